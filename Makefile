@@ -1,0 +1,49 @@
+# sorpia: set-up, demo and tests on a fresh Debian bookworm machine (as root).
+#   make demo   installs what is missing, builds sorpia into .venv, runs `sorpia demo`
+#   make test   installs what is missing, builds, runs the C++ tests (ctest) and pytest
+# Both are harmless to run twice: each step checks what is already there.
+
+SHELL := /bin/bash
+PYTHON ?= python3
+VENV ?= .venv
+PY := $(VENV)/bin/python
+APT_PACKAGES := libopenmesh-dev libosd-dev libgtest-dev
+SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
+# The Python build keeps its CMake tree here, so a second `make` rebuilds only what changed.
+PIP_BUILD := -C build-dir=build/python
+
+.PHONY: demo test deps venv install cpp-test py-test clean
+
+demo: install
+	$(VENV)/bin/sorpia demo
+
+test: cpp-test py-test
+
+deps:
+	@if ! dpkg -s $(APT_PACKAGES) >/dev/null 2>&1; then \
+	  echo "installing Debian packages: $(APT_PACKAGES)"; \
+	  $(SUDO) apt-get update -qq && DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq $(APT_PACKAGES) >/dev/null; \
+	fi
+
+$(PY):
+	$(PYTHON) -m venv $(VENV)
+	$(PY) -m pip install -q --upgrade pip
+
+venv: $(PY)
+
+# scikit-build-core, pybind11, cmake and ninja come from PyPI into the venv;
+# --no-build-isolation keeps them there between runs.
+install: deps venv
+	$(PY) -m pip install -q scikit-build-core pybind11 cmake ninja
+	$(PY) -m pip install -q --no-build-isolation $(PIP_BUILD) ".[test]"
+
+cpp-test: deps venv install
+	$(VENV)/bin/cmake -S . -B build/cpp -G Ninja -DSORPIA_BUILD_TESTS=ON -DSORPIA_BUILD_PYTHON=OFF >/dev/null
+	$(VENV)/bin/cmake --build build/cpp
+	cd build/cpp && ../../$(VENV)/bin/ctest --output-on-failure
+
+py-test: install
+	cd tests && ../$(PY) -m pytest
+
+clean:
+	rm -rf build $(VENV)

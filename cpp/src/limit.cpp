@@ -1,0 +1,188 @@
+#include "sorpia/limit.hpp"
+
+#include <opensubdiv/far/error.h>
+#include <opensubdiv/far/primvarRefiner.h>
+#include <opensubdiv/far/topologyDescriptor.h>
+
+#include <algorithm>
+#include <numeric>
+#include <stdexcept>
+#include <string>
+
+#include "osd_refiner.hpp"
+#include "sorpia/errors.hpp"
+
+namespace sorpia {
+namespace detail {
+
+namespace {
+// OpenSubdiv reports topology errors through a global callback; collect the
+// message of the current thread's refiner build.
+thread_local std::string osd_error;
+void record_osd_error(Far::ErrorType, const char* message) { osd_error = message ? message : ""; }
+}  // namespace
+
+LoopRefiner make_loop_refiner(const Topology& topology, Boundary boundary) {
+  using namespace OpenSubdiv;
+  LoopRefiner out;
+  const std::size_t n = topology.n_vertices();
+  out.to_osd.assign(n, -1);
+  out.from_osd.reserve(n - topology.n_unreferenced());
+  for (std::size_t v = 0; v < n; ++v)
+    if (!topology.is_unreferenced(v)) {
+      out.to_osd[v] = static_cast<std::int32_t>(out.from_osd.size());
+      out.from_osd.push_back(static_cast<std::int32_t>(v));
+    }
+  const std::vector<std::int32_t>& faces = topology.faces();
+  std::vector<int> osd_faces(faces.size());
+  for (std::size_t k = 0; k < faces.size(); ++k) osd_faces[k] = out.to_osd[faces[k]];
+  std::vector<int> verts_per_face(topology.n_faces(), 3);
+
+  Far::TopologyDescriptor desc;
+  desc.numVertices = static_cast<int>(out.from_osd.size());
+  desc.numFaces = static_cast<int>(topology.n_faces());
+  desc.numVertsPerFace = verts_per_face.data();
+  desc.vertIndicesPerFace = osd_faces.data();
+
+  Sdc::Options sdc;
+  sdc.SetVtxBoundaryInterpolation(boundary == Boundary::EdgeOnly ? Sdc::Options::VTX_BOUNDARY_EDGE_ONLY
+                                                                 : Sdc::Options::VTX_BOUNDARY_EDGE_AND_CORNER);
+  using Factory = Far::TopologyRefinerFactory<Far::TopologyDescriptor>;
+  Factory::Options options(Sdc::SCHEME_LOOP, sdc);
+  osd_error.clear();
+  Far::SetErrorCallback(record_osd_error);
+  out.refiner.reset(Factory::Create(desc, options));
+  Far::SetErrorCallback(nullptr);
+  if (!out.refiner) throw MeshError("OpenSubdiv refused the mesh topology: " + osd_error);
+  return out;
+}
+
+}  // namespace detail
+
+namespace {
+
+// Primvar types that let PrimvarRefinerReal<double>::Limit write the weights
+// of each limit mask instead of combining positions: row i of B. Limit()
+// visits the vertices in order (Clear() then AddWithWeight() per vertex), so
+// the rows are appended straight into CSR arrays; rows of unreferenced
+// vertices, which OpenSubdiv never sees, are identity rows filled in between.
+struct SourceIndex {
+  std::int32_t index;
+};
+struct SourceIndices {
+  const std::vector<std::int32_t>* from_osd;
+  SourceIndex operator[](int i) const { return SourceIndex{(*from_osd)[i]}; }
+};
+struct CsrBuilder {
+  CsrMatrix* b;
+  std::size_t next_row = 0;  // rows [0, next_row) are started
+  void start_row(std::size_t row) {
+    if (row < next_row) throw std::logic_error("sorpia: OpenSubdiv Limit() visited vertices out of order");
+    close_row();
+    for (; next_row < row; ++next_row) {  // unreferenced vertices in between
+      b->indices.push_back(static_cast<std::int32_t>(next_row));
+      b->data.push_back(1.0);
+      b->indptr[next_row + 1] = static_cast<std::int32_t>(b->indices.size());
+    }
+    ++next_row;
+  }
+  // Sort the entries of the last started row by column and set its end.
+  void close_row() {
+    if (next_row == 0) return;
+    const std::int32_t lo = b->indptr[next_row - 1];
+    const auto hi = static_cast<std::int32_t>(b->indices.size());
+    std::pair<std::int32_t, double> tmp[64];
+    std::vector<std::pair<std::int32_t, double>> big;
+    auto* e = tmp;
+    if (hi - lo > 64) {
+      big.resize(hi - lo);
+      e = big.data();
+    }
+    for (std::int32_t p = lo; p < hi; ++p) e[p - lo] = {b->indices[p], b->data[p]};
+    std::sort(e, e + (hi - lo));
+    for (std::int32_t p = lo; p < hi; ++p) std::tie(b->indices[p], b->data[p]) = e[p - lo];
+    b->indptr[next_row] = hi;
+  }
+};
+struct RowRecorder {
+  CsrBuilder* builder;
+  std::int32_t row;
+  void Clear() { builder->start_row(static_cast<std::size_t>(row)); }
+  void AddWithWeight(const SourceIndex& s, double w) {
+    // OpenSubdiv lists interior neighbours of boundary vertices with weight 0.
+    if (w != 0.0) {
+      builder->b->indices.push_back(s.index);
+      builder->b->data.push_back(w);
+    }
+  }
+};
+struct RowRecorders {
+  CsrBuilder* builder;
+  const std::vector<std::int32_t>* from_osd;
+  RowRecorder operator[](int i) const { return RowRecorder{builder, (*from_osd)[i]}; }
+};
+
+struct Point3 {
+  double x, y, z;
+  void Clear() { x = y = z = 0.0; }
+  void AddWithWeight(const Point3& p, double w) {
+    x += w * p.x;
+    y += w * p.y;
+    z += w * p.z;
+  }
+};
+
+}  // namespace
+
+CsrMatrix limit_matrix(const Topology& topology, Boundary boundary) {
+  const auto osd = detail::make_loop_refiner(topology, boundary);
+  const std::size_t n = topology.n_vertices();
+  CsrMatrix b;
+  b.n_rows = b.n_cols = n;
+  b.indptr.assign(n + 1, 0);
+  b.indices.reserve(n + topology.ring_neighbors().size());
+  b.data.reserve(n + topology.ring_neighbors().size());
+  CsrBuilder builder{&b};
+  SourceIndices src{&osd.from_osd};
+  RowRecorders dst{&builder, &osd.from_osd};
+  OpenSubdiv::Far::PrimvarRefinerReal<double>(*osd.refiner).Limit(src, dst);
+  builder.start_row(n);  // closes the last row and fills trailing unreferenced rows
+  return b;
+}
+
+void limit_points(const Topology& topology, const double* vertices, Boundary boundary, double* out) {
+  const auto osd = detail::make_loop_refiner(topology, boundary);
+  const std::size_t n = topology.n_vertices();
+  const std::size_t k = osd.from_osd.size();
+  std::vector<Point3> src(k), dst(k);
+  for (std::size_t i = 0; i < k; ++i) {
+    const double* p = vertices + 3 * osd.from_osd[i];
+    src[i] = Point3{p[0], p[1], p[2]};
+  }
+  OpenSubdiv::Far::PrimvarRefinerReal<double>(*osd.refiner).Limit(src, dst);
+  std::copy(vertices, vertices + 3 * n, out);  // unreferenced vertices: limit is themselves
+  for (std::size_t i = 0; i < k; ++i) {
+    double* q = out + 3 * osd.from_osd[i];
+    q[0] = dst[i].x;
+    q[1] = dst[i].y;
+    q[2] = dst[i].z;
+  }
+}
+
+void multiply(const CsrMatrix& a, const double* x, double* y) {
+  for (std::size_t i = 0; i < a.n_rows; ++i) {
+    double s0 = 0, s1 = 0, s2 = 0;
+    for (std::int32_t p = a.indptr[i]; p < a.indptr[i + 1]; ++p) {
+      const double w = a.data[p];
+      const double* xj = x + 3 * a.indices[p];
+      s0 += w * xj[0];
+      s1 += w * xj[1];
+      s2 += w * xj[2];
+    }
+    y[3 * i] = s0;
+    y[3 * i + 1] = s1;
+    y[3 * i + 2] = s2;
+  }
+}
+
+}  // namespace sorpia

@@ -1,0 +1,27 @@
+#pragma once
+// Building an OpenSubdiv Loop refiner from a sorpia::Topology (internal).
+#include <opensubdiv/far/topologyRefiner.h>
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "sorpia/topology.hpp"
+
+namespace sorpia::detail {
+
+namespace Far = OpenSubdiv::Far;
+
+// OpenSubdiv is given only the referenced vertices (an isolated vertex has no
+// Loop limit); `to_osd[v]` is vertex v's index in the refiner, or -1, and
+// `from_osd` is its inverse.
+struct LoopRefiner {
+  std::unique_ptr<Far::TopologyRefiner> refiner;
+  std::vector<std::int32_t> to_osd;
+  std::vector<std::int32_t> from_osd;
+};
+
+// Throws sorpia::MeshError when OpenSubdiv refuses the topology.
+LoopRefiner make_loop_refiner(const Topology& topology, Boundary boundary);
+
+}  // namespace sorpia::detail

@@ -1,0 +1,151 @@
+#include "sorpia/shapes.hpp"
+
+#include <cmath>
+#include <map>
+#include <random>
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+#include "openmesh_types.hpp"
+#include "sorpia/errors.hpp"
+
+namespace sorpia {
+namespace {
+constexpr double kPi = 3.14159265358979323846;
+
+void check(bool ok, const std::string& what) {
+  if (!ok) throw ParameterError(what);
+}
+}  // namespace
+
+TriMesh icosphere(int level) {
+  check(level >= 0 && level <= 10, "icosphere level must be in 0..10, got " + std::to_string(level));
+  const double t = (1.0 + std::sqrt(5.0)) / 2.0;
+  TriMesh m;
+  m.vertices = {-1, t, 0, 1, t, 0, -1, -t, 0, 1, -t, 0, 0, -1, t, 0, 1, t,
+                0, -1, -t, 0, 1, -t, t, 0, -1, t, 0, 1, -t, 0, -1, -t, 0, 1};
+  m.faces = {0, 11, 5, 0, 5,  1,  0, 1, 7, 0, 7,  10, 0, 10, 11, 1, 5, 9, 5, 11,
+             4, 11, 10, 2, 10, 7, 6, 7, 1, 8, 3,  9,  4, 3, 4,  2,  3, 2, 6, 3,
+             6, 8,  3, 8,  9,  4,  9, 5, 2, 4, 11, 6,  2, 10, 8, 6,  7, 9, 8, 1};
+  auto normalise = [&](std::size_t v) {
+    double* p = &m.vertices[3 * v];
+    const double r = std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
+    for (int k = 0; k < 3; ++k) p[k] /= r;
+  };
+  for (std::size_t v = 0; v < 12; ++v) normalise(v);
+  for (int l = 0; l < level; ++l) {
+    std::map<std::pair<int, int>, int> mid;
+    auto midpoint = [&](int a, int b) {
+      const auto key = std::minmax(a, b);
+      auto it = mid.find(key);
+      if (it != mid.end()) return it->second;
+      const int v = static_cast<int>(m.n_vertices());
+      for (int k = 0; k < 3; ++k) m.vertices.push_back(0.5 * (m.vertices[3 * a + k] + m.vertices[3 * b + k]));
+      normalise(v);
+      mid.emplace(key, v);
+      return v;
+    };
+    std::vector<std::int32_t> faces;
+    faces.reserve(4 * m.faces.size());
+    for (std::size_t f = 0; f < m.n_faces(); ++f) {
+      const int a = m.faces[3 * f], b = m.faces[3 * f + 1], c = m.faces[3 * f + 2];
+      const int ab = midpoint(a, b), bc = midpoint(b, c), ca = midpoint(c, a);
+      faces.insert(faces.end(), {a, ab, ca, b, bc, ab, c, ca, bc, ab, bc, ca});
+    }
+    m.faces.swap(faces);
+  }
+  return m;
+}
+
+TriMesh torus(int nu, int nv) {
+  check(nu >= 3 && nv >= 3, "torus needs at least 3 x 3 vertices, got " + std::to_string(nu) + " x " +
+                                std::to_string(nv));
+  TriMesh m;
+  m.vertices.reserve(3 * static_cast<std::size_t>(nu) * nv);
+  for (int i = 0; i < nu; ++i)
+    for (int j = 0; j < nv; ++j) {
+      const double u = 2 * kPi * i / nu, v = 2 * kPi * j / nv;
+      m.vertices.insert(m.vertices.end(),
+                        {(1 + 0.4 * std::cos(v)) * std::cos(u), (1 + 0.4 * std::cos(v)) * std::sin(u), 0.4 * std::sin(v)});
+    }
+  auto id = [&](int i, int j) { return ((i + nu) % nu) * nv + (j + nv) % nv; };
+  m.faces.reserve(6 * static_cast<std::size_t>(nu) * nv);
+  for (int i = 0; i < nu; ++i)
+    for (int j = 0; j < nv; ++j) {
+      const int a = id(i, j), b = id(i + 1, j), c = id(i + 1, j + 1), d = id(i, j + 1);
+      m.faces.insert(m.faces.end(), {a, b, c, a, c, d});
+    }
+  return m;
+}
+
+TriMesh grid(int nu, int nv) {
+  check(nu >= 2 && nv >= 2, "grid needs at least 2 x 2 vertices, got " + std::to_string(nu) + " x " +
+                                std::to_string(nv));
+  TriMesh m;
+  for (int i = 0; i < nu; ++i)
+    for (int j = 0; j < nv; ++j) {
+      const double x = static_cast<double>(i) / (nu - 1), y = static_cast<double>(j) / (nv - 1);
+      m.vertices.insert(m.vertices.end(), {x, y, 0.1 * std::sin(2 * kPi * x) * std::cos(2 * kPi * y)});
+    }
+  for (int i = 0; i + 1 < nu; ++i)
+    for (int j = 0; j + 1 < nv; ++j) {
+      const int a = i * nv + j, b = (i + 1) * nv + j, c = (i + 1) * nv + j + 1, d = i * nv + j + 1;
+      m.faces.insert(m.faces.end(), {a, b, c, a, c, d});
+    }
+  return m;
+}
+
+TriMesh pole(int n) {
+  check(n >= 3, "pole valence must be at least 3, got " + std::to_string(n));
+  TriMesh m;
+  m.vertices = {0, 0, 0.3};
+  for (int r = 1; r <= 2; ++r)
+    for (int k = 0; k < n; ++k) {
+      const double a = 2 * kPi * (k + 0.5 * (r - 1)) / n;
+      m.vertices.insert(m.vertices.end(), {r * std::cos(a), r * std::sin(a), 0.3 / (1 + r * r)});
+    }
+  auto ring = [&](int r, int k) { return 1 + (r - 1) * n + (k % n); };
+  for (int k = 0; k < n; ++k) m.faces.insert(m.faces.end(), {0, ring(1, k), ring(1, k + 1)});
+  for (int k = 0; k < n; ++k) {
+    m.faces.insert(m.faces.end(), {ring(1, k), ring(2, k), ring(1, k + 1)});
+    m.faces.insert(m.faces.end(), {ring(1, k + 1), ring(2, k), ring(2, k + 1)});
+  }
+  return m;
+}
+
+TriMesh irregular(int n_vertices, std::uint32_t seed) {
+  check(n_vertices >= 16, "irregular needs at least 16 vertices, got " + std::to_string(n_vertices));
+  const int nv = std::max(4, static_cast<int>(std::sqrt(n_vertices / 2.5)));
+  const int nu = std::max(4, n_vertices / nv);
+  TriMesh m = torus(nu, nv);
+
+  detail::silence_openmesh();
+  detail::OMesh mesh;
+  std::vector<detail::OMesh::VertexHandle> vh;
+  for (std::size_t v = 0; v < m.n_vertices(); ++v)
+    vh.push_back(mesh.add_vertex(detail::OMesh::Point(m.vertices[3 * v], m.vertices[3 * v + 1], m.vertices[3 * v + 2])));
+  for (std::size_t f = 0; f < m.n_faces(); ++f)
+    mesh.add_face(vh[m.faces[3 * f]], vh[m.faces[3 * f + 1]], vh[m.faces[3 * f + 2]]);
+
+  // Flip about a third of the edges at random, keeping every valence in 3..12.
+  std::mt19937 rng(seed);
+  std::uniform_int_distribution<int> pick(0, static_cast<int>(mesh.n_edges()) - 1);
+  const std::size_t flips = mesh.n_edges() / 3;
+  for (std::size_t k = 0; k < flips; ++k) {
+    const auto eh = mesh.edge_handle(pick(rng));
+    if (!mesh.is_flip_ok(eh)) continue;
+    const auto h0 = mesh.halfedge_handle(eh, 0), h1 = mesh.halfedge_handle(eh, 1);
+    const auto a = mesh.to_vertex_handle(h0), b = mesh.to_vertex_handle(h1);
+    const auto c = mesh.to_vertex_handle(mesh.next_halfedge_handle(h0));
+    const auto d = mesh.to_vertex_handle(mesh.next_halfedge_handle(h1));
+    if (mesh.valence(a) <= 3 || mesh.valence(b) <= 3 || mesh.valence(c) >= 12 || mesh.valence(d) >= 12) continue;
+    mesh.flip(eh);
+  }
+  m.faces.clear();
+  for (const auto fh : mesh.faces())
+    for (const auto v : mesh.fv_range(fh)) m.faces.push_back(v.idx());
+  return m;
+}
+
+}  // namespace sorpia

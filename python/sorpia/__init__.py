@@ -1,0 +1,22 @@
+"""sorpia: interpolating Loop subdivision surfaces.
+
+Moves the control vertices of a triangle mesh so that its Loop limit surface
+(as OpenSubdiv defines it) passes through the given vertices: solves B V = V0
+with SOR-PIA and the rest of the PIA family.
+"""
+
+from ._core import __version__
+from .errors import MeshError, MeshFileError, ParameterError
+from .limit import UnreferencedVerticesWarning, limit_matrix, limit_points
+from . import shapes
+
+__all__ = [
+    "__version__",
+    "MeshError",
+    "MeshFileError",
+    "ParameterError",
+    "UnreferencedVerticesWarning",
+    "limit_matrix",
+    "limit_points",
+    "shapes",
+]

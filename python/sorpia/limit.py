@@ -1,0 +1,74 @@
+"""The Loop limit operator: limit positions and the limit matrix B."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import scipy.sparse
+
+from . import _core
+from ._validate import DEFAULT_BOUNDARY, as_boundary, as_faces, as_vertices
+
+
+class UnreferencedVerticesWarning(UserWarning):
+    """Some vertices belong to no face; their limit is themselves."""
+
+
+def topology(faces, n_vertices: int, *, warn: bool = True) -> _core.Topology:
+    """Validate `faces` and build the mesh connectivity (OpenMesh half-edges).
+
+    Warns with UnreferencedVerticesWarning when some vertices belong to no face.
+    """
+    faces = as_faces(faces, n_vertices)
+    topo = _core.Topology(faces, int(n_vertices))
+    if warn and topo.n_unreferenced:
+        warnings.warn(
+            f"{topo.n_unreferenced} of {n_vertices} vertices belong to no face; "
+            "they pass through unchanged (their limit is themselves)",
+            UnreferencedVerticesWarning,
+            stacklevel=3,
+        )
+    return topo
+
+
+def limit_points(vertices, faces, boundary: str = DEFAULT_BOUNDARY) -> np.ndarray:
+    """Loop limit positions of the vertices of a triangle mesh (paper eq. 5-6).
+
+    Parameters
+    ----------
+    vertices : array_like, (n, 3) float
+        Control vertices.
+    faces : array_like, (m, 3) int
+        Triangles, indices into `vertices`, consistently oriented.
+    boundary : {"edge-and-corner", "edge-only"}
+        Boundary rule (OpenSubdiv's VTX_BOUNDARY_EDGE_AND_CORNER or
+        VTX_BOUNDARY_EDGE_ONLY). With "edge-and-corner" (the default) a
+        boundary vertex with a single face stays where it is; with "edge-only"
+        it gets the boundary mask (1/6, 2/3, 1/6).
+
+    Returns
+    -------
+    numpy.ndarray, (n, 3) float64
+        B V, evaluated by OpenSubdiv's ``Far::PrimvarRefinerReal<double>::Limit``.
+        Interior vertex of valence n: alpha_n v + (1 - alpha_n)/n sum of its
+        neighbours, alpha_n = 3 / (8 - 8 (3/8 + cos(2 pi/n)/4)^2) (paper eq. 5);
+        boundary vertex: 2/3 v + 1/6 (its two boundary neighbours). Vertices no
+        face references are returned unchanged (with a warning).
+    """
+    vertices = as_vertices(vertices)
+    topo = topology(faces, vertices.shape[0])
+    return _core.limit_points(topo, vertices, as_boundary(boundary))
+
+
+def limit_matrix(faces, n_vertices: int, boundary: str = DEFAULT_BOUNDARY) -> scipy.sparse.csr_matrix:
+    """The Loop limit matrix B (paper eq. 7) as a scipy CSR matrix, (n, n) float64.
+
+    Row i holds the limit mask of vertex i as OpenSubdiv evaluates it, so that
+    ``limit_matrix(F, len(V)) @ V == limit_points(V, F)``. Unreferenced vertices
+    get an identity row. See `limit_points` for `boundary`.
+    """
+    n_vertices = int(n_vertices)
+    topo = topology(faces, n_vertices)
+    data, indices, indptr = _core.limit_matrix(topo, as_boundary(boundary))
+    return scipy.sparse.csr_matrix((data, indices, indptr), shape=(n_vertices, n_vertices))

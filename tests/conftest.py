@@ -1,0 +1,85 @@
+"""Shared test meshes, grouped by what they stress, and the closed-form Loop
+limit masks written independently of sorpia (from the paper, eq. 5)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import scipy.sparse
+import scipy.spatial
+
+import sorpia
+
+
+def sphere_hull(n_points: int, seed: int):
+    """Convex hull of random points on the unit sphere, faces oriented outward:
+    a closed mesh with valences from about 3 to 12."""
+    rng = np.random.default_rng(seed)
+    p = rng.normal(size=(n_points, 3))
+    p /= np.linalg.norm(p, axis=1, keepdims=True)
+    faces = scipy.spatial.ConvexHull(p).simplices.astype(np.int64)
+    a, b, c = p[faces[:, 0]], p[faces[:, 1]], p[faces[:, 2]]
+    inward = np.einsum("ij,ij->i", np.cross(b - a, c - a), a) < 0
+    faces[inward] = faces[inward][:, ::-1]
+    return p, faces
+
+
+def loop_alpha(n):
+    """alpha_n = 3 / (3 + 8 n beta_n), n beta_n = 5/8 - (3/8 + cos(2 pi/n)/4)^2."""
+    n = np.asarray(n, dtype=float)
+    c = 3.0 / 8.0 + np.cos(2.0 * np.pi / n) / 4.0
+    return 3.0 / (3.0 + 8.0 * (5.0 / 8.0 - c * c))
+
+
+def closed_form_limit_matrix(faces, n_vertices: int, boundary: str = "edge-and-corner"):
+    """Loop limit matrix from the closed-form masks: interior alpha_n and
+    (1 - alpha_n)/n; boundary 2/3 and 1/6 for the two boundary neighbours; a
+    one-face corner under "edge-and-corner" stays put (weight 1)."""
+    faces = np.asarray(faces)
+    edges = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
+    und = np.sort(edges, axis=1)
+    uniq, counts = np.unique(und, axis=0, return_counts=True)
+    adj = scipy.sparse.coo_matrix((np.ones(len(uniq)), (uniq[:, 0], uniq[:, 1])), shape=(n_vertices,) * 2)
+    adj = (adj + adj.T).tocsr()
+    valence = np.diff(adj.indptr)
+    bnd = uniq[counts == 1]
+    on_boundary = np.zeros(n_vertices, bool)
+    on_boundary[bnd.ravel()] = True
+    faces_at = np.bincount(faces.ravel(), minlength=n_vertices)
+    rows, cols, vals = [], [], []
+    for i in range(n_vertices):
+        if valence[i] == 0:
+            rows.append(i); cols.append(i); vals.append(1.0)
+        elif not on_boundary[i]:
+            a = loop_alpha(valence[i])
+            nb = adj.indices[adj.indptr[i]:adj.indptr[i + 1]]
+            rows += [i] * (len(nb) + 1); cols += [i, *nb]; vals += [a] + [(1 - a) / len(nb)] * len(nb)
+        elif faces_at[i] == 1 and boundary == "edge-and-corner":
+            rows.append(i); cols.append(i); vals.append(1.0)
+        else:
+            nb = np.concatenate([bnd[bnd[:, 0] == i, 1], bnd[bnd[:, 1] == i, 0]])
+            assert len(nb) == 2, f"vertex {i} is not a manifold boundary vertex"
+            rows += [i] * 3; cols += [i, *nb]; vals += [2 / 3, 1 / 6, 1 / 6]
+    return scipy.sparse.csr_matrix((vals, (rows, cols)), shape=(n_vertices, n_vertices))
+
+
+# Meshes by what they stress: closed with valences 3..12, boundary, a high-valence pole.
+MESHES = {
+    "sphere-hull": lambda: sphere_hull(300, seed=4),
+    "icosphere": lambda: sorpia.shapes.icosphere(2),
+    "irregular-torus": lambda: sorpia.shapes.irregular(500, seed=2),
+    "grid-boundary": lambda: sorpia.shapes.grid(9, 7),
+    "pole-48": lambda: sorpia.shapes.pole(48),
+}
+
+
+@pytest.fixture(params=sorted(MESHES))
+def mesh(request):
+    """(name, vertices, faces) for each test mesh."""
+    v, f = MESHES[request.param]()
+    return request.param, np.asarray(v, dtype=float), np.asarray(f)
+
+
+@pytest.fixture
+def closed_form():
+    return closed_form_limit_matrix
