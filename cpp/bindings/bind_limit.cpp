@@ -1,0 +1,81 @@
+// Bindings of the topology, the limit operator and the generated shapes.
+#include <pybind11/stl.h>
+
+#include "bindings.hpp"
+#include "sorpia/limit.hpp"
+#include "sorpia/shapes.hpp"
+
+namespace sorpia_py {
+using namespace pybind11::literals;
+
+namespace {
+py::tuple mesh_tuple(const sorpia::TriMesh& m) {
+  return py::make_tuple(to_numpy(m.vertices, 3), to_numpy(m.faces, 3));
+}
+}  // namespace
+
+void bind_limit(py::module_& m) {
+  py::class_<sorpia::Topology>(m, "Topology")
+      .def(py::init([](const Faces& faces, std::size_t n_vertices) {
+             check_shape(faces, 3, "faces");
+             py::gil_scoped_release release;
+             return sorpia::Topology(faces.data(), static_cast<std::size_t>(faces.shape(0)), n_vertices);
+           }),
+           "faces"_a.noconvert(), "n_vertices"_a)
+      .def_property_readonly("n_vertices", &sorpia::Topology::n_vertices)
+      .def_property_readonly("n_faces", &sorpia::Topology::n_faces)
+      .def_property_readonly("n_edges", &sorpia::Topology::n_edges)
+      .def_property_readonly("n_boundary_edges", &sorpia::Topology::n_boundary_edges)
+      .def_property_readonly("n_unreferenced", &sorpia::Topology::n_unreferenced)
+      .def_property_readonly("ring_offsets", [](const sorpia::Topology& t) { return to_numpy(t.ring_offsets(), 0); })
+      .def_property_readonly("ring_neighbors",
+                             [](const sorpia::Topology& t) { return to_numpy(t.ring_neighbors(), 0); })
+      .def_property_readonly("is_boundary", [](const sorpia::Topology& t) {
+        py::array_t<bool> out(static_cast<py::ssize_t>(t.n_vertices()));
+        auto* p = out.mutable_data();
+        for (std::size_t i = 0; i < t.n_vertices(); ++i) p[i] = t.is_boundary(i);
+        return out;
+      });
+
+  m.def(
+      "limit_matrix",
+      [](const sorpia::Topology& topology, const std::string& boundary) {
+        const auto b = parse_boundary(boundary);
+        sorpia::CsrMatrix mat;
+        {
+          py::gil_scoped_release release;
+          mat = sorpia::limit_matrix(topology, b);
+        }
+        return py::make_tuple(to_numpy(mat.data, 0), to_numpy(mat.indices, 0), to_numpy(mat.indptr, 0));
+      },
+      "topology"_a, "boundary"_a, "Limit matrix B as CSR arrays (data, indices, indptr).");
+
+  m.def(
+      "limit_points",
+      [](const sorpia::Topology& topology, const Vertices& vertices, const std::string& boundary) {
+        check_shape(vertices, 3, "vertices");
+        if (static_cast<std::size_t>(vertices.shape(0)) != topology.n_vertices())
+          throw sorpia::ParameterError("vertices has " + std::to_string(vertices.shape(0)) +
+                                       " rows but the topology has " + std::to_string(topology.n_vertices()) +
+                                       " vertices");
+        const auto b = parse_boundary(boundary);
+        Vertices out({vertices.shape(0), py::ssize_t{3}});
+        double* dst = out.mutable_data();
+        const double* src = vertices.data();
+        {
+          py::gil_scoped_release release;
+          sorpia::limit_points(topology, src, b, dst);
+        }
+        return out;
+      },
+      "topology"_a, "vertices"_a.noconvert(), "boundary"_a, "Loop limit positions B V, (n, 3).");
+
+  m.def("icosphere", [](int level) { return mesh_tuple(sorpia::icosphere(level)); }, "level"_a);
+  m.def("torus", [](int nu, int nv) { return mesh_tuple(sorpia::torus(nu, nv)); }, "nu"_a, "nv"_a);
+  m.def("grid", [](int nu, int nv) { return mesh_tuple(sorpia::grid(nu, nv)); }, "nu"_a, "nv"_a);
+  m.def("pole", [](int n) { return mesh_tuple(sorpia::pole(n)); }, "n"_a);
+  m.def("irregular", [](int n, std::uint32_t seed) { return mesh_tuple(sorpia::irregular(n, seed)); }, "n_vertices"_a,
+        "seed"_a = 1);
+}
+
+}  // namespace sorpia_py

@@ -1,0 +1,50 @@
+#pragma once
+// Shared helpers of the pybind11 module sorpia._core. One binding file per
+// topic (limit, solvers, surface, io), each with a bind_<topic>(module) that
+// module.cpp calls: conversion and error translation only, no mathematics.
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "sorpia/errors.hpp"
+#include "sorpia/topology.hpp"
+
+namespace sorpia_py {
+
+namespace py = pybind11;
+
+// Arrays the core accepts: exact dtype and C layout. Bind them with
+// .noconvert(): the Python layer (sorpia/_validate.py) converts and validates.
+using Vertices = py::array_t<double, py::array::c_style>;
+using Faces = py::array_t<std::int32_t, py::array::c_style>;
+
+inline sorpia::Boundary parse_boundary(const std::string& name) {
+  if (name == "edge-only") return sorpia::Boundary::EdgeOnly;
+  if (name == "edge-and-corner") return sorpia::Boundary::EdgeAndCorner;
+  throw sorpia::ParameterError("unknown boundary '" + name + "': use 'edge-only' or 'edge-and-corner'");
+}
+
+inline void check_shape(const py::array& a, py::ssize_t cols, const char* name) {
+  if (a.ndim() != 2 || a.shape(1) != cols)
+    throw sorpia::ParameterError(std::string(name) + " must have shape (n, " + std::to_string(cols) + ")");
+}
+
+// A fresh numpy array (owned by Python) holding a copy of v; cols > 0 makes it
+// (len/cols, cols), cols == 0 one-dimensional.
+template <class T>
+py::array_t<T> to_numpy(const std::vector<T>& v, py::ssize_t cols) {
+  py::array_t<T> out(cols > 0 ? std::vector<py::ssize_t>{static_cast<py::ssize_t>(v.size()) / cols, cols}
+                              : std::vector<py::ssize_t>{static_cast<py::ssize_t>(v.size())});
+  if (!v.empty()) std::memcpy(out.mutable_data(), v.data(), v.size() * sizeof(T));
+  return out;
+}
+
+void bind_limit(py::module_& m);
+void bind_solvers(py::module_& m);
+void bind_surface(py::module_& m);
+void bind_io(py::module_& m);
+
+}  // namespace sorpia_py
