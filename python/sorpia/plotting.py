@@ -1,0 +1,252 @@
+"""Figures of the paper, drawn headless with matplotlib (Agg backend).
+
+- `convergence_figure`: Figure 7, log10(E_k/E_0) against the iteration k, one
+  labelled line per method.
+- `interpolation_figure`: Figure 3, four shaded panels seen by the same camera:
+  (a) the given mesh, (b) its Loop limit surface (it shrinks away from the
+  given vertices, drawn red), (c) the control mesh found by SOR-PIA with the
+  given vertices red and the new control vertices blue, (d) the limit surface
+  of that control mesh, passing through the red points.
+
+matplotlib is an optional dependency (``pip install sorpia[plot]``); this
+module imports it only when a figure is drawn, and `require_matplotlib` says
+what to install when it is missing. Functions return a
+``matplotlib.figure.Figure``; the caller saves it (``fig.savefig``) and closes
+it (``matplotlib.pyplot.close(fig)`` is not needed: the figures are not
+registered with pyplot).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+# Faces drawn per panel at most: matplotlib sorts and paints each polygon in
+# Python, about 10 us a face, so 4 panels of 60k faces take a few seconds.
+FACE_BUDGET = 60_000
+# Vertex markers drawn per panel at most (more only paint the panel red).
+POINT_BUDGET = 4_000
+
+GIVEN_COLOR = "#d62728"    # red: the given vertices V0 (paper Figure 3)
+CONTROL_COLOR = "#1f4fd6"  # blue: the control vertices found by SOR-PIA
+MESH_COLOR = np.array([0.80, 0.80, 0.78])
+SURFACE_COLOR = np.array([0.62, 0.74, 0.90])
+
+
+def require_matplotlib() -> None:
+    """Raise ImportError with what to install when matplotlib is missing."""
+    try:
+        import matplotlib  # noqa: F401
+    except ImportError:
+        raise ImportError("drawing figures needs matplotlib: pip install 'sorpia[plot]' "
+                          "(or pip install matplotlib)") from None
+
+
+def _new_figure(width_px: int, height_px: int, dpi: int = 100):
+    # A Figure not registered with pyplot: no global state, no backend choice
+    # needed, garbage-collected like any object; the Agg canvas draws it.
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(width_px / dpi, height_px / dpi), dpi=dpi)
+    FigureCanvasAgg(fig)
+    return fig
+
+
+def convergence_figure(curves, tol: float | None = None, title: str | None = None,
+                       size: tuple[int, int] = (900, 560)):
+    """The paper's Figure 7: log10(E_k/E_0) against the iteration k.
+
+    Parameters
+    ----------
+    curves : iterable of (label, errors)
+        `errors[k]` = E_k/E_0 for k = 0..iterations (errors[0] = 1), one line
+        per entry. Zeros (an exact solve) are drawn at the smallest positive
+        float instead of -inf.
+    tol : float, optional
+        Drawn as a dashed horizontal line at log10(tol).
+    size : (width, height) in pixels of the saved PNG (at the figure's dpi).
+    """
+    fig = _new_figure(*size)
+    ax = fig.add_subplot(1, 1, 1)
+    markers = "osD^vP*Xh<>"
+    for j, (label, errors) in enumerate(curves):
+        e = np.maximum(np.asarray(errors, dtype=float), np.finfo(float).tiny)
+        k = np.arange(len(e))
+        ax.plot(k, np.log10(e), marker=markers[j % len(markers)], markersize=3.5,
+                markevery=max(1, len(e) // 25), linewidth=1.4, label=label)
+    if tol is not None:
+        ax.axhline(math.log10(tol), color="0.4", linestyle="--", linewidth=0.9, label=f"tol = {tol:g}")
+    ax.set_xlabel("iteration k")
+    ax.set_ylabel("log10(E_k / E_0)")
+    ax.set_title(title or "Convergence of the PIA family (paper Figure 7)")
+    ax.grid(True, linewidth=0.4, alpha=0.6)
+    ax.legend(loc="upper right", fontsize=9)
+    ax.set_xlim(left=0)
+    fig.tight_layout()
+    return fig
+
+
+def level_for_budget(n_faces: int, level: int, face_budget: int = FACE_BUDGET) -> int:
+    """The largest refinement level <= `level` whose tessellation
+    (n_faces * 4**level triangles) fits in `face_budget`; 0 at least."""
+    while level > 0 and n_faces * 4 ** level > face_budget:
+        level -= 1
+    return level
+
+
+def _view_vector(elev: float, azim: float) -> np.ndarray:
+    """Unit vector from the scene towards matplotlib's camera at (elev, azim)."""
+    e, a = math.radians(elev), math.radians(azim)
+    return np.array([math.cos(e) * math.cos(a), math.cos(e) * math.sin(a), math.sin(e)])
+
+
+def _face_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """Area-weighted (unnormalised) face normals, (m, 3)."""
+    t = vertices[faces]
+    return np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
+
+
+def _vertex_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    fn = _face_normals(vertices, faces)
+    vn = np.zeros_like(vertices)
+    for k in range(3):
+        np.add.at(vn, faces[:, k], fn)
+    norm = np.linalg.norm(vn, axis=1, keepdims=True)
+    return vn / np.where(norm > 0, norm, 1.0)
+
+
+def _is_closed(faces: np.ndarray, n_vertices: int) -> bool:
+    half = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]).astype(np.int64)
+    keys = half.min(axis=1) * n_vertices + half.max(axis=1)
+    _, counts = np.unique(keys, return_counts=True)
+    return bool((counts == 2).all())
+
+
+def _select_faces(vertices, faces, view, budget, closed):
+    """Faces to draw: all of them within the budget; beyond it the back faces of
+    a closed mesh go first (they are hidden anyway), then an even stride."""
+    keep = np.arange(len(faces))
+    if len(keep) > budget and closed:
+        keep = keep[_face_normals(vertices, faces) @ view > 0]
+    if len(keep) > budget:
+        keep = keep[:: math.ceil(len(keep) / budget)]
+    return keep
+
+
+def _shaded_colors(vertices, faces, base, light):
+    n = _face_normals(vertices, faces)
+    norm = np.linalg.norm(n, axis=1)
+    n = n / np.where(norm > 0, norm, 1.0)[:, None]
+    # Two-sided Lambert shading: open meshes show their back side too.
+    intensity = 0.30 + 0.70 * np.abs(n @ light)
+    rgb = np.clip(base[None, :] * intensity[:, None], 0, 1)
+    return np.column_stack([rgb, np.ones(len(rgb))])
+
+
+def interpolation_figure(vertices, faces, given_surface, control_vertices, fitted_surface, *,
+                         size: tuple[int, int] = (1200, 1000), elev: float = 25.0, azim: float = -60.0,
+                         face_budget: int = FACE_BUDGET, point_budget: int = POINT_BUDGET,
+                         title: str | None = None, iterations: int | None = None, level: int | None = None):
+    """The paper's Figure 3 in four panels, the same camera in each.
+
+    Parameters
+    ----------
+    vertices : (n, 3) float64
+        The given vertices V0 (drawn red).
+    faces : (m, 3) int
+        The given triangles (also the faces of the control mesh).
+    given_surface : (V_s, F_s)
+        Tessellated Loop limit surface of the given mesh (panel b).
+    control_vertices : (n, 3) float64
+        Control vertices found by SOR-PIA (drawn blue, panel c).
+    fitted_surface : (V_s, F_s)
+        Tessellated limit surface of the control mesh (panel d).
+    size : (width, height) of the PNG in pixels (100 dpi).
+    elev, azim : camera angles in degrees (matplotlib's view_init).
+    face_budget, point_budget : most faces / markers drawn per panel; beyond
+        them back faces of closed meshes are culled, then an even stride of
+        faces or markers is drawn (the panel title says so).
+    """
+    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+
+    V0 = np.asarray(vertices, dtype=float)
+    F = np.asarray(faces, dtype=np.int64)
+    Vc = np.asarray(control_vertices, dtype=float)
+    Vg, Fg = (np.asarray(given_surface[0], float), np.asarray(given_surface[1], np.int64))
+    Vf, Ff = (np.asarray(fitted_surface[0], float), np.asarray(fitted_surface[1], np.int64))
+
+    view = _view_vector(elev, azim)
+    up = np.array([0.0, 0.0, 1.0])
+    right = np.cross(up, view)
+    right = right / (np.linalg.norm(right) or 1.0)
+    light = view + 0.5 * up - 0.4 * right  # from over the viewer's left shoulder
+    light /= np.linalg.norm(light)
+
+    # One box of axis limits around everything drawn, equal scale on the three
+    # axes (box aspect = extents): the same camera in every panel.
+    allpts = np.concatenate([V0, Vc, Vg, Vf])
+    allpts = allpts[np.isfinite(allpts).all(axis=1)]
+    lo, hi = allpts.min(axis=0), allpts.max(axis=0)
+    extent = np.maximum(hi - lo, 0.05 * max(float((hi - lo).max()), 1e-12))  # flat meshes keep some depth
+    centre = (lo + hi) / 2
+
+    closed = _is_closed(F, len(V0))
+    # Markers: only the given vertices facing the camera on a closed mesh
+    # (matplotlib cannot hide points behind a surface); at most point_budget.
+    shown = np.unique(F.ravel())
+    if closed:
+        shown = shown[_vertex_normals(V0, F)[shown] @ view > 0]
+    stride = max(1, math.ceil(len(shown) / point_budget))
+    shown = shown[::stride]
+    marker = float(np.clip(3000.0 / max(len(shown), 1), 1.0, 14.0))
+
+    fig = _new_figure(*size)
+    panels = [
+        ("(a) given mesh", V0, F, MESH_COLOR, True, [(V0, GIVEN_COLOR)]),
+        ("(b) Loop limit surface of the given mesh", Vg, Fg, SURFACE_COLOR, False, [(V0, GIVEN_COLOR)]),
+        ("(c) control mesh by SOR-PIA" + (f", {iterations} iterations" if iterations is not None else ""),
+         Vc, F, MESH_COLOR, True, [(Vc, CONTROL_COLOR), (V0, GIVEN_COLOR)]),
+        ("(d) limit surface of the control mesh", Vf, Ff, SURFACE_COLOR, False, [(V0, GIVEN_COLOR)]),
+    ]
+    for j, (label, Vp, Fp, base, edges, points) in enumerate(panels):
+        ax = fig.add_subplot(2, 2, j + 1, projection="3d")
+        ax.computed_zorder = False  # markers painted over the surface, not sorted with it
+        keep = _select_faces(Vp, Fp, view, face_budget, closed)
+        sub = Fp[keep]
+        edgecolor = "none"
+        linewidth = 0.0
+        if edges and len(sub) <= 20_000:
+            edgecolor, linewidth = (0.15, 0.15, 0.15, 0.6), 0.5 if len(sub) <= 3_000 else 0.15
+        coll = Poly3DCollection(Vp[sub], facecolors=_shaded_colors(Vp, sub, base, light),
+                                edgecolors=edgecolor, linewidths=linewidth)
+        coll.set_zorder(1)
+        ax.add_collection3d(coll)
+        for z, (P, color) in enumerate(points):
+            ax.scatter(P[shown, 0], P[shown, 1], P[shown, 2], s=marker, c=color, depthshade=False,
+                       linewidths=0, zorder=2 + z)
+        if len(sub) < len(Fp):
+            label += f"\n({len(sub)} of {len(Fp)} faces drawn)"
+        ax.set_title(label, fontsize=10)
+        ax.set_xlim(centre[0] - extent[0] / 2, centre[0] + extent[0] / 2)
+        ax.set_ylim(centre[1] - extent[1] / 2, centre[1] + extent[1] / 2)
+        ax.set_zlim(centre[2] - extent[2] / 2, centre[2] + extent[2] / 2)
+        ax.set_proj_type("ortho")
+        ax.view_init(elev=elev, azim=azim)
+        try:
+            ax.set_box_aspect(tuple(extent), zoom=1.35)
+        except TypeError:  # matplotlib < 3.7 has no zoom
+            ax.set_box_aspect(tuple(extent))
+        ax.set_axis_off()
+    note = []
+    if level is not None:
+        note.append(f"limit surfaces refined {level} times")
+    if stride > 1:
+        note.append(f"every {stride}th vertex marked")
+    if closed:
+        note.append("vertices facing the camera marked")
+    fig.suptitle((title or "Loop limit surface and SOR-PIA interpolation (paper Figure 3)")
+                 + ("\n" + ", ".join(note) if note else ""), fontsize=11)
+    fig.subplots_adjust(left=0.01, right=0.99, bottom=0.01, top=0.90, wspace=0.02, hspace=0.12)
+    return fig
