@@ -1,52 +1,905 @@
-"""The ``sorpia`` command (also ``python -m sorpia``)."""
+"""The ``sorpia`` command (also ``python -m sorpia``).
+
+Subcommands: ``fit`` (control mesh whose Loop limit surface interpolates a
+mesh file), ``compare`` (the paper's Table 1 and Figure 7 for one mesh),
+``render`` (the paper's Figure 3), ``info`` (mesh statistics, the paper's
+Table 2) and ``demo`` (all of it on a generated sample mesh).
+
+Exit codes: 0 success; 1 a solve stopped at --max-iter before reaching --tol
+(every output is still written); 2 bad input (a one-line message on stderr, no
+traceback); 130 interrupted. The input file is only read. Every output is
+written atomically: a temporary file in the same folder, then os.replace.
+"""
 
 from __future__ import annotations
 
 import argparse
+import contextlib
+import csv
+import io
+import json
+import math
+import os
 import sys
+import tempfile
+import time
+import warnings
+from pathlib import Path
 
 import numpy as np
 
 from . import __version__
 
+EXIT_OK, EXIT_NOT_CONVERGED, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
 
-def _cmd_demo(args: argparse.Namespace) -> int:
-    from . import limit_points, shapes
+METHODS = ("pia", "wpia", "hss", "whss", "gs", "sor", "cg")
+# The paper's names (Table 1) for the methods it compares, and ours for the rest.
+METHOD_LABELS = {"pia": "PIA", "wpia": "W-PIA", "hss": "HSS-PIA", "whss": "WHSS-PIA", "gs": "Gauss-Seidel",
+                 "sor": "SOR-PIA", "cg": "CG"}
+# The columns of the paper's Table 1: iterations to reach E_k/E_0 < 10^-j.
+TABLE_TOLERANCES = tuple(10.0 ** -j for j in range(1, 11))
+MESH_SUFFIXES = (".obj", ".off", ".ply", ".stl")
 
-    vertices, faces = shapes.irregular(args.vertices, seed=1)
-    limit = limit_points(vertices, faces)
-    shrink = np.linalg.norm(limit - vertices, axis=1)
-    diag = float(np.linalg.norm(vertices.max(axis=0) - vertices.min(axis=0)))
-    print(f"sorpia {__version__} demo: generated irregular closed mesh, "
-          f"{len(vertices)} vertices, {len(faces)} faces")
-    print(f"Loop limit points (OpenSubdiv): |limit - vertex| mean {shrink.mean():.4g}, "
-          f"max {shrink.max():.4g} ({100 * shrink.max() / diag:.2f}% of the bounding-box diagonal)")
-    return 0
+
+class UserError(Exception):
+    """Bad input from the command line: reported as one line, exit code 2."""
+
+
+# --------------------------------------------------------------------------- output files
+
+@contextlib.contextmanager
+def atomic_output(path):
+    """Yield a temporary path in the folder of `path`; on success it replaces
+    `path` (os.replace, atomic on one file system), on failure it is removed
+    and `path` is left as it was."""
+    path = Path(path)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent if str(path.parent) else ".")
+    os.close(fd)
+    try:
+        yield tmp
+        os.chmod(tmp, 0o666 & ~_umask())
+        os.replace(tmp, path)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        raise
+
+
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+def write_text(path, text: str) -> None:
+    with atomic_output(path) as tmp, open(tmp, "w", encoding="utf-8", newline="") as fh:
+        fh.write(text)
+
+
+def _jsonable(obj):
+    """numpy scalars and arrays to Python, NaN and inf to None (JSON has neither)."""
+    if isinstance(obj, dict):
+        return {str(k): _jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_jsonable(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return _jsonable(obj.tolist())
+    if isinstance(obj, np.generic):
+        obj = obj.item()
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return None
+    return obj
+
+
+def write_json(path, data) -> None:
+    write_text(path, json.dumps(_jsonable(data), indent=2) + "\n")
+
+
+def save_figure(fig, path) -> None:
+    with atomic_output(path) as tmp:
+        fig.savefig(tmp, format="png")
+
+
+# --------------------------------------------------------------------------- progress
+
+class Progress:
+    """Progress of one solve, fed by interpolate's callback(k, error).
+
+    On a terminal: one live line on stderr, redrawn at most 10 times a second
+    and erased at the end. In a pipe or a file: a plain line every few seconds
+    (short runs print none). Disabled: nothing at all.
+    """
+
+    def __init__(self, label: str, enabled: bool = True, stream=None):
+        self.stream = stream if stream is not None else sys.stderr
+        self.enabled = enabled
+        self.tty = enabled and _isatty(self.stream)
+        self.interval = 0.1 if self.tty else 2.0
+        self.label = label
+        self.start = self.last = time.perf_counter()
+        self.width = 0
+
+    def __call__(self, k: int, error: float) -> bool:
+        if self.enabled:
+            now = time.perf_counter()
+            if now - self.last >= self.interval:
+                self.last = now
+                text = f"{self.label}: iteration {k}, E_k/E_0 = {error:.3e}, {now - self.start:.1f} s"
+                if self.tty:
+                    self.stream.write("\r" + text.ljust(self.width))
+                    self.width = len(text)
+                else:
+                    self.stream.write(text + "\n")
+                self.stream.flush()
+        return False  # never ask the solver to stop
+
+    def close(self) -> None:
+        if self.tty and self.width:
+            self.stream.write("\r" + " " * self.width + "\r")
+            self.stream.flush()
+            self.width = 0
+
+
+def _isatty(stream) -> bool:
+    try:
+        return stream.isatty()
+    except (AttributeError, ValueError):
+        return False
+
+
+# --------------------------------------------------------------------------- checks and helpers
+
+def _same_file(a, b) -> bool:
+    a, b = Path(a), Path(b)
+    if a.resolve() == b.resolve():
+        return True
+    try:
+        return a.exists() and b.exists() and os.path.samefile(a, b)
+    except OSError:
+        return False
+
+
+def check_paths(inputs, outputs: dict, force: bool = False) -> None:
+    """Refuse an output that is an input (unless `force`), the same file given
+    for two outputs, and an output whose folder does not exist; before any
+    work is done, so a long fit never ends in 'cannot write'."""
+    named = [(opt, p) for opt, p in outputs.items() if p is not None]
+    for opt, p in named:
+        for src in inputs:
+            if _same_file(p, src) and not force:
+                raise UserError(f"{opt} {p} is the input file: refusing to overwrite it (pass --force to do so)")
+        folder = Path(p).parent
+        if not folder.is_dir():
+            raise UserError(f"{opt} {p}: folder {folder} does not exist")
+        if Path(p).is_dir():
+            raise UserError(f"{opt} {p} is a folder, not a file")
+    for i, (opt_a, a) in enumerate(named):
+        for opt_b, b in named[i + 1:]:
+            if _same_file(a, b):
+                raise UserError(f"{opt_a} and {opt_b} name the same file {a}")
+
+
+def check_mesh_suffix(opt: str, path) -> None:
+    if path is not None and Path(path).suffix.lower() not in MESH_SUFFIXES:
+        raise UserError(f"{opt} {path}: unknown mesh format {Path(path).suffix or '(no suffix)'!r}; "
+                        f"use one of {', '.join(MESH_SUFFIXES)}")
+
+
+def read_input(path):
+    """Read the input mesh; returns (vertices, faces, seconds)."""
+    from . import read_mesh
+
+    if not Path(path).exists():
+        raise UserError(f"{path}: no such file")
+    if Path(path).is_dir():
+        raise UserError(f"{path} is a folder, not a mesh file")
+    t0 = time.perf_counter()
+    vertices, faces = read_mesh(path)
+    return vertices, faces, time.perf_counter() - t0
+
+
+def _omega_arg(text: str):
+    """--omega: 'auto', 'young' or a number (its range is checked by interpolate)."""
+    low = text.strip().lower()
+    if low in ("auto", "young"):
+        return low
+    try:
+        return float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected auto, young or a number, got {text!r}") from None
+
+
+def _methods_arg(text: str):
+    names = [m.strip().lower() for m in text.split(",") if m.strip()]
+    bad = [m for m in names if m not in METHODS]
+    if bad or not names:
+        raise argparse.ArgumentTypeError(f"unknown method {', '.join(bad) or '(none)'}: use a comma-separated "
+                                         f"list of {','.join(METHODS)}")
+    return list(dict.fromkeys(names))
+
+
+def _positive_float(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not (value > 0 and math.isfinite(value)):
+        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}")
+    return value
+
+
+def _positive_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected at least 1, got {text!r}")
+    return value
+
+
+def _level_arg(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    if not 0 <= value <= 8:
+        raise argparse.ArgumentTypeError(f"expected a level from 0 to 8, got {text!r}")
+    return value
+
+
+def _size_arg(text: str):
+    try:
+        w, h = (int(x) for x in text.lower().split("x"))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected WIDTHxHEIGHT in pixels, e.g. 1200x1000, got {text!r}") from None
+    if not (100 <= w <= 10000 and 100 <= h <= 10000):
+        raise argparse.ArgumentTypeError(f"width and height must be 100 to 10000 pixels, got {text!r}")
+    return w, h
+
+
+def _result_fields(res) -> dict:
+    """Every public figure of an interpolate result except the control vertices
+    (whatever the result type holds: method, omega, iterations, converged,
+    errors, seconds and the per-phase timings, spectral estimates...)."""
+    if hasattr(res, "__dataclass_fields__"):
+        names = list(res.__dataclass_fields__)
+    else:
+        names = [n for n in dir(res) if not n.startswith("_")]
+    out = {}
+    for name in names:
+        if name == "control_vertices":
+            continue
+        try:
+            value = getattr(res, name)
+        except AttributeError:
+            continue
+        if callable(value):
+            continue
+        out[name] = value
+    return out
+
+
+def _run_interpolate(vertices, faces, *, method, omega, tol, max_iter, boundary, progress: Progress):
+    """sorpia.interpolate with a progress line; returns (result, wall seconds,
+    CPU seconds, warnings raised during the run)."""
+    from . import interpolate
+
+    kwargs = dict(method=method, tol=tol, max_iter=max_iter, boundary=boundary, callback=progress)
+    if omega is not None:
+        kwargs["omega"] = omega
+    cpu0, t0 = time.process_time(), time.perf_counter()
+    try:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            res = interpolate(vertices, faces, **kwargs)
+    finally:
+        progress.close()
+    return res, time.perf_counter() - t0, time.process_time() - cpu0, caught
+
+
+def _report_warnings(caught, skip_convergence: bool = True) -> None:
+    """Print the warnings of a solve as 'sorpia: warning: ...', once each; the
+    solver's own 'did not converge' is left out where the summary says it."""
+    seen = set()
+    for w in caught:
+        text = str(w.message)
+        if skip_convergence and "converge" in type(w.message).__name__.lower() + text.lower():
+            continue
+        if text not in seen:
+            seen.add(text)
+            print(f"sorpia: warning: {text}", file=sys.stderr)
+
+
+def _fmt_seconds(s: float) -> str:
+    return f"{s:.3f}" if s < 10 else f"{s:.1f}"
+
+
+def _omega_text(res) -> str:
+    omega = getattr(res, "omega", None)
+    if omega is None or (isinstance(omega, float) and not math.isfinite(omega)):
+        return "-"
+    return f"{omega:.4f}"
+
+
+# --------------------------------------------------------------------------- fit
+
+def run_fit(input_path, output, *, method="sor", omega="auto", tol=1e-10, max_iter=1000,
+            boundary="edge-and-corner", surface=None, level=3, report=None, quiet=False, force=False,
+            out=None) -> tuple[int, dict]:
+    """`sorpia fit`: returns (exit code, report dict)."""
+    from . import limit_points, write_mesh
+    from .meshinfo import mesh_info
+
+    out = out if out is not None else sys.stdout
+    check_mesh_suffix("-o", output)
+    check_mesh_suffix("--surface", surface)
+    check_paths([input_path], {"-o": output, "--surface": surface, "--report": report}, force)
+    if omega != "auto" and method != "sor":
+        raise UserError(f"--omega applies to --method sor only (got --method {method})")
+
+    timings: dict[str, float] = {}
+    V0, F, timings["read"] = read_input(input_path)
+    t0 = time.perf_counter()
+    stats = mesh_info(V0, F, boundary=boundary, list_extraordinary=False)
+    timings["statistics"] = time.perf_counter() - t0
+    if not stats["loop_pia"]["can_run"]:
+        raise UserError(f"{input_path}: Loop PIA cannot run on this mesh: {stats['loop_pia']['reason']}")
+
+    progress = Progress(f"{METHOD_LABELS[method]}", enabled=not quiet)
+    res, timings["fit"], cpu, caught = _run_interpolate(
+        V0, F, method=method, omega=omega if method == "sor" else None, tol=tol, max_iter=max_iter,
+        boundary=boundary, progress=progress)
+    _report_warnings(caught)
+    ctrl = np.asarray(res.control_vertices)
+
+    t0 = time.perf_counter()
+    write_mesh(output, ctrl, F)
+    timings["write"] = time.perf_counter() - t0
+    # An independent check of what was written: the limit positions of the
+    # control mesh against the given vertices (OpenSubdiv's Limit, not the solver).
+    t0 = time.perf_counter()
+    residual = np.linalg.norm(limit_points(ctrl, F, boundary=boundary) - V0, axis=1)
+    timings["check"] = time.perf_counter() - t0
+    surface_stats = None
+    if surface is not None:
+        from . import limit_surface
+
+        t0 = time.perf_counter()
+        Vs, Fs = limit_surface(ctrl, F, level=level, boundary=boundary)
+        write_mesh(surface, Vs, Fs)
+        timings["surface"] = time.perf_counter() - t0
+        surface_stats = {"path": str(surface), "level": level, "vertices": len(Vs), "faces": len(Fs)}
+
+    fields = _result_fields(res)
+    errors = np.asarray(res.errors, dtype=float)
+    diag = stats.get("diagonal") or 1.0
+    data = {
+        "sorpia_version": __version__,
+        "command": "fit",
+        "input": str(input_path),
+        "output": str(output),
+        "surface": surface_stats,
+        "report": None if report is None else str(report),
+        "mesh": stats,
+        "method": method,
+        "omega_rule": omega if method == "sor" else None,
+        "omega": fields.get("omega"),
+        "tol": tol,
+        "max_iter": max_iter,
+        "boundary": boundary,
+        "iterations": int(res.iterations),
+        "converged": bool(res.converged),
+        "final_error": float(errors[-1]),
+        "errors": errors,
+        "max_residual": float(residual.max()),
+        "max_residual_relative": float(residual.max() / diag),
+        "cpu_seconds": cpu,
+        "timings": timings,
+        "result": {k: v for k, v in fields.items() if k not in ("errors",)},
+    }
+    if report is not None:
+        write_json(report, data)
+    if not quiet:
+        print(_fit_summary(data), file=out)
+    return (EXIT_OK if res.converged else EXIT_NOT_CONVERGED), data
+
+
+def _mesh_line(stats: dict) -> str:
+    parts = [f"{stats['vertices']} vertices", f"{stats['faces']} faces"]
+    if "boundary_loops" in stats:
+        parts.append("closed" if stats["boundary_loops"] == 0 else f"{stats['boundary_loops']} boundary loops")
+        if stats.get("genus") is not None:
+            parts.append(f"genus {stats['genus']}")
+        parts.append(f"{stats['extraordinary_vertices']} extraordinary vertices "
+                     f"(valence {stats['valence_min']} to {stats['valence_max']})")
+    return ", ".join(parts)
+
+
+def _fit_summary(d: dict) -> str:
+    label = METHOD_LABELS[d["method"]]
+    omega = d["omega"]
+    if d["method"] == "sor" and omega is not None:
+        label += f", omega {omega:.4f} ({d['omega_rule']})"
+    elif d["method"] == "gs":
+        label += ", omega 1"
+    state = (f"converged in {d['iterations']} iterations: E_k/E_0 = {d['final_error']:.3g} < tol {d['tol']:g}"
+             if d["converged"] else
+             f"NOT converged: stopped after {d['iterations']} iterations at E_k/E_0 = {d['final_error']:.3g} "
+             f"(tol {d['tol']:g}); outputs written anyway, exit code 1")
+    t = d["timings"]
+    phases = ", ".join(f"{k} {_fmt_seconds(v)}" for k, v in t.items())
+    written = [d["output"]] + ([d["surface"]["path"]] if d["surface"] else []) + (
+        [d["report"]] if d["report"] else [])
+    lines = [
+        f"sorpia fit: {d['input']} -> {d['output']}",
+        f"  mesh        {_mesh_line(d['mesh'])}",
+        f"  method      {label}",
+        f"  result      {state}",
+        f"  check       max |B V - V0| = {d['max_residual']:.3g} "
+        f"({d['max_residual_relative']:.3g} of the bounding-box diagonal)",
+        f"  seconds     {phases}",
+        f"  wrote       {', '.join(written)}",
+    ]
+    if d["surface"]:
+        s = d["surface"]
+        lines.insert(-1, f"  surface     level {s['level']}: {s['vertices']} vertices, {s['faces']} faces")
+    return "\n".join(lines)
+
+
+# --------------------------------------------------------------------------- compare
+
+def iterations_to_reach(errors, tolerances=TABLE_TOLERANCES) -> list:
+    """For each tol: the first k with errors[k] < tol (None if never)."""
+    errors = np.asarray(errors, dtype=float)
+    out = []
+    for tol in tolerances:
+        hit = np.flatnonzero(errors < tol)
+        out.append(int(hit[0]) if len(hit) else None)
+    return out
+
+
+def run_compare(input_path, *, methods=METHODS, tol=1e-10, max_iter=1000, boundary="edge-and-corner",
+                table=None, csv_path=None, plot=None, json_path=None, quiet=False, force=False,
+                out=None) -> tuple[int, dict]:
+    """`sorpia compare`: every method to the same tolerance; returns (exit code, data)."""
+    from .meshinfo import mesh_info
+
+    out = out if out is not None else sys.stdout
+    check_paths([input_path], {"--table": table, "--csv": csv_path, "--plot": plot, "--json": json_path}, force)
+    if plot is not None:
+        _require_plotting()
+    V0, F, read_seconds = read_input(input_path)
+    stats = mesh_info(V0, F, boundary=boundary, list_extraordinary=False)
+    if not stats["loop_pia"]["can_run"]:
+        raise UserError(f"{input_path}: Loop PIA cannot run on this mesh: {stats['loop_pia']['reason']}")
+    rows = []
+    for method in methods:
+        progress = Progress(METHOD_LABELS[method], enabled=not quiet)
+        res, wall, cpu, caught = _run_interpolate(V0, F, method=method, omega=None, tol=tol, max_iter=max_iter,
+                                                  boundary=boundary, progress=progress)
+        _report_warnings(caught)
+        fields = _result_fields(res)
+        rows.append({
+            "method": method,
+            "label": METHOD_LABELS[method],
+            "omega": fields.get("omega") if method in ("sor", "gs") else None,
+            "iterations": int(res.iterations),
+            "converged": bool(res.converged),
+            "reached": iterations_to_reach(res.errors),
+            "cpu_seconds": cpu,
+            "wall_seconds": wall,
+            "errors": np.asarray(res.errors, dtype=float),
+            "result": {k: v for k, v in fields.items() if k != "errors"},
+        })
+    data = {
+        "sorpia_version": __version__,
+        "command": "compare",
+        "input": str(input_path),
+        "mesh": stats,
+        "tol": tol,
+        "max_iter": max_iter,
+        "boundary": boundary,
+        "tolerances": TABLE_TOLERANCES,
+        "read_seconds": read_seconds,
+        "methods": rows,
+    }
+    markdown = compare_markdown(data, Path(input_path).name)
+    if table is not None:
+        write_text(table, markdown + "\n")
+    if csv_path is not None:
+        write_text(csv_path, compare_csv(data))
+    if json_path is not None:
+        write_json(json_path, data)
+    if plot is not None:
+        from .plotting import convergence_figure
+
+        curves = [(_curve_label(r), r["errors"]) for r in rows]
+        save_figure(convergence_figure(curves, tol=tol, title=f"Convergence on {Path(input_path).name} "
+                                       f"(paper Figure 7)"), plot)
+    if not quiet:
+        print(f"sorpia compare: {input_path}: {_mesh_line(stats)}", file=out)
+        print(markdown, file=out)
+        failed = [r["label"] for r in rows if not r["converged"]]
+        if failed:
+            print(f"NOT converged to tol {tol:g} within {max_iter} iterations: {', '.join(failed)} (exit code 1)",
+                  file=out)
+        written = [p for p in (table, csv_path, plot, json_path) if p is not None]
+        if written:
+            print(f"wrote {', '.join(map(str, written))}", file=out)
+    ok = all(r["converged"] for r in rows)
+    return (EXIT_OK if ok else EXIT_NOT_CONVERGED), data
+
+
+def _curve_label(row) -> str:
+    return row["label"] + (f" (omega {row['omega']:.4f})" if row["method"] == "sor" and row["omega"] else "")
+
+
+def _tol_header(tol: float) -> str:
+    return f"1e-{round(-math.log10(tol))}"
+
+
+def compare_markdown(data: dict, name: str) -> str:
+    """The paper's Table 1 layout for one mesh: method, omega, iterations to
+    reach E_k/E_0 < 1e-1 ... 1e-10 ('-' = not reached), CPU seconds of the whole
+    run (to --tol), wall seconds."""
+    head = ["mesh", "method", "omega"] + [_tol_header(t) for t in data["tolerances"]] + ["CPU time (s)",
+                                                                                        "wall time (s)"]
+    lines = ["| " + " | ".join(head) + " |", "|" + "|".join(["---"] * 3 + ["---:"] * (len(head) - 3)) + "|"]
+    for j, r in enumerate(data["methods"]):
+        cells = [name if j == 0 else "", r["label"], "-" if r["omega"] is None else f"{r['omega']:.4f}"]
+        cells += ["-" if k is None else str(k) for k in r["reached"]]
+        cells += [f"{r['cpu_seconds']:.4f}", f"{r['wall_seconds']:.4f}"]
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def compare_csv(data: dict) -> str:
+    buf = io.StringIO()
+    writer = csv.writer(buf, lineterminator="\n")
+    writer.writerow(["method", "omega", "iterations", "converged"]
+                    + [f"iterations_to_{_tol_header(t)}" for t in data["tolerances"]]
+                    + ["cpu_seconds", "wall_seconds"])
+    for r in data["methods"]:
+        writer.writerow([r["method"], "" if r["omega"] is None else repr(float(r["omega"])), r["iterations"],
+                         r["converged"]] + ["" if k is None else k for k in r["reached"]]
+                        + [f"{r['cpu_seconds']:.6f}", f"{r['wall_seconds']:.6f}"])
+    return buf.getvalue()
+
+
+# --------------------------------------------------------------------------- render
+
+def _require_plotting() -> None:
+    from .plotting import require_matplotlib
+
+    try:
+        require_matplotlib()
+    except ImportError as exc:
+        raise UserError(str(exc)) from None
+
+
+def run_render(input_path, output, *, level=3, tol=1e-10, max_iter=1000, boundary="edge-and-corner",
+               size=(1200, 1000), elev=25.0, azim=-60.0, face_budget=None, quiet=False, force=False,
+               out=None) -> tuple[int, dict]:
+    """`sorpia render`: the paper's Figure 3 for a mesh file."""
+    from . import limit_surface
+    from .meshinfo import mesh_info
+    from .plotting import FACE_BUDGET, interpolation_figure, level_for_budget
+
+    out = out if out is not None else sys.stdout
+    if Path(output).suffix.lower() != ".png":
+        raise UserError(f"-o {output}: render writes a PNG image, give a file name ending in .png")
+    check_paths([input_path], {"-o": output}, force)
+    _require_plotting()
+    budget = face_budget or FACE_BUDGET
+    timings = {}
+    V0, F, timings["read"] = read_input(input_path)
+    stats = mesh_info(V0, F, boundary=boundary, list_extraordinary=False)
+    if not stats["loop_pia"]["can_run"]:
+        raise UserError(f"{input_path}: Loop PIA cannot run on this mesh: {stats['loop_pia']['reason']}")
+    progress = Progress("SOR-PIA", enabled=not quiet)
+    res, timings["fit"], _, caught = _run_interpolate(V0, F, method="sor", omega="auto", tol=tol, max_iter=max_iter,
+                                                      boundary=boundary, progress=progress)
+    _report_warnings(caught)
+    ctrl = np.asarray(res.control_vertices)
+    drawn_level = level_for_budget(len(F), level, budget)
+    t0 = time.perf_counter()
+    given = limit_surface(V0, F, level=drawn_level, boundary=boundary)
+    fitted = limit_surface(ctrl, F, level=drawn_level, boundary=boundary)
+    timings["surface"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    fig = interpolation_figure(V0, F, given, ctrl, fitted, size=size, elev=elev, azim=azim, face_budget=budget,
+                               title=f"{Path(input_path).name}: Loop limit surface and SOR-PIA (paper Figure 3)",
+                               iterations=int(res.iterations), level=drawn_level)
+    save_figure(fig, output)
+    timings["draw"] = time.perf_counter() - t0
+    data = {"output": str(output), "level": drawn_level, "iterations": int(res.iterations),
+            "converged": bool(res.converged), "omega": getattr(res, "omega", None), "timings": timings}
+    if not quiet:
+        lvl = f"level {drawn_level}" + (f" (asked {level}; face budget {budget})" if drawn_level < level else "")
+        state = "" if res.converged else f"; NOT converged to tol {tol:g} (exit code 1)"
+        print(f"sorpia render: {input_path} -> {output} ({size[0]}x{size[1]} px, limit surfaces at {lvl}; "
+              f"SOR-PIA omega {_omega_text(res)}, {res.iterations} iterations{state})", file=out)
+        print("  seconds     " + ", ".join(f"{k} {_fmt_seconds(v)}" for k, v in timings.items()), file=out)
+    return (EXIT_OK if res.converged else EXIT_NOT_CONVERGED), data
+
+
+# --------------------------------------------------------------------------- info
+
+def run_info(input_path, *, as_json=False, boundary="edge-and-corner", out=None) -> tuple[int, dict]:
+    """`sorpia info`: mesh statistics and whether Loop PIA can run (exit 0 either way)."""
+    from .meshinfo import format_info, mesh_info
+
+    out = out if out is not None else sys.stdout
+    V0, F, _ = read_input(input_path)
+    info = mesh_info(V0, F, boundary=boundary)
+    if as_json:
+        print(json.dumps(_jsonable({"input": str(input_path), **info}), indent=2), file=out)
+    else:
+        print(format_info(info, str(input_path)), file=out)
+    return EXIT_OK, info
+
+
+# --------------------------------------------------------------------------- demo
+
+def sample_mesh():
+    """The demo's mesh: a closed genus-1 mesh of 400 vertices with random edge
+    flips (sorpia.shapes.irregular: valences 3 to 12, most vertices
+    extraordinary), its tube made wavy so that the Loop surface visibly shrinks
+    away from the vertices. Returns (vertices (n, 3) float64, faces (m, 3) int32)."""
+    from . import shapes
+
+    V, F = shapes.irregular(400, seed=3)
+    V = np.array(V, dtype=float)
+    # A bump in the tube radius, 5 waves around the ring: the Loop surface
+    # shrinks most at the crests, where the curvature is largest.
+    angle = np.arctan2(V[:, 1], V[:, 0])
+    ring = np.column_stack([np.cos(angle), np.sin(angle), np.zeros(len(V))])
+    offset = V - ring  # from the tube's centre circle (major radius 1)
+    V = ring + offset * (1.0 + 0.45 * np.sin(5 * angle))[:, None]
+    return V, F
+
+
+def _new_demo_folder() -> Path:
+    stamp = time.strftime("%Y%m%d-%H%M%S")
+    for k in range(100):
+        folder = Path.cwd() / (f"sorpia-demo-{stamp}" + (f"-{k}" if k else ""))
+        try:
+            folder.mkdir()
+            return folder
+        except FileExistsError:
+            continue
+    raise UserError("could not create a new sorpia-demo-* folder in the working directory")
+
+
+def run_demo(out_dir=None, *, quiet=False, out=None) -> int:
+    """`sorpia demo`: fit, compare and render on the built-in sample mesh."""
+    from . import write_mesh
+
+    out = out if out is not None else sys.stdout
+    t_start = time.perf_counter()
+    if out_dir is None:
+        folder = _new_demo_folder()
+    else:
+        folder = Path(out_dir)
+        if folder.exists() and not folder.is_dir():
+            raise UserError(f"--out {folder} is a file, not a folder")
+        try:
+            folder.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise UserError(f"--out {folder}: cannot create the folder: {exc.strerror}") from None
+    try:
+        plots = True
+        _require_plotting()
+    except UserError as exc:
+        plots = False
+        print(f"sorpia demo: no figures: {exc}", file=out)
+    paths = {
+        "sample mesh": folder / "sample.obj",
+        "control mesh": folder / "control.obj",
+        "limit surface of the control mesh": folder / "surface.obj",
+        "fit report": folder / "fit-report.json",
+        "Table 1 (Markdown)": folder / "table.md",
+        "Table 1 (CSV)": folder / "table.csv",
+        "comparison (JSON)": folder / "compare.json",
+    }
+    if plots:
+        paths["Figure 7 (convergence)"] = folder / "convergence.png"
+        paths["Figure 3 (interpolation)"] = folder / "figure3.png"
+    V, F = sample_mesh()
+    write_mesh(paths["sample mesh"], V, F)
+    sample = paths["sample mesh"]
+    say = (lambda *a: None) if quiet else (lambda *a: print(*a, file=out))
+    say(f"sorpia {__version__} demo: sample mesh {sample} (a wavy torus with random edge flips)\n")
+    codes = []
+    code, _ = run_fit(sample, paths["control mesh"], surface=paths["limit surface of the control mesh"],
+                      level=3, report=paths["fit report"], quiet=quiet, out=out)
+    codes.append(code)
+    say("")
+    code, _ = run_compare(sample, table=paths["Table 1 (Markdown)"], csv_path=paths["Table 1 (CSV)"],
+                          json_path=paths["comparison (JSON)"], plot=paths.get("Figure 7 (convergence)"),
+                          quiet=quiet, out=out)
+    codes.append(code)
+    if plots:
+        say("")
+        code, _ = run_render(sample, paths["Figure 3 (interpolation)"], quiet=quiet, out=out)
+        codes.append(code)
+    width = max(len(k) for k in paths)
+    say(f"\nsorpia demo: done in {time.perf_counter() - t_start:.1f} s; files in {folder}:")
+    for what, p in paths.items():
+        say(f"  {what:<{width}}  {p}")
+    say(f"next: sorpia info {sample}   |   sorpia fit --help")
+    return max(codes)
+
+
+# --------------------------------------------------------------------------- parser
+
+class _Formatter(argparse.ArgumentDefaultsHelpFormatter, argparse.RawDescriptionHelpFormatter):
+    """Defaults shown after every option; descriptions keep their line breaks."""
+
+
+EXIT_HELP = """exit codes: 0 done; 1 a solve stopped at --max-iter before reaching --tol (all outputs
+still written); 2 bad input or options (one line on stderr); 130 interrupted."""
 
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="sorpia",
-        description="Interpolating Loop subdivision surfaces: move the control vertices of a triangle mesh "
-        "so that its Loop limit surface passes through the given vertices (SOR-PIA and the PIA family).",
-        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+        description="Interpolating Loop subdivision surfaces: move the control vertices of a triangle mesh so "
+        "that its Loop limit surface passes through the given vertices (SOR-PIA and the PIA family).",
+        epilog=EXIT_HELP + "\nRun 'sorpia COMMAND --help' for the options of a command.",
+        formatter_class=_Formatter,
     )
     parser.add_argument("--version", action="version", version=f"sorpia {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
-    demo = sub.add_parser("demo", help="run the main job on a built-in sample mesh",
-                          formatter_class=argparse.ArgumentDefaultsHelpFormatter)
-    demo.add_argument("--vertices", type=int, default=400, help="size of the generated sample mesh")
-    demo.set_defaults(func=_cmd_demo)
+
+    def command(name, help_text, description):
+        return sub.add_parser(name, help=help_text, description=description, epilog=EXIT_HELP,
+                              formatter_class=_Formatter)
+
+    def solver_options(p, with_method=True):
+        if with_method:
+            p.add_argument("--method", choices=METHODS, default="sor",
+                           help="iteration: sor = SOR-PIA (paper eq. 18), gs = Gauss-Seidel, pia = PIA (eq. 9), "
+                           "wpia = weighted PIA, hss/whss = (weighted) Hermitian/skew-Hermitian splitting, "
+                           "cg = conjugate gradients")
+        p.add_argument("--tol", type=_positive_float, default=1e-10,
+                       help="stop when E_k/E_0 < TOL, E_k = max_i |v_i^0 - (B V_k)_i| (paper section 5)")
+        p.add_argument("--max-iter", type=_positive_int, default=1000, metavar="N",
+                       help="stop after N iterations (exit code 1 if TOL was not reached)")
+        p.add_argument("--boundary", choices=("edge-and-corner", "edge-only"), default="edge-and-corner",
+                       help="boundary rule of the limit surface (OpenSubdiv VTX_BOUNDARY_EDGE_AND_CORNER keeps "
+                       "one-face corners; EDGE_ONLY smooths them)")
+
+    fit = command("fit", "fit a control mesh whose Loop limit surface interpolates a mesh",
+                  "Read a triangle mesh, solve B V = V0 for control vertices V whose Loop limit surface passes "
+                  "through the given vertices V0, write the control mesh (same faces, same vertex order) and, if "
+                  "asked, the tessellated limit surface and a JSON report. Prints a short summary; long runs "
+                  "show progress on stderr.")
+    fit.add_argument("input", metavar="IN", help="input triangle mesh (.obj, .off, .ply, .stl); only read")
+    fit.add_argument("-o", "--output", metavar="OUT", required=True,
+                     help="control mesh to write (.obj, .off, .ply or .stl; .stl stores float32 only)")
+    solver_options(fit)
+    fit.add_argument("--omega", type=_omega_arg, default="auto",
+                     help="relaxation of --method sor: auto (sorpia's measured rule), young (paper Remark 1, "
+                     "from the spectral radius of the Jacobi matrix) or a number in (0, 2)")
+    fit.add_argument("--surface", metavar="SURF",
+                     help="also write the limit surface of the control mesh, refined --level times (a triangle "
+                     "mesh with every vertex at its exact limit position)")
+    fit.add_argument("--level", type=_level_arg, default=3, metavar="L",
+                     help="refinement level of --surface: 4^L triangles per input triangle")
+    fit.add_argument("--report", metavar="REPORT.json",
+                     help="write a JSON report: mesh statistics, method, omega, E_k/E_0 per iteration, seconds "
+                     "per phase (read, statistics, fit, write, check, surface)")
+    fit.add_argument("--quiet", "-q", action="store_true", help="print nothing but errors and warnings")
+    fit.add_argument("--force", action="store_true", help="allow an output to overwrite the input file")
+    fit.set_defaults(func=lambda a: run_fit(
+        a.input, a.output, method=a.method, omega=a.omega, tol=a.tol, max_iter=a.max_iter, boundary=a.boundary,
+        surface=a.surface, level=a.level, report=a.report, quiet=a.quiet, force=a.force)[0])
+
+    comp = command("compare", "run several methods to one tolerance: the paper's Table 1 and Figure 7",
+                   "Run each method on the mesh to the same tolerance and print the paper's Table 1 layout for "
+                   "it: omega, iterations to reach E_k/E_0 < 1e-1 ... 1e-10 ('-' = not reached), CPU and wall "
+                   "seconds of the whole run. Optionally write the table (Markdown, CSV), every figure (JSON) and "
+                   "the convergence plot (Figure 7: log10(E_k/E_0) against k, one line per method).")
+    comp.add_argument("input", metavar="IN", help="input triangle mesh (.obj, .off, .ply, .stl); only read")
+    comp.add_argument("--methods", type=_methods_arg, default=list(METHODS), metavar="LIST",
+                      help=f"comma-separated methods, from {','.join(METHODS)} (sor with omega auto)")
+    solver_options(comp, with_method=False)
+    comp.add_argument("--table", metavar="T.md", help="write the table as Markdown")
+    comp.add_argument("--csv", metavar="T.csv", help="write the table as CSV")
+    comp.add_argument("--plot", metavar="P.png", help="write the convergence plot (paper Figure 7) as PNG")
+    comp.add_argument("--json", metavar="J.json", help="write every figure (E_k/E_0 per iteration, timings) as JSON")
+    comp.add_argument("--quiet", "-q", action="store_true", help="print nothing but errors and warnings")
+    comp.add_argument("--force", action="store_true", help="allow an output to overwrite the input file")
+    comp.set_defaults(func=lambda a: run_compare(
+        a.input, methods=a.methods, tol=a.tol, max_iter=a.max_iter, boundary=a.boundary, table=a.table,
+        csv_path=a.csv, plot=a.plot, json_path=a.json, quiet=a.quiet, force=a.force)[0])
+
+    ren = command("render", "draw the paper's Figure 3 for a mesh (PNG)",
+                  "Fit the mesh with SOR-PIA and draw four shaded panels, the same camera in each: (a) the given "
+                  "mesh, (b) its Loop limit surface (it shrinks away from the given vertices, red), (c) the "
+                  "control mesh found by SOR-PIA, given vertices red and control vertices blue, (d) the limit "
+                  "surface of the control mesh through the red points. Big meshes are drawn at a lower level "
+                  "or with part of their faces (--face-budget) so that drawing takes seconds.")
+    ren.add_argument("input", metavar="IN", help="input triangle mesh (.obj, .off, .ply, .stl); only read")
+    ren.add_argument("-o", "--output", metavar="FIG.png", required=True, help="PNG image to write")
+    ren.add_argument("--level", type=_level_arg, default=3, metavar="L",
+                     help="refinement level of the limit surfaces drawn (lowered to fit --face-budget)")
+    solver_options(ren, with_method=False)
+    ren.add_argument("--size", type=_size_arg, default=(1200, 1000), metavar="WxH", help="image size in pixels")
+    ren.add_argument("--elev", type=float, default=25.0, help="camera elevation in degrees")
+    ren.add_argument("--azim", type=float, default=-60.0, help="camera azimuth in degrees")
+    ren.add_argument("--face-budget", type=_positive_int, default=None, metavar="N",
+                     help="most triangles drawn per panel (default: sorpia.plotting.FACE_BUDGET = 60000)")
+    ren.add_argument("--quiet", "-q", action="store_true", help="print nothing but errors and warnings")
+    ren.add_argument("--force", action="store_true", help="allow the output to overwrite the input file")
+    ren.set_defaults(func=lambda a: run_render(
+        a.input, a.output, level=a.level, tol=a.tol, max_iter=a.max_iter, boundary=a.boundary, size=a.size,
+        elev=a.elev, azim=a.azim, face_budget=a.face_budget, quiet=a.quiet, force=a.force)[0])
+
+    inf = command("info", "mesh statistics (the paper's Table 2) and whether Loop PIA can run on it",
+                  "Print vertices, faces, edges, boundary loops, Euler characteristic, genus, components, "
+                  "unreferenced vertices, the valence histogram and the extraordinary vertices (valence other "
+                  "than 6 inside, 4 on the boundary; the paper's Table 2), and whether Loop PIA can run on the "
+                  "mesh and if not why. Exit code 0 whenever the file can be read.")
+    inf.add_argument("input", metavar="IN", help="input mesh (.obj, .off, .ply, .stl); only read")
+    inf.add_argument("--json", action="store_true", help="print JSON (every extraordinary vertex listed) instead")
+    inf.add_argument("--boundary", choices=("edge-and-corner", "edge-only"), default="edge-and-corner",
+                     help="boundary rule the verdict refers to")
+    inf.set_defaults(func=lambda a: run_info(a.input, as_json=a.json, boundary=a.boundary)[0])
+
+    demo = command("demo", "fit, compare and render on a built-in sample mesh",
+                   "Generate a small sample mesh (a wavy torus with random edge flips: valences 3 to 12, visible "
+                   "shrinkage), then run fit (control mesh, limit surface, report), compare (Table 1 as Markdown "
+                   "and CSV, Figure 7) and render (Figure 3) on it, writing every file into one folder, and "
+                   "print where they are. Takes a few seconds.")
+    demo.add_argument("--out", metavar="DIR", default=None,
+                      help="folder for the files (created if needed; default: a new folder "
+                      "sorpia-demo-YYYYMMDD-HHMMSS in the working directory)")
+    demo.add_argument("--quiet", "-q", action="store_true", help="print nothing but errors and warnings")
+    demo.set_defaults(func=lambda a: run_demo(a.out, quiet=a.quiet))
     return parser
 
 
+def _error_text(exc: BaseException) -> str:
+    if isinstance(exc, OSError) and exc.strerror:
+        return f"{exc.filename}: {exc.strerror}" if exc.filename else exc.strerror
+    return str(exc) or type(exc).__name__
+
+
 def main(argv: list[str] | None = None) -> int:
+    """Entry point of the `sorpia` script; returns the exit code."""
     parser = build_parser()
-    args = parser.parse_args(argv)
+    args = parser.parse_args(argv)  # exits 2 with a usage line on a bad option
     if args.command is None:
         parser.print_help()
-        return 0
-    return args.func(args)
+        return EXIT_OK
+
+    def show(message, category, filename, lineno, file=None, line=None):
+        print(f"sorpia: warning: {message}", file=sys.stderr)
+
+    old_show = warnings.showwarning
+    warnings.showwarning = show
+    try:
+        return args.func(args)
+    except UserError as exc:
+        print(f"sorpia: error: {exc}", file=sys.stderr)
+        return EXIT_USAGE
+    except BrokenPipeError:
+        # `sorpia info mesh.obj | head`: the reader left; not an error of ours.
+        with contextlib.suppress(OSError):
+            sys.stdout = open(os.devnull, "w")
+        return EXIT_OK
+    except (ValueError, TypeError, OSError, ImportError) as exc:
+        # sorpia.MeshError, ParameterError and MeshFileError are ValueErrors.
+        print(f"sorpia: error: {_error_text(exc)}", file=sys.stderr)
+        return EXIT_USAGE
+    except KeyboardInterrupt:
+        print("sorpia: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    finally:
+        warnings.showwarning = old_show
 
 
 if __name__ == "__main__":
