@@ -5,7 +5,9 @@
 #include <algorithm>
 #include <limits>
 #include <mutex>
+#include <numeric>
 #include <string>
+#include <tuple>
 
 #include "openmesh_types.hpp"
 #include "sorpia/errors.hpp"
@@ -29,77 +31,205 @@ std::string face_str(std::size_t f, const std::int32_t* faces) {
          std::to_string(faces[3 * f + 1]) + ", " + std::to_string(faces[3 * f + 2]) + ")";
 }
 
-// Checks what OpenMesh would not: indices in range and distinct (OpenMesh
-// aborts on a repeated vertex), at most two faces per edge and consistent
-// orientation (OpenMesh would fail add_face without saying why). Edges are
-// bucketed by their smaller vertex (a counting sort: linear time).
+// ---- validate_faces and its helpers ----------------------------------------
+// Half-edge h (0 <= h < 3 n_faces) of a face list runs from the corner
+// faces[h] to the next corner of its face, faces[next_corner(h)].
+namespace face_checks {
+
+inline std::size_t next_corner(std::size_t h) { return h - h % 3 + (h % 3 + 1) % 3; }
+inline std::size_t prev_corner(std::size_t h) { return h - h % 3 + (h % 3 + 2) % 3; }
+
+// Union-find over corners (path halving): corners of one vertex that end up in
+// one set form one fan of faces around it.
+struct DisjointSets {
+  std::vector<std::int32_t> parent;
+  explicit DisjointSets(std::size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
+  std::int32_t find(std::int32_t x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  }
+  void unite(std::int32_t a, std::int32_t b) {
+    a = find(a);
+    b = find(b);
+    if (a != b) parent[std::max(a, b)] = std::min(a, b);
+  }
+};
+
+std::string face_list(const std::vector<std::int32_t>& ids, std::size_t shown) {
+  std::string s;
+  for (std::size_t i = 0; i < ids.size() && i < shown; ++i) s += (i ? ", " : "") + std::to_string(ids[i]);
+  return ids.size() > shown ? s + ", ..." : s;
+}
+
+// Error path only. Two faces traverse an edge in the same direction: try to
+// orient the connected component of face `start` by breadth-first search
+// (`mate(h)` is the other half-edge of h's edge, or -1 on the boundary). Says
+// which faces to reverse, or that no orientation exists (a Moebius strip).
+template <class Mate>
+std::string orientation_advice(const std::int32_t* faces, std::size_t n_faces, std::size_t start, Mate mate) {
+  std::vector<std::int8_t> flip(n_faces, -1);
+  std::vector<std::int32_t> component{static_cast<std::int32_t>(start)};
+  flip[start] = 0;
+  bool orientable = true;
+  for (std::size_t q = 0; q < component.size(); ++q) {
+    const std::int32_t f = component[q];
+    for (std::int32_t h = 3 * f; h < 3 * f + 3; ++h) {
+      const std::int32_t g = mate(h);
+      if (g < 0) continue;
+      // opposite traversal keeps the relative orientation, the same one swaps it
+      const std::int8_t want = static_cast<std::int8_t>(flip[f] ^ (faces[h] == faces[g] ? 1 : 0));
+      if (flip[g / 3] < 0) {
+        flip[g / 3] = want;
+        component.push_back(g / 3);
+      } else if (flip[g / 3] != want) {
+        orientable = false;
+      }
+    }
+  }
+  if (!orientable)
+    return "the surface is not orientable (like a Moebius strip: no choice of face orientations is consistent), "
+           "and Loop interpolation needs an orientable surface";
+  std::vector<std::int32_t> ones, zeros;
+  for (std::int32_t f : component) (flip[f] ? ones : zeros).push_back(f);
+  std::vector<std::int32_t>& fewer = ones.size() <= zeros.size() ? ones : zeros;
+  std::sort(fewer.begin(), fewer.end());
+  return "reversing the vertex order of " + std::to_string(fewer.size()) + " of the " +
+         std::to_string(component.size()) + " faces of this connected part makes it consistent (faces " +
+         face_list(fewer, 8) + ")";
+}
+
+}  // namespace face_checks
+
+// Checks what OpenMesh and OpenSubdiv would not (see DEPENDENCIES.md):
+// indices in range and distinct (OpenMesh aborts on a repeated vertex), no
+// duplicate faces, at most two faces per edge, consistent orientation (OpenMesh
+// would fail add_face without saying why) and one fan of faces per vertex (a
+// 'bowtie' is accepted by OpenMesh and quietly made a corner by OpenSubdiv).
+// Throws MeshError naming the first offending face, edge or vertex.
+// Half-edges are bucketed by their smaller vertex (a counting sort) and each
+// bucket sorted by (other vertex, third vertex of the face): O(h log k) for h
+// half-edges and at most k in a bucket, never quadratic at a high-valence vertex.
 // Returns the number of edges and of boundary edges.
 std::pair<std::size_t, std::size_t> validate_faces(const std::int32_t* faces, std::size_t n_faces,
                                                    std::size_t n_vertices) {
-  if (n_vertices > static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max()))
+  using face_checks::next_corner;
+  using face_checks::prev_corner;
+  constexpr auto int_max = static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max());
+  if (n_vertices > int_max)
     throw MeshError("too many vertices: " + std::to_string(n_vertices) + " (at most 2^31 - 1)");
+  if (n_faces > int_max / 3)
+    throw MeshError("too many faces: " + std::to_string(n_faces) + " (at most (2^31 - 1) / 3)");
+  if (n_faces == 0) throw MeshError("the mesh has no faces: Loop subdivision needs at least one triangle");
   for (std::size_t f = 0; f < n_faces; ++f) {
     const std::int32_t* t = faces + 3 * f;
     for (int k = 0; k < 3; ++k)
       if (t[k] < 0 || static_cast<std::size_t>(t[k]) >= n_vertices)
-        throw MeshError(face_str(f, faces) + " has vertex index " + std::to_string(t[k]) +
-                        " out of range [0, " + std::to_string(n_vertices) + ")");
-    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2])
-      throw MeshError(face_str(f, faces) + " repeats a vertex (degenerate triangle)");
+        throw MeshError(face_str(f, faces) + " has vertex index " + std::to_string(t[k]) + " out of range [0, " +
+                        std::to_string(n_vertices) + ")");
+    for (int k = 0; k < 3; ++k)
+      if (t[k] == t[(k + 1) % 3])
+        throw MeshError(face_str(f, faces) + " repeats vertex " + std::to_string(t[k]) +
+                        " (a degenerate triangle): remove the face");
   }
+  const std::size_t n_half = 3 * n_faces;
+  auto tail = [&](std::int32_t h) { return faces[h]; };
+  auto head = [&](std::int32_t h) { return faces[next_corner(h)]; };
+  auto lo_end = [&](std::int32_t h) { return std::min(tail(h), head(h)); };
+  auto hi_end = [&](std::int32_t h) { return std::max(tail(h), head(h)); };
+  auto third = [&](std::int32_t h) { return faces[prev_corner(h)]; };
+
   std::vector<std::int32_t> start(n_vertices + 1, 0);
-  for (std::size_t h = 0; h < 3 * n_faces; ++h) {
-    const std::int32_t a = faces[h], b = faces[h - h % 3 + (h % 3 + 1) % 3];
-    ++start[std::min(a, b) + 1];
-  }
+  for (std::size_t h = 0; h < n_half; ++h) ++start[lo_end(static_cast<std::int32_t>(h)) + 1];
   for (std::size_t v = 0; v < n_vertices; ++v) start[v + 1] += start[v];
   std::vector<std::int32_t> fill(start.begin(), start.end() - 1);
-  std::vector<std::int32_t> bucket(3 * n_faces);  // half-edge ids
-  for (std::size_t h = 0; h < 3 * n_faces; ++h) {
-    const std::int32_t a = faces[h], b = faces[h - h % 3 + (h % 3 + 1) % 3];
-    bucket[fill[std::min(a, b)]++] = static_cast<std::int32_t>(h);
+  std::vector<std::int32_t> bucket(n_half);
+  for (std::size_t h = 0; h < n_half; ++h) {
+    const auto hh = static_cast<std::int32_t>(h);
+    bucket[fill[lo_end(hh)]++] = hh;
   }
-  auto head = [&](std::int32_t h) { return faces[h - h % 3 + (h % 3 + 1) % 3]; };
+  // Sorted by (other end, third vertex, id): the half-edges of one edge are
+  // adjacent, and two faces with the same three vertices are next to each other.
+  auto key = [&](std::int32_t h) { return std::make_tuple(hi_end(h), third(h), h); };
+  for (std::size_t v = 0; v < n_vertices; ++v)
+    std::sort(bucket.begin() + start[v], bucket.begin() + start[v + 1],
+              [&](std::int32_t a, std::int32_t b) { return key(a) < key(b); });
+  // The other half-edge of h's edge, or -1 (only used once no edge has 3+ faces).
+  auto mate = [&](std::int32_t h) -> std::int32_t {
+    const auto first = bucket.begin() + start[lo_end(h)], last = bucket.begin() + start[lo_end(h) + 1];
+    const std::int32_t other = hi_end(h);
+    auto it = std::lower_bound(first, last, other, [&](std::int32_t e, std::int32_t o) { return hi_end(e) < o; });
+    for (; it != last && hi_end(*it) == other; ++it)
+      if (*it != h) return *it;
+    return -1;
+  };
+
+  face_checks::DisjointSets fans(n_half);
+  std::int32_t misoriented = -1;  // a half-edge whose mate runs the same way
   std::size_t n_edges = 0, n_boundary = 0;
   for (std::size_t v = 0; v < n_vertices; ++v) {
-    const std::int32_t lo = start[v], hi = start[v + 1];
-    for (std::int32_t i = lo; i < hi; ++i) {
-      const std::int32_t hi_ = bucket[i];
-      const std::int32_t other = std::max(faces[hi_], head(hi_));
-      bool first = true;
-      for (std::int32_t j = lo; j < i; ++j)
-        if (std::max(faces[bucket[j]], head(bucket[j])) == other) first = false;
-      if (!first) continue;
-      // the half-edges of edge (v, other)
-      std::int32_t users[3] = {-1, -1, -1};
-      int count = 0;
-      for (std::int32_t j = i; j < hi; ++j) {
-        const std::int32_t hj = bucket[j];
-        if (std::max(faces[hj], head(hj)) != other) continue;
-        if (count < 3) users[count] = hj;
-        ++count;
-      }
-      ++n_edges;
-      const std::string edge = "edge (" + std::to_string(v) + ", " + std::to_string(other) + ")";
-      if (count > 2)
-        throw MeshError("non-manifold " + edge + ": shared by " + std::to_string(count) +
-                        " faces (faces " + std::to_string(users[0] / 3) + ", " + std::to_string(users[1] / 3) +
-                        ", " + std::to_string(users[2] / 3) + ", ...)");
-      if (count == 1) {
-        ++n_boundary;
-      } else if (faces[users[0]] == faces[users[1]]) {
-        const std::int32_t f0 = users[0] / 3, f1 = users[1] / 3;
-        std::int32_t s0[3] = {faces[3 * f0], faces[3 * f0 + 1], faces[3 * f0 + 2]};
-        std::int32_t s1[3] = {faces[3 * f1], faces[3 * f1 + 1], faces[3 * f1 + 2]};
-        std::sort(s0, s0 + 3);
-        std::sort(s1, s1 + 3);
-        if (std::equal(s0, s0 + 3, s1))
+    for (std::int32_t i = start[v], j; i < start[v + 1]; i = j) {
+      const std::int32_t other = hi_end(bucket[i]);
+      for (j = i + 1; j < start[v + 1] && hi_end(bucket[j]) == other; ++j)
+        if (third(bucket[j]) == third(bucket[j - 1])) {
+          const std::int32_t f0 = std::min(bucket[j - 1], bucket[j]) / 3, f1 = std::max(bucket[j - 1], bucket[j]) / 3;
           throw MeshError("duplicate faces: " + face_str(f0, faces) + " and " + face_str(f1, faces) +
-                          " have the same vertices");
-        throw MeshError("inconsistent orientation at " + edge + ": " + face_str(f0, faces) + " and " +
-                        face_str(f1, faces) + " traverse it in the same direction (flip one of them)");
+                          " have the same three vertices; remove one of them");
+        }
+      ++n_edges;
+      if (j - i > 2) {
+        std::vector<std::int32_t> users;
+        for (std::int32_t p = i; p < j; ++p) users.push_back(bucket[p] / 3);
+        std::sort(users.begin(), users.end());
+        throw MeshError("non-manifold edge (" + std::to_string(v) + ", " + std::to_string(other) + "): shared by " + std::to_string(j - i) + " faces (faces " +
+                        face_checks::face_list(users, 4) + "); an edge may border at most two faces");
       }
+      if (j - i == 1) {
+        ++n_boundary;
+        continue;
+      }
+      const std::int32_t h0 = bucket[i], h1 = bucket[i + 1];
+      if (tail(h0) == tail(h1)) {
+        if (misoriented < 0) misoriented = h0;
+        continue;
+      }
+      // h0 and h1 run opposite ways: the faces on either side join one fan
+      // at each end of the edge (a corner is named by the half-edge leaving it).
+      fans.unite(h0, static_cast<std::int32_t>(next_corner(h1)));
+      fans.unite(h1, static_cast<std::int32_t>(next_corner(h0)));
     }
+  }
+  if (misoriented >= 0) {
+    const std::int32_t h0 = misoriented, h1 = mate(h0);
+    const std::int32_t f0 = std::min(h0, h1) / 3, f1 = std::max(h0, h1) / 3;
+    throw MeshError("inconsistent orientation at edge (" + std::to_string(lo_end(h0)) + ", " +
+                    std::to_string(hi_end(h0)) + "): " + face_str(f0, faces) + " and " + face_str(f1, faces) +
+                    " both run from vertex " + std::to_string(tail(h0)) + " to " + std::to_string(head(h0)) + "; " +
+                    face_checks::orientation_advice(faces, n_faces, f0, mate));
+  }
+  // One fan per vertex: every corner of a vertex in the set of its first corner.
+  std::vector<std::int32_t>& first_corner = fill;  // reused: the bucketing is done
+  std::fill(first_corner.begin(), first_corner.end(), -1);
+  for (std::size_t h = 0; h < n_half; ++h) {
+    const auto hh = static_cast<std::int32_t>(h);
+    const std::int32_t v = tail(hh);
+    if (first_corner[v] < 0) {
+      first_corner[v] = hh;
+      continue;
+    }
+    if (fans.find(hh) == fans.find(first_corner[v])) continue;
+    std::vector<std::int32_t> roots;
+    std::size_t n_at_v = 0;
+    for (std::size_t c = 0; c < n_half; ++c)
+      if (faces[c] == v) {
+        ++n_at_v;
+        roots.push_back(fans.find(static_cast<std::int32_t>(c)));
+      }
+    std::sort(roots.begin(), roots.end());
+    const auto n_fans = std::unique(roots.begin(), roots.end()) - roots.begin();
+    throw MeshError("non-manifold vertex " + std::to_string(v) + ": its " + std::to_string(n_at_v) + " faces form " +
+                    std::to_string(n_fans) + " fans that meet only at this vertex (a 'bowtie'; e.g. faces " +
+                    std::to_string(first_corner[v] / 3) + " and " + std::to_string(hh / 3) +
+                    "); split it into one vertex per fan");
   }
   return {n_edges, n_boundary};
 }

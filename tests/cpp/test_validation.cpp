@@ -1,0 +1,133 @@
+// sorpia::Topology refuses bad faces before OpenMesh and OpenSubdiv see them
+// (OpenMesh aborts on a repeated vertex and accepts bowties; OpenSubdiv makes
+// non-manifold vertices corners), with a message naming the face, edge or
+// vertex; and accepts the unusual but valid meshes.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <string>
+#include <vector>
+
+#include "sorpia/errors.hpp"
+#include "sorpia/limit.hpp"
+#include "sorpia/shapes.hpp"
+#include "sorpia/topology.hpp"
+
+namespace {
+
+using Faces = std::vector<std::int32_t>;
+
+// The Topology constructor throws MeshError whose message contains every one of `parts`.
+void expect_refused(const Faces& faces, std::size_t n_vertices, const std::vector<std::string>& parts) {
+  try {
+    sorpia::Topology topo(faces.data(), faces.size() / 3, n_vertices);
+    ADD_FAILURE() << "accepted; expected an error containing '" << parts.front() << "'";
+  } catch (const sorpia::MeshError& e) {
+    const std::string what = e.what();
+    for (const auto& p : parts) EXPECT_NE(what.find(p), std::string::npos) << "'" << p << "' not in: " << what;
+  }
+}
+
+// A Moebius strip: a band of n quads (two triangles each) whose ends are glued
+// with a half twist, so it has no consistent orientation.
+Faces moebius(int n) {
+  Faces f;
+  for (int i = 0; i < n; ++i) {
+    const int a0 = 2 * i, a1 = 2 * i + 1;
+    const int b0 = i + 1 < n ? 2 * i + 2 : 1, b1 = i + 1 < n ? 2 * i + 3 : 0;  // the twist
+    f.insert(f.end(), {a0, b0, b1, a0, b1, a1});
+  }
+  return f;
+}
+
+}  // namespace
+
+TEST(Validation, IndexOutOfRangeNamesTheFaceAndIndex) {
+  expect_refused({0, 1, 2, 0, 2, 9}, 4, {"face 1 (0, 2, 9)", "vertex index 9", "[0, 4)"});
+  expect_refused({0, 1, 2, 0, -1, 2}, 4, {"face 1", "vertex index -1"});
+}
+
+TEST(Validation, RepeatedVertexNamesTheFace) {
+  // OpenMesh's add_face would abort (assert) on this face.
+  expect_refused({0, 1, 2, 0, 2, 2}, 4, {"face 1 (0, 2, 2)", "repeats vertex 2"});
+}
+
+TEST(Validation, NoFacesIsRefused) { expect_refused({}, 3, {"no faces"}); }
+
+TEST(Validation, DuplicateFacesInEitherOrientation) {
+  expect_refused({0, 1, 2, 1, 3, 2, 2, 0, 1}, 4, {"duplicate faces", "face 0 (0, 1, 2)", "face 2 (2, 0, 1)"});
+  // reversed: every edge then has two opposite faces, a closed 'pillow'
+  expect_refused({0, 1, 2, 0, 2, 1}, 3, {"duplicate faces", "face 0", "face 1"});
+}
+
+TEST(Validation, NonManifoldEdgeNamesTheEdgeAndItsFaces) {
+  expect_refused({0, 1, 2, 1, 0, 3, 0, 1, 4}, 5, {"non-manifold edge (0, 1)", "3 faces", "faces 0, 1, 2"});
+}
+
+TEST(Validation, InconsistentOrientationSaysWhichFacesToFlip) {
+  auto m = sorpia::icosphere(1);
+  std::swap(m.faces[3 * 7 + 1], m.faces[3 * 7 + 2]);  // reverse face 7
+  expect_refused(m.faces, m.n_vertices(), {"inconsistent orientation at edge", "face 7", "1 of the 80 faces",
+                                           "(faces 7)"});
+}
+
+TEST(Validation, MoebiusStripIsNotOrientable) {
+  const Faces f = moebius(8);
+  expect_refused(f, 16, {"inconsistent orientation", "not orientable"});
+}
+
+TEST(Validation, BowtieVertexIsNamed) {
+  // Two triangles sharing vertex 0 only: OpenMesh accepts this without complaint.
+  expect_refused({0, 1, 2, 0, 3, 4}, 5, {"non-manifold vertex 0", "2 fans", "faces 0 and 1"});
+  // Two closed cones touching at their apex 0: no boundary edge anywhere.
+  expect_refused({0, 1, 2, 0, 2, 3, 0, 3, 1, 1, 3, 2, 0, 4, 5, 0, 5, 6, 0, 6, 4, 4, 6, 5}, 7,
+                 {"non-manifold vertex 0", "6 faces form 2 fans"});
+}
+
+TEST(Validation, UnusualButValidMeshesAreAccepted) {
+  const Faces single = {0, 1, 2};
+  EXPECT_EQ(sorpia::Topology(single.data(), 1, 3).n_boundary_edges(), 3u);
+  // a strip: every vertex on the boundary
+  const Faces strip = {0, 1, 2, 2, 1, 3, 2, 3, 4, 4, 3, 5};
+  const sorpia::Topology s(strip.data(), 4, 6);
+  for (std::size_t v = 0; v < 6; ++v) EXPECT_TRUE(s.is_boundary(v));
+  EXPECT_EQ(s.n_edges(), 9u);
+  // two components (an icosphere and a disjoint triangle) and an unreferenced vertex
+  auto m = sorpia::icosphere(1);
+  const auto n = static_cast<std::int32_t>(m.n_vertices());
+  m.faces.insert(m.faces.end(), {n, n + 1, n + 2});
+  const sorpia::Topology two(m.faces.data(), m.n_faces(), m.n_vertices() + 4);
+  EXPECT_EQ(two.n_unreferenced(), 1u);
+  EXPECT_EQ(two.n_boundary_edges(), 3u);
+}
+
+TEST(Validation, Valence360PoleMatchesTheClosedForm) {
+  // alpha_n = 3 / (3 + 8 n beta_n), n beta_n = 5/8 - (3/8 + cos(2 pi/n)/4)^2 (paper eq. 5);
+  // pole(n): the centre (vertex 0) is an interior vertex of valence n.
+  const auto m = sorpia::pole(360);
+  const sorpia::Topology topo(m.faces.data(), m.n_faces(), m.n_vertices());
+  ASSERT_EQ(topo.valence(0), 360);
+  const auto b = sorpia::limit_matrix(topo, sorpia::Boundary::EdgeOnly);
+  const double c = 3.0 / 8.0 + std::cos(2.0 * std::acos(-1.0) / 360.0) / 4.0;
+  const double alpha = 3.0 / (3.0 + 8.0 * (5.0 / 8.0 - c * c));
+  ASSERT_EQ(b.indptr[1] - b.indptr[0], 361);
+  for (std::int32_t p = b.indptr[0]; p < b.indptr[1]; ++p)
+    EXPECT_NEAR(b.data[p], b.indices[p] == 0 ? alpha : (1 - alpha) / 360.0, 1e-15);  // double rounding only
+}
+
+TEST(Validation, FaceOrderDoesNotMatter) {
+  // OpenMesh builds the mesh face by face; a shuffled order must give the same rings.
+  const auto m = sorpia::irregular(400, 3);
+  std::vector<std::size_t> order(m.n_faces());
+  std::iota(order.begin(), order.end(), 0);
+  std::reverse(order.begin(), order.end());
+  for (std::size_t i = 0; i + 7 < order.size(); i += 7) std::swap(order[i], order[i + 3]);
+  Faces shuffled;
+  for (std::size_t f : order) shuffled.insert(shuffled.end(), m.faces.begin() + 3 * f, m.faces.begin() + 3 * f + 3);
+  const sorpia::Topology a(m.faces.data(), m.n_faces(), m.n_vertices());
+  const sorpia::Topology b(shuffled.data(), m.n_faces(), m.n_vertices());
+  EXPECT_EQ(a.n_edges(), b.n_edges());
+  for (std::size_t v = 0; v < m.n_vertices(); ++v) EXPECT_EQ(a.valence(v), b.valence(v));
+}
