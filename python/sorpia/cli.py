@@ -29,6 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from . import __version__
+from .plotting import FACE_BUDGET  # plotting imports matplotlib only when drawing
 
 EXIT_OK, EXIT_NOT_CONVERGED, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
 
@@ -579,19 +580,19 @@ def _require_plotting() -> None:
 
 
 def run_render(input_path, output, *, level=3, tol=1e-10, max_iter=1000, boundary="edge-and-corner",
-               size=(1200, 1000), elev=25.0, azim=-60.0, face_budget=None, quiet=False, force=False,
+               size=(1200, 1000), elev=30.0, azim=-60.0, face_budget=FACE_BUDGET, quiet=False, force=False,
                out=None) -> tuple[int, dict]:
     """`sorpia render`: the paper's Figure 3 for a mesh file."""
     from . import limit_surface
     from .meshinfo import mesh_info
-    from .plotting import FACE_BUDGET, interpolation_figure, level_for_budget
+    from .plotting import interpolation_figure, level_for_budget
 
     out = out if out is not None else sys.stdout
     if Path(output).suffix.lower() != ".png":
         raise UserError(f"-o {output}: render writes a PNG image, give a file name ending in .png")
     check_paths([input_path], {"-o": output}, force)
     _require_plotting()
-    budget = face_budget or FACE_BUDGET
+    budget = face_budget
     timings = {}
     V0, F, timings["read"] = read_input(input_path)
     stats = mesh_info(V0, F, boundary=boundary, list_extraordinary=False)
@@ -734,12 +735,18 @@ def run_demo(out_dir=None, *, quiet=False, out=None) -> int:
 
 # --------------------------------------------------------------------------- parser
 
-class _Formatter(argparse.ArgumentDefaultsHelpFormatter, argparse.RawDescriptionHelpFormatter):
-    """Defaults shown after every option; descriptions keep their line breaks."""
+class _Formatter(argparse.ArgumentDefaultsHelpFormatter):
+    """The default shown after every option that has one (not after flags
+    and optional outputs, whose default is simply 'off')."""
+
+    def _get_help_string(self, action):
+        if action.default is None or action.default is False:
+            return action.help
+        return super()._get_help_string(action)
 
 
-EXIT_HELP = """exit codes: 0 done; 1 a solve stopped at --max-iter before reaching --tol (all outputs
-still written); 2 bad input or options (one line on stderr); 130 interrupted."""
+EXIT_HELP = ("exit codes: 0 done; 1 a solve stopped at --max-iter before reaching --tol (all outputs still "
+             "written); 2 bad input or options (one line on stderr); 130 interrupted.")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -747,15 +754,22 @@ def build_parser() -> argparse.ArgumentParser:
         prog="sorpia",
         description="Interpolating Loop subdivision surfaces: move the control vertices of a triangle mesh so "
         "that its Loop limit surface passes through the given vertices (SOR-PIA and the PIA family).",
-        epilog=EXIT_HELP + "\nRun 'sorpia COMMAND --help' for the options of a command.",
+        epilog=EXIT_HELP + " Run 'sorpia COMMAND --help' for the options of a command.",
         formatter_class=_Formatter,
     )
     parser.add_argument("--version", action="version", version=f"sorpia {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
 
-    def command(name, help_text, description):
-        return sub.add_parser(name, help=help_text, description=description, epilog=EXIT_HELP,
-                              formatter_class=_Formatter)
+    def command(name, help_text, description, input_arg=True):
+        p = sub.add_parser(name, help=help_text, description=description, epilog=EXIT_HELP,
+                           formatter_class=_Formatter)
+        if input_arg:
+            p.add_argument("input", metavar="IN", help="input triangle mesh (.obj, .off, .ply, .stl); only read")
+        return p
+
+    def output_flags(p):
+        p.add_argument("--quiet", "-q", action="store_true", help="print nothing but errors and warnings")
+        p.add_argument("--force", action="store_true", help="allow an output to overwrite the input file")
 
     def solver_options(p, with_method=True):
         if with_method:
@@ -776,7 +790,6 @@ def build_parser() -> argparse.ArgumentParser:
                   "through the given vertices V0, write the control mesh (same faces, same vertex order) and, if "
                   "asked, the tessellated limit surface and a JSON report. Prints a short summary; long runs "
                   "show progress on stderr.")
-    fit.add_argument("input", metavar="IN", help="input triangle mesh (.obj, .off, .ply, .stl); only read")
     fit.add_argument("-o", "--output", metavar="OUT", required=True,
                      help="control mesh to write (.obj, .off, .ply or .stl; .stl stores float32 only)")
     solver_options(fit)
@@ -791,8 +804,7 @@ def build_parser() -> argparse.ArgumentParser:
     fit.add_argument("--report", metavar="REPORT.json",
                      help="write a JSON report: mesh statistics, method, omega, E_k/E_0 per iteration, seconds "
                      "per phase (read, statistics, fit, write, check, surface)")
-    fit.add_argument("--quiet", "-q", action="store_true", help="print nothing but errors and warnings")
-    fit.add_argument("--force", action="store_true", help="allow an output to overwrite the input file")
+    output_flags(fit)
     fit.set_defaults(func=lambda a: run_fit(
         a.input, a.output, method=a.method, omega=a.omega, tol=a.tol, max_iter=a.max_iter, boundary=a.boundary,
         surface=a.surface, level=a.level, report=a.report, quiet=a.quiet, force=a.force)[0])
@@ -802,16 +814,14 @@ def build_parser() -> argparse.ArgumentParser:
                    "it: omega, iterations to reach E_k/E_0 < 1e-1 ... 1e-10 ('-' = not reached), CPU and wall "
                    "seconds of the whole run. Optionally write the table (Markdown, CSV), every figure (JSON) and "
                    "the convergence plot (Figure 7: log10(E_k/E_0) against k, one line per method).")
-    comp.add_argument("input", metavar="IN", help="input triangle mesh (.obj, .off, .ply, .stl); only read")
-    comp.add_argument("--methods", type=_methods_arg, default=list(METHODS), metavar="LIST",
+    comp.add_argument("--methods", type=_methods_arg, default=",".join(METHODS), metavar="LIST",
                       help=f"comma-separated methods, from {','.join(METHODS)} (sor with omega auto)")
     solver_options(comp, with_method=False)
     comp.add_argument("--table", metavar="T.md", help="write the table as Markdown")
     comp.add_argument("--csv", metavar="T.csv", help="write the table as CSV")
     comp.add_argument("--plot", metavar="P.png", help="write the convergence plot (paper Figure 7) as PNG")
     comp.add_argument("--json", metavar="J.json", help="write every figure (E_k/E_0 per iteration, timings) as JSON")
-    comp.add_argument("--quiet", "-q", action="store_true", help="print nothing but errors and warnings")
-    comp.add_argument("--force", action="store_true", help="allow an output to overwrite the input file")
+    output_flags(comp)
     comp.set_defaults(func=lambda a: run_compare(
         a.input, methods=a.methods, tol=a.tol, max_iter=a.max_iter, boundary=a.boundary, table=a.table,
         csv_path=a.csv, plot=a.plot, json_path=a.json, quiet=a.quiet, force=a.force)[0])
@@ -822,18 +832,16 @@ def build_parser() -> argparse.ArgumentParser:
                   "control mesh found by SOR-PIA, given vertices red and control vertices blue, (d) the limit "
                   "surface of the control mesh through the red points. Big meshes are drawn at a lower level "
                   "or with part of their faces (--face-budget) so that drawing takes seconds.")
-    ren.add_argument("input", metavar="IN", help="input triangle mesh (.obj, .off, .ply, .stl); only read")
     ren.add_argument("-o", "--output", metavar="FIG.png", required=True, help="PNG image to write")
     ren.add_argument("--level", type=_level_arg, default=3, metavar="L",
                      help="refinement level of the limit surfaces drawn (lowered to fit --face-budget)")
     solver_options(ren, with_method=False)
-    ren.add_argument("--size", type=_size_arg, default=(1200, 1000), metavar="WxH", help="image size in pixels")
-    ren.add_argument("--elev", type=float, default=25.0, help="camera elevation in degrees")
+    ren.add_argument("--size", type=_size_arg, default="1200x1000", metavar="WxH", help="image size in pixels")
+    ren.add_argument("--elev", type=float, default=30.0, help="camera elevation in degrees")
     ren.add_argument("--azim", type=float, default=-60.0, help="camera azimuth in degrees")
-    ren.add_argument("--face-budget", type=_positive_int, default=None, metavar="N",
-                     help="most triangles drawn per panel (default: sorpia.plotting.FACE_BUDGET = 60000)")
-    ren.add_argument("--quiet", "-q", action="store_true", help="print nothing but errors and warnings")
-    ren.add_argument("--force", action="store_true", help="allow the output to overwrite the input file")
+    ren.add_argument("--face-budget", type=_positive_int, default=FACE_BUDGET, metavar="N",
+                     help="most triangles drawn per panel")
+    output_flags(ren)
     ren.set_defaults(func=lambda a: run_render(
         a.input, a.output, level=a.level, tol=a.tol, max_iter=a.max_iter, boundary=a.boundary, size=a.size,
         elev=a.elev, azim=a.azim, face_budget=a.face_budget, quiet=a.quiet, force=a.force)[0])
@@ -843,7 +851,6 @@ def build_parser() -> argparse.ArgumentParser:
                   "unreferenced vertices, the valence histogram and the extraordinary vertices (valence other "
                   "than 6 inside, 4 on the boundary; the paper's Table 2), and whether Loop PIA can run on the "
                   "mesh and if not why. Exit code 0 whenever the file can be read.")
-    inf.add_argument("input", metavar="IN", help="input mesh (.obj, .off, .ply, .stl); only read")
     inf.add_argument("--json", action="store_true", help="print JSON (every extraordinary vertex listed) instead")
     inf.add_argument("--boundary", choices=("edge-and-corner", "edge-only"), default="edge-and-corner",
                      help="boundary rule the verdict refers to")
@@ -853,7 +860,7 @@ def build_parser() -> argparse.ArgumentParser:
                    "Generate a small sample mesh (a wavy torus with random edge flips: valences 3 to 12, visible "
                    "shrinkage), then run fit (control mesh, limit surface, report), compare (Table 1 as Markdown "
                    "and CSV, Figure 7) and render (Figure 3) on it, writing every file into one folder, and "
-                   "print where they are. Takes a few seconds.")
+                   "print where they are. Takes a few seconds.", input_arg=False)
     demo.add_argument("--out", metavar="DIR", default=None,
                       help="folder for the files (created if needed; default: a new folder "
                       "sorpia-demo-YYYYMMDD-HHMMSS in the working directory)")

@@ -146,7 +146,7 @@ def _shaded_colors(vertices, faces, base, light):
 
 
 def interpolation_figure(vertices, faces, given_surface, control_vertices, fitted_surface, *,
-                         size: tuple[int, int] = (1200, 1000), elev: float = 25.0, azim: float = -60.0,
+                         size: tuple[int, int] = (1200, 1000), elev: float = 30.0, azim: float = -60.0,
                          face_budget: int = FACE_BUDGET, point_budget: int = POINT_BUDGET,
                          title: str | None = None, iterations: int | None = None, level: int | None = None):
     """The paper's Figure 3 in four panels, the same camera in each.

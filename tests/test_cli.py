@@ -1,0 +1,336 @@
+"""The `sorpia` command driven as a user drives it: subprocesses of
+`python -m sorpia` and of the installed `sorpia` script, on mesh files written
+into tmp_path; the files it writes are read back and checked against the
+Python API and against independent computations."""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import os
+import subprocess
+import sys
+import sysconfig
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import sorpia
+from sorpia import cli
+
+TOLERANCE_HEADERS = [f"1e-{j}" for j in range(1, 11)]
+
+
+def run(*args, cwd, script=False, timeout=300, env=None):
+    """Run the command; returns the CompletedProcess (text)."""
+    exe = [str(_script())] if script else [sys.executable, "-m", "sorpia"]
+    return subprocess.run([*exe, *map(str, args)], cwd=cwd, capture_output=True, text=True, timeout=timeout,
+                          env=None if env is None else {**os.environ, **env})
+
+
+def _script() -> Path:
+    path = Path(sysconfig.get_path("scripts")) / ("sorpia.exe" if os.name == "nt" else "sorpia")
+    if not path.exists():
+        pytest.skip(f"the sorpia script is not installed next to this Python ({path})")
+    return path
+
+
+def write_obj(path: Path, vertices, faces) -> Path:
+    """An OBJ file written by hand, every float with 17 significant digits
+    (repr), so the file holds exactly the float64 vertices the test compares."""
+    lines = ["# written by tests/test_cli.py"]
+    lines += [f"v {x!r} {y!r} {z!r}" for x, y, z in np.asarray(vertices, dtype=float).tolist()]
+    lines += [f"f {a + 1} {b + 1} {c + 1}" for a, b, c in np.asarray(faces).tolist()]
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def assert_user_error(proc):
+    """Exit code 2, a message on stderr naming the problem, no traceback."""
+    assert proc.returncode == 2, (proc.returncode, proc.stdout, proc.stderr)
+    assert "Traceback" not in proc.stderr
+    last = proc.stderr.strip().splitlines()[-1]
+    assert last.startswith("sorpia") and "error:" in last, proc.stderr
+
+
+# Two inputs: closed with valences 3 to 12 (most vertices extraordinary), and
+# open with a boundary and two one-face corners.
+MESHES = {
+    "irregular-torus": lambda: sorpia.shapes.irregular(300, seed=5),
+    "grid-boundary": lambda: sorpia.shapes.grid(8, 7),
+}
+
+
+@pytest.fixture(params=sorted(MESHES))
+def mesh_file(request, tmp_path):
+    V, F = MESHES[request.param]()
+    return request.param, write_obj(tmp_path / f"{request.param}.obj", V, F), np.asarray(V), np.asarray(F)
+
+
+@pytest.fixture
+def torus_file(tmp_path):
+    V, F = MESHES["irregular-torus"]()
+    return write_obj(tmp_path / "torus.obj", V, F), np.asarray(V), np.asarray(F)
+
+
+def test_help_explains_every_option_with_its_default(tmp_path):
+    parser = cli.build_parser()
+    subparsers = next(a for a in parser._actions if a.dest == "command").choices
+    top = run("--help", cwd=tmp_path)
+    assert top.returncode == 0
+    for name, sub in subparsers.items():
+        assert name in top.stdout
+        # A wide terminal, so that argparse does not break 'edge-and-corner' at a hyphen.
+        proc = run(name, "--help", cwd=tmp_path, env={"COLUMNS": "400"})
+        assert proc.returncode == 0, proc.stderr
+        text = " ".join(proc.stdout.split())
+        for action in sub._actions:
+            if not action.option_strings or action.dest == "help":
+                continue
+            assert action.option_strings[-1] in text, (name, action.option_strings)
+            assert action.help, (name, action.option_strings)
+            if action.default not in (None, False):
+                shown = action.default if isinstance(action.default, str) else repr(action.default)
+                assert f"(default: {shown})" in text, (name, action.option_strings, shown)
+        assert "exit codes" in text
+
+
+def test_script_and_module_are_the_same_program(tmp_path):
+    by_script = run("--version", cwd=tmp_path, script=True)
+    by_module = run("--version", cwd=tmp_path)
+    assert by_script.returncode == by_module.returncode == 0
+    assert by_script.stdout == by_module.stdout == f"sorpia {sorpia.__version__}\n"
+
+
+def test_fit_writes_a_control_mesh_that_interpolates_the_file(mesh_file, tmp_path):
+    name, src, V0, F = mesh_file
+    before = src.read_bytes()
+    out, surf, report = tmp_path / "ctrl.obj", tmp_path / "surf.obj", tmp_path / "report.json"
+    level = 1
+    proc = run("fit", src, "-o", out, "--surface", surf, "--level", level, "--report", report, cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    assert src.read_bytes() == before  # the input is only read
+
+    Vc, Fc = sorpia.read_mesh(out)
+    np.testing.assert_array_equal(Fc, F)  # same faces, same vertex order
+    # B V_ctrl = V0 up to tol 1e-10 relative to E_0 (about the shrinkage,
+    # < 1 on these unit-size meshes) plus exact float64 file round trips:
+    # 1e-9 absolute leaves a margin of 10 at least.
+    B = sorpia.limit_matrix(F, len(V0))
+    assert np.abs(B @ Vc - V0).max() < 1e-9
+
+    Vs, Fs = sorpia.read_mesh(surf)
+    assert len(Fs) == len(F) * 4 ** level
+
+    data = json.loads(report.read_text())
+    ref = sorpia.interpolate(V0, F)  # the same run through the Python API
+    assert data["method"] == "sor" and data["converged"] is True
+    assert data["iterations"] == ref.iterations == len(data["errors"]) - 1
+    np.testing.assert_allclose(data["errors"], ref.errors, rtol=1e-9, atol=1e-15)
+    assert data["omega"] == pytest.approx(ref.omega, rel=1e-12)
+    assert data["errors"][-1] < 1e-10 <= data["errors"][-2]  # the paper's stopping rule
+    assert data["mesh"]["vertices"] == len(V0) and data["mesh"]["faces"] == len(F)
+    assert data["max_residual"] == pytest.approx(np.linalg.norm(B @ Vc - V0, axis=1).max(), abs=1e-13)
+    for phase in ("read", "fit", "write", "surface"):
+        assert data["timings"][phase] >= 0
+    # The summary names the figures a user looks for.
+    assert f"converged in {ref.iterations} iterations" in proc.stdout
+    assert str(out) in proc.stdout
+
+
+def test_fit_quiet_prints_nothing(torus_file, tmp_path):
+    src, _, _ = torus_file
+    proc = run("fit", src, "-o", tmp_path / "c.ply", "--quiet", cwd=tmp_path)
+    assert proc.returncode == 0
+    assert proc.stdout == "" and proc.stderr == ""
+
+
+def test_fit_not_converged_exits_1_and_still_writes(torus_file, tmp_path):
+    src, V0, F = torus_file
+    out, report = tmp_path / "ctrl.off", tmp_path / "r.json"
+    proc = run("fit", src, "-o", out, "--method", "pia", "--max-iter", 3, "--report", report, cwd=tmp_path)
+    assert proc.returncode == 1, proc.stderr
+    assert "NOT converged" in proc.stdout and "Traceback" not in proc.stderr
+    data = json.loads(report.read_text())
+    assert data["converged"] is False and data["iterations"] == 3 and len(data["errors"]) == 4
+    Vc, _ = sorpia.read_mesh(out)
+    # Three PIA steps from V0 (paper eq. 9), computed independently with B.
+    B = sorpia.limit_matrix(F, len(V0))
+    V = V0.copy()
+    for _ in range(3):
+        V = V + (V0 - B @ V)
+    np.testing.assert_allclose(Vc, V, rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("case", ["missing-file", "output-is-input", "output-is-input-other-spelling",
+                                  "omega-out-of-range", "omega-not-a-number", "unknown-method",
+                                  "unknown-output-format", "missing-folder", "non-manifold", "garbage-file"])
+def test_bad_input_exits_2_with_one_line(case, torus_file, tmp_path):
+    src, V0, F = torus_file
+    before = src.read_bytes()
+    out = tmp_path / "ctrl.obj"
+    args = {
+        "missing-file": ["fit", tmp_path / "nope.obj", "-o", out],
+        "output-is-input": ["fit", src, "-o", src],
+        "output-is-input-other-spelling": ["fit", src, "-o", f"./{src.name}"],
+        "omega-out-of-range": ["fit", src, "-o", out, "--omega", "2.5"],
+        "omega-not-a-number": ["fit", src, "-o", out, "--omega", "fast"],
+        "unknown-method": ["compare", src, "--methods", "sor,newton"],
+        "unknown-output-format": ["fit", src, "-o", tmp_path / "ctrl.xyz"],
+        "missing-folder": ["fit", src, "-o", tmp_path / "no" / "ctrl.obj"],
+        "non-manifold": ["fit", write_obj(tmp_path / "nm.obj", np.eye(4),
+                                          [[0, 1, 2], [0, 1, 3], [1, 0, 2]]), "-o", out],
+        "garbage-file": ["info", tmp_path / "junk.obj"],
+    }[case]
+    (tmp_path / "junk.obj").write_bytes(b"v 1 2\nf 1 2 3 x\n\x00\xff")
+    proc = run(*args, cwd=tmp_path)
+    assert_user_error(proc)
+    assert src.read_bytes() == before
+    assert not out.exists()
+    assert not [p for p in tmp_path.iterdir() if p.name.endswith(".tmp")]  # no temporary file left
+
+
+def test_force_overwrites_the_input(torus_file, tmp_path):
+    src, V0, F = torus_file
+    proc = run("fit", src, "-o", src, "--force", "--quiet", cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    Vc, _ = sorpia.read_mesh(src)
+    assert np.abs(sorpia.limit_matrix(F, len(V0)) @ Vc - V0).max() < 1e-9
+
+
+def test_compare_writes_table_1_and_figure_7(torus_file, tmp_path):
+    from matplotlib.image import imread
+
+    src, V0, F = torus_file
+    table, table_csv, js, plot = (tmp_path / n for n in ("t.md", "t.csv", "t.json", "p.png"))
+    proc = run("compare", src, "--table", table, "--csv", table_csv, "--json", js, "--plot", plot, cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    md = table.read_text()
+    assert md.strip() in proc.stdout  # the printed table is the written one
+    header = md.splitlines()[0]
+    for tol in TOLERANCE_HEADERS:
+        assert f"| {tol} |" in header
+    for method in cli.METHODS:
+        assert f"| {cli.METHOD_LABELS[method]} |" in md
+
+    rows = list(csv.DictReader(io.StringIO(table_csv.read_text())))
+    assert [r["method"] for r in rows] == list(cli.METHODS)
+    data = json.loads(js.read_text())
+    for row, entry in zip(rows, data["methods"]):
+        ref = sorpia.interpolate(V0, F, method=entry["method"])  # the Python API, same run
+        assert entry["iterations"] == ref.iterations == int(row["iterations"])
+        np.testing.assert_allclose(entry["errors"], ref.errors, rtol=1e-9, atol=1e-15)
+        # iterations to reach 1e-j: the first k with E_k/E_0 < 1e-j, from the errors themselves
+        errors = np.asarray(ref.errors)
+        for j, tol in enumerate(TOLERANCE_HEADERS, start=1):
+            expected = int(np.flatnonzero(errors < 10.0 ** -j)[0])
+            assert entry["reached"][j - 1] == expected == int(row[f"iterations_to_{tol}"])
+    image = imread(plot)
+    assert image.shape[:2] == (560, 900)  # plotting.convergence_figure's default size
+    assert image[..., :3].std() > 0.01  # not a blank image
+
+
+def test_render_draws_figure_3(torus_file, tmp_path):
+    from matplotlib.image import imread
+
+    src, _, _ = torus_file
+    fig = tmp_path / "fig3.png"
+    proc = run("render", src, "-o", fig, "--level", 1, "--size", "640x480", cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    image = imread(fig)
+    assert image.shape[:2] == (480, 640)
+    rgb = image[..., :3]
+    red = (rgb[..., 0] > 0.7) & (rgb[..., 1] < 0.3) & (rgb[..., 2] < 0.3)
+    blue = (rgb[..., 2] > 0.6) & (rgb[..., 0] < 0.3)
+    assert red.sum() > 50 and blue.sum() > 20  # the given (red) and control (blue) vertices are drawn
+
+
+def independent_counts(F, n):
+    """Edges, boundary edges and valences from the face array alone."""
+    half = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
+    edges, counts = np.unique(np.sort(half, axis=1), axis=0, return_counts=True)
+    valence = np.bincount(edges.ravel(), minlength=n)
+    on_boundary = np.zeros(n, bool)
+    on_boundary[edges[counts == 1].ravel()] = True
+    extraordinary = np.where(on_boundary, valence != 4, valence != 6)
+    return len(edges), int((counts == 1).sum()), valence, extraordinary
+
+
+@pytest.mark.parametrize("name, genus, loops", [("irregular-torus", 1, 0), ("grid-boundary", 0, 1)])
+def test_info_json_counts(name, genus, loops, tmp_path):
+    V, F = MESHES[name]()
+    src = write_obj(tmp_path / "m.obj", V, F)
+    proc = run("info", src, "--json", cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    info = json.loads(proc.stdout)
+    n_edges, n_bnd, valence, extra = independent_counts(np.asarray(F), len(V))
+    assert (info["vertices"], info["faces"], info["edges"], info["boundary_edges"]) == (len(V), len(F), n_edges,
+                                                                                        n_bnd)
+    assert info["euler_characteristic"] == len(V) - n_edges + len(F) == 2 - 2 * genus - loops
+    assert (info["genus"], info["boundary_loops"], info["components"]) == (genus, loops, 1)
+    assert info["extraordinary_vertices"] == int(extra.sum())
+    assert [e[0] for e in info["extraordinary"]] == np.flatnonzero(extra).tolist()
+    assert sum(sum(h.values()) for h in info["valence_histogram"].values()) == len(V)
+    assert info["valence_max"] == valence.max()
+    assert info["loop_pia"]["can_run"] is True
+
+
+def test_info_says_why_loop_pia_cannot_run(tmp_path):
+    # Two triangles that traverse edge (0, 1) the same way: inconsistent orientation.
+    src = write_obj(tmp_path / "flip.obj", np.eye(4), [[0, 1, 2], [0, 1, 3]])
+    proc = run("info", src, cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    assert "cannot run" in proc.stdout and "orientation" in proc.stdout
+
+
+def test_demo_writes_everything_in_a_new_folder(tmp_path):
+    from matplotlib.image import imread
+
+    proc = run("demo", cwd=tmp_path, script=True)
+    assert proc.returncode == 0, proc.stderr
+    (folder,) = [p for p in tmp_path.iterdir() if p.name.startswith("sorpia-demo")]
+    names = {"sample.obj", "control.obj", "surface.obj", "fit-report.json", "table.md", "table.csv",
+             "compare.json", "convergence.png", "figure3.png"}
+    assert {p.name for p in folder.iterdir()} == names
+    for n in names:
+        assert n in proc.stdout
+    V0, F = sorpia.read_mesh(folder / "sample.obj")
+    Vc, _ = sorpia.read_mesh(folder / "control.obj")
+    assert np.abs(sorpia.limit_matrix(F, len(V0)) @ Vc - V0).max() < 1e-9
+    assert imread(folder / "figure3.png").shape[:2] == (1000, 1200)
+    assert json.loads((folder / "fit-report.json").read_text())["converged"] is True
+
+
+def test_progress_line_on_a_terminal_plain_lines_in_a_pipe():
+    class Tty(io.StringIO):
+        def isatty(self):
+            return True
+
+    tty, pipe, off = Tty(), io.StringIO(), io.StringIO()
+    for stream, enabled in ((tty, True), (pipe, True), (off, False)):
+        p = cli.Progress("SOR-PIA", enabled=enabled, stream=stream)
+        p.interval = 0.0  # show every call
+        for k, e in enumerate([1.0, 0.1, 0.01]):
+            assert p(k, e) is False  # never stops the solver
+        p.close()
+    assert tty.getvalue().count("\r") >= 3 and "\n" not in tty.getvalue()
+    assert tty.getvalue().endswith("\r")  # the live line is erased at the end
+    assert pipe.getvalue().splitlines()[-1] == pipe.getvalue().splitlines()[-1].strip()
+    assert len(pipe.getvalue().splitlines()) == 3 and "E_k/E_0 = 1.000e-02" in pipe.getvalue()
+    assert off.getvalue() == ""
+
+
+def test_atomic_output_keeps_the_old_file_on_failure(tmp_path):
+    target = tmp_path / "table.md"
+    target.write_text("old")
+    with pytest.raises(RuntimeError, match="disk full"):
+        with cli.atomic_output(target) as tmp:
+            Path(tmp).write_text("half writ")
+            raise RuntimeError("disk full")
+    assert target.read_text() == "old"
+    assert [p.name for p in tmp_path.iterdir()] == ["table.md"]
+    cli.write_text(target, "new")
+    assert target.read_text() == "new"
+    assert [p.name for p in tmp_path.iterdir()] == ["table.md"]
