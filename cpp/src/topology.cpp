@@ -8,7 +8,9 @@
 #include <numeric>
 #include <string>
 #include <tuple>
+#include <utility>
 
+#include "one_ring.hpp"
 #include "openmesh_types.hpp"
 #include "sorpia/errors.hpp"
 
@@ -236,52 +238,86 @@ std::pair<std::size_t, std::size_t> validate_faces(const std::int32_t* faces, st
 
 }  // namespace
 
-Topology::Topology(const std::int32_t* faces, std::size_t n_faces, std::size_t n_vertices)
-    : n_vertices_(n_vertices), faces_(faces, faces + 3 * n_faces) {
-  detail::silence_openmesh();
-  std::tie(n_edges_, n_boundary_edges_) = validate_faces(faces, n_faces, n_vertices);
+namespace {
 
+// The reference build: OpenMesh's half-edge mesh by add_face, flattened by
+// circulating clockwise round each vertex. Rotated so that an interior ring
+// starts where one_ring_direct starts it (both builds give the same arrays).
+detail::OneRing one_ring_openmesh(const std::int32_t* faces, std::size_t n_faces, std::size_t n_vertices,
+                                  std::size_t n_edges) {
+  detail::OneRing r;
   detail::OMesh mesh;
-  mesh.reserve(n_vertices, n_edges_, n_faces);
+  mesh.reserve(n_vertices, n_edges, n_faces);
   for (std::size_t v = 0; v < n_vertices; ++v) mesh.add_vertex(detail::OMesh::Point(0, 0, 0));
-  face_count_.assign(n_vertices, 0);
+  r.face_count.assign(n_vertices, 0);
   for (std::size_t f = 0; f < n_faces; ++f) {
     const std::int32_t* t = faces + 3 * f;
-    for (int k = 0; k < 3; ++k) ++face_count_[t[k]];
+    for (int k = 0; k < 3; ++k) ++r.face_count[t[k]];
     const auto fh = mesh.add_face(mesh.vertex_handle(t[0]), mesh.vertex_handle(t[1]), mesh.vertex_handle(t[2]));
     if (!fh.is_valid())
       throw MeshError(face_str(f, faces) +
                       " makes a non-manifold vertex (two fans of faces meet at one vertex, a 'bowtie')");
   }
 
-  // Flatten the half-edge structure into a CSR one-ring.
-  ring_offsets_.assign(n_vertices + 1, 0);
-  boundary_.assign(n_vertices, 0);
-  ring_neighbors_.reserve(2 * n_edges_);
+  r.offsets.assign(n_vertices + 1, 0);
+  r.boundary.assign(n_vertices, 0);
+  r.neighbors.reserve(2 * n_edges);
   for (std::size_t v = 0; v < n_vertices; ++v) {
     const auto vh = mesh.vertex_handle(static_cast<int>(v));
-    ring_offsets_[v] = static_cast<std::int32_t>(ring_neighbors_.size());
-    if (face_count_[v] == 0) {
-      ++n_unreferenced_;
+    r.offsets[v] = static_cast<std::int32_t>(r.neighbors.size());
+    if (r.face_count[v] == 0) {
+      ++r.n_unreferenced;
       continue;
     }
     // A boundary vertex's outgoing half-edge is its boundary half-edge: start
     // there so the ring runs from one boundary neighbour to the other.
     const auto h0 = mesh.halfedge_handle(vh);
     const bool on_boundary = mesh.is_boundary(h0);
-    boundary_[v] = on_boundary;
+    r.boundary[v] = on_boundary;
     int faces_seen = 0;
+    int lowest_face = -1;
+    std::size_t lowest_at = r.neighbors.size();
     auto h = h0;
     do {
-      ring_neighbors_.push_back(mesh.to_vertex_handle(h).idx());
-      if (!mesh.is_boundary(h)) ++faces_seen;
+      if (!mesh.is_boundary(h)) {
+        ++faces_seen;
+        if (lowest_face < 0 || mesh.face_handle(h).idx() < lowest_face) {
+          lowest_face = mesh.face_handle(h).idx();
+          lowest_at = r.neighbors.size();
+        }
+      }
+      r.neighbors.push_back(mesh.to_vertex_handle(h).idx());
       h = mesh.next_halfedge_handle(mesh.opposite_halfedge_handle(h));  // clockwise
     } while (h != h0);
-    if (faces_seen != face_count_[v])
-      throw MeshError("non-manifold vertex " + std::to_string(v) + ": its " + std::to_string(face_count_[v]) +
+    if (faces_seen != r.face_count[v])
+      throw MeshError("non-manifold vertex " + std::to_string(v) + ": its " + std::to_string(r.face_count[v]) +
                       " faces form more than one fan (a 'bowtie'); split it into one vertex per fan");
+    // h = v -> x lies in the face (v, x, .): start an interior ring at the x
+    // of the lowest-numbered face.
+    if (!on_boundary)
+      std::rotate(r.neighbors.begin() + r.offsets[v], r.neighbors.begin() + lowest_at, r.neighbors.end());
   }
-  ring_offsets_[n_vertices] = static_cast<std::int32_t>(ring_neighbors_.size());
+  r.offsets[n_vertices] = static_cast<std::int32_t>(r.neighbors.size());
+  return r;
+}
+
+}  // namespace
+
+Topology::Topology(const std::int32_t* faces, std::size_t n_faces, std::size_t n_vertices)
+    : Topology(faces, n_faces, n_vertices, TopologyBuild::Direct) {}
+
+Topology::Topology(const std::int32_t* faces, std::size_t n_faces, std::size_t n_vertices, TopologyBuild build)
+    : n_vertices_(n_vertices), faces_(faces, faces + 3 * n_faces) {
+  detail::silence_openmesh();
+  std::tie(n_edges_, n_boundary_edges_) = validate_faces(faces, n_faces, n_vertices);
+  detail::OneRing r = build == TopologyBuild::OpenMesh
+                          ? one_ring_openmesh(faces, n_faces, n_vertices, n_edges_)
+                          : detail::one_ring_direct(faces, n_faces, n_vertices, n_edges_);
+  ring_offsets_ = std::move(r.offsets);
+  ring_neighbors_ = std::move(r.neighbors);
+  face_count_ = std::move(r.face_count);
+  boundary_ = std::move(r.boundary);
+  n_unreferenced_ = r.n_unreferenced;
 }
 
 }  // namespace sorpia

@@ -1,0 +1,32 @@
+#pragma once
+// The flat one-ring of a validated triangle mesh (internal; see topology.hpp).
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace sorpia::detail {
+
+// What sorpia::Topology keeps of the half-edge structure: per vertex its
+// neighbours in clockwise order (a boundary vertex from one boundary neighbour
+// to the other; an interior vertex starting at the second corner of the
+// lowest-numbered face around it), its number of faces and whether it is on
+// the boundary.
+struct OneRing {
+  std::vector<std::int32_t> offsets;    // n_vertices + 1
+  std::vector<std::int32_t> neighbors;  // 2 n_edges
+  std::vector<std::int32_t> face_count;
+  std::vector<std::uint8_t> boundary;
+  std::size_t n_unreferenced = 0;
+};
+
+// The one-ring matched straight from the face array, in linear time: the
+// corners are bucketed by vertex (a counting sort) and each vertex's faces
+// chained by the map "previous corner -> next corner" of its triangles, which
+// is the clockwise step OpenMesh's circulator takes. `faces` must have passed
+// validate_faces (indices in range, at most two faces per edge, consistent
+// orientation, one fan per vertex); a second fan is still refused with the
+// same MeshError. `n_edges` sizes the output.
+OneRing one_ring_direct(const std::int32_t* faces, std::size_t n_faces, std::size_t n_vertices,
+                        std::size_t n_edges);
+
+}  // namespace sorpia::detail
