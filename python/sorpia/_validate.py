@@ -1,12 +1,31 @@
 """Validation and conversion of user input, done once at the API's edge.
 
 Vertices become C-contiguous float64 (n, 3) arrays and faces C-contiguous
-int32 (m, 3) arrays (copies only when the input is not already so); the
+int32 (m, 3) arrays (copies only when the input is not already so; the input
+is never modified, read-only and non-contiguous arrays are accepted); the
 compiled core refuses anything else. Messages name the argument, what was
 expected, what was given, and the index of the first bad row.
+
+What is checked where:
+
+- here (Python): kind and dtype (TypeError), shape, emptiness, finite
+  coordinates, face indices in range (before the cast to int32, so that an
+  int64 index of 2**32 + 1 is refused rather than wrapped to 1), polygons that
+  are not triangles (with the recipe to triangulate them);
+- in the C++ core (sorpia::Topology, validate_faces in cpp/src/topology.cpp),
+  for every caller including sorpia-bench: indices again, a vertex repeated
+  in a face, duplicate faces, edges of three or more faces, inconsistent
+  orientation (with the faces to flip, or "not orientable" for a Moebius
+  strip) and non-manifold ("bowtie") vertices, raised as sorpia.MeshError.
+
+Faces given as floats are refused with TypeError even when they hold whole
+numbers, as numpy refuses float indices: a float face array is more often a
+mistake (vertices and faces swapped) than a convenience.
 """
 
 from __future__ import annotations
+
+import operator
 
 import numpy as np
 
@@ -15,14 +34,29 @@ from .errors import MeshError, ParameterError
 BOUNDARY_RULES = ("edge-and-corner", "edge-only")
 DEFAULT_BOUNDARY = "edge-and-corner"
 
+# How to make triangles of polygons, quoted in the messages.
+TRIANGULATE_HINT = (
+    "split each polygon (a, b, c, d, ...) into the fan (a, b, c), (a, c, d), ...; for an (m, 4) quad array "
+    "F: numpy.vstack([F[:, [0, 1, 2]], F[:, [0, 2, 3]]]); sorpia.read_mesh(path, triangulate=True) does this "
+    "for files")
+
+
+def _asarray(value, name: str, expected: str) -> np.ndarray:
+    try:
+        return np.asarray(value)
+    except (ValueError, TypeError) as exc:  # ragged nested lists and the like
+        raise TypeError(f"{name} must be {expected}: {exc}") from None
+
 
 def as_vertices(vertices, name: str = "vertices") -> np.ndarray:
-    """Return `vertices` as a C-contiguous float64 (n, 3) array, finite."""
-    try:
-        arr = np.asarray(vertices)
-    except Exception as exc:  # ragged lists and the like
-        raise TypeError(f"{name} must be an (n, 3) array of floats: {exc}") from None
-    if arr.dtype == object or not (np.issubdtype(arr.dtype, np.floating) or np.issubdtype(arr.dtype, np.integer)):
+    """Return `vertices` as a C-contiguous float64 (n, 3) array of finite values.
+
+    Any real dtype (float16..longdouble, integers) is converted; bool, complex,
+    object and string arrays raise TypeError. Raises ValueError for a wrong
+    shape and sorpia.MeshError for an empty or non-finite array.
+    """
+    arr = _asarray(vertices, name, "an (n, 3) array of floats")
+    if arr.dtype == bool or not (np.issubdtype(arr.dtype, np.floating) or np.issubdtype(arr.dtype, np.integer)):
         raise TypeError(f"{name} must be an (n, 3) array of real numbers, got dtype {arr.dtype}")
     if arr.ndim != 2 or arr.shape[1] != 3:
         raise ValueError(f"{name} must have shape (n, 3), got {arr.shape}")
@@ -33,36 +67,77 @@ def as_vertices(vertices, name: str = "vertices") -> np.ndarray:
     if not finite.all():
         i = int(np.flatnonzero(~finite)[0])
         raise MeshError(f"{name}[{i}] = {arr[i].tolist()} is not finite (NaN or inf); "
-                        f"{int((~finite).sum())} vertices in all")
+                        f"{int((~finite).sum())} of {len(arr)} vertices are not")
     return arr
 
 
+def as_vertex_count(n_vertices, name: str = "n_vertices") -> int:
+    """Return `n_vertices` as an int >= 0; floats (even 12.0) and bools raise TypeError."""
+    if isinstance(n_vertices, (bool, np.bool_)):
+        raise TypeError(f"{name} must be an integer, got {n_vertices!r}")
+    try:
+        n = operator.index(n_vertices)
+    except TypeError:
+        raise TypeError(f"{name} must be an integer, got {n_vertices!r}") from None
+    if n < 0:
+        raise ParameterError(f"{name} = {n} must be >= 0")
+    return n
+
+
+def _first_polygon(faces) -> tuple[int, int] | None:
+    """(index, length) of the first row of a list of faces that is not a triple."""
+    try:
+        for i, row in enumerate(faces):
+            if len(row) != 3:
+                return i, len(row)
+    except TypeError:  # rows without a length: not a list of polygons at all
+        return None
+    return None
+
+
 def as_faces(faces, n_vertices: int, name: str = "faces") -> np.ndarray:
-    """Return `faces` as a C-contiguous int32 (m, 3) array of indices in range."""
+    """Return `faces` as a C-contiguous int32 (m, 3) array of indices in [0, n_vertices).
+
+    Any integer dtype is accepted (signed or unsigned, any byte order);
+    float, bool, complex and object arrays raise TypeError. Polygons with
+    other than 3 vertices raise sorpia.MeshError saying how to triangulate.
+    """
+    n_vertices = as_vertex_count(n_vertices)
+    expected = "an (m, 3) array of integer vertex indices"
     try:
         arr = np.asarray(faces)
-    except Exception as exc:
-        raise TypeError(f"{name} must be an (m, 3) array of vertex indices: {exc}") from None
-    if arr.dtype == object or arr.dtype == bool or not (
-        np.issubdtype(arr.dtype, np.integer) or (np.issubdtype(arr.dtype, np.floating) and arr.size == 0)
-    ):
-        raise TypeError(f"{name} must be an (m, 3) array of integer vertex indices, got dtype {arr.dtype}")
+    except (ValueError, TypeError) as exc:
+        arr = None
+        error = exc
+    if arr is None or (arr.dtype == object and arr.ndim == 1):
+        polygon = _first_polygon(faces)
+        if polygon is not None:
+            i, k = polygon
+            raise MeshError(f"{name}[{i}] has {k} vertices: Loop subdivision needs triangles; {TRIANGULATE_HINT}")
+        if arr is None:
+            raise TypeError(f"{name} must be {expected}: {error}") from None
+    if arr.dtype == bool or not np.issubdtype(arr.dtype, np.integer):
+        if np.issubdtype(arr.dtype, np.floating):
+            raise TypeError(f"{name} must hold integer vertex indices, got dtype {arr.dtype} (float indices are "
+                            f"refused, as numpy refuses them; if they are whole numbers pass {name}.astype(int))")
+        raise TypeError(f"{name} must be {expected}, got dtype {arr.dtype}")
     if arr.ndim != 2:
         raise ValueError(f"{name} must have shape (m, 3), got {arr.shape}")
     if arr.shape[1] != 3:
-        raise MeshError(
-            f"{name} has {arr.shape[1]} vertices per face: Loop subdivision needs triangles "
-            "(split each polygon into triangles first, e.g. sorpia.read_mesh(path, triangulate=True))")
+        raise MeshError(f"{name} has {arr.shape[1]} vertices per face, shape {arr.shape}: Loop subdivision needs "
+                        f"triangles; {TRIANGULATE_HINT}")
     if arr.shape[0] == 0:
         raise MeshError(f"{name} is empty: a mesh needs at least one triangle")
     bad = (arr < 0) | (arr >= n_vertices)
     if bad.any():
         f = int(np.flatnonzero(bad.any(axis=1))[0])
-        raise MeshError(f"{name}[{f}] = {arr[f].tolist()} has a vertex index out of range [0, {n_vertices})")
+        k = int(np.flatnonzero(bad[f])[0])
+        raise MeshError(f"{name}[{f}] = {arr[f].tolist()} has vertex index {arr[f, k]} out of range "
+                        f"[0, {n_vertices})")
     return np.ascontiguousarray(arr, dtype=np.int32)
 
 
 def as_boundary(boundary: str) -> str:
-    if boundary not in BOUNDARY_RULES:
+    if not isinstance(boundary, str) or boundary not in BOUNDARY_RULES:
         raise ParameterError(f"unknown boundary {boundary!r}: use one of {', '.join(map(repr, BOUNDARY_RULES))}")
     return boundary

@@ -1,0 +1,284 @@
+"""Bad input gets a clear error naming the problem and where (issue 7): arrays,
+topology, parameters. Each refusal asserts the exception type and a message
+that names the index; each acceptance asserts the result against an
+independent computation (the closed-form limit masks of conftest.py)."""
+
+from __future__ import annotations
+
+import hashlib
+import warnings
+
+import numpy as np
+import pytest
+
+import sorpia
+from sorpia._validate import as_faces, as_vertex_count, as_vertices
+
+V1, F1 = sorpia.shapes.icosphere(1)  # 42 vertices, 80 faces
+
+
+def two_triangles_sharing_a_vertex():
+    """The smallest bowtie: faces (0, 1, 2) and (0, 3, 4) meet at vertex 0 only."""
+    v = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [-1, 0, 0], [0, -1, 0]], float)
+    return v, np.array([[0, 1, 2], [0, 3, 4]])
+
+
+def double_cone():
+    """Two closed tetrahedra glued at one vertex: a bowtie with no boundary edge."""
+    rng = np.random.default_rng(0)
+    f = [[0, 1, 2], [0, 2, 3], [0, 3, 1], [1, 3, 2], [0, 4, 5], [0, 5, 6], [0, 6, 4], [4, 6, 5]]
+    return rng.normal(size=(7, 3)), np.array(f)
+
+
+def moebius(n: int = 8):
+    """A Moebius strip: a band of n quads, two triangles each, glued with a half twist."""
+    t = 2 * np.pi * np.arange(n) / n
+    v = []
+    for a in t:
+        for w in (-0.3, 0.3):
+            v.append([(1 + w * np.cos(a / 2)) * np.cos(a), (1 + w * np.cos(a / 2)) * np.sin(a), w * np.sin(a / 2)])
+    f = []
+    for i in range(n):
+        a0, a1 = 2 * i, 2 * i + 1
+        b0, b1 = (2 * i + 2, 2 * i + 3) if i + 1 < n else (1, 0)  # the twist
+        f += [[a0, b0, b1], [a0, b1, a1]]
+    return np.array(v), np.array(f)
+
+
+def strip(n: int = 6):
+    """A zig-zag strip of n triangles: every vertex is on the boundary."""
+    v = np.array([[i // 2, i % 2, 0.1 * i] for i in range(n + 2)], float)
+    f = [[i, i + 1, i + 2] if i % 2 == 0 else [i + 1, i, i + 2] for i in range(n)]
+    return v, np.array(f)
+
+
+def with_faces_flipped(faces, ids):
+    f = np.array(faces, copy=True)
+    f[ids] = f[ids][:, ::-1]
+    return f
+
+
+def digest(*arrays) -> str:
+    h = hashlib.sha256()
+    for a in arrays:
+        h.update(np.ascontiguousarray(a).tobytes())
+        h.update(str((a.dtype, a.shape, a.strides)).encode())
+    return h.hexdigest()
+
+
+# ---------------------------------------------------------------- arrays --
+
+def nan_at(i, value=np.nan):
+    v = V1.copy()
+    v[i, 1] = value
+    return v
+
+
+def face_set(f, i, row):
+    f = np.array(f, copy=True)
+    f[i] = row
+    return f
+
+
+# (id, vertices, faces, exception, message pattern)
+BAD_ARRAYS = [
+    ("vertices-2-columns", V1[:, :2], F1, ValueError, r"vertices must have shape \(n, 3\), got \(42, 2\)"),
+    ("vertices-1d", V1.ravel(), F1, ValueError, r"vertices must have shape \(n, 3\), got \(126,\)"),
+    ("vertices-3d", V1[None], F1, ValueError, r"vertices must have shape \(n, 3\), got \(1, 42, 3\)"),
+    ("vertices-bool", V1 > 0, F1, TypeError, r"vertices must be .* real numbers, got dtype bool"),
+    ("vertices-complex", V1 + 0j, F1, TypeError, r"vertices .* got dtype complex128"),
+    ("vertices-object", V1.astype(object), F1, TypeError, r"vertices .* got dtype object"),
+    ("vertices-strings", V1.astype(str), F1, TypeError, r"vertices .* got dtype <U"),
+    ("vertices-none", None, F1, TypeError, r"vertices .* got dtype object"),
+    ("vertices-ragged", [[0, 0, 0], [1, 0]], F1, TypeError, r"vertices must be an \(n, 3\) array"),
+    ("vertices-empty", np.zeros((0, 3)), F1, sorpia.MeshError, r"vertices is empty"),
+    ("vertex-nan", nan_at(17), F1, sorpia.MeshError, r"vertices\[17\] = \[.*nan.*\] is not finite"),
+    ("vertex-inf", nan_at(5, np.inf), F1, sorpia.MeshError, r"vertices\[5\] = \[.*inf.*\] is not finite"),
+    ("vertex-minus-inf", nan_at(41, -np.inf), F1, sorpia.MeshError, r"vertices\[41\] .* not finite"),
+    ("faces-1d", V1, F1.ravel(), ValueError, r"faces must have shape \(m, 3\), got \(240,\)"),
+    ("faces-float", V1, F1.astype(float), TypeError, r"faces must hold integer .* got dtype float64.*astype\(int\)"),
+    ("faces-float32", V1, F1.astype(np.float32), TypeError, r"got dtype float32"),
+    ("faces-bool", V1, F1 > 0, TypeError, r"faces must be .* integer vertex indices, got dtype bool"),
+    ("faces-complex", V1, F1 + 0j, TypeError, r"faces .* got dtype complex128"),
+    ("faces-object", V1, F1.astype(object), TypeError, r"faces .* got dtype object"),
+    ("faces-empty", V1, np.zeros((0, 3), int), sorpia.MeshError, r"faces is empty"),
+    ("faces-quads", V1, np.zeros((5, 4), int), sorpia.MeshError,
+     r"faces has 4 vertices per face, shape \(5, 4\): Loop subdivision needs triangles; split each polygon"),
+    ("faces-mixed-polygons", V1, [[0, 1, 2], [0, 2, 3], [3, 4, 5, 6]], sorpia.MeshError,
+     r"faces\[2\] has 4 vertices: Loop subdivision needs triangles; .*numpy.vstack"),
+    ("faces-edge", V1, [[0, 1, 2], [0, 2]], sorpia.MeshError, r"faces\[1\] has 2 vertices"),
+    ("index-negative", V1, face_set(F1, 9, [3, -1, 4]), sorpia.MeshError,
+     r"faces\[9\] = \[3, -1, 4\] has vertex index -1 out of range \[0, 42\)"),
+    ("index-too-large", V1, face_set(F1, 0, [0, 42, 5]), sorpia.MeshError,
+     r"faces\[0\] = \[0, 42, 5\] has vertex index 42 out of range \[0, 42\)"),
+    # 2**32 + 1 would become 1 in a careless cast to int32
+    ("index-wraps-int32", V1, face_set(F1.astype(np.int64), 3, [0, 2**32 + 1, 5]), sorpia.MeshError,
+     r"faces\[3\] .* vertex index 4294967297 out of range"),
+    ("index-uint64-huge", V1, face_set(F1.astype(np.uint64), 3, [0, 2**63, 5]), sorpia.MeshError,
+     r"faces\[3\] .* vertex index 9223372036854775808 out of range"),
+    ("repeated-vertex", V1, face_set(F1, 11, [7, 8, 7]), sorpia.MeshError,
+     r"face 11 \(7, 8, 7\) repeats vertex 7 \(a degenerate triangle\)"),
+    ("duplicate-face", V1, np.vstack([F1, F1[[30]]]), sorpia.MeshError,
+     r"duplicate faces: face 30 \(.*\) and face 80 \(.*\) have the same three vertices"),
+    ("duplicate-face-reversed", V1, np.vstack([F1, F1[[30], ::-1]]), sorpia.MeshError,
+     r"duplicate faces: face 30 .* and face 80"),
+]
+
+
+@pytest.mark.parametrize("vertices, faces, exc, match", [c[1:] for c in BAD_ARRAYS], ids=[c[0] for c in BAD_ARRAYS])
+def test_bad_arrays_are_refused_with_the_index(vertices, faces, exc, match):
+    with pytest.raises(exc, match=match):
+        sorpia.limit_points(vertices, faces)
+
+
+def test_every_refusal_is_a_value_or_type_error():
+    # The sorpia exceptions are ValueError subclasses: `except ValueError` catches bad input of every kind.
+    assert issubclass(sorpia.MeshError, ValueError)
+    assert issubclass(sorpia.ParameterError, ValueError)
+    assert issubclass(sorpia.MeshFileError, ValueError)
+
+
+def test_limit_matrix_refuses_bad_faces_and_counts():
+    with pytest.raises(sorpia.MeshError, match=r"faces\[0\] = \[0, 12, 14\] has vertex index 12 out of range \[0, 10\)"):
+        sorpia.limit_matrix(F1, 10)
+    with pytest.raises(TypeError, match=r"n_vertices must be an integer, got 42.5"):
+        as_faces(F1, 42.5)
+    with pytest.raises(sorpia.ParameterError, match=r"n_vertices = -1 must be >= 0"):
+        sorpia.limit_matrix(F1, -1)
+
+
+def test_vertex_count_accepts_numpy_integers_only():
+    assert as_vertex_count(np.int64(42)) == 42
+    with pytest.raises(TypeError, match="n_vertices must be an integer, got True"):
+        as_vertex_count(True)
+
+
+def strided(a):
+    """A non-contiguous view of `a` (every other column of a wider array)."""
+    wide = np.zeros((a.shape[0], 2 * a.shape[1]), a.dtype)
+    wide[:, ::2] = a
+    return wide[:, ::2]
+
+
+def read_only(a):
+    a = np.array(a, copy=True)
+    a.flags.writeable = False
+    return a
+
+
+CONVERTED = {
+    "non-contiguous": lambda v, f: (strided(v), strided(f)),
+    "fortran-order": lambda v, f: (np.asfortranarray(v), np.asfortranarray(f)),
+    "read-only": lambda v, f: (read_only(v), read_only(f)),
+    "big-endian": lambda v, f: (v.astype(">f8"), f.astype(">i8")),
+    "uint16-and-int-vertices": lambda v, f: ((v * 1000).astype(np.int64), f.astype(np.uint16)),
+    "float32-and-int8": lambda v, f: (v.astype(np.float32), f.astype(np.int8)),
+    "lists": lambda v, f: (v.tolist(), f.tolist()),
+}
+
+
+@pytest.mark.parametrize("kind", sorted(CONVERTED))
+def test_unusual_arrays_are_converted_and_never_modified(kind, closed_form):
+    v, f = CONVERTED[kind](V1, F1)
+    arrays = [a for a in (v, f) if isinstance(a, np.ndarray)]
+    before = digest(*arrays)
+    flags = [(a.flags.writeable, a.flags.c_contiguous) for a in arrays]
+    out = sorpia.limit_points(v, f)
+    # Same answer as the closed-form masks applied to the same (converted) numbers:
+    # 1e-14 relative to the coordinates (the int vertices are scaled by 1000).
+    exact = closed_form(F1, len(V1)) @ np.asarray(v, dtype=np.float64)
+    assert np.abs(out - exact).max() <= 1e-14 * max(1.0, np.abs(exact).max())
+    assert out.dtype == np.float64 and out.flags.c_contiguous and out.flags.writeable
+    assert digest(*arrays) == before  # the input is untouched
+    assert [(a.flags.writeable, a.flags.c_contiguous) for a in arrays] == flags
+
+
+def test_validated_arrays_are_not_copied_when_already_right():
+    # No hidden copy of a large input that is already float64/int32 C-contiguous.
+    f32 = F1.astype(np.int32)
+    assert as_vertices(V1) is V1
+    assert as_faces(f32, len(V1)) is f32
+
+
+# -------------------------------------------------------------- topology --
+
+BAD_TOPOLOGY = [
+    ("non-manifold-edge", lambda: (np.eye(5, 3), np.array([[0, 1, 2], [1, 0, 3], [0, 1, 4]])),
+     r"non-manifold edge \(0, 1\): shared by 3 faces \(faces 0, 1, 2\)"),
+    ("non-manifold-edge-in-a-sphere", lambda: (np.vstack([V1, [[2, 2, 2]]]), np.vstack([F1, [[F1[0, 0], F1[0, 1], 42]]])),
+     r"non-manifold edge \(\d+, \d+\): shared by 3 faces \(faces 0, .*80\)"),
+    ("bowtie", two_triangles_sharing_a_vertex,
+     r"non-manifold vertex 0: its 2 faces form 2 fans .*'bowtie'; e.g. faces 0 and 1"),
+    ("bowtie-closed-cones", double_cone, r"non-manifold vertex 0: its 6 faces form 2 fans"),
+    ("flipped-face", lambda: (V1, with_faces_flipped(F1, [7])),
+     r"inconsistent orientation at edge \(\d+, \d+\): face \d+ .* both run from vertex \d+ to \d+; reversing the "
+     r"vertex order of 1 of the 80 faces .* \(faces 7\)"),
+    ("three-flipped-faces", lambda: (V1, with_faces_flipped(F1, [3, 10, 17])),
+     r"inconsistent orientation .* 3 of the 80 faces .* \(faces 3, 10, 17\)"),
+    ("moebius-strip", moebius, r"inconsistent orientation at edge .* the surface is not orientable"),
+]
+
+
+@pytest.mark.parametrize("make, match", [c[1:] for c in BAD_TOPOLOGY], ids=[c[0] for c in BAD_TOPOLOGY])
+def test_bad_topology_is_refused_naming_edge_vertex_or_faces(make, match):
+    v, f = make()
+    with pytest.raises(sorpia.MeshError, match=match):
+        sorpia.limit_points(v, f)
+
+
+@pytest.mark.parametrize("make, match", [c[1:] for c in BAD_TOPOLOGY], ids=[c[0] for c in BAD_TOPOLOGY])
+def test_bad_topology_is_refused_by_limit_matrix_too(make, match):
+    v, f = make()
+    with pytest.raises(sorpia.MeshError, match=match):
+        sorpia.limit_matrix(f, len(v))
+
+
+VALID_ODD_MESHES = {
+    "single-triangle": lambda: (np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0.5]]), np.array([[0, 1, 2]])),
+    "all-boundary-strip": strip,
+    "two-components": lambda: (
+        np.vstack([V1, V1[::-1]]), np.vstack([F1, len(V1) + (len(V1) - 1 - F1)])),
+    "sphere-and-triangle": lambda: (
+        np.vstack([V1, [[3, 0, 0], [4, 0, 0], [3, 1, 0]]]), np.vstack([F1, [[42, 43, 44]]])),
+    "pole-360": lambda: sorpia.shapes.pole(360),
+}
+
+
+@pytest.mark.parametrize("boundary", ["edge-and-corner", "edge-only"])
+@pytest.mark.parametrize("name", sorted(VALID_ODD_MESHES))
+def test_unusual_valid_meshes_match_the_closed_form(name, boundary, closed_form):
+    # 1e-14: both sides are the same closed-form masks in double precision.
+    v, f = VALID_ODD_MESHES[name]()
+    out = sorpia.limit_points(v, f, boundary=boundary)
+    assert np.abs(out - closed_form(f, len(v), boundary) @ v).max() <= 1e-14
+
+
+def test_components_are_independent():
+    v, f = VALID_ODD_MESHES["two-components"]()
+    both = sorpia.limit_points(v, f)
+    assert np.array_equal(both[: len(V1)], sorpia.limit_points(V1, F1))
+    # the second component is the first with its vertices numbered backwards
+    assert np.abs(both[len(V1):][::-1] - sorpia.limit_points(V1, F1)).max() <= 1e-15  # summation order only
+
+
+def test_unreferenced_vertices_warn_and_pass_through(closed_form):
+    extra = np.array([[5.0, 6.0, 7.0], [-1.0, 2.5, 0.0]])
+    v = np.vstack([extra[:1], V1, extra[1:]])  # unreferenced first and last
+    f = F1 + 1
+    with pytest.warns(sorpia.UnreferencedVerticesWarning, match="2 of 44 vertices belong to no face"):
+        out = sorpia.limit_points(v, f)
+    assert np.array_equal(out[[0, -1]], extra)
+    assert np.abs(out - closed_form(f, len(v)) @ v).max() <= 1e-14
+
+
+def test_pole_of_valence_360_is_interior_and_exact(closed_form):
+    v, f = sorpia.shapes.pole(360)
+    b = sorpia.limit_matrix(f, len(v))
+    assert b[0].nnz == 361  # the centre and its 360 neighbours
+    assert abs(b - closed_form(f, len(v))).max() <= 1e-15  # one rounding of the same formula
+
+
+def test_no_warning_for_a_clean_mesh():
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        sorpia.limit_points(V1, F1)
