@@ -24,4 +24,15 @@ struct LoopRefiner {
 // Throws sorpia::MeshError when OpenSubdiv refuses the topology.
 LoopRefiner make_loop_refiner(const Topology& topology, Boundary boundary);
 
+// A position as OpenSubdiv's PrimvarRefiner combines them (Clear, AddWithWeight).
+struct Point3 {
+  double x, y, z;
+  void Clear() { x = y = z = 0.0; }
+  void AddWithWeight(const Point3& p, double w) {
+    x += w * p.x;
+    y += w * p.y;
+    z += w * p.z;
+  }
+};
+
 }  // namespace sorpia::detail

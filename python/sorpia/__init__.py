@@ -8,6 +8,8 @@ with SOR-PIA and the rest of the PIA family.
 from ._core import __version__
 from .errors import MeshError, MeshFileError, ParameterError
 from .limit import UnreferencedVerticesWarning, limit_matrix, limit_points
+from .io import read_mesh, write_mesh
+from .surface import LoopSurface, evaluate_limit, limit_surface
 from . import shapes
 
 __all__ = [
@@ -19,4 +21,5 @@ __all__ = [
     "limit_matrix",
     "limit_points",
     "shapes",
+    "LoopSurface", "evaluate_limit", "limit_surface", "read_mesh", "write_mesh",
 ]

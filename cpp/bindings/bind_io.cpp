@@ -1,0 +1,36 @@
+// Bindings of the mesh file readers and writers. Conversion and error
+// translation only.
+#include "bindings.hpp"
+#include "sorpia/io.hpp"
+
+namespace sorpia_py {
+using namespace pybind11::literals;
+
+void bind_io(py::module_& m) {
+  m.def(
+      "read_mesh",
+      [](const std::string& path, bool triangulate) {
+        sorpia::TriMesh mesh;
+        {
+          py::gil_scoped_release release;
+          mesh = sorpia::read_mesh(path, triangulate);
+        }
+        return py::make_tuple(to_numpy(mesh.vertices, 3), to_numpy(mesh.faces, 3));
+      },
+      "path"_a, "triangulate"_a);
+  m.def(
+      "write_mesh",
+      [](const std::string& path, const Vertices& vertices, const Faces& faces, bool binary) {
+        check_shape(vertices, 3, "vertices");
+        check_shape(faces, 3, "faces");
+        const double* v = vertices.data();
+        const std::int32_t* f = faces.data();
+        const auto n = static_cast<std::size_t>(vertices.shape(0));
+        const auto nf = static_cast<std::size_t>(faces.shape(0));
+        py::gil_scoped_release release;
+        sorpia::write_mesh(path, v, n, f, nf, binary);
+      },
+      "path"_a, "vertices"_a.noconvert(), "faces"_a.noconvert(), "binary"_a);
+}
+
+}  // namespace sorpia_py

@@ -1,0 +1,87 @@
+// Bindings of the Loop limit surface (LoopSurface: Bfr evaluation and uniform
+// tessellation). Conversion and error translation only.
+#include "bindings.hpp"
+#include "sorpia/surface.hpp"
+
+namespace sorpia_py {
+using namespace pybind11::literals;
+
+namespace {
+using FaceIds = py::array_t<std::int32_t, py::array::c_style>;
+
+void check_rows(const Vertices& a, std::size_t n_vertices) {
+  check_shape(a, 3, "vertices");
+  if (static_cast<std::size_t>(a.shape(0)) != n_vertices)
+    throw sorpia::ParameterError("vertices has " + std::to_string(a.shape(0)) + " rows but the mesh has " +
+                                 std::to_string(n_vertices) + " vertices");
+}
+}  // namespace
+
+void bind_surface(py::module_& m) {
+  py::class_<sorpia::LoopSurface>(m, "LoopSurface")
+      .def(py::init([](const sorpia::Topology& topology, const Vertices& vertices, const std::string& boundary) {
+             check_rows(vertices, topology.n_vertices());
+             const auto b = parse_boundary(boundary);
+             const double* v = vertices.data();
+             py::gil_scoped_release release;
+             return sorpia::LoopSurface(topology, v, b);
+           }),
+           "topology"_a, "vertices"_a.noconvert(), "boundary"_a)
+      .def_property_readonly("n_vertices", &sorpia::LoopSurface::n_vertices)
+      .def_property_readonly("n_faces", &sorpia::LoopSurface::n_faces)
+      .def("set_vertices",
+           [](sorpia::LoopSurface& s, const Vertices& vertices) {
+             check_rows(vertices, s.n_vertices());
+             s.set_vertices(vertices.data());
+           },
+           "vertices"_a.noconvert())
+      .def("get_vertices",
+           [](const sorpia::LoopSurface& s) {
+             Vertices out({static_cast<py::ssize_t>(s.n_vertices()), py::ssize_t{3}});
+             s.get_vertices(out.mutable_data());
+             return out;
+           })
+      .def("evaluate",
+           [](const sorpia::LoopSurface& s, const FaceIds& face_ids, const Vertices& uv, bool derivatives) {
+             check_shape(uv, 2, "uv");
+             if (face_ids.ndim() != 1 || face_ids.shape(0) != uv.shape(0))
+               throw sorpia::ParameterError("face_ids must have shape (k,) with k = len(uv) = " +
+                                            std::to_string(uv.shape(0)));
+             const auto k = static_cast<std::size_t>(uv.shape(0));
+             const std::vector<py::ssize_t> shape{uv.shape(0), py::ssize_t{3}};
+             Vertices p(shape);
+             double* pp = p.mutable_data();
+             const std::int32_t* f = face_ids.data();
+             const double* t = uv.data();
+             if (!derivatives) {
+               {
+                 py::gil_scoped_release release;
+                 s.evaluate(f, t, k, pp, nullptr, nullptr, nullptr);
+               }
+               return py::object(p);
+             }
+             Vertices du(shape), dv(shape), nrm(shape);
+             double *a = du.mutable_data(), *b = dv.mutable_data(), *c = nrm.mutable_data();
+             {
+               py::gil_scoped_release release;
+               s.evaluate(f, t, k, pp, a, b, c);
+             }
+             return py::object(py::make_tuple(p, du, dv, nrm));
+           },
+           "face_ids"_a.noconvert(), "uv"_a.noconvert(), "derivatives"_a)
+      .def("tessellate",
+           [](sorpia::LoopSurface& s, int level) {
+             sorpia::TriMesh t;
+             {
+               py::gil_scoped_release release;
+               t = s.tessellate(level);
+             }
+             return py::make_tuple(to_numpy(t.vertices, 3), to_numpy(t.faces, 3));
+           },
+           "level"_a);
+
+  m.def("tessellation_bytes", &sorpia::tessellation_bytes, "n_vertices"_a, "n_faces"_a, "level"_a);
+  m.def("available_memory_bytes", &sorpia::available_memory_bytes);
+}
+
+}  // namespace sorpia_py

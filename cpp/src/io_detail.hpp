@@ -1,0 +1,203 @@
+#pragma once
+// Internals shared by the mesh file readers and writers (io_*.cpp).
+#include <charconv>
+#include <cstddef>
+#include <cstdint>
+#include <cstring>
+#include <string>
+#include <string_view>
+#include <system_error>
+#include <vector>
+
+#include "sorpia/errors.hpp"
+#include "sorpia/shapes.hpp"
+
+namespace sorpia::detail::io {
+
+// A whole file in memory (the readers parse from memory: one read, no
+// per-line stream overhead).
+struct FileData {
+  std::string path;
+  std::string bytes;
+};
+
+// Throws FileError when the file is missing, a directory, unreadable or empty.
+FileData load_file(const std::string& path);
+
+// Writes `data` to `path` through a temporary file in the same folder and a
+// rename; on failure the temporary file is removed and `path` is untouched.
+void write_atomic(const std::string& path, const std::string& data);
+
+// Where in a file something is: "line 12", "vertex 7", ...
+struct Where {
+  const char* kind;
+  std::size_t index;
+  std::string str() const { return std::string(kind) + " " + std::to_string(index); }
+};
+
+[[noreturn]] inline void fail(const FileData& f, const std::string& what) { throw FileError(f.path + ": " + what); }
+[[noreturn]] inline void fail(const FileData& f, const Where& w, const std::string& what) {
+  throw FileError(f.path + ", " + w.str() + ": " + what);
+}
+
+// Lines of a text buffer, without their "\n" or "\r\n"; numbered from 1.
+class LineReader {
+ public:
+  LineReader(const char* begin, const char* end) : p_(begin), end_(end) {}
+  bool next(std::string_view& line) {
+    if (p_ >= end_) return false;
+    const auto* nl = static_cast<const char*>(std::memchr(p_, '\n', static_cast<std::size_t>(end_ - p_)));
+    const char* stop = nl ? nl : end_;
+    const char* q = stop;
+    if (q > p_ && q[-1] == '\r') --q;
+    line = std::string_view(p_, static_cast<std::size_t>(q - p_));
+    p_ = nl ? nl + 1 : end_;
+    ++number_;
+    return true;
+  }
+  std::size_t number() const { return number_; }
+  const char* position() const { return p_; }
+
+ private:
+  const char* p_;
+  const char* end_;
+  std::size_t number_ = 0;
+};
+
+inline bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\f' || c == '\v'; }
+
+// Next whitespace-separated token of `rest` (which is advanced past it).
+inline bool next_token(std::string_view& rest, std::string_view& token) {
+  std::size_t i = 0;
+  while (i < rest.size() && is_space(rest[i])) ++i;
+  if (i == rest.size()) {
+    rest = {};
+    return false;
+  }
+  std::size_t j = i;
+  while (j < rest.size() && !is_space(rest[j])) ++j;
+  token = rest.substr(i, j - i);
+  rest.remove_prefix(j);
+  return true;
+}
+
+// The line without a trailing "# comment" and surrounding blanks.
+inline std::string_view strip_comment(std::string_view line) {
+  const std::size_t hash = line.find('#');
+  if (hash != std::string_view::npos) line = line.substr(0, hash);
+  while (!line.empty() && is_space(line.front())) line.remove_prefix(1);
+  while (!line.empty() && is_space(line.back())) line.remove_suffix(1);
+  return line;
+}
+
+// Exact decimal -> double (std::from_chars: correctly rounded, so the
+// shortest representation written by to_chars reads back bit for bit).
+// A leading '+' is accepted (from_chars alone refuses it).
+inline std::errc parse_double(std::string_view t, double& out) {
+  const char* b = t.data();
+  const char* e = b + t.size();
+  if (b != e && *b == '+') ++b;
+  const auto r = std::from_chars(b, e, out);
+  if (r.ec != std::errc()) return r.ec;
+  return r.ptr == e ? std::errc() : std::errc::invalid_argument;
+}
+
+inline bool parse_int(std::string_view t, long long& out) {
+  const char* b = t.data();
+  const char* e = b + t.size();
+  if (b != e && *b == '+') ++b;
+  const auto r = std::from_chars(b, e, out);
+  return r.ec == std::errc() && r.ptr == e;
+}
+
+// Parses a coordinate, refusing text that is not a number and non-finite values.
+double parse_coordinate(const FileData& f, const Where& w, std::string_view token);
+
+// Collects faces (0-based indices), splitting polygons into fans when asked
+// and reporting them otherwise.
+class FaceSink {
+ public:
+  FaceSink(const FileData& file, bool triangulate, std::vector<std::int32_t>& faces)
+      : file_(file), triangulate_(triangulate), faces_(faces) {}
+  // `idx` holds k indices already checked to lie in [0, n_vertices).
+  void add(const std::int64_t* idx, std::size_t k, const Where& w) {
+    if (k == 3) {
+      faces_.insert(faces_.end(), {static_cast<std::int32_t>(idx[0]), static_cast<std::int32_t>(idx[1]),
+                                   static_cast<std::int32_t>(idx[2])});
+      return;
+    }
+    if (k < 3) fail(file_, w, "a face needs at least 3 vertices, this one has " + std::to_string(k));
+    if (!triangulate_)
+      fail(file_, w,
+           "face with " + std::to_string(k) +
+               " vertices: sorpia works on triangles; read the file with triangulate=True to split each "
+               "polygon into a fan of triangles from its first vertex");
+    for (std::size_t i = 1; i + 1 < k; ++i)
+      faces_.insert(faces_.end(), {static_cast<std::int32_t>(idx[0]), static_cast<std::int32_t>(idx[i]),
+                                   static_cast<std::int32_t>(idx[i + 1])});
+  }
+
+ private:
+  const FileData& file_;
+  bool triangulate_;
+  std::vector<std::int32_t>& faces_;
+};
+
+// Index check shared by the readers: 0 <= i < n.
+inline void check_index(const FileData& f, const Where& w, long long i, std::size_t n) {
+  if (i < 0 || static_cast<unsigned long long>(i) >= n)
+    fail(f, w, "vertex index " + std::to_string(i) + " is out of range [0, " + std::to_string(n) + ")");
+}
+
+// Refuses a mesh without vertices or faces, or with more vertices than int32 indices hold.
+void check_counts(const FileData& f, const TriMesh& mesh);
+
+// Text output with exact numbers: std::to_chars writes the shortest text that
+// reads back to the same double (or float).
+class TextOut {
+ public:
+  explicit TextOut(std::size_t reserve = 0) { s_.reserve(reserve); }
+  TextOut& operator<<(std::string_view text) {
+    s_.append(text);
+    return *this;
+  }
+  TextOut& operator<<(char c) {
+    s_.push_back(c);
+    return *this;
+  }
+  template <class T>
+  TextOut& num(T value) {
+    char buf[64];
+    const auto r = std::to_chars(buf, buf + sizeof buf, value);
+    s_.append(buf, r.ptr);
+    return *this;
+  }
+  // "x y z"
+  TextOut& xyz(const double* p) {
+    num(p[0]) << ' ';
+    num(p[1]) << ' ';
+    return num(p[2]);
+  }
+  // "a b c", indices plus `base` (1 for OBJ)
+  TextOut& triangle(const std::int32_t* f, int base) {
+    num(f[0] + base) << ' ';
+    num(f[1] + base) << ' ';
+    return num(f[2] + base);
+  }
+  std::string& str() { return s_; }
+
+ private:
+  std::string s_;
+};
+
+// Format readers and writers (io_obj.cpp, io_off.cpp, io_ply.cpp, io_stl.cpp).
+TriMesh read_obj(const FileData& f, bool triangulate);
+TriMesh read_off(const FileData& f, bool triangulate);
+TriMesh read_ply(const FileData& f, bool triangulate);
+TriMesh read_stl(const FileData& f, bool triangulate);
+std::string format_obj(const double* v, std::size_t n, const std::int32_t* faces, std::size_t m);
+std::string format_off(const double* v, std::size_t n, const std::int32_t* faces, std::size_t m);
+std::string format_ply(const double* v, std::size_t n, const std::int32_t* faces, std::size_t m, bool binary);
+std::string format_stl(const double* v, std::size_t n, const std::int32_t* faces, std::size_t m, bool binary);
+
+}  // namespace sorpia::detail::io

@@ -1,0 +1,90 @@
+// Wavefront OBJ: "v x y z" vertices and "f" faces (1-based indices, "a",
+// "a/b", "a//c", "a/b/c" forms, negative indices counted from the last vertex
+// read). Every other statement (vt, vn, vp, g, o, s, usemtl, mtllib, l, p,
+// curves, ...) is skipped.
+#include <cctype>
+
+#include "io_detail.hpp"
+
+namespace sorpia::detail::io {
+
+namespace {
+bool is_keyword(std::string_view t) {
+  for (const char c : t)
+    if (!std::isalpha(static_cast<unsigned char>(c)) && c != '_') return false;
+  return true;
+}
+}  // namespace
+
+TriMesh read_obj(const FileData& f, bool triangulate) {
+  TriMesh mesh;
+  mesh.vertices.reserve(f.bytes.size() / 16);
+  mesh.faces.reserve(f.bytes.size() / 16);
+  FaceSink sink(f, triangulate, mesh.faces);
+  // Faces may name vertices defined further down: positive indices past the
+  // vertices read so far are checked at the end (face row, line).
+  struct Pending {
+    std::size_t first_row, end_row, line;
+  };
+  std::vector<Pending> pending;
+  std::vector<std::int64_t> idx;
+  LineReader lines(f.bytes.data(), f.bytes.data() + f.bytes.size());
+  std::string_view line, tok;
+  while (lines.next(line)) {
+    std::string_view rest = strip_comment(line);
+    if (!next_token(rest, tok)) continue;
+    const Where w{"line", lines.number()};
+    if (tok == "v") {
+      double p[3];
+      for (double& x : p) {
+        if (!next_token(rest, tok)) fail(f, w, "a vertex needs 3 coordinates");
+        x = parse_coordinate(f, w, tok);
+      }
+      mesh.vertices.insert(mesh.vertices.end(), p, p + 3);  // a 4th (w) or colours are ignored
+    } else if (tok == "f") {
+      idx.clear();
+      const auto n = static_cast<long long>(mesh.n_vertices());
+      bool forward = false;
+      while (next_token(rest, tok)) {
+        const std::string_view v = tok.substr(0, tok.find('/'));
+        long long i = 0;
+        if (!parse_int(v, i)) fail(f, w, "expected a vertex index, found '" + std::string(tok.substr(0, 40)) + "'");
+        if (i == 0) fail(f, w, "vertex index 0: OBJ indices start at 1");
+        if (i < 0) {
+          if (-i > n)
+            fail(f, w, "relative vertex index " + std::to_string(i) + " points before the first vertex (" +
+                           std::to_string(n) + " read so far)");
+          i += n;
+        } else {
+          i -= 1;
+          forward = forward || i >= n;
+        }
+        idx.push_back(i);
+      }
+      const std::size_t before = mesh.faces.size();
+      sink.add(idx.data(), idx.size(), w);
+      if (forward) pending.push_back({before / 3, mesh.faces.size() / 3, w.index});
+    } else if (!is_keyword(tok)) {
+      fail(f, w, "'" + std::string(tok.substr(0, 40)) + "' is not an OBJ statement (not a text OBJ file?)");
+    }
+  }
+  const std::size_t n = mesh.n_vertices();
+  for (const Pending& p : pending)
+    for (std::size_t k = 3 * p.first_row; k < 3 * p.end_row; ++k)
+      if (static_cast<std::size_t>(mesh.faces[k]) >= n)
+        fail(f, Where{"line", p.line},
+             "vertex index " + std::to_string(mesh.faces[k] + 1) + " is out of range: the file has " +
+                 std::to_string(n) + " vertices");
+  return mesh;
+}
+
+std::string format_obj(const double* v, std::size_t n, const std::int32_t* faces, std::size_t m) {
+  TextOut out(n * 60 + m * 30);
+  out << "# written by sorpia " << SORPIA_VERSION << ": " << std::to_string(n) << " vertices, " << std::to_string(m)
+      << " triangles\n";
+  for (std::size_t i = 0; i < n; ++i) (out << "v ").xyz(v + 3 * i) << '\n';
+  for (std::size_t i = 0; i < m; ++i) (out << "f ").triangle(faces + 3 * i, 1) << '\n';
+  return std::move(out.str());
+}
+
+}  // namespace sorpia::detail::io

@@ -1,0 +1,296 @@
+#include "sorpia/surface.hpp"
+
+#include <opensubdiv/bfr/refinerSurfaceFactory.h>
+#include <opensubdiv/bfr/surface.h>
+#include <opensubdiv/bfr/surfaceFactoryCache.h>
+#include <opensubdiv/far/primvarRefiner.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <limits>
+#include <mutex>
+#include <numeric>
+#include <shared_mutex>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "osd_refiner.hpp"
+#include "sorpia/errors.hpp"
+
+namespace sorpia {
+
+namespace {
+
+namespace Bfr = OpenSubdiv::Bfr;
+namespace Far = OpenSubdiv::Far;
+
+// A thread-safe cache lets every OpenMP thread share one factory (irregular
+// patches are built once per distinct vertex neighbourhood, then reused).
+using ThreadedCache = Bfr::SurfaceFactoryCacheThreaded<std::shared_mutex, std::shared_lock<std::shared_mutex>,
+                                                       std::unique_lock<std::shared_mutex>>;
+using SurfaceFactory = Bfr::RefinerSurfaceFactory<ThreadedCache>;
+
+using detail::Point3;
+
+// Measured bytes per refined face held by a uniformly refined Loop
+// TopologyRefiner with full topology (all levels together, ~4/3 of the last
+// level) and the position buffers: peak RSS measured by bench/surface_speed.py
+// was 250 B per output face in all, outputs included (irregular 100k, levels 2-3).
+constexpr double kRefinerBytesPerFace = 220.0;
+
+std::string human_bytes(double b) {
+  char buf[64];
+  if (b >= 1e9)
+    std::snprintf(buf, sizeof buf, "%.1f GB", b / 1e9);
+  else
+    std::snprintf(buf, sizeof buf, "%.0f MB", b / 1e6);
+  return buf;
+}
+
+// Bfr evaluates on the closed triangle; a parameter a rounding error outside is
+// pulled back onto it, anything further out is refused.
+constexpr double kUvSlack = 1e-12;
+
+}  // namespace
+
+std::size_t tessellation_bytes(std::size_t n_vertices, std::size_t n_faces, int level) {
+  const double grow = std::pow(4.0, level);
+  const double faces = static_cast<double>(n_faces) * grow;
+  const double verts = static_cast<double>(n_vertices) + faces / 2.0 + 2.0 * static_cast<double>(n_faces);
+  // refiner (every level) + output arrays: vertices (24 B) and faces (12 B),
+  // each held twice while the Python layer copies them.
+  const double bytes = faces * kRefinerBytesPerFace + 2.0 * (24.0 * verts + 12.0 * faces);
+  return bytes >= static_cast<double>(std::numeric_limits<std::size_t>::max())
+             ? std::numeric_limits<std::size_t>::max()
+             : static_cast<std::size_t>(bytes);
+}
+
+std::size_t available_memory_bytes() {
+  std::size_t avail = 0;
+  std::ifstream meminfo("/proc/meminfo");
+  std::string key;
+  std::size_t value = 0;
+  std::string unit;
+  while (meminfo >> key >> value >> unit)
+    if (key == "MemAvailable:") {
+      avail = value * 1024;
+      break;
+    }
+  // A container's memory limit (cgroup v2) can be far below the host's.
+  std::ifstream max_file("/sys/fs/cgroup/memory.max"), cur_file("/sys/fs/cgroup/memory.current");
+  std::string max_text;
+  std::size_t current = 0;
+  if (max_file >> max_text && max_text != "max" && cur_file >> current) {
+    const std::size_t limit = std::stoull(max_text);
+    const std::size_t left = limit > current ? limit - current : 0;
+    avail = avail == 0 ? left : std::min(avail, left);
+  }
+  return avail;
+}
+
+struct LoopSurface::Impl {
+  Topology topology;
+  Boundary boundary;
+  detail::LoopRefiner base;           // unrefined: Bfr and the limit positions of control vertices
+  std::unique_ptr<SurfaceFactory> factory;
+  std::vector<double> vertices;       // (n, 3), as given
+  std::vector<Point3> points;         // referenced vertices in OpenSubdiv's order
+  detail::LoopRefiner refined;        // uniformly refined to refined_level (built on demand)
+  int refined_level = -1;
+
+  Impl(const Topology& t, Boundary b) : topology(t), boundary(b), base(detail::make_loop_refiner(t, b)) {}
+};
+
+LoopSurface::LoopSurface(const Topology& topology, const double* vertices, Boundary boundary)
+    : impl_(std::make_unique<Impl>(topology, boundary)) {
+  Bfr::SurfaceFactory::Options options;
+  impl_->factory = std::make_unique<SurfaceFactory>(*impl_->base.refiner, options);
+  impl_->points.resize(impl_->base.from_osd.size());
+  set_vertices(vertices);
+}
+
+LoopSurface::~LoopSurface() = default;
+LoopSurface::LoopSurface(LoopSurface&&) noexcept = default;
+LoopSurface& LoopSurface::operator=(LoopSurface&&) noexcept = default;
+
+std::size_t LoopSurface::n_vertices() const { return impl_->topology.n_vertices(); }
+std::size_t LoopSurface::n_faces() const { return impl_->topology.n_faces(); }
+Boundary LoopSurface::boundary() const { return impl_->boundary; }
+
+void LoopSurface::set_vertices(const double* vertices) {
+  const std::size_t n = n_vertices();
+  impl_->vertices.assign(vertices, vertices + 3 * n);
+  const auto& from = impl_->base.from_osd;
+  for (std::size_t i = 0; i < from.size(); ++i) {
+    const double* p = vertices + 3 * static_cast<std::size_t>(from[i]);
+    impl_->points[i] = Point3{p[0], p[1], p[2]};
+  }
+}
+
+void LoopSurface::get_vertices(double* out) const { std::copy(impl_->vertices.begin(), impl_->vertices.end(), out); }
+
+void LoopSurface::evaluate(const std::int32_t* face_ids, const double* uv, std::size_t k, double* positions,
+                           double* du, double* dv, double* normals) const {
+  const std::size_t n_f = n_faces();
+  std::vector<double> params(uv, uv + 2 * k);
+  for (std::size_t i = 0; i < k; ++i) {
+    if (face_ids[i] < 0 || static_cast<std::size_t>(face_ids[i]) >= n_f)
+      throw ParameterError("face_ids[" + std::to_string(i) + "] = " + std::to_string(face_ids[i]) +
+                           " is out of range [0, " + std::to_string(n_f) + ")");
+    double& u = params[2 * i];
+    double& v = params[2 * i + 1];
+    if (!(u >= -kUvSlack && v >= -kUvSlack && u + v <= 1.0 + kUvSlack))
+      throw ParameterError("uv[" + std::to_string(i) + "] = (" + std::to_string(u) + ", " + std::to_string(v) +
+                           ") is outside the triangle u >= 0, v >= 0, u + v <= 1");
+    u = std::max(u, 0.0);
+    v = std::max(v, 0.0);
+    if (u + v > 1.0) {
+      const double s = u + v;
+      u /= s;
+      v /= s;
+    }
+  }
+  // Group the points by face so that each face's surface is built once.
+  std::vector<std::size_t> order(k);
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::size_t a, std::size_t b) { return face_ids[a] < face_ids[b]; });
+  std::vector<std::size_t> group_start;
+  for (std::size_t j = 0; j < k; ++j)
+    if (j == 0 || face_ids[order[j]] != face_ids[order[j - 1]]) group_start.push_back(j);
+  group_start.push_back(k);
+  const auto n_groups = static_cast<std::ptrdiff_t>(group_start.size()) - 1;
+
+  const SurfaceFactory& factory = *impl_->factory;
+  const double* mesh_points = &impl_->points.data()->x;
+  const bool want_derivs = du || dv || normals;
+  int failed_face = -1;
+#pragma omp parallel
+  {
+    Bfr::Surface<double> surface;
+    std::vector<double> patch;
+    const Bfr::Surface<double>::PointDescriptor desc(3);
+#pragma omp for schedule(dynamic, 64)
+    for (std::ptrdiff_t g = 0; g < n_groups; ++g) {
+      const int face = face_ids[order[group_start[g]]];
+      if (!factory.InitVertexSurface(face, &surface)) {
+#pragma omp critical
+        failed_face = face;
+        continue;
+      }
+      patch.resize(3 * static_cast<std::size_t>(surface.GetNumPatchPoints()));
+      surface.PreparePatchPoints(mesh_points, desc, patch.data(), desc);
+      for (std::size_t j = group_start[g]; j < group_start[g + 1]; ++j) {
+        const std::size_t i = order[j];
+        double p[3], d1[3], d2[3];
+        if (want_derivs)
+          surface.Evaluate(&params[2 * i], patch.data(), desc, p, d1, d2);
+        else
+          surface.Evaluate(&params[2 * i], patch.data(), desc, p);
+        std::copy(p, p + 3, positions + 3 * i);
+        if (du) std::copy(d1, d1 + 3, du + 3 * i);
+        if (dv) std::copy(d2, d2 + 3, dv + 3 * i);
+        if (normals) {
+          const double nx = d1[1] * d2[2] - d1[2] * d2[1];
+          const double ny = d1[2] * d2[0] - d1[0] * d2[2];
+          const double nz = d1[0] * d2[1] - d1[1] * d2[0];
+          const double len = std::sqrt(nx * nx + ny * ny + nz * nz);
+          const double s = len > 0.0 ? 1.0 / len : 0.0;
+          normals[3 * i] = nx * s;
+          normals[3 * i + 1] = ny * s;
+          normals[3 * i + 2] = nz * s;
+        }
+      }
+    }
+  }
+  if (failed_face >= 0)
+    throw MeshError("OpenSubdiv's Bfr could not build the limit surface of face " + std::to_string(failed_face));
+}
+
+TriMesh LoopSurface::tessellate(int level) {
+  if (level < 0 || level > 15)
+    throw ParameterError("level must be in 0..15, got " + std::to_string(level));
+  const std::size_t n = n_vertices();
+  const std::size_t m = n_faces();
+  const double out_faces = static_cast<double>(m) * std::pow(4.0, level);
+  if (out_faces > static_cast<double>(std::numeric_limits<std::int32_t>::max()))
+    throw ParameterError("level " + std::to_string(level) + " would make " + std::to_string(out_faces) +
+                         " triangles from " + std::to_string(m) + " (4^level per face), more than int32 indices hold");
+  const std::size_t need = tessellation_bytes(n, m, level);
+  const std::size_t avail = available_memory_bytes();
+  if (avail != 0 && need > avail)
+    throw ParameterError("level " + std::to_string(level) + " makes " + std::to_string(static_cast<long long>(out_faces)) +
+                         " triangles (4^level per face) and needs about " + human_bytes(static_cast<double>(need)) +
+                         ", but only " + human_bytes(static_cast<double>(avail)) +
+                         " of memory is available: use a lower level, or evaluate_limit at the points you need");
+
+  if (impl_->refined_level != level) {
+    impl_->refined = detail::LoopRefiner{};  // free the old one before building the new one
+    impl_->refined = detail::make_loop_refiner(impl_->topology, impl_->boundary);
+    if (level > 0) {
+      Far::TopologyRefiner::UniformOptions options(level);
+      // Limit() on the last level needs its full topology (DEPENDENCIES.md).
+      options.fullTopologyInLastLevel = true;
+      impl_->refined.refiner->RefineUniform(options);
+    }
+    impl_->refined_level = level;
+  }
+  const Far::TopologyRefiner& refiner = *impl_->refined.refiner;
+  Far::PrimvarRefinerReal<double> primvar(refiner);
+
+  std::vector<Point3> src = impl_->points, dst;
+  for (int l = 1; l <= level; ++l) {
+    dst.resize(static_cast<std::size_t>(refiner.GetLevel(l).GetNumVertices()));
+    primvar.Interpolate(l, src, dst);
+    std::swap(src, dst);
+  }
+  std::vector<Point3> limit(src.size());
+  primvar.Limit(src, limit);
+  std::vector<Point3>().swap(src);
+
+  // Refined vertices are ordered children of vertices first
+  // (orderVerticesFromFacesFirst = false), so the first n_osd of every level
+  // descend from the control vertices, in order.
+  const auto& from = impl_->refined.from_osd;
+  const std::size_t n_osd = from.size();
+  const std::size_t n_out = n + (limit.size() - n_osd);
+  TriMesh out;
+  out.vertices.resize(3 * n_out);
+  // Control vertices: B V from the unrefined refiner, the very computation of
+  // sorpia::limit_points (the refined level gives the same point up to
+  // rounding); unreferenced vertices stay where they are.
+  std::copy(impl_->vertices.begin(), impl_->vertices.end(), out.vertices.begin());
+  {
+    std::vector<Point3> base_limit(n_osd);
+    Far::PrimvarRefinerReal<double>(*impl_->base.refiner).Limit(impl_->points, base_limit);
+    for (std::size_t i = 0; i < n_osd; ++i) {
+      double* q = &out.vertices[3 * static_cast<std::size_t>(from[i])];
+      q[0] = base_limit[i].x;
+      q[1] = base_limit[i].y;
+      q[2] = base_limit[i].z;
+    }
+  }
+  for (std::size_t i = n_osd; i < limit.size(); ++i) {
+    double* q = &out.vertices[3 * (n + i - n_osd)];
+    q[0] = limit[i].x;
+    q[1] = limit[i].y;
+    q[2] = limit[i].z;
+  }
+  const auto& last = refiner.GetLevel(level);
+  const auto n_faces_out = static_cast<std::size_t>(last.GetNumFaces());
+  out.faces.resize(3 * n_faces_out);
+  const auto to_out = [&](int i) {
+    return static_cast<std::int32_t>(static_cast<std::size_t>(i) < n_osd ? static_cast<std::size_t>(from[i])
+                                                                         : n + static_cast<std::size_t>(i) - n_osd);
+  };
+  for (std::size_t f = 0; f < n_faces_out; ++f) {
+    const auto fv = last.GetFaceVertices(static_cast<int>(f));
+    for (int c = 0; c < 3; ++c) out.faces[3 * f + c] = to_out(fv[c]);
+  }
+  return out;
+}
+
+}  // namespace sorpia
