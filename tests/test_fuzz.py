@@ -1,0 +1,203 @@
+"""Property-based tests (hypothesis) over random small meshes and random
+corruptions of them (issue 7). Bounded: every test has a fixed number of
+examples and a deadline, so the whole file runs in well under 30 s.
+
+Each property is checked against an independent computation: the closed-form
+Loop masks of conftest.py for valid meshes, and `mesh_problems` below (plain
+Python dictionaries, no sorpia code) for what makes a face list invalid.
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections import defaultdict
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, assume, given, settings
+from hypothesis import strategies as st
+
+import sorpia
+
+# The `closed_form` fixture is a stateless function: sharing it between examples is safe.
+# database=None: nothing is written into the source tree.
+FUZZ = settings(max_examples=120, deadline=2000, database=None,
+                suppress_health_check=[HealthCheck.function_scoped_fixture])
+
+
+def zigzag_strip(n: int = 5):
+    v = np.array([[i // 2, i % 2, 0.1 * i] for i in range(n + 2)], float)
+    return v, np.array([[i, i + 1, i + 2] if i % 2 == 0 else [i + 1, i, i + 2] for i in range(n)])
+
+
+BASES = {
+    "tetrahedron": lambda: (np.array([[1, 1, 1], [1, -1, -1], [-1, 1, -1], [-1, -1, 1]], float),
+                            np.array([[0, 1, 2], [0, 2, 3], [0, 3, 1], [1, 3, 2]])),
+    "icosahedron": lambda: sorpia.shapes.icosphere(0),
+    "icosphere-1": lambda: sorpia.shapes.icosphere(1),
+    "torus-4x3": lambda: sorpia.shapes.torus(4, 3),
+    "grid-3x4": lambda: sorpia.shapes.grid(3, 4),
+    "pole-7": lambda: sorpia.shapes.pole(7),
+    "irregular": lambda: sorpia.shapes.irregular(60, seed=5),
+    "strip": zigzag_strip,
+}
+BASE_MESHES = {k: tuple(np.asarray(a) for a in make()) for k, make in BASES.items()}
+
+
+def mesh_problems(faces, n_vertices: int) -> set[str]:
+    """What is wrong with a face list, found independently of sorpia: the set of
+    message fragments sorpia may report ("out of range", "repeats vertex",
+    "duplicate faces", "non-manifold edge", "inconsistent orientation",
+    "non-manifold vertex"). Empty for a valid mesh."""
+    faces = [tuple(int(x) for x in f) for f in faces]
+    if any(not 0 <= x < n_vertices for f in faces for x in f):
+        return {"out of range"}
+    if any(len(set(f)) < 3 for f in faces):
+        return {"repeats vertex"}
+    problems = set()
+    if len({tuple(sorted(f)) for f in faces}) < len(faces):
+        problems.add("duplicate faces")
+    directed = defaultdict(list)  # (a, b) -> faces running a -> b
+    for i, (a, b, c) in enumerate(faces):
+        for e in ((a, b), (b, c), (c, a)):
+            directed[e].append(i)
+    undirected = defaultdict(int)
+    for (a, b), users in directed.items():
+        undirected[min(a, b), max(a, b)] += len(users)
+        if len(users) > 1:
+            problems.add("inconsistent orientation")
+    if any(k > 2 for k in undirected.values()):
+        problems.add("non-manifold edge")
+    if problems:
+        return problems
+    # Fans: faces at v joined when they share an edge (v, w).
+    at = defaultdict(list)
+    for i, f in enumerate(faces):
+        for x in f:
+            at[x].append(i)
+    for v, fs in at.items():
+        by_edge = defaultdict(list)
+        for i in fs:
+            for w in faces[i]:
+                if w != v:
+                    by_edge[w].append(i)
+        seen, stack = {fs[0]}, [fs[0]]
+        while stack:
+            i = stack.pop()
+            for w in faces[i]:
+                for j in by_edge.get(w, ()):
+                    if j not in seen:
+                        seen.add(j)
+                        stack.append(j)
+        if len(seen) < len(fs):
+            problems.add("non-manifold vertex")
+    return problems
+
+
+def limit_quietly(v, f, boundary="edge-and-corner"):
+    """limit_points with unreferenced vertices allowed (they may follow from a corruption)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", sorpia.UnreferencedVerticesWarning)
+        return sorpia.limit_points(v, f, boundary=boundary)
+
+
+@st.composite
+def relabeled_meshes(draw):
+    """A base mesh with its vertices permuted, its faces shuffled and each face's
+    corners rotated (orientation kept): the same surface, numbered differently."""
+    name = draw(st.sampled_from(sorted(BASE_MESHES)))
+    v, f = BASE_MESHES[name]
+    seed = draw(st.integers(0, 2**32 - 1))
+    rng = np.random.default_rng(seed)
+    perm = rng.permutation(len(v))  # new index of old vertex i is perm[i]
+    v2 = np.empty_like(v)
+    v2[perm] = v
+    f2 = perm[f][rng.permutation(len(f))]
+    shift = rng.integers(0, 3, size=len(f2))
+    f2 = np.array([np.roll(t, s) for t, s in zip(f2, shift)])
+    return name, v, f, perm, v2, f2
+
+
+@FUZZ
+@given(case=relabeled_meshes(), boundary=st.sampled_from(["edge-and-corner", "edge-only"]))
+def test_limit_points_equal_closed_form_and_follow_relabeling(case, boundary, closed_form):
+    _, v, f, perm, v2, f2 = case
+    out = sorpia.limit_points(v2, f2, boundary=boundary)
+    # 1e-14: the same closed-form masks in double precision (coordinates within [-2, 2]^3 or the grid's size).
+    assert np.abs(out - closed_form(f2, len(v2), boundary) @ v2).max() <= 1e-14
+    # Equivariance: renumbering vertices and faces renumbers the limit points, nothing else;
+    # only the summation order may change (1e-14).
+    assert np.abs(out[perm] - sorpia.limit_points(v, f, boundary=boundary)).max() <= 1e-14
+
+
+@FUZZ
+@given(relabeled_meshes())
+def test_limit_matrix_is_relabeled_with_the_vertices(case):
+    _, v, f, perm, v2, f2 = case
+    b = sorpia.limit_matrix(f, len(v)).toarray()
+    b2 = sorpia.limit_matrix(f2, len(v2)).toarray()
+    # B2[perm[i], perm[j]] = B[i, j]; exact: the same weights are computed for the same vertex.
+    assert np.array_equal(b2[np.ix_(perm, perm)], b)
+
+
+CORRUPTIONS = st.one_of(
+    st.tuples(st.just("set"), st.integers(0, 10**6), st.integers(0, 2), st.integers(-2, 10**6)),
+    st.tuples(st.just("flip"), st.integers(0, 10**6)),
+    st.tuples(st.just("duplicate"), st.integers(0, 10**6)),
+    st.tuples(st.just("delete"), st.integers(0, 10**6)),
+    st.tuples(st.just("add"), st.integers(0, 10**6), st.integers(0, 10**6), st.integers(0, 10**6)),
+    st.tuples(st.just("weld"), st.integers(0, 10**6), st.integers(0, 10**6)),
+)
+
+
+def corrupt(v, f, edits):
+    """Apply edits to a face list; vertex indices wrap modulo n (+2, so a few are out of range)."""
+    faces = [list(t) for t in f]
+    n = len(v)
+    for e in edits:
+        if not faces:
+            break
+        i = e[1] % len(faces)
+        if e[0] == "set":
+            faces[i][e[2]] = e[3] % (n + 2) if e[3] >= 0 else e[3]
+        elif e[0] == "flip":
+            faces[i] = faces[i][::-1]
+        elif e[0] == "duplicate":
+            faces.append(list(faces[i]))
+        elif e[0] == "delete":
+            del faces[i]
+        elif e[0] == "add":
+            faces.append([e[1] % n, e[2] % n, e[3] % n])
+        elif e[0] == "weld":  # merge two vertices: makes non-manifold edges and vertices
+            a, b = e[1] % n, e[2] % n
+            faces = [[a if x == b else x for x in t] for t in faces]
+    return np.array(faces, dtype=np.int64).reshape(-1, 3)
+
+
+@FUZZ
+@given(name=st.sampled_from(sorted(BASE_MESHES)), edits=st.lists(CORRUPTIONS, min_size=1, max_size=4))
+def test_corrupted_faces_are_refused_exactly_when_invalid(name, edits, closed_form):
+    v, f = BASE_MESHES[name]
+    bad = corrupt(v, f, edits)
+    assume(len(bad) > 0)
+    problems = mesh_problems(bad, len(v))
+    if not problems:
+        out = limit_quietly(v, bad)
+        assert np.abs(out - closed_form(bad, len(v)) @ v).max() <= 1e-14
+        return
+    with pytest.raises(sorpia.MeshError) as info:
+        limit_quietly(v, bad)
+    # The reported problem is one that is really there.
+    assert any(p in str(info.value) for p in problems), (str(info.value), problems)
+
+
+@FUZZ
+@given(st.sampled_from(sorted(BASE_MESHES)), st.integers(0, 10**6), st.integers(0, 2),
+       st.sampled_from([np.nan, np.inf, -np.inf]))
+def test_non_finite_vertex_is_named(name, i, k, value):
+    v, f = BASE_MESHES[name]
+    v = v.copy()
+    i %= len(v)
+    v[i, k] = value
+    with pytest.raises(sorpia.MeshError, match=rf"vertices\[{i}\] = .* is not finite"):
+        sorpia.limit_points(v, f)
