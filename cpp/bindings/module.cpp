@@ -15,6 +15,7 @@ PYBIND11_MODULE(_core, m) {
   py::register_exception<sorpia::FileError>(m, "MeshFileError", PyExc_ValueError);
 
   sorpia_py::bind_limit(m);
+  sorpia_py::bind_solvers(m);
   sorpia_py::bind_surface(m);
   sorpia_py::bind_io(m);
   // One line per topic; each bind_<topic> lives in cpp/bindings/bind_<topic>.cpp.

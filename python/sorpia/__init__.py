@@ -8,6 +8,7 @@ with SOR-PIA and the rest of the PIA family.
 from ._core import __version__
 from .errors import MeshError, MeshFileError, ParameterError
 from .limit import UnreferencedVerticesWarning, limit_matrix, limit_points
+from .solve import ConvergenceWarning, InterpolationResult, Interpolator, OmegaWarning, interpolate
 from .io import read_mesh, write_mesh
 from .surface import LoopSurface, evaluate_limit, limit_surface
 from . import shapes
@@ -18,6 +19,7 @@ __all__ = [
     "MeshFileError",
     "ParameterError",
     "UnreferencedVerticesWarning",
+    "ConvergenceWarning", "InterpolationResult", "Interpolator", "OmegaWarning", "interpolate",
     "limit_matrix",
     "limit_points",
     "shapes",

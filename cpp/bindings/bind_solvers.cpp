@@ -1,0 +1,121 @@
+// Bindings of the PIA-family solvers: the compact limit operator with its
+// spectral-estimate cache (built once per mesh) and solve().
+#include <pybind11/functional.h>
+
+#include <cmath>
+#include <limits>
+
+#include "bindings.hpp"
+#include "sorpia/solvers.hpp"
+
+namespace sorpia_py {
+using namespace pybind11::literals;
+
+namespace {
+
+// One mesh's operator and the spectral estimates found so far.
+struct OperatorState {
+  sorpia::LimitOperator op;
+  sorpia::SpectralCache cache;
+};
+
+sorpia::OmegaRule parse_omega_rule(const std::string& name) {
+  if (name == "given") return sorpia::OmegaRule::Given;
+  if (name == "young") return sorpia::OmegaRule::Young;
+  if (name == "auto") return sorpia::OmegaRule::Auto;
+  throw sorpia::ParameterError("unknown omega rule '" + name + "'");
+}
+
+py::dict result_dict(sorpia::SolveResult&& r) {
+  py::dict d;
+  d["control_vertices"] = to_numpy(r.control_vertices, 3);
+  d["errors"] = to_numpy(r.errors, 0);
+  d["initial_error"] = r.initial_error;
+  d["iterations"] = r.iterations;
+  d["stop_reason"] = sorpia::stop_reason_name(r.stop_reason);
+  d["method"] = sorpia::method_name(r.method);
+  d["variant"] = r.variant;
+  d["omega"] = r.omega;
+  d["rho"] = r.rho;
+  d["omega_clamped"] = r.omega_clamped;
+  d["sigma"] = r.sigma;
+  d["lambda_min"] = r.lambda_min;
+  d["alpha"] = r.alpha;
+  d["weight"] = r.weight;
+  d["products"] = r.products;
+  d["estimate_seconds"] = r.estimate_seconds;
+  d["solve_seconds"] = r.solve_seconds;
+  return d;
+}
+
+}  // namespace
+
+void bind_solvers(py::module_& m) {
+  py::class_<OperatorState>(m, "LimitOperator")
+      .def(py::init([](const sorpia::Topology& topology, const std::string& boundary) {
+             const auto b = parse_boundary(boundary);
+             py::gil_scoped_release release;
+             return OperatorState{sorpia::limit_operator(topology, b), {}};
+           }),
+           "topology"_a, "boundary"_a)
+      .def_property_readonly("n", [](const OperatorState& s) { return s.op.n; })
+      .def_property_readonly("offsets", [](const OperatorState& s) { return to_numpy(s.op.offsets, 0); })
+      .def_property_readonly("neighbors", [](const OperatorState& s) { return to_numpy(s.op.neighbors, 0); })
+      .def_property_readonly("diag", [](const OperatorState& s) { return to_numpy(s.op.diag, 0); })
+      .def_property_readonly("weight", [](const OperatorState& s) { return to_numpy(s.op.weight, 0); })
+      .def_property_readonly("symmetrisable", [](const OperatorState& s) { return sorpia::is_symmetrisable(s.op); })
+      .def(
+          "apply",
+          [](const OperatorState& s, const Vertices& x) {
+            check_shape(x, 3, "x");
+            if (static_cast<std::size_t>(x.shape(0)) != s.op.n)
+              throw sorpia::ParameterError("x has " + std::to_string(x.shape(0)) + " rows, the operator " +
+                                           std::to_string(s.op.n));
+            Vertices y({x.shape(0), py::ssize_t{3}});
+            sorpia::apply(s.op, x.data(), y.mutable_data());
+            return y;
+          },
+          "x"_a.noconvert(), "B x for (n, 3) x.")
+      .def("lambda_min", [](OperatorState& s) { return sorpia::estimate_lambda_min(s.op, s.cache); })
+      .def("jacobi_rho", [](OperatorState& s) { return sorpia::estimate_jacobi_rho(s.op, s.cache); })
+      .def("hermitian_extremes",
+           [](OperatorState& s) { return py::make_tuple(sorpia::estimate_hermitian_extremes(s.op, s.cache).first,
+                                                        s.cache.hermitian_max); })
+      .def(
+          "solve",
+          [](OperatorState& s, const Vertices& v0, const std::string& method, const std::string& omega_rule,
+             double omega, double sigma, double alpha, double weight, double tol, int max_iter,
+             const py::object& callback) {
+            check_shape(v0, 3, "vertices");
+            if (static_cast<std::size_t>(v0.shape(0)) != s.op.n)
+              throw sorpia::ParameterError("vertices has " + std::to_string(v0.shape(0)) +
+                                           " rows but the mesh has " + std::to_string(s.op.n) + " vertices");
+            sorpia::SolveOptions opt;
+            opt.method = sorpia::parse_method(method);
+            opt.omega_rule = parse_omega_rule(omega_rule);
+            opt.omega = omega;
+            opt.sigma = sigma;
+            opt.alpha = alpha;
+            opt.weight = weight;
+            opt.tol = tol;
+            opt.max_iter = max_iter;
+            // No callback: the core never leaves C++ during the iteration.
+            if (!callback.is_none())
+              opt.callback = [callback](int k, double e) {
+                py::gil_scoped_acquire acquire;
+                return py::bool_(callback(k, e)).cast<bool>();
+              };
+            sorpia::SolveResult r;
+            {
+              py::gil_scoped_release release;
+              r = sorpia::solve(s.op, v0.data(), opt, &s.cache);
+            }
+            return result_dict(std::move(r));
+          },
+          "vertices"_a.noconvert(), "method"_a, "omega_rule"_a, "omega"_a, "sigma"_a, "alpha"_a, "weight"_a, "tol"_a,
+          "max_iter"_a, "callback"_a,
+          "Solve B V = V0; NaN sigma/alpha/weight: estimate. Returns a dict of the result fields.");
+  m.attr("YOUNG_RHO_CLAMP") = sorpia::young_rho_clamp;
+}
+
+}  // namespace sorpia_py

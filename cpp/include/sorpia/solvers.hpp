@@ -1,0 +1,176 @@
+#pragma once
+/// @file solvers.hpp
+/// The PIA family on the Loop limit operator: solve B V = V0 (paper eq. 8) for
+/// the control vertices V, with B the Loop limit matrix (paper eq. 7).
+///
+/// Vertex arrays are row-major (n, 3) doubles. Every method starts from
+/// V^(0) = V0 and uses the paper's stopping rule (section 5):
+/// E_k = max_i ||v_i^0 - (B V^(k))_i||, stop when E_k / E_0 < tol or k = max_iter.
+/// Also: E_k <= 64 eps max_i ||v_i^0|| (rounding level) counts as converged;
+/// E_k > 1e6 E_0 or not finite stops as diverged (the iterate is still finite).
+
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "sorpia/limit.hpp"
+#include "sorpia/topology.hpp"
+
+namespace sorpia {
+
+/// The Loop limit matrix B in the compact form the solvers sweep over.
+///
+/// Every row of B has one diagonal weight and equal off-diagonal weights:
+/// interior vertex of valence n: alpha_n and (1 - alpha_n)/n (paper eq. 5);
+/// boundary vertex: 2/3 and 1/6 for its two boundary neighbours; a one-face
+/// corner under "edge-and-corner" and an unreferenced vertex: 1 and no
+/// neighbours. So row i is (diag[i], weight[i] on each of
+/// neighbors[offsets[i] .. offsets[i+1])), exactly.
+/// The arrays are contiguous; build the structure once and reuse it.
+struct LimitOperator {
+  std::size_t n = 0;                   ///< number of vertices (rows)
+  std::vector<std::int32_t> offsets;   ///< n + 1 entries
+  std::vector<std::int32_t> neighbors; ///< columns of the off-diagonal entries of each row
+  std::vector<double> diag;            ///< B_ii (alpha_i in the paper)
+  std::vector<double> weight;          ///< the off-diagonal weight of row i, 0 when it has no neighbours
+};
+
+/// Compact form of a limit matrix.
+/// @param b  a square CSR matrix whose rows each have a positive diagonal entry
+///           and equal off-diagonal entries (every Loop limit matrix does)
+/// @throw std::logic_error when a row breaks that pattern: B did not come from
+///        the Loop limit masks, which is a bug, not a user error
+LimitOperator limit_operator(const CsrMatrix& b);
+
+/// limit_operator(limit_matrix(topology, boundary)): B from OpenSubdiv's masks.
+LimitOperator limit_operator(const Topology& topology, Boundary boundary);
+
+/// y = B x, x and y row-major (n, 3), distinct arrays.
+void apply(const LimitOperator& op, const double* x, double* y);
+
+/// True when B = Gamma Upsilon with Gamma = diag(weight) and Upsilon symmetric
+/// (paper section 3.2), i.e. when the neighbour pattern is symmetric and no
+/// row with neighbours is referenced by a row without: closed meshes (plus
+/// unreferenced vertices). Boundaries break it.
+bool is_symmetrisable(const LimitOperator& op);
+
+/// The methods of sorpia::solve.
+enum class Method {
+  Pia,   ///< V += d,          d = V0 - B V (paper eq. 9)
+  Wpia,  ///< V += sigma d     (weighted PIA)
+  Gs,    ///< Gauss-Seidel sweep (Sor with omega = 1)
+  Sor,   ///< SOR-PIA sweep, paper eq. 18
+  Cg,    ///< conjugate gradients on Upsilon V = Gamma^-1 V0; BiCGSTAB when B is not symmetrisable
+  Hss,   ///< Hermitian/skew-Hermitian splitting (Bai, Golub, Ng 2003) of B
+  Whss,  ///< HSS relaxed: V <- V + weight (HSS(V) - V)
+};
+
+/// "pia", "wpia", "gs", "sor", "cg", "hss", "whss". @throw ParameterError on another name
+Method parse_method(const std::string& name);
+const char* method_name(Method method);
+
+/// How "sor" chooses omega.
+enum class OmegaRule {
+  Given,  ///< SolveOptions::omega as given, in (0, 2)
+  Young,  ///< paper Remark 1: 2 / (1 + sqrt(1 - rho^2)), rho = rho(I - D^-1 B)
+  Auto,   ///< sorpia's measured rule, see auto_omega
+};
+
+/// Spectral quantities of one B, estimated on demand and kept so that several
+/// solves on one mesh pay for them once. NaN = not estimated yet.
+struct SpectralCache {
+  double lambda_min = NAN;      ///< smallest eigenvalue of B (B's largest is 1: rows sum to 1)
+  double jacobi_rho = NAN;      ///< spectral radius of I - D^-1 B
+  double hermitian_min = NAN;   ///< smallest eigenvalue of H = (B + B^T)/2
+  double hermitian_max = NAN;   ///< largest eigenvalue of H
+  double seconds = 0.0;         ///< time spent estimating, all calls together
+};
+
+/// Smallest eigenvalue of B, by the power method on I - B in the Gamma^-1 inner
+/// product (where B is self-adjoint): lambda_min = 1 - ||(I-B)x|| / ||x|| after
+/// the ratio settles (relative change < 1e-6, at most 300 products). The
+/// estimate is at or above the true value (a Rayleigh-type lower bound of 1 - lambda_min).
+double estimate_lambda_min(const LimitOperator& op, SpectralCache& cache);
+
+/// Spectral radius of the Jacobi matrix I - D^-1 B, by the power method in the
+/// D Gamma^-1 inner product (where D^-1 B is self-adjoint); the geometric mean
+/// of two successive norm ratios, so that a +rho/-rho pair does not stall it.
+/// At most 500 products; a lower bound of the true value.
+double estimate_jacobi_rho(const LimitOperator& op, SpectralCache& cache);
+
+/// Extreme eigenvalues of H = (B + B^T)/2, by the power method on H and on
+/// lambda_max I - H (at most 300 scalar products each).
+/// Returns {lambda_min(H), lambda_max(H)}.
+std::pair<double, double> estimate_hermitian_extremes(const LimitOperator& op, SpectralCache& cache);
+
+/// rho at or above this means Young's formula has no real value; the rule then
+/// uses this rho (a warning is the caller's job: SolveResult::omega_clamped).
+constexpr double young_rho_clamp = 0.9999;
+
+/// Paper Remark 1: omega = 2 / (1 + sqrt(1 - rho^2)), rho clamped to
+/// young_rho_clamp (which gives omega = 1.9720).
+/// @param clamped  set to whether rho was clamped (may be null)
+double young_omega(double rho, bool* clamped);
+
+/// The "auto" omega of "sor", measured (bench/omega_study.py, README
+/// "Convergence against the paper"): on 14 meshes (9 real, 5 generated) the
+/// fewest sweeps to 1e-10 come at omega in [1.00, 1.12], at most 3 sweeps fewer
+/// than omega = 1, and every fixed omega >= 1.02 needs more sweeps than
+/// Gauss-Seidel on some mesh. So "auto" is omega = 1: no estimate to pay for,
+/// never slower than "gs".
+constexpr double sor_auto_omega = 1.0;
+
+/// Options of sorpia::solve. NaN for sigma / alpha / weight means "estimate".
+struct SolveOptions {
+  Method method = Method::Sor;
+  OmegaRule omega_rule = OmegaRule::Auto;
+  double omega = 1.0;     ///< "sor" with OmegaRule::Given, in (0, 2)
+  double sigma = NAN;     ///< "wpia" step; default 2 / (lambda_min(B) + 1)
+  double alpha = NAN;     ///< "hss"/"whss" shift; default sqrt(lambda_min(H) lambda_max(H))
+  /// "whss" relaxation weight; default 2 / (2 - mu_min - mu_max), where
+  /// mu = (alpha - l)/(alpha + l) at l = lambda_max(H), lambda_min(H): the
+  /// ends of the HSS spectrum when S = 0 (equals 1 at the default alpha)
+  double weight = NAN;
+  double tol = 1e-10;     ///< stop when E_k / E_0 < tol
+  int max_iter = 1000;
+  /// Called after E_k is known for k = 0, 1, ...; returning true stops the run.
+  /// Empty: no call at all.
+  std::function<bool(int, double)> callback;
+};
+
+enum class StopReason { Converged, MaxIter, Diverged, Callback };
+const char* stop_reason_name(StopReason reason);
+
+struct SolveResult {
+  std::vector<double> control_vertices;  ///< (n, 3)
+  std::vector<double> errors;            ///< errors[k] = E_k / E_0, k = 0..iterations
+  double initial_error = 0.0;            ///< E_0, absolute
+  int iterations = 0;
+  StopReason stop_reason = StopReason::MaxIter;
+  bool converged() const { return stop_reason == StopReason::Converged; }
+  Method method = Method::Sor;
+  std::string variant;                   ///< what ran: e.g. "cg" or "bicgstab" for Method::Cg
+  double omega = NAN;                    ///< "sor"/"gs": the omega used
+  double rho = NAN;                      ///< "sor" with "young": the estimated rho(I - D^-1 B)
+  bool omega_clamped = false;            ///< "young": rho >= young_rho_clamp, omega clamped
+  double sigma = NAN;                    ///< "pia"/"wpia": the step used
+  double lambda_min = NAN;               ///< estimated smallest eigenvalue of B, where used
+  double alpha = NAN;                    ///< "hss"/"whss": the shift used
+  double weight = NAN;                   ///< "whss": the relaxation weight used
+  long long products = 0;                ///< operator applications (B, B^T, H or S) in the solve
+  double estimate_seconds = 0.0;         ///< spectral estimates for the parameters (0 when cached)
+  double solve_seconds = 0.0;            ///< the iteration itself
+};
+
+/// Solve B V = V0.
+/// @param op     the limit operator
+/// @param v0     row-major (n, 3) mesh vertices, finite
+/// @param opt    method and parameters (validated here: ParameterError)
+/// @param cache  spectral estimates to reuse and fill in (may be null)
+SolveResult solve(const LimitOperator& op, const double* v0, const SolveOptions& opt,
+                  SpectralCache* cache = nullptr);
+
+}  // namespace sorpia

@@ -1,0 +1,131 @@
+#pragma once
+// Kernels and the stopping monitor shared by the solver files (solvers.cpp,
+// solver_krylov.cpp, spectral.cpp). Not a public header.
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "sorpia/solvers.hpp"
+
+namespace sorpia {
+namespace detail {
+
+// y = B x for C interleaved columns (C = 3: vertices; C = 1: a scalar field).
+template <int C>
+inline void apply_cols(const LimitOperator& op, const double* x, double* y) {
+  const std::int32_t* off = op.offsets.data();
+  const std::int32_t* nb = op.neighbors.data();
+  for (std::size_t i = 0; i < op.n; ++i) {
+    double s[C] = {};
+    for (std::int32_t p = off[i]; p < off[i + 1]; ++p)
+      for (int c = 0; c < C; ++c) s[c] += x[C * nb[p] + c];
+    for (int c = 0; c < C; ++c) y[C * i + c] = op.diag[i] * x[C * i + c] + op.weight[i] * s[c];
+  }
+}
+
+// s = sum of the (n, 3) rows of v over the neighbours of vertex i.
+inline void neighbour_sum(const LimitOperator& op, const double* v, std::size_t i, double* s) {
+  s[0] = s[1] = s[2] = 0.0;
+  for (std::int32_t p = op.offsets[i]; p < op.offsets[i + 1]; ++p) {
+    const double* q = v + 3 * op.neighbors[p];
+    s[0] += q[0];
+    s[1] += q[1];
+    s[2] += q[2];
+  }
+}
+
+// B^T in CSR: the rows of B^T hold, for column j of B, every row i referencing j
+// with its weight w_i. Built once per solve that needs it (HSS).
+struct Transposed {
+  std::vector<std::int32_t> offsets, rows;
+  std::vector<double> values;
+};
+Transposed transpose(const LimitOperator& op);
+
+// y = B^T x (C columns).
+template <int C>
+inline void apply_transpose_cols(const LimitOperator& op, const Transposed& t, const double* x, double* y) {
+  for (std::size_t j = 0; j < op.n; ++j) {
+    double s[C] = {};
+    for (std::int32_t p = t.offsets[j]; p < t.offsets[j + 1]; ++p)
+      for (int c = 0; c < C; ++c) s[c] += t.values[p] * x[C * t.rows[p] + c];
+    for (int c = 0; c < C; ++c) y[C * j + c] = op.diag[j] * x[C * j + c] + s[c];
+  }
+}
+
+// r = v0 - B v (r may be null: only the norm); returns max_i ||r_i|| (the paper's E_k).
+double residual(const LimitOperator& op, const double* v0, const double* v, double* r);
+
+inline double max_row_norm(const double* r, std::size_t n) {
+  double m = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double e = r[3 * i] * r[3 * i] + r[3 * i + 1] * r[3 * i + 1] + r[3 * i + 2] * r[3 * i + 2];
+    m = std::max(m, e);
+  }
+  return std::sqrt(m);
+}
+
+// Records E_k / E_0 and decides when to stop (paper section 5), the same for
+// every method. A run whose error grows past 1e6 E_0 or turns non-finite
+// stops as diverged while the iterate is still finite. E_k at rounding level
+// (at most 64 eps max_i ||v_i^0||: nearly flat input, where E_0 itself is
+// rounding noise) counts as converged: no method can go below it.
+class Monitor {
+ public:
+  static constexpr double divergence_limit = 1e6;
+
+  // scale: max_i ||v_i^0||
+  Monitor(const SolveOptions& opt, SolveResult& res, double scale)
+      : opt_(opt), res_(res), floor_(64.0 * 2.220446049250313e-16 * scale) {
+    res_.errors.clear();
+    res_.errors.reserve(static_cast<std::size_t>(opt.max_iter) + 1);
+  }
+
+  // E_0; returns true when there is nothing to do (E_0 == 0: V0 already solves it).
+  bool start(double e0) {
+    res_.initial_error = e0;
+    e0_ = e0;
+    if (!(e0 > 0.0)) {
+      res_.errors.push_back(0.0);
+      res_.iterations = 0;
+      res_.stop_reason = StopReason::Converged;
+      if (opt_.callback) opt_.callback(0, 0.0);
+      return true;
+    }
+    return record(e0);
+  }
+
+  // E_k for the next k; returns true to stop.
+  bool record(double e) {
+    const double rel = e / e0_;
+    const int k = static_cast<int>(res_.errors.size());
+    res_.errors.push_back(rel);
+    res_.iterations = k;
+    const bool asked = opt_.callback && opt_.callback(k, rel);
+    if (!std::isfinite(rel) || rel > divergence_limit) return stop(StopReason::Diverged);
+    if (rel < opt_.tol || e <= floor_) return stop(StopReason::Converged);
+    if (asked) return stop(StopReason::Callback);
+    if (k >= opt_.max_iter) return stop(StopReason::MaxIter);
+    return false;
+  }
+
+ private:
+  bool stop(StopReason r) {
+    res_.stop_reason = r;
+    return true;
+  }
+  const SolveOptions& opt_;
+  SolveResult& res_;
+  double floor_;
+  double e0_ = 0.0;
+};
+
+// The Krylov and HSS methods (solver_krylov.cpp).
+void solve_cg(const LimitOperator& op, const double* v0, double* v, Monitor& mon, SolveResult& res);
+void solve_hss(const LimitOperator& op, const double* v0, double* v, double alpha, double weight, Monitor& mon,
+               SolveResult& res);
+
+}  // namespace detail
+}  // namespace sorpia

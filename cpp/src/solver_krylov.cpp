@@ -1,0 +1,258 @@
+// Krylov and splitting methods: "cg" (CG on the symmetrised system, BiCGSTAB
+// where boundaries break the symmetry) and "hss"/"whss" (Bai, Golub and Ng 2003).
+// The three coordinates are three independent right-hand sides: every scalar
+// of a Krylov method is kept per column, the stopping rule looks at all three.
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <vector>
+
+#include "solver_detail.hpp"
+#include "sorpia/solvers.hpp"
+
+namespace sorpia {
+namespace detail {
+namespace {
+
+using Col3 = std::array<double, 3>;
+
+Col3 dot3(const std::vector<double>& a, const std::vector<double>& b) {
+  Col3 s{0.0, 0.0, 0.0};
+  for (std::size_t k = 0; k < a.size(); k += 3)
+    for (int c = 0; c < 3; ++c) s[c] += a[k + c] * b[k + c];
+  return s;
+}
+
+// y += a x per column.
+void axpy3(const Col3& a, const std::vector<double>& x, std::vector<double>& y) {
+  for (std::size_t k = 0; k < y.size(); k += 3)
+    for (int c = 0; c < 3; ++c) y[k + c] += a[c] * x[k + c];
+}
+
+double safe_div(double a, double b) { return b != 0.0 ? a / b : 0.0; }
+
+// Row scaling S = Gamma^-1 (1 on rows without neighbours): S B = Upsilon,
+// symmetric on closed meshes (paper section 3.2).
+std::vector<double> row_scale(const LimitOperator& op) {
+  std::vector<double> s(op.n);
+  for (std::size_t i = 0; i < op.n; ++i) s[i] = op.weight[i] > 0.0 ? 1.0 / op.weight[i] : 1.0;
+  return s;
+}
+
+// E_k from a scaled residual S r.
+double unscaled_error(const std::vector<double>& rs, const std::vector<double>& s) {
+  double m = 0.0;
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    const double* r = rs.data() + 3 * i;
+    m = std::max(m, (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]) / (s[i] * s[i]));
+  }
+  return std::sqrt(m);
+}
+
+void scaled_product(const LimitOperator& op, const std::vector<double>& s, const std::vector<double>& x,
+                    std::vector<double>& y) {
+  apply_cols<3>(op, x.data(), y.data());
+  for (std::size_t i = 0; i < op.n; ++i)
+    for (int c = 0; c < 3; ++c) y[3 * i + c] *= s[i];
+}
+
+// Weighted dot product per column: sum_i w_i a_i b_i.
+Col3 wdot3(const std::vector<double>& a, const std::vector<double>& b, const std::vector<double>& w) {
+  Col3 s{0.0, 0.0, 0.0};
+  for (std::size_t i = 0; i < w.size(); ++i)
+    for (int c = 0; c < 3; ++c) s[c] += w[i] * a[3 * i + c] * b[3 * i + c];
+  return s;
+}
+
+// CG on the symmetrised system: B = Gamma Upsilon is self-adjoint and positive
+// definite in the inner product <x, y> = x^T Gamma^-1 y, so CG runs on B V = V0
+// with that inner product; this is CG on Gamma^-1/2 B Gamma^1/2 (symmetric,
+// the spectrum of B), i.e. CG on Upsilon V = Gamma^-1 V0 preconditioned by
+// Gamma. E_k comes from the recursively updated residual (one product per
+// iteration; it equals the true residual to rounding at these condition numbers).
+void cg_symmetric(const LimitOperator& op, const double* v0, double* v, Monitor& mon, SolveResult& res) {
+  const std::size_t m = 3 * op.n;
+  const std::vector<double> w = row_scale(op);
+  std::vector<double> r(m), p(m), q(m), x(v, v + m);
+  if (mon.start(residual(op, v0, v, r.data()))) return;
+  p = r;
+  Col3 rr = wdot3(r, r, w);
+  for (;;) {
+    apply_cols<3>(op, p.data(), q.data());
+    ++res.products;
+    const Col3 pq = wdot3(p, q, w);
+    Col3 a, na;
+    for (int c = 0; c < 3; ++c) {
+      a[c] = safe_div(rr[c], pq[c]);  // a column already solved has rr = 0
+      na[c] = -a[c];
+    }
+    axpy3(a, p, x);
+    axpy3(na, q, r);
+    const Col3 rr_new = wdot3(r, r, w);
+    Col3 b;
+    for (int c = 0; c < 3; ++c) b[c] = safe_div(rr_new[c], rr[c]);
+    rr = rr_new;
+    for (std::size_t k = 0; k < m; k += 3)
+      for (int c = 0; c < 3; ++c) p[k + c] = r[k + c] + b[c] * p[k + c];
+    std::copy(x.begin(), x.end(), v);
+    if (mon.record(max_row_norm(r.data(), op.n))) return;
+  }
+}
+
+// BiCGSTAB (van der Vorst 1992) on S B V = S V0, for meshes with boundary,
+// where Upsilon is not symmetric. One iteration = two products.
+void bicgstab(const LimitOperator& op, const double* v0, double* v, Monitor& mon, SolveResult& res) {
+  const std::size_t m = 3 * op.n;
+  const std::vector<double> s = row_scale(op);
+  std::vector<double> r(m), rt(m), p(m, 0.0), q(m, 0.0), h(m), t(m), x(v, v + m);
+  const double e0 = residual(op, v0, v, r.data());
+  for (std::size_t i = 0; i < op.n; ++i)
+    for (int c = 0; c < 3; ++c) r[3 * i + c] *= s[i];
+  if (mon.start(e0)) return;
+  rt = r;
+  Col3 rho{1, 1, 1}, alpha{1, 1, 1}, omega{1, 1, 1};
+  for (;;) {
+    const Col3 rho_new = dot3(rt, r);
+    for (int c = 0; c < 3; ++c) {
+      if (rho_new[c] == 0.0) continue;  // solved column (or breakdown: see below)
+      const double beta = safe_div(rho_new[c], rho[c]) * safe_div(alpha[c], omega[c]);
+      for (std::size_t k = c; k < m; k += 3) p[k] = r[k] + beta * (p[k] - omega[c] * q[k]);
+    }
+    scaled_product(op, s, p, q);
+    const Col3 rtq = dot3(rt, q);
+    for (int c = 0; c < 3; ++c) alpha[c] = rho_new[c] != 0.0 ? safe_div(rho_new[c], rtq[c]) : 0.0;
+    for (std::size_t k = 0; k < m; k += 3)
+      for (int c = 0; c < 3; ++c) h[k + c] = r[k + c] - alpha[c] * q[k + c];
+    scaled_product(op, s, h, t);
+    res.products += 2;
+    const Col3 th = dot3(t, h), tt = dot3(t, t);
+    for (int c = 0; c < 3; ++c) omega[c] = safe_div(th[c], tt[c]);
+    for (std::size_t k = 0; k < m; k += 3)
+      for (int c = 0; c < 3; ++c) {
+        x[k + c] += alpha[c] * p[k + c] + omega[c] * h[k + c];
+        r[k + c] = h[k + c] - omega[c] * t[k + c];
+      }
+    rho = rho_new;
+    // A column whose shadow residual became orthogonal to r (rho = 0) or whose
+    // stabilising step vanished (omega = 0) restarts from its current residual.
+    const Col3 rr = dot3(r, r);
+    for (int c = 0; c < 3; ++c)
+      if (rr[c] > 0.0 && (rho[c] == 0.0 || omega[c] == 0.0)) {
+        for (std::size_t k = c; k < m; k += 3) {
+          rt[k] = r[k];
+          p[k] = q[k] = 0.0;
+        }
+        rho[c] = alpha[c] = omega[c] = 1.0;
+      }
+    std::copy(x.begin(), x.end(), v);
+    if (mon.record(unscaled_error(r, s))) return;
+  }
+}
+
+// CG on an operator M self-adjoint and positive definite in the w-weighted
+// inner product (3 columns), from the start value in x, until the largest row
+// of the residual is at most abs_tol (at most 500 iterations). Returns the
+// products of B (or B^T) spent, at `cost` per application of M.
+template <class ApplyM>
+long long inner_cg(std::size_t n, ApplyM apply_m, int cost, const std::vector<double>& w,
+                   const std::vector<double>& rhs, std::vector<double>& x, double abs_tol, std::vector<double>& r,
+                   std::vector<double>& p, std::vector<double>& q) {
+  long long products = cost;
+  apply_m(x, q);
+  for (std::size_t k = 0; k < r.size(); ++k) r[k] = rhs[k] - q[k];
+  p = r;
+  Col3 rr = wdot3(r, r, w);
+  for (int it = 0; it < 500 && max_row_norm(r.data(), n) > abs_tol; ++it) {
+    apply_m(p, q);
+    products += cost;
+    const Col3 pq = wdot3(p, q, w);
+    Col3 a, na;
+    for (int c = 0; c < 3; ++c) {
+      a[c] = safe_div(rr[c], pq[c]);
+      na[c] = -a[c];
+    }
+    axpy3(a, p, x);
+    axpy3(na, q, r);
+    const Col3 rr_new = wdot3(r, r, w);
+    for (std::size_t k = 0; k < r.size(); k += 3)
+      for (int c = 0; c < 3; ++c) p[k + c] = r[k + c] + safe_div(rr_new[c], rr[c]) * p[k + c];
+    rr = rr_new;
+  }
+  return products;
+}
+
+}  // namespace
+
+void solve_cg(const LimitOperator& op, const double* v0, double* v, Monitor& mon, SolveResult& res) {
+  if (is_symmetrisable(op)) {
+    res.variant = "cg";
+    cg_symmetric(op, v0, v, mon, res);
+  } else {
+    res.variant = "bicgstab";
+    bicgstab(op, v0, v, mon, res);
+  }
+}
+
+// HSS on B V = V0 (Bai, Golub and Ng 2003): H = (B + B^T)/2, S = (B - B^T)/2,
+//   (alpha I + H) U       = (alpha I - S) V^(k) + V0
+//   (alpha I + S) V^(k+1) = (alpha I - H) U     + V0
+// then V^(k+1) <- V^(k) + weight (V^(k+1) - V^(k)) (weight 1 for "hss").
+// Both inner systems are solved by CG: the first is SPD; the second through
+// (alpha I - S)(alpha I + S) = alpha^2 I - S^2, SPD since S^T = -S.
+// Inner CG is warm-started and stops at a residual of 1e-3 E_k (inexact HSS).
+void solve_hss(const LimitOperator& op, const double* v0, double* v, double alpha, double weight, Monitor& mon,
+               SolveResult& res) {
+  const std::size_t m = 3 * op.n;
+  const Transposed tr = transpose(op);
+  const std::vector<double> ones(op.n, 1.0);
+  std::vector<double> bx(m), btx(m), rhs(m), u(m), xn(m), r(m), p(m), q(m), tmp(m), sx(m);
+  const std::vector<double> b0(v0, v0 + m);
+  const auto apply_h = [&](const std::vector<double>& x, std::vector<double>& y) {
+    apply_cols<3>(op, x.data(), bx.data());
+    apply_transpose_cols<3>(op, tr, x.data(), btx.data());
+    for (std::size_t k = 0; k < m; ++k) y[k] = 0.5 * (bx[k] + btx[k]);
+  };
+  const auto apply_s = [&](const std::vector<double>& x, std::vector<double>& y) {
+    apply_cols<3>(op, x.data(), bx.data());
+    apply_transpose_cols<3>(op, tr, x.data(), btx.data());
+    for (std::size_t k = 0; k < m; ++k) y[k] = 0.5 * (bx[k] - btx[k]);
+  };
+  const auto m1 = [&](const std::vector<double>& x, std::vector<double>& y) {
+    apply_h(x, y);
+    for (std::size_t k = 0; k < m; ++k) y[k] += alpha * x[k];
+  };
+  const auto m2 = [&](const std::vector<double>& x, std::vector<double>& y) {
+    apply_s(x, sx);
+    apply_s(sx, y);
+    for (std::size_t k = 0; k < m; ++k) y[k] = alpha * alpha * x[k] - y[k];
+  };
+
+  std::vector<double> x(v, v + m);
+  double e = residual(op, v0, v, nullptr);
+  if (mon.start(e)) return;
+  for (;;) {
+    const double inner_tol = 1e-3 * e;
+    // (alpha I + H) U = (alpha I - S) X + V0
+    apply_s(x, tmp);
+    res.products += 2;
+    for (std::size_t k = 0; k < m; ++k) rhs[k] = alpha * x[k] - tmp[k] + b0[k];
+    u = x;
+    res.products += inner_cg(op.n, m1, 2, ones, rhs, u, inner_tol, r, p, q);
+    // (alpha I + S) Xn = (alpha I - H) U + V0 =: c, via (alpha^2 I - S^2) Xn = (alpha I - S) c
+    apply_h(u, tmp);
+    for (std::size_t k = 0; k < m; ++k) tmp[k] = alpha * u[k] - tmp[k] + b0[k];
+    apply_s(tmp, rhs);
+    res.products += 4;
+    for (std::size_t k = 0; k < m; ++k) rhs[k] = alpha * tmp[k] - rhs[k];
+    xn = x;
+    res.products += inner_cg(op.n, m2, 4, ones, rhs, xn, alpha * inner_tol, r, p, q);
+    for (std::size_t k = 0; k < m; ++k) x[k] += weight * (xn[k] - x[k]);
+    std::copy(x.begin(), x.end(), v);
+    e = residual(op, v0, v, nullptr);
+    ++res.products;
+    if (mon.record(e)) return;
+  }
+}
+
+}  // namespace detail
+}  // namespace sorpia

@@ -1,0 +1,296 @@
+// The limit operator in compact form, the stationary methods (PIA, W-PIA,
+// Gauss-Seidel, SOR-PIA) and the driver shared by every method.
+#include "sorpia/solvers.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+#include <tuple>
+
+#include "solver_detail.hpp"
+#include "sorpia/errors.hpp"
+
+namespace sorpia {
+
+LimitOperator limit_operator(const CsrMatrix& b) {
+  if (b.n_rows != b.n_cols) throw std::logic_error("sorpia::limit_operator: B is not square");
+  LimitOperator op;
+  op.n = b.n_rows;
+  op.offsets.assign(op.n + 1, 0);
+  op.neighbors.reserve(b.indices.size());
+  op.diag.assign(op.n, 0.0);
+  op.weight.assign(op.n, 0.0);
+  for (std::size_t i = 0; i < op.n; ++i) {
+    bool has_diag = false, has_weight = false;
+    for (std::int32_t p = b.indptr[i]; p < b.indptr[i + 1]; ++p) {
+      const std::int32_t j = b.indices[p];
+      if (static_cast<std::size_t>(j) == i) {
+        op.diag[i] = b.data[p];
+        has_diag = true;
+        continue;
+      }
+      if (b.data[p] == 0.0) continue;  // an explicit zero is no neighbour
+      // Loop masks give every neighbour of a vertex the same weight; a row
+      // that does not is not a Loop limit mask (a bug upstream), so refuse it
+      // rather than sweep with the wrong matrix.
+      if (has_weight && b.data[p] != op.weight[i])
+        throw std::logic_error("sorpia::limit_operator: row " + std::to_string(i) +
+                               " of B has unequal off-diagonal weights");
+      op.weight[i] = b.data[p];
+      has_weight = true;
+      op.neighbors.push_back(j);
+    }
+    if (!has_diag || !(op.diag[i] > 0.0))
+      throw std::logic_error("sorpia::limit_operator: row " + std::to_string(i) + " of B has no positive diagonal");
+    op.offsets[i + 1] = static_cast<std::int32_t>(op.neighbors.size());
+  }
+  return op;
+}
+
+LimitOperator limit_operator(const Topology& topology, Boundary boundary) {
+  return limit_operator(limit_matrix(topology, boundary));
+}
+
+void apply(const LimitOperator& op, const double* x, double* y) { detail::apply_cols<3>(op, x, y); }
+
+bool is_symmetrisable(const LimitOperator& op) {
+  // (i, j) stored => (j, i) stored. Rows are short (valence), so a linear scan
+  // of row j is cheaper than sorting.
+  for (std::size_t i = 0; i < op.n; ++i)
+    for (std::int32_t p = op.offsets[i]; p < op.offsets[i + 1]; ++p) {
+      const std::int32_t j = op.neighbors[p];
+      const auto* first = op.neighbors.data() + op.offsets[j];
+      const auto* last = op.neighbors.data() + op.offsets[j + 1];
+      if (std::find(first, last, static_cast<std::int32_t>(i)) == last) return false;
+    }
+  return true;
+}
+
+Method parse_method(const std::string& name) {
+  for (Method m : {Method::Pia, Method::Wpia, Method::Gs, Method::Sor, Method::Cg, Method::Hss, Method::Whss})
+    if (name == method_name(m)) return m;
+  throw ParameterError("unknown method '" + name + "': use one of 'pia', 'wpia', 'gs', 'sor', 'cg', 'hss', 'whss'");
+}
+
+const char* method_name(Method method) {
+  switch (method) {
+    case Method::Pia: return "pia";
+    case Method::Wpia: return "wpia";
+    case Method::Gs: return "gs";
+    case Method::Sor: return "sor";
+    case Method::Cg: return "cg";
+    case Method::Hss: return "hss";
+    case Method::Whss: return "whss";
+  }
+  return "?";
+}
+
+const char* stop_reason_name(StopReason reason) {
+  switch (reason) {
+    case StopReason::Converged: return "converged";
+    case StopReason::MaxIter: return "max_iter";
+    case StopReason::Diverged: return "diverged";
+    case StopReason::Callback: return "callback";
+  }
+  return "?";
+}
+
+double young_omega(double rho, bool* clamped) {
+  const bool c = !(rho < young_rho_clamp);  // NaN clamps too
+  if (clamped) *clamped = c;
+  const double r = c ? young_rho_clamp : std::max(rho, 0.0);
+  return 2.0 / (1.0 + std::sqrt(1.0 - r * r));
+}
+
+namespace detail {
+
+double residual(const LimitOperator& op, const double* v0, const double* v, double* r) {
+  double m = 0.0;
+  for (std::size_t i = 0; i < op.n; ++i) {
+    double s[3];
+    neighbour_sum(op, v, i, s);
+    const double d = op.diag[i], w = op.weight[i];
+    const double r0 = v0[3 * i] - (d * v[3 * i] + w * s[0]);
+    const double r1 = v0[3 * i + 1] - (d * v[3 * i + 1] + w * s[1]);
+    const double r2 = v0[3 * i + 2] - (d * v[3 * i + 2] + w * s[2]);
+    if (r) {
+      r[3 * i] = r0;
+      r[3 * i + 1] = r1;
+      r[3 * i + 2] = r2;
+    }
+    m = std::max(m, r0 * r0 + r1 * r1 + r2 * r2);
+  }
+  return std::sqrt(m);
+}
+
+Transposed transpose(const LimitOperator& op) {
+  Transposed t;
+  t.offsets.assign(op.n + 1, 0);
+  for (std::int32_t j : op.neighbors) ++t.offsets[j + 1];
+  for (std::size_t j = 0; j < op.n; ++j) t.offsets[j + 1] += t.offsets[j];
+  t.rows.resize(op.neighbors.size());
+  t.values.resize(op.neighbors.size());
+  std::vector<std::int32_t> fill(t.offsets.begin(), t.offsets.end() - 1);
+  for (std::size_t i = 0; i < op.n; ++i)
+    for (std::int32_t p = op.offsets[i]; p < op.offsets[i + 1]; ++p) {
+      const std::int32_t q = fill[op.neighbors[p]]++;
+      t.rows[q] = static_cast<std::int32_t>(i);
+      t.values[q] = op.weight[i];
+    }
+  return t;
+}
+
+namespace {
+
+// Richardson: V += sigma (V0 - B V) (paper eq. 9 with sigma = 1, W-PIA otherwise).
+void solve_richardson(const LimitOperator& op, const double* v0, double* v, double sigma, Monitor& mon,
+                      SolveResult& res) {
+  std::vector<double> r(3 * op.n);
+  if (mon.start(residual(op, v0, v, r.data()))) return;
+  for (;;) {
+    for (std::size_t k = 0; k < 3 * op.n; ++k) v[k] += sigma * r[k];
+    ++res.products;
+    if (mon.record(residual(op, v0, v, r.data()))) return;
+  }
+}
+
+// One SOR-PIA sweep (paper eq. 18), in place, vertices in input order:
+// v_i^inf = alpha_i v_i + w_i sum_j v_j with the neighbours updated earlier in
+// this sweep already moved, d_i = (v_i^0 - v_i^inf) / alpha_i, v_i += omega d_i.
+void sor_sweep(const LimitOperator& op, const double* v0, double* v, double omega) {
+  for (std::size_t i = 0; i < op.n; ++i) {
+    double s[3];
+    neighbour_sum(op, v, i, s);
+    const double d = op.diag[i], w = op.weight[i], f = omega / d;
+    double* x = v + 3 * i;
+    const double* x0 = v0 + 3 * i;
+    x[0] += f * (x0[0] - (d * x[0] + w * s[0]));
+    x[1] += f * (x0[1] - (d * x[1] + w * s[1]));
+    x[2] += f * (x0[2] - (d * x[2] + w * s[2]));
+  }
+}
+
+void solve_sor(const LimitOperator& op, const double* v0, double* v, double omega, Monitor& mon,
+               SolveResult& res) {
+  if (mon.start(residual(op, v0, v, nullptr))) return;
+  for (;;) {
+    sor_sweep(op, v0, v, omega);
+    res.products += 2;  // the sweep and the residual for E_k
+    if (mon.record(residual(op, v0, v, nullptr))) return;
+  }
+}
+
+void check_open_unit(double x, const char* name, double hi) {
+  if (!(x > 0.0 && x < hi))
+    throw ParameterError(std::string(name) + " = " + std::to_string(x) + " is outside (0, " + std::to_string(hi) +
+                         ")");
+}
+
+}  // namespace
+}  // namespace detail
+
+SolveResult solve(const LimitOperator& op, const double* v0, const SolveOptions& opt, SpectralCache* cache) {
+  using clock = std::chrono::steady_clock;
+  if (!(opt.tol > 0.0)) throw ParameterError("tol = " + std::to_string(opt.tol) + " must be positive");
+  if (opt.max_iter < 1) throw ParameterError("max_iter = " + std::to_string(opt.max_iter) + " must be at least 1");
+
+  SpectralCache local;
+  SpectralCache& sc = cache ? *cache : local;
+  SolveResult res;
+  res.method = opt.method;
+  res.variant = method_name(opt.method);
+
+  // Parameters: the estimates are timed apart from the solve (and cost nothing
+  // when the cache already holds them).
+  const double spent_before = sc.seconds;
+  switch (opt.method) {
+    case Method::Pia:
+      res.sigma = 1.0;
+      break;
+    case Method::Wpia:
+      if (std::isnan(opt.sigma)) {
+        res.lambda_min = estimate_lambda_min(op, sc);
+        res.sigma = 2.0 / (res.lambda_min + 1.0);  // lambda_max(B) = 1
+      } else {
+        detail::check_open_unit(opt.sigma, "sigma", 2.0);
+        res.sigma = opt.sigma;
+      }
+      break;
+    case Method::Gs:
+      res.omega = 1.0;
+      break;
+    case Method::Sor:
+      if (opt.omega_rule == OmegaRule::Given) {
+        detail::check_open_unit(opt.omega, "omega", 2.0);
+        res.omega = opt.omega;
+      } else if (opt.omega_rule == OmegaRule::Young) {
+        res.rho = estimate_jacobi_rho(op, sc);
+        res.omega = young_omega(res.rho, &res.omega_clamped);
+      } else {
+        res.omega = sor_auto_omega;
+      }
+      break;
+    case Method::Cg:
+      break;
+    case Method::Hss:
+    case Method::Whss: {
+      const bool relaxed = opt.method == Method::Whss;
+      const bool need_h = std::isnan(opt.alpha) || (relaxed && std::isnan(opt.weight));
+      double hmin = NAN, hmax = NAN;
+      if (need_h) std::tie(hmin, hmax) = estimate_hermitian_extremes(op, sc);
+      if (std::isnan(opt.alpha)) {
+        // H's extremes are positive on Loop limit matrices (measured 0.17 .. 1.1);
+        // guard the square root anyway.
+        res.alpha = std::sqrt(std::max(hmin, 1e-3 * hmax) * hmax);
+      } else {
+        if (!(opt.alpha > 0.0 && std::isfinite(opt.alpha)))
+          throw ParameterError("alpha = " + std::to_string(opt.alpha) + " must be positive and finite");
+        res.alpha = opt.alpha;
+      }
+      if (!relaxed) {
+        res.weight = 1.0;
+      } else if (std::isnan(opt.weight)) {
+        // With S = 0 the HSS iteration matrix is (alpha - H)(alpha + H)^-1,
+        // eigenvalues (alpha - l)/(alpha + l) for l in [hmin, hmax]; the
+        // relaxation 2 / (2 - mu_min - mu_max) centres them on 0. At
+        // alpha = sqrt(hmin hmax) they are already centred (weight 1).
+        const double mu_min = (res.alpha - hmax) / (res.alpha + hmax);
+        const double mu_max = (res.alpha - hmin) / (res.alpha + hmin);
+        res.weight = 2.0 / (2.0 - mu_min - mu_max);
+      } else {
+        detail::check_open_unit(opt.weight, "weight", 2.0);
+        res.weight = opt.weight;
+      }
+      break;
+    }
+  }
+  res.estimate_seconds = sc.seconds - spent_before;
+
+  const auto t0 = clock::now();
+  res.control_vertices.assign(v0, v0 + 3 * op.n);  // V^(0) = V0 (paper: M^0 = M)
+  double* v = res.control_vertices.data();
+  detail::Monitor mon(opt, res, detail::max_row_norm(v0, op.n));
+  switch (opt.method) {
+    case Method::Pia:
+    case Method::Wpia:
+      detail::solve_richardson(op, v0, v, res.sigma, mon, res);
+      break;
+    case Method::Gs:
+    case Method::Sor:
+      detail::solve_sor(op, v0, v, res.omega, mon, res);
+      break;
+    case Method::Cg:
+      detail::solve_cg(op, v0, v, mon, res);
+      break;
+    case Method::Hss:
+    case Method::Whss:
+      detail::solve_hss(op, v0, v, res.alpha, res.weight, mon, res);
+      break;
+  }
+  res.solve_seconds = std::chrono::duration<double>(clock::now() - t0).count();
+  return res;
+}
+
+}  // namespace sorpia

@@ -1,0 +1,346 @@
+"""Loop surface interpolation: solve B V = V0 with SOR-PIA and the PIA family.
+
+B is the Loop limit matrix (paper eq. 7, as OpenSubdiv evaluates it), V0 the
+(n, 3) mesh vertices, V the control vertices whose limit surface passes through
+V0. Every method starts from V = V0 and stops by the paper's rule (section 5):
+E_k = max_i ||v_i^0 - (B V^(k))_i||, stop when E_k / E_0 < tol or at max_iter.
+
+Methods (the iteration itself runs in the C++ core):
+
+- ``"pia"``: V += V0 - B V (paper eq. 9).
+- ``"wpia"``: V += sigma (V0 - B V), sigma = 2 / (lambda_min + lambda_max) by
+  default. lambda_max(B) = 1 exactly (B's rows are non-negative and sum to 1,
+  and its spectrum is real); lambda_min is estimated by the power method on
+  I - B in the Gamma^-1 inner product, where B = Gamma Upsilon is
+  self-adjoint (at most 300 scalar products with B).
+- ``"gs"``: Gauss-Seidel, the SOR-PIA sweep with omega = 1.
+- ``"sor"``: SOR-PIA (paper eq. 18), vertices in input order:
+  d_i = (v_i^0 - v_i^inf) / alpha_i with the neighbours already updated in
+  this sweep, then v_i += omega d_i (alpha_i = B_ii).
+- ``"cg"``: on closed meshes B = Gamma Upsilon (paper section 3.2) with
+  Gamma = diag((1 - alpha_i)/n_i) and Upsilon symmetric positive definite:
+  conjugate gradients on Upsilon V = Gamma^-1 V0, one product per iteration.
+  On meshes with boundary, rows of boundary vertices ignore interior
+  neighbours that do see them, so Upsilon is not symmetric: "cg" then runs
+  BiCGSTAB (van der Vorst 1992) on Gamma^-1 B V = Gamma^-1 V0 (two products
+  per iteration); ``result.variant`` says which ran.
+- ``"hss"``: Bai, Golub and Ng (2003) on B V = V0, H = (B + B^T)/2,
+  S = (B - B^T)/2::
+
+      (alpha I + H) U       = (alpha I - S) V^(k) + V0
+      (alpha I + S) V^(k+1) = (alpha I - H) U     + V0
+
+  alpha = sqrt(lambda_min(H) lambda_max(H)) (both by the power method). The
+  first system is solved by CG; the second by CG on
+  (alpha^2 I - S^2) V = (alpha I - S) c, which is SPD because S^T = -S. Inner
+  solves are warm-started and stop at a residual of 1e-3 E_k.
+- ``"whss"``: the HSS step relaxed, V^(k+1) <- V^(k) + w (HSS(V^(k)) - V^(k)),
+  w = 2 / (2 - s^2) by default, s = max over lambda in {lambda_min(H),
+  lambda_max(H)} of |alpha - lambda| / (alpha + lambda), the HSS contraction
+  bound: for nearly symmetric B the HSS iteration matrix has eigenvalues in
+  about [0, s^2] and this w centres them on 0.
+
+omega for "sor": a float in (0, 2); ``"young"``, the paper's Remark 1,
+omega = 2 / (1 + sqrt(1 - rho^2)) with rho = rho(I - D^-1 B) by the power
+method; rho >= 1 (the usual case on real meshes: Young's formula has no real
+value) warns with OmegaWarning and uses rho = 0.9999, omega = 1.9720;
+``"auto"`` (default), sorpia's rule measured by bench/omega_study.py (README,
+"Convergence against the paper").
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+import time
+import warnings
+from dataclasses import dataclass, field, replace
+from typing import Callable, Optional
+
+import numpy as np
+import scipy.sparse
+
+from . import _core
+from ._validate import DEFAULT_BOUNDARY, as_boundary, as_vertices
+from .errors import ParameterError
+from .limit import topology as _topology
+
+METHODS = ("pia", "wpia", "gs", "sor", "cg", "hss", "whss")
+OMEGA_RULES = ("auto", "young")
+YOUNG_RHO_CLAMP = float(_core.YOUNG_RHO_CLAMP)
+
+
+class ConvergenceWarning(UserWarning):
+    """A solve stopped at max_iter or diverged before reaching tol."""
+
+
+class OmegaWarning(UserWarning):
+    """omega="young" met rho(I - D^-1 B) >= 1, where Young's formula has no real value."""
+
+
+@dataclass(frozen=True)
+class InterpolationResult:
+    """What a solve returns.
+
+    Attributes
+    ----------
+    control_vertices : (n, 3) float64
+        V, in the input vertex order; B V = V0 to the tolerance reached.
+    iterations : int
+        Iterations done (sweeps for "gs"/"sor", outer steps for "hss"/"whss").
+    converged : bool
+        errors[-1] < tol.
+    errors : (iterations + 1,) float64
+        errors[k] = E_k / E_0, so errors[0] = 1 (a single 0.0 when E_0 = 0:
+        V0 already interpolates and nothing is done).
+    method : str
+    omega : float or None
+        "sor"/"gs": the omega used (1.0 for "gs"); None for other methods.
+    seconds : float
+        Wall time of the whole call, every phase in `timings` included.
+    stop_reason : {"converged", "max_iter", "diverged", "callback"}
+    initial_error : float
+        E_0, absolute.
+    variant : str
+        The algorithm that ran: the method's name, or "bicgstab" for "cg" on a
+        mesh with boundary.
+    rho : float or None
+        omega="young": the estimated spectral radius of I - D^-1 B.
+    sigma, lambda_min : float or None
+        "pia"/"wpia": the step; "wpia": the estimated smallest eigenvalue of B.
+    alpha, weight : float or None
+        "hss"/"whss": the shift; "whss": the relaxation weight.
+    products : int
+        Applications of B (or B^T) in the iteration, inner solves included: a
+        measure of work comparable across methods.
+    timings : dict
+        Seconds per phase: "topology" (faces validated, OpenMesh), "operator"
+        (B from OpenSubdiv), "estimate" (spectral estimates for the parameters:
+        0 when an Interpolator already holds them), "solve".
+    """
+
+    control_vertices: np.ndarray
+    iterations: int
+    converged: bool
+    errors: np.ndarray
+    method: str
+    omega: Optional[float]
+    seconds: float
+    stop_reason: str
+    initial_error: float
+    variant: str
+    rho: Optional[float] = None
+    sigma: Optional[float] = None
+    lambda_min: Optional[float] = None
+    alpha: Optional[float] = None
+    weight: Optional[float] = None
+    products: int = 0
+    timings: dict = field(default_factory=dict)
+
+
+def _optional(x: float) -> Optional[float]:
+    return None if x is None or math.isnan(x) else float(x)
+
+
+def _real(value, name: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise ParameterError(f"{name} must be a real number, got {value!r}")
+    return float(value)
+
+
+def _check_open(value, name: str, hi: float = 2.0) -> float:
+    x = _real(value, name)
+    if not (0.0 < x < hi):
+        raise ParameterError(f"{name} = {value!r} is outside (0, {hi:g})")
+    return x
+
+
+def _check_options(method, omega, tol, max_iter, callback, sigma, alpha, weight):
+    if not isinstance(method, str) or method not in METHODS:
+        raise ParameterError(f"unknown method {method!r}: use one of {', '.join(map(repr, METHODS))}")
+    if method == "sor":
+        if isinstance(omega, str):
+            if omega not in OMEGA_RULES:
+                raise ParameterError(f"omega = {omega!r}: use a float in (0, 2), 'auto' or 'young'")
+            rule, omega_value = omega, float("nan")
+        else:
+            rule, omega_value = "given", _check_open(omega, "omega")
+    else:
+        # Parameters a method does not use are refused, not ignored.
+        if not (isinstance(omega, str) and omega == "auto"):
+            raise ParameterError(f"omega = {omega!r} applies to method='sor' only (method={method!r})")
+        rule, omega_value = "auto", float("nan")
+    tol_value = _real(tol, "tol")
+    if not (tol_value > 0.0) or math.isinf(tol_value):
+        raise ParameterError(f"tol = {tol!r} must be a positive finite number")
+    if isinstance(max_iter, bool) or not isinstance(max_iter, numbers.Integral) or max_iter < 1:
+        raise ParameterError(f"max_iter = {max_iter!r} must be an integer >= 1")
+    if int(max_iter) > 2**31 - 1:
+        raise ParameterError(f"max_iter = {max_iter!r} is too large (at most 2**31 - 1)")
+    if callback is not None and not callable(callback):
+        raise ParameterError(f"callback = {callback!r} must be callable (k, error) or None")
+    uses = {"sigma": ("wpia",), "alpha": ("hss", "whss"), "weight": ("whss",)}
+    values = {}
+    for name, value in (("sigma", sigma), ("alpha", alpha), ("weight", weight)):
+        if value is None:
+            values[name] = float("nan")
+            continue
+        if method not in uses[name]:
+            raise ParameterError(f"{name} = {value!r} applies to method={' or '.join(map(repr, uses[name]))} only "
+                                 f"(method={method!r})")
+        if name == "alpha":
+            x = _real(value, name)
+            if not (x > 0.0) or math.isinf(x):
+                raise ParameterError(f"alpha = {value!r} must be a positive finite number")
+            values[name] = x
+        else:
+            values[name] = _check_open(value, name)
+    return rule, omega_value, tol_value, int(max_iter), values
+
+
+class Interpolator:
+    """Build once, solve many: the topology and the limit operator B of one mesh.
+
+    Parameters
+    ----------
+    faces : array_like, (m, 3) int
+        Triangles, consistently oriented, manifold.
+    n_vertices : int
+        Number of vertices (vertices no face references pass through
+        unchanged, with an UnreferencedVerticesWarning).
+    boundary : {"edge-and-corner", "edge-only"}
+        Boundary rule, see sorpia.limit_points.
+
+    The spectral estimates a method needs (lambda_min for "wpia", rho for
+    omega="young", H's extremes for "hss"/"whss", ...) are computed on first
+    use and kept, so that running every method on one mesh pays for them once.
+    """
+
+    def __init__(self, faces, n_vertices: int, boundary: str = DEFAULT_BOUNDARY):
+        t0 = time.perf_counter()
+        self.n_vertices = int(n_vertices)
+        self.boundary = as_boundary(boundary)
+        self.topology = _topology(faces, self.n_vertices)
+        t1 = time.perf_counter()
+        self._operator = _core.LimitOperator(self.topology, self.boundary)
+        t2 = time.perf_counter()
+        self.build_timings = {"topology": t1 - t0, "operator": t2 - t1}
+
+    @property
+    def closed(self) -> bool:
+        """True when B = Gamma Upsilon with Upsilon symmetric ("cg" runs CG, not BiCGSTAB)."""
+        return bool(self._operator.symmetrisable)
+
+    def limit_matrix(self) -> scipy.sparse.csr_matrix:
+        """B as a scipy CSR matrix, rebuilt from the compact operator the solvers use."""
+        op = self._operator
+        offsets = op.offsets
+        n = self.n_vertices
+        rows = np.repeat(np.arange(n), np.diff(offsets))
+        weight = op.weight
+        data = np.concatenate([op.diag, weight[rows]])
+        r = np.concatenate([np.arange(n), rows])
+        c = np.concatenate([np.arange(n), op.neighbors])
+        return scipy.sparse.csr_matrix((data, (r, c)), shape=(n, n))
+
+    def solve(self, vertices, method: str = "sor", omega="auto", tol: float = 1e-10, max_iter: int = 1000,
+              callback: Optional[Callable[[int, float], object]] = None, *, sigma=None, alpha=None, weight=None,
+              _stacklevel: int = 2) -> InterpolationResult:
+        """Solve B V = V0 for the control vertices V.
+
+        Parameters
+        ----------
+        vertices : array_like, (n, 3) float
+            V0, finite; n must equal the n_vertices given at construction.
+        method : {"sor", "gs", "pia", "wpia", "cg", "hss", "whss"}
+        omega : float in (0, 2), "auto" or "young"
+            SOR relaxation ("sor" only; other methods accept only the default).
+        tol : float > 0
+            Stop when E_k / E_0 < tol.
+        max_iter : int >= 1
+        callback : callable(k, error) or None
+            Called with k = 0, 1, ... and error = E_k / E_0 as each E_k is
+            known; a true return value stops the run (stop_reason "callback",
+            no warning). None costs nothing per iteration.
+        sigma : float in (0, 2), "wpia" only
+            Step; default 2 / (lambda_min(B) + 1).
+        alpha : float > 0, "hss"/"whss" only
+            Shift; default sqrt(lambda_min(H) lambda_max(H)).
+        weight : float in (0, 2), "whss" only
+            Relaxation weight; default 2 / (2 - s^2) (module docstring).
+
+        Returns
+        -------
+        InterpolationResult
+            Warns with ConvergenceWarning when tol was not reached (max_iter,
+            divergence) and with OmegaWarning when omega="young" met rho >= 1.
+        """
+        t0 = time.perf_counter()
+        rule, omega_value, tol_value, max_iter, extra = _check_options(
+            method, omega, tol, max_iter, callback, sigma, alpha, weight)
+        v0 = as_vertices(vertices)
+        if v0.shape[0] != self.n_vertices:
+            raise ParameterError(f"vertices has {v0.shape[0]} rows but the mesh has {self.n_vertices} vertices")
+        r = self._operator.solve(v0, method, rule, omega_value, extra["sigma"], extra["alpha"], extra["weight"],
+                                 tol_value, max_iter, callback)
+        seconds = time.perf_counter() - t0
+        if r["omega_clamped"]:
+            warnings.warn(
+                f"omega='young': rho(I - D^-1 B) = {r['rho']:.6f} >= 1, so Young's formula (paper Remark 1) has no "
+                f"real value; rho clamped to {YOUNG_RHO_CLAMP}, omega = {r['omega']:.4f} (slow: omega='auto' is "
+                "the measured choice)", OmegaWarning, stacklevel=_stacklevel)
+        reason = r["stop_reason"]
+        if reason in ("max_iter", "diverged"):
+            what = (f"reached max_iter = {max_iter}" if reason == "max_iter"
+                    else "diverged (E_k grew past 1e6 E_0 or was not finite)")
+            warnings.warn(f"method={method!r} {what} with E_k/E_0 = {r['errors'][-1]:.3g} > tol = {tol_value:g}",
+                          ConvergenceWarning, stacklevel=_stacklevel)
+        errors = r["errors"]
+        return InterpolationResult(
+            control_vertices=r["control_vertices"],
+            iterations=int(r["iterations"]),
+            converged=reason == "converged",
+            errors=errors,
+            method=method,
+            omega=_optional(r["omega"]) if method in ("sor", "gs") else None,
+            seconds=seconds,
+            stop_reason=reason,
+            initial_error=float(r["initial_error"]),
+            variant=r["variant"],
+            rho=_optional(r["rho"]),
+            sigma=_optional(r["sigma"]),
+            lambda_min=_optional(r["lambda_min"]),
+            alpha=_optional(r["alpha"]),
+            weight=_optional(r["weight"]),
+            products=int(r["products"]),
+            timings={"topology": 0.0, "operator": 0.0, "estimate": float(r["estimate_seconds"]),
+                     "solve": float(r["solve_seconds"])},
+        )
+
+
+def interpolate(vertices, faces, method: str = "sor", omega="auto", tol: float = 1e-10, max_iter: int = 1000,
+                boundary: str = DEFAULT_BOUNDARY, callback: Optional[Callable[[int, float], object]] = None, *,
+                sigma=None, alpha=None, weight=None) -> InterpolationResult:
+    """Control vertices whose Loop limit surface interpolates `vertices`.
+
+    One call of ``Interpolator(faces, len(vertices), boundary).solve(...)``;
+    see `Interpolator.solve` for the parameters and the module docstring for
+    the methods and their formulas. `seconds` and `timings` include building
+    the topology and B.
+
+    Examples
+    --------
+    >>> V, F = sorpia.shapes.icosphere(3)
+    >>> res = sorpia.interpolate(V, F)                   # SOR-PIA, omega="auto"
+    >>> np.allclose(sorpia.limit_points(res.control_vertices, F), V, atol=1e-9)
+    True
+    """
+    t0 = time.perf_counter()
+    # Options are checked before the (costly) operator is built.
+    _check_options(method, omega, tol, max_iter, callback, sigma, alpha, weight)
+    v0 = as_vertices(vertices)
+    interp = Interpolator(faces, v0.shape[0], boundary)
+    res = interp.solve(v0, method, omega, tol, max_iter, callback, sigma=sigma, alpha=alpha, weight=weight,
+                       _stacklevel=3)
+    timings = dict(res.timings, **interp.build_timings)
+    return replace(res, seconds=time.perf_counter() - t0, timings=timings)

@@ -1,0 +1,188 @@
+// The solvers against dense references: the compact operator, one SOR-PIA
+// sweep, one PIA step, the full solves, the stopping monitor.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <stdexcept>
+#include <vector>
+
+#include "sorpia/errors.hpp"
+#include "sorpia/limit.hpp"
+#include "sorpia/shapes.hpp"
+#include "sorpia/solvers.hpp"
+#include "sorpia/topology.hpp"
+
+namespace {
+
+using Dense = std::vector<std::vector<double>>;
+
+Dense dense_of(const sorpia::CsrMatrix& b) {
+  Dense d(b.n_rows, std::vector<double>(b.n_cols, 0.0));
+  for (std::size_t i = 0; i < b.n_rows; ++i)
+    for (int p = b.indptr[i]; p < b.indptr[i + 1]; ++p) d[i][b.indices[p]] += b.data[p];
+  return d;
+}
+
+struct Case {
+  sorpia::TriMesh mesh;
+  sorpia::CsrMatrix b;
+  sorpia::LimitOperator op;
+};
+
+Case make_case(const sorpia::TriMesh& m) {
+  const sorpia::Topology topo(m.faces.data(), m.n_faces(), m.n_vertices());
+  Case c{m, sorpia::limit_matrix(topo, sorpia::Boundary::EdgeAndCorner), {}};
+  c.op = sorpia::limit_operator(c.b);
+  return c;
+}
+
+std::vector<Case> cases() {
+  return {make_case(sorpia::irregular(150, 3)), make_case(sorpia::grid(6, 5)), make_case(sorpia::pole(40))};
+}
+
+double max_abs_diff(const std::vector<double>& a, const std::vector<double>& b) {
+  double m = 0.0;
+  for (std::size_t k = 0; k < a.size(); ++k) m = std::max(m, std::abs(a[k] - b[k]));
+  return m;
+}
+
+TEST(LimitOperator, ReproducesTheOpenSubdivMatrix) {
+  for (const Case& c : cases()) {
+    const Dense d = dense_of(c.b);
+    Dense e(c.op.n, std::vector<double>(c.op.n, 0.0));
+    for (std::size_t i = 0; i < c.op.n; ++i) {
+      e[i][i] += c.op.diag[i];
+      for (int p = c.op.offsets[i]; p < c.op.offsets[i + 1]; ++p) e[i][c.op.neighbors[p]] += c.op.weight[i];
+    }
+    for (std::size_t i = 0; i < c.op.n; ++i)
+      for (std::size_t j = 0; j < c.op.n; ++j) ASSERT_EQ(d[i][j], e[i][j]) << i << "," << j;  // exact copy
+    std::vector<double> y1(3 * c.op.n), y2(3 * c.op.n);
+    sorpia::apply(c.op, c.mesh.vertices.data(), y1.data());
+    sorpia::multiply(c.b, c.mesh.vertices.data(), y2.data());
+    EXPECT_LT(max_abs_diff(y1, y2), 1e-15);  // same sums, different order
+  }
+}
+
+TEST(LimitOperator, RefusesRowsThatAreNoLoopMask) {
+  sorpia::CsrMatrix b;
+  b.n_rows = b.n_cols = 3;
+  b.indptr = {0, 3, 4, 5};
+  b.indices = {0, 1, 2, 1, 2};
+  b.data = {0.5, 0.2, 0.3, 1.0, 1.0};  // row 0: unequal neighbour weights
+  EXPECT_THROW(sorpia::limit_operator(b), std::logic_error);
+}
+
+TEST(LimitOperator, SymmetrisableExactlyWhenClosed) {
+  EXPECT_TRUE(sorpia::is_symmetrisable(make_case(sorpia::irregular(150, 3)).op));
+  EXPECT_FALSE(sorpia::is_symmetrisable(make_case(sorpia::grid(6, 5)).op));
+}
+
+// One SOR sweep by the textbook formula on the dense matrix:
+// x_i <- x_i + omega (b_i - sum_j B_ij x_j) / B_ii, j < i already updated.
+TEST(Solve, OneSorSweepEqualsDenseReference) {
+  for (const Case& c : cases()) {
+    const Dense d = dense_of(c.b);
+    const std::size_t n = c.op.n;
+    const double omega = 1.3;
+    std::vector<double> x = c.mesh.vertices;
+    const std::vector<double>& v0 = c.mesh.vertices;
+    for (std::size_t i = 0; i < n; ++i)
+      for (int k = 0; k < 3; ++k) {
+        double s = 0.0;
+        for (std::size_t j = 0; j < n; ++j) s += d[i][j] * x[3 * j + k];
+        x[3 * i + k] += omega * (v0[3 * i + k] - s) / d[i][i];
+      }
+    sorpia::SolveOptions opt;
+    opt.method = sorpia::Method::Sor;
+    opt.omega_rule = sorpia::OmegaRule::Given;
+    opt.omega = omega;
+    opt.max_iter = 1;
+    const sorpia::SolveResult r = sorpia::solve(c.op, v0.data(), opt);
+    EXPECT_EQ(r.iterations, 1);
+    EXPECT_LT(max_abs_diff(r.control_vertices, x), 1e-14);
+  }
+}
+
+TEST(Solve, OnePiaStepEqualsDenseReference) {
+  for (const Case& c : cases()) {
+    const Dense d = dense_of(c.b);
+    const std::vector<double>& v0 = c.mesh.vertices;
+    std::vector<double> x = v0;
+    for (std::size_t i = 0; i < c.op.n; ++i)
+      for (int k = 0; k < 3; ++k) {
+        double s = 0.0;
+        for (std::size_t j = 0; j < c.op.n; ++j) s += d[i][j] * v0[3 * j + k];
+        x[3 * i + k] += v0[3 * i + k] - s;
+      }
+    sorpia::SolveOptions opt;
+    opt.method = sorpia::Method::Pia;
+    opt.max_iter = 1;
+    EXPECT_LT(max_abs_diff(sorpia::solve(c.op, v0.data(), opt).control_vertices, x), 1e-14);
+  }
+}
+
+TEST(Solve, EveryMethodSolvesBVEqualsV0) {
+  using M = sorpia::Method;
+  for (const Case& c : cases())
+    for (M m : {M::Pia, M::Wpia, M::Gs, M::Sor, M::Cg, M::Hss, M::Whss}) {
+      sorpia::SolveOptions opt;
+      opt.method = m;
+      const sorpia::SolveResult r = sorpia::solve(c.op, c.mesh.vertices.data(), opt);
+      ASSERT_TRUE(r.converged()) << sorpia::method_name(m);
+      ASSERT_EQ(r.errors.size(), static_cast<std::size_t>(r.iterations) + 1);
+      std::vector<double> bv(r.control_vertices.size());
+      sorpia::multiply(c.b, r.control_vertices.data(), bv.data());
+      double e = 0.0;
+      for (std::size_t i = 0; i < c.op.n; ++i)
+        e = std::max(e, std::hypot(bv[3 * i] - c.mesh.vertices[3 * i], bv[3 * i + 1] - c.mesh.vertices[3 * i + 1],
+                                   bv[3 * i + 2] - c.mesh.vertices[3 * i + 2]));
+      // The paper's stopping rule, recomputed from scratch (Krylov methods
+      // track a recursive residual: allow rounding on top of it).
+      EXPECT_LT(e, 1.01e-10 * r.initial_error + 1e-15) << sorpia::method_name(m);
+    }
+}
+
+TEST(Solve, DivergenceStopsWhileFinite) {
+  // Not a Loop matrix: diag 0.1 and two neighbours of weight 0.45 make
+  // I - B have eigenvalues beyond -1, so PIA diverges.
+  sorpia::LimitOperator op;
+  op.n = 3;
+  op.offsets = {0, 2, 4, 6};
+  op.neighbors = {1, 2, 0, 2, 0, 1};
+  op.diag = {0.1, 0.1, 0.1};
+  op.weight = {0.45, 0.45, 0.45};
+  const std::vector<double> v0 = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+  sorpia::SolveOptions opt;
+  opt.method = sorpia::Method::Pia;
+  const sorpia::SolveResult r = sorpia::solve(op, v0.data(), opt);
+  EXPECT_EQ(r.stop_reason, sorpia::StopReason::Diverged);
+  for (double x : r.control_vertices) EXPECT_TRUE(std::isfinite(x));
+}
+
+TEST(Solve, ParametersAreChecked) {
+  const Case c = make_case(sorpia::irregular(150, 3));
+  sorpia::SolveOptions opt;
+  opt.omega_rule = sorpia::OmegaRule::Given;
+  opt.omega = 2.0;
+  EXPECT_THROW(sorpia::solve(c.op, c.mesh.vertices.data(), opt), sorpia::ParameterError);
+  opt.omega = 1.0;
+  opt.tol = std::nan("");
+  EXPECT_THROW(sorpia::solve(c.op, c.mesh.vertices.data(), opt), sorpia::ParameterError);
+  opt.tol = 1e-10;
+  opt.max_iter = 0;
+  EXPECT_THROW(sorpia::solve(c.op, c.mesh.vertices.data(), opt), sorpia::ParameterError);
+  EXPECT_THROW(sorpia::parse_method("jacobi"), sorpia::ParameterError);
+}
+
+TEST(Omega, YoungFormulaAndClamp) {
+  bool clamped = true;
+  EXPECT_DOUBLE_EQ(sorpia::young_omega(0.6, &clamped), 2.0 / (1.0 + 0.8));
+  EXPECT_FALSE(clamped);
+  const double at_clamp = 2.0 / (1.0 + std::sqrt(1.0 - sorpia::young_rho_clamp * sorpia::young_rho_clamp));
+  EXPECT_DOUBLE_EQ(sorpia::young_omega(1.002, &clamped), at_clamp);
+  EXPECT_TRUE(clamped);
+  EXPECT_DOUBLE_EQ(sorpia::young_omega(std::nan(""), &clamped), at_clamp);
+  EXPECT_TRUE(clamped);
+}
+
+}  // namespace
