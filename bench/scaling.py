@@ -1,0 +1,99 @@
+"""Time and memory against mesh size: is every phase linear?
+
+    python bench/scaling.py                       # irregular meshes, 10k .. 4M vertices
+    python bench/scaling.py --sizes 10000,100000 --kind torus --plot /tmp/s.png
+
+Runs sorpia-bench (C++, one process per size so that each peak memory is its
+own) on generated meshes of growing size, prints a table of seconds per phase,
+iterations, peak memory and bytes per vertex above the input arrays, and draws
+a log-log plot (matplotlib, Agg) with a dashed line of slope 1 through the
+smallest size. Nothing here runs under pytest.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import shutil
+import subprocess
+import sys
+
+
+def bench_exe():
+    exe = os.path.join(os.path.dirname(sys.executable), "sorpia-bench")
+    return exe if os.path.exists(exe) else shutil.which("sorpia-bench")
+
+
+def spec(kind: str, n: int) -> str:
+    if kind == "torus":  # nu x nv with nu = 2.5 nv, as irregular() does
+        nv = max(3, round(math.sqrt(n / 2.5)))
+        return f"torus:{max(3, n // nv)}x{nv}"
+    if kind == "icosphere":  # the level nearest n
+        return f"icosphere:{max(0, round(math.log(max(n, 12) / 10, 4)))}"
+    return f"irregular:{n}"
+
+
+def main(argv=None):
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--sizes", default="10000,100000,1000000,4000000")
+    p.add_argument("--kind", choices=["irregular", "torus", "icosphere"], default="irregular")
+    p.add_argument("--method", default="sor")
+    p.add_argument("--repeat", type=int, default=3)
+    p.add_argument("--plot", default=os.path.join(os.path.dirname(os.path.abspath(__file__)), "scaling.png"))
+    p.add_argument("--json", metavar="PATH", help="also write the figures as JSON")
+    a = p.parse_args(argv)
+    exe = bench_exe()
+    if exe is None:
+        sys.exit("sorpia-bench not found: pip install the package first")
+
+    rows = []
+    for n in (int(s) for s in a.sizes.split(",")):
+        out = subprocess.run([exe, spec(a.kind, n), "--method", a.method, "--repeat", str(a.repeat), "--json"],
+                             capture_output=True, text=True)
+        if out.returncode != 0:
+            print(f"{spec(a.kind, n)}: sorpia-bench failed: {out.stderr.strip()}", file=sys.stderr)
+            break
+        m = json.loads(out.stdout)["meshes"][0]
+        r = m["methods"][0]
+        rows.append({"mesh": m["mesh"], "n": m["n_vertices"], "topology": m["topology"], "operator": m["operator"],
+                     "solve": r["solve"], "estimate": r["estimate"], "iterations": r["iterations"],
+                     "end_to_end": r["end_to_end"], "floor": m["floor"], "sweep_over_floor": r["sweep_over_floor"],
+                     "peak_mb": m["peak_rss_bytes"] / 2**20, "bytes_per_vertex": m["bytes_per_vertex"]})
+
+    print(f"scaling, {a.kind} meshes, method {a.method}, medians of {a.repeat} (seconds; one thread)")
+    print(f"{'mesh':<20} {'vertices':>9} {'topology':>8} {'operator':>8} {'solve':>7} {'iters':>5} {'total':>7} "
+          f"{'us/vertex':>9} {'sweep/fl':>8} {'peak MB':>8} {'B/vertex':>8}")
+    for r in rows:
+        print(f"{r['mesh']:<20} {r['n']:9d} {r['topology']:8.3f} {r['operator']:8.3f} {r['solve']:7.3f} "
+              f"{r['iterations']:5d} {r['end_to_end']:7.3f} {1e6 * r['end_to_end'] / r['n']:9.3f} "
+              f"{r['sweep_over_floor']:8.2f} {r['peak_mb']:8.1f} {r['bytes_per_vertex']:8.0f}")
+    if a.json:
+        with open(a.json, "w") as fh:
+            json.dump(rows, fh, indent=1)
+    if len(rows) < 2:
+        return
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    n = [r["n"] for r in rows]
+    fig, (ax_t, ax_m) = plt.subplots(1, 2, figsize=(10, 4))
+    for key in ("topology", "operator", "solve", "end_to_end"):
+        ax_t.loglog(n, [r[key] for r in rows], "o-", label=key.replace("_", " "))
+    ax_t.loglog(n, [rows[0]["end_to_end"] * x / n[0] for x in n], "k--", lw=0.8, label="slope 1")
+    ax_t.set(xlabel="vertices", ylabel="seconds", title=f"time ({a.kind}, {a.method})")
+    ax_t.legend(fontsize=8)
+    ax_m.loglog(n, [r["peak_mb"] for r in rows], "o-", label="peak resident MB")
+    ax_m.loglog(n, [rows[-1]["peak_mb"] * x / n[-1] for x in n], "k--", lw=0.8, label="slope 1")
+    ax_m.set(xlabel="vertices", ylabel="MB", title="peak memory")
+    ax_m.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(a.plot, dpi=110)
+    print(f"plot: {a.plot}")
+
+
+if __name__ == "__main__":
+    main()

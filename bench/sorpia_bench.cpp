@@ -1,0 +1,482 @@
+// sorpia-bench: times each phase of Loop interpolation (read, topology,
+// operator, solve, write) on mesh files and generated meshes, with the
+// streaming floor of a sweep and the peak memory. Links the C++ core only.
+//
+//   sorpia-bench icosphere:8 torus:1000x1000 --method sor,gs,wpia --repeat 5
+//   sorpia-bench bunny.ply --write /tmp/out --json
+#include <sys/resource.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <functional>
+#include <iostream>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "sorpia/errors.hpp"
+#include "sorpia/io.hpp"
+#include "sorpia/limit.hpp"
+#include "sorpia/limit_masks.hpp"
+#include "sorpia/shapes.hpp"
+#include "sorpia/solvers.hpp"
+#include "sorpia/topology.hpp"
+
+namespace {
+
+const char* const kUsage = R"(usage: sorpia-bench [options] MESH [MESH ...]
+
+MESH is a mesh file (.obj .off .ply .stl) or a generated mesh:
+  icosphere:L        sphere, 10*4^L + 2 vertices (L = 0..10; 8 gives 655k)
+  torus:NUxNV        closed, every vertex of valence 6 (1000x1000 gives 1M)
+  irregular:N[:SEED] closed, about N vertices, valences 3..12
+  grid:NUxNV         open patch with boundary and two one-face corners
+  pole:N             disk around one vertex of valence N
+
+options:
+  --method LIST      comma-separated: sor gs pia wpia cg hss whss, or none
+                     (time topology and operator only); default sor
+  --tol X            stop when E_k/E_0 < X (default 1e-10)
+  --max-iter N       default 1000
+  --omega W          fixed omega for sor (default: sorpia's auto rule)
+  --boundary RULE    edge-and-corner (default) or edge-only
+  --operator HOW     masks (default: limit masks from the one-ring) or
+                     opensubdiv (B from Far::PrimvarRefiner::Limit, the reference)
+  --topology HOW     direct (default) or openmesh (the reference build)
+  --triangulate      split polygons of mesh files into triangles
+  --write DIR        write the control vertices to DIR/<mesh>.<method>.ply
+                     (binary PLY; --format obj|off|ply-ascii for text)
+  --repeat N         run everything N times, report medians (default 1)
+  --json             print JSON instead of a table
+  -h, --help         this text
+
+Times are wall-clock seconds, one thread. "floor" is one plain streaming pass
+over the arrays a sweep reads and writes; sweep/floor = (solve seconds per
+iteration) / floor. Peak memory is the process's VmHWM for that mesh;
+B/vertex is that peak above the resident size once the input arrays exist.
+)";
+
+struct Usage : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+struct Options {
+  std::vector<std::string> meshes;
+  std::vector<std::string> methods{"sor"};
+  double tol = 1e-10;
+  int max_iter = 1000;
+  double omega = NAN;
+  sorpia::Boundary boundary = sorpia::Boundary::EdgeAndCorner;
+  std::string boundary_name = "edge-and-corner";
+  bool opensubdiv_operator = false;
+  sorpia::TopologyBuild topology = sorpia::TopologyBuild::Direct;
+  bool triangulate = false;
+  std::string write_dir, format = "ply";
+  int repeat = 1;
+  bool json = false;
+};
+
+double to_double(const std::string& flag, const std::string& s) {
+  try {
+    std::size_t used = 0;
+    const double x = std::stod(s, &used);
+    if (used == s.size() && std::isfinite(x)) return x;
+  } catch (const std::exception&) {
+  }
+  throw Usage(flag + " needs a number, got '" + s + "'");
+}
+
+int to_int(const std::string& flag, const std::string& s, int lo) {
+  try {
+    std::size_t used = 0;
+    const long x = std::stol(s, &used);
+    if (used == s.size() && x >= lo && x <= 1000000000) return static_cast<int>(x);
+  } catch (const std::exception&) {
+  }
+  throw Usage(flag + " needs an integer >= " + std::to_string(lo) + ", got '" + s + "'");
+}
+
+std::vector<std::string> split(const std::string& s, char sep) {
+  std::vector<std::string> out;
+  std::stringstream in(s);
+  for (std::string part; std::getline(in, part, sep);) out.push_back(part);
+  return out;
+}
+
+Options parse(int argc, char** argv) {
+  Options o;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    auto value = [&]() -> std::string {
+      if (i + 1 >= argc) throw Usage(a + " needs a value");
+      return argv[++i];
+    };
+    if (a == "-h" || a == "--help") {
+      std::cout << kUsage;
+      std::exit(0);
+    } else if (a == "--method") {
+      o.methods = split(value(), ',');
+      for (const auto& m : o.methods)
+        if (m != "none") try {
+            sorpia::parse_method(m);
+          } catch (const sorpia::ParameterError& e) {
+            throw Usage(std::string("--method: ") + e.what());
+          }
+    } else if (a == "--tol") {
+      o.tol = to_double(a, value());
+      if (!(o.tol > 0 && o.tol < 1)) throw Usage("--tol must be in (0, 1)");
+    } else if (a == "--max-iter") {
+      o.max_iter = to_int(a, value(), 1);
+    } else if (a == "--omega") {
+      o.omega = to_double(a, value());
+      if (!(o.omega > 0 && o.omega < 2)) throw Usage("--omega must be in (0, 2)");
+    } else if (a == "--boundary") {
+      o.boundary_name = value();
+      if (o.boundary_name == "edge-only") o.boundary = sorpia::Boundary::EdgeOnly;
+      else if (o.boundary_name != "edge-and-corner") throw Usage("--boundary: edge-and-corner or edge-only");
+    } else if (a == "--operator") {
+      const std::string v = value();
+      if (v != "masks" && v != "opensubdiv") throw Usage("--operator: masks or opensubdiv");
+      o.opensubdiv_operator = v == "opensubdiv";
+    } else if (a == "--topology") {
+      const std::string v = value();
+      if (v != "direct" && v != "openmesh") throw Usage("--topology: direct or openmesh");
+      o.topology = v == "openmesh" ? sorpia::TopologyBuild::OpenMesh : sorpia::TopologyBuild::Direct;
+    } else if (a == "--triangulate") {
+      o.triangulate = true;
+    } else if (a == "--write") {
+      o.write_dir = value();
+    } else if (a == "--format") {
+      o.format = value();
+      if (o.format != "ply" && o.format != "ply-ascii" && o.format != "obj" && o.format != "off")
+        throw Usage("--format: ply, ply-ascii, obj or off");
+    } else if (a == "--repeat") {
+      o.repeat = to_int(a, value(), 1);
+    } else if (a == "--json") {
+      o.json = true;
+    } else if (!a.empty() && a[0] == '-') {
+      throw Usage("unknown option " + a);
+    } else {
+      o.meshes.push_back(a);
+    }
+  }
+  if (o.meshes.empty()) throw Usage("no mesh given");
+  return o;
+}
+
+// ---- meshes ------------------------------------------------------------------
+
+bool is_generated(const std::string& spec) { return spec.find(':') != std::string::npos && spec.find('.') == std::string::npos; }
+
+// "torus:1000x1000" -> {1000, 1000}
+std::vector<int> spec_numbers(const std::string& spec, char sep, std::size_t lo, std::size_t hi) {
+  const auto parts = split(spec.substr(spec.find(':') + 1), sep);
+  if (parts.size() < lo || parts.size() > hi) throw Usage("bad mesh '" + spec + "'");
+  std::vector<int> out;
+  for (const auto& p : parts) out.push_back(to_int(spec, p, 0));
+  return out;
+}
+
+sorpia::TriMesh generate(const std::string& spec);
+
+sorpia::TriMesh load(const std::string& spec, bool triangulate) {
+  if (!is_generated(spec)) return sorpia::read_mesh(spec, triangulate);
+  try {
+    return generate(spec);
+  } catch (const sorpia::ParameterError& e) {  // e.g. icosphere:11: a bad argument
+    throw Usage("mesh '" + spec + "': " + e.what());
+  }
+}
+
+sorpia::TriMesh generate(const std::string& spec) {
+  const std::string kind = spec.substr(0, spec.find(':'));
+  if (kind == "icosphere") return sorpia::icosphere(spec_numbers(spec, 'x', 1, 1)[0]);
+  if (kind == "pole") return sorpia::pole(spec_numbers(spec, 'x', 1, 1)[0]);
+  if (kind == "torus" || kind == "grid") {
+    const auto n = spec_numbers(spec, 'x', 2, 2);
+    return kind == "torus" ? sorpia::torus(n[0], n[1]) : sorpia::grid(n[0], n[1]);
+  }
+  if (kind == "irregular") {
+    const auto n = spec_numbers(spec, ':', 1, 2);
+    return sorpia::irregular(n[0], n.size() > 1 ? static_cast<std::uint32_t>(n[1]) : 1u);
+  }
+  throw Usage("unknown generated mesh '" + kind + "' (icosphere, torus, irregular, grid, pole)");
+}
+
+std::string label_of(const std::string& spec) {
+  if (is_generated(spec)) return spec;
+  const auto slash = spec.find_last_of('/');
+  return slash == std::string::npos ? spec : spec.substr(slash + 1);
+}
+
+// ---- measurement ---------------------------------------------------------------
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+// kB from /proc/self/status ("VmRSS", "VmHWM"); 0 where unavailable.
+long status_kb(const char* key) {
+  std::ifstream in("/proc/self/status");
+  for (std::string line; std::getline(in, line);)
+    if (line.rfind(key, 0) == 0) return std::atol(line.c_str() + std::string(key).size() + 1);
+  return 0;
+}
+
+// Resets VmHWM to the current resident size (Linux >= 4.0), so that each mesh
+// gets its own peak.
+void reset_peak() { std::ofstream("/proc/self/clear_refs") << "5"; }
+
+double median(std::vector<double> x) {
+  if (x.empty()) return NAN;
+  std::sort(x.begin(), x.end());
+  const std::size_t m = x.size() / 2;
+  return x.size() % 2 ? x[m] : 0.5 * (x[m - 1] + x[m]);
+}
+
+// The streaming floor: the memory traffic of one sweep at full bandwidth. It
+// reads every array a sweep reads (the operator's offsets, neighbour indices,
+// diagonal and weights, V0 and V) and writes V, each once and in order, with
+// no gather of neighbour positions and no per-row branching: the neighbour
+// indices are summed as one flat array. Median of 7 passes.
+double streaming_floor(const sorpia::LimitOperator& op, const double* v0, std::vector<double>& v) {
+  std::vector<double> times;
+  volatile double sink = 0;
+  const std::size_t nnz = op.neighbors.size();
+  for (int r = 0; r < 7; ++r) {
+    const auto t0 = Clock::now();
+    std::int64_t idx = 0;
+    for (std::size_t p = 0; p < nnz; ++p) idx += op.neighbors[p];
+    for (std::size_t i = 0; i < op.n; ++i) {
+      const double s = op.diag[i] + op.weight[i] + op.offsets[i];
+      for (int k = 0; k < 3; ++k) v[3 * i + k] = 0.5 * v[3 * i + k] + 1e-30 * s * v0[3 * i + k];
+    }
+    times.push_back(seconds_since(t0));
+    sink = sink + v[0] + static_cast<double>(idx);
+  }
+  return median(times);
+}
+
+struct MethodRun {
+  std::string method;
+  std::vector<double> solve, estimate, write;
+  int iterations = 0;
+  double final_error = NAN, omega = NAN;
+  std::string stop;
+};
+
+struct MeshRun {
+  std::string label;
+  std::size_t n_vertices = 0, n_faces = 0;
+  std::vector<double> read, topology, op;
+  std::vector<MethodRun> methods;
+  double floor = NAN;
+  long peak_kb = 0, input_kb = 0;
+};
+
+std::string output_path(const Options& o, const std::string& label, const std::string& method) {
+  std::string name = label;
+  for (char& c : name)
+    if (c == ':' || c == '/' || c == ' ') c = '_';
+  const std::string ext = o.format == "ply-ascii" ? "ply" : o.format;
+  return o.write_dir + "/" + name + "." + method + "." + ext;
+}
+
+MeshRun run_mesh(const Options& o, const std::string& spec) {
+  MeshRun run;
+  run.label = label_of(spec);
+  for (const auto& m : o.methods)
+    if (m != "none") run.methods.push_back(MethodRun{m, {}, {}, {}, 0, NAN, NAN, ""});
+  for (int rep = 0; rep < o.repeat; ++rep) {
+    auto t0 = Clock::now();
+    sorpia::TriMesh mesh = load(spec, o.triangulate);
+    run.read.push_back(seconds_since(t0));
+    run.n_vertices = mesh.n_vertices();
+    run.n_faces = mesh.n_faces();
+    const long input_kb = status_kb("VmRSS");
+    reset_peak();
+
+    t0 = Clock::now();
+    const sorpia::Topology topology(mesh.faces.data(), mesh.n_faces(), mesh.n_vertices(), o.topology);
+    run.topology.push_back(seconds_since(t0));
+
+    t0 = Clock::now();
+    const sorpia::LimitOperator op = o.opensubdiv_operator ? sorpia::limit_operator(topology, o.boundary)
+                                                           : sorpia::limit_operator_from_masks(topology, o.boundary);
+    run.op.push_back(seconds_since(t0));
+
+    for (auto& mr : run.methods) {
+      sorpia::SolveOptions so;
+      so.method = sorpia::parse_method(mr.method);
+      so.tol = o.tol;
+      so.max_iter = o.max_iter;
+      if (!std::isnan(o.omega)) {
+        so.omega_rule = sorpia::OmegaRule::Given;
+        so.omega = o.omega;
+      }
+      t0 = Clock::now();
+      const sorpia::SolveResult res = sorpia::solve(op, mesh.vertices.data(), so);
+      const double wall = seconds_since(t0);
+      mr.solve.push_back(wall - res.estimate_seconds);
+      mr.estimate.push_back(res.estimate_seconds);
+      mr.iterations = res.iterations;
+      mr.final_error = res.errors.empty() ? NAN : res.errors.back();
+      mr.omega = res.omega;
+      mr.stop = sorpia::stop_reason_name(res.stop_reason);
+      if (!o.write_dir.empty()) {
+        t0 = Clock::now();
+        sorpia::write_mesh(output_path(o, run.label, mr.method), res.control_vertices.data(), mesh.n_vertices(),
+                           mesh.faces.data(), mesh.n_faces(), o.format == "ply");
+        mr.write.push_back(seconds_since(t0));
+      }
+    }
+    if (rep == 0) {
+      run.peak_kb = status_kb("VmHWM");
+      run.input_kb = input_kb;
+      if (!run.methods.empty()) {
+        std::vector<double> v(mesh.vertices);
+        run.floor = streaming_floor(op, mesh.vertices.data(), v);
+      }
+    }
+  }
+  return run;
+}
+
+// ---- output --------------------------------------------------------------------
+
+std::string json_str(const std::string& s) {
+  std::string out = "\"";
+  for (char c : s) {
+    if (c == '"' || c == '\\') out += '\\';
+    if (static_cast<unsigned char>(c) >= 0x20) out += c;
+  }
+  return out + "\"";
+}
+
+std::string num(double x) {
+  if (!std::isfinite(x)) return "null";
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.6g", x);
+  return buf;
+}
+
+double bytes_per_vertex(const MeshRun& r) {
+  return r.n_vertices ? 1024.0 * static_cast<double>(r.peak_kb - r.input_kb) / static_cast<double>(r.n_vertices) : NAN;
+}
+
+std::string cpu_model() {
+  std::ifstream in("/proc/cpuinfo");
+  for (std::string line; std::getline(in, line);)
+    if (line.rfind("model name", 0) == 0) return line.substr(line.find(':') + 2);
+  return "unknown";
+}
+
+void print_json(const Options& o, const std::vector<MeshRun>& runs) {
+  std::printf("{\n  \"machine\": {\"cpu\": %s, \"hardware_threads\": %u},\n", json_str(cpu_model()).c_str(),
+              std::thread::hardware_concurrency());
+  std::printf("  \"options\": {\"tol\": %s, \"max_iter\": %d, \"boundary\": %s, \"operator\": %s, \"topology\": %s, "
+              "\"repeat\": %d},\n",
+              num(o.tol).c_str(), o.max_iter, json_str(o.boundary_name).c_str(),
+              json_str(o.opensubdiv_operator ? "opensubdiv" : "masks").c_str(),
+              json_str(o.topology == sorpia::TopologyBuild::OpenMesh ? "openmesh" : "direct").c_str(), o.repeat);
+  std::printf("  \"meshes\": [");
+  for (std::size_t k = 0; k < runs.size(); ++k) {
+    const MeshRun& r = runs[k];
+    std::printf("%s\n    {\"mesh\": %s, \"n_vertices\": %zu, \"n_faces\": %zu, \"read\": %s, \"topology\": %s, "
+                "\"operator\": %s, \"floor\": %s, \"peak_rss_bytes\": %ld, \"input_rss_bytes\": %ld, "
+                "\"bytes_per_vertex\": %s, \"methods\": [",
+                k ? "," : "", json_str(r.label).c_str(), r.n_vertices, r.n_faces, num(median(r.read)).c_str(),
+                num(median(r.topology)).c_str(), num(median(r.op)).c_str(), num(r.floor).c_str(), 1024 * r.peak_kb,
+                1024 * r.input_kb, num(bytes_per_vertex(r)).c_str());
+    for (std::size_t j = 0; j < r.methods.size(); ++j) {
+      const MethodRun& m = r.methods[j];
+      const double solve = median(m.solve);
+      const double sweep = m.iterations ? solve / m.iterations : NAN;
+      std::printf("%s\n      {\"method\": %s, \"solve\": %s, \"estimate\": %s, \"write\": %s, \"iterations\": %d, "
+                  "\"final_error\": %s, \"stop\": %s, \"omega\": %s, \"sweep\": %s, \"sweep_over_floor\": %s, "
+                  "\"end_to_end\": %s}",
+                  j ? "," : "", json_str(m.method).c_str(), num(solve).c_str(), num(median(m.estimate)).c_str(),
+                  num(median(m.write)).c_str(), m.iterations, num(m.final_error).c_str(), json_str(m.stop).c_str(),
+                  num(m.omega).c_str(), num(sweep).c_str(), num(sweep / r.floor).c_str(),
+                  num(median(r.topology) + median(r.op) + solve + median(m.estimate)).c_str());
+    }
+    std::printf("]}");
+  }
+  std::printf("\n  ]\n}\n");
+}
+
+void print_table(const Options& o, const std::vector<MeshRun>& runs) {
+  std::printf("sorpia-bench: %s, %u hardware threads; one thread; tol %g; %s; operator %s; topology %s; "
+              "medians of %d\n",
+              cpu_model().c_str(), std::thread::hardware_concurrency(), o.tol, o.boundary_name.c_str(),
+              o.opensubdiv_operator ? "opensubdiv" : "masks",
+              o.topology == sorpia::TopologyBuild::OpenMesh ? "openmesh" : "direct", o.repeat);
+  std::printf("%-22s %9s %7s %8s %8s %-6s %7s %8s %6s %9s %8s %9s %8s %8s\n", "mesh", "vertices", "read", "topology",
+              "operator", "method", "solve", "estimate", "iters", "E_k/E_0", "write", "sweep/fl", "peak MB",
+              "B/vertex");
+  // a method that stopped for another reason than convergence is marked
+  // with its reason after the error
+  for (const MeshRun& r : runs) {
+    const std::size_t rows = std::max<std::size_t>(1, r.methods.size());
+    for (std::size_t j = 0; j < rows; ++j) {
+      const bool first = j == 0;
+      if (first)
+        std::printf("%-22s %9zu %7.3f %8.3f %8.3f ", r.label.c_str(), r.n_vertices, median(r.read),
+                    median(r.topology), median(r.op));
+      else
+        std::printf("%-22s %9s %7s %8s %8s ", "", "", "", "", "");
+      if (r.methods.empty()) {
+        std::printf("%-6s %7s %8s %6s %9s %8s %9s ", "none", "-", "-", "-", "-", "-", "-");
+      } else {
+        const MethodRun& m = r.methods[j];
+        const double solve = median(m.solve);
+        std::printf("%-6s %7.3f %8.3f %6d %9.2e%s %8s %9.2f ", m.method.c_str(), solve, median(m.estimate),
+                    m.iterations, m.final_error, m.stop == "converged" ? "" : ("(" + m.stop + ")").c_str(), m.write.empty() ? "-" : num(median(m.write)).c_str(),
+                    m.iterations ? solve / m.iterations / r.floor : NAN);
+      }
+      if (first)
+        std::printf("%8.1f %8.0f\n", r.peak_kb / 1024.0, bytes_per_vertex(r));
+      else
+        std::printf("\n");
+    }
+  }
+  const bool any_floor = std::any_of(runs.begin(), runs.end(), [](const MeshRun& r) { return !r.methods.empty(); });
+  if (any_floor) {
+    std::printf("floor (s):");
+    for (const MeshRun& r : runs) std::printf(" %s %.4f", r.label.c_str(), r.floor);
+    std::printf("\n");
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options o;
+  try {
+    o = parse(argc, argv);
+  } catch (const Usage& e) {
+    std::fprintf(stderr, "sorpia-bench: %s\n\n%s", e.what(), kUsage);
+    return 2;
+  }
+  std::vector<MeshRun> runs;
+  try {
+    for (const auto& spec : o.meshes) runs.push_back(run_mesh(o, spec));
+  } catch (const Usage& e) {
+    std::fprintf(stderr, "sorpia-bench: %s\n\n%s", e.what(), kUsage);
+    return 2;
+  } catch (const std::exception& e) {  // MeshError, FileError, ParameterError, bad_alloc
+    std::fprintf(stderr, "sorpia-bench: %s\n", e.what());
+    return 1;
+  }
+  if (o.json)
+    print_json(o, runs);
+  else
+    print_table(o, runs);
+  return 0;
+}

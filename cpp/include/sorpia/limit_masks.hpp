@@ -1,0 +1,54 @@
+#pragma once
+/// @file limit_masks.hpp
+/// The Loop limit operator B (paper eq. 6-7) built vertex by vertex from the
+/// one-ring and OpenSubdiv's limit masks, without a Far::TopologyRefiner.
+///
+/// Every row of B is one limit mask: a weight on the vertex and one equal
+/// weight on each vertex of its mask. The weights are OpenSubdiv's own,
+/// computed by Sdc::Scheme<SCHEME_LOOP>::ComputeVertexLimitMask, the routine
+/// Far::PrimvarRefinerReal<double>::Limit calls; only the refiner that Limit
+/// needs around it (about 1 s at 1M vertices) is skipped. The result equals
+/// limit_matrix() exactly (tests/cpp/test_fast_operator.cpp).
+
+#include <cstddef>
+
+#include "sorpia/limit.hpp"
+#include "sorpia/solvers.hpp"
+#include "sorpia/topology.hpp"
+
+namespace sorpia {
+
+/// One Loop limit mask: `diag` on the vertex itself, `weight` on each vertex of
+/// its mask (all ring neighbours inside, the two boundary neighbours on the
+/// boundary, none at a corner).
+struct LimitMask {
+  double diag = 1.0;
+  double weight = 0.0;
+};
+
+/// Smooth rule, an interior vertex of valence n (paper eq. 5):
+/// weight = 1 / (n + 3 / (8 gamma)), gamma = (5/8 - beta^2) / n,
+/// beta = 3/8 + cos(2 pi / n) / 4, diag = 1 - n weight  (alpha_n = 3 / (3 + 8 n beta_n));
+/// n = 6 gives 1/2 and 1/12. Tabulated for small n. @param valence at least 3
+LimitMask smooth_limit_mask(int valence);
+/// Crease rule, a boundary vertex: 2/3 and 1/6 on its two boundary neighbours.
+LimitMask crease_limit_mask();
+/// Corner rule (a one-face corner under Boundary::EdgeAndCorner): 1, no neighbours.
+LimitMask corner_limit_mask();
+
+/// The limit mask of vertex i: smooth inside, crease on the boundary, corner
+/// for a one-face vertex under Boundary::EdgeAndCorner; an unreferenced vertex
+/// gets (1, no neighbours). Its mask vertices are the whole ring inside and
+/// topology.ring_neighbors() first and last on the boundary.
+LimitMask limit_mask(const Topology& topology, std::size_t i, Boundary boundary);
+
+/// B in the solvers' compact form, straight from the masks: equal, array for
+/// array, to limit_operator(limit_matrix(topology, boundary)) (neighbours in
+/// increasing order), in O(n_vertices + n_edges) time.
+LimitOperator limit_operator_from_masks(const Topology& topology, Boundary boundary);
+
+/// B as CSR (columns sorted within a row), equal to limit_matrix(topology,
+/// boundary) entry for entry, without the OpenSubdiv refiner.
+CsrMatrix limit_matrix_from_masks(const Topology& topology, Boundary boundary);
+
+}  // namespace sorpia

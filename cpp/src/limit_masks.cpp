@@ -1,0 +1,171 @@
+#include "sorpia/limit_masks.hpp"
+
+#include <opensubdiv/sdc/loopScheme.h>
+
+#include <algorithm>
+#include <array>
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "sorpia/errors.hpp"
+
+namespace sorpia {
+
+namespace {
+namespace Sdc = OpenSubdiv::Sdc;
+
+// The minimal vertex neighbourhood and mask types Sdc::Scheme asks for (the
+// same interface Far::PrimvarRefinerReal::Limit fills from its refiner). A
+// crease vertex is handed two edges, both infinitely sharp: its mask weights
+// the two ends of the crease, i.e. the two boundary neighbours.
+struct Neighbourhood {
+  int n_edges, n_faces;
+  bool crease;
+  int GetNumEdges() const { return n_edges; }
+  int GetNumFaces() const { return n_faces; }
+  float* GetSharpnessPerEdge(float* s) const {
+    for (int i = 0; i < n_edges; ++i) s[i] = crease ? Sdc::Crease::SHARPNESS_INFINITE : 0.0f;
+    return s;
+  }
+};
+struct Mask {
+  typedef double Weight;
+  std::array<double, 2> v{}, f{};
+  double* e;
+  int nv = 0, ne = 0, nf = 0;
+  void SetNumVertexWeights(int c) { nv = c; }
+  void SetNumEdgeWeights(int c) { ne = c; }
+  void SetNumFaceWeights(int c) { nf = c; }
+  int GetNumVertexWeights() const { return nv; }
+  int GetNumEdgeWeights() const { return ne; }
+  int GetNumFaceWeights() const { return nf; }
+  double& VertexWeight(int i) { return v[i]; }
+  double& EdgeWeight(int i) { return e[i]; }
+  double& FaceWeight(int i) { return f[i]; }
+  void SetFaceWeightsForFaceCenters(bool) {}
+};
+
+LimitMask sdc_limit_mask(int n_edges, int n_faces, Sdc::Crease::Rule rule) {
+  std::vector<double> edge_weights(std::max(n_edges, 1));
+  Mask mask;
+  mask.e = edge_weights.data();
+  const Neighbourhood hood{n_edges, n_faces, rule == Sdc::Crease::RULE_CREASE};
+  Sdc::Scheme<Sdc::SCHEME_LOOP>().ComputeVertexLimitMask(hood, mask, rule);
+  // Loop limit masks have no face weights and one edge weight for every mask
+  // vertex (zero for the interior edges of a crease).
+  if (mask.nf != 0 || mask.nv != 1) throw std::logic_error("sorpia: unexpected Loop limit mask shape");
+  return LimitMask{mask.v[0], mask.ne ? edge_weights[0] : 0.0};
+}
+
+constexpr int kTabulated = 64;  // valences up to this are looked up
+
+const std::array<LimitMask, kTabulated + 1>& smooth_table() {
+  static const std::array<LimitMask, kTabulated + 1> table = [] {
+    std::array<LimitMask, kTabulated + 1> t{};
+    for (int n = 3; n <= kTabulated; ++n) t[n] = sdc_limit_mask(n, n, Sdc::Crease::RULE_SMOOTH);
+    return t;
+  }();
+  return table;
+}
+
+// The mask of vertex v with the rule limit_mask() documents; `crease`
+// reports the crease rule, under which only the first and last ring neighbours count.
+LimitMask mask_of(const Topology& t, std::size_t v, Boundary boundary, const LimitMask& crease_mask, bool& crease) {
+  crease = false;
+  if (t.is_unreferenced(v)) return corner_limit_mask();
+  if (!t.is_boundary(v)) return smooth_limit_mask(t.valence(v));
+  if (t.face_count(v) == 1 && boundary == Boundary::EdgeAndCorner) return corner_limit_mask();
+  crease = true;
+  return crease_mask;
+}
+}  // namespace
+
+LimitMask smooth_limit_mask(int valence) {
+  if (valence < 3) throw ParameterError("an interior vertex has valence at least 3, got " + std::to_string(valence));
+  if (valence <= kTabulated) return smooth_table()[valence];
+  return sdc_limit_mask(valence, valence, Sdc::Crease::RULE_SMOOTH);
+}
+
+LimitMask crease_limit_mask() {
+  static const LimitMask mask = sdc_limit_mask(2, 1, Sdc::Crease::RULE_CREASE);
+  return mask;
+}
+
+LimitMask corner_limit_mask() {
+  static const LimitMask mask = sdc_limit_mask(2, 1, Sdc::Crease::RULE_CORNER);
+  return mask;
+}
+
+LimitMask limit_mask(const Topology& topology, std::size_t i, Boundary boundary) {
+  bool crease = false;
+  return mask_of(topology, i, boundary, crease_limit_mask(), crease);
+}
+
+LimitOperator limit_operator_from_masks(const Topology& topology, Boundary boundary) {
+  const std::size_t n = topology.n_vertices();
+  const auto& offsets = topology.ring_offsets();
+  const auto& ring = topology.ring_neighbors();
+  const LimitMask crease_mask = crease_limit_mask();
+  LimitOperator op;
+  op.n = n;
+  op.offsets.resize(n + 1);
+  op.diag.resize(n);
+  op.weight.resize(n);
+  op.neighbors.resize(ring.size());  // an upper bound: creases and corners keep fewer
+  std::int32_t out = 0;
+  for (std::size_t v = 0; v < n; ++v) {
+    op.offsets[v] = out;
+    bool crease = false;
+    const LimitMask m = mask_of(topology, v, boundary, crease_mask, crease);
+    op.diag[v] = m.diag;
+    op.weight[v] = m.weight;
+    if (m.weight == 0.0) continue;
+    std::int32_t* row = op.neighbors.data() + out;
+    if (crease) {
+      row[0] = ring[offsets[v]];
+      row[1] = ring[offsets[v + 1] - 1];
+      out += 2;
+    } else {
+      std::copy(ring.begin() + offsets[v], ring.begin() + offsets[v + 1], row);
+      out += offsets[v + 1] - offsets[v];
+    }
+    std::sort(row, op.neighbors.data() + out);
+  }
+  op.offsets[n] = out;
+  op.neighbors.resize(out);
+  return op;
+}
+
+CsrMatrix limit_matrix_from_masks(const Topology& topology, Boundary boundary) {
+  const LimitOperator op = limit_operator_from_masks(topology, boundary);
+  CsrMatrix b;
+  b.n_rows = b.n_cols = op.n;
+  b.indptr.resize(op.n + 1);
+  b.indices.resize(op.n + op.neighbors.size());
+  b.data.resize(b.indices.size());
+  std::size_t p = 0;
+  for (std::size_t i = 0; i < op.n; ++i) {
+    b.indptr[i] = static_cast<std::int32_t>(p);
+    bool diag_done = false;
+    for (std::int32_t q = op.offsets[i]; q < op.offsets[i + 1]; ++q) {
+      const std::int32_t j = op.neighbors[q];
+      if (!diag_done && j > static_cast<std::int32_t>(i)) {
+        b.indices[p] = static_cast<std::int32_t>(i);
+        b.data[p++] = op.diag[i];
+        diag_done = true;
+      }
+      b.indices[p] = j;
+      b.data[p++] = op.weight[i];
+    }
+    if (!diag_done) {
+      b.indices[p] = static_cast<std::int32_t>(i);
+      b.data[p++] = op.diag[i];
+    }
+  }
+  b.indptr[op.n] = static_cast<std::int32_t>(p);
+  return b;
+}
+
+}  // namespace sorpia

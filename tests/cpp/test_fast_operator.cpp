@@ -1,0 +1,223 @@
+// The fast path (direct one-ring, limit masks without a refiner) against the
+// reference path (OpenMesh one-ring, OpenSubdiv's Far Limit()).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "loop_masks.hpp"
+#include "sorpia/errors.hpp"
+#include "sorpia/limit.hpp"
+#include "sorpia/limit_masks.hpp"
+#include "sorpia/shapes.hpp"
+#include "sorpia/solvers.hpp"
+#include "sorpia/topology.hpp"
+
+namespace {
+
+using sorpia::Boundary;
+using sorpia::TopologyBuild;
+
+sorpia::Topology build(const sorpia::TriMesh& m, TopologyBuild how) {
+  return sorpia::Topology(m.faces.data(), m.n_faces(), m.n_vertices(), how);
+}
+
+// A boundary vertex (0) with n - 1 faces: the high-valence boundary case.
+sorpia::TriMesh fan(int n) {
+  sorpia::TriMesh m;
+  m.vertices.assign(3 * (n + 1), 0.0);
+  for (int i = 1; i < n; ++i) m.faces.insert(m.faces.end(), {0, i, i + 1});
+  return m;
+}
+
+// The same mesh with its faces shuffled, each face's corners rotated at random
+// and two unreferenced vertices appended: the one-ring must not depend on
+// the face order OpenMesh's add_face happens to see.
+sorpia::TriMesh scrambled(sorpia::TriMesh m, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::vector<std::size_t> order(m.n_faces());
+  std::iota(order.begin(), order.end(), 0);
+  std::shuffle(order.begin(), order.end(), rng);
+  std::vector<std::int32_t> faces;
+  for (std::size_t f : order) {
+    const int r = static_cast<int>(rng() % 3);
+    for (int k = 0; k < 3; ++k) faces.push_back(m.faces[3 * f + (k + r) % 3]);
+  }
+  m.faces = faces;
+  m.vertices.insert(m.vertices.end(), 6, 0.5);
+  return m;
+}
+
+struct Named {
+  std::string name;
+  sorpia::TriMesh mesh;
+};
+
+// Closed irregular (valences 3..12), closed with valence 5 and 6, boundary
+// with one-face corners, a valence-64 pole, a valence-40 boundary vertex, a
+// single triangle, and scrambled copies.
+std::vector<Named> meshes() {
+  return {{"irregular", sorpia::irregular(3000, 5)},
+          {"icosphere", sorpia::icosphere(3)},
+          {"torus", sorpia::torus(9, 5)},
+          {"grid", sorpia::grid(9, 7)},
+          {"pole64", sorpia::pole(64)},
+          {"fan41", fan(41)},
+          {"triangle", fan(2)},
+          {"irregular-scrambled", scrambled(sorpia::irregular(2000, 9), 3)},
+          {"grid-scrambled", scrambled(sorpia::grid(8, 6), 4)},
+          {"pole-scrambled", scrambled(sorpia::pole(30), 5)}};
+}
+
+TEST(FastTopology, DirectOneRingEqualsOpenMesh) {
+  for (const auto& [name, m] : meshes()) {
+    SCOPED_TRACE(name);
+    const auto direct = build(m, TopologyBuild::Direct);
+    const auto ref = build(m, TopologyBuild::OpenMesh);
+    EXPECT_EQ(direct.ring_offsets(), ref.ring_offsets());
+    EXPECT_EQ(direct.ring_neighbors(), ref.ring_neighbors());
+    EXPECT_EQ(direct.n_edges(), ref.n_edges());
+    EXPECT_EQ(direct.n_boundary_edges(), ref.n_boundary_edges());
+    EXPECT_EQ(direct.n_unreferenced(), ref.n_unreferenced());
+    for (std::size_t v = 0; v < m.n_vertices(); ++v) {
+      ASSERT_EQ(direct.is_boundary(v), ref.is_boundary(v)) << "vertex " << v;
+      ASSERT_EQ(direct.face_count(v), ref.face_count(v)) << "vertex " << v;
+    }
+  }
+}
+
+// The ring is the set of vertices sharing an edge with v, counted from the
+// faces alone, and consecutive ring entries (clockwise) are the two other
+// corners of one face, in the order (next, current) of that face.
+TEST(FastTopology, DirectOneRingIsTheClockwiseFan) {
+  for (const auto& [name, m] : meshes()) {
+    SCOPED_TRACE(name);
+    const auto t = build(m, TopologyBuild::Direct);
+    std::vector<std::vector<std::pair<int, int>>> wedges(m.n_vertices());  // (next, prev) per corner
+    for (std::size_t f = 0; f < m.n_faces(); ++f)
+      for (int k = 0; k < 3; ++k)
+        wedges[m.faces[3 * f + k]].push_back({m.faces[3 * f + (k + 1) % 3], m.faces[3 * f + (k + 2) % 3]});
+    for (std::size_t v = 0; v < m.n_vertices(); ++v) {
+      const int lo = t.ring_offsets()[v], hi = t.ring_offsets()[v + 1];
+      const int steps = t.is_boundary(v) ? hi - lo - 1 : hi - lo;
+      ASSERT_EQ(steps, static_cast<int>(wedges[v].size())) << "vertex " << v;
+      for (int s = 0; s < steps; ++s) {
+        const int x = t.ring_neighbors()[lo + s], y = t.ring_neighbors()[lo + (s + 1) % (hi - lo)];
+        const std::pair<int, int> w{y, x};
+        EXPECT_NE(std::find(wedges[v].begin(), wedges[v].end(), w), wedges[v].end())
+            << "vertex " << v << ": " << x << " -> " << y << " is not a face's clockwise step";
+      }
+    }
+  }
+}
+
+// Each bad mesh is refused by both builds with the same message (the checks
+// of validate_faces run first; the direct build keeps its own fan count).
+TEST(FastTopology, BadMeshesRefusedAlikeByBothBuilds) {
+  const std::vector<std::pair<std::string, std::vector<std::int32_t>>> bad = {
+      {"bowtie of two open fans", {0, 1, 2, 0, 3, 4}},
+      {"two closed cones at one apex",
+       {0, 1, 2, 0, 2, 3, 0, 3, 1, 1, 3, 2, 0, 4, 5, 0, 5, 6, 0, 6, 4, 4, 6, 5}},
+      {"edge with three faces", {0, 1, 2, 1, 0, 3, 0, 1, 4}},
+      {"inconsistent orientation", {0, 1, 2, 0, 1, 3}},
+      {"repeated vertex", {0, 1, 1}},
+      {"index out of range", {0, 1, 9}},
+  };
+  for (const auto& [what, faces] : bad) {
+    SCOPED_TRACE(what);
+    std::string messages[2];
+    int k = 0;
+    for (auto how : {TopologyBuild::Direct, TopologyBuild::OpenMesh}) {
+      try {
+        sorpia::Topology(faces.data(), faces.size() / 3, 7, how);
+        ADD_FAILURE() << "accepted";
+      } catch (const sorpia::MeshError& e) {
+        messages[k] = e.what();
+      }
+      ++k;
+    }
+    EXPECT_EQ(messages[0], messages[1]);
+    EXPECT_FALSE(messages[0].empty());
+  }
+}
+
+TEST(FastTopology, BowtieNamesTheVertex) {
+  const std::vector<std::int32_t> faces = {0, 1, 2, 0, 3, 4};
+  try {
+    sorpia::Topology(faces.data(), 2, 5);
+    FAIL() << "a bowtie was accepted";
+  } catch (const sorpia::MeshError& e) {
+    EXPECT_NE(std::string(e.what()).find("non-manifold vertex 0"), std::string::npos) << e.what();
+  }
+}
+
+// Masks from Sdc against the closed form written independently in
+// loop_masks.hpp. 1e-15: both evaluate the same trigonometric expression in
+// double, in a different order (a few ulps).
+TEST(LimitMasks, SmoothMaskIsTheClosedForm) {
+  for (int n = 3; n <= 200; ++n) {
+    const auto m = sorpia::smooth_limit_mask(n);
+    EXPECT_NEAR(m.diag, sorpia_test::loop_alpha(n), 1e-15) << "valence " << n;
+    EXPECT_NEAR(m.weight, (1 - sorpia_test::loop_alpha(n)) / n, 1e-15) << "valence " << n;
+  }
+  EXPECT_EQ(sorpia::smooth_limit_mask(6).diag, 0.5);
+  EXPECT_EQ(sorpia::smooth_limit_mask(6).weight, 1.0 / 12.0);
+  EXPECT_NEAR(sorpia::crease_limit_mask().diag, 2.0 / 3.0, 1e-16);
+  EXPECT_NEAR(sorpia::crease_limit_mask().weight, 1.0 / 6.0, 1e-16);
+  EXPECT_EQ(sorpia::corner_limit_mask().diag, 1.0);
+  EXPECT_EQ(sorpia::corner_limit_mask().weight, 0.0);
+  EXPECT_THROW(sorpia::smooth_limit_mask(2), sorpia::ParameterError);
+}
+
+// The masks path against OpenSubdiv's Far Limit(): same pattern, and values
+// within 1e-15 (both run Sdc's mask code in double; in practice they are equal).
+TEST(LimitMasks, MatrixEqualsOpenSubdivLimit) {
+  for (const auto& [name, m] : meshes())
+    for (auto rule : {Boundary::EdgeOnly, Boundary::EdgeAndCorner}) {
+      SCOPED_TRACE(name + (rule == Boundary::EdgeOnly ? " edge-only" : " edge-and-corner"));
+      const auto t = build(m, TopologyBuild::Direct);
+      const auto ref = sorpia::limit_matrix(t, rule);
+      const auto fast = sorpia::limit_matrix_from_masks(t, rule);
+      ASSERT_EQ(fast.n_rows, ref.n_rows);
+      ASSERT_EQ(fast.indptr, ref.indptr);
+      ASSERT_EQ(fast.indices, ref.indices);
+      double worst = 0;
+      for (std::size_t p = 0; p < ref.data.size(); ++p) worst = std::max(worst, std::abs(fast.data[p] - ref.data[p]));
+      EXPECT_LE(worst, 1e-15);
+    }
+}
+
+TEST(LimitMasks, OperatorEqualsTheSolversCompactForm) {
+  for (const auto& [name, m] : meshes())
+    for (auto rule : {Boundary::EdgeOnly, Boundary::EdgeAndCorner}) {
+      SCOPED_TRACE(name);
+      const auto t = build(m, TopologyBuild::Direct);
+      const auto ref = sorpia::limit_operator(sorpia::limit_matrix(t, rule));
+      const auto fast = sorpia::limit_operator_from_masks(t, rule);
+      ASSERT_EQ(fast.n, ref.n);
+      EXPECT_EQ(fast.offsets, ref.offsets);
+      EXPECT_EQ(fast.neighbors, ref.neighbors);
+      for (std::size_t i = 0; i < ref.n; ++i) {
+        ASSERT_NEAR(fast.diag[i], ref.diag[i], 1e-15) << "row " << i;
+        ASSERT_NEAR(fast.weight[i], ref.weight[i], 1e-15) << "row " << i;
+      }
+    }
+}
+
+// Per-vertex query agrees with the assembled operator.
+TEST(LimitMasks, PerVertexMaskMatchesOperator) {
+  const auto m = sorpia::grid(6, 5);
+  const auto t = build(m, TopologyBuild::Direct);
+  const auto op = sorpia::limit_operator_from_masks(t, Boundary::EdgeAndCorner);
+  for (std::size_t i = 0; i < m.n_vertices(); ++i) {
+    const auto mask = sorpia::limit_mask(t, i, Boundary::EdgeAndCorner);
+    EXPECT_EQ(mask.diag, op.diag[i]);
+    EXPECT_EQ(mask.weight, op.weight[i]);
+  }
+}
+
+}  // namespace
