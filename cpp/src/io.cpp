@@ -105,9 +105,9 @@ double parse_coordinate(const FileData& f, const Where& w, std::string_view toke
   double x = 0;
   const std::errc ec = parse_double(token, x);
   if (ec == std::errc::result_out_of_range)
-    fail(f, w, "coordinate '" + std::string(token) + "' is out of the range of double");
-  if (ec != std::errc()) fail(f, w, "expected a number, found '" + std::string(token.substr(0, 40)) + "'");
-  if (!std::isfinite(x)) fail(f, w, "coordinate '" + std::string(token) + "' is not finite");
+    fail(f, w, "coordinate " + quoted(token) + " is out of the range of double");
+  if (ec != std::errc()) fail(f, w, "expected a number, found " + quoted(token));
+  if (!std::isfinite(x)) fail(f, w, "coordinate " + quoted(token) + " is not finite");
   return x;
 }
 

@@ -40,6 +40,25 @@ struct Where {
   throw FileError(f.path + ", " + w.str() + ": " + what);
 }
 
+// File text quoted for a message: at most 40 bytes, anything but printable
+// ASCII as \xNN (the message must stay valid UTF-8 for Python).
+inline std::string quoted(std::string_view t) {
+  static const char hex[] = "0123456789abcdef";
+  std::string out = "'";
+  for (std::size_t i = 0; i < t.size() && i < 40; ++i) {
+    const auto c = static_cast<unsigned char>(t[i]);
+    if (c >= 0x20 && c < 0x7f) {
+      out += static_cast<char>(c);
+    } else {
+      out += "\\x";
+      out += hex[c >> 4];
+      out += hex[c & 15];
+    }
+  }
+  if (t.size() > 40) out += "...";
+  return out + "'";
+}
+
 // Lines of a text buffer, without their "\n" or "\r\n"; numbered from 1.
 class LineReader {
  public:

@@ -48,7 +48,7 @@ TriMesh read_obj(const FileData& f, bool triangulate) {
       while (next_token(rest, tok)) {
         const std::string_view v = tok.substr(0, tok.find('/'));
         long long i = 0;
-        if (!parse_int(v, i)) fail(f, w, "expected a vertex index, found '" + std::string(tok.substr(0, 40)) + "'");
+        if (!parse_int(v, i)) fail(f, w, "expected a vertex index, found " + quoted(tok));
         if (i == 0) fail(f, w, "vertex index 0: OBJ indices start at 1");
         if (i < 0) {
           if (-i > n)
@@ -65,7 +65,7 @@ TriMesh read_obj(const FileData& f, bool triangulate) {
       sink.add(idx.data(), idx.size(), w);
       if (forward) pending.push_back({before / 3, mesh.faces.size() / 3, w.index});
     } else if (!is_keyword(tok)) {
-      fail(f, w, "'" + std::string(tok.substr(0, 40)) + "' is not an OBJ statement (not a text OBJ file?)");
+      fail(f, w, quoted(tok) + " is not an OBJ statement (not a text OBJ file?)");
     }
   }
   const std::size_t n = mesh.n_vertices();

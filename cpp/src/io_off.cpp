@@ -32,7 +32,7 @@ bool next_content(LineReader& lines, std::string_view& content) {
 std::size_t parse_count(const FileData& f, const Where& w, std::string_view rest_tok, const char* what) {
   long long c = 0;
   if (!parse_int(rest_tok, c) || c < 0)
-    fail(f, w, std::string("expected the number of ") + what + ", found '" + std::string(rest_tok.substr(0, 40)) + "'");
+    fail(f, w, std::string("expected the number of ") + what + ", found " + quoted(rest_tok));
   return static_cast<std::size_t>(c);
 }
 
@@ -44,7 +44,7 @@ TriMesh read_off(const FileData& f, bool triangulate) {
   if (!next_content(lines, rest) || !next_token(rest, tok) || !is_off_keyword(tok))
     fail(f, Where{"line", lines.number()}, "an OFF file starts with 'OFF'");
   if (tok.find('4') != std::string_view::npos || tok.find('n') != std::string_view::npos)
-    fail(f, Where{"line", lines.number()}, "'" + std::string(tok) + "' (not 3-dimensional) is not supported");
+    fail(f, Where{"line", lines.number()}, quoted(tok) + " (not 3-dimensional) is not supported");
   std::string_view after = rest;
   if (next_token(after, tok) && tok == "BINARY")
     fail(f, Where{"line", lines.number()}, "binary OFF is not supported; write it as text OFF or PLY");
@@ -87,7 +87,7 @@ TriMesh read_off(const FileData& f, bool triangulate) {
     for (auto& x : idx) {
       long long v = 0;
       if (!next_token(rest, tok)) fail(f, w, "the face has fewer than the " + std::to_string(k) + " indices it announces");
-      if (!parse_int(tok, v)) fail(f, w, "expected a vertex index, found '" + std::string(tok.substr(0, 40)) + "'");
+      if (!parse_int(tok, v)) fail(f, w, "expected a vertex index, found " + quoted(tok));
       check_index(f, w, v, nv);
       x = v;
     }

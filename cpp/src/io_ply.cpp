@@ -132,7 +132,7 @@ Header parse_header(const FileData& f) {
       else if (tok == "binary_big_endian")
         h.encoding = Encoding::BigEndian;
       else
-        fail(f, w, "unknown PLY format '" + std::string(tok) + "'");
+        fail(f, w, "unknown PLY format " + quoted(tok));
       has_format = true;
     } else if (tok == "element") {
       Element e;
@@ -154,16 +154,16 @@ Header parse_header(const FileData& f) {
         if (!next_token(rest, t1) || !next_token(rest, t2) || !next_token(rest, name))
           fail(f, w, "expected 'property list <count type> <item type> <name>'");
         if (!parse_type(t1, p.count_type) || is_float(p.count_type))
-          fail(f, w, "a list count must have an integer type, got '" + std::string(t1) + "'");
-        if (!parse_type(t2, p.type)) fail(f, w, "unknown property type '" + std::string(t2) + "'");
+          fail(f, w, "a list count must have an integer type, got " + quoted(t1));
+        if (!parse_type(t2, p.type)) fail(f, w, "unknown property type " + quoted(t2));
       } else {
-        if (!parse_type(t1, p.type)) fail(f, w, "unknown property type '" + std::string(t1) + "'");
+        if (!parse_type(t1, p.type)) fail(f, w, "unknown property type " + quoted(t1));
         if (!next_token(rest, name)) fail(f, w, "expected 'property <type> <name>'");
       }
       p.name = std::string(name);
       h.elements.back().props.push_back(std::move(p));
     } else {
-      fail(f, w, "unknown header line '" + std::string(line.substr(0, 40)) + "'");
+      fail(f, w, "unknown header line " + quoted(line));
     }
   }
   if (!has_format) fail(f, "the header has no 'format' line");
@@ -337,14 +337,14 @@ TriMesh read_ascii(const FileData& f, const Header& h, const Layout& l, bool tri
           continue;
         }
         long long n = 0;
-        if (!parse_int(need(), n) || n < 0) fail(f, w, "expected a list length, found '" + std::string(tok) + "'");
+        if (!parse_int(need(), n) || n < 0) fail(f, w, "expected a list length, found " + quoted(tok));
         const bool wanted = is_face && static_cast<int>(k) == l.indices;
         if (wanted) idx.resize(static_cast<std::size_t>(n));
         for (long long j = 0; j < n; ++j) {
           const std::string_view t = need();
           if (!wanted) continue;
           long long v = 0;
-          if (!parse_int(t, v)) fail(f, w, "expected a vertex index, found '" + std::string(t.substr(0, 40)) + "'");
+          if (!parse_int(t, v)) fail(f, w, "expected a vertex index, found " + quoted(t));
           check_index(f, w, v, nv);
           idx[static_cast<std::size_t>(j)] = v;
         }

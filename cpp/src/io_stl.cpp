@@ -55,9 +55,9 @@ double parse_float32(const FileData& f, const Where& w, std::string_view t) {
   if (b != e && *b == '+') ++b;
   float x = 0;
   const auto r = std::from_chars(b, e, x);
-  if (r.ec == std::errc::result_out_of_range) fail(f, w, "coordinate '" + std::string(t) + "' is out of float32 range");
-  if (r.ec != std::errc() || r.ptr != e) fail(f, w, "expected a number, found '" + std::string(t.substr(0, 40)) + "'");
-  if (!std::isfinite(x)) fail(f, w, "coordinate '" + std::string(t) + "' is not finite");
+  if (r.ec == std::errc::result_out_of_range) fail(f, w, "coordinate " + quoted(t) + " is out of float32 range");
+  if (r.ec != std::errc() || r.ptr != e) fail(f, w, "expected a number, found " + quoted(t));
+  if (!std::isfinite(x)) fail(f, w, "coordinate " + quoted(t) + " is not finite");
   return x;
 }
 
@@ -110,7 +110,7 @@ TriMesh read_ascii(const FileData& f, bool triangulate) {
       sink.add(loop.data(), loop.size(), w);
       in_loop = false;
     } else if (tok != "solid" && tok != "endsolid" && tok != "facet" && tok != "endfacet") {
-      fail(f, w, "'" + std::string(tok.substr(0, 40)) + "' is not an ascii STL keyword");
+      fail(f, w, quoted(tok) + " is not an ascii STL keyword");
     }
   }
   if (in_loop) fail(f, "the file ends inside an 'outer loop'");

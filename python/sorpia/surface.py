@@ -95,13 +95,27 @@ class LoopSurface:
         -------
         positions : (k, 3) float64
             P(u, v). At a face corner this is the limit position B V of the
-            corner vertex (paper eq. 6), under both boundary rules.
+            corner vertex (paper eq. 6), under both boundary rules; on regular
+            patches (box splines) it is the exact limit surface.
         du, dv : (k, 3) float64, only with ``derivatives=True``
             dP/du and dP/dv.
         normals : (k, 3) float64, only with ``derivatives=True``
             (dP/du x dP/dv) / |dP/du x dP/dv|: outward for faces oriented
             counter-clockwise seen from outside; zero where the cross product
             vanishes.
+
+        Notes
+        -----
+        Accuracy near extraordinary vertices: Bfr represents the surface in
+        the corner triangle of side 1/16 (in u, v) at a vertex of valence
+        other than 6 (4 on the boundary) by a Gregory triangle, after 4 local
+        refinements. There positions approximate the limit surface (exactly
+        at the corners of the refined triangles) and OpenSubdiv's derivatives
+        approximate the derivatives of those positions (it drops the
+        derivative of the rational Gregory weights): measured tangents within
+        a few percent, normals within about 0.02 rad of finite differences.
+        Elsewhere tangents and normals agree with finite differences of the
+        positions to 1e-9.
         """
         uv = np.asarray(uv)
         if uv.ndim != 2 or uv.shape[1] != 2:

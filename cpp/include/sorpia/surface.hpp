@@ -61,7 +61,11 @@ class LoopSurface {
   /// Limit positions (and optionally first derivatives and unit normals) at k
   /// points (face_ids[i], uv[2i], uv[2i+1]), evaluated by Bfr::Surface<double>.
   /// Exact at face corners (the limit position B V of the corner vertex) under
-  /// both boundary rules.
+  /// both boundary rules, and wherever the patch is regular (box spline).
+  /// Within the corner triangle of side 1/16 at an extraordinary vertex Bfr
+  /// uses a Gregory triangle: positions approximate the limit surface there
+  /// and OpenSubdiv's derivatives approximate the positions' derivatives
+  /// (measured: normals within about 0.02 rad of finite differences).
   /// @param face_ids  k face indices, each in [0, n_faces)
   /// @param uv        row-major (k, 2) parameters, u >= 0, v >= 0, u + v <= 1
   /// @param k         number of points

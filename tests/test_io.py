@@ -1,0 +1,450 @@
+"""Mesh files: exact round trips, other programs' files, errors with file and
+line, atomic writes, and the real meshes in ../shared/meshes when present."""
+
+from __future__ import annotations
+
+import os
+import re
+import struct
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import sorpia
+
+# Awkward float64 values: no short decimal, tiny, huge, negative zero, subnormals.
+AWKWARD = np.array([
+    [1 / 3, np.pi * 1e-7, 1e300],
+    [-0.0, 5e-324, 2.2250738585072014e-308],
+    [0.1, 0.2, 0.30000000000000004],
+    [-1.7976931348623157e308, 4.9406564584124654e-320, 123456789.12345679],
+])
+AWKWARD_FACES = np.array([[0, 1, 2], [0, 2, 3], [1, 3, 2]])
+EXACT_FORMATS = [("obj", False), ("off", False), ("ply", False), ("ply", True)]
+
+
+def random_doubles(n, seed):
+    """n x 3 doubles from random bit patterns (every exponent), finite."""
+    rng = np.random.default_rng(seed)
+    v = rng.integers(0, 2**64, size=(n, 3), dtype=np.uint64).view(np.float64)
+    return np.where(np.isfinite(v), v, 0.5)
+
+
+def same_bits(a, b):
+    return a.shape == b.shape and a.dtype == b.dtype and a.tobytes() == b.tobytes()
+
+
+@pytest.mark.parametrize("ext,binary", EXACT_FORMATS)
+def test_awkward_values_round_trip_bit_for_bit(tmp_path, ext, binary):
+    path = tmp_path / f"m.{ext}"
+    sorpia.write_mesh(path, AWKWARD, AWKWARD_FACES, binary=binary)
+    v, f = sorpia.read_mesh(path)
+    assert same_bits(v, AWKWARD)  # -0.0 and subnormals included
+    assert f.dtype == np.int32 and np.array_equal(f, AWKWARD_FACES)
+
+
+@pytest.mark.parametrize("ext,binary", EXACT_FORMATS)
+def test_random_bit_patterns_round_trip_bit_for_bit(tmp_path, ext, binary):
+    v0, f0 = sorpia.shapes.icosphere(2)
+    v0 = random_doubles(len(v0), seed=len(ext) + binary)
+    path = tmp_path / f"m.{ext}"
+    sorpia.write_mesh(path, v0, f0, binary=binary)
+    v, f = sorpia.read_mesh(path)
+    assert same_bits(v, v0) and np.array_equal(f, f0)
+
+
+@pytest.mark.parametrize("binary", [False, True])
+def test_stl_stores_float32_and_merges_equal_corners(tmp_path, binary):
+    # Vertices numbered in order of first appearance in the faces, as the STL
+    # reader numbers them, so the round trip gives back the float32 rounding.
+    v0, f0 = sorpia.shapes.icosphere(1)
+    order = np.unique(f0.ravel(), return_index=True)[1]
+    first_seen = f0.ravel()[np.sort(order)]
+    rank = np.empty(len(v0), dtype=np.int64)
+    rank[first_seen] = np.arange(len(v0))
+    v0, f0 = v0[first_seen] * np.pi, rank[f0]
+    path = tmp_path / "m.stl"
+    sorpia.write_mesh(path, v0, f0, binary=binary)
+    v, f = sorpia.read_mesh(path)
+    assert same_bits(v, v0.astype(np.float32).astype(np.float64))
+    assert np.array_equal(f, f0)
+    if binary:
+        assert path.stat().st_size == 84 + 50 * len(f0)
+        assert not path.read_bytes().startswith(b"solid")  # other readers take that for ascii
+
+
+def test_stl_refuses_coordinates_beyond_float32(tmp_path):
+    with pytest.raises(sorpia.MeshError, match="beyond float32"):
+        sorpia.write_mesh(tmp_path / "m.stl", AWKWARD, AWKWARD_FACES)
+
+
+def test_binary_ply_is_what_the_header_says(tmp_path):
+    # double x y z and "list uchar int": 24 bytes per vertex, 13 per face.
+    v, f = sorpia.shapes.icosphere(1)
+    path = tmp_path / "m.ply"
+    sorpia.write_mesh(path, v, f, binary=True)
+    data = path.read_bytes()
+    head, body = data.split(b"end_header\n", 1)
+    assert b"format binary_little_endian 1.0" in head and b"property double x" in head
+    assert len(body) == 24 * len(v) + 13 * len(f)
+    assert np.array_equal(np.frombuffer(body[: 24 * len(v)], "<f8").reshape(-1, 3), v)
+
+
+def write_text(tmp_path, name, text):
+    path = tmp_path / name
+    path.write_text(textwrap.dedent(text).lstrip("\n"))
+    return path
+
+
+def test_blender_style_obj_with_normals_texcoords_and_groups(tmp_path):
+    path = write_text(tmp_path, "blender.obj", """
+        # Blender v2.93.1 OBJ File: ''
+        # www.blender.org
+        mtllib cube.mtl
+        o Tetra
+        v 1.000000 1.000000 1.000000
+        v -1.000000 -1.000000 1.000000
+        v -1.000000 1.000000 -1.000000
+        v 1.000000 -1.000000 -1.000000 1.0
+        vt 0.875000 0.500000
+        vt 0.625000 0.750000
+        vt 0.625000 0.500000
+        vn 0.5774 0.5774 0.5774
+        vn -0.5774 -0.5774 0.5774
+        usemtl Material
+        s off
+        f 1/1/1 2/2/1 4/3/1
+        f 1//2 3//2 2//2
+        g second
+        f -4/1 -1/2 -2/3
+        f 1 4 3
+    """)
+    v, f = sorpia.read_mesh(path)
+    assert np.array_equal(v, [[1, 1, 1], [-1, -1, 1], [-1, 1, -1], [1, -1, -1]])
+    assert np.array_equal(f, [[0, 1, 3], [0, 2, 1], [0, 3, 2], [0, 3, 2]])
+
+
+def test_off_with_comments_colours_and_counts_on_the_header_line(tmp_path):
+    path = write_text(tmp_path, "colours.off", """
+        COFF 4 4 6
+        # a tetrahedron with vertex colours
+        0 0 0  255 0 0 255
+        1 0 0  0 255 0 255   # x axis
+        0 1 0  0 0 255 255
+
+        0 0 1  9 9 9 255
+        3 0 2 1  0.5 0.5 0.5
+        3 0 1 3
+        3 1 2 3
+        3 0 3 2
+    """)
+    v, f = sorpia.read_mesh(path)
+    assert np.array_equal(v, [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]])
+    assert np.array_equal(f, [[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]])
+
+
+def test_ascii_ply_with_extra_properties_and_elements(tmp_path):
+    path = write_text(tmp_path, "extra.ply", """
+        ply
+        format ascii 1.0
+        comment made by a scanner
+        obj_info some text
+        element vertex 4
+        property float nx
+        property float x
+        property float y
+        property float z
+        property uchar red
+        element face 2
+        property uchar flags
+        property list uchar int vertex_indices
+        property list uchar float texcoord
+        element edge 1
+        property int vertex1
+        property int vertex2
+        end_header
+        9 0 0 0 255
+        9 1 0 0.5 0
+        9 0 1 -0.25 7
+        9 1 1 1e-3 7
+        1 3 0 1 2 6 0 0 1 0 0 1
+        0 3 2 1 3 0
+        0 1
+    """)
+    v, f = sorpia.read_mesh(path)
+    assert np.array_equal(v, [[0, 0, 0], [1, 0, 0.5], [0, 1, -0.25], [1, 1, 1e-3]])
+    assert np.array_equal(f, [[0, 1, 2], [2, 1, 3]])
+
+
+@pytest.mark.parametrize("endian", ["<", ">"])
+def test_binary_ply_with_float_coordinates_uchar_counts_and_extra_properties(tmp_path, endian):
+    name = "binary_little_endian" if endian == "<" else "binary_big_endian"
+    header = (f"ply\nformat {name} 1.0\nelement vertex 3\nproperty float x\nproperty uchar quality\n"
+              "property float y\nproperty float z\nelement face 1\nproperty list uchar uint vertex_index\n"
+              "property int material\nend_header\n").encode()
+    body = b"".join(struct.pack(endian + "fBff", *p) for p in [(0.1, 1, 0, 0), (1, 2, 0, 0), (0, 3, 1, 2.5)])
+    body += struct.pack(endian + "B3Ii", 3, 0, 1, 2, 7)
+    path = tmp_path / "f32.ply"
+    path.write_bytes(header + body)
+    v, f = sorpia.read_mesh(path)
+    # float32 values widened exactly, as the file stores them.
+    assert same_bits(v, np.array([[0.1, 0, 0], [1, 0, 0], [0, 1, 2.5]], dtype=np.float32).astype(np.float64))
+    assert np.array_equal(f, [[0, 1, 2]])
+
+
+def test_ascii_stl_from_another_program(tmp_path):
+    path = write_text(tmp_path, "part.stl", """
+        solid part exported by CAD
+          facet normal 0.000000e+00 0.000000e+00 -1.000000e+00
+            outer loop
+              vertex 0.000000e+00 0.000000e+00 0.000000e+00
+              vertex 0.000000e+00 1.000000e+00 0.000000e+00
+              vertex 1.000000e+00 0.000000e+00 0.000000e+00
+            endloop
+          endfacet
+          facet normal 0 0 -1
+            outer loop
+              vertex 1 0 0
+              vertex 0 1 0
+              vertex +1.0 1.0 -0.0
+            endloop
+          endfacet
+        endsolid part
+    """)
+    v, f = sorpia.read_mesh(path)
+    assert np.array_equal(v, [[0, 0, 0], [0, 1, 0], [1, 0, 0], [1, 1, 0]])
+    assert np.array_equal(f, [[0, 1, 2], [2, 1, 3]])
+
+
+def test_binary_stl_whose_header_starts_with_solid(tmp_path):
+    # Some exporters start the 80-byte header with "solid": the size rule decides.
+    tri = struct.pack("<12fH", 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0)
+    path = tmp_path / "solid.stl"
+    path.write_bytes(b"solid binary".ljust(80, b" ") + struct.pack("<I", 1) + tri)
+    v, f = sorpia.read_mesh(path)
+    assert np.array_equal(v, [[0, 0, 0], [1, 0, 0], [0, 1, 0]]) and np.array_equal(f, [[0, 1, 2]])
+
+
+QUAD_OBJ = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 2 0 0\nf 1 2 5\nf 1 2 3 4\n"
+
+
+def test_polygons_are_reported_with_their_line(tmp_path):
+    path = tmp_path / "quad.obj"
+    path.write_text(QUAD_OBJ)
+    with pytest.raises(sorpia.MeshFileError, match=r"quad\.obj, line 7: face with 4 vertices.*triangulate=True"):
+        sorpia.read_mesh(path)
+
+
+@pytest.mark.parametrize("ext", ["obj", "off", "ply"])
+def test_polygons_are_split_into_fans_when_asked(tmp_path, ext):
+    v0 = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [2, 0, 0]], dtype=float)
+    text = {
+        "obj": QUAD_OBJ,
+        "off": "OFF\n5 2 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n2 0 0\n3 0 1 4\n4 0 1 2 3\n",
+        "ply": ("ply\nformat ascii 1.0\nelement vertex 5\nproperty double x\nproperty double y\nproperty double z\n"
+                "element face 2\nproperty list uchar int vertex_indices\nend_header\n"
+                "0 0 0\n1 0 0\n1 1 0\n0 1 0\n2 0 0\n3 0 1 4\n4 0 1 2 3\n"),
+    }[ext]
+    path = tmp_path / f"poly.{ext}"
+    path.write_text(text)
+    with pytest.raises(sorpia.MeshFileError, match="face with 4 vertices"):
+        sorpia.read_mesh(path)
+    v, f = sorpia.read_mesh(path, triangulate=True)
+    assert np.array_equal(v, v0)
+    assert np.array_equal(f, [[0, 1, 4], [0, 1, 2], [0, 2, 3]])
+
+
+BAD_FILES = {
+    "index 0": ("bad.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n", r"line 4: vertex index 0"),
+    "index past the end": ("bad.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n", r"line 4: vertex index 4 is out of range"),
+    "relative index": ("bad.obj", "v 0 0 0\nf -1 -2 -3\n", r"line 2: relative vertex index -2"),
+    "obj nan": ("bad.obj", "v 0 0 0\nv nan 0 0\n", r"line 2: coordinate 'nan' is not finite"),
+    "obj garbage": ("bad.obj", "v 0 0 0\n12 3 4\n", r"line 2: '12' is not an OBJ statement"),
+    "obj short vertex": ("bad.obj", "v 0 0\n", r"line 1: a vertex needs 3 coordinates"),
+    "obj bad number": ("bad.obj", "v 0 0 1.2.3\n", r"line 1: expected a number, found '1\.2\.3'"),
+    "obj binary": ("bad.obj", "v 0 0 0\n\x01\x02 1\n", r"line 2: '\\x01\\x02' is not an OBJ statement"),
+    "no faces": ("bad.obj", "v 0 0 0\n", r"1 vertices but no faces"),
+    "off index": ("bad.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 3\n", r"line 6: vertex index 3 is out of range"),
+    "off inf": ("bad.off", "OFF\n3 1 0\n0 0 0\n1 inf 0\n0 1 0\n3 0 1 2\n", r"line 4: coordinate 'inf' is not finite"),
+    "off truncated": ("bad.off", "OFF\n3 1 0\n0.0 0.0 0.0\n1.0 0.0 0.0\n0.0 1.0 0.0\n", r"ends after 0 of 1 faces"),
+    "off header": ("bad.off", "OFFISH\n", r"line 1: an OFF file starts with 'OFF'"),
+    "off binary": ("bad.off", "OFF BINARY\n", r"binary OFF is not supported"),
+    "off huge": ("bad.off", "OFF\n1000000000000 1 0\n0 0 0\n", r"line 2: the header claims 1000000000000 vertices"),
+    "ply huge": ("bad.ply", "ply\nformat ascii 1.0\nelement vertex 1000000000000\nproperty float x\nproperty float y\n"
+                 "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n",
+                 r"line 3: the header claims 1000000000000 'vertex' elements"),
+    "ply magic": ("bad.ply", "plx\n", r"line 1: a PLY file starts with the line 'ply'"),
+    "ply no end": ("bad.ply", "ply\nformat ascii 1.0\nelement vertex 3\n", r"no 'end_header'"),
+    "ply no face": ("bad.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+                    "property float z\nend_header\n0 0 0\n", r"no 'face' element"),
+    "ply no z": ("bad.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+                 "end_header\n0 0\n", r"line 3: the vertex element has no property z"),
+    "ply nan": ("bad.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
+                "0 0 0\n1 NaN 0\n0 1 0\n3 0 1 2\n", r"line 11: coordinate 'NaN' is not finite"),
+    "stl keyword": ("bad.stl", "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertx 1 0 0\n",
+                    r"line 5: 'vertx' is not an ascii STL keyword"),
+    "stl not stl": ("bad.stl", "hello", r"neither an ascii STL"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(BAD_FILES))
+def test_malformed_files_name_the_file_and_the_line(tmp_path, case):
+    name, text, message = BAD_FILES[case]
+    path = tmp_path / name
+    path.write_text(text)
+    with pytest.raises(sorpia.MeshFileError, match=re.escape(name) + ".*" + message):
+        sorpia.read_mesh(path)
+
+
+def test_mesh_file_error_is_a_value_error():
+    assert issubclass(sorpia.MeshFileError, ValueError)
+
+
+@pytest.mark.parametrize("ext", ["obj", "off", "ply", "stl"])
+def test_missing_empty_directory_and_random_bytes_fail_cleanly(tmp_path, ext):
+    with pytest.raises(sorpia.MeshFileError, match="cannot open the file: No such file"):
+        sorpia.read_mesh(tmp_path / f"missing.{ext}")
+    (tmp_path / f"folder.{ext}").mkdir()
+    with pytest.raises(sorpia.MeshFileError, match="is a directory"):
+        sorpia.read_mesh(tmp_path / f"folder.{ext}")
+    (tmp_path / f"empty.{ext}").write_bytes(b"")
+    with pytest.raises(sorpia.MeshFileError, match="the file is empty"):
+        sorpia.read_mesh(tmp_path / f"empty.{ext}")
+    noise = tmp_path / f"noise.{ext}"
+    noise.write_bytes(np.random.default_rng(5).integers(0, 256, 5000, dtype=np.uint8).tobytes())
+    with pytest.raises(sorpia.MeshFileError, match=re.escape(str(noise))):
+        sorpia.read_mesh(noise)
+
+
+@pytest.mark.parametrize("ext", ["ply", "stl"])
+def test_truncated_binary_files_are_reported(tmp_path, ext):
+    v, f = sorpia.shapes.icosphere(1)
+    path = tmp_path / f"m.{ext}"
+    sorpia.write_mesh(path, v, f, binary=True)
+    path.write_bytes(path.read_bytes()[:-7])
+    with pytest.raises(sorpia.MeshFileError, match="ends inside|truncated"):
+        sorpia.read_mesh(path)
+
+
+def test_unknown_extension_is_refused(tmp_path):
+    v, f = sorpia.shapes.icosphere(0)
+    with pytest.raises(sorpia.MeshFileError, match=r"unknown mesh file extension '\.xyz': use \.obj"):
+        sorpia.write_mesh(tmp_path / "m.xyz", v, f)
+    with pytest.raises(sorpia.MeshFileError, match=r"unknown mesh file extension \(none\)"):
+        sorpia.read_mesh(tmp_path / "mesh")
+
+
+def test_extension_case_does_not_matter(tmp_path):
+    v, f = sorpia.shapes.icosphere(0)
+    sorpia.write_mesh(tmp_path / "M.OBJ", v, f)
+    assert same_bits(sorpia.read_mesh(tmp_path / "M.OBJ")[0], v)
+
+
+def test_binary_obj_is_refused(tmp_path):
+    v, f = sorpia.shapes.icosphere(0)
+    with pytest.raises(sorpia.ParameterError, match="OBJ and OFF are text formats"):
+        sorpia.write_mesh(tmp_path / "m.obj", v, f, binary=True)
+
+
+def test_vertex_order_and_unreferenced_vertices_are_kept(tmp_path):
+    # No merging, no reordering: duplicated positions and an unused vertex survive.
+    v0 = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 0, 0], [5, 5, 5]], dtype=float)
+    f0 = np.array([[0, 1, 2], [3, 2, 0]])
+    for ext, binary in EXACT_FORMATS:
+        path = tmp_path / f"keep.{ext}"
+        sorpia.write_mesh(path, v0, f0, binary=binary)
+        v, f = sorpia.read_mesh(path)
+        assert same_bits(v, v0) and np.array_equal(f, f0)
+
+
+def leftovers(folder):
+    return sorted(p.name for p in Path(folder).iterdir() if "sorpia-tmp" in p.name)
+
+
+def test_a_failed_write_leaves_the_old_file_and_no_temporary(tmp_path):
+    # A child process limited to 1000-byte files (RLIMIT_FSIZE, SIGXFSZ
+    # ignored, so write() fails with EFBIG) writes a bigger mesh over an
+    # existing file: the error names the file, the old content survives whole
+    # and no temporary file is left. Works as root, unlike a read-only folder.
+    target = tmp_path / "mesh.ply"
+    target.write_bytes(b"old content")
+    script = textwrap.dedent(f"""
+        import resource, signal, sys
+        import sorpia
+        signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+        resource.setrlimit(resource.RLIMIT_FSIZE, (1000, 1000))
+        v, f = sorpia.shapes.icosphere(3)
+        try:
+            sorpia.write_mesh({str(target)!r}, v, f, binary=True)
+        except sorpia.MeshFileError as e:
+            print("MeshFileError:", e)
+            sys.exit(0)
+        sys.exit(1)
+    """)
+    run = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=120)
+    assert run.returncode == 0, run.stdout + run.stderr
+    assert "mesh.ply: writing failed (nothing was changed)" in run.stdout
+    assert target.read_bytes() == b"old content"
+    assert leftovers(tmp_path) == []
+
+
+def test_bad_input_is_refused_before_the_file_is_touched(tmp_path):
+    target = tmp_path / "mesh.obj"
+    target.write_bytes(b"old content")
+    v, f = sorpia.shapes.icosphere(0)
+    with pytest.raises(sorpia.MeshError, match="out of range"):
+        sorpia.write_mesh(target, v, f + 1)
+    bad = v.copy()
+    bad[3, 1] = np.nan
+    with pytest.raises(sorpia.MeshError, match=r"vertices\[3\].*not finite"):
+        sorpia.write_mesh(target, bad, f)
+    assert target.read_bytes() == b"old content" and leftovers(tmp_path) == []
+
+
+def test_writing_over_a_directory_or_into_a_missing_folder_fails(tmp_path):
+    v, f = sorpia.shapes.icosphere(0)
+    (tmp_path / "d.obj").mkdir()
+    with pytest.raises(sorpia.MeshFileError, match="is a directory"):
+        sorpia.write_mesh(tmp_path / "d.obj", v, f)
+    with pytest.raises(sorpia.MeshFileError, match="cannot create a temporary file"):
+        sorpia.write_mesh(tmp_path / "no" / "such" / "m.obj", v, f)
+    assert leftovers(tmp_path) == []
+
+
+def test_a_write_replaces_an_existing_file_and_keeps_its_mode(tmp_path):
+    target = tmp_path / "m.off"
+    target.write_text("old")
+    os.chmod(target, 0o640)
+    v, f = sorpia.shapes.icosphere(1)
+    sorpia.write_mesh(target, v, f)
+    assert (target.stat().st_mode & 0o777) == 0o640
+    assert same_bits(sorpia.read_mesh(target)[0], v)
+
+
+SHARED_MESHES = Path(__file__).resolve().parents[2] / "shared" / "meshes"
+
+
+def shared_mesh_counts():
+    """(file, vertices, faces) from the table in ../shared/meshes/README.md."""
+    readme = SHARED_MESHES / "README.md"
+    if not readme.exists():
+        return []
+    rows = []
+    for line in readme.read_text().splitlines():
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        if len(cells) > 3 and re.fullmatch(r"[\w.-]+\.(obj|off|ply|stl)", cells[0]):
+            rows.append((cells[0], int(cells[1]), int(cells[2])))
+    return rows
+
+
+@pytest.mark.skipif(not SHARED_MESHES.exists(), reason="../shared/meshes is not present")
+@pytest.mark.parametrize("name,n_vertices,n_faces", shared_mesh_counts() or [("none", 0, 0)])
+def test_shared_meshes_read_with_the_counts_their_readme_lists(name, n_vertices, n_faces):
+    v, f = sorpia.read_mesh(SHARED_MESHES / name)
+    assert v.shape == (n_vertices, 3) and f.shape == (n_faces, 3)
+    assert f.min() >= 0 and f.max() < n_vertices
