@@ -1,0 +1,167 @@
+"""Speed of sorpia's mesh files and limit surface, each phase timed on its own.
+
+Files: write and read of a generated mesh (default sorpia.shapes.irregular
+with 1M vertices, 2M faces) in every format sorpia writes; median of
+--repeat runs; files go to --dir (default: a temporary folder on the same
+disk as this repository's build/, so page-cache effects are those of a real
+disk, and fsync is included in the write times).
+
+Surface: LoopSurface build, limit_surface at levels 1..--max-level (first
+call builds the refined topology, second call reuses it, as after
+set_vertices), and evaluate_limit at 1M random points with derivatives, on
+sorpia.shapes.irregular(--surface-vertices) (default 100k).
+
+Prints Markdown tables; --json writes the figures.
+
+    python bench/io_speed.py [--vertices 1000000] [--surface-vertices 100000] [--repeat 3] [--json out.json]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import resource
+import statistics
+import tempfile
+import time
+
+import numpy as np
+
+import sorpia
+
+FORMATS = [("ply", True), ("ply", False), ("obj", False), ("off", False), ("stl", True), ("stl", False)]
+
+
+def timed(fn, repeat):
+    times, out = [], None
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        out = fn()
+        times.append(time.perf_counter() - t0)
+    return statistics.median(times), out
+
+
+def reset_peak_rss():
+    """Linux: writing 5 to /proc/self/clear_refs resets the peak RSS (VmHWM)."""
+    try:
+        with open("/proc/self/clear_refs", "w") as fh:
+            fh.write("5")
+    except OSError:
+        pass
+
+
+def peak_rss_mb():
+    try:
+        with open("/proc/self/status") as fh:
+            for line in fh:
+                if line.startswith("VmHWM:"):
+                    return int(line.split()[1]) / 1024
+    except OSError:
+        pass
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+
+
+def current_rss_mb():
+    with open("/proc/self/status") as fh:
+        for line in fh:
+            if line.startswith("VmRSS:"):
+                return int(line.split()[1]) / 1024
+    return 0.0
+
+
+def bench_files(n_vertices, repeat, folder):
+    v, f = sorpia.shapes.irregular(n_vertices)
+    rows = []
+    for ext, binary in FORMATS:
+        path = os.path.join(folder, f"bench.{ext}")
+        t_write, _ = timed(lambda: sorpia.write_mesh(path, v, f, binary=binary), repeat)
+        t_read, (v2, f2) = timed(lambda: sorpia.read_mesh(path), repeat)
+        exact = bool(v2.tobytes() == v.tobytes()) if ext != "stl" else None
+        rows.append({"format": ext, "binary": binary, "vertices": len(v), "faces": len(f),
+                     "bytes": os.path.getsize(path), "write_s": t_write, "read_s": t_read, "bit_exact": exact})
+        os.remove(path)
+    return rows
+
+
+def bench_surface(n_vertices, max_level, repeat):
+    v, f = sorpia.shapes.irregular(n_vertices)
+    out = {"vertices": len(v), "faces": len(f)}
+    t0 = time.perf_counter()
+    s = sorpia.LoopSurface(v, f)
+    out["build_s"] = time.perf_counter() - t0
+    out["levels"] = []
+    for level in range(1, max_level + 1):
+        before = current_rss_mb()
+        reset_peak_rss()
+        t0 = time.perf_counter()
+        vs, fs = s.tessellate(level)
+        first = time.perf_counter() - t0
+        t_again, _ = timed(lambda: s.tessellate(level), repeat)
+        out["levels"].append({"level": level, "out_vertices": len(vs), "out_faces": len(fs), "first_s": first,
+                              "again_s": t_again, "peak_rss_mb": peak_rss_mb() - before,
+                              "estimate_mb": sorpia._core.tessellation_bytes(len(v), len(f), level) / 1e6})
+        del vs, fs
+    rng = np.random.default_rng(1)
+    k = 1_000_000
+    face_ids = rng.integers(0, len(f), k)
+    uv = rng.dirichlet([1, 1, 1], k)[:, :2]
+    out["evaluate_points"] = k
+    out["evaluate_s"], _ = timed(lambda: s.evaluate(face_ids, uv), repeat)
+    out["evaluate_derivatives_s"], _ = timed(lambda: s.evaluate(face_ids, uv, derivatives=True), repeat)
+    return out
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--vertices", type=int, default=1_000_000)
+    ap.add_argument("--surface-vertices", type=int, default=100_000)
+    ap.add_argument("--max-level", type=int, default=2)
+    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--dir", default=None, help="folder for the files (default: a temporary folder under build/)")
+    ap.add_argument("--only", choices=["files", "surface"], default=None)
+    ap.add_argument("--json", default=None)
+    args = ap.parse_args()
+
+    result = {}
+    if args.only != "surface":
+        result["files"] = print_files(args)
+    if args.only != "files":
+        result["surface"] = print_surface(args)
+    if args.json:
+        with open(args.json, "w") as fh:
+            json.dump(result, fh, indent=2)
+
+
+def print_files(args):
+    base = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "build")
+    os.makedirs(base, exist_ok=True)
+    with tempfile.TemporaryDirectory(dir=args.dir or base) as folder:
+        files = bench_files(args.vertices, args.repeat, folder)
+    print(f"## Files: irregular mesh, {files[0]['vertices']} vertices, {files[0]['faces']} faces "
+          f"(median of {args.repeat})\n")
+    print("| format | MB | write s | read s | float64 bit-exact |")
+    print("|---|---|---|---|---|")
+    for r in files:
+        name = f"{r['format']} {'binary' if r['binary'] else 'ascii'}"
+        exact = "float32 by definition" if r["bit_exact"] is None else ("yes" if r["bit_exact"] else "NO")
+        print(f"| {name} | {r['bytes'] / 1e6:.1f} | {r['write_s']:.2f} | {r['read_s']:.2f} | {exact} |")
+    return files
+
+
+def print_surface(args):
+    surface = bench_surface(args.surface_vertices, args.max_level, args.repeat)
+    print(f"\n## Limit surface: irregular mesh, {surface['vertices']} vertices, {surface['faces']} faces\n")
+    print(f"LoopSurface build: {surface['build_s']:.2f} s\n")
+    print("| level | output vertices | output faces | first s | again s | peak RSS growth MB | estimate MB |")
+    print("|---|---|---|---|---|---|---|")
+    for r in surface["levels"]:
+        print(f"| {r['level']} | {r['out_vertices']} | {r['out_faces']} | {r['first_s']:.2f} | {r['again_s']:.2f} "
+              f"| {r['peak_rss_mb']:.0f} | {r['estimate_mb']:.0f} |")
+    print(f"\nevaluate_limit at {surface['evaluate_points']} points: {surface['evaluate_s']:.2f} s, "
+          f"with derivatives {surface['evaluate_derivatives_s']:.2f} s")
+    return surface
+
+
+if __name__ == "__main__":
+    main()
