@@ -7,9 +7,10 @@ with rho(I - D^-1 B) by the power method) and omega="auto"; times are medians
 of --repeat runs of estimate + solve (the operator is built once per mesh and
 not counted). Prints Markdown; --json writes everything. --whss adds the same
 study for the relaxation weight of "whss" (outer iterations for w = 0.8 .. 1.2
-at the default alpha).
+at the default alpha). --arpack checks rho(I - D^-1 B) with scipy's ARPACK
+(eigs, tol 1e-10), independent of sorpia's power method.
 
-    python bench/omega_study.py [--meshes DIR] [--tol 1e-10] [--whss] [--json out.json]
+    python bench/omega_study.py [--meshes DIR] [--tol 1e-10] [--whss] [--arpack] [--json out.json]
 """
 
 from __future__ import annotations
@@ -23,6 +24,8 @@ import sys
 import warnings
 
 import numpy as np
+import scipy.sparse
+import scipy.sparse.linalg
 
 import sorpia
 
@@ -59,6 +62,16 @@ WEIGHTS = (0.8, 0.9, 1.0, 1.1, 1.2)
 OMEGAS = sorted(set(np.round(np.arange(0.80, 1.601, 0.05), 2)) | set(np.round(np.arange(0.96, 1.121, 0.01), 2)))
 
 
+def arpack_rho(v, f) -> float:
+    """Spectral radius of I - D^-1 B by ARPACK (largest magnitude eigenvalues)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", sorpia.UnreferencedVerticesWarning)
+        b = sorpia.limit_matrix(f, len(v))
+    jac = scipy.sparse.identity(len(v)) - scipy.sparse.diags(1.0 / b.diagonal()) @ b
+    ev = scipy.sparse.linalg.eigs(jac, k=4, which="LM", return_eigenvectors=False, tol=1e-10, maxiter=50000)
+    return float(np.abs(ev).max())
+
+
 def timed(solver, v, repeat, **kw):
     """(result, median seconds of estimate + solve over `repeat` runs)."""
     times, res = [], None
@@ -77,6 +90,7 @@ def main(argv=None):
     ap.add_argument("--tol", type=float, default=1e-10)
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--whss", action="store_true", help="also scan the whss relaxation weight")
+    ap.add_argument("--arpack", action="store_true", help="also rho(I - D^-1 B) by scipy's ARPACK")
     ap.add_argument("--json", help="write the measurements here")
     args = ap.parse_args(argv)
 
@@ -98,21 +112,22 @@ def main(argv=None):
         if args.whss:
             for w in WEIGHTS:
                 whss[w] = solver.solve(v, method="whss", weight=w, tol=args.tol).iterations
-        rows.append(dict(mesh=name, n=len(v), whss=whss, gs=gs.iterations, t_gs=t_gs, auto=auto.iterations, auto_omega=auto.omega,
+        rho_arpack = arpack_rho(v, f) if args.arpack else float("nan")
+        rows.append(dict(mesh=name, n=len(v), whss=whss, rho_arpack=rho_arpack, gs=gs.iterations, t_gs=t_gs, auto=auto.iterations, auto_omega=auto.omega,
                          t_auto=t_auto, rho=young.rho, young_omega=young.omega, young=young.iterations,
                          young_converged=young.converged, t_young=t_young, best_omegas=best, best=best_it,
                          t_best=t_best, scan=scan))
         print(f"# {name}: gs {gs.iterations}, best {best_it} at omega {best[0]}..{best[-1]}", file=sys.stderr)
 
     print(f"Sweeps to E_k/E_0 < {args.tol:g} (time: median of {args.repeat}, estimate + solve)\n")
-    print("| mesh | n | rho(I-D^-1B) | young omega | young sweeps | GS sweeps | auto omega | auto sweeps "
+    print("| mesh | n | rho(I-D^-1B) | rho ARPACK | young omega | young sweeps | GS sweeps | auto omega | auto sweeps "
           "| fastest omega | its sweeps | t GS ms | t auto ms | t young ms |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     for r in rows:
         b = r["best_omegas"]
         br = f"{b[0]:.2f}" if len(b) == 1 else f"{b[0]:.2f}-{b[-1]:.2f}"
         yi = str(r["young"]) + ("" if r["young_converged"] else " (not converged)")
-        print(f"| {r['mesh']} | {r['n']} | {r['rho']:.5f} | {r['young_omega']:.4f} | {yi} | {r['gs']} "
+        print(f"| {r['mesh']} | {r['n']} | {r['rho']:.5f} | {r['rho_arpack']:.5f} | {r['young_omega']:.4f} | {yi} | {r['gs']} "
               f"| {r['auto_omega']:.2f} | {r['auto']} | {br} | {r['best']} | {1e3 * r['t_gs']:.2f} "
               f"| {1e3 * r['t_auto']:.2f} | {1e3 * r['t_young']:.2f} |")
 
