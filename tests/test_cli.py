@@ -180,7 +180,7 @@ def test_bad_input_exits_2_with_one_line(case, torus_file, tmp_path):
         "unknown-method": ["compare", src, "--methods", "sor,newton"],
         "unknown-output-format": ["fit", src, "-o", tmp_path / "ctrl.xyz"],
         "missing-folder": ["fit", src, "-o", tmp_path / "no" / "ctrl.obj"],
-        "non-manifold": ["fit", write_obj(tmp_path / "nm.obj", np.eye(4),
+        "non-manifold": ["fit", write_obj(tmp_path / "nm.obj", np.eye(4, 3),
                                           [[0, 1, 2], [0, 1, 3], [1, 0, 2]]), "-o", out],
         "garbage-file": ["info", tmp_path / "junk.obj"],
     }[case]
@@ -190,6 +190,29 @@ def test_bad_input_exits_2_with_one_line(case, torus_file, tmp_path):
     assert src.read_bytes() == before
     assert not out.exists()
     assert not [p for p in tmp_path.iterdir() if p.name.endswith(".tmp")]  # no temporary file left
+
+
+def test_polygons_are_refused_unless_triangulate(tmp_path):
+    # Two quads of a strip, by hand: OBJ faces of 4 vertices.
+    V = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [2, 0, 0.5], [2, 1, 0.5]], dtype=float)
+    src = tmp_path / "quads.obj"
+    src.write_text("".join(f"v {x!r} {y!r} {z!r}\n" for x, y, z in V.tolist()) + "f 1 2 3 4\nf 2 5 6 3\n")
+    refused = run("fit", src, "-o", tmp_path / "c.ply", cwd=tmp_path)
+    assert_user_error(refused)
+    assert "--triangulate" in refused.stderr
+    info = run("info", src, "--json", cwd=tmp_path)
+    assert info.returncode == 0, info.stderr
+    verdict = json.loads(info.stdout)["loop_pia"]
+    assert verdict["can_run"] is False and "--triangulate" in verdict["reason"]
+
+    out = tmp_path / "c.ply"
+    done = run("fit", src, "-o", out, "--triangulate", "--binary", "--quiet", cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    assert out.read_bytes().startswith(b"ply\nformat binary_little_endian")
+    Vc, Fc = sorpia.read_mesh(out)
+    # Fans from each polygon's first vertex: (0,1,2), (0,2,3) and (1,4,5), (1,5,2).
+    np.testing.assert_array_equal(Fc, [[0, 1, 2], [0, 2, 3], [1, 4, 5], [1, 5, 2]])
+    assert np.abs(sorpia.limit_matrix(Fc, len(V)) @ Vc - V).max() < 1e-9
 
 
 def test_force_overwrites_the_input(torus_file, tmp_path):
@@ -279,7 +302,7 @@ def test_info_json_counts(name, genus, loops, tmp_path):
 
 def test_info_says_why_loop_pia_cannot_run(tmp_path):
     # Two triangles that traverse edge (0, 1) the same way: inconsistent orientation.
-    src = write_obj(tmp_path / "flip.obj", np.eye(4), [[0, 1, 2], [0, 1, 3]])
+    src = write_obj(tmp_path / "flip.obj", np.eye(4, 3), [[0, 1, 2], [0, 1, 3]])
     proc = run("info", src, cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr
     assert "cannot run" in proc.stdout and "orientation" in proc.stdout

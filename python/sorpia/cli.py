@@ -46,6 +46,10 @@ class UserError(Exception):
     """Bad input from the command line: reported as one line, exit code 2."""
 
 
+class PolygonError(UserError):
+    """The input file has faces of more than 3 vertices and --triangulate was not given."""
+
+
 # --------------------------------------------------------------------------- output files
 
 @contextlib.contextmanager
@@ -186,17 +190,34 @@ def check_mesh_suffix(opt: str, path) -> None:
                         f"use one of {', '.join(MESH_SUFFIXES)}")
 
 
-def read_input(path):
-    """Read the input mesh; returns (vertices, faces, seconds)."""
-    from . import read_mesh
+def read_input(path, triangulate: bool = False):
+    """Read the input mesh; returns (vertices, faces, seconds). A polygon in
+    the file without --triangulate is a UserError that says to pass it."""
+    from . import MeshFileError, read_mesh
 
     if not Path(path).exists():
         raise UserError(f"{path}: no such file")
     if Path(path).is_dir():
         raise UserError(f"{path} is a folder, not a mesh file")
     t0 = time.perf_counter()
-    vertices, faces = read_mesh(path)
+    try:
+        vertices, faces = read_mesh(path, triangulate=triangulate)
+    except MeshFileError as exc:
+        if triangulate or not _is_polygon_error(exc):
+            raise
+        raise PolygonError(f"{_polygon_message(exc)}; pass --triangulate to split each polygon into a fan of "
+                        "triangles from its first vertex") from None
     return vertices, faces, time.perf_counter() - t0
+
+
+def _is_polygon_error(exc) -> bool:
+    # sorpia.read_mesh refuses a face of more than 3 vertices and names the
+    # Python remedy (triangulate=True); the command line has --triangulate.
+    return "triangulate" in str(exc)
+
+
+def _polygon_message(exc) -> str:
+    return str(exc).split(": sorpia works on triangles")[0].split("; read the file with")[0]
 
 
 def _omega_arg(text: str):
@@ -313,7 +334,7 @@ def _report_warnings(caught, skip_convergence: bool = True) -> None:
 
 
 def _fmt_seconds(s: float) -> str:
-    return f"{s:.3f}" if s < 10 else f"{s:.1f}"
+    return f"{s:.2g}" if s < 0.1 else f"{s:.2f}"
 
 
 def _omega_text(res) -> str:
@@ -327,7 +348,7 @@ def _omega_text(res) -> str:
 
 def run_fit(input_path, output, *, method="sor", omega="auto", tol=1e-10, max_iter=1000,
             boundary="edge-and-corner", surface=None, level=3, report=None, quiet=False, force=False,
-            out=None) -> tuple[int, dict]:
+            triangulate=False, binary=False, out=None) -> tuple[int, dict]:
     """`sorpia fit`: returns (exit code, report dict)."""
     from . import limit_points, write_mesh
     from .meshinfo import mesh_info
@@ -338,9 +359,11 @@ def run_fit(input_path, output, *, method="sor", omega="auto", tol=1e-10, max_it
     check_paths([input_path], {"-o": output, "--surface": surface, "--report": report}, force)
     if omega != "auto" and method != "sor":
         raise UserError(f"--omega applies to --method sor only (got --method {method})")
+    if binary and not any(Path(p).suffix.lower() in (".ply", ".stl") for p in (output, surface) if p):
+        raise UserError("--binary applies to .ply and .stl outputs only (OBJ and OFF are text formats)")
 
     timings: dict[str, float] = {}
-    V0, F, timings["read"] = read_input(input_path)
+    V0, F, timings["read"] = read_input(input_path, triangulate)
     t0 = time.perf_counter()
     stats = mesh_info(V0, F, boundary=boundary, list_extraordinary=False)
     timings["statistics"] = time.perf_counter() - t0
@@ -355,7 +378,7 @@ def run_fit(input_path, output, *, method="sor", omega="auto", tol=1e-10, max_it
     ctrl = np.asarray(res.control_vertices)
 
     t0 = time.perf_counter()
-    write_mesh(output, ctrl, F)
+    write_mesh(output, ctrl, F, binary=_binary_for(output, binary))
     timings["write"] = time.perf_counter() - t0
     # An independent check of what was written: the limit positions of the
     # control mesh against the given vertices (OpenSubdiv's Limit, not the solver).
@@ -368,17 +391,20 @@ def run_fit(input_path, output, *, method="sor", omega="auto", tol=1e-10, max_it
 
         t0 = time.perf_counter()
         Vs, Fs = limit_surface(ctrl, F, level=level, boundary=boundary)
-        write_mesh(surface, Vs, Fs)
+        write_mesh(surface, Vs, Fs, binary=_binary_for(surface, binary))
         timings["surface"] = time.perf_counter() - t0
         surface_stats = {"path": str(surface), "level": level, "vertices": len(Vs), "faces": len(Fs)}
 
     fields = _result_fields(res)
+    # The solver's own phases (topology, operator, estimate, solve), inside "fit".
+    fit_phases = {f"fit.{k}": float(v) for k, v in (getattr(res, "timings", None) or {}).items()}
     errors = np.asarray(res.errors, dtype=float)
     diag = stats.get("diagonal") or 1.0
     data = {
         "sorpia_version": __version__,
         "command": "fit",
         "input": str(input_path),
+        "triangulated": triangulate,
         "output": str(output),
         "surface": surface_stats,
         "report": None if report is None else str(report),
@@ -396,14 +422,19 @@ def run_fit(input_path, output, *, method="sor", omega="auto", tol=1e-10, max_it
         "max_residual": float(residual.max()),
         "max_residual_relative": float(residual.max() / diag),
         "cpu_seconds": cpu,
-        "timings": timings,
-        "result": {k: v for k, v in fields.items() if k not in ("errors",)},
+        "timings": {**timings, **fit_phases},
+        "result": {k: v for k, v in fields.items() if k not in ("errors", "timings")},
     }
     if report is not None:
         write_json(report, data)
     if not quiet:
         print(_fit_summary(data), file=out)
     return (EXIT_OK if res.converged else EXIT_NOT_CONVERGED), data
+
+
+def _binary_for(path, binary: bool) -> bool:
+    """--binary for the formats that have a binary form (PLY, STL)."""
+    return binary and Path(path).suffix.lower() in (".ply", ".stl")
 
 
 def _mesh_line(stats: dict) -> str:
@@ -429,7 +460,9 @@ def _fit_summary(d: dict) -> str:
              f"NOT converged: stopped after {d['iterations']} iterations at E_k/E_0 = {d['final_error']:.3g} "
              f"(tol {d['tol']:g}); outputs written anyway, exit code 1")
     t = d["timings"]
-    phases = ", ".join(f"{k} {_fmt_seconds(v)}" for k, v in t.items())
+    inner = ", ".join(f"{k[4:]} {_fmt_seconds(v)}" for k, v in t.items() if k.startswith("fit."))
+    phases = ", ".join(f"{k} {_fmt_seconds(v)}" + (f" ({inner})" if k == "fit" and inner else "")
+                       for k, v in t.items() if not k.startswith("fit."))
     written = [d["output"]] + ([d["surface"]["path"]] if d["surface"] else []) + (
         [d["report"]] if d["report"] else [])
     lines = [
@@ -462,7 +495,7 @@ def iterations_to_reach(errors, tolerances=TABLE_TOLERANCES) -> list:
 
 def run_compare(input_path, *, methods=METHODS, tol=1e-10, max_iter=1000, boundary="edge-and-corner",
                 table=None, csv_path=None, plot=None, json_path=None, quiet=False, force=False,
-                out=None) -> tuple[int, dict]:
+                triangulate=False, out=None) -> tuple[int, dict]:
     """`sorpia compare`: every method to the same tolerance; returns (exit code, data)."""
     from .meshinfo import mesh_info
 
@@ -470,7 +503,7 @@ def run_compare(input_path, *, methods=METHODS, tol=1e-10, max_iter=1000, bounda
     check_paths([input_path], {"--table": table, "--csv": csv_path, "--plot": plot, "--json": json_path}, force)
     if plot is not None:
         _require_plotting()
-    V0, F, read_seconds = read_input(input_path)
+    V0, F, read_seconds = read_input(input_path, triangulate)
     stats = mesh_info(V0, F, boundary=boundary, list_extraordinary=False)
     if not stats["loop_pia"]["can_run"]:
         raise UserError(f"{input_path}: Loop PIA cannot run on this mesh: {stats['loop_pia']['reason']}")
@@ -581,9 +614,9 @@ def _require_plotting() -> None:
 
 def run_render(input_path, output, *, level=3, tol=1e-10, max_iter=1000, boundary="edge-and-corner",
                size=(1200, 1000), elev=30.0, azim=-60.0, face_budget=FACE_BUDGET, quiet=False, force=False,
-               out=None) -> tuple[int, dict]:
+               triangulate=False, out=None) -> tuple[int, dict]:
     """`sorpia render`: the paper's Figure 3 for a mesh file."""
-    from . import limit_surface
+    from . import LoopSurface
     from .meshinfo import mesh_info
     from .plotting import interpolation_figure, level_for_budget
 
@@ -594,7 +627,7 @@ def run_render(input_path, output, *, level=3, tol=1e-10, max_iter=1000, boundar
     _require_plotting()
     budget = face_budget
     timings = {}
-    V0, F, timings["read"] = read_input(input_path)
+    V0, F, timings["read"] = read_input(input_path, triangulate)
     stats = mesh_info(V0, F, boundary=boundary, list_extraordinary=False)
     if not stats["loop_pia"]["can_run"]:
         raise UserError(f"{input_path}: Loop PIA cannot run on this mesh: {stats['loop_pia']['reason']}")
@@ -605,8 +638,11 @@ def run_render(input_path, output, *, level=3, tol=1e-10, max_iter=1000, boundar
     ctrl = np.asarray(res.control_vertices)
     drawn_level = level_for_budget(len(F), level, budget)
     t0 = time.perf_counter()
-    given = limit_surface(V0, F, level=drawn_level, boundary=boundary)
-    fitted = limit_surface(ctrl, F, level=drawn_level, boundary=boundary)
+    # One LoopSurface for both: the topology is built once, only positions change.
+    surface = LoopSurface(V0, F, boundary=boundary)
+    given = surface.tessellate(drawn_level)
+    surface.set_vertices(ctrl)
+    fitted = surface.tessellate(drawn_level)
     timings["surface"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     fig = interpolation_figure(V0, F, given, ctrl, fitted, size=size, elev=elev, azim=azim, face_budget=budget,
@@ -627,13 +663,27 @@ def run_render(input_path, output, *, level=3, tol=1e-10, max_iter=1000, boundar
 
 # --------------------------------------------------------------------------- info
 
-def run_info(input_path, *, as_json=False, boundary="edge-and-corner", out=None) -> tuple[int, dict]:
-    """`sorpia info`: mesh statistics and whether Loop PIA can run (exit 0 either way)."""
+def run_info(input_path, *, as_json=False, boundary="edge-and-corner", triangulate=False,
+             out=None) -> tuple[int, dict]:
+    """`sorpia info`: mesh statistics and whether Loop PIA can run (exit 0 either way).
+
+    A file with polygons is described as its fan triangulation, with the
+    verdict that Loop PIA cannot run on it as it is (--triangulate)."""
     from .meshinfo import format_info, mesh_info
 
     out = out if out is not None else sys.stdout
-    V0, F, _ = read_input(input_path)
+    try:
+        V0, F, _ = read_input(input_path, triangulate)
+        polygons = False
+    except PolygonError:
+        V0, F, _ = read_input(input_path, triangulate=True)
+        polygons = True
     info = mesh_info(V0, F, boundary=boundary)
+    info["triangulated"] = bool(triangulate or polygons)
+    if polygons and info["loop_pia"]["can_run"]:
+        info["loop_pia"] = {"can_run": False, "notes": [],
+                            "reason": "the file has faces of more than 3 vertices (the counts are of their fan "
+                            "triangulation); pass --triangulate to fit, compare or render to split them"}
     if as_json:
         print(json.dumps(_jsonable({"input": str(input_path), **info}), indent=2), file=out)
     else:
@@ -664,7 +714,7 @@ def sample_mesh():
 def _new_demo_folder() -> Path:
     stamp = time.strftime("%Y%m%d-%H%M%S")
     for k in range(100):
-        folder = Path.cwd() / (f"sorpia-demo-{stamp}" + (f"-{k}" if k else ""))
+        folder = Path(f"sorpia-demo-{stamp}" + (f"-{k}" if k else ""))  # relative: short paths in the summary
         try:
             folder.mkdir()
             return folder
@@ -767,6 +817,11 @@ def build_parser() -> argparse.ArgumentParser:
             p.add_argument("input", metavar="IN", help="input triangle mesh (.obj, .off, .ply, .stl); only read")
         return p
 
+    def triangulate_flag(p):
+        p.add_argument("--triangulate", action="store_true",
+                       help="split faces of more than 3 vertices into fans of triangles from their first vertex "
+                       "(without it such a file is refused)")
+
     def output_flags(p):
         p.add_argument("--quiet", "-q", action="store_true", help="print nothing but errors and warnings")
         p.add_argument("--force", action="store_true", help="allow an output to overwrite the input file")
@@ -804,10 +859,14 @@ def build_parser() -> argparse.ArgumentParser:
     fit.add_argument("--report", metavar="REPORT.json",
                      help="write a JSON report: mesh statistics, method, omega, E_k/E_0 per iteration, seconds "
                      "per phase (read, statistics, fit, write, check, surface)")
+    fit.add_argument("--binary", action="store_true", help="write .ply and .stl outputs in binary (faster, "
+                     "smaller; PLY keeps float64 either way)")
+    triangulate_flag(fit)
     output_flags(fit)
     fit.set_defaults(func=lambda a: run_fit(
         a.input, a.output, method=a.method, omega=a.omega, tol=a.tol, max_iter=a.max_iter, boundary=a.boundary,
-        surface=a.surface, level=a.level, report=a.report, quiet=a.quiet, force=a.force)[0])
+        surface=a.surface, level=a.level, report=a.report, quiet=a.quiet, force=a.force, triangulate=a.triangulate,
+        binary=a.binary)[0])
 
     comp = command("compare", "run several methods to one tolerance: the paper's Table 1 and Figure 7",
                    "Run each method on the mesh to the same tolerance and print the paper's Table 1 layout for "
@@ -821,10 +880,11 @@ def build_parser() -> argparse.ArgumentParser:
     comp.add_argument("--csv", metavar="T.csv", help="write the table as CSV")
     comp.add_argument("--plot", metavar="P.png", help="write the convergence plot (paper Figure 7) as PNG")
     comp.add_argument("--json", metavar="J.json", help="write every figure (E_k/E_0 per iteration, timings) as JSON")
+    triangulate_flag(comp)
     output_flags(comp)
     comp.set_defaults(func=lambda a: run_compare(
         a.input, methods=a.methods, tol=a.tol, max_iter=a.max_iter, boundary=a.boundary, table=a.table,
-        csv_path=a.csv, plot=a.plot, json_path=a.json, quiet=a.quiet, force=a.force)[0])
+        csv_path=a.csv, plot=a.plot, json_path=a.json, quiet=a.quiet, force=a.force, triangulate=a.triangulate)[0])
 
     ren = command("render", "draw the paper's Figure 3 for a mesh (PNG)",
                   "Fit the mesh with SOR-PIA and draw four shaded panels, the same camera in each: (a) the given "
@@ -841,10 +901,12 @@ def build_parser() -> argparse.ArgumentParser:
     ren.add_argument("--azim", type=float, default=-60.0, help="camera azimuth in degrees")
     ren.add_argument("--face-budget", type=_positive_int, default=FACE_BUDGET, metavar="N",
                      help="most triangles drawn per panel")
+    triangulate_flag(ren)
     output_flags(ren)
     ren.set_defaults(func=lambda a: run_render(
         a.input, a.output, level=a.level, tol=a.tol, max_iter=a.max_iter, boundary=a.boundary, size=a.size,
-        elev=a.elev, azim=a.azim, face_budget=a.face_budget, quiet=a.quiet, force=a.force)[0])
+        elev=a.elev, azim=a.azim, face_budget=a.face_budget, quiet=a.quiet, force=a.force,
+        triangulate=a.triangulate)[0])
 
     inf = command("info", "mesh statistics (the paper's Table 2) and whether Loop PIA can run on it",
                   "Print vertices, faces, edges, boundary loops, Euler characteristic, genus, components, "
@@ -854,7 +916,9 @@ def build_parser() -> argparse.ArgumentParser:
     inf.add_argument("--json", action="store_true", help="print JSON (every extraordinary vertex listed) instead")
     inf.add_argument("--boundary", choices=("edge-and-corner", "edge-only"), default="edge-and-corner",
                      help="boundary rule the verdict refers to")
-    inf.set_defaults(func=lambda a: run_info(a.input, as_json=a.json, boundary=a.boundary)[0])
+    triangulate_flag(inf)
+    inf.set_defaults(func=lambda a: run_info(a.input, as_json=a.json, boundary=a.boundary,
+                                             triangulate=a.triangulate)[0])
 
     demo = command("demo", "fit, compare and render on a built-in sample mesh",
                    "Generate a small sample mesh (a wavy torus with random edge flips: valences 3 to 12, visible "

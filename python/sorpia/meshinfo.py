@@ -65,10 +65,10 @@ def mesh_info(vertices, faces, boundary: str = "edge-and-corner", list_extraordi
         info["bounding_box"] = [lo.tolist(), hi.tolist()]
         info["diagonal"] = float(np.linalg.norm(hi - lo))
     verdict = _loop_pia_verdict(vertices, faces, boundary)
-    info["loop_pia"] = verdict
-    # The counts below need triangles with indices in range; anything else was
-    # already reported by the verdict.
+    # The counts below need triangles with indices in range; anything else is
+    # reported by the verdict.
     if faces.ndim != 2 or faces.shape[1] != 3 or m == 0 or n == 0 or faces.min() < 0 or faces.max() >= n:
+        info["loop_pia"] = verdict
         return info
 
     faces = faces.astype(np.int64)
@@ -144,6 +144,7 @@ def mesh_info(vertices, faces, boundary: str = "edge-and-corner", list_extraordi
     if n - n_ref and verdict["can_run"]:
         verdict["notes"].append(
             f"{n - n_ref} vertices belong to no face: they pass through unchanged (their limit is themselves)")
+    info["loop_pia"] = verdict
     return info
 
 
