@@ -106,8 +106,9 @@ double estimate_jacobi_rho(const LimitOperator& op, SpectralCache& cache);
 /// Returns {lambda_min(H), lambda_max(H)}.
 std::pair<double, double> estimate_hermitian_extremes(const LimitOperator& op, SpectralCache& cache);
 
-/// rho at or above this means Young's formula has no real value; the rule then
-/// uses this rho (a warning is the caller's job: SolveResult::omega_clamped).
+/// rho at or above this: Young's formula has no real value (rho >= 1) or none of
+/// use (omega within 0.03 of 2); the rule then uses this rho (a warning is the
+/// caller's job: SolveResult::omega_clamped).
 constexpr double young_rho_clamp = 0.9999;
 
 /// Paper Remark 1: omega = 2 / (1 + sqrt(1 - rho^2)), rho clamped to
