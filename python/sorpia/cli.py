@@ -320,17 +320,25 @@ def _run_interpolate(vertices, faces, *, method, omega, tol, max_iter, boundary,
     return res, time.perf_counter() - t0, time.process_time() - cpu0, caught
 
 
-def _report_warnings(caught, skip_convergence: bool = True) -> None:
-    """Print the warnings of a solve as 'sorpia: warning: ...', once each; the
-    solver's own 'did not converge' is left out where the summary says it."""
-    seen = set()
+_warned: set = set()  # texts already printed in this process
+
+
+def warn_once(text: str) -> None:
+    """Print 'sorpia: warning: TEXT' on stderr unless it was printed already
+    (several steps of one command meet the same unreferenced vertices)."""
+    if text not in _warned:
+        _warned.add(text)
+        print(f"sorpia: warning: {text}", file=sys.stderr)
+
+
+def _report_warnings(caught) -> None:
+    """Print the warnings of a solve; the solver's own 'did not converge' is
+    left out: the summary says it, and the exit code."""
     for w in caught:
         text = str(w.message)
-        if skip_convergence and "converge" in type(w.message).__name__.lower() + text.lower():
+        if "converge" in type(w.message).__name__.lower():
             continue
-        if text not in seen:
-            seen.add(text)
-            print(f"sorpia: warning: {text}", file=sys.stderr)
+        warn_once(text)
 
 
 def _fmt_seconds(s: float) -> str:
@@ -440,7 +448,8 @@ def _binary_for(path, binary: bool) -> bool:
 def _mesh_line(stats: dict) -> str:
     parts = [f"{stats['vertices']} vertices", f"{stats['faces']} faces"]
     if "boundary_loops" in stats:
-        parts.append("closed" if stats["boundary_loops"] == 0 else f"{stats['boundary_loops']} boundary loops")
+        loops = stats["boundary_loops"]
+        parts.append("closed" if loops == 0 else f"{loops} boundary loop{'s' if loops > 1 else ''}")
         if stats.get("genus") is not None:
             parts.append(f"genus {stats['genus']}")
         parts.append(f"{stats['extraordinary_vertices']} extraordinary vertices "
@@ -614,7 +623,7 @@ def _require_plotting() -> None:
 
 def run_render(input_path, output, *, level=3, tol=1e-10, max_iter=1000, boundary="edge-and-corner",
                size=(1200, 1000), elev=30.0, azim=-60.0, face_budget=FACE_BUDGET, quiet=False, force=False,
-               triangulate=False, out=None) -> tuple[int, dict]:
+               triangulate=False, up="z", out=None) -> tuple[int, dict]:
     """`sorpia render`: the paper's Figure 3 for a mesh file."""
     from . import LoopSurface
     from .meshinfo import mesh_info
@@ -647,7 +656,7 @@ def run_render(input_path, output, *, level=3, tol=1e-10, max_iter=1000, boundar
     t0 = time.perf_counter()
     fig = interpolation_figure(V0, F, given, ctrl, fitted, size=size, elev=elev, azim=azim, face_budget=budget,
                                title=f"{Path(input_path).name}: Loop limit surface and SOR-PIA (paper Figure 3)",
-                               iterations=int(res.iterations), level=drawn_level)
+                               iterations=int(res.iterations), level=drawn_level, up=up)
     save_figure(fig, output)
     timings["draw"] = time.perf_counter() - t0
     data = {"output": str(output), "level": drawn_level, "iterations": int(res.iterations),
@@ -899,6 +908,8 @@ def build_parser() -> argparse.ArgumentParser:
     ren.add_argument("--size", type=_size_arg, default="1200x1000", metavar="WxH", help="image size in pixels")
     ren.add_argument("--elev", type=float, default=30.0, help="camera elevation in degrees")
     ren.add_argument("--azim", type=float, default=-60.0, help="camera azimuth in degrees")
+    ren.add_argument("--up", choices=("x", "y", "z"), default="z",
+                     help="the axis drawn vertical (many mesh files, e.g. the Stanford bunny, have y up)")
     ren.add_argument("--face-budget", type=_positive_int, default=FACE_BUDGET, metavar="N",
                      help="most triangles drawn per panel")
     triangulate_flag(ren)
@@ -906,7 +917,7 @@ def build_parser() -> argparse.ArgumentParser:
     ren.set_defaults(func=lambda a: run_render(
         a.input, a.output, level=a.level, tol=a.tol, max_iter=a.max_iter, boundary=a.boundary, size=a.size,
         elev=a.elev, azim=a.azim, face_budget=a.face_budget, quiet=a.quiet, force=a.force,
-        triangulate=a.triangulate)[0])
+        triangulate=a.triangulate, up=a.up)[0])
 
     inf = command("info", "mesh statistics (the paper's Table 2) and whether Loop PIA can run on it",
                   "Print vertices, faces, edges, boundary loops, Euler characteristic, genus, components, "
@@ -948,7 +959,7 @@ def main(argv: list[str] | None = None) -> int:
         return EXIT_OK
 
     def show(message, category, filename, lineno, file=None, line=None):
-        print(f"sorpia: warning: {message}", file=sys.stderr)
+        warn_once(str(message))
 
     old_show = warnings.showwarning
     warnings.showwarning = show

@@ -117,19 +117,29 @@ def _vertex_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     return vn / np.where(norm > 0, norm, 1.0)
 
 
-def _is_closed(faces: np.ndarray, n_vertices: int) -> bool:
+def _boundary_share(faces: np.ndarray, n_vertices: int) -> float:
+    """Boundary edges / edges: 0 for a closed mesh."""
     half = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]).astype(np.int64)
     keys = half.min(axis=1) * n_vertices + half.max(axis=1)
     _, counts = np.unique(keys, return_counts=True)
-    return bool((counts == 2).all())
+    return float((counts == 1).sum() / len(counts))
 
 
-def _select_faces(vertices, faces, view, budget, closed):
-    """Faces to draw: all of them within the budget; beyond it the back faces of
-    a closed mesh go first (they are hidden anyway), then an even stride."""
+def _visible_side(vertices, faces, view) -> float:
+    """+1 when the camera looks at the outer side of most of the projected area
+    (faces oriented outward), -1 when at the inner side (an open sheet seen
+    from behind)."""
+    n = _face_normals(vertices, faces) @ view
+    return 1.0 if n[n > 0].sum() >= -n[n < 0].sum() * 0.5 else -1.0
+
+
+def _select_faces(vertices, faces, view, budget, side):
+    """Faces to draw: all of them within the budget; beyond it the faces
+    turned away from the camera go first (hidden on a closed mesh, seen
+    through holes only on an open one), then an even stride."""
     keep = np.arange(len(faces))
-    if len(keep) > budget and closed:
-        keep = keep[_face_normals(vertices, faces) @ view > 0]
+    if len(keep) > budget:
+        keep = keep[side * (_face_normals(vertices, faces) @ view) > 0]
     if len(keep) > budget:
         keep = keep[:: math.ceil(len(keep) / budget)]
     return keep
@@ -148,7 +158,8 @@ def _shaded_colors(vertices, faces, base, light):
 def interpolation_figure(vertices, faces, given_surface, control_vertices, fitted_surface, *,
                          size: tuple[int, int] = (1200, 1000), elev: float = 30.0, azim: float = -60.0,
                          face_budget: int = FACE_BUDGET, point_budget: int = POINT_BUDGET,
-                         title: str | None = None, iterations: int | None = None, level: int | None = None):
+                         title: str | None = None, iterations: int | None = None, level: int | None = None,
+                         up: str = "z"):
     """The paper's Figure 3 in four panels, the same camera in each.
 
     Parameters
@@ -166,16 +177,20 @@ def interpolation_figure(vertices, faces, given_surface, control_vertices, fitte
     size : (width, height) of the PNG in pixels (100 dpi).
     elev, azim : camera angles in degrees (matplotlib's view_init).
     face_budget, point_budget : most faces / markers drawn per panel; beyond
-        them back faces of closed meshes are culled, then an even stride of
-        faces or markers is drawn (the panel title says so).
+        them the faces turned away from the camera are left out, then an even
+        stride of faces or markers is drawn (the panel title says so).
+    up : {"x", "y", "z"}
+        The axis drawn vertical (many mesh files have y up).
     """
     from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
-    V0 = np.asarray(vertices, dtype=float)
+    # A cyclic permutation of the axes (a rotation: orientation kept) puts `up` on z.
+    axes = {"z": [0, 1, 2], "y": [2, 0, 1], "x": [1, 2, 0]}[up]
+    V0 = np.asarray(vertices, dtype=float)[:, axes]
     F = np.asarray(faces, dtype=np.int64)
-    Vc = np.asarray(control_vertices, dtype=float)
-    Vg, Fg = (np.asarray(given_surface[0], float), np.asarray(given_surface[1], np.int64))
-    Vf, Ff = (np.asarray(fitted_surface[0], float), np.asarray(fitted_surface[1], np.int64))
+    Vc = np.asarray(control_vertices, dtype=float)[:, axes]
+    Vg, Fg = (np.asarray(given_surface[0], float)[:, axes], np.asarray(given_surface[1], np.int64))
+    Vf, Ff = (np.asarray(fitted_surface[0], float)[:, axes], np.asarray(fitted_surface[1], np.int64))
 
     view = _view_vector(elev, azim)
     up = np.array([0.0, 0.0, 1.0])
@@ -192,12 +207,13 @@ def interpolation_figure(vertices, faces, given_surface, control_vertices, fitte
     extent = np.maximum(hi - lo, 0.05 * max(float((hi - lo).max()), 1e-12))  # flat meshes keep some depth
     centre = (lo + hi) / 2
 
-    closed = _is_closed(F, len(V0))
-    # Markers: only the given vertices facing the camera on a closed mesh
+    side = _visible_side(V0, F, view)
+    # Markers: on a (nearly) closed mesh only the vertices facing the camera
     # (matplotlib cannot hide points behind a surface); at most point_budget.
+    closed = _boundary_share(F, len(V0)) < 0.01
     shown = np.unique(F.ravel())
     if closed:
-        shown = shown[_vertex_normals(V0, F)[shown] @ view > 0]
+        shown = shown[side * (_vertex_normals(V0, F)[shown] @ view) > 0]
     stride = max(1, math.ceil(len(shown) / point_budget))
     shown = shown[::stride]
     marker = float(np.clip(3000.0 / max(len(shown), 1), 1.0, 14.0))
@@ -213,7 +229,7 @@ def interpolation_figure(vertices, faces, given_surface, control_vertices, fitte
     for j, (label, Vp, Fp, base, edges, points) in enumerate(panels):
         ax = fig.add_subplot(2, 2, j + 1, projection="3d")
         ax.computed_zorder = False  # markers painted over the surface, not sorted with it
-        keep = _select_faces(Vp, Fp, view, face_budget, closed)
+        keep = _select_faces(Vp, Fp, view, face_budget, side)
         sub = Fp[keep]
         edgecolor = "none"
         linewidth = 0.0
@@ -241,7 +257,7 @@ def interpolation_figure(vertices, faces, given_surface, control_vertices, fitte
         ax.set_axis_off()
     note = []
     if level is not None:
-        note.append(f"limit surfaces refined {level} times")
+        note.append(f"limit surfaces at refinement level {level}")
     if stride > 1:
         note.append(f"every {stride}th vertex marked")
     if closed:
