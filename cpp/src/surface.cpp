@@ -102,6 +102,9 @@ struct LoopSurface::Impl {
   std::vector<Point3> points;         // referenced vertices in OpenSubdiv's order
   detail::LoopRefiner refined;        // uniformly refined to refined_level (built on demand)
   int refined_level = -1;
+  // The Python binding releases the GIL: evaluate() may run in several
+  // threads at once, set_vertices() and tessellate() change state.
+  mutable std::shared_mutex mutex;
 
   Impl(const Topology& t, Boundary b) : topology(t), boundary(b), base(detail::make_loop_refiner(t, b)) {}
 };
@@ -129,6 +132,7 @@ std::size_t LoopSurface::n_faces() const { return impl_->topology.n_faces(); }
 Boundary LoopSurface::boundary() const { return impl_->boundary; }
 
 void LoopSurface::set_vertices(const double* vertices) {
+  const std::unique_lock<std::shared_mutex> lock(impl_->mutex);
   const std::size_t n = n_vertices();
   impl_->vertices.assign(vertices, vertices + 3 * n);
   const auto& from = impl_->base.from_osd;
@@ -138,7 +142,10 @@ void LoopSurface::set_vertices(const double* vertices) {
   }
 }
 
-void LoopSurface::get_vertices(double* out) const { std::copy(impl_->vertices.begin(), impl_->vertices.end(), out); }
+void LoopSurface::get_vertices(double* out) const {
+  const std::shared_lock<std::shared_mutex> lock(impl_->mutex);
+  std::copy(impl_->vertices.begin(), impl_->vertices.end(), out);
+}
 
 void LoopSurface::evaluate(const std::int32_t* face_ids, const double* uv, std::size_t k, double* positions,
                            double* du, double* dv, double* normals) const {
@@ -175,6 +182,7 @@ void LoopSurface::evaluate(const std::int32_t* face_ids, const double* uv, std::
   const SurfaceFactory& factory = *impl_->factory;
   const double* mesh_points = &impl_->points.data()->x;
   const bool want_derivs = du || dv || normals;
+  const std::shared_lock<std::shared_mutex> lock(impl_->mutex);
   int failed_face = -1;
 #pragma omp parallel
   {
@@ -234,6 +242,7 @@ TriMesh LoopSurface::tessellate(int level) {
                          " triangles (4^level per face) and needs about " + human_bytes(static_cast<double>(need)) +
                          ", but only " + human_bytes(static_cast<double>(avail)) +
                          " of memory is available: use a lower level, or evaluate_limit at the points you need");
+  const std::unique_lock<std::shared_mutex> lock(impl_->mutex);
 
   if (impl_->refined_level != level) {
     impl_->refined = detail::LoopRefiner{};  // free the old one before building the new one

@@ -32,6 +32,10 @@ std::size_t available_memory_bytes();
 /// tessellation level asked for); set_vertices() changes the control vertices
 /// without rebuilding them, as the PIA loop changes positions, never topology.
 ///
+/// Threads: evaluate() and get_vertices() may run concurrently (one shared
+/// Bfr factory with a thread-safe cache, OpenMP inside evaluate());
+/// set_vertices() and tessellate() take exclusive access.
+///
 /// Parameterisation of face f = (a, b, c) (Bfr's triangle parameterisation):
 /// (u, v) = (0, 0) is vertex a, (1, 0) is b, (0, 1) is c; points with u >= 0,
 /// v >= 0, u + v <= 1 lie on the face's limit patch.
