@@ -199,7 +199,8 @@ void solve_cg(const LimitOperator& op, const double* v0, double* v, Monitor& mon
 // then V^(k+1) <- V^(k) + weight (V^(k+1) - V^(k)) (weight 1 for "hss").
 // Both inner systems are solved by CG: the first is SPD; the second through
 // (alpha I - S)(alpha I + S) = alpha^2 I - S^2, SPD since S^T = -S.
-// Inner CG is warm-started and stops at a residual of 1e-3 E_k (inexact HSS).
+// Inner CG is warm-started and stops at a residual of 1e-3 E_k (inexact HSS),
+// or at rounding level.
 void solve_hss(const LimitOperator& op, const double* v0, double* v, double alpha, double weight, Monitor& mon,
                SolveResult& res) {
   const std::size_t m = 3 * op.n;
@@ -228,10 +229,12 @@ void solve_hss(const LimitOperator& op, const double* v0, double* v, double alph
   };
 
   std::vector<double> x(v, v + m);
+  // Below rounding level (as in Monitor) an inner CG cannot get: never ask for it.
+  const double floor = 64.0 * 2.220446049250313e-16 * max_row_norm(v0, op.n);
   double e = residual(op, v0, v, nullptr);
   if (mon.start(e)) return;
   for (;;) {
-    const double inner_tol = 1e-3 * e;
+    const double inner_tol = std::max(1e-3 * e, floor);
     // (alpha I + H) U = (alpha I - S) X + V0
     apply_s(x, tmp);
     res.products += 2;
