@@ -245,3 +245,17 @@ def test_wrong_vertex_count_for_interpolator():
     solver = sorpia.Interpolator(f, len(v))
     with pytest.raises(sorpia.ParameterError, match="vertices has 41 rows but the mesh has 42"):
         solver.solve(v[:-1])
+
+
+@pytest.mark.parametrize("method", ["sor", "cg", "hss"])
+@pytest.mark.parametrize("exponent", [700, -700])
+def test_huge_and_tiny_coordinates_scale_exactly(method, exponent):
+    # B is linear and the core solves for V0 / 2^e (2^e ~ max |V0|), which is
+    # exact: scaling the input by a power of two scales the answer exactly and
+    # leaves the error history alone (squared norms of 1e210 would overflow).
+    v, f = sorpia.shapes.irregular(300, seed=2)
+    res = sorpia.interpolate(v, f, method=method)
+    big = sorpia.interpolate(np.ldexp(v, exponent), f, method=method)
+    assert big.converged and big.iterations == res.iterations
+    np.testing.assert_array_equal(big.errors, res.errors)
+    np.testing.assert_array_equal(big.control_vertices, np.ldexp(res.control_vertices, exponent))

@@ -269,7 +269,17 @@ SolveResult solve(const LimitOperator& op, const double* v0, const SolveOptions&
   res.estimate_seconds = sc.seconds - spent_before;
 
   const auto t0 = clock::now();
-  res.control_vertices.assign(v0, v0 + 3 * op.n);  // V^(0) = V0 (paper: M^0 = M)
+  // Solve for V0 / 2^e, 2^e ~ max |v0|: multiplying by a power of two is exact
+  // and B is linear, so the iterates are those of V0 scaled, and norms can
+  // neither overflow (|v| > 1e154 squares to inf) nor underflow.
+  double max_abs = 0.0;
+  for (std::size_t k = 0; k < 3 * op.n; ++k) max_abs = std::max(max_abs, std::abs(v0[k]));
+  int exponent = 0;
+  if (max_abs > 0.0 && std::isfinite(max_abs)) std::frexp(max_abs, &exponent);
+  std::vector<double> scaled(v0, v0 + 3 * op.n);
+  for (double& x : scaled) x = std::ldexp(x, -exponent);
+  v0 = scaled.data();
+  res.control_vertices = scaled;  // V^(0) = V0 (paper: M^0 = M)
   double* v = res.control_vertices.data();
   detail::Monitor mon(opt, res, detail::max_row_norm(v0, op.n));
   switch (opt.method) {
@@ -289,6 +299,8 @@ SolveResult solve(const LimitOperator& op, const double* v0, const SolveOptions&
       detail::solve_hss(op, v0, v, res.alpha, res.weight, mon, res);
       break;
   }
+  for (double& x : res.control_vertices) x = std::ldexp(x, exponent);
+  res.initial_error = std::ldexp(res.initial_error, exponent);
   res.solve_seconds = std::chrono::duration<double>(clock::now() - t0).count();
   return res;
 }
