@@ -122,6 +122,10 @@ void check_counts(const FileData& f, const TriMesh& mesh) {
 }  // namespace detail::io
 
 MeshFormat mesh_format(const std::string& path) {
+  // The C library would stop at the NUL: "a.obj\0.ply" would open a.obj as PLY.
+  const std::size_t nul = path.find('\0');
+  if (nul != std::string::npos)
+    throw FileError(path.substr(0, nul) + "...: the path contains a NUL character");
   const std::size_t slash = path.find_last_of('/');
   const std::size_t dot = path.find_last_of('.');
   std::string ext;

@@ -3,6 +3,7 @@
 // read). Every other statement (vt, vn, vp, g, o, s, usemtl, mtllib, l, p,
 // curves, ...) is skipped.
 #include <cctype>
+#include <limits>
 
 #include "io_detail.hpp"
 
@@ -51,11 +52,14 @@ TriMesh read_obj(const FileData& f, bool triangulate) {
         if (!parse_int(v, i)) fail(f, w, "expected a vertex index, found " + quoted(tok));
         if (i == 0) fail(f, w, "vertex index 0: OBJ indices start at 1");
         if (i < 0) {
-          if (-i > n)
+          if (i < -n)  // not -i > n: -LLONG_MIN overflows
             fail(f, w, "relative vertex index " + std::to_string(i) + " points before the first vertex (" +
                            std::to_string(n) + " read so far)");
           i += n;
         } else {
+          // Checked before the faces are stored as int32, where it would wrap.
+          if (i > std::numeric_limits<std::int32_t>::max())
+            fail(f, w, "vertex index " + std::to_string(i) + " is out of range: more than int32 indices hold");
           i -= 1;
           forward = forward || i >= n;
         }

@@ -81,8 +81,10 @@ TriMesh read_off(const FileData& f, bool triangulate) {
       fail(f, "the file ends after " + std::to_string(i) + " of " + std::to_string(nf) + " faces");
     const Where w{"line", lines.number()};
     long long k = 0;
-    if (!next_token(rest, tok) || !parse_int(tok, k) || k < 0 || k > 1 << 20)
+    if (!next_token(rest, tok) || !parse_int(tok, k) || k < 0)
       fail(f, w, "expected the number of vertices of a face");
+    if (static_cast<unsigned long long>(k) > rest.size() / 2 + 1)  // before allocating for it
+      fail(f, w, "a face of " + std::to_string(k) + " vertices is longer than its line");
     idx.resize(static_cast<std::size_t>(k));
     for (auto& x : idx) {
       long long v = 0;

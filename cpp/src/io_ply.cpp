@@ -338,6 +338,10 @@ TriMesh read_ascii(const FileData& f, const Header& h, const Layout& l, bool tri
         }
         long long n = 0;
         if (!parse_int(need(), n) || n < 0) fail(f, w, "expected a list length, found " + quoted(tok));
+        // Each item takes at least two characters of the line: a bad length
+        // fails here, before anything is allocated for it.
+        if (static_cast<unsigned long long>(n) > rest.size() / 2 + 1)
+          fail(f, w, "a list of " + std::to_string(n) + " items is longer than its line");
         const bool wanted = is_face && static_cast<int>(k) == l.indices;
         if (wanted) idx.resize(static_cast<std::size_t>(n));
         for (long long j = 0; j < n; ++j) {
