@@ -357,3 +357,23 @@ def test_atomic_output_keeps_the_old_file_on_failure(tmp_path):
     cli.write_text(target, "new")
     assert target.read_text() == "new"
     assert [p.name for p in tmp_path.iterdir()] == ["table.md"]
+
+
+def test_without_matplotlib_figures_are_refused_and_the_rest_runs(torus_file, tmp_path):
+    # A matplotlib package that cannot be imported, first on the path.
+    fake = tmp_path / "no-mpl" / "matplotlib"
+    fake.mkdir(parents=True)
+    (fake / "__init__.py").write_text("raise ImportError('matplotlib hidden by the test')\n")
+    env = {"PYTHONPATH": str(fake.parent)}
+    src, _, _ = torus_file
+    proc = run("render", src, "-o", tmp_path / "f.png", cwd=tmp_path, env=env)
+    assert_user_error(proc)
+    assert "pip install matplotlib" in proc.stderr and not (tmp_path / "f.png").exists()
+    proc = run("compare", src, "--methods", "sor", "--plot", tmp_path / "p.png", cwd=tmp_path, env=env)
+    assert_user_error(proc)
+    assert run("fit", src, "-o", tmp_path / "c.obj", "-q", cwd=tmp_path, env=env).returncode == 0
+    demo = run("demo", "--out", tmp_path / "d", cwd=tmp_path, env=env)
+    assert demo.returncode == 0, demo.stderr
+    assert "no figures" in demo.stdout
+    written = {p.name for p in (tmp_path / "d").iterdir()}
+    assert "control.obj" in written and "table.md" in written and not any(n.endswith(".png") for n in written)

@@ -8,7 +8,7 @@
   given vertices red and the new control vertices blue, (d) the limit surface
   of that control mesh, passing through the red points.
 
-matplotlib is an optional dependency (``pip install sorpia[plot]``); this
+matplotlib is an optional dependency (the ``plot`` extra); this
 module imports it only when a figure is drawn, and `require_matplotlib` says
 what to install when it is missing. Functions return a
 ``matplotlib.figure.Figure``; the caller saves it (``fig.savefig``) and closes
@@ -39,8 +39,8 @@ def require_matplotlib() -> None:
     try:
         import matplotlib  # noqa: F401
     except ImportError:
-        raise ImportError("drawing figures needs matplotlib: pip install 'sorpia[plot]' "
-                          "(or pip install matplotlib)") from None
+        raise ImportError("drawing figures needs matplotlib (sorpia's optional 'plot' extra): "
+                          "pip install matplotlib") from None
 
 
 def _new_figure(width_px: int, height_px: int, dpi: int = 100):
