@@ -2,10 +2,11 @@
 corruptions of them (issue 7). Bounded: every test has a fixed number of
 examples and a deadline, so the whole file runs in well under 30 s.
 
-A 5 s per-example deadline catches a reader that hangs or crawls without
-failing on a loaded machine. Each property is checked against an independent computation: the closed-form
-Loop masks of conftest.py for valid meshes, and `mesh_problems` below (plain
-Python dictionaries, no sorpia code) for what makes a face list invalid.
+A 5 s per-example deadline catches a reader that crawls without failing on a
+loaded machine. Each property is checked against an independent computation:
+the closed-form Loop masks of conftest.py for valid meshes, and
+`mesh_problems` below (plain Python dictionaries, no sorpia code) for what
+makes a face list invalid.
 """
 
 from __future__ import annotations
