@@ -302,10 +302,11 @@ def _result_fields(res) -> dict:
     return out
 
 
-def _run_interpolate(vertices, faces, *, method, omega, tol, max_iter, boundary, progress: Progress):
+def _run_interpolate(vertices, faces, *, method, omega, tol, max_iter, boundary, progress: Progress, source):
     """sorpia.interpolate with a progress line; returns (result, wall seconds,
-    CPU seconds, warnings raised during the run)."""
-    from . import interpolate
+    CPU seconds, warnings raised during the run). A mesh it refuses is a
+    UserError naming the file `source`."""
+    from . import MeshError, interpolate
 
     kwargs = dict(method=method, tol=tol, max_iter=max_iter, boundary=boundary, callback=progress)
     if omega is not None:
@@ -315,6 +316,8 @@ def _run_interpolate(vertices, faces, *, method, omega, tol, max_iter, boundary,
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
             res = interpolate(vertices, faces, **kwargs)
+    except MeshError as exc:
+        raise UserError(f"{source}: Loop PIA cannot run on this mesh: {exc}") from None
     finally:
         progress.close()
     return res, time.perf_counter() - t0, time.process_time() - cpu0, caught
@@ -373,27 +376,21 @@ def run_fit(input_path, output, *, method="sor", omega="auto", tol=1e-10, max_it
     timings: dict[str, float] = {}
     V0, F, timings["read"] = read_input(input_path, triangulate)
     t0 = time.perf_counter()
-    stats = mesh_info(V0, F, boundary=boundary, list_extraordinary=False)
+    # interpolate validates the mesh (MeshError: exit code 2) right after this.
+    stats = mesh_info(V0, F, boundary=boundary, list_extraordinary=False, verdict=False)
     timings["statistics"] = time.perf_counter() - t0
-    if not stats["loop_pia"]["can_run"]:
-        raise UserError(f"{input_path}: Loop PIA cannot run on this mesh: {stats['loop_pia']['reason']}")
 
     progress = Progress(f"{METHOD_LABELS[method]}", enabled=not quiet)
     res, timings["fit"], cpu, caught = _run_interpolate(
         V0, F, method=method, omega=omega if method == "sor" else None, tol=tol, max_iter=max_iter,
-        boundary=boundary, progress=progress)
+        boundary=boundary, progress=progress, source=input_path)
     _report_warnings(caught)
     ctrl = np.asarray(res.control_vertices)
 
     t0 = time.perf_counter()
     write_mesh(output, ctrl, F, binary=_binary_for(output, binary))
     timings["write"] = time.perf_counter() - t0
-    # An independent check of what was written: the limit positions of the
-    # control mesh against the given vertices (OpenSubdiv's Limit, not the solver).
-    t0 = time.perf_counter()
-    residual = np.linalg.norm(limit_points(ctrl, F, boundary=boundary) - V0, axis=1)
-    timings["check"] = time.perf_counter() - t0
-    surface_stats = None
+    surface_stats, limit = None, None
     if surface is not None:
         from . import limit_surface
 
@@ -402,6 +399,14 @@ def run_fit(input_path, output, *, method="sor", omega="auto", tol=1e-10, max_it
         write_mesh(surface, Vs, Fs, binary=_binary_for(surface, binary))
         timings["surface"] = time.perf_counter() - t0
         surface_stats = {"path": str(surface), "level": level, "vertices": len(Vs), "faces": len(Fs)}
+        limit = Vs[: len(V0)]  # the surface's first n vertices are B V exactly (limit_surface's contract)
+    # An independent check of what was written: the limit positions of the
+    # control mesh against the given vertices (OpenSubdiv, not the solver).
+    t0 = time.perf_counter()
+    if limit is None:
+        limit = limit_points(ctrl, F, boundary=boundary)
+    residual = np.linalg.norm(limit - V0, axis=1)
+    timings["check"] = time.perf_counter() - t0
 
     fields = _result_fields(res)
     # The solver's own phases (topology, operator, estimate, solve), inside "fit".
@@ -464,7 +469,9 @@ def _fit_summary(d: dict) -> str:
         label += f", omega {omega:.4f} ({d['omega_rule']})"
     elif d["method"] == "gs":
         label += ", omega 1"
-    state = (f"converged in {d['iterations']} iterations: E_k/E_0 = {d['final_error']:.3g} < tol {d['tol']:g}"
+    state = (f"converged in {d['iterations']} iterations: E_k/E_0 = {d['final_error']:.3g} " + (
+             f"< tol {d['tol']:g}" if d["final_error"] < d["tol"] else
+             f"(tol {d['tol']:g} is below what float64 reaches: E_k stopped at rounding level)")
              if d["converged"] else
              f"NOT converged: stopped after {d['iterations']} iterations at E_k/E_0 = {d['final_error']:.3g} "
              f"(tol {d['tol']:g}); outputs written anyway, exit code 1")
@@ -513,14 +520,12 @@ def run_compare(input_path, *, methods=METHODS, tol=1e-10, max_iter=1000, bounda
     if plot is not None:
         _require_plotting()
     V0, F, read_seconds = read_input(input_path, triangulate)
-    stats = mesh_info(V0, F, boundary=boundary, list_extraordinary=False)
-    if not stats["loop_pia"]["can_run"]:
-        raise UserError(f"{input_path}: Loop PIA cannot run on this mesh: {stats['loop_pia']['reason']}")
+    stats = mesh_info(V0, F, boundary=boundary, list_extraordinary=False, verdict=False)  # interpolate validates
     rows = []
     for method in methods:
         progress = Progress(METHOD_LABELS[method], enabled=not quiet)
         res, wall, cpu, caught = _run_interpolate(V0, F, method=method, omega=None, tol=tol, max_iter=max_iter,
-                                                  boundary=boundary, progress=progress)
+                                                  boundary=boundary, progress=progress, source=input_path)
         _report_warnings(caught)
         fields = _result_fields(res)
         rows.append({
@@ -626,7 +631,6 @@ def run_render(input_path, output, *, level=3, tol=1e-10, max_iter=1000, boundar
                triangulate=False, up="z", out=None) -> tuple[int, dict]:
     """`sorpia render`: the paper's Figure 3 for a mesh file."""
     from . import LoopSurface
-    from .meshinfo import mesh_info
     from .plotting import interpolation_figure, level_for_budget
 
     out = out if out is not None else sys.stdout
@@ -637,12 +641,9 @@ def run_render(input_path, output, *, level=3, tol=1e-10, max_iter=1000, boundar
     budget = face_budget
     timings = {}
     V0, F, timings["read"] = read_input(input_path, triangulate)
-    stats = mesh_info(V0, F, boundary=boundary, list_extraordinary=False)
-    if not stats["loop_pia"]["can_run"]:
-        raise UserError(f"{input_path}: Loop PIA cannot run on this mesh: {stats['loop_pia']['reason']}")
     progress = Progress("SOR-PIA", enabled=not quiet)
     res, timings["fit"], _, caught = _run_interpolate(V0, F, method="sor", omega="auto", tol=tol, max_iter=max_iter,
-                                                      boundary=boundary, progress=progress)
+                                                      boundary=boundary, progress=progress, source=input_path)
     _report_warnings(caught)
     ctrl = np.asarray(res.control_vertices)
     drawn_level = level_for_budget(len(F), level, budget)

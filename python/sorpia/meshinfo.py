@@ -27,7 +27,8 @@ def _components(n: int, a: np.ndarray, b: np.ndarray) -> tuple[int, np.ndarray]:
     return scipy.sparse.csgraph.connected_components(graph, directed=False)
 
 
-def mesh_info(vertices, faces, boundary: str = "edge-and-corner", list_extraordinary: bool = True) -> dict:
+def mesh_info(vertices, faces, boundary: str = "edge-and-corner", list_extraordinary: bool = True,
+              verdict: bool = True) -> dict:
     """Statistics of a triangle mesh and whether Loop PIA can run on it.
 
     Parameters
@@ -39,6 +40,11 @@ def mesh_info(vertices, faces, boundary: str = "edge-and-corner", list_extraordi
     list_extraordinary : bool
         Include the index and valence of every extraordinary vertex (one entry
         per vertex; leave out for compact reports of big meshes).
+    verdict : bool
+        Run sorpia's validation for ``loop_pia``. False leaves ``loop_pia``
+        out and takes the mesh as valid (for a caller about to run
+        `interpolate`, which validates it anyway: building the topology twice
+        costs seconds on a million vertices).
 
     Returns
     -------
@@ -53,7 +59,8 @@ def mesh_info(vertices, faces, boundary: str = "edge-and-corner", list_extraordi
         valence != 4), ``extraordinary_share`` (of the referenced vertices),
         ``extraordinary`` (list of [index, valence, "interior"|"boundary"],
         if asked), ``bounding_box`` ([min xyz, max xyz]), ``diagonal``, and
-        ``loop_pia``: {"can_run": bool, "reason": str | None, "notes": [str]}.
+        (with `verdict`) ``loop_pia``: {"can_run": bool, "reason": str | None,
+        "notes": [str]}.
     """
     vertices = np.asarray(vertices, dtype=np.float64)
     faces = np.asarray(faces)
@@ -64,11 +71,12 @@ def mesh_info(vertices, faces, boundary: str = "edge-and-corner", list_extraordi
         lo, hi = vertices[finite].min(axis=0), vertices[finite].max(axis=0)
         info["bounding_box"] = [lo.tolist(), hi.tolist()]
         info["diagonal"] = float(np.linalg.norm(hi - lo))
-    verdict = _loop_pia_verdict(vertices, faces, boundary)
+    checked = _loop_pia_verdict(vertices, faces, boundary) if verdict else None
     # The counts below need triangles with indices in range; anything else is
     # reported by the verdict.
     if faces.ndim != 2 or faces.shape[1] != 3 or m == 0 or n == 0 or faces.min() < 0 or faces.max() >= n:
-        info["loop_pia"] = verdict
+        if checked:
+            info["loop_pia"] = checked
         return info
 
     faces = faces.astype(np.int64)
@@ -110,7 +118,7 @@ def mesh_info(vertices, faces, boundary: str = "edge-and-corner", list_extraordi
         components=int(n_comp),
         unreferenced_vertices=int(n - n_ref),
     )
-    if verdict["can_run"]:
+    if checked is None or checked["can_run"]:
         # chi_c = 2 - 2 g_c - b_c on each connected orientable surface.
         v_c = np.bincount(comp_index, minlength=n_comp)
         e_c = np.bincount(remap[labels[ea]], minlength=n_comp)
@@ -141,10 +149,11 @@ def mesh_info(vertices, faces, boundary: str = "edge-and-corner", list_extraordi
         info["extraordinary"] = [
             [int(i), int(valence[i]), "boundary" if on_boundary[i] else "interior"] for i in idx
         ]
-    if n - n_ref and verdict["can_run"]:
-        verdict["notes"].append(
-            f"{n - n_ref} vertices belong to no face: they pass through unchanged (their limit is themselves)")
-    info["loop_pia"] = verdict
+    if checked:
+        if n - n_ref and checked["can_run"]:
+            checked["notes"].append(
+                f"{n - n_ref} vertices belong to no face: they pass through unchanged (their limit is themselves)")
+        info["loop_pia"] = checked
     return info
 
 
