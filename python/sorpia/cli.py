@@ -108,21 +108,46 @@ def save_figure(fig, path) -> None:
 # --------------------------------------------------------------------------- progress
 
 class Progress:
-    """Progress of one solve, fed by interpolate's callback(k, error).
+    """Progress of a command: the phase it is in (`status`) and the solve,
+    fed by interpolate's callback(k, error).
 
-    On a terminal: one live line on stderr, redrawn at most 10 times a second
-    and erased at the end. In a pipe or a file: a plain line every few seconds
-    (short runs print none). Disabled: nothing at all.
+    On a terminal: one live line on stderr (the phase, then iteration and
+    E_k/E_0 redrawn at most 10 times a second), erased at the end. In a pipe
+    or a file: a plain line every two seconds of iterating (short runs print
+    none), no phases. Disabled: nothing at all. A context manager: the live
+    line is erased however the block ends (before an error message).
     """
 
-    def __init__(self, label: str, enabled: bool = True, stream=None):
+    def __init__(self, label: str = "", enabled: bool = True, stream=None):
         self.stream = stream if stream is not None else sys.stderr
         self.enabled = enabled
         self.tty = enabled and _isatty(self.stream)
         self.interval = 0.1 if self.tty else 2.0
+        self.width = 0
+        self.restart(label)
+
+    def restart(self, label: str) -> None:
+        """A new solve: its label, its clock."""
         self.label = label
         self.start = self.last = time.perf_counter()
-        self.width = 0
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def _draw(self, text: str) -> None:
+        global _live_line
+        self.stream.write("\r" + text.ljust(self.width))
+        self.width = len(text)
+        self.stream.flush()
+        _live_line = self
+
+    def status(self, text: str) -> None:
+        """Show the phase the command is in (terminal only)."""
+        if self.tty:
+            self._draw(f"{text} ...")
 
     def __call__(self, k: int, error: float) -> bool:
         if self.enabled:
@@ -131,18 +156,24 @@ class Progress:
                 self.last = now
                 text = f"{self.label}: iteration {k}, E_k/E_0 = {error:.3e}, {now - self.start:.1f} s"
                 if self.tty:
-                    self.stream.write("\r" + text.ljust(self.width))
-                    self.width = len(text)
+                    self._draw(text)
                 else:
                     self.stream.write(text + "\n")
-                self.stream.flush()
+                    self.stream.flush()
         return False  # never ask the solver to stop
 
     def close(self) -> None:
+        """Erase the live line (it is drawn again by the next update)."""
+        global _live_line
         if self.tty and self.width:
             self.stream.write("\r" + " " * self.width + "\r")
             self.stream.flush()
             self.width = 0
+        if _live_line is self:
+            _live_line = None
+
+
+_live_line: Progress | None = None  # the Progress whose line is on the terminal now
 
 
 def _isatty(stream) -> bool:
@@ -308,9 +339,12 @@ def _run_interpolate(vertices, faces, *, method, omega, tol, max_iter, boundary,
     UserError naming the file `source`."""
     from . import MeshError, interpolate
 
+    progress.restart(METHOD_LABELS[method])
+
     kwargs = dict(method=method, tol=tol, max_iter=max_iter, boundary=boundary, callback=progress)
     if omega is not None:
         kwargs["omega"] = omega
+    progress.status(f"{progress.label}: setting up (topology, limit operator)")
     cpu0, t0 = time.process_time(), time.perf_counter()
     try:
         with warnings.catch_warnings(record=True) as caught:
@@ -318,8 +352,6 @@ def _run_interpolate(vertices, faces, *, method, omega, tol, max_iter, boundary,
             res = interpolate(vertices, faces, **kwargs)
     except MeshError as exc:
         raise UserError(f"{source}: Loop PIA cannot run on this mesh: {exc}") from None
-    finally:
-        progress.close()
     return res, time.perf_counter() - t0, time.process_time() - cpu0, caught
 
 
@@ -331,6 +363,8 @@ def warn_once(text: str) -> None:
     (several steps of one command meet the same unreferenced vertices)."""
     if text not in _warned:
         _warned.add(text)
+        if _live_line is not None:
+            _live_line.close()  # a warning on a line of its own
         print(f"sorpia: warning: {text}", file=sys.stderr)
 
 
@@ -374,39 +408,44 @@ def run_fit(input_path, output, *, method="sor", omega="auto", tol=1e-10, max_it
         raise UserError("--binary applies to .ply and .stl outputs only (OBJ and OFF are text formats)")
 
     timings: dict[str, float] = {}
-    V0, F, timings["read"] = read_input(input_path, triangulate)
-    t0 = time.perf_counter()
-    # interpolate validates the mesh (MeshError: exit code 2) right after this.
-    stats = mesh_info(V0, F, boundary=boundary, list_extraordinary=False, verdict=False)
-    timings["statistics"] = time.perf_counter() - t0
-
-    progress = Progress(f"{METHOD_LABELS[method]}", enabled=not quiet)
-    res, timings["fit"], cpu, caught = _run_interpolate(
-        V0, F, method=method, omega=omega if method == "sor" else None, tol=tol, max_iter=max_iter,
-        boundary=boundary, progress=progress, source=input_path)
-    _report_warnings(caught)
-    ctrl = np.asarray(res.control_vertices)
-
-    t0 = time.perf_counter()
-    write_mesh(output, ctrl, F, binary=_binary_for(output, binary))
-    timings["write"] = time.perf_counter() - t0
-    surface_stats, limit = None, None
-    if surface is not None:
-        from . import limit_surface
-
+    with Progress(enabled=not quiet) as progress:
+        progress.status(f"reading {input_path}")
+        V0, F, timings["read"] = read_input(input_path, triangulate)
+        progress.status("mesh statistics")
         t0 = time.perf_counter()
-        Vs, Fs = limit_surface(ctrl, F, level=level, boundary=boundary)
-        write_mesh(surface, Vs, Fs, binary=_binary_for(surface, binary))
-        timings["surface"] = time.perf_counter() - t0
-        surface_stats = {"path": str(surface), "level": level, "vertices": len(Vs), "faces": len(Fs)}
-        limit = Vs[: len(V0)]  # the surface's first n vertices are B V exactly (limit_surface's contract)
-    # An independent check of what was written: the limit positions of the
-    # control mesh against the given vertices (OpenSubdiv, not the solver).
-    t0 = time.perf_counter()
-    if limit is None:
-        limit = limit_points(ctrl, F, boundary=boundary)
-    residual = np.linalg.norm(limit - V0, axis=1)
-    timings["check"] = time.perf_counter() - t0
+        # interpolate validates the mesh (MeshError: exit code 2) right after this.
+        stats = mesh_info(V0, F, boundary=boundary, list_extraordinary=False, verdict=False)
+        timings["statistics"] = time.perf_counter() - t0
+
+        res, timings["fit"], cpu, caught = _run_interpolate(
+            V0, F, method=method, omega=omega if method == "sor" else None, tol=tol, max_iter=max_iter,
+            boundary=boundary, progress=progress, source=input_path)
+        _report_warnings(caught)
+        ctrl = np.asarray(res.control_vertices)
+
+        progress.status(f"writing {output}")
+        t0 = time.perf_counter()
+        write_mesh(output, ctrl, F, binary=_binary_for(output, binary))
+        timings["write"] = time.perf_counter() - t0
+        surface_stats, limit = None, None
+        if surface is not None:
+            from . import limit_surface
+
+            progress.status(f"limit surface, level {level}")
+            t0 = time.perf_counter()
+            Vs, Fs = limit_surface(ctrl, F, level=level, boundary=boundary)
+            write_mesh(surface, Vs, Fs, binary=_binary_for(surface, binary))
+            timings["surface"] = time.perf_counter() - t0
+            surface_stats = {"path": str(surface), "level": level, "vertices": len(Vs), "faces": len(Fs)}
+            limit = Vs[: len(V0)]  # the surface's first n vertices are B V exactly (limit_surface's contract)
+        # An independent check of what was written: the limit positions of the
+        # control mesh against the given vertices (OpenSubdiv, not the solver).
+        progress.status("checking B V = V0")
+        t0 = time.perf_counter()
+        if limit is None:
+            limit = limit_points(ctrl, F, boundary=boundary)
+        residual = np.linalg.norm(limit - V0, axis=1)
+        timings["check"] = time.perf_counter() - t0
 
     fields = _result_fields(res)
     # The solver's own phases (topology, operator, estimate, solve), inside "fit".
@@ -519,27 +558,29 @@ def run_compare(input_path, *, methods=METHODS, tol=1e-10, max_iter=1000, bounda
     check_paths([input_path], {"--table": table, "--csv": csv_path, "--plot": plot, "--json": json_path}, force)
     if plot is not None:
         _require_plotting()
-    V0, F, read_seconds = read_input(input_path, triangulate)
-    stats = mesh_info(V0, F, boundary=boundary, list_extraordinary=False, verdict=False)  # interpolate validates
     rows = []
-    for method in methods:
-        progress = Progress(METHOD_LABELS[method], enabled=not quiet)
-        res, wall, cpu, caught = _run_interpolate(V0, F, method=method, omega=None, tol=tol, max_iter=max_iter,
-                                                  boundary=boundary, progress=progress, source=input_path)
-        _report_warnings(caught)
-        fields = _result_fields(res)
-        rows.append({
-            "method": method,
-            "label": METHOD_LABELS[method],
-            "omega": fields.get("omega") if method in ("sor", "gs") else None,
-            "iterations": int(res.iterations),
-            "converged": bool(res.converged),
-            "reached": iterations_to_reach(res.errors),
-            "cpu_seconds": cpu,
-            "wall_seconds": wall,
-            "errors": np.asarray(res.errors, dtype=float),
-            "result": {k: v for k, v in fields.items() if k != "errors"},
-        })
+    with Progress(enabled=not quiet) as progress:
+        progress.status(f"reading {input_path}")
+        V0, F, read_seconds = read_input(input_path, triangulate)
+        progress.status("mesh statistics")
+        stats = mesh_info(V0, F, boundary=boundary, list_extraordinary=False, verdict=False)  # interpolate validates
+        for method in methods:
+            res, wall, cpu, caught = _run_interpolate(V0, F, method=method, omega=None, tol=tol, max_iter=max_iter,
+                                                      boundary=boundary, progress=progress, source=input_path)
+            _report_warnings(caught)
+            fields = _result_fields(res)
+            rows.append({
+                "method": method,
+                "label": METHOD_LABELS[method],
+                "omega": fields.get("omega") if method in ("sor", "gs") else None,
+                "iterations": int(res.iterations),
+                "converged": bool(res.converged),
+                "reached": iterations_to_reach(res.errors),
+                "cpu_seconds": cpu,
+                "wall_seconds": wall,
+                "errors": np.asarray(res.errors, dtype=float),
+                "result": {k: v for k, v in fields.items() if k != "errors"},
+            })
     data = {
         "sorpia_version": __version__,
         "command": "compare",
@@ -640,26 +681,30 @@ def run_render(input_path, output, *, level=3, tol=1e-10, max_iter=1000, boundar
     _require_plotting()
     budget = face_budget
     timings = {}
-    V0, F, timings["read"] = read_input(input_path, triangulate)
-    progress = Progress("SOR-PIA", enabled=not quiet)
-    res, timings["fit"], _, caught = _run_interpolate(V0, F, method="sor", omega="auto", tol=tol, max_iter=max_iter,
-                                                      boundary=boundary, progress=progress, source=input_path)
-    _report_warnings(caught)
-    ctrl = np.asarray(res.control_vertices)
-    drawn_level = level_for_budget(len(F), level, budget)
-    t0 = time.perf_counter()
-    # One LoopSurface for both: the topology is built once, only positions change.
-    surface = LoopSurface(V0, F, boundary=boundary)
-    given = surface.tessellate(drawn_level)
-    surface.set_vertices(ctrl)
-    fitted = surface.tessellate(drawn_level)
-    timings["surface"] = time.perf_counter() - t0
-    t0 = time.perf_counter()
-    fig = interpolation_figure(V0, F, given, ctrl, fitted, size=size, elev=elev, azim=azim, face_budget=budget,
-                               title=f"{Path(input_path).name}: Loop limit surface and SOR-PIA (paper Figure 3)",
-                               iterations=int(res.iterations), level=drawn_level, up=up)
-    save_figure(fig, output)
-    timings["draw"] = time.perf_counter() - t0
+    with Progress(enabled=not quiet) as progress:
+        progress.status(f"reading {input_path}")
+        V0, F, timings["read"] = read_input(input_path, triangulate)
+        res, timings["fit"], _, caught = _run_interpolate(V0, F, method="sor", omega="auto", tol=tol,
+                                                          max_iter=max_iter, boundary=boundary, progress=progress,
+                                                          source=input_path)
+        _report_warnings(caught)
+        ctrl = np.asarray(res.control_vertices)
+        drawn_level = level_for_budget(len(F), level, budget)
+        progress.status(f"limit surfaces, level {drawn_level}")
+        t0 = time.perf_counter()
+        # One LoopSurface for both: the topology is built once, only positions change.
+        surface = LoopSurface(V0, F, boundary=boundary)
+        given = surface.tessellate(drawn_level)
+        surface.set_vertices(ctrl)
+        fitted = surface.tessellate(drawn_level)
+        timings["surface"] = time.perf_counter() - t0
+        progress.status(f"drawing {output}")
+        t0 = time.perf_counter()
+        fig = interpolation_figure(V0, F, given, ctrl, fitted, size=size, elev=elev, azim=azim, face_budget=budget,
+                                   title=f"{Path(input_path).name}: Loop limit surface and SOR-PIA (paper Figure 3)",
+                                   iterations=int(res.iterations), level=drawn_level, up=up)
+        save_figure(fig, output)
+        timings["draw"] = time.perf_counter() - t0
     data = {"output": str(output), "level": drawn_level, "iterations": int(res.iterations),
             "converged": bool(res.converged), "omega": getattr(res, "omega", None), "timings": timings}
     if not quiet:
