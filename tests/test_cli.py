@@ -333,12 +333,13 @@ def test_progress_line_on_a_terminal_plain_lines_in_a_pipe():
 
     tty, pipe, off = Tty(), io.StringIO(), io.StringIO()
     for stream, enabled in ((tty, True), (pipe, True), (off, False)):
-        p = cli.Progress("SOR-PIA", enabled=enabled, stream=stream)
-        p.interval = 0.0  # show every call
-        for k, e in enumerate([1.0, 0.1, 0.01]):
-            assert p(k, e) is False  # never stops the solver
-        p.close()
-    assert tty.getvalue().count("\r") >= 3 and "\n" not in tty.getvalue()
+        with cli.Progress("SOR-PIA", enabled=enabled, stream=stream) as p:
+            p.status("reading mesh.obj")  # phases: on a terminal only
+            p.interval = 0.0  # show every call
+            for k, e in enumerate([1.0, 0.1, 0.01]):
+                assert p(k, e) is False  # never stops the solver
+    assert "reading mesh.obj" in tty.getvalue() and "reading" not in pipe.getvalue()
+    assert tty.getvalue().count("\r") >= 4 and "\n" not in tty.getvalue()
     assert tty.getvalue().endswith("\r")  # the live line is erased at the end
     assert pipe.getvalue().splitlines()[-1] == pipe.getvalue().splitlines()[-1].strip()
     assert len(pipe.getvalue().splitlines()) == 3 and "E_k/E_0 = 1.000e-02" in pipe.getvalue()
