@@ -411,6 +411,8 @@ def run_fit(input_path, output, *, method="sor", omega="auto", tol=1e-10, max_it
     with Progress(enabled=not quiet) as progress:
         progress.status(f"reading {input_path}")
         V0, F, timings["read"] = read_input(input_path, triangulate)
+        if surface is not None:
+            _check_surface_fits(len(V0), len(F), level)
         progress.status("mesh statistics")
         t0 = time.perf_counter()
         # interpolate validates the mesh (MeshError: exit code 2) right after this.
@@ -482,6 +484,18 @@ def run_fit(input_path, output, *, method="sor", omega="auto", tol=1e-10, max_it
     if not quiet:
         print(_fit_summary(data), file=out)
     return (EXIT_OK if res.converged else EXIT_NOT_CONVERGED), data
+
+
+def _check_surface_fits(n_vertices: int, n_faces: int, level: int) -> None:
+    """Refuse --level before the solve when the tessellation would not fit in
+    memory (limit_surface would refuse it only after the solve)."""
+    from . import _core
+
+    need, avail = _core.tessellation_bytes(n_vertices, n_faces, level), _core.available_memory_bytes()
+    if avail and need > avail:  # 0: not known here; limit_surface decides
+        raise UserError(f"--surface at --level {level} needs about {need / 2**30:.1f} GiB "
+                        f"({n_faces * 4 ** level} triangles) but {avail / 2**30:.1f} GiB of memory is available: "
+                        "use a lower --level")
 
 
 def _binary_for(path, binary: bool) -> bool:
