@@ -255,6 +255,20 @@ def test_compare_writes_table_1_and_figure_7(torus_file, tmp_path):
     assert image[..., :3].std() > 0.01  # not a blank image
 
 
+def test_compare_not_converged_exits_1_with_dashes(torus_file, tmp_path):
+    src, _, _ = torus_file
+    table, table_csv = tmp_path / "t.md", tmp_path / "t.csv"
+    proc = run("compare", src, "--methods", "pia,sor", "--max-iter", 5, "--table", table, "--csv", table_csv,
+               cwd=tmp_path)
+    assert proc.returncode == 1, proc.stderr
+    assert "NOT converged" in proc.stdout and "Traceback" not in proc.stderr
+    rows = list(csv.DictReader(io.StringIO(table_csv.read_text())))
+    assert [r["converged"] for r in rows] == ["False", "False"]
+    assert rows[0]["iterations_to_1e-10"] == ""  # not reached in 5 PIA steps
+    pia_row = next(line for line in table.read_text().splitlines() if "| PIA |" in line)
+    assert pia_row.rstrip().split("|")[-4].strip() == "-"  # the 1e-10 column
+
+
 def test_render_draws_figure_3(torus_file, tmp_path):
     from matplotlib.image import imread
 
