@@ -71,10 +71,11 @@ def convergence_figure(curves, tol: float | None = None, title: str | None = Non
     fig = _new_figure(*size)
     ax = fig.add_subplot(1, 1, 1)
     markers = "osD^vP*Xh<>"
+    styles = ("-", "--", "-.", ":")  # methods with equal errors (GS and SOR at omega 1) stay distinguishable
     for j, (label, errors) in enumerate(curves):
         e = np.maximum(np.asarray(errors, dtype=float), np.finfo(float).tiny)
         k = np.arange(len(e))
-        ax.plot(k, np.log10(e), marker=markers[j % len(markers)], markersize=3.5,
+        ax.plot(k, np.log10(e), marker=markers[j % len(markers)], markersize=3.5, linestyle=styles[j % len(styles)],
                 markevery=max(1, len(e) // 25), linewidth=1.4, label=label)
     if tol is not None:
         ax.axhline(math.log10(tol), color="0.4", linestyle="--", linewidth=0.9, label=f"tol = {tol:g}")
