@@ -1,9 +1,7 @@
 #include "one_ring.hpp"
 
-#include <algorithm>
 #include <stdexcept>
 #include <string>
-#include <utility>
 
 #include "sorpia/errors.hpp"
 
@@ -18,40 +16,12 @@ struct Corner {
   std::int32_t prev;
 };
 
-// Index in [lo, hi) of the corner whose `prev` is x, or -1. Valences are small
-// (3..12 on most meshes): a linear scan; poles of high valence use a sorted copy.
-struct PrevLookup {
-  const Corner* c;
-  int k;
-  std::vector<std::pair<std::int32_t, std::int32_t>> sorted;  // (prev, corner) for k > kLinear
-  std::vector<std::int32_t> nexts;                            // sorted, for k > kLinear
-  static constexpr int kLinear = 24;
-  PrevLookup(const Corner* corners, int count) : c(corners), k(count) {
-    if (k <= kLinear) return;
-    sorted.resize(k);
-    nexts.resize(k);
-    for (int i = 0; i < k; ++i) {
-      sorted[i] = {c[i].prev, i};
-      nexts[i] = c[i].next;
-    }
-    std::sort(sorted.begin(), sorted.end());
-    std::sort(nexts.begin(), nexts.end());
-  }
-  int find(std::int32_t x) const {
-    if (k <= kLinear) {
-      for (int i = 0; i < k; ++i)
-        if (c[i].prev == x) return i;
-      return -1;
-    }
-    const auto it = std::lower_bound(sorted.begin(), sorted.end(), std::make_pair(x, std::int32_t{-1}));
-    return it != sorted.end() && it->first == x ? it->second : -1;
-  }
-  bool is_next(std::int32_t x) const {  // does some corner have next == x?
-    if (k > kLinear) return std::binary_search(nexts.begin(), nexts.end(), x);
-    for (int i = 0; i < k; ++i)
-      if (c[i].next == x) return true;
-    return false;
-  }
+// Scratch per neighbour id, stamped with the vertex whose fan is being
+// chained, so that it is never cleared: `prev_of == v` says some corner of v
+// has prev x (corner `corner`), `next_of == v` that some corner has next x.
+// Neighbour ids are near v in a mesh with any index locality: cache hits.
+struct Slot {
+  std::int32_t prev_of = -1, corner = 0, next_of = -1;
 };
 }  // namespace
 
@@ -79,6 +49,7 @@ OneRing one_ring_direct(const std::int32_t* faces, std::size_t n_faces, std::siz
 
   r.offsets.resize(n_vertices + 1);
   r.boundary.assign(n_vertices, 0);
+  std::vector<Slot> slots(n_vertices);
   r.neighbors.resize(2 * n_edges);
   std::size_t out = 0;
   for (std::size_t v = 0; v < n_vertices; ++v) {
@@ -89,12 +60,17 @@ OneRing one_ring_direct(const std::int32_t* faces, std::size_t n_faces, std::siz
       continue;
     }
     const Corner* c = corners.data() + start[v];
-    const PrevLookup lookup(c, k);
+    const auto vv = static_cast<std::int32_t>(v);
+    for (int i = 0; i < k; ++i) {
+      slots[c[i].prev].prev_of = vv;
+      slots[c[i].prev].corner = i;
+      slots[c[i].next].next_of = vv;
+    }
     // A boundary vertex has exactly one corner whose `prev` is no corner's
     // `next` (the far end of its outgoing boundary edge): start there.
     std::int32_t first = c[0].next;  // interior: the lowest-numbered face's second corner
     for (int i = 0; i < k; ++i)
-      if (!lookup.is_next(c[i].prev)) {
+      if (slots[c[i].prev].next_of != vv) {
         first = c[i].prev;
         r.boundary[v] = 1;
         break;
@@ -106,10 +82,9 @@ OneRing one_ring_direct(const std::int32_t* faces, std::size_t n_faces, std::siz
     int faces_seen = 0;
     for (;;) {
       r.neighbors[out++] = x;
-      const int i = lookup.find(x);
-      if (i < 0) break;  // the other boundary neighbour
+      if (slots[x].prev_of != vv) break;  // the other boundary neighbour
       ++faces_seen;
-      x = c[i].next;
+      x = c[slots[x].corner].next;
       if (x == first || faces_seen > k) break;  // back round an interior vertex
     }
     if (faces_seen != k)
