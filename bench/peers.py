@@ -165,10 +165,12 @@ def main(argv=None):
         print(f"C++ sorpia-bench: topology {cpp['topology']:.3f} s, operator {cpp['operator']:.3f} s, "
               f"streaming floor {cpp['floor'] * 1e3:.2f} ms, peak {cpp['peak_rss_bytes'] / 2**20:.0f} MB "
               f"({cpp['bytes_per_vertex']:.0f} B/vertex above the input)")
+        peers = {k: e for k, e in entries.items() if "peer" in k}
         for m in cpp["methods"]:
+            vs = ", ".join(f"{k.split()[0]} {e['total'] / m['end_to_end']:.1f}x slower" for k, e in peers.items())
             print(f"  {m['method']:<6} solve {m['solve']:.3f} s + estimate {m['estimate']:.3f} s, "
                   f"{m['iterations']} iterations, sweep {m['sweep'] * 1e3:.2f} ms = {m['sweep_over_floor']:.2f} x floor, "
-                  f"end to end {m['end_to_end']:.3f} s")
+                  f"end to end {m['end_to_end']:.3f} s ({vs})")
     if a.json:
         with open(a.json, "w") as fh:
             json.dump({"mesh": a.mesh, "n_vertices": n, "n_faces": len(F), "tol": a.tol, "repeat": a.repeat,
