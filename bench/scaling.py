@@ -43,13 +43,17 @@ def main(argv=None):
     p.add_argument("--repeat", type=int, default=3)
     p.add_argument("--plot", default=os.path.join(os.path.dirname(os.path.abspath(__file__)), "scaling.png"))
     p.add_argument("--json", metavar="PATH", help="also write the figures as JSON")
+    p.add_argument("--from-json", metavar="PATH", help="table and plot from an earlier --json, without running")
     a = p.parse_args(argv)
     exe = bench_exe()
-    if exe is None:
+    if exe is None and not a.from_json:
         sys.exit("sorpia-bench not found: pip install the package first")
 
     rows = []
-    for n in (int(s) for s in a.sizes.split(",")):
+    if a.from_json:
+        with open(a.from_json) as fh:
+            rows = json.load(fh)
+    for n in [] if a.from_json else (int(s) for s in a.sizes.split(",")):
         out = subprocess.run([exe, spec(a.kind, n), "--method", a.method, "--repeat", str(a.repeat), "--json"],
                              capture_output=True, text=True)
         if out.returncode != 0:
