@@ -423,6 +423,9 @@ READER_DEFECTS = [
      PLY_HEAD.format(fmt="ascii", nv=3, nf=1) + "0 0 0\n1 0 0\n0 1 0\n4000000000 0 1 2\n",
      r"list\.ply, line 14: .*4000000000",
      "idx.resize(4e9) before reading the indices: MemoryError (or the OOM killer for smaller lengths)"),
+    ("ply-element-name-bytes", "name.ply", b"ply\nformat ascii 1.0\nelement v\xffrtex 100000\nproperty float x\nend_header\n",
+     r"name\.ply, line 3: the header claims 100000 'v\\xffrtex' elements",
+     "PLY element names are quoted raw (not escaped): Python raises UnicodeDecodeError"),
 ]
 
 

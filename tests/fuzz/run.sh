@@ -3,6 +3,7 @@
 # AddressSanitizer and UndefinedBehaviorSanitizer). Not part of `make test`:
 #
 #   tests/fuzz/run.sh [seconds=600] [jobs=1]
+#   tests/fuzz/run.sh triage        # only classify what is in build/fuzz/artifacts
 #
 # Needs clang and its runtime (Debian: apt-get install clang libclang-rt-14-dev)
 # and the sorpia dependencies (libopenmesh-dev, libosd-dev). Builds
@@ -41,17 +42,25 @@ cp -n "$root"/tests/fuzz/seeds/* "$out/corpus/" 2>/dev/null || true
 # OpenMesh and OpenSubdiv are not built with ASan: leaks inside them are not ours.
 export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=0:allocator_may_return_null=0}
 export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
+# Triage: what went wrong, one line per kind of finding, with a count and an example input.
+triage() {
+  export LC_ALL=C  # the messages may hold invalid UTF-8: sed must treat them as bytes
+  echo "== findings in $out/artifacts (count, kind, example) =="
+  for a in "$out"/artifacts/*; do
+    [ -f "$a" ] || continue
+    why=$("$out/fuzz_readers" "$a" 2>&1 | grep -a -m1 -E "sorpia fuzz finding|ERROR: AddressSanitizer|runtime error|ERROR: libFuzzer" |
+          sed -E 's/(sorpia fuzz finding: [^:]*).*/\1/; s/0x[0-9a-f]+/0x?/g' || true)
+    printf '%s\t%s\n' "${why:-no longer reproduces}" "$(basename "$a")"
+  done | sort | awk -F'\t' '{n[$1]++; ex[$1]=$2} END {for (k in n) printf "%6d  %s  (e.g. %s)\n", n[k], k, ex[k]}'
+}
+if [ "$seconds" = triage ]; then
+  triage
+  exit 0
+fi
 # Fork mode with -ignore_*: one finding does not end the run; every crashing,
 # leaking-memory or slow input is kept in artifacts/ and the run goes on.
 "$out/fuzz_readers" "$out/corpus" -dict="$root/tests/fuzz/mesh.dict" \
   -artifact_prefix="$out/artifacts/" -max_total_time="$seconds" -fork="$jobs" \
   -ignore_crashes=1 -ignore_ooms=1 -ignore_timeouts=1 \
   -max_len=65536 -rss_limit_mb=2048 -timeout=10 -print_final_stats=1 || true
-# Triage: what went wrong, one line per kind of finding, with a count and an example input.
-echo "== findings in $out/artifacts (count, kind, example) =="
-for a in "$out"/artifacts/*; do
-  [ -f "$a" ] || continue
-  why=$("$out/fuzz_readers" "$a" 2>&1 | grep -a -m1 -E "sorpia fuzz finding|ERROR: AddressSanitizer|runtime error|ERROR: libFuzzer" |
-        sed -E 's/(finding: [^:]*:).*/\1/; s/0x[0-9a-f]+/0x?/g' || true)
-  printf '%s\t%s\n' "${why:-no longer reproduces}" "$(basename "$a")"
-done | sort | awk -F'\t' '{n[$1]++; ex[$1]=$2} END {for (k in n) printf "%6d  %s  (e.g. %s)\n", n[k], k, ex[k]}'
+triage
