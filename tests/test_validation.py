@@ -409,20 +409,32 @@ def test_file_with_bad_topology_reads_but_is_refused_on_use(tmp_path):
         sorpia.limit_points(v, f)
 
 
-# Reader defects found by fuzzing (tests/fuzz, README "Bad input and fuzzing"); the fixes belong in
-# cpp/src/io_obj.cpp, io_ply.cpp and io.cpp. strict xfail: these fail loudly once fixed, so the
-# marker gets removed.
-READER_DEFECTS = [
+# Reader defects found by fuzzing and probing (README "Bad input and fuzzing"), now fixed in
+# cpp/src/io_obj.cpp, io_ply.cpp and io.cpp (ac3ec66).
+FIXED_READER_DEFECTS = [
+    # the int64 index was cast to int32 before the range check: read as face (0, 1, 2)
     ("obj-index-beyond-int32", "wrap.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4294967299\n",
-     r"wrap\.obj, line 4: vertex index 4294967299 is out of range",
-     "read as face (0, 1, 2): the int64 index is cast to int32 before the range check"),
+     r"wrap\.obj, line 4: vertex index 4294967299 is out of range"),
+    # -i overflowed (undefined behaviour) in the relative-index check
     ("obj-index-llong-min", "min.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 -9223372036854775808\n",
-     r"min\.obj, line 4: relative vertex index -9223372036854775808 points before the first vertex",
-     "-i overflows (undefined behaviour) in the relative-index check"),
+     r"min\.obj, line 4: relative vertex index -9223372036854775808 points before the first vertex"),
+    # idx.resize(4e9) before reading the indices: MemoryError (or the OOM killer for smaller lengths)
     ("ply-ascii-list-length-4e9", "list.ply",
      PLY_HEAD.format(fmt="ascii", nv=3, nf=1) + "0 0 0\n1 0 0\n0 1 0\n4000000000 0 1 2\n",
-     r"list\.ply, line 14: .*4000000000",
-     "idx.resize(4e9) before reading the indices: MemoryError (or the OOM killer for smaller lengths)"),
+     r"list\.ply, line 13: a list of 4000000000 items is longer than its line"),
+]
+
+
+@pytest.mark.parametrize("name, content, match", [c[1:] for c in FIXED_READER_DEFECTS],
+                         ids=[c[0] for c in FIXED_READER_DEFECTS])
+def test_reader_defects_found_by_fuzzing_stay_fixed(tmp_path, name, content, match):
+    path = write(tmp_path / name, content)
+    with pytest.raises(sorpia.MeshFileError, match=match):
+        sorpia.read_mesh(path)
+
+
+# Still open (strict xfail: a fix makes it fail, asking for the marker to go).
+READER_DEFECTS = [
     ("ply-element-name-bytes", "name.ply", b"ply\nformat ascii 1.0\nelement v\xffrtex 100000\nproperty float x\nend_header\n",
      r"name\.ply, line 3: the header claims 100000 'v\\xffrtex' elements",
      "PLY element names are quoted raw (not escaped): Python raises UnicodeDecodeError"),
@@ -437,11 +449,10 @@ def test_reader_defects_found_by_fuzzing(tmp_path, name, content, match, why, re
         sorpia.read_mesh(path)
 
 
-@pytest.mark.xfail(reason="a NUL in the path truncates it at the C level: 'a.obj\\0.ply' opens a.obj as PLY",
-                   strict=True)
 def test_path_with_nul_is_refused(tmp_path):
+    # At the C level a NUL would truncate the path: 'a.obj\\0.ply' opened a.obj as PLY.
     write(tmp_path / "a.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
-    with pytest.raises(ValueError, match=r"(NUL|null) (character|byte)"):
+    with pytest.raises(sorpia.MeshFileError, match=r"the path contains a NUL character"):
         sorpia.read_mesh(str(tmp_path / "a.obj") + "\0.ply")
 
 
@@ -510,11 +521,10 @@ def test_an_unreachable_tol_ends_at_rounding_level(method, recwarn):
     assert np.abs(residual).max() <= 1e-12  # B V = V0 to rounding level either way
 
 
-@pytest.mark.xfail(strict=True, reason="max_row_norm squares coordinates: E_0 overflows to inf (|v| > 1e154) or "
-                   "underflows to 0 (|v| < 1e-154, then V0 is returned as if it interpolated); fix: solve for "
-                   "V0 / 2**k with 2**k ~ max|V0|, exact")
 @pytest.mark.parametrize("exponent", [600, -600])
 def test_interpolation_is_exact_under_power_of_two_scaling(exponent):
+    # Found here: E_0 overflowed to inf (|v| > 1e154) or underflowed to 0 (|v| < 1e-154, and V0 came back
+    # as if it interpolated); fixed by solving for V0 / 2**e (9ac2c8d).
     # B (s V) = s V0 for s = 2**k: every operation scales exactly, so the iterates and
     # the error history must be the same, only the control vertices scale.
     v, f = sorpia.shapes.irregular(300, seed=2)
