@@ -279,6 +279,13 @@ def test_pole_of_valence_360_is_interior_and_exact(closed_form):
     assert abs(b - closed_form(f, len(v))).max() <= 1e-15  # one rounding of the same formula
 
 
+def test_valence_beyond_opensubdivs_limit_names_the_vertex():
+    # OpenSubdiv refuses valence > 65535 without saying which vertex; pole(n)'s centre is vertex 0.
+    v, f = sorpia.shapes.pole(65536)
+    with pytest.raises(sorpia.MeshError, match=r"vertex 0 has 65536 neighbours: OpenSubdiv supports at most 65535"):
+        sorpia.limit_points(v, f)
+
+
 def test_no_warning_for_a_clean_mesh():
     with warnings.catch_warnings():
         warnings.simplefilter("error")

@@ -166,6 +166,7 @@ std::pair<std::size_t, std::size_t> validate_faces(const std::int32_t* faces, st
   };
 
   face_checks::DisjointSets fans(n_half);
+  std::vector<std::int32_t> valence(n_vertices, 0);
   std::int32_t misoriented = -1;  // a half-edge whose mate runs the same way
   std::size_t n_edges = 0, n_boundary = 0;
   for (std::size_t v = 0; v < n_vertices; ++v) {
@@ -178,6 +179,8 @@ std::pair<std::size_t, std::size_t> validate_faces(const std::int32_t* faces, st
                           " have the same three vertices; remove one of them");
         }
       ++n_edges;
+      ++valence[v];
+      ++valence[other];
       if (j - i > 2) {
         std::vector<std::int32_t> users;
         for (std::int32_t p = i; p < j; ++p) users.push_back(bucket[p] / 3);
@@ -233,6 +236,14 @@ std::pair<std::size_t, std::size_t> validate_faces(const std::int32_t* faces, st
                     std::to_string(first_corner[v] / 3) + " and " + std::to_string(hh / 3) +
                     "); split it into one vertex per fan");
   }
+  // OpenSubdiv's Far refuses a vertex of more than 65535 edges (Vtr::VALENCE_LIMIT)
+  // without saying which; every sorpia operation goes through it.
+  constexpr std::int32_t max_valence = (1 << 16) - 1;
+  for (std::size_t v = 0; v < n_vertices; ++v)
+    if (valence[v] > max_valence)
+      throw MeshError("vertex " + std::to_string(v) + " has " + std::to_string(valence[v]) +
+                      " neighbours: OpenSubdiv supports at most " + std::to_string(max_valence) +
+                      " edges at a vertex; split the fan around it");
   return {n_edges, n_boundary};
 }
 

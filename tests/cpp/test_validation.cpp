@@ -117,6 +117,13 @@ TEST(Validation, Valence360PoleMatchesTheClosedForm) {
     EXPECT_NEAR(b.data[p], b.indices[p] == 0 ? alpha : (1 - alpha) / 360.0, 1e-15);  // double rounding only
 }
 
+TEST(Validation, ValenceBeyondOpenSubdivsLimitNamesTheVertex) {
+  const auto m = sorpia::pole(65536);  // its centre, vertex 0, has 65536 neighbours
+  expect_refused(m.faces, m.n_vertices(), {"vertex 0 has 65536 neighbours", "at most 65535"});
+  const auto ok = sorpia::pole(65535);
+  EXPECT_EQ(sorpia::Topology(ok.faces.data(), ok.n_faces(), ok.n_vertices()).valence(0), 65535);
+}
+
 TEST(Validation, FaceOrderDoesNotMatter) {
   // OpenMesh builds the mesh face by face; a shuffled order must give the same rings.
   const auto m = sorpia::irregular(400, 3);
