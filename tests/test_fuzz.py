@@ -27,7 +27,7 @@ import sorpia
 # database=None: nothing is written into the source tree. derandomize: the normal run is
 # reproducible; SORPIA_FUZZ_EXAMPLES=5000 explores with that many random examples instead.
 _EXPLORE = int(os.environ.get("SORPIA_FUZZ_EXAMPLES", "0"))
-FUZZ = settings(max_examples=_EXPLORE or 120, derandomize=not _EXPLORE, deadline=5000, database=None,
+FUZZ = settings(max_examples=_EXPLORE or 300, derandomize=not _EXPLORE, deadline=5000, database=None,
                 suppress_health_check=[HealthCheck.function_scoped_fixture])
 
 
