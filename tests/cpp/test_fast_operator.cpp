@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "../../cpp/src/one_ring.hpp"  // internal: the direct build on its own
 #include "loop_masks.hpp"
 #include "sorpia/errors.hpp"
 #include "sorpia/limit.hpp"
@@ -142,6 +143,24 @@ TEST(FastTopology, BadMeshesRefusedAlikeByBothBuilds) {
     }
     EXPECT_EQ(messages[0], messages[1]);
     EXPECT_FALSE(messages[0].empty());
+  }
+}
+
+// The direct build counts fans itself, so a bowtie is refused even without
+// validate_faces in front of it (here called on its own).
+TEST(FastTopology, DirectBuildRefusesBowtiesByItself) {
+  const std::vector<std::pair<std::vector<std::int32_t>, std::size_t>> bowties = {
+      {{0, 1, 2, 0, 3, 4}, 6},                                                          // two open fans
+      {{0, 1, 2, 0, 2, 3, 0, 3, 1, 1, 3, 2, 0, 4, 5, 0, 5, 6, 0, 6, 4, 4, 6, 5}, 12},  // two closed cones
+      {{0, 1, 2, 0, 2, 3, 0, 3, 1, 1, 3, 2, 0, 4, 5}, 9},                              // a closed and an open fan
+  };
+  for (const auto& [faces, n_edges] : bowties) {
+    try {
+      sorpia::detail::one_ring_direct(faces.data(), faces.size() / 3, 7, n_edges);
+      ADD_FAILURE() << "bowtie with " << faces.size() / 3 << " faces accepted";
+    } catch (const sorpia::MeshError& e) {
+      EXPECT_NE(std::string(e.what()).find("non-manifold vertex 0"), std::string::npos) << e.what();
+    }
   }
 }
 
