@@ -85,7 +85,7 @@ void bind_solvers(py::module_& m) {
           "solve",
           [](OperatorState& s, const Vertices& v0, const std::string& method, const std::string& omega_rule,
              double omega, double sigma, double alpha, double weight, double tol, int max_iter,
-             const py::object& callback) {
+             const py::object& callback, int threads) {
             check_shape(v0, 3, "vertices");
             if (static_cast<std::size_t>(v0.shape(0)) != s.op.n)
               throw sorpia::ParameterError("vertices has " + std::to_string(v0.shape(0)) +
@@ -99,6 +99,7 @@ void bind_solvers(py::module_& m) {
             opt.weight = weight;
             opt.tol = tol;
             opt.max_iter = max_iter;
+            opt.threads = threads;
             // No callback: the core never leaves C++ during the iteration.
             if (!callback.is_none())
               opt.callback = [callback](int k, double e) {
@@ -113,9 +114,10 @@ void bind_solvers(py::module_& m) {
             return result_dict(std::move(r));
           },
           "vertices"_a.noconvert(), "method"_a, "omega_rule"_a, "omega"_a, "sigma"_a, "alpha"_a, "weight"_a, "tol"_a,
-          "max_iter"_a, "callback"_a,
+          "max_iter"_a, "callback"_a, "threads"_a = 1,
           "Solve B V = V0; NaN sigma/alpha/weight: estimate. Returns a dict of the result fields.");
   m.attr("YOUNG_RHO_CLAMP") = sorpia::young_rho_clamp;
+  m.attr("MAX_THREADS") = sorpia::max_threads;
 }
 
 }  // namespace sorpia_py

@@ -67,6 +67,14 @@ inline double max_row_norm(const double* r, std::size_t n) {
   return std::sqrt(m);
 }
 
+// 2^e when it is a normal double, else 0. Multiplying by a normal power of two
+// is exact and rounds a subnormal result as ldexp does, at a fraction of its cost.
+inline double pow2_factor(int e) { return (e > -1000 && e < 1000) ? std::ldexp(1.0, e) : 0.0; }
+// x 2^e, f = pow2_factor(e).
+inline double times_pow2(double x, double f, int e) { return f != 0.0 ? x * f : std::ldexp(x, e); }
+// x[k] *= 2^e for k < n.
+void scale_pow2(double* x, std::size_t n, int e);
+
 // Records E_k / E_0 and decides when to stop (paper section 5), the same for
 // every method. A run whose error grows past 1e6 E_0 or turns non-finite
 // stops as diverged while the iterate is still finite. E_k at rounding level
@@ -121,6 +129,12 @@ class Monitor {
   double floor_;
   double e0_ = 0.0;
 };
+
+// "sor" and "gs" (solver_sweep.cpp): sweeps of V0 / 2^exponent with the fused
+// E_k (or a residual pass when opt.two_pass), on opt.threads threads; sets
+// res.control_vertices (times 2^exponent), errors, iterations, stop reason.
+void solve_sor(const LimitOperator& op, const double* v0, int exponent, const SolveOptions& opt, double omega,
+               SolveResult& res);
 
 // The Krylov and HSS methods (solver_krylov.cpp).
 void solve_cg(const LimitOperator& op, const double* v0, double* v, Monitor& mon, SolveResult& res);

@@ -125,6 +125,11 @@ double residual(const LimitOperator& op, const double* v0, const double* v, doub
   return std::sqrt(m);
 }
 
+void scale_pow2(double* x, std::size_t n, int e) {
+  const double f = pow2_factor(e);
+  for (std::size_t k = 0; k < n; ++k) x[k] = times_pow2(x[k], f, e);
+}
+
 Transposed transpose(const LimitOperator& op) {
   Transposed t;
   t.offsets.assign(op.n + 1, 0);
@@ -156,32 +161,6 @@ void solve_richardson(const LimitOperator& op, const double* v0, double* v, doub
   }
 }
 
-// One SOR-PIA sweep (paper eq. 18), in place, vertices in input order:
-// v_i^inf = alpha_i v_i + w_i sum_j v_j with the neighbours updated earlier in
-// this sweep already moved, d_i = (v_i^0 - v_i^inf) / alpha_i, v_i += omega d_i.
-void sor_sweep(const LimitOperator& op, const double* v0, double* v, double omega) {
-  for (std::size_t i = 0; i < op.n; ++i) {
-    double s[3];
-    neighbour_sum(op, v, i, s);
-    const double d = op.diag[i], w = op.weight[i], f = omega / d;
-    double* x = v + 3 * i;
-    const double* x0 = v0 + 3 * i;
-    x[0] += f * (x0[0] - (d * x[0] + w * s[0]));
-    x[1] += f * (x0[1] - (d * x[1] + w * s[1]));
-    x[2] += f * (x0[2] - (d * x[2] + w * s[2]));
-  }
-}
-
-void solve_sor(const LimitOperator& op, const double* v0, double* v, double omega, Monitor& mon,
-               SolveResult& res) {
-  if (mon.start(residual(op, v0, v, nullptr))) return;
-  for (;;) {
-    sor_sweep(op, v0, v, omega);
-    res.products += 2;  // the sweep and the residual for E_k
-    if (mon.record(residual(op, v0, v, nullptr))) return;
-  }
-}
-
 void check_open_unit(double x, const char* name, double hi) {
   if (!(x > 0.0 && x < hi))
     throw ParameterError(std::string(name) + " = " + std::to_string(x) + " is outside (0, " + std::to_string(hi) +
@@ -195,6 +174,12 @@ SolveResult solve(const LimitOperator& op, const double* v0, const SolveOptions&
   using clock = std::chrono::steady_clock;
   if (!(opt.tol > 0.0)) throw ParameterError("tol = " + std::to_string(opt.tol) + " must be positive");
   if (opt.max_iter < 1) throw ParameterError("max_iter = " + std::to_string(opt.max_iter) + " must be at least 1");
+  if (opt.threads < 1 || opt.threads > max_threads)
+    throw ParameterError("threads = " + std::to_string(opt.threads) + " must be an integer in 1.." +
+                         std::to_string(max_threads));
+  if (opt.threads > 1 && opt.method != Method::Sor && opt.method != Method::Gs)
+    throw ParameterError("threads = " + std::to_string(opt.threads) + " applies to method 'sor' or 'gs' only (method '" +
+                         method_name(opt.method) + "')");
 
   SpectralCache local;
   SpectralCache& sc = cache ? *cache : local;
@@ -271,35 +256,41 @@ SolveResult solve(const LimitOperator& op, const double* v0, const SolveOptions&
   const auto t0 = clock::now();
   // Solve for V0 / 2^e, 2^e ~ max |v0|: multiplying by a power of two is exact
   // and B is linear, so the iterates are those of V0 scaled, and norms can
-  // neither overflow (|v| > 1e154 squares to inf) nor underflow.
+  // neither overflow (|v| > 1e154 squares to inf) nor underflow. Within
+  // 2^+-200 no squared norm down to rounding level (2^-53 max |v0|) can do
+  // either, and the scaling would change no bit of any iterate (every
+  // operation commutes with it): then V0 is used as it is, without a copy.
   double max_abs = 0.0;
   for (std::size_t k = 0; k < 3 * op.n; ++k) max_abs = std::max(max_abs, std::abs(v0[k]));
   int exponent = 0;
   if (max_abs > 0.0 && std::isfinite(max_abs)) std::frexp(max_abs, &exponent);
-  std::vector<double> scaled(v0, v0 + 3 * op.n);
-  for (double& x : scaled) x = std::ldexp(x, -exponent);
-  v0 = scaled.data();
-  res.control_vertices = scaled;  // V^(0) = V0 (paper: M^0 = M)
-  double* v = res.control_vertices.data();
-  detail::Monitor mon(opt, res, detail::max_row_norm(v0, op.n));
-  switch (opt.method) {
-    case Method::Pia:
-    case Method::Wpia:
-      detail::solve_richardson(op, v0, v, res.sigma, mon, res);
-      break;
-    case Method::Gs:
-    case Method::Sor:
-      detail::solve_sor(op, v0, v, res.omega, mon, res);
-      break;
-    case Method::Cg:
-      detail::solve_cg(op, v0, v, mon, res);
-      break;
-    case Method::Hss:
-    case Method::Whss:
-      detail::solve_hss(op, v0, v, res.alpha, res.weight, mon, res);
-      break;
+  if (std::abs(exponent) <= 200) exponent = 0;
+  if (opt.method == Method::Gs || opt.method == Method::Sor) {
+    detail::solve_sor(op, v0, exponent, opt, res.omega, res);
+  } else {
+    std::vector<double> scaled;
+    if (exponent != 0) {
+      scaled.assign(v0, v0 + 3 * op.n);
+      detail::scale_pow2(scaled.data(), scaled.size(), -exponent);
+      v0 = scaled.data();
+    }
+    res.control_vertices.assign(v0, v0 + 3 * op.n);  // V^(0) = V0 (paper: M^0 = M)
+    double* v = res.control_vertices.data();
+    detail::Monitor mon(opt, res, detail::max_row_norm(v0, op.n));
+    switch (opt.method) {
+      case Method::Pia:
+      case Method::Wpia:
+        detail::solve_richardson(op, v0, v, res.sigma, mon, res);
+        break;
+      case Method::Cg:
+        detail::solve_cg(op, v0, v, mon, res);
+        break;
+      default:  // Hss, Whss
+        detail::solve_hss(op, v0, v, res.alpha, res.weight, mon, res);
+        break;
+    }
+    detail::scale_pow2(res.control_vertices.data(), res.control_vertices.size(), exponent);
   }
-  for (double& x : res.control_vertices) x = std::ldexp(x, exponent);
   res.initial_error = std::ldexp(res.initial_error, exponent);
   res.solve_seconds = std::chrono::duration<double>(clock::now() - t0).count();
   return res;

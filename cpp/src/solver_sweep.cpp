@@ -1,0 +1,478 @@
+// The SOR-PIA / Gauss-Seidel engine ("sor" and "gs"): one pass over the mesh
+// per iteration that both sweeps (paper eq. 18) and yields the paper's E_k of
+// the new iterate, exactly; optionally on several threads.
+//
+// Fused E_k. E_k = max_i ||v_i^0 - (B V^(k))_i|| needs every neighbour of i at
+// its value after sweep k. In sweep order, vertex j's neighbours are all final
+// once the sweep has passed max(N(j)); on meshes whose vertex order is
+// spatially coherent that is a few rows later. So the residual of vertex j is
+// computed in the same loop, `lag` vertices behind the update front, by the
+// same formula and summation order as a separate residual pass: the E_k are
+// bit for bit those of the two-pass method (tested), while V, V0 and the
+// neighbour lists are still in cache. Vertices with a neighbour beyond the lag
+// (seams such as a torus's wrap-around, or a poorly ordered file) are marked
+// "deferred" once per solve and get their residual after the sweep.
+//
+// Threads. The vertices are split into contiguous index ranges of equal work,
+// one per thread. A vertex with a neighbour in another range is an
+// "interface" vertex: the ranges sweep their other vertices in parallel, in
+// vertex order (no two of them are adjacent across ranges, so the result does
+// not depend on timing), then one thread sweeps the interface vertices in
+// vertex order. This is Gauss-Seidel in a slightly different vertex order
+// (interface vertices last), so the iteration count stays that of the
+// sequential sweep (a multicolour order would change the ordering of every
+// vertex). The caller's vertex order is never changed.
+//
+// Layout. V and V0 are held as (n, 4) doubles, the fourth lane zero, so a
+// neighbour is one 32-byte load; the arithmetic is per lane in the same order
+// as the scalar formula, and an AVX2 build of the kernels (picked at run time)
+// gives the same bits as the baseline one (no FMA contraction: target avx2 only).
+#include <sys/mman.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstdlib>
+#include <cstring>
+#include <iterator>
+#include <new>
+#include <string>
+#include <vector>
+
+#include "solver_detail.hpp"
+#include "sorpia/errors.hpp"
+
+namespace sorpia {
+namespace detail {
+namespace {
+
+// Every function taking or returning d4 is internal and inlined: the ABI
+// note about passing AVX vectors without AVX does not concern us.
+#pragma GCC diagnostic ignored "-Wpsabi"
+typedef double d4 __attribute__((vector_size(32)));
+
+// n rows of 4 doubles, zeroed, on a 2 MB boundary with transparent huge pages
+// asked for when large (a row never straddles a cache line; 2 MB pages save
+// most of the page faults and TLB misses of a fresh 32 MB array).
+// std::vector<d4> would not even guarantee 32 bytes: the baseline target caps
+// vector alignment at 16.
+class Rows {
+ public:
+  explicit Rows(std::size_t n) {
+    const std::size_t bytes = 32 * n;
+    const std::size_t align = bytes >= kHuge ? kHuge : 64;
+    bytes_ = (bytes + align - 1) / align * align;
+    void* p = std::aligned_alloc(align, bytes_);
+    if (!p) throw std::bad_alloc();
+#ifdef MADV_HUGEPAGE
+    if (align == kHuge) madvise(p, bytes_, MADV_HUGEPAGE);  // advice only: failure is harmless
+#endif
+    std::memset(p, 0, bytes_);
+    rows_ = static_cast<d4*>(p);
+  }
+  ~Rows() { std::free(rows_); }
+  Rows(const Rows&) = delete;
+  Rows& operator=(const Rows&) = delete;
+  d4* data() { return rows_; }
+  const d4* data() const { return rows_; }
+  d4& operator[](std::size_t i) { return rows_[i]; }
+  const d4& operator[](std::size_t i) const { return rows_[i]; }
+
+ private:
+  static constexpr std::size_t kHuge = std::size_t{1} << 21;
+  std::size_t bytes_ = 0;
+  d4* rows_ = nullptr;
+};
+
+constexpr std::uint8_t kInterface = 1;  // swept after the ranges, by one thread
+constexpr std::uint8_t kDeferred = 2;   // residual after the sweep, not in it
+
+// The largest lag of the residual front behind the update front.
+constexpr std::int32_t kMaxLag = 8192;
+
+struct Ctx {
+  const std::int32_t* off;
+  const std::int32_t* nb;
+  std::int32_t n;             // the zero row of x
+  std::int32_t slots_end;     // vertices below it may read kSlots entries of nb from off[i]
+  const double* diag;
+  const double* weight;
+  const double* v0;           // (n, 3)
+  d4* x;                      // (n + 1, 4), row n and lane 3 zero
+  const std::uint8_t* flags;
+  double omega;
+  std::int32_t ahead;         // prefetch the row of x this far ahead of the front
+  std::int32_t lag;           // residual front behind the update front
+};
+
+inline d4 splat(double a) { return d4{a, a, a, a}; }
+
+// Sum of the neighbours' rows of x, in neighbour order (as neighbour_sum).
+// The first K neighbours are summed by a loop of fixed length K: a loop over
+// each vertex's own count mispredicts its exit about once per vertex on
+// meshes that mix valences, which measured as the largest cost of a sweep on
+// such meshes (fixed K: 0.34 s instead of 0.48 s for "sor" on
+// irregular:1000000). Slots past the valence add the zero row n, and adding
+// +0.0 leaves every sum bit for bit as the plain loop gives it. K is chosen
+// per mesh from its valences (choose_slots); K = 0 is the plain loop.
+template <int K>
+__attribute__((always_inline)) inline d4 ring_sum(const Ctx& c, std::int32_t i) {
+  const std::int32_t b = c.off[i], v = c.off[i + 1] - b;
+  const std::int32_t* q = c.nb + b;
+  d4 s = splat(0.0);
+  std::int32_t k = 0;
+  if (K > 0 && __builtin_expect(i < c.slots_end, 1)) {
+    for (; k < K; ++k) {
+      // j, or the zero row past the valence, chosen by a mask: written as a
+      // conditional, GCC turns it back into a branch per slot.
+      const std::int32_t j = q[k];  // readable below slots_end
+      const std::int32_t pad = -static_cast<std::int32_t>(k >= v);
+      s += c.x[j ^ ((j ^ c.n) & pad)];
+    }
+  }
+  for (; k < v; ++k) s += c.x[q[k]];
+  return s;
+}
+
+__attribute__((always_inline)) inline d4 v0_row(const Ctx& c, std::int32_t i) {
+  const double* y = c.v0 + 3 * static_cast<std::ptrdiff_t>(i);
+  return d4{y[0], y[1], y[2], 0.0};
+}
+
+// ||v_i^0 - (B x)_i||^2, as residual() computes it.
+template <int K>
+__attribute__((always_inline)) inline double residual_sq(const Ctx& c, std::int32_t i) {
+  const d4 s = ring_sum<K>(c, i);
+  const d4 r = v0_row(c, i) - (splat(c.diag[i]) * c.x[i] + splat(c.weight[i]) * s);
+  return r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
+}
+
+// One vertex of the SOR-PIA sweep (paper eq. 18): d_i = (v_i^0 - v_i^inf) /
+// alpha_i with the neighbours as they are now, v_i += omega d_i.
+template <int K>
+__attribute__((always_inline)) inline void update(const Ctx& c, std::int32_t i) {
+  const d4 s = ring_sum<K>(c, i);
+  const double d = c.diag[i];
+  const d4 r = v0_row(c, i) - (splat(d) * c.x[i] + splat(c.weight[i]) * s);
+  c.x[i] += splat(c.omega / d) * r;
+}
+
+// The row of x the front will first need `ahead` vertices from now: on
+// irregular meshes the farthest neighbours are reached out of order, which
+// the hardware prefetcher does not follow (0.63 s -> 0.49 s on irregular:1000000).
+__attribute__((always_inline)) inline void prefetch_ahead(const Ctx& c, std::int32_t i) {
+  __builtin_prefetch(c.x + std::min(i + c.ahead, c.n), 1);
+}
+
+// Sweep [b, e) in order, skipping interface vertices; with Fused, also the
+// residuals of its non-deferred vertices, lag behind. Returns their max ||r||^2.
+template <bool Fused, int K>
+__attribute__((always_inline)) inline double sweep_range_body(const Ctx& c, std::int32_t b, std::int32_t e) {
+  double m = 0.0;
+  for (std::int32_t i = b; i < e; ++i) {
+    prefetch_ahead(c, i);
+    if (!(c.flags[i] & kInterface)) update<K>(c, i);
+    if (Fused) {
+      const std::int32_t j = i - c.lag;
+      if (j >= b && !(c.flags[j] & kDeferred)) m = std::max(m, residual_sq<K>(c, j));
+    }
+  }
+  if (Fused)
+    for (std::int32_t j = std::max(b, e - c.lag); j < e; ++j)
+      if (!(c.flags[j] & kDeferred)) m = std::max(m, residual_sq<K>(c, j));
+  return m;
+}
+
+template <int K>
+__attribute__((always_inline)) inline double residual_range_body(const Ctx& c, std::int32_t b, std::int32_t e) {
+  double m = 0.0;
+  for (std::int32_t i = b; i < e; ++i) {
+    prefetch_ahead(c, i);
+    m = std::max(m, residual_sq<K>(c, i));
+  }
+  return m;
+}
+
+template <int K>
+__attribute__((always_inline)) inline double residual_list_body(const Ctx& c, const std::int32_t* l, std::size_t k) {
+  double m = 0.0;
+  for (std::size_t t = 0; t < k; ++t) m = std::max(m, residual_sq<K>(c, l[t]));
+  return m;
+}
+
+template <int K>
+__attribute__((always_inline)) inline void update_list_body(const Ctx& c, const std::int32_t* l, std::size_t k) {
+  for (std::size_t t = 0; t < k; ++t) update<K>(c, l[t]);
+}
+
+// The kernels for one slot count K, built for the baseline instruction set and
+// for AVX2 (one 256-bit load and add per neighbour): the same arithmetic,
+// lane by lane, so the same bits (no FMA: the target is avx2 alone).
+struct Kernels {
+  double (*sweep_fused)(const Ctx&, std::int32_t, std::int32_t);
+  double (*sweep_plain)(const Ctx&, std::int32_t, std::int32_t);
+  double (*residual_range)(const Ctx&, std::int32_t, std::int32_t);
+  double (*residual_list)(const Ctx&, const std::int32_t*, std::size_t);
+  void (*update_list)(const Ctx&, const std::int32_t*, std::size_t);
+};
+
+#define SORPIA_SWEEP_KERNELS(NAME, ATTR, K)                                                                         \
+  ATTR double NAME##K##_sweep_fused(const Ctx& c, std::int32_t b, std::int32_t e) {                                \
+    return sweep_range_body<true, K>(c, b, e);                                                                     \
+  }                                                                                                                \
+  ATTR double NAME##K##_sweep_plain(const Ctx& c, std::int32_t b, std::int32_t e) {                                \
+    return sweep_range_body<false, K>(c, b, e);                                                                    \
+  }                                                                                                                \
+  ATTR double NAME##K##_residual_range(const Ctx& c, std::int32_t b, std::int32_t e) {                             \
+    return residual_range_body<K>(c, b, e);                                                                        \
+  }                                                                                                                \
+  ATTR double NAME##K##_residual_list(const Ctx& c, const std::int32_t* l, std::size_t k) {                       \
+    return residual_list_body<K>(c, l, k);                                                                         \
+  }                                                                                                                \
+  ATTR void NAME##K##_update_list(const Ctx& c, const std::int32_t* l, std::size_t k) {                            \
+    update_list_body<K>(c, l, k);                                                                                  \
+  }                                                                                                                \
+  const Kernels NAME##K##_kernels{NAME##K##_sweep_fused, NAME##K##_sweep_plain, NAME##K##_residual_range,          \
+                                  NAME##K##_residual_list, NAME##K##_update_list};
+
+// Slot counts offered; 0 = the plain loop.
+constexpr int kSlotChoices[] = {0, 4, 6, 8, 10, 12};
+
+#define SORPIA_SWEEP_KERNEL_SET(NAME, ATTR) \
+  SORPIA_SWEEP_KERNELS(NAME, ATTR, 0)       \
+  SORPIA_SWEEP_KERNELS(NAME, ATTR, 4)       \
+  SORPIA_SWEEP_KERNELS(NAME, ATTR, 6)       \
+  SORPIA_SWEEP_KERNELS(NAME, ATTR, 8)       \
+  SORPIA_SWEEP_KERNELS(NAME, ATTR, 10)      \
+  SORPIA_SWEEP_KERNELS(NAME, ATTR, 12)      \
+  const Kernels* const NAME##_set[] = {&NAME##0_kernels, &NAME##4_kernels,  &NAME##6_kernels,                     \
+                                       &NAME##8_kernels, &NAME##10_kernels, &NAME##12_kernels};
+
+SORPIA_SWEEP_KERNEL_SET(base, )
+#if defined(__x86_64__) && defined(__GNUC__)
+SORPIA_SWEEP_KERNEL_SET(avx2, __attribute__((target("avx2"))))
+#endif
+#undef SORPIA_SWEEP_KERNEL_SET
+#undef SORPIA_SWEEP_KERNELS
+
+// The kernels for kSlotChoices[choice].
+const Kernels& kernels(int choice) {
+#if defined(__x86_64__) && defined(__GNUC__)
+  static const bool has_avx2 = __builtin_cpu_supports("avx2");
+  if (has_avx2) return *avx2_set[choice];
+#endif
+  return *base_set[choice];
+}
+
+// The slot count K with the least expected cost per vertex: a slot costs
+// about one cycle, a vertex of valence above K (a loop exit the branch
+// predictor cannot know) about 15. A regular mesh gets K = its valence (no
+// wasted slot, no misprediction); irregular:1000000 (valences 3..12, 90% at
+// most 8) gets K = 8.
+int choose_slots(const LimitOperator& op) {
+  std::vector<std::int64_t> above(kSlotChoices[std::size(kSlotChoices) - 1] + 2, 0);
+  for (std::size_t i = 0; i < op.n; ++i) {
+    const std::int32_t v = op.offsets[i + 1] - op.offsets[i];
+    ++above[std::min<std::size_t>(static_cast<std::size_t>(v), above.size() - 1)];
+  }
+  // above[v] = vertices of valence > v
+  std::int64_t rest = static_cast<std::int64_t>(op.n);
+  for (std::size_t v = 0; v < above.size(); ++v) above[v] = (rest -= above[v]);
+  int best = 0;
+  double best_cost = NAN;
+  const double n = std::max<double>(1.0, static_cast<double>(op.n));
+  for (int choice = 0; choice < static_cast<int>(std::size(kSlotChoices)); ++choice) {
+    const int k = kSlotChoices[choice];
+    // The plain loop: every vertex whose valence differs from the last
+    // one's mispredicts; estimated as all but the most common valence.
+    double cost;
+    if (k == 0) {
+      std::int64_t most = 0;
+      for (std::size_t v = 0; v + 1 < above.size(); ++v)
+        most = std::max(most, (v ? above[v - 1] : static_cast<std::int64_t>(op.n)) - above[v]);
+      cost = 15.0 * (1.0 - static_cast<double>(most) / n) + 0.0;
+    } else {
+      cost = static_cast<double>(k) + 15.0 * static_cast<double>(above[static_cast<std::size_t>(k)]) / n;
+    }
+    // The plain loop also skips the mask: prefer it on a tie.
+    if (choice == 0) cost -= 0.5;
+    if (std::isnan(best_cost) || cost < best_cost) best_cost = cost, best = choice;
+  }
+  return best;
+}
+
+// Ranges, interface and deferred vertices of one operator and thread count.
+struct Plan {
+  std::vector<std::int32_t> begin;      // ranges: [begin[t], begin[t + 1]), t < threads
+  std::vector<std::uint8_t> flags;      // kInterface | kDeferred per vertex
+  std::vector<std::int32_t> interface;  // ascending
+  std::vector<std::int32_t> deferred;   // ascending
+  std::int32_t ahead = 0;
+  std::int32_t lag = 0;
+};
+
+Plan make_plan(const LimitOperator& op, int threads) {
+  const auto n = static_cast<std::int32_t>(op.n);
+  const std::int32_t* off = op.offsets.data();
+  const std::int32_t* nb = op.neighbors.data();
+  Plan p;
+  // Equal work per range: a vertex costs its neighbours plus about two
+  // neighbours' worth of its own loads and arithmetic.
+  const double total = static_cast<double>(off[n]) + 2.0 * n;
+  p.begin.assign(static_cast<std::size_t>(threads) + 1, n);
+  p.begin[0] = 0;
+  for (int t = 1; t < threads; ++t) {
+    const double target = total * t / threads;
+    std::int32_t lo = p.begin[t - 1], hi = n;  // first i with cost(i) >= target
+    while (lo < hi) {
+      const std::int32_t mid = lo + (hi - lo) / 2;
+      if (off[mid] + 2.0 * mid < target) lo = mid + 1;
+      else hi = mid;
+    }
+    p.begin[t] = lo;
+  }
+  p.flags.assign(op.n, 0);
+  if (threads > 1)
+    for (int t = 0; t < threads; ++t)
+      for (std::int32_t i = p.begin[t]; i < p.begin[t + 1]; ++i)
+        for (std::int32_t q = off[i]; q < off[i + 1]; ++q)
+          if (nb[q] < p.begin[t] || nb[q] >= p.begin[t + 1]) {
+            p.flags[i] = kInterface;
+            p.interface.push_back(i);
+            break;
+          }
+  // The lag: the forward reach max(N(i)) - i of all but about 1/128 of the
+  // vertices, so that the residual front stays close behind the update front
+  // (its rows still in L2) and few residuals are deferred.
+  std::vector<std::int32_t> reach_count(kMaxLag + 2, 0);
+  for (std::int32_t i = 0; i < n; ++i) {
+    std::int32_t r = 0;
+    for (std::int32_t q = off[i]; q < off[i + 1]; ++q) r = std::max(r, nb[q] - i);
+    ++reach_count[std::min(r, kMaxLag + 1)];
+  }
+  std::int64_t beyond = n;
+  p.lag = 0;
+  while (p.lag <= kMaxLag && (beyond -= reach_count[p.lag]) > n / 128) ++p.lag;
+  p.lag = std::max<std::int32_t>(p.lag, 1);
+  // Deferred: the residual of i is not final lag vertices later, because i or
+  // a neighbour is swept in the interface phase, or a neighbour lies beyond the lag.
+  for (std::int32_t i = 0; i < n; ++i) {
+    bool late = p.flags[i] & kInterface;
+    for (std::int32_t q = off[i]; q < off[i + 1] && !late; ++q)
+      late = nb[q] > i + p.lag || (p.flags[nb[q]] & kInterface);
+    if (late) {
+      p.flags[i] |= kDeferred;
+      p.deferred.push_back(i);
+    }
+  }
+  p.ahead = p.lag;
+  return p;
+}
+
+class Engine {
+ public:
+  // v0: the caller's (n, 3) vertices, solved for as V0 / 2^exponent (in place
+  // when exponent = 0).
+  Engine(const LimitOperator& op, const double* v0, int exponent, double omega, int threads)
+      : op_(op),
+        plan_(make_plan(op, threads)),
+        choice_(choose_slots(op)),
+        k_(kernels(choice_)),
+        x_(op.n + 1),
+        exponent_(exponent),
+        // Below about 8k vertices a thread, waking the threads costs more
+        // than they save; the ranges then run one after the other (the same
+        // order, so the same result).
+        parallel_(threads > 1 && op.n >= 8192 * static_cast<std::size_t>(threads)) {
+    if (exponent_ != 0) {
+      scaled_.assign(v0, v0 + 3 * op.n);
+      scale_pow2(scaled_.data(), scaled_.size(), -exponent_);
+      v0 = scaled_.data();
+    }
+    for (std::size_t i = 0; i < op.n; ++i) x_[i] = d4{v0[3 * i], v0[3 * i + 1], v0[3 * i + 2], 0.0};  // V^(0) = V0
+    const std::int32_t nnz = op.offsets[op.n];
+    std::int32_t slots_end = static_cast<std::int32_t>(op.n);
+    while (slots_end > 0 && op.offsets[slots_end - 1] + kSlotChoices[choice_] > nnz) --slots_end;
+    ctx_ = Ctx{op.offsets.data(), op.neighbors.data(), static_cast<std::int32_t>(op.n), slots_end, op.diag.data(),
+               op.weight.data(), v0, x_.data(), plan_.flags.data(), omega, plan_.ahead, plan_.lag};
+  }
+
+  int threads() const { return static_cast<int>(plan_.begin.size()) - 1; }
+
+  // max_i ||v_i^0|| of the (scaled) V0: the monitor's rounding level.
+  double scale() const { return max_row_norm(ctx_.v0, op_.n); }
+
+  // E of the current iterate, by a residual pass.
+  double residual() const {
+    const int t_count = threads();
+    double m = 0.0;
+#pragma omp parallel for num_threads(t_count) schedule(static, 1) reduction(max : m) if (parallel_)
+    for (int t = 0; t < t_count; ++t) m = std::max(m, k_.residual_range(ctx_, plan_.begin[t], plan_.begin[t + 1]));
+    return std::sqrt(m);
+  }
+
+  // One sweep; fused: returns E of the new iterate, else NaN.
+  double sweep(bool fused) {
+    const int t_count = threads();
+    const auto sweep_range = fused ? k_.sweep_fused : k_.sweep_plain;
+    const std::int32_t* deferred = plan_.deferred.data();
+    const auto n_deferred = static_cast<std::int64_t>(plan_.deferred.size());
+    double m = 0.0;
+#pragma omp parallel num_threads(t_count) reduction(max : m) if (parallel_)
+    {
+#pragma omp for schedule(static, 1)
+      for (int t = 0; t < t_count; ++t) m = std::max(m, sweep_range(ctx_, plan_.begin[t], plan_.begin[t + 1]));
+#pragma omp single
+      k_.update_list(ctx_, plan_.interface.data(), plan_.interface.size());
+      if (fused) {
+        // Chunks of the deferred list; the implicit barrier of `single` has
+        // made every update of this sweep visible.
+        constexpr std::int64_t chunk = 1024;
+#pragma omp for schedule(static)
+        for (std::int64_t a = 0; a < n_deferred; a += chunk)
+          m = std::max(m, k_.residual_list(ctx_, deferred + a, static_cast<std::size_t>(
+                                                                   std::min(chunk, n_deferred - a))));
+      }
+    }
+    return fused ? std::sqrt(m) : NAN;
+  }
+
+  // (n, 3) control vertices, times 2^exponent().
+  void write(double* v) const {
+    for (std::size_t i = 0; i < op_.n; ++i)
+      for (int a = 0; a < 3; ++a) v[3 * i + a] = x_[i][a];
+    scale_pow2(v, 3 * op_.n, exponent_);
+  }
+
+ private:
+  const LimitOperator& op_;
+  Plan plan_;
+  int choice_;  // index into kSlotChoices
+  const Kernels& k_;
+  Rows x_;
+  int exponent_;
+  bool parallel_;
+  std::vector<double> scaled_;  // V0 / 2^exponent when exponent != 0
+  Ctx ctx_;
+};
+
+}  // namespace
+
+void solve_sor(const LimitOperator& op, const double* v0, int exponent, const SolveOptions& opt, double omega,
+               SolveResult& res) {
+  Engine engine(op, v0, exponent, omega, opt.threads);
+  Monitor mon(opt, res, engine.scale());
+  if (!mon.start(engine.residual())) {
+    for (;;) {
+      double e = engine.sweep(!opt.two_pass);
+      res.products += 2;  // a sweep and a residual, fused or not
+      if (opt.two_pass) e = engine.residual();
+      if (mon.record(e)) break;
+    }
+  }
+  res.control_vertices.resize(3 * op.n);
+  engine.write(res.control_vertices.data());
+}
+
+}  // namespace detail
+}  // namespace sorpia

@@ -1,0 +1,174 @@
+// The "sor"/"gs" engine: the E_k computed inside the sweep against a separate
+// residual pass and against B from scratch, threaded sweeps against the
+// sequential one, the threads parameter.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <random>
+#include <utility>
+#include <vector>
+
+#include "sorpia/errors.hpp"
+#include "sorpia/limit.hpp"
+#include "sorpia/shapes.hpp"
+#include "sorpia/solvers.hpp"
+#include "sorpia/topology.hpp"
+
+namespace {
+
+struct Case {
+  const char* name;
+  sorpia::TriMesh mesh;
+  sorpia::CsrMatrix b;
+  sorpia::LimitOperator op;
+};
+
+Case make_case(const char* name, const sorpia::TriMesh& m) {
+  const sorpia::Topology topo(m.faces.data(), m.n_faces(), m.n_vertices());
+  Case c{name, m, sorpia::limit_matrix(topo, sorpia::Boundary::EdgeAndCorner), {}};
+  c.op = sorpia::limit_operator(c.b);
+  return c;
+}
+
+// The same mesh with its vertices numbered at random: every neighbour far
+// away in index, so almost every residual is deferred past the sweep and the
+// thread ranges share most vertices (interface).
+sorpia::TriMesh shuffled(const sorpia::TriMesh& m, unsigned seed) {
+  std::vector<std::int32_t> perm(m.n_vertices());
+  std::iota(perm.begin(), perm.end(), 0);
+  std::shuffle(perm.begin(), perm.end(), std::mt19937(seed));
+  sorpia::TriMesh out;
+  out.vertices.resize(m.vertices.size());
+  for (std::size_t i = 0; i < m.n_vertices(); ++i)
+    for (int a = 0; a < 3; ++a) out.vertices[3 * perm[i] + a] = m.vertices[3 * i + a];
+  for (std::int32_t f : m.faces) out.faces.push_back(perm[f]);
+  return out;
+}
+
+// Meshes past the sweep's lag of 4096 vertices (the fused residual runs
+// behind the front and the seams are deferred), with boundary, a pole, and
+// a scrambled vertex order.
+const std::vector<Case>& cases() {
+  static const std::vector<Case> c = {
+      make_case("irregular", sorpia::irregular(26000, 7)), make_case("torus", sorpia::torus(130, 130)),
+      make_case("grid", sorpia::grid(90, 70)),             make_case("pole", sorpia::pole(48)),
+      make_case("shuffled", shuffled(sorpia::irregular(20000, 3), 11))};
+  return c;
+}
+
+sorpia::SolveResult run(const Case& c, int threads, bool two_pass, double omega = 1.0, int max_iter = 1000) {
+  sorpia::SolveOptions opt;
+  opt.method = sorpia::Method::Sor;
+  opt.omega_rule = sorpia::OmegaRule::Given;
+  opt.omega = omega;
+  opt.threads = threads;
+  opt.two_pass = two_pass;
+  opt.max_iter = max_iter;
+  return sorpia::solve(c.op, c.mesh.vertices.data(), opt);
+}
+
+// max_i ||v_i^0 - (B v)_i|| with B as the CSR matrix from OpenSubdiv's masks.
+double error_from_scratch(const Case& c, const std::vector<double>& v) {
+  std::vector<double> bv(v.size());
+  sorpia::multiply(c.b, v.data(), bv.data());
+  double e = 0.0;
+  for (std::size_t i = 0; i < c.op.n; ++i)
+    e = std::max(e, std::hypot(c.mesh.vertices[3 * i] - bv[3 * i], c.mesh.vertices[3 * i + 1] - bv[3 * i + 1],
+                               c.mesh.vertices[3 * i + 2] - bv[3 * i + 2]));
+  return e;
+}
+
+double max_abs(const std::vector<double>& a) {
+  double m = 0.0;
+  for (double x : a) m = std::max(m, std::abs(x));
+  return m;
+}
+
+TEST(Sweep, FusedErrorsEqualTwoPassBitForBit) {
+  // The fused sweep computes each residual by the same formula, in the same
+  // summation order, from the same final values as the residual pass: the
+  // E_k, the iterates and the iteration counts must agree exactly.
+  for (const Case& c : cases())
+    for (auto [threads, omega] : {std::pair{1, 1.0}, std::pair{2, 1.0}, std::pair{3, 1.3}}) {
+      const sorpia::SolveResult fused = run(c, threads, false, omega);
+      const sorpia::SolveResult two = run(c, threads, true, omega);
+      ASSERT_TRUE(fused.converged()) << c.name;
+      EXPECT_EQ(fused.iterations, two.iterations) << c.name << " threads " << threads;
+      EXPECT_EQ(fused.errors, two.errors) << c.name << " threads " << threads << " omega " << omega;
+      EXPECT_EQ(fused.control_vertices, two.control_vertices) << c.name;
+    }
+}
+
+TEST(Sweep, ErrorsArePapersEkFromScratch) {
+  // E_k after k sweeps, recomputed with the CSR matrix B (a different
+  // summation order: equal to rounding, 1e-12 of E_0 covers it).
+  for (const Case& c : cases())
+    for (int threads : {1, 2}) {
+      const sorpia::SolveResult full = run(c, threads, false);
+      for (int k : {threads, 4}) {
+        const sorpia::SolveResult part = run(c, threads, false, 1.0, k);
+        ASSERT_EQ(part.iterations, k);
+        EXPECT_EQ(part.errors, std::vector<double>(full.errors.begin(), full.errors.begin() + k + 1));
+        EXPECT_NEAR(error_from_scratch(c, part.control_vertices) / part.initial_error, part.errors[k], 1e-12)
+            << c.name << " k " << k;
+      }
+    }
+}
+
+TEST(Sweep, ThreadsGiveTheSequentialSolution) {
+  for (const Case& c : cases()) {
+    const sorpia::SolveResult one = run(c, 1, false);
+    ASSERT_TRUE(one.converged()) << c.name;
+    for (int threads : {2, 3, 7}) {
+      const sorpia::SolveResult t = run(c, threads, false);
+      ASSERT_TRUE(t.converged()) << c.name << " threads " << threads;
+      // Both stop at E_k < 1e-10 E_0; B's smallest eigenvalue is about 0.2,
+      // so the two solutions differ by well under 1e-8 of the coordinates.
+      std::vector<double> d(one.control_vertices.size());
+      for (std::size_t k = 0; k < d.size(); ++k) d[k] = t.control_vertices[k] - one.control_vertices[k];
+      EXPECT_LT(max_abs(d), 1e-8 * max_abs(one.control_vertices)) << c.name << " threads " << threads;
+      // Gauss-Seidel with the interface vertices last: nearly the same ordering.
+      EXPECT_LE(t.iterations, std::ceil(1.15 * one.iterations)) << c.name << " threads " << threads;
+      EXPECT_LT(error_from_scratch(c, t.control_vertices), 1.01e-10 * t.initial_error) << c.name;
+    }
+  }
+}
+
+TEST(Sweep, OneThreadIsTheTextbookSweepOrder) {
+  // threads = 1 sweeps vertices 0, 1, ..., n-1: after one sweep V equals the
+  // SOR formula applied in that order (same arithmetic as the engine).
+  const Case& c = cases()[0];
+  const sorpia::LimitOperator& op = c.op;
+  std::vector<double> x = c.mesh.vertices;
+  const double omega = 1.3;
+  for (std::size_t i = 0; i < op.n; ++i) {
+    double s[3] = {0, 0, 0};
+    for (int p = op.offsets[i]; p < op.offsets[i + 1]; ++p)
+      for (int a = 0; a < 3; ++a) s[a] += x[3 * op.neighbors[p] + a];
+    for (int a = 0; a < 3; ++a)
+      x[3 * i + a] += omega / op.diag[i] * (c.mesh.vertices[3 * i + a] - (op.diag[i] * x[3 * i + a] + op.weight[i] * s[a]));
+  }
+  EXPECT_EQ(run(c, 1, false, omega, 1).control_vertices, x);
+}
+
+TEST(Sweep, ThreadsParameterChecked) {
+  const Case& c = cases()[3];
+  for (int bad : {0, -1, sorpia::max_threads + 1}) {
+    sorpia::SolveOptions opt;
+    opt.threads = bad;
+    EXPECT_THROW(sorpia::solve(c.op, c.mesh.vertices.data(), opt), sorpia::ParameterError) << bad;
+  }
+  sorpia::SolveOptions opt;
+  opt.method = sorpia::Method::Cg;
+  opt.threads = 2;
+  EXPECT_THROW(sorpia::solve(c.op, c.mesh.vertices.data(), opt), sorpia::ParameterError);
+  opt.method = sorpia::Method::Gs;
+  EXPECT_TRUE(sorpia::solve(c.op, c.mesh.vertices.data(), opt).converged());
+  // More threads than vertices: empty ranges, still the solution.
+  opt.threads = 64;
+  EXPECT_TRUE(sorpia::solve(c.op, c.mesh.vertices.data(), opt).converged());
+}
+
+}  // namespace

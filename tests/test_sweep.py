@@ -1,0 +1,118 @@
+"""threads= for "sor"/"gs": threaded solves against scipy's direct solve and the
+one-thread sweep, the caller's vertex order, the parameter's checks.
+
+The threaded sweep splits the vertices into index ranges and sweeps the
+vertices shared between ranges last: Gauss-Seidel in another order, so the
+solution is the same to the tolerance and the iteration count nearly so.
+"""
+
+import math
+
+import numpy as np
+import pytest
+import scipy.sparse.linalg
+
+import sorpia
+
+TOL = 1e-10
+
+
+@pytest.fixture(scope="module")
+def big_irregular():
+    # Large enough (about 20k vertices) that 2 threads really run in
+    # parallel (the core runs the ranges one after another below 8k
+    # vertices a thread, with the same result).
+    return sorpia.shapes.irregular(20000, seed=4)
+
+
+def direct(v, f, boundary="edge-and-corner"):
+    b = sorpia.limit_matrix(f, len(v), boundary).tocsc()
+    return scipy.sparse.linalg.splu(b).solve(v)
+
+
+@pytest.mark.parametrize("threads", [1, 2, 3])
+@pytest.mark.parametrize("method", ["sor", "gs"])
+def test_threads_equal_direct_solve(big_irregular, threads, method):
+    v, f = big_irregular
+    res = sorpia.interpolate(v, f, method=method, tol=TOL, threads=threads)
+    assert res.converged
+    ref = direct(v, f)
+    # E_k < 1e-10 E_0 and B's eigenvalues lie in about [0.2, 1]: the error in
+    # V is a few 1e-10 E_0, far below 1e-8 of the coordinates.
+    assert np.abs(res.control_vertices - ref).max() <= 1e-8 * np.abs(ref).max()
+
+
+@pytest.mark.parametrize("mesh_name", ["grid", "pole", "irregular"])
+def test_threads_iterations_close_to_sequential(mesh_name):
+    v, f = {"grid": sorpia.shapes.grid(40, 30), "pole": sorpia.shapes.pole(60),
+            "irregular": sorpia.shapes.irregular(3000, seed=9)}[mesh_name]
+    one = sorpia.interpolate(v, f, threads=1)
+    ref = direct(v, f)
+    for threads in (2, 4):
+        res = sorpia.interpolate(v, f, threads=threads)
+        assert res.converged
+        assert res.iterations <= math.ceil(1.15 * one.iterations)
+        assert np.abs(res.control_vertices - ref).max() <= 1e-8 * np.abs(ref).max()
+
+
+def test_errors_are_the_papers_ek_with_threads(big_irregular):
+    # E_k from the fused sweep against the residual of the returned vertices
+    # with B from scratch (summed in another order: equal to rounding).
+    v, f = big_irregular
+    b = sorpia.limit_matrix(f, len(v))
+    for k in (1, 3):
+        with pytest.warns(sorpia.ConvergenceWarning):
+            res = sorpia.interpolate(v, f, threads=2, max_iter=k)
+        ek = np.linalg.norm(v - b @ res.control_vertices, axis=1).max()
+        assert abs(ek / res.initial_error - res.errors[-1]) <= 1e-12
+
+
+def test_control_vertices_in_callers_order():
+    # Relabel the vertices at random: the answer must come back relabelled the
+    # same way (threads split by index, so the ranges differ completely).
+    v, f = sorpia.shapes.irregular(5000, seed=2)
+    perm = np.random.default_rng(0).permutation(len(v))
+    inv = np.empty_like(perm)
+    inv[perm] = np.arange(len(v))
+    vp = v[perm]             # new vertex i is old vertex perm[i]
+    fp = inv[f]
+    ref = direct(v, f)
+    for threads in (1, 2):
+        res = sorpia.interpolate(vp, fp, threads=threads)
+        assert res.converged
+        assert np.abs(res.control_vertices - ref[perm]).max() <= 1e-8 * np.abs(ref).max()
+
+
+def test_interpolator_solve_takes_threads():
+    v, f = sorpia.shapes.torus(30, 20)
+    solver = sorpia.Interpolator(f, len(v))
+    a = solver.solve(v, threads=1)
+    b = solver.solve(v, threads=2)
+    assert np.abs(a.control_vertices - b.control_vertices).max() <= 1e-8 * np.abs(v).max()
+
+
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        ({"threads": 0}, r"threads = 0 must be an integer in 1\.\."),
+        ({"threads": -2}, r"threads = -2 must be"),
+        ({"threads": 10**6}, r"threads = 1000000 must be an integer in 1\.\."),
+        ({"threads": 1.5}, r"threads = 1\.5 must be an integer"),
+        ({"threads": True}, r"threads = True must be an integer"),
+        ({"threads": "2"}, r"threads = '2' must be an integer"),
+        ({"threads": None}, r"threads = None must be an integer"),
+        ({"method": "cg", "threads": 2}, r"threads = 2 applies to method='sor' or 'gs' only"),
+        ({"method": "pia", "threads": 3}, r"threads = 3 applies to method='sor' or 'gs' only"),
+    ],
+)
+def test_bad_threads(kwargs, match):
+    v, f = sorpia.shapes.icosphere(0)
+    with pytest.raises(sorpia.ParameterError, match=match):
+        sorpia.interpolate(v, f, **kwargs)
+    with pytest.raises(sorpia.ParameterError, match=match):
+        sorpia.Interpolator(f, len(v)).solve(v, **kwargs)
+
+
+def test_numpy_integer_threads_accepted():
+    v, f = sorpia.shapes.icosphere(1)
+    assert sorpia.interpolate(v, f, threads=np.int64(2)).converged
