@@ -429,28 +429,15 @@ FIXED_READER_DEFECTS = [
     ("ply-ascii-list-length-4e9", "list.ply",
      PLY_HEAD.format(fmt="ascii", nv=3, nf=1) + "0 0 0\n1 0 0\n0 1 0\n4000000000 0 1 2\n",
      r"list\.ply, line 13: a list of 4000000000 items is longer than its line"),
+    # raw bytes of a PLY element name in the message: Python raised UnicodeDecodeError
+    ("ply-element-name-bytes", "name.ply", b"ply\nformat ascii 1.0\nelement v\xffrtex 100000\nproperty float x\nend_header\n",
+     r"name\.ply, line 3: the header claims 100000 'v\\xffrtex' elements"),
 ]
 
 
 @pytest.mark.parametrize("name, content, match", [c[1:] for c in FIXED_READER_DEFECTS],
                          ids=[c[0] for c in FIXED_READER_DEFECTS])
 def test_reader_defects_found_by_fuzzing_stay_fixed(tmp_path, name, content, match):
-    path = write(tmp_path / name, content)
-    with pytest.raises(sorpia.MeshFileError, match=match):
-        sorpia.read_mesh(path)
-
-
-# Still open (strict xfail: a fix makes it fail, asking for the marker to go).
-READER_DEFECTS = [
-    ("ply-element-name-bytes", "name.ply", b"ply\nformat ascii 1.0\nelement v\xffrtex 100000\nproperty float x\nend_header\n",
-     r"name\.ply, line 3: the header claims 100000 'v\\xffrtex' elements",
-     "PLY element names are quoted raw (not escaped): Python raises UnicodeDecodeError"),
-]
-
-
-@pytest.mark.parametrize("name, content, match, why", [c[1:] for c in READER_DEFECTS], ids=[c[0] for c in READER_DEFECTS])
-def test_reader_defects_found_by_fuzzing(tmp_path, name, content, match, why, request):
-    request.applymarker(pytest.mark.xfail(reason=why, strict=True))
     path = write(tmp_path / name, content)
     with pytest.raises(sorpia.MeshFileError, match=match):
         sorpia.read_mesh(path)

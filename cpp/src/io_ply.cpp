@@ -176,7 +176,7 @@ Header parse_header(const FileData& f) {
     const std::size_t per = std::max<std::size_t>(e.min_bytes(h.encoding != Encoding::Ascii), 1);
     if (e.count > left / per || need + e.count * per > left + 1)
       fail(f, Where{"line", e.line},
-           "the header claims " + std::to_string(e.count) + " '" + e.name + "' elements, more than the " +
+           "the header claims " + std::to_string(e.count) + " " + quoted(e.name) + " elements, more than the " +
                std::to_string(left) + " bytes after the header can hold");
     need += e.count * per;
   }
@@ -229,8 +229,8 @@ TriMesh read_binary(const FileData& f, const Header& h, const Layout& l, bool tr
   std::vector<std::int64_t> idx;
   const std::size_t nv = l.vertex->count;
   auto truncated = [&](const Element& e, std::size_t i) {
-    fail(f, Where{e.name.c_str(), i},
-         "the file ends inside element " + std::to_string(i) + " of " + std::to_string(e.count) + " '" + e.name + "'");
+    fail(f, Where{"element", i},
+         "the file ends inside element " + std::to_string(i) + " of " + std::to_string(e.count) + " " + quoted(e.name));
   };
   for (const auto& e : h.elements) {
     const bool is_vertex = &e == l.vertex;
@@ -250,7 +250,7 @@ TriMesh read_binary(const FileData& f, const Header& h, const Layout& l, bool tr
         const bool plain = !swap && stride == 24 && o[0] == 0 && o[1] == 8 && o[2] == 16 &&
                            t[0] == PlyType::F64 && t[1] == PlyType::F64 && t[2] == PlyType::F64;
         if (plain) {  // what sorpia writes: x y z double, nothing else
-          std::memcpy(out, p, 24 * e.count);
+          if (e.count) std::memcpy(out, p, 24 * e.count);  // out is null when the vertex element is empty
         } else {
           for (std::size_t i = 0; i < e.count; ++i)
             for (int c = 0; c < 3; ++c) out[3 * i + c] = load_number(p + i * stride + o[c], t[c], swap);
@@ -282,7 +282,7 @@ TriMesh read_binary(const FileData& f, const Header& h, const Layout& l, bool tr
         if (static_cast<std::size_t>(end - p) < cs) truncated(e, i);
         const double count = load_number(p, pr.count_type, swap);
         p += cs;
-        if (count < 0) fail(f, Where{e.name.c_str(), i}, "a negative list length");
+        if (count < 0) fail(f, Where{"element", i}, "a negative list length in " + quoted(e.name));
         const auto n = static_cast<std::size_t>(count);
         const std::size_t s = type_size(pr.type);
         if (static_cast<std::size_t>(end - p) / s < n) truncated(e, i);
@@ -318,13 +318,13 @@ TriMesh read_ascii(const FileData& f, const Header& h, const Layout& l, bool tri
     for (std::size_t i = 0; i < e.count; ++i) {
       do {
         if (!lines.next(line))
-          fail(f, "the file ends after " + std::to_string(i) + " of " + std::to_string(e.count) + " '" + e.name +
-                      "' elements");
+          fail(f, "the file ends after " + std::to_string(i) + " of " + std::to_string(e.count) + " " + quoted(e.name) +
+                      " elements");
         rest = line;
       } while (strip_comment(line).empty());
       const Where w{"line", first_line + lines.number()};
       auto need = [&]() {
-        if (!next_token(rest, tok)) fail(f, w, "the line ends before the properties of the '" + e.name + "' element");
+        if (!next_token(rest, tok)) fail(f, w, "the line ends before the properties of the " + quoted(e.name) + " element");
         return tok;
       };
       for (std::size_t k = 0; k < e.props.size(); ++k) {

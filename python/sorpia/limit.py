@@ -8,7 +8,7 @@ import numpy as np
 import scipy.sparse
 
 from . import _core
-from ._validate import DEFAULT_BOUNDARY, as_boundary, as_faces, as_vertices
+from ._validate import DEFAULT_BOUNDARY, as_boundary, as_faces, as_vertex_count, as_vertices
 
 
 class UnreferencedVerticesWarning(UserWarning):
@@ -20,8 +20,9 @@ def topology(faces, n_vertices: int, *, warn: bool = True) -> _core.Topology:
 
     Warns with UnreferencedVerticesWarning when some vertices belong to no face.
     """
+    n_vertices = as_vertex_count(n_vertices)
     faces = as_faces(faces, n_vertices)
-    topo = _core.Topology(faces, int(n_vertices))
+    topo = _core.Topology(faces, n_vertices)
     if warn and topo.n_unreferenced:
         warnings.warn(
             f"{topo.n_unreferenced} of {n_vertices} vertices belong to no face; "
@@ -68,7 +69,7 @@ def limit_matrix(faces, n_vertices: int, boundary: str = DEFAULT_BOUNDARY) -> sc
     ``limit_matrix(F, len(V)) @ V == limit_points(V, F)``. Unreferenced vertices
     get an identity row. See `limit_points` for `boundary`.
     """
-    n_vertices = int(n_vertices)
+    n_vertices = as_vertex_count(n_vertices)
     topo = topology(faces, n_vertices)
     data, indices, indptr = _core.limit_matrix(topo, as_boundary(boundary))
     return scipy.sparse.csr_matrix((data, indices, indptr), shape=(n_vertices, n_vertices))
