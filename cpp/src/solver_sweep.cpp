@@ -344,10 +344,11 @@ Plan make_plan(const LimitOperator& op, int threads) {
   // The lag: the forward reach max(N(i)) - i of all but about 1/128 of the
   // vertices, so that the residual front stays close behind the update front
   // (its rows still in L2) and few residuals are deferred.
-  std::vector<std::int32_t> reach_count(kMaxLag + 2, 0);
+  std::vector<std::int32_t> reach(op.n), reach_count(kMaxLag + 2, 0);
   for (std::int32_t i = 0; i < n; ++i) {
     std::int32_t r = 0;
     for (std::int32_t q = off[i]; q < off[i + 1]; ++q) r = std::max(r, nb[q] - i);
+    reach[i] = r;
     ++reach_count[std::min(r, kMaxLag + 1)];
   }
   std::int64_t beyond = n;
@@ -357,9 +358,8 @@ Plan make_plan(const LimitOperator& op, int threads) {
   // Deferred: the residual of i is not final lag vertices later, because i or
   // a neighbour is swept in the interface phase, or a neighbour lies beyond the lag.
   for (std::int32_t i = 0; i < n; ++i) {
-    bool late = p.flags[i] & kInterface;
-    for (std::int32_t q = off[i]; q < off[i + 1] && !late; ++q)
-      late = nb[q] > i + p.lag || (p.flags[nb[q]] & kInterface);
+    bool late = (p.flags[i] & kInterface) || reach[i] > p.lag;
+    for (std::int32_t q = off[i]; q < off[i + 1] && !late && threads > 1; ++q) late = p.flags[nb[q]] & kInterface;
     if (late) {
       p.flags[i] |= kDeferred;
       p.deferred.push_back(i);
