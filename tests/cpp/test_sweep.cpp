@@ -54,7 +54,7 @@ const std::vector<Case>& cases() {
   static const std::vector<Case> c = {
       make_case("irregular", sorpia::irregular(26000, 7)), make_case("torus", sorpia::torus(130, 130)),
       make_case("grid", sorpia::grid(90, 70)),             make_case("pole", sorpia::pole(48)),
-      make_case("shuffled", shuffled(sorpia::irregular(20000, 3), 11))};
+      make_case("shuffled", shuffled(sorpia::irregular(40000, 3), 11))};
   return c;
 }
 
@@ -133,6 +133,30 @@ TEST(Sweep, ThreadsGiveTheSequentialSolution) {
       EXPECT_LE(t.iterations, std::ceil(1.15 * one.iterations)) << c.name << " threads " << threads;
       EXPECT_LT(error_from_scratch(c, t.control_vertices), 1.01e-10 * t.initial_error) << c.name;
     }
+  }
+}
+
+TEST(Sweep, PoorOrderIsSweptInItsOwnOrderAndReturnedInTheCallers) {
+  // The shuffled mesh is the irregular one renumbered: its solution must be
+  // the same vertices renumbered, though the core sweeps it breadth-first.
+  const sorpia::TriMesh m = sorpia::irregular(40000, 3);
+  const Case a = make_case("natural", m);
+  const Case& b = cases()[4];  // shuffled(irregular(40000, 3), 11)
+  std::vector<std::int32_t> perm(m.n_vertices());
+  std::iota(perm.begin(), perm.end(), 0);
+  std::shuffle(perm.begin(), perm.end(), std::mt19937(11));  // as shuffled() did
+  for (int threads : {1, 2}) {
+    const sorpia::SolveResult ra = run(a, threads, false), rb = run(b, threads, false);
+    EXPECT_FALSE(ra.reordered);
+    EXPECT_TRUE(rb.reordered);
+    ASSERT_TRUE(rb.converged());
+    double d = 0.0;
+    for (std::size_t i = 0; i < m.n_vertices(); ++i)
+      for (int c = 0; c < 3; ++c)
+        d = std::max(d, std::abs(rb.control_vertices[3 * perm[i] + c] - ra.control_vertices[3 * i + c]));
+    EXPECT_LT(d, 1e-8 * max_abs(ra.control_vertices));  // both to E_k < 1e-10 E_0
+    EXPECT_LE(rb.iterations, std::ceil(1.15 * ra.iterations));
+    EXPECT_LT(error_from_scratch(b, rb.control_vertices), 1.01e-10 * rb.initial_error);
   }
 }
 

@@ -171,6 +171,10 @@ struct SolveResult {
   Method method = Method::Sor;
   std::string variant;                   ///< what ran: e.g. "cg" or "bicgstab" for Method::Cg
   double omega = NAN;                    ///< "sor"/"gs": the omega used
+  /// "sor"/"gs": swept in a locality order of its own (breadth-first) because
+  /// the input order was too poor (most vertices' neighbours far away in
+  /// index); control_vertices are in the caller's order all the same.
+  bool reordered = false;
   double rho = NAN;                      ///< "sor" with "young": the estimated rho(I - D^-1 B)
   bool omega_clamped = false;            ///< "young": rho >= young_rho_clamp, omega clamped
   double sigma = NAN;                    ///< "pia"/"wpia": the step used
