@@ -45,6 +45,10 @@ options:
   --tol X            stop when E_k/E_0 < X (default 1e-10)
   --max-iter N       default 1000
   --omega W          fixed omega for sor (default: sorpia's auto rule)
+  --threads N        threads sweeping at once for sor and gs (default 1; the
+                     other methods always run on one thread)
+  --two-pass         sor/gs: E_k by a separate residual pass after each sweep
+                     (the reference) instead of inside the sweep
   --boundary RULE    edge-and-corner (default) or edge-only
   --operator HOW     masks (default: limit masks from the one-ring) or
                      opensubdiv (B from Far::PrimvarRefiner::Limit, the reference)
@@ -56,7 +60,7 @@ options:
   --json             print JSON instead of a table
   -h, --help         this text
 
-Times are wall-clock seconds, one thread. "floor" is one plain streaming pass
+Times are wall-clock seconds. "floor" is one plain streaming pass
 over the arrays a sweep reads and writes; sweep/floor = (solve seconds per
 iteration) / floor. Peak memory is the process's VmHWM for that mesh;
 B/vertex is that peak above the resident size once the input arrays exist.
@@ -72,6 +76,8 @@ struct Options {
   double tol = 1e-10;
   int max_iter = 1000;
   double omega = NAN;
+  int threads = 1;
+  bool two_pass = false;
   sorpia::Boundary boundary = sorpia::Boundary::EdgeAndCorner;
   std::string boundary_name = "edge-and-corner";
   bool opensubdiv_operator = false;
@@ -136,6 +142,11 @@ Options parse(int argc, char** argv) {
     } else if (a == "--omega") {
       o.omega = to_double(a, value());
       if (!(o.omega > 0 && o.omega < 2)) throw Usage("--omega must be in (0, 2)");
+    } else if (a == "--threads") {
+      o.threads = to_int(a, value(), 1);
+      if (o.threads > sorpia::max_threads) throw Usage("--threads must be at most " + std::to_string(sorpia::max_threads));
+    } else if (a == "--two-pass") {
+      o.two_pass = true;
     } else if (a == "--boundary") {
       o.boundary_name = value();
       if (o.boundary_name == "edge-only") o.boundary = sorpia::Boundary::EdgeOnly;
@@ -275,6 +286,8 @@ struct MethodRun {
   int iterations = 0;
   double final_error = NAN, omega = NAN;
   std::string stop;
+  int threads = 1;
+  bool reordered = false;
 };
 
 struct MeshRun {
@@ -322,6 +335,9 @@ MeshRun run_mesh(const Options& o, const std::string& spec) {
       so.method = sorpia::parse_method(mr.method);
       so.tol = o.tol;
       so.max_iter = o.max_iter;
+      const bool sweeps = so.method == sorpia::Method::Sor || so.method == sorpia::Method::Gs;
+      so.threads = sweeps ? o.threads : 1;
+      so.two_pass = o.two_pass;
       if (!std::isnan(o.omega)) {
         so.omega_rule = sorpia::OmegaRule::Given;
         so.omega = o.omega;
@@ -335,6 +351,8 @@ MeshRun run_mesh(const Options& o, const std::string& spec) {
       mr.final_error = res.errors.empty() ? NAN : res.errors.back();
       mr.omega = res.omega;
       mr.stop = sorpia::stop_reason_name(res.stop_reason);
+      mr.threads = so.threads;
+      mr.reordered = res.reordered;
       if (!o.write_dir.empty()) {
         t0 = Clock::now();
         sorpia::write_mesh(output_path(o, run.label, mr.method), res.control_vertices.data(), mesh.n_vertices(),
@@ -393,10 +411,11 @@ void print_json(const Options& o, const std::vector<MeshRun>& runs) {
   std::printf("{\n  \"machine\": {\"cpu\": %s, \"hardware_threads\": %u},\n", json_str(cpu_model()).c_str(),
               std::thread::hardware_concurrency());
   std::printf("  \"options\": {\"tol\": %s, \"max_iter\": %d, \"boundary\": %s, \"operator\": %s, \"topology\": %s, "
-              "\"repeat\": %d},\n",
+              "\"threads\": %d, \"two_pass\": %s, \"repeat\": %d},\n",
               num(o.tol).c_str(), o.max_iter, json_str(o.boundary_name).c_str(),
               json_str(o.opensubdiv_operator ? "opensubdiv" : "masks").c_str(),
-              json_str(o.topology == sorpia::TopologyBuild::OpenMesh ? "openmesh" : "direct").c_str(), o.repeat);
+              json_str(o.topology == sorpia::TopologyBuild::OpenMesh ? "openmesh" : "direct").c_str(), o.threads,
+              o.two_pass ? "true" : "false", o.repeat);
   std::printf("  \"meshes\": [");
   for (std::size_t k = 0; k < runs.size(); ++k) {
     const MeshRun& r = runs[k];
@@ -411,11 +430,11 @@ void print_json(const Options& o, const std::vector<MeshRun>& runs) {
       const double solve = median(m.solve);
       const double sweep = m.iterations ? solve / m.iterations : NAN;
       std::printf("%s\n      {\"method\": %s, \"solve\": %s, \"estimate\": %s, \"write\": %s, \"iterations\": %d, "
-                  "\"final_error\": %s, \"stop\": %s, \"omega\": %s, \"sweep\": %s, \"sweep_over_floor\": %s, "
-                  "\"end_to_end\": %s}",
+                  "\"final_error\": %s, \"stop\": %s, \"omega\": %s, \"threads\": %d, \"reordered\": %s, "
+                  "\"sweep\": %s, \"sweep_over_floor\": %s, \"end_to_end\": %s}",
                   j ? "," : "", json_str(m.method).c_str(), num(solve).c_str(), num(median(m.estimate)).c_str(),
                   num(median(m.write)).c_str(), m.iterations, num(m.final_error).c_str(), json_str(m.stop).c_str(),
-                  num(m.omega).c_str(), num(sweep).c_str(), num(sweep / r.floor).c_str(),
+                  num(m.omega).c_str(), m.threads, m.reordered ? "true" : "false", num(sweep).c_str(), num(sweep / r.floor).c_str(),
                   num(median(r.topology) + median(r.op) + solve + median(m.estimate)).c_str());
     }
     std::printf("]}");
@@ -424,9 +443,10 @@ void print_json(const Options& o, const std::vector<MeshRun>& runs) {
 }
 
 void print_table(const Options& o, const std::vector<MeshRun>& runs) {
-  std::printf("sorpia-bench: %s, %u hardware threads; one thread; tol %g; %s; operator %s; topology %s; "
-              "medians of %d\n",
-              cpu_model().c_str(), std::thread::hardware_concurrency(), o.tol, o.boundary_name.c_str(),
+  std::printf("sorpia-bench: %s, %u hardware threads; sor/gs on %d thread%s%s; tol %g; %s; operator %s; "
+              "topology %s; medians of %d\n",
+              cpu_model().c_str(), std::thread::hardware_concurrency(), o.threads, o.threads > 1 ? "s" : "",
+              o.two_pass ? " (two-pass E_k)" : "", o.tol, o.boundary_name.c_str(),
               o.opensubdiv_operator ? "opensubdiv" : "masks",
               o.topology == sorpia::TopologyBuild::OpenMesh ? "openmesh" : "direct", o.repeat);
   std::printf("%-22s %9s %7s %8s %8s %-6s %7s %8s %6s %9s %8s %9s %8s %8s\n", "mesh", "vertices", "read", "topology",
