@@ -342,9 +342,11 @@ Plan make_plan(const LimitOperator& op, int threads) {
             p.interface.push_back(i);
             break;
           }
-  // The lag: the forward reach max(N(i)) - i of all but about 1/128 of the
+  // The lag: the forward reach max(N(i)) - i of all but about 1/1024 of the
   // vertices, so that the residual front stays close behind the update front
-  // (its rows still in L2) and few residuals are deferred.
+  // (its rows still in L2) and few residuals are deferred: a deferred
+  // residual gathers from far rows, cache misses each (irregular:1000000,
+  // sor: 0.46 s with 1/20 deferred, 0.34 s with 1/128, 0.32 s with 1/1024).
   std::vector<std::int32_t> reach(op.n), reach_count(kMaxLag + 2, 0);
   for (std::int32_t i = 0; i < n; ++i) {
     std::int32_t r = 0;
@@ -354,7 +356,7 @@ Plan make_plan(const LimitOperator& op, int threads) {
   }
   std::int64_t beyond = n;
   p.lag = 0;
-  while (p.lag <= kMaxLag && (beyond -= reach_count[p.lag]) > n / 128) ++p.lag;
+  while (p.lag <= kMaxLag && (beyond -= reach_count[p.lag]) > n / 1024) ++p.lag;
   p.lag = std::max<std::int32_t>(p.lag, 1);
   // Deferred: the residual of i is not final lag vertices later, because i or
   // a neighbour is swept in the interface phase, or a neighbour lies beyond the lag.
