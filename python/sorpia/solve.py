@@ -16,7 +16,11 @@ Methods (the iteration itself runs in the C++ core):
 - ``"gs"``: Gauss-Seidel, the SOR-PIA sweep with omega = 1.
 - ``"sor"``: SOR-PIA (paper eq. 18), vertices in input order:
   d_i = (v_i^0 - v_i^inf) / alpha_i with the neighbours already updated in
-  this sweep, then v_i += omega d_i (alpha_i = B_ii).
+  this sweep, then v_i += omega d_i (alpha_i = B_ii). E_k is computed inside
+  the sweep (one pass over the mesh per iteration, the same values as a
+  separate residual pass); ``threads=N`` sweeps N index ranges in parallel,
+  the vertices they share last. A mesh whose vertex order is very poor
+  (shuffled) is swept in a breadth-first order and returned in its own order.
 - ``"cg"``: on closed meshes B = Gamma Upsilon (paper section 3.2) with
   Gamma = diag((1 - alpha_i)/n_i) and Upsilon symmetric positive definite:
   conjugate gradients on Upsilon V = Gamma^-1 V0, one product per iteration.
