@@ -312,7 +312,8 @@ struct Plan {
   std::size_t far = 0;  // vertices reaching further ahead than the lag
 };
 
-Plan make_plan(const LimitOperator& op, int threads) {
+// parallel: run the passes on the threads (their results do not depend on it).
+Plan make_plan(const LimitOperator& op, int threads, bool parallel) {
   const auto n = static_cast<std::int32_t>(op.n);
   const std::int32_t* off = op.offsets.data();
   const std::int32_t* nb = op.neighbors.data();
@@ -333,42 +334,54 @@ Plan make_plan(const LimitOperator& op, int threads) {
     p.begin[t] = lo;
   }
   p.flags.assign(op.n, 0);
-  if (threads > 1)
+  std::vector<std::vector<std::int32_t>> per_range(static_cast<std::size_t>(threads));
+  if (threads > 1) {
+#pragma omp parallel for num_threads(threads) schedule(static, 1) if (parallel)
     for (int t = 0; t < threads; ++t)
       for (std::int32_t i = p.begin[t]; i < p.begin[t + 1]; ++i)
         for (std::int32_t q = off[i]; q < off[i + 1]; ++q)
           if (nb[q] < p.begin[t] || nb[q] >= p.begin[t + 1]) {
             p.flags[i] = kInterface;
-            p.interface.push_back(i);
+            per_range[t].push_back(i);
             break;
           }
+    for (auto& r : per_range) p.interface.insert(p.interface.end(), r.begin(), r.end());
+  }
   // The lag: the forward reach max(N(i)) - i of all but about 1/1024 of the
   // vertices, so that the residual front stays close behind the update front
   // (its rows still in L2) and few residuals are deferred: a deferred
   // residual gathers from far rows, cache misses each (irregular:1000000,
   // sor: 0.46 s with 1/20 deferred, 0.34 s with 1/128, 0.32 s with 1/1024).
   std::vector<std::int32_t> reach(op.n), reach_count(kMaxLag + 2, 0);
+#pragma omp parallel for num_threads(threads) schedule(static) if (parallel)
   for (std::int32_t i = 0; i < n; ++i) {
     std::int32_t r = 0;
     for (std::int32_t q = off[i]; q < off[i + 1]; ++q) r = std::max(r, nb[q] - i);
     reach[i] = r;
-    ++reach_count[std::min(r, kMaxLag + 1)];
   }
+  for (std::int32_t i = 0; i < n; ++i) ++reach_count[std::min(reach[i], kMaxLag + 1)];
   std::int64_t beyond = n;
   p.lag = 0;
   while (p.lag <= kMaxLag && (beyond -= reach_count[p.lag]) > n / 1024) ++p.lag;
   p.lag = std::max<std::int32_t>(p.lag, 1);
   // Deferred: the residual of i is not final lag vertices later, because i or
   // a neighbour is swept in the interface phase, or a neighbour lies beyond the lag.
-  for (std::int32_t i = 0; i < n; ++i) {
-    p.far += reach[i] > p.lag;
-    bool late = (p.flags[i] & kInterface) || reach[i] > p.lag;
-    for (std::int32_t q = off[i]; q < off[i + 1] && !late && threads > 1; ++q) late = p.flags[nb[q]] & kInterface;
-    if (late) {
-      p.flags[i] |= kDeferred;
-      p.deferred.push_back(i);
+  std::size_t far = 0;
+#pragma omp parallel for num_threads(threads) schedule(static, 1) reduction(+ : far) if (parallel)
+  for (int t = 0; t < threads; ++t) {
+    per_range[t].clear();
+    for (std::int32_t i = p.begin[t]; i < p.begin[t + 1]; ++i) {
+      far += reach[i] > p.lag;
+      bool late = (p.flags[i] & kInterface) || reach[i] > p.lag;
+      for (std::int32_t q = off[i]; q < off[i + 1] && !late && threads > 1; ++q) late = p.flags[nb[q]] & kInterface;
+      if (late) {
+        p.flags[i] |= kDeferred;
+        per_range[t].push_back(i);
+      }
     }
   }
+  p.far = far;
+  for (auto& r : per_range) p.deferred.insert(p.deferred.end(), r.begin(), r.end());
   p.ahead = p.lag;
   return p;
 }
@@ -448,13 +461,13 @@ class Engine {
   // when exponent = 0 and the order is kept).
   Engine(const LimitOperator& op, const double* v0, int exponent, double omega, int threads)
       : op_(&op),
-        plan_(make_plan(op, threads)),
-        x_(op.n + 1),
-        exponent_(exponent),
         // Below about 8k vertices a thread, waking the threads costs more
         // than they save; the ranges then run one after the other (the same
         // order, so the same result).
-        parallel_(threads > 1 && op.n >= 8192 * static_cast<std::size_t>(threads)) {
+        parallel_(threads > 1 && op.n >= 8192 * static_cast<std::size_t>(threads)),
+        plan_(make_plan(op, threads, parallel_)),
+        x_(op.n + 1),
+        exponent_(exponent) {
     if (poor_order(plan_, op.n)) {
       // Sweep in a locality order instead (a Gauss-Seidel order like any
       // other: same solution, iteration counts within a few percent), and
@@ -464,7 +477,7 @@ class Engine {
       for (std::size_t k = 0; k < op.n; ++k) inv_[perm_[k]] = static_cast<std::int32_t>(k);
       reordered_ = permuted(op, perm_, inv_);
       op_ = &reordered_;
-      plan_ = make_plan(reordered_, threads);
+      plan_ = make_plan(reordered_, threads, parallel_);
       v0_.resize(3 * op.n);
       for (std::size_t k = 0; k < op.n; ++k)
         for (int a = 0; a < 3; ++a) v0_[3 * k + a] = v0[3 * static_cast<std::size_t>(perm_[k]) + a];
@@ -531,6 +544,7 @@ class Engine {
 
  private:
   const LimitOperator* op_;                // the operator swept: the caller's or reordered_
+  bool parallel_;                         // threads really run in parallel
   std::vector<std::int32_t> perm_, inv_;  // locality order (empty: the caller's): perm[new] = old
   LimitOperator reordered_;               // the caller's operator in that order
   Plan plan_;
@@ -538,7 +552,6 @@ class Engine {
   const Kernels* k_ = nullptr;
   Rows x_;
   int exponent_;
-  bool parallel_;
   std::vector<double> v0_;                // V0 reordered and/or divided by 2^exponent, when either applies
   Ctx ctx_;
 };
