@@ -334,7 +334,10 @@ Plan make_plan(const LimitOperator& op, int threads, bool parallel) {
     p.begin[t] = lo;
   }
   p.flags.assign(op.n, 0);
+  // Per-range lists, reserved here: nothing may throw (bad_alloc) inside a
+  // parallel region, where it would end the process.
   std::vector<std::vector<std::int32_t>> per_range(static_cast<std::size_t>(threads));
+  for (int t = 0; t < threads; ++t) per_range[t].reserve(static_cast<std::size_t>(p.begin[t + 1] - p.begin[t]));
   if (threads > 1) {
 #pragma omp parallel for num_threads(threads) schedule(static, 1) if (parallel)
     for (int t = 0; t < threads; ++t)
