@@ -50,6 +50,7 @@ namespace {
 // note about passing AVX vectors without AVX does not concern us.
 #pragma GCC diagnostic ignored "-Wpsabi"
 typedef double d4 __attribute__((vector_size(32)));
+typedef std::int32_t i4 __attribute__((vector_size(16)));
 
 // n rows of 4 doubles, zeroed, on a 2 MB boundary with transparent huge pages
 // asked for when large (a row never straddles a cache line; 2 MB pages save
@@ -111,10 +112,11 @@ inline d4 splat(double a) { return d4{a, a, a, a}; }
 // The first K neighbours are summed by a loop of fixed length K: a loop over
 // each vertex's own count mispredicts its exit about once per vertex on
 // meshes that mix valences, which measured as the largest cost of a sweep on
-// such meshes (fixed K: 0.34 s instead of 0.48 s for "sor" on
-// irregular:1000000). Slots past the valence add the zero row n, and adding
-// +0.0 leaves every sum bit for bit as the plain loop gives it. K is chosen
-// per mesh from its valences (choose_slots); K = 0 is the plain loop.
+// such meshes ("sor" on irregular:1000000: 0.48 s with the plain loop, 0.34 s
+// with 8 slots selected one by one, 0.26 s selected four at a time). Slots
+// past the valence add the zero row n, and adding +0.0 leaves every sum bit
+// for bit as the plain loop gives it. K (a multiple of 4) is chosen per mesh
+// from its valences (choose_slots); K = 0 is the plain loop.
 template <int K>
 __attribute__((always_inline)) inline d4 ring_sum(const Ctx& c, std::int32_t i) {
   const std::int32_t b = c.off[i], v = c.off[i + 1] - b;
@@ -122,12 +124,19 @@ __attribute__((always_inline)) inline d4 ring_sum(const Ctx& c, std::int32_t i) 
   d4 s = splat(0.0);
   std::int32_t k = 0;
   if (K > 0 && __builtin_expect(i < c.slots_end, 1)) {
-    for (; k < K; ++k) {
-      // j, or the zero row past the valence, chosen by a mask: written as a
-      // conditional, GCC turns it back into a branch per slot.
-      const std::int32_t j = q[k];  // readable below slots_end
-      const std::int32_t pad = -static_cast<std::int32_t>(k >= v);
-      s += c.x[j ^ ((j ^ c.n) & pad)];
+    // Four slots at a time: the indices, or the zero row past the valence,
+    // chosen by a vector mask and turned into byte offsets in one go (a
+    // scalar select per slot costs seven instructions; written as a
+    // conditional, GCC turns it back into a branch per slot).
+    const i4 lane = {0, 1, 2, 3};
+    const i4 valence = {v, v, v, v}, zero_row = {c.n, c.n, c.n, c.n};
+    const char* base = reinterpret_cast<const char*>(c.x);
+    for (; k < K; k += 4) {
+      i4 j;
+      std::memcpy(&j, q + k, sizeof j);  // readable below slots_end
+      const i4 real = (lane + k) < valence;
+      const i4 bytes = ((j & real) | (zero_row & ~real)) << 5;
+      for (int a = 0; a < 4; ++a) s += *reinterpret_cast<const d4*>(base + bytes[a]);
     }
   }
   for (; k < v; ++k) s += c.x[q[k]];
@@ -236,17 +245,14 @@ struct Kernels {
                                   NAME##K##_residual_list, NAME##K##_update_list};
 
 // Slot counts offered; 0 = the plain loop.
-constexpr int kSlotChoices[] = {0, 4, 6, 8, 10, 12};
+constexpr int kSlotChoices[] = {0, 4, 8, 12};
 
 #define SORPIA_SWEEP_KERNEL_SET(NAME, ATTR) \
   SORPIA_SWEEP_KERNELS(NAME, ATTR, 0)       \
   SORPIA_SWEEP_KERNELS(NAME, ATTR, 4)       \
-  SORPIA_SWEEP_KERNELS(NAME, ATTR, 6)       \
   SORPIA_SWEEP_KERNELS(NAME, ATTR, 8)       \
-  SORPIA_SWEEP_KERNELS(NAME, ATTR, 10)      \
   SORPIA_SWEEP_KERNELS(NAME, ATTR, 12)      \
-  const Kernels* const NAME##_set[] = {&NAME##0_kernels, &NAME##4_kernels,  &NAME##6_kernels,                     \
-                                       &NAME##8_kernels, &NAME##10_kernels, &NAME##12_kernels};
+  const Kernels* const NAME##_set[] = {&NAME##0_kernels, &NAME##4_kernels, &NAME##8_kernels, &NAME##12_kernels};
 
 SORPIA_SWEEP_KERNEL_SET(base, )
 #if defined(__x86_64__) && defined(__GNUC__)
@@ -266,8 +272,8 @@ const Kernels& kernels(int choice) {
 
 // The slot count K with the least expected cost per vertex: a slot costs
 // about one cycle, a vertex of valence above K (a loop exit the branch
-// predictor cannot know) about 15. A regular mesh gets K = its valence (no
-// wasted slot, no misprediction); irregular:1000000 (valences 3..12, 90% at
+// predictor cannot know) about 15. A mesh of one valence gets the plain loop
+// (its exit always predicted); irregular:1000000 (valences 3..12, 90% at
 // most 8) gets K = 8.
 int choose_slots(const LimitOperator& op) {
   std::vector<std::int64_t> above(kSlotChoices[std::size(kSlotChoices) - 1] + 2, 0);
