@@ -4,8 +4,9 @@
 
 #include <algorithm>
 #include <limits>
+#include <memory>
 #include <mutex>
-#include <numeric>
+#include <stdexcept>
 #include <string>
 #include <tuple>
 #include <utility>
@@ -35,32 +36,128 @@ std::string face_str(std::size_t f, const std::int32_t* faces) {
 
 // ---- validate_faces and its helpers ----------------------------------------
 // Half-edge h (0 <= h < 3 n_faces) of a face list runs from the corner
-// faces[h] to the next corner of its face, faces[next_corner(h)].
+// faces[h] to the next corner of its face, faces[next_corner(h)]; it also
+// names that corner (the corner at faces[h]).
 namespace face_checks {
 
 inline std::size_t next_corner(std::size_t h) { return h - h % 3 + (h % 3 + 1) % 3; }
 inline std::size_t prev_corner(std::size_t h) { return h - h % 3 + (h % 3 + 2) % 3; }
 
-// Union-find over corners (path halving): corners of one vertex that end up in
-// one set form one fan of faces around it.
-struct DisjointSets {
-  std::vector<std::int32_t> parent;
-  explicit DisjointSets(std::size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
-  std::int32_t find(std::int32_t x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  }
-  void unite(std::int32_t a, std::int32_t b) {
-    a = find(a);
-    b = find(b);
-    if (a != b) parent[std::max(a, b)] = std::min(a, b);
-  }
+// Corner of a triangle (v, a, b) at v, counter-clockwise: `next` = a, `prev` = b.
+struct Corner {
+  std::int32_t next;
+  std::int32_t prev;
+};
+
+// Scratch per neighbour x of the vertex v being checked, stamped with v so
+// that it is never cleared: the faces at v using edge (v, x) (`users`, at most
+// 3 counted; `outs` of them run v -> x), the third vertex of the first one and
+// the corner whose `prev` is x (one_ring.cpp chains a fan the same way).
+struct EdgeSlot {
+  std::int32_t stamp = -1, third = 0, in_corner = 0;
+  std::uint8_t users = 0, outs = 0;
 };
 
 std::string face_list(const std::vector<std::int32_t>& ids, std::size_t shown) {
   std::string s;
   for (std::size_t i = 0; i < ids.size() && i < shown; ++i) s += (i ? ", " : "") + std::to_string(ids[i]);
   return ids.size() > shown ? s + ", ..." : s;
+}
+
+// Error path only. Marks in `seen` the corners of the fan round the vertex of
+// corner h0 (the faces reached from h0's across edges at that vertex).
+// `mate[h]` is the other half-edge of h's edge or -1; needs edges of at most
+// two faces, consistently oriented, so that the step to the next corner round
+// the vertex, next_corner(mate[h]), is one-to-one and the walk ends.
+void mark_fan(const std::vector<std::int32_t>& mate, std::int32_t h0, std::vector<std::uint8_t>& seen) {
+  std::int32_t h = h0;
+  do {
+    seen[h] = 1;
+    if (mate[h] < 0) {  // a boundary edge: walk back from h0 to the other one
+      for (h = mate[prev_corner(h0)]; h >= 0; h = mate[prev_corner(h)]) seen[h] = 1;
+      return;
+    }
+    h = static_cast<std::int32_t>(next_corner(mate[h]));
+  } while (h != h0);
+}
+
+// Error path only. Some edge (v, x > v) has three or more faces or two faces
+// with the same third vertex: sort the half-edges of the edges (v, x > v) by
+// (x, third vertex, id), so that the half-edges of one edge, and two faces
+// with the same three vertices, are adjacent, and name the first such edge.
+[[noreturn]] void refuse_edge(const std::int32_t* faces, std::size_t n_half, std::int32_t v) {
+  auto other = [&](std::int32_t h) { return std::max(faces[h], faces[next_corner(h)]); };
+  std::vector<std::int32_t> hs;
+  for (std::size_t h = 0; h < n_half; ++h)
+    if (std::min(faces[h], faces[next_corner(h)]) == v) hs.push_back(static_cast<std::int32_t>(h));
+  auto third = [&](std::int32_t h) { return faces[prev_corner(h)]; };
+  auto key = [&](std::int32_t h) { return std::make_tuple(other(h), third(h), h); };
+  std::sort(hs.begin(), hs.end(), [&](std::int32_t a, std::int32_t b) { return key(a) < key(b); });
+  for (std::size_t i = 0, j; i < hs.size(); i = j) {
+    for (j = i + 1; j < hs.size() && other(hs[j]) == other(hs[i]); ++j)
+      if (third(hs[j]) == third(hs[j - 1])) {
+        const std::int32_t f0 = std::min(hs[j - 1], hs[j]) / 3, f1 = std::max(hs[j - 1], hs[j]) / 3;
+        throw MeshError("duplicate faces: " + face_str(f0, faces) + " and " + face_str(f1, faces) +
+                        " have the same three vertices; remove one of them");
+      }
+    if (j - i > 2) {
+      std::vector<std::int32_t> users;
+      for (std::size_t p = i; p < j; ++p) users.push_back(hs[p] / 3);
+      std::sort(users.begin(), users.end());
+      throw MeshError("non-manifold edge (" + std::to_string(v) + ", " + std::to_string(other(hs[i])) +
+                      "): shared by " + std::to_string(j - i) + " faces (faces " + face_list(users, 4) +
+                      "); an edge may border at most two faces");
+    }
+  }
+  throw std::logic_error("sorpia: refuse_edge found no bad edge at vertex " + std::to_string(v));
+}
+
+// Error path only: the other half-edge of each half-edge's edge, or -1, by
+// sorting the half-edges by edge (needs edges of at most two faces).
+std::vector<std::int32_t> mates(const std::int32_t* faces, std::size_t n_half) {
+  std::vector<std::pair<std::uint64_t, std::int32_t>> by_edge(n_half);
+  for (std::size_t h = 0; h < n_half; ++h) {
+    const auto a = static_cast<std::uint64_t>(faces[h]), b = static_cast<std::uint64_t>(faces[next_corner(h)]);
+    by_edge[h] = {std::min(a, b) << 32 | std::max(a, b), static_cast<std::int32_t>(h)};
+  }
+  std::sort(by_edge.begin(), by_edge.end());
+  std::vector<std::int32_t> mate(n_half, -1);
+  for (std::size_t i = 0; i + 1 < n_half; ++i)
+    if (by_edge[i].first == by_edge[i + 1].first) {
+      mate[by_edge[i].second] = by_edge[i + 1].second;
+      mate[by_edge[i + 1].second] = by_edge[i].second;
+      ++i;
+    }
+  return mate;
+}
+
+// Error path only. Some vertex has more than one fan of faces: name the vertex
+// of the first corner (in face order) outside the fan of its vertex's first
+// corner, with its number of faces and of fans.
+[[noreturn]] void refuse_bowtie(const std::int32_t* faces, std::size_t n_vertices, std::size_t n_half) {
+  const std::vector<std::int32_t> mate = mates(faces, n_half);
+  std::vector<std::int32_t> first_corner(n_vertices, -1);
+  for (std::size_t h = 0; h < n_half; ++h)
+    if (first_corner[faces[h]] < 0) first_corner[faces[h]] = static_cast<std::int32_t>(h);
+  std::vector<std::uint8_t> seen(n_half, 0);
+  for (std::int32_t c : first_corner)
+    if (c >= 0) mark_fan(mate, c, seen);
+  const auto hh = static_cast<std::int32_t>(std::find(seen.begin(), seen.end(), 0) - seen.begin());
+  if (static_cast<std::size_t>(hh) == n_half) throw std::logic_error("sorpia: refuse_bowtie found one fan everywhere");
+  const std::int32_t v = faces[hh];
+  std::size_t n_at_v = 0, n_fans = 1;  // the first fan is marked
+  for (std::size_t c = 0; c < n_half; ++c)
+    if (faces[c] == v) {
+      ++n_at_v;
+      if (!seen[c]) {
+        ++n_fans;
+        mark_fan(mate, static_cast<std::int32_t>(c), seen);
+      }
+    }
+  throw MeshError("non-manifold vertex " + std::to_string(v) + ": its " + std::to_string(n_at_v) + " faces form " +
+                  std::to_string(n_fans) + " fans that meet only at this vertex (a 'bowtie'; e.g. faces " +
+                  std::to_string(first_corner[v] / 3) + " and " + std::to_string(hh / 3) +
+                  "); split it into one vertex per fan");
 }
 
 // Error path only. Two faces traverse an edge in the same direction: try to
@@ -108,14 +205,18 @@ std::string orientation_advice(const std::int32_t* faces, std::size_t n_faces, s
 // would fail add_face without saying why) and one fan of faces per vertex (a
 // 'bowtie' is accepted by OpenMesh and quietly made a corner by OpenSubdiv).
 // Throws MeshError naming the first offending face, edge or vertex.
-// Half-edges are bucketed by their smaller vertex (a counting sort) and each
-// bucket sorted by (other vertex, third vertex of the face): O(h log k) for h
-// half-edges and at most k in a bucket, never quadratic at a high-valence vertex.
+// Linear time: the corners are bucketed by vertex (a counting sort, as in
+// one_ring.cpp) and each vertex's faces matched edge by edge through a slot
+// per neighbour stamped with the vertex, then chained into a fan; no sort, so
+// a high-valence vertex costs no more than its edges. A problem found there is
+// named by an error path that looks again (sorting) to name the same edge,
+// face or vertex whatever the order of the checks: the first edge (lo, hi)
+// with 3+ faces or a duplicate face, else the first misoriented edge, else the
+// vertex of the first corner outside its vertex's first fan.
 // Returns the number of edges and of boundary edges.
 std::pair<std::size_t, std::size_t> validate_faces(const std::int32_t* faces, std::size_t n_faces,
                                                    std::size_t n_vertices) {
   using face_checks::next_corner;
-  using face_checks::prev_corner;
   constexpr auto int_max = static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max());
   if (n_vertices > int_max)
     throw MeshError("too many vertices: " + std::to_string(n_vertices) + " (at most 2^31 - 1)");
@@ -134,108 +235,110 @@ std::pair<std::size_t, std::size_t> validate_faces(const std::int32_t* faces, st
                         " (a degenerate triangle): remove the face");
   }
   const std::size_t n_half = 3 * n_faces;
-  auto tail = [&](std::int32_t h) { return faces[h]; };
-  auto head = [&](std::int32_t h) { return faces[next_corner(h)]; };
-  auto lo_end = [&](std::int32_t h) { return std::min(tail(h), head(h)); };
-  auto hi_end = [&](std::int32_t h) { return std::max(tail(h), head(h)); };
-  auto third = [&](std::int32_t h) { return faces[prev_corner(h)]; };
 
+  // Corners bucketed by vertex, in face order within a bucket.
   std::vector<std::int32_t> start(n_vertices + 1, 0);
-  for (std::size_t h = 0; h < n_half; ++h) ++start[lo_end(static_cast<std::int32_t>(h)) + 1];
+  for (std::size_t h = 0; h < n_half; ++h) ++start[faces[h] + 1];
   for (std::size_t v = 0; v < n_vertices; ++v) start[v + 1] += start[v];
-  std::vector<std::int32_t> fill(start.begin(), start.end() - 1);
-  std::vector<std::int32_t> bucket(n_half);
-  for (std::size_t h = 0; h < n_half; ++h) {
-    const auto hh = static_cast<std::int32_t>(h);
-    bucket[fill[lo_end(hh)]++] = hh;
-  }
-  // Sorted by (other end, third vertex, id): the half-edges of one edge are
-  // adjacent, and two faces with the same three vertices are next to each other.
-  auto key = [&](std::int32_t h) { return std::make_tuple(hi_end(h), third(h), h); };
-  for (std::size_t v = 0; v < n_vertices; ++v)
-    std::sort(bucket.begin() + start[v], bucket.begin() + start[v + 1],
-              [&](std::int32_t a, std::int32_t b) { return key(a) < key(b); });
-  // The other half-edge of h's edge, or -1 (only used once no edge has 3+ faces).
-  auto mate = [&](std::int32_t h) -> std::int32_t {
-    const auto first = bucket.begin() + start[lo_end(h)], last = bucket.begin() + start[lo_end(h) + 1];
-    const std::int32_t other = hi_end(h);
-    auto it = std::lower_bound(first, last, other, [&](std::int32_t e, std::int32_t o) { return hi_end(e) < o; });
-    for (; it != last && hi_end(*it) == other; ++it)
-      if (*it != h) return *it;
-    return -1;
-  };
-
-  face_checks::DisjointSets fans(n_half);
-  std::vector<std::int32_t> valence(n_vertices, 0);
-  std::int32_t misoriented = -1;  // a half-edge whose mate runs the same way
-  std::size_t n_edges = 0, n_boundary = 0;
-  for (std::size_t v = 0; v < n_vertices; ++v) {
-    for (std::int32_t i = start[v], j; i < start[v + 1]; i = j) {
-      const std::int32_t other = hi_end(bucket[i]);
-      for (j = i + 1; j < start[v + 1] && hi_end(bucket[j]) == other; ++j)
-        if (third(bucket[j]) == third(bucket[j - 1])) {
-          const std::int32_t f0 = std::min(bucket[j - 1], bucket[j]) / 3, f1 = std::max(bucket[j - 1], bucket[j]) / 3;
-          throw MeshError("duplicate faces: " + face_str(f0, faces) + " and " + face_str(f1, faces) +
-                          " have the same three vertices; remove one of them");
-        }
-      ++n_edges;
-      ++valence[v];
-      ++valence[other];
-      if (j - i > 2) {
-        std::vector<std::int32_t> users;
-        for (std::int32_t p = i; p < j; ++p) users.push_back(bucket[p] / 3);
-        std::sort(users.begin(), users.end());
-        throw MeshError("non-manifold edge (" + std::to_string(v) + ", " + std::to_string(other) + "): shared by " + std::to_string(j - i) + " faces (faces " +
-                        face_checks::face_list(users, 4) + "); an edge may border at most two faces");
-      }
-      if (j - i == 1) {
-        ++n_boundary;
-        continue;
-      }
-      const std::int32_t h0 = bucket[i], h1 = bucket[i + 1];
-      if (tail(h0) == tail(h1)) {
-        if (misoriented < 0) misoriented = h0;
-        continue;
-      }
-      // h0 and h1 run opposite ways: the faces on either side join one fan
-      // at each end of the edge (a corner is named by the half-edge leaving it).
-      fans.unite(h0, static_cast<std::int32_t>(next_corner(h1)));
-      fans.unite(h1, static_cast<std::int32_t>(next_corner(h0)));
+  // Left uninitialised: the fill below writes every entry.
+  std::unique_ptr<face_checks::Corner[]> corners(new face_checks::Corner[n_half]);
+  {
+    std::vector<std::int32_t> fill(start.begin(), start.end() - 1);
+    for (std::size_t f = 0; f < n_faces; ++f) {
+      const std::int32_t* t = faces + 3 * f;
+      corners[fill[t[0]]++] = {t[1], t[2]};
+      corners[fill[t[1]]++] = {t[2], t[0]};
+      corners[fill[t[2]]++] = {t[0], t[1]};
     }
   }
-  if (misoriented >= 0) {
-    const std::int32_t h0 = misoriented, h1 = mate(h0);
-    const std::int32_t f0 = std::min(h0, h1) / 3, f1 = std::max(h0, h1) / 3;
-    throw MeshError("inconsistent orientation at edge (" + std::to_string(lo_end(h0)) + ", " +
-                    std::to_string(hi_end(h0)) + "): " + face_str(f0, faces) + " and " + face_str(f1, faces) +
-                    " both run from vertex " + std::to_string(tail(h0)) + " to " + std::to_string(head(h0)) + "; " +
-                    face_checks::orientation_advice(faces, n_faces, f0, mate));
-  }
-  // One fan per vertex: every corner of a vertex in the set of its first corner.
-  std::vector<std::int32_t>& first_corner = fill;  // reused: the bucketing is done
-  std::fill(first_corner.begin(), first_corner.end(), -1);
-  for (std::size_t h = 0; h < n_half; ++h) {
-    const auto hh = static_cast<std::int32_t>(h);
-    const std::int32_t v = tail(hh);
-    if (first_corner[v] < 0) {
-      first_corner[v] = hh;
+
+  std::vector<face_checks::EdgeSlot> slots(n_vertices);
+  std::vector<std::int32_t> valence(n_vertices, 0);
+  constexpr auto none = std::numeric_limits<std::int32_t>::max();
+  using Edge = std::pair<std::int32_t, std::int32_t>;  // (lower end, higher end)
+  auto edge = [](std::int32_t a, std::int32_t b) { return Edge{std::min(a, b), std::max(a, b)}; };
+  std::int32_t bad_lo = none;  // the lowest lower end of an edge of 3+ faces or of two equal faces
+  Edge misoriented{none, none};  // the first edge two faces run the same way
+  bool bowtie = false;
+  std::size_t n_edge_ends = 0, n_boundary_ends = 0;  // each edge is seen from both ends
+  for (std::size_t vi = 0; vi < n_vertices; ++vi) {
+    const auto v = static_cast<std::int32_t>(vi);
+    const std::int32_t k = start[v + 1] - start[v];
+    const face_checks::Corner* c = corners.get() + start[v];
+    std::int32_t n_edges_v = 0, n_single = 0;  // edges at v, and those of one face
+    bool fan_checkable = true;                 // edge counts and orientation right at v
+    // Face i of v uses edge (v, x) with third vertex `third`, running v -> x if `out`.
+    auto use = [&](std::int32_t x, std::int32_t third, bool out, std::int32_t i) {
+      face_checks::EdgeSlot& s = slots[x];
+      if (s.stamp != v) {
+        s = {v, third, i, 1, static_cast<std::uint8_t>(out)};
+        ++n_edges_v;
+        ++n_single;
+        return;
+      }
+      if (s.users == 1) {
+        --n_single;
+        if (s.third == third) {
+          bad_lo = std::min(bad_lo, std::min(v, x));
+          fan_checkable = false;
+        } else if (s.outs == static_cast<std::uint8_t>(out)) {
+          misoriented = std::min(misoriented, edge(v, x));
+          fan_checkable = false;
+        }
+      } else if (s.users == 2) {
+        bad_lo = std::min(bad_lo, std::min(v, x));
+        fan_checkable = false;
+      }
+      s.users = static_cast<std::uint8_t>(std::min(s.users + 1, 3));
+      s.outs = static_cast<std::uint8_t>(s.outs + out);
+      s.in_corner = out ? s.in_corner : i;
+    };
+    for (std::int32_t i = 0; i < k; ++i) {
+      use(c[i].next, c[i].prev, true, i);
+      use(c[i].prev, c[i].next, false, i);
+    }
+    valence[v] = n_edges_v;
+    n_edge_ends += static_cast<std::size_t>(n_edges_v);
+    n_boundary_ends += static_cast<std::size_t>(n_single);
+    if (k == 0 || !fan_checkable || bowtie) continue;
+    if (n_single > 2) {  // a fan has two boundary edges or none
+      bowtie = true;
       continue;
     }
-    if (fans.find(hh) == fans.find(first_corner[v])) continue;
-    std::vector<std::int32_t> roots;
-    std::size_t n_at_v = 0;
-    for (std::size_t c = 0; c < n_half; ++c)
-      if (faces[c] == v) {
-        ++n_at_v;
-        roots.push_back(fans.find(static_cast<std::int32_t>(c)));
+    // Chain the faces clockwise (see one_ring.cpp): from neighbour x to the
+    // `next` of the corner whose `prev` is x, starting at the far end of the
+    // boundary edge that only runs into v, or anywhere round an interior vertex.
+    std::int32_t first = c[0].next;
+    for (std::int32_t i = 0; i < k && n_single > 0; ++i)
+      if (slots[c[i].prev].outs == 0 && slots[c[i].prev].users == 1) {
+        first = c[i].prev;
+        break;
       }
-    std::sort(roots.begin(), roots.end());
-    const auto n_fans = std::unique(roots.begin(), roots.end()) - roots.begin();
-    throw MeshError("non-manifold vertex " + std::to_string(v) + ": its " + std::to_string(n_at_v) + " faces form " +
-                    std::to_string(n_fans) + " fans that meet only at this vertex (a 'bowtie'; e.g. faces " +
-                    std::to_string(first_corner[v] / 3) + " and " + std::to_string(hh / 3) +
-                    "); split it into one vertex per fan");
+    std::int32_t seen = 0;
+    for (std::int32_t x = first;;) {
+      const face_checks::EdgeSlot& s = slots[x];
+      if (s.users == s.outs) break;  // no face runs x -> v: the fan's other boundary edge
+      ++seen;
+      x = c[s.in_corner].next;
+      if (x == first || seen > k) break;
+    }
+    if (seen != k) bowtie = true;
   }
+  corners.reset();
+  if (bad_lo != none) face_checks::refuse_edge(faces, n_half, bad_lo);
+  if (misoriented.first != none) {
+    const auto [lo, hi] = misoriented;
+    const std::vector<std::int32_t> mate = face_checks::mates(faces, n_half);
+    std::int32_t h0 = 0;
+    while (edge(faces[h0], faces[next_corner(h0)]) != misoriented) ++h0;
+    const std::int32_t h1 = mate[h0];
+    const std::int32_t f0 = std::min(h0, h1) / 3, f1 = std::max(h0, h1) / 3;
+    throw MeshError("inconsistent orientation at edge (" + std::to_string(lo) + ", " + std::to_string(hi) + "): " +
+                    face_str(f0, faces) + " and " + face_str(f1, faces) + " both run from vertex " +
+                    std::to_string(faces[h0]) + " to " + std::to_string(faces[next_corner(h0)]) + "; " +
+                    face_checks::orientation_advice(faces, n_faces, f0, [&](std::int32_t h) { return mate[h]; }));
+  }
+  if (bowtie) face_checks::refuse_bowtie(faces, n_vertices, n_half);
   // OpenSubdiv's Far refuses a vertex of more than 65535 edges (Vtr::VALENCE_LIMIT)
   // without saying which; every sorpia operation goes through it.
   constexpr std::int32_t max_valence = (1 << 16) - 1;
@@ -244,7 +347,7 @@ std::pair<std::size_t, std::size_t> validate_faces(const std::int32_t* faces, st
       throw MeshError("vertex " + std::to_string(v) + " has " + std::to_string(valence[v]) +
                       " neighbours: OpenSubdiv supports at most " + std::to_string(max_valence) +
                       " edges at a vertex; split the fan around it");
-  return {n_edges, n_boundary};
+  return {n_edge_ends / 2, n_boundary_ends / 2};
 }
 
 }  // namespace
