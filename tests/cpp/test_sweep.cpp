@@ -96,6 +96,7 @@ TEST(Sweep, FusedErrorsEqualTwoPassBitForBit) {
       const sorpia::SolveResult two = run(c, threads, true, omega);
       ASSERT_TRUE(fused.converged()) << c.name;
       EXPECT_EQ(fused.iterations, two.iterations) << c.name << " threads " << threads;
+      EXPECT_EQ(fused.initial_error, two.initial_error) << c.name;  // E_0 inside the first sweep
       EXPECT_EQ(fused.errors, two.errors) << c.name << " threads " << threads << " omega " << omega;
       EXPECT_EQ(fused.control_vertices, two.control_vertices) << c.name;
     }
@@ -157,6 +158,22 @@ TEST(Sweep, PoorOrderIsSweptInItsOwnOrderAndReturnedInTheCallers) {
     EXPECT_LT(d, 1e-8 * max_abs(ra.control_vertices));  // both to E_k < 1e-10 E_0
     EXPECT_LE(rb.iterations, std::ceil(1.15 * ra.iterations));
     EXPECT_LT(error_from_scratch(b, rb.control_vertices), 1.01e-10 * rb.initial_error);
+  }
+}
+
+TEST(Sweep, StopAtZeroReturnsV0) {
+  // Every vertex at one point: B V0 = V0 up to rounding (rows sum to 1), so
+  // E_0 is at rounding level and the run stops at k = 0; the first sweep,
+  // which computed E_0, must be undone.
+  sorpia::TriMesh m = sorpia::irregular(20000, 5);
+  for (std::size_t i = 0; i < m.n_vertices(); ++i)
+    for (int a = 0; a < 3; ++a) m.vertices[3 * i + a] = 0.1 * (a + 1);
+  const Case c = make_case("point", m);
+  for (int threads : {1, 2}) {
+    const sorpia::SolveResult r = run(c, threads, false);
+    EXPECT_EQ(r.iterations, 0);
+    EXPECT_TRUE(r.converged());
+    EXPECT_EQ(r.control_vertices, m.vertices);
   }
 }
 
