@@ -10,8 +10,10 @@
 // same formula and summation order as a separate residual pass: the E_k are
 // bit for bit those of the two-pass method (tested), while V, V0 and the
 // neighbour lists are still in cache. Vertices with a neighbour beyond the lag
-// (seams such as a torus's wrap-around, or a poorly ordered file) are marked
-// "deferred" once per solve and get their residual after the sweep.
+// (seams such as a torus's wrap-around) are marked "deferred" once per solve
+// and get their residual after the sweep. A mesh in a very poor order (most
+// vertices deferred, e.g. a shuffled file) is swept in a breadth-first order
+// of its own (locality_order) and handed back in the caller's order.
 //
 // Threads. The vertices are split into contiguous index ranges of equal work,
 // one per thread. A vertex with a neighbour in another range is an
@@ -21,12 +23,14 @@
 // vertex order. This is Gauss-Seidel in a slightly different vertex order
 // (interface vertices last), so the iteration count stays that of the
 // sequential sweep (a multicolour order would change the ordering of every
-// vertex). The caller's vertex order is never changed.
+// vertex). One fork and one join per sweep: the interface vertices and the
+// deferred residuals run on the calling thread after the join.
 //
-// Layout. V and V0 are held as (n, 4) doubles, the fourth lane zero, so a
-// neighbour is one 32-byte load; the arithmetic is per lane in the same order
-// as the scalar formula, and an AVX2 build of the kernels (picked at run time)
-// gives the same bits as the baseline one (no FMA contraction: target avx2 only).
+// Layout. V is held as (n + 1, 4) doubles, the fourth lane and the last row
+// zero, so a neighbour is one 32-byte load; V0 is read in place (n, 3). The
+// arithmetic is per lane in the same order as the scalar formula, and an AVX2
+// build of the kernels (picked at run time) gives the same bits as the
+// baseline one (no FMA contraction: the target is avx2 alone).
 #include <sys/mman.h>
 
 #include <algorithm>
@@ -52,9 +56,10 @@ namespace {
 typedef double d4 __attribute__((vector_size(32)));
 typedef std::int32_t i4 __attribute__((vector_size(16)));
 
-// n rows of 4 doubles, uninitialised but the last (zero), on a 2 MB boundary with transparent huge pages
-// asked for when large (a row never straddles a cache line; 2 MB pages save
-// most of the page faults and TLB misses of a fresh 32 MB array).
+// n rows of 4 doubles, uninitialised but the last (zero), on a 2 MB boundary
+// with transparent huge pages asked for when large (a row never straddles a
+// cache line; 2 MB pages save most of the page faults and TLB misses of a
+// fresh 32 MB array).
 // std::vector<d4> would not even guarantee 32 bytes: the baseline target caps
 // vector alignment at 16.
 class Rows {
