@@ -52,9 +52,10 @@ struct Corner {
 // Scratch per neighbour x of the vertex v being checked, stamped with v so
 // that it is never cleared: the faces at v using edge (v, x) (`users`, at most
 // 3 counted; `outs` of them run v -> x), the third vertex of the first one and
-// the corner whose `prev` is x (one_ring.cpp chains a fan the same way).
+// the neighbour after x clockwise round v: the `next` of the corner whose
+// `prev` is x (one_ring.cpp chains a fan the same way).
 struct EdgeSlot {
-  std::int32_t stamp = -1, third = 0, in_corner = 0;
+  std::int32_t stamp = -1, third = 0, after = 0;
   std::uint8_t users = 0, outs = 0;
 };
 
@@ -268,10 +269,10 @@ std::pair<std::size_t, std::size_t> validate_faces(const std::int32_t* faces, st
     std::int32_t n_edges_v = 0, n_single = 0;  // edges at v, and those of one face
     bool fan_checkable = true;                 // edge counts and orientation right at v
     // Face i of v uses edge (v, x) with third vertex `third`, running v -> x if `out`.
-    auto use = [&](std::int32_t x, std::int32_t third, bool out, std::int32_t i) {
+    auto use = [&](std::int32_t x, std::int32_t third, bool out) {
       face_checks::EdgeSlot& s = slots[x];
       if (s.stamp != v) {
-        s = {v, third, i, 1, static_cast<std::uint8_t>(out)};
+        s = {v, third, third, 1, static_cast<std::uint8_t>(out)};
         ++n_edges_v;
         ++n_single;
         return;
@@ -291,11 +292,11 @@ std::pair<std::size_t, std::size_t> validate_faces(const std::int32_t* faces, st
       }
       s.users = static_cast<std::uint8_t>(std::min(s.users + 1, 3));
       s.outs = static_cast<std::uint8_t>(s.outs + out);
-      s.in_corner = out ? s.in_corner : i;
+      s.after = out ? s.after : third;
     };
     for (std::int32_t i = 0; i < k; ++i) {
-      use(c[i].next, c[i].prev, true, i);
-      use(c[i].prev, c[i].next, false, i);
+      use(c[i].next, c[i].prev, true);
+      use(c[i].prev, c[i].next, false);
     }
     valence[v] = n_edges_v;
     n_edge_ends += static_cast<std::size_t>(n_edges_v);
@@ -319,7 +320,7 @@ std::pair<std::size_t, std::size_t> validate_faces(const std::int32_t* faces, st
       const face_checks::EdgeSlot& s = slots[x];
       if (s.users == s.outs) break;  // no face runs x -> v: the fan's other boundary edge
       ++seen;
-      x = c[s.in_corner].next;
+      x = s.after;
       if (x == first || seen > k) break;
     }
     if (seen != k) bowtie = true;
