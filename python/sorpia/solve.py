@@ -123,8 +123,8 @@ class InterpolationResult:
         Applications of B (or B^T) in the iteration, inner solves included: a
         measure of work comparable across methods.
     timings : dict
-        Seconds per phase: "topology" (faces validated, OpenMesh), "operator"
-        (B from OpenSubdiv), "estimate" (spectral estimates for the parameters:
+        Seconds per phase: "topology" (faces validated, one-ring), "operator"
+        (B from OpenSubdiv's limit masks), "estimate" (spectral estimates for the parameters:
         0 when an Interpolator already holds them), "solve".
     """
 
