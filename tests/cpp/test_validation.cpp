@@ -138,3 +138,41 @@ TEST(Validation, FaceOrderDoesNotMatter) {
   EXPECT_EQ(a.n_edges(), b.n_edges());
   for (std::size_t v = 0; v < m.n_vertices(); ++v) EXPECT_EQ(a.valence(v), b.valence(v));
 }
+
+TEST(Validation, BowtieOfAnOpenAndAClosedFanIsNamed) {
+  // Vertex 0: an open fan (faces 0, 1: two boundary edges at 0, as one fan
+  // has) and a closed cone (faces 2-5): only walking the fans tells them apart.
+  expect_refused({0, 1, 2, 0, 2, 3, 0, 4, 5, 0, 5, 6, 0, 6, 4, 4, 6, 5}, 7,
+                 {"non-manifold vertex 0: its 5 faces form 2 fans", "faces 0 and 2"});
+}
+
+TEST(Validation, ProblemsAreNamedInAFixedOrder) {
+  // Edges of 3+ faces and duplicate faces come before orientation: face 7
+  // reversed and, on higher-numbered vertices, a third face on an edge.
+  auto m = sorpia::icosphere(1);
+  const auto n = static_cast<std::int32_t>(m.n_vertices());
+  std::swap(m.faces[3 * 7 + 1], m.faces[3 * 7 + 2]);
+  const std::int32_t a = m.faces[3 * 70], b = m.faces[3 * 70 + 1];
+  m.faces.insert(m.faces.end(), {a, b, n});
+  expect_refused(m.faces, m.n_vertices() + 1,
+                 {"non-manifold edge (" + std::to_string(std::min(a, b)) + ", " + std::to_string(std::max(a, b)) + ")"});
+
+  // Of several misoriented edges the first by (lower end, higher end) is named,
+  // found here by comparing every pair of faces.
+  m = sorpia::icosphere(1);
+  std::swap(m.faces[3 * 7 + 1], m.faces[3 * 7 + 2]);
+  std::swap(m.faces[3 * 60 + 1], m.faces[3 * 60 + 2]);
+  std::pair<std::int32_t, std::int32_t> first{n, n};
+  for (std::size_t f = 0; f < m.n_faces(); ++f)
+    for (std::size_t g = f + 1; g < m.n_faces(); ++g)
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) {
+          const std::int32_t p = m.faces[3 * f + i], q = m.faces[3 * f + (i + 1) % 3];
+          if (p == m.faces[3 * g + j] && q == m.faces[3 * g + (j + 1) % 3])
+            first = std::min(first, std::make_pair(std::min(p, q), std::max(p, q)));
+        }
+  ASSERT_LT(first.first, n);
+  expect_refused(m.faces, m.n_vertices(),
+                 {"inconsistent orientation at edge (" + std::to_string(first.first) + ", " +
+                  std::to_string(first.second) + ")"});
+}
