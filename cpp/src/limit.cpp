@@ -122,15 +122,6 @@ struct RowRecorders {
   RowRecorder operator[](int i) const { return RowRecorder{builder, (*from_osd)[i]}; }
 };
 
-struct Point3 {
-  double x, y, z;
-  void Clear() { x = y = z = 0.0; }
-  void AddWithWeight(const Point3& p, double w) {
-    x += w * p.x;
-    y += w * p.y;
-    z += w * p.z;
-  }
-};
 
 }  // namespace
 
@@ -154,10 +145,10 @@ void limit_points(const Topology& topology, const double* vertices, Boundary bou
   const auto osd = detail::make_loop_refiner(topology, boundary);
   const std::size_t n = topology.n_vertices();
   const std::size_t k = osd.from_osd.size();
-  std::vector<Point3> src(k), dst(k);
+  std::vector<detail::Point3> src(k), dst(k);
   for (std::size_t i = 0; i < k; ++i) {
     const double* p = vertices + 3 * osd.from_osd[i];
-    src[i] = Point3{p[0], p[1], p[2]};
+    src[i] = detail::Point3{p[0], p[1], p[2]};
   }
   OpenSubdiv::Far::PrimvarRefinerReal<double>(*osd.refiner).Limit(src, dst);
   std::copy(vertices, vertices + 3 * n, out);  // unreferenced vertices: limit is themselves

@@ -7,15 +7,24 @@
 
 namespace sorpia::detail {
 
-namespace {
-// Corner of a triangle (v, a, b) at v, counter-clockwise: `next` = a, `prev` = b.
-// Going clockwise round v, the ring passes b and then a: the step from
-// neighbour x is to the `next` of the corner whose `prev` is x.
-struct Corner {
-  std::int32_t next;
-  std::int32_t prev;
-};
+CornerBuckets bucket_corners(const std::int32_t* faces, std::size_t n_faces, std::size_t n_vertices) {
+  CornerBuckets b;
+  b.start.assign(n_vertices + 1, 0);
+  for (std::size_t h = 0; h < 3 * n_faces; ++h) ++b.start[faces[h] + 1];
+  for (std::size_t v = 0; v < n_vertices; ++v) b.start[v + 1] += b.start[v];
+  // Left uninitialised: the fill below writes every entry.
+  b.corners.reset(new Corner[3 * n_faces]);
+  std::vector<std::int32_t> fill(b.start.begin(), b.start.end() - 1);
+  for (std::size_t f = 0; f < n_faces; ++f) {
+    const std::int32_t* t = faces + 3 * f;
+    b.corners[fill[t[0]]++] = {t[1], t[2]};
+    b.corners[fill[t[1]]++] = {t[2], t[0]};
+    b.corners[fill[t[2]]++] = {t[0], t[1]};
+  }
+  return b;
+}
 
+namespace {
 // Scratch per neighbour id, stamped with the vertex whose fan is being
 // chained, so that it is never cleared: `prev_of == v` says some corner of v
 // has prev x (corner `corner`), `next_of == v` that some corner has next x.
@@ -28,24 +37,10 @@ struct Slot {
 OneRing one_ring_direct(const std::int32_t* faces, std::size_t n_faces, std::size_t n_vertices,
                         std::size_t n_edges) {
   OneRing r;
-  // Corners bucketed by vertex, in face order within a bucket.
-  std::vector<std::int32_t> start(n_vertices + 1, 0);
-  for (std::size_t h = 0; h < 3 * n_faces; ++h) ++start[faces[h] + 1];
+  const CornerBuckets buckets = bucket_corners(faces, n_faces, n_vertices);
+  const std::vector<std::int32_t>& start = buckets.start;
   r.face_count.resize(n_vertices);
-  for (std::size_t v = 0; v < n_vertices; ++v) {
-    r.face_count[v] = start[v + 1];
-    start[v + 1] += start[v];
-  }
-  std::vector<Corner> corners(3 * n_faces);
-  {
-    std::vector<std::int32_t> fill(start.begin(), start.end() - 1);
-    for (std::size_t f = 0; f < n_faces; ++f) {
-      const std::int32_t* t = faces + 3 * f;
-      corners[fill[t[0]]++] = {t[1], t[2]};
-      corners[fill[t[1]]++] = {t[2], t[0]};
-      corners[fill[t[2]]++] = {t[0], t[1]};
-    }
-  }
+  for (std::size_t v = 0; v < n_vertices; ++v) r.face_count[v] = start[v + 1] - start[v];
 
   r.offsets.resize(n_vertices + 1);
   r.boundary.assign(n_vertices, 0);
@@ -59,7 +54,7 @@ OneRing one_ring_direct(const std::int32_t* faces, std::size_t n_faces, std::siz
       ++r.n_unreferenced;
       continue;
     }
-    const Corner* c = corners.data() + start[v];
+    const Corner* c = buckets.corners.get() + start[v];
     const auto vv = static_cast<std::int32_t>(v);
     for (int i = 0; i < k; ++i) {
       slots[c[i].prev].prev_of = vv;

@@ -2,9 +2,28 @@
 // The flat one-ring of a validated triangle mesh (internal; see topology.hpp).
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 namespace sorpia::detail {
+
+// Corner of a triangle (v, a, b) at v, counter-clockwise: `next` = a, `prev` = b.
+// Going clockwise round v, the ring passes b and then a: the step from
+// neighbour x is to the `next` of the corner whose `prev` is x.
+struct Corner {
+  std::int32_t next;
+  std::int32_t prev;
+};
+
+// The corners of a triangle list bucketed by vertex (a counting sort, linear
+// time), in face order within a bucket: vertex v's corners are
+// corners[start[v] .. start[v + 1]). Shared by validate_faces and
+// one_ring_direct. `faces` must hold indices in [0, n_vertices).
+struct CornerBuckets {
+  std::vector<std::int32_t> start;     // n_vertices + 1
+  std::unique_ptr<Corner[]> corners;   // 3 n_faces
+};
+CornerBuckets bucket_corners(const std::int32_t* faces, std::size_t n_faces, std::size_t n_vertices);
 
 // What sorpia::Topology keeps of the half-edge structure: per vertex its
 // neighbours in clockwise order (a boundary vertex from one boundary neighbour

@@ -43,11 +43,6 @@ namespace face_checks {
 inline std::size_t next_corner(std::size_t h) { return h - h % 3 + (h % 3 + 1) % 3; }
 inline std::size_t prev_corner(std::size_t h) { return h - h % 3 + (h % 3 + 2) % 3; }
 
-// Corner of a triangle (v, a, b) at v, counter-clockwise: `next` = a, `prev` = b.
-struct Corner {
-  std::int32_t next;
-  std::int32_t prev;
-};
 
 // Scratch per neighbour x of the vertex v being checked, stamped with v so
 // that it is never cleared: the faces at v using edge (v, x) (`users`, at most
@@ -237,21 +232,8 @@ std::pair<std::size_t, std::size_t> validate_faces(const std::int32_t* faces, st
   }
   const std::size_t n_half = 3 * n_faces;
 
-  // Corners bucketed by vertex, in face order within a bucket.
-  std::vector<std::int32_t> start(n_vertices + 1, 0);
-  for (std::size_t h = 0; h < n_half; ++h) ++start[faces[h] + 1];
-  for (std::size_t v = 0; v < n_vertices; ++v) start[v + 1] += start[v];
-  // Left uninitialised: the fill below writes every entry.
-  std::unique_ptr<face_checks::Corner[]> corners(new face_checks::Corner[n_half]);
-  {
-    std::vector<std::int32_t> fill(start.begin(), start.end() - 1);
-    for (std::size_t f = 0; f < n_faces; ++f) {
-      const std::int32_t* t = faces + 3 * f;
-      corners[fill[t[0]]++] = {t[1], t[2]};
-      corners[fill[t[1]]++] = {t[2], t[0]};
-      corners[fill[t[2]]++] = {t[0], t[1]};
-    }
-  }
+  detail::CornerBuckets buckets = detail::bucket_corners(faces, n_faces, n_vertices);
+  const std::vector<std::int32_t>& start = buckets.start;
 
   std::vector<face_checks::EdgeSlot> slots(n_vertices);
   std::vector<std::int32_t> valence(n_vertices, 0);
@@ -265,7 +247,7 @@ std::pair<std::size_t, std::size_t> validate_faces(const std::int32_t* faces, st
   for (std::size_t vi = 0; vi < n_vertices; ++vi) {
     const auto v = static_cast<std::int32_t>(vi);
     const std::int32_t k = start[v + 1] - start[v];
-    const face_checks::Corner* c = corners.get() + start[v];
+    const detail::Corner* c = buckets.corners.get() + start[v];
     std::int32_t n_edges_v = 0, n_single = 0;  // edges at v, and those of one face
     bool fan_checkable = true;                 // edge counts and orientation right at v
     // Face i of v uses edge (v, x) with third vertex `third`, running v -> x if `out`.
@@ -325,7 +307,7 @@ std::pair<std::size_t, std::size_t> validate_faces(const std::int32_t* faces, st
     }
     if (seen != k) bowtie = true;
   }
-  corners.reset();
+  buckets.corners.reset();
   if (bad_lo != none) face_checks::refuse_edge(faces, n_half, bad_lo);
   if (misoriented.first != none) {
     const auto [lo, hi] = misoriented;
