@@ -98,7 +98,8 @@ class InterpolationResult:
     iterations : int
         Iterations done (sweeps for "gs"/"sor", outer steps for "hss"/"whss").
     converged : bool
-        errors[-1] < tol.
+        errors[-1] < tol, or E_k at the rounding floor (E_k <= 64 eps max_i ||v_i^0||),
+        below which no method can go: a tol of 1e-300 ends there, converged.
     errors : (iterations + 1,) float64
         errors[k] = E_k / E_0, so errors[0] = 1 (a single 0.0 when E_0 = 0:
         V0 already interpolates and nothing is done).
