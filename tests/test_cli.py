@@ -241,8 +241,16 @@ def test_compare_writes_table_1_and_figure_7(torus_file, tmp_path):
     rows = list(csv.DictReader(io.StringIO(table_csv.read_text())))
     assert [r["method"] for r in rows] == list(cli.METHODS)
     data = json.loads(js.read_text())
+    # The Python API, same run: one Interpolator, every method solved on it, as compare does.
+    interp = sorpia.Interpolator(F, len(V0))
+    # The build is reported once, with the phases Interpolator reports, and is in no row.
+    assert set(interp.build_timings) <= set(data["setup"])
+    assert data["setup"]["wall_seconds"] >= 0 and data["setup"]["cpu_seconds"] >= 0
+    assert "Not included: reading the file and the topology and limit operator" in proc.stdout
     for row, entry in zip(rows, data["methods"]):
-        ref = sorpia.interpolate(V0, F, method=entry["method"])  # the Python API, same run
+        ref = interp.solve(V0, method=entry["method"])
+        assert entry["result"]["timings"]["topology"] == entry["result"]["timings"]["operator"] == 0
+        assert entry["threads"] == 1 and entry["cpu_clock"] == "thread"
         assert entry["iterations"] == ref.iterations == int(row["iterations"])
         np.testing.assert_allclose(entry["errors"], ref.errors, rtol=1e-9, atol=1e-15)
         # iterations to reach 1e-j: the first k with E_k/E_0 < 1e-j, from the errors themselves
@@ -250,9 +258,46 @@ def test_compare_writes_table_1_and_figure_7(torus_file, tmp_path):
         for j, tol in enumerate(TOLERANCE_HEADERS, start=1):
             expected = int(np.flatnonzero(errors < 10.0 ** -j)[0])
             assert entry["reached"][j - 1] == expected == int(row[f"iterations_to_{tol}"])
+    # The spectral estimates are shared: W-HSS (after HSS in METHODS) needs H's
+    # extremes, which HSS computed, so it spends no time estimating them again.
+    timings = {e["method"]: e["result"]["timings"] for e in data["methods"]}
+    assert timings["hss"]["estimate"] > 0 and timings["whss"]["estimate"] == 0
     image = imread(plot)
     assert image.shape[:2] == (560, 900)  # plotting.convergence_figure's default size
     assert image[..., :3].std() > 0.01  # not a blank image
+
+
+def test_fit_threads_agrees_with_one_thread(torus_file, tmp_path):
+    src, V0, F = torus_file
+    ctrl, reports = {}, {}
+    for n in (1, 2):
+        out, report = tmp_path / f"c{n}.obj", tmp_path / f"r{n}.json"
+        proc = run("fit", src, "-o", out, "--threads", n, "--report", report, "--quiet", cwd=tmp_path)
+        assert proc.returncode == 0, proc.stderr
+        ctrl[n], _ = sorpia.read_mesh(out)
+        reports[n] = json.loads(report.read_text())
+        assert reports[n]["threads"] == n
+    # Two threads sweep the vertices in another order (index ranges, then the
+    # shared vertices): both stop at E_k/E_0 < 1e-10, so the control vertices
+    # agree to about that relative to their size; 1e-8 leaves a margin of 100.
+    scale = np.abs(ctrl[1]).max()
+    assert np.abs(ctrl[2] - ctrl[1]).max() < 1e-8 * scale
+    # Iteration counts within 15% (solve.py: "within a few percent").
+    assert abs(reports[2]["iterations"] - reports[1]["iterations"]) <= 0.15 * reports[1]["iterations"]
+
+
+@pytest.mark.parametrize("args", [["fit", "-o", "c.obj", "--threads", "0"],
+                                  ["compare", "--methods", "pia", "--threads", "0"],
+                                  ["render", "-o", "f.png", "--threads", "0"],
+                                  ["fit", "-o", "c.obj", "--method", "pia", "--threads", "2"]],
+                         ids=["fit-0", "compare-0", "render-0", "fit-pia-2"])
+def test_bad_threads_exit_2_with_one_line(args, torus_file, tmp_path):
+    src, _, _ = torus_file
+    proc = run(args[0], src, *args[1:], cwd=tmp_path)
+    assert_user_error(proc)
+    assert len(proc.stderr.strip().splitlines()) == 1, proc.stderr
+    assert "--threads" in proc.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["torus.obj"]  # nothing written
 
 
 def test_compare_not_converged_exits_1_with_dashes(torus_file, tmp_path):

@@ -40,6 +40,7 @@ METHOD_LABELS = {"pia": "PIA", "wpia": "W-PIA", "hss": "HSS-PIA", "whss": "WHSS-
 # The columns of the paper's Table 1: iterations to reach E_k/E_0 < 10^-j.
 TABLE_TOLERANCES = tuple(10.0 ** -j for j in range(1, 11))
 MESH_SUFFIXES = (".obj", ".off", ".ply", ".stl")
+THREADED_METHODS = ("sor", "gs")  # the methods that sweep on --threads N
 
 
 class UserError(Exception):
@@ -281,11 +282,15 @@ def _positive_float(text: str) -> float:
     return value
 
 
-def _positive_int(text: str) -> int:
+def _int_arg(text: str) -> int:
     try:
-        value = int(text)
+        return int(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+
+
+def _positive_int(text: str) -> int:
+    value = _int_arg(text)
     if value < 1:
         raise argparse.ArgumentTypeError(f"expected at least 1, got {text!r}")
     return value
@@ -333,26 +338,105 @@ def _result_fields(res) -> dict:
     return out
 
 
-def _run_interpolate(vertices, faces, *, method, omega, tol, max_iter, boundary, progress: Progress, source):
-    """sorpia.interpolate with a progress line; returns (result, wall seconds,
-    CPU seconds, warnings raised during the run). A mesh it refuses is a
-    UserError naming the file `source`."""
-    from . import MeshError, interpolate
+def cpu_clock(threads: int) -> str:
+    """The clock of the CPU seconds reported for a solve on `threads` threads (_Clock)."""
+    return "thread" if threads == 1 else "process"
 
-    progress.restart(METHOD_LABELS[method])
 
-    kwargs = dict(method=method, tol=tol, max_iter=max_iter, boundary=boundary, callback=progress)
-    if omega is not None:
-        kwargs["omega"] = omega
-    progress.status(f"{progress.label}: setting up (topology, limit operator)")
-    cpu0, t0 = time.process_time(), time.perf_counter()
+class _Clock:
+    """Wall (perf_counter) and CPU seconds of a block.
+
+    The CPU clock depends on who does the work. threads == 1: every solve and
+    build runs on the calling thread, so time.thread_time() (that thread
+    only). time.process_time() would also count threads that merely spin:
+    libgomp's workers busy-wait some tens of ms after a parallel region ends
+    (limit_surface's, in fit --surface or demo), which showed as PIA at CPU
+    0.0044 s against wall 0.0004 s in the demo: about 4 ms of a spinning
+    worker, accounted to the process in scheduler-tick steps. threads > 1: the sweep's workers do part of the work, so
+    time.process_time() (every thread, their busy-waiting between sweeps
+    included: CPU the run occupies). cpu_clock(threads) names the one used."""
+
+    def __init__(self, threads: int = 1):
+        self._cpu = time.thread_time if cpu_clock(threads) == "thread" else time.process_time
+
+    def __enter__(self):
+        self.cpu0, self.t0 = self._cpu(), time.perf_counter()
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.wall = time.perf_counter() - self.t0
+        self.cpu = self._cpu() - self.cpu0
+
+
+def _timed(call, *, threads: int, source):
+    """call() with its warnings recorded and its wall and CPU seconds
+    (_Clock(threads)); returns (value, clock, warnings). A mesh the library
+    refuses is a UserError naming the file `source`."""
+    from . import MeshError
+
     try:
-        with warnings.catch_warnings(record=True) as caught:
+        with warnings.catch_warnings(record=True) as caught, _Clock(threads) as clock:
             warnings.simplefilter("always")
-            res = interpolate(vertices, faces, **kwargs)
+            value = call()
     except MeshError as exc:
         raise UserError(f"{source}: Loop PIA cannot run on this mesh: {exc}") from None
-    return res, time.perf_counter() - t0, time.process_time() - cpu0, caught
+    return value, clock, caught
+
+
+def _solver_kwargs(method, omega, tol, max_iter, threads, progress: Progress) -> dict:
+    progress.restart(METHOD_LABELS[method])
+    kwargs = dict(method=method, tol=tol, max_iter=max_iter, callback=progress, threads=threads)
+    if omega is not None:
+        kwargs["omega"] = omega
+    return kwargs
+
+
+def _fit_once(vertices, faces, *, method, omega, tol, max_iter, boundary, threads, progress: Progress, source):
+    """sorpia.interpolate (fit, render: one solve, so no Interpolator kept;
+    interpolate checks the options before building B) with a progress line;
+    returns (result, wall seconds, CPU seconds, warnings raised during the run)."""
+    from . import interpolate
+
+    kwargs = _solver_kwargs(method, omega, tol, max_iter, threads, progress)
+    progress.status(f"{progress.label}: setting up (topology, limit operator)")
+    res, clock, caught = _timed(lambda: interpolate(vertices, faces, boundary=boundary, **kwargs), threads=threads,
+                                source=source)
+    return res, clock.wall, clock.cpu, caught
+
+
+def _build_interpolator(vertices, faces, *, boundary, progress: Progress, source):
+    """sorpia.Interpolator for the mesh (compare: topology and limit operator
+    B built once for every method); prints its warnings; returns
+    (interpolator, {"wall": s, "cpu": s})."""
+    from . import Interpolator
+
+    progress.status("setting up (topology, limit operator)")
+    interp, clock, caught = _timed(lambda: Interpolator(faces, len(vertices), boundary=boundary), threads=1,
+                                   source=source)
+    _report_warnings(caught)
+    return interp, {"wall": clock.wall, "cpu": clock.cpu}
+
+
+def _solve(interp, vertices, *, method, omega, tol, max_iter, threads, progress: Progress, source):
+    """interp.solve with a progress line; returns (result, wall seconds, CPU
+    seconds, warnings raised during the run)."""
+    kwargs = _solver_kwargs(method, omega, tol, max_iter, threads, progress)
+    progress.status(f"{progress.label}: solving")
+    res, clock, caught = _timed(lambda: interp.solve(vertices, **kwargs), threads=threads, source=source)
+    return res, clock.wall, clock.cpu, caught
+
+
+def check_threads(threads: int, method: str | None = None) -> None:
+    """--threads: 1..sorpia's MAX_THREADS, more than 1 for sor/gs only
+    (`method` None: compare, which applies it to sor/gs and runs the rest on
+    one thread). Checked before any work; the solver checks again."""
+    from .solve import MAX_THREADS
+
+    if not 1 <= threads <= MAX_THREADS:
+        raise UserError(f"--threads {threads}: expected a whole number from 1 to {MAX_THREADS}")
+    if threads > 1 and method is not None and method not in THREADED_METHODS:
+        raise UserError(f"--threads applies to --method sor or gs only (got --method {method}); "
+                        "the other methods run on one thread")
 
 
 _warned: set = set()  # texts already printed in this process
@@ -393,7 +477,7 @@ def _omega_text(res) -> str:
 
 def run_fit(input_path, output, *, method="sor", omega="auto", tol=1e-10, max_iter=1000,
             boundary="edge-and-corner", surface=None, level=3, report=None, quiet=False, force=False,
-            triangulate=False, binary=False, out=None) -> tuple[int, dict]:
+            triangulate=False, binary=False, threads=1, out=None) -> tuple[int, dict]:
     """`sorpia fit`: returns (exit code, report dict)."""
     from . import limit_points, write_mesh
     from .meshinfo import mesh_info
@@ -404,6 +488,7 @@ def run_fit(input_path, output, *, method="sor", omega="auto", tol=1e-10, max_it
     check_paths([input_path], {"-o": output, "--surface": surface, "--report": report}, force)
     if omega != "auto" and method != "sor":
         raise UserError(f"--omega applies to --method sor only (got --method {method})")
+    check_threads(threads, method)
     if binary and not any(Path(p).suffix.lower() in (".ply", ".stl") for p in (output, surface) if p):
         raise UserError("--binary applies to .ply and .stl outputs only (OBJ and OFF are text formats)")
 
@@ -419,9 +504,9 @@ def run_fit(input_path, output, *, method="sor", omega="auto", tol=1e-10, max_it
         stats = mesh_info(V0, F, boundary=boundary, list_extraordinary=False, verdict=False)
         timings["statistics"] = time.perf_counter() - t0
 
-        res, timings["fit"], cpu, caught = _run_interpolate(
+        res, timings["fit"], cpu, caught = _fit_once(
             V0, F, method=method, omega=omega if method == "sor" else None, tol=tol, max_iter=max_iter,
-            boundary=boundary, progress=progress, source=input_path)
+            boundary=boundary, threads=threads, progress=progress, source=input_path)
         _report_warnings(caught)
         ctrl = np.asarray(res.control_vertices)
 
@@ -469,6 +554,7 @@ def run_fit(input_path, output, *, method="sor", omega="auto", tol=1e-10, max_it
         "tol": tol,
         "max_iter": max_iter,
         "boundary": boundary,
+        "threads": threads,
         "iterations": int(res.iterations),
         "converged": bool(res.converged),
         "final_error": float(errors[-1]),
@@ -476,6 +562,7 @@ def run_fit(input_path, output, *, method="sor", omega="auto", tol=1e-10, max_it
         "max_residual": float(residual.max()),
         "max_residual_relative": float(residual.max() / diag),
         "cpu_seconds": cpu,
+        "cpu_clock": cpu_clock(threads),
         "timings": {**timings, **fit_phases},
         "result": {k: v for k, v in fields.items() if k not in ("errors", "timings")},
     }
@@ -522,6 +609,8 @@ def _fit_summary(d: dict) -> str:
         label += f", omega {omega:.4f} ({d['omega_rule']})"
     elif d["method"] == "gs":
         label += ", omega 1"
+    if d["threads"] > 1:
+        label += f", {d['threads']} threads"
     state = (f"converged in {d['iterations']} iterations: E_k/E_0 = {d['final_error']:.3g} " + (
              f"< tol {d['tol']:g}" if d["final_error"] < d["tol"] else
              f"(tol {d['tol']:g} is below what float64 reaches: E_k stopped at rounding level)")
@@ -564,11 +653,14 @@ def iterations_to_reach(errors, tolerances=TABLE_TOLERANCES) -> list:
 
 def run_compare(input_path, *, methods=METHODS, tol=1e-10, max_iter=1000, boundary="edge-and-corner",
                 table=None, csv_path=None, plot=None, json_path=None, quiet=False, force=False,
-                triangulate=False, out=None) -> tuple[int, dict]:
-    """`sorpia compare`: every method to the same tolerance; returns (exit code, data)."""
+                triangulate=False, threads=1, out=None) -> tuple[int, dict]:
+    """`sorpia compare`: every method to the same tolerance, on one
+    sorpia.Interpolator (topology, limit operator and spectral estimates built
+    once and shared); returns (exit code, data). `threads` applies to sor/gs."""
     from .meshinfo import mesh_info
 
     out = out if out is not None else sys.stdout
+    check_threads(threads)
     check_paths([input_path], {"--table": table, "--csv": csv_path, "--plot": plot, "--json": json_path}, force)
     if plot is not None:
         _require_plotting()
@@ -577,10 +669,12 @@ def run_compare(input_path, *, methods=METHODS, tol=1e-10, max_iter=1000, bounda
         progress.status(f"reading {input_path}")
         V0, F, read_seconds = read_input(input_path, triangulate)
         progress.status("mesh statistics")
-        stats = mesh_info(V0, F, boundary=boundary, list_extraordinary=False, verdict=False)  # interpolate validates
+        stats = mesh_info(V0, F, boundary=boundary, list_extraordinary=False, verdict=False)  # Interpolator validates
+        interp, build = _build_interpolator(V0, F, boundary=boundary, progress=progress, source=input_path)
         for method in methods:
-            res, wall, cpu, caught = _run_interpolate(V0, F, method=method, omega=None, tol=tol, max_iter=max_iter,
-                                                      boundary=boundary, progress=progress, source=input_path)
+            n_threads = threads if method in THREADED_METHODS else 1
+            res, wall, cpu, caught = _solve(interp, V0, method=method, omega=None, tol=tol, max_iter=max_iter,
+                                            threads=n_threads, progress=progress, source=input_path)
             _report_warnings(caught)
             fields = _result_fields(res)
             rows.append({
@@ -590,7 +684,9 @@ def run_compare(input_path, *, methods=METHODS, tol=1e-10, max_iter=1000, bounda
                 "iterations": int(res.iterations),
                 "converged": bool(res.converged),
                 "reached": iterations_to_reach(res.errors),
+                "threads": n_threads,
                 "cpu_seconds": cpu,
+                "cpu_clock": cpu_clock(n_threads),
                 "wall_seconds": wall,
                 "errors": np.asarray(res.errors, dtype=float),
                 "result": {k: v for k, v in fields.items() if k != "errors"},
@@ -604,7 +700,11 @@ def run_compare(input_path, *, methods=METHODS, tol=1e-10, max_iter=1000, bounda
         "max_iter": max_iter,
         "boundary": boundary,
         "tolerances": TABLE_TOLERANCES,
+        "threads": threads,
         "read_seconds": read_seconds,
+        # Topology and limit operator B, built once and shared by every method;
+        # not in any row's seconds.
+        "setup": {"wall_seconds": build["wall"], "cpu_seconds": build["cpu"], **interp.build_timings},
         "methods": rows,
     }
     markdown = compare_markdown(data, Path(input_path).name)
@@ -623,6 +723,7 @@ def run_compare(input_path, *, methods=METHODS, tol=1e-10, max_iter=1000, bounda
     if not quiet:
         print(f"sorpia compare: {input_path}: {_mesh_line(stats)}", file=out)
         print(markdown, file=out)
+        print(_setup_line(data), file=out)
         failed = [r["label"] for r in rows if not r["converged"]]
         if failed:
             print(f"NOT converged to tol {tol:g} within {max_iter} iterations: {', '.join(failed)} (exit code 1)",
@@ -642,12 +743,25 @@ def _tol_header(tol: float) -> str:
     return f"1e-{round(-math.log10(tol))}"
 
 
+SOLVE_SECONDS_NOTE = (
+    "solve seconds: each method's own Interpolator.solve call, to --tol: the spectral estimates it is the first "
+    "to need (kept and shared: WHSS-PIA reuses HSS-PIA's) and its iterations; CPU of the calling thread "
+    "(of the whole process for sor/gs with --threads above 1). Not included: reading the file and the "
+    "topology and limit operator, built once for every method")
+
+
+def _setup_line(data: dict) -> str:
+    s = data["setup"]
+    return (f"{SOLVE_SECONDS_NOTE}: {s['wall_seconds']:.4f} s wall, {s['cpu_seconds']:.4f} s CPU "
+            f"(topology {s['topology']:.4f} s, operator {s['operator']:.4f} s).")
+
+
 def compare_markdown(data: dict, name: str) -> str:
     """The paper's Table 1 layout for one mesh: method, omega, iterations to
-    reach E_k/E_0 < 1e-1 ... 1e-10 ('-' = not reached), CPU seconds of the whole
-    run (to --tol), wall seconds."""
-    head = ["mesh", "method", "omega"] + [_tol_header(t) for t in data["tolerances"]] + ["CPU time (s)",
-                                                                                        "wall time (s)"]
+    reach E_k/E_0 < 1e-1 ... 1e-10 ('-' = not reached), CPU and wall seconds
+    of the method's own solve (SOLVE_SECONDS_NOTE)."""
+    head = ["mesh", "method", "omega"] + [_tol_header(t) for t in data["tolerances"]] + ["solve CPU (s)",
+                                                                                        "solve wall (s)"]
     lines = ["| " + " | ".join(head) + " |", "|" + "|".join(["---"] * 3 + ["---:"] * (len(head) - 3)) + "|"]
     for j, r in enumerate(data["methods"]):
         cells = [name if j == 0 else "", r["label"], "-" if r["omega"] is None else f"{r['omega']:.4f}"]
@@ -683,7 +797,7 @@ def _require_plotting() -> None:
 
 def run_render(input_path, output, *, level=3, tol=1e-10, max_iter=1000, boundary="edge-and-corner",
                size=(1200, 1000), elev=30.0, azim=-60.0, face_budget=FACE_BUDGET, quiet=False, force=False,
-               triangulate=False, up="z", out=None) -> tuple[int, dict]:
+               triangulate=False, up="z", threads=1, out=None) -> tuple[int, dict]:
     """`sorpia render`: the paper's Figure 3 for a mesh file."""
     from . import LoopSurface
     from .plotting import interpolation_figure, level_for_budget
@@ -692,15 +806,16 @@ def run_render(input_path, output, *, level=3, tol=1e-10, max_iter=1000, boundar
     if Path(output).suffix.lower() != ".png":
         raise UserError(f"-o {output}: render writes a PNG image, give a file name ending in .png")
     check_paths([input_path], {"-o": output}, force)
+    check_threads(threads, "sor")
     _require_plotting()
     budget = face_budget
     timings = {}
     with Progress(enabled=not quiet) as progress:
         progress.status(f"reading {input_path}")
         V0, F, timings["read"] = read_input(input_path, triangulate)
-        res, timings["fit"], _, caught = _run_interpolate(V0, F, method="sor", omega="auto", tol=tol,
-                                                          max_iter=max_iter, boundary=boundary, progress=progress,
-                                                          source=input_path)
+        res, timings["fit"], _, caught = _fit_once(V0, F, method="sor", omega="auto", tol=tol, max_iter=max_iter,
+                                                   boundary=boundary, threads=threads, progress=progress,
+                                                   source=input_path)
         _report_warnings(caught)
         ctrl = np.asarray(res.control_vertices)
         drawn_level = level_for_budget(len(F), level, budget)
@@ -719,7 +834,7 @@ def run_render(input_path, output, *, level=3, tol=1e-10, max_iter=1000, boundar
                                    iterations=int(res.iterations), level=drawn_level, up=up)
         save_figure(fig, output)
         timings["draw"] = time.perf_counter() - t0
-    data = {"output": str(output), "level": drawn_level, "iterations": int(res.iterations),
+    data = {"output": str(output), "level": drawn_level, "threads": threads, "iterations": int(res.iterations),
             "converged": bool(res.converged), "omega": getattr(res, "omega", None), "timings": timings}
     if not quiet:
         lvl = f"level {drawn_level}" + (f" (asked {level}; face budget {budget})" if drawn_level < level else "")
@@ -909,6 +1024,12 @@ def build_parser() -> argparse.ArgumentParser:
                        help="boundary rule of the limit surface (OpenSubdiv VTX_BOUNDARY_EDGE_AND_CORNER keeps "
                        "one-face corners; EDGE_ONLY smooths them)")
 
+    def threads_option(p, which):
+        p.add_argument("--threads", type=_int_arg, default=1, metavar="N",
+                       help=f"threads sweeping at once, {which}: vertex index ranges in parallel, then the "
+                       "vertices they share (iterations may differ by a few percent from one thread); more "
+                       "than the free cores only slows down")
+
     fit = command("fit", "fit a control mesh whose Loop limit surface interpolates a mesh",
                   "Read a triangle mesh, solve B V = V0 for control vertices V whose Loop limit surface passes "
                   "through the given vertices V0, write the control mesh (same faces, same vertex order) and, if "
@@ -928,6 +1049,7 @@ def build_parser() -> argparse.ArgumentParser:
     fit.add_argument("--report", metavar="REPORT.json",
                      help="write a JSON report: mesh statistics, method, omega, E_k/E_0 per iteration, seconds "
                      "per phase (read, statistics, fit, write, check, surface)")
+    threads_option(fit, "--method sor or gs only (refused with other methods, which run on one thread)")
     fit.add_argument("--binary", action="store_true", help="write .ply and .stl outputs in binary (faster, "
                      "smaller; PLY keeps float64 either way)")
     triangulate_flag(fit)
@@ -935,12 +1057,13 @@ def build_parser() -> argparse.ArgumentParser:
     fit.set_defaults(func=lambda a: run_fit(
         a.input, a.output, method=a.method, omega=a.omega, tol=a.tol, max_iter=a.max_iter, boundary=a.boundary,
         surface=a.surface, level=a.level, report=a.report, quiet=a.quiet, force=a.force, triangulate=a.triangulate,
-        binary=a.binary)[0])
+        binary=a.binary, threads=a.threads)[0])
 
     comp = command("compare", "run several methods to one tolerance: the paper's Table 1 and Figure 7",
                    "Run each method on the mesh to the same tolerance and print the paper's Table 1 layout for "
                    "it: omega, iterations to reach E_k/E_0 < 1e-1 ... 1e-10 ('-' = not reached), CPU and wall "
-                   "seconds of the whole run. Optionally write the table (Markdown, CSV), every figure (JSON) and "
+                   "seconds of each method's own solve (the topology and limit operator are built once for all "
+                   "methods, their seconds printed below the table). Optionally write the table (Markdown, CSV), every figure (JSON) and "
                    "the convergence plot (Figure 7: log10(E_k/E_0) against k, one line per method).")
     comp.add_argument("--methods", type=_methods_arg, default=",".join(METHODS), metavar="LIST",
                       help=f"comma-separated methods, from {','.join(METHODS)} (sor with omega auto)")
@@ -949,11 +1072,13 @@ def build_parser() -> argparse.ArgumentParser:
     comp.add_argument("--csv", metavar="T.csv", help="write the table as CSV")
     comp.add_argument("--plot", metavar="P.png", help="write the convergence plot (paper Figure 7) as PNG")
     comp.add_argument("--json", metavar="J.json", help="write every figure (E_k/E_0 per iteration, timings) as JSON")
+    threads_option(comp, "applied to sor and gs only (the other methods always run on one thread)")
     triangulate_flag(comp)
     output_flags(comp)
     comp.set_defaults(func=lambda a: run_compare(
         a.input, methods=a.methods, tol=a.tol, max_iter=a.max_iter, boundary=a.boundary, table=a.table,
-        csv_path=a.csv, plot=a.plot, json_path=a.json, quiet=a.quiet, force=a.force, triangulate=a.triangulate)[0])
+        csv_path=a.csv, plot=a.plot, json_path=a.json, quiet=a.quiet, force=a.force, triangulate=a.triangulate,
+        threads=a.threads)[0])
 
     ren = command("render", "draw the paper's Figure 3 for a mesh (PNG)",
                   "Fit the mesh with SOR-PIA and draw four shaded panels, the same camera in each: (a) the given "
@@ -972,12 +1097,13 @@ def build_parser() -> argparse.ArgumentParser:
                      help="the axis drawn vertical (many mesh files, e.g. the Stanford bunny, have y up)")
     ren.add_argument("--face-budget", type=_positive_int, default=FACE_BUDGET, metavar="N",
                      help="most triangles drawn per panel")
+    threads_option(ren, "in the SOR-PIA fit")
     triangulate_flag(ren)
     output_flags(ren)
     ren.set_defaults(func=lambda a: run_render(
         a.input, a.output, level=a.level, tol=a.tol, max_iter=a.max_iter, boundary=a.boundary, size=a.size,
         elev=a.elev, azim=a.azim, face_budget=a.face_budget, quiet=a.quiet, force=a.force,
-        triangulate=a.triangulate, up=a.up)[0])
+        triangulate=a.triangulate, up=a.up, threads=a.threads)[0])
 
     inf = command("info", "mesh statistics (the paper's Table 2) and whether Loop PIA can run on it",
                   "Print vertices, faces, edges, boundary loops, Euler characteristic, genus, components, "
