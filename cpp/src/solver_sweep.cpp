@@ -13,7 +13,8 @@
 // (seams such as a torus's wrap-around) are marked "deferred" once per solve
 // and get their residual after the sweep. A mesh in a very poor order (most
 // vertices deferred, e.g. a shuffled file) is swept in a breadth-first order
-// of its own (locality_order) and handed back in the caller's order.
+// of its own (locality_order) and handed back in the caller's order. E_0
+// comes the same way from the pass that sets V^(0) = V0 (Engine::start).
 //
 // Threads. The vertices are split into contiguous index ranges of equal work,
 // one per thread. A vertex with a neighbour in another range is an
@@ -178,14 +179,25 @@ __attribute__((always_inline)) inline void prefetch_ahead(const Ctx& c, std::int
   __builtin_prefetch(c.x + std::min(i + c.ahead, c.n), 1);
 }
 
-// Sweep [b, e) in order, skipping interface vertices; with Fused, also the
-// residuals of its non-deferred vertices, lag behind. Returns their max ||r||^2.
-template <bool Fused, int K>
+// What the front does to vertex i.
+enum class Front {
+  Sweep,  // update it (interface vertices excepted)
+  Init,   // x_i = v_i^0, every vertex: the residual lag behind is then E_0's
+};
+
+// Sweep [b, e) in order, skipping interface vertices (or with Front::Init,
+// set x = V0 there); with Fused, also the residuals of its non-deferred
+// vertices, lag behind. Returns their max ||r||^2.
+template <bool Fused, int K, Front F = Front::Sweep>
 __attribute__((always_inline)) inline double sweep_range_body(const Ctx& c, std::int32_t b, std::int32_t e) {
   double m = 0.0;
   for (std::int32_t i = b; i < e; ++i) {
-    prefetch_ahead(c, i);
-    if (!(c.flags[i] & kInterface)) update<K>(c, i);
+    if (F == Front::Init) {
+      c.x[i] = v0_row(c, i);
+    } else {
+      prefetch_ahead(c, i);
+      if (!(c.flags[i] & kInterface)) update<K>(c, i);
+    }
     if (Fused) {
       const std::int32_t j = i - c.lag;
       if (j >= b && !(c.flags[j] & kDeferred)) m = std::max(m, residual_sq<K>(c, j));
@@ -224,6 +236,7 @@ __attribute__((always_inline)) inline void update_list_body(const Ctx& c, const 
 // lane by lane, so the same bits (no FMA: the target is avx2 alone).
 struct Kernels {
   double (*sweep_fused)(const Ctx&, std::int32_t, std::int32_t);
+  double (*init_fused)(const Ctx&, std::int32_t, std::int32_t);  // x = V0 and E_0's residuals
   double (*sweep_plain)(const Ctx&, std::int32_t, std::int32_t);
   double (*residual_range)(const Ctx&, std::int32_t, std::int32_t);
   double (*residual_list)(const Ctx&, const std::int32_t*, std::size_t);
@@ -233,6 +246,9 @@ struct Kernels {
 #define SORPIA_SWEEP_KERNELS(NAME, ATTR, K)                                                                         \
   ATTR double NAME##K##_sweep_fused(const Ctx& c, std::int32_t b, std::int32_t e) {                                \
     return sweep_range_body<true, K>(c, b, e);                                                                     \
+  }                                                                                                                \
+  ATTR double NAME##K##_init_fused(const Ctx& c, std::int32_t b, std::int32_t e) {                                 \
+    return sweep_range_body<true, K, Front::Init>(c, b, e);                                                        \
   }                                                                                                                \
   ATTR double NAME##K##_sweep_plain(const Ctx& c, std::int32_t b, std::int32_t e) {                                \
     return sweep_range_body<false, K>(c, b, e);                                                                    \
@@ -246,8 +262,8 @@ struct Kernels {
   ATTR void NAME##K##_update_list(const Ctx& c, const std::int32_t* l, std::size_t k) {                            \
     update_list_body<K>(c, l, k);                                                                                  \
   }                                                                                                                \
-  const Kernels NAME##K##_kernels{NAME##K##_sweep_fused, NAME##K##_sweep_plain, NAME##K##_residual_range,          \
-                                  NAME##K##_residual_list, NAME##K##_update_list};
+  const Kernels NAME##K##_kernels{NAME##K##_sweep_fused,    NAME##K##_init_fused,     NAME##K##_sweep_plain,       \
+                                  NAME##K##_residual_range, NAME##K##_residual_list, NAME##K##_update_list};
 
 // Slot counts offered; 0 = the plain loop.
 constexpr int kSlotChoices[] = {0, 4, 8, 12};
@@ -323,6 +339,31 @@ struct Plan {
   std::size_t far = 0;  // vertices reaching further ahead than the lag
 };
 
+// The first 4 kRingGroups neighbours of vertex i in s, the slots past its
+// valence holding i itself; returns where the rest of its neighbours begin in
+// nb (they end at nb + off[i + 1]). A loop of fixed length, as in ring_sum,
+// for make_plan's passes over the rings: a loop over each vertex's own count
+// mispredicts its exit about once a vertex, which made the reach pass 9 ms of
+// the 12 ms of make_plan on irregular:1000000 (2.5 ms this way).
+constexpr int kRingGroups = 3;
+// nnz: the length of nb.
+inline const std::int32_t* ring_slots(const std::int32_t* off, const std::int32_t* nb, std::int32_t nnz,
+                                      std::int32_t i, i4 (&s)[kRingGroups]) {
+  const std::int32_t b = off[i], v = off[i + 1] - b;
+  const i4 lane = {0, 1, 2, 3}, valence = {v, v, v, v}, self = {i, i, i, i};
+  for (int g = 0; g < kRingGroups; ++g) {
+    i4 j = self;
+    if (__builtin_expect(b + 4 * (g + 1) <= nnz, 1)) {
+      std::memcpy(&j, nb + b + 4 * g, sizeof j);  // selected by a mask, as in ring_sum
+    } else {
+      for (int a = 0; a < 4 && 4 * g + a < v; ++a) j[a] = nb[b + 4 * g + a];
+    }
+    const i4 real = (lane + 4 * g) < valence;
+    s[g] = (j & real) | (self & ~real);
+  }
+  return nb + b + std::min(v, 4 * kRingGroups);
+}
+
 // parallel: run the passes on the threads (their results do not depend on it).
 Plan make_plan(const LimitOperator& op, int threads, bool parallel) {
   const auto n = static_cast<std::int32_t>(op.n);
@@ -351,14 +392,21 @@ Plan make_plan(const LimitOperator& op, int threads, bool parallel) {
   for (int t = 0; t < threads; ++t) per_range[t].reserve(static_cast<std::size_t>(p.begin[t + 1] - p.begin[t]));
   if (threads > 1) {
 #pragma omp parallel for num_threads(threads) schedule(static, 1) if (parallel)
-    for (int t = 0; t < threads; ++t)
-      for (std::int32_t i = p.begin[t]; i < p.begin[t + 1]; ++i)
-        for (std::int32_t q = off[i]; q < off[i + 1]; ++q)
-          if (nb[q] < p.begin[t] || nb[q] >= p.begin[t + 1]) {
-            p.flags[i] = kInterface;
-            per_range[t].push_back(i);
-            break;
-          }
+    for (int t = 0; t < threads; ++t) {
+      const std::int32_t lo = p.begin[t], hi = p.begin[t + 1];
+      for (std::int32_t i = lo; i < hi; ++i) {
+        i4 s[kRingGroups];
+        const std::int32_t* rest = ring_slots(off, nb, off[n], i, s);
+        i4 out = (s[0] < lo) | (s[0] >= hi);
+        for (int g = 1; g < kRingGroups; ++g) out |= (s[g] < lo) | (s[g] >= hi);
+        bool outside = (out[0] | out[1] | out[2] | out[3]) != 0;
+        for (const std::int32_t* q = rest; q < nb + off[i + 1]; ++q) outside |= *q < lo || *q >= hi;
+        if (outside) {
+          p.flags[i] = kInterface;
+          per_range[t].push_back(i);
+        }
+      }
+    }
     for (auto& r : per_range) p.interface.insert(p.interface.end(), r.begin(), r.end());
   }
   // The lag: the forward reach max(N(i)) - i of all but about 1/1024 of the
@@ -369,9 +417,14 @@ Plan make_plan(const LimitOperator& op, int threads, bool parallel) {
   std::vector<std::int32_t> reach(op.n), reach_count(kMaxLag + 2, 0);
 #pragma omp parallel for num_threads(threads) schedule(static) if (parallel)
   for (std::int32_t i = 0; i < n; ++i) {
-    std::int32_t r = 0;
-    for (std::int32_t q = off[i]; q < off[i + 1]; ++q) r = std::max(r, nb[q] - i);
-    reach[i] = r;
+    i4 s[kRingGroups];
+    const std::int32_t* rest = ring_slots(off, nb, off[n], i, s);
+    i4 m = s[0];
+    for (int g = 1; g < kRingGroups; ++g) m = m > s[g] ? m : s[g];
+    // i itself counts too: a vertex with every neighbour below it reaches 0.
+    std::int32_t r = std::max(std::max(std::max(m[0], m[1]), std::max(m[2], m[3])), i);
+    for (const std::int32_t* q = rest; q < nb + off[i + 1]; ++q) r = std::max(r, *q);
+    reach[i] = r - i;
   }
   for (std::int32_t i = 0; i < n; ++i) ++reach_count[std::min(reach[i], kMaxLag + 1)];
   std::int64_t beyond = n;
@@ -387,7 +440,15 @@ Plan make_plan(const LimitOperator& op, int threads, bool parallel) {
     for (std::int32_t i = p.begin[t]; i < p.begin[t + 1]; ++i) {
       far += reach[i] > p.lag;
       bool late = (p.flags[i] & kInterface) || reach[i] > p.lag;
-      for (std::int32_t q = off[i]; q < off[i + 1] && !late && threads > 1; ++q) late = p.flags[nb[q]] & kInterface;
+      if (threads > 1 && !late) {
+        i4 s[kRingGroups];
+        const std::int32_t* rest = ring_slots(off, nb, off[n], i, s);
+        std::uint8_t f = 0;
+        for (int g = 0; g < kRingGroups; ++g)
+          for (int a = 0; a < 4; ++a) f |= p.flags[s[g][a]];
+        for (const std::int32_t* q = rest; q < nb + off[i + 1]; ++q) f |= p.flags[*q];
+        late = f & kInterface;
+      }
       if (late) {
         p.flags[i] |= kDeferred;
         per_range[t].push_back(i);
@@ -504,7 +565,6 @@ class Engine {
     }
     choice_ = choose_slots(*op_);
     k_ = &kernels(choice_);
-    for (std::size_t i = 0; i < op.n; ++i) x_[i] = d4{v0[3 * i], v0[3 * i + 1], v0[3 * i + 2], 0.0};  // V^(0) = V0
     const std::int32_t nnz = op_->offsets[op.n];
     std::int32_t slots_end = static_cast<std::int32_t>(op.n);
     while (slots_end > 0 && op_->offsets[slots_end - 1] + kSlotChoices[choice_] > nnz) --slots_end;
@@ -519,6 +579,18 @@ class Engine {
 
   // max_i ||v_i^0|| of the (scaled) V0: the monitor's rounding level.
   double scale() const { return max_row_norm(ctx_.v0, op_->n); }
+
+  // Sets V^(0) = V0 and returns E_0, in one pass: the residuals run lag
+  // behind the rows being set, as in a fused sweep (the same bits as
+  // residual(), without reading x back from memory).
+  double start() {
+    const int t_count = threads();
+    double m = 0.0;
+#pragma omp parallel for num_threads(t_count) schedule(static, 1) reduction(max : m) if (parallel_)
+    for (int t = 0; t < t_count; ++t) m = std::max(m, k_->init_fused(ctx_, plan_.begin[t], plan_.begin[t + 1]));
+    m = std::max(m, k_->residual_list(ctx_, plan_.deferred.data(), plan_.deferred.size()));
+    return std::sqrt(m);
+  }
 
   // E of the current iterate, by a residual pass.
   double residual() const {
@@ -576,8 +648,9 @@ void solve_sor(const LimitOperator& op, const double* v0, int exponent, const So
                SolveResult& res) {
   Engine engine(op, v0, exponent, omega, opt.threads);
   res.reordered = engine.reordered();
+  const double e0 = engine.start();
   Monitor mon(opt, res, engine.scale());
-  if (!mon.start(engine.residual())) {
+  if (!mon.start(e0)) {
     for (;;) {
       double e = engine.sweep(!opt.two_pass);
       res.products += 2;  // a sweep and a residual, fused or not
