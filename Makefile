@@ -9,8 +9,10 @@ VENV ?= .venv
 PY := $(VENV)/bin/python
 APT_PACKAGES := libopenmesh-dev libosd-dev libgtest-dev
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
-# The Python build keeps its CMake tree here, so a second `make` rebuilds only what changed.
-PIP_BUILD := -C build-dir=build/python
+# The Python build keeps its CMake tree here, so a second `make` rebuilds only what changed; it also builds
+# the C++ tests, so ctest runs in the same tree and the core is compiled once.
+BUILD_DIR := build/python
+PIP_BUILD := -C build-dir=$(BUILD_DIR) -C cmake.define.SORPIA_BUILD_TESTS=ON
 
 .PHONY: demo test deps venv install cpp-test py-test clean
 
@@ -37,10 +39,8 @@ install: deps venv
 	$(PY) -m pip install -q scikit-build-core pybind11 cmake ninja
 	$(PY) -m pip install -q --no-build-isolation $(PIP_BUILD) ".[test]"
 
-cpp-test: deps venv install
-	$(VENV)/bin/cmake -S . -B build/cpp -G Ninja -DSORPIA_BUILD_TESTS=ON -DSORPIA_BUILD_PYTHON=OFF >/dev/null
-	$(VENV)/bin/cmake --build build/cpp
-	cd build/cpp && ../../$(VENV)/bin/ctest --output-on-failure
+cpp-test: install
+	cd $(BUILD_DIR) && ../../$(VENV)/bin/ctest --output-on-failure
 
 py-test: install
 	cd tests && ../$(PY) -m pytest
