@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "expect_error.hpp"
 #include "sorpia/errors.hpp"
 #include "sorpia/limit.hpp"
 #include "sorpia/shapes.hpp"
@@ -21,13 +22,8 @@ using Faces = std::vector<std::int32_t>;
 
 // The Topology constructor throws MeshError whose message contains every one of `parts`.
 void expect_refused(const Faces& faces, std::size_t n_vertices, const std::vector<std::string>& parts) {
-  try {
-    sorpia::Topology topo(faces.data(), faces.size() / 3, n_vertices);
-    ADD_FAILURE() << "accepted; expected an error containing '" << parts.front() << "'";
-  } catch (const sorpia::MeshError& e) {
-    const std::string what = e.what();
-    for (const auto& p : parts) EXPECT_NE(what.find(p), std::string::npos) << "'" << p << "' not in: " << what;
-  }
+  sorpia_test::expect_error<sorpia::MeshError>(
+      [&] { sorpia::Topology topo(faces.data(), faces.size() / 3, n_vertices); }, parts);
 }
 
 // A Moebius strip: a band of n quads (two triangles each) whose ends are glued
