@@ -7,6 +7,11 @@
 
 namespace sorpia::detail {
 
+void refuse_second_fan(std::size_t v, int n_faces) {
+  throw MeshError("non-manifold vertex " + std::to_string(v) + ": its " + std::to_string(n_faces) +
+                  " faces form more than one fan (a 'bowtie'); split it into one vertex per fan");
+}
+
 CornerBuckets bucket_corners(const std::int32_t* faces, std::size_t n_faces, std::size_t n_vertices) {
   CornerBuckets b;
   b.start.assign(n_vertices + 1, 0);
@@ -70,9 +75,7 @@ OneRing one_ring_direct(const std::int32_t* faces, std::size_t n_faces, std::siz
         r.boundary[v] = 1;
         break;
       }
-    if (out + k + r.boundary[v] > r.neighbors.size())
-      throw MeshError("non-manifold vertex " + std::to_string(v) + ": its " + std::to_string(k) +
-                      " faces form more than one fan (a 'bowtie'); split it into one vertex per fan");
+    if (out + k + r.boundary[v] > r.neighbors.size()) refuse_second_fan(v, k);
     std::int32_t x = first;
     int faces_seen = 0;
     for (;;) {
@@ -82,9 +85,7 @@ OneRing one_ring_direct(const std::int32_t* faces, std::size_t n_faces, std::siz
       x = c[slots[x].corner].next;
       if (x == first || faces_seen > k) break;  // back round an interior vertex
     }
-    if (faces_seen != k)
-      throw MeshError("non-manifold vertex " + std::to_string(v) + ": its " + std::to_string(k) +
-                      " faces form more than one fan (a 'bowtie'); split it into one vertex per fan");
+    if (faces_seen != k) refuse_second_fan(v, k);
   }
   if (out != r.neighbors.size())  // n_edges did not come from these faces
     throw std::logic_error("sorpia: one-ring size " + std::to_string(out) + " != 2 x " + std::to_string(n_edges) +

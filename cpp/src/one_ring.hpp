@@ -25,6 +25,10 @@ struct CornerBuckets {
 };
 CornerBuckets bucket_corners(const std::int32_t* faces, std::size_t n_faces, std::size_t n_vertices);
 
+// Throws the MeshError of a vertex whose `n_faces` faces form more than one
+// fan (both one-ring builds find it while walking the fan).
+[[noreturn]] void refuse_second_fan(std::size_t v, int n_faces);
+
 // What sorpia::Topology keeps of the half-edge structure: per vertex its
 // neighbours in clockwise order (a boundary vertex from one boundary neighbour
 // to the other; an interior vertex starting at the second corner of the

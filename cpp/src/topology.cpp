@@ -386,9 +386,7 @@ detail::OneRing one_ring_openmesh(const std::int32_t* faces, std::size_t n_faces
       r.neighbors.push_back(mesh.to_vertex_handle(h).idx());
       h = mesh.next_halfedge_handle(mesh.opposite_halfedge_handle(h));  // clockwise
     } while (h != h0);
-    if (faces_seen != r.face_count[v])
-      throw MeshError("non-manifold vertex " + std::to_string(v) + ": its " + std::to_string(r.face_count[v]) +
-                      " faces form more than one fan (a 'bowtie'); split it into one vertex per fan");
+    if (faces_seen != r.face_count[v]) detail::refuse_second_fan(v, r.face_count[v]);
     // h = v -> x lies in the face (v, x, .): start an interior ring at the x
     // of the lowest-numbered face.
     if (!on_boundary)
