@@ -70,16 +70,6 @@ const std::array<LimitMask, kTabulated + 1>& smooth_table() {
   return table;
 }
 
-// The mask of vertex v with the rule limit_mask() documents; `crease`
-// reports the crease rule, under which only the first and last ring neighbours count.
-LimitMask mask_of(const Topology& t, std::size_t v, Boundary boundary, const LimitMask& crease_mask, bool& crease) {
-  crease = false;
-  if (t.is_unreferenced(v)) return corner_limit_mask();
-  if (!t.is_boundary(v)) return smooth_limit_mask(t.valence(v));
-  if (t.face_count(v) == 1 && boundary == Boundary::EdgeAndCorner) return corner_limit_mask();
-  crease = true;
-  return crease_mask;
-}
 }  // namespace
 
 LimitMask smooth_limit_mask(int valence) {
@@ -99,15 +89,16 @@ LimitMask corner_limit_mask() {
 }
 
 LimitMask limit_mask(const Topology& topology, std::size_t i, Boundary boundary) {
-  bool crease = false;
-  return mask_of(topology, i, boundary, crease_limit_mask(), crease);
+  if (topology.is_unreferenced(i)) return corner_limit_mask();
+  if (!topology.is_boundary(i)) return smooth_limit_mask(topology.valence(i));
+  if (topology.face_count(i) == 1 && boundary == Boundary::EdgeAndCorner) return corner_limit_mask();
+  return crease_limit_mask();
 }
 
 LimitOperator limit_operator_from_masks(const Topology& topology, Boundary boundary) {
   const std::size_t n = topology.n_vertices();
   const auto& offsets = topology.ring_offsets();
   const auto& ring = topology.ring_neighbors();
-  const LimitMask crease_mask = crease_limit_mask();
   LimitOperator op;
   op.n = n;
   op.offsets.resize(n + 1);
@@ -117,13 +108,12 @@ LimitOperator limit_operator_from_masks(const Topology& topology, Boundary bound
   std::int32_t out = 0;
   for (std::size_t v = 0; v < n; ++v) {
     op.offsets[v] = out;
-    bool crease = false;
-    const LimitMask m = mask_of(topology, v, boundary, crease_mask, crease);
+    const LimitMask m = limit_mask(topology, v, boundary);
     op.diag[v] = m.diag;
     op.weight[v] = m.weight;
-    if (m.weight == 0.0) continue;
+    if (m.weight == 0.0) continue;  // a corner (or unreferenced vertex) keeps itself
     std::int32_t* row = op.neighbors.data() + out;
-    if (crease) {
+    if (topology.is_boundary(v)) {  // the crease rule: only the two boundary neighbours count
       row[0] = ring[offsets[v]];
       row[1] = ring[offsets[v + 1] - 1];
       out += 2;
