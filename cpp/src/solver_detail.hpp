@@ -55,6 +55,16 @@ inline void apply_transpose_cols(const LimitOperator& op, const Transposed& t, c
   }
 }
 
+// Gamma^-1 as a vector: 1 / w_i per row (1 on rows without neighbours). B =
+// Gamma Upsilon with Upsilon symmetric on closed meshes (paper section 3.2), so
+// B is self-adjoint in the inner product <x, y> = sum_i x_i y_i / w_i, and
+// Gamma^-1 B = Upsilon is the row-scaled system.
+inline std::vector<double> gamma_inverse(const LimitOperator& op) {
+  std::vector<double> g(op.n);
+  for (std::size_t i = 0; i < op.n; ++i) g[i] = op.weight[i] > 0.0 ? 1.0 / op.weight[i] : 1.0;
+  return g;
+}
+
 // r = v0 - B v (r may be null: only the norm); returns max_i ||r_i|| (the paper's E_k).
 double residual(const LimitOperator& op, const double* v0, const double* v, double* r);
 
@@ -104,6 +114,9 @@ class Monitor {
     }
     return record(e0);
   }
+
+  // The rounding level of E_k, 64 eps max_i ||v_i^0||: no method gets below it.
+  double floor() const { return floor_; }
 
   // E_k for the next k; returns true to stop.
   bool record(double e) {

@@ -31,14 +31,6 @@ void axpy3(const Col3& a, const std::vector<double>& x, std::vector<double>& y) 
 
 double safe_div(double a, double b) { return b != 0.0 ? a / b : 0.0; }
 
-// Row scaling S = Gamma^-1 (1 on rows without neighbours): S B = Upsilon,
-// symmetric on closed meshes (paper section 3.2).
-std::vector<double> row_scale(const LimitOperator& op) {
-  std::vector<double> s(op.n);
-  for (std::size_t i = 0; i < op.n; ++i) s[i] = op.weight[i] > 0.0 ? 1.0 / op.weight[i] : 1.0;
-  return s;
-}
-
 // E_k from a scaled residual S r.
 double unscaled_error(const std::vector<double>& rs, const std::vector<double>& s) {
   double m = 0.0;
@@ -72,7 +64,7 @@ Col3 wdot3(const std::vector<double>& a, const std::vector<double>& b, const std
 // iteration; it equals the true residual to rounding at these condition numbers).
 void cg_symmetric(const LimitOperator& op, const double* v0, double* v, Monitor& mon, SolveResult& res) {
   const std::size_t m = 3 * op.n;
-  const std::vector<double> w = row_scale(op);
+  const std::vector<double> w = gamma_inverse(op);
   std::vector<double> r(m), p(m), q(m), x(v, v + m);
   if (mon.start(residual(op, v0, v, r.data()))) return;
   p = r;
@@ -103,7 +95,7 @@ void cg_symmetric(const LimitOperator& op, const double* v0, double* v, Monitor&
 // where Upsilon is not symmetric. One iteration = two products.
 void bicgstab(const LimitOperator& op, const double* v0, double* v, Monitor& mon, SolveResult& res) {
   const std::size_t m = 3 * op.n;
-  const std::vector<double> s = row_scale(op);
+  const std::vector<double> s = gamma_inverse(op);  // S = Gamma^-1: S B = Upsilon
   std::vector<double> r(m), rt(m), p(m, 0.0), q(m, 0.0), h(m), t(m), x(v, v + m);
   const double e0 = residual(op, v0, v, r.data());
   for (std::size_t i = 0; i < op.n; ++i)
@@ -229,8 +221,8 @@ void solve_hss(const LimitOperator& op, const double* v0, double* v, double alph
   };
 
   std::vector<double> x(v, v + m);
-  // Below rounding level (as in Monitor) an inner CG cannot get: never ask for it.
-  const double floor = 64.0 * 2.220446049250313e-16 * max_row_norm(v0, op.n);
+  // Below rounding level an inner CG cannot get: never ask for it.
+  const double floor = mon.floor();
   double e = residual(op, v0, v, nullptr);
   if (mon.start(e)) return;
   for (;;) {

@@ -58,14 +58,6 @@ double power_radius(std::size_t n, ApplyA apply_a, const std::vector<double>& w,
   return est;
 }
 
-// Gamma^-1 weights: B = Gamma Upsilon with Upsilon symmetric is self-adjoint
-// in the inner product <x, y> = sum x_i y_i / w_i. Rows without neighbours get 1.
-std::vector<double> gamma_inverse(const LimitOperator& op) {
-  std::vector<double> w(op.n);
-  for (std::size_t i = 0; i < op.n; ++i) w[i] = op.weight[i] > 0.0 ? 1.0 / op.weight[i] : 1.0;
-  return w;
-}
-
 struct Timer {
   SpectralCache& cache;
   clock::time_point t0 = clock::now();
@@ -83,14 +75,15 @@ double estimate_lambda_min(const LimitOperator& op, SpectralCache& cache) {
     for (std::size_t i = 0; i < op.n; ++i) y[i] = x[i] - bx[i];
   };
   // Eigenvalues of I - B lie in [0, 1 - lambda_min]: its radius is 1 - lambda_min.
-  cache.lambda_min = 1.0 - power_radius(op.n, i_minus_b, gamma_inverse(op), 300, 1e-6);
+  // Gamma^-1 weights make B (so I - B) self-adjoint where it can be.
+  cache.lambda_min = 1.0 - power_radius(op.n, i_minus_b, detail::gamma_inverse(op), 300, 1e-6);
   return cache.lambda_min;
 }
 
 double estimate_jacobi_rho(const LimitOperator& op, SpectralCache& cache) {
   if (!std::isnan(cache.jacobi_rho)) return cache.jacobi_rho;
   Timer timer{cache};
-  std::vector<double> bx(op.n), w = gamma_inverse(op);
+  std::vector<double> bx(op.n), w = detail::gamma_inverse(op);
   // D^-1 B = D^-1 Gamma Upsilon is self-adjoint for the weights D Gamma^-1.
   for (std::size_t i = 0; i < op.n; ++i) w[i] *= op.diag[i];
   const auto jacobi = [&](const double* x, double* y) {
