@@ -4,6 +4,11 @@
 #include <opensubdiv/bfr/surface.h>
 #include <opensubdiv/bfr/surfaceFactoryCache.h>
 #include <opensubdiv/far/primvarRefiner.h>
+#include <opensubdiv/far/topologyDescriptor.h>
+#include <opensubdiv/far/topologyRefinerFactory.h>
+#ifdef _OPENMP
+#include <omp.h>
+#endif
 
 #include <algorithm>
 #include <cmath>
@@ -51,6 +56,23 @@ std::string human_bytes(double b) {
 }
 
 constexpr int kApproxLevelSmooth = 4;
+
+// Faces per OpenMP chunk in evaluate(); also the least work per thread.
+constexpr std::ptrdiff_t kFacesPerChunk = 64;
+
+// Threads for `n_groups` faces: no more than there are chunks, so a small
+// query runs on the calling thread alone. A thread started for nothing is not
+// free: after the region libgomp's idle workers spin-wait (GOMP_SPINCOUNT),
+// and that CPU time lands on whatever the caller does next.
+int evaluate_threads(std::ptrdiff_t n_groups) {
+#ifdef _OPENMP
+  const std::ptrdiff_t chunks = (n_groups + kFacesPerChunk - 1) / kFacesPerChunk;
+  return static_cast<int>(std::max<std::ptrdiff_t>(1, std::min<std::ptrdiff_t>(omp_get_max_threads(), chunks)));
+#else
+  (void)n_groups;
+  return 1;
+#endif
+}
 
 // Bfr evaluates on the closed triangle; a parameter a rounding error outside is
 // pulled back onto it, anything further out is refused.
@@ -100,7 +122,10 @@ struct LoopSurface::Impl {
   std::unique_ptr<SurfaceFactory> factory;
   std::vector<double> vertices;       // (n, 3), as given
   std::vector<Point3> points;         // referenced vertices in OpenSubdiv's order
-  detail::LoopRefiner refined;        // uniformly refined to refined_level (built on demand)
+  // Uniformly refined to refined_level (built on demand); shares base's level
+  // 0 (Far::TopologyRefinerFactory::Create), so it is declared after base and
+  // destroyed before it.
+  std::unique_ptr<Far::TopologyRefiner> refined;
   int refined_level = -1;
   // The Python binding releases the GIL: evaluate() may run in several
   // threads at once, set_vertices() and tessellate() change state.
@@ -180,16 +205,18 @@ void LoopSurface::evaluate(const std::int32_t* face_ids, const double* uv, std::
   const auto n_groups = static_cast<std::ptrdiff_t>(group_start.size()) - 1;
 
   const SurfaceFactory& factory = *impl_->factory;
-  const double* mesh_points = &impl_->points.data()->x;
   const bool want_derivs = du || dv || normals;
   const std::shared_lock<std::shared_mutex> lock(impl_->mutex);
+  const double* mesh_points = &impl_->points.data()->x;
   int failed_face = -1;
-#pragma omp parallel
+  // Each point is computed alone, so the thread count changes nothing in the results.
+  const int threads = evaluate_threads(n_groups);
+#pragma omp parallel num_threads(threads) if (threads > 1)
   {
     Bfr::Surface<double> surface;
     std::vector<double> patch;
     const Bfr::Surface<double>::PointDescriptor desc(3);
-#pragma omp for schedule(dynamic, 64)
+#pragma omp for schedule(dynamic, kFacesPerChunk)
     for (std::ptrdiff_t g = 0; g < n_groups; ++g) {
       const int face = face_ids[order[group_start[g]]];
       if (!factory.InitVertexSurface(face, &surface)) {
@@ -245,17 +272,18 @@ TriMesh LoopSurface::tessellate(int level) {
   const std::unique_lock<std::shared_mutex> lock(impl_->mutex);
 
   if (impl_->refined_level != level) {
-    impl_->refined = detail::LoopRefiner{};  // free the old one before building the new one
-    impl_->refined = detail::make_loop_refiner(impl_->topology, impl_->boundary);
+    impl_->refined.reset();  // free the old one before building the new one
+    // The topology was converted and checked once, for base: share its level 0.
+    impl_->refined.reset(Far::TopologyRefinerFactory<Far::TopologyDescriptor>::Create(*impl_->base.refiner));
     if (level > 0) {
       Far::TopologyRefiner::UniformOptions options(level);
       // Limit() on the last level needs its full topology (DEPENDENCIES.md).
       options.fullTopologyInLastLevel = true;
-      impl_->refined.refiner->RefineUniform(options);
+      impl_->refined->RefineUniform(options);
     }
     impl_->refined_level = level;
   }
-  const Far::TopologyRefiner& refiner = *impl_->refined.refiner;
+  const Far::TopologyRefiner& refiner = *impl_->refined;
   Far::PrimvarRefinerReal<double> primvar(refiner);
 
   std::vector<Point3> src = impl_->points, dst;
@@ -271,7 +299,7 @@ TriMesh LoopSurface::tessellate(int level) {
   // Refined vertices are ordered children of vertices first
   // (orderVerticesFromFacesFirst = false), so the first n_osd of every level
   // descend from the control vertices, in order.
-  const auto& from = impl_->refined.from_osd;
+  const auto& from = impl_->base.from_osd;
   const std::size_t n_osd = from.size();
   const std::size_t n_out = n + (limit.size() - n_osd);
   TriMesh out;
