@@ -101,16 +101,6 @@ void write_atomic(const std::string& path, const std::string& data) {
   }
 }
 
-double parse_coordinate(const FileData& f, const Where& w, std::string_view token) {
-  double x = 0;
-  const std::errc ec = parse_double(token, x);
-  if (ec == std::errc::result_out_of_range)
-    fail(f, w, "coordinate " + quoted(token) + " is out of the range of double");
-  if (ec != std::errc()) fail(f, w, "expected a number, found " + quoted(token));
-  if (!std::isfinite(x)) fail(f, w, "coordinate " + quoted(token) + " is not finite");
-  return x;
-}
-
 void check_counts(const FileData& f, const TriMesh& mesh) {
   if (mesh.n_vertices() == 0) fail(f, "no vertices: not a mesh file of this format, or an empty mesh");
   if (mesh.n_faces() == 0)

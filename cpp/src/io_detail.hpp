@@ -1,12 +1,14 @@
 #pragma once
 // Internals shared by the mesh file readers and writers (io_*.cpp).
 #include <charconv>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
 #include <string>
 #include <string_view>
 #include <system_error>
+#include <type_traits>
 #include <vector>
 
 #include "sorpia/errors.hpp"
@@ -109,10 +111,12 @@ inline std::string_view strip_comment(std::string_view line) {
   return line;
 }
 
-// Exact decimal -> double (std::from_chars: correctly rounded, so the
-// shortest representation written by to_chars reads back bit for bit).
-// A leading '+' is accepted (from_chars alone refuses it).
-inline std::errc parse_double(std::string_view t, double& out) {
+// Exact decimal -> T (std::from_chars: correctly rounded for floating T, so
+// the shortest representation written by to_chars reads back bit for bit).
+// A leading '+' is accepted (from_chars alone refuses it); text after the
+// number is invalid_argument.
+template <class T>
+std::errc parse_number(std::string_view t, T& out) {
   const char* b = t.data();
   const char* e = b + t.size();
   if (b != e && *b == '+') ++b;
@@ -121,16 +125,22 @@ inline std::errc parse_double(std::string_view t, double& out) {
   return r.ptr == e ? std::errc() : std::errc::invalid_argument;
 }
 
-inline bool parse_int(std::string_view t, long long& out) {
-  const char* b = t.data();
-  const char* e = b + t.size();
-  if (b != e && *b == '+') ++b;
-  const auto r = std::from_chars(b, e, out);
-  return r.ec == std::errc() && r.ptr == e;
-}
+inline bool parse_int(std::string_view t, long long& out) { return parse_number(t, out) == std::errc(); }
 
-// Parses a coordinate, refusing text that is not a number and non-finite values.
-double parse_coordinate(const FileData& f, const Where& w, std::string_view token);
+// Parses a coordinate as T (double; float for STL, whose coordinates are
+// float32 by definition), refusing text that is not a number and non-finite values.
+template <class T = double>
+double parse_coordinate(const FileData& f, const Where& w, std::string_view token) {
+  T x = 0;
+  const std::errc ec = parse_number(token, x);
+  if (ec == std::errc::result_out_of_range)
+    fail(f, w,
+         "coordinate " + quoted(token) +
+             (std::is_same_v<T, float> ? " is out of float32 range" : " is out of the range of double"));
+  if (ec != std::errc()) fail(f, w, "expected a number, found " + quoted(token));
+  if (!std::isfinite(x)) fail(f, w, "coordinate " + quoted(token) + " is not finite");
+  return x;
+}
 
 // Collects faces (0-based indices), splitting polygons into fans when asked
 // and reporting them otherwise.

@@ -48,19 +48,6 @@ class Welder {
   std::unordered_map<Key, std::int64_t, KeyHash> map_;
 };
 
-// An ascii STL coordinate, as the float32 the format defines.
-double parse_float32(const FileData& f, const Where& w, std::string_view t) {
-  const char* b = t.data();
-  const char* e = b + t.size();
-  if (b != e && *b == '+') ++b;
-  float x = 0;
-  const auto r = std::from_chars(b, e, x);
-  if (r.ec == std::errc::result_out_of_range) fail(f, w, "coordinate " + quoted(t) + " is out of float32 range");
-  if (r.ec != std::errc() || r.ptr != e) fail(f, w, "expected a number, found " + quoted(t));
-  if (!std::isfinite(x)) fail(f, w, "coordinate " + quoted(t) + " is not finite");
-  return x;
-}
-
 TriMesh read_binary(const FileData& f, std::size_t count) {
   TriMesh mesh;
   mesh.faces.reserve(3 * count);
@@ -99,7 +86,7 @@ TriMesh read_ascii(const FileData& f, bool triangulate) {
       double p[3];
       for (double& x : p) {
         if (!next_token(rest, tok)) fail(f, w, "a vertex needs 3 coordinates");
-        x = parse_float32(f, w, tok);
+        x = parse_coordinate<float>(f, w, tok);  // as the float32 the format defines
       }
       loop.push_back(weld.add(p));
     } else if (tok == "outer") {
@@ -133,16 +120,14 @@ void facet(const double* v, const std::int32_t* t, float out[12]) {
 TriMesh read_stl(const FileData& f, bool triangulate) {
   const std::size_t size = f.bytes.size();
   // Binary files may begin with "solid" too: the size decides first.
+  std::uint32_t count = 0;
   if (size >= 84) {
-    std::uint32_t count = 0;
     std::memcpy(&count, f.bytes.data() + 80, 4);
     if (size == 84 + 50 * static_cast<std::size_t>(count)) return read_binary(f, count);
   }
   std::string_view head(f.bytes.data(), std::min<std::size_t>(size, 512)), tok;
   if (next_token(head, tok) && tok == "solid") return read_ascii(f, triangulate);
   if (size < 84) fail(f, "neither an ascii STL (starting with 'solid') nor a binary STL (at least 84 bytes)");
-  std::uint32_t count = 0;
-  std::memcpy(&count, f.bytes.data() + 80, 4);
   fail(f, "binary STL header announces " + std::to_string(count) + " triangles (" +
               std::to_string(84 + 50 * static_cast<std::size_t>(count)) + " bytes) but the file has " +
               std::to_string(size) + " bytes (truncated or not an STL file)");
