@@ -29,6 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from . import __version__
+from ._validate import BOUNDARY_RULES, DEFAULT_BOUNDARY
 from .plotting import FACE_BUDGET  # plotting imports matplotlib only when drawing
 
 EXIT_OK, EXIT_NOT_CONVERGED, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
@@ -297,10 +298,7 @@ def _positive_int(text: str) -> int:
 
 
 def _level_arg(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    value = _int_arg(text)
     if not 0 <= value <= 8:
         raise argparse.ArgumentTypeError(f"expected a level from 0 to 8, got {text!r}")
     return value
@@ -369,9 +367,9 @@ class _Clock:
 
 
 def _timed(call, *, threads: int, source):
-    """call() with its warnings recorded and its wall and CPU seconds
-    (_Clock(threads)); returns (value, clock, warnings). A mesh the library
-    refuses is a UserError naming the file `source`."""
+    """call() with its wall and CPU seconds (_Clock(threads)); the warnings it
+    raised are printed (_report_warnings). Returns (value, clock). A mesh the
+    library refuses is a UserError naming the file `source`."""
     from . import MeshError
 
     try:
@@ -380,28 +378,32 @@ def _timed(call, *, threads: int, source):
             value = call()
     except MeshError as exc:
         raise UserError(f"{source}: Loop PIA cannot run on this mesh: {exc}") from None
-    return value, clock, caught
+    _report_warnings(caught)
+    return value, clock
 
 
-def _solver_kwargs(method, omega, tol, max_iter, threads, progress: Progress) -> dict:
+def _run_solver(solve, vertices, *, phase, method, omega, tol, max_iter, threads, progress: Progress, source):
+    """solve(vertices, **options) with a progress line labelled by the method,
+    its phase shown as `phase`; returns (result, wall seconds, CPU seconds).
+
+    fit and render pass sorpia.interpolate with the faces bound (one solve, so
+    no Interpolator kept; interpolate checks the options before building B),
+    compare passes the shared Interpolator's solve."""
     progress.restart(METHOD_LABELS[method])
     kwargs = dict(method=method, tol=tol, max_iter=max_iter, callback=progress, threads=threads)
     if omega is not None:
         kwargs["omega"] = omega
-    return kwargs
+    progress.status(f"{progress.label}: {phase}")
+    res, clock = _timed(lambda: solve(vertices, **kwargs), threads=threads, source=source)
+    return res, clock.wall, clock.cpu
 
 
-def _fit_once(vertices, faces, *, method, omega, tol, max_iter, boundary, threads, progress: Progress, source):
-    """sorpia.interpolate (fit, render: one solve, so no Interpolator kept;
-    interpolate checks the options before building B) with a progress line;
-    returns (result, wall seconds, CPU seconds, warnings raised during the run)."""
+def _fit_once(vertices, faces, *, boundary, **options):
+    """sorpia.interpolate through _run_solver (fit, render)."""
     from . import interpolate
 
-    kwargs = _solver_kwargs(method, omega, tol, max_iter, threads, progress)
-    progress.status(f"{progress.label}: setting up (topology, limit operator)")
-    res, clock, caught = _timed(lambda: interpolate(vertices, faces, boundary=boundary, **kwargs), threads=threads,
-                                source=source)
-    return res, clock.wall, clock.cpu, caught
+    return _run_solver(lambda v, **kw: interpolate(v, faces, boundary=boundary, **kw), vertices,
+                       phase="setting up (topology, limit operator)", **options)
 
 
 def _build_interpolator(vertices, faces, *, boundary, progress: Progress, source):
@@ -411,19 +413,8 @@ def _build_interpolator(vertices, faces, *, boundary, progress: Progress, source
     from . import Interpolator
 
     progress.status("setting up (topology, limit operator)")
-    interp, clock, caught = _timed(lambda: Interpolator(faces, len(vertices), boundary=boundary), threads=1,
-                                   source=source)
-    _report_warnings(caught)
+    interp, clock = _timed(lambda: Interpolator(faces, len(vertices), boundary=boundary), threads=1, source=source)
     return interp, {"wall": clock.wall, "cpu": clock.cpu}
-
-
-def _solve(interp, vertices, *, method, omega, tol, max_iter, threads, progress: Progress, source):
-    """interp.solve with a progress line; returns (result, wall seconds, CPU
-    seconds, warnings raised during the run)."""
-    kwargs = _solver_kwargs(method, omega, tol, max_iter, threads, progress)
-    progress.status(f"{progress.label}: solving")
-    res, clock, caught = _timed(lambda: interp.solve(vertices, **kwargs), threads=threads, source=source)
-    return res, clock.wall, clock.cpu, caught
 
 
 def check_threads(threads: int, method: str | None = None) -> None:
@@ -476,7 +467,7 @@ def _omega_text(res) -> str:
 # --------------------------------------------------------------------------- fit
 
 def run_fit(input_path, output, *, method="sor", omega="auto", tol=1e-10, max_iter=1000,
-            boundary="edge-and-corner", surface=None, level=3, report=None, quiet=False, force=False,
+            boundary=DEFAULT_BOUNDARY, surface=None, level=3, report=None, quiet=False, force=False,
             triangulate=False, binary=False, threads=1, out=None) -> tuple[int, dict]:
     """`sorpia fit`: returns (exit code, report dict)."""
     from . import limit_points, write_mesh
@@ -504,10 +495,9 @@ def run_fit(input_path, output, *, method="sor", omega="auto", tol=1e-10, max_it
         stats = mesh_info(V0, F, boundary=boundary, list_extraordinary=False, verdict=False)
         timings["statistics"] = time.perf_counter() - t0
 
-        res, timings["fit"], cpu, caught = _fit_once(
+        res, timings["fit"], cpu = _fit_once(
             V0, F, method=method, omega=omega if method == "sor" else None, tol=tol, max_iter=max_iter,
             boundary=boundary, threads=threads, progress=progress, source=input_path)
-        _report_warnings(caught)
         ctrl = np.asarray(res.control_vertices)
 
         progress.status(f"writing {output}")
@@ -651,7 +641,7 @@ def iterations_to_reach(errors, tolerances=TABLE_TOLERANCES) -> list:
     return out
 
 
-def run_compare(input_path, *, methods=METHODS, tol=1e-10, max_iter=1000, boundary="edge-and-corner",
+def run_compare(input_path, *, methods=METHODS, tol=1e-10, max_iter=1000, boundary=DEFAULT_BOUNDARY,
                 table=None, csv_path=None, plot=None, json_path=None, quiet=False, force=False,
                 triangulate=False, threads=1, out=None) -> tuple[int, dict]:
     """`sorpia compare`: every method to the same tolerance, on one
@@ -673,9 +663,8 @@ def run_compare(input_path, *, methods=METHODS, tol=1e-10, max_iter=1000, bounda
         interp, build = _build_interpolator(V0, F, boundary=boundary, progress=progress, source=input_path)
         for method in methods:
             n_threads = threads if method in THREADED_METHODS else 1
-            res, wall, cpu, caught = _solve(interp, V0, method=method, omega=None, tol=tol, max_iter=max_iter,
-                                            threads=n_threads, progress=progress, source=input_path)
-            _report_warnings(caught)
+            res, wall, cpu = _run_solver(interp.solve, V0, phase="solving", method=method, omega=None, tol=tol,
+                                         max_iter=max_iter, threads=n_threads, progress=progress, source=input_path)
             fields = _result_fields(res)
             rows.append({
                 "method": method,
@@ -795,7 +784,7 @@ def _require_plotting() -> None:
         raise UserError(str(exc)) from None
 
 
-def run_render(input_path, output, *, level=3, tol=1e-10, max_iter=1000, boundary="edge-and-corner",
+def run_render(input_path, output, *, level=3, tol=1e-10, max_iter=1000, boundary=DEFAULT_BOUNDARY,
                size=(1200, 1000), elev=30.0, azim=-60.0, face_budget=FACE_BUDGET, quiet=False, force=False,
                triangulate=False, up="z", threads=1, out=None) -> tuple[int, dict]:
     """`sorpia render`: the paper's Figure 3 for a mesh file."""
@@ -813,10 +802,8 @@ def run_render(input_path, output, *, level=3, tol=1e-10, max_iter=1000, boundar
     with Progress(enabled=not quiet) as progress:
         progress.status(f"reading {input_path}")
         V0, F, timings["read"] = read_input(input_path, triangulate)
-        res, timings["fit"], _, caught = _fit_once(V0, F, method="sor", omega="auto", tol=tol, max_iter=max_iter,
-                                                   boundary=boundary, threads=threads, progress=progress,
-                                                   source=input_path)
-        _report_warnings(caught)
+        res, timings["fit"], _ = _fit_once(V0, F, method="sor", omega="auto", tol=tol, max_iter=max_iter,
+                                           boundary=boundary, threads=threads, progress=progress, source=input_path)
         ctrl = np.asarray(res.control_vertices)
         drawn_level = level_for_budget(len(F), level, budget)
         progress.status(f"limit surfaces, level {drawn_level}")
@@ -847,7 +834,7 @@ def run_render(input_path, output, *, level=3, tol=1e-10, max_iter=1000, boundar
 
 # --------------------------------------------------------------------------- info
 
-def run_info(input_path, *, as_json=False, boundary="edge-and-corner", triangulate=False,
+def run_info(input_path, *, as_json=False, boundary=DEFAULT_BOUNDARY, triangulate=False,
              out=None) -> tuple[int, dict]:
     """`sorpia info`: mesh statistics and whether Loop PIA can run (exit 0 either way).
 
@@ -1006,8 +993,11 @@ def build_parser() -> argparse.ArgumentParser:
                        help="split faces of more than 3 vertices into fans of triangles from their first vertex "
                        "(without it such a file is refused)")
 
-    def output_flags(p):
+    def quiet_flag(p):
         p.add_argument("--quiet", "-q", action="store_true", help="print nothing but errors and warnings")
+
+    def output_flags(p):
+        quiet_flag(p)
         p.add_argument("--force", action="store_true", help="allow an output to overwrite the input file")
 
     def solver_options(p, with_method=True):
@@ -1020,7 +1010,7 @@ def build_parser() -> argparse.ArgumentParser:
                        help="stop when E_k/E_0 < TOL, E_k = max_i |v_i^0 - (B V_k)_i| (paper section 5)")
         p.add_argument("--max-iter", type=_positive_int, default=1000, metavar="N",
                        help="stop after N iterations (exit code 1 if TOL was not reached)")
-        p.add_argument("--boundary", choices=("edge-and-corner", "edge-only"), default="edge-and-corner",
+        p.add_argument("--boundary", choices=BOUNDARY_RULES, default=DEFAULT_BOUNDARY,
                        help="boundary rule of the limit surface (OpenSubdiv VTX_BOUNDARY_EDGE_AND_CORNER keeps "
                        "one-face corners; EDGE_ONLY smooths them)")
 
@@ -1111,7 +1101,7 @@ def build_parser() -> argparse.ArgumentParser:
                   "than 6 inside, 4 on the boundary; the paper's Table 2), and whether Loop PIA can run on the "
                   "mesh and if not why. Exit code 0 whenever the file can be read.")
     inf.add_argument("--json", action="store_true", help="print JSON (every extraordinary vertex listed) instead")
-    inf.add_argument("--boundary", choices=("edge-and-corner", "edge-only"), default="edge-and-corner",
+    inf.add_argument("--boundary", choices=BOUNDARY_RULES, default=DEFAULT_BOUNDARY,
                      help="boundary rule the verdict refers to")
     triangulate_flag(inf)
     inf.set_defaults(func=lambda a: run_info(a.input, as_json=a.json, boundary=a.boundary,
@@ -1125,7 +1115,7 @@ def build_parser() -> argparse.ArgumentParser:
     demo.add_argument("--out", metavar="DIR", default=None,
                       help="folder for the files (created if needed; default: a new folder "
                       "sorpia-demo-YYYYMMDD-HHMMSS in the working directory)")
-    demo.add_argument("--quiet", "-q", action="store_true", help="print nothing but errors and warnings")
+    quiet_flag(demo)
     demo.set_defaults(func=lambda a: run_demo(a.out, quiet=a.quiet))
     return parser
 

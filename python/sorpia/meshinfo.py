@@ -164,13 +164,13 @@ def _histogram(values: np.ndarray) -> dict:
 
 def _loop_pia_verdict(vertices: np.ndarray, faces: np.ndarray, boundary: str) -> dict:
     """Run sorpia's own validation and turn its verdict into a dict."""
-    from ._validate import as_boundary, as_faces, as_vertices
+    from ._validate import as_boundary, as_vertices
 
     notes: list[str] = []
     try:
         as_boundary(boundary)
         as_vertices(vertices)
-        topology(as_faces(faces, len(vertices)), len(vertices), warn=False)
+        topology(faces, len(vertices), warn=False)  # validates the faces (as_faces), then builds
     except (MeshError, ValueError, TypeError) as exc:
         return {"can_run": False, "reason": str(exc), "notes": notes}
     notes.append(f"boundary rule {boundary!r}")
