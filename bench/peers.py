@@ -28,7 +28,6 @@ import argparse
 import json
 import os
 import platform
-import shutil
 import statistics
 import subprocess
 import sys
@@ -41,13 +40,19 @@ import scipy.sparse.linalg
 
 import sorpia
 
+sys.path.insert(0, os.path.dirname(__file__))
+from scaling import bench_exe  # noqa: E402
+
 
 def load(spec: str):
     """(vertices, faces) from a mesh file or a generated mesh spec (same syntax as sorpia-bench)."""
     if ":" in spec and "." not in spec:
         kind, _, args = spec.partition(":")
+        make = getattr(sorpia.shapes, kind, None)
+        if make is None:
+            raise SystemExit(f"unknown mesh {spec!r}")
         nums = [int(x) for x in args.replace("x", ":").split(":")]
-        return getattr(sorpia.shapes, kind)(*nums)
+        return make(*nums)
     return sorpia.read_mesh(spec)
 
 
@@ -106,11 +111,6 @@ def sorpia_method(V0, F, tol, method):
     return {"topology": t.get("topology", 0.0), "operator": t.get("operator", 0.0), "estimate": t.get("estimate", 0.0),
             "solve": t.get("solve", 0.0), "total": total, "iterations": r.iterations,
             "final_error": float(r.errors[-1])}
-
-
-def bench_exe():
-    exe = os.path.join(os.path.dirname(sys.executable), "sorpia-bench")
-    return exe if os.path.exists(exe) else shutil.which("sorpia-bench")
 
 
 def sorpia_bench(spec, methods, tol, repeat):

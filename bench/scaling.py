@@ -22,6 +22,7 @@ import sys
 
 
 def bench_exe():
+    """The sorpia-bench installed next to this Python, else the one on PATH, else None."""
     exe = os.path.join(os.path.dirname(sys.executable), "sorpia-bench")
     return exe if os.path.exists(exe) else shutil.which("sorpia-bench")
 

@@ -8,7 +8,7 @@ machine's load hits every column alike. Reported: the C++ solve seconds
 (result.timings["solve"]: the sweep engine's set-up, E_0 and the sweeps),
 median and min over the repeats, iterations, final E_k/E_0, and each thread
 count's speed-up over the first. Meshes: irregular:N[:SEED], torus:NUxNV,
-icosphere:L, grid:NUxNV, pole:N (sorpia.shapes).
+icosphere:L, grid:NUxNV, pole:N (sorpia.shapes) or a mesh file (peers.load).
 """
 
 from __future__ import annotations
@@ -21,20 +21,8 @@ import sys
 
 import sorpia
 
-
-def mesh(spec: str):
-    kind, _, arg = spec.partition(":")
-    if kind == "irregular":
-        n, _, seed = arg.partition(":")
-        return sorpia.shapes.irregular(int(n), seed=int(seed or 1))
-    if kind in ("torus", "grid"):
-        nu, nv = (int(x) for x in arg.split("x"))
-        return getattr(sorpia.shapes, kind)(nu, nv)
-    if kind == "icosphere":
-        return sorpia.shapes.icosphere(int(arg))
-    if kind == "pole":
-        return sorpia.shapes.pole(int(arg))
-    raise SystemExit(f"sweep_threads.py: unknown mesh {spec!r}")
+sys.path.insert(0, os.path.dirname(__file__))
+from peers import load as mesh  # noqa: E402
 
 
 def main(argv=None) -> int:
