@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import scipy.sparse
+import scipy.sparse.linalg
 import scipy.spatial
 
 import sorpia
@@ -61,6 +62,13 @@ def closed_form_limit_matrix(faces, n_vertices: int, boundary: str = "edge-and-c
             assert len(nb) == 2, f"vertex {i} is not a manifold boundary vertex"
             rows += [i] * 3; cols += [i, *nb]; vals += [2 / 3, 1 / 6, 1 / 6]
     return scipy.sparse.csr_matrix((vals, (rows, cols)), shape=(n_vertices, n_vertices))
+
+
+def direct_solve(faces, vertices, boundary: str = "edge-and-corner"):
+    """B^-1 V0 by scipy's sparse LU of sorpia.limit_matrix: the reference the
+    iterative solvers are checked against."""
+    b = sorpia.limit_matrix(faces, len(vertices), boundary).tocsc()
+    return scipy.sparse.linalg.splu(b).solve(vertices)
 
 
 # Meshes by what they stress: closed with valences 3..12, boundary, a high-valence pole.

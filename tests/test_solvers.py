@@ -8,17 +8,11 @@ import math
 
 import numpy as np
 import pytest
-import scipy.sparse.linalg
-
 import sorpia
+from conftest import direct_solve
 from sorpia.solve import METHODS, YOUNG_RHO_CLAMP
 
 TOL = 1e-10
-
-
-def direct_solve(faces, vertices, boundary="edge-and-corner"):
-    b = sorpia.limit_matrix(faces, len(vertices), boundary)
-    return scipy.sparse.linalg.spsolve(b.tocsc(), vertices)
 
 
 @pytest.mark.parametrize("method", METHODS)
