@@ -170,6 +170,21 @@ def test_set_vertices_gives_the_surface_of_the_new_control_mesh():
         assert np.array_equal(a, b)
 
 
+def test_changing_the_tessellation_level_gives_the_fresh_surfaces_tessellation():
+    # The refined topology is rebuilt on the kept base level whenever the
+    # level changes (down, to 0 and back up): bit-identical to a new surface's,
+    # and evaluation on the same object is unaffected (same Bfr factory).
+    v, f = sorpia.shapes.grid(6, 5)
+    s = sorpia.LoopSurface(v, f, boundary="edge-only")
+    rng = np.random.default_rng(3)
+    face_ids, uv = rng.integers(0, len(f), 20), rng.dirichlet([1, 1, 1], 20)[:, :2]
+    before = s.evaluate(face_ids, uv)
+    for level in (2, 1, 0, 2):
+        for a, b in zip(s.tessellate(level), sorpia.limit_surface(v, f, level, boundary="edge-only")):
+            assert np.array_equal(a, b)
+    assert np.array_equal(s.evaluate(face_ids, uv), before)
+
+
 def test_level_zero_is_the_limit_points_on_the_control_faces():
     v, f = sorpia.shapes.grid(5, 4)
     vs, fs = sorpia.limit_surface(v, f, level=0)

@@ -33,8 +33,9 @@ std::size_t available_memory_bytes();
 /// without rebuilding them, as the PIA loop changes positions, never topology.
 ///
 /// Threads: evaluate() and get_vertices() may run concurrently (one shared
-/// Bfr factory with a thread-safe cache, OpenMP inside evaluate());
-/// set_vertices() and tessellate() take exclusive access.
+/// Bfr factory with a thread-safe cache, OpenMP inside evaluate(): at most one
+/// thread per 64 distinct faces queried); set_vertices() and tessellate() take
+/// exclusive access.
 ///
 /// Parameterisation of face f = (a, b, c) (Bfr's triangle parameterisation):
 /// (u, v) = (0, 0) is vertex a, (1, 0) is b, (0, 1) is c; points with u >= 0,
