@@ -289,6 +289,14 @@ BAD_FILES = {
     "stl keyword": ("bad.stl", "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertx 1 0 0\n",
                     r"line 5: 'vertx' is not an ascii STL keyword"),
     "stl not stl": ("bad.stl", "hello", r"neither an ascii STL"),
+    # One parser for double and float32: each type's range and message.
+    "obj beyond double": ("bad.obj", "v 0 0 1e400\n", r"line 1: coordinate '1e400' is out of the range of double"),
+    "stl beyond float32": ("bad.stl", "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 1e40\n",
+                           r"line 4: coordinate '1e40' is out of float32 range"),
+    "stl bad number": ("bad.stl", "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 1.2.3\n",
+                       r"line 4: expected a number, found '1\.2\.3'"),
+    "stl inf": ("bad.stl", "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 inf 0\n",
+                r"line 4: coordinate 'inf' is not finite"),
 }
 
 
