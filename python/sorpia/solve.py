@@ -266,7 +266,7 @@ class Interpolator:
 
     def solve(self, vertices, method: str = "sor", omega="auto", tol: float = 1e-10, max_iter: int = 1000,
               callback: Optional[Callable[[int, float], object]] = None, *, sigma=None, alpha=None, weight=None,
-              threads: int = 1, _stacklevel: int = 2) -> InterpolationResult:
+              threads: int = 1) -> InterpolationResult:
         """Solve B V = V0 for the control vertices V.
 
         Parameters
@@ -307,9 +307,15 @@ class Interpolator:
             divergence) and with OmegaWarning when omega="young" met rho >= 0.9999.
         """
         t0 = time.perf_counter()
-        rule, omega_value, tol_value, max_iter, extra = _check_options(
-            method, omega, tol, max_iter, callback, sigma, alpha, weight, threads)
-        v0 = as_vertices(vertices)
+        checked = _check_options(method, omega, tol, max_iter, callback, sigma, alpha, weight, threads)
+        return self._solve(as_vertices(vertices), method, checked, callback, t0)
+
+    def _solve(self, v0: np.ndarray, method: str, checked: tuple, callback, t0: float) -> InterpolationResult:
+        """solve() on input already validated: `v0` from as_vertices, `checked`
+        from _check_options (interpolate validates both before building B and
+        calls this, so nothing is validated twice). Warnings point at the
+        caller of solve() or interpolate()."""
+        rule, omega_value, tol_value, max_iter, extra = checked
         if v0.shape[0] != self.n_vertices:
             raise ParameterError(f"vertices has {v0.shape[0]} rows but the mesh has {self.n_vertices} vertices")
         r = self._operator.solve(v0, method, rule, omega_value, extra["sigma"], extra["alpha"], extra["weight"],
@@ -320,13 +326,13 @@ class Interpolator:
                 f"omega='young': rho(I - D^-1 B) = {r['rho']:.6f} >= {YOUNG_RHO_CLAMP}, where Young's formula "
                 f"(paper Remark 1) has no real value (rho >= 1) or none of use; rho clamped to {YOUNG_RHO_CLAMP}, "
                 f"omega = {r['omega']:.4f} (slow: omega='auto' is the measured choice)",
-                OmegaWarning, stacklevel=_stacklevel)
+                OmegaWarning, stacklevel=3)
         reason = r["stop_reason"]
         if reason in ("max_iter", "diverged"):
             what = (f"reached max_iter = {max_iter}" if reason == "max_iter"
                     else "diverged (E_k grew past 1e6 E_0 or was not finite)")
             warnings.warn(f"method={method!r} {what} with E_k/E_0 = {r['errors'][-1]:.3g} > tol = {tol_value:g}",
-                          ConvergenceWarning, stacklevel=_stacklevel)
+                          ConvergenceWarning, stacklevel=3)
         errors = r["errors"]
         return InterpolationResult(
             control_vertices=r["control_vertices"],
@@ -369,10 +375,9 @@ def interpolate(vertices, faces, method: str = "sor", omega="auto", tol: float =
     """
     t0 = time.perf_counter()
     # Options are checked before the (costly) operator is built.
-    _check_options(method, omega, tol, max_iter, callback, sigma, alpha, weight, threads)
+    checked = _check_options(method, omega, tol, max_iter, callback, sigma, alpha, weight, threads)
     v0 = as_vertices(vertices)
     interp = Interpolator(faces, v0.shape[0], boundary)
-    res = interp.solve(v0, method, omega, tol, max_iter, callback, sigma=sigma, alpha=alpha, weight=weight,
-                       threads=threads, _stacklevel=3)
+    res = interp._solve(v0, method, checked, callback, t0)
     timings = dict(res.timings, **interp.build_timings)
     return replace(res, seconds=time.perf_counter() - t0, timings=timings)
