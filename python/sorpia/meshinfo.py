@@ -27,6 +27,14 @@ def _components(n: int, a: np.ndarray, b: np.ndarray) -> tuple[int, np.ndarray]:
     return scipy.sparse.csgraph.connected_components(graph, directed=False)
 
 
+def edge_counts(faces: np.ndarray, n_vertices: int) -> tuple[np.ndarray, np.ndarray]:
+    """The undirected edges of (m, 3) int64 `faces` as sorted keys
+    min(a, b) * n_vertices + max(a, b), and the number of faces at each (1: a
+    boundary edge)."""
+    half = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
+    return np.unique(half.min(axis=1) * n_vertices + half.max(axis=1), return_counts=True)
+
+
 def mesh_info(vertices, faces, boundary: str = "edge-and-corner", list_extraordinary: bool = True,
               verdict: bool = True) -> dict:
     """Statistics of a triangle mesh and whether Loop PIA can run on it.
@@ -80,9 +88,7 @@ def mesh_info(vertices, faces, boundary: str = "edge-and-corner", list_extraordi
         return info
 
     faces = faces.astype(np.int64)
-    half = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
-    lo_, hi_ = half.min(axis=1), half.max(axis=1)
-    keys, counts = np.unique(lo_ * n + hi_, return_counts=True)
+    keys, counts = edge_counts(faces, n)
     ea, eb = keys // n, keys % n
     boundary_edge = counts == 1
     referenced = np.zeros(n, bool)

@@ -120,9 +120,9 @@ def _vertex_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
 
 def _boundary_share(faces: np.ndarray, n_vertices: int) -> float:
     """Boundary edges / edges: 0 for a closed mesh."""
-    half = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]).astype(np.int64)
-    keys = half.min(axis=1) * n_vertices + half.max(axis=1)
-    _, counts = np.unique(keys, return_counts=True)
+    from .meshinfo import edge_counts
+
+    _, counts = edge_counts(np.asarray(faces, dtype=np.int64), n_vertices)
     return float((counts == 1).sum() / len(counts))
 
 
