@@ -83,8 +83,12 @@ void bind_solvers(py::module_& m) {
       .def("lambda_min", [](OperatorState& s) { return sorpia::estimate_lambda_min(s.op, s.cache); })
       .def("jacobi_rho", [](OperatorState& s) { return sorpia::estimate_jacobi_rho(s.op, s.cache); })
       .def("hermitian_extremes",
-           [](OperatorState& s) { return py::make_tuple(sorpia::estimate_hermitian_extremes(s.op, s.cache).first,
-                                                        s.cache.hermitian_max); })
+           [](OperatorState& s) {
+             // The pair itself: reading s.cache.hermitian_max as a second argument
+             // could happen before the estimate fills it (unsequenced).
+             const auto [lo, hi] = sorpia::estimate_hermitian_extremes(s.op, s.cache);
+             return py::make_tuple(lo, hi);
+           })
       .def(
           "solve",
           [](OperatorState& s, const Vertices& v0, const std::string& method, const std::string& omega_rule,
