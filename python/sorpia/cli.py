@@ -16,6 +16,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import csv
+import dataclasses
 import io
 import json
 import math
@@ -31,6 +32,7 @@ import numpy as np
 from . import __version__
 from ._validate import BOUNDARY_RULES, DEFAULT_BOUNDARY
 from .plotting import FACE_BUDGET  # plotting imports matplotlib only when drawing
+from .solve import THREADED_METHODS  # the methods that sweep on --threads N
 
 EXIT_OK, EXIT_NOT_CONVERGED, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
 
@@ -41,7 +43,6 @@ METHOD_LABELS = {"pia": "PIA", "wpia": "W-PIA", "hss": "HSS-PIA", "whss": "WHSS-
 # The columns of the paper's Table 1: iterations to reach E_k/E_0 < 10^-j.
 TABLE_TOLERANCES = tuple(10.0 ** -j for j in range(1, 11))
 MESH_SUFFIXES = (".obj", ".off", ".ply", ".stl")
-THREADED_METHODS = ("sor", "gs")  # the methods that sweep on --threads N
 
 
 class UserError(Exception):
@@ -315,25 +316,10 @@ def _size_arg(text: str):
 
 
 def _result_fields(res) -> dict:
-    """Every public figure of an interpolate result except the control vertices
-    (whatever the result type holds: method, omega, iterations, converged,
-    errors, seconds and the per-phase timings, spectral estimates...)."""
-    if hasattr(res, "__dataclass_fields__"):
-        names = list(res.__dataclass_fields__)
-    else:
-        names = [n for n in dir(res) if not n.startswith("_")]
-    out = {}
-    for name in names:
-        if name == "control_vertices":
-            continue
-        try:
-            value = getattr(res, name)
-        except AttributeError:
-            continue
-        if callable(value):
-            continue
-        out[name] = value
-    return out
+    """Every field of an InterpolationResult except the control vertices
+    (method, omega, iterations, converged, errors, seconds and the per-phase
+    timings, spectral estimates...), in the dataclass's order."""
+    return {f.name: getattr(res, f.name) for f in dataclasses.fields(res) if f.name != "control_vertices"}
 
 
 def cpu_clock(threads: int) -> str:
@@ -669,7 +655,7 @@ def run_compare(input_path, *, methods=METHODS, tol=1e-10, max_iter=1000, bounda
             rows.append({
                 "method": method,
                 "label": METHOD_LABELS[method],
-                "omega": fields.get("omega") if method in ("sor", "gs") else None,
+                "omega": res.omega,  # None but for sor and gs
                 "iterations": int(res.iterations),
                 "converged": bool(res.converged),
                 "reached": iterations_to_reach(res.errors),

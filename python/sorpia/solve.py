@@ -75,6 +75,7 @@ from .limit import topology as _topology
 
 METHODS = ("pia", "wpia", "gs", "sor", "cg", "hss", "whss")
 OMEGA_RULES = ("auto", "young")
+THREADED_METHODS = ("sor", "gs")  # the methods that sweep on threads > 1
 YOUNG_RHO_CLAMP = float(_core.YOUNG_RHO_CLAMP)
 MAX_THREADS = int(_core.MAX_THREADS)
 
@@ -170,7 +171,7 @@ def _check_threads(threads, method) -> int:
         raise ParameterError(f"threads = {threads!r} must be an integer >= 1")
     if not 1 <= threads <= MAX_THREADS:
         raise ParameterError(f"threads = {threads!r} must be an integer in 1..{MAX_THREADS}")
-    if threads > 1 and method not in ("sor", "gs"):
+    if threads > 1 and method not in THREADED_METHODS:
         raise ParameterError(f"threads = {threads!r} applies to method='sor' or 'gs' only (method={method!r})")
     return int(threads)
 
