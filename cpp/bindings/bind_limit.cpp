@@ -54,10 +54,7 @@ void bind_limit(py::module_& m) {
       "limit_points",
       [](const sorpia::Topology& topology, const Vertices& vertices, const std::string& boundary) {
         check_shape(vertices, 3, "vertices");
-        if (static_cast<std::size_t>(vertices.shape(0)) != topology.n_vertices())
-          throw sorpia::ParameterError("vertices has " + std::to_string(vertices.shape(0)) +
-                                       " rows but the topology has " + std::to_string(topology.n_vertices()) +
-                                       " vertices");
+        check_rows(vertices, topology.n_vertices(), "vertices", "the topology");
         const auto b = parse_boundary(boundary);
         Vertices out({vertices.shape(0), py::ssize_t{3}});
         double* dst = out.mutable_data();

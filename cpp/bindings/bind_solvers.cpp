@@ -72,9 +72,7 @@ void bind_solvers(py::module_& m) {
           "apply",
           [](const OperatorState& s, const Vertices& x) {
             check_shape(x, 3, "x");
-            if (static_cast<std::size_t>(x.shape(0)) != s.op.n)
-              throw sorpia::ParameterError("x has " + std::to_string(x.shape(0)) + " rows, the operator " +
-                                           std::to_string(s.op.n));
+            check_rows(x, s.op.n, "x", "the operator");
             Vertices y({x.shape(0), py::ssize_t{3}});
             sorpia::apply(s.op, x.data(), y.mutable_data());
             return y;
@@ -95,9 +93,7 @@ void bind_solvers(py::module_& m) {
              double omega, double sigma, double alpha, double weight, double tol, int max_iter,
              const py::object& callback, int threads) {
             check_shape(v0, 3, "vertices");
-            if (static_cast<std::size_t>(v0.shape(0)) != s.op.n)
-              throw sorpia::ParameterError("vertices has " + std::to_string(v0.shape(0)) +
-                                           " rows but the mesh has " + std::to_string(s.op.n) + " vertices");
+            check_rows(v0, s.op.n, "vertices", "the mesh");
             sorpia::SolveOptions opt;
             opt.method = sorpia::parse_method(method);
             opt.omega_rule = parse_omega_rule(omega_rule);

@@ -32,6 +32,13 @@ inline void check_shape(const py::array& a, py::ssize_t cols, const char* name) 
     throw sorpia::ParameterError(std::string(name) + " must have shape (n, " + std::to_string(cols) + ")");
 }
 
+// a must have one row per vertex of `owner` ("the mesh", ...), n in all.
+inline void check_rows(const py::array& a, std::size_t n, const char* name, const char* owner) {
+  if (static_cast<std::size_t>(a.shape(0)) != n)
+    throw sorpia::ParameterError(std::string(name) + " has " + std::to_string(a.shape(0)) + " rows but " + owner +
+                                 " has " + std::to_string(n) + " vertices");
+}
+
 // A fresh numpy array (owned by Python) holding a copy of v; cols > 0 makes it
 // (len/cols, cols), cols == 0 one-dimensional.
 template <class T>
