@@ -6,6 +6,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include "limit_case.hpp"
 #include "sorpia/errors.hpp"
 #include "sorpia/limit.hpp"
 #include "sorpia/shapes.hpp"
@@ -23,21 +24,11 @@ Dense dense_of(const sorpia::CsrMatrix& b) {
   return d;
 }
 
-struct Case {
-  sorpia::TriMesh mesh;
-  sorpia::CsrMatrix b;
-  sorpia::LimitOperator op;
-};
-
-Case make_case(const sorpia::TriMesh& m) {
-  const sorpia::Topology topo(m.faces.data(), m.n_faces(), m.n_vertices());
-  Case c{m, sorpia::limit_matrix(topo, sorpia::Boundary::EdgeAndCorner), {}};
-  c.op = sorpia::limit_operator(c.b);
-  return c;
-}
+using Case = sorpia_test::LimitCase;
+using sorpia_test::limit_case;
 
 std::vector<Case> cases() {
-  return {make_case(sorpia::irregular(150, 3)), make_case(sorpia::grid(6, 5)), make_case(sorpia::pole(40))};
+  return {limit_case(sorpia::irregular(150, 3)), limit_case(sorpia::grid(6, 5)), limit_case(sorpia::pole(40))};
 }
 
 double max_abs_diff(const std::vector<double>& a, const std::vector<double>& b) {
@@ -73,8 +64,8 @@ TEST(LimitOperator, RefusesRowsThatAreNoLoopMask) {
 }
 
 TEST(LimitOperator, SymmetrisableExactlyWhenClosed) {
-  EXPECT_TRUE(sorpia::is_symmetrisable(make_case(sorpia::irregular(150, 3)).op));
-  EXPECT_FALSE(sorpia::is_symmetrisable(make_case(sorpia::grid(6, 5)).op));
+  EXPECT_TRUE(sorpia::is_symmetrisable(limit_case(sorpia::irregular(150, 3)).op));
+  EXPECT_FALSE(sorpia::is_symmetrisable(limit_case(sorpia::grid(6, 5)).op));
 }
 
 // One SOR sweep by the textbook formula on the dense matrix:
@@ -160,7 +151,7 @@ TEST(Solve, DivergenceStopsWhileFinite) {
 }
 
 TEST(Solve, ParametersAreChecked) {
-  const Case c = make_case(sorpia::irregular(150, 3));
+  const Case c = limit_case(sorpia::irregular(150, 3));
   sorpia::SolveOptions opt;
   opt.omega_rule = sorpia::OmegaRule::Given;
   opt.omega = 2.0;

@@ -10,6 +10,7 @@
 #include <utility>
 #include <vector>
 
+#include "limit_case.hpp"
 #include "sorpia/errors.hpp"
 #include "sorpia/limit.hpp"
 #include "sorpia/shapes.hpp"
@@ -18,19 +19,8 @@
 
 namespace {
 
-struct Case {
-  const char* name;
-  sorpia::TriMesh mesh;
-  sorpia::CsrMatrix b;
-  sorpia::LimitOperator op;
-};
-
-Case make_case(const char* name, const sorpia::TriMesh& m) {
-  const sorpia::Topology topo(m.faces.data(), m.n_faces(), m.n_vertices());
-  Case c{name, m, sorpia::limit_matrix(topo, sorpia::Boundary::EdgeAndCorner), {}};
-  c.op = sorpia::limit_operator(c.b);
-  return c;
-}
+using Case = sorpia_test::LimitCase;
+using sorpia_test::limit_case;
 
 // The same mesh with its vertices numbered at random: every neighbour far
 // away in index, so almost every residual is deferred past the sweep and the
@@ -52,9 +42,9 @@ sorpia::TriMesh shuffled(const sorpia::TriMesh& m, unsigned seed) {
 // a scrambled vertex order.
 const std::vector<Case>& cases() {
   static const std::vector<Case> c = {
-      make_case("irregular", sorpia::irregular(26000, 7)), make_case("torus", sorpia::torus(130, 130)),
-      make_case("grid", sorpia::grid(90, 70)),             make_case("pole", sorpia::pole(48)),
-      make_case("shuffled", shuffled(sorpia::irregular(40000, 3), 11))};
+      limit_case(sorpia::irregular(26000, 7), "irregular"), limit_case(sorpia::torus(130, 130), "torus"),
+      limit_case(sorpia::grid(90, 70), "grid"),             limit_case(sorpia::pole(48), "pole"),
+      limit_case(shuffled(sorpia::irregular(40000, 3), 11), "shuffled")};
   return c;
 }
 
@@ -141,7 +131,7 @@ TEST(Sweep, PoorOrderIsSweptInItsOwnOrderAndReturnedInTheCallers) {
   // The shuffled mesh is the irregular one renumbered: its solution must be
   // the same vertices renumbered, though the core sweeps it breadth-first.
   const sorpia::TriMesh m = sorpia::irregular(40000, 3);
-  const Case a = make_case("natural", m);
+  const Case a = limit_case(m, "natural");
   const Case& b = cases()[4];  // shuffled(irregular(40000, 3), 11)
   std::vector<std::int32_t> perm(m.n_vertices());
   std::iota(perm.begin(), perm.end(), 0);
@@ -168,7 +158,7 @@ TEST(Sweep, StopAtZeroReturnsV0) {
   sorpia::TriMesh m = sorpia::irregular(20000, 5);
   for (std::size_t i = 0; i < m.n_vertices(); ++i)
     for (int a = 0; a < 3; ++a) m.vertices[3 * i + a] = 0.1 * (a + 1);
-  const Case c = make_case("point", m);
+  const Case c = limit_case(m, "point");
   for (int threads : {1, 2}) {
     const sorpia::SolveResult r = run(c, threads, false);
     EXPECT_EQ(r.iterations, 0);
