@@ -77,12 +77,7 @@ inline double max_row_norm(const double* r, std::size_t n) {
   return std::sqrt(m);
 }
 
-// 2^e when it is a normal double, else 0. Multiplying by a normal power of two
-// is exact and rounds a subnormal result as ldexp does, at a fraction of its cost.
-inline double pow2_factor(int e) { return (e > -1000 && e < 1000) ? std::ldexp(1.0, e) : 0.0; }
-// x 2^e, f = pow2_factor(e).
-inline double times_pow2(double x, double f, int e) { return f != 0.0 ? x * f : std::ldexp(x, e); }
-// x[k] *= 2^e for k < n.
+// x[k] *= 2^e for k < n (exactly, or rounded as ldexp rounds a subnormal).
 void scale_pow2(double* x, std::size_t n, int e);
 
 // Records E_k / E_0 and decides when to stop (paper section 5), the same for
