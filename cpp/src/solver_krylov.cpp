@@ -56,6 +56,28 @@ Col3 wdot3(const std::vector<double>& a, const std::vector<double>& b, const std
   return s;
 }
 
+// The rest of a CG iteration once q = M p (M self-adjoint in the w-weighted
+// inner product), per column: x += a p, r -= a q, p = r + b p, with
+// a = rr / <p, q>, b = rr_new / rr; rr = <r, r> is updated. A column already
+// solved has rr = 0 and stays put.
+void cg_step(const std::vector<double>& w, std::vector<double>& x, std::vector<double>& r, std::vector<double>& p,
+             const std::vector<double>& q, Col3& rr) {
+  const Col3 pq = wdot3(p, q, w);
+  Col3 a, na;
+  for (int c = 0; c < 3; ++c) {
+    a[c] = safe_div(rr[c], pq[c]);
+    na[c] = -a[c];
+  }
+  axpy3(a, p, x);
+  axpy3(na, q, r);
+  const Col3 rr_new = wdot3(r, r, w);
+  Col3 b;
+  for (int c = 0; c < 3; ++c) b[c] = safe_div(rr_new[c], rr[c]);
+  rr = rr_new;
+  for (std::size_t k = 0; k < p.size(); k += 3)
+    for (int c = 0; c < 3; ++c) p[k + c] = r[k + c] + b[c] * p[k + c];
+}
+
 // CG on the symmetrised system: B = Gamma Upsilon is self-adjoint and positive
 // definite in the inner product <x, y> = x^T Gamma^-1 y, so CG runs on B V = V0
 // with that inner product; this is CG on Gamma^-1/2 B Gamma^1/2 (symmetric,
@@ -72,20 +94,7 @@ void cg_symmetric(const LimitOperator& op, const double* v0, double* v, Monitor&
   for (;;) {
     apply_cols<3>(op, p.data(), q.data());
     ++res.products;
-    const Col3 pq = wdot3(p, q, w);
-    Col3 a, na;
-    for (int c = 0; c < 3; ++c) {
-      a[c] = safe_div(rr[c], pq[c]);  // a column already solved has rr = 0
-      na[c] = -a[c];
-    }
-    axpy3(a, p, x);
-    axpy3(na, q, r);
-    const Col3 rr_new = wdot3(r, r, w);
-    Col3 b;
-    for (int c = 0; c < 3; ++c) b[c] = safe_div(rr_new[c], rr[c]);
-    rr = rr_new;
-    for (std::size_t k = 0; k < m; k += 3)
-      for (int c = 0; c < 3; ++c) p[k + c] = r[k + c] + b[c] * p[k + c];
+    cg_step(w, x, r, p, q, rr);
     std::copy(x.begin(), x.end(), v);
     if (mon.record(max_row_norm(r.data(), op.n))) return;
   }
@@ -157,18 +166,7 @@ long long inner_cg(std::size_t n, ApplyM apply_m, int cost, const std::vector<do
   for (int it = 0; it < 500 && max_row_norm(r.data(), n) > abs_tol; ++it) {
     apply_m(p, q);
     products += cost;
-    const Col3 pq = wdot3(p, q, w);
-    Col3 a, na;
-    for (int c = 0; c < 3; ++c) {
-      a[c] = safe_div(rr[c], pq[c]);
-      na[c] = -a[c];
-    }
-    axpy3(a, p, x);
-    axpy3(na, q, r);
-    const Col3 rr_new = wdot3(r, r, w);
-    for (std::size_t k = 0; k < r.size(); k += 3)
-      for (int c = 0; c < 3; ++c) p[k + c] = r[k + c] + safe_div(rr_new[c], rr[c]) * p[k + c];
-    rr = rr_new;
+    cg_step(w, x, r, p, q, rr);
   }
   return products;
 }
