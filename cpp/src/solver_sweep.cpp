@@ -566,11 +566,11 @@ class Engine {
       scale_pow2(v0_.data(), v0_.size(), -exponent_);
       v0 = v0_.data();
     }
-    choice_ = choose_slots(*op_);
-    k_ = &kernels(choice_);
+    const int choice = choose_slots(*op_);  // index into kSlotChoices
+    k_ = &kernels(choice);
     const std::int32_t nnz = op_->offsets[op.n];
     std::int32_t slots_end = static_cast<std::int32_t>(op.n);
-    while (slots_end > 0 && op_->offsets[slots_end - 1] + kSlotChoices[choice_] > nnz) --slots_end;
+    while (slots_end > 0 && op_->offsets[slots_end - 1] + kSlotChoices[choice] > nnz) --slots_end;
     ctx_ = Ctx{op_->offsets.data(), op_->neighbors.data(), static_cast<std::int32_t>(op.n), slots_end,
                op_->diag.data(), op_->weight.data(), v0, x_.data(), plan_.flags.data(), omega, plan_.ahead, plan_.lag};
   }
@@ -640,7 +640,6 @@ class Engine {
   std::vector<std::int32_t> perm_, inv_;  // locality order (empty: the caller's): perm[new] = old
   LimitOperator reordered_;               // the caller's operator in that order
   Plan plan_;
-  int choice_ = 0;                        // index into kSlotChoices
   const Kernels* k_ = nullptr;
   Rows x_;
   int exponent_;
