@@ -13,19 +13,25 @@
 // (seams such as a torus's wrap-around) are marked "deferred" once per solve
 // and get their residual after the sweep. A mesh in a very poor order (most
 // vertices deferred, e.g. a shuffled file) is swept in a breadth-first order
-// of its own (locality_order) and handed back in the caller's order. E_0
-// comes the same way from the pass that sets V^(0) = V0 (Engine::start).
+// of its own (locality_order) and handed back in the caller's order. When
+// more than 1/8 of the residuals would be deferred all the same, E_k comes
+// from a residual pass after each sweep instead (Engine::fused_pays). E_0
+// comes from the pass that sets V^(0) = V0 (Engine::start).
 //
 // Threads. The vertices are split into contiguous index ranges of equal work,
-// one per thread. A vertex with a neighbour in another range is an
-// "interface" vertex: the ranges sweep their other vertices in parallel, in
-// vertex order (no two of them are adjacent across ranges, so the result does
-// not depend on timing), then one thread sweeps the interface vertices in
-// vertex order. This is Gauss-Seidel in a slightly different vertex order
-// (interface vertices last), so the iteration count stays that of the
-// sequential sweep (a multicolour order would change the ordering of every
-// vertex). One fork and one join per sweep: the interface vertices and the
-// deferred residuals run on the calling thread after the join.
+// one per thread, or, when that would leave many vertices with a neighbour in
+// another range, renumbered into slabs across the mesh first (slab_order,
+// each keeping the caller's order). A vertex with a neighbour in another
+// range is an "interface" vertex: the ranges sweep their other vertices in
+// parallel, in vertex order (no two of them are adjacent across ranges, so
+// the result does not depend on timing), then one thread sweeps the
+// interface vertices in vertex order. This is Gauss-Seidel in a slightly
+// different vertex order (interface vertices last), so the iteration count
+// stays about that of the sequential sweep (a multicolour order would change
+// the ordering of every vertex). One fork and one join per sweep: each thread
+// also computes the deferred residuals of its own range; the interface
+// vertices, and the residuals that need them, run on the calling thread
+// after the join.
 //
 // Layout. V is held as (n + 1, 4) doubles, the fourth lane and the last row
 // zero, so a neighbour is one 32-byte load; V0 is read in place (n, 3). The
@@ -44,6 +50,8 @@
 #include <string>
 #include <vector>
 
+#include <omp.h>
+
 #include "solver_detail.hpp"
 #include "sorpia/errors.hpp"
 
@@ -57,39 +65,62 @@ namespace {
 typedef double d4 __attribute__((vector_size(32)));
 typedef std::int32_t i4 __attribute__((vector_size(16)));
 
-// n rows of 4 doubles, uninitialised but the last (zero), on a 2 MB boundary
-// with transparent huge pages asked for when large (a row never straddles a
-// cache line; 2 MB pages save most of the page faults and TLB misses of a
-// fresh 32 MB array).
+// n values of T, uninitialised (no pass to zero them, no page faulted in
+// before its first use), 64-byte aligned, so that a row of x never straddles
+// a cache line; with huge_pages, and when large, on a 2 MB boundary with
+// transparent huge pages asked for: they save most of the page faults and
+// TLB misses of x, the array the sweep gathers from (irregular:1000000:
+// 0.258 s to solve with them, 0.273 s without). Not for the engine's other
+// copies: a fresh huge page here took 2 to 20 times as long to fault in, at
+// random (the renumbered operator of icosphere:8 in 4 ms or 80 ms, 7.5 ms
+// steadily in 4 kB pages).
 // std::vector<d4> would not even guarantee 32 bytes: the baseline target caps
 // vector alignment at 16.
-class Rows {
+template <class T>
+class Buffer {
  public:
-  explicit Rows(std::size_t n) {
-    const std::size_t bytes = 32 * n;
-    const std::size_t align = bytes >= kHuge ? kHuge : 64;
-    bytes_ = (bytes + align - 1) / align * align;
-    void* p = std::aligned_alloc(align, bytes_);
+  Buffer() = default;
+  Buffer(std::size_t n, bool huge_pages) {
+    const std::size_t bytes = std::max<std::size_t>(sizeof(T) * n, 64);
+    const std::size_t align = huge_pages && bytes >= kHuge ? kHuge : 64;
+    const std::size_t rounded = (bytes + align - 1) / align * align;
+    void* p = std::aligned_alloc(align, rounded);
     if (!p) throw std::bad_alloc();
 #ifdef MADV_HUGEPAGE
-    if (align == kHuge) madvise(p, bytes_, MADV_HUGEPAGE);  // advice only: failure is harmless
+    if (align == kHuge) madvise(p, rounded, MADV_HUGEPAGE);  // advice only: failure is harmless
 #endif
-    rows_ = static_cast<d4*>(p);
-    if (n > 0) rows_[n - 1] = d4{0.0, 0.0, 0.0, 0.0};  // the caller fills the others
+    data_ = static_cast<T*>(p);
   }
-  ~Rows() { std::free(rows_); }
-  Rows(const Rows&) = delete;
-  Rows& operator=(const Rows&) = delete;
-  d4* data() { return rows_; }
-  const d4* data() const { return rows_; }
-  d4& operator[](std::size_t i) { return rows_[i]; }
-  const d4& operator[](std::size_t i) const { return rows_[i]; }
+  ~Buffer() { std::free(data_); }
+  Buffer(const Buffer&) = delete;
+  Buffer& operator=(const Buffer&) = delete;
+  Buffer& operator=(Buffer&& o) noexcept {
+    std::swap(data_, o.data_);
+    return *this;
+  }
+  T* data() { return data_; }
+  const T* data() const { return data_; }
+  T& operator[](std::size_t i) { return data_[i]; }
+  const T& operator[](std::size_t i) const { return data_[i]; }
 
  private:
   static constexpr std::size_t kHuge = std::size_t{1} << 21;
-  std::size_t bytes_ = 0;
-  d4* rows_ = nullptr;
+  T* data_ = nullptr;
 };
+
+// A LimitOperator's arrays as the engine reads them: the caller's, or a
+// renumbered copy of its own (Renumbered).
+struct OpView {
+  std::size_t n;
+  const std::int32_t* offsets;  // n + 1
+  const std::int32_t* neighbors;
+  const double* diag;
+  const double* weight;
+};
+
+OpView view(const LimitOperator& op) {
+  return {op.n, op.offsets.data(), op.neighbors.data(), op.diag.data(), op.weight.data()};
+}
 
 constexpr std::uint8_t kInterface = 1;  // swept after the ranges, by one thread
 constexpr std::uint8_t kDeferred = 2;   // residual after the sweep, not in it
@@ -299,7 +330,7 @@ const Kernels& kernels(int choice) {
 // predictor cannot know) about 15. A mesh of one valence gets the plain loop
 // (its exit always predicted); irregular:1000000 (valences 3..12, 90% at
 // most 8) gets K = 8.
-int choose_slots(const LimitOperator& op) {
+int choose_slots(const OpView& op) {
   std::vector<std::int64_t> above(kSlotChoices[std::size(kSlotChoices) - 1] + 2, 0);
   for (std::size_t i = 0; i < op.n; ++i) {
     const std::int32_t v = op.offsets[i + 1] - op.offsets[i];
@@ -336,7 +367,12 @@ struct Plan {
   std::vector<std::int32_t> begin;      // ranges: [begin[t], begin[t + 1]), t < threads
   std::vector<std::uint8_t> flags;      // kInterface | kDeferred per vertex
   std::vector<std::int32_t> interface;  // ascending
-  std::vector<std::int32_t> deferred;   // ascending
+  // The deferred vertices: first those of range 0 whose neighbours are all
+  // swept by its thread, [local[0], local[1]), then range 1's, ..., then,
+  // from local[threads], the others (a neighbour, or the vertex itself,
+  // swept with the interface). Ascending within each part.
+  std::vector<std::int32_t> deferred;
+  std::vector<std::size_t> local;
   std::int32_t ahead = 0;
   std::int32_t lag = 0;
   std::size_t far = 0;  // vertices reaching further ahead than the lag
@@ -367,99 +403,119 @@ inline const std::int32_t* ring_slots(const std::int32_t* off, const std::int32_
   return nb + b + std::min(v, 4 * kRingGroups);
 }
 
-// parallel: run the passes on the threads (their results do not depend on it).
-Plan make_plan(const LimitOperator& op, int threads, bool parallel) {
+// Index ranges of equal work, one per thread: starts, threads + 1 of them,
+// the last n. A vertex costs its neighbours plus about two neighbours' worth
+// of its own loads and arithmetic.
+std::vector<std::int32_t> equal_work_ranges(const OpView& op, int threads) {
   const auto n = static_cast<std::int32_t>(op.n);
-  const std::int32_t* off = op.offsets.data();
-  const std::int32_t* nb = op.neighbors.data();
-  Plan p;
-  // Equal work per range: a vertex costs its neighbours plus about two
-  // neighbours' worth of its own loads and arithmetic.
+  const std::int32_t* off = op.offsets;
   const double total = static_cast<double>(off[n]) + 2.0 * n;
-  p.begin.assign(static_cast<std::size_t>(threads) + 1, n);
-  p.begin[0] = 0;
+  std::vector<std::int32_t> begin(static_cast<std::size_t>(threads) + 1, n);
+  begin[0] = 0;
   for (int t = 1; t < threads; ++t) {
     const double target = total * t / threads;
-    std::int32_t lo = p.begin[t - 1], hi = n;  // first i with cost(i) >= target
+    std::int32_t lo = begin[t - 1], hi = n;  // first i with cost(i) >= target
     while (lo < hi) {
       const std::int32_t mid = lo + (hi - lo) / 2;
       if (off[mid] + 2.0 * mid < target) lo = mid + 1;
       else hi = mid;
     }
-    p.begin[t] = lo;
+    begin[t] = lo;
   }
+  return begin;
+}
+
+// parallel: run the passes on the threads (their results do not depend on it).
+// begin: the ranges' starts (threads + 1 of them, the last n).
+Plan make_plan(const OpView& op, int threads, bool parallel, const std::vector<std::int32_t>& begin) {
+  const auto n = static_cast<std::int32_t>(op.n);
+  const std::int32_t* off = op.offsets;
+  const std::int32_t* nb = op.neighbors;
+  Plan p;
+  p.begin = begin;
   p.flags.assign(op.n, 0);
   // Per-range lists, reserved here: nothing may throw (bad_alloc) inside a
   // parallel region, where it would end the process.
   std::vector<std::vector<std::int32_t>> per_range(static_cast<std::size_t>(threads));
   for (int t = 0; t < threads; ++t) per_range[t].reserve(static_cast<std::size_t>(p.begin[t + 1] - p.begin[t]));
-  if (threads > 1) {
+  // One pass over the rings, range by range: interface vertices (a
+  // neighbour in another range), and the forward reach max(N(i)) - i of each
+  // vertex, for the lag below.
+  std::vector<std::int32_t> reach(op.n);
+  std::vector<std::vector<std::int32_t>> reach_count(static_cast<std::size_t>(threads),
+                                                     std::vector<std::int32_t>(kMaxLag + 2, 0));
 #pragma omp parallel for num_threads(threads) schedule(static, 1) if (parallel)
-    for (int t = 0; t < threads; ++t) {
-      const std::int32_t lo = p.begin[t], hi = p.begin[t + 1];
-      for (std::int32_t i = lo; i < hi; ++i) {
-        i4 s[kRingGroups];
-        const std::int32_t* rest = ring_slots(off, nb, off[n], i, s);
-        i4 out = (s[0] < lo) | (s[0] >= hi);
-        for (int g = 1; g < kRingGroups; ++g) out |= (s[g] < lo) | (s[g] >= hi);
-        bool outside = (out[0] | out[1] | out[2] | out[3]) != 0;
-        for (const std::int32_t* q = rest; q < nb + off[i + 1]; ++q) outside |= *q < lo || *q >= hi;
-        if (outside) {
-          p.flags[i] = kInterface;
-          per_range[t].push_back(i);
-        }
+  for (int t = 0; t < threads; ++t) {
+    const std::int32_t lo = p.begin[t], hi = p.begin[t + 1];
+    std::int32_t* count = reach_count[t].data();
+    for (std::int32_t i = lo; i < hi; ++i) {
+      i4 s[kRingGroups];
+      const std::int32_t* rest = ring_slots(off, nb, off[n], i, s);
+      i4 m = s[0], out = (s[0] < lo) | (s[0] >= hi);
+      for (int g = 1; g < kRingGroups; ++g) {
+        m = m > s[g] ? m : s[g];
+        out |= (s[g] < lo) | (s[g] >= hi);
+      }
+      // i itself counts too: a vertex with every neighbour below it reaches 0.
+      std::int32_t r = std::max(std::max(std::max(m[0], m[1]), std::max(m[2], m[3])), i);
+      bool outside = (out[0] | out[1] | out[2] | out[3]) != 0;
+      for (const std::int32_t* q = rest; q < nb + off[i + 1]; ++q) {
+        r = std::max(r, *q);
+        outside |= *q < lo || *q >= hi;
+      }
+      reach[i] = r - i;
+      ++count[std::min(reach[i], kMaxLag + 1)];
+      if (outside) {  // never with one range
+        p.flags[i] = kInterface;
+        per_range[t].push_back(i);
       }
     }
-    for (auto& r : per_range) p.interface.insert(p.interface.end(), r.begin(), r.end());
   }
-  // The lag: the forward reach max(N(i)) - i of all but about 1/1024 of the
-  // vertices, so that the residual front stays close behind the update front
-  // (its rows still in L2) and few residuals are deferred: a deferred
-  // residual gathers from far rows, cache misses each (irregular:1000000,
-  // sor: 0.46 s with 1/20 deferred, 0.34 s with 1/128, 0.32 s with 1/1024).
-  std::vector<std::int32_t> reach(op.n), reach_count(kMaxLag + 2, 0);
-#pragma omp parallel for num_threads(threads) schedule(static) if (parallel)
-  for (std::int32_t i = 0; i < n; ++i) {
-    i4 s[kRingGroups];
-    const std::int32_t* rest = ring_slots(off, nb, off[n], i, s);
-    i4 m = s[0];
-    for (int g = 1; g < kRingGroups; ++g) m = m > s[g] ? m : s[g];
-    // i itself counts too: a vertex with every neighbour below it reaches 0.
-    std::int32_t r = std::max(std::max(std::max(m[0], m[1]), std::max(m[2], m[3])), i);
-    for (const std::int32_t* q = rest; q < nb + off[i + 1]; ++q) r = std::max(r, *q);
-    reach[i] = r - i;
-  }
-  for (std::int32_t i = 0; i < n; ++i) ++reach_count[std::min(reach[i], kMaxLag + 1)];
+  for (auto& r : per_range) p.interface.insert(p.interface.end(), r.begin(), r.end());
+  for (int t = 1; t < threads; ++t)
+    for (int k = 0; k < kMaxLag + 2; ++k) reach_count[0][k] += reach_count[t][k];
+  // The lag: the forward reach of all but about 1/1024 of the vertices, so
+  // that the residual front stays close behind the update front (its rows
+  // still in L2) and few residuals are deferred: a deferred residual gathers
+  // from far rows, cache misses each (irregular:1000000, sor: 0.46 s with
+  // 1/20 deferred, 0.34 s with 1/128, 0.32 s with 1/1024).
   std::int64_t beyond = n;
   p.lag = 0;
-  while (p.lag <= kMaxLag && (beyond -= reach_count[p.lag]) > n / 1024) ++p.lag;
+  while (p.lag <= kMaxLag && (beyond -= reach_count[0][p.lag]) > n / 1024) ++p.lag;
   p.lag = std::max<std::int32_t>(p.lag, 1);
   // Deferred: the residual of i is not final lag vertices later, because i or
   // a neighbour is swept in the interface phase, or a neighbour lies beyond the lag.
   std::size_t far = 0;
+  std::vector<std::vector<std::int32_t>> after_interface(static_cast<std::size_t>(threads));
+  for (int t = 0; t < threads; ++t) after_interface[t].reserve(p.interface.size());
 #pragma omp parallel for num_threads(threads) schedule(static, 1) reduction(+ : far) if (parallel)
   for (int t = 0; t < threads; ++t) {
     per_range[t].clear();
     for (std::int32_t i = p.begin[t]; i < p.begin[t + 1]; ++i) {
       far += reach[i] > p.lag;
-      bool late = (p.flags[i] & kInterface) || reach[i] > p.lag;
-      if (threads > 1 && !late) {
+      bool touches_interface = p.flags[i] & kInterface;
+      if (threads > 1 && !touches_interface) {
         i4 s[kRingGroups];
         const std::int32_t* rest = ring_slots(off, nb, off[n], i, s);
         std::uint8_t f = 0;
         for (int g = 0; g < kRingGroups; ++g)
           for (int a = 0; a < 4; ++a) f |= p.flags[s[g][a]];
         for (const std::int32_t* q = rest; q < nb + off[i + 1]; ++q) f |= p.flags[*q];
-        late = f & kInterface;
+        touches_interface = f & kInterface;
       }
-      if (late) {
+      if (touches_interface || reach[i] > p.lag) {
         p.flags[i] |= kDeferred;
-        per_range[t].push_back(i);
+        (touches_interface ? after_interface[t] : per_range[t]).push_back(i);
       }
     }
   }
   p.far = far;
-  for (auto& r : per_range) p.deferred.insert(p.deferred.end(), r.begin(), r.end());
+  p.local.push_back(0);
+  for (auto& r : per_range) {
+    p.deferred.insert(p.deferred.end(), r.begin(), r.end());
+    p.local.push_back(p.deferred.size());
+  }
+  for (auto& r : after_interface) p.deferred.insert(p.deferred.end(), r.begin(), r.end());
   p.ahead = p.lag;
   return p;
 }
@@ -468,7 +524,7 @@ Plan make_plan(const LimitOperator& op, int threads, bool parallel) {
 // an icosphere whose vertices come level by level): breadth-first search
 // from the last vertex reached by a first search (Cuthill-McKee without its
 // degree sort), component by component. Returns perm, perm[new] = old.
-std::vector<std::int32_t> locality_order(const LimitOperator& op) {
+std::vector<std::int32_t> locality_order(const OpView& op) {
   const auto n = static_cast<std::int32_t>(op.n);
   std::vector<std::int32_t> order;
   order.reserve(op.n);
@@ -502,26 +558,131 @@ std::vector<std::int32_t> locality_order(const LimitOperator& op) {
   return order;
 }
 
-// op with its vertices renumbered: row k of the result is row perm[k] of op,
-// neighbours renamed by inv (inv[perm[k]] = k), in the same ring order.
-LimitOperator permuted(const LimitOperator& op, const std::vector<std::int32_t>& perm,
-                       const std::vector<std::int32_t>& inv) {
-  LimitOperator r;
-  r.n = op.n;
-  r.offsets.resize(op.n + 1);
-  r.neighbors.resize(op.neighbors.size());
-  r.diag.resize(op.n);
-  r.weight.resize(op.n);
-  r.offsets[0] = 0;
-  for (std::size_t k = 0; k < op.n; ++k) {
-    const std::int32_t i = perm[k];
-    std::int32_t out = r.offsets[k];
-    for (std::int32_t q = op.offsets[i]; q < op.offsets[i + 1]; ++q) r.neighbors[out++] = inv[op.neighbors[q]];
-    r.offsets[k + 1] = out;
-    r.diag[k] = op.diag[i];
-    r.weight[k] = op.weight[i];
+// An order for threads when index ranges split the mesh badly (most vertices
+// would be interface vertices, swept by one thread: icosphere:8 comes level by
+// level, so that the coarse vertices of the first range touch the second):
+// slabs of equal work across the longest side of V0's bounding box, one per
+// thread, each keeping the caller's vertex order (a good sweep order stays
+// one: icosphere:8's coarse-to-fine order converges in 16 sweeps, a
+// breadth-first one in 23). Only the slabs' common faces are interface.
+// Returns perm (perm[new] = old); begin gets the slabs' starts.
+std::vector<std::int32_t> slab_order(const OpView& op, const double* v0, int threads,
+                                     std::vector<std::int32_t>& begin) {
+  const auto n = static_cast<std::ptrdiff_t>(op.n);
+  double lo[3], hi[3];
+  for (int a = 0; a < 3; ++a) lo[a] = hi[a] = n ? v0[a] : 0.0;
+#pragma omp parallel for num_threads(threads) schedule(static) reduction(min : lo[:3]) reduction(max : hi[:3])
+  for (std::ptrdiff_t i = 0; i < n; ++i)
+    for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], v0[3 * i + a]), hi[a] = std::max(hi[a], v0[3 * i + a]);
+  int axis = 0;
+  for (int a = 1; a < 3; ++a)
+    if (hi[a] - lo[a] > hi[axis] - lo[axis]) axis = a;
+  // Work per thin slice of the axis, then slabs as runs of slices: O(n),
+  // equal work to within a slice (1/4096 of a slab).
+  const std::size_t slices = 4096 * static_cast<std::size_t>(threads);
+  const double width = hi[axis] - lo[axis], scale = width > 0 ? static_cast<double>(slices) / width : 0.0;
+  std::vector<std::int32_t> slice(op.n);
+  std::vector<double> work(slices * threads, 0.0);  // per thread, then summed into the first
+#pragma omp parallel num_threads(threads)
+  {
+    double* w = work.data() + slices * static_cast<std::size_t>(omp_get_thread_num());
+#pragma omp for schedule(static)
+    for (std::ptrdiff_t i = 0; i < n; ++i) {
+      const double f = (v0[3 * i + axis] - lo[axis]) * scale;  // NaN (a NaN in V0): slice 0
+      slice[i] = f >= 0.0 ? static_cast<std::int32_t>(std::min<double>(f, static_cast<double>(slices - 1))) : 0;
+      w[slice[i]] += op.offsets[i + 1] - op.offsets[i] + 2.0;  // as equal_work_ranges
+    }
   }
-  return r;
+  double total = 0.0;
+  for (std::size_t k = 0; k < slices; ++k) {
+    for (int t = 1; t < threads; ++t) work[k] += work[slices * t + k];
+    total += work[k];
+  }
+  std::vector<std::int32_t> slab_of(slices);
+  double sum = 0.0;
+  for (std::size_t k = 0; k < slices; ++k) {
+    slab_of[k] = std::min(threads - 1, static_cast<int>(sum / total * threads));
+    sum += work[k];
+  }
+  // Counting sort by slab: stable, so each slab keeps the caller's order.
+  begin.assign(static_cast<std::size_t>(threads) + 1, 0);
+  for (std::ptrdiff_t i = 0; i < n; ++i) ++begin[slab_of[slice[i]] + 1];
+  for (int t = 0; t < threads; ++t) begin[t + 1] += begin[t];
+  std::vector<std::int32_t> perm(n), next(begin.begin(), begin.end() - 1);
+  for (std::ptrdiff_t i = 0; i < n; ++i) perm[next[slab_of[slice[i]]]++] = static_cast<std::int32_t>(i);
+  return perm;
+}
+
+// op with its vertices renumbered: row k is row perm[k] of op, neighbours
+// renamed by inv (inv[perm[k]] = k), in the same ring order.
+struct Renumbered {
+  Buffer<std::int32_t> offsets, neighbors;
+  Buffer<double> diag, weight;
+  OpView view{};
+
+  Renumbered() = default;
+  Renumbered(const OpView& op, const std::int32_t* perm, const std::int32_t* inv, int threads, bool parallel)
+      : offsets(op.n + 1, false),
+        neighbors(static_cast<std::size_t>(op.offsets[op.n]), false),
+        diag(op.n, false),
+        weight(op.n, false) {
+    offsets[0] = 0;
+    for (std::size_t k = 0; k < op.n; ++k)
+      offsets[k + 1] = offsets[k] + op.offsets[perm[k] + 1] - op.offsets[perm[k]];
+    const auto n = static_cast<std::ptrdiff_t>(op.n);
+    std::int32_t* nb = neighbors.data();
+    const std::int32_t* off = offsets.data();
+    double* d = diag.data();
+    double* w = weight.data();
+#pragma omp parallel for num_threads(threads) schedule(static) if (parallel)
+    for (std::ptrdiff_t k = 0; k < n; ++k) {
+      const std::int32_t i = perm[k];
+      std::int32_t out = off[k];
+      for (std::int32_t q = op.offsets[i]; q < op.offsets[i + 1]; ++q) nb[out++] = inv[op.neighbors[q]];
+      d[k] = op.diag[i];
+      w[k] = op.weight[i];
+    }
+    view = {op.n, offsets.data(), neighbors.data(), diag.data(), weight.data()};
+  }
+  Renumbered& operator=(Renumbered&& o) noexcept {
+    offsets = std::move(o.offsets), neighbors = std::move(o.neighbors);
+    diag = std::move(o.diag), weight = std::move(o.weight);
+    std::swap(view, o.view);
+    return *this;
+  }
+};
+
+// How a vertex order suits the engine, from a sample of the vertices (the
+// choice it informs is about speed alone): the fraction reaching further
+// ahead than kMaxLag, and the fraction with a neighbour in another of the
+// index ranges `begin`.
+struct OrderSurvey {
+  double far = 0.0, interface = 0.0;
+};
+
+OrderSurvey survey_order(const OpView& op, const std::vector<std::int32_t>& begin) {
+  // 64 runs of 64 consecutive vertices, evenly spread: a few cache misses
+  // a run rather than a few a vertex.
+  const auto n = static_cast<std::int32_t>(op.n);
+  constexpr std::int32_t kRuns = 64, kRun = 64;
+  std::size_t count = 0, far = 0, interface = 0;
+  int t = 0;
+  for (std::int32_t r = 0; r < kRuns; ++r) {
+    const std::int32_t b = static_cast<std::int32_t>(static_cast<std::int64_t>(n) * r / kRuns);
+    for (std::int32_t i = b; i < std::min(n, b + kRun); ++i, ++count) {
+      while (i >= begin[t + 1]) ++t;
+      bool reaches = false, outside = false;
+      for (std::int32_t q = op.offsets[i]; q < op.offsets[i + 1]; ++q) {
+        const std::int32_t j = op.neighbors[q];
+        reaches |= j - i > kMaxLag;
+        outside |= j < begin[t] || j >= begin[t + 1];
+      }
+      far += reaches;
+      interface += outside;
+    }
+  }
+  const double c = std::max<double>(1.0, static_cast<double>(count));
+  return {static_cast<double>(far) / c, static_cast<double>(interface) / c};
 }
 
 // Too poor an order: more than half of the vertices reach further ahead than
@@ -531,48 +692,75 @@ LimitOperator permuted(const LimitOperator& op, const std::vector<std::int32_t>&
 // kept: icosphere:8 comes level by level (26% far reaching) and converges in
 // 16 sweeps in that order, 23 in the breadth-first one, so reordering it
 // would not pay.
-bool poor_order(const Plan& p, std::size_t n) { return p.lag > kMaxLag && p.far > n / 2; }
+bool poor_order(const OrderSurvey& s) { return s.far > 0.5; }
+
+// So many interface vertices that one thread would sweep a good part of the
+// mesh alone (icosphere:8 split in two index ranges: 67%): the ranges are
+// replaced by slabs (slab_order).
+bool crowded_interface(const OrderSurvey& s) {
+  return s.interface > 1.0 / 16;
+}
 
 class Engine {
  public:
   // v0: the caller's (n, 3) vertices, solved for as V0 / 2^exponent (in place
   // when exponent = 0 and the order is kept).
   Engine(const LimitOperator& op, const double* v0, int exponent, double omega, int threads)
-      : op_(&op),
+      : op_(view(op)),
         // Below about 8k vertices a thread, waking the threads costs more
         // than they save; the ranges then run one after the other (the same
         // order, so the same result).
         parallel_(threads > 1 && op.n >= 8192 * static_cast<std::size_t>(threads)),
-        plan_(make_plan(op, threads, parallel_)),
-        x_(op.n + 1),
+        x_(op.n + 1, true),
         exponent_(exponent) {
-    if (poor_order(plan_, op.n)) {
+    x_[op.n] = splat(0.0);  // the zero row
+    std::vector<std::int32_t> begin = equal_work_ranges(op_, threads);
+    const OrderSurvey survey = survey_order(op_, begin);
+    if (poor_order(survey)) {
       // Sweep in a locality order instead (a Gauss-Seidel order like any
       // other: same solution, iteration counts within a few percent), and
       // hand the control vertices back in the caller's order.
-      perm_ = locality_order(op);
-      inv_.resize(op.n);
-      for (std::size_t k = 0; k < op.n; ++k) inv_[perm_[k]] = static_cast<std::int32_t>(k);
-      reordered_ = permuted(op, perm_, inv_);
-      op_ = &reordered_;
-      plan_ = make_plan(reordered_, threads, parallel_);
-      v0_.resize(3 * op.n);
-      for (std::size_t k = 0; k < op.n; ++k)
-        for (int a = 0; a < 3; ++a) v0_[3 * k + a] = v0[3 * static_cast<std::size_t>(perm_[k]) + a];
-    } else if (exponent_ != 0) {
-      v0_.assign(v0, v0 + 3 * op.n);
+      perm_ = locality_order(op_);
+    } else if (parallel_ && crowded_interface(survey)) {
+      perm_ = slab_order(op_, v0, threads, begin);
     }
-    if (!v0_.empty()) {
-      scale_pow2(v0_.data(), v0_.size(), -exponent_);
+    const std::size_t n = op.n;
+    if (!perm_.empty() || exponent_ != 0) v0_ = Buffer<double>(3 * n, false);
+    if (!perm_.empty()) {
+      inv_.resize(n);
+      for (std::size_t k = 0; k < n; ++k) inv_[perm_[k]] = static_cast<std::int32_t>(k);
+      reordered_ = Renumbered(op_, perm_.data(), inv_.data(), threads, parallel_);
+      op_ = reordered_.view;
+      if (poor_order(survey)) begin = equal_work_ranges(op_, threads);
+      double* w = v0_.data();
+      const std::int32_t* perm = perm_.data();
+#pragma omp parallel for num_threads(threads) schedule(static) if (parallel_)
+      for (std::size_t k = 0; k < n; ++k)
+        for (int a = 0; a < 3; ++a) w[3 * k + a] = v0[3 * static_cast<std::size_t>(perm[k]) + a];
+    } else if (exponent_ != 0) {
+      std::memcpy(v0_.data(), v0, 3 * n * sizeof(double));
+    }
+    if (v0_.data()) {
+      scale_pow2(v0_.data(), 3 * n, -exponent_);
       v0 = v0_.data();
     }
-    const int choice = choose_slots(*op_);  // index into kSlotChoices
+    plan_ = make_plan(op_, threads, parallel_, begin);
+    const int choice = choose_slots(op_);  // index into kSlotChoices
     k_ = &kernels(choice);
-    const std::int32_t nnz = op_->offsets[op.n];
-    std::int32_t slots_end = static_cast<std::int32_t>(op.n);
-    while (slots_end > 0 && op_->offsets[slots_end - 1] + kSlotChoices[choice] > nnz) --slots_end;
-    ctx_ = Ctx{op_->offsets.data(), op_->neighbors.data(), static_cast<std::int32_t>(op.n), slots_end,
-               op_->diag.data(), op_->weight.data(), v0, x_.data(), plan_.flags.data(), omega, plan_.ahead, plan_.lag};
+    const std::int32_t nnz = op_.offsets[n];
+    auto slots_end = static_cast<std::int32_t>(n);
+    while (slots_end > 0 && op_.offsets[slots_end - 1] + kSlotChoices[choice] > nnz) --slots_end;
+    ctx_ = Ctx{op_.offsets,  op_.neighbors, static_cast<std::int32_t>(n), slots_end, op_.diag, op_.weight, v0,
+               x_.data(), plan_.flags.data(), omega, plan_.ahead, plan_.lag};
+  }
+
+  // Whether E_k inside the sweep is faster than a residual pass after it.
+  // Not when many residuals are deferred: each gathers its neighbours from
+  // rows long evicted (icosphere:8, whose coarse vertices, a quarter, reach
+  // far ahead: 15.5 ms a fused sweep, 12.9 ms a sweep and a residual pass).
+  // Either way gives the same E_k, bit for bit.
+  bool fused_pays() const {
+    return plan_.deferred.size() <= op_.n / 8;
   }
 
   // Whether the vertices are swept in another order than the caller's.
@@ -581,7 +769,7 @@ class Engine {
   int threads() const { return static_cast<int>(plan_.begin.size()) - 1; }
 
   // max_i ||v_i^0|| of the (scaled) V0: the monitor's rounding level.
-  double scale() const { return max_row_norm(ctx_.v0, op_->n); }
+  double scale() const { return max_row_norm(ctx_.v0, op_.n); }
 
   // Sets V^(0) = V0 and returns E_0, in one pass: the residuals run lag
   // behind the rows being set, as in a fused sweep (the same bits as
@@ -616,34 +804,41 @@ class Engine {
     const int t_count = threads();
     const auto sweep_range = fused ? k_->sweep_fused : k_->sweep_plain;
     double m = 0.0;
+    const std::int32_t* deferred = plan_.deferred.data();
 #pragma omp parallel for num_threads(t_count) schedule(static, 1) reduction(max : m) if (parallel_)
-    for (int t = 0; t < t_count; ++t) m = std::max(m, sweep_range(ctx_, plan_.begin[t], plan_.begin[t + 1]));
+    for (int t = 0; t < t_count; ++t) {
+      m = std::max(m, sweep_range(ctx_, plan_.begin[t], plan_.begin[t + 1]));
+      // The deferred residuals of the range's own vertices, final now.
+      if (fused) m = std::max(m, k_->residual_list(ctx_, deferred + plan_.local[t], plan_.local[t + 1] - plan_.local[t]));
+    }
     k_->update_list(ctx_, plan_.interface.data(), plan_.interface.size());
     if (!fused) return NAN;
-    m = std::max(m, k_->residual_list(ctx_, plan_.deferred.data(), plan_.deferred.size()));
+    const std::size_t rest = plan_.local[t_count];
+    m = std::max(m, k_->residual_list(ctx_, deferred + rest, plan_.deferred.size() - rest));
     return std::sqrt(m);
   }
 
   // (n, 3) control vertices, times 2^exponent().
   void write(double* v) const {
-    const std::size_t n = op_->n;
-    for (std::size_t i = 0; i < n; ++i) {
-      const d4& y = x_[perm_.empty() ? i : static_cast<std::size_t>(inv_[i])];
+    const auto n = static_cast<std::ptrdiff_t>(op_.n);
+#pragma omp parallel for num_threads(threads()) schedule(static) if (parallel_)
+    for (std::ptrdiff_t i = 0; i < n; ++i) {
+      const d4& y = x_[perm_.empty() ? i : inv_[i]];
       for (int a = 0; a < 3; ++a) v[3 * i + a] = y[a];
     }
     scale_pow2(v, 3 * n, exponent_);
   }
 
  private:
-  const LimitOperator* op_;                // the operator swept: the caller's or reordered_
+  OpView op_;                             // the operator swept: the caller's or reordered_
   bool parallel_;                         // threads really run in parallel
-  std::vector<std::int32_t> perm_, inv_;  // locality order (empty: the caller's): perm[new] = old
-  LimitOperator reordered_;               // the caller's operator in that order
+  std::vector<std::int32_t> perm_, inv_;  // the sweep's order (empty: the caller's): perm[new] = old
+  Renumbered reordered_;                  // the caller's operator in that order
   Plan plan_;
   const Kernels* k_ = nullptr;
-  Rows x_;
+  Buffer<d4> x_;                          // (n + 1) rows
   int exponent_;
-  std::vector<double> v0_;                // V0 reordered and/or divided by 2^exponent, when either applies
+  Buffer<double> v0_;                     // V0 reordered and/or divided by 2^exponent, when either applies
   Ctx ctx_;
 };
 
@@ -653,13 +848,14 @@ void solve_sor(const LimitOperator& op, const double* v0, int exponent, const So
                SolveResult& res) {
   Engine engine(op, v0, exponent, omega, opt.threads);
   res.reordered = engine.reordered();
+  const bool fused = !opt.two_pass && engine.fused_pays();
   const double e0 = engine.start();
   Monitor mon(opt, res, engine.scale());
   if (!mon.start(e0)) {
     for (;;) {
-      double e = engine.sweep(!opt.two_pass);
+      double e = engine.sweep(fused);
       res.products += 2;  // a sweep and a residual, fused or not
-      if (opt.two_pass) e = engine.residual();
+      if (!fused) e = engine.residual();
       if (mon.record(e)) break;
     }
   }

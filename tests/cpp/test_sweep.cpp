@@ -38,13 +38,16 @@ sorpia::TriMesh shuffled(const sorpia::TriMesh& m, unsigned seed) {
 }
 
 // Meshes past the sweep's lag of 4096 vertices (the fused residual runs
-// behind the front and the seams are deferred), with boundary, a pole, and
-// a scrambled vertex order.
+// behind the front and the seams are deferred), with boundary, a pole, a
+// scrambled vertex order, and an icosphere numbered level by level (its
+// coarse quarter reaches far ahead: E_k by a residual pass; index ranges
+// would share most vertices: slabs on two or more threads).
 const std::vector<Case>& cases() {
   static const std::vector<Case> c = {
       limit_case(sorpia::irregular(26000, 7), "irregular"), limit_case(sorpia::torus(130, 130), "torus"),
       limit_case(sorpia::grid(90, 70), "grid"),             limit_case(sorpia::pole(48), "pole"),
-      limit_case(shuffled(sorpia::irregular(40000, 3), 11), "shuffled")};
+      limit_case(shuffled(sorpia::irregular(40000, 3), 11), "shuffled"),
+      limit_case(sorpia::icosphere(6), "icosphere")};
   return c;
 }
 
@@ -149,6 +152,28 @@ TEST(Sweep, PoorOrderIsSweptInItsOwnOrderAndReturnedInTheCallers) {
     EXPECT_LE(rb.iterations, std::ceil(1.15 * ra.iterations));
     EXPECT_LT(error_from_scratch(b, rb.control_vertices), 1.01e-10 * rb.initial_error);
   }
+}
+
+TEST(Sweep, CrowdedRangesAreSweptInSlabsAndReturnedInTheCallersOrder) {
+  // icosphere(6) split into two index ranges: the first holds every coarse
+  // vertex, each with neighbours in both. On two or more threads the engine
+  // sweeps slabs across the sphere instead; the irregular mesh's own ranges
+  // share few vertices and are kept.
+  const Case& ico = cases()[5];
+  const sorpia::SolveResult one = run(ico, 1, false);
+  EXPECT_FALSE(one.reordered);
+  for (int threads : {2, 3}) {
+    const sorpia::SolveResult t = run(ico, threads, false);
+    EXPECT_TRUE(t.reordered) << threads;
+    ASSERT_TRUE(t.converged());
+    // The caller's order: the same vertices as the sequential sweep's, to
+    // what the stopping rule leaves (see ThreadsGiveTheSequentialSolution).
+    std::vector<double> d(one.control_vertices.size());
+    for (std::size_t k = 0; k < d.size(); ++k) d[k] = t.control_vertices[k] - one.control_vertices[k];
+    EXPECT_LT(max_abs(d), 1e-8 * max_abs(one.control_vertices)) << threads;
+    EXPECT_LT(error_from_scratch(ico, t.control_vertices), 1.01e-10 * t.initial_error) << threads;
+  }
+  EXPECT_FALSE(run(cases()[0], 2, false).reordered);
 }
 
 TEST(Sweep, StopAtZeroReturnsV0) {
