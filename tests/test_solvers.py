@@ -180,6 +180,26 @@ def test_interpolator_reuses_estimates():
     assert abs(solver.limit_matrix() - b).max() == 0.0
 
 
+def test_result_arrays_outlive_the_solver_and_are_plain_numpy():
+    # The core hands its result vectors to numpy without a copy (a capsule
+    # owns them): they must stay valid and writable after the Interpolator
+    # and the result are gone, and hold the solution (checked by B V = V0).
+    import gc
+
+    v, f = sorpia.shapes.icosphere(3)
+    solver = sorpia.Interpolator(f, len(v))
+    res = solver.solve(v)
+    cv, errors = res.control_vertices, res.errors
+    del solver, res
+    gc.collect()
+    assert cv.shape == v.shape and cv.dtype == np.float64 and cv.flags.c_contiguous and cv.flags.writeable
+    assert errors.ndim == 1 and errors[0] == 1.0
+    b = sorpia.limit_matrix(f, len(v))
+    assert np.abs(b @ cv - v).max() < 1e-9 * np.abs(v).max()
+    cv += 1.0  # writable storage of its own
+    np.testing.assert_allclose(b @ (cv - 1.0), v, rtol=0, atol=1e-9)
+
+
 def test_unreferenced_vertex_passes_through():
     v, f = sorpia.shapes.icosphere(1)
     v = np.vstack([v, [[5.0, 6.0, 7.0]]])

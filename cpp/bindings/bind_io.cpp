@@ -15,7 +15,7 @@ void bind_io(py::module_& m) {
           py::gil_scoped_release release;
           mesh = sorpia::read_mesh(path, triangulate);
         }
-        return py::make_tuple(to_numpy(mesh.vertices, 3), to_numpy(mesh.faces, 3));
+        return py::make_tuple(to_numpy(std::move(mesh.vertices), 3), to_numpy(std::move(mesh.faces), 3));
       },
       "path"_a, "triangulate"_a);
   m.def(

@@ -9,8 +9,8 @@ namespace sorpia_py {
 using namespace pybind11::literals;
 
 namespace {
-py::tuple mesh_tuple(const sorpia::TriMesh& m) {
-  return py::make_tuple(to_numpy(m.vertices, 3), to_numpy(m.faces, 3));
+py::tuple mesh_tuple(sorpia::TriMesh&& m) {
+  return py::make_tuple(to_numpy(std::move(m.vertices), 3), to_numpy(std::move(m.faces), 3));
 }
 }  // namespace
 
@@ -46,7 +46,8 @@ void bind_limit(py::module_& m) {
           py::gil_scoped_release release;
           mat = sorpia::limit_matrix(topology, b);
         }
-        return py::make_tuple(to_numpy(mat.data, 0), to_numpy(mat.indices, 0), to_numpy(mat.indptr, 0));
+        return py::make_tuple(to_numpy(std::move(mat.data), 0), to_numpy(std::move(mat.indices), 0),
+                              to_numpy(std::move(mat.indptr), 0));
       },
       "topology"_a, "boundary"_a, "Limit matrix B as CSR arrays (data, indices, indptr).");
 

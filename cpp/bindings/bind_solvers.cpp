@@ -29,8 +29,8 @@ sorpia::OmegaRule parse_omega_rule(const std::string& name) {
 
 py::dict result_dict(sorpia::SolveResult&& r) {
   py::dict d;
-  d["control_vertices"] = to_numpy(r.control_vertices, 3);
-  d["errors"] = to_numpy(r.errors, 0);
+  d["control_vertices"] = to_numpy(std::move(r.control_vertices), 3);
+  d["errors"] = to_numpy(std::move(r.errors), 0);
   d["initial_error"] = r.initial_error;
   d["iterations"] = r.iterations;
   d["stop_reason"] = sorpia::stop_reason_name(r.stop_reason);

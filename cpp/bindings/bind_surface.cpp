@@ -76,7 +76,7 @@ void bind_surface(py::module_& m) {
                py::gil_scoped_release release;
                t = s.tessellate(level);
              }
-             return py::make_tuple(to_numpy(t.vertices, 3), to_numpy(t.faces, 3));
+             return py::make_tuple(to_numpy(std::move(t.vertices), 3), to_numpy(std::move(t.faces), 3));
            },
            "level"_a);
 
