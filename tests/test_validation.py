@@ -154,6 +154,75 @@ def test_vertex_count_accepts_numpy_integers_only():
         as_vertex_count(True)
 
 
+# Every public entry taking a vertex count validates it with the one helper
+# (as_vertex_count, through sorpia.limit.topology): same type, same message.
+COUNT_ENTRIES = {
+    "limit_matrix": lambda n: sorpia.limit_matrix(F1, n),
+    "limit_matrix-keyword": lambda n: sorpia.limit_matrix(F1, n_vertices=n),
+    "Interpolator": lambda n: sorpia.Interpolator(F1, n),
+    "Interpolator-keyword": lambda n: sorpia.Interpolator(F1, n_vertices=n),
+}
+
+# (id, count, exception, message pattern naming the parameter and the value)
+BAD_COUNTS = [
+    ("float", 42.0, TypeError, r"^n_vertices must be an integer, got 42\.0$"),
+    ("numpy-float", np.float64(42), TypeError, r"^n_vertices must be an integer, got (np\.float64\()?42\.0\)?$"),
+    ("bool", True, TypeError, r"^n_vertices must be an integer, got True$"),
+    ("numpy-bool", np.bool_(True), TypeError, r"^n_vertices must be an integer, got (np\.)?True_?$"),
+    ("string", "42", TypeError, r"^n_vertices must be an integer, got '42'$"),
+    ("negative", -1, sorpia.ParameterError, r"^n_vertices = -1 must be >= 0$"),
+    ("too-small-for-faces", 10, sorpia.MeshError,
+     r"^faces\[0\] = \[0, 12, 14\] has vertex index 12 out of range \[0, 10\): n_vertices = 10 is too small for "
+     r"faces, whose largest vertex index is 41$"),
+]
+
+
+@pytest.mark.parametrize("entry", sorted(COUNT_ENTRIES))
+@pytest.mark.parametrize("count, exc, match", [c[1:] for c in BAD_COUNTS], ids=[c[0] for c in BAD_COUNTS])
+def test_every_vertex_count_entry_refuses_the_same_way(entry, count, exc, match):
+    with pytest.raises(exc, match=match):
+        COUNT_ENTRIES[entry](count)
+
+
+@pytest.mark.parametrize("count", [np.int64(42), np.int32(42), np.uint8(42), np.uint64(42)],
+                         ids=lambda c: type(c).__name__)
+def test_vertex_count_entries_accept_numpy_integers(count, closed_form):
+    # The same B as the closed-form masks for the plain int count: 1e-15, one rounding of the same formulas.
+    exact = closed_form(F1, 42)
+    assert abs(sorpia.limit_matrix(F1, count) - exact).max() <= 1e-15
+    interp = sorpia.Interpolator(F1, count)
+    assert type(interp.n_vertices) is int and interp.n_vertices == 42
+    assert abs(interp.limit_matrix() - exact).max() <= 1e-15
+
+
+@pytest.mark.parametrize("call", [
+    lambda: sorpia.limit_points(V1[:10], F1),
+    lambda: sorpia.interpolate(V1[:10], F1),
+], ids=["limit_points", "interpolate"])
+def test_too_few_vertices_for_the_faces_names_len_vertices(call):
+    # Where the count is the rows of `vertices`, the message names it so (there is no n_vertices argument).
+    with pytest.raises(sorpia.MeshError, match=r"out of range \[0, 10\): len\(vertices\) = 10 is too small for faces, "
+                                               r"whose largest vertex index is 41$"):
+        call()
+
+
+@pytest.mark.parametrize("count, exc, match", [
+    (400.0, TypeError, r"^n_vertices must be an integer, got 400\.0$"),
+    (True, TypeError, r"^n_vertices must be an integer, got True$"),
+    (-5, sorpia.ParameterError, r"^n_vertices = -5 must be >= 0$"),
+], ids=["float", "bool", "negative"])
+def test_irregular_validates_its_vertex_count(count, exc, match):
+    with pytest.raises(exc, match=match):
+        sorpia.shapes.irregular(count)
+
+
+def test_irregular_accepts_a_numpy_integer_count():
+    # Same mesh for the numpy and the plain int count (the generator is deterministic for a seed).
+    v, f = sorpia.shapes.irregular(np.int64(300), seed=2)
+    v2, f2 = sorpia.shapes.irregular(300, seed=2)
+    assert np.array_equal(v, v2) and np.array_equal(f, f2)
+
+
 def strided(a):
     """A non-contiguous view of `a` (every other column of a wider array)."""
     wide = np.zeros((a.shape[0], 2 * a.shape[1]), a.dtype)

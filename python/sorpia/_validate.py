@@ -95,14 +95,16 @@ def _first_polygon(faces) -> tuple[int, int] | None:
     return None
 
 
-def as_faces(faces, n_vertices: int, name: str = "faces") -> np.ndarray:
+def as_faces(faces, n_vertices: int, name: str = "faces", count_name: str = "n_vertices") -> np.ndarray:
     """Return `faces` as a C-contiguous int32 (m, 3) array of indices in [0, n_vertices).
 
     Any integer dtype is accepted (signed or unsigned, any byte order);
     float, bool, complex and object arrays raise TypeError. Polygons with
     other than 3 vertices raise sorpia.MeshError saying how to triangulate.
+    `count_name` is what the caller calls the vertex count ("n_vertices",
+    "len(vertices)"), named with its value when an index is too large for it.
     """
-    n_vertices = as_vertex_count(n_vertices)
+    n_vertices = as_vertex_count(n_vertices, count_name)
     expected = "an (m, 3) array of integer vertex indices"
     try:
         arr = np.asarray(faces)
@@ -132,8 +134,11 @@ def as_faces(faces, n_vertices: int, name: str = "faces") -> np.ndarray:
     if bad.any():
         f = int(np.flatnonzero(bad.any(axis=1))[0])
         k = int(np.flatnonzero(bad[f])[0])
-        raise MeshError(f"{name}[{f}] = {arr[f].tolist()} has vertex index {arr[f, k]} out of range "
-                        f"[0, {n_vertices})")
+        message = f"{name}[{f}] = {arr[f].tolist()} has vertex index {arr[f, k]} out of range [0, {n_vertices})"
+        if arr[f, k] >= n_vertices:  # the count may be the mistake rather than the faces
+            message += (f": {count_name} = {n_vertices} is too small for {name}, whose largest vertex index is "
+                        f"{arr.max()}")
+        raise MeshError(message)
     return np.ascontiguousarray(arr, dtype=np.int32)
 
 

@@ -87,7 +87,7 @@ def write_mesh(path, vertices, faces, binary: bool = False) -> None:
     vertices no face uses are not stored.
     """
     vertices = as_vertices(vertices)
-    faces = as_faces(faces, vertices.shape[0])
+    faces = as_faces(faces, vertices.shape[0], count_name="len(vertices)")
     _core.write_mesh(os.fspath(path), vertices, faces, bool(binary))
 
 

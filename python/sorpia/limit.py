@@ -15,13 +15,15 @@ class UnreferencedVerticesWarning(UserWarning):
     """Some vertices belong to no face; their limit is themselves."""
 
 
-def topology(faces, n_vertices: int, *, warn: bool = True) -> _core.Topology:
-    """Validate `faces` and build the mesh connectivity (OpenMesh half-edges).
+def topology(faces, n_vertices: int, *, warn: bool = True, count_name: str = "n_vertices") -> _core.Topology:
+    """Validate `n_vertices` and `faces` and build the mesh connectivity (OpenMesh half-edges).
 
+    `count_name` names the vertex count in messages: "n_vertices" where the
+    caller passed the count, "len(vertices)" where it is the rows of an array.
     Warns with UnreferencedVerticesWarning when some vertices belong to no face.
     """
-    n_vertices = as_vertex_count(n_vertices)
-    faces = as_faces(faces, n_vertices)
+    n_vertices = as_vertex_count(n_vertices, count_name)
+    faces = as_faces(faces, n_vertices, count_name=count_name)
     topo = _core.Topology(faces, n_vertices)
     if warn and topo.n_unreferenced:
         warnings.warn(
@@ -58,7 +60,7 @@ def limit_points(vertices, faces, boundary: str = DEFAULT_BOUNDARY) -> np.ndarra
         face references are returned unchanged (with a warning).
     """
     vertices = as_vertices(vertices)
-    topo = topology(faces, vertices.shape[0])
+    topo = topology(faces, vertices.shape[0], count_name="len(vertices)")
     return _core.limit_points(topo, vertices, as_boundary(boundary))
 
 
@@ -69,7 +71,7 @@ def limit_matrix(faces, n_vertices: int, boundary: str = DEFAULT_BOUNDARY) -> sc
     ``limit_matrix(F, len(V)) @ V == limit_points(V, F)``. Unreferenced vertices
     get an identity row. See `limit_points` for `boundary`.
     """
-    n_vertices = as_vertex_count(n_vertices)
-    topo = topology(faces, n_vertices)
+    topo = topology(faces, n_vertices)  # validates n_vertices (as_vertex_count) and the faces
+    n = topo.n_vertices
     data, indices, indptr = _core.limit_matrix(topo, as_boundary(boundary))
-    return scipy.sparse.csr_matrix((data, indices, indptr), shape=(n_vertices, n_vertices))
+    return scipy.sparse.csr_matrix((data, indices, indptr), shape=(n, n))

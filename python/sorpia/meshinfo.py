@@ -176,7 +176,7 @@ def _loop_pia_verdict(vertices: np.ndarray, faces: np.ndarray, boundary: str) ->
     try:
         as_boundary(boundary)
         as_vertices(vertices)
-        topology(faces, len(vertices), warn=False)  # validates the faces (as_faces), then builds
+        topology(faces, len(vertices), warn=False, count_name="len(vertices)")  # validates the faces, then builds
     except (MeshError, ValueError, TypeError) as exc:
         return {"can_run": False, "reason": str(exc), "notes": notes}
     notes.append(f"boundary rule {boundary!r}")

@@ -8,6 +8,7 @@ faces oriented counter-clockwise seen from outside. Built by the C++ core, so
 from __future__ import annotations
 
 from . import _core
+from ._validate import as_vertex_count
 
 
 def icosphere(level: int = 3):
@@ -35,7 +36,7 @@ def pole(n: int = 48):
 def irregular(n_vertices: int = 2000, seed: int = 1):
     """Closed genus-1 mesh of about `n_vertices` vertices with random edge flips:
     valences 3 to 12, most vertices extraordinary."""
-    return _core.irregular(n_vertices, seed)
+    return _core.irregular(as_vertex_count(n_vertices), seed)
 
 
 __all__ = ["icosphere", "torus", "grid", "pole", "irregular"]

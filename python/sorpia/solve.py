@@ -228,8 +228,11 @@ class Interpolator:
     faces : array_like, (m, 3) int
         Triangles, consistently oriented, manifold.
     n_vertices : int
-        Number of vertices (vertices no face references pass through
-        unchanged, with an UnreferencedVerticesWarning).
+        Number of vertices, an int or numpy integer >= 0 checked as
+        `sorpia.limit_matrix` checks it (a float, even 12.0, or a bool raises
+        TypeError; a count below the largest face index + 1, MeshError).
+        Vertices no face references pass through unchanged, with an
+        UnreferencedVerticesWarning.
     boundary : {"edge-and-corner", "edge-only"}
         Boundary rule, see sorpia.limit_points.
 
@@ -238,11 +241,13 @@ class Interpolator:
     use and kept, so that running every method on one mesh pays for them once.
     """
 
-    def __init__(self, faces, n_vertices: int, boundary: str = DEFAULT_BOUNDARY):
+    def __init__(self, faces, n_vertices: int, boundary: str = DEFAULT_BOUNDARY, *, _count_name: str = "n_vertices"):
+        # _count_name: how messages name the count; interpolate() passes "len(vertices)".
         t0 = time.perf_counter()
-        self.n_vertices = int(n_vertices)
         self.boundary = as_boundary(boundary)
-        self.topology = _topology(faces, self.n_vertices)
+        # validates n_vertices as limit_matrix does (as_vertex_count: no float, bool or negative count)
+        self.topology = _topology(faces, n_vertices, count_name=_count_name)
+        self.n_vertices = self.topology.n_vertices
         t1 = time.perf_counter()
         self._operator = _core.LimitOperator(self.topology, self.boundary)
         t2 = time.perf_counter()
@@ -378,7 +383,7 @@ def interpolate(vertices, faces, method: str = "sor", omega="auto", tol: float =
     # Options are checked before the (costly) operator is built.
     checked = _check_options(method, omega, tol, max_iter, callback, sigma, alpha, weight, threads)
     v0 = as_vertices(vertices)
-    interp = Interpolator(faces, v0.shape[0], boundary)
+    interp = Interpolator(faces, v0.shape[0], boundary, _count_name="len(vertices)")
     res = interp._solve(v0, method, checked, callback, t0)
     timings = dict(res.timings, **interp.build_timings)
     return replace(res, seconds=time.perf_counter() - t0, timings=timings)
