@@ -223,6 +223,57 @@ def test_force_overwrites_the_input(torus_file, tmp_path):
     assert np.abs(sorpia.limit_matrix(F, len(V0)) @ Vc - V0).max() < 1e-9
 
 
+def _link(kind: str, src: Path, tmp_path: Path) -> tuple[Path, Path]:
+    """(input, output) naming one file through a link made as `kind` says."""
+    (tmp_path / "sub").mkdir()
+    links = {
+        "symlink": (src, tmp_path / "link.obj", src.name),
+        "symlink-absolute": (src, tmp_path / "link.obj", src.resolve()),
+        "symlink-other-folder": (src, tmp_path / "sub" / "link.obj", Path("..") / src.name),
+        "input-is-the-symlink": (tmp_path / "link.obj", src, src.name),
+    }
+    if kind == "hard-link":
+        os.link(src, tmp_path / "sub" / "hard.obj")
+        return src, tmp_path / "sub" / "hard.obj"
+    inp, out, target = links[kind]
+    link = out if inp == src else inp
+    try:
+        os.symlink(target, link)
+    except (OSError, NotImplementedError) as exc:  # Windows without the privilege
+        pytest.skip(f"cannot make a symlink here: {exc}")
+    return inp, out
+
+
+@pytest.mark.parametrize("kind", ["symlink", "symlink-absolute", "symlink-other-folder", "input-is-the-symlink",
+                                  "hard-link"])
+def test_output_that_is_the_input_through_a_link_is_refused(kind, torus_file, tmp_path):
+    # -o naming the input file by another path (a link) is refused as -o equal to the input is:
+    # exit 2, one line naming the option and the path, and the file keeps its bytes.
+    src, V0, F = torus_file
+    before = src.read_bytes()
+    inp, out = _link(kind, src, tmp_path)
+    proc = run("fit", inp, "-o", out, "--quiet", cwd=tmp_path)
+    assert_user_error(proc)
+    assert proc.stderr.strip().splitlines() == [f"sorpia: error: -o {out} is the input file: refusing to overwrite it "
+                                                f"(pass --force to do so)"]
+    assert src.read_bytes() == before
+    assert not [p for p in tmp_path.rglob("*") if ".sorpia-tmp" in p.name]  # refused before any write
+
+
+def test_force_through_a_symlink_writes_the_output_path(torus_file, tmp_path):
+    # With --force the control mesh is written to the -o path. The write is atomic (a temporary
+    # file renamed over the path), so the rename replaces the symlink itself: -o then reads back
+    # the control mesh and the file the link pointed to keeps its bytes.
+    src, V0, F = torus_file
+    before = src.read_bytes()
+    inp, out = _link("symlink", src, tmp_path)
+    proc = run("fit", inp, "-o", out, "--force", "--quiet", cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    Vc, _ = sorpia.read_mesh(out)
+    assert np.abs(sorpia.limit_matrix(F, len(V0)) @ Vc - V0).max() < 1e-9  # B Vc = V0 to the solver's tol
+    assert not out.is_symlink() and src.read_bytes() == before
+
+
 def test_compare_writes_table_1_and_figure_7(torus_file, tmp_path):
     from matplotlib.image import imread
 
@@ -365,6 +416,69 @@ def test_info_says_why_loop_pia_cannot_run(tmp_path):
     proc = run("info", src, cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr
     assert "cannot run" in proc.stdout and "orientation" in proc.stdout
+
+
+# Bad topology written by hand in both text formats, the verdict compared with the
+# message of sorpia's own validation (the Python API), not with a text of our own.
+MOEBIUS_OFF = """OFF
+# the smallest Moebius strip: 5 vertices, faces (i, i+1, i+2) mod 5; each edge (i, i+1)
+# is run the same way by its two faces and no choice of orientations can mend all five
+5 5 0
+1 0 0
+0.31 0.95 0.2
+-0.81 0.59 -0.2
+-0.81 -0.59 0.2
+0.31 -0.95 -0.2
+3 0 1 2
+3 1 2 3
+3 2 3 4
+3 3 4 0
+3 4 0 1
+"""
+
+BOWTIE_OBJ = """# two fans around vertex 4 (OBJ index 5), one of three triangles above and one of two
+# below, that share only that vertex: a non-manifold ('bowtie') vertex
+v 0 0 1
+v 1 0 1
+v 1 1 1
+v 0 1 1
+v 0.5 0.5 0
+v 0 0 -1
+v 1 0 -1
+v 1 1 -1
+f 5 1 2
+f 5 2 3
+f 5 3 4
+f 5 6 7
+f 5 7 8
+"""
+
+@pytest.mark.parametrize("name, content, problem", [
+    ("moebius.off", MOEBIUS_OFF, "the surface is not orientable"),
+    ("bowtie.obj", BOWTIE_OBJ, "non-manifold vertex 4:"),
+], ids=["moebius", "bowtie"])
+def test_info_and_fit_name_the_topology_problem_as_the_api_does(name, content, problem, tmp_path):
+    src = tmp_path / name
+    src.write_text(content)
+    V, F = sorpia.read_mesh(src)
+    with pytest.raises(sorpia.MeshError) as refused:
+        sorpia.limit_points(V, F)
+    expected = str(refused.value)
+    assert problem in expected  # the API names the problem (and, for the bowtie, the vertex index)
+
+    text = run("info", src, cwd=tmp_path)
+    assert text.returncode == 0, text.stderr  # info describes a mesh Loop PIA cannot run on; not an error
+    verdict = [line for line in text.stdout.splitlines() if line.startswith("Loop PIA")]
+    assert len(verdict) == 1 and verdict[0].endswith(f"cannot run: {expected}")
+    as_json = run("info", src, "--json", cwd=tmp_path)
+    assert as_json.returncode == 0, as_json.stderr
+    assert json.loads(as_json.stdout)["loop_pia"] == {"can_run": False, "reason": expected, "notes": []}
+    assert json.loads(as_json.stdout)["genus"] is None  # undetermined for an invalid surface
+
+    fit = run("fit", src, "-o", tmp_path / "c.obj", "--quiet", cwd=tmp_path)
+    assert_user_error(fit)
+    assert expected in fit.stderr
+    assert not (tmp_path / "c.obj").exists()
 
 
 def test_demo_writes_everything_in_a_new_folder(tmp_path):
