@@ -757,7 +757,7 @@ class Engine {
   // Whether E_k inside the sweep is faster than a residual pass after it.
   // Not when many residuals are deferred: each gathers its neighbours from
   // rows long evicted (icosphere:8, whose coarse vertices, a quarter, reach
-  // far ahead: 15.5 ms a fused sweep, 12.9 ms a sweep and a residual pass).
+  // far ahead: 16 sweeps in 0.246 s fused, 0.226 s with residual passes).
   // Either way gives the same E_k, bit for bit.
   bool fused_pays() const {
     return plan_.deferred.size() <= op_.n / 8;
