@@ -202,8 +202,18 @@ def test_polygons_are_refused_unless_triangulate(tmp_path):
     assert "--triangulate" in refused.stderr
     info = run("info", src, "--json", cwd=tmp_path)
     assert info.returncode == 0, info.stderr
-    verdict = json.loads(info.stdout)["loop_pia"]
+    described = json.loads(info.stdout)
+    verdict = described["loop_pia"]
     assert verdict["can_run"] is False and "--triangulate" in verdict["reason"]
+    # With --triangulate the same fan triangulation is described (one read
+    # either way), and nothing stands in the way of a fit.
+    info_t = run("info", src, "--json", "--triangulate", cwd=tmp_path)
+    assert info_t.returncode == 0, info_t.stderr
+    described_t = json.loads(info_t.stdout)
+    assert described["triangulated"] is True and described_t["triangulated"] is True
+    assert described_t["loop_pia"]["can_run"] is True
+    for key in ("vertices", "faces", "edges"):
+        assert described[key] == described_t[key], key
 
     out = tmp_path / "c.ply"
     done = run("fit", src, "-o", out, "--triangulate", "--binary", "--quiet", cwd=tmp_path)

@@ -11,11 +11,13 @@ void bind_io(py::module_& m) {
       "read_mesh",
       [](const std::string& path, bool triangulate) {
         sorpia::TriMesh mesh;
+        std::size_t polygons = 0;
         {
           py::gil_scoped_release release;
-          mesh = sorpia::read_mesh(path, triangulate);
+          mesh = sorpia::read_mesh(path, triangulate, &polygons);
         }
-        return py::make_tuple(to_numpy(std::move(mesh.vertices), 3), to_numpy(std::move(mesh.faces), 3));
+        // (vertices, faces, polygons split): sorpia.read_mesh returns the first two.
+        return py::make_tuple(to_numpy(std::move(mesh.vertices), 3), to_numpy(std::move(mesh.faces), 3), polygons);
       },
       "path"_a, "triangulate"_a);
   m.def(

@@ -129,17 +129,20 @@ MeshFormat mesh_format(const std::string& path) {
                   ": use .obj, .off, .ply or .stl");
 }
 
-TriMesh read_mesh(const std::string& path, bool triangulate) {
+TriMesh read_mesh(const std::string& path, bool triangulate, std::size_t* polygons) {
   const MeshFormat format = mesh_format(path);
   const auto file = detail::io::load_file(path);
+  detail::io::Polygons p;
+  p.triangulate = triangulate;
   TriMesh mesh;
   switch (format) {
-    case MeshFormat::Obj: mesh = detail::io::read_obj(file, triangulate); break;
-    case MeshFormat::Off: mesh = detail::io::read_off(file, triangulate); break;
-    case MeshFormat::Ply: mesh = detail::io::read_ply(file, triangulate); break;
-    case MeshFormat::Stl: mesh = detail::io::read_stl(file, triangulate); break;
+    case MeshFormat::Obj: mesh = detail::io::read_obj(file, p); break;
+    case MeshFormat::Off: mesh = detail::io::read_off(file, p); break;
+    case MeshFormat::Ply: mesh = detail::io::read_ply(file, p); break;
+    case MeshFormat::Stl: mesh = detail::io::read_stl(file, p); break;
   }
   detail::io::check_counts(file, mesh);
+  if (polygons) *polygons = p.split;
   return mesh;
 }
 

@@ -144,10 +144,16 @@ double parse_coordinate(const FileData& f, const Where& w, std::string_view toke
 
 // Collects faces (0-based indices), splitting polygons into fans when asked
 // and reporting them otherwise.
+// What a reader does with faces of more than 3 vertices, and how many it met.
+struct Polygons {
+  bool triangulate = false;  // split each into a fan from its first vertex; else an error naming its line
+  std::size_t split = 0;     // polygons split so far
+};
+
 class FaceSink {
  public:
-  FaceSink(const FileData& file, bool triangulate, std::vector<std::int32_t>& faces)
-      : file_(file), triangulate_(triangulate), faces_(faces) {}
+  FaceSink(const FileData& file, Polygons& polygons, std::vector<std::int32_t>& faces)
+      : file_(file), polygons_(polygons), faces_(faces) {}
   // `idx` holds k indices already checked to lie in [0, n_vertices).
   void add(const std::int64_t* idx, std::size_t k, const Where& w) {
     if (k == 3) {
@@ -156,11 +162,12 @@ class FaceSink {
       return;
     }
     if (k < 3) fail(file_, w, "a face needs at least 3 vertices, this one has " + std::to_string(k));
-    if (!triangulate_)
+    if (!polygons_.triangulate)
       fail(file_, w,
            "face with " + std::to_string(k) +
                " vertices: sorpia works on triangles; read the file with triangulate=True to split each "
                "polygon into a fan of triangles from its first vertex");
+    ++polygons_.split;
     for (std::size_t i = 1; i + 1 < k; ++i)
       faces_.insert(faces_.end(), {static_cast<std::int32_t>(idx[0]), static_cast<std::int32_t>(idx[i]),
                                    static_cast<std::int32_t>(idx[i + 1])});
@@ -168,7 +175,7 @@ class FaceSink {
 
  private:
   const FileData& file_;
-  bool triangulate_;
+  Polygons& polygons_;
   std::vector<std::int32_t>& faces_;
 };
 
@@ -220,10 +227,10 @@ class TextOut {
 };
 
 // Format readers and writers (io_obj.cpp, io_off.cpp, io_ply.cpp, io_stl.cpp).
-TriMesh read_obj(const FileData& f, bool triangulate);
-TriMesh read_off(const FileData& f, bool triangulate);
-TriMesh read_ply(const FileData& f, bool triangulate);
-TriMesh read_stl(const FileData& f, bool triangulate);
+TriMesh read_obj(const FileData& f, Polygons& polygons);
+TriMesh read_off(const FileData& f, Polygons& polygons);
+TriMesh read_ply(const FileData& f, Polygons& polygons);
+TriMesh read_stl(const FileData& f, Polygons& polygons);
 std::string format_obj(const double* v, std::size_t n, const std::int32_t* faces, std::size_t m);
 std::string format_off(const double* v, std::size_t n, const std::int32_t* faces, std::size_t m);
 std::string format_ply(const double* v, std::size_t n, const std::int32_t* faces, std::size_t m, bool binary);

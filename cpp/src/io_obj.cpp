@@ -17,11 +17,11 @@ bool is_keyword(std::string_view t) {
 }
 }  // namespace
 
-TriMesh read_obj(const FileData& f, bool triangulate) {
+TriMesh read_obj(const FileData& f, Polygons& polygons) {
   TriMesh mesh;
   mesh.vertices.reserve(f.bytes.size() / 16);
   mesh.faces.reserve(f.bytes.size() / 16);
-  FaceSink sink(f, triangulate, mesh.faces);
+  FaceSink sink(f, polygons, mesh.faces);
   // Faces may name vertices defined further down: positive indices past the
   // vertices read so far are checked at the end (face row, line).
   struct Pending {

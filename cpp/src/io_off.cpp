@@ -38,7 +38,7 @@ std::size_t parse_count(const FileData& f, const Where& w, std::string_view rest
 
 }  // namespace
 
-TriMesh read_off(const FileData& f, bool triangulate) {
+TriMesh read_off(const FileData& f, Polygons& polygons) {
   LineReader lines(f.bytes.data(), f.bytes.data() + f.bytes.size());
   std::string_view rest, tok;
   if (!next_content(lines, rest) || !next_token(rest, tok) || !is_off_keyword(tok))
@@ -74,7 +74,7 @@ TriMesh read_off(const FileData& f, bool triangulate) {
     }
   }
   mesh.faces.reserve(3 * nf);
-  FaceSink sink(f, triangulate, mesh.faces);
+  FaceSink sink(f, polygons, mesh.faces);
   std::vector<std::int64_t> idx;
   for (std::size_t i = 0; i < nf; ++i) {
     if (!next_content(lines, rest))

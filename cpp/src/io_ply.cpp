@@ -220,12 +220,12 @@ Layout find_layout(const FileData& f, const Header& h) {
   return l;
 }
 
-TriMesh read_binary(const FileData& f, const Header& h, const Layout& l, bool triangulate) {
+TriMesh read_binary(const FileData& f, const Header& h, const Layout& l, Polygons& polygons) {
   const bool swap = h.encoding == Encoding::BigEndian;
   const char* p = h.data;
   const char* end = f.bytes.data() + f.bytes.size();
   TriMesh mesh;
-  FaceSink sink(f, triangulate, mesh.faces);
+  FaceSink sink(f, polygons, mesh.faces);
   std::vector<std::int64_t> idx;
   const std::size_t nv = l.vertex->count;
   auto truncated = [&](const Element& e, std::size_t i) {
@@ -302,11 +302,11 @@ TriMesh read_binary(const FileData& f, const Header& h, const Layout& l, bool tr
   return mesh;
 }
 
-TriMesh read_ascii(const FileData& f, const Header& h, const Layout& l, bool triangulate) {
+TriMesh read_ascii(const FileData& f, const Header& h, const Layout& l, Polygons& polygons) {
   LineReader lines(h.data, f.bytes.data() + f.bytes.size());
   const std::size_t first_line = h.data_line - 1;
   TriMesh mesh;
-  FaceSink sink(f, triangulate, mesh.faces);
+  FaceSink sink(f, polygons, mesh.faces);
   std::vector<std::int64_t> idx;
   const std::size_t nv = l.vertex->count;
   std::string_view line, rest, tok;
@@ -361,10 +361,10 @@ TriMesh read_ascii(const FileData& f, const Header& h, const Layout& l, bool tri
 
 }  // namespace
 
-TriMesh read_ply(const FileData& f, bool triangulate) {
+TriMesh read_ply(const FileData& f, Polygons& polygons) {
   const Header h = parse_header(f);
   const Layout l = find_layout(f, h);
-  return h.encoding == Encoding::Ascii ? read_ascii(f, h, l, triangulate) : read_binary(f, h, l, triangulate);
+  return h.encoding == Encoding::Ascii ? read_ascii(f, h, l, polygons) : read_binary(f, h, l, polygons);
 }
 
 std::string format_ply(const double* v, std::size_t n, const std::int32_t* faces, std::size_t m, bool binary) {

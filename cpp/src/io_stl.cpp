@@ -52,7 +52,8 @@ TriMesh read_binary(const FileData& f, std::size_t count) {
   TriMesh mesh;
   mesh.faces.reserve(3 * count);
   Welder weld(mesh, count);
-  FaceSink sink(f, false, mesh.faces);
+  Polygons triangles_only;  // a binary facet has three corners by layout
+  FaceSink sink(f, triangles_only, mesh.faces);
   const char* p = f.bytes.data() + 84;
   for (std::size_t t = 0; t < count; ++t, p += 50) {
     std::int64_t idx[3];
@@ -69,10 +70,10 @@ TriMesh read_binary(const FileData& f, std::size_t count) {
   return mesh;
 }
 
-TriMesh read_ascii(const FileData& f, bool triangulate) {
+TriMesh read_ascii(const FileData& f, Polygons& polygons) {
   TriMesh mesh;
   Welder weld(mesh, f.bytes.size() / 200);
-  FaceSink sink(f, triangulate, mesh.faces);
+  FaceSink sink(f, polygons, mesh.faces);
   LineReader lines(f.bytes.data(), f.bytes.data() + f.bytes.size());
   std::string_view line, rest, tok;
   std::vector<std::int64_t> loop;
@@ -117,7 +118,7 @@ void facet(const double* v, const std::int32_t* t, float out[12]) {
 
 }  // namespace
 
-TriMesh read_stl(const FileData& f, bool triangulate) {
+TriMesh read_stl(const FileData& f, Polygons& polygons) {
   const std::size_t size = f.bytes.size();
   // Binary files may begin with "solid" too: the size decides first.
   std::uint32_t count = 0;
@@ -126,7 +127,7 @@ TriMesh read_stl(const FileData& f, bool triangulate) {
     if (size == 84 + 50 * static_cast<std::size_t>(count)) return read_binary(f, count);
   }
   std::string_view head(f.bytes.data(), std::min<std::size_t>(size, 512)), tok;
-  if (next_token(head, tok) && tok == "solid") return read_ascii(f, triangulate);
+  if (next_token(head, tok) && tok == "solid") return read_ascii(f, polygons);
   if (size < 84) fail(f, "neither an ascii STL (starting with 'solid') nor a binary STL (at least 84 bytes)");
   fail(f, "binary STL header announces " + std::to_string(count) + " triangles (" +
               std::to_string(84 + 50 * static_cast<std::size_t>(count)) + " bytes) but the file has " +

@@ -227,7 +227,15 @@ def check_mesh_suffix(opt: str, path) -> None:
 def read_input(path, triangulate: bool = False):
     """Read the input mesh; returns (vertices, faces, seconds). A polygon in
     the file without --triangulate is a UserError that says to pass it."""
-    from . import MeshFileError, read_mesh
+    vertices, faces, seconds, _ = read_input_counting(path, triangulate)
+    return vertices, faces, seconds
+
+
+def read_input_counting(path, triangulate: bool = False):
+    """`read_input`, and how many polygons were split: (vertices, faces,
+    seconds, polygons)."""
+    from . import MeshFileError
+    from .io import read_mesh_counting
 
     if not Path(path).exists():
         raise UserError(f"{path}: no such file")
@@ -235,13 +243,13 @@ def read_input(path, triangulate: bool = False):
         raise UserError(f"{path} is a folder, not a mesh file")
     t0 = time.perf_counter()
     try:
-        vertices, faces = read_mesh(path, triangulate=triangulate)
+        vertices, faces, polygons = read_mesh_counting(path, triangulate=triangulate)
     except MeshFileError as exc:
         if triangulate or not _is_polygon_error(exc):
             raise
         raise PolygonError(f"{_polygon_message(exc)}; pass --triangulate to split each polygon into a fan of "
                         "triangles from its first vertex") from None
-    return vertices, faces, time.perf_counter() - t0
+    return vertices, faces, time.perf_counter() - t0, polygons
 
 
 def _is_polygon_error(exc) -> bool:
@@ -829,12 +837,11 @@ def run_info(input_path, *, as_json=False, boundary=DEFAULT_BOUNDARY, triangulat
     from .meshinfo import format_info, mesh_info
 
     out = out if out is not None else sys.stdout
-    try:
-        V0, F, _ = read_input(input_path, triangulate)
-        polygons = False
-    except PolygonError:
-        V0, F, _ = read_input(input_path, triangulate=True)
-        polygons = True
+    # One read, polygons split whether or not --triangulate was given (the
+    # statistics are of the fan triangulation either way); the count says
+    # whether the verdict must send the user to --triangulate.
+    V0, F, _, n_polygons = read_input_counting(input_path, triangulate=True)
+    polygons = n_polygons > 0 and not triangulate
     info = mesh_info(V0, F, boundary=boundary)
     info["triangulated"] = bool(triangulate or polygons)
     if polygons and info["loop_pia"]["can_run"]:

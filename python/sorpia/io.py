@@ -55,6 +55,13 @@ def read_mesh(path, triangulate: bool = False):
         out-of-range index, non-finite coordinate, a polygon without
         ``triangulate``, counts in the header the file cannot hold, no faces.
     """
+    vertices, faces, _ = read_mesh_counting(path, triangulate)
+    return vertices, faces
+
+
+def read_mesh_counting(path, triangulate: bool = False):
+    """`read_mesh`, and how many polygons it split: (vertices, faces,
+    polygons); polygons is 0 without `triangulate` (a polygon is an error)."""
     return _core.read_mesh(os.fspath(path), bool(triangulate))
 
 

@@ -69,8 +69,30 @@ TEST_F(IoTest, PolygonIsAnErrorNamingItsLineUnlessTriangulated) {
   } catch (const sorpia::FileError& e) {
     EXPECT_NE(std::string(e.what()).find("quad.obj, line 6: face with 4 vertices"), std::string::npos) << e.what();
   }
-  const auto r = sorpia::read_mesh(path("quad.obj"), true);
+  std::size_t polygons = 99;
+  const auto r = sorpia::read_mesh(path("quad.obj"), true, &polygons);
   EXPECT_EQ(r.faces, (std::vector<std::int32_t>{0, 1, 2, 0, 2, 3}));
+  EXPECT_EQ(polygons, 1u);
+}
+
+TEST_F(IoTest, PolygonsSplitAreCounted) {
+  // A triangle, two quads and a pentagon, in OBJ and OFF: 3 polygons split,
+  // 1 + 2 + 2 + 3 triangles in all.
+  write_text("mix.obj",
+             "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 2 0 0\nv 2 1 0\n"
+             "f 1 2 3\nf 1 2 3 4\nf 2 5 6 3\nf 1 2 5 6 4\n");
+  write_text("mix.off", "OFF\n6 4 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n2 0 0\n2 1 0\n"
+                        "3 0 1 2\n4 0 1 2 3\n4 1 4 5 2\n5 0 1 4 5 3\n");
+  for (const char* name : {"mix.obj", "mix.off"}) {
+    std::size_t polygons = 0;
+    const auto r = sorpia::read_mesh(path(name), true, &polygons);
+    EXPECT_EQ(polygons, 3u) << name;
+    EXPECT_EQ(r.faces.size(), 3u * (1 + 2 + 2 + 3)) << name;
+  }
+  std::size_t polygons = 7;  // set, not added to
+  write_text("tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+  sorpia::read_mesh(path("tri.obj"), true, &polygons);
+  EXPECT_EQ(polygons, 0u);
 }
 
 TEST_F(IoTest, HeaderClaimingATrillionVerticesFailsAtOnce) {

@@ -63,12 +63,14 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   io::FileData file{"fuzz", std::string(reinterpret_cast<const char*>(data) + 1, size - 1)};
   if (file.bytes.empty()) return 0;  // load_file refuses empty files before any reader runs
   sorpia::TriMesh mesh;
+  io::Polygons polygons;
+  polygons.triangulate = triangulate;
   try {
     switch (reader) {
-      case 0: mesh = io::read_obj(file, triangulate); break;
-      case 1: mesh = io::read_off(file, triangulate); break;
-      case 2: mesh = io::read_ply(file, triangulate); break;
-      default: mesh = io::read_stl(file, triangulate); break;
+      case 0: mesh = io::read_obj(file, polygons); break;
+      case 1: mesh = io::read_off(file, polygons); break;
+      case 2: mesh = io::read_ply(file, polygons); break;
+      default: mesh = io::read_stl(file, polygons); break;
     }
     io::check_counts(file, mesh);
   } catch (const sorpia::FileError& e) {

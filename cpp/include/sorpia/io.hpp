@@ -36,11 +36,13 @@ MeshFormat mesh_format(const std::string& path);
 /// @param triangulate  split polygons into triangles (a fan from each
 ///                     polygon's first vertex); when false a polygon is an
 ///                     error naming its line
+/// @param polygons     when not null, set to the number of faces of more
+///                     than 3 vertices split (0 without triangulate)
 /// @return vertices (n, 3) and faces (m, 3), in file order
 /// @throws FileError when the file is missing, unreadable, malformed,
 ///         truncated, has an index out of range, a non-finite coordinate,
 ///         no vertices or no faces
-TriMesh read_mesh(const std::string& path, bool triangulate = false);
+TriMesh read_mesh(const std::string& path, bool triangulate = false, std::size_t* polygons = nullptr);
 
 /// Write a triangle mesh atomically: to a temporary file in the same folder,
 /// then renamed over `path`, so that a failure leaves no partial file and an
