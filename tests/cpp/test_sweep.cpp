@@ -179,16 +179,19 @@ TEST(Sweep, CrowdedRangesAreSweptInSlabsAndReturnedInTheCallersOrder) {
 TEST(Sweep, StopAtZeroReturnsV0) {
   // Every vertex at one point: B V0 = V0 up to rounding (rows sum to 1), so
   // E_0 is at rounding level and the run stops at k = 0; the first sweep,
-  // which computed E_0, must be undone.
-  sorpia::TriMesh m = sorpia::irregular(20000, 5);
-  for (std::size_t i = 0; i < m.n_vertices(); ++i)
-    for (int a = 0; a < 3; ++a) m.vertices[3 * i + a] = 0.1 * (a + 1);
-  const Case c = limit_case(m, "point");
-  for (int threads : {1, 2}) {
-    const sorpia::SolveResult r = run(c, threads, false);
-    EXPECT_EQ(r.iterations, 0);
-    EXPECT_TRUE(r.converged());
-    EXPECT_EQ(r.control_vertices, m.vertices);
+  // which computed E_0, must be undone. The icosphere is swept in slabs on
+  // two threads: with no extent to cut, all its vertices fall in the first.
+  for (sorpia::TriMesh m : {sorpia::irregular(20000, 5), sorpia::icosphere(6)}) {
+    for (std::size_t i = 0; i < m.n_vertices(); ++i)
+      for (int a = 0; a < 3; ++a) m.vertices[3 * i + a] = 0.1 * (a + 1);
+    const Case c = limit_case(m, "point");
+    for (int threads : {1, 2}) {
+      const sorpia::SolveResult r = run(c, threads, false);
+      EXPECT_EQ(r.iterations, 0);
+      EXPECT_TRUE(r.converged());
+      EXPECT_EQ(r.control_vertices, m.vertices);
+      EXPECT_EQ(r.reordered, threads == 2 && m.n_vertices() == 40962) << m.n_vertices();
+    }
   }
 }
 
