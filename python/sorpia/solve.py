@@ -241,12 +241,22 @@ class Interpolator:
     use and kept, so that running every method on one mesh pays for them once.
     """
 
-    def __init__(self, faces, n_vertices: int, boundary: str = DEFAULT_BOUNDARY, *, _count_name: str = "n_vertices"):
-        # _count_name: how messages name the count; interpolate() passes "len(vertices)".
+    def __init__(self, faces, n_vertices: int, boundary: str = DEFAULT_BOUNDARY):
+        self._build(faces, n_vertices, boundary, "n_vertices")
+
+    @classmethod
+    def _for_vertices(cls, faces, n_vertices: int, boundary: str) -> Interpolator:
+        """As Interpolator(faces, n_vertices, boundary), for interpolate(): its
+        messages call the count len(vertices), the rows of the caller's array."""
+        self = cls.__new__(cls)
+        self._build(faces, n_vertices, boundary, "len(vertices)")
+        return self
+
+    def _build(self, faces, n_vertices, boundary, count_name: str) -> None:
         t0 = time.perf_counter()
         self.boundary = as_boundary(boundary)
         # validates n_vertices as limit_matrix does (as_vertex_count: no float, bool or negative count)
-        self.topology = _topology(faces, n_vertices, count_name=_count_name)
+        self.topology = _topology(faces, n_vertices, count_name=count_name)
         self.n_vertices = self.topology.n_vertices
         t1 = time.perf_counter()
         self._operator = _core.LimitOperator(self.topology, self.boundary)
@@ -383,7 +393,7 @@ def interpolate(vertices, faces, method: str = "sor", omega="auto", tol: float =
     # Options are checked before the (costly) operator is built.
     checked = _check_options(method, omega, tol, max_iter, callback, sigma, alpha, weight, threads)
     v0 = as_vertices(vertices)
-    interp = Interpolator(faces, v0.shape[0], boundary, _count_name="len(vertices)")
+    interp = Interpolator._for_vertices(faces, v0.shape[0], boundary)
     res = interp._solve(v0, method, checked, callback, t0)
     timings = dict(res.timings, **interp.build_timings)
     return replace(res, seconds=time.perf_counter() - t0, timings=timings)
