@@ -18,7 +18,9 @@ Methods (the iteration itself runs in the C++ core):
   d_i = (v_i^0 - v_i^inf) / alpha_i with the neighbours already updated in
   this sweep, then v_i += omega d_i (alpha_i = B_ii). E_k is computed inside
   the sweep (one pass over the mesh per iteration, the same values as a
-  separate residual pass); ``threads=N`` sweeps N index ranges in parallel,
+  separate residual pass, or by such a pass where most residuals would wait
+  for the end of the sweep); ``threads=N`` sweeps N index ranges (or, where
+  ranges would share many vertices, N slabs across the mesh) in parallel,
   the vertices they share last. A mesh whose vertex order is very poor
   (shuffled) is swept in a breadth-first order and returned in its own order.
 - ``"cg"``: on closed meshes B = Gamma Upsilon (paper section 3.2) with
@@ -307,7 +309,9 @@ class Interpolator:
             Relaxation weight; default 2 / (2 - mu_min - mu_max) (module docstring).
         threads : int >= 1, "sor"/"gs" only
             Threads sweeping at once. The vertices are split into one
-            contiguous index range per thread, swept in parallel in vertex
+            contiguous index range per thread (renumbered into slabs across
+            the mesh first when more than 1/16 of them would have a
+            neighbour in another range), swept in parallel in vertex
             order, then the vertices with a neighbour in another range:
             Gauss-Seidel in a slightly different vertex order, so the
             iterates differ from threads=1 by that ordering (the solution
