@@ -64,6 +64,7 @@ namespace {
 #pragma GCC diagnostic ignored "-Wpsabi"
 typedef double d4 __attribute__((vector_size(32)));
 typedef std::int32_t i4 __attribute__((vector_size(16)));
+typedef std::uint32_t u4 __attribute__((vector_size(16)));
 
 // n values of T, uninitialised (no pass to zero them, no page faulted in
 // before its first use), 64-byte aligned, so that a row of x never straddles
@@ -172,7 +173,10 @@ __attribute__((always_inline)) inline d4 ring_sum(const Ctx& c, std::int32_t i) 
       i4 j;
       std::memcpy(&j, q + k, sizeof j);  // readable below slots_end
       const i4 real = (lane + k) < valence;
-      const i4 bytes = ((j & real) | (zero_row & ~real)) << 5;
+      // Unsigned: a lane moved to a register is zero-extended for free,
+      // where a signed one took a sign extension per neighbour; 32 * row
+      // is exact below kMaxSlotRows rows.
+      const u4 bytes = reinterpret_cast<u4>((j & real) | (zero_row & ~real)) << 5;
       for (int a = 0; a < 4; ++a) s += *reinterpret_cast<const d4*>(base + bytes[a]);
     }
   }
@@ -301,6 +305,11 @@ struct Kernels {
 
 // Slot counts offered; 0 = the plain loop.
 constexpr int kSlotChoices[] = {0, 4, 8, 12};
+
+// The rows of x (n + 1) the slot kernels can address: they form byte
+// offsets 32 * row in 32-bit lanes. Larger meshes (over 134M vertices) take
+// the plain loop, which indexes with full-width integers.
+constexpr std::size_t kMaxSlotRows = std::size_t{1} << 27;
 
 #define SORPIA_SWEEP_KERNEL_SET(NAME, ATTR) \
   SORPIA_SWEEP_KERNELS(NAME, ATTR, 0)       \
@@ -745,7 +754,7 @@ class Engine {
       v0 = v0_.data();
     }
     plan_ = make_plan(op_, threads, parallel_, begin);
-    const int choice = choose_slots(op_);  // index into kSlotChoices
+    const int choice = n + 1 <= kMaxSlotRows ? choose_slots(op_) : 0;  // index into kSlotChoices
     k_ = &kernels(choice);
     const std::int32_t nnz = op_.offsets[n];
     auto slots_end = static_cast<std::int32_t>(n);
