@@ -140,8 +140,7 @@ struct Ctx {
   d4* x;                      // (n + 1, 4), row n and lane 3 zero
   const std::uint8_t* flags;
   double omega;
-  std::int32_t ahead;         // prefetch the row of x this far ahead of the front
-  std::int32_t lag;           // residual front behind the update front
+  std::int32_t lag;           // residual front behind the update front, and the prefetch distance ahead of it
 };
 
 inline d4 splat(double a) { return d4{a, a, a, a}; }
@@ -207,11 +206,11 @@ __attribute__((always_inline)) inline void update(const Ctx& c, std::int32_t i) 
   c.x[i] += splat(c.omega / d) * r;
 }
 
-// The row of x the front will first need `ahead` vertices from now: on
+// The row of x the front will first need `lag` vertices from now: on
 // irregular meshes the farthest neighbours are reached out of order, which
 // the hardware prefetcher does not follow (0.63 s -> 0.49 s on irregular:1000000).
 __attribute__((always_inline)) inline void prefetch_ahead(const Ctx& c, std::int32_t i) {
-  __builtin_prefetch(c.x + std::min(i + c.ahead, c.n), 1);
+  __builtin_prefetch(c.x + std::min(i + c.lag, c.n), 1);
 }
 
 // What the front does to vertex i.
@@ -382,9 +381,7 @@ struct Plan {
   // swept with the interface). Ascending within each part.
   std::vector<std::int32_t> deferred;
   std::vector<std::size_t> local;
-  std::int32_t ahead = 0;
   std::int32_t lag = 0;
-  std::size_t far = 0;  // vertices reaching further ahead than the lag
 };
 
 // The first 4 kRingGroups neighbours of vertex i in s, the slots past its
@@ -494,14 +491,12 @@ Plan make_plan(const OpView& op, int threads, bool parallel, const std::vector<s
   p.lag = std::max<std::int32_t>(p.lag, 1);
   // Deferred: the residual of i is not final lag vertices later, because i or
   // a neighbour is swept in the interface phase, or a neighbour lies beyond the lag.
-  std::size_t far = 0;
   std::vector<std::vector<std::int32_t>> after_interface(static_cast<std::size_t>(threads));
   for (int t = 0; t < threads; ++t) after_interface[t].reserve(p.interface.size());
-#pragma omp parallel for num_threads(threads) schedule(static, 1) reduction(+ : far) if (parallel)
+#pragma omp parallel for num_threads(threads) schedule(static, 1) if (parallel)
   for (int t = 0; t < threads; ++t) {
     per_range[t].clear();
     for (std::int32_t i = p.begin[t]; i < p.begin[t + 1]; ++i) {
-      far += reach[i] > p.lag;
       bool touches_interface = p.flags[i] & kInterface;
       if (threads > 1 && !touches_interface) {
         i4 s[kRingGroups];
@@ -518,14 +513,12 @@ Plan make_plan(const OpView& op, int threads, bool parallel, const std::vector<s
       }
     }
   }
-  p.far = far;
   p.local.push_back(0);
   for (auto& r : per_range) {
     p.deferred.insert(p.deferred.end(), r.begin(), r.end());
     p.local.push_back(p.deferred.size());
   }
   for (auto& r : after_interface) p.deferred.insert(p.deferred.end(), r.begin(), r.end());
-  p.ahead = p.lag;
   return p;
 }
 
@@ -653,12 +646,7 @@ struct Renumbered {
     }
     view = {op.n, offsets.data(), neighbors.data(), diag.data(), weight.data()};
   }
-  Renumbered& operator=(Renumbered&& o) noexcept {
-    offsets = std::move(o.offsets), neighbors = std::move(o.neighbors);
-    diag = std::move(o.diag), weight = std::move(o.weight);
-    std::swap(view, o.view);
-    return *this;
-  }
+  Renumbered& operator=(Renumbered&&) = default;
 };
 
 // How a vertex order suits the engine, from a sample of the vertices (the
@@ -725,7 +713,8 @@ class Engine {
     x_[op.n] = splat(0.0);  // the zero row
     std::vector<std::int32_t> begin = equal_work_ranges(op_, threads);
     const OrderSurvey survey = survey_order(op_, begin);
-    if (poor_order(survey)) {
+    const bool poor = poor_order(survey);
+    if (poor) {
       // Sweep in a locality order instead (a Gauss-Seidel order like any
       // other: same solution, iteration counts within a few percent), and
       // hand the control vertices back in the caller's order.
@@ -740,7 +729,7 @@ class Engine {
       for (std::size_t k = 0; k < n; ++k) inv_[perm_[k]] = static_cast<std::int32_t>(k);
       reordered_ = Renumbered(op_, perm_.data(), inv_.data(), threads, parallel_);
       op_ = reordered_.view;
-      if (poor_order(survey)) begin = equal_work_ranges(op_, threads);
+      if (poor) begin = equal_work_ranges(op_, threads);
       double* w = v0_.data();
       const std::int32_t* perm = perm_.data();
 #pragma omp parallel for num_threads(threads) schedule(static) if (parallel_)
@@ -760,7 +749,7 @@ class Engine {
     auto slots_end = static_cast<std::int32_t>(n);
     while (slots_end > 0 && op_.offsets[slots_end - 1] + kSlotChoices[choice] > nnz) --slots_end;
     ctx_ = Ctx{op_.offsets,  op_.neighbors, static_cast<std::int32_t>(n), slots_end, op_.diag, op_.weight, v0,
-               x_.data(), plan_.flags.data(), omega, plan_.ahead, plan_.lag};
+               x_.data(), plan_.flags.data(), omega, plan_.lag};
   }
 
   // Whether E_k inside the sweep is faster than a residual pass after it.
