@@ -9,18 +9,16 @@ using namespace pybind11::literals;
 namespace {
 using FaceIds = py::array_t<std::int32_t, py::array::c_style>;
 
-void check_rows(const Vertices& a, std::size_t n_vertices) {
+void check_vertices(const Vertices& a, std::size_t n_vertices) {
   check_shape(a, 3, "vertices");
-  if (static_cast<std::size_t>(a.shape(0)) != n_vertices)
-    throw sorpia::ParameterError("vertices has " + std::to_string(a.shape(0)) + " rows but the mesh has " +
-                                 std::to_string(n_vertices) + " vertices");
+  check_rows(a, n_vertices, "vertices", "the mesh");
 }
 }  // namespace
 
 void bind_surface(py::module_& m) {
   py::class_<sorpia::LoopSurface>(m, "LoopSurface")
       .def(py::init([](const sorpia::Topology& topology, const Vertices& vertices, const std::string& boundary) {
-             check_rows(vertices, topology.n_vertices());
+             check_vertices(vertices, topology.n_vertices());
              const auto b = parse_boundary(boundary);
              const double* v = vertices.data();
              py::gil_scoped_release release;
@@ -31,7 +29,7 @@ void bind_surface(py::module_& m) {
       .def_property_readonly("n_faces", &sorpia::LoopSurface::n_faces)
       .def("set_vertices",
            [](sorpia::LoopSurface& s, const Vertices& vertices) {
-             check_rows(vertices, s.n_vertices());
+             check_vertices(vertices, s.n_vertices());
              s.set_vertices(vertices.data());
            },
            "vertices"_a.noconvert())
