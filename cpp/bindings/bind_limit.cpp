@@ -8,12 +8,6 @@
 namespace sorpia_py {
 using namespace pybind11::literals;
 
-namespace {
-py::tuple mesh_tuple(sorpia::TriMesh&& m) {
-  return py::make_tuple(to_numpy(std::move(m.vertices), 3), to_numpy(std::move(m.faces), 3));
-}
-}  // namespace
-
 void bind_limit(py::module_& m) {
   py::class_<sorpia::Topology>(m, "Topology")
       .def(py::init([](const Faces& faces, std::size_t n_vertices) {

@@ -74,7 +74,7 @@ void bind_surface(py::module_& m) {
                py::gil_scoped_release release;
                t = s.tessellate(level);
              }
-             return py::make_tuple(to_numpy(std::move(t.vertices), 3), to_numpy(std::move(t.faces), 3));
+             return mesh_tuple(std::move(t));
            },
            "level"_a);
 

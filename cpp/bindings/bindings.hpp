@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "sorpia/errors.hpp"
+#include "sorpia/shapes.hpp"
 #include "sorpia/topology.hpp"
 
 namespace sorpia_py {
@@ -64,6 +65,11 @@ py::array_t<T> to_numpy(std::vector<T>&& v, py::ssize_t cols) {
   auto* owner = new std::vector<T>(std::move(v));
   py::capsule free_with_array(owner, [](void* p) { delete static_cast<std::vector<T>*>(p); });
   return py::array_t<T>(numpy_shape(*owner, cols), owner->data(), free_with_array);
+}
+
+// (vertices (n, 3), faces (m, 3)), taking the mesh's storage over.
+inline py::tuple mesh_tuple(sorpia::TriMesh&& m) {
+  return py::make_tuple(to_numpy(std::move(m.vertices), 3), to_numpy(std::move(m.faces), 3));
 }
 
 void bind_limit(py::module_& m);
