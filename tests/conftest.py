@@ -25,6 +25,12 @@ def sphere_hull(n_points: int, seed: int):
     return p, faces
 
 
+def zigzag_strip(n: int):
+    """A zig-zag strip of n triangles, consistently oriented: every vertex is on the boundary."""
+    v = np.array([[i // 2, i % 2, 0.1 * i] for i in range(n + 2)], float)
+    return v, np.array([[i, i + 1, i + 2] if i % 2 == 0 else [i + 1, i, i + 2] for i in range(n)])
+
+
 def loop_alpha(n):
     """alpha_n = 3 / (3 + 8 n beta_n), n beta_n = 5/8 - (3/8 + cos(2 pi/n)/4)^2."""
     n = np.asarray(n, dtype=float)

@@ -22,6 +22,7 @@ from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
 import sorpia
+from conftest import zigzag_strip
 
 # The `closed_form` fixture is a stateless function: sharing it between examples is safe.
 # database=None: nothing is written into the source tree. derandomize: the normal run is
@@ -29,11 +30,6 @@ import sorpia
 _EXPLORE = int(os.environ.get("SORPIA_FUZZ_EXAMPLES", "0"))
 FUZZ = settings(max_examples=_EXPLORE or 300, derandomize=not _EXPLORE, deadline=5000, database=None,
                 suppress_health_check=[HealthCheck.function_scoped_fixture])
-
-
-def zigzag_strip(n: int = 5):
-    v = np.array([[i // 2, i % 2, 0.1 * i] for i in range(n + 2)], float)
-    return v, np.array([[i, i + 1, i + 2] if i % 2 == 0 else [i + 1, i, i + 2] for i in range(n)])
 
 
 BASES = {
@@ -45,7 +41,7 @@ BASES = {
     "grid-3x4": lambda: sorpia.shapes.grid(3, 4),
     "pole-7": lambda: sorpia.shapes.pole(7),
     "irregular": lambda: sorpia.shapes.irregular(60, seed=5),
-    "strip": zigzag_strip,
+    "strip": lambda: zigzag_strip(5),
 }
 BASE_MESHES = {k: tuple(np.asarray(a) for a in make()) for k, make in BASES.items()}
 

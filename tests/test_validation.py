@@ -15,6 +15,8 @@ import pytest
 import sorpia
 from sorpia._validate import as_faces, as_vertex_count, as_vertices
 
+from conftest import zigzag_strip
+
 V1, F1 = sorpia.shapes.icosphere(1)  # 42 vertices, 80 faces
 
 
@@ -44,13 +46,6 @@ def moebius(n: int = 8):
         b0, b1 = (2 * i + 2, 2 * i + 3) if i + 1 < n else (1, 0)  # the twist
         f += [[a0, b0, b1], [a0, b1, a1]]
     return np.array(v), np.array(f)
-
-
-def strip(n: int = 6):
-    """A zig-zag strip of n triangles: every vertex is on the boundary."""
-    v = np.array([[i // 2, i % 2, 0.1 * i] for i in range(n + 2)], float)
-    f = [[i, i + 1, i + 2] if i % 2 == 0 else [i + 1, i, i + 2] for i in range(n)]
-    return v, np.array(f)
 
 
 def with_faces_flipped(faces, ids):
@@ -305,7 +300,7 @@ def test_bad_topology_is_refused_by_limit_matrix_too(make, match):
 
 VALID_ODD_MESHES = {
     "single-triangle": lambda: (np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0.5]]), np.array([[0, 1, 2]])),
-    "all-boundary-strip": strip,
+    "all-boundary-strip": lambda: zigzag_strip(6),
     "two-components": lambda: (
         np.vstack([V1, V1[::-1]]), np.vstack([F1, len(V1) + (len(V1) - 1 - F1)])),
     "sphere-and-triangle": lambda: (
