@@ -32,7 +32,9 @@ FileData load_file(const std::string& path) {
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd < 0) fail(f, "cannot open the file: " + errno_text(errno));
   // Regular files report their size; read to the end either way (pipes, /proc).
-  std::size_t capacity = S_ISREG(st.st_mode) ? static_cast<std::size_t>(st.st_size) : 0;
+  // One byte more than the size: the read that finds the end then has room,
+  // instead of doubling (and zero-filling) a buffer the file already fills.
+  const std::size_t capacity = S_ISREG(st.st_mode) ? static_cast<std::size_t>(st.st_size) + 1 : 0;
   f.bytes.resize(std::max<std::size_t>(capacity, 1 << 16));
   std::size_t used = 0;
   for (;;) {
