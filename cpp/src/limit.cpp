@@ -57,6 +57,27 @@ LoopRefiner make_loop_refiner(const Topology& topology, Boundary boundary) {
   return out;
 }
 
+void gather_points(const LoopRefiner& osd, const double* vertices, std::vector<Point3>& points) {
+  points.resize(osd.from_osd.size());
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const double* p = vertices + 3 * static_cast<std::size_t>(osd.from_osd[i]);
+    points[i] = Point3{p[0], p[1], p[2]};
+  }
+}
+
+void limit_positions(const LoopRefiner& osd, const std::vector<Point3>& points, const double* vertices,
+                     std::size_t n, double* out) {
+  std::vector<Point3> limit(points.size());
+  OpenSubdiv::Far::PrimvarRefinerReal<double>(*osd.refiner).Limit(points, limit);
+  std::copy(vertices, vertices + 3 * n, out);  // unreferenced vertices: limit is themselves
+  for (std::size_t i = 0; i < limit.size(); ++i) {
+    double* q = out + 3 * static_cast<std::size_t>(osd.from_osd[i]);
+    q[0] = limit[i].x;
+    q[1] = limit[i].y;
+    q[2] = limit[i].z;
+  }
+}
+
 }  // namespace detail
 
 namespace {
@@ -143,21 +164,9 @@ CsrMatrix limit_matrix(const Topology& topology, Boundary boundary) {
 
 void limit_points(const Topology& topology, const double* vertices, Boundary boundary, double* out) {
   const auto osd = detail::make_loop_refiner(topology, boundary);
-  const std::size_t n = topology.n_vertices();
-  const std::size_t k = osd.from_osd.size();
-  std::vector<detail::Point3> src(k), dst(k);
-  for (std::size_t i = 0; i < k; ++i) {
-    const double* p = vertices + 3 * osd.from_osd[i];
-    src[i] = detail::Point3{p[0], p[1], p[2]};
-  }
-  OpenSubdiv::Far::PrimvarRefinerReal<double>(*osd.refiner).Limit(src, dst);
-  std::copy(vertices, vertices + 3 * n, out);  // unreferenced vertices: limit is themselves
-  for (std::size_t i = 0; i < k; ++i) {
-    double* q = out + 3 * osd.from_osd[i];
-    q[0] = dst[i].x;
-    q[1] = dst[i].y;
-    q[2] = dst[i].z;
-  }
+  std::vector<detail::Point3> points;
+  detail::gather_points(osd, vertices, points);
+  detail::limit_positions(osd, points, vertices, topology.n_vertices(), out);
 }
 
 void multiply(const CsrMatrix& a, const double* x, double* y) {

@@ -2,6 +2,7 @@
 // Building an OpenSubdiv Loop refiner from a sorpia::Topology (internal).
 #include <opensubdiv/far/topologyRefiner.h>
 
+#include <cstddef>
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -34,5 +35,14 @@ struct Point3 {
     z += w * p.z;
   }
 };
+
+// points = the referenced rows of `vertices` (row-major (n, 3)), in the refiner's order.
+void gather_points(const LoopRefiner& osd, const double* vertices, std::vector<Point3>& points);
+
+// out = B V (row-major (n, 3)): `vertices` with each referenced vertex's row
+// replaced by its limit position, from the unrefined refiner's Limit() on
+// `points` (gather_points of `vertices`); an unreferenced vertex is its own limit.
+void limit_positions(const LoopRefiner& osd, const std::vector<Point3>& points, const double* vertices,
+                     std::size_t n, double* out);
 
 }  // namespace sorpia::detail

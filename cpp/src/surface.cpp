@@ -144,7 +144,6 @@ LoopSurface::LoopSurface(const Topology& topology, const double* vertices, Bound
   // for about 5% more evaluation time (bench/surface_speed.py).
   options.SetApproxLevelSmooth(kApproxLevelSmooth);
   impl_->factory = std::make_unique<SurfaceFactory>(*impl_->base.refiner, options);
-  impl_->points.resize(impl_->base.from_osd.size());
   set_vertices(vertices);
 }
 
@@ -160,11 +159,7 @@ void LoopSurface::set_vertices(const double* vertices) {
   const std::unique_lock<std::shared_mutex> lock(impl_->mutex);
   const std::size_t n = n_vertices();
   impl_->vertices.assign(vertices, vertices + 3 * n);
-  const auto& from = impl_->base.from_osd;
-  for (std::size_t i = 0; i < from.size(); ++i) {
-    const double* p = vertices + 3 * static_cast<std::size_t>(from[i]);
-    impl_->points[i] = Point3{p[0], p[1], p[2]};
-  }
+  detail::gather_points(impl_->base, vertices, impl_->points);
 }
 
 void LoopSurface::get_vertices(double* out) const {
@@ -304,20 +299,9 @@ TriMesh LoopSurface::tessellate(int level) {
   const std::size_t n_out = n + (limit.size() - n_osd);
   TriMesh out;
   out.vertices.resize(3 * n_out);
-  // Control vertices: B V from the unrefined refiner, the very computation of
-  // sorpia::limit_points (the refined level gives the same point up to
-  // rounding); unreferenced vertices stay where they are.
-  std::copy(impl_->vertices.begin(), impl_->vertices.end(), out.vertices.begin());
-  {
-    std::vector<Point3> base_limit(n_osd);
-    Far::PrimvarRefinerReal<double>(*impl_->base.refiner).Limit(impl_->points, base_limit);
-    for (std::size_t i = 0; i < n_osd; ++i) {
-      double* q = &out.vertices[3 * static_cast<std::size_t>(from[i])];
-      q[0] = base_limit[i].x;
-      q[1] = base_limit[i].y;
-      q[2] = base_limit[i].z;
-    }
-  }
+  // Control vertices: B V from the unrefined refiner, as sorpia::limit_points
+  // computes it (the refined level gives the same point up to rounding).
+  detail::limit_positions(impl_->base, impl_->points, impl_->vertices.data(), n, out.vertices.data());
   for (std::size_t i = n_osd; i < limit.size(); ++i) {
     double* q = &out.vertices[3 * (n + i - n_osd)];
     q[0] = limit[i].x;
