@@ -261,12 +261,15 @@ def test_wrong_vertex_count_for_interpolator():
         solver.solve(v[:-1])
 
 
-@pytest.mark.parametrize("method", ["sor", "cg", "hss"])
+@pytest.mark.parametrize("method", ["sor", "gs", "cg", "hss"])
 @pytest.mark.parametrize("exponent", [700, -700])
 def test_huge_and_tiny_coordinates_scale_exactly(method, exponent):
     # B is linear and the core solves for V0 / 2^e (2^e ~ max |V0|), which is
     # exact: scaling the input by a power of two scales the answer exactly and
     # leaves the error history alone (squared norms of 1e210 would overflow).
+    # Found by test_validation.py: E_0 overflowed to inf (|v| > 1e154) or
+    # underflowed to 0 (|v| < 1e-154, and V0 came back as if it interpolated);
+    # fixed by solving for V0 / 2**e (9ac2c8d).
     v, f = sorpia.shapes.irregular(300, seed=2)
     res = sorpia.interpolate(v, f, method=method)
     big = sorpia.interpolate(np.ldexp(v, exponent), f, method=method)
