@@ -236,7 +236,10 @@ std::pair<std::size_t, std::size_t> validate_faces(const std::int32_t* faces, st
   const std::vector<std::int32_t>& start = buckets.start;
 
   std::vector<face_checks::EdgeSlot> slots(n_vertices);
-  std::vector<std::int32_t> valence(n_vertices, 0);
+  // OpenSubdiv's Far refuses a vertex of more than 65535 edges (Vtr::VALENCE_LIMIT)
+  // without saying which; every sorpia operation goes through it.
+  constexpr std::int32_t max_valence = (1 << 16) - 1;
+  std::int32_t crowded = -1, crowded_valence = 0;  // the first vertex of more edges than that
   constexpr auto none = std::numeric_limits<std::int32_t>::max();
   using Edge = std::pair<std::int32_t, std::int32_t>;  // (lower end, higher end)
   auto edge = [](std::int32_t a, std::int32_t b) { return Edge{std::min(a, b), std::max(a, b)}; };
@@ -280,7 +283,10 @@ std::pair<std::size_t, std::size_t> validate_faces(const std::int32_t* faces, st
       use(c[i].next, c[i].prev, true);
       use(c[i].prev, c[i].next, false);
     }
-    valence[v] = n_edges_v;
+    if (n_edges_v > max_valence && crowded < 0) {
+      crowded = v;
+      crowded_valence = n_edges_v;
+    }
     n_edge_ends += static_cast<std::size_t>(n_edges_v);
     n_boundary_ends += static_cast<std::size_t>(n_single);
     if (k == 0 || !fan_checkable || bowtie) continue;
@@ -322,14 +328,10 @@ std::pair<std::size_t, std::size_t> validate_faces(const std::int32_t* faces, st
                     face_checks::orientation_advice(faces, n_faces, f0, [&](std::int32_t h) { return mate[h]; }));
   }
   if (bowtie) face_checks::refuse_bowtie(faces, n_vertices, n_half);
-  // OpenSubdiv's Far refuses a vertex of more than 65535 edges (Vtr::VALENCE_LIMIT)
-  // without saying which; every sorpia operation goes through it.
-  constexpr std::int32_t max_valence = (1 << 16) - 1;
-  for (std::size_t v = 0; v < n_vertices; ++v)
-    if (valence[v] > max_valence)
-      throw MeshError("vertex " + std::to_string(v) + " has " + std::to_string(valence[v]) +
-                      " neighbours: OpenSubdiv supports at most " + std::to_string(max_valence) +
-                      " edges at a vertex; split the fan around it");
+  if (crowded >= 0)
+    throw MeshError("vertex " + std::to_string(crowded) + " has " + std::to_string(crowded_valence) +
+                    " neighbours: OpenSubdiv supports at most " + std::to_string(max_valence) +
+                    " edges at a vertex; split the fan around it");
   return {n_edge_ends / 2, n_boundary_ends / 2};
 }
 
