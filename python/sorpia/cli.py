@@ -33,6 +33,7 @@ from . import __version__
 from ._validate import BOUNDARY_RULES, DEFAULT_BOUNDARY
 from .plotting import FACE_BUDGET  # plotting imports matplotlib only when drawing
 from .solve import THREADED_METHODS  # the methods that sweep on --threads N
+from .solve import ConvergenceWarning  # not printed: the summary and the exit code say it
 
 EXIT_OK, EXIT_NOT_CONVERGED, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
 
@@ -441,10 +442,8 @@ def _report_warnings(caught) -> None:
     """Print the warnings of a solve; the solver's own 'did not converge' is
     left out: the summary says it, and the exit code."""
     for w in caught:
-        text = str(w.message)
-        if "converge" in type(w.message).__name__.lower():
-            continue
-        warn_once(text)
+        if not issubclass(w.category, ConvergenceWarning):
+            warn_once(str(w.message))
 
 
 def _fmt_seconds(s: float) -> str:
