@@ -246,6 +246,19 @@ def test_timings_and_products():
         ({"method": "hss", "alpha": -1.0}, "alpha = -1.0 must be"),
         ({"method": "hss", "weight": 1.1}, "weight = 1.1 applies to method='whss'"),
         ({"boundary": "none"}, "unknown boundary 'none'"),
+        # the remaining edges: infinities, numpy scalars, strings, None, wrong case, too large
+        ({"omega": float("inf")}, r"omega = inf is outside \(0, 2\)"),
+        ({"omega": -0.5}, r"omega = -0.5 is outside \(0, 2\)"),
+        ({"omega": np.float64(2.0)}, r"omega = .*2\.0.* is outside \(0, 2\)"),
+        ({"tol": float("inf")}, r"tol = inf must be a positive finite number"),
+        ({"tol": "1e-10"}, r"tol must be a real number, got '1e-10'"),
+        ({"max_iter": np.int64(0)}, r"max_iter = (np\.int64\()?0\)? must be an integer >= 1"),
+        ({"max_iter": -5}, r"max_iter = -5 must be an integer >= 1"),
+        ({"max_iter": 10**12}, r"max_iter = 1000000000000 is too large"),
+        ({"method": "SOR"}, r"unknown method 'SOR': use one of 'pia'"),
+        ({"method": None}, r"unknown method None"),
+        ({"boundary": "Edge-Only"}, r"unknown boundary 'Edge-Only': use one of 'edge-and-corner', 'edge-only'"),
+        ({"boundary": None}, r"unknown boundary None"),
     ],
 )
 def test_bad_parameters(kwargs, match):
