@@ -103,12 +103,20 @@ void write_atomic(const std::string& path, const std::string& data) {
   }
 }
 
-void check_counts(const FileData& f, const TriMesh& mesh) {
-  if (mesh.n_vertices() == 0) fail(f, "no vertices: not a mesh file of this format, or an empty mesh");
+TriMesh parse_mesh(const FileData& file, MeshFormat format, Polygons& polygons) {
+  TriMesh mesh;
+  switch (format) {
+    case MeshFormat::Obj: mesh = read_obj(file, polygons); break;
+    case MeshFormat::Off: mesh = read_off(file, polygons); break;
+    case MeshFormat::Ply: mesh = read_ply(file, polygons); break;
+    case MeshFormat::Stl: mesh = read_stl(file, polygons); break;
+  }
+  if (mesh.n_vertices() == 0) fail(file, "no vertices: not a mesh file of this format, or an empty mesh");
   if (mesh.n_faces() == 0)
-    fail(f, "has " + std::to_string(mesh.n_vertices()) + " vertices but no faces: sorpia needs a triangle mesh");
+    fail(file, "has " + std::to_string(mesh.n_vertices()) + " vertices but no faces: sorpia needs a triangle mesh");
   if (mesh.n_vertices() > static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max()))
-    fail(f, "more vertices than int32 indices hold");
+    fail(file, "more vertices than int32 indices hold");
+  return mesh;
 }
 
 }  // namespace detail::io
@@ -133,17 +141,9 @@ MeshFormat mesh_format(const std::string& path) {
 
 TriMesh read_mesh(const std::string& path, bool triangulate, std::size_t* polygons) {
   const MeshFormat format = mesh_format(path);
-  const auto file = detail::io::load_file(path);
   detail::io::Polygons p;
   p.triangulate = triangulate;
-  TriMesh mesh;
-  switch (format) {
-    case MeshFormat::Obj: mesh = detail::io::read_obj(file, p); break;
-    case MeshFormat::Off: mesh = detail::io::read_off(file, p); break;
-    case MeshFormat::Ply: mesh = detail::io::read_ply(file, p); break;
-    case MeshFormat::Stl: mesh = detail::io::read_stl(file, p); break;
-  }
-  detail::io::check_counts(file, mesh);
+  TriMesh mesh = detail::io::parse_mesh(detail::io::load_file(path), format, p);
   if (polygons) *polygons = p.split;
   return mesh;
 }

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "sorpia/errors.hpp"
+#include "sorpia/io.hpp"
 #include "sorpia/shapes.hpp"
 
 namespace sorpia::detail::io {
@@ -185,9 +186,6 @@ inline void check_index(const FileData& f, const Where& w, long long i, std::siz
     fail(f, w, "vertex index " + std::to_string(i) + " is out of range [0, " + std::to_string(n) + ")");
 }
 
-// Refuses a mesh without vertices or faces, or with more vertices than int32 indices hold.
-void check_counts(const FileData& f, const TriMesh& mesh);
-
 // Text output with exact numbers: std::to_chars writes the shortest text that
 // reads back to the same double (or float).
 class TextOut {
@@ -225,6 +223,12 @@ class TextOut {
  private:
   std::string s_;
 };
+
+// The mesh in `file`, read as `format` (read_mesh without the path: the
+// fuzz target feeds bytes here). Throws FileError for a malformed file and
+// for a mesh without vertices or faces, or with more vertices than int32
+// indices hold.
+TriMesh parse_mesh(const FileData& file, MeshFormat format, Polygons& polygons);
 
 // Format readers and writers (io_obj.cpp, io_off.cpp, io_ply.cpp, io_stl.cpp).
 TriMesh read_obj(const FileData& f, Polygons& polygons);

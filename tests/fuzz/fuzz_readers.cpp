@@ -49,6 +49,8 @@ void check_message(const std::exception& e) {
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   if (size < 1) return 0;
   namespace io = sorpia::detail::io;
+  using sorpia::MeshFormat;
+  static const MeshFormat formats[] = {MeshFormat::Obj, MeshFormat::Off, MeshFormat::Ply, MeshFormat::Stl};
   const char mode = static_cast<char>(data[0]);
   int reader = 0;
   bool triangulate = false;
@@ -66,13 +68,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   io::Polygons polygons;
   polygons.triangulate = triangulate;
   try {
-    switch (reader) {
-      case 0: mesh = io::read_obj(file, polygons); break;
-      case 1: mesh = io::read_off(file, polygons); break;
-      case 2: mesh = io::read_ply(file, polygons); break;
-      default: mesh = io::read_stl(file, polygons); break;
-    }
-    io::check_counts(file, mesh);
+    mesh = io::parse_mesh(file, formats[reader], polygons);
   } catch (const sorpia::FileError& e) {
     check_message(e);
     return 0;
