@@ -197,7 +197,6 @@ void solve_hss(const LimitOperator& op, const double* v0, double* v, double alph
   const Transposed tr = transpose(op);
   const std::vector<double> ones(op.n, 1.0);
   std::vector<double> bx(m), btx(m), rhs(m), u(m), xn(m), r(m), p(m), q(m), tmp(m), sx(m);
-  const std::vector<double> b0(v0, v0 + m);
   const auto apply_h = [&](const std::vector<double>& x, std::vector<double>& y) {
     apply_cols<3>(op, x.data(), bx.data());
     apply_transpose_cols<3>(op, tr, x.data(), btx.data());
@@ -228,12 +227,12 @@ void solve_hss(const LimitOperator& op, const double* v0, double* v, double alph
     // (alpha I + H) U = (alpha I - S) X + V0
     apply_s(x, tmp);
     res.products += 2;
-    for (std::size_t k = 0; k < m; ++k) rhs[k] = alpha * x[k] - tmp[k] + b0[k];
+    for (std::size_t k = 0; k < m; ++k) rhs[k] = alpha * x[k] - tmp[k] + v0[k];
     u = x;
     res.products += inner_cg(op.n, m1, 2, ones, rhs, u, inner_tol, r, p, q);
     // (alpha I + S) Xn = (alpha I - H) U + V0 =: c, via (alpha^2 I - S^2) Xn = (alpha I - S) c
     apply_h(u, tmp);
-    for (std::size_t k = 0; k < m; ++k) tmp[k] = alpha * u[k] - tmp[k] + b0[k];
+    for (std::size_t k = 0; k < m; ++k) tmp[k] = alpha * u[k] - tmp[k] + v0[k];
     apply_s(tmp, rhs);
     res.products += 4;
     for (std::size_t k = 0; k < m; ++k) rhs[k] = alpha * tmp[k] - rhs[k];
