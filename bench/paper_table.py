@@ -65,7 +65,8 @@ RUNS = [
 ]
 
 
-def parameter(label: str, r) -> str:
+def parameter(r) -> str:
+    """The table's parameter column: omega (and rho), sigma, alpha (and w) or the CG variant."""
     if r.method in ("sor", "gs"):
         return f"omega={r.omega:.4f}" + (f", rho={r.rho:.4f}" if r.rho is not None else "")
     if r.method == "wpia":
@@ -83,7 +84,7 @@ def run(name, v, f, repeat):
         # A fresh Interpolator per run: the spectral estimates are paid every time.
         runs = [timed(make_interpolator(v, f), v, 1, **kw) for _ in range(repeat)]
         res, times = runs[-1][0], [t for _, t in runs]
-        rows.append(dict(mesh=name, n=len(v), label=label, parameter=parameter(label, res),
+        rows.append(dict(mesh=name, n=len(v), label=label, parameter=parameter(res),
                          levels=iterations_to_reach(res.errors, TABLE_TOLERANCES), iterations=res.iterations,
                          converged=res.converged, products=res.products, seconds=statistics.median(times),
                          estimate_seconds=res.timings["estimate"]))
