@@ -450,11 +450,9 @@ def _fmt_seconds(s: float) -> str:
     return f"{s:.2g}" if s < 0.1 else f"{s:.2f}"
 
 
-def _omega_text(res) -> str:
-    omega = getattr(res, "omega", None)
-    if omega is None or (isinstance(omega, float) and not math.isfinite(omega)):
-        return "-"
-    return f"{omega:.4f}"
+def _omega_text(omega) -> str:
+    """A result's omega (None, or a finite float: solve maps NaN to None) as printed."""
+    return "-" if omega is None else f"{omega:.4f}"
 
 
 # --------------------------------------------------------------------------- fit
@@ -519,7 +517,7 @@ def run_fit(input_path, output, *, method="sor", omega="auto", tol=1e-10, max_it
 
     fields = _result_fields(res)
     # The solver's own phases (topology, operator, estimate, solve), inside "fit".
-    fit_phases = {f"fit.{k}": float(v) for k, v in (getattr(res, "timings", None) or {}).items()}
+    fit_phases = {f"fit.{k}": float(v) for k, v in res.timings.items()}
     errors = np.asarray(res.errors, dtype=float)
     diag = stats.get("diagonal") or 1.0
     data = {
@@ -533,7 +531,7 @@ def run_fit(input_path, output, *, method="sor", omega="auto", tol=1e-10, max_it
         "mesh": stats,
         "method": method,
         "omega_rule": omega if method == "sor" else None,
-        "omega": fields.get("omega"),
+        "omega": res.omega,
         "tol": tol,
         "max_iter": max_iter,
         "boundary": boundary,
@@ -746,7 +744,7 @@ def compare_markdown(data: dict, name: str) -> str:
                                                                                         "solve wall (s)"]
     lines = ["| " + " | ".join(head) + " |", "|" + "|".join(["---"] * 3 + ["---:"] * (len(head) - 3)) + "|"]
     for j, r in enumerate(data["methods"]):
-        cells = [name if j == 0 else "", r["label"], "-" if r["omega"] is None else f"{r['omega']:.4f}"]
+        cells = [name if j == 0 else "", r["label"], _omega_text(r["omega"])]
         cells += ["-" if k is None else str(k) for k in r["reached"]]
         cells += [f"{r['cpu_seconds']:.4f}", f"{r['wall_seconds']:.4f}"]
         lines.append("| " + " | ".join(cells) + " |")
@@ -815,12 +813,12 @@ def run_render(input_path, output, *, level=3, tol=1e-10, max_iter=1000, boundar
         save_figure(fig, output)
         timings["draw"] = time.perf_counter() - t0
     data = {"output": str(output), "level": drawn_level, "threads": threads, "iterations": int(res.iterations),
-            "converged": bool(res.converged), "omega": getattr(res, "omega", None), "timings": timings}
+            "converged": bool(res.converged), "omega": res.omega, "timings": timings}
     if not quiet:
         lvl = f"level {drawn_level}" + (f" (asked {level}; face budget {budget})" if drawn_level < level else "")
         state = "" if res.converged else f"; NOT converged to tol {tol:g} (exit code 1)"
         print(f"sorpia render: {input_path} -> {output} ({size[0]}x{size[1]} px, limit surfaces at {lvl}; "
-              f"SOR-PIA omega {_omega_text(res)}, {res.iterations} iterations{state})", file=out)
+              f"SOR-PIA omega {_omega_text(res.omega)}, {res.iterations} iterations{state})", file=out)
         print("  seconds     " + ", ".join(f"{k} {_fmt_seconds(v)}" for k, v in timings.items()), file=out)
     return (EXIT_OK if res.converged else EXIT_NOT_CONVERGED), data
 
