@@ -96,9 +96,10 @@ struct SpectralCache {
 double estimate_lambda_min(const LimitOperator& op, SpectralCache& cache);
 
 /// Spectral radius of the Jacobi matrix I - D^-1 B, by the power method in the
-/// D Gamma^-1 inner product (where D^-1 B is self-adjoint); the geometric mean
-/// of two successive norm ratios, so that a +rho/-rho pair does not stall it.
-/// At most 500 products; a lower bound of the true value.
+/// D Gamma^-1 inner product (where D^-1 B is self-adjoint): the norm ratio
+/// ||A x|| / ||x||, which a +rho/-rho pair does not stall (unlike a Rayleigh
+/// quotient), until it changes by less than 1e-7, at most 500 products; a
+/// lower bound of the true value.
 double estimate_jacobi_rho(const LimitOperator& op, SpectralCache& cache);
 
 /// Extreme eigenvalues of H = (B + B^T)/2, by the power method on H and on
