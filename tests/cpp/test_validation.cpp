@@ -5,12 +5,12 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <cmath>
 #include <numeric>
 #include <string>
 #include <vector>
 
 #include "expect_error.hpp"
+#include "loop_masks.hpp"
 #include "sorpia/errors.hpp"
 #include "sorpia/limit.hpp"
 #include "sorpia/shapes.hpp"
@@ -100,14 +100,13 @@ TEST(Validation, UnusualButValidMeshesAreAccepted) {
 }
 
 TEST(Validation, Valence360PoleMatchesTheClosedForm) {
-  // alpha_n = 3 / (3 + 8 n beta_n), n beta_n = 5/8 - (3/8 + cos(2 pi/n)/4)^2 (paper eq. 5);
+  // The closed-form mask alpha_n (paper eq. 5, loop_masks.hpp);
   // pole(n): the centre (vertex 0) is an interior vertex of valence n.
   const auto m = sorpia::pole(360);
   const sorpia::Topology topo(m.faces.data(), m.n_faces(), m.n_vertices());
   ASSERT_EQ(topo.valence(0), 360);
   const auto b = sorpia::limit_matrix(topo, sorpia::Boundary::EdgeOnly);
-  const double c = 3.0 / 8.0 + std::cos(2.0 * std::acos(-1.0) / 360.0) / 4.0;
-  const double alpha = 3.0 / (3.0 + 8.0 * (5.0 / 8.0 - c * c));
+  const double alpha = sorpia_test::loop_alpha(360);
   ASSERT_EQ(b.indptr[1] - b.indptr[0], 361);
   for (std::int32_t p = b.indptr[0]; p < b.indptr[1]; ++p)
     EXPECT_NEAR(b.data[p], b.indices[p] == 0 ? alpha : (1 - alpha) / 360.0, 1e-15);  // double rounding only
