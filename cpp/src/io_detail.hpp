@@ -143,14 +143,14 @@ double parse_coordinate(const FileData& f, const Where& w, std::string_view toke
   return x;
 }
 
-// Collects faces (0-based indices), splitting polygons into fans when asked
-// and reporting them otherwise.
 // What a reader does with faces of more than 3 vertices, and how many it met.
 struct Polygons {
   bool triangulate = false;  // split each into a fan from its first vertex; else an error naming its line
   std::size_t split = 0;     // polygons split so far
 };
 
+// Collects faces (0-based indices), splitting polygons into fans when asked
+// and reporting them otherwise.
 class FaceSink {
  public:
   FaceSink(const FileData& file, Polygons& polygons, std::vector<std::int32_t>& faces)
