@@ -52,20 +52,17 @@ TriMesh read_binary(const FileData& f, std::size_t count) {
   TriMesh mesh;
   mesh.faces.reserve(3 * count);
   Welder weld(mesh, count);
-  Polygons triangles_only;  // a binary facet has three corners by layout
-  FaceSink sink(f, triangles_only, mesh.faces);
   const char* p = f.bytes.data() + 84;
+  // A binary facet has three corners by layout: no polygons, straight to the faces.
   for (std::size_t t = 0; t < count; ++t, p += 50) {
-    std::int64_t idx[3];
     for (int c = 0; c < 3; ++c) {
       float q[3];
       std::memcpy(q, p + 12 + 12 * c, 12);  // after the normal
       const double d[3] = {q[0], q[1], q[2]};
       if (!std::isfinite(d[0]) || !std::isfinite(d[1]) || !std::isfinite(d[2]))
         fail(f, Where{"triangle", t}, "a coordinate is not finite");
-      idx[c] = weld.add(d);
+      mesh.faces.push_back(static_cast<std::int32_t>(weld.add(d)));
     }
-    sink.add(idx, 3, Where{"triangle", t});
   }
   return mesh;
 }
