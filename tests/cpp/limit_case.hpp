@@ -1,6 +1,11 @@
 #pragma once
 // A test mesh with its limit matrix B (OpenSubdiv's Far Limit(),
-// edge-and-corner boundary) and B in the solvers' compact form.
+// edge-and-corner boundary) and B in the solvers' compact form, and the
+// measures the solver tests compare results by.
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
 #include "sorpia/limit.hpp"
 #include "sorpia/shapes.hpp"
 #include "sorpia/solvers.hpp"
@@ -20,6 +25,25 @@ inline LimitCase limit_case(const sorpia::TriMesh& m, const char* name = "") {
   LimitCase c{name, m, sorpia::limit_matrix(topo, sorpia::Boundary::EdgeAndCorner), {}};
   c.op = sorpia::limit_operator(c.b);
   return c;
+}
+
+// max_k |a_k - b_k|
+inline double max_abs_diff(const std::vector<double>& a, const std::vector<double>& b) {
+  double m = 0.0;
+  for (std::size_t k = 0; k < a.size(); ++k) m = std::max(m, std::abs(a[k] - b[k]));
+  return m;
+}
+
+// The paper's E = max_i ||v_i^0 - (B v)_i|| of control vertices v, with B the
+// CSR matrix from OpenSubdiv (not the operator the solvers iterate with).
+inline double error_from_scratch(const LimitCase& c, const std::vector<double>& v) {
+  std::vector<double> bv(v.size());
+  sorpia::multiply(c.b, v.data(), bv.data());
+  const std::vector<double>& v0 = c.mesh.vertices;
+  double e = 0.0;
+  for (std::size_t i = 0; i < c.op.n; ++i)
+    e = std::max(e, std::hypot(v0[3 * i] - bv[3 * i], v0[3 * i + 1] - bv[3 * i + 1], v0[3 * i + 2] - bv[3 * i + 2]));
+  return e;
 }
 
 }  // namespace sorpia_test

@@ -20,7 +20,9 @@
 namespace {
 
 using Case = sorpia_test::LimitCase;
+using sorpia_test::error_from_scratch;
 using sorpia_test::limit_case;
+using sorpia_test::max_abs_diff;
 
 // The same mesh with its vertices numbered at random: every neighbour far
 // away in index, so almost every residual is deferred past the sweep and the
@@ -60,17 +62,6 @@ sorpia::SolveResult run(const Case& c, int threads, bool two_pass, double omega 
   opt.two_pass = two_pass;
   opt.max_iter = max_iter;
   return sorpia::solve(c.op, c.mesh.vertices.data(), opt);
-}
-
-// max_i ||v_i^0 - (B v)_i|| with B as the CSR matrix from OpenSubdiv's masks.
-double error_from_scratch(const Case& c, const std::vector<double>& v) {
-  std::vector<double> bv(v.size());
-  sorpia::multiply(c.b, v.data(), bv.data());
-  double e = 0.0;
-  for (std::size_t i = 0; i < c.op.n; ++i)
-    e = std::max(e, std::hypot(c.mesh.vertices[3 * i] - bv[3 * i], c.mesh.vertices[3 * i + 1] - bv[3 * i + 1],
-                               c.mesh.vertices[3 * i + 2] - bv[3 * i + 2]));
-  return e;
 }
 
 double max_abs(const std::vector<double>& a) {
@@ -120,9 +111,8 @@ TEST(Sweep, ThreadsGiveTheSequentialSolution) {
       ASSERT_TRUE(t.converged()) << c.name << " threads " << threads;
       // Both stop at E_k < 1e-10 E_0; B's smallest eigenvalue is about 0.2,
       // so the two solutions differ by well under 1e-8 of the coordinates.
-      std::vector<double> d(one.control_vertices.size());
-      for (std::size_t k = 0; k < d.size(); ++k) d[k] = t.control_vertices[k] - one.control_vertices[k];
-      EXPECT_LT(max_abs(d), 1e-8 * max_abs(one.control_vertices)) << c.name << " threads " << threads;
+      EXPECT_LT(max_abs_diff(t.control_vertices, one.control_vertices), 1e-8 * max_abs(one.control_vertices))
+          << c.name << " threads " << threads;
       // Gauss-Seidel with the interface vertices last: nearly the same ordering.
       EXPECT_LE(t.iterations, std::ceil(1.15 * one.iterations)) << c.name << " threads " << threads;
       EXPECT_LT(error_from_scratch(c, t.control_vertices), 1.01e-10 * t.initial_error) << c.name;
@@ -168,9 +158,8 @@ TEST(Sweep, CrowdedRangesAreSweptInSlabsAndReturnedInTheCallersOrder) {
     ASSERT_TRUE(t.converged());
     // The caller's order: the same vertices as the sequential sweep's, to
     // what the stopping rule leaves (see ThreadsGiveTheSequentialSolution).
-    std::vector<double> d(one.control_vertices.size());
-    for (std::size_t k = 0; k < d.size(); ++k) d[k] = t.control_vertices[k] - one.control_vertices[k];
-    EXPECT_LT(max_abs(d), 1e-8 * max_abs(one.control_vertices)) << threads;
+    EXPECT_LT(max_abs_diff(t.control_vertices, one.control_vertices), 1e-8 * max_abs(one.control_vertices))
+        << threads;
     EXPECT_LT(error_from_scratch(ico, t.control_vertices), 1.01e-10 * t.initial_error) << threads;
   }
   EXPECT_FALSE(run(cases()[0], 2, false).reordered);
