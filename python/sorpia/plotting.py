@@ -109,11 +109,11 @@ def _face_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     return np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
 
 
-def _vertex_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
-    fn = _face_normals(vertices, faces)
-    vn = np.zeros_like(vertices)
+def _vertex_normals(face_normals: np.ndarray, faces: np.ndarray, n_vertices: int) -> np.ndarray:
+    """Unit vertex normals, (n_vertices, 3), from `_face_normals` of `faces`."""
+    vn = np.zeros((n_vertices, 3))
     for k in range(3):
-        np.add.at(vn, faces[:, k], fn)
+        np.add.at(vn, faces[:, k], face_normals)
     norm = np.linalg.norm(vn, axis=1, keepdims=True)
     return vn / np.where(norm > 0, norm, 1.0)
 
@@ -126,30 +126,29 @@ def _boundary_share(faces: np.ndarray, n_vertices: int) -> float:
     return float((counts == 1).sum() / len(counts))
 
 
-def _visible_side(vertices, faces, view) -> float:
+def _visible_side(face_normals, view) -> float:
     """+1 when the camera looks at the outer side of most of the projected area
     (faces oriented outward), -1 when at the inner side (an open sheet seen
     from behind)."""
-    n = _face_normals(vertices, faces) @ view
+    n = face_normals @ view
     return 1.0 if n[n > 0].sum() >= -n[n < 0].sum() * 0.5 else -1.0
 
 
-def _select_faces(vertices, faces, view, budget, side):
-    """Faces to draw: all of them within the budget; beyond it the faces
-    turned away from the camera go first (hidden on a closed mesh, seen
-    through holes only on an open one), then an even stride."""
-    keep = np.arange(len(faces))
+def _select_faces(face_normals, view, budget, side):
+    """Indices of the faces to draw: all of them within the budget; beyond it
+    the faces turned away from the camera go first (hidden on a closed mesh,
+    seen through holes only on an open one), then an even stride."""
+    keep = np.arange(len(face_normals))
     if len(keep) > budget:
-        keep = keep[side * (_face_normals(vertices, faces) @ view) > 0]
+        keep = keep[side * (face_normals @ view) > 0]
     if len(keep) > budget:
         keep = keep[:: math.ceil(len(keep) / budget)]
     return keep
 
 
-def _shaded_colors(vertices, faces, base, light):
-    n = _face_normals(vertices, faces)
-    norm = np.linalg.norm(n, axis=1)
-    n = n / np.where(norm > 0, norm, 1.0)[:, None]
+def _shaded_colors(face_normals, base, light):
+    norm = np.linalg.norm(face_normals, axis=1)
+    n = face_normals / np.where(norm > 0, norm, 1.0)[:, None]
     # Two-sided Lambert shading: open meshes show their back side too.
     intensity = 0.30 + 0.70 * np.abs(n @ light)
     rgb = np.clip(base[None, :] * intensity[:, None], 0, 1)
@@ -208,13 +207,15 @@ def interpolation_figure(vertices, faces, given_surface, control_vertices, fitte
     extent = np.maximum(hi - lo, 0.05 * max(float((hi - lo).max()), 1e-12))  # flat meshes keep some depth
     centre = (lo + hi) / 2
 
-    side = _visible_side(V0, F, view)
+    # Face normals: of the given mesh once (side, markers, panel a), of each other surface once.
+    normals0 = _face_normals(V0, F)
+    side = _visible_side(normals0, view)
     # Markers: on a (nearly) closed mesh only the vertices facing the camera
     # (matplotlib cannot hide points behind a surface); at most point_budget.
     closed = _boundary_share(F, len(V0)) < 0.01
     shown = np.unique(F.ravel())
     if closed:
-        shown = shown[side * (_vertex_normals(V0, F)[shown] @ view) > 0]
+        shown = shown[side * (_vertex_normals(normals0, F, len(V0))[shown] @ view) > 0]
     stride = max(1, math.ceil(len(shown) / point_budget))
     shown = shown[::stride]
     marker = float(np.clip(3000.0 / max(len(shown), 1), 1.0, 14.0))
@@ -230,13 +231,14 @@ def interpolation_figure(vertices, faces, given_surface, control_vertices, fitte
     for j, (label, Vp, Fp, base, edges, points) in enumerate(panels):
         ax = fig.add_subplot(2, 2, j + 1, projection="3d")
         ax.computed_zorder = False  # markers painted over the surface, not sorted with it
-        keep = _select_faces(Vp, Fp, view, face_budget, side)
+        normals = normals0 if Vp is V0 else _face_normals(Vp, Fp)
+        keep = _select_faces(normals, view, face_budget, side)
         sub = Fp[keep]
         edgecolor = "none"
         linewidth = 0.0
         if edges and len(sub) <= 20_000:
             edgecolor, linewidth = (0.15, 0.15, 0.15, 0.6), 0.5 if len(sub) <= 3_000 else 0.15
-        coll = Poly3DCollection(Vp[sub], facecolors=_shaded_colors(Vp, sub, base, light),
+        coll = Poly3DCollection(Vp[sub], facecolors=_shaded_colors(normals[keep], base, light),
                                 edgecolors=edgecolor, linewidths=linewidth)
         coll.set_zorder(1)
         ax.add_collection3d(coll)
