@@ -163,12 +163,6 @@ TEST(FastTopology, DirectBuildRefusesBowtiesByItself) {
   }
 }
 
-TEST(FastTopology, BowtieNamesTheVertex) {
-  const std::vector<std::int32_t> faces = {0, 1, 2, 0, 3, 4};
-  sorpia_test::expect_error<sorpia::MeshError>([&] { sorpia::Topology topo(faces.data(), 2, 5); },
-                                               {"non-manifold vertex 0"});
-}
-
 // Masks from Sdc against the closed form written independently in
 // loop_masks.hpp. 1e-15: both evaluate the same trigonometric expression in
 // double, in a different order (a few ulps).
