@@ -51,5 +51,7 @@ struct OneRing {
 // same MeshError. `n_edges` sizes the output.
 OneRing one_ring_direct(const std::int32_t* faces, std::size_t n_faces, std::size_t n_vertices,
                         std::size_t n_edges);
+// The same from the corners validate_faces has already bucketed.
+OneRing one_ring_direct(const CornerBuckets& buckets, std::size_t n_vertices, std::size_t n_edges);
 
 }  // namespace sorpia::detail

@@ -209,9 +209,10 @@ std::string orientation_advice(const std::int32_t* faces, std::size_t n_faces, s
 // face or vertex whatever the order of the checks: the first edge (lo, hi)
 // with 3+ faces or a duplicate face, else the first misoriented edge, else the
 // vertex of the first corner outside its vertex's first fan.
-// Returns the number of edges and of boundary edges.
+// Returns the number of edges and of boundary edges, and leaves the corner
+// buckets in `buckets` for one_ring_direct.
 std::pair<std::size_t, std::size_t> validate_faces(const std::int32_t* faces, std::size_t n_faces,
-                                                   std::size_t n_vertices) {
+                                                   std::size_t n_vertices, detail::CornerBuckets& buckets) {
   using face_checks::next_corner;
   constexpr auto int_max = static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max());
   if (n_vertices > int_max)
@@ -232,7 +233,7 @@ std::pair<std::size_t, std::size_t> validate_faces(const std::int32_t* faces, st
   }
   const std::size_t n_half = 3 * n_faces;
 
-  detail::CornerBuckets buckets = detail::bucket_corners(faces, n_faces, n_vertices);
+  buckets = detail::bucket_corners(faces, n_faces, n_vertices);
   const std::vector<std::int32_t>& start = buckets.start;
 
   std::vector<face_checks::EdgeSlot> slots(n_vertices);
@@ -313,7 +314,7 @@ std::pair<std::size_t, std::size_t> validate_faces(const std::int32_t* faces, st
     }
     if (seen != k) bowtie = true;
   }
-  buckets.corners.reset();
+  if (bad_lo != none || misoriented.first != none || bowtie) buckets.corners.reset();  // memory for the sorts below
   if (bad_lo != none) face_checks::refuse_edge(faces, n_half, bad_lo);
   if (misoriented.first != none) {
     const auto [lo, hi] = misoriented;
@@ -406,10 +407,11 @@ Topology::Topology(const std::int32_t* faces, std::size_t n_faces, std::size_t n
 Topology::Topology(const std::int32_t* faces, std::size_t n_faces, std::size_t n_vertices, TopologyBuild build)
     : n_vertices_(n_vertices), faces_(faces, faces + 3 * n_faces) {
   detail::silence_openmesh();
-  std::tie(n_edges_, n_boundary_edges_) = validate_faces(faces, n_faces, n_vertices);
+  detail::CornerBuckets buckets;
+  std::tie(n_edges_, n_boundary_edges_) = validate_faces(faces, n_faces, n_vertices, buckets);
   detail::OneRing r = build == TopologyBuild::OpenMesh
                           ? one_ring_openmesh(faces, n_faces, n_vertices, n_edges_)
-                          : detail::one_ring_direct(faces, n_faces, n_vertices, n_edges_);
+                          : detail::one_ring_direct(buckets, n_vertices, n_edges_);
   ring_offsets_ = std::move(r.offsets);
   ring_neighbors_ = std::move(r.neighbors);
   face_count_ = std::move(r.face_count);
