@@ -226,15 +226,9 @@ def check_mesh_suffix(opt: str, path) -> None:
 
 
 def read_input(path, triangulate: bool = False):
-    """Read the input mesh; returns (vertices, faces, seconds). A polygon in
-    the file without --triangulate is a UserError that says to pass it."""
-    vertices, faces, seconds, _ = read_input_counting(path, triangulate)
-    return vertices, faces, seconds
-
-
-def read_input_counting(path, triangulate: bool = False):
-    """`read_input`, and how many polygons were split: (vertices, faces,
-    seconds, polygons)."""
+    """Read the input mesh; returns (vertices, faces, seconds, polygons split).
+    A polygon in the file without --triangulate is a UserError that says to
+    pass it."""
     from . import MeshFileError
     from .io import read_mesh_counting
 
@@ -477,7 +471,7 @@ def run_fit(input_path, output, *, method="sor", omega="auto", tol=1e-10, max_it
     timings: dict[str, float] = {}
     with Progress(enabled=not quiet) as progress:
         progress.status(f"reading {input_path}")
-        V0, F, timings["read"] = read_input(input_path, triangulate)
+        V0, F, timings["read"], _ = read_input(input_path, triangulate)
         if surface is not None:
             _check_surface_fits(len(V0), len(F), level)
         progress.status("mesh statistics")
@@ -648,7 +642,7 @@ def run_compare(input_path, *, methods=METHODS, tol=1e-10, max_iter=1000, bounda
     rows = []
     with Progress(enabled=not quiet) as progress:
         progress.status(f"reading {input_path}")
-        V0, F, read_seconds = read_input(input_path, triangulate)
+        V0, F, read_seconds, _ = read_input(input_path, triangulate)
         progress.status("mesh statistics")
         stats = mesh_info(V0, F, boundary=boundary, list_extraordinary=False, verdict=False)  # Interpolator validates
         interp, build = _build_interpolator(V0, F, boundary=boundary, progress=progress, source=input_path)
@@ -792,7 +786,7 @@ def run_render(input_path, output, *, level=3, tol=1e-10, max_iter=1000, boundar
     timings = {}
     with Progress(enabled=not quiet) as progress:
         progress.status(f"reading {input_path}")
-        V0, F, timings["read"] = read_input(input_path, triangulate)
+        V0, F, timings["read"], _ = read_input(input_path, triangulate)
         res, timings["fit"], _ = _fit_once(V0, F, method="sor", omega="auto", tol=tol, max_iter=max_iter,
                                            boundary=boundary, threads=threads, progress=progress, source=input_path)
         ctrl = np.asarray(res.control_vertices)
@@ -837,7 +831,7 @@ def run_info(input_path, *, as_json=False, boundary=DEFAULT_BOUNDARY, triangulat
     # One read, polygons split whether or not --triangulate was given (the
     # statistics are of the fan triangulation either way); the count says
     # whether the verdict must send the user to --triangulate.
-    V0, F, _, n_polygons = read_input_counting(input_path, triangulate=True)
+    V0, F, _, n_polygons = read_input(input_path, triangulate=True)
     polygons = n_polygons > 0 and not triangulate
     info = mesh_info(V0, F, boundary=boundary)
     info["triangulated"] = bool(triangulate or polygons)
