@@ -24,13 +24,20 @@ using sorpia_test::error_from_scratch;
 using sorpia_test::limit_case;
 using sorpia_test::max_abs_diff;
 
-// The same mesh with its vertices numbered at random: every neighbour far
-// away in index, so almost every residual is deferred past the sweep and the
-// thread ranges share most vertices (interface).
-sorpia::TriMesh shuffled(const sorpia::TriMesh& m, unsigned seed) {
-  std::vector<std::int32_t> perm(m.n_vertices());
+// 0, ..., n-1 shuffled by std::mt19937(seed).
+std::vector<std::int32_t> permutation(std::size_t n, unsigned seed) {
+  std::vector<std::int32_t> perm(n);
   std::iota(perm.begin(), perm.end(), 0);
   std::shuffle(perm.begin(), perm.end(), std::mt19937(seed));
+  return perm;
+}
+
+// The same mesh with its vertices numbered at random (old vertex i is new
+// vertex permutation(n, seed)[i]): every neighbour far away in index, so
+// almost every residual is deferred past the sweep and the thread ranges
+// share most vertices (interface).
+sorpia::TriMesh shuffled(const sorpia::TriMesh& m, unsigned seed) {
+  const std::vector<std::int32_t> perm = permutation(m.n_vertices(), seed);
   sorpia::TriMesh out;
   out.vertices.resize(m.vertices.size());
   for (std::size_t i = 0; i < m.n_vertices(); ++i)
@@ -126,9 +133,7 @@ TEST(Sweep, PoorOrderIsSweptInItsOwnOrderAndReturnedInTheCallers) {
   const sorpia::TriMesh m = sorpia::irregular(40000, 3);
   const Case a = limit_case(m, "natural");
   const Case& b = cases()[4];  // shuffled(irregular(40000, 3), 11)
-  std::vector<std::int32_t> perm(m.n_vertices());
-  std::iota(perm.begin(), perm.end(), 0);
-  std::shuffle(perm.begin(), perm.end(), std::mt19937(11));  // as shuffled() did
+  const std::vector<std::int32_t> perm = permutation(m.n_vertices(), 11);  // as shuffled() numbered it
   for (int threads : {1, 2}) {
     const sorpia::SolveResult ra = run(a, threads, false), rb = run(b, threads, false);
     EXPECT_FALSE(ra.reordered);
