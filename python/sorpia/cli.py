@@ -37,10 +37,10 @@ from .solve import ConvergenceWarning  # not printed: the summary and the exit c
 
 EXIT_OK, EXIT_NOT_CONVERGED, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
 
-METHODS = ("pia", "wpia", "hss", "whss", "gs", "sor", "cg")
 # The paper's names (Table 1) for the methods it compares, and ours for the rest.
 METHOD_LABELS = {"pia": "PIA", "wpia": "W-PIA", "hss": "HSS-PIA", "whss": "WHSS-PIA", "gs": "Gauss-Seidel",
                  "sor": "SOR-PIA", "cg": "CG"}
+METHODS = tuple(METHOD_LABELS)  # --method choices, and compare's rows in this order
 # The columns of the paper's Table 1: iterations to reach E_k/E_0 < 10^-j.
 TABLE_TOLERANCES = tuple(10.0 ** -j for j in range(1, 11))
 MESH_SUFFIXES = (".obj", ".off", ".ply", ".stl")
