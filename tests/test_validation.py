@@ -425,6 +425,42 @@ BAD_FILES = [
     # the file's bytes are quoted escaped (raw, they made Python raise UnicodeDecodeError; found by fuzzing)
     ("non-utf8-bytes", "bytes.obj", b"v 0 0 0\n\xff\xfe junk\n", r"bytes\.obj, line 2: '\\xff\\xfe' is not an OBJ statement"),
     ("random-text", "noise.obj", "v 0 0 0\n3.14 = pi\n", r"noise\.obj, line 2: '3\.14' is not an OBJ statement"),
+    # each reader's errors: the file, then the line and the problem
+    ("relative-index", "bad.obj", "v 0 0 0\nf -1 -2 -3\n", r"bad\.obj.*line 2: relative vertex index -2"),
+    ("obj-nan-no-faces", "bad.obj", "v 0 0 0\nv nan 0 0\n", r"bad\.obj.*line 2: coordinate 'nan' is not finite"),
+    ("obj-garbage", "bad.obj", "v 0 0 0\n12 3 4\n", r"bad\.obj.*line 2: '12' is not an OBJ statement"),
+    ("obj-short-vertex", "bad.obj", "v 0 0\n", r"bad\.obj.*line 1: a vertex needs 3 coordinates"),
+    ("obj-number-with-two-points", "bad.obj", "v 0 0 1.2.3\n", r"bad\.obj.*line 1: expected a number, found '1\.2\.3'"),
+    ("obj-binary", "bad.obj", "v 0 0 0\n\x01\x02 1\n", r"bad\.obj.*line 2: '\\x01\\x02' is not an OBJ statement"),
+    ("no-faces", "bad.obj", "v 0 0 0\n", r"bad\.obj.*1 vertices but no faces"),
+    ("off-index", "bad.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 3\n", r"bad\.off.*line 6: vertex index 3 is out of range"),
+    ("off-inf", "bad.off", "OFF\n3 1 0\n0 0 0\n1 inf 0\n0 1 0\n3 0 1 2\n", r"bad\.off.*line 4: coordinate 'inf' is not finite"),
+    ("off-no-face-line", "bad.off", "OFF\n3 1 0\n0.0 0.0 0.0\n1.0 0.0 0.0\n0.0 1.0 0.0\n", r"bad\.off.*ends after 0 of 1 faces"),
+    ("off-header", "bad.off", "OFFISH\n", r"bad\.off.*line 1: an OFF file starts with 'OFF'"),
+    ("off-binary", "bad.off", "OFF BINARY\n", r"bad\.off.*binary OFF is not supported"),
+    ("ply-huge", "bad.ply", "ply\nformat ascii 1.0\nelement vertex 1000000000000\nproperty float x\nproperty float y\n"
+     "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n",
+     r"bad\.ply.*line 3: the header claims 1000000000000 'vertex' elements"),
+    ("ply-magic", "bad.ply", "plx\n", r"bad\.ply.*line 1: a PLY file starts with the line 'ply'"),
+    ("ply-no-end", "bad.ply", "ply\nformat ascii 1.0\nelement vertex 3\n", r"bad\.ply.*no 'end_header'"),
+    ("ply-no-face", "bad.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+     "property float z\nend_header\n0 0 0\n", r"bad\.ply.*no 'face' element"),
+    ("ply-no-z", "bad.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+     "end_header\n0 0\n", r"bad\.ply.*line 3: the vertex element has no property z"),
+    ("ply-nan", "bad.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+     "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
+     "0 0 0\n1 NaN 0\n0 1 0\n3 0 1 2\n", r"bad\.ply.*line 11: coordinate 'NaN' is not finite"),
+    ("stl-keyword", "bad.stl", "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertx 1 0 0\n",
+     r"bad\.stl.*line 5: 'vertx' is not an ascii STL keyword"),
+    ("stl-not-stl", "bad.stl", "hello", r"bad\.stl.*neither an ascii STL"),
+    # One parser for double and float32: each type's range and message.
+    ("obj-beyond-double", "bad.obj", "v 0 0 1e400\n", r"bad\.obj.*line 1: coordinate '1e400' is out of the range of double"),
+    ("stl-beyond-float32", "bad.stl", "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 1e40\n",
+     r"bad\.stl.*line 4: coordinate '1e40' is out of float32 range"),
+    ("stl-bad-number", "bad.stl", "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 1.2.3\n",
+     r"bad\.stl.*line 4: expected a number, found '1\.2\.3'"),
+    ("stl-inf", "bad.stl", "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 inf 0\n",
+     r"bad\.stl.*line 4: coordinate 'inf' is not finite"),
 ]
 
 
