@@ -264,10 +264,11 @@ def test_mesh_file_error_is_a_value_error():
 
 @pytest.mark.parametrize("ext", ["obj", "off", "ply", "stl"])
 def test_missing_empty_directory_and_random_bytes_fail_cleanly(tmp_path, ext):
-    with pytest.raises(sorpia.MeshFileError, match="cannot open the file: No such file"):
+    with pytest.raises(sorpia.MeshFileError,
+                       match=rf"missing\.{ext}: cannot open the file: No such file or directory"):
         sorpia.read_mesh(tmp_path / f"missing.{ext}")
     (tmp_path / f"folder.{ext}").mkdir()
-    with pytest.raises(sorpia.MeshFileError, match="is a directory"):
+    with pytest.raises(sorpia.MeshFileError, match=rf"folder\.{ext}: is a directory, not a mesh file"):
         sorpia.read_mesh(tmp_path / f"folder.{ext}")
     (tmp_path / f"empty.{ext}").write_bytes(b"")
     with pytest.raises(sorpia.MeshFileError, match="the file is empty"):

@@ -493,14 +493,6 @@ def test_bad_files_name_the_file_and_line(tmp_path, name, content, match):
     assert file_digest(path) == before  # a failed read leaves the file as it was
 
 
-def test_missing_file_and_directory(tmp_path):
-    with pytest.raises(sorpia.MeshFileError, match=r"nope\.obj: cannot open the file: No such file or directory"):
-        sorpia.read_mesh(tmp_path / "nope.obj")
-    (tmp_path / "folder.obj").mkdir()
-    with pytest.raises(sorpia.MeshFileError, match=r"folder\.obj: is a directory, not a mesh file"):
-        sorpia.read_mesh(tmp_path / "folder.obj")
-
-
 @pytest.mark.skipif(not hasattr(os, "geteuid") or os.geteuid() == 0,
                     reason="root reads a chmod 000 file anyway: the permission check cannot fail")
 def test_unreadable_file(tmp_path):
