@@ -144,9 +144,10 @@ class Monitor {
 void solve_sor(const LimitOperator& op, const double* v0, int exponent, const SolveOptions& opt, double omega,
                SolveResult& res);
 
-// The Krylov and HSS methods (solver_krylov.cpp).
-void solve_cg(const LimitOperator& op, const double* v0, double* v, Monitor& mon, SolveResult& res);
-void solve_hss(const LimitOperator& op, const double* v0, double* v, double alpha, double weight, Monitor& mon,
+// The Krylov and HSS methods (solver_krylov.cpp), iterating on
+// res.control_vertices, which holds V^(0) on entry.
+void solve_cg(const LimitOperator& op, const double* v0, Monitor& mon, SolveResult& res);
+void solve_hss(const LimitOperator& op, const double* v0, double alpha, double weight, Monitor& mon,
                SolveResult& res);
 
 }  // namespace detail

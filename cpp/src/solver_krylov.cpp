@@ -84,29 +84,30 @@ void cg_step(const std::vector<double>& w, std::vector<double>& x, std::vector<d
 // the spectrum of B), i.e. CG on Upsilon V = Gamma^-1 V0 preconditioned by
 // Gamma. E_k comes from the recursively updated residual (one product per
 // iteration; it equals the true residual to rounding at these condition numbers).
-void cg_symmetric(const LimitOperator& op, const double* v0, double* v, Monitor& mon, SolveResult& res) {
+void cg_symmetric(const LimitOperator& op, const double* v0, Monitor& mon, SolveResult& res) {
   const std::size_t m = 3 * op.n;
   const std::vector<double> w = gamma_inverse(op);
-  std::vector<double> r(m), p(m), q(m), x(v, v + m);
-  if (mon.start(residual(op, v0, v, r.data()))) return;
+  std::vector<double>& x = res.control_vertices;
+  std::vector<double> r(m), p(m), q(m);
+  if (mon.start(residual(op, v0, x.data(), r.data()))) return;
   p = r;
   Col3 rr = wdot3(r, r, w);
   for (;;) {
     apply_cols<3>(op, p.data(), q.data());
     ++res.products;
     cg_step(w, x, r, p, q, rr);
-    std::copy(x.begin(), x.end(), v);
     if (mon.record(max_row_norm(r.data(), op.n))) return;
   }
 }
 
 // BiCGSTAB (van der Vorst 1992) on S B V = S V0, for meshes with boundary,
 // where Upsilon is not symmetric. One iteration = two products.
-void bicgstab(const LimitOperator& op, const double* v0, double* v, Monitor& mon, SolveResult& res) {
+void bicgstab(const LimitOperator& op, const double* v0, Monitor& mon, SolveResult& res) {
   const std::size_t m = 3 * op.n;
   const std::vector<double> s = gamma_inverse(op);  // S = Gamma^-1: S B = Upsilon
-  std::vector<double> r(m), rt(m), p(m, 0.0), q(m, 0.0), h(m), t(m), x(v, v + m);
-  const double e0 = residual(op, v0, v, r.data());
+  std::vector<double>& x = res.control_vertices;
+  std::vector<double> r(m), rt(m), p(m, 0.0), q(m, 0.0), h(m), t(m);
+  const double e0 = residual(op, v0, x.data(), r.data());
   for (std::size_t i = 0; i < op.n; ++i)
     for (int c = 0; c < 3; ++c) r[3 * i + c] *= s[i];
   if (mon.start(e0)) return;
@@ -145,7 +146,6 @@ void bicgstab(const LimitOperator& op, const double* v0, double* v, Monitor& mon
         }
         rho[c] = alpha[c] = omega[c] = 1.0;
       }
-    std::copy(x.begin(), x.end(), v);
     if (mon.record(unscaled_error(r, s))) return;
   }
 }
@@ -173,13 +173,13 @@ long long inner_cg(std::size_t n, ApplyM apply_m, int cost, const std::vector<do
 
 }  // namespace
 
-void solve_cg(const LimitOperator& op, const double* v0, double* v, Monitor& mon, SolveResult& res) {
+void solve_cg(const LimitOperator& op, const double* v0, Monitor& mon, SolveResult& res) {
   if (is_symmetrisable(op)) {
     res.variant = "cg";
-    cg_symmetric(op, v0, v, mon, res);
+    cg_symmetric(op, v0, mon, res);
   } else {
     res.variant = "bicgstab";
-    bicgstab(op, v0, v, mon, res);
+    bicgstab(op, v0, mon, res);
   }
 }
 
@@ -191,7 +191,7 @@ void solve_cg(const LimitOperator& op, const double* v0, double* v, Monitor& mon
 // (alpha I - S)(alpha I + S) = alpha^2 I - S^2, SPD since S^T = -S.
 // Inner CG is warm-started and stops at a residual of 1e-3 E_k (inexact HSS),
 // or at rounding level.
-void solve_hss(const LimitOperator& op, const double* v0, double* v, double alpha, double weight, Monitor& mon,
+void solve_hss(const LimitOperator& op, const double* v0, double alpha, double weight, Monitor& mon,
                SolveResult& res) {
   const std::size_t m = 3 * op.n;
   const Transposed tr = transpose(op);
@@ -217,10 +217,10 @@ void solve_hss(const LimitOperator& op, const double* v0, double* v, double alph
     for (std::size_t k = 0; k < m; ++k) y[k] = alpha * alpha * x[k] - y[k];
   };
 
-  std::vector<double> x(v, v + m);
+  std::vector<double>& x = res.control_vertices;
   // Below rounding level an inner CG cannot get: never ask for it.
   const double floor = mon.floor();
-  double e = residual(op, v0, v, nullptr);
+  double e = residual(op, v0, x.data(), nullptr);
   if (mon.start(e)) return;
   for (;;) {
     const double inner_tol = std::max(1e-3 * e, floor);
@@ -239,8 +239,7 @@ void solve_hss(const LimitOperator& op, const double* v0, double* v, double alph
     xn = x;
     res.products += inner_cg(op.n, m2, 4, ones, rhs, xn, alpha * inner_tol, r, p, q);
     for (std::size_t k = 0; k < m; ++k) x[k] += weight * (xn[k] - x[k]);
-    std::copy(x.begin(), x.end(), v);
-    e = residual(op, v0, v, nullptr);
+    e = residual(op, v0, x.data(), nullptr);
     ++res.products;
     if (mon.record(e)) return;
   }

@@ -157,8 +157,8 @@ Transposed transpose(const LimitOperator& op) {
 namespace {
 
 // Richardson: V += sigma (V0 - B V) (paper eq. 9 with sigma = 1, W-PIA otherwise).
-void solve_richardson(const LimitOperator& op, const double* v0, double* v, double sigma, Monitor& mon,
-                      SolveResult& res) {
+void solve_richardson(const LimitOperator& op, const double* v0, double sigma, Monitor& mon, SolveResult& res) {
+  double* v = res.control_vertices.data();
   std::vector<double> r(3 * op.n);
   if (mon.start(residual(op, v0, v, r.data()))) return;
   for (;;) {
@@ -282,18 +282,17 @@ SolveResult solve(const LimitOperator& op, const double* v0, const SolveOptions&
       v0 = scaled.data();
     }
     res.control_vertices.assign(v0, v0 + 3 * op.n);  // V^(0) = V0 (paper: M^0 = M)
-    double* v = res.control_vertices.data();
     detail::Monitor mon(opt, res, detail::max_row_norm(v0, op.n));
     switch (opt.method) {
       case Method::Pia:
       case Method::Wpia:
-        detail::solve_richardson(op, v0, v, res.sigma, mon, res);
+        detail::solve_richardson(op, v0, res.sigma, mon, res);
         break;
       case Method::Cg:
-        detail::solve_cg(op, v0, v, mon, res);
+        detail::solve_cg(op, v0, mon, res);
         break;
       default:  // Hss, Whss
-        detail::solve_hss(op, v0, v, res.alpha, res.weight, mon, res);
+        detail::solve_hss(op, v0, res.alpha, res.weight, mon, res);
         break;
     }
     detail::scale_pow2(res.control_vertices.data(), res.control_vertices.size(), exponent);
