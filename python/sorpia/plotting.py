@@ -213,7 +213,9 @@ def interpolation_figure(vertices, faces, given_surface, control_vertices, fitte
     # Markers: on a (nearly) closed mesh only the vertices facing the camera
     # (matplotlib cannot hide points behind a surface); at most point_budget.
     closed = _boundary_share(F, len(V0)) < 0.01
-    shown = np.unique(F.ravel())
+    referenced = np.zeros(len(V0), bool)
+    referenced[F.ravel()] = True
+    shown = np.flatnonzero(referenced)  # np.unique(F) in O(n), without sorting 3m indices
     if closed:
         shown = shown[side * (_vertex_normals(normals0, F, len(V0))[shown] @ view) > 0]
     stride = max(1, math.ceil(len(shown) / point_budget))
