@@ -3,6 +3,10 @@ limit masks written independently of sorpia (from the paper, eq. 5)."""
 
 from __future__ import annotations
 
+import os
+import sysconfig
+from pathlib import Path
+
 import numpy as np
 import pytest
 import scipy.sparse
@@ -10,6 +14,13 @@ import scipy.sparse.linalg
 import scipy.spatial
 
 import sorpia
+
+
+def installed_script(name: str) -> Path | None:
+    """The program `name` installed into this Python's scripts folder (where pip
+    puts the `sorpia` script and CMake the sorpia-bench executable), or None."""
+    path = Path(sysconfig.get_path("scripts")) / (f"{name}.exe" if os.name == "nt" else name)
+    return path if path.exists() else None
 
 
 def sphere_hull(n_points: int, seed: int):

@@ -20,6 +20,8 @@ import pytest
 import sorpia
 from sorpia import cli
 
+from conftest import installed_script
+
 TOLERANCE_HEADERS = [f"1e-{j}" for j in range(1, 11)]
 
 
@@ -31,9 +33,9 @@ def run(*args, cwd, script=False, timeout=300, env=None):
 
 
 def _script() -> Path:
-    path = Path(sysconfig.get_path("scripts")) / ("sorpia.exe" if os.name == "nt" else "sorpia")
-    if not path.exists():
-        pytest.skip(f"the sorpia script is not installed next to this Python ({path})")
+    path = installed_script("sorpia")
+    if path is None:
+        pytest.skip(f"the sorpia script is not installed next to this Python ({sysconfig.get_path('scripts')})")
     return path
 
 

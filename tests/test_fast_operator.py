@@ -5,10 +5,8 @@ timings live in bench/)."""
 from __future__ import annotations
 
 import json
-import os
 import shutil
 import subprocess
-import sys
 
 import numpy as np
 import pytest
@@ -16,7 +14,7 @@ import pytest
 import sorpia
 from sorpia import _core
 
-from conftest import MESHES
+from conftest import MESHES, installed_script
 
 
 def scrambled(vertices, faces, seed):
@@ -61,14 +59,9 @@ def test_ring_is_the_clockwise_fan_of_each_vertex(name):
         assert pairs == steps[v], f"vertex {v}: ring {r} is not the clockwise fan"
 
 
-def bench_exe():
-    exe = os.path.join(os.path.dirname(sys.executable), "sorpia-bench")
-    return exe if os.path.exists(exe) else shutil.which("sorpia-bench")
-
-
 @pytest.fixture
 def sorpia_bench():
-    exe = bench_exe()
+    exe = installed_script("sorpia-bench") or shutil.which("sorpia-bench")
     if exe is None:
         pytest.skip("sorpia-bench is not installed next to this Python")
     return exe
