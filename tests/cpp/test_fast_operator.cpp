@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "../../cpp/src/one_ring.hpp"  // internal: the direct build on its own
+#include "bad_faces.hpp"
 #include "expect_error.hpp"
 #include "loop_masks.hpp"
 #include "sorpia/errors.hpp"
@@ -121,10 +122,9 @@ TEST(FastTopology, DirectOneRingIsTheClockwiseFan) {
 // of validate_faces run first; the direct build keeps its own fan count).
 TEST(FastTopology, BadMeshesRefusedAlikeByBothBuilds) {
   const std::vector<std::pair<std::string, std::vector<std::int32_t>>> bad = {
-      {"bowtie of two open fans", {0, 1, 2, 0, 3, 4}},
-      {"two closed cones at one apex",
-       {0, 1, 2, 0, 2, 3, 0, 3, 1, 1, 3, 2, 0, 4, 5, 0, 5, 6, 0, 6, 4, 4, 6, 5}},
-      {"edge with three faces", {0, 1, 2, 1, 0, 3, 0, 1, 4}},
+      {"bowtie of two open fans", sorpia_test::bowtie_open_fans},
+      {"two closed cones at one apex", sorpia_test::bowtie_closed_cones},
+      {"edge with three faces", sorpia_test::edge_with_three_faces},
       {"inconsistent orientation", {0, 1, 2, 0, 1, 3}},
       {"repeated vertex", {0, 1, 1}},
       {"index out of range", {0, 1, 9}},
@@ -151,9 +151,9 @@ TEST(FastTopology, BadMeshesRefusedAlikeByBothBuilds) {
 // validate_faces in front of it (here called on its own).
 TEST(FastTopology, DirectBuildRefusesBowtiesByItself) {
   const std::vector<std::pair<std::vector<std::int32_t>, std::size_t>> bowties = {
-      {{0, 1, 2, 0, 3, 4}, 6},                                                          // two open fans
-      {{0, 1, 2, 0, 2, 3, 0, 3, 1, 1, 3, 2, 0, 4, 5, 0, 5, 6, 0, 6, 4, 4, 6, 5}, 12},  // two closed cones
-      {{0, 1, 2, 0, 2, 3, 0, 3, 1, 1, 3, 2, 0, 4, 5}, 9},                              // a closed and an open fan
+      {sorpia_test::bowtie_open_fans, 6},
+      {sorpia_test::bowtie_closed_cones, 12},
+      {{0, 1, 2, 0, 2, 3, 0, 3, 1, 1, 3, 2, 0, 4, 5}, 9},  // a closed and an open fan
   };
   for (const auto& [faces, n_edges] : bowties) {
     SCOPED_TRACE("bowtie with " + std::to_string(faces.size() / 3) + " faces");

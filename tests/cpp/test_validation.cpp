@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "bad_faces.hpp"
 #include "expect_error.hpp"
 #include "loop_masks.hpp"
 #include "sorpia/errors.hpp"
@@ -18,7 +19,7 @@
 
 namespace {
 
-using Faces = std::vector<std::int32_t>;
+using sorpia_test::Faces;
 
 // The Topology constructor throws MeshError whose message contains every one of `parts`.
 void expect_refused(const Faces& faces, std::size_t n_vertices, const std::vector<std::string>& parts) {
@@ -59,7 +60,7 @@ TEST(Validation, DuplicateFacesInEitherOrientation) {
 }
 
 TEST(Validation, NonManifoldEdgeNamesTheEdgeAndItsFaces) {
-  expect_refused({0, 1, 2, 1, 0, 3, 0, 1, 4}, 5, {"non-manifold edge (0, 1)", "3 faces", "faces 0, 1, 2"});
+  expect_refused(sorpia_test::edge_with_three_faces, 5, {"non-manifold edge (0, 1)", "3 faces", "faces 0, 1, 2"});
 }
 
 TEST(Validation, InconsistentOrientationSaysWhichFacesToFlip) {
@@ -76,10 +77,9 @@ TEST(Validation, MoebiusStripIsNotOrientable) {
 
 TEST(Validation, BowtieVertexIsNamed) {
   // Two triangles sharing vertex 0 only: OpenMesh accepts this without complaint.
-  expect_refused({0, 1, 2, 0, 3, 4}, 5, {"non-manifold vertex 0", "2 fans", "faces 0 and 1"});
+  expect_refused(sorpia_test::bowtie_open_fans, 5, {"non-manifold vertex 0", "2 fans", "faces 0 and 1"});
   // Two closed cones touching at their apex 0: no boundary edge anywhere.
-  expect_refused({0, 1, 2, 0, 2, 3, 0, 3, 1, 1, 3, 2, 0, 4, 5, 0, 5, 6, 0, 6, 4, 4, 6, 5}, 7,
-                 {"non-manifold vertex 0", "6 faces form 2 fans"});
+  expect_refused(sorpia_test::bowtie_closed_cones, 7, {"non-manifold vertex 0", "6 faces form 2 fans"});
 }
 
 TEST(Validation, UnusualButValidMeshesAreAccepted) {
