@@ -111,9 +111,11 @@ def _face_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
 
 def _vertex_normals(face_normals: np.ndarray, faces: np.ndarray, n_vertices: int) -> np.ndarray:
     """Unit vertex normals, (n_vertices, 3), from `_face_normals` of `faces`."""
-    vn = np.zeros((n_vertices, 3))
-    for k in range(3):
-        np.add.at(vn, faces[:, k], face_normals)
+    # Sums of the face normals at each corner by bincount (np.add.at is about 5x
+    # slower), corner 0 of every face first, then 1, then 2.
+    corners = faces.T.ravel()
+    vn = np.column_stack([np.bincount(corners, weights=np.tile(face_normals[:, c], 3), minlength=n_vertices)
+                          for c in range(3)])
     norm = np.linalg.norm(vn, axis=1, keepdims=True)
     return vn / np.where(norm > 0, norm, 1.0)
 
