@@ -41,11 +41,8 @@ struct Slot {
 
 OneRing one_ring_direct(const std::int32_t* faces, std::size_t n_faces, std::size_t n_vertices,
                         std::size_t n_edges) {
-  return one_ring_direct(bucket_corners(faces, n_faces, n_vertices), n_vertices, n_edges);
-}
-
-OneRing one_ring_direct(const CornerBuckets& buckets, std::size_t n_vertices, std::size_t n_edges) {
   OneRing r;
+  const CornerBuckets buckets = bucket_corners(faces, n_faces, n_vertices);
   const std::vector<std::int32_t>& start = buckets.start;
   r.face_count.resize(n_vertices);
   for (std::size_t v = 0; v < n_vertices; ++v) r.face_count[v] = start[v + 1] - start[v];

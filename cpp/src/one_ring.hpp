@@ -48,10 +48,10 @@ struct OneRing {
 // is the clockwise step OpenMesh's circulator takes. `faces` must have passed
 // validate_faces (indices in range, at most two faces per edge, consistent
 // orientation, one fan per vertex); a second fan is still refused with the
-// same MeshError. `n_edges` sizes the output.
+// same MeshError. `n_edges` sizes the output. sorpia::Topology does not call
+// it: validate_faces fills the same arrays while it walks the fans (only
+// tests/cpp/test_fast_operator.cpp calls this standalone build).
 OneRing one_ring_direct(const std::int32_t* faces, std::size_t n_faces, std::size_t n_vertices,
                         std::size_t n_edges);
-// The same from the corners validate_faces has already bucketed.
-OneRing one_ring_direct(const CornerBuckets& buckets, std::size_t n_vertices, std::size_t n_edges);
 
 }  // namespace sorpia::detail

@@ -209,10 +209,11 @@ std::string orientation_advice(const std::int32_t* faces, std::size_t n_faces, s
 // face or vertex whatever the order of the checks: the first edge (lo, hi)
 // with 3+ faces or a duplicate face, else the first misoriented edge, else the
 // vertex of the first corner outside its vertex's first fan.
-// Returns the number of edges and of boundary edges, and leaves the corner
-// buckets in `buckets` for one_ring_direct.
+// Returns the number of edges and of boundary edges. With `ring`, also fills
+// it with the fans that walk passes, which are the one-ring (the direct build:
+// the arrays one_ring_direct makes from valid faces).
 std::pair<std::size_t, std::size_t> validate_faces(const std::int32_t* faces, std::size_t n_faces,
-                                                   std::size_t n_vertices, detail::CornerBuckets& buckets) {
+                                                   std::size_t n_vertices, detail::OneRing* ring) {
   using face_checks::next_corner;
   constexpr auto int_max = static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max());
   if (n_vertices > int_max)
@@ -233,8 +234,16 @@ std::pair<std::size_t, std::size_t> validate_faces(const std::int32_t* faces, st
   }
   const std::size_t n_half = 3 * n_faces;
 
-  buckets = detail::bucket_corners(faces, n_faces, n_vertices);
+  detail::CornerBuckets buckets = detail::bucket_corners(faces, n_faces, n_vertices);
   const std::vector<std::int32_t>& start = buckets.start;
+  if (ring) {
+    ring->offsets.resize(n_vertices + 1);
+    ring->face_count.resize(n_vertices);
+    ring->boundary.assign(n_vertices, 0);
+    // Exact for a closed mesh (2 n_edges = n_half); a boundary adds one entry
+    // per boundary edge.
+    ring->neighbors.reserve(n_half + n_half / 16);
+  }
 
   std::vector<face_checks::EdgeSlot> slots(n_vertices);
   // OpenSubdiv's Far refuses a vertex of more than 65535 edges (Vtr::VALENCE_LIMIT)
@@ -252,6 +261,11 @@ std::pair<std::size_t, std::size_t> validate_faces(const std::int32_t* faces, st
     const auto v = static_cast<std::int32_t>(vi);
     const std::int32_t k = start[v + 1] - start[v];
     const detail::Corner* c = buckets.corners.get() + start[v];
+    if (ring) {
+      ring->offsets[v] = static_cast<std::int32_t>(ring->neighbors.size());
+      ring->face_count[v] = k;
+      ring->n_unreferenced += k == 0;
+    }
     std::int32_t n_edges_v = 0, n_single = 0;  // edges at v, and those of one face
     bool fan_checkable = true;                 // edge counts and orientation right at v
     // Face i of v uses edge (v, x) with third vertex `third`, running v -> x if `out`.
@@ -298,14 +312,17 @@ std::pair<std::size_t, std::size_t> validate_faces(const std::int32_t* faces, st
     // Chain the faces clockwise (see one_ring.cpp): from neighbour x to the
     // `next` of the corner whose `prev` is x, starting at the far end of the
     // boundary edge that only runs into v, or anywhere round an interior vertex.
+    // An interior ring starts at the second corner of the lowest-numbered face.
     std::int32_t first = c[0].next;
     for (std::int32_t i = 0; i < k && n_single > 0; ++i)
       if (slots[c[i].prev].outs == 0 && slots[c[i].prev].users == 1) {
         first = c[i].prev;
         break;
       }
+    if (ring) ring->boundary[v] = n_single > 0;
     std::int32_t seen = 0;
     for (std::int32_t x = first;;) {
+      if (ring) ring->neighbors.push_back(x);
       const face_checks::EdgeSlot& s = slots[x];
       if (s.users == s.outs) break;  // no face runs x -> v: the fan's other boundary edge
       ++seen;
@@ -314,7 +331,7 @@ std::pair<std::size_t, std::size_t> validate_faces(const std::int32_t* faces, st
     }
     if (seen != k) bowtie = true;
   }
-  if (bad_lo != none || misoriented.first != none || bowtie) buckets.corners.reset();  // memory for the sorts below
+  buckets.corners.reset();
   if (bad_lo != none) face_checks::refuse_edge(faces, n_half, bad_lo);
   if (misoriented.first != none) {
     const auto [lo, hi] = misoriented;
@@ -333,6 +350,7 @@ std::pair<std::size_t, std::size_t> validate_faces(const std::int32_t* faces, st
     throw MeshError("vertex " + std::to_string(crowded) + " has " + std::to_string(crowded_valence) +
                     " neighbours: OpenSubdiv supports at most " + std::to_string(max_valence) +
                     " edges at a vertex; split the fan around it");
+  if (ring) ring->offsets[n_vertices] = static_cast<std::int32_t>(ring->neighbors.size());
   return {n_edge_ends / 2, n_boundary_ends / 2};
 }
 
@@ -407,11 +425,10 @@ Topology::Topology(const std::int32_t* faces, std::size_t n_faces, std::size_t n
 Topology::Topology(const std::int32_t* faces, std::size_t n_faces, std::size_t n_vertices, TopologyBuild build)
     : n_vertices_(n_vertices), faces_(faces, faces + 3 * n_faces) {
   detail::silence_openmesh();
-  detail::CornerBuckets buckets;
-  std::tie(n_edges_, n_boundary_edges_) = validate_faces(faces, n_faces, n_vertices, buckets);
-  detail::OneRing r = build == TopologyBuild::OpenMesh
-                          ? one_ring_openmesh(faces, n_faces, n_vertices, n_edges_)
-                          : detail::one_ring_direct(buckets, n_vertices, n_edges_);
+  detail::OneRing r;
+  std::tie(n_edges_, n_boundary_edges_) =
+      validate_faces(faces, n_faces, n_vertices, build == TopologyBuild::Direct ? &r : nullptr);
+  if (build == TopologyBuild::OpenMesh) r = one_ring_openmesh(faces, n_faces, n_vertices, n_edges_);
   ring_offsets_ = std::move(r.offsets);
   ring_neighbors_ = std::move(r.neighbors);
   face_count_ = std::move(r.face_count);
