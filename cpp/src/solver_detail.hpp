@@ -55,6 +55,16 @@ inline void apply_transpose_cols(const LimitOperator& op, const Transposed& t, c
   }
 }
 
+// y = (B x + sign B^T x) / 2 (C columns): H x for sign = 1, S x for sign = -1,
+// H and S the symmetric and skew-symmetric parts of B. bx, btx: scratch, x's size.
+template <int C>
+inline void apply_part(const LimitOperator& op, const Transposed& t, double sign, const double* x, double* bx,
+                       double* btx, double* y) {
+  apply_cols<C>(op, x, bx);
+  apply_transpose_cols<C>(op, t, x, btx);
+  for (std::size_t k = 0; k < C * op.n; ++k) y[k] = 0.5 * (bx[k] + sign * btx[k]);
+}
+
 // Gamma^-1 as a vector: 1 / w_i per row (1 on rows without neighbours). B =
 // Gamma Upsilon with Upsilon symmetric on closed meshes (paper section 3.2), so
 // B is self-adjoint in the inner product <x, y> = sum_i x_i y_i / w_i, and

@@ -198,14 +198,10 @@ void solve_hss(const LimitOperator& op, const double* v0, double alpha, double w
   const std::vector<double> ones(op.n, 1.0);
   std::vector<double> bx(m), btx(m), rhs(m), u(m), xn(m), r(m), p(m), q(m), tmp(m), sx(m);
   const auto apply_h = [&](const std::vector<double>& x, std::vector<double>& y) {
-    apply_cols<3>(op, x.data(), bx.data());
-    apply_transpose_cols<3>(op, tr, x.data(), btx.data());
-    for (std::size_t k = 0; k < m; ++k) y[k] = 0.5 * (bx[k] + btx[k]);
+    apply_part<3>(op, tr, 1.0, x.data(), bx.data(), btx.data(), y.data());
   };
   const auto apply_s = [&](const std::vector<double>& x, std::vector<double>& y) {
-    apply_cols<3>(op, x.data(), bx.data());
-    apply_transpose_cols<3>(op, tr, x.data(), btx.data());
-    for (std::size_t k = 0; k < m; ++k) y[k] = 0.5 * (bx[k] - btx[k]);
+    apply_part<3>(op, tr, -1.0, x.data(), bx.data(), btx.data(), y.data());
   };
   const auto m1 = [&](const std::vector<double>& x, std::vector<double>& y) {
     apply_h(x, y);

@@ -99,11 +99,7 @@ std::pair<double, double> estimate_hermitian_extremes(const LimitOperator& op, S
     Timer timer{cache};
     const detail::Transposed t = detail::transpose(op);
     std::vector<double> bx(op.n), btx(op.n), ones(op.n, 1.0);
-    const auto h = [&](const double* x, double* y) {
-      detail::apply_cols<1>(op, x, bx.data());
-      detail::apply_transpose_cols<1>(op, t, x, btx.data());
-      for (std::size_t i = 0; i < op.n; ++i) y[i] = 0.5 * (bx[i] + btx[i]);
-    };
+    const auto h = [&](const double* x, double* y) { detail::apply_part<1>(op, t, 1.0, x, bx.data(), btx.data(), y); };
     const double hmax = power_radius(op.n, h, ones, 300, 1e-6);
     const auto shifted = [&](const double* x, double* y) {
       h(x, y);
