@@ -17,8 +17,8 @@ struct Corner {
 
 // The corners of a triangle list bucketed by vertex (a counting sort, linear
 // time), in face order within a bucket: vertex v's corners are
-// corners[start[v] .. start[v + 1]). Shared by validate_faces and
-// one_ring_direct. `faces` must hold indices in [0, n_vertices).
+// corners[start[v] .. start[v + 1]). Used by validate_faces (topology.cpp).
+// `faces` must hold indices in [0, n_vertices).
 struct CornerBuckets {
   std::vector<std::int32_t> start;     // n_vertices + 1
   std::unique_ptr<Corner[]> corners;   // 3 n_faces
@@ -26,7 +26,7 @@ struct CornerBuckets {
 CornerBuckets bucket_corners(const std::int32_t* faces, std::size_t n_faces, std::size_t n_vertices);
 
 // Throws the MeshError of a vertex whose `n_faces` faces form more than one
-// fan (both one-ring builds find it while walking the fan).
+// fan (the OpenMesh build finds it while circulating).
 [[noreturn]] void refuse_second_fan(std::size_t v, int n_faces);
 
 // What sorpia::Topology keeps of the half-edge structure: per vertex its
@@ -41,17 +41,5 @@ struct OneRing {
   std::vector<std::uint8_t> boundary;
   std::size_t n_unreferenced = 0;
 };
-
-// The one-ring matched straight from the face array, in linear time: the
-// corners are bucketed by vertex (a counting sort) and each vertex's faces
-// chained by the map "previous corner -> next corner" of its triangles, which
-// is the clockwise step OpenMesh's circulator takes. `faces` must have passed
-// validate_faces (indices in range, at most two faces per edge, consistent
-// orientation, one fan per vertex); a second fan is still refused with the
-// same MeshError. `n_edges` sizes the output. sorpia::Topology does not call
-// it: validate_faces fills the same arrays while it walks the fans (only
-// tests/cpp/test_fast_operator.cpp calls this standalone build).
-OneRing one_ring_direct(const std::int32_t* faces, std::size_t n_faces, std::size_t n_vertices,
-                        std::size_t n_edges);
 
 }  // namespace sorpia::detail

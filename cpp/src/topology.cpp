@@ -210,8 +210,7 @@ std::string orientation_advice(const std::int32_t* faces, std::size_t n_faces, s
 // with 3+ faces or a duplicate face, else the first misoriented edge, else the
 // vertex of the first corner outside its vertex's first fan.
 // Returns the number of edges and of boundary edges. With `ring`, also fills
-// it with the fans that walk passes, which are the one-ring (the direct build:
-// the arrays one_ring_direct makes from valid faces).
+// it with the fans that walk passes, which are the one-ring (the direct build).
 std::pair<std::size_t, std::size_t> validate_faces(const std::int32_t* faces, std::size_t n_faces,
                                                    std::size_t n_vertices, detail::OneRing* ring) {
   using face_checks::next_corner;
@@ -360,7 +359,7 @@ namespace {
 
 // The reference build: OpenMesh's half-edge mesh by add_face, flattened by
 // circulating clockwise round each vertex. Rotated so that an interior ring
-// starts where one_ring_direct starts it (both builds give the same arrays).
+// starts where validate_faces's walk starts it (both builds give the same arrays).
 detail::OneRing one_ring_openmesh(const std::int32_t* faces, std::size_t n_faces, std::size_t n_vertices,
                                   std::size_t n_edges) {
   detail::OneRing r;

@@ -9,7 +9,6 @@
 #include <string>
 #include <vector>
 
-#include "../../cpp/src/one_ring.hpp"  // internal: the direct build on its own
 #include "bad_faces.hpp"
 #include "expect_error.hpp"
 #include "loop_masks.hpp"
@@ -144,22 +143,6 @@ TEST(FastTopology, BadMeshesRefusedAlikeByBothBuilds) {
     }
     EXPECT_EQ(messages[0], messages[1]);
     EXPECT_FALSE(messages[0].empty());
-  }
-}
-
-// The direct build counts fans itself, so a bowtie is refused even without
-// validate_faces in front of it (here called on its own).
-TEST(FastTopology, DirectBuildRefusesBowtiesByItself) {
-  const std::vector<std::pair<std::vector<std::int32_t>, std::size_t>> bowties = {
-      {sorpia_test::bowtie_open_fans, 6},
-      {sorpia_test::bowtie_closed_cones, 12},
-      {{0, 1, 2, 0, 2, 3, 0, 3, 1, 1, 3, 2, 0, 4, 5}, 9},  // a closed and an open fan
-  };
-  for (const auto& [faces, n_edges] : bowties) {
-    SCOPED_TRACE("bowtie with " + std::to_string(faces.size() / 3) + " faces");
-    sorpia_test::expect_error<sorpia::MeshError>(
-        [&] { sorpia::detail::one_ring_direct(faces.data(), faces.size() / 3, 7, n_edges); },
-        {"non-manifold vertex 0"});
   }
 }
 
