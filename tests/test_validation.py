@@ -193,7 +193,9 @@ def test_vertex_count_entries_accept_numpy_integers(count, closed_form):
 @pytest.mark.parametrize("call", [
     lambda: sorpia.limit_points(V1[:10], F1),
     lambda: sorpia.interpolate(V1[:10], F1),
-], ids=["limit_points", "interpolate"])
+    lambda: sorpia.LoopSurface(V1[:10], F1),
+    lambda: sorpia.limit_surface(V1[:10], F1, level=1),
+], ids=["limit_points", "interpolate", "LoopSurface", "limit_surface"])
 def test_too_few_vertices_for_the_faces_names_len_vertices(call):
     # Where the count is the rows of `vertices`, the message names it so (there is no n_vertices argument).
     with pytest.raises(sorpia.MeshError, match=r"out of range \[0, 10\): len\(vertices\) = 10 is too small for faces, "

@@ -53,7 +53,7 @@ class LoopSurface:
     def __init__(self, vertices, faces, boundary: str = DEFAULT_BOUNDARY):
         vertices = as_vertices(vertices)
         self._boundary = as_boundary(boundary)
-        self._topology = topology(faces, vertices.shape[0])
+        self._topology = topology(faces, vertices.shape[0], count_name="len(vertices)")
         self._surface = _core.LoopSurface(self._topology, vertices, self._boundary)
 
     @property
