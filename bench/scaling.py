@@ -19,11 +19,13 @@ import os
 import shutil
 import subprocess
 import sys
+import sysconfig
 
 
 def bench_exe():
-    """The sorpia-bench installed next to this Python, else the one on PATH, else None."""
-    exe = os.path.join(os.path.dirname(sys.executable), "sorpia-bench")
+    """The sorpia-bench installed into this Python's scripts folder (where CMake puts it, as pip does the
+    `sorpia` script; not always next to sys.executable), else the one on PATH, else None."""
+    exe = os.path.join(sysconfig.get_path("scripts"), "sorpia-bench")
     return exe if os.path.exists(exe) else shutil.which("sorpia-bench")
 
 
