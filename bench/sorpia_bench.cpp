@@ -80,7 +80,6 @@ struct Options {
   int threads = 1;
   bool two_pass = false;
   sorpia::Boundary boundary = sorpia::Boundary::EdgeAndCorner;
-  std::string boundary_name = "edge-and-corner";
   bool opensubdiv_operator = false;
   sorpia::TopologyBuild topology = sorpia::TopologyBuild::Direct;
   bool triangulate = false;
@@ -149,9 +148,11 @@ Options parse(int argc, char** argv) {
     } else if (a == "--two-pass") {
       o.two_pass = true;
     } else if (a == "--boundary") {
-      o.boundary_name = value();
-      if (o.boundary_name == "edge-only") o.boundary = sorpia::Boundary::EdgeOnly;
-      else if (o.boundary_name != "edge-and-corner") throw Usage("--boundary: edge-and-corner or edge-only");
+      try {
+        o.boundary = sorpia::parse_boundary(value());
+      } catch (const sorpia::ParameterError& e) {
+        throw Usage(std::string("--boundary: ") + e.what());
+      }
     } else if (a == "--operator") {
       const std::string v = value();
       if (v != "masks" && v != "opensubdiv") throw Usage("--operator: masks or opensubdiv");
@@ -416,7 +417,7 @@ void print_json(const Options& o, const std::vector<MeshRun>& runs) {
               std::thread::hardware_concurrency());
   std::printf("  \"options\": {\"tol\": %s, \"max_iter\": %d, \"boundary\": %s, \"operator\": %s, \"topology\": %s, "
               "\"threads\": %d, \"two_pass\": %s, \"repeat\": %d},\n",
-              num(o.tol).c_str(), o.max_iter, json_str(o.boundary_name).c_str(),
+              num(o.tol).c_str(), o.max_iter, json_str(sorpia::boundary_name(o.boundary)).c_str(),
               json_str(o.opensubdiv_operator ? "opensubdiv" : "masks").c_str(),
               json_str(o.topology == sorpia::TopologyBuild::OpenMesh ? "openmesh" : "direct").c_str(), o.threads,
               o.two_pass ? "true" : "false", o.repeat);
@@ -450,7 +451,7 @@ void print_table(const Options& o, const std::vector<MeshRun>& runs) {
   std::printf("sorpia-bench: %s, %u hardware threads; sor/gs on %d thread%s%s; tol %g; %s; operator %s; "
               "topology %s; medians of %d\n",
               cpu_model().c_str(), std::thread::hardware_concurrency(), o.threads, o.threads > 1 ? "s" : "",
-              o.two_pass ? " (two-pass E_k)" : "", o.tol, o.boundary_name.c_str(),
+              o.two_pass ? " (two-pass E_k)" : "", o.tol, sorpia::boundary_name(o.boundary),
               o.opensubdiv_operator ? "opensubdiv" : "masks",
               o.topology == sorpia::TopologyBuild::OpenMesh ? "openmesh" : "direct", o.repeat);
   std::printf("%-22s %9s %7s %8s %8s %-6s %7s %8s %6s %9s %8s %9s %8s %8s\n", "mesh", "vertices", "read", "topology",

@@ -34,7 +34,7 @@ void bind_limit(py::module_& m) {
   m.def(
       "limit_matrix",
       [](const sorpia::Topology& topology, const std::string& boundary) {
-        const auto b = parse_boundary(boundary);
+        const auto b = sorpia::parse_boundary(boundary);
         sorpia::CsrMatrix mat;
         {
           py::gil_scoped_release release;
@@ -50,7 +50,7 @@ void bind_limit(py::module_& m) {
       [](const sorpia::Topology& topology, const Vertices& vertices, const std::string& boundary) {
         check_shape(vertices, 3, "vertices");
         check_rows(vertices, topology.n_vertices(), "vertices", "the topology");
-        const auto b = parse_boundary(boundary);
+        const auto b = sorpia::parse_boundary(boundary);
         Vertices out({vertices.shape(0), py::ssize_t{3}});
         double* dst = out.mutable_data();
         const double* src = vertices.data();

@@ -54,7 +54,7 @@ py::dict result_dict(sorpia::SolveResult&& r) {
 void bind_solvers(py::module_& m) {
   py::class_<OperatorState>(m, "LimitOperator")
       .def(py::init([](const sorpia::Topology& topology, const std::string& boundary) {
-             const auto b = parse_boundary(boundary);
+             const auto b = sorpia::parse_boundary(boundary);
              py::gil_scoped_release release;
              // B from OpenSubdiv's limit masks without its refiner (about 1.4 s
              // at 1M vertices): equal to sorpia::limit_operator(topology, b),

@@ -19,7 +19,7 @@ void bind_surface(py::module_& m) {
   py::class_<sorpia::LoopSurface>(m, "LoopSurface")
       .def(py::init([](const sorpia::Topology& topology, const Vertices& vertices, const std::string& boundary) {
              check_vertices(vertices, topology.n_vertices());
-             const auto b = parse_boundary(boundary);
+             const auto b = sorpia::parse_boundary(boundary);
              const double* v = vertices.data();
              py::gil_scoped_release release;
              return sorpia::LoopSurface(topology, v, b);

@@ -22,12 +22,6 @@ namespace py = pybind11;
 using Vertices = py::array_t<double, py::array::c_style>;
 using Faces = py::array_t<std::int32_t, py::array::c_style>;
 
-inline sorpia::Boundary parse_boundary(const std::string& name) {
-  if (name == "edge-only") return sorpia::Boundary::EdgeOnly;
-  if (name == "edge-and-corner") return sorpia::Boundary::EdgeAndCorner;
-  throw sorpia::ParameterError("unknown boundary '" + name + "': use 'edge-only' or 'edge-and-corner'");
-}
-
 inline void check_shape(const py::array& a, py::ssize_t cols, const char* name) {
   if (a.ndim() != 2 || a.shape(1) != cols)
     throw sorpia::ParameterError(std::string(name) + " must have shape (n, " + std::to_string(cols) + ")");

@@ -16,6 +16,16 @@
 #include "sorpia/errors.hpp"
 
 namespace sorpia {
+
+Boundary parse_boundary(const std::string& name) {
+  for (Boundary b : {Boundary::EdgeOnly, Boundary::EdgeAndCorner})
+    if (name == boundary_name(b)) return b;
+  throw ParameterError("unknown boundary '" + name + "': use 'edge-only' or 'edge-and-corner'");
+}
+
+const char* boundary_name(Boundary boundary) {
+  return boundary == Boundary::EdgeOnly ? "edge-only" : "edge-and-corner";
+}
 namespace detail {
 void silence_openmesh() {
   static std::once_flag once;
