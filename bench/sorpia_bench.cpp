@@ -334,8 +334,8 @@ MeshRun run_mesh(const Options& o, const std::string& spec) {
     run.topology.push_back(seconds_since(t0));
 
     t0 = Clock::now();
-    const sorpia::LimitOperator op = o.opensubdiv_operator ? sorpia::limit_operator(topology, o.boundary)
-                                                           : sorpia::limit_operator_from_masks(topology, o.boundary);
+    const sorpia::LimitOperator op = o.opensubdiv_operator ? sorpia::limit_operator(sorpia::reference_limit_matrix(topology, o.boundary))
+                                                           : sorpia::limit_operator(topology, o.boundary);
     run.op.push_back(seconds_since(t0));
 
     for (auto& mr : run.methods) {

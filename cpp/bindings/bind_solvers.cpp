@@ -6,7 +6,6 @@
 #include <limits>
 
 #include "bindings.hpp"
-#include "sorpia/limit_masks.hpp"
 #include "sorpia/solvers.hpp"
 
 namespace sorpia_py {
@@ -56,10 +55,7 @@ void bind_solvers(py::module_& m) {
       .def(py::init([](const sorpia::Topology& topology, const std::string& boundary) {
              const auto b = sorpia::parse_boundary(boundary);
              py::gil_scoped_release release;
-             // B from OpenSubdiv's limit masks without its refiner (about 1.4 s
-             // at 1M vertices): equal to sorpia::limit_operator(topology, b),
-             // OpenSubdiv's Far Limit(), to 1e-15 (tests/cpp/test_fast_operator.cpp).
-             return OperatorState{sorpia::limit_operator_from_masks(topology, b), {}};
+             return OperatorState{sorpia::limit_operator(topology, b), {}};
            }),
            "topology"_a, "boundary"_a)
       .def_property_readonly("n", [](const OperatorState& s) { return s.op.n; })

@@ -1,4 +1,4 @@
-// The limit operator in compact form, the stationary methods (PIA, W-PIA,
+// The stationary methods (PIA, W-PIA,
 // Gauss-Seidel, SOR-PIA) and the driver shared by every method.
 #include "sorpia/solvers.hpp"
 
@@ -13,60 +13,6 @@
 #include "sorpia/errors.hpp"
 
 namespace sorpia {
-
-LimitOperator limit_operator(const CsrMatrix& b) {
-  if (b.n_rows != b.n_cols) throw std::logic_error("sorpia::limit_operator: B is not square");
-  LimitOperator op;
-  op.n = b.n_rows;
-  op.offsets.assign(op.n + 1, 0);
-  op.neighbors.reserve(b.indices.size());
-  op.diag.assign(op.n, 0.0);
-  op.weight.assign(op.n, 0.0);
-  for (std::size_t i = 0; i < op.n; ++i) {
-    bool has_diag = false, has_weight = false;
-    for (std::int32_t p = b.indptr[i]; p < b.indptr[i + 1]; ++p) {
-      const std::int32_t j = b.indices[p];
-      if (static_cast<std::size_t>(j) == i) {
-        op.diag[i] = b.data[p];
-        has_diag = true;
-        continue;
-      }
-      if (b.data[p] == 0.0) continue;  // an explicit zero is no neighbour
-      // Loop masks give every neighbour of a vertex the same weight; a row
-      // that does not is not a Loop limit mask (a bug upstream), so refuse it
-      // rather than sweep with the wrong matrix.
-      if (has_weight && b.data[p] != op.weight[i])
-        throw std::logic_error("sorpia::limit_operator: row " + std::to_string(i) +
-                               " of B has unequal off-diagonal weights");
-      op.weight[i] = b.data[p];
-      has_weight = true;
-      op.neighbors.push_back(j);
-    }
-    if (!has_diag || !(op.diag[i] > 0.0))
-      throw std::logic_error("sorpia::limit_operator: row " + std::to_string(i) + " of B has no positive diagonal");
-    op.offsets[i + 1] = static_cast<std::int32_t>(op.neighbors.size());
-  }
-  return op;
-}
-
-LimitOperator limit_operator(const Topology& topology, Boundary boundary) {
-  return limit_operator(limit_matrix(topology, boundary));
-}
-
-void apply(const LimitOperator& op, const double* x, double* y) { detail::apply_cols<3>(op, x, y); }
-
-bool is_symmetrisable(const LimitOperator& op) {
-  // (i, j) stored => (j, i) stored. Rows are short (valence), so a linear scan
-  // of row j is cheaper than sorting.
-  for (std::size_t i = 0; i < op.n; ++i)
-    for (std::int32_t p = op.offsets[i]; p < op.offsets[i + 1]; ++p) {
-      const std::int32_t j = op.neighbors[p];
-      const auto* first = op.neighbors.data() + op.offsets[j];
-      const auto* last = op.neighbors.data() + op.offsets[j + 1];
-      if (std::find(first, last, static_cast<std::int32_t>(i)) == last) return false;
-    }
-  return true;
-}
 
 Method parse_method(const std::string& name) {
   for (Method m : {Method::Pia, Method::Wpia, Method::Gs, Method::Sor, Method::Cg, Method::Hss, Method::Whss})
@@ -109,12 +55,11 @@ namespace detail {
 double residual(const LimitOperator& op, const double* v0, const double* v, double* r) {
   double m = 0.0;
   for (std::size_t i = 0; i < op.n; ++i) {
-    double s[3];
-    neighbour_sum(op, v, i, s);
-    const double d = op.diag[i], w = op.weight[i];
-    const double r0 = v0[3 * i] - (d * v[3 * i] + w * s[0]);
-    const double r1 = v0[3 * i + 1] - (d * v[3 * i + 1] + w * s[1]);
-    const double r2 = v0[3 * i + 2] - (d * v[3 * i + 2] + w * s[2]);
+    double bv[3];
+    row_product(op, v, i, bv);
+    const double r0 = v0[3 * i] - bv[0];
+    const double r1 = v0[3 * i + 1] - bv[1];
+    const double r2 = v0[3 * i + 2] - bv[2];
     if (r) {
       r[3 * i] = r0;
       r[3 * i + 1] = r1;
@@ -149,7 +94,7 @@ Transposed transpose(const LimitOperator& op) {
     for (std::int32_t p = op.offsets[i]; p < op.offsets[i + 1]; ++p) {
       const std::int32_t q = fill[op.neighbors[p]]++;
       t.rows[q] = static_cast<std::int32_t>(i);
-      t.values[q] = op.weight[i];
+      t.values[q] = op.entry(i, p);
     }
   return t;
 }
@@ -273,6 +218,7 @@ SolveResult solve(const LimitOperator& op, const double* v0, const SolveOptions&
   if (max_abs > 0.0 && std::isfinite(max_abs)) std::frexp(max_abs, &exponent);
   if (std::abs(exponent) <= 200) exponent = 0;
   if (opt.method == Method::Gs || opt.method == Method::Sor) {
+    if (!op.uniform()) throw std::logic_error("sorpia::solve: the sweep takes uniform rows only");
     detail::solve_sor(op, v0, exponent, opt, res.omega, res);
   } else {
     std::vector<double> scaled;

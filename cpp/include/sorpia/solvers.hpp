@@ -16,46 +16,10 @@
 #include <string>
 #include <vector>
 
-#include "sorpia/limit.hpp"
+#include "sorpia/limit_operator.hpp"
 #include "sorpia/topology.hpp"
 
 namespace sorpia {
-
-/// The Loop limit matrix B in the compact form the solvers sweep over.
-///
-/// Every row of B has one diagonal weight and equal off-diagonal weights:
-/// interior vertex of valence n: alpha_n and (1 - alpha_n)/n (paper eq. 5);
-/// boundary vertex: 2/3 and 1/6 for its two boundary neighbours; a one-face
-/// corner under "edge-and-corner" and an unreferenced vertex: 1 and no
-/// neighbours. So row i is (diag[i], weight[i] on each of
-/// neighbors[offsets[i] .. offsets[i+1])), exactly.
-/// The arrays are contiguous; build the structure once and reuse it.
-struct LimitOperator {
-  std::size_t n = 0;                   ///< number of vertices (rows)
-  std::vector<std::int32_t> offsets;   ///< n + 1 entries
-  std::vector<std::int32_t> neighbors; ///< columns of the off-diagonal entries of each row
-  std::vector<double> diag;            ///< B_ii (alpha_i in the paper)
-  std::vector<double> weight;          ///< the off-diagonal weight of row i, 0 when it has no neighbours
-};
-
-/// Compact form of a limit matrix.
-/// @param b  a square CSR matrix whose rows each have a positive diagonal entry
-///           and equal off-diagonal entries (every Loop limit matrix does)
-/// @throw std::logic_error when a row breaks that pattern: B did not come from
-///        the Loop limit masks, which is a bug, not a user error
-LimitOperator limit_operator(const CsrMatrix& b);
-
-/// limit_operator(limit_matrix(topology, boundary)): B from OpenSubdiv's masks.
-LimitOperator limit_operator(const Topology& topology, Boundary boundary);
-
-/// y = B x, x and y row-major (n, 3), distinct arrays.
-void apply(const LimitOperator& op, const double* x, double* y);
-
-/// True when B = Gamma Upsilon with Gamma = diag(weight) and Upsilon symmetric
-/// (paper section 3.2), i.e. when the neighbour pattern is symmetric and no
-/// row with neighbours is referenced by a row without: closed meshes (plus
-/// unreferenced vertices). Boundaries break it.
-bool is_symmetrisable(const LimitOperator& op);
 
 /// The methods of sorpia::solve.
 enum class Method {
