@@ -256,9 +256,9 @@ def test_timings_and_products():
         ({"max_iter": -5}, r"max_iter = -5 must be an integer >= 1"),
         ({"max_iter": 10**12}, r"max_iter = 1000000000000 is too large"),
         ({"method": "SOR"}, r"unknown method 'SOR': use one of 'pia'"),
-        ({"method": None}, r"unknown method None"),
+        ({"method": None}, r"method must be a string, got None"),
         ({"boundary": "Edge-Only"}, r"unknown boundary 'Edge-Only': use one of 'edge-and-corner', 'edge-only'"),
-        ({"boundary": None}, r"unknown boundary None"),
+        ({"boundary": None}, r"boundary must be a string, got None"),
     ],
 )
 def test_bad_parameters(kwargs, match):

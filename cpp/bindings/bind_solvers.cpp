@@ -1,9 +1,13 @@
 // Bindings of the PIA-family solvers: the compact limit operator with its
 // spectral-estimate cache (built once per mesh) and solve().
 #include <pybind11/functional.h>
+#include <pybind11/stl.h>
 
 #include <cmath>
 #include <limits>
+#include <optional>
+#include <string>
+#include <vector>
 
 #include "bindings.hpp"
 #include "sorpia/solvers.hpp"
@@ -18,13 +22,6 @@ struct OperatorState {
   sorpia::LimitOperator op;
   sorpia::SpectralCache cache;
 };
-
-sorpia::OmegaRule parse_omega_rule(const std::string& name) {
-  if (name == "given") return sorpia::OmegaRule::Given;
-  if (name == "young") return sorpia::OmegaRule::Young;
-  if (name == "auto") return sorpia::OmegaRule::Auto;
-  throw sorpia::ParameterError("unknown omega rule '" + name + "'");
-}
 
 py::dict result_dict(sorpia::SolveResult&& r) {
   py::dict d;
@@ -51,9 +48,56 @@ py::dict result_dict(sorpia::SolveResult&& r) {
 }  // namespace
 
 void bind_solvers(py::module_& m) {
+  py::enum_<sorpia::Method> method(m, "Method", "The PIA-family methods (sorpia::Method).");
+  for (sorpia::Method v : sorpia::all_methods) method.value(sorpia::method_name(v), v);
+  py::enum_<sorpia::OmegaRule>(m, "OmegaRule", "How 'sor' chooses omega (sorpia::OmegaRule).")
+      .value("given", sorpia::OmegaRule::Given)
+      .value("young", sorpia::OmegaRule::Young)
+      .value("auto", sorpia::OmegaRule::Auto);
+  m.def("parse_method", &sorpia::parse_method, "name"_a);
+  m.def("method_names", [] {
+    std::vector<std::string> names;
+    for (sorpia::Method v : sorpia::all_methods) names.emplace_back(sorpia::method_name(v));
+    return names;
+  });
+
+  // Options cross into C++ once, typed, and are checked by the core's
+  // check_options (ParameterError) when constructed.
+  py::class_<sorpia::SolveOptions>(m, "SolveOptions")
+      .def(py::init([](sorpia::Method method, sorpia::OmegaRule omega_rule, double omega, std::optional<double> sigma,
+                       std::optional<double> alpha, std::optional<double> weight, double tol, long long max_iter,
+                       int threads) {
+             sorpia::SolveOptions o;
+             o.method = method;
+             o.omega_rule = omega_rule;
+             o.omega = omega;
+             o.sigma = sigma;
+             o.alpha = alpha;
+             o.weight = weight;
+             o.tol = tol;
+             o.max_iter = max_iter;
+             o.threads = threads;
+             sorpia::check_options(o);
+             return o;
+           }),
+           py::kw_only(), "method"_a, "omega_rule"_a, "omega"_a, "sigma"_a, "alpha"_a, "weight"_a, "tol"_a,
+           "max_iter"_a, "threads"_a)
+      .def_readonly("method", &sorpia::SolveOptions::method)
+      .def_readonly("omega_rule", &sorpia::SolveOptions::omega_rule)
+      .def_readonly("tol", &sorpia::SolveOptions::tol)
+      .def_readonly("max_iter", &sorpia::SolveOptions::max_iter)
+      .def_readonly("threads", &sorpia::SolveOptions::threads);
+  m.def(
+      "parse_omega",
+      [](const std::string& text) {
+        sorpia::SolveOptions o;
+        sorpia::parse_omega(text, o);
+        return py::make_tuple(o.omega_rule, o.omega);
+      },
+      "text"_a, "(OmegaRule, omega) from 'auto', 'young' or a number.");
+
   py::class_<OperatorState>(m, "LimitOperator")
-      .def(py::init([](const sorpia::Topology& topology, const std::string& boundary) {
-             const auto b = sorpia::parse_boundary(boundary);
+      .def(py::init([](const sorpia::Topology& topology, sorpia::Boundary b) {
              py::gil_scoped_release release;
              return OperatorState{sorpia::limit_operator(topology, b), {}};
            }),
@@ -63,6 +107,8 @@ void bind_solvers(py::module_& m) {
       .def_property_readonly("neighbors", [](const OperatorState& s) { return to_numpy(s.op.neighbors, 0); })
       .def_property_readonly("diag", [](const OperatorState& s) { return to_numpy(s.op.diag, 0); })
       .def_property_readonly("weight", [](const OperatorState& s) { return to_numpy(s.op.weight, 0); })
+      .def("limit_matrix", [](const OperatorState& s) { return csr_tuple(sorpia::to_csr(s.op)); },
+           "B as CSR arrays (data, indices, indptr).")
       .def_property_readonly("symmetrisable", [](const OperatorState& s) { return sorpia::is_symmetrisable(s.op); })
       .def(
           "apply",
@@ -85,21 +131,9 @@ void bind_solvers(py::module_& m) {
            })
       .def(
           "solve",
-          [](OperatorState& s, const Vertices& v0, const std::string& method, const std::string& omega_rule,
-             double omega, double sigma, double alpha, double weight, double tol, int max_iter,
-             const py::object& callback, int threads) {
+          [](OperatorState& s, const Vertices& v0, sorpia::SolveOptions opt, const py::object& callback) {
             check_shape(v0, 3, "vertices");
             check_rows(v0, s.op.n, "vertices", "the mesh");
-            sorpia::SolveOptions opt;
-            opt.method = sorpia::parse_method(method);
-            opt.omega_rule = parse_omega_rule(omega_rule);
-            opt.omega = omega;
-            opt.sigma = sigma;
-            opt.alpha = alpha;
-            opt.weight = weight;
-            opt.tol = tol;
-            opt.max_iter = max_iter;
-            opt.threads = threads;
             // No callback: the core never leaves C++ during the iteration.
             if (!callback.is_none())
               opt.callback = [callback](int k, double e) {
@@ -113,9 +147,8 @@ void bind_solvers(py::module_& m) {
             }
             return result_dict(std::move(r));
           },
-          "vertices"_a.noconvert(), "method"_a, "omega_rule"_a, "omega"_a, "sigma"_a, "alpha"_a, "weight"_a, "tol"_a,
-          "max_iter"_a, "callback"_a, "threads"_a = 1,
-          "Solve B V = V0; NaN sigma/alpha/weight: estimate. Returns a dict of the result fields.");
+          "vertices"_a.noconvert(), "options"_a, "callback"_a,
+          "Solve B V = V0 with checked options. Returns a dict of the result fields.");
   m.attr("YOUNG_RHO_CLAMP") = sorpia::young_rho_clamp;
   m.attr("MAX_THREADS") = sorpia::max_threads;
 }

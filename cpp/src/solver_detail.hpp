@@ -128,7 +128,8 @@ class Monitor {
   Monitor(const SolveOptions& opt, SolveResult& res, double scale)
       : opt_(opt), res_(res), floor_(64.0 * 2.220446049250313e-16 * scale) {
     res_.errors.clear();
-    res_.errors.reserve(static_cast<std::size_t>(opt.max_iter) + 1);
+    // A generous max_iter must not reserve memory it will not use.
+    res_.errors.reserve(static_cast<std::size_t>(std::min(opt.max_iter, 4096LL)) + 1);
   }
 
   // E_0; returns true when there is nothing to do (E_0 == 0: V0 already solves it).

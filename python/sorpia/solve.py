@@ -75,11 +75,12 @@ from ._validate import DEFAULT_BOUNDARY, as_boundary, as_vertices
 from .errors import ParameterError
 from .limit import topology as _topology
 
-METHODS = ("pia", "wpia", "gs", "sor", "cg", "hss", "whss")
+METHODS = tuple(_core.method_names())  # the core's one list, in its order
 OMEGA_RULES = ("auto", "young")
 THREADED_METHODS = ("sor", "gs")  # the methods that sweep on threads > 1
 YOUNG_RHO_CLAMP = float(_core.YOUNG_RHO_CLAMP)
 MAX_THREADS = int(_core.MAX_THREADS)
+_INT64_MAX = 2**63 - 1
 
 
 class ConvergenceWarning(UserWarning):
@@ -161,65 +162,39 @@ def _real(value, name: str) -> float:
     return float(value)
 
 
-def _check_open(value, name: str, hi: float = 2.0) -> float:
-    x = _real(value, name)
-    if not (0.0 < x < hi):
-        raise ParameterError(f"{name} = {value!r} is outside (0, {hi:g})")
-    return x
+def _integer(value, name: str, what: str) -> int:
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+        raise ParameterError(f"{name} = {value!r} must be {what}")
+    return min(int(value), _INT64_MAX)  # beyond any limit: the core names it as too large
 
 
-def _check_threads(threads, method) -> int:
-    if isinstance(threads, bool) or not isinstance(threads, numbers.Integral):
-        raise ParameterError(f"threads = {threads!r} must be an integer >= 1")
-    if not 1 <= threads <= MAX_THREADS:
-        raise ParameterError(f"threads = {threads!r} must be an integer in 1..{MAX_THREADS}")
-    if threads > 1 and method not in THREADED_METHODS:
-        raise ParameterError(f"threads = {threads!r} applies to method='sor' or 'gs' only (method={method!r})")
-    return int(threads)
+def check_options(method: str = "sor", omega="auto", tol: float = 1e-10, max_iter: int = 1000,
+                  callback: Optional[Callable[[int, float], object]] = None, *, sigma=None, alpha=None,
+                  weight=None, threads: int = 1) -> _core.SolveOptions:
+    """The solver options, checked: what `interpolate` and `Interpolator.solve`
+    accept, with the same messages (sorpia.ParameterError), before any work.
 
-
-def _check_options(method, omega, tol, max_iter, callback, sigma, alpha, weight, threads=1):
-    if not isinstance(method, str) or method not in METHODS:
-        raise ParameterError(f"unknown method {method!r}: use one of {', '.join(map(repr, METHODS))}")
-    if method == "sor":
-        if isinstance(omega, str):
-            if omega not in OMEGA_RULES:
-                raise ParameterError(f"omega = {omega!r}: use a float in (0, 2), 'auto' or 'young'")
-            rule, omega_value = omega, float("nan")
-        else:
-            rule, omega_value = "given", _check_open(omega, "omega")
+    Python types are converted here (a bool, a string or None where a number
+    belongs is refused); every range and which options apply to which method
+    are checked once, by the core (sorpia::check_options), for Python, the
+    command line and C++ alike.
+    """
+    if not isinstance(method, str):
+        raise ParameterError(f"method must be a string, got {method!r}")
+    method_value = _core.parse_method(method)
+    if isinstance(omega, str):
+        rule, omega_value = _core.parse_omega(omega)
     else:
-        # Parameters a method does not use are refused, not ignored.
-        if not (isinstance(omega, str) and omega == "auto"):
-            raise ParameterError(f"omega = {omega!r} applies to method='sor' only (method={method!r})")
-        rule, omega_value = "auto", float("nan")
-    tol_value = _real(tol, "tol")
-    if not (tol_value > 0.0) or math.isinf(tol_value):
-        raise ParameterError(f"tol = {tol!r} must be a positive finite number")
-    if isinstance(max_iter, bool) or not isinstance(max_iter, numbers.Integral) or max_iter < 1:
-        raise ParameterError(f"max_iter = {max_iter!r} must be an integer >= 1")
-    if int(max_iter) > 2**31 - 1:
-        raise ParameterError(f"max_iter = {max_iter!r} is too large (at most 2**31 - 1)")
+        rule, omega_value = _core.OmegaRule.given, _real(omega, "omega")
     if callback is not None and not callable(callback):
         raise ParameterError(f"callback = {callback!r} must be callable (k, error) or None")
-    uses = {"sigma": ("wpia",), "alpha": ("hss", "whss"), "weight": ("whss",)}
-    values = {}
-    for name, value in (("sigma", sigma), ("alpha", alpha), ("weight", weight)):
-        if value is None:
-            values[name] = float("nan")
-            continue
-        if method not in uses[name]:
-            raise ParameterError(f"{name} = {value!r} applies to method={' or '.join(map(repr, uses[name]))} only "
-                                 f"(method={method!r})")
-        if name == "alpha":
-            x = _real(value, name)
-            if not (x > 0.0) or math.isinf(x):
-                raise ParameterError(f"alpha = {value!r} must be a positive finite number")
-            values[name] = x
-        else:
-            values[name] = _check_open(value, name)
-    values["threads"] = _check_threads(threads, method)
-    return rule, omega_value, tol_value, int(max_iter), values
+    return _core.SolveOptions(
+        method=method_value, omega_rule=rule, omega=omega_value,
+        sigma=None if sigma is None else _real(sigma, "sigma"),
+        alpha=None if alpha is None else _real(alpha, "alpha"),
+        weight=None if weight is None else _real(weight, "weight"),
+        tol=_real(tol, "tol"), max_iter=_integer(max_iter, "max_iter", "an integer >= 1"),
+        threads=min(_integer(threads, "threads", "an integer >= 1"), 2**31 - 1))
 
 
 class Interpolator:
@@ -256,12 +231,13 @@ class Interpolator:
 
     def _build(self, faces, n_vertices, boundary, count_name: str) -> None:
         t0 = time.perf_counter()
-        self.boundary = as_boundary(boundary)
+        self._boundary = as_boundary(boundary)
+        self.boundary = _core.boundary_name(self._boundary)
         # validates n_vertices as limit_matrix does (as_vertex_count: no float, bool or negative count)
         self.topology = _topology(faces, n_vertices, count_name=count_name)
         self.n_vertices = self.topology.n_vertices
         t1 = time.perf_counter()
-        self._operator = _core.LimitOperator(self.topology, self.boundary)
+        self._operator = _core.LimitOperator(self.topology, self._boundary)
         t2 = time.perf_counter()
         self.build_timings = {"topology": t1 - t0, "operator": t2 - t1}
 
@@ -271,16 +247,9 @@ class Interpolator:
         return bool(self._operator.symmetrisable)
 
     def limit_matrix(self) -> scipy.sparse.csr_matrix:
-        """B as a scipy CSR matrix, rebuilt from the compact operator the solvers use."""
-        op = self._operator
-        offsets = op.offsets
+        """B as a scipy CSR matrix: the operator the solvers use, as `sorpia.limit_matrix` gives it."""
         n = self.n_vertices
-        rows = np.repeat(np.arange(n), np.diff(offsets))
-        weight = op.weight
-        data = np.concatenate([op.diag, weight[rows]])
-        r = np.concatenate([np.arange(n), rows])
-        c = np.concatenate([np.arange(n), op.neighbors])
-        return scipy.sparse.csr_matrix((data, (r, c)), shape=(n, n))
+        return scipy.sparse.csr_matrix(self._operator.limit_matrix(), shape=(n, n))
 
     def solve(self, vertices, method: str = "sor", omega="auto", tol: float = 1e-10, max_iter: int = 1000,
               callback: Optional[Callable[[int, float], object]] = None, *, sigma=None, alpha=None, weight=None,
@@ -327,19 +296,19 @@ class Interpolator:
             divergence) and with OmegaWarning when omega="young" met rho >= 0.9999.
         """
         t0 = time.perf_counter()
-        checked = _check_options(method, omega, tol, max_iter, callback, sigma, alpha, weight, threads)
-        return self._solve(as_vertices(vertices), method, checked, callback, t0)
+        options = check_options(method, omega, tol, max_iter, callback, sigma=sigma, alpha=alpha, weight=weight,
+                                threads=threads)
+        return self._solve(as_vertices(vertices), method, options, callback, t0)
 
-    def _solve(self, v0: np.ndarray, method: str, checked: tuple, callback, t0: float) -> InterpolationResult:
-        """solve() on input already validated: `v0` from as_vertices, `checked`
-        from _check_options (interpolate validates both before building B and
-        calls this, so nothing is validated twice). Warnings point at the
-        caller of solve() or interpolate()."""
-        rule, omega_value, tol_value, max_iter, extra = checked
+    def _solve(self, v0: np.ndarray, method: str, options: _core.SolveOptions, callback,
+               t0: float) -> InterpolationResult:
+        """solve() on input already validated: `v0` from as_vertices, `options`
+        from check_options (interpolate validates both before building B and
+        calls this). Warnings point at the caller of solve() or interpolate()."""
+        tol_value, max_iter = options.tol, options.max_iter
         if v0.shape[0] != self.n_vertices:
             raise ParameterError(f"vertices has {v0.shape[0]} rows but the mesh has {self.n_vertices} vertices")
-        r = self._operator.solve(v0, method, rule, omega_value, extra["sigma"], extra["alpha"], extra["weight"],
-                                 tol_value, max_iter, callback, extra["threads"])
+        r = self._operator.solve(v0, options, callback)
         seconds = time.perf_counter() - t0
         if r["omega_clamped"]:
             warnings.warn(
@@ -395,9 +364,10 @@ def interpolate(vertices, faces, method: str = "sor", omega="auto", tol: float =
     """
     t0 = time.perf_counter()
     # Options are checked before the (costly) operator is built.
-    checked = _check_options(method, omega, tol, max_iter, callback, sigma, alpha, weight, threads)
+    options = check_options(method, omega, tol, max_iter, callback, sigma=sigma, alpha=alpha, weight=weight,
+                            threads=threads)
     v0 = as_vertices(vertices)
     interp = Interpolator._for_vertices(faces, v0.shape[0], boundary)
-    res = interp._solve(v0, method, checked, callback, t0)
+    res = interp._solve(v0, method, options, callback, t0)
     timings = dict(res.timings, **interp.build_timings)
     return replace(res, seconds=time.perf_counter() - t0, timings=timings)

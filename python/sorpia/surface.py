@@ -66,7 +66,7 @@ class LoopSurface:
 
     @property
     def boundary(self) -> str:
-        return self._boundary
+        return _core.boundary_name(self._boundary)
 
     @property
     def vertices(self) -> np.ndarray:

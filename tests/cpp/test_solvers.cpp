@@ -191,3 +191,40 @@ TEST(Omega, YoungFormulaAndClamp) {
 }
 
 }  // namespace
+
+// Values appear in option messages as Python's repr() writes them, so that the
+// same mistake reads the same from Python, the command line and C++.
+TEST(SolveOptions, MessagesWriteValuesAsPythonRepr) {
+  const auto message = [](const sorpia::SolveOptions& o) {
+    try {
+      sorpia::check_options(o);
+    } catch (const sorpia::ParameterError& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  sorpia::SolveOptions o;
+  o.omega_rule = sorpia::OmegaRule::Given;
+  o.omega = 2.0;
+  EXPECT_EQ(message(o), "omega = 2.0 is outside (0, 2)");
+  o.omega = 1.5;
+  o.method = sorpia::Method::Pia;
+  EXPECT_EQ(message(o), "omega = 1.5 applies to method='sor' only (method='pia')");
+  o = {};
+  o.tol = -1.5e-7;
+  EXPECT_EQ(message(o), "tol = -1.5e-07 must be a positive finite number");
+  o = {};
+  o.method = sorpia::Method::Cg;
+  o.threads = 2;
+  EXPECT_EQ(message(o), "threads = 2 applies to method='sor' or 'gs' only (method='cg')");
+  o = {};
+  o.method = sorpia::Method::Wpia;
+  o.sigma = 0.001;
+  EXPECT_EQ(message(o), "accepted");
+  o.sigma = 1e16;
+  EXPECT_EQ(message(o), "sigma = 1e+16 is outside (0, 2)");
+  o = {};
+  o.max_iter = sorpia::max_iterations + 1;
+  EXPECT_EQ(message(o), "max_iter = 2147483648 is too large (at most 2**31 - 1)");
+  EXPECT_THROW(sorpia::parse_omega("fast", o), sorpia::ParameterError);
+}

@@ -13,6 +13,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -31,6 +32,11 @@ enum class Method {
   Hss,   ///< Hermitian/skew-Hermitian splitting (Bai, Golub, Ng 2003) of B
   Whss,  ///< HSS relaxed: V <- V + weight (HSS(V) - V)
 };
+
+/// Every method, in the order documented and listed in messages: the one list
+/// of method names (Python's sorpia.solve.METHODS is read from it).
+constexpr Method all_methods[] = {Method::Pia, Method::Wpia, Method::Gs, Method::Sor,
+                                  Method::Cg,  Method::Hss,  Method::Whss};
 
 /// "pia", "wpia", "gs", "sor", "cg", "hss", "whss". @throw ParameterError on another name
 Method parse_method(const std::string& name);
@@ -92,19 +98,23 @@ constexpr double sor_auto_omega = 1.0;
 /// The largest SolveOptions::threads accepted.
 constexpr int max_threads = 1024;
 
-/// Options of sorpia::solve. NaN for sigma / alpha / weight means "estimate".
+/// The largest SolveOptions::max_iter accepted (2**31 - 1).
+constexpr long long max_iterations = 2147483647;
+
+/// Options of sorpia::solve. An empty sigma / alpha / weight means "estimate";
+/// a parameter given to a method that does not use it is refused, not ignored.
 struct SolveOptions {
   Method method = Method::Sor;
-  OmegaRule omega_rule = OmegaRule::Auto;
+  OmegaRule omega_rule = OmegaRule::Auto;  ///< "sor" only; other methods take Auto (no omega)
   double omega = 1.0;     ///< "sor" with OmegaRule::Given, in (0, 2)
-  double sigma = NAN;     ///< "wpia" step; default 2 / (lambda_min(B) + 1)
-  double alpha = NAN;     ///< "hss"/"whss" shift; default sqrt(lambda_min(H) lambda_max(H))
-  /// "whss" relaxation weight; default 2 / (2 - mu_min - mu_max), where
+  std::optional<double> sigma;   ///< "wpia" step in (0, 2); default 2 / (lambda_min(B) + 1)
+  std::optional<double> alpha;   ///< "hss"/"whss" shift > 0; default sqrt(lambda_min(H) lambda_max(H))
+  /// "whss" relaxation weight in (0, 2); default 2 / (2 - mu_min - mu_max), where
   /// mu = (alpha - l)/(alpha + l) at l = lambda_max(H), lambda_min(H): the
   /// ends of the HSS spectrum when S = 0 (equals 1 at the default alpha)
-  double weight = NAN;
-  double tol = 1e-10;     ///< stop when E_k / E_0 < tol
-  int max_iter = 1000;
+  std::optional<double> weight;
+  double tol = 1e-10;     ///< stop when E_k / E_0 < tol; positive and finite
+  long long max_iter = 1000;  ///< 1 .. max_iterations
   /// "sor"/"gs": threads sweeping at once (1..max_threads; other methods: 1).
   /// The vertices are split into one contiguous index range per thread; each
   /// range is swept in vertex order in parallel, then the vertices with a
@@ -122,6 +132,18 @@ struct SolveOptions {
   /// Empty: no call at all.
   std::function<bool(int, double)> callback;
 };
+
+/// Checks every option of `opt` against its range and its method: the one
+/// validation of solver options, whichever way they come in (Python, the
+/// command line, C++). Values appear in messages as Python's repr writes them.
+/// @throw ParameterError naming the option, its value and what is accepted,
+///        e.g. "omega = 2.0 is outside (0, 2)"
+void check_options(const SolveOptions& opt);
+
+/// Sets opt.omega_rule and opt.omega from the text of an omega option: "auto",
+/// "young" or a number (range checked by check_options).
+/// @throw ParameterError on other text
+void parse_omega(const std::string& text, SolveOptions& opt);
 
 enum class StopReason { Converged, MaxIter, Diverged, Callback };
 const char* stop_reason_name(StopReason reason);
@@ -154,7 +176,7 @@ struct SolveResult {
 /// Solve B V = V0.
 /// @param op     the limit operator
 /// @param v0     row-major (n, 3) mesh vertices, finite
-/// @param opt    method and parameters (validated here: ParameterError)
+/// @param opt    method and parameters (check_options: ParameterError)
 /// @param cache  spectral estimates to reuse and fill in (may be null)
 SolveResult solve(const LimitOperator& op, const double* v0, const SolveOptions& opt,
                   SpectralCache* cache = nullptr);
