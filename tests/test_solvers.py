@@ -289,3 +289,22 @@ def test_huge_and_tiny_coordinates_scale_exactly(method, exponent):
     assert big.converged and big.iterations == res.iterations
     np.testing.assert_array_equal(big.errors, res.errors)
     np.testing.assert_array_equal(big.control_vertices, np.ldexp(res.control_vertices, exponent))
+
+
+def test_result_round_trips_through_pickle_and_is_read_only():
+    """The one result type (bound from the core) pickles for multiprocessing
+    with every field equal, and its fields cannot be reassigned."""
+    import pickle
+
+    v, f = sorpia.shapes.icosphere(2)
+    res = sorpia.interpolate(v, f, method="wpia")
+    back = pickle.loads(pickle.dumps(res))
+    for name in sorpia.InterpolationResult._fields:
+        a, b = getattr(res, name), getattr(back, name)
+        if isinstance(a, np.ndarray):
+            np.testing.assert_array_equal(a, b)
+        else:
+            assert a == b, name
+    assert "control_vertices=<array (162, 3)>" in repr(res)
+    with pytest.raises(AttributeError):
+        res.iterations = 3

@@ -315,6 +315,7 @@ SolveResult solve(const LimitOperator& op, const double* v0, const SolveOptions&
   }
   res.initial_error = std::ldexp(res.initial_error, exponent);
   res.solve_seconds = std::chrono::duration<double>(clock::now() - t0).count();
+  res.seconds = res.estimate_seconds + res.solve_seconds;
   return res;
 }
 

@@ -64,7 +64,6 @@ import math
 import numbers
 import time
 import warnings
-from dataclasses import dataclass, field, replace
 from typing import Callable, Optional
 
 import numpy as np
@@ -91,69 +90,8 @@ class OmegaWarning(UserWarning):
     """omega="young" met rho(I - D^-1 B) >= 0.9999: Young's formula has no real value (rho >= 1) or none of use."""
 
 
-@dataclass(frozen=True)
-class InterpolationResult:
-    """What a solve returns.
-
-    Attributes
-    ----------
-    control_vertices : (n, 3) float64
-        V, in the input vertex order; B V = V0 to the tolerance reached.
-    iterations : int
-        Iterations done (sweeps for "gs"/"sor", outer steps for "hss"/"whss").
-    converged : bool
-        errors[-1] < tol, or E_k at the rounding floor (E_k <= 64 eps max_i ||v_i^0||),
-        below which no method can go: a tol of 1e-300 ends there, converged.
-    errors : (iterations + 1,) float64
-        errors[k] = E_k / E_0, so errors[0] = 1 (a single 0.0 when E_0 = 0:
-        V0 already interpolates and nothing is done).
-    method : str
-    omega : float or None
-        "sor"/"gs": the omega used (1.0 for "gs"); None for other methods.
-    seconds : float
-        Wall time of the whole call, every phase in `timings` included.
-    stop_reason : {"converged", "max_iter", "diverged", "callback"}
-    initial_error : float
-        E_0, absolute.
-    variant : str
-        The algorithm that ran: the method's name, or "bicgstab" for "cg" on a
-        mesh with boundary.
-    rho : float or None
-        omega="young": the estimated spectral radius of I - D^-1 B.
-    sigma, lambda_min : float or None
-        "pia"/"wpia": the step; "wpia": the estimated smallest eigenvalue of B.
-    alpha, weight : float or None
-        "hss"/"whss": the shift; "whss": the relaxation weight.
-    products : int
-        Applications of B (or B^T) in the iteration, inner solves included: a
-        measure of work comparable across methods.
-    timings : dict
-        Seconds per phase: "topology" (faces validated, one-ring), "operator"
-        (B from OpenSubdiv's limit masks), "estimate" (spectral estimates for the parameters:
-        0 when an Interpolator already holds them), "solve".
-    """
-
-    control_vertices: np.ndarray
-    iterations: int
-    converged: bool
-    errors: np.ndarray
-    method: str
-    omega: Optional[float]
-    seconds: float
-    stop_reason: str
-    initial_error: float
-    variant: str
-    rho: Optional[float] = None
-    sigma: Optional[float] = None
-    lambda_min: Optional[float] = None
-    alpha: Optional[float] = None
-    weight: Optional[float] = None
-    products: int = 0
-    timings: dict = field(default_factory=dict)
-
-
-def _optional(x: float) -> Optional[float]:
-    return None if x is None or math.isnan(x) else float(x)
+# The one result type, defined in the core's binding (its docstring lists the fields).
+InterpolationResult = _core.InterpolationResult
 
 
 def _real(value, name: str) -> float:
@@ -310,39 +248,20 @@ class Interpolator:
             raise ParameterError(f"vertices has {v0.shape[0]} rows but the mesh has {self.n_vertices} vertices")
         r = self._operator.solve(v0, options, callback)
         seconds = time.perf_counter() - t0
-        if r["omega_clamped"]:
+        if r.omega_clamped:
             warnings.warn(
-                f"omega='young': rho(I - D^-1 B) = {r['rho']:.6f} >= {YOUNG_RHO_CLAMP}, where Young's formula "
+                f"omega='young': rho(I - D^-1 B) = {r.rho:.6f} >= {YOUNG_RHO_CLAMP}, where Young's formula "
                 f"(paper Remark 1) has no real value (rho >= 1) or none of use; rho clamped to {YOUNG_RHO_CLAMP}, "
-                f"omega = {r['omega']:.4f} (slow: omega='auto' is the measured choice)",
+                f"omega = {r.omega:.4f} (slow: omega='auto' is the measured choice)",
                 OmegaWarning, stacklevel=3)
-        reason = r["stop_reason"]
+        reason = r.stop_reason
         if reason in ("max_iter", "diverged"):
             what = (f"reached max_iter = {max_iter}" if reason == "max_iter"
                     else "diverged (E_k grew past 1e6 E_0 or was not finite)")
-            warnings.warn(f"method={method!r} {what} with E_k/E_0 = {r['errors'][-1]:.3g} > tol = {tol_value:g}",
+            warnings.warn(f"method={method!r} {what} with E_k/E_0 = {r.errors[-1]:.3g} > tol = {tol_value:g}",
                           ConvergenceWarning, stacklevel=3)
-        errors = r["errors"]
-        return InterpolationResult(
-            control_vertices=r["control_vertices"],
-            iterations=int(r["iterations"]),
-            converged=reason == "converged",
-            errors=errors,
-            method=method,
-            omega=_optional(r["omega"]) if method in ("sor", "gs") else None,
-            seconds=seconds,
-            stop_reason=reason,
-            initial_error=float(r["initial_error"]),
-            variant=r["variant"],
-            rho=_optional(r["rho"]),
-            sigma=_optional(r["sigma"]),
-            lambda_min=_optional(r["lambda_min"]),
-            alpha=_optional(r["alpha"]),
-            weight=_optional(r["weight"]),
-            products=int(r["products"]),
-            timings={"topology": 0.0, "operator": 0.0, "estimate": float(r["estimate_seconds"]),
-                     "solve": float(r["solve_seconds"])},
-        )
+        r._record_build(time.perf_counter() - t0, 0.0, 0.0)
+        return r
 
 
 def interpolate(vertices, faces, method: str = "sor", omega="auto", tol: float = 1e-10, max_iter: int = 1000,
@@ -369,5 +288,5 @@ def interpolate(vertices, faces, method: str = "sor", omega="auto", tol: float =
     v0 = as_vertices(vertices)
     interp = Interpolator._for_vertices(faces, v0.shape[0], boundary)
     res = interp._solve(v0, method, options, callback, t0)
-    timings = dict(res.timings, **interp.build_timings)
-    return replace(res, seconds=time.perf_counter() - t0, timings=timings)
+    res._record_build(time.perf_counter() - t0, interp.build_timings["topology"], interp.build_timings["operator"])
+    return res

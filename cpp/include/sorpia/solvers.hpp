@@ -171,6 +171,13 @@ struct SolveResult {
   long long products = 0;                ///< operator applications (B, B^T, H or S) in the solve
   double estimate_seconds = 0.0;         ///< spectral estimates for the parameters (0 when cached)
   double solve_seconds = 0.0;            ///< the iteration itself
+  /// Building the topology and the operator: 0 from solve(), which gets them
+  /// built; a caller that builds them for this solve records them here.
+  double topology_seconds = 0.0;
+  double operator_seconds = 0.0;
+  /// Wall time of the whole call: estimate + solve from solve(); a caller that
+  /// does more for this result (validation, building B) records its own total.
+  double seconds = 0.0;
 };
 
 /// Solve B V = V0.
