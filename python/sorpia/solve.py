@@ -45,17 +45,16 @@ Methods (the iteration itself runs in the C++ core):
   l = lambda_max(H) and lambda_min(H): for S = 0 the HSS iteration matrix is
   (alpha I - H)(alpha I + H)^-1 with eigenvalues in [mu_min, mu_max], and this
   w centres them on 0. At the default alpha they are centred already, so w = 1
-  and "whss" equals "hss" unless alpha or weight is given (measured: w = 1 is
-  the best weight on 12 of 14 meshes, README).
+  and "whss" equals "hss" unless alpha or weight is given.
 
 omega for "sor": a float in (0, 2); ``"young"``, the paper's Remark 1,
 omega = 2 / (1 + sqrt(1 - rho^2)) with rho = rho(I - D^-1 B) by the power
 method (a lower bound of the true rho); rho >= 0.9999 (rho >= 1 is the usual
 case on real meshes, where the formula has no real value) warns with
 OmegaWarning and uses rho = 0.9999, omega = 1.9720; ``"auto"`` (default):
-omega = 1, the rule measured by bench/omega_study.py (README, "Convergence
-against the paper"): the fastest omega lies in [0.96, 1.15] on every mesh
-measured, and only omega = 1 never needs more sweeps than Gauss-Seidel.
+omega = 1 (sorpia::sor_auto_omega): bench/omega_study.py finds the fastest
+fixed omega close to 1 on every mesh it runs, and only omega = 1 never needs
+more sweeps than Gauss-Seidel (figures on the omega study's page of the docs).
 """
 
 from __future__ import annotations

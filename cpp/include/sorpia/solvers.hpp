@@ -46,7 +46,7 @@ const char* method_name(Method method);
 enum class OmegaRule {
   Given,  ///< SolveOptions::omega as given, in (0, 2)
   Young,  ///< paper Remark 1: 2 / (1 + sqrt(1 - rho^2)), rho = rho(I - D^-1 B)
-  Auto,   ///< sorpia's measured rule, see auto_omega
+  Auto,   ///< sorpia's rule, see sor_auto_omega
 };
 
 /// Spectral quantities of one B, estimated on demand and kept so that several
@@ -87,12 +87,11 @@ constexpr double young_rho_clamp = 0.9999;
 /// @param clamped  set to whether rho was clamped (may be null)
 double young_omega(double rho, bool* clamped);
 
-/// The "auto" omega of "sor", measured (bench/omega_study.py, README
-/// "Convergence against the paper"): on 14 meshes (9 real, 5 generated) the
-/// fewest sweeps to 1e-10 come at omega in [1.00, 1.12], at most 3 sweeps fewer
-/// than omega = 1, and every fixed omega >= 1.02 needs more sweeps than
-/// Gauss-Seidel on some mesh. So "auto" is omega = 1: no estimate to pay for,
-/// never slower than "gs".
+/// The "auto" omega of "sor": 1, because bench/omega_study.py finds the best
+/// fixed omega close to 1 on every mesh it runs, gaining a few sweeps at most,
+/// while any fixed omega above 1 needs more sweeps than Gauss-Seidel on some
+/// mesh (the study's page in the docs has the figures). omega = 1 has no
+/// estimate to pay for and is never slower than "gs".
 constexpr double sor_auto_omega = 1.0;
 
 /// The largest SolveOptions::threads accepted.
