@@ -496,3 +496,45 @@ def test_ply_tristrips_give_the_strips_triangles_in_one_orientation(tmp_path, en
     assert len(f2) == len(tris) and canonical(f2) == canonical(tris)
     # one orientation throughout: sorpia's validation accepts it as a surface
     assert np.allclose(sorpia.limit_points(sorpia.interpolate(v2, f2).control_vertices, f2), v, atol=1e-9)
+
+
+def test_triangulation_never_repeats_a_face_when_a_manifold_split_exists(tmp_path):
+    """Two quads over the same four vertices, the second listed from another
+    corner: fanning both from their first vertex gives the triangle (a, b, c)
+    twice (once reversed). The split must take the other diagonal for the
+    second quad, which closes the two quads into a tetrahedron."""
+    path = tmp_path / "pillow.obj"
+    path.write_text("v 0 0 0\nv 0.5 -1 0.2\nv 1 0 0\nv 0.5 1 -0.2\nf 1 2 3 4\nf 3 2 1 4\n")
+    v, f = sorpia.read_mesh(path, triangulate=True)
+    assert len(canonical(f)) == 4 and len({tuple(sorted(t)) for t in f.tolist()}) == 4  # no face twice
+    edges = {}
+    for t in f.tolist():
+        for a, b in zip(t, t[1:] + t[:1]):
+            edges[tuple(sorted((a, b)))] = edges.get(tuple(sorted((a, b))), 0) + 1
+    assert set(edges.values()) == {2}  # closed, every edge of two faces
+    res = sorpia.interpolate(v, f)  # sorpia's validation accepts it: consistently oriented, manifold
+    assert np.allclose(sorpia.limit_points(res.control_vertices, f), v, atol=1e-9)
+
+
+def test_quads_are_cut_along_their_shorter_diagonal(tmp_path):
+    """A grid of quads whose vertices lean one way or the other at random
+    (some quads with equal diagonals): every quad's two triangles share its
+    shorter diagonal."""
+    rng = np.random.default_rng(5)
+    nu, nv = 5, 6
+    lean = rng.choice([-0.4, 0.4], size=(nu, nv))
+    v = np.array([[j + lean[i, j] * i, i, 0.0] for i in range(nu) for j in range(nv)])
+    quads = [(i * nv + j, i * nv + j + 1, (i + 1) * nv + j + 1, (i + 1) * nv + j)
+             for i in range(nu - 1) for j in range(nv - 1)]
+    text = "".join(f"v {x!r} {y!r} {z!r}\n" for x, y, z in v.tolist()) + "".join(
+        "f " + " ".join(str(k + 1) for k in q) + "\n" for q in quads)
+    path = tmp_path / "grid.obj"
+    path.write_text(text)
+    _, f = sorpia.read_mesh(path, triangulate=True)
+    for k, (a, b, c, d) in enumerate(quads):
+        t1, t2 = set(f[2 * k]), set(f[2 * k + 1])
+        shared = t1 & t2
+        # a tie keeps the fan from the first corner, (a, c)
+        short = {b, d} if np.linalg.norm(v[b] - v[d]) < np.linalg.norm(v[a] - v[c]) else {a, c}
+        assert shared == short, k
+        assert t1 | t2 == {a, b, c, d}

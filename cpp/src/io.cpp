@@ -103,6 +103,123 @@ void write_atomic(const std::string& path, const std::string& data) {
   }
 }
 
+namespace {
+
+// The edges of a mesh, and the diagonals added to it, in one bucket per
+// vertex (an edge is kept in the bucket of its smaller end). Each bucket's
+// room is counted before anything is added: the mesh's edges plus every
+// diagonal its polygons could take. Lookups scan one short bucket.
+class EdgeBuckets {
+ public:
+  explicit EdgeBuckets(std::size_t n_vertices) : start_(n_vertices + 1, 0) {}
+  // First pass: room for an edge (u, w).
+  void count(std::int32_t u, std::int32_t w) { ++start_[static_cast<std::size_t>(std::min(u, w)) + 1]; }
+  void allocate() {
+    for (std::size_t v = 1; v < start_.size(); ++v) start_[v] += start_[v - 1];
+    fill_.assign(start_.begin(), start_.end() - 1);
+    other_.resize(start_.back());
+  }
+  void insert(std::int32_t u, std::int32_t w) { other_[fill_[std::min(u, w)]++] = std::max(u, w); }
+  bool contains(std::int32_t u, std::int32_t w) const {
+    const auto lo = static_cast<std::size_t>(std::min(u, w));
+    const std::int32_t hi = std::max(u, w);
+    for (std::size_t p = start_[lo]; p < fill_[lo]; ++p)
+      if (other_[p] == hi) return true;
+    return false;
+  }
+
+ private:
+  std::vector<std::size_t> start_, fill_;
+  std::vector<std::int32_t> other_;
+};
+
+double squared_distance(const std::vector<double>& v, std::int32_t a, std::int32_t b) {
+  double s = 0.0;
+  for (int c = 0; c < 3; ++c) {
+    const double d = v[3 * static_cast<std::size_t>(a) + c] - v[3 * static_cast<std::size_t>(b) + c];
+    s += d * d;
+  }
+  return s;
+}
+
+}  // namespace
+
+void triangulate_polygons(const Polygons& polygons, const std::vector<double>& vertices,
+                          std::vector<std::int32_t>& faces) {
+  if (polygons.list.empty()) return;
+  // Calls f(row) for every row of `faces` that is a triangle of the file (not
+  // a row of the fans standing in for the polygons).
+  const auto for_each_triangle = [&](auto f) {
+    std::size_t next_polygon = 0;
+    for (std::size_t row = 0; row < faces.size() / 3; ++row) {
+      if (next_polygon < polygons.list.size() && row == polygons.list[next_polygon].first_row) {
+        row += polygons.list[next_polygon++].k - 3;  // the fan's other rows
+        continue;
+      }
+      f(faces.data() + 3 * row);
+    }
+  };
+  // Calls f(u, w) for every side of every polygon, and g(u, w) for each
+  // diagonal it may take (none beyond the fan from its first corner past
+  // kMaxSearched corners).
+  constexpr std::size_t kMaxSearched = 32;
+  const auto for_each_polygon_edge = [&](auto side, auto diagonal) {
+    for (const auto& p : polygons.list) {
+      const std::int32_t* q = polygons.indices.data() + p.first_index;
+      for (std::size_t c = 0; c < p.k; ++c) side(q[c], q[(c + 1) % p.k]);
+      if (p.k > kMaxSearched) {
+        for (std::size_t d = 2; d + 1 < p.k; ++d) diagonal(q[0], q[d]);
+        continue;
+      }
+      for (std::size_t a = 0; a < p.k; ++a)
+        for (std::size_t b = a + 2; b < p.k; ++b)
+          if (!(a == 0 && b == p.k - 1)) diagonal(q[a], q[b]);
+    }
+  };
+  EdgeBuckets edges(vertices.size() / 3);
+  const auto count = [&](std::int32_t u, std::int32_t w) { edges.count(u, w); };
+  const auto insert = [&](std::int32_t u, std::int32_t w) { edges.insert(u, w); };
+  for_each_triangle([&](const std::int32_t* t) {
+    for (int c = 0; c < 3; ++c) count(t[c], t[(c + 1) % 3]);
+  });
+  for_each_polygon_edge(count, count);
+  edges.allocate();
+  for_each_triangle([&](const std::int32_t* t) {
+    for (int c = 0; c < 3; ++c) insert(t[c], t[(c + 1) % 3]);
+  });
+  for_each_polygon_edge(insert, [](std::int32_t, std::int32_t) {});
+
+  for (const auto& p : polygons.list) {
+    const std::int32_t* q = polygons.indices.data() + p.first_index;
+    const std::size_t k = p.k;
+    const auto is_new = [&](std::size_t corner) {  // every diagonal of the fan from `corner` is a new edge
+      for (std::size_t d = 2; d + 1 < k; ++d)
+        if (edges.contains(q[corner], q[(corner + d) % k])) return false;
+      return true;
+    };
+    std::size_t corner = 0;
+    if (k == 4) {
+      // corner 0 cuts along (q0, q2), corner 1 along (q1, q3): the shorter first.
+      const bool second_shorter = squared_distance(vertices, q[1], q[3]) < squared_distance(vertices, q[0], q[2]);
+      const std::size_t first = second_shorter ? 1 : 0;
+      corner = is_new(first) || !is_new(1 - first) ? first : 1 - first;
+    } else if (k <= kMaxSearched) {
+      for (std::size_t c = 0; c < k; ++c)
+        if (is_new(c)) {
+          corner = c;
+          break;
+        }
+    }
+    std::int32_t* out = faces.data() + 3 * p.first_row;
+    for (std::size_t i = 1; i + 1 < k; ++i) {
+      out[3 * (i - 1)] = q[corner];
+      out[3 * (i - 1) + 1] = q[(corner + i) % k];
+      out[3 * (i - 1) + 2] = q[(corner + i + 1) % k];
+    }
+    for (std::size_t d = 2; d + 1 < k; ++d) edges.insert(q[corner], q[(corner + d) % k]);
+  }
+}
+
 TriMesh parse_mesh(const FileData& file, MeshFormat format, Polygons& polygons) {
   TriMesh mesh;
   switch (format) {
@@ -116,6 +233,7 @@ TriMesh parse_mesh(const FileData& file, MeshFormat format, Polygons& polygons) 
     fail(file, "has " + std::to_string(mesh.n_vertices()) + " vertices but no faces: sorpia needs a triangle mesh");
   if (mesh.n_vertices() > static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max()))
     fail(file, "more vertices than int32 indices hold");
+  triangulate_polygons(polygons, mesh.vertices, mesh.faces);
   return mesh;
 }
 

@@ -189,18 +189,40 @@ double parse_coordinate(const FileData& f, const Where& w, std::string_view toke
 }
 
 // What a reader does with faces of more than 3 vertices, and how many it met.
+// Polygons to triangulate are kept (their fans hold their rows of the face
+// list meanwhile) until the whole file is read: the split of each is chosen
+// with every edge of the mesh known (triangulate_polygons).
 struct Polygons {
-  bool triangulate = false;  // split each into a fan from its first vertex; else an error naming its line
+  bool triangulate = false;  // split each into triangles; else an error naming its line
   std::size_t split = 0;     // polygons split so far
+  struct Polygon {
+    std::size_t first_row;   // its k - 2 triangles are rows first_row .. first_row + k - 3 of the faces
+    std::size_t first_index; // its k corners are indices[first_index .. first_index + k)
+    std::size_t k;
+  };
+  std::vector<Polygon> list;
+  std::vector<std::int32_t> indices;
 };
 
-// Collects faces (0-based indices), splitting polygons into fans when asked
-// and reporting them otherwise.
+// Replaces the fans that stand for polygons by splits that keep the mesh
+// manifold where one exists: a quad takes its shorter diagonal unless that
+// diagonal is already an edge of the mesh (then the other one); a larger
+// polygon is fanned from its first corner whose diagonals are all new edges
+// (its first corner if none is, or if it has more than 32 corners). A new diagonal cannot repeat a face or give
+// an edge a third face. Polygons are taken in file order, each seeing the
+// diagonals chosen before it. `vertices` (n, 3) give the diagonals' lengths.
+void triangulate_polygons(const Polygons& polygons, const std::vector<double>& vertices,
+                          std::vector<std::int32_t>& faces);
+
+// Collects faces (0-based indices), recording polygons for triangulation when
+// asked and reporting them otherwise.
 class FaceSink {
  public:
   FaceSink(const FileData& file, Polygons& polygons, std::vector<std::int32_t>& faces)
       : file_(file), polygons_(polygons), faces_(faces) {}
-  // `idx` holds k indices already checked to lie in [0, n_vertices).
+  // `idx` holds k indices already checked to lie in [0, n_vertices) (or, in
+  // OBJ, to be checked against the final vertex count: the fan's rows hold
+  // every corner until then).
   void add(const std::int64_t* idx, std::size_t k, const Where& w) {
     if (k == 3) {
       faces_.insert(faces_.end(), {static_cast<std::int32_t>(idx[0]), static_cast<std::int32_t>(idx[1]),
@@ -212,8 +234,10 @@ class FaceSink {
       fail(file_, w,
            "face with " + std::to_string(k) +
                " vertices: sorpia works on triangles; read the file with triangulate=True to split each "
-               "polygon into a fan of triangles from its first vertex");
+               "polygon into triangles");
     ++polygons_.split;
+    polygons_.list.push_back({faces_.size() / 3, polygons_.indices.size(), k});
+    for (std::size_t i = 0; i < k; ++i) polygons_.indices.push_back(static_cast<std::int32_t>(idx[i]));
     for (std::size_t i = 1; i + 1 < k; ++i)
       faces_.insert(faces_.end(), {static_cast<std::int32_t>(idx[0]), static_cast<std::int32_t>(idx[i]),
                                    static_cast<std::int32_t>(idx[i + 1])});

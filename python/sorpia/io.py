@@ -20,9 +20,15 @@ def read_mesh(path, triangulate: bool = False):
     path : str or os.PathLike
         The file; its extension (any case) names the format.
     triangulate : bool
-        Split polygons (faces of more than 3 vertices) into fans of triangles
-        from each polygon's first vertex (right for convex polygons). When
-        False (the default) a polygon raises MeshFileError naming its line.
+        Split polygons (faces of more than 3 vertices) into triangles, each
+        polygon's triangles in its place in the face order. The split keeps the
+        mesh manifold where it can: a quad is cut along its shorter diagonal
+        unless that diagonal is already an edge of the mesh (then along the
+        other); a larger polygon is fanned from its first corner whose
+        diagonals are all new edges (else, and beyond 32 corners, from its first
+        corner; fans are right for convex polygons). A new diagonal never repeats a face or gives an
+        edge a third face. When False (the default) a polygon raises
+        MeshFileError naming its line.
 
     Returns
     -------

@@ -33,9 +33,14 @@ MeshFormat mesh_format(const std::string& path);
 
 /// Read a triangle mesh.
 /// @param path         an .obj, .off, .ply or .stl file
-/// @param triangulate  split polygons into triangles (a fan from each
-///                     polygon's first vertex); when false a polygon is an
-///                     error naming its line
+/// @param triangulate  split polygons into triangles; when false a polygon is
+///                     an error naming its line. The split keeps the mesh
+///                     manifold where it can: a quad is cut along its shorter
+///                     diagonal unless that diagonal is already an edge of the
+///                     mesh (then along the other), a larger polygon is fanned
+///                     from its first corner whose diagonals are all new edges
+///                     (else, and beyond 32 corners, from its first corner);
+///                     polygons in file order.
 /// @param polygons     when not null, set to the number of faces of more
 ///                     than 3 vertices split (0 without triangulate)
 /// @return vertices (n, 3) and faces (m, 3), in file order
