@@ -538,3 +538,53 @@ def test_quads_are_cut_along_their_shorter_diagonal(tmp_path):
         short = {b, d} if np.linalg.norm(v[b] - v[d]) < np.linalg.norm(v[a] - v[c]) else {a, c}
         assert shared == short, k
         assert t1 | t2 == {a, b, c, d}
+
+
+def test_file_names_that_are_not_utf8_read_and_write(tmp_path):
+    """A file name the OS takes but that is not UTF-8 (the byte 0xe9 of a
+    Latin-1 'é'), as Python gives it (surrogate escapes) and as bytes: the mesh
+    round-trips bit for bit, and messages show the byte as \\xe9."""
+    v, f = sorpia.shapes.icosphere(1)
+    name = os.fsdecode(b"lat\xe9.ply")
+    sorpia.write_mesh(tmp_path / name, v, f, binary=True)
+    assert (os.fsencode(tmp_path) + b"/lat\xe9.ply") in [os.fsencode(p) for p in tmp_path.iterdir()]
+    for path in (tmp_path / name, os.fsencode(tmp_path / name)):
+        v2, f2 = sorpia.read_mesh(path)
+        assert same_bits(v2, v) and np.array_equal(f2, f)
+    with pytest.raises(sorpia.MeshFileError, match=r"lat\\xe9\.obj: cannot open the file"):
+        sorpia.read_mesh(tmp_path / os.fsdecode(b"lat\xe9.obj"))
+
+
+READ_UNDER_LIMIT = """
+import resource, sys
+import sorpia
+resource.setrlimit(resource.RLIMIT_AS, (1 << 30, 1 << 30))  # 1 GiB: the input is endless or 2 GiB
+try:
+    sorpia.read_mesh(sys.argv[1])
+except sorpia.MeshFileError as e:
+    print(e)
+"""
+
+
+@pytest.mark.parametrize("source,ext,match", [
+    ("/dev/zero", "obj", r"line 1: '\\x00.*is not an OBJ statement"),
+    ("/dev/zero", "off", r"line 1: an OFF file starts with 'OFF'"),
+    ("/dev/urandom", "ply", r"line 1: a PLY file starts with the line 'ply'"),
+    ("sparse", "ply", r"line 1: a PLY file starts with the line 'ply'"),
+])
+def test_endless_or_huge_input_of_another_kind_fails_on_its_start(tmp_path, source, ext, match):
+    """The start of a file is checked before the rest is read: a device or a
+    2 GiB file of zeros fails at once under a 1 GiB address-space limit
+    instead of being read whole (MemoryError) or forever."""
+    path = tmp_path / f"input.{ext}"
+    if source == "sparse":
+        with open(path, "wb") as fh:
+            fh.truncate(2 << 30)
+    else:
+        if not os.path.exists(source):
+            pytest.skip(f"{source} does not exist here")
+        path.symlink_to(source)
+    out = subprocess.run([sys.executable, "-c", READ_UNDER_LIMIT, str(path)], capture_output=True, text=True,
+                         timeout=120)
+    assert out.returncode == 0, out.stderr
+    assert re.search(match, out.stdout), out.stdout

@@ -24,7 +24,79 @@ namespace {
 std::string errno_text(int err) { return std::strerror(err); }
 }  // namespace
 
-FileData load_file(const std::string& path) {
+std::string printable_path(const std::string& path) {
+  static const char hex[] = "0123456789abcdef";
+  std::string out;
+  out.reserve(path.size());
+  const auto* p = reinterpret_cast<const unsigned char*>(path.data());
+  const std::size_t n = path.size();
+  for (std::size_t i = 0; i < n;) {
+    // Length of a valid UTF-8 sequence at i (0: not one).
+    std::size_t len = 0;
+    if (p[i] < 0x80) {
+      len = 1;
+    } else {
+      const std::size_t want = p[i] >= 0xF0 && p[i] <= 0xF4 ? 4 : p[i] >= 0xE0 ? 3 : p[i] >= 0xC2 && p[i] < 0xE0 ? 2 : 0;
+      len = want;
+      for (std::size_t k = 1; k < want; ++k)
+        if (i + k >= n || (p[i + k] & 0xC0) != 0x80) len = 0;
+      if (want == 3 && len && ((p[i] == 0xE0 && p[i + 1] < 0xA0) || (p[i] == 0xED && p[i + 1] >= 0xA0))) len = 0;
+      if (want == 4 && len && ((p[i] == 0xF0 && p[i + 1] < 0x90) || (p[i] == 0xF4 && p[i + 1] >= 0x90))) len = 0;
+    }
+    if (len == 0) {
+      out += "\\x";
+      out += hex[p[i] >> 4];
+      out += hex[p[i] & 15];
+      ++i;
+    } else {
+      out.append(path, i, len);
+      i += len;
+    }
+  }
+  return out;
+}
+
+namespace {
+
+// Whether `start`, the first bytes of a file (all of it when shorter than the
+// sniffed size), can begin a file of `format`; throws FileError naming what is
+// wrong when it cannot. Only what the format fixes at its start is checked:
+// "ply" for PLY, an OFF keyword for OFF, a statement keyword for OBJ; an STL
+// file may start with anything.
+void check_start(const FileData& f, MeshFormat format) {
+  std::string_view text(f.bytes);
+  if (text.compare(0, 3, "\xEF\xBB\xBF") == 0) text.remove_prefix(3);
+  // The first token of the first line that holds more than blanks and comments.
+  std::string_view first;
+  bool found = false;
+  LineReader lines(text.data(), text.data() + text.size());
+  std::string_view line;
+  while (!found && lines.next(line)) {
+    std::string_view rest = strip_comment(line);
+    found = next_token(rest, first);
+  }
+  // The readers' own messages for the same mistakes.
+  switch (format) {
+    case MeshFormat::Ply:
+      if (f.bytes.compare(0, 3, "ply") != 0 || (f.bytes.size() > 3 && f.bytes[3] != '\n' && f.bytes[3] != '\r'))
+        fail(f, Where{"line", 1}, "a PLY file starts with the line 'ply'");
+      break;
+    case MeshFormat::Off:
+      if (found && first.find("OFF") == std::string_view::npos)
+        fail(f, Where{"line", lines.number()}, "an OFF file starts with 'OFF'");
+      break;
+    case MeshFormat::Obj:
+      if (found && !std::isalpha(static_cast<unsigned char>(first[0])))
+        fail(f, Where{"line", lines.number()}, quoted(first) + " is not an OBJ statement (not a text OBJ file?)");
+      break;
+    case MeshFormat::Stl:
+      break;
+  }
+}
+
+}  // namespace
+
+FileData load_file(const std::string& path, MeshFormat format) {
   FileData f{path, {}};
   struct stat st {};
   if (::stat(path.c_str(), &st) != 0) fail(f, "cannot open the file: " + errno_text(errno));
@@ -32,13 +104,27 @@ FileData load_file(const std::string& path) {
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd < 0) fail(f, "cannot open the file: " + errno_text(errno));
   // Regular files report their size; read to the end either way (pipes, /proc).
-  // One byte more than the size: the read that finds the end then has room,
-  // instead of doubling (and zero-filling) a buffer the file already fills.
+  // Past the sniffed part the buffer takes one byte more than the size: the
+  // read that finds the end then has room, instead of doubling (and
+  // zero-filling) a buffer the file already fills.
+  constexpr std::size_t kSniffed = 1 << 16;
   const std::size_t capacity = S_ISREG(st.st_mode) ? static_cast<std::size_t>(st.st_size) + 1 : 0;
-  f.bytes.resize(std::max<std::size_t>(capacity, 1 << 16));
+  f.bytes.resize(kSniffed);  // the first read fills at most the part check_start looks at
   std::size_t used = 0;
+  bool checked = false;
   for (;;) {
-    if (used == f.bytes.size()) f.bytes.resize(2 * f.bytes.size());
+    if (used == f.bytes.size()) {
+      if (!checked) {
+        try {
+          check_start(f, format);
+        } catch (...) {
+          ::close(fd);
+          throw;
+        }
+        checked = true;
+      }
+      f.bytes.resize(std::max(capacity, 2 * f.bytes.size()));
+    }
     const ssize_t r = ::read(fd, f.bytes.data() + used, f.bytes.size() - used);
     if (r < 0) {
       if (errno == EINTR) continue;
@@ -52,6 +138,7 @@ FileData load_file(const std::string& path) {
   ::close(fd);
   f.bytes.resize(used);
   if (used == 0) fail(f, "the file is empty");
+  if (!checked) check_start(f, format);
   return f;
 }
 
@@ -243,7 +330,7 @@ MeshFormat mesh_format(const std::string& path) {
   // The C library would stop at the NUL: "a.obj\0.ply" would open a.obj as PLY.
   const std::size_t nul = path.find('\0');
   if (nul != std::string::npos)
-    throw FileError(path.substr(0, nul) + "...: the path contains a NUL character");
+    throw FileError(detail::io::printable_path(path.substr(0, nul)) + "...: the path contains a NUL character");
   const std::size_t slash = path.find_last_of('/');
   const std::size_t dot = path.find_last_of('.');
   std::string ext;
@@ -253,7 +340,7 @@ MeshFormat mesh_format(const std::string& path) {
   if (ext == "off") return MeshFormat::Off;
   if (ext == "ply") return MeshFormat::Ply;
   if (ext == "stl") return MeshFormat::Stl;
-  throw FileError(path + ": unknown mesh file extension " + (ext.empty() ? std::string("(none)") : "'." + ext + "'") +
+  throw FileError(detail::io::printable_path(path) + ": unknown mesh file extension " + (ext.empty() ? std::string("(none)") : "'." + ext + "'") +
                   ": use .obj, .off, .ply or .stl");
 }
 
@@ -261,7 +348,7 @@ TriMesh read_mesh(const std::string& path, bool triangulate, std::size_t* polygo
   const MeshFormat format = mesh_format(path);
   detail::io::Polygons p;
   p.triangulate = triangulate;
-  TriMesh mesh = detail::io::parse_mesh(detail::io::load_file(path), format, p);
+  TriMesh mesh = detail::io::parse_mesh(detail::io::load_file(path, format), format, p);
   if (polygons) *polygons = p.split;
   return mesh;
 }
@@ -270,7 +357,7 @@ void write_mesh(const std::string& path, const double* vertices, std::size_t n_v
                 std::size_t n_faces, bool binary) {
   const MeshFormat format = mesh_format(path);
   if (binary && (format == MeshFormat::Obj || format == MeshFormat::Off))
-    throw ParameterError(path + ": OBJ and OFF are text formats; binary=true is for .ply and .stl");
+    throw ParameterError(detail::io::printable_path(path) + ": OBJ and OFF are text formats; binary=true is for .ply and .stl");
   if (n_vertices == 0 || n_faces == 0) throw MeshError("write_mesh: the mesh has no vertices or no faces");
   for (std::size_t i = 0; i < 3 * n_vertices; ++i)
     if (!std::isfinite(vertices[i]))

@@ -24,8 +24,15 @@ struct FileData {
   std::string bytes;
 };
 
-// Throws FileError when the file is missing, a directory, unreadable or empty.
-FileData load_file(const std::string& path);
+// `path` as messages show it: valid UTF-8 as it is, any other byte as \xNN
+// (a file name need not be UTF-8; Python's message must be).
+std::string printable_path(const std::string& path);
+
+// Throws FileError when the file is missing, a directory, unreadable or empty,
+// or when its start cannot begin a file of `format` (checked on the first
+// 64 kB, before the rest is read: a device or a huge file of another kind
+// fails at once instead of being read whole).
+FileData load_file(const std::string& path, MeshFormat format);
 
 // Writes `data` to `path` through a temporary file in the same folder and a
 // rename; on failure the temporary file is removed and `path` is untouched.
@@ -38,9 +45,11 @@ struct Where {
   std::string str() const { return std::string(kind) + " " + std::to_string(index); }
 };
 
-[[noreturn]] inline void fail(const FileData& f, const std::string& what) { throw FileError(f.path + ": " + what); }
+[[noreturn]] inline void fail(const FileData& f, const std::string& what) {
+  throw FileError(printable_path(f.path) + ": " + what);
+}
 [[noreturn]] inline void fail(const FileData& f, const Where& w, const std::string& what) {
-  throw FileError(f.path + ", " + w.str() + ": " + what);
+  throw FileError(printable_path(f.path) + ", " + w.str() + ": " + what);
 }
 
 // File text quoted for a message: at most 40 bytes, anything but printable

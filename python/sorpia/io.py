@@ -68,7 +68,7 @@ def read_mesh(path, triangulate: bool = False):
 def read_mesh_counting(path, triangulate: bool = False):
     """`read_mesh`, and how many polygons it split: (vertices, faces,
     polygons); polygons is 0 without `triangulate` (a polygon is an error)."""
-    return _core.read_mesh(os.fspath(path), bool(triangulate))
+    return _core.read_mesh(os.fsencode(path), bool(triangulate))  # bytes: any file name the OS takes
 
 
 def write_mesh(path, vertices, faces, binary: bool = False) -> None:
@@ -101,7 +101,7 @@ def write_mesh(path, vertices, faces, binary: bool = False) -> None:
     """
     vertices = as_vertices(vertices)
     faces = as_faces(faces, vertices.shape[0], count_name="len(vertices)")
-    _core.write_mesh(os.fspath(path), vertices, faces, bool(binary))
+    _core.write_mesh(os.fsencode(path), vertices, faces, bool(binary))
 
 
 __all__ = ["read_mesh", "write_mesh"]
