@@ -1,0 +1,73 @@
+// The core's fork-join pool: every task runs once, exceptions come back to
+// the caller, and a forked child can run tasks too (libgomp hangs there).
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <csignal>
+#include <stdexcept>
+#include <thread>
+#include <vector>
+
+#include "../../cpp/src/parallel.hpp"
+
+namespace {
+
+using sorpia::detail::parallel_ranges;
+using sorpia::detail::run_tasks;
+
+TEST(Parallel, EveryTaskRunsOnceOnDistinctThreads) {
+  for (int n : {1, 2, 3, 8}) {
+    std::vector<std::atomic<int>> runs(n);
+    std::vector<std::thread::id> who(n);
+    run_tasks(n, [&](int t) {
+      ++runs[t];
+      who[t] = std::this_thread::get_id();
+    });
+    for (int t = 0; t < n; ++t) EXPECT_EQ(runs[t].load(), 1) << "task " << t << " of " << n;
+    EXPECT_EQ(who[0], std::this_thread::get_id());  // task 0 on the caller
+    for (int t = 1; t < n; ++t) EXPECT_NE(who[t], who[0]);
+  }
+}
+
+TEST(Parallel, RangesCoverEachIndexOnce) {
+  std::vector<int> hits(1000, 0);
+  parallel_ranges(3, hits.size(), [&](std::size_t b, std::size_t e, int) {
+    for (std::size_t i = b; i < e; ++i) ++hits[i];
+  });
+  for (int h : hits) ASSERT_EQ(h, 1);
+}
+
+TEST(Parallel, ATaskExceptionReachesTheCallerAfterAllTasks) {
+  std::atomic<int> ran{0};
+  EXPECT_THROW(run_tasks(4,
+                         [&](int t) {
+                           ++ran;
+                           if (t == 2) throw std::runtime_error("task 2");
+                         }),
+               std::runtime_error);
+  EXPECT_EQ(ran.load(), 4);
+  std::atomic<int> again{0};
+  run_tasks(4, [&](int) { ++again; });  // the pool still works
+  EXPECT_EQ(again.load(), 4);
+}
+
+TEST(Parallel, AForkedChildRunsTasksOnThreadsOfItsOwn) {
+  run_tasks(3, [](int) {});  // the parent's workers exist
+  ASSERT_GE(sorpia::detail::pool_workers(), 2);
+  const pid_t pid = fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    alarm(20);  // a hang ends the child with SIGALRM
+    std::atomic<int> ran{0};
+    run_tasks(3, [&](int) { ++ran; });
+    _exit(ran.load() == 3 ? 0 : 1);
+  }
+  int status = 0;
+  ASSERT_EQ(waitpid(pid, &status, 0), pid);
+  ASSERT_TRUE(WIFEXITED(status)) << "the child hung or crashed (signal " << WTERMSIG(status) << ")";
+  EXPECT_EQ(WEXITSTATUS(status), 0);
+}
+
+}  // namespace
