@@ -238,3 +238,18 @@ def test_wrong_vertex_count_for_set_vertices_is_refused():
     s = sorpia.LoopSurface(v, f)
     with pytest.raises(sorpia.ParameterError, match="rows"):
         s.set_vertices(np.asarray(v)[:-1])
+
+
+@pytest.mark.parametrize("scale", [1e-300, 1e-100, 1e80, 1e154, 1e155, 1e300])
+def test_normals_do_not_depend_on_the_scale_of_the_coordinates(scale):
+    """Scaling a mesh by s > 0 scales du and dv by s and leaves the unit
+    normals as they are; the squared cross product (of order s^4) must neither
+    underflow to zero nor overflow to inf/NaN. 1e-14: a few ulps of unit
+    vectors after the (inexact) scaling of the positions."""
+    v, f = sorpia.shapes.icosphere(2)
+    fid = np.arange(len(f))
+    uv = np.full((len(f), 2), 1 / 3)
+    _, _, _, n0 = sorpia.evaluate_limit(v, f, fid, uv, derivatives=True)
+    _, _, _, n = sorpia.evaluate_limit(v * scale, f, fid, uv, derivatives=True)
+    assert np.allclose(np.linalg.norm(n0, axis=1), 1.0, atol=1e-14)
+    assert np.abs(n - n0).max() < 1e-14

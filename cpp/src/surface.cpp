@@ -135,6 +135,34 @@ struct LoopSurface::Impl {
   Impl(const Topology& t, Boundary b) : topology(t), boundary(b), base(detail::make_loop_refiner(t, b)) {}
 };
 
+namespace {
+
+// v scaled by a power of two (exactly) so that its largest component lies in
+// [0.5, 1): products and squares of such vectors neither overflow nor underflow.
+void scale_to_unit(const double* v, double* out) {
+  const double m = std::max({std::abs(v[0]), std::abs(v[1]), std::abs(v[2])});
+  int e = 0;
+  if (m > 0.0 && std::isfinite(m)) std::frexp(m, &e);
+  for (int c = 0; c < 3; ++c) out[c] = std::ldexp(v[c], -e);
+}
+
+// The unit normal du x dv / |du x dv| at any scale of the coordinates (the
+// plain formula squares the cross product: it overflows from about 1e77 and
+// underflows below about 1e-77); zero where du and dv are parallel or zero.
+void unit_normal(const double* du, const double* dv, double* out) {
+  double a[3], b[3], n[3], u[3];
+  scale_to_unit(du, a);
+  scale_to_unit(dv, b);
+  n[0] = a[1] * b[2] - a[2] * b[1];
+  n[1] = a[2] * b[0] - a[0] * b[2];
+  n[2] = a[0] * b[1] - a[1] * b[0];
+  scale_to_unit(n, u);
+  const double len = std::sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+  for (int c = 0; c < 3; ++c) out[c] = len > 0.0 ? u[c] / len : 0.0;
+}
+
+}  // namespace
+
 LoopSurface::LoopSurface(const Topology& topology, const double* vertices, Boundary boundary)
     : impl_(std::make_unique<Impl>(topology, boundary)) {
   Bfr::SurfaceFactory::Options options;
@@ -232,16 +260,7 @@ void LoopSurface::evaluate(const std::int32_t* face_ids, const double* uv, std::
         std::copy(p, p + 3, positions + 3 * i);
         if (du) std::copy(d1, d1 + 3, du + 3 * i);
         if (dv) std::copy(d2, d2 + 3, dv + 3 * i);
-        if (normals) {
-          const double nx = d1[1] * d2[2] - d1[2] * d2[1];
-          const double ny = d1[2] * d2[0] - d1[0] * d2[2];
-          const double nz = d1[0] * d2[1] - d1[1] * d2[0];
-          const double len = std::sqrt(nx * nx + ny * ny + nz * nz);
-          const double s = len > 0.0 ? 1.0 / len : 0.0;
-          normals[3 * i] = nx * s;
-          normals[3 * i + 1] = ny * s;
-          normals[3 * i + 2] = nz * s;
-        }
+        if (normals) unit_normal(d1, d2, normals + 3 * i);
       }
     }
   }
