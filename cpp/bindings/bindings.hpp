@@ -70,5 +70,6 @@ void bind_limit(py::module_& m);
 void bind_solvers(py::module_& m);
 void bind_surface(py::module_& m);
 void bind_io(py::module_& m);
+void bind_mesh_checks(py::module_& m);
 
 }  // namespace sorpia_py

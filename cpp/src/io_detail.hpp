@@ -27,10 +27,6 @@ struct FileData {
 // Throws FileError when the file is missing, a directory, unreadable or empty.
 FileData load_file(const std::string& path);
 
-// Writes `data` to `path` through a temporary file in the same folder and a
-// rename; on failure the temporary file is removed and `path` is untouched.
-void write_atomic(const std::string& path, const std::string& data);
-
 // Where in a file something is: "line 12", "vertex 7", ...
 struct Where {
   const char* kind;

@@ -122,10 +122,9 @@ def _vertex_normals(face_normals: np.ndarray, faces: np.ndarray, n_vertices: int
 
 def _boundary_share(faces: np.ndarray, n_vertices: int) -> float:
     """Boundary edges / edges: 0 for a closed mesh."""
-    from .meshinfo import edge_counts
+    from .meshinfo import boundary_share
 
-    _, counts = edge_counts(np.asarray(faces, dtype=np.int64), n_vertices)
-    return float((counts == 1).sum() / len(counts))
+    return boundary_share(faces, n_vertices)
 
 
 def _visible_side(face_normals, view) -> float:

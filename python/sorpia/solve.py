@@ -68,7 +68,6 @@ from dataclasses import dataclass, field, replace
 from typing import Callable, Optional
 
 import numpy as np
-import scipy.sparse
 
 from . import _core
 from ._validate import DEFAULT_BOUNDARY, as_boundary, as_vertices
@@ -222,6 +221,11 @@ def _check_options(method, omega, tol, max_iter, callback, sigma, alpha, weight,
     return rule, omega_value, tol_value, int(max_iter), values
 
 
+def check_options(*, method="sor", omega="auto", tol=1e-10, max_iter=1000, threads=1) -> None:
+    """Check solver options as `interpolate` checks them, before any work; raises ParameterError."""
+    _check_options(method, omega, tol, max_iter, None, None, None, None, threads)
+
+
 class Interpolator:
     """Build once, solve many: the topology and the limit operator B of one mesh.
 
@@ -272,6 +276,8 @@ class Interpolator:
 
     def limit_matrix(self) -> scipy.sparse.csr_matrix:
         """B as a scipy CSR matrix, rebuilt from the compact operator the solvers use."""
+        import scipy.sparse  # here, not at import: sorpia's commands need no scipy
+
         op = self._operator
         offsets = op.offsets
         n = self.n_vertices
