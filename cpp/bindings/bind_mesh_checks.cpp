@@ -26,19 +26,15 @@ py::dict statistics_dict(sorpia::MeshStatistics&& s) {
   d["valence_max"] = s.valence_max;
   d["interior_valences"] = s.interior_valences;
   d["boundary_valences"] = s.boundary_valences;
-  std::vector<std::int32_t> vertex, valence;
-  std::vector<std::uint8_t> boundary;
-  vertex.reserve(s.extraordinary.size());
-  valence.reserve(s.extraordinary.size());
-  boundary.reserve(s.extraordinary.size());
-  for (const auto& e : s.extraordinary) {
-    vertex.push_back(e.vertex);
-    valence.push_back(e.valence);
-    boundary.push_back(e.boundary);
-  }
+  const auto k = static_cast<py::ssize_t>(s.extraordinary.size());
+  py::array_t<std::int32_t> vertex(k), valence(k);
+  py::array_t<bool> boundary(k);
+  auto* pv = vertex.mutable_data();
+  auto* pn = valence.mutable_data();
+  auto* pb = boundary.mutable_data();
+  for (const auto& e : s.extraordinary) *pv++ = e.vertex, *pn++ = e.valence, *pb++ = e.boundary;
   // (vertex, valence, on the boundary), three arrays in increasing vertex order.
-  d["extraordinary"] = py::make_tuple(to_numpy(std::move(vertex), 0), to_numpy(std::move(valence), 0),
-                                      to_numpy(std::move(boundary), 0).attr("astype")("bool"));
+  d["extraordinary"] = py::make_tuple(vertex, valence, boundary);
   return d;
 }
 

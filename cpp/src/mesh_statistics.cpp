@@ -30,11 +30,11 @@ class DisjointSets {
 
 // What both sources supply, per vertex and in all.
 struct EdgeCounts {
-  explicit EdgeCounts(std::size_t n) : valence(n), corners(n), boundary(n), components(n) {}
-  std::vector<std::int32_t> valence;   // edges at the vertex
-  std::vector<std::int32_t> corners;   // faces at the vertex
-  std::vector<std::uint8_t> boundary;  // on an edge of one face
-  DisjointSets components;             // joined along every edge
+  explicit EdgeCounts(std::size_t n) : valence(n), corners(n), boundary(n), component(n, -1) {}
+  std::vector<std::int32_t> valence;    // edges at the vertex
+  std::vector<std::int32_t> corners;    // faces at the vertex
+  std::vector<std::uint8_t> boundary;   // on an edge of one face
+  std::vector<std::int32_t> component;  // a label shared by the vertices joined by edges (< n)
   std::vector<std::int32_t> loop_vertex;  // one vertex of each boundary loop
   std::size_t n_edges = 0, n_boundary_edges = 0;
 };
@@ -51,7 +51,7 @@ MeshStatistics finish(EdgeCounts& c, std::size_t n_faces, bool oriented_manifold
   struct Piece {
     std::int64_t vertices = 0, edge_ends = 0, corners = 0, loops = 0;
   };
-  std::vector<std::int32_t> piece_of(n, -1);  // indexed by a component's root
+  std::vector<std::int32_t> piece_of(n, -1);  // indexed by a component's label
   std::vector<Piece> pieces;
   std::size_t n_referenced = 0;
   int vmin = 0, vmax = 0;
@@ -61,7 +61,7 @@ MeshStatistics finish(EdgeCounts& c, std::size_t n_faces, bool oriented_manifold
     vmin = n_referenced ? std::min(vmin, valence) : valence;
     vmax = n_referenced ? std::max(vmax, valence) : valence;
     ++n_referenced;
-    const std::int32_t root = c.components.find(static_cast<std::int32_t>(v));
+    const std::int32_t root = c.component[v];
     if (piece_of[root] < 0) {
       piece_of[root] = static_cast<std::int32_t>(pieces.size());
       pieces.emplace_back();
@@ -77,7 +77,7 @@ MeshStatistics finish(EdgeCounts& c, std::size_t n_faces, bool oriented_manifold
     if (valence != regular)
       s.extraordinary.push_back({static_cast<std::int32_t>(v), valence, c.boundary[v] != 0});
   }
-  for (const std::int32_t v : c.loop_vertex) ++pieces[piece_of[c.components.find(v)]].loops;
+  for (const std::int32_t v : c.loop_vertex) ++pieces[piece_of[c.component[v]]].loops;
   s.n_components = pieces.size();
   s.n_unreferenced = n - n_referenced;
   s.valence_min = vmin;
@@ -190,8 +190,20 @@ MeshStatistics mesh_statistics(const Topology& topology) {
     c.valence[v] = topology.valence(v);
     c.corners[v] = topology.face_count(v);
     c.boundary[v] = topology.is_boundary(v);
-    for (std::int32_t q = offsets[v]; q < offsets[v + 1]; ++q)
-      if (ring[q] > static_cast<std::int32_t>(v)) c.components.unite(static_cast<std::int32_t>(v), ring[q]);
+  }
+  // Components: breadth-first over the ring, labelled by their first vertex.
+  std::vector<std::int32_t> queue(n);
+  for (std::size_t v0 = 0; v0 < n; ++v0) {
+    if (c.component[v0] >= 0) continue;
+    const auto label = static_cast<std::int32_t>(v0);
+    std::size_t head = 0, tail = 0;
+    queue[tail++] = label;
+    c.component[v0] = label;
+    while (head < tail) {
+      const std::int32_t v = queue[head++];
+      for (std::int32_t q = offsets[v]; q < offsets[v + 1]; ++q)
+        if (c.component[ring[q]] < 0) c.component[ring[q]] = label, queue[tail++] = ring[q];
+    }
   }
   // A validated mesh has two boundary edges at each boundary vertex, to the
   // first and the last of its ring: every boundary piece is one loop.
@@ -221,6 +233,7 @@ std::optional<MeshStatistics> face_list_statistics(const std::int32_t* faces, st
   for (std::size_t h = 0; h < n_half; ++h) ++c.corners[faces[h]];
   const std::vector<std::int32_t> order = sorted_half_edges(faces, n_half, n_vertices);
   std::vector<std::int32_t> mate(n_half, kNoFan);
+  DisjointSets components(n_vertices);
   auto ends = [&](std::int32_t h) {
     const std::int32_t a = faces[h], b = faces[next_corner(h)];
     return std::make_pair(std::min(a, b), std::max(a, b));
@@ -232,7 +245,7 @@ std::optional<MeshStatistics> face_list_statistics(const std::int32_t* faces, st
     ++c.n_edges;
     ++c.valence[a];
     ++c.valence[b];
-    c.components.unite(a, b);
+    components.unite(a, b);
     if (j - i == 1) {
       ++c.n_boundary_edges;
       c.boundary[a] = c.boundary[b] = 1;
@@ -242,6 +255,7 @@ std::optional<MeshStatistics> face_list_statistics(const std::int32_t* faces, st
       mate[order[i + 1]] = order[i];
     }
   }
+  for (std::size_t v = 0; v < n_vertices; ++v) c.component[v] = components.find(static_cast<std::int32_t>(v));
   count_loops(faces, n_half, mate, c);
   return finish(c, n_faces, false);
 }

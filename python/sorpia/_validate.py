@@ -63,8 +63,8 @@ def as_vertices(vertices, name: str = "vertices") -> np.ndarray:
     if arr.shape[0] == 0:
         raise MeshError(f"{name} is empty: a mesh needs at least one triangle")
     arr = np.ascontiguousarray(arr, dtype=np.float64)
-    finite = np.isfinite(arr).all(axis=1)
-    if not finite.all():
+    if not np.isfinite(arr).all():  # the rows only when one is bad: a per-row reduction is much slower
+        finite = np.isfinite(arr).all(axis=1)
         i = int(np.flatnonzero(~finite)[0])
         raise MeshError(f"{name}[{i}] = {arr[i].tolist()} is not finite (NaN or inf); "
                         f"{int((~finite).sum())} of {len(arr)} vertices are not")

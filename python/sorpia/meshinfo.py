@@ -99,9 +99,10 @@ def boundary_share(faces, n_vertices: int) -> float:
 def _layout(vertices, n_faces: int, stats, list_extraordinary) -> dict:
     vertices = np.asarray(vertices, dtype=np.float64)
     info: dict = {"vertices": len(vertices), "faces": n_faces}
-    n = len(vertices)
-    if n:
-        lo, hi = vertices.min(axis=0), vertices.max(axis=0)
+    if len(vertices):
+        # Column by column: numpy's reduction along axis 0 of an (n, 3) array is several times slower.
+        lo = np.array([vertices[:, k].min() for k in range(3)])
+        hi = np.array([vertices[:, k].max() for k in range(3)])
         if not (np.isfinite(lo).all() and np.isfinite(hi).all()):
             finite = np.isfinite(vertices).all(axis=1)
             lo, hi = (vertices[finite].min(axis=0), vertices[finite].max(axis=0)) if finite.any() else (None, None)
