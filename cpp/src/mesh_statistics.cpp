@@ -55,6 +55,7 @@ MeshStatistics finish(EdgeCounts& c, std::size_t n_faces, bool oriented_manifold
   std::vector<Piece> pieces;
   std::size_t n_referenced = 0;
   int vmin = 0, vmax = 0;
+  s.extraordinary.reserve(n);  // address space only: pages are touched as entries are added
   for (std::size_t v = 0; v < n; ++v) {
     if (c.corners[v] == 0) continue;  // unreferenced
     const int valence = c.valence[v];
