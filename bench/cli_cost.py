@@ -80,6 +80,7 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--dir", default=None, help="folder for the files (default: a temporary folder)")
     args = ap.parse_args()
+    load = os.getloadavg()[0]  # other work on the machine inflates every wall time alike; the ratios hold better
 
     with tempfile.TemporaryDirectory(dir=args.dir) as tmp:
         tmp = Path(tmp)
@@ -107,13 +108,14 @@ def main() -> None:
               for name, s in samples.items()}
     command, library = median["command (sorpia fit)"], median["library (read, statistics, fit, write, check)"]
     lines = [f"{args.vertices} vertices (sorpia.shapes.irregular(n, 1), binary PLY); median of {args.repeat} "
-             "runs, alternated; each a process of its own, interpreter start included.", "",
+             f"runs, alternated; each a process of its own, interpreter start included; load average "
+             f"{load:.1f} at the start.", "",
              "| run | wall (s) | peak RSS (MB) | wall / library | peak / library |", "|---|---:|---:|---:|---:|"]
     for name, (wall, peak) in median.items():
         lines.append(f"| {name} | {wall:.3f} | {peak:.0f} | {wall / library[0]:.2f} | {peak / library[1]:.2f} |")
     table = "\n".join(lines)
     print(table)
-    out = {"vertices": args.vertices, "repeat": args.repeat,
+    out = {"vertices": args.vertices, "repeat": args.repeat, "load_average": load,
            "runs": {name: {"wall_seconds": [w for w, _ in s], "peak_rss_mb": [m for _, m in s],
                            "median_wall_seconds": median[name][0], "median_peak_rss_mb": median[name][1]}
                     for name, s in samples.items()},
