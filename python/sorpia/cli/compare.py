@@ -47,11 +47,10 @@ def run_compare(input_path, *, methods=DISPLAY_ORDER, tol=1e-10, max_iter=1000, 
     from ..meshinfo import topology_info
 
     out = out if out is not None else sys.stdout
+    given = f"--methods {','.join(methods)}" + (f" --threads {threads}" if threads != 1 else "")
     for method in methods:
-        # --threads is checked as sor takes it even where only other methods run.
-        check_solver_options(f"--methods {','.join(methods)}" + (f" --threads {threads}" if threads != 1 else ""),
-                             method=method, tol=tol, max_iter=max_iter, threads=threads_for(method, threads))
-    check_solver_options(f"--threads {threads}", method="sor", threads=threads)
+        check_solver_options(given, method=method, tol=tol, max_iter=max_iter, threads=threads_for(method, threads))
+    check_solver_options(given, method="sor", threads=threads)  # --threads as sor takes it, whichever methods run
     check_paths([input_path], {"--table": table, "--csv": csv_path, "--plot": plot, "--json": json_path}, force)
     if plot is not None:
         require_plotting()
