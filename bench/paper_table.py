@@ -20,7 +20,7 @@ import os
 import statistics
 import sys
 
-from sorpia.cli import TABLE_TOLERANCES, iterations_to_reach
+from sorpia.cli.compare import TABLE_TOLERANCES, iterations_to_reach
 
 sys.path.insert(0, os.path.dirname(__file__))
 from omega_study import DEFAULT_MESH_DIR, load_meshes, make_interpolator, timed  # noqa: E402

@@ -14,6 +14,10 @@ import scipy.sparse.linalg
 import scipy.spatial
 
 import sorpia
+from sorpia import cli
+from sorpia.cli import common
+
+from cli_support import CLI_MESHES, write_obj
 
 
 def installed_script(name: str) -> Path | None:
@@ -108,3 +112,39 @@ def mesh(request):
 @pytest.fixture
 def closed_form():
     return closed_form_limit_matrix
+
+
+# ---- the sorpia command ----------------------------------------------------
+
+@pytest.fixture
+def command(capsys):
+    """run(*args): `sorpia ARGS` in this process, as the script runs it; returns
+    (exit code, stdout, stderr)."""
+
+    def run(*args) -> tuple[int, str, str]:
+        common._warned.clear()  # each command prints its warnings once, as a process of its own would
+        capsys.readouterr()
+        try:
+            code = cli.main([str(a) for a in args])
+        except SystemExit as exc:  # argparse: --help, --version, a bad option
+            code = exc.code
+        out = capsys.readouterr()
+        return code, out.out, out.err
+
+    return run
+
+
+@pytest.fixture(params=sorted(CLI_MESHES))
+def mesh_file(request, tmp_path, monkeypatch):
+    """(name, path, V, F): each of CLI_MESHES as an OBJ file in tmp_path, the working directory."""
+    monkeypatch.chdir(tmp_path)
+    V, F = CLI_MESHES[request.param]()
+    return request.param, write_obj(tmp_path / f"{request.param}.obj", V, F), np.asarray(V), np.asarray(F)
+
+
+@pytest.fixture
+def torus_file(tmp_path, monkeypatch):
+    """(path, V, F): the irregular torus of CLI_MESHES as tmp_path/torus.obj; tmp_path is the working directory."""
+    monkeypatch.chdir(tmp_path)
+    V, F = CLI_MESHES["irregular-torus"]()
+    return write_obj(tmp_path / "torus.obj", V, F), np.asarray(V), np.asarray(F)

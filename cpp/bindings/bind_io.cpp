@@ -33,6 +33,14 @@ void bind_io(py::module_& m) {
         sorpia::write_mesh(path, v, n, f, nf, binary);
       },
       "path"_a, "vertices"_a.noconvert(), "faces"_a.noconvert(), "binary"_a);
+  m.def(
+      "write_file_atomic",
+      [](const std::string& path, const py::bytes& data) {
+        std::string bytes = data;
+        py::gil_scoped_release release;
+        sorpia::write_file_atomic(path, bytes);
+      },
+      "path"_a, "data"_a, "Write bytes to path atomically (temporary file, fsync, rename).");
 }
 
 }  // namespace sorpia_py

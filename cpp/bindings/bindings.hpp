@@ -52,8 +52,8 @@ py::array_t<T> to_numpy(const std::vector<T>& v, py::ssize_t cols) {
 }
 
 // The same shape, without a copy: the numpy array takes v's storage over
-// (a capsule frees it with the array). For results: at 1M vertices the copy
-// of the control vertices cost a 24 MB memcpy into freshly faulted pages.
+// (a capsule frees it with the array). For results, which can be large: no
+// copy into freshly faulted pages.
 template <class T>
 py::array_t<T> to_numpy(std::vector<T>&& v, py::ssize_t cols) {
   if (v.empty()) return py::array_t<T>(numpy_shape(v, cols));  // no storage to take over (data() may be null)
@@ -77,5 +77,6 @@ void bind_limit(py::module_& m);
 void bind_solvers(py::module_& m);
 void bind_surface(py::module_& m);
 void bind_io(py::module_& m);
+void bind_mesh_checks(py::module_& m);
 
 }  // namespace sorpia_py

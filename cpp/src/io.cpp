@@ -18,11 +18,11 @@
 
 namespace sorpia {
 
-namespace detail::io {
-
 namespace {
 std::string errno_text(int err) { return std::strerror(err); }
 }  // namespace
+
+namespace detail::io {
 
 std::string printable_path(const std::string& path) {
   static const char hex[] = "0123456789abcdef";
@@ -142,8 +142,11 @@ FileData load_file(const std::string& path, MeshFormat format) {
   return f;
 }
 
-void write_atomic(const std::string& path, const std::string& data) {
-  const FileData f{path, {}};
+}  // namespace detail::io
+
+void write_file_atomic(const std::string& path, const std::string& data) {
+  using detail::io::fail;
+  const detail::io::FileData f{path, {}};
   struct stat st {};
   const bool exists = ::stat(path.c_str(), &st) == 0;
   if (exists && S_ISDIR(st.st_mode)) fail(f, "is a directory; give a file name");
@@ -189,6 +192,8 @@ void write_atomic(const std::string& path, const std::string& data) {
     fail(f, "cannot replace the file: " + errno_text(err));
   }
 }
+
+namespace detail::io {
 
 namespace {
 
@@ -373,7 +378,7 @@ void write_mesh(const std::string& path, const double* vertices, std::size_t n_v
     case MeshFormat::Ply: data = detail::io::format_ply(vertices, n_vertices, faces, n_faces, binary); break;
     case MeshFormat::Stl: data = detail::io::format_stl(vertices, n_vertices, faces, n_faces, binary); break;
   }
-  detail::io::write_atomic(path, data);
+  write_file_atomic(path, data);
 }
 
 }  // namespace sorpia

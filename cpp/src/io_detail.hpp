@@ -34,10 +34,6 @@ std::string printable_path(const std::string& path);
 // fails at once instead of being read whole).
 FileData load_file(const std::string& path, MeshFormat format);
 
-// Writes `data` to `path` through a temporary file in the same folder and a
-// rename; on failure the temporary file is removed and `path` is untouched.
-void write_atomic(const std::string& path, const std::string& data);
-
 // Where in a file something is: "line 12", "vertex 7", ...
 struct Where {
   const char* kind;

@@ -64,8 +64,8 @@ def as_vertices(vertices, name: str = "vertices") -> np.ndarray:
     if arr.shape[0] == 0:
         raise MeshError(f"{name} is empty: a mesh needs at least one triangle")
     arr = np.ascontiguousarray(arr, dtype=np.float64)
-    finite = np.isfinite(arr).all(axis=1)
-    if not finite.all():
+    if not np.isfinite(arr).all():  # the rows only when one is bad: a per-row reduction is much slower
+        finite = np.isfinite(arr).all(axis=1)
         i = int(np.flatnonzero(~finite)[0])
         raise MeshError(f"{name}[{i}] = {arr[i].tolist()} is not finite (NaN or inf); "
                         f"{int((~finite).sum())} of {len(arr)} vertices are not")
@@ -131,8 +131,8 @@ def as_faces(faces, n_vertices: int, name: str = "faces", count_name: str = "n_v
                         f"triangles; {TRIANGULATE_HINT}")
     if arr.shape[0] == 0:
         raise MeshError(f"{name} is empty: a mesh needs at least one triangle")
-    bad = (arr < 0) | (arr >= n_vertices)
-    if bad.any():
+    if arr.min() < 0 or arr.max() >= n_vertices:  # two reductions; the mask below only to name the face
+        bad = (arr < 0) | (arr >= n_vertices)
         f = int(np.flatnonzero(bad.any(axis=1))[0])
         k = int(np.flatnonzero(bad[f])[0])
         message = f"{name}[{f}] = {arr[f].tolist()} has vertex index {arr[f, k]} out of range [0, {n_vertices})"

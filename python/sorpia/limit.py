@@ -5,7 +5,6 @@ from __future__ import annotations
 import warnings
 
 import numpy as np
-import scipy.sparse
 
 from . import _core
 from ._validate import DEFAULT_BOUNDARY, as_boundary, as_faces, as_vertex_count, as_vertices
@@ -71,6 +70,8 @@ def limit_matrix(faces, n_vertices: int, boundary: str = DEFAULT_BOUNDARY) -> sc
     ``limit_matrix(F, len(V)) @ V == limit_points(V, F)``. Unreferenced vertices
     get an identity row. See `limit_points` for `boundary`.
     """
+    import scipy.sparse  # here, not at import: sorpia's commands need no scipy
+
     topo = topology(faces, n_vertices)  # validates n_vertices (as_vertex_count) and the faces
     n = topo.n_vertices
     data, indices, indptr = _core.limit_matrix(topo, as_boundary(boundary))

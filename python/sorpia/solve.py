@@ -66,7 +66,6 @@ import warnings
 from typing import Callable, Optional
 
 import numpy as np
-import scipy.sparse
 
 from . import _core
 from ._validate import DEFAULT_BOUNDARY, as_boundary, as_vertices
@@ -185,6 +184,8 @@ class Interpolator:
 
     def limit_matrix(self) -> scipy.sparse.csr_matrix:
         """B as a scipy CSR matrix: the operator the solvers use, as `sorpia.limit_matrix` gives it."""
+        import scipy.sparse  # here, not at import: sorpia's commands need no scipy
+
         n = self.n_vertices
         return scipy.sparse.csr_matrix(self._operator.limit_matrix(), shape=(n, n))
 

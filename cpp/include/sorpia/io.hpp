@@ -61,4 +61,11 @@ TriMesh read_mesh(const std::string& path, bool triangulate = false, std::size_t
 void write_mesh(const std::string& path, const double* vertices, std::size_t n_vertices, const std::int32_t* faces,
                 std::size_t n_faces, bool binary = false);
 
+/// Write `data` to `path` atomically, as write_mesh writes its bytes: to a
+/// temporary file in the same folder (the mode of the file it replaces, or the
+/// umask's), fsync, then renamed over `path`. A failure removes the temporary
+/// file and leaves `path` as it was. Every file sorpia writes goes through it.
+/// @throws FileError naming the path when the file cannot be written
+void write_file_atomic(const std::string& path, const std::string& data);
+
 }  // namespace sorpia

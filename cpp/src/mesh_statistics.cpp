@@ -1,0 +1,264 @@
+// Mesh statistics: two ways to the edges (a Topology's one-ring, or a sort of
+// a raw face list's half-edges) into one EdgeCounts, counted by one finish().
+#include "sorpia/mesh_statistics.hpp"
+
+#include <algorithm>
+#include <numeric>
+#include <utility>
+
+namespace sorpia {
+
+namespace {
+
+// Union-find over vertex indices (path halving).
+class DisjointSets {
+ public:
+  explicit DisjointSets(std::size_t n) : parent_(n) { std::iota(parent_.begin(), parent_.end(), 0); }
+  std::int32_t find(std::int32_t v) {
+    while (parent_[v] != v) v = parent_[v] = parent_[parent_[v]];
+    return v;
+  }
+  void unite(std::int32_t a, std::int32_t b) {
+    a = find(a);
+    b = find(b);
+    if (a != b) parent_[std::max(a, b)] = std::min(a, b);
+  }
+
+ private:
+  std::vector<std::int32_t> parent_;
+};
+
+// What both sources supply, per vertex and in all.
+struct EdgeCounts {
+  explicit EdgeCounts(std::size_t n) : valence(n), corners(n), boundary(n), component(n, -1) {}
+  std::vector<std::int32_t> valence;    // edges at the vertex
+  std::vector<std::int32_t> corners;    // faces at the vertex
+  std::vector<std::uint8_t> boundary;   // on an edge of one face
+  std::vector<std::int32_t> component;  // a label shared by the vertices joined by edges (< n)
+  std::vector<std::int32_t> loop_vertex;  // one vertex of each boundary loop
+  std::size_t n_edges = 0, n_boundary_edges = 0;
+};
+
+MeshStatistics finish(EdgeCounts& c, std::size_t n_faces, bool oriented_manifold) {
+  const std::size_t n = c.valence.size();
+  MeshStatistics s;
+  s.n_vertices = n;
+  s.n_faces = n_faces;
+  s.n_edges = c.n_edges;
+  s.n_boundary_edges = c.n_boundary_edges;
+  s.n_boundary_loops = c.loop_vertex.size();
+  // Per component: referenced vertices, edge ends, face corners, boundary loops.
+  struct Piece {
+    std::int64_t vertices = 0, edge_ends = 0, corners = 0, loops = 0;
+  };
+  std::vector<std::int32_t> piece_of(n, -1);  // indexed by a component's label
+  std::vector<Piece> pieces;
+  std::size_t n_referenced = 0;
+  int vmin = 0, vmax = 0;
+  s.extraordinary.reserve(n);  // address space only: pages are touched as entries are added
+  for (std::size_t v = 0; v < n; ++v) {
+    if (c.corners[v] == 0) continue;  // unreferenced
+    const int valence = c.valence[v];
+    vmin = n_referenced ? std::min(vmin, valence) : valence;
+    vmax = n_referenced ? std::max(vmax, valence) : valence;
+    ++n_referenced;
+    const std::int32_t root = c.component[v];
+    if (piece_of[root] < 0) {
+      piece_of[root] = static_cast<std::int32_t>(pieces.size());
+      pieces.emplace_back();
+    }
+    Piece& p = pieces[piece_of[root]];
+    ++p.vertices;
+    p.edge_ends += valence;
+    p.corners += c.corners[v];
+    auto& histogram = c.boundary[v] ? s.boundary_valences : s.interior_valences;
+    if (histogram.size() <= static_cast<std::size_t>(valence)) histogram.resize(valence + 1);
+    ++histogram[valence];
+    const int regular = c.boundary[v] ? regular_boundary_valence : regular_interior_valence;
+    if (valence != regular)
+      s.extraordinary.push_back({static_cast<std::int32_t>(v), valence, c.boundary[v] != 0});
+  }
+  for (const std::int32_t v : c.loop_vertex) ++pieces[piece_of[c.component[v]]].loops;
+  s.n_components = pieces.size();
+  s.n_unreferenced = n - n_referenced;
+  s.valence_min = vmin;
+  s.valence_max = vmax;
+  s.euler_characteristic = static_cast<std::int64_t>(n_referenced) - static_cast<std::int64_t>(c.n_edges) +
+                           static_cast<std::int64_t>(n_faces);
+  if (oriented_manifold) {
+    // chi_c = 2 - 2 g_c - b_c on each connected orientable surface.
+    std::int64_t genus = 0;
+    for (const Piece& p : pieces) {
+      const std::int64_t chi = p.vertices - p.edge_ends / 2 + p.corners / 3;
+      const std::int64_t twice = 2 - chi - p.loops;
+      genus += twice >= 0 ? twice / 2 : -((1 - twice) / 2);  // floor division
+    }
+    s.genus = genus;
+  }
+  return s;
+}
+
+// ---- the raw face list -------------------------------------------------------
+// Half-edge h (0 <= h < 3 n_faces) runs from faces[h] to faces[next_corner(h)].
+inline std::size_t next_corner(std::size_t h) { return h - h % 3 + (h % 3 + 1) % 3; }
+
+constexpr std::int32_t kBoundary = -1;  // mate of a half-edge whose edge has one face
+constexpr std::int32_t kNoFan = -2;     // an edge of three or more faces, or a half-edge of a degenerate face
+
+// A face with a repeated vertex has no edges of its own: its half-edges are left out.
+inline bool degenerate_face(const std::int32_t* f) { return f[0] == f[1] || f[1] == f[2] || f[2] == f[0]; }
+
+// The half-edges of the proper faces sorted by undirected edge (min end, max
+// end, id): a counting sort by the min end, then each (small) bucket by the max end.
+std::vector<std::int32_t> sorted_half_edges(const std::int32_t* faces, std::size_t n_half, std::size_t n) {
+  auto lo = [&](std::size_t h) { return std::min(faces[h], faces[next_corner(h)]); };
+  auto hi = [&](std::size_t h) { return std::max(faces[h], faces[next_corner(h)]); };
+  auto proper = [&](std::size_t h) { return !degenerate_face(faces + (h - h % 3)); };
+  std::vector<std::int32_t> start(n + 1, 0);
+  for (std::size_t h = 0; h < n_half; ++h)
+    if (proper(h)) ++start[lo(h) + 1];
+  std::partial_sum(start.begin(), start.end(), start.begin());
+  std::vector<std::int32_t> order(start[n]);
+  std::vector<std::int32_t> fill(start.begin(), start.end() - 1);
+  for (std::size_t h = 0; h < n_half; ++h)
+    if (proper(h)) order[fill[lo(h)]++] = static_cast<std::int32_t>(h);
+  for (std::size_t v = 0; v < n; ++v)
+    std::sort(order.begin() + start[v], order.begin() + start[v + 1],
+              [&](std::int32_t a, std::int32_t b) { return std::make_pair(hi(a), a) < std::make_pair(hi(b), b); });
+  return order;
+}
+
+// The boundary half-edge that follows boundary half-edge h round its loop:
+// from h's end vertex v, across the faces of h's fan at v (each step from the
+// half-edge leaving v in a face to its mate's face), until a half-edge leaving
+// v is on the boundary. -1 when the fan cannot be followed.
+std::int32_t next_on_boundary(const std::int32_t* faces, const std::vector<std::int32_t>& mate, std::int32_t h,
+                              std::int32_t fan_size) {
+  std::size_t g = next_corner(h);  // leaves v in h's face
+  for (std::int32_t step = 0; step <= fan_size; ++step) {
+    if (mate[g] == kBoundary) return static_cast<std::int32_t>(g);
+    if (mate[g] == kNoFan) return -1;
+    const std::size_t m = static_cast<std::size_t>(mate[g]);
+    if (faces[m] != faces[next_corner(g)]) return -1;  // both faces run the edge the same way
+    g = next_corner(m);
+  }
+  return -1;
+}
+
+// Boundary loops of a raw face list into c.loop_vertex: the cycles of
+// next_on_boundary where it is a one-to-one map of the boundary half-edges,
+// else the connected pieces of the boundary edges.
+void count_loops(const std::int32_t* faces, std::size_t n_half, const std::vector<std::int32_t>& mate,
+                 EdgeCounts& c) {
+  std::vector<std::int32_t> next(n_half, -1);
+  std::vector<std::uint8_t> reached(n_half, 0);
+  bool followed = true;
+  for (std::size_t h = 0; h < n_half && followed; ++h) {
+    if (mate[h] != kBoundary) continue;
+    const std::int32_t g = next_on_boundary(faces, mate, static_cast<std::int32_t>(h),
+                                            c.corners[faces[next_corner(h)]]);
+    followed = g >= 0 && !reached[g];
+    if (followed) next[h] = g, reached[g] = 1;
+  }
+  if (followed) {
+    std::fill(reached.begin(), reached.end(), 0);
+    for (std::size_t h = 0; h < n_half; ++h) {
+      if (mate[h] != kBoundary || reached[h]) continue;
+      c.loop_vertex.push_back(faces[h]);
+      for (std::int32_t g = static_cast<std::int32_t>(h); !reached[g]; g = next[g]) reached[g] = 1;
+    }
+    return;
+  }
+  const std::size_t n = c.valence.size();
+  DisjointSets pieces(n);
+  for (std::size_t h = 0; h < n_half; ++h)
+    if (mate[h] == kBoundary) pieces.unite(faces[h], faces[next_corner(h)]);
+  for (std::size_t v = 0; v < n; ++v)
+    if (c.boundary[v] && pieces.find(static_cast<std::int32_t>(v)) == static_cast<std::int32_t>(v))
+      c.loop_vertex.push_back(static_cast<std::int32_t>(v));
+}
+
+}  // namespace
+
+MeshStatistics mesh_statistics(const Topology& topology) {
+  const std::size_t n = topology.n_vertices();
+  const auto& offsets = topology.ring_offsets();
+  const auto& ring = topology.ring_neighbors();
+  EdgeCounts c(n);
+  c.n_edges = topology.n_edges();
+  c.n_boundary_edges = topology.n_boundary_edges();
+  for (std::size_t v = 0; v < n; ++v) {
+    c.valence[v] = topology.valence(v);
+    c.corners[v] = topology.face_count(v);
+    c.boundary[v] = topology.is_boundary(v);
+  }
+  // Components: breadth-first over the ring, labelled by their first vertex.
+  std::vector<std::int32_t> queue(n);
+  for (std::size_t v0 = 0; v0 < n; ++v0) {
+    if (c.component[v0] >= 0) continue;
+    const auto label = static_cast<std::int32_t>(v0);
+    std::size_t head = 0, tail = 0;
+    queue[tail++] = label;
+    c.component[v0] = label;
+    while (head < tail) {
+      const std::int32_t v = queue[head++];
+      for (std::int32_t q = offsets[v]; q < offsets[v + 1]; ++q)
+        if (c.component[ring[q]] < 0) c.component[ring[q]] = label, queue[tail++] = ring[q];
+    }
+  }
+  // A validated mesh has two boundary edges at each boundary vertex, to the
+  // first and the last of its ring: every boundary piece is one loop.
+  std::vector<std::uint8_t> walked(n, 0);
+  for (std::size_t v0 = 0; v0 < n; ++v0) {
+    if (!c.boundary[v0] || walked[v0]) continue;
+    c.loop_vertex.push_back(static_cast<std::int32_t>(v0));
+    std::int32_t prev = -1, v = static_cast<std::int32_t>(v0);
+    while (!walked[v]) {
+      walked[v] = 1;
+      const std::int32_t first = ring[offsets[v]], last = ring[offsets[v + 1] - 1];
+      const std::int32_t next = first != prev ? first : last;
+      prev = v;
+      v = next;
+    }
+  }
+  return finish(c, topology.n_faces(), true);
+}
+
+std::optional<MeshStatistics> face_list_statistics(const std::int32_t* faces, std::size_t n_faces,
+                                                   std::size_t n_vertices) {
+  const std::size_t n_half = 3 * n_faces;
+  if (n_faces == 0) return std::nullopt;
+  for (std::size_t h = 0; h < n_half; ++h)
+    if (faces[h] < 0 || static_cast<std::size_t>(faces[h]) >= n_vertices) return std::nullopt;
+  EdgeCounts c(n_vertices);
+  for (std::size_t h = 0; h < n_half; ++h) ++c.corners[faces[h]];
+  const std::vector<std::int32_t> order = sorted_half_edges(faces, n_half, n_vertices);
+  std::vector<std::int32_t> mate(n_half, kNoFan);
+  DisjointSets components(n_vertices);
+  auto ends = [&](std::int32_t h) {
+    const std::int32_t a = faces[h], b = faces[next_corner(h)];
+    return std::make_pair(std::min(a, b), std::max(a, b));
+  };
+  for (std::size_t i = 0, j; i < order.size(); i = j) {
+    const auto [a, b] = ends(order[i]);
+    for (j = i + 1; j < order.size() && ends(order[j]) == std::make_pair(a, b); ++j) {
+    }
+    ++c.n_edges;
+    ++c.valence[a];
+    ++c.valence[b];
+    components.unite(a, b);
+    if (j - i == 1) {
+      ++c.n_boundary_edges;
+      c.boundary[a] = c.boundary[b] = 1;
+      mate[order[i]] = kBoundary;
+    } else if (j - i == 2) {
+      mate[order[i]] = order[i + 1];
+      mate[order[i + 1]] = order[i];
+    }
+  }
+  for (std::size_t v = 0; v < n_vertices; ++v) c.component[v] = components.find(static_cast<std::int32_t>(v));
+  count_loops(faces, n_half, mate, c);
+  return finish(c, n_faces, false);
+}
+
+}  // namespace sorpia

@@ -1,0 +1,264 @@
+"""What the subcommands share: exit codes, the user error, input paths and
+files, solver options, the timed solve and the printed warnings."""
+
+from __future__ import annotations
+
+import os
+import sys
+import time
+import warnings
+from pathlib import Path
+
+from ..solve import METHODS, THREADED_METHODS, ConvergenceWarning  # ConvergenceWarning: the summary says it
+from . import progress as _progress
+
+EXIT_OK, EXIT_NOT_CONVERGED, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
+
+# The paper's names (Table 1) for the methods it compares, and ours for the
+# rest; compare's rows and the help list the methods in this order.
+METHOD_LABELS = {"pia": "PIA", "wpia": "W-PIA", "hss": "HSS-PIA", "whss": "WHSS-PIA", "gs": "Gauss-Seidel",
+                 "sor": "SOR-PIA", "cg": "CG"}
+DISPLAY_ORDER = tuple(sorted(METHODS, key=lambda m: list(METHOD_LABELS).index(m) if m in METHOD_LABELS
+                             else len(METHOD_LABELS)))
+MESH_SUFFIXES = (".obj", ".off", ".ply", ".stl")
+
+
+def method_label(method: str) -> str:
+    return METHOD_LABELS.get(method, method)
+
+
+class UserError(Exception):
+    """Bad input from the command line: reported as one line, exit code 2."""
+
+
+class PolygonError(UserError):
+    """The input file has faces of more than 3 vertices and --triangulate was not given."""
+
+
+# --------------------------------------------------------------------------- paths and files
+
+def _same_file(a, b) -> bool:
+    a, b = Path(a), Path(b)
+    if a.resolve() == b.resolve():
+        return True
+    try:
+        return a.exists() and b.exists() and os.path.samefile(a, b)
+    except OSError:
+        return False
+
+
+def check_paths(inputs, outputs: dict, force: bool = False) -> None:
+    """Refuse an output that is an input (unless `force`), the same file given
+    for two outputs, and an output whose folder does not exist; before any
+    work is done, so a long fit never ends in 'cannot write'."""
+    named = [(opt, p) for opt, p in outputs.items() if p is not None]
+    for opt, p in named:
+        for src in inputs:
+            if _same_file(p, src) and not force:
+                raise UserError(f"{opt} {p} is the input file: refusing to overwrite it (pass --force to do so)")
+        folder = Path(p).parent
+        if not folder.is_dir():
+            raise UserError(f"{opt} {p}: folder {folder} does not exist")
+        if Path(p).is_dir():
+            raise UserError(f"{opt} {p} is a folder, not a file")
+    for i, (opt_a, a) in enumerate(named):
+        for opt_b, b in named[i + 1:]:
+            if _same_file(a, b):
+                raise UserError(f"{opt_a} and {opt_b} name the same file {a}")
+
+
+def check_mesh_suffix(opt: str, path) -> None:
+    if path is not None and Path(path).suffix.lower() not in MESH_SUFFIXES:
+        raise UserError(f"{opt} {path}: unknown mesh format {Path(path).suffix or '(no suffix)'!r}; "
+                        f"use one of {', '.join(MESH_SUFFIXES)}")
+
+
+def read_input(path, triangulate: bool = False):
+    """Read the input mesh; returns (vertices, faces, seconds, polygons split).
+    A polygon in the file without --triangulate is a UserError that says to
+    pass it."""
+    from .. import MeshFileError
+    from ..io import read_mesh_counting
+
+    if not Path(path).exists():
+        raise UserError(f"{path}: no such file")
+    if Path(path).is_dir():
+        raise UserError(f"{path} is a folder, not a mesh file")
+    t0 = time.perf_counter()
+    try:
+        vertices, faces, polygons = read_mesh_counting(path, triangulate=triangulate)
+    except MeshFileError as exc:
+        if triangulate or not _is_polygon_error(exc):
+            raise
+        raise PolygonError(f"{_polygon_message(exc)}; pass --triangulate to split each polygon into a fan of "
+                           "triangles from its first vertex") from None
+    return vertices, faces, time.perf_counter() - t0, polygons
+
+
+def _is_polygon_error(exc) -> bool:
+    # sorpia.read_mesh refuses a face of more than 3 vertices and names the
+    # Python remedy (triangulate=True); the command line has --triangulate.
+    return "triangulate" in str(exc)
+
+
+def _polygon_message(exc) -> str:
+    return str(exc).split(": sorpia works on triangles")[0].split("; read the file with")[0]
+
+
+def require_plotting() -> None:
+    from ..plotting import require_matplotlib
+
+    try:
+        require_matplotlib()
+    except ImportError as exc:
+        raise UserError(str(exc)) from None
+
+
+# --------------------------------------------------------------------------- solver options
+
+def check_solver_options(given: str, **options) -> None:
+    """The library's own check of the solver options (sorpia.solve.check_options),
+    before the file is read; its message follows the options as given
+    on the command line (`given`, e.g. "--method pia --threads 2")."""
+    from .. import ParameterError
+    from ..solve import check_options
+
+    try:
+        check_options(**options)
+    except ParameterError as exc:
+        raise UserError(f"{given}: {exc}") from None
+
+
+def threads_for(method: str, threads: int) -> int:
+    """--threads applies to the methods that sweep on threads (compare runs the others on one)."""
+    return threads if method in THREADED_METHODS else 1
+
+
+# --------------------------------------------------------------------------- timed solves
+
+def result_fields(res) -> dict:
+    """Every field of an InterpolationResult except the control vertices
+    (method, omega, iterations, converged, errors, seconds and the per-phase
+    timings, spectral estimates...), in the order of InterpolationResult._fields."""
+    return {name: getattr(res, name) for name in res._fields if name != "control_vertices"}
+
+
+def cpu_clock(threads: int) -> str:
+    """The clock of the CPU seconds reported for a solve on `threads` threads (Clock)."""
+    return "thread" if threads == 1 else "process"
+
+
+class Clock:
+    """Wall (perf_counter) and CPU seconds of a block.
+
+    The CPU clock depends on who does the work. threads == 1: every solve and
+    build runs on the calling thread, so time.thread_time() (that thread
+    only): time.process_time() would also count threads that merely spin, as
+    OpenMP workers busy-wait for a while after a parallel region ends.
+    threads > 1: the sweep's workers do part of the work, so
+    time.process_time() (every thread, their busy-waiting between sweeps
+    included: CPU the run occupies). cpu_clock(threads) names the one used."""
+
+    def __init__(self, threads: int = 1):
+        self._cpu = time.thread_time if cpu_clock(threads) == "thread" else time.process_time
+
+    def __enter__(self):
+        self.cpu0, self.t0 = self._cpu(), time.perf_counter()
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.wall = time.perf_counter() - self.t0
+        self.cpu = self._cpu() - self.cpu0
+
+
+def timed(call, *, threads: int, source):
+    """call() with its wall and CPU seconds (Clock(threads)); the warnings it
+    raised are printed (report_warnings). Returns (value, clock). A mesh the
+    library refuses is a UserError naming the file `source`."""
+    from .. import MeshError
+
+    try:
+        with warnings.catch_warnings(record=True) as caught, Clock(threads) as clock:
+            warnings.simplefilter("always")
+            value = call()
+    except MeshError as exc:
+        raise UserError(f"{source}: Loop PIA cannot run on this mesh: {exc}") from None
+    report_warnings(caught)
+    return value, clock
+
+
+def build_interpolator(vertices, faces, *, boundary, progress, source):
+    """sorpia.Interpolator for the mesh: the topology and limit operator B,
+    built once for every solve, check and statistic of a command; prints its
+    warnings; returns (interpolator, {"wall": s, "cpu": s})."""
+    from .. import Interpolator
+
+    progress.status("setting up (topology, limit operator)")
+    interp, clock = timed(lambda: Interpolator(faces, len(vertices), boundary=boundary), threads=1, source=source)
+    return interp, {"wall": clock.wall, "cpu": clock.cpu}
+
+
+def run_solver(interp, vertices, *, phase, method, omega, tol, max_iter, threads, progress, source):
+    """interp.solve(vertices, **options) with a progress line labelled by the
+    method, its phase shown as `phase`; returns (result, wall seconds, CPU seconds)."""
+    progress.restart(method_label(method))
+    kwargs = dict(method=method, tol=tol, max_iter=max_iter, callback=progress, threads=threads)
+    if omega is not None:
+        kwargs["omega"] = omega
+    progress.status(f"{progress.label}: {phase}")
+    res, clock = timed(lambda: interp.solve(vertices, **kwargs), threads=threads, source=source)
+    return res, clock.wall, clock.cpu
+
+
+def fit_once(vertices, faces, *, boundary, progress, source, **options):
+    """One solve on a fresh Interpolator (fit, render), reported as
+    sorpia.interpolate reports it: `seconds` and `timings` include the build.
+    Returns (interpolator, result, wall seconds, CPU seconds)."""
+    interp, build = build_interpolator(vertices, faces, boundary=boundary, progress=progress, source=source)
+    res, wall, cpu = run_solver(interp, vertices, phase="solving", progress=progress, source=source, **options)
+    res._record_build(res.seconds + build["wall"], interp.build_timings["topology"],
+                      interp.build_timings["operator"])
+    return interp, res, wall + build["wall"], cpu + build["cpu"]
+
+
+# --------------------------------------------------------------------------- printing
+
+_warned: set = set()  # texts already printed in this process
+
+
+def warn_once(text: str) -> None:
+    """Print 'sorpia: warning: TEXT' on stderr unless it was printed already
+    (several steps of one command meet the same unreferenced vertices)."""
+    if text not in _warned:
+        _warned.add(text)
+        _progress.erase_live_line()  # a warning on a line of its own
+        print(f"sorpia: warning: {text}", file=sys.stderr)
+
+
+def report_warnings(caught) -> None:
+    """Print the warnings of a solve; the solver's own 'did not converge' is
+    left out: the summary says it, and the exit code."""
+    for w in caught:
+        if not issubclass(w.category, ConvergenceWarning):
+            warn_once(str(w.message))
+
+
+def fmt_seconds(s: float) -> str:
+    return f"{s:.2g}" if s < 0.1 else f"{s:.2f}"
+
+
+def omega_text(omega) -> str:
+    """A result's omega (None, or a finite float: solve maps NaN to None) as printed."""
+    return "-" if omega is None else f"{omega:.4f}"
+
+
+def mesh_line(stats: dict) -> str:
+    parts = [f"{stats['vertices']} vertices", f"{stats['faces']} faces"]
+    if "boundary_loops" in stats:
+        loops = stats["boundary_loops"]
+        parts.append("closed" if loops == 0 else f"{loops} boundary loop{'s' if loops > 1 else ''}")
+        if stats.get("genus") is not None:
+            parts.append(f"genus {stats['genus']}")
+        parts.append(f"{stats['extraordinary_vertices']} extraordinary vertices "
+                     f"(valence {stats['valence_min']} to {stats['valence_max']})")
+    return ", ".join(parts)

@@ -1,0 +1,164 @@
+"""``sorpia fit``: a control mesh whose Loop limit surface interpolates a mesh file."""
+
+from __future__ import annotations
+
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from .. import __version__
+from .._validate import DEFAULT_BOUNDARY
+from .common import (EXIT_NOT_CONVERGED, EXIT_OK, UserError, check_mesh_suffix, check_paths, check_solver_options,
+                     cpu_clock, fit_once, fmt_seconds, method_label, mesh_line, read_input, result_fields)
+from .output import write_json
+from .progress import Progress
+
+
+def run_fit(input_path, output, *, method="sor", omega="auto", tol=1e-10, max_iter=1000,
+            boundary=DEFAULT_BOUNDARY, surface=None, level=3, report=None, quiet=False, force=False,
+            triangulate=False, binary=False, threads=1, out=None) -> tuple[int, dict]:
+    """`sorpia fit`: returns (exit code, report dict)."""
+    from .. import _core, write_mesh
+    from ..meshinfo import topology_info
+
+    out = out if out is not None else sys.stdout
+    check_mesh_suffix("-o", output)
+    check_mesh_suffix("--surface", surface)
+    check_paths([input_path], {"-o": output, "--surface": surface, "--report": report}, force)
+    given = f"--method {method}" + (f" --omega {omega}" if omega != "auto" else "") + (
+        f" --threads {threads}" if threads != 1 else "")
+    check_solver_options(given, method=method, omega=omega, tol=tol, max_iter=max_iter, threads=threads)
+    if binary and not any(Path(p).suffix.lower() in (".ply", ".stl") for p in (output, surface) if p):
+        raise UserError("--binary applies to .ply and .stl outputs only (OBJ and OFF are text formats)")
+
+    timings: dict[str, float] = {}
+    with Progress(enabled=not quiet) as progress:
+        progress.status(f"reading {input_path}")
+        V0, F, timings["read"], _ = read_input(input_path, triangulate)
+        if surface is not None:
+            _check_surface_fits(len(V0), len(F), level)
+        timings["statistics"] = 0.0  # reported before the fit, measured after the topology is built
+        interp, res, timings["fit"], cpu = fit_once(
+            V0, F, method=method, omega=omega if method == "sor" else None, tol=tol, max_iter=max_iter,
+            boundary=boundary, threads=threads, progress=progress, source=input_path)
+        progress.status("mesh statistics")
+        t0 = time.perf_counter()
+        stats = topology_info(V0, interp.topology)
+        timings["statistics"] = time.perf_counter() - t0
+        ctrl = np.asarray(res.control_vertices)
+
+        progress.status(f"writing {output}")
+        t0 = time.perf_counter()
+        write_mesh(output, ctrl, F, binary=_binary_for(output, binary))
+        timings["write"] = time.perf_counter() - t0
+        surface_stats = None
+        if surface is not None:
+            from .. import limit_surface
+
+            progress.status(f"limit surface, level {level}")
+            t0 = time.perf_counter()
+            Vs, Fs = limit_surface(ctrl, F, level=level, boundary=boundary)
+            write_mesh(surface, Vs, Fs, binary=_binary_for(surface, binary))
+            timings["surface"] = time.perf_counter() - t0
+            surface_stats = {"path": str(surface), "level": level, "vertices": len(Vs), "faces": len(Fs)}
+        # A check of what was written, independent of the solver: the limit
+        # positions of the control mesh from OpenSubdiv's masks over the
+        # topology's one-ring, against the given vertices.
+        progress.status("checking B V = V0")
+        t0 = time.perf_counter()
+        max_residual, _, _ = _core.limit_residual(interp.topology, ctrl, V0, boundary)
+        timings["check"] = time.perf_counter() - t0
+
+    fields = result_fields(res)
+    # The solver's own phases (topology, operator, estimate, solve), inside "fit".
+    fit_phases = {f"fit.{k}": float(v) for k, v in res.timings.items()}
+    errors = np.asarray(res.errors, dtype=float)
+    diag = stats.get("diagonal") or 1.0
+    data = {
+        "sorpia_version": __version__,
+        "command": "fit",
+        "input": str(input_path),
+        "triangulated": triangulate,
+        "output": str(output),
+        "surface": surface_stats,
+        "report": None if report is None else str(report),
+        "mesh": stats,
+        "method": method,
+        "omega_rule": omega if method == "sor" else None,
+        "omega": res.omega,
+        "tol": tol,
+        "max_iter": max_iter,
+        "boundary": boundary,
+        "threads": threads,
+        "iterations": int(res.iterations),
+        "converged": bool(res.converged),
+        "final_error": float(errors[-1]),
+        "errors": errors,
+        "max_residual": float(max_residual),
+        "max_residual_relative": float(max_residual / diag),
+        "cpu_seconds": cpu,
+        "cpu_clock": cpu_clock(threads),
+        "timings": {**timings, **fit_phases},
+        "result": {k: v for k, v in fields.items() if k not in ("errors", "timings")},
+    }
+    if report is not None:
+        write_json(report, data)
+    if not quiet:
+        print(fit_summary(data), file=out)
+    return (EXIT_OK if res.converged else EXIT_NOT_CONVERGED), data
+
+
+def _check_surface_fits(n_vertices: int, n_faces: int, level: int) -> None:
+    """Refuse --level before the solve when the tessellation would not fit in
+    memory (limit_surface would refuse it only after the solve)."""
+    from .. import _core
+
+    need, avail = _core.tessellation_bytes(n_vertices, n_faces, level), _core.available_memory_bytes()
+    if avail and need > avail:  # 0: not known here; limit_surface decides
+        raise UserError(f"--surface at --level {level} needs about {need / 2**30:.1f} GiB "
+                        f"({n_faces * 4 ** level} triangles) but {avail / 2**30:.1f} GiB of memory is available: "
+                        "use a lower --level")
+
+
+def _binary_for(path, binary: bool) -> bool:
+    """--binary for the formats that have a binary form (PLY, STL)."""
+    return binary and Path(path).suffix.lower() in (".ply", ".stl")
+
+
+def fit_summary(d: dict) -> str:
+    label = method_label(d["method"])
+    omega = d["omega"]
+    if d["method"] == "sor" and omega is not None:
+        label += f", omega {omega:.4f} ({d['omega_rule']})"
+    elif d["method"] == "gs":
+        label += ", omega 1"
+    if d["threads"] > 1:
+        label += f", {d['threads']} threads"
+    state = (f"converged in {d['iterations']} iterations: E_k/E_0 = {d['final_error']:.3g} " + (
+             f"< tol {d['tol']:g}" if d["final_error"] < d["tol"] else
+             f"(tol {d['tol']:g} is below what float64 reaches: E_k stopped at rounding level)")
+             if d["converged"] else
+             f"NOT converged: stopped after {d['iterations']} iterations at E_k/E_0 = {d['final_error']:.3g} "
+             f"(tol {d['tol']:g}); outputs written anyway, exit code 1")
+    t = d["timings"]
+    inner = ", ".join(f"{k[4:]} {fmt_seconds(v)}" for k, v in t.items() if k.startswith("fit."))
+    phases = ", ".join(f"{k} {fmt_seconds(v)}" + (f" ({inner})" if k == "fit" and inner else "")
+                       for k, v in t.items() if not k.startswith("fit."))
+    written = [d["output"]] + ([d["surface"]["path"]] if d["surface"] else []) + (
+        [d["report"]] if d["report"] else [])
+    lines = [
+        f"sorpia fit: {d['input']} -> {d['output']}",
+        f"  mesh        {mesh_line(d['mesh'])}",
+        f"  method      {label}",
+        f"  result      {state}",
+        f"  check       max |B V - V0| = {d['max_residual']:.3g} "
+        f"({d['max_residual_relative']:.3g} of the bounding-box diagonal)",
+        f"  seconds     {phases}",
+        f"  wrote       {', '.join(written)}",
+    ]
+    if d["surface"]:
+        s = d["surface"]
+        lines.insert(-1, f"  surface     level {s['level']}: {s['vertices']} vertices, {s['faces']} faces")
+    return "\n".join(lines)

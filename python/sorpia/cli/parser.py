@@ -1,0 +1,238 @@
+"""The command line of ``sorpia``: its subcommands, their options and help."""
+
+from __future__ import annotations
+
+import argparse
+
+from .. import __version__
+from .._validate import BOUNDARY_RULES, DEFAULT_BOUNDARY
+from ..plotting import FACE_BUDGET  # plotting imports matplotlib only when drawing
+from .common import DISPLAY_ORDER
+from .compare import run_compare
+from .demo import run_demo
+from .fit import run_fit
+from .info import run_info
+from .render import run_render
+
+
+def _omega_arg(text: str):
+    """--omega: 'auto', 'young' or a number (its range is checked by interpolate)."""
+    low = text.strip().lower()
+    if low in ("auto", "young"):
+        return low
+    try:
+        return float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected auto, young or a number, got {text!r}") from None
+
+
+def _methods_arg(text: str):
+    names = [m.strip().lower() for m in text.split(",") if m.strip()]
+    bad = [m for m in names if m not in DISPLAY_ORDER]
+    if bad or not names:
+        raise argparse.ArgumentTypeError(f"unknown method {', '.join(bad) or '(none)'}: use a comma-separated "
+                                         f"list of {','.join(DISPLAY_ORDER)}")
+    return list(dict.fromkeys(names))
+
+
+def _float_arg(text: str) -> float:
+    try:
+        return float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+
+
+def _int_arg(text: str) -> int:
+    try:
+        return int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+
+
+def _positive_int(text: str) -> int:
+    value = _int_arg(text)
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected at least 1, got {text!r}")
+    return value
+
+
+def _level_arg(text: str) -> int:
+    value = _int_arg(text)
+    if not 0 <= value <= 8:
+        raise argparse.ArgumentTypeError(f"expected a level from 0 to 8, got {text!r}")
+    return value
+
+
+def _size_arg(text: str):
+    try:
+        w, h = (int(x) for x in text.lower().split("x"))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected WIDTHxHEIGHT in pixels, e.g. 1200x1000, got {text!r}") from None
+    if not (100 <= w <= 10000 and 100 <= h <= 10000):
+        raise argparse.ArgumentTypeError(f"width and height must be 100 to 10000 pixels, got {text!r}")
+    return w, h
+
+
+
+class _Formatter(argparse.ArgumentDefaultsHelpFormatter):
+    """The default shown after every option that has one (not after flags
+    and optional outputs, whose default is simply 'off')."""
+
+    def _get_help_string(self, action):
+        if action.default is None or action.default is False:
+            return action.help
+        return super()._get_help_string(action)
+
+
+EXIT_HELP = ("exit codes: 0 done; 1 a solve stopped at --max-iter before reaching --tol (all outputs still "
+             "written); 2 bad input or options (one line on stderr); 130 interrupted.")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="sorpia",
+        description="Interpolating Loop subdivision surfaces: move the control vertices of a triangle mesh so "
+        "that its Loop limit surface passes through the given vertices (SOR-PIA and the PIA family).",
+        epilog=EXIT_HELP + " Run 'sorpia COMMAND --help' for the options of a command.",
+        formatter_class=_Formatter,
+    )
+    parser.add_argument("--version", action="version", version=f"sorpia {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+
+    def command(name, help_text, description, input_arg=True):
+        p = sub.add_parser(name, help=help_text, description=description, epilog=EXIT_HELP,
+                           formatter_class=_Formatter)
+        if input_arg:
+            p.add_argument("input", metavar="IN", help="input triangle mesh (.obj, .off, .ply, .stl); only read")
+        return p
+
+    def triangulate_flag(p):
+        p.add_argument("--triangulate", action="store_true",
+                       help="split faces of more than 3 vertices into fans of triangles from their first vertex "
+                       "(without it such a file is refused)")
+
+    def quiet_flag(p):
+        p.add_argument("--quiet", "-q", action="store_true", help="print nothing but errors and warnings")
+
+    def output_flags(p):
+        quiet_flag(p)
+        p.add_argument("--force", action="store_true", help="allow an output to overwrite the input file")
+
+    def solver_options(p, with_method=True):
+        if with_method:
+            p.add_argument("--method", choices=DISPLAY_ORDER, default="sor",
+                           help="iteration: sor = SOR-PIA (paper eq. 18), gs = Gauss-Seidel, pia = PIA (eq. 9), "
+                           "wpia = weighted PIA, hss/whss = (weighted) Hermitian/skew-Hermitian splitting, "
+                           "cg = conjugate gradients")
+        p.add_argument("--tol", type=_float_arg, default=1e-10,
+                       help="stop when E_k/E_0 < TOL, E_k = max_i |v_i^0 - (B V_k)_i| (paper section 5)")
+        p.add_argument("--max-iter", type=_int_arg, default=1000, metavar="N",
+                       help="stop after N iterations (exit code 1 if TOL was not reached)")
+        p.add_argument("--boundary", choices=BOUNDARY_RULES, default=DEFAULT_BOUNDARY,
+                       help="boundary rule of the limit surface (OpenSubdiv VTX_BOUNDARY_EDGE_AND_CORNER keeps "
+                       "one-face corners; EDGE_ONLY smooths them)")
+
+    def threads_option(p, which):
+        p.add_argument("--threads", type=_int_arg, default=1, metavar="N",
+                       help=f"threads sweeping at once, {which}: vertex index ranges in parallel, then the "
+                       "vertices they share (iterations may differ by a few percent from one thread); more "
+                       "than the free cores only slows down")
+
+    fit = command("fit", "fit a control mesh whose Loop limit surface interpolates a mesh",
+                  "Read a triangle mesh, solve B V = V0 for control vertices V whose Loop limit surface passes "
+                  "through the given vertices V0, write the control mesh (same faces, same vertex order) and, if "
+                  "asked, the tessellated limit surface and a JSON report. Prints a short summary; long runs "
+                  "show progress on stderr.")
+    fit.add_argument("-o", "--output", metavar="OUT", required=True,
+                     help="control mesh to write (.obj, .off, .ply or .stl; .stl stores float32 only)")
+    solver_options(fit)
+    fit.add_argument("--omega", type=_omega_arg, default="auto",
+                     help="relaxation of --method sor: auto (sorpia's measured rule), young (paper Remark 1, "
+                     "from the spectral radius of the Jacobi matrix) or a number in (0, 2)")
+    fit.add_argument("--surface", metavar="SURF",
+                     help="also write the limit surface of the control mesh, refined --level times (a triangle "
+                     "mesh with every vertex at its exact limit position)")
+    fit.add_argument("--level", type=_level_arg, default=3, metavar="L",
+                     help="refinement level of --surface: 4^L triangles per input triangle")
+    fit.add_argument("--report", metavar="REPORT.json",
+                     help="write a JSON report: mesh statistics, method, omega, E_k/E_0 per iteration, seconds "
+                     "per phase (read, statistics, fit, write, check, surface)")
+    threads_option(fit, "--method sor or gs only (refused with other methods, which run on one thread)")
+    fit.add_argument("--binary", action="store_true", help="write .ply and .stl outputs in binary (faster, "
+                     "smaller; PLY keeps float64 either way)")
+    triangulate_flag(fit)
+    output_flags(fit)
+    fit.set_defaults(func=lambda a: run_fit(
+        a.input, a.output, method=a.method, omega=a.omega, tol=a.tol, max_iter=a.max_iter, boundary=a.boundary,
+        surface=a.surface, level=a.level, report=a.report, quiet=a.quiet, force=a.force, triangulate=a.triangulate,
+        binary=a.binary, threads=a.threads)[0])
+
+    comp = command("compare", "run several methods to one tolerance: the paper's Table 1 and Figure 7",
+                   "Run each method on the mesh to the same tolerance and print the paper's Table 1 layout for "
+                   "it: omega, iterations to reach E_k/E_0 < 1e-1 ... 1e-10 ('-' = not reached), CPU and wall "
+                   "seconds of each method's own solve (the topology and limit operator are built once for all "
+                   "methods, their seconds printed below the table). Optionally write the table (Markdown, CSV), every figure (JSON) and "
+                   "the convergence plot (Figure 7: log10(E_k/E_0) against k, one line per method).")
+    comp.add_argument("--methods", type=_methods_arg, default=",".join(DISPLAY_ORDER), metavar="LIST",
+                      help=f"comma-separated methods, from {','.join(DISPLAY_ORDER)} (sor with omega auto)")
+    solver_options(comp, with_method=False)
+    comp.add_argument("--table", metavar="T.md", help="write the table as Markdown")
+    comp.add_argument("--csv", metavar="T.csv", help="write the table as CSV")
+    comp.add_argument("--plot", metavar="P.png", help="write the convergence plot (paper Figure 7) as PNG")
+    comp.add_argument("--json", metavar="J.json", help="write every figure (E_k/E_0 per iteration, timings) as JSON")
+    threads_option(comp, "applied to sor and gs only (the other methods always run on one thread)")
+    triangulate_flag(comp)
+    output_flags(comp)
+    comp.set_defaults(func=lambda a: run_compare(
+        a.input, methods=a.methods, tol=a.tol, max_iter=a.max_iter, boundary=a.boundary, table=a.table,
+        csv_path=a.csv, plot=a.plot, json_path=a.json, quiet=a.quiet, force=a.force, triangulate=a.triangulate,
+        threads=a.threads)[0])
+
+    ren = command("render", "draw the paper's Figure 3 for a mesh (PNG)",
+                  "Fit the mesh with SOR-PIA and draw four shaded panels, the same camera in each: (a) the given "
+                  "mesh, (b) its Loop limit surface (it shrinks away from the given vertices, red), (c) the "
+                  "control mesh found by SOR-PIA, given vertices red and control vertices blue, (d) the limit "
+                  "surface of the control mesh through the red points. Big meshes are drawn at a lower level "
+                  "or with part of their faces (--face-budget) so that drawing takes seconds.")
+    ren.add_argument("-o", "--output", metavar="FIG.png", required=True, help="PNG image to write")
+    ren.add_argument("--level", type=_level_arg, default=3, metavar="L",
+                     help="refinement level of the limit surfaces drawn (lowered to fit --face-budget)")
+    solver_options(ren, with_method=False)
+    ren.add_argument("--size", type=_size_arg, default="1200x1000", metavar="WxH", help="image size in pixels")
+    ren.add_argument("--elev", type=float, default=30.0, help="camera elevation in degrees")
+    ren.add_argument("--azim", type=float, default=-60.0, help="camera azimuth in degrees")
+    ren.add_argument("--up", choices=("x", "y", "z"), default="z",
+                     help="the axis drawn vertical (many mesh files, e.g. the Stanford bunny, have y up)")
+    ren.add_argument("--face-budget", type=_positive_int, default=FACE_BUDGET, metavar="N",
+                     help="most triangles drawn per panel")
+    threads_option(ren, "in the SOR-PIA fit")
+    triangulate_flag(ren)
+    output_flags(ren)
+    ren.set_defaults(func=lambda a: run_render(
+        a.input, a.output, level=a.level, tol=a.tol, max_iter=a.max_iter, boundary=a.boundary, size=a.size,
+        elev=a.elev, azim=a.azim, face_budget=a.face_budget, quiet=a.quiet, force=a.force,
+        triangulate=a.triangulate, up=a.up, threads=a.threads)[0])
+
+    inf = command("info", "mesh statistics (the paper's Table 2) and whether Loop PIA can run on it",
+                  "Print vertices, faces, edges, boundary loops, Euler characteristic, genus, components, "
+                  "unreferenced vertices, the valence histogram and the extraordinary vertices (valence other "
+                  "than 6 inside, 4 on the boundary; the paper's Table 2), and whether Loop PIA can run on the "
+                  "mesh and if not why. Exit code 0 whenever the file can be read.")
+    inf.add_argument("--json", action="store_true", help="print JSON (every extraordinary vertex listed) instead")
+    inf.add_argument("--boundary", choices=BOUNDARY_RULES, default=DEFAULT_BOUNDARY,
+                     help="boundary rule the verdict refers to")
+    triangulate_flag(inf)
+    inf.set_defaults(func=lambda a: run_info(a.input, as_json=a.json, boundary=a.boundary,
+                                             triangulate=a.triangulate)[0])
+
+    demo = command("demo", "fit, compare and render on a built-in sample mesh",
+                   "Generate a small sample mesh (a wavy torus with random edge flips: valences 3 to 12, visible "
+                   "shrinkage), then run fit (control mesh, limit surface, report), compare (Table 1 as Markdown "
+                   "and CSV, Figure 7) and render (Figure 3) on it, writing every file into one folder, and "
+                   "print where they are. Takes a few seconds.", input_arg=False)
+    demo.add_argument("--out", metavar="DIR", default=None,
+                      help="folder for the files (created if needed; default: a new folder "
+                      "sorpia-demo-YYYYMMDD-HHMMSS in the working directory)")
+    quiet_flag(demo)
+    demo.set_defaults(func=lambda a: run_demo(a.out, quiet=a.quiet))
+    return parser
