@@ -100,7 +100,7 @@ class LoopSurface:
         du, dv : (k, 3) float64, only with ``derivatives=True``
             dP/du and dP/dv.
         normals : (k, 3) float64, only with ``derivatives=True``
-            (dP/du x dP/dv) / |dP/du x dP/dv|: outward for faces oriented
+            ``(dP/du x dP/dv) / |dP/du x dP/dv|``: outward for faces oriented
             counter-clockwise seen from outside; zero where the cross product
             vanishes.
 
