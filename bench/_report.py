@@ -5,7 +5,8 @@ which commit and which machine produced it and is regenerated, never edited by
 hand. The stamp: the git commit (short hash, "+dirty" when the work tree has
 uncommitted changes), the CPU model, cores, memory, operating system, the C++
 compiler of the build tree when it can be found, the Python, numpy and scipy
-versions, the command line, and the UTC date.
+versions, the load average when the page was written (other jobs on the
+machine skew timings), the command line, and the UTC date.
 """
 
 from __future__ import annotations
@@ -100,10 +101,15 @@ def stamp() -> str:
     m = machine()
     libs = ", ".join(f"{k} {m[k]}" for k in ("python", "numpy", "scipy") if k in m)
     command = " ".join(["python", os.path.relpath(sys.argv[0], ROOT) if sys.argv[0] else "-"] + sys.argv[1:])
+    try:
+        load = " / ".join(f"{x:.1f}" for x in os.getloadavg())
+    except OSError:
+        load = "unknown"
     date = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
     return (f"- commit: `{commit()}`\n"
             f"- machine: {m['cpu']}, {m['cores']} cores, {m['memory']} memory; {m['os']}\n"
             f"- compiler: {m['compiler']}; {libs}\n"
+            f"- load average (1, 5, 15 min) when written: {load}\n"
             f"- command: `{command}`\n"
             f"- date: {date}\n")
 
