@@ -33,11 +33,16 @@ def _run(*cmd: str) -> str:
 
 
 def commit() -> str:
-    """Short hash of HEAD, with "+dirty" when tracked files differ from it; "unknown" outside git."""
+    """Short hash of HEAD, with "+dirty" when tracked files differ from it; "unknown" outside git.
+
+    The pages and the README's excerpt are left out of the comparison: they are what the scripts write, so a
+    run that regenerates several pages in turn stays clean.
+    """
     head = _run("git", "rev-parse", "--short", "HEAD")
     if not head:
         return "unknown"
-    dirty = _run("git", "status", "--porcelain", "--untracked-files=no")
+    dirty = _run("git", "status", "--porcelain", "--untracked-files=no", "--", ".",
+                 f":!{PAGES.relative_to(ROOT)}", ":!README.md")
     return head + ("+dirty" if dirty else "")
 
 
@@ -131,3 +136,24 @@ def write_page(slug: str, title: str, body_markdown: str) -> pathlib.Path:
     path.write_text(text)
     print(f"page: {os.path.relpath(path)}", file=sys.stderr)
     return path
+
+
+def write_readme_excerpt(name: str, slug: str, body_markdown: str) -> pathlib.Path:
+    """Replace the README's excerpt `name` with body_markdown and a one-line stamp linking to page `slug`.
+
+    The excerpt lies between the lines ``<!-- {name}: ... -->`` and ``<!-- end of {name} -->``; they stay, so
+    the next run finds them. Raises ValueError when the README has no such markers.
+    """
+    readme = ROOT / "README.md"
+    text = readme.read_text()
+    m = re.search(rf"^<!-- {re.escape(name)}:.*?-->\n(.*?)^<!-- end of {re.escape(name)} -->$", text, re.M | re.S)
+    if m is None:
+        raise ValueError(f"README.md has no '<!-- {name}: ... -->' ... '<!-- end of {name} -->' markers")
+    mach = machine()
+    date = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d")
+    excerpt = (f"{body_markdown.strip()}\n\n"
+               f"Measured at commit `{commit()}` on {mach['cpu']} ({mach['cores']} cores, {mach['memory']}), "
+               f"{date}; [the full page](docs/benchmarks/{slug}.md) gives the machine and the command.\n")
+    readme.write_text(text[:m.start(1)] + excerpt + text[m.end(1):])
+    print(f"README excerpt: {name}", file=sys.stderr)
+    return readme

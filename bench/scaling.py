@@ -23,7 +23,7 @@ import sys
 import sysconfig
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from _report import PAGES, write_page  # noqa: E402
+from _report import PAGES, write_page, write_readme_excerpt  # noqa: E402
 
 
 def bench_exe():
@@ -52,6 +52,7 @@ def main(argv=None):
                    "docs/benchmarks/scaling.png; with --no-page, no plot unless given)")
     p.add_argument("--json", metavar="PATH", help="also write the figures as JSON")
     p.add_argument("--no-page", action="store_true", help="print only; do not write docs/benchmarks/scaling.md")
+    p.add_argument("--readme", action="store_true", help="also put the table into README.md (its 'scaling table')")
     p.add_argument("--from-json", metavar="PATH", help="table and plot from an earlier --json, without running")
     a = p.parse_args(argv)
     exe = bench_exe()
@@ -75,6 +76,12 @@ def main(argv=None):
                      "end_to_end": r["end_to_end"], "floor": m["floor"], "sweep_over_floor": r["sweep_over_floor"],
                      "peak_mb": m["peak_rss_bytes"] / 2**20, "bytes_per_vertex": m["bytes_per_vertex"]})
 
+    table = ["| vertices | topology s | operator s | solve s | iterations | end to end s | peak MB "
+             "| bytes/vertex above input |", "|---:|---:|---:|---:|---:|---:|---:|---:|"]
+    table += [f"| {r['n']:,} | {r['topology']:.3f} | {r['operator']:.4f} | {r['solve']:.3f} | {r['iterations']} "
+              f"| {r['end_to_end']:.3f} | {r['peak_mb']:.0f} | {r['bytes_per_vertex']:.0f} |" for r in rows]
+    table = [f"`sorpia-bench`, `{a.kind}` meshes, method `{a.method}` to 1e-10, one thread, medians of {a.repeat} "
+             "(C++ core: arrays in, control vertices out):", ""] + table
     lines = [f"`{a.kind}` meshes, method `{a.method}`, one thread, medians of {a.repeat} runs of `sorpia-bench` "
              "(seconds).", "",
              "| mesh | vertices | topology s | operator s | solve s | iterations | end to end s | µs/vertex "
@@ -98,6 +105,8 @@ def main(argv=None):
             lines += ["", f"![time and memory against size]({os.path.basename(plot)})"]
     if not a.no_page:
         write_page("scaling", "Growth with size", "\n".join(lines))
+    if a.readme:
+        write_readme_excerpt("scaling table", "scaling", "\n".join(table))
 
 
 def draw(rows, kind, method, path):
