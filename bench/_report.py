@@ -20,7 +20,8 @@ import subprocess
 import sys
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
-PAGES = ROOT / "docs" / "benchmarks"
+PAGES_DIR = "docs/benchmarks"  # in the repository
+PAGES = ROOT / PAGES_DIR
 
 
 def _run(*cmd: str) -> str:
@@ -42,7 +43,7 @@ def commit() -> str:
     if not head:
         return "unknown"
     dirty = _run("git", "status", "--porcelain", "--untracked-files=no", "--", ".",
-                 f":!{PAGES.relative_to(ROOT)}", ":!README.md")
+                 f":!{PAGES_DIR}", ":!README.md")
     return head + ("+dirty" if dirty else "")
 
 
@@ -101,20 +102,24 @@ def machine() -> dict:
     return out
 
 
+def load_average() -> str:
+    """The 1, 5 and 15 minute load averages, "1.0 / 0.9 / 0.8"; "unknown" where the system has none."""
+    try:
+        return " / ".join(f"{x:.1f}" for x in os.getloadavg())
+    except OSError:
+        return "unknown"
+
+
 def stamp() -> str:
     """The page's stamp as Markdown: commit, machine, command and date."""
     m = machine()
     libs = ", ".join(f"{k} {m[k]}" for k in ("python", "numpy", "scipy") if k in m)
     command = " ".join(["python", os.path.relpath(sys.argv[0], ROOT) if sys.argv[0] else "-"] + sys.argv[1:])
-    try:
-        load = " / ".join(f"{x:.1f}" for x in os.getloadavg())
-    except OSError:
-        load = "unknown"
     date = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
     return (f"- commit: `{commit()}`\n"
             f"- machine: {m['cpu']}, {m['cores']} cores, {m['memory']} memory; {m['os']}\n"
             f"- compiler: {m['compiler']}; {libs}\n"
-            f"- load average (1, 5, 15 min) when written: {load}\n"
+            f"- load average (1, 5, 15 min) when written: {load_average()}\n"
             f"- command: `{command}`\n"
             f"- date: {date}\n")
 
@@ -153,7 +158,8 @@ def write_readme_excerpt(name: str, slug: str, body_markdown: str) -> pathlib.Pa
     date = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d")
     excerpt = (f"{body_markdown.strip()}\n\n"
                f"Measured at commit `{commit()}` on {mach['cpu']} ({mach['cores']} cores, {mach['memory']}), "
-               f"{date}; [the full page](docs/benchmarks/{slug}.md) gives the machine and the command.\n")
+               f"{date}, load average {load_average()}; [the full page](docs/benchmarks/{slug}.md) gives the "
+               "machine and the command.\n")
     readme.write_text(text[:m.start(1)] + excerpt + text[m.end(1):])
     print(f"README excerpt: {name}", file=sys.stderr)
     return readme

@@ -135,8 +135,9 @@ def main(argv=None):
             for w in WEIGHTS:
                 whss[w] = solver.solve(v, method="whss", weight=w, tol=args.tol).iterations
         rho_arpack = arpack_rho(v, f) if args.arpack else float("nan")
-        rows.append(dict(mesh=name, n=len(v), whss=whss, rho_arpack=rho_arpack, gs=gs.iterations, t_gs=t_gs, auto=auto.iterations, auto_omega=auto.omega,
-                         t_auto=t_auto, rho=young.rho, young_omega=young.omega, young=young.iterations,
+        rows.append(dict(mesh=name, n=len(v), whss=whss, rho_arpack=rho_arpack, gs=gs.iterations, t_gs=t_gs,
+                         auto=auto.iterations, auto_omega=auto.omega, t_auto=t_auto, rho=young.rho,
+                         young_omega=young.omega, young=young.iterations,
                          young_converged=young.converged, t_young=t_young, best_omegas=best, best=best_it,
                          t_best=t_best, scan=scan))
         print(f"# {name}: gs {gs.iterations}, best {best_it} at omega {best[0]}..{best[-1]}", file=sys.stderr)
@@ -154,8 +155,8 @@ def main(argv=None):
         b = r["best_omegas"]
         br = f"{b[0]:.2f}" if len(b) == 1 else f"{b[0]:.2f}-{b[-1]:.2f}"
         yi = str(r["young"]) + ("" if r["young_converged"] else " (not converged)")
-        out(f"| {r['mesh']} | {r['n']} | {r['rho']:.5f} | {r['rho_arpack']:.5f} | {r['young_omega']:.4f} | {yi} | {r['gs']} "
-            f"| {r['auto_omega']:.2f} | {r['auto']} | {br} | {r['best']} | {1e3 * r['t_gs']:.2f} "
+        out(f"| {r['mesh']} | {r['n']} | {r['rho']:.5f} | {r['rho_arpack']:.5f} | {r['young_omega']:.4f} | {yi} "
+            f"| {r['gs']} | {r['auto_omega']:.2f} | {r['auto']} | {br} | {r['best']} | {1e3 * r['t_gs']:.2f} "
             f"| {1e3 * r['t_auto']:.2f} | {1e3 * r['t_young']:.2f} |")
 
     out("\nSweeps per omega (columns) and mesh (rows):\n")

@@ -157,7 +157,8 @@ def main(argv=None):
              f"numpy {np.__version__}, scipy {scipy.__version__}. Every entry includes building B (peers: "
              "`sorpia.limit_matrix`; sorpia: topology + operator, the \"operator\" column); ratios are over "
              "sorpia `sor`.", "",
-             "| entry | total s | operator s | estimate s | solve s | iterations | E_k/E_0 | total / sor | solve / sor |",
+             "| entry | total s | operator s | estimate s | solve s | iterations | E_k/E_0 | total / sor "
+             "| solve / sor |",
              "|---|---:|---:|---:|---:|---:|---:|---:|---:|"]
     for name, e in entries.items():
         op = e.get("topology", 0.0) + e["operator"]
