@@ -58,14 +58,17 @@ class LoopSurface:
 
     @property
     def n_vertices(self) -> int:
+        """Number of control vertices, n."""
         return self._surface.n_vertices
 
     @property
     def n_faces(self) -> int:
+        """Number of control faces, m."""
         return self._surface.n_faces
 
     @property
     def boundary(self) -> str:
+        """The boundary rule, "edge-and-corner" or "edge-only"."""
         return self._boundary
 
     @property
