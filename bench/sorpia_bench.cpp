@@ -44,7 +44,7 @@ options:
                      (time topology and operator only); default sor
   --tol X            stop when E_k/E_0 < X (default 1e-10)
   --max-iter N       default 1000
-  --omega W          fixed omega for sor (default: sorpia's auto rule)
+  --omega W          omega for sor: a number in (0, 2), auto or young (default: auto)
   --threads N        threads sweeping at once for sor and gs (default 1; the
                      other methods always run on one thread)
   --two-pass         sor/gs: E_k by a separate residual pass after each sweep
@@ -76,6 +76,7 @@ struct Options {
   std::vector<std::string> methods{"sor"};
   double tol = 1e-10;
   int max_iter = 1000;
+  sorpia::OmegaRule omega_rule = sorpia::OmegaRule::Auto;
   double omega = NAN;
   int threads = 1;
   bool two_pass = false;
@@ -140,8 +141,15 @@ Options parse(int argc, char** argv) {
     } else if (a == "--max-iter") {
       o.max_iter = to_int(a, value(), 1);
     } else if (a == "--omega") {
-      o.omega = to_double(a, value());
-      if (!(o.omega > 0 && o.omega < 2)) throw Usage("--omega must be in (0, 2)");
+      try {  // the library's own parsing and check, as for Python and the sorpia command
+        sorpia::SolveOptions sor;
+        sorpia::parse_omega(value(), sor);
+        sorpia::check_options(sor);
+        o.omega_rule = sor.omega_rule;
+        o.omega = sor.omega;
+      } catch (const sorpia::ParameterError& e) {
+        throw Usage(std::string("--omega: ") + e.what());
+      }
     } else if (a == "--threads") {
       o.threads = to_int(a, value(), 1);
       if (o.threads > sorpia::max_threads) throw Usage("--threads must be at most " + std::to_string(sorpia::max_threads));
@@ -334,8 +342,8 @@ MeshRun run_mesh(const Options& o, const std::string& spec) {
     run.topology.push_back(seconds_since(t0));
 
     t0 = Clock::now();
-    const sorpia::LimitOperator op = o.opensubdiv_operator ? sorpia::limit_operator(topology, o.boundary)
-                                                           : sorpia::limit_operator_from_masks(topology, o.boundary);
+    const sorpia::LimitOperator op = o.opensubdiv_operator ? sorpia::limit_operator(sorpia::reference_limit_matrix(topology, o.boundary))
+                                                           : sorpia::limit_operator(topology, o.boundary);
     run.op.push_back(seconds_since(t0));
 
     for (auto& mr : run.methods) {
@@ -346,8 +354,8 @@ MeshRun run_mesh(const Options& o, const std::string& spec) {
       const bool sweeps = so.method == sorpia::Method::Sor || so.method == sorpia::Method::Gs;
       so.threads = sweeps ? o.threads : 1;
       so.two_pass = o.two_pass;
-      if (!std::isnan(o.omega)) {
-        so.omega_rule = sorpia::OmegaRule::Given;
+      if (so.method == sorpia::Method::Sor) {  // --omega is sor's; the other methods have none
+        so.omega_rule = o.omega_rule;
         so.omega = o.omega;
       }
       t0 = Clock::now();

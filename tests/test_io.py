@@ -406,3 +406,93 @@ def test_shared_meshes_read_with_the_counts_their_readme_lists(name, n_vertices,
     v, f = sorpia.read_mesh(SHARED_MESHES / name)
     assert v.shape == (n_vertices, 3) and f.shape == (n_faces, 3)
     assert f.min() >= 0 and f.max() < n_vertices
+
+
+# A tetrahedron written plainly, and the variants real tools write: each must
+# read as exactly the same arrays (float64, order kept).
+TETRA_V = np.array([[0, 0, 0], [1.5, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
+TETRA_F = np.array([[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]])
+TETRA_OBJ = "v 0 0 0\nv 1.5 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 1 4 3\n"
+TETRA_OFF_BODY = "0 0 0\n1.5 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 1 2 3\n3 0 3 2\n"
+
+
+@pytest.mark.parametrize("name,text", [
+    ("bom.obj", "\ufeff" + TETRA_OBJ),
+    ("classic-mac-line-ends.obj", TETRA_OBJ.replace("\n", "\r")),
+    ("continued-lines.obj", TETRA_OBJ.replace("v 1.5 0 0", "v 1.5 \\\n 0 0").replace("f 2 3 4", "f 2 \\  \n3 \\\n4")),
+    ("weight-and-colours.obj", TETRA_OBJ.replace("v 0 0 0", "v 0 0 0 1.0").replace("v 0 1 0", "v 0 1 0 0.2 0.3 0.4")),
+    ("bom.off", "\ufeffOFF\n4 4 6\n" + TETRA_OFF_BODY),
+    ("counts-after-comments.off", "OFF\n# written by a tool\n\n# counts next\n4 4 6\n" + TETRA_OFF_BODY),
+    ("counts-over-lines.off", "OFF\n4   # vertices\n4   # faces\n" + TETRA_OFF_BODY),
+    ("no-edge-count.off", "OFF\n4 4\n" + TETRA_OFF_BODY),
+    ("records-over-lines.off", "OFF\n4 4 6\n0 0 0\n1.5\n0 0\n0 1 0\n0 0 1\n3 0 2\n1\n3\n0 1 3\n3 1 2 3 0.5 0.5 0.5\n3 0 3 2\n"),
+])
+def test_file_variants_that_real_tools_write_read_exactly(tmp_path, name, text):
+    path = tmp_path / name
+    path.write_bytes(text.encode("utf-8"))
+    v, f = sorpia.read_mesh(path)
+    assert v.dtype == np.float64 and same_bits(v, TETRA_V)
+    assert np.array_equal(f, TETRA_F)
+
+
+def test_obj_vertex_line_with_a_word_is_refused_with_its_line(tmp_path):
+    path = tmp_path / "word.obj"
+    path.write_text(TETRA_OBJ.replace("v 0 1 0", "v 0 1 0 x"))
+    with pytest.raises(sorpia.MeshFileError, match=r"word\.obj, line 3: expected a number, found 'x'"):
+        sorpia.read_mesh(path)
+
+
+def grid_strips(nu, nv):
+    """Triangle strips of an nu x nv grid of vertices, one strip per row of
+    quads joined by -1, and the grid's triangles as a consistent orientation
+    would list them: quad (i, j) as (a, c, b) and (b, c, d) with a = (i, j),
+    b = (i, j+1), c = (i+1, j), d = (i+1, j+1)."""
+    idx = lambda i, j: i * nv + j  # noqa: E731
+    strips, tris = [], []
+    for i in range(nu - 1):
+        for j in range(nv):
+            strips += [idx(i, j), idx(i + 1, j)]
+        strips.append(-1)
+        for j in range(nv - 1):
+            a, b, c, d = idx(i, j), idx(i, j + 1), idx(i + 1, j), idx(i + 1, j + 1)
+            tris += [(a, c, b), (b, c, d)]
+    return strips[:-1], tris
+
+
+def canonical(faces):
+    """Faces as a set of cyclic rotations starting at the smallest index:
+    equal sets mean the same triangles with the same orientation."""
+    out = set()
+    for t in np.asarray(faces).tolist():
+        k = t.index(min(t))
+        out.add(tuple(t[k:] + t[:k]))
+    return out
+
+
+@pytest.mark.parametrize("encoding", ["ascii", "binary_little_endian", "binary_big_endian"])
+def test_ply_tristrips_give_the_strips_triangles_in_one_orientation(tmp_path, encoding):
+    nu, nv = 4, 5
+    strips, tris = grid_strips(nu, nv)
+    # the first two rows joined by degenerate triangles (repeat the last and the
+    # next first vertex; the strip's parity is kept) instead of a -1 restart
+    row = 2 * nv
+    strips = strips[:row] + [strips[row - 1], strips[row + 1]] + strips[row + 1:]
+    xs, ys = np.meshgrid(np.arange(nv, dtype=float), np.arange(nu, dtype=float))
+    v = np.column_stack([xs.ravel(), ys.ravel(), np.zeros(nu * nv)])
+    header = (f"ply\nformat {encoding} 1.0\nelement vertex {len(v)}\nproperty double x\nproperty double y\n"
+              f"property double z\nelement tristrips 1\nproperty list int int vertex_indices\nend_header\n")
+    if encoding == "ascii":
+        body = "".join(" ".join(map(repr, p)) + "\n" for p in v.tolist())
+        body += f"{len(strips)} " + " ".join(map(str, strips)) + "\n"
+        data = (header + body).encode()
+    else:
+        e = "<" if encoding.endswith("little_endian") else ">"
+        data = header.encode() + v.astype(e + "f8").tobytes()
+        data += np.array([len(strips)] + strips, dtype=e + "i4").tobytes()
+    path = tmp_path / "strips.ply"
+    path.write_bytes(data)
+    v2, f2 = sorpia.read_mesh(path)
+    assert same_bits(v2, v)
+    assert len(f2) == len(tris) and canonical(f2) == canonical(tris)
+    # one orientation throughout: sorpia's validation accepts it as a surface
+    assert np.allclose(sorpia.limit_points(sorpia.interpolate(v2, f2).control_vertices, f2), v, atol=1e-9)

@@ -446,7 +446,7 @@ BAD_FILES = [
     ("ply-magic", "bad.ply", "plx\n", r"bad\.ply.*line 1: a PLY file starts with the line 'ply'"),
     ("ply-no-end", "bad.ply", "ply\nformat ascii 1.0\nelement vertex 3\n", r"bad\.ply.*no 'end_header'"),
     ("ply-no-face", "bad.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
-     "property float z\nend_header\n0 0 0\n", r"bad\.ply.*no 'face' element"),
+     "property float z\nend_header\n0 0 0\n", r"bad\.ply.*no 'face' or 'tristrips' element"),
     ("ply-no-z", "bad.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
      "end_header\n0 0\n", r"bad\.ply.*line 3: the vertex element has no property z"),
     ("ply-nan", "bad.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"

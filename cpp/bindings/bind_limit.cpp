@@ -9,6 +9,12 @@ namespace sorpia_py {
 using namespace pybind11::literals;
 
 void bind_limit(py::module_& m) {
+  py::enum_<sorpia::Boundary>(m, "Boundary", "Boundary interpolation rule (sorpia::Boundary).")
+      .value("edge_and_corner", sorpia::Boundary::EdgeAndCorner)
+      .value("edge_only", sorpia::Boundary::EdgeOnly);
+  m.def("parse_boundary", &sorpia::parse_boundary, "name"_a);
+  m.def("boundary_name", &sorpia::boundary_name, "boundary"_a);
+
   py::class_<sorpia::Topology>(m, "Topology")
       .def(py::init([](const Faces& faces, std::size_t n_vertices) {
              check_shape(faces, 3, "faces");
@@ -33,24 +39,21 @@ void bind_limit(py::module_& m) {
 
   m.def(
       "limit_matrix",
-      [](const sorpia::Topology& topology, const std::string& boundary) {
-        const auto b = sorpia::parse_boundary(boundary);
+      [](const sorpia::Topology& topology, sorpia::Boundary b) {
         sorpia::CsrMatrix mat;
         {
           py::gil_scoped_release release;
           mat = sorpia::limit_matrix(topology, b);
         }
-        return py::make_tuple(to_numpy(std::move(mat.data), 0), to_numpy(std::move(mat.indices), 0),
-                              to_numpy(std::move(mat.indptr), 0));
+        return csr_tuple(std::move(mat));
       },
       "topology"_a, "boundary"_a, "Limit matrix B as CSR arrays (data, indices, indptr).");
 
   m.def(
       "limit_points",
-      [](const sorpia::Topology& topology, const Vertices& vertices, const std::string& boundary) {
+      [](const sorpia::Topology& topology, const Vertices& vertices, sorpia::Boundary b) {
         check_shape(vertices, 3, "vertices");
         check_rows(vertices, topology.n_vertices(), "vertices", "the topology");
-        const auto b = sorpia::parse_boundary(boundary);
         Vertices out({vertices.shape(0), py::ssize_t{3}});
         double* dst = out.mutable_data();
         const double* src = vertices.data();

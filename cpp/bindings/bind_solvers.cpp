@@ -1,12 +1,16 @@
 // Bindings of the PIA-family solvers: the compact limit operator with its
 // spectral-estimate cache (built once per mesh) and solve().
 #include <pybind11/functional.h>
+#include <pybind11/stl.h>
 
 #include <cmath>
 #include <limits>
+#include <iterator>
+#include <optional>
+#include <string>
+#include <vector>
 
 #include "bindings.hpp"
-#include "sorpia/limit_masks.hpp"
 #include "sorpia/solvers.hpp"
 
 namespace sorpia_py {
@@ -20,46 +24,210 @@ struct OperatorState {
   sorpia::SpectralCache cache;
 };
 
-sorpia::OmegaRule parse_omega_rule(const std::string& name) {
-  if (name == "given") return sorpia::OmegaRule::Given;
-  if (name == "young") return sorpia::OmegaRule::Young;
-  if (name == "auto") return sorpia::OmegaRule::Auto;
-  throw sorpia::ParameterError("unknown omega rule '" + name + "'");
+// A double that means "not used by this method" when NaN, as Python's None.
+py::object optional_float(double x) { return std::isnan(x) ? py::object(py::none()) : py::object(py::float_(x)); }
+
+// A (rows, cols) numpy view of a result's vector, kept alive by the result.
+py::array view(const std::vector<double>& v, py::ssize_t cols, const py::object& owner) {
+  return py::array_t<double>(numpy_shape(v, cols), v.data(), owner);
 }
 
-py::dict result_dict(sorpia::SolveResult&& r) {
-  py::dict d;
-  d["control_vertices"] = to_numpy(std::move(r.control_vertices), 3);
-  d["errors"] = to_numpy(std::move(r.errors), 0);
-  d["initial_error"] = r.initial_error;
-  d["iterations"] = r.iterations;
-  d["stop_reason"] = sorpia::stop_reason_name(r.stop_reason);
-  d["method"] = sorpia::method_name(r.method);
-  d["variant"] = r.variant;
-  d["omega"] = r.omega;
-  d["rho"] = r.rho;
-  d["omega_clamped"] = r.omega_clamped;
-  d["sigma"] = r.sigma;
-  d["lambda_min"] = r.lambda_min;
-  d["alpha"] = r.alpha;
-  d["weight"] = r.weight;
-  d["products"] = r.products;
-  d["estimate_seconds"] = r.estimate_seconds;
-  d["solve_seconds"] = r.solve_seconds;
-  return d;
+const char* const kResultDoc = R"doc(What a solve returns (sorpia.interpolate, Interpolator.solve).
+
+Attributes
+----------
+control_vertices : (n, 3) float64
+    V, in the input vertex order; B V = V0 to the tolerance reached.
+iterations : int
+    Iterations done (sweeps for "gs"/"sor", outer steps for "hss"/"whss").
+converged : bool
+    errors[-1] < tol, or E_k at the rounding floor (E_k <= 64 eps max_i ||v_i^0||),
+    below which no method can go: a tol of 1e-300 ends there, converged.
+errors : (iterations + 1,) float64
+    errors[k] = E_k / E_0, so errors[0] = 1 (a single 0.0 when E_0 = 0:
+    V0 already interpolates and nothing is done).
+method : str
+omega : float or None
+    "sor"/"gs": the omega used (1.0 for "gs"); None for other methods.
+seconds : float
+    Wall time of the whole call, every phase in `timings` included.
+stop_reason : {"converged", "max_iter", "diverged", "callback"}
+initial_error : float
+    E_0, absolute.
+variant : str
+    The algorithm that ran: the method's name, or "bicgstab" for "cg" on a
+    mesh with boundary.
+rho : float or None
+    omega="young": the estimated spectral radius of I - D^-1 B.
+sigma : float or None
+    "pia"/"wpia": the step.
+lambda_min : float or None
+    "wpia": the estimated smallest eigenvalue of B.
+alpha : float or None
+    "hss"/"whss": the shift.
+weight : float or None
+    "hss"/"whss": the relaxation weight.
+products : int
+    Applications of B (or B^T) in the iteration, inner solves included: a
+    measure of work comparable across methods.
+timings : dict
+    Seconds per phase: "topology" (faces validated, one-ring), "operator"
+    (B from OpenSubdiv's limit masks), "estimate" (spectral estimates for the
+    parameters: 0 when an Interpolator already holds them), "solve".
+)doc";
+
+// The public attributes, in the order of the docstring (and of _fields).
+const char* const kResultFields[] = {"control_vertices", "iterations", "converged",  "errors", "method",
+                                     "omega",            "seconds",    "stop_reason", "initial_error",
+                                     "variant",          "rho",        "sigma",       "lambda_min",
+                                     "alpha",            "weight",     "products",    "timings"};
+
+void bind_result(py::module_& m) {
+  using R = sorpia::SolveResult;
+  py::class_<R> cls(m, "InterpolationResult", kResultDoc);
+  cls.def_property_readonly("control_vertices",
+                            [](const py::object& self) { return view(self.cast<const R&>().control_vertices, 3, self); })
+      .def_property_readonly("errors", [](const py::object& self) { return view(self.cast<const R&>().errors, 0, self); })
+      .def_readonly("iterations", &R::iterations)
+      .def_property_readonly("converged", &R::converged)
+      .def_property_readonly("method", [](const R& r) { return std::string(sorpia::method_name(r.method)); })
+      .def_property_readonly("omega", [](const R& r) { return optional_float(r.omega); })
+      .def_readonly("seconds", &R::seconds)
+      .def_property_readonly("stop_reason", [](const R& r) { return std::string(sorpia::stop_reason_name(r.stop_reason)); })
+      .def_readonly("initial_error", &R::initial_error)
+      .def_readonly("variant", &R::variant)
+      .def_property_readonly("rho", [](const R& r) { return optional_float(r.rho); })
+      .def_property_readonly("sigma", [](const R& r) { return optional_float(r.sigma); })
+      .def_property_readonly("lambda_min", [](const R& r) { return optional_float(r.lambda_min); })
+      .def_property_readonly("alpha", [](const R& r) { return optional_float(r.alpha); })
+      .def_property_readonly("weight", [](const R& r) { return optional_float(r.weight); })
+      .def_readonly("products", &R::products)
+      .def_property_readonly("timings",
+                             [](const R& r) {
+                               py::dict d;
+                               d["topology"] = r.topology_seconds;
+                               d["operator"] = r.operator_seconds;
+                               d["estimate"] = r.estimate_seconds;
+                               d["solve"] = r.solve_seconds;
+                               return d;
+                             })
+      .def_readonly("omega_clamped", &R::omega_clamped, "omega='young' met rho >= YOUNG_RHO_CLAMP.")
+      .def(
+          "_record_build",
+          [](R& r, double seconds, double topology_seconds, double operator_seconds) {
+            r.seconds = seconds;
+            r.topology_seconds = topology_seconds;
+            r.operator_seconds = operator_seconds;
+          },
+          "seconds"_a, "topology_seconds"_a, "operator_seconds"_a,
+          "For sorpia's Python layer: the whole call's wall time and the build phases it timed.")
+      .def(py::pickle(
+          [](const R& r) {
+            return py::make_tuple(r.control_vertices, r.errors, r.initial_error, r.iterations,
+                                  static_cast<int>(r.stop_reason), static_cast<int>(r.method), r.variant, r.omega,
+                                  r.reordered, r.rho, r.omega_clamped, r.sigma, r.lambda_min, r.alpha, r.weight,
+                                  r.products, r.estimate_seconds, r.solve_seconds, r.topology_seconds,
+                                  r.operator_seconds, r.seconds);
+          },
+          [](const py::tuple& t) {
+            if (t.size() != 21) throw std::runtime_error("InterpolationResult: bad pickle state");
+            R r;
+            r.control_vertices = t[0].cast<std::vector<double>>();
+            r.errors = t[1].cast<std::vector<double>>();
+            r.initial_error = t[2].cast<double>();
+            r.iterations = t[3].cast<int>();
+            r.stop_reason = static_cast<sorpia::StopReason>(t[4].cast<int>());
+            r.method = static_cast<sorpia::Method>(t[5].cast<int>());
+            r.variant = t[6].cast<std::string>();
+            r.omega = t[7].cast<double>();
+            r.reordered = t[8].cast<bool>();
+            r.rho = t[9].cast<double>();
+            r.omega_clamped = t[10].cast<bool>();
+            r.sigma = t[11].cast<double>();
+            r.lambda_min = t[12].cast<double>();
+            r.alpha = t[13].cast<double>();
+            r.weight = t[14].cast<double>();
+            r.products = t[15].cast<long long>();
+            r.estimate_seconds = t[16].cast<double>();
+            r.solve_seconds = t[17].cast<double>();
+            r.topology_seconds = t[18].cast<double>();
+            r.operator_seconds = t[19].cast<double>();
+            r.seconds = t[20].cast<double>();
+            return r;
+          }))
+      .def("__repr__", [](const py::object& self) {
+        std::string out = "InterpolationResult(";
+        for (const char* name : kResultFields) {
+          if (name != kResultFields[0]) out += ", ";
+          const py::object v = self.attr(name);
+          // Arrays by shape: a million control vertices are no repr.
+          out += std::string(name) + "=" +
+                 (py::isinstance<py::array>(v) ? "<array " + py::str(v.attr("shape")).cast<std::string>() + ">"
+                                                : py::repr(v).cast<std::string>());
+        }
+        return out + ")";
+      });
+  py::tuple fields(std::size(kResultFields));
+  for (std::size_t k = 0; k < std::size(kResultFields); ++k) fields[k] = py::str(kResultFields[k]);
+  cls.attr("_fields") = fields;
 }
 
 }  // namespace
 
 void bind_solvers(py::module_& m) {
+  bind_result(m);
+  py::enum_<sorpia::Method> method(m, "Method", "The PIA-family methods (sorpia::Method).");
+  for (sorpia::Method v : sorpia::all_methods) method.value(sorpia::method_name(v), v);
+  py::enum_<sorpia::OmegaRule>(m, "OmegaRule", "How 'sor' chooses omega (sorpia::OmegaRule).")
+      .value("given", sorpia::OmegaRule::Given)
+      .value("young", sorpia::OmegaRule::Young)
+      .value("auto", sorpia::OmegaRule::Auto);
+  m.def("parse_method", &sorpia::parse_method, "name"_a);
+  m.def("method_names", [] {
+    std::vector<std::string> names;
+    for (sorpia::Method v : sorpia::all_methods) names.emplace_back(sorpia::method_name(v));
+    return names;
+  });
+
+  // Options cross into C++ once, typed, and are checked by the core's
+  // check_options (ParameterError) when constructed.
+  py::class_<sorpia::SolveOptions>(m, "SolveOptions")
+      .def(py::init([](sorpia::Method method, sorpia::OmegaRule omega_rule, double omega, std::optional<double> sigma,
+                       std::optional<double> alpha, std::optional<double> weight, double tol, long long max_iter,
+                       int threads) {
+             sorpia::SolveOptions o;
+             o.method = method;
+             o.omega_rule = omega_rule;
+             o.omega = omega;
+             o.sigma = sigma;
+             o.alpha = alpha;
+             o.weight = weight;
+             o.tol = tol;
+             o.max_iter = max_iter;
+             o.threads = threads;
+             sorpia::check_options(o);
+             return o;
+           }),
+           py::kw_only(), "method"_a, "omega_rule"_a, "omega"_a, "sigma"_a, "alpha"_a, "weight"_a, "tol"_a,
+           "max_iter"_a, "threads"_a)
+      .def_readonly("method", &sorpia::SolveOptions::method)
+      .def_readonly("omega_rule", &sorpia::SolveOptions::omega_rule)
+      .def_readonly("tol", &sorpia::SolveOptions::tol)
+      .def_readonly("max_iter", &sorpia::SolveOptions::max_iter)
+      .def_readonly("threads", &sorpia::SolveOptions::threads);
+  m.def(
+      "parse_omega",
+      [](const std::string& text) {
+        sorpia::SolveOptions o;
+        sorpia::parse_omega(text, o);
+        return py::make_tuple(o.omega_rule, o.omega);
+      },
+      "text"_a, "(OmegaRule, omega) from 'auto', 'young' or a number.");
+
   py::class_<OperatorState>(m, "LimitOperator")
-      .def(py::init([](const sorpia::Topology& topology, const std::string& boundary) {
-             const auto b = sorpia::parse_boundary(boundary);
+      .def(py::init([](const sorpia::Topology& topology, sorpia::Boundary b) {
              py::gil_scoped_release release;
-             // B from OpenSubdiv's limit masks without its refiner (about 1.4 s
-             // at 1M vertices): equal to sorpia::limit_operator(topology, b),
-             // OpenSubdiv's Far Limit(), to 1e-15 (tests/cpp/test_fast_operator.cpp).
-             return OperatorState{sorpia::limit_operator_from_masks(topology, b), {}};
+             return OperatorState{sorpia::limit_operator(topology, b), {}};
            }),
            "topology"_a, "boundary"_a)
       .def_property_readonly("n", [](const OperatorState& s) { return s.op.n; })
@@ -67,6 +235,8 @@ void bind_solvers(py::module_& m) {
       .def_property_readonly("neighbors", [](const OperatorState& s) { return to_numpy(s.op.neighbors, 0); })
       .def_property_readonly("diag", [](const OperatorState& s) { return to_numpy(s.op.diag, 0); })
       .def_property_readonly("weight", [](const OperatorState& s) { return to_numpy(s.op.weight, 0); })
+      .def("limit_matrix", [](const OperatorState& s) { return csr_tuple(sorpia::to_csr(s.op)); },
+           "B as CSR arrays (data, indices, indptr).")
       .def_property_readonly("symmetrisable", [](const OperatorState& s) { return sorpia::is_symmetrisable(s.op); })
       .def(
           "apply",
@@ -89,21 +259,9 @@ void bind_solvers(py::module_& m) {
            })
       .def(
           "solve",
-          [](OperatorState& s, const Vertices& v0, const std::string& method, const std::string& omega_rule,
-             double omega, double sigma, double alpha, double weight, double tol, int max_iter,
-             const py::object& callback, int threads) {
+          [](OperatorState& s, const Vertices& v0, sorpia::SolveOptions opt, const py::object& callback) {
             check_shape(v0, 3, "vertices");
             check_rows(v0, s.op.n, "vertices", "the mesh");
-            sorpia::SolveOptions opt;
-            opt.method = sorpia::parse_method(method);
-            opt.omega_rule = parse_omega_rule(omega_rule);
-            opt.omega = omega;
-            opt.sigma = sigma;
-            opt.alpha = alpha;
-            opt.weight = weight;
-            opt.tol = tol;
-            opt.max_iter = max_iter;
-            opt.threads = threads;
             // No callback: the core never leaves C++ during the iteration.
             if (!callback.is_none())
               opt.callback = [callback](int k, double e) {
@@ -115,11 +273,10 @@ void bind_solvers(py::module_& m) {
               py::gil_scoped_release release;
               r = sorpia::solve(s.op, v0.data(), opt, &s.cache);
             }
-            return result_dict(std::move(r));
+            return r;
           },
-          "vertices"_a.noconvert(), "method"_a, "omega_rule"_a, "omega"_a, "sigma"_a, "alpha"_a, "weight"_a, "tol"_a,
-          "max_iter"_a, "callback"_a, "threads"_a = 1,
-          "Solve B V = V0; NaN sigma/alpha/weight: estimate. Returns a dict of the result fields.");
+          "vertices"_a.noconvert(), "options"_a, "callback"_a,
+          "Solve B V = V0 with checked options. Returns an InterpolationResult.");
   m.attr("YOUNG_RHO_CLAMP") = sorpia::young_rho_clamp;
   m.attr("MAX_THREADS") = sorpia::max_threads;
 }

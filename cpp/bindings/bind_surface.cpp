@@ -17,9 +17,8 @@ void check_vertices(const Vertices& a, std::size_t n_vertices) {
 
 void bind_surface(py::module_& m) {
   py::class_<sorpia::LoopSurface>(m, "LoopSurface")
-      .def(py::init([](const sorpia::Topology& topology, const Vertices& vertices, const std::string& boundary) {
+      .def(py::init([](const sorpia::Topology& topology, const Vertices& vertices, sorpia::Boundary b) {
              check_vertices(vertices, topology.n_vertices());
-             const auto b = sorpia::parse_boundary(boundary);
              const double* v = vertices.data();
              py::gil_scoped_release release;
              return sorpia::LoopSurface(topology, v, b);

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "sorpia/errors.hpp"
+#include "sorpia/limit.hpp"
 #include "sorpia/shapes.hpp"
 #include "sorpia/topology.hpp"
 
@@ -59,6 +60,12 @@ py::array_t<T> to_numpy(std::vector<T>&& v, py::ssize_t cols) {
   auto* owner = new std::vector<T>(std::move(v));
   py::capsule free_with_array(owner, [](void* p) { delete static_cast<std::vector<T>*>(p); });
   return py::array_t<T>(numpy_shape(*owner, cols), owner->data(), free_with_array);
+}
+
+// (data, indices, indptr) of a CSR matrix, for scipy.sparse.csr_matrix, taking its storage over.
+inline py::tuple csr_tuple(sorpia::CsrMatrix&& b) {
+  return py::make_tuple(to_numpy(std::move(b.data), 0), to_numpy(std::move(b.indices), 0),
+                        to_numpy(std::move(b.indptr), 0));
 }
 
 // (vertices (n, 3), faces (m, 3)), taking the mesh's storage over.

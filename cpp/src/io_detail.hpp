@@ -62,13 +62,27 @@ inline std::string quoted(std::string_view t) {
   return out + "'";
 }
 
-// Lines of a text buffer, without their "\n" or "\r\n"; numbered from 1.
+// Where the text of a file starts: after a UTF-8 byte-order mark, if any.
+inline const char* text_begin(const FileData& f) {
+  const char* p = f.bytes.data();
+  return f.bytes.compare(0, 3, "\xEF\xBB\xBF") == 0 ? p + 3 : p;
+}
+
+// Lines of a text buffer, without their "\n" or "\r\n"; numbered from 1. A
+// buffer with no "\n" at all but a "\r" has classic Mac line ends: "\r" ends
+// its lines.
 class LineReader {
  public:
-  LineReader(const char* begin, const char* end) : p_(begin), end_(end) {}
+  LineReader(const char* begin, const char* end)
+      : p_(begin),
+        end_(end),
+        eol_(std::memchr(begin, '\n', static_cast<std::size_t>(end - begin)) == nullptr &&
+                     std::memchr(begin, '\r', static_cast<std::size_t>(end - begin)) != nullptr
+                 ? '\r'
+                 : '\n') {}
   bool next(std::string_view& line) {
     if (p_ >= end_) return false;
-    const auto* nl = static_cast<const char*>(std::memchr(p_, '\n', static_cast<std::size_t>(end_ - p_)));
+    const auto* nl = static_cast<const char*>(std::memchr(p_, eol_, static_cast<std::size_t>(end_ - p_)));
     const char* stop = nl ? nl : end_;
     const char* q = stop;
     if (q > p_ && q[-1] == '\r') --q;
@@ -83,6 +97,7 @@ class LineReader {
  private:
   const char* p_;
   const char* end_;
+  char eol_;
   std::size_t number_ = 0;
 };
 
@@ -111,6 +126,36 @@ inline std::string_view strip_comment(std::string_view line) {
   while (!line.empty() && is_space(line.back())) line.remove_suffix(1);
   return line;
 }
+
+// The tokens of a text, across lines, with "#" comments and blank lines
+// skipped: for formats whose records may run over several lines (OFF).
+class TokenReader {
+ public:
+  TokenReader(const char* begin, const char* end) : lines_(begin, end) {}
+  // The next token; false at the end of the text.
+  bool next(std::string_view& token) {
+    while (!next_token(rest_, token)) {
+      std::string_view line;
+      if (!lines_.next(line)) return false;
+      rest_ = strip_comment(line);
+    }
+    return true;
+  }
+  // Drops what is left of the current line (e.g. a colour after a record).
+  void skip_line() { rest_ = {}; }
+  // Whether the current line has more tokens.
+  bool line_has_more() const {
+    for (char c : rest_)
+      if (!is_space(c)) return true;
+    return false;
+  }
+  std::size_t line() const { return lines_.number(); }
+  const char* position() const { return lines_.position(); }
+
+ private:
+  LineReader lines_;
+  std::string_view rest_;
+};
 
 // Exact decimal -> T (std::from_chars: correctly rounded for floating T, so
 // the shortest representation written by to_chars reads back bit for bit).

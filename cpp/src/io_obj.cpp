@@ -1,7 +1,9 @@
 // Wavefront OBJ: "v x y z" vertices and "f" faces (1-based indices, "a",
 // "a/b", "a//c", "a/b/c" forms, negative indices counted from the last vertex
 // read). Every other statement (vt, vn, vp, g, o, s, usemtl, mtllib, l, p,
-// curves, ...) is skipped.
+// curves, ...) is skipped. A line ending in "\\" continues on the next; a
+// UTF-8 byte-order mark is skipped; after "v x y z" only numbers may follow
+// (the weight w, or colours).
 #include <cctype>
 #include <limits>
 
@@ -10,6 +12,12 @@
 namespace sorpia::detail::io {
 
 namespace {
+// A line ending in a backslash (blanks after it allowed) continues on the next.
+bool continues(std::string_view line) {
+  while (!line.empty() && is_space(line.back())) line.remove_suffix(1);
+  return !line.empty() && line.back() == '\\';
+}
+
 bool is_keyword(std::string_view t) {
   for (const char c : t)
     if (!std::isalpha(static_cast<unsigned char>(c)) && c != '_') return false;
@@ -29,19 +37,29 @@ TriMesh read_obj(const FileData& f, Polygons& polygons) {
   };
   std::vector<Pending> pending;
   std::vector<std::int64_t> idx;
-  LineReader lines(f.bytes.data(), f.bytes.data() + f.bytes.size());
+  LineReader lines(text_begin(f), f.bytes.data() + f.bytes.size());
   std::string_view line, tok;
+  std::string joined;  // a statement continued over lines ending in '\\'
   while (lines.next(line)) {
+    const Where w{"line", lines.number()};
+    if (continues(line)) {
+      joined.assign(line.substr(0, line.rfind('\\'))) += ' ';
+      while (lines.next(line) && continues(line)) joined.append(line.substr(0, line.rfind('\\'))) += ' ';
+      if (!continues(line)) joined.append(line);
+      line = joined;
+    }
     std::string_view rest = strip_comment(line);
     if (!next_token(rest, tok)) continue;
-    const Where w{"line", lines.number()};
     if (tok == "v") {
       double p[3];
       for (double& x : p) {
         if (!next_token(rest, tok)) fail(f, w, "a vertex needs 3 coordinates");
         x = parse_coordinate(f, w, tok);
       }
-      mesh.vertices.insert(mesh.vertices.end(), p, p + 3);  // a 4th (w) or colours are ignored
+      // A 4th number (the weight w) or colours are ignored; anything else is
+      // not a vertex line (e.g. several statements run together).
+      while (next_token(rest, tok)) parse_coordinate(f, w, tok);
+      mesh.vertices.insert(mesh.vertices.end(), p, p + 3);
     } else if (tok == "f") {
       idx.clear();
       const auto n = static_cast<long long>(mesh.n_vertices());

@@ -1,8 +1,11 @@
-// Object File Format (OFF, as Geomview and CGAL write it): a header "OFF"
-// (or COFF, NOFF, CNOFF, STOFF...: extra per-vertex numbers are ignored), the
-// counts "n_vertices n_faces n_edges" (on the header line or the next one),
-// one vertex per line, then one face per line "k i_1 ... i_k [colour]" with
-// 0-based indices. "#" starts a comment anywhere.
+// Object File Format (OFF, as Geomview, CGAL and libigl write it): a header
+// "OFF" (or COFF, NOFF, CNOFF, STOFF...: extra per-vertex numbers are
+// ignored), the counts "n_vertices n_faces [n_edges]", the vertices "x y z
+// [extras]" one per line, then the faces "k i_1 ... i_k [colour]" with 0-based
+// indices. "#" starts a comment anywhere; a UTF-8 byte-order mark is skipped.
+// Counts and records may run over several lines (libigl and pymeshlab read
+// such files): a vertex ends at its third coordinate, a face at its k-th
+// index, and the rest of that line (extras, a colour) is ignored.
 #include <string>
 
 #include "io_detail.hpp"
@@ -19,16 +22,6 @@ bool is_off_keyword(std::string_view t) {
   return true;
 }
 
-// Next line holding something other than blanks and comments.
-bool next_content(LineReader& lines, std::string_view& content) {
-  std::string_view line;
-  while (lines.next(line)) {
-    content = strip_comment(line);
-    if (!content.empty()) return true;
-  }
-  return false;
-}
-
 std::size_t parse_count(const FileData& f, const Where& w, std::string_view rest_tok, const char* what) {
   long long c = 0;
   if (!parse_int(rest_tok, c) || c < 0)
@@ -39,24 +32,28 @@ std::size_t parse_count(const FileData& f, const Where& w, std::string_view rest
 }  // namespace
 
 TriMesh read_off(const FileData& f, Polygons& polygons) {
-  LineReader lines(f.bytes.data(), f.bytes.data() + f.bytes.size());
-  std::string_view rest, tok;
-  if (!next_content(lines, rest) || !next_token(rest, tok) || !is_off_keyword(tok))
-    fail(f, Where{"line", lines.number()}, "an OFF file starts with 'OFF'");
+  TokenReader in(text_begin(f), f.bytes.data() + f.bytes.size());
+  std::string_view tok;
+  const auto at = [&in] { return Where{"line", in.line()}; };
+  if (!in.next(tok) || !is_off_keyword(tok)) fail(f, at(), "an OFF file starts with 'OFF'");
   if (tok.find('4') != std::string_view::npos || tok.find('n') != std::string_view::npos)
-    fail(f, Where{"line", lines.number()}, quoted(tok) + " (not 3-dimensional) is not supported");
-  std::string_view after = rest;
-  if (next_token(after, tok) && tok == "BINARY")
-    fail(f, Where{"line", lines.number()}, "binary OFF is not supported; write it as text OFF or PLY");
-  if (!next_token(rest, tok) && (!next_content(lines, rest) || !next_token(rest, tok)))
+    fail(f, at(), quoted(tok) + " (not 3-dimensional) is not supported");
+  if (in.line_has_more() && in.next(tok)) {
+    if (tok == "BINARY") fail(f, at(), "binary OFF is not supported; write it as text OFF or PLY");
+  } else if (!in.next(tok)) {
     fail(f, "the file ends before the vertex and face counts");
-  const Where counts_at{"line", lines.number()};
-  const std::size_t nv = parse_count(f, counts_at, tok, "vertices");
-  if (!next_token(rest, tok)) fail(f, counts_at, "expected the number of faces after the number of vertices");
+  }
+  const std::size_t nv = parse_count(f, at(), tok, "vertices");
+  if (!in.next(tok)) fail(f, at(), "expected the number of faces after the number of vertices");
+  const Where counts_at = at();
   const std::size_t nf = parse_count(f, counts_at, tok, "faces");
+  if (in.line_has_more()) {  // the edge count, which nothing needs
+    in.next(tok);
+    parse_count(f, counts_at, tok, "edges");
+  }
   // A header claiming more than the file can hold fails here, before any
-  // allocation: a vertex line is at least 6 bytes ("0 0 0\n"), a face 8.
-  const auto left = static_cast<std::size_t>(f.bytes.data() + f.bytes.size() - lines.position());
+  // allocation: a vertex is at least 6 bytes ("0 0 0\n"), a face 8.
+  const auto left = static_cast<std::size_t>(f.bytes.data() + f.bytes.size() - in.position());
   if (nv > left / 6 || nf > left / 8 || nv * 6 + nf * 8 > left + 2)
     fail(f, counts_at,
          "the header claims " + std::to_string(nv) + " vertices and " + std::to_string(nf) +
@@ -65,35 +62,35 @@ TriMesh read_off(const FileData& f, Polygons& polygons) {
   TriMesh mesh;
   mesh.vertices.resize(3 * nv);
   for (std::size_t i = 0; i < nv; ++i) {
-    if (!next_content(lines, rest))
-      fail(f, "the file ends after " + std::to_string(i) + " of " + std::to_string(nv) + " vertices");
-    const Where w{"line", lines.number()};
     for (int c = 0; c < 3; ++c) {
-      if (!next_token(rest, tok)) fail(f, w, "a vertex needs 3 coordinates");
-      mesh.vertices[3 * i + c] = parse_coordinate(f, w, tok);
+      if (!in.next(tok))
+        fail(f, "the file ends " + std::string(c ? "inside vertex " : "after ") + std::to_string(i) +
+                    (c ? "" : " of " + std::to_string(nv) + " vertices"));
+      mesh.vertices[3 * i + c] = parse_coordinate(f, at(), tok);
     }
+    in.skip_line();
   }
   mesh.faces.reserve(3 * nf);
   FaceSink sink(f, polygons, mesh.faces);
   std::vector<std::int64_t> idx;
   for (std::size_t i = 0; i < nf; ++i) {
-    if (!next_content(lines, rest))
-      fail(f, "the file ends after " + std::to_string(i) + " of " + std::to_string(nf) + " faces");
-    const Where w{"line", lines.number()};
+    if (!in.next(tok)) fail(f, "the file ends after " + std::to_string(i) + " of " + std::to_string(nf) + " faces");
+    const Where w = at();
     long long k = 0;
-    if (!next_token(rest, tok) || !parse_int(tok, k) || k < 0)
-      fail(f, w, "expected the number of vertices of a face");
-    if (static_cast<unsigned long long>(k) > rest.size() / 2 + 1)  // before allocating for it
-      fail(f, w, "a face of " + std::to_string(k) + " vertices is longer than its line");
+    if (!parse_int(tok, k) || k < 0) fail(f, w, "expected the number of vertices of a face, found " + quoted(tok));
+    const auto rest = static_cast<std::size_t>(f.bytes.data() + f.bytes.size() - in.position());
+    if (static_cast<unsigned long long>(k) > rest / 2 + 64)  // each index takes 2 bytes: before allocating for it
+      fail(f, w, "a face of " + std::to_string(k) + " vertices is longer than the rest of the file");
     idx.resize(static_cast<std::size_t>(k));
     for (auto& x : idx) {
       long long v = 0;
-      if (!next_token(rest, tok)) fail(f, w, "the face has fewer than the " + std::to_string(k) + " indices it announces");
-      if (!parse_int(tok, v)) fail(f, w, "expected a vertex index, found " + quoted(tok));
-      check_index(f, w, v, nv);
+      if (!in.next(tok)) fail(f, w, "the file ends inside a face of " + std::to_string(k) + " vertices");
+      if (!parse_int(tok, v)) fail(f, at(), "expected a vertex index, found " + quoted(tok));
+      check_index(f, at(), v, nv);
       x = v;
     }
-    sink.add(idx.data(), idx.size(), w);  // anything after the indices (a colour) is ignored
+    in.skip_line();  // a colour after the indices is ignored
+    sink.add(idx.data(), idx.size(), w);
   }
   return mesh;
 }

@@ -1,8 +1,9 @@
 // Stanford PLY: ascii, binary_little_endian and binary_big_endian on reading;
 // ascii and binary_little_endian with `double` coordinates on writing.
 // The "vertex" element's x, y, z (any numeric type) and the "face" element's
-// "vertex_indices" (or "vertex_index") list are read; every other property
-// and element is skipped.
+// "vertex_indices" (or "vertex_index") list are read, or, without a "face"
+// element, the triangle strips of a "tristrips" element (as several of
+// Stanford's scans come); every other property and element is skipped.
 #include <cmath>
 #include <string>
 
@@ -187,9 +188,33 @@ Header parse_header(const FileData& f) {
 struct Layout {
   const Element* vertex = nullptr;
   int xyz[3] = {-1, -1, -1};
-  const Element* face = nullptr;
+  const Element* face = nullptr;  // the "face" element, or else the "tristrips" element
   int indices = -1;
+  bool strips = false;  // face is "tristrips": its lists are triangle strips
 };
+
+// The faces of a list of indices: the polygon itself, or, for a "tristrips"
+// element, the triangles of its strips. A strip (v0, v1, v2, v3, ...) gives
+// (v0, v1, v2), (v2, v1, v3), (v2, v3, v4), ...: every other triangle reversed
+// so that all have the strip's orientation; -1 ends a strip and starts
+// another. Triangles with a repeated vertex join strips and are no faces.
+void add_faces(const Layout& l, const std::int64_t* idx, std::size_t n, FaceSink& sink, const Where& w) {
+  if (!l.strips) {
+    sink.add(idx, n, w);
+    return;
+  }
+  std::size_t start = 0;
+  for (std::size_t k = 0; k < n; ++k) {
+    if (idx[k] < 0) {
+      start = k + 1;
+      continue;
+    }
+    if (k < start + 2) continue;
+    const bool odd = (k - start) % 2 == 1;
+    const std::int64_t t[3] = {odd ? idx[k - 1] : idx[k - 2], odd ? idx[k - 2] : idx[k - 1], idx[k]};
+    if (t[0] != t[1] && t[1] != t[2] && t[0] != t[2]) sink.add(t, 3, w);
+  }
+}
 
 Layout find_layout(const FileData& f, const Header& h) {
   Layout l;
@@ -203,20 +228,21 @@ Layout find_layout(const FileData& f, const Header& h) {
         if (l.xyz[c] < 0)
           fail(f, Where{"line", e.line}, std::string("the vertex element has no property ") + char('x' + c));
     }
-    if (e.name == "face" && !l.face) {
+    if ((e.name == "face" && (!l.face || l.strips)) || (e.name == "tristrips" && !l.face)) {
       l.face = &e;
+      l.strips = e.name == "tristrips";
       for (int k = 0; k < static_cast<int>(e.props.size()); ++k)
         if (e.props[k].is_list && (e.props[k].name == "vertex_indices" || e.props[k].name == "vertex_index")) {
           l.indices = k;
           break;
         }
-      if (l.indices < 0) fail(f, Where{"line", e.line}, "the face element has no list 'vertex_indices'");
+      if (l.indices < 0) fail(f, Where{"line", e.line}, "the " + e.name + " element has no list 'vertex_indices'");
       if (is_float(e.props[l.indices].type))
         fail(f, Where{"line", e.line}, "vertex_indices must have an integer type");
     }
   }
   if (!l.vertex) fail(f, "no 'vertex' element in the header");
-  if (!l.face) fail(f, "no 'face' element in the header: sorpia needs a triangle mesh");
+  if (!l.face) fail(f, "no 'face' or 'tristrips' element in the header: sorpia needs a triangle mesh");
   return l;
 }
 
@@ -290,10 +316,10 @@ TriMesh read_binary(const FileData& f, const Header& h, const Layout& l, Polygon
           idx.resize(n);
           for (std::size_t j = 0; j < n; ++j) {
             const double v = load_number(p + j * s, pr.type, swap);
-            check_index(f, Where{"face", i}, static_cast<long long>(v), nv);
+            if (!(l.strips && v == -1)) check_index(f, Where{"face", i}, static_cast<long long>(v), nv);
             idx[j] = static_cast<std::int64_t>(v);
           }
-          sink.add(idx.data(), n, Where{"face", i});
+          add_faces(l, idx.data(), n, sink, Where{"face", i});
         }
         p += n * s;
       }
@@ -349,10 +375,10 @@ TriMesh read_ascii(const FileData& f, const Header& h, const Layout& l, Polygons
           if (!wanted) continue;
           long long v = 0;
           if (!parse_int(t, v)) fail(f, w, "expected a vertex index, found " + quoted(t));
-          check_index(f, w, v, nv);
+          if (!(l.strips && v == -1)) check_index(f, w, v, nv);
           idx[static_cast<std::size_t>(j)] = v;
         }
-        if (wanted) sink.add(idx.data(), idx.size(), w);
+        if (wanted) add_faces(l, idx.data(), idx.size(), sink, w);
       }
     }
   }

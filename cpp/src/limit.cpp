@@ -11,6 +11,7 @@
 
 #include "osd_refiner.hpp"
 #include "sorpia/errors.hpp"
+#include "sorpia/limit_operator.hpp"
 
 namespace sorpia {
 namespace detail {
@@ -146,7 +147,7 @@ struct RowRecorders {
 
 }  // namespace
 
-CsrMatrix limit_matrix(const Topology& topology, Boundary boundary) {
+CsrMatrix reference_limit_matrix(const Topology& topology, Boundary boundary) {
   const auto osd = detail::make_loop_refiner(topology, boundary);
   const std::size_t n = topology.n_vertices();
   CsrMatrix b;
@@ -162,27 +163,19 @@ CsrMatrix limit_matrix(const Topology& topology, Boundary boundary) {
   return b;
 }
 
-void limit_points(const Topology& topology, const double* vertices, Boundary boundary, double* out) {
+void reference_limit_points(const Topology& topology, const double* vertices, Boundary boundary, double* out) {
   const auto osd = detail::make_loop_refiner(topology, boundary);
   std::vector<detail::Point3> points;
   detail::gather_points(osd, vertices, points);
   detail::limit_positions(osd, points, vertices, topology.n_vertices(), out);
 }
 
-void multiply(const CsrMatrix& a, const double* x, double* y) {
-  for (std::size_t i = 0; i < a.n_rows; ++i) {
-    double s0 = 0, s1 = 0, s2 = 0;
-    for (std::int32_t p = a.indptr[i]; p < a.indptr[i + 1]; ++p) {
-      const double w = a.data[p];
-      const double* xj = x + 3 * a.indices[p];
-      s0 += w * xj[0];
-      s1 += w * xj[1];
-      s2 += w * xj[2];
-    }
-    y[3 * i] = s0;
-    y[3 * i + 1] = s1;
-    y[3 * i + 2] = s2;
-  }
+CsrMatrix limit_matrix(const Topology& topology, Boundary boundary) {
+  return to_csr(limit_operator(topology, boundary));
+}
+
+void limit_points(const Topology& topology, const double* vertices, Boundary boundary, double* out) {
+  apply(limit_operator(topology, boundary), vertices, out);
 }
 
 }  // namespace sorpia

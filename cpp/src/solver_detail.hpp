@@ -13,27 +13,50 @@ namespace sorpia {
 namespace detail {
 
 // y = B x for C interleaved columns (C = 3: vertices; C = 1: a scalar field).
+// Uniform rows: diag x_i + weight (sum of the neighbours), in neighbour order.
 template <int C>
 inline void apply_cols(const LimitOperator& op, const double* x, double* y) {
   const std::int32_t* off = op.offsets.data();
   const std::int32_t* nb = op.neighbors.data();
+  if (op.uniform()) {
+    for (std::size_t i = 0; i < op.n; ++i) {
+      double s[C] = {};
+      for (std::int32_t p = off[i]; p < off[i + 1]; ++p)
+        for (int c = 0; c < C; ++c) s[c] += x[C * nb[p] + c];
+      for (int c = 0; c < C; ++c) y[C * i + c] = op.diag[i] * x[C * i + c] + op.weight[i] * s[c];
+    }
+    return;
+  }
+  const double* val = op.values.data();
   for (std::size_t i = 0; i < op.n; ++i) {
     double s[C] = {};
     for (std::int32_t p = off[i]; p < off[i + 1]; ++p)
-      for (int c = 0; c < C; ++c) s[c] += x[C * nb[p] + c];
-    for (int c = 0; c < C; ++c) y[C * i + c] = op.diag[i] * x[C * i + c] + op.weight[i] * s[c];
+      for (int c = 0; c < C; ++c) s[c] += val[p] * x[C * nb[p] + c];
+    for (int c = 0; c < C; ++c) y[C * i + c] = op.diag[i] * x[C * i + c] + s[c];
   }
 }
 
-// s = sum of the (n, 3) rows of v over the neighbours of vertex i.
-inline void neighbour_sum(const LimitOperator& op, const double* v, std::size_t i, double* s) {
-  s[0] = s[1] = s[2] = 0.0;
+// (B v)_i for (n, 3) rows of v, written to bv[0..3): the formula of apply_cols<3>.
+inline void row_product(const LimitOperator& op, const double* v, std::size_t i, double* bv) {
+  double s[3] = {0.0, 0.0, 0.0};
+  if (op.uniform()) {
+    for (std::int32_t p = op.offsets[i]; p < op.offsets[i + 1]; ++p) {
+      const double* q = v + 3 * op.neighbors[p];
+      s[0] += q[0];
+      s[1] += q[1];
+      s[2] += q[2];
+    }
+    for (int c = 0; c < 3; ++c) bv[c] = op.diag[i] * v[3 * i + c] + op.weight[i] * s[c];
+    return;
+  }
   for (std::int32_t p = op.offsets[i]; p < op.offsets[i + 1]; ++p) {
     const double* q = v + 3 * op.neighbors[p];
-    s[0] += q[0];
-    s[1] += q[1];
-    s[2] += q[2];
+    const double w = op.values[p];
+    s[0] += w * q[0];
+    s[1] += w * q[1];
+    s[2] += w * q[2];
   }
+  for (int c = 0; c < 3; ++c) bv[c] = op.diag[i] * v[3 * i + c] + s[c];
 }
 
 // B^T in CSR: the rows of B^T hold, for column j of B, every row i referencing j
@@ -69,8 +92,10 @@ inline void apply_part(const LimitOperator& op, const Transposed& t, double sign
 // Gamma Upsilon with Upsilon symmetric on closed meshes (paper section 3.2), so
 // B is self-adjoint in the inner product <x, y> = sum_i x_i y_i / w_i, and
 // Gamma^-1 B = Upsilon is the row-scaled system.
+// Rows with several weights have no such Gamma: they get 1 (the plain inner product).
 inline std::vector<double> gamma_inverse(const LimitOperator& op) {
-  std::vector<double> g(op.n);
+  std::vector<double> g(op.n, 1.0);
+  if (!op.uniform()) return g;
   for (std::size_t i = 0; i < op.n; ++i) g[i] = op.weight[i] > 0.0 ? 1.0 / op.weight[i] : 1.0;
   return g;
 }
@@ -103,7 +128,8 @@ class Monitor {
   Monitor(const SolveOptions& opt, SolveResult& res, double scale)
       : opt_(opt), res_(res), floor_(64.0 * 2.220446049250313e-16 * scale) {
     res_.errors.clear();
-    res_.errors.reserve(static_cast<std::size_t>(opt.max_iter) + 1);
+    // A generous max_iter must not reserve memory it will not use.
+    res_.errors.reserve(static_cast<std::size_t>(std::min(opt.max_iter, 4096LL)) + 1);
   }
 
   // E_0; returns true when there is nothing to do (E_0 == 0: V0 already solves it).

@@ -1,77 +1,28 @@
-// The limit operator in compact form, the stationary methods (PIA, W-PIA,
+// The stationary methods (PIA, W-PIA,
 // Gauss-Seidel, SOR-PIA) and the driver shared by every method.
 #include "sorpia/solvers.hpp"
 
 #include <algorithm>
 #include <chrono>
+#include <initializer_list>
 #include <cmath>
 #include <stdexcept>
 #include <string>
 #include <tuple>
 
 #include "solver_detail.hpp"
+#include "repr.hpp"
 #include "sorpia/errors.hpp"
 
 namespace sorpia {
 
-LimitOperator limit_operator(const CsrMatrix& b) {
-  if (b.n_rows != b.n_cols) throw std::logic_error("sorpia::limit_operator: B is not square");
-  LimitOperator op;
-  op.n = b.n_rows;
-  op.offsets.assign(op.n + 1, 0);
-  op.neighbors.reserve(b.indices.size());
-  op.diag.assign(op.n, 0.0);
-  op.weight.assign(op.n, 0.0);
-  for (std::size_t i = 0; i < op.n; ++i) {
-    bool has_diag = false, has_weight = false;
-    for (std::int32_t p = b.indptr[i]; p < b.indptr[i + 1]; ++p) {
-      const std::int32_t j = b.indices[p];
-      if (static_cast<std::size_t>(j) == i) {
-        op.diag[i] = b.data[p];
-        has_diag = true;
-        continue;
-      }
-      if (b.data[p] == 0.0) continue;  // an explicit zero is no neighbour
-      // Loop masks give every neighbour of a vertex the same weight; a row
-      // that does not is not a Loop limit mask (a bug upstream), so refuse it
-      // rather than sweep with the wrong matrix.
-      if (has_weight && b.data[p] != op.weight[i])
-        throw std::logic_error("sorpia::limit_operator: row " + std::to_string(i) +
-                               " of B has unequal off-diagonal weights");
-      op.weight[i] = b.data[p];
-      has_weight = true;
-      op.neighbors.push_back(j);
-    }
-    if (!has_diag || !(op.diag[i] > 0.0))
-      throw std::logic_error("sorpia::limit_operator: row " + std::to_string(i) + " of B has no positive diagonal");
-    op.offsets[i + 1] = static_cast<std::int32_t>(op.neighbors.size());
-  }
-  return op;
-}
-
-LimitOperator limit_operator(const Topology& topology, Boundary boundary) {
-  return limit_operator(limit_matrix(topology, boundary));
-}
-
-void apply(const LimitOperator& op, const double* x, double* y) { detail::apply_cols<3>(op, x, y); }
-
-bool is_symmetrisable(const LimitOperator& op) {
-  // (i, j) stored => (j, i) stored. Rows are short (valence), so a linear scan
-  // of row j is cheaper than sorting.
-  for (std::size_t i = 0; i < op.n; ++i)
-    for (std::int32_t p = op.offsets[i]; p < op.offsets[i + 1]; ++p) {
-      const std::int32_t j = op.neighbors[p];
-      const auto* first = op.neighbors.data() + op.offsets[j];
-      const auto* last = op.neighbors.data() + op.offsets[j + 1];
-      if (std::find(first, last, static_cast<std::int32_t>(i)) == last) return false;
-    }
-  return true;
-}
-
 Method parse_method(const std::string& name) {
-  for (Method m : {Method::Pia, Method::Wpia, Method::Gs, Method::Sor, Method::Cg, Method::Hss, Method::Whss})
+  std::string names;
+  for (Method m : all_methods) {
     if (name == method_name(m)) return m;
-  throw ParameterError("unknown method '" + name + "': use one of 'pia', 'wpia', 'gs', 'sor', 'cg', 'hss', 'whss'");
+    names += std::string(names.empty() ? "'" : ", '") + method_name(m) + "'";
+  }
+  throw ParameterError("unknown method '" + name + "': use one of " + names);
 }
 
 const char* method_name(Method method) {
@@ -97,6 +48,75 @@ const char* stop_reason_name(StopReason reason) {
   return "?";
 }
 
+namespace {
+
+std::string quoted(Method m) { return std::string("'") + method_name(m) + "'"; }
+
+// "name = value applies to method='a' or 'b' only (method='c')" unless the method is one of `users`.
+void check_applies(const char* name, const std::string& value, Method method, std::initializer_list<Method> users) {
+  for (Method u : users)
+    if (u == method) return;
+  std::string list;
+  for (Method u : users) list += (list.empty() ? "" : " or ") + quoted(u);
+  throw ParameterError(std::string(name) + " = " + value + " applies to method=" + list + " only (method=" +
+                       quoted(method) + ")");
+}
+
+// omega, sigma and weight: relaxation factors, in (0, 2).
+void check_relaxation(const char* name, double x) {
+  if (!(x > 0.0 && x < 2.0)) throw ParameterError(std::string(name) + " = " + detail::repr(x) + " is outside (0, 2)");
+}
+
+void check_positive_finite(const char* name, double x) {
+  if (!(x > 0.0 && std::isfinite(x)))
+    throw ParameterError(std::string(name) + " = " + detail::repr(x) + " must be a positive finite number");
+}
+
+}  // namespace
+
+void check_options(const SolveOptions& opt) {
+  const Method m = opt.method;
+  if (opt.omega_rule != OmegaRule::Auto) {
+    const std::string shown = opt.omega_rule == OmegaRule::Young ? "'young'" : detail::repr(opt.omega);
+    check_applies("omega", shown, m, {Method::Sor});
+    if (opt.omega_rule == OmegaRule::Given) check_relaxation("omega", opt.omega);
+  }
+  if (opt.sigma) {
+    check_applies("sigma", detail::repr(*opt.sigma), m, {Method::Wpia});
+    check_relaxation("sigma", *opt.sigma);
+  }
+  if (opt.alpha) {
+    check_applies("alpha", detail::repr(*opt.alpha), m, {Method::Hss, Method::Whss});
+    check_positive_finite("alpha", *opt.alpha);
+  }
+  if (opt.weight) {
+    check_applies("weight", detail::repr(*opt.weight), m, {Method::Whss});
+    check_relaxation("weight", *opt.weight);
+  }
+  check_positive_finite("tol", opt.tol);
+  if (opt.max_iter < 1)
+    throw ParameterError("max_iter = " + detail::repr(opt.max_iter) + " must be an integer >= 1");
+  if (opt.max_iter > max_iterations)
+    throw ParameterError("max_iter = " + detail::repr(opt.max_iter) + " is too large (at most 2**31 - 1)");
+  if (opt.threads < 1 || opt.threads > max_threads)
+    throw ParameterError("threads = " + detail::repr(opt.threads) + " must be an integer in 1.." +
+                         std::to_string(max_threads));
+  if (opt.threads > 1) check_applies("threads", detail::repr(opt.threads), m, {Method::Sor, Method::Gs});
+}
+
+void parse_omega(const std::string& text, SolveOptions& opt) {
+  if (text == "auto" || text == "young") {
+    opt.omega_rule = text == "auto" ? OmegaRule::Auto : OmegaRule::Young;
+    return;
+  }
+  char* end = nullptr;
+  const double x = std::strtod(text.c_str(), &end);
+  if (text.empty() || end != text.c_str() + text.size())
+    throw ParameterError("omega = '" + text + "': use a float in (0, 2), 'auto' or 'young'");
+  opt.omega_rule = OmegaRule::Given;
+  opt.omega = x;
+}
+
 double young_omega(double rho, bool* clamped) {
   const bool c = !(rho < young_rho_clamp);  // NaN clamps too
   if (clamped) *clamped = c;
@@ -109,12 +129,11 @@ namespace detail {
 double residual(const LimitOperator& op, const double* v0, const double* v, double* r) {
   double m = 0.0;
   for (std::size_t i = 0; i < op.n; ++i) {
-    double s[3];
-    neighbour_sum(op, v, i, s);
-    const double d = op.diag[i], w = op.weight[i];
-    const double r0 = v0[3 * i] - (d * v[3 * i] + w * s[0]);
-    const double r1 = v0[3 * i + 1] - (d * v[3 * i + 1] + w * s[1]);
-    const double r2 = v0[3 * i + 2] - (d * v[3 * i + 2] + w * s[2]);
+    double bv[3];
+    row_product(op, v, i, bv);
+    const double r0 = v0[3 * i] - bv[0];
+    const double r1 = v0[3 * i + 1] - bv[1];
+    const double r2 = v0[3 * i + 2] - bv[2];
     if (r) {
       r[3 * i] = r0;
       r[3 * i + 1] = r1;
@@ -149,7 +168,7 @@ Transposed transpose(const LimitOperator& op) {
     for (std::int32_t p = op.offsets[i]; p < op.offsets[i + 1]; ++p) {
       const std::int32_t q = fill[op.neighbors[p]]++;
       t.rows[q] = static_cast<std::int32_t>(i);
-      t.values[q] = op.weight[i];
+      t.values[q] = op.entry(i, p);
     }
   return t;
 }
@@ -168,46 +187,24 @@ void solve_richardson(const LimitOperator& op, const double* v0, double sigma, M
   }
 }
 
-void check_open_unit(double x, const char* name, double hi) {
-  if (!(x > 0.0 && x < hi))
-    throw ParameterError(std::string(name) + " = " + std::to_string(x) + " is outside (0, " + std::to_string(hi) +
-                         ")");
-}
-
 }  // namespace
 }  // namespace detail
 
-SolveResult solve(const LimitOperator& op, const double* v0, const SolveOptions& opt, SpectralCache* cache) {
-  using clock = std::chrono::steady_clock;
-  if (!(opt.tol > 0.0)) throw ParameterError("tol = " + std::to_string(opt.tol) + " must be positive");
-  if (opt.max_iter < 1) throw ParameterError("max_iter = " + std::to_string(opt.max_iter) + " must be at least 1");
-  if (opt.threads < 1 || opt.threads > max_threads)
-    throw ParameterError("threads = " + std::to_string(opt.threads) + " must be an integer in 1.." +
-                         std::to_string(max_threads));
-  if (opt.threads > 1 && opt.method != Method::Sor && opt.method != Method::Gs)
-    throw ParameterError("threads = " + std::to_string(opt.threads) + " applies to method 'sor' or 'gs' only (method '" +
-                         method_name(opt.method) + "')");
+namespace {
 
-  SpectralCache local;
-  SpectralCache& sc = cache ? *cache : local;
-  SolveResult res;
-  res.method = opt.method;
-  res.variant = method_name(opt.method);
-
-  // Parameters: the estimates are timed apart from the solve (and cost nothing
-  // when the cache already holds them).
-  const double spent_before = sc.seconds;
+// The parameters a method runs with: given, or derived from spectral estimates
+// (kept in `sc`), into res.
+void resolve_parameters(const LimitOperator& op, const SolveOptions& opt, SpectralCache& sc, SolveResult& res) {
   switch (opt.method) {
     case Method::Pia:
       res.sigma = 1.0;
       break;
     case Method::Wpia:
-      if (std::isnan(opt.sigma)) {
+      if (opt.sigma) {
+        res.sigma = *opt.sigma;
+      } else {
         res.lambda_min = estimate_lambda_min(op, sc);
         res.sigma = 2.0 / (res.lambda_min + 1.0);  // lambda_max(B) = 1
-      } else {
-        detail::check_open_unit(opt.sigma, "sigma", 2.0);
-        res.sigma = opt.sigma;
       }
       break;
     case Method::Gs:
@@ -215,7 +212,6 @@ SolveResult solve(const LimitOperator& op, const double* v0, const SolveOptions&
       break;
     case Method::Sor:
       if (opt.omega_rule == OmegaRule::Given) {
-        detail::check_open_unit(opt.omega, "omega", 2.0);
         res.omega = opt.omega;
       } else if (opt.omega_rule == OmegaRule::Young) {
         res.rho = estimate_jacobi_rho(op, sc);
@@ -229,21 +225,15 @@ SolveResult solve(const LimitOperator& op, const double* v0, const SolveOptions&
     case Method::Hss:
     case Method::Whss: {
       const bool relaxed = opt.method == Method::Whss;
-      const bool need_h = std::isnan(opt.alpha) || (relaxed && std::isnan(opt.weight));
       double hmin = NAN, hmax = NAN;
-      if (need_h) std::tie(hmin, hmax) = estimate_hermitian_extremes(op, sc);
-      if (std::isnan(opt.alpha)) {
-        // H's extremes are positive on Loop limit matrices (measured 0.17 .. 1.1);
-        // guard the square root anyway.
-        res.alpha = std::sqrt(std::max(hmin, 1e-3 * hmax) * hmax);
-      } else {
-        if (!(opt.alpha > 0.0 && std::isfinite(opt.alpha)))
-          throw ParameterError("alpha = " + std::to_string(opt.alpha) + " must be positive and finite");
-        res.alpha = opt.alpha;
-      }
+      if (!opt.alpha || (relaxed && !opt.weight)) std::tie(hmin, hmax) = estimate_hermitian_extremes(op, sc);
+      // H's extremes are positive on Loop limit matrices; the square root is guarded anyway.
+      res.alpha = opt.alpha ? *opt.alpha : std::sqrt(std::max(hmin, 1e-3 * hmax) * hmax);
       if (!relaxed) {
         res.weight = 1.0;
-      } else if (std::isnan(opt.weight)) {
+      } else if (opt.weight) {
+        res.weight = *opt.weight;
+      } else {
         // With S = 0 the HSS iteration matrix is (alpha - H)(alpha + H)^-1,
         // eigenvalues (alpha - l)/(alpha + l) for l in [hmin, hmax]; the
         // relaxation 2 / (2 - mu_min - mu_max) centres them on 0. At
@@ -251,54 +241,81 @@ SolveResult solve(const LimitOperator& op, const double* v0, const SolveOptions&
         const double mu_min = (res.alpha - hmax) / (res.alpha + hmax);
         const double mu_max = (res.alpha - hmin) / (res.alpha + hmin);
         res.weight = 2.0 / (2.0 - mu_min - mu_max);
-      } else {
-        detail::check_open_unit(opt.weight, "weight", 2.0);
-        res.weight = opt.weight;
       }
       break;
     }
   }
+}
+
+// The exponent e with 2^e ~ max |v0| when |e| > 200, else 0. The methods solve
+// for V0 / 2^e: multiplying by a power of two is exact and B is linear, so the
+// iterates are those of V0 scaled, and norms can neither overflow (|v| > 1e154
+// squares to inf) nor underflow. Within 2^+-200 no squared norm down to
+// rounding level (2^-53 max |v0|) can do either, and the scaling would change
+// no bit of any iterate: then V0 is used as it is, without a copy.
+int scale_exponent(const double* v0, std::size_t n) {
+  double max_abs = 0.0;
+  for (std::size_t k = 0; k < 3 * n; ++k) max_abs = std::max(max_abs, std::abs(v0[k]));
+  int exponent = 0;
+  if (max_abs > 0.0 && std::isfinite(max_abs)) std::frexp(max_abs, &exponent);
+  return std::abs(exponent) <= 200 ? 0 : exponent;
+}
+
+// The iteration of a method that iterates on res.control_vertices (all but
+// the sweep), for V0 / 2^exponent.
+void run_iteration(const LimitOperator& op, const double* v0, int exponent, const SolveOptions& opt,
+                   SolveResult& res) {
+  std::vector<double> scaled;
+  if (exponent != 0) {
+    scaled.assign(v0, v0 + 3 * op.n);
+    detail::scale_pow2(scaled.data(), scaled.size(), -exponent);
+    v0 = scaled.data();
+  }
+  res.control_vertices.assign(v0, v0 + 3 * op.n);  // V^(0) = V0 (paper: M^0 = M)
+  detail::Monitor mon(opt, res, detail::max_row_norm(v0, op.n));
+  switch (opt.method) {
+    case Method::Pia:
+    case Method::Wpia:
+      detail::solve_richardson(op, v0, res.sigma, mon, res);
+      break;
+    case Method::Cg:
+      detail::solve_cg(op, v0, mon, res);
+      break;
+    default:  // Hss, Whss
+      detail::solve_hss(op, v0, res.alpha, res.weight, mon, res);
+      break;
+  }
+  detail::scale_pow2(res.control_vertices.data(), res.control_vertices.size(), exponent);
+}
+
+}  // namespace
+
+SolveResult solve(const LimitOperator& op, const double* v0, const SolveOptions& opt, SpectralCache* cache) {
+  using clock = std::chrono::steady_clock;
+  check_options(opt);
+  SpectralCache local;
+  SpectralCache& sc = cache ? *cache : local;
+  SolveResult res;
+  res.method = opt.method;
+  res.variant = method_name(opt.method);
+
+  // The estimates are timed apart from the solve (and cost nothing when the
+  // cache already holds them).
+  const double spent_before = sc.seconds;
+  resolve_parameters(op, opt, sc, res);
   res.estimate_seconds = sc.seconds - spent_before;
 
   const auto t0 = clock::now();
-  // Solve for V0 / 2^e, 2^e ~ max |v0|: multiplying by a power of two is exact
-  // and B is linear, so the iterates are those of V0 scaled, and norms can
-  // neither overflow (|v| > 1e154 squares to inf) nor underflow. Within
-  // 2^+-200 no squared norm down to rounding level (2^-53 max |v0|) can do
-  // either, and the scaling would change no bit of any iterate (every
-  // operation commutes with it): then V0 is used as it is, without a copy.
-  double max_abs = 0.0;
-  for (std::size_t k = 0; k < 3 * op.n; ++k) max_abs = std::max(max_abs, std::abs(v0[k]));
-  int exponent = 0;
-  if (max_abs > 0.0 && std::isfinite(max_abs)) std::frexp(max_abs, &exponent);
-  if (std::abs(exponent) <= 200) exponent = 0;
+  const int exponent = scale_exponent(v0, op.n);
   if (opt.method == Method::Gs || opt.method == Method::Sor) {
+    if (!op.uniform()) throw std::logic_error("sorpia::solve: the sweep takes uniform rows only");
     detail::solve_sor(op, v0, exponent, opt, res.omega, res);
   } else {
-    std::vector<double> scaled;
-    if (exponent != 0) {
-      scaled.assign(v0, v0 + 3 * op.n);
-      detail::scale_pow2(scaled.data(), scaled.size(), -exponent);
-      v0 = scaled.data();
-    }
-    res.control_vertices.assign(v0, v0 + 3 * op.n);  // V^(0) = V0 (paper: M^0 = M)
-    detail::Monitor mon(opt, res, detail::max_row_norm(v0, op.n));
-    switch (opt.method) {
-      case Method::Pia:
-      case Method::Wpia:
-        detail::solve_richardson(op, v0, res.sigma, mon, res);
-        break;
-      case Method::Cg:
-        detail::solve_cg(op, v0, mon, res);
-        break;
-      default:  // Hss, Whss
-        detail::solve_hss(op, v0, res.alpha, res.weight, mon, res);
-        break;
-    }
-    detail::scale_pow2(res.control_vertices.data(), res.control_vertices.size(), exponent);
+    run_iteration(op, v0, exponent, opt, res);
   }
   res.initial_error = std::ldexp(res.initial_error, exponent);
   res.solve_seconds = std::chrono::duration<double>(clock::now() - t0).count();
+  res.seconds = res.estimate_seconds + res.solve_seconds;
   return res;
 }
 

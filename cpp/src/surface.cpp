@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "osd_refiner.hpp"
+#include "sorpia/limit.hpp"
 #include "sorpia/errors.hpp"
 
 namespace sorpia {
@@ -300,9 +301,9 @@ TriMesh LoopSurface::tessellate(int level) {
   const std::size_t n_out = n + (limit.size() - n_osd);
   TriMesh out;
   out.vertices.resize(3 * n_out);
-  // Control vertices: B V from the unrefined refiner, as sorpia::limit_points
-  // computes it (the refined level gives the same point up to rounding).
-  detail::limit_positions(impl_->base, impl_->points, impl_->vertices.data(), n, out.vertices.data());
+  // Control vertices: B V exactly as sorpia::limit_points computes it (the
+  // refined level gives the same point up to rounding).
+  limit_points(impl_->topology, impl_->vertices.data(), impl_->boundary, out.vertices.data());
   for (std::size_t i = n_osd; i < limit.size(); ++i) {
     double* q = &out.vertices[3 * (n + i - n_osd)];
     q[0] = limit[i].x;

@@ -18,9 +18,9 @@
 namespace sorpia {
 
 Boundary parse_boundary(const std::string& name) {
-  for (Boundary b : {Boundary::EdgeOnly, Boundary::EdgeAndCorner})
+  for (Boundary b : {Boundary::EdgeAndCorner, Boundary::EdgeOnly})
     if (name == boundary_name(b)) return b;
-  throw ParameterError("unknown boundary '" + name + "': use 'edge-only' or 'edge-and-corner'");
+  throw ParameterError("unknown boundary '" + name + "': use one of 'edge-and-corner', 'edge-only'");
 }
 
 const char* boundary_name(Boundary boundary) {

@@ -29,9 +29,10 @@ import operator
 
 import numpy as np
 
+from . import _core
 from .errors import MeshError, ParameterError
 
-BOUNDARY_RULES = ("edge-and-corner", "edge-only")
+BOUNDARY_RULES = tuple(_core.boundary_name(b) for b in _core.Boundary.__members__.values())
 DEFAULT_BOUNDARY = "edge-and-corner"
 
 # How to make triangles of polygons, quoted in the messages.
@@ -142,7 +143,9 @@ def as_faces(faces, n_vertices: int, name: str = "faces", count_name: str = "n_v
     return np.ascontiguousarray(arr, dtype=np.int32)
 
 
-def as_boundary(boundary: str) -> str:
-    if not isinstance(boundary, str) or boundary not in BOUNDARY_RULES:
-        raise ParameterError(f"unknown boundary {boundary!r}: use one of {', '.join(map(repr, BOUNDARY_RULES))}")
-    return boundary
+def as_boundary(boundary: str) -> _core.Boundary:
+    """The core's Boundary for a rule's name; the names and the message of an
+    unknown one come from the core (sorpia::parse_boundary)."""
+    if not isinstance(boundary, str):
+        raise ParameterError(f"boundary must be a string, got {boundary!r}")
+    return _core.parse_boundary(boundary)

@@ -16,7 +16,6 @@ from __future__ import annotations
 import argparse
 import contextlib
 import csv
-import dataclasses
 import io
 import json
 import math
@@ -321,8 +320,8 @@ def _size_arg(text: str):
 def _result_fields(res) -> dict:
     """Every field of an InterpolationResult except the control vertices
     (method, omega, iterations, converged, errors, seconds and the per-phase
-    timings, spectral estimates...), in the dataclass's order."""
-    return {f.name: getattr(res, f.name) for f in dataclasses.fields(res) if f.name != "control_vertices"}
+    timings, spectral estimates...), in the order of InterpolationResult._fields."""
+    return {name: getattr(res, name) for name in res._fields if name != "control_vertices"}
 
 
 def cpu_clock(threads: int) -> str:

@@ -45,17 +45,16 @@ Methods (the iteration itself runs in the C++ core):
   l = lambda_max(H) and lambda_min(H): for S = 0 the HSS iteration matrix is
   (alpha I - H)(alpha I + H)^-1 with eigenvalues in [mu_min, mu_max], and this
   w centres them on 0. At the default alpha they are centred already, so w = 1
-  and "whss" equals "hss" unless alpha or weight is given (measured: w = 1 is
-  the best weight on 12 of 14 meshes, README).
+  and "whss" equals "hss" unless alpha or weight is given.
 
 omega for "sor": a float in (0, 2); ``"young"``, the paper's Remark 1,
 omega = 2 / (1 + sqrt(1 - rho^2)) with rho = rho(I - D^-1 B) by the power
 method (a lower bound of the true rho); rho >= 0.9999 (rho >= 1 is the usual
 case on real meshes, where the formula has no real value) warns with
 OmegaWarning and uses rho = 0.9999, omega = 1.9720; ``"auto"`` (default):
-omega = 1, the rule measured by bench/omega_study.py (README, "Convergence
-against the paper"): the fastest omega lies in [0.96, 1.15] on every mesh
-measured, and only omega = 1 never needs more sweeps than Gauss-Seidel.
+omega = 1 (sorpia::sor_auto_omega): bench/omega_study.py finds the fastest
+fixed omega close to 1 on every mesh it runs, and only omega = 1 never needs
+more sweeps than Gauss-Seidel (figures on the omega study's page of the docs).
 """
 
 from __future__ import annotations
@@ -64,7 +63,6 @@ import math
 import numbers
 import time
 import warnings
-from dataclasses import dataclass, field, replace
 from typing import Callable, Optional
 
 import numpy as np
@@ -75,11 +73,12 @@ from ._validate import DEFAULT_BOUNDARY, as_boundary, as_vertices
 from .errors import ParameterError
 from .limit import topology as _topology
 
-METHODS = ("pia", "wpia", "gs", "sor", "cg", "hss", "whss")
+METHODS = tuple(_core.method_names())  # the core's one list, in its order
 OMEGA_RULES = ("auto", "young")
 THREADED_METHODS = ("sor", "gs")  # the methods that sweep on threads > 1
 YOUNG_RHO_CLAMP = float(_core.YOUNG_RHO_CLAMP)
 MAX_THREADS = int(_core.MAX_THREADS)
+_INT64_MAX = 2**63 - 1
 
 
 class ConvergenceWarning(UserWarning):
@@ -90,69 +89,8 @@ class OmegaWarning(UserWarning):
     """omega="young" met rho(I - D^-1 B) >= 0.9999: Young's formula has no real value (rho >= 1) or none of use."""
 
 
-@dataclass(frozen=True)
-class InterpolationResult:
-    """What a solve returns.
-
-    Attributes
-    ----------
-    control_vertices : (n, 3) float64
-        V, in the input vertex order; B V = V0 to the tolerance reached.
-    iterations : int
-        Iterations done (sweeps for "gs"/"sor", outer steps for "hss"/"whss").
-    converged : bool
-        errors[-1] < tol, or E_k at the rounding floor (E_k <= 64 eps max_i ||v_i^0||),
-        below which no method can go: a tol of 1e-300 ends there, converged.
-    errors : (iterations + 1,) float64
-        errors[k] = E_k / E_0, so errors[0] = 1 (a single 0.0 when E_0 = 0:
-        V0 already interpolates and nothing is done).
-    method : str
-    omega : float or None
-        "sor"/"gs": the omega used (1.0 for "gs"); None for other methods.
-    seconds : float
-        Wall time of the whole call, every phase in `timings` included.
-    stop_reason : {"converged", "max_iter", "diverged", "callback"}
-    initial_error : float
-        E_0, absolute.
-    variant : str
-        The algorithm that ran: the method's name, or "bicgstab" for "cg" on a
-        mesh with boundary.
-    rho : float or None
-        omega="young": the estimated spectral radius of I - D^-1 B.
-    sigma, lambda_min : float or None
-        "pia"/"wpia": the step; "wpia": the estimated smallest eigenvalue of B.
-    alpha, weight : float or None
-        "hss"/"whss": the shift; "whss": the relaxation weight.
-    products : int
-        Applications of B (or B^T) in the iteration, inner solves included: a
-        measure of work comparable across methods.
-    timings : dict
-        Seconds per phase: "topology" (faces validated, one-ring), "operator"
-        (B from OpenSubdiv's limit masks), "estimate" (spectral estimates for the parameters:
-        0 when an Interpolator already holds them), "solve".
-    """
-
-    control_vertices: np.ndarray
-    iterations: int
-    converged: bool
-    errors: np.ndarray
-    method: str
-    omega: Optional[float]
-    seconds: float
-    stop_reason: str
-    initial_error: float
-    variant: str
-    rho: Optional[float] = None
-    sigma: Optional[float] = None
-    lambda_min: Optional[float] = None
-    alpha: Optional[float] = None
-    weight: Optional[float] = None
-    products: int = 0
-    timings: dict = field(default_factory=dict)
-
-
-def _optional(x: float) -> Optional[float]:
-    return None if x is None or math.isnan(x) else float(x)
+# The one result type, defined in the core's binding (its docstring lists the fields).
+InterpolationResult = _core.InterpolationResult
 
 
 def _real(value, name: str) -> float:
@@ -161,65 +99,39 @@ def _real(value, name: str) -> float:
     return float(value)
 
 
-def _check_open(value, name: str, hi: float = 2.0) -> float:
-    x = _real(value, name)
-    if not (0.0 < x < hi):
-        raise ParameterError(f"{name} = {value!r} is outside (0, {hi:g})")
-    return x
+def _integer(value, name: str, what: str) -> int:
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+        raise ParameterError(f"{name} = {value!r} must be {what}")
+    return min(int(value), _INT64_MAX)  # beyond any limit: the core names it as too large
 
 
-def _check_threads(threads, method) -> int:
-    if isinstance(threads, bool) or not isinstance(threads, numbers.Integral):
-        raise ParameterError(f"threads = {threads!r} must be an integer >= 1")
-    if not 1 <= threads <= MAX_THREADS:
-        raise ParameterError(f"threads = {threads!r} must be an integer in 1..{MAX_THREADS}")
-    if threads > 1 and method not in THREADED_METHODS:
-        raise ParameterError(f"threads = {threads!r} applies to method='sor' or 'gs' only (method={method!r})")
-    return int(threads)
+def check_options(method: str = "sor", omega="auto", tol: float = 1e-10, max_iter: int = 1000,
+                  callback: Optional[Callable[[int, float], object]] = None, *, sigma=None, alpha=None,
+                  weight=None, threads: int = 1) -> _core.SolveOptions:
+    """The solver options, checked: what `interpolate` and `Interpolator.solve`
+    accept, with the same messages (sorpia.ParameterError), before any work.
 
-
-def _check_options(method, omega, tol, max_iter, callback, sigma, alpha, weight, threads=1):
-    if not isinstance(method, str) or method not in METHODS:
-        raise ParameterError(f"unknown method {method!r}: use one of {', '.join(map(repr, METHODS))}")
-    if method == "sor":
-        if isinstance(omega, str):
-            if omega not in OMEGA_RULES:
-                raise ParameterError(f"omega = {omega!r}: use a float in (0, 2), 'auto' or 'young'")
-            rule, omega_value = omega, float("nan")
-        else:
-            rule, omega_value = "given", _check_open(omega, "omega")
+    Python types are converted here (a bool, a string or None where a number
+    belongs is refused); every range and which options apply to which method
+    are checked once, by the core (sorpia::check_options), for Python, the
+    command line and C++ alike.
+    """
+    if not isinstance(method, str):
+        raise ParameterError(f"method must be a string, got {method!r}")
+    method_value = _core.parse_method(method)
+    if isinstance(omega, str):
+        rule, omega_value = _core.parse_omega(omega)
     else:
-        # Parameters a method does not use are refused, not ignored.
-        if not (isinstance(omega, str) and omega == "auto"):
-            raise ParameterError(f"omega = {omega!r} applies to method='sor' only (method={method!r})")
-        rule, omega_value = "auto", float("nan")
-    tol_value = _real(tol, "tol")
-    if not (tol_value > 0.0) or math.isinf(tol_value):
-        raise ParameterError(f"tol = {tol!r} must be a positive finite number")
-    if isinstance(max_iter, bool) or not isinstance(max_iter, numbers.Integral) or max_iter < 1:
-        raise ParameterError(f"max_iter = {max_iter!r} must be an integer >= 1")
-    if int(max_iter) > 2**31 - 1:
-        raise ParameterError(f"max_iter = {max_iter!r} is too large (at most 2**31 - 1)")
+        rule, omega_value = _core.OmegaRule.given, _real(omega, "omega")
     if callback is not None and not callable(callback):
         raise ParameterError(f"callback = {callback!r} must be callable (k, error) or None")
-    uses = {"sigma": ("wpia",), "alpha": ("hss", "whss"), "weight": ("whss",)}
-    values = {}
-    for name, value in (("sigma", sigma), ("alpha", alpha), ("weight", weight)):
-        if value is None:
-            values[name] = float("nan")
-            continue
-        if method not in uses[name]:
-            raise ParameterError(f"{name} = {value!r} applies to method={' or '.join(map(repr, uses[name]))} only "
-                                 f"(method={method!r})")
-        if name == "alpha":
-            x = _real(value, name)
-            if not (x > 0.0) or math.isinf(x):
-                raise ParameterError(f"alpha = {value!r} must be a positive finite number")
-            values[name] = x
-        else:
-            values[name] = _check_open(value, name)
-    values["threads"] = _check_threads(threads, method)
-    return rule, omega_value, tol_value, int(max_iter), values
+    return _core.SolveOptions(
+        method=method_value, omega_rule=rule, omega=omega_value,
+        sigma=None if sigma is None else _real(sigma, "sigma"),
+        alpha=None if alpha is None else _real(alpha, "alpha"),
+        weight=None if weight is None else _real(weight, "weight"),
+        tol=_real(tol, "tol"), max_iter=_integer(max_iter, "max_iter", "an integer >= 1"),
+        threads=min(_integer(threads, "threads", "an integer >= 1"), 2**31 - 1))
 
 
 class Interpolator:
@@ -256,12 +168,13 @@ class Interpolator:
 
     def _build(self, faces, n_vertices, boundary, count_name: str) -> None:
         t0 = time.perf_counter()
-        self.boundary = as_boundary(boundary)
+        self._boundary = as_boundary(boundary)
+        self.boundary = _core.boundary_name(self._boundary)
         # validates n_vertices as limit_matrix does (as_vertex_count: no float, bool or negative count)
         self.topology = _topology(faces, n_vertices, count_name=count_name)
         self.n_vertices = self.topology.n_vertices
         t1 = time.perf_counter()
-        self._operator = _core.LimitOperator(self.topology, self.boundary)
+        self._operator = _core.LimitOperator(self.topology, self._boundary)
         t2 = time.perf_counter()
         self.build_timings = {"topology": t1 - t0, "operator": t2 - t1}
 
@@ -271,16 +184,9 @@ class Interpolator:
         return bool(self._operator.symmetrisable)
 
     def limit_matrix(self) -> scipy.sparse.csr_matrix:
-        """B as a scipy CSR matrix, rebuilt from the compact operator the solvers use."""
-        op = self._operator
-        offsets = op.offsets
+        """B as a scipy CSR matrix: the operator the solvers use, as `sorpia.limit_matrix` gives it."""
         n = self.n_vertices
-        rows = np.repeat(np.arange(n), np.diff(offsets))
-        weight = op.weight
-        data = np.concatenate([op.diag, weight[rows]])
-        r = np.concatenate([np.arange(n), rows])
-        c = np.concatenate([np.arange(n), op.neighbors])
-        return scipy.sparse.csr_matrix((data, (r, c)), shape=(n, n))
+        return scipy.sparse.csr_matrix(self._operator.limit_matrix(), shape=(n, n))
 
     def solve(self, vertices, method: str = "sor", omega="auto", tol: float = 1e-10, max_iter: int = 1000,
               callback: Optional[Callable[[int, float], object]] = None, *, sigma=None, alpha=None, weight=None,
@@ -327,53 +233,34 @@ class Interpolator:
             divergence) and with OmegaWarning when omega="young" met rho >= 0.9999.
         """
         t0 = time.perf_counter()
-        checked = _check_options(method, omega, tol, max_iter, callback, sigma, alpha, weight, threads)
-        return self._solve(as_vertices(vertices), method, checked, callback, t0)
+        options = check_options(method, omega, tol, max_iter, callback, sigma=sigma, alpha=alpha, weight=weight,
+                                threads=threads)
+        return self._solve(as_vertices(vertices), method, options, callback, t0)
 
-    def _solve(self, v0: np.ndarray, method: str, checked: tuple, callback, t0: float) -> InterpolationResult:
-        """solve() on input already validated: `v0` from as_vertices, `checked`
-        from _check_options (interpolate validates both before building B and
-        calls this, so nothing is validated twice). Warnings point at the
-        caller of solve() or interpolate()."""
-        rule, omega_value, tol_value, max_iter, extra = checked
+    def _solve(self, v0: np.ndarray, method: str, options: _core.SolveOptions, callback,
+               t0: float) -> InterpolationResult:
+        """solve() on input already validated: `v0` from as_vertices, `options`
+        from check_options (interpolate validates both before building B and
+        calls this). Warnings point at the caller of solve() or interpolate()."""
+        tol_value, max_iter = options.tol, options.max_iter
         if v0.shape[0] != self.n_vertices:
             raise ParameterError(f"vertices has {v0.shape[0]} rows but the mesh has {self.n_vertices} vertices")
-        r = self._operator.solve(v0, method, rule, omega_value, extra["sigma"], extra["alpha"], extra["weight"],
-                                 tol_value, max_iter, callback, extra["threads"])
+        r = self._operator.solve(v0, options, callback)
         seconds = time.perf_counter() - t0
-        if r["omega_clamped"]:
+        if r.omega_clamped:
             warnings.warn(
-                f"omega='young': rho(I - D^-1 B) = {r['rho']:.6f} >= {YOUNG_RHO_CLAMP}, where Young's formula "
+                f"omega='young': rho(I - D^-1 B) = {r.rho:.6f} >= {YOUNG_RHO_CLAMP}, where Young's formula "
                 f"(paper Remark 1) has no real value (rho >= 1) or none of use; rho clamped to {YOUNG_RHO_CLAMP}, "
-                f"omega = {r['omega']:.4f} (slow: omega='auto' is the measured choice)",
+                f"omega = {r.omega:.4f} (slow: omega='auto' is the measured choice)",
                 OmegaWarning, stacklevel=3)
-        reason = r["stop_reason"]
+        reason = r.stop_reason
         if reason in ("max_iter", "diverged"):
             what = (f"reached max_iter = {max_iter}" if reason == "max_iter"
                     else "diverged (E_k grew past 1e6 E_0 or was not finite)")
-            warnings.warn(f"method={method!r} {what} with E_k/E_0 = {r['errors'][-1]:.3g} > tol = {tol_value:g}",
+            warnings.warn(f"method={method!r} {what} with E_k/E_0 = {r.errors[-1]:.3g} > tol = {tol_value:g}",
                           ConvergenceWarning, stacklevel=3)
-        errors = r["errors"]
-        return InterpolationResult(
-            control_vertices=r["control_vertices"],
-            iterations=int(r["iterations"]),
-            converged=reason == "converged",
-            errors=errors,
-            method=method,
-            omega=_optional(r["omega"]) if method in ("sor", "gs") else None,
-            seconds=seconds,
-            stop_reason=reason,
-            initial_error=float(r["initial_error"]),
-            variant=r["variant"],
-            rho=_optional(r["rho"]),
-            sigma=_optional(r["sigma"]),
-            lambda_min=_optional(r["lambda_min"]),
-            alpha=_optional(r["alpha"]),
-            weight=_optional(r["weight"]),
-            products=int(r["products"]),
-            timings={"topology": 0.0, "operator": 0.0, "estimate": float(r["estimate_seconds"]),
-                     "solve": float(r["solve_seconds"])},
-        )
+        r._record_build(time.perf_counter() - t0, 0.0, 0.0)
+        return r
 
 
 def interpolate(vertices, faces, method: str = "sor", omega="auto", tol: float = 1e-10, max_iter: int = 1000,
@@ -395,9 +282,10 @@ def interpolate(vertices, faces, method: str = "sor", omega="auto", tol: float =
     """
     t0 = time.perf_counter()
     # Options are checked before the (costly) operator is built.
-    checked = _check_options(method, omega, tol, max_iter, callback, sigma, alpha, weight, threads)
+    options = check_options(method, omega, tol, max_iter, callback, sigma=sigma, alpha=alpha, weight=weight,
+                            threads=threads)
     v0 = as_vertices(vertices)
     interp = Interpolator._for_vertices(faces, v0.shape[0], boundary)
-    res = interp._solve(v0, method, checked, callback, t0)
-    timings = dict(res.timings, **interp.build_timings)
-    return replace(res, seconds=time.perf_counter() - t0, timings=timings)
+    res = interp._solve(v0, method, options, callback, t0)
+    res._record_build(time.perf_counter() - t0, interp.build_timings["topology"], interp.build_timings["operator"])
+    return res

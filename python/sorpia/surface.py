@@ -69,7 +69,7 @@ class LoopSurface:
     @property
     def boundary(self) -> str:
         """The boundary rule, "edge-and-corner" or "edge-only"."""
-        return self._boundary
+        return _core.boundary_name(self._boundary)
 
     @property
     def vertices(self) -> np.ndarray:

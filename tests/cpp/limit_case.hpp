@@ -1,9 +1,11 @@
 #pragma once
-// A test mesh with its limit matrix B (OpenSubdiv's Far Limit(),
-// edge-and-corner boundary) and B in the solvers' compact form, and the
-// measures the solver tests compare results by.
+// A test mesh with its limit matrix B from OpenSubdiv's Far Limit()
+// (edge-and-corner boundary; the reference, independent of the solvers) and B
+// as the solvers get it (sorpia::limit_operator), and the measures the solver
+// tests compare results by.
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <vector>
 
 #include "sorpia/limit.hpp"
@@ -22,9 +24,18 @@ struct LimitCase {
 
 inline LimitCase limit_case(const sorpia::TriMesh& m, const char* name = "") {
   const sorpia::Topology topo(m.faces.data(), m.n_faces(), m.n_vertices());
-  LimitCase c{name, m, sorpia::limit_matrix(topo, sorpia::Boundary::EdgeAndCorner), {}};
-  c.op = sorpia::limit_operator(c.b);
-  return c;
+  return LimitCase{name, m, sorpia::reference_limit_matrix(topo, sorpia::Boundary::EdgeAndCorner),
+                   sorpia::limit_operator(topo, sorpia::Boundary::EdgeAndCorner)};
+}
+
+// y = A x for row-major (n, 3) x and y: the textbook CSR product.
+inline void multiply(const sorpia::CsrMatrix& a, const double* x, double* y) {
+  for (std::size_t i = 0; i < a.n_rows; ++i) {
+    double s[3] = {0.0, 0.0, 0.0};
+    for (std::int32_t p = a.indptr[i]; p < a.indptr[i + 1]; ++p)
+      for (int c = 0; c < 3; ++c) s[c] += a.data[p] * x[3 * a.indices[p] + c];
+    for (int c = 0; c < 3; ++c) y[3 * i + c] = s[c];
+  }
 }
 
 // max_k |a_k - b_k|
@@ -38,7 +49,7 @@ inline double max_abs_diff(const std::vector<double>& a, const std::vector<doubl
 // CSR matrix from OpenSubdiv (not the operator the solvers iterate with).
 inline double error_from_scratch(const LimitCase& c, const std::vector<double>& v) {
   std::vector<double> bv(v.size());
-  sorpia::multiply(c.b, v.data(), bv.data());
+  multiply(c.b, v.data(), bv.data());
   const std::vector<double>& v0 = c.mesh.vertices;
   double e = 0.0;
   for (std::size_t i = 0; i < c.op.n; ++i)

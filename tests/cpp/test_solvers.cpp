@@ -28,6 +28,7 @@ using Case = sorpia_test::LimitCase;
 using sorpia_test::error_from_scratch;
 using sorpia_test::limit_case;
 using sorpia_test::max_abs_diff;
+using sorpia_test::multiply;
 
 std::vector<Case> cases() {
   return {limit_case(sorpia::irregular(150, 3)), limit_case(sorpia::grid(6, 5)), limit_case(sorpia::pole(40))};
@@ -45,17 +46,39 @@ TEST(LimitOperator, ReproducesTheOpenSubdivMatrix) {
       for (std::size_t j = 0; j < c.op.n; ++j) ASSERT_EQ(d[i][j], e[i][j]) << i << "," << j;  // exact copy
     std::vector<double> y1(3 * c.op.n), y2(3 * c.op.n);
     sorpia::apply(c.op, c.mesh.vertices.data(), y1.data());
-    sorpia::multiply(c.b, c.mesh.vertices.data(), y2.data());
+    multiply(c.b, c.mesh.vertices.data(), y2.data());
     EXPECT_LT(max_abs_diff(y1, y2), 1e-15);  // same sums, different order
   }
 }
 
-TEST(LimitOperator, RefusesRowsThatAreNoLoopMask) {
+// A row with unequal neighbour weights makes the operator non-uniform: every
+// entry keeps its own weight, and apply and to_csr give the matrix back.
+TEST(LimitOperator, KeepsRowsWithSeveralWeights) {
   sorpia::CsrMatrix b;
   b.n_rows = b.n_cols = 3;
-  b.indptr = {0, 3, 4, 5};
-  b.indices = {0, 1, 2, 1, 2};
-  b.data = {0.5, 0.2, 0.3, 1.0, 1.0};  // row 0: unequal neighbour weights
+  b.indptr = {0, 3, 4, 6};
+  b.indices = {0, 1, 2, 1, 0, 2};
+  b.data = {0.5, 0.2, 0.3, 1.0, 0.25, 0.75};  // row 0: unequal neighbour weights
+  const auto op = sorpia::limit_operator(b);
+  ASSERT_FALSE(op.uniform());
+  EXPECT_FALSE(sorpia::is_symmetrisable(op));
+  const auto back = sorpia::to_csr(op);
+  EXPECT_EQ(back.indptr, b.indptr);
+  EXPECT_EQ(back.indices, (std::vector<std::int32_t>{0, 1, 2, 1, 0, 2}));
+  EXPECT_EQ(back.data, b.data);
+  const std::vector<double> x = {1, 2, 3, -1, 0.5, 4, 0.25, -2, 8};
+  std::vector<double> y1(9), y2(9);
+  sorpia::apply(op, x.data(), y1.data());
+  multiply(b, x.data(), y2.data());
+  EXPECT_LT(max_abs_diff(y1, y2), 1e-15);  // same products, summed in another order
+}
+
+TEST(LimitOperator, RefusesRowsWithoutPositiveDiagonal) {
+  sorpia::CsrMatrix b;
+  b.n_rows = b.n_cols = 2;
+  b.indptr = {0, 2, 3};
+  b.indices = {0, 1, 0};
+  b.data = {0.5, 0.5, 1.0};  // row 1 has no diagonal entry
   EXPECT_THROW(sorpia::limit_operator(b), std::logic_error);
 }
 
@@ -168,3 +191,40 @@ TEST(Omega, YoungFormulaAndClamp) {
 }
 
 }  // namespace
+
+// Values appear in option messages as Python's repr() writes them, so that the
+// same mistake reads the same from Python, the command line and C++.
+TEST(SolveOptions, MessagesWriteValuesAsPythonRepr) {
+  const auto message = [](const sorpia::SolveOptions& o) {
+    try {
+      sorpia::check_options(o);
+    } catch (const sorpia::ParameterError& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  sorpia::SolveOptions o;
+  o.omega_rule = sorpia::OmegaRule::Given;
+  o.omega = 2.0;
+  EXPECT_EQ(message(o), "omega = 2.0 is outside (0, 2)");
+  o.omega = 1.5;
+  o.method = sorpia::Method::Pia;
+  EXPECT_EQ(message(o), "omega = 1.5 applies to method='sor' only (method='pia')");
+  o = {};
+  o.tol = -1.5e-7;
+  EXPECT_EQ(message(o), "tol = -1.5e-07 must be a positive finite number");
+  o = {};
+  o.method = sorpia::Method::Cg;
+  o.threads = 2;
+  EXPECT_EQ(message(o), "threads = 2 applies to method='sor' or 'gs' only (method='cg')");
+  o = {};
+  o.method = sorpia::Method::Wpia;
+  o.sigma = 0.001;
+  EXPECT_EQ(message(o), "accepted");
+  o.sigma = 1e16;
+  EXPECT_EQ(message(o), "sigma = 1e+16 is outside (0, 2)");
+  o = {};
+  o.max_iter = sorpia::max_iterations + 1;
+  EXPECT_EQ(message(o), "max_iter = 2147483648 is too large (at most 2**31 - 1)");
+  EXPECT_THROW(sorpia::parse_omega("fast", o), sorpia::ParameterError);
+}

@@ -22,25 +22,30 @@ struct CsrMatrix {
 
 /// The Loop limit matrix B: row i holds the limit mask of vertex i, so that
 /// B V gives the limit positions of the control vertices V.
-///
-/// Built by recording the weights of OpenSubdiv's
-/// Far::PrimvarRefinerReal<double>::Limit on an unrefined Loop refiner; the
-/// explicit zero weights OpenSubdiv gives interior neighbours of boundary
-/// vertices are dropped. Unreferenced vertices get an identity row.
+/// to_csr(limit_operator(topology, boundary)) (limit_operator.hpp): OpenSubdiv's
+/// limit masks; unreferenced vertices get an identity row.
 /// @param topology  the mesh connectivity
 /// @param boundary  boundary interpolation rule
-/// @return B, (n_vertices, n_vertices)
+/// @return B, (n_vertices, n_vertices), columns sorted within a row
 CsrMatrix limit_matrix(const Topology& topology, Boundary boundary);
 
-/// Loop limit positions of the vertices, B V, evaluated by OpenSubdiv's
-/// Far::PrimvarRefinerReal<double>::Limit.
+/// Loop limit positions of the vertices, B V: apply(limit_operator(topology,
+/// boundary), ...); unreferenced vertices are their own limit.
 /// @param topology  the mesh connectivity
 /// @param vertices  row-major (n_vertices, 3) control vertices
 /// @param boundary  boundary interpolation rule
 /// @param out       row-major (n_vertices, 3) limit positions (written)
 void limit_points(const Topology& topology, const double* vertices, Boundary boundary, double* out);
 
-/// y = A x for row-major (n, 3) x and y.
-void multiply(const CsrMatrix& a, const double* x, double* y);
+/// Reference, for tests: B recorded from OpenSubdiv's
+/// Far::PrimvarRefinerReal<double>::Limit on an unrefined Loop
+/// Far::TopologyRefiner (the explicit zero weights OpenSubdiv gives interior
+/// neighbours of boundary vertices dropped; identity rows for unreferenced
+/// vertices). limit_matrix must equal it to rounding. It builds a refiner,
+/// which costs several times limit_matrix.
+CsrMatrix reference_limit_matrix(const Topology& topology, Boundary boundary);
+
+/// Reference, for tests: B V evaluated by Far::PrimvarRefinerReal<double>::Limit.
+void reference_limit_points(const Topology& topology, const double* vertices, Boundary boundary, double* out);
 
 }  // namespace sorpia

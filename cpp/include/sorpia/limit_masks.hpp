@@ -1,19 +1,16 @@
 #pragma once
 /// @file limit_masks.hpp
-/// The Loop limit operator B (paper eq. 6-7) built vertex by vertex from the
-/// one-ring and OpenSubdiv's limit masks, without a Far::TopologyRefiner.
+/// OpenSubdiv's Loop limit masks, vertex by vertex, without a
+/// Far::TopologyRefiner: the rows of B (limit_operator.hpp builds B from them).
 ///
-/// Every row of B is one limit mask: a weight on the vertex and one equal
-/// weight on each vertex of its mask. The weights are OpenSubdiv's own,
-/// computed by Sdc::Scheme<SCHEME_LOOP>::ComputeVertexLimitMask, the routine
+/// Every Loop limit mask is a weight on the vertex and one equal weight on
+/// each vertex of its mask. The weights are OpenSubdiv's own, computed by
+/// Sdc::Scheme<SCHEME_LOOP>::ComputeVertexLimitMask, the routine
 /// Far::PrimvarRefinerReal<double>::Limit calls; only the refiner that Limit
-/// needs around it (about 1 s at 1M vertices) is skipped. The result equals
-/// limit_matrix() exactly (tests/cpp/test_fast_operator.cpp).
+/// needs around it is skipped.
 
 #include <cstddef>
 
-#include "sorpia/limit.hpp"
-#include "sorpia/solvers.hpp"
 #include "sorpia/topology.hpp"
 
 namespace sorpia {
@@ -41,14 +38,5 @@ LimitMask corner_limit_mask();
 /// gets (1, no neighbours). Its mask vertices are the whole ring inside and
 /// topology.ring_neighbors() first and last on the boundary.
 LimitMask limit_mask(const Topology& topology, std::size_t i, Boundary boundary);
-
-/// B in the solvers' compact form, straight from the masks: equal, array for
-/// array, to limit_operator(limit_matrix(topology, boundary)) (neighbours in
-/// increasing order), in O(n_vertices + n_edges) time.
-LimitOperator limit_operator_from_masks(const Topology& topology, Boundary boundary);
-
-/// B as CSR (columns sorted within a row), equal to limit_matrix(topology,
-/// boundary) entry for entry, without the OpenSubdiv refiner.
-CsrMatrix limit_matrix_from_masks(const Topology& topology, Boundary boundary);
 
 }  // namespace sorpia

@@ -13,49 +13,14 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
-#include "sorpia/limit.hpp"
+#include "sorpia/limit_operator.hpp"
 #include "sorpia/topology.hpp"
 
 namespace sorpia {
-
-/// The Loop limit matrix B in the compact form the solvers sweep over.
-///
-/// Every row of B has one diagonal weight and equal off-diagonal weights:
-/// interior vertex of valence n: alpha_n and (1 - alpha_n)/n (paper eq. 5);
-/// boundary vertex: 2/3 and 1/6 for its two boundary neighbours; a one-face
-/// corner under "edge-and-corner" and an unreferenced vertex: 1 and no
-/// neighbours. So row i is (diag[i], weight[i] on each of
-/// neighbors[offsets[i] .. offsets[i+1])), exactly.
-/// The arrays are contiguous; build the structure once and reuse it.
-struct LimitOperator {
-  std::size_t n = 0;                   ///< number of vertices (rows)
-  std::vector<std::int32_t> offsets;   ///< n + 1 entries
-  std::vector<std::int32_t> neighbors; ///< columns of the off-diagonal entries of each row
-  std::vector<double> diag;            ///< B_ii (alpha_i in the paper)
-  std::vector<double> weight;          ///< the off-diagonal weight of row i, 0 when it has no neighbours
-};
-
-/// Compact form of a limit matrix.
-/// @param b  a square CSR matrix whose rows each have a positive diagonal entry
-///           and equal off-diagonal entries (every Loop limit matrix does)
-/// @throw std::logic_error when a row breaks that pattern: B did not come from
-///        the Loop limit masks, which is a bug, not a user error
-LimitOperator limit_operator(const CsrMatrix& b);
-
-/// limit_operator(limit_matrix(topology, boundary)): B from OpenSubdiv's masks.
-LimitOperator limit_operator(const Topology& topology, Boundary boundary);
-
-/// y = B x, x and y row-major (n, 3), distinct arrays.
-void apply(const LimitOperator& op, const double* x, double* y);
-
-/// True when B = Gamma Upsilon with Gamma = diag(weight) and Upsilon symmetric
-/// (paper section 3.2), i.e. when the neighbour pattern is symmetric and no
-/// row with neighbours is referenced by a row without: closed meshes (plus
-/// unreferenced vertices). Boundaries break it.
-bool is_symmetrisable(const LimitOperator& op);
 
 /// The methods of sorpia::solve.
 enum class Method {
@@ -68,6 +33,11 @@ enum class Method {
   Whss,  ///< HSS relaxed: V <- V + weight (HSS(V) - V)
 };
 
+/// Every method, in the order documented and listed in messages: the one list
+/// of method names (Python's sorpia.solve.METHODS is read from it).
+constexpr Method all_methods[] = {Method::Pia, Method::Wpia, Method::Gs, Method::Sor,
+                                  Method::Cg,  Method::Hss,  Method::Whss};
+
 /// "pia", "wpia", "gs", "sor", "cg", "hss", "whss". @throw ParameterError on another name
 Method parse_method(const std::string& name);
 const char* method_name(Method method);
@@ -76,7 +46,7 @@ const char* method_name(Method method);
 enum class OmegaRule {
   Given,  ///< SolveOptions::omega as given, in (0, 2)
   Young,  ///< paper Remark 1: 2 / (1 + sqrt(1 - rho^2)), rho = rho(I - D^-1 B)
-  Auto,   ///< sorpia's measured rule, see auto_omega
+  Auto,   ///< sorpia's rule, see sor_auto_omega
 };
 
 /// Spectral quantities of one B, estimated on demand and kept so that several
@@ -117,30 +87,33 @@ constexpr double young_rho_clamp = 0.9999;
 /// @param clamped  set to whether rho was clamped (may be null)
 double young_omega(double rho, bool* clamped);
 
-/// The "auto" omega of "sor", measured (bench/omega_study.py, README
-/// "Convergence against the paper"): on 14 meshes (9 real, 5 generated) the
-/// fewest sweeps to 1e-10 come at omega in [1.00, 1.12], at most 3 sweeps fewer
-/// than omega = 1, and every fixed omega >= 1.02 needs more sweeps than
-/// Gauss-Seidel on some mesh. So "auto" is omega = 1: no estimate to pay for,
-/// never slower than "gs".
+/// The "auto" omega of "sor": 1, because bench/omega_study.py finds the best
+/// fixed omega close to 1 on every mesh it runs, gaining a few sweeps at most,
+/// while any fixed omega above 1 needs more sweeps than Gauss-Seidel on some
+/// mesh (the study's page in the docs has the figures). omega = 1 has no
+/// estimate to pay for and is never slower than "gs".
 constexpr double sor_auto_omega = 1.0;
 
 /// The largest SolveOptions::threads accepted.
 constexpr int max_threads = 1024;
 
-/// Options of sorpia::solve. NaN for sigma / alpha / weight means "estimate".
+/// The largest SolveOptions::max_iter accepted (2**31 - 1).
+constexpr long long max_iterations = 2147483647;
+
+/// Options of sorpia::solve. An empty sigma / alpha / weight means "estimate";
+/// a parameter given to a method that does not use it is refused, not ignored.
 struct SolveOptions {
   Method method = Method::Sor;
-  OmegaRule omega_rule = OmegaRule::Auto;
+  OmegaRule omega_rule = OmegaRule::Auto;  ///< "sor" only; other methods take Auto (no omega)
   double omega = 1.0;     ///< "sor" with OmegaRule::Given, in (0, 2)
-  double sigma = NAN;     ///< "wpia" step; default 2 / (lambda_min(B) + 1)
-  double alpha = NAN;     ///< "hss"/"whss" shift; default sqrt(lambda_min(H) lambda_max(H))
-  /// "whss" relaxation weight; default 2 / (2 - mu_min - mu_max), where
+  std::optional<double> sigma;   ///< "wpia" step in (0, 2); default 2 / (lambda_min(B) + 1)
+  std::optional<double> alpha;   ///< "hss"/"whss" shift > 0; default sqrt(lambda_min(H) lambda_max(H))
+  /// "whss" relaxation weight in (0, 2); default 2 / (2 - mu_min - mu_max), where
   /// mu = (alpha - l)/(alpha + l) at l = lambda_max(H), lambda_min(H): the
   /// ends of the HSS spectrum when S = 0 (equals 1 at the default alpha)
-  double weight = NAN;
-  double tol = 1e-10;     ///< stop when E_k / E_0 < tol
-  int max_iter = 1000;
+  std::optional<double> weight;
+  double tol = 1e-10;     ///< stop when E_k / E_0 < tol; positive and finite
+  long long max_iter = 1000;  ///< 1 .. max_iterations
   /// "sor"/"gs": threads sweeping at once (1..max_threads; other methods: 1).
   /// The vertices are split into one contiguous index range per thread; each
   /// range is swept in vertex order in parallel, then the vertices with a
@@ -158,6 +131,18 @@ struct SolveOptions {
   /// Empty: no call at all.
   std::function<bool(int, double)> callback;
 };
+
+/// Checks every option of `opt` against its range and its method: the one
+/// validation of solver options, whichever way they come in (Python, the
+/// command line, C++). Values appear in messages as Python's repr writes them.
+/// @throw ParameterError naming the option, its value and what is accepted,
+///        e.g. "omega = 2.0 is outside (0, 2)"
+void check_options(const SolveOptions& opt);
+
+/// Sets opt.omega_rule and opt.omega from the text of an omega option: "auto",
+/// "young" or a number (range checked by check_options).
+/// @throw ParameterError on other text
+void parse_omega(const std::string& text, SolveOptions& opt);
 
 enum class StopReason { Converged, MaxIter, Diverged, Callback };
 const char* stop_reason_name(StopReason reason);
@@ -185,12 +170,19 @@ struct SolveResult {
   long long products = 0;                ///< operator applications (B, B^T, H or S) in the solve
   double estimate_seconds = 0.0;         ///< spectral estimates for the parameters (0 when cached)
   double solve_seconds = 0.0;            ///< the iteration itself
+  /// Building the topology and the operator: 0 from solve(), which gets them
+  /// built; a caller that builds them for this solve records them here.
+  double topology_seconds = 0.0;
+  double operator_seconds = 0.0;
+  /// Wall time of the whole call: estimate + solve from solve(); a caller that
+  /// does more for this result (validation, building B) records its own total.
+  double seconds = 0.0;
 };
 
 /// Solve B V = V0.
 /// @param op     the limit operator
 /// @param v0     row-major (n, 3) mesh vertices, finite
-/// @param opt    method and parameters (validated here: ParameterError)
+/// @param opt    method and parameters (check_options: ParameterError)
 /// @param cache  spectral estimates to reuse and fill in (may be null)
 SolveResult solve(const LimitOperator& op, const double* v0, const SolveOptions& opt,
                   SpectralCache* cache = nullptr);
