@@ -44,3 +44,21 @@ myst_enable_extensions = ["dollarmath"]
 html_theme = "alabaster"
 html_title = f"sorpia {release}"
 html_static_path = []
+
+
+def _skip_bare_properties(app, what, name, obj, skip, options):
+    """Leave out properties without a docstring of their own: pybind11 gives each bound field one whose only
+    text is its getter's signature, and the class's Attributes section already describes the field."""
+    if isinstance(obj, property) and not (obj.__doc__ or "").strip():
+        return True
+    return None
+
+
+def _drop_pybind11_base(app, name, obj, options, bases):
+    """pybind11's common base class says nothing to a user of the class."""
+    bases[:] = [b for b in bases if b.__name__ != "pybind11_object"]
+
+
+def setup(app):
+    app.connect("autodoc-skip-member", _skip_bare_properties)
+    app.connect("autodoc-process-bases", _drop_pybind11_base)
