@@ -138,7 +138,7 @@ def main():
         result["surface"] = surface_table(args, lines)
     print("\n".join(lines))
     if not args.no_page:
-        write_page("io-speed", "Mesh files and the limit surface", "\n".join(lines))
+        write_page("io-speed", "Mesh files and the limit surface", "\n".join(lines), settings=(ap, args))
     if args.json:
         with open(args.json, "w") as fh:
             json.dump(result, fh, indent=2)

@@ -180,7 +180,7 @@ def main(argv=None):
     out(skipped_note(skipped))
     print("\n".join(lines))
     if not args.no_page:
-        write_page("omega-study", "SOR-PIA sweeps against omega", "\n".join(lines))
+        write_page("omega-study", "SOR-PIA sweeps against omega", "\n".join(lines), settings=(ap, args))
     if args.json:
         with open(args.json, "w") as fh:
             json.dump(rows, fh, indent=1)

@@ -132,7 +132,7 @@ def main(argv=None):
     lines += skipped_note(skipped).split("\n")
     print("\n".join(lines))
     if not args.no_page:
-        write_page("paper-table", "Iterations against the paper's Table 1", "\n".join(lines))
+        write_page("paper-table", "Iterations against the paper's Table 1", "\n".join(lines), settings=(ap, args))
     if args.json:
         with open(args.json, "w") as fh:
             json.dump(rows, fh, indent=1)

@@ -179,7 +179,7 @@ def main(argv=None):
     print("\n".join(lines))
     if not a.no_page:
         slug = "peers-" + "".join(c if c.isalnum() else "-" for c in os.path.basename(a.mesh).lower())
-        write_page(slug, f"Peers on {a.mesh}", "\n".join(lines))
+        write_page(slug, f"Peers on {a.mesh}", "\n".join(lines), settings=(p, a))
     if a.json:
         with open(a.json, "w") as fh:
             json.dump({"mesh": a.mesh, "n_vertices": n, "n_faces": len(F), "tol": a.tol, "repeat": a.repeat,

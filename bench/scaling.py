@@ -104,7 +104,7 @@ def main(argv=None):
         if not a.no_page and os.path.dirname(os.path.abspath(plot)) == str(PAGES):
             lines += ["", f"![time and memory against size]({os.path.basename(plot)})"]
     if not a.no_page:
-        write_page("scaling", "Growth with size", "\n".join(lines))
+        write_page("scaling", "Growth with size", "\n".join(lines), settings=(p, a))
     if a.readme:
         write_readme_excerpt("scaling table", "scaling", "\n".join(table))
 

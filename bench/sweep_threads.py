@@ -68,7 +68,7 @@ def main(argv=None) -> int:
     if not a.json:
         print("\n".join(lines))
     if not a.no_page:
-        write_page("sweep-threads", "Threads", "\n".join(lines))
+        write_page("sweep-threads", "Threads", "\n".join(lines), settings=(ap, a))
     return 0
 
 

@@ -67,3 +67,20 @@ def test_readme_without_markers_is_refused(report, tmp_path, monkeypatch):
     monkeypatch.setattr(report, "ROOT", tmp_path)
     with pytest.raises(ValueError, match="markers"):
         report.write_readme_excerpt("t", "slug", "table")
+
+
+def test_page_names_the_options_that_differ_from_their_defaults(report):
+    import argparse
+
+    parser = argparse.ArgumentParser()
+    parser.add_argument("mesh")
+    parser.add_argument("--sizes", default="10,100,1000")
+    parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument("--json", default=None)
+    parser.add_argument("--no-page", action="store_true")
+    args = parser.parse_args(["m.ply", "--sizes", "10,100", "--json", "x.json"])
+    text = report.write_page("p", "t", "body", settings=(parser, args)).read_text()
+    notes = [line for line in text.splitlines() if line.startswith("Settings other than the defaults")]
+    assert notes == ["Settings other than the defaults: `--sizes 10,100` (default 10,100,1000)."]
+    args = parser.parse_args(["m.ply"])
+    assert "Settings other" not in report.write_page("p", "t", "body", settings=(parser, args)).read_text()
