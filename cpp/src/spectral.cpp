@@ -59,10 +59,12 @@ struct Tridiagonal {
       hi = std::max(hi, a[i] + r);
     }
     const std::size_t k = a.size();
-    // The eigenvalue of rank `want` (0-based) lies where count_below passes want.
+    // The eigenvalue of rank `want` (0-based) lies where count_below passes
+    // want; halve [l, h] down to a few ulps (at most 200 halvings).
+    constexpr double eps = std::numeric_limits<double>::epsilon();
     auto bisect = [&](std::size_t want) {
       double l = lo, h = hi;
-      for (int it = 0; it < 200 && h - l > 4.0 * std::numeric_limits<double>::epsilon() * std::max(std::abs(l), std::abs(h)); ++it) {
+      for (int it = 0; it < 200 && h - l > 4.0 * eps * std::max(std::abs(l), std::abs(h)); ++it) {
         const double m = 0.5 * (l + h);
         (count_below(m) > want ? h : l) = m;
       }
