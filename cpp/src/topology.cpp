@@ -52,17 +52,9 @@ namespace face_checks {
 
 inline std::size_t next_corner(std::size_t h) { return h - h % 3 + (h % 3 + 1) % 3; }
 inline std::size_t prev_corner(std::size_t h) { return h - h % 3 + (h % 3 + 2) % 3; }
-
-
-// Scratch per neighbour x of the vertex v being checked, stamped with v so
-// that it is never cleared: the faces at v using edge (v, x) (`users`, at most
-// 3 counted; `outs` of them run v -> x), the third vertex of the first one and
-// the neighbour after x clockwise round v: the `next` of the corner whose
-// `prev` is x (one_ring.cpp chains a fan the same way).
-struct EdgeSlot {
-  std::int32_t stamp = -1, third = 0, after = 0;
-  std::uint8_t users = 0, outs = 0;
-};
+using Edge = std::pair<std::int32_t, std::int32_t>;  // (lower end, higher end)
+inline Edge edge(std::int32_t a, std::int32_t b) { return {std::min(a, b), std::max(a, b)}; }
+constexpr auto none = std::numeric_limits<std::int32_t>::max();
 
 std::string face_list(const std::vector<std::int32_t>& ids, std::size_t shown) {
   std::string s;
@@ -203,33 +195,33 @@ std::string orientation_advice(const std::int32_t* faces, std::size_t n_faces, s
          face_list(fewer, 8) + ")";
 }
 
-}  // namespace face_checks
+// Error path only. Edge e is run the same way by two faces: names them and
+// says how to fix the orientation of their connected part.
+[[noreturn]] void refuse_misoriented(const std::int32_t* faces, std::size_t n_faces, Edge e) {
+  const std::size_t n_half = 3 * n_faces;
+  const std::vector<std::int32_t> mate = mates(faces, n_half);
+  std::int32_t h0 = 0;
+  while (edge(faces[h0], faces[next_corner(h0)]) != e) ++h0;
+  const std::int32_t h1 = mate[h0];
+  const std::int32_t f0 = std::min(h0, h1) / 3, f1 = std::max(h0, h1) / 3;
+  throw MeshError("inconsistent orientation at edge (" + std::to_string(e.first) + ", " + std::to_string(e.second) +
+                  "): " + face_str(f0, faces) + " and " + face_str(f1, faces) + " both run from vertex " +
+                  std::to_string(faces[h0]) + " to " + std::to_string(faces[next_corner(h0)]) + "; " +
+                  orientation_advice(faces, n_faces, f0, [&](std::int32_t h) { return mate[h]; }));
+}
 
-// Checks what OpenMesh and OpenSubdiv would not (see DEPENDENCIES.md):
-// indices in range and distinct (OpenMesh aborts on a repeated vertex), no
-// duplicate faces, at most two faces per edge, consistent orientation (OpenMesh
-// would fail add_face without saying why) and one fan of faces per vertex (a
-// 'bowtie' is accepted by OpenMesh and quietly made a corner by OpenSubdiv).
-// Throws MeshError naming the first offending face, edge or vertex.
-// Linear time: the corners are bucketed by vertex (a counting sort, as in
-// one_ring.cpp) and each vertex's faces matched edge by edge through a slot
-// per neighbour stamped with the vertex, then chained into a fan; no sort, so
-// a high-valence vertex costs no more than its edges. A problem found there is
-// named by an error path that looks again (sorting) to name the same edge,
-// face or vertex whatever the order of the checks: the first edge (lo, hi)
-// with 3+ faces or a duplicate face, else the first misoriented edge, else the
-// vertex of the first corner outside its vertex's first fan.
-// Returns the number of edges and of boundary edges. With `ring`, also fills
-// it with the fans that walk passes, which are the one-ring (the direct build).
-std::pair<std::size_t, std::size_t> validate_faces(const std::int32_t* faces, std::size_t n_faces,
-                                                   std::size_t n_vertices, detail::OneRing* ring) {
-  using face_checks::next_corner;
+// Counts the core's int32 indices can hold, and at least one face.
+void check_counts(std::size_t n_faces, std::size_t n_vertices) {
   constexpr auto int_max = static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max());
   if (n_vertices > int_max)
     throw MeshError("too many vertices: " + std::to_string(n_vertices) + " (at most 2^31 - 1)");
   if (n_faces > int_max / 3)
     throw MeshError("too many faces: " + std::to_string(n_faces) + " (at most (2^31 - 1) / 3)");
   if (n_faces == 0) throw MeshError("the mesh has no faces: Loop subdivision needs at least one triangle");
+}
+
+// Every index in [0, n_vertices) and three distinct vertices per face, face by face.
+void check_face_indices(const std::int32_t* faces, std::size_t n_faces, std::size_t n_vertices) {
   for (std::size_t f = 0; f < n_faces; ++f) {
     const std::int32_t* t = faces + 3 * f;
     for (int k = 0; k < 3; ++k)
@@ -241,126 +233,210 @@ std::pair<std::size_t, std::size_t> validate_faces(const std::int32_t* faces, st
         throw MeshError(face_str(f, faces) + " repeats vertex " + std::to_string(t[k]) +
                         " (a degenerate triangle): remove the face");
   }
-  const std::size_t n_half = 3 * n_faces;
+}
 
-  detail::CornerBuckets buckets = detail::bucket_corners(faces, n_faces, n_vertices);
-  const std::vector<std::int32_t>& start = buckets.start;
-  if (ring) {
-    ring->offsets.resize(n_vertices + 1);
-    ring->face_count.resize(n_vertices);
-    ring->boundary.assign(n_vertices, 0);
-    // Exact for a closed mesh (2 n_edges = n_half); a boundary adds one entry
-    // per boundary edge.
-    ring->neighbors.reserve(n_half + n_half / 16);
+// OpenSubdiv's Far refuses a vertex of more than 65535 edges (Vtr::VALENCE_LIMIT)
+// without saying which; every sorpia operation goes through it.
+constexpr std::int32_t max_valence = (1 << 16) - 1;
+
+// What the vertex-by-vertex pass found, each problem the first of its kind in
+// the order its error path names it, and the edge counts (every edge is seen
+// from both ends).
+struct Findings {
+  std::int32_t bad_lo = none;       // the lowest lower end of an edge of 3+ faces or of two equal faces
+  Edge misoriented{none, none};     // the first edge two faces run the same way
+  bool bowtie = false;              // some vertex has more than one fan
+  std::int32_t crowded = -1, crowded_valence = 0;  // the first vertex of more than max_valence edges
+  std::size_t n_edge_ends = 0, n_boundary_ends = 0;
+};
+
+// Throws the MeshError of the first problem in `found`, in this order: an edge
+// of 3+ faces or a duplicate face, a misoriented edge, a bowtie, a crowded
+// vertex. Each error path looks again (sorting) to name the same edge, face or
+// vertex whatever order the pass met them in.
+void refuse_findings(const Findings& found, const std::int32_t* faces, std::size_t n_faces, std::size_t n_vertices) {
+  const std::size_t n_half = 3 * n_faces;
+  if (found.bad_lo != none) refuse_edge(faces, n_half, found.bad_lo);
+  if (found.misoriented.first != none) refuse_misoriented(faces, n_faces, found.misoriented);
+  if (found.bowtie) refuse_bowtie(faces, n_vertices, n_half);
+  if (found.crowded >= 0)
+    throw MeshError("vertex " + std::to_string(found.crowded) + " has " + std::to_string(found.crowded_valence) +
+                    " neighbours: OpenSubdiv supports at most " + std::to_string(max_valence) +
+                    " edges at a vertex; split the fan around it");
+}
+
+// The edges of one vertex v at a time, matched through a slot per neighbour x
+// stamped with v so that it is never cleared: the faces at v using edge
+// (v, x) (`users`, at most 3 counted; `outs` of them run v -> x), the third
+// vertex of the first one, and the neighbour after x clockwise round v: the
+// `next` of the corner whose `prev` is x (as one_ring.hpp's Corner chains a
+// fan). No sort, so a high-valence vertex costs no more than its edges.
+class VertexEdges {
+ public:
+  explicit VertexEdges(std::size_t n_vertices) : slots_(n_vertices) {}
+
+  // Matches the edges of v's k corners c, recording problems in `found`;
+  // returns whether the fan can be walked (every edge at v of at most two
+  // faces, distinct, consistently oriented).
+  bool match(std::int32_t v, const detail::Corner* c, std::int32_t k, Findings& found) {
+    v_ = v;
+    n_edges_ = n_single_ = 0;
+    checkable_ = true;
+    for (std::int32_t i = 0; i < k; ++i) {
+      use(c[i].next, c[i].prev, true, found);
+      use(c[i].prev, c[i].next, false, found);
+    }
+    if (n_edges_ > max_valence && found.crowded < 0) {
+      found.crowded = v;
+      found.crowded_valence = n_edges_;
+    }
+    found.n_edge_ends += static_cast<std::size_t>(n_edges_);
+    found.n_boundary_ends += static_cast<std::size_t>(n_single_);
+    return checkable_;
   }
 
-  std::vector<face_checks::EdgeSlot> slots(n_vertices);
-  // OpenSubdiv's Far refuses a vertex of more than 65535 edges (Vtr::VALENCE_LIMIT)
-  // without saying which; every sorpia operation goes through it.
-  constexpr std::int32_t max_valence = (1 << 16) - 1;
-  std::int32_t crowded = -1, crowded_valence = 0;  // the first vertex of more edges than that
-  constexpr auto none = std::numeric_limits<std::int32_t>::max();
-  using Edge = std::pair<std::int32_t, std::int32_t>;  // (lower end, higher end)
-  auto edge = [](std::int32_t a, std::int32_t b) { return Edge{std::min(a, b), std::max(a, b)}; };
-  std::int32_t bad_lo = none;  // the lowest lower end of an edge of 3+ faces or of two equal faces
-  Edge misoriented{none, none};  // the first edge two faces run the same way
-  bool bowtie = false;
-  std::size_t n_edge_ends = 0, n_boundary_ends = 0;  // each edge is seen from both ends
-  for (std::size_t vi = 0; vi < n_vertices; ++vi) {
-    const auto v = static_cast<std::int32_t>(vi);
-    const std::int32_t k = start[v + 1] - start[v];
-    const detail::Corner* c = buckets.corners.get() + start[v];
-    if (ring) {
-      ring->offsets[v] = static_cast<std::int32_t>(ring->neighbors.size());
-      ring->face_count[v] = k;
-      ring->n_unreferenced += k == 0;
+  // Edges at v of one face (boundary edges), after match.
+  std::int32_t n_single() const { return n_single_; }
+
+  // Where the clockwise walk round v starts: the far end of the boundary edge
+  // that only runs into v, or (interior vertex) the second corner of v's
+  // lowest-numbered face.
+  std::int32_t fan_start(const detail::Corner* c, std::int32_t k) const {
+    for (std::int32_t i = 0; i < k && n_single_ > 0; ++i) {
+      const EdgeSlot& s = slots_[c[i].prev];
+      if (s.outs == 0 && s.users == 1) return c[i].prev;
     }
-    std::int32_t n_edges_v = 0, n_single = 0;  // edges at v, and those of one face
-    bool fan_checkable = true;                 // edge counts and orientation right at v
-    // Face i of v uses edge (v, x) with third vertex `third`, running v -> x if `out`.
-    auto use = [&](std::int32_t x, std::int32_t third, bool out) {
-      face_checks::EdgeSlot& s = slots[x];
-      if (s.stamp != v) {
-        s = {v, third, third, 1, static_cast<std::uint8_t>(out)};
-        ++n_edges_v;
-        ++n_single;
-        return;
-      }
-      if (s.users == 1) {
-        --n_single;
-        if (s.third == third) {
-          bad_lo = std::min(bad_lo, std::min(v, x));
-          fan_checkable = false;
-        } else if (s.outs == static_cast<std::uint8_t>(out)) {
-          misoriented = std::min(misoriented, edge(v, x));
-          fan_checkable = false;
-        }
-      } else if (s.users == 2) {
-        bad_lo = std::min(bad_lo, std::min(v, x));
-        fan_checkable = false;
-      }
-      s.users = static_cast<std::uint8_t>(std::min(s.users + 1, 3));
-      s.outs = static_cast<std::uint8_t>(s.outs + out);
-      s.after = out ? s.after : third;
-    };
-    for (std::int32_t i = 0; i < k; ++i) {
-      use(c[i].next, c[i].prev, true);
-      use(c[i].prev, c[i].next, false);
-    }
-    if (n_edges_v > max_valence && crowded < 0) {
-      crowded = v;
-      crowded_valence = n_edges_v;
-    }
-    n_edge_ends += static_cast<std::size_t>(n_edges_v);
-    n_boundary_ends += static_cast<std::size_t>(n_single);
-    if (k == 0 || !fan_checkable || bowtie) continue;
-    if (n_single > 2) {  // a fan has two boundary edges or none
-      bowtie = true;
-      continue;
-    }
-    // Chain the faces clockwise (see one_ring.cpp): from neighbour x to the
-    // `next` of the corner whose `prev` is x, starting at the far end of the
-    // boundary edge that only runs into v, or anywhere round an interior vertex.
-    // An interior ring starts at the second corner of the lowest-numbered face.
-    std::int32_t first = c[0].next;
-    for (std::int32_t i = 0; i < k && n_single > 0; ++i)
-      if (slots[c[i].prev].outs == 0 && slots[c[i].prev].users == 1) {
-        first = c[i].prev;
-        break;
-      }
-    if (ring) ring->boundary[v] = n_single > 0;
+    return c[0].next;
+  }
+
+  // Walks the fan clockwise from `first`, calling emit(x) for each neighbour
+  // passed, until it closes, reaches the fan's other boundary edge or has
+  // passed more than k faces; returns the number of faces passed (k when v
+  // has a single fan).
+  template <class Emit>
+  std::int32_t walk_fan(std::int32_t first, std::int32_t k, Emit emit) const {
     std::int32_t seen = 0;
     for (std::int32_t x = first;;) {
-      if (ring) ring->neighbors.push_back(x);
-      const face_checks::EdgeSlot& s = slots[x];
+      emit(x);
+      const EdgeSlot& s = slots_[x];
       if (s.users == s.outs) break;  // no face runs x -> v: the fan's other boundary edge
       ++seen;
       x = s.after;
       if (x == first || seen > k) break;
     }
-    if (seen != k) bowtie = true;
+    return seen;
+  }
+
+ private:
+  struct EdgeSlot {
+    std::int32_t stamp = -1, third = 0, after = 0;
+    std::uint8_t users = 0, outs = 0;
+  };
+
+  // One face at v uses edge (v, x) with third vertex `third`, running v -> x if `out`.
+  void use(std::int32_t x, std::int32_t third, bool out, Findings& found) {
+    EdgeSlot& s = slots_[x];
+    if (s.stamp != v_) {
+      s = {v_, third, third, 1, static_cast<std::uint8_t>(out)};
+      ++n_edges_;
+      ++n_single_;
+      return;
+    }
+    if (s.users == 1) {
+      --n_single_;
+      if (s.third == third) {
+        found.bad_lo = std::min(found.bad_lo, std::min(v_, x));
+        checkable_ = false;
+      } else if (s.outs == static_cast<std::uint8_t>(out)) {
+        found.misoriented = std::min(found.misoriented, edge(v_, x));
+        checkable_ = false;
+      }
+    } else if (s.users == 2) {
+      found.bad_lo = std::min(found.bad_lo, std::min(v_, x));
+      checkable_ = false;
+    }
+    s.users = static_cast<std::uint8_t>(std::min(s.users + 1, 3));
+    s.outs = static_cast<std::uint8_t>(s.outs + out);
+    s.after = out ? s.after : third;
+  }
+
+  std::vector<EdgeSlot> slots_;
+  std::int32_t v_ = -1, n_edges_ = 0, n_single_ = 0;  // the vertex, its edges, those of one face
+  bool checkable_ = true;
+};
+
+// Fills a detail::OneRing vertex by vertex with the fans the walk passes; does
+// nothing without a ring (validation alone).
+class RingBuilder {
+ public:
+  RingBuilder(detail::OneRing* ring, std::size_t n_vertices, std::size_t n_half) : r_(ring) {
+    if (!r_) return;
+    r_->offsets.resize(n_vertices + 1);
+    r_->face_count.resize(n_vertices);
+    r_->boundary.assign(n_vertices, 0);
+    // Exact for a closed mesh (2 n_edges = n_half); a boundary adds one entry
+    // per boundary edge.
+    r_->neighbors.reserve(n_half + n_half / 16);
+  }
+  void begin_vertex(std::int32_t v, std::int32_t n_faces) {
+    if (!r_) return;
+    r_->offsets[v] = static_cast<std::int32_t>(r_->neighbors.size());
+    r_->face_count[v] = n_faces;
+    r_->n_unreferenced += n_faces == 0;
+  }
+  void set_boundary(std::int32_t v, bool on_boundary) {
+    if (r_) r_->boundary[v] = on_boundary;
+  }
+  void push(std::int32_t x) {
+    if (r_) r_->neighbors.push_back(x);
+  }
+  void finish(std::size_t n_vertices) {
+    if (r_) r_->offsets[n_vertices] = static_cast<std::int32_t>(r_->neighbors.size());
+  }
+
+ private:
+  detail::OneRing* r_;
+};
+
+}  // namespace face_checks
+
+// Checks what OpenMesh and OpenSubdiv would not: indices in range and distinct
+// (OpenMesh aborts on a repeated vertex), no duplicate faces, at most two
+// faces per edge, consistent orientation (OpenMesh would fail add_face without
+// saying why) and one fan of faces per vertex (a 'bowtie' is accepted by
+// OpenMesh and quietly made a corner by OpenSubdiv). Throws MeshError naming
+// the first offending face, edge or vertex.
+// Linear time: the corners are bucketed by vertex (detail::bucket_corners),
+// each vertex's edges matched (face_checks::VertexEdges) and its faces
+// chained into a fan; problems are named afterwards by
+// face_checks::refuse_findings.
+// Returns the number of edges and of boundary edges. With `ring`, also fills
+// it with the fans that walk passes, which are the one-ring (the direct build).
+std::pair<std::size_t, std::size_t> validate_faces(const std::int32_t* faces, std::size_t n_faces,
+                                                   std::size_t n_vertices, detail::OneRing* ring) {
+  face_checks::check_counts(n_faces, n_vertices);
+  face_checks::check_face_indices(faces, n_faces, n_vertices);
+  detail::CornerBuckets buckets = detail::bucket_corners(faces, n_faces, n_vertices);
+  face_checks::RingBuilder builder(ring, n_vertices, 3 * n_faces);
+  face_checks::VertexEdges edges(n_vertices);
+  face_checks::Findings found;
+  for (std::size_t vi = 0; vi < n_vertices; ++vi) {
+    const auto v = static_cast<std::int32_t>(vi);
+    const std::int32_t k = buckets.start[v + 1] - buckets.start[v];
+    const detail::Corner* c = buckets.corners.get() + buckets.start[v];
+    builder.begin_vertex(v, k);
+    if (!edges.match(v, c, k, found) || k == 0 || found.bowtie) continue;
+    if (edges.n_single() > 2) {  // a fan has two boundary edges or none
+      found.bowtie = true;
+      continue;
+    }
+    builder.set_boundary(v, edges.n_single() > 0);
+    if (edges.walk_fan(edges.fan_start(c, k), k, [&](std::int32_t x) { builder.push(x); }) != k) found.bowtie = true;
   }
   buckets.corners.reset();
-  if (bad_lo != none) face_checks::refuse_edge(faces, n_half, bad_lo);
-  if (misoriented.first != none) {
-    const auto [lo, hi] = misoriented;
-    const std::vector<std::int32_t> mate = face_checks::mates(faces, n_half);
-    std::int32_t h0 = 0;
-    while (edge(faces[h0], faces[next_corner(h0)]) != misoriented) ++h0;
-    const std::int32_t h1 = mate[h0];
-    const std::int32_t f0 = std::min(h0, h1) / 3, f1 = std::max(h0, h1) / 3;
-    throw MeshError("inconsistent orientation at edge (" + std::to_string(lo) + ", " + std::to_string(hi) + "): " +
-                    face_str(f0, faces) + " and " + face_str(f1, faces) + " both run from vertex " +
-                    std::to_string(faces[h0]) + " to " + std::to_string(faces[next_corner(h0)]) + "; " +
-                    face_checks::orientation_advice(faces, n_faces, f0, [&](std::int32_t h) { return mate[h]; }));
-  }
-  if (bowtie) face_checks::refuse_bowtie(faces, n_vertices, n_half);
-  if (crowded >= 0)
-    throw MeshError("vertex " + std::to_string(crowded) + " has " + std::to_string(crowded_valence) +
-                    " neighbours: OpenSubdiv supports at most " + std::to_string(max_valence) +
-                    " edges at a vertex; split the fan around it");
-  if (ring) ring->offsets[n_vertices] = static_cast<std::int32_t>(ring->neighbors.size());
-  return {n_edge_ends / 2, n_boundary_ends / 2};
+  face_checks::refuse_findings(found, faces, n_faces, n_vertices);
+  builder.finish(n_vertices);
+  return {found.n_edge_ends / 2, found.n_boundary_ends / 2};
 }
 
 }  // namespace

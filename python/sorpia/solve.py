@@ -10,9 +10,10 @@ Methods (the iteration itself runs in the C++ core):
 - ``"pia"``: V += V0 - B V (paper eq. 9).
 - ``"wpia"``: V += sigma (V0 - B V), sigma = 2 / (lambda_min + lambda_max) by
   default. lambda_max(B) = 1 exactly (B's rows are non-negative and sum to 1,
-  and its spectrum is real); lambda_min is estimated by the power method on
-  I - B in the Gamma^-1 inner product, where B = Gamma Upsilon is
-  self-adjoint (at most 300 scalar products with B).
+  and its spectrum is real); lambda_min is estimated by Lanczos on B in the
+  Gamma^-1 inner product, where B = Gamma Upsilon is self-adjoint (with a
+  boundary, on B without its one-way entries, which has B's eigenvalues), at
+  most 300 scalar products with B; the estimate is at or above the true value.
 - ``"gs"``: Gauss-Seidel, the SOR-PIA sweep with omega = 1.
 - ``"sor"``: SOR-PIA (paper eq. 18), vertices in input order:
   d_i = (v_i^0 - v_i^inf) / alpha_i with the neighbours already updated in
@@ -36,7 +37,7 @@ Methods (the iteration itself runs in the C++ core):
       (alpha I + H) U       = (alpha I - S) V^(k) + V0
       (alpha I + S) V^(k+1) = (alpha I - H) U     + V0
 
-  alpha = sqrt(lambda_min(H) lambda_max(H)) (both by the power method). The
+  alpha = sqrt(lambda_min(H) lambda_max(H)) (both by one Lanczos run on H). The
   first system is solved by CG; the second by CG on
   (alpha^2 I - S^2) V = (alpha I - S) c, which is SPD because S^T = -S. Inner
   solves are warm-started and stop at a residual of 1e-3 E_k.

@@ -24,8 +24,8 @@ const char* boundary_name(Boundary boundary);
 /// How sorpia::Topology turns the validated faces into its one-ring. Both give
 /// the same arrays (tests/cpp/test_fast_operator.cpp checks it).
 enum class TopologyBuild {
-  /// Linear-time half-edge matching on the face array (the default): about 5x
-  /// faster than OpenMesh's add_face at 1M vertices, and no half-edge mesh in memory.
+  /// Linear-time half-edge matching on the face array (the default): faster
+  /// than OpenMesh's add_face, and no half-edge mesh in memory.
   Direct,
   /// OpenMesh's TriMesh: add_face per face, then circulators (the reference).
   OpenMesh,
