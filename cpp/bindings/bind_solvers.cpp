@@ -248,8 +248,10 @@ void bind_solvers(py::module_& m) {
             return y;
           },
           "x"_a.noconvert(), "B x for (n, 3) x.")
-      .def("lambda_min", [](OperatorState& s) { return sorpia::estimate_lambda_min(s.op, s.cache); })
-      .def("jacobi_rho", [](OperatorState& s) { return sorpia::estimate_jacobi_rho(s.op, s.cache); })
+      .def("lambda_min", [](OperatorState& s) { return sorpia::estimate_lambda_min(s.op, s.cache); },
+           py::call_guard<py::gil_scoped_release>())
+      .def("jacobi_rho", [](OperatorState& s) { return sorpia::estimate_jacobi_rho(s.op, s.cache); },
+           py::call_guard<py::gil_scoped_release>())
       .def("hermitian_extremes",
            [](OperatorState& s) {
              // The pair itself: reading s.cache.hermitian_max as a second argument

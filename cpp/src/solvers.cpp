@@ -300,10 +300,11 @@ SolveResult solve(const LimitOperator& op, const double* v0, const SolveOptions&
   res.variant = method_name(opt.method);
 
   // The estimates are timed apart from the solve (and cost nothing when the
-  // cache already holds them).
-  const double spent_before = sc.seconds;
+  // cache already holds them; a solve waiting for another thread's estimate
+  // of the same cache counts its wait).
+  const auto e0 = clock::now();
   resolve_parameters(op, opt, sc, res);
-  res.estimate_seconds = sc.seconds - spent_before;
+  res.estimate_seconds = std::chrono::duration<double>(clock::now() - e0).count();
 
   const auto t0 = clock::now();
   const int exponent = scale_exponent(v0, op.n);

@@ -200,6 +200,7 @@ struct Timer {
 }  // namespace
 
 double estimate_lambda_min(const LimitOperator& op, SpectralCache& cache) {
+  const std::lock_guard<std::mutex> lock(cache.mutex);
   if (!std::isnan(cache.lambda_min)) return cache.lambda_min;
   Timer timer{cache};
   const SelfAdjointPart b{op};
@@ -209,6 +210,7 @@ double estimate_lambda_min(const LimitOperator& op, SpectralCache& cache) {
 }
 
 double estimate_jacobi_rho(const LimitOperator& op, SpectralCache& cache) {
+  const std::lock_guard<std::mutex> lock(cache.mutex);
   if (!std::isnan(cache.jacobi_rho)) return cache.jacobi_rho;
   Timer timer{cache};
   std::vector<double> bx(op.n), w = detail::gamma_inverse(op);
@@ -223,6 +225,7 @@ double estimate_jacobi_rho(const LimitOperator& op, SpectralCache& cache) {
 }
 
 std::pair<double, double> estimate_hermitian_extremes(const LimitOperator& op, SpectralCache& cache) {
+  const std::lock_guard<std::mutex> lock(cache.mutex);
   if (std::isnan(cache.hermitian_min) || std::isnan(cache.hermitian_max)) {
     Timer timer{cache};
     const detail::Transposed t = detail::transpose(op);

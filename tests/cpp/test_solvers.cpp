@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <stdexcept>
+#include <thread>
 #include <vector>
 
 #include "limit_case.hpp"
@@ -227,4 +228,28 @@ TEST(SolveOptions, MessagesWriteValuesAsPythonRepr) {
   o.max_iter = sorpia::max_iterations + 1;
   EXPECT_EQ(message(o), "max_iter = 2147483648 is too large (at most 2**31 - 1)");
   EXPECT_THROW(sorpia::parse_omega("fast", o), sorpia::ParameterError);
+}
+
+// One cache shared by solves on several threads (an Interpolator used from a
+// thread pool): the estimate is computed once, the others wait for it. Had
+// every thread computed its own, the cache's total estimating time would be
+// the sum of theirs, above the longest single one.
+TEST(SpectralCache, SharedByThreadsEstimatesOnce) {
+  const auto c = limit_case(sorpia::irregular(4000, 5));
+  sorpia::SpectralCache cache;
+  sorpia::SolveOptions opt;
+  opt.method = sorpia::Method::Wpia;
+  opt.max_iter = 1;
+  std::vector<sorpia::SolveResult> res(4);
+  std::vector<std::thread> threads;
+  for (auto& r : res)
+    threads.emplace_back([&, p = &r] { *p = sorpia::solve(c.op, c.mesh.vertices.data(), opt, &cache); });
+  for (auto& t : threads) t.join();
+  double longest = 0.0;
+  for (const auto& r : res) {
+    EXPECT_EQ(r.lambda_min, res[0].lambda_min);
+    longest = std::max(longest, r.estimate_seconds);
+  }
+  EXPECT_GT(cache.seconds, 0.0);
+  EXPECT_LE(cache.seconds, longest * 1.0001 + 1e-6);
 }

@@ -13,6 +13,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <vector>
@@ -51,12 +52,27 @@ enum class OmegaRule {
 
 /// Spectral quantities of one B, estimated on demand and kept so that several
 /// solves on one mesh pay for them once. NaN = not estimated yet.
+/// Thread-safe: the estimate functions take `mutex`, so solves on one cache
+/// from several threads compute each estimate once.
 struct SpectralCache {
   double lambda_min = NAN;      ///< smallest eigenvalue of B (B's largest is 1: rows sum to 1)
   double jacobi_rho = NAN;      ///< spectral radius of I - D^-1 B
   double hermitian_min = NAN;   ///< smallest eigenvalue of H = (B + B^T)/2
   double hermitian_max = NAN;   ///< largest eigenvalue of H
   double seconds = 0.0;         ///< time spent estimating, all calls together
+  std::mutex mutex;             ///< held while an estimate is looked up or computed
+
+  SpectralCache() = default;
+  /// The estimates of `other` (a fresh mutex).
+  SpectralCache(const SpectralCache& other) { *this = other; }
+  SpectralCache& operator=(const SpectralCache& other) {
+    lambda_min = other.lambda_min;
+    jacobi_rho = other.jacobi_rho;
+    hermitian_min = other.hermitian_min;
+    hermitian_max = other.hermitian_max;
+    seconds = other.seconds;
+    return *this;
+  }
 };
 
 /// Smallest eigenvalue of B, by Lanczos in the Gamma^-1 inner product, where
