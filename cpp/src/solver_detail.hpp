@@ -112,6 +112,10 @@ inline double max_row_norm(const double* r, std::size_t n) {
   return std::sqrt(m);
 }
 
+// Seconds this thread has spent computing spectral estimates (not waiting for
+// another thread's): solve() reports the part its parameters took.
+extern thread_local double estimate_seconds_on_this_thread;
+
 // x[k] *= 2^e for k < n (exactly, or rounded as ldexp rounds a subnormal).
 void scale_pow2(double* x, std::size_t n, int e);
 

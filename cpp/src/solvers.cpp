@@ -299,12 +299,11 @@ SolveResult solve(const LimitOperator& op, const double* v0, const SolveOptions&
   res.method = opt.method;
   res.variant = method_name(opt.method);
 
-  // The estimates are timed apart from the solve (and cost nothing when the
-  // cache already holds them; a solve waiting for another thread's estimate
-  // of the same cache counts its wait).
-  const auto e0 = clock::now();
+  // The estimates are timed apart from the solve, and cost nothing when the
+  // cache already holds them (or another thread's solve computed them).
+  const double spent_before = detail::estimate_seconds_on_this_thread;
   resolve_parameters(op, opt, sc, res);
-  res.estimate_seconds = std::chrono::duration<double>(clock::now() - e0).count();
+  res.estimate_seconds = detail::estimate_seconds_on_this_thread - spent_before;
 
   const auto t0 = clock::now();
   const int exponent = scale_exponent(v0, op.n);

@@ -194,10 +194,18 @@ struct SelfAdjointPart {
 struct Timer {
   SpectralCache& cache;
   clock::time_point t0 = clock::now();
-  ~Timer() { cache.seconds += std::chrono::duration<double>(clock::now() - t0).count(); }
+  ~Timer() {
+    const double s = std::chrono::duration<double>(clock::now() - t0).count();
+    cache.seconds += s;
+    detail::estimate_seconds_on_this_thread += s;
+  }
 };
 
 }  // namespace
+
+namespace detail {
+thread_local double estimate_seconds_on_this_thread = 0.0;
+}  // namespace detail
 
 double estimate_lambda_min(const LimitOperator& op, SpectralCache& cache) {
   const std::lock_guard<std::mutex> lock(cache.mutex);
