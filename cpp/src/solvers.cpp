@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <stdexcept>
 #include <string>
 #include <tuple>
 
@@ -178,8 +177,8 @@ SolveResult solve(const LimitOperator& op, const double* v0, const SolveOptions&
       double hmin = NAN, hmax = NAN;
       if (need_h) std::tie(hmin, hmax) = estimate_hermitian_extremes(op, sc);
       if (std::isnan(opt.alpha)) {
-        // H's extremes are positive on Loop limit matrices (measured 0.17 .. 1.1);
-        // guard the square root anyway.
+        // H's extremes are positive on Loop limit matrices; guard the square
+        // root anyway.
         res.alpha = std::sqrt(std::max(hmin, 1e-3 * hmax) * hmax);
       } else {
         if (!(opt.alpha > 0.0 && std::isfinite(opt.alpha)))
@@ -218,7 +217,6 @@ SolveResult solve(const LimitOperator& op, const double* v0, const SolveOptions&
   if (max_abs > 0.0 && std::isfinite(max_abs)) std::frexp(max_abs, &exponent);
   if (std::abs(exponent) <= 200) exponent = 0;
   if (opt.method == Method::Gs || opt.method == Method::Sor) {
-    if (!op.uniform()) throw std::logic_error("sorpia::solve: the sweep takes uniform rows only");
     detail::solve_sor(op, v0, exponent, opt, res.omega, res);
   } else {
     std::vector<double> scaled;

@@ -6,9 +6,6 @@
 #include <opensubdiv/far/primvarRefiner.h>
 #include <opensubdiv/far/topologyDescriptor.h>
 #include <opensubdiv/far/topologyRefinerFactory.h>
-#ifdef _OPENMP
-#include <omp.h>
-#endif
 
 #include <algorithm>
 #include <cmath>
@@ -22,6 +19,7 @@
 #include <utility>
 #include <vector>
 
+#include "openmp.hpp"
 #include "osd_refiner.hpp"
 #include "sorpia/limit.hpp"
 #include "sorpia/errors.hpp"
@@ -41,10 +39,10 @@ using SurfaceFactory = Bfr::RefinerSurfaceFactory<ThreadedCache>;
 
 using detail::Point3;
 
-// Measured bytes per refined face held by a uniformly refined Loop
-// TopologyRefiner with full topology (all levels together, ~4/3 of the last
-// level) and the position buffers: peak RSS measured by bench/surface_speed.py
-// was 250 B per output face in all, outputs included (irregular 100k, levels 2-3).
+// Bytes per refined face held by a uniformly refined Loop TopologyRefiner
+// with full topology (all levels together, about 4/3 of the last level) and
+// the position buffers, outputs excluded: an estimate for the memory warning,
+// not a bound.
 constexpr double kRefinerBytesPerFace = 220.0;
 
 std::string human_bytes(double b) {
@@ -66,13 +64,9 @@ constexpr std::ptrdiff_t kFacesPerChunk = 64;
 // free: after the region libgomp's idle workers spin-wait (GOMP_SPINCOUNT),
 // and that CPU time lands on whatever the caller does next.
 int evaluate_threads(std::ptrdiff_t n_groups) {
-#ifdef _OPENMP
   const std::ptrdiff_t chunks = (n_groups + kFacesPerChunk - 1) / kFacesPerChunk;
-  return static_cast<int>(std::max<std::ptrdiff_t>(1, std::min<std::ptrdiff_t>(omp_get_max_threads(), chunks)));
-#else
-  (void)n_groups;
-  return 1;
-#endif
+  return static_cast<int>(
+      std::max<std::ptrdiff_t>(1, std::min<std::ptrdiff_t>(detail::default_thread_count(), chunks)));
 }
 
 // Bfr evaluates on the closed triangle; a parameter a rounding error outside is
@@ -206,7 +200,7 @@ void LoopSurface::evaluate(const std::int32_t* face_ids, const double* uv, std::
   const double* mesh_points = &impl_->points.data()->x;
   int failed_face = -1;
   // Each point is computed alone, so the thread count changes nothing in the results.
-  const int threads = evaluate_threads(n_groups);
+  [[maybe_unused]] const int threads = evaluate_threads(n_groups);  // unused without OpenMP
 #pragma omp parallel num_threads(threads) if (threads > 1)
   {
     Bfr::Surface<double> surface;
@@ -273,7 +267,7 @@ TriMesh LoopSurface::tessellate(int level) {
     impl_->refined.reset(Far::TopologyRefinerFactory<Far::TopologyDescriptor>::Create(*impl_->base.refiner));
     if (level > 0) {
       Far::TopologyRefiner::UniformOptions options(level);
-      // Limit() on the last level needs its full topology (DEPENDENCIES.md).
+      // Far's Limit() on the last level needs that level's full topology.
       options.fullTopologyInLastLevel = true;
       impl_->refined->RefineUniform(options);
     }

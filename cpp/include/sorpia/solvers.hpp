@@ -81,12 +81,10 @@ constexpr double young_rho_clamp = 0.9999;
 /// @param clamped  set to whether rho was clamped (may be null)
 double young_omega(double rho, bool* clamped);
 
-/// The "auto" omega of "sor", measured (bench/omega_study.py, README
-/// "Convergence against the paper"): on 14 meshes (9 real, 5 generated) the
-/// fewest sweeps to 1e-10 come at omega in [1.00, 1.12], at most 3 sweeps fewer
-/// than omega = 1, and every fixed omega >= 1.02 needs more sweeps than
-/// Gauss-Seidel on some mesh. So "auto" is omega = 1: no estimate to pay for,
-/// never slower than "gs".
+/// The "auto" omega of "sor", from bench/omega_study.py: on real and
+/// generated meshes the best omega lies close to 1 and saves only a few sweeps
+/// over it, and no fixed omega above 1 beats Gauss-Seidel on every mesh. So
+/// "auto" is omega = 1: no estimate to pay for, never slower than "gs".
 constexpr double sor_auto_omega = 1.0;
 
 /// The largest SolveOptions::threads accepted.
@@ -111,12 +109,16 @@ struct SolveOptions {
   /// neighbour in another range in vertex order: Gauss-Seidel in a slightly
   /// different order, so the iterates differ from threads = 1 by the ordering
   /// (tests: same solution to 1e-8, iterations within 15%), and do not depend
-  /// on timing. More threads than cores only slows down.
+  /// on timing. More threads than cores only slows down. Built without
+  /// OpenMP (CMake SORPIA_OPENMP=OFF), the ranges run one after the other on
+  /// the calling thread: the same ordering, so the same solution to the
+  /// tolerance (bit for bit unless the ranges would have been swept in slabs).
   int threads = 1;
-  /// "sor"/"gs": compute E_k by a separate residual pass after each sweep
-  /// instead of inside it. Both give the same E_k bit for bit; the fused
-  /// sweep (default) reads the mesh once per iteration instead of twice.
-  /// For tests and benchmarks.
+  /// Reference path for tests and benchmarks only, not for use: "sor"/"gs"
+  /// compute E_k by a separate residual pass after each sweep instead of
+  /// inside it. Both give the same E_k bit for bit (what the tests check);
+  /// the fused sweep (default) reads the mesh once per iteration instead of
+  /// twice.
   bool two_pass = false;
   /// Called after E_k is known for k = 0, 1, ...; returning true stops the run.
   /// Empty: no call at all.
