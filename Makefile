@@ -1,6 +1,7 @@
 # sorpia: set-up, demo and tests on a fresh Debian bookworm machine (as root).
 #   make demo   installs what is missing, builds sorpia into .venv, runs `sorpia demo`
 #   make test   installs what is missing, builds, runs the C++ tests (ctest) and pytest
+#   make test-noomp   the same tests against a core built without OpenMP (SORPIA_OPENMP=OFF)
 # Both are harmless to run twice: each step checks what is already there.
 
 SHELL := /bin/bash
@@ -14,7 +15,7 @@ SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 BUILD_DIR := build/python
 PIP_BUILD := -C build-dir=$(BUILD_DIR) -C cmake.define.SORPIA_BUILD_TESTS=ON
 
-.PHONY: demo test deps venv install cpp-test py-test clean
+.PHONY: demo test test-noomp deps venv install cpp-test py-test clean
 
 demo: install
 	$(VENV)/bin/sorpia demo
@@ -44,6 +45,19 @@ cpp-test: install
 
 py-test: install
 	cd tests && ../$(PY) -m pytest
+
+# A second CMake tree without OpenMP: its C++ tests, then pytest against its module (the
+# Python sources as they are, with that _core), found first through PYTHONPATH.
+NOOMP_DIR := build/noomp
+test-noomp: install
+	$(VENV)/bin/cmake -S . -B $(NOOMP_DIR) -G Ninja -DCMAKE_MAKE_PROGRAM=$(abspath $(VENV))/bin/ninja \
+	  -DSORPIA_OPENMP=OFF -DSORPIA_BUILD_TESTS=ON -DSORPIA_BUILD_PYTHON=ON \
+	  -DPython_EXECUTABLE=$(abspath $(PY)) -Dpybind11_DIR=$$($(PY) -m pybind11 --cmakedir)
+	$(VENV)/bin/cmake --build $(NOOMP_DIR) -j2
+	cd $(NOOMP_DIR) && ../../$(VENV)/bin/ctest --output-on-failure
+	rm -rf $(NOOMP_DIR)/pkg && mkdir -p $(NOOMP_DIR)/pkg/sorpia
+	cp python/sorpia/*.py $(NOOMP_DIR)/_core*.so $(NOOMP_DIR)/pkg/sorpia/
+	cd tests && PYTHONPATH=../$(NOOMP_DIR)/pkg ../$(PY) -m pytest -q
 
 clean:
 	rm -rf build $(VENV)
