@@ -4,6 +4,10 @@ one-thread sweep, the caller's vertex order, the parameter's checks.
 The threaded sweep splits the vertices into index ranges and sweeps the
 vertices shared between ranges last: Gauss-Seidel in another order, so the
 solution is the same to the tolerance and the iteration count nearly so.
+
+The core runs the ranges on real threads only from PARALLEL_MIN vertices a
+thread (below, one after another, with the same result), so the threaded
+cases use meshes of at least PARALLEL_MIN * threads vertices.
 """
 
 import math
@@ -14,14 +18,15 @@ import sorpia
 from conftest import direct_solve
 
 TOL = 1e-10
+PARALLEL_MIN = 8192  # vertices a thread from which the core runs ranges on threads
 
 
 @pytest.fixture(scope="module")
 def big_irregular():
-    # Large enough (about 20k vertices) that 2 threads really run in
-    # parallel (the core runs the ranges one after another below 8k
-    # vertices a thread, with the same result).
-    return sorpia.shapes.irregular(20000, seed=4)
+    # Enough vertices that 3 threads run in parallel.
+    v, f = sorpia.shapes.irregular(26000, seed=4)
+    assert len(v) >= 3 * PARALLEL_MIN
+    return v, f
 
 
 @pytest.fixture(scope="module")
@@ -46,11 +51,14 @@ def test_threads_equal_direct_solve(big_irregular, big_irregular_reference, thre
 
 @pytest.mark.parametrize("mesh_name", ["grid", "pole", "irregular"])
 def test_threads_iterations_close_to_sequential(mesh_name):
-    v, f = {"grid": sorpia.shapes.grid(40, 30), "pole": sorpia.shapes.pole(60),
-            "irregular": sorpia.shapes.irregular(3000, seed=9)}[mesh_name]
+    # grid and irregular run 2 and 3 ranges on threads; the small pole, one
+    # after another.
+    v, f = {"grid": sorpia.shapes.grid(180, 140), "pole": sorpia.shapes.pole(60),
+            "irregular": sorpia.shapes.irregular(26000, seed=9)}[mesh_name]
+    assert mesh_name == "pole" or len(v) >= 3 * PARALLEL_MIN
     one = sorpia.interpolate(v, f, threads=1)
     ref = direct_solve(f, v)
-    for threads in (2, 4):
+    for threads in (2, 3):
         res = sorpia.interpolate(v, f, threads=threads)
         assert res.converged
         assert res.iterations <= math.ceil(1.15 * one.iterations)
@@ -88,7 +96,8 @@ def test_control_vertices_in_callers_order():
 
 
 def test_interpolator_solve_takes_threads():
-    v, f = sorpia.shapes.torus(30, 20)
+    v, f = sorpia.shapes.torus(140, 120)  # 2 ranges on threads
+    assert len(v) >= 2 * PARALLEL_MIN
     solver = sorpia.Interpolator(f, len(v))
     a = solver.solve(v, threads=1)
     b = solver.solve(v, threads=2)

@@ -181,8 +181,16 @@ class Monitor {
 // "sor" and "gs" (solver_sweep.cpp): sweeps of V0 / 2^exponent with the fused
 // E_k (or a residual pass when opt.two_pass), on opt.threads threads; sets
 // res.control_vertices (times 2^exponent), errors, iterations, stop reason.
+// Uniform rows and rows with per-entry weights alike.
 void solve_sor(const LimitOperator& op, const double* v0, int exponent, const SolveOptions& opt, double omega,
                SolveResult& res);
+
+// The sweep runs its ranges on threads only from this many vertices a thread;
+// with fewer, one after the other on the calling thread (the same arithmetic
+// in the same order, so the same bits, except that crowded ranges are not
+// replaced by slabs). Tests lower it to run small meshes on real threads;
+// nothing else changes it.
+extern std::size_t sweep_min_vertices_per_thread;
 
 // The Krylov and HSS methods (solver_krylov.cpp), iterating on
 // res.control_vertices, which holds V^(0) on entry.

@@ -6,7 +6,6 @@
 #include <chrono>
 #include <initializer_list>
 #include <cmath>
-#include <stdexcept>
 #include <string>
 #include <tuple>
 
@@ -308,7 +307,6 @@ SolveResult solve(const LimitOperator& op, const double* v0, const SolveOptions&
   const auto t0 = clock::now();
   const int exponent = scale_exponent(v0, op.n);
   if (opt.method == Method::Gs || opt.method == Method::Sor) {
-    if (!op.uniform()) throw std::logic_error("sorpia::solve: the sweep takes uniform rows only");
     detail::solve_sor(op, v0, exponent, opt, res.omega, res);
   } else {
     run_iteration(op, v0, exponent, opt, res);

@@ -211,6 +211,18 @@ double estimate_lambda_min(const LimitOperator& op, SpectralCache& cache) {
   const std::lock_guard<std::mutex> lock(cache.mutex);
   if (!std::isnan(cache.lambda_min)) return cache.lambda_min;
   Timer timer{cache};
+  if (!op.uniform()) {
+    // No known inner product makes rows with several weights self-adjoint,
+    // and Lanczos needs one: the power method on I - B, whose norm ratio
+    // tends to 1 - lambda_min where I - B's largest eigenvalue dominates.
+    std::vector<double> bx(op.n);
+    const auto i_minus_b = [&](const double* x, double* y) {
+      detail::apply_cols<1>(op, x, bx.data());
+      for (std::size_t i = 0; i < op.n; ++i) y[i] = x[i] - bx[i];
+    };
+    cache.lambda_min = 1.0 - power_radius(op.n, i_minus_b, std::vector<double>(op.n, 1.0), 300, 1e-6);
+    return cache.lambda_min;
+  }
   const SelfAdjointPart b{op};
   const auto low_end = [](double lo, double) { return std::make_pair(1.0 - lo, 0.0); };
   cache.lambda_min = lanczos_extremes(op.n, b, detail::gamma_inverse(op), 300, 1e-5, low_end).first;

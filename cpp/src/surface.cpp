@@ -6,9 +6,6 @@
 #include <opensubdiv/far/primvarRefiner.h>
 #include <opensubdiv/far/topologyDescriptor.h>
 #include <opensubdiv/far/topologyRefinerFactory.h>
-#ifdef _OPENMP
-#include <omp.h>
-#endif
 
 #include <algorithm>
 #include <cmath>
@@ -22,6 +19,7 @@
 #include <utility>
 #include <vector>
 
+#include "openmp.hpp"
 #include "osd_refiner.hpp"
 #include "sorpia/limit.hpp"
 #include "sorpia/errors.hpp"
@@ -66,13 +64,9 @@ constexpr std::ptrdiff_t kFacesPerChunk = 64;
 // free: after the region libgomp's idle workers spin-wait (GOMP_SPINCOUNT),
 // and that CPU time lands on whatever the caller does next.
 int evaluate_threads(std::ptrdiff_t n_groups) {
-#ifdef _OPENMP
   const std::ptrdiff_t chunks = (n_groups + kFacesPerChunk - 1) / kFacesPerChunk;
-  return static_cast<int>(std::max<std::ptrdiff_t>(1, std::min<std::ptrdiff_t>(omp_get_max_threads(), chunks)));
-#else
-  (void)n_groups;
-  return 1;
-#endif
+  return static_cast<int>(
+      std::max<std::ptrdiff_t>(1, std::min<std::ptrdiff_t>(detail::default_thread_count(), chunks)));
 }
 
 // Bfr evaluates on the closed triangle; a parameter a rounding error outside is
@@ -234,7 +228,7 @@ void LoopSurface::evaluate(const std::int32_t* face_ids, const double* uv, std::
   const double* mesh_points = &impl_->points.data()->x;
   int failed_face = -1;
   // Each point is computed alone, so the thread count changes nothing in the results.
-  const int threads = evaluate_threads(n_groups);
+  [[maybe_unused]] const int threads = evaluate_threads(n_groups);  // unused without OpenMP
 #pragma omp parallel num_threads(threads) if (threads > 1)
   {
     Bfr::Surface<double> surface;

@@ -1,16 +1,20 @@
 // The "sor"/"gs" engine: the E_k computed inside the sweep against a separate
 // residual pass and against B from scratch, threaded sweeps against the
-// sequential one, the threads parameter.
+// sequential one, the threads parameter. The threaded cases run their ranges
+// on real threads (SweepRangesOnThreads): the meshes are below the
+// production cut of vertices a thread.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <numeric>
 #include <random>
+#include <string>
 #include <utility>
 #include <vector>
 
 #include "limit_case.hpp"
+#include "parallel_ranges.hpp"
 #include "sorpia/errors.hpp"
 #include "sorpia/limit.hpp"
 #include "sorpia/shapes.hpp"
@@ -23,6 +27,7 @@ using Case = sorpia_test::LimitCase;
 using sorpia_test::error_from_scratch;
 using sorpia_test::limit_case;
 using sorpia_test::max_abs_diff;
+using sorpia_test::SweepRangesOnThreads;
 
 // 0, ..., n-1 shuffled by std::mt19937(seed).
 std::vector<std::int32_t> permutation(std::size_t n, unsigned seed) {
@@ -46,7 +51,7 @@ sorpia::TriMesh shuffled(const sorpia::TriMesh& m, unsigned seed) {
   return out;
 }
 
-// Meshes past the sweep's lag of 4096 vertices (the fused residual runs
+// Meshes past the sweep's lag (the fused residual runs
 // behind the front and the seams are deferred), with boundary, a pole, a
 // scrambled vertex order, and an icosphere numbered level by level (its
 // coarse quarter reaches far ahead: E_k by a residual pass; index ranges
@@ -78,6 +83,7 @@ double max_abs(const std::vector<double>& a) {
 }
 
 TEST(Sweep, FusedErrorsEqualTwoPassBitForBit) {
+  const SweepRangesOnThreads on_threads;
   // The fused sweep computes each residual by the same formula, in the same
   // summation order, from the same final values as the residual pass: the
   // E_k, the iterates and the iteration counts must agree exactly.
@@ -94,6 +100,7 @@ TEST(Sweep, FusedErrorsEqualTwoPassBitForBit) {
 }
 
 TEST(Sweep, ErrorsArePapersEkFromScratch) {
+  const SweepRangesOnThreads on_threads;
   // E_k after k sweeps, recomputed with the CSR matrix B (a different
   // summation order: equal to rounding, 1e-12 of E_0 covers it).
   for (const Case& c : cases())
@@ -110,6 +117,7 @@ TEST(Sweep, ErrorsArePapersEkFromScratch) {
 }
 
 TEST(Sweep, ThreadsGiveTheSequentialSolution) {
+  const SweepRangesOnThreads on_threads;
   for (const Case& c : cases()) {
     const sorpia::SolveResult one = run(c, 1, false);
     ASSERT_TRUE(one.converged()) << c.name;
@@ -127,7 +135,34 @@ TEST(Sweep, ThreadsGiveTheSequentialSolution) {
   }
 }
 
+TEST(Sweep, RangesOnThreadsEqualRangesOneAfterAnother) {
+  // No two vertices of different ranges are adjacent, and the interface runs
+  // after the join: the iterates do not depend on whether the ranges run at
+  // once, bit for bit (also what a build without OpenMP relies on). Only
+  // where the ranges share few vertices (not the pole, the icosphere, or 7
+  // ranges): crowded ranges are replaced by slabs only when they run on
+  // threads.
+  const std::vector<Case>& all = cases();
+  for (const Case* c : {&all[0], &all[1], &all[2], &all[4]})
+    for (int threads : {2, 3}) {
+      sorpia::SolveResult at_once, in_turn;
+      {
+        const SweepRangesOnThreads on_threads;
+        at_once = run(*c, threads, false, 1.0, 8);
+      }
+      {
+        const SweepRangesOnThreads in_order(SweepRangesOnThreads::kNever);
+        in_turn = run(*c, threads, false, 1.0, 8);
+      }
+      EXPECT_EQ(at_once.errors, in_turn.errors) << c->name << " threads " << threads;
+      EXPECT_EQ(at_once.control_vertices, in_turn.control_vertices) << c->name << " threads " << threads;
+      EXPECT_EQ(at_once.reordered, std::string(c->name) == "shuffled") << c->name << " threads " << threads;
+      EXPECT_EQ(in_turn.reordered, at_once.reordered) << c->name << " threads " << threads;
+    }
+}
+
 TEST(Sweep, PoorOrderIsSweptInItsOwnOrderAndReturnedInTheCallers) {
+  const SweepRangesOnThreads on_threads;
   // The shuffled mesh is the irregular one renumbered: its solution must be
   // the same vertices renumbered, though the core sweeps it breadth-first.
   const sorpia::TriMesh m = sorpia::irregular(40000, 3);
@@ -150,16 +185,18 @@ TEST(Sweep, PoorOrderIsSweptInItsOwnOrderAndReturnedInTheCallers) {
 }
 
 TEST(Sweep, CrowdedRangesAreSweptInSlabsAndReturnedInTheCallersOrder) {
+  const SweepRangesOnThreads on_threads;
   // icosphere(6) split into two index ranges: the first holds every coarse
   // vertex, each with neighbours in both. On two or more threads the engine
-  // sweeps slabs across the sphere instead; the irregular mesh's own ranges
-  // share few vertices and are kept.
+  // sweeps slabs across the sphere instead (with OpenMP; without, the ranges
+  // run in turn and are kept); the irregular mesh's own ranges share few
+  // vertices and are kept.
   const Case& ico = cases()[5];
   const sorpia::SolveResult one = run(ico, 1, false);
   EXPECT_FALSE(one.reordered);
   for (int threads : {2, 3}) {
     const sorpia::SolveResult t = run(ico, threads, false);
-    EXPECT_TRUE(t.reordered) << threads;
+    EXPECT_EQ(t.reordered, sorpia_test::kRangesOnThreads) << threads;
     ASSERT_TRUE(t.converged());
     // The caller's order: the same vertices as the sequential sweep's, to
     // what the stopping rule leaves (see ThreadsGiveTheSequentialSolution).
@@ -171,6 +208,7 @@ TEST(Sweep, CrowdedRangesAreSweptInSlabsAndReturnedInTheCallersOrder) {
 }
 
 TEST(Sweep, StopAtZeroReturnsV0) {
+  const SweepRangesOnThreads on_threads;
   // Every vertex at one point: B V0 = V0 up to rounding (rows sum to 1), so
   // E_0 is at rounding level and the run stops at k = 0; the first sweep,
   // which computed E_0, must be undone. The icosphere is swept in slabs on
@@ -184,7 +222,8 @@ TEST(Sweep, StopAtZeroReturnsV0) {
       EXPECT_EQ(r.iterations, 0);
       EXPECT_TRUE(r.converged());
       EXPECT_EQ(r.control_vertices, m.vertices);
-      EXPECT_EQ(r.reordered, threads == 2 && m.n_vertices() == 40962) << m.n_vertices();
+      EXPECT_EQ(r.reordered, sorpia_test::kRangesOnThreads && threads == 2 && m.n_vertices() == 40962)
+          << m.n_vertices();
     }
   }
 }

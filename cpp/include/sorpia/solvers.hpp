@@ -84,7 +84,9 @@ struct SpectralCache {
 /// Stops when the smallest Ritz value changes by at most 1e-5 (relative to
 /// 1 - lambda_min) on two products in a row, after 40 products at least and
 /// 300 at most. Ritz values lie inside the spectrum, so the estimate is at or
-/// above the true value.
+/// above the true value. Rows with several weights (LimitOperator::values),
+/// which no known inner product makes self-adjoint, get the power method on
+/// I - B instead (at most 300 products; no such bound).
 double estimate_lambda_min(const LimitOperator& op, SpectralCache& cache);
 
 /// Spectral radius of the Jacobi matrix I - D^-1 B, by the power method in the
@@ -143,12 +145,16 @@ struct SolveOptions {
   /// neighbour in another range in vertex order: Gauss-Seidel in a slightly
   /// different order, so the iterates differ from threads = 1 by the ordering
   /// (tests: same solution to 1e-8, iterations within 15%), and do not depend
-  /// on timing. More threads than cores only slows down.
+  /// on timing. More threads than cores only slows down. Built without
+  /// OpenMP (CMake SORPIA_OPENMP=OFF), the ranges run one after the other on
+  /// the calling thread: the same ordering, so the same solution to the
+  /// tolerance (bit for bit unless the ranges would have been swept in slabs).
   int threads = 1;
-  /// "sor"/"gs": compute E_k by a separate residual pass after each sweep
-  /// instead of inside it. Both give the same E_k bit for bit; the fused
-  /// sweep (default) reads the mesh once per iteration instead of twice.
-  /// For tests and benchmarks.
+  /// Reference path for tests and benchmarks only, not for use: "sor"/"gs"
+  /// compute E_k by a separate residual pass after each sweep instead of
+  /// inside it. Both give the same E_k bit for bit (what the tests check);
+  /// the fused sweep (default) reads the mesh once per iteration instead of
+  /// twice.
   bool two_pass = false;
   /// Called after E_k is known for k = 0, 1, ...; returning true stops the run.
   /// Empty: no call at all.

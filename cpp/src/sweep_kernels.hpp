@@ -1,0 +1,96 @@
+#pragma once
+// The sweep's inner loops ("sor"/"gs", solver_sweep.cpp) as the engine sees
+// them: the arrays they read (Ctx), one table of function pointers per slot
+// count, and the choice among them. The loops themselves are in
+// sweep_kernels_impl.hpp, compiled once for the baseline instruction set
+// (sweep_kernels.cpp) and once for AVX2 (sweep_kernels_avx2.cpp), picked at
+// run time. Not a public header.
+#include <cstddef>
+#include <cstdint>
+
+namespace sorpia {
+namespace detail {
+
+// Every function taking or returning these vectors is internal: the ABI note
+// about passing AVX vectors without AVX does not concern us.
+#pragma GCC diagnostic ignored "-Wpsabi"
+typedef double d4 __attribute__((vector_size(32)));
+typedef std::int32_t i4 __attribute__((vector_size(16)));
+typedef std::uint32_t u4 __attribute__((vector_size(16)));
+
+// A LimitOperator's arrays as the engine reads them: the caller's, or a
+// renumbered copy of its own (Renumbered, vertex_order.hpp).
+struct OpView {
+  std::size_t n;
+  const std::int32_t* offsets;  // n + 1
+  const std::int32_t* neighbors;
+  const double* diag;
+  const double* weight;         // uniform rows: one weight per row
+  const double* values;         // rows with several weights: one per entry of neighbors; else null
+  bool uniform() const { return values == nullptr; }
+};
+
+// Per-vertex flags of the plan (sweep_plan.hpp).
+constexpr std::uint8_t kInterface = 1;  // swept after the ranges, by one thread
+constexpr std::uint8_t kDeferred = 2;   // residual after the sweep, not in it
+
+// What the kernels read and write.
+struct Ctx {
+  const std::int32_t* off;
+  const std::int32_t* nb;
+  std::int32_t n;             // the zero row of x
+  std::int32_t slots_end;     // the slot kernels may read K entries of nb from off[i] for i below it
+  const double* diag;
+  const double* weight;
+  const double* values;       // null: uniform rows
+  const double* v0;           // (n, 3)
+  d4* x;                      // (n + 1, 4), row n and lane 3 zero
+  const std::uint8_t* flags;
+  double omega;
+  std::int32_t lag;           // residual front behind the update front, and the prefetch distance ahead of it
+};
+
+// The kernels for one kind of row (a slot count K for uniform rows, or
+// per-entry weights). Each computes ||v_i^0 - (B x)_i||^2 and the update of
+// eq. 18 by one formula, so a residual inside the sweep and one in a separate
+// pass give the same bits.
+struct Kernels {
+  // Sweep [b, e) in vertex order, skipping interface vertices; returns the max
+  // ||r||^2 of its non-deferred vertices, lag behind the front.
+  double (*sweep_fused)(const Ctx&, std::int32_t, std::int32_t);
+  // x = V0 on [b, e), and E_0's residuals as in sweep_fused.
+  double (*init_fused)(const Ctx&, std::int32_t, std::int32_t);
+  // Sweep [b, e) as sweep_fused, without residuals (returns 0).
+  double (*sweep_plain)(const Ctx&, std::int32_t, std::int32_t);
+  // Max ||r||^2 over [b, e).
+  double (*residual_range)(const Ctx&, std::int32_t, std::int32_t);
+  // Max ||r||^2 over the k vertices of l.
+  double (*residual_list)(const Ctx&, const std::int32_t*, std::size_t);
+  // Update the k vertices of l, in that order.
+  void (*update_list)(const Ctx&, const std::int32_t*, std::size_t);
+};
+
+// Slot counts offered for uniform rows; 0 = the plain loop.
+constexpr int kSlotChoices[] = {0, 4, 8, 12};
+
+// The rows of x (n + 1) the slot kernels can address: they form byte
+// offsets 32 * row in 32-bit lanes. Larger meshes (over 134M vertices) take
+// the plain loop, which indexes with full-width integers.
+constexpr std::size_t kMaxSlotRows = std::size_t{1} << 27;
+
+// Index into kSlotChoices for op's valences (uniform rows).
+int choose_slots(const OpView& op);
+
+// The kernels for uniform rows with kSlotChoices[choice] slots: the AVX2 build
+// where the processor has it, else the baseline one (the same bits).
+const Kernels& uniform_kernels(int choice);
+
+// The kernels for rows with per-entry weights (OpView::values).
+const Kernels& per_entry_kernels();
+
+// The AVX2 build of uniform_kernels (sweep_kernels_avx2.cpp), present when
+// CMake compiles that unit with -mavx2 (SORPIA_AVX2_KERNELS).
+const Kernels& avx2_uniform_kernels(int choice);
+
+}  // namespace detail
+}  // namespace sorpia
