@@ -1,7 +1,9 @@
 # sorpia: set-up, demo and tests on a fresh Debian bookworm machine (as root).
 #   make demo   installs what is missing, builds sorpia into .venv, runs `sorpia demo`
-#   make test   installs what is missing, builds, runs the C++ tests (ctest) and pytest
-# Both are harmless to run twice: each step checks what is already there.
+#   make test   installs what is missing, builds, runs the C++ tests (ctest) and pytest, and builds the docs
+#               with warnings as errors
+#   make docs   the documentation (Sphinx, from the installed package's docstrings) into build/docs
+# Each is harmless to run twice: each step checks what is already there.
 
 SHELL := /bin/bash
 PYTHON ?= python3
@@ -14,12 +16,16 @@ SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 BUILD_DIR := build/python
 PIP_BUILD := -C build-dir=$(BUILD_DIR) -C cmake.define.SORPIA_BUILD_TESTS=ON
 
-.PHONY: demo test deps venv install cpp-test py-test clean
+# -E: a fresh environment each time, so pages generated from the installed package (the API, the command's
+# --help) never come from a stale cache; the whole build takes seconds.
+SPHINX := $(PY) -m sphinx -b html -E -q docs build/docs
+
+.PHONY: demo test deps venv install cpp-test py-test docs docs-test clean
 
 demo: install
 	$(VENV)/bin/sorpia demo
 
-test: cpp-test py-test
+test: cpp-test py-test docs-test
 
 deps:
 	@if ! dpkg -s $(APT_PACKAGES) >/dev/null 2>&1; then \
@@ -37,13 +43,21 @@ venv: $(PY)
 # --no-build-isolation keeps them there between runs.
 install: deps venv
 	$(PY) -m pip install -q scikit-build-core pybind11 cmake ninja
-	$(PY) -m pip install -q --no-build-isolation $(PIP_BUILD) ".[test]"
+	$(PY) -m pip install -q --no-build-isolation $(PIP_BUILD) ".[test,docs]"
 
 cpp-test: install
 	cd $(BUILD_DIR) && ../../$(VENV)/bin/ctest --output-on-failure
 
 py-test: install
 	cd tests && ../$(PY) -m pytest
+
+docs: install
+	$(SPHINX)
+	@echo "docs: build/docs/index.html"
+
+# As `make docs`, but a warning (a broken reference, a docstring that does not parse) fails the build.
+docs-test: install
+	$(SPHINX) -W --keep-going
 
 clean:
 	rm -rf build $(VENV)

@@ -11,7 +11,8 @@ call builds the refined topology, second call reuses it, as after
 set_vertices), and evaluate_limit at 1M random points with derivatives, on
 sorpia.shapes.irregular(--surface-vertices) (default 100k).
 
-Prints Markdown tables; --json writes the figures.
+Prints Markdown tables and writes them into docs/benchmarks/io-speed.md
+(unless --no-page); --json writes the figures.
 
     python bench/io_speed.py [--vertices 1000000] [--surface-vertices 100000] [--repeat 3] [--json out.json]
 """
@@ -24,11 +25,15 @@ import os
 import resource
 import statistics
 import tempfile
+import sys
 import time
 
 import numpy as np
 
 import sorpia
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from _report import write_page  # noqa: E402
 
 FORMATS = [("ply", True), ("ply", False), ("obj", False), ("off", False), ("stl", True), ("stl", False)]
 
@@ -123,45 +128,51 @@ def main():
     ap.add_argument("--dir", default=None, help="folder for the files (default: a temporary folder under build/)")
     ap.add_argument("--only", choices=["files", "surface"], default=None)
     ap.add_argument("--json", default=None)
+    ap.add_argument("--no-page", action="store_true", help="print only; do not write docs/benchmarks/io-speed.md")
     args = ap.parse_args()
 
-    result = {}
+    result, lines = {}, []
     if args.only != "surface":
-        result["files"] = print_files(args)
+        result["files"] = files_table(args, lines)
     if args.only != "files":
-        result["surface"] = print_surface(args)
+        result["surface"] = surface_table(args, lines)
+    print("\n".join(lines))
+    if not args.no_page:
+        write_page("io-speed", "Mesh files and the limit surface", "\n".join(lines), settings=(ap, args))
     if args.json:
         with open(args.json, "w") as fh:
             json.dump(result, fh, indent=2)
 
 
-def print_files(args):
+def files_table(args, lines):
+    """Time the file formats; their Markdown table goes onto lines."""
     base = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "build")
     os.makedirs(base, exist_ok=True)
     with tempfile.TemporaryDirectory(dir=args.dir or base) as folder:
         files = bench_files(args.vertices, args.repeat, folder)
-    print(f"## Files: irregular mesh, {files[0]['vertices']} vertices, {files[0]['faces']} faces "
-          f"(median of {args.repeat})\n")
-    print("| format | MB | write s | read s | float64 bit-exact |")
-    print("|---|---|---|---|---|")
+    lines += [f"## Files: irregular mesh, {files[0]['vertices']:,} vertices, {files[0]['faces']:,} faces "
+              f"(median of {args.repeat}; writes include fsync)", "",
+              "| format | MB | write s | read s | float64 bit-exact |", "|---|---:|---:|---:|---|"]
     for r in files:
         name = f"{r['format']} {'binary' if r['binary'] else 'ascii'}"
         exact = "float32 by definition" if r["bit_exact"] is None else ("yes" if r["bit_exact"] else "NO")
-        print(f"| {name} | {r['bytes'] / 1e6:.1f} | {r['write_s']:.2f} | {r['read_s']:.2f} | {exact} |")
+        lines.append(f"| {name} | {r['bytes'] / 1e6:.1f} | {r['write_s']:.2f} | {r['read_s']:.2f} | {exact} |")
     return files
 
 
-def print_surface(args):
+def surface_table(args, lines):
+    """Time the limit surface; its Markdown table goes onto lines."""
     surface = bench_surface(args.surface_vertices, args.max_level, args.repeat)
-    print(f"\n## Limit surface: irregular mesh, {surface['vertices']} vertices, {surface['faces']} faces\n")
-    print(f"LoopSurface build: {surface['build_s']:.2f} s\n")
-    print("| level | output vertices | output faces | first s | again s | peak RSS growth MB | estimate MB |")
-    print("|---|---|---|---|---|---|---|")
+    lines += ["", f"## Limit surface: irregular mesh, {surface['vertices']:,} vertices, {surface['faces']:,} faces",
+              "", f"`LoopSurface` build: {surface['build_s']:.2f} s. \"first\": the first `tessellate(level)`, which "
+              f"builds the refined topology; \"again\": median of {args.repeat} more on the same topology.", "",
+              "| level | output vertices | output faces | first s | again s | peak RSS growth MB | estimate MB |",
+              "|---:|---:|---:|---:|---:|---:|---:|"]
     for r in surface["levels"]:
-        print(f"| {r['level']} | {r['out_vertices']} | {r['out_faces']} | {r['first_s']:.2f} | {r['again_s']:.2f} "
-              f"| {r['peak_rss_mb']:.0f} | {r['estimate_mb']:.0f} |")
-    print(f"\nevaluate_limit at {surface['evaluate_points']} points: {surface['evaluate_s']:.2f} s, "
-          f"with derivatives {surface['evaluate_derivatives_s']:.2f} s")
+        lines.append(f"| {r['level']} | {r['out_vertices']:,} | {r['out_faces']:,} | {r['first_s']:.2f} "
+                     f"| {r['again_s']:.2f} | {r['peak_rss_mb']:.0f} | {r['estimate_mb']:.0f} |")
+    lines += ["", f"`evaluate` at {surface['evaluate_points']:,} random points: {surface['evaluate_s']:.2f} s, "
+              f"with derivatives {surface['evaluate_derivatives_s']:.2f} s"]
     return surface
 
 

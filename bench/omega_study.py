@@ -1,5 +1,5 @@
 """How many SOR-PIA sweeps each omega needs, on real and generated meshes:
-the evidence behind omega="auto" (README, "Convergence against the paper").
+the evidence behind omega="auto" (docs: convergence against the paper).
 
 For every mesh: sweeps to E_k/E_0 < tol for omega on a grid (0.80 .. 1.60 by
 0.05, and 0.96 .. 1.12 by 0.01), Gauss-Seidel, omega="young" (paper Remark 1,
@@ -8,9 +8,10 @@ of --repeat runs of estimate + solve (the operator is built once per mesh and
 not counted). Prints Markdown; --json writes everything. --whss adds the same
 study for the relaxation weight of "whss" (outer iterations for w = 0.8 .. 1.2
 at the default alpha). --arpack checks rho(I - D^-1 B) with scipy's ARPACK
-(eigs, tol 1e-10), independent of sorpia's power method.
+(eigs, tol 1e-10), independent of sorpia's power method. The tables also go
+into docs/benchmarks/omega-study.md (unless --no-page).
 
-    python bench/omega_study.py [--meshes DIR] [--tol 1e-10] [--whss] [--arpack] [--json out.json]
+    python bench/omega_study.py [--meshes DIR] [--tol 1e-10] [--whss] [--arpack] [--json out.json] [--no-page]
 """
 
 from __future__ import annotations
@@ -29,6 +30,9 @@ import scipy.sparse.linalg
 
 import sorpia
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from _report import write_page  # noqa: E402
+
 DEFAULT_MESH_DIR = os.path.join(os.path.dirname(__file__), "..", "..", "shared", "meshes")
 
 GENERATED = {
@@ -40,15 +44,32 @@ GENERATED = {
 }
 
 
-def load_meshes(mesh_dir: str, generated: bool = True):
-    """[(name, vertices, faces)]: the .obj files of mesh_dir (sorted), then the generated meshes."""
+def load_meshes(mesh_dir: str, generated: bool = True, skipped: list | None = None):
+    """[(name, vertices, faces)]: the .obj files of mesh_dir (sorted) that sorpia accepts as triangle meshes,
+    then the generated meshes. Files it refuses (polygons, non-manifold topology) go onto `skipped` as
+    (name, reason) when a list is given."""
     out = []
     for path in sorted(glob.glob(os.path.join(mesh_dir, "*.obj"))):
-        v, f = sorpia.read_mesh(path)
-        out.append((os.path.basename(path)[:-4], v, f))
+        name = os.path.basename(path)[:-4]
+        try:
+            v, f = sorpia.read_mesh(path)
+            make_interpolator(v, f)
+        except (sorpia.MeshFileError, sorpia.MeshError) as e:
+            if skipped is not None:  # the reason in a few words: the message up to its first colon
+                msg = str(e).replace(path + ", ", "")
+                skipped.append((name, "polygons" if "works on triangles" in msg else msg.split(":")[0]))
+            continue
+        out.append((name, v, f))
     if generated:
         out += [(name, *make()) for name, make in GENERATED.items()]
     return out
+
+
+def skipped_note(skipped) -> str:
+    """A Markdown paragraph naming the mesh files left out and why ("" when none were)."""
+    if not skipped:
+        return ""
+    return "\nLeft out (sorpia refuses them as Loop input): " + "; ".join(f"{n} ({why})" for n, why in skipped)
 
 
 def make_interpolator(v, f):
@@ -92,10 +113,11 @@ def main(argv=None):
     ap.add_argument("--whss", action="store_true", help="also scan the whss relaxation weight")
     ap.add_argument("--arpack", action="store_true", help="also rho(I - D^-1 B) by scipy's ARPACK")
     ap.add_argument("--json", help="write the measurements here")
+    ap.add_argument("--no-page", action="store_true", help="print only; do not write docs/benchmarks/omega-study.md")
     args = ap.parse_args(argv)
 
-    rows = []
-    for name, v, f in load_meshes(args.meshes):
+    rows, skipped = [], []
+    for name, v, f in load_meshes(args.meshes, skipped=skipped):
         # A fresh Interpolator for young so that rho's estimate is paid and timed.
         young, t_young = timed(make_interpolator(v, f), v, 1, omega="young", max_iter=5000, tol=args.tol)
         solver = make_interpolator(v, f)
@@ -113,42 +135,52 @@ def main(argv=None):
             for w in WEIGHTS:
                 whss[w] = solver.solve(v, method="whss", weight=w, tol=args.tol).iterations
         rho_arpack = arpack_rho(v, f) if args.arpack else float("nan")
-        rows.append(dict(mesh=name, n=len(v), whss=whss, rho_arpack=rho_arpack, gs=gs.iterations, t_gs=t_gs, auto=auto.iterations, auto_omega=auto.omega,
-                         t_auto=t_auto, rho=young.rho, young_omega=young.omega, young=young.iterations,
+        rows.append(dict(mesh=name, n=len(v), whss=whss, rho_arpack=rho_arpack, gs=gs.iterations, t_gs=t_gs,
+                         auto=auto.iterations, auto_omega=auto.omega, t_auto=t_auto, rho=young.rho,
+                         young_omega=young.omega, young=young.iterations,
                          young_converged=young.converged, t_young=t_young, best_omegas=best, best=best_it,
                          t_best=t_best, scan=scan))
         print(f"# {name}: gs {gs.iterations}, best {best_it} at omega {best[0]}..{best[-1]}", file=sys.stderr)
 
-    print(f"Sweeps to E_k/E_0 < {args.tol:g} (time: median of {args.repeat}, estimate + solve)\n")
-    print("| mesh | n | rho(I-D^-1B) | rho ARPACK | young omega | young sweeps | GS sweeps | auto omega | auto sweeps "
-          "| fastest omega | its sweeps | t GS ms | t auto ms | t young ms |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    lines = []
+
+    def out(text=""):
+        lines.extend(text.split("\n"))
+
+    out(f"Sweeps to E_k/E_0 < {args.tol:g} (time: median of {args.repeat}, estimate + solve)\n")
+    out("| mesh | n | rho(I-D^-1B) | rho ARPACK | young omega | young sweeps | GS sweeps | auto omega | auto sweeps "
+        "| fastest omega | its sweeps | t GS ms | t auto ms | t young ms |")
+    out("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     for r in rows:
         b = r["best_omegas"]
         br = f"{b[0]:.2f}" if len(b) == 1 else f"{b[0]:.2f}-{b[-1]:.2f}"
         yi = str(r["young"]) + ("" if r["young_converged"] else " (not converged)")
-        print(f"| {r['mesh']} | {r['n']} | {r['rho']:.5f} | {r['rho_arpack']:.5f} | {r['young_omega']:.4f} | {yi} | {r['gs']} "
-              f"| {r['auto_omega']:.2f} | {r['auto']} | {br} | {r['best']} | {1e3 * r['t_gs']:.2f} "
-              f"| {1e3 * r['t_auto']:.2f} | {1e3 * r['t_young']:.2f} |")
+        out(f"| {r['mesh']} | {r['n']} | {r['rho']:.5f} | {r['rho_arpack']:.5f} | {r['young_omega']:.4f} | {yi} "
+            f"| {r['gs']} | {r['auto_omega']:.2f} | {r['auto']} | {br} | {r['best']} | {1e3 * r['t_gs']:.2f} "
+            f"| {1e3 * r['t_auto']:.2f} | {1e3 * r['t_young']:.2f} |")
 
-    print("\nSweeps per omega (columns) and mesh (rows):\n")
-    print("| mesh | " + " | ".join(f"{om:.2f}" for om in OMEGAS) + " |")
-    print("|---|" + "---|" * len(OMEGAS))
+    out("\nSweeps per omega (columns) and mesh (rows):\n")
+    out("| mesh | " + " | ".join(f"{om:.2f}" for om in OMEGAS) + " |")
+    out("|---|" + "---|" * len(OMEGAS))
     for r in rows:
-        print(f"| {r['mesh']} | " + " | ".join(str(r["scan"][float(om)]) for om in OMEGAS) + " |")
+        out(f"| {r['mesh']} | " + " | ".join(str(r["scan"][float(om)]) for om in OMEGAS) + " |")
 
     # The largest fixed omega that never needs more sweeps than GS on any mesh.
     safe = [om for om in OMEGAS if all(r["scan"][float(om)] <= r["gs"] for r in rows)]
-    print(f"\nFixed omegas never worse than GS on all {len(rows)} meshes: {', '.join(f'{o:.2f}' for o in safe)}")
+    out(f"\n- Fixed omegas never worse than GS on all {len(rows)} meshes: {', '.join(f'{o:.2f}' for o in safe)}")
     gains = {float(om): sum(r["gs"] - r["scan"][float(om)] for r in rows) for om in safe}
-    print("Sweeps saved against GS, summed over the meshes: " + ", ".join(f"{o:.2f}: {g}" for o, g in gains.items()))
-    print(f"auto never worse than GS: {all(r['auto'] <= r['gs'] for r in rows)}")
+    out("- Sweeps saved against GS, summed over the meshes: " + ", ".join(f"{o:.2f}: {g}" for o, g in gains.items()))
+    out(f"- auto never worse than GS: {all(r['auto'] <= r['gs'] for r in rows)}")
     if args.whss:
-        print("\nwhss outer iterations per relaxation weight (default alpha):\n")
-        print("| mesh | " + " | ".join(f"w={w}" for w in WEIGHTS) + " |")
-        print("|---|" + "---|" * len(WEIGHTS))
+        out("\nwhss outer iterations per relaxation weight (default alpha):\n")
+        out("| mesh | " + " | ".join(f"w={w}" for w in WEIGHTS) + " |")
+        out("|---|" + "---|" * len(WEIGHTS))
         for r in rows:
-            print(f"| {r['mesh']} | " + " | ".join(str(r["whss"][w]) for w in WEIGHTS) + " |")
+            out(f"| {r['mesh']} | " + " | ".join(str(r["whss"][w]) for w in WEIGHTS) + " |")
+    out(skipped_note(skipped))
+    print("\n".join(lines))
+    if not args.no_page:
+        write_page("omega-study", "SOR-PIA sweeps against omega", "\n".join(lines), settings=(ap, args))
     if args.json:
         with open(args.json, "w") as fh:
             json.dump(rows, fh, indent=1)

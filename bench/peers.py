@@ -19,7 +19,8 @@ One run, one machine, one mesh, every entry timed `--repeat` times (medians):
 Every peer includes the time to build B, as sorpia's end-to-end time includes
 its own topology and operator. "solve" is the iteration alone (peer 2: without
 its eigenvalue estimate, reported as "estimate"); ratios are peer time over
-sorpia's "sor" time. Nothing here runs under pytest.
+sorpia's "sor" time. The tables also go into docs/benchmarks/peers.md (unless
+--no-page). Nothing here runs under pytest.
 """
 
 from __future__ import annotations
@@ -27,7 +28,6 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import platform
 import statistics
 import subprocess
 import sys
@@ -41,6 +41,7 @@ import scipy.sparse.linalg
 import sorpia
 
 sys.path.insert(0, os.path.dirname(__file__))
+from _report import write_page  # noqa: E402
 from scaling import bench_exe  # noqa: E402
 
 
@@ -137,6 +138,7 @@ def main(argv=None):
     p.add_argument("--splu-max", type=int, default=600_000,
                    help="skip splu above this many vertices (its fill-in needs several GB)")
     p.add_argument("--json", metavar="PATH", help="also write the figures as JSON")
+    p.add_argument("--no-page", action="store_true", help="print only; do not write docs/benchmarks/peers.md")
     a = p.parse_args(argv)
 
     V0, F = load(a.mesh)
@@ -151,26 +153,33 @@ def main(argv=None):
     cpp = sorpia_bench(a.mesh, methods, a.tol, a.repeat)
 
     ref = entries.get("sorpia sor") or next(iter(entries.values()))
-    print(f"peers on {a.mesh}: {n} vertices, {len(F)} faces; tol {a.tol:g}; medians of {a.repeat}; "
-          f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores, numpy {np.__version__}, "
-          f"scipy {scipy.__version__}")
-    print(f"{'entry':<22} {'total s':>8} {'operator':>8} {'estimate':>8} {'solve s':>8} {'iters':>6} "
-          f"{'E_k/E_0':>9} {'total/sor':>9} {'solve/sor':>9}")
+    lines = [f"`{a.mesh}`: {n:,} vertices, {len(F):,} faces; tol {a.tol:g}; medians of {a.repeat}; "
+             f"numpy {np.__version__}, scipy {scipy.__version__}. Every entry includes building B (peers: "
+             "`sorpia.limit_matrix`; sorpia: topology + operator, the \"operator\" column); ratios are over "
+             "sorpia `sor`.", "",
+             "| entry | total s | operator s | estimate s | solve s | iterations | E_k/E_0 | total / sor "
+             "| solve / sor |",
+             "|---|---:|---:|---:|---:|---:|---:|---:|---:|"]
     for name, e in entries.items():
         op = e.get("topology", 0.0) + e["operator"]
-        print(f"{name:<22} {e['total']:8.3f} {op:8.3f} {e['estimate']:8.3f} {e['solve']:8.3f} "
-              f"{int(e['iterations']):6d} {e['final_error']:9.2e} {e['total'] / ref['total']:9.2f} "
-              f"{e['solve'] / ref['solve']:9.2f}")
+        lines.append(f"| {name} | {e['total']:.3f} | {op:.3f} | {e['estimate']:.3f} | {e['solve']:.3f} "
+                     f"| {int(e['iterations'])} | {e['final_error']:.2e} | {e['total'] / ref['total']:.2f} "
+                     f"| {e['solve'] / ref['solve']:.2f} |")
     if cpp:
-        print(f"C++ sorpia-bench: topology {cpp['topology']:.3f} s, operator {cpp['operator']:.3f} s, "
-              f"streaming floor {cpp['floor'] * 1e3:.2f} ms, peak {cpp['peak_rss_bytes'] / 2**20:.0f} MB "
-              f"({cpp['bytes_per_vertex']:.0f} B/vertex above the input)")
+        lines += ["", f"C++ `sorpia-bench` on the same mesh: topology {cpp['topology']:.3f} s, operator "
+                  f"{cpp['operator']:.3f} s, streaming floor {cpp['floor'] * 1e3:.2f} ms, peak "
+                  f"{cpp['peak_rss_bytes'] / 2**20:.0f} MB ({cpp['bytes_per_vertex']:.0f} B/vertex above the input).",
+                  "", "| method | solve s | estimate s | iterations | sweep ms | sweep / floor | end to end s "
+                  "| peers, end to end / this |", "|---|---:|---:|---:|---:|---:|---:|---|"]
         peers = {k: e for k, e in entries.items() if "peer" in k}
         for m in cpp["methods"]:
-            vs = ", ".join(f"{k.split()[0]} {e['total'] / m['end_to_end']:.1f}x slower" for k, e in peers.items())
-            print(f"  {m['method']:<6} solve {m['solve']:.3f} s + estimate {m['estimate']:.3f} s, "
-                  f"{m['iterations']} iterations, sweep {m['sweep'] * 1e3:.2f} ms = {m['sweep_over_floor']:.2f} x floor, "
-                  f"end to end {m['end_to_end']:.3f} s ({vs})")
+            vs = ", ".join(f"{k.split()[0]} {e['total'] / m['end_to_end']:.1f}x" for k, e in peers.items())
+            lines.append(f"| `{m['method']}` | {m['solve']:.3f} | {m['estimate']:.3f} | {m['iterations']} "
+                         f"| {m['sweep'] * 1e3:.2f} | {m['sweep_over_floor']:.2f} | {m['end_to_end']:.3f} | {vs} |")
+    print("\n".join(lines))
+    if not a.no_page:
+        slug = "peers-" + "".join(c if c.isalnum() else "-" for c in os.path.basename(a.mesh).lower())
+        write_page(slug, f"Peers on {a.mesh}", "\n".join(lines), settings=(p, a))
     if a.json:
         with open(a.json, "w") as fh:
             json.dump({"mesh": a.mesh, "n_vertices": n, "n_faces": len(F), "tol": a.tol, "repeat": a.repeat,

@@ -1,13 +1,14 @@
 """Time and memory against mesh size: is every phase linear?
 
     python bench/scaling.py                       # irregular meshes, 10k .. 4M vertices
-    python bench/scaling.py --sizes 10000,100000 --kind torus --plot /tmp/s.png
+    python bench/scaling.py --sizes 10000,100000 --kind torus --no-page --plot /tmp/s.png
 
 Runs sorpia-bench (C++, one process per size so that each peak memory is its
-own) on generated meshes of growing size, prints a table of seconds per phase,
-iterations, peak memory and bytes per vertex above the input arrays, and draws
-a log-log plot (matplotlib, Agg) with a dashed line of slope 1 through the
-smallest size. Nothing here runs under pytest.
+own) on generated meshes of growing size, prints a Markdown table of seconds
+per phase, iterations, peak memory and bytes per vertex above the input
+arrays, draws a log-log plot (matplotlib, Agg) with a dashed line of slope 1
+through the smallest size, and writes both into the documentation page
+docs/benchmarks/scaling.md (unless --no-page). Nothing here runs under pytest.
 """
 
 from __future__ import annotations
@@ -20,6 +21,9 @@ import shutil
 import subprocess
 import sys
 import sysconfig
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from _report import PAGES, write_page, write_readme_excerpt  # noqa: E402
 
 
 def bench_exe():
@@ -44,8 +48,11 @@ def main(argv=None):
     p.add_argument("--kind", choices=["irregular", "torus", "icosphere"], default="irregular")
     p.add_argument("--method", default="sor")
     p.add_argument("--repeat", type=int, default=3)
-    p.add_argument("--plot", default=os.path.join(os.path.dirname(os.path.abspath(__file__)), "scaling.png"))
+    p.add_argument("--plot", default=None, help="where to draw the plot (default: beside the page, "
+                   "docs/benchmarks/scaling.png; with --no-page, no plot unless given)")
     p.add_argument("--json", metavar="PATH", help="also write the figures as JSON")
+    p.add_argument("--no-page", action="store_true", help="print only; do not write docs/benchmarks/scaling.md")
+    p.add_argument("--readme", action="store_true", help="also put the table into README.md (its 'scaling table')")
     p.add_argument("--from-json", metavar="PATH", help="table and plot from an earlier --json, without running")
     a = p.parse_args(argv)
     exe = bench_exe()
@@ -69,18 +76,41 @@ def main(argv=None):
                      "end_to_end": r["end_to_end"], "floor": m["floor"], "sweep_over_floor": r["sweep_over_floor"],
                      "peak_mb": m["peak_rss_bytes"] / 2**20, "bytes_per_vertex": m["bytes_per_vertex"]})
 
-    print(f"scaling, {a.kind} meshes, method {a.method}, medians of {a.repeat} (seconds; one thread)")
-    print(f"{'mesh':<20} {'vertices':>9} {'topology':>8} {'operator':>8} {'solve':>7} {'iters':>5} {'total':>7} "
-          f"{'us/vertex':>9} {'sweep/fl':>8} {'peak MB':>8} {'B/vertex':>8}")
+    table = ["| vertices | topology s | operator s | solve s | iterations | end to end s | peak MB "
+             "| bytes/vertex above input |", "|---:|---:|---:|---:|---:|---:|---:|---:|"]
+    table += [f"| {r['n']:,} | {r['topology']:.3f} | {r['operator']:.4f} | {r['solve']:.3f} | {r['iterations']} "
+              f"| {r['end_to_end']:.3f} | {r['peak_mb']:.0f} | {r['bytes_per_vertex']:.0f} |" for r in rows]
+    table = [f"`sorpia-bench`, `{a.kind}` meshes, method `{a.method}` to 1e-10, one thread, medians of {a.repeat} "
+             "(C++ core: arrays in, control vertices out):", ""] + table
+    lines = [f"`{a.kind}` meshes, method `{a.method}`, one thread, medians of {a.repeat} runs of `sorpia-bench` "
+             "(seconds).", "",
+             "| mesh | vertices | topology s | operator s | solve s | iterations | end to end s | µs/vertex "
+             "| sweep/floor | peak MB | bytes/vertex above input |",
+             "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
     for r in rows:
-        print(f"{r['mesh']:<20} {r['n']:9d} {r['topology']:8.3f} {r['operator']:8.3f} {r['solve']:7.3f} "
-              f"{r['iterations']:5d} {r['end_to_end']:7.3f} {1e6 * r['end_to_end'] / r['n']:9.3f} "
-              f"{r['sweep_over_floor']:8.2f} {r['peak_mb']:8.1f} {r['bytes_per_vertex']:8.0f}")
+        lines.append(f"| `{r['mesh']}` | {r['n']:,} | {r['topology']:.3f} | {r['operator']:.4f} | {r['solve']:.3f} "
+                     f"| {r['iterations']} | {r['end_to_end']:.3f} | {1e6 * r['end_to_end'] / r['n']:.2f} "
+                     f"| {r['sweep_over_floor']:.2f} | {r['peak_mb']:.0f} | {r['bytes_per_vertex']:.0f} |")
+    lines += ["", "sweep/floor: solve seconds per iteration over the streaming floor (one plain pass over the "
+              "arrays a sweep touches, measured by `sorpia-bench`)."]
+    print("\n".join(lines))
     if a.json:
         with open(a.json, "w") as fh:
             json.dump(rows, fh, indent=1)
-    if len(rows) < 2:
-        return
+    plot = a.plot or (None if a.no_page else str(PAGES / "scaling.png"))
+    if len(rows) >= 2 and plot:
+        os.makedirs(os.path.dirname(os.path.abspath(plot)), exist_ok=True)
+        draw(rows, a.kind, a.method, plot)
+        if not a.no_page and os.path.dirname(os.path.abspath(plot)) == str(PAGES):
+            lines += ["", f"![time and memory against size]({os.path.basename(plot)})"]
+    if not a.no_page:
+        write_page("scaling", "Growth with size", "\n".join(lines), settings=(p, a))
+    if a.readme:
+        write_readme_excerpt("scaling table", "scaling", "\n".join(table))
+
+
+def draw(rows, kind, method, path):
+    """Log-log plot of the phases' seconds and of the peak memory against the vertex count."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -91,7 +121,7 @@ def main(argv=None):
     for key in ("topology", "operator", "solve", "end_to_end"):
         ax_t.loglog(n, [r[key] for r in rows], "o-", label=key.replace("_", " "))
     ax_t.loglog(n, [rows[0]["end_to_end"] * x / n[0] for x in n], "k--", lw=0.8, label="slope 1")
-    ax_t.set(xlabel="vertices", ylabel="seconds", title=f"time ({a.kind}, {a.method})")
+    ax_t.set(xlabel="vertices", ylabel="seconds", title=f"time ({kind}, {method})")
     ax_t.legend(fontsize=8)
     above = [r["bytes_per_vertex"] * r["n"] / 2**20 for r in rows]
     ax_m.loglog(n, [r["peak_mb"] for r in rows], "o-", label="peak resident MB")
@@ -100,8 +130,8 @@ def main(argv=None):
     ax_m.set(xlabel="vertices", ylabel="MB", title="peak memory (topology, operator, solve)")
     ax_m.legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(a.plot, dpi=110)
-    print(f"plot: {a.plot}")
+    fig.savefig(path, dpi=110)
+    print(f"plot: {path}", file=sys.stderr)
 
 
 if __name__ == "__main__":

@@ -9,6 +9,7 @@ machine's load hits every column alike. Reported: the C++ solve seconds
 median and min over the repeats, iterations, final E_k/E_0, and each thread
 count's speed-up over the first. Meshes: irregular:N[:SEED], torus:NUxNV,
 icosphere:L, grid:NUxNV, pole:N (sorpia.shapes) or a mesh file (peers.load).
+The table also goes into docs/benchmarks/sweep-threads.md (unless --no-page).
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ import sys
 import sorpia
 
 sys.path.insert(0, os.path.dirname(__file__))
+from _report import write_page  # noqa: E402
 from peers import load as mesh  # noqa: E402
 
 
@@ -33,6 +35,7 @@ def main(argv=None) -> int:
     ap.add_argument("--tol", type=float, default=1e-10)
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    ap.add_argument("--no-page", action="store_true", help="do not write docs/benchmarks/sweep-threads.md")
     a = ap.parse_args(argv)
     counts = [int(t) for t in a.threads.split(",")]
     rows = []
@@ -55,12 +58,17 @@ def main(argv=None) -> int:
     if a.json:
         print(json.dumps({"cpus": os.cpu_count(), "method": a.method, "tol": a.tol, "repeat": a.repeat, "rows": rows},
                          indent=1))
-        return 0
-    print(f"{a.method} to {a.tol:g}, {os.cpu_count()} CPUs, medians of {a.repeat} (solve phase, seconds)")
-    print(f"{'mesh':22} {'vertices':>9} {'threads':>7} {'median':>8} {'min':>8} {'iters':>6} {'E_k/E_0':>9} {'speed-up':>8}")
+    lines = [f"`{a.method}` to {a.tol:g}, {os.cpu_count()} CPUs; the solve phase (`result.timings[\"solve\"]`), "
+             f"seconds, medians of {a.repeat} runs alternating between the thread counts.", "",
+             "| mesh | vertices | threads | median s | min s | iterations | E_k/E_0 | speed-up |",
+             "|---|---:|---:|---:|---:|---:|---:|---:|"]
     for r in rows:
-        print(f"{r['mesh']:22} {r['vertices']:9d} {r['threads']:7d} {r['solve_median']:8.3f} {r['solve_min']:8.3f} "
-              f"{r['iterations']:6d} {r['final_error']:9.2e} {r['speedup']:8.2f}")
+        lines.append(f"| `{r['mesh']}` | {r['vertices']:,} | {r['threads']} | {r['solve_median']:.3f} "
+                     f"| {r['solve_min']:.3f} | {r['iterations']} | {r['final_error']:.2e} | {r['speedup']:.2f} |")
+    if not a.json:
+        print("\n".join(lines))
+    if not a.no_page:
+        write_page("sweep-threads", "Threads", "\n".join(lines), settings=(ap, a))
     return 0
 
 

@@ -41,10 +41,10 @@ using SurfaceFactory = Bfr::RefinerSurfaceFactory<ThreadedCache>;
 
 using detail::Point3;
 
-// Measured bytes per refined face held by a uniformly refined Loop
-// TopologyRefiner with full topology (all levels together, ~4/3 of the last
-// level) and the position buffers: peak RSS measured by bench/surface_speed.py
-// was 250 B per output face in all, outputs included (irregular 100k, levels 2-3).
+// Bytes per refined face held by a uniformly refined Loop TopologyRefiner
+// with full topology (all levels together, ~4/3 of the last level) and the
+// position buffers, for the memory check before a tessellation;
+// bench/io_speed.py prints the peak it measures beside this estimate.
 constexpr double kRefinerBytesPerFace = 220.0;
 
 std::string human_bytes(double b) {
@@ -147,7 +147,7 @@ LoopSurface::LoopSurface(const Topology& topology, const double* vertices, Bound
   // triangles after this many local refinements (default 2): 4 shrinks that
   // region to the corner triangles of side 1/16, where OpenSubdiv's derivatives
   // are approximate (it drops the derivative of the rational Gregory weights),
-  // for about 5% more evaluation time (bench/surface_speed.py).
+  // at a small cost in evaluation time.
   options.SetApproxLevelSmooth(kApproxLevelSmooth);
   impl_->factory = std::make_unique<SurfaceFactory>(*impl_->base.refiner, options);
   set_vertices(vertices);
@@ -269,7 +269,8 @@ TriMesh LoopSurface::tessellate(int level) {
     impl_->refined.reset(Far::TopologyRefinerFactory<Far::TopologyDescriptor>::Create(*impl_->base.refiner));
     if (level > 0) {
       Far::TopologyRefiner::UniformOptions options(level);
-      // Limit() on the last level needs its full topology (DEPENDENCIES.md).
+      // Limit() on the last level needs its full topology: without it
+      // OpenSubdiv prints an error and leaves the output untouched.
       options.fullTopologyInLastLevel = true;
       impl_->refined->RefineUniform(options);
     }

@@ -23,7 +23,7 @@ import math
 import numpy as np
 
 # Faces drawn per panel at most: matplotlib sorts and paints each polygon in
-# Python, so drawing time grows with the faces; the budget keeps it to seconds.
+# Python, so the time to draw a figure grows with the faces drawn.
 FACE_BUDGET = 60_000
 # Vertex markers drawn per panel at most (more only paint the panel red).
 POINT_BUDGET = 4_000
@@ -111,8 +111,8 @@ def _face_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
 
 def _vertex_normals(face_normals: np.ndarray, faces: np.ndarray, n_vertices: int) -> np.ndarray:
     """Unit vertex normals, (n_vertices, 3), from `_face_normals` of `faces`."""
-    # Sums of the face normals at each corner by bincount (np.add.at is much
-    # slower), corner 0 of every face first, then 1, then 2.
+    # Sums of the face normals at each corner by bincount (a vectorised
+    # scatter-add, unlike np.add.at), corner 0 of every face first, then 1, then 2.
     corners = faces.T.ravel()
     vn = np.column_stack([np.bincount(corners, weights=np.tile(face_normals[:, c], 3), minlength=n_vertices)
                           for c in range(3)])

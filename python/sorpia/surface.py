@@ -58,14 +58,17 @@ class LoopSurface:
 
     @property
     def n_vertices(self) -> int:
+        """Number of control vertices, n."""
         return self._surface.n_vertices
 
     @property
     def n_faces(self) -> int:
+        """Number of control faces, m."""
         return self._surface.n_faces
 
     @property
     def boundary(self) -> str:
+        """The boundary rule, "edge-and-corner" or "edge-only"."""
         return _core.boundary_name(self._boundary)
 
     @property
@@ -100,7 +103,7 @@ class LoopSurface:
         du, dv : (k, 3) float64, only with ``derivatives=True``
             dP/du and dP/dv.
         normals : (k, 3) float64, only with ``derivatives=True``
-            (dP/du x dP/dv) / |dP/du x dP/dv|: outward for faces oriented
+            ``(dP/du x dP/dv) / |dP/du x dP/dv|``: outward for faces oriented
             counter-clockwise seen from outside; zero where the cross product
             vanishes.
 
@@ -112,8 +115,9 @@ class LoopSurface:
         refinements. There positions approximate the limit surface (exactly
         at the corners of the refined triangles) and OpenSubdiv's derivatives
         approximate the derivatives of those positions (it drops the
-        derivative of the rational Gregory weights): measured tangents within
-        a few percent, normals within about 0.02 rad of finite differences.
+        derivative of the rational Gregory weights): tangents within a few
+        percent, normals within a few hundredths of a radian of finite
+        differences (the tests hold them to 0.05 rad).
         Elsewhere tangents and normals agree with finite differences of the
         positions to 1e-9.
         """
