@@ -95,12 +95,13 @@ def _printable_names():
     """stdout and stderr print any file name (see _escape_undecodable) inside the block."""
     streams = [(s, s.errors) for s in (sys.stdout, sys.stderr) if hasattr(s, "reconfigure")]
     for stream, _ in streams:
-        stream.reconfigure(errors="sorpia.names")
+        with contextlib.suppress(ValueError, OSError):
+            stream.reconfigure(errors="sorpia.names")
     try:
         yield
     finally:
         for stream, errors in streams:
-            with contextlib.suppress(ValueError):  # closed meanwhile
+            with contextlib.suppress(ValueError, OSError):  # closed meanwhile, or its reader left (the flush)
                 stream.reconfigure(errors=errors)
 
 
