@@ -20,6 +20,16 @@ namespace sorpia {
 
 namespace {
 std::string errno_text(int err) { return std::strerror(err); }
+
+// Closes a file descriptor however the scope ends (errno kept for the message).
+struct CloseOnExit {
+  int fd;
+  ~CloseOnExit() {
+    const int err = errno;
+    ::close(fd);
+    errno = err;
+  }
+};
 }  // namespace
 
 namespace detail::io {
@@ -96,13 +106,14 @@ void check_start(const FileData& f, MeshFormat format) {
 
 }  // namespace
 
-FileData load_file(const std::string& path, MeshFormat format) {
+FileData load_file(const std::string& path, MeshFormat format, const InterruptHook& on_interrupt) {
   FileData f{path, {}};
   struct stat st {};
   if (::stat(path.c_str(), &st) != 0) fail(f, "cannot open the file: " + errno_text(errno));
   if (S_ISDIR(st.st_mode)) fail(f, "is a directory, not a mesh file");
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd < 0) fail(f, "cannot open the file: " + errno_text(errno));
+  const CloseOnExit close_fd{fd};
   // Regular files report their size; read to the end either way (pipes, /proc).
   // Past the sniffed part the buffer takes one byte more than the size: the
   // read that finds the end then has room, instead of doubling (and
@@ -115,27 +126,23 @@ FileData load_file(const std::string& path, MeshFormat format) {
   for (;;) {
     if (used == f.bytes.size()) {
       if (!checked) {
-        try {
-          check_start(f, format);
-        } catch (...) {
-          ::close(fd);
-          throw;
-        }
+        check_start(f, format);
         checked = true;
       }
       f.bytes.resize(std::max(capacity, 2 * f.bytes.size()));
     }
     const ssize_t r = ::read(fd, f.bytes.data() + used, f.bytes.size() - used);
     if (r < 0) {
-      if (errno == EINTR) continue;
-      const int err = errno;
-      ::close(fd);
-      fail(f, "cannot read the file: " + errno_text(err));
+      // A signal, on a pipe or a device: the caller's hook says whether to stop.
+      if (errno == EINTR) {
+        if (on_interrupt) on_interrupt();
+        continue;
+      }
+      fail(f, "cannot read the file: " + errno_text(errno));
     }
     if (r == 0) break;
     used += static_cast<std::size_t>(r);
   }
-  ::close(fd);
   f.bytes.resize(used);
   if (used == 0) fail(f, "the file is empty");
   if (!checked) check_start(f, format);
@@ -144,16 +151,54 @@ FileData load_file(const std::string& path, MeshFormat format) {
 
 }  // namespace detail::io
 
+namespace {
+
+// The temporary file of write_file_atomic(path): in the folder of `path`, so
+// that rename() is atomic, named by a short fixed prefix and mkstemp's random
+// part (a name near NAME_MAX still has room for it), hidden from `ls` and
+// from globs like *.ply while it exists.
+constexpr char kTemporaryName[] = ".sorpia-tmp-XXXXXX";
+
+struct Target {
+  bool exists = false;
+  struct stat st {};
+};
+
+// What is at `path` now; throws FileError when it is a folder or cannot be
+// looked up (a name too long for its folder, a missing or unreadable folder).
+Target inspect_target(const detail::io::FileData& f) {
+  Target t;
+  t.exists = ::stat(f.path.c_str(), &t.st) == 0;
+  if (!t.exists && errno != ENOENT) detail::io::fail(f, "cannot write the file: " + errno_text(errno));
+  if (t.exists && S_ISDIR(t.st.st_mode)) detail::io::fail(f, "is a directory; give a file name");
+  return t;
+}
+
+// Creates the temporary file for `f.path`; returns its descriptor and sets `tmp`.
+int create_temporary(const detail::io::FileData& f, std::string& tmp) {
+  const std::size_t slash = f.path.find_last_of('/');
+  tmp = (slash == std::string::npos ? std::string() : f.path.substr(0, slash + 1)) + kTemporaryName;
+  const int fd = ::mkstemp(tmp.data());
+  if (fd < 0) detail::io::fail(f, "cannot create a temporary file in its folder: " + errno_text(errno));
+  return fd;
+}
+
+}  // namespace
+
+void check_writable(const std::string& path) {
+  const detail::io::FileData f{path, {}};
+  inspect_target(f);
+  std::string tmp;
+  ::close(create_temporary(f, tmp));
+  ::unlink(tmp.c_str());
+}
+
 void write_file_atomic(const std::string& path, const std::string& data) {
   using detail::io::fail;
   const detail::io::FileData f{path, {}};
-  struct stat st {};
-  const bool exists = ::stat(path.c_str(), &st) == 0;
-  if (exists && S_ISDIR(st.st_mode)) fail(f, "is a directory; give a file name");
-  // The temporary file lives in the same folder so that rename() is atomic.
-  std::string tmp = path + ".sorpia-tmp-XXXXXX";
-  const int fd = ::mkstemp(tmp.data());
-  if (fd < 0) fail(f, "cannot create a temporary file in its folder: " + errno_text(errno));
+  const Target target = inspect_target(f);
+  std::string tmp;
+  const int fd = create_temporary(f, tmp);
   auto abandon = [&](const std::string& what, int err) {
     ::close(fd);
     ::unlink(tmp.c_str());
@@ -162,14 +207,16 @@ void write_file_atomic(const std::string& path, const std::string& data) {
   // mkstemp makes the file 0600: give it the mode a plain open() would, or
   // the mode of the file it replaces.
   mode_t mode = 0;
-  if (exists) {
-    mode = st.st_mode & 07777;
+  if (target.exists) {
+    mode = target.st.st_mode & 07777;
   } else {
     const mode_t mask = ::umask(0);
     ::umask(mask);
     mode = 0666 & ~mask;
   }
   if (::fchmod(fd, mode) != 0) abandon("cannot set the file mode", errno);
+  // A signal during the write (EINTR) does not stop it: the call finishes or
+  // fails (removing the temporary file) before a handler in the caller runs.
   std::size_t done = 0;
   while (done < data.size()) {
     const ssize_t w = ::write(fd, data.data() + done, data.size() - done);
@@ -349,11 +396,11 @@ MeshFormat mesh_format(const std::string& path) {
                   ": use .obj, .off, .ply or .stl");
 }
 
-TriMesh read_mesh(const std::string& path, bool triangulate, std::size_t* polygons) {
+TriMesh read_mesh(const std::string& path, bool triangulate, std::size_t* polygons, const InterruptHook& on_interrupt) {
   const MeshFormat format = mesh_format(path);
   detail::io::Polygons p;
   p.triangulate = triangulate;
-  TriMesh mesh = detail::io::parse_mesh(detail::io::load_file(path, format), format, p);
+  TriMesh mesh = detail::io::parse_mesh(detail::io::load_file(path, format, on_interrupt), format, p);
   if (polygons) *polygons = p.split;
   return mesh;
 }

@@ -87,29 +87,6 @@ std::size_t tessellation_bytes(std::size_t n_vertices, std::size_t n_faces, int 
              : static_cast<std::size_t>(bytes);
 }
 
-std::size_t available_memory_bytes() {
-  std::size_t avail = 0;
-  std::ifstream meminfo("/proc/meminfo");
-  std::string key;
-  std::size_t value = 0;
-  std::string unit;
-  while (meminfo >> key >> value >> unit)
-    if (key == "MemAvailable:") {
-      avail = value * 1024;
-      break;
-    }
-  // A container's memory limit (cgroup v2) can be far below the host's.
-  std::ifstream max_file("/sys/fs/cgroup/memory.max"), cur_file("/sys/fs/cgroup/memory.current");
-  std::string max_text;
-  std::size_t current = 0;
-  if (max_file >> max_text && max_text != "max" && cur_file >> current) {
-    const std::size_t limit = std::stoull(max_text);
-    const std::size_t left = limit > current ? limit - current : 0;
-    avail = avail == 0 ? left : std::min(avail, left);
-  }
-  return avail;
-}
-
 struct LoopSurface::Impl {
   Topology topology;
   Boundary boundary;

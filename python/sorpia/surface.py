@@ -173,7 +173,8 @@ def limit_surface(vertices, faces, level: int = 3, boundary: str = DEFAULT_BOUND
         topology of every level plus the output arrays), e.g. level 2 of a
         100k-vertex closed mesh (200k faces): 3.2M triangles, under 1 GB;
         level 3: 12.8M triangles, about 3.4 GB. A level whose estimate
-        exceeds the memory available now raises ParameterError.
+        exceeds the memory left to the process now (free memory, ulimit -v,
+        the cgroup's memory limit) raises ParameterError.
     boundary : {"edge-and-corner", "edge-only"}
         Boundary rule, as in `sorpia.limit_points`.
 

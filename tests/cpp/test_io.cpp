@@ -10,6 +10,7 @@
 #include <limits>
 #include <string>
 
+#include "expect_error.hpp"
 #include "sorpia/errors.hpp"
 #include "sorpia/io.hpp"
 #include "sorpia/shapes.hpp"
@@ -119,6 +120,25 @@ TEST_F(IoTest, FailedWriteKeepsTheOldFile) {
   std::size_t n_files = 0;
   for ([[maybe_unused]] const auto& e : fs::directory_iterator(dir_)) ++n_files;
   EXPECT_EQ(n_files, 1u);  // no temporary file left
+}
+
+TEST_F(IoTest, NamesOfNameMaxBytesAreWrittenLongerOnesRefusedBeforeAnyFile) {
+  // The temporary file's name does not grow with the target's.
+  const long name_max = ::pathconf(dir_.c_str(), _PC_NAME_MAX);
+  ASSERT_GT(name_max, 8);
+  const std::string longest = std::string(static_cast<std::size_t>(name_max) - 4, 'c') + ".obj";
+  sorpia::check_writable(path(longest));
+  const auto m = sorpia::icosphere(1);
+  sorpia::write_mesh(path(longest), m.vertices.data(), m.n_vertices(), m.faces.data(), m.n_faces());
+  EXPECT_EQ(sorpia::read_mesh(path(longest)).vertices, m.vertices);
+  const std::string too_long = "c" + longest;
+  sorpia_test::expect_error<sorpia::FileError>([&] { sorpia::check_writable(path(too_long)); },
+                                               {"File name too long"});
+  sorpia_test::expect_error<sorpia::FileError>(
+      [&] { sorpia::write_file_atomic(path(too_long), "data"); }, {"File name too long"});
+  std::size_t n_files = 0;
+  for ([[maybe_unused]] const auto& e : fs::directory_iterator(dir_)) ++n_files;
+  EXPECT_EQ(n_files, 1u);  // the longest name only: check_writable's temporary file is gone
 }
 
 TEST_F(IoTest, UnknownExtensionAndMissingFile) {

@@ -19,6 +19,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <string>
 
 #include "sorpia/shapes.hpp"
@@ -30,6 +31,13 @@ enum class MeshFormat { Obj, Off, Ply, Stl };
 /// The format named by the file's extension (.obj, .off, .ply, .stl, any case).
 /// @throws FileError for any other extension
 MeshFormat mesh_format(const std::string& path);
+
+/// Called when a read is interrupted by a signal (EINTR: a pipe or a device
+/// waiting for data) before it could finish. It may throw to abandon the read
+/// (the file is closed, the exception passes through); when it returns, the
+/// read goes on. The Python binding runs the interpreter's signal handlers
+/// here, so Ctrl-C stops a read that waits.
+using InterruptHook = std::function<void()>;
 
 /// Read a triangle mesh.
 /// @param path         an .obj, .off, .ply or .stl file
@@ -43,11 +51,14 @@ MeshFormat mesh_format(const std::string& path);
 ///                     polygons in file order.
 /// @param polygons     when not null, set to the number of faces of more
 ///                     than 3 vertices split (0 without triangulate)
+/// @param on_interrupt called when a signal interrupts the read (empty: the
+///                     read goes on)
 /// @return vertices (n, 3) and faces (m, 3), in file order
 /// @throws FileError when the file is missing, unreadable, malformed,
 ///         truncated, has an index out of range, a non-finite coordinate,
 ///         no vertices or no faces
-TriMesh read_mesh(const std::string& path, bool triangulate = false, std::size_t* polygons = nullptr);
+TriMesh read_mesh(const std::string& path, bool triangulate = false, std::size_t* polygons = nullptr,
+                  const InterruptHook& on_interrupt = {});
 
 /// Write a triangle mesh atomically: to a temporary file in the same folder,
 /// then renamed over `path`, so that a failure leaves no partial file and an
@@ -62,10 +73,20 @@ void write_mesh(const std::string& path, const double* vertices, std::size_t n_v
                 std::size_t n_faces, bool binary = false);
 
 /// Write `data` to `path` atomically, as write_mesh writes its bytes: to a
-/// temporary file in the same folder (the mode of the file it replaces, or the
-/// umask's), fsync, then renamed over `path`. A failure removes the temporary
-/// file and leaves `path` as it was. Every file sorpia writes goes through it.
+/// temporary file in the same folder (".sorpia-tmp-" and 6 random
+/// characters, whatever the length of `path`'s name; the mode of the file it
+/// replaces, or the umask's), fsync, then renamed over `path`. A failure
+/// removes the temporary file and leaves `path` as it was. A signal does not
+/// interrupt it: the call finishes or fails first. Every file sorpia writes
+/// goes through it.
 /// @throws FileError naming the path when the file cannot be written
 void write_file_atomic(const std::string& path, const std::string& data);
+
+/// Whether write_file_atomic(path, ...) can start: `path` is not a folder,
+/// its name fits its folder (NAME_MAX), and a temporary file can be created
+/// (and is removed again) in the folder. For checks before long work; the
+/// disk can still fill up meanwhile.
+/// @throws FileError naming the path, with the words write_file_atomic would use
+void check_writable(const std::string& path);
 
 }  // namespace sorpia

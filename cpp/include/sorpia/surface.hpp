@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <memory>
 
+#include "sorpia/memory.hpp"  // available_memory_bytes, which tessellate checks
 #include "sorpia/shapes.hpp"
 #include "sorpia/topology.hpp"
 
@@ -21,9 +22,6 @@ namespace sorpia {
 /// @param n_faces     control triangles
 /// @param level       refinement level, 0..15
 std::size_t tessellation_bytes(std::size_t n_vertices, std::size_t n_faces, int level);
-
-/// Memory the system can give now (Linux MemAvailable), in bytes; 0 when unknown.
-std::size_t available_memory_bytes();
 
 /// The Loop limit surface of one mesh topology: build once, query many.
 ///

@@ -12,7 +12,7 @@ from pathlib import Path
 from ..solve import METHODS, THREADED_METHODS, ConvergenceWarning  # ConvergenceWarning: the summary says it
 from . import progress as _progress
 
-EXIT_OK, EXIT_NOT_CONVERGED, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
+EXIT_OK, EXIT_NOT_CONVERGED, EXIT_USAGE, EXIT_INTERRUPTED, EXIT_TERMINATED = 0, 1, 2, 130, 143
 
 # The paper's names (Table 1) for the methods it compares, and ours for the
 # rest; compare's rows and the help list the methods in this order.
@@ -49,18 +49,25 @@ def _same_file(a, b) -> bool:
 
 def check_paths(inputs, outputs: dict, force: bool = False) -> None:
     """Refuse an output that is an input (unless `force`), the same file given
-    for two outputs, and an output whose folder does not exist; before any
-    work is done, so a long fit never ends in 'cannot write'."""
+    for two outputs, an output whose folder does not exist, and one the
+    atomic writer could not start on (a folder not writable, a name too long
+    for its folder: sorpia::check_writable); before any work is done, so a
+    long fit never ends in 'cannot write'."""
+    from .. import MeshFileError, _core
+
     named = [(opt, p) for opt, p in outputs.items() if p is not None]
     for opt, p in named:
-        for src in inputs:
-            if _same_file(p, src) and not force:
-                raise UserError(f"{opt} {p} is the input file: refusing to overwrite it (pass --force to do so)")
         folder = Path(p).parent
         if not folder.is_dir():
             raise UserError(f"{opt} {p}: folder {folder} does not exist")
-        if Path(p).is_dir():
-            raise UserError(f"{opt} {p} is a folder, not a file")
+        try:
+            # First: a name too long for its folder fails every other look-up.
+            _core.check_writable(os.fsencode(p))
+        except MeshFileError as exc:
+            raise UserError(f"{opt} {exc}") from None
+        for src in inputs:
+            if _same_file(p, src) and not force:
+                raise UserError(f"{opt} {p} is the input file: refusing to overwrite it (pass --force to do so)")
     for i, (opt_a, a) in enumerate(named):
         for opt_b, b in named[i + 1:]:
             if _same_file(a, b):

@@ -112,14 +112,16 @@ def run_fit(input_path, output, *, method="sor", omega="auto", tol=1e-10, max_it
 
 def _check_surface_fits(n_vertices: int, n_faces: int, level: int) -> None:
     """Refuse --level before the solve when the tessellation would not fit in
-    memory (limit_surface would refuse it only after the solve)."""
+    the memory left to the process (sorpia::available_memory_bytes: free
+    memory, rlimits, cgroup limits); limit_surface would refuse it only after
+    the solve."""
     from .. import _core
 
     need, avail = _core.tessellation_bytes(n_vertices, n_faces, level), _core.available_memory_bytes()
     if avail and need > avail:  # 0: not known here; limit_surface decides
         raise UserError(f"--surface at --level {level} needs about {need / 2**30:.1f} GiB "
-                        f"({n_faces * 4 ** level} triangles) but {avail / 2**30:.1f} GiB of memory is available: "
-                        "use a lower --level")
+                        f"({n_faces * 4 ** level} triangles) but {avail / 2**30:.1f} GiB is left to this process (free "
+                        "memory, ulimit -v, the cgroup's memory limit): use a lower --level")
 
 
 def _binary_for(path, binary: bool) -> bool:

@@ -18,7 +18,7 @@ from .. import _core
 
 
 def write_bytes(path, data: bytes) -> None:
-    _core.write_file_atomic(os.fspath(path), data)
+    _core.write_file_atomic(os.fsencode(path), data)  # bytes: any file name the OS takes
 
 
 def write_text(path, text: str) -> None:

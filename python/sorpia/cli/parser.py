@@ -85,7 +85,8 @@ class _Formatter(argparse.ArgumentDefaultsHelpFormatter):
 
 
 EXIT_HELP = ("exit codes: 0 done; 1 a solve stopped at --max-iter before reaching --tol (all outputs still "
-             "written); 2 bad input or options (one line on stderr); 130 interrupted.")
+             "written); 2 bad input or options, or not enough memory (one line on stderr); 130 interrupted "
+             "(Ctrl-C); 143 terminated (SIGTERM).")
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -44,7 +44,9 @@ class Progress:
         _live_line = self
 
     def status(self, text: str) -> None:
-        """Show the phase the command is in (terminal only)."""
+        """Show the phase the command is in (terminal only); current_phase() returns it."""
+        global _phase
+        _phase = text
         if self.tty:
             self._draw(f"{text} ...")
 
@@ -73,6 +75,17 @@ class Progress:
 
 
 _live_line: Progress | None = None  # the Progress whose line is on the terminal now
+_phase = ""  # the last phase a Progress was told of (status), shown or not
+
+
+def current_phase() -> str:
+    """The phase the command is in, for an error that has no place of its own (out of memory)."""
+    return _phase
+
+
+def reset_phase() -> None:
+    global _phase
+    _phase = ""
 
 
 def erase_live_line() -> None:
