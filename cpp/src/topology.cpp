@@ -221,8 +221,11 @@ std::string orientation_advice(const std::int32_t* faces, std::size_t n_faces, s
 // vertex of the first corner outside its vertex's first fan.
 // Returns the number of edges and of boundary edges. With `ring`, also fills
 // it with the fans that walk passes, which are the one-ring (the direct build).
+// With `valid`, a problem the walk finds sets *valid = false instead of being
+// named (naming may sort every half-edge).
 std::pair<std::size_t, std::size_t> validate_faces(const std::int32_t* faces, std::size_t n_faces,
-                                                   std::size_t n_vertices, detail::OneRing* ring) {
+                                                   std::size_t n_vertices, detail::OneRing* ring,
+                                                   bool* valid = nullptr) {
   using face_checks::next_corner;
   constexpr auto int_max = static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max());
   if (n_vertices > int_max)
@@ -341,6 +344,10 @@ std::pair<std::size_t, std::size_t> validate_faces(const std::int32_t* faces, st
     if (seen != k) bowtie = true;
   }
   buckets.corners.reset();
+  if (valid && (bad_lo != none || misoriented.first != none || bowtie || crowded >= 0)) {
+    *valid = false;
+    return {0, 0};
+  }
   if (bad_lo != none) face_checks::refuse_edge(faces, n_half, bad_lo);
   if (misoriented.first != none) {
     const auto [lo, hi] = misoriented;
@@ -427,6 +434,16 @@ detail::OneRing one_ring_openmesh(const std::int32_t* faces, std::size_t n_faces
 }
 
 }  // namespace
+
+bool faces_valid(const std::int32_t* faces, std::size_t n_faces, std::size_t n_vertices) {
+  bool valid = true;
+  try {
+    validate_faces(faces, n_faces, n_vertices, nullptr, &valid);
+  } catch (const MeshError&) {
+    return false;
+  }
+  return valid;
+}
 
 Topology::Topology(const std::int32_t* faces, std::size_t n_faces, std::size_t n_vertices)
     : Topology(faces, n_faces, n_vertices, TopologyBuild::Direct) {}
