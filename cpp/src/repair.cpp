@@ -166,11 +166,13 @@ RepairResult repair_pass(const std::int32_t* faces, std::size_t n_faces, std::si
 
   // Fans: corners of one vertex joined across its joined edges.
   Corners fans(n_half);
+  bool misoriented = false;  // some joined faces run their edge the same way
   for (std::size_t h = 0; h < n_half; ++h) {
     const std::int32_t g = mate[h];
     if (g < static_cast<std::int32_t>(h)) continue;  // unjoined, or joined from g already
     const auto hn = static_cast<std::int32_t>(next_corner(h)), gn = static_cast<std::int32_t>(next_corner(g));
     const bool same_way = faces[g] == faces[h];
+    misoriented |= same_way;
     fans.join(static_cast<std::int32_t>(h), same_way ? g : gn);
     fans.join(hn, same_way ? gn : g);
   }
@@ -199,10 +201,11 @@ RepairResult repair_pass(const std::int32_t* faces, std::size_t n_faces, std::si
       (sheet_end[v] ? rep.sheet_copies : rep.bowtie_copies).push_back(copies[v]);
     }
 
-  // Orientation: per component, the class of faces to reverse.
-  std::vector<std::int8_t> flip(n_faces, -1);
+  // Orientation: per component, the class of faces to reverse (none where
+  // every joined pair of faces runs its edge both ways).
+  std::vector<std::int8_t> flip(n_faces, misoriented ? -1 : 0);
   std::vector<std::int32_t> component;
-  for (std::size_t f0 = 0; f0 < n_faces; ++f0) {
+  for (std::size_t f0 = 0; f0 < n_faces && misoriented; ++f0) {
     if (removed[f0] || flip[f0] >= 0) continue;
     component.assign(1, static_cast<std::int32_t>(f0));
     flip[f0] = 0;
