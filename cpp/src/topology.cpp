@@ -221,8 +221,8 @@ std::string orientation_advice(const std::int32_t* faces, std::size_t n_faces, s
 // vertex of the first corner outside its vertex's first fan.
 // Returns the number of edges and of boundary edges. With `ring`, also fills
 // it with the fans that walk passes, which are the one-ring (the direct build).
-// With `valid`, a problem the walk finds sets *valid = false instead of being
-// named (naming may sort every half-edge).
+// With `valid`, the walk stops at the first problem and sets *valid = false
+// instead of naming it (naming may sort every half-edge).
 std::pair<std::size_t, std::size_t> validate_faces(const std::int32_t* faces, std::size_t n_faces,
                                                    std::size_t n_vertices, detail::OneRing* ring,
                                                    bool* valid = nullptr) {
@@ -270,6 +270,8 @@ std::pair<std::size_t, std::size_t> validate_faces(const std::int32_t* faces, st
   bool bowtie = false;
   std::size_t n_edge_ends = 0, n_boundary_ends = 0;  // each edge is seen from both ends
   for (std::size_t vi = 0; vi < n_vertices; ++vi) {
+    // A yes-or-no answer is known at the first problem.
+    if (valid && (bad_lo != none || misoriented.first != none || bowtie || crowded >= 0)) break;
     const auto v = static_cast<std::int32_t>(vi);
     const std::int32_t k = start[v + 1] - start[v];
     const detail::Corner* c = buckets.corners.get() + start[v];

@@ -67,8 +67,10 @@ struct RepairResult {
 ///    disagreeing with the component's lowest-numbered face).
 ///
 /// No vertex is moved or dropped (vertices used only by removed faces, and
-/// unreferenced ones, stay as unreferenced vertices). A valid input comes back
-/// with an empty report and faces equal to the input; repair is idempotent.
+/// unreferenced ones, stay as unreferenced vertices). A valid input costs
+/// sorpia::faces_valid alone and comes back with an empty report and empty
+/// arrays: the input is the result, nothing is copied. Repair is idempotent:
+/// its output is valid.
 ///
 /// @param faces       row-major (n_faces, 3) vertex indices in [0, n_vertices)
 /// @throw MeshError   a component that has no consistent orientation (a
