@@ -176,7 +176,9 @@ RepairResult repair_pass(const std::int32_t* faces, std::size_t n_faces, std::si
     fans.join(static_cast<std::int32_t>(h), same_way ? g : gn);
     fans.join(hn, same_way ? gn : g);
   }
-  std::vector<std::int32_t> vertex_of(n_half, -1);  // per fan (its root corner): the output vertex
+  // The output vertex of each corner. A fan's root is its lowest corner, so
+  // in corner order the root's vertex is known before the fan's other corners.
+  std::vector<std::int32_t> vertex_of(n_half, -1);
   std::vector<std::uint8_t> taken(n_vertices, 0);
   std::vector<std::int32_t> copies(n_vertices, 0);
   r.vertex_map.resize(n_vertices);
@@ -184,13 +186,16 @@ RepairResult repair_pass(const std::int32_t* faces, std::size_t n_faces, std::si
   for (std::size_t h = 0; h < n_half; ++h) {
     if (removed[h / 3]) continue;
     const std::int32_t root = fans.find(static_cast<std::int32_t>(h));
-    if (vertex_of[root] >= 0) continue;
+    if (root != static_cast<std::int32_t>(h)) {
+      vertex_of[h] = vertex_of[root];
+      continue;
+    }
     const std::int32_t v = faces[h];
     if (!taken[v]) {
       taken[v] = 1;
-      vertex_of[root] = v;
+      vertex_of[h] = v;
     } else {
-      vertex_of[root] = static_cast<std::int32_t>(r.vertex_map.size());
+      vertex_of[h] = static_cast<std::int32_t>(r.vertex_map.size());
       r.vertex_map.push_back(v);
       ++copies[v];
     }
@@ -242,9 +247,7 @@ RepairResult repair_pass(const std::int32_t* faces, std::size_t n_faces, std::si
 
   for (std::size_t f = 0; f < n_faces; ++f) {
     if (removed[f]) continue;
-    const std::int32_t a = vertex_of[fans.find(static_cast<std::int32_t>(3 * f))];
-    const std::int32_t b = vertex_of[fans.find(static_cast<std::int32_t>(3 * f + 1))];
-    const std::int32_t c = vertex_of[fans.find(static_cast<std::int32_t>(3 * f + 2))];
+    const std::int32_t a = vertex_of[3 * f], b = vertex_of[3 * f + 1], c = vertex_of[3 * f + 2];
     if (flip[f])
       r.faces.insert(r.faces.end(), {a, c, b});
     else
