@@ -248,6 +248,7 @@ struct Findings {
   bool bowtie = false;              // some vertex has more than one fan
   std::int32_t crowded = -1, crowded_valence = 0;  // the first vertex of more than max_valence edges
   std::size_t n_edge_ends = 0, n_boundary_ends = 0;
+  bool any() const { return bad_lo != none || misoriented.first != none || bowtie || crowded >= 0; }
 };
 
 // Throws the MeshError of the first problem in `found`, in this order: an edge
@@ -412,8 +413,11 @@ class RingBuilder {
 // face_checks::refuse_findings.
 // Returns the number of edges and of boundary edges. With `ring`, also fills
 // it with the fans that walk passes, which are the one-ring (the direct build).
+// With `valid`, the walk stops at the first problem and sets *valid = false
+// instead of naming it (naming may sort every half-edge).
 std::pair<std::size_t, std::size_t> validate_faces(const std::int32_t* faces, std::size_t n_faces,
-                                                   std::size_t n_vertices, detail::OneRing* ring) {
+                                                   std::size_t n_vertices, detail::OneRing* ring,
+                                                   bool* valid = nullptr) {
   face_checks::check_counts(n_faces, n_vertices);
   face_checks::check_face_indices(faces, n_faces, n_vertices);
   detail::CornerBuckets buckets = detail::bucket_corners(faces, n_faces, n_vertices);
@@ -421,6 +425,7 @@ std::pair<std::size_t, std::size_t> validate_faces(const std::int32_t* faces, st
   face_checks::VertexEdges edges(n_vertices);
   face_checks::Findings found;
   for (std::size_t vi = 0; vi < n_vertices; ++vi) {
+    if (valid && found.any()) break;  // a yes-or-no answer is known at the first problem
     const auto v = static_cast<std::int32_t>(vi);
     const std::int32_t k = buckets.start[v + 1] - buckets.start[v];
     const detail::Corner* c = buckets.corners.get() + buckets.start[v];
@@ -434,6 +439,10 @@ std::pair<std::size_t, std::size_t> validate_faces(const std::int32_t* faces, st
     if (edges.walk_fan(edges.fan_start(c, k), k, [&](std::int32_t x) { builder.push(x); }) != k) found.bowtie = true;
   }
   buckets.corners.reset();
+  if (valid && found.any()) {
+    *valid = false;
+    return {0, 0};
+  }
   face_checks::refuse_findings(found, faces, n_faces, n_vertices);
   builder.finish(n_vertices);
   return {found.n_edge_ends / 2, found.n_boundary_ends / 2};
@@ -503,6 +512,16 @@ detail::OneRing one_ring_openmesh(const std::int32_t* faces, std::size_t n_faces
 }
 
 }  // namespace
+
+bool faces_valid(const std::int32_t* faces, std::size_t n_faces, std::size_t n_vertices) {
+  bool valid = true;
+  try {
+    validate_faces(faces, n_faces, n_vertices, nullptr, &valid);
+  } catch (const MeshError&) {
+    return false;
+  }
+  return valid;
+}
 
 Topology::Topology(const std::int32_t* faces, std::size_t n_faces, std::size_t n_vertices)
     : Topology(faces, n_faces, n_vertices, TopologyBuild::Direct) {}

@@ -18,6 +18,9 @@ What is checked where:
   orientation (with the faces to flip, or "not orientable" for a Moebius
   strip) and non-manifold ("bowtie") vertices, raised as sorpia.MeshError.
 
+sorpia.repair changes the faces the core refuses (all but indices out of
+range and a non-orientable surface) into a valid mesh without moving a vertex.
+
 Faces given as floats are refused with TypeError even when they hold whole
 numbers, as numpy refuses float indices: a float face array is more often a
 mistake (vertices and faces swapped) than a convenience.

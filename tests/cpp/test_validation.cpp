@@ -27,18 +27,6 @@ void expect_refused(const Faces& faces, std::size_t n_vertices, const std::vecto
       [&] { sorpia::Topology topo(faces.data(), faces.size() / 3, n_vertices); }, parts);
 }
 
-// A Moebius strip: a band of n quads (two triangles each) whose ends are glued
-// with a half twist, so it has no consistent orientation.
-Faces moebius(int n) {
-  Faces f;
-  for (int i = 0; i < n; ++i) {
-    const int a0 = 2 * i, a1 = 2 * i + 1;
-    const int b0 = i + 1 < n ? 2 * i + 2 : 1, b1 = i + 1 < n ? 2 * i + 3 : 0;  // the twist
-    f.insert(f.end(), {a0, b0, b1, a0, b1, a1});
-  }
-  return f;
-}
-
 }  // namespace
 
 TEST(Validation, IndexOutOfRangeNamesTheFaceAndIndex) {
@@ -71,7 +59,7 @@ TEST(Validation, InconsistentOrientationSaysWhichFacesToFlip) {
 }
 
 TEST(Validation, MoebiusStripIsNotOrientable) {
-  const Faces f = moebius(8);
+  const Faces f = sorpia_test::moebius(8);
   expect_refused(f, 16, {"inconsistent orientation", "not orientable"});
 }
 

@@ -31,6 +31,10 @@ enum class TopologyBuild {
   OpenMesh,
 };
 
+/// Whether the sorpia::Topology constructor accepts these faces, found by its
+/// checks without building the one-ring or naming the problem.
+bool faces_valid(const std::int32_t* faces, std::size_t n_faces, std::size_t n_vertices);
+
 /// Connectivity of a triangle mesh, built once and shared by the limit
 /// operator, the solvers and surface evaluation.
 ///

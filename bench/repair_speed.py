@@ -1,0 +1,129 @@
+"""Speed of sorpia.repair on a large mesh, side by side with validation alone.
+
+Clean: sorpia.shapes.irregular(--vertices) as it is; sorpia.repair against
+the validation every sorpia function already pays (the topology build of
+sorpia.limit_points and sorpia.interpolate: converting the faces and
+sorpia::Topology), and the core alone (_core.repair against _core.Topology).
+Defects: the same mesh with a few hundred defects injected at random faces
+(reversed faces, exact and reversed duplicates, degenerate faces, bowties made
+by a triangle hung on one vertex, non-manifold edges made by a third face on an
+edge), repaired, and again without the degenerate faces; each repaired mesh is
+checked to pass sorpia's validation.
+
+Runs alternate between the sides; medians of --repeat runs. Prints a Markdown
+table; --json writes the figures.
+
+    python bench/repair_speed.py [--vertices 1000000] [--defects 100] [--repeat 5] [--json out.json]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import statistics
+import subprocess
+import time
+
+import numpy as np
+
+import sorpia
+from sorpia import _core
+from sorpia.limit import topology
+
+
+def inject_defects(v, f, k, seed=0, degenerate=True):
+    """k of each kind of defect (k duplicates, half of them reversed), at random faces; without
+    `degenerate`, no degenerate faces."""
+    rng = np.random.default_rng(seed)
+    n = len(v)
+    at = rng.choice(len(f), 5 * k, replace=False)
+    bad = f.copy()
+    flipped, dup, nm, hang, degenerate_at = np.split(at, 5)
+    bad[flipped] = bad[flipped][:, [0, 2, 1]]
+    dups = np.vstack([f[dup[: k // 2]], f[dup[k // 2:]][:, [0, 2, 1]]])
+    extra = np.arange(n, n + 3 * k).reshape(k, 3)  # new vertices: a third face on an edge, a triangle on a vertex
+    third_faces = np.column_stack([f[nm, 0], f[nm, 1], extra[:, 0]])
+    hung = np.column_stack([f[hang, 0], extra[:, 1], extra[:, 2]])
+    degenerate_faces = np.column_stack([f[degenerate_at, 0], f[degenerate_at, 0], f[degenerate_at, 1]])
+    faces = np.vstack([bad, dups, third_faces, hung] + ([degenerate_faces] if degenerate else [])).astype(np.int32)
+    vertices = np.vstack([v, rng.normal(size=(3 * k, 3))])
+    return vertices, faces
+
+
+def alternate(fns, repeat):
+    """Median seconds of each function, run in turn `repeat` times."""
+    times = {name: [] for name in fns}
+    for _ in range(repeat):
+        for name, fn in fns.items():
+            t0 = time.perf_counter()
+            fn()
+            times[name].append(time.perf_counter() - t0)
+    return {name: statistics.median(ts) for name, ts in times.items()}
+
+
+def commit():
+    try:
+        return subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True,
+                              check=True).stdout.strip()
+    except (OSError, subprocess.CalledProcessError):
+        return "unknown"
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--vertices", type=int, default=1_000_000)
+    ap.add_argument("--defects", type=int, default=100, help="defects of each of the five kinds")
+    ap.add_argument("--repeat", type=int, default=5)
+    ap.add_argument("--json")
+    args = ap.parse_args()
+
+    v, f = sorpia.shapes.irregular(args.vertices, 1)
+    v, f = np.ascontiguousarray(v), np.ascontiguousarray(f, np.int32)
+    clean = alternate({
+        "validation (sorpia's topology build)": lambda: topology(f, len(v), warn=False),
+        "sorpia.repair": lambda: sorpia.repair(v, f),
+        "core: sorpia::Topology": lambda: _core.Topology(f, len(v)),
+        "core: sorpia::repair": lambda: _core.repair(f, len(v)),
+    }, args.repeat)
+    assert sorpia.repair(v, f).faces is f
+
+    # A degenerate face ends the first validity check at once; without one it runs to its end.
+    variants = {"5 kinds": inject_defects(v, f, args.defects),
+                "no degenerate faces": inject_defects(v, f, args.defects, degenerate=False)}
+    defects, counts = {}, {}
+    for label, (dv, df) in variants.items():
+        defects[f"sorpia.repair, {label}"] = lambda dv=dv, df=df: sorpia.repair(dv, df)
+        defects[f"core: sorpia::repair, {label}"] = lambda dv=dv, df=df: _core.repair(df, len(dv))
+        result = sorpia.repair(dv, df)
+        _core.Topology(result.faces, len(result.vertices))  # the repaired mesh passes validation
+        counts[label] = result.report["counts"]
+    defects = alternate(defects, args.repeat)
+
+    machine = f"{platform.machine()}, {platform.processor() or platform.system()}"
+    print(f"sorpia.repair at {len(v):,} vertices, {len(f):,} faces; commit {commit()}; {machine}; "
+          f"median of {args.repeat}, alternated; load average {os.getloadavg()[0]:.1f} at the end\n")
+    print("| clean mesh | seconds | vs validation |")
+    print("|---|---:|---:|")
+    base = clean["validation (sorpia's topology build)"]
+    core_base = clean["core: sorpia::Topology"]
+    for name, t in clean.items():
+        ref = core_base if name.startswith("core") else base
+        print(f"| {name} | {t:.3f} | {t / ref:.2f}x |")
+    for label, c in counts.items():
+        print(f"\n{label}: " + ", ".join(f"{k} {n}" for k, n in c.items() if n))
+    print("\n| mesh with defects | seconds |")
+    print("|---|---:|")
+    for name, t in defects.items():
+        print(f"| {name} | {t:.3f} |")
+    if args.json:
+        with open(args.json, "w") as fh:
+            json.dump({"vertices": len(v), "faces": len(f), "repeat": args.repeat, "commit": commit(),
+                       "load_average": os.getloadavg()[0],
+                       "machine": machine, "clean_seconds": clean, "defect_seconds": defects, "counts": counts},
+                      fh, indent=1)
+
+
+if __name__ == "__main__":
+    main()

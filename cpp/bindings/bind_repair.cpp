@@ -1,0 +1,48 @@
+// Binding of sorpia::repair.
+#include <pybind11/stl.h>
+
+#include "bindings.hpp"
+#include "sorpia/repair.hpp"
+
+namespace sorpia_py {
+using namespace pybind11::literals;
+
+namespace {
+
+// The report as plain Python lists and ints (JSON-able), one key per kind of change.
+py::dict report_dict(const sorpia::RepairReport& r) {
+  py::dict d;
+  d["degenerate_faces"] = py::cast(r.degenerate_faces);
+  d["duplicate_faces"] = py::cast(r.duplicate_faces);
+  d["reversed_duplicate_faces"] = py::cast(r.reversed_duplicate_faces);
+  d["nonmanifold_edges"] = py::cast(r.nonmanifold_edges);
+  d["sheet_vertices"] = py::cast(r.sheet_vertices);
+  d["sheet_copies"] = py::cast(r.sheet_copies);
+  d["bowtie_vertices"] = py::cast(r.bowtie_vertices);
+  d["bowtie_copies"] = py::cast(r.bowtie_copies);
+  d["flipped_faces"] = py::cast(r.flipped_faces);
+  return d;
+}
+
+}  // namespace
+
+void bind_repair(py::module_& m) {
+  m.def(
+      "repair",
+      [](const Faces& faces, std::size_t n_vertices) -> py::object {
+        check_shape(faces, 3, "faces");
+        sorpia::RepairResult r;
+        {
+          py::gil_scoped_release release;
+          r = sorpia::repair(faces.data(), static_cast<std::size_t>(faces.shape(0)), n_vertices);
+        }
+        if (r.report.empty()) return py::none();
+        py::dict report = report_dict(r.report);
+        return py::make_tuple(to_numpy(std::move(r.faces), 3), to_numpy(std::move(r.vertex_map), 0),
+                              to_numpy(std::move(r.face_map), 0), report);
+      },
+      "faces"_a.noconvert(), "n_vertices"_a,
+      "sorpia::repair: None for a valid mesh, else (faces, vertex_map, face_map, report dict).");
+}
+
+}  // namespace sorpia_py

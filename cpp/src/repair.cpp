@@ -1,0 +1,346 @@
+// sorpia::repair (repair.hpp). Works on the face array's half-edges: half-edge
+// h (0 <= h < 3 n_faces) runs from faces[h] to the next corner of its face and
+// also names the corner at faces[h], as in topology.cpp. Linear time apart
+// from the faces of one edge, which are few: the half-edges are grouped by
+// edge with a counting sort on the lower end and a slot per higher end, the
+// fans are the classes of a union-find over corners, the orientation a
+// breadth-first search over the joined edges.
+#include "sorpia/repair.hpp"
+
+#include <algorithm>
+#include <iterator>
+#include <limits>
+#include <numeric>
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+#include "sorpia/errors.hpp"
+#include "sorpia/topology.hpp"
+
+namespace sorpia {
+
+bool RepairReport::empty() const {
+  return degenerate_faces.empty() && duplicate_faces.empty() && reversed_duplicate_faces.empty() &&
+         nonmanifold_edges.empty() && sheet_vertices.empty() && bowtie_vertices.empty() && flipped_faces.empty();
+}
+
+namespace {
+
+inline std::size_t next_corner(std::size_t h) { return h - h % 3 + (h % 3 + 1) % 3; }
+inline std::size_t prev_corner(std::size_t h) { return h - h % 3 + (h % 3 + 2) % 3; }
+
+std::string face_str(std::size_t f, const std::int32_t* faces) {
+  return "face " + std::to_string(f) + " (" + std::to_string(faces[3 * f]) + ", " +
+         std::to_string(faces[3 * f + 1]) + ", " + std::to_string(faces[3 * f + 2]) + ")";
+}
+
+// Union-find over corners with path halving; the root of a class is its lowest corner.
+struct Corners {
+  std::vector<std::int32_t> parent;
+  explicit Corners(std::size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
+  std::int32_t find(std::int32_t c) {
+    while (parent[c] != c) c = parent[c] = parent[parent[c]];
+    return c;
+  }
+  void join(std::int32_t a, std::int32_t b) {
+    a = find(a);
+    b = find(b);
+    if (a != b) parent[std::max(a, b)] = std::min(a, b);
+  }
+};
+
+// Rules 2 and 3 of repair.hpp: removes (in `removed`, reported in `rep`) the
+// duplicate faces, and returns for each half-edge the half-edge of the face it
+// is joined to across its edge, or -1. The half-edges of the faces not yet
+// removed are bucketed by their lower end (a counting sort, in face order
+// within a bucket); within a bucket the edges are told apart by a slot per
+// higher end stamped with the lower end. A duplicate face shares each of its
+// edges with the face it repeats, so it is found at its first edge, before it
+// could be joined. The ends of edges of three or more faces are marked in `sheet_end`.
+std::vector<std::int32_t> join_edges(const std::int32_t* faces, std::size_t n_faces, std::size_t n_vertices,
+                                     bool pair_sheets, std::vector<std::uint8_t>& removed, RepairReport& rep,
+                                     std::vector<std::uint8_t>& sheet_end) {
+  const std::size_t n_half = 3 * n_faces;
+  auto lo = [&](std::size_t h) { return std::min(faces[h], faces[next_corner(h)]); };
+  auto hi = [&](std::size_t h) { return std::max(faces[h], faces[next_corner(h)]); };
+  auto third = [&](std::int32_t h) { return faces[prev_corner(h)]; };
+  std::vector<std::int32_t> bucket(n_vertices + 1, 0);
+  for (std::size_t h = 0; h < n_half; ++h)
+    if (!removed[h / 3]) ++bucket[lo(h) + 1];
+  for (std::size_t v = 0; v < n_vertices; ++v) bucket[v + 1] += bucket[v];
+  std::vector<std::int32_t> by_lo(bucket[n_vertices]);
+  {
+    std::vector<std::int32_t> fill(bucket.begin(), bucket.end() - 1);
+    for (std::size_t h = 0; h < n_half; ++h)
+      if (!removed[h / 3]) by_lo[fill[lo(h)]++] = static_cast<std::int32_t>(h);
+  }
+  auto drop_duplicate = [&](std::int32_t kept, std::int32_t h) {
+    removed[h / 3] = 1;
+    (faces[kept] == faces[h] ? rep.duplicate_faces : rep.reversed_duplicate_faces).push_back(h / 3);
+  };
+  std::vector<std::int32_t> mate(n_half, -1);
+  // Per higher end x of an edge (v, x): stamp v, the number of faces (-1 once
+  // an edge of 3+ is done) and the first half-edge.
+  std::vector<std::int32_t> stamp(n_vertices, -1), count(n_vertices), first(n_vertices);
+  std::vector<std::int32_t> live;
+  for (std::size_t vi = 0; vi < n_vertices; ++vi) {
+    const auto v = static_cast<std::int32_t>(vi);
+    const std::int32_t* b = by_lo.data() + bucket[v];
+    const std::int32_t k = bucket[v + 1] - bucket[v];
+    for (std::int32_t i = 0; i < k; ++i) {
+      const std::int32_t x = hi(b[i]);
+      if (stamp[x] != v) {
+        stamp[x] = v;
+        count[x] = 0;
+        first[x] = b[i];
+      }
+      ++count[x];
+    }
+    for (std::int32_t i = 0; i < k; ++i) {
+      const std::int32_t h = b[i], x = hi(h);
+      if (count[x] == 2) {
+        const std::int32_t g = first[x];
+        if (g == h || removed[g / 3] || removed[h / 3]) continue;  // removed: a duplicate found at another edge
+        if (third(g) == third(h)) {
+          drop_duplicate(g, h);
+        } else {
+          mate[g] = h;
+          mate[h] = g;
+        }
+      } else if (count[x] > 2) {  // every face of edge (v, x), at once
+        count[x] = -1;
+        live.clear();
+        for (std::int32_t j = i; j < k; ++j) {
+          const std::int32_t hj = b[j];
+          if (hi(hj) != x || removed[hj / 3]) continue;
+          const auto same = std::find_if(live.begin(), live.end(), [&](std::int32_t g) { return third(g) == third(hj); });
+          if (same != live.end())
+            drop_duplicate(*same, hj);
+          else
+            live.push_back(hj);
+        }
+        if (live.size() == 2) {
+          mate[live[0]] = live[1];
+          mate[live[1]] = live[0];
+        } else if (live.size() > 2) {
+          rep.nonmanifold_edges.push_back({v, x});
+          sheet_end[v] = sheet_end[x] = 1;
+          for (std::size_t p = 0; p < live.size() && pair_sheets; ++p) {
+            if (mate[live[p]] >= 0) continue;
+            std::size_t partner = 0;
+            for (std::size_t q = p + 1; q < live.size() && !partner; ++q)
+              if (mate[live[q]] < 0 && faces[live[q]] != faces[live[p]]) partner = q;
+            for (std::size_t q = p + 1; q < live.size() && !partner; ++q)
+              if (mate[live[q]] < 0) partner = q;
+            if (!partner) break;
+            mate[live[p]] = live[partner];
+            mate[live[partner]] = live[p];
+          }
+        }
+      }
+    }
+  }
+  std::sort(rep.duplicate_faces.begin(), rep.duplicate_faces.end());
+  std::sort(rep.reversed_duplicate_faces.begin(), rep.reversed_duplicate_faces.end());
+  std::sort(rep.nonmanifold_edges.begin(), rep.nonmanifold_edges.end());
+  return mate;
+}
+
+// One pass of the rules in repair.hpp over valid indices; without
+// `pair_sheets`, every face of an edge of three or more borders it alone.
+RepairResult repair_pass(const std::int32_t* faces, std::size_t n_faces, std::size_t n_vertices, bool pair_sheets) {
+  RepairResult r;
+  RepairReport& rep = r.report;
+  const std::size_t n_half = 3 * n_faces;
+  std::vector<std::uint8_t> removed(n_faces, 0);
+  for (std::size_t f = 0; f < n_faces; ++f) {
+    const std::int32_t* t = faces + 3 * f;
+    if (t[0] == t[1] || t[1] == t[2] || t[2] == t[0]) {
+      removed[f] = 1;
+      rep.degenerate_faces.push_back(static_cast<std::int32_t>(f));
+    }
+  }
+  std::vector<std::uint8_t> sheet_end(n_vertices, 0);
+  const std::vector<std::int32_t> mate = join_edges(faces, n_faces, n_vertices, pair_sheets, removed, rep, sheet_end);
+
+  // Fans: corners of one vertex joined across its joined edges.
+  Corners fans(n_half);
+  bool misoriented = false;  // some joined faces run their edge the same way
+  for (std::size_t h = 0; h < n_half; ++h) {
+    const std::int32_t g = mate[h];
+    if (g < static_cast<std::int32_t>(h)) continue;  // unjoined, or joined from g already
+    const auto hn = static_cast<std::int32_t>(next_corner(h)), gn = static_cast<std::int32_t>(next_corner(g));
+    const bool same_way = faces[g] == faces[h];
+    misoriented |= same_way;
+    fans.join(static_cast<std::int32_t>(h), same_way ? g : gn);
+    fans.join(hn, same_way ? gn : g);
+  }
+  // The output vertex of each corner. A fan's root is its lowest corner, so
+  // in corner order the root's vertex is known before the fan's other corners.
+  std::vector<std::int32_t> vertex_of(n_half, -1);
+  std::vector<std::uint8_t> taken(n_vertices, 0);
+  std::vector<std::int32_t> copies(n_vertices, 0);
+  r.vertex_map.resize(n_vertices);
+  std::iota(r.vertex_map.begin(), r.vertex_map.end(), 0);
+  for (std::size_t h = 0; h < n_half; ++h) {
+    if (removed[h / 3]) continue;
+    const std::int32_t root = fans.find(static_cast<std::int32_t>(h));
+    if (root != static_cast<std::int32_t>(h)) {
+      vertex_of[h] = vertex_of[root];
+      continue;
+    }
+    const std::int32_t v = faces[h];
+    if (!taken[v]) {
+      taken[v] = 1;
+      vertex_of[h] = v;
+    } else {
+      vertex_of[h] = static_cast<std::int32_t>(r.vertex_map.size());
+      r.vertex_map.push_back(v);
+      ++copies[v];
+    }
+  }
+  for (std::size_t v = 0; v < n_vertices; ++v)
+    if (copies[v]) {
+      (sheet_end[v] ? rep.sheet_vertices : rep.bowtie_vertices).push_back(static_cast<std::int32_t>(v));
+      (sheet_end[v] ? rep.sheet_copies : rep.bowtie_copies).push_back(copies[v]);
+    }
+
+  // Orientation: per component, the class of faces to reverse (none where
+  // every joined pair of faces runs its edge both ways).
+  std::vector<std::int8_t> flip(n_faces, misoriented ? -1 : 0);
+  std::vector<std::int32_t> component;
+  for (std::size_t f0 = 0; f0 < n_faces && misoriented; ++f0) {
+    if (removed[f0] || flip[f0] >= 0) continue;
+    component.assign(1, static_cast<std::int32_t>(f0));
+    flip[f0] = 0;
+    std::size_t n_flipped = 0;
+    std::int32_t clash = -1;  // a face whose orientation is forced both ways
+    for (std::size_t q = 0; q < component.size(); ++q) {
+      const std::int32_t f = component[q];
+      for (std::int32_t h = 3 * f; h < 3 * f + 3; ++h) {
+        const std::int32_t g = mate[h];
+        if (g < 0) continue;
+        // running the edge the same way as h needs the other orientation
+        const auto want = static_cast<std::int8_t>(flip[f] ^ (faces[g] == faces[h]));
+        if (flip[g / 3] < 0) {
+          flip[g / 3] = want;
+          n_flipped += static_cast<std::size_t>(want);
+          component.push_back(g / 3);
+        } else if (flip[g / 3] != want && clash < 0) {
+          clash = g / 3;
+        }
+      }
+    }
+    if (clash >= 0)
+      throw MeshError("the connected part of " + std::to_string(component.size()) + " faces containing " +
+                      face_str(f0, faces) + " is not orientable (like a Moebius strip: no choice of face "
+                      "orientations is consistent, e.g. at " + face_str(clash, faces) +
+                      "): Loop interpolation needs an orientable surface, and repair cannot make one");
+    const std::int8_t reverse = n_flipped <= component.size() - n_flipped ? 1 : 0;
+    for (std::int32_t f : component) {
+      flip[f] = flip[f] == reverse;
+      if (flip[f]) rep.flipped_faces.push_back(f);
+    }
+  }
+  std::sort(rep.flipped_faces.begin(), rep.flipped_faces.end());
+
+  for (std::size_t f = 0; f < n_faces; ++f) {
+    if (removed[f]) continue;
+    const std::int32_t a = vertex_of[3 * f], b = vertex_of[3 * f + 1], c = vertex_of[3 * f + 2];
+    if (flip[f])
+      r.faces.insert(r.faces.end(), {a, c, b});
+    else
+      r.faces.insert(r.faces.end(), {a, b, c});
+    r.face_map.push_back(static_cast<std::int32_t>(f));
+  }
+  return r;
+}
+
+// `later`, a pass over `first`'s output, in `first`'s input indices, appended to `first`.
+void compose(RepairResult& first, RepairResult&& later) {
+  RepairReport& a = first.report;
+  const RepairReport& b = later.report;
+  auto faces_of = [&](const std::vector<std::int32_t>& fs, std::vector<std::int32_t>& into) {
+    for (std::int32_t f : fs) into.push_back(first.face_map[f]);
+    std::sort(into.begin(), into.end());
+  };
+  faces_of(b.degenerate_faces, a.degenerate_faces);
+  faces_of(b.duplicate_faces, a.duplicate_faces);
+  faces_of(b.reversed_duplicate_faces, a.reversed_duplicate_faces);
+  std::vector<std::int32_t> flipped;
+  faces_of(b.flipped_faces, flipped);
+  std::vector<std::int32_t> both;  // reversed twice: not reversed
+  std::set_symmetric_difference(a.flipped_faces.begin(), a.flipped_faces.end(), flipped.begin(), flipped.end(),
+                                std::back_inserter(both));
+  a.flipped_faces = std::move(both);
+  for (const auto& [u, v] : b.nonmanifold_edges) {
+    const std::int32_t p = first.vertex_map[u], q = first.vertex_map[v];
+    a.nonmanifold_edges.push_back({std::min(p, q), std::max(p, q)});
+  }
+  auto add_copies = [&](const std::vector<std::int32_t>& vs, const std::vector<std::int32_t>& ns,
+                        std::vector<std::int32_t>& into_v, std::vector<std::int32_t>& into_n) {
+    for (std::size_t i = 0; i < vs.size(); ++i) {
+      const std::int32_t v = first.vertex_map[vs[i]];
+      const auto at = std::find(into_v.begin(), into_v.end(), v);
+      if (at != into_v.end()) {
+        into_n[at - into_v.begin()] += ns[i];
+      } else {
+        const auto pos = std::lower_bound(into_v.begin(), into_v.end(), v) - into_v.begin();
+        into_v.insert(into_v.begin() + pos, v);
+        into_n.insert(into_n.begin() + pos, ns[i]);
+      }
+    }
+  };
+  add_copies(b.sheet_vertices, b.sheet_copies, a.sheet_vertices, a.sheet_copies);
+  add_copies(b.bowtie_vertices, b.bowtie_copies, a.bowtie_vertices, a.bowtie_copies);
+  std::vector<std::int32_t> vertex_map(later.vertex_map.size()), face_map(later.face_map.size());
+  for (std::size_t i = 0; i < vertex_map.size(); ++i) vertex_map[i] = first.vertex_map[later.vertex_map[i]];
+  for (std::size_t i = 0; i < face_map.size(); ++i) face_map[i] = first.face_map[later.face_map[i]];
+  first.vertex_map = std::move(vertex_map);
+  first.face_map = std::move(face_map);
+  first.faces = std::move(later.faces);
+}
+
+}  // namespace
+
+RepairResult repair(const std::int32_t* faces, std::size_t n_faces, std::size_t n_vertices) {
+  // A valid mesh costs the validation alone, and comes back as it is.
+  if (faces_valid(faces, n_faces, n_vertices)) return {};
+  // What repair does not change: refused with the validation's message.
+  const bool repairable = n_faces > 0 &&
+                          n_vertices <= static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max()) &&
+                          std::all_of(faces, faces + 3 * n_faces, [&](std::int32_t v) {
+                            return v >= 0 && static_cast<std::size_t>(v) < n_vertices;
+                          });
+  if (!repairable) {
+    static_cast<void>(Topology(faces, n_faces, n_vertices));
+    throw std::logic_error("sorpia::repair: the validation accepted faces with an index out of range");
+  }
+
+  RepairResult result = repair_pass(faces, n_faces, n_vertices, true);
+  if (result.faces.empty())
+    throw MeshError("every face repeats a vertex (" + std::to_string(n_faces) +
+                    " degenerate triangles): no face is left, and Loop subdivision needs at least one triangle");
+  // Pairing sheets can join them into one fan at both ends of their edge (two
+  // sheets that touch along several edges), which leaves that edge with more
+  // than two faces: a further pass makes each face of such an edge border it alone.
+  constexpr int max_passes = 4;
+  for (int pass = 1;; ++pass) {
+    const std::size_t n_out = result.vertex_map.size();
+    if (faces_valid(result.faces.data(), result.faces.size() / 3, n_out)) return result;
+    RepairResult next;
+    if (pass < max_passes) next = repair_pass(result.faces.data(), result.faces.size() / 3, n_out, false);
+    if (next.report.empty()) {  // nothing more repair changes (e.g. a vertex of too many edges)
+      try {
+        static_cast<void>(Topology(result.faces.data(), result.faces.size() / 3, n_out));
+      } catch (const MeshError& e) {
+        throw MeshError(std::string("repair could not make a valid mesh: ") + e.what());
+      }
+      throw std::logic_error("sorpia::repair: faces_valid and Topology disagree");
+    }
+    compose(result, std::move(next));
+  }
+}
+
+}  // namespace sorpia
