@@ -10,6 +10,8 @@ thread (below, one after another, with the same result), so the threaded
 cases use meshes of at least PARALLEL_MIN * threads vertices.
 """
 
+import subprocess
+import sys
 import math
 
 import numpy as np
@@ -129,3 +131,61 @@ def test_bad_threads(kwargs, match):
 def test_numpy_integer_threads_accepted():
     v, f = sorpia.shapes.icosphere(1)
     assert sorpia.interpolate(v, f, threads=np.int64(2)).converged
+
+
+FORK_AFTER_THREADS = """
+import os, signal, sys
+import numpy as np
+import sorpia
+v, f = sorpia.shapes.irregular(40000, 1)
+parent = sorpia.interpolate(v, f, threads=2)  # the pool's workers exist now
+pid = os.fork()
+if pid == 0:
+    signal.alarm(60)  # a hang ends the child with SIGALRM
+    child = sorpia.interpolate(v, f, threads=2)
+    same = np.array_equal(child.control_vertices, parent.control_vertices)
+    os._exit(0 if child.converged and same else 1)
+_, status = os.waitpid(pid, 0)
+print(os.waitstatus_to_exitcode(status))
+"""
+
+
+def test_a_forked_child_solves_on_threads_after_its_parent_did():
+    """multiprocessing's fork start method: a child forked after the parent
+    solved on threads must solve on threads too, with the parent's result bit
+    for bit (the threads' ranges do not depend on timing). With OpenMP's
+    runtime the child hung in the parallel region."""
+    out = subprocess.run([sys.executable, "-c", FORK_AFTER_THREADS], capture_output=True, text=True, timeout=180)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip() == "0", out.stdout + out.stderr
+
+
+NO_THREAD_TO_BE_HAD = """
+import resource, sys
+import numpy as np
+import sorpia
+v, f = sorpia.shapes.irregular(40000, 1)
+one = sorpia.interpolate(v, f, threads=1)
+# Every new thread's stack is RLIMIT_STACK (4 GiB, set before this process
+# started); the address space left is far less: no thread can start.
+soft, hard = resource.getrlimit(resource.RLIMIT_AS)
+resource.setrlimit(resource.RLIMIT_AS, (2 << 30, hard))
+res = sorpia.interpolate(v, f, threads=2)
+ok = res.converged and np.abs(res.control_vertices - one.control_vertices).max() < 1e-8
+print("ok" if ok else "wrong")
+"""
+
+
+def test_threads_that_cannot_start_leave_the_work_to_the_caller():
+    """Under memory limits where no thread can be started, threads=2 runs the
+    ranges on the calling thread and returns the solution (with OpenMP's
+    runtime the process printed 'Thread creation failed' and exited 1)."""
+    import resource
+
+    def big_stacks():
+        resource.setrlimit(resource.RLIMIT_STACK, (4 << 30, resource.RLIM_INFINITY))
+
+    out = subprocess.run([sys.executable, "-c", NO_THREAD_TO_BE_HAD], capture_output=True, text=True, timeout=180,
+                         preexec_fn=big_stacks)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip() == "ok"

@@ -1,6 +1,7 @@
 #include "parallel.hpp"
 
 #include <pthread.h>
+#include <sched.h>
 
 #include <condition_variable>
 #include <exception>
@@ -132,6 +133,13 @@ Pool* Pool::instance_ = [] {
 void run_tasks(int n_tasks, const std::function<void(int)>& task) { Pool::instance().run(n_tasks, task); }
 
 int pool_workers() { return Pool::instance().size(); }
+
+int available_processors() {
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  if (sched_getaffinity(0, sizeof set, &set) == 0) return std::max(1, CPU_COUNT(&set));
+  return std::max(1u, std::thread::hardware_concurrency());
+}
 
 }  // namespace detail
 }  // namespace sorpia

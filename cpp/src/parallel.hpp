@@ -6,6 +6,7 @@
 // on the calling thread instead of ending the process (libgomp exits).
 #include <cstddef>
 #include <functional>
+#include <vector>
 
 namespace sorpia {
 namespace detail {
@@ -18,19 +19,43 @@ namespace detail {
 /// Not reentrant: a task must not call run_tasks.
 void run_tasks(int n_tasks, const std::function<void(int)>& task);
 
-/// run_tasks over [0, n) cut into n_tasks contiguous ranges of near-equal
-/// length: body(begin, end, t) for range t.
-inline void parallel_ranges(int n_tasks, std::size_t n,
-                            const std::function<void(std::size_t, std::size_t, int)>& body) {
+/// Workers the pool holds now (for tests).
+int pool_workers();
+
+/// The processors this process may run on (its affinity mask), at least 1.
+int available_processors();
+
+/// task(t) for t in [0, n_tasks): through run_tasks when `parallel`, else one
+/// after another on the calling thread.
+inline void for_each_task(bool parallel, int n_tasks, const std::function<void(int)>& task) {
+  if (parallel) {
+    run_tasks(n_tasks, task);
+  } else {
+    for (int t = 0; t < n_tasks; ++t) task(t);
+  }
+}
+
+/// body(i) for i in [0, n), cut into n_tasks contiguous ranges of near-equal
+/// length, one task each (a static schedule).
+template <class Body>
+void for_each_index(bool parallel, int n_tasks, std::size_t n, Body body) {
   const auto t_count = static_cast<std::size_t>(n_tasks < 1 ? 1 : n_tasks);
-  run_tasks(static_cast<int>(t_count), [&](int t) {
+  for_each_task(parallel, static_cast<int>(t_count), [&](int t) {
     const auto k = static_cast<std::size_t>(t);
-    body(n * k / t_count, n * (k + 1) / t_count, t);
+    for (std::size_t i = n * k / t_count; i < n * (k + 1) / t_count; ++i) body(i);
   });
 }
 
-/// Workers the pool holds now (for tests).
-int pool_workers();
+/// The largest of f(t) for t in [0, n_tasks) (0 for none), the tasks run as by
+/// for_each_task.
+template <class F>
+double max_over_tasks(bool parallel, int n_tasks, F f) {
+  std::vector<double> part(static_cast<std::size_t>(n_tasks > 0 ? n_tasks : 0), 0.0);
+  for_each_task(parallel, n_tasks, [&](int t) { part[static_cast<std::size_t>(t)] = f(t); });
+  double m = 0.0;
+  for (double x : part) m = x > m ? x : m;
+  return m;
+}
 
 }  // namespace detail
 }  // namespace sorpia

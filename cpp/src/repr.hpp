@@ -41,7 +41,7 @@ inline std::string repr(double x) {
     return sign + out;
   }
   std::string mantissa = digits.size() == 1 ? digits : digits.substr(0, 1) + "." + digits.substr(1);
-  char e[8];
+  char e[16];
   std::snprintf(e, sizeof e, "e%c%02d", exponent < 0 ? '-' : '+', std::abs(exponent));
   return sign + mantissa + e;
 }

@@ -31,10 +31,11 @@
 // the ordering of every vertex). One fork and one join per sweep: each thread
 // also computes the deferred residuals of its own range; the interface
 // vertices, and the residuals that need them, run on the calling thread
-// after the join. Below sweep_min_vertices_per_thread, or built without
-// OpenMP, the ranges run one after the other on the calling thread: the same
-// iterates, bit for bit, except that ranges are then never replaced by slabs
-// (nothing to gain).
+// after the join, on the core's thread pool (parallel.hpp). Below
+// sweep_min_vertices_per_thread the ranges run one after the other on the
+// calling thread: the same iterates, bit for bit, except that ranges are then
+// never replaced by slabs (nothing to gain); where the pool cannot give
+// threads, it runs them in turn too, with the same iterates.
 //
 // Layout. V is held as (n + 1, 4) doubles, the fourth lane and the last row
 // zero, so a neighbour is one 32-byte load; V0 is read in place (n, 3). The
@@ -57,7 +58,7 @@
 #include <vector>
 
 #include "aligned_buffer.hpp"
-#include "openmp.hpp"
+#include "parallel.hpp"
 #include "solver_detail.hpp"
 #include "sweep_kernels.hpp"
 #include "sweep_plan.hpp"
@@ -82,9 +83,9 @@ class Engine {
   Engine(const LimitOperator& op, const double* v0, int exponent, double omega, int threads)
       : op_(view(op)),
         // Below sweep_min_vertices_per_thread, waking the threads costs more
-        // than they save; without OpenMP there are none to wake. The ranges
-        // then run one after the other (the same order, so the same result).
-        parallel_(kOpenMP && threads > 1 && op.n / static_cast<std::size_t>(threads) >= sweep_min_vertices_per_thread),
+        // than they save. The ranges then run one after the other (the same
+        // order, so the same result).
+        parallel_(threads > 1 && op.n / static_cast<std::size_t>(threads) >= sweep_min_vertices_per_thread),
         x_(op.n + 1, true),
         exponent_(exponent) {
     x_[op.n] = d4{0.0, 0.0, 0.0, 0.0};  // the zero row
@@ -109,9 +110,9 @@ class Engine {
       if (poor) begin = equal_work_ranges(op_, threads);
       double* w = v0_.data();
       const std::int32_t* perm = perm_.data();
-#pragma omp parallel for num_threads(threads) schedule(static) if (parallel_)
-      for (std::size_t k = 0; k < n; ++k)
+      for_each_index(parallel_, threads, n, [&](std::size_t k) {
         for (int a = 0; a < 3; ++a) w[3 * k + a] = v0[3 * static_cast<std::size_t>(perm[k]) + a];
+      });
     } else if (exponent_ != 0) {
       std::memcpy(v0_.data(), v0, 3 * n * sizeof(double));
     }
@@ -167,9 +168,9 @@ class Engine {
   // E of the current iterate, by a residual pass.
   double residual() const {
     const int t_count = threads();
-    double m = 0.0;
-#pragma omp parallel for num_threads(t_count) schedule(static, 1) reduction(max : m) if (parallel_)
-    for (int t = 0; t < t_count; ++t) m = std::max(m, k_->residual_range(ctx_, plan_.begin[t], plan_.begin[t + 1]));
+    const double m = max_over_tasks(parallel_, t_count, [&](int t) {
+      return k_->residual_range(ctx_, plan_.begin[t], plan_.begin[t + 1]);
+    });
     return std::sqrt(m);
   }
 
@@ -181,14 +182,14 @@ class Engine {
   double sweep(bool fused) {
     const int t_count = threads();
     const auto sweep_range = fused ? k_->sweep_fused : k_->sweep_plain;
-    double m = 0.0;
     const std::int32_t* deferred = plan_.deferred.data();
-#pragma omp parallel for num_threads(t_count) schedule(static, 1) reduction(max : m) if (parallel_)
-    for (int t = 0; t < t_count; ++t) {
-      m = std::max(m, sweep_range(ctx_, plan_.begin[t], plan_.begin[t + 1]));
+    double m = max_over_tasks(parallel_, t_count, [&](int t) {
+      double mt = sweep_range(ctx_, plan_.begin[t], plan_.begin[t + 1]);
       // The deferred residuals of the range's own vertices, final now.
-      if (fused) m = std::max(m, k_->residual_list(ctx_, deferred + plan_.local[t], plan_.local[t + 1] - plan_.local[t]));
-    }
+      if (fused)
+        mt = std::max(mt, k_->residual_list(ctx_, deferred + plan_.local[t], plan_.local[t + 1] - plan_.local[t]));
+      return mt;
+    });
     k_->update_list(ctx_, plan_.interface.data(), plan_.interface.size());
     if (!fused) return NAN;
     const std::size_t rest = plan_.local[t_count];
@@ -198,13 +199,11 @@ class Engine {
 
   // (n, 3) control vertices, times 2^exponent().
   void write(double* v) const {
-    const auto n = static_cast<std::ptrdiff_t>(op_.n);
-#pragma omp parallel for num_threads(threads()) schedule(static) if (parallel_)
-    for (std::ptrdiff_t i = 0; i < n; ++i) {
-      const d4& y = x_[perm_.empty() ? i : inv_[i]];
+    for_each_index(parallel_, threads(), op_.n, [&](std::size_t i) {
+      const d4& y = x_[perm_.empty() ? i : static_cast<std::size_t>(inv_[i])];
       for (int a = 0; a < 3; ++a) v[3 * i + a] = y[a];
-    }
-    scale_pow2(v, 3 * n, exponent_);
+    });
+    scale_pow2(v, 3 * op_.n, exponent_);
   }
 
  private:

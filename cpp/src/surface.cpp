@@ -8,6 +8,7 @@
 #include <opensubdiv/far/topologyRefinerFactory.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -19,7 +20,7 @@
 #include <utility>
 #include <vector>
 
-#include "openmp.hpp"
+#include "parallel.hpp"
 #include "osd_refiner.hpp"
 #include "sorpia/limit.hpp"
 #include "sorpia/errors.hpp"
@@ -31,7 +32,7 @@ namespace {
 namespace Bfr = OpenSubdiv::Bfr;
 namespace Far = OpenSubdiv::Far;
 
-// A thread-safe cache lets every OpenMP thread share one factory (irregular
+// A thread-safe cache lets every thread of evaluate() share one factory (irregular
 // patches are built once per distinct vertex neighbourhood, then reused).
 using ThreadedCache = Bfr::SurfaceFactoryCacheThreaded<std::shared_mutex, std::shared_lock<std::shared_mutex>,
                                                        std::unique_lock<std::shared_mutex>>;
@@ -56,17 +57,16 @@ std::string human_bytes(double b) {
 
 constexpr int kApproxLevelSmooth = 4;
 
-// Faces per OpenMP chunk in evaluate(); also the least work per thread.
+// Faces per chunk that a thread takes at a time in evaluate(); also the least
+// work per thread.
 constexpr std::ptrdiff_t kFacesPerChunk = 64;
 
 // Threads for `n_groups` faces: no more than there are chunks, so a small
-// query runs on the calling thread alone. A thread started for nothing is not
-// free: after the region libgomp's idle workers spin-wait (GOMP_SPINCOUNT),
-// and that CPU time lands on whatever the caller does next.
+// query runs on the calling thread alone, and no more than the processors.
 int evaluate_threads(std::ptrdiff_t n_groups) {
   const std::ptrdiff_t chunks = (n_groups + kFacesPerChunk - 1) / kFacesPerChunk;
   return static_cast<int>(
-      std::max<std::ptrdiff_t>(1, std::min<std::ptrdiff_t>(detail::default_thread_count(), chunks)));
+      std::max<std::ptrdiff_t>(1, std::min<std::ptrdiff_t>(detail::available_processors(), chunks)));
 }
 
 // Bfr evaluates on the closed triangle; a parameter a rounding error outside is
@@ -203,40 +203,43 @@ void LoopSurface::evaluate(const std::int32_t* face_ids, const double* uv, std::
   const bool want_derivs = du || dv || normals;
   const std::shared_lock<std::shared_mutex> lock(impl_->mutex);
   const double* mesh_points = &impl_->points.data()->x;
-  int failed_face = -1;
-  // Each point is computed alone, so the thread count changes nothing in the results.
-  [[maybe_unused]] const int threads = evaluate_threads(n_groups);  // unused without OpenMP
-#pragma omp parallel num_threads(threads) if (threads > 1)
-  {
+  std::atomic<int> failed_face{-1};
+  // Each point is computed alone, so the thread count changes nothing in the
+  // results. Chunks of faces are handed out in turn (their costs differ).
+  std::atomic<std::ptrdiff_t> next_chunk{0};
+  const int threads = evaluate_threads(n_groups);
+  detail::for_each_task(threads > 1, threads, [&](int) {
     Bfr::Surface<double> surface;
     std::vector<double> patch;
     const Bfr::Surface<double>::PointDescriptor desc(3);
-#pragma omp for schedule(dynamic, kFacesPerChunk)
-    for (std::ptrdiff_t g = 0; g < n_groups; ++g) {
-      const int face = face_ids[order[group_start[g]]];
-      if (!factory.InitVertexSurface(face, &surface)) {
-#pragma omp critical
-        failed_face = face;
-        continue;
-      }
-      patch.resize(3 * static_cast<std::size_t>(surface.GetNumPatchPoints()));
-      surface.PreparePatchPoints(mesh_points, desc, patch.data(), desc);
-      for (std::size_t j = group_start[g]; j < group_start[g + 1]; ++j) {
-        const std::size_t i = order[j];
-        double p[3], d1[3], d2[3];
-        if (want_derivs)
-          surface.Evaluate(&params[2 * i], patch.data(), desc, p, d1, d2);
-        else
-          surface.Evaluate(&params[2 * i], patch.data(), desc, p);
-        std::copy(p, p + 3, positions + 3 * i);
-        if (du) std::copy(d1, d1 + 3, du + 3 * i);
-        if (dv) std::copy(d2, d2 + 3, dv + 3 * i);
-        if (normals) unit_normal(d1, d2, normals + 3 * i);
+    for (;;) {
+      const std::ptrdiff_t first = kFacesPerChunk * next_chunk++;
+      if (first >= n_groups) break;
+      for (std::ptrdiff_t g = first; g < std::min(n_groups, first + kFacesPerChunk); ++g) {
+        const int face = face_ids[order[group_start[g]]];
+        if (!factory.InitVertexSurface(face, &surface)) {
+          failed_face = face;
+          continue;
+        }
+        patch.resize(3 * static_cast<std::size_t>(surface.GetNumPatchPoints()));
+        surface.PreparePatchPoints(mesh_points, desc, patch.data(), desc);
+        for (std::size_t j = group_start[g]; j < group_start[g + 1]; ++j) {
+          const std::size_t i = order[j];
+          double p[3], d1[3], d2[3];
+          if (want_derivs)
+            surface.Evaluate(&params[2 * i], patch.data(), desc, p, d1, d2);
+          else
+            surface.Evaluate(&params[2 * i], patch.data(), desc, p);
+          std::copy(p, p + 3, positions + 3 * i);
+          if (du) std::copy(d1, d1 + 3, du + 3 * i);
+          if (dv) std::copy(d2, d2 + 3, dv + 3 * i);
+          if (normals) unit_normal(d1, d2, normals + 3 * i);
+        }
       }
     }
-  }
+  });
   if (failed_face >= 0)
-    throw MeshError("OpenSubdiv's Bfr could not build the limit surface of face " + std::to_string(failed_face));
+    throw MeshError("OpenSubdiv's Bfr could not build the limit surface of face " + std::to_string(failed_face.load()));
 }
 
 TriMesh LoopSurface::tessellate(int level) {

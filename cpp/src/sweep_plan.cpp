@@ -2,6 +2,8 @@
 // lag of the fused residual and the deferred residuals.
 #include "sweep_plan.hpp"
 
+#include "parallel.hpp"
+
 #include <algorithm>
 #include <cstring>
 
@@ -72,8 +74,7 @@ Plan make_plan(const OpView& op, int threads, [[maybe_unused]] bool parallel,
   std::vector<std::int32_t> reach(op.n);
   std::vector<std::vector<std::int32_t>> reach_count(static_cast<std::size_t>(threads),
                                                      std::vector<std::int32_t>(kMaxLag + 2, 0));
-#pragma omp parallel for num_threads(threads) schedule(static, 1) if (parallel)
-  for (int t = 0; t < threads; ++t) {
+  for_each_task(parallel, threads, [&](int t) {
     const std::int32_t lo = p.begin[t], hi = p.begin[t + 1];
     std::int32_t* count = reach_count[t].data();
     for (std::int32_t i = lo; i < hi; ++i) {
@@ -98,7 +99,7 @@ Plan make_plan(const OpView& op, int threads, [[maybe_unused]] bool parallel,
         per_range[t].push_back(i);
       }
     }
-  }
+  });
   for (auto& r : per_range) p.interface.insert(p.interface.end(), r.begin(), r.end());
   for (int t = 1; t < threads; ++t)
     for (int k = 0; k < kMaxLag + 2; ++k) reach_count[0][k] += reach_count[t][k];
@@ -114,8 +115,7 @@ Plan make_plan(const OpView& op, int threads, [[maybe_unused]] bool parallel,
   // a neighbour is swept in the interface phase, or a neighbour lies beyond the lag.
   std::vector<std::vector<std::int32_t>> after_interface(static_cast<std::size_t>(threads));
   for (int t = 0; t < threads; ++t) after_interface[t].reserve(p.interface.size());
-#pragma omp parallel for num_threads(threads) schedule(static, 1) if (parallel)
-  for (int t = 0; t < threads; ++t) {
+  for_each_task(parallel, threads, [&](int t) {
     per_range[t].clear();
     for (std::int32_t i = p.begin[t]; i < p.begin[t + 1]; ++i) {
       bool touches_interface = p.flags[i] & kInterface;
@@ -133,7 +133,7 @@ Plan make_plan(const OpView& op, int threads, [[maybe_unused]] bool parallel,
         (touches_interface ? after_interface[t] : per_range[t]).push_back(i);
       }
     }
-  }
+  });
   p.local.push_back(0);
   for (auto& r : per_range) {
     p.deferred.insert(p.deferred.end(), r.begin(), r.end());

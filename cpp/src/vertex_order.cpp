@@ -5,7 +5,7 @@
 #include <algorithm>
 #include <cstddef>
 
-#include "openmp.hpp"
+#include "parallel.hpp"
 #include "sweep_plan.hpp"
 
 namespace sorpia {
@@ -48,11 +48,19 @@ std::vector<std::int32_t> locality_order(const OpView& op) {
 std::vector<std::int32_t> slab_order(const OpView& op, const double* v0, int threads,
                                      std::vector<std::int32_t>& begin) {
   const auto n = static_cast<std::ptrdiff_t>(op.n);
+  // The bounding box, each thread over its range, then combined.
+  std::vector<double> box(6 * static_cast<std::size_t>(threads));
+  for_each_task(true, threads, [&](int t) {
+    double* b = box.data() + 6 * t;
+    for (int a = 0; a < 3; ++a) b[a] = b[3 + a] = n ? v0[a] : 0.0;
+    for (std::ptrdiff_t i = n * t / threads; i < n * (t + 1) / threads; ++i)
+      for (int a = 0; a < 3; ++a) b[a] = std::min(b[a], v0[3 * i + a]), b[3 + a] = std::max(b[3 + a], v0[3 * i + a]);
+  });
   double lo[3], hi[3];
-  for (int a = 0; a < 3; ++a) lo[a] = hi[a] = n ? v0[a] : 0.0;
-#pragma omp parallel for num_threads(threads) schedule(static) reduction(min : lo[:3]) reduction(max : hi[:3])
-  for (std::ptrdiff_t i = 0; i < n; ++i)
-    for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], v0[3 * i + a]), hi[a] = std::max(hi[a], v0[3 * i + a]);
+  for (int a = 0; a < 3; ++a) {
+    lo[a] = box[a], hi[a] = box[3 + a];
+    for (int t = 1; t < threads; ++t) lo[a] = std::min(lo[a], box[6 * t + a]), hi[a] = std::max(hi[a], box[6 * t + 3 + a]);
+  }
   int axis = 0;
   for (int a = 1; a < 3; ++a)
     if (hi[a] - lo[a] > hi[axis] - lo[axis]) axis = a;
@@ -62,16 +70,14 @@ std::vector<std::int32_t> slab_order(const OpView& op, const double* v0, int thr
   const double width = hi[axis] - lo[axis], scale = width > 0 ? static_cast<double>(slices) / width : 0.0;
   std::vector<std::int32_t> slice(op.n);
   std::vector<double> work(slices * threads, 0.0);  // per thread, then summed into the first
-#pragma omp parallel num_threads(threads)
-  {
-    double* w = work.data() + slices * static_cast<std::size_t>(thread_number());
-#pragma omp for schedule(static)
-    for (std::ptrdiff_t i = 0; i < n; ++i) {
+  for_each_task(true, threads, [&](int t) {
+    double* w = work.data() + slices * static_cast<std::size_t>(t);
+    for (std::ptrdiff_t i = n * t / threads; i < n * (t + 1) / threads; ++i) {
       const double f = (v0[3 * i + axis] - lo[axis]) * scale;  // NaN (a NaN in V0): slice 0
       slice[i] = f >= 0.0 ? static_cast<std::int32_t>(std::min<double>(f, static_cast<double>(slices - 1))) : 0;
       w[slice[i]] += op.offsets[i + 1] - op.offsets[i] + 2.0;  // as equal_work_ranges
     }
-  }
+  });
   double total = 0.0;
   for (std::size_t k = 0; k < slices; ++k) {
     for (int t = 1; t < threads; ++t) work[k] += work[slices * t + k];
@@ -93,7 +99,7 @@ std::vector<std::int32_t> slab_order(const OpView& op, const double* v0, int thr
 }
 
 Renumbered::Renumbered(const OpView& op, const std::int32_t* perm, const std::int32_t* inv,
-                       [[maybe_unused]] int threads, [[maybe_unused]] bool parallel)
+                       int threads, bool parallel)
     : offsets(op.n + 1, false),
       neighbors(static_cast<std::size_t>(op.offsets[op.n]), false),
       diag(op.n, false) {
@@ -111,8 +117,7 @@ Renumbered::Renumbered(const OpView& op, const std::int32_t* perm, const std::in
   const std::int32_t* off = offsets.data();
   double* d = diag.data();
   double* w = weight.data();
-#pragma omp parallel for num_threads(threads) schedule(static) if (parallel)
-  for (std::ptrdiff_t k = 0; k < n; ++k) {
+  for_each_index(parallel, threads, static_cast<std::size_t>(n), [&](std::size_t k) {
     const std::int32_t i = perm[k];
     std::int32_t out = off[k];
     for (std::int32_t q = op.offsets[i]; q < op.offsets[i + 1]; ++q, ++out) {
@@ -121,7 +126,7 @@ Renumbered::Renumbered(const OpView& op, const std::int32_t* perm, const std::in
     }
     d[k] = op.diag[i];
     if (!per_entry) w[k] = op.weight[i];
-  }
+  });
   view = {op.n, offsets.data(), neighbors.data(), diag.data(), weight.data(), values.data()};
 }
 

@@ -6,15 +6,9 @@
 #include <cstddef>
 #include <limits>
 
-#include "openmp.hpp"
 #include "solver_detail.hpp"
 
 namespace sorpia_test {
-
-// Whether the core runs ranges on threads at all: not when built without
-// OpenMP, where crowded ranges are then never replaced by slabs either (the
-// tests and the core are compiled with the same OpenMP flags).
-constexpr bool kRangesOnThreads = sorpia::detail::kOpenMP;
 
 // For its lifetime, the sweep runs ranges of at least `per_thread` vertices on
 // threads (1: always; SIZE_MAX: never, one after another on the caller).

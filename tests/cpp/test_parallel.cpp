@@ -10,11 +10,12 @@
 #include <thread>
 #include <vector>
 
-#include "../../cpp/src/parallel.hpp"
+#include "parallel.hpp"
 
 namespace {
 
-using sorpia::detail::parallel_ranges;
+using sorpia::detail::for_each_index;
+using sorpia::detail::max_over_tasks;
 using sorpia::detail::run_tasks;
 
 TEST(Parallel, EveryTaskRunsOnceOnDistinctThreads) {
@@ -32,11 +33,12 @@ TEST(Parallel, EveryTaskRunsOnceOnDistinctThreads) {
 }
 
 TEST(Parallel, RangesCoverEachIndexOnce) {
-  std::vector<int> hits(1000, 0);
-  parallel_ranges(3, hits.size(), [&](std::size_t b, std::size_t e, int) {
-    for (std::size_t i = b; i < e; ++i) ++hits[i];
-  });
-  for (int h : hits) ASSERT_EQ(h, 1);
+  for (bool parallel : {true, false}) {
+    std::vector<int> hits(1000, 0);
+    for_each_index(parallel, 3, hits.size(), [&](std::size_t i) { ++hits[i]; });
+    for (int h : hits) ASSERT_EQ(h, 1);
+  }
+  EXPECT_EQ(max_over_tasks(true, 5, [](int t) { return t == 3 ? 7.0 : 1.0; }), 7.0);
 }
 
 TEST(Parallel, ATaskExceptionReachesTheCallerAfterAllTasks) {

@@ -186,7 +186,7 @@ TEST(PerEntryWeights, SweepConvergesInEveryOrderAndOnThreads) {
           << c.name << " threads " << threads;
       EXPECT_LE(t.iterations, std::ceil(1.15 * one.iterations)) << c.name << " threads " << threads;
       const std::string name = c.name;
-      EXPECT_EQ(t.reordered, name == "shuffled" || (name == "icosphere" && sorpia_test::kRangesOnThreads))
+      EXPECT_EQ(t.reordered, name == "shuffled" || name == "icosphere")
           << name << " threads " << threads;
     }
   }

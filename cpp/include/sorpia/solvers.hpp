@@ -145,10 +145,10 @@ struct SolveOptions {
   /// neighbour in another range in vertex order: Gauss-Seidel in a slightly
   /// different order, so the iterates differ from threads = 1 by the ordering
   /// (tests: same solution to 1e-8, iterations within 15%), and do not depend
-  /// on timing. More threads than cores only slows down. Built without
-  /// OpenMP (CMake SORPIA_OPENMP=OFF), the ranges run one after the other on
-  /// the calling thread: the same ordering, so the same solution to the
-  /// tolerance (bit for bit unless the ranges would have been swept in slabs).
+  /// on timing. More threads than cores only slows down. Where no thread can
+  /// be started (a process or memory limit) or the core's thread pool is busy
+  /// with another solve, the ranges run one after the other on the calling
+  /// thread: the same ordering, so the same result.
   int threads = 1;
   /// Reference path for tests and benchmarks only, not for use: "sor"/"gs"
   /// compute E_k by a separate residual pass after each sweep instead of

@@ -31,8 +31,8 @@ std::size_t tessellation_bytes(std::size_t n_vertices, std::size_t n_faces, int 
 /// without rebuilding them, as the PIA loop changes positions, never topology.
 ///
 /// Threads: evaluate() and get_vertices() may run concurrently (one shared
-/// Bfr factory with a thread-safe cache, OpenMP inside evaluate(): at most one
-/// thread per 64 distinct faces queried); set_vertices() and tessellate() take
+/// Bfr factory with a thread-safe cache, the core's thread pool inside
+/// evaluate(): at most one thread per 64 distinct faces queried); set_vertices() and tessellate() take
 /// exclusive access.
 ///
 /// Parameterisation of face f = (a, b, c) (Bfr's triangle parameterisation):

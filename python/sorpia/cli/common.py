@@ -160,11 +160,11 @@ class Clock:
 
     The CPU clock depends on who does the work. threads == 1: every solve and
     build runs on the calling thread, so time.thread_time() (that thread
-    only): time.process_time() would also count threads that merely spin, as
-    OpenMP workers busy-wait for a while after a parallel region ends.
+    only): time.process_time() would also count other threads of the process
+    (a BLAS's, or the core's pool busy with a surface evaluation).
     threads > 1: the sweep's workers do part of the work, so
-    time.process_time() (every thread, their busy-waiting between sweeps
-    included: CPU the run occupies). cpu_clock(threads) names the one used."""
+    time.process_time() (every thread: CPU the run occupies). cpu_clock(threads)
+    names the one used."""
 
     def __init__(self, threads: int = 1):
         self._cpu = time.thread_time if cpu_clock(threads) == "thread" else time.process_time
