@@ -158,3 +158,30 @@ def test_render_repair_draws_the_repaired_mesh(defect_file, command):
     assert code == 0, err
     assert (src.parent / "fig.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert out.count("repaired") == 6
+
+
+def test_polygon_file_needs_triangulate_then_repairs(tmp_path, monkeypatch, command):
+    """Two quad grids sharing one corner vertex (an open bowtie): refused as polygons without --triangulate;
+    with it, the bowtie is split and every output vertex copies its input vertex bit for bit."""
+    monkeypatch.chdir(tmp_path)
+    v = np.vstack([points(9, 2), points(8, 3)])
+
+    def grid(ids):
+        """The 2x2 quads of a 3x3 grid of vertices ids (row by row), as 1-based OBJ indices."""
+        return [[ids[(r + dr) * 3 + c + dc] + 1 for dr, dc in ((0, 0), (0, 1), (1, 1), (1, 0))]
+                for r in (0, 1) for c in (0, 1)]
+
+    second = [8] + list(range(9, 17))  # vertex 8, the first grid's last corner, is the second grid's first
+    lines = [f"v {x!r} {y!r} {z!r}" for x, y, z in v.tolist()]
+    lines += ["f " + " ".join(map(str, q)) for q in grid(list(range(9))) + grid(second)]
+    (tmp_path / "quads.obj").write_text("\n".join(lines) + "\n")
+    code, _, err = command("repair", "quads.obj", "-o", "out.obj")
+    assert_user_error(code, err)
+    assert "--triangulate" in err
+    code, out, err = command("repair", "quads.obj", "-o", "out.obj", "--triangulate", "--report", "r.json")
+    assert code == 0, err
+    report = json.loads((tmp_path / "r.json").read_text())
+    assert report["report"]["bowtie_vertices"] == [8] and report["vertex_map"][len(v):] == [8]
+    w, f = sorpia.read_mesh("out.obj")
+    assert np.array_equal(w.view(np.uint64), v[report["vertex_map"]].view(np.uint64))
+    assert "bowtie vertices (fans meeting at one vertex): 1 split into one vertex per fan, 1 copy added" in out

@@ -28,6 +28,11 @@ def _listed(noun: str, items, max_listed: int) -> str:
     return f"({noun[len(items) > 1]} {', '.join(names)}{more})"
 
 
+def _copies(per_vertex) -> str:
+    n = sum(per_vertex)
+    return f"{n} {'copy' if n == 1 else 'copies'} added"
+
+
 _FACES, _EDGES, _VERTICES = ("face", "faces"), ("edge", "edges"), ("vertex", "vertices")
 
 
@@ -44,10 +49,10 @@ def describe_changes(report: dict, max_listed: int = 5) -> list[str]:
     if r["nonmanifold_edges"]:
         lines.append(f"non-manifold edges (3 or more faces): {len(r['nonmanifold_edges'])} separated into "
                      f"sheets {_listed(_EDGES, r['nonmanifold_edges'], max_listed)}, their "
-                     f"{len(r['sheet_vertices'])} end vertices split with {sum(r['sheet_copies'])} copies added")
+                     f"{len(r['sheet_vertices'])} end vertices split with {_copies(r['sheet_copies'])}")
     if r["bowtie_vertices"]:
         lines.append(f"bowtie vertices (fans meeting at one vertex): {len(r['bowtie_vertices'])} split into one "
-                     f"vertex per fan, {sum(r['bowtie_copies'])} copies added "
+                     f"vertex per fan, {_copies(r['bowtie_copies'])} "
                      f"{_listed(_VERTICES, r['bowtie_vertices'], max_listed)}")
     if r["flipped_faces"]:
         lines.append(f"inconsistent orientation: {len(r['flipped_faces'])} faces reversed "
