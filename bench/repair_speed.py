@@ -10,10 +10,11 @@ by a triangle hung on one vertex, non-manifold edges made by a third face on an
 edge), repaired, and again without the degenerate faces; each repaired mesh is
 checked to pass sorpia's validation.
 
-Runs alternate between the sides; medians of --repeat runs. Prints a Markdown
-table; --json writes the figures.
+Runs alternate between the sides; medians of --repeat runs. Prints Markdown
+tables and writes them into docs/benchmarks/repair-speed.md (unless
+--no-page); --json writes the figures.
 
-    python bench/repair_speed.py [--vertices 1000000] [--defects 100] [--repeat 5] [--json out.json]
+    python bench/repair_speed.py [--vertices 1000000] [--defects 100] [--repeat 5] [--json out.json] [--no-page]
 """
 
 from __future__ import annotations
@@ -23,7 +24,7 @@ import json
 import os
 import platform
 import statistics
-import subprocess
+import sys
 import time
 
 import numpy as np
@@ -31,6 +32,9 @@ import numpy as np
 import sorpia
 from sorpia import _core
 from sorpia.limit import topology
+
+sys.path.insert(0, os.path.dirname(__file__))
+from _report import commit, write_page  # noqa: E402
 
 
 def inject_defects(v, f, k, seed=0, degenerate=True):
@@ -63,20 +67,13 @@ def alternate(fns, repeat):
     return {name: statistics.median(ts) for name, ts in times.items()}
 
 
-def commit():
-    try:
-        return subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True,
-                              check=True).stdout.strip()
-    except (OSError, subprocess.CalledProcessError):
-        return "unknown"
-
-
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--vertices", type=int, default=1_000_000)
     ap.add_argument("--defects", type=int, default=100, help="defects of each of the five kinds")
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--json")
+    ap.add_argument("--no-page", action="store_true", help="print only; do not write docs/benchmarks/repair-speed.md")
     args = ap.parse_args()
 
     v, f = sorpia.shapes.irregular(args.vertices, 1)
@@ -102,21 +99,21 @@ def main():
     defects = alternate(defects, args.repeat)
 
     machine = f"{platform.machine()}, {platform.processor() or platform.system()}"
-    print(f"sorpia.repair at {len(v):,} vertices, {len(f):,} faces; commit {commit()}; {machine}; "
-          f"median of {args.repeat}, alternated; load average {os.getloadavg()[0]:.1f} at the end\n")
-    print("| clean mesh | seconds | vs validation |")
-    print("|---|---:|---:|")
+    lines = [f"sorpia.repair at {len(v):,} vertices, {len(f):,} faces (sorpia.shapes.irregular); median of "
+             f"{args.repeat}, alternated; load average {os.getloadavg()[0]:.1f} at the end.", "",
+             "| clean mesh | seconds | vs validation |", "|---|---:|---:|"]
     base = clean["validation (sorpia's topology build)"]
     core_base = clean["core: sorpia::Topology"]
     for name, t in clean.items():
         ref = core_base if name.startswith("core") else base
-        print(f"| {name} | {t:.3f} | {t / ref:.2f}x |")
+        lines.append(f"| {name} | {t:.3f} | {t / ref:.2f}x |")
     for label, c in counts.items():
-        print(f"\n{label}: " + ", ".join(f"{k} {n}" for k, n in c.items() if n))
-    print("\n| mesh with defects | seconds |")
-    print("|---|---:|")
-    for name, t in defects.items():
-        print(f"| {name} | {t:.3f} |")
+        lines += ["", f"{label}: " + ", ".join(f"{k} {n}" for k, n in c.items() if n)]
+    lines += ["", "| mesh with defects | seconds |", "|---|---:|"]
+    lines += [f"| {name} | {t:.3f} |" for name, t in defects.items()]
+    print("\n".join(lines))
+    if not args.no_page:
+        write_page("repair-speed", "Speed of `sorpia.repair`", "\n".join(lines), settings=(ap, args))
     if args.json:
         with open(args.json, "w") as fh:
             json.dump({"vertices": len(v), "faces": len(f), "repeat": args.repeat, "commit": commit(),

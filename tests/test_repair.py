@@ -144,13 +144,22 @@ def fit_passes_through_inputs(v, result):
     assert np.abs(limit[used] - np.asarray(v, float)[result.vertex_map[used]]).max() <= 1e-8 * scale
 
 
-def test_fit_of_repaired_defects_passes_through_the_inputs():
+def defect_mesh():
+    """A closed irregular mesh with every kind of defect added: 3 exact and 1
+    reversed duplicate face, a degenerate face, a third face on an edge, two
+    triangles hung on a vertex (bowties), 3 faces reversed. (vertices, faces)."""
     v, f = sorpia.shapes.irregular(400, seed=3)
     v, f = np.asarray(v), np.asarray(f)
     n = len(v)
     v = np.vstack([v, points(6, 1)])
-    bad = np.vstack([f, f[:3], [[f[10, 0], f[10, 1], n]], [[f[20, 0], n + 1, n + 2]], [[f[30, 0], n + 3, n + 4]]])
+    bad = np.vstack([f, f[:3], f[5:6, ::-1], [[f[6, 0], f[6, 0], f[6, 1]]], [[f[10, 0], f[10, 1], n]],
+                     [[f[20, 0], n + 1, n + 2]], [[f[30, 0], n + 3, n + 4]]])
     bad[40:43] = bad[40:43][:, ::-1]
+    return v, bad
+
+
+def test_fit_of_repaired_defects_passes_through_the_inputs():
+    v, bad = defect_mesh()
     r = sorpia.repair(v, bad)
     assert sum(r.report["counts"].values()) > 0
     check_repaired(v, bad, r)

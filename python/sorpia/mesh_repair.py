@@ -20,6 +20,46 @@ def _counts(report: dict) -> dict:
     return {kind: (sum if kind.endswith("_copies") else len)(report[kind]) for kind in REPORT_KINDS}
 
 
+def _listed(noun: str, items, max_listed: int) -> str:
+    """"(faces 3, 7, ... 12 in all)": the first `max_listed` items of a report
+    list; `noun` is (singular, plural)."""
+    names = [f"({x[0]}, {x[1]})" if isinstance(x, (list, tuple)) else str(x) for x in items[:max_listed]]
+    more = f", ... {len(items)} in all" if len(items) > max_listed else ""
+    return f"({noun[len(items) > 1]} {', '.join(names)}{more})"
+
+
+def _copies(per_vertex) -> str:
+    n = sum(per_vertex)
+    return f"{n} {'copy' if n == 1 else 'copies'} added"
+
+
+_FACES, _EDGES, _VERTICES = ("face", "faces"), ("edge", "edges"), ("vertex", "vertices")
+
+
+def describe_changes(report: dict, max_listed: int = 5) -> list[str]:
+    """One line per kind of change in a `repair` report (none for a valid
+    mesh), naming the first `max_listed` input faces, edges or vertices of
+    each; for ``sorpia repair``, ``--repair`` and ``sorpia info``."""
+    r, lines = report, []
+    for kind, what in (("degenerate_faces", "degenerate faces (a repeated vertex)"),
+                       ("duplicate_faces", "duplicate faces"),
+                       ("reversed_duplicate_faces", "reversed duplicate faces")):
+        if r[kind]:
+            lines.append(f"{what}: {len(r[kind])} removed {_listed(_FACES, r[kind], max_listed)}")
+    if r["nonmanifold_edges"]:
+        lines.append(f"non-manifold edges (3 or more faces): {len(r['nonmanifold_edges'])} separated into "
+                     f"sheets {_listed(_EDGES, r['nonmanifold_edges'], max_listed)}, their "
+                     f"{len(r['sheet_vertices'])} end vertices split with {_copies(r['sheet_copies'])}")
+    if r["bowtie_vertices"]:
+        lines.append(f"bowtie vertices (fans meeting at one vertex): {len(r['bowtie_vertices'])} split into one "
+                     f"vertex per fan, {_copies(r['bowtie_copies'])} "
+                     f"{_listed(_VERTICES, r['bowtie_vertices'], max_listed)}")
+    if r["flipped_faces"]:
+        lines.append(f"inconsistent orientation: {len(r['flipped_faces'])} faces reversed "
+                     f"{_listed(_FACES, r['flipped_faces'], max_listed)}")
+    return lines
+
+
 class RepairResult(NamedTuple):
     """What `repair` returns.
 

@@ -127,6 +127,19 @@ def _layout(vertices, n_faces: int, stats, list_extraordinary) -> dict:
     return info
 
 
+def _repair_rows(repair: dict | None) -> list[tuple[str, str]]:
+    """The rows of `format_info` for info["repair"] (``sorpia info``): what
+    --repair changed, would change, or why it cannot repair the mesh."""
+    if repair is None:
+        return []
+    if "refused" in repair:
+        return [("--repair", f"cannot make it valid either: {repair['refused']}")]
+    if not repair["changes"]:
+        return [("--repair", "would change nothing")]
+    label = "repaired" if repair["applied"] else "--repair would fix"
+    return [(label if j == 0 else "", line) for j, line in enumerate(repair["changes"])]
+
+
 def _histogram(counts) -> dict:
     return {v: int(c) for v, c in enumerate(counts) if c}
 
@@ -165,6 +178,7 @@ def format_info(info: dict, name: str | None = None, max_listed: int = 16) -> st
         rows.append(("Loop PIA", "can run" + (f" ({'; '.join(verdict['notes'])})" if verdict["notes"] else "")))
     else:
         rows.append(("Loop PIA", f"cannot run: {verdict['reason']}"))
+    rows += _repair_rows(info.get("repair"))
     width = max(len(k) for k, _ in rows)
     lines = [f"{k:<{width}}  {v}" for k, v in rows]
     shown = (info.get("extraordinary") or [])[:max_listed]

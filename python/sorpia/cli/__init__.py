@@ -3,7 +3,8 @@
 Subcommands, one module each: ``fit`` (control mesh whose Loop limit surface
 interpolates a mesh file), ``compare`` (the paper's Table 1 and Figure 7 for
 one mesh), ``render`` (the paper's Figure 3), ``info`` (mesh statistics, the
-paper's Table 2) and ``demo`` (all of it on a generated sample mesh);
+paper's Table 2), ``repair`` (a mesh made valid, sorpia.repair) and ``demo``
+(all of it on a generated sample mesh);
 ``parser`` holds their options, ``output`` the files they write besides
 meshes, ``progress`` the progress line, ``common`` what they share.
 

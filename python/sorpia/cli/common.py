@@ -8,6 +8,9 @@ import sys
 import time
 import warnings
 from pathlib import Path
+from typing import NamedTuple
+
+import numpy as np
 
 from ..solve import METHODS, THREADED_METHODS, ConvergenceWarning  # ConvergenceWarning: the summary says it
 from . import progress as _progress
@@ -80,10 +83,21 @@ def check_mesh_suffix(opt: str, path) -> None:
                         f"use one of {', '.join(MESH_SUFFIXES)}")
 
 
-def read_input(path, triangulate: bool = False):
-    """Read the input mesh; returns (vertices, faces, seconds, polygons split).
-    A polygon in the file without --triangulate is a UserError that says to
-    pass it."""
+class InputMesh(NamedTuple):
+    """The input mesh of a command, as read_input returns it."""
+
+    vertices: np.ndarray
+    faces: np.ndarray
+    seconds: float  # reading (and triangulating)
+    polygons: int  # polygons split by --triangulate
+    repair: object = None  # sorpia.RepairResult with --repair: vertices and faces are its output
+    repair_seconds: float = 0.0
+
+
+def read_input(path, triangulate: bool = False, repair: bool = False) -> InputMesh:
+    """Read the input mesh of every subcommand: polygons split with
+    `triangulate`, the mesh repaired with `repair` (repair_input). A polygon
+    in the file without --triangulate is a UserError that says to pass it."""
     from .. import MeshFileError
     from ..io import read_mesh_counting
 
@@ -99,7 +113,38 @@ def read_input(path, triangulate: bool = False):
             raise
         raise PolygonError(f"{_polygon_message(exc)}; pass --triangulate to split each polygon into a fan of "
                            "triangles from its first vertex") from None
-    return vertices, faces, time.perf_counter() - t0, polygons
+    seconds = time.perf_counter() - t0
+    if not repair:
+        return InputMesh(vertices, faces, seconds, polygons)
+    t0 = time.perf_counter()
+    result = repair_input(vertices, faces, path)
+    return InputMesh(result.vertices, result.faces, seconds, polygons, result, time.perf_counter() - t0)
+
+
+def repair_input(vertices, faces, source):
+    """sorpia.repair of a command's input; a mesh it refuses (a Moebius strip)
+    is a UserError naming the file `source`."""
+    from .. import MeshError, repair
+
+    try:
+        return repair(vertices, faces)
+    except MeshError as exc:
+        raise UserError(f"{source}: cannot repair this mesh: {exc}") from None
+
+
+def repair_json(result) -> dict:
+    """What a command's JSON report holds of a repair: the report (every
+    change, with input indices), the vertex map (for every output vertex, the
+    input vertex it copies) and the face map (for every output face, the input
+    face it comes from; with --triangulate, a face of the triangulation)."""
+    return {"report": result.report, "vertex_map": result.vertex_map, "face_map": result.face_map}
+
+
+def repair_lines(result) -> list[str]:
+    """The repair's summary: one line per kind of change, or one saying there was none."""
+    from ..mesh_repair import describe_changes
+
+    return describe_changes(result.report) or ["nothing to repair: the mesh is valid"]
 
 
 def _is_polygon_error(exc) -> bool:

@@ -14,7 +14,7 @@ from .. import __version__
 from .._validate import DEFAULT_BOUNDARY
 from .common import (DISPLAY_ORDER, EXIT_NOT_CONVERGED, EXIT_OK, build_interpolator, check_paths,
                      check_solver_options, cpu_clock, method_label, mesh_line, omega_text, read_input,
-                     require_plotting, result_fields, run_solver, threads_for)
+                     repair_json, repair_lines, require_plotting, result_fields, run_solver, threads_for)
 from .output import save_figure, write_json, write_text
 from .progress import Progress
 
@@ -40,7 +40,7 @@ def iterations_to_reach(errors, tolerances=TABLE_TOLERANCES) -> list:
 
 def run_compare(input_path, *, methods=DISPLAY_ORDER, tol=1e-10, max_iter=1000, boundary=DEFAULT_BOUNDARY,
                 table=None, csv_path=None, plot=None, json_path=None, quiet=False, force=False,
-                triangulate=False, threads=1, out=None) -> tuple[int, dict]:
+                triangulate=False, threads=1, repair=False, out=None) -> tuple[int, dict]:
     """`sorpia compare`: every method to the same tolerance, on one
     sorpia.Interpolator (topology, limit operator and spectral estimates built
     once and shared); returns (exit code, data). `threads` applies to sor/gs."""
@@ -57,7 +57,8 @@ def run_compare(input_path, *, methods=DISPLAY_ORDER, tol=1e-10, max_iter=1000, 
     rows = []
     with Progress(enabled=not quiet) as progress:
         progress.status(f"reading {input_path}")
-        V0, F, read_seconds, _ = read_input(input_path, triangulate)
+        mesh = read_input(input_path, triangulate, repair)
+        V0, F, read_seconds = mesh.vertices, mesh.faces, mesh.seconds
         interp, build = build_interpolator(V0, F, boundary=boundary, progress=progress, source=input_path)
         progress.status("mesh statistics")
         stats = topology_info(V0, interp.topology)
@@ -84,6 +85,7 @@ def run_compare(input_path, *, methods=DISPLAY_ORDER, tol=1e-10, max_iter=1000, 
         "sorpia_version": __version__,
         "command": "compare",
         "input": str(input_path),
+        "repair": repair_json(mesh.repair) if repair else None,
         "mesh": stats,
         "tol": tol,
         "max_iter": max_iter,
@@ -111,6 +113,8 @@ def run_compare(input_path, *, methods=DISPLAY_ORDER, tol=1e-10, max_iter=1000, 
                                        f"(paper Figure 7)"), plot)
     if not quiet:
         print(f"sorpia compare: {input_path}: {mesh_line(stats)}", file=out)
+        for line in repair_lines(mesh.repair) if repair else ():
+            print(f"  repaired: {line}", file=out)
         print(markdown, file=out)
         print(_setup_line(data), file=out)
         failed = [r["label"] for r in rows if not r["converged"]]

@@ -11,14 +11,15 @@ import numpy as np
 from .. import __version__
 from .._validate import DEFAULT_BOUNDARY
 from .common import (EXIT_NOT_CONVERGED, EXIT_OK, UserError, check_mesh_suffix, check_paths, check_solver_options,
-                     cpu_clock, fit_once, fmt_seconds, method_label, mesh_line, read_input, result_fields)
+                     cpu_clock, fit_once, fmt_seconds, method_label, mesh_line, read_input, repair_json, repair_lines,
+                     result_fields)
 from .output import write_json
 from .progress import Progress
 
 
 def run_fit(input_path, output, *, method="sor", omega="auto", tol=1e-10, max_iter=1000,
             boundary=DEFAULT_BOUNDARY, surface=None, level=3, report=None, quiet=False, force=False,
-            triangulate=False, binary=False, threads=1, out=None) -> tuple[int, dict]:
+            triangulate=False, binary=False, threads=1, repair=False, out=None) -> tuple[int, dict]:
     """`sorpia fit`: returns (exit code, report dict)."""
     from .. import _core, write_mesh
     from ..meshinfo import topology_info
@@ -36,7 +37,10 @@ def run_fit(input_path, output, *, method="sor", omega="auto", tol=1e-10, max_it
     timings: dict[str, float] = {}
     with Progress(enabled=not quiet) as progress:
         progress.status(f"reading {input_path}")
-        V0, F, timings["read"], _ = read_input(input_path, triangulate)
+        mesh = read_input(input_path, triangulate, repair)
+        V0, F, timings["read"] = mesh.vertices, mesh.faces, mesh.seconds
+        if repair:
+            timings["repair"] = mesh.repair_seconds
         if surface is not None:
             _check_surface_fits(len(V0), len(F), level)
         timings["statistics"] = 0.0  # reported before the fit, measured after the topology is built
@@ -81,6 +85,7 @@ def run_fit(input_path, output, *, method="sor", omega="auto", tol=1e-10, max_it
         "command": "fit",
         "input": str(input_path),
         "triangulated": triangulate,
+        "repair": repair_json(mesh.repair) if repair else None,
         "output": str(output),
         "surface": surface_stats,
         "report": None if report is None else str(report),
@@ -106,7 +111,7 @@ def run_fit(input_path, output, *, method="sor", omega="auto", tol=1e-10, max_it
     if report is not None:
         write_json(report, data)
     if not quiet:
-        print(fit_summary(data), file=out)
+        print(fit_summary(data, repair_lines(mesh.repair) if repair else ()), file=out)
     return (EXIT_OK if res.converged else EXIT_NOT_CONVERGED), data
 
 
@@ -129,7 +134,8 @@ def _binary_for(path, binary: bool) -> bool:
     return binary and Path(path).suffix.lower() in (".ply", ".stl")
 
 
-def fit_summary(d: dict) -> str:
+def fit_summary(d: dict, repaired=()) -> str:
+    """The summary printed by fit; `repaired`: a line per kind of change --repair made."""
     label = method_label(d["method"])
     omega = d["omega"]
     if d["method"] == "sor" and omega is not None:
@@ -152,6 +158,7 @@ def fit_summary(d: dict) -> str:
         [d["report"]] if d["report"] else [])
     lines = [
         f"sorpia fit: {d['input']} -> {d['output']}",
+        *(f"  {'repaired' if j == 0 else '':<12}{line}" for j, line in enumerate(repaired)),
         f"  mesh        {mesh_line(d['mesh'])}",
         f"  method      {label}",
         f"  result      {state}",

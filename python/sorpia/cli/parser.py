@@ -13,6 +13,7 @@ from .demo import run_demo
 from .fit import run_fit
 from .info import run_info
 from .render import run_render
+from .repair import run_repair
 
 
 def _omega_arg(text: str):
@@ -112,6 +113,16 @@ def build_parser() -> argparse.ArgumentParser:
                        help="split faces of more than 3 vertices into fans of triangles from their first vertex "
                        "(without it such a file is refused)")
 
+    def mesh_output(p, what):
+        p.add_argument("-o", "--output", metavar="OUT", required=True,
+                       help=f"{what} to write (.obj, .off, .ply or .stl; .stl stores float32 only)")
+
+    def repair_flag(p, effect):
+        p.add_argument("--repair", action="store_true",
+                       help="repair the mesh first, as 'sorpia repair' does (duplicate and degenerate faces "
+                       "removed, non-manifold edges and bowtie vertices split by copying vertices, orientation "
+                       f"made consistent; no vertex moves); {effect}")
+
     def quiet_flag(p):
         p.add_argument("--quiet", "-q", action="store_true", help="print nothing but errors and warnings")
 
@@ -144,8 +155,7 @@ def build_parser() -> argparse.ArgumentParser:
                   "through the given vertices V0, write the control mesh (same faces, same vertex order) and, if "
                   "asked, the tessellated limit surface and a JSON report. Prints a short summary; long runs "
                   "show progress on stderr.")
-    fit.add_argument("-o", "--output", metavar="OUT", required=True,
-                     help="control mesh to write (.obj, .off, .ply or .stl; .stl stores float32 only)")
+    mesh_output(fit, "control mesh")
     solver_options(fit)
     fit.add_argument("--omega", type=_omega_arg, default="auto",
                      help="relaxation of --method sor: auto (sorpia's measured rule), young (paper Remark 1, "
@@ -162,11 +172,13 @@ def build_parser() -> argparse.ArgumentParser:
     fit.add_argument("--binary", action="store_true", help="write .ply and .stl outputs in binary (faster, "
                      "smaller; PLY keeps float64 either way)")
     triangulate_flag(fit)
+    repair_flag(fit, "the control mesh is that of the repaired mesh (its extra vertices copy input vertices) and "
+                "--report holds the repair report and the vertex map")
     output_flags(fit)
     fit.set_defaults(func=lambda a: run_fit(
         a.input, a.output, method=a.method, omega=a.omega, tol=a.tol, max_iter=a.max_iter, boundary=a.boundary,
         surface=a.surface, level=a.level, report=a.report, quiet=a.quiet, force=a.force, triangulate=a.triangulate,
-        binary=a.binary, threads=a.threads)[0])
+        binary=a.binary, threads=a.threads, repair=a.repair)[0])
 
     comp = command("compare", "run several methods to one tolerance: the paper's Table 1 and Figure 7",
                    "Run each method on the mesh to the same tolerance and print the paper's Table 1 layout for "
@@ -183,11 +195,12 @@ def build_parser() -> argparse.ArgumentParser:
     comp.add_argument("--json", metavar="J.json", help="write every figure (E_k/E_0 per iteration, timings) as JSON")
     threads_option(comp, "applied to sor and gs only (the other methods always run on one thread)")
     triangulate_flag(comp)
+    repair_flag(comp, "--json holds the repair report and the vertex map")
     output_flags(comp)
     comp.set_defaults(func=lambda a: run_compare(
         a.input, methods=a.methods, tol=a.tol, max_iter=a.max_iter, boundary=a.boundary, table=a.table,
         csv_path=a.csv, plot=a.plot, json_path=a.json, quiet=a.quiet, force=a.force, triangulate=a.triangulate,
-        threads=a.threads)[0])
+        threads=a.threads, repair=a.repair)[0])
 
     ren = command("render", "draw the paper's Figure 3 for a mesh (PNG)",
                   "Fit the mesh with SOR-PIA and draw four shaded panels, the same camera in each: (a) the given "
@@ -208,23 +221,43 @@ def build_parser() -> argparse.ArgumentParser:
                      help="most triangles drawn per panel")
     threads_option(ren, "in the SOR-PIA fit")
     triangulate_flag(ren)
+    repair_flag(ren, "the panels show the repaired mesh")
     output_flags(ren)
     ren.set_defaults(func=lambda a: run_render(
         a.input, a.output, level=a.level, tol=a.tol, max_iter=a.max_iter, boundary=a.boundary, size=a.size,
         elev=a.elev, azim=a.azim, face_budget=a.face_budget, quiet=a.quiet, force=a.force,
-        triangulate=a.triangulate, up=a.up, threads=a.threads)[0])
+        triangulate=a.triangulate, up=a.up, threads=a.threads, repair=a.repair)[0])
 
     inf = command("info", "mesh statistics (the paper's Table 2) and whether Loop PIA can run on it",
                   "Print vertices, faces, edges, boundary loops, Euler characteristic, genus, components, "
                   "unreferenced vertices, the valence histogram and the extraordinary vertices (valence other "
                   "than 6 inside, 4 on the boundary; the paper's Table 2), and whether Loop PIA can run on the "
-                  "mesh and if not why. Exit code 0 whenever the file can be read.")
+                  "mesh and if not why (and what --repair would change). Exit code 0 whenever the file can be "
+                  "read (and, with --repair, repaired).")
     inf.add_argument("--json", action="store_true", help="print JSON (every extraordinary vertex listed) instead")
     inf.add_argument("--boundary", choices=BOUNDARY_RULES, default=DEFAULT_BOUNDARY,
                      help="boundary rule the verdict refers to")
     triangulate_flag(inf)
+    repair_flag(inf, "the statistics and the verdict are of the repaired mesh (without it, a refused mesh is "
+                "told what --repair would change)")
     inf.set_defaults(func=lambda a: run_info(a.input, as_json=a.json, boundary=a.boundary,
-                                             triangulate=a.triangulate)[0])
+                                             triangulate=a.triangulate, repair=a.repair)[0])
+
+    rep = command("repair", "make a mesh valid for Loop interpolation without moving a vertex",
+                  "Read a triangle mesh and write it repaired (sorpia.repair): faces with a repeated vertex and "
+                  "duplicate faces (either orientation) removed; at an edge of three or more faces the faces "
+                  "paired into sheets and the edge's vertices copied per sheet; bowtie vertices split into one "
+                  "vertex per fan; each connected part oriented consistently. No vertex moves; copies are "
+                  "appended after the input vertices. Prints one line per kind of change; a valid mesh is "
+                  "written unchanged. A surface with no consistent orientation (a Moebius strip) is refused.")
+    mesh_output(rep, "repaired mesh")
+    rep.add_argument("--report", metavar="REPORT.json",
+                     help="write a JSON report: every change with its input faces, edges or vertices, the "
+                     "counts, and vertex_map (for every output vertex, the input vertex it copies)")
+    triangulate_flag(rep)
+    output_flags(rep)
+    rep.set_defaults(func=lambda a: run_repair(a.input, a.output, report=a.report, triangulate=a.triangulate,
+                                               quiet=a.quiet, force=a.force)[0])
 
     demo = command("demo", "fit, compare and render on a built-in sample mesh",
                    "Generate a small sample mesh (a wavy torus with random edge flips: valences 3 to 12, visible "

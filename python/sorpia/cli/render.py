@@ -11,14 +11,14 @@ import numpy as np
 from .._validate import DEFAULT_BOUNDARY
 from ..plotting import FACE_BUDGET  # plotting imports matplotlib only when drawing
 from .common import (EXIT_NOT_CONVERGED, EXIT_OK, UserError, check_paths, check_solver_options, fit_once,
-                     fmt_seconds, omega_text, read_input, require_plotting)
+                     fmt_seconds, omega_text, read_input, repair_lines, require_plotting)
 from .output import save_figure
 from .progress import Progress
 
 
 def run_render(input_path, output, *, level=3, tol=1e-10, max_iter=1000, boundary=DEFAULT_BOUNDARY,
                size=(1200, 1000), elev=30.0, azim=-60.0, face_budget=FACE_BUDGET, quiet=False, force=False,
-               triangulate=False, up="z", threads=1, out=None) -> tuple[int, dict]:
+               triangulate=False, up="z", threads=1, repair=False, out=None) -> tuple[int, dict]:
     """`sorpia render`: the paper's Figure 3 for a mesh file."""
     from .. import LoopSurface
     from ..plotting import interpolation_figure, level_for_budget
@@ -33,7 +33,10 @@ def run_render(input_path, output, *, level=3, tol=1e-10, max_iter=1000, boundar
     timings = {}
     with Progress(enabled=not quiet) as progress:
         progress.status(f"reading {input_path}")
-        V0, F, timings["read"], _ = read_input(input_path, triangulate)
+        mesh = read_input(input_path, triangulate, repair)
+        V0, F, timings["read"] = mesh.vertices, mesh.faces, mesh.seconds
+        if repair:
+            timings["repair"] = mesh.repair_seconds
         _, res, timings["fit"], _ = fit_once(V0, F, method="sor", omega="auto", tol=tol, max_iter=max_iter,
                                              boundary=boundary, threads=threads, progress=progress,
                                              source=input_path)
@@ -61,5 +64,7 @@ def run_render(input_path, output, *, level=3, tol=1e-10, max_iter=1000, boundar
         state = "" if res.converged else f"; NOT converged to tol {tol:g} (exit code 1)"
         print(f"sorpia render: {input_path} -> {output} ({size[0]}x{size[1]} px, limit surfaces at {lvl}; "
               f"SOR-PIA omega {omega_text(res.omega)}, {res.iterations} iterations{state})", file=out)
+        for line in repair_lines(mesh.repair) if repair else ():
+            print(f"  repaired    {line}", file=out)
         print("  seconds     " + ", ".join(f"{k} {fmt_seconds(v)}" for k, v in timings.items()), file=out)
     return (EXIT_OK if res.converged else EXIT_NOT_CONVERGED), data

@@ -1,0 +1,34 @@
+"""``sorpia repair``: a mesh file made valid for Loop interpolation (sorpia.repair), written to another file."""
+
+from __future__ import annotations
+
+import sys
+
+from .. import __version__
+from .common import EXIT_OK, check_mesh_suffix, check_paths, read_input, repair_json, repair_lines
+from .output import write_json
+
+
+def run_repair(input_path, output, *, report=None, triangulate=False, quiet=False, force=False,
+               out=None) -> tuple[int, dict]:
+    """`sorpia repair`: returns (exit code, report dict). A valid mesh is
+    written unchanged; one repair refuses (a Moebius strip) is a UserError."""
+    from .. import write_mesh
+
+    out = out if out is not None else sys.stdout
+    check_mesh_suffix("-o", output)
+    check_paths([input_path], {"-o": output, "--report": report}, force)
+    mesh = read_input(input_path, triangulate, repair=True)
+    write_mesh(output, mesh.vertices, mesh.faces)
+    data = {"sorpia_version": __version__, "command": "repair", "input": str(input_path),
+            "triangulated": triangulate, "output": str(output), "vertices": len(mesh.vertices),
+            "faces": len(mesh.faces), **repair_json(mesh.repair)}
+    if report is not None:
+        write_json(report, data)
+    if not quiet:
+        changed = any(mesh.repair.report["counts"].values())
+        print(f"sorpia repair: {input_path} -> {output} ({len(mesh.vertices)} vertices, {len(mesh.faces)} faces"
+              + ("" if changed else "; the mesh is valid: written unchanged") + ")", file=out)
+        for line in repair_lines(mesh.repair) if changed else []:
+            print(f"  {line}", file=out)
+    return EXIT_OK, data
