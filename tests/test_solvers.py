@@ -308,3 +308,21 @@ def test_result_round_trips_through_pickle_and_is_read_only():
     assert "control_vertices=<array (162, 3)>" in repr(res)
     with pytest.raises(AttributeError):
         res.iterations = 3
+
+
+@pytest.mark.parametrize("method", ["sor", "cg", "pia"])
+@pytest.mark.parametrize("scale", [1e-300, 1e-318, 5e-324])
+def test_subnormal_input_is_reported_consistently(method, scale):
+    """Tiny input is solved on V0 scaled by a power of two, and E_0 reported at
+    V0's own scale. Where that E_0 underflows to 0 (the smallest subnormals),
+    V0 interpolates as far as doubles can tell: errors == [0.0], no iterations,
+    V0 returned, as the docs promise for E_0 = 0; otherwise E_0 > 0 and the
+    solve reaches tol."""
+    v, f = sorpia.shapes.icosphere(2)
+    res = sorpia.interpolate(v * scale, f, method=method)
+    assert res.converged
+    if res.initial_error == 0.0:
+        assert list(res.errors) == [0.0] and res.iterations == 0
+        assert np.array_equal(res.control_vertices, v * scale)
+    else:
+        assert res.iterations > 0 and res.errors[-1] < 1e-10

@@ -260,6 +260,16 @@ int scale_exponent(const double* v0, std::size_t n) {
   return std::abs(exponent) <= 200 ? 0 : exponent;
 }
 
+// Whether V0, scaled up by 2^-exponent for the solve, has a residual that is 0
+// at V0's own scale: E_0 = max_i ||v_i^0 - (B V0)_i|| underflows (subnormal
+// input), so V0 interpolates as far as doubles can tell, and the solve returns
+// it as the answer with errors [0.0], as for E_0 = 0 exactly.
+bool nothing_to_solve(const LimitOperator& op, const double* v0, int exponent) {
+  std::vector<double> scaled(v0, v0 + 3 * op.n);
+  detail::scale_pow2(scaled.data(), scaled.size(), -exponent);
+  return std::ldexp(detail::residual(op, scaled.data(), scaled.data(), nullptr), exponent) == 0.0;
+}
+
 // The iteration of a method that iterates on res.control_vertices (all but
 // the sweep), for V0 / 2^exponent.
 void run_iteration(const LimitOperator& op, const double* v0, int exponent, const SolveOptions& opt,
@@ -306,7 +316,12 @@ SolveResult solve(const LimitOperator& op, const double* v0, const SolveOptions&
 
   const auto t0 = clock::now();
   const int exponent = scale_exponent(v0, op.n);
-  if (opt.method == Method::Gs || opt.method == Method::Sor) {
+  if (exponent < 0 && nothing_to_solve(op, v0, exponent)) {
+    res.control_vertices.assign(v0, v0 + 3 * op.n);
+    res.errors.assign(1, 0.0);
+    res.stop_reason = StopReason::Converged;
+    if (opt.callback) opt.callback(0, 0.0);
+  } else if (opt.method == Method::Gs || opt.method == Method::Sor) {
     detail::solve_sor(op, v0, exponent, opt, res.omega, res);
   } else {
     run_iteration(op, v0, exponent, opt, res);
