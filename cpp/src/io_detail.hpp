@@ -31,9 +31,9 @@ std::string printable_path(const std::string& path);
 // Throws FileError when the file is missing, a directory, unreadable or empty,
 // or when its start cannot begin a file of `format` (checked on the first
 // 64 kB, before the rest is read: a device or a huge file of another kind
-// fails at once instead of being read whole). A read interrupted by a signal
-// calls `on_interrupt` (when given), then goes on (read_mesh's contract).
-FileData load_file(const std::string& path, MeshFormat format, const InterruptHook& on_interrupt = {});
+// fails at once instead of being read whole). Polls for an interrupt as
+// read_mesh's contract says.
+FileData load_file(const std::string& path, MeshFormat format);
 
 // Where in a file something is: "line 12", "vertex 7", ...
 struct Where {
