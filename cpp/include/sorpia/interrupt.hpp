@@ -27,8 +27,11 @@ class Interrupted : public std::runtime_error {
 using InterruptChecker = std::function<bool()>;
 
 /// The least time between two questions to the checker: a poll in between is
-/// a clock read.
-constexpr std::chrono::milliseconds kInterruptPollInterval{10};
+/// a clock read. Long enough that a checker which must wait for a lock (the
+/// Python binding's takes the GIL, which another Python thread may hold for
+/// its switch interval) costs the call a few percent at most; short enough
+/// that a stop comes well within a second.
+constexpr std::chrono::milliseconds kInterruptPollInterval{50};
 
 /// Installs `checker` on the calling thread while the scope lives (an empty
 /// one installs none); the checker it replaces comes back at its end.
