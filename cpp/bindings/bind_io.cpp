@@ -12,16 +12,12 @@ void bind_io(py::module_& m) {
       [](const std::string& path, bool triangulate) {
         sorpia::TriMesh mesh;
         std::size_t polygons = 0;
-        // A read that waits (a pipe, a device) and is interrupted runs
+        // A read interrupted by a signal (waiting on a pipe, a device) runs
         // Python's signal handlers: KeyboardInterrupt, or whatever a handler
         // raises, ends the read; a handler that returns lets it go on.
-        const auto on_interrupt = [] {
-          py::gil_scoped_acquire acquire;
-          if (PyErr_CheckSignals() != 0) throw py::error_already_set();
-        };
         {
-          py::gil_scoped_release release;
-          mesh = sorpia::read_mesh(path, triangulate, &polygons, on_interrupt);
+          LongCall call;
+          mesh = sorpia::read_mesh(path, triangulate, &polygons);
         }
         // (vertices, faces, polygons split): sorpia.read_mesh returns the first two.
         return py::make_tuple(to_numpy(std::move(mesh.vertices), 3), to_numpy(std::move(mesh.faces), 3), polygons);

@@ -249,22 +249,26 @@ void bind_solvers(py::module_& m) {
           },
           "x"_a.noconvert(), "B x for (n, 3) x.")
       .def("lambda_min", [](OperatorState& s) { return sorpia::estimate_lambda_min(s.op, s.cache); },
-           py::call_guard<py::gil_scoped_release>())
+           py::call_guard<LongCall>())
       .def("jacobi_rho", [](OperatorState& s) { return sorpia::estimate_jacobi_rho(s.op, s.cache); },
-           py::call_guard<py::gil_scoped_release>())
+           py::call_guard<LongCall>())
       .def("hermitian_extremes",
            [](OperatorState& s) {
              // The pair itself: reading s.cache.hermitian_max as a second argument
              // could happen before the estimate fills it (unsequenced).
-             const auto [lo, hi] = sorpia::estimate_hermitian_extremes(s.op, s.cache);
-             return py::make_tuple(lo, hi);
+             std::pair<double, double> ends;
+             {
+               LongCall call;
+               ends = sorpia::estimate_hermitian_extremes(s.op, s.cache);
+             }
+             return py::make_tuple(ends.first, ends.second);
            })
       .def(
           "solve",
           [](OperatorState& s, const Vertices& v0, sorpia::SolveOptions opt, const py::object& callback) {
             check_shape(v0, 3, "vertices");
             check_rows(v0, s.op.n, "vertices", "the mesh");
-            // No callback: the core never leaves C++ during the iteration.
+            // The callback runs with the GIL; what it raises (KeyboardInterrupt too) ends the solve.
             if (!callback.is_none())
               opt.callback = [callback](int k, double e) {
                 py::gil_scoped_acquire acquire;
@@ -272,7 +276,7 @@ void bind_solvers(py::module_& m) {
               };
             sorpia::SolveResult r;
             {
-              py::gil_scoped_release release;
+              LongCall call;
               r = sorpia::solve(s.op, v0.data(), opt, &s.cache);
             }
             return r;

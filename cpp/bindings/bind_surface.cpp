@@ -52,7 +52,7 @@ void bind_surface(py::module_& m) {
              const double* t = uv.data();
              if (!derivatives) {
                {
-                 py::gil_scoped_release release;
+                 LongCall call;
                  s.evaluate(f, t, k, pp, nullptr, nullptr, nullptr);
                }
                return py::object(p);
@@ -60,7 +60,7 @@ void bind_surface(py::module_& m) {
              Vertices du(shape), dv(shape), nrm(shape);
              double *a = du.mutable_data(), *b = dv.mutable_data(), *c = nrm.mutable_data();
              {
-               py::gil_scoped_release release;
+               LongCall call;
                s.evaluate(f, t, k, pp, a, b, c);
              }
              return py::object(py::make_tuple(p, du, dv, nrm));
@@ -70,7 +70,7 @@ void bind_surface(py::module_& m) {
            [](sorpia::LoopSurface& s, int level) {
              sorpia::TriMesh t;
              {
-               py::gil_scoped_release release;
+               LongCall call;
                t = s.tessellate(level);
              }
              return mesh_tuple(std::move(t));

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "sorpia/errors.hpp"
+#include "sorpia/interrupt.hpp"
 #include "sorpia/limit.hpp"
 #include "sorpia/shapes.hpp"
 #include "sorpia/topology.hpp"
@@ -34,6 +35,19 @@ inline void check_rows(const py::array& a, std::size_t n, const char* name, cons
     throw sorpia::ParameterError(std::string(name) + " has " + std::to_string(a.shape(0)) + " rows but " + owner +
                                  " has " + std::to_string(n) + " vertices");
 }
+
+// The interrupt checker of a long call (sorpia/interrupt.hpp): runs Python's
+// signal handlers, with the GIL; true when one raised (KeyboardInterrupt),
+// its exception left set for the module's translation of sorpia::Interrupted.
+// Empty off the main thread, where Python runs no handlers.
+sorpia::InterruptChecker python_signal_checker();
+
+// A long call into the core: the GIL released and python_signal_checker
+// installed while it lives (as a local, or a py::call_guard).
+class LongCall {
+  sorpia::InterruptScope scope_{python_signal_checker()};
+  py::gil_scoped_release release_;
+};
 
 template <class T>
 std::vector<py::ssize_t> numpy_shape(const std::vector<T>& v, py::ssize_t cols) {

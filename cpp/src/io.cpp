@@ -1,5 +1,6 @@
 // Mesh files: dispatch by extension, loading, atomic writing, shared checks.
 #include "sorpia/io.hpp"
+#include "sorpia/interrupt.hpp"
 
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -106,7 +107,7 @@ void check_start(const FileData& f, MeshFormat format) {
 
 }  // namespace
 
-FileData load_file(const std::string& path, MeshFormat format, const InterruptHook& on_interrupt) {
+FileData load_file(const std::string& path, MeshFormat format) {
   FileData f{path, {}};
   struct stat st {};
   if (::stat(path.c_str(), &st) != 0) fail(f, "cannot open the file: " + errno_text(errno));
@@ -119,6 +120,7 @@ FileData load_file(const std::string& path, MeshFormat format, const InterruptHo
   // read that finds the end then has room, instead of doubling (and
   // zero-filling) a buffer the file already fills.
   constexpr std::size_t kSniffed = 1 << 16;
+  constexpr std::size_t kChunk = std::size_t{1} << 24;
   const std::size_t capacity = S_ISREG(st.st_mode) ? static_cast<std::size_t>(st.st_size) + 1 : 0;
   f.bytes.resize(kSniffed);  // the first read fills at most the part check_start looks at
   std::size_t used = 0;
@@ -131,17 +133,19 @@ FileData load_file(const std::string& path, MeshFormat format, const InterruptHo
       }
       f.bytes.resize(std::max(capacity, 2 * f.bytes.size()));
     }
-    const ssize_t r = ::read(fd, f.bytes.data() + used, f.bytes.size() - used);
+    // In chunks of at most kChunk bytes, polling for an interrupt between them.
+    const ssize_t r = ::read(fd, f.bytes.data() + used, std::min(kChunk, f.bytes.size() - used));
     if (r < 0) {
-      // A signal, on a pipe or a device: the caller's hook says whether to stop.
+      // A signal, on a pipe or a device: the interrupt checker says whether to stop.
       if (errno == EINTR) {
-        if (on_interrupt) on_interrupt();
+        check_interrupt_now();
         continue;
       }
       fail(f, "cannot read the file: " + errno_text(errno));
     }
     if (r == 0) break;
     used += static_cast<std::size_t>(r);
+    poll_interrupt();
   }
   f.bytes.resize(used);
   if (used == 0) fail(f, "the file is empty");
@@ -396,11 +400,11 @@ MeshFormat mesh_format(const std::string& path) {
                   ": use .obj, .off, .ply or .stl");
 }
 
-TriMesh read_mesh(const std::string& path, bool triangulate, std::size_t* polygons, const InterruptHook& on_interrupt) {
+TriMesh read_mesh(const std::string& path, bool triangulate, std::size_t* polygons) {
   const MeshFormat format = mesh_format(path);
   detail::io::Polygons p;
   p.triangulate = triangulate;
-  TriMesh mesh = detail::io::parse_mesh(detail::io::load_file(path, format, on_interrupt), format, p);
+  TriMesh mesh = detail::io::parse_mesh(detail::io::load_file(path, format), format, p);
   if (polygons) *polygons = p.split;
   return mesh;
 }

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "sorpia/errors.hpp"
+#include "sorpia/interrupt.hpp"
 #include "sorpia/io.hpp"
 #include "sorpia/shapes.hpp"
 
@@ -31,9 +32,9 @@ std::string printable_path(const std::string& path);
 // Throws FileError when the file is missing, a directory, unreadable or empty,
 // or when its start cannot begin a file of `format` (checked on the first
 // 64 kB, before the rest is read: a device or a huge file of another kind
-// fails at once instead of being read whole). A read interrupted by a signal
-// calls `on_interrupt` (when given), then goes on (read_mesh's contract).
-FileData load_file(const std::string& path, MeshFormat format, const InterruptHook& on_interrupt = {});
+// fails at once instead of being read whole). Polls for an interrupt as
+// read_mesh's contract says.
+FileData load_file(const std::string& path, MeshFormat format);
 
 // Where in a file something is: "line 12", "vertex 7", ...
 struct Where {
@@ -74,9 +75,13 @@ inline const char* text_begin(const FileData& f) {
   return f.bytes.compare(0, 3, "\xEF\xBB\xBF") == 0 ? p + 3 : p;
 }
 
+// The parsers poll for an interrupt (sorpia/interrupt.hpp) once per this many
+// lines or binary records.
+constexpr std::size_t kRecordsPerPoll = std::size_t{1} << 16;
+
 // Lines of a text buffer, without their "\n" or "\r\n"; numbered from 1. A
 // buffer with no "\n" at all but a "\r" has classic Mac line ends: "\r" ends
-// its lines.
+// its lines. Polls for an interrupt every kRecordsPerPoll lines.
 class LineReader {
  public:
   LineReader(const char* begin, const char* end)
@@ -94,7 +99,7 @@ class LineReader {
     if (q > p_ && q[-1] == '\r') --q;
     line = std::string_view(p_, static_cast<std::size_t>(q - p_));
     p_ = nl ? nl + 1 : end_;
-    ++number_;
+    if (++number_ % kRecordsPerPoll == 0) poll_interrupt();
     return true;
   }
   std::size_t number() const { return number_; }

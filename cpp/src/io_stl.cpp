@@ -55,6 +55,7 @@ TriMesh read_binary(const FileData& f, std::size_t count) {
   const char* p = f.bytes.data() + 84;
   // A binary facet has three corners by layout: no polygons, straight to the faces.
   for (std::size_t t = 0; t < count; ++t, p += 50) {
+    if (t % kRecordsPerPoll == 0) poll_interrupt();
     for (int c = 0; c < 3; ++c) {
       float q[3];
       std::memcpy(q, p + 12 + 12 * c, 12);  // after the normal

@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "sorpia/interrupt.hpp"
 #include "sorpia/solvers.hpp"
 
 namespace sorpia {
@@ -153,8 +154,10 @@ class Monitor {
   // The rounding level of E_k, 64 eps max_i ||v_i^0||: no method gets below it.
   double floor() const { return floor_; }
 
-  // E_k for the next k; returns true to stop.
+  // E_k for the next k; returns true to stop. Polls for an interrupt first
+  // (once per iteration, on the calling thread, between sweeps).
   bool record(double e) {
+    poll_interrupt();
     const double rel = e / e0_;
     const int k = static_cast<int>(res_.errors.size());
     res_.errors.push_back(rel);

@@ -2,6 +2,8 @@
 // HSS's alpha) on one scalar field (a third of the work of a vertex product):
 // Lanczos for the extreme eigenvalues of B and of H, which are self-adjoint
 // in a weighted inner product; the power method for the Jacobi radius.
+// Both poll for an interrupt once per product: an interrupted estimate leaves
+// its cache entry unset.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -101,6 +103,7 @@ std::pair<double, double> lanczos_extremes(std::size_t n, ApplyA apply_a, const 
   constexpr int min_products = 40;
   int calm = 0;
   for (int k = 0; k < max_products; ++k) {
+    poll_interrupt();
     apply_a(u.data(), au.data());
     double uau = 0.0;
     for (std::size_t i = 0; i < n; ++i) uau += w[i] * u[i] * au[i];
@@ -148,6 +151,7 @@ double power_radius(std::size_t n, ApplyA apply_a, const std::vector<double>& w,
   for (auto& e : x) e /= nx;
   double est = 0.0;
   for (int k = 0; k < max_products; ++k) {
+    poll_interrupt();
     apply_a(x.data(), y.data());
     const double ny = wnorm(y, w);
     const double prev = est;

@@ -24,6 +24,7 @@
 #include "osd_refiner.hpp"
 #include "sorpia/limit.hpp"
 #include "sorpia/errors.hpp"
+#include "sorpia/interrupt.hpp"
 
 namespace sorpia {
 
@@ -207,12 +208,22 @@ void LoopSurface::evaluate(const std::int32_t* face_ids, const double* uv, std::
   // Each point is computed alone, so the thread count changes nothing in the
   // results. Chunks of faces are handed out in turn (their costs differ).
   std::atomic<std::ptrdiff_t> next_chunk{0};
+  std::atomic<bool> stop{false};
   const int threads = evaluate_threads(n_groups);
   detail::for_each_task(threads > 1, threads, [&](int) {
     Bfr::Surface<double> surface;
     std::vector<double> patch;
     const Bfr::Surface<double>::PointDescriptor desc(3);
     for (;;) {
+      // Only the calling thread's poll can throw (workers have no checker);
+      // the others then stop at their next chunk.
+      if (stop) break;
+      try {
+        poll_interrupt();
+      } catch (...) {
+        stop = true;
+        throw;
+      }
       const std::ptrdiff_t first = kFacesPerChunk * next_chunk++;
       if (first >= n_groups) break;
       for (std::ptrdiff_t g = first; g < std::min(n_groups, first + kFacesPerChunk); ++g) {
@@ -242,6 +253,9 @@ void LoopSurface::evaluate(const std::int32_t* face_ids, const double* uv, std::
     throw MeshError("OpenSubdiv's Bfr could not build the limit surface of face " + std::to_string(failed_face.load()));
 }
 
+// The output loops of tessellate() poll for an interrupt once per this many rows.
+constexpr std::size_t kRowsPerPoll = std::size_t{1} << 16;
+
 TriMesh LoopSurface::tessellate(int level) {
   if (level < 0 || level > 15)
     throw ParameterError("level must be in 0..15, got " + std::to_string(level));
@@ -260,6 +274,7 @@ TriMesh LoopSurface::tessellate(int level) {
                          " of memory is available: use a lower level, or evaluate_limit at the points you need");
   const std::unique_lock<std::shared_mutex> lock(impl_->mutex);
 
+  // Polls for an interrupt between the steps (OpenSubdiv's calls run whole).
   if (impl_->refined_level != level) {
     impl_->refined.reset();  // free the old one before building the new one
     // The topology was converted and checked once, for base: share its level 0.
@@ -269,6 +284,7 @@ TriMesh LoopSurface::tessellate(int level) {
       // Limit() on the last level needs its full topology: without it
       // OpenSubdiv prints an error and leaves the output untouched.
       options.fullTopologyInLastLevel = true;
+      poll_interrupt();
       impl_->refined->RefineUniform(options);
     }
     impl_->refined_level = level;
@@ -278,12 +294,15 @@ TriMesh LoopSurface::tessellate(int level) {
 
   std::vector<Point3> src = impl_->points, dst;
   for (int l = 1; l <= level; ++l) {
+    poll_interrupt();
     dst.resize(static_cast<std::size_t>(refiner.GetLevel(l).GetNumVertices()));
     primvar.Interpolate(l, src, dst);
     std::swap(src, dst);
   }
+  poll_interrupt();
   std::vector<Point3> limit(src.size());
   primvar.Limit(src, limit);
+  poll_interrupt();
   std::vector<Point3>().swap(src);
 
   // Refined vertices are ordered children of vertices first
@@ -298,6 +317,7 @@ TriMesh LoopSurface::tessellate(int level) {
   // refined level gives the same point up to rounding).
   limit_points(impl_->topology, impl_->vertices.data(), impl_->boundary, out.vertices.data());
   for (std::size_t i = n_osd; i < limit.size(); ++i) {
+    if (i % kRowsPerPoll == 0) poll_interrupt();
     double* q = &out.vertices[3 * (n + i - n_osd)];
     q[0] = limit[i].x;
     q[1] = limit[i].y;
@@ -311,6 +331,7 @@ TriMesh LoopSurface::tessellate(int level) {
                                                                          : n + static_cast<std::size_t>(i) - n_osd);
   };
   for (std::size_t f = 0; f < n_faces_out; ++f) {
+    if (f % kRowsPerPoll == 0) poll_interrupt();
     const auto fv = last.GetFaceVertices(static_cast<int>(f));
     for (int c = 0; c < 3; ++c) out.faces[3 * f + c] = to_out(fv[c]);
   }

@@ -19,7 +19,6 @@
 
 #include <cstddef>
 #include <cstdint>
-#include <functional>
 #include <string>
 
 #include "sorpia/shapes.hpp"
@@ -31,13 +30,6 @@ enum class MeshFormat { Obj, Off, Ply, Stl };
 /// The format named by the file's extension (.obj, .off, .ply, .stl, any case).
 /// @throws FileError for any other extension
 MeshFormat mesh_format(const std::string& path);
-
-/// Called when a read is interrupted by a signal (EINTR: a pipe or a device
-/// waiting for data) before it could finish. It may throw to abandon the read
-/// (the file is closed, the exception passes through); when it returns, the
-/// read goes on. The Python binding runs the interpreter's signal handlers
-/// here, so Ctrl-C stops a read that waits.
-using InterruptHook = std::function<void()>;
 
 /// Read a triangle mesh.
 /// @param path         an .obj, .off, .ply or .stl file
@@ -51,14 +43,16 @@ using InterruptHook = std::function<void()>;
 ///                     polygons in file order.
 /// @param polygons     when not null, set to the number of faces of more
 ///                     than 3 vertices split (0 without triangulate)
-/// @param on_interrupt called when a signal interrupts the read (empty: the
-///                     read goes on)
 /// @return vertices (n, 3) and faces (m, 3), in file order
+/// The read polls the calling thread's interrupt checker
+/// (sorpia/interrupt.hpp) after each chunk, and asks it at once when a signal
+/// interrupts a read that waits (a pipe, a device); when the checker returns
+/// false, the read goes on.
+/// @throws Interrupted when the checker says stop
 /// @throws FileError when the file is missing, unreadable, malformed,
 ///         truncated, has an index out of range, a non-finite coordinate,
 ///         no vertices or no faces
-TriMesh read_mesh(const std::string& path, bool triangulate = false, std::size_t* polygons = nullptr,
-                  const InterruptHook& on_interrupt = {});
+TriMesh read_mesh(const std::string& path, bool triangulate = false, std::size_t* polygons = nullptr);
 
 /// Write a triangle mesh atomically: to a temporary file in the same folder,
 /// then renamed over `path`, so that a failure leaves no partial file and an
