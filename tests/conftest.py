@@ -12,6 +12,15 @@ from pathlib import Path
 # Set before numpy loads its BLAS.
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
+import signal  # noqa: E402
+
+# A shell runs background jobs with SIGINT ignored, and children inherit that:
+# the tests that send SIGINT (to this process or to a child Python, which then
+# installs no KeyboardInterrupt handler) would see it dropped. Run them as from
+# a terminal whatever started the suite.
+if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+
 import numpy as np  # noqa: E402
 import pytest
 import scipy.sparse
