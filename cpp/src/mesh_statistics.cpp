@@ -2,6 +2,8 @@
 // a raw face list's half-edges) into one EdgeCounts, counted by one finish().
 #include "sorpia/mesh_statistics.hpp"
 
+#include "half_edges.hpp"
+
 #include <algorithm>
 #include <numeric>
 #include <utility>
@@ -10,23 +12,8 @@ namespace sorpia {
 
 namespace {
 
-// Union-find over vertex indices (path halving).
-class DisjointSets {
- public:
-  explicit DisjointSets(std::size_t n) : parent_(n) { std::iota(parent_.begin(), parent_.end(), 0); }
-  std::int32_t find(std::int32_t v) {
-    while (parent_[v] != v) v = parent_[v] = parent_[parent_[v]];
-    return v;
-  }
-  void unite(std::int32_t a, std::int32_t b) {
-    a = find(a);
-    b = find(b);
-    if (a != b) parent_[std::max(a, b)] = std::min(a, b);
-  }
-
- private:
-  std::vector<std::int32_t> parent_;
-};
+using detail::DisjointSets;
+using detail::next_corner;
 
 // What both sources supply, per vertex and in all.
 struct EdgeCounts {
@@ -99,8 +86,7 @@ MeshStatistics finish(EdgeCounts& c, std::size_t n_faces, bool oriented_manifold
 }
 
 // ---- the raw face list -------------------------------------------------------
-// Half-edge h (0 <= h < 3 n_faces) runs from faces[h] to faces[next_corner(h)].
-inline std::size_t next_corner(std::size_t h) { return h - h % 3 + (h % 3 + 1) % 3; }
+// Over the half-edges of the face list (half_edges.hpp).
 
 constexpr std::int32_t kBoundary = -1;  // mate of a half-edge whose edge has one face
 constexpr std::int32_t kNoFan = -2;     // an edge of three or more faces, or a half-edge of a degenerate face

@@ -15,6 +15,7 @@
 #include <string>
 #include <utility>
 
+#include "half_edges.hpp"
 #include "sorpia/errors.hpp"
 #include "sorpia/topology.hpp"
 
@@ -27,28 +28,11 @@ bool RepairReport::empty() const {
 
 namespace {
 
-inline std::size_t next_corner(std::size_t h) { return h - h % 3 + (h % 3 + 1) % 3; }
-inline std::size_t prev_corner(std::size_t h) { return h - h % 3 + (h % 3 + 2) % 3; }
-
-std::string face_str(std::size_t f, const std::int32_t* faces) {
-  return "face " + std::to_string(f) + " (" + std::to_string(faces[3 * f]) + ", " +
-         std::to_string(faces[3 * f + 1]) + ", " + std::to_string(faces[3 * f + 2]) + ")";
-}
-
-// Union-find over corners with path halving; the root of a class is its lowest corner.
-struct Corners {
-  std::vector<std::int32_t> parent;
-  explicit Corners(std::size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
-  std::int32_t find(std::int32_t c) {
-    while (parent[c] != c) c = parent[c] = parent[parent[c]];
-    return c;
-  }
-  void join(std::int32_t a, std::int32_t b) {
-    a = find(a);
-    b = find(b);
-    if (a != b) parent[std::max(a, b)] = std::min(a, b);
-  }
-};
+using detail::face_str;
+using detail::next_corner;
+using detail::prev_corner;
+// Union-find over corners: the root of a class is its lowest corner.
+using Corners = detail::DisjointSets;
 
 // Rules 2 and 3 of repair.hpp: removes (in `removed`, reported in `rep`) the
 // duplicate faces, and returns for each half-edge the half-edge of the face it
@@ -173,8 +157,8 @@ RepairResult repair_pass(const std::int32_t* faces, std::size_t n_faces, std::si
     const auto hn = static_cast<std::int32_t>(next_corner(h)), gn = static_cast<std::int32_t>(next_corner(g));
     const bool same_way = faces[g] == faces[h];
     misoriented |= same_way;
-    fans.join(static_cast<std::int32_t>(h), same_way ? g : gn);
-    fans.join(hn, same_way ? gn : g);
+    fans.unite(static_cast<std::int32_t>(h), same_way ? g : gn);
+    fans.unite(hn, same_way ? gn : g);
   }
   // The output vertex of each corner. A fan's root is its lowest corner, so
   // in corner order the root's vertex is known before the fan's other corners.

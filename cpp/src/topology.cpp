@@ -11,6 +11,7 @@
 #include <tuple>
 #include <utility>
 
+#include "half_edges.hpp"
 #include "one_ring.hpp"
 #include "openmesh_types.hpp"
 #include "sorpia/errors.hpp"
@@ -39,19 +40,14 @@ void silence_openmesh() {
 
 namespace {
 
-std::string face_str(std::size_t f, const std::int32_t* faces) {
-  return "face " + std::to_string(f) + " (" + std::to_string(faces[3 * f]) + ", " +
-         std::to_string(faces[3 * f + 1]) + ", " + std::to_string(faces[3 * f + 2]) + ")";
-}
+using detail::face_str;
 
 // ---- validate_faces and its helpers ----------------------------------------
-// Half-edge h (0 <= h < 3 n_faces) of a face list runs from the corner
-// faces[h] to the next corner of its face, faces[next_corner(h)]; it also
-// names that corner (the corner at faces[h]).
+// Over the half-edges of the face list (half_edges.hpp).
 namespace face_checks {
 
-inline std::size_t next_corner(std::size_t h) { return h - h % 3 + (h % 3 + 1) % 3; }
-inline std::size_t prev_corner(std::size_t h) { return h - h % 3 + (h % 3 + 2) % 3; }
+using detail::next_corner;
+using detail::prev_corner;
 using Edge = std::pair<std::int32_t, std::int32_t>;  // (lower end, higher end)
 inline Edge edge(std::int32_t a, std::int32_t b) { return {std::min(a, b), std::max(a, b)}; }
 constexpr auto none = std::numeric_limits<std::int32_t>::max();
