@@ -20,7 +20,7 @@ def residual(V, F, V0, boundary="edge-and-corner"):
     """(max, argmax, norms) of the core's check."""
     topo = topology(F, len(V0), warn=False)
     return _core.limit_residual(topo, np.ascontiguousarray(V, dtype=float), np.ascontiguousarray(V0, dtype=float),
-                                boundary)
+                                _core.parse_boundary(boundary))
 
 
 @pytest.mark.parametrize("boundary", ["edge-and-corner", "edge-only"])

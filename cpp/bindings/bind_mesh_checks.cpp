@@ -70,12 +70,11 @@ void bind_mesh_checks(py::module_& m) {
   m.def(
       "limit_residual",
       [](const sorpia::Topology& topology, const Vertices& control, const Vertices& target,
-         const std::string& boundary) {
+         sorpia::Boundary b) {
         check_shape(control, 3, "control");
         check_shape(target, 3, "target");
         check_rows(control, topology.n_vertices(), "control", "the topology");
         check_rows(target, topology.n_vertices(), "target", "the topology");
-        const auto b = sorpia::parse_boundary(boundary);
         py::array_t<double> norms(static_cast<py::ssize_t>(topology.n_vertices()));
         double* r = norms.mutable_data();
         sorpia::LimitResidual res;

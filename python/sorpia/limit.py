@@ -52,7 +52,8 @@ def limit_points(vertices, faces, boundary: str = DEFAULT_BOUNDARY) -> np.ndarra
     Returns
     -------
     numpy.ndarray, (n, 3) float64
-        B V, evaluated by OpenSubdiv's ``Far::PrimvarRefinerReal<double>::Limit``.
+        B V, from OpenSubdiv's Loop limit masks (``Sdc::Scheme::ComputeVertexLimitMask``,
+        what ``Far::PrimvarRefinerReal<double>::Limit`` applies; equal to it to 1e-15).
         Interior vertex of valence n: alpha_n v + (1 - alpha_n)/n sum of its
         neighbours, alpha_n = 3 / (8 - 8 (3/8 + cos(2 pi/n)/4)^2) (paper eq. 5);
         boundary vertex: 2/3 v + 1/6 (its two boundary neighbours). Vertices no

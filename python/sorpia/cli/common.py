@@ -93,6 +93,11 @@ class InputMesh(NamedTuple):
     repair: object = None  # sorpia.RepairResult with --repair: vertices and faces are its output
     repair_seconds: float = 0.0
 
+    @property
+    def timings(self) -> dict:
+        """The seconds of a command's input phases: "read", and "repair" with --repair."""
+        return {"read": self.seconds, **({"repair": self.repair_seconds} if self.repair is not None else {})}
+
 
 def read_input(path, triangulate: bool = False, repair: bool = False) -> InputMesh:
     """Read the input mesh of every subcommand: polygons split with
@@ -111,8 +116,8 @@ def read_input(path, triangulate: bool = False, repair: bool = False) -> InputMe
     except MeshFileError as exc:
         if triangulate or not _is_polygon_error(exc):
             raise
-        raise PolygonError(f"{_polygon_message(exc)}; pass --triangulate to split each polygon into a fan of "
-                           "triangles from its first vertex") from None
+        raise PolygonError(f"{_polygon_message(exc)}; pass --triangulate to split each polygon into "
+                           "triangles") from None
     seconds = time.perf_counter() - t0
     if not repair:
         return InputMesh(vertices, faces, seconds, polygons)

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import __version__
-from .._validate import DEFAULT_BOUNDARY
+from .._validate import DEFAULT_BOUNDARY, as_boundary
 from .common import (EXIT_NOT_CONVERGED, EXIT_OK, UserError, check_mesh_suffix, check_paths, check_solver_options,
                      cpu_clock, fit_once, fmt_seconds, method_label, mesh_line, read_input, repair_json, repair_lines,
                      result_fields)
@@ -38,9 +38,8 @@ def run_fit(input_path, output, *, method="sor", omega="auto", tol=1e-10, max_it
     with Progress(enabled=not quiet) as progress:
         progress.status(f"reading {input_path}")
         mesh = read_input(input_path, triangulate, repair)
-        V0, F, timings["read"] = mesh.vertices, mesh.faces, mesh.seconds
-        if repair:
-            timings["repair"] = mesh.repair_seconds
+        V0, F = mesh.vertices, mesh.faces
+        timings.update(mesh.timings)
         if surface is not None:
             _check_surface_fits(len(V0), len(F), level)
         timings["statistics"] = 0.0  # reported before the fit, measured after the topology is built
@@ -72,7 +71,7 @@ def run_fit(input_path, output, *, method="sor", omega="auto", tol=1e-10, max_it
         # topology's one-ring, against the given vertices.
         progress.status("checking B V = V0")
         t0 = time.perf_counter()
-        max_residual, _, _ = _core.limit_residual(interp.topology, ctrl, V0, boundary)
+        max_residual, _, _ = _core.limit_residual(interp.topology, ctrl, V0, as_boundary(boundary))
         timings["check"] = time.perf_counter() - t0
 
     fields = result_fields(res)

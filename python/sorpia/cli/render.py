@@ -34,9 +34,8 @@ def run_render(input_path, output, *, level=3, tol=1e-10, max_iter=1000, boundar
     with Progress(enabled=not quiet) as progress:
         progress.status(f"reading {input_path}")
         mesh = read_input(input_path, triangulate, repair)
-        V0, F, timings["read"] = mesh.vertices, mesh.faces, mesh.seconds
-        if repair:
-            timings["repair"] = mesh.repair_seconds
+        V0, F = mesh.vertices, mesh.faces
+        timings.update(mesh.timings)
         _, res, timings["fit"], _ = fit_once(V0, F, method="sor", omega="auto", tol=tol, max_iter=max_iter,
                                              boundary=boundary, threads=threads, progress=progress,
                                              source=input_path)
