@@ -93,11 +93,11 @@ void check_start(const FileData& f, MeshFormat format) {
         fail(f, Where{"line", 1}, "a PLY file starts with the line 'ply'");
       break;
     case MeshFormat::Off:
-      if (found && first.find("OFF") == std::string_view::npos)
+      if (found && !is_off_keyword(first))
         fail(f, Where{"line", lines.number()}, "an OFF file starts with 'OFF'");
       break;
     case MeshFormat::Obj:
-      if (found && !std::isalpha(static_cast<unsigned char>(first[0])))
+      if (found && !is_obj_keyword(first))
         fail(f, Where{"line", lines.number()}, quoted(first) + " is not an OBJ statement (not a text OBJ file?)");
       break;
     case MeshFormat::Stl:
@@ -117,8 +117,8 @@ FileData load_file(const std::string& path, MeshFormat format) {
   const CloseOnExit close_fd{fd};
   // Regular files report their size; read to the end either way (pipes, /proc).
   // Past the sniffed part the buffer takes one byte more than the size: the
-  // read that finds the end then has room, instead of doubling (and
-  // zero-filling) a buffer the file already fills.
+  // read that finds the end then has room, instead of doubling a buffer the
+  // file already fills.
   constexpr std::size_t kSniffed = 1 << 16;
   constexpr std::size_t kChunk = std::size_t{1} << 24;
   const std::size_t capacity = S_ISREG(st.st_mode) ? static_cast<std::size_t>(st.st_size) + 1 : 0;

@@ -1,10 +1,12 @@
 #pragma once
 // Internals shared by the mesh file readers and writers (io_*.cpp).
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
+#include <memory>
 #include <string>
 #include <string_view>
 #include <system_error>
@@ -18,11 +20,44 @@
 
 namespace sorpia::detail::io {
 
+// A file's bytes: a buffer whose growth leaves the new bytes uninitialised,
+// since read() is about to write them (a std::string would zero-fill every
+// byte of the file first).
+class Bytes {
+ public:
+  Bytes() = default;
+  Bytes(const std::string& s) {  // NOLINT: implicit, for tests and the fuzz target
+    resize(s.size());
+    if (!s.empty()) std::memcpy(p_.get(), s.data(), s.size());
+  }
+  const char* data() const { return p_.get(); }
+  char* data() { return p_.get(); }
+  std::size_t size() const { return size_; }
+  bool empty() const { return size_ == 0; }
+  char operator[](std::size_t i) const { return p_[i]; }
+  operator std::string_view() const { return {p_.get(), size_}; }
+  int compare(std::size_t pos, std::size_t n, const char* s) const { return std::string_view(*this).compare(pos, n, s); }
+  // n bytes: the first min(n, size()) kept, the rest uninitialised.
+  void resize(std::size_t n) {
+    if (n > capacity_) {
+      std::unique_ptr<char[]> bigger(new char[n]);
+      if (size_) std::memcpy(bigger.get(), p_.get(), size_);
+      p_ = std::move(bigger);
+      capacity_ = n;
+    }
+    size_ = n;
+  }
+
+ private:
+  std::unique_ptr<char[]> p_;
+  std::size_t size_ = 0, capacity_ = 0;
+};
+
 // A whole file in memory (the readers parse from memory: one read, no
 // per-line stream overhead).
 struct FileData {
   std::string path;
-  std::string bytes;
+  Bytes bytes;
 };
 
 // `path` as messages show it: valid UTF-8 as it is, any other byte as \xNN
@@ -136,6 +171,22 @@ inline std::string_view strip_comment(std::string_view line) {
   while (!line.empty() && is_space(line.front())) line.remove_prefix(1);
   while (!line.empty() && is_space(line.back())) line.remove_suffix(1);
   return line;
+}
+
+// An OFF header keyword: [ST][C][N][4][n]OFF (the 4 and n, other dimensions,
+// are refused by the reader).
+inline bool is_off_keyword(std::string_view t) {
+  if (t.size() < 3 || t.substr(t.size() - 3) != "OFF") return false;
+  for (const char c : t.substr(0, t.size() - 3))
+    if (std::string_view("STCN4n").find(c) == std::string_view::npos) return false;
+  return true;
+}
+
+// An OBJ statement keyword (v, f, vt, usemtl, ...): letters and '_'.
+inline bool is_obj_keyword(std::string_view t) {
+  for (const char c : t)
+    if (!std::isalpha(static_cast<unsigned char>(c)) && c != '_') return false;
+  return !t.empty();
 }
 
 // The tokens of a text, across lines, with "#" comments and blank lines

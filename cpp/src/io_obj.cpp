@@ -18,11 +18,6 @@ bool continues(std::string_view line) {
   return !line.empty() && line.back() == '\\';
 }
 
-bool is_keyword(std::string_view t) {
-  for (const char c : t)
-    if (!std::isalpha(static_cast<unsigned char>(c)) && c != '_') return false;
-  return true;
-}
 }  // namespace
 
 TriMesh read_obj(const FileData& f, Polygons& polygons) {
@@ -86,7 +81,7 @@ TriMesh read_obj(const FileData& f, Polygons& polygons) {
       const std::size_t before = mesh.faces.size();
       sink.add(idx.data(), idx.size(), w);
       if (forward) pending.push_back({before / 3, mesh.faces.size() / 3, w.index});
-    } else if (!is_keyword(tok)) {
+    } else if (!is_obj_keyword(tok)) {
       fail(f, w, quoted(tok) + " is not an OBJ statement (not a text OBJ file?)");
     }
   }

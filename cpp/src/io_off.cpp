@@ -14,14 +14,6 @@ namespace sorpia::detail::io {
 
 namespace {
 
-bool is_off_keyword(std::string_view t) {
-  // [ST][C][N][4][n]OFF; the 4 and n (other dimensions) are refused later.
-  if (t.size() < 3 || t.substr(t.size() - 3) != "OFF") return false;
-  for (const char c : t.substr(0, t.size() - 3))
-    if (std::string_view("STCN4n").find(c) == std::string_view::npos) return false;
-  return true;
-}
-
 std::size_t parse_count(const FileData& f, const Where& w, std::string_view rest_tok, const char* what) {
   long long c = 0;
   if (!parse_int(rest_tok, c) || c < 0)
