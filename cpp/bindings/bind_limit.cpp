@@ -14,6 +14,40 @@ void bind_limit(py::module_& m) {
       .value("edge_only", sorpia::Boundary::EdgeOnly);
   m.def("parse_boundary", &sorpia::parse_boundary, "name"_a);
   m.def("boundary_name", &sorpia::boundary_name, "boundary"_a);
+  py::enum_<sorpia::Scheme>(m, "Scheme", "Subdivision scheme (sorpia::Scheme).")
+      .value("loop", sorpia::Scheme::Loop)
+      .value("catmull_clark", sorpia::Scheme::CatmullClark);
+  m.def("parse_scheme", &sorpia::parse_scheme, "name"_a);
+  m.def("scheme_name", &sorpia::scheme_name, "scheme"_a);
+  m.attr("INFINITE_SHARPNESS") = sorpia::kInfiniteSharpness;
+
+  // Tags are built from arrays _validate.as_tags has already converted; the
+  // constructor copies them and runs the core's checks (sorpia::check_tags).
+  using Doubles = py::array_t<double, py::array::c_style>;
+  const auto copy_ints = [](const Faces& a) { return std::vector<std::int32_t>(a.data(), a.data() + a.size()); };
+  const auto copy_doubles = [](const Doubles& a) { return std::vector<double>(a.data(), a.data() + a.size()); };
+  py::class_<sorpia::Tags>(m, "Tags", "OpenSubdiv's sharpness tags (sorpia::Tags).")
+      .def(py::init([=](const Faces& crease_vertices, const Doubles& crease_sharpness, const Faces& corner_vertices,
+                        const Doubles& corner_sharpness, const Faces& holes, std::size_t n_vertices,
+                        std::size_t n_faces) {
+             sorpia::Tags t{copy_ints(crease_vertices), copy_doubles(crease_sharpness), copy_ints(corner_vertices),
+                            copy_doubles(corner_sharpness), copy_ints(holes)};
+             sorpia::check_tags(t, n_vertices, n_faces);
+             return t;
+           }),
+           "crease_vertices"_a.noconvert(), "crease_sharpness"_a.noconvert(), "corner_vertices"_a.noconvert(),
+           "corner_sharpness"_a.noconvert(), "holes"_a.noconvert(), "n_vertices"_a, "n_faces"_a)
+      .def(py::init<>())
+      .def_property_readonly("crease_vertices",
+                             [](const sorpia::Tags& t) {
+                               return to_numpy(t.crease_vertices, 2);
+                             })
+      .def_property_readonly("crease_sharpness", [](const sorpia::Tags& t) { return to_numpy(t.crease_sharpness, 0); })
+      .def_property_readonly("corner_vertices", [](const sorpia::Tags& t) { return to_numpy(t.corner_vertices, 0); })
+      .def_property_readonly("corner_sharpness", [](const sorpia::Tags& t) { return to_numpy(t.corner_sharpness, 0); })
+      .def_property_readonly("holes", [](const sorpia::Tags& t) { return to_numpy(t.holes, 0); })
+      .def("empty", &sorpia::Tags::empty)
+      .def("max_semi_sharpness", &sorpia::Tags::max_semi_sharpness);
 
   py::class_<sorpia::Topology>(m, "Topology")
       .def(py::init([](const Faces& faces, std::size_t n_vertices) {

@@ -18,15 +18,6 @@
 
 namespace sorpia {
 
-Boundary parse_boundary(const std::string& name) {
-  for (Boundary b : {Boundary::EdgeAndCorner, Boundary::EdgeOnly})
-    if (name == boundary_name(b)) return b;
-  throw ParameterError("unknown boundary '" + name + "': use one of 'edge-and-corner', 'edge-only'");
-}
-
-const char* boundary_name(Boundary boundary) {
-  return boundary == Boundary::EdgeOnly ? "edge-only" : "edge-and-corner";
-}
 namespace detail {
 void silence_openmesh() {
   static std::once_flag once;

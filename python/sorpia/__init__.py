@@ -10,6 +10,7 @@ from .errors import MeshError, MeshFileError, ParameterError
 from .limit import UnreferencedVerticesWarning, limit_matrix, limit_points
 from .solve import ConvergenceWarning, InterpolationResult, Interpolator, OmegaWarning, interpolate
 from .io import read_mesh, write_mesh
+from ._validate import Polygons
 from .mesh_repair import RepairResult, repair
 from .surface import LoopSurface, evaluate_limit, limit_surface
 from . import shapes
@@ -22,6 +23,7 @@ __all__ = [
     "UnreferencedVerticesWarning",
     "ConvergenceWarning", "InterpolationResult", "Interpolator", "OmegaWarning", "interpolate",
     "limit_matrix",
+    "Polygons",
     "limit_points",
     "shapes",
     "LoopSurface", "evaluate_limit", "limit_surface", "read_mesh", "write_mesh",

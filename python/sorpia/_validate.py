@@ -29,6 +29,7 @@ mistake (vertices and faces swapped) than a convenience.
 from __future__ import annotations
 
 import operator
+from typing import NamedTuple
 
 import numpy as np
 
@@ -152,3 +153,81 @@ def as_boundary(boundary: str) -> _core.Boundary:
     if not isinstance(boundary, str):
         raise ParameterError(f"boundary must be a string, got {boundary!r}")
     return _core.parse_boundary(boundary)
+
+
+SCHEMES = tuple(_core.scheme_name(s) for s in _core.Scheme.__members__.values())
+DEFAULT_SCHEME = "loop"
+
+
+def as_scheme(scheme: str) -> _core.Scheme:
+    """The core's Scheme for a scheme's name ("loop", "catmull-clark"); the
+    message of an unknown one comes from the core (sorpia::parse_scheme)."""
+    if not isinstance(scheme, str):
+        raise ParameterError(f"scheme must be a string, got {scheme!r}")
+    return _core.parse_scheme(scheme)
+
+
+class Polygons(NamedTuple):
+    """Faces of any sizes in the counts + indices form of OpenSubdiv's
+    Far::TopologyDescriptor and USD: face f has ``face_vertex_counts[f]``
+    vertices, listed in ``face_vertex_indices`` after those of faces 0..f-1.
+    Accepted wherever faces are."""
+
+    face_vertex_counts: np.ndarray
+    face_vertex_indices: np.ndarray
+
+
+def _tag_indices(value, name: str, width: int) -> np.ndarray:
+    arr = _asarray(value, name, "an array of integer indices")
+    if arr.size == 0:
+        return np.zeros((0, width) if width > 1 else 0, dtype=np.int32)
+    if arr.dtype == bool or not np.issubdtype(arr.dtype, np.integer):
+        raise TypeError(f"{name} must hold integer indices, got dtype {arr.dtype}")
+    if width > 1 and (arr.ndim != 2 or arr.shape[1] != width):
+        raise ValueError(f"{name} must have shape (k, {width}), got {arr.shape}")
+    if width == 1 and arr.ndim != 1:
+        raise ValueError(f"{name} must have shape (k,), got {arr.shape}")
+    if arr.min() < np.iinfo(np.int32).min or arr.max() > np.iinfo(np.int32).max:
+        raise MeshError(f"{name} holds an index that does not fit in 32 bits")
+    return np.ascontiguousarray(arr, dtype=np.int32)
+
+
+def _tag_sharpness(value, name: str, k: int) -> np.ndarray:
+    arr = _asarray(value, name, "a number or an array of numbers")
+    if arr.dtype == bool or not (np.issubdtype(arr.dtype, np.floating) or np.issubdtype(arr.dtype, np.integer)):
+        raise TypeError(f"{name} must be real numbers, got dtype {arr.dtype}")
+    if arr.ndim == 0:
+        arr = np.full(k, float(arr))
+    if arr.shape != (k,):
+        raise ValueError(f"{name} must be a number or have shape ({k},), got {arr.shape}")
+    arr = np.ascontiguousarray(arr, dtype=np.float64)
+    return np.where(np.isposinf(arr), _core.INFINITE_SHARPNESS, arr)
+
+
+def _pair(value, name: str):
+    if isinstance(value, tuple) and len(value) == 2:
+        return value
+    raise TypeError(f"{name} must be a pair (indices, sharpness), got {type(value).__name__}")
+
+
+def as_tags(creases=None, corners=None, holes=None, *, n_vertices: int, n_faces: int) -> _core.Tags:
+    """OpenSubdiv's sharpness tags as the core's Tags, checked (sorpia::check_tags).
+
+    ``creases = (edges (k, 2) ints, sharpness)``, ``corners = (vertices (c,),
+    sharpness)``, ``holes = faces (h,)``; a sharpness is a number for all or
+    one per tag; inf (or anything >= 10, OpenSubdiv's Sdc::Crease::
+    SHARPNESS_INFINITE) is infinitely sharp. None means no tag of that kind.
+    """
+    empty_i, empty_d = np.zeros(0, np.int32), np.zeros(0, np.float64)
+    edges, edge_s, verts, vert_s, hole_faces = np.zeros((0, 2), np.int32), empty_d, empty_i, empty_d, empty_i
+    if creases is not None:
+        e, s = _pair(creases, "creases")
+        edges = _tag_indices(e, "creases[0] (the edges)", 2)
+        edge_s = _tag_sharpness(s, "creases[1] (the sharpness)", len(edges))
+    if corners is not None:
+        v, s = _pair(corners, "corners")
+        verts = _tag_indices(v, "corners[0] (the vertices)", 1)
+        vert_s = _tag_sharpness(s, "corners[1] (the sharpness)", len(verts))
+    if holes is not None:
+        hole_faces = _tag_indices(holes, "holes", 1)
+    return _core.Tags(edges, edge_s, verts, vert_s, hole_faces, n_vertices, n_faces)

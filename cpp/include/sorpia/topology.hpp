@@ -8,18 +8,9 @@
 #include <string>
 #include <vector>
 
+#include "sorpia/subdivision.hpp"
+
 namespace sorpia {
-
-/// How the limit surface treats the mesh boundary (OpenSubdiv's
-/// Sdc::Options::VtxBoundaryInterpolation).
-enum class Boundary {
-  EdgeOnly,       ///< VTX_BOUNDARY_EDGE_ONLY: boundary curves are smooth, a one-face corner gets (1/6, 2/3, 1/6)
-  EdgeAndCorner,  ///< VTX_BOUNDARY_EDGE_AND_CORNER: as EdgeOnly, but one-face corners are kept (weight 1)
-};
-
-/// "edge-only", "edge-and-corner". @throw ParameterError on another name
-Boundary parse_boundary(const std::string& name);
-const char* boundary_name(Boundary boundary);
 
 /// How sorpia::Topology turns the validated faces into its one-ring. Both give
 /// the same arrays (tests/cpp/test_fast_operator.cpp checks it).
