@@ -78,15 +78,17 @@ def face_set(f, i, row):
 
 # (id, vertices, faces, exception, message pattern)
 BAD_ARRAYS = [
-    ("vertices-2-columns", V1[:, :2], F1, ValueError, r"vertices must have shape \(n, 3\), got \(42, 2\)"),
-    ("vertices-1d", V1.ravel(), F1, ValueError, r"vertices must have shape \(n, 3\), got \(126,\)"),
-    ("vertices-3d", V1[None], F1, ValueError, r"vertices must have shape \(n, 3\), got \(1, 42, 3\)"),
+    # limit_points maps (n, k) data for any k >= 1 (tests/test_update.py)
+    ("vertices-0-columns", V1[:, :0], F1, ValueError, r"vertices must have shape \(n, k\), k >= 1, got \(42, 0\)"),
+    ("vertices-1d", V1.ravel(), F1, ValueError,
+     r"vertices must have shape \(n, k\), k >= 1, got \(126,\) \(a scalar per vertex: values\[:, None\]\)"),
+    ("vertices-3d", V1[None], F1, ValueError, r"vertices must have shape \(n, k\), k >= 1, got \(1, 42, 3\)"),
     ("vertices-bool", V1 > 0, F1, TypeError, r"vertices must be .* real numbers, got dtype bool"),
     ("vertices-complex", V1 + 0j, F1, TypeError, r"vertices .* got dtype complex128"),
     ("vertices-object", V1.astype(object), F1, TypeError, r"vertices .* got dtype object"),
     ("vertices-strings", V1.astype(str), F1, TypeError, r"vertices .* got dtype <U"),
     ("vertices-none", None, F1, TypeError, r"vertices .* got dtype object"),
-    ("vertices-ragged", [[0, 0, 0], [1, 0]], F1, TypeError, r"vertices must be an \(n, 3\) array"),
+    ("vertices-ragged", [[0, 0, 0], [1, 0]], F1, TypeError, r"vertices must be an \(n, k\) array"),
     ("vertices-empty", np.zeros((0, 3)), F1, sorpia.MeshError, r"vertices is empty"),
     ("vertex-nan", nan_at(17), F1, sorpia.MeshError, r"vertices\[17\] = \[.*nan.*\] is not finite"),
     ("vertex-inf", nan_at(5, np.inf), F1, sorpia.MeshError, r"vertices\[5\] = \[.*inf.*\] is not finite"),

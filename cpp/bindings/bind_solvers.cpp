@@ -3,7 +3,9 @@
 #include <pybind11/functional.h>
 #include <pybind11/stl.h>
 
+#include <chrono>
 #include <cmath>
+#include <memory>
 #include <limits>
 #include <iterator>
 #include <optional>
@@ -11,6 +13,7 @@
 #include <vector>
 
 #include "bindings.hpp"
+#include "sorpia/local_update.hpp"
 #include "sorpia/solvers.hpp"
 
 namespace sorpia_py {
@@ -18,34 +21,63 @@ using namespace pybind11::literals;
 
 namespace {
 
-// One mesh's operator and the spectral estimates found so far.
+// One mesh's operator, the spectral estimates found so far, and the state of
+// local updates: the targets of the last solve that kept them (handed to the
+// LocalSolver, built on the first update, when an update comes).
 struct OperatorState {
   sorpia::LimitOperator op;
   sorpia::SpectralCache cache;
+  std::vector<double> solved_targets;  // (n, k) of the last solve, not yet in `local`
+  std::size_t solved_k = 0;
+  std::unique_ptr<sorpia::LocalSolver> local;
 };
+
+// An (n, k) array's k, checked: two dimensions, at least one column.
+std::size_t columns_of(const py::array& a, const char* name) {
+  if (a.ndim() != 2 || a.shape(1) < 1)
+    throw sorpia::ParameterError(std::string(name) + " must have shape (n, k), k >= 1");
+  return static_cast<std::size_t>(a.shape(1));
+}
 
 // A double that means "not used by this method" when NaN, as Python's None.
 py::object optional_float(double x) { return std::isnan(x) ? py::object(py::none()) : py::object(py::float_(x)); }
 
-// A (rows, cols) numpy view of a result's vector, kept alive by the result.
-py::array view(const std::vector<double>& v, py::ssize_t cols, const py::object& owner) {
-  return py::array_t<double>(numpy_shape(v, cols), v.data(), owner);
+// A (rows, cols) numpy view of a result's vector, kept alive by the result;
+// read-only when `read_only`.
+py::array view(const std::vector<double>& v, py::ssize_t cols, const py::object& owner, bool read_only = false) {
+  py::array a = py::array_t<double>(numpy_shape(v, cols), v.data(), owner);
+  if (read_only) a.attr("setflags")(py::arg("write") = false);
+  return a;
 }
+
+// What the local updates call their results (SolveResult::variant): their
+// vertices are read-only, since the next update from them relies on the
+// residual the Interpolator keeps for them.
+constexpr const char* kLocalVariant = "local";
 
 const char* const kResultDoc = R"doc(What a solve returns (sorpia.interpolate, Interpolator.solve).
 
 Attributes
 ----------
-control_vertices : (n, 3) float64
-    V, in the input vertex order; B V = V0 to the tolerance reached.
+control_vertices : (n, k) float64
+    V, in the input vertex order; B V = V0 to the tolerance reached. k = 3
+    for vertices, the data's columns otherwise. Read-only in the result of
+    an update (Interpolator.update), whose residual the Interpolator keeps
+    for the next update.
 iterations : int
-    Iterations done (sweeps for "gs"/"sor", outer steps for "hss"/"whss").
+    Iterations done (sweeps for "gs"/"sor", outer steps for "hss"/"whss"),
+    counted from the start: 0 when a warm start already met tol. An update
+    (Interpolator.update): 1 when it relaxed any vertex, else 0.
 converged : bool
     errors[-1] < tol, or E_k at the rounding floor (E_k <= 64 eps max_i ||v_i^0||),
     below which no method can go: a tol of 1e-300 ends there, converged.
 errors : (iterations + 1,) float64
-    errors[k] = E_k / E_0, so errors[0] = 1 (a single 0.0 when E_0 = 0:
-    V0 already interpolates and nothing is done).
+    errors[k] = E_k / E_0, E_0 = max_i ||v_i^0 - (B V0)_i|| the error of the
+    cold start V = V0 whatever the start, so errors[0] = 1 from a cold start
+    and E(start) / E_0 from a warm one (`initial`, an update); a single 0.0
+    when E_0 = 0: V0 already interpolates and is the result. An update:
+    [E(previous) / E_0, E(result) / E_0] with E_0 of the new targets, E over
+    the whole mesh.
 method : str
 omega : float or None
     "sor"/"gs": the omega used (1.0 for "gs"); None for other methods.
@@ -69,7 +101,10 @@ weight : float or None
     "hss"/"whss": the relaxation weight.
 products : int
     Applications of B (or B^T) in the iteration, inner solves included: a
-    measure of work comparable across methods.
+    measure of work comparable across methods (0 for an update).
+relaxations : int
+    Single-vertex relaxations (eq. 18 at one vertex): iterations * n for
+    "sor"/"gs", those of the work list for an update, 0 for other methods.
 timings : dict
     Seconds per phase: "topology" (faces validated, one-ring), "operator"
     (B from OpenSubdiv's limit masks), "estimate" (spectral estimates for the
@@ -80,13 +115,18 @@ timings : dict
 const char* const kResultFields[] = {"control_vertices", "iterations", "converged",  "errors", "method",
                                      "omega",            "seconds",    "stop_reason", "initial_error",
                                      "variant",          "rho",        "sigma",       "lambda_min",
-                                     "alpha",            "weight",     "products",    "timings"};
+                                     "alpha",            "weight",     "products",    "relaxations",
+                                     "timings"};
 
 void bind_result(py::module_& m) {
   using R = sorpia::SolveResult;
   py::class_<R> cls(m, "InterpolationResult", kResultDoc);
   cls.def_property_readonly("control_vertices",
-                            [](const py::object& self) { return view(self.cast<const R&>().control_vertices, 3, self); })
+                            [](const py::object& self) {
+                              const R& r = self.cast<const R&>();
+                              return view(r.control_vertices, static_cast<py::ssize_t>(r.columns), self,
+                                          r.variant == kLocalVariant);
+                            })
       .def_property_readonly("errors", [](const py::object& self) { return view(self.cast<const R&>().errors, 0, self); })
       .def_readonly("iterations", &R::iterations)
       .def_property_readonly("converged", &R::converged)
@@ -102,6 +142,7 @@ void bind_result(py::module_& m) {
       .def_property_readonly("alpha", [](const R& r) { return optional_float(r.alpha); })
       .def_property_readonly("weight", [](const R& r) { return optional_float(r.weight); })
       .def_readonly("products", &R::products)
+      .def_readonly("relaxations", &R::relaxations)
       .def_property_readonly("timings",
                              [](const R& r) {
                                py::dict d;
@@ -127,10 +168,10 @@ void bind_result(py::module_& m) {
                                   static_cast<int>(r.stop_reason), static_cast<int>(r.method), r.variant, r.omega,
                                   r.reordered, r.rho, r.omega_clamped, r.sigma, r.lambda_min, r.alpha, r.weight,
                                   r.products, r.estimate_seconds, r.solve_seconds, r.topology_seconds,
-                                  r.operator_seconds, r.seconds);
+                                  r.operator_seconds, r.seconds, r.columns, r.relaxations);
           },
           [](const py::tuple& t) {
-            if (t.size() != 21) throw std::runtime_error("InterpolationResult: bad pickle state");
+            if (t.size() != 23) throw std::runtime_error("InterpolationResult: bad pickle state");
             R r;
             r.control_vertices = t[0].cast<std::vector<double>>();
             r.errors = t[1].cast<std::vector<double>>();
@@ -153,6 +194,8 @@ void bind_result(py::module_& m) {
             r.topology_seconds = t[18].cast<double>();
             r.operator_seconds = t[19].cast<double>();
             r.seconds = t[20].cast<double>();
+            r.columns = t[21].cast<std::size_t>();
+            r.relaxations = t[22].cast<long long>();
             return r;
           }))
       .def("__repr__", [](const py::object& self) {
@@ -265,9 +308,14 @@ void bind_solvers(py::module_& m) {
            })
       .def(
           "solve",
-          [](OperatorState& s, const Vertices& v0, sorpia::SolveOptions opt, const py::object& callback) {
-            check_shape(v0, 3, "vertices");
+          [](OperatorState& s, const Vertices& v0, sorpia::SolveOptions opt, const py::object& callback,
+             const std::optional<Vertices>& initial, bool keep_targets) {
+            const std::size_t k = columns_of(v0, "vertices");
             check_rows(v0, s.op.n, "vertices", "the mesh");
+            if (initial) {
+              check_shape(*initial, static_cast<py::ssize_t>(k), "initial");
+              check_rows(*initial, s.op.n, "initial", "the mesh");
+            }
             // The callback runs with the GIL; what it raises (KeyboardInterrupt too) ends the solve.
             if (!callback.is_none())
               opt.callback = [callback](int k, double e) {
@@ -277,12 +325,82 @@ void bind_solvers(py::module_& m) {
             sorpia::SolveResult r;
             {
               LongCall call;
-              r = sorpia::solve(s.op, v0.data(), opt, &s.cache);
+              r = sorpia::solve(s.op, v0.data(), k, initial ? initial->data() : nullptr, opt, &s.cache);
+              if (keep_targets) {
+                s.solved_targets.assign(v0.data(), v0.data() + k * s.op.n);
+                s.solved_k = k;
+              }
             }
             return r;
           },
-          "vertices"_a.noconvert(), "options"_a, "callback"_a,
-          "Solve B V = V0 with checked options. Returns an InterpolationResult.");
+          "vertices"_a.noconvert(), "options"_a, "callback"_a, "initial"_a.noconvert() = py::none(),
+          "keep_targets"_a = false,
+          "Solve B V = V0 ((n, k) data) with checked options, from `initial` when given. keep_targets: the "
+          "targets of later updates are these. Returns an InterpolationResult.")
+      .def(
+          "update",
+          [](OperatorState& s, const py::object& previous_obj, bool previous_is_last, const Faces& indices,
+             const Vertices& positions, double tol, long long max_iter, bool in_place) {
+            sorpia::SolveResult& previous = previous_obj.cast<sorpia::SolveResult&>();
+            if (!s.local && s.solved_k == 0)
+              throw sorpia::ParameterError("update needs the targets of a solve first: call solve(vertices)");
+            const std::size_t k = s.solved_k ? s.solved_k : s.local->columns();
+            if (previous.columns != k || previous.control_vertices.size() != k * s.op.n)
+              throw sorpia::ParameterError("previous has shape (" +
+                                           std::to_string(previous.control_vertices.size() / previous.columns) +
+                                           ", " + std::to_string(previous.columns) + ") but the targets are (" +
+                                           std::to_string(s.op.n) + ", " + std::to_string(k) + ")");
+            if (indices.ndim() != 1) throw sorpia::ParameterError("indices must be one-dimensional");
+            check_shape(positions, static_cast<py::ssize_t>(k), "positions");
+            if (positions.shape(0) != indices.shape(0))
+              throw sorpia::ParameterError("positions has " + std::to_string(positions.shape(0)) +
+                                           " rows but indices has " + std::to_string(indices.shape(0)));
+            sorpia::SolveResult fresh;
+            sorpia::SolveResult& r = in_place ? previous : fresh;
+            {
+              LongCall call;
+              const auto t0 = std::chrono::steady_clock::now();
+              if (!s.local) s.local = std::make_unique<sorpia::LocalSolver>(s.op);
+              if (s.solved_k) {
+                s.local->set_targets(std::move(s.solved_targets), s.solved_k);
+                s.solved_targets = {};
+                s.solved_k = 0;
+                previous_is_last = false;
+              }
+              if (!in_place) r.control_vertices = previous.control_vertices;
+              const long long n = static_cast<long long>(s.op.n);
+              // At most max_iter sweeps' worth of relaxations.
+              const long long cap = max_iter > std::numeric_limits<long long>::max() / std::max(n, 1LL)
+                                        ? std::numeric_limits<long long>::max() : max_iter * n;
+              r.rho = r.sigma = r.lambda_min = r.alpha = r.weight = NAN;
+              r.omega_clamped = r.reordered = false;
+              r.estimate_seconds = r.topology_seconds = r.operator_seconds = 0.0;
+              s.local->update(r.control_vertices.data(), previous_is_last, indices.data(),
+                              static_cast<std::size_t>(indices.shape(0)), positions.data(), tol, cap, r);
+              r.solve_seconds = r.seconds =
+                  std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+            }
+            return in_place ? previous_obj : py::cast(std::move(fresh));
+          },
+          "previous"_a, "previous_is_last"_a, "indices"_a.noconvert(), "positions"_a.noconvert(), "tol"_a,
+          "max_iter"_a, "in_place"_a,
+          "Move the kept targets at `indices` to `positions` and relax from previous.control_vertices "
+          "(sorpia::LocalSolver::update). previous_is_last: previous is the last update's result, unchanged.")
+      .def_property_readonly(
+          "targets_columns",
+          [](const OperatorState& s) -> std::size_t {
+            return s.solved_k ? s.solved_k : s.local && s.local->has_targets() ? s.local->columns() : 0;
+          },
+          "k of the kept (n, k) targets; 0 before a solve that kept them.")
+      .def_property_readonly(
+          "targets",
+          [](const OperatorState& s) -> py::object {
+            if (s.solved_k) return to_numpy(s.solved_targets, static_cast<py::ssize_t>(s.solved_k));
+            if (s.local && s.local->has_targets())
+              return to_numpy(s.local->targets(), static_cast<py::ssize_t>(s.local->columns()));
+            return py::none();
+          },
+          "A copy of the targets later updates move (None before a solve that kept them).");
   m.attr("YOUNG_RHO_CLAMP") = sorpia::young_rho_clamp;
   m.attr("MAX_THREADS") = sorpia::max_threads;
 }

@@ -60,6 +60,36 @@ inline void row_product(const LimitOperator& op, const double* v, std::size_t i,
   for (int c = 0; c < 3; ++c) bv[c] = op.diag[i] * v[3 * i + c] + s[c];
 }
 
+// (B v)_i for (n, k) rows of v, any k, written to bv[0..k): the formula of
+// apply_cols<k> (for k = 3 that of row_product).
+inline void row_product_cols(const LimitOperator& op, const double* v, std::size_t k, std::size_t i, double* bv) {
+  for (std::size_t c = 0; c < k; ++c) bv[c] = 0.0;
+  for (std::int32_t p = op.offsets[i]; p < op.offsets[i + 1]; ++p) {
+    const double* q = v + k * static_cast<std::size_t>(op.neighbors[p]);
+    if (op.uniform()) {
+      for (std::size_t c = 0; c < k; ++c) bv[c] += q[c];
+    } else {
+      const double w = op.values[p];
+      for (std::size_t c = 0; c < k; ++c) bv[c] += w * q[c];
+    }
+  }
+  const double d = op.diag[i], w = op.uniform() ? op.weight[i] : 1.0;
+  for (std::size_t c = 0; c < k; ++c) bv[c] = d * v[k * i + c] + (op.uniform() ? w * bv[c] : bv[c]);
+}
+
+// y = B x for (n, k) x and y, any k >= 1: apply_cols<k> for the small k,
+// row_product_cols beyond.
+inline void apply_columns(const LimitOperator& op, std::size_t k, const double* x, double* y) {
+  switch (k) {
+    case 1: apply_cols<1>(op, x, y); return;
+    case 2: apply_cols<2>(op, x, y); return;
+    case 3: apply_cols<3>(op, x, y); return;
+    case 4: apply_cols<4>(op, x, y); return;
+    default:
+      for (std::size_t i = 0; i < op.n; ++i) row_product_cols(op, x, k, i, y + k * i);
+  }
+}
+
 // B^T in CSR: the rows of B^T hold, for column j of B, every row i referencing j
 // with its weight w_i. Built once per solve that needs it (HSS).
 struct Transposed {
@@ -68,25 +98,25 @@ struct Transposed {
 };
 Transposed transpose(const LimitOperator& op);
 
-// y = B^T x (C columns).
-template <int C>
-inline void apply_transpose_cols(const LimitOperator& op, const Transposed& t, const double* x, double* y) {
+// y = B^T x for (n, k) x and y.
+inline void apply_transpose_columns(const LimitOperator& op, const Transposed& t, std::size_t k, const double* x,
+                                    double* y) {
   for (std::size_t j = 0; j < op.n; ++j) {
-    double s[C] = {};
+    double* yj = y + k * j;
+    for (std::size_t c = 0; c < k; ++c) yj[c] = 0.0;
     for (std::int32_t p = t.offsets[j]; p < t.offsets[j + 1]; ++p)
-      for (int c = 0; c < C; ++c) s[c] += t.values[p] * x[C * t.rows[p] + c];
-    for (int c = 0; c < C; ++c) y[C * j + c] = op.diag[j] * x[C * j + c] + s[c];
+      for (std::size_t c = 0; c < k; ++c) yj[c] += t.values[p] * x[k * t.rows[p] + c];
+    for (std::size_t c = 0; c < k; ++c) yj[c] = op.diag[j] * x[k * j + c] + yj[c];
   }
 }
 
-// y = (B x + sign B^T x) / 2 (C columns): H x for sign = 1, S x for sign = -1,
+// y = (B x + sign B^T x) / 2 for (n, k) x: H x for sign = 1, S x for sign = -1,
 // H and S the symmetric and skew-symmetric parts of B. bx, btx: scratch, x's size.
-template <int C>
-inline void apply_part(const LimitOperator& op, const Transposed& t, double sign, const double* x, double* bx,
-                       double* btx, double* y) {
-  apply_cols<C>(op, x, bx);
-  apply_transpose_cols<C>(op, t, x, btx);
-  for (std::size_t k = 0; k < C * op.n; ++k) y[k] = 0.5 * (bx[k] + sign * btx[k]);
+inline void apply_part(const LimitOperator& op, const Transposed& t, std::size_t k, double sign, const double* x,
+                       double* bx, double* btx, double* y) {
+  apply_columns(op, k, x, bx);
+  apply_transpose_columns(op, t, k, x, btx);
+  for (std::size_t q = 0; q < k * op.n; ++q) y[q] = 0.5 * (bx[q] + sign * btx[q]);
 }
 
 // Gamma^-1 as a vector: 1 / w_i per row (1 on rows without neighbours). B =
@@ -101,13 +131,23 @@ inline std::vector<double> gamma_inverse(const LimitOperator& op) {
   return g;
 }
 
-// r = v0 - B v (r may be null: only the norm); returns max_i ||r_i|| (the paper's E_k).
-double residual(const LimitOperator& op, const double* v0, const double* v, double* r);
+// r = v0 - B v for (n, k) arrays (r may be null: only the norm); returns
+// max_i ||r_i|| (the paper's E_k, the Euclidean norm over the k columns).
+double residual(const LimitOperator& op, const double* v0, const double* v, double* r, std::size_t k = 3);
 
-inline double max_row_norm(const double* r, std::size_t n) {
+// max_i ||r_i|| over the rows of an (n, k) array.
+inline double max_row_norm(const double* r, std::size_t n, std::size_t k = 3) {
   double m = 0.0;
+  if (k == 3) {
+    for (std::size_t i = 0; i < n; ++i) {
+      const double e = r[3 * i] * r[3 * i] + r[3 * i + 1] * r[3 * i + 1] + r[3 * i + 2] * r[3 * i + 2];
+      m = std::max(m, e);
+    }
+    return std::sqrt(m);
+  }
   for (std::size_t i = 0; i < n; ++i) {
-    const double e = r[3 * i] * r[3 * i] + r[3 * i + 1] * r[3 * i + 1] + r[3 * i + 2] * r[3 * i + 2];
+    double e = 0.0;
+    for (std::size_t c = 0; c < k; ++c) e += r[k * i + c] * r[k * i + c];
     m = std::max(m, e);
   }
   return std::sqrt(m);
@@ -137,8 +177,16 @@ class Monitor {
     res_.errors.reserve(static_cast<std::size_t>(std::min(opt.max_iter, 4096LL)) + 1);
   }
 
-  // E_0; returns true when there is nothing to do (E_0 == 0: V0 already solves it).
-  bool start(double e0) {
+  // A warm start: E_0 is that of the cold start V^(0) = V0, given here before
+  // start(), so that E_k / E_0 < tol is the same guarantee from any start;
+  // start() then gets the error of the warm start itself (errors[0]).
+  void reference(double e0) { reference_ = e0; }
+
+  // The error of the start (E_0 unless reference() gave it); records it as
+  // errors[0] and returns true when there is nothing to do (E_0 == 0: V0
+  // already solves it; or the start already meets tol).
+  bool start(double e) {
+    const double e0 = std::isnan(reference_) ? e : reference_;
     res_.initial_error = e0;
     e0_ = e0;
     if (!(e0 > 0.0)) {
@@ -148,7 +196,7 @@ class Monitor {
       if (opt_.callback) opt_.callback(0, 0.0);
       return true;
     }
-    return record(e0);
+    return record(e);
   }
 
   // The rounding level of E_k, 64 eps max_i ||v_i^0||: no method gets below it.
@@ -179,14 +227,22 @@ class Monitor {
   SolveResult& res_;
   double floor_;
   double e0_ = 0.0;
+  double reference_ = NAN;
 };
 
-// "sor" and "gs" (solver_sweep.cpp): sweeps of V0 / 2^exponent with the fused
-// E_k (or a residual pass when opt.two_pass), on opt.threads threads; sets
-// res.control_vertices (times 2^exponent), errors, iterations, stop reason.
-// Uniform rows and rows with per-entry weights alike.
+// "sor" and "gs" (solver_sweep.cpp) on (n, 3) data: sweeps of V0 / 2^exponent
+// with the fused E_k (or a residual pass when opt.two_pass), on opt.threads
+// threads, from V0 or from `initial` (a warm start, (n, 3), scaled alike;
+// null: cold); sets res.control_vertices (times 2^exponent), errors,
+// iterations, stop reason. Uniform rows and rows with per-entry weights alike.
 void solve_sor(const LimitOperator& op, const double* v0, int exponent, const SolveOptions& opt, double omega,
-               SolveResult& res);
+               SolveResult& res, const double* initial = nullptr);
+
+// "sor" and "gs" on (n, k) data with k other than 3 (the engine above is built
+// for 3 columns): the same sweep (eq. 18) in vertex order on one thread, E_k
+// by a residual pass after each sweep, on res.control_vertices (V^(0) on entry).
+void solve_sor_columns(const LimitOperator& op, const double* v0, std::size_t k, double omega, Monitor& mon,
+                       SolveResult& res);
 
 // The sweep runs its ranges on threads only from this many vertices a thread;
 // with fewer, one after the other on the calling thread (the same arithmetic
@@ -195,10 +251,10 @@ void solve_sor(const LimitOperator& op, const double* v0, int exponent, const So
 // nothing else changes it.
 extern std::size_t sweep_min_vertices_per_thread;
 
-// The Krylov and HSS methods (solver_krylov.cpp), iterating on
+// The Krylov and HSS methods (solver_krylov.cpp) on (n, k) data, iterating on
 // res.control_vertices, which holds V^(0) on entry.
-void solve_cg(const LimitOperator& op, const double* v0, Monitor& mon, SolveResult& res);
-void solve_hss(const LimitOperator& op, const double* v0, double alpha, double weight, Monitor& mon,
+void solve_cg(const LimitOperator& op, const double* v0, std::size_t k, Monitor& mon, SolveResult& res);
+void solve_hss(const LimitOperator& op, const double* v0, std::size_t k, double alpha, double weight, Monitor& mon,
                SolveResult& res);
 
 }  // namespace detail

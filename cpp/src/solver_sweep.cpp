@@ -165,6 +165,15 @@ class Engine {
     return std::sqrt(m);
   }
 
+  // x = `initial`, (n, 3) in the caller's order, already divided by
+  // 2^exponent: a warm start, loaded after start() has found E_0 from V0.
+  void load(const double* initial) {
+    for_each_index(parallel_, threads(), op_.n, [&](std::size_t k) {
+      const double* y = initial + 3 * (perm_.empty() ? k : static_cast<std::size_t>(perm_[k]));
+      x_[k] = d4{y[0], y[1], y[2], 0.0};
+    });
+  }
+
   // E of the current iterate, by a residual pass.
   double residual() const {
     const int t_count = threads();
@@ -222,13 +231,19 @@ class Engine {
 }  // namespace
 
 void solve_sor(const LimitOperator& op, const double* v0, int exponent, const SolveOptions& opt, double omega,
-               SolveResult& res) {
+               SolveResult& res, const double* initial) {
   Engine engine(op, v0, exponent, omega, opt.threads);
   res.reordered = engine.reordered();
   const bool fused = !opt.two_pass && engine.fused_pays();
   const double e0 = engine.start();
   Monitor mon(opt, res, engine.scale());
-  if (!mon.start(e0)) {
+  double first = e0;
+  if (initial && e0 > 0.0) {  // E_0 = 0: V0 solves it exactly, whatever the start
+    mon.reference(e0);
+    engine.load(initial);
+    first = engine.residual();
+  }
+  if (!mon.start(first)) {
     for (;;) {
       double e = engine.sweep(fused);
       res.products += 2;  // a sweep and a residual, fused or not
@@ -238,6 +253,22 @@ void solve_sor(const LimitOperator& op, const double* v0, int exponent, const So
   }
   res.control_vertices.resize(3 * op.n);
   engine.write(res.control_vertices.data());
+}
+
+void solve_sor_columns(const LimitOperator& op, const double* v0, std::size_t k, double omega, Monitor& mon,
+                       SolveResult& res) {
+  double* x = res.control_vertices.data();
+  std::vector<double> bx(k);
+  if (mon.start(residual(op, v0, x, nullptr, k))) return;
+  for (;;) {
+    for (std::size_t i = 0; i < op.n; ++i) {
+      row_product_cols(op, x, k, i, bx.data());
+      const double f = omega / op.diag[i];
+      for (std::size_t c = 0; c < k; ++c) x[k * i + c] += f * (v0[k * i + c] - bx[c]);
+    }
+    res.products += 2;  // a sweep and a residual
+    if (mon.record(residual(op, v0, x, nullptr, k))) return;
+  }
 }
 
 }  // namespace detail

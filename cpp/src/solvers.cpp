@@ -125,8 +125,22 @@ double young_omega(double rho, bool* clamped) {
 
 namespace detail {
 
-double residual(const LimitOperator& op, const double* v0, const double* v, double* r) {
+double residual(const LimitOperator& op, const double* v0, const double* v, double* r, std::size_t k) {
   double m = 0.0;
+  if (k != 3) {
+    std::vector<double> bv(k);
+    for (std::size_t i = 0; i < op.n; ++i) {
+      row_product_cols(op, v, k, i, bv.data());
+      double e = 0.0;
+      for (std::size_t c = 0; c < k; ++c) {
+        const double rc = v0[k * i + c] - bv[c];
+        if (r) r[k * i + c] = rc;
+        e += rc * rc;
+      }
+      m = std::max(m, e);
+    }
+    return std::sqrt(m);
+  }
   for (std::size_t i = 0; i < op.n; ++i) {
     double bv[3];
     row_product(op, v, i, bv);
@@ -175,14 +189,15 @@ Transposed transpose(const LimitOperator& op) {
 namespace {
 
 // Richardson: V += sigma (V0 - B V) (paper eq. 9 with sigma = 1, W-PIA otherwise).
-void solve_richardson(const LimitOperator& op, const double* v0, double sigma, Monitor& mon, SolveResult& res) {
+void solve_richardson(const LimitOperator& op, const double* v0, std::size_t kc, double sigma, Monitor& mon,
+                      SolveResult& res) {
   double* v = res.control_vertices.data();
-  std::vector<double> r(3 * op.n);
-  if (mon.start(residual(op, v0, v, r.data()))) return;
+  std::vector<double> r(kc * op.n);
+  if (mon.start(residual(op, v0, v, r.data(), kc))) return;
   for (;;) {
-    for (std::size_t k = 0; k < 3 * op.n; ++k) v[k] += sigma * r[k];
+    for (std::size_t k = 0; k < kc * op.n; ++k) v[k] += sigma * r[k];
     ++res.products;
-    if (mon.record(residual(op, v0, v, r.data()))) return;
+    if (mon.record(residual(op, v0, v, r.data(), kc))) return;
   }
 }
 
@@ -252,9 +267,9 @@ void resolve_parameters(const LimitOperator& op, const SolveOptions& opt, Spectr
 // squares to inf) nor underflow. Within 2^+-200 no squared norm down to
 // rounding level (2^-53 max |v0|) can do either, and the scaling would change
 // no bit of any iterate: then V0 is used as it is, without a copy.
-int scale_exponent(const double* v0, std::size_t n) {
+int scale_exponent(const double* v0, std::size_t count) {
   double max_abs = 0.0;
-  for (std::size_t k = 0; k < 3 * n; ++k) max_abs = std::max(max_abs, std::abs(v0[k]));
+  for (std::size_t k = 0; k < count; ++k) max_abs = std::max(max_abs, std::abs(v0[k]));
   int exponent = 0;
   if (max_abs > 0.0 && std::isfinite(max_abs)) std::frexp(max_abs, &exponent);
   return std::abs(exponent) <= 200 ? 0 : exponent;
@@ -264,49 +279,98 @@ int scale_exponent(const double* v0, std::size_t n) {
 // at V0's own scale: E_0 = max_i ||v_i^0 - (B V0)_i|| underflows (subnormal
 // input), so V0 interpolates as far as doubles can tell, and the solve returns
 // it as the answer with errors [0.0], as for E_0 = 0 exactly.
-bool nothing_to_solve(const LimitOperator& op, const double* v0, int exponent) {
-  std::vector<double> scaled(v0, v0 + 3 * op.n);
+bool nothing_to_solve(const LimitOperator& op, const double* v0, std::size_t k, int exponent) {
+  std::vector<double> scaled(v0, v0 + k * op.n);
   detail::scale_pow2(scaled.data(), scaled.size(), -exponent);
-  return std::ldexp(detail::residual(op, scaled.data(), scaled.data(), nullptr), exponent) == 0.0;
+  return std::ldexp(detail::residual(op, scaled.data(), scaled.data(), nullptr, k), exponent) == 0.0;
 }
 
 // The iteration of a method that iterates on res.control_vertices (all but
-// the sweep), for V0 / 2^exponent.
-void run_iteration(const LimitOperator& op, const double* v0, int exponent, const SolveOptions& opt,
-                   SolveResult& res) {
+// the (n, 3) sweep), for V0 / 2^exponent, (n, k), from V0 or `initial`.
+void run_iteration(const LimitOperator& op, const double* v0, std::size_t k, const double* initial, int exponent,
+                   const SolveOptions& opt, SolveResult& res) {
+  const std::size_t m = k * op.n;
   std::vector<double> scaled;
   if (exponent != 0) {
-    scaled.assign(v0, v0 + 3 * op.n);
+    scaled.assign(v0, v0 + m);
     detail::scale_pow2(scaled.data(), scaled.size(), -exponent);
     v0 = scaled.data();
   }
-  res.control_vertices.assign(v0, v0 + 3 * op.n);  // V^(0) = V0 (paper: M^0 = M)
-  detail::Monitor mon(opt, res, detail::max_row_norm(v0, op.n));
+  detail::Monitor mon(opt, res, detail::max_row_norm(v0, op.n, k));
+  if (initial) {
+    // E_0 of the cold start: a warm start meets the same E_k / E_0 < tol.
+    const double e0 = detail::residual(op, v0, v0, nullptr, k);
+    mon.reference(e0);
+    if (e0 > 0.0) {
+      res.control_vertices.assign(initial, initial + m);
+      detail::scale_pow2(res.control_vertices.data(), m, -exponent);
+    } else {
+      res.control_vertices.assign(v0, v0 + m);  // V0 solves it exactly: the answer, whatever the start
+    }
+  } else {
+    res.control_vertices.assign(v0, v0 + m);  // V^(0) = V0 (paper: M^0 = M)
+  }
   switch (opt.method) {
     case Method::Pia:
     case Method::Wpia:
-      detail::solve_richardson(op, v0, res.sigma, mon, res);
+      detail::solve_richardson(op, v0, k, res.sigma, mon, res);
       break;
     case Method::Cg:
-      detail::solve_cg(op, v0, mon, res);
+      detail::solve_cg(op, v0, k, mon, res);
+      break;
+    case Method::Gs:
+    case Method::Sor:
+      detail::solve_sor_columns(op, v0, k, res.omega, mon, res);
       break;
     default:  // Hss, Whss
-      detail::solve_hss(op, v0, res.alpha, res.weight, mon, res);
+      detail::solve_hss(op, v0, k, res.alpha, res.weight, mon, res);
       break;
   }
   detail::scale_pow2(res.control_vertices.data(), res.control_vertices.size(), exponent);
 }
 
+// (n, k) data with k < 3 as (n, 3), the columns past k zero: every method
+// treats the columns alike and a zero column has a zero residual, so the
+// first k columns iterate as they would alone and E_k is the same; the
+// sweep then runs on its (n, 3) engine, threads included.
+std::vector<double> padded(const double* x, std::size_t n, std::size_t k) {
+  std::vector<double> out(3 * n, 0.0);
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t c = 0; c < k; ++c) out[3 * i + c] = x[k * i + c];
+  return out;
+}
+
 }  // namespace
 
 SolveResult solve(const LimitOperator& op, const double* v0, const SolveOptions& opt, SpectralCache* cache) {
+  return solve(op, v0, 3, nullptr, opt, cache);
+}
+
+SolveResult solve(const LimitOperator& op, const double* v0, std::size_t k, const double* initial,
+                  const SolveOptions& opt, SpectralCache* cache) {
   using clock = std::chrono::steady_clock;
   check_options(opt);
+  if (k < 1) throw ParameterError("the data must have at least one column (k = 0)");
+  const bool sweep = opt.method == Method::Gs || opt.method == Method::Sor;
+  if (opt.threads > 1 && k > 3)
+    throw ParameterError("threads = " + detail::repr(opt.threads) + " sweeps (n, 3) data and fewer columns only; " +
+                         "this data has " + std::to_string(k) + " columns: use threads=1");
+  if (sweep && k < 3) {
+    const std::vector<double> v0p = padded(v0, op.n, k);
+    const std::vector<double> initialp = initial ? padded(initial, op.n, k) : std::vector<double>();
+    SolveResult res = solve(op, v0p.data(), 3, initial ? initialp.data() : nullptr, opt, cache);
+    for (std::size_t i = 0; i < op.n; ++i)
+      for (std::size_t c = 0; c < k; ++c) res.control_vertices[k * i + c] = res.control_vertices[3 * i + c];
+    res.control_vertices.resize(k * op.n);
+    res.columns = k;
+    return res;
+  }
   SpectralCache local;
   SpectralCache& sc = cache ? *cache : local;
   SolveResult res;
   res.method = opt.method;
   res.variant = method_name(opt.method);
+  res.columns = k;
 
   // The estimates are timed apart from the solve, and cost nothing when the
   // cache already holds them (or another thread's solve computed them).
@@ -315,17 +379,24 @@ SolveResult solve(const LimitOperator& op, const double* v0, const SolveOptions&
   res.estimate_seconds = detail::estimate_seconds_on_this_thread - spent_before;
 
   const auto t0 = clock::now();
-  const int exponent = scale_exponent(v0, op.n);
-  if (exponent < 0 && nothing_to_solve(op, v0, exponent)) {
-    res.control_vertices.assign(v0, v0 + 3 * op.n);
+  const int exponent = scale_exponent(v0, k * op.n);
+  if (exponent < 0 && nothing_to_solve(op, v0, k, exponent)) {
+    res.control_vertices.assign(v0, v0 + k * op.n);
     res.errors.assign(1, 0.0);
     res.stop_reason = StopReason::Converged;
     if (opt.callback) opt.callback(0, 0.0);
-  } else if (opt.method == Method::Gs || opt.method == Method::Sor) {
-    detail::solve_sor(op, v0, exponent, opt, res.omega, res);
+  } else if (sweep && k == 3) {
+    std::vector<double> scaled_initial;
+    if (initial && exponent != 0) {
+      scaled_initial.assign(initial, initial + 3 * op.n);
+      detail::scale_pow2(scaled_initial.data(), scaled_initial.size(), -exponent);
+      initial = scaled_initial.data();
+    }
+    detail::solve_sor(op, v0, exponent, opt, res.omega, res, initial);
   } else {
-    run_iteration(op, v0, exponent, opt, res);
+    run_iteration(op, v0, k, initial, exponent, opt, res);
   }
+  if (sweep) res.relaxations = static_cast<long long>(res.iterations) * static_cast<long long>(op.n);
   res.initial_error = std::ldexp(res.initial_error, exponent);
   res.solve_seconds = std::chrono::duration<double>(clock::now() - t0).count();
   res.seconds = res.estimate_seconds + res.solve_seconds;

@@ -254,7 +254,7 @@ std::pair<double, double> estimate_hermitian_extremes(const LimitOperator& op, S
     Timer timer{cache};
     const detail::Transposed t = detail::transpose(op);
     std::vector<double> bx(op.n), btx(op.n), ones(op.n, 1.0);
-    const auto h = [&](const double* x, double* y) { detail::apply_part<1>(op, t, 1.0, x, bx.data(), btx.data(), y); };
+    const auto h = [&](const double* x, double* y) { detail::apply_part(op, t, 1, 1.0, x, bx.data(), btx.data(), y); };
     const auto both = [](double lo, double hi) { return std::make_pair(lo, hi); };
     std::tie(cache.hermitian_min, cache.hermitian_max) = lanczos_extremes(op.n, h, ones, 300, 1e-5, both);
   }

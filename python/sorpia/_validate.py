@@ -29,7 +29,7 @@ mistake (vertices and faces swapped) than a convenience.
 from __future__ import annotations
 
 import operator
-from typing import NamedTuple
+from typing import NamedTuple, Optional
 
 import numpy as np
 
@@ -53,18 +53,24 @@ def _asarray(value, name: str, expected: str) -> np.ndarray:
         raise TypeError(f"{name} must be {expected}: {exc}") from None
 
 
-def as_vertices(vertices, name: str = "vertices") -> np.ndarray:
+def as_vertices(vertices, name: str = "vertices", columns: Optional[int] = 3) -> np.ndarray:
     """Return `vertices` as a C-contiguous float64 (n, 3) array of finite values.
+
+    `columns=None` accepts (n, k) data for any k >= 1 (colours, texture
+    coordinates, scalar fields as (n, 1)), checked alike.
 
     Any real dtype (float16..longdouble, integers) is converted; bool, complex,
     object and string arrays raise TypeError. Raises ValueError for a wrong
     shape and sorpia.MeshError for an empty or non-finite array.
     """
-    arr = _asarray(vertices, name, "an (n, 3) array of floats")
+    shape = "(n, 3)" if columns == 3 else "(n, k)" if columns is None else f"(n, {columns})"
+    arr = _asarray(vertices, name, f"an {shape} array of floats")
     if arr.dtype == bool or not (np.issubdtype(arr.dtype, np.floating) or np.issubdtype(arr.dtype, np.integer)):
-        raise TypeError(f"{name} must be an (n, 3) array of real numbers, got dtype {arr.dtype}")
-    if arr.ndim != 2 or arr.shape[1] != 3:
-        raise ValueError(f"{name} must have shape (n, 3), got {arr.shape}")
+        raise TypeError(f"{name} must be an {shape} array of real numbers, got dtype {arr.dtype}")
+    if arr.ndim != 2 or arr.shape[1] < 1 or (columns is not None and arr.shape[1] != columns):
+        hint = " (a scalar per vertex: values[:, None])" if arr.ndim == 1 and columns is None else ""
+        raise ValueError(f"{name} must have shape {shape}{', k >= 1' if columns is None else ''}, "
+                         f"got {arr.shape}{hint}")
     if arr.shape[0] == 0:
         raise MeshError(f"{name} is empty: a mesh needs at least one triangle")
     arr = np.ascontiguousarray(arr, dtype=np.float64)

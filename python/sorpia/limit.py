@@ -39,8 +39,9 @@ def limit_points(vertices, faces, boundary: str = DEFAULT_BOUNDARY) -> np.ndarra
 
     Parameters
     ----------
-    vertices : array_like, (n, 3) float
-        Control vertices.
+    vertices : array_like, (n, 3) or (n, k) float
+        Control vertices, or any per-vertex data (k >= 1 columns, each
+        mapped by B alike).
     faces : array_like, (m, 3) int
         Triangles, indices into `vertices`, consistently oriented.
     boundary : {"edge-and-corner", "edge-only"}
@@ -51,7 +52,7 @@ def limit_points(vertices, faces, boundary: str = DEFAULT_BOUNDARY) -> np.ndarra
 
     Returns
     -------
-    numpy.ndarray, (n, 3) float64
+    numpy.ndarray, (n, 3) or (n, k) float64
         B V, from OpenSubdiv's Loop limit masks (``Sdc::Scheme::ComputeVertexLimitMask``,
         what ``Far::PrimvarRefinerReal<double>::Limit`` applies; equal to it to 1e-15).
         Interior vertex of valence n: alpha_n v + (1 - alpha_n)/n sum of its
@@ -59,9 +60,21 @@ def limit_points(vertices, faces, boundary: str = DEFAULT_BOUNDARY) -> np.ndarra
         boundary vertex: 2/3 v + 1/6 (its two boundary neighbours). Vertices no
         face references are returned unchanged (with a warning).
     """
-    vertices = as_vertices(vertices)
+    vertices = as_vertices(vertices, columns=None)
     topo = topology(faces, vertices.shape[0], count_name="len(vertices)")
-    return _core.limit_points(topo, vertices, as_boundary(boundary))
+    k = vertices.shape[1]
+    if k == 3:
+        return _core.limit_points(topo, vertices, as_boundary(boundary))
+    # B acts on each column alike: the columns three at a time (the last
+    # group padded with zero columns) through the (n, 3) core.
+    n, groups = vertices.shape[0], -(-k // 3)
+    padded = np.zeros((n, 3 * groups))
+    padded[:, :k] = vertices
+    out = np.empty_like(padded)
+    for g in range(groups):
+        out[:, 3 * g:3 * g + 3] = _core.limit_points(topo, np.ascontiguousarray(padded[:, 3 * g:3 * g + 3]),
+                                                     as_boundary(boundary))
+    return np.ascontiguousarray(out[:, :k])
 
 
 def limit_matrix(faces, n_vertices: int, boundary: str = DEFAULT_BOUNDARY) -> scipy.sparse.csr_matrix:

@@ -2,8 +2,14 @@
 
 B is the Loop limit matrix (paper eq. 7, as OpenSubdiv evaluates it), V0 the
 (n, 3) mesh vertices, V the control vertices whose limit surface passes through
-V0. Every method starts from V = V0 and stops by the paper's rule (section 5):
-E_k = max_i ||v_i^0 - (B V^(k))_i||, stop when E_k / E_0 < tol or at max_iter.
+V0. Every method starts from V = V0 (or a warm start, ``initial=``) and stops
+by the paper's rule (section 5): E_k = max_i ||v_i^0 - (B V^(k))_i||, stop when
+E_k / E_0 < tol or at max_iter, E_0 always that of the cold start V = V0.
+
+Any per-vertex data can be interpolated on the limit surface: V0 may be
+(n, k) for any k >= 1 (colours, texture coordinates, a scalar field as
+(n, 1)); E_k is then the Euclidean norm over the k components.
+`Interpolator.update` re-solves locally after a few targets move.
 
 Methods (the iteration itself runs in the C++ core):
 
@@ -64,6 +70,7 @@ import math
 import numbers
 import time
 import warnings
+import weakref
 from typing import Callable, Optional
 
 import numpy as np
@@ -153,6 +160,9 @@ class Interpolator:
     The spectral estimates a method needs (lambda_min for "wpia", rho for
     omega="young", H's extremes for "hss"/"whss", ...) are computed on first
     use and kept, so that running every method on one mesh pays for them once.
+
+    The Interpolator also keeps the targets of its last `solve` (a copy), which
+    `update` moves: see `targets` and `update`.
     """
 
     def __init__(self, faces, n_vertices: int, boundary: str = DEFAULT_BOUNDARY):
@@ -177,6 +187,13 @@ class Interpolator:
         self._operator = _core.LimitOperator(self.topology, self._boundary)
         t2 = time.perf_counter()
         self.build_timings = {"topology": t1 - t0, "operator": t2 - t1}
+        self._last_update = None  # weak reference to the result the last update returned
+
+    @property
+    def targets(self) -> Optional[np.ndarray]:
+        """A copy of the targets `update` moves: those of the last `solve`, moved
+        by every `update` since; None before the first solve."""
+        return self._operator.targets
 
     @property
     def closed(self) -> bool:
@@ -192,13 +209,17 @@ class Interpolator:
 
     def solve(self, vertices, method: str = "sor", omega="auto", tol: float = 1e-10, max_iter: int = 1000,
               callback: Optional[Callable[[int, float], object]] = None, *, sigma=None, alpha=None, weight=None,
-              threads: int = 1) -> InterpolationResult:
+              threads: int = 1, initial=None) -> InterpolationResult:
         """Solve B V = V0 for the control vertices V.
 
         Parameters
         ----------
-        vertices : array_like, (n, 3) float
+        vertices : array_like, (n, 3) or (n, k) float
             V0, finite; n must equal the n_vertices given at construction.
+            Any k >= 1 columns: every column is interpolated on the limit
+            surface, E_k is the largest Euclidean norm of a row of the
+            residual over all k. The Interpolator keeps a copy, the targets
+            of later `update` calls.
         method : {"sor", "gs", "pia", "wpia", "cg", "hss", "whss"}
         omega : float in (0, 2), "auto" or "young"
             SOR relaxation ("sor" only; other methods accept only the default).
@@ -226,7 +247,13 @@ class Interpolator:
             agrees to the tolerance, iteration counts within a few percent)
             and do not depend on timing. 1 (default) on one core; more than
             the cores free only slows down. control_vertices are always in
-            the input order.
+            the input order. With more than 3 columns of data, 1 only.
+        initial : array_like, same shape as `vertices`, or None
+            A warm start V^(0) (e.g. the previous frame's control_vertices),
+            for every method. The stopping rule is unchanged: E_0 is the error
+            of the cold start V = V0, so the result meets the same E_k / E_0 <
+            tol; errors[0] = E(initial) / E_0 and iterations count from the
+            warm start (0 when it already meets tol).
 
         Returns
         -------
@@ -237,17 +264,107 @@ class Interpolator:
         t0 = time.perf_counter()
         options = check_options(method, omega, tol, max_iter, callback, sigma=sigma, alpha=alpha, weight=weight,
                                 threads=threads)
-        return self._solve(as_vertices(vertices), method, options, callback, t0)
+        v0 = as_vertices(vertices, columns=None)
+        return self._solve(v0, method, options, callback, t0, _as_initial(initial, v0), keep_targets=True)
 
-    def _solve(self, v0: np.ndarray, method: str, options: _core.SolveOptions, callback,
-               t0: float) -> InterpolationResult:
+    def update(self, previous: InterpolationResult, indices, positions, tol: float = 1e-10, max_iter: int = 1000,
+               *, in_place: bool = False) -> InterpolationResult:
+        """Move the targets at `indices` to `positions` and re-solve locally.
+
+        Starts from ``previous.control_vertices`` and relaxes only the vertices
+        whose residual is at least tol * E_0 (a work-list Gauss-Seidel:
+        a vertex enters the list when its residual reaches the threshold,
+        and leaves it relaxed), so the work stays near the moved targets: the
+        change of the solution decays geometrically with the distance in rings.
+
+        The targets are the Interpolator's: those of its last `solve`, moved by
+        every update since (`targets`); this call moves them for good, so
+        successive updates compose. The result meets the guarantee of a full
+        solve of the new targets: E / E_0 < tol over the whole mesh, with E the
+        largest residual row max_i ||v_i^0 - (B V)_i|| and E_0 that of the cold
+        start V = V0, both for the new targets, or E at the rounding floor
+        (64 eps max_i ||v_i^0||) as in a solve. With E_0 taken over the whole
+        mesh, a small move may need no relaxation at all (its residual already
+        below tol * E_0): the result is then previous's vertices.
+
+        Parameters
+        ----------
+        previous : InterpolationResult
+            The start: any result with the targets' shape, usually this
+            Interpolator's last solve or update. Starting from the result the
+            last update returned, whose residual the Interpolator keeps, costs
+            O(work) only; any other start first computes its residual, O(n).
+        indices : array_like of int, (m,)
+            Vertices whose targets move; a repeated index takes its last position.
+        positions : array_like, (m, k) float
+            Their new targets (k the columns of the solved data).
+        tol : float > 0
+            As in `solve`.
+        max_iter : int >= 1
+            At most max_iter * n single-vertex relaxations (max_iter sweeps'
+            worth); stop_reason "max_iter" with a ConvergenceWarning beyond.
+        in_place : bool
+            False (default): a new result, with a copy of previous's vertices
+            (O(n) memory traffic). True: `previous` itself is updated and
+            returned (its arrays show the new vertices): for interactive loops
+            on large meshes.
+
+        Returns
+        -------
+        InterpolationResult
+            method "gs", variant "local"; errors = [E(previous) / E_0,
+            E(result) / E_0] (only the first when nothing needed relaxing);
+            iterations 1 when any vertex was relaxed, else 0; relaxations the
+            single-vertex relaxations done; initial_error E_0 of the new targets.
+        """
+        t0 = time.perf_counter()
+        if not isinstance(previous, InterpolationResult):
+            raise ParameterError(f"previous must be an InterpolationResult, got {type(previous).__name__}")
+        options = check_options(tol=tol, max_iter=max_iter)
+        tol_value, max_iter = options.tol, options.max_iter
+        idx = np.asarray(indices)
+        if idx.ndim == 0:
+            idx = idx.reshape(1)
+        if idx.ndim != 1 or not (np.issubdtype(idx.dtype, np.integer) or idx.size == 0):
+            raise ParameterError(f"indices must be a 1-D array of vertex indices, got {idx.dtype} {idx.shape}")
+        if idx.size and (idx.min() < 0 or idx.max() >= self.n_vertices):
+            bad = int(np.flatnonzero((idx < 0) | (idx >= self.n_vertices))[0])
+            raise ParameterError(f"indices[{bad}] = {int(idx[bad])} is not a vertex (0..{self.n_vertices - 1})")
+        idx = np.ascontiguousarray(idx, dtype=np.int32)
+        targets_k = self._operator.targets_columns
+        if targets_k == 0:
+            raise ParameterError("update needs the targets of a solve first: call solve(vertices)")
+        if previous.control_vertices.shape != (self.n_vertices, targets_k):
+            raise ParameterError(f"previous has shape {previous.control_vertices.shape} but the targets are "
+                                 f"{(self.n_vertices, targets_k)}")
+        pos = np.asarray(positions)
+        if pos.ndim == 1 and idx.size == 1:  # one vertex: its position alone
+            pos = pos.reshape(1, -1)
+        pos = as_vertices(pos, "positions", columns=targets_k) if idx.size else np.zeros((0, targets_k))
+        if len(pos) != len(idx):
+            raise ParameterError(f"positions has {len(pos)} rows but indices has {len(idx)}")
+        last = self._last_update() if self._last_update is not None else None
+        r = self._operator.update(previous, last is previous, idx, pos, tol_value, max_iter, bool(in_place))
+        self._last_update = weakref.ref(r)
+        if r.stop_reason == "max_iter":
+            warnings.warn(f"update reached max_iter = {max_iter} sweeps' worth of relaxations with "
+                          f"E/E_0 = {r.errors[-1]:.3g} > tol = {tol_value:g}", ConvergenceWarning, stacklevel=2)
+        r._record_build(time.perf_counter() - t0, 0.0, 0.0)
+        return r
+
+    def _solve(self, v0: np.ndarray, method: str, options: _core.SolveOptions, callback, t0: float,
+               initial: Optional[np.ndarray] = None, keep_targets: bool = False) -> InterpolationResult:
         """solve() on input already validated: `v0` from as_vertices, `options`
-        from check_options (interpolate validates both before building B and
-        calls this). Warnings point at the caller of solve() or interpolate()."""
+        from check_options, `initial` from _as_initial (interpolate validates
+        them before building B and calls this). keep_targets: `update` moves
+        these targets from now on. Warnings point at the caller of solve() or
+        interpolate()."""
         tol_value, max_iter = options.tol, options.max_iter
         if v0.shape[0] != self.n_vertices:
             raise ParameterError(f"vertices has {v0.shape[0]} rows but the mesh has {self.n_vertices} vertices")
-        r = self._operator.solve(v0, options, callback)
+        r = self._operator.solve(v0, options, callback, initial, keep_targets)
+        if keep_targets:
+            self._last_update = None
         seconds = time.perf_counter() - t0
         if r.omega_clamped:
             warnings.warn(
@@ -265,10 +382,23 @@ class Interpolator:
         return r
 
 
+def _as_initial(initial, v0: np.ndarray) -> Optional[np.ndarray]:
+    """A warm start checked against V0: None, or a finite float64 array of V0's shape."""
+    if initial is None:
+        return None
+    arr = as_vertices(initial, "initial", columns=v0.shape[1])
+    if arr.shape != v0.shape:
+        raise ParameterError(f"initial has shape {arr.shape} but vertices has {v0.shape}")
+    return arr
+
+
 def interpolate(vertices, faces, method: str = "sor", omega="auto", tol: float = 1e-10, max_iter: int = 1000,
                 boundary: str = DEFAULT_BOUNDARY, callback: Optional[Callable[[int, float], object]] = None, *,
-                sigma=None, alpha=None, weight=None, threads: int = 1) -> InterpolationResult:
+                sigma=None, alpha=None, weight=None, threads: int = 1, initial=None) -> InterpolationResult:
     """Control vertices whose Loop limit surface interpolates `vertices`.
+
+    `vertices` may be (n, k) data for any k >= 1 (every column interpolated);
+    `initial` is a warm start, see `Interpolator.solve`.
 
     One call of ``Interpolator(faces, len(vertices), boundary).solve(...)``;
     see `Interpolator.solve` for the parameters and the module docstring for
@@ -286,8 +416,9 @@ def interpolate(vertices, faces, method: str = "sor", omega="auto", tol: float =
     # Options are checked before the (costly) operator is built.
     options = check_options(method, omega, tol, max_iter, callback, sigma=sigma, alpha=alpha, weight=weight,
                             threads=threads)
-    v0 = as_vertices(vertices)
+    v0 = as_vertices(vertices, columns=None)
+    start = _as_initial(initial, v0)
     interp = Interpolator._for_vertices(faces, v0.shape[0], boundary)
-    res = interp._solve(v0, method, options, callback, t0)
+    res = interp._solve(v0, method, options, callback, t0, start)
     res._record_build(time.perf_counter() - t0, interp.build_timings["topology"], interp.build_timings["operator"])
     return res

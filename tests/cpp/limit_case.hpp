@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <random>
 #include <vector>
 
 #include "sorpia/limit.hpp"
@@ -26,6 +27,28 @@ inline LimitCase limit_case(const sorpia::TriMesh& m, const char* name = "") {
   const sorpia::Topology topo(m.faces.data(), m.n_faces(), m.n_vertices());
   return LimitCase{name, m, sorpia::reference_limit_matrix(topo, sorpia::Boundary::EdgeAndCorner),
                    sorpia::limit_operator(topo, sorpia::Boundary::EdgeAndCorner)};
+}
+
+// B with each off-diagonal weight scaled by 1 + spread * u (u uniform in
+// [-1, 1]), then the row's off-diagonal weights rescaled to their old sum:
+// rows still sum to 1, the diagonal is unchanged, no two weights of a row
+// are equal. sorpia::limit_operator(CsrMatrix) makes it an operator with
+// per-entry weights (LimitOperator::values).
+inline sorpia::CsrMatrix perturbed(sorpia::CsrMatrix b, double spread, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (std::size_t i = 0; i < b.n_rows; ++i) {
+    double before = 0.0, after = 0.0;
+    for (std::int32_t p = b.indptr[i]; p < b.indptr[i + 1]; ++p) {
+      if (b.indices[p] == static_cast<std::int32_t>(i)) continue;
+      before += b.data[p];
+      b.data[p] *= 1.0 + spread * u(rng);
+      after += b.data[p];
+    }
+    for (std::int32_t p = b.indptr[i]; p < b.indptr[i + 1]; ++p)
+      if (b.indices[p] != static_cast<std::int32_t>(i)) b.data[p] *= before / after;
+  }
+  return b;
 }
 
 // y = A x for row-major (n, 3) x and y: the textbook CSR product.

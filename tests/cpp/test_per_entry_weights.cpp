@@ -25,28 +25,8 @@ namespace {
 
 using sorpia_test::error_from_scratch;
 using sorpia_test::max_abs_diff;
+using sorpia_test::perturbed;
 using sorpia_test::SweepRangesOnThreads;
-
-// B with each off-diagonal weight scaled by 1 + spread * u (u uniform in
-// [-1, 1]), then the row's off-diagonal weights rescaled to their old sum:
-// rows still sum to 1, the diagonal is unchanged, no two weights of a row
-// are equal.
-sorpia::CsrMatrix perturbed(sorpia::CsrMatrix b, double spread, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  for (std::size_t i = 0; i < b.n_rows; ++i) {
-    double before = 0.0, after = 0.0;
-    for (std::int32_t p = b.indptr[i]; p < b.indptr[i + 1]; ++p) {
-      if (b.indices[p] == static_cast<std::int32_t>(i)) continue;
-      before += b.data[p];
-      b.data[p] *= 1.0 + spread * u(rng);
-      after += b.data[p];
-    }
-    for (std::int32_t p = b.indptr[i]; p < b.indptr[i + 1]; ++p)
-      if (b.indices[p] != static_cast<std::int32_t>(i)) b.data[p] *= before / after;
-  }
-  return b;
-}
 
 // The mesh, the perturbed matrix as b (what error_from_scratch measures
 // with) and the operator built from it.

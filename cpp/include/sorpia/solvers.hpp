@@ -3,9 +3,12 @@
 /// The PIA family on the Loop limit operator: solve B V = V0 (paper eq. 8) for
 /// the control vertices V, with B the Loop limit matrix (paper eq. 7).
 ///
-/// Vertex arrays are row-major (n, 3) doubles. Every method starts from
-/// V^(0) = V0 and uses the paper's stopping rule (section 5):
-/// E_k = max_i ||v_i^0 - (B V^(k))_i||, stop when E_k / E_0 < tol or k = max_iter.
+/// Vertex arrays are row-major (n, 3) doubles, or (n, k) for any per-vertex
+/// data (k columns, E_k's norm over all k). Every method starts from
+/// V^(0) = V0, or from a given warm start, and uses the paper's stopping rule
+/// (section 5): E_k = max_i ||v_i^0 - (B V^(k))_i||, stop when E_k / E_0 < tol
+/// or k = max_iter, E_0 always that of V^(0) = V0 (so a warm start meets the
+/// same guarantee as a cold one).
 /// Also: E_k <= 64 eps max_i ||v_i^0|| (rounding level) counts as converged;
 /// E_k > 1e6 E_0 or not finite stops as diverged (the iterate is still finite).
 
@@ -177,9 +180,12 @@ enum class StopReason { Converged, MaxIter, Diverged, Callback };
 const char* stop_reason_name(StopReason reason);
 
 struct SolveResult {
-  std::vector<double> control_vertices;  ///< (n, 3)
-  std::vector<double> errors;            ///< errors[k] = E_k / E_0, k = 0..iterations
-  double initial_error = 0.0;            ///< E_0, absolute
+  std::vector<double> control_vertices;  ///< (n, columns)
+  std::size_t columns = 3;               ///< k: columns of the data (3 for vertices)
+  /// errors[k] = E_k / E_0, k = 0..iterations; errors[0] = 1 from a cold
+  /// start, E(start) / E_0 from a warm one (E_0 still that of V0)
+  std::vector<double> errors;
+  double initial_error = 0.0;            ///< E_0 (of the cold start V^(0) = V0), absolute
   int iterations = 0;
   StopReason stop_reason = StopReason::MaxIter;
   bool converged() const { return stop_reason == StopReason::Converged; }
@@ -197,6 +203,9 @@ struct SolveResult {
   double alpha = NAN;                    ///< "hss"/"whss": the shift used
   double weight = NAN;                   ///< "whss": the relaxation weight used
   long long products = 0;                ///< operator applications (B, B^T, H or S) in the solve
+  /// Single-vertex relaxations (eq. 18 at one vertex): iterations * n for
+  /// "sor"/"gs", those of the work list for a LocalSolver update, 0 otherwise
+  long long relaxations = 0;
   double estimate_seconds = 0.0;         ///< spectral estimates for the parameters (0 when cached)
   double solve_seconds = 0.0;            ///< the iteration itself
   /// Building the topology and the operator: 0 from solve(), which gets them
@@ -208,12 +217,26 @@ struct SolveResult {
   double seconds = 0.0;
 };
 
-/// Solve B V = V0.
-/// @param op     the limit operator
-/// @param v0     row-major (n, 3) mesh vertices, finite
-/// @param opt    method and parameters (check_options: ParameterError)
-/// @param cache  spectral estimates to reuse and fill in (may be null)
+/// Solve B V = V0 for (n, 3) vertices from the cold start V^(0) = V0:
+/// solve(op, v0, 3, nullptr, opt, cache).
 SolveResult solve(const LimitOperator& op, const double* v0, const SolveOptions& opt,
                   SpectralCache* cache = nullptr);
+
+/// Solve B V = V0.
+/// @param op       the limit operator
+/// @param v0       row-major (n, k) data (vertices: k = 3), finite
+/// @param k        columns, >= 1; "sor"/"gs" with threads > 1 take k <= 3 only
+///                 (ParameterError otherwise). k = 3 runs the sweep engine as
+///                 it is; k < 3 runs it with zero columns added (the same
+///                 iterates and E_k); k > 3 sweeps in vertex order on one thread
+/// @param initial  row-major (n, k) warm start V^(0), finite, or null for
+///                 V^(0) = V0. E_0 is V0's error all the same: errors[0] =
+///                 E(initial) / E_0, and a start already below tol returns
+///                 after 0 iterations. When V0 solves the system exactly
+///                 (E_0 = 0) the result is V0 whatever the start.
+/// @param opt      method and parameters (check_options: ParameterError)
+/// @param cache    spectral estimates to reuse and fill in (may be null)
+SolveResult solve(const LimitOperator& op, const double* v0, std::size_t k, const double* initial,
+                  const SolveOptions& opt, SpectralCache* cache = nullptr);
 
 }  // namespace sorpia

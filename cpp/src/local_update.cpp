@@ -1,0 +1,234 @@
+// Local re-solves (local_update.hpp): a work-list Gauss-Seidel over the rows
+// of B, driven by kept residuals.
+//
+// Moving target i changes one residual, r_i (r = V0 - B V), and the cold
+// residuals (V0 - B V0) of row i and of the rows reading vertex i: B's
+// transpose. Relaxing vertex i (eq. 18 at one vertex, omega = 1:
+// v_i += r_i / B_ii) zeroes r_i and changes r_j by -B_ji delta for the rows
+// j reading i, again B's transpose. A vertex enters the work list when its
+// residual reaches the threshold tol * E_0 (and the rounding floor); when
+// the list runs dry, every residual changed is recomputed from its row (the
+// incremental ones carry rounding) and the rows still at the threshold go
+// back to the list. The result meets E / E_0 < tol over the whole mesh: the
+// rows never touched keep their residuals, below the threshold unless the
+// start was not, and those are in the list from the start.
+#include "sorpia/local_update.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <initializer_list>
+#include <stdexcept>
+#include <string>
+
+#include "solver_detail.hpp"
+#include "sorpia/errors.hpp"
+
+namespace sorpia {
+
+void MaxTree::assign(const std::vector<double>& values) {
+  size_ = 1;
+  while (size_ < values.size()) size_ *= 2;
+  t_.assign(2 * size_, 0.0);
+  std::copy(values.begin(), values.end(), t_.begin() + static_cast<std::ptrdiff_t>(size_));
+  for (std::size_t p = size_ - 1; p >= 1; --p) t_[p] = std::max(t_[2 * p], t_[2 * p + 1]);
+}
+
+void MaxTree::set(std::size_t i, double value) {
+  std::size_t p = size_ + i;
+  t_[p] = value;
+  for (p /= 2; p >= 1; p /= 2) {
+    const double m = std::max(t_[2 * p], t_[2 * p + 1]);
+    if (t_[p] == m) break;  // the maxima above are unchanged too
+    t_[p] = m;
+  }
+}
+
+void MaxTree::collect(double threshold, std::vector<std::int32_t>& out) const {
+  if (t_.size() < 2 || !(t_[1] >= threshold)) return;
+  std::vector<std::size_t> stack{1};
+  while (!stack.empty()) {
+    const std::size_t p = stack.back();
+    stack.pop_back();
+    if (p >= size_) {
+      out.push_back(static_cast<std::int32_t>(p - size_));
+      continue;
+    }
+    for (std::size_t c : {2 * p + 1, 2 * p})
+      if (t_[c] >= threshold) stack.push_back(c);
+  }
+}
+
+LocalSolver::LocalSolver(const LimitOperator& op) : op_(op), mark_(op.n, 0) {
+  detail::Transposed t = detail::transpose(op);
+  t_offsets_ = std::move(t.offsets);
+  t_rows_ = std::move(t.rows);
+  t_values_ = std::move(t.values);
+}
+
+void LocalSolver::residual_row(const double* v, std::size_t i, double* r) const {
+  detail::row_product_cols(op_, v, k_, i, r);
+  for (std::size_t c = 0; c < k_; ++c) r[c] = targets_[k_ * i + c] - r[c];
+}
+
+double LocalSolver::cold_row(std::size_t i) const {
+  std::vector<double> r(k_);
+  residual_row(targets_.data(), i, r.data());
+  double e = 0.0;
+  for (double x : r) e += x * x;
+  return e;
+}
+
+void LocalSolver::set_targets(std::vector<double> targets, std::size_t k) {
+  if (k < 1 || targets.size() != k * op_.n)
+    throw std::logic_error("LocalSolver::set_targets: targets are not (n, k)");
+  k_ = k;
+  targets_ = std::move(targets);
+  std::vector<double> cold(op_.n), norm(op_.n);
+  for (std::size_t i = 0; i < op_.n; ++i) {
+    cold[i] = cold_row(i);
+    double e = 0.0;
+    for (std::size_t c = 0; c < k_; ++c) e += targets_[k_ * i + c] * targets_[k_ * i + c];
+    norm[i] = e;
+  }
+  cold_.assign(cold);
+  target_norm_.assign(norm);
+  residual_valid_ = false;
+}
+
+void LocalSolver::update(double* v, bool v_is_last, const std::int32_t* indices, std::size_t count,
+                         const double* positions, double tol, long long max_relaxations, SolveResult& res) {
+  if (!has_targets()) throw std::logic_error("LocalSolver::update before set_targets");
+  const std::size_t n = op_.n, k = k_;
+  for (std::size_t q = 0; q < count; ++q)
+    if (indices[q] < 0 || static_cast<std::size_t>(indices[q]) >= n)
+      throw ParameterError("indices[" + std::to_string(q) + "] = " + std::to_string(indices[q]) +
+                           " is not a vertex (0.." + std::to_string(n - 1) + ")");
+  std::vector<double> r(k);
+  const auto norm2 = [k](const double* x) {
+    double e = 0.0;
+    for (std::size_t c = 0; c < k; ++c) e += x[c] * x[c];
+    return e;
+  };
+
+  // The start's residual, in full unless it is the last update's result.
+  if (!v_is_last || !residual_valid_) {
+    r_.assign(k * n, 0.0);
+    std::vector<double> rn(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      residual_row(v, i, &r_[k * i]);
+      rn[i] = norm2(&r_[k * i]);
+    }
+    residual_.assign(rn);
+    residual_valid_ = true;
+  }
+
+  // Move the targets: r_i by the move, the cold residuals of row i and of
+  // the rows reading i from their rows.
+  std::vector<std::int32_t> cold_dirty;
+  for (std::size_t q = 0; q < count; ++q) {
+    const std::size_t i = static_cast<std::size_t>(indices[q]);
+    for (std::size_t c = 0; c < k; ++c) targets_[k * i + c] = positions[k * q + c];
+    residual_row(v, i, &r_[k * i]);  // exact, as every residual kept
+    residual_.set(i, norm2(&r_[k * i]));
+    target_norm_.set(i, norm2(&targets_[k * i]));
+    cold_dirty.push_back(static_cast<std::int32_t>(i));
+    for (std::int32_t p = t_offsets_[i]; p < t_offsets_[i + 1]; ++p) cold_dirty.push_back(t_rows_[p]);
+  }
+  for (std::int32_t j : cold_dirty) cold_.set(static_cast<std::size_t>(j), cold_row(static_cast<std::size_t>(j)));
+
+  res.method = Method::Gs;
+  res.variant = "local";  // bind_solvers.cpp keys read-only vertices on it
+  res.omega = 1.0;
+  res.columns = k;
+  res.relaxations = 0;
+  res.products = 0;
+  res.iterations = 0;
+  const double e0 = std::sqrt(cold_.max());
+  res.initial_error = e0;
+  const double floor = 64.0 * 2.220446049250313e-16 * std::sqrt(target_norm_.max());
+  const double e_start = std::sqrt(residual_.max());
+  res.stop_reason = StopReason::Converged;
+  if (!(e0 > 0.0)) {
+    // V0 interpolates itself exactly: it is the answer (O(n), as a solve's).
+    std::copy(targets_.begin(), targets_.end(), v);
+    std::fill(r_.begin(), r_.end(), 0.0);
+    residual_.assign(std::vector<double>(n, 0.0));
+    res.errors.assign(1, 0.0);
+    return;
+  }
+  res.errors.assign(1, e_start / e0);
+  // Relax a row while ||r_i|| >= tol E_0 and above the rounding floor.
+  const double bound = std::max(tol * e0, std::nextafter(floor, INFINITY));
+  const double threshold = bound * bound;
+  if (e_start < bound) return;
+
+  std::vector<std::int32_t> work, changed;
+  residual_.collect(threshold, work);
+  for (std::int32_t i : work) mark_[i] |= 1;
+  long long relaxations = 0;
+  bool stopped = false;
+  while (!work.empty() && !stopped) {
+    // The list as a queue: relaxing in the order vertices enter it sweeps
+    // outwards from the moved targets, ring by ring.
+    for (std::size_t head = 0; head < work.size(); ++head) {
+      const std::size_t i = static_cast<std::size_t>(work[head]);
+      mark_[i] &= static_cast<std::uint8_t>(~1u);
+      double* ri = &r_[k * i];
+      residual_row(v, i, ri);
+      if (!(norm2(ri) >= threshold)) {
+        if (!(mark_[i] & 2)) changed.push_back(static_cast<std::int32_t>(i));
+        mark_[i] |= 2;
+        continue;
+      }
+      if (relaxations >= max_relaxations) {
+        stopped = true;
+        break;
+      }
+      ++relaxations;
+      if ((relaxations & 4095) == 0) poll_interrupt();
+      const double f = 1.0 / op_.diag[i];
+      for (std::size_t c = 0; c < k; ++c) {
+        const double d = f * ri[c];
+        v[k * i + c] += d;
+        r[c] = d;
+        ri[c] = 0.0;
+      }
+      if (!(mark_[i] & 2)) changed.push_back(static_cast<std::int32_t>(i));
+      mark_[i] |= 2;
+      for (std::int32_t p = t_offsets_[i]; p < t_offsets_[i + 1]; ++p) {
+        const std::size_t j = static_cast<std::size_t>(t_rows_[p]);
+        double* rj = &r_[k * j];
+        for (std::size_t c = 0; c < k; ++c) rj[c] -= t_values_[p] * r[c];
+        if (!(mark_[j] & 2)) changed.push_back(static_cast<std::int32_t>(j));
+        mark_[j] |= 2;
+        if (!(mark_[j] & 1) && norm2(rj) >= threshold) {
+          mark_[j] |= 1;
+          work.push_back(static_cast<std::int32_t>(j));
+        }
+      }
+    }
+    for (std::int32_t i : work) mark_[i] &= static_cast<std::uint8_t>(~1u);
+    work.clear();
+    // Every residual changed, from its row; those still at the threshold go round again.
+    for (std::int32_t j : changed) {
+      double* rj = &r_[k * static_cast<std::size_t>(j)];
+      residual_row(v, static_cast<std::size_t>(j), rj);
+      const double e = norm2(rj);
+      residual_.set(static_cast<std::size_t>(j), e);
+      mark_[j] = 0;
+      if (!stopped && e >= threshold) {
+        mark_[j] = 1;
+        work.push_back(j);
+      }
+    }
+    changed.clear();
+  }
+  for (std::int32_t i : work) mark_[i] = 0;
+  res.relaxations = relaxations;
+  res.iterations = relaxations > 0 ? 1 : 0;
+  const double e_end = std::sqrt(residual_.max());
+  if (res.iterations) res.errors.push_back(e_end / e0);
+  res.stop_reason = e_end < bound ? StopReason::Converged : StopReason::MaxIter;
+}
+
+}  // namespace sorpia

@@ -1,0 +1,248 @@
+"""Warm starts, (n, k) data and local updates (Interpolator.update), against a
+scipy direct solve and the residual of sorpia.limit_matrix (independent of the
+solvers' operator code paths: a scipy CSR product)."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+import scipy.sparse.linalg
+
+import sorpia
+from sorpia.errors import MeshError, ParameterError
+from sorpia.solve import METHODS, ConvergenceWarning
+
+SHARED_MESHES = Path(__file__).resolve().parents[2] / "shared" / "meshes"
+
+
+def meshes():
+    closed = sorpia.shapes.irregular(400, seed=4)
+    grid = sorpia.shapes.grid(14, 11)  # boundary and one-face corners
+    return {"irregular": closed, "grid": grid}
+
+
+def residual(B, targets, v):
+    """max_i ||t_i - (B v)_i||, the paper's E, from a scipy product."""
+    return float(np.linalg.norm(targets - B @ v, axis=1).max())
+
+
+def data(n, k, seed=0):
+    rng = np.random.default_rng(seed)
+    return rng.normal(size=(n, k))
+
+
+@pytest.mark.parametrize("name", ["irregular", "grid"])
+@pytest.mark.parametrize("k", [1, 2, 3, 5])
+@pytest.mark.parametrize("method", METHODS)
+def test_k_columns_every_method_matches_direct_solve(name, k, method):
+    V, F = meshes()[name]
+    values = data(len(V), k, seed=k)
+    B = sorpia.limit_matrix(F, len(V))
+    ref = scipy.sparse.linalg.spsolve(B.tocsc(), values)
+    ref = ref.reshape(len(V), k)
+    res = sorpia.interpolate(values, F, method=method, tol=1e-12, max_iter=20000)
+    assert res.converged
+    assert res.control_vertices.shape == (len(V), k)
+    e0 = residual(B, values, values)
+    assert res.initial_error == pytest.approx(e0, rel=1e-12)
+    # E_k / E_0 < 1e-12, E over the k columns' Euclidean norm; B^-1 bounded
+    # (spectrum in about [0.2, 1]): the solution to a few 1e-12 E_0.
+    assert residual(B, values, res.control_vertices) < 1.01e-12 * e0
+    np.testing.assert_allclose(res.control_vertices, ref, atol=1e-9 * np.abs(ref).max())
+
+
+def test_k_columns_are_the_columns_solved_together():
+    """Columns iterate independently; only the stopping rule joins them. With a
+    tight tol, (n, 5) equals its (n, 3) and (n, 2) parts solved apart."""
+    V, F = meshes()["irregular"]
+    values = data(len(V), 5)
+    interp = sorpia.Interpolator(F, len(V))
+    whole = interp.solve(values, tol=1e-13).control_vertices
+    first = interp.solve(values[:, :3], tol=1e-13).control_vertices
+    rest = interp.solve(values[:, 3:], tol=1e-13).control_vertices
+    np.testing.assert_allclose(whole, np.hstack([first, rest]), atol=1e-10)
+
+
+def test_k_columns_threads():
+    V, F = meshes()["irregular"]
+    two = data(len(V), 2)
+    one = sorpia.interpolate(two, F, threads=1, tol=1e-12).control_vertices
+    both = sorpia.interpolate(two, F, threads=2, tol=1e-12).control_vertices
+    np.testing.assert_allclose(one, both, atol=1e-9)
+    with pytest.raises(ParameterError, match="threads = 2 .* 5 columns"):
+        sorpia.interpolate(data(len(V), 5), F, threads=2)
+
+
+@pytest.mark.parametrize("k", [1, 2, 4, 7])
+def test_limit_points_k_columns(k):
+    V, F = meshes()["grid"]
+    values = data(len(V), k)
+    B = sorpia.limit_matrix(F, len(V))
+    np.testing.assert_allclose(sorpia.limit_points(values, F), B @ values, atol=1e-14)
+
+
+def test_bad_data_shapes():
+    V, F = meshes()["irregular"]
+    with pytest.raises(ValueError, match=r"values\[:, None\]"):
+        sorpia.interpolate(V[:, 0], F)
+    with pytest.raises(ValueError, match=r"\(n, k\), k >= 1"):
+        sorpia.interpolate(np.zeros((len(V), 0)), F)
+    with pytest.raises(ParameterError, match="initial has shape"):
+        sorpia.interpolate(V, F, initial=V[:-1])
+    with pytest.raises(ValueError, match=r"initial must have shape \(n, 3\)"):
+        sorpia.interpolate(V, F, initial=V[:, :2])
+
+
+@pytest.mark.parametrize("name", ["irregular", "grid"])
+@pytest.mark.parametrize("method", METHODS)
+def test_warm_start_same_guarantee(name, method):
+    V, F = meshes()[name]
+    B = sorpia.limit_matrix(F, len(V))
+    interp = sorpia.Interpolator(F, len(V))
+    first = interp.solve(V, tol=1e-12)
+    moved = V + 1e-3 * np.sin(np.arange(V.size)).reshape(V.shape)
+    warm = interp.solve(moved, method=method, tol=1e-10, max_iter=5000, initial=first.control_vertices)
+    e0 = residual(B, moved, moved)
+    assert warm.converged
+    assert warm.initial_error == pytest.approx(e0, rel=1e-12)  # E_0 of the cold start
+    assert warm.errors[0] == pytest.approx(residual(B, moved, first.control_vertices) / e0, rel=1e-6)
+    assert warm.errors[0] < 1
+    assert residual(B, moved, warm.control_vertices) < 1.0001e-10 * e0
+    assert len(warm.errors) == warm.iterations + 1
+
+
+def test_warm_start_already_solved_does_nothing():
+    V, F = meshes()["irregular"]
+    exact = sorpia.interpolate(V, F, tol=1e-13)
+    again = sorpia.interpolate(V, F, tol=1e-8, initial=exact.control_vertices)
+    assert again.iterations == 0 and again.converged
+    np.testing.assert_array_equal(again.control_vertices, exact.control_vertices)
+
+
+def diagonal(V):
+    return float(np.linalg.norm(V.max(axis=0) - V.min(axis=0)))
+
+
+@pytest.mark.parametrize("name", ["irregular", "grid"])
+@pytest.mark.parametrize("in_place", [False, True])
+def test_update_meets_full_solve_guarantee_and_composes(name, in_place):
+    V, F = meshes()[name]
+    B = sorpia.limit_matrix(F, len(V))
+    interp = sorpia.Interpolator(F, len(V))
+    res = interp.solve(V, tol=1e-10)
+    targets = V.copy()
+    step = 0.01 * diagonal(V)
+    for idx in ([len(V) // 2], [5, 6, 7, 8], [len(V) // 3]):
+        targets[idx] += step * np.array([0.3, -0.2, 1.0])
+        before = res.control_vertices.copy()
+        new = interp.update(res, idx, targets[idx], tol=1e-10, in_place=in_place)
+        assert (new is res) == in_place
+        if not in_place:
+            np.testing.assert_array_equal(res.control_vertices, before)  # previous left alone
+        res = new
+        np.testing.assert_array_equal(interp.targets, targets)
+        e0 = residual(B, targets, targets)
+        assert res.converged and res.variant == "local" and res.method == "gs"
+        assert res.initial_error == pytest.approx(e0, rel=1e-12)
+        assert residual(B, targets, res.control_vertices) < 1.0001e-10 * e0
+        assert res.errors[-1] < 1e-10 < res.errors[0]
+        assert res.iterations == 1 and 0 < res.relaxations
+        full = interp.solve(targets, tol=1e-13)  # a solve resets the kept targets to these: the same
+        np.testing.assert_allclose(res.control_vertices, full.control_vertices, atol=100 * 1e-10 * e0)
+
+
+def test_update_one_vertex_is_local():
+    V, F = sorpia.shapes.irregular(20000, seed=2)
+    interp = sorpia.Interpolator(F, len(V))
+    res = interp.solve(V)
+    p = V[100] + 0.01 * diagonal(V)
+    res = interp.update(res, [100], p)
+    assert res.converged and 0 < res.relaxations < len(V) / 4
+
+
+def test_update_k_columns_and_start_from_any_result():
+    V, F = meshes()["grid"]
+    B = sorpia.limit_matrix(F, len(V))
+    values = data(len(V), 1)
+    interp = sorpia.Interpolator(F, len(V))
+    cold = interp.solve(values)
+    values[3] = 5.0
+    up = interp.update(cold, 3, [5.0])
+    assert up.control_vertices.shape == (len(V), 1)
+    assert residual(B, values, up.control_vertices) < 1.0001e-10 * residual(B, values, values)
+    # From another start than the last update (its residual computed in full): the same guarantee.
+    values[7] = -2.0
+    up2 = interp.update(cold, [7], [[-2.0]])
+    assert residual(B, values, up2.control_vertices) < 1.0001e-10 * residual(B, values, values)
+
+
+def test_update_nothing_to_do():
+    V, F = meshes()["irregular"]
+    interp = sorpia.Interpolator(F, len(V))
+    res = interp.solve(V)
+    same = interp.update(res, [3], V[3])
+    assert same.iterations == 0 and same.relaxations == 0 and list(same.errors) == [res.errors[-1]]
+    np.testing.assert_array_equal(same.control_vertices, res.control_vertices)
+
+
+def test_update_bad_input():
+    V, F = meshes()["irregular"]
+    interp = sorpia.Interpolator(F, len(V))
+    with pytest.raises(ParameterError, match="needs the targets of a solve"):
+        interp.update(sorpia.interpolate(V, F), [0], V[0])
+    res = interp.solve(V)
+    with pytest.raises(ParameterError, match="is not a vertex"):
+        interp.update(res, [len(V)], V[0])
+    with pytest.raises(ParameterError, match="positions has 1 rows but indices has 2"):
+        interp.update(res, [0, 1], [V[0]])
+    with pytest.raises(ValueError, match=r"positions must have shape \(n, 3\)"):
+        interp.update(res, [0], [[1.0, 2.0]])
+    with pytest.raises(MeshError, match="not finite"):
+        interp.update(res, [0], [np.nan, 0, 0])
+    with pytest.raises(ParameterError, match="previous must be an InterpolationResult"):
+        interp.update(V, [0], V[0])
+    with pytest.raises(ParameterError, match="previous has shape"):
+        interp.update(sorpia.interpolate(V[:, :2], F), [0], V[0])
+    with pytest.raises(ParameterError, match="tol"):
+        interp.update(res, [0], V[0], tol=0)
+    up = interp.update(res, [0], V[0] + 1.0)
+    with pytest.raises(ValueError, match="read-only"):  # the next update relies on its kept residual
+        up.control_vertices[0] = 0.0
+    res.control_vertices[0] = 0.0  # a solve's result stays writable
+
+
+def test_update_max_iter_warns():
+    V, F = meshes()["irregular"]
+    interp = sorpia.Interpolator(F, len(V))
+    res = interp.solve(V)
+    with pytest.warns(ConvergenceWarning, match="max_iter"):
+        r = interp.update(res, [0], V[0] + 1.0, tol=1e-300, max_iter=1)
+    assert r.stop_reason == "max_iter"
+
+
+def shared_loop_meshes():
+    if not SHARED_MESHES.exists():
+        return []
+    return sorted(p.name for p in SHARED_MESHES.iterdir() if p.suffix in (".obj", ".off", ".ply", ".stl"))
+
+
+@pytest.mark.skipif(not SHARED_MESHES.exists(), reason="../shared/meshes is not present")
+@pytest.mark.parametrize("name", shared_loop_meshes() or ["none"])
+@pytest.mark.filterwarnings("ignore::sorpia.limit.UnreferencedVerticesWarning")
+def test_update_on_shared_meshes(name):
+    """On every shared mesh the Loop interpolator accepts (triangulated): one
+    target moved, the update meets the guarantee of a full solve."""
+    V, F = sorpia.read_mesh(SHARED_MESHES / name, triangulate=True)
+    try:
+        interp = sorpia.Interpolator(F, len(V))
+    except (MeshError, ValueError) as exc:
+        pytest.skip(f"not a Loop mesh here: {exc}")
+    B = interp.limit_matrix()
+    res = interp.solve(V, max_iter=100000)
+    targets = V.copy()
+    i = len(V) // 2
+    targets[i] += 0.01 * diagonal(V)
+    up = interp.update(res, [i], targets[i])
+    e0 = residual(B, targets, targets)
+    assert up.converged
+    assert residual(B, targets, up.control_vertices) < 1.0001e-10 * e0
