@@ -70,11 +70,10 @@ void LocalSolver::residual_row(const double* v, std::size_t i, double* r) const 
   for (std::size_t c = 0; c < k_; ++c) r[c] = targets_[k_ * i + c] - r[c];
 }
 
-double LocalSolver::cold_row(std::size_t i) const {
-  std::vector<double> r(k_);
-  residual_row(targets_.data(), i, r.data());
+double LocalSolver::cold_row(std::size_t i) {
+  residual_row(targets_.data(), i, scratch_.data());
   double e = 0.0;
-  for (double x : r) e += x * x;
+  for (std::size_t c = 0; c < k_; ++c) e += scratch_[c] * scratch_[c];
   return e;
 }
 
@@ -83,6 +82,7 @@ void LocalSolver::set_targets(std::vector<double> targets, std::size_t k) {
     throw std::logic_error("LocalSolver::set_targets: targets are not (n, k)");
   k_ = k;
   targets_ = std::move(targets);
+  scratch_.resize(k);
   std::vector<double> cold(op_.n), norm(op_.n);
   for (std::size_t i = 0; i < op_.n; ++i) {
     cold[i] = cold_row(i);
@@ -95,6 +95,95 @@ void LocalSolver::set_targets(std::vector<double> targets, std::size_t k) {
   residual_valid_ = false;
 }
 
+// The work list from `work` (the rows at the threshold) until it runs dry
+// and every row changed, recomputed from its row, is below the threshold, or
+// until max_relaxations (`stopped`). K: the columns when known at compile
+// time (3), 0 for k_ at run time. Returns the relaxations done.
+template <int K>
+long long LocalSolver::relax(double* v, std::vector<std::int32_t>& work, double threshold, long long max_relaxations,
+                             bool& stopped) {
+  const std::size_t k = K ? static_cast<std::size_t>(K) : k_;
+  const auto norm2 = [k](const double* x) {
+    double e = 0.0;
+    for (std::size_t c = 0; c < k; ++c) e += x[c] * x[c];
+    return e;
+  };
+  const auto row_residual = [&](std::size_t i, double* r) {
+    detail::row_product_cols<K>(op_, v, k, i, r);
+    for (std::size_t c = 0; c < k; ++c) r[c] = targets_[k * i + c] - r[c];
+  };
+  std::vector<std::int32_t> changed;
+  double delta[K ? K : 1];
+  std::vector<double> delta_run(K ? 0 : k);
+  double* const d = K ? delta : delta_run.data();
+  // The arrays as local pointers: stores through v and r would otherwise
+  // make the compiler reload every member at each neighbour.
+  std::uint8_t* const mark = mark_.data();
+  double* const res = r_.data();
+  const std::int32_t* const t_off = t_offsets_.data();
+  const std::int32_t* const t_rows = t_rows_.data();
+  const double* const t_val = t_values_.data();
+  const double* const diag = op_.diag.data();
+  for (std::int32_t i : work) mark[i] |= 1;
+  long long relaxations = 0;
+  while (!work.empty() && !stopped) {
+    // The list as a queue: relaxing in the order vertices enter it sweeps
+    // outwards from the moved targets, ring by ring. The residuals are kept
+    // by increments here, recomputed from their rows below.
+    for (std::size_t head = 0; head < work.size(); ++head) {
+      const std::size_t i = static_cast<std::size_t>(work[head]);
+      mark[i] &= static_cast<std::uint8_t>(~1u);
+      double* ri = res + k * i;
+      if (!(norm2(ri) >= threshold)) continue;
+      if (relaxations >= max_relaxations) {
+        stopped = true;
+        break;
+      }
+      ++relaxations;
+      if ((relaxations & 4095) == 0) poll_interrupt();
+      const double f = 1.0 / diag[i];
+      for (std::size_t c = 0; c < k; ++c) {
+        d[c] = f * ri[c];
+        v[k * i + c] += d[c];
+        ri[c] = 0.0;
+      }
+      if (!(mark[i] & 2)) changed.push_back(static_cast<std::int32_t>(i));
+      mark[i] |= 2;
+      for (std::int32_t p = t_off[i]; p < t_off[i + 1]; ++p) {
+        const std::size_t j = static_cast<std::size_t>(t_rows[p]);
+        double* rj = res + k * j;
+        const double w = t_val[p];
+        for (std::size_t c = 0; c < k; ++c) rj[c] -= w * d[c];
+        const std::uint8_t mj = mark[j];
+        if (!(mj & 2)) changed.push_back(static_cast<std::int32_t>(j));
+        if (!(mj & 1) && norm2(rj) >= threshold) {
+          mark[j] = 3;
+          work.push_back(static_cast<std::int32_t>(j));
+        } else {
+          mark[j] = mj | 2;
+        }
+      }
+    }
+    for (std::int32_t i : work) mark_[i] &= static_cast<std::uint8_t>(~1u);
+    work.clear();
+    // Every residual changed, from its row; those still at the threshold go round again.
+    for (std::int32_t j : changed) {
+      double* rj = &r_[k * static_cast<std::size_t>(j)];
+      row_residual(static_cast<std::size_t>(j), rj);
+      const double e = norm2(rj);
+      residual_.set(static_cast<std::size_t>(j), e);
+      mark_[j] = 0;
+      if (!stopped && e >= threshold) {
+        mark_[j] = 1;
+        work.push_back(j);
+      }
+    }
+    changed.clear();
+  }
+  for (std::int32_t i : work) mark_[i] = 0;
+  return relaxations;
+}
+
 void LocalSolver::update(double* v, bool v_is_last, const std::int32_t* indices, std::size_t count,
                          const double* positions, double tol, long long max_relaxations, SolveResult& res) {
   if (!has_targets()) throw std::logic_error("LocalSolver::update before set_targets");
@@ -103,7 +192,6 @@ void LocalSolver::update(double* v, bool v_is_last, const std::int32_t* indices,
     if (indices[q] < 0 || static_cast<std::size_t>(indices[q]) >= n)
       throw ParameterError("indices[" + std::to_string(q) + "] = " + std::to_string(indices[q]) +
                            " is not a vertex (0.." + std::to_string(n - 1) + ")");
-  std::vector<double> r(k);
   const auto norm2 = [k](const double* x) {
     double e = 0.0;
     for (std::size_t c = 0; c < k; ++c) e += x[c] * x[c];
@@ -162,68 +250,11 @@ void LocalSolver::update(double* v, bool v_is_last, const std::int32_t* indices,
   const double threshold = bound * bound;
   if (e_start < bound) return;
 
-  std::vector<std::int32_t> work, changed;
+  std::vector<std::int32_t> work;
   residual_.collect(threshold, work);
-  for (std::int32_t i : work) mark_[i] |= 1;
-  long long relaxations = 0;
   bool stopped = false;
-  while (!work.empty() && !stopped) {
-    // The list as a queue: relaxing in the order vertices enter it sweeps
-    // outwards from the moved targets, ring by ring.
-    for (std::size_t head = 0; head < work.size(); ++head) {
-      const std::size_t i = static_cast<std::size_t>(work[head]);
-      mark_[i] &= static_cast<std::uint8_t>(~1u);
-      double* ri = &r_[k * i];
-      residual_row(v, i, ri);
-      if (!(norm2(ri) >= threshold)) {
-        if (!(mark_[i] & 2)) changed.push_back(static_cast<std::int32_t>(i));
-        mark_[i] |= 2;
-        continue;
-      }
-      if (relaxations >= max_relaxations) {
-        stopped = true;
-        break;
-      }
-      ++relaxations;
-      if ((relaxations & 4095) == 0) poll_interrupt();
-      const double f = 1.0 / op_.diag[i];
-      for (std::size_t c = 0; c < k; ++c) {
-        const double d = f * ri[c];
-        v[k * i + c] += d;
-        r[c] = d;
-        ri[c] = 0.0;
-      }
-      if (!(mark_[i] & 2)) changed.push_back(static_cast<std::int32_t>(i));
-      mark_[i] |= 2;
-      for (std::int32_t p = t_offsets_[i]; p < t_offsets_[i + 1]; ++p) {
-        const std::size_t j = static_cast<std::size_t>(t_rows_[p]);
-        double* rj = &r_[k * j];
-        for (std::size_t c = 0; c < k; ++c) rj[c] -= t_values_[p] * r[c];
-        if (!(mark_[j] & 2)) changed.push_back(static_cast<std::int32_t>(j));
-        mark_[j] |= 2;
-        if (!(mark_[j] & 1) && norm2(rj) >= threshold) {
-          mark_[j] |= 1;
-          work.push_back(static_cast<std::int32_t>(j));
-        }
-      }
-    }
-    for (std::int32_t i : work) mark_[i] &= static_cast<std::uint8_t>(~1u);
-    work.clear();
-    // Every residual changed, from its row; those still at the threshold go round again.
-    for (std::int32_t j : changed) {
-      double* rj = &r_[k * static_cast<std::size_t>(j)];
-      residual_row(v, static_cast<std::size_t>(j), rj);
-      const double e = norm2(rj);
-      residual_.set(static_cast<std::size_t>(j), e);
-      mark_[j] = 0;
-      if (!stopped && e >= threshold) {
-        mark_[j] = 1;
-        work.push_back(j);
-      }
-    }
-    changed.clear();
-  }
-  for (std::int32_t i : work) mark_[i] = 0;
+  const long long relaxations = k == 3 ? relax<3>(v, work, threshold, max_relaxations, stopped)
+                                       : relax<0>(v, work, threshold, max_relaxations, stopped);
   res.relaxations = relaxations;
   res.iterations = relaxations > 0 ? 1 : 0;
   const double e_end = std::sqrt(residual_.max());

@@ -61,8 +61,11 @@ inline void row_product(const LimitOperator& op, const double* v, std::size_t i,
 }
 
 // (B v)_i for (n, k) rows of v, any k, written to bv[0..k): the formula of
-// apply_cols<k> (for k = 3 that of row_product).
-inline void row_product_cols(const LimitOperator& op, const double* v, std::size_t k, std::size_t i, double* bv) {
+// apply_cols<k> (for k = 3 that of row_product). K: k known at compile time
+// (K = k), or 0 for k at run time.
+template <int K = 0>
+inline void row_product_cols(const LimitOperator& op, const double* v, std::size_t k_run, std::size_t i, double* bv) {
+  const std::size_t k = K ? static_cast<std::size_t>(K) : k_run;
   for (std::size_t c = 0; c < k; ++c) bv[c] = 0.0;
   for (std::int32_t p = op.offsets[i]; p < op.offsets[i + 1]; ++p) {
     const double* q = v + k * static_cast<std::size_t>(op.neighbors[p]);

@@ -77,7 +77,10 @@ class LocalSolver {
 
  private:
   void residual_row(const double* v, std::size_t i, double* r) const;  // v0_i - (B v)_i
-  double cold_row(std::size_t i) const;                                // ||v0_i - (B V0)_i||^2
+  double cold_row(std::size_t i);                                      // ||v0_i - (B V0)_i||^2
+  template <int K>
+  long long relax(double* v, std::vector<std::int32_t>& work, double threshold, long long max_relaxations,
+                  bool& stopped);
 
   const LimitOperator& op_;
   std::vector<std::int32_t> t_offsets_, t_rows_;  // B^T: the rows reading each vertex
@@ -89,6 +92,7 @@ class LocalSolver {
   MaxTree residual_;              // ||r_i||^2
   bool residual_valid_ = false;
   std::vector<std::uint8_t> mark_;  // 1: in the work list, 2: residual changed this update
+  std::vector<double> scratch_;     // k: one row
 };
 
 }  // namespace sorpia
