@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <memory>
+#include <mutex>
 #include <limits>
 #include <iterator>
 #include <optional>
@@ -30,6 +31,9 @@ struct OperatorState {
   std::vector<double> solved_targets;  // (n, k) of the last solve, not yet in `local`
   std::size_t solved_k = 0;
   std::unique_ptr<sorpia::LocalSolver> local;
+  // Held while the targets or `local` are read or changed: one update (or
+  // solve keeping its targets) at a time. In a unique_ptr: the state is moved.
+  std::unique_ptr<std::mutex> targets_mutex = std::make_unique<std::mutex>();
 };
 
 // An (n, k) array's k, checked: two dimensions, at least one column.
@@ -327,6 +331,7 @@ void bind_solvers(py::module_& m) {
               LongCall call;
               r = sorpia::solve(s.op, v0.data(), k, initial ? initial->data() : nullptr, opt, &s.cache);
               if (keep_targets) {
+                const std::lock_guard<std::mutex> lock(*s.targets_mutex);
                 s.solved_targets.assign(v0.data(), v0.data() + k * s.op.n);
                 s.solved_k = k;
               }
@@ -342,23 +347,27 @@ void bind_solvers(py::module_& m) {
           [](OperatorState& s, const py::object& previous_obj, bool previous_is_last, const Faces& indices,
              const Vertices& positions, double tol, long long max_iter, bool in_place) {
             sorpia::SolveResult& previous = previous_obj.cast<sorpia::SolveResult&>();
-            if (!s.local && s.solved_k == 0)
-              throw sorpia::ParameterError("update needs the targets of a solve first: call solve(vertices)");
-            const std::size_t k = s.solved_k ? s.solved_k : s.local->columns();
-            if (previous.columns != k || previous.control_vertices.size() != k * s.op.n)
-              throw sorpia::ParameterError("previous has shape (" +
-                                           std::to_string(previous.control_vertices.size() / previous.columns) +
-                                           ", " + std::to_string(previous.columns) + ") but the targets are (" +
-                                           std::to_string(s.op.n) + ", " + std::to_string(k) + ")");
             if (indices.ndim() != 1) throw sorpia::ParameterError("indices must be one-dimensional");
-            check_shape(positions, static_cast<py::ssize_t>(k), "positions");
-            if (positions.shape(0) != indices.shape(0))
-              throw sorpia::ParameterError("positions has " + std::to_string(positions.shape(0)) +
-                                           " rows but indices has " + std::to_string(indices.shape(0)));
+            if (positions.ndim() != 2 || positions.shape(0) != indices.shape(0))
+              throw sorpia::ParameterError("positions must have one row per index (" +
+                                           std::to_string(indices.shape(0)) + ")");
             sorpia::SolveResult fresh;
             sorpia::SolveResult& r = in_place ? previous : fresh;
             {
+              // The GIL released before the lock: a thread holding the lock
+              // takes the GIL back when its call ends.
               LongCall call;
+              const std::lock_guard<std::mutex> lock(*s.targets_mutex);
+              if (!s.local && s.solved_k == 0)
+                throw sorpia::ParameterError("update needs the targets of a solve first: call solve(vertices)");
+              const std::size_t k = s.solved_k ? s.solved_k : s.local->columns();
+              if (previous.columns != k || previous.control_vertices.size() != k * s.op.n)
+                throw sorpia::ParameterError("previous has shape (" +
+                                             std::to_string(previous.control_vertices.size() / previous.columns) +
+                                             ", " + std::to_string(previous.columns) + ") but the targets are (" +
+                                             std::to_string(s.op.n) + ", " + std::to_string(k) + ")");
+              if (positions.shape(1) != static_cast<py::ssize_t>(k))
+                throw sorpia::ParameterError("positions must have shape (n, " + std::to_string(k) + ")");
               const auto t0 = std::chrono::steady_clock::now();
               if (!s.local) s.local = std::make_unique<sorpia::LocalSolver>(s.op);
               if (s.solved_k) {
@@ -389,16 +398,27 @@ void bind_solvers(py::module_& m) {
       .def_property_readonly(
           "targets_columns",
           [](const OperatorState& s) -> std::size_t {
+            py::gil_scoped_release release;
+            const std::lock_guard<std::mutex> lock(*s.targets_mutex);
             return s.solved_k ? s.solved_k : s.local && s.local->has_targets() ? s.local->columns() : 0;
           },
           "k of the kept (n, k) targets; 0 before a solve that kept them.")
       .def_property_readonly(
           "targets",
           [](const OperatorState& s) -> py::object {
-            if (s.solved_k) return to_numpy(s.solved_targets, static_cast<py::ssize_t>(s.solved_k));
-            if (s.local && s.local->has_targets())
-              return to_numpy(s.local->targets(), static_cast<py::ssize_t>(s.local->columns()));
-            return py::none();
+            std::vector<double> copy;
+            std::size_t k = 0;
+            {
+              py::gil_scoped_release release;
+              const std::lock_guard<std::mutex> lock(*s.targets_mutex);
+              if (s.solved_k) {
+                copy = s.solved_targets, k = s.solved_k;
+              } else if (s.local && s.local->has_targets()) {
+                copy = s.local->targets(), k = s.local->columns();
+              }
+            }
+            if (k == 0) return py::none();
+            return to_numpy(std::move(copy), static_cast<py::ssize_t>(k));
           },
           "A copy of the targets later updates move (None before a solve that kept them).");
   m.attr("YOUNG_RHO_CLAMP") = sorpia::young_rho_clamp;

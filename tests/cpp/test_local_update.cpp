@@ -19,14 +19,30 @@ namespace {
 
 using sorpia_test::LimitCase;
 
-// E and E_0 of control vertices v for targets t, from the CSR matrix b.
-double error_of(const sorpia::CsrMatrix& b, const std::vector<double>& t, const std::vector<double>& v) {
-  std::vector<double> bv(v.size());
-  sorpia_test::multiply(b, v.data(), bv.data());
+// max_i ||t_i - (B v)_i|| over (n, k) rows, from the CSR matrix b: E of
+// control vertices v for targets t (E_0 for v = t).
+double error_of(const sorpia::CsrMatrix& b, const std::vector<double>& t, const std::vector<double>& v,
+                std::size_t k = 3) {
   double e = 0.0;
-  for (std::size_t i = 0; i < b.n_rows; ++i)
-    e = std::max(e, std::hypot(t[3 * i] - bv[3 * i], t[3 * i + 1] - bv[3 * i + 1], t[3 * i + 2] - bv[3 * i + 2]));
+  for (std::size_t i = 0; i < b.n_rows; ++i) {
+    double s = 0.0;
+    for (std::size_t c = 0; c < k; ++c) {
+      double bv = 0.0;
+      for (std::int32_t p = b.indptr[i]; p < b.indptr[i + 1]; ++p) bv += b.data[p] * v[k * b.indices[p] + c];
+      s += (t[k * i + c] - bv) * (t[k * i + c] - bv);
+    }
+    e = std::max(e, std::sqrt(s));
+  }
   return e;
+}
+
+// Options of `method` to 1e-10, max_iter 5000.
+sorpia::SolveOptions options(sorpia::Method method) {
+  sorpia::SolveOptions opt;
+  opt.method = method;
+  opt.tol = 1e-10;
+  opt.max_iter = 5000;
+  return opt;
 }
 
 std::vector<LimitCase> cases() {
@@ -164,10 +180,7 @@ TEST(WarmStart, SameGuaranteeEveryMethod) {
     const double e0 = error_of(c.b, v0, v0);
     for (sorpia::Method m : sorpia::all_methods) {
       SCOPED_TRACE(sorpia::method_name(m));
-      sorpia::SolveOptions opt;
-      opt.method = m;
-      opt.tol = 1e-10;
-      opt.max_iter = 5000;
+      const sorpia::SolveOptions opt = options(m);
       const sorpia::SolveResult warm = sorpia::solve(c.op, v0.data(), 3, first.control_vertices.data(), opt);
       ASSERT_TRUE(warm.converged());
       EXPECT_NEAR(warm.initial_error, e0, 1e-12 * e0);  // E_0 of the cold start
@@ -182,6 +195,38 @@ TEST(WarmStart, SameGuaranteeEveryMethod) {
     const sorpia::SolveResult again = sorpia::solve(c.op, v0.data(), 3, exact.control_vertices.data(), opt);
     EXPECT_EQ(again.iterations, 0);
     EXPECT_EQ(again.control_vertices, exact.control_vertices);
+  }
+}
+
+
+TEST(Columns, AnyKEveryMethodAndLocalUpdate) {
+  for (const LimitCase& c : cases()) {
+    SCOPED_TRACE(c.name);
+    for (std::size_t k : {1u, 2u, 5u}) {
+      SCOPED_TRACE(k);
+      std::vector<double> v0(k * c.op.n);
+      for (std::size_t q = 0; q < v0.size(); ++q) v0[q] = std::sin(0.37 * static_cast<double>(q));
+      const double e0 = error_of(c.b, v0, v0, k);
+      for (sorpia::Method m : sorpia::all_methods) {
+        SCOPED_TRACE(sorpia::method_name(m));
+        const sorpia::SolveResult r = sorpia::solve(c.op, v0.data(), k, nullptr, options(m));
+        ASSERT_TRUE(r.converged());
+        EXPECT_EQ(r.columns, k);
+        EXPECT_NEAR(r.initial_error, e0, 1e-12 * e0);
+        EXPECT_LT(error_of(c.b, v0, r.control_vertices, k), 1e-10 * e0 * (1 + 1e-6));
+      }
+      // One update of k-column targets.
+      sorpia::SolveOptions opt;
+      std::vector<double> v = sorpia::solve(c.op, v0.data(), k, nullptr, opt).control_vertices;
+      sorpia::LocalSolver local(c.op);
+      local.set_targets(v0, k);
+      const std::int32_t i = static_cast<std::int32_t>(c.op.n / 3);
+      for (std::size_t a = 0; a < k; ++a) v0[k * i + a] += 0.5;
+      sorpia::SolveResult r;
+      local.update(v.data(), false, &i, 1, &v0[k * i], 1e-10, 1000LL * c.op.n, r);
+      ASSERT_TRUE(r.converged());
+      EXPECT_LT(error_of(c.b, v0, v, k), 1e-10 * error_of(c.b, v0, v0, k) * (1 + 1e-6));
+    }
   }
 }
 
