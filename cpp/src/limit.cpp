@@ -23,6 +23,22 @@ thread_local std::string osd_error;
 void record_osd_error(Far::ErrorType, const char* message) { osd_error = message ? message : ""; }
 }  // namespace
 
+std::unique_ptr<Far::TopologyRefiner> create_refiner(const Far::TopologyDescriptor& desc, Scheme scheme,
+                                                     Boundary boundary) {
+  using namespace OpenSubdiv;
+  Sdc::Options sdc;
+  sdc.SetVtxBoundaryInterpolation(boundary == Boundary::EdgeOnly ? Sdc::Options::VTX_BOUNDARY_EDGE_ONLY
+                                                                 : Sdc::Options::VTX_BOUNDARY_EDGE_AND_CORNER);
+  using Factory = Far::TopologyRefinerFactory<Far::TopologyDescriptor>;
+  Factory::Options options(scheme == Scheme::Loop ? Sdc::SCHEME_LOOP : Sdc::SCHEME_CATMARK, sdc);
+  osd_error.clear();
+  Far::SetErrorCallback(record_osd_error);
+  std::unique_ptr<Far::TopologyRefiner> refiner(Factory::Create(desc, options));
+  Far::SetErrorCallback(nullptr);
+  if (!refiner) throw MeshError("OpenSubdiv refused the mesh topology: " + osd_error);
+  return refiner;
+}
+
 LoopRefiner make_loop_refiner(const Topology& topology, Boundary boundary) {
   using namespace OpenSubdiv;
   LoopRefiner out;
@@ -45,16 +61,7 @@ LoopRefiner make_loop_refiner(const Topology& topology, Boundary boundary) {
   desc.numVertsPerFace = verts_per_face.data();
   desc.vertIndicesPerFace = osd_faces.data();
 
-  Sdc::Options sdc;
-  sdc.SetVtxBoundaryInterpolation(boundary == Boundary::EdgeOnly ? Sdc::Options::VTX_BOUNDARY_EDGE_ONLY
-                                                                 : Sdc::Options::VTX_BOUNDARY_EDGE_AND_CORNER);
-  using Factory = Far::TopologyRefinerFactory<Far::TopologyDescriptor>;
-  Factory::Options options(Sdc::SCHEME_LOOP, sdc);
-  osd_error.clear();
-  Far::SetErrorCallback(record_osd_error);
-  out.refiner.reset(Factory::Create(desc, options));
-  Far::SetErrorCallback(nullptr);
-  if (!out.refiner) throw MeshError("OpenSubdiv refused the mesh topology: " + osd_error);
+  out.refiner = create_refiner(desc, Scheme::Loop, boundary);
   return out;
 }
 
