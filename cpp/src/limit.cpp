@@ -177,12 +177,17 @@ void reference_limit_points(const Topology& topology, const double* vertices, Bo
   detail::limit_positions(osd, points, vertices, topology.n_vertices(), out);
 }
 
-CsrMatrix limit_matrix(const Topology& topology, Boundary boundary) {
-  return to_csr(limit_operator(topology, boundary));
+CsrMatrix limit_matrix(const Topology& topology, Boundary boundary, const Tags& tags) {
+  return to_csr(limit_operator(topology, boundary, tags));
 }
 
 void limit_points(const Topology& topology, const double* vertices, Boundary boundary, double* out) {
   apply(limit_operator(topology, boundary), vertices, out);
+}
+
+void limit_points(const Topology& topology, const double* vertices, Boundary boundary, const Tags& tags,
+                  double* out) {
+  apply(limit_operator(topology, boundary, tags), vertices, out);
 }
 
 }  // namespace sorpia
