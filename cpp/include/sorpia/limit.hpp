@@ -24,10 +24,12 @@ struct CsrMatrix {
 /// B V gives the limit positions of the control vertices V.
 /// to_csr(limit_operator(topology, boundary)) (limit_operator.hpp): OpenSubdiv's
 /// limit masks; unreferenced vertices get an identity row.
+/// With `tags`, to_csr(limit_operator(topology, boundary, tags)).
 /// @param topology  the mesh connectivity
 /// @param boundary  boundary interpolation rule
+/// @param tags      OpenSubdiv's sharpness tags (creases, corners, holes)
 /// @return B, (n_vertices, n_vertices), columns sorted within a row
-CsrMatrix limit_matrix(const Topology& topology, Boundary boundary);
+CsrMatrix limit_matrix(const Topology& topology, Boundary boundary, const Tags& tags = Tags{});
 
 /// Loop limit positions of the vertices, B V: apply(limit_operator(topology,
 /// boundary), ...); unreferenced vertices are their own limit.
@@ -36,6 +38,9 @@ CsrMatrix limit_matrix(const Topology& topology, Boundary boundary);
 /// @param boundary  boundary interpolation rule
 /// @param out       row-major (n_vertices, 3) limit positions (written)
 void limit_points(const Topology& topology, const double* vertices, Boundary boundary, double* out);
+/// As above with OpenSubdiv's sharpness tags (limit_operator.hpp).
+void limit_points(const Topology& topology, const double* vertices, Boundary boundary, const Tags& tags,
+                  double* out);
 
 /// Reference, for tests: B recorded from OpenSubdiv's
 /// Far::PrimvarRefinerReal<double>::Limit on an unrefined Loop
