@@ -164,32 +164,8 @@ def test_untagged_calls_are_unchanged(sphere):
 
 # OpenSubdiv's Loop shapes with their tags (`t` lines of the OBJ files).
 def read_osd_shape(path: Path):
-    v, f = sorpia.read_mesh(path)[:2]
-    creases, sharp, corners, corner_s, holes, boundary = [], [], [], [], [], "edge-and-corner"
-    for line in path.read_text().splitlines():
-        t = line.split()
-        if not t or t[0] != "t":
-            continue
-        counts = [int(x) for x in t[2].split("/")]
-        ints, floats = t[3:3 + counts[0]], t[3 + counts[0]:3 + counts[0] + counts[1]]
-        if t[1] == "crease":
-            for a, b in zip(ints[:-1], ints[1:]):
-                creases.append((int(a), int(b)))
-                sharp.append(float(floats[0]))
-        elif t[1] == "corner":
-            corners += [int(x) for x in ints]
-            corner_s += [float(floats[0])] * len(ints)
-        elif t[1] == "hole":
-            holes += [int(x) for x in ints]
-        elif t[1] == "interpolateboundary":
-            boundary = {"1": "edge-only", "2": "edge-and-corner"}.get(ints[0], boundary)
-    tags = {}
-    if creases:
-        tags["creases"] = (np.array(creases), np.array(sharp))
-    if corners:
-        tags["corners"] = (np.array(corners), np.array(corner_s))
-    if holes:
-        tags["holes"] = np.array(holes)
+    v, f, tags = sorpia.read_mesh(path, tags=True)
+    boundary = tags.pop("boundary", "edge-and-corner")
     return v, f, tags, boundary
 
 
