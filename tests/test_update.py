@@ -151,6 +151,28 @@ def test_update_meets_full_solve_guarantee_and_composes(name, in_place):
         np.testing.assert_allclose(res.control_vertices, full.control_vertices, atol=100 * 1e-10 * e0)
 
 
+@pytest.mark.parametrize("sharpness", [np.inf, 1.5])
+def test_update_with_creases(sharpness):
+    """Crease rows: one-way entries (infinitely sharp) or per-entry weights
+    (semi-sharp, B composed through refinement levels); the update's guarantee
+    against the residual of limit_matrix with the same tags."""
+    V, F = sorpia.shapes.grid(16, 12)
+    nv = 12  # vertex (i, j) of the grid is i * nv + j
+    row = 6
+    edges = np.array([[row * nv + j, row * nv + j + 1] for j in range(2, 10)])
+    tags = {"creases": (edges, sharpness), "corners": ([0], np.inf)}
+    B = sorpia.limit_matrix(F, len(V), **tags)
+    interp = sorpia.Interpolator(F, len(V), **tags)
+    assert interp._operator.uniform == (sharpness == np.inf)
+    res = interp.solve(V)
+    targets = V.copy()
+    for i in (row * nv + 5, 5, len(V) - 1):
+        targets[i] += [0.0, 0.0, 0.3]
+        res = interp.update(res, [i], targets[i])
+        e0 = residual(B, targets, targets)
+        assert res.converged and residual(B, targets, res.control_vertices) < 1.0001e-10 * e0
+
+
 def test_update_one_vertex_is_local():
     V, F = sorpia.shapes.irregular(20000, seed=2)
     interp = sorpia.Interpolator(F, len(V))
@@ -230,14 +252,16 @@ def shared_loop_meshes():
 @pytest.mark.parametrize("name", shared_loop_meshes() or ["none"])
 @pytest.mark.filterwarnings("ignore::sorpia.limit.UnreferencedVerticesWarning")
 def test_update_on_shared_meshes(name):
-    """On every shared mesh the Loop interpolator accepts (triangulated): one
-    target moved, the update meets the guarantee of a full solve."""
-    V, F = sorpia.read_mesh(SHARED_MESHES / name, triangulate=True)
+    """On every shared mesh the Loop interpolator accepts (triangulated, with
+    the file's creases, corners and boundary rule): one target moved, the
+    update meets the guarantee of a full solve."""
+    V, F, tags = sorpia.read_mesh(SHARED_MESHES / name, triangulate=True, tags=True)
+    tags.pop("holes", None)  # face indices of the polygons, not of the triangles
     try:
-        interp = sorpia.Interpolator(F, len(V))
+        interp = sorpia.Interpolator(F, len(V), **tags)
     except (MeshError, ValueError) as exc:
         pytest.skip(f"not a Loop mesh here: {exc}")
-    B = interp.limit_matrix()
+    B = sorpia.limit_matrix(F, len(V), **tags)
     res = interp.solve(V, max_iter=100000)
     targets = V.copy()
     i = len(V) // 2
