@@ -58,6 +58,21 @@ void MaxTree::collect(double threshold, std::vector<std::int32_t>& out) const {
   }
 }
 
+namespace {
+
+// ||x_i||^2 of each row of an (n, k) array.
+std::vector<double> row_norms2(const std::vector<double>& x, std::size_t k) {
+  std::vector<double> out(x.size() / k);
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    double e = 0.0;
+    for (std::size_t c = 0; c < k; ++c) e += x[k * i + c] * x[k * i + c];
+    out[i] = e;
+  }
+  return out;
+}
+
+}  // namespace
+
 LocalSolver::LocalSolver(const LimitOperator& op) : op_(op), mark_(op.n, 0) {
   detail::Transposed t = detail::transpose(op);
   t_offsets_ = std::move(t.offsets);
@@ -83,15 +98,10 @@ void LocalSolver::set_targets(std::vector<double> targets, std::size_t k) {
   k_ = k;
   targets_ = std::move(targets);
   scratch_.resize(k);
-  std::vector<double> cold(op_.n), norm(op_.n);
-  for (std::size_t i = 0; i < op_.n; ++i) {
-    cold[i] = cold_row(i);
-    double e = 0.0;
-    for (std::size_t c = 0; c < k_; ++c) e += targets_[k_ * i + c] * targets_[k_ * i + c];
-    norm[i] = e;
-  }
-  cold_.assign(cold);
-  target_norm_.assign(norm);
+  std::vector<double> cold(k * op_.n);
+  detail::residual(op_, targets_.data(), targets_.data(), cold.data(), k);
+  cold_.assign(row_norms2(cold, k));
+  target_norm_.assign(row_norms2(targets_, k));
   residual_valid_ = false;
 }
 
@@ -200,13 +210,9 @@ void LocalSolver::update(double* v, bool v_is_last, const std::int32_t* indices,
 
   // The start's residual, in full unless it is the last update's result.
   if (!v_is_last || !residual_valid_) {
-    r_.assign(k * n, 0.0);
-    std::vector<double> rn(n);
-    for (std::size_t i = 0; i < n; ++i) {
-      residual_row(v, i, &r_[k * i]);
-      rn[i] = norm2(&r_[k * i]);
-    }
-    residual_.assign(rn);
+    r_.resize(k * n);
+    detail::residual(op_, targets_.data(), v, r_.data(), k);
+    residual_.assign(row_norms2(r_, k));
     residual_valid_ = true;
   }
 
