@@ -72,7 +72,7 @@ def limit_points(vertices, faces, boundary: str = DEFAULT_BOUNDARY, *, creases=N
         Control vertices, or any per-vertex data (k >= 1 columns, each
         mapped by B alike).
     faces : array_like, (m, 3) int
-        Triangles, indices into `vertices`, consistently oriented.
+        Triangles, indices into ``vertices``, consistently oriented.
     boundary : {"edge-and-corner", "edge-only"}
         Boundary rule (OpenSubdiv's VTX_BOUNDARY_EDGE_AND_CORNER or
         VTX_BOUNDARY_EDGE_ONLY). With "edge-and-corner" (the default) a

@@ -254,7 +254,7 @@ class Interpolator:
             and do not depend on timing. 1 (default) on one core; more than
             the cores free only slows down. control_vertices are always in
             the input order. With more than 3 columns of data, 1 only.
-        initial : array_like, same shape as `vertices`, or None
+        initial : array_like, same shape as ``vertices``, or None
             A warm start V^(0) (e.g. the previous frame's control_vertices),
             for every method. The stopping rule is unchanged: E_0 is the error
             of the cold start V = V0, so the result meets the same E_k / E_0 <
@@ -405,9 +405,9 @@ def interpolate(vertices, faces, method: str = "sor", omega="auto", tol: float =
                 boundary: str = DEFAULT_BOUNDARY, callback: Optional[Callable[[int, float], object]] = None, *,
                 sigma=None, alpha=None, weight=None, threads: int = 1, creases=None, corners=None,
                 holes=None, initial=None) -> InterpolationResult:
-    """Control vertices whose Loop limit surface interpolates `vertices`.
+    """Control vertices whose Loop limit surface interpolates ``vertices``.
 
-    `vertices` may be (n, k) data for any k >= 1 (every column interpolated);
+    ``vertices`` may be (n, k) data for any k >= 1 (every column interpolated);
     `initial` is a warm start, see `Interpolator.solve`.
 
     One call of ``Interpolator(faces, len(vertices), boundary, creases=,
