@@ -22,7 +22,7 @@ V, F = sorpia.shapes.icosphere(3)
 interp = sorpia.Interpolator(F, len(V))
 result = interp.solve(V)
 targets = V.copy()
-picked, height = 0, 0.0
+picked, height, status = 0, 0.0, "move the slider"
 
 ps.init()
 ps.register_point_cloud("targets", targets, radius=0.004)
@@ -31,13 +31,14 @@ ps.register_surface_mesh("limit surface", surface[0], surface[1])
 
 
 def frame():
-    global result, height
+    global result, height, status
     changed, height = psim.SliderFloat("height of vertex 0", height, -0.5, 0.5)
+    psim.TextUnformatted(status)
     if not changed:
         return
     targets[picked] = V[picked] * (1.0 + height)
     result = interp.update(result, [picked], targets[picked], in_place=True)
-    psim.TextUnformatted(f"update: {result.seconds * 1e3:.2f} ms, {result.relaxations} relaxations")
+    status = f"update: {result.seconds * 1e3:.2f} ms, {result.relaxations} relaxations"
     ps.get_point_cloud("targets").update_point_positions(targets)
     verts, _ = sorpia.limit_surface(result.control_vertices, F, level=2)
     ps.get_surface_mesh("limit surface").update_vertex_positions(verts)

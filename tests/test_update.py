@@ -198,6 +198,21 @@ def test_update_k_columns_and_start_from_any_result():
     assert residual(B, values, up2.control_vertices) < 1.0001e-10 * residual(B, values, values)
 
 
+def test_results_pickle_with_their_columns():
+    import pickle
+
+    V, F = meshes()["irregular"]
+    interp = sorpia.Interpolator(F, len(V))
+    res = interp.solve(V[:, :2])
+    up = interp.update(res, [4], [1.0, 2.0])
+    for r in (res, up):
+        back = pickle.loads(pickle.dumps(r))
+        np.testing.assert_array_equal(back.control_vertices, r.control_vertices)
+        assert back.control_vertices.shape == (len(V), 2)
+        assert back.relaxations == r.relaxations and back.variant == r.variant
+    assert not pickle.loads(pickle.dumps(up)).control_vertices.flags.writeable
+
+
 def test_update_nothing_to_do():
     V, F = meshes()["irregular"]
     interp = sorpia.Interpolator(F, len(V))

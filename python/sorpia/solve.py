@@ -312,8 +312,9 @@ class Interpolator:
         in_place : bool
             False (default): a new result, with a copy of previous's vertices
             (O(n) memory traffic). True: `previous` itself is updated and
-            returned (its arrays show the new vertices): for interactive loops
-            on large meshes.
+            returned (its arrays show the new vertices; arrays taken from it
+            before must not be written into, as the kept residual relies on
+            them): for interactive loops on large meshes.
 
         Returns
         -------
