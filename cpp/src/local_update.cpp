@@ -259,8 +259,18 @@ void LocalSolver::update(double* v, bool v_is_last, const std::int32_t* indices,
   std::vector<std::int32_t> work;
   residual_.collect(threshold, work);
   bool stopped = false;
-  const long long relaxations = k == 3 ? relax<3>(v, work, threshold, max_relaxations, stopped)
-                                       : relax<0>(v, work, threshold, max_relaxations, stopped);
+  long long relaxations = 0;
+  try {
+    relaxations = k == 3 ? relax<3>(v, work, threshold, max_relaxations, stopped)
+                         : relax<0>(v, work, threshold, max_relaxations, stopped);
+  } catch (...) {
+    // Interrupted (poll_interrupt): v is half relaxed and may be dropped by
+    // the caller, so the kept residual belongs to no result any more; the
+    // next update computes its start's in full. The marks go back to zero.
+    residual_valid_ = false;
+    std::fill(mark_.begin(), mark_.end(), 0);
+    throw;
+  }
   res.relaxations = relaxations;
   res.iterations = relaxations > 0 ? 1 : 0;
   const double e_end = std::sqrt(residual_.max());
