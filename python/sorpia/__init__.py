@@ -12,7 +12,7 @@ from .solve import ConvergenceWarning, InterpolationResult, Interpolator, OmegaW
 from .io import read_mesh, write_mesh
 from ._validate import Polygons
 from .mesh_repair import RepairResult, repair
-from .surface import LoopSurface, evaluate_limit, limit_surface
+from .surface import LimitSurface, LoopSurface, evaluate_limit, limit_surface
 from . import shapes
 
 __all__ = [
@@ -26,6 +26,6 @@ __all__ = [
     "Polygons",
     "limit_points",
     "shapes",
-    "LoopSurface", "evaluate_limit", "limit_surface", "read_mesh", "write_mesh",
+    "LimitSurface", "LoopSurface", "evaluate_limit", "limit_surface", "read_mesh", "write_mesh",
     "RepairResult", "repair",
 ]
