@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import sorpia
-from sorpia.surface import subface_columns
+from sorpia.surface import corner_uv, edge_uv  # checked here: Bfr at these parameters is the corner
 
 SCHEMES = ["loop", "catmull-clark"]
 
@@ -26,16 +26,6 @@ def face_list(faces):
         ends = np.cumsum(faces.face_vertex_counts)
         return [faces.face_vertex_indices[e - c:e].tolist() for c, e in zip(faces.face_vertex_counts, ends)]
     return np.asarray(faces).tolist()
-
-
-def corner_uv(scheme, k, j):
-    """(u, v) of corner j of a k-gon, as the docs state Bfr's parameterisation."""
-    if scheme == "loop":
-        return [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0)][j]
-    if k == 4:
-        return [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)][j]
-    w = subface_columns(k)
-    return (float(j % w), float(j // w))
 
 
 def level_one_parameters(scheme, faces, tess_faces, n):
@@ -235,24 +225,18 @@ def test_an_infinitely_sharp_crease_is_the_cubic_b_spline_of_its_vertices(scheme
 @pytest.mark.parametrize("scheme", SCHEMES)
 def test_the_normal_jumps_across_a_sharp_crease_and_not_across_a_smooth_one(scheme):
     # The two faces on either side of a crease edge, evaluated at the edge's
-    # midpoint: the same point, with normals as far apart as the fold (about
+    # midpoint (sorpia.surface.edge_uv, from either side): the same point, with normals as far apart as the fold (about
     # 60 degrees) when the edge is sharp, equal when it is not.
     v, f, line = folded_grid()
     edges = np.column_stack([line[:-1], line[1:]])
     a, b = line[3], line[4]
     sides = [k for k in range(len(f)) if a in f[k] and b in f[k]]
     assert len(sides) == 2
-    ids, uv = [], []
+    ids, uv = sides, []
     for k in sides:
-        ja, jb = f[k].tolist().index(a), f[k].tolist().index(b)
-        ca, cb = np.array(corner_uv(scheme if scheme == "loop" else "catmull-clark", 3, ja)), \
-            np.array(corner_uv(scheme if scheme == "loop" else "catmull-clark", 3, jb))
-        if scheme == "loop":
-            uv.append((ca + cb) / 2)
-        else:  # the sub-face of whichever end comes first along the face
-            j = ja if (ja + 1) % 3 == jb else jb
-            uv.append(np.array(corner_uv("catmull-clark", 3, j)) + [0.5, 0.0])
-        ids.append(k)
+        face = f[k].tolist()
+        j = next(j for j in range(3) if {face[j], face[(j + 1) % 3]} == {a, b})
+        uv.append(edge_uv(scheme, 3, j, [0.5])[0])  # the midpoint of edge j, on this face's side
     for sharp, check in [(np.inf, lambda angle: angle > 0.5), (0.0, lambda angle: angle < 1e-9)]:
         s = sorpia.LimitSurface(v, f, scheme=scheme, creases=(edges, sharp))
         p, _, _, n = s.evaluate(ids, np.array(uv), derivatives=True)

@@ -46,10 +46,10 @@ using detail::Point3;
 // Bytes per refined face held by a uniformly refined TopologyRefiner with
 // full topology (all levels together, ~4/3 of the last level) and the
 // position buffers, for the memory check before a tessellation;
-// bench/io_speed.py prints the peak it measures beside this estimate. A quad
-// has twice a triangle's share of vertices and 4/3 of its edges.
+// bench/io_speed.py prints the peak it measures beside this estimate (both
+// schemes: it measures Loop and Catmull-Clark).
 constexpr double kRefinerBytesPerTriangle = 220.0;
-constexpr double kRefinerBytesPerQuad = 400.0;
+constexpr double kRefinerBytesPerQuad = 300.0;
 
 std::string human_bytes(double b) {
   char buf[64];

@@ -51,6 +51,32 @@ def subface_columns(face_size: int) -> int:
     return (3 if k > 4 else 2) if k < 10 else 1 + math.isqrt(k - 1)
 
 
+def corner_uv(scheme: str, face_size: int, corner: int) -> tuple[float, float]:
+    """(u, v) of corner `corner` of a face of `face_size` vertices in Bfr's
+    parameterisation under `scheme` (see the module docstring)."""
+    k, j = int(face_size), int(corner)
+    if scheme == "loop":
+        return [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0)][j]
+    if k == 4:
+        return [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)][j]
+    w = subface_columns(k)
+    return float(j % w), float(j // w)
+
+
+def edge_uv(scheme: str, face_size: int, edge: int, t) -> np.ndarray:
+    """(len(t), 2) parameters of the points at t in [0, 1] along edge `edge`
+    (corner `edge` to corner `edge + 1`) of a face, in Bfr's
+    parameterisation (Bfr::Parameterization::GetEdgeCoord): straight from
+    corner to corner in a triangle or a quad; in a k-gon's sub-faces the
+    first half runs in sub-face `edge` and the second in sub-face `edge + 1`."""
+    t = np.asarray(t, dtype=float)[:, None]
+    a = np.array(corner_uv(scheme, face_size, edge))
+    b = np.array(corner_uv(scheme, face_size, (edge + 1) % face_size))
+    if scheme == "loop" or face_size == 4:
+        return a + t * (b - a)
+    return np.where(t < 0.5, a + t * [1.0, 0.0], b + (1.0 - t) * [0.0, 1.0])
+
+
 def _faces_out(faces, counts):
     """A tessellation's faces as the core returns them: an (m, k) array, or
     sorpia.Polygons when the sizes differ."""
@@ -240,7 +266,7 @@ def limit_surface(vertices, faces, level: int = 3, boundary: str = DEFAULT_BOUND
         the control polygons; from level 1 a k-sided face gives
         k * 4**(level - 1) quads, and the output has about as many vertices as
         quads. Memory at the peak is about 270 bytes per output triangle and
-        470 per output quad (OpenSubdiv's refined topology of every level
+        380 per output quad (OpenSubdiv's refined topology of every level
         plus the output arrays), e.g. Loop level 2 of a 100k-vertex closed
         mesh (200k faces): 3.2M triangles, under 1 GB; level 3: 12.8M
         triangles, about 3.4 GB. A level whose estimate exceeds the memory
