@@ -1,5 +1,6 @@
 #pragma once
 // Building an OpenSubdiv Loop refiner from a sorpia::Topology (internal).
+#include <opensubdiv/far/topologyDescriptor.h>
 #include <opensubdiv/far/topologyRefiner.h>
 
 #include <cstddef>
@@ -21,6 +22,12 @@ struct LoopRefiner {
   std::vector<std::int32_t> to_osd;
   std::vector<std::int32_t> from_osd;
 };
+
+// A refiner for `desc` under `scheme` and `boundary` (Sdc's other options at
+// their defaults: CREASE_UNIFORM, the rules sorpia's limit masks assume).
+// Throws sorpia::MeshError when OpenSubdiv refuses the topology.
+std::unique_ptr<Far::TopologyRefiner> create_refiner(const Far::TopologyDescriptor& desc, Scheme scheme,
+                                                     Boundary boundary);
 
 // Throws sorpia::MeshError when OpenSubdiv refuses the topology.
 LoopRefiner make_loop_refiner(const Topology& topology, Boundary boundary);
