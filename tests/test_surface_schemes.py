@@ -278,3 +278,41 @@ def test_holes_have_no_surface_and_no_tessellated_faces(scheme):
     assert np.array_equal(fs, full.reshape(len(f), per_face, -1)[kept].reshape(-1, fs.shape[1]))
     with pytest.raises(sorpia.ParameterError, match=r"face_ids\[1\] = 7 is a hole"):
         s.evaluate([1, 7], [[0.1, 0.1], [0.1, 0.1]])
+
+
+def test_tagged_loop_tessellation_starts_with_limit_points():
+    # The control vertices' rows are B V as sorpia.limit_points computes it
+    # with the same tags (one operator, bit for bit), infinite and semi-sharp.
+    v, f, line = folded_grid()
+    edges = np.column_stack([line[:-1], line[1:]])
+    sharpness = np.where(np.arange(len(edges)) % 2, np.inf, 1.5)
+    tags = dict(creases=(edges, sharpness), corners=([line[0]], 2.0))
+    for level in (0, 2):
+        vs, _ = sorpia.limit_surface(v, f, level, **tags)
+        assert np.array_equal(vs[:len(v)], sorpia.limit_points(v, f, **tags))
+
+
+@pytest.mark.parametrize("scheme", SCHEMES)
+def test_a_dart_is_the_one_place_where_opensubdiv_s_limits_disagree(scheme):
+    # An interior vertex with one infinitely sharp edge (a dart; both ends of
+    # the one crease here): Sdc gives it the smooth limit mask, which is not
+    # the limit of its refinement, so Far's Limit() on the control mesh (B),
+    # after L levels, and Bfr's corner (Limit() after its 4 local refinements)
+    # are different points, all within 1% of the edge length here
+    # (docs/surfaces.md). Every other corner agrees to rounding.
+    v, f = sorpia.shapes.grid(7, 7)
+    v = np.asarray(v, dtype=float)
+    v[:, 2] += 0.1 * np.random.default_rng(0).standard_normal(49)  # a bumpy height field
+    f = np.asarray(f)
+    dart = 24
+    other = int(next(x for face in f if dart in face for x in face if x != dart))
+    s = sorpia.LimitSurface(v, f, scheme=scheme, creases=([[dart, other]], np.inf))
+    ids = np.repeat(np.arange(len(f)), 3)
+    uv = np.array([corner_uv(scheme, 3, j) for j in range(3)] * len(f))
+    bfr = s.evaluate(ids, uv)
+    at_dart = np.isin(f.ravel(), [dart, other])
+    edge = 1 / 6
+    for level in (0, 1, 2, 3):
+        p = s.tessellate(level)[0][f.ravel()]
+        assert np.abs(p - bfr)[~at_dart].max() <= 1e-12
+        assert np.abs(p - bfr)[at_dart].max() <= 0.01 * edge

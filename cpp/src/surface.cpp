@@ -123,16 +123,10 @@ std::size_t tessellation_bytes(Scheme scheme, std::size_t n_vertices, std::size_
 
 namespace {
 
-// OpenSubdiv reports topology errors through a global callback; collect the
-// message of the current thread's refiner build.
-thread_local std::string osd_error;
-void record_osd_error(Far::ErrorType, const char* message) { osd_error = message ? message : ""; }
-
 // TEMPORARY until detail::make_refiner (scheme, boundary and tags) exists:
 // the refiner of a triangle topology under either scheme, with the tags.
 detail::LoopRefiner make_surface_refiner(const Topology& topology, Scheme scheme, Boundary boundary,
                                          const Tags& tags) {
-  using namespace OpenSubdiv;
   detail::LoopRefiner out;
   const std::size_t n = topology.n_vertices();
   out.to_osd.assign(n, -1);
@@ -165,16 +159,7 @@ detail::LoopRefiner make_surface_refiner(const Topology& topology, Scheme scheme
   desc.numHoles = static_cast<int>(tags.holes.size());
   desc.holeIndices = tags.holes.data();
 
-  Sdc::Options sdc;
-  sdc.SetVtxBoundaryInterpolation(boundary == Boundary::EdgeOnly ? Sdc::Options::VTX_BOUNDARY_EDGE_ONLY
-                                                                 : Sdc::Options::VTX_BOUNDARY_EDGE_AND_CORNER);
-  using Factory = Far::TopologyRefinerFactory<Far::TopologyDescriptor>;
-  Factory::Options options(scheme == Scheme::Loop ? Sdc::SCHEME_LOOP : Sdc::SCHEME_CATMARK, sdc);
-  osd_error.clear();
-  Far::SetErrorCallback(record_osd_error);
-  out.refiner.reset(Factory::Create(desc, options));
-  Far::SetErrorCallback(nullptr);
-  if (!out.refiner) throw MeshError("OpenSubdiv refused the mesh topology: " + osd_error);
+  out.refiner = detail::create_refiner(desc, scheme, boundary);
   return out;
 }
 
@@ -593,10 +578,11 @@ Tessellation LimitSurface::tessellate(int level) {
   const std::size_t n_out = n + (n_level - n_osd);
   Tessellation out;
   out.vertices.resize(3 * n_out);
-  if (scheme == Scheme::Loop && impl_->tags.empty()) {
+  if (scheme == Scheme::Loop) {
     // Control vertices: B V exactly as sorpia::limit_points computes it (the
-    // refined level gives the same point up to rounding).
-    limit_points(impl_->topology, impl_->vertices.data(), impl_->boundary, out.vertices.data());
+    // refined level gives the same point up to rounding, except at a dart,
+    // whose limit mask is not the limit of its refinement).
+    limit_points(impl_->topology, impl_->vertices.data(), impl_->boundary, impl_->tags, out.vertices.data());
   } else {
     std::copy(impl_->vertices.begin(), impl_->vertices.end(), out.vertices.begin());
     for (std::size_t i = 0; i < n_osd; ++i) {
