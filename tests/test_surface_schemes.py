@@ -116,7 +116,6 @@ def test_catmull_clark_level_one_vertices_are_bfr_at_their_parameters(tri_mesh):
     assert np.abs(s.evaluate(ids, uv) - vs).max() <= 1e-12 * diagonal(v)
 
 
-@pytest.mark.skip(reason="TEMPORARY: polygon faces need the polygon sorpia.Topology (branch catmark)")
 @pytest.mark.parametrize("k", [3, 5, 6, 9, 10, 13])
 def test_n_gons_give_k_quads_and_bfr_matches_at_their_parameters(k):
     # A prism with two k-gon caps: corner j of each face (the documented

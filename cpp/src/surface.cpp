@@ -121,56 +121,12 @@ std::size_t tessellation_bytes(Scheme scheme, std::size_t n_vertices, std::size_
              : static_cast<std::size_t>(bytes);
 }
 
-namespace {
-
-// TEMPORARY until detail::make_refiner (scheme, boundary and tags) exists:
-// the refiner of a triangle topology under either scheme, with the tags.
-detail::LoopRefiner make_surface_refiner(const Topology& topology, Scheme scheme, Boundary boundary,
-                                         const Tags& tags) {
-  detail::LoopRefiner out;
-  const std::size_t n = topology.n_vertices();
-  out.to_osd.assign(n, -1);
-  for (std::size_t v = 0; v < n; ++v)
-    if (!topology.is_unreferenced(v)) {
-      out.to_osd[v] = static_cast<std::int32_t>(out.from_osd.size());
-      out.from_osd.push_back(static_cast<std::int32_t>(v));
-    }
-  const std::vector<std::int32_t>& faces = topology.faces();
-  std::vector<int> osd_faces(faces.size());
-  for (std::size_t k = 0; k < faces.size(); ++k) osd_faces[k] = out.to_osd[faces[k]];
-  std::vector<int> verts_per_face(topology.n_faces(), 3);
-  std::vector<int> creases(tags.crease_vertices.size()), corners(tags.corner_vertices.size());
-  for (std::size_t k = 0; k < creases.size(); ++k) creases[k] = out.to_osd[tags.crease_vertices[k]];
-  for (std::size_t k = 0; k < corners.size(); ++k) corners[k] = out.to_osd[tags.corner_vertices[k]];
-  std::vector<float> crease_w(tags.crease_sharpness.begin(), tags.crease_sharpness.end());
-  std::vector<float> corner_w(tags.corner_sharpness.begin(), tags.corner_sharpness.end());
-
-  Far::TopologyDescriptor desc;
-  desc.numVertices = static_cast<int>(out.from_osd.size());
-  desc.numFaces = static_cast<int>(topology.n_faces());
-  desc.numVertsPerFace = verts_per_face.data();
-  desc.vertIndicesPerFace = osd_faces.data();
-  desc.numCreases = static_cast<int>(crease_w.size());
-  desc.creaseVertexIndexPairs = creases.data();
-  desc.creaseWeights = crease_w.data();
-  desc.numCorners = static_cast<int>(corner_w.size());
-  desc.cornerVertexIndices = corners.data();
-  desc.cornerWeights = corner_w.data();
-  desc.numHoles = static_cast<int>(tags.holes.size());
-  desc.holeIndices = tags.holes.data();
-
-  out.refiner = detail::create_refiner(desc, scheme, boundary);
-  return out;
-}
-
-}  // namespace
-
 struct LimitSurface::Impl {
   Topology topology;
   Scheme scheme;
   Boundary boundary;
   Tags tags;
-  detail::LoopRefiner base;  // unrefined, with the tags: Bfr and the limit positions of control vertices
+  detail::Refiner base;  // unrefined, with the tags: Bfr and the limit positions of control vertices
   std::unique_ptr<SurfaceFactory> factory;
   std::vector<double> vertices;  // (n, 3), as given
   std::vector<Point3> points;    // referenced vertices in OpenSubdiv's order
@@ -184,7 +140,7 @@ struct LimitSurface::Impl {
   mutable std::shared_mutex mutex;
 
   Impl(const Topology& t, Scheme s, Boundary b, const Tags& g)
-      : topology(t), scheme(s), boundary(b), tags(g), base(make_surface_refiner(t, s, b, g)) {}
+      : topology(t), scheme(s), boundary(b), tags(g), base(detail::make_refiner(t, s, b, g)) {}
 };
 
 namespace {
