@@ -9,7 +9,6 @@
 #include <opensubdiv/far/topologyRefinerFactory.h>
 
 #include <algorithm>
-#include <functional>
 #include <atomic>
 #include <cmath>
 #include <cstdio>
@@ -446,7 +445,7 @@ std::vector<int> inexact_limit_vertices(const Far::TopologyRefiner& refiner, int
 
 }  // namespace
 
-Tessellation LimitSurface::tessellate(int level) {
+PolyMesh LimitSurface::tessellate(int level) {
   if (level < 0 || level > 15)
     throw ParameterError("level must be in 0..15, got " + std::to_string(level));
   const Scheme scheme = impl_->scheme;
@@ -532,7 +531,7 @@ Tessellation LimitSurface::tessellate(int level) {
   const std::size_t n_osd = from.size();
   const auto n_level = static_cast<std::size_t>(last.GetNumVertices());
   const std::size_t n_out = n + (n_level - n_osd);
-  Tessellation out;
+  PolyMesh out;
   out.vertices.resize(3 * n_out);
   if (scheme == Scheme::Loop) {
     // Control vertices: B V exactly as sorpia::limit_points computes it (the
@@ -562,22 +561,14 @@ Tessellation LimitSurface::tessellate(int level) {
                                                                          : n + static_cast<std::size_t>(i) - n_osd);
   };
   const auto n_faces_level = static_cast<std::size_t>(last.GetNumFaces());
-  // Catmull-Clark's level 0 is the control polygons, of any sizes; every
-  // other level has the scheme's regular faces.
-  const bool polygons = scheme == Scheme::CatmullClark && level == 0;
-  out.face_size = polygons ? 0 : scheme == Scheme::Loop ? 3 : 4;
-  out.faces.reserve(static_cast<std::size_t>(last.GetNumFaceVertices()));
+  out.face_counts.reserve(n_faces_level);
+  out.face_indices.reserve(static_cast<std::size_t>(last.GetNumFaceVertices()));
   for (std::size_t f = 0; f < n_faces_level; ++f) {
     if (f % kRowsPerPoll == 0) poll_interrupt();
     if (last.IsFaceHole(static_cast<int>(f))) continue;
     const auto fv = last.GetFaceVertices(static_cast<int>(f));
-    if (polygons) out.face_counts.push_back(fv.size());
-    for (int c = 0; c < fv.size(); ++c) out.faces.push_back(to_out(fv[c]));
-  }
-  if (polygons && std::adjacent_find(out.face_counts.begin(), out.face_counts.end(), std::not_equal_to<>()) ==
-                      out.face_counts.end()) {  // one size after all
-    out.face_size = out.face_counts.empty() ? 4 : out.face_counts.front();
-    out.face_counts.clear();
+    out.face_counts.push_back(fv.size());
+    for (int c = 0; c < fv.size(); ++c) out.face_indices.push_back(to_out(fv[c]));
   }
   return out;
 }
