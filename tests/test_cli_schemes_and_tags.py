@@ -135,3 +135,43 @@ def test_every_solving_command_takes_the_scheme_options(option, command):
         assert code == 0 and option in stdout, name
     code, stdout, _ = command("demo", "--help")
     assert "--scheme" in stdout
+
+
+def test_fit_solves_with_the_file_tags_and_writes_them_with_the_control_mesh(tmp_path, monkeypatch, command):
+    monkeypatch.chdir(tmp_path)
+    v, tris, _ = cube_of_triangles()
+    v = v + np.random.default_rng(4).normal(0, 0.03, v.shape)
+    lines = ["t crease 2/1/0 0 1 10", "t crease 2/1/0 1 3 10", "t crease 2/1/0 3 2 2.5", "t corner 1/1/0 7 1.5",
+             "t interpolateboundary 1/0/0 2"]
+    tagged_obj(tmp_path / "tags.obj", v, tris, lines)
+    code, stdout, err = command("fit", "tags.obj", "-o", "c.obj", "--report", "r.json")
+    assert code == 0, err
+    report = json.loads((tmp_path / "r.json").read_text())
+    assert report["tags"]["creases"]["count"] == 3 and report["tags"]["corners"]["count"] == 1
+    assert report["tags"]["written_to_output"] == ["boundary", "corners", "creases"]
+    _, _, tags = sorpia.read_mesh("tags.obj", tags=True)
+    ctrl, f, written = sorpia.read_mesh("c.obj", tags=True)
+    assert np.array_equal(f, tris) and written.keys() == tags.keys()
+    for key in ("creases", "corners"):
+        assert np.array_equal(written[key][0], tags[key][0]) and written[key][1].tobytes() == tags[key][1].tobytes()
+    # The control mesh's limit, with the tags it carries, passes through the given vertices.
+    limit = sorpia.limit_points(ctrl, f, **written)
+    assert np.abs(limit - v).max() < 1e-9
+    # Without the tags the same control mesh's limit misses them: the tags were used.
+    assert np.abs(sorpia.limit_points(ctrl, f, boundary="edge-only") - v).max() > 1e-3
+    # A format without tags: the control mesh is written without them, with a warning saying so.
+    code, _, err = command("fit", "tags.obj", "-o", "c.ply", "--quiet")
+    assert code == 0 and "sharpness tags (corners, creases) are not written: only .obj files hold them" in err
+
+
+def test_fit_with_sharp_angle_writes_the_creases_it_found(tmp_path, monkeypatch, command):
+    monkeypatch.chdir(tmp_path)
+    v, tris, _ = cube_of_triangles()
+    write_obj(tmp_path / "cube.obj", v, tris)
+    code, _, err = command("fit", "cube.obj", "-o", "c.obj", "--sharp-angle", "60", "--quiet")
+    assert code == 0, err
+    ctrl, f, tags = sorpia.read_mesh("c.obj", tags=True)
+    edges, sharpness = tags["creases"]
+    assert edges.tolist() == sorpia.sharp_edges(v, tris, 60).tolist() and (sharpness == 10).all()
+    # Every vertex of a cube with all 12 edges sharp is a corner: the limit is the control mesh itself.
+    assert np.array_equal(ctrl, v)
