@@ -99,6 +99,20 @@ void bind_limit(py::module_& m) {
       },
       "topology"_a, "vertices"_a.noconvert(), "boundary"_a, "tags"_a = sorpia::Tags{}, "Loop limit positions B V, (n, 3).");
 
+  m.def(
+      "reference_limit_matrix",
+      [](const sorpia::Topology& topology, sorpia::Scheme scheme, sorpia::Boundary b, const sorpia::Tags& tags) {
+        sorpia::CsrMatrix mat;
+        {
+          py::gil_scoped_release release;
+          mat = sorpia::reference_limit_matrix(topology, scheme, b, tags);
+        }
+        return csr_tuple(std::move(mat));
+      },
+      "topology"_a, "scheme"_a, "boundary"_a, "tags"_a,
+      "For tests: B from OpenSubdiv's refinement of the whole mesh until every semi-sharp tag has decayed and "
+      "Limit() on the last level (sorpia::reference_limit_matrix), as CSR arrays.");
+
   m.def("icosphere", [](int level) { return mesh_tuple(sorpia::icosphere(level)); }, "level"_a);
   m.def("torus", [](int nu, int nv) { return mesh_tuple(sorpia::torus(nu, nv)); }, "nu"_a, "nv"_a);
   m.def("grid", [](int nu, int nv) { return mesh_tuple(sorpia::grid(nu, nv)); }, "nu"_a, "nv"_a);

@@ -300,6 +300,10 @@ CsrMatrix refined_limit_rows(const Topology& topology, Scheme scheme, Boundary b
   return b;
 }
 
+}  // namespace sorpia::detail
+
+namespace sorpia {
+
 namespace {
 
 // A primvar that is a sparse row of weights over the control vertices.
@@ -320,6 +324,7 @@ struct SparseRow {
 }  // namespace
 
 CsrMatrix reference_limit_matrix(const Topology& topology, Scheme scheme, Boundary boundary, const Tags& tags) {
+  using namespace detail;
   const std::size_t n = topology.n_vertices();
   const VertexTags vt = vertex_tags(topology, tags);  // checks the creases against the topology
   std::vector<int> to_osd(n, -1), from_osd;
@@ -404,4 +409,4 @@ CsrMatrix reference_limit_matrix(const Topology& topology, Scheme scheme, Bounda
   return b;
 }
 
-}  // namespace sorpia::detail
+}  // namespace sorpia

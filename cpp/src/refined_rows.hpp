@@ -66,11 +66,4 @@ VertexTags vertex_tags(const Topology& topology, const Tags& tags);
 CsrMatrix refined_limit_rows(const Topology& topology, Scheme scheme, Boundary boundary, const VertexTags& tags,
                              const std::vector<std::int32_t>& vertices, const std::vector<int>& levels);
 
-// Reference for tests: B of the whole mesh with its tags, from one
-// Far::TopologyRefiner of the whole mesh refined uniformly to the largest
-// tags.levels(v) (every semi-sharp tag decayed), Interpolate level by level and
-// Limit() on the last level, composed back to the control vertices. Its cost
-// grows as 4^levels.
-CsrMatrix reference_limit_matrix(const Topology& topology, Scheme scheme, Boundary boundary, const Tags& tags);
-
 }  // namespace sorpia::detail

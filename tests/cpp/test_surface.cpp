@@ -1,4 +1,4 @@
-// LoopSurface: corners and tessellated control vertices are the limit points.
+// LimitSurface: corners and tessellated control vertices are the limit points.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -14,7 +14,7 @@ namespace {
 
 using sorpia::Boundary;
 
-TEST(LoopSurface, CornersEqualLimitPointsUnderBothBoundaryRules) {
+TEST(LimitSurface, CornersEqualLimitPointsUnderBothBoundaryRules) {
   // (0,0), (1,0), (0,1) are the face's vertices 0, 1, 2. Bfr and Far's Limit
   // use different arithmetic: 1e-14 on a unit-sized mesh.
   const auto m = sorpia::grid(6, 5);
@@ -22,7 +22,7 @@ TEST(LoopSurface, CornersEqualLimitPointsUnderBothBoundaryRules) {
   for (const Boundary b : {Boundary::EdgeAndCorner, Boundary::EdgeOnly}) {
     std::vector<double> lp(m.vertices.size());
     sorpia::limit_points(topo, m.vertices.data(), b, lp.data());
-    const sorpia::LoopSurface s(topo, m.vertices.data(), b);
+    const sorpia::LimitSurface s(topo, m.vertices.data(), sorpia::Scheme::Loop, b);
     std::vector<std::int32_t> ids;
     std::vector<double> uv;
     for (std::size_t f = 0; f < m.n_faces(); ++f)
@@ -38,10 +38,10 @@ TEST(LoopSurface, CornersEqualLimitPointsUnderBothBoundaryRules) {
   }
 }
 
-TEST(LoopSurface, TessellationStartsWithTheLimitPointsAndGrowsFourfold) {
+TEST(LimitSurface, TessellationStartsWithTheLimitPointsAndGrowsFourfold) {
   const auto m = sorpia::icosphere(1);
   const sorpia::Topology topo(m.faces.data(), m.n_faces(), m.n_vertices());
-  sorpia::LoopSurface s(topo, m.vertices.data(), Boundary::EdgeAndCorner);
+  sorpia::LimitSurface s(topo, m.vertices.data(), sorpia::Scheme::Loop, Boundary::EdgeAndCorner);
   std::vector<double> lp(m.vertices.size());
   sorpia::limit_points(topo, m.vertices.data(), Boundary::EdgeAndCorner, lp.data());
   const auto t = s.tessellate(2);
@@ -53,10 +53,10 @@ TEST(LoopSurface, TessellationStartsWithTheLimitPointsAndGrowsFourfold) {
     EXPECT_LT(std::hypot(t.vertices[3 * i], t.vertices[3 * i + 1], t.vertices[3 * i + 2]), 1.0);
 }
 
-TEST(LoopSurface, RefusesBadLevelsAndPoints) {
+TEST(LimitSurface, RefusesBadLevelsAndPoints) {
   const auto m = sorpia::icosphere(0);
   const sorpia::Topology topo(m.faces.data(), m.n_faces(), m.n_vertices());
-  sorpia::LoopSurface s(topo, m.vertices.data(), Boundary::EdgeAndCorner);
+  sorpia::LimitSurface s(topo, m.vertices.data(), sorpia::Scheme::Loop, Boundary::EdgeAndCorner);
   EXPECT_THROW(s.tessellate(16), sorpia::ParameterError);
   const std::int32_t bad_face = 20;
   const double uv[2] = {0.2, 0.2};
@@ -65,7 +65,7 @@ TEST(LoopSurface, RefusesBadLevelsAndPoints) {
   const std::int32_t face = 0;
   const double outside[2] = {0.7, 0.7};
   EXPECT_THROW(s.evaluate(&face, outside, 1, p, nullptr, nullptr, nullptr), sorpia::ParameterError);
-  EXPECT_GT(sorpia::tessellation_bytes(m.n_vertices(), m.n_faces(), 15), std::size_t{1} << 40);
+  EXPECT_GT(sorpia::tessellation_bytes(sorpia::Scheme::Loop, m.n_vertices(), m.n_faces(), 0, 15), std::size_t{1} << 40);
 }
 
 }  // namespace

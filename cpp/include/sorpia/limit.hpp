@@ -50,6 +50,17 @@ void limit_points(const Topology& topology, const double* vertices, Boundary bou
 /// which costs several times limit_matrix.
 CsrMatrix reference_limit_matrix(const Topology& topology, Boundary boundary);
 
+/// Reference, for tests: B of the whole mesh with its sharpness tags, from
+/// one Far::TopologyRefiner of the whole mesh refined uniformly until every
+/// semi-sharp tag has decayed (ceil of the largest finite sharpness, after
+/// repeated tags are resolved as OpenSubdiv resolves them: the last counts),
+/// PrimvarRefinerReal<double>::Interpolate level by level and Limit() on the
+/// last level, composed back to the control vertices (identity rows for
+/// unreferenced vertices). limit_matrix(topology, boundary, tags) must equal
+/// it to rounding. Its cost grows as 4^levels.
+/// @throw MeshError naming the first crease that is not an edge of the mesh
+CsrMatrix reference_limit_matrix(const Topology& topology, Scheme scheme, Boundary boundary, const Tags& tags);
+
 /// Reference, for tests: B V evaluated by Far::PrimvarRefinerReal<double>::Limit.
 void reference_limit_points(const Topology& topology, const double* vertices, Boundary boundary, double* out);
 
