@@ -175,3 +175,23 @@ def test_fit_with_sharp_angle_writes_the_creases_it_found(tmp_path, monkeypatch,
     assert edges.tolist() == sorpia.sharp_edges(v, tris, 60).tolist() and (sharpness == 10).all()
     # Every vertex of a cube with all 12 edges sharp is a corner: the limit is the control mesh itself.
     assert np.array_equal(ctrl, v)
+
+
+def test_render_draws_the_file_creases_in_orange(tmp_path, monkeypatch, command):
+    pytest.importorskip("matplotlib")
+    from matplotlib.image import imread
+
+    monkeypatch.chdir(tmp_path)
+    v, tris, _ = cube_of_triangles()
+    tagged_obj(tmp_path / "tags.obj", v, tris, ["t crease 2/1/0 0 1 10", "t crease 2/1/0 1 3 10"])
+
+    def orange_pixels(png):
+        image = imread(png)[:, :, :3]
+        return int((np.abs(image - np.array([1.0, 0x7F / 255, 0x0E / 255])).max(axis=2) < 0.08).sum())
+
+    code, stdout, err = command("render", "tags.obj", "-o", "with.png", "--size", "400x320", "--level", "2")
+    assert code == 0, err
+    code, _, err = command("render", "tags.obj", "-o", "without.png", "--size", "400x320", "--level", "2",
+                           "--ignore-tags")
+    assert code == 0, err
+    assert orange_pixels("with.png") > 50 and orange_pixels("without.png") == 0
