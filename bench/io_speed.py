@@ -167,7 +167,8 @@ def compare_reads(args, lines):
             rows.append({"format": ext, "binary": binary, "baseline_s": b, "this_s": t, "ratio": t / b,
                          "all_baseline_s": times["baseline"], "all_this_s": times["this"]})
     lines += [f"## Reads side by side: irregular mesh, {len(v):,} vertices, {len(f):,} triangles",
-              "", f"Each read in a fresh process, baseline and this build alternated, median of {args.repeat}.", "",
+              "", f"Baseline: {args.baseline_label or 'the sorpia package in ' + args.baseline}. Each read in a "
+              f"fresh process, baseline and this build alternated, median of {args.repeat}.", "",
               "| format | baseline read s | this read s | this / baseline |", "|---|---:|---:|---:|"]
     for r in rows:
         lines.append(f"| {r['format']} {'binary' if r['binary'] else 'ascii'} | {r['baseline_s']:.3f} "
@@ -187,6 +188,8 @@ def main():
     ap.add_argument("--no-page", action="store_true", help="print only; do not write docs/benchmarks/io-speed.md")
     ap.add_argument("--baseline", default=None, metavar="DIR",
                     help="only compare read times with the sorpia package in DIR (see above)")
+    ap.add_argument("--baseline-label", default=None, metavar="TEXT",
+                    help="what the baseline is, for the page (e.g. the commit it was built from)")
     args = ap.parse_args()
 
     if args.baseline:
