@@ -4,6 +4,7 @@ by default, --ignore-tags), --sharp-angle, and what info and fit's report say of
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -195,3 +196,52 @@ def test_render_draws_the_file_creases_in_orange(tmp_path, monkeypatch, command)
                            "--ignore-tags")
     assert code == 0, err
     assert orange_pixels("with.png") > 50 and orange_pixels("without.png") == 0
+
+
+def _solves(scheme: str) -> bool:
+    """Whether this build's Interpolator takes the scheme (Catmull-Clark arrives with the catmark branch)."""
+    import inspect
+
+    return scheme == "loop" or "scheme" in inspect.signature(sorpia.Interpolator).parameters
+
+
+CATMULL_CLARK = pytest.mark.skipif(not _solves("catmull-clark"), reason="Interpolator takes no scheme= yet")
+
+
+@CATMULL_CLARK
+def test_fit_solves_a_quad_mesh_with_catmull_clark_by_default(tmp_path, monkeypatch, command):
+    monkeypatch.chdir(tmp_path)
+    v, _, quads = cube_of_triangles()
+    v = v + np.random.default_rng(6).normal(0, 0.05, v.shape)
+    tagged_obj(tmp_path / "q.obj", v, quads, ["t crease 2/1/0 0 1 1.5"])
+    code, stdout, err = command("fit", "q.obj", "-o", "c.obj", "--report", "r.json")
+    assert code == 0, err
+    assert json.loads((tmp_path / "r.json").read_text())["scheme"] == "catmull-clark"
+    ctrl, f, tags = sorpia.read_mesh("c.obj", tags=True)
+    assert np.array_equal(f, quads) and tags["creases"][0].tolist() == [[0, 1]]
+    limit = sorpia.limit_points(ctrl, f, scheme="catmull-clark", **tags)
+    assert np.abs(limit - v).max() < 1e-9
+    code, stdout, err = command("info", "q.obj", "--json")
+    assert json.loads(stdout)["pia"] == {"scheme": "catmull-clark", "can_run": True, "reason": None}
+
+
+SHARED = [p for p in sorted((Path(__file__).resolve().parents[2] / "shared" / "meshes").glob("osd_*.obj"))
+          if "nonman" not in p.name]
+
+
+@pytest.mark.skipif(not SHARED, reason="../shared/meshes is not present")
+@pytest.mark.parametrize("path", SHARED or [None], ids=[p.name for p in SHARED] or ["none"])
+def test_opensubdiv_shapes_fit_with_their_tags(path, tmp_path, command):
+    v, f, tags = sorpia.read_mesh(path, tags=True)
+    scheme = "loop" if isinstance(f, np.ndarray) and f.shape[1] == 3 else "catmull-clark"
+    if not _solves(scheme):
+        pytest.skip("Interpolator takes no scheme= yet")
+    out = tmp_path / "c.obj"
+    code, _, err = command("fit", path, "-o", out, "--quiet", "--report", tmp_path / "r.json")
+    assert code == 0, err
+    report = json.loads((tmp_path / "r.json").read_text())
+    assert report["scheme"] == scheme
+    ctrl, f2, written = sorpia.read_mesh(out, tags=True)
+    limit = sorpia.limit_points(ctrl, f2, **({} if scheme == "loop" else {"scheme": scheme}), **written)
+    diagonal = np.linalg.norm(v.max(axis=0) - v.min(axis=0))
+    assert np.abs(limit - v).max() < 1e-9 * diagonal
