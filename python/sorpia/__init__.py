@@ -9,7 +9,8 @@ from ._core import __version__
 from .errors import MeshError, MeshFileError, ParameterError
 from .limit import UnreferencedVerticesWarning, limit_matrix, limit_points
 from .solve import ConvergenceWarning, InterpolationResult, Interpolator, OmegaWarning, interpolate
-from .io import read_mesh, write_mesh
+from .io import UnknownTagWarning, read_mesh, write_mesh
+from .sharp import sharp_edges
 from ._validate import Polygons
 from .mesh_repair import RepairResult, repair
 from .surface import LimitSurface, LoopSurface, evaluate_limit, limit_surface
@@ -27,5 +28,6 @@ __all__ = [
     "limit_points",
     "shapes",
     "LimitSurface", "LoopSurface", "evaluate_limit", "limit_surface", "read_mesh", "write_mesh",
+    "UnknownTagWarning", "sharp_edges",
     "RepairResult", "repair",
 ]
