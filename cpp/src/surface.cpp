@@ -500,7 +500,10 @@ PolyMesh LimitSurface::tessellate(int level) {
   // Where Limit() is not the limit, Bfr evaluates the control faces' surface
   // at the vertex's parameter (exact at the corners of its refined patches).
   const auto& last = refiner.GetLevel(level);
-  {
+  // Only semi-sharp tags, or Catmull-Clark's level 0 of a mesh with other
+  // faces than quads, make such vertices: the common case skips the search.
+  if (impl_->tags.max_semi_sharpness() > 0.0 ||
+      (scheme == Scheme::CatmullClark && level == 0 && n_face_vertices != 4 * m)) {
     const std::vector<int> fix = inexact_limit_vertices(refiner, level);
     std::vector<int> fixed;
     std::vector<std::int32_t> face_ids;
