@@ -281,7 +281,7 @@ def interpolate(vertices, faces, method: str = "sor", omega="auto", tol: float =
                 boundary: str = DEFAULT_BOUNDARY, callback: Optional[Callable[[int, float], object]] = None, *,
                 sigma=None, alpha=None, weight=None, threads: int = 1, scheme: str = DEFAULT_SCHEME, creases=None,
                 corners=None, holes=None) -> InterpolationResult:
-    """Control vertices whose Loop limit surface interpolates `vertices`.
+    """Control vertices whose Loop limit surface interpolates ``vertices``.
 
     One call of ``Interpolator(faces, len(vertices), boundary, creases=,
     corners=, holes=).solve(...)``; see `Interpolator` for the tags,
