@@ -225,11 +225,11 @@ void bind_solvers(py::module_& m) {
       "text"_a, "(OmegaRule, omega) from 'auto', 'young' or a number.");
 
   py::class_<OperatorState>(m, "LimitOperator")
-      .def(py::init([](const sorpia::Topology& topology, sorpia::Boundary b) {
+      .def(py::init([](const sorpia::Topology& topology, sorpia::Boundary b, sorpia::Scheme scheme) {
              py::gil_scoped_release release;
-             return OperatorState{sorpia::limit_operator(topology, b), {}};
+             return OperatorState{sorpia::limit_operator(topology, b, scheme), {}};
            }),
-           "topology"_a, "boundary"_a)
+           "topology"_a, "boundary"_a, "scheme"_a = sorpia::Scheme::Loop)
       .def_property_readonly("n", [](const OperatorState& s) { return s.op.n; })
       .def_property_readonly("offsets", [](const OperatorState& s) { return to_numpy(s.op.offsets, 0); })
       .def_property_readonly("neighbors", [](const OperatorState& s) { return to_numpy(s.op.neighbors, 0); })
@@ -238,6 +238,9 @@ void bind_solvers(py::module_& m) {
       .def("limit_matrix", [](const OperatorState& s) { return csr_tuple(sorpia::to_csr(s.op)); },
            "B as CSR arrays (data, indices, indptr).")
       .def_property_readonly("symmetrisable", [](const OperatorState& s) { return sorpia::is_symmetrisable(s.op); })
+      .def_property_readonly(
+          "symmetriser", [](const OperatorState& s) { return to_numpy(sorpia::symmetriser(s.op), 0); },
+          "Gamma^-1 with Gamma^-1 B symmetric on its two-way entries (sorpia::symmetriser), or empty.")
       .def(
           "apply",
           [](const OperatorState& s, const Vertices& x) {

@@ -56,6 +56,10 @@ Refiner make_refiner(const Topology& topology, Scheme scheme, Boundary boundary,
   const std::vector<float> corner_weights = sharpness(tags.corner_sharpness);
   const std::vector<int> holes(tags.holes.begin(), tags.holes.end());
 
+  if (scheme == Scheme::Loop) {
+    const std::string not_triangles = loop_needs_triangles(topology);
+    if (!not_triangles.empty()) throw MeshError(not_triangles);
+  }
   Far::TopologyDescriptor desc;
   desc.numVertices = static_cast<int>(out.from_osd.size());
   desc.numFaces = static_cast<int>(topology.n_faces());
@@ -170,10 +174,78 @@ struct RowRecorders {
   RowRecorder operator[](int i) const { return RowRecorder{builder, (*from_osd)[i]}; }
 };
 
+// A row of B as a sum of weighted control vertices: the primvar type that
+// PrimvarRefinerReal<double>::Interpolate and Limit combine (Clear,
+// AddWithWeight), so that refining and taking limits of unit rows composes
+// the matrices.
+struct SparseRow {
+  std::vector<std::pair<std::int32_t, double>> entries;
+  void Clear() { entries.clear(); }
+  void AddWithWeight(const SparseRow& src, double w) {
+    for (const auto& [j, x] : src.entries) entries.emplace_back(j, w * x);
+  }
+  // Sorted by column, equal columns summed, zeros dropped (OpenSubdiv lists
+  // interior neighbours of boundary vertices with weight 0).
+  void merge() {
+    std::sort(entries.begin(), entries.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+    std::size_t out = 0;
+    for (std::size_t p = 0; p < entries.size(); ++p)
+      if (out > 0 && entries[out - 1].first == entries[p].first)
+        entries[out - 1].second += entries[p].second;
+      else
+        entries[out++] = entries[p];
+    entries.resize(out);
+    entries.erase(std::remove_if(entries.begin(), entries.end(), [](const auto& e) { return e.second == 0.0; }),
+                  entries.end());
+  }
+};
+
+// Catmull-Clark's B from Far: Limit() on the unrefined refiner when every
+// face is a quad; otherwise one uniform refinement (Interpolate to level 1,
+// full topology) and Limit() on level 1, the children of the control vertices
+// being level 1's first vertices, composed back onto the control vertices.
+CsrMatrix catmark_reference_limit_matrix(const Topology& topology, Boundary boundary) {
+  using OpenSubdiv::Far::PrimvarRefinerReal;
+  using OpenSubdiv::Far::TopologyRefiner;
+  auto osd = detail::make_refiner(topology, Scheme::CatmullClark, boundary);
+  const std::size_t n = topology.n_vertices(), n_osd = osd.from_osd.size();
+  std::vector<SparseRow> rows(n_osd), limit;
+  for (std::size_t i = 0; i < n_osd; ++i) rows[i].entries = {{osd.from_osd[i], 1.0}};
+  if (!topology.all_quads()) {
+    TopologyRefiner::UniformOptions options(1);
+    options.fullTopologyInLastLevel = true;
+    osd.refiner->RefineUniform(options);
+    std::vector<SparseRow> level1(osd.refiner->GetLevel(1).GetNumVertices());
+    PrimvarRefinerReal<double>(*osd.refiner).Interpolate(1, rows, level1);
+    for (auto& r : level1) r.merge();
+    rows = std::move(level1);
+  }
+  limit.resize(rows.size());
+  PrimvarRefinerReal<double>(*osd.refiner).Limit(rows, limit);
+  CsrMatrix b;
+  b.n_rows = b.n_cols = n;
+  b.indptr.assign(n + 1, 0);
+  for (std::size_t v = 0; v < n; ++v) {
+    if (osd.to_osd[v] < 0) {
+      b.indices.push_back(static_cast<std::int32_t>(v));
+      b.data.push_back(1.0);
+    } else {
+      SparseRow& r = limit[osd.to_osd[v]];
+      r.merge();
+      for (const auto& [j, w] : r.entries) {
+        b.indices.push_back(j);
+        b.data.push_back(w);
+      }
+    }
+    b.indptr[v + 1] = static_cast<std::int32_t>(b.indices.size());
+  }
+  return b;
+}
 
 }  // namespace
 
-CsrMatrix reference_limit_matrix(const Topology& topology, Boundary boundary) {
+CsrMatrix reference_limit_matrix(const Topology& topology, Boundary boundary, Scheme scheme) {
+  if (scheme == Scheme::CatmullClark) return catmark_reference_limit_matrix(topology, boundary);
   const auto osd = detail::make_refiner(topology, Scheme::Loop, boundary);
   const std::size_t n = topology.n_vertices();
   CsrMatrix b;
@@ -189,19 +261,24 @@ CsrMatrix reference_limit_matrix(const Topology& topology, Boundary boundary) {
   return b;
 }
 
-void reference_limit_points(const Topology& topology, const double* vertices, Boundary boundary, double* out) {
+void reference_limit_points(const Topology& topology, const double* vertices, Boundary boundary, double* out,
+                            Scheme scheme) {
+  if (scheme == Scheme::CatmullClark) {
+    apply(limit_operator(reference_limit_matrix(topology, boundary, scheme)), vertices, out);
+    return;
+  }
   const auto osd = detail::make_refiner(topology, Scheme::Loop, boundary);
   std::vector<detail::Point3> points;
   detail::gather_points(osd, vertices, points);
   detail::limit_positions(osd, points, vertices, topology.n_vertices(), out);
 }
 
-CsrMatrix limit_matrix(const Topology& topology, Boundary boundary) {
-  return to_csr(limit_operator(topology, boundary));
+CsrMatrix limit_matrix(const Topology& topology, Boundary boundary, Scheme scheme) {
+  return to_csr(limit_operator(topology, boundary, scheme));
 }
 
-void limit_points(const Topology& topology, const double* vertices, Boundary boundary, double* out) {
-  apply(limit_operator(topology, boundary), vertices, out);
+void limit_points(const Topology& topology, const double* vertices, Boundary boundary, double* out, Scheme scheme) {
+  apply(limit_operator(topology, boundary, scheme), vertices, out);
 }
 
 }  // namespace sorpia

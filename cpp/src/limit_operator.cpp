@@ -3,15 +3,29 @@
 #include "sorpia/limit_operator.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <stdexcept>
 #include <string>
 
+#include "sorpia/errors.hpp"
+
+#include "catmark_rows.hpp"
 #include "solver_detail.hpp"
 #include "sorpia/limit_masks.hpp"
 
 namespace sorpia {
 
-LimitOperator limit_operator(const Topology& topology, Boundary boundary) {
+std::string loop_needs_triangles(const Topology& topology) {
+  std::size_t f = 0;
+  while (f < topology.n_faces() && topology.face_size(f) == 3) ++f;
+  if (f == topology.n_faces()) return {};
+  return "face " + std::to_string(f) + " has " + std::to_string(topology.face_size(f)) +
+         " vertices: Loop subdivision needs triangles; triangulate the mesh or use the Catmull-Clark scheme";
+}
+
+LimitOperator limit_operator(const Topology& topology, Boundary boundary, Scheme scheme) {
+  if (scheme == Scheme::CatmullClark) return detail::catmark_limit_operator(topology, boundary);
+  if (!topology.all_triangles()) throw MeshError(loop_needs_triangles(topology));
   const std::size_t n = topology.n_vertices();
   const auto& offsets = topology.ring_offsets();
   const auto& ring = topology.ring_neighbors();
@@ -110,18 +124,52 @@ CsrMatrix to_csr(const LimitOperator& op) {
 
 void apply(const LimitOperator& op, const double* x, double* y) { detail::apply_cols<3>(op, x, y); }
 
-bool is_symmetrisable(const LimitOperator& op) {
-  if (!op.uniform()) return false;
-  // (i, j) stored => (j, i) stored. Rows are short (valence), so a linear scan
-  // of row j is cheaper than sorting.
-  for (std::size_t i = 0; i < op.n; ++i)
-    for (std::int32_t p = op.offsets[i]; p < op.offsets[i + 1]; ++p) {
-      const std::int32_t j = op.neighbors[p];
-      const auto* first = op.neighbors.data() + op.offsets[j];
-      const auto* last = op.neighbors.data() + op.offsets[j + 1];
-      if (std::find(first, last, static_cast<std::int32_t>(i)) == last) return false;
+namespace {
+// Where row j stores column i, or -1. Rows are short (valence), so a linear
+// scan of row j is cheaper than sorting.
+std::int32_t mirror(const LimitOperator& op, std::int32_t i, std::int32_t j) {
+  const auto* first = op.neighbors.data() + op.offsets[j];
+  const auto* last = op.neighbors.data() + op.offsets[j + 1];
+  const auto* at = std::find(first, last, i);
+  return at == last ? -1 : static_cast<std::int32_t>(at - op.neighbors.data());
+}
+}  // namespace
+
+std::vector<double> symmetriser(const LimitOperator& op) {
+  std::vector<double> d(op.n, 0.0);
+  if (op.uniform()) {
+    for (std::size_t i = 0; i < op.n; ++i) d[i] = op.weight[i] > 0.0 ? 1.0 / op.weight[i] : 1.0;
+    return d;
+  }
+  std::vector<std::int32_t> queue;
+  for (std::size_t s = 0; s < op.n; ++s) {
+    if (d[s] != 0.0) continue;
+    d[s] = op.offsets[s + 1] > op.offsets[s] ? 1.0 / op.values[op.offsets[s]] : 1.0;
+    queue.assign(1, static_cast<std::int32_t>(s));
+    for (std::size_t q = 0; q < queue.size(); ++q) {
+      const std::int32_t i = queue[q];
+      for (std::int32_t p = op.offsets[i]; p < op.offsets[i + 1]; ++p) {
+        const std::int32_t j = op.neighbors[p], pm = mirror(op, i, j);
+        if (pm < 0) continue;  // a one-way entry
+        const double want = d[i] * op.values[p] / op.values[pm];
+        if (d[j] == 0.0) {
+          d[j] = want;
+          queue.push_back(j);
+        } else if (std::abs(d[j] - want) > 1e-12 * d[j]) {
+          return {};
+        }
+      }
     }
-  return true;
+  }
+  return d;
+}
+
+bool is_symmetrisable(const LimitOperator& op) {
+  // (i, j) stored => (j, i) stored.
+  for (std::size_t i = 0; i < op.n; ++i)
+    for (std::int32_t p = op.offsets[i]; p < op.offsets[i + 1]; ++p)
+      if (mirror(op, static_cast<std::int32_t>(i), op.neighbors[p]) < 0) return false;
+  return op.uniform() || !symmetriser(op).empty();
 }
 
 }  // namespace sorpia

@@ -170,7 +170,7 @@ double power_radius(std::size_t n, ApplyA apply_a, const std::vector<double>& w,
 // triangular with exactly these entries below the diagonal blocks, and each
 // diagonal block is Gamma Upsilon with Upsilon symmetric. So B's spectrum is
 // that of B with these entries dropped, which is self-adjoint in the Gamma^-1
-// inner product. Empty when is_symmetrisable(op).
+// inner product. Empty when is_symmetrisable(op). As (entry p, column).
 std::vector<std::pair<std::int32_t, std::int32_t>> one_way_entries(const LimitOperator& op) {
   std::vector<std::pair<std::int32_t, std::int32_t>> e;
   for (std::size_t i = 0; i < op.n; ++i)
@@ -178,20 +178,21 @@ std::vector<std::pair<std::int32_t, std::int32_t>> one_way_entries(const LimitOp
       const std::int32_t j = op.neighbors[p];
       const auto* first = op.neighbors.data() + op.offsets[j];
       const auto* last = op.neighbors.data() + op.offsets[j + 1];
-      if (std::find(first, last, static_cast<std::int32_t>(i)) == last)
-        e.emplace_back(static_cast<std::int32_t>(i), j);
+      if (std::find(first, last, static_cast<std::int32_t>(i)) == last) e.emplace_back(p, j);
     }
   return e;
 }
 
-// y = B_s x: B x without the one-way entries (B's off-diagonal weight of row
-// i is op.weight[i]).
+// y = B_s x: B x without the one-way entries.
 struct SelfAdjointPart {
   const LimitOperator& op;
   std::vector<std::pair<std::int32_t, std::int32_t>> one_way = one_way_entries(op);
   void operator()(const double* x, double* y) const {
     detail::apply_cols<1>(op, x, y);
-    for (const auto& [i, j] : one_way) y[i] -= op.weight[i] * x[j];
+    for (const auto& [p, j] : one_way) y[row_of(p)] -= op.entry(row_of(p), p) * x[j];
+  }
+  std::size_t row_of(std::int32_t p) const {
+    return static_cast<std::size_t>(std::upper_bound(op.offsets.begin(), op.offsets.end(), p) - op.offsets.begin() - 1);
   }
 };
 
@@ -215,10 +216,11 @@ double estimate_lambda_min(const LimitOperator& op, SpectralCache& cache) {
   const std::lock_guard<std::mutex> lock(cache.mutex);
   if (!std::isnan(cache.lambda_min)) return cache.lambda_min;
   Timer timer{cache};
-  if (!op.uniform()) {
-    // No known inner product makes rows with several weights self-adjoint,
-    // and Lanczos needs one: the power method on I - B, whose norm ratio
-    // tends to 1 - lambda_min where I - B's largest eigenvalue dominates.
+  std::vector<double> gamma_inverse = symmetriser(op);
+  if (gamma_inverse.empty()) {
+    // No diagonal inner product makes these rows self-adjoint, and Lanczos
+    // needs one: the power method on I - B, whose norm ratio tends to
+    // 1 - lambda_min where I - B's largest eigenvalue dominates.
     std::vector<double> bx(op.n);
     const auto i_minus_b = [&](const double* x, double* y) {
       detail::apply_cols<1>(op, x, bx.data());
@@ -229,7 +231,7 @@ double estimate_lambda_min(const LimitOperator& op, SpectralCache& cache) {
   }
   const SelfAdjointPart b{op};
   const auto low_end = [](double lo, double) { return std::make_pair(1.0 - lo, 0.0); };
-  cache.lambda_min = lanczos_extremes(op.n, b, detail::gamma_inverse(op), 300, 1e-5, low_end).first;
+  cache.lambda_min = lanczos_extremes(op.n, b, gamma_inverse, 300, 1e-5, low_end).first;
   return cache.lambda_min;
 }
 

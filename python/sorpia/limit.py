@@ -1,4 +1,4 @@
-"""The Loop limit operator: limit positions and the limit matrix B."""
+"""The limit operator of Loop and Catmull-Clark surfaces: limit positions and the limit matrix B."""
 
 from __future__ import annotations
 
@@ -41,46 +41,56 @@ def topology(faces, n_vertices: int, *, scheme: str = DEFAULT_SCHEME, warn: bool
     return topo
 
 
-def limit_points(vertices, faces, boundary: str = DEFAULT_BOUNDARY) -> np.ndarray:
-    """Loop limit positions of the vertices of a triangle mesh (paper eq. 5-6).
+def limit_points(vertices, faces, boundary: str = DEFAULT_BOUNDARY, *, scheme: str = DEFAULT_SCHEME) -> np.ndarray:
+    """Limit positions of the vertices of a mesh (paper eq. 5-6), B V.
 
     Parameters
     ----------
     vertices : array_like, (n, 3) float
         Control vertices.
-    faces : array_like, (m, 3) int
-        Triangles, indices into `vertices`, consistently oriented.
+    faces : array_like (m, k) int, list of polygons or sorpia.Polygons
+        Faces, indices into `vertices`, consistently oriented; triangles for
+        Loop, any polygons for Catmull-Clark.
     boundary : {"edge-and-corner", "edge-only"}
         Boundary rule (OpenSubdiv's VTX_BOUNDARY_EDGE_AND_CORNER or
         VTX_BOUNDARY_EDGE_ONLY). With "edge-and-corner" (the default) a
         boundary vertex with a single face stays where it is; with "edge-only"
         it gets the boundary mask (1/6, 2/3, 1/6).
+    scheme : {"loop", "catmull-clark"}
+        The subdivision scheme (OpenSubdiv's SCHEME_LOOP or SCHEME_CATMARK).
 
     Returns
     -------
     numpy.ndarray, (n, 3) float64
-        B V, from OpenSubdiv's Loop limit masks (``Sdc::Scheme::ComputeVertexLimitMask``,
+        B V, from OpenSubdiv's limit masks (``Sdc::Scheme::ComputeVertexLimitMask``,
         what ``Far::PrimvarRefinerReal<double>::Limit`` applies; equal to it to 1e-15).
-        Interior vertex of valence n: alpha_n v + (1 - alpha_n)/n sum of its
-        neighbours, alpha_n = 3 / (8 - 8 (3/8 + cos(2 pi/n)/4)^2) (paper eq. 5);
-        boundary vertex: 2/3 v + 1/6 (its two boundary neighbours). Vertices no
-        face references are returned unchanged (with a warning).
+        Loop, interior vertex of valence n: alpha_n v + (1 - alpha_n)/n sum of
+        its neighbours, alpha_n = 3 / (8 - 8 (3/8 + cos(2 pi/n)/4)^2) (paper
+        eq. 5). Catmull-Clark, interior vertex of valence n whose faces are
+        quads: (n^2 v + 4 sum e_j + sum f_j) / (n (n + 5)), e_j its edge
+        neighbours, f_j the opposite corners of its quads; an interior vertex
+        of a non-quad face: its limit after one uniform refinement (OpenSubdiv
+        evaluates limits on quads only), composed back onto its faces'
+        vertices. Boundary vertex, both schemes: 2/3 v + 1/6 (its two boundary
+        neighbours). Vertices no face references are returned unchanged (with
+        a warning).
     """
     vertices = as_vertices(vertices)
-    topo = topology(faces, vertices.shape[0], count_name="len(vertices)")
-    return _core.limit_points(topo, vertices, as_boundary(boundary))
+    topo = topology(faces, vertices.shape[0], scheme=scheme, count_name="len(vertices)")
+    return _core.limit_points(topo, vertices, as_boundary(boundary), as_scheme(scheme))
 
 
-def limit_matrix(faces, n_vertices: int, boundary: str = DEFAULT_BOUNDARY) -> scipy.sparse.csr_matrix:
-    """The Loop limit matrix B (paper eq. 7) as a scipy CSR matrix, (n, n) float64.
+def limit_matrix(faces, n_vertices: int, boundary: str = DEFAULT_BOUNDARY, *,
+                 scheme: str = DEFAULT_SCHEME) -> scipy.sparse.csr_matrix:
+    """The limit matrix B (paper eq. 7) as a scipy CSR matrix, (n, n) float64.
 
     Row i holds the limit mask of vertex i as OpenSubdiv evaluates it, so that
     ``limit_matrix(F, len(V)) @ V == limit_points(V, F)``. Unreferenced vertices
-    get an identity row. See `limit_points` for `boundary`.
+    get an identity row. See `limit_points` for `boundary` and `scheme`.
     """
     import scipy.sparse  # here, not at import: sorpia's commands need no scipy
 
-    topo = topology(faces, n_vertices)  # validates n_vertices (as_vertex_count) and the faces
+    topo = topology(faces, n_vertices, scheme=scheme)  # validates n_vertices (as_vertex_count) and the faces
     n = topo.n_vertices
-    data, indices, indptr = _core.limit_matrix(topo, as_boundary(boundary))
+    data, indices, indptr = _core.limit_matrix(topo, as_boundary(boundary), as_scheme(scheme))
     return scipy.sparse.csr_matrix((data, indices, indptr), shape=(n, n))

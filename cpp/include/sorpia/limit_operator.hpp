@@ -6,6 +6,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "sorpia/limit.hpp"
@@ -40,11 +41,23 @@ struct LimitOperator {
   double entry(std::size_t i, std::size_t p) const { return values.empty() ? weight[i] : values[p]; }
 };
 
-/// B from OpenSubdiv's Loop limit masks (sorpia::limit_mask, limit_masks.hpp),
-/// one row per vertex, in O(n_vertices + n_edges): the production build of B.
-/// Equal to reference_limit_matrix (OpenSubdiv's Far Limit()) to rounding
-/// (tests/cpp/test_limit_operator.cpp).
-LimitOperator limit_operator(const Topology& topology, Boundary boundary);
+/// B from OpenSubdiv's limit masks (limit_masks.hpp), one row per vertex, in
+/// O(n_vertices + n_edges): the production build of B. Equal to
+/// reference_limit_matrix (OpenSubdiv's Far) to rounding
+/// (tests/cpp/test_limit_operator.cpp, test_catmark.cpp).
+/// Loop (uniform rows): sorpia::limit_mask; needs an all-triangle topology
+/// (@throw MeshError naming the first other face).
+/// Catmull-Clark (rows in `values`): Sdc's CATMARK limit masks where every
+/// face at the vertex is a quad (interior valence n: (n^2 v + 4 sum e_j +
+/// sum f_j) / (n (n + 5)), f_j the opposite corners) and on the boundary
+/// ((v_prev + 4 v + v_next) / 6; a one-face corner keeps itself under
+/// EdgeAndCorner); an interior vertex with a non-quad face gets its limit
+/// after one uniform refinement, composed back onto its faces' vertices.
+LimitOperator limit_operator(const Topology& topology, Boundary boundary, Scheme scheme = Scheme::Loop);
+
+/// Empty when every face is a triangle, else the message naming the first
+/// face that is not (Loop's refusal).
+std::string loop_needs_triangles(const Topology& topology);
 
 /// The compact form of a square CSR matrix whose rows each have a positive
 /// diagonal entry (explicit zero off-diagonal entries are dropped). Rows whose
@@ -59,10 +72,21 @@ CsrMatrix to_csr(const LimitOperator& op);
 /// y = B x, x and y row-major (n, 3), distinct arrays.
 void apply(const LimitOperator& op, const double* x, double* y);
 
-/// True when B = Gamma Upsilon with Gamma = diag(weight) and Upsilon symmetric
-/// (paper section 3.2): uniform rows, a symmetric neighbour pattern, and no
-/// row with neighbours referenced by a row without: closed Loop meshes (plus
-/// unreferenced vertices). Boundaries break it.
+/// Gamma^-1 of B = Gamma Upsilon with Gamma diagonal, positive, and Upsilon
+/// symmetric on the entries whose mirror is stored (paper section 3.2): d with
+/// d_i B_ij = d_j B_ji for every such pair. Uniform rows always have one,
+/// d_i = 1 / weight_i (1 on rows without neighbours). Rows with several
+/// weights: found by propagating d_j = d_i B_ij / B_ji over the two-way
+/// entries, each connected part starting from 1 / (its first off-diagonal
+/// weight); empty when some pair contradicts it (relative 1e-12).
+/// Catmull-Clark rows of quad rings have one (d_i proportional to n_i (n_i + 5),
+/// edge weight 4 and face weight 1 in Upsilon).
+std::vector<double> symmetriser(const LimitOperator& op);
+
+/// True when B = Gamma Upsilon with Upsilon symmetric (symmetriser exists) and
+/// the neighbour pattern is symmetric (no row with neighbours referenced by a
+/// row without): closed Loop meshes and closed quad meshes (plus unreferenced
+/// vertices). Boundaries break it.
 bool is_symmetrisable(const LimitOperator& op);
 
 }  // namespace sorpia
