@@ -14,6 +14,7 @@
 #include <fstream>
 #include <functional>
 #include <iostream>
+#include <random>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -24,6 +25,7 @@
 #include "sorpia/io.hpp"
 #include "sorpia/limit.hpp"
 #include "sorpia/limit_masks.hpp"
+#include "sorpia/limit_operator.hpp"
 #include "sorpia/shapes.hpp"
 #include "sorpia/solvers.hpp"
 #include "sorpia/topology.hpp"
@@ -60,6 +62,12 @@ options:
                      opensubdiv (B from Far::PrimvarRefiner::Limit, the reference)
   --topology HOW     direct (default) or openmesh (the reference build)
   --triangulate      split polygons of mesh files into triangles
+  --tags             use the OpenSubdiv tags (t lines) of OBJ files: creases,
+                     corners, holes (their interpolateboundary is left to
+                     --boundary)
+  --creases S[:X]    tag every edge with probability S in [0, 1] (a fixed
+                     random draw) as a crease of sharpness X (default inf;
+                     added to the file's tags)
   --write DIR        write the control vertices to DIR/<mesh>.<method>.ply
                      (binary PLY; --format obj|off|ply-ascii for text)
   --repeat N         run everything N times, report medians (default 1)
@@ -91,6 +99,8 @@ struct Options {
   bool opensubdiv_operator = false;
   sorpia::TopologyBuild topology = sorpia::TopologyBuild::Direct;
   bool triangulate = false;
+  bool file_tags = false;
+  double crease_share = 0.0, crease_sharpness = sorpia::kInfiniteSharpness;
   std::string write_dir, format = "ply";
   int repeat = 1;
   bool json = false;
@@ -182,6 +192,16 @@ Options parse(int argc, char** argv) {
       const std::string v = value();
       if (v != "direct" && v != "openmesh") throw Usage("--topology: direct or openmesh");
       o.topology = v == "openmesh" ? sorpia::TopologyBuild::OpenMesh : sorpia::TopologyBuild::Direct;
+    } else if (a == "--tags") {
+      o.file_tags = true;
+    } else if (a == "--creases") {
+      const auto parts = split(value(), ':');
+      if (parts.empty() || parts.size() > 2) throw Usage("--creases: SHARE or SHARE:SHARPNESS");
+      o.crease_share = to_double("--creases", parts[0]);
+      if (!(o.crease_share >= 0.0 && o.crease_share <= 1.0)) throw Usage("--creases: SHARE must be in [0, 1]");
+      if (parts.size() == 2)
+        o.crease_sharpness = parts[1] == "inf" ? sorpia::kInfiniteSharpness : to_double("--creases", parts[1]);
+      if (!(o.crease_sharpness >= 0.0)) throw Usage("--creases: SHARPNESS must be >= 0 or inf");
     } else if (a == "--triangulate") {
       o.triangulate = true;
     } else if (a == "--write") {
@@ -236,8 +256,21 @@ struct BenchMesh {
 
 BenchMesh generate(const std::string& spec);
 
-BenchMesh load(const std::string& spec, bool triangulate) {
-  if (!is_generated(spec)) return sorpia::read_mesh(spec, triangulate);
+// A file's triangles stay a TriMesh (the triangle path); other polygons a PolyMesh.
+BenchMesh load(const std::string& spec, bool triangulate, bool file_tags, sorpia::Tags& tags) {
+  tags = sorpia::Tags{};
+  if (!is_generated(spec)) {
+    sorpia::MeshFile file = sorpia::read_mesh(spec, sorpia::ReadOptions{triangulate, file_tags});
+    tags = std::move(file.tags.tags);
+    if (file.all_triangles()) return sorpia::TriMesh{std::move(file.vertices), std::move(file.faces)};
+    sorpia::PolyMesh poly;
+    poly.face_counts = file.face_sizes.empty()
+                           ? std::vector<std::int32_t>(file.n_faces(), file.face_size)
+                           : std::move(file.face_sizes);
+    poly.vertices = std::move(file.vertices);
+    poly.face_indices = std::move(file.faces);
+    return poly;
+  }
   try {
     return generate(spec);
   } catch (const sorpia::ParameterError& e) {  // e.g. icosphere:11: a bad argument
@@ -269,6 +302,23 @@ BenchMesh generate(const std::string& spec) {
   }
   throw Usage("unknown generated mesh '" + kind +
               "' (icosphere, torus, irregular, grid, pole, quadtorus, quadgrid, quads, polygons)");
+}
+
+// Each edge of the mesh, with probability `share` (a fixed draw), appended to
+// `tags` as a crease of the given sharpness.
+void add_random_creases(const sorpia::Topology& topology, double share, double sharpness, sorpia::Tags& tags) {
+  if (share <= 0.0) return;
+  std::mt19937_64 rng(1);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const auto& offsets = topology.ring_offsets();
+  const auto& ring = topology.ring_neighbors();
+  for (std::size_t v = 0; v < topology.n_vertices(); ++v)
+    for (std::int32_t p = offsets[v]; p < offsets[v + 1]; ++p)
+      if (static_cast<std::size_t>(ring[p]) > v && u(rng) < share) {
+        tags.crease_vertices.push_back(static_cast<std::int32_t>(v));
+        tags.crease_vertices.push_back(ring[p]);
+        tags.crease_sharpness.push_back(sharpness);
+      }
 }
 
 std::string label_of(const std::string& spec) {
@@ -349,7 +399,7 @@ struct MethodRun {
 
 struct MeshRun {
   std::string label;
-  std::size_t n_vertices = 0, n_faces = 0;
+  std::size_t n_vertices = 0, n_faces = 0, n_creases = 0;
   std::vector<double> read, topology, op;
   std::vector<MethodRun> methods;
   double floor = NAN;
@@ -371,7 +421,8 @@ MeshRun run_mesh(const Options& o, const std::string& spec) {
     if (m != "none") run.methods.push_back(MethodRun{m, {}, {}, {}, 0, NAN, NAN, ""});
   for (int rep = 0; rep < o.repeat; ++rep) {
     auto t0 = Clock::now();
-    const BenchMesh mesh = load(spec, o.triangulate);
+    sorpia::Tags tags;
+    const BenchMesh mesh = load(spec, o.triangulate, o.file_tags, tags);
     run.read.push_back(seconds_since(t0));
     run.n_vertices = mesh.n_vertices();
     run.n_faces = mesh.n_faces();
@@ -382,10 +433,15 @@ MeshRun run_mesh(const Options& o, const std::string& spec) {
     const sorpia::Topology topology = mesh.topology(o.topology);
     run.topology.push_back(seconds_since(t0));
 
+    add_random_creases(topology, o.crease_share, o.crease_sharpness, tags);
+    run.n_creases = tags.n_creases();
     t0 = Clock::now();
     const sorpia::LimitOperator op =
-        o.opensubdiv_operator ? sorpia::limit_operator(sorpia::reference_limit_matrix(topology, o.boundary, o.scheme))
-                              : sorpia::limit_operator(topology, o.boundary, o.scheme);
+        o.opensubdiv_operator
+            ? sorpia::limit_operator(tags.empty() && o.scheme == sorpia::Scheme::Loop
+                                         ? sorpia::reference_limit_matrix(topology, o.boundary)
+                                         : sorpia::reference_limit_matrix(topology, o.scheme, o.boundary, tags))
+            : sorpia::limit_operator(topology, o.boundary, o.scheme, tags);
     run.op.push_back(seconds_since(t0));
 
     for (auto& mr : run.methods) {
@@ -413,9 +469,12 @@ MeshRun run_mesh(const Options& o, const std::string& spec) {
       mr.reordered = res.reordered;
       if (!o.write_dir.empty()) {
         t0 = Clock::now();
-        if (mesh.polygons) throw Usage("--write: polygon meshes cannot be written yet");
-        sorpia::write_mesh(output_path(o, run.label, mr.method), res.control_vertices.data(), mesh.n_vertices(),
-                           mesh.tri.faces.data(), mesh.tri.n_faces(), o.format == "ply");
+        const sorpia::MeshView view =
+            mesh.polygons ? sorpia::MeshView{res.control_vertices.data(), mesh.n_vertices(), mesh.poly.face_indices.data(),
+                                             mesh.n_faces(), mesh.poly.face_counts.data(), 0}
+                          : sorpia::MeshView{res.control_vertices.data(), mesh.n_vertices(), mesh.tri.faces.data(),
+                                             mesh.n_faces(), nullptr, 3};
+        sorpia::write_mesh(output_path(o, run.label, mr.method), view, o.format == "ply");
         mr.write.push_back(seconds_since(t0));
       }
     }
@@ -476,10 +535,10 @@ void print_json(const Options& o, const std::vector<MeshRun>& runs) {
   std::printf("  \"meshes\": [");
   for (std::size_t k = 0; k < runs.size(); ++k) {
     const MeshRun& r = runs[k];
-    std::printf("%s\n    {\"mesh\": %s, \"n_vertices\": %zu, \"n_faces\": %zu, \"read\": %s, \"topology\": %s, "
+    std::printf("%s\n    {\"mesh\": %s, \"n_vertices\": %zu, \"n_faces\": %zu, \"n_creases\": %zu, \"read\": %s, \"topology\": %s, "
                 "\"operator\": %s, \"floor\": %s, \"peak_rss_bytes\": %ld, \"input_rss_bytes\": %ld, "
                 "\"bytes_per_vertex\": %s, \"methods\": [",
-                k ? "," : "", json_str(r.label).c_str(), r.n_vertices, r.n_faces, num(median(r.read)).c_str(),
+                k ? "," : "", json_str(r.label).c_str(), r.n_vertices, r.n_faces, r.n_creases, num(median(r.read)).c_str(),
                 num(median(r.topology)).c_str(), num(median(r.op)).c_str(), num(r.floor).c_str(), 1024 * r.peak_kb,
                 1024 * r.input_kb, num(bytes_per_vertex(r)).c_str());
     for (std::size_t j = 0; j < r.methods.size(); ++j) {

@@ -28,7 +28,8 @@ QUAD_MESHES = {
 def far_matrix(faces, n, boundary="edge-and-corner"):
     """B from OpenSubdiv's Far (Limit(); after one refinement where a face is not a quad)."""
     topo = topology(faces, n, scheme=CC)
-    data, indices, indptr = _core.reference_limit_matrix(topo, _core.parse_boundary(boundary), _core.Scheme.catmull_clark)
+    data, indices, indptr = _core.reference_limit_matrix(topo, _core.Scheme.catmull_clark, _core.parse_boundary(boundary),
+                                                         _core.Tags())
     return scipy.sparse.csr_matrix((data, indices, indptr), shape=(n, n))
 
 

@@ -97,27 +97,36 @@ void bind_limit(py::module_& m) {
         return out;
       });
 
-  // B as CSR arrays (data, indices, indptr), built with the GIL released.
-  using BuildB = sorpia::CsrMatrix (*)(const sorpia::Topology&, sorpia::Boundary, sorpia::Scheme);
-  const auto csr_of = [](BuildB build) {
-    return [build](const sorpia::Topology& topology, sorpia::Boundary b, sorpia::Scheme scheme) {
-      sorpia::CsrMatrix mat;
-      {
-        py::gil_scoped_release release;
-        mat = build(topology, b, scheme);
-      }
-      return csr_tuple(std::move(mat));
-    };
+  // B as CSR arrays (data, indices, indptr), built by `build` with the GIL released.
+  const auto csr_of = [](auto build) {
+    sorpia::CsrMatrix mat;
+    {
+      py::gil_scoped_release release;
+      mat = build();
+    }
+    return csr_tuple(std::move(mat));
   };
-  m.def("limit_matrix", csr_of(&sorpia::limit_matrix), "topology"_a, "boundary"_a, "scheme"_a = sorpia::Scheme::Loop,
-        "Limit matrix B as CSR arrays (data, indices, indptr).");
-  m.def("reference_limit_matrix", csr_of(&sorpia::reference_limit_matrix), "topology"_a, "boundary"_a,
-        "scheme"_a = sorpia::Scheme::Loop,
-        "B recorded from OpenSubdiv's Far (sorpia::reference_limit_matrix), for tests and benchmarks.");
+  m.def(
+      "limit_matrix",
+      [csr_of](const sorpia::Topology& topology, sorpia::Boundary b, const sorpia::Tags& tags, sorpia::Scheme scheme) {
+        return csr_of([&] { return sorpia::limit_matrix(topology, b, scheme, tags); });
+      },
+      "topology"_a, "boundary"_a, "tags"_a = sorpia::Tags{}, "scheme"_a = sorpia::Scheme::Loop,
+      "Limit matrix B as CSR arrays (data, indices, indptr).");
+  m.def(
+      "reference_limit_matrix",
+      [csr_of](const sorpia::Topology& topology, sorpia::Scheme scheme, sorpia::Boundary b, const sorpia::Tags& tags) {
+        return csr_of([&] { return sorpia::reference_limit_matrix(topology, scheme, b, tags); });
+      },
+      "topology"_a, "scheme"_a, "boundary"_a, "tags"_a,
+      "For tests: B from OpenSubdiv's refinement of the whole mesh until every semi-sharp tag has decayed (and, "
+      "for Catmull-Clark with a non-quad face, at least once) and Limit() on the last level "
+      "(sorpia::reference_limit_matrix), as CSR arrays.");
 
   m.def(
       "limit_points",
-      [](const sorpia::Topology& topology, const Vertices& vertices, sorpia::Boundary b, sorpia::Scheme scheme) {
+      [](const sorpia::Topology& topology, const Vertices& vertices, sorpia::Boundary b, const sorpia::Tags& tags,
+         sorpia::Scheme scheme) {
         check_shape(vertices, 3, "vertices");
         check_rows(vertices, topology.n_vertices(), "vertices", "the topology");
         Vertices out({vertices.shape(0), py::ssize_t{3}});
@@ -125,12 +134,12 @@ void bind_limit(py::module_& m) {
         const double* src = vertices.data();
         {
           py::gil_scoped_release release;
-          sorpia::limit_points(topology, src, b, dst, scheme);
+          sorpia::limit_points(topology, src, b, scheme, tags, dst);
         }
         return out;
       },
-      "topology"_a, "vertices"_a.noconvert(), "boundary"_a, "scheme"_a = sorpia::Scheme::Loop,
-      "Limit positions B V, (n, 3).");
+      "topology"_a, "vertices"_a.noconvert(), "boundary"_a, "tags"_a = sorpia::Tags{},
+      "scheme"_a = sorpia::Scheme::Loop, "Limit positions B V, (n, 3).");
 
   m.def("icosphere", [](int level) { return mesh_tuple(sorpia::icosphere(level)); }, "level"_a);
   m.def("torus", [](int nu, int nv) { return mesh_tuple(sorpia::torus(nu, nv)); }, "nu"_a, "nv"_a);

@@ -23,6 +23,22 @@ thread_local std::string osd_error;
 void record_osd_error(Far::ErrorType, const char* message) { osd_error = message ? message : ""; }
 }  // namespace
 
+std::unique_ptr<Far::TopologyRefiner> create_refiner(const Far::TopologyDescriptor& desc, Scheme scheme,
+                                                     Boundary boundary) {
+  using namespace OpenSubdiv;
+  Sdc::Options sdc;
+  sdc.SetVtxBoundaryInterpolation(boundary == Boundary::EdgeOnly ? Sdc::Options::VTX_BOUNDARY_EDGE_ONLY
+                                                                 : Sdc::Options::VTX_BOUNDARY_EDGE_AND_CORNER);
+  using Factory = Far::TopologyRefinerFactory<Far::TopologyDescriptor>;
+  Factory::Options options(scheme == Scheme::Loop ? Sdc::SCHEME_LOOP : Sdc::SCHEME_CATMARK, sdc);
+  osd_error.clear();
+  Far::SetErrorCallback(record_osd_error);
+  std::unique_ptr<Far::TopologyRefiner> refiner(Factory::Create(desc, options));
+  Far::SetErrorCallback(nullptr);
+  if (!refiner) throw MeshError("OpenSubdiv refused the mesh topology: " + osd_error);
+  return refiner;
+}
+
 Refiner make_refiner(const Topology& topology, Scheme scheme, Boundary boundary, const Tags& tags) {
   using namespace OpenSubdiv;
   Refiner out;
@@ -75,16 +91,7 @@ Refiner make_refiner(const Topology& topology, Scheme scheme, Boundary boundary,
   desc.numHoles = static_cast<int>(holes.size());
   desc.holeIndices = holes.data();
 
-  Sdc::Options sdc;
-  sdc.SetVtxBoundaryInterpolation(boundary == Boundary::EdgeOnly ? Sdc::Options::VTX_BOUNDARY_EDGE_ONLY
-                                                                 : Sdc::Options::VTX_BOUNDARY_EDGE_AND_CORNER);
-  using Factory = Far::TopologyRefinerFactory<Far::TopologyDescriptor>;
-  Factory::Options options(scheme == Scheme::Loop ? Sdc::SCHEME_LOOP : Sdc::SCHEME_CATMARK, sdc);
-  osd_error.clear();
-  Far::SetErrorCallback(record_osd_error);
-  out.refiner.reset(Factory::Create(desc, options));
-  Far::SetErrorCallback(nullptr);
-  if (!out.refiner) throw MeshError("OpenSubdiv refused the mesh topology: " + osd_error);
+  out.refiner = create_refiner(desc, scheme, boundary);
   return out;
 }
 
@@ -174,78 +181,9 @@ struct RowRecorders {
   RowRecorder operator[](int i) const { return RowRecorder{builder, (*from_osd)[i]}; }
 };
 
-// A row of B as a sum of weighted control vertices: the primvar type that
-// PrimvarRefinerReal<double>::Interpolate and Limit combine (Clear,
-// AddWithWeight), so that refining and taking limits of unit rows composes
-// the matrices.
-struct SparseRow {
-  std::vector<std::pair<std::int32_t, double>> entries;
-  void Clear() { entries.clear(); }
-  void AddWithWeight(const SparseRow& src, double w) {
-    for (const auto& [j, x] : src.entries) entries.emplace_back(j, w * x);
-  }
-  // Sorted by column, equal columns summed, zeros dropped (OpenSubdiv lists
-  // interior neighbours of boundary vertices with weight 0).
-  void merge() {
-    std::sort(entries.begin(), entries.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
-    std::size_t out = 0;
-    for (std::size_t p = 0; p < entries.size(); ++p)
-      if (out > 0 && entries[out - 1].first == entries[p].first)
-        entries[out - 1].second += entries[p].second;
-      else
-        entries[out++] = entries[p];
-    entries.resize(out);
-    entries.erase(std::remove_if(entries.begin(), entries.end(), [](const auto& e) { return e.second == 0.0; }),
-                  entries.end());
-  }
-};
-
-// Catmull-Clark's B from Far: Limit() on the unrefined refiner when every
-// face is a quad; otherwise one uniform refinement (Interpolate to level 1,
-// full topology) and Limit() on level 1, the children of the control vertices
-// being level 1's first vertices, composed back onto the control vertices.
-CsrMatrix catmark_reference_limit_matrix(const Topology& topology, Boundary boundary) {
-  using OpenSubdiv::Far::PrimvarRefinerReal;
-  using OpenSubdiv::Far::TopologyRefiner;
-  auto osd = detail::make_refiner(topology, Scheme::CatmullClark, boundary);
-  const std::size_t n = topology.n_vertices(), n_osd = osd.from_osd.size();
-  std::vector<SparseRow> rows(n_osd), limit;
-  for (std::size_t i = 0; i < n_osd; ++i) rows[i].entries = {{osd.from_osd[i], 1.0}};
-  if (!topology.all_quads()) {
-    TopologyRefiner::UniformOptions options(1);
-    options.fullTopologyInLastLevel = true;
-    osd.refiner->RefineUniform(options);
-    std::vector<SparseRow> level1(osd.refiner->GetLevel(1).GetNumVertices());
-    PrimvarRefinerReal<double>(*osd.refiner).Interpolate(1, rows, level1);
-    for (auto& r : level1) r.merge();
-    rows = std::move(level1);
-  }
-  limit.resize(rows.size());
-  PrimvarRefinerReal<double>(*osd.refiner).Limit(rows, limit);
-  CsrMatrix b;
-  b.n_rows = b.n_cols = n;
-  b.indptr.assign(n + 1, 0);
-  for (std::size_t v = 0; v < n; ++v) {
-    if (osd.to_osd[v] < 0) {
-      b.indices.push_back(static_cast<std::int32_t>(v));
-      b.data.push_back(1.0);
-    } else {
-      SparseRow& r = limit[osd.to_osd[v]];
-      r.merge();
-      for (const auto& [j, w] : r.entries) {
-        b.indices.push_back(j);
-        b.data.push_back(w);
-      }
-    }
-    b.indptr[v + 1] = static_cast<std::int32_t>(b.indices.size());
-  }
-  return b;
-}
-
 }  // namespace
 
-CsrMatrix reference_limit_matrix(const Topology& topology, Boundary boundary, Scheme scheme) {
-  if (scheme == Scheme::CatmullClark) return catmark_reference_limit_matrix(topology, boundary);
+CsrMatrix reference_limit_matrix(const Topology& topology, Boundary boundary) {
   const auto osd = detail::make_refiner(topology, Scheme::Loop, boundary);
   const std::size_t n = topology.n_vertices();
   CsrMatrix b;
@@ -261,24 +199,33 @@ CsrMatrix reference_limit_matrix(const Topology& topology, Boundary boundary, Sc
   return b;
 }
 
-void reference_limit_points(const Topology& topology, const double* vertices, Boundary boundary, double* out,
-                            Scheme scheme) {
-  if (scheme == Scheme::CatmullClark) {
-    apply(limit_operator(reference_limit_matrix(topology, boundary, scheme)), vertices, out);
-    return;
-  }
+void reference_limit_points(const Topology& topology, const double* vertices, Boundary boundary, double* out) {
   const auto osd = detail::make_refiner(topology, Scheme::Loop, boundary);
   std::vector<detail::Point3> points;
   detail::gather_points(osd, vertices, points);
   detail::limit_positions(osd, points, vertices, topology.n_vertices(), out);
 }
 
-CsrMatrix limit_matrix(const Topology& topology, Boundary boundary, Scheme scheme) {
-  return to_csr(limit_operator(topology, boundary, scheme));
+CsrMatrix limit_matrix(const Topology& topology, Boundary boundary, Scheme scheme, const Tags& tags) {
+  return to_csr(limit_operator(topology, boundary, scheme, tags));
 }
 
-void limit_points(const Topology& topology, const double* vertices, Boundary boundary, double* out, Scheme scheme) {
-  apply(limit_operator(topology, boundary, scheme), vertices, out);
+CsrMatrix limit_matrix(const Topology& topology, Boundary boundary, const Tags& tags) {
+  return limit_matrix(topology, boundary, Scheme::Loop, tags);
+}
+
+void limit_points(const Topology& topology, const double* vertices, Boundary boundary, Scheme scheme,
+                  const Tags& tags, double* out) {
+  apply(limit_operator(topology, boundary, scheme, tags), vertices, out);
+}
+
+void limit_points(const Topology& topology, const double* vertices, Boundary boundary, double* out) {
+  limit_points(topology, vertices, boundary, Scheme::Loop, Tags{}, out);
+}
+
+void limit_points(const Topology& topology, const double* vertices, Boundary boundary, const Tags& tags,
+                  double* out) {
+  limit_points(topology, vertices, boundary, Scheme::Loop, tags, out);
 }
 
 }  // namespace sorpia

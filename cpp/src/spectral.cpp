@@ -11,6 +11,7 @@
 #include <limits>
 #include <vector>
 
+#include "half_edges.hpp"
 #include "solver_detail.hpp"
 #include "sorpia/solvers.hpp"
 
@@ -170,29 +171,76 @@ double power_radius(std::size_t n, ApplyA apply_a, const std::vector<double>& w,
 // triangular with exactly these entries below the diagonal blocks, and each
 // diagonal block is Gamma Upsilon with Upsilon symmetric. So B's spectrum is
 // that of B with these entries dropped, which is self-adjoint in the Gamma^-1
-// inner product. Empty when is_symmetrisable(op). As (entry p, column).
-std::vector<std::pair<std::int32_t, std::int32_t>> one_way_entries(const LimitOperator& op) {
-  std::vector<std::pair<std::int32_t, std::int32_t>> e;
+// inner product. Empty when is_symmetrisable(op).
+struct OneWay {
+  std::int32_t row, entry, column;  // entry: the index into op.neighbors
+};
+std::vector<OneWay> one_way_entries(const LimitOperator& op) {
+  std::vector<OneWay> e;
   for (std::size_t i = 0; i < op.n; ++i)
     for (std::int32_t p = op.offsets[i]; p < op.offsets[i + 1]; ++p) {
       const std::int32_t j = op.neighbors[p];
       const auto* first = op.neighbors.data() + op.offsets[j];
       const auto* last = op.neighbors.data() + op.offsets[j + 1];
-      if (std::find(first, last, static_cast<std::int32_t>(i)) == last) e.emplace_back(p, j);
+      if (std::find(first, last, static_cast<std::int32_t>(i)) == last)
+        e.push_back({static_cast<std::int32_t>(i), p, j});
     }
   return e;
+}
+
+// Whether B's spectrum is that of B without its one-way entries: when no
+// one-way entry lies on a cycle of B's pattern, B is block lower triangular
+// (ordered by the classes of its two-way entries, upstream first) with these
+// entries below the diagonal blocks. True on Loop meshes without tags (the
+// order above); false where an infinitely sharp crease ends in a dart: the
+// crease vertices are read one way by their smooth neighbours, which reach
+// them back through the dart.
+bool one_way_entries_below_blocks(const LimitOperator& op, const std::vector<OneWay>& one_way_list) {
+  if (one_way_list.empty()) return true;
+  std::vector<std::pair<std::int32_t, std::int32_t>> one_way;  // (row, column)
+  for (const OneWay& e : one_way_list) one_way.emplace_back(e.row, e.column);
+  detail::DisjointSets two_way(op.n);
+  std::vector<std::pair<std::int32_t, std::int32_t>> sorted_one_way(one_way);
+  std::sort(sorted_one_way.begin(), sorted_one_way.end());
+  for (std::size_t i = 0; i < op.n; ++i)
+    for (std::int32_t p = op.offsets[i]; p < op.offsets[i + 1]; ++p) {
+      const std::pair<std::int32_t, std::int32_t> e{static_cast<std::int32_t>(i), op.neighbors[p]};
+      if (!std::binary_search(sorted_one_way.begin(), sorted_one_way.end(), e)) two_way.unite(e.first, e.second);
+    }
+  // Kahn's topological sort of the classes along the one-way entries.
+  std::vector<std::int32_t> indegree(op.n, 0), out_offsets(op.n + 1, 0), out;
+  for (const auto& [i, j] : one_way) {
+    const std::int32_t a = two_way.find(i), b = two_way.find(j);
+    if (a == b) return false;
+    ++out_offsets[a + 1];
+    ++indegree[b];
+  }
+  for (std::size_t k = 0; k < op.n; ++k) out_offsets[k + 1] += out_offsets[k];
+  out.resize(one_way.size());
+  std::vector<std::int32_t> fill(out_offsets.begin(), out_offsets.end() - 1), ready;
+  for (const auto& [i, j] : one_way) out[fill[two_way.find(i)]++] = two_way.find(j);
+  for (std::size_t k = 0; k < op.n; ++k)
+    if (two_way.find(static_cast<std::int32_t>(k)) == static_cast<std::int32_t>(k) && indegree[k] == 0)
+      ready.push_back(static_cast<std::int32_t>(k));
+  std::size_t removed = 0;
+  while (!ready.empty()) {
+    const std::int32_t a = ready.back();
+    ready.pop_back();
+    for (std::int32_t p = out_offsets[a]; p < out_offsets[a + 1]; ++p) {
+      ++removed;
+      if (--indegree[out[p]] == 0) ready.push_back(out[p]);
+    }
+  }
+  return removed == one_way.size();
 }
 
 // y = B_s x: B x without the one-way entries.
 struct SelfAdjointPart {
   const LimitOperator& op;
-  std::vector<std::pair<std::int32_t, std::int32_t>> one_way = one_way_entries(op);
+  std::vector<OneWay> one_way = one_way_entries(op);
   void operator()(const double* x, double* y) const {
     detail::apply_cols<1>(op, x, y);
-    for (const auto& [p, j] : one_way) y[row_of(p)] -= op.entry(row_of(p), p) * x[j];
-  }
-  std::size_t row_of(std::int32_t p) const {
-    return static_cast<std::size_t>(std::upper_bound(op.offsets.begin(), op.offsets.end(), p) - op.offsets.begin() - 1);
+    for (const OneWay& e : one_way) y[e.row] -= op.entry(e.row, e.entry) * x[e.column];
   }
 };
 
@@ -217,10 +265,12 @@ double estimate_lambda_min(const LimitOperator& op, SpectralCache& cache) {
   if (!std::isnan(cache.lambda_min)) return cache.lambda_min;
   Timer timer{cache};
   std::vector<double> gamma_inverse = symmetriser(op);
-  if (gamma_inverse.empty()) {
-    // No diagonal inner product makes these rows self-adjoint, and Lanczos
+  if (gamma_inverse.empty() || !one_way_entries_below_blocks(op, one_way_entries(op))) {
+    // No diagonal inner product makes these rows self-adjoint (sorpia::
+    // symmetriser), nor B when a one-way entry closes a cycle, and Lanczos
     // needs one: the power method on I - B, whose norm ratio tends to
-    // 1 - lambda_min where I - B's largest eigenvalue dominates.
+    // max |1 - lambda|, so the estimate is at or below the smallest real part
+    // of B's eigenvalues (which may be complex then).
     std::vector<double> bx(op.n);
     const auto i_minus_b = [&](const double* x, double* y) {
       detail::apply_cols<1>(op, x, bx.data());

@@ -80,6 +80,8 @@ import numpy as np
 from . import _core
 from ._validate import DEFAULT_BOUNDARY, DEFAULT_SCHEME, as_boundary, as_scheme, as_vertices
 from .errors import ParameterError
+from .limit import TAGS_DOC as _TAGS_DOC
+from .limit import tags as _tags
 from .limit import topology as _topology
 
 METHODS = tuple(_core.method_names())  # the core's one list, in its order
@@ -161,24 +163,27 @@ class Interpolator:
         Boundary rule, see sorpia.limit_points.
     scheme : {"loop", "catmull-clark"}
         The subdivision scheme whose limit surface interpolates, see sorpia.limit_points.
+    {tags}
 
     The spectral estimates a method needs (lambda_min for "wpia", rho for
     omega="young", H's extremes for "hss"/"whss", ...) are computed on first
     use and kept, so that running every method on one mesh pays for them once.
     """
 
-    def __init__(self, faces, n_vertices: int, boundary: str = DEFAULT_BOUNDARY, *, scheme: str = DEFAULT_SCHEME):
-        self._build(faces, n_vertices, boundary, scheme, "n_vertices")
+    def __init__(self, faces, n_vertices: int, boundary: str = DEFAULT_BOUNDARY, *, scheme: str = DEFAULT_SCHEME,
+                 creases=None, corners=None, holes=None):
+        self._build(faces, n_vertices, boundary, scheme, "n_vertices", (creases, corners, holes))
 
     @classmethod
-    def _for_vertices(cls, faces, n_vertices: int, boundary: str, scheme: str) -> Interpolator:
-        """As Interpolator(faces, n_vertices, boundary, scheme=scheme), for interpolate():
-        its messages call the count len(vertices), the rows of the caller's array."""
+    def _for_vertices(cls, faces, n_vertices: int, boundary: str, scheme: str, tags: tuple) -> Interpolator:
+        """As Interpolator(faces, n_vertices, boundary, scheme=, creases=, corners=,
+        holes=), for interpolate(): its messages call the count len(vertices),
+        the rows of the caller's array."""
         self = cls.__new__(cls)
-        self._build(faces, n_vertices, boundary, scheme, "len(vertices)")
+        self._build(faces, n_vertices, boundary, scheme, "len(vertices)", tags)
         return self
 
-    def _build(self, faces, n_vertices, boundary, scheme, count_name: str) -> None:
+    def _build(self, faces, n_vertices, boundary, scheme, count_name: str, tags: tuple) -> None:
         t0 = time.perf_counter()
         self._boundary = as_boundary(boundary)
         self.boundary = _core.boundary_name(self._boundary)
@@ -187,8 +192,9 @@ class Interpolator:
         # validates n_vertices as limit_matrix does (as_vertex_count: no float, bool or negative count)
         self.topology = _topology(faces, n_vertices, scheme=self.scheme, count_name=count_name)
         self.n_vertices = self.topology.n_vertices
+        self.tags = _tags(self.topology, *tags)
         t1 = time.perf_counter()
-        self._operator = _core.LimitOperator(self.topology, self._boundary, self._scheme)
+        self._operator = _core.LimitOperator(self.topology, self._boundary, self.tags, self._scheme)
         t2 = time.perf_counter()
         self.build_timings = {"topology": t1 - t0, "operator": t2 - t1}
 
@@ -279,15 +285,20 @@ class Interpolator:
         return r
 
 
+Interpolator.__doc__ = Interpolator.__doc__.replace("{tags}", _TAGS_DOC)
+
+
 def interpolate(vertices, faces, method: str = "sor", omega="auto", tol: float = 1e-10, max_iter: int = 1000,
                 boundary: str = DEFAULT_BOUNDARY, callback: Optional[Callable[[int, float], object]] = None, *,
-                sigma=None, alpha=None, weight=None, threads: int = 1,
-                scheme: str = DEFAULT_SCHEME) -> InterpolationResult:
+                sigma=None, alpha=None, weight=None, threads: int = 1, scheme: str = DEFAULT_SCHEME,
+                creases=None, corners=None, holes=None) -> InterpolationResult:
     """Control vertices whose limit surface (Loop, or Catmull-Clark with
     ``scheme="catmull-clark"``) interpolates `vertices`.
 
-    One call of ``Interpolator(faces, len(vertices), boundary, scheme=scheme).solve(...)``;
-    see `Interpolator.solve` for the parameters and the module docstring for
+    One call of ``Interpolator(faces, len(vertices), boundary, scheme=,
+    creases=, corners=, holes=).solve(...)``; see `Interpolator` for the
+    scheme and the tags, `Interpolator.solve` for the other parameters and the
+    module docstring for
     the methods and their formulas. `seconds` and `timings` include building
     the topology and B.
 
@@ -303,7 +314,7 @@ def interpolate(vertices, faces, method: str = "sor", omega="auto", tol: float =
     options = check_options(method, omega, tol, max_iter, callback, sigma=sigma, alpha=alpha, weight=weight,
                             threads=threads)
     v0 = as_vertices(vertices)
-    interp = Interpolator._for_vertices(faces, v0.shape[0], boundary, scheme)
+    interp = Interpolator._for_vertices(faces, v0.shape[0], boundary, scheme, (creases, corners, holes))
     res = interp._solve(v0, method, options, callback, t0)
     res._record_build(time.perf_counter() - t0, interp.build_timings["topology"], interp.build_timings["operator"])
     return res

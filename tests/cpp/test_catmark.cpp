@@ -51,7 +51,7 @@ TEST(Catmark, EveryRowEqualsOpenSubdivFar) {
       SCOPED_TRACE(name + (rule == Boundary::EdgeOnly ? " edge-only" : " edge-and-corner"));
       const auto t = build(m);
       const auto fast = sorpia::limit_matrix(t, rule, Scheme::CatmullClark);
-      const auto ref = sorpia::reference_limit_matrix(t, rule, Scheme::CatmullClark);
+      const auto ref = sorpia::reference_limit_matrix(t, Scheme::CatmullClark, rule, {});
       ASSERT_EQ(fast.n_rows, m.n_vertices());
       for (std::size_t i = 0; i < fast.n_rows; ++i) {
         const auto a = row(fast, i), b = row(ref, i);
@@ -139,6 +139,39 @@ TEST(Catmark, RowsSumToOne) {
       for (std::int32_t p = op.offsets[i]; p < op.offsets[i + 1]; ++p) s += op.entry(i, p);
       ASSERT_NEAR(s, 1.0, 1e-14) << "row " << i;
       ASSERT_GT(op.diag[i], 0.0) << "row " << i;
+    }
+  }
+}
+
+// With sharpness tags the rows of the tagged vertices (and darts) come from
+// OpenSubdiv's refinement, refined at least once next to non-quad faces: the
+// whole operator against one refinement of the whole mesh.
+TEST(Catmark, TaggedRowsEqualTheWholeMeshRefinement) {
+  for (const char* name : {"quad-irregular", "polygon-torus", "quad-grid"}) {
+    SCOPED_TRACE(name);
+    sorpia::PolyMesh m;
+    for (const auto& [n, mesh] : sorpia_test::polygon_meshes())
+      if (n == name) m = mesh;
+    const auto t = build(m);
+    sorpia::Tags tags;
+    // a chain of edges from vertex 0, alternately infinitely sharp and semi-sharp, and two corners
+    std::int32_t v = 0;
+    for (int k = 0; k < 6; ++k) {
+      const std::int32_t w = t.ring_neighbors()[t.ring_offsets()[v] + 1];
+      tags.crease_vertices.insert(tags.crease_vertices.end(), {v, w});
+      tags.crease_sharpness.push_back(k % 2 ? 1.5 : sorpia::kInfiniteSharpness);
+      v = w;
+    }
+    tags.corner_vertices = {v, static_cast<std::int32_t>(t.n_vertices() / 2)};
+    tags.corner_sharpness = {2.0, sorpia::kInfiniteSharpness};
+    for (auto rule : {Boundary::EdgeOnly, Boundary::EdgeAndCorner}) {
+      const auto fast = sorpia::limit_matrix(t, rule, Scheme::CatmullClark, tags);
+      const auto ref = sorpia::reference_limit_matrix(t, Scheme::CatmullClark, rule, tags);
+      for (std::size_t i = 0; i < fast.n_rows; ++i) {
+        const auto a = row(fast, i), b = row(ref, i);
+        ASSERT_EQ(a.size(), b.size()) << "row " << i;
+        for (const auto& [j, w] : b) ASSERT_NEAR(a.at(j), w, 1e-14) << "row " << i << " column " << j;
+      }
     }
   }
 }

@@ -24,39 +24,56 @@ struct CsrMatrix {
 
 /// The limit matrix B: row i holds the limit mask of vertex i, so that
 /// B V gives the limit positions of the control vertices V.
-/// to_csr(limit_operator(topology, boundary, scheme)) (limit_operator.hpp):
+/// to_csr(limit_operator(topology, boundary, scheme, tags)) (limit_operator.hpp):
 /// OpenSubdiv's limit masks; unreferenced vertices get an identity row.
 /// @param topology  the mesh connectivity
 /// @param boundary  boundary interpolation rule
 /// @param scheme    Loop (triangles only) or Catmull-Clark
+/// @param tags      OpenSubdiv's sharpness tags (creases, corners, holes)
 /// @return B, (n_vertices, n_vertices), columns sorted within a row
-CsrMatrix limit_matrix(const Topology& topology, Boundary boundary, Scheme scheme = Scheme::Loop);
+CsrMatrix limit_matrix(const Topology& topology, Boundary boundary, Scheme scheme = Scheme::Loop,
+                       const Tags& tags = Tags{});
+/// Loop with tags: limit_matrix(topology, boundary, Scheme::Loop, tags).
+CsrMatrix limit_matrix(const Topology& topology, Boundary boundary, const Tags& tags);
 
 /// Limit positions of the vertices, B V: apply(limit_operator(topology,
-/// boundary, scheme), ...); unreferenced vertices are their own limit.
+/// boundary, scheme, tags), ...); unreferenced vertices are their own limit.
 /// @param topology  the mesh connectivity
 /// @param vertices  row-major (n_vertices, 3) control vertices
 /// @param boundary  boundary interpolation rule
-/// @param out       row-major (n_vertices, 3) limit positions (written)
 /// @param scheme    Loop (triangles only) or Catmull-Clark
-void limit_points(const Topology& topology, const double* vertices, Boundary boundary, double* out,
-                  Scheme scheme = Scheme::Loop);
+/// @param tags      OpenSubdiv's sharpness tags
+/// @param out       row-major (n_vertices, 3) limit positions (written)
+void limit_points(const Topology& topology, const double* vertices, Boundary boundary, Scheme scheme,
+                  const Tags& tags, double* out);
+/// Loop without tags.
+void limit_points(const Topology& topology, const double* vertices, Boundary boundary, double* out);
+/// Loop with OpenSubdiv's sharpness tags.
+void limit_points(const Topology& topology, const double* vertices, Boundary boundary, const Tags& tags,
+                  double* out);
 
 /// Reference, for tests: B recorded from OpenSubdiv's
-/// Far::PrimvarRefinerReal<double>::Limit on an unrefined
+/// Far::PrimvarRefinerReal<double>::Limit on an unrefined Loop
 /// Far::TopologyRefiner (the explicit zero weights OpenSubdiv gives interior
 /// neighbours of boundary vertices dropped; identity rows for unreferenced
-/// vertices). For Catmull-Clark on a mesh with a non-quad face, where Limit()
-/// on the unrefined level would treat n-gons as quads, the limit of the
-/// control vertices' children after one uniform refinement
-/// (PrimvarRefinerReal::Interpolate, then Limit() on level 1), composed back
-/// onto the control vertices. limit_matrix must equal it to rounding. It
-/// builds a refiner, which costs several times limit_matrix.
-CsrMatrix reference_limit_matrix(const Topology& topology, Boundary boundary, Scheme scheme = Scheme::Loop);
+/// vertices). limit_matrix must equal it to rounding. It builds a refiner,
+/// which costs several times limit_matrix.
+CsrMatrix reference_limit_matrix(const Topology& topology, Boundary boundary);
 
-/// Reference, for tests: B V evaluated by Far::PrimvarRefinerReal<double>::Limit
-/// (Catmull-Clark: reference_limit_matrix applied).
-void reference_limit_points(const Topology& topology, const double* vertices, Boundary boundary, double* out,
-                            Scheme scheme = Scheme::Loop);
+/// Reference, for tests: B of the whole mesh with its sharpness tags, from
+/// one Far::TopologyRefiner of the whole mesh refined uniformly until every
+/// semi-sharp tag has decayed (ceil of the largest finite sharpness, after
+/// repeated tags are resolved as OpenSubdiv resolves them: the last counts),
+/// and for Catmull-Clark at least once when a face is not a quad (Limit() on
+/// an unrefined level would treat an n-gon as a quad),
+/// PrimvarRefinerReal<double>::Interpolate level by level and Limit() on the
+/// last level, composed back to the control vertices (identity rows for
+/// unreferenced vertices). limit_matrix(topology, boundary, scheme, tags) must
+/// equal it to rounding. Its cost grows as 4^levels.
+/// @throw MeshError naming the first crease that is not an edge of the mesh
+CsrMatrix reference_limit_matrix(const Topology& topology, Scheme scheme, Boundary boundary, const Tags& tags);
+
+/// Reference, for tests: B V evaluated by Far::PrimvarRefinerReal<double>::Limit (Loop).
+void reference_limit_points(const Topology& topology, const double* vertices, Boundary boundary, double* out);
 
 }  // namespace sorpia
