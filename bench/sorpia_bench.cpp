@@ -441,7 +441,7 @@ MeshRun run_mesh(const Options& o, const std::string& spec) {
             ? sorpia::limit_operator(tags.empty() && o.scheme == sorpia::Scheme::Loop
                                          ? sorpia::reference_limit_matrix(topology, o.boundary)
                                          : sorpia::reference_limit_matrix(topology, o.scheme, o.boundary, tags))
-            : sorpia::limit_operator(topology, o.boundary, o.scheme, tags);
+            : sorpia::limit_operator(topology, o.scheme, o.boundary, tags);
     run.op.push_back(seconds_since(t0));
 
     for (auto& mr : run.methods) {

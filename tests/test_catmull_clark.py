@@ -113,3 +113,15 @@ def test_triangles_under_catmull_clark_are_refined_once():
     assert abs(b - far_matrix(F, len(V))).max() <= 1e-15
     res = sorpia.interpolate(V, F, scheme=CC)
     assert np.abs(sorpia.limit_points(res.control_vertices, F, scheme=CC) - V).max() <= 1e-9
+
+
+def test_a_cube_has_a_singular_catmull_clark_matrix():
+    """Every vertex of a cube has valence 3: (3/8) x_i + 3 (1/6) x_e + 3 (1/24) x_f with the checkerboard x
+    (x_e = -x_i across an edge, x_f = x_i across a face) is 3/8 - 1/2 + 1/8 = 0, so B has a null vector and no
+    method can fit the cube (OpenSubdiv's osd_catmark_car holds such a cube)."""
+    V = np.array([[x, y, z] for x in (0, 1) for y in (0, 1) for z in (0, 1)], dtype=float)
+    quads = [[0, 1, 3, 2], [4, 6, 7, 5], [0, 4, 5, 1], [2, 3, 7, 6], [0, 2, 6, 4], [1, 5, 7, 3]]
+    b = sorpia.limit_matrix(quads, 8, scheme=CC)
+    checkerboard = np.array([(-1.0) ** (x + y + z) for x, y, z in V.astype(int)])
+    assert np.abs(b @ checkerboard).max() <= 1e-15
+    assert np.allclose(far_matrix(quads, 8).toarray(), b.toarray(), atol=1e-15)

@@ -3,6 +3,7 @@
 
 #include "bindings.hpp"
 #include "sorpia/limit.hpp"
+#include "sorpia/limit_operator.hpp"
 #include "sorpia/shapes.hpp"
 
 namespace sorpia_py {
@@ -109,7 +110,7 @@ void bind_limit(py::module_& m) {
   m.def(
       "limit_matrix",
       [csr_of](const sorpia::Topology& topology, sorpia::Boundary b, const sorpia::Tags& tags, sorpia::Scheme scheme) {
-        return csr_of([&] { return sorpia::limit_matrix(topology, b, scheme, tags); });
+        return csr_of([&] { return sorpia::limit_matrix(topology, scheme, b, tags); });
       },
       "topology"_a, "boundary"_a, "tags"_a = sorpia::Tags{}, "scheme"_a = sorpia::Scheme::Loop,
       "Limit matrix B as CSR arrays (data, indices, indptr).");
@@ -134,7 +135,7 @@ void bind_limit(py::module_& m) {
         const double* src = vertices.data();
         {
           py::gil_scoped_release release;
-          sorpia::limit_points(topology, src, b, scheme, tags, dst);
+          sorpia::limit_points(topology, src, scheme, b, tags, dst);
         }
         return out;
       },

@@ -228,7 +228,7 @@ void bind_solvers(py::module_& m) {
       .def(py::init([](const sorpia::Topology& topology, sorpia::Boundary b, const sorpia::Tags& tags,
                        sorpia::Scheme scheme) {
              py::gil_scoped_release release;
-             return OperatorState{sorpia::limit_operator(topology, b, scheme, tags), {}};
+             return OperatorState{sorpia::limit_operator(topology, scheme, b, tags), {}};
            }),
            "topology"_a, "boundary"_a, "tags"_a = sorpia::Tags{}, "scheme"_a = sorpia::Scheme::Loop)
       .def_property_readonly("uniform", [](const OperatorState& s) { return s.op.uniform(); })

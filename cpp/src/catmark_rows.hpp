@@ -1,6 +1,6 @@
 #pragma once
 // The Catmull-Clark limit operator's builder (internal; limit_operator.hpp's
-// limit_operator(topology, boundary, Scheme::CatmullClark) calls it).
+// limit_operator(topology, Scheme::CatmullClark, boundary, tags) calls it).
 #include <cstddef>
 #include <cstdint>
 #include <utility>

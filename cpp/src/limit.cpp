@@ -206,26 +206,26 @@ void reference_limit_points(const Topology& topology, const double* vertices, Bo
   detail::limit_positions(osd, points, vertices, topology.n_vertices(), out);
 }
 
-CsrMatrix limit_matrix(const Topology& topology, Boundary boundary, Scheme scheme, const Tags& tags) {
-  return to_csr(limit_operator(topology, boundary, scheme, tags));
+CsrMatrix limit_matrix(const Topology& topology, Scheme scheme, Boundary boundary, const Tags& tags) {
+  return to_csr(limit_operator(topology, scheme, boundary, tags));
 }
 
 CsrMatrix limit_matrix(const Topology& topology, Boundary boundary, const Tags& tags) {
-  return limit_matrix(topology, boundary, Scheme::Loop, tags);
+  return limit_matrix(topology, Scheme::Loop, boundary, tags);
 }
 
-void limit_points(const Topology& topology, const double* vertices, Boundary boundary, Scheme scheme,
+void limit_points(const Topology& topology, const double* vertices, Scheme scheme, Boundary boundary,
                   const Tags& tags, double* out) {
-  apply(limit_operator(topology, boundary, scheme, tags), vertices, out);
+  apply(limit_operator(topology, scheme, boundary, tags), vertices, out);
 }
 
 void limit_points(const Topology& topology, const double* vertices, Boundary boundary, double* out) {
-  limit_points(topology, vertices, boundary, Scheme::Loop, Tags{}, out);
+  limit_points(topology, vertices, Scheme::Loop, boundary, Tags{}, out);
 }
 
 void limit_points(const Topology& topology, const double* vertices, Boundary boundary, const Tags& tags,
                   double* out) {
-  limit_points(topology, vertices, boundary, Scheme::Loop, tags, out);
+  limit_points(topology, vertices, Scheme::Loop, boundary, tags, out);
 }
 
 }  // namespace sorpia

@@ -131,30 +131,34 @@ std::string loop_needs_triangles(const Topology& topology) {
 
 namespace {
 
-// Catmull-Clark with tags: the untagged operator with the rows of the
-// vertices a tag touches (a crease edge or a corner at them) and of darts
-// replaced by OpenSubdiv's refinement (refined_rows.hpp), at the levels the
-// whole-mesh reference uses: every semi-sharp tag at the vertex decayed, and
-// at least one level where the vertex has a non-quad face; a dart at the
-// reference's level (its limit mask depends on the level it is taken at).
-LimitOperator catmark_with_tags(const Topology& topology, Boundary boundary, const Tags& tags) {
-  const detail::VertexTags vt = detail::vertex_tags(topology, tags);
+// Catmull-Clark: the masks' operator (detail::catmark_limit_operator) with the
+// rows whose level (detail::row_levels) the masks do not give replaced by
+// OpenSubdiv's refinement around their vertex (refined_rows.hpp): vertices a
+// tag touches (a crease edge or a corner at them), darts, and interior
+// vertices of two faces (their Sdc limit mask, the corner rule, is not the
+// limit of their refinement, so they are taken at the mesh's deepest level).
+LimitOperator catmark_operator(const Topology& topology, Boundary boundary, const Tags& tags) {
+  LimitOperator op = detail::catmark_limit_operator(topology, boundary);
   const std::size_t n = topology.n_vertices();
-  int levels = topology.all_quads() ? 0 : 1;
-  for (std::size_t v = 0; v < n; ++v) levels = std::max(levels, vt.levels(static_cast<std::int32_t>(v)));
+  const auto valence_two = [&](std::size_t v) {
+    return !topology.is_unreferenced(v) && !topology.is_boundary(v) && topology.valence(v) == 2;
+  };
+  bool any_valence_two = false;
+  for (std::size_t v = 0; v < n && !any_valence_two; ++v) any_valence_two = valence_two(v);
+  if (tags.empty() && !any_valence_two) return op;
+  const detail::VertexTags vt = detail::vertex_tags(topology, tags);
+  const std::vector<int> level = detail::row_levels(topology, Scheme::CatmullClark, vt);
   std::vector<std::int32_t> refined;
   std::vector<int> refined_levels;
   for (std::size_t v = 0; v < n; ++v) {
     const auto i = static_cast<std::int32_t>(v);
     if (topology.is_unreferenced(v)) continue;
     const bool tagged = vt.crease_offsets[v + 1] > vt.crease_offsets[v] || vt.corner[v] > 0.0f;
-    const bool dart = levels > 0 && vt.dart(topology, i);
-    if (!tagged && !dart) continue;
-    const bool quads = topology.has_face_ring() ? topology.quad_ring(v) : false;
-    refined.push_back(i);
-    refined_levels.push_back(dart ? levels : std::max(vt.levels(i), quads ? 0 : 1));
+    if (tagged || valence_two(v) || vt.dart(topology, i)) {
+      refined.push_back(i);
+      refined_levels.push_back(level[v]);
+    }
   }
-  LimitOperator op = detail::catmark_limit_operator(topology, boundary);
   if (refined.empty()) return op;
   return limit_operator(replace_rows(
       to_csr(op), refined,
@@ -163,43 +167,36 @@ LimitOperator catmark_with_tags(const Topology& topology, Boundary boundary, con
 
 }  // namespace
 
-LimitOperator limit_operator(const Topology& topology, Boundary boundary, Scheme scheme, const Tags& tags) {
-  if (scheme == Scheme::CatmullClark)
-    return tags.empty() ? detail::catmark_limit_operator(topology, boundary)
-                        : catmark_with_tags(topology, boundary, tags);
-  if (!topology.all_triangles()) throw MeshError(loop_needs_triangles(topology));
-  if (!tags.empty()) return limit_operator(topology, boundary, tags);
-  return uniform_operator(topology, [&](std::size_t v) { return untagged_row(topology, v, boundary); });
+LimitOperator limit_operator(const Topology& topology, Boundary boundary) {
+  return limit_operator(topology, boundary, Tags{});
 }
 
 LimitOperator limit_operator(const Topology& topology, Boundary boundary, const Tags& tags) {
-  if (tags.empty() || !topology.all_triangles()) return limit_operator(topology, boundary, Scheme::Loop, Tags{});
+  if (!topology.all_triangles()) throw MeshError(loop_needs_triangles(topology));
+  if (tags.empty())
+    return uniform_operator(topology, [&](std::size_t v) { return untagged_row(topology, v, boundary); });
   const detail::VertexTags vt = detail::vertex_tags(topology, tags);
-  // B is Far's Limit() after `levels` of refinement, where every semi-sharp
-  // tag has decayed. Rows with a semi-sharp tag, and darts when levels > 0
-  // (refined_rows.hpp), come from that refinement; every other row is the
-  // same at any level.
-  std::vector<int> level(topology.n_vertices());
-  int levels = 0;
-  for (std::size_t v = 0; v < topology.n_vertices(); ++v) {
-    level[v] = vt.levels(static_cast<std::int32_t>(v));
-    levels = std::max(levels, level[v]);
-  }
+  // Rows with a semi-sharp tag, and darts when the mesh has one, come from
+  // OpenSubdiv's refinement (refined_rows.hpp); every other row is the same
+  // at any level.
+  const std::vector<int> level = detail::row_levels(topology, Scheme::Loop, vt);
   std::vector<std::int32_t> refined;
   std::vector<int> refined_levels;
-  for (std::size_t v = 0; v < topology.n_vertices(); ++v) {
-    const auto i = static_cast<std::int32_t>(v);
-    const bool dart = levels > 0 && !topology.is_unreferenced(v) && vt.dart(topology, i);
-    if (level[v] > 0 || dart) {
-      refined.push_back(i);
-      refined_levels.push_back(dart ? levels : level[v]);
+  for (std::size_t v = 0; v < topology.n_vertices(); ++v)
+    if (level[v] > 0) {
+      refined.push_back(static_cast<std::int32_t>(v));
+      refined_levels.push_back(level[v]);
     }
-  }
   LimitOperator op =
       uniform_operator(topology, [&](std::size_t v) { return infinitely_sharp_row(topology, v, boundary, vt); });
   if (refined.empty()) return op;
   return limit_operator(
       replace_rows(to_csr(op), refined, detail::refined_limit_rows(topology, Scheme::Loop, boundary, vt, refined, refined_levels)));
+}
+
+LimitOperator limit_operator(const Topology& topology, Scheme scheme, Boundary boundary, const Tags& tags) {
+  if (scheme == Scheme::CatmullClark) return catmark_operator(topology, boundary, tags);
+  return limit_operator(topology, boundary, tags);
 }
 
 LimitOperator limit_operator(const CsrMatrix& b) {

@@ -24,27 +24,26 @@ struct CsrMatrix {
 
 /// The limit matrix B: row i holds the limit mask of vertex i, so that
 /// B V gives the limit positions of the control vertices V.
-/// to_csr(limit_operator(topology, boundary, scheme, tags)) (limit_operator.hpp):
+/// to_csr(limit_operator(topology, scheme, boundary, tags)) (limit_operator.hpp):
 /// OpenSubdiv's limit masks; unreferenced vertices get an identity row.
 /// @param topology  the mesh connectivity
-/// @param boundary  boundary interpolation rule
 /// @param scheme    Loop (triangles only) or Catmull-Clark
+/// @param boundary  boundary interpolation rule
 /// @param tags      OpenSubdiv's sharpness tags (creases, corners, holes)
 /// @return B, (n_vertices, n_vertices), columns sorted within a row
-CsrMatrix limit_matrix(const Topology& topology, Boundary boundary, Scheme scheme = Scheme::Loop,
-                       const Tags& tags = Tags{});
-/// Loop with tags: limit_matrix(topology, boundary, Scheme::Loop, tags).
-CsrMatrix limit_matrix(const Topology& topology, Boundary boundary, const Tags& tags);
+CsrMatrix limit_matrix(const Topology& topology, Scheme scheme, Boundary boundary, const Tags& tags = Tags{});
+/// Loop: limit_matrix(topology, Scheme::Loop, boundary, tags).
+CsrMatrix limit_matrix(const Topology& topology, Boundary boundary, const Tags& tags = Tags{});
 
 /// Limit positions of the vertices, B V: apply(limit_operator(topology,
-/// boundary, scheme, tags), ...); unreferenced vertices are their own limit.
+/// scheme, boundary, tags), ...); unreferenced vertices are their own limit.
 /// @param topology  the mesh connectivity
 /// @param vertices  row-major (n_vertices, 3) control vertices
-/// @param boundary  boundary interpolation rule
 /// @param scheme    Loop (triangles only) or Catmull-Clark
+/// @param boundary  boundary interpolation rule
 /// @param tags      OpenSubdiv's sharpness tags
 /// @param out       row-major (n_vertices, 3) limit positions (written)
-void limit_points(const Topology& topology, const double* vertices, Boundary boundary, Scheme scheme,
+void limit_points(const Topology& topology, const double* vertices, Scheme scheme, Boundary boundary,
                   const Tags& tags, double* out);
 /// Loop without tags.
 void limit_points(const Topology& topology, const double* vertices, Boundary boundary, double* out);

@@ -41,30 +41,18 @@ struct LimitOperator {
   double entry(std::size_t i, std::size_t p) const { return values.empty() ? weight[i] : values[p]; }
 };
 
-/// B from OpenSubdiv's limit masks (limit_masks.hpp), one row per vertex, in
-/// O(n_vertices + n_edges): the production build of B. Equal to
-/// reference_limit_matrix (OpenSubdiv's Far) to rounding
-/// (tests/cpp/test_limit_operator.cpp, test_catmark.cpp).
-/// Loop (uniform rows): sorpia::limit_mask; needs an all-triangle topology
-/// (@throw MeshError naming the first other face).
-/// Catmull-Clark (rows in `values`): Sdc's CATMARK limit masks where every
-/// face at the vertex is a quad (interior valence n: (n^2 v + 4 sum e_j +
-/// sum f_j) / (n (n + 5)), f_j the opposite corners) and on the boundary
-/// ((v_prev + 4 v + v_next) / 6; a one-face corner keeps itself under
-/// EdgeAndCorner); an interior vertex with a non-quad face gets its limit
-/// after one uniform refinement, composed back onto its faces' vertices.
-/// With `tags`: see limit_operator(topology, boundary, tags) below; under
-/// Catmull-Clark the rows of the vertices a tag touches (and darts) come from
-/// OpenSubdiv's refinement the same way, refined at least once where the
-/// vertex has a non-quad face.
-LimitOperator limit_operator(const Topology& topology, Boundary boundary, Scheme scheme = Scheme::Loop,
-                             const Tags& tags = Tags{});
+/// B of a Loop mesh from OpenSubdiv's Loop limit masks (sorpia::limit_mask,
+/// limit_masks.hpp), one uniform row per vertex, in O(n_vertices + n_edges):
+/// the production build of B. Equal to reference_limit_matrix (OpenSubdiv's
+/// Far Limit()) to rounding (tests/cpp/test_limit_operator.cpp).
+/// @throw MeshError naming the first face that is not a triangle
+LimitOperator limit_operator(const Topology& topology, Boundary boundary);
 
 /// Empty when every face is a triangle, else the message naming the first
 /// face that is not (Loop's refusal).
 std::string loop_needs_triangles(const Topology& topology);
 
-/// B with OpenSubdiv's sharpness tags (Far::TopologyDescriptor's creases,
+/// Loop's B with OpenSubdiv's sharpness tags (Far::TopologyDescriptor's creases,
 /// corners and holes; a tag given twice counts with its last sharpness).
 /// Rows of vertices no tag touches are the masks above. Infinitely sharp tags
 /// keep the uniform form (Sdc's rules, boundary edges counting as sharp
@@ -79,9 +67,25 @@ std::string loop_needs_triangles(const Topology& topology);
 /// same at any level. Holes change no
 /// row of B (Far's refinement and Limit() treat a hole's vertices as if the
 /// face were there); they only cut faces out of the surface.
-/// Loop: limit_operator(topology, boundary, Scheme::Loop, tags).
-/// @throw MeshError naming the first crease that is not an edge of the mesh
+/// @throw MeshError naming the first crease that is not an edge of the mesh,
+///        or the first face that is not a triangle
 LimitOperator limit_operator(const Topology& topology, Boundary boundary, const Tags& tags);
+
+/// B under either scheme with OpenSubdiv's sharpness tags (empty: none).
+/// Loop as above. Catmull-Clark (rows in `values`), equal to OpenSubdiv's
+/// Limit() of the whole mesh refined to the deepest level detail::row_levels
+/// gives (tests/cpp/test_catmark.cpp): Sdc's CATMARK limit masks where every
+/// face at the vertex is a quad (interior valence n: (n^2 v + 4 sum e_j +
+/// sum f_j) / (n (n + 5)), f_j the opposite corners, where Far's Limit()
+/// puts the face weights) and on the boundary ((v_prev + 4 v + v_next) / 6;
+/// a one-face corner keeps itself under EdgeAndCorner); an interior vertex
+/// with a non-quad face gets its limit after one uniform refinement,
+/// composed back onto its faces' vertices (detail::catmark_refined_row). Rows
+/// of vertices a tag touches, of darts and of interior vertices of two faces
+/// (whose Sdc limit masks change with the level) come from OpenSubdiv's
+/// refinement around the vertex and Limit() at their row level.
+/// @throw MeshError naming the first crease that is not an edge of the mesh
+LimitOperator limit_operator(const Topology& topology, Scheme scheme, Boundary boundary, const Tags& tags = Tags{});
 
 /// The compact form of a square CSR matrix whose rows each have a positive
 /// diagonal entry (explicit zero off-diagonal entries are dropped). Rows whose
