@@ -211,8 +211,10 @@ CATMULL_CLARK = pytest.mark.skipif(not _solves("catmull-clark"), reason="Interpo
 @CATMULL_CLARK
 def test_fit_solves_a_quad_mesh_with_catmull_clark_by_default(tmp_path, monkeypatch, command):
     monkeypatch.chdir(tmp_path)
-    v, _, quads = cube_of_triangles()
+    # Not the cube: its Catmull-Clark B is singular (test_catmull_clark.py), no method can fit it.
+    v, quads = sorpia.shapes.quad_torus(6, 5)
     v = v + np.random.default_rng(6).normal(0, 0.05, v.shape)
+    quads = quads.tolist()
     tagged_obj(tmp_path / "q.obj", v, quads, ["t crease 2/1/0 0 1 1.5"])
     code, stdout, err = command("fit", "q.obj", "-o", "c.obj", "--report", "r.json")
     assert code == 0, err
@@ -238,6 +240,12 @@ def test_opensubdiv_shapes_fit_with_their_tags(path, tmp_path, command):
         pytest.skip("Interpolator takes no scheme= yet")
     out = tmp_path / "c.obj"
     code, _, err = command("fit", path, "-o", out, "--quiet", "--report", tmp_path / "r.json")
+    if path.name == "osd_catmark_fan.obj":  # three faces on edge (7, 8): refused like any non-manifold mesh
+        assert code != 0 and "non-manifold edge (7, 8)" in err
+        return
+    if path.name == "osd_catmark_car.obj":  # it holds a separate cube, whose Catmull-Clark B is singular
+        assert code == 1 and not json.loads((tmp_path / "r.json").read_text())["result"]["converged"]
+        return
     assert code == 0, err
     report = json.loads((tmp_path / "r.json").read_text())
     assert report["scheme"] == scheme
