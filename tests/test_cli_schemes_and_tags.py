@@ -245,3 +245,17 @@ def test_opensubdiv_shapes_fit_with_their_tags(path, tmp_path, command):
     limit = sorpia.limit_points(ctrl, f2, **({} if scheme == "loop" else {"scheme": scheme}), **written)
     diagonal = np.linalg.norm(v.max(axis=0) - v.min(axis=0))
     assert np.abs(limit - v).max() < 1e-9 * diagonal
+
+
+def test_info_explains_a_crease_that_is_not_an_edge(tmp_path, monkeypatch, command):
+    monkeypatch.chdir(tmp_path)
+    v, tris, _ = cube_of_triangles()
+    tagged_obj(tmp_path / "bad.obj", v, tris, ["t crease 2/1/0 0 7 10"])  # opposite corners of the cube
+    with pytest.raises(sorpia.MeshError) as refused:
+        sorpia.Interpolator(tris, len(v), creases=([[0, 7]], 10.0))
+    code, stdout, err = command("info", "bad.obj", "--json")
+    assert code == 0, err
+    assert json.loads(stdout)["pia"] == {"scheme": "loop", "can_run": False, "reason": str(refused.value)}
+    code, _, err = command("fit", "bad.obj", "-o", "c.obj")
+    assert_user_error(code, err)
+    assert str(refused.value) in err and "Loop PIA cannot run on this mesh" in err
