@@ -1,5 +1,7 @@
 // Bindings of the limit surface (LimitSurface: Bfr evaluation and uniform
 // tessellation). Conversion and error translation only.
+#include <algorithm>
+
 #include "bindings.hpp"
 #include "sorpia/surface.hpp"
 
@@ -15,11 +17,14 @@ void check_vertices(const Vertices& a, std::size_t n_vertices) {
 }
 
 // (vertices (n, 3), faces, face_counts): faces (m, k) with face_counts None
-// when every face has k vertices, else the concatenated indices and the counts.
-py::tuple tessellation_tuple(sorpia::Tessellation&& t) {
+// when every face has k vertices (every tessellation but Catmull-Clark's
+// level 0 of a mixed mesh), else the concatenated indices and the counts.
+py::tuple tessellation_tuple(sorpia::PolyMesh&& t) {
   auto vertices = to_numpy(std::move(t.vertices), 3);
-  if (t.face_size > 0) return py::make_tuple(vertices, to_numpy(std::move(t.faces), t.face_size), py::none());
-  return py::make_tuple(vertices, to_numpy(std::move(t.faces), 0), to_numpy(std::move(t.face_counts), 0));
+  const auto& c = t.face_counts;
+  if (!c.empty() && std::all_of(c.begin(), c.end(), [&](std::int32_t k) { return k == c.front(); }))
+    return py::make_tuple(vertices, to_numpy(std::move(t.face_indices), c.front()), py::none());
+  return py::make_tuple(vertices, to_numpy(std::move(t.face_indices), 0), to_numpy(std::move(t.face_counts), 0));
 }
 }  // namespace
 
@@ -79,7 +84,7 @@ void bind_surface(py::module_& m) {
            "face_ids"_a.noconvert(), "uv"_a.noconvert(), "derivatives"_a)
       .def("tessellate",
            [](sorpia::LimitSurface& s, int level) {
-             sorpia::Tessellation t;
+             sorpia::PolyMesh t;
              {
                LongCall call;
                t = s.tessellate(level);

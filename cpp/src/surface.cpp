@@ -9,7 +9,6 @@
 #include <opensubdiv/far/topologyRefinerFactory.h>
 
 #include <algorithm>
-#include <functional>
 #include <atomic>
 #include <cmath>
 #include <cstdio>
@@ -121,71 +120,12 @@ std::size_t tessellation_bytes(Scheme scheme, std::size_t n_vertices, std::size_
              : static_cast<std::size_t>(bytes);
 }
 
-namespace {
-
-// OpenSubdiv reports topology errors through a global callback; collect the
-// message of the current thread's refiner build.
-thread_local std::string osd_error;
-void record_osd_error(Far::ErrorType, const char* message) { osd_error = message ? message : ""; }
-
-// TEMPORARY until detail::make_refiner (scheme, boundary and tags) exists:
-// the refiner of a triangle topology under either scheme, with the tags.
-detail::LoopRefiner make_surface_refiner(const Topology& topology, Scheme scheme, Boundary boundary,
-                                         const Tags& tags) {
-  using namespace OpenSubdiv;
-  detail::LoopRefiner out;
-  const std::size_t n = topology.n_vertices();
-  out.to_osd.assign(n, -1);
-  for (std::size_t v = 0; v < n; ++v)
-    if (!topology.is_unreferenced(v)) {
-      out.to_osd[v] = static_cast<std::int32_t>(out.from_osd.size());
-      out.from_osd.push_back(static_cast<std::int32_t>(v));
-    }
-  const std::vector<std::int32_t>& faces = topology.faces();
-  std::vector<int> osd_faces(faces.size());
-  for (std::size_t k = 0; k < faces.size(); ++k) osd_faces[k] = out.to_osd[faces[k]];
-  std::vector<int> verts_per_face(topology.n_faces(), 3);
-  std::vector<int> creases(tags.crease_vertices.size()), corners(tags.corner_vertices.size());
-  for (std::size_t k = 0; k < creases.size(); ++k) creases[k] = out.to_osd[tags.crease_vertices[k]];
-  for (std::size_t k = 0; k < corners.size(); ++k) corners[k] = out.to_osd[tags.corner_vertices[k]];
-  std::vector<float> crease_w(tags.crease_sharpness.begin(), tags.crease_sharpness.end());
-  std::vector<float> corner_w(tags.corner_sharpness.begin(), tags.corner_sharpness.end());
-
-  Far::TopologyDescriptor desc;
-  desc.numVertices = static_cast<int>(out.from_osd.size());
-  desc.numFaces = static_cast<int>(topology.n_faces());
-  desc.numVertsPerFace = verts_per_face.data();
-  desc.vertIndicesPerFace = osd_faces.data();
-  desc.numCreases = static_cast<int>(crease_w.size());
-  desc.creaseVertexIndexPairs = creases.data();
-  desc.creaseWeights = crease_w.data();
-  desc.numCorners = static_cast<int>(corner_w.size());
-  desc.cornerVertexIndices = corners.data();
-  desc.cornerWeights = corner_w.data();
-  desc.numHoles = static_cast<int>(tags.holes.size());
-  desc.holeIndices = tags.holes.data();
-
-  Sdc::Options sdc;
-  sdc.SetVtxBoundaryInterpolation(boundary == Boundary::EdgeOnly ? Sdc::Options::VTX_BOUNDARY_EDGE_ONLY
-                                                                 : Sdc::Options::VTX_BOUNDARY_EDGE_AND_CORNER);
-  using Factory = Far::TopologyRefinerFactory<Far::TopologyDescriptor>;
-  Factory::Options options(scheme == Scheme::Loop ? Sdc::SCHEME_LOOP : Sdc::SCHEME_CATMARK, sdc);
-  osd_error.clear();
-  Far::SetErrorCallback(record_osd_error);
-  out.refiner.reset(Factory::Create(desc, options));
-  Far::SetErrorCallback(nullptr);
-  if (!out.refiner) throw MeshError("OpenSubdiv refused the mesh topology: " + osd_error);
-  return out;
-}
-
-}  // namespace
-
 struct LimitSurface::Impl {
   Topology topology;
   Scheme scheme;
   Boundary boundary;
   Tags tags;
-  detail::LoopRefiner base;  // unrefined, with the tags: Bfr and the limit positions of control vertices
+  detail::Refiner base;  // unrefined, with the tags: Bfr and the limit positions of control vertices
   std::unique_ptr<SurfaceFactory> factory;
   std::vector<double> vertices;  // (n, 3), as given
   std::vector<Point3> points;    // referenced vertices in OpenSubdiv's order
@@ -199,7 +139,7 @@ struct LimitSurface::Impl {
   mutable std::shared_mutex mutex;
 
   Impl(const Topology& t, Scheme s, Boundary b, const Tags& g)
-      : topology(t), scheme(s), boundary(b), tags(g), base(make_surface_refiner(t, s, b, g)) {}
+      : topology(t), scheme(s), boundary(b), tags(g), base(detail::make_refiner(t, s, b, g)) {}
 };
 
 namespace {
@@ -505,7 +445,7 @@ std::vector<int> inexact_limit_vertices(const Far::TopologyRefiner& refiner, int
 
 }  // namespace
 
-Tessellation LimitSurface::tessellate(int level) {
+PolyMesh LimitSurface::tessellate(int level) {
   if (level < 0 || level > 15)
     throw ParameterError("level must be in 0..15, got " + std::to_string(level));
   const Scheme scheme = impl_->scheme;
@@ -591,12 +531,13 @@ Tessellation LimitSurface::tessellate(int level) {
   const std::size_t n_osd = from.size();
   const auto n_level = static_cast<std::size_t>(last.GetNumVertices());
   const std::size_t n_out = n + (n_level - n_osd);
-  Tessellation out;
+  PolyMesh out;
   out.vertices.resize(3 * n_out);
-  if (scheme == Scheme::Loop && impl_->tags.empty()) {
+  if (scheme == Scheme::Loop) {
     // Control vertices: B V exactly as sorpia::limit_points computes it (the
-    // refined level gives the same point up to rounding).
-    limit_points(impl_->topology, impl_->vertices.data(), impl_->boundary, out.vertices.data());
+    // refined level gives the same point up to rounding, except at a dart,
+    // whose limit mask is not the limit of its refinement).
+    limit_points(impl_->topology, impl_->vertices.data(), impl_->boundary, impl_->tags, out.vertices.data());
   } else {
     std::copy(impl_->vertices.begin(), impl_->vertices.end(), out.vertices.begin());
     for (std::size_t i = 0; i < n_osd; ++i) {
@@ -620,22 +561,14 @@ Tessellation LimitSurface::tessellate(int level) {
                                                                          : n + static_cast<std::size_t>(i) - n_osd);
   };
   const auto n_faces_level = static_cast<std::size_t>(last.GetNumFaces());
-  // Catmull-Clark's level 0 is the control polygons, of any sizes; every
-  // other level has the scheme's regular faces.
-  const bool polygons = scheme == Scheme::CatmullClark && level == 0;
-  out.face_size = polygons ? 0 : scheme == Scheme::Loop ? 3 : 4;
-  out.faces.reserve(static_cast<std::size_t>(last.GetNumFaceVertices()));
+  out.face_counts.reserve(n_faces_level);
+  out.face_indices.reserve(static_cast<std::size_t>(last.GetNumFaceVertices()));
   for (std::size_t f = 0; f < n_faces_level; ++f) {
     if (f % kRowsPerPoll == 0) poll_interrupt();
     if (last.IsFaceHole(static_cast<int>(f))) continue;
     const auto fv = last.GetFaceVertices(static_cast<int>(f));
-    if (polygons) out.face_counts.push_back(fv.size());
-    for (int c = 0; c < fv.size(); ++c) out.faces.push_back(to_out(fv[c]));
-  }
-  if (polygons && std::adjacent_find(out.face_counts.begin(), out.face_counts.end(), std::not_equal_to<>()) ==
-                      out.face_counts.end()) {  // one size after all
-    out.face_size = out.face_counts.empty() ? 4 : out.face_counts.front();
-    out.face_counts.clear();
+    out.face_counts.push_back(fv.size());
+    for (int c = 0; c < fv.size(); ++c) out.face_indices.push_back(to_out(fv[c]));
   }
   return out;
 }

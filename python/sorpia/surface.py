@@ -125,7 +125,7 @@ class LimitSurface:
         vertices = as_vertices(vertices)
         self._boundary = as_boundary(boundary)
         self._scheme = as_scheme(scheme)
-        self._topology = topology(faces, vertices.shape[0], count_name="len(vertices)")
+        self._topology = topology(faces, vertices.shape[0], scheme=scheme, count_name="len(vertices)")
         tags = as_tags(creases, corners, holes, n_vertices=vertices.shape[0], n_faces=self._topology.n_faces)
         self._surface = _core.LimitSurface(self._topology, vertices, self._scheme, self._boundary, tags)
 

@@ -145,9 +145,9 @@ TEST(Interrupt, TessellationAndEvaluationStop) {
     EXPECT_THROW(s.evaluate(face.data(), uv.data(), 1, p, nullptr, nullptr, nullptr), Interrupted);
   }
   EXPECT_EQ(stop.asked, 2);
-  const sorpia::Tessellation t = s.tessellate(2), f = fresh.tessellate(2);
+  const sorpia::PolyMesh t = s.tessellate(2), f = fresh.tessellate(2);
   EXPECT_EQ(t.vertices, f.vertices);
-  EXPECT_EQ(t.faces, f.faces);
+  EXPECT_EQ(t.face_indices, f.face_indices);
 }
 
 TEST(Interrupt, ReadingAFileStops) {

@@ -69,3 +69,45 @@ TEST(LimitSurface, RefusesBadLevelsAndPoints) {
 }
 
 }  // namespace
+
+namespace {
+
+// Corner j of a k-gon in Bfr's parameterisation under Catmull-Clark (surface.hpp).
+std::pair<double, double> catmark_corner(int k, int j) {
+  if (k == 4) return {static_cast<double>(j == 1 || j == 2), static_cast<double>(j >= 2)};
+  const int w = k < 10 ? (k < 5 ? 2 : 3) : 1 + static_cast<int>(std::sqrt(static_cast<double>(k - 1)));
+  return {static_cast<double>(j % w), static_cast<double>(j / w)};
+}
+
+TEST(LimitSurface, CatmullClarkPolygonsGiveQuadsAndExactCorners) {
+  // Mixed triangles, quads, pentagons and hexagons: level 0 is the control
+  // polygons, level 1 one quad per corner, level 2 four times as many; Bfr at
+  // every corner equals the tessellation's control vertex (Far refinement +
+  // Limit(), or Bfr where Far's Limit() does not apply) to 1e-12.
+  const sorpia::PolyMesh m = sorpia::polygon_torus(10, 6, 3);
+  const sorpia::Topology topo(m.face_counts.data(), m.n_faces(), m.face_indices.data(), m.n_vertices());
+  sorpia::LimitSurface s(topo, m.vertices.data(), sorpia::Scheme::CatmullClark, Boundary::EdgeAndCorner);
+  const sorpia::PolyMesh t0 = s.tessellate(0), t1 = s.tessellate(1), t2 = s.tessellate(2);
+  EXPECT_EQ(t0.face_counts, m.face_counts);
+  EXPECT_EQ(t0.face_indices, m.face_indices);
+  EXPECT_EQ(t1.n_faces(), m.face_indices.size());
+  EXPECT_EQ(t2.n_faces(), 4 * m.face_indices.size());
+  for (const auto* t : {&t1, &t2})
+    EXPECT_TRUE(std::all_of(t->face_counts.begin(), t->face_counts.end(), [](int k) { return k == 4; }));
+  std::vector<std::int32_t> ids;
+  std::vector<double> uv;
+  for (std::size_t f = 0, o = 0; f < m.n_faces(); o += m.face_counts[f++])
+    for (int j = 0; j < m.face_counts[f]; ++j) {
+      const auto c = catmark_corner(m.face_counts[f], j);
+      ids.push_back(static_cast<std::int32_t>(f));
+      uv.insert(uv.end(), {c.first, c.second});
+    }
+  std::vector<double> p(3 * ids.size());
+  s.evaluate(ids.data(), uv.data(), ids.size(), p.data(), nullptr, nullptr, nullptr);
+  for (const auto* t : {&t0, &t1, &t2})
+    for (std::size_t i = 0; i < ids.size(); ++i)
+      for (int c = 0; c < 3; ++c)
+        EXPECT_NEAR(p[3 * i + c], t->vertices[3 * static_cast<std::size_t>(m.face_indices[i]) + c], 1e-12);
+}
+
+}  // namespace

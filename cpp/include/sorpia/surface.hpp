@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "sorpia/memory.hpp"  // available_memory_bytes, which tessellate checks
+#include "sorpia/shapes.hpp"  // PolyMesh
 #include "sorpia/subdivision.hpp"
 #include "sorpia/topology.hpp"
 
@@ -30,22 +31,6 @@ namespace sorpia {
 /// @param level           refinement level, 0..15
 std::size_t tessellation_bytes(Scheme scheme, std::size_t n_vertices, std::size_t n_faces,
                                std::size_t n_face_vertices, int level);
-
-/// A polygon mesh as flat arrays: face f has face_counts[f] vertices, listed
-/// in `faces` after those of the faces before it (OpenSubdiv's
-/// TopologyDescriptor form). When every face has the same size k, face_size
-/// is k and face_counts is left empty ((m, k) row-major faces).
-struct Tessellation {
-  std::vector<double> vertices;           ///< (n, 3)
-  std::vector<std::int32_t> face_counts;  ///< (m,), empty when face_size > 0
-  std::vector<std::int32_t> faces;        ///< the faces' vertex indices, concatenated
-  int face_size = 0;                      ///< k when every face has k vertices, else 0
-
-  std::size_t n_vertices() const { return vertices.size() / 3; }
-  std::size_t n_faces() const {
-    return face_size > 0 ? faces.size() / static_cast<std::size_t>(face_size) : face_counts.size();
-  }
-};
 
 /// The limit surface of one mesh topology under one subdivision scheme,
 /// boundary rule and set of sharpness tags: build once, query many.
@@ -144,7 +129,7 @@ class LimitSurface {
   /// @param level  0..15
   /// @throws ParameterError when the level is out of range or the estimated
   ///         memory (tessellation_bytes) exceeds the memory available
-  Tessellation tessellate(int level);
+  PolyMesh tessellate(int level);
 
  private:
   struct Impl;
