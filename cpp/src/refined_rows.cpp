@@ -29,7 +29,9 @@ struct FaceVertices {
   const std::int32_t* begin;
   int size;
 };
-FaceVertices face_vertices(const Topology& topology, std::size_t f) { return {topology.faces().data() + 3 * f, 3}; }
+FaceVertices face_vertices(const Topology& topology, std::size_t f) {
+  return {topology.face_indices().data() + topology.face_offset(f), topology.face_size(f)};
+}
 
 bool is_edge(const Topology& topology, std::int32_t a, std::int32_t b) {
   const auto& ring = topology.ring_neighbors();
@@ -187,6 +189,25 @@ int VertexTags::infinite_creases(std::int32_t v) const {
   return count;
 }
 
+std::vector<int> row_levels(const Topology& topology, Scheme scheme, const VertexTags& tags) {
+  const std::size_t n = topology.n_vertices();
+  std::vector<int> level(n, 0);
+  int deepest = 0;
+  for (std::size_t v = 0; v < n; ++v) {
+    if (topology.is_unreferenced(v)) continue;
+    level[v] = tags.levels(static_cast<std::int32_t>(v));
+    if (scheme == Scheme::CatmullClark && !topology.quad_ring(v)) level[v] = std::max(level[v], 1);
+    deepest = std::max(deepest, level[v]);
+  }
+  if (deepest > 0)
+    for (std::size_t v = 0; v < n; ++v) {
+      if (topology.is_unreferenced(v)) continue;
+      const bool valence_two = !topology.is_boundary(v) && topology.valence(v) == 2;  // Catmull-Clark only
+      if (valence_two || tags.dart(topology, static_cast<std::int32_t>(v))) level[v] = deepest;
+    }
+  return level;
+}
+
 VertexTags vertex_tags(const Topology& topology, const Tags& tags) {
   const std::size_t n = topology.n_vertices();
   VertexTags out;
@@ -327,47 +348,13 @@ CsrMatrix reference_limit_matrix(const Topology& topology, Scheme scheme, Bounda
   using namespace detail;
   const std::size_t n = topology.n_vertices();
   const VertexTags vt = vertex_tags(topology, tags);  // checks the creases against the topology
-  std::vector<int> to_osd(n, -1), from_osd;
-  for (std::size_t v = 0; v < n; ++v)
-    if (!topology.is_unreferenced(v)) {
-      to_osd[v] = static_cast<int>(from_osd.size());
-      from_osd.push_back(static_cast<int>(v));
-    }
-  std::vector<int> counts, indices;
-  for (std::size_t f = 0; f < topology.n_faces(); ++f) {
-    const FaceVertices fv = face_vertices(topology, f);
-    counts.push_back(fv.size);
-    for (int j = 0; j < fv.size; ++j) indices.push_back(to_osd[fv.begin[j]]);
-  }
-  std::vector<int> crease_pairs, corners, holes(tags.holes.begin(), tags.holes.end());
-  std::vector<float> crease_weights, corner_weights;
-  for (std::size_t i = 0; i < tags.n_creases(); ++i) {
-    crease_pairs.push_back(to_osd[tags.crease_vertices[2 * i]]);
-    crease_pairs.push_back(to_osd[tags.crease_vertices[2 * i + 1]]);
-    crease_weights.push_back(osd_sharpness(tags.crease_sharpness[i]));
-  }
-  for (std::size_t i = 0; i < tags.n_corners(); ++i)
-    if (to_osd[tags.corner_vertices[i]] >= 0) {
-      corners.push_back(to_osd[tags.corner_vertices[i]]);
-      corner_weights.push_back(osd_sharpness(tags.corner_sharpness[i]));
-    }
-  Far::TopologyDescriptor d;
-  d.numVertices = static_cast<int>(from_osd.size());
-  d.numFaces = static_cast<int>(counts.size());
-  d.numVertsPerFace = counts.data();
-  d.vertIndicesPerFace = indices.data();
-  d.numCreases = static_cast<int>(crease_weights.size());
-  d.creaseVertexIndexPairs = crease_pairs.data();
-  d.creaseWeights = crease_weights.data();
-  d.numCorners = static_cast<int>(corners.size());
-  d.cornerVertexIndices = corners.data();
-  d.cornerWeights = corner_weights.data();
-  d.numHoles = static_cast<int>(holes.size());
-  d.holeIndices = holes.data();
-  const auto refiner = create_refiner(d, scheme, boundary);
+  const Refiner osd = make_refiner(topology, scheme, boundary, tags);
+  const auto& refiner = osd.refiner;
+  const std::vector<std::int32_t>& to_osd = osd.to_osd;
+  const std::vector<std::int32_t>& from_osd = osd.from_osd;
 
-  int levels = 0;
-  for (std::size_t v = 0; v < n; ++v) levels = std::max(levels, vt.levels(static_cast<std::int32_t>(v)));
+  const std::vector<int> row_level = row_levels(topology, scheme, vt);
+  const int levels = row_level.empty() ? 0 : *std::max_element(row_level.begin(), row_level.end());
   std::vector<SparseRow> rows(from_osd.size()), next;
   for (std::size_t i = 0; i < rows.size(); ++i) rows[i].e.emplace_back(from_osd[i], 1.0);
   if (levels > 0) {
