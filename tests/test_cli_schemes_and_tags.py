@@ -306,3 +306,15 @@ def test_info_counts_a_quad_mesh_as_catmull_clark_sees_it(tmp_path, monkeypatch,
         # Regular under Catmull-Clark: valence 4 inside, 3 on the boundary; every vertex here is regular.
         assert info["regular_valence"] == [4, 3] and info["extraordinary_vertices"] == 0
         assert sorted(set(sides[used])) == ([4] if name == "torus.obj" else [3, 4])
+
+
+@CATMULL_CLARK
+def test_demo_with_catmull_clark_fits_its_quad_sample(tmp_path, command):
+    code, stdout, err = command("demo", "--scheme", "catmull-clark", "--out", tmp_path / "d", "--quiet")
+    assert code == 0, err
+    v, f = sorpia.read_mesh(tmp_path / "d" / "sample.obj")
+    assert f.shape[1] == 4
+    report = json.loads((tmp_path / "d" / "fit-report.json").read_text())
+    assert report["scheme"] == "catmull-clark" and report["converged"]
+    ctrl, _ = sorpia.read_mesh(tmp_path / "d" / "control.obj")
+    assert np.abs(sorpia.limit_points(ctrl, f, scheme="catmull-clark") - v).max() < 1e-9
