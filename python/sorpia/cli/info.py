@@ -66,8 +66,9 @@ def run_info(input_path, *, as_json=False, boundary=None, triangulate=False, rep
     if polygons:
         info["loop_pia"] = {"can_run": False, "notes": [],
                             "reason": "the file has faces of more than 3 vertices" + (
-                                " (the counts are of their triangulation)" if refusal else "")
-                            + "; pass --triangulate to split them, or --scheme catmull-clark"}
+                                " (the counts are of their triangulation); pass --triangulate to split them, or "
+                                "--scheme catmull-clark" if refusal else ": Loop needs triangles (--triangulate "
+                                "splits them)")}
     info["pia"] = _verdict(chosen, refusal, mesh, tags, info)
     if as_json:
         print(json.dumps(jsonable({"input": str(input_path), **info}), indent=2), file=out)
