@@ -422,3 +422,40 @@ def test_opensubdiv_shapes_fitted_surfaces_pass_through_their_vertices(name):
     ok = ~np.isin(corners, darts(f, len(v), tags.get("creases")))
     p = s.evaluate(ids, uv)
     assert np.abs(p - v[corners])[ok].max() <= 1e-9 * diagonal(v)
+
+
+def test_evaluation_on_threads_and_from_threads_gives_the_points_of_one_thread():
+    # Each point is computed alone: a large query (split over the core's
+    # threads, 64 faces a chunk), small queries of at most 64 faces (on the
+    # calling thread) and four Python threads querying one surface at once
+    # (the GIL released) give the same bits. Catmull-Clark with semi-sharp and
+    # infinitely sharp creases, so that Bfr's cache is shared by irregular
+    # patches.
+    import threading
+
+    v, f = sorpia.shapes.quad_irregular(3000, seed=5)
+    f = np.asarray(f)
+    edges = np.unique(np.sort(f[::7, :2], axis=1), axis=0)
+    sharpness = np.where(np.arange(len(edges)) % 2, np.inf, 2.5)
+    s = sorpia.LimitSurface(v, f, scheme="catmull-clark", creases=(edges, sharpness))
+    rng = np.random.default_rng(4)
+    ids = rng.integers(0, len(f), 20000)
+    uv = rng.uniform(0, 1, (20000, 2))
+    whole = s.evaluate(ids, uv, derivatives=True)
+    order = np.argsort(ids, kind="stable")
+    pieces = np.empty_like(whole[0])
+    for chunk in np.array_split(order, 400):  # about 50 points, at most 50 faces each
+        pieces[chunk] = s.evaluate(ids[chunk], uv[chunk])
+    assert np.array_equal(pieces, whole[0])
+    results = [None] * 4
+
+    def query(k):
+        results[k] = s.evaluate(ids, uv, derivatives=True)
+
+    workers = [threading.Thread(target=query, args=(k,)) for k in range(4)]
+    for w in workers:
+        w.start()
+    for w in workers:
+        w.join()
+    for r in results:
+        assert all(np.array_equal(a, b) for a, b in zip(r, whole))
