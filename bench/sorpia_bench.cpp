@@ -1,4 +1,4 @@
-// sorpia-bench: times each phase of Loop interpolation (read, topology,
+// sorpia-bench: times each phase of subdivision-surface interpolation (read, topology,
 // operator, solve, write) on mesh files and generated meshes, with the
 // streaming floor of a sweep and the peak memory. Links the C++ core only.
 //
@@ -40,6 +40,11 @@ MESH is a mesh file (.obj .off .ply .stl) or a generated mesh:
   irregular:N[:SEED] closed, about N vertices, valences 3..12
   grid:NUxNV         open patch with boundary and two one-face corners
   pole:N             disk around one vertex of valence N
+  quadtorus:NUxNV    the torus as quads, every vertex of valence 4
+  quadgrid:NUxNV     the grid as quads
+  quads:N[:SEED]     closed quad mesh, about N vertices, valences 3..12
+                     (irregular:N/6 with each triangle split into 3 quads)
+  polygons:NUxNV[:SEED]  the quad torus with triangles, pentagons, hexagons
 
 options:
   --method LIST      comma-separated: sor gs pia wpia cg hss whss, or none
@@ -52,6 +57,7 @@ options:
   --two-pass         sor/gs: E_k by a separate residual pass after each sweep
                      (the reference) instead of inside the sweep
   --boundary RULE    edge-and-corner (default) or edge-only
+  --scheme NAME      loop (default; triangles only) or catmull-clark
   --operator HOW     masks (default: limit masks from the one-ring) or
                      opensubdiv (B from Far::PrimvarRefiner::Limit, the reference)
   --topology HOW     direct (default) or openmesh (the reference build)
@@ -89,6 +95,7 @@ struct Options {
   int threads = 1;
   bool two_pass = false;
   sorpia::Boundary boundary = sorpia::Boundary::EdgeAndCorner;
+  sorpia::Scheme scheme = sorpia::Scheme::Loop;
   bool opensubdiv_operator = false;
   sorpia::TopologyBuild topology = sorpia::TopologyBuild::Direct;
   bool triangulate = false;
@@ -171,6 +178,12 @@ Options parse(int argc, char** argv) {
       } catch (const sorpia::ParameterError& e) {
         throw Usage(std::string("--boundary: ") + e.what());
       }
+    } else if (a == "--scheme") {
+      try {
+        o.scheme = sorpia::parse_scheme(value());
+      } catch (const sorpia::ParameterError& e) {
+        throw Usage(std::string("--scheme: ") + e.what());
+      }
     } else if (a == "--operator") {
       const std::string v = value();
       if (v != "masks" && v != "opensubdiv") throw Usage("--operator: masks or opensubdiv");
@@ -224,16 +237,39 @@ std::vector<int> spec_numbers(const std::string& spec, char sep, std::size_t lo,
   return out;
 }
 
-sorpia::TriMesh generate(const std::string& spec);
+// A triangle mesh (`tri`), or a polygon mesh (`poly`, when `polygons`): the
+// triangle path builds its Topology exactly as before polygons existed.
+struct BenchMesh {
+  sorpia::TriMesh tri;
+  sorpia::PolyMesh poly;
+  bool polygons = false;
+  BenchMesh(sorpia::TriMesh m) : tri(std::move(m)) {}
+  BenchMesh(sorpia::PolyMesh m) : poly(std::move(m)), polygons(true) {}
+  const std::vector<double>& vertices() const { return polygons ? poly.vertices : tri.vertices; }
+  std::size_t n_vertices() const { return vertices().size() / 3; }
+  std::size_t n_faces() const { return polygons ? poly.n_faces() : tri.n_faces(); }
+  sorpia::Topology topology(sorpia::TopologyBuild how) const {
+    if (!polygons) return sorpia::Topology(tri.faces.data(), tri.n_faces(), tri.n_vertices(), how);
+    return sorpia::Topology(poly.face_counts.data(), poly.n_faces(), poly.face_indices.data(), poly.n_vertices(), how);
+  }
+};
 
-sorpia::TriMesh load(const std::string& spec, bool triangulate, bool file_tags, sorpia::Tags& tags) {
+BenchMesh generate(const std::string& spec);
+
+// A file's triangles stay a TriMesh (the triangle path); other polygons a PolyMesh.
+BenchMesh load(const std::string& spec, bool triangulate, bool file_tags, sorpia::Tags& tags) {
   tags = sorpia::Tags{};
   if (!is_generated(spec)) {
     sorpia::MeshFile file = sorpia::read_mesh(spec, sorpia::ReadOptions{triangulate, file_tags});
-    if (!file.all_triangles())
-      throw Usage("mesh '" + spec + "' has faces of more than 3 vertices: pass --triangulate to split them");
     tags = std::move(file.tags.tags);
-    return sorpia::TriMesh{std::move(file.vertices), std::move(file.faces)};
+    if (file.all_triangles()) return sorpia::TriMesh{std::move(file.vertices), std::move(file.faces)};
+    sorpia::PolyMesh poly;
+    poly.face_counts = file.face_sizes.empty()
+                           ? std::vector<std::int32_t>(file.n_faces(), file.face_size)
+                           : std::move(file.face_sizes);
+    poly.vertices = std::move(file.vertices);
+    poly.face_indices = std::move(file.faces);
+    return poly;
   }
   try {
     return generate(spec);
@@ -242,19 +278,30 @@ sorpia::TriMesh load(const std::string& spec, bool triangulate, bool file_tags, 
   }
 }
 
-sorpia::TriMesh generate(const std::string& spec) {
+BenchMesh generate(const std::string& spec) {
   const std::string kind = spec.substr(0, spec.find(':'));
   if (kind == "icosphere") return sorpia::icosphere(spec_numbers(spec, 'x', 1, 1)[0]);
   if (kind == "pole") return sorpia::pole(spec_numbers(spec, 'x', 1, 1)[0]);
-  if (kind == "torus" || kind == "grid") {
+  if (kind == "torus" || kind == "grid" || kind == "quadtorus" || kind == "quadgrid") {
     const auto n = spec_numbers(spec, 'x', 2, 2);
+    if (kind == "quadtorus") return sorpia::quad_torus(n[0], n[1]);
+    if (kind == "quadgrid") return sorpia::quad_grid(n[0], n[1]);
     return kind == "torus" ? sorpia::torus(n[0], n[1]) : sorpia::grid(n[0], n[1]);
   }
-  if (kind == "irregular") {
+  if (kind == "irregular" || kind == "quads") {
     const auto n = spec_numbers(spec, ':', 1, 2);
-    return sorpia::irregular(n[0], n.size() > 1 ? static_cast<std::uint32_t>(n[1]) : 1u);
+    const auto seed = n.size() > 1 ? static_cast<std::uint32_t>(n[1]) : 1u;
+    if (kind == "quads") return sorpia::quad_irregular(n[0], seed);
+    return sorpia::irregular(n[0], seed);
   }
-  throw Usage("unknown generated mesh '" + kind + "' (icosphere, torus, irregular, grid, pole)");
+  if (kind == "polygons") {
+    const auto parts = split(spec.substr(spec.find(':') + 1), ':');
+    const auto n = spec_numbers(kind + ":" + parts[0], 'x', 2, 2);
+    const auto seed = parts.size() > 1 ? static_cast<std::uint32_t>(to_int(spec, parts[1], 0)) : 1u;
+    return sorpia::polygon_torus(n[0], n[1], seed);
+  }
+  throw Usage("unknown generated mesh '" + kind +
+              "' (icosphere, torus, irregular, grid, pole, quadtorus, quadgrid, quads, polygons)");
 }
 
 // Each edge of the mesh, with probability `share` (a fixed draw), appended to
@@ -375,7 +422,7 @@ MeshRun run_mesh(const Options& o, const std::string& spec) {
   for (int rep = 0; rep < o.repeat; ++rep) {
     auto t0 = Clock::now();
     sorpia::Tags tags;
-    sorpia::TriMesh mesh = load(spec, o.triangulate, o.file_tags, tags);
+    const BenchMesh mesh = load(spec, o.triangulate, o.file_tags, tags);
     run.read.push_back(seconds_since(t0));
     run.n_vertices = mesh.n_vertices();
     run.n_faces = mesh.n_faces();
@@ -383,7 +430,7 @@ MeshRun run_mesh(const Options& o, const std::string& spec) {
     const long input_kb = status_kb("VmRSS");
 
     t0 = Clock::now();
-    const sorpia::Topology topology(mesh.faces.data(), mesh.n_faces(), mesh.n_vertices(), o.topology);
+    const sorpia::Topology topology = mesh.topology(o.topology);
     run.topology.push_back(seconds_since(t0));
 
     add_random_creases(topology, o.crease_share, o.crease_sharpness, tags);
@@ -391,10 +438,10 @@ MeshRun run_mesh(const Options& o, const std::string& spec) {
     t0 = Clock::now();
     const sorpia::LimitOperator op =
         o.opensubdiv_operator
-            ? sorpia::limit_operator(tags.empty() ? sorpia::reference_limit_matrix(topology, o.boundary)
-                                                  : sorpia::reference_limit_matrix(topology, sorpia::Scheme::Loop,
-                                                                                   o.boundary, tags))
-            : sorpia::limit_operator(topology, o.boundary, tags);
+            ? sorpia::limit_operator(tags.empty() && o.scheme == sorpia::Scheme::Loop
+                                         ? sorpia::reference_limit_matrix(topology, o.boundary)
+                                         : sorpia::reference_limit_matrix(topology, o.scheme, o.boundary, tags))
+            : sorpia::limit_operator(topology, o.scheme, o.boundary, tags);
     run.op.push_back(seconds_since(t0));
 
     for (auto& mr : run.methods) {
@@ -410,7 +457,7 @@ MeshRun run_mesh(const Options& o, const std::string& spec) {
         so.omega = o.omega;
       }
       t0 = Clock::now();
-      const sorpia::SolveResult res = sorpia::solve(op, mesh.vertices.data(), so);
+      const sorpia::SolveResult res = sorpia::solve(op, mesh.vertices().data(), so);
       const double wall = seconds_since(t0);
       mr.solve.push_back(wall - res.estimate_seconds);
       mr.estimate.push_back(res.estimate_seconds);
@@ -422,15 +469,19 @@ MeshRun run_mesh(const Options& o, const std::string& spec) {
       mr.reordered = res.reordered;
       if (!o.write_dir.empty()) {
         t0 = Clock::now();
-        sorpia::write_mesh(output_path(o, run.label, mr.method), res.control_vertices.data(), mesh.n_vertices(),
-                           mesh.faces.data(), mesh.n_faces(), o.format == "ply");
+        const sorpia::MeshView view =
+            mesh.polygons ? sorpia::MeshView{res.control_vertices.data(), mesh.n_vertices(), mesh.poly.face_indices.data(),
+                                             mesh.n_faces(), mesh.poly.face_counts.data(), 0}
+                          : sorpia::MeshView{res.control_vertices.data(), mesh.n_vertices(), mesh.tri.faces.data(),
+                                             mesh.n_faces(), nullptr, 3};
+        sorpia::write_mesh(output_path(o, run.label, mr.method), view, o.format == "ply");
         mr.write.push_back(seconds_since(t0));
       }
     }
     if (rep == 0) {
       run.peak_kb = status_kb("VmHWM");
       run.input_kb = input_kb;
-      if (!run.methods.empty()) run.floor = streaming_floor(op, mesh.vertices.data());
+      if (!run.methods.empty()) run.floor = streaming_floor(op, mesh.vertices().data());
     }
   }
   return run;
@@ -474,9 +525,10 @@ std::string cpu_model() {
 void print_json(const Options& o, const std::vector<MeshRun>& runs) {
   std::printf("{\n  \"machine\": {\"cpu\": %s, \"hardware_threads\": %u},\n", json_str(cpu_model()).c_str(),
               std::thread::hardware_concurrency());
-  std::printf("  \"options\": {\"tol\": %s, \"max_iter\": %d, \"boundary\": %s, \"operator\": %s, \"topology\": %s, "
-              "\"threads\": %d, \"two_pass\": %s, \"repeat\": %d},\n",
-              num(o.tol).c_str(), o.max_iter, json_str(sorpia::boundary_name(o.boundary)).c_str(),
+  std::printf("  \"options\": {\"tol\": %s, \"max_iter\": %d, \"scheme\": %s, \"boundary\": %s, \"operator\": %s, "
+              "\"topology\": %s, \"threads\": %d, \"two_pass\": %s, \"repeat\": %d},\n",
+              num(o.tol).c_str(), o.max_iter, json_str(sorpia::scheme_name(o.scheme)).c_str(),
+              json_str(sorpia::boundary_name(o.boundary)).c_str(),
               json_str(o.opensubdiv_operator ? "opensubdiv" : "masks").c_str(),
               json_str(o.topology == sorpia::TopologyBuild::OpenMesh ? "openmesh" : "direct").c_str(), o.threads,
               o.two_pass ? "true" : "false", o.repeat);
@@ -507,10 +559,10 @@ void print_json(const Options& o, const std::vector<MeshRun>& runs) {
 }
 
 void print_table(const Options& o, const std::vector<MeshRun>& runs) {
-  std::printf("sorpia-bench: %s, %u hardware threads; sor/gs on %d thread%s%s; tol %g; %s; operator %s; "
+  std::printf("sorpia-bench: %s, %u hardware threads; sor/gs on %d thread%s%s; tol %g; %s; %s; operator %s; "
               "topology %s; medians of %d\n",
               cpu_model().c_str(), std::thread::hardware_concurrency(), o.threads, o.threads > 1 ? "s" : "",
-              o.two_pass ? " (two-pass E_k)" : "", o.tol, sorpia::boundary_name(o.boundary),
+              o.two_pass ? " (two-pass E_k)" : "", o.tol, sorpia::scheme_name(o.scheme), sorpia::boundary_name(o.boundary),
               o.opensubdiv_operator ? "opensubdiv" : "masks",
               o.topology == sorpia::TopologyBuild::OpenMesh ? "openmesh" : "direct", o.repeat);
   std::printf("%-22s %9s %7s %8s %8s %-6s %7s %8s %6s %9s %8s %9s %8s %8s\n", "mesh", "vertices", "read", "topology",

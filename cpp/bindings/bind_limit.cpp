@@ -98,18 +98,31 @@ void bind_limit(py::module_& m) {
         return out;
       });
 
+  // B as CSR arrays (data, indices, indptr), built by `build` with the GIL released.
+  const auto csr_of = [](auto build) {
+    sorpia::CsrMatrix mat;
+    {
+      py::gil_scoped_release release;
+      mat = build();
+    }
+    return csr_tuple(std::move(mat));
+  };
   m.def(
       "limit_matrix",
-      [](const sorpia::Topology& topology, sorpia::Boundary b, const sorpia::Tags& tags, sorpia::Scheme scheme) {
-        sorpia::CsrMatrix mat;
-        {
-          py::gil_scoped_release release;
-          mat = sorpia::to_csr(sorpia::limit_operator(topology, scheme, b, tags));
-        }
-        return csr_tuple(std::move(mat));
+      [csr_of](const sorpia::Topology& topology, sorpia::Boundary b, const sorpia::Tags& tags, sorpia::Scheme scheme) {
+        return csr_of([&] { return sorpia::limit_matrix(topology, scheme, b, tags); });
       },
       "topology"_a, "boundary"_a, "tags"_a = sorpia::Tags{}, "scheme"_a = sorpia::Scheme::Loop,
       "Limit matrix B as CSR arrays (data, indices, indptr).");
+  m.def(
+      "reference_limit_matrix",
+      [csr_of](const sorpia::Topology& topology, sorpia::Scheme scheme, sorpia::Boundary b, const sorpia::Tags& tags) {
+        return csr_of([&] { return sorpia::reference_limit_matrix(topology, scheme, b, tags); });
+      },
+      "topology"_a, "scheme"_a, "boundary"_a, "tags"_a,
+      "For tests: B from OpenSubdiv's refinement of the whole mesh until every semi-sharp tag has decayed (and, "
+      "for Catmull-Clark with a non-quad face, at least once) and Limit() on the last level "
+      "(sorpia::reference_limit_matrix), as CSR arrays.");
 
   m.def(
       "limit_points",
@@ -122,26 +135,12 @@ void bind_limit(py::module_& m) {
         const double* src = vertices.data();
         {
           py::gil_scoped_release release;
-          sorpia::apply(sorpia::limit_operator(topology, scheme, b, tags), src, dst);
+          sorpia::limit_points(topology, src, scheme, b, tags, dst);
         }
         return out;
       },
-      "topology"_a, "vertices"_a.noconvert(), "boundary"_a, "tags"_a = sorpia::Tags{}, "scheme"_a = sorpia::Scheme::Loop,
-      "Limit positions B V, (n, 3).");
-
-  m.def(
-      "reference_limit_matrix",
-      [](const sorpia::Topology& topology, sorpia::Scheme scheme, sorpia::Boundary b, const sorpia::Tags& tags) {
-        sorpia::CsrMatrix mat;
-        {
-          py::gil_scoped_release release;
-          mat = sorpia::reference_limit_matrix(topology, scheme, b, tags);
-        }
-        return csr_tuple(std::move(mat));
-      },
-      "topology"_a, "scheme"_a, "boundary"_a, "tags"_a,
-      "For tests: B from OpenSubdiv's refinement of the whole mesh until every semi-sharp tag has decayed and "
-      "Limit() on the last level (sorpia::reference_limit_matrix), as CSR arrays.");
+      "topology"_a, "vertices"_a.noconvert(), "boundary"_a, "tags"_a = sorpia::Tags{},
+      "scheme"_a = sorpia::Scheme::Loop, "Limit positions B V, (n, 3).");
 
   m.def("icosphere", [](int level) { return mesh_tuple(sorpia::icosphere(level)); }, "level"_a);
   m.def("torus", [](int nu, int nv) { return mesh_tuple(sorpia::torus(nu, nv)); }, "nu"_a, "nv"_a);

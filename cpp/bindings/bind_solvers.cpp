@@ -287,6 +287,9 @@ void bind_solvers(py::module_& m) {
       .def("limit_matrix", [](const OperatorState& s) { return csr_tuple(sorpia::to_csr(s.op)); },
            "B as CSR arrays (data, indices, indptr).")
       .def_property_readonly("symmetrisable", [](const OperatorState& s) { return sorpia::is_symmetrisable(s.op); })
+      .def_property_readonly(
+          "symmetriser", [](const OperatorState& s) { return to_numpy(sorpia::symmetriser(s.op), 0); },
+          "Gamma^-1 with Gamma^-1 B symmetric on its two-way entries (sorpia::symmetriser), or empty.")
       .def(
           "apply",
           [](const OperatorState& s, const Vertices& x) {

@@ -72,6 +72,10 @@ Refiner make_refiner(const Topology& topology, Scheme scheme, Boundary boundary,
   const std::vector<float> corner_weights = sharpness(tags.corner_sharpness);
   const std::vector<int> holes(tags.holes.begin(), tags.holes.end());
 
+  if (scheme == Scheme::Loop) {
+    const std::string not_triangles = loop_needs_triangles(topology);
+    if (!not_triangles.empty()) throw MeshError(not_triangles);
+  }
   Far::TopologyDescriptor desc;
   desc.numVertices = static_cast<int>(out.from_osd.size());
   desc.numFaces = static_cast<int>(topology.n_faces());
@@ -177,7 +181,6 @@ struct RowRecorders {
   RowRecorder operator[](int i) const { return RowRecorder{builder, (*from_osd)[i]}; }
 };
 
-
 }  // namespace
 
 CsrMatrix reference_limit_matrix(const Topology& topology, Boundary boundary) {
@@ -203,17 +206,26 @@ void reference_limit_points(const Topology& topology, const double* vertices, Bo
   detail::limit_positions(osd, points, vertices, topology.n_vertices(), out);
 }
 
+CsrMatrix limit_matrix(const Topology& topology, Scheme scheme, Boundary boundary, const Tags& tags) {
+  return to_csr(limit_operator(topology, scheme, boundary, tags));
+}
+
 CsrMatrix limit_matrix(const Topology& topology, Boundary boundary, const Tags& tags) {
-  return to_csr(limit_operator(topology, boundary, tags));
+  return limit_matrix(topology, Scheme::Loop, boundary, tags);
+}
+
+void limit_points(const Topology& topology, const double* vertices, Scheme scheme, Boundary boundary,
+                  const Tags& tags, double* out) {
+  apply(limit_operator(topology, scheme, boundary, tags), vertices, out);
 }
 
 void limit_points(const Topology& topology, const double* vertices, Boundary boundary, double* out) {
-  apply(limit_operator(topology, boundary), vertices, out);
+  limit_points(topology, vertices, Scheme::Loop, boundary, Tags{}, out);
 }
 
 void limit_points(const Topology& topology, const double* vertices, Boundary boundary, const Tags& tags,
                   double* out) {
-  apply(limit_operator(topology, boundary, tags), vertices, out);
+  limit_points(topology, vertices, Scheme::Loop, boundary, tags, out);
 }
 
 }  // namespace sorpia

@@ -1,5 +1,6 @@
 #include "sorpia/limit_masks.hpp"
 
+#include <opensubdiv/sdc/catmarkScheme.h>
 #include <opensubdiv/sdc/loopScheme.h>
 
 #include <algorithm>
@@ -32,8 +33,9 @@ struct Neighbourhood {
 };
 struct Mask {
   typedef double Weight;
-  std::array<double, 2> v{}, f{};
+  std::array<double, 2> v{};
   double* e;
+  double* f;
   int nv = 0, ne = 0, nf = 0;
   void SetNumVertexWeights(int c) { nv = c; }
   void SetNumEdgeWeights(int c) { ne = c; }
@@ -47,16 +49,28 @@ struct Mask {
   void SetFaceWeightsForFaceCenters(bool) {}
 };
 
-LimitMask sdc_limit_mask(int n_edges, int n_faces, Sdc::Crease::Rule rule) {
-  std::vector<double> edge_weights(std::max(n_edges, 1));
+// The limit mask of a vertex of n_edges edges and n_faces faces under `rule`,
+// from Sdc::Scheme<kScheme>: (vertex weight, first edge weight, first face
+// weight). Smooth masks weight all edges alike and all faces alike; crease
+// masks only the crease ends (edges 0 and 1 here).
+template <Sdc::SchemeType kScheme>
+CatmarkMask sdc_limit_mask(int n_edges, int n_faces, Sdc::Crease::Rule rule) {
+  std::vector<double> edge_weights(std::max(n_edges, 1)), face_weights(std::max(n_faces, 1));
   Mask mask;
   mask.e = edge_weights.data();
+  mask.f = face_weights.data();
   const Neighbourhood hood{n_edges, n_faces, rule == Sdc::Crease::RULE_CREASE};
-  Sdc::Scheme<Sdc::SCHEME_LOOP>().ComputeVertexLimitMask(hood, mask, rule);
+  Sdc::Scheme<kScheme>().ComputeVertexLimitMask(hood, mask, rule);
+  if (mask.nv != 1) throw std::logic_error("sorpia: unexpected limit mask shape");
+  return CatmarkMask{mask.v[0], mask.ne ? edge_weights[0] : 0.0, mask.nf ? face_weights[0] : 0.0};
+}
+
+LimitMask sdc_limit_mask(int n_edges, int n_faces, Sdc::Crease::Rule rule) {
+  const CatmarkMask m = sdc_limit_mask<Sdc::SCHEME_LOOP>(n_edges, n_faces, rule);
   // Loop limit masks have no face weights and one edge weight for every mask
   // vertex (zero for the interior edges of a crease).
-  if (mask.nf != 0 || mask.nv != 1) throw std::logic_error("sorpia: unexpected Loop limit mask shape");
-  return LimitMask{mask.v[0], mask.ne ? edge_weights[0] : 0.0};
+  if (m.face != 0.0) throw std::logic_error("sorpia: unexpected Loop limit mask shape");
+  return LimitMask{m.diag, m.edge};
 }
 
 constexpr int kTabulated = 64;  // valences up to this are looked up
@@ -70,7 +84,29 @@ const std::array<LimitMask, kTabulated + 1>& smooth_table() {
   return table;
 }
 
+const std::array<CatmarkMask, kTabulated + 1>& catmark_table() {
+  static const std::array<CatmarkMask, kTabulated + 1> table = [] {
+    std::array<CatmarkMask, kTabulated + 1> t{};
+    for (int n = 2; n <= kTabulated; ++n)
+      t[n] = sdc_limit_mask<Sdc::SCHEME_CATMARK>(n, n, Sdc::Crease::RULE_SMOOTH);
+    return t;
+  }();
+  return table;
+}
+
 }  // namespace
+
+CatmarkMask catmark_smooth_limit_mask(int valence) {
+  if (valence < 2)
+    throw ParameterError("an interior vertex has valence at least 2, got " + std::to_string(valence));
+  if (valence <= kTabulated) return catmark_table()[valence];
+  return sdc_limit_mask<Sdc::SCHEME_CATMARK>(valence, valence, Sdc::Crease::RULE_SMOOTH);
+}
+
+CatmarkMask catmark_crease_limit_mask() {
+  static const CatmarkMask mask = sdc_limit_mask<Sdc::SCHEME_CATMARK>(2, 1, Sdc::Crease::RULE_CREASE);
+  return mask;
+}
 
 LimitMask smooth_limit_mask(int valence) {
   if (valence < 3) throw ParameterError("an interior vertex has valence at least 3, got " + std::to_string(valence));

@@ -3,11 +3,13 @@
 #include "sorpia/limit_operator.hpp"
 
 #include <algorithm>
-#include <numeric>
+#include <cmath>
 #include <stdexcept>
 #include <string>
 
+#include "catmark_rows.hpp"
 #include "refined_rows.hpp"
+#include "sorpia/errors.hpp"
 #include "solver_detail.hpp"
 #include "sorpia/limit_masks.hpp"
 
@@ -119,12 +121,60 @@ CsrMatrix replace_rows(const CsrMatrix& b, const std::vector<std::int32_t>& vert
 
 }  // namespace
 
+std::string loop_needs_triangles(const Topology& topology) {
+  std::size_t f = 0;
+  while (f < topology.n_faces() && topology.face_size(f) == 3) ++f;
+  if (f == topology.n_faces()) return {};
+  return "face " + std::to_string(f) + " has " + std::to_string(topology.face_size(f)) +
+         " vertices: Loop subdivision needs triangles; triangulate the mesh or use the Catmull-Clark scheme";
+}
+
+namespace {
+
+// Catmull-Clark: the masks' operator (detail::catmark_limit_operator) with the
+// rows whose level (detail::row_levels) the masks do not give replaced by
+// OpenSubdiv's refinement around their vertex (refined_rows.hpp): vertices a
+// tag touches (a crease edge or a corner at them), darts, and interior
+// vertices of two faces (their Sdc limit mask, the corner rule, is not the
+// limit of their refinement, so they are taken at the mesh's deepest level).
+LimitOperator catmark_operator(const Topology& topology, Boundary boundary, const Tags& tags) {
+  LimitOperator op = detail::catmark_limit_operator(topology, boundary);
+  const std::size_t n = topology.n_vertices();
+  const auto valence_two = [&](std::size_t v) {
+    return !topology.is_unreferenced(v) && !topology.is_boundary(v) && topology.valence(v) == 2;
+  };
+  bool any_valence_two = false;
+  for (std::size_t v = 0; v < n && !any_valence_two; ++v) any_valence_two = valence_two(v);
+  if (tags.empty() && !any_valence_two) return op;
+  const detail::VertexTags vt = detail::vertex_tags(topology, tags);
+  const std::vector<int> level = detail::row_levels(topology, Scheme::CatmullClark, vt);
+  std::vector<std::int32_t> refined;
+  std::vector<int> refined_levels;
+  for (std::size_t v = 0; v < n; ++v) {
+    const auto i = static_cast<std::int32_t>(v);
+    if (topology.is_unreferenced(v)) continue;
+    const bool tagged = vt.crease_offsets[v + 1] > vt.crease_offsets[v] || vt.corner[v] > 0.0f;
+    if (tagged || valence_two(v) || vt.dart(topology, i)) {
+      refined.push_back(i);
+      refined_levels.push_back(level[v]);
+    }
+  }
+  if (refined.empty()) return op;
+  return limit_operator(replace_rows(
+      to_csr(op), refined,
+      detail::refined_limit_rows(topology, Scheme::CatmullClark, boundary, vt, refined, refined_levels)));
+}
+
+}  // namespace
+
 LimitOperator limit_operator(const Topology& topology, Boundary boundary) {
-  return uniform_operator(topology, [&](std::size_t v) { return untagged_row(topology, v, boundary); });
+  return limit_operator(topology, boundary, Tags{});
 }
 
 LimitOperator limit_operator(const Topology& topology, Boundary boundary, const Tags& tags) {
-  if (tags.empty()) return limit_operator(topology, boundary);
+  if (!topology.all_triangles()) throw MeshError(loop_needs_triangles(topology));
+  if (tags.empty())
+    return uniform_operator(topology, [&](std::size_t v) { return untagged_row(topology, v, boundary); });
   const detail::VertexTags vt = detail::vertex_tags(topology, tags);
   // Rows with a semi-sharp tag, and darts when the mesh has one, come from
   // OpenSubdiv's refinement (refined_rows.hpp); every other row is the same
@@ -145,13 +195,8 @@ LimitOperator limit_operator(const Topology& topology, Boundary boundary, const 
 }
 
 LimitOperator limit_operator(const Topology& topology, Scheme scheme, Boundary boundary, const Tags& tags) {
-  if (scheme == Scheme::Loop) return limit_operator(topology, boundary, tags);
-  // Catmull-Clark: every row from OpenSubdiv's refinement around its vertex.
-  const detail::VertexTags vt = detail::vertex_tags(topology, tags);
-  std::vector<std::int32_t> all(topology.n_vertices());
-  std::iota(all.begin(), all.end(), 0);
-  return limit_operator(detail::refined_limit_rows(topology, scheme, boundary, vt, all,
-                                                   detail::row_levels(topology, scheme, vt)));
+  if (scheme == Scheme::CatmullClark) return catmark_operator(topology, boundary, tags);
+  return limit_operator(topology, boundary, tags);
 }
 
 LimitOperator limit_operator(const CsrMatrix& b) {
@@ -220,18 +265,52 @@ CsrMatrix to_csr(const LimitOperator& op) {
 
 void apply(const LimitOperator& op, const double* x, double* y) { detail::apply_cols<3>(op, x, y); }
 
-bool is_symmetrisable(const LimitOperator& op) {
-  if (!op.uniform()) return false;
-  // (i, j) stored => (j, i) stored. Rows are short (valence), so a linear scan
-  // of row j is cheaper than sorting.
-  for (std::size_t i = 0; i < op.n; ++i)
-    for (std::int32_t p = op.offsets[i]; p < op.offsets[i + 1]; ++p) {
-      const std::int32_t j = op.neighbors[p];
-      const auto* first = op.neighbors.data() + op.offsets[j];
-      const auto* last = op.neighbors.data() + op.offsets[j + 1];
-      if (std::find(first, last, static_cast<std::int32_t>(i)) == last) return false;
+namespace {
+// Where row j stores column i, or -1. Rows are short (valence), so a linear
+// scan of row j is cheaper than sorting.
+std::int32_t mirror(const LimitOperator& op, std::int32_t i, std::int32_t j) {
+  const auto* first = op.neighbors.data() + op.offsets[j];
+  const auto* last = op.neighbors.data() + op.offsets[j + 1];
+  const auto* at = std::find(first, last, i);
+  return at == last ? -1 : static_cast<std::int32_t>(at - op.neighbors.data());
+}
+}  // namespace
+
+std::vector<double> symmetriser(const LimitOperator& op) {
+  std::vector<double> d(op.n, 0.0);
+  if (op.uniform()) {
+    for (std::size_t i = 0; i < op.n; ++i) d[i] = op.weight[i] > 0.0 ? 1.0 / op.weight[i] : 1.0;
+    return d;
+  }
+  std::vector<std::int32_t> queue;
+  for (std::size_t s = 0; s < op.n; ++s) {
+    if (d[s] != 0.0) continue;
+    d[s] = op.offsets[s + 1] > op.offsets[s] ? 1.0 / op.values[op.offsets[s]] : 1.0;
+    queue.assign(1, static_cast<std::int32_t>(s));
+    for (std::size_t q = 0; q < queue.size(); ++q) {
+      const std::int32_t i = queue[q];
+      for (std::int32_t p = op.offsets[i]; p < op.offsets[i + 1]; ++p) {
+        const std::int32_t j = op.neighbors[p], pm = mirror(op, i, j);
+        if (pm < 0) continue;  // a one-way entry
+        const double want = d[i] * op.values[p] / op.values[pm];
+        if (d[j] == 0.0) {
+          d[j] = want;
+          queue.push_back(j);
+        } else if (std::abs(d[j] - want) > 1e-12 * d[j]) {
+          return {};
+        }
+      }
     }
-  return true;
+  }
+  return d;
+}
+
+bool is_symmetrisable(const LimitOperator& op) {
+  // (i, j) stored => (j, i) stored.
+  for (std::size_t i = 0; i < op.n; ++i)
+    for (std::int32_t p = op.offsets[i]; p < op.offsets[i + 1]; ++p)
+      if (mirror(op, static_cast<std::int32_t>(i), op.neighbors[p]) < 0) return false;
+  return op.uniform() || !symmetriser(op).empty();
 }
 
 }  // namespace sorpia

@@ -122,15 +122,15 @@ inline void apply_part(const LimitOperator& op, const Transposed& t, std::size_t
   for (std::size_t q = 0; q < k * op.n; ++q) y[q] = 0.5 * (bx[q] + sign * btx[q]);
 }
 
-// Gamma^-1 as a vector: 1 / w_i per row (1 on rows without neighbours). B =
-// Gamma Upsilon with Upsilon symmetric on closed meshes (paper section 3.2), so
-// B is self-adjoint in the inner product <x, y> = sum_i x_i y_i / w_i, and
-// Gamma^-1 B = Upsilon is the row-scaled system.
-// Rows with several weights have no such Gamma: they get 1 (the plain inner product).
+// Gamma^-1 as a vector (sorpia::symmetriser): B = Gamma Upsilon with Upsilon
+// symmetric on closed meshes (paper section 3.2), so B is self-adjoint in the
+// inner product <x, y> = sum_i x_i y_i / gamma_i, and Gamma^-1 B = Upsilon is
+// the row-scaled system. Uniform rows: 1 / w_i (1 on rows without
+// neighbours). Rows with several weights where no such Gamma exists get 1
+// (the plain inner product).
 inline std::vector<double> gamma_inverse(const LimitOperator& op) {
-  std::vector<double> g(op.n, 1.0);
-  if (!op.uniform()) return g;
-  for (std::size_t i = 0; i < op.n; ++i) g[i] = op.weight[i] > 0.0 ? 1.0 / op.weight[i] : 1.0;
+  std::vector<double> g = symmetriser(op);
+  if (g.empty()) g.assign(op.n, 1.0);
   return g;
 }
 

@@ -172,15 +172,18 @@ double power_radius(std::size_t n, ApplyA apply_a, const std::vector<double>& w,
 // diagonal block is Gamma Upsilon with Upsilon symmetric. So B's spectrum is
 // that of B with these entries dropped, which is self-adjoint in the Gamma^-1
 // inner product. Empty when is_symmetrisable(op).
-std::vector<std::pair<std::int32_t, std::int32_t>> one_way_entries(const LimitOperator& op) {
-  std::vector<std::pair<std::int32_t, std::int32_t>> e;
+struct OneWay {
+  std::int32_t row, entry, column;  // entry: the index into op.neighbors
+};
+std::vector<OneWay> one_way_entries(const LimitOperator& op) {
+  std::vector<OneWay> e;
   for (std::size_t i = 0; i < op.n; ++i)
     for (std::int32_t p = op.offsets[i]; p < op.offsets[i + 1]; ++p) {
       const std::int32_t j = op.neighbors[p];
       const auto* first = op.neighbors.data() + op.offsets[j];
       const auto* last = op.neighbors.data() + op.offsets[j + 1];
       if (std::find(first, last, static_cast<std::int32_t>(i)) == last)
-        e.emplace_back(static_cast<std::int32_t>(i), j);
+        e.push_back({static_cast<std::int32_t>(i), p, j});
     }
   return e;
 }
@@ -192,9 +195,10 @@ std::vector<std::pair<std::int32_t, std::int32_t>> one_way_entries(const LimitOp
 // order above); false where an infinitely sharp crease ends in a dart: the
 // crease vertices are read one way by their smooth neighbours, which reach
 // them back through the dart.
-bool one_way_entries_below_blocks(const LimitOperator& op,
-                                  const std::vector<std::pair<std::int32_t, std::int32_t>>& one_way) {
-  if (one_way.empty()) return true;
+bool one_way_entries_below_blocks(const LimitOperator& op, const std::vector<OneWay>& one_way_list) {
+  if (one_way_list.empty()) return true;
+  std::vector<std::pair<std::int32_t, std::int32_t>> one_way;  // (row, column)
+  for (const OneWay& e : one_way_list) one_way.emplace_back(e.row, e.column);
   detail::DisjointSets two_way(op.n);
   std::vector<std::pair<std::int32_t, std::int32_t>> sorted_one_way(one_way);
   std::sort(sorted_one_way.begin(), sorted_one_way.end());
@@ -230,14 +234,13 @@ bool one_way_entries_below_blocks(const LimitOperator& op,
   return removed == one_way.size();
 }
 
-// y = B_s x: B x without the one-way entries (B's off-diagonal weight of row
-// i is op.weight[i]).
+// y = B_s x: B x without the one-way entries.
 struct SelfAdjointPart {
   const LimitOperator& op;
-  std::vector<std::pair<std::int32_t, std::int32_t>> one_way = one_way_entries(op);
+  std::vector<OneWay> one_way = one_way_entries(op);
   void operator()(const double* x, double* y) const {
     detail::apply_cols<1>(op, x, y);
-    for (const auto& [i, j] : one_way) y[i] -= op.weight[i] * x[j];
+    for (const OneWay& e : one_way) y[e.row] -= op.entry(e.row, e.entry) * x[e.column];
   }
 };
 
@@ -261,12 +264,13 @@ double estimate_lambda_min(const LimitOperator& op, SpectralCache& cache) {
   const std::lock_guard<std::mutex> lock(cache.mutex);
   if (!std::isnan(cache.lambda_min)) return cache.lambda_min;
   Timer timer{cache};
-  if (!op.uniform() || !one_way_entries_below_blocks(op, one_way_entries(op))) {
-    // No known inner product makes rows with several weights self-adjoint,
-    // nor B when a one-way entry closes a cycle, and Lanczos needs one: the
-    // power method on I - B, whose norm ratio tends to max |1 - lambda|, so
-    // the estimate is at or below the smallest real part of B's eigenvalues
-    // (which may be complex then).
+  std::vector<double> gamma_inverse = symmetriser(op);
+  if (gamma_inverse.empty() || !one_way_entries_below_blocks(op, one_way_entries(op))) {
+    // No diagonal inner product makes these rows self-adjoint (sorpia::
+    // symmetriser), nor B when a one-way entry closes a cycle, and Lanczos
+    // needs one: the power method on I - B, whose norm ratio tends to
+    // max |1 - lambda|, so the estimate is at or below the smallest real part
+    // of B's eigenvalues (which may be complex then).
     std::vector<double> bx(op.n);
     const auto i_minus_b = [&](const double* x, double* y) {
       detail::apply_cols<1>(op, x, bx.data());
@@ -277,7 +281,7 @@ double estimate_lambda_min(const LimitOperator& op, SpectralCache& cache) {
   }
   const SelfAdjointPart b{op};
   const auto low_end = [](double lo, double) { return std::make_pair(1.0 - lo, 0.0); };
-  cache.lambda_min = lanczos_extremes(op.n, b, detail::gamma_inverse(op), 300, 1e-5, low_end).first;
+  cache.lambda_min = lanczos_extremes(op.n, b, gamma_inverse, 300, 1e-5, low_end).first;
   return cache.lambda_min;
 }
 

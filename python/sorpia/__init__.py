@@ -13,7 +13,7 @@ from .io import UnknownTagWarning, read_mesh, write_mesh
 from .sharp import sharp_edges
 from ._validate import Polygons
 from .mesh_repair import RepairResult, repair
-from .surface import LoopSurface, evaluate_limit, limit_surface
+from .surface import LimitSurface, LoopSurface, evaluate_limit, limit_surface
 from . import shapes
 
 __all__ = [
@@ -27,7 +27,7 @@ __all__ = [
     "Polygons",
     "limit_points",
     "shapes",
-    "LoopSurface", "evaluate_limit", "limit_surface", "read_mesh", "write_mesh", "UnknownTagWarning",
-    "sharp_edges",
+    "LimitSurface", "LoopSurface", "evaluate_limit", "limit_surface", "read_mesh", "write_mesh",
+    "UnknownTagWarning", "sharp_edges",
     "RepairResult", "repair",
 ]

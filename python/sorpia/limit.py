@@ -1,4 +1,4 @@
-"""The Loop limit operator: limit positions and the limit matrix B."""
+"""The limit operator of Loop and Catmull-Clark surfaces: limit positions and the limit matrix B."""
 
 from __future__ import annotations
 
@@ -62,36 +62,42 @@ TAGS_DOC = """creases : (edges (k, 2) int, sharpness (k,) float or one float), o
         there."""
 
 
-def limit_points(vertices, faces, boundary: str = DEFAULT_BOUNDARY, *, scheme: str = DEFAULT_SCHEME, creases=None,
-                 corners=None, holes=None) -> np.ndarray:
-    """Loop limit positions of the vertices of a triangle mesh (paper eq. 5-6).
+def limit_points(vertices, faces, boundary: str = DEFAULT_BOUNDARY, *, scheme: str = DEFAULT_SCHEME,
+                 creases=None, corners=None, holes=None) -> np.ndarray:
+    """Limit positions of the vertices of a mesh (paper eq. 5-6), B V.
 
     Parameters
     ----------
     vertices : array_like, (n, 3) or (n, k) float
         Control vertices, or any per-vertex data (k >= 1 columns, each
         mapped by B alike).
-    faces : array_like, (m, 3) int
-        Triangles, indices into ``vertices``, consistently oriented.
+    faces : array_like (m, k) int, list of polygons or sorpia.Polygons
+        Faces, indices into ``vertices``, consistently oriented; triangles for
+        Loop, any polygons for Catmull-Clark.
     boundary : {"edge-and-corner", "edge-only"}
         Boundary rule (OpenSubdiv's VTX_BOUNDARY_EDGE_AND_CORNER or
         VTX_BOUNDARY_EDGE_ONLY). With "edge-and-corner" (the default) a
         boundary vertex with a single face stays where it is; with "edge-only"
         it gets the boundary mask (1/6, 2/3, 1/6).
     scheme : {"loop", "catmull-clark"}
-        Loop (triangles only) or Catmull-Clark (any polygons; rows from
-        OpenSubdiv's refinement around each vertex and ``Limit()``).
+        The subdivision scheme (OpenSubdiv's SCHEME_LOOP or SCHEME_CATMARK).
     {tags}
 
     Returns
     -------
     numpy.ndarray, (n, 3) or (n, k) float64
-        B V, from OpenSubdiv's Loop limit masks (``Sdc::Scheme::ComputeVertexLimitMask``,
+        B V, from OpenSubdiv's limit masks (``Sdc::Scheme::ComputeVertexLimitMask``,
         what ``Far::PrimvarRefinerReal<double>::Limit`` applies; equal to it to 1e-15).
-        Interior vertex of valence n: alpha_n v + (1 - alpha_n)/n sum of its
-        neighbours, alpha_n = 3 / (8 - 8 (3/8 + cos(2 pi/n)/4)^2) (paper eq. 5);
-        boundary vertex: 2/3 v + 1/6 (its two boundary neighbours). Vertices no
-        face references are returned unchanged (with a warning).
+        Loop, interior vertex of valence n: alpha_n v + (1 - alpha_n)/n sum of
+        its neighbours, alpha_n = 3 / (8 - 8 (3/8 + cos(2 pi/n)/4)^2) (paper
+        eq. 5). Catmull-Clark, interior vertex of valence n whose faces are
+        quads: (n^2 v + 4 sum e_j + sum f_j) / (n (n + 5)), e_j its edge
+        neighbours, f_j the opposite corners of its quads; an interior vertex
+        of a non-quad face: its limit after one uniform refinement (OpenSubdiv
+        evaluates limits on quads only), composed back onto its faces'
+        vertices. Boundary vertex, both schemes: 2/3 v + 1/6 (its two boundary
+        neighbours). Vertices no face references are returned unchanged (with
+        a warning).
         With tags: infinitely sharp features keep this form (a vertex with
         two sharp edges gets 2/3 and 1/6 on their ends, with three or more
         or an infinitely sharp corner it keeps itself, with one it stays
@@ -122,7 +128,7 @@ limit_points.__doc__ = limit_points.__doc__.replace("{tags}", TAGS_DOC)
 
 def limit_matrix(faces, n_vertices: int, boundary: str = DEFAULT_BOUNDARY, *, scheme: str = DEFAULT_SCHEME,
                  creases=None, corners=None, holes=None) -> scipy.sparse.csr_matrix:
-    """The Loop limit matrix B (paper eq. 7) as a scipy CSR matrix, (n, n) float64.
+    """The limit matrix B (paper eq. 7) as a scipy CSR matrix, (n, n) float64.
 
     Row i holds the limit mask of vertex i as OpenSubdiv evaluates it, so that
     ``limit_matrix(F, len(V)) @ V == limit_points(V, F)``. Unreferenced vertices

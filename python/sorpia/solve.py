@@ -1,6 +1,7 @@
-"""Loop surface interpolation: solve B V = V0 with SOR-PIA and the PIA family.
+"""Subdivision surface interpolation: solve B V = V0 with SOR-PIA and the PIA family.
 
-B is the Loop limit matrix (paper eq. 7, as OpenSubdiv evaluates it), V0 the
+B is the limit matrix of the Loop or Catmull-Clark surface (paper eq. 7, as
+OpenSubdiv evaluates it; ``scheme=``), V0 the
 (n, 3) mesh vertices, V the control vertices whose limit surface passes through
 V0. Every method starts from V = V0 (or a warm start, ``initial=``) and stops
 by the paper's rule (section 5): E_k = max_i ||v_i^0 - (B V^(k))_i||, stop when
@@ -20,6 +21,10 @@ Methods (the iteration itself runs in the C++ core):
   Gamma^-1 inner product, where B = Gamma Upsilon is self-adjoint (with a
   boundary, on B without its one-way entries, which has B's eigenvalues), at
   most 300 scalar products with B; the estimate is at or above the true value.
+  Catmull-Clark rows of quad rings have such a Gamma (Gamma_ii proportional to
+  1 / (n_i (n_i + 5))), and so do the rows refined around non-quad faces on
+  every mesh tried (sorpia::symmetriser finds it or says there is none);
+  without one, lambda_min comes from the power method on I - B.
 - ``"gs"``: Gauss-Seidel, the SOR-PIA sweep with omega = 1.
 - ``"sor"``: SOR-PIA (paper eq. 18), vertices in input order:
   d_i = (v_i^0 - v_i^inf) / alpha_i with the neighbours already updated in
@@ -33,10 +38,14 @@ Methods (the iteration itself runs in the C++ core):
 - ``"cg"``: on closed meshes B = Gamma Upsilon (paper section 3.2) with
   Gamma = diag((1 - alpha_i)/n_i) and Upsilon symmetric positive definite:
   conjugate gradients on Upsilon V = Gamma^-1 V0, one product per iteration.
-  On meshes with boundary, rows of boundary vertices ignore interior
-  neighbours that do see them, so Upsilon is not symmetric: "cg" then runs
-  BiCGSTAB (van der Vorst 1992) on Gamma^-1 B V = Gamma^-1 V0 (two products
-  per iteration); ``result.variant`` says which ran.
+  Catmull-Clark on a closed quad mesh: Gamma = diag(1 / (n_i (n_i + 5))),
+  Upsilon with n_i^2 on the diagonal, 4 on edges and 1 across quads (closed
+  meshes with other polygons: the Gamma sorpia::symmetriser finds). On
+  meshes with boundary, rows of boundary vertices ignore interior neighbours
+  that do see them, so Upsilon is not symmetric (nor where no diagonal Gamma
+  symmetrises the rows): "cg" then runs BiCGSTAB (van der Vorst 1992) on
+  Gamma^-1 B V = Gamma^-1 V0 (two products per iteration); ``result.variant``
+  says which ran.
 - ``"hss"``: Bai, Golub and Ng (2003) on B V = V0, H = (B + B^T)/2,
   S = (B - B^T)/2::
 
@@ -148,8 +157,9 @@ class Interpolator:
 
     Parameters
     ----------
-    faces : array_like, (m, 3) int
-        Triangles, consistently oriented, manifold.
+    faces : array_like (m, k) int, list of polygons or sorpia.Polygons
+        Faces, consistently oriented, manifold: triangles for Loop, any
+        polygons for Catmull-Clark.
     n_vertices : int
         Number of vertices, an int or numpy integer >= 0 checked as
         `sorpia.limit_matrix` checks it (a float, even 12.0, or a bool raises
@@ -159,7 +169,7 @@ class Interpolator:
     boundary : {"edge-and-corner", "edge-only"}
         Boundary rule, see sorpia.limit_points.
     scheme : {"loop", "catmull-clark"}
-        Loop (triangles) or Catmull-Clark (any polygons).
+        The subdivision scheme whose limit surface interpolates, see sorpia.limit_points.
     {tags}
 
     The spectral estimates a method needs (lambda_min for "wpia", rho for
@@ -172,28 +182,29 @@ class Interpolator:
 
     def __init__(self, faces, n_vertices: int, boundary: str = DEFAULT_BOUNDARY, *, scheme: str = DEFAULT_SCHEME,
                  creases=None, corners=None, holes=None):
-        self._build(faces, n_vertices, boundary, "n_vertices", scheme, (creases, corners, holes))
+        self._build(faces, n_vertices, boundary, scheme, "n_vertices", (creases, corners, holes))
 
     @classmethod
     def _for_vertices(cls, faces, n_vertices: int, boundary: str, scheme: str, tags: tuple) -> Interpolator:
-        """As Interpolator(faces, n_vertices, boundary, creases=, corners=, holes=),
-        for interpolate(): its messages call the count len(vertices), the rows
-        of the caller's array."""
+        """As Interpolator(faces, n_vertices, boundary, scheme=, creases=, corners=,
+        holes=), for interpolate(): its messages call the count len(vertices),
+        the rows of the caller's array."""
         self = cls.__new__(cls)
-        self._build(faces, n_vertices, boundary, "len(vertices)", scheme, tags)
+        self._build(faces, n_vertices, boundary, scheme, "len(vertices)", tags)
         return self
 
-    def _build(self, faces, n_vertices, boundary, count_name: str, scheme: str, tags: tuple) -> None:
+    def _build(self, faces, n_vertices, boundary, scheme, count_name: str, tags: tuple) -> None:
         t0 = time.perf_counter()
         self._boundary = as_boundary(boundary)
         self.boundary = _core.boundary_name(self._boundary)
+        self._scheme = as_scheme(scheme)
+        self.scheme = _core.scheme_name(self._scheme)
         # validates n_vertices as limit_matrix does (as_vertex_count: no float, bool or negative count)
-        self.scheme = _core.scheme_name(as_scheme(scheme))
-        self.topology = _topology(faces, n_vertices, scheme=scheme, count_name=count_name)
+        self.topology = _topology(faces, n_vertices, scheme=self.scheme, count_name=count_name)
         self.n_vertices = self.topology.n_vertices
         self.tags = _tags(self.topology, *tags)
         t1 = time.perf_counter()
-        self._operator = _core.LimitOperator(self.topology, self._boundary, self.tags, as_scheme(scheme))
+        self._operator = _core.LimitOperator(self.topology, self._boundary, self.tags, self._scheme)
         t2 = time.perf_counter()
         self.build_timings = {"topology": t1 - t0, "operator": t2 - t1}
         self._last_update = None  # weak reference to the result the last update returned
@@ -409,14 +420,16 @@ def interpolate(vertices, faces, method: str = "sor", omega="auto", tol: float =
                 boundary: str = DEFAULT_BOUNDARY, callback: Optional[Callable[[int, float], object]] = None, *,
                 sigma=None, alpha=None, weight=None, threads: int = 1, scheme: str = DEFAULT_SCHEME, creases=None,
                 corners=None, holes=None, initial=None) -> InterpolationResult:
-    """Control vertices whose Loop limit surface interpolates ``vertices``.
+    """Control vertices whose limit surface (Loop, or Catmull-Clark with
+    ``scheme="catmull-clark"``) interpolates ``vertices``.
 
     ``vertices`` may be (n, k) data for any k >= 1 (every column interpolated);
     `initial` is a warm start, see `Interpolator.solve`.
 
-    One call of ``Interpolator(faces, len(vertices), boundary, creases=,
-    corners=, holes=).solve(...)``; see `Interpolator` for the tags,
-    `Interpolator.solve` for the other parameters and the module docstring for
+    One call of ``Interpolator(faces, len(vertices), boundary, scheme=,
+    creases=, corners=, holes=).solve(...)``; see `Interpolator` for the
+    scheme and the tags, `Interpolator.solve` for the other parameters and the
+    module docstring for
     the methods and their formulas. `seconds` and `timings` include building
     the topology and B.
 

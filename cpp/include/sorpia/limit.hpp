@@ -1,11 +1,13 @@
 #pragma once
 /// @file limit.hpp
-/// The Loop limit operator B (paper eq. 6-7) as OpenSubdiv defines it.
+/// The limit operator B (paper eq. 6-7) as OpenSubdiv defines it, for Loop
+/// and Catmull-Clark.
 
 #include <cstddef>
 #include <cstdint>
 #include <vector>
 
+#include "sorpia/subdivision.hpp"
 #include "sorpia/topology.hpp"
 
 namespace sorpia {
@@ -20,25 +22,32 @@ struct CsrMatrix {
   std::vector<double> data;
 };
 
-/// The Loop limit matrix B: row i holds the limit mask of vertex i, so that
+/// The limit matrix B: row i holds the limit mask of vertex i, so that
 /// B V gives the limit positions of the control vertices V.
-/// to_csr(limit_operator(topology, boundary)) (limit_operator.hpp): OpenSubdiv's
-/// limit masks; unreferenced vertices get an identity row.
-/// With `tags`, to_csr(limit_operator(topology, boundary, tags)).
+/// to_csr(limit_operator(topology, scheme, boundary, tags)) (limit_operator.hpp):
+/// OpenSubdiv's limit masks; unreferenced vertices get an identity row.
 /// @param topology  the mesh connectivity
+/// @param scheme    Loop (triangles only) or Catmull-Clark
 /// @param boundary  boundary interpolation rule
 /// @param tags      OpenSubdiv's sharpness tags (creases, corners, holes)
 /// @return B, (n_vertices, n_vertices), columns sorted within a row
+CsrMatrix limit_matrix(const Topology& topology, Scheme scheme, Boundary boundary, const Tags& tags = Tags{});
+/// Loop: limit_matrix(topology, Scheme::Loop, boundary, tags).
 CsrMatrix limit_matrix(const Topology& topology, Boundary boundary, const Tags& tags = Tags{});
 
-/// Loop limit positions of the vertices, B V: apply(limit_operator(topology,
-/// boundary), ...); unreferenced vertices are their own limit.
+/// Limit positions of the vertices, B V: apply(limit_operator(topology,
+/// scheme, boundary, tags), ...); unreferenced vertices are their own limit.
 /// @param topology  the mesh connectivity
 /// @param vertices  row-major (n_vertices, 3) control vertices
+/// @param scheme    Loop (triangles only) or Catmull-Clark
 /// @param boundary  boundary interpolation rule
+/// @param tags      OpenSubdiv's sharpness tags
 /// @param out       row-major (n_vertices, 3) limit positions (written)
+void limit_points(const Topology& topology, const double* vertices, Scheme scheme, Boundary boundary,
+                  const Tags& tags, double* out);
+/// Loop without tags.
 void limit_points(const Topology& topology, const double* vertices, Boundary boundary, double* out);
-/// As above with OpenSubdiv's sharpness tags (limit_operator.hpp).
+/// Loop with OpenSubdiv's sharpness tags.
 void limit_points(const Topology& topology, const double* vertices, Boundary boundary, const Tags& tags,
                   double* out);
 
@@ -54,14 +63,16 @@ CsrMatrix reference_limit_matrix(const Topology& topology, Boundary boundary);
 /// one Far::TopologyRefiner of the whole mesh refined uniformly until every
 /// semi-sharp tag has decayed (ceil of the largest finite sharpness, after
 /// repeated tags are resolved as OpenSubdiv resolves them: the last counts),
+/// and for Catmull-Clark at least once when a face is not a quad (Limit() on
+/// an unrefined level would treat an n-gon as a quad),
 /// PrimvarRefinerReal<double>::Interpolate level by level and Limit() on the
 /// last level, composed back to the control vertices (identity rows for
-/// unreferenced vertices). limit_matrix(topology, boundary, tags) must equal
-/// it to rounding. Its cost grows as 4^levels.
+/// unreferenced vertices). limit_matrix(topology, boundary, scheme, tags) must
+/// equal it to rounding. Its cost grows as 4^levels.
 /// @throw MeshError naming the first crease that is not an edge of the mesh
 CsrMatrix reference_limit_matrix(const Topology& topology, Scheme scheme, Boundary boundary, const Tags& tags);
 
-/// Reference, for tests: B V evaluated by Far::PrimvarRefinerReal<double>::Limit.
+/// Reference, for tests: B V evaluated by Far::PrimvarRefinerReal<double>::Limit (Loop).
 void reference_limit_points(const Topology& topology, const double* vertices, Boundary boundary, double* out);
 
 }  // namespace sorpia

@@ -1,6 +1,6 @@
 #pragma once
 /// @file limit_masks.hpp
-/// OpenSubdiv's Loop limit masks, vertex by vertex, without a
+/// OpenSubdiv's Loop and Catmull-Clark limit masks, vertex by vertex, without a
 /// Far::TopologyRefiner: the rows of B (limit_operator.hpp builds B from them).
 ///
 /// Every Loop limit mask is a weight on the vertex and one equal weight on
@@ -38,5 +38,23 @@ LimitMask corner_limit_mask();
 /// gets (1, no neighbours). Its mask vertices are the whole ring inside and
 /// topology.ring_neighbors() first and last on the boundary.
 LimitMask limit_mask(const Topology& topology, std::size_t i, Boundary boundary);
+
+/// One Catmull-Clark limit mask (Sdc::Scheme<SCHEME_CATMARK>), of a vertex
+/// whose faces are all quads: `diag` on the vertex, `edge` on each edge
+/// neighbour, `face` on the opposite corner of each quad (where
+/// Far::PrimvarRefinerReal::Limit applies the face weights).
+struct CatmarkMask {
+  double diag = 1.0;
+  double edge = 0.0;
+  double face = 0.0;
+};
+
+/// Smooth rule, an interior vertex of valence n in a quad ring:
+/// face = 1 / (n (n + 5)), edge = 4 face, diag = 1 - n (edge + face), i.e.
+/// (n^2 v + 4 sum e_j + sum f_j) / (n (n + 5)); n = 4 gives 4/9, 1/9, 1/36.
+/// Valence 2 is OpenSubdiv's corner rule (1, 0, 0). @param valence at least 2
+CatmarkMask catmark_smooth_limit_mask(int valence);
+/// Crease rule, a boundary vertex: 2/3 and 1/6 on its two boundary neighbours (no face weight).
+CatmarkMask catmark_crease_limit_mask();
 
 }  // namespace sorpia

@@ -6,6 +6,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "sorpia/limit.hpp"
@@ -40,13 +41,18 @@ struct LimitOperator {
   double entry(std::size_t i, std::size_t p) const { return values.empty() ? weight[i] : values[p]; }
 };
 
-/// B from OpenSubdiv's Loop limit masks (sorpia::limit_mask, limit_masks.hpp),
-/// one row per vertex, in O(n_vertices + n_edges): the production build of B.
-/// Equal to reference_limit_matrix (OpenSubdiv's Far Limit()) to rounding
-/// (tests/cpp/test_limit_operator.cpp).
+/// B of a Loop mesh from OpenSubdiv's Loop limit masks (sorpia::limit_mask,
+/// limit_masks.hpp), one uniform row per vertex, in O(n_vertices + n_edges):
+/// the production build of B. Equal to reference_limit_matrix (OpenSubdiv's
+/// Far Limit()) to rounding (tests/cpp/test_limit_operator.cpp).
+/// @throw MeshError naming the first face that is not a triangle
 LimitOperator limit_operator(const Topology& topology, Boundary boundary);
 
-/// B with OpenSubdiv's sharpness tags (Far::TopologyDescriptor's creases,
+/// Empty when every face is a triangle, else the message naming the first
+/// face that is not (Loop's refusal).
+std::string loop_needs_triangles(const Topology& topology);
+
+/// Loop's B with OpenSubdiv's sharpness tags (Far::TopologyDescriptor's creases,
 /// corners and holes; a tag given twice counts with its last sharpness).
 /// Rows of vertices no tag touches are the masks above. Infinitely sharp tags
 /// keep the uniform form (Sdc's rules, boundary edges counting as sharp
@@ -61,18 +67,25 @@ LimitOperator limit_operator(const Topology& topology, Boundary boundary);
 /// same at any level. Holes change no
 /// row of B (Far's refinement and Limit() treat a hole's vertices as if the
 /// face were there); they only cut faces out of the surface.
-/// @throw MeshError naming the first crease that is not an edge of the mesh
+/// @throw MeshError naming the first crease that is not an edge of the mesh,
+///        or the first face that is not a triangle
 LimitOperator limit_operator(const Topology& topology, Boundary boundary, const Tags& tags);
 
-/// B under either scheme with OpenSubdiv's sharpness tags: Loop as above;
-/// Catmull-Clark with every row from OpenSubdiv's refinement around its vertex
-/// and Limit() (a row needs no level on a ring of quads, one next to another
-/// polygon, and its semi-sharp tags' decay; darts and interior vertices of two
-/// faces, whose Sdc limit masks change with the level, the deepest), equal to
-/// OpenSubdiv's Limit() of the whole mesh refined to the deepest of those
-/// levels.
+/// B under either scheme with OpenSubdiv's sharpness tags (empty: none).
+/// Loop as above. Catmull-Clark (rows in `values`), equal to OpenSubdiv's
+/// Limit() of the whole mesh refined to the deepest level detail::row_levels
+/// gives (tests/cpp/test_catmark.cpp): Sdc's CATMARK limit masks where every
+/// face at the vertex is a quad (interior valence n: (n^2 v + 4 sum e_j +
+/// sum f_j) / (n (n + 5)), f_j the opposite corners, where Far's Limit()
+/// puts the face weights) and on the boundary ((v_prev + 4 v + v_next) / 6;
+/// a one-face corner keeps itself under EdgeAndCorner); an interior vertex
+/// with a non-quad face gets its limit after one uniform refinement,
+/// composed back onto its faces' vertices (detail::catmark_refined_row). Rows
+/// of vertices a tag touches, of darts and of interior vertices of two faces
+/// (whose Sdc limit masks change with the level) come from OpenSubdiv's
+/// refinement around the vertex and Limit() at their row level.
 /// @throw MeshError naming the first crease that is not an edge of the mesh
-LimitOperator limit_operator(const Topology& topology, Scheme scheme, Boundary boundary, const Tags& tags);
+LimitOperator limit_operator(const Topology& topology, Scheme scheme, Boundary boundary, const Tags& tags = Tags{});
 
 /// The compact form of a square CSR matrix whose rows each have a positive
 /// diagonal entry (explicit zero off-diagonal entries are dropped). Rows whose
@@ -87,10 +100,21 @@ CsrMatrix to_csr(const LimitOperator& op);
 /// y = B x, x and y row-major (n, 3), distinct arrays.
 void apply(const LimitOperator& op, const double* x, double* y);
 
-/// True when B = Gamma Upsilon with Gamma = diag(weight) and Upsilon symmetric
-/// (paper section 3.2): uniform rows, a symmetric neighbour pattern, and no
-/// row with neighbours referenced by a row without: closed Loop meshes (plus
-/// unreferenced vertices). Boundaries break it.
+/// Gamma^-1 of B = Gamma Upsilon with Gamma diagonal, positive, and Upsilon
+/// symmetric on the entries whose mirror is stored (paper section 3.2): d with
+/// d_i B_ij = d_j B_ji for every such pair. Uniform rows always have one,
+/// d_i = 1 / weight_i (1 on rows without neighbours). Rows with several
+/// weights: found by propagating d_j = d_i B_ij / B_ji over the two-way
+/// entries, each connected part starting from 1 / (its first off-diagonal
+/// weight); empty when some pair contradicts it (relative 1e-12).
+/// Catmull-Clark rows of quad rings have one (d_i proportional to n_i (n_i + 5),
+/// edge weight 4 and face weight 1 in Upsilon).
+std::vector<double> symmetriser(const LimitOperator& op);
+
+/// True when B = Gamma Upsilon with Upsilon symmetric (symmetriser exists) and
+/// the neighbour pattern is symmetric (no row with neighbours referenced by a
+/// row without): closed Loop meshes and closed quad meshes (plus unreferenced
+/// vertices). Boundaries break it.
 bool is_symmetrisable(const LimitOperator& op);
 
 }  // namespace sorpia

@@ -1,0 +1,127 @@
+"""Catmull-Clark (scheme="catmull-clark"): B against OpenSubdiv's Far, every
+method against a scipy direct solve of Far's B, the limit surface through the
+targets, and what the symmetrised methods assume."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import scipy.sparse
+import scipy.sparse.linalg
+
+import sorpia
+from sorpia import _core
+from sorpia.limit import topology
+from sorpia.solve import METHODS
+
+CC = "catmull-clark"
+
+# Meshes by what they stress: closed quads with valences 3..12, an open quad
+# patch with one-face corners, mixed triangles/quads/pentagons/hexagons.
+QUAD_MESHES = {
+    "quad-irregular": lambda: sorpia.shapes.quad_irregular(900, seed=2),
+    "quad-grid": lambda: sorpia.shapes.quad_grid(9, 7),
+    "polygon-torus": lambda: sorpia.shapes.polygon_torus(10, 8, seed=3),
+}
+
+
+def far_matrix(faces, n, boundary="edge-and-corner"):
+    """B from OpenSubdiv's Far (Limit(); after one refinement where a face is not a quad)."""
+    topo = topology(faces, n, scheme=CC)
+    data, indices, indptr = _core.reference_limit_matrix(topo, _core.Scheme.catmull_clark, _core.parse_boundary(boundary),
+                                                         _core.Tags())
+    return scipy.sparse.csr_matrix((data, indices, indptr), shape=(n, n))
+
+
+@pytest.mark.parametrize("name", sorted(QUAD_MESHES))
+@pytest.mark.parametrize("boundary", ["edge-and-corner", "edge-only"])
+def test_limit_matrix_equals_far(name, boundary):
+    V, F = QUAD_MESHES[name]()
+    b = sorpia.limit_matrix(F, len(V), boundary, scheme=CC)
+    ref = far_matrix(F, len(V), boundary)
+    assert abs(b - ref).max() <= 1e-15
+    assert np.allclose(sorpia.limit_points(V, F, boundary, scheme=CC), ref @ V, rtol=0, atol=1e-14)
+
+
+@pytest.mark.parametrize("name", sorted(QUAD_MESHES))
+@pytest.mark.parametrize("method", METHODS)
+def test_every_method_matches_a_direct_solve(name, method):
+    V, F = QUAD_MESHES[name]()
+    expected = scipy.sparse.linalg.splu(far_matrix(F, len(V)).tocsc()).solve(V)
+    res = sorpia.interpolate(V, F, method=method, tol=1e-12, max_iter=3000, scheme=CC)
+    assert res.stop_reason == "converged", res.stop_reason
+    scale = np.abs(V).max()
+    assert np.abs(res.control_vertices - expected).max() <= 1e-9 * scale
+    assert np.abs(sorpia.limit_points(res.control_vertices, F, scheme=CC) - V).max() <= 1e-10 * scale
+
+
+def test_closed_quad_mesh_is_symmetrisable_and_cg_runs_cg():
+    """B = Gamma Upsilon with Gamma_ii = 1 / (n_i (n_i + 5)): Upsilon has n_i^2 on
+    the diagonal, 4 on edges and 1 across quads, symmetric; its eigenvalues
+    (those of B) are positive, so CG applies."""
+    V, F = sorpia.shapes.quad_irregular(900, seed=5)
+    interp = sorpia.Interpolator(F, len(V), scheme=CC)
+    assert interp.closed
+    b = interp.limit_matrix()
+    valence = np.diff(topology(F, len(V), scheme=CC).ring_offsets)
+    upsilon = scipy.sparse.diags(valence * (valence + 5.0)) @ b
+    assert abs(upsilon - upsilon.T).max() <= 1e-12
+    assert set(np.unique(upsilon.data.round(12))) <= {1.0, 4.0} | set((valence ** 2).astype(float))
+    assert np.linalg.eigvalsh(upsilon.toarray()).min() > 0
+    gamma_inverse = interp._operator.symmetriser
+    assert np.allclose(gamma_inverse / gamma_inverse[0], valence * (valence + 5.0) / (valence[0] * (valence[0] + 5)))
+    assert interp.solve(V, method="cg").variant == "cg"
+
+
+@pytest.mark.parametrize("name", ["polygon-torus", "triangles"])
+def test_composed_rows_of_closed_polygon_meshes_are_symmetrisable_too(name):
+    """Rows refined once around non-quad faces still admit a diagonal Gamma with
+    Gamma^-1 B symmetric (found by sorpia::symmetriser, checked here), and B's
+    eigenvalues are real and positive: CG runs."""
+    V, F = QUAD_MESHES[name]() if name in QUAD_MESHES else sorpia.shapes.irregular(300, seed=3)
+    interp = sorpia.Interpolator(F, len(V), scheme=CC)
+    assert interp.closed
+    upsilon = scipy.sparse.diags(interp._operator.symmetriser) @ interp.limit_matrix()
+    assert abs(upsilon - upsilon.T).max() <= 1e-12 * abs(upsilon).max()
+    assert np.linalg.eigvalsh(upsilon.toarray()).min() > 0
+    assert interp.solve(V, method="cg").variant == "cg"
+
+
+def test_cg_falls_back_to_bicgstab_with_a_boundary():
+    V, F = QUAD_MESHES["quad-grid"]()
+    interp = sorpia.Interpolator(F, len(V), scheme=CC)
+    assert not interp.closed
+    assert interp.solve(V, method="cg").variant == "bicgstab"
+
+
+def test_loop_refuses_quads_and_points_to_catmull_clark():
+    V, F = sorpia.shapes.quad_torus(6, 5)
+    with pytest.raises(sorpia.MeshError, match=r'scheme="catmull-clark"'):
+        sorpia.interpolate(V, F)
+
+
+def test_an_unknown_scheme_is_named():
+    V, F = sorpia.shapes.quad_torus(6, 5)
+    with pytest.raises(sorpia.ParameterError, match="scheme"):
+        sorpia.limit_points(V, F, scheme="butterfly")
+
+
+def test_triangles_under_catmull_clark_are_refined_once():
+    """A triangle mesh is a polygon mesh too: every interior row comes from one refinement (Far's, composed)."""
+    V, F = sorpia.shapes.irregular(300, seed=3)
+    b = sorpia.limit_matrix(F, len(V), scheme=CC)
+    assert abs(b - far_matrix(F, len(V))).max() <= 1e-15
+    res = sorpia.interpolate(V, F, scheme=CC)
+    assert np.abs(sorpia.limit_points(res.control_vertices, F, scheme=CC) - V).max() <= 1e-9
+
+
+def test_a_cube_has_a_singular_catmull_clark_matrix():
+    """Every vertex of a cube has valence 3: (3/8) x_i + 3 (1/6) x_e + 3 (1/24) x_f with the checkerboard x
+    (x_e = -x_i across an edge, x_f = x_i across a face) is 3/8 - 1/2 + 1/8 = 0, so B has a null vector and no
+    method can fit the cube (OpenSubdiv's osd_catmark_car holds such a cube)."""
+    V = np.array([[x, y, z] for x in (0, 1) for y in (0, 1) for z in (0, 1)], dtype=float)
+    quads = [[0, 1, 3, 2], [4, 6, 7, 5], [0, 4, 5, 1], [2, 3, 7, 6], [0, 2, 6, 4], [1, 5, 7, 3]]
+    b = sorpia.limit_matrix(quads, 8, scheme=CC)
+    checkerboard = np.array([(-1.0) ** (x + y + z) for x, y, z in V.astype(int)])
+    assert np.abs(b @ checkerboard).max() <= 1e-15
+    assert np.allclose(far_matrix(quads, 8).toarray(), b.toarray(), atol=1e-15)
