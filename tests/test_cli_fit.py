@@ -190,3 +190,26 @@ def test_fit_threads_agrees_with_one_thread(torus_file, tmp_path, command):
     assert np.abs(ctrl[2] - ctrl[1]).max() < 1e-8 * scale
     # Iteration counts within 15% (solve.py: "within a few percent").
     assert abs(reports[2]["iterations"] - reports[1]["iterations"]) <= 0.15 * reports[1]["iterations"]
+
+
+@pytest.mark.parametrize("scheme, mesh", [("loop", sorpia.shapes.torus(8, 6)), ("catmull-clark", None)])
+def test_surface_memory_check_counts_the_scheme_s_faces(scheme, mesh, tmp_path, command, monkeypatch):
+    """--surface is refused before the solve when the tessellation would not fit; the face count in the
+    message is the count limit_surface produces at that level (quads for Catmull-Clark, including a
+    pentagon's five at level 1), not the triangle count."""
+    if mesh is None:  # a quad strip with a pentagon: mixed polygons under Catmull-Clark
+        V = np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0], [0, 1, 0], [1, 1, 0], [2, 1, 0], [2.5, 0.5, 0]], float)
+        F = sorpia.Polygons(np.array([4, 5]), np.array([0, 1, 4, 3, 1, 2, 6, 5, 4]))
+    else:
+        V, F = mesh
+    src = tmp_path / "in.obj"
+    sorpia.write_mesh(src, V, F)
+    level = 2
+    expected = len(sorpia.limit_surface(V, F, level=level, scheme=scheme)[1])
+    monkeypatch.setattr(sorpia._core, "available_memory_bytes", lambda: 1)
+    code, _, err = command("fit", src, "-o", tmp_path / "c.obj", "--surface", tmp_path / "s.obj", "--level",
+                           level, "--scheme", scheme)
+    assert code != 0
+    assert "is left to this process" in err
+    assert f"({expected} " in err
+    assert not (tmp_path / "c.obj").exists()  # refused before the solve

@@ -46,9 +46,8 @@ def run_fit(input_path, output, *, method="sor", omega="auto", tol=1e-10, max_it
         scheme = choose_scheme(scheme, F, input_path)
         boundary = boundary_rule(boundary, mesh)
         tags = solve_tags(mesh, sharp_angle, input_path)
-        n_faces = len(face_counts(F))
         if surface is not None:
-            _check_surface_fits(len(V0), n_faces, level)
+            _check_surface_fits(len(V0), face_counts(F), level, scheme)
         timings["statistics"] = 0.0  # reported before the fit, measured after the topology is built
         interp, res, timings["fit"], cpu = fit_once(
             V0, F, method=method, omega=omega if method == "sor" else None, tol=tol, max_iter=max_iter,
@@ -159,18 +158,26 @@ def _max_residual(interp, ctrl, V0, faces, boundary, scheme, tags) -> float:
                         - V0).max())
 
 
-def _check_surface_fits(n_vertices: int, n_faces: int, level: int) -> None:
+def _check_surface_fits(n_vertices: int, counts: np.ndarray, level: int, scheme: str) -> None:
     """Refuse --level before the solve when the tessellation would not fit in
     the memory left to the process (sorpia::available_memory_bytes: free
-    memory, rlimits, cgroup limits); limit_surface would refuse it only after
-    the solve."""
+    memory, rlimits, cgroup limits), by the estimate limit_surface checks
+    (sorpia::tessellation_bytes for the scheme); limit_surface would refuse it
+    only after the solve."""
     from .. import _core
+    from .._validate import as_scheme
 
-    need, avail = _core.tessellation_bytes(n_vertices, n_faces, level), _core.available_memory_bytes()
+    n_corners = int(counts.sum())
+    need = _core.tessellation_bytes(n_vertices, len(counts), level, as_scheme(scheme), n_corners)
+    avail = _core.available_memory_bytes()
     if avail and need > avail:  # 0: not known here; limit_surface decides
-        raise UserError(f"--surface at --level {level} needs about {need / 2**30:.1f} GiB "
-                        f"({n_faces * 4 ** level} triangles) but {avail / 2**30:.1f} GiB is left to this process (free "
-                        "memory, ulimit -v, the cgroup's memory limit): use a lower --level")
+        if scheme == "loop":
+            output = f"{len(counts) * 4 ** level} triangles"
+        else:  # a k-gon gives k quads at level 1, each 4 more per level
+            output = f"{n_corners * 4 ** (level - 1) if level else len(counts)} faces"
+        raise UserError(f"--surface at --level {level} needs about {need / 2**30:.1f} GiB ({output}) but "
+                        f"{avail / 2**30:.1f} GiB is left to this process (free memory, ulimit -v, the cgroup's "
+                        "memory limit): use a lower --level")
 
 
 def _binary_for(path, binary: bool) -> bool:
