@@ -1,6 +1,7 @@
-// sorpia::repair (repair.hpp). Works on the face array's half-edges: half-edge
-// h (0 <= h < 3 n_faces) runs from faces[h] to the next corner of its face and
-// also names the corner at faces[h], as in topology.cpp. Linear time apart
+// sorpia::repair (repair.hpp). Works on the half-edges of the face list
+// (half_edges.hpp's FaceList, triangles or polygons): half-edge h runs from
+// corner h to the next corner of its face and also names corner h, as in
+// topology.cpp. Linear time apart
 // from the faces of one edge, which are few: the half-edges are grouped by
 // edge with a counting sort on the lower end and a slot per higher end, the
 // fans are the classes of a union-find over corners, the orientation a
@@ -22,17 +23,105 @@
 namespace sorpia {
 
 bool RepairReport::empty() const {
-  return degenerate_faces.empty() && duplicate_faces.empty() && reversed_duplicate_faces.empty() &&
+  return degenerate_faces.empty() && collapsed_faces.empty() && duplicate_faces.empty() && reversed_duplicate_faces.empty() &&
          nonmanifold_edges.empty() && sheet_vertices.empty() && bowtie_vertices.empty() && flipped_faces.empty();
 }
 
 namespace {
 
-using detail::face_str;
-using detail::next_corner;
-using detail::prev_corner;
+using detail::FaceList;
 // Union-find over corners: the root of a class is its lowest corner.
 using Corners = detail::DisjointSets;
+
+// The offsets (and, for polygons, the corner faces) of a FaceList.
+struct FaceArrays {
+  std::vector<std::int32_t> off, corner_face;  // corner_face empty for triangles
+
+  static FaceArrays triangles(std::size_t n_faces) { return {detail::triangle_offsets(n_faces), {}}; }
+  static FaceArrays polygons(const std::int32_t* counts, std::size_t n_faces) {
+    FaceArrays a{detail::polygon_offsets(counts, n_faces), {}};
+    a.corner_face = detail::corner_faces(a.off);
+    return a;
+  }
+  FaceList over(const std::int32_t* idx) const {
+    return {idx, off.data(), corner_face.empty() ? nullptr : corner_face.data(), off.size() - 1};
+  }
+};
+
+// A polygon list owning its arrays.
+struct OwnedFaces {
+  std::vector<std::int32_t> idx;
+  FaceArrays arrays;
+
+  bool empty() const { return arrays.off.empty(); }
+  FaceList view() const { return arrays.over(idx.data()); }
+};
+
+// Rule 1 of repair.hpp: marks in `removed` (and reports) the faces that
+// repeat a vertex and are not a polygon once their consecutive repeats are
+// dropped. Returns `fl` with the repeated corners of the other faces that
+// repeat a vertex dropped ("collapsed_faces"), the faces numbered as in `fl`,
+// or an empty list where no face collapses (triangles never do).
+OwnedFaces drop_repeated_corners(const FaceList& fl, std::size_t n_vertices, std::vector<std::uint8_t>& removed,
+                                 RepairReport& rep) {
+  OwnedFaces out;
+  if (fl.triangles()) {
+    for (std::size_t f = 0; f < fl.n_faces; ++f) {
+      const std::int32_t* t = fl.idx + 3 * f;
+      if (t[0] == t[1] || t[1] == t[2] || t[2] == t[0]) {
+        removed[f] = 1;
+        rep.degenerate_faces.push_back(static_cast<std::int32_t>(f));
+      }
+    }
+    return out;
+  }
+  // stamp[v] == 2 f: v seen in face f; 2 f + 1: v kept in face f's collapsed cycle.
+  std::vector<std::int32_t> stamp(n_vertices, -1);
+  std::vector<std::int32_t> kept_off{0}, kept;  // the collapsed faces' corners
+  for (std::size_t f = 0; f < fl.n_faces; ++f) {
+    const std::int32_t lo = fl.off[f], hi = fl.off[f + 1];
+    const auto seen = static_cast<std::int32_t>(2 * f), in_cycle = seen + 1;
+    bool repeats = false;
+    for (std::int32_t h = lo; h < hi; ++h) {
+      repeats |= stamp[fl.idx[h]] == seen;
+      stamp[fl.idx[h]] = seen;
+    }
+    if (!repeats) continue;
+    const std::size_t start = kept.size();
+    bool polygon = true;
+    for (std::int32_t h = lo; h < hi; ++h) {
+      const std::int32_t v = fl.idx[h];
+      if (v == fl.idx[fl.prev(h)]) continue;  // a consecutive repeat (cyclically)
+      polygon &= stamp[v] != in_cycle;
+      stamp[v] = in_cycle;
+      kept.push_back(v);
+    }
+    if (polygon && kept.size() - start >= 3) {
+      rep.collapsed_faces.push_back(static_cast<std::int32_t>(f));
+      kept_off.push_back(static_cast<std::int32_t>(kept.size()));
+    } else {
+      kept.resize(start);
+      removed[f] = 1;
+      rep.degenerate_faces.push_back(static_cast<std::int32_t>(f));
+    }
+  }
+  if (rep.collapsed_faces.empty()) return out;
+  std::vector<std::int32_t>& off = out.arrays.off;
+  off.reserve(fl.n_faces + 1);
+  out.idx.reserve(fl.n_corners());
+  off.push_back(0);
+  for (std::size_t f = 0, c = 0; f < fl.n_faces; ++f) {
+    if (c < rep.collapsed_faces.size() && rep.collapsed_faces[c] == static_cast<std::int32_t>(f)) {
+      out.idx.insert(out.idx.end(), kept.begin() + kept_off[c], kept.begin() + kept_off[c + 1]);
+      ++c;
+    } else {
+      out.idx.insert(out.idx.end(), fl.idx + fl.off[f], fl.idx + fl.off[f + 1]);
+    }
+    off.push_back(static_cast<std::int32_t>(out.idx.size()));
+  }
+  out.arrays.corner_face = detail::corner_faces(off);
+  return out;
+}
 
 // Rules 2 and 3 of repair.hpp: removes (in `removed`, reported in `rep`) the
 // duplicate faces, and returns for each half-edge the half-edge of the face it
@@ -41,27 +130,42 @@ using Corners = detail::DisjointSets;
 // within a bucket); within a bucket the edges are told apart by a slot per
 // higher end stamped with the lower end. A duplicate face shares each of its
 // edges with the face it repeats, so it is found at its first edge, before it
-// could be joined. The ends of edges of three or more faces are marked in `sheet_end`.
-std::vector<std::int32_t> join_edges(const std::int32_t* faces, std::size_t n_faces, std::size_t n_vertices,
-                                     bool pair_sheets, std::vector<std::uint8_t>& removed, RepairReport& rep,
+// could be joined. The ends of edges of three or more faces are marked in
+// `sheet_end`. Needs faces without a repeated vertex (rule 1).
+std::vector<std::int32_t> join_edges(const FaceList& fl, std::size_t n_vertices, bool pair_sheets,
+                                     std::vector<std::uint8_t>& removed, RepairReport& rep,
                                      std::vector<std::uint8_t>& sheet_end) {
-  const std::size_t n_half = 3 * n_faces;
-  auto lo = [&](std::size_t h) { return std::min(faces[h], faces[next_corner(h)]); };
-  auto hi = [&](std::size_t h) { return std::max(faces[h], faces[next_corner(h)]); };
-  auto third = [&](std::int32_t h) { return faces[prev_corner(h)]; };
+  const std::int32_t* faces = fl.idx;
+  const std::size_t n_half = fl.n_corners();
+  auto lo = [&](std::size_t h) { return std::min(faces[h], faces[fl.next(h)]); };
+  auto hi = [&](std::size_t h) { return std::max(faces[h], faces[fl.next(h)]); };
+  // Whether the faces of half-edges g and h, which lie on one edge, have the
+  // same vertices in the same cyclic order, either way round: for triangles,
+  // the same third vertex; polygons are walked from the edge's end faces[g],
+  // h's face backwards where it runs the edge the other way.
+  auto same_face = [&](std::int32_t g, std::int32_t h) {
+    if (fl.triangles()) return faces[fl.prev(g)] == faces[fl.prev(h)];
+    const std::int32_t fg = fl.face_of(g), fh = fl.face_of(h), n = fl.off[fg + 1] - fl.off[fg];
+    if (n != fl.off[fh + 1] - fl.off[fh]) return false;
+    const bool forward = faces[g] == faces[h];
+    std::size_t a = static_cast<std::size_t>(g), b = forward ? static_cast<std::size_t>(h) : fl.next(h);
+    for (std::int32_t i = 0; i < n; ++i, a = fl.next(a), b = forward ? fl.next(b) : fl.prev(b))
+      if (faces[a] != faces[b]) return false;
+    return true;
+  };
   std::vector<std::int32_t> bucket(n_vertices + 1, 0);
   for (std::size_t h = 0; h < n_half; ++h)
-    if (!removed[h / 3]) ++bucket[lo(h) + 1];
+    if (!removed[fl.face_of(h)]) ++bucket[lo(h) + 1];
   for (std::size_t v = 0; v < n_vertices; ++v) bucket[v + 1] += bucket[v];
   std::vector<std::int32_t> by_lo(bucket[n_vertices]);
   {
     std::vector<std::int32_t> fill(bucket.begin(), bucket.end() - 1);
     for (std::size_t h = 0; h < n_half; ++h)
-      if (!removed[h / 3]) by_lo[fill[lo(h)]++] = static_cast<std::int32_t>(h);
+      if (!removed[fl.face_of(h)]) by_lo[fill[lo(h)]++] = static_cast<std::int32_t>(h);
   }
   auto drop_duplicate = [&](std::int32_t kept, std::int32_t h) {
-    removed[h / 3] = 1;
-    (faces[kept] == faces[h] ? rep.duplicate_faces : rep.reversed_duplicate_faces).push_back(h / 3);
+    removed[fl.face_of(h)] = 1;
+    (faces[kept] == faces[h] ? rep.duplicate_faces : rep.reversed_duplicate_faces).push_back(fl.face_of(h));
   };
   std::vector<std::int32_t> mate(n_half, -1);
   // Per higher end x of an edge (v, x): stamp v, the number of faces (-1 once
@@ -85,8 +189,8 @@ std::vector<std::int32_t> join_edges(const std::int32_t* faces, std::size_t n_fa
       const std::int32_t h = b[i], x = hi(h);
       if (count[x] == 2) {
         const std::int32_t g = first[x];
-        if (g == h || removed[g / 3] || removed[h / 3]) continue;  // removed: a duplicate found at another edge
-        if (third(g) == third(h)) {
+        if (g == h || removed[fl.face_of(g)] || removed[fl.face_of(h)]) continue;  // removed: a duplicate found at another edge
+        if (same_face(g, h)) {
           drop_duplicate(g, h);
         } else {
           mate[g] = h;
@@ -97,8 +201,8 @@ std::vector<std::int32_t> join_edges(const std::int32_t* faces, std::size_t n_fa
         live.clear();
         for (std::int32_t j = i; j < k; ++j) {
           const std::int32_t hj = b[j];
-          if (hi(hj) != x || removed[hj / 3]) continue;
-          const auto same = std::find_if(live.begin(), live.end(), [&](std::int32_t g) { return third(g) == third(hj); });
+          if (hi(hj) != x || removed[fl.face_of(hj)]) continue;
+          const auto same = std::find_if(live.begin(), live.end(), [&](std::int32_t g) { return same_face(g, hj); });
           if (same != live.end())
             drop_duplicate(*same, hj);
           else
@@ -133,20 +237,17 @@ std::vector<std::int32_t> join_edges(const std::int32_t* faces, std::size_t n_fa
 
 // One pass of the rules in repair.hpp over valid indices; without
 // `pair_sheets`, every face of an edge of three or more borders it alone.
-RepairResult repair_pass(const std::int32_t* faces, std::size_t n_faces, std::size_t n_vertices, bool pair_sheets) {
+// The output faces are polygons (with face_counts) unless `input` is triangles.
+RepairResult repair_pass(const FaceList& input, std::size_t n_vertices, bool pair_sheets) {
   RepairResult r;
   RepairReport& rep = r.report;
-  const std::size_t n_half = 3 * n_faces;
-  std::vector<std::uint8_t> removed(n_faces, 0);
-  for (std::size_t f = 0; f < n_faces; ++f) {
-    const std::int32_t* t = faces + 3 * f;
-    if (t[0] == t[1] || t[1] == t[2] || t[2] == t[0]) {
-      removed[f] = 1;
-      rep.degenerate_faces.push_back(static_cast<std::int32_t>(f));
-    }
-  }
+  std::vector<std::uint8_t> removed(input.n_faces, 0);
+  const OwnedFaces collapsed = drop_repeated_corners(input, n_vertices, removed, rep);
+  const FaceList fl = collapsed.empty() ? input : collapsed.view();
+  const std::int32_t* faces = fl.idx;
+  const std::size_t n_faces = fl.n_faces, n_half = fl.n_corners();
   std::vector<std::uint8_t> sheet_end(n_vertices, 0);
-  const std::vector<std::int32_t> mate = join_edges(faces, n_faces, n_vertices, pair_sheets, removed, rep, sheet_end);
+  const std::vector<std::int32_t> mate = join_edges(fl, n_vertices, pair_sheets, removed, rep, sheet_end);
 
   // Fans: corners of one vertex joined across its joined edges.
   Corners fans(n_half);
@@ -154,7 +255,7 @@ RepairResult repair_pass(const std::int32_t* faces, std::size_t n_faces, std::si
   for (std::size_t h = 0; h < n_half; ++h) {
     const std::int32_t g = mate[h];
     if (g < static_cast<std::int32_t>(h)) continue;  // unjoined, or joined from g already
-    const auto hn = static_cast<std::int32_t>(next_corner(h)), gn = static_cast<std::int32_t>(next_corner(g));
+    const auto hn = static_cast<std::int32_t>(fl.next(h)), gn = static_cast<std::int32_t>(fl.next(g));
     const bool same_way = faces[g] == faces[h];
     misoriented |= same_way;
     fans.unite(static_cast<std::int32_t>(h), same_way ? g : gn);
@@ -168,7 +269,7 @@ RepairResult repair_pass(const std::int32_t* faces, std::size_t n_faces, std::si
   r.vertex_map.resize(n_vertices);
   std::iota(r.vertex_map.begin(), r.vertex_map.end(), 0);
   for (std::size_t h = 0; h < n_half; ++h) {
-    if (removed[h / 3]) continue;
+    if (removed[fl.face_of(h)]) continue;
     const std::int32_t root = fans.find(static_cast<std::int32_t>(h));
     if (root != static_cast<std::int32_t>(h)) {
       vertex_of[h] = vertex_of[root];
@@ -202,25 +303,26 @@ RepairResult repair_pass(const std::int32_t* faces, std::size_t n_faces, std::si
     std::int32_t clash = -1;  // a face whose orientation is forced both ways
     for (std::size_t q = 0; q < component.size(); ++q) {
       const std::int32_t f = component[q];
-      for (std::int32_t h = 3 * f; h < 3 * f + 3; ++h) {
+      for (std::int32_t h = fl.off[f]; h < fl.off[f + 1]; ++h) {
         const std::int32_t g = mate[h];
         if (g < 0) continue;
         // running the edge the same way as h needs the other orientation
         const auto want = static_cast<std::int8_t>(flip[f] ^ (faces[g] == faces[h]));
-        if (flip[g / 3] < 0) {
-          flip[g / 3] = want;
+        const std::int32_t fg = fl.face_of(g);
+        if (flip[fg] < 0) {
+          flip[fg] = want;
           n_flipped += static_cast<std::size_t>(want);
-          component.push_back(g / 3);
-        } else if (flip[g / 3] != want && clash < 0) {
-          clash = g / 3;
+          component.push_back(fg);
+        } else if (flip[fg] != want && clash < 0) {
+          clash = fg;
         }
       }
     }
     if (clash >= 0)
       throw MeshError("the connected part of " + std::to_string(component.size()) + " faces containing " +
-                      face_str(f0, faces) + " is not orientable (like a Moebius strip: no choice of face "
-                      "orientations is consistent, e.g. at " + face_str(clash, faces) +
-                      "): Loop interpolation needs an orientable surface, and repair cannot make one");
+                      fl.str(f0) + " is not orientable (like a Moebius strip: no choice of face "
+                      "orientations is consistent, e.g. at " + fl.str(clash) +
+                      "): subdivision needs an orientable surface, and repair cannot make one");
     const std::int8_t reverse = n_flipped <= component.size() - n_flipped ? 1 : 0;
     for (std::int32_t f : component) {
       flip[f] = flip[f] == reverse;
@@ -229,13 +331,17 @@ RepairResult repair_pass(const std::int32_t* faces, std::size_t n_faces, std::si
   }
   std::sort(rep.flipped_faces.begin(), rep.flipped_faces.end());
 
+  // A reversed face keeps its first corner: (a, b, c, d) becomes (a, d, c, b).
+  r.faces.reserve(n_half);
   for (std::size_t f = 0; f < n_faces; ++f) {
     if (removed[f]) continue;
-    const std::int32_t a = vertex_of[3 * f], b = vertex_of[3 * f + 1], c = vertex_of[3 * f + 2];
+    const std::int32_t lo = fl.off[f], hi = fl.off[f + 1];
+    r.faces.push_back(vertex_of[lo]);
     if (flip[f])
-      r.faces.insert(r.faces.end(), {a, c, b});
+      for (std::int32_t h = hi - 1; h > lo; --h) r.faces.push_back(vertex_of[h]);
     else
-      r.faces.insert(r.faces.end(), {a, b, c});
+      for (std::int32_t h = lo + 1; h < hi; ++h) r.faces.push_back(vertex_of[h]);
+    if (!input.triangles()) r.face_counts.push_back(hi - lo);
     r.face_map.push_back(static_cast<std::int32_t>(f));
   }
   return r;
@@ -250,6 +356,7 @@ void compose(RepairResult& first, RepairResult&& later) {
     std::sort(into.begin(), into.end());
   };
   faces_of(b.degenerate_faces, a.degenerate_faces);
+  faces_of(b.collapsed_faces, a.collapsed_faces);
   faces_of(b.duplicate_faces, a.duplicate_faces);
   faces_of(b.reversed_duplicate_faces, a.reversed_duplicate_faces);
   std::vector<std::int32_t> flipped;
@@ -284,40 +391,82 @@ void compose(RepairResult& first, RepairResult&& later) {
   first.vertex_map = std::move(vertex_map);
   first.face_map = std::move(face_map);
   first.faces = std::move(later.faces);
+  first.face_counts = std::move(later.face_counts);
 }
 
 }  // namespace
 
-RepairResult repair(const std::int32_t* faces, std::size_t n_faces, std::size_t n_vertices) {
-  // A valid mesh costs the validation alone, and comes back as it is.
-  if (faces_valid(faces, n_faces, n_vertices)) return {};
+namespace {
+
+// TEMPORARY until branch catmark's polygon Topology is merged.
+RepairResult repair_pass(const FaceList& input, std::size_t n_vertices, bool pair_sheets);
+struct PolyTopologyStub {
+  PolyTopologyStub(const std::int32_t* counts, std::size_t n_faces, const std::int32_t* idx, std::size_t n_vertices) {
+    if (n_faces == 0) throw MeshError("the mesh has no faces");
+    const FaceArrays a = FaceArrays::polygons(counts, n_faces);
+    for (std::size_t f = 0; f < n_faces; ++f)
+      for (std::int32_t h = a.off[f]; h < a.off[f + 1]; ++h)
+        if (idx[h] < 0 || static_cast<std::size_t>(idx[h]) >= n_vertices)
+          throw MeshError(a.over(idx).str(f) + " has vertex index " + std::to_string(idx[h]) + " out of range [0, " +
+                          std::to_string(n_vertices) + ")");
+    if (!repair_pass(a.over(idx), n_vertices, false).report.empty()) throw MeshError("invalid polygon mesh");
+  }
+};
+bool poly_faces_valid_stub(const std::int32_t* counts, std::size_t n_faces, const std::int32_t* idx, std::size_t n_vertices) {
+  try {
+    PolyTopologyStub(counts, n_faces, idx, n_vertices);
+  } catch (const MeshError&) {
+    return false;
+  }
+  return true;
+}
+
+// Whether sorpia::Topology accepts the faces (`counts`: nullptr for triangles).
+bool valid(const std::int32_t* counts, const FaceList& fl, std::size_t n_vertices) {
+  return counts ? poly_faces_valid_stub(counts, fl.n_faces, fl.idx, n_vertices) : faces_valid(fl.idx, fl.n_faces, n_vertices);
+}
+
+// Throws sorpia::Topology's MeshError for faces it refuses.
+void validate(const std::int32_t* counts, const FaceList& fl, std::size_t n_vertices) {
+  if (counts)
+    static_cast<void>(PolyTopologyStub(counts, fl.n_faces, fl.idx, n_vertices));
+  else
+    static_cast<void>(Topology(fl.idx, fl.n_faces, n_vertices));
+}
+
+// repair() of faces sorpia::Topology refuses.
+RepairResult repair_faces(const std::int32_t* counts, const FaceList& fl, std::size_t n_vertices) {
   // What repair does not change: refused with the validation's message.
-  const bool repairable = n_faces > 0 &&
+  const bool repairable = fl.n_faces > 0 &&
                           n_vertices <= static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max()) &&
-                          std::all_of(faces, faces + 3 * n_faces, [&](std::int32_t v) {
+                          std::all_of(fl.idx, fl.idx + fl.n_corners(), [&](std::int32_t v) {
                             return v >= 0 && static_cast<std::size_t>(v) < n_vertices;
                           });
   if (!repairable) {
-    static_cast<void>(Topology(faces, n_faces, n_vertices));
+    validate(counts, fl, n_vertices);
     throw std::logic_error("sorpia::repair: the validation accepted faces with an index out of range");
   }
 
-  RepairResult result = repair_pass(faces, n_faces, n_vertices, true);
+  RepairResult result = repair_pass(fl, n_vertices, true);
   if (result.faces.empty())
-    throw MeshError("every face repeats a vertex (" + std::to_string(n_faces) +
-                    " degenerate triangles): no face is left, and Loop subdivision needs at least one triangle");
+    throw MeshError("every face repeats a vertex (" + std::to_string(fl.n_faces) +
+                    " degenerate faces): no face is left, and subdivision needs at least one face");
   // Pairing sheets can join them into one fan at both ends of their edge (two
   // sheets that touch along several edges), which leaves that edge with more
   // than two faces: a further pass makes each face of such an edge border it alone.
   constexpr int max_passes = 4;
   for (int pass = 1;; ++pass) {
-    const std::size_t n_out = result.vertex_map.size();
-    if (faces_valid(result.faces.data(), result.faces.size() / 3, n_out)) return result;
+    const std::size_t n_out = result.vertex_map.size(), n_faces_out = result.face_map.size();
+    const std::int32_t* counts_out = counts ? result.face_counts.data() : nullptr;
+    const FaceArrays arrays =
+        counts ? FaceArrays::polygons(counts_out, n_faces_out) : FaceArrays::triangles(n_faces_out);
+    const FaceList out = arrays.over(result.faces.data());
+    if (valid(counts_out, out, n_out)) return result;
     RepairResult next;
-    if (pass < max_passes) next = repair_pass(result.faces.data(), result.faces.size() / 3, n_out, false);
+    if (pass < max_passes) next = repair_pass(out, n_out, false);
     if (next.report.empty()) {  // nothing more repair changes (e.g. a vertex of too many edges)
       try {
-        static_cast<void>(Topology(result.faces.data(), result.faces.size() / 3, n_out));
+        validate(counts_out, out, n_out);
       } catch (const MeshError& e) {
         throw MeshError(std::string("repair could not make a valid mesh: ") + e.what());
       }
@@ -325,6 +474,22 @@ RepairResult repair(const std::int32_t* faces, std::size_t n_faces, std::size_t 
     }
     compose(result, std::move(next));
   }
+}
+
+}  // namespace
+
+// A valid mesh costs the validation alone, and comes back as it is.
+RepairResult repair(const std::int32_t* faces, std::size_t n_faces, std::size_t n_vertices) {
+  if (faces_valid(faces, n_faces, n_vertices)) return {};  // before FaceArrays: a valid mesh allocates nothing
+  const FaceArrays arrays = FaceArrays::triangles(n_faces);
+  return repair_faces(nullptr, arrays.over(faces), n_vertices);
+}
+
+RepairResult repair(const std::int32_t* face_vertex_counts, std::size_t n_faces, const std::int32_t* face_vertex_indices,
+                    std::size_t n_vertices) {
+  if (poly_faces_valid_stub(face_vertex_counts, n_faces, face_vertex_indices, n_vertices)) return {};
+  const FaceArrays arrays = FaceArrays::polygons(face_vertex_counts, n_faces);
+  return repair_faces(face_vertex_counts, arrays.over(face_vertex_indices), n_vertices);
 }
 
 }  // namespace sorpia
