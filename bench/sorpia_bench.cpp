@@ -207,7 +207,12 @@ std::vector<int> spec_numbers(const std::string& spec, char sep, std::size_t lo,
 sorpia::TriMesh generate(const std::string& spec);
 
 sorpia::TriMesh load(const std::string& spec, bool triangulate) {
-  if (!is_generated(spec)) return sorpia::read_mesh(spec, triangulate);
+  if (!is_generated(spec)) {
+    sorpia::MeshFile file = sorpia::read_mesh(spec, sorpia::ReadOptions{triangulate, false});
+    if (!file.all_triangles())
+      throw Usage("mesh '" + spec + "' has faces of more than 3 vertices: pass --triangulate to split them");
+    return sorpia::TriMesh{std::move(file.vertices), std::move(file.faces)};
+  }
   try {
     return generate(spec);
   } catch (const sorpia::ParameterError& e) {  // e.g. icosphere:11: a bad argument

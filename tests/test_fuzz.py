@@ -271,18 +271,31 @@ def test_corrupted_files_read_or_fail_cleanly(name, edits, triangulate):
         with open(path, "wb") as fh:
             fh.write(data)
         try:
-            v, f = sorpia.read_mesh(path, triangulate=triangulate)
+            v, f, tags = sorpia.read_mesh(path, triangulate=triangulate, tags=True)
         except sorpia.MeshFileError as e:
             # The message names the file and is printable (it goes to a terminal or a log).
             assert str(e).startswith(path) and str(e).isprintable(), str(e)
             return
         with open(path, "rb") as fh:
             assert fh.read() == data  # reading never modifies the file
-    # What a reader accepts is well formed ...
+    # What a reader accepts is well formed: polygons of 3 or more vertices (triangles with triangulate) ...
     assert v.dtype == np.float64 and v.ndim == 2 and v.shape[1] == 3 and np.isfinite(v).all()
-    assert f.dtype == np.int32 and f.ndim == 2 and f.shape[1] == 3 and len(f) > 0
-    assert f.min() >= 0 and f.max() < len(v)
-    # ... and is then either a valid mesh or refused by the topology checks, never anything else.
+    if isinstance(f, sorpia.Polygons):
+        counts, corners = f
+        assert not triangulate and counts.dtype == np.int32 and counts.min() >= 3
+        assert corners.dtype == np.int32 and counts.sum() == len(corners)
+    else:
+        assert f.dtype == np.int32 and f.ndim == 2 and f.shape[1] >= 3 and len(f) > 0
+        assert f.shape[1] == 3 or not triangulate
+        corners = f.ravel()
+    assert corners.min() >= 0 and corners.max() < len(v)
+    n_faces = len(f) if isinstance(f, np.ndarray) else len(f.face_vertex_counts)
+    for kind, (indices, sharpness) in ((k, tags[k]) for k in ("creases", "corners") if k in tags):
+        assert indices.min() >= 0 and indices.max() < len(v) and (sharpness >= 0).all(), kind
+    assert "holes" not in tags or (tags["holes"].min() >= 0 and tags["holes"].max() < n_faces)
+    if not (isinstance(f, np.ndarray) and f.shape[1] == 3):
+        return  # the topology checks below are Loop's
+    # ... and a triangle mesh is then either a valid mesh or refused by the topology checks, never anything else.
     problems = mesh_problems(f, len(v))
     if problems:
         with pytest.raises(sorpia.MeshError):

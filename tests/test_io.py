@@ -232,13 +232,6 @@ def test_binary_stl_whose_header_starts_with_solid(tmp_path):
 QUAD_OBJ = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 2 0 0\nf 1 2 5\nf 1 2 3 4\n"
 
 
-def test_polygons_are_reported_with_their_line(tmp_path):
-    path = tmp_path / "quad.obj"
-    path.write_text(QUAD_OBJ)
-    with pytest.raises(sorpia.MeshFileError, match=r"quad\.obj, line 7: face with 4 vertices.*triangulate=True"):
-        sorpia.read_mesh(path)
-
-
 @pytest.mark.parametrize("ext", ["obj", "off", "ply"])
 def test_polygons_are_split_into_fans_when_asked(tmp_path, ext):
     v0 = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [2, 0, 0]], dtype=float)
@@ -251,8 +244,9 @@ def test_polygons_are_split_into_fans_when_asked(tmp_path, ext):
     }[ext]
     path = tmp_path / f"poly.{ext}"
     path.write_text(text)
-    with pytest.raises(sorpia.MeshFileError, match="face with 4 vertices"):
-        sorpia.read_mesh(path)
+    v, f = sorpia.read_mesh(path)  # kept as they are: a triangle and a quad
+    assert isinstance(f, sorpia.Polygons)
+    assert f.face_vertex_counts.tolist() == [3, 4] and f.face_vertex_indices.tolist() == [0, 1, 4, 0, 1, 2, 3]
     v, f = sorpia.read_mesh(path, triangulate=True)
     assert np.array_equal(v, v0)
     assert np.array_equal(f, [[0, 1, 4], [0, 1, 2], [0, 2, 3]])

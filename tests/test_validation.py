@@ -405,7 +405,8 @@ BAD_FILES = [
      r"far\.obj, line 4: vertex index 4 is out of range: the file has 3 vertices"),
     ("obj-index-zero", "zero.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n", r"zero\.obj, line 4: vertex index 0"),
     ("obj-no-faces", "points.obj", "v 0 0 0\nv 1 0 0\n", r"points\.obj: has 2 vertices but no faces"),
-    ("obj-polygon", "quad.obj", QUAD_OBJ, r"quad\.obj, line 13: face with 4 vertices: .*triangulate=True"),
+    ("obj-two-vertex-face", "edge.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2\n",
+     r"edge\.obj, line 4: a face needs at least 3 vertices, this one has 2"),
     ("off-truncated", "cut.off", "OFF\n4 2 0\n" + "0.125 0.25 0.5\n" * 4 + "3 0 1 2\n",
      r"cut\.off: the file ends after 1 of 2 faces"),
     ("off-not-off", "mesh.off", "v 0 0 0\n", r"mesh\.off, line 1: an OFF file starts with 'OFF'"),
@@ -507,6 +508,7 @@ def test_unreadable_file(tmp_path):
 def test_obj_with_polygons_normals_and_texture_coordinates(tmp_path):
     path = write(tmp_path / "quad.obj", QUAD_OBJ)
     before = file_digest(path)
+    assert np.array_equal(sorpia.read_mesh(path)[1], [[0, 1, 2, 3]])  # kept as a quad unless asked
     v, f = sorpia.read_mesh(path, triangulate=True)
     # vt/vn/g/usemtl/s are ignored; the quad becomes the fan (1, 2, 3), (1, 3, 4) from its first vertex.
     assert np.array_equal(v, [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0.5]])

@@ -3,39 +3,75 @@
 #include "bindings.hpp"
 #include "sorpia/io.hpp"
 
+#include <pybind11/stl.h>
+
+#include <algorithm>
+#include <optional>
+
 namespace sorpia_py {
 using namespace pybind11::literals;
 
 void bind_io(py::module_& m) {
   m.def(
       "read_mesh",
-      [](const std::string& path, bool triangulate) {
-        sorpia::TriMesh mesh;
-        std::size_t polygons = 0;
+      [](const std::string& path, bool triangulate, bool tags) {
+        sorpia::MeshFile mesh;
         // A read interrupted by a signal (waiting on a pipe, a device) runs
         // Python's signal handlers: KeyboardInterrupt, or whatever a handler
         // raises, ends the read; a handler that returns lets it go on.
         {
           LongCall call;
-          mesh = sorpia::read_mesh(path, triangulate, &polygons);
+          mesh = sorpia::read_mesh(path, sorpia::ReadOptions{triangulate, tags});
         }
-        // (vertices, faces, polygons split): sorpia.read_mesh returns the first two.
-        return py::make_tuple(to_numpy(std::move(mesh.vertices), 3), to_numpy(std::move(mesh.faces), 3), polygons);
+        // sorpia.io.read_mesh makes its result of: vertices (n, 3); the faces,
+        // (m, face_size) when face_sizes is None, else the flat corner list;
+        // face_sizes; polygons split; and, with tags, (Tags, Boundary or None,
+        // unknown tag names).
+        const bool uniform = mesh.face_sizes.empty();
+        py::object sizes = uniform ? py::object(py::none()) : py::object(to_numpy(std::move(mesh.face_sizes), 0));
+        py::object file_tags = py::none();
+        if (tags) {
+          py::object boundary = mesh.tags.boundary ? py::cast(*mesh.tags.boundary) : py::object(py::none());
+          file_tags = py::make_tuple(py::cast(std::move(mesh.tags.tags)), boundary, py::cast(mesh.tags.unknown));
+        }
+        return py::make_tuple(to_numpy(std::move(mesh.vertices), 3),
+                              to_numpy(std::move(mesh.faces), uniform ? mesh.face_size : 0), sizes,
+                              mesh.polygons_split, file_tags);
       },
-      "path"_a, "triangulate"_a);
+      "path"_a, "triangulate"_a, "tags"_a);
   m.def(
       "write_mesh",
-      [](const std::string& path, const Vertices& vertices, const Faces& faces, bool binary) {
+      [](const std::string& path, const Vertices& vertices, const Faces& faces, const std::optional<Faces>& face_sizes,
+         std::int32_t face_size, bool binary, const std::optional<sorpia::Tags>& tags,
+         std::optional<sorpia::Boundary> boundary) {
         check_shape(vertices, 3, "vertices");
-        check_shape(faces, 3, "faces");
-        const double* v = vertices.data();
-        const std::int32_t* f = faces.data();
-        const auto n = static_cast<std::size_t>(vertices.shape(0));
-        const auto nf = static_cast<std::size_t>(faces.shape(0));
+        sorpia::MeshView view;
+        view.vertices = vertices.data();
+        view.n_vertices = static_cast<std::size_t>(vertices.shape(0));
+        view.faces = faces.data();
+        if (face_sizes) {
+          view.face_sizes = face_sizes->data();
+          view.n_faces = static_cast<std::size_t>(face_sizes->size());
+          std::size_t total = 0;
+          for (py::ssize_t i = 0; i < face_sizes->size(); ++i) total += static_cast<std::size_t>(std::max(0, view.face_sizes[i]));
+          if (total != static_cast<std::size_t>(faces.size()))
+            throw sorpia::ParameterError("write_mesh: the face sizes add up to " + std::to_string(total) +
+                                         " corners but the faces list " + std::to_string(faces.size()));
+        } else {
+          if (face_size < 3) throw sorpia::MeshError("write_mesh: a face needs at least 3 vertices");
+          view.face_size = face_size;
+          view.n_faces = static_cast<std::size_t>(faces.size()) / static_cast<std::size_t>(face_size);
+          if (view.n_faces * static_cast<std::size_t>(face_size) != static_cast<std::size_t>(faces.size()))
+            throw sorpia::ParameterError("write_mesh: the faces do not divide into faces of " + std::to_string(face_size));
+        }
+        sorpia::FileTags file_tags;
+        if (tags) file_tags.tags = *tags;
+        file_tags.boundary = boundary;
         py::gil_scoped_release release;
-        sorpia::write_mesh(path, v, n, f, nf, binary);
+        sorpia::write_mesh(path, view, binary, &file_tags);
       },
-      "path"_a, "vertices"_a.noconvert(), "faces"_a.noconvert(), "binary"_a);
+      "path"_a, "vertices"_a.noconvert(), "faces"_a.noconvert(), "face_sizes"_a.noconvert(), "face_size"_a,
+      "binary"_a, "tags"_a, "boundary"_a);
   m.def(
       "write_file_atomic",
       [](const std::string& path, const py::bytes& data) {

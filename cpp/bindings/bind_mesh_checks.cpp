@@ -2,9 +2,12 @@
 // and the residual of a fit.
 #include <pybind11/stl.h>
 
+#include <algorithm>
+
 #include "bindings.hpp"
 #include "sorpia/limit_residual.hpp"
 #include "sorpia/mesh_statistics.hpp"
+#include "sorpia/sharp_edges.hpp"
 
 namespace sorpia_py {
 using namespace pybind11::literals;
@@ -41,6 +44,28 @@ py::dict statistics_dict(sorpia::MeshStatistics&& s) {
 }  // namespace
 
 void bind_mesh_checks(py::module_& m) {
+  m.def(
+      "sharp_edges",
+      [](const Vertices& vertices, const Faces& face_vertex_counts, const Faces& face_vertex_indices,
+         double angle_degrees) {
+        check_shape(vertices, 3, "vertices");
+        long long corners = 0;
+        for (py::ssize_t f = 0; f < face_vertex_counts.size(); ++f) corners += std::max(face_vertex_counts.data()[f], 0);
+        if (corners != static_cast<long long>(face_vertex_indices.size()))
+          throw sorpia::ParameterError("face_vertex_counts add up to " + std::to_string(corners) +
+                                       " corners but face_vertex_indices holds " +
+                                       std::to_string(face_vertex_indices.size()));
+        std::vector<std::int32_t> edges;
+        {
+          py::gil_scoped_release release;
+          edges = sorpia::sharp_edges(vertices.data(), static_cast<std::size_t>(vertices.shape(0)),
+                                      face_vertex_counts.data(), static_cast<std::size_t>(face_vertex_counts.size()),
+                                      face_vertex_indices.data(), angle_degrees);
+        }
+        return to_numpy(std::move(edges), 2);
+      },
+      "vertices"_a.noconvert(), "face_vertex_counts"_a.noconvert(), "face_vertex_indices"_a.noconvert(),
+      "angle_degrees"_a, "(k, 2) edges whose faces meet at more than angle_degrees (sorpia::sharp_edges).");
   m.def(
       "mesh_statistics",
       [](const sorpia::Topology& topology) {

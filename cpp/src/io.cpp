@@ -363,20 +363,43 @@ void triangulate_polygons(const Polygons& polygons, const std::vector<double>& v
   }
 }
 
-TriMesh parse_mesh(const FileData& file, MeshFormat format, Polygons& polygons) {
-  TriMesh mesh;
+std::vector<std::int32_t> triangle_rows(const Polygons& polygons, const std::vector<std::int32_t>& holes) {
+  // extra[i]: rows the polygons before polygons.list[i] add beyond one per face.
+  std::vector<std::size_t> extra(polygons.list.size() + 1, 0);
+  for (std::size_t i = 0; i < polygons.list.size(); ++i) extra[i + 1] = extra[i] + polygons.list[i].k - 3;
+  std::vector<std::int32_t> rows;
+  rows.reserve(holes.size());
+  for (const std::int32_t h : holes) {
+    const auto face = static_cast<std::size_t>(h);
+    const auto it = std::lower_bound(polygons.list.begin(), polygons.list.end(), face,
+                                     [](const Polygons::Polygon& p, std::size_t f) { return p.face < f; });
+    const auto i = static_cast<std::size_t>(it - polygons.list.begin());
+    const std::size_t first = face + extra[i];
+    const std::size_t count = it != polygons.list.end() && it->face == face ? it->k - 2 : 1;
+    for (std::size_t r = 0; r < count; ++r) rows.push_back(static_cast<std::int32_t>(first + r));
+  }
+  return rows;
+}
+
+MeshFile parse_mesh(const FileData& file, MeshFormat format, const ReadOptions& options) {
+  Polygons polygons;
+  polygons.triangulate = options.triangulate;
+  MeshFile mesh;
   switch (format) {
-    case MeshFormat::Obj: mesh = read_obj(file, polygons); break;
+    case MeshFormat::Obj: mesh = read_obj(file, polygons, options.tags); break;
     case MeshFormat::Off: mesh = read_off(file, polygons); break;
     case MeshFormat::Ply: mesh = read_ply(file, polygons); break;
     case MeshFormat::Stl: mesh = read_stl(file, polygons); break;
   }
   if (mesh.n_vertices() == 0) fail(file, "no vertices: not a mesh file of this format, or an empty mesh");
-  if (mesh.n_faces() == 0)
-    fail(file, "has " + std::to_string(mesh.n_vertices()) + " vertices but no faces: sorpia needs a triangle mesh");
+  if (mesh.n_faces() == 0) fail(file, "has " + std::to_string(mesh.n_vertices()) + " vertices but no faces");
   if (mesh.n_vertices() > static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max()))
     fail(file, "more vertices than int32 indices hold");
+  if (mesh.n_faces() > static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max()))
+    fail(file, "more faces than int32 indices hold");
   triangulate_polygons(polygons, mesh.vertices, mesh.faces);
+  if (!polygons.list.empty() && !mesh.tags.tags.holes.empty())
+    mesh.tags.tags.holes = triangle_rows(polygons, mesh.tags.tags.holes);
   return mesh;
 }
 
@@ -400,34 +423,44 @@ MeshFormat mesh_format(const std::string& path) {
                   ": use .obj, .off, .ply or .stl");
 }
 
-TriMesh read_mesh(const std::string& path, bool triangulate, std::size_t* polygons) {
+MeshFile read_mesh(const std::string& path, const ReadOptions& options) {
   const MeshFormat format = mesh_format(path);
-  detail::io::Polygons p;
-  p.triangulate = triangulate;
-  TriMesh mesh = detail::io::parse_mesh(detail::io::load_file(path, format), format, p);
-  if (polygons) *polygons = p.split;
-  return mesh;
+  return detail::io::parse_mesh(detail::io::load_file(path, format), format, options);
 }
 
-void write_mesh(const std::string& path, const double* vertices, std::size_t n_vertices, const std::int32_t* faces,
-                std::size_t n_faces, bool binary) {
+void write_mesh(const std::string& path, const MeshView& mesh, bool binary, const FileTags* tags) {
   const MeshFormat format = mesh_format(path);
+  const std::string where = detail::io::printable_path(path) + ": ";
   if (binary && (format == MeshFormat::Obj || format == MeshFormat::Off))
-    throw ParameterError(detail::io::printable_path(path) + ": OBJ and OFF are text formats; binary=true is for .ply and .stl");
-  if (n_vertices == 0 || n_faces == 0) throw MeshError("write_mesh: the mesh has no vertices or no faces");
-  for (std::size_t i = 0; i < 3 * n_vertices; ++i)
-    if (!std::isfinite(vertices[i]))
+    throw ParameterError(where + "OBJ and OFF are text formats; binary=true is for .ply and .stl");
+  const bool triangles = !mesh.face_sizes && mesh.face_size == 3;
+  if (format == MeshFormat::Stl && !triangles)
+    throw ParameterError(where + "STL stores triangles only; write polygons to .obj, .off or .ply, or triangulate them");
+  if (tags && !tags->empty() && format != MeshFormat::Obj)
+    throw ParameterError(where + "sharpness tags (creases, corners, holes, boundary) are written to .obj files only "
+                         "(OpenSubdiv's 't' lines); no other format has them");
+  if (mesh.n_vertices == 0 || mesh.n_faces == 0) throw MeshError("write_mesh: the mesh has no vertices or no faces");
+  for (std::size_t i = 0; i < 3 * mesh.n_vertices; ++i)
+    if (!std::isfinite(mesh.vertices[i]))
       throw MeshError("write_mesh: vertex " + std::to_string(i / 3) + " has a non-finite coordinate");
-  for (std::size_t i = 0; i < 3 * n_faces; ++i)
-    if (faces[i] < 0 || static_cast<std::size_t>(faces[i]) >= n_vertices)
-      throw MeshError("write_mesh: face " + std::to_string(i / 3) + " has vertex index " + std::to_string(faces[i]) +
-                      " out of range [0, " + std::to_string(n_vertices) + ")");
+  std::size_t face = 0;
+  detail::io::for_each_face(mesh, [&](const std::int32_t* f, std::size_t k) {
+    if (k < 3 || k > static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max()))
+      throw MeshError("write_mesh: face " + std::to_string(face) + " has " + std::to_string(static_cast<std::int32_t>(k)) +
+                      " vertices; a face needs at least 3");
+    for (std::size_t c = 0; c < k; ++c)
+      if (f[c] < 0 || static_cast<std::size_t>(f[c]) >= mesh.n_vertices)
+        throw MeshError("write_mesh: face " + std::to_string(face) + " has vertex index " + std::to_string(f[c]) +
+                        " out of range [0, " + std::to_string(mesh.n_vertices) + ")");
+    ++face;
+  });
+  if (tags) check_tags(tags->tags, mesh.n_vertices, mesh.n_faces);
   std::string data;
   switch (format) {
-    case MeshFormat::Obj: data = detail::io::format_obj(vertices, n_vertices, faces, n_faces); break;
-    case MeshFormat::Off: data = detail::io::format_off(vertices, n_vertices, faces, n_faces); break;
-    case MeshFormat::Ply: data = detail::io::format_ply(vertices, n_vertices, faces, n_faces, binary); break;
-    case MeshFormat::Stl: data = detail::io::format_stl(vertices, n_vertices, faces, n_faces, binary); break;
+    case MeshFormat::Obj: data = detail::io::format_obj(mesh, tags && !tags->empty() ? tags : nullptr); break;
+    case MeshFormat::Off: data = detail::io::format_off(mesh); break;
+    case MeshFormat::Ply: data = detail::io::format_ply(mesh, binary); break;
+    case MeshFormat::Stl: data = detail::io::format_stl(mesh, binary); break;
   }
   write_file_atomic(path, data);
 }

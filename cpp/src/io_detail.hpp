@@ -6,6 +6,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
+#include <limits>
 #include <memory>
 #include <string>
 #include <string_view>
@@ -193,7 +194,7 @@ inline bool is_obj_keyword(std::string_view t) {
 // skipped: for formats whose records may run over several lines (OFF).
 class TokenReader {
  public:
-  TokenReader(const char* begin, const char* end) : lines_(begin, end) {}
+  TokenReader(const char* begin, const char* end) : lines_(begin, end), end_(end) {}
   // The next token; false at the end of the text.
   bool next(std::string_view& token) {
     while (!next_token(rest_, token)) {
@@ -213,9 +214,12 @@ class TokenReader {
   }
   std::size_t line() const { return lines_.number(); }
   const char* position() const { return lines_.position(); }
+  // Bytes not yet read as tokens: the rest of the current line and what follows it.
+  std::size_t bytes_left() const { return rest_.size() + static_cast<std::size_t>(end_ - lines_.position()); }
 
  private:
   LineReader lines_;
+  const char* end_;
   std::string_view rest_;
 };
 
@@ -255,11 +259,11 @@ double parse_coordinate(const FileData& f, const Where& w, std::string_view toke
 // list meanwhile) until the whole file is read: the split of each is chosen
 // with every edge of the mesh known (triangulate_polygons).
 struct Polygons {
-  bool triangulate = false;  // split each into triangles; else an error naming its line
-  std::size_t split = 0;     // polygons split so far
+  bool triangulate = false;  // split each into triangles; else kept as they are
   struct Polygon {
-    std::size_t first_row;   // its k - 2 triangles are rows first_row .. first_row + k - 3 of the faces
-    std::size_t first_index; // its k corners are indices[first_index .. first_index + k)
+    std::size_t face;         // its index among the file's faces
+    std::size_t first_row;    // its k - 2 triangles are rows first_row .. first_row + k - 3 of the faces
+    std::size_t first_index;  // its k corners are indices[first_index .. first_index + k)
     std::size_t k;
   };
   std::vector<Polygon> list;
@@ -276,39 +280,63 @@ struct Polygons {
 void triangulate_polygons(const Polygons& polygons, const std::vector<double>& vertices,
                           std::vector<std::int32_t>& faces);
 
-// Collects faces (0-based indices), recording polygons for triangulation when
-// asked and reporting them otherwise.
+// The rows of the triangles of the file's faces `holes` (indices among the
+// file's faces, fewer than `n_file_faces`) once `polygons` are split: a
+// triangle keeps its face, a polygon of k corners gives k - 2 rows.
+std::vector<std::int32_t> triangle_rows(const Polygons& polygons, const std::vector<std::int32_t>& holes);
+
+// Collects faces (0-based indices) into a MeshFile: as they are, the sizes
+// recorded only once a face differs from those before it; or, with
+// triangulate, polygons as fans recorded for triangulate_polygons.
 class FaceSink {
  public:
-  FaceSink(const FileData& file, Polygons& polygons, std::vector<std::int32_t>& faces)
-      : file_(file), polygons_(polygons), faces_(faces) {}
+  FaceSink(const FileData& file, Polygons& polygons, MeshFile& mesh) : file_(file), polygons_(polygons), mesh_(mesh) {}
   // `idx` holds k indices already checked to lie in [0, n_vertices) (or, in
   // OBJ, to be checked against the final vertex count: the fan's rows hold
   // every corner until then).
   void add(const std::int64_t* idx, std::size_t k, const Where& w) {
-    if (k == 3) {
-      faces_.insert(faces_.end(), {static_cast<std::int32_t>(idx[0]), static_cast<std::int32_t>(idx[1]),
-                                   static_cast<std::int32_t>(idx[2])});
+    if (mesh_.face_sizes.empty() && k == static_cast<std::size_t>(mesh_.face_size) && k == 3) {
+      mesh_.faces.insert(mesh_.faces.end(), {static_cast<std::int32_t>(idx[0]), static_cast<std::int32_t>(idx[1]),
+                                             static_cast<std::int32_t>(idx[2])});
+      ++n_faces_;
       return;
     }
-    if (k < 3) fail(file_, w, "a face needs at least 3 vertices, this one has " + std::to_string(k));
-    if (!polygons_.triangulate)
-      fail(file_, w,
-           "face with " + std::to_string(k) +
-               " vertices: sorpia works on triangles; read the file with triangulate=True to split each "
-               "polygon into triangles");
-    ++polygons_.split;
-    polygons_.list.push_back({faces_.size() / 3, polygons_.indices.size(), k});
-    for (std::size_t i = 0; i < k; ++i) polygons_.indices.push_back(static_cast<std::int32_t>(idx[i]));
-    for (std::size_t i = 1; i + 1 < k; ++i)
-      faces_.insert(faces_.end(), {static_cast<std::int32_t>(idx[0]), static_cast<std::int32_t>(idx[i]),
-                                   static_cast<std::int32_t>(idx[i + 1])});
+    add_other(idx, k, w);
   }
+  // Faces read so far (file faces: a polygon split counts once).
+  std::size_t n_faces() const { return n_faces_; }
 
  private:
+  void add_other(const std::int64_t* idx, std::size_t k, const Where& w) {
+    if (k < 3) fail(file_, w, "a face needs at least 3 vertices, this one has " + std::to_string(k));
+    if (polygons_.triangulate && k > 3) {
+      ++mesh_.polygons_split;
+      polygons_.list.push_back({n_faces_, mesh_.faces.size() / 3, polygons_.indices.size(), k});
+      for (std::size_t i = 0; i < k; ++i) polygons_.indices.push_back(static_cast<std::int32_t>(idx[i]));
+      for (std::size_t i = 1; i + 1 < k; ++i)
+        mesh_.faces.insert(mesh_.faces.end(), {static_cast<std::int32_t>(idx[0]), static_cast<std::int32_t>(idx[i]),
+                                               static_cast<std::int32_t>(idx[i + 1])});
+      ++n_faces_;
+      return;
+    }
+    if (k > static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max()))
+      fail(file_, w, "a face of " + std::to_string(k) + " vertices: more than int32 counts hold");
+    const auto size = static_cast<std::int32_t>(k);
+    if (mesh_.face_sizes.empty() && size != mesh_.face_size) {
+      if (n_faces_ == 0)
+        mesh_.face_size = size;  // the first face sets the common size
+      else
+        mesh_.face_sizes.assign(n_faces_, mesh_.face_size);  // sizes differ from here on: record every one
+    }
+    if (!mesh_.face_sizes.empty()) mesh_.face_sizes.push_back(size);
+    for (std::size_t i = 0; i < k; ++i) mesh_.faces.push_back(static_cast<std::int32_t>(idx[i]));
+    ++n_faces_;
+  }
+
   const FileData& file_;
   Polygons& polygons_;
-  std::vector<std::int32_t>& faces_;
+  MeshFile& mesh_;
+  std::size_t n_faces_ = 0;
 };
 
 // Index check shared by the readers: 0 <= i < n.
@@ -343,11 +371,13 @@ class TextOut {
     num(p[1]) << ' ';
     return num(p[2]);
   }
-  // "a b c", indices plus `base` (1 for OBJ)
-  TextOut& triangle(const std::int32_t* f, int base) {
-    num(f[0] + base) << ' ';
-    num(f[1] + base) << ' ';
-    return num(f[2] + base);
+  // "a b c ...": the k indices of a face, each plus `base` (1 for OBJ)
+  TextOut& face(const std::int32_t* f, std::size_t k, int base) {
+    for (std::size_t i = 0; i < k; ++i) {
+      if (i) s_.push_back(' ');
+      num(f[i] + base);
+    }
+    return *this;
   }
   std::string& str() { return s_; }
 
@@ -355,20 +385,32 @@ class TextOut {
   std::string s_;
 };
 
+// The faces of a MeshView one by one: f(first corner, k).
+template <class F>
+void for_each_face(const MeshView& m, F f) {
+  std::size_t at = 0;
+  for (std::size_t i = 0; i < m.n_faces; ++i) {
+    const auto k = static_cast<std::size_t>(m.face_sizes ? m.face_sizes[i] : m.face_size);
+    f(m.faces + at, k);
+    at += k;
+  }
+}
+
 // The mesh in `file`, read as `format` (read_mesh without the path: the
 // fuzz target feeds bytes here). Throws FileError for a malformed file and
 // for a mesh without vertices or faces, or with more vertices than int32
 // indices hold.
-TriMesh parse_mesh(const FileData& file, MeshFormat format, Polygons& polygons);
+MeshFile parse_mesh(const FileData& file, MeshFormat format, const ReadOptions& options);
 
 // Format readers and writers (io_obj.cpp, io_off.cpp, io_ply.cpp, io_stl.cpp).
-TriMesh read_obj(const FileData& f, Polygons& polygons);
-TriMesh read_off(const FileData& f, Polygons& polygons);
-TriMesh read_ply(const FileData& f, Polygons& polygons);
-TriMesh read_stl(const FileData& f, Polygons& polygons);
-std::string format_obj(const double* v, std::size_t n, const std::int32_t* faces, std::size_t m);
-std::string format_off(const double* v, std::size_t n, const std::int32_t* faces, std::size_t m);
-std::string format_ply(const double* v, std::size_t n, const std::int32_t* faces, std::size_t m, bool binary);
-std::string format_stl(const double* v, std::size_t n, const std::int32_t* faces, std::size_t m, bool binary);
+// `tags`: read the OBJ `t` lines (read_obj only).
+MeshFile read_obj(const FileData& f, Polygons& polygons, bool tags);
+MeshFile read_off(const FileData& f, Polygons& polygons);
+MeshFile read_ply(const FileData& f, Polygons& polygons);
+MeshFile read_stl(const FileData& f, Polygons& polygons);
+std::string format_obj(const MeshView& m, const FileTags* tags);
+std::string format_off(const MeshView& m);
+std::string format_ply(const MeshView& m, bool binary);
+std::string format_stl(const MeshView& m, bool binary);
 
 }  // namespace sorpia::detail::io

@@ -1,11 +1,14 @@
 // Wavefront OBJ: "v x y z" vertices and "f" faces (1-based indices, "a",
 // "a/b", "a//c", "a/b/c" forms, negative indices counted from the last vertex
-// read). Every other statement (vt, vn, vp, g, o, s, usemtl, mtllib, l, p,
-// curves, ...) is skipped. A line ending in "\\" continues on the next; a
+// read), and, when asked, OpenSubdiv's "t" tag lines (FileTags in
+// sorpia/io.hpp). Every other statement (vt, vn, vp, g, o, s, usemtl, mtllib,
+// l, p, curves, ...) is skipped. A line ending in "\\" continues on the next; a
 // UTF-8 byte-order mark is skipped; after "v x y z" only numbers may follow
 // (the weight w, or colours).
+#include <algorithm>
 #include <cctype>
 #include <limits>
+#include <utility>
 
 #include "io_detail.hpp"
 
@@ -18,17 +21,174 @@ bool continues(std::string_view line) {
   return !line.empty() && line.back() == '\\';
 }
 
+
+// One `t` line: its name and its integer, number and word arguments.
+struct TagLine {
+  std::string_view name;
+  std::vector<long long> ints;
+  std::vector<double> floats;
+  std::vector<std::string_view> strings;
+};
+
+TagLine parse_tag(const FileData& f, const Where& w, std::string_view rest) {
+  TagLine t;
+  std::string_view tok;
+  if (!next_token(rest, t.name)) fail(f, w, "a 't' line needs a tag name and its argument counts I/F/S");
+  long long counts[3] = {0, 0, 0};
+  {
+    if (!next_token(rest, tok)) fail(f, w, "tag " + quoted(t.name) + " needs its argument counts I/F/S");
+    std::string_view c = tok;
+    for (int k = 0; k < 3; ++k) {
+      const std::size_t slash = k < 2 ? c.find('/') : c.size();
+      if (slash == std::string_view::npos || !parse_int(c.substr(0, slash), counts[k]) || counts[k] < 0)
+        fail(f, w, "tag " + quoted(t.name) + ": expected argument counts I/F/S (e.g. 2/1/0), found " + quoted(tok));
+      c = k < 2 ? c.substr(slash + 1) : c;
+    }
+    // Each argument is at least one character and a blank: a bad count fails before any allocation.
+    if (static_cast<unsigned long long>(counts[0]) + counts[1] + counts[2] > rest.size())
+      fail(f, w, "tag " + quoted(t.name) + ": " + quoted(tok) + " counts more arguments than the line holds");
+  }
+  const auto need = [&](const char* what) {
+    if (!next_token(rest, tok))
+      fail(f, w, "tag " + quoted(t.name) + ": the line ends before its " + what + " arguments are all given");
+    return tok;
+  };
+  t.ints.resize(static_cast<std::size_t>(counts[0]));
+  for (auto& x : t.ints)
+    if (!parse_int(need("integer"), x)) fail(f, w, "tag " + quoted(t.name) + ": expected an integer, found " + quoted(tok));
+  t.floats.resize(static_cast<std::size_t>(counts[1]));
+  for (auto& x : t.floats) {
+    if (parse_number(need("number"), x) != std::errc() || std::isnan(x))
+      fail(f, w, "tag " + quoted(t.name) + ": expected a number, found " + quoted(tok));
+  }
+  t.strings.resize(static_cast<std::size_t>(counts[2]));
+  for (auto& x : t.strings) x = need("word");
+  if (next_token(rest, tok))
+    fail(f, w, "tag " + quoted(t.name) + ": " + quoted(tok) + " after the arguments its counts announce");
+  return t;
+}
+
+// The tags of a file, collected line by line (FileTags), with the lines of
+// the indices checked once the whole file is read.
+class TagReader {
+ public:
+  explicit TagReader(const FileData& f) : f_(f) {}
+
+  void add(const Where& w, std::string_view rest, FileTags& out) {
+    const TagLine t = parse_tag(f_, w, rest);
+    const std::string name = quoted(t.name);
+    // One sharpness for all, or one per tag; negative counts as 0 (OpenSubdiv: max(0, s)).
+    const auto sharpness = [&](std::size_t n_tags, std::size_t i) {
+      if (t.floats.size() != 1 && t.floats.size() != n_tags)
+        fail(f_, w, "tag " + name + ": " + std::to_string(n_tags) + " tags need one sharpness for all or one each, found " +
+                        std::to_string(t.floats.size()));
+      return std::max(0.0, t.floats[t.floats.size() == 1 ? 0 : i]);
+    };
+    if (t.name == "crease") {
+      if (t.ints.empty() || t.ints.size() % 2)
+        fail(f_, w, "tag 'crease' takes vertex pairs (A B for an edge), found " + std::to_string(t.ints.size()) +
+                        " integers");
+      for (std::size_t e = 0; e < t.ints.size() / 2; ++e) {
+        const long long a = t.ints[2 * e], b = t.ints[2 * e + 1];
+        if (a == b) fail(f_, w, "tag 'crease': edge (" + std::to_string(a) + ", " + std::to_string(b) + ") has one vertex twice");
+        vertex(w, a, out.tags.crease_vertices);
+        vertex(w, b, out.tags.crease_vertices);
+        out.tags.crease_sharpness.push_back(sharpness(t.ints.size() / 2, e));
+      }
+    } else if (t.name == "corner") {
+      if (t.ints.empty()) fail(f_, w, "tag 'corner' names no vertex");
+      for (std::size_t i = 0; i < t.ints.size(); ++i) {
+        vertex(w, t.ints[i], out.tags.corner_vertices);
+        out.tags.corner_sharpness.push_back(sharpness(t.ints.size(), i));
+      }
+    } else if (t.name == "hole") {
+      for (const long long h : t.ints) {
+        if (h < 0 || h > std::numeric_limits<std::int32_t>::max())
+          fail(f_, w, "tag 'hole': face " + std::to_string(h) + " is out of range");
+        hole_lines_.push_back(w.index);
+        out.tags.holes.push_back(static_cast<std::int32_t>(h));
+      }
+    } else if (t.name == "interpolateboundary") {
+      if (t.ints.size() != 1) fail(f_, w, "tag 'interpolateboundary' takes one integer (1 edge-and-corner, 2 edge-only)");
+      if (t.ints[0] == 1)
+        out.boundary = Boundary::EdgeAndCorner;
+      else if (t.ints[0] == 2)
+        out.boundary = Boundary::EdgeOnly;
+      else if (t.ints[0] == 0)
+        fail(f_, w, "tag 'interpolateboundary 0' (no boundary interpolation, OpenSubdiv's VTX_BOUNDARY_NONE) is not "
+                    "supported: sorpia's boundary rules are 1 (edge-and-corner) and 2 (edge-only)");
+      else
+        fail(f_, w, "tag 'interpolateboundary': unknown mode " + std::to_string(t.ints[0]) +
+                        " (1 edge-and-corner, 2 edge-only)");
+    } else if (t.name == "creasemethod") {
+      if (t.strings.size() != 1) fail(f_, w, "tag 'creasemethod' takes one word (normal or chaikin)");
+      if (t.strings[0] == "chaikin")
+        fail(f_, w, "tag 'creasemethod chaikin' is not supported: sorpia's semi-sharp creases decay uniformly "
+                    "(OpenSubdiv's CREASE_UNIFORM, 'normal')");
+      if (t.strings[0] != "normal") fail(f_, w, "tag 'creasemethod': unknown method " + quoted(t.strings[0]));
+    } else if (t.name == "smoothtriangles") {
+      if (t.strings.size() != 1) fail(f_, w, "tag 'smoothtriangles' takes one word (catmark or smooth)");
+      if (t.strings[0] == "smooth")
+        fail(f_, w, "tag 'smoothtriangles smooth' is not supported: sorpia's Catmull-Clark triangles follow the "
+                    "Catmull-Clark rule (OpenSubdiv's TRI_SUB_CATMARK, 'catmark')");
+      if (t.strings[0] != "catmark") fail(f_, w, "tag 'smoothtriangles': unknown value " + quoted(t.strings[0]));
+    } else if (t.name != "facevaryinginterpolateboundary" && t.name != "facevaryingpropagatecorners") {
+      // Unknown names are skipped, as OpenSubdiv's parser skips them, and listed.
+      auto it = unknown_.begin();
+      while (it != unknown_.end() && it->name != t.name) ++it;
+      if (it == unknown_.end())
+        unknown_.push_back({std::string(t.name), 1, w.index});
+      else
+        ++it->count;
+    }
+  }
+
+  // Checks the indices against the mesh read (n vertices, m file faces) and fills out.unknown.
+  void finish(std::size_t n_vertices, std::size_t n_faces, FileTags& out) const {
+    for (const auto& [value, line] : vertex_lines_)
+      if (static_cast<std::size_t>(value) >= n_vertices)
+        fail(f_, Where{"line", line},
+             "tag vertex " + std::to_string(value) + " is out of range: the file has " + std::to_string(n_vertices) +
+                 " vertices (tag indices are 0-based)");
+    for (std::size_t i = 0; i < out.tags.holes.size(); ++i)
+      if (static_cast<std::size_t>(out.tags.holes[i]) >= n_faces)
+        fail(f_, Where{"line", hole_lines_[i]},
+             "tag 'hole': face " + std::to_string(out.tags.holes[i]) + " is out of range: the file has " +
+                 std::to_string(n_faces) + " faces (tag indices are 0-based)");
+    for (const auto& u : unknown_)
+      out.unknown.push_back(quoted(u.name) + ": " + std::to_string(u.count) + (u.count == 1 ? " tag" : " tags") +
+                            (u.count == 1 ? ", on line " : ", the first on line ") + std::to_string(u.line));
+  }
+
+ private:
+  void vertex(const Where& w, long long v, std::vector<std::int32_t>& out) {
+    if (v < 0 || v > std::numeric_limits<std::int32_t>::max())
+      fail(f_, w, "tag vertex " + std::to_string(v) + " is out of range (tag indices are 0-based)");
+    vertex_lines_.push_back({v, w.index});
+    out.push_back(static_cast<std::int32_t>(v));
+  }
+  struct Unknown {
+    std::string name;
+    std::size_t count, line;
+  };
+  const FileData& f_;
+  std::vector<std::pair<long long, std::size_t>> vertex_lines_;  // (vertex, line) of every tag vertex
+  std::vector<std::size_t> hole_lines_;
+  std::vector<Unknown> unknown_;
+};
+
 }  // namespace
 
-TriMesh read_obj(const FileData& f, Polygons& polygons) {
-  TriMesh mesh;
+MeshFile read_obj(const FileData& f, Polygons& polygons, bool tags) {
+  MeshFile mesh;
   mesh.vertices.reserve(f.bytes.size() / 16);
   mesh.faces.reserve(f.bytes.size() / 16);
-  FaceSink sink(f, polygons, mesh.faces);
+  FaceSink sink(f, polygons, mesh);
+  TagReader tag_reader(f);
   // Faces may name vertices defined further down: positive indices past the
-  // vertices read so far are checked at the end (face row, line).
+  // vertices read so far are checked at the end (indices, line).
   struct Pending {
-    std::size_t first_row, end_row, line;
+    std::size_t first, end, line;
   };
   std::vector<Pending> pending;
   std::vector<std::int64_t> idx;
@@ -80,27 +240,45 @@ TriMesh read_obj(const FileData& f, Polygons& polygons) {
       }
       const std::size_t before = mesh.faces.size();
       sink.add(idx.data(), idx.size(), w);
-      if (forward) pending.push_back({before / 3, mesh.faces.size() / 3, w.index});
+      if (forward) pending.push_back({before, mesh.faces.size(), w.index});
+    } else if (tags && tok == "t") {
+      tag_reader.add(w, rest, mesh.tags);
     } else if (!is_obj_keyword(tok)) {
       fail(f, w, quoted(tok) + " is not an OBJ statement (not a text OBJ file?)");
     }
   }
   const std::size_t n = mesh.n_vertices();
   for (const Pending& p : pending)
-    for (std::size_t k = 3 * p.first_row; k < 3 * p.end_row; ++k)
+    for (std::size_t k = p.first; k < p.end; ++k)
       if (static_cast<std::size_t>(mesh.faces[k]) >= n)
         fail(f, Where{"line", p.line},
              "vertex index " + std::to_string(mesh.faces[k] + 1) + " is out of range: the file has " +
                  std::to_string(n) + " vertices");
+  if (tags) tag_reader.finish(n, sink.n_faces(), mesh.tags);
   return mesh;
 }
 
-std::string format_obj(const double* v, std::size_t n, const std::int32_t* faces, std::size_t m) {
-  TextOut out(n * 60 + m * 30);
-  out << "# written by sorpia " << SORPIA_VERSION << ": " << std::to_string(n) << " vertices, " << std::to_string(m)
-      << " triangles\n";
-  for (std::size_t i = 0; i < n; ++i) (out << "v ").xyz(v + 3 * i) << '\n';
-  for (std::size_t i = 0; i < m; ++i) (out << "f ").triangle(faces + 3 * i, 1) << '\n';
+std::string format_obj(const MeshView& m, const FileTags* tags) {
+  TextOut out(m.n_vertices * 60 + m.n_faces * 30);
+  out << "# written by sorpia " << SORPIA_VERSION << ": " << std::to_string(m.n_vertices) << " vertices, "
+      << std::to_string(m.n_faces) << (m.face_sizes || m.face_size != 3 ? " faces\n" : " triangles\n");
+  for (std::size_t i = 0; i < m.n_vertices; ++i) (out << "v ").xyz(m.vertices + 3 * i) << '\n';
+  for_each_face(m, [&](const std::int32_t* f, std::size_t k) { (out << "f ").face(f, k, 1) << '\n'; });
+  if (!tags) return std::move(out.str());
+  // One tag a line, as OpenSubdiv's shapes have them (its parser reads lines of at most 255 characters).
+  const Tags& t = tags->tags;
+  for (std::size_t i = 0; i < t.n_creases(); ++i) {
+    (out << "t crease 2/1/0 ").face(t.crease_vertices.data() + 2 * i, 2, 0) << ' ';
+    out.num(t.crease_sharpness[i]) << '\n';
+  }
+  for (std::size_t i = 0; i < t.n_corners(); ++i) {
+    (out << "t corner 1/1/0 ").num(t.corner_vertices[i]) << ' ';
+    out.num(t.corner_sharpness[i]) << '\n';
+  }
+  for (const std::int32_t h : t.holes) (out << "t hole 1/0/0 ").num(h) << '\n';
+  if (tags->boundary)
+    out << (*tags->boundary == Boundary::EdgeAndCorner ? "t interpolateboundary 1/0/0 1\n"
+                                                         : "t interpolateboundary 1/0/0 2\n");
   return std::move(out.str());
 }
 

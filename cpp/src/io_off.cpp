@@ -23,7 +23,7 @@ std::size_t parse_count(const FileData& f, const Where& w, std::string_view rest
 
 }  // namespace
 
-TriMesh read_off(const FileData& f, Polygons& polygons) {
+MeshFile read_off(const FileData& f, Polygons& polygons) {
   TokenReader in(text_begin(f), f.bytes.data() + f.bytes.size());
   std::string_view tok;
   const auto at = [&in] { return Where{"line", in.line()}; };
@@ -51,7 +51,7 @@ TriMesh read_off(const FileData& f, Polygons& polygons) {
          "the header claims " + std::to_string(nv) + " vertices and " + std::to_string(nf) +
              " faces, more than the remaining " + std::to_string(left) + " bytes can hold");
 
-  TriMesh mesh;
+  MeshFile mesh;
   mesh.vertices.resize(3 * nv);
   for (std::size_t i = 0; i < nv; ++i) {
     for (int c = 0; c < 3; ++c) {
@@ -63,15 +63,15 @@ TriMesh read_off(const FileData& f, Polygons& polygons) {
     in.skip_line();
   }
   mesh.faces.reserve(3 * nf);
-  FaceSink sink(f, polygons, mesh.faces);
+  FaceSink sink(f, polygons, mesh);
   std::vector<std::int64_t> idx;
   for (std::size_t i = 0; i < nf; ++i) {
     if (!in.next(tok)) fail(f, "the file ends after " + std::to_string(i) + " of " + std::to_string(nf) + " faces");
     const Where w = at();
     long long k = 0;
     if (!parse_int(tok, k) || k < 0) fail(f, w, "expected the number of vertices of a face, found " + quoted(tok));
-    const auto rest = static_cast<std::size_t>(f.bytes.data() + f.bytes.size() - in.position());
-    if (static_cast<unsigned long long>(k) > rest / 2 + 64)  // each index takes 2 bytes: before allocating for it
+    const std::size_t rest = in.bytes_left();
+    if (static_cast<unsigned long long>(k) > rest / 2 + 1)  // each index takes 2 bytes: before allocating for it
       fail(f, w, "a face of " + std::to_string(k) + " vertices is longer than the rest of the file");
     idx.resize(static_cast<std::size_t>(k));
     for (auto& x : idx) {
@@ -87,11 +87,11 @@ TriMesh read_off(const FileData& f, Polygons& polygons) {
   return mesh;
 }
 
-std::string format_off(const double* v, std::size_t n, const std::int32_t* faces, std::size_t m) {
-  TextOut out(n * 60 + m * 30);
-  out << "OFF\n" << std::to_string(n) << ' ' << std::to_string(m) << " 0\n";
-  for (std::size_t i = 0; i < n; ++i) out.xyz(v + 3 * i) << '\n';
-  for (std::size_t i = 0; i < m; ++i) (out << "3 ").triangle(faces + 3 * i, 0) << '\n';
+std::string format_off(const MeshView& m) {
+  TextOut out(m.n_vertices * 60 + m.n_faces * 30);
+  out << "OFF\n" << std::to_string(m.n_vertices) << ' ' << std::to_string(m.n_faces) << " 0\n";
+  for (std::size_t i = 0; i < m.n_vertices; ++i) out.xyz(m.vertices + 3 * i) << '\n';
+  for_each_face(m, [&](const std::int32_t* f, std::size_t k) { (out.num(k) << ' ').face(f, k, 0) << '\n'; });
   return std::move(out.str());
 }
 

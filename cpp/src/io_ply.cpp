@@ -4,6 +4,7 @@
 // "vertex_indices" (or "vertex_index") list are read, or, without a "face"
 // element, the triangle strips of a "tristrips" element (as several of
 // Stanford's scans come); every other property and element is skipped.
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -246,12 +247,12 @@ Layout find_layout(const FileData& f, const Header& h) {
   return l;
 }
 
-TriMesh read_binary(const FileData& f, const Header& h, const Layout& l, Polygons& polygons) {
+MeshFile read_binary(const FileData& f, const Header& h, const Layout& l, Polygons& polygons) {
   const bool swap = h.encoding == Encoding::BigEndian;
   const char* p = h.data;
   const char* end = f.bytes.data() + f.bytes.size();
-  TriMesh mesh;
-  FaceSink sink(f, polygons, mesh.faces);
+  MeshFile mesh;
+  FaceSink sink(f, polygons, mesh);
   std::vector<std::int64_t> idx;
   const std::size_t nv = l.vertex->count;
   auto truncated = [&](const Element& e, std::size_t i) {
@@ -328,11 +329,11 @@ TriMesh read_binary(const FileData& f, const Header& h, const Layout& l, Polygon
   return mesh;
 }
 
-TriMesh read_ascii(const FileData& f, const Header& h, const Layout& l, Polygons& polygons) {
+MeshFile read_ascii(const FileData& f, const Header& h, const Layout& l, Polygons& polygons) {
   LineReader lines(h.data, f.bytes.data() + f.bytes.size());
   const std::size_t first_line = h.data_line - 1;
-  TriMesh mesh;
-  FaceSink sink(f, polygons, mesh.faces);
+  MeshFile mesh;
+  FaceSink sink(f, polygons, mesh);
   std::vector<std::int64_t> idx;
   const std::size_t nv = l.vertex->count;
   std::string_view line, rest, tok;
@@ -387,37 +388,60 @@ TriMesh read_ascii(const FileData& f, const Header& h, const Layout& l, Polygons
 
 }  // namespace
 
-TriMesh read_ply(const FileData& f, Polygons& polygons) {
+MeshFile read_ply(const FileData& f, Polygons& polygons) {
   const Header h = parse_header(f);
   const Layout l = find_layout(f, h);
   return h.encoding == Encoding::Ascii ? read_ascii(f, h, l, polygons) : read_binary(f, h, l, polygons);
 }
 
-std::string format_ply(const double* v, std::size_t n, const std::int32_t* faces, std::size_t m, bool binary) {
+std::string format_ply(const MeshView& mesh, bool binary) {
   static_assert(sizeof(double) == 8 && sizeof(std::int32_t) == 4, "PLY double and int");
-  TextOut out(binary ? 300 + 24 * n + 13 * m : n * 60 + m * 30);
+  const double* v = mesh.vertices;
+  const std::size_t n = mesh.n_vertices, m = mesh.n_faces;
+  // The list's count is a uchar unless a face has more than 255 corners.
+  std::size_t n_indices = 0, largest = 0;
+  for_each_face(mesh, [&](const std::int32_t*, std::size_t k) {
+    n_indices += k;
+    largest = std::max(largest, k);
+  });
+  const bool wide = largest > 255;
+  TextOut out(binary ? 300 + 24 * n + (wide ? 4 : 1) * m + 4 * n_indices : n * 60 + m * 30);
   out << "ply\nformat " << (binary ? "binary_little_endian" : "ascii") << " 1.0\ncomment written by sorpia "
       << SORPIA_VERSION << "\nelement vertex " << std::to_string(n)
       << "\nproperty double x\nproperty double y\nproperty double z\nelement face " << std::to_string(m)
-      << "\nproperty list uchar int vertex_indices\nend_header\n";
+      << (wide ? "\nproperty list int int vertex_indices\nend_header\n" : "\nproperty list uchar int vertex_indices\nend_header\n");
   std::string& s = out.str();
   if (!binary) {
     for (std::size_t i = 0; i < n; ++i) out.xyz(v + 3 * i) << '\n';
-    for (std::size_t i = 0; i < m; ++i) (out << "3 ").triangle(faces + 3 * i, 0) << '\n';
+    for_each_face(mesh, [&](const std::int32_t* f, std::size_t k) { (out.num(k) << ' ').face(f, k, 0) << '\n'; });
     return std::move(s);
   }
 #if defined(__BYTE_ORDER__) && __BYTE_ORDER__ != __ORDER_LITTLE_ENDIAN__
 #error "the binary PLY writer assumes a little-endian machine"
 #endif
   const std::size_t head = s.size();
-  s.resize(head + 24 * n + 13 * m);
+  s.resize(head + 24 * n + (wide ? 4 : 1) * m + 4 * n_indices);
   char* p = s.data() + head;
   std::memcpy(p, v, 24 * n);
   p += 24 * n;
-  for (std::size_t i = 0; i < m; ++i, p += 13) {
-    p[0] = 3;
-    std::memcpy(p + 1, faces + 3 * i, 12);
+  if (!mesh.face_sizes && mesh.face_size == 3) {  // triangles: fixed 13-byte records
+    for (std::size_t i = 0; i < m; ++i, p += 13) {
+      p[0] = 3;
+      std::memcpy(p + 1, mesh.faces + 3 * i, 12);
+    }
+    return std::move(s);
   }
+  for_each_face(mesh, [&](const std::int32_t* f, std::size_t k) {
+    if (wide) {
+      const auto c = static_cast<std::int32_t>(k);
+      std::memcpy(p, &c, 4);
+      p += 4;
+    } else {
+      *p++ = static_cast<char>(static_cast<unsigned char>(k));
+    }
+    std::memcpy(p, f, 4 * k);
+    p += 4 * k;
+  });
   return std::move(s);
 }
 

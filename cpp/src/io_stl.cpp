@@ -30,7 +30,7 @@ struct KeyHash {
 // Merges exactly equal corners into one vertex.
 class Welder {
  public:
-  Welder(TriMesh& mesh, std::size_t n_triangles) : mesh_(mesh) { map_.reserve(n_triangles / 2 + 16); }
+  Welder(MeshFile& mesh, std::size_t n_triangles) : mesh_(mesh) { map_.reserve(n_triangles / 2 + 16); }
   std::int64_t add(const double p[3]) {
     Key k{};
     for (int c = 0; c < 3; ++c) {
@@ -44,12 +44,12 @@ class Welder {
   }
 
  private:
-  TriMesh& mesh_;
+  MeshFile& mesh_;
   std::unordered_map<Key, std::int64_t, KeyHash> map_;
 };
 
-TriMesh read_binary(const FileData& f, std::size_t count) {
-  TriMesh mesh;
+MeshFile read_binary(const FileData& f, std::size_t count) {
+  MeshFile mesh;
   mesh.faces.reserve(3 * count);
   Welder weld(mesh, count);
   const char* p = f.bytes.data() + 84;
@@ -68,10 +68,10 @@ TriMesh read_binary(const FileData& f, std::size_t count) {
   return mesh;
 }
 
-TriMesh read_ascii(const FileData& f, Polygons& polygons) {
-  TriMesh mesh;
+MeshFile read_ascii(const FileData& f, Polygons& polygons) {
+  MeshFile mesh;
   Welder weld(mesh, f.bytes.size() / 200);
-  FaceSink sink(f, polygons, mesh.faces);
+  FaceSink sink(f, polygons, mesh);
   LineReader lines(f.bytes.data(), f.bytes.data() + f.bytes.size());
   std::string_view line, rest, tok;
   std::vector<std::int64_t> loop;
@@ -116,7 +116,7 @@ void facet(const double* v, const std::int32_t* t, float out[12]) {
 
 }  // namespace
 
-TriMesh read_stl(const FileData& f, Polygons& polygons) {
+MeshFile read_stl(const FileData& f, Polygons& polygons) {
   const std::size_t size = f.bytes.size();
   // Binary files may begin with "solid" too: the size decides first.
   std::uint32_t count = 0;
@@ -132,7 +132,11 @@ TriMesh read_stl(const FileData& f, Polygons& polygons) {
               std::to_string(size) + " bytes (truncated or not an STL file)");
 }
 
-std::string format_stl(const double* v, std::size_t n, const std::int32_t* faces, std::size_t m, bool binary) {
+std::string format_stl(const MeshView& mesh, bool binary) {
+  // write_mesh refuses polygons for STL before this is called.
+  const double* v = mesh.vertices;
+  const std::int32_t* faces = mesh.faces;
+  const std::size_t n = mesh.n_vertices, m = mesh.n_faces;
   for (std::size_t i = 0; i < 3 * n; ++i)
     if (std::fabs(v[i]) > std::numeric_limits<float>::max())
       throw MeshError("write_mesh: vertex " + std::to_string(i / 3) + " has coordinate " + std::to_string(v[i]) +

@@ -1,5 +1,6 @@
 #pragma once
 // OpenMesh types used inside the core (never in a public header).
+#include <OpenMesh/Core/Mesh/PolyMesh_ArrayKernelT.hh>
 #include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
 
 namespace sorpia::detail {
@@ -11,6 +12,7 @@ struct DoubleTraits : public OpenMesh::DefaultTraits {
   typedef OpenMesh::Vec3d Normal;
 };
 using OMesh = OpenMesh::TriMesh_ArrayKernelT<DoubleTraits>;
+using OPolyMesh = OpenMesh::PolyMesh_ArrayKernelT<DoubleTraits>;
 
 // OpenMesh logs to stdout/stderr on every read, write and failed add_face;
 // sorpia reports errors itself.

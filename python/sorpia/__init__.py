@@ -9,7 +9,8 @@ from ._core import __version__
 from .errors import MeshError, MeshFileError, ParameterError
 from .limit import UnreferencedVerticesWarning, limit_matrix, limit_points
 from .solve import ConvergenceWarning, InterpolationResult, Interpolator, OmegaWarning, interpolate
-from .io import read_mesh, write_mesh
+from .io import UnknownTagWarning, read_mesh, write_mesh
+from .sharp import sharp_edges
 from ._validate import Polygons
 from .mesh_repair import RepairResult, repair
 from .surface import LoopSurface, evaluate_limit, limit_surface
@@ -26,6 +27,7 @@ __all__ = [
     "Polygons",
     "limit_points",
     "shapes",
-    "LoopSurface", "evaluate_limit", "limit_surface", "read_mesh", "write_mesh",
+    "LoopSurface", "evaluate_limit", "limit_surface", "read_mesh", "write_mesh", "UnknownTagWarning",
+    "sharp_edges",
     "RepairResult", "repair",
 ]

@@ -177,6 +177,65 @@ class Polygons(NamedTuple):
     face_vertex_indices: np.ndarray
 
 
+def as_polygons(faces, n_vertices: int, name: str = "faces",
+                count_name: str = "n_vertices") -> tuple[np.ndarray, np.ndarray]:
+    """Return faces of any sizes as (face_vertex_counts, face_vertex_indices),
+    C-contiguous int32, every index in [0, n_vertices) and every face of at
+    least 3 vertices.
+
+    `faces` is an (m, k) integer array, a list of index lists (ragged or
+    not), or a `Polygons`. Dtypes are checked as `as_faces` checks them.
+    """
+    n_vertices = as_vertex_count(n_vertices, count_name)
+    if isinstance(faces, Polygons):
+        counts = _asarray(faces.face_vertex_counts, f"{name}.face_vertex_counts", "a (m,) array of integers")
+        indices = _asarray(faces.face_vertex_indices, f"{name}.face_vertex_indices", "a 1-D array of integers")
+        for arr, what in ((counts, "face_vertex_counts"), (indices, "face_vertex_indices")):
+            if arr.dtype == bool or not np.issubdtype(arr.dtype, np.integer):
+                raise TypeError(f"{name}.{what} must hold integers, got dtype {arr.dtype}")
+            if arr.ndim != 1:
+                raise ValueError(f"{name}.{what} must be one-dimensional, got shape {arr.shape}")
+        if counts.size and int(counts.sum(dtype=np.int64)) != indices.size:
+            raise MeshError(f"{name}.face_vertex_counts add up to {int(counts.sum(dtype=np.int64))} corners but "
+                            f"{name}.face_vertex_indices holds {indices.size}")
+    else:
+        try:
+            arr = np.asarray(faces)
+        except (ValueError, TypeError):
+            arr = None
+        if arr is None or (arr.dtype == object and arr.ndim == 1):  # a ragged list of faces
+            try:
+                rows = [np.asarray(row) for row in faces]
+            except TypeError:
+                raise TypeError(f"{name} must be an (m, k) array of vertex indices, a list of index lists or "
+                                "sorpia.Polygons") from None
+            bad = next((i for i, r in enumerate(rows) if r.ndim != 1 or r.dtype == bool
+                        or (r.size and not np.issubdtype(r.dtype, np.integer))), None)
+            if bad is not None:
+                raise TypeError(f"{name}[{bad}] = {rows[bad].tolist()!r} is not a list of integer vertex indices")
+            counts = np.array([r.size for r in rows], dtype=np.int64)
+            indices = np.concatenate(rows).astype(np.int64) if rows else np.zeros(0, np.int64)
+        else:
+            if arr.dtype == bool or not np.issubdtype(arr.dtype, np.integer):
+                raise TypeError(f"{name} must hold integer vertex indices, got dtype {arr.dtype}")
+            if arr.ndim != 2:
+                raise ValueError(f"{name} must have shape (m, k), got {arr.shape}")
+            counts = np.full(arr.shape[0], arr.shape[1], dtype=np.int64)
+            indices = arr.reshape(-1)
+    if counts.size == 0:
+        raise MeshError(f"{name} is empty: a mesh needs at least one face")
+    if counts.min() < 3:
+        f = int(np.flatnonzero(counts < 3)[0])
+        raise MeshError(f"{name}[{f}] has {int(counts[f])} vertices: a face needs at least 3")
+    if indices.min() < 0 or indices.max() >= n_vertices:
+        k = int(np.flatnonzero((indices < 0) | (indices >= n_vertices))[0])
+        f = int(np.searchsorted(np.cumsum(counts), k, side="right"))
+        raise MeshError(f"{name}[{f}] has vertex index {indices[k]} out of range [0, {n_vertices})")
+    if counts.max() > np.iinfo(np.int32).max:
+        raise MeshError(f"{name} has a face of more vertices than int32 counts hold")
+    return (np.ascontiguousarray(counts, dtype=np.int32), np.ascontiguousarray(indices, dtype=np.int32))
+
+
 def _tag_indices(value, name: str, width: int) -> np.ndarray:
     arr = _asarray(value, name, "an array of integer indices")
     if arr.size == 0:

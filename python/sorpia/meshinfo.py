@@ -144,10 +144,10 @@ def _histogram(counts) -> dict:
     return {v: int(c) for v, c in enumerate(counts) if c}
 
 
-def format_info(info: dict, name: str | None = None, max_listed: int = 16) -> str:
+def format_info(info: dict, name: str | None = None, max_listed: int = 16, extra_rows=()) -> str:
     """Human-readable text of `mesh_info`'s dict; the extraordinary vertices
     laid out as the paper's Table 2 (vertex / valence rows), the first
-    `max_listed` of them."""
+    `max_listed` of them; `extra_rows` (label, text) after the statistics."""
     rows: list[tuple[str, str]] = []
     if name:
         rows.append(("mesh", name))
@@ -179,6 +179,7 @@ def format_info(info: dict, name: str | None = None, max_listed: int = 16) -> st
     else:
         rows.append(("Loop PIA", f"cannot run: {verdict['reason']}"))
     rows += _repair_rows(info.get("repair"))
+    rows += list(extra_rows)
     width = max(len(k) for k, _ in rows)
     lines = [f"{k:<{width}}  {v}" for k, v in rows]
     shown = (info.get("extraordinary") or [])[:max_listed]

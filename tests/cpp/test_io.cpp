@@ -62,38 +62,127 @@ TEST_F(IoTest, StlRoundsToFloat32AndMergesEqualCorners) {
       EXPECT_EQ(r.vertices[3 * r.faces[k] + c], static_cast<double>(static_cast<float>(m.vertices[3 * m.faces[k] + c])));
 }
 
-TEST_F(IoTest, PolygonIsAnErrorNamingItsLineUnlessTriangulated) {
+TEST_F(IoTest, PolygonsAreKeptUnlessTriangulated) {
   write_text("quad.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n# a quad\nf 1 2 3 4\n");
-  try {
-    sorpia::read_mesh(path("quad.obj"));
-    FAIL() << "a quad was accepted";
-  } catch (const sorpia::FileError& e) {
-    EXPECT_NE(std::string(e.what()).find("quad.obj, line 6: face with 4 vertices"), std::string::npos) << e.what();
-  }
-  std::size_t polygons = 99;
-  const auto r = sorpia::read_mesh(path("quad.obj"), true, &polygons);
+  const auto q = sorpia::read_mesh(path("quad.obj"));
+  EXPECT_EQ(q.faces, (std::vector<std::int32_t>{0, 1, 2, 3}));
+  EXPECT_TRUE(q.face_sizes.empty());
+  EXPECT_EQ(q.face_size, 4);
+  EXPECT_EQ(q.n_faces(), 1u);
+  EXPECT_EQ(q.polygons_split, 0u);
+  const auto r = sorpia::read_mesh(path("quad.obj"), {true, false});
   EXPECT_EQ(r.faces, (std::vector<std::int32_t>{0, 1, 2, 0, 2, 3}));
-  EXPECT_EQ(polygons, 1u);
+  EXPECT_TRUE(r.all_triangles());
+  EXPECT_EQ(r.polygons_split, 1u);
 }
 
-TEST_F(IoTest, PolygonsSplitAreCounted) {
-  // A triangle, two quads and a pentagon, in OBJ and OFF: 3 polygons split,
-  // 1 + 2 + 2 + 3 triangles in all.
+TEST_F(IoTest, MixedPolygonsKeepTheirSizesAndSplitsAreCounted) {
+  // A triangle, two quads and a pentagon, in OBJ and OFF: sizes 3, 4, 4, 5 as
+  // read; 3 polygons split, 1 + 2 + 2 + 3 triangles in all, with triangulate.
   write_text("mix.obj",
              "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 2 0 0\nv 2 1 0\n"
              "f 1 2 3\nf 1 2 3 4\nf 2 5 6 3\nf 1 2 5 6 4\n");
   write_text("mix.off", "OFF\n6 4 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n2 0 0\n2 1 0\n"
                         "3 0 1 2\n4 0 1 2 3\n4 1 4 5 2\n5 0 1 4 5 3\n");
+  const std::vector<std::int32_t> corners{0, 1, 2, 0, 1, 2, 3, 1, 4, 5, 2, 0, 1, 4, 5, 3};
   for (const char* name : {"mix.obj", "mix.off"}) {
-    std::size_t polygons = 0;
-    const auto r = sorpia::read_mesh(path(name), true, &polygons);
-    EXPECT_EQ(polygons, 3u) << name;
+    const auto kept = sorpia::read_mesh(path(name));
+    EXPECT_EQ(kept.face_sizes, (std::vector<std::int32_t>{3, 4, 4, 5})) << name;
+    EXPECT_EQ(kept.faces, corners) << name;
+    const auto r = sorpia::read_mesh(path(name), {true, false});
+    EXPECT_EQ(r.polygons_split, 3u) << name;
     EXPECT_EQ(r.faces.size(), 3u * (1 + 2 + 2 + 3)) << name;
+    EXPECT_TRUE(r.all_triangles()) << name;
   }
-  std::size_t polygons = 7;  // set, not added to
   write_text("tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
-  sorpia::read_mesh(path("tri.obj"), true, &polygons);
-  EXPECT_EQ(polygons, 0u);
+  EXPECT_EQ(sorpia::read_mesh(path("tri.obj"), {true, false}).polygons_split, 0u);
+}
+
+TEST_F(IoTest, PolygonsRoundTripInEveryFormatButStl) {
+  // Sizes 5, 3, 4 (the first face sets no common size) and a 300-gon (PLY's
+  // uchar count cannot hold it: the writer switches to an int count).
+  std::vector<double> v;
+  for (int i = 0; i < 300; ++i) v.insert(v.end(), {std::cos(i * 0.02), std::sin(i * 0.02), i / 7.0});
+  std::vector<std::int32_t> sizes{5, 3, 4, 300}, faces{0, 1, 2, 3, 4, 4, 5, 6, 6, 7, 8, 9};
+  for (int i = 0; i < 300; ++i) faces.push_back(299 - i);
+  const sorpia::MeshView view{v.data(), 300, faces.data(), sizes.size(), sizes.data(), 3};
+  for (const auto& [name, binary] : {std::pair{"p.obj", false}, {"p.off", false}, {"p.ply", false}, {"q.ply", true}}) {
+    sorpia::write_mesh(path(name), view, binary);
+    const auto r = sorpia::read_mesh(path(name));
+    EXPECT_EQ(r.vertices, v) << name;
+    EXPECT_EQ(r.faces, faces) << name;
+    EXPECT_EQ(r.face_sizes, sizes) << name;
+  }
+  sorpia_test::expect_error<sorpia::ParameterError>([&] { sorpia::write_mesh(path("p.stl"), view); }, {"STL stores triangles only"});
+}
+
+TEST_F(IoTest, ObjTagsAsOpenSubdivReadsThem) {
+  write_text("tags.obj",
+             "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 2 0 0\nv 2 1 0\n"
+             "f 1 2 3 4\nf 2 5 6 3\n"
+             "t crease 2/1/0 0 1 2.5\n"
+             "t crease 4/1/0 1 2  2 3 10\n"     // two edges (pairs), one sharpness
+             "t crease 4/2/0 4 5 5 2 1 -3\n"    // one each; negative counts as 0
+             "t corner 1/1/0 4 0.7\n"
+             "t hole 1/0/0 1\n"
+             "t interpolateboundary 1/0/0 2\n"
+             "t creasemethod 0/0/1 normal\n"
+             "t facevaryinginterpolateboundary 1/0/0 1\n"
+             "t mystery 0/0/0\nt mystery 1/0/0 3\n");
+  const auto m = sorpia::read_mesh(path("tags.obj"), {false, true});
+  EXPECT_EQ(m.tags.tags.crease_vertices, (std::vector<std::int32_t>{0, 1, 1, 2, 2, 3, 4, 5, 5, 2}));
+  EXPECT_EQ(m.tags.tags.crease_sharpness, (std::vector<double>{2.5, 10, 10, 1, 0}));
+  EXPECT_EQ(m.tags.tags.corner_vertices, (std::vector<std::int32_t>{4}));
+  EXPECT_EQ(m.tags.tags.corner_sharpness, (std::vector<double>{0.7}));
+  EXPECT_EQ(m.tags.tags.holes, (std::vector<std::int32_t>{1}));
+  ASSERT_TRUE(m.tags.boundary.has_value());
+  EXPECT_EQ(*m.tags.boundary, sorpia::Boundary::EdgeOnly);
+  ASSERT_EQ(m.tags.unknown.size(), 1u);
+  EXPECT_EQ(m.tags.unknown[0], "'mystery': 2 tags, the first on line 17");
+  EXPECT_TRUE(sorpia::read_mesh(path("tags.obj")).tags.empty());  // not read unless asked
+  // With triangulate, the hole is the two triangles of face 1.
+  EXPECT_EQ(sorpia::read_mesh(path("tags.obj"), {true, true}).tags.tags.holes, (std::vector<std::int32_t>{2, 3}));
+}
+
+TEST_F(IoTest, TagsRoundTripBitForBit) {
+  write_text("in.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 2 0 0\nv 2 1 0\nf 1 2 3 4\nf 2 5 6 3\n"
+                       "t crease 2/1/0 1 2 0.30000000000000004\nt corner 1/1/0 0 inf\nt hole 1/0/0 0\n"
+                       "t interpolateboundary 1/0/0 1\n");
+  const auto m = sorpia::read_mesh(path("in.obj"), {false, true});
+  const sorpia::MeshView view{m.vertices.data(), m.n_vertices(), m.faces.data(), m.n_faces(), nullptr, m.face_size};
+  sorpia::write_mesh(path("out.obj"), view, false, &m.tags);
+  const auto r = sorpia::read_mesh(path("out.obj"), {false, true});
+  EXPECT_EQ(r.tags.tags.crease_vertices, m.tags.tags.crease_vertices);
+  EXPECT_EQ(std::memcmp(r.tags.tags.crease_sharpness.data(), m.tags.tags.crease_sharpness.data(), 8), 0);
+  EXPECT_EQ(r.tags.tags.corner_sharpness, m.tags.tags.corner_sharpness);
+  EXPECT_TRUE(std::isinf(r.tags.tags.corner_sharpness[0]));
+  EXPECT_EQ(r.tags.tags.holes, m.tags.tags.holes);
+  EXPECT_EQ(r.tags.boundary, m.tags.boundary);
+  sorpia_test::expect_error<sorpia::ParameterError>([&] { sorpia::write_mesh(path("out.ply"), view, false, &m.tags); }, {".obj files only"});
+}
+
+TEST_F(IoTest, BadTagsNameTheirLine) {
+  const std::string head = "v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 3\n";
+  const std::pair<const char*, const char*> cases[] = {
+      {"t crease 3/1/0 0 1 2 5\n", "line 5: tag 'crease' takes vertex pairs"},
+      {"t crease 2/1/0 0 1\n", "line 5: tag 'crease': the line ends before its number arguments"},
+      {"t crease 2/1/0 0 7 1\n", "line 5: tag vertex 7 is out of range: the file has 3 vertices"},
+      {"t crease 2/1/0 1 1 1\n", "line 5: tag 'crease': edge (1, 1) has one vertex twice"},
+      {"t crease 2/1/0 0 1 nan\n", "line 5: tag 'crease': expected a number, found 'nan'"},
+      {"t crease 4/3/0 0 1 1 2 1 2 3\n", "2 tags need one sharpness for all or one each, found 3"},
+      {"t hole 1/0/0 1\n", "line 5: tag 'hole': face 1 is out of range: the file has 1 faces"},
+      {"t interpolateboundary 1/0/0 0\n", "line 5: tag 'interpolateboundary 0' (no boundary interpolation"},
+      {"t creasemethod 0/0/1 chaikin\n", "line 5: tag 'creasemethod chaikin' is not supported"},
+      {"t smoothtriangles 0/0/1 smooth\n", "line 5: tag 'smoothtriangles smooth' is not supported"},
+      {"t crease 2/1 0 1 1\n", "line 5: tag 'crease': expected argument counts I/F/S"},
+      {"t crease 2/1/0 0 1 1 extra\n", "line 5: tag 'crease': 'extra' after the arguments"},
+      {"t crease 900/1/0 0 1 1\n", "counts more arguments than the line holds"},
+  };
+  for (const auto& [line, message] : cases) {
+    write_text("bad.obj", head + line);
+    sorpia_test::expect_error<sorpia::FileError>([&] { sorpia::read_mesh(path("bad.obj"), {false, true}); }, {message});
+    EXPECT_NO_THROW(sorpia::read_mesh(path("bad.obj"))) << line;  // tags not asked for: not read
+  }
 }
 
 TEST_F(IoTest, HeaderClaimingATrillionVerticesFailsAtOnce) {

@@ -64,11 +64,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   if (mode >= 'A' && mode <= 'Z') triangulate = true;
   io::FileData file{"fuzz", std::string(reinterpret_cast<const char*>(data) + 1, size - 1)};
   if (file.bytes.empty()) return 0;  // load_file refuses empty files before any reader runs
-  sorpia::TriMesh mesh;
-  io::Polygons polygons;
-  polygons.triangulate = triangulate;
+  sorpia::MeshFile mesh;
   try {
-    mesh = io::parse_mesh(file, formats[reader], polygons);
+    mesh = io::parse_mesh(file, formats[reader], sorpia::ReadOptions{triangulate, true});
   } catch (const sorpia::FileError& e) {
     check_message(e);
     return 0;
@@ -81,6 +79,18 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     if (i < 0 || static_cast<std::size_t>(i) >= n) finding("reader returned a face index out of range");
   for (const double x : mesh.vertices)
     if (!(x - x == 0)) finding("reader returned a non-finite coordinate");
+  std::size_t corners = 0;
+  for (std::size_t f = 0; f < mesh.n_faces(); ++f) {
+    const std::int32_t k = mesh.face_sizes.empty() ? mesh.face_size : mesh.face_sizes[f];
+    if (k < 3) finding("reader returned a face of fewer than 3 vertices");
+    corners += static_cast<std::size_t>(k);
+  }
+  if (corners != mesh.faces.size()) finding("reader's face sizes do not add up to its corner list");
+  for (const std::int32_t h : mesh.tags.tags.holes)
+    if (h < 0 || static_cast<std::size_t>(h) >= mesh.n_faces()) finding("reader returned a hole out of range");
+  for (const std::int32_t v : mesh.tags.tags.crease_vertices)
+    if (v < 0 || static_cast<std::size_t>(v) >= n) finding("reader returned a crease vertex out of range");
+  if (!mesh.all_triangles()) return 0;  // the limit below is Loop's
   try {
     const sorpia::Topology topo(mesh.faces.data(), mesh.n_faces(), n);
     std::vector<double> out(mesh.vertices.size());

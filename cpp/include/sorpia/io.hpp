@@ -1,7 +1,8 @@
 #pragma once
 /// @file io.hpp
-/// Triangle-mesh files that keep every digit: OBJ, OFF, PLY (ascii, binary
-/// little- and big-endian on reading) and STL (ascii, binary).
+/// Mesh files that keep every digit: OBJ, OFF, PLY (ascii, binary little- and
+/// big-endian on reading) and STL (ascii, binary); polygons of any size (STL:
+/// triangles), and OpenSubdiv's sharpness tags in OBJ files.
 ///
 /// Text numbers are written in the shortest form that reads back to the same
 /// double (std::to_chars) and parsed with std::from_chars, so a float64
@@ -19,52 +20,121 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <string>
+#include <vector>
 
-#include "sorpia/shapes.hpp"
+#include "sorpia/subdivision.hpp"
 
 namespace sorpia {
 
 enum class MeshFormat { Obj, Off, Ply, Stl };
 
+/// The tags of an OBJ file, as OpenSubdiv's regression shapes write them and
+/// its shape parser (regression/common/shape_utils.cpp, far_utils.h) reads
+/// them: a line `t NAME I/F/S` followed by I integers, F numbers and S words.
+///   t crease 2/1/0 A B S        edge (A, B), 0-based vertices, sharpness S;
+///                                2k integers are k edges (pairs, not a chain),
+///                                with one sharpness for all or one each
+///   t corner 1/1/0 V S          vertex V; k vertices with one or k sharpnesses
+///   t hole K/0/0 F ...          faces (0-based, file order)
+///   t interpolateboundary 1/0/0 MODE   1: edge-and-corner, 2: edge-only
+///                                (0, none, is refused: sorpia has no such rule)
+///   t creasemethod 0/0/1 normal  ("chaikin" is refused)
+///   t smoothtriangles 0/0/1 catmark  ("smooth" is refused)
+/// A negative sharpness counts as 0, as OpenSubdiv reads it. The face-varying
+/// tags (facevaryinginterpolateboundary, facevaryingpropagatecorners) do not
+/// change positions and are skipped; other names are skipped and listed in
+/// `unknown`.
+struct FileTags {
+  Tags tags;                        ///< creases, corners, holes (with triangulate: rows of the triangles)
+  std::optional<Boundary> boundary;  ///< the interpolateboundary tag, when the file has one
+  /// A tag name sorpia does not know, with its count and first line, one
+  /// entry per name: "'foo': 3 tags, the first on line 12".
+  std::vector<std::string> unknown;
+  bool empty() const { return tags.empty() && !boundary; }
+};
+
 /// The format named by the file's extension (.obj, .off, .ply, .stl, any case).
 /// @throws FileError for any other extension
 MeshFormat mesh_format(const std::string& path);
 
-/// Read a triangle mesh.
-/// @param path         an .obj, .off, .ply or .stl file
-/// @param triangulate  split polygons into triangles; when false a polygon is
-///                     an error naming its line. The split keeps the mesh
-///                     manifold where it can: a quad is cut along its shorter
-///                     diagonal unless that diagonal is already an edge of the
-///                     mesh (then along the other), a larger polygon is fanned
-///                     from its first corner whose diagonals are all new edges
-///                     (else, and beyond 32 corners, from its first corner);
-///                     polygons in file order.
-/// @param polygons     when not null, set to the number of faces of more
-///                     than 3 vertices split (0 without triangulate)
-/// @return vertices (n, 3) and faces (m, 3), in file order
+/// A mesh as a file holds it: vertices, and faces in the counts + indices
+/// form of OpenSubdiv's Far::TopologyDescriptor (numVertsPerFace,
+/// vertIndicesPerFace) and USD (faceVertexCounts, faceVertexIndices). When
+/// every face has the same number of corners, `face_sizes` stays empty and
+/// `face_size` holds that number, so a triangle (or all-quad) mesh costs
+/// nothing beyond its index list.
+struct MeshFile {
+  std::vector<double> vertices;          ///< (n, 3), in file order
+  std::vector<std::int32_t> faces;       ///< every face's corners (0-based), face after face
+  std::vector<std::int32_t> face_sizes;  ///< corners per face; empty when every face has `face_size`
+  std::int32_t face_size = 3;            ///< the corners of every face when face_sizes is empty
+  std::size_t polygons_split = 0;        ///< faces of more than 3 corners split (ReadOptions::triangulate)
+  FileTags tags;                         ///< the OBJ file's `t` lines (ReadOptions::tags)
+
+  std::size_t n_vertices() const { return vertices.size() / 3; }
+  std::size_t n_faces() const { return face_sizes.empty() ? faces.size() / static_cast<std::size_t>(face_size) : face_sizes.size(); }
+  bool all_triangles() const { return face_sizes.empty() && face_size == 3; }
+};
+
+struct ReadOptions {
+  /// Split faces of more than 3 corners into triangles, each polygon's
+  /// triangles in its place in the face order. The split keeps the mesh
+  /// manifold where it can: a quad is cut along its shorter diagonal unless
+  /// that diagonal is already an edge of the mesh (then along the other), a
+  /// larger polygon is fanned from its first corner whose diagonals are all
+  /// new edges (else, and beyond 32 corners, from its first corner); polygons
+  /// in file order. Hole tags are mapped to the triangles of their faces.
+  bool triangulate = false;
+  /// Read OpenSubdiv's `t` tag lines of an OBJ file (FileTags); without it
+  /// they are skipped unread, as every other OBJ statement sorpia does not use.
+  bool tags = false;
+};
+
+/// Read a mesh.
+/// @param path     an .obj, .off, .ply or .stl file
+/// @return vertices and faces in file order (polygons kept as they are
+///         unless options.triangulate), and the tags when options.tags
 /// The read polls the calling thread's interrupt checker
 /// (sorpia/interrupt.hpp) after each chunk, and asks it at once when a signal
 /// interrupts a read that waits (a pipe, a device); when the checker returns
 /// false, the read goes on.
 /// @throws Interrupted when the checker says stop
 /// @throws FileError when the file is missing, unreadable, malformed,
-///         truncated, has an index out of range, a non-finite coordinate,
-///         no vertices or no faces
-TriMesh read_mesh(const std::string& path, bool triangulate = false, std::size_t* polygons = nullptr);
+///         truncated, has an index out of range, a face of fewer than 3
+///         vertices, a non-finite coordinate, no vertices or no faces, or (with
+///         options.tags) a malformed tag or one whose rule sorpia does not have
+MeshFile read_mesh(const std::string& path, const ReadOptions& options = {});
 
-/// Write a triangle mesh atomically: to a temporary file in the same folder,
-/// then renamed over `path`, so that a failure leaves no partial file and an
-/// existing file untouched.
-/// @param path        an .obj, .off, .ply or .stl file
-/// @param vertices    row-major (n_vertices, 3), finite
-/// @param faces       row-major (n_faces, 3) indices in [0, n_vertices)
+/// A mesh to write, borrowed from the caller: as MeshFile, by pointers.
+struct MeshView {
+  const double* vertices = nullptr;  ///< (n_vertices, 3), finite
+  std::size_t n_vertices = 0;
+  const std::int32_t* faces = nullptr;  ///< every face's corners, face after face, in [0, n_vertices)
+  std::size_t n_faces = 0;
+  const std::int32_t* face_sizes = nullptr;  ///< (n_faces,) corners per face (at least 3); null: `face_size` each
+  std::int32_t face_size = 3;
+};
+
+/// Write a mesh atomically: to a temporary file in the same folder, then
+/// renamed over `path`, so that a failure leaves no partial file and an
+/// existing file untouched. OBJ, OFF and PLY take any polygons, STL triangles
+/// only; tags are written to OBJ only (`t` lines, one tag a line, as
+/// OpenSubdiv's shapes have them).
 /// @param binary      binary PLY (little-endian) or STL; OBJ and OFF are text only
+/// @param tags        null or empty: no tag lines
 /// @throws FileError when the file cannot be written; MeshError for a bad
-///         index or a non-finite coordinate; ParameterError for binary OBJ/OFF
-void write_mesh(const std::string& path, const double* vertices, std::size_t n_vertices, const std::int32_t* faces,
-                std::size_t n_faces, bool binary = false);
+///         index, a face of fewer than 3 corners or a non-finite coordinate;
+///         ParameterError for binary OBJ/OFF, polygons to STL, tags to
+///         anything but OBJ
+void write_mesh(const std::string& path, const MeshView& mesh, bool binary = false, const FileTags* tags = nullptr);
+
+/// write_mesh of a triangle mesh: faces (n_faces, 3).
+inline void write_mesh(const std::string& path, const double* vertices, std::size_t n_vertices,
+                       const std::int32_t* faces, std::size_t n_faces, bool binary = false) {
+  write_mesh(path, MeshView{vertices, n_vertices, faces, n_faces, nullptr, 3}, binary);
+}
 
 /// Write `data` to `path` atomically, as write_mesh writes its bytes: to a
 /// temporary file in the same folder (".sorpia-tmp-" and 6 random

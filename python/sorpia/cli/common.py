@@ -24,6 +24,9 @@ METHOD_LABELS = {"pia": "PIA", "wpia": "W-PIA", "hss": "HSS-PIA", "whss": "WHSS-
 DISPLAY_ORDER = tuple(sorted(METHODS, key=lambda m: list(METHOD_LABELS).index(m) if m in METHOD_LABELS
                              else len(METHOD_LABELS)))
 MESH_SUFFIXES = (".obj", ".off", ".ply", ".stl")
+# --scheme: the library's schemes, and "auto" (Loop for an all-triangle mesh, Catmull-Clark otherwise).
+CLI_SCHEMES = ("auto", "loop", "catmull-clark")
+SCHEME_LABELS = {"loop": "Loop", "catmull-clark": "Catmull-Clark"}
 
 
 def method_label(method: str) -> str:
@@ -35,7 +38,7 @@ class UserError(Exception):
 
 
 class PolygonError(UserError):
-    """The input file has faces of more than 3 vertices and --triangulate was not given."""
+    """Loop was asked for (--scheme loop) on a file with faces of more than 3 vertices."""
 
 
 # --------------------------------------------------------------------------- paths and files
@@ -87,11 +90,12 @@ class InputMesh(NamedTuple):
     """The input mesh of a command, as read_input returns it."""
 
     vertices: np.ndarray
-    faces: np.ndarray
+    faces: object  # (m, k) int32 array, or sorpia.Polygons for mixed sizes
     seconds: float  # reading (and triangulating)
     polygons: int  # polygons split by --triangulate
     repair: object = None  # sorpia.RepairResult with --repair: vertices and faces are its output
     repair_seconds: float = 0.0
+    tags: dict = {}  # the file's tags as read_mesh(tags=True) returns them ({} with --ignore-tags)
 
     @property
     def timings(self) -> dict:
@@ -99,31 +103,162 @@ class InputMesh(NamedTuple):
         return {"read": self.seconds, **({"repair": self.repair_seconds} if self.repair is not None else {})}
 
 
-def read_input(path, triangulate: bool = False, repair: bool = False) -> InputMesh:
-    """Read the input mesh of every subcommand: polygons split with
-    `triangulate`, the mesh repaired with `repair` (repair_input). A polygon
-    in the file without --triangulate is a UserError that says to pass it."""
-    from .. import MeshFileError
-    from ..io import read_mesh_counting
+def read_input(path, triangulate: bool = False, repair: bool = False, tags: bool = True) -> InputMesh:
+    """Read the input mesh of every subcommand: polygons kept (or split with
+    `triangulate`), the OBJ file's sharpness tags read unless `tags` is
+    False (--ignore-tags), the mesh repaired with `repair` (repair_input),
+    which takes triangles and no tags."""
+    from ..io import read_mesh_file
 
     if not Path(path).exists():
         raise UserError(f"{path}: no such file")
     if Path(path).is_dir():
         raise UserError(f"{path} is a folder, not a mesh file")
     t0 = time.perf_counter()
-    try:
-        vertices, faces, polygons = read_mesh_counting(path, triangulate=triangulate)
-    except MeshFileError as exc:
-        if triangulate or not _is_polygon_error(exc):
-            raise
-        raise PolygonError(f"{_polygon_message(exc)}; pass --triangulate to split each polygon into "
-                           "triangles") from None
+    contents = read_mesh_file(path, triangulate=triangulate, tags=tags and Path(path).suffix.lower() == ".obj")
     seconds = time.perf_counter() - t0
+    vertices, faces, file_tags = contents.vertices, contents.faces, contents.tags or {}
     if not repair:
-        return InputMesh(vertices, faces, seconds, polygons)
+        return InputMesh(vertices, faces, seconds, contents.polygons_split, tags=file_tags)
+    if not is_triangles(faces):
+        raise PolygonError(f"{path}: --repair works on triangles and the file has faces of {face_sizes_text(faces)}"
+                           " vertices; pass --triangulate to split them")
+    if any(k in file_tags for k in ("creases", "corners", "holes")):
+        raise UserError(f"{path}: --repair renumbers vertices and faces, which the file's sharpness tags refer to; "
+                        "pass --ignore-tags to repair the mesh without them")
     t0 = time.perf_counter()
     result = repair_input(vertices, faces, path)
-    return InputMesh(result.vertices, result.faces, seconds, polygons, result, time.perf_counter() - t0)
+    return InputMesh(result.vertices, result.faces, seconds, contents.polygons_split, result,
+                     time.perf_counter() - t0, file_tags)
+
+
+def is_triangles(faces) -> bool:
+    """Whether faces as read_mesh returns them are all triangles."""
+    return isinstance(faces, np.ndarray) and faces.ndim == 2 and faces.shape[1] == 3
+
+
+def face_counts(faces) -> np.ndarray:
+    """The number of vertices of each face, for faces as read_mesh returns them."""
+    if isinstance(faces, np.ndarray):
+        return np.full(len(faces), faces.shape[1] if faces.ndim == 2 else 0, dtype=np.int64)
+    return np.asarray(faces.face_vertex_counts, dtype=np.int64)
+
+
+def face_sizes_text(faces) -> str:
+    """'3, 4 and 5': the face sizes a mesh has."""
+    sizes = [str(k) for k in np.unique(face_counts(faces))]
+    return sizes[0] if len(sizes) == 1 else ", ".join(sizes[:-1]) + " and " + sizes[-1]
+
+
+def face_size_histogram(faces) -> dict:
+    """{vertices per face: faces}, e.g. {3: 132, 4: 836}."""
+    sizes, counts = np.unique(face_counts(faces), return_counts=True)
+    return {int(k): int(c) for k, c in zip(sizes, counts)}
+
+
+def choose_scheme(scheme: str, faces, source) -> str:
+    """--scheme resolved for the mesh: auto is Loop for an all-triangle mesh
+    and Catmull-Clark otherwise; Loop on polygons is a PolygonError naming the
+    first face that is not a triangle and the two ways out."""
+    triangles = is_triangles(faces)
+    if scheme == "auto":
+        return "loop" if triangles else "catmull-clark"
+    if scheme == "loop" and not triangles:
+        counts = face_counts(faces)
+        f = int(np.flatnonzero(counts != 3)[0])
+        raise PolygonError(f"{source}: face {f} has {counts[f]} vertices and Loop subdivision needs triangles; "
+                           "pass --triangulate to split the polygons, or --scheme catmull-clark (or auto) to "
+                           "keep them")
+    return scheme
+
+
+def solve_tags(mesh: InputMesh, sharp_angle, source) -> dict:
+    """The creases, corners and holes a command solves with: the file's tags,
+    and with --sharp-angle every edge sharper than it as an infinitely sharp
+    crease (sorpia.sharp_edges; an edge the file already tags takes the
+    larger sharpness)."""
+    from .. import MeshError, _core, sharp_edges
+
+    tags = {k: v for k, v in mesh.tags.items() if k in ("creases", "corners", "holes")}
+    if sharp_angle is None:
+        return tags
+    try:
+        edges = sharp_edges(mesh.vertices, mesh.faces, sharp_angle)
+    except MeshError as exc:
+        raise UserError(f"{source}: --sharp-angle: {exc}") from None
+    sharpness = np.full(len(edges), _core.INFINITE_SHARPNESS)
+    if "creases" in tags:
+        old_edges, old_sharpness = tags["creases"]
+        edges = np.vstack([np.sort(old_edges, axis=1), edges])
+        sharpness = np.concatenate([np.asarray(old_sharpness, dtype=float), sharpness])
+        # One row per edge, the largest sharpness of its tags (sorted by sharpness, the last of each edge kept).
+        order = np.lexsort((sharpness, edges[:, 1], edges[:, 0]))
+        edges, sharpness = edges[order], sharpness[order]
+        last = np.ones(len(edges), dtype=bool)
+        last[:-1] = (edges[1:] != edges[:-1]).any(axis=1)
+        edges, sharpness = edges[last], sharpness[last]
+    tags["creases"] = (np.ascontiguousarray(edges, dtype=np.int32), sharpness)
+    return tags
+
+
+def boundary_rule(boundary, mesh: InputMesh) -> str:
+    """--boundary when given, else the file's interpolateboundary tag, else the default rule."""
+    from .._validate import DEFAULT_BOUNDARY
+
+    return boundary if boundary is not None else mesh.tags.get("boundary", DEFAULT_BOUNDARY)
+
+
+def tags_summary(tags: dict) -> dict:
+    """What a command reports of the tags it solved with: per kind the count,
+    and for creases and corners how many are infinitely sharp, semi-sharp
+    and smooth (0), with the histogram {sharpness: count}."""
+    from .. import _core
+
+    out: dict = {}
+    for kind in ("creases", "corners"):
+        if kind not in tags:
+            continue
+        sharpness = np.asarray(tags[kind][1], dtype=float)
+        infinite = sharpness >= _core.INFINITE_SHARPNESS
+        values, counts = np.unique(sharpness, return_counts=True)
+        out[kind] = {"count": len(sharpness), "infinitely_sharp": int(infinite.sum()),
+                     "semi_sharp": int(((sharpness > 0) & ~infinite).sum()), "smooth": int((sharpness == 0).sum()),
+                     "sharpness_histogram": {repr(float(v)): int(c) for v, c in zip(values, counts)}}
+    if "holes" in tags:
+        out["holes"] = {"count": len(tags["holes"])}
+    return out
+
+
+def tags_lines(summary: dict) -> list[str]:
+    """One line per kind of tag, e.g. 'creases  314: 280 infinitely sharp, 34 semi-sharp (sharpness 6.0 x 20, ...)'."""
+    lines = []
+    for kind in ("creases", "corners"):
+        if kind not in summary:
+            continue
+        s = summary[kind]
+        parts = [f"{s[k]} {k.replace('_', ' ')}" for k in ("infinitely_sharp", "semi_sharp", "smooth") if s[k]]
+        histogram = ", ".join(f"{float(v):g} x {c}" for v, c in s["sharpness_histogram"].items())
+        lines.append(f"{kind} {s['count']}: {', '.join(parts)} (sharpness {histogram})")
+    if "holes" in summary:
+        lines.append(f"holes {summary['holes']['count']}")
+    return lines
+
+
+def scheme_kwargs(scheme: str, tags: dict) -> dict:
+    """The keyword arguments a solve takes for the scheme and tags. Loop
+    without tags passes none, so that a library without the scheme and tag
+    arguments runs it too; anything else needs them (UserError if absent)."""
+    if scheme == "loop" and not tags:
+        return {}
+    import inspect
+
+    from .. import Interpolator
+
+    if "scheme" not in inspect.signature(Interpolator).parameters:
+        raise UserError(f"this build of sorpia solves Loop without sharpness tags only (asked: "
+                        f"{SCHEME_LABELS[scheme]}{' with tags' if tags else ''}); pass --triangulate and "
+                        "--ignore-tags")
+    return {"scheme": scheme, **tags}
 
 
 def repair_input(vertices, faces, source):
@@ -150,16 +285,6 @@ def repair_lines(result) -> list[str]:
     from ..mesh_repair import describe_changes
 
     return describe_changes(result.report) or ["nothing to repair: the mesh is valid"]
-
-
-def _is_polygon_error(exc) -> bool:
-    # sorpia.read_mesh refuses a face of more than 3 vertices and names the
-    # Python remedy (triangulate=True); the command line has --triangulate.
-    return "triangulate" in str(exc)
-
-
-def _polygon_message(exc) -> str:
-    return str(exc).split(": sorpia works on triangles")[0].split("; read the file with")[0]
 
 
 def require_plotting() -> None:
@@ -228,10 +353,10 @@ class Clock:
         self.cpu = self._cpu() - self.cpu0
 
 
-def timed(call, *, threads: int, source):
+def timed(call, *, threads: int, source, scheme: str = "loop"):
     """call() with its wall and CPU seconds (Clock(threads)); the warnings it
     raised are printed (report_warnings). Returns (value, clock). A mesh the
-    library refuses is a UserError naming the file `source`."""
+    library refuses is a UserError naming the file `source` and the scheme."""
     from .. import MeshError
 
     try:
@@ -239,23 +364,25 @@ def timed(call, *, threads: int, source):
             warnings.simplefilter("always")
             value = call()
     except MeshError as exc:
-        raise UserError(f"{source}: Loop PIA cannot run on this mesh: {exc}") from None
+        raise UserError(f"{source}: {SCHEME_LABELS[scheme]} PIA cannot run on this mesh: {exc}") from None
     report_warnings(caught)
     return value, clock
 
 
-def build_interpolator(vertices, faces, *, boundary, progress, source):
-    """sorpia.Interpolator for the mesh: the topology and limit operator B,
-    built once for every solve, check and statistic of a command; prints its
-    warnings; returns (interpolator, {"wall": s, "cpu": s})."""
+def build_interpolator(vertices, faces, *, boundary, progress, source, scheme="loop", tags=None):
+    """sorpia.Interpolator for the mesh, the scheme and the tags: the topology
+    and limit operator B, built once for every solve, check and statistic of
+    a command; prints its warnings; returns (interpolator, {"wall": s, "cpu": s})."""
     from .. import Interpolator
 
+    kwargs = scheme_kwargs(scheme, tags or {})
     progress.status("setting up (topology, limit operator)")
-    interp, clock = timed(lambda: Interpolator(faces, len(vertices), boundary=boundary), threads=1, source=source)
+    interp, clock = timed(lambda: Interpolator(faces, len(vertices), boundary=boundary, **kwargs), threads=1,
+                          source=source, scheme=scheme)
     return interp, {"wall": clock.wall, "cpu": clock.cpu}
 
 
-def run_solver(interp, vertices, *, phase, method, omega, tol, max_iter, threads, progress, source):
+def run_solver(interp, vertices, *, phase, method, omega, tol, max_iter, threads, progress, source, scheme="loop"):
     """interp.solve(vertices, **options) with a progress line labelled by the
     method, its phase shown as `phase`; returns (result, wall seconds, CPU seconds)."""
     progress.restart(method_label(method))
@@ -263,16 +390,18 @@ def run_solver(interp, vertices, *, phase, method, omega, tol, max_iter, threads
     if omega is not None:
         kwargs["omega"] = omega
     progress.status(f"{progress.label}: {phase}")
-    res, clock = timed(lambda: interp.solve(vertices, **kwargs), threads=threads, source=source)
+    res, clock = timed(lambda: interp.solve(vertices, **kwargs), threads=threads, source=source, scheme=scheme)
     return res, clock.wall, clock.cpu
 
 
-def fit_once(vertices, faces, *, boundary, progress, source, **options):
+def fit_once(vertices, faces, *, boundary, progress, source, scheme="loop", tags=None, **options):
     """One solve on a fresh Interpolator (fit, render), reported as
     sorpia.interpolate reports it: `seconds` and `timings` include the build.
     Returns (interpolator, result, wall seconds, CPU seconds)."""
-    interp, build = build_interpolator(vertices, faces, boundary=boundary, progress=progress, source=source)
-    res, wall, cpu = run_solver(interp, vertices, phase="solving", progress=progress, source=source, **options)
+    interp, build = build_interpolator(vertices, faces, boundary=boundary, progress=progress, source=source,
+                                       scheme=scheme, tags=tags)
+    res, wall, cpu = run_solver(interp, vertices, phase="solving", progress=progress, source=source, scheme=scheme,
+                                **options)
     res._record_build(res.seconds + build["wall"], interp.build_timings["topology"],
                       interp.build_timings["operator"])
     return interp, res, wall + build["wall"], cpu + build["cpu"]

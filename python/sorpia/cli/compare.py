@@ -11,10 +11,10 @@ from pathlib import Path
 import numpy as np
 
 from .. import __version__
-from .._validate import DEFAULT_BOUNDARY
-from .common import (DISPLAY_ORDER, EXIT_NOT_CONVERGED, EXIT_OK, build_interpolator, check_paths,
-                     check_solver_options, cpu_clock, method_label, mesh_line, omega_text, read_input,
-                     repair_json, repair_lines, require_plotting, result_fields, run_solver, threads_for)
+from .common import (DISPLAY_ORDER, EXIT_NOT_CONVERGED, EXIT_OK, SCHEME_LABELS, boundary_rule, build_interpolator,
+                     check_paths, check_solver_options, choose_scheme, cpu_clock, method_label, mesh_line,
+                     omega_text, read_input, repair_json, repair_lines, require_plotting, result_fields, run_solver,
+                     solve_tags, tags_lines, tags_summary, threads_for)
 from .output import save_figure, write_json, write_text
 from .progress import Progress
 
@@ -38,9 +38,10 @@ def iterations_to_reach(errors, tolerances=TABLE_TOLERANCES) -> list:
     return out
 
 
-def run_compare(input_path, *, methods=DISPLAY_ORDER, tol=1e-10, max_iter=1000, boundary=DEFAULT_BOUNDARY,
+def run_compare(input_path, *, methods=DISPLAY_ORDER, tol=1e-10, max_iter=1000, boundary=None,
                 table=None, csv_path=None, plot=None, json_path=None, quiet=False, force=False,
-                triangulate=False, threads=1, repair=False, out=None) -> tuple[int, dict]:
+                triangulate=False, threads=1, repair=False, scheme="auto", ignore_tags=False, sharp_angle=None,
+                out=None) -> tuple[int, dict]:
     """`sorpia compare`: every method to the same tolerance, on one
     sorpia.Interpolator (topology, limit operator and spectral estimates built
     once and shared); returns (exit code, data). `threads` applies to sor/gs."""
@@ -57,15 +58,20 @@ def run_compare(input_path, *, methods=DISPLAY_ORDER, tol=1e-10, max_iter=1000, 
     rows = []
     with Progress(enabled=not quiet) as progress:
         progress.status(f"reading {input_path}")
-        mesh = read_input(input_path, triangulate, repair)
+        mesh = read_input(input_path, triangulate, repair, tags=not ignore_tags)
         V0, F, read_seconds = mesh.vertices, mesh.faces, mesh.seconds
-        interp, build = build_interpolator(V0, F, boundary=boundary, progress=progress, source=input_path)
+        scheme = choose_scheme(scheme, F, input_path)
+        boundary = boundary_rule(boundary, mesh)
+        tags = solve_tags(mesh, sharp_angle, input_path)
+        interp, build = build_interpolator(V0, F, boundary=boundary, progress=progress, source=input_path,
+                                           scheme=scheme, tags=tags)
         progress.status("mesh statistics")
         stats = topology_info(V0, interp.topology)
         for method in methods:
             n_threads = threads_for(method, threads)
             res, wall, cpu = run_solver(interp, V0, phase="solving", method=method, omega=None, tol=tol,
-                                        max_iter=max_iter, threads=n_threads, progress=progress, source=input_path)
+                                        max_iter=max_iter, threads=n_threads, progress=progress, source=input_path,
+                                        scheme=scheme)
             fields = result_fields(res)
             rows.append({
                 "method": method,
@@ -87,6 +93,8 @@ def run_compare(input_path, *, methods=DISPLAY_ORDER, tol=1e-10, max_iter=1000, 
         "input": str(input_path),
         "repair": repair_json(mesh.repair) if repair else None,
         "mesh": stats,
+        "scheme": scheme,
+        "tags": {"from_file": not ignore_tags, "sharp_angle": sharp_angle, **tags_summary(tags)},
         "tol": tol,
         "max_iter": max_iter,
         "boundary": boundary,
@@ -112,7 +120,8 @@ def run_compare(input_path, *, methods=DISPLAY_ORDER, tol=1e-10, max_iter=1000, 
         save_figure(convergence_figure(curves, tol=tol, title=f"Convergence on {Path(input_path).name} "
                                        f"(paper Figure 7)"), plot)
     if not quiet:
-        print(f"sorpia compare: {input_path}: {mesh_line(stats)}", file=out)
+        print(f"sorpia compare: {input_path}: {mesh_line(stats)}; {SCHEME_LABELS[scheme]}"
+              + "".join(f"; {line}" for line in tags_lines(data["tags"])), file=out)
         for line in repair_lines(mesh.repair) if repair else ():
             print(f"  repaired: {line}", file=out)
         print(markdown, file=out)

@@ -15,14 +15,19 @@ from .fit import run_fit
 from .render import run_render
 
 
-def sample_mesh():
-    """The demo's mesh: a closed genus-1 mesh of 400 vertices with random edge
-    flips (sorpia.shapes.irregular: valences 3 to 12, most vertices
-    extraordinary), its tube made wavy so that the Loop surface visibly shrinks
-    away from the vertices. Returns (vertices (n, 3) float64, faces (m, 3) int32)."""
+def sample_mesh(scheme: str = "loop"):
+    """The demo's mesh. Loop: a closed genus-1 mesh of 400 vertices with
+    random edge flips (sorpia.shapes.irregular: valences 3 to 12, most
+    vertices extraordinary); Catmull-Clark: a torus of 24 x 12 quads. Either
+    with its tube made wavy so that the limit surface visibly shrinks away
+    from the vertices. Returns (vertices (n, 3) float64, faces (m, 3) or
+    (m, 4) int32)."""
     from .. import shapes
 
-    V, F = shapes.irregular(400, seed=3)
+    if scheme == "catmull-clark":
+        V, F = _quad_torus(24, 12)
+    else:
+        V, F = shapes.irregular(400, seed=3)
     V = np.array(V, dtype=float)
     # A bump in the tube radius, 5 waves around the ring: the Loop surface
     # shrinks most at the crests, where the curvature is largest.
@@ -30,6 +35,18 @@ def sample_mesh():
     ring = np.column_stack([np.cos(angle), np.sin(angle), np.zeros(len(V))])
     offset = V - ring  # from the tube's centre circle (major radius 1)
     V = ring + offset * (1.0 + 0.45 * np.sin(5 * angle))[:, None]
+    return V, F
+
+
+def _quad_torus(nu: int, nv: int):
+    """A torus of nu x nv quads, radii 1 and 0.4, faces counter-clockwise seen from outside."""
+    u, v = np.meshgrid(2 * np.pi * np.arange(nu) / nu, 2 * np.pi * np.arange(nv) / nv, indexing="ij")
+    r = 1.0 + 0.4 * np.cos(v)
+    V = np.column_stack([(r * np.cos(u)).ravel(), (r * np.sin(u)).ravel(), (0.4 * np.sin(v)).ravel()])
+    i, j = np.meshgrid(np.arange(nu), np.arange(nv), indexing="ij")
+    a, b = i * nv + j, ((i + 1) % nu) * nv + j
+    c, d = ((i + 1) % nu) * nv + (j + 1) % nv, i * nv + (j + 1) % nv
+    F = np.column_stack([a.ravel(), b.ravel(), c.ravel(), d.ravel()]).astype(np.int32)
     return V, F
 
 
@@ -45,8 +62,9 @@ def _new_demo_folder() -> Path:
     raise UserError("could not create a new sorpia-demo-* folder in the working directory")
 
 
-def run_demo(out_dir=None, *, quiet=False, out=None) -> int:
-    """`sorpia demo`: fit, compare and render on the built-in sample mesh."""
+def run_demo(out_dir=None, *, quiet=False, scheme="auto", out=None) -> int:
+    """`sorpia demo`: fit, compare and render on the built-in sample mesh of
+    the scheme (auto: Loop's)."""
     from .. import write_mesh
 
     out = out if out is not None else sys.stdout
@@ -79,23 +97,25 @@ def run_demo(out_dir=None, *, quiet=False, out=None) -> int:
     if plots:
         paths["Figure 7 (convergence)"] = folder / "convergence.png"
         paths["Figure 3 (interpolation)"] = folder / "figure3.png"
-    V, F = sample_mesh()
+    scheme = "loop" if scheme == "auto" else scheme
+    V, F = sample_mesh(scheme)
     write_mesh(paths["sample mesh"], V, F)
     sample = paths["sample mesh"]
     say = (lambda *a: None) if quiet else (lambda *a: print(*a, file=out))
-    say(f"sorpia {__version__} demo: sample mesh {sample} (a wavy torus with random edge flips)\n")
+    what = "a wavy torus of quads" if scheme == "catmull-clark" else "a wavy torus with random edge flips"
+    say(f"sorpia {__version__} demo: sample mesh {sample} ({what})\n")
     codes = []
     code, _ = run_fit(sample, paths["control mesh"], surface=paths["limit surface of the control mesh"],
-                      level=3, report=paths["fit report"], quiet=quiet, out=out)
+                      level=3, report=paths["fit report"], quiet=quiet, scheme=scheme, out=out)
     codes.append(code)
     say("")
     code, _ = run_compare(sample, table=paths["Table 1 (Markdown)"], csv_path=paths["Table 1 (CSV)"],
                           json_path=paths["comparison (JSON)"], plot=paths.get("Figure 7 (convergence)"),
-                          quiet=quiet, out=out)
+                          quiet=quiet, scheme=scheme, out=out)
     codes.append(code)
     if plots:
         say("")
-        code, _ = run_render(sample, paths["Figure 3 (interpolation)"], quiet=quiet, out=out)
+        code, _ = run_render(sample, paths["Figure 3 (interpolation)"], quiet=quiet, scheme=scheme, out=out)
         codes.append(code)
     width = max(len(k) for k in paths)
     say(f"\nsorpia demo: done in {time.perf_counter() - t_start:.1f} s; files in {folder}:")

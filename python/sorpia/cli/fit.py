@@ -9,18 +9,21 @@ from pathlib import Path
 import numpy as np
 
 from .. import __version__
-from .._validate import DEFAULT_BOUNDARY, as_boundary
-from .common import (EXIT_NOT_CONVERGED, EXIT_OK, UserError, check_mesh_suffix, check_paths, check_solver_options,
-                     cpu_clock, fit_once, fmt_seconds, method_label, mesh_line, read_input, repair_json, repair_lines,
-                     result_fields)
+from .._validate import as_boundary
+from .common import (EXIT_NOT_CONVERGED, EXIT_OK, SCHEME_LABELS, UserError, boundary_rule, check_mesh_suffix,
+                     check_paths, check_solver_options, choose_scheme, cpu_clock, face_counts, face_size_histogram,
+                     fit_once, fmt_seconds, method_label, mesh_line, read_input, repair_json, repair_lines,
+                     result_fields, scheme_kwargs, solve_tags, tags_lines, tags_summary, warn_once)
 from .output import write_json
 from .progress import Progress
 
 
 def run_fit(input_path, output, *, method="sor", omega="auto", tol=1e-10, max_iter=1000,
-            boundary=DEFAULT_BOUNDARY, surface=None, level=3, report=None, quiet=False, force=False,
-            triangulate=False, binary=False, threads=1, repair=False, out=None) -> tuple[int, dict]:
-    """`sorpia fit`: returns (exit code, report dict)."""
+            boundary=None, surface=None, level=3, report=None, quiet=False, force=False,
+            triangulate=False, binary=False, threads=1, repair=False, scheme="auto", ignore_tags=False,
+            sharp_angle=None, out=None) -> tuple[int, dict]:
+    """`sorpia fit`: returns (exit code, report dict). `boundary` None: the
+    file's interpolateboundary tag, else the default rule."""
     from .. import _core, write_mesh
     from ..meshinfo import topology_info
 
@@ -37,15 +40,19 @@ def run_fit(input_path, output, *, method="sor", omega="auto", tol=1e-10, max_it
     timings: dict[str, float] = {}
     with Progress(enabled=not quiet) as progress:
         progress.status(f"reading {input_path}")
-        mesh = read_input(input_path, triangulate, repair)
+        mesh = read_input(input_path, triangulate, repair, tags=not ignore_tags)
         V0, F = mesh.vertices, mesh.faces
         timings.update(mesh.timings)
+        scheme = choose_scheme(scheme, F, input_path)
+        boundary = boundary_rule(boundary, mesh)
+        tags = solve_tags(mesh, sharp_angle, input_path)
+        n_faces = len(face_counts(F))
         if surface is not None:
-            _check_surface_fits(len(V0), len(F), level)
+            _check_surface_fits(len(V0), n_faces, level)
         timings["statistics"] = 0.0  # reported before the fit, measured after the topology is built
         interp, res, timings["fit"], cpu = fit_once(
             V0, F, method=method, omega=omega if method == "sor" else None, tol=tol, max_iter=max_iter,
-            boundary=boundary, threads=threads, progress=progress, source=input_path)
+            boundary=boundary, threads=threads, progress=progress, source=input_path, scheme=scheme, tags=tags)
         progress.status("mesh statistics")
         t0 = time.perf_counter()
         stats = topology_info(V0, interp.topology)
@@ -54,7 +61,9 @@ def run_fit(input_path, output, *, method="sor", omega="auto", tol=1e-10, max_it
 
         progress.status(f"writing {output}")
         t0 = time.perf_counter()
-        write_mesh(output, ctrl, F, binary=_binary_for(output, binary))
+        # The control mesh keeps the tags it was fitted with (OBJ), so that it can be refitted.
+        written_tags = _tags_to_write(output, tags, boundary, mesh)
+        write_mesh(output, ctrl, F, binary=_binary_for(output, binary), **written_tags)
         timings["write"] = time.perf_counter() - t0
         surface_stats = None
         if surface is not None:
@@ -62,7 +71,7 @@ def run_fit(input_path, output, *, method="sor", omega="auto", tol=1e-10, max_it
 
             progress.status(f"limit surface, level {level}")
             t0 = time.perf_counter()
-            Vs, Fs = limit_surface(ctrl, F, level=level, boundary=boundary)
+            Vs, Fs = limit_surface(ctrl, F, level=level, boundary=boundary, **scheme_kwargs(scheme, tags))
             write_mesh(surface, Vs, Fs, binary=_binary_for(surface, binary))
             timings["surface"] = time.perf_counter() - t0
             surface_stats = {"path": str(surface), "level": level, "vertices": len(Vs), "faces": len(Fs)}
@@ -71,7 +80,7 @@ def run_fit(input_path, output, *, method="sor", omega="auto", tol=1e-10, max_it
         # topology's one-ring, against the given vertices.
         progress.status("checking B V = V0")
         t0 = time.perf_counter()
-        max_residual, _, _ = _core.limit_residual(interp.topology, ctrl, V0, as_boundary(boundary))
+        max_residual = _max_residual(interp, ctrl, V0, F, boundary, scheme, tags)
         timings["check"] = time.perf_counter() - t0
 
     fields = result_fields(res)
@@ -84,6 +93,10 @@ def run_fit(input_path, output, *, method="sor", omega="auto", tol=1e-10, max_it
         "command": "fit",
         "input": str(input_path),
         "triangulated": triangulate,
+        "scheme": scheme,
+        "face_sizes": face_size_histogram(F),
+        "tags": {"from_file": not ignore_tags, "sharp_angle": sharp_angle, **tags_summary(tags),
+                 "written_to_output": sorted(written_tags)},
         "repair": repair_json(mesh.repair) if repair else None,
         "output": str(output),
         "surface": surface_stats,
@@ -112,6 +125,38 @@ def run_fit(input_path, output, *, method="sor", omega="auto", tol=1e-10, max_it
     if not quiet:
         print(fit_summary(data, repair_lines(mesh.repair) if repair else ()), file=out)
     return (EXIT_OK if res.converged else EXIT_NOT_CONVERGED), data
+
+
+def _tags_to_write(output, tags: dict, boundary: str, mesh) -> dict:
+    """The tags the control mesh is written with: those it was fitted with,
+    and the boundary rule when it is not the default or the file named it;
+    OBJ only (another format cannot hold them: a warning says they are left out)."""
+    from .._validate import DEFAULT_BOUNDARY
+
+    out = dict(tags)
+    if boundary != DEFAULT_BOUNDARY or "boundary" in mesh.tags:
+        out["boundary"] = boundary
+    if Path(output).suffix.lower() == ".obj":
+        return out
+    if tags:
+        warn_once(f"-o {output}: the sharpness tags ({', '.join(sorted(tags))}) are not written: only .obj files "
+                  "hold them; refitting this file would solve without them")
+    return {}
+
+
+def _max_residual(interp, ctrl, V0, faces, boundary, scheme, tags) -> float:
+    """max |B V - V0| of the control mesh written, independent of the
+    solver: Loop without tags from OpenSubdiv's masks over the topology's
+    one-ring (limit_residual); otherwise from the library's limit points of
+    the scheme and tags."""
+    from .. import _core
+
+    if not scheme_kwargs(scheme, tags):
+        return float(_core.limit_residual(interp.topology, ctrl, V0, as_boundary(boundary))[0])
+    from .. import limit_points
+
+    return float(np.abs(limit_points(ctrl, faces, boundary=boundary, **scheme_kwargs(scheme, tags))
+                        - V0).max())
 
 
 def _check_surface_fits(n_vertices: int, n_faces: int, level: int) -> None:
@@ -159,6 +204,8 @@ def fit_summary(d: dict, repaired=()) -> str:
         f"sorpia fit: {d['input']} -> {d['output']}",
         *(f"  {'repaired' if j == 0 else '':<12}{line}" for j, line in enumerate(repaired)),
         f"  mesh        {mesh_line(d['mesh'])}",
+        f"  scheme      {SCHEME_LABELS[d['scheme']]}" + (f", boundary {d['boundary']}"),
+        *(f"  {'tags' if j == 0 else '':<12}{line}" for j, line in enumerate(tags_lines(d["tags"]))),
         f"  method      {label}",
         f"  result      {state}",
         f"  check       max |B V - V0| = {d['max_residual']:.3g} "

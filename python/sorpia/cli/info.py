@@ -1,51 +1,114 @@
-"""``sorpia info``: mesh statistics (the paper's Table 2) and whether Loop PIA can run."""
+"""``sorpia info``: mesh statistics (the paper's Table 2), the scheme and the
+sharpness tags, and whether PIA can run."""
 
 from __future__ import annotations
 
 import json
 import sys
 
-from .._validate import DEFAULT_BOUNDARY
-from .common import EXIT_OK, read_input, repair_lines
+from .common import (EXIT_OK, SCHEME_LABELS, UserError, boundary_rule, choose_scheme, face_size_histogram,
+                     is_triangles, read_input, repair_lines, scheme_kwargs, solve_tags, tags_lines, tags_summary)
 from .output import jsonable
 
 MAX_LISTED = 16  # extraordinary vertices listed in the text output (--json lists all)
 
 
-def run_info(input_path, *, as_json=False, boundary=DEFAULT_BOUNDARY, triangulate=False,
-             repair=False, out=None) -> tuple[int, dict]:
-    """`sorpia info`: mesh statistics and whether Loop PIA can run (exit 0 either way).
+def run_info(input_path, *, as_json=False, boundary=None, triangulate=False, repair=False, scheme="auto",
+             ignore_tags=False, sharp_angle=None, out=None) -> tuple[int, dict]:
+    """`sorpia info`: mesh statistics, the scheme, the tags, and whether PIA
+    can run (exit 0 either way).
 
-    A file with polygons is described as its fan triangulation, with the
-    verdict that Loop PIA cannot run on it as it is (--triangulate). With
-    `repair`, everything is of the repaired mesh and info["repair"] says what
-    changed; without it, a mesh Loop PIA cannot run on is repaired in memory
-    and info["repair"] says what --repair would change (or why it cannot)."""
+    The statistics are of the mesh as the scheme sees it: a file with
+    polygons is counted as its triangulation (the read with --triangulate),
+    with its faces by size. The verdict is the library's own: the solve's
+    validation of the faces, scheme and tags. Tags the reader refuses (a
+    crease method sorpia does not have, a malformed tag) are reported, and
+    the mesh described without them. With `repair`, everything is of the
+    repaired mesh and info["repair"] says what changed; without it, a mesh
+    Loop PIA cannot run on is repaired in memory and info["repair"] says what
+    --repair would change (or why it cannot)."""
+    from .. import MeshFileError
     from ..meshinfo import format_info, mesh_info
 
     out = out if out is not None else sys.stdout
-    # One read, polygons split whether or not --triangulate was given (the
-    # statistics are of the fan triangulation either way); the count says
-    # whether the verdict must send the user to --triangulate.
-    mesh = read_input(input_path, triangulate=True, repair=repair)
-    polygons = mesh.polygons > 0 and not triangulate
-    info = mesh_info(mesh.vertices, mesh.faces, boundary=boundary,
+    tags_refused = None
+    try:
+        mesh = read_input(input_path, triangulate=triangulate, repair=repair, tags=not ignore_tags)
+    except MeshFileError as exc:
+        if ignore_tags or "tag" not in str(exc):
+            raise
+        tags_refused = str(exc)
+        mesh = read_input(input_path, triangulate=triangulate, repair=repair, tags=False)
+    polygons = not is_triangles(mesh.faces)
+    try:
+        chosen = choose_scheme(scheme, mesh.faces, input_path)
+        refusal = None
+    except UserError as exc:  # --scheme loop on polygons
+        chosen, refusal = scheme, str(exc)
+    # The statistics of a polygon file are those of its triangulation.
+    counted = read_input(input_path, triangulate=True, repair=repair, tags=False) if polygons else mesh
+    info = mesh_info(counted.vertices, counted.faces, boundary=boundary_rule(boundary, mesh),
                      list_extraordinary=True if as_json else MAX_LISTED)
+    info["face_sizes"] = face_size_histogram(mesh.faces)
+    info["triangulated"] = bool(triangulate or polygons)
+    info["scheme"] = chosen
+    info["boundary"] = boundary_rule(boundary, mesh)
+    tags = solve_tags(mesh, sharp_angle, input_path)
+    info["tags"] = {"from_file": not ignore_tags, "sharp_angle": sharp_angle, **tags_summary(tags),
+                    **({"refused": tags_refused} if tags_refused else {})}
     if repair:
         info["repair"] = {"applied": True, "changes": repair_lines(mesh.repair),
                           "counts": mesh.repair.report["counts"]}
     elif not info["loop_pia"]["can_run"]:
-        info["repair"] = _what_repair_would_do(mesh.vertices, mesh.faces)
-    info["triangulated"] = bool(triangulate or polygons)
+        info["repair"] = _what_repair_would_do(counted.vertices, counted.faces)
     if polygons and info["loop_pia"]["can_run"]:
         info["loop_pia"] = {"can_run": False, "notes": [],
-                            "reason": "the file has faces of more than 3 vertices (the counts are of their fan "
-                            "triangulation); pass --triangulate to fit, compare or render to split them"}
+                            "reason": "the file has faces of more than 3 vertices (the counts are of their "
+                            "triangulation); pass --triangulate to split them, or --scheme catmull-clark"}
+    info["pia"] = _verdict(chosen, refusal, mesh, tags, info)
     if as_json:
         print(json.dumps(jsonable({"input": str(input_path), **info}), indent=2), file=out)
     else:
-        print(format_info(info, str(input_path), max_listed=MAX_LISTED), file=out)
+        print(format_info(info, str(input_path), max_listed=MAX_LISTED, extra_rows=_scheme_rows(info)), file=out)
     return EXIT_OK, info
+
+
+def _verdict(scheme: str, refusal, mesh, tags: dict, info: dict) -> dict:
+    """Whether PIA can run with the scheme and the tags, and if not why: the
+    Interpolator's own validation, or Loop's verdict for Loop without tags."""
+    from .. import Interpolator, MeshError, ParameterError
+
+    if refusal is not None:
+        return {"scheme": scheme, "can_run": False, "reason": refusal}
+    if scheme == "loop" and not tags:
+        return {"scheme": scheme, **{k: info["loop_pia"][k] for k in ("can_run", "reason")}}
+    try:
+        kwargs = scheme_kwargs(scheme, tags)
+        Interpolator(mesh.faces, len(mesh.vertices), boundary=info["boundary"], **kwargs)
+    except (UserError, MeshError, ParameterError, TypeError) as exc:
+        return {"scheme": scheme, "can_run": False, "reason": str(exc)}
+    return {"scheme": scheme, "can_run": True, "reason": None}
+
+
+def _scheme_rows(info: dict) -> list[tuple[str, str]]:
+    """The rows of the scheme, the faces by size, the tags and the verdict."""
+    names = {3: "triangles", 4: "quads"}
+    rows = [("faces by size", ", ".join(f"{c} {names.get(k, f'{k}-gons')}" for k, c in info["face_sizes"].items())),
+            ("scheme", f"{SCHEME_LABELS.get(info['scheme'], info['scheme'])}, boundary {info['boundary']}")]
+    tags = info["tags"]
+    lines = tags_lines(tags)
+    if tags.get("refused"):
+        rows.append(("tags", f"refused, the mesh described without them: {tags['refused']}"))
+    elif not lines:
+        rows.append(("tags", "none" if tags["from_file"] else "none (--ignore-tags)"))
+    rows += [("tags" if j == 0 else "", line) for j, line in enumerate(lines)]
+    if tags.get("sharp_angle") is not None:
+        rows.append(("", f"(with the creases of --sharp-angle {tags['sharp_angle']:g})"))
+    v = info["pia"]
+    label = f"{SCHEME_LABELS.get(v['scheme'], v['scheme'])} PIA"
+    if v["scheme"] != "loop" or lines:  # Loop without tags: the Loop PIA row above says it
+        rows.append((label, "can run" if v["can_run"] else f"cannot run: {v['reason']}"))
+    return rows
 
 
 def _what_repair_would_do(vertices, faces) -> dict:

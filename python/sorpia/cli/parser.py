@@ -7,7 +7,7 @@ import argparse
 from .. import __version__
 from .._validate import BOUNDARY_RULES, DEFAULT_BOUNDARY
 from ..plotting import FACE_BUDGET  # plotting imports matplotlib only when drawing
-from .common import DISPLAY_ORDER
+from .common import CLI_SCHEMES, DISPLAY_ORDER
 from .compare import run_compare
 from .demo import run_demo
 from .fit import run_fit
@@ -64,6 +64,13 @@ def _level_arg(text: str) -> int:
     return value
 
 
+def _angle_arg(text: str) -> float:
+    value = _float_arg(text)
+    if not 0 <= value <= 180:
+        raise argparse.ArgumentTypeError(f"expected an angle from 0 to 180 degrees, got {text!r}")
+    return value
+
+
 def _size_arg(text: str):
     try:
         w, h = (int(x) for x in text.lower().split("x"))
@@ -105,13 +112,26 @@ def build_parser() -> argparse.ArgumentParser:
         p = sub.add_parser(name, help=help_text, description=description, epilog=EXIT_HELP,
                            formatter_class=_Formatter)
         if input_arg:
-            p.add_argument("input", metavar="IN", help="input triangle mesh (.obj, .off, .ply, .stl); only read")
+            p.add_argument("input", metavar="IN", help="input mesh (.obj, .off, .ply, .stl; triangles, quads or any "
+                           "polygons, and OpenSubdiv's sharpness tags in .obj); only read")
         return p
 
     def triangulate_flag(p):
         p.add_argument("--triangulate", action="store_true",
-                       help="split faces of more than 3 vertices into fans of triangles from their first vertex "
-                       "(without it such a file is refused)")
+                       help="split faces of more than 3 vertices into triangles (a quad along its shorter "
+                       "diagonal, keeping the mesh manifold where it can), which makes --scheme auto pick Loop; "
+                       "hole tags follow their faces' triangles")
+
+    def scheme_options(p):
+        p.add_argument("--scheme", choices=CLI_SCHEMES, default="auto",
+                       help="subdivision scheme of the limit surface: loop (triangles only), catmull-clark (any "
+                       "polygons), or auto: Loop for an all-triangle mesh, Catmull-Clark otherwise")
+        p.add_argument("--ignore-tags", action="store_true",
+                       help="drop the sharpness tags of an .obj file (OpenSubdiv's 't crease', 't corner', "
+                       "'t hole', 't interpolateboundary' lines), which are used by default")
+        p.add_argument("--sharp-angle", type=_angle_arg, metavar="DEG",
+                       help="make every edge whose two faces' normals are more than DEG degrees apart an "
+                       "infinitely sharp crease (added to the file's creases)")
 
     def mesh_output(p, what):
         p.add_argument("-o", "--output", metavar="OUT", required=True,
@@ -140,9 +160,12 @@ def build_parser() -> argparse.ArgumentParser:
                        help="stop when E_k/E_0 < TOL, E_k = max_i |v_i^0 - (B V_k)_i| (paper section 5)")
         p.add_argument("--max-iter", type=_int_arg, default=1000, metavar="N",
                        help="stop after N iterations (exit code 1 if TOL was not reached)")
-        p.add_argument("--boundary", choices=BOUNDARY_RULES, default=DEFAULT_BOUNDARY,
-                       help="boundary rule of the limit surface (OpenSubdiv VTX_BOUNDARY_EDGE_AND_CORNER keeps "
-                       "one-face corners; EDGE_ONLY smooths them)")
+        boundary_option(p, "boundary rule of the limit surface (OpenSubdiv VTX_BOUNDARY_EDGE_AND_CORNER keeps "
+                        "one-face corners; EDGE_ONLY smooths them)")
+
+    def boundary_option(p, text):
+        p.add_argument("--boundary", choices=BOUNDARY_RULES, default=None,
+                       help=f"{text}; default: the file's 't interpolateboundary' tag, else {DEFAULT_BOUNDARY}")
 
     def threads_option(p, which):
         p.add_argument("--threads", type=_int_arg, default=1, metavar="N",
@@ -171,6 +194,7 @@ def build_parser() -> argparse.ArgumentParser:
     threads_option(fit, "--method sor or gs only (refused with other methods, which run on one thread)")
     fit.add_argument("--binary", action="store_true", help="write .ply and .stl outputs in binary (faster, "
                      "smaller; PLY keeps float64 either way)")
+    scheme_options(fit)
     triangulate_flag(fit)
     repair_flag(fit, "the control mesh is that of the repaired mesh (its extra vertices copy input vertices) and "
                 "--report holds the repair report and the vertex map")
@@ -178,7 +202,8 @@ def build_parser() -> argparse.ArgumentParser:
     fit.set_defaults(func=lambda a: run_fit(
         a.input, a.output, method=a.method, omega=a.omega, tol=a.tol, max_iter=a.max_iter, boundary=a.boundary,
         surface=a.surface, level=a.level, report=a.report, quiet=a.quiet, force=a.force, triangulate=a.triangulate,
-        binary=a.binary, threads=a.threads, repair=a.repair)[0])
+        binary=a.binary, threads=a.threads, repair=a.repair, scheme=a.scheme, ignore_tags=a.ignore_tags,
+        sharp_angle=a.sharp_angle)[0])
 
     comp = command("compare", "run several methods to one tolerance: the paper's Table 1 and Figure 7",
                    "Run each method on the mesh to the same tolerance and print the paper's Table 1 layout for "
@@ -194,13 +219,15 @@ def build_parser() -> argparse.ArgumentParser:
     comp.add_argument("--plot", metavar="P.png", help="write the convergence plot (paper Figure 7) as PNG")
     comp.add_argument("--json", metavar="J.json", help="write every figure (E_k/E_0 per iteration, timings) as JSON")
     threads_option(comp, "applied to sor and gs only (the other methods always run on one thread)")
+    scheme_options(comp)
     triangulate_flag(comp)
     repair_flag(comp, "--json holds the repair report and the vertex map")
     output_flags(comp)
     comp.set_defaults(func=lambda a: run_compare(
         a.input, methods=a.methods, tol=a.tol, max_iter=a.max_iter, boundary=a.boundary, table=a.table,
         csv_path=a.csv, plot=a.plot, json_path=a.json, quiet=a.quiet, force=a.force, triangulate=a.triangulate,
-        threads=a.threads, repair=a.repair)[0])
+        threads=a.threads, repair=a.repair, scheme=a.scheme, ignore_tags=a.ignore_tags,
+        sharp_angle=a.sharp_angle)[0])
 
     ren = command("render", "draw the paper's Figure 3 for a mesh (PNG)",
                   "Fit the mesh with SOR-PIA and draw four shaded panels, the same camera in each: (a) the given "
@@ -220,13 +247,15 @@ def build_parser() -> argparse.ArgumentParser:
     ren.add_argument("--face-budget", type=_positive_int, default=FACE_BUDGET, metavar="N",
                      help="most triangles drawn per panel")
     threads_option(ren, "in the SOR-PIA fit")
+    scheme_options(ren)
     triangulate_flag(ren)
     repair_flag(ren, "the panels show the repaired mesh")
     output_flags(ren)
     ren.set_defaults(func=lambda a: run_render(
         a.input, a.output, level=a.level, tol=a.tol, max_iter=a.max_iter, boundary=a.boundary, size=a.size,
         elev=a.elev, azim=a.azim, face_budget=a.face_budget, quiet=a.quiet, force=a.force,
-        triangulate=a.triangulate, up=a.up, threads=a.threads, repair=a.repair)[0])
+        triangulate=a.triangulate, up=a.up, threads=a.threads, repair=a.repair, scheme=a.scheme,
+        ignore_tags=a.ignore_tags, sharp_angle=a.sharp_angle)[0])
 
     inf = command("info", "mesh statistics (the paper's Table 2) and whether Loop PIA can run on it",
                   "Print vertices, faces, edges, boundary loops, Euler characteristic, genus, components, "
@@ -235,13 +264,14 @@ def build_parser() -> argparse.ArgumentParser:
                   "mesh and if not why (and what --repair would change). Exit code 0 whenever the file can be "
                   "read (and, with --repair, repaired).")
     inf.add_argument("--json", action="store_true", help="print JSON (every extraordinary vertex listed) instead")
-    inf.add_argument("--boundary", choices=BOUNDARY_RULES, default=DEFAULT_BOUNDARY,
-                     help="boundary rule the verdict refers to")
+    boundary_option(inf, "boundary rule the verdict refers to")
+    scheme_options(inf)
     triangulate_flag(inf)
     repair_flag(inf, "the statistics and the verdict are of the repaired mesh (without it, a refused mesh is "
                 "told what --repair would change)")
     inf.set_defaults(func=lambda a: run_info(a.input, as_json=a.json, boundary=a.boundary,
-                                             triangulate=a.triangulate, repair=a.repair)[0])
+                                             triangulate=a.triangulate, repair=a.repair, scheme=a.scheme,
+                                             ignore_tags=a.ignore_tags, sharp_angle=a.sharp_angle)[0])
 
     rep = command("repair", "make a mesh valid for Loop interpolation without moving a vertex",
                   "Read a triangle mesh and write it repaired (sorpia.repair): faces with a repeated vertex and "
@@ -267,6 +297,9 @@ def build_parser() -> argparse.ArgumentParser:
     demo.add_argument("--out", metavar="DIR", default=None,
                       help="folder for the files (created if needed; default: a new folder "
                       "sorpia-demo-YYYYMMDD-HHMMSS in the working directory)")
+    demo.add_argument("--scheme", choices=CLI_SCHEMES, default="auto",
+                      help="the sample mesh and its scheme: loop (a torus of triangles with random edge flips), "
+                      "catmull-clark (a torus of quads), or auto (loop)")
     quiet_flag(demo)
-    demo.set_defaults(func=lambda a: run_demo(a.out, quiet=a.quiet))
+    demo.set_defaults(func=lambda a: run_demo(a.out, quiet=a.quiet, scheme=a.scheme))
     return parser

@@ -8,17 +8,18 @@ from pathlib import Path
 
 import numpy as np
 
-from .._validate import DEFAULT_BOUNDARY
 from ..plotting import FACE_BUDGET  # plotting imports matplotlib only when drawing
-from .common import (EXIT_NOT_CONVERGED, EXIT_OK, UserError, check_paths, check_solver_options, fit_once,
-                     fmt_seconds, omega_text, read_input, repair_lines, require_plotting)
+from .common import (EXIT_NOT_CONVERGED, EXIT_OK, SCHEME_LABELS, UserError, boundary_rule, check_paths,
+                     check_solver_options, choose_scheme, face_counts, fit_once, fmt_seconds, omega_text, read_input, repair_lines,
+                     require_plotting, scheme_kwargs, solve_tags)
 from .output import save_figure
 from .progress import Progress
 
 
-def run_render(input_path, output, *, level=3, tol=1e-10, max_iter=1000, boundary=DEFAULT_BOUNDARY,
+def run_render(input_path, output, *, level=3, tol=1e-10, max_iter=1000, boundary=None,
                size=(1200, 1000), elev=30.0, azim=-60.0, face_budget=FACE_BUDGET, quiet=False, force=False,
-               triangulate=False, up="z", threads=1, repair=False, out=None) -> tuple[int, dict]:
+               triangulate=False, up="z", threads=1, repair=False, scheme="auto", ignore_tags=False,
+               sharp_angle=None, out=None) -> tuple[int, dict]:
     """`sorpia render`: the paper's Figure 3 for a mesh file."""
     from .. import LoopSurface
     from ..plotting import interpolation_figure, level_for_budget
@@ -33,18 +34,21 @@ def run_render(input_path, output, *, level=3, tol=1e-10, max_iter=1000, boundar
     timings = {}
     with Progress(enabled=not quiet) as progress:
         progress.status(f"reading {input_path}")
-        mesh = read_input(input_path, triangulate, repair)
+        mesh = read_input(input_path, triangulate, repair, tags=not ignore_tags)
         V0, F = mesh.vertices, mesh.faces
         timings.update(mesh.timings)
+        scheme = choose_scheme(scheme, F, input_path)
+        boundary = boundary_rule(boundary, mesh)
+        tags = solve_tags(mesh, sharp_angle, input_path)
         _, res, timings["fit"], _ = fit_once(V0, F, method="sor", omega="auto", tol=tol, max_iter=max_iter,
                                              boundary=boundary, threads=threads, progress=progress,
-                                             source=input_path)
+                                             source=input_path, scheme=scheme, tags=tags)
         ctrl = np.asarray(res.control_vertices)
-        drawn_level = level_for_budget(len(F), level, budget)
+        drawn_level = level_for_budget(len(face_counts(F)), level, budget)
         progress.status(f"limit surfaces, level {drawn_level}")
         t0 = time.perf_counter()
         # One LoopSurface for both: the topology is built once, only positions change.
-        surface = LoopSurface(V0, F, boundary=boundary)
+        surface = LoopSurface(V0, F, boundary=boundary, **scheme_kwargs(scheme, tags))
         given = surface.tessellate(drawn_level)
         surface.set_vertices(ctrl)
         fitted = surface.tessellate(drawn_level)
@@ -52,11 +56,12 @@ def run_render(input_path, output, *, level=3, tol=1e-10, max_iter=1000, boundar
         progress.status(f"drawing {output}")
         t0 = time.perf_counter()
         fig = interpolation_figure(V0, F, given, ctrl, fitted, size=size, elev=elev, azim=azim, face_budget=budget,
-                                   title=f"{Path(input_path).name}: Loop limit surface and SOR-PIA (paper Figure 3)",
+                                   title=f"{Path(input_path).name}: {SCHEME_LABELS[scheme]} limit surface and SOR-PIA "
+                                   "(paper Figure 3)",
                                    iterations=int(res.iterations), level=drawn_level, up=up)
         save_figure(fig, output)
         timings["draw"] = time.perf_counter() - t0
-    data = {"output": str(output), "level": drawn_level, "threads": threads, "iterations": int(res.iterations),
+    data = {"output": str(output), "scheme": scheme, "level": drawn_level, "threads": threads, "iterations": int(res.iterations),
             "converged": bool(res.converged), "omega": res.omega, "timings": timings}
     if not quiet:
         lvl = f"level {drawn_level}" + (f" (asked {level}; face budget {budget})" if drawn_level < level else "")
