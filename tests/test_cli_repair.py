@@ -160,9 +160,10 @@ def test_render_repair_draws_the_repaired_mesh(defect_file, command):
     assert out.count("repaired") == 6
 
 
-def test_polygon_file_needs_triangulate_then_repairs(tmp_path, monkeypatch, command):
-    """Two quad grids sharing one corner vertex (an open bowtie): refused as polygons without --triangulate;
-    with it, the bowtie is split and every output vertex copies its input vertex bit for bit."""
+@pytest.mark.parametrize("triangulate", [False, True])
+def test_polygon_file_repairs_as_quads_or_triangles(tmp_path, monkeypatch, command, triangulate):
+    """Two quad grids sharing one corner vertex (an open bowtie): the bowtie is split, as quads or (with
+    --triangulate) as triangles, and every output vertex copies its input vertex bit for bit."""
     monkeypatch.chdir(tmp_path)
     v = np.vstack([points(9, 2), points(8, 3)])
 
@@ -175,13 +176,12 @@ def test_polygon_file_needs_triangulate_then_repairs(tmp_path, monkeypatch, comm
     lines = [f"v {x!r} {y!r} {z!r}" for x, y, z in v.tolist()]
     lines += ["f " + " ".join(map(str, q)) for q in grid(list(range(9))) + grid(second)]
     (tmp_path / "quads.obj").write_text("\n".join(lines) + "\n")
-    code, _, err = command("repair", "quads.obj", "-o", "out.obj")
-    assert_user_error(code, err)
-    assert "--triangulate" in err
-    code, out, err = command("repair", "quads.obj", "-o", "out.obj", "--triangulate", "--report", "r.json")
+    code, out, err = command("repair", "quads.obj", "-o", "out.obj", "--report", "r.json",
+                             *(["--triangulate"] if triangulate else []))
     assert code == 0, err
     report = json.loads((tmp_path / "r.json").read_text())
     assert report["report"]["bowtie_vertices"] == [8] and report["vertex_map"][len(v):] == [8]
     w, f = sorpia.read_mesh("out.obj")
     assert np.array_equal(w.view(np.uint64), v[report["vertex_map"]].view(np.uint64))
+    assert f.shape == ((16, 3) if triangulate else (8, 4)) and report["faces"] == len(f)
     assert "bowtie vertices (fans meeting at one vertex): 1 split into one vertex per fan, 1 copy added" in out

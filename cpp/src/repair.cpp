@@ -33,6 +33,31 @@ using detail::FaceList;
 // Union-find over corners: the root of a class is its lowest corner.
 using Corners = detail::DisjointSets;
 
+// A FaceList whose kind is fixed at compile time: the triangle path steps
+// round a face by arithmetic (next_corner, h / 3), with no branch on the kind.
+template <bool kPolygons>
+struct Faces : FaceList {
+  bool triangles() const { return !kPolygons; }
+  std::int32_t face_of(std::size_t h) const {
+    if constexpr (kPolygons) return corner_face[h];
+    return static_cast<std::int32_t>(h / 3);
+  }
+  std::size_t next(std::size_t h) const {
+    if constexpr (kPolygons) return FaceList::next(h);
+    return detail::next_corner(h);
+  }
+  std::size_t prev(std::size_t h) const {
+    if constexpr (kPolygons) return FaceList::prev(h);
+    return detail::prev_corner(h);
+  }
+  // Face f's corners are [begin(f), end(f)).
+  std::int32_t begin(std::size_t f) const {
+    if constexpr (kPolygons) return off[f];
+    return static_cast<std::int32_t>(3 * f);
+  }
+  std::int32_t end(std::size_t f) const { return begin(f + 1); }
+};
+
 // The offsets (and, for polygons, the corner faces) of a FaceList.
 struct FaceArrays {
   std::vector<std::int32_t> off, corner_face;  // corner_face empty for triangles
@@ -132,7 +157,8 @@ OwnedFaces drop_repeated_corners(const FaceList& fl, std::size_t n_vertices, std
 // edges with the face it repeats, so it is found at its first edge, before it
 // could be joined. The ends of edges of three or more faces are marked in
 // `sheet_end`. Needs faces without a repeated vertex (rule 1).
-std::vector<std::int32_t> join_edges(const FaceList& fl, std::size_t n_vertices, bool pair_sheets,
+template <bool kPolygons>
+std::vector<std::int32_t> join_edges(const Faces<kPolygons>& fl, std::size_t n_vertices, bool pair_sheets,
                                      std::vector<std::uint8_t>& removed, RepairReport& rep,
                                      std::vector<std::uint8_t>& sheet_end) {
   const std::int32_t* faces = fl.idx;
@@ -145,8 +171,8 @@ std::vector<std::int32_t> join_edges(const FaceList& fl, std::size_t n_vertices,
   // h's face backwards where it runs the edge the other way.
   auto same_face = [&](std::int32_t g, std::int32_t h) {
     if (fl.triangles()) return faces[fl.prev(g)] == faces[fl.prev(h)];
-    const std::int32_t fg = fl.face_of(g), fh = fl.face_of(h), n = fl.off[fg + 1] - fl.off[fg];
-    if (n != fl.off[fh + 1] - fl.off[fh]) return false;
+    const std::int32_t fg = fl.face_of(g), fh = fl.face_of(h), n = fl.end(fg) - fl.begin(fg);
+    if (n != fl.end(fh) - fl.begin(fh)) return false;
     const bool forward = faces[g] == faces[h];
     std::size_t a = static_cast<std::size_t>(g), b = forward ? static_cast<std::size_t>(h) : fl.next(h);
     for (std::int32_t i = 0; i < n; ++i, a = fl.next(a), b = forward ? fl.next(b) : fl.prev(b))
@@ -238,12 +264,13 @@ std::vector<std::int32_t> join_edges(const FaceList& fl, std::size_t n_vertices,
 // One pass of the rules in repair.hpp over valid indices; without
 // `pair_sheets`, every face of an edge of three or more borders it alone.
 // The output faces are polygons (with face_counts) unless `input` is triangles.
+template <bool kPolygons>
 RepairResult repair_pass(const FaceList& input, std::size_t n_vertices, bool pair_sheets) {
   RepairResult r;
   RepairReport& rep = r.report;
   std::vector<std::uint8_t> removed(input.n_faces, 0);
   const OwnedFaces collapsed = drop_repeated_corners(input, n_vertices, removed, rep);
-  const FaceList fl = collapsed.empty() ? input : collapsed.view();
+  const Faces<kPolygons> fl{collapsed.empty() ? input : collapsed.view()};
   const std::int32_t* faces = fl.idx;
   const std::size_t n_faces = fl.n_faces, n_half = fl.n_corners();
   std::vector<std::uint8_t> sheet_end(n_vertices, 0);
@@ -303,7 +330,7 @@ RepairResult repair_pass(const FaceList& input, std::size_t n_vertices, bool pai
     std::int32_t clash = -1;  // a face whose orientation is forced both ways
     for (std::size_t q = 0; q < component.size(); ++q) {
       const std::int32_t f = component[q];
-      for (std::int32_t h = fl.off[f]; h < fl.off[f + 1]; ++h) {
+      for (std::int32_t h = fl.begin(f); h < fl.end(f); ++h) {
         const std::int32_t g = mate[h];
         if (g < 0) continue;
         // running the edge the same way as h needs the other orientation
@@ -335,13 +362,13 @@ RepairResult repair_pass(const FaceList& input, std::size_t n_vertices, bool pai
   r.faces.reserve(n_half);
   for (std::size_t f = 0; f < n_faces; ++f) {
     if (removed[f]) continue;
-    const std::int32_t lo = fl.off[f], hi = fl.off[f + 1];
+    const std::int32_t lo = fl.begin(f), hi = fl.end(f);
     r.faces.push_back(vertex_of[lo]);
     if (flip[f])
       for (std::int32_t h = hi - 1; h > lo; --h) r.faces.push_back(vertex_of[h]);
     else
       for (std::int32_t h = lo + 1; h < hi; ++h) r.faces.push_back(vertex_of[h]);
-    if (!input.triangles()) r.face_counts.push_back(hi - lo);
+    if (kPolygons) r.face_counts.push_back(hi - lo);
     r.face_map.push_back(static_cast<std::int32_t>(f));
   }
   return r;
@@ -399,6 +426,7 @@ void compose(RepairResult& first, RepairResult&& later) {
 namespace {
 
 // TEMPORARY until branch catmark's polygon Topology is merged.
+template <bool kPolygons>
 RepairResult repair_pass(const FaceList& input, std::size_t n_vertices, bool pair_sheets);
 struct PolyTopologyStub {
   PolyTopologyStub(const std::int32_t* counts, std::size_t n_faces, const std::int32_t* idx, std::size_t n_vertices) {
@@ -409,7 +437,7 @@ struct PolyTopologyStub {
         if (idx[h] < 0 || static_cast<std::size_t>(idx[h]) >= n_vertices)
           throw MeshError(a.over(idx).str(f) + " has vertex index " + std::to_string(idx[h]) + " out of range [0, " +
                           std::to_string(n_vertices) + ")");
-    if (!repair_pass(a.over(idx), n_vertices, false).report.empty()) throw MeshError("invalid polygon mesh");
+    if (!repair_pass<true>(a.over(idx), n_vertices, false).report.empty()) throw MeshError("invalid polygon mesh");
   }
 };
 bool poly_faces_valid_stub(const std::int32_t* counts, std::size_t n_faces, const std::int32_t* idx, std::size_t n_vertices) {
@@ -447,7 +475,10 @@ RepairResult repair_faces(const std::int32_t* counts, const FaceList& fl, std::s
     throw std::logic_error("sorpia::repair: the validation accepted faces with an index out of range");
   }
 
-  RepairResult result = repair_pass(fl, n_vertices, true);
+  auto pass = [&](const FaceList& faces, std::size_t n, bool pair_sheets) {
+    return counts ? repair_pass<true>(faces, n, pair_sheets) : repair_pass<false>(faces, n, pair_sheets);
+  };
+  RepairResult result = pass(fl, n_vertices, true);
   if (result.faces.empty())
     throw MeshError("every face repeats a vertex (" + std::to_string(fl.n_faces) +
                     " degenerate faces): no face is left, and subdivision needs at least one face");
@@ -455,7 +486,7 @@ RepairResult repair_faces(const std::int32_t* counts, const FaceList& fl, std::s
   // sheets that touch along several edges), which leaves that edge with more
   // than two faces: a further pass makes each face of such an edge border it alone.
   constexpr int max_passes = 4;
-  for (int pass = 1;; ++pass) {
+  for (int n_pass = 1;; ++n_pass) {
     const std::size_t n_out = result.vertex_map.size(), n_faces_out = result.face_map.size();
     const std::int32_t* counts_out = counts ? result.face_counts.data() : nullptr;
     const FaceArrays arrays =
@@ -463,7 +494,7 @@ RepairResult repair_faces(const std::int32_t* counts, const FaceList& fl, std::s
     const FaceList out = arrays.over(result.faces.data());
     if (valid(counts_out, out, n_out)) return result;
     RepairResult next;
-    if (pass < max_passes) next = repair_pass(out, n_out, false);
+    if (n_pass < max_passes) next = pass(out, n_out, false);
     if (next.report.empty()) {  // nothing more repair changes (e.g. a vertex of too many edges)
       try {
         validate(counts_out, out, n_out);

@@ -1,5 +1,6 @@
-"""Repair of triangle meshes that sorpia refuses (duplicate and degenerate
-faces, bowtie vertices, edges of three or more faces, mixed orientation)."""
+"""Repair of triangle and polygon meshes that sorpia refuses (duplicate and
+degenerate faces, bowtie vertices, edges of three or more faces, mixed
+orientation)."""
 
 from __future__ import annotations
 
@@ -8,10 +9,10 @@ from typing import NamedTuple
 import numpy as np
 
 from . import _core
-from ._validate import as_faces, as_vertices
+from ._validate import Polygons, as_faces, as_polygons, as_vertices
 
 # The report's keys, in the order the repair applies its rules (see `repair`).
-REPORT_KINDS = ("degenerate_faces", "duplicate_faces", "reversed_duplicate_faces", "nonmanifold_edges",
+REPORT_KINDS = ("degenerate_faces", "collapsed_faces", "duplicate_faces", "reversed_duplicate_faces", "nonmanifold_edges",
                 "sheet_vertices", "sheet_copies", "bowtie_vertices", "bowtie_copies", "flipped_faces")
 
 
@@ -41,11 +42,12 @@ def describe_changes(report: dict, max_listed: int = 5) -> list[str]:
     mesh), naming the first `max_listed` input faces, edges or vertices of
     each; for ``sorpia repair``, ``--repair`` and ``sorpia info``."""
     r, lines = report, []
-    for kind, what in (("degenerate_faces", "degenerate faces (a repeated vertex)"),
-                       ("duplicate_faces", "duplicate faces"),
-                       ("reversed_duplicate_faces", "reversed duplicate faces")):
+    for kind, what, done in (("degenerate_faces", "degenerate faces (a repeated vertex)", "removed"),
+                             ("collapsed_faces", "polygons with a repeated corner", "kept without the repeats"),
+                             ("duplicate_faces", "duplicate faces", "removed"),
+                             ("reversed_duplicate_faces", "reversed duplicate faces", "removed")):
         if r[kind]:
-            lines.append(f"{what}: {len(r[kind])} removed {_listed(_FACES, r[kind], max_listed)}")
+            lines.append(f"{what}: {len(r[kind])} {done} {_listed(_FACES, r[kind], max_listed)}")
     if r["nonmanifold_edges"]:
         lines.append(f"non-manifold edges (3 or more faces): {len(r['nonmanifold_edges'])} separated into "
                      f"sheets {_listed(_EDGES, r['nonmanifold_edges'], max_listed)}, their "
@@ -68,8 +70,9 @@ class RepairResult(NamedTuple):
     vertices : numpy.ndarray, (n + k, 3) float64
         The input vertices, then k copies: ``vertices[i]`` equals
         ``input_vertices[vertex_map[i]]`` bit for bit.
-    faces : numpy.ndarray, (m', 3) int32
-        The repaired triangles, a valid mesh for every sorpia function.
+    faces : numpy.ndarray, (m', k) int32, or sorpia.Polygons
+        The repaired faces, a valid mesh for every sorpia function, in the
+        form they were given (see `repair`).
     vertex_map : numpy.ndarray, (n + k,) int32
         For every output vertex, the input vertex it copies
         (``vertex_map[i] == i`` for i < n).
@@ -80,21 +83,40 @@ class RepairResult(NamedTuple):
     """
 
     vertices: np.ndarray
-    faces: np.ndarray
+    faces: np.ndarray | Polygons
     vertex_map: np.ndarray
     face_map: np.ndarray
     report: dict
 
 
+def _face_rows(faces):
+    """`faces` as the 2-D integer array it is given as (not yet validated), or
+    None for sorpia.Polygons, ragged lists and anything as_polygons refuses."""
+    if isinstance(faces, Polygons):
+        return None
+    try:
+        arr = np.asarray(faces)
+    except (ValueError, TypeError):
+        return None
+    if arr.ndim != 2 or arr.dtype == bool or not np.issubdtype(arr.dtype, np.integer):
+        return None
+    return arr
+
+
 def repair(vertices, faces) -> RepairResult:
-    """Make a triangle mesh valid for Loop interpolation without moving a vertex.
+    """Make a triangle or polygon mesh valid for subdivision without moving a vertex.
 
     The rules, applied in this order:
 
-    1. faces with a repeated vertex are removed ("degenerate_faces");
-    2. of faces with the same three vertices the first is kept; later ones in
-       the same cyclic order ("duplicate_faces") or the opposite one
-       ("reversed_duplicate_faces") are removed;
+    1. a face with a repeated vertex loses its consecutive repeats (cyclically:
+       ``(a, b, b, c)`` and ``(a, b, c, a)`` become the triangle ``(a, b, c)``)
+       when what is left is a polygon of three or more distinct vertices
+       ("collapsed_faces"); otherwise (every triangle with a repeated vertex, a
+       polygon crossing itself at a vertex such as ``(a, b, a, c)``) it is
+       removed ("degenerate_faces");
+    2. of faces with the same vertices in the same cyclic sequence the first is
+       kept; later ones in the same direction ("duplicate_faces") or the
+       opposite one ("reversed_duplicate_faces") are removed;
     3. at an edge of three or more faces ("nonmanifold_edges"), the faces are
        paired into sheets in face order: the lowest-numbered unpaired face with
        the next unpaired face running the edge the other way (else the next
@@ -108,7 +130,8 @@ def repair(vertices, faces) -> RepairResult:
        appended after the input vertices, in the order of its first corner;
     5. each connected part is oriented consistently by reversing the smaller of
        its two classes of faces (on a tie, those disagreeing with its
-       lowest-numbered face) ("flipped_faces").
+       lowest-numbered face) ("flipped_faces"); a reversed face keeps its
+       first corner: ``(a, b, c, d)`` becomes ``(a, d, c, b)``.
 
     No vertex is moved or dropped: vertices used only by removed faces and
     unreferenced vertices stay (unreferenced). Repair is idempotent.
@@ -117,39 +140,69 @@ def repair(vertices, faces) -> RepairResult:
     ----------
     vertices : array_like, (n, 3) float
         Vertex positions (validated as everywhere in sorpia).
-    faces : array_like, (m, 3) int
-        Triangles, indices into `vertices`; they may fail sorpia's topology
-        checks, which is what this function is for.
+    faces : array_like, (m, k) int, list of lists, or sorpia.Polygons
+        Triangles, quads or polygons of any sizes (at least 3 vertices each),
+        indices into `vertices`; they may fail sorpia's topology checks, which
+        is what this function is for.
 
     Returns
     -------
     RepairResult
-        ``(vertices, faces, vertex_map, face_map, report)``. ``report`` has one
-        key per kind above, holding the input face indices, the input edges
-        ``[a, b]`` (a < b) or the input vertex indices concerned, and "counts",
-        the number of each kind (for "sheet_copies" and "bowtie_copies", the
-        number of vertices added). For a
-        valid mesh every count is 0 and the validated input arrays come back
-        themselves (no copy; they are the caller's arrays when these are
-        already float64 and int32, C-contiguous), with identity maps.
+        ``(vertices, faces, vertex_map, face_map, report)``. The faces come
+        back in the form they were given: an (m, k) array (or a list of
+        faces of k vertices each) as an (m', k) int32 array, unless rule 1
+        shortened a face, and then, like a ragged list or a
+        `sorpia.Polygons`, as a `sorpia.Polygons` of int32 arrays.
+        ``report`` has one key per kind above, holding the input face
+        indices, the input edges ``[a, b]`` (a < b) or the input vertex
+        indices concerned, and "counts", the number of each kind (for
+        "sheet_copies" and "bowtie_copies", the number of vertices added). For
+        a valid mesh every count is 0 and the validated input arrays come back
+        themselves (no copy; they are the caller's arrays, or the caller's
+        `sorpia.Polygons`, when these are already float64 and int32,
+        C-contiguous), with identity maps.
 
     Raises
     ------
     sorpia.MeshError
         A connected part with no consistent orientation (a Moebius strip),
         named by its lowest face and its size; faces that all repeat a vertex;
-        or a problem repair does not change (index
-        out of range, no faces, a vertex of more edges than OpenSubdiv takes).
+        or a problem repair does not change (index out of range, a face of
+        fewer than 3 vertices, no faces, a vertex of more edges than
+        OpenSubdiv takes).
     """
     vertices = as_vertices(vertices)
     n = vertices.shape[0]
-    faces = as_faces(faces, n, count_name="len(vertices)")
-    changed = _core.repair(faces, n)
-    if changed is None:
-        report = {kind: [] for kind in REPORT_KINDS}
+    rows = _face_rows(faces)
+    if rows is not None and rows.shape[1] == 3:  # triangles: the (m, 3) path, as sorpia's Loop functions take them
+        faces = as_faces(rows, n, count_name="len(vertices)")
+        changed = _core.repair(faces, n)
+        if changed is None:
+            return _unchanged(vertices, faces, len(faces))
+        new_faces, vertex_map, face_map, report = changed
         report["counts"] = _counts(report)
-        return RepairResult(vertices, faces, np.arange(n, dtype=np.int32), np.arange(len(faces), dtype=np.int32),
-                            report)
-    new_faces, vertex_map, face_map, report = changed
+        return RepairResult(vertices[vertex_map], new_faces, vertex_map, face_map, report)
+
+    counts, indices = as_polygons(faces if rows is None else rows, n, count_name="len(vertices)")
+    changed = _core.repair_polygons(counts, indices, n)
+    if changed is None:
+        if rows is not None:  # validated: the cast cannot wrap; no copy of an int32 C-contiguous array
+            return _unchanged(vertices, np.ascontiguousarray(rows, dtype=np.int32), len(rows))
+        same = (isinstance(faces, Polygons) and faces.face_vertex_counts is counts
+                and faces.face_vertex_indices is indices)
+        return _unchanged(vertices, faces if same else Polygons(counts, indices), len(counts))
+    new_counts, new_indices, vertex_map, face_map, report = changed
     report["counts"] = _counts(report)
+    if rows is not None and (new_counts == rows.shape[1]).all():
+        new_faces = new_indices.reshape(-1, rows.shape[1])
+    else:
+        new_faces = Polygons(new_counts, new_indices)
     return RepairResult(vertices[vertex_map], new_faces, vertex_map, face_map, report)
+
+
+def _unchanged(vertices, faces, n_faces) -> RepairResult:
+    """The result for a valid mesh: its arrays, identity maps, an empty report."""
+    report = {kind: [] for kind in REPORT_KINDS}
+    report["counts"] = _counts(report)
+    return RepairResult(vertices, faces, np.arange(len(vertices), dtype=np.int32),
+                        np.arange(n_faces, dtype=np.int32), report)

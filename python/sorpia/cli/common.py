@@ -107,7 +107,7 @@ def read_input(path, triangulate: bool = False, repair: bool = False, tags: bool
     """Read the input mesh of every subcommand: polygons kept (or split with
     `triangulate`), the OBJ file's sharpness tags read unless `tags` is
     False (--ignore-tags), the mesh repaired with `repair` (repair_input),
-    which takes triangles and no tags."""
+    which takes no tags."""
     from ..io import read_mesh_file
 
     if not Path(path).exists():
@@ -120,9 +120,6 @@ def read_input(path, triangulate: bool = False, repair: bool = False, tags: bool
     vertices, faces, file_tags = contents.vertices, contents.faces, contents.tags or {}
     if not repair:
         return InputMesh(vertices, faces, seconds, contents.polygons_split, tags=file_tags)
-    if not is_triangles(faces):
-        raise PolygonError(f"{path}: --repair works on triangles and the file has faces of {face_sizes_text(faces)}"
-                           " vertices; pass --triangulate to split them")
     if any(k in file_tags for k in ("creases", "corners", "holes")):
         raise UserError(f"{path}: --repair renumbers vertices and faces, which the file's sharpness tags refer to; "
                         "pass --ignore-tags to repair the mesh without them")

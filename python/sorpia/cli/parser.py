@@ -273,9 +273,11 @@ def build_parser() -> argparse.ArgumentParser:
                                              triangulate=a.triangulate, repair=a.repair, scheme=a.scheme,
                                              ignore_tags=a.ignore_tags, sharp_angle=a.sharp_angle)[0])
 
-    rep = command("repair", "make a mesh valid for Loop interpolation without moving a vertex",
-                  "Read a triangle mesh and write it repaired (sorpia.repair): faces with a repeated vertex and "
-                  "duplicate faces (either orientation) removed; at an edge of three or more faces the faces "
+    rep = command("repair", "make a mesh valid for subdivision without moving a vertex",
+                  "Read a mesh of triangles, quads or any polygons and write it repaired (sorpia.repair), its "
+                  "faces as they were (polygons stay polygons unless --triangulate): a polygon's consecutive "
+                  "repeated corners dropped where a polygon of 3 or more vertices is left, other faces with a "
+                  "repeated vertex and duplicate faces (either orientation) removed; at an edge of three or more faces the faces "
                   "paired into sheets and the edge's vertices copied per sheet; bowtie vertices split into one "
                   "vertex per fan; each connected part oriented consistently. No vertex moves; copies are "
                   "appended after the input vertices. Prints one line per kind of change; a valid mesh is "
