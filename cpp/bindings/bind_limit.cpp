@@ -56,6 +56,20 @@ void bind_limit(py::module_& m) {
              return sorpia::Topology(faces.data(), static_cast<std::size_t>(faces.shape(0)), n_vertices);
            }),
            "faces"_a.noconvert(), "n_vertices"_a)
+      .def(py::init([](const Faces& face_vertex_counts, const Faces& face_vertex_indices, std::size_t n_vertices) {
+             if (face_vertex_counts.ndim() != 1 || face_vertex_indices.ndim() != 1)
+               throw sorpia::ParameterError("face_vertex_counts and face_vertex_indices must be one-dimensional");
+             std::int64_t total = 0;
+             for (py::ssize_t f = 0; f < face_vertex_counts.shape(0); ++f) total += face_vertex_counts.data()[f];
+             if (total != face_vertex_indices.shape(0))
+               throw sorpia::MeshError("face_vertex_counts sum to " + std::to_string(total) +
+                                       " but face_vertex_indices has " +
+                                       std::to_string(face_vertex_indices.shape(0)) + " entries");
+             py::gil_scoped_release release;
+             return sorpia::Topology(face_vertex_counts.data(), static_cast<std::size_t>(face_vertex_counts.shape(0)),
+                                     face_vertex_indices.data(), n_vertices);
+           }),
+           "face_vertex_counts"_a.noconvert(), "face_vertex_indices"_a.noconvert(), "n_vertices"_a)
       .def_property_readonly("n_vertices", &sorpia::Topology::n_vertices)
       .def_property_readonly("n_faces", &sorpia::Topology::n_faces)
       .def_property_readonly("n_edges", &sorpia::Topology::n_edges)
@@ -64,6 +78,18 @@ void bind_limit(py::module_& m) {
       .def_property_readonly("ring_offsets", [](const sorpia::Topology& t) { return to_numpy(t.ring_offsets(), 0); })
       .def_property_readonly("ring_neighbors",
                              [](const sorpia::Topology& t) { return to_numpy(t.ring_neighbors(), 0); })
+      .def_property_readonly("face_counts", [](const sorpia::Topology& t) { return to_numpy(t.face_counts(), 0); })
+      .def_property_readonly("face_offsets", [](const sorpia::Topology& t) { return to_numpy(t.face_offsets(), 0); })
+      .def_property_readonly("face_indices", [](const sorpia::Topology& t) { return to_numpy(t.face_indices(), 0); })
+      .def_property_readonly("all_triangles", &sorpia::Topology::all_triangles)
+      .def_property_readonly("all_quads", &sorpia::Topology::all_quads)
+      .def_property_readonly("vertex_face_offsets",
+                             [](const sorpia::Topology& t) { return to_numpy(t.vertex_face_offsets(), 0); })
+      .def_property_readonly("vertex_faces", [](const sorpia::Topology& t) { return to_numpy(t.vertex_faces(), 0); })
+      .def_property_readonly("face_ring_offsets",
+                             [](const sorpia::Topology& t) { return to_numpy(t.face_ring_offsets(), 0); })
+      .def_property_readonly("face_ring_neighbors",
+                             [](const sorpia::Topology& t) { return to_numpy(t.face_ring_neighbors(), 0); })
       .def_property_readonly("is_boundary", [](const sorpia::Topology& t) {
         py::array_t<bool> out(static_cast<py::ssize_t>(t.n_vertices()));
         auto* p = out.mutable_data();
@@ -105,6 +131,13 @@ void bind_limit(py::module_& m) {
   m.def("pole", [](int n) { return mesh_tuple(sorpia::pole(n)); }, "n"_a);
   m.def("irregular", [](int n, std::uint32_t seed) { return mesh_tuple(sorpia::irregular(n, seed)); }, "n_vertices"_a,
         "seed"_a = 1);
+  m.def("quad_torus", [](int nu, int nv) { return mesh_tuple(sorpia::quad_torus(nu, nv)); }, "nu"_a, "nv"_a);
+  m.def("quad_grid", [](int nu, int nv) { return mesh_tuple(sorpia::quad_grid(nu, nv)); }, "nu"_a, "nv"_a);
+  m.def("quad_irregular", [](int n, std::uint32_t seed) { return mesh_tuple(sorpia::quad_irregular(n, seed)); },
+        "n_vertices"_a, "seed"_a = 1);
+  m.def("polygon_torus",
+        [](int nu, int nv, std::uint32_t seed) { return mesh_tuple(sorpia::polygon_torus(nu, nv, seed)); }, "nu"_a,
+        "nv"_a, "seed"_a = 1);
 }
 
 }  // namespace sorpia_py

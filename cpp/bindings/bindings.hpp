@@ -87,6 +87,12 @@ inline py::tuple mesh_tuple(sorpia::TriMesh&& m) {
   return py::make_tuple(to_numpy(std::move(m.vertices), 3), to_numpy(std::move(m.faces), 3));
 }
 
+// (vertices (n, 3), face_vertex_counts (m,), face_vertex_indices (sum of counts,)).
+inline py::tuple mesh_tuple(sorpia::PolyMesh&& m) {
+  return py::make_tuple(to_numpy(std::move(m.vertices), 3), to_numpy(std::move(m.face_counts), 0),
+                        to_numpy(std::move(m.face_indices), 0));
+}
+
 void bind_limit(py::module_& m);
 void bind_solvers(py::module_& m);
 void bind_surface(py::module_& m);

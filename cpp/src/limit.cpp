@@ -23,9 +23,9 @@ thread_local std::string osd_error;
 void record_osd_error(Far::ErrorType, const char* message) { osd_error = message ? message : ""; }
 }  // namespace
 
-LoopRefiner make_loop_refiner(const Topology& topology, Boundary boundary) {
+Refiner make_refiner(const Topology& topology, Scheme scheme, Boundary boundary, const Tags& tags) {
   using namespace OpenSubdiv;
-  LoopRefiner out;
+  Refiner out;
   const std::size_t n = topology.n_vertices();
   out.to_osd.assign(n, -1);
   out.from_osd.reserve(n - topology.n_unreferenced());
@@ -34,22 +34,48 @@ LoopRefiner make_loop_refiner(const Topology& topology, Boundary boundary) {
       out.to_osd[v] = static_cast<std::int32_t>(out.from_osd.size());
       out.from_osd.push_back(static_cast<std::int32_t>(v));
     }
-  const std::vector<std::int32_t>& faces = topology.faces();
+  const std::vector<std::int32_t>& faces = topology.face_indices();
   std::vector<int> osd_faces(faces.size());
   for (std::size_t k = 0; k < faces.size(); ++k) osd_faces[k] = out.to_osd[faces[k]];
-  std::vector<int> verts_per_face(topology.n_faces(), 3);
+  const auto to_osd = [&](std::int32_t v, const char* what, std::size_t i) {
+    if (out.to_osd[v] < 0)
+      throw MeshError(std::string(what) + "[" + std::to_string(i) + "] names vertex " + std::to_string(v) +
+                      ", which no face uses");
+    return out.to_osd[v];
+  };
+  const auto sharpness = [](const std::vector<double>& s) {
+    std::vector<float> w(s.size());
+    for (std::size_t i = 0; i < s.size(); ++i)
+      w[i] = s[i] >= kInfiniteSharpness ? Sdc::Crease::SHARPNESS_INFINITE : static_cast<float>(s[i]);
+    return w;
+  };
+  std::vector<int> crease_pairs(tags.crease_vertices.size()), corners(tags.corner_vertices.size());
+  for (std::size_t i = 0; i < crease_pairs.size(); ++i) crease_pairs[i] = to_osd(tags.crease_vertices[i], "creases", i / 2);
+  for (std::size_t i = 0; i < corners.size(); ++i) corners[i] = to_osd(tags.corner_vertices[i], "corners", i);
+  const std::vector<float> crease_weights = sharpness(tags.crease_sharpness);
+  const std::vector<float> corner_weights = sharpness(tags.corner_sharpness);
+  const std::vector<int> holes(tags.holes.begin(), tags.holes.end());
 
   Far::TopologyDescriptor desc;
   desc.numVertices = static_cast<int>(out.from_osd.size());
   desc.numFaces = static_cast<int>(topology.n_faces());
-  desc.numVertsPerFace = verts_per_face.data();
+  const std::vector<std::int32_t> face_counts = topology.face_counts();
+  desc.numVertsPerFace = face_counts.data();
   desc.vertIndicesPerFace = osd_faces.data();
+  desc.numCreases = static_cast<int>(tags.n_creases());
+  desc.creaseVertexIndexPairs = crease_pairs.data();
+  desc.creaseWeights = crease_weights.data();
+  desc.numCorners = static_cast<int>(tags.n_corners());
+  desc.cornerVertexIndices = corners.data();
+  desc.cornerWeights = corner_weights.data();
+  desc.numHoles = static_cast<int>(holes.size());
+  desc.holeIndices = holes.data();
 
   Sdc::Options sdc;
   sdc.SetVtxBoundaryInterpolation(boundary == Boundary::EdgeOnly ? Sdc::Options::VTX_BOUNDARY_EDGE_ONLY
                                                                  : Sdc::Options::VTX_BOUNDARY_EDGE_AND_CORNER);
   using Factory = Far::TopologyRefinerFactory<Far::TopologyDescriptor>;
-  Factory::Options options(Sdc::SCHEME_LOOP, sdc);
+  Factory::Options options(scheme == Scheme::Loop ? Sdc::SCHEME_LOOP : Sdc::SCHEME_CATMARK, sdc);
   osd_error.clear();
   Far::SetErrorCallback(record_osd_error);
   out.refiner.reset(Factory::Create(desc, options));
@@ -58,7 +84,7 @@ LoopRefiner make_loop_refiner(const Topology& topology, Boundary boundary) {
   return out;
 }
 
-void gather_points(const LoopRefiner& osd, const double* vertices, std::vector<Point3>& points) {
+void gather_points(const Refiner& osd, const double* vertices, std::vector<Point3>& points) {
   points.resize(osd.from_osd.size());
   for (std::size_t i = 0; i < points.size(); ++i) {
     const double* p = vertices + 3 * static_cast<std::size_t>(osd.from_osd[i]);
@@ -66,7 +92,7 @@ void gather_points(const LoopRefiner& osd, const double* vertices, std::vector<P
   }
 }
 
-void limit_positions(const LoopRefiner& osd, const std::vector<Point3>& points, const double* vertices,
+void limit_positions(const Refiner& osd, const std::vector<Point3>& points, const double* vertices,
                      std::size_t n, double* out) {
   std::vector<Point3> limit(points.size());
   OpenSubdiv::Far::PrimvarRefinerReal<double>(*osd.refiner).Limit(points, limit);
@@ -148,7 +174,7 @@ struct RowRecorders {
 }  // namespace
 
 CsrMatrix reference_limit_matrix(const Topology& topology, Boundary boundary) {
-  const auto osd = detail::make_loop_refiner(topology, boundary);
+  const auto osd = detail::make_refiner(topology, Scheme::Loop, boundary);
   const std::size_t n = topology.n_vertices();
   CsrMatrix b;
   b.n_rows = b.n_cols = n;
@@ -164,7 +190,7 @@ CsrMatrix reference_limit_matrix(const Topology& topology, Boundary boundary) {
 }
 
 void reference_limit_points(const Topology& topology, const double* vertices, Boundary boundary, double* out) {
-  const auto osd = detail::make_loop_refiner(topology, boundary);
+  const auto osd = detail::make_refiner(topology, Scheme::Loop, boundary);
   std::vector<detail::Point3> points;
   detail::gather_points(osd, vertices, points);
   detail::limit_positions(osd, points, vertices, topology.n_vertices(), out);

@@ -29,4 +29,25 @@ CornerBuckets bucket_corners(const std::int32_t* faces, std::size_t n_faces, std
   return b;
 }
 
+CornerBuckets bucket_polygon_corners(const std::int32_t* indices, const std::int32_t* offsets, std::size_t n_faces,
+                                     std::size_t n_vertices) {
+  CornerBuckets b;
+  const auto n_corners = static_cast<std::size_t>(offsets[n_faces]);
+  b.start.assign(n_vertices + 1, 0);
+  for (std::size_t h = 0; h < n_corners; ++h) ++b.start[indices[h] + 1];
+  for (std::size_t v = 0; v < n_vertices; ++v) b.start[v + 1] += b.start[v];
+  b.corners.reset(new Corner[n_corners]);
+  b.ids.reset(new std::int32_t[n_corners]);
+  std::vector<std::int32_t> fill(b.start.begin(), b.start.end() - 1);
+  for (std::size_t f = 0; f < n_faces; ++f) {
+    const std::int32_t lo = offsets[f], hi = offsets[f + 1];
+    for (std::int32_t h = lo; h < hi; ++h) {
+      const std::int32_t at = fill[indices[h]]++;
+      b.corners[at] = {indices[h + 1 == hi ? lo : h + 1], indices[h == lo ? hi - 1 : h - 1]};
+      b.ids[at] = h;
+    }
+  }
+  return b;
+}
+
 }  // namespace sorpia::detail

@@ -1,5 +1,5 @@
 #pragma once
-// Building an OpenSubdiv Loop refiner from a sorpia::Topology (internal).
+// Building an OpenSubdiv refiner from a sorpia::Topology (internal).
 #include <opensubdiv/far/topologyRefiner.h>
 
 #include <cstddef>
@@ -7,6 +7,7 @@
 #include <memory>
 #include <vector>
 
+#include "sorpia/subdivision.hpp"
 #include "sorpia/topology.hpp"
 
 namespace sorpia::detail {
@@ -14,16 +15,21 @@ namespace sorpia::detail {
 namespace Far = OpenSubdiv::Far;
 
 // OpenSubdiv is given only the referenced vertices (an isolated vertex has no
-// Loop limit); `to_osd[v]` is vertex v's index in the refiner, or -1, and
-// `from_osd` is its inverse.
-struct LoopRefiner {
+// limit); `to_osd[v]` is vertex v's index in the refiner, or -1, and
+// `from_osd` is its inverse. Faces keep their indices.
+struct Refiner {
   std::unique_ptr<Far::TopologyRefiner> refiner;
   std::vector<std::int32_t> to_osd;
   std::vector<std::int32_t> from_osd;
 };
 
-// Throws sorpia::MeshError when OpenSubdiv refuses the topology.
-LoopRefiner make_loop_refiner(const Topology& topology, Boundary boundary);
+// The unrefined Far::TopologyRefiner of the mesh under `scheme` and
+// `boundary`, with the sharpness tags in its TopologyDescriptor (creases and
+// corners mapped through to_osd; sharpness as float, kInfiniteSharpness and
+// above as Sdc::Crease::SHARPNESS_INFINITE). `tags` must have passed
+// check_tags. Throws sorpia::MeshError when OpenSubdiv refuses the topology
+// (Loop with a non-triangle face) or a tag names a vertex no face uses.
+Refiner make_refiner(const Topology& topology, Scheme scheme, Boundary boundary, const Tags& tags = {});
 
 // A position as OpenSubdiv's PrimvarRefiner combines them (Clear, AddWithWeight).
 struct Point3 {
@@ -37,12 +43,12 @@ struct Point3 {
 };
 
 // points = the referenced rows of `vertices` (row-major (n, 3)), in the refiner's order.
-void gather_points(const LoopRefiner& osd, const double* vertices, std::vector<Point3>& points);
+void gather_points(const Refiner& osd, const double* vertices, std::vector<Point3>& points);
 
 // out = B V (row-major (n, 3)): `vertices` with each referenced vertex's row
 // replaced by its limit position, from the unrefined refiner's Limit() on
 // `points` (gather_points of `vertices`); an unreferenced vertex is its own limit.
-void limit_positions(const LoopRefiner& osd, const std::vector<Point3>& points, const double* vertices,
+void limit_positions(const Refiner& osd, const std::vector<Point3>& points, const double* vertices,
                      std::size_t n, double* out);
 
 }  // namespace sorpia::detail

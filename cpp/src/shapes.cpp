@@ -1,6 +1,8 @@
 #include "sorpia/shapes.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <initializer_list>
 #include <map>
 #include <random>
 #include <stdexcept>
@@ -145,6 +147,100 @@ TriMesh irregular(int n_vertices, std::uint32_t seed) {
   m.faces.clear();
   for (const auto fh : mesh.faces())
     for (const auto v : mesh.fv_range(fh)) m.faces.push_back(v.idx());
+  return m;
+}
+
+namespace {
+// The quads (a, b, c, d) of the vertex grid of torus(nu, nv) (wrapped) or
+// grid(nu, nv) (not), counter-clockwise as their triangles (a, b, c), (a, c, d).
+PolyMesh quads_of(TriMesh tri) {
+  PolyMesh m;
+  m.vertices = std::move(tri.vertices);
+  for (std::size_t f = 0; f < tri.n_faces(); f += 2) {
+    const std::int32_t* t = tri.faces.data() + 3 * f;
+    m.face_indices.insert(m.face_indices.end(), {t[0], t[1], t[2], t[5]});
+    m.face_counts.push_back(4);
+  }
+  return m;
+}
+}  // namespace
+
+PolyMesh quad_torus(int nu, int nv) { return quads_of(torus(nu, nv)); }
+
+PolyMesh quad_grid(int nu, int nv) { return quads_of(grid(nu, nv)); }
+
+PolyMesh quad_irregular(int n_vertices, std::uint32_t seed) {
+  check(n_vertices >= 96, "quad_irregular needs at least 96 vertices, got " + std::to_string(n_vertices));
+  const TriMesh tri = irregular(n_vertices / 6, seed);
+  PolyMesh m;
+  m.vertices = tri.vertices;
+  const auto point = [&](std::initializer_list<std::int32_t> corners) {
+    const auto v = static_cast<std::int32_t>(m.n_vertices());
+    double p[3] = {0, 0, 0};
+    for (std::int32_t c : corners)
+      for (int k = 0; k < 3; ++k) p[k] += tri.vertices[3 * c + k] / static_cast<double>(corners.size());
+    m.vertices.insert(m.vertices.end(), p, p + 3);
+    return v;
+  };
+  std::map<std::pair<std::int32_t, std::int32_t>, std::int32_t> midpoints;
+  const auto midpoint = [&](std::int32_t a, std::int32_t b) {
+    const auto key = std::minmax(a, b);
+    const auto it = midpoints.find(key);
+    if (it != midpoints.end()) return it->second;
+    const std::int32_t v = point({a, b});
+    midpoints.emplace(key, v);
+    return v;
+  };
+  m.face_counts.assign(3 * tri.n_faces(), 4);
+  m.face_indices.reserve(12 * tri.n_faces());
+  for (std::size_t f = 0; f < tri.n_faces(); ++f) {
+    const std::int32_t* t = tri.faces.data() + 3 * f;
+    const std::int32_t c = point({t[0], t[1], t[2]});
+    const std::int32_t mid[3] = {midpoint(t[0], t[1]), midpoint(t[1], t[2]), midpoint(t[2], t[0])};
+    // corner k: (t[k], mid(k, k+1), centroid, mid(k-1, k)), counter-clockwise as the triangle
+    for (int k = 0; k < 3; ++k) m.face_indices.insert(m.face_indices.end(), {t[k], mid[k], c, mid[(k + 2) % 3]});
+  }
+  return m;
+}
+
+PolyMesh polygon_torus(int nu, int nv, std::uint32_t seed) {
+  check(nu >= 4 && nv >= 4, "polygon_torus needs at least 4 x 4 vertices, got " + std::to_string(nu) + " x " +
+                                std::to_string(nv));
+  PolyMesh m;
+  m.vertices = torus(nu, nv).vertices;
+  auto id = [&](int i, int j) { return ((i + nu) % nu) * nv + (j + nv) % nv; };
+  std::vector<std::uint8_t> used(static_cast<std::size_t>(nu) * nv, 0);
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u01(0.0, 1.0);
+  const auto face = [&](std::initializer_list<std::int32_t> vs) {
+    m.face_counts.push_back(static_cast<std::int32_t>(vs.size()));
+    m.face_indices.insert(m.face_indices.end(), vs);
+  };
+  // A quad is joined only with its neighbour i + 1 < nu (never across the
+  // wrap), which no earlier quad has used.
+  for (int i = 0; i < nu; ++i)
+    for (int j = 0; j < nv; ++j) {
+      if (used[i * nv + j]) continue;
+      used[i * nv + j] = 1;
+      const int a = id(i, j), b = id(i + 1, j), c = id(i + 1, j + 1), d = id(i, j + 1);
+      const double r = u01(rng);
+      const bool right_free = i + 1 < nu && !used[(i + 1) * nv + j];
+      if (r < 0.10) {
+        face({a, b, c});
+        face({a, c, d});
+      } else if (r < 0.24 && right_free) {
+        used[(i + 1) * nv + j] = 1;
+        const int e = id(i + 2, j), f = id(i + 2, j + 1);
+        if (r < 0.17) {  // the neighbour's half (b, f, c) joined: a pentagon and a triangle
+          face({a, b, f, c, d});
+          face({b, e, f});
+        } else {  // the whole neighbour (b, e, f, c): a hexagon
+          face({a, b, e, f, c, d});
+        }
+      } else {
+        face({a, b, c, d});
+      }
+    }
   return m;
 }
 

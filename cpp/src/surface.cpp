@@ -91,7 +91,7 @@ std::size_t tessellation_bytes(std::size_t n_vertices, std::size_t n_faces, int 
 struct LoopSurface::Impl {
   Topology topology;
   Boundary boundary;
-  detail::LoopRefiner base;           // unrefined: Bfr and the limit positions of control vertices
+  detail::Refiner base;               // unrefined: Bfr and the limit positions of control vertices
   std::unique_ptr<SurfaceFactory> factory;
   std::vector<double> vertices;       // (n, 3), as given
   std::vector<Point3> points;         // referenced vertices in OpenSubdiv's order
@@ -104,7 +104,7 @@ struct LoopSurface::Impl {
   // threads at once, set_vertices() and tessellate() change state.
   mutable std::shared_mutex mutex;
 
-  Impl(const Topology& t, Boundary b) : topology(t), boundary(b), base(detail::make_loop_refiner(t, b)) {}
+  Impl(const Topology& t, Boundary b) : topology(t), boundary(b), base(detail::make_refiner(t, Scheme::Loop, b)) {}
 };
 
 namespace {

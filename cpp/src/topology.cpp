@@ -6,9 +6,11 @@
 #include <limits>
 #include <memory>
 #include <mutex>
+#include <numeric>
 #include <stdexcept>
 #include <string>
 #include <tuple>
+#include <type_traits>
 #include <utility>
 
 #include "half_edges.hpp"
@@ -31,14 +33,45 @@ void silence_openmesh() {
 
 namespace {
 
-using detail::face_str;
+// The faces being validated, triangles or polygons: face f is
+// idx[off[f] .. off[f + 1]). Corner h (0 <= h < n_corners()) is also the
+// half-edge from idx[h] to the next corner of its face. `corner_face` maps a
+// corner to its face for polygons; triangles need no table (h / 3).
+struct FaceList {
+  const std::int32_t* idx;
+  const std::int32_t* off;          // nullptr for triangles (3 f)
+  const std::int32_t* corner_face;  // nullptr for triangles
+  std::size_t n_faces;
+
+  bool triangles() const { return corner_face == nullptr; }
+  std::int32_t begin(std::size_t f) const { return off ? off[f] : static_cast<std::int32_t>(3 * f); }
+  std::int32_t end(std::size_t f) const { return begin(f + 1); }
+  std::size_t n_corners() const { return static_cast<std::size_t>(begin(n_faces)); }
+  std::int32_t face_of(std::size_t h) const {
+    return corner_face ? corner_face[h] : static_cast<std::int32_t>(h / 3);
+  }
+  std::size_t next(std::size_t h) const {
+    if (!corner_face) return detail::next_corner(h);
+    const std::int32_t f = corner_face[h];
+    return h + 1 == static_cast<std::size_t>(end(f)) ? static_cast<std::size_t>(begin(f)) : h + 1;
+  }
+  std::size_t prev(std::size_t h) const {
+    if (!corner_face) return detail::prev_corner(h);
+    const std::int32_t f = corner_face[h];
+    return h == static_cast<std::size_t>(begin(f)) ? static_cast<std::size_t>(end(f)) - 1 : h - 1;
+  }
+  // "face f (a, b, c, ...)", for messages.
+  std::string str(std::size_t f) const {
+    std::string s = "face " + std::to_string(f) + " (";
+    for (std::int32_t h = begin(f); h < end(f); ++h) s += (h > begin(f) ? ", " : "") + std::to_string(idx[h]);
+    return s + ")";
+  }
+};
 
 // ---- validate_faces and its helpers ----------------------------------------
-// Over the half-edges of the face list (half_edges.hpp).
+// Over the half-edges of the face list.
 namespace face_checks {
 
-using detail::next_corner;
-using detail::prev_corner;
 using Edge = std::pair<std::int32_t, std::int32_t>;  // (lower end, higher end)
 inline Edge edge(std::int32_t a, std::int32_t b) { return {std::min(a, b), std::max(a, b)}; }
 constexpr auto none = std::numeric_limits<std::int32_t>::max();
@@ -54,40 +87,44 @@ std::string face_list(const std::vector<std::int32_t>& ids, std::size_t shown) {
 // `mate[h]` is the other half-edge of h's edge or -1; needs edges of at most
 // two faces, consistently oriented, so that the step to the next corner round
 // the vertex, next_corner(mate[h]), is one-to-one and the walk ends.
-void mark_fan(const std::vector<std::int32_t>& mate, std::int32_t h0, std::vector<std::uint8_t>& seen) {
+void mark_fan(const FaceList& fl, const std::vector<std::int32_t>& mate, std::int32_t h0,
+              std::vector<std::uint8_t>& seen) {
   std::int32_t h = h0;
   do {
     seen[h] = 1;
     if (mate[h] < 0) {  // a boundary edge: walk back from h0 to the other one
-      for (h = mate[prev_corner(h0)]; h >= 0; h = mate[prev_corner(h)]) seen[h] = 1;
+      for (h = mate[fl.prev(h0)]; h >= 0; h = mate[fl.prev(h)]) seen[h] = 1;
       return;
     }
-    h = static_cast<std::int32_t>(next_corner(mate[h]));
+    h = static_cast<std::int32_t>(fl.next(mate[h]));
   } while (h != h0);
 }
 
-// Error path only. Some edge (v, x > v) has three or more faces or two faces
-// with the same third vertex: sort the half-edges of the edges (v, x > v) by
-// (x, third vertex, id), so that the half-edges of one edge, and two faces
-// with the same three vertices, are adjacent, and name the first such edge.
-[[noreturn]] void refuse_edge(const std::int32_t* faces, std::size_t n_half, std::int32_t v) {
-  auto other = [&](std::int32_t h) { return std::max(faces[h], faces[next_corner(h)]); };
+// Error path only. Some edge (v, x > v) has three or more faces or (triangles)
+// two faces with the same third vertex: sort the half-edges of the edges
+// (v, x > v) by (x, third vertex, id), so that the half-edges of one edge, and
+// two faces with the same three vertices, are adjacent, and name the first
+// such edge. (Two polygons may share two edges at a vertex of two faces.)
+[[noreturn]] void refuse_edge(const FaceList& fl, std::int32_t v) {
+  const std::int32_t* faces = fl.idx;
+  const std::size_t n_half = fl.n_corners();
+  auto other = [&](std::int32_t h) { return std::max(faces[h], faces[fl.next(h)]); };
   std::vector<std::int32_t> hs;
   for (std::size_t h = 0; h < n_half; ++h)
-    if (std::min(faces[h], faces[next_corner(h)]) == v) hs.push_back(static_cast<std::int32_t>(h));
-  auto third = [&](std::int32_t h) { return faces[prev_corner(h)]; };
+    if (std::min(faces[h], faces[fl.next(h)]) == v) hs.push_back(static_cast<std::int32_t>(h));
+  auto third = [&](std::int32_t h) { return fl.triangles() ? faces[fl.prev(h)] : h; };
   auto key = [&](std::int32_t h) { return std::make_tuple(other(h), third(h), h); };
   std::sort(hs.begin(), hs.end(), [&](std::int32_t a, std::int32_t b) { return key(a) < key(b); });
   for (std::size_t i = 0, j; i < hs.size(); i = j) {
     for (j = i + 1; j < hs.size() && other(hs[j]) == other(hs[i]); ++j)
-      if (third(hs[j]) == third(hs[j - 1])) {
+      if (fl.triangles() && third(hs[j]) == third(hs[j - 1])) {
         const std::int32_t f0 = std::min(hs[j - 1], hs[j]) / 3, f1 = std::max(hs[j - 1], hs[j]) / 3;
-        throw MeshError("duplicate faces: " + face_str(f0, faces) + " and " + face_str(f1, faces) +
+        throw MeshError("duplicate faces: " + fl.str(f0) + " and " + fl.str(f1) +
                         " have the same three vertices; remove one of them");
       }
     if (j - i > 2) {
       std::vector<std::int32_t> users;
-      for (std::size_t p = i; p < j; ++p) users.push_back(hs[p] / 3);
+      for (std::size_t p = i; p < j; ++p) users.push_back(fl.face_of(hs[p]));
       std::sort(users.begin(), users.end());
       throw MeshError("non-manifold edge (" + std::to_string(v) + ", " + std::to_string(other(hs[i])) +
                       "): shared by " + std::to_string(j - i) + " faces (faces " + face_list(users, 4) +
@@ -99,10 +136,11 @@ void mark_fan(const std::vector<std::int32_t>& mate, std::int32_t h0, std::vecto
 
 // Error path only: the other half-edge of each half-edge's edge, or -1, by
 // sorting the half-edges by edge (needs edges of at most two faces).
-std::vector<std::int32_t> mates(const std::int32_t* faces, std::size_t n_half) {
+std::vector<std::int32_t> mates(const FaceList& fl) {
+  const std::size_t n_half = fl.n_corners();
   std::vector<std::pair<std::uint64_t, std::int32_t>> by_edge(n_half);
   for (std::size_t h = 0; h < n_half; ++h) {
-    const auto a = static_cast<std::uint64_t>(faces[h]), b = static_cast<std::uint64_t>(faces[next_corner(h)]);
+    const auto a = static_cast<std::uint64_t>(fl.idx[h]), b = static_cast<std::uint64_t>(fl.idx[fl.next(h)]);
     by_edge[h] = {std::min(a, b) << 32 | std::max(a, b), static_cast<std::int32_t>(h)};
   }
   std::sort(by_edge.begin(), by_edge.end());
@@ -119,14 +157,16 @@ std::vector<std::int32_t> mates(const std::int32_t* faces, std::size_t n_half) {
 // Error path only. Some vertex has more than one fan of faces: name the vertex
 // of the first corner (in face order) outside the fan of its vertex's first
 // corner, with its number of faces and of fans.
-[[noreturn]] void refuse_bowtie(const std::int32_t* faces, std::size_t n_vertices, std::size_t n_half) {
-  const std::vector<std::int32_t> mate = mates(faces, n_half);
+[[noreturn]] void refuse_bowtie(const FaceList& fl, std::size_t n_vertices) {
+  const std::int32_t* faces = fl.idx;
+  const std::size_t n_half = fl.n_corners();
+  const std::vector<std::int32_t> mate = mates(fl);
   std::vector<std::int32_t> first_corner(n_vertices, -1);
   for (std::size_t h = 0; h < n_half; ++h)
     if (first_corner[faces[h]] < 0) first_corner[faces[h]] = static_cast<std::int32_t>(h);
   std::vector<std::uint8_t> seen(n_half, 0);
   for (std::int32_t c : first_corner)
-    if (c >= 0) mark_fan(mate, c, seen);
+    if (c >= 0) mark_fan(fl, mate, c, seen);
   const auto hh = static_cast<std::int32_t>(std::find(seen.begin(), seen.end(), 0) - seen.begin());
   if (static_cast<std::size_t>(hh) == n_half) throw std::logic_error("sorpia: refuse_bowtie found one fan everywhere");
   const std::int32_t v = faces[hh];
@@ -136,12 +176,12 @@ std::vector<std::int32_t> mates(const std::int32_t* faces, std::size_t n_half) {
       ++n_at_v;
       if (!seen[c]) {
         ++n_fans;
-        mark_fan(mate, static_cast<std::int32_t>(c), seen);
+        mark_fan(fl, mate, static_cast<std::int32_t>(c), seen);
       }
     }
   throw MeshError("non-manifold vertex " + std::to_string(v) + ": its " + std::to_string(n_at_v) + " faces form " +
                   std::to_string(n_fans) + " fans that meet only at this vertex (a 'bowtie'; e.g. faces " +
-                  std::to_string(first_corner[v] / 3) + " and " + std::to_string(hh / 3) +
+                  std::to_string(fl.face_of(first_corner[v])) + " and " + std::to_string(fl.face_of(hh)) +
                   "); split it into one vertex per fan");
 }
 
@@ -150,29 +190,31 @@ std::vector<std::int32_t> mates(const std::int32_t* faces, std::size_t n_half) {
 // (`mate(h)` is the other half-edge of h's edge, or -1 on the boundary). Says
 // which faces to reverse, or that no orientation exists (a Moebius strip).
 template <class Mate>
-std::string orientation_advice(const std::int32_t* faces, std::size_t n_faces, std::size_t start, Mate mate) {
-  std::vector<std::int8_t> flip(n_faces, -1);
+std::string orientation_advice(const FaceList& fl, std::size_t start, Mate mate) {
+  const std::int32_t* faces = fl.idx;
+  std::vector<std::int8_t> flip(fl.n_faces, -1);
   std::vector<std::int32_t> component{static_cast<std::int32_t>(start)};
   flip[start] = 0;
   bool orientable = true;
   for (std::size_t q = 0; q < component.size(); ++q) {
     const std::int32_t f = component[q];
-    for (std::int32_t h = 3 * f; h < 3 * f + 3; ++h) {
+    for (std::int32_t h = fl.begin(f); h < fl.end(f); ++h) {
       const std::int32_t g = mate(h);
       if (g < 0) continue;
       // opposite traversal keeps the relative orientation, the same one swaps it
       const std::int8_t want = static_cast<std::int8_t>(flip[f] ^ (faces[h] == faces[g] ? 1 : 0));
-      if (flip[g / 3] < 0) {
-        flip[g / 3] = want;
-        component.push_back(g / 3);
-      } else if (flip[g / 3] != want) {
+      const std::int32_t fg = fl.face_of(g);
+      if (flip[fg] < 0) {
+        flip[fg] = want;
+        component.push_back(fg);
+      } else if (flip[fg] != want) {
         orientable = false;
       }
     }
   }
   if (!orientable)
     return "the surface is not orientable (like a Moebius strip: no choice of face orientations is consistent), "
-           "and Loop interpolation needs an orientable surface";
+           "and subdivision needs an orientable surface";
   std::vector<std::int32_t> ones, zeros;
   for (std::int32_t f : component) (flip[f] ? ones : zeros).push_back(f);
   std::vector<std::int32_t>& fewer = ones.size() <= zeros.size() ? ones : zeros;
@@ -184,41 +226,51 @@ std::string orientation_advice(const std::int32_t* faces, std::size_t n_faces, s
 
 // Error path only. Edge e is run the same way by two faces: names them and
 // says how to fix the orientation of their connected part.
-[[noreturn]] void refuse_misoriented(const std::int32_t* faces, std::size_t n_faces, Edge e) {
-  const std::size_t n_half = 3 * n_faces;
-  const std::vector<std::int32_t> mate = mates(faces, n_half);
+[[noreturn]] void refuse_misoriented(const FaceList& fl, Edge e) {
+  const std::int32_t* faces = fl.idx;
+  const std::vector<std::int32_t> mate = mates(fl);
   std::int32_t h0 = 0;
-  while (edge(faces[h0], faces[next_corner(h0)]) != e) ++h0;
+  while (edge(faces[h0], faces[fl.next(h0)]) != e) ++h0;
   const std::int32_t h1 = mate[h0];
-  const std::int32_t f0 = std::min(h0, h1) / 3, f1 = std::max(h0, h1) / 3;
+  const std::int32_t f0 = fl.face_of(std::min(h0, h1)), f1 = fl.face_of(std::max(h0, h1));
   throw MeshError("inconsistent orientation at edge (" + std::to_string(e.first) + ", " + std::to_string(e.second) +
-                  "): " + face_str(f0, faces) + " and " + face_str(f1, faces) + " both run from vertex " +
-                  std::to_string(faces[h0]) + " to " + std::to_string(faces[next_corner(h0)]) + "; " +
-                  orientation_advice(faces, n_faces, f0, [&](std::int32_t h) { return mate[h]; }));
+                  "): " + fl.str(f0) + " and " + fl.str(f1) + " both run from vertex " + std::to_string(faces[h0]) +
+                  " to " + std::to_string(faces[fl.next(h0)]) + "; " +
+                  orientation_advice(fl, f0, [&](std::int32_t h) { return mate[h]; }));
 }
 
-// Counts the core's int32 indices can hold, and at least one face.
-void check_counts(std::size_t n_faces, std::size_t n_vertices) {
-  constexpr auto int_max = static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max());
-  if (n_vertices > int_max)
-    throw MeshError("too many vertices: " + std::to_string(n_vertices) + " (at most 2^31 - 1)");
-  if (n_faces > int_max / 3)
-    throw MeshError("too many faces: " + std::to_string(n_faces) + " (at most (2^31 - 1) / 3)");
-  if (n_faces == 0) throw MeshError("the mesh has no faces: Loop subdivision needs at least one triangle");
-}
-
-// Every index in [0, n_vertices) and three distinct vertices per face, face by face.
-void check_face_indices(const std::int32_t* faces, std::size_t n_faces, std::size_t n_vertices) {
-  for (std::size_t f = 0; f < n_faces; ++f) {
+// Every index in [0, n_vertices) and three distinct vertices per triangle, face by face.
+void check_face_indices(const FaceList& fl, std::size_t n_vertices) {
+  const std::int32_t* faces = fl.idx;
+  for (std::size_t f = 0; f < fl.n_faces; ++f) {
     const std::int32_t* t = faces + 3 * f;
     for (int k = 0; k < 3; ++k)
       if (t[k] < 0 || static_cast<std::size_t>(t[k]) >= n_vertices)
-        throw MeshError(face_str(f, faces) + " has vertex index " + std::to_string(t[k]) + " out of range [0, " +
+        throw MeshError(fl.str(f) + " has vertex index " + std::to_string(t[k]) + " out of range [0, " +
                         std::to_string(n_vertices) + ")");
     for (int k = 0; k < 3; ++k)
       if (t[k] == t[(k + 1) % 3])
-        throw MeshError(face_str(f, faces) + " repeats vertex " + std::to_string(t[k]) +
+        throw MeshError(fl.str(f) + " repeats vertex " + std::to_string(t[k]) +
                         " (a degenerate triangle): remove the face");
+  }
+}
+
+// The same for polygons (their sizes, at least 3, are checked when the
+// offsets are made): indices in range, no vertex twice in a face.
+void check_polygon_indices(const FaceList& fl, std::size_t n_vertices) {
+  std::vector<std::int32_t> sorted;
+  for (std::size_t f = 0; f < fl.n_faces; ++f) {
+    const std::int32_t *lo = fl.idx + fl.off[f], *hi = fl.idx + fl.off[f + 1];
+    for (const std::int32_t* t = lo; t < hi; ++t)
+      if (*t < 0 || static_cast<std::size_t>(*t) >= n_vertices)
+        throw MeshError(fl.str(f) + " has vertex index " + std::to_string(*t) + " out of range [0, " +
+                        std::to_string(n_vertices) + ")");
+    sorted.assign(lo, hi);
+    std::sort(sorted.begin(), sorted.end());
+    const auto twice = std::adjacent_find(sorted.begin(), sorted.end());
+    if (twice != sorted.end())
+      throw MeshError(fl.str(f) + " repeats vertex " + std::to_string(*twice) +
+                      " (a degenerate polygon): remove the repeated corner or the face");
   }
 }
 
@@ -242,11 +294,10 @@ struct Findings {
 // of 3+ faces or a duplicate face, a misoriented edge, a bowtie, a crowded
 // vertex. Each error path looks again (sorting) to name the same edge, face or
 // vertex whatever order the pass met them in.
-void refuse_findings(const Findings& found, const std::int32_t* faces, std::size_t n_faces, std::size_t n_vertices) {
-  const std::size_t n_half = 3 * n_faces;
-  if (found.bad_lo != none) refuse_edge(faces, n_half, found.bad_lo);
-  if (found.misoriented.first != none) refuse_misoriented(faces, n_faces, found.misoriented);
-  if (found.bowtie) refuse_bowtie(faces, n_vertices, n_half);
+void refuse_findings(const Findings& found, const FaceList& fl, std::size_t n_vertices) {
+  if (found.bad_lo != none) refuse_edge(fl, found.bad_lo);
+  if (found.misoriented.first != none) refuse_misoriented(fl, found.misoriented);
+  if (found.bowtie) refuse_bowtie(fl, n_vertices);
   if (found.crowded >= 0)
     throw MeshError("vertex " + std::to_string(found.crowded) + " has " + std::to_string(found.crowded_valence) +
                     " neighbours: OpenSubdiv supports at most " + std::to_string(max_valence) +
@@ -259,20 +310,25 @@ void refuse_findings(const Findings& found, const std::int32_t* faces, std::size
 // vertex of the first one, and the neighbour after x clockwise round v: the
 // `next` of the corner whose `prev` is x (as one_ring.hpp's Corner chains a
 // fan). No sort, so a high-valence vertex costs no more than its edges.
+// kPolygons: the slot also keeps that corner (the face between x and the next
+// neighbour, for the face ring), and two faces sharing both edges at v are a
+// vertex of two faces, not duplicate triangles.
+template <bool kPolygons>
 class VertexEdges {
  public:
   explicit VertexEdges(std::size_t n_vertices) : slots_(n_vertices) {}
 
-  // Matches the edges of v's k corners c, recording problems in `found`;
-  // returns whether the fan can be walked (every edge at v of at most two
-  // faces, distinct, consistently oriented).
-  bool match(std::int32_t v, const detail::Corner* c, std::int32_t k, Findings& found) {
+  // Matches the edges of v's k corners c (with their corner ids for
+  // polygons), recording problems in `found`; returns whether the fan can be
+  // walked (every edge at v of at most two faces, distinct, consistently oriented).
+  bool match(std::int32_t v, const detail::Corner* c, const std::int32_t* ids, std::int32_t k, Findings& found) {
     v_ = v;
     n_edges_ = n_single_ = 0;
     checkable_ = true;
     for (std::int32_t i = 0; i < k; ++i) {
-      use(c[i].next, c[i].prev, true, found);
-      use(c[i].prev, c[i].next, false, found);
+      const std::int32_t id = kPolygons ? ids[i] : 0;
+      use(c[i].next, c[i].prev, true, id, found);
+      use(c[i].prev, c[i].next, false, id, found);
     }
     if (n_edges_ > max_valence && found.crowded < 0) {
       found.crowded = v;
@@ -298,17 +354,21 @@ class VertexEdges {
   }
 
   // Walks the fan clockwise from `first`, calling emit(x) for each neighbour
-  // passed, until it closes, reaches the fan's other boundary edge or has
+  // passed and (polygons) face(corner) for each face passed between two
+  // neighbours, until it closes, reaches the fan's other boundary edge or has
   // passed more than k faces; returns the number of faces passed (k when v
   // has a single fan).
-  template <class Emit>
-  std::int32_t walk_fan(std::int32_t first, std::int32_t k, Emit emit) const {
+  template <class Emit, class Face>
+  std::int32_t walk_fan(std::int32_t first, std::int32_t k, Emit emit, Face face) const {
     std::int32_t seen = 0;
     for (std::int32_t x = first;;) {
       emit(x);
       const EdgeSlot& s = slots_[x];
       if (s.users == s.outs) break;  // no face runs x -> v: the fan's other boundary edge
       ++seen;
+      if constexpr (kPolygons) {
+        if (seen <= k) face(s.corner);
+      }
       x = s.after;
       if (x == first || seen > k) break;
     }
@@ -316,23 +376,32 @@ class VertexEdges {
   }
 
  private:
-  struct EdgeSlot {
+  struct TriangleSlot {
     std::int32_t stamp = -1, third = 0, after = 0;
     std::uint8_t users = 0, outs = 0;
   };
+  struct PolygonSlot : TriangleSlot {
+    std::int32_t corner = -1;  // the corner whose prev is x: the face between x and `after`
+  };
+  using EdgeSlot = std::conditional_t<kPolygons, PolygonSlot, TriangleSlot>;
 
-  // One face at v uses edge (v, x) with third vertex `third`, running v -> x if `out`.
-  void use(std::int32_t x, std::int32_t third, bool out, Findings& found) {
+  // One face at v (corner `id`) uses edge (v, x) with third vertex `third`,
+  // running v -> x if `out`.
+  void use(std::int32_t x, std::int32_t third, bool out, std::int32_t id, Findings& found) {
     EdgeSlot& s = slots_[x];
     if (s.stamp != v_) {
-      s = {v_, third, third, 1, static_cast<std::uint8_t>(out)};
+      s.stamp = v_;
+      s.third = s.after = third;
+      s.users = 1;
+      s.outs = static_cast<std::uint8_t>(out);
+      if constexpr (kPolygons) s.corner = id;
       ++n_edges_;
       ++n_single_;
       return;
     }
     if (s.users == 1) {
       --n_single_;
-      if (s.third == third) {
+      if (!kPolygons && s.third == third) {
         found.bad_lo = std::min(found.bad_lo, std::min(v_, x));
         checkable_ = false;
       } else if (s.outs == static_cast<std::uint8_t>(out)) {
@@ -345,7 +414,10 @@ class VertexEdges {
     }
     s.users = static_cast<std::uint8_t>(std::min(s.users + 1, 3));
     s.outs = static_cast<std::uint8_t>(s.outs + out);
-    s.after = out ? s.after : third;
+    if (!out) {
+      s.after = third;
+      if constexpr (kPolygons) s.corner = id;
+    }
   }
 
   std::vector<EdgeSlot> slots_;
@@ -353,24 +425,36 @@ class VertexEdges {
   bool checkable_ = true;
 };
 
-// Fills a detail::OneRing vertex by vertex with the fans the walk passes; does
-// nothing without a ring (validation alone).
+// Fills a detail::OneRing vertex by vertex with the fans the walk passes (for
+// polygons also the faces passed and their other vertices); does nothing
+// without a ring (validation alone).
 class RingBuilder {
  public:
-  RingBuilder(detail::OneRing* ring, std::size_t n_vertices, std::size_t n_half) : r_(ring) {
+  RingBuilder(detail::OneRing* ring, const FaceList& fl, std::size_t n_vertices) : r_(ring), fl_(fl) {
     if (!r_) return;
+    const std::size_t n_half = fl.n_corners();
     r_->offsets.resize(n_vertices + 1);
     r_->face_count.resize(n_vertices);
     r_->boundary.assign(n_vertices, 0);
     // Exact for a closed mesh (2 n_edges = n_half); a boundary adds one entry
     // per boundary edge.
     r_->neighbors.reserve(n_half + n_half / 16);
+    if (fl.triangles()) return;
+    r_->face_offsets.resize(n_vertices + 1);
+    r_->faces.reserve(n_half);
+    r_->face_ring_offsets.resize(n_vertices + 1);
+    r_->quad_ring.assign(n_vertices, 0);
   }
   void begin_vertex(std::int32_t v, std::int32_t n_faces) {
     if (!r_) return;
+    v_ = v;
     r_->offsets[v] = static_cast<std::int32_t>(r_->neighbors.size());
     r_->face_count[v] = n_faces;
     r_->n_unreferenced += n_faces == 0;
+    if (fl_.triangles()) return;
+    r_->face_offsets[v] = static_cast<std::int32_t>(r_->faces.size());
+    r_->face_ring_offsets[v] = static_cast<std::int32_t>(r_->face_ring.size());
+    r_->quad_ring[v] = n_faces > 0;
   }
   void set_boundary(std::int32_t v, bool on_boundary) {
     if (r_) r_->boundary[v] = on_boundary;
@@ -378,18 +462,34 @@ class RingBuilder {
   void push(std::int32_t x) {
     if (r_) r_->neighbors.push_back(x);
   }
+  // The face of corner h (at the current vertex), passed between two
+  // neighbours: its vertices after the next one up to the one before the
+  // previous one, counter-clockwise.
+  void push_face(std::int32_t h) {
+    if (!r_) return;
+    const std::int32_t f = fl_.face_of(h), lo = fl_.off[f], n = fl_.off[f + 1] - lo, p = h - lo;
+    r_->faces.push_back(f);
+    for (std::int32_t t = 2; t < n - 1; ++t) r_->face_ring.push_back(fl_.idx[lo + (p + t) % n]);
+    if (n != 4) r_->quad_ring[v_] = 0;
+  }
   void finish(std::size_t n_vertices) {
-    if (r_) r_->offsets[n_vertices] = static_cast<std::int32_t>(r_->neighbors.size());
+    if (!r_) return;
+    r_->offsets[n_vertices] = static_cast<std::int32_t>(r_->neighbors.size());
+    if (fl_.triangles()) return;
+    r_->face_offsets[n_vertices] = static_cast<std::int32_t>(r_->faces.size());
+    r_->face_ring_offsets[n_vertices] = static_cast<std::int32_t>(r_->face_ring.size());
   }
 
  private:
   detail::OneRing* r_;
+  FaceList fl_;
+  std::int32_t v_ = -1;
 };
 
 }  // namespace face_checks
 
 // Checks what OpenMesh and OpenSubdiv would not: indices in range and distinct
-// (OpenMesh aborts on a repeated vertex), no duplicate faces, at most two
+// (OpenMesh aborts on a repeated vertex), no duplicate triangles, at most two
 // faces per edge, consistent orientation (OpenMesh would fail add_face without
 // saying why) and one fan of faces per vertex (a 'bowtie' is accepted by
 // OpenMesh and quietly made a corner by OpenSubdiv). Throws MeshError naming
@@ -402,68 +502,135 @@ class RingBuilder {
 // it with the fans that walk passes, which are the one-ring (the direct build).
 // With `valid`, the walk stops at the first problem and sets *valid = false
 // instead of naming it (naming may sort every half-edge).
-std::pair<std::size_t, std::size_t> validate_faces(const std::int32_t* faces, std::size_t n_faces,
-                                                   std::size_t n_vertices, detail::OneRing* ring,
-                                                   bool* valid = nullptr) {
-  face_checks::check_counts(n_faces, n_vertices);
-  face_checks::check_face_indices(faces, n_faces, n_vertices);
-  detail::CornerBuckets buckets = detail::bucket_corners(faces, n_faces, n_vertices);
-  face_checks::RingBuilder builder(ring, n_vertices, 3 * n_faces);
-  face_checks::VertexEdges edges(n_vertices);
+// kPolygons is fl.triangles() == false: triangles take the path without corner ids.
+template <bool kPolygons>
+std::pair<std::size_t, std::size_t> validate_faces(const FaceList& fl, std::size_t n_vertices, detail::OneRing* ring,
+                                                   bool* valid) {
+  if constexpr (kPolygons)
+    face_checks::check_polygon_indices(fl, n_vertices);
+  else
+    face_checks::check_face_indices(fl, n_vertices);
+  detail::CornerBuckets buckets = kPolygons ? detail::bucket_polygon_corners(fl.idx, fl.off, fl.n_faces, n_vertices)
+                                            : detail::bucket_corners(fl.idx, fl.n_faces, n_vertices);
+  face_checks::RingBuilder builder(ring, fl, n_vertices);
+  face_checks::VertexEdges<kPolygons> edges(n_vertices);
   face_checks::Findings found;
   for (std::size_t vi = 0; vi < n_vertices; ++vi) {
     if (valid && found.any()) break;  // a yes-or-no answer is known at the first problem
     const auto v = static_cast<std::int32_t>(vi);
     const std::int32_t k = buckets.start[v + 1] - buckets.start[v];
     const detail::Corner* c = buckets.corners.get() + buckets.start[v];
+    const std::int32_t* ids = kPolygons ? buckets.ids.get() + buckets.start[v] : nullptr;
     builder.begin_vertex(v, k);
-    if (!edges.match(v, c, k, found) || k == 0 || found.bowtie) continue;
+    if (!edges.match(v, c, ids, k, found) || k == 0 || found.bowtie) continue;
     if (edges.n_single() > 2) {  // a fan has two boundary edges or none
       found.bowtie = true;
       continue;
     }
     builder.set_boundary(v, edges.n_single() > 0);
-    if (edges.walk_fan(edges.fan_start(c, k), k, [&](std::int32_t x) { builder.push(x); }) != k) found.bowtie = true;
+    if (edges.walk_fan(
+            edges.fan_start(c, k), k, [&](std::int32_t x) { builder.push(x); },
+            [&](std::int32_t h) { builder.push_face(h); }) != k)
+      found.bowtie = true;
   }
   buckets.corners.reset();
+  buckets.ids.reset();
   if (valid && found.any()) {
     *valid = false;
     return {0, 0};
   }
-  face_checks::refuse_findings(found, faces, n_faces, n_vertices);
+  face_checks::refuse_findings(found, fl, n_vertices);
   builder.finish(n_vertices);
   return {found.n_edge_ends / 2, found.n_boundary_ends / 2};
+}
+
+std::pair<std::size_t, std::size_t> validate_faces(const FaceList& fl, std::size_t n_vertices, detail::OneRing* ring,
+                                                   bool* valid = nullptr) {
+  return fl.triangles() ? validate_faces<false>(fl, n_vertices, ring, valid)
+                        : validate_faces<true>(fl, n_vertices, ring, valid);
+}
+
+// Counts the core's int32 indices can hold, and at least one face.
+// (Every face has at least three corners, and the corners are int32 indices.)
+void check_counts(std::size_t n_faces, std::size_t n_vertices) {
+  constexpr auto int_max = static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max());
+  if (n_vertices > int_max)
+    throw MeshError("too many vertices: " + std::to_string(n_vertices) + " (at most 2^31 - 1)");
+  if (n_faces > int_max / 3)
+    throw MeshError("too many faces: " + std::to_string(n_faces) + " (at most (2^31 - 1) / 3)");
+  if (n_faces == 0) throw MeshError("the mesh has no faces: subdivision needs at least one face");
+}
+
+// The offsets of polygons from their counts (check_counts first); every count
+// at least 3 and the total within int32.
+std::vector<std::int32_t> polygon_offsets(const std::int32_t* counts, std::size_t n_faces) {
+  std::vector<std::int32_t> off(n_faces + 1);
+  std::int64_t total = 0;
+  for (std::size_t f = 0; f < n_faces; ++f) {
+    off[f] = static_cast<std::int32_t>(total);
+    if (counts[f] < 3)
+      throw MeshError("face " + std::to_string(f) + " has " + std::to_string(counts[f]) +
+                      " vertices: a face needs at least 3");
+    total += counts[f];
+    if (total > std::numeric_limits<std::int32_t>::max())
+      throw MeshError("too many face vertices: faces 0.." + std::to_string(f) + " have more than 2^31 - 1 corners");
+  }
+  off[n_faces] = static_cast<std::int32_t>(total);
+  return off;
+}
+
+// The face of every corner (polygons).
+std::vector<std::int32_t> corner_faces(const std::vector<std::int32_t>& off) {
+  std::vector<std::int32_t> cf(static_cast<std::size_t>(off.back()));
+  for (std::size_t f = 0; f + 1 < off.size(); ++f)
+    std::fill(cf.begin() + off[f], cf.begin() + off[f + 1], static_cast<std::int32_t>(f));
+  return cf;
 }
 
 }  // namespace
 
 namespace {
 
-// The reference build: OpenMesh's half-edge mesh by add_face, flattened by
-// circulating clockwise round each vertex. Rotated so that an interior ring
-// starts where validate_faces's walk starts it (both builds give the same arrays).
-detail::OneRing one_ring_openmesh(const std::int32_t* faces, std::size_t n_faces, std::size_t n_vertices,
-                                  std::size_t n_edges) {
+// The reference build: OpenMesh's half-edge mesh by add_face (TriMesh for
+// triangles, PolyMesh for polygons), flattened by circulating clockwise round
+// each vertex. Rotated so that an interior ring starts where validate_faces's
+// walk starts it (both builds give the same arrays).
+template <class Mesh>
+detail::OneRing one_ring_openmesh(const FaceList& fl, std::size_t n_vertices, std::size_t n_edges) {
   detail::OneRing r;
-  detail::OMesh mesh;
-  mesh.reserve(n_vertices, n_edges, n_faces);
-  for (std::size_t v = 0; v < n_vertices; ++v) mesh.add_vertex(detail::OMesh::Point(0, 0, 0));
+  Mesh mesh;
+  mesh.reserve(n_vertices, n_edges, fl.n_faces);
+  for (std::size_t v = 0; v < n_vertices; ++v) mesh.add_vertex(typename Mesh::Point(0, 0, 0));
   r.face_count.assign(n_vertices, 0);
-  for (std::size_t f = 0; f < n_faces; ++f) {
-    const std::int32_t* t = faces + 3 * f;
-    for (int k = 0; k < 3; ++k) ++r.face_count[t[k]];
-    const auto fh = mesh.add_face(mesh.vertex_handle(t[0]), mesh.vertex_handle(t[1]), mesh.vertex_handle(t[2]));
+  std::vector<typename Mesh::VertexHandle> handles;
+  for (std::size_t f = 0; f < fl.n_faces; ++f) {
+    handles.clear();
+    for (std::int32_t h = fl.begin(f); h < fl.end(f); ++h) {
+      ++r.face_count[fl.idx[h]];
+      handles.push_back(mesh.vertex_handle(fl.idx[h]));
+    }
+    const auto fh = mesh.add_face(handles);
     if (!fh.is_valid())
-      throw MeshError(face_str(f, faces) +
-                      " makes a non-manifold vertex (two fans of faces meet at one vertex, a 'bowtie')");
+      throw MeshError(fl.str(f) + " makes a non-manifold vertex (two fans of faces meet at one vertex, a 'bowtie')");
   }
 
+  const bool polygons = !fl.triangles();
   r.offsets.assign(n_vertices + 1, 0);
   r.boundary.assign(n_vertices, 0);
   r.neighbors.reserve(2 * n_edges);
+  if (polygons) {
+    r.face_offsets.assign(n_vertices + 1, 0);
+    r.face_ring_offsets.assign(n_vertices + 1, 0);
+    r.quad_ring.assign(n_vertices, 0);
+  }
+  std::vector<std::int32_t> faces, face_ring_sizes, face_ring;  // of one vertex, in circulation order
   for (std::size_t v = 0; v < n_vertices; ++v) {
     const auto vh = mesh.vertex_handle(static_cast<int>(v));
     r.offsets[v] = static_cast<std::int32_t>(r.neighbors.size());
+    if (polygons) {
+      r.face_offsets[v] = static_cast<std::int32_t>(r.faces.size());
+      r.face_ring_offsets[v] = static_cast<std::int32_t>(r.face_ring.size());
+    }
     if (r.face_count[v] == 0) {
       ++r.n_unreferenced;
       continue;
@@ -475,26 +642,60 @@ detail::OneRing one_ring_openmesh(const std::int32_t* faces, std::size_t n_faces
     r.boundary[v] = on_boundary;
     int faces_seen = 0;
     int lowest_face = -1;
-    std::size_t lowest_at = r.neighbors.size();
+    std::size_t lowest_at = 0;
+    faces.clear();
+    face_ring_sizes.clear();
+    face_ring.clear();
+    bool quads = true;
     auto h = h0;
     do {
       if (!mesh.is_boundary(h)) {
         ++faces_seen;
         if (lowest_face < 0 || mesh.face_handle(h).idx() < lowest_face) {
           lowest_face = mesh.face_handle(h).idx();
-          lowest_at = r.neighbors.size();
+          lowest_at = r.neighbors.size() - r.offsets[v];
         }
       }
       r.neighbors.push_back(mesh.to_vertex_handle(h).idx());
-      h = mesh.next_halfedge_handle(mesh.opposite_halfedge_handle(h));  // clockwise
+      const auto across = mesh.opposite_halfedge_handle(h);  // x -> v, in the face after x clockwise
+      h = mesh.next_halfedge_handle(across);                  // clockwise
+      if (polygons && !mesh.is_boundary(across)) {
+        // The face between x and the next neighbour y: its vertices from the
+        // one after y to the one before x, counter-clockwise.
+        const std::size_t before = face_ring.size();
+        const auto x = mesh.from_vertex_handle(across);
+        for (auto g = mesh.next_halfedge_handle(h); mesh.to_vertex_handle(g) != x; g = mesh.next_halfedge_handle(g))
+          face_ring.push_back(mesh.to_vertex_handle(g).idx());
+        faces.push_back(mesh.face_handle(across).idx());
+        face_ring_sizes.push_back(static_cast<std::int32_t>(face_ring.size() - before));
+        quads = quads && face_ring.size() - before == 1;
+      }
     } while (h != h0);
     if (faces_seen != r.face_count[v]) detail::refuse_second_fan(v, r.face_count[v]);
     // h = v -> x lies in the face (v, x, .): start an interior ring at the x
-    // of the lowest-numbered face.
-    if (!on_boundary)
-      std::rotate(r.neighbors.begin() + r.offsets[v], r.neighbors.begin() + lowest_at, r.neighbors.end());
+    // of the lowest-numbered face. The faces listed after neighbour j are
+    // those between j and j + 1: they rotate with the neighbours.
+    if (!on_boundary) {
+      std::rotate(r.neighbors.begin() + r.offsets[v], r.neighbors.begin() + r.offsets[v] + lowest_at,
+                  r.neighbors.end());
+      if (polygons) {
+        const auto at = static_cast<std::ptrdiff_t>(lowest_at);
+        const std::ptrdiff_t skip = std::accumulate(face_ring_sizes.begin(), face_ring_sizes.begin() + at, 0);
+        std::rotate(faces.begin(), faces.begin() + at, faces.end());
+        std::rotate(face_ring.begin(), face_ring.begin() + skip, face_ring.end());
+      }
+    }
+    if (polygons) {
+      r.faces.insert(r.faces.end(), faces.begin(), faces.end());
+      r.face_ring.insert(r.face_ring.end(), face_ring.begin(), face_ring.end());
+      r.quad_ring[v] = quads;
+    }
   }
   r.offsets[n_vertices] = static_cast<std::int32_t>(r.neighbors.size());
+  if (polygons) {
+    r.face_offsets[n_vertices] = static_cast<std::int32_t>(r.faces.size());
+    r.face_ring_offsets[n_vertices] = static_cast<std::int32_t>(r.face_ring.size());
+  }
   return r;
 }
 
@@ -503,7 +704,8 @@ detail::OneRing one_ring_openmesh(const std::int32_t* faces, std::size_t n_faces
 bool faces_valid(const std::int32_t* faces, std::size_t n_faces, std::size_t n_vertices) {
   bool valid = true;
   try {
-    validate_faces(faces, n_faces, n_vertices, nullptr, &valid);
+    check_counts(n_faces, n_vertices);
+    validate_faces(FaceList{faces, nullptr, nullptr, n_faces}, n_vertices, nullptr, &valid);
   } catch (const MeshError&) {
     return false;
   }
@@ -513,18 +715,67 @@ bool faces_valid(const std::int32_t* faces, std::size_t n_faces, std::size_t n_v
 Topology::Topology(const std::int32_t* faces, std::size_t n_faces, std::size_t n_vertices)
     : Topology(faces, n_faces, n_vertices, TopologyBuild::Direct) {}
 
-Topology::Topology(const std::int32_t* faces, std::size_t n_faces, std::size_t n_vertices, TopologyBuild build)
-    : n_vertices_(n_vertices), faces_(faces, faces + 3 * n_faces) {
+Topology::Topology(const std::int32_t* faces, std::size_t n_faces, std::size_t n_vertices, TopologyBuild how)
+    : n_vertices_(n_vertices), n_faces_(n_faces) {
+  check_counts(n_faces, n_vertices);
+  face_indices_.assign(faces, faces + 3 * n_faces);
+  build(how);
+}
+
+Topology::Topology(const std::int32_t* face_vertex_counts, std::size_t n_faces,
+                   const std::int32_t* face_vertex_indices, std::size_t n_vertices, TopologyBuild how)
+    : n_vertices_(n_vertices), n_faces_(n_faces) {
+  check_counts(n_faces, n_vertices);
+  face_offsets_ = polygon_offsets(face_vertex_counts, n_faces);
+  face_indices_.assign(face_vertex_indices, face_vertex_indices + face_offsets_.back());
+  const auto* counts_end = face_vertex_counts + n_faces;
+  all_triangles_ = std::all_of(face_vertex_counts, counts_end, [](std::int32_t k) { return k == 3; });
+  all_quads_ = std::all_of(face_vertex_counts, counts_end, [](std::int32_t k) { return k == 4; });
+  if (all_triangles_) face_offsets_.clear();
+  build(how);
+}
+
+std::vector<std::int32_t> Topology::face_counts() const {
+  std::vector<std::int32_t> counts(n_faces_);
+  for (std::size_t f = 0; f < n_faces_; ++f) counts[f] = face_size(f);
+  return counts;
+}
+
+std::vector<std::int32_t> Topology::face_offsets() const {
+  if (!all_triangles_) return face_offsets_;
+  std::vector<std::int32_t> off(n_faces_ + 1);
+  for (std::size_t f = 0; f <= n_faces_; ++f) off[f] = static_cast<std::int32_t>(3 * f);
+  return off;
+}
+
+const std::vector<std::int32_t>& Topology::faces() const {
+  if (!all_triangles_)
+    throw std::logic_error("sorpia::Topology::faces: the mesh has faces that are not triangles (use face_indices)");
+  return face_indices_;
+}
+
+void Topology::build(TopologyBuild how) {
   detail::silence_openmesh();
+  const std::vector<std::int32_t> corner_face =
+      all_triangles_ ? std::vector<std::int32_t>{} : corner_faces(face_offsets_);
+  const FaceList fl{face_indices_.data(), all_triangles_ ? nullptr : face_offsets_.data(),
+                    all_triangles_ ? nullptr : corner_face.data(), n_faces_};
   detail::OneRing r;
   std::tie(n_edges_, n_boundary_edges_) =
-      validate_faces(faces, n_faces, n_vertices, build == TopologyBuild::Direct ? &r : nullptr);
-  if (build == TopologyBuild::OpenMesh) r = one_ring_openmesh(faces, n_faces, n_vertices, n_edges_);
+      validate_faces(fl, n_vertices_, how == TopologyBuild::Direct ? &r : nullptr);
+  if (how == TopologyBuild::OpenMesh)
+    r = all_triangles_ ? one_ring_openmesh<detail::OMesh>(fl, n_vertices_, n_edges_)
+                       : one_ring_openmesh<detail::OPolyMesh>(fl, n_vertices_, n_edges_);
   ring_offsets_ = std::move(r.offsets);
   ring_neighbors_ = std::move(r.neighbors);
   face_count_ = std::move(r.face_count);
   boundary_ = std::move(r.boundary);
   n_unreferenced_ = r.n_unreferenced;
+  vertex_face_offsets_ = std::move(r.face_offsets);
+  vertex_faces_ = std::move(r.faces);
+  face_ring_offsets_ = std::move(r.face_ring_offsets);
+  face_ring_neighbors_ = std::move(r.face_ring);
+  quad_ring_ = std::move(r.quad_ring);
 }
 
 }  // namespace sorpia

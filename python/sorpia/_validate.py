@@ -1,7 +1,8 @@
 """Validation and conversion of user input, done once at the API's edge.
 
 Vertices become C-contiguous float64 (n, 3) arrays and faces C-contiguous
-int32 (m, 3) arrays (copies only when the input is not already so; the input
+int32 (m, 3) arrays for Loop, or (counts, indices) int32 pairs for polygons
+(copies only when the input is not already so; the input
 is never modified, read-only and non-contiguous arrays are accepted); the
 compiled core refuses anything else. Messages name the argument, what was
 expected, what was given, and the index of the first bad row.
@@ -10,11 +11,12 @@ What is checked where:
 
 - here (Python): kind and dtype (TypeError), shape, emptiness, finite
   coordinates, face indices in range (before the cast to int32, so that an
-  int64 index of 2**32 + 1 is refused rather than wrapped to 1), polygons that
-  are not triangles (with the recipe to triangulate them);
+  int64 index of 2**32 + 1 is refused rather than wrapped to 1), faces of
+  fewer than 3 vertices, and for Loop polygons that are not triangles (with
+  the recipe to triangulate them, or to use scheme="catmull-clark");
 - in the C++ core (sorpia::Topology, validate_faces in cpp/src/topology.cpp),
   for every caller including sorpia-bench: indices again, a vertex repeated
-  in a face, duplicate faces, edges of three or more faces, inconsistent
+  in a face, duplicate triangles, edges of three or more faces, inconsistent
   orientation (with the faces to flip, or "not orientable" for a Moebius
   strip) and non-manifold ("bowtie") vertices, raised as sorpia.MeshError.
 
@@ -100,51 +102,137 @@ def _first_polygon(faces) -> tuple[int, int] | None:
     return None
 
 
-def as_faces(faces, n_vertices: int, name: str = "faces", count_name: str = "n_vertices") -> np.ndarray:
-    """Return `faces` as a C-contiguous int32 (m, 3) array of indices in [0, n_vertices).
+def _not_triangles(what: str) -> str:
+    return (f"{what}: Loop subdivision needs triangles; {TRIANGULATE_HINT}; or pass scheme=\"catmull-clark\" "
+            "for the Catmull-Clark surface of the polygons as they are")
 
-    Any integer dtype is accepted (signed or unsigned, any byte order);
-    float, bool, complex and object arrays raise TypeError. Polygons with
-    other than 3 vertices raise sorpia.MeshError saying how to triangulate.
-    `count_name` is what the caller calls the vertex count ("n_vertices",
-    "len(vertices)"), named with its value when an index is too large for it.
-    """
-    n_vertices = as_vertex_count(n_vertices, count_name)
-    expected = "an (m, 3) array of integer vertex indices"
+
+def _index_dtype(arr: np.ndarray, name: str, expected: str) -> None:
+    """TypeError unless `arr` holds integers."""
+    if arr.dtype == bool or not np.issubdtype(arr.dtype, np.integer):
+        if np.issubdtype(arr.dtype, np.floating):
+            raise TypeError(f"{name} must hold integer vertex indices, got dtype {arr.dtype} (float indices are "
+                            f"refused, as numpy refuses them; if they are whole numbers pass {name}.astype(int))")
+        raise TypeError(f"{name} must be {expected}, got dtype {arr.dtype}")
+
+
+def _check_range(indices: np.ndarray, offsets, n_vertices: int, name: str, count_name: str) -> None:
+    """MeshError naming the first face (row f of `indices` when `offsets` is
+    None, else indices[offsets[f]:offsets[f+1]]) with an index outside [0, n_vertices)."""
+    if indices.min() >= 0 and indices.max() < n_vertices:  # two reductions; the rest only to name the face
+        return
+    flat = indices.ravel()
+    h = int(np.flatnonzero((flat < 0) | (flat >= n_vertices))[0])
+    if offsets is None:
+        f = h // indices.shape[1]
+        row = indices[f]
+    else:
+        f = int(np.searchsorted(offsets, h, side="right")) - 1
+        row = flat[offsets[f]:offsets[f + 1]]
+    message = f"{name}[{f}] = {row.tolist()} has vertex index {flat[h]} out of range [0, {n_vertices})"
+    if flat[h] >= n_vertices:  # the count may be the mistake rather than the faces
+        message += f": {count_name} = {n_vertices} is too small for {name}, whose largest vertex index is {flat.max()}"
+    raise MeshError(message)
+
+
+def _face_rows(faces, name: str, shape: str, expected: str):
+    """`faces` as a 2-D integer array, or None for a ragged list of rows."""
     try:
         arr = np.asarray(faces)
     except (ValueError, TypeError) as exc:
         arr = None
         error = exc
     if arr is None or (arr.dtype == object and arr.ndim == 1):
-        polygon = _first_polygon(faces)
-        if polygon is not None:
-            i, k = polygon
-            raise MeshError(f"{name}[{i}] has {k} vertices: Loop subdivision needs triangles; {TRIANGULATE_HINT}")
+        if _first_polygon(faces) is not None:
+            return None
         if arr is None:
             raise TypeError(f"{name} must be {expected}: {error}") from None
-    if arr.dtype == bool or not np.issubdtype(arr.dtype, np.integer):
-        if np.issubdtype(arr.dtype, np.floating):
-            raise TypeError(f"{name} must hold integer vertex indices, got dtype {arr.dtype} (float indices are "
-                            f"refused, as numpy refuses them; if they are whole numbers pass {name}.astype(int))")
-        raise TypeError(f"{name} must be {expected}, got dtype {arr.dtype}")
+    _index_dtype(arr, name, expected)
     if arr.ndim != 2:
-        raise ValueError(f"{name} must have shape (m, 3), got {arr.shape}")
-    if arr.shape[1] != 3:
-        raise MeshError(f"{name} has {arr.shape[1]} vertices per face, shape {arr.shape}: Loop subdivision needs "
-                        f"triangles; {TRIANGULATE_HINT}")
+        raise ValueError(f"{name} must have shape {shape}, got {arr.shape}")
     if arr.shape[0] == 0:
-        raise MeshError(f"{name} is empty: a mesh needs at least one triangle")
-    if arr.min() < 0 or arr.max() >= n_vertices:  # two reductions; the mask below only to name the face
-        bad = (arr < 0) | (arr >= n_vertices)
-        f = int(np.flatnonzero(bad.any(axis=1))[0])
-        k = int(np.flatnonzero(bad[f])[0])
-        message = f"{name}[{f}] = {arr[f].tolist()} has vertex index {arr[f, k]} out of range [0, {n_vertices})"
-        if arr[f, k] >= n_vertices:  # the count may be the mistake rather than the faces
-            message += (f": {count_name} = {n_vertices} is too small for {name}, whose largest vertex index is "
-                        f"{arr.max()}")
-        raise MeshError(message)
+        raise MeshError(f"{name} is empty: a mesh needs at least one face")
+    return arr
+
+
+def as_faces(faces, n_vertices: int, name: str = "faces", count_name: str = "n_vertices") -> np.ndarray:
+    """Return `faces` as a C-contiguous int32 (m, 3) array of indices in [0, n_vertices).
+
+    Any integer dtype is accepted (signed or unsigned, any byte order);
+    float, bool, complex and object arrays raise TypeError. Polygons with
+    other than 3 vertices raise sorpia.MeshError saying how to triangulate
+    them or to use the Catmull-Clark scheme (see `as_polygons`).
+    `count_name` is what the caller calls the vertex count ("n_vertices",
+    "len(vertices)"), named with its value when an index is too large for it.
+    """
+    n_vertices = as_vertex_count(n_vertices, count_name)
+    if isinstance(faces, Polygons):
+        counts, indices = as_polygons(faces, n_vertices, name, count_name)
+        bad = np.flatnonzero(counts != 3)
+        if len(bad):
+            raise MeshError(_not_triangles(f"{name}[{bad[0]}] has {counts[bad[0]]} vertices"))
+        return indices.reshape(-1, 3)
+    arr = _face_rows(faces, name, "(m, 3)", "an (m, 3) array of integer vertex indices")
+    if arr is None:
+        i, k = _first_polygon(faces)
+        if k < 3:
+            raise MeshError(f"{name}[{i}] has {k} vertices: a face needs at least 3")
+        raise MeshError(_not_triangles(f"{name}[{i}] has {k} vertices"))
+    if arr.shape[1] != 3:
+        raise MeshError(_not_triangles(f"{name} has {arr.shape[1]} vertices per face, shape {arr.shape}"))
+    _check_range(arr, None, n_vertices, name, count_name)
     return np.ascontiguousarray(arr, dtype=np.int32)
+
+
+def as_polygons(faces, n_vertices: int, name: str = "faces",
+                count_name: str = "n_vertices") -> tuple[np.ndarray, np.ndarray]:
+    """Return `faces` as ``(face_vertex_counts, face_vertex_indices)``, two
+    C-contiguous int32 arrays (the form of OpenSubdiv's TopologyDescriptor).
+
+    `faces` may be an (m, k) integer array (every face with k >= 3 vertices),
+    a list of lists of any lengths, or a `sorpia.Polygons`. Every face needs at
+    least 3 vertices and every index must lie in [0, n_vertices); dtypes as in
+    `as_faces`. Repeated vertices, edges of three faces and the like are the
+    core's checks (sorpia::Topology).
+    """
+    n_vertices = as_vertex_count(n_vertices, count_name)
+    if isinstance(faces, Polygons):
+        counts = _asarray(faces.face_vertex_counts, f"{name}.face_vertex_counts", "a 1-D array of integers")
+        indices = _asarray(faces.face_vertex_indices, f"{name}.face_vertex_indices", "a 1-D array of integers")
+        for arr, what in ((counts, "face_vertex_counts"), (indices, "face_vertex_indices")):
+            _index_dtype(arr, f"{name}.{what}", "a 1-D array of integers")
+            if arr.ndim != 1:
+                raise ValueError(f"{name}.{what} must be one-dimensional, got shape {arr.shape}")
+        if len(counts) == 0:
+            raise MeshError(f"{name} is empty: a mesh needs at least one face")
+        if counts.min() < 3:
+            f = int(np.flatnonzero(counts < 3)[0])
+            raise MeshError(f"{name}[{f}] has {counts[f]} vertices: a face needs at least 3")
+        total = int(counts.sum(dtype=np.int64))
+        if total != len(indices):
+            raise MeshError(f"{name}.face_vertex_counts sum to {total} but {name}.face_vertex_indices has "
+                            f"{len(indices)} entries")
+        if total > np.iinfo(np.int32).max:
+            raise MeshError(f"{name} has {total} face vertices: at most 2^31 - 1")
+        offsets = np.concatenate([[0], np.cumsum(counts, dtype=np.int64)])
+        _check_range(indices, offsets, n_vertices, name, count_name)
+        return np.ascontiguousarray(counts, dtype=np.int32), np.ascontiguousarray(indices, dtype=np.int32)
+    arr = _face_rows(faces, name, "(m, k)",
+                     "an (m, k) array of integer vertex indices, a list of polygons or sorpia.Polygons")
+    if arr is None:  # a ragged list: one row at a time
+        rows = [np.asarray(row) for row in faces]
+        counts = np.array([len(row) for row in rows], dtype=np.int64)
+        short = np.flatnonzero(counts < 3)
+        if len(short):
+            raise MeshError(f"{name}[{short[0]}] has {counts[short[0]]} vertices: a face needs at least 3")
+        for i, row in enumerate(rows):
+            _index_dtype(row, f"{name}[{i}]", "a list of integer vertex indices")
+        return as_polygons(Polygons(counts, np.concatenate(rows)), n_vertices, name, count_name)
+    if arr.shape[1] < 3:
+        raise MeshError(f"{name} has {arr.shape[1]} vertices per face, shape {arr.shape}: a face needs at least 3")
+    _check_range(arr, None, n_vertices, name, count_name)
+    return (np.full(arr.shape[0], arr.shape[1], dtype=np.int32),
+            np.ascontiguousarray(arr, dtype=np.int32).ravel())
 
 
 def as_boundary(boundary: str) -> _core.Boundary:
@@ -175,65 +263,6 @@ class Polygons(NamedTuple):
 
     face_vertex_counts: np.ndarray
     face_vertex_indices: np.ndarray
-
-
-def as_polygons(faces, n_vertices: int, name: str = "faces",
-                count_name: str = "n_vertices") -> tuple[np.ndarray, np.ndarray]:
-    """Return faces of any sizes as (face_vertex_counts, face_vertex_indices),
-    C-contiguous int32, every index in [0, n_vertices) and every face of at
-    least 3 vertices.
-
-    `faces` is an (m, k) integer array, a list of index lists (ragged or
-    not), or a `Polygons`. Dtypes are checked as `as_faces` checks them.
-    """
-    n_vertices = as_vertex_count(n_vertices, count_name)
-    if isinstance(faces, Polygons):
-        counts = _asarray(faces.face_vertex_counts, f"{name}.face_vertex_counts", "a (m,) array of integers")
-        indices = _asarray(faces.face_vertex_indices, f"{name}.face_vertex_indices", "a 1-D array of integers")
-        for arr, what in ((counts, "face_vertex_counts"), (indices, "face_vertex_indices")):
-            if arr.dtype == bool or not np.issubdtype(arr.dtype, np.integer):
-                raise TypeError(f"{name}.{what} must hold integers, got dtype {arr.dtype}")
-            if arr.ndim != 1:
-                raise ValueError(f"{name}.{what} must be one-dimensional, got shape {arr.shape}")
-        if counts.size and int(counts.sum(dtype=np.int64)) != indices.size:
-            raise MeshError(f"{name}.face_vertex_counts add up to {int(counts.sum(dtype=np.int64))} corners but "
-                            f"{name}.face_vertex_indices holds {indices.size}")
-    else:
-        try:
-            arr = np.asarray(faces)
-        except (ValueError, TypeError):
-            arr = None
-        if arr is None or (arr.dtype == object and arr.ndim == 1):  # a ragged list of faces
-            try:
-                rows = [np.asarray(row) for row in faces]
-            except TypeError:
-                raise TypeError(f"{name} must be an (m, k) array of vertex indices, a list of index lists or "
-                                "sorpia.Polygons") from None
-            bad = next((i for i, r in enumerate(rows) if r.ndim != 1 or r.dtype == bool
-                        or (r.size and not np.issubdtype(r.dtype, np.integer))), None)
-            if bad is not None:
-                raise TypeError(f"{name}[{bad}] = {rows[bad].tolist()!r} is not a list of integer vertex indices")
-            counts = np.array([r.size for r in rows], dtype=np.int64)
-            indices = np.concatenate(rows).astype(np.int64) if rows else np.zeros(0, np.int64)
-        else:
-            if arr.dtype == bool or not np.issubdtype(arr.dtype, np.integer):
-                raise TypeError(f"{name} must hold integer vertex indices, got dtype {arr.dtype}")
-            if arr.ndim != 2:
-                raise ValueError(f"{name} must have shape (m, k), got {arr.shape}")
-            counts = np.full(arr.shape[0], arr.shape[1], dtype=np.int64)
-            indices = arr.reshape(-1)
-    if counts.size == 0:
-        raise MeshError(f"{name} is empty: a mesh needs at least one face")
-    if counts.min() < 3:
-        f = int(np.flatnonzero(counts < 3)[0])
-        raise MeshError(f"{name}[{f}] has {int(counts[f])} vertices: a face needs at least 3")
-    if indices.min() < 0 or indices.max() >= n_vertices:
-        k = int(np.flatnonzero((indices < 0) | (indices >= n_vertices))[0])
-        f = int(np.searchsorted(np.cumsum(counts), k, side="right"))
-        raise MeshError(f"{name}[{f}] has vertex index {indices[k]} out of range [0, {n_vertices})")
-    if counts.max() > np.iinfo(np.int32).max:
-        raise MeshError(f"{name} has a face of more vertices than int32 counts hold")
-    return (np.ascontiguousarray(counts, dtype=np.int32), np.ascontiguousarray(indices, dtype=np.int32))
 
 
 def _tag_indices(value, name: str, width: int) -> np.ndarray:

@@ -7,23 +7,30 @@ import warnings
 import numpy as np
 
 from . import _core
-from ._validate import DEFAULT_BOUNDARY, as_boundary, as_faces, as_vertex_count, as_vertices
+from ._validate import DEFAULT_BOUNDARY, DEFAULT_SCHEME, as_boundary, as_faces, as_polygons, as_scheme, as_vertex_count, as_vertices
 
 
 class UnreferencedVerticesWarning(UserWarning):
     """Some vertices belong to no face; their limit is themselves."""
 
 
-def topology(faces, n_vertices: int, *, warn: bool = True, count_name: str = "n_vertices") -> _core.Topology:
-    """Validate `n_vertices` and `faces` and build the mesh connectivity (OpenMesh half-edges).
+def topology(faces, n_vertices: int, *, scheme: str = DEFAULT_SCHEME, warn: bool = True,
+             count_name: str = "n_vertices") -> _core.Topology:
+    """Validate `n_vertices` and `faces` and build the mesh connectivity (sorpia::Topology).
 
-    `count_name` names the vertex count in messages: "n_vertices" where the
-    caller passed the count, "len(vertices)" where it is the rows of an array.
-    Warns with UnreferencedVerticesWarning when some vertices belong to no face.
+    Loop (``scheme="loop"``) takes triangles only (`as_faces`); Catmull-Clark
+    any polygons (`as_polygons`: (m, k) arrays, lists of polygons,
+    `sorpia.Polygons`). `count_name` names the vertex count in messages:
+    "n_vertices" where the caller passed the count, "len(vertices)" where it is
+    the rows of an array. Warns with UnreferencedVerticesWarning when some
+    vertices belong to no face.
     """
     n_vertices = as_vertex_count(n_vertices, count_name)
-    faces = as_faces(faces, n_vertices, count_name=count_name)
-    topo = _core.Topology(faces, n_vertices)
+    if as_scheme(scheme) == _core.Scheme.loop:
+        topo = _core.Topology(as_faces(faces, n_vertices, count_name=count_name), n_vertices)
+    else:
+        counts, indices = as_polygons(faces, n_vertices, count_name=count_name)
+        topo = _core.Topology(counts, indices, n_vertices)
     if warn and topo.n_unreferenced:
         warnings.warn(
             f"{topo.n_unreferenced} of {n_vertices} vertices belong to no face; "

@@ -1,14 +1,16 @@
-"""Generated triangle meshes, for tests, benchmarks and the demo.
+"""Generated triangle and polygon meshes, for tests, benchmarks and the demo.
 
-Each function returns ``(vertices, faces)``: float64 (n, 3) and int32 (m, 3),
-faces oriented counter-clockwise seen from outside. Built by the C++ core, so
+Each function returns ``(vertices, faces)``: float64 (n, 3) and int32 (m, 3)
+for triangles, int32 (m, 4) for quads, or a `sorpia.Polygons` for mixed
+polygons (the form `sorpia.read_mesh` returns), faces oriented
+counter-clockwise seen from outside. Built by the C++ core, so
 ``sorpia-bench`` uses the very same meshes.
 """
 
 from __future__ import annotations
 
 from . import _core
-from ._validate import as_vertex_count
+from ._validate import Polygons, as_vertex_count
 
 
 def icosphere(level: int = 3):
@@ -39,4 +41,36 @@ def irregular(n_vertices: int = 2000, seed: int = 1):
     return _core.irregular(as_vertex_count(n_vertices), seed)
 
 
-__all__ = ["icosphere", "torus", "grid", "pole", "irregular"]
+def _quads(mesh):
+    vertices, counts, indices = mesh
+    return vertices, indices.reshape(len(counts), 4)
+
+
+def quad_torus(nu: int = 32, nv: int = 16):
+    """The torus of `torus` as nu x nv quads, (m, 4): every vertex of valence 4."""
+    return _quads(_core.quad_torus(nu, nv))
+
+
+def quad_grid(nu: int = 10, nv: int = 10):
+    """The patch of `grid` as (nu - 1) x (nv - 1) quads, (m, 4): boundary vertices
+    of valence 3 and four one-face corners."""
+    return _quads(_core.quad_grid(nu, nv))
+
+
+def quad_irregular(n_vertices: int = 12000, seed: int = 1):
+    """A closed all-quad mesh of about `n_vertices` vertices with irregular
+    vertices: `irregular` (n_vertices / 6) with each triangle split into three
+    quads at its centroid and edge midpoints; valences 3 (the centroids), 4 (the
+    midpoints) and 3..12 (the triangle mesh's vertices). Faces (m, 4)."""
+    return _quads(_core.quad_irregular(as_vertex_count(n_vertices), seed))
+
+
+def polygon_torus(nu: int = 32, nv: int = 16, seed: int = 1):
+    """`quad_torus` with quads split into triangles and joined into pentagons and
+    hexagons at random: mixed polygons as a `sorpia.Polygons`."""
+    vertices, counts, indices = _core.polygon_torus(nu, nv, seed)
+    return vertices, Polygons(counts, indices)
+
+
+__all__ = ["icosphere", "torus", "grid", "pole", "irregular", "quad_torus", "quad_grid", "quad_irregular",
+           "polygon_torus"]

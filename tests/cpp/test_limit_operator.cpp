@@ -13,6 +13,7 @@
 #include "bad_faces.hpp"
 #include "expect_error.hpp"
 #include "loop_masks.hpp"
+#include "poly_meshes.hpp"
 #include "sorpia/errors.hpp"
 #include "sorpia/limit.hpp"
 #include "sorpia/limit_masks.hpp"
@@ -79,17 +80,7 @@ std::vector<Named> meshes() {
 TEST(FastTopology, DirectOneRingEqualsOpenMesh) {
   for (const auto& [name, m] : meshes()) {
     SCOPED_TRACE(name);
-    const auto direct = build(m, TopologyBuild::Direct);
-    const auto ref = build(m, TopologyBuild::OpenMesh);
-    EXPECT_EQ(direct.ring_offsets(), ref.ring_offsets());
-    EXPECT_EQ(direct.ring_neighbors(), ref.ring_neighbors());
-    EXPECT_EQ(direct.n_edges(), ref.n_edges());
-    EXPECT_EQ(direct.n_boundary_edges(), ref.n_boundary_edges());
-    EXPECT_EQ(direct.n_unreferenced(), ref.n_unreferenced());
-    for (std::size_t v = 0; v < m.n_vertices(); ++v) {
-      ASSERT_EQ(direct.is_boundary(v), ref.is_boundary(v)) << "vertex " << v;
-      ASSERT_EQ(direct.face_count(v), ref.face_count(v)) << "vertex " << v;
-    }
+    sorpia_test::expect_same_topology(build(m, TopologyBuild::Direct), build(m, TopologyBuild::OpenMesh));
   }
 }
 

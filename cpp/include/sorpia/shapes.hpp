@@ -1,6 +1,6 @@
 #pragma once
 /// @file shapes.hpp
-/// Generated triangle meshes for tests, benchmarks and the demo.
+/// Generated triangle and polygon meshes for tests, benchmarks and the demo.
 
 #include <cstdint>
 #include <vector>
@@ -38,5 +38,36 @@ TriMesh pole(int n);
 /// are flipped at random (OpenMesh's flip, keeping valences in 3..12), so that
 /// most vertices are extraordinary. Deterministic for a given seed.
 TriMesh irregular(int n_vertices, std::uint32_t seed = 1);
+
+/// A polygon mesh in the counts + indices form (Far::TopologyDescriptor's).
+struct PolyMesh {
+  std::vector<double> vertices;            ///< (n, 3)
+  std::vector<std::int32_t> face_counts;   ///< vertices of each face
+  std::vector<std::int32_t> face_indices;  ///< the faces' vertices, face after face, counter-clockwise
+
+  std::size_t n_vertices() const { return vertices.size() / 3; }
+  std::size_t n_faces() const { return face_counts.size(); }
+};
+
+/// The torus of torus(nu, nv) as nu x nv quads: every vertex of valence 4.
+PolyMesh quad_torus(int nu, int nv);
+
+/// The patch of grid(nu, nv) as (nu - 1) x (nv - 1) quads: boundary vertices of
+/// valence 3, four one-face corners of valence 2.
+PolyMesh quad_grid(int nu, int nv);
+
+/// A closed all-quad mesh with irregular vertices: irregular(n_vertices / 6,
+/// seed) with each triangle split into three quads (its centroid joined to
+/// its edge midpoints). About n_vertices vertices: the triangle mesh's own
+/// (valences 3..12), the edge midpoints (valence 4) and the centroids
+/// (valence 3). @param n_vertices at least 96
+PolyMesh quad_irregular(int n_vertices, std::uint32_t seed = 1);
+
+/// quad_torus(nu, nv) with about 10% of its quads split into two triangles,
+/// 7% joined with half of their neighbour into pentagons and 7% joined with
+/// their neighbour into hexagons, at random: triangles, quads and n-gons
+/// mixed, vertices of valence 3 to 6. Deterministic for a given seed.
+/// @param nu, nv at least 4
+PolyMesh polygon_torus(int nu, int nv, std::uint32_t seed = 1);
 
 }  // namespace sorpia

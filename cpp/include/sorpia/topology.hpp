@@ -1,6 +1,6 @@
 #pragma once
 /// @file topology.hpp
-/// Triangle-mesh topology: validation, half-edge connectivity (OpenMesh) and
+/// Polygon-mesh topology: validation, half-edge connectivity (OpenMesh) and
 /// the flat one-ring structure the limit operator and the solvers run over.
 
 #include <cstddef>
@@ -26,30 +26,67 @@ enum class TopologyBuild {
 /// checks without building the one-ring or naming the problem.
 bool faces_valid(const std::int32_t* faces, std::size_t n_faces, std::size_t n_vertices);
 
-/// Connectivity of a triangle mesh, built once and shared by the limit
-/// operator, the solvers and surface evaluation.
+/// Connectivity of a polygon mesh (triangles, quads, any n-gons), built once
+/// and shared by the limit operator, the solvers and surface evaluation.
 ///
-/// The constructor validates the faces (indices in range, no repeated vertex in
-/// a face, every edge shared by at most two faces, consistent orientation,
-/// manifold vertices) and throws sorpia::MeshError naming the first offending
-/// face, edge or vertex. The half-edges are then matched into a flat CSR
-/// one-ring (directly from the faces by default, or through OpenMesh), so that
-/// no circulator runs in an inner loop.
+/// Faces are given as OpenSubdiv's Far::TopologyDescriptor and USD take them:
+/// face f has face_counts()[f] vertices, face_indices()[face_offsets()[f] ..
+/// face_offsets()[f + 1]), counter-clockwise seen from outside.
+///
+/// The constructor validates the faces (indices in range, at least three
+/// vertices and no repeated vertex in a face, every edge shared by at most two
+/// faces, consistent orientation, manifold vertices) and throws
+/// sorpia::MeshError naming the first offending face, edge or vertex. The
+/// half-edges are then matched into a flat CSR one-ring (directly from the
+/// faces by default, or through OpenMesh), so that no circulator runs in an
+/// inner loop.
+///
+/// Edge neighbours (ring_*) exist for every mesh. The face neighbours
+/// (vertex_faces, face_ring_*), which only Catmull-Clark needs, are built when
+/// some face is not a triangle (has_face_ring()); an all-triangle mesh builds
+/// exactly what Loop reads and nothing more.
 class Topology {
  public:
+  /// Triangles: row-major (n_faces, 3) vertex indices.
   /// @param faces       row-major (n_faces, 3) vertex indices
   /// @param n_faces     number of triangles
   /// @param n_vertices  number of vertices (some may be unreferenced)
   Topology(const std::int32_t* faces, std::size_t n_faces, std::size_t n_vertices);
   /// As above, choosing how the one-ring is built (see TopologyBuild).
   Topology(const std::int32_t* faces, std::size_t n_faces, std::size_t n_vertices, TopologyBuild build);
+  /// Polygons: face f has face_vertex_counts[f] vertices, listed in
+  /// face_vertex_indices after those of faces 0 .. f-1 (their total is the sum
+  /// of the counts). An all-triangle input gives the same Topology as the
+  /// triangle constructor.
+  Topology(const std::int32_t* face_vertex_counts, std::size_t n_faces, const std::int32_t* face_vertex_indices,
+           std::size_t n_vertices, TopologyBuild build = TopologyBuild::Direct);
 
   std::size_t n_vertices() const { return n_vertices_; }
-  std::size_t n_faces() const { return faces_.size() / 3; }
-  /// Row-major (n_faces, 3) vertex indices, as given.
-  const std::vector<std::int32_t>& faces() const { return faces_; }
+  std::size_t n_faces() const { return n_faces_; }
+  /// Number of vertices of face f.
+  std::int32_t face_size(std::size_t f) const {
+    return all_triangles_ ? 3 : face_offsets_[f + 1] - face_offsets_[f];
+  }
+  /// Where face f's vertices start in face_indices().
+  std::int32_t face_offset(std::size_t f) const {
+    return all_triangles_ ? static_cast<std::int32_t>(3 * f) : face_offsets_[f];
+  }
+  /// The vertices of every face, face after face, as given.
+  const std::vector<std::int32_t>& face_indices() const { return face_indices_; }
+  /// Number of vertices of each face (a new array: a triangle mesh stores none).
+  std::vector<std::int32_t> face_counts() const;
+  /// n_faces + 1 entries, face f's vertices start at face_indices()[face_offsets()[f]]
+  /// (a new array: a triangle mesh stores none).
+  std::vector<std::int32_t> face_offsets() const;
+  /// Every face is a triangle (face_indices() is then the row-major (n_faces, 3) array).
+  bool all_triangles() const { return all_triangles_; }
+  /// Every face is a quad.
+  bool all_quads() const { return all_quads_; }
+  /// Row-major (n_faces, 3) triangles, as given; only for all_triangles() meshes.
+  /// @throw std::logic_error on a mesh with other polygons
+  const std::vector<std::int32_t>& faces() const;
 
-  /// One-ring CSR: the neighbours of vertex i are
+  /// One-ring CSR: the edge neighbours of vertex i are
   /// ring_neighbors()[ring_offsets()[i] .. ring_offsets()[i+1]).
   /// Clockwise (seen from the side the faces are counter-clockwise): for a
   /// boundary vertex the first and the last neighbour are the two neighbours
@@ -57,6 +94,26 @@ class Topology {
   /// lowest-numbered face around it.
   const std::vector<std::int32_t>& ring_offsets() const { return ring_offsets_; }
   const std::vector<std::int32_t>& ring_neighbors() const { return ring_neighbors_; }
+
+  /// Whether the face neighbours below were built (some face is not a triangle).
+  bool has_face_ring() const { return !vertex_face_offsets_.empty(); }
+  /// The faces at vertex i in ring order, vertex_faces()[vertex_face_offsets()[i]
+  /// .. vertex_face_offsets()[i+1]) (face_count(i) of them): the j-th lies
+  /// between edge neighbours j and j+1 of the ring (j+1 taken cyclically for an
+  /// interior vertex). Empty unless has_face_ring().
+  const std::vector<std::int32_t>& vertex_face_offsets() const { return vertex_face_offsets_; }
+  const std::vector<std::int32_t>& vertex_faces() const { return vertex_faces_; }
+  /// The face neighbours of vertex i: for each of its faces in ring order, the
+  /// face's vertices other than i and the two edge neighbours it lies between,
+  /// in the face's (counter-clockwise) order: none for a triangle, the
+  /// opposite corner of a quad, n - 3 vertices for an n-gon.
+  /// face_ring_neighbors()[face_ring_offsets()[i] .. face_ring_offsets()[i+1]).
+  /// Empty unless has_face_ring().
+  const std::vector<std::int32_t>& face_ring_offsets() const { return face_ring_offsets_; }
+  const std::vector<std::int32_t>& face_ring_neighbors() const { return face_ring_neighbors_; }
+  /// Every face at vertex i is a quad (its face neighbours are then one
+  /// opposite corner per face). False for a triangle mesh and an unreferenced vertex.
+  bool quad_ring(std::size_t i) const { return has_face_ring() && quad_ring_[i] != 0; }
 
   /// Number of edges at vertex i.
   int valence(std::size_t i) const { return ring_offsets_[i + 1] - ring_offsets_[i]; }
@@ -71,12 +128,23 @@ class Topology {
   std::size_t n_unreferenced() const { return n_unreferenced_; }
 
  private:
+  void build(TopologyBuild build);
+
   std::size_t n_vertices_ = 0;
-  std::vector<std::int32_t> faces_;
+  std::size_t n_faces_ = 0;
+  std::vector<std::int32_t> face_indices_;
+  std::vector<std::int32_t> face_offsets_;  // n_faces + 1, or empty when all_triangles_
+  bool all_triangles_ = true;
+  bool all_quads_ = false;
   std::vector<std::int32_t> ring_offsets_;
   std::vector<std::int32_t> ring_neighbors_;
   std::vector<std::int32_t> face_count_;
   std::vector<std::uint8_t> boundary_;
+  std::vector<std::int32_t> vertex_face_offsets_;
+  std::vector<std::int32_t> vertex_faces_;
+  std::vector<std::int32_t> face_ring_offsets_;
+  std::vector<std::int32_t> face_ring_neighbors_;
+  std::vector<std::uint8_t> quad_ring_;
   std::size_t n_edges_ = 0;
   std::size_t n_boundary_edges_ = 0;
   std::size_t n_unreferenced_ = 0;

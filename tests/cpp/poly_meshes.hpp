@@ -1,0 +1,85 @@
+#pragma once
+// Polygon meshes for the topology and limit tests: quads (closed, open,
+// irregular), mixed triangles/quads/pentagons/hexagons, and scrambled copies
+// (faces shuffled, corners rotated, unreferenced vertices appended).
+#include <gtest/gtest.h>
+
+#include <cstdint>
+#include <numeric>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "sorpia/shapes.hpp"
+#include "sorpia/topology.hpp"
+
+namespace sorpia_test {
+
+inline sorpia::Topology build(const sorpia::PolyMesh& m,
+                              sorpia::TopologyBuild how = sorpia::TopologyBuild::Direct) {
+  return sorpia::Topology(m.face_counts.data(), m.n_faces(), m.face_indices.data(), m.n_vertices(), how);
+}
+
+// The two builds of one mesh (TopologyBuild::Direct and ::OpenMesh) agree on
+// every array: edge neighbours, and for polygons the faces and face neighbours.
+inline void expect_same_topology(const sorpia::Topology& direct, const sorpia::Topology& ref) {
+  EXPECT_EQ(direct.ring_offsets(), ref.ring_offsets());
+  EXPECT_EQ(direct.ring_neighbors(), ref.ring_neighbors());
+  EXPECT_EQ(direct.vertex_face_offsets(), ref.vertex_face_offsets());
+  EXPECT_EQ(direct.vertex_faces(), ref.vertex_faces());
+  EXPECT_EQ(direct.face_ring_offsets(), ref.face_ring_offsets());
+  EXPECT_EQ(direct.face_ring_neighbors(), ref.face_ring_neighbors());
+  EXPECT_EQ(direct.n_edges(), ref.n_edges());
+  EXPECT_EQ(direct.n_boundary_edges(), ref.n_boundary_edges());
+  EXPECT_EQ(direct.n_unreferenced(), ref.n_unreferenced());
+  for (std::size_t v = 0; v < direct.n_vertices(); ++v) {
+    ASSERT_EQ(direct.is_boundary(v), ref.is_boundary(v)) << "vertex " << v;
+    ASSERT_EQ(direct.face_count(v), ref.face_count(v)) << "vertex " << v;
+    ASSERT_EQ(direct.quad_ring(v), ref.quad_ring(v)) << "vertex " << v;
+  }
+}
+
+inline sorpia::PolyMesh scrambled(const sorpia::PolyMesh& m, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::vector<std::int32_t> off(m.n_faces() + 1, 0);
+  for (std::size_t f = 0; f < m.n_faces(); ++f) off[f + 1] = off[f] + m.face_counts[f];
+  std::vector<std::size_t> order(m.n_faces());
+  std::iota(order.begin(), order.end(), 0);
+  std::shuffle(order.begin(), order.end(), rng);
+  sorpia::PolyMesh s;
+  s.vertices = m.vertices;
+  for (std::size_t f : order) {
+    const int n = m.face_counts[f], r = static_cast<int>(rng() % n);
+    s.face_counts.push_back(n);
+    for (int k = 0; k < n; ++k) s.face_indices.push_back(m.face_indices[off[f] + (k + r) % n]);
+  }
+  s.vertices.insert(s.vertices.end(), 6, 0.5);
+  return s;
+}
+
+// A single polygon of n vertices (all boundary).
+inline sorpia::PolyMesh ngon(int n) {
+  sorpia::PolyMesh m;
+  for (int k = 0; k < n; ++k) m.vertices.insert(m.vertices.end(), {1.0 * k, 0.5 * k * k, 0.0});
+  m.face_counts = {n};
+  for (int k = 0; k < n; ++k) m.face_indices.push_back(k);
+  return m;
+}
+
+struct NamedPoly {
+  std::string name;
+  sorpia::PolyMesh mesh;
+};
+
+inline std::vector<NamedPoly> polygon_meshes() {
+  return {{"quad-torus", sorpia::quad_torus(8, 6)},
+          {"quad-grid", sorpia::quad_grid(7, 5)},
+          {"quad-irregular", sorpia::quad_irregular(1200, 2)},
+          {"polygon-torus", sorpia::polygon_torus(12, 10, 3)},
+          {"pentagon", ngon(5)},
+          {"quad-grid-scrambled", scrambled(sorpia::quad_grid(6, 6), 4)},
+          {"polygon-torus-scrambled", scrambled(sorpia::polygon_torus(10, 8, 5), 6)},
+          {"quad-irregular-scrambled", scrambled(sorpia::quad_irregular(600, 7), 8)}};
+}
+
+}  // namespace sorpia_test
