@@ -14,6 +14,7 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 import sorpia
+from sorpia.limit import topology
 from sorpia.mesh_repair import REPORT_KINDS
 from test_fuzz import CORRUPTIONS, FUZZ, corrupt, cycle, face_lists, mesh_problems
 from test_io import SHARED_MESHES as SHARED
@@ -29,6 +30,7 @@ def check_repaired(v, faces, result):
     v = np.asarray(v, float)
     out = face_lists(result.faces)
     assert mesh_problems(out, len(result.vertices)) == set()
+    topology(result.faces, len(result.vertices), scheme="catmull-clark", warn=False)  # and sorpia's validation
     n = len(v)
     assert np.array_equal(result.vertex_map[:n], np.arange(n))
     assert np.array_equal(result.vertices.view(np.uint64), v[result.vertex_map].view(np.uint64))  # bit for bit

@@ -28,45 +28,41 @@ inline std::string face_str(std::size_t f, const std::int32_t* faces) {
          std::to_string(faces[3 * f + 1]) + ", " + std::to_string(faces[3 * f + 2]) + ")";
 }
 
-// A triangle or polygon list: face f is idx[off[f] .. off[f + 1]). Corner h
-// (0 <= h < n_corners()) is also the half-edge from idx[h] to the next corner
-// of its face. `corner_face` maps a corner to its face for polygons; triangles
-// need no table (h / 3, and next_corner/prev_corner), and off[f] = 3 f.
+// A list of triangles or polygons: face f is idx[begin(f) .. end(f)).
+// Corner h (0 <= h < n_corners()) is also the half-edge from idx[h] to the
+// next corner of its face. `off` (n_faces + 1 offsets) and `corner_face` (the
+// face of each corner) are given for polygons; triangles need neither (3 f,
+// h / 3, next_corner).
 struct FaceList {
   const std::int32_t* idx;
-  const std::int32_t* off;
+  const std::int32_t* off;          // nullptr for triangles (3 f)
   const std::int32_t* corner_face;  // nullptr for triangles
   std::size_t n_faces;
 
   bool triangles() const { return corner_face == nullptr; }
-  std::size_t n_corners() const { return static_cast<std::size_t>(off[n_faces]); }
+  std::int32_t begin(std::size_t f) const { return off ? off[f] : static_cast<std::int32_t>(3 * f); }
+  std::int32_t end(std::size_t f) const { return begin(f + 1); }
+  std::size_t n_corners() const { return static_cast<std::size_t>(begin(n_faces)); }
   std::int32_t face_of(std::size_t h) const {
     return corner_face ? corner_face[h] : static_cast<std::int32_t>(h / 3);
   }
   std::size_t next(std::size_t h) const {
     if (!corner_face) return next_corner(h);
     const std::int32_t f = corner_face[h];
-    return h + 1 == static_cast<std::size_t>(off[f + 1]) ? static_cast<std::size_t>(off[f]) : h + 1;
+    return h + 1 == static_cast<std::size_t>(end(f)) ? static_cast<std::size_t>(begin(f)) : h + 1;
   }
   std::size_t prev(std::size_t h) const {
     if (!corner_face) return prev_corner(h);
     const std::int32_t f = corner_face[h];
-    return h == static_cast<std::size_t>(off[f]) ? static_cast<std::size_t>(off[f + 1]) - 1 : h - 1;
+    return h == static_cast<std::size_t>(begin(f)) ? static_cast<std::size_t>(end(f)) - 1 : h - 1;
   }
   // "face f (a, b, c, ...)", for messages.
   std::string str(std::size_t f) const {
     std::string s = "face " + std::to_string(f) + " (";
-    for (std::int32_t h = off[f]; h < off[f + 1]; ++h) s += (h > off[f] ? ", " : "") + std::to_string(idx[h]);
+    for (std::int32_t h = begin(f); h < end(f); ++h) s += (h > begin(f) ? ", " : "") + std::to_string(idx[h]);
     return s + ")";
   }
 };
-
-// The offsets of n_faces triangles (3 f), for a FaceList.
-inline std::vector<std::int32_t> triangle_offsets(std::size_t n_faces) {
-  std::vector<std::int32_t> off(n_faces + 1);
-  for (std::size_t f = 0; f <= n_faces; ++f) off[f] = static_cast<std::int32_t>(3 * f);
-  return off;
-}
 
 // The offsets of polygons from their counts; every count at least 3 and the
 // total within int32.

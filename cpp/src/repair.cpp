@@ -58,18 +58,19 @@ struct Faces : FaceList {
   std::int32_t end(std::size_t f) const { return begin(f + 1); }
 };
 
-// The offsets (and, for polygons, the corner faces) of a FaceList.
+// The offsets and corner faces of a FaceList of polygons (none for triangles).
 struct FaceArrays {
-  std::vector<std::int32_t> off, corner_face;  // corner_face empty for triangles
+  std::size_t n_faces = 0;
+  std::vector<std::int32_t> off, corner_face;
 
-  static FaceArrays triangles(std::size_t n_faces) { return {detail::triangle_offsets(n_faces), {}}; }
+  static FaceArrays triangles(std::size_t n_faces) { return {n_faces, {}, {}}; }
   static FaceArrays polygons(const std::int32_t* counts, std::size_t n_faces) {
-    FaceArrays a{detail::polygon_offsets(counts, n_faces), {}};
+    FaceArrays a{n_faces, detail::polygon_offsets(counts, n_faces), {}};
     a.corner_face = detail::corner_faces(a.off);
     return a;
   }
   FaceList over(const std::int32_t* idx) const {
-    return {idx, off.data(), corner_face.empty() ? nullptr : corner_face.data(), off.size() - 1};
+    return {idx, off.empty() ? nullptr : off.data(), corner_face.empty() ? nullptr : corner_face.data(), n_faces};
   }
 };
 
@@ -78,7 +79,7 @@ struct OwnedFaces {
   std::vector<std::int32_t> idx;
   FaceArrays arrays;
 
-  bool empty() const { return arrays.off.empty(); }
+  bool empty() const { return idx.empty(); }
   FaceList view() const { return arrays.over(idx.data()); }
 };
 
@@ -145,6 +146,7 @@ OwnedFaces drop_repeated_corners(const FaceList& fl, std::size_t n_vertices, std
     off.push_back(static_cast<std::int32_t>(out.idx.size()));
   }
   out.arrays.corner_face = detail::corner_faces(off);
+  out.arrays.n_faces = fl.n_faces;
   return out;
 }
 
@@ -425,39 +427,15 @@ void compose(RepairResult& first, RepairResult&& later) {
 
 namespace {
 
-// TEMPORARY until branch catmark's polygon Topology is merged.
-template <bool kPolygons>
-RepairResult repair_pass(const FaceList& input, std::size_t n_vertices, bool pair_sheets);
-struct PolyTopologyStub {
-  PolyTopologyStub(const std::int32_t* counts, std::size_t n_faces, const std::int32_t* idx, std::size_t n_vertices) {
-    if (n_faces == 0) throw MeshError("the mesh has no faces");
-    const FaceArrays a = FaceArrays::polygons(counts, n_faces);
-    for (std::size_t f = 0; f < n_faces; ++f)
-      for (std::int32_t h = a.off[f]; h < a.off[f + 1]; ++h)
-        if (idx[h] < 0 || static_cast<std::size_t>(idx[h]) >= n_vertices)
-          throw MeshError(a.over(idx).str(f) + " has vertex index " + std::to_string(idx[h]) + " out of range [0, " +
-                          std::to_string(n_vertices) + ")");
-    if (!repair_pass<true>(a.over(idx), n_vertices, false).report.empty()) throw MeshError("invalid polygon mesh");
-  }
-};
-bool poly_faces_valid_stub(const std::int32_t* counts, std::size_t n_faces, const std::int32_t* idx, std::size_t n_vertices) {
-  try {
-    PolyTopologyStub(counts, n_faces, idx, n_vertices);
-  } catch (const MeshError&) {
-    return false;
-  }
-  return true;
-}
-
 // Whether sorpia::Topology accepts the faces (`counts`: nullptr for triangles).
 bool valid(const std::int32_t* counts, const FaceList& fl, std::size_t n_vertices) {
-  return counts ? poly_faces_valid_stub(counts, fl.n_faces, fl.idx, n_vertices) : faces_valid(fl.idx, fl.n_faces, n_vertices);
+  return counts ? faces_valid(counts, fl.n_faces, fl.idx, n_vertices) : faces_valid(fl.idx, fl.n_faces, n_vertices);
 }
 
 // Throws sorpia::Topology's MeshError for faces it refuses.
 void validate(const std::int32_t* counts, const FaceList& fl, std::size_t n_vertices) {
   if (counts)
-    static_cast<void>(PolyTopologyStub(counts, fl.n_faces, fl.idx, n_vertices));
+    static_cast<void>(Topology(counts, fl.n_faces, fl.idx, n_vertices));
   else
     static_cast<void>(Topology(fl.idx, fl.n_faces, n_vertices));
 }
@@ -518,7 +496,7 @@ RepairResult repair(const std::int32_t* faces, std::size_t n_faces, std::size_t 
 
 RepairResult repair(const std::int32_t* face_vertex_counts, std::size_t n_faces, const std::int32_t* face_vertex_indices,
                     std::size_t n_vertices) {
-  if (poly_faces_valid_stub(face_vertex_counts, n_faces, face_vertex_indices, n_vertices)) return {};
+  if (faces_valid(face_vertex_counts, n_faces, face_vertex_indices, n_vertices)) return {};
   const FaceArrays arrays = FaceArrays::polygons(face_vertex_counts, n_faces);
   return repair_faces(face_vertex_counts, arrays.over(face_vertex_indices), n_vertices);
 }

@@ -9,7 +9,7 @@ from typing import NamedTuple
 import numpy as np
 
 from . import _core
-from ._validate import Polygons, as_faces, as_polygons, as_vertices
+from ._validate import Polygons, _face_rows, as_faces, as_polygons, as_vertices
 
 # The report's keys, in the order the repair applies its rules (see `repair`).
 REPORT_KINDS = ("degenerate_faces", "collapsed_faces", "duplicate_faces", "reversed_duplicate_faces", "nonmanifold_edges",
@@ -89,20 +89,6 @@ class RepairResult(NamedTuple):
     report: dict
 
 
-def _face_rows(faces):
-    """`faces` as the 2-D integer array it is given as (not yet validated), or
-    None for sorpia.Polygons, ragged lists and anything as_polygons refuses."""
-    if isinstance(faces, Polygons):
-        return None
-    try:
-        arr = np.asarray(faces)
-    except (ValueError, TypeError):
-        return None
-    if arr.ndim != 2 or arr.dtype == bool or not np.issubdtype(arr.dtype, np.integer):
-        return None
-    return arr
-
-
 def repair(vertices, faces) -> RepairResult:
     """Make a triangle or polygon mesh valid for subdivision without moving a vertex.
 
@@ -173,7 +159,9 @@ def repair(vertices, faces) -> RepairResult:
     """
     vertices = as_vertices(vertices)
     n = vertices.shape[0]
-    rows = _face_rows(faces)
+    # the (m, k) array the faces are given as (not yet validated), None for Polygons and ragged lists
+    rows = None if isinstance(faces, Polygons) else _face_rows(
+        faces, "faces", "(m, k)", "an (m, k) array of integer vertex indices, a list of polygons or sorpia.Polygons")
     if rows is not None and rows.shape[1] == 3:  # triangles: the (m, 3) path, as sorpia's Loop functions take them
         faces = as_faces(rows, n, count_name="len(vertices)")
         changed = _core.repair(faces, n)

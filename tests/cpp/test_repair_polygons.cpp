@@ -3,7 +3,8 @@
 // PolyMesh, independently of sorpia's validation (add_face refuses a complex
 // edge or an orientation clash; every vertex must be manifold), and against
 // the input: each output face is its input face (consecutive repeats dropped)
-// renumbered through vertex_map, reversed if flipped.
+// renumbered through vertex_map, reversed if flipped. And sorpia's polygon
+// Topology accepts it.
 #include <OpenMesh/Core/Mesh/PolyMesh_ArrayKernelT.hh>
 #include <OpenMesh/Core/System/omstream.hh>
 #include <gtest/gtest.h>
@@ -16,6 +17,7 @@
 #include "expect_error.hpp"
 #include "sorpia/errors.hpp"
 #include "sorpia/repair.hpp"
+#include "sorpia/topology.hpp"
 
 namespace {
 
@@ -109,6 +111,7 @@ Poly repaired(const Poly& in, sorpia::RepairResult* result = nullptr) {
     else EXPECT_LT(static_cast<std::size_t>(r.vertex_map[i]), in.n_vertices);
   }
   expect_openmesh_manifold(out);
+  EXPECT_NO_THROW(sorpia::Topology(out.counts.data(), out.n_faces(), out.indices.data(), out.n_vertices));
   const std::set<std::int32_t> flipped(r.report.flipped_faces.begin(), r.report.flipped_faces.end());
   EXPECT_EQ(r.face_map.size(), out.n_faces());
   for (std::size_t j = 0; j < out.n_faces(); ++j) {
