@@ -270,3 +270,31 @@ def test_real_polygon_meshes_repair_to_valid_meshes(path):
     r = sorpia.repair(v, f)
     check_repaired(v, f, r)
     assert set(r.report) == set(REPORT_KINDS) | {"counts"}
+
+
+# ---- sharpness tags ---------------------------------------------------------
+
+def test_tags_follow_the_repair():
+    """Two cubes welded along an edge (four sheets) with a crease on that edge, a corner at one of its
+    ends and a hole: on the repaired mesh the crease is on every output edge whose ends copy the
+    crease's vertices, the corner on the vertex and its copy, the hole on the output face of its face."""
+    (v0, f0), (v1, f1) = cube(), cube(1)
+    f = np.vstack([f0, f1])
+    f[f == 8], f[f == 9] = 2, 3
+    v = np.vstack([v0, v1])
+    f = np.vstack([f[:1], f[:1], f[1:]])  # face 0 twice: the duplicate (input face 1) is removed
+    r = sorpia.repair(v, f, creases=([[3, 2], [0, 1]], [10.0, 2.5]), corners=([2], 4.0), holes=[1, 5])
+    assert set(r.tags) == {"creases", "corners", "holes"}
+    out = face_lists(r.faces)
+    output_edges = {tuple(sorted((a, b))) for q in out for a, b in zip(q, q[1:] + q[:1])}
+    edges, sharpness = r.tags["creases"]
+    for wanted, s in (((2, 3), 10.0), ((0, 1), 2.5)):  # brute force over the output edges
+        copies = {e for e in output_edges if tuple(sorted(r.vertex_map[list(e)])) == wanted}
+        got = {tuple(sorted(e)) for e, t in zip(edges.tolist(), sharpness) if t == s}
+        assert got == copies and copies
+    assert len(edges) == 3  # (2, 3) twice (one copy per cube), (0, 1) once
+    corners, corner_sharpness = r.tags["corners"]
+    assert sorted(r.vertex_map[corners].tolist()) == [2, 2] and set(corner_sharpness) == {4.0}
+    assert r.report["duplicate_faces"] == [1]
+    assert r.tags["holes"].tolist() == [j for j, src in enumerate(r.face_map) if src == 5]
+    assert sorpia.repair(v, f).tags == {}

@@ -4,12 +4,13 @@ orientation)."""
 
 from __future__ import annotations
 
+from types import MappingProxyType
 from typing import NamedTuple
 
 import numpy as np
 
 from . import _core
-from ._validate import Polygons, _face_rows, as_faces, as_polygons, as_vertices
+from ._validate import Polygons, _face_rows, as_faces, as_polygons, as_tags, as_vertices
 
 # The report's keys, in the order the repair applies its rules (see `repair`).
 REPORT_KINDS = ("degenerate_faces", "collapsed_faces", "duplicate_faces", "reversed_duplicate_faces", "nonmanifold_edges",
@@ -80,6 +81,10 @@ class RepairResult(NamedTuple):
         For every output face, the input face it comes from.
     report : dict
         Every change, JSON-able (lists of ints): see `repair`.
+    tags : dict
+        The sharpness tags given to `repair`, on the repaired mesh: the keys
+        among ``creases``, ``corners`` and ``holes`` that were given, ready
+        for ``interpolate(vertices, faces, **tags)`` (see `repair`).
     """
 
     vertices: np.ndarray
@@ -87,9 +92,10 @@ class RepairResult(NamedTuple):
     vertex_map: np.ndarray
     face_map: np.ndarray
     report: dict
+    tags: dict = MappingProxyType({})  # read-only: no tags given
 
 
-def repair(vertices, faces) -> RepairResult:
+def repair(vertices, faces, *, creases=None, corners=None, holes=None) -> RepairResult:
     """Make a triangle or polygon mesh valid for subdivision without moving a vertex.
 
     The rules, applied in this order:
@@ -130,11 +136,18 @@ def repair(vertices, faces) -> RepairResult:
         Triangles, quads or polygons of any sizes (at least 3 vertices each),
         indices into `vertices`; they may fail sorpia's topology checks, which
         is what this function is for.
+    creases, corners, holes : optional
+        OpenSubdiv's sharpness tags of the input mesh, as `interpolate` takes
+        them. They come back in ``RepairResult.tags`` on the repaired mesh: a
+        crease on every output edge whose two ends copy its two vertices (an
+        edge of removed faces only is dropped), a corner on its vertex and
+        every copy, a hole on the output faces of its face (a removed face's
+        hole is dropped).
 
     Returns
     -------
     RepairResult
-        ``(vertices, faces, vertex_map, face_map, report)``. The faces come
+        ``(vertices, faces, vertex_map, face_map, report, tags)``. The faces come
         back in the form they were given: an (m, k) array (or a list of
         faces of k vertices each) as an (m', k) int32 array, unless rule 1
         shortened a face, and then, like a ragged list or a
@@ -158,6 +171,20 @@ def repair(vertices, faces) -> RepairResult:
         OpenSubdiv takes).
     """
     vertices = as_vertices(vertices)
+    result = _repair_faces(vertices, faces)
+    if creases is None and corners is None and holes is None:
+        return result
+    r = result.report  # every input face is kept or removed by one rule
+    n_faces = len(result.face_map) + sum(len(r[k]) for k in ("degenerate_faces", "duplicate_faces",
+                                                              "reversed_duplicate_faces"))
+    tags = as_tags(creases, corners, holes, n_vertices=len(vertices), n_faces=n_faces)
+    given = {kind for kind, value in (("creases", creases), ("corners", corners), ("holes", holes))
+             if value is not None}
+    return result._replace(tags=_mapped_tags(tags, result, len(vertices), given))
+
+
+def _repair_faces(vertices, faces) -> RepairResult:
+    """`repair` without tags, of validated vertices."""
     n = vertices.shape[0]
     # the (m, k) array the faces are given as (not yet validated), None for Polygons and ragged lists
     rows = None if isinstance(faces, Polygons) else _face_rows(
@@ -186,6 +213,36 @@ def repair(vertices, faces) -> RepairResult:
     else:
         new_faces = Polygons(new_counts, new_indices)
     return RepairResult(vertices[vertex_map], new_faces, vertex_map, face_map, report)
+
+
+def _mapped_tags(tags, result: RepairResult, n_vertices: int, kinds) -> dict:
+    """The tags (a checked _core.Tags of the input mesh, of `n_vertices`
+    vertices) on the repaired mesh of `result`: the `kinds` given."""
+    vertex_map, face_map, out = result.vertex_map, result.face_map, {}
+    if "creases" in kinds:
+        counts, indices = as_polygons(result.faces, len(vertex_map))
+        last = np.cumsum(counts) - 1
+        nxt = np.arange(1, len(indices) + 1)
+        nxt[last] = last - counts + 1  # a face's last corner is followed by its first
+        a, b = indices, indices[nxt]
+        edges = np.unique(np.column_stack([np.minimum(a, b), np.maximum(a, b)]), axis=0)  # the output edges
+        ends = np.sort(vertex_map[edges], axis=1).astype(np.int64)  # their input vertices
+        key = ends[:, 0] * n_vertices + ends[:, 1]
+        order = np.argsort(key, kind="stable")
+        wanted = np.sort(tags.crease_vertices, axis=1).astype(np.int64)
+        wanted_key = wanted[:, 0] * n_vertices + wanted[:, 1]
+        lo = np.searchsorted(key[order], wanted_key, side="left")
+        hi = np.searchsorted(key[order], wanted_key, side="right")
+        which = np.concatenate([order[i:j] for i, j in zip(lo, hi)] + [np.zeros(0, np.int64)])
+        out["creases"] = (edges[which].astype(np.int32), np.repeat(tags.crease_sharpness, hi - lo))
+    if "corners" in kinds:
+        sharpness = np.full(n_vertices, np.nan)
+        sharpness[tags.corner_vertices] = tags.corner_sharpness  # a corner given twice: the last, as OpenSubdiv
+        copies = np.flatnonzero(~np.isnan(sharpness[vertex_map]))
+        out["corners"] = (copies.astype(np.int32), sharpness[vertex_map[copies]])
+    if "holes" in kinds:
+        out["holes"] = np.flatnonzero(np.isin(face_map, tags.holes)).astype(np.int32)
+    return out
 
 
 def _unchanged(vertices, faces, n_faces) -> RepairResult:

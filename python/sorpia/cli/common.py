@@ -107,7 +107,7 @@ def read_input(path, triangulate: bool = False, repair: bool = False, tags: bool
     """Read the input mesh of every subcommand: polygons kept (or split with
     `triangulate`), the OBJ file's sharpness tags read unless `tags` is
     False (--ignore-tags), the mesh repaired with `repair` (repair_input),
-    which takes no tags."""
+    its tags carried onto the repaired mesh."""
     from ..io import read_mesh_file
 
     if not Path(path).exists():
@@ -120,13 +120,11 @@ def read_input(path, triangulate: bool = False, repair: bool = False, tags: bool
     vertices, faces, file_tags = contents.vertices, contents.faces, contents.tags or {}
     if not repair:
         return InputMesh(vertices, faces, seconds, contents.polygons_split, tags=file_tags)
-    if any(k in file_tags for k in ("creases", "corners", "holes")):
-        raise UserError(f"{path}: --repair renumbers vertices and faces, which the file's sharpness tags refer to; "
-                        "pass --ignore-tags to repair the mesh without them")
     t0 = time.perf_counter()
-    result = repair_input(vertices, faces, path)
+    sharpness = {k: v for k, v in file_tags.items() if k in ("creases", "corners", "holes")}
+    result = repair_input(vertices, faces, path, sharpness)
     return InputMesh(result.vertices, result.faces, seconds, contents.polygons_split, result,
-                     time.perf_counter() - t0, file_tags)
+                     time.perf_counter() - t0, {**file_tags, **result.tags})
 
 
 def is_triangles(faces) -> bool:
@@ -258,13 +256,14 @@ def scheme_kwargs(scheme: str, tags: dict) -> dict:
     return {"scheme": scheme, **tags}
 
 
-def repair_input(vertices, faces, source):
-    """sorpia.repair of a command's input; a mesh it refuses (a Moebius strip)
-    is a UserError naming the file `source`."""
+def repair_input(vertices, faces, source, tags=None):
+    """sorpia.repair of a command's input, with its sharpness `tags` (a dict
+    of creases, corners, holes); a mesh it refuses (a Moebius strip) is a
+    UserError naming the file `source`."""
     from .. import MeshError, repair
 
     try:
-        return repair(vertices, faces)
+        return repair(vertices, faces, **(tags or {}))
     except MeshError as exc:
         raise UserError(f"{source}: cannot repair this mesh: {exc}") from None
 

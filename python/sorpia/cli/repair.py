@@ -18,8 +18,14 @@ def run_repair(input_path, output, *, report=None, triangulate=False, quiet=Fals
     out = out if out is not None else sys.stdout
     check_mesh_suffix("-o", output)
     check_paths([input_path], {"-o": output, "--report": report}, force)
+    from .._validate import DEFAULT_BOUNDARY
+    from .fit import _tags_to_write
+
     mesh = read_input(input_path, triangulate, repair=True)
-    write_mesh(output, mesh.vertices, mesh.faces)
+    # the file's tags, carried onto the repaired mesh, written with it (OBJ)
+    sharpness = {k: v for k, v in mesh.tags.items() if k in ("creases", "corners", "holes")}
+    write_mesh(output, mesh.vertices, mesh.faces,
+               **_tags_to_write(output, sharpness, mesh.tags.get("boundary", DEFAULT_BOUNDARY), mesh))
     n_faces = len(face_counts(mesh.faces))
     data = {"sorpia_version": __version__, "command": "repair", "input": str(input_path),
             "triangulated": triangulate, "output": str(output), "vertices": len(mesh.vertices),
