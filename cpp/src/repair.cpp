@@ -263,6 +263,51 @@ std::vector<std::int32_t> join_edges(const Faces<kPolygons>& fl, std::size_t n_v
   return mate;
 }
 
+// Rule 4: the output vertex of each corner of the faces not removed (-1 for
+// the others): one per fan, the corners of one vertex joined across joined
+// edges. `vertex_map` holds the input vertices on entry; the copies are
+// appended, and counted per input vertex in `copies`. Sets `misoriented` when
+// some joined faces run their edge the same way.
+template <bool kPolygons>
+std::vector<std::int32_t> fan_vertices(const Faces<kPolygons>& fl, const std::vector<std::int32_t>& mate,
+                                       const std::vector<std::uint8_t>& removed, std::vector<std::int32_t>& vertex_map,
+                                       std::vector<std::int32_t>& copies, bool& misoriented) {
+  const std::int32_t* faces = fl.idx;
+  const std::size_t n_half = fl.n_corners();
+  Corners fans(n_half);
+  for (std::size_t h = 0; h < n_half; ++h) {
+    const std::int32_t g = mate[h];
+    if (g < static_cast<std::int32_t>(h)) continue;  // unjoined, or joined from g already
+    const auto hn = static_cast<std::int32_t>(fl.next(h)), gn = static_cast<std::int32_t>(fl.next(g));
+    const bool same_way = faces[g] == faces[h];
+    misoriented |= same_way;
+    fans.unite(static_cast<std::int32_t>(h), same_way ? g : gn);
+    fans.unite(hn, same_way ? gn : g);
+  }
+  // A fan's root is its lowest corner, so in corner order the root's vertex
+  // is known before the fan's other corners.
+  std::vector<std::int32_t> vertex_of(n_half, -1);
+  std::vector<std::uint8_t> taken(copies.size(), 0);
+  for (std::size_t h = 0; h < n_half; ++h) {
+    if (removed[fl.face_of(h)]) continue;
+    const std::int32_t root = fans.find(static_cast<std::int32_t>(h));
+    if (root != static_cast<std::int32_t>(h)) {
+      vertex_of[h] = vertex_of[root];
+      continue;
+    }
+    const std::int32_t v = faces[h];
+    if (!taken[v]) {
+      taken[v] = 1;
+      vertex_of[h] = v;
+    } else {
+      vertex_of[h] = static_cast<std::int32_t>(vertex_map.size());
+      vertex_map.push_back(v);
+      ++copies[v];
+    }
+  }
+  return vertex_of;
+}
+
 // One pass of the rules in repair.hpp over valid indices; without
 // `pair_sheets`, every face of an edge of three or more borders it alone.
 // The output faces are polygons (with face_counts) unless `input` is triangles.
@@ -278,42 +323,11 @@ RepairResult repair_pass(const FaceList& input, std::size_t n_vertices, bool pai
   std::vector<std::uint8_t> sheet_end(n_vertices, 0);
   const std::vector<std::int32_t> mate = join_edges(fl, n_vertices, pair_sheets, removed, rep, sheet_end);
 
-  // Fans: corners of one vertex joined across its joined edges.
-  Corners fans(n_half);
-  bool misoriented = false;  // some joined faces run their edge the same way
-  for (std::size_t h = 0; h < n_half; ++h) {
-    const std::int32_t g = mate[h];
-    if (g < static_cast<std::int32_t>(h)) continue;  // unjoined, or joined from g already
-    const auto hn = static_cast<std::int32_t>(fl.next(h)), gn = static_cast<std::int32_t>(fl.next(g));
-    const bool same_way = faces[g] == faces[h];
-    misoriented |= same_way;
-    fans.unite(static_cast<std::int32_t>(h), same_way ? g : gn);
-    fans.unite(hn, same_way ? gn : g);
-  }
-  // The output vertex of each corner. A fan's root is its lowest corner, so
-  // in corner order the root's vertex is known before the fan's other corners.
-  std::vector<std::int32_t> vertex_of(n_half, -1);
-  std::vector<std::uint8_t> taken(n_vertices, 0);
+  bool misoriented = false;
   std::vector<std::int32_t> copies(n_vertices, 0);
   r.vertex_map.resize(n_vertices);
   std::iota(r.vertex_map.begin(), r.vertex_map.end(), 0);
-  for (std::size_t h = 0; h < n_half; ++h) {
-    if (removed[fl.face_of(h)]) continue;
-    const std::int32_t root = fans.find(static_cast<std::int32_t>(h));
-    if (root != static_cast<std::int32_t>(h)) {
-      vertex_of[h] = vertex_of[root];
-      continue;
-    }
-    const std::int32_t v = faces[h];
-    if (!taken[v]) {
-      taken[v] = 1;
-      vertex_of[h] = v;
-    } else {
-      vertex_of[h] = static_cast<std::int32_t>(r.vertex_map.size());
-      r.vertex_map.push_back(v);
-      ++copies[v];
-    }
-  }
+  const std::vector<std::int32_t> vertex_of = fan_vertices(fl, mate, removed, r.vertex_map, copies, misoriented);
   for (std::size_t v = 0; v < n_vertices; ++v)
     if (copies[v]) {
       (sheet_end[v] ? rep.sheet_vertices : rep.bowtie_vertices).push_back(static_cast<std::int32_t>(v));
@@ -440,19 +454,21 @@ void validate(const std::int32_t* counts, const FaceList& fl, std::size_t n_vert
     static_cast<void>(Topology(fl.idx, fl.n_faces, n_vertices));
 }
 
+// The index checks repair does not change, by the validation's message.
+void check_indices(const std::int32_t* counts, const FaceList& fl, std::size_t n_vertices) {
+  const bool ok = fl.n_faces > 0 && n_vertices <= static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max()) &&
+                  std::all_of(fl.idx, fl.idx + fl.n_corners(), [&](std::int32_t v) {
+                    return v >= 0 && static_cast<std::size_t>(v) < n_vertices;
+                  });
+  if (!ok) {
+    validate(counts, fl, n_vertices);
+    throw std::logic_error("sorpia::split_nonmanifold: the validation accepted faces with an index out of range");
+  }
+}
+
 // repair() of faces sorpia::Topology refuses.
 RepairResult repair_faces(const std::int32_t* counts, const FaceList& fl, std::size_t n_vertices) {
-  // What repair does not change: refused with the validation's message.
-  const bool repairable = fl.n_faces > 0 &&
-                          n_vertices <= static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max()) &&
-                          std::all_of(fl.idx, fl.idx + fl.n_corners(), [&](std::int32_t v) {
-                            return v >= 0 && static_cast<std::size_t>(v) < n_vertices;
-                          });
-  if (!repairable) {
-    validate(counts, fl, n_vertices);
-    throw std::logic_error("sorpia::repair: the validation accepted faces with an index out of range");
-  }
-
+  check_indices(counts, fl, n_vertices);  // what repair does not change: refused as the validation refuses it
   auto pass = [&](const FaceList& faces, std::size_t n, bool pair_sheets) {
     return counts ? repair_pass<true>(faces, n, pair_sheets) : repair_pass<false>(faces, n, pair_sheets);
   };
@@ -499,6 +515,143 @@ RepairResult repair(const std::int32_t* face_vertex_counts, std::size_t n_faces,
   if (faces_valid(face_vertex_counts, n_faces, face_vertex_indices, n_vertices)) return {};
   const FaceArrays arrays = FaceArrays::polygons(face_vertex_counts, n_faces);
   return repair_faces(face_vertex_counts, arrays.over(face_vertex_indices), n_vertices);
+}
+
+namespace {
+
+// split_nonmanifold (repair.hpp) over valid indices.
+template <bool kPolygons>
+NonmanifoldSplit split_pass(const Faces<kPolygons>& fl, std::size_t n_vertices) {
+  NonmanifoldSplit s;
+  const std::int32_t* faces = fl.idx;
+  const std::size_t n_half = fl.n_corners();
+  std::vector<std::int32_t> stamp(n_vertices, -1), n_faces_at(n_vertices, 0);
+  for (std::size_t f = 0; f < fl.n_faces; ++f)
+    for (std::int32_t h = fl.begin(f); h < fl.end(f); ++h) {
+      if (stamp[faces[h]] == static_cast<std::int32_t>(f))
+        throw MeshError(fl.str(f) + " repeats vertex " + std::to_string(faces[h]) +
+                        ": nonmanifold=\"sharp\" keeps every face as it is, and a face cannot repeat a vertex "
+                        "(OpenSubdiv makes a degenerate edge of it); sorpia.repair (--repair) drops the repeat");
+      stamp[faces[h]] = static_cast<std::int32_t>(f);
+      ++n_faces_at[faces[h]];
+    }
+  // The half-edges by lower end, then by higher end: the faces of each edge together.
+  auto lo = [&](std::size_t h) { return std::min(faces[h], faces[fl.next(h)]); };
+  auto hi = [&](std::int32_t h) { return std::max(faces[h], faces[fl.next(h)]); };
+  std::vector<std::int32_t> bucket(n_vertices + 1, 0), by_lo(n_half);
+  for (std::size_t h = 0; h < n_half; ++h) ++bucket[lo(h) + 1];
+  for (std::size_t v = 0; v < n_vertices; ++v) bucket[v + 1] += bucket[v];
+  {
+    std::vector<std::int32_t> fill(bucket.begin(), bucket.end() - 1);
+    for (std::size_t h = 0; h < n_half; ++h) by_lo[fill[lo(h)]++] = static_cast<std::int32_t>(h);
+  }
+  std::vector<std::int32_t> mate(n_half, -1), n_edges(n_vertices, 0), n_boundary(n_vertices, 0),
+      n_nonmanifold(n_vertices, 0);
+  std::vector<std::array<std::int32_t, 2>> nonmanifold_ends(n_vertices, {-1, -1});  // the first two
+  auto nonmanifold_end = [&](std::int32_t v, std::int32_t x) {
+    if (n_nonmanifold[v] < 2) nonmanifold_ends[v][n_nonmanifold[v]] = x;
+    ++n_nonmanifold[v];
+  };
+  for (std::size_t vi = 0; vi < n_vertices; ++vi) {
+    const auto v = static_cast<std::int32_t>(vi);
+    std::int32_t* b = by_lo.data() + bucket[v];
+    const std::int32_t k = bucket[v + 1] - bucket[v];
+    std::sort(b, b + k, [&](std::int32_t g, std::int32_t h) { return std::make_pair(hi(g), g) < std::make_pair(hi(h), h); });
+    for (std::int32_t i = 0, j; i < k; i = j) {
+      const std::int32_t x = hi(b[i]);
+      for (j = i + 1; j < k && hi(b[j]) == x; ++j) {
+      }
+      ++n_edges[v];
+      ++n_edges[x];
+      if (j - i == 1) {
+        ++n_boundary[v];
+        ++n_boundary[x];
+      } else if (j - i == 2 && faces[b[i]] != faces[b[i + 1]]) {
+        mate[b[i]] = b[i + 1];
+        mate[b[i + 1]] = b[i];
+      } else {
+        s.nonmanifold_edges.push_back({v, x});
+        nonmanifold_end(v, x);
+        nonmanifold_end(x, v);
+      }
+    }
+  }
+  const std::vector<std::uint8_t> removed(fl.n_faces, 0);
+  std::vector<std::int32_t> copies(n_vertices, 0);
+  s.vertex_map.resize(n_vertices);
+  std::iota(s.vertex_map.begin(), s.vertex_map.end(), 0);
+  bool misoriented = false;  // stays false: only edges run both ways are joined
+  const std::vector<std::int32_t> vertex_of = fan_vertices(fl, mate, removed, s.vertex_map, copies, misoriented);
+
+  std::vector<std::uint8_t> crease(n_vertices, 0);
+  for (std::size_t vi = 0; vi < n_vertices; ++vi) {
+    if (n_nonmanifold[vi] == 0 && copies[vi] == 0) continue;
+    const auto v = static_cast<std::int32_t>(vi);
+    s.nonmanifold_vertices.push_back(v);
+    crease[v] = n_nonmanifold[v] == 2 && n_boundary[v] == 0 && n_faces_at[v] > n_edges[v];
+    if (!crease[v]) s.corners.push_back(v);
+  }
+  // Each fan of a crease vertex must lie between copies of its two
+  // non-manifold edges (the boundary rule of the split is then its crease
+  // rule): per output vertex, its faces and the far ends of its open edges.
+  const std::size_t n_out = s.vertex_map.size();
+  std::vector<std::int32_t> fan_faces(n_out, 0), n_open(n_out, 0);
+  std::vector<std::array<std::int32_t, 2>> open_ends(n_out, {-1, -1});
+  auto open_end = [&](std::int32_t o, std::int32_t x) {
+    if (n_open[o] < 2) open_ends[o][n_open[o]] = x;
+    ++n_open[o];
+  };
+  for (std::size_t h = 0; h < n_half; ++h) {
+    const std::int32_t v = faces[h];
+    if (!crease[v]) continue;
+    const std::int32_t o = vertex_of[h];
+    ++fan_faces[o];
+    if (mate[h] < 0) open_end(o, faces[fl.next(h)]);
+    if (mate[fl.prev(h)] < 0) open_end(o, faces[fl.prev(h)]);
+  }
+  for (std::size_t o = 0; o < n_out; ++o) {
+    const std::int32_t v = s.vertex_map[o];
+    if (!crease[v]) continue;
+    auto ends = open_ends[o], want = nonmanifold_ends[v];
+    std::sort(ends.begin(), ends.end());
+    std::sort(want.begin(), want.end());
+    if (n_open[o] != 2 || ends != want || want[0] == want[1])
+      throw MeshError("vertex " + std::to_string(v) + " is on an interior non-manifold crease (edges (" +
+                      std::to_string(v) + ", " + std::to_string(want[0]) + ") and (" + std::to_string(v) + ", " +
+                      std::to_string(want[1]) + "), where OpenSubdiv gives it the crease rule), but one of its fans "
+                      "of faces does not lie between those two edges: nonmanifold=\"sharp\" cannot reproduce "
+                      "OpenSubdiv's rule there; sorpia.repair (--repair) makes the mesh manifold");
+    if (fan_faces[o] == 1 &&
+        (s.single_face_sheets.empty() || s.single_face_sheets.back() != v))
+      s.single_face_sheets.push_back(v);
+  }
+  std::sort(s.single_face_sheets.begin(), s.single_face_sheets.end());
+  s.single_face_sheets.erase(std::unique(s.single_face_sheets.begin(), s.single_face_sheets.end()),
+                             s.single_face_sheets.end());
+  if (s.empty()) return {};
+  s.faces.reserve(n_half);
+  for (std::size_t f = 0; f < fl.n_faces; ++f) {
+    for (std::int32_t h = fl.begin(f); h < fl.end(f); ++h) s.faces.push_back(vertex_of[h]);
+    if (kPolygons) s.face_counts.push_back(fl.end(f) - fl.begin(f));
+  }
+  return s;
+}
+
+}  // namespace
+
+NonmanifoldSplit split_nonmanifold(const std::int32_t* faces, std::size_t n_faces, std::size_t n_vertices) {
+  if (faces_valid(faces, n_faces, n_vertices)) return {};
+  const FaceArrays arrays = FaceArrays::triangles(n_faces);
+  check_indices(nullptr, arrays.over(faces), n_vertices);
+  return split_pass(Faces<false>{arrays.over(faces)}, n_vertices);
+}
+
+NonmanifoldSplit split_nonmanifold(const std::int32_t* face_vertex_counts, std::size_t n_faces,
+                                   const std::int32_t* face_vertex_indices, std::size_t n_vertices) {
+  if (faces_valid(face_vertex_counts, n_faces, face_vertex_indices, n_vertices)) return {};
+  const FaceArrays arrays = FaceArrays::polygons(face_vertex_counts, n_faces);
+  check_indices(face_vertex_counts, arrays.over(face_vertex_indices), n_vertices);
+  return split_pass(Faces<true>{arrays.over(face_vertex_indices)}, n_vertices);
 }
 
 }  // namespace sorpia

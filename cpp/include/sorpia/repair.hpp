@@ -101,4 +101,54 @@ RepairResult repair(const std::int32_t* faces, std::size_t n_faces, std::size_t 
 RepairResult repair(const std::int32_t* face_vertex_counts, std::size_t n_faces, const std::int32_t* face_vertex_indices,
                     std::size_t n_vertices);
 
+/// For nonmanifold="sharp": the mesh kept as it is, but cut apart where
+/// OpenSubdiv sees non-manifold topology, so that OpenSubdiv's own rules for
+/// it become tags of a manifold mesh. OpenSubdiv (Far's
+/// TopologyRefinerFactory, Vtr::Level) makes an edge non-manifold when three
+/// or more faces use it or its two faces run it the same way, and makes it
+/// infinitely sharp; a vertex is non-manifold on such an edge or where its
+/// faces form several fans, and becomes an infinitely sharp corner, except on
+/// an interior non-manifold crease (exactly two non-manifold edges, no
+/// boundary edge, more faces than edges), where the two edges make it a
+/// crease vertex.
+///
+/// The split joins only the two faces of an edge that run it opposite ways;
+/// every other edge borders each of its faces alone, so that a non-manifold
+/// edge becomes one boundary edge (infinitely sharp, as OpenSubdiv makes it)
+/// per face, and each vertex gets one output vertex per fan (the first fan in
+/// face order keeps the input index, copies are appended). Faces are neither
+/// removed nor reversed. On the split mesh with an infinitely sharp corner
+/// tag on every copy of each vertex in `corners`, every vertex's limit row is
+/// OpenSubdiv's row on the input mesh, its columns mapped through vertex_map;
+/// a crease vertex's copies each lie on the boundary between the copies of
+/// its two non-manifold edges, whose boundary rule is the crease rule, except
+/// a copy in a fan of one face (`single_face_sheets`), which the
+/// edge-and-corner boundary rule makes a corner.
+struct NonmanifoldSplit {
+  std::vector<std::int32_t> faces;        ///< the vertices of every face, renumbered, face after face
+  std::vector<std::int32_t> face_counts;  ///< polygons: the vertex count of each face; empty for triangles
+  std::vector<std::int32_t> vertex_map;   ///< for every output vertex, the input vertex it copies
+  /// The non-manifold edges (lower, higher input vertex), OpenSubdiv's infinitely sharp ones.
+  std::vector<std::array<std::int32_t, 2>> nonmanifold_edges;
+  /// The non-manifold input vertices, and those of them that are corners.
+  std::vector<std::int32_t> nonmanifold_vertices, corners;
+  /// Crease vertices with a copy in a fan of one face.
+  std::vector<std::int32_t> single_face_sheets;
+
+  /// True for a manifold mesh (then faces and vertex_map are empty: the input is the split).
+  bool empty() const { return nonmanifold_vertices.empty(); }
+};
+
+/// The split of `faces` (row-major (n_faces, 3)) described at NonmanifoldSplit.
+/// @throw MeshError  a face that repeats a vertex (OpenSubdiv would give it a
+///                   degenerate edge, which no sorpia mesh has); a crease
+///                   vertex some fan of which is not bounded by its two
+///                   non-manifold edges (the split would not reproduce its
+///                   crease rule); a problem of the indices, as Topology says it
+NonmanifoldSplit split_nonmanifold(const std::int32_t* faces, std::size_t n_faces, std::size_t n_vertices);
+
+/// The same for polygons (counts + indices, as Topology takes them).
+NonmanifoldSplit split_nonmanifold(const std::int32_t* face_vertex_counts, std::size_t n_faces,
+                                   const std::int32_t* face_vertex_indices, std::size_t n_vertices);
+
 }  // namespace sorpia
