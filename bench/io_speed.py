@@ -14,7 +14,14 @@ sorpia.shapes.irregular(--surface-vertices) (default 100k).
 Prints Markdown tables and writes them into docs/benchmarks/io-speed.md
 (unless --no-page); --json writes the figures.
 
+Reads side by side (--baseline DIR): the same files read by this sorpia and
+by another build of it (DIR holds an installed ``sorpia`` package, e.g. a copy
+of site-packages/sorpia taken before a change), each read in a fresh process,
+the two alternated --repeat times, medians and their ratio; written into
+docs/benchmarks/io-read-compare.md.
+
     python bench/io_speed.py [--vertices 1000000] [--surface-vertices 100000] [--repeat 3] [--json out.json]
+    python bench/io_speed.py --baseline /tmp/sorpia-before [--vertices 1000000] [--repeat 7]
 """
 
 from __future__ import annotations
@@ -24,6 +31,7 @@ import json
 import os
 import resource
 import statistics
+import subprocess
 import tempfile
 import sys
 import time
@@ -119,6 +127,54 @@ def bench_surface(n_vertices, max_level, repeat):
     return out
 
 
+# One timed read in a child process: the sorpia found first on sys.path (PYTHONPATH chooses the build).
+_READ_CHILD = """
+import sys, time
+import sorpia
+t0 = time.perf_counter()
+v, f = sorpia.read_mesh(sys.argv[1])
+print(time.perf_counter() - t0, len(v), len(f))
+"""
+
+
+def _read_in_child(path, package_dir):
+    env = dict(os.environ)
+    if package_dir:
+        env["PYTHONPATH"] = package_dir + os.pathsep + env.get("PYTHONPATH", "")
+    out = subprocess.run([sys.executable, "-c", _READ_CHILD, path], env=env, capture_output=True, text=True,
+                         check=True).stdout.split()
+    return float(out[0]), int(out[1]), int(out[2])
+
+
+def compare_reads(args, lines):
+    """Read time of this build against --baseline, alternated in fresh processes; table onto lines."""
+    v, f = sorpia.shapes.irregular(args.vertices)
+    base = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "build")
+    os.makedirs(base, exist_ok=True)
+    rows = []
+    with tempfile.TemporaryDirectory(dir=args.dir or base) as folder:
+        for ext, binary in (("ply", True), ("ply", False), ("obj", False), ("off", False)):
+            path = os.path.join(folder, f"bench.{ext}")
+            sorpia.write_mesh(path, v, f, binary=binary)
+            _read_in_child(path, None)  # the page cache warm for both
+            times = {"baseline": [], "this": []}
+            for _ in range(args.repeat):
+                for who, package in (("baseline", args.baseline), ("this", None)):
+                    t, nv, nf = _read_in_child(path, package)
+                    assert (nv, nf) == (len(v), len(f))
+                    times[who].append(t)
+            b, t = statistics.median(times["baseline"]), statistics.median(times["this"])
+            rows.append({"format": ext, "binary": binary, "baseline_s": b, "this_s": t, "ratio": t / b,
+                         "all_baseline_s": times["baseline"], "all_this_s": times["this"]})
+    lines += [f"## Reads side by side: irregular mesh, {len(v):,} vertices, {len(f):,} triangles",
+              "", f"Each read in a fresh process, baseline and this build alternated, median of {args.repeat}.", "",
+              "| format | baseline read s | this read s | this / baseline |", "|---|---:|---:|---:|"]
+    for r in rows:
+        lines.append(f"| {r['format']} {'binary' if r['binary'] else 'ascii'} | {r['baseline_s']:.3f} "
+                     f"| {r['this_s']:.3f} | {r['ratio']:.3f} |")
+    return rows
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--vertices", type=int, default=1_000_000)
@@ -129,7 +185,21 @@ def main():
     ap.add_argument("--only", choices=["files", "surface"], default=None)
     ap.add_argument("--json", default=None)
     ap.add_argument("--no-page", action="store_true", help="print only; do not write docs/benchmarks/io-speed.md")
+    ap.add_argument("--baseline", default=None, metavar="DIR",
+                    help="only compare read times with the sorpia package in DIR (see above)")
     args = ap.parse_args()
+
+    if args.baseline:
+        lines = []
+        rows = compare_reads(args, lines)
+        print("\n".join(lines))
+        if not args.no_page:
+            write_page("io-read-compare", "Mesh file reads against a baseline build", "\n".join(lines),
+                       settings=(ap, args))
+        if args.json:
+            with open(args.json, "w") as fh:
+                json.dump(rows, fh, indent=2)
+        return
 
     result, lines = {}, []
     if args.only != "surface":

@@ -14,6 +14,7 @@
 #include <fstream>
 #include <functional>
 #include <iostream>
+#include <random>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -24,6 +25,7 @@
 #include "sorpia/io.hpp"
 #include "sorpia/limit.hpp"
 #include "sorpia/limit_masks.hpp"
+#include "sorpia/limit_operator.hpp"
 #include "sorpia/shapes.hpp"
 #include "sorpia/solvers.hpp"
 #include "sorpia/topology.hpp"
@@ -54,6 +56,12 @@ options:
                      opensubdiv (B from Far::PrimvarRefiner::Limit, the reference)
   --topology HOW     direct (default) or openmesh (the reference build)
   --triangulate      split polygons of mesh files into triangles
+  --tags             use the OpenSubdiv tags (t lines) of OBJ files: creases,
+                     corners, holes (their interpolateboundary is left to
+                     --boundary)
+  --creases S[:X]    tag every edge with probability S in [0, 1] (a fixed
+                     random draw) as a crease of sharpness X (default inf;
+                     added to the file's tags)
   --write DIR        write the control vertices to DIR/<mesh>.<method>.ply
                      (binary PLY; --format obj|off|ply-ascii for text)
   --repeat N         run everything N times, report medians (default 1)
@@ -84,6 +92,8 @@ struct Options {
   bool opensubdiv_operator = false;
   sorpia::TopologyBuild topology = sorpia::TopologyBuild::Direct;
   bool triangulate = false;
+  bool file_tags = false;
+  double crease_share = 0.0, crease_sharpness = sorpia::kInfiniteSharpness;
   std::string write_dir, format = "ply";
   int repeat = 1;
   bool json = false;
@@ -169,6 +179,16 @@ Options parse(int argc, char** argv) {
       const std::string v = value();
       if (v != "direct" && v != "openmesh") throw Usage("--topology: direct or openmesh");
       o.topology = v == "openmesh" ? sorpia::TopologyBuild::OpenMesh : sorpia::TopologyBuild::Direct;
+    } else if (a == "--tags") {
+      o.file_tags = true;
+    } else if (a == "--creases") {
+      const auto parts = split(value(), ':');
+      if (parts.empty() || parts.size() > 2) throw Usage("--creases: SHARE or SHARE:SHARPNESS");
+      o.crease_share = to_double("--creases", parts[0]);
+      if (!(o.crease_share >= 0.0 && o.crease_share <= 1.0)) throw Usage("--creases: SHARE must be in [0, 1]");
+      if (parts.size() == 2)
+        o.crease_sharpness = parts[1] == "inf" ? sorpia::kInfiniteSharpness : to_double("--creases", parts[1]);
+      if (!(o.crease_sharpness >= 0.0)) throw Usage("--creases: SHARPNESS must be >= 0 or inf");
     } else if (a == "--triangulate") {
       o.triangulate = true;
     } else if (a == "--write") {
@@ -206,11 +226,13 @@ std::vector<int> spec_numbers(const std::string& spec, char sep, std::size_t lo,
 
 sorpia::TriMesh generate(const std::string& spec);
 
-sorpia::TriMesh load(const std::string& spec, bool triangulate) {
+sorpia::TriMesh load(const std::string& spec, bool triangulate, bool file_tags, sorpia::Tags& tags) {
+  tags = sorpia::Tags{};
   if (!is_generated(spec)) {
-    sorpia::MeshFile file = sorpia::read_mesh(spec, sorpia::ReadOptions{triangulate, false});
+    sorpia::MeshFile file = sorpia::read_mesh(spec, sorpia::ReadOptions{triangulate, file_tags});
     if (!file.all_triangles())
       throw Usage("mesh '" + spec + "' has faces of more than 3 vertices: pass --triangulate to split them");
+    tags = std::move(file.tags.tags);
     return sorpia::TriMesh{std::move(file.vertices), std::move(file.faces)};
   }
   try {
@@ -233,6 +255,23 @@ sorpia::TriMesh generate(const std::string& spec) {
     return sorpia::irregular(n[0], n.size() > 1 ? static_cast<std::uint32_t>(n[1]) : 1u);
   }
   throw Usage("unknown generated mesh '" + kind + "' (icosphere, torus, irregular, grid, pole)");
+}
+
+// Each edge of the mesh, with probability `share` (a fixed draw), appended to
+// `tags` as a crease of the given sharpness.
+void add_random_creases(const sorpia::Topology& topology, double share, double sharpness, sorpia::Tags& tags) {
+  if (share <= 0.0) return;
+  std::mt19937_64 rng(1);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const auto& offsets = topology.ring_offsets();
+  const auto& ring = topology.ring_neighbors();
+  for (std::size_t v = 0; v < topology.n_vertices(); ++v)
+    for (std::int32_t p = offsets[v]; p < offsets[v + 1]; ++p)
+      if (static_cast<std::size_t>(ring[p]) > v && u(rng) < share) {
+        tags.crease_vertices.push_back(static_cast<std::int32_t>(v));
+        tags.crease_vertices.push_back(ring[p]);
+        tags.crease_sharpness.push_back(sharpness);
+      }
 }
 
 std::string label_of(const std::string& spec) {
@@ -313,7 +352,7 @@ struct MethodRun {
 
 struct MeshRun {
   std::string label;
-  std::size_t n_vertices = 0, n_faces = 0;
+  std::size_t n_vertices = 0, n_faces = 0, n_creases = 0;
   std::vector<double> read, topology, op;
   std::vector<MethodRun> methods;
   double floor = NAN;
@@ -335,7 +374,8 @@ MeshRun run_mesh(const Options& o, const std::string& spec) {
     if (m != "none") run.methods.push_back(MethodRun{m, {}, {}, {}, 0, NAN, NAN, ""});
   for (int rep = 0; rep < o.repeat; ++rep) {
     auto t0 = Clock::now();
-    sorpia::TriMesh mesh = load(spec, o.triangulate);
+    sorpia::Tags tags;
+    sorpia::TriMesh mesh = load(spec, o.triangulate, o.file_tags, tags);
     run.read.push_back(seconds_since(t0));
     run.n_vertices = mesh.n_vertices();
     run.n_faces = mesh.n_faces();
@@ -346,9 +386,15 @@ MeshRun run_mesh(const Options& o, const std::string& spec) {
     const sorpia::Topology topology(mesh.faces.data(), mesh.n_faces(), mesh.n_vertices(), o.topology);
     run.topology.push_back(seconds_since(t0));
 
+    add_random_creases(topology, o.crease_share, o.crease_sharpness, tags);
+    run.n_creases = tags.n_creases();
     t0 = Clock::now();
-    const sorpia::LimitOperator op = o.opensubdiv_operator ? sorpia::limit_operator(sorpia::reference_limit_matrix(topology, o.boundary))
-                                                           : sorpia::limit_operator(topology, o.boundary);
+    const sorpia::LimitOperator op =
+        o.opensubdiv_operator
+            ? sorpia::limit_operator(tags.empty() ? sorpia::reference_limit_matrix(topology, o.boundary)
+                                                  : sorpia::reference_limit_matrix(topology, sorpia::Scheme::Loop,
+                                                                                   o.boundary, tags))
+            : sorpia::limit_operator(topology, o.boundary, tags);
     run.op.push_back(seconds_since(t0));
 
     for (auto& mr : run.methods) {
@@ -437,10 +483,10 @@ void print_json(const Options& o, const std::vector<MeshRun>& runs) {
   std::printf("  \"meshes\": [");
   for (std::size_t k = 0; k < runs.size(); ++k) {
     const MeshRun& r = runs[k];
-    std::printf("%s\n    {\"mesh\": %s, \"n_vertices\": %zu, \"n_faces\": %zu, \"read\": %s, \"topology\": %s, "
+    std::printf("%s\n    {\"mesh\": %s, \"n_vertices\": %zu, \"n_faces\": %zu, \"n_creases\": %zu, \"read\": %s, \"topology\": %s, "
                 "\"operator\": %s, \"floor\": %s, \"peak_rss_bytes\": %ld, \"input_rss_bytes\": %ld, "
                 "\"bytes_per_vertex\": %s, \"methods\": [",
-                k ? "," : "", json_str(r.label).c_str(), r.n_vertices, r.n_faces, num(median(r.read)).c_str(),
+                k ? "," : "", json_str(r.label).c_str(), r.n_vertices, r.n_faces, r.n_creases, num(median(r.read)).c_str(),
                 num(median(r.topology)).c_str(), num(median(r.op)).c_str(), num(r.floor).c_str(), 1024 * r.peak_kb,
                 1024 * r.input_kb, num(bytes_per_vertex(r)).c_str());
     for (std::size_t j = 0; j < r.methods.size(); ++j) {

@@ -75,27 +75,29 @@ def test_fit_not_converged_exits_1_and_still_writes(torus_file, tmp_path, comman
     np.testing.assert_allclose(Vc, V, rtol=0, atol=1e-12)
 
 
-def test_polygons_are_refused_unless_triangulate(tmp_path, monkeypatch, command):
+def test_polygons_are_refused_by_loop_unless_triangulate(tmp_path, monkeypatch, command):
     monkeypatch.chdir(tmp_path)
     # Two quads of a strip, by hand: OBJ faces of 4 vertices.
     V = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [2, 0, 0.5], [2, 1, 0.5]], dtype=float)
     src = tmp_path / "quads.obj"
     src.write_text("".join(f"v {x!r} {y!r} {z!r}\n" for x, y, z in V.tolist()) + "f 1 2 3 4\nf 2 5 6 3\n")
-    code, _, err = command("fit", src, "-o", tmp_path / "c.ply")
+    code, _, err = command("fit", src, "-o", tmp_path / "c.ply", "--scheme", "loop")
     assert_user_error(code, err)
-    assert "--triangulate" in err
+    assert "face 0 has 4 vertices and Loop subdivision needs triangles" in err
+    assert "--triangulate" in err and "--scheme catmull-clark" in err
     code, stdout, err = command("info", src, "--json")
     assert code == 0, err
     described = json.loads(stdout)
     verdict = described["loop_pia"]
     assert verdict["can_run"] is False and "--triangulate" in verdict["reason"]
+    assert described["scheme"] == "catmull-clark" and described["face_sizes"] == {"4": 2}
     # With --triangulate the same fan triangulation is described (one read
     # either way), and nothing stands in the way of a fit.
     code, stdout, err = command("info", src, "--json", "--triangulate")
     assert code == 0, err
     described_t = json.loads(stdout)
     assert described["triangulated"] is True and described_t["triangulated"] is True
-    assert described_t["loop_pia"]["can_run"] is True
+    assert described_t["loop_pia"]["can_run"] is True and described_t["scheme"] == "loop"
     for key in ("vertices", "faces", "edges"):
         assert described[key] == described_t[key], key
 

@@ -99,19 +99,19 @@ void bind_limit(py::module_& m) {
 
   m.def(
       "limit_matrix",
-      [](const sorpia::Topology& topology, sorpia::Boundary b) {
+      [](const sorpia::Topology& topology, sorpia::Boundary b, const sorpia::Tags& tags) {
         sorpia::CsrMatrix mat;
         {
           py::gil_scoped_release release;
-          mat = sorpia::limit_matrix(topology, b);
+          mat = sorpia::limit_matrix(topology, b, tags);
         }
         return csr_tuple(std::move(mat));
       },
-      "topology"_a, "boundary"_a, "Limit matrix B as CSR arrays (data, indices, indptr).");
+      "topology"_a, "boundary"_a, "tags"_a = sorpia::Tags{}, "Limit matrix B as CSR arrays (data, indices, indptr).");
 
   m.def(
       "limit_points",
-      [](const sorpia::Topology& topology, const Vertices& vertices, sorpia::Boundary b) {
+      [](const sorpia::Topology& topology, const Vertices& vertices, sorpia::Boundary b, const sorpia::Tags& tags) {
         check_shape(vertices, 3, "vertices");
         check_rows(vertices, topology.n_vertices(), "vertices", "the topology");
         Vertices out({vertices.shape(0), py::ssize_t{3}});
@@ -119,11 +119,25 @@ void bind_limit(py::module_& m) {
         const double* src = vertices.data();
         {
           py::gil_scoped_release release;
-          sorpia::limit_points(topology, src, b, dst);
+          sorpia::limit_points(topology, src, b, tags, dst);
         }
         return out;
       },
-      "topology"_a, "vertices"_a.noconvert(), "boundary"_a, "Loop limit positions B V, (n, 3).");
+      "topology"_a, "vertices"_a.noconvert(), "boundary"_a, "tags"_a = sorpia::Tags{}, "Loop limit positions B V, (n, 3).");
+
+  m.def(
+      "reference_limit_matrix",
+      [](const sorpia::Topology& topology, sorpia::Scheme scheme, sorpia::Boundary b, const sorpia::Tags& tags) {
+        sorpia::CsrMatrix mat;
+        {
+          py::gil_scoped_release release;
+          mat = sorpia::reference_limit_matrix(topology, scheme, b, tags);
+        }
+        return csr_tuple(std::move(mat));
+      },
+      "topology"_a, "scheme"_a, "boundary"_a, "tags"_a,
+      "For tests: B from OpenSubdiv's refinement of the whole mesh until every semi-sharp tag has decayed and "
+      "Limit() on the last level (sorpia::reference_limit_matrix), as CSR arrays.");
 
   m.def("icosphere", [](int level) { return mesh_tuple(sorpia::icosphere(level)); }, "level"_a);
   m.def("torus", [](int nu, int nv) { return mesh_tuple(sorpia::torus(nu, nv)); }, "nu"_a, "nv"_a);

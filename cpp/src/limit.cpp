@@ -23,6 +23,22 @@ thread_local std::string osd_error;
 void record_osd_error(Far::ErrorType, const char* message) { osd_error = message ? message : ""; }
 }  // namespace
 
+std::unique_ptr<Far::TopologyRefiner> create_refiner(const Far::TopologyDescriptor& desc, Scheme scheme,
+                                                     Boundary boundary) {
+  using namespace OpenSubdiv;
+  Sdc::Options sdc;
+  sdc.SetVtxBoundaryInterpolation(boundary == Boundary::EdgeOnly ? Sdc::Options::VTX_BOUNDARY_EDGE_ONLY
+                                                                 : Sdc::Options::VTX_BOUNDARY_EDGE_AND_CORNER);
+  using Factory = Far::TopologyRefinerFactory<Far::TopologyDescriptor>;
+  Factory::Options options(scheme == Scheme::Loop ? Sdc::SCHEME_LOOP : Sdc::SCHEME_CATMARK, sdc);
+  osd_error.clear();
+  Far::SetErrorCallback(record_osd_error);
+  std::unique_ptr<Far::TopologyRefiner> refiner(Factory::Create(desc, options));
+  Far::SetErrorCallback(nullptr);
+  if (!refiner) throw MeshError("OpenSubdiv refused the mesh topology: " + osd_error);
+  return refiner;
+}
+
 Refiner make_refiner(const Topology& topology, Scheme scheme, Boundary boundary, const Tags& tags) {
   using namespace OpenSubdiv;
   Refiner out;
@@ -71,16 +87,7 @@ Refiner make_refiner(const Topology& topology, Scheme scheme, Boundary boundary,
   desc.numHoles = static_cast<int>(holes.size());
   desc.holeIndices = holes.data();
 
-  Sdc::Options sdc;
-  sdc.SetVtxBoundaryInterpolation(boundary == Boundary::EdgeOnly ? Sdc::Options::VTX_BOUNDARY_EDGE_ONLY
-                                                                 : Sdc::Options::VTX_BOUNDARY_EDGE_AND_CORNER);
-  using Factory = Far::TopologyRefinerFactory<Far::TopologyDescriptor>;
-  Factory::Options options(scheme == Scheme::Loop ? Sdc::SCHEME_LOOP : Sdc::SCHEME_CATMARK, sdc);
-  osd_error.clear();
-  Far::SetErrorCallback(record_osd_error);
-  out.refiner.reset(Factory::Create(desc, options));
-  Far::SetErrorCallback(nullptr);
-  if (!out.refiner) throw MeshError("OpenSubdiv refused the mesh topology: " + osd_error);
+  out.refiner = create_refiner(desc, scheme, boundary);
   return out;
 }
 
@@ -196,12 +203,17 @@ void reference_limit_points(const Topology& topology, const double* vertices, Bo
   detail::limit_positions(osd, points, vertices, topology.n_vertices(), out);
 }
 
-CsrMatrix limit_matrix(const Topology& topology, Boundary boundary) {
-  return to_csr(limit_operator(topology, boundary));
+CsrMatrix limit_matrix(const Topology& topology, Boundary boundary, const Tags& tags) {
+  return to_csr(limit_operator(topology, boundary, tags));
 }
 
 void limit_points(const Topology& topology, const double* vertices, Boundary boundary, double* out) {
   apply(limit_operator(topology, boundary), vertices, out);
+}
+
+void limit_points(const Topology& topology, const double* vertices, Boundary boundary, const Tags& tags,
+                  double* out) {
+  apply(limit_operator(topology, boundary, tags), vertices, out);
 }
 
 }  // namespace sorpia

@@ -6,12 +6,39 @@
 #include <stdexcept>
 #include <string>
 
+#include "refined_rows.hpp"
 #include "solver_detail.hpp"
 #include "sorpia/limit_masks.hpp"
 
 namespace sorpia {
 
-LimitOperator limit_operator(const Topology& topology, Boundary boundary) {
+namespace {
+
+// The mask vertices of a row: all ring neighbours, the two boundary (or
+// crease) neighbours, or none.
+enum class MaskVertices { Ring, Ends, None };
+
+// A row of a uniform operator: its weights and which neighbours carry `weight`.
+struct UniformRow {
+  LimitMask mask;
+  MaskVertices vertices;
+  std::int32_t ends[2];  // MaskVertices::Ends: the two neighbours
+};
+
+// The rule of vertex v without tags: smooth inside, crease on the boundary
+// (the two boundary neighbours, first and last in the ring), corner for a
+// one-face vertex under "edge-and-corner" and for an unreferenced vertex.
+UniformRow untagged_row(const Topology& topology, std::size_t v, Boundary boundary) {
+  const LimitMask m = limit_mask(topology, v, boundary);
+  if (m.weight == 0.0) return {m, MaskVertices::None, {}};
+  if (!topology.is_boundary(v)) return {m, MaskVertices::Ring, {}};
+  const auto& ring = topology.ring_neighbors();
+  return {m, MaskVertices::Ends, {ring[topology.ring_offsets()[v]], ring[topology.ring_offsets()[v + 1] - 1]}};
+}
+
+// A uniform operator with the rule of each vertex from `row(v)`.
+template <class RowRule>
+LimitOperator uniform_operator(const Topology& topology, RowRule row) {
   const std::size_t n = topology.n_vertices();
   const auto& offsets = topology.ring_offsets();
   const auto& ring = topology.ring_neighbors();
@@ -24,24 +51,105 @@ LimitOperator limit_operator(const Topology& topology, Boundary boundary) {
   std::int32_t out = 0;
   for (std::size_t v = 0; v < n; ++v) {
     op.offsets[v] = out;
-    const LimitMask m = limit_mask(topology, v, boundary);
-    op.diag[v] = m.diag;
-    op.weight[v] = m.weight;
-    if (m.weight == 0.0) continue;  // a corner (or unreferenced vertex) keeps itself
-    std::int32_t* row = op.neighbors.data() + out;
-    if (topology.is_boundary(v)) {  // the crease rule: only the two boundary neighbours count
-      row[0] = ring[offsets[v]];
-      row[1] = ring[offsets[v + 1] - 1];
+    const UniformRow r = row(v);
+    op.diag[v] = r.mask.diag;
+    op.weight[v] = r.mask.weight;
+    std::int32_t* first = op.neighbors.data() + out;
+    if (r.vertices == MaskVertices::Ends) {
+      first[0] = r.ends[0];
+      first[1] = r.ends[1];
       out += 2;
-    } else {
-      std::copy(ring.begin() + offsets[v], ring.begin() + offsets[v + 1], row);
+    } else if (r.vertices == MaskVertices::Ring) {
+      std::copy(ring.begin() + offsets[v], ring.begin() + offsets[v + 1], first);
       out += offsets[v + 1] - offsets[v];
     }
-    std::sort(row, op.neighbors.data() + out);
+    std::sort(first, op.neighbors.data() + out);
   }
   op.offsets[n] = out;
   op.neighbors.resize(out);
   return op;
+}
+
+// The rule of a Loop vertex whose tags are all infinitely sharp (OpenSubdiv's
+// Sdc::Crease rules, boundary edges counting as sharp edges): an infinitely
+// sharp corner keeps itself; with one sharp edge (a dart) the smooth rule, two
+// the crease rule on their ends, three or more the corner rule.
+UniformRow infinitely_sharp_row(const Topology& topology, std::size_t v, Boundary boundary,
+                                const detail::VertexTags& tags) {
+  if (tags.infinite(tags.corner[v])) return {corner_limit_mask(), MaskVertices::None, {}};
+  const auto& ring = topology.ring_neighbors();
+  const std::int32_t first = ring[topology.ring_offsets()[v]], last = ring[topology.ring_offsets()[v + 1] - 1];
+  int sharp = 0;
+  std::int32_t ends[2] = {};
+  for (std::int32_t p = tags.crease_offsets[v]; p < tags.crease_offsets[v + 1]; ++p) {
+    const std::int32_t w = tags.crease_other[p];
+    if (topology.is_boundary(v) && (w == first || w == last)) continue;  // sharp already
+    if (sharp < 2) ends[sharp] = w;
+    ++sharp;
+  }
+  if (topology.is_boundary(v)) {
+    if (sharp == 0) return untagged_row(topology, v, boundary);
+    return {corner_limit_mask(), MaskVertices::None, {}};
+  }
+  if (sharp <= 1) return untagged_row(topology, v, boundary);
+  if (sharp == 2) return {crease_limit_mask(), MaskVertices::Ends, {ends[0], ends[1]}};
+  return {corner_limit_mask(), MaskVertices::None, {}};
+}
+
+// `b` with the rows of `vertices` replaced by `rows` (refined_limit_rows' form).
+CsrMatrix replace_rows(const CsrMatrix& b, const std::vector<std::int32_t>& vertices, const CsrMatrix& rows) {
+  std::vector<std::int32_t> slot(b.n_rows, -1);
+  for (std::size_t k = 0; k < vertices.size(); ++k) slot[vertices[k]] = static_cast<std::int32_t>(k);
+  CsrMatrix out;
+  out.n_rows = b.n_rows;
+  out.n_cols = b.n_cols;
+  out.indptr.assign(1, 0);
+  out.indices.reserve(b.indices.size() + rows.indices.size());
+  out.data.reserve(out.indices.capacity());
+  for (std::size_t i = 0; i < b.n_rows; ++i) {
+    const CsrMatrix& from = slot[i] < 0 ? b : rows;
+    const std::size_t r = slot[i] < 0 ? i : static_cast<std::size_t>(slot[i]);
+    out.indices.insert(out.indices.end(), from.indices.begin() + from.indptr[r], from.indices.begin() + from.indptr[r + 1]);
+    out.data.insert(out.data.end(), from.data.begin() + from.indptr[r], from.data.begin() + from.indptr[r + 1]);
+    out.indptr.push_back(static_cast<std::int32_t>(out.indices.size()));
+  }
+  return out;
+}
+
+}  // namespace
+
+LimitOperator limit_operator(const Topology& topology, Boundary boundary) {
+  return uniform_operator(topology, [&](std::size_t v) { return untagged_row(topology, v, boundary); });
+}
+
+LimitOperator limit_operator(const Topology& topology, Boundary boundary, const Tags& tags) {
+  if (tags.empty()) return limit_operator(topology, boundary);
+  const detail::VertexTags vt = detail::vertex_tags(topology, tags);
+  // B is Far's Limit() after `levels` of refinement, where every semi-sharp
+  // tag has decayed. Rows with a semi-sharp tag, and darts when levels > 0
+  // (refined_rows.hpp), come from that refinement; every other row is the
+  // same at any level.
+  std::vector<int> level(topology.n_vertices());
+  int levels = 0;
+  for (std::size_t v = 0; v < topology.n_vertices(); ++v) {
+    level[v] = vt.levels(static_cast<std::int32_t>(v));
+    levels = std::max(levels, level[v]);
+  }
+  std::vector<std::int32_t> refined;
+  std::vector<int> refined_levels;
+  for (std::size_t v = 0; v < topology.n_vertices(); ++v) {
+    const auto i = static_cast<std::int32_t>(v);
+    const bool dart = levels > 0 && !topology.is_unreferenced(v) && vt.dart(topology, i);
+    if (level[v] > 0 || dart) {
+      refined.push_back(i);
+      refined_levels.push_back(dart ? levels : level[v]);
+    }
+  }
+  LimitOperator op =
+      uniform_operator(topology, [&](std::size_t v) { return infinitely_sharp_row(topology, v, boundary, vt); });
+  if (refined.empty()) return op;
+  return limit_operator(
+      replace_rows(to_csr(op), refined, detail::refined_limit_rows(topology, Scheme::Loop, boundary, vt, refined, refined_levels)));
 }
 
 LimitOperator limit_operator(const CsrMatrix& b) {

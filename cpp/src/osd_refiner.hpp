@@ -1,5 +1,6 @@
 #pragma once
 // Building an OpenSubdiv refiner from a sorpia::Topology (internal).
+#include <opensubdiv/far/topologyDescriptor.h>
 #include <opensubdiv/far/topologyRefiner.h>
 
 #include <cstddef>
@@ -22,6 +23,12 @@ struct Refiner {
   std::vector<std::int32_t> to_osd;
   std::vector<std::int32_t> from_osd;
 };
+
+// A refiner for `desc` under `scheme` and `boundary` (Sdc's other options at
+// their defaults: CREASE_UNIFORM, the rules sorpia's limit masks assume).
+// Throws sorpia::MeshError when OpenSubdiv refuses the topology.
+std::unique_ptr<Far::TopologyRefiner> create_refiner(const Far::TopologyDescriptor& desc, Scheme scheme,
+                                                     Boundary boundary);
 
 // The unrefined Far::TopologyRefiner of the mesh under `scheme` and
 // `boundary`, with the sharpness tags in its TopologyDescriptor (creases and

@@ -154,6 +154,10 @@ class Monitor {
   // The rounding level of E_k, 64 eps max_i ||v_i^0||: no method gets below it.
   double floor() const { return floor_; }
 
+  // Whether record(e) would stop as converged: methods whose E_k comes from
+  // an updated residual check the true one before they record it.
+  bool converges(double e) const { return e / e0_ < opt_.tol || e <= floor_; }
+
   // E_k for the next k; returns true to stop. Polls for an interrupt first
   // (once per iteration, on the calling thread, between sweeps).
   bool record(double e) {

@@ -83,7 +83,8 @@ void cg_step(const std::vector<double>& w, std::vector<double>& x, std::vector<d
 // with that inner product; this is CG on Gamma^-1/2 B Gamma^1/2 (symmetric,
 // the spectrum of B), i.e. CG on Upsilon V = Gamma^-1 V0 preconditioned by
 // Gamma. E_k comes from the recursively updated residual (one product per
-// iteration; it equals the true residual to rounding at these condition numbers).
+// iteration), except where it says converged: the true residual is computed
+// then, recorded, and the iteration restarts from it if it is not converged.
 void cg_symmetric(const LimitOperator& op, const double* v0, Monitor& mon, SolveResult& res) {
   const std::size_t m = 3 * op.n;
   const std::vector<double> w = gamma_inverse(op);
@@ -96,12 +97,20 @@ void cg_symmetric(const LimitOperator& op, const double* v0, Monitor& mon, Solve
     apply_cols<3>(op, p.data(), q.data());
     ++res.products;
     cg_step(w, x, r, p, q, rr);
-    if (mon.record(max_row_norm(r.data(), op.n))) return;
+    double e = max_row_norm(r.data(), op.n);
+    if (mon.converges(e)) {  // the updated residual says converged: take the true one, restart from it if not
+      e = residual(op, v0, x.data(), r.data());
+      ++res.products;
+      p = r;
+      rr = wdot3(r, r, w);
+    }
+    if (mon.record(e)) return;
   }
 }
 
 // BiCGSTAB (van der Vorst 1992) on S B V = S V0, for meshes with boundary,
-// where Upsilon is not symmetric. One iteration = two products.
+// where Upsilon is not symmetric. One iteration = two products. E_k as in
+// cg_symmetric: the true residual wherever the updated one says converged.
 void bicgstab(const LimitOperator& op, const double* v0, Monitor& mon, SolveResult& res) {
   const std::size_t m = 3 * op.n;
   const std::vector<double> s = gamma_inverse(op);  // S = Gamma^-1: S B = Upsilon
@@ -146,7 +155,18 @@ void bicgstab(const LimitOperator& op, const double* v0, Monitor& mon, SolveResu
         }
         rho[c] = alpha[c] = omega[c] = 1.0;
       }
-    if (mon.record(unscaled_error(r, s))) return;
+    double e = unscaled_error(r, s);
+    if (mon.converges(e)) {  // the updated residual says converged: take the true one, restart from it if not
+      e = residual(op, v0, x.data(), r.data());
+      ++res.products;
+      for (std::size_t i = 0; i < op.n; ++i)
+        for (int c = 0; c < 3; ++c) r[3 * i + c] *= s[i];
+      rt = r;
+      std::fill(p.begin(), p.end(), 0.0);
+      std::fill(q.begin(), q.end(), 0.0);
+      rho = alpha = omega = Col3{1, 1, 1};
+    }
+    if (mon.record(e)) return;
   }
 }
 

@@ -203,6 +203,13 @@ void resolve_parameters(const LimitOperator& op, const SolveOptions& opt, Spectr
         res.sigma = *opt.sigma;
       } else {
         res.lambda_min = estimate_lambda_min(op, sc);
+        // W-PIA's step assumes B's eigenvalues in (0, 1]; sharpness tags can
+        // make them complex, and the estimate is then a lower bound of their
+        // real parts. At or below 0 no step is known to converge: refused.
+        if (!(res.lambda_min > 0.0))
+          throw MeshError("method 'wpia': the limit matrix has an eigenvalue with real part <= 0 (estimated "
+                          "lambda_min = " + detail::repr(res.lambda_min) +
+                          "), where no step sigma is known to converge; use 'sor', 'gs' or 'cg'");
         res.sigma = 2.0 / (res.lambda_min + 1.0);  // lambda_max(B) = 1
       }
       break;

@@ -11,6 +11,7 @@
 #include <limits>
 #include <vector>
 
+#include "half_edges.hpp"
 #include "solver_detail.hpp"
 #include "sorpia/solvers.hpp"
 
@@ -184,6 +185,51 @@ std::vector<std::pair<std::int32_t, std::int32_t>> one_way_entries(const LimitOp
   return e;
 }
 
+// Whether B's spectrum is that of B without its one-way entries: when no
+// one-way entry lies on a cycle of B's pattern, B is block lower triangular
+// (ordered by the classes of its two-way entries, upstream first) with these
+// entries below the diagonal blocks. True on Loop meshes without tags (the
+// order above); false where an infinitely sharp crease ends in a dart: the
+// crease vertices are read one way by their smooth neighbours, which reach
+// them back through the dart.
+bool one_way_entries_below_blocks(const LimitOperator& op,
+                                  const std::vector<std::pair<std::int32_t, std::int32_t>>& one_way) {
+  if (one_way.empty()) return true;
+  detail::DisjointSets two_way(op.n);
+  std::vector<std::pair<std::int32_t, std::int32_t>> sorted_one_way(one_way);
+  std::sort(sorted_one_way.begin(), sorted_one_way.end());
+  for (std::size_t i = 0; i < op.n; ++i)
+    for (std::int32_t p = op.offsets[i]; p < op.offsets[i + 1]; ++p) {
+      const std::pair<std::int32_t, std::int32_t> e{static_cast<std::int32_t>(i), op.neighbors[p]};
+      if (!std::binary_search(sorted_one_way.begin(), sorted_one_way.end(), e)) two_way.unite(e.first, e.second);
+    }
+  // Kahn's topological sort of the classes along the one-way entries.
+  std::vector<std::int32_t> indegree(op.n, 0), out_offsets(op.n + 1, 0), out;
+  for (const auto& [i, j] : one_way) {
+    const std::int32_t a = two_way.find(i), b = two_way.find(j);
+    if (a == b) return false;
+    ++out_offsets[a + 1];
+    ++indegree[b];
+  }
+  for (std::size_t k = 0; k < op.n; ++k) out_offsets[k + 1] += out_offsets[k];
+  out.resize(one_way.size());
+  std::vector<std::int32_t> fill(out_offsets.begin(), out_offsets.end() - 1), ready;
+  for (const auto& [i, j] : one_way) out[fill[two_way.find(i)]++] = two_way.find(j);
+  for (std::size_t k = 0; k < op.n; ++k)
+    if (two_way.find(static_cast<std::int32_t>(k)) == static_cast<std::int32_t>(k) && indegree[k] == 0)
+      ready.push_back(static_cast<std::int32_t>(k));
+  std::size_t removed = 0;
+  while (!ready.empty()) {
+    const std::int32_t a = ready.back();
+    ready.pop_back();
+    for (std::int32_t p = out_offsets[a]; p < out_offsets[a + 1]; ++p) {
+      ++removed;
+      if (--indegree[out[p]] == 0) ready.push_back(out[p]);
+    }
+  }
+  return removed == one_way.size();
+}
+
 // y = B_s x: B x without the one-way entries (B's off-diagonal weight of row
 // i is op.weight[i]).
 struct SelfAdjointPart {
@@ -215,10 +261,12 @@ double estimate_lambda_min(const LimitOperator& op, SpectralCache& cache) {
   const std::lock_guard<std::mutex> lock(cache.mutex);
   if (!std::isnan(cache.lambda_min)) return cache.lambda_min;
   Timer timer{cache};
-  if (!op.uniform()) {
+  if (!op.uniform() || !one_way_entries_below_blocks(op, one_way_entries(op))) {
     // No known inner product makes rows with several weights self-adjoint,
-    // and Lanczos needs one: the power method on I - B, whose norm ratio
-    // tends to 1 - lambda_min where I - B's largest eigenvalue dominates.
+    // nor B when a one-way entry closes a cycle, and Lanczos needs one: the
+    // power method on I - B, whose norm ratio tends to max |1 - lambda|, so
+    // the estimate is at or below the smallest real part of B's eigenvalues
+    // (which may be complex then).
     std::vector<double> bx(op.n);
     const auto i_minus_b = [&](const double* x, double* y) {
       detail::apply_cols<1>(op, x, bx.data());

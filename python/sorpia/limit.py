@@ -7,7 +7,8 @@ import warnings
 import numpy as np
 
 from . import _core
-from ._validate import DEFAULT_BOUNDARY, DEFAULT_SCHEME, as_boundary, as_faces, as_polygons, as_scheme, as_vertex_count, as_vertices
+from ._validate import (DEFAULT_BOUNDARY, DEFAULT_SCHEME, as_boundary, as_faces, as_polygons, as_scheme, as_tags,
+                        as_vertex_count, as_vertices)
 
 
 class UnreferencedVerticesWarning(UserWarning):
@@ -41,7 +42,28 @@ def topology(faces, n_vertices: int, *, scheme: str = DEFAULT_SCHEME, warn: bool
     return topo
 
 
-def limit_points(vertices, faces, boundary: str = DEFAULT_BOUNDARY) -> np.ndarray:
+def tags(topo: _core.Topology, creases=None, corners=None, holes=None) -> _core.Tags:
+    """The sharpness tags of a mesh, checked against its counts (`_validate.as_tags`);
+    whether each crease is an edge of the mesh is checked where B is built."""
+    return as_tags(creases, corners, holes, n_vertices=topo.n_vertices, n_faces=topo.n_faces)
+
+
+TAGS_DOC = """creases : (edges (k, 2) int, sharpness (k,) float or one float), optional
+        OpenSubdiv's crease tags: each edge must be an edge of the mesh (a
+        MeshError names the first that is not). Sharpness 0 is smooth, inf
+        (or 10 and above) infinitely sharp, anything between semi-sharp (it
+        decays by one per subdivision level). A crease given twice counts
+        with its last sharpness, as in OpenSubdiv.
+    corners : (vertices (c,) int, sharpness), optional
+        OpenSubdiv's corner tags (vertex sharpness).
+    holes : (h,) int, optional
+        Faces cut out of the surface. They change no row of B: OpenSubdiv
+        refines and limits the vertices around a hole as if the face were
+        there."""
+
+
+def limit_points(vertices, faces, boundary: str = DEFAULT_BOUNDARY, *, creases=None, corners=None,
+                 holes=None) -> np.ndarray:
     """Loop limit positions of the vertices of a triangle mesh (paper eq. 5-6).
 
     Parameters
@@ -55,6 +77,7 @@ def limit_points(vertices, faces, boundary: str = DEFAULT_BOUNDARY) -> np.ndarra
         VTX_BOUNDARY_EDGE_ONLY). With "edge-and-corner" (the default) a
         boundary vertex with a single face stays where it is; with "edge-only"
         it gets the boundary mask (1/6, 2/3, 1/6).
+    {tags}
 
     Returns
     -------
@@ -65,22 +88,33 @@ def limit_points(vertices, faces, boundary: str = DEFAULT_BOUNDARY) -> np.ndarra
         neighbours, alpha_n = 3 / (8 - 8 (3/8 + cos(2 pi/n)/4)^2) (paper eq. 5);
         boundary vertex: 2/3 v + 1/6 (its two boundary neighbours). Vertices no
         face references are returned unchanged (with a warning).
+        With tags: infinitely sharp features keep this form (a vertex with
+        two sharp edges gets 2/3 and 1/6 on their ends, with three or more
+        or an infinitely sharp corner it keeps itself, with one it stays
+        smooth); with semi-sharp tags B is OpenSubdiv's ``Limit()`` after
+        refining until every sharpness has decayed, composed back to the
+        control vertices (docs: "Creases, corners and holes").
     """
     vertices = as_vertices(vertices)
     topo = topology(faces, vertices.shape[0], count_name="len(vertices)")
-    return _core.limit_points(topo, vertices, as_boundary(boundary))
+    return _core.limit_points(topo, vertices, as_boundary(boundary), tags(topo, creases, corners, holes))
 
 
-def limit_matrix(faces, n_vertices: int, boundary: str = DEFAULT_BOUNDARY) -> scipy.sparse.csr_matrix:
+limit_points.__doc__ = limit_points.__doc__.replace("{tags}", TAGS_DOC)
+
+
+def limit_matrix(faces, n_vertices: int, boundary: str = DEFAULT_BOUNDARY, *, creases=None, corners=None,
+                 holes=None) -> scipy.sparse.csr_matrix:
     """The Loop limit matrix B (paper eq. 7) as a scipy CSR matrix, (n, n) float64.
 
     Row i holds the limit mask of vertex i as OpenSubdiv evaluates it, so that
     ``limit_matrix(F, len(V)) @ V == limit_points(V, F)``. Unreferenced vertices
-    get an identity row. See `limit_points` for `boundary`.
+    get an identity row. See `limit_points` for `boundary` and the tags
+    (`creases`, `corners`, `holes`).
     """
     import scipy.sparse  # here, not at import: sorpia's commands need no scipy
 
     topo = topology(faces, n_vertices)  # validates n_vertices (as_vertex_count) and the faces
     n = topo.n_vertices
-    data, indices, indptr = _core.limit_matrix(topo, as_boundary(boundary))
+    data, indices, indptr = _core.limit_matrix(topo, as_boundary(boundary), tags(topo, creases, corners, holes))
     return scipy.sparse.csr_matrix((data, indices, indptr), shape=(n, n))

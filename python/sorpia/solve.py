@@ -71,6 +71,8 @@ import numpy as np
 from . import _core
 from ._validate import DEFAULT_BOUNDARY, as_boundary, as_vertices
 from .errors import ParameterError
+from .limit import TAGS_DOC as _TAGS_DOC
+from .limit import tags as _tags
 from .limit import topology as _topology
 
 METHODS = tuple(_core.method_names())  # the core's one list, in its order
@@ -149,32 +151,36 @@ class Interpolator:
         UnreferencedVerticesWarning.
     boundary : {"edge-and-corner", "edge-only"}
         Boundary rule, see sorpia.limit_points.
+    {tags}
 
     The spectral estimates a method needs (lambda_min for "wpia", rho for
     omega="young", H's extremes for "hss"/"whss", ...) are computed on first
     use and kept, so that running every method on one mesh pays for them once.
     """
 
-    def __init__(self, faces, n_vertices: int, boundary: str = DEFAULT_BOUNDARY):
-        self._build(faces, n_vertices, boundary, "n_vertices")
+    def __init__(self, faces, n_vertices: int, boundary: str = DEFAULT_BOUNDARY, *, creases=None, corners=None,
+                 holes=None):
+        self._build(faces, n_vertices, boundary, "n_vertices", (creases, corners, holes))
 
     @classmethod
-    def _for_vertices(cls, faces, n_vertices: int, boundary: str) -> Interpolator:
-        """As Interpolator(faces, n_vertices, boundary), for interpolate(): its
-        messages call the count len(vertices), the rows of the caller's array."""
+    def _for_vertices(cls, faces, n_vertices: int, boundary: str, tags: tuple) -> Interpolator:
+        """As Interpolator(faces, n_vertices, boundary, creases=, corners=, holes=),
+        for interpolate(): its messages call the count len(vertices), the rows
+        of the caller's array."""
         self = cls.__new__(cls)
-        self._build(faces, n_vertices, boundary, "len(vertices)")
+        self._build(faces, n_vertices, boundary, "len(vertices)", tags)
         return self
 
-    def _build(self, faces, n_vertices, boundary, count_name: str) -> None:
+    def _build(self, faces, n_vertices, boundary, count_name: str, tags: tuple) -> None:
         t0 = time.perf_counter()
         self._boundary = as_boundary(boundary)
         self.boundary = _core.boundary_name(self._boundary)
         # validates n_vertices as limit_matrix does (as_vertex_count: no float, bool or negative count)
         self.topology = _topology(faces, n_vertices, count_name=count_name)
         self.n_vertices = self.topology.n_vertices
+        self.tags = _tags(self.topology, *tags)
         t1 = time.perf_counter()
-        self._operator = _core.LimitOperator(self.topology, self._boundary)
+        self._operator = _core.LimitOperator(self.topology, self._boundary, self.tags)
         t2 = time.perf_counter()
         self.build_timings = {"topology": t1 - t0, "operator": t2 - t1}
 
@@ -265,13 +271,18 @@ class Interpolator:
         return r
 
 
+Interpolator.__doc__ = Interpolator.__doc__.replace("{tags}", _TAGS_DOC)
+
+
 def interpolate(vertices, faces, method: str = "sor", omega="auto", tol: float = 1e-10, max_iter: int = 1000,
                 boundary: str = DEFAULT_BOUNDARY, callback: Optional[Callable[[int, float], object]] = None, *,
-                sigma=None, alpha=None, weight=None, threads: int = 1) -> InterpolationResult:
+                sigma=None, alpha=None, weight=None, threads: int = 1, creases=None, corners=None,
+                holes=None) -> InterpolationResult:
     """Control vertices whose Loop limit surface interpolates `vertices`.
 
-    One call of ``Interpolator(faces, len(vertices), boundary).solve(...)``;
-    see `Interpolator.solve` for the parameters and the module docstring for
+    One call of ``Interpolator(faces, len(vertices), boundary, creases=,
+    corners=, holes=).solve(...)``; see `Interpolator` for the tags,
+    `Interpolator.solve` for the other parameters and the module docstring for
     the methods and their formulas. `seconds` and `timings` include building
     the topology and B.
 
@@ -287,7 +298,7 @@ def interpolate(vertices, faces, method: str = "sor", omega="auto", tol: float =
     options = check_options(method, omega, tol, max_iter, callback, sigma=sigma, alpha=alpha, weight=weight,
                             threads=threads)
     v0 = as_vertices(vertices)
-    interp = Interpolator._for_vertices(faces, v0.shape[0], boundary)
+    interp = Interpolator._for_vertices(faces, v0.shape[0], boundary, (creases, corners, holes))
     res = interp._solve(v0, method, options, callback, t0)
     res._record_build(time.perf_counter() - t0, interp.build_timings["topology"], interp.build_timings["operator"])
     return res

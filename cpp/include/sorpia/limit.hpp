@@ -24,10 +24,12 @@ struct CsrMatrix {
 /// B V gives the limit positions of the control vertices V.
 /// to_csr(limit_operator(topology, boundary)) (limit_operator.hpp): OpenSubdiv's
 /// limit masks; unreferenced vertices get an identity row.
+/// With `tags`, to_csr(limit_operator(topology, boundary, tags)).
 /// @param topology  the mesh connectivity
 /// @param boundary  boundary interpolation rule
+/// @param tags      OpenSubdiv's sharpness tags (creases, corners, holes)
 /// @return B, (n_vertices, n_vertices), columns sorted within a row
-CsrMatrix limit_matrix(const Topology& topology, Boundary boundary);
+CsrMatrix limit_matrix(const Topology& topology, Boundary boundary, const Tags& tags = Tags{});
 
 /// Loop limit positions of the vertices, B V: apply(limit_operator(topology,
 /// boundary), ...); unreferenced vertices are their own limit.
@@ -36,6 +38,9 @@ CsrMatrix limit_matrix(const Topology& topology, Boundary boundary);
 /// @param boundary  boundary interpolation rule
 /// @param out       row-major (n_vertices, 3) limit positions (written)
 void limit_points(const Topology& topology, const double* vertices, Boundary boundary, double* out);
+/// As above with OpenSubdiv's sharpness tags (limit_operator.hpp).
+void limit_points(const Topology& topology, const double* vertices, Boundary boundary, const Tags& tags,
+                  double* out);
 
 /// Reference, for tests: B recorded from OpenSubdiv's
 /// Far::PrimvarRefinerReal<double>::Limit on an unrefined Loop
@@ -44,6 +49,17 @@ void limit_points(const Topology& topology, const double* vertices, Boundary bou
 /// vertices). limit_matrix must equal it to rounding. It builds a refiner,
 /// which costs several times limit_matrix.
 CsrMatrix reference_limit_matrix(const Topology& topology, Boundary boundary);
+
+/// Reference, for tests: B of the whole mesh with its sharpness tags, from
+/// one Far::TopologyRefiner of the whole mesh refined uniformly until every
+/// semi-sharp tag has decayed (ceil of the largest finite sharpness, after
+/// repeated tags are resolved as OpenSubdiv resolves them: the last counts),
+/// PrimvarRefinerReal<double>::Interpolate level by level and Limit() on the
+/// last level, composed back to the control vertices (identity rows for
+/// unreferenced vertices). limit_matrix(topology, boundary, tags) must equal
+/// it to rounding. Its cost grows as 4^levels.
+/// @throw MeshError naming the first crease that is not an edge of the mesh
+CsrMatrix reference_limit_matrix(const Topology& topology, Scheme scheme, Boundary boundary, const Tags& tags);
 
 /// Reference, for tests: B V evaluated by Far::PrimvarRefinerReal<double>::Limit.
 void reference_limit_points(const Topology& topology, const double* vertices, Boundary boundary, double* out);

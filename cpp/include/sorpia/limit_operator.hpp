@@ -46,6 +46,24 @@ struct LimitOperator {
 /// (tests/cpp/test_limit_operator.cpp).
 LimitOperator limit_operator(const Topology& topology, Boundary boundary);
 
+/// B with OpenSubdiv's sharpness tags (Far::TopologyDescriptor's creases,
+/// corners and holes; a tag given twice counts with its last sharpness).
+/// Rows of vertices no tag touches are the masks above. Infinitely sharp tags
+/// keep the uniform form (Sdc's rules, boundary edges counting as sharp
+/// edges): at an infinitely sharp corner, or at three or more sharp edges, the
+/// vertex keeps itself; at two, the crease rule 2/3 and 1/6 on their two ends;
+/// at one (a dart), the smooth rule. With semi-sharp tags, B is OpenSubdiv's
+/// Limit() after uniform refinement to ceil(the largest finite sharpness)
+/// levels, composed back to the control vertices: a vertex with a semi-sharp
+/// edge or corner gets its row from that refinement (rows of any width:
+/// `values` is then filled), and so does a dart, whose Sdc limit mask (the
+/// smooth one) gives a different point at each level; every other row is the
+/// same at any level. Holes change no
+/// row of B (Far's refinement and Limit() treat a hole's vertices as if the
+/// face were there); they only cut faces out of the surface.
+/// @throw MeshError naming the first crease that is not an edge of the mesh
+LimitOperator limit_operator(const Topology& topology, Boundary boundary, const Tags& tags);
+
 /// The compact form of a square CSR matrix whose rows each have a positive
 /// diagonal entry (explicit zero off-diagonal entries are dropped). Rows whose
 /// off-diagonal entries are all equal are stored uniform; if any row is not,

@@ -85,8 +85,11 @@ struct SpectralCache {
 /// 1 - lambda_min) on two products in a row, after 40 products at least and
 /// 300 at most. Ritz values lie inside the spectrum, so the estimate is at or
 /// above the true value. Rows with several weights (LimitOperator::values),
-/// which no known inner product makes self-adjoint, get the power method on
-/// I - B instead (at most 300 products; no such bound).
+/// which no known inner product makes self-adjoint, and uniform rows where a
+/// one-way entry closes a cycle of B's pattern (an infinitely sharp crease
+/// that ends in a dart), where no such ordering exists, get the power method
+/// on I - B instead (at most 300 products): 1 - max |1 - lambda|, at or below
+/// the smallest real part of B's eigenvalues, which may then be complex.
 double estimate_lambda_min(const LimitOperator& op, SpectralCache& cache);
 
 /// Spectral radius of the Jacobi matrix I - D^-1 B, by the power method in the

@@ -231,7 +231,8 @@ def tags_lines(summary: dict) -> list[str]:
         if kind not in summary:
             continue
         s = summary[kind]
-        parts = [f"{s[k]} {k.replace('_', ' ')}" for k in ("infinitely_sharp", "semi_sharp", "smooth") if s[k]]
+        parts = [f"{s[k]} {label}" for k, label in (("infinitely_sharp", "infinitely sharp"),
+                                                    ("semi_sharp", "semi-sharp"), ("smooth", "smooth (0)")) if s[k]]
         histogram = ", ".join(f"{float(v):g} x {c}" for v, c in s["sharpness_histogram"].items())
         lines.append(f"{kind} {s['count']}: {', '.join(parts)} (sharpness {histogram})")
     if "holes" in summary:

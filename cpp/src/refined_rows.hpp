@@ -1,0 +1,69 @@
+#pragma once
+// Rows of the limit matrix B computed by OpenSubdiv's own refinement and
+// Limit(), vertex by vertex, on a local mesh (internal).
+#include <cstdint>
+#include <vector>
+
+#include "sorpia/limit.hpp"
+#include "sorpia/subdivision.hpp"
+#include "sorpia/topology.hpp"
+
+namespace sorpia::detail {
+
+// The sharpness tags as OpenSubdiv applies them: a crease or a corner given
+// twice counts with its last sharpness (Far::TopologyDescriptor assigns them
+// in order), a zero sharpness is no tag, sharpness is float (Far's type), at
+// most Sdc::Crease::SHARPNESS_INFINITE.
+struct VertexTags {
+  // Per tagged vertex: its crease edges (the other end, sharpness > 0).
+  std::vector<std::int32_t> crease_offsets;  // n_vertices + 1
+  std::vector<std::int32_t> crease_other;
+  std::vector<float> crease_sharpness;
+  std::vector<float> corner;       // n_vertices: vertex sharpness (0: none)
+  std::vector<std::uint8_t> hole;  // n_faces
+
+  // The number of refinement levels after which every semi-sharp tag at v
+  // has decayed: ceil of the largest finite sharpness among v's creases and
+  // its corner (0 when none).
+  int levels(std::int32_t v) const;
+  bool infinite(float s) const { return s >= kInfiniteSharpness; }
+  // The number of v's creases that are infinitely sharp.
+  int infinite_creases(std::int32_t v) const;
+  // Whether v is a dart once its semi-sharp tags have decayed: an interior
+  // vertex with exactly one infinitely sharp edge and no infinitely sharp
+  // corner. Sdc gives a dart the smooth limit mask, which is not the limit of
+  // its refinement (the sharp edge's children are midpoints, not smooth edge
+  // points), so Far's Limit() of a dart depends on the level it is taken at:
+  // the only rows that do.
+  bool dart(const Topology& topology, std::int32_t v) const {
+    return !topology.is_boundary(v) && !infinite(corner[v]) && infinite_creases(v) == 1;
+  }
+};
+
+// Groups `tags` by vertex. Every crease must be an edge of `topology`.
+// @throw MeshError naming the first crease that is not an edge
+VertexTags vertex_tags(const Topology& topology, const Tags& tags);
+
+// Rows of B (limit positions of the control vertices) for `vertices`, from
+// OpenSubdiv itself: for each vertex v = vertices[k], a Far::TopologyRefiner
+// on the faces incident to v with v's tags (its creases, its corner, the holes
+// among those faces), refined uniformly one level at a time, the weights
+// carried by PrimvarRefinerReal<double>::Interpolate, for levels[k] levels
+// (at least tags.levels(v), where v's semi-sharp tags have decayed), then
+// Limit() on the last level. After each level the local mesh is
+// replaced by the faces incident to v's child, with their decayed sharpness.
+//
+// Exact because of locality (Sdc's CREASE_UNIFORM rules): v's child depends
+// on v's faces only, and its one-ring on the children of those faces, so v's
+// limit depends only on v's faces, v's corner sharpness and its edges'
+// sharpness; the edges and vertices of the local mesh that are not incident
+// to v only turn into boundaries whose rules reach none of v's descendants.
+// Tests compare every row with a refinement of the whole mesh.
+//
+// Returns a CSR matrix with one row per entry of `vertices` (in that order),
+// n_vertices columns, the diagonal included, columns sorted, exact zeros
+// dropped. An unreferenced vertex gets its identity row.
+CsrMatrix refined_limit_rows(const Topology& topology, Scheme scheme, Boundary boundary, const VertexTags& tags,
+                             const std::vector<std::int32_t>& vertices, const std::vector<int>& levels);
+
+}  // namespace sorpia::detail
