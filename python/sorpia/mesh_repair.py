@@ -183,22 +183,38 @@ def repair(vertices, faces, *, creases=None, corners=None, holes=None) -> Repair
     return result._replace(tags=_mapped_tags(tags, result, len(vertices), given))
 
 
-def _repair_faces(vertices, faces) -> RepairResult:
-    """`repair` without tags, of validated vertices."""
-    n = vertices.shape[0]
-    # the (m, k) array the faces are given as (not yet validated), None for Polygons and ragged lists
+def _core_faces(faces, n_vertices: int):
+    """`faces` validated for the core: ``(rows, triangles, polygons)`` where
+    rows is the (m, k) array the faces were given as (None for Polygons and
+    ragged lists), triangles the (m, 3) int32 array when k == 3 (else None)
+    and polygons otherwise the int32 (counts, indices)."""
     rows = None if isinstance(faces, Polygons) else _face_rows(
         faces, "faces", "(m, k)", "an (m, k) array of integer vertex indices, a list of polygons or sorpia.Polygons")
     if rows is not None and rows.shape[1] == 3:  # triangles: the (m, 3) path, as sorpia's Loop functions take them
-        faces = as_faces(rows, n, count_name="len(vertices)")
-        changed = _core.repair(faces, n)
+        return rows, as_faces(rows, n_vertices, count_name="len(vertices)"), None
+    return rows, None, as_polygons(faces if rows is None else rows, n_vertices, count_name="len(vertices)")
+
+
+def _faces_as_given(rows, counts, indices):
+    """Output polygons in the form the input came in (see `repair`)."""
+    if rows is not None and (counts == rows.shape[1]).all():
+        return indices.reshape(-1, rows.shape[1])
+    return Polygons(counts, indices)
+
+
+def _repair_faces(vertices, faces) -> RepairResult:
+    """`repair` without tags, of validated vertices."""
+    n = vertices.shape[0]
+    rows, triangles, polygons = _core_faces(faces, n)
+    if triangles is not None:
+        changed = _core.repair(triangles, n)
         if changed is None:
-            return _unchanged(vertices, faces, len(faces))
+            return _unchanged(vertices, triangles, len(triangles))
         new_faces, vertex_map, face_map, report = changed
         report["counts"] = _counts(report)
         return RepairResult(vertices[vertex_map], new_faces, vertex_map, face_map, report)
 
-    counts, indices = as_polygons(faces if rows is None else rows, n, count_name="len(vertices)")
+    counts, indices = polygons
     changed = _core.repair_polygons(counts, indices, n)
     if changed is None:
         if rows is not None:  # validated: the cast cannot wrap; no copy of an int32 C-contiguous array
@@ -208,11 +224,8 @@ def _repair_faces(vertices, faces) -> RepairResult:
         return _unchanged(vertices, faces if same else Polygons(counts, indices), len(counts))
     new_counts, new_indices, vertex_map, face_map, report = changed
     report["counts"] = _counts(report)
-    if rows is not None and (new_counts == rows.shape[1]).all():
-        new_faces = new_indices.reshape(-1, rows.shape[1])
-    else:
-        new_faces = Polygons(new_counts, new_indices)
-    return RepairResult(vertices[vertex_map], new_faces, vertex_map, face_map, report)
+    return RepairResult(vertices[vertex_map], _faces_as_given(rows, new_counts, new_indices), vertex_map, face_map,
+                        report)
 
 
 def _mapped_tags(tags, result: RepairResult, n_vertices: int, kinds) -> dict:

@@ -69,11 +69,13 @@ from typing import Callable, Optional
 import numpy as np
 
 from . import _core
+from . import nonmanifold as nonmanifold_sharp
 from ._validate import DEFAULT_BOUNDARY, as_boundary, as_vertices
 from .errors import ParameterError
 from .limit import TAGS_DOC as _TAGS_DOC
 from .limit import tags as _tags
 from .limit import topology as _topology
+from .nonmanifold import as_nonmanifold
 
 METHODS = tuple(_core.method_names())  # the core's one list, in its order
 OMEGA_RULES = ("auto", "young")
@@ -277,8 +279,12 @@ Interpolator.__doc__ = Interpolator.__doc__.replace("{tags}", _TAGS_DOC)
 def interpolate(vertices, faces, method: str = "sor", omega="auto", tol: float = 1e-10, max_iter: int = 1000,
                 boundary: str = DEFAULT_BOUNDARY, callback: Optional[Callable[[int, float], object]] = None, *,
                 sigma=None, alpha=None, weight=None, threads: int = 1, creases=None, corners=None,
-                holes=None) -> InterpolationResult:
+                holes=None, nonmanifold: str = "error") -> InterpolationResult:
     """Control vertices whose Loop limit surface interpolates `vertices`.
+
+    With ``nonmanifold="sharp"`` (see `limit_points`) a non-manifold mesh is
+    solved with OpenSubdiv's rules for it, and the result's control_vertices
+    are those of the input vertices.
 
     One call of ``Interpolator(faces, len(vertices), boundary, creases=,
     corners=, holes=).solve(...)``; see `Interpolator` for the tags,
@@ -293,6 +299,11 @@ def interpolate(vertices, faces, method: str = "sor", omega="auto", tol: float =
     >>> np.allclose(sorpia.limit_points(res.control_vertices, F), V, atol=1e-9)
     True
     """
+    if as_nonmanifold(nonmanifold) == "sharp":
+        return nonmanifold_sharp.interpolate(
+            vertices, faces, boundary, dict(creases=creases, corners=corners, holes=holes), method=method,
+            omega=omega, tol=tol, max_iter=max_iter, callback=callback, sigma=sigma, alpha=alpha, weight=weight,
+            threads=threads)
     t0 = time.perf_counter()
     # Options are checked before the (costly) operator is built.
     options = check_options(method, omega, tol, max_iter, callback, sigma=sigma, alpha=alpha, weight=weight,

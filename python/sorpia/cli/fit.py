@@ -13,7 +13,8 @@ from .._validate import as_boundary
 from .common import (EXIT_NOT_CONVERGED, EXIT_OK, SCHEME_LABELS, UserError, boundary_rule, check_mesh_suffix,
                      check_paths, check_solver_options, choose_scheme, cpu_clock, face_counts, face_size_histogram,
                      fit_once, fmt_seconds, method_label, mesh_line, read_input, repair_json, repair_lines,
-                     result_fields, scheme_kwargs, solve_tags, tags_lines, tags_summary, warn_once)
+                     result_fields, scheme_kwargs, solve_tags, split_json, split_lines, tags_lines, tags_summary,
+                     warn_once)
 from .output import write_json
 from .progress import Progress
 
@@ -21,7 +22,7 @@ from .progress import Progress
 def run_fit(input_path, output, *, method="sor", omega="auto", tol=1e-10, max_iter=1000,
             boundary=None, surface=None, level=3, report=None, quiet=False, force=False,
             triangulate=False, binary=False, threads=1, repair=False, scheme="auto", ignore_tags=False,
-            sharp_angle=None, out=None) -> tuple[int, dict]:
+            sharp_angle=None, nonmanifold="error", out=None) -> tuple[int, dict]:
     """`sorpia fit`: returns (exit code, report dict). `boundary` None: the
     file's interpolateboundary tag, else the default rule."""
     from .. import _core, write_mesh
@@ -40,7 +41,7 @@ def run_fit(input_path, output, *, method="sor", omega="auto", tol=1e-10, max_it
     timings: dict[str, float] = {}
     with Progress(enabled=not quiet) as progress:
         progress.status(f"reading {input_path}")
-        mesh = read_input(input_path, triangulate, repair, tags=not ignore_tags)
+        mesh = read_input(input_path, triangulate, repair, tags=not ignore_tags, nonmanifold=nonmanifold)
         V0, F = mesh.vertices, mesh.faces
         timings.update(mesh.timings)
         scheme = choose_scheme(scheme, F, input_path)
@@ -98,6 +99,7 @@ def run_fit(input_path, output, *, method="sor", omega="auto", tol=1e-10, max_it
         "tags": {"from_file": not ignore_tags, "sharp_angle": sharp_angle, **tags_summary(tags),
                  "written_to_output": sorted(written_tags)},
         "repair": repair_json(mesh.repair) if repair else None,
+        "nonmanifold": split_json(mesh.split) if mesh.split is not None else None,
         "output": str(output),
         "surface": surface_stats,
         "report": None if report is None else str(report),
@@ -123,7 +125,8 @@ def run_fit(input_path, output, *, method="sor", omega="auto", tol=1e-10, max_it
     if report is not None:
         write_json(report, data)
     if not quiet:
-        print(fit_summary(data, repair_lines(mesh.repair) if repair else ()), file=out)
+        changes = (repair_lines(mesh.repair) if repair else []) + (split_lines(mesh.split) if mesh.split else [])
+        print(fit_summary(data, changes), file=out)
     return (EXIT_OK if res.converged else EXIT_NOT_CONVERGED), data
 
 

@@ -5,7 +5,8 @@ from __future__ import annotations
 import sys
 
 from .. import __version__
-from .common import EXIT_OK, check_mesh_suffix, check_paths, face_counts, read_input, repair_json, repair_lines
+from .common import (EXIT_OK, check_mesh_suffix, check_paths, face_counts, read_input, repair_json, repair_lines,
+                     sharpness_tags)
 from .output import write_json
 
 
@@ -23,7 +24,7 @@ def run_repair(input_path, output, *, report=None, triangulate=False, quiet=Fals
 
     mesh = read_input(input_path, triangulate, repair=True)
     # the file's tags, carried onto the repaired mesh, written with it (OBJ)
-    sharpness = {k: v for k, v in mesh.tags.items() if k in ("creases", "corners", "holes")}
+    sharpness = sharpness_tags(mesh.tags)
     write_mesh(output, mesh.vertices, mesh.faces,
                **_tags_to_write(output, sharpness, mesh.tags.get("boundary", DEFAULT_BOUNDARY), mesh))
     n_faces = len(face_counts(mesh.faces))
