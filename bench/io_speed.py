@@ -6,10 +6,11 @@ with 1M vertices, 2M faces) in every format sorpia writes; median of
 disk as this repository's build/, so page-cache effects are those of a real
 disk, and fsync is included in the write times).
 
-Surface: LoopSurface build, limit_surface at levels 1..--max-level (first
-call builds the refined topology, second call reuses it, as after
-set_vertices), and evaluate_limit at 1M random points with derivatives, on
-sorpia.shapes.irregular(--surface-vertices) (default 100k).
+Surface, for each scheme: LimitSurface build, limit_surface at levels
+1..--max-level (first call builds the refined topology, second call reuses
+it, as after set_vertices), and evaluate_limit at 1M random points with
+derivatives, on sorpia.shapes.irregular (Loop) and sorpia.shapes.quad_irregular
+(Catmull-Clark) of --surface-vertices vertices (default 100k).
 
 Prints Markdown tables and writes them into docs/benchmarks/io-speed.md
 (unless --no-page); --json writes the figures.
@@ -99,13 +100,19 @@ def bench_files(n_vertices, repeat, folder):
     return rows
 
 
-def bench_surface(n_vertices, max_level, repeat):
-    v, f = sorpia.shapes.irregular(n_vertices)
-    out = {"vertices": len(v), "faces": len(f)}
+# The surface benchmark's mesh for each scheme: most vertices extraordinary.
+SURFACE_MESHES = {"loop": ("irregular triangle mesh", sorpia.shapes.irregular),
+                  "catmull-clark": ("irregular quad mesh", sorpia.shapes.quad_irregular)}
+
+
+def bench_surface(scheme, n_vertices, max_level, repeat):
+    v, f = SURFACE_MESHES[scheme][1](n_vertices)
+    out = {"scheme": scheme, "vertices": len(v), "faces": len(f)}
     t0 = time.perf_counter()
-    s = sorpia.LoopSurface(v, f)
+    s = sorpia.LimitSurface(v, f, scheme=scheme)
     out["build_s"] = time.perf_counter() - t0
     out["levels"] = []
+    core_scheme = sorpia._core.parse_scheme(scheme)
     for level in range(1, max_level + 1):
         before = current_rss_mb()
         reset_peak_rss()
@@ -113,14 +120,15 @@ def bench_surface(n_vertices, max_level, repeat):
         vs, fs = s.tessellate(level)
         first = time.perf_counter() - t0
         t_again, _ = timed(lambda: s.tessellate(level), repeat)
+        estimate = sorpia._core.tessellation_bytes(len(v), len(f), level, core_scheme, f.size)
         out["levels"].append({"level": level, "out_vertices": len(vs), "out_faces": len(fs), "first_s": first,
                               "again_s": t_again, "peak_rss_mb": peak_rss_mb() - before,
-                              "estimate_mb": sorpia._core.tessellation_bytes(len(v), len(f), level) / 1e6})
+                              "estimate_mb": estimate / 1e6})
         del vs, fs
     rng = np.random.default_rng(1)
     k = 1_000_000
     face_ids = rng.integers(0, len(f), k)
-    uv = rng.dirichlet([1, 1, 1], k)[:, :2]
+    uv = rng.dirichlet([1, 1, 1], k)[:, :2] if scheme == "loop" else rng.uniform(0, 1, (k, 2))
     out["evaluate_points"] = k
     out["evaluate_s"], _ = timed(lambda: s.evaluate(face_ids, uv), repeat)
     out["evaluate_derivatives_s"], _ = timed(lambda: s.evaluate(face_ids, uv, derivatives=True), repeat)
@@ -167,7 +175,8 @@ def compare_reads(args, lines):
             rows.append({"format": ext, "binary": binary, "baseline_s": b, "this_s": t, "ratio": t / b,
                          "all_baseline_s": times["baseline"], "all_this_s": times["this"]})
     lines += [f"## Reads side by side: irregular mesh, {len(v):,} vertices, {len(f):,} triangles",
-              "", f"Each read in a fresh process, baseline and this build alternated, median of {args.repeat}.", "",
+              "", f"Baseline: {args.baseline_label or 'the sorpia package in ' + args.baseline}. Each read in a "
+              f"fresh process, baseline and this build alternated, median of {args.repeat}.", "",
               "| format | baseline read s | this read s | this / baseline |", "|---|---:|---:|---:|"]
     for r in rows:
         lines.append(f"| {r['format']} {'binary' if r['binary'] else 'ascii'} | {r['baseline_s']:.3f} "
@@ -187,6 +196,8 @@ def main():
     ap.add_argument("--no-page", action="store_true", help="print only; do not write docs/benchmarks/io-speed.md")
     ap.add_argument("--baseline", default=None, metavar="DIR",
                     help="only compare read times with the sorpia package in DIR (see above)")
+    ap.add_argument("--baseline-label", default=None, metavar="TEXT",
+                    help="what the baseline is, for the page (e.g. the commit it was built from)")
     args = ap.parse_args()
 
     if args.baseline:
@@ -231,19 +242,22 @@ def files_table(args, lines):
 
 
 def surface_table(args, lines):
-    """Time the limit surface; its Markdown table goes onto lines."""
-    surface = bench_surface(args.surface_vertices, args.max_level, args.repeat)
-    lines += ["", f"## Limit surface: irregular mesh, {surface['vertices']:,} vertices, {surface['faces']:,} faces",
-              "", f"`LoopSurface` build: {surface['build_s']:.2f} s. \"first\": the first `tessellate(level)`, which "
-              f"builds the refined topology; \"again\": median of {args.repeat} more on the same topology.", "",
-              "| level | output vertices | output faces | first s | again s | peak RSS growth MB | estimate MB |",
-              "|---:|---:|---:|---:|---:|---:|---:|"]
-    for r in surface["levels"]:
-        lines.append(f"| {r['level']} | {r['out_vertices']:,} | {r['out_faces']:,} | {r['first_s']:.2f} "
-                     f"| {r['again_s']:.2f} | {r['peak_rss_mb']:.0f} | {r['estimate_mb']:.0f} |")
-    lines += ["", f"`evaluate` at {surface['evaluate_points']:,} random points: {surface['evaluate_s']:.2f} s, "
-              f"with derivatives {surface['evaluate_derivatives_s']:.2f} s"]
-    return surface
+    """Time the limit surface under each scheme; the Markdown tables go onto lines."""
+    result = {}
+    for scheme, (what, _) in SURFACE_MESHES.items():
+        surface = result[scheme] = bench_surface(scheme, args.surface_vertices, args.max_level, args.repeat)
+        lines += ["", f"## Limit surface, {scheme}: {what}, {surface['vertices']:,} vertices, "
+                  f"{surface['faces']:,} faces", "",
+                  f"`LimitSurface` build: {surface['build_s']:.2f} s. \"first\": the first `tessellate(level)`, "
+                  f"which builds the refined topology; \"again\": median of {args.repeat} more on the same topology.",
+                  "", "| level | output vertices | output faces | first s | again s | peak RSS growth MB | estimate MB |",
+                  "|---:|---:|---:|---:|---:|---:|---:|"]
+        for r in surface["levels"]:
+            lines.append(f"| {r['level']} | {r['out_vertices']:,} | {r['out_faces']:,} | {r['first_s']:.2f} "
+                         f"| {r['again_s']:.2f} | {r['peak_rss_mb']:.0f} | {r['estimate_mb']:.0f} |")
+        lines += ["", f"`evaluate` at {surface['evaluate_points']:,} random points: {surface['evaluate_s']:.2f} s, "
+                  f"with derivatives {surface['evaluate_derivatives_s']:.2f} s"]
+    return result
 
 
 if __name__ == "__main__":

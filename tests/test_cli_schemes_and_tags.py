@@ -4,6 +4,7 @@ by default, --ignore-tags), --sharp-angle, and what info and fit's report say of
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -135,3 +136,126 @@ def test_every_solving_command_takes_the_scheme_options(option, command):
         assert code == 0 and option in stdout, name
     code, stdout, _ = command("demo", "--help")
     assert "--scheme" in stdout
+
+
+def test_fit_solves_with_the_file_tags_and_writes_them_with_the_control_mesh(tmp_path, monkeypatch, command):
+    monkeypatch.chdir(tmp_path)
+    v, tris, _ = cube_of_triangles()
+    v = v + np.random.default_rng(4).normal(0, 0.03, v.shape)
+    lines = ["t crease 2/1/0 0 1 10", "t crease 2/1/0 1 3 10", "t crease 2/1/0 3 2 2.5", "t corner 1/1/0 7 1.5",
+             "t interpolateboundary 1/0/0 2"]
+    tagged_obj(tmp_path / "tags.obj", v, tris, lines)
+    code, stdout, err = command("fit", "tags.obj", "-o", "c.obj", "--report", "r.json")
+    assert code == 0, err
+    report = json.loads((tmp_path / "r.json").read_text())
+    assert report["tags"]["creases"]["count"] == 3 and report["tags"]["corners"]["count"] == 1
+    assert report["tags"]["written_to_output"] == ["boundary", "corners", "creases"]
+    _, _, tags = sorpia.read_mesh("tags.obj", tags=True)
+    ctrl, f, written = sorpia.read_mesh("c.obj", tags=True)
+    assert np.array_equal(f, tris) and written.keys() == tags.keys()
+    for key in ("creases", "corners"):
+        assert np.array_equal(written[key][0], tags[key][0]) and written[key][1].tobytes() == tags[key][1].tobytes()
+    # The control mesh's limit, with the tags it carries, passes through the given vertices.
+    limit = sorpia.limit_points(ctrl, f, **written)
+    assert np.abs(limit - v).max() < 1e-9
+    # Without the tags the same control mesh's limit misses them: the tags were used.
+    assert np.abs(sorpia.limit_points(ctrl, f, boundary="edge-only") - v).max() > 1e-3
+    # A format without tags: the control mesh is written without them, with a warning saying so.
+    code, _, err = command("fit", "tags.obj", "-o", "c.ply", "--quiet")
+    assert code == 0 and "sharpness tags (corners, creases) are not written: only .obj files hold them" in err
+
+
+def test_fit_with_sharp_angle_writes_the_creases_it_found(tmp_path, monkeypatch, command):
+    monkeypatch.chdir(tmp_path)
+    v, tris, _ = cube_of_triangles()
+    write_obj(tmp_path / "cube.obj", v, tris)
+    code, _, err = command("fit", "cube.obj", "-o", "c.obj", "--sharp-angle", "60", "--quiet")
+    assert code == 0, err
+    ctrl, f, tags = sorpia.read_mesh("c.obj", tags=True)
+    edges, sharpness = tags["creases"]
+    assert edges.tolist() == sorpia.sharp_edges(v, tris, 60).tolist() and (sharpness == 10).all()
+    # Every vertex of a cube with all 12 edges sharp is a corner: the limit is the control mesh itself.
+    assert np.array_equal(ctrl, v)
+
+
+def test_render_draws_the_file_creases_in_orange(tmp_path, monkeypatch, command):
+    pytest.importorskip("matplotlib")
+    from matplotlib.image import imread
+
+    monkeypatch.chdir(tmp_path)
+    v, tris, _ = cube_of_triangles()
+    tagged_obj(tmp_path / "tags.obj", v, tris, ["t crease 2/1/0 0 1 10", "t crease 2/1/0 1 3 10"])
+
+    def orange_pixels(png):
+        image = imread(png)[:, :, :3]
+        return int((np.abs(image - np.array([1.0, 0x7F / 255, 0x0E / 255])).max(axis=2) < 0.08).sum())
+
+    code, stdout, err = command("render", "tags.obj", "-o", "with.png", "--size", "400x320", "--level", "2")
+    assert code == 0, err
+    code, _, err = command("render", "tags.obj", "-o", "without.png", "--size", "400x320", "--level", "2",
+                           "--ignore-tags")
+    assert code == 0, err
+    assert orange_pixels("with.png") > 50 and orange_pixels("without.png") == 0
+
+
+def _solves(scheme: str) -> bool:
+    """Whether this build's Interpolator takes the scheme (Catmull-Clark arrives with the catmark branch)."""
+    import inspect
+
+    return scheme == "loop" or "scheme" in inspect.signature(sorpia.Interpolator).parameters
+
+
+CATMULL_CLARK = pytest.mark.skipif(not _solves("catmull-clark"), reason="Interpolator takes no scheme= yet")
+
+
+@CATMULL_CLARK
+def test_fit_solves_a_quad_mesh_with_catmull_clark_by_default(tmp_path, monkeypatch, command):
+    monkeypatch.chdir(tmp_path)
+    v, _, quads = cube_of_triangles()
+    v = v + np.random.default_rng(6).normal(0, 0.05, v.shape)
+    tagged_obj(tmp_path / "q.obj", v, quads, ["t crease 2/1/0 0 1 1.5"])
+    code, stdout, err = command("fit", "q.obj", "-o", "c.obj", "--report", "r.json")
+    assert code == 0, err
+    assert json.loads((tmp_path / "r.json").read_text())["scheme"] == "catmull-clark"
+    ctrl, f, tags = sorpia.read_mesh("c.obj", tags=True)
+    assert np.array_equal(f, quads) and tags["creases"][0].tolist() == [[0, 1]]
+    limit = sorpia.limit_points(ctrl, f, scheme="catmull-clark", **tags)
+    assert np.abs(limit - v).max() < 1e-9
+    code, stdout, err = command("info", "q.obj", "--json")
+    assert json.loads(stdout)["pia"] == {"scheme": "catmull-clark", "can_run": True, "reason": None}
+
+
+SHARED = [p for p in sorted((Path(__file__).resolve().parents[2] / "shared" / "meshes").glob("osd_*.obj"))
+          if "nonman" not in p.name]
+
+
+@pytest.mark.skipif(not SHARED, reason="../shared/meshes is not present")
+@pytest.mark.parametrize("path", SHARED or [None], ids=[p.name for p in SHARED] or ["none"])
+def test_opensubdiv_shapes_fit_with_their_tags(path, tmp_path, command):
+    v, f, tags = sorpia.read_mesh(path, tags=True)
+    scheme = "loop" if isinstance(f, np.ndarray) and f.shape[1] == 3 else "catmull-clark"
+    if not _solves(scheme):
+        pytest.skip("Interpolator takes no scheme= yet")
+    out = tmp_path / "c.obj"
+    code, _, err = command("fit", path, "-o", out, "--quiet", "--report", tmp_path / "r.json")
+    assert code == 0, err
+    report = json.loads((tmp_path / "r.json").read_text())
+    assert report["scheme"] == scheme
+    ctrl, f2, written = sorpia.read_mesh(out, tags=True)
+    limit = sorpia.limit_points(ctrl, f2, **({} if scheme == "loop" else {"scheme": scheme}), **written)
+    diagonal = np.linalg.norm(v.max(axis=0) - v.min(axis=0))
+    assert np.abs(limit - v).max() < 1e-9 * diagonal
+
+
+def test_info_explains_a_crease_that_is_not_an_edge(tmp_path, monkeypatch, command):
+    monkeypatch.chdir(tmp_path)
+    v, tris, _ = cube_of_triangles()
+    tagged_obj(tmp_path / "bad.obj", v, tris, ["t crease 2/1/0 0 7 10"])  # opposite corners of the cube
+    with pytest.raises(sorpia.MeshError) as refused:
+        sorpia.Interpolator(tris, len(v), creases=([[0, 7]], 10.0))
+    code, stdout, err = command("info", "bad.obj", "--json")
+    assert code == 0, err
+    assert json.loads(stdout)["pia"] == {"scheme": "loop", "can_run": False, "reason": str(refused.value)}
+    code, _, err = command("fit", "bad.obj", "-o", "c.obj")
+    assert_user_error(code, err)
+    assert str(refused.value) in err and "Loop PIA cannot run on this mesh" in err

@@ -184,3 +184,88 @@ def test_opensubdiv_shapes_rows_and_fits(name):
         res = sorpia.interpolate(v, f, method=method, boundary=boundary, max_iter=3000, **tags)
         assert res.converged, method
         assert np.linalg.norm(ref @ res.control_vertices - v, axis=1).max() <= 1e-9 * np.abs(v).max(), method
+
+
+def reference_b_scheme(faces, n, boundary, scheme, **tags):
+    topo = make_topology(faces, n, scheme=scheme, warn=False)
+    data, indices, indptr = _core.reference_limit_matrix(topo, sorpia.limit.as_scheme(scheme),
+                                                         sorpia.limit.as_boundary(boundary), make_tags(topo, **tags))
+    return scipy.sparse.csr_matrix((data, indices, indptr), shape=(n, n))
+
+
+@pytest.mark.parametrize("boundary", ["edge-and-corner", "edge-only"])
+def test_catmull_clark_rows_with_tags_equal_opensubdivs(boundary):
+    """Quads and other polygons (polygon_torus has interior vertices of two faces, whose rows OpenSubdiv's
+    Limit() changes with the level): every row against the whole mesh refined by OpenSubdiv, to 1e-14."""
+    for v, f in [sorpia.shapes.quad_grid(7, 5), sorpia.shapes.polygon_torus(9, 7, 2)]:
+        e = edges_of_polygons(f)
+        rng = np.random.default_rng(3)
+        pick = rng.random(len(e)) < 0.15
+        tags = dict(creases=(e[pick], rng.choice([0.5, 1.5, 2.5, math.inf], pick.sum())), corners=([2], 1.5))
+        B = sorpia.limit_matrix(f, len(v), boundary, scheme="catmull-clark", **tags)
+        assert abs(B - reference_b_scheme(f, len(v), boundary, "catmull-clark", **tags)).max() < 1e-14
+
+
+def edges_of_polygons(faces):
+    if isinstance(faces, sorpia.Polygons):
+        counts, idx = np.asarray(faces.face_vertex_counts), np.asarray(faces.face_vertex_indices)
+    else:
+        f = np.asarray(faces)
+        counts, idx = np.full(len(f), f.shape[1]), f.ravel()
+    start = np.concatenate([[0], np.cumsum(counts)[:-1]])
+    pos = np.arange(len(idx)) - np.repeat(start, counts)
+    nxt = np.repeat(start, counts) + (pos + 1) % np.repeat(counts, counts)
+    return np.unique(np.sort(np.column_stack([idx, idx[nxt]]), axis=1), axis=0)
+
+
+OSD_CATMARK_TAGGED = ["osd_catmark_cube_corner0.obj", "osd_catmark_cube_creases0.obj", "osd_catmark_cube_creases1.obj",
+                      "osd_catmark_cubes_semisharp.obj", "osd_catmark_torus_creases0.obj", "osd_catmark_helmet.obj"]
+
+
+@pytest.mark.skipif(not SHARED_MESHES.exists(), reason="../shared/meshes is not present")
+@pytest.mark.parametrize("name", OSD_CATMARK_TAGGED)
+def test_opensubdiv_catmull_clark_shapes_rows_and_fits(name):
+    """Every row against OpenSubdiv's whole-mesh refinement (7 levels for the helmet), then every method's fit
+    checked with that B."""
+    v, f, tags, boundary = read_osd_shape(SHARED_MESHES / name)
+    ref = reference_b_scheme(f, len(v), boundary, "catmull-clark", **tags)
+    assert abs(sorpia.limit_matrix(f, len(v), boundary, scheme="catmull-clark", **tags) - ref).max() < 1e-14
+    for method in METHODS:
+        res = sorpia.interpolate(v, f, method=method, boundary=boundary, scheme="catmull-clark", max_iter=3000, **tags)
+        assert res.converged, method
+        assert np.linalg.norm(ref @ res.control_vertices - v, axis=1).max() <= 1e-9 * np.abs(v).max(), method
+
+
+@pytest.mark.skipif(not SHARED_MESHES.exists(), reason="../shared/meshes is not present")
+@pytest.mark.parametrize("name", ["osd_catmark_pawn.obj", "osd_catmark_bishop.obj", "osd_catmark_rook.obj",
+                                  "osd_catmark_car.obj"])
+def test_large_opensubdiv_shapes_rows_on_whole_neighbourhoods(name):
+    """The chess pieces and the car need 6 to 8 levels, past a whole-mesh refinement here: the rows of tagged
+    vertices are checked against OpenSubdiv's refinement of the whole two-ring around them (faces beyond the
+    one-ring that sorpia's rows are computed from), with their tags."""
+    v, f, tags, boundary = read_osd_shape(SHARED_MESHES / name)
+    B = sorpia.limit_matrix(f, len(v), boundary, scheme="catmull-clark", **tags).tocsr()
+    faces = [np.asarray(x) for x in (f if not isinstance(f, sorpia.Polygons) else np.split(
+        np.asarray(f.face_vertex_indices), np.cumsum(f.face_vertex_counts)[:-1]))]
+    edges, sharp = tags["creases"]
+    rng = np.random.default_rng(0)
+    for seed in rng.choice(np.unique(edges), 1):
+        ring = {int(seed)}
+        for _ in range(2):
+            ring |= {int(u) for face in faces if ring & set(face.tolist()) for u in face}
+        near = [face for face in faces if set(face.tolist()) & ring]
+        used = np.unique(np.concatenate(near))
+        index = {int(u): k for k, u in enumerate(used)}
+        sub = sorpia.Polygons(np.array([len(x) for x in near]), np.array([index[int(u)] for x in near for u in x]))
+        keep = np.array([a in index and b in index for a, b in edges])
+        sub_tags = {"creases": (np.array([[index[int(a)], index[int(b)]] for a, b in edges[keep]]).reshape(-1, 2),
+                                sharp[keep])}
+        # only edges of the sub-mesh (an edge between two kept vertices may belong to faces left out)
+        sub_edges = {tuple(e) for e in edges_of_polygons(sub)}
+        ok = np.array([tuple(sorted(e)) in sub_edges for e in sub_tags["creases"][0]], bool)
+        sub_tags["creases"] = (sub_tags["creases"][0][ok], sub_tags["creases"][1][ok])
+        ref = reference_b_scheme(sub, len(used), boundary, "catmull-clark", **sub_tags)
+        one_ring = {int(u) for face in faces if int(seed) in face.tolist() for u in face}
+        for u in one_ring:  # every vertex whose faces all lie in the sub-mesh
+            row = B.getrow(u).toarray().ravel()[used]
+            np.testing.assert_allclose(ref.getrow(index[u]).toarray().ravel(), row, atol=1e-14, err_msg=f"{name} {u}")

@@ -3,6 +3,7 @@
 
 #include "bindings.hpp"
 #include "sorpia/limit.hpp"
+#include "sorpia/limit_operator.hpp"
 #include "sorpia/shapes.hpp"
 
 namespace sorpia_py {
@@ -99,19 +100,21 @@ void bind_limit(py::module_& m) {
 
   m.def(
       "limit_matrix",
-      [](const sorpia::Topology& topology, sorpia::Boundary b, const sorpia::Tags& tags) {
+      [](const sorpia::Topology& topology, sorpia::Boundary b, const sorpia::Tags& tags, sorpia::Scheme scheme) {
         sorpia::CsrMatrix mat;
         {
           py::gil_scoped_release release;
-          mat = sorpia::limit_matrix(topology, b, tags);
+          mat = sorpia::to_csr(sorpia::limit_operator(topology, scheme, b, tags));
         }
         return csr_tuple(std::move(mat));
       },
-      "topology"_a, "boundary"_a, "tags"_a = sorpia::Tags{}, "Limit matrix B as CSR arrays (data, indices, indptr).");
+      "topology"_a, "boundary"_a, "tags"_a = sorpia::Tags{}, "scheme"_a = sorpia::Scheme::Loop,
+      "Limit matrix B as CSR arrays (data, indices, indptr).");
 
   m.def(
       "limit_points",
-      [](const sorpia::Topology& topology, const Vertices& vertices, sorpia::Boundary b, const sorpia::Tags& tags) {
+      [](const sorpia::Topology& topology, const Vertices& vertices, sorpia::Boundary b, const sorpia::Tags& tags,
+         sorpia::Scheme scheme) {
         check_shape(vertices, 3, "vertices");
         check_rows(vertices, topology.n_vertices(), "vertices", "the topology");
         Vertices out({vertices.shape(0), py::ssize_t{3}});
@@ -119,11 +122,12 @@ void bind_limit(py::module_& m) {
         const double* src = vertices.data();
         {
           py::gil_scoped_release release;
-          sorpia::limit_points(topology, src, b, tags, dst);
+          sorpia::apply(sorpia::limit_operator(topology, scheme, b, tags), src, dst);
         }
         return out;
       },
-      "topology"_a, "vertices"_a.noconvert(), "boundary"_a, "tags"_a = sorpia::Tags{}, "Loop limit positions B V, (n, 3).");
+      "topology"_a, "vertices"_a.noconvert(), "boundary"_a, "tags"_a = sorpia::Tags{}, "scheme"_a = sorpia::Scheme::Loop,
+      "Limit positions B V, (n, 3).");
 
   m.def(
       "reference_limit_matrix",

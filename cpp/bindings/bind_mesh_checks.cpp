@@ -50,7 +50,8 @@ void bind_mesh_checks(py::module_& m) {
          double angle_degrees) {
         check_shape(vertices, 3, "vertices");
         long long corners = 0;
-        for (py::ssize_t f = 0; f < face_vertex_counts.size(); ++f) corners += std::max(face_vertex_counts.data()[f], 0);
+        for (py::ssize_t f = 0; f < face_vertex_counts.size(); ++f)
+          corners += std::max(face_vertex_counts.data()[f], 0);
         if (corners != static_cast<long long>(face_vertex_indices.size()))
           throw sorpia::ParameterError("face_vertex_counts add up to " + std::to_string(corners) +
                                        " corners but face_vertex_indices holds " +

@@ -225,11 +225,12 @@ void bind_solvers(py::module_& m) {
       "text"_a, "(OmegaRule, omega) from 'auto', 'young' or a number.");
 
   py::class_<OperatorState>(m, "LimitOperator")
-      .def(py::init([](const sorpia::Topology& topology, sorpia::Boundary b, const sorpia::Tags& tags) {
+      .def(py::init([](const sorpia::Topology& topology, sorpia::Boundary b, const sorpia::Tags& tags,
+                       sorpia::Scheme scheme) {
              py::gil_scoped_release release;
-             return OperatorState{sorpia::limit_operator(topology, b, tags), {}};
+             return OperatorState{sorpia::limit_operator(topology, scheme, b, tags), {}};
            }),
-           "topology"_a, "boundary"_a, "tags"_a = sorpia::Tags{})
+           "topology"_a, "boundary"_a, "tags"_a = sorpia::Tags{}, "scheme"_a = sorpia::Scheme::Loop)
       .def_property_readonly("uniform", [](const OperatorState& s) { return s.op.uniform(); })
       .def_property_readonly("n", [](const OperatorState& s) { return s.op.n; })
       .def_property_readonly("offsets", [](const OperatorState& s) { return to_numpy(s.op.offsets, 0); })

@@ -1,5 +1,7 @@
-// Bindings of the Loop limit surface (LoopSurface: Bfr evaluation and uniform
+// Bindings of the limit surface (LimitSurface: Bfr evaluation and uniform
 // tessellation). Conversion and error translation only.
+#include <algorithm>
+
 #include "bindings.hpp"
 #include "sorpia/surface.hpp"
 
@@ -13,33 +15,47 @@ void check_vertices(const Vertices& a, std::size_t n_vertices) {
   check_shape(a, 3, "vertices");
   check_rows(a, n_vertices, "vertices", "the mesh");
 }
+
+// (vertices (n, 3), faces, face_counts): faces (m, k) with face_counts None
+// when every face has k vertices (every tessellation but Catmull-Clark's
+// level 0 of a mixed mesh), else the concatenated indices and the counts.
+py::tuple tessellation_tuple(sorpia::PolyMesh&& t) {
+  auto vertices = to_numpy(std::move(t.vertices), 3);
+  const auto& c = t.face_counts;
+  if (!c.empty() && std::all_of(c.begin(), c.end(), [&](std::int32_t k) { return k == c.front(); }))
+    return py::make_tuple(vertices, to_numpy(std::move(t.face_indices), c.front()), py::none());
+  return py::make_tuple(vertices, to_numpy(std::move(t.face_indices), 0), to_numpy(std::move(t.face_counts), 0));
+}
 }  // namespace
 
 void bind_surface(py::module_& m) {
-  py::class_<sorpia::LoopSurface>(m, "LoopSurface")
-      .def(py::init([](const sorpia::Topology& topology, const Vertices& vertices, sorpia::Boundary b) {
+  py::class_<sorpia::LimitSurface>(m, "LimitSurface")
+      .def(py::init([](const sorpia::Topology& topology, const Vertices& vertices, sorpia::Scheme scheme,
+                       sorpia::Boundary b, const sorpia::Tags& tags) {
              check_vertices(vertices, topology.n_vertices());
              const double* v = vertices.data();
              py::gil_scoped_release release;
-             return sorpia::LoopSurface(topology, v, b);
+             return sorpia::LimitSurface(topology, v, scheme, b, tags);
            }),
-           "topology"_a, "vertices"_a.noconvert(), "boundary"_a)
-      .def_property_readonly("n_vertices", &sorpia::LoopSurface::n_vertices)
-      .def_property_readonly("n_faces", &sorpia::LoopSurface::n_faces)
+           "topology"_a, "vertices"_a.noconvert(), "scheme"_a, "boundary"_a, "tags"_a)
+      .def_property_readonly("n_vertices", &sorpia::LimitSurface::n_vertices)
+      .def_property_readonly("n_faces", &sorpia::LimitSurface::n_faces)
+      .def_property_readonly("scheme", &sorpia::LimitSurface::scheme)
+      .def_property_readonly("boundary", &sorpia::LimitSurface::boundary)
       .def("set_vertices",
-           [](sorpia::LoopSurface& s, const Vertices& vertices) {
+           [](sorpia::LimitSurface& s, const Vertices& vertices) {
              check_vertices(vertices, s.n_vertices());
              s.set_vertices(vertices.data());
            },
            "vertices"_a.noconvert())
       .def("get_vertices",
-           [](const sorpia::LoopSurface& s) {
+           [](const sorpia::LimitSurface& s) {
              Vertices out({static_cast<py::ssize_t>(s.n_vertices()), py::ssize_t{3}});
              s.get_vertices(out.mutable_data());
              return out;
            })
       .def("evaluate",
-           [](const sorpia::LoopSurface& s, const FaceIds& face_ids, const Vertices& uv, bool derivatives) {
+           [](const sorpia::LimitSurface& s, const FaceIds& face_ids, const Vertices& uv, bool derivatives) {
              check_shape(uv, 2, "uv");
              if (face_ids.ndim() != 1 || face_ids.shape(0) != uv.shape(0))
                throw sorpia::ParameterError("face_ids must have shape (k,) with k = len(uv) = " +
@@ -67,17 +83,22 @@ void bind_surface(py::module_& m) {
            },
            "face_ids"_a.noconvert(), "uv"_a.noconvert(), "derivatives"_a)
       .def("tessellate",
-           [](sorpia::LoopSurface& s, int level) {
-             sorpia::TriMesh t;
+           [](sorpia::LimitSurface& s, int level) {
+             sorpia::PolyMesh t;
              {
                LongCall call;
                t = s.tessellate(level);
              }
-             return mesh_tuple(std::move(t));
+             return tessellation_tuple(std::move(t));
            },
            "level"_a);
 
-  m.def("tessellation_bytes", &sorpia::tessellation_bytes, "n_vertices"_a, "n_faces"_a, "level"_a);
+  m.def("tessellation_bytes",
+        [](std::size_t n_vertices, std::size_t n_faces, int level, sorpia::Scheme scheme,
+           std::size_t n_face_vertices) {
+          return sorpia::tessellation_bytes(scheme, n_vertices, n_faces, n_face_vertices, level);
+        },
+        "n_vertices"_a, "n_faces"_a, "level"_a, "scheme"_a = sorpia::Scheme::Loop, "n_face_vertices"_a = 0);
   m.def("available_memory_bytes", &sorpia::available_memory_bytes);
 }
 

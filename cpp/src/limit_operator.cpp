@@ -3,6 +3,7 @@
 #include "sorpia/limit_operator.hpp"
 
 #include <algorithm>
+#include <numeric>
 #include <stdexcept>
 #include <string>
 
@@ -125,31 +126,32 @@ LimitOperator limit_operator(const Topology& topology, Boundary boundary) {
 LimitOperator limit_operator(const Topology& topology, Boundary boundary, const Tags& tags) {
   if (tags.empty()) return limit_operator(topology, boundary);
   const detail::VertexTags vt = detail::vertex_tags(topology, tags);
-  // B is Far's Limit() after `levels` of refinement, where every semi-sharp
-  // tag has decayed. Rows with a semi-sharp tag, and darts when levels > 0
-  // (refined_rows.hpp), come from that refinement; every other row is the
-  // same at any level.
-  std::vector<int> level(topology.n_vertices());
-  int levels = 0;
-  for (std::size_t v = 0; v < topology.n_vertices(); ++v) {
-    level[v] = vt.levels(static_cast<std::int32_t>(v));
-    levels = std::max(levels, level[v]);
-  }
+  // Rows with a semi-sharp tag, and darts when the mesh has one, come from
+  // OpenSubdiv's refinement (refined_rows.hpp); every other row is the same
+  // at any level.
+  const std::vector<int> level = detail::row_levels(topology, Scheme::Loop, vt);
   std::vector<std::int32_t> refined;
   std::vector<int> refined_levels;
-  for (std::size_t v = 0; v < topology.n_vertices(); ++v) {
-    const auto i = static_cast<std::int32_t>(v);
-    const bool dart = levels > 0 && !topology.is_unreferenced(v) && vt.dart(topology, i);
-    if (level[v] > 0 || dart) {
-      refined.push_back(i);
-      refined_levels.push_back(dart ? levels : level[v]);
+  for (std::size_t v = 0; v < topology.n_vertices(); ++v)
+    if (level[v] > 0) {
+      refined.push_back(static_cast<std::int32_t>(v));
+      refined_levels.push_back(level[v]);
     }
-  }
   LimitOperator op =
       uniform_operator(topology, [&](std::size_t v) { return infinitely_sharp_row(topology, v, boundary, vt); });
   if (refined.empty()) return op;
   return limit_operator(
       replace_rows(to_csr(op), refined, detail::refined_limit_rows(topology, Scheme::Loop, boundary, vt, refined, refined_levels)));
+}
+
+LimitOperator limit_operator(const Topology& topology, Scheme scheme, Boundary boundary, const Tags& tags) {
+  if (scheme == Scheme::Loop) return limit_operator(topology, boundary, tags);
+  // Catmull-Clark: every row from OpenSubdiv's refinement around its vertex.
+  const detail::VertexTags vt = detail::vertex_tags(topology, tags);
+  std::vector<std::int32_t> all(topology.n_vertices());
+  std::iota(all.begin(), all.end(), 0);
+  return limit_operator(detail::refined_limit_rows(topology, scheme, boundary, vt, all,
+                                                   detail::row_levels(topology, scheme, vt)));
 }
 
 LimitOperator limit_operator(const CsrMatrix& b) {

@@ -189,6 +189,25 @@ int VertexTags::infinite_creases(std::int32_t v) const {
   return count;
 }
 
+std::vector<int> row_levels(const Topology& topology, Scheme scheme, const VertexTags& tags) {
+  const std::size_t n = topology.n_vertices();
+  std::vector<int> level(n, 0);
+  int deepest = 0;
+  for (std::size_t v = 0; v < n; ++v) {
+    if (topology.is_unreferenced(v)) continue;
+    level[v] = tags.levels(static_cast<std::int32_t>(v));
+    if (scheme == Scheme::CatmullClark && !topology.quad_ring(v)) level[v] = std::max(level[v], 1);
+    deepest = std::max(deepest, level[v]);
+  }
+  if (deepest > 0)
+    for (std::size_t v = 0; v < n; ++v) {
+      if (topology.is_unreferenced(v)) continue;
+      const bool valence_two = !topology.is_boundary(v) && topology.valence(v) == 2;  // Catmull-Clark only
+      if (valence_two || tags.dart(topology, static_cast<std::int32_t>(v))) level[v] = deepest;
+    }
+  return level;
+}
+
 VertexTags vertex_tags(const Topology& topology, const Tags& tags) {
   const std::size_t n = topology.n_vertices();
   VertexTags out;
@@ -334,8 +353,8 @@ CsrMatrix reference_limit_matrix(const Topology& topology, Scheme scheme, Bounda
   const std::vector<std::int32_t>& to_osd = osd.to_osd;
   const std::vector<std::int32_t>& from_osd = osd.from_osd;
 
-  int levels = 0;
-  for (std::size_t v = 0; v < n; ++v) levels = std::max(levels, vt.levels(static_cast<std::int32_t>(v)));
+  const std::vector<int> row_level = row_levels(topology, scheme, vt);
+  const int levels = row_level.empty() ? 0 : *std::max_element(row_level.begin(), row_level.end());
   std::vector<SparseRow> rows(from_osd.size()), next;
   for (std::size_t i = 0; i < rows.size(); ++i) rows[i].e.emplace_back(from_osd[i], 1.0);
   if (levels > 0) {

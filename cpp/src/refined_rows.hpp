@@ -40,6 +40,16 @@ struct VertexTags {
   }
 };
 
+// The level each row of B is taken at (B is OpenSubdiv's Limit() after
+// L = the largest of these levels): for each vertex tags.levels(v), at least
+// 1 under Catmull-Clark next to a face that is not a quad (Sdc's limit masks
+// assume quads), and L when L > 0 for a dart (see VertexTags::dart) and for
+// an interior vertex of two faces (Catmull-Clark), whose Sdc limit masks are
+// not the limit of their own refinement either; 0 for an unreferenced vertex.
+// Every other row is the same at any deeper level (tests: every row against
+// the whole mesh refined to L).
+std::vector<int> row_levels(const Topology& topology, Scheme scheme, const VertexTags& tags);
+
 // Groups `tags` by vertex. Every crease must be an edge of `topology`.
 // @throw MeshError naming the first crease that is not an edge
 VertexTags vertex_tags(const Topology& topology, const Tags& tags);

@@ -3,6 +3,7 @@
 #include <opensubdiv/bfr/refinerSurfaceFactory.h>
 #include <opensubdiv/bfr/surface.h>
 #include <opensubdiv/bfr/surfaceFactoryCache.h>
+#include <opensubdiv/far/error.h>
 #include <opensubdiv/far/primvarRefiner.h>
 #include <opensubdiv/far/topologyDescriptor.h>
 #include <opensubdiv/far/topologyRefinerFactory.h>
@@ -11,7 +12,6 @@
 #include <atomic>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <limits>
 #include <mutex>
 #include <numeric>
@@ -20,11 +20,11 @@
 #include <utility>
 #include <vector>
 
-#include "parallel.hpp"
 #include "osd_refiner.hpp"
-#include "sorpia/limit.hpp"
+#include "parallel.hpp"
 #include "sorpia/errors.hpp"
 #include "sorpia/interrupt.hpp"
+#include "sorpia/limit.hpp"
 
 namespace sorpia {
 
@@ -32,6 +32,7 @@ namespace {
 
 namespace Bfr = OpenSubdiv::Bfr;
 namespace Far = OpenSubdiv::Far;
+namespace Sdc = OpenSubdiv::Sdc;
 
 // A thread-safe cache lets every thread of evaluate() share one factory (irregular
 // patches are built once per distinct vertex neighbourhood, then reused).
@@ -41,11 +42,13 @@ using SurfaceFactory = Bfr::RefinerSurfaceFactory<ThreadedCache>;
 
 using detail::Point3;
 
-// Bytes per refined face held by a uniformly refined Loop TopologyRefiner
-// with full topology (all levels together, ~4/3 of the last level) and the
+// Bytes per refined face held by a uniformly refined TopologyRefiner with
+// full topology (all levels together, ~4/3 of the last level) and the
 // position buffers, for the memory check before a tessellation;
-// bench/io_speed.py prints the peak it measures beside this estimate.
-constexpr double kRefinerBytesPerFace = 220.0;
+// bench/io_speed.py prints the peak it measures beside this estimate (both
+// schemes: it measures Loop and Catmull-Clark).
+constexpr double kRefinerBytesPerTriangle = 220.0;
+constexpr double kRefinerBytesPerQuad = 300.0;
 
 std::string human_bytes(double b) {
   char buf[64];
@@ -56,7 +59,16 @@ std::string human_bytes(double b) {
   return buf;
 }
 
+// Bfr represents the surface next to an extraordinary vertex by Gregory
+// patches after this many local refinements (default 2): 4 shrinks that
+// region to the corners of side 1/16, where OpenSubdiv's derivatives are
+// approximate (it drops the derivative of the rational Gregory weights), at a
+// small cost in evaluation time.
 constexpr int kApproxLevelSmooth = 4;
+// Local refinements around semi-sharp features (default 6): 10, the deepest
+// OpenSubdiv isolates, so that every semi-sharp feature (sharpness below 10)
+// has decayed before Bfr stops refining.
+constexpr int kApproxLevelSharp = 10;
 
 // Faces per chunk that a thread takes at a time in evaluate(); also the least
 // work per thread.
@@ -70,31 +82,53 @@ int evaluate_threads(std::ptrdiff_t n_groups) {
       std::max<std::ptrdiff_t>(1, std::min<std::ptrdiff_t>(detail::available_processors(), chunks)));
 }
 
-// Bfr evaluates on the closed triangle; a parameter a rounding error outside is
-// pulled back onto it, anything further out is refused.
+// Bfr evaluates on the closed face domain; a parameter a rounding error outside
+// is pulled back onto it, anything further out is refused.
 constexpr double kUvSlack = 1e-12;
+
+// Faces of the tessellation at `level` (see LimitSurface::tessellate).
+double tessellated_faces(Scheme scheme, std::size_t n_faces, std::size_t n_face_vertices, int level) {
+  if (scheme == Scheme::Loop || level == 0) return static_cast<double>(n_faces) * std::pow(4.0, level);
+  return static_cast<double>(n_face_vertices) * std::pow(4.0, level - 1);
+}
+
+std::string face_words(Scheme scheme, double faces, int level) {
+  char count[32];
+  std::snprintf(count, sizeof count, "%.0f", faces);
+  if (scheme == Scheme::Loop) return std::string(count) + " triangles (4^level per face)";
+  if (level == 0) return std::string(count) + " faces";
+  return std::string(count) + " quads (k 4^(level-1) per k-sided face)";
+}
 
 }  // namespace
 
-std::size_t tessellation_bytes(std::size_t n_vertices, std::size_t n_faces, int level) {
-  const double grow = std::pow(4.0, level);
-  const double faces = static_cast<double>(n_faces) * grow;
-  const double verts = static_cast<double>(n_vertices) + faces / 2.0 + 2.0 * static_cast<double>(n_faces);
-  // refiner (every level) + output arrays: vertices (24 B) and faces (12 B),
-  // each held twice while the Python layer copies them.
-  const double bytes = faces * kRefinerBytesPerFace + 2.0 * (24.0 * verts + 12.0 * faces);
+std::size_t tessellation_bytes(Scheme scheme, std::size_t n_vertices, std::size_t n_faces,
+                               std::size_t n_face_vertices, int level) {
+  if (n_face_vertices == 0) n_face_vertices = n_faces * (scheme == Scheme::Loop ? 3 : 4);
+  const double faces = tessellated_faces(scheme, n_faces, n_face_vertices, level);
+  const bool quads = scheme == Scheme::CatmullClark;
+  // Euler: a closed triangle mesh has about half as many vertices as faces, a
+  // quad mesh as many.
+  const double verts = static_cast<double>(n_vertices) + (quads ? faces : faces / 2.0) +
+                       2.0 * static_cast<double>(n_faces);
+  // refiner (every level) + output arrays: vertices (24 B) and faces (4 B a
+  // corner), each held twice while the Python layer copies them.
+  const double bytes = faces * (quads ? kRefinerBytesPerQuad : kRefinerBytesPerTriangle) +
+                       2.0 * (24.0 * verts + (quads ? 16.0 : 12.0) * faces);
   return bytes >= static_cast<double>(std::numeric_limits<std::size_t>::max())
              ? std::numeric_limits<std::size_t>::max()
              : static_cast<std::size_t>(bytes);
 }
 
-struct LoopSurface::Impl {
+struct LimitSurface::Impl {
   Topology topology;
+  Scheme scheme;
   Boundary boundary;
-  detail::Refiner base;               // unrefined: Bfr and the limit positions of control vertices
+  Tags tags;
+  detail::Refiner base;  // unrefined, with the tags: Bfr and the limit positions of control vertices
   std::unique_ptr<SurfaceFactory> factory;
-  std::vector<double> vertices;       // (n, 3), as given
-  std::vector<Point3> points;         // referenced vertices in OpenSubdiv's order
+  std::vector<double> vertices;  // (n, 3), as given
+  std::vector<Point3> points;    // referenced vertices in OpenSubdiv's order
   // Uniformly refined to refined_level (built on demand); shares base's level
   // 0 (Far::TopologyRefinerFactory::Create), so it is declared after base and
   // destroyed before it.
@@ -104,7 +138,8 @@ struct LoopSurface::Impl {
   // threads at once, set_vertices() and tessellate() change state.
   mutable std::shared_mutex mutex;
 
-  Impl(const Topology& t, Boundary b) : topology(t), boundary(b), base(detail::make_refiner(t, Scheme::Loop, b)) {}
+  Impl(const Topology& t, Scheme s, Boundary b, const Tags& g)
+      : topology(t), scheme(s), boundary(b), tags(g), base(detail::make_refiner(t, s, b, g)) {}
 };
 
 namespace {
@@ -133,62 +168,104 @@ void unit_normal(const double* du, const double* dv, double* out) {
   for (int c = 0; c < 3; ++c) out[c] = len > 0.0 ? u[c] / len : 0.0;
 }
 
+// Columns w of the tiles of a face split into quad sub-faces: corner j lies
+// at (j mod w, j div w).
+int subface_columns(const Bfr::Parameterization& param) {
+  const int k = param.GetFaceSize();
+  double c[2];
+  for (int j = 1; j < k; ++j) {
+    param.GetVertexCoord(j, c);
+    if (c[1] > 0.0) return j;
+  }
+  return k;
+}
+
+std::string uv_str(double u, double v) { return "(" + std::to_string(u) + ", " + std::to_string(v) + ")"; }
+
+// Checks (u, v) against the domain of a face with parameterisation `param`
+// (see surface.hpp) and pulls a point a rounding error outside onto it.
+void check_uv(const Bfr::Parameterization& param, std::size_t i, double& u, double& v) {
+  const auto where = [&] { return "uv[" + std::to_string(i) + "] = " + uv_str(u, v); };
+  switch (param.GetType()) {
+    case Bfr::Parameterization::TRI:
+      if (!(u >= -kUvSlack && v >= -kUvSlack && u + v <= 1.0 + kUvSlack))
+        throw ParameterError(where() + " is outside the triangle u >= 0, v >= 0, u + v <= 1");
+      u = std::max(u, 0.0);
+      v = std::max(v, 0.0);
+      if (u + v > 1.0) {
+        const double s = u + v;
+        u /= s;
+        v /= s;
+      }
+      return;
+    case Bfr::Parameterization::QUAD:
+      if (!(u >= -kUvSlack && v >= -kUvSlack && u <= 1.0 + kUvSlack && v <= 1.0 + kUvSlack))
+        throw ParameterError(where() + " is outside the quad's unit square 0 <= u, v <= 1");
+      u = std::clamp(u, 0.0, 1.0);
+      v = std::clamp(v, 0.0, 1.0);
+      return;
+    case Bfr::Parameterization::QUAD_SUBFACES: {
+      // Sub-face j is [x_j, x_j + 1/2] x [y_j, y_j + 1/2], (x_j, y_j) = (j mod
+      // w, j div w) (Bfr's GetVertexCoord(j)); the tile of (u, v) is the
+      // corner at or below it, as Bfr's ConvertCoordToSubFace rounds.
+      const int k = param.GetFaceSize();
+      const int w = subface_columns(param);
+      const double tile_u = std::floor(u + kUvSlack), tile_v = std::floor(v + kUvSlack);
+      const double su = u - tile_u, sv = v - tile_v;
+      const double j = tile_v * w + tile_u;
+      if (!(tile_u >= 0.0 && tile_u < w && tile_v >= 0.0 && j < k && su <= 0.5 + kUvSlack && sv <= 0.5 + kUvSlack))
+        throw ParameterError(where() + " is in none of the " + std::to_string(k) + " sub-faces of this " +
+                             std::to_string(k) + "-sided face: sub-face j is the square of side 1/2 at (j mod " +
+                             std::to_string(w) + ", j div " + std::to_string(w) + "), j < " + std::to_string(k));
+      u = tile_u + std::clamp(su, 0.0, 0.5);
+      v = tile_v + std::clamp(sv, 0.0, 0.5);
+      return;
+    }
+  }
+}
+
 }  // namespace
 
-LoopSurface::LoopSurface(const Topology& topology, const double* vertices, Boundary boundary)
-    : impl_(std::make_unique<Impl>(topology, boundary)) {
+LimitSurface::LimitSurface(const Topology& topology, const double* vertices, Scheme scheme, Boundary boundary,
+                           const Tags& tags)
+    : impl_(std::make_unique<Impl>(topology, scheme, boundary, tags)) {
   Bfr::SurfaceFactory::Options options;
-  // Bfr represents the surface next to an extraordinary vertex by Gregory
-  // triangles after this many local refinements (default 2): 4 shrinks that
-  // region to the corner triangles of side 1/16, where OpenSubdiv's derivatives
-  // are approximate (it drops the derivative of the rational Gregory weights),
-  // at a small cost in evaluation time.
   options.SetApproxLevelSmooth(kApproxLevelSmooth);
+  options.SetApproxLevelSharp(kApproxLevelSharp);
   impl_->factory = std::make_unique<SurfaceFactory>(*impl_->base.refiner, options);
   set_vertices(vertices);
 }
 
-LoopSurface::~LoopSurface() = default;
-LoopSurface::LoopSurface(LoopSurface&&) noexcept = default;
-LoopSurface& LoopSurface::operator=(LoopSurface&&) noexcept = default;
+LimitSurface::~LimitSurface() = default;
+LimitSurface::LimitSurface(LimitSurface&&) noexcept = default;
+LimitSurface& LimitSurface::operator=(LimitSurface&&) noexcept = default;
 
-std::size_t LoopSurface::n_vertices() const { return impl_->topology.n_vertices(); }
-std::size_t LoopSurface::n_faces() const { return impl_->topology.n_faces(); }
-Boundary LoopSurface::boundary() const { return impl_->boundary; }
+std::size_t LimitSurface::n_vertices() const { return impl_->topology.n_vertices(); }
+std::size_t LimitSurface::n_faces() const { return impl_->topology.n_faces(); }
+Scheme LimitSurface::scheme() const { return impl_->scheme; }
+Boundary LimitSurface::boundary() const { return impl_->boundary; }
+const Tags& LimitSurface::tags() const { return impl_->tags; }
 
-void LoopSurface::set_vertices(const double* vertices) {
+void LimitSurface::set_vertices(const double* vertices) {
   const std::unique_lock<std::shared_mutex> lock(impl_->mutex);
   const std::size_t n = n_vertices();
   impl_->vertices.assign(vertices, vertices + 3 * n);
   detail::gather_points(impl_->base, vertices, impl_->points);
 }
 
-void LoopSurface::get_vertices(double* out) const {
+void LimitSurface::get_vertices(double* out) const {
   const std::shared_lock<std::shared_mutex> lock(impl_->mutex);
   std::copy(impl_->vertices.begin(), impl_->vertices.end(), out);
 }
 
-void LoopSurface::evaluate(const std::int32_t* face_ids, const double* uv, std::size_t k, double* positions,
-                           double* du, double* dv, double* normals) const {
-  const std::size_t n_f = n_faces();
-  std::vector<double> params(uv, uv + 2 * k);
-  for (std::size_t i = 0; i < k; ++i) {
-    if (face_ids[i] < 0 || static_cast<std::size_t>(face_ids[i]) >= n_f)
-      throw ParameterError("face_ids[" + std::to_string(i) + "] = " + std::to_string(face_ids[i]) +
-                           " is out of range [0, " + std::to_string(n_f) + ")");
-    double& u = params[2 * i];
-    double& v = params[2 * i + 1];
-    if (!(u >= -kUvSlack && v >= -kUvSlack && u + v <= 1.0 + kUvSlack))
-      throw ParameterError("uv[" + std::to_string(i) + "] = (" + std::to_string(u) + ", " + std::to_string(v) +
-                           ") is outside the triangle u >= 0, v >= 0, u + v <= 1");
-    u = std::max(u, 0.0);
-    v = std::max(v, 0.0);
-    if (u + v > 1.0) {
-      const double s = u + v;
-      u /= s;
-      v /= s;
-    }
-  }
+namespace {
+
+// Bfr evaluation of k checked points (face_ids[i], params[2i..2i+1]) of the
+// surface whose control points (in OpenSubdiv's order) are `mesh_points`;
+// derivative outputs may be null. The caller holds the surface's lock.
+void evaluate_points(const SurfaceFactory& factory, const double* mesh_points, const std::int32_t* face_ids,
+                     const double* params, std::size_t k, double* positions, double* du, double* dv,
+                     double* normals) {
   // Group the points by face so that each face's surface is built once.
   std::vector<std::size_t> order(k);
   std::iota(order.begin(), order.end(), std::size_t{0});
@@ -200,10 +277,7 @@ void LoopSurface::evaluate(const std::int32_t* face_ids, const double* uv, std::
   group_start.push_back(k);
   const auto n_groups = static_cast<std::ptrdiff_t>(group_start.size()) - 1;
 
-  const SurfaceFactory& factory = *impl_->factory;
   const bool want_derivs = du || dv || normals;
-  const std::shared_lock<std::shared_mutex> lock(impl_->mutex);
-  const double* mesh_points = &impl_->points.data()->x;
   std::atomic<int> failed_face{-1};
   // Each point is computed alone, so the thread count changes nothing in the
   // results. Chunks of faces are handed out in turn (their costs differ).
@@ -253,24 +327,141 @@ void LoopSurface::evaluate(const std::int32_t* face_ids, const double* uv, std::
     throw MeshError("OpenSubdiv's Bfr could not build the limit surface of face " + std::to_string(failed_face.load()));
 }
 
+}  // namespace
+
+void LimitSurface::evaluate(const std::int32_t* face_ids, const double* uv, std::size_t k, double* positions,
+                            double* du, double* dv, double* normals) const {
+  const std::size_t n_f = n_faces();
+  const SurfaceFactory& factory = *impl_->factory;
+  const auto& level0 = impl_->base.refiner->GetLevel(0);
+  std::vector<double> params(uv, uv + 2 * k);
+  for (std::size_t i = 0; i < k; ++i) {
+    const std::int32_t f = face_ids[i];
+    if (f < 0 || static_cast<std::size_t>(f) >= n_f)
+      throw ParameterError("face_ids[" + std::to_string(i) + "] = " + std::to_string(f) + " is out of range [0, " +
+                           std::to_string(n_f) + ")");
+    if (level0.IsFaceHole(f))
+      throw ParameterError("face_ids[" + std::to_string(i) + "] = " + std::to_string(f) +
+                           " is a hole: it has no limit surface");
+    check_uv(factory.GetFaceParameterization(f), i, params[2 * i], params[2 * i + 1]);
+  }
+  const std::shared_lock<std::shared_mutex> lock(impl_->mutex);
+  evaluate_points(factory, &impl_->points.data()->x, face_ids, params.data(), k, positions, du, dv, normals);
+}
+
 // The output loops of tessellate() poll for an interrupt once per this many rows.
 constexpr std::size_t kRowsPerPoll = std::size_t{1} << 16;
 
-TriMesh LoopSurface::tessellate(int level) {
+namespace {
+
+// (u, v) of corner `corner` of face `face` of level `level` of a uniformly
+// refined refiner, in the parameterisation of the control face it comes from
+// (written to *control_face). Walks up the parent faces: child j of a face
+// covers the part of its parent at the parent's corner j (Far's
+// QuadRefinement and TriRefinement), an affine image of the child's own
+// domain; every coordinate is dyadic, so the result is exact.
+void refined_corner_uv(const Far::TopologyRefiner& refiner, const SurfaceFactory& factory, int level, int face,
+                       int corner, int* control_face, double uv[2]) {
+  const bool tri = refiner.GetSchemeType() == Sdc::SCHEME_LOOP;
+  static constexpr double kSquare[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+  static constexpr double kTriangle[3][2] = {{0, 0}, {1, 0}, {0, 1}};
+  if (level == 0) {
+    factory.GetFaceParameterization(face).GetVertexCoord(corner, uv);
+    *control_face = face;
+    return;
+  }
+  uv[0] = tri ? kTriangle[corner][0] : kSquare[corner][0];
+  uv[1] = tri ? kTriangle[corner][1] : kSquare[corner][1];
+  for (int l = level; l >= 1; --l) {
+    const int parent = refiner.GetLevel(l).GetFaceParentFace(face);
+    const auto children = refiner.GetLevel(l - 1).GetFaceChildFaces(parent);
+    int j = 0;
+    while (children[j] != face) ++j;
+    // Images in the parent's domain of the child's local (0, 0), (1, 0), (0, 1).
+    double a[2], b[2], d[2];
+    const auto set = [](double* p, double x, double y) { p[0] = x, p[1] = y; };
+    const auto mid = [](double* p, const double* x, const double* y) {
+      p[0] = 0.5 * (x[0] + y[0]), p[1] = 0.5 * (x[1] + y[1]);
+    };
+    if (tri) {
+      // Children 0..2 at the corners keep the corner first in place; child 3
+      // is the middle one, (m1, m2, m0) with m_i the midpoint of edge i.
+      static constexpr double kChild[4][3][2] = {{{0, 0}, {0.5, 0}, {0, 0.5}},
+                                                 {{0.5, 0}, {1, 0}, {0.5, 0.5}},
+                                                 {{0, 0.5}, {0.5, 0.5}, {0, 1}},
+                                                 {{0.5, 0.5}, {0, 0.5}, {0.5, 0}}};
+      set(a, kChild[j][0][0], kChild[j][0][1]);
+      set(b, kChild[j][1][0], kChild[j][1][1]);
+      set(d, kChild[j][2][0], kChild[j][2][1]);
+    } else if (l - 1 > 0 || refiner.GetLevel(0).GetFaceVertices(parent).size() == 4) {
+      // Child j of a quad lists the parent's corner j at its own position j,
+      // then the midpoints of edges j, the centre and the midpoint of edge j - 1.
+      const auto image = [&](int i, double* p) {
+        const int r = (i - j + 4) % 4;
+        const double* cj = kSquare[j];
+        if (r == 0) set(p, cj[0], cj[1]);
+        if (r == 1) mid(p, cj, kSquare[(j + 1) % 4]);
+        if (r == 2) set(p, 0.5, 0.5);
+        if (r == 3) mid(p, cj, kSquare[(j + 3) % 4]);
+      };
+      image(0, a);
+      image(1, b);
+      image(3, d);
+    } else {
+      // Child j of a k-gon (k != 4) is sub-face j, corner j first.
+      double x[2];
+      factory.GetFaceParameterization(parent).GetVertexCoord(j, x);
+      set(a, x[0], x[1]);
+      set(b, x[0] + 0.5, x[1]);
+      set(d, x[0], x[1] + 0.5);
+    }
+    const double u = uv[0], v = uv[1];
+    uv[0] = a[0] + (b[0] - a[0]) * u + (d[0] - a[0]) * v;
+    uv[1] = a[1] + (b[1] - a[1]) * u + (d[1] - a[1]) * v;
+    face = parent;
+  }
+  *control_face = face;
+}
+
+bool semi_sharp(float sharpness) { return sharpness > 0.0f && sharpness < static_cast<float>(kInfiniteSharpness); }
+
+// Vertices of `level` whose limit Far's Limit() on that level does not give:
+// a vertex with a semi-sharp sharpness or edge (its rule changes on a later
+// level) and, under Catmull-Clark, a vertex of a non-quad face (the limit mask
+// takes a face's vertex two after the vertex as the opposite one).
+std::vector<int> inexact_limit_vertices(const Far::TopologyRefiner& refiner, int level) {
+  const auto& lv = refiner.GetLevel(level);
+  const bool catmark = refiner.GetSchemeType() == Sdc::SCHEME_CATMARK;
+  std::vector<int> out;
+  for (int v = 0; v < lv.GetNumVertices(); ++v) {
+    bool inexact = semi_sharp(lv.GetVertexSharpness(v));
+    for (const int e : lv.GetVertexEdges(v)) inexact = inexact || semi_sharp(lv.GetEdgeSharpness(e));
+    if (catmark)
+      for (const int f : lv.GetVertexFaces(v)) inexact = inexact || lv.GetFaceVertices(f).size() != 4;
+    if (inexact) out.push_back(v);
+  }
+  return out;
+}
+
+}  // namespace
+
+PolyMesh LimitSurface::tessellate(int level) {
   if (level < 0 || level > 15)
     throw ParameterError("level must be in 0..15, got " + std::to_string(level));
+  const Scheme scheme = impl_->scheme;
   const std::size_t n = n_vertices();
   const std::size_t m = n_faces();
-  const double out_faces = static_cast<double>(m) * std::pow(4.0, level);
+  const auto n_face_vertices = static_cast<std::size_t>(impl_->base.refiner->GetLevel(0).GetNumFaceVertices());
+  const double out_faces = tessellated_faces(scheme, m, n_face_vertices, level);
   if (out_faces > static_cast<double>(std::numeric_limits<std::int32_t>::max()))
-    throw ParameterError("level " + std::to_string(level) + " would make " + std::to_string(out_faces) +
-                         " triangles from " + std::to_string(m) + " (4^level per face), more than int32 indices hold");
-  const std::size_t need = tessellation_bytes(n, m, level);
+    throw ParameterError("level " + std::to_string(level) + " would make " + face_words(scheme, out_faces, level) +
+                         " from " + std::to_string(m) + ", more than int32 indices hold");
+  const std::size_t need = tessellation_bytes(scheme, n, m, n_face_vertices, level);
   const std::size_t avail = available_memory_bytes();
   if (avail != 0 && need > avail)
-    throw ParameterError("level " + std::to_string(level) + " makes " + std::to_string(static_cast<long long>(out_faces)) +
-                         " triangles (4^level per face) and needs about " + human_bytes(static_cast<double>(need)) +
-                         ", but only " + human_bytes(static_cast<double>(avail)) +
+    throw ParameterError("level " + std::to_string(level) + " makes " + face_words(scheme, out_faces, level) +
+                         " and needs about " + human_bytes(static_cast<double>(need)) + ", but only " +
+                         human_bytes(static_cast<double>(avail)) +
                          " of memory is available: use a lower level, or evaluate_limit at the points you need");
   const std::unique_lock<std::shared_mutex> lock(impl_->mutex);
 
@@ -305,35 +496,79 @@ TriMesh LoopSurface::tessellate(int level) {
   poll_interrupt();
   std::vector<Point3>().swap(src);
 
+  // Where Limit() is not the limit, Bfr evaluates the control faces' surface
+  // at the vertex's parameter (exact at the corners of its refined patches).
+  const auto& last = refiner.GetLevel(level);
+  {
+    const std::vector<int> fix = inexact_limit_vertices(refiner, level);
+    std::vector<int> fixed;
+    std::vector<std::int32_t> face_ids;
+    std::vector<double> params;
+    for (const int v : fix) {
+      const auto faces = last.GetVertexFaces(v);
+      const auto corners = last.GetVertexFaceLocalIndices(v);
+      int k = 0;
+      while (k < faces.size() && last.IsFaceHole(faces[k])) ++k;
+      if (k == faces.size()) continue;  // only in holes: no face shows it
+      int control_face = 0;
+      double uv[2];
+      refined_corner_uv(refiner, *impl_->factory, level, faces[k], corners[k], &control_face, uv);
+      fixed.push_back(v);
+      face_ids.push_back(control_face);
+      params.insert(params.end(), uv, uv + 2);
+    }
+    std::vector<double> p(3 * fixed.size());
+    evaluate_points(*impl_->factory, &impl_->points.data()->x, face_ids.data(), params.data(), fixed.size(),
+                    p.data(), nullptr, nullptr, nullptr);
+    for (std::size_t i = 0; i < fixed.size(); ++i) limit[fixed[i]] = Point3{p[3 * i], p[3 * i + 1], p[3 * i + 2]};
+  }
+
   // Refined vertices are ordered children of vertices first
-  // (orderVerticesFromFacesFirst = false), so the first n_osd of every level
-  // descend from the control vertices, in order.
+  // (orderVerticesFromFacesFirst = false), so the first vertices of every
+  // level descend from those of the level before, in order: the first n_osd
+  // descend from the control vertices.
   const auto& from = impl_->base.from_osd;
   const std::size_t n_osd = from.size();
-  const std::size_t n_out = n + (limit.size() - n_osd);
-  TriMesh out;
+  const auto n_level = static_cast<std::size_t>(last.GetNumVertices());
+  const std::size_t n_out = n + (n_level - n_osd);
+  PolyMesh out;
   out.vertices.resize(3 * n_out);
-  // Control vertices: B V exactly as sorpia::limit_points computes it (the
-  // refined level gives the same point up to rounding).
-  limit_points(impl_->topology, impl_->vertices.data(), impl_->boundary, out.vertices.data());
-  for (std::size_t i = n_osd; i < limit.size(); ++i) {
+  if (scheme == Scheme::Loop) {
+    // Control vertices: B V exactly as sorpia::limit_points computes it (the
+    // refined level gives the same point up to rounding, except at a dart,
+    // whose limit mask is not the limit of its refinement).
+    limit_points(impl_->topology, impl_->vertices.data(), impl_->boundary, impl_->tags, out.vertices.data());
+  } else {
+    std::copy(impl_->vertices.begin(), impl_->vertices.end(), out.vertices.begin());
+    for (std::size_t i = 0; i < n_osd; ++i) {
+      double* q = &out.vertices[3 * static_cast<std::size_t>(from[i])];
+      q[0] = limit[i].x;
+      q[1] = limit[i].y;
+      q[2] = limit[i].z;
+    }
+  }
+  for (std::size_t i = n_osd; i < n_level; ++i) {
     if (i % kRowsPerPoll == 0) poll_interrupt();
     double* q = &out.vertices[3 * (n + i - n_osd)];
     q[0] = limit[i].x;
     q[1] = limit[i].y;
     q[2] = limit[i].z;
   }
-  const auto& last = refiner.GetLevel(level);
-  const auto n_faces_out = static_cast<std::size_t>(last.GetNumFaces());
-  out.faces.resize(3 * n_faces_out);
+  std::vector<Point3>().swap(limit);
+
   const auto to_out = [&](int i) {
     return static_cast<std::int32_t>(static_cast<std::size_t>(i) < n_osd ? static_cast<std::size_t>(from[i])
                                                                          : n + static_cast<std::size_t>(i) - n_osd);
   };
-  for (std::size_t f = 0; f < n_faces_out; ++f) {
+  const auto n_faces_level = static_cast<std::size_t>(last.GetNumFaces());
+  out.face_counts.reserve(n_faces_level);
+  out.face_indices.reserve(static_cast<std::size_t>(last.GetNumFaceVertices()));
+  for (std::size_t f = 0; f < n_faces_level; ++f) {
     if (f % kRowsPerPoll == 0) poll_interrupt();
+    if (last.IsFaceHole(static_cast<int>(f))) continue;
     const auto fv = last.GetFaceVertices(static_cast<int>(f));
-    for (int c = 0; c < 3; ++c) out.faces[3 * f + c] = to_out(fv[c]);
+    out.face_counts.push_back(fv.size());
+    for (int c = 0; c < fv.size(); ++c) out.face_indices.push_back(to_out(fv[c]));
   }
   return out;
 }

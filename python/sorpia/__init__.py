@@ -14,7 +14,7 @@ from .sharp import sharp_edges
 from ._validate import Polygons
 from .mesh_repair import RepairResult, repair
 from .nonmanifold import NonmanifoldWarning
-from .surface import LoopSurface, evaluate_limit, limit_surface
+from .surface import LimitSurface, LoopSurface, evaluate_limit, limit_surface
 from . import shapes
 
 __all__ = [
@@ -28,8 +28,8 @@ __all__ = [
     "Polygons",
     "limit_points",
     "shapes",
-    "LoopSurface", "evaluate_limit", "limit_surface", "read_mesh", "write_mesh", "UnknownTagWarning",
-    "sharp_edges",
+    "LimitSurface", "LoopSurface", "evaluate_limit", "limit_surface", "read_mesh", "write_mesh",
+    "UnknownTagWarning", "sharp_edges",
     "RepairResult", "repair",
     "NonmanifoldWarning",
 ]

@@ -70,9 +70,9 @@ def read_mesh(path, triangulate: bool = False, tags: bool = False):
         Sharpness is as written (10 and above, or inf, is infinitely sharp;
         a negative one reads as 0, as OpenSubdiv reads it).
 
-    Tags
-    ----
-    The ``t`` lines of OpenSubdiv's shapes, read as its shape parser reads
+    Notes
+    -----
+    **Tags.** The ``t`` lines of OpenSubdiv's shapes, read as its shape parser reads
     them (``t NAME I/F/S`` then I integers, F numbers, S words):
     ``t crease 2/1/0 A B S`` (an edge; 2k integers are k edges, pairs not a
     chain, with one sharpness for all or one each), ``t corner 1/1/0 V S``,
@@ -84,9 +84,7 @@ def read_mesh(path, triangulate: bool = False, tags: bool = False):
     (they do not move vertices); any other name is skipped with an
     `UnknownTagWarning`.
 
-    Formats
-    -------
-    OBJ: ``v``, ``f`` and (with ``tags``) ``t`` lines; ``f`` accepts ``a``, ``a/b``, ``a//c``,
+    **Formats.** OBJ: ``v``, ``f`` and (with ``tags``) ``t`` lines; ``f`` accepts ``a``, ``a/b``, ``a//c``,
     ``a/b/c`` and negative (relative) indices; texture coordinates, normals,
     groups, materials and every other statement are ignored.
     OFF: OFF/COFF/NOFF/STOFF headers (extra per-vertex numbers and face colours

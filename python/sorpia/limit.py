@@ -74,8 +74,8 @@ TAGS_DOC = """creases : (edges (k, 2) int, sharpness (k,) float or one float), o
         there."""
 
 
-def limit_points(vertices, faces, boundary: str = DEFAULT_BOUNDARY, *, creases=None, corners=None,
-                 holes=None, nonmanifold: str = "error") -> np.ndarray:
+def limit_points(vertices, faces, boundary: str = DEFAULT_BOUNDARY, *, scheme: str = DEFAULT_SCHEME, creases=None,
+                 corners=None, holes=None, nonmanifold: str = "error") -> np.ndarray:
     """Loop limit positions of the vertices of a triangle mesh (paper eq. 5-6).
 
     Parameters
@@ -89,6 +89,9 @@ def limit_points(vertices, faces, boundary: str = DEFAULT_BOUNDARY, *, creases=N
         VTX_BOUNDARY_EDGE_ONLY). With "edge-and-corner" (the default) a
         boundary vertex with a single face stays where it is; with "edge-only"
         it gets the boundary mask (1/6, 2/3, 1/6).
+    scheme : {"loop", "catmull-clark"}
+        Loop (triangles only) or Catmull-Clark (any polygons; rows from
+        OpenSubdiv's refinement around each vertex and ``Limit()``).
     {tags}
     {nonmanifold}
 
@@ -109,11 +112,12 @@ def limit_points(vertices, faces, boundary: str = DEFAULT_BOUNDARY, *, creases=N
         control vertices (docs: "Creases, corners and holes").
     """
     if as_nonmanifold(nonmanifold) == "sharp":
-        return nonmanifold_sharp.limit_points(vertices, faces, boundary, dict(creases=creases, corners=corners,
-                                                                              holes=holes))
+        return nonmanifold_sharp.limit_points(vertices, faces, boundary, scheme,
+                                              dict(creases=creases, corners=corners, holes=holes))
     vertices = as_vertices(vertices)
-    topo = topology(faces, vertices.shape[0], count_name="len(vertices)")
-    return _core.limit_points(topo, vertices, as_boundary(boundary), tags(topo, creases, corners, holes))
+    topo = topology(faces, vertices.shape[0], scheme=scheme, count_name="len(vertices)")
+    return _core.limit_points(topo, vertices, as_boundary(boundary), tags(topo, creases, corners, holes),
+                              as_scheme(scheme))
 
 
 NONMANIFOLD_DOC = """nonmanifold : {"error", "sharp"}
@@ -129,21 +133,22 @@ NONMANIFOLD_DOC = """nonmanifold : {"error", "sharp"}
 limit_points.__doc__ = limit_points.__doc__.replace("{tags}", TAGS_DOC).replace("{nonmanifold}", NONMANIFOLD_DOC)
 
 
-def limit_matrix(faces, n_vertices: int, boundary: str = DEFAULT_BOUNDARY, *, creases=None, corners=None,
-                 holes=None, nonmanifold: str = "error") -> scipy.sparse.csr_matrix:
+def limit_matrix(faces, n_vertices: int, boundary: str = DEFAULT_BOUNDARY, *, scheme: str = DEFAULT_SCHEME,
+                 creases=None, corners=None, holes=None, nonmanifold: str = "error") -> scipy.sparse.csr_matrix:
     """The Loop limit matrix B (paper eq. 7) as a scipy CSR matrix, (n, n) float64.
 
     Row i holds the limit mask of vertex i as OpenSubdiv evaluates it, so that
     ``limit_matrix(F, len(V)) @ V == limit_points(V, F)``. Unreferenced vertices
-    get an identity row. See `limit_points` for `boundary`, the tags
-    (`creases`, `corners`, `holes`) and `nonmanifold`.
+    get an identity row. See `limit_points` for `boundary`, `scheme`, the
+    tags (`creases`, `corners`, `holes`) and `nonmanifold`.
     """
     import scipy.sparse  # here, not at import: sorpia's commands need no scipy
 
     if as_nonmanifold(nonmanifold) == "sharp":
-        return nonmanifold_sharp.limit_matrix(faces, n_vertices, boundary, dict(creases=creases, corners=corners,
-                                                                                holes=holes))
-    topo = topology(faces, n_vertices)  # validates n_vertices (as_vertex_count) and the faces
+        return nonmanifold_sharp.limit_matrix(faces, n_vertices, boundary, scheme,
+                                              dict(creases=creases, corners=corners, holes=holes))
+    topo = topology(faces, n_vertices, scheme=scheme)  # validates n_vertices (as_vertex_count) and the faces
     n = topo.n_vertices
-    data, indices, indptr = _core.limit_matrix(topo, as_boundary(boundary), tags(topo, creases, corners, holes))
+    data, indices, indptr = _core.limit_matrix(topo, as_boundary(boundary), tags(topo, creases, corners, holes),
+                                               as_scheme(scheme))
     return scipy.sparse.csr_matrix((data, indices, indptr), shape=(n, n))

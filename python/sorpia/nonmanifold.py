@@ -131,30 +131,30 @@ def _columns_to_input(vertex_map: np.ndarray, n: int):
     return scipy.sparse.csr_matrix((np.ones(k), (np.arange(k), vertex_map)), shape=(k, n))
 
 
-def limit_points(vertices, faces, boundary, tags: dict):
+def limit_points(vertices, faces, boundary, scheme, tags: dict):
     """`sorpia.limit_points` with nonmanifold="sharp"."""
     from .limit import limit_points as manifold_limit_points
 
     vertices = as_vertices(vertices)
     s = split(faces, len(vertices), boundary, **tags)
     if s is None:
-        return manifold_limit_points(vertices, faces, boundary, **tags)
-    return manifold_limit_points(vertices[s.vertex_map], s.faces, boundary, **s.tags)[: len(vertices)]
+        return manifold_limit_points(vertices, faces, boundary, scheme=scheme, **tags)
+    return manifold_limit_points(vertices[s.vertex_map], s.faces, boundary, scheme=scheme, **s.tags)[: len(vertices)]
 
 
-def limit_matrix(faces, n_vertices: int, boundary, tags: dict):
+def limit_matrix(faces, n_vertices: int, boundary, scheme, tags: dict):
     """`sorpia.limit_matrix` with nonmanifold="sharp": the split's rows of the
     input vertices, each copy's column added to its input vertex's."""
     from .limit import limit_matrix as manifold_limit_matrix
 
     s = split(faces, n_vertices, boundary, **tags)
     if s is None:
-        return manifold_limit_matrix(faces, n_vertices, boundary, **tags)
-    b = manifold_limit_matrix(s.faces, len(s.vertex_map), boundary, **s.tags)
+        return manifold_limit_matrix(faces, n_vertices, boundary, scheme=scheme, **tags)
+    b = manifold_limit_matrix(s.faces, len(s.vertex_map), boundary, scheme=scheme, **s.tags)
     return (b[:n_vertices] @ _columns_to_input(s.vertex_map, n_vertices)).tocsr()
 
 
-def interpolate(vertices, faces, boundary, tags: dict, **options):
+def interpolate(vertices, faces, boundary, scheme, tags: dict, **options):
     """`sorpia.interpolate` with nonmanifold="sharp": the split solved (its
     copies' targets their input vertices'), the input vertices' control
     vertices returned (each copy's equals its input vertex's to the solver's
@@ -164,9 +164,10 @@ def interpolate(vertices, faces, boundary, tags: dict, **options):
     vertices = as_vertices(vertices)
     s = split(faces, len(vertices), boundary, **tags)
     if s is None:
-        return manifold_interpolate(vertices, faces, boundary=boundary, **tags, **options)
-    return InputVertices(manifold_interpolate(vertices[s.vertex_map], s.faces, boundary=boundary, **s.tags, **options),
-                         len(vertices))
+        return manifold_interpolate(vertices, faces, boundary=boundary, scheme=scheme, **tags, **options)
+    result = manifold_interpolate(vertices[s.vertex_map], s.faces, boundary=boundary, scheme=scheme, **s.tags,
+                                  **options)
+    return InputVertices(result, len(vertices))
 
 
 class InputVertices:

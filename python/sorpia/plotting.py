@@ -3,10 +3,13 @@
 - `convergence_figure`: Figure 7, log10(E_k/E_0) against the iteration k, one
   labelled line per method.
 - `interpolation_figure`: Figure 3, four shaded panels seen by the same camera:
-  (a) the given mesh, (b) its Loop limit surface (it shrinks away from the
-  given vertices, drawn red), (c) the control mesh found by SOR-PIA with the
-  given vertices red and the new control vertices blue, (d) the limit surface
-  of that control mesh, passing through the red points.
+  (a) the given mesh, (b) its limit surface (it shrinks away from the given
+  vertices, drawn red), (c) the control mesh found by SOR-PIA with the given
+  vertices red and the new control vertices blue, (d) the limit surface of
+  that control mesh, passing through the red points. Triangles, quads and
+  other polygons are drawn as they are (flat shaded, so that sharp creases
+  show as sharp); crease edges and their limit curves (`crease_curves`) are
+  drawn in orange.
 
 matplotlib is an optional dependency (the ``plot`` extra); this
 module imports it only when a figure is drawn, and `require_matplotlib` says
@@ -32,6 +35,7 @@ GIVEN_COLOR = "#d62728"    # red: the given vertices V0 (paper Figure 3)
 CONTROL_COLOR = "#1f4fd6"  # blue: the control vertices found by SOR-PIA
 MESH_COLOR = np.array([0.80, 0.80, 0.78])
 SURFACE_COLOR = np.array([0.62, 0.74, 0.90])
+CREASE_COLOR = "#ff7f0e"   # orange: crease edges of the meshes, crease curves of the limit surfaces
 
 
 def require_matplotlib() -> None:
@@ -89,10 +93,18 @@ def convergence_figure(curves, tol: float | None = None, title: str | None = Non
     return fig
 
 
-def level_for_budget(n_faces: int, level: int, face_budget: int = FACE_BUDGET) -> int:
-    """The largest refinement level <= `level` whose tessellation
-    (n_faces * 4**level triangles) fits in `face_budget`; 0 at least."""
-    while level > 0 and n_faces * 4 ** level > face_budget:
+def level_for_budget(n_faces: int, level: int, face_budget: int = FACE_BUDGET, *,
+                     first_level_faces: int | None = None) -> int:
+    """The largest refinement level <= `level` whose tessellation fits in
+    `face_budget` faces; 0 at least. Loop: n_faces * 4**level triangles;
+    Catmull-Clark: pass `first_level_faces` (the faces' vertex counts summed,
+    the quads of level 1), giving first_level_faces * 4**(level - 1) quads."""
+    def faces(k):
+        if first_level_faces is None or k == 0:
+            return n_faces * 4 ** k
+        return first_level_faces * 4 ** (k - 1)
+
+    while level > 0 and faces(level) > face_budget:
         level -= 1
     return level
 
@@ -101,6 +113,111 @@ def _view_vector(elev: float, azim: float) -> np.ndarray:
     """Unit vector from the scene towards matplotlib's camera at (elev, azim)."""
     e, a = math.radians(elev), math.radians(azim)
     return np.array([math.cos(e) * math.cos(a), math.cos(e) * math.sin(a), math.sin(e)])
+
+
+class _Faces:
+    """Faces of any sizes for drawing: an (m, k) index array, or the counts +
+    indices of sorpia.Polygons (kept as an (m, k) array when every face has k
+    vertices)."""
+
+    def __init__(self, faces):
+        self.array = None
+        if hasattr(faces, "face_vertex_counts"):
+            counts = np.asarray(faces.face_vertex_counts, dtype=np.int64)
+            indices = np.asarray(faces.face_vertex_indices, dtype=np.int64)
+            if len(counts) and (counts == counts[0]).all():
+                self.array = indices.reshape(len(counts), int(counts[0]))
+            else:
+                self.counts, self.indices = counts, indices
+                self.starts = np.concatenate([[0], np.cumsum(counts)[:-1]]).astype(np.int64)
+        else:
+            self.array = np.asarray(faces, dtype=np.int64)
+
+    def __len__(self) -> int:
+        return len(self.array) if self.array is not None else len(self.counts)
+
+    def fan(self):
+        """(triangles (t, 3), owner (t,)): each face split into the fan from its
+        first vertex, and the face each triangle comes from."""
+        if self.array is not None:
+            m, k = self.array.shape
+            tris = np.concatenate([self.array[:, [0, j, j + 1]] for j in range(1, k - 1)]) if k > 2 else \
+                np.zeros((0, 3), np.int64)
+            return tris, np.tile(np.arange(m), max(k - 2, 0))
+        per_face = np.maximum(self.counts - 2, 0)
+        owner = np.repeat(np.arange(len(self.counts)), per_face)
+        j = np.arange(len(owner)) - (np.cumsum(per_face) - per_face)[owner] + 1  # 1..k-2 within each face
+        first = self.starts[owner]
+        return np.column_stack([self.indices[first], self.indices[first + j], self.indices[first + j + 1]]), owner
+
+    def normals(self, vertices) -> np.ndarray:
+        """(m, 3) unnormalised normals of the faces, twice their vector areas:
+        the sums of their fan triangles' `_face_normals`."""
+        tris, owner = self.fan()
+        tn = _face_normals(vertices, tris)
+        if self.array is not None and len(tris) == len(self.array):
+            return tn
+        return np.column_stack([np.bincount(owner, weights=tn[:, c], minlength=len(self)) for c in range(3)])
+
+    def polygons(self, vertices, keep):
+        """The kept faces' corner positions, as Poly3DCollection takes them."""
+        if self.array is not None:
+            return vertices[self.array[keep]]
+        return [vertices[self.indices[self.starts[f]:self.starts[f] + self.counts[f]]] for f in keep]
+
+    def rows(self):
+        """The faces as lists of vertex indices."""
+        if self.array is not None:
+            return self.array.tolist()
+        return [self.indices[s:s + c].tolist() for s, c in zip(self.starts, self.counts)]
+
+    def edge_sides(self, edges) -> np.ndarray:
+        """(k, 2, 2) int: for each edge (a, b), the (face, corner j) of the
+        faces whose corners j, j + 1 are (a, b) or (b, a), two per edge (the
+        same twice on a boundary). Raises ParameterError for a pair that is
+        not an edge."""
+        from .errors import ParameterError
+
+        edges = np.asarray(edges, dtype=np.int64).reshape(-1, 2)
+        found: dict = {(min(a, b), max(a, b)): [] for a, b in edges.tolist()}
+        for f, face in enumerate(self.rows()):
+            for j, (a, b) in enumerate(zip(face, face[1:] + face[:1])):
+                sides = found.get((min(a, b), max(a, b)))
+                if sides is not None:
+                    sides.append((f, j))
+        out = np.zeros((len(edges), 2, 2), dtype=np.int64)
+        for i, (a, b) in enumerate(edges.tolist()):
+            sides = found[(min(a, b), max(a, b))]
+            if not sides:
+                raise ParameterError(f"creases[{i}] = [{a}, {b}] is not an edge of the mesh")
+            out[i] = [sides[0], sides[-1]]
+        return out
+
+
+def crease_curves(surface, faces, edges, samples: int = 9):
+    """The limit curves of crease edges on a `sorpia.LimitSurface`, for
+    `interpolation_figure`: (points (k, samples, 3), normals (k, samples, 2,
+    3)), the unit normals of the surface on either side of the curve (the
+    same twice on a boundary), evaluated by Bfr along each edge's parameter
+    line (`sorpia.surface.edge_uv`)."""
+    from .surface import edge_uv
+
+    edges = np.asarray(edges, dtype=np.int64).reshape(-1, 2)
+    F = _Faces(faces)
+    rows = F.rows()
+    sides = F.edge_sides(edges)
+    t = np.linspace(0.0, 1.0, samples)
+    ids, uv = [], []
+    for k, (side_a, side_b) in enumerate(sides.tolist()):
+        for s, (f, j) in enumerate((side_a, side_b)):
+            # Along the edge from its first vertex to its second: reversed on the side that runs b -> a.
+            forward = rows[f][j] == edges[k][0]
+            ids.append(np.full(samples, f))
+            uv.append(edge_uv(surface.scheme, len(rows[f]), j, t if forward else t[::-1]))
+    p, _, _, n = surface.evaluate(np.concatenate(ids), np.concatenate(uv), derivatives=True)
+    p = p.reshape(len(sides), 2, samples, 3)
+    n = n.reshape(len(sides), 2, samples, 3)
+    return p[:, 0], np.transpose(n, (0, 2, 1, 3))
 
 
 def _face_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
@@ -156,21 +273,34 @@ def _shaded_colors(face_normals, base, light):
     return np.column_stack([rgb, np.ones(len(rgb))])
 
 
+def _crease_segments(points, normals, view, side, closed):
+    """Segments (s, 2, 3) of polylines `points` (k, p, 3) to draw, with the
+    unit normals (k, p, 2, 3) of the two sides: on a closed mesh only those
+    with a side facing the camera at an end (matplotlib does not hide lines
+    behind a surface)."""
+    seg = np.stack([points[:, :-1], points[:, 1:]], axis=2).reshape(-1, 2, 3)
+    if not closed:
+        return seg
+    facing = (side * (normals @ view) > 0).any(axis=2)  # (k, p): a side faces the camera
+    return seg[(facing[:, :-1] | facing[:, 1:]).ravel()]
+
+
 def interpolation_figure(vertices, faces, given_surface, control_vertices, fitted_surface, *,
                          size: tuple[int, int] = (1200, 1000), elev: float = 30.0, azim: float = -60.0,
                          face_budget: int = FACE_BUDGET, point_budget: int = POINT_BUDGET,
                          title: str | None = None, iterations: int | None = None, level: int | None = None,
-                         up: str = "z"):
+                         up: str = "z", scheme: str = "loop", creases=None, crease_curves=None):
     """The paper's Figure 3 in four panels, the same camera in each.
 
     Parameters
     ----------
     vertices : (n, 3) float64
         The given vertices V0 (drawn red).
-    faces : (m, 3) int
-        The given triangles (also the faces of the control mesh).
+    faces : (m, k) int array or sorpia.Polygons
+        The given faces (also the faces of the control mesh): triangles,
+        quads or any polygons, drawn as they are.
     given_surface : (V_s, F_s)
-        Tessellated Loop limit surface of the given mesh (panel b).
+        Tessellated limit surface of the given mesh (panel b); F_s as `faces`.
     control_vertices : (n, 3) float64
         Control vertices found by SOR-PIA (drawn blue, panel c).
     fitted_surface : (V_s, F_s)
@@ -182,16 +312,23 @@ def interpolation_figure(vertices, faces, given_surface, control_vertices, fitte
         stride of faces or markers is drawn (the panel title says so).
     up : {"x", "y", "z"}
         The axis drawn vertical (many mesh files have y up).
+    scheme : {"loop", "catmull-clark"}
+        Named in the titles.
+    creases : (k, 2) int, optional
+        Crease edges, drawn orange on the meshes (panels a and c).
+    crease_curves : (given, fitted), optional
+        Their limit curves on the two surfaces, each as `crease_curves`
+        returns them, drawn orange on panels b and d.
     """
-    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+    from mpl_toolkits.mplot3d.art3d import Line3DCollection, Poly3DCollection
 
     # A cyclic permutation of the axes (a rotation: orientation kept) puts `up` on z.
     axes = {"z": [0, 1, 2], "y": [2, 0, 1], "x": [1, 2, 0]}[up]
     V0 = np.asarray(vertices, dtype=float)[:, axes]
-    F = np.asarray(faces, dtype=np.int64)
+    F = _Faces(faces)
     Vc = np.asarray(control_vertices, dtype=float)[:, axes]
-    Vg, Fg = (np.asarray(given_surface[0], float)[:, axes], np.asarray(given_surface[1], np.int64))
-    Vf, Ff = (np.asarray(fitted_surface[0], float)[:, axes], np.asarray(fitted_surface[1], np.int64))
+    Vg, Fg = np.asarray(given_surface[0], float)[:, axes], _Faces(given_surface[1])
+    Vf, Ff = np.asarray(fitted_surface[0], float)[:, axes], _Faces(fitted_surface[1])
 
     view = _view_vector(elev, azim)
     up = np.array([0.0, 0.0, 1.0])
@@ -209,24 +346,51 @@ def interpolation_figure(vertices, faces, given_surface, control_vertices, fitte
     centre = (lo + hi) / 2
 
     # Face normals: of the given mesh once (side, markers, panel a), of each other surface once.
-    normals0 = _face_normals(V0, F)
+    normals0 = F.normals(V0)
     side = _visible_side(normals0, view)
     # Markers: on a (nearly) closed mesh only the vertices facing the camera
     # (matplotlib cannot hide points behind a surface); at most point_budget.
-    closed = _boundary_share(F, len(V0)) < 0.01
+    # Nearly closed: boundary edges under 5% of the edges of the faces' fans
+    # (OpenSubdiv's pawn and rook, open at the bottom, have 1.4% and 1.1%).
+    fan, _ = F.fan()
+    closed = _boundary_share(fan, len(V0)) < 0.05
     referenced = np.zeros(len(V0), bool)
-    referenced[F.ravel()] = True
-    shown = np.flatnonzero(referenced)  # np.unique(F) in O(n), without sorting 3m indices
+    referenced[fan.ravel()] = True
+    shown = np.flatnonzero(referenced)  # np.unique(F) in O(n), without sorting every index
     if closed:
-        shown = shown[side * (_vertex_normals(normals0, F, len(V0))[shown] @ view) > 0]
+        shown = shown[side * (_vertex_normals(_face_normals(V0, fan), fan, len(V0))[shown] @ view) > 0]
     stride = max(1, math.ceil(len(shown) / point_budget))
     shown = shown[::stride]
     marker = float(np.clip(3000.0 / max(len(shown), 1), 1.0, 14.0))
 
+    # Crease lines: the mesh edges with the normals of their two faces, the
+    # limit curves with the surface's normals on either side.
+    lines = [None] * 4
+    if creases is not None and len(creases):
+        crease_edges = np.asarray(creases, dtype=np.int64).reshape(-1, 2)
+        crease_faces = F.edge_sides(crease_edges)[:, :, 0]  # (k, 2)
+        for j, V in ((0, V0), (2, Vc)):
+            n = F.normals(V)[crease_faces]
+            n /= np.maximum(np.linalg.norm(n, axis=2, keepdims=True), 1e-300)
+            lines[j] = _crease_segments(V[crease_edges], np.repeat(n[:, None], 2, axis=1), view, side, closed)
+    if crease_curves is not None:
+        for j, (points, normals) in ((1, crease_curves[0]), (3, crease_curves[1])):
+            lines[j] = _crease_segments(np.asarray(points)[..., axes], np.asarray(normals)[..., axes], view, side,
+                                        closed)
+
+    # Magnify the box (matplotlib leaves wide margins) as far as its projection
+    # fits the panel: matplotlib scales the box to its aspect / |aspect|; the
+    # panels are about 0.86 * height / width as tall as they are wide.
+    box = extent / np.linalg.norm(extent)
+    screen_up = np.cross(view, right)
+    fit = max(np.abs(box * right).sum(), np.abs(box * screen_up).sum() / (0.86 * size[1] / size[0]))
+    zoom = min(1.35, 1.4 / fit)
+
     fig = _new_figure(*size)
+    name = {"loop": "Loop", "catmull-clark": "Catmull-Clark"}.get(scheme, scheme)
     panels = [
         ("(a) given mesh", V0, F, MESH_COLOR, True, [(V0, GIVEN_COLOR)]),
-        ("(b) Loop limit surface of the given mesh", Vg, Fg, SURFACE_COLOR, False, [(V0, GIVEN_COLOR)]),
+        (f"(b) {name} limit surface of the given mesh", Vg, Fg, SURFACE_COLOR, False, [(V0, GIVEN_COLOR)]),
         ("(c) control mesh by SOR-PIA" + (f", {iterations} iterations" if iterations is not None else ""),
          Vc, F, MESH_COLOR, True, [(Vc, CONTROL_COLOR), (V0, GIVEN_COLOR)]),
         ("(d) limit surface of the control mesh", Vf, Ff, SURFACE_COLOR, False, [(V0, GIVEN_COLOR)]),
@@ -234,22 +398,25 @@ def interpolation_figure(vertices, faces, given_surface, control_vertices, fitte
     for j, (label, Vp, Fp, base, edges, points) in enumerate(panels):
         ax = fig.add_subplot(2, 2, j + 1, projection="3d")
         ax.computed_zorder = False  # markers painted over the surface, not sorted with it
-        normals = normals0 if Vp is V0 else _face_normals(Vp, Fp)
+        normals = normals0 if Vp is V0 else Fp.normals(Vp)
         keep = _select_faces(normals, view, face_budget, side)
-        sub = Fp[keep]
         edgecolor = "none"
         linewidth = 0.0
-        if edges and len(sub) <= 20_000:
-            edgecolor, linewidth = (0.15, 0.15, 0.15, 0.6), 0.5 if len(sub) <= 3_000 else 0.15
-        coll = Poly3DCollection(Vp[sub], facecolors=_shaded_colors(normals[keep], base, light),
+        if edges and len(keep) <= 20_000:
+            edgecolor, linewidth = (0.15, 0.15, 0.15, 0.6), 0.5 if len(keep) <= 3_000 else 0.15
+        coll = Poly3DCollection(Fp.polygons(Vp, keep), facecolors=_shaded_colors(normals[keep], base, light),
                                 edgecolors=edgecolor, linewidths=linewidth)
         coll.set_zorder(1)
         ax.add_collection3d(coll)
+        if lines[j] is not None and len(lines[j]):
+            crease = Line3DCollection(lines[j], colors=CREASE_COLOR, linewidths=1.6)
+            crease.set_zorder(1.5)
+            ax.add_collection3d(crease)
         for z, (P, color) in enumerate(points):
             ax.scatter(P[shown, 0], P[shown, 1], P[shown, 2], s=marker, c=color, depthshade=False,
                        linewidths=0, zorder=2 + z)
-        if len(sub) < len(Fp):
-            label += f"\n({len(sub)} of {len(Fp)} faces drawn)"
+        if len(keep) < len(Fp):
+            label += f"\n({len(keep)} of {len(Fp)} faces drawn)"
         ax.set_title(label, fontsize=10)
         ax.set_xlim(centre[0] - extent[0] / 2, centre[0] + extent[0] / 2)
         ax.set_ylim(centre[1] - extent[1] / 2, centre[1] + extent[1] / 2)
@@ -257,7 +424,7 @@ def interpolation_figure(vertices, faces, given_surface, control_vertices, fitte
         ax.set_proj_type("ortho")
         ax.view_init(elev=elev, azim=azim)
         try:
-            ax.set_box_aspect(tuple(extent), zoom=1.35)
+            ax.set_box_aspect(tuple(extent), zoom=zoom)
         except TypeError:  # matplotlib < 3.7 has no zoom
             ax.set_box_aspect(tuple(extent))
         ax.set_axis_off()
@@ -268,7 +435,9 @@ def interpolation_figure(vertices, faces, given_surface, control_vertices, fitte
         note.append(f"every {stride}th vertex marked")
     if closed:
         note.append("vertices facing the camera marked")
-    fig.suptitle((title or "Loop limit surface and SOR-PIA interpolation (paper Figure 3)")
+    if crease_curves is not None or creases is not None:
+        note.append("creases orange")
+    fig.suptitle((title or f"{name} limit surface and SOR-PIA interpolation (paper Figure 3)")
                  + ("\n" + ", ".join(note) if note else ""), fontsize=11)
     fig.subplots_adjust(left=0.01, right=0.99, bottom=0.01, top=0.90, wspace=0.02, hspace=0.12)
     return fig

@@ -70,7 +70,7 @@ import numpy as np
 
 from . import _core
 from . import nonmanifold as nonmanifold_sharp
-from ._validate import DEFAULT_BOUNDARY, as_boundary, as_vertices
+from ._validate import DEFAULT_BOUNDARY, DEFAULT_SCHEME, as_boundary, as_scheme, as_vertices
 from .errors import ParameterError
 from .limit import TAGS_DOC as _TAGS_DOC
 from .limit import tags as _tags
@@ -153,6 +153,8 @@ class Interpolator:
         UnreferencedVerticesWarning.
     boundary : {"edge-and-corner", "edge-only"}
         Boundary rule, see sorpia.limit_points.
+    scheme : {"loop", "catmull-clark"}
+        Loop (triangles) or Catmull-Clark (any polygons).
     {tags}
 
     The spectral estimates a method needs (lambda_min for "wpia", rho for
@@ -160,29 +162,30 @@ class Interpolator:
     use and kept, so that running every method on one mesh pays for them once.
     """
 
-    def __init__(self, faces, n_vertices: int, boundary: str = DEFAULT_BOUNDARY, *, creases=None, corners=None,
-                 holes=None):
-        self._build(faces, n_vertices, boundary, "n_vertices", (creases, corners, holes))
+    def __init__(self, faces, n_vertices: int, boundary: str = DEFAULT_BOUNDARY, *, scheme: str = DEFAULT_SCHEME,
+                 creases=None, corners=None, holes=None):
+        self._build(faces, n_vertices, boundary, "n_vertices", scheme, (creases, corners, holes))
 
     @classmethod
-    def _for_vertices(cls, faces, n_vertices: int, boundary: str, tags: tuple) -> Interpolator:
+    def _for_vertices(cls, faces, n_vertices: int, boundary: str, scheme: str, tags: tuple) -> Interpolator:
         """As Interpolator(faces, n_vertices, boundary, creases=, corners=, holes=),
         for interpolate(): its messages call the count len(vertices), the rows
         of the caller's array."""
         self = cls.__new__(cls)
-        self._build(faces, n_vertices, boundary, "len(vertices)", tags)
+        self._build(faces, n_vertices, boundary, "len(vertices)", scheme, tags)
         return self
 
-    def _build(self, faces, n_vertices, boundary, count_name: str, tags: tuple) -> None:
+    def _build(self, faces, n_vertices, boundary, count_name: str, scheme: str, tags: tuple) -> None:
         t0 = time.perf_counter()
         self._boundary = as_boundary(boundary)
         self.boundary = _core.boundary_name(self._boundary)
         # validates n_vertices as limit_matrix does (as_vertex_count: no float, bool or negative count)
-        self.topology = _topology(faces, n_vertices, count_name=count_name)
+        self.scheme = _core.scheme_name(as_scheme(scheme))
+        self.topology = _topology(faces, n_vertices, scheme=scheme, count_name=count_name)
         self.n_vertices = self.topology.n_vertices
         self.tags = _tags(self.topology, *tags)
         t1 = time.perf_counter()
-        self._operator = _core.LimitOperator(self.topology, self._boundary, self.tags)
+        self._operator = _core.LimitOperator(self.topology, self._boundary, self.tags, as_scheme(scheme))
         t2 = time.perf_counter()
         self.build_timings = {"topology": t1 - t0, "operator": t2 - t1}
 
@@ -278,8 +281,8 @@ Interpolator.__doc__ = Interpolator.__doc__.replace("{tags}", _TAGS_DOC)
 
 def interpolate(vertices, faces, method: str = "sor", omega="auto", tol: float = 1e-10, max_iter: int = 1000,
                 boundary: str = DEFAULT_BOUNDARY, callback: Optional[Callable[[int, float], object]] = None, *,
-                sigma=None, alpha=None, weight=None, threads: int = 1, creases=None, corners=None,
-                holes=None, nonmanifold: str = "error") -> InterpolationResult:
+                sigma=None, alpha=None, weight=None, threads: int = 1, scheme: str = DEFAULT_SCHEME, creases=None,
+                corners=None, holes=None, nonmanifold: str = "error") -> InterpolationResult:
     """Control vertices whose Loop limit surface interpolates `vertices`.
 
     With ``nonmanifold="sharp"`` (see `limit_points`) a non-manifold mesh is
@@ -301,7 +304,7 @@ def interpolate(vertices, faces, method: str = "sor", omega="auto", tol: float =
     """
     if as_nonmanifold(nonmanifold) == "sharp":
         return nonmanifold_sharp.interpolate(
-            vertices, faces, boundary, dict(creases=creases, corners=corners, holes=holes), method=method,
+            vertices, faces, boundary, scheme, dict(creases=creases, corners=corners, holes=holes), method=method,
             omega=omega, tol=tol, max_iter=max_iter, callback=callback, sigma=sigma, alpha=alpha, weight=weight,
             threads=threads)
     t0 = time.perf_counter()
@@ -309,7 +312,7 @@ def interpolate(vertices, faces, method: str = "sor", omega="auto", tol: float =
     options = check_options(method, omega, tol, max_iter, callback, sigma=sigma, alpha=alpha, weight=weight,
                             threads=threads)
     v0 = as_vertices(vertices)
-    interp = Interpolator._for_vertices(faces, v0.shape[0], boundary, (creases, corners, holes))
+    interp = Interpolator._for_vertices(faces, v0.shape[0], boundary, scheme, (creases, corners, holes))
     res = interp._solve(v0, method, options, callback, t0)
     res._record_build(time.perf_counter() - t0, interp.build_timings["topology"], interp.build_timings["operator"])
     return res

@@ -1,18 +1,34 @@
-"""The Loop limit surface of a control mesh: evaluation at any (face, u, v) and
-uniform tessellation, through OpenSubdiv (Bfr and Far).
+"""The limit surface of a control mesh under Loop or Catmull-Clark
+subdivision, with OpenSubdiv's sharpness tags: evaluation at any
+(face, u, v) and uniform tessellation, through OpenSubdiv (Bfr and Far).
 
-Parameterisation of a face ``(a, b, c)`` (OpenSubdiv Bfr's triangle
-parameterisation): ``(u, v) = (0, 0)`` is vertex ``a``, ``(1, 0)`` is ``b``,
-``(0, 1)`` is ``c``; the face's limit patch is ``u >= 0, v >= 0, u + v <= 1``
-(values a rounding error, 1e-12, outside are pulled onto it, others refused).
+Parameterisation of a face (OpenSubdiv Bfr's, chosen by the scheme and the
+face's size k; values a rounding error, 1e-12, outside the domain are pulled
+onto it, others refused):
+
+- Loop, a triangle ``(a, b, c)``: ``(u, v) = (0, 0)`` is ``a``, ``(1, 0)`` is
+  ``b``, ``(0, 1)`` is ``c``; the face is ``u >= 0, v >= 0, u + v <= 1``.
+- Catmull-Clark, a quad ``(a, b, c, d)``: the unit square, ``(0, 0)`` is
+  ``a``, ``(1, 0)`` is ``b``, ``(1, 1)`` is ``c``, ``(0, 1)`` is ``d``.
+- Catmull-Clark, any other k-gon (a triangle included): the face's limit
+  surface is k quad sub-faces, one at each corner (the quads of its first
+  subdivision). Sub-face j is the square ``[x_j, x_j + 1/2] x [y_j, y_j +
+  1/2]`` with ``(x_j, y_j) = (j % w, j // w)``, where w = 2 for k < 5, 3 for
+  k = 5..9 and ``1 + isqrt(k - 1)`` from k = 10 (`subface_columns`).
+  ``(x_j, y_j)`` is corner j, ``(x_j + 1/2, y_j)`` the midpoint of edge j
+  (corner j to j + 1), ``(x_j, y_j + 1/2)`` the midpoint of edge j - 1 and
+  ``(x_j + 1/2, y_j + 1/2)`` the centre of the face. Doubling the offset
+  within a sub-face gives Ptex's coordinates of that sub-face.
 """
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from . import _core
-from ._validate import DEFAULT_BOUNDARY, as_boundary, as_vertices
+from ._validate import DEFAULT_BOUNDARY, DEFAULT_SCHEME, Polygons, as_boundary, as_scheme, as_tags, as_vertices
 from .errors import ParameterError
 from .limit import topology
 
@@ -26,35 +42,92 @@ def _as_level(level) -> int:
     return level
 
 
-class LoopSurface:
-    """The Loop limit surface of a triangle mesh: build once, query many.
+def subface_columns(face_size: int) -> int:
+    """Columns w of the grid of sub-faces of a k-gon under Catmull-Clark
+    (k != 4): corner j of the face is at ``(u, v) = (j % w, j // w)``."""
+    k = int(face_size)
+    if k < 3:
+        raise ParameterError(f"face_size must be at least 3, got {k}")
+    return (3 if k > 4 else 2) if k < 10 else 1 + math.isqrt(k - 1)
+
+
+def corner_uv(scheme: str, face_size: int, corner: int) -> tuple[float, float]:
+    """(u, v) of corner `corner` of a face of `face_size` vertices in Bfr's
+    parameterisation under `scheme` (see the module docstring)."""
+    k, j = int(face_size), int(corner)
+    if scheme == "loop":
+        return [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0)][j]
+    if k == 4:
+        return [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)][j]
+    w = subface_columns(k)
+    return float(j % w), float(j // w)
+
+
+def edge_uv(scheme: str, face_size: int, edge: int, t) -> np.ndarray:
+    """(len(t), 2) parameters of the points at t in [0, 1] along edge `edge`
+    (corner `edge` to corner `edge + 1`) of a face, in Bfr's
+    parameterisation (Bfr::Parameterization::GetEdgeCoord): straight from
+    corner to corner in a triangle or a quad; in a k-gon's sub-faces the
+    first half runs in sub-face `edge` and the second in sub-face `edge + 1`."""
+    t = np.asarray(t, dtype=float)[:, None]
+    a = np.array(corner_uv(scheme, face_size, edge))
+    b = np.array(corner_uv(scheme, face_size, (edge + 1) % face_size))
+    if scheme == "loop" or face_size == 4:
+        return a + t * (b - a)
+    return np.where(t < 0.5, a + t * [1.0, 0.0], b + (1.0 - t) * [0.0, 1.0])
+
+
+def _faces_out(faces, counts):
+    """A tessellation's faces as the core returns them: an (m, k) array, or
+    sorpia.Polygons when the sizes differ."""
+    return faces if counts is None else Polygons(counts, faces)
+
+
+class LimitSurface:
+    """The limit surface of a control mesh under Loop or Catmull-Clark
+    subdivision, with sharpness tags: build once, query many.
 
     Keeps the validated topology and OpenSubdiv's structures (a Far topology
-    refiner, the Bfr surface factory and its cache of irregular patches, and
-    the refined topology of the last tessellation level), so that repeated
-    evaluation, and new control vertices on the same faces (`set_vertices`, as
-    in the PIA loop), cost no rebuild.
+    refiner carrying the tags, the Bfr surface factory and its cache of
+    irregular patches, and the refined topology of the last tessellation
+    level), so that repeated evaluation, and new control vertices on the same
+    faces (`set_vertices`, as in the PIA loop), cost no rebuild.
 
     Parameters
     ----------
     vertices : array_like, (n, 3) float
         Control vertices.
-    faces : array_like, (m, 3) int
-        Triangles, consistently oriented, manifold.
+    faces : array_like
+        Faces, consistently oriented, manifold: an (m, 3) array for Loop; for
+        Catmull-Clark any polygons.
     boundary : {"edge-and-corner", "edge-only"}
         Boundary rule, as in `sorpia.limit_points`.
+    scheme : {"loop", "catmull-clark"}
+        Subdivision scheme (OpenSubdiv's SCHEME_LOOP or SCHEME_CATMARK).
+    creases : (edges, sharpness), optional
+        Sharp edges: an (k, 2) int array of vertex pairs and a sharpness per
+        edge (or one for all); ``inf`` (or 10 and more) is infinitely sharp,
+        smaller values are semi-sharp.
+    corners : (vertices, sharpness), optional
+        Sharp vertices, as for creases.
+    holes : array_like of int, optional
+        Faces that are holes: they have no limit surface.
 
     Notes
     -----
-    Parameterisation of face ``(a, b, c)``: ``(0, 0)`` is ``a``, ``(1, 0)`` is
-    ``b``, ``(0, 1)`` is ``c``; ``u >= 0, v >= 0, u + v <= 1``.
+    The parameterisation of each kind of face is described in the module
+    docstring (`sorpia.surface`). ``LoopSurface`` is another name for this
+    class.
     """
 
-    def __init__(self, vertices, faces, boundary: str = DEFAULT_BOUNDARY):
+    def __init__(self, vertices, faces, boundary: str = DEFAULT_BOUNDARY, *, scheme: str = DEFAULT_SCHEME,
+                 creases=None, corners=None, holes=None):
         vertices = as_vertices(vertices)
         self._boundary = as_boundary(boundary)
-        self._topology = topology(faces, vertices.shape[0], count_name="len(vertices)")
-        self._surface = _core.LoopSurface(self._topology, vertices, self._boundary)
+        self._scheme = as_scheme(scheme)
+        self._topology = topology(faces, vertices.shape[0], scheme=scheme, count_name="len(vertices)")
+        tags = as_tags(creases, corners, holes, n_vertices=vertices.shape[0], n_faces=self._topology.n_faces)
+        self._surface = _core.LimitSurface(self._topology, vertices, self._scheme, self._boundary, tags)
 
     @property
     def n_vertices(self) -> int:
@@ -65,6 +138,11 @@ class LoopSurface:
     def n_faces(self) -> int:
         """Number of control faces, m."""
         return self._surface.n_faces
+
+    @property
+    def scheme(self) -> str:
+        """The subdivision scheme, "loop" or "catmull-clark"."""
+        return _core.scheme_name(self._scheme)
 
     @property
     def boundary(self) -> str:
@@ -87,10 +165,15 @@ class LoopSurface:
         Parameters
         ----------
         face_ids : array_like, (k,) int
-            Face of each point, in [0, m).
+            Face of each point, in [0, m); not a hole.
         uv : array_like, (k, 2) float
-            Parameters in the face: (0, 0) is its first vertex, (1, 0) its
-            second, (0, 1) its third; u >= 0, v >= 0, u + v <= 1.
+            Parameters in the face (see the module docstring): for a Loop
+            triangle (0, 0) is its first vertex, (1, 0) its second, (0, 1)
+            its third; for a Catmull-Clark quad the unit square, (0, 0) its
+            first vertex, (1, 0), (1, 1), (0, 1) the next ones; for another
+            k-gon corner j is at ``(j % w, j // w)`` with ``w =
+            subface_columns(k)``, and the points of sub-face j are within 1/2
+            of it in u and v.
         derivatives : bool
             Also return the tangents and the unit normal.
 
@@ -110,14 +193,16 @@ class LoopSurface:
         Notes
         -----
         Accuracy near extraordinary vertices: Bfr represents the surface in
-        the corner triangle of side 1/16 (in u, v) at a vertex of valence
-        other than 6 (4 on the boundary) by a Gregory triangle, after 4 local
-        refinements. There positions approximate the limit surface (exactly
-        at the corners of the refined triangles) and OpenSubdiv's derivatives
-        approximate the derivatives of those positions (it drops the
-        derivative of the rational Gregory weights): tangents within a few
-        percent, normals within a few hundredths of a radian of finite
-        differences (the tests hold them to 0.05 rad).
+        the corner region of side 1/16 (in u, v) at an extraordinary vertex
+        (valence other than 6 for Loop, 4 for Catmull-Clark; 4 and 3 on the
+        boundary) by a Gregory patch, after 4 local refinements. There
+        positions approximate the limit surface (exactly at the corners of the
+        refined faces) and OpenSubdiv's derivatives approximate the
+        derivatives of those positions (it drops the derivative of the
+        rational Gregory weights): tangents within a few percent, normals
+        within a few hundredths of a radian of finite differences (the tests
+        hold them to 0.05 rad). Semi-sharp creases and corners are resolved
+        by Bfr's local refinement until their sharpness has decayed.
         Elsewhere tangents and normals agree with finite differences of the
         positions to 1e-9.
         """
@@ -143,67 +228,91 @@ class LoopSurface:
         return self._surface.evaluate(face_ids, uv, bool(derivatives))
 
     def tessellate(self, level: int = 3):
-        """The limit surface as a triangle mesh; see `limit_surface`.
+        """The limit surface as a mesh; see `limit_surface`.
 
         The refined topology of the last level asked for is kept, so a second
         call at the same level (e.g. after `set_vertices`) only recomputes
         positions.
         """
-        return self._surface.tessellate(_as_level(level))
+        vertices, faces, counts = self._surface.tessellate(_as_level(level))
+        return vertices, _faces_out(faces, counts)
 
 
-def limit_surface(vertices, faces, level: int = 3, boundary: str = DEFAULT_BOUNDARY):
-    """The Loop limit surface as a triangle mesh: uniform refinement to `level`
-    with every output vertex at its exact limit position.
+LoopSurface = LimitSurface
+
+
+def limit_surface(vertices, faces, level: int = 3, boundary: str = DEFAULT_BOUNDARY, *,
+                  scheme: str = DEFAULT_SCHEME, creases=None, corners=None, holes=None):
+    """The limit surface as a mesh: uniform refinement to `level` with every
+    output vertex at its exact limit position.
 
     Computed by OpenSubdiv's ``Far::PrimvarRefinerReal<double>``: positions
-    interpolated level by level (the Loop masks, paper eq. 2-4), then each
-    vertex of the last level moved to its limit position (paper eq. 5-6).
+    interpolated level by level (the scheme's refinement masks, paper eq.
+    2-4 for Loop), then each vertex of the last level moved to its limit
+    position (paper eq. 5-6). With semi-sharp tags the refinement goes on
+    until every sharpness has decayed (level ``ceil`` of the largest one),
+    where OpenSubdiv's limit masks are exact, and each output vertex takes
+    the limit position of its descendant there.
 
     Parameters
     ----------
     vertices : array_like, (n, 3) float
         Control vertices.
-    faces : array_like, (m, 3) int
-        Triangles, consistently oriented, manifold.
+    faces : array_like
+        Faces, consistently oriented, manifold; see `LimitSurface`.
     level : int, 0..15
-        Refinement level. Size grows as 4**level: the output has m * 4**level
-        triangles and about n + m * (4**level - 1) / 2 vertices. Memory at the
-        peak is about 270 bytes per output triangle (OpenSubdiv's refined
-        topology of every level plus the output arrays), e.g. level 2 of a
-        100k-vertex closed mesh (200k faces): 3.2M triangles, under 1 GB;
-        level 3: 12.8M triangles, about 3.4 GB. A level whose estimate
-        exceeds the memory left to the process now (free memory, ulimit -v,
-        the cgroup's memory limit) raises ParameterError.
+        Refinement level. Loop: the output has m * 4**level triangles and
+        about n + m * (4**level - 1) / 2 vertices. Catmull-Clark: level 0 is
+        the control polygons; from level 1 a k-sided face gives
+        k * 4**(level - 1) quads, and the output has about as many vertices as
+        quads. Memory at the peak is about 270 bytes per output triangle and
+        380 per output quad (OpenSubdiv's refined topology of every level
+        plus the output arrays), e.g. Loop level 2 of a 100k-vertex closed
+        mesh (200k faces): 3.2M triangles, under 1 GB; level 3: 12.8M
+        triangles, about 3.4 GB. A level whose estimate exceeds the memory
+        left to the process now (free memory, ulimit -v, the cgroup's memory
+        limit) raises ParameterError.
     boundary : {"edge-and-corner", "edge-only"}
         Boundary rule, as in `sorpia.limit_points`.
+    scheme, creases, corners, holes
+        As in `LimitSurface`.
 
     Returns
     -------
     vertices : (n_s, 3) float64
         Limit positions. Rows 0..n-1 descend from the control vertices and
-        equal ``limit_points(vertices, faces)`` (B V) exactly; unreferenced
-        control vertices stay where they are.
-    faces : (m * 4**level, 3) int32
-        Triangles; rows ``f * 4**level .. (f + 1) * 4**level - 1`` cover
-        control face f, with its orientation.
+        equal ``limit_points(vertices, faces)`` (B V); unreferenced control
+        vertices stay where they are. The vertices of a level are the first
+        rows of every higher level's, in the same order.
+    faces : (m_s, 3) or (m_s, 4) int32, or sorpia.Polygons
+        Triangles (Loop) or quads (Catmull-Clark); the control polygons at
+        Catmull-Clark's level 0 (sorpia.Polygons when their sizes differ).
+        The faces refined from control face f are one block of rows, after
+        those of the faces before it, with f's orientation
+        (``f * 4**level .. (f + 1) * 4**level - 1`` for Loop). Faces of holes
+        are left out.
     """
-    return LoopSurface(vertices, faces, boundary).tessellate(level)
+    return LimitSurface(vertices, faces, boundary, scheme=scheme, creases=creases, corners=corners,
+                        holes=holes).tessellate(level)
 
 
-def evaluate_limit(vertices, faces, face_ids, uv, derivatives: bool = False, boundary: str = DEFAULT_BOUNDARY):
+def evaluate_limit(vertices, faces, face_ids, uv, derivatives: bool = False, boundary: str = DEFAULT_BOUNDARY, *,
+                   scheme: str = DEFAULT_SCHEME, creases=None, corners=None, holes=None):
     """Limit surface positions (and with ``derivatives=True`` the tangents and
     the unit normal) at points (face_ids[i], uv[i]); one-call form of
-    ``LoopSurface(vertices, faces, boundary).evaluate(face_ids, uv, derivatives)``.
+    ``LimitSurface(vertices, faces, boundary, scheme=...).evaluate(face_ids,
+    uv, derivatives)``.
 
-    Parameterisation of face ``(a, b, c)``: ``(0, 0)`` is ``a``, ``(1, 0)`` is
-    ``b``, ``(0, 1)`` is ``c``; u >= 0, v >= 0, u + v <= 1. Evaluated with
+    The parameterisation of each kind of face is in `LimitSurface.evaluate`
+    and the module docstring; for a Loop triangle ``(a, b, c)``, ``(0, 0)`` is
+    ``a``, ``(1, 0)`` is ``b``, ``(0, 1)`` is ``c``. Evaluated with
     OpenSubdiv's Bfr, which is exact at face corners (equal to `limit_points`)
     under both boundary rules.
 
     Returns
     -------
     positions : (k, 3) float64, or the tuple (positions, du, dv, normals) of
-    (k, 3) float64 arrays with ``derivatives=True``; see `LoopSurface.evaluate`.
+    (k, 3) float64 arrays with ``derivatives=True``; see `LimitSurface.evaluate`.
     """
-    return LoopSurface(vertices, faces, boundary).evaluate(face_ids, uv, derivatives)
+    return LimitSurface(vertices, faces, boundary, scheme=scheme, creases=creases, corners=corners,
+                        holes=holes).evaluate(face_ids, uv, derivatives)

@@ -161,4 +161,23 @@ TEST(Creases, ACreaseThatIsNoEdgeIsNamed) {
       {"creases[1] = [0, " + std::to_string(far) + "] is not an edge of the mesh"});
 }
 
+// Catmull-Clark: every row from the local refiners against the whole mesh
+// refined by OpenSubdiv, with and without tags, on quads and mixed polygons.
+TEST(Creases, CatmullClarkRowsAreFarsRefinedLimit) {
+  const std::vector<std::pair<std::string, sorpia::PolyMesh>> polys = {
+      {"quad_torus(8, 6)", sorpia::quad_torus(8, 6)},
+      {"quad_grid(6, 5)", sorpia::quad_grid(6, 5)},
+      {"quad_irregular(300)", sorpia::quad_irregular(300, 2)},
+      {"polygon_torus(9, 7)", sorpia::polygon_torus(9, 7, 3)}};
+  for (const auto& [name, m] : polys)
+    for (Boundary b : {Boundary::EdgeAndCorner, Boundary::EdgeOnly})
+      for (unsigned seed : {0u, 6u}) {
+        const sorpia::Topology t(m.face_counts.data(), m.n_faces(), m.face_indices.data(), m.n_vertices());
+        const Tags tags = seed ? random_tags(t, seed, {0.5, 1.0, 2.0, 2.5, kInf}, 0.12) : Tags{};
+        const auto op = sorpia::limit_operator(t, Scheme::CatmullClark, b, tags);
+        const auto ref = sorpia::reference_limit_matrix(t, Scheme::CatmullClark, b, tags);
+        EXPECT_LE(max_entry_diff(sorpia::to_csr(op), ref), 1e-14) << name << " seed " << seed;
+      }
+}
+
 }  // namespace

@@ -130,8 +130,8 @@ TEST(Interrupt, SpectralEstimateStopsAndLeavesItsCacheUnset) {
 TEST(Interrupt, TessellationAndEvaluationStop) {
   const sorpia::TriMesh m = sorpia::icosphere(2);
   const sorpia::Topology topo(m.faces.data(), m.n_faces(), m.n_vertices());
-  sorpia::LoopSurface s(topo, m.vertices.data(), sorpia::Boundary::EdgeAndCorner);
-  sorpia::LoopSurface fresh(topo, m.vertices.data(), sorpia::Boundary::EdgeAndCorner);
+  sorpia::LimitSurface s(topo, m.vertices.data(), sorpia::Scheme::Loop, sorpia::Boundary::EdgeAndCorner);
+  sorpia::LimitSurface fresh(topo, m.vertices.data(), sorpia::Scheme::Loop, sorpia::Boundary::EdgeAndCorner);
   const std::vector<std::int32_t> face(1, 0);
   const std::vector<double> uv{0.25, 0.25};
   double p[3];
@@ -145,9 +145,9 @@ TEST(Interrupt, TessellationAndEvaluationStop) {
     EXPECT_THROW(s.evaluate(face.data(), uv.data(), 1, p, nullptr, nullptr, nullptr), Interrupted);
   }
   EXPECT_EQ(stop.asked, 2);
-  const sorpia::TriMesh t = s.tessellate(2), f = fresh.tessellate(2);
+  const sorpia::PolyMesh t = s.tessellate(2), f = fresh.tessellate(2);
   EXPECT_EQ(t.vertices, f.vertices);
-  EXPECT_EQ(t.faces, f.faces);
+  EXPECT_EQ(t.face_indices, f.face_indices);
 }
 
 TEST(Interrupt, ReadingAFileStops) {

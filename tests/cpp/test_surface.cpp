@@ -1,4 +1,4 @@
-// LoopSurface: corners and tessellated control vertices are the limit points.
+// LimitSurface: corners and tessellated control vertices are the limit points.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -14,7 +14,7 @@ namespace {
 
 using sorpia::Boundary;
 
-TEST(LoopSurface, CornersEqualLimitPointsUnderBothBoundaryRules) {
+TEST(LimitSurface, CornersEqualLimitPointsUnderBothBoundaryRules) {
   // (0,0), (1,0), (0,1) are the face's vertices 0, 1, 2. Bfr and Far's Limit
   // use different arithmetic: 1e-14 on a unit-sized mesh.
   const auto m = sorpia::grid(6, 5);
@@ -22,7 +22,7 @@ TEST(LoopSurface, CornersEqualLimitPointsUnderBothBoundaryRules) {
   for (const Boundary b : {Boundary::EdgeAndCorner, Boundary::EdgeOnly}) {
     std::vector<double> lp(m.vertices.size());
     sorpia::limit_points(topo, m.vertices.data(), b, lp.data());
-    const sorpia::LoopSurface s(topo, m.vertices.data(), b);
+    const sorpia::LimitSurface s(topo, m.vertices.data(), sorpia::Scheme::Loop, b);
     std::vector<std::int32_t> ids;
     std::vector<double> uv;
     for (std::size_t f = 0; f < m.n_faces(); ++f)
@@ -38,10 +38,10 @@ TEST(LoopSurface, CornersEqualLimitPointsUnderBothBoundaryRules) {
   }
 }
 
-TEST(LoopSurface, TessellationStartsWithTheLimitPointsAndGrowsFourfold) {
+TEST(LimitSurface, TessellationStartsWithTheLimitPointsAndGrowsFourfold) {
   const auto m = sorpia::icosphere(1);
   const sorpia::Topology topo(m.faces.data(), m.n_faces(), m.n_vertices());
-  sorpia::LoopSurface s(topo, m.vertices.data(), Boundary::EdgeAndCorner);
+  sorpia::LimitSurface s(topo, m.vertices.data(), sorpia::Scheme::Loop, Boundary::EdgeAndCorner);
   std::vector<double> lp(m.vertices.size());
   sorpia::limit_points(topo, m.vertices.data(), Boundary::EdgeAndCorner, lp.data());
   const auto t = s.tessellate(2);
@@ -53,10 +53,10 @@ TEST(LoopSurface, TessellationStartsWithTheLimitPointsAndGrowsFourfold) {
     EXPECT_LT(std::hypot(t.vertices[3 * i], t.vertices[3 * i + 1], t.vertices[3 * i + 2]), 1.0);
 }
 
-TEST(LoopSurface, RefusesBadLevelsAndPoints) {
+TEST(LimitSurface, RefusesBadLevelsAndPoints) {
   const auto m = sorpia::icosphere(0);
   const sorpia::Topology topo(m.faces.data(), m.n_faces(), m.n_vertices());
-  sorpia::LoopSurface s(topo, m.vertices.data(), Boundary::EdgeAndCorner);
+  sorpia::LimitSurface s(topo, m.vertices.data(), sorpia::Scheme::Loop, Boundary::EdgeAndCorner);
   EXPECT_THROW(s.tessellate(16), sorpia::ParameterError);
   const std::int32_t bad_face = 20;
   const double uv[2] = {0.2, 0.2};
@@ -65,7 +65,49 @@ TEST(LoopSurface, RefusesBadLevelsAndPoints) {
   const std::int32_t face = 0;
   const double outside[2] = {0.7, 0.7};
   EXPECT_THROW(s.evaluate(&face, outside, 1, p, nullptr, nullptr, nullptr), sorpia::ParameterError);
-  EXPECT_GT(sorpia::tessellation_bytes(m.n_vertices(), m.n_faces(), 15), std::size_t{1} << 40);
+  EXPECT_GT(sorpia::tessellation_bytes(sorpia::Scheme::Loop, m.n_vertices(), m.n_faces(), 0, 15), std::size_t{1} << 40);
+}
+
+}  // namespace
+
+namespace {
+
+// Corner j of a k-gon in Bfr's parameterisation under Catmull-Clark (surface.hpp).
+std::pair<double, double> catmark_corner(int k, int j) {
+  if (k == 4) return {static_cast<double>(j == 1 || j == 2), static_cast<double>(j >= 2)};
+  const int w = k < 10 ? (k < 5 ? 2 : 3) : 1 + static_cast<int>(std::sqrt(static_cast<double>(k - 1)));
+  return {static_cast<double>(j % w), static_cast<double>(j / w)};
+}
+
+TEST(LimitSurface, CatmullClarkPolygonsGiveQuadsAndExactCorners) {
+  // Mixed triangles, quads, pentagons and hexagons: level 0 is the control
+  // polygons, level 1 one quad per corner, level 2 four times as many; Bfr at
+  // every corner equals the tessellation's control vertex (Far refinement +
+  // Limit(), or Bfr where Far's Limit() does not apply) to 1e-12.
+  const sorpia::PolyMesh m = sorpia::polygon_torus(10, 6, 3);
+  const sorpia::Topology topo(m.face_counts.data(), m.n_faces(), m.face_indices.data(), m.n_vertices());
+  sorpia::LimitSurface s(topo, m.vertices.data(), sorpia::Scheme::CatmullClark, Boundary::EdgeAndCorner);
+  const sorpia::PolyMesh t0 = s.tessellate(0), t1 = s.tessellate(1), t2 = s.tessellate(2);
+  EXPECT_EQ(t0.face_counts, m.face_counts);
+  EXPECT_EQ(t0.face_indices, m.face_indices);
+  EXPECT_EQ(t1.n_faces(), m.face_indices.size());
+  EXPECT_EQ(t2.n_faces(), 4 * m.face_indices.size());
+  for (const auto* t : {&t1, &t2})
+    EXPECT_TRUE(std::all_of(t->face_counts.begin(), t->face_counts.end(), [](int k) { return k == 4; }));
+  std::vector<std::int32_t> ids;
+  std::vector<double> uv;
+  for (std::size_t f = 0, o = 0; f < m.n_faces(); o += m.face_counts[f++])
+    for (int j = 0; j < m.face_counts[f]; ++j) {
+      const auto c = catmark_corner(m.face_counts[f], j);
+      ids.push_back(static_cast<std::int32_t>(f));
+      uv.insert(uv.end(), {c.first, c.second});
+    }
+  std::vector<double> p(3 * ids.size());
+  s.evaluate(ids.data(), uv.data(), ids.size(), p.data(), nullptr, nullptr, nullptr);
+  for (const auto* t : {&t0, &t1, &t2})
+    for (std::size_t i = 0; i < ids.size(); ++i)
+      for (int c = 0; c < 3; ++c)
+        EXPECT_NEAR(p[3 * i + c], t->vertices[3 * static_cast<std::size_t>(m.face_indices[i]) + c], 1e-12);
 }
 
 }  // namespace

@@ -64,6 +64,16 @@ LimitOperator limit_operator(const Topology& topology, Boundary boundary);
 /// @throw MeshError naming the first crease that is not an edge of the mesh
 LimitOperator limit_operator(const Topology& topology, Boundary boundary, const Tags& tags);
 
+/// B under either scheme with OpenSubdiv's sharpness tags: Loop as above;
+/// Catmull-Clark with every row from OpenSubdiv's refinement around its vertex
+/// and Limit() (a row needs no level on a ring of quads, one next to another
+/// polygon, and its semi-sharp tags' decay; darts and interior vertices of two
+/// faces, whose Sdc limit masks change with the level, the deepest), equal to
+/// OpenSubdiv's Limit() of the whole mesh refined to the deepest of those
+/// levels.
+/// @throw MeshError naming the first crease that is not an edge of the mesh
+LimitOperator limit_operator(const Topology& topology, Scheme scheme, Boundary boundary, const Tags& tags);
+
 /// The compact form of a square CSR matrix whose rows each have a positive
 /// diagonal entry (explicit zero off-diagonal entries are dropped). Rows whose
 /// off-diagonal entries are all equal are stored uniform; if any row is not,

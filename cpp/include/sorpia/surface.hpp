@@ -1,59 +1,87 @@
 #pragma once
 /// @file surface.hpp
-/// The Loop limit surface of a control mesh (OpenSubdiv): evaluation at any
-/// (face, u, v) through Bfr, and uniform tessellation with every output vertex
-/// at its exact limit position.
+/// The limit surface of a control mesh under Loop or Catmull-Clark
+/// subdivision, with OpenSubdiv's sharpness tags (OpenSubdiv Bfr and Far):
+/// evaluation at any (face, u, v), and uniform tessellation with every output
+/// vertex at its exact limit position.
 
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <vector>
 
 #include "sorpia/memory.hpp"  // available_memory_bytes, which tessellate checks
-#include "sorpia/shapes.hpp"
+#include "sorpia/shapes.hpp"  // PolyMesh
+#include "sorpia/subdivision.hpp"
 #include "sorpia/topology.hpp"
 
 namespace sorpia {
 
 /// Bytes a uniform tessellation to `level` needs at its peak (OpenSubdiv's
 /// refined topology of every level, the refined positions, the output
-/// arrays), estimated from the counts: each level multiplies faces by 4 and
-/// vertices by about 4.
-/// @param n_vertices  control vertices
-/// @param n_faces     control triangles
-/// @param level       refinement level, 0..15
-std::size_t tessellation_bytes(std::size_t n_vertices, std::size_t n_faces, int level);
+/// arrays), estimated from the counts.
+/// @param scheme          Loop (each level splits a triangle into 4) or
+///                        Catmull-Clark (the first level splits a k-gon into
+///                        k quads, each later level a quad into 4)
+/// @param n_vertices      control vertices
+/// @param n_faces         control faces
+/// @param n_face_vertices the faces' vertex counts summed (their corners);
+///                        0 when every face has the scheme's regular size
+///                        (3 for Loop, 4 for Catmull-Clark)
+/// @param level           refinement level, 0..15
+std::size_t tessellation_bytes(Scheme scheme, std::size_t n_vertices, std::size_t n_faces,
+                               std::size_t n_face_vertices, int level);
 
-/// The Loop limit surface of one mesh topology: build once, query many.
+/// The limit surface of one mesh topology under one subdivision scheme,
+/// boundary rule and set of sharpness tags: build once, query many.
 ///
 /// Holds the topology and the OpenSubdiv structures (a Far::TopologyRefiner
-/// for the Bfr surface factory, and the uniformly refined refiner of the last
-/// tessellation level asked for); set_vertices() changes the control vertices
-/// without rebuilding them, as the PIA loop changes positions, never topology.
+/// carrying the tags, the Bfr surface factory built on it, and the uniformly
+/// refined refiner of the last tessellation level asked for); set_vertices()
+/// changes the control vertices without rebuilding them, as the PIA loop
+/// changes positions, never topology.
 ///
 /// Threads: evaluate() and get_vertices() may run concurrently (one shared
 /// Bfr factory with a thread-safe cache, the core's thread pool inside
-/// evaluate(): at most one thread per 64 distinct faces queried); set_vertices() and tessellate() take
-/// exclusive access.
+/// evaluate(): at most one thread per 64 distinct faces queried);
+/// set_vertices() and tessellate() take exclusive access. Long calls poll
+/// sorpia::poll_interrupt().
 ///
-/// Parameterisation of face f = (a, b, c) (Bfr's triangle parameterisation):
-/// (u, v) = (0, 0) is vertex a, (1, 0) is b, (0, 1) is c; points with u >= 0,
-/// v >= 0, u + v <= 1 lie on the face's limit patch.
-class LoopSurface {
+/// Parameterisation of a face (Bfr::Parameterization, chosen by the scheme
+/// and the face's size k):
+/// - a triangle (a, b, c) under Loop: (u, v) = (0, 0) is a, (1, 0) is b,
+///   (0, 1) is c; the face is u >= 0, v >= 0, u + v <= 1;
+/// - a quad (a, b, c, d) under Catmull-Clark: the unit square, (0, 0) is a,
+///   (1, 0) is b, (1, 1) is c, (0, 1) is d;
+/// - any other k-gon under Catmull-Clark (a triangle included): its limit
+///   surface is made of k quad sub-faces, one at each corner (the quads of its
+///   first subdivision). Sub-face j is the square [x_j, x_j + 1/2] x [y_j,
+///   y_j + 1/2] with (x_j, y_j) = (j mod w, j div w), w = 2 for k < 5, 3 for
+///   k = 5..9, 1 + floor(sqrt(k - 1)) from k = 10: (x_j, y_j) is corner j,
+///   (x_j + 1/2, y_j) the midpoint of edge j (corner j to j + 1),
+///   (x_j, y_j + 1/2) the midpoint of edge j - 1, and (x_j + 1/2, y_j + 1/2)
+///   the face's centre (the same point in every sub-face).
+class LimitSurface {
  public:
   /// @param topology  mesh connectivity (copied)
   /// @param vertices  row-major (n_vertices, 3) control vertices (copied)
+  /// @param scheme    subdivision scheme
   /// @param boundary  boundary interpolation rule
-  /// @throws MeshError when OpenSubdiv refuses the topology
-  LoopSurface(const Topology& topology, const double* vertices, Boundary boundary);
-  ~LoopSurface();
-  LoopSurface(LoopSurface&&) noexcept;
-  LoopSurface& operator=(LoopSurface&&) noexcept;
-  LoopSurface(const LoopSurface&) = delete;
-  LoopSurface& operator=(const LoopSurface&) = delete;
+  /// @param tags      creases, corners and holes (checked by check_tags)
+  /// @throws MeshError when OpenSubdiv refuses the topology or a tag
+  LimitSurface(const Topology& topology, const double* vertices, Scheme scheme, Boundary boundary,
+               const Tags& tags = Tags{});
+  ~LimitSurface();
+  LimitSurface(LimitSurface&&) noexcept;
+  LimitSurface& operator=(LimitSurface&&) noexcept;
+  LimitSurface(const LimitSurface&) = delete;
+  LimitSurface& operator=(const LimitSurface&) = delete;
 
   std::size_t n_vertices() const;
   std::size_t n_faces() const;
+  Scheme scheme() const;
   Boundary boundary() const;
+  const Tags& tags() const;
 
   /// Replace the control vertices (same topology).
   /// @param vertices  row-major (n_vertices, 3)
@@ -62,37 +90,46 @@ class LoopSurface {
   void get_vertices(double* out) const;
 
   /// Limit positions (and optionally first derivatives and unit normals) at k
-  /// points (face_ids[i], uv[2i], uv[2i+1]), evaluated by Bfr::Surface<double>.
+  /// points (face_ids[i], uv[2i], uv[2i+1]), evaluated by Bfr::Surface<double>
+  /// in the face's parameterisation (see the class comment).
   /// Exact at face corners (the limit position B V of the corner vertex) under
   /// both boundary rules, and wherever the patch is regular (box spline).
-  /// Within the corner triangle of side 1/16 at an extraordinary vertex Bfr
-  /// uses a Gregory triangle: positions approximate the limit surface there
+  /// Within the corner region of side 1/16 at an extraordinary vertex Bfr
+  /// uses a Gregory patch: positions approximate the limit surface there
   /// and OpenSubdiv's derivatives approximate the positions' derivatives
   /// (normals within a few hundredths of a radian of finite differences;
-  /// tests/test_surface.py holds them to 0.05 rad).
-  /// @param face_ids  k face indices, each in [0, n_faces)
-  /// @param uv        row-major (k, 2) parameters, u >= 0, v >= 0, u + v <= 1
+  /// tests/test_surface.py holds them to 0.05 rad). Semi-sharp features are
+  /// resolved by Bfr's local refinement up to level 10, as deep as
+  /// OpenSubdiv refines (sharpness 10 is infinite).
+  /// @param face_ids  k face indices, each in [0, n_faces) and not a hole
+  /// @param uv        row-major (k, 2) parameters in the face's domain
   /// @param k         number of points
   /// @param positions row-major (k, 3), written
   /// @param du, dv    row-major (k, 3) dP/du and dP/dv, written unless null
   /// @param normals   row-major (k, 3) (dP/du x dP/dv) / |dP/du x dP/dv|, zero
   ///                  where the cross product vanishes; written unless null
-  /// @throws ParameterError for a face index or (u, v) out of range
+  /// @throws ParameterError for a face index, a hole or (u, v) out of range
   void evaluate(const std::int32_t* face_ids, const double* uv, std::size_t k, double* positions, double* du,
                 double* dv, double* normals) const;
 
-  /// Uniform refinement to `level` (4^level triangles per control triangle)
-  /// with every vertex moved to its limit position
-  /// (Far::PrimvarRefinerReal<double>: Interpolate level by level, then Limit).
+  /// Uniform refinement to `level` with every vertex moved to its limit
+  /// position (Far::PrimvarRefinerReal<double>: Interpolate level by level,
+  /// then Limit on the last level; with semi-sharp tags the refinement goes
+  /// on until every sharpness has decayed, and the last level's descendants
+  /// of the level's vertices give their limit positions).
   ///
+  /// Loop: 4^level triangles per control triangle. Catmull-Clark: level 0 is
+  /// the control polygons; from level 1 a k-gon gives k 4^(level-1) quads.
   /// Vertex i < n_vertices() descends from control vertex i and sits at its
   /// limit position B V (unreferenced control vertices stay where they are);
-  /// the triangles of control face f are rows [f 4^level, (f+1) 4^level) of
-  /// the output faces, with f's orientation.
+  /// the vertices of level l are the first vertices of every level after it,
+  /// in the same order. The faces refined from control face f come in one
+  /// block of rows, after those of the faces before it, with f's
+  /// orientation; faces of holes are left out.
   /// @param level  0..15
   /// @throws ParameterError when the level is out of range or the estimated
   ///         memory (tessellation_bytes) exceeds the memory available
-  TriMesh tessellate(int level);
+  PolyMesh tessellate(int level);
 
  private:
   struct Impl;

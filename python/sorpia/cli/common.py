@@ -286,20 +286,21 @@ def tags_lines(summary: dict) -> list[str]:
 
 
 def scheme_kwargs(scheme: str, tags: dict) -> dict:
-    """The keyword arguments a solve takes for the scheme and tags. Loop
-    without tags passes none, so that a library without the scheme and tag
-    arguments runs it too; anything else needs them (UserError if absent)."""
-    if scheme == "loop" and not tags:
-        return {}
+    """The keyword arguments a solve takes for the scheme and tags: none for
+    Loop (the library's default scheme), `scheme` otherwise, and the tags.
+    A library without the argument asked for is a UserError saying so."""
     import inspect
 
     from .. import Interpolator
 
-    if "scheme" not in inspect.signature(Interpolator).parameters:
-        raise UserError(f"this build of sorpia solves Loop without sharpness tags only (asked: "
-                        f"{SCHEME_LABELS[scheme]}{' with tags' if tags else ''}); pass --triangulate and "
-                        "--ignore-tags")
-    return {"scheme": scheme, **tags}
+    kwargs = {**({} if scheme == "loop" else {"scheme": scheme}), **tags}
+    missing = [k for k in ("scheme", "creases") if (k == "scheme" and "scheme" in kwargs or k == "creases" and tags)
+               and k not in inspect.signature(Interpolator).parameters]
+    if missing:
+        raise UserError(f"this build of sorpia cannot solve {SCHEME_LABELS[scheme]}"
+                        f"{' with sharpness tags' if tags else ''}: its Interpolator takes no "
+                        f"{' or '.join(m + '=' for m in missing)}; pass --triangulate and --ignore-tags")
+    return kwargs
 
 
 def repair_input(vertices, faces, source, tags=None):

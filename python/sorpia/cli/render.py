@@ -10,8 +10,8 @@ import numpy as np
 
 from ..plotting import FACE_BUDGET  # plotting imports matplotlib only when drawing
 from .common import (EXIT_NOT_CONVERGED, EXIT_OK, SCHEME_LABELS, UserError, boundary_rule, check_paths,
-                     check_solver_options, choose_scheme, face_counts, fit_once, fmt_seconds, omega_text, read_input, repair_lines,
-                     require_plotting, scheme_kwargs, solve_tags)
+                     check_solver_options, choose_scheme, face_counts, fit_once, fmt_seconds, omega_text, read_input,
+                     repair_lines, require_plotting, scheme_kwargs, solve_tags)
 from .output import save_figure
 from .progress import Progress
 
@@ -21,8 +21,8 @@ def run_render(input_path, output, *, level=3, tol=1e-10, max_iter=1000, boundar
                triangulate=False, up="z", threads=1, repair=False, scheme="auto", ignore_tags=False,
                sharp_angle=None, nonmanifold="error", out=None) -> tuple[int, dict]:
     """`sorpia render`: the paper's Figure 3 for a mesh file."""
-    from .. import LoopSurface
-    from ..plotting import interpolation_figure, level_for_budget
+    from .. import LimitSurface
+    from ..plotting import crease_curves, interpolation_figure, level_for_budget
 
     out = out if out is not None else sys.stdout
     if Path(output).suffix.lower() != ".png":
@@ -44,25 +44,35 @@ def run_render(input_path, output, *, level=3, tol=1e-10, max_iter=1000, boundar
                                              boundary=boundary, threads=threads, progress=progress,
                                              source=input_path, scheme=scheme, tags=tags)
         ctrl = np.asarray(res.control_vertices)
-        drawn_level = level_for_budget(len(face_counts(F)), level, budget)
+        counts = face_counts(F)
+        drawn_level = level_for_budget(len(counts), level, budget,
+                                       first_level_faces=None if scheme == "loop" else int(counts.sum()))
         progress.status(f"limit surfaces, level {drawn_level}")
         t0 = time.perf_counter()
-        # One LoopSurface for both: the topology is built once, only positions change.
-        surface = LoopSurface(V0, F, boundary=boundary, **scheme_kwargs(scheme, tags))
+        # One LimitSurface for both: the topology is built once, only positions change.
+        surface = LimitSurface(V0, F, boundary=boundary, **scheme_kwargs(scheme, tags))
+        # The creases drawn orange, with their limit curves: every crease that is not smooth.
+        creases = None
+        if "creases" in tags:
+            edges, sharpness = tags["creases"]
+            creases = np.asarray(edges)[np.asarray(sharpness) > 0]
         given = surface.tessellate(drawn_level)
+        given_curves = crease_curves(surface, F, creases) if creases is not None and len(creases) else None
         surface.set_vertices(ctrl)
         fitted = surface.tessellate(drawn_level)
+        curves = None if given_curves is None else (given_curves, crease_curves(surface, F, creases))
         timings["surface"] = time.perf_counter() - t0
         progress.status(f"drawing {output}")
         t0 = time.perf_counter()
         fig = interpolation_figure(V0, F, given, ctrl, fitted, size=size, elev=elev, azim=azim, face_budget=budget,
                                    title=f"{Path(input_path).name}: {SCHEME_LABELS[scheme]} limit surface and SOR-PIA "
                                    "(paper Figure 3)",
-                                   iterations=int(res.iterations), level=drawn_level, up=up)
+                                   iterations=int(res.iterations), level=drawn_level, up=up, scheme=scheme,
+                                   creases=creases, crease_curves=curves)
         save_figure(fig, output)
         timings["draw"] = time.perf_counter() - t0
-    data = {"output": str(output), "scheme": scheme, "level": drawn_level, "threads": threads, "iterations": int(res.iterations),
-            "converged": bool(res.converged), "omega": res.omega, "timings": timings}
+    data = {"output": str(output), "scheme": scheme, "level": drawn_level, "threads": threads,
+            "iterations": int(res.iterations), "converged": bool(res.converged), "omega": res.omega, "timings": timings}
     if not quiet:
         lvl = f"level {drawn_level}" + (f" (asked {level}; face budget {budget})" if drawn_level < level else "")
         state = "" if res.converged else f"; NOT converged to tol {tol:g} (exit code 1)"
