@@ -83,7 +83,7 @@ def limit_points(vertices, faces, boundary: str = DEFAULT_BOUNDARY, *, scheme: s
     vertices : array_like, (n, 3) float
         Control vertices.
     faces : array_like, (m, 3) int
-        Triangles, indices into `vertices`, consistently oriented.
+        Triangles, indices into ``vertices``, consistently oriented.
     boundary : {"edge-and-corner", "edge-only"}
         Boundary rule (OpenSubdiv's VTX_BOUNDARY_EDGE_AND_CORNER or
         VTX_BOUNDARY_EDGE_ONLY). With "edge-and-corner" (the default) a

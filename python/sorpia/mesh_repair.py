@@ -134,7 +134,7 @@ def repair(vertices, faces, *, creases=None, corners=None, holes=None) -> Repair
         Vertex positions (validated as everywhere in sorpia).
     faces : array_like, (m, k) int, list of lists, or sorpia.Polygons
         Triangles, quads or polygons of any sizes (at least 3 vertices each),
-        indices into `vertices`; they may fail sorpia's topology checks, which
+        indices into ``vertices``; they may fail sorpia's topology checks, which
         is what this function is for.
     creases, corners, holes : optional
         OpenSubdiv's sharpness tags of the input mesh, as `interpolate` takes

@@ -92,7 +92,7 @@ def split(faces, n_vertices: int, boundary: str = DEFAULT_BOUNDARY, *, creases=N
     warnings.warn(f"nonmanifold=\"sharp\": {len(report['nonmanifold_edges'])} non-manifold edges and "
                   f"{len(report['nonmanifold_vertices'])} non-manifold vertices kept with OpenSubdiv's rules, "
                   "whose result OpenSubdiv's documentation calls undefined for now", NonmanifoldWarning,
-                  stacklevel=3)
+                  stacklevel=4)
     crease_vertices = sorted(set(report["nonmanifold_vertices"]) - set(report["corners"]))
     if report["single_face_sheets"] and as_boundary(boundary) == _core.Boundary.edge_and_corner:
         v = report["single_face_sheets"][0]

@@ -283,7 +283,7 @@ def interpolate(vertices, faces, method: str = "sor", omega="auto", tol: float =
                 boundary: str = DEFAULT_BOUNDARY, callback: Optional[Callable[[int, float], object]] = None, *,
                 sigma=None, alpha=None, weight=None, threads: int = 1, scheme: str = DEFAULT_SCHEME, creases=None,
                 corners=None, holes=None, nonmanifold: str = "error") -> InterpolationResult:
-    """Control vertices whose Loop limit surface interpolates `vertices`.
+    """Control vertices whose Loop limit surface interpolates ``vertices``.
 
     With ``nonmanifold="sharp"`` (see `limit_points`) a non-manifold mesh is
     solved with OpenSubdiv's rules for it, and the result's control_vertices

@@ -125,8 +125,8 @@ def run_fit(input_path, output, *, method="sor", omega="auto", tol=1e-10, max_it
     if report is not None:
         write_json(report, data)
     if not quiet:
-        changes = (repair_lines(mesh.repair) if repair else []) + (split_lines(mesh.split) if mesh.split else [])
-        print(fit_summary(data, changes), file=out)
+        print(fit_summary(data, repair_lines(mesh.repair) if repair else (),
+                          split_lines(mesh.split) if mesh.split is not None else ()), file=out)
     return (EXIT_OK if res.converged else EXIT_NOT_CONVERGED), data
 
 
@@ -181,8 +181,9 @@ def _binary_for(path, binary: bool) -> bool:
     return binary and Path(path).suffix.lower() in (".ply", ".stl")
 
 
-def fit_summary(d: dict, repaired=()) -> str:
-    """The summary printed by fit; `repaired`: a line per kind of change --repair made."""
+def fit_summary(d: dict, repaired=(), kept=()) -> str:
+    """The summary printed by fit; `repaired`: a line per kind of change --repair made; `kept`: what
+    --nonmanifold sharp kept."""
     label = method_label(d["method"])
     omega = d["omega"]
     if d["method"] == "sor" and omega is not None:
@@ -206,6 +207,7 @@ def fit_summary(d: dict, repaired=()) -> str:
     lines = [
         f"sorpia fit: {d['input']} -> {d['output']}",
         *(f"  {'repaired' if j == 0 else '':<12}{line}" for j, line in enumerate(repaired)),
+        *(f"  {'nonmanifold' if j == 0 else '':<12}{line}" for j, line in enumerate(kept)),
         f"  mesh        {mesh_line(d['mesh'])}",
         f"  scheme      {SCHEME_LABELS[d['scheme']]}" + (f", boundary {d['boundary']}"),
         *(f"  {'tags' if j == 0 else '':<12}{line}" for j, line in enumerate(tags_lines(d["tags"]))),
