@@ -66,7 +66,7 @@ TAGS_DOC = """creases : (edges (k, 2) int, sharpness (k,) float or one float), o
         (or 10 and above) infinitely sharp, anything between semi-sharp (it
         decays by one per subdivision level). A crease given twice counts
         with its last sharpness, as in OpenSubdiv.
-    corners : (vertices (c,) int, sharpness), optional
+    corners : (vertex indices (c,) int, sharpness), optional
         OpenSubdiv's corner tags (vertex sharpness).
     holes : (h,) int, optional
         Faces cut out of the surface. They change no row of B: OpenSubdiv
