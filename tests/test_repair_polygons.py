@@ -7,6 +7,7 @@ repaired mesh is checked independently of sorpia by test_fuzz.mesh_problems
 from __future__ import annotations
 
 import json
+import warnings
 
 import numpy as np
 import pytest
@@ -298,3 +299,24 @@ def test_tags_follow_the_repair():
     assert r.report["duplicate_faces"] == [1]
     assert r.tags["holes"].tolist() == [j for j, src in enumerate(r.face_map) if src == 5]
     assert sorpia.repair(v, f).tags == {}
+
+
+def test_catmull_clark_fit_of_repaired_quads_passes_through_the_inputs():
+    """Every defect at once on a quad torus; the Catmull-Clark limit surface of the interpolated repaired mesh
+    passes through every referenced input vertex, at each of its copies."""
+    v, f = quad_torus(8, 6)
+    n = len(v)
+    v = np.vstack([v, points(6, 3)])
+    bad = np.vstack([f, f[:2], f[5:6, ::-1], [[f[6, 0], f[6, 0], f[6, 1], n]], [[f[10, 0], f[10, 1], n + 1, n + 2]],
+                     [[f[20, 0], n + 3, n + 4, n + 5]]])
+    bad[30:32] = bad[30:32][:, ::-1]
+    r = sorpia.repair(v, bad)
+    assert sum(r.report["counts"].values()) > 0
+    check_repaired(v, bad, r)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", sorpia.UnreferencedVerticesWarning)
+        fit = sorpia.interpolate(r.vertices, r.faces, scheme="catmull-clark")
+        assert fit.converged
+        limit = sorpia.limit_points(fit.control_vertices, r.faces, scheme="catmull-clark")
+    used = np.unique(np.concatenate(face_lists(r.faces)))
+    assert np.abs(limit[used] - v[r.vertex_map[used]]).max() <= 1e-8 * max(1.0, np.abs(v).max())
