@@ -180,3 +180,21 @@ def test_fit_on_the_command_line(tmp_path, monkeypatch, command):
     assert sorted(vertex_map[tags["corners"][0]].tolist()) == [0] * 3 + [3] * 3  # every copy of the corners
     limit = sorpia.limit_points(ctrl, faces, corners=tags["corners"])
     assert np.abs(limit - v[vertex_map]).max() <= 1e-8 * np.abs(v).max()
+
+
+@pytest.mark.filterwarnings("default::sorpia.NonmanifoldWarning")
+def test_the_fan_shape_fits_on_the_command_line(tmp_path, command):
+    """osd_catmark_fan.obj (quads fanned round edges of 3 and more faces): fit --nonmanifold sharp, the written
+    split control mesh refitted as it is passes through every input vertex at each of its copies."""
+    path = SHARED_MESHES / "osd_catmark_fan.obj"
+    if not path.exists():
+        pytest.skip("../shared/meshes absent")
+    v, _ = sorpia.read_mesh(path)
+    code, _, err = command("fit", path, "-o", tmp_path / "c.obj", "-q", "--nonmanifold", "sharp",
+                           "--report", tmp_path / "r.json")
+    assert code == 0, err
+    report = json.loads((tmp_path / "r.json").read_text())["nonmanifold"]
+    assert report["nonmanifold_edges"]
+    ctrl, faces, tags = sorpia.read_mesh(tmp_path / "c.obj", tags=True)
+    limit = sorpia.limit_points(ctrl, faces, scheme="catmull-clark", corners=tags["corners"])
+    assert np.abs(limit - v[report["vertex_map"]]).max() <= 1e-9 * np.abs(v).max()
