@@ -10,6 +10,11 @@ by a triangle hung on one vertex, non-manifold edges made by a third face on an
 edge), repaired, and again without the degenerate faces; each repaired mesh is
 checked to pass sorpia's validation.
 
+Quads: sorpia.shapes.quad_irregular(--vertices), clean and with the same
+kinds of defects made of quads (a degenerate quad repeats a corner
+consecutively, so repair keeps it as a triangle), repaired by the polygon path
+(sorpia::repair on counts and indices) against the polygon validation.
+
 Runs alternate between the sides; medians of --repeat runs. Prints Markdown
 tables and writes them into docs/benchmarks/repair-speed.md (unless
 --no-page); --json writes the figures.
@@ -56,6 +61,23 @@ def inject_defects(v, f, k, seed=0, degenerate=True):
     return vertices, faces
 
 
+def inject_quad_defects(v, f, k, seed=0):
+    """inject_defects for an (m, 4) quad array: reversed quads, duplicates (half reversed), a third quad on an
+    edge, a quad hung on a vertex, and quads repeating a corner; (vertices, faces as an (m', 4) array)."""
+    rng = np.random.default_rng(seed)
+    n = len(v)
+    flipped, dup, nm, hang, degenerate_at = np.split(rng.choice(len(f), 5 * k, replace=False), 5)
+    bad = f.copy()
+    bad[flipped] = bad[flipped][:, [0, 3, 2, 1]]
+    dups = np.vstack([f[dup[: k // 2]], f[dup[k // 2:]][:, [0, 3, 2, 1]]])
+    extra = np.arange(n, n + 5 * k).reshape(k, 5)  # new vertices: 2 for a third quad on an edge, 3 for a hung quad
+    third_faces = np.column_stack([f[nm, 0], f[nm, 1], extra[:, 0], extra[:, 1]])
+    hung = np.column_stack([f[hang, 0], extra[:, 2], extra[:, 3], extra[:, 4]])
+    degenerate = np.column_stack([f[degenerate_at, 0], f[degenerate_at, 0], f[degenerate_at, 1], extra[:, 2]])
+    faces = np.vstack([bad, dups, third_faces, hung, degenerate]).astype(np.int32)
+    return np.vstack([v, rng.normal(size=(5 * k, 3))]), faces
+
+
 def alternate(fns, repeat):
     """Median seconds of each function, run in turn `repeat` times."""
     times = {name: [] for name in fns}
@@ -98,6 +120,22 @@ def main():
         counts[label] = result.report["counts"]
     defects = alternate(defects, args.repeat)
 
+    qv, qf = sorpia.shapes.quad_irregular(args.vertices, 1)
+    qv, qf = np.ascontiguousarray(qv), np.ascontiguousarray(qf, np.int32)
+    q_counts, q_indices = np.full(len(qf), 4, np.int32), qf.ravel()
+    dqv, dqf = inject_quad_defects(qv, qf, args.defects)
+    dq_counts, dq_indices = np.full(len(dqf), 4, np.int32), dqf.ravel()
+    quads = alternate({
+        "core: sorpia::Topology, clean quads": lambda: _core.Topology(q_counts, q_indices, len(qv)),
+        "core: sorpia::repair, clean quads": lambda: _core.repair_polygons(q_counts, q_indices, len(qv)),
+        "sorpia.repair, quads with 5 kinds": lambda: sorpia.repair(dqv, dqf),
+        "core: sorpia::repair, quads with 5 kinds": lambda: _core.repair_polygons(dq_counts, dq_indices, len(dqv)),
+    }, args.repeat)
+    assert sorpia.repair(qv, qf).faces is qf
+    result = sorpia.repair(dqv, dqf)
+    topology(result.faces, len(result.vertices), scheme="catmull-clark", warn=False)  # passes validation
+    counts["quads with 5 kinds"] = result.report["counts"]
+
     machine = f"{platform.machine()}, {platform.processor() or platform.system()}"
     lines = [f"sorpia.repair at {len(v):,} vertices, {len(f):,} faces (sorpia.shapes.irregular); median of "
              f"{args.repeat}, alternated; load average {os.getloadavg()[0]:.1f} at the end.", "",
@@ -111,6 +149,9 @@ def main():
         lines += ["", f"{label}: " + ", ".join(f"{k} {n}" for k, n in c.items() if n)]
     lines += ["", "| mesh with defects | seconds |", "|---|---:|"]
     lines += [f"| {name} | {t:.3f} |" for name, t in defects.items()]
+    lines += ["", f"Quads: sorpia.shapes.quad_irregular, {len(qv):,} vertices, {len(qf):,} quads; {len(dqf) - len(qf)} "
+              "defect quads added.", "", "| quads | seconds |", "|---|---:|"]
+    lines += [f"| {name} | {t:.3f} |" for name, t in quads.items()]
     print("\n".join(lines))
     if not args.no_page:
         write_page("repair-speed", "Speed of `sorpia.repair`", "\n".join(lines), settings=(ap, args))
@@ -118,7 +159,8 @@ def main():
         with open(args.json, "w") as fh:
             json.dump({"vertices": len(v), "faces": len(f), "repeat": args.repeat, "commit": commit(),
                        "load_average": os.getloadavg()[0],
-                       "machine": machine, "clean_seconds": clean, "defect_seconds": defects, "counts": counts},
+                       "machine": machine, "clean_seconds": clean, "defect_seconds": defects, "quad_seconds": quads,
+                       "counts": counts},
                       fh, indent=1)
 
 

@@ -160,9 +160,10 @@ def test_render_repair_draws_the_repaired_mesh(defect_file, command):
     assert out.count("repaired") == 6
 
 
-def test_polygon_file_needs_triangulate_then_repairs(tmp_path, monkeypatch, command):
-    """Two quad grids sharing one corner vertex (an open bowtie): refused as polygons without --triangulate;
-    with it, the bowtie is split and every output vertex copies its input vertex bit for bit."""
+@pytest.mark.parametrize("triangulate", [False, True])
+def test_polygon_file_repairs_as_quads_or_triangles(tmp_path, monkeypatch, command, triangulate):
+    """Two quad grids sharing one corner vertex (an open bowtie): the bowtie is split, as quads or (with
+    --triangulate) as triangles, and every output vertex copies its input vertex bit for bit."""
     monkeypatch.chdir(tmp_path)
     v = np.vstack([points(9, 2), points(8, 3)])
 
@@ -175,13 +176,30 @@ def test_polygon_file_needs_triangulate_then_repairs(tmp_path, monkeypatch, comm
     lines = [f"v {x!r} {y!r} {z!r}" for x, y, z in v.tolist()]
     lines += ["f " + " ".join(map(str, q)) for q in grid(list(range(9))) + grid(second)]
     (tmp_path / "quads.obj").write_text("\n".join(lines) + "\n")
-    code, _, err = command("repair", "quads.obj", "-o", "out.obj")
-    assert_user_error(code, err)
-    assert "--triangulate" in err
-    code, out, err = command("repair", "quads.obj", "-o", "out.obj", "--triangulate", "--report", "r.json")
+    code, out, err = command("repair", "quads.obj", "-o", "out.obj", "--report", "r.json",
+                             *(["--triangulate"] if triangulate else []))
     assert code == 0, err
     report = json.loads((tmp_path / "r.json").read_text())
     assert report["report"]["bowtie_vertices"] == [8] and report["vertex_map"][len(v):] == [8]
     w, f = sorpia.read_mesh("out.obj")
     assert np.array_equal(w.view(np.uint64), v[report["vertex_map"]].view(np.uint64))
+    assert f.shape == ((16, 3) if triangulate else (8, 4)) and report["faces"] == len(f)
     assert "bowtie vertices (fans meeting at one vertex): 1 split into one vertex per fan, 1 copy added" in out
+
+
+def test_repair_carries_the_files_tags_onto_the_repaired_mesh(tmp_path, monkeypatch, command):
+    """Two quads sharing vertex 0 (a bowtie) with a crease and a corner at 0: the repaired file has the
+    corner on vertex 0 and on its copy, the crease on its edge."""
+    monkeypatch.chdir(tmp_path)
+    v = points(7, 4)
+    lines = [f"v {x!r} {y!r} {z!r}" for x, y, z in v.tolist()]
+    lines += ["f 1 2 3 4", "f 1 5 6 7", "t crease 2/1/0 0 1 10", "t corner 1/1/0 0 3"]
+    (tmp_path / "tagged.obj").write_text("\n".join(lines) + "\n")
+    code, out, err = command("repair", "tagged.obj", "-o", "out.obj", "--report", "r.json")
+    assert code == 0, err
+    vertex_map = json.loads((tmp_path / "r.json").read_text())["vertex_map"]
+    w, f, tags = sorpia.read_mesh("out.obj", tags=True)
+    assert vertex_map == [0, 1, 2, 3, 4, 5, 6, 0]
+    corners, sharpness = tags["corners"]
+    assert sorted(corners.tolist()) == [0, 7] and sharpness.tolist() == [3.0, 3.0]
+    assert tags["creases"][0].tolist() == [[0, 1]]

@@ -46,52 +46,64 @@ BASES = {
 BASE_MESHES = {k: tuple(np.asarray(a) for a in make()) for k, make in BASES.items()}
 
 
+def face_lists(faces) -> list[list[int]]:
+    """Faces in any accepted form as a list of lists of ints."""
+    if isinstance(faces, sorpia.Polygons):
+        ends = np.cumsum(faces.face_vertex_counts)
+        return [list(map(int, f)) for f in np.split(np.asarray(faces.face_vertex_indices), ends[:-1])]
+    return [list(map(int, f)) for f in faces]
+
+
+def cycle(face, reverse=False) -> tuple:
+    """A face as a cycle starting at its smallest vertex, reversed first when `reverse`."""
+    f = list(face)[::-1] if reverse else list(face)
+    k = f.index(min(f))
+    return tuple(f[k:] + f[:k])
+
+
 def mesh_problems(faces, n_vertices: int) -> set[str]:
-    """What is wrong with a face list, found independently of sorpia: the set of
-    message fragments sorpia may report ("out of range", "repeats vertex",
+    """What is wrong with a face list (triangles or polygons, in any accepted form),
+    found independently of sorpia: the set of message fragments sorpia may report
+    ("out of range", "vertices: a face needs at least 3", "repeats vertex",
     "duplicate faces", "non-manifold edge", "inconsistent orientation",
     "non-manifold vertex"). Empty for a valid mesh."""
-    faces = [tuple(int(x) for x in f) for f in faces]
+    faces = face_lists(faces)
     if any(not 0 <= x < n_vertices for f in faces for x in f):
         return {"out of range"}
-    if any(len(set(f)) < 3 for f in faces):
+    if any(len(f) < 3 for f in faces):
+        return {"vertices: a face needs at least 3"}
+    if any(len(set(f)) < len(f) for f in faces):
         return {"repeats vertex"}
     problems = set()
-    if len({tuple(sorted(f)) for f in faces}) < len(faces):
+    if len({min(cycle(f), cycle(f, True)) for f in faces}) < len(faces):
         problems.add("duplicate faces")
-    directed = defaultdict(list)  # (a, b) -> faces running a -> b
-    for i, (a, b, c) in enumerate(faces):
-        for e in ((a, b), (b, c), (c, a)):
-            directed[e].append(i)
+    directed = defaultdict(int)
+    for f in faces:
+        for i, a in enumerate(f):
+            directed[a, f[(i + 1) % len(f)]] += 1
     undirected = defaultdict(int)
-    for (a, b), users in directed.items():
-        undirected[min(a, b), max(a, b)] += len(users)
-        if len(users) > 1:
+    for (a, b), k in directed.items():
+        undirected[min(a, b), max(a, b)] += k
+        if k > 1:
             problems.add("inconsistent orientation")
     if any(k > 2 for k in undirected.values()):
         problems.add("non-manifold edge")
     if problems:
         return problems
-    # Fans: faces at v joined when they share an edge (v, w).
+    # Fans: the faces at v joined when they share an edge (v, w) of both.
     at = defaultdict(list)
     for i, f in enumerate(faces):
-        for x in f:
-            at[x].append(i)
-    for v, fs in at.items():
-        by_edge = defaultdict(list)
-        for i in fs:
-            for w in faces[i]:
-                if w != v:
-                    by_edge[w].append(i)
-        seen, stack = {fs[0]}, [fs[0]]
+        for j, x in enumerate(f):
+            at[x].append((i, {f[j - 1], f[(j + 1) % len(f)]}))
+    for v, corners in at.items():
+        seen, stack = {0}, [0]
         while stack:
-            i = stack.pop()
-            for w in faces[i]:
-                for j in by_edge.get(w, ()):
-                    if j not in seen:
-                        seen.add(j)
-                        stack.append(j)
-        if len(seen) < len(fs):
+            c = stack.pop()
+            for d, (_, ends) in enumerate(corners):
+                if d not in seen and ends & corners[c][1]:
+                    seen.add(d)
+                    stack.append(d)
+        if len(seen) < len(corners):
             problems.add("non-manifold vertex")
     return problems
 
@@ -152,8 +164,9 @@ CORRUPTIONS = st.one_of(
 )
 
 
-def corrupt(v, f, edits):
-    """Apply edits to a face list; vertex indices wrap modulo n (+2, so a few are out of range)."""
+def corrupt(v, f, edits, polygons=False):
+    """Apply edits to a face list; vertex indices wrap modulo n (+2, so a few are out of range). An (m, 3)
+    array; with `polygons`, a list of lists, "add" appending a quad (its fourth vertex from the other three)."""
     faces = [list(t) for t in f]
     n = len(v)
     for e in edits:
@@ -169,11 +182,11 @@ def corrupt(v, f, edits):
         elif e[0] == "delete":
             del faces[i]
         elif e[0] == "add":
-            faces.append([e[1] % n, e[2] % n, e[3] % n])
+            faces.append([e[1] % n, e[2] % n, e[3] % n] + ([(e[1] + e[2] + e[3]) % n] if polygons else []))
         elif e[0] == "weld":  # merge two vertices: makes non-manifold edges and vertices
             a, b = e[1] % n, e[2] % n
             faces = [[a if x == b else x for x in t] for t in faces]
-    return np.array(faces, dtype=np.int64).reshape(-1, 3)
+    return faces if polygons else np.array(faces, dtype=np.int64).reshape(-1, 3)
 
 
 @FUZZ

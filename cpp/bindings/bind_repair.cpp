@@ -13,6 +13,7 @@ namespace {
 py::dict report_dict(const sorpia::RepairReport& r) {
   py::dict d;
   d["degenerate_faces"] = py::cast(r.degenerate_faces);
+  d["collapsed_faces"] = py::cast(r.collapsed_faces);
   d["duplicate_faces"] = py::cast(r.duplicate_faces);
   d["reversed_duplicate_faces"] = py::cast(r.reversed_duplicate_faces);
   d["nonmanifold_edges"] = py::cast(r.nonmanifold_edges);
@@ -21,6 +22,16 @@ py::dict report_dict(const sorpia::RepairReport& r) {
   d["bowtie_vertices"] = py::cast(r.bowtie_vertices);
   d["bowtie_copies"] = py::cast(r.bowtie_copies);
   d["flipped_faces"] = py::cast(r.flipped_faces);
+  return d;
+}
+
+// nonmanifold="sharp"'s split as Python lists (JSON-able).
+py::dict split_dict(const sorpia::NonmanifoldSplit& s) {
+  py::dict d;
+  d["nonmanifold_edges"] = py::cast(s.nonmanifold_edges);
+  d["nonmanifold_vertices"] = py::cast(s.nonmanifold_vertices);
+  d["corners"] = py::cast(s.corners);
+  d["single_face_sheets"] = py::cast(s.single_face_sheets);
   return d;
 }
 
@@ -43,6 +54,58 @@ void bind_repair(py::module_& m) {
       },
       "faces"_a.noconvert(), "n_vertices"_a,
       "sorpia::repair: None for a valid mesh, else (faces, vertex_map, face_map, report dict).");
+  m.def(
+      "repair_polygons",
+      [](const Faces& counts, const Faces& indices, std::size_t n_vertices) -> py::object {
+        if (counts.ndim() != 1 || indices.ndim() != 1)
+          throw sorpia::ParameterError("face_vertex_counts and face_vertex_indices must be one-dimensional");
+        sorpia::RepairResult r;
+        {
+          py::gil_scoped_release release;
+          r = sorpia::repair(counts.data(), static_cast<std::size_t>(counts.shape(0)), indices.data(), n_vertices);
+        }
+        if (r.report.empty()) return py::none();
+        py::dict report = report_dict(r.report);
+        return py::make_tuple(to_numpy(std::move(r.face_counts), 0), to_numpy(std::move(r.faces), 0),
+                              to_numpy(std::move(r.vertex_map), 0), to_numpy(std::move(r.face_map), 0), report);
+      },
+      "face_vertex_counts"_a.noconvert(), "face_vertex_indices"_a.noconvert(), "n_vertices"_a,
+      "sorpia::repair of polygons: None for a valid mesh, else (face_vertex_counts, face_vertex_indices, "
+      "vertex_map, face_map, report dict).");
+  m.def(
+      "split_nonmanifold",
+      [](const Faces& faces, std::size_t n_vertices) -> py::object {
+        check_shape(faces, 3, "faces");
+        sorpia::NonmanifoldSplit s;
+        {
+          py::gil_scoped_release release;
+          s = sorpia::split_nonmanifold(faces.data(), static_cast<std::size_t>(faces.shape(0)), n_vertices);
+        }
+        if (s.empty()) return py::none();
+        py::dict report = split_dict(s);
+        return py::make_tuple(to_numpy(std::move(s.faces), 3), to_numpy(std::move(s.vertex_map), 0), report);
+      },
+      "faces"_a.noconvert(), "n_vertices"_a,
+      "sorpia::split_nonmanifold: None for a manifold mesh, else (faces, vertex_map, report dict).");
+  m.def(
+      "split_nonmanifold_polygons",
+      [](const Faces& counts, const Faces& indices, std::size_t n_vertices) -> py::object {
+        if (counts.ndim() != 1 || indices.ndim() != 1)
+          throw sorpia::ParameterError("face_vertex_counts and face_vertex_indices must be one-dimensional");
+        sorpia::NonmanifoldSplit s;
+        {
+          py::gil_scoped_release release;
+          s = sorpia::split_nonmanifold(counts.data(), static_cast<std::size_t>(counts.shape(0)), indices.data(),
+                                        n_vertices);
+        }
+        if (s.empty()) return py::none();
+        py::dict report = split_dict(s);
+        return py::make_tuple(to_numpy(std::move(s.face_counts), 0), to_numpy(std::move(s.faces), 0),
+                              to_numpy(std::move(s.vertex_map), 0), report);
+      },
+      "face_vertex_counts"_a.noconvert(), "face_vertex_indices"_a.noconvert(), "n_vertices"_a,
+      "sorpia::split_nonmanifold of polygons: None for a manifold mesh, else (face_vertex_counts, "
+      "face_vertex_indices, vertex_map, report dict).");
 }
 
 }  // namespace sorpia_py

@@ -1,16 +1,20 @@
 #pragma once
-// The half-edges of a triangle list, and a union-find, shared by the face
-// checks (topology.cpp), repair (repair.cpp) and the statistics of a raw face
-// list (mesh_statistics.cpp). Not a public header.
+// The half-edges of a triangle or polygon list, and a union-find, shared by
+// the face checks (topology.cpp), repair (repair.cpp) and the statistics of a
+// raw face list (mesh_statistics.cpp). Not a public header.
 //
 // Half-edge h (0 <= h < 3 n_faces) runs from the corner faces[h] to the next
 // corner of its face, faces[next_corner(h)]; it also names that corner.
+// FaceList extends this to polygons through face offsets.
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <numeric>
 #include <string>
 #include <vector>
+
+#include "sorpia/errors.hpp"
 
 namespace sorpia {
 namespace detail {
@@ -22,6 +26,68 @@ inline std::size_t prev_corner(std::size_t h) { return h - h % 3 + (h % 3 + 2) %
 inline std::string face_str(std::size_t f, const std::int32_t* faces) {
   return "face " + std::to_string(f) + " (" + std::to_string(faces[3 * f]) + ", " +
          std::to_string(faces[3 * f + 1]) + ", " + std::to_string(faces[3 * f + 2]) + ")";
+}
+
+// A list of triangles or polygons: face f is idx[begin(f) .. end(f)).
+// Corner h (0 <= h < n_corners()) is also the half-edge from idx[h] to the
+// next corner of its face. `off` (n_faces + 1 offsets) and `corner_face` (the
+// face of each corner) are given for polygons; triangles need neither (3 f,
+// h / 3, next_corner).
+struct FaceList {
+  const std::int32_t* idx;
+  const std::int32_t* off;          // nullptr for triangles (3 f)
+  const std::int32_t* corner_face;  // nullptr for triangles
+  std::size_t n_faces;
+
+  bool triangles() const { return corner_face == nullptr; }
+  std::int32_t begin(std::size_t f) const { return off ? off[f] : static_cast<std::int32_t>(3 * f); }
+  std::int32_t end(std::size_t f) const { return begin(f + 1); }
+  std::size_t n_corners() const { return static_cast<std::size_t>(begin(n_faces)); }
+  std::int32_t face_of(std::size_t h) const {
+    return corner_face ? corner_face[h] : static_cast<std::int32_t>(h / 3);
+  }
+  std::size_t next(std::size_t h) const {
+    if (!corner_face) return next_corner(h);
+    const std::int32_t f = corner_face[h];
+    return h + 1 == static_cast<std::size_t>(end(f)) ? static_cast<std::size_t>(begin(f)) : h + 1;
+  }
+  std::size_t prev(std::size_t h) const {
+    if (!corner_face) return prev_corner(h);
+    const std::int32_t f = corner_face[h];
+    return h == static_cast<std::size_t>(begin(f)) ? static_cast<std::size_t>(end(f)) - 1 : h - 1;
+  }
+  // "face f (a, b, c, ...)", for messages.
+  std::string str(std::size_t f) const {
+    std::string s = "face " + std::to_string(f) + " (";
+    for (std::int32_t h = begin(f); h < end(f); ++h) s += (h > begin(f) ? ", " : "") + std::to_string(idx[h]);
+    return s + ")";
+  }
+};
+
+// The offsets of polygons from their counts; every count at least 3 and the
+// total within int32.
+inline std::vector<std::int32_t> polygon_offsets(const std::int32_t* counts, std::size_t n_faces) {
+  std::vector<std::int32_t> off(n_faces + 1);
+  std::int64_t total = 0;
+  for (std::size_t f = 0; f < n_faces; ++f) {
+    off[f] = static_cast<std::int32_t>(total);
+    if (counts[f] < 3)
+      throw MeshError("face " + std::to_string(f) + " has " + std::to_string(counts[f]) +
+                      " vertices: a face needs at least 3");
+    total += counts[f];
+    if (total > std::numeric_limits<std::int32_t>::max())
+      throw MeshError("too many face vertices: faces 0.." + std::to_string(f) + " have more than 2^31 - 1 corners");
+  }
+  off[n_faces] = static_cast<std::int32_t>(total);
+  return off;
+}
+
+// The face of every corner of the faces with offsets `off` (FaceList::corner_face).
+inline std::vector<std::int32_t> corner_faces(const std::vector<std::int32_t>& off) {
+  std::vector<std::int32_t> face(static_cast<std::size_t>(off.back()));
+  for (std::size_t f = 0; f + 1 < off.size(); ++f)
+    std::fill(face.begin() + off[f], face.begin() + off[f + 1], static_cast<std::int32_t>(f));
+  return face;
 }
 
 // Union-find over indices 0..n-1 with path halving; the root of a class is its

@@ -1,6 +1,7 @@
-// sorpia::repair (repair.hpp). Works on the face array's half-edges: half-edge
-// h (0 <= h < 3 n_faces) runs from faces[h] to the next corner of its face and
-// also names the corner at faces[h], as in topology.cpp. Linear time apart
+// sorpia::repair (repair.hpp). Works on the half-edges of the face list
+// (half_edges.hpp's FaceList, triangles or polygons): half-edge h runs from
+// corner h to the next corner of its face and also names corner h, as in
+// topology.cpp. Linear time apart
 // from the faces of one edge, which are few: the half-edges are grouped by
 // edge with a counting sort on the lower end and a slot per higher end, the
 // fans are the classes of a union-find over corners, the orientation a
@@ -22,17 +23,132 @@
 namespace sorpia {
 
 bool RepairReport::empty() const {
-  return degenerate_faces.empty() && duplicate_faces.empty() && reversed_duplicate_faces.empty() &&
+  return degenerate_faces.empty() && collapsed_faces.empty() && duplicate_faces.empty() && reversed_duplicate_faces.empty() &&
          nonmanifold_edges.empty() && sheet_vertices.empty() && bowtie_vertices.empty() && flipped_faces.empty();
 }
 
 namespace {
 
-using detail::face_str;
-using detail::next_corner;
-using detail::prev_corner;
+using detail::FaceList;
 // Union-find over corners: the root of a class is its lowest corner.
 using Corners = detail::DisjointSets;
+
+// A FaceList whose kind is fixed at compile time: the triangle path steps
+// round a face by arithmetic (next_corner, h / 3), with no branch on the kind.
+template <bool kPolygons>
+struct Faces : FaceList {
+  bool triangles() const { return !kPolygons; }
+  std::int32_t face_of(std::size_t h) const {
+    if constexpr (kPolygons) return corner_face[h];
+    return static_cast<std::int32_t>(h / 3);
+  }
+  std::size_t next(std::size_t h) const {
+    if constexpr (kPolygons) return FaceList::next(h);
+    return detail::next_corner(h);
+  }
+  std::size_t prev(std::size_t h) const {
+    if constexpr (kPolygons) return FaceList::prev(h);
+    return detail::prev_corner(h);
+  }
+  // Face f's corners are [begin(f), end(f)).
+  std::int32_t begin(std::size_t f) const {
+    if constexpr (kPolygons) return off[f];
+    return static_cast<std::int32_t>(3 * f);
+  }
+  std::int32_t end(std::size_t f) const { return begin(f + 1); }
+};
+
+// The offsets and corner faces of a FaceList of polygons (none for triangles).
+struct FaceArrays {
+  std::size_t n_faces = 0;
+  std::vector<std::int32_t> off, corner_face;
+
+  static FaceArrays triangles(std::size_t n_faces) { return {n_faces, {}, {}}; }
+  static FaceArrays polygons(const std::int32_t* counts, std::size_t n_faces) {
+    FaceArrays a{n_faces, detail::polygon_offsets(counts, n_faces), {}};
+    a.corner_face = detail::corner_faces(a.off);
+    return a;
+  }
+  FaceList over(const std::int32_t* idx) const {
+    return {idx, off.empty() ? nullptr : off.data(), corner_face.empty() ? nullptr : corner_face.data(), n_faces};
+  }
+};
+
+// A polygon list owning its arrays.
+struct OwnedFaces {
+  std::vector<std::int32_t> idx;
+  FaceArrays arrays;
+
+  bool empty() const { return idx.empty(); }
+  FaceList view() const { return arrays.over(idx.data()); }
+};
+
+// Rule 1 of repair.hpp: marks in `removed` (and reports) the faces that
+// repeat a vertex and are not a polygon once their consecutive repeats are
+// dropped. Returns `fl` with the repeated corners of the other faces that
+// repeat a vertex dropped ("collapsed_faces"), the faces numbered as in `fl`,
+// or an empty list where no face collapses (triangles never do).
+OwnedFaces drop_repeated_corners(const FaceList& fl, std::size_t n_vertices, std::vector<std::uint8_t>& removed,
+                                 RepairReport& rep) {
+  OwnedFaces out;
+  if (fl.triangles()) {
+    for (std::size_t f = 0; f < fl.n_faces; ++f) {
+      const std::int32_t* t = fl.idx + 3 * f;
+      if (t[0] == t[1] || t[1] == t[2] || t[2] == t[0]) {
+        removed[f] = 1;
+        rep.degenerate_faces.push_back(static_cast<std::int32_t>(f));
+      }
+    }
+    return out;
+  }
+  // stamp[v] == 2 f: v seen in face f; 2 f + 1: v kept in face f's collapsed cycle.
+  std::vector<std::int32_t> stamp(n_vertices, -1);
+  std::vector<std::int32_t> kept_off{0}, kept;  // the collapsed faces' corners
+  for (std::size_t f = 0; f < fl.n_faces; ++f) {
+    const std::int32_t lo = fl.off[f], hi = fl.off[f + 1];
+    const auto seen = static_cast<std::int32_t>(2 * f), in_cycle = seen + 1;
+    bool repeats = false;
+    for (std::int32_t h = lo; h < hi; ++h) {
+      repeats |= stamp[fl.idx[h]] == seen;
+      stamp[fl.idx[h]] = seen;
+    }
+    if (!repeats) continue;
+    const std::size_t start = kept.size();
+    bool polygon = true;
+    for (std::int32_t h = lo; h < hi; ++h) {
+      const std::int32_t v = fl.idx[h];
+      if (v == fl.idx[fl.prev(h)]) continue;  // a consecutive repeat (cyclically)
+      polygon &= stamp[v] != in_cycle;
+      stamp[v] = in_cycle;
+      kept.push_back(v);
+    }
+    if (polygon && kept.size() - start >= 3) {
+      rep.collapsed_faces.push_back(static_cast<std::int32_t>(f));
+      kept_off.push_back(static_cast<std::int32_t>(kept.size()));
+    } else {
+      kept.resize(start);
+      removed[f] = 1;
+      rep.degenerate_faces.push_back(static_cast<std::int32_t>(f));
+    }
+  }
+  if (rep.collapsed_faces.empty()) return out;
+  std::vector<std::int32_t>& off = out.arrays.off;
+  off.reserve(fl.n_faces + 1);
+  out.idx.reserve(fl.n_corners());
+  off.push_back(0);
+  for (std::size_t f = 0, c = 0; f < fl.n_faces; ++f) {
+    if (c < rep.collapsed_faces.size() && rep.collapsed_faces[c] == static_cast<std::int32_t>(f)) {
+      out.idx.insert(out.idx.end(), kept.begin() + kept_off[c], kept.begin() + kept_off[c + 1]);
+      ++c;
+    } else {
+      out.idx.insert(out.idx.end(), fl.idx + fl.off[f], fl.idx + fl.off[f + 1]);
+    }
+    off.push_back(static_cast<std::int32_t>(out.idx.size()));
+  }
+  out.arrays.corner_face = detail::corner_faces(off);
+  out.arrays.n_faces = fl.n_faces;
+  return out;
+}
 
 // Rules 2 and 3 of repair.hpp: removes (in `removed`, reported in `rep`) the
 // duplicate faces, and returns for each half-edge the half-edge of the face it
@@ -41,27 +157,43 @@ using Corners = detail::DisjointSets;
 // within a bucket); within a bucket the edges are told apart by a slot per
 // higher end stamped with the lower end. A duplicate face shares each of its
 // edges with the face it repeats, so it is found at its first edge, before it
-// could be joined. The ends of edges of three or more faces are marked in `sheet_end`.
-std::vector<std::int32_t> join_edges(const std::int32_t* faces, std::size_t n_faces, std::size_t n_vertices,
-                                     bool pair_sheets, std::vector<std::uint8_t>& removed, RepairReport& rep,
+// could be joined. The ends of edges of three or more faces are marked in
+// `sheet_end`. Needs faces without a repeated vertex (rule 1).
+template <bool kPolygons>
+std::vector<std::int32_t> join_edges(const Faces<kPolygons>& fl, std::size_t n_vertices, bool pair_sheets,
+                                     std::vector<std::uint8_t>& removed, RepairReport& rep,
                                      std::vector<std::uint8_t>& sheet_end) {
-  const std::size_t n_half = 3 * n_faces;
-  auto lo = [&](std::size_t h) { return std::min(faces[h], faces[next_corner(h)]); };
-  auto hi = [&](std::size_t h) { return std::max(faces[h], faces[next_corner(h)]); };
-  auto third = [&](std::int32_t h) { return faces[prev_corner(h)]; };
+  const std::int32_t* faces = fl.idx;
+  const std::size_t n_half = fl.n_corners();
+  auto lo = [&](std::size_t h) { return std::min(faces[h], faces[fl.next(h)]); };
+  auto hi = [&](std::size_t h) { return std::max(faces[h], faces[fl.next(h)]); };
+  // Whether the faces of half-edges g and h, which lie on one edge, have the
+  // same vertices in the same cyclic order, either way round: for triangles,
+  // the same third vertex; polygons are walked from the edge's end faces[g],
+  // h's face backwards where it runs the edge the other way.
+  auto same_face = [&](std::int32_t g, std::int32_t h) {
+    if (fl.triangles()) return faces[fl.prev(g)] == faces[fl.prev(h)];
+    const std::int32_t fg = fl.face_of(g), fh = fl.face_of(h), n = fl.end(fg) - fl.begin(fg);
+    if (n != fl.end(fh) - fl.begin(fh)) return false;
+    const bool forward = faces[g] == faces[h];
+    std::size_t a = static_cast<std::size_t>(g), b = forward ? static_cast<std::size_t>(h) : fl.next(h);
+    for (std::int32_t i = 0; i < n; ++i, a = fl.next(a), b = forward ? fl.next(b) : fl.prev(b))
+      if (faces[a] != faces[b]) return false;
+    return true;
+  };
   std::vector<std::int32_t> bucket(n_vertices + 1, 0);
   for (std::size_t h = 0; h < n_half; ++h)
-    if (!removed[h / 3]) ++bucket[lo(h) + 1];
+    if (!removed[fl.face_of(h)]) ++bucket[lo(h) + 1];
   for (std::size_t v = 0; v < n_vertices; ++v) bucket[v + 1] += bucket[v];
   std::vector<std::int32_t> by_lo(bucket[n_vertices]);
   {
     std::vector<std::int32_t> fill(bucket.begin(), bucket.end() - 1);
     for (std::size_t h = 0; h < n_half; ++h)
-      if (!removed[h / 3]) by_lo[fill[lo(h)]++] = static_cast<std::int32_t>(h);
+      if (!removed[fl.face_of(h)]) by_lo[fill[lo(h)]++] = static_cast<std::int32_t>(h);
   }
   auto drop_duplicate = [&](std::int32_t kept, std::int32_t h) {
-    removed[h / 3] = 1;
-    (faces[kept] == faces[h] ? rep.duplicate_faces : rep.reversed_duplicate_faces).push_back(h / 3);
+    removed[fl.face_of(h)] = 1;
+    (faces[kept] == faces[h] ? rep.duplicate_faces : rep.reversed_duplicate_faces).push_back(fl.face_of(h));
   };
   std::vector<std::int32_t> mate(n_half, -1);
   // Per higher end x of an edge (v, x): stamp v, the number of faces (-1 once
@@ -85,8 +217,8 @@ std::vector<std::int32_t> join_edges(const std::int32_t* faces, std::size_t n_fa
       const std::int32_t h = b[i], x = hi(h);
       if (count[x] == 2) {
         const std::int32_t g = first[x];
-        if (g == h || removed[g / 3] || removed[h / 3]) continue;  // removed: a duplicate found at another edge
-        if (third(g) == third(h)) {
+        if (g == h || removed[fl.face_of(g)] || removed[fl.face_of(h)]) continue;  // removed: a duplicate found at another edge
+        if (same_face(g, h)) {
           drop_duplicate(g, h);
         } else {
           mate[g] = h;
@@ -97,8 +229,8 @@ std::vector<std::int32_t> join_edges(const std::int32_t* faces, std::size_t n_fa
         live.clear();
         for (std::int32_t j = i; j < k; ++j) {
           const std::int32_t hj = b[j];
-          if (hi(hj) != x || removed[hj / 3]) continue;
-          const auto same = std::find_if(live.begin(), live.end(), [&](std::int32_t g) { return third(g) == third(hj); });
+          if (hi(hj) != x || removed[fl.face_of(hj)]) continue;
+          const auto same = std::find_if(live.begin(), live.end(), [&](std::int32_t g) { return same_face(g, hj); });
           if (same != live.end())
             drop_duplicate(*same, hj);
           else
@@ -131,44 +263,33 @@ std::vector<std::int32_t> join_edges(const std::int32_t* faces, std::size_t n_fa
   return mate;
 }
 
-// One pass of the rules in repair.hpp over valid indices; without
-// `pair_sheets`, every face of an edge of three or more borders it alone.
-RepairResult repair_pass(const std::int32_t* faces, std::size_t n_faces, std::size_t n_vertices, bool pair_sheets) {
-  RepairResult r;
-  RepairReport& rep = r.report;
-  const std::size_t n_half = 3 * n_faces;
-  std::vector<std::uint8_t> removed(n_faces, 0);
-  for (std::size_t f = 0; f < n_faces; ++f) {
-    const std::int32_t* t = faces + 3 * f;
-    if (t[0] == t[1] || t[1] == t[2] || t[2] == t[0]) {
-      removed[f] = 1;
-      rep.degenerate_faces.push_back(static_cast<std::int32_t>(f));
-    }
-  }
-  std::vector<std::uint8_t> sheet_end(n_vertices, 0);
-  const std::vector<std::int32_t> mate = join_edges(faces, n_faces, n_vertices, pair_sheets, removed, rep, sheet_end);
-
-  // Fans: corners of one vertex joined across its joined edges.
+// Rule 4: the output vertex of each corner of the faces not removed (-1 for
+// the others): one per fan, the corners of one vertex joined across joined
+// edges. `vertex_map` holds the input vertices on entry; the copies are
+// appended, and counted per input vertex in `copies`. Sets `misoriented` when
+// some joined faces run their edge the same way.
+template <bool kPolygons>
+std::vector<std::int32_t> fan_vertices(const Faces<kPolygons>& fl, const std::vector<std::int32_t>& mate,
+                                       const std::vector<std::uint8_t>& removed, std::vector<std::int32_t>& vertex_map,
+                                       std::vector<std::int32_t>& copies, bool& misoriented) {
+  const std::int32_t* faces = fl.idx;
+  const std::size_t n_half = fl.n_corners();
   Corners fans(n_half);
-  bool misoriented = false;  // some joined faces run their edge the same way
   for (std::size_t h = 0; h < n_half; ++h) {
     const std::int32_t g = mate[h];
     if (g < static_cast<std::int32_t>(h)) continue;  // unjoined, or joined from g already
-    const auto hn = static_cast<std::int32_t>(next_corner(h)), gn = static_cast<std::int32_t>(next_corner(g));
+    const auto hn = static_cast<std::int32_t>(fl.next(h)), gn = static_cast<std::int32_t>(fl.next(g));
     const bool same_way = faces[g] == faces[h];
     misoriented |= same_way;
     fans.unite(static_cast<std::int32_t>(h), same_way ? g : gn);
     fans.unite(hn, same_way ? gn : g);
   }
-  // The output vertex of each corner. A fan's root is its lowest corner, so
-  // in corner order the root's vertex is known before the fan's other corners.
+  // A fan's root is its lowest corner, so in corner order the root's vertex
+  // is known before the fan's other corners.
   std::vector<std::int32_t> vertex_of(n_half, -1);
-  std::vector<std::uint8_t> taken(n_vertices, 0);
-  std::vector<std::int32_t> copies(n_vertices, 0);
-  r.vertex_map.resize(n_vertices);
-  std::iota(r.vertex_map.begin(), r.vertex_map.end(), 0);
+  std::vector<std::uint8_t> taken(copies.size(), 0);
   for (std::size_t h = 0; h < n_half; ++h) {
-    if (removed[h / 3]) continue;
+    if (removed[fl.face_of(h)]) continue;
     const std::int32_t root = fans.find(static_cast<std::int32_t>(h));
     if (root != static_cast<std::int32_t>(h)) {
       vertex_of[h] = vertex_of[root];
@@ -179,11 +300,34 @@ RepairResult repair_pass(const std::int32_t* faces, std::size_t n_faces, std::si
       taken[v] = 1;
       vertex_of[h] = v;
     } else {
-      vertex_of[h] = static_cast<std::int32_t>(r.vertex_map.size());
-      r.vertex_map.push_back(v);
+      vertex_of[h] = static_cast<std::int32_t>(vertex_map.size());
+      vertex_map.push_back(v);
       ++copies[v];
     }
   }
+  return vertex_of;
+}
+
+// One pass of the rules in repair.hpp over valid indices; without
+// `pair_sheets`, every face of an edge of three or more borders it alone.
+// The output faces are polygons (with face_counts) unless `input` is triangles.
+template <bool kPolygons>
+RepairResult repair_pass(const FaceList& input, std::size_t n_vertices, bool pair_sheets) {
+  RepairResult r;
+  RepairReport& rep = r.report;
+  std::vector<std::uint8_t> removed(input.n_faces, 0);
+  const OwnedFaces collapsed = drop_repeated_corners(input, n_vertices, removed, rep);
+  const Faces<kPolygons> fl{collapsed.empty() ? input : collapsed.view()};
+  const std::int32_t* faces = fl.idx;
+  const std::size_t n_faces = fl.n_faces, n_half = fl.n_corners();
+  std::vector<std::uint8_t> sheet_end(n_vertices, 0);
+  const std::vector<std::int32_t> mate = join_edges(fl, n_vertices, pair_sheets, removed, rep, sheet_end);
+
+  bool misoriented = false;
+  std::vector<std::int32_t> copies(n_vertices, 0);
+  r.vertex_map.resize(n_vertices);
+  std::iota(r.vertex_map.begin(), r.vertex_map.end(), 0);
+  const std::vector<std::int32_t> vertex_of = fan_vertices(fl, mate, removed, r.vertex_map, copies, misoriented);
   for (std::size_t v = 0; v < n_vertices; ++v)
     if (copies[v]) {
       (sheet_end[v] ? rep.sheet_vertices : rep.bowtie_vertices).push_back(static_cast<std::int32_t>(v));
@@ -202,25 +346,26 @@ RepairResult repair_pass(const std::int32_t* faces, std::size_t n_faces, std::si
     std::int32_t clash = -1;  // a face whose orientation is forced both ways
     for (std::size_t q = 0; q < component.size(); ++q) {
       const std::int32_t f = component[q];
-      for (std::int32_t h = 3 * f; h < 3 * f + 3; ++h) {
+      for (std::int32_t h = fl.begin(f); h < fl.end(f); ++h) {
         const std::int32_t g = mate[h];
         if (g < 0) continue;
         // running the edge the same way as h needs the other orientation
         const auto want = static_cast<std::int8_t>(flip[f] ^ (faces[g] == faces[h]));
-        if (flip[g / 3] < 0) {
-          flip[g / 3] = want;
+        const std::int32_t fg = fl.face_of(g);
+        if (flip[fg] < 0) {
+          flip[fg] = want;
           n_flipped += static_cast<std::size_t>(want);
-          component.push_back(g / 3);
-        } else if (flip[g / 3] != want && clash < 0) {
-          clash = g / 3;
+          component.push_back(fg);
+        } else if (flip[fg] != want && clash < 0) {
+          clash = fg;
         }
       }
     }
     if (clash >= 0)
       throw MeshError("the connected part of " + std::to_string(component.size()) + " faces containing " +
-                      face_str(f0, faces) + " is not orientable (like a Moebius strip: no choice of face "
-                      "orientations is consistent, e.g. at " + face_str(clash, faces) +
-                      "): Loop interpolation needs an orientable surface, and repair cannot make one");
+                      fl.str(f0) + " is not orientable (like a Moebius strip: no choice of face "
+                      "orientations is consistent, e.g. at " + fl.str(clash) +
+                      "): subdivision needs an orientable surface, and repair cannot make one");
     const std::int8_t reverse = n_flipped <= component.size() - n_flipped ? 1 : 0;
     for (std::int32_t f : component) {
       flip[f] = flip[f] == reverse;
@@ -229,13 +374,17 @@ RepairResult repair_pass(const std::int32_t* faces, std::size_t n_faces, std::si
   }
   std::sort(rep.flipped_faces.begin(), rep.flipped_faces.end());
 
+  // A reversed face keeps its first corner: (a, b, c, d) becomes (a, d, c, b).
+  r.faces.reserve(n_half);
   for (std::size_t f = 0; f < n_faces; ++f) {
     if (removed[f]) continue;
-    const std::int32_t a = vertex_of[3 * f], b = vertex_of[3 * f + 1], c = vertex_of[3 * f + 2];
+    const std::int32_t lo = fl.begin(f), hi = fl.end(f);
+    r.faces.push_back(vertex_of[lo]);
     if (flip[f])
-      r.faces.insert(r.faces.end(), {a, c, b});
+      for (std::int32_t h = hi - 1; h > lo; --h) r.faces.push_back(vertex_of[h]);
     else
-      r.faces.insert(r.faces.end(), {a, b, c});
+      for (std::int32_t h = lo + 1; h < hi; ++h) r.faces.push_back(vertex_of[h]);
+    if (kPolygons) r.face_counts.push_back(hi - lo);
     r.face_map.push_back(static_cast<std::int32_t>(f));
   }
   return r;
@@ -250,6 +399,7 @@ void compose(RepairResult& first, RepairResult&& later) {
     std::sort(into.begin(), into.end());
   };
   faces_of(b.degenerate_faces, a.degenerate_faces);
+  faces_of(b.collapsed_faces, a.collapsed_faces);
   faces_of(b.duplicate_faces, a.duplicate_faces);
   faces_of(b.reversed_duplicate_faces, a.reversed_duplicate_faces);
   std::vector<std::int32_t> flipped;
@@ -284,40 +434,64 @@ void compose(RepairResult& first, RepairResult&& later) {
   first.vertex_map = std::move(vertex_map);
   first.face_map = std::move(face_map);
   first.faces = std::move(later.faces);
+  first.face_counts = std::move(later.face_counts);
 }
 
 }  // namespace
 
-RepairResult repair(const std::int32_t* faces, std::size_t n_faces, std::size_t n_vertices) {
-  // A valid mesh costs the validation alone, and comes back as it is.
-  if (faces_valid(faces, n_faces, n_vertices)) return {};
-  // What repair does not change: refused with the validation's message.
-  const bool repairable = n_faces > 0 &&
-                          n_vertices <= static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max()) &&
-                          std::all_of(faces, faces + 3 * n_faces, [&](std::int32_t v) {
-                            return v >= 0 && static_cast<std::size_t>(v) < n_vertices;
-                          });
-  if (!repairable) {
-    static_cast<void>(Topology(faces, n_faces, n_vertices));
-    throw std::logic_error("sorpia::repair: the validation accepted faces with an index out of range");
-  }
+namespace {
 
-  RepairResult result = repair_pass(faces, n_faces, n_vertices, true);
+// Whether sorpia::Topology accepts the faces (`counts`: nullptr for triangles).
+bool valid(const std::int32_t* counts, const FaceList& fl, std::size_t n_vertices) {
+  return counts ? faces_valid(counts, fl.n_faces, fl.idx, n_vertices) : faces_valid(fl.idx, fl.n_faces, n_vertices);
+}
+
+// Throws sorpia::Topology's MeshError for faces it refuses.
+void validate(const std::int32_t* counts, const FaceList& fl, std::size_t n_vertices) {
+  if (counts)
+    static_cast<void>(Topology(counts, fl.n_faces, fl.idx, n_vertices));
+  else
+    static_cast<void>(Topology(fl.idx, fl.n_faces, n_vertices));
+}
+
+// The index checks repair does not change, by the validation's message.
+void check_indices(const std::int32_t* counts, const FaceList& fl, std::size_t n_vertices) {
+  const bool ok = fl.n_faces > 0 && n_vertices <= static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max()) &&
+                  std::all_of(fl.idx, fl.idx + fl.n_corners(), [&](std::int32_t v) {
+                    return v >= 0 && static_cast<std::size_t>(v) < n_vertices;
+                  });
+  if (!ok) {
+    validate(counts, fl, n_vertices);
+    throw std::logic_error("sorpia::split_nonmanifold: the validation accepted faces with an index out of range");
+  }
+}
+
+// repair() of faces sorpia::Topology refuses.
+RepairResult repair_faces(const std::int32_t* counts, const FaceList& fl, std::size_t n_vertices) {
+  check_indices(counts, fl, n_vertices);  // what repair does not change: refused as the validation refuses it
+  auto pass = [&](const FaceList& faces, std::size_t n, bool pair_sheets) {
+    return counts ? repair_pass<true>(faces, n, pair_sheets) : repair_pass<false>(faces, n, pair_sheets);
+  };
+  RepairResult result = pass(fl, n_vertices, true);
   if (result.faces.empty())
-    throw MeshError("every face repeats a vertex (" + std::to_string(n_faces) +
-                    " degenerate triangles): no face is left, and Loop subdivision needs at least one triangle");
+    throw MeshError("every face repeats a vertex (" + std::to_string(fl.n_faces) +
+                    " degenerate faces): no face is left, and subdivision needs at least one face");
   // Pairing sheets can join them into one fan at both ends of their edge (two
   // sheets that touch along several edges), which leaves that edge with more
   // than two faces: a further pass makes each face of such an edge border it alone.
   constexpr int max_passes = 4;
-  for (int pass = 1;; ++pass) {
-    const std::size_t n_out = result.vertex_map.size();
-    if (faces_valid(result.faces.data(), result.faces.size() / 3, n_out)) return result;
+  for (int n_pass = 1;; ++n_pass) {
+    const std::size_t n_out = result.vertex_map.size(), n_faces_out = result.face_map.size();
+    const std::int32_t* counts_out = counts ? result.face_counts.data() : nullptr;
+    const FaceArrays arrays =
+        counts ? FaceArrays::polygons(counts_out, n_faces_out) : FaceArrays::triangles(n_faces_out);
+    const FaceList out = arrays.over(result.faces.data());
+    if (valid(counts_out, out, n_out)) return result;
     RepairResult next;
-    if (pass < max_passes) next = repair_pass(result.faces.data(), result.faces.size() / 3, n_out, false);
+    if (n_pass < max_passes) next = pass(out, n_out, false);
     if (next.report.empty()) {  // nothing more repair changes (e.g. a vertex of too many edges)
       try {
-        static_cast<void>(Topology(result.faces.data(), result.faces.size() / 3, n_out));
+        validate(counts_out, out, n_out);
       } catch (const MeshError& e) {
         throw MeshError(std::string("repair could not make a valid mesh: ") + e.what());
       }
@@ -325,6 +499,159 @@ RepairResult repair(const std::int32_t* faces, std::size_t n_faces, std::size_t 
     }
     compose(result, std::move(next));
   }
+}
+
+}  // namespace
+
+// A valid mesh costs the validation alone, and comes back as it is.
+RepairResult repair(const std::int32_t* faces, std::size_t n_faces, std::size_t n_vertices) {
+  if (faces_valid(faces, n_faces, n_vertices)) return {};  // before FaceArrays: a valid mesh allocates nothing
+  const FaceArrays arrays = FaceArrays::triangles(n_faces);
+  return repair_faces(nullptr, arrays.over(faces), n_vertices);
+}
+
+RepairResult repair(const std::int32_t* face_vertex_counts, std::size_t n_faces, const std::int32_t* face_vertex_indices,
+                    std::size_t n_vertices) {
+  if (faces_valid(face_vertex_counts, n_faces, face_vertex_indices, n_vertices)) return {};
+  const FaceArrays arrays = FaceArrays::polygons(face_vertex_counts, n_faces);
+  return repair_faces(face_vertex_counts, arrays.over(face_vertex_indices), n_vertices);
+}
+
+namespace {
+
+// split_nonmanifold (repair.hpp) over valid indices.
+template <bool kPolygons>
+NonmanifoldSplit split_pass(const Faces<kPolygons>& fl, std::size_t n_vertices) {
+  NonmanifoldSplit s;
+  const std::int32_t* faces = fl.idx;
+  const std::size_t n_half = fl.n_corners();
+  std::vector<std::int32_t> stamp(n_vertices, -1), n_faces_at(n_vertices, 0);
+  for (std::size_t f = 0; f < fl.n_faces; ++f)
+    for (std::int32_t h = fl.begin(f); h < fl.end(f); ++h) {
+      if (stamp[faces[h]] == static_cast<std::int32_t>(f))
+        throw MeshError(fl.str(f) + " repeats vertex " + std::to_string(faces[h]) +
+                        ": nonmanifold=\"sharp\" keeps every face as it is, and a face cannot repeat a vertex "
+                        "(OpenSubdiv makes a degenerate edge of it); sorpia.repair (--repair) drops the repeat");
+      stamp[faces[h]] = static_cast<std::int32_t>(f);
+      ++n_faces_at[faces[h]];
+    }
+  // The half-edges by lower end, then by higher end: the faces of each edge together.
+  auto lo = [&](std::size_t h) { return std::min(faces[h], faces[fl.next(h)]); };
+  auto hi = [&](std::int32_t h) { return std::max(faces[h], faces[fl.next(h)]); };
+  std::vector<std::int32_t> bucket(n_vertices + 1, 0), by_lo(n_half);
+  for (std::size_t h = 0; h < n_half; ++h) ++bucket[lo(h) + 1];
+  for (std::size_t v = 0; v < n_vertices; ++v) bucket[v + 1] += bucket[v];
+  {
+    std::vector<std::int32_t> fill(bucket.begin(), bucket.end() - 1);
+    for (std::size_t h = 0; h < n_half; ++h) by_lo[fill[lo(h)]++] = static_cast<std::int32_t>(h);
+  }
+  std::vector<std::int32_t> mate(n_half, -1), n_edges(n_vertices, 0), n_boundary(n_vertices, 0),
+      n_nonmanifold(n_vertices, 0);
+  std::vector<std::array<std::int32_t, 2>> nonmanifold_ends(n_vertices, {-1, -1});  // the first two
+  auto nonmanifold_end = [&](std::int32_t v, std::int32_t x) {
+    if (n_nonmanifold[v] < 2) nonmanifold_ends[v][n_nonmanifold[v]] = x;
+    ++n_nonmanifold[v];
+  };
+  for (std::size_t vi = 0; vi < n_vertices; ++vi) {
+    const auto v = static_cast<std::int32_t>(vi);
+    std::int32_t* b = by_lo.data() + bucket[v];
+    const std::int32_t k = bucket[v + 1] - bucket[v];
+    std::sort(b, b + k, [&](std::int32_t g, std::int32_t h) { return std::make_pair(hi(g), g) < std::make_pair(hi(h), h); });
+    for (std::int32_t i = 0, j; i < k; i = j) {
+      const std::int32_t x = hi(b[i]);
+      for (j = i + 1; j < k && hi(b[j]) == x; ++j) {
+      }
+      ++n_edges[v];
+      ++n_edges[x];
+      if (j - i == 1) {
+        ++n_boundary[v];
+        ++n_boundary[x];
+      } else if (j - i == 2 && faces[b[i]] != faces[b[i + 1]]) {
+        mate[b[i]] = b[i + 1];
+        mate[b[i + 1]] = b[i];
+      } else {
+        s.nonmanifold_edges.push_back({v, x});
+        nonmanifold_end(v, x);
+        nonmanifold_end(x, v);
+      }
+    }
+  }
+  const std::vector<std::uint8_t> removed(fl.n_faces, 0);
+  std::vector<std::int32_t> copies(n_vertices, 0);
+  s.vertex_map.resize(n_vertices);
+  std::iota(s.vertex_map.begin(), s.vertex_map.end(), 0);
+  bool misoriented = false;  // stays false: only edges run both ways are joined
+  const std::vector<std::int32_t> vertex_of = fan_vertices(fl, mate, removed, s.vertex_map, copies, misoriented);
+
+  std::vector<std::uint8_t> crease(n_vertices, 0);
+  for (std::size_t vi = 0; vi < n_vertices; ++vi) {
+    if (n_nonmanifold[vi] == 0 && copies[vi] == 0) continue;
+    const auto v = static_cast<std::int32_t>(vi);
+    s.nonmanifold_vertices.push_back(v);
+    crease[v] = n_nonmanifold[v] == 2 && n_boundary[v] == 0 && n_faces_at[v] > n_edges[v];
+    if (!crease[v]) s.corners.push_back(v);
+  }
+  // Each fan of a crease vertex must lie between copies of its two
+  // non-manifold edges (the boundary rule of the split is then its crease
+  // rule): per output vertex, its faces and the far ends of its open edges.
+  const std::size_t n_out = s.vertex_map.size();
+  std::vector<std::int32_t> fan_faces(n_out, 0), n_open(n_out, 0);
+  std::vector<std::array<std::int32_t, 2>> open_ends(n_out, {-1, -1});
+  auto open_end = [&](std::int32_t o, std::int32_t x) {
+    if (n_open[o] < 2) open_ends[o][n_open[o]] = x;
+    ++n_open[o];
+  };
+  for (std::size_t h = 0; h < n_half; ++h) {
+    const std::int32_t v = faces[h];
+    if (!crease[v]) continue;
+    const std::int32_t o = vertex_of[h];
+    ++fan_faces[o];
+    if (mate[h] < 0) open_end(o, faces[fl.next(h)]);
+    if (mate[fl.prev(h)] < 0) open_end(o, faces[fl.prev(h)]);
+  }
+  for (std::size_t o = 0; o < n_out; ++o) {
+    const std::int32_t v = s.vertex_map[o];
+    if (!crease[v]) continue;
+    auto ends = open_ends[o], want = nonmanifold_ends[v];
+    std::sort(ends.begin(), ends.end());
+    std::sort(want.begin(), want.end());
+    if (n_open[o] != 2 || ends != want || want[0] == want[1])
+      throw MeshError("vertex " + std::to_string(v) + " is on an interior non-manifold crease (edges (" +
+                      std::to_string(v) + ", " + std::to_string(want[0]) + ") and (" + std::to_string(v) + ", " +
+                      std::to_string(want[1]) + "), where OpenSubdiv gives it the crease rule), but one of its fans "
+                      "of faces does not lie between those two edges: nonmanifold=\"sharp\" cannot reproduce "
+                      "OpenSubdiv's rule there; sorpia.repair (--repair) makes the mesh manifold");
+    if (fan_faces[o] == 1 &&
+        (s.single_face_sheets.empty() || s.single_face_sheets.back() != v))
+      s.single_face_sheets.push_back(v);
+  }
+  std::sort(s.single_face_sheets.begin(), s.single_face_sheets.end());
+  s.single_face_sheets.erase(std::unique(s.single_face_sheets.begin(), s.single_face_sheets.end()),
+                             s.single_face_sheets.end());
+  if (s.empty()) return {};
+  s.faces.reserve(n_half);
+  for (std::size_t f = 0; f < fl.n_faces; ++f) {
+    for (std::int32_t h = fl.begin(f); h < fl.end(f); ++h) s.faces.push_back(vertex_of[h]);
+    if (kPolygons) s.face_counts.push_back(fl.end(f) - fl.begin(f));
+  }
+  return s;
+}
+
+}  // namespace
+
+NonmanifoldSplit split_nonmanifold(const std::int32_t* faces, std::size_t n_faces, std::size_t n_vertices) {
+  if (faces_valid(faces, n_faces, n_vertices)) return {};
+  const FaceArrays arrays = FaceArrays::triangles(n_faces);
+  check_indices(nullptr, arrays.over(faces), n_vertices);
+  return split_pass(Faces<false>{arrays.over(faces)}, n_vertices);
+}
+
+NonmanifoldSplit split_nonmanifold(const std::int32_t* face_vertex_counts, std::size_t n_faces,
+                                   const std::int32_t* face_vertex_indices, std::size_t n_vertices) {
+  if (faces_valid(face_vertex_counts, n_faces, face_vertex_indices, n_vertices)) return {};
+  const FaceArrays arrays = FaceArrays::polygons(face_vertex_counts, n_faces);
+  check_indices(face_vertex_counts, arrays.over(face_vertex_indices), n_vertices);
+  return split_pass(Faces<true>{arrays.over(face_vertex_indices)}, n_vertices);
 }
 
 }  // namespace sorpia

@@ -33,40 +33,7 @@ void silence_openmesh() {
 
 namespace {
 
-// The faces being validated, triangles or polygons: face f is
-// idx[off[f] .. off[f + 1]). Corner h (0 <= h < n_corners()) is also the
-// half-edge from idx[h] to the next corner of its face. `corner_face` maps a
-// corner to its face for polygons; triangles need no table (h / 3).
-struct FaceList {
-  const std::int32_t* idx;
-  const std::int32_t* off;          // nullptr for triangles (3 f)
-  const std::int32_t* corner_face;  // nullptr for triangles
-  std::size_t n_faces;
-
-  bool triangles() const { return corner_face == nullptr; }
-  std::int32_t begin(std::size_t f) const { return off ? off[f] : static_cast<std::int32_t>(3 * f); }
-  std::int32_t end(std::size_t f) const { return begin(f + 1); }
-  std::size_t n_corners() const { return static_cast<std::size_t>(begin(n_faces)); }
-  std::int32_t face_of(std::size_t h) const {
-    return corner_face ? corner_face[h] : static_cast<std::int32_t>(h / 3);
-  }
-  std::size_t next(std::size_t h) const {
-    if (!corner_face) return detail::next_corner(h);
-    const std::int32_t f = corner_face[h];
-    return h + 1 == static_cast<std::size_t>(end(f)) ? static_cast<std::size_t>(begin(f)) : h + 1;
-  }
-  std::size_t prev(std::size_t h) const {
-    if (!corner_face) return detail::prev_corner(h);
-    const std::int32_t f = corner_face[h];
-    return h == static_cast<std::size_t>(begin(f)) ? static_cast<std::size_t>(end(f)) - 1 : h - 1;
-  }
-  // "face f (a, b, c, ...)", for messages.
-  std::string str(std::size_t f) const {
-    std::string s = "face " + std::to_string(f) + " (";
-    for (std::int32_t h = begin(f); h < end(f); ++h) s += (h > begin(f) ? ", " : "") + std::to_string(idx[h]);
-    return s + ")";
-  }
-};
+using detail::FaceList;
 
 // ---- validate_faces and its helpers ----------------------------------------
 // Over the half-edges of the face list.
@@ -561,32 +528,6 @@ void check_counts(std::size_t n_faces, std::size_t n_vertices) {
   if (n_faces == 0) throw MeshError("the mesh has no faces: subdivision needs at least one face");
 }
 
-// The offsets of polygons from their counts (check_counts first); every count
-// at least 3 and the total within int32.
-std::vector<std::int32_t> polygon_offsets(const std::int32_t* counts, std::size_t n_faces) {
-  std::vector<std::int32_t> off(n_faces + 1);
-  std::int64_t total = 0;
-  for (std::size_t f = 0; f < n_faces; ++f) {
-    off[f] = static_cast<std::int32_t>(total);
-    if (counts[f] < 3)
-      throw MeshError("face " + std::to_string(f) + " has " + std::to_string(counts[f]) +
-                      " vertices: a face needs at least 3");
-    total += counts[f];
-    if (total > std::numeric_limits<std::int32_t>::max())
-      throw MeshError("too many face vertices: faces 0.." + std::to_string(f) + " have more than 2^31 - 1 corners");
-  }
-  off[n_faces] = static_cast<std::int32_t>(total);
-  return off;
-}
-
-// The face of every corner (polygons).
-std::vector<std::int32_t> corner_faces(const std::vector<std::int32_t>& off) {
-  std::vector<std::int32_t> cf(static_cast<std::size_t>(off.back()));
-  for (std::size_t f = 0; f + 1 < off.size(); ++f)
-    std::fill(cf.begin() + off[f], cf.begin() + off[f + 1], static_cast<std::int32_t>(f));
-  return cf;
-}
-
 }  // namespace
 
 namespace {
@@ -712,6 +653,20 @@ bool faces_valid(const std::int32_t* faces, std::size_t n_faces, std::size_t n_v
   return valid;
 }
 
+bool faces_valid(const std::int32_t* face_vertex_counts, std::size_t n_faces, const std::int32_t* face_vertex_indices,
+                 std::size_t n_vertices) {
+  bool valid = true;
+  try {
+    check_counts(n_faces, n_vertices);
+    const std::vector<std::int32_t> off = detail::polygon_offsets(face_vertex_counts, n_faces);
+    const std::vector<std::int32_t> corner_face = detail::corner_faces(off);
+    validate_faces(FaceList{face_vertex_indices, off.data(), corner_face.data(), n_faces}, n_vertices, nullptr, &valid);
+  } catch (const MeshError&) {
+    return false;
+  }
+  return valid;
+}
+
 Topology::Topology(const std::int32_t* faces, std::size_t n_faces, std::size_t n_vertices)
     : Topology(faces, n_faces, n_vertices, TopologyBuild::Direct) {}
 
@@ -726,7 +681,7 @@ Topology::Topology(const std::int32_t* face_vertex_counts, std::size_t n_faces,
                    const std::int32_t* face_vertex_indices, std::size_t n_vertices, TopologyBuild how)
     : n_vertices_(n_vertices), n_faces_(n_faces) {
   check_counts(n_faces, n_vertices);
-  face_offsets_ = polygon_offsets(face_vertex_counts, n_faces);
+  face_offsets_ = detail::polygon_offsets(face_vertex_counts, n_faces);
   face_indices_.assign(face_vertex_indices, face_vertex_indices + face_offsets_.back());
   const auto* counts_end = face_vertex_counts + n_faces;
   all_triangles_ = std::all_of(face_vertex_counts, counts_end, [](std::int32_t k) { return k == 3; });
@@ -757,7 +712,7 @@ const std::vector<std::int32_t>& Topology::faces() const {
 void Topology::build(TopologyBuild how) {
   detail::silence_openmesh();
   const std::vector<std::int32_t> corner_face =
-      all_triangles_ ? std::vector<std::int32_t>{} : corner_faces(face_offsets_);
+      all_triangles_ ? std::vector<std::int32_t>{} : detail::corner_faces(face_offsets_);
   const FaceList fl{face_indices_.data(), all_triangles_ ? nullptr : face_offsets_.data(),
                     all_triangles_ ? nullptr : corner_face.data(), n_faces_};
   detail::OneRing r;

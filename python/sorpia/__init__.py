@@ -13,6 +13,7 @@ from .io import UnknownTagWarning, read_mesh, write_mesh
 from .sharp import sharp_edges
 from ._validate import Polygons
 from .mesh_repair import RepairResult, repair
+from .nonmanifold import NonmanifoldWarning
 from .surface import LimitSurface, LoopSurface, evaluate_limit, limit_surface
 from . import shapes
 
@@ -30,4 +31,5 @@ __all__ = [
     "LimitSurface", "LoopSurface", "evaluate_limit", "limit_surface", "read_mesh", "write_mesh",
     "UnknownTagWarning", "sharp_edges",
     "RepairResult", "repair",
+    "NonmanifoldWarning",
 ]

@@ -7,8 +7,11 @@ import warnings
 import numpy as np
 
 from . import _core
+from . import nonmanifold as nonmanifold_sharp
 from ._validate import (DEFAULT_BOUNDARY, DEFAULT_SCHEME, as_boundary, as_faces, as_polygons, as_scheme, as_tags,
                         as_vertex_count, as_vertices)
+from .errors import MeshError
+from .nonmanifold import NONMANIFOLD_HINT, as_nonmanifold
 
 
 class UnreferencedVerticesWarning(UserWarning):
@@ -27,11 +30,16 @@ def topology(faces, n_vertices: int, *, scheme: str = DEFAULT_SCHEME, warn: bool
     vertices belong to no face.
     """
     n_vertices = as_vertex_count(n_vertices, count_name)
-    if as_scheme(scheme) == _core.Scheme.loop:
-        topo = _core.Topology(as_faces(faces, n_vertices, count_name=count_name), n_vertices)
-    else:
-        counts, indices = as_polygons(faces, n_vertices, count_name=count_name)
-        topo = _core.Topology(counts, indices, n_vertices)
+    try:
+        if as_scheme(scheme) == _core.Scheme.loop:
+            topo = _core.Topology(as_faces(faces, n_vertices, count_name=count_name), n_vertices)
+        else:
+            counts, indices = as_polygons(faces, n_vertices, count_name=count_name)
+            topo = _core.Topology(counts, indices, n_vertices)
+    except MeshError as exc:
+        if not any(kind in str(exc) for kind in NONMANIFOLD_KINDS):
+            raise
+        raise MeshError(f"{exc}; {NONMANIFOLD_HINT}") from None
     if warn and topo.n_unreferenced:
         warnings.warn(
             f"{topo.n_unreferenced} of {n_vertices} vertices belong to no face; "
@@ -40,6 +48,10 @@ def topology(faces, n_vertices: int, *, scheme: str = DEFAULT_SCHEME, warn: bool
             stacklevel=3,
         )
     return topo
+
+
+# The refusals of sorpia::Topology that OpenSubdiv takes as non-manifold topology.
+NONMANIFOLD_KINDS = ("non-manifold edge", "non-manifold vertex", "inconsistent orientation", "duplicate faces")
 
 
 def tags(topo: _core.Topology, creases=None, corners=None, holes=None) -> _core.Tags:
@@ -62,8 +74,8 @@ TAGS_DOC = """creases : (edges (k, 2) int, sharpness (k,) float or one float), o
         there."""
 
 
-def limit_points(vertices, faces, boundary: str = DEFAULT_BOUNDARY, *, scheme: str = DEFAULT_SCHEME,
-                 creases=None, corners=None, holes=None) -> np.ndarray:
+def limit_points(vertices, faces, boundary: str = DEFAULT_BOUNDARY, *, scheme: str = DEFAULT_SCHEME, creases=None,
+                 corners=None, holes=None, nonmanifold: str = "error") -> np.ndarray:
     """Limit positions of the vertices of a mesh (paper eq. 5-6), B V.
 
     Parameters
@@ -82,6 +94,7 @@ def limit_points(vertices, faces, boundary: str = DEFAULT_BOUNDARY, *, scheme: s
     scheme : {"loop", "catmull-clark"}
         The subdivision scheme (OpenSubdiv's SCHEME_LOOP or SCHEME_CATMARK).
     {tags}
+    {nonmanifold}
 
     Returns
     -------
@@ -105,6 +118,9 @@ def limit_points(vertices, faces, boundary: str = DEFAULT_BOUNDARY, *, scheme: s
         refining until every sharpness has decayed, composed back to the
         control vertices (docs: "Creases, corners and holes").
     """
+    if as_nonmanifold(nonmanifold) == "sharp":
+        return nonmanifold_sharp.limit_points(vertices, faces, boundary, scheme,
+                                              dict(creases=creases, corners=corners, holes=holes))
     vertices = as_vertices(vertices, columns=None)
     topo = topology(faces, vertices.shape[0], scheme=scheme, count_name="len(vertices)")
     k = vertices.shape[1]
@@ -123,20 +139,33 @@ def limit_points(vertices, faces, boundary: str = DEFAULT_BOUNDARY, *, scheme: s
     return np.ascontiguousarray(out[:, :k])
 
 
-limit_points.__doc__ = limit_points.__doc__.replace("{tags}", TAGS_DOC)
+NONMANIFOLD_DOC = """nonmanifold : {"error", "sharp"}
+        What non-manifold topology (edges of three or more faces, or run the
+        same way by their two faces, and 'bowtie' vertices) gets: "error" (the
+        default) refuses it, naming the first problem; "sharp" keeps it with
+        OpenSubdiv's own rules for it, non-manifold edges infinitely sharp and
+        non-manifold vertices corners (a vertex on an interior non-manifold
+        crease gets the crease rule), with a `NonmanifoldWarning`: OpenSubdiv's
+        documentation calls that result undefined (`sorpia.nonmanifold`)."""
+
+
+limit_points.__doc__ = limit_points.__doc__.replace("{tags}", TAGS_DOC).replace("{nonmanifold}", NONMANIFOLD_DOC)
 
 
 def limit_matrix(faces, n_vertices: int, boundary: str = DEFAULT_BOUNDARY, *, scheme: str = DEFAULT_SCHEME,
-                 creases=None, corners=None, holes=None) -> scipy.sparse.csr_matrix:
+                 creases=None, corners=None, holes=None, nonmanifold: str = "error") -> scipy.sparse.csr_matrix:
     """The limit matrix B (paper eq. 7) as a scipy CSR matrix, (n, n) float64.
 
     Row i holds the limit mask of vertex i as OpenSubdiv evaluates it, so that
     ``limit_matrix(F, len(V)) @ V == limit_points(V, F)``. Unreferenced vertices
-    get an identity row. See `limit_points` for `boundary`, `scheme` and the
-    tags (`creases`, `corners`, `holes`).
+    get an identity row. See `limit_points` for `boundary`, `scheme`, the
+    tags (`creases`, `corners`, `holes`) and `nonmanifold`.
     """
     import scipy.sparse  # here, not at import: sorpia's commands need no scipy
 
+    if as_nonmanifold(nonmanifold) == "sharp":
+        return nonmanifold_sharp.limit_matrix(faces, n_vertices, boundary, scheme,
+                                              dict(creases=creases, corners=corners, holes=holes))
     topo = topology(faces, n_vertices, scheme=scheme)  # validates n_vertices (as_vertex_count) and the faces
     n = topo.n_vertices
     data, indices, indptr = _core.limit_matrix(topo, as_boundary(boundary), tags(topo, creases, corners, holes),

@@ -1,17 +1,19 @@
-"""Repair of triangle meshes that sorpia refuses (duplicate and degenerate
-faces, bowtie vertices, edges of three or more faces, mixed orientation)."""
+"""Repair of triangle and polygon meshes that sorpia refuses (duplicate and
+degenerate faces, bowtie vertices, edges of three or more faces, mixed
+orientation)."""
 
 from __future__ import annotations
 
+from types import MappingProxyType
 from typing import NamedTuple
 
 import numpy as np
 
 from . import _core
-from ._validate import as_faces, as_vertices
+from ._validate import Polygons, _face_rows, as_faces, as_polygons, as_tags, as_vertices
 
 # The report's keys, in the order the repair applies its rules (see `repair`).
-REPORT_KINDS = ("degenerate_faces", "duplicate_faces", "reversed_duplicate_faces", "nonmanifold_edges",
+REPORT_KINDS = ("degenerate_faces", "collapsed_faces", "duplicate_faces", "reversed_duplicate_faces", "nonmanifold_edges",
                 "sheet_vertices", "sheet_copies", "bowtie_vertices", "bowtie_copies", "flipped_faces")
 
 
@@ -41,11 +43,12 @@ def describe_changes(report: dict, max_listed: int = 5) -> list[str]:
     mesh), naming the first `max_listed` input faces, edges or vertices of
     each; for ``sorpia repair``, ``--repair`` and ``sorpia info``."""
     r, lines = report, []
-    for kind, what in (("degenerate_faces", "degenerate faces (a repeated vertex)"),
-                       ("duplicate_faces", "duplicate faces"),
-                       ("reversed_duplicate_faces", "reversed duplicate faces")):
+    for kind, what, done in (("degenerate_faces", "degenerate faces (a repeated vertex)", "removed"),
+                             ("collapsed_faces", "polygons with a repeated corner", "kept without the repeats"),
+                             ("duplicate_faces", "duplicate faces", "removed"),
+                             ("reversed_duplicate_faces", "reversed duplicate faces", "removed")):
         if r[kind]:
-            lines.append(f"{what}: {len(r[kind])} removed {_listed(_FACES, r[kind], max_listed)}")
+            lines.append(f"{what}: {len(r[kind])} {done} {_listed(_FACES, r[kind], max_listed)}")
     if r["nonmanifold_edges"]:
         lines.append(f"non-manifold edges (3 or more faces): {len(r['nonmanifold_edges'])} separated into "
                      f"sheets {_listed(_EDGES, r['nonmanifold_edges'], max_listed)}, their "
@@ -68,8 +71,9 @@ class RepairResult(NamedTuple):
     vertices : numpy.ndarray, (n + k, 3) float64
         The input vertices, then k copies: ``vertices[i]`` equals
         ``input_vertices[vertex_map[i]]`` bit for bit.
-    faces : numpy.ndarray, (m', 3) int32
-        The repaired triangles, a valid mesh for every sorpia function.
+    faces : numpy.ndarray, (m', k) int32, or sorpia.Polygons
+        The repaired faces, a valid mesh for every sorpia function, in the
+        form they were given (see `repair`).
     vertex_map : numpy.ndarray, (n + k,) int32
         For every output vertex, the input vertex it copies
         (``vertex_map[i] == i`` for i < n).
@@ -77,24 +81,34 @@ class RepairResult(NamedTuple):
         For every output face, the input face it comes from.
     report : dict
         Every change, JSON-able (lists of ints): see `repair`.
+    tags : dict
+        The sharpness tags given to `repair`, on the repaired mesh: the keys
+        among ``creases``, ``corners`` and ``holes`` that were given, ready
+        for ``interpolate(vertices, faces, **tags)`` (see `repair`).
     """
 
     vertices: np.ndarray
-    faces: np.ndarray
+    faces: np.ndarray | Polygons
     vertex_map: np.ndarray
     face_map: np.ndarray
     report: dict
+    tags: dict = MappingProxyType({})  # read-only: no tags given
 
 
-def repair(vertices, faces) -> RepairResult:
-    """Make a triangle mesh valid for Loop interpolation without moving a vertex.
+def repair(vertices, faces, *, creases=None, corners=None, holes=None) -> RepairResult:
+    """Make a triangle or polygon mesh valid for subdivision without moving a vertex.
 
     The rules, applied in this order:
 
-    1. faces with a repeated vertex are removed ("degenerate_faces");
-    2. of faces with the same three vertices the first is kept; later ones in
-       the same cyclic order ("duplicate_faces") or the opposite one
-       ("reversed_duplicate_faces") are removed;
+    1. a face with a repeated vertex loses its consecutive repeats (cyclically:
+       ``(a, b, b, c)`` and ``(a, b, c, a)`` become the triangle ``(a, b, c)``)
+       when what is left is a polygon of three or more distinct vertices
+       ("collapsed_faces"); otherwise (every triangle with a repeated vertex, a
+       polygon crossing itself at a vertex such as ``(a, b, a, c)``) it is
+       removed ("degenerate_faces");
+    2. of faces with the same vertices in the same cyclic sequence the first is
+       kept; later ones in the same direction ("duplicate_faces") or the
+       opposite one ("reversed_duplicate_faces") are removed;
     3. at an edge of three or more faces ("nonmanifold_edges"), the faces are
        paired into sheets in face order: the lowest-numbered unpaired face with
        the next unpaired face running the edge the other way (else the next
@@ -108,7 +122,8 @@ def repair(vertices, faces) -> RepairResult:
        appended after the input vertices, in the order of its first corner;
     5. each connected part is oriented consistently by reversing the smaller of
        its two classes of faces (on a tie, those disagreeing with its
-       lowest-numbered face) ("flipped_faces").
+       lowest-numbered face) ("flipped_faces"); a reversed face keeps its
+       first corner: ``(a, b, c, d)`` becomes ``(a, d, c, b)``.
 
     No vertex is moved or dropped: vertices used only by removed faces and
     unreferenced vertices stay (unreferenced). Repair is idempotent.
@@ -117,39 +132,135 @@ def repair(vertices, faces) -> RepairResult:
     ----------
     vertices : array_like, (n, 3) float
         Vertex positions (validated as everywhere in sorpia).
-    faces : array_like, (m, 3) int
-        Triangles, indices into `vertices`; they may fail sorpia's topology
-        checks, which is what this function is for.
+    faces : array_like, (m, k) int, list of lists, or sorpia.Polygons
+        Triangles, quads or polygons of any sizes (at least 3 vertices each),
+        indices into ``vertices``; they may fail sorpia's topology checks, which
+        is what this function is for.
+    creases, corners, holes : optional
+        OpenSubdiv's sharpness tags of the input mesh, as `interpolate` takes
+        them. They come back in ``RepairResult.tags`` on the repaired mesh: a
+        crease on every output edge whose two ends copy its two vertices (an
+        edge of removed faces only is dropped), a corner on its vertex and
+        every copy, a hole on the output faces of its face (a removed face's
+        hole is dropped).
 
     Returns
     -------
     RepairResult
-        ``(vertices, faces, vertex_map, face_map, report)``. ``report`` has one
-        key per kind above, holding the input face indices, the input edges
-        ``[a, b]`` (a < b) or the input vertex indices concerned, and "counts",
-        the number of each kind (for "sheet_copies" and "bowtie_copies", the
-        number of vertices added). For a
-        valid mesh every count is 0 and the validated input arrays come back
-        themselves (no copy; they are the caller's arrays when these are
-        already float64 and int32, C-contiguous), with identity maps.
+        ``(vertices, faces, vertex_map, face_map, report, tags)``. The faces come
+        back in the form they were given: an (m, k) array (or a list of
+        faces of k vertices each) as an (m', k) int32 array, unless rule 1
+        shortened a face, and then, like a ragged list or a
+        `sorpia.Polygons`, as a `sorpia.Polygons` of int32 arrays.
+        ``report`` has one key per kind above, holding the input face
+        indices, the input edges ``[a, b]`` (a < b) or the input vertex
+        indices concerned, and "counts", the number of each kind (for
+        "sheet_copies" and "bowtie_copies", the number of vertices added). For
+        a valid mesh every count is 0 and the validated input arrays come back
+        themselves (no copy; they are the caller's arrays, or the caller's
+        `sorpia.Polygons`, when these are already float64 and int32,
+        C-contiguous), with identity maps.
 
     Raises
     ------
     sorpia.MeshError
         A connected part with no consistent orientation (a Moebius strip),
         named by its lowest face and its size; faces that all repeat a vertex;
-        or a problem repair does not change (index
-        out of range, no faces, a vertex of more edges than OpenSubdiv takes).
+        or a problem repair does not change (index out of range, a face of
+        fewer than 3 vertices, no faces, a vertex of more edges than
+        OpenSubdiv takes).
     """
     vertices = as_vertices(vertices)
+    result = _repair_faces(vertices, faces)
+    if creases is None and corners is None and holes is None:
+        return result
+    r = result.report  # every input face is kept or removed by one rule
+    n_faces = len(result.face_map) + sum(len(r[k]) for k in ("degenerate_faces", "duplicate_faces",
+                                                              "reversed_duplicate_faces"))
+    tags = as_tags(creases, corners, holes, n_vertices=len(vertices), n_faces=n_faces)
+    given = {kind for kind, value in (("creases", creases), ("corners", corners), ("holes", holes))
+             if value is not None}
+    return result._replace(tags=_mapped_tags(tags, result, len(vertices), given))
+
+
+def _core_faces(faces, n_vertices: int):
+    """`faces` validated for the core: ``(rows, triangles, polygons)`` where
+    rows is the (m, k) array the faces were given as (None for Polygons and
+    ragged lists), triangles the (m, 3) int32 array when k == 3 (else None)
+    and polygons otherwise the int32 (counts, indices)."""
+    rows = None if isinstance(faces, Polygons) else _face_rows(
+        faces, "faces", "(m, k)", "an (m, k) array of integer vertex indices, a list of polygons or sorpia.Polygons")
+    if rows is not None and rows.shape[1] == 3:  # triangles: the (m, 3) path, as sorpia's Loop functions take them
+        return rows, as_faces(rows, n_vertices, count_name="len(vertices)"), None
+    return rows, None, as_polygons(faces if rows is None else rows, n_vertices, count_name="len(vertices)")
+
+
+def _faces_as_given(rows, counts, indices):
+    """Output polygons in the form the input came in (see `repair`)."""
+    if rows is not None and (counts == rows.shape[1]).all():
+        return indices.reshape(-1, rows.shape[1])
+    return Polygons(counts, indices)
+
+
+def _repair_faces(vertices, faces) -> RepairResult:
+    """`repair` without tags, of validated vertices."""
     n = vertices.shape[0]
-    faces = as_faces(faces, n, count_name="len(vertices)")
-    changed = _core.repair(faces, n)
-    if changed is None:
-        report = {kind: [] for kind in REPORT_KINDS}
+    rows, triangles, polygons = _core_faces(faces, n)
+    if triangles is not None:
+        changed = _core.repair(triangles, n)
+        if changed is None:
+            return _unchanged(vertices, triangles, len(triangles))
+        new_faces, vertex_map, face_map, report = changed
         report["counts"] = _counts(report)
-        return RepairResult(vertices, faces, np.arange(n, dtype=np.int32), np.arange(len(faces), dtype=np.int32),
-                            report)
-    new_faces, vertex_map, face_map, report = changed
+        return RepairResult(vertices[vertex_map], new_faces, vertex_map, face_map, report)
+
+    counts, indices = polygons
+    changed = _core.repair_polygons(counts, indices, n)
+    if changed is None:
+        if rows is not None:  # validated: the cast cannot wrap; no copy of an int32 C-contiguous array
+            return _unchanged(vertices, np.ascontiguousarray(rows, dtype=np.int32), len(rows))
+        same = (isinstance(faces, Polygons) and faces.face_vertex_counts is counts
+                and faces.face_vertex_indices is indices)
+        return _unchanged(vertices, faces if same else Polygons(counts, indices), len(counts))
+    new_counts, new_indices, vertex_map, face_map, report = changed
     report["counts"] = _counts(report)
-    return RepairResult(vertices[vertex_map], new_faces, vertex_map, face_map, report)
+    return RepairResult(vertices[vertex_map], _faces_as_given(rows, new_counts, new_indices), vertex_map, face_map,
+                        report)
+
+
+def _mapped_tags(tags, result: RepairResult, n_vertices: int, kinds) -> dict:
+    """The tags (a checked _core.Tags of the input mesh, of `n_vertices`
+    vertices) on the repaired mesh of `result`: the `kinds` given."""
+    vertex_map, face_map, out = result.vertex_map, result.face_map, {}
+    if "creases" in kinds:
+        counts, indices = as_polygons(result.faces, len(vertex_map))
+        last = np.cumsum(counts) - 1
+        nxt = np.arange(1, len(indices) + 1)
+        nxt[last] = last - counts + 1  # a face's last corner is followed by its first
+        a, b = indices, indices[nxt]
+        edges = np.unique(np.column_stack([np.minimum(a, b), np.maximum(a, b)]), axis=0)  # the output edges
+        ends = np.sort(vertex_map[edges], axis=1).astype(np.int64)  # their input vertices
+        key = ends[:, 0] * n_vertices + ends[:, 1]
+        order = np.argsort(key, kind="stable")
+        wanted = np.sort(tags.crease_vertices, axis=1).astype(np.int64)
+        wanted_key = wanted[:, 0] * n_vertices + wanted[:, 1]
+        lo = np.searchsorted(key[order], wanted_key, side="left")
+        hi = np.searchsorted(key[order], wanted_key, side="right")
+        which = np.concatenate([order[i:j] for i, j in zip(lo, hi)] + [np.zeros(0, np.int64)])
+        out["creases"] = (edges[which].astype(np.int32), np.repeat(tags.crease_sharpness, hi - lo))
+    if "corners" in kinds:
+        sharpness = np.full(n_vertices, np.nan)
+        sharpness[tags.corner_vertices] = tags.corner_sharpness  # a corner given twice: the last, as OpenSubdiv
+        copies = np.flatnonzero(~np.isnan(sharpness[vertex_map]))
+        out["corners"] = (copies.astype(np.int32), sharpness[vertex_map[copies]])
+    if "holes" in kinds:
+        out["holes"] = np.flatnonzero(np.isin(face_map, tags.holes)).astype(np.int32)
+    return out
+
+
+def _unchanged(vertices, faces, n_faces) -> RepairResult:
+    """The result for a valid mesh: its arrays, identity maps, an empty report."""
+    report = {kind: [] for kind in REPORT_KINDS}
+    report["counts"] = _counts(report)
+    return RepairResult(vertices, faces, np.arange(len(vertices), dtype=np.int32),
+                        np.arange(n_faces, dtype=np.int32), report)

@@ -85,11 +85,13 @@ from typing import Callable, Optional
 import numpy as np
 
 from . import _core
+from . import nonmanifold as nonmanifold_sharp
 from ._validate import DEFAULT_BOUNDARY, DEFAULT_SCHEME, as_boundary, as_scheme, as_vertices
 from .errors import ParameterError
 from .limit import TAGS_DOC as _TAGS_DOC
 from .limit import tags as _tags
 from .limit import topology as _topology
+from .nonmanifold import as_nonmanifold
 
 METHODS = tuple(_core.method_names())  # the core's one list, in its order
 OMEGA_RULES = ("auto", "young")
@@ -419,12 +421,15 @@ def _as_initial(initial, v0: np.ndarray) -> Optional[np.ndarray]:
 def interpolate(vertices, faces, method: str = "sor", omega="auto", tol: float = 1e-10, max_iter: int = 1000,
                 boundary: str = DEFAULT_BOUNDARY, callback: Optional[Callable[[int, float], object]] = None, *,
                 sigma=None, alpha=None, weight=None, threads: int = 1, scheme: str = DEFAULT_SCHEME, creases=None,
-                corners=None, holes=None, initial=None) -> InterpolationResult:
+                corners=None, holes=None, initial=None, nonmanifold: str = "error") -> InterpolationResult:
     """Control vertices whose limit surface (Loop, or Catmull-Clark with
     ``scheme="catmull-clark"``) interpolates ``vertices``.
 
     ``vertices`` may be (n, k) data for any k >= 1 (every column interpolated);
-    `initial` is a warm start, see `Interpolator.solve`.
+    `initial` is a warm start, see `Interpolator.solve`. With
+    ``nonmanifold="sharp"`` (see `limit_points`) a non-manifold mesh is solved
+    with OpenSubdiv's rules for it, and the result's control_vertices are those
+    of the input vertices.
 
     One call of ``Interpolator(faces, len(vertices), boundary, scheme=,
     creases=, corners=, holes=).solve(...)``; see `Interpolator` for the
@@ -440,6 +445,11 @@ def interpolate(vertices, faces, method: str = "sor", omega="auto", tol: float =
     >>> np.allclose(sorpia.limit_points(res.control_vertices, F), V, atol=1e-9)
     True
     """
+    if as_nonmanifold(nonmanifold) == "sharp":
+        return nonmanifold_sharp.interpolate(
+            vertices, faces, boundary, scheme, dict(creases=creases, corners=corners, holes=holes), method=method,
+            omega=omega, tol=tol, max_iter=max_iter, callback=callback, sigma=sigma, alpha=alpha, weight=weight,
+            threads=threads, initial=initial)
     t0 = time.perf_counter()
     # Options are checked before the (costly) operator is built.
     options = check_options(method, omega, tol, max_iter, callback, sigma=sigma, alpha=alpha, weight=weight,

@@ -1,8 +1,8 @@
 #pragma once
 /// @file repair.hpp
-/// Repair of a triangle list that sorpia::Topology refuses: the fewest changes
-/// to the faces (no vertex moves) that make it a consistently oriented
-/// manifold surface.
+/// Repair of a triangle or polygon list that sorpia::Topology refuses: the
+/// fewest changes to the faces (no vertex moves) that make it a consistently
+/// oriented manifold surface.
 
 #include <array>
 #include <cstddef>
@@ -13,13 +13,18 @@ namespace sorpia {
 
 /// Every change sorpia::repair made, in the input's indices.
 struct RepairReport {
-  /// Faces with a repeated vertex, removed.
+  /// Faces with a repeated vertex that are no polygon without their
+  /// consecutive repeats (every degenerate triangle), removed.
   std::vector<std::int32_t> degenerate_faces;
-  /// Faces with the same three vertices in the same cyclic order as an earlier
+  /// Polygons with a repeated vertex that are a polygon of three or more
+  /// distinct vertices once their consecutive repeats (cyclically) are
+  /// dropped: kept with those corners dropped.
+  std::vector<std::int32_t> collapsed_faces;
+  /// Faces with the same vertices in the same cyclic order as an earlier
   /// face, removed (the first of the equal faces is kept).
   std::vector<std::int32_t> duplicate_faces;
-  /// Faces with the same three vertices as an earlier face in the opposite
-  /// cyclic order, removed (the first is kept).
+  /// Faces with the same vertices as an earlier face in the opposite cyclic
+  /// order, removed (the first is kept).
   std::vector<std::int32_t> reversed_duplicate_faces;
   /// Edges (lower, higher vertex) of three or more faces (after removing the
   /// duplicates), whose sheets were separated.
@@ -39,9 +44,11 @@ struct RepairReport {
 
 /// The repaired mesh as indices: output vertex i copies input vertex
 /// vertex_map[i]; output face j is input face face_map[j], its vertex indices
-/// renumbered (and reversed if it was flipped).
+/// renumbered (and reversed if it was flipped: first corner kept, the others
+/// in the opposite order), without the corners dropped from a collapsed face.
 struct RepairResult {
-  std::vector<std::int32_t> faces;       ///< row-major (n_faces, 3)
+  std::vector<std::int32_t> faces;        ///< the vertices of every face, face after face
+  std::vector<std::int32_t> face_counts;  ///< polygons: the vertex count of each face; empty for triangles
   std::vector<std::int32_t> vertex_map;  ///< n_vertices + the copies; vertex_map[i] = i for i < n_vertices
   std::vector<std::int32_t> face_map;    ///< one entry per output face
   RepairReport report;
@@ -49,9 +56,12 @@ struct RepairResult {
 
 /// Makes `faces` a valid sorpia::Topology, changing only what must change:
 ///
-/// 1. faces with a repeated vertex are removed;
-/// 2. of faces with the same three vertices (in either cyclic order) the
-///    first is kept, the others removed;
+/// 1. a face with a repeated vertex loses its consecutive repeats (cyclically:
+///    (a, b, b, c) and (a, b, c, a) become (a, b, c)) when what is left is a
+///    polygon of three or more distinct vertices; otherwise (every triangle
+///    with a repeat, (a, b, a, c)) it is removed;
+/// 2. of faces with the same vertices in the same cyclic sequence (either
+///    way round) the first is kept, the others removed;
 /// 3. at an edge of three or more faces, the faces are paired into sheets in
 ///    face order: the lowest-numbered unpaired face with the next unpaired
 ///    face that runs the edge the other way (else with the next unpaired face);
@@ -64,7 +74,8 @@ struct RepairResult {
 ///    input ones, numbered in the order of the fans' first corners;
 /// 5. each connected component is oriented consistently: the faces of the
 ///    smaller of its two orientation classes are reversed (on a tie, those
-///    disagreeing with the component's lowest-numbered face).
+///    disagreeing with the component's lowest-numbered face). A face is
+///    reversed keeping its first corner: (a, b, c, d) becomes (a, d, c, b).
 ///
 /// No vertex is moved or dropped (vertices used only by removed faces, and
 /// unreferenced ones, stay as unreferenced vertices). A valid input costs
@@ -80,5 +91,64 @@ struct RepairResult {
 ///                    no faces, a vertex of more edges than OpenSubdiv takes),
 ///                    with sorpia::Topology's message
 RepairResult repair(const std::int32_t* faces, std::size_t n_faces, std::size_t n_vertices);
+
+/// The same rules for polygons in the counts + indices form of sorpia::Topology
+/// (face f has face_vertex_counts[f] >= 3 vertices, listed in
+/// face_vertex_indices after those of the faces before it). The result's faces
+/// are polygons with their face_counts (a collapsed face has fewer vertices
+/// than its input face); the same errors, and a face of fewer than three
+/// vertices is refused as the validation refuses it.
+RepairResult repair(const std::int32_t* face_vertex_counts, std::size_t n_faces, const std::int32_t* face_vertex_indices,
+                    std::size_t n_vertices);
+
+/// For nonmanifold="sharp": the mesh kept as it is, but cut apart where
+/// OpenSubdiv sees non-manifold topology, so that OpenSubdiv's own rules for
+/// it become tags of a manifold mesh. OpenSubdiv (Far's
+/// TopologyRefinerFactory, Vtr::Level) makes an edge non-manifold when three
+/// or more faces use it or its two faces run it the same way, and makes it
+/// infinitely sharp; a vertex is non-manifold on such an edge or where its
+/// faces form several fans, and becomes an infinitely sharp corner, except on
+/// an interior non-manifold crease (exactly two non-manifold edges, no
+/// boundary edge, more faces than edges), where the two edges make it a
+/// crease vertex.
+///
+/// The split joins only the two faces of an edge that run it opposite ways;
+/// every other edge borders each of its faces alone, so that a non-manifold
+/// edge becomes one boundary edge (infinitely sharp, as OpenSubdiv makes it)
+/// per face, and each vertex gets one output vertex per fan (the first fan in
+/// face order keeps the input index, copies are appended). Faces are neither
+/// removed nor reversed. On the split mesh with an infinitely sharp corner
+/// tag on every copy of each vertex in `corners`, every vertex's limit row is
+/// OpenSubdiv's row on the input mesh, its columns mapped through vertex_map;
+/// a crease vertex's copies each lie on the boundary between the copies of
+/// its two non-manifold edges, whose boundary rule is the crease rule, except
+/// a copy in a fan of one face (`single_face_sheets`), which the
+/// edge-and-corner boundary rule makes a corner.
+struct NonmanifoldSplit {
+  std::vector<std::int32_t> faces;        ///< the vertices of every face, renumbered, face after face
+  std::vector<std::int32_t> face_counts;  ///< polygons: the vertex count of each face; empty for triangles
+  std::vector<std::int32_t> vertex_map;   ///< for every output vertex, the input vertex it copies
+  /// The non-manifold edges (lower, higher input vertex), OpenSubdiv's infinitely sharp ones.
+  std::vector<std::array<std::int32_t, 2>> nonmanifold_edges;
+  /// The non-manifold input vertices, and those of them that are corners.
+  std::vector<std::int32_t> nonmanifold_vertices, corners;
+  /// Crease vertices with a copy in a fan of one face.
+  std::vector<std::int32_t> single_face_sheets;
+
+  /// True for a manifold mesh (then faces and vertex_map are empty: the input is the split).
+  bool empty() const { return nonmanifold_vertices.empty(); }
+};
+
+/// The split of `faces` (row-major (n_faces, 3)) described at NonmanifoldSplit.
+/// @throw MeshError  a face that repeats a vertex (OpenSubdiv would give it a
+///                   degenerate edge, which no sorpia mesh has); a crease
+///                   vertex some fan of which is not bounded by its two
+///                   non-manifold edges (the split would not reproduce its
+///                   crease rule); a problem of the indices, as Topology says it
+NonmanifoldSplit split_nonmanifold(const std::int32_t* faces, std::size_t n_faces, std::size_t n_vertices);
+
+/// The same for polygons (counts + indices, as Topology takes them).
+NonmanifoldSplit split_nonmanifold(const std::int32_t* face_vertex_counts, std::size_t n_faces,
+                                   const std::int32_t* face_vertex_indices, std::size_t n_vertices);
 
 }  // namespace sorpia

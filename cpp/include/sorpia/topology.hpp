@@ -25,6 +25,9 @@ enum class TopologyBuild {
 /// Whether the sorpia::Topology constructor accepts these faces, found by its
 /// checks without building the one-ring or naming the problem.
 bool faces_valid(const std::int32_t* faces, std::size_t n_faces, std::size_t n_vertices);
+/// The same for polygons (the Topology constructor that takes counts and indices).
+bool faces_valid(const std::int32_t* face_vertex_counts, std::size_t n_faces, const std::int32_t* face_vertex_indices,
+                 std::size_t n_vertices);
 
 /// Connectivity of a polygon mesh (triangles, quads, any n-gons), built once
 /// and shared by the limit operator, the solvers and surface evaluation.

@@ -96,6 +96,7 @@ class InputMesh(NamedTuple):
     repair: object = None  # sorpia.RepairResult with --repair: vertices and faces are its output
     repair_seconds: float = 0.0
     tags: dict = {}  # the file's tags as read_mesh(tags=True) returns them ({} with --ignore-tags)
+    split: object = None  # sorpia.nonmanifold.Split with --nonmanifold sharp: vertices and faces are the split's
 
     @property
     def timings(self) -> dict:
@@ -103,11 +104,13 @@ class InputMesh(NamedTuple):
         return {"read": self.seconds, **({"repair": self.repair_seconds} if self.repair is not None else {})}
 
 
-def read_input(path, triangulate: bool = False, repair: bool = False, tags: bool = True) -> InputMesh:
+def read_input(path, triangulate: bool = False, repair: bool = False, tags: bool = True,
+               nonmanifold: str = "error") -> InputMesh:
     """Read the input mesh of every subcommand: polygons kept (or split with
     `triangulate`), the OBJ file's sharpness tags read unless `tags` is
     False (--ignore-tags), the mesh repaired with `repair` (repair_input),
-    which takes triangles and no tags."""
+    its tags carried onto the repaired mesh; with `nonmanifold` "sharp", a
+    non-manifold mesh replaced by its manifold split (split_input)."""
     from ..io import read_mesh_file
 
     if not Path(path).exists():
@@ -119,17 +122,54 @@ def read_input(path, triangulate: bool = False, repair: bool = False, tags: bool
     seconds = time.perf_counter() - t0
     vertices, faces, file_tags = contents.vertices, contents.faces, contents.tags or {}
     if not repair:
-        return InputMesh(vertices, faces, seconds, contents.polygons_split, tags=file_tags)
-    if not is_triangles(faces):
-        raise PolygonError(f"{path}: --repair works on triangles and the file has faces of {face_sizes_text(faces)}"
-                           " vertices; pass --triangulate to split them")
-    if any(k in file_tags for k in ("creases", "corners", "holes")):
-        raise UserError(f"{path}: --repair renumbers vertices and faces, which the file's sharpness tags refer to; "
-                        "pass --ignore-tags to repair the mesh without them")
-    t0 = time.perf_counter()
-    result = repair_input(vertices, faces, path)
-    return InputMesh(result.vertices, result.faces, seconds, contents.polygons_split, result,
-                     time.perf_counter() - t0, file_tags)
+        mesh = InputMesh(vertices, faces, seconds, contents.polygons_split, tags=file_tags)
+    else:
+        t0 = time.perf_counter()
+        result = repair_input(vertices, faces, path, sharpness_tags(file_tags))
+        mesh = InputMesh(result.vertices, result.faces, seconds, contents.polygons_split, result,
+                         time.perf_counter() - t0, {**file_tags, **result.tags})
+    return split_input(mesh, path) if nonmanifold == "sharp" else mesh
+
+
+def sharpness_tags(tags: dict) -> dict:
+    """The creases, corners and holes of a file's tags (without its boundary rule)."""
+    return {k: v for k, v in tags.items() if k in ("creases", "corners", "holes")}
+
+
+def split_input(mesh: InputMesh, source) -> InputMesh:
+    """--nonmanifold sharp: a non-manifold mesh replaced by its manifold split
+    with OpenSubdiv's rules as corner tags (sorpia.nonmanifold.split; its
+    NonmanifoldWarning is printed); what the split cannot reproduce is a
+    UserError naming the file `source`."""
+    from .. import MeshError
+    from .._validate import DEFAULT_BOUNDARY
+    from ..nonmanifold import split
+
+    try:
+        s = split(mesh.faces, len(mesh.vertices), mesh.tags.get("boundary", DEFAULT_BOUNDARY),
+                  **sharpness_tags(mesh.tags))
+    except MeshError as exc:
+        raise UserError(f"{source}: --nonmanifold sharp: {exc}") from None
+    if s is None:
+        return mesh
+    return mesh._replace(vertices=mesh.vertices[s.vertex_map], faces=s.faces, tags={**mesh.tags, **s.tags}, split=s)
+
+
+def split_json(split) -> dict:
+    """What a command's JSON report holds of --nonmanifold sharp: the
+    non-manifold edges and vertices (input indices), the corners among them,
+    and the vertex map of the split (for every vertex of the split, the input
+    vertex it copies)."""
+    return {**split.report, "vertex_map": split.vertex_map}
+
+
+def split_lines(split) -> list[str]:
+    """One line saying what --nonmanifold sharp kept."""
+    r = split.report
+    return [f"non-manifold topology kept (OpenSubdiv's rules): {len(r['nonmanifold_edges'])} edges infinitely "
+            f"sharp, {len(r['corners'])} corner vertices, "
+            f"{len(r['nonmanifold_vertices']) - len(r['corners'])} crease vertices; "
+            f"{len(split.vertex_map) - int(split.vertex_map.max()) - 1} vertex copies in the split"]
 
 
 def is_triangles(faces) -> bool:
@@ -263,13 +303,14 @@ def scheme_kwargs(scheme: str, tags: dict) -> dict:
     return kwargs
 
 
-def repair_input(vertices, faces, source):
-    """sorpia.repair of a command's input; a mesh it refuses (a Moebius strip)
-    is a UserError naming the file `source`."""
+def repair_input(vertices, faces, source, tags=None):
+    """sorpia.repair of a command's input, with its sharpness `tags` (a dict
+    of creases, corners, holes); a mesh it refuses (a Moebius strip) is a
+    UserError naming the file `source`."""
     from .. import MeshError, repair
 
     try:
-        return repair(vertices, faces)
+        return repair(vertices, faces, **(tags or {}))
     except MeshError as exc:
         raise UserError(f"{source}: cannot repair this mesh: {exc}") from None
 

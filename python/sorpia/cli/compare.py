@@ -41,7 +41,7 @@ def iterations_to_reach(errors, tolerances=TABLE_TOLERANCES) -> list:
 def run_compare(input_path, *, methods=DISPLAY_ORDER, tol=1e-10, max_iter=1000, boundary=None,
                 table=None, csv_path=None, plot=None, json_path=None, quiet=False, force=False,
                 triangulate=False, threads=1, repair=False, scheme="auto", ignore_tags=False, sharp_angle=None,
-                out=None) -> tuple[int, dict]:
+                nonmanifold="error", out=None) -> tuple[int, dict]:
     """`sorpia compare`: every method to the same tolerance, on one
     sorpia.Interpolator (topology, limit operator and spectral estimates built
     once and shared); returns (exit code, data). `threads` applies to sor/gs."""
@@ -58,7 +58,7 @@ def run_compare(input_path, *, methods=DISPLAY_ORDER, tol=1e-10, max_iter=1000, 
     rows = []
     with Progress(enabled=not quiet) as progress:
         progress.status(f"reading {input_path}")
-        mesh = read_input(input_path, triangulate, repair, tags=not ignore_tags)
+        mesh = read_input(input_path, triangulate, repair, tags=not ignore_tags, nonmanifold=nonmanifold)
         V0, F, read_seconds = mesh.vertices, mesh.faces, mesh.seconds
         scheme = choose_scheme(scheme, F, input_path)
         boundary = boundary_rule(boundary, mesh)

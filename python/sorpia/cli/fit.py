@@ -13,7 +13,8 @@ from .._validate import as_boundary
 from .common import (EXIT_NOT_CONVERGED, EXIT_OK, SCHEME_LABELS, UserError, boundary_rule, check_mesh_suffix,
                      check_paths, check_solver_options, choose_scheme, cpu_clock, face_counts, face_size_histogram,
                      fit_once, fmt_seconds, method_label, mesh_line, read_input, repair_json, repair_lines,
-                     result_fields, scheme_kwargs, solve_tags, tags_lines, tags_summary, warn_once)
+                     result_fields, scheme_kwargs, solve_tags, split_json, split_lines, tags_lines, tags_summary,
+                     warn_once)
 from .output import write_json
 from .progress import Progress
 
@@ -21,7 +22,7 @@ from .progress import Progress
 def run_fit(input_path, output, *, method="sor", omega="auto", tol=1e-10, max_iter=1000,
             boundary=None, surface=None, level=3, report=None, quiet=False, force=False,
             triangulate=False, binary=False, threads=1, repair=False, scheme="auto", ignore_tags=False,
-            sharp_angle=None, out=None) -> tuple[int, dict]:
+            sharp_angle=None, nonmanifold="error", out=None) -> tuple[int, dict]:
     """`sorpia fit`: returns (exit code, report dict). `boundary` None: the
     file's interpolateboundary tag, else the default rule."""
     from .. import _core, write_mesh
@@ -40,7 +41,7 @@ def run_fit(input_path, output, *, method="sor", omega="auto", tol=1e-10, max_it
     timings: dict[str, float] = {}
     with Progress(enabled=not quiet) as progress:
         progress.status(f"reading {input_path}")
-        mesh = read_input(input_path, triangulate, repair, tags=not ignore_tags)
+        mesh = read_input(input_path, triangulate, repair, tags=not ignore_tags, nonmanifold=nonmanifold)
         V0, F = mesh.vertices, mesh.faces
         timings.update(mesh.timings)
         scheme = choose_scheme(scheme, F, input_path)
@@ -97,6 +98,7 @@ def run_fit(input_path, output, *, method="sor", omega="auto", tol=1e-10, max_it
         "tags": {"from_file": not ignore_tags, "sharp_angle": sharp_angle, **tags_summary(tags),
                  "written_to_output": sorted(written_tags)},
         "repair": repair_json(mesh.repair) if repair else None,
+        "nonmanifold": split_json(mesh.split) if mesh.split is not None else None,
         "output": str(output),
         "surface": surface_stats,
         "report": None if report is None else str(report),
@@ -122,7 +124,8 @@ def run_fit(input_path, output, *, method="sor", omega="auto", tol=1e-10, max_it
     if report is not None:
         write_json(report, data)
     if not quiet:
-        print(fit_summary(data, repair_lines(mesh.repair) if repair else ()), file=out)
+        print(fit_summary(data, repair_lines(mesh.repair) if repair else (),
+                          split_lines(mesh.split) if mesh.split is not None else ()), file=out)
     return (EXIT_OK if res.converged else EXIT_NOT_CONVERGED), data
 
 
@@ -185,8 +188,9 @@ def _binary_for(path, binary: bool) -> bool:
     return binary and Path(path).suffix.lower() in (".ply", ".stl")
 
 
-def fit_summary(d: dict, repaired=()) -> str:
-    """The summary printed by fit; `repaired`: a line per kind of change --repair made."""
+def fit_summary(d: dict, repaired=(), kept=()) -> str:
+    """The summary printed by fit; `repaired`: a line per kind of change --repair made; `kept`: what
+    --nonmanifold sharp kept."""
     label = method_label(d["method"])
     omega = d["omega"]
     if d["method"] == "sor" and omega is not None:
@@ -210,6 +214,7 @@ def fit_summary(d: dict, repaired=()) -> str:
     lines = [
         f"sorpia fit: {d['input']} -> {d['output']}",
         *(f"  {'repaired' if j == 0 else '':<12}{line}" for j, line in enumerate(repaired)),
+        *(f"  {'nonmanifold' if j == 0 else '':<12}{line}" for j, line in enumerate(kept)),
         f"  mesh        {mesh_line(d['mesh'])}",
         f"  scheme      {SCHEME_LABELS[d['scheme']]}" + (f", boundary {d['boundary']}"),
         *(f"  {'tags' if j == 0 else '':<12}{line}" for j, line in enumerate(tags_lines(d["tags"]))),

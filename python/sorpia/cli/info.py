@@ -61,9 +61,9 @@ def run_info(input_path, *, as_json=False, boundary=None, triangulate=False, rep
     if repair:
         info["repair"] = {"applied": True, "changes": repair_lines(mesh.repair),
                           "counts": mesh.repair.report["counts"]}
-    elif not info["loop_pia"]["can_run"] and is_triangles(counted.faces):  # sorpia.repair takes triangles
-        info["repair"] = _what_repair_would_do(counted.vertices, counted.faces)
-    if polygons:
+    elif not info["loop_pia"]["can_run"]:  # what --repair would do: to the faces as read (polygons kept)
+        info["repair"] = _what_repair_would_do(mesh.vertices, mesh.faces)
+    if polygons and info["loop_pia"]["can_run"]:
         info["loop_pia"] = {"can_run": False, "notes": [],
                             "reason": "the file has faces of more than 3 vertices" + (
                                 " (the counts are of their triangulation); pass --triangulate to split them, or "
@@ -118,8 +118,9 @@ def _scheme_rows(info: dict) -> list[tuple[str, str]]:
 
 
 def _what_repair_would_do(vertices, faces) -> dict:
-    """sorpia.repair run in memory on a mesh Loop PIA refuses: the changes it
-    would make, one line per kind, or the reason it refuses the mesh too."""
+    """sorpia.repair run in memory on a mesh PIA refuses (triangles or
+    polygons, as --repair takes them): the changes it would make, one line
+    per kind, or the reason it refuses the mesh too."""
     from .. import MeshError
     from .. import repair as repair_mesh
     from ..mesh_repair import describe_changes

@@ -143,6 +143,13 @@ def build_parser() -> argparse.ArgumentParser:
                        "removed, non-manifold edges and bowtie vertices split by copying vertices, orientation "
                        f"made consistent; no vertex moves); {effect}")
 
+    def nonmanifold_flag(p):
+        p.add_argument("--nonmanifold", choices=("error", "sharp"), default="error",
+                       help="what non-manifold topology gets: error (the default) refuses it; sharp keeps it with "
+                       "OpenSubdiv's rules (non-manifold edges infinitely sharp, non-manifold vertices corners) "
+                       "through a manifold split with corner tags, whose control mesh is written; OpenSubdiv's "
+                       "documentation calls that result undefined")
+
     def quiet_flag(p):
         p.add_argument("--quiet", "-q", action="store_true", help="print nothing but errors and warnings")
 
@@ -198,12 +205,13 @@ def build_parser() -> argparse.ArgumentParser:
     triangulate_flag(fit)
     repair_flag(fit, "the control mesh is that of the repaired mesh (its extra vertices copy input vertices) and "
                 "--report holds the repair report and the vertex map")
+    nonmanifold_flag(fit)
     output_flags(fit)
     fit.set_defaults(func=lambda a: run_fit(
         a.input, a.output, method=a.method, omega=a.omega, tol=a.tol, max_iter=a.max_iter, boundary=a.boundary,
         surface=a.surface, level=a.level, report=a.report, quiet=a.quiet, force=a.force, triangulate=a.triangulate,
         binary=a.binary, threads=a.threads, repair=a.repair, scheme=a.scheme, ignore_tags=a.ignore_tags,
-        sharp_angle=a.sharp_angle)[0])
+        sharp_angle=a.sharp_angle, nonmanifold=a.nonmanifold)[0])
 
     comp = command("compare", "run several methods to one tolerance: the paper's Table 1 and Figure 7",
                    "Run each method on the mesh to the same tolerance and print the paper's Table 1 layout for "
@@ -222,12 +230,13 @@ def build_parser() -> argparse.ArgumentParser:
     scheme_options(comp)
     triangulate_flag(comp)
     repair_flag(comp, "--json holds the repair report and the vertex map")
+    nonmanifold_flag(comp)
     output_flags(comp)
     comp.set_defaults(func=lambda a: run_compare(
         a.input, methods=a.methods, tol=a.tol, max_iter=a.max_iter, boundary=a.boundary, table=a.table,
         csv_path=a.csv, plot=a.plot, json_path=a.json, quiet=a.quiet, force=a.force, triangulate=a.triangulate,
         threads=a.threads, repair=a.repair, scheme=a.scheme, ignore_tags=a.ignore_tags,
-        sharp_angle=a.sharp_angle)[0])
+        sharp_angle=a.sharp_angle, nonmanifold=a.nonmanifold)[0])
 
     ren = command("render", "draw the paper's Figure 3 for a mesh (PNG)",
                   "Fit the mesh with SOR-PIA and draw four shaded panels, the same camera in each: (a) the given "
@@ -250,12 +259,13 @@ def build_parser() -> argparse.ArgumentParser:
     scheme_options(ren)
     triangulate_flag(ren)
     repair_flag(ren, "the panels show the repaired mesh")
+    nonmanifold_flag(ren)
     output_flags(ren)
     ren.set_defaults(func=lambda a: run_render(
         a.input, a.output, level=a.level, tol=a.tol, max_iter=a.max_iter, boundary=a.boundary, size=a.size,
         elev=a.elev, azim=a.azim, face_budget=a.face_budget, quiet=a.quiet, force=a.force,
         triangulate=a.triangulate, up=a.up, threads=a.threads, repair=a.repair, scheme=a.scheme,
-        ignore_tags=a.ignore_tags, sharp_angle=a.sharp_angle)[0])
+        ignore_tags=a.ignore_tags, sharp_angle=a.sharp_angle, nonmanifold=a.nonmanifold)[0])
 
     inf = command("info", "mesh statistics (the paper's Table 2) and whether Loop PIA can run on it",
                   "Print vertices, faces, edges, boundary loops, Euler characteristic, genus, components, "
@@ -273,9 +283,11 @@ def build_parser() -> argparse.ArgumentParser:
                                              triangulate=a.triangulate, repair=a.repair, scheme=a.scheme,
                                              ignore_tags=a.ignore_tags, sharp_angle=a.sharp_angle)[0])
 
-    rep = command("repair", "make a mesh valid for Loop interpolation without moving a vertex",
-                  "Read a triangle mesh and write it repaired (sorpia.repair): faces with a repeated vertex and "
-                  "duplicate faces (either orientation) removed; at an edge of three or more faces the faces "
+    rep = command("repair", "make a mesh valid for subdivision without moving a vertex",
+                  "Read a mesh of triangles, quads or any polygons and write it repaired (sorpia.repair), its "
+                  "faces as they were (polygons stay polygons unless --triangulate): a polygon's consecutive "
+                  "repeated corners dropped where a polygon of 3 or more vertices is left, other faces with a "
+                  "repeated vertex and duplicate faces (either orientation) removed; at an edge of three or more faces the faces "
                   "paired into sheets and the edge's vertices copied per sheet; bowtie vertices split into one "
                   "vertex per fan; each connected part oriented consistently. No vertex moves; copies are "
                   "appended after the input vertices. Prints one line per kind of change; a valid mesh is "

@@ -19,7 +19,7 @@ from .progress import Progress
 def run_render(input_path, output, *, level=3, tol=1e-10, max_iter=1000, boundary=None,
                size=(1200, 1000), elev=30.0, azim=-60.0, face_budget=FACE_BUDGET, quiet=False, force=False,
                triangulate=False, up="z", threads=1, repair=False, scheme="auto", ignore_tags=False,
-               sharp_angle=None, out=None) -> tuple[int, dict]:
+               sharp_angle=None, nonmanifold="error", out=None) -> tuple[int, dict]:
     """`sorpia render`: the paper's Figure 3 for a mesh file."""
     from .. import LimitSurface
     from ..plotting import crease_curves, interpolation_figure, level_for_budget
@@ -34,7 +34,7 @@ def run_render(input_path, output, *, level=3, tol=1e-10, max_iter=1000, boundar
     timings = {}
     with Progress(enabled=not quiet) as progress:
         progress.status(f"reading {input_path}")
-        mesh = read_input(input_path, triangulate, repair, tags=not ignore_tags)
+        mesh = read_input(input_path, triangulate, repair, tags=not ignore_tags, nonmanifold=nonmanifold)
         V0, F = mesh.vertices, mesh.faces
         timings.update(mesh.timings)
         scheme = choose_scheme(scheme, F, input_path)

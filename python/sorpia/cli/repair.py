@@ -1,11 +1,12 @@
-"""``sorpia repair``: a mesh file made valid for Loop interpolation (sorpia.repair), written to another file."""
+"""``sorpia repair``: a mesh file made valid for subdivision (sorpia.repair), written to another file."""
 
 from __future__ import annotations
 
 import sys
 
 from .. import __version__
-from .common import EXIT_OK, check_mesh_suffix, check_paths, read_input, repair_json, repair_lines
+from .common import (EXIT_OK, check_mesh_suffix, check_paths, face_counts, read_input, repair_json, repair_lines,
+                     sharpness_tags)
 from .output import write_json
 
 
@@ -18,16 +19,23 @@ def run_repair(input_path, output, *, report=None, triangulate=False, quiet=Fals
     out = out if out is not None else sys.stdout
     check_mesh_suffix("-o", output)
     check_paths([input_path], {"-o": output, "--report": report}, force)
+    from .._validate import DEFAULT_BOUNDARY
+    from .fit import _tags_to_write
+
     mesh = read_input(input_path, triangulate, repair=True)
-    write_mesh(output, mesh.vertices, mesh.faces)
+    # the file's tags, carried onto the repaired mesh, written with it (OBJ)
+    sharpness = sharpness_tags(mesh.tags)
+    write_mesh(output, mesh.vertices, mesh.faces,
+               **_tags_to_write(output, sharpness, mesh.tags.get("boundary", DEFAULT_BOUNDARY), mesh))
+    n_faces = len(face_counts(mesh.faces))
     data = {"sorpia_version": __version__, "command": "repair", "input": str(input_path),
             "triangulated": triangulate, "output": str(output), "vertices": len(mesh.vertices),
-            "faces": len(mesh.faces), **repair_json(mesh.repair)}
+            "faces": n_faces, **repair_json(mesh.repair)}
     if report is not None:
         write_json(report, data)
     if not quiet:
         changed = any(mesh.repair.report["counts"].values())
-        print(f"sorpia repair: {input_path} -> {output} ({len(mesh.vertices)} vertices, {len(mesh.faces)} faces"
+        print(f"sorpia repair: {input_path} -> {output} ({len(mesh.vertices)} vertices, {n_faces} faces"
               + ("" if changed else "; the mesh is valid: written unchanged") + ")", file=out)
         for line in repair_lines(mesh.repair) if changed else []:
             print(f"  {line}", file=out)

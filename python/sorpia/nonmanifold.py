@@ -1,0 +1,185 @@
+"""``nonmanifold="sharp"``: OpenSubdiv's own rules for non-manifold topology.
+
+OpenSubdiv takes a non-manifold mesh as it is (Far's TopologyRefinerFactory):
+an edge of three or more faces, or whose two faces run it the same way, is
+made infinitely sharp; a vertex on such an edge, or whose faces form several
+fans, becomes an infinitely sharp corner, except on an interior non-manifold
+crease (two non-manifold edges, no boundary edge, more faces than edges),
+where it gets the crease rule along those two edges. OpenSubdiv's
+documentation calls the result of non-manifold topology undefined for now:
+`NonmanifoldWarning` says so whenever a mesh is non-manifold.
+
+sorpia computes exactly those rows through a manifold split
+(sorpia::split_nonmanifold): the faces cut apart at the non-manifold edges and
+vertices, one vertex per fan (copies of the input vertices), with an
+infinitely sharp corner on every copy of each corner vertex; the copies of a
+crease vertex lie on boundaries of the split whose boundary rule is the
+crease rule. The limit rows of the split, their columns mapped back through
+the vertex map, are OpenSubdiv's rows of the input mesh (to rounding, tested
+against Far's Limit() on the whole mesh). Faces that repeat a vertex, to
+which OpenSubdiv gives degenerate edges, are refused: `sorpia.repair` drops
+the repeat.
+"""
+
+from __future__ import annotations
+
+import warnings
+from typing import NamedTuple
+
+import numpy as np
+
+from . import _core
+from ._validate import DEFAULT_BOUNDARY, as_boundary, as_tags, as_vertices
+from .errors import MeshError, ParameterError
+
+NONMANIFOLD_MODES = ("error", "sharp")
+DEFAULT_NONMANIFOLD = "error"
+
+# Appended to the messages that refuse non-manifold topology.
+NONMANIFOLD_HINT = ("sorpia.repair (command line: --repair) makes the mesh manifold by splitting it, or "
+                    "nonmanifold=\"sharp\" (--nonmanifold sharp) keeps it with OpenSubdiv's rules for it "
+                    "(non-manifold edges infinitely sharp, non-manifold vertices corners)")
+
+
+class NonmanifoldWarning(UserWarning):
+    """nonmanifold="sharp" on a non-manifold mesh: OpenSubdiv's documentation
+    calls the surface of non-manifold topology undefined for now."""
+
+
+def as_nonmanifold(value) -> str:
+    """"error" or "sharp", checked."""
+    if value not in NONMANIFOLD_MODES:
+        raise ParameterError(f"nonmanifold must be one of {', '.join(map(repr, NONMANIFOLD_MODES))}, got {value!r}")
+    return value
+
+
+class Split(NamedTuple):
+    """A non-manifold mesh as its manifold split (see the module docstring)."""
+
+    faces: object  # as the faces were given: (m, k) array or sorpia.Polygons
+    vertex_map: np.ndarray  # for every vertex of the split, the input vertex it copies
+    tags: dict  # the split's tags: the caller's, carried over, and the corners
+    report: dict  # nonmanifold_edges, nonmanifold_vertices, corners, single_face_sheets (input indices)
+
+
+def split(faces, n_vertices: int, boundary: str = DEFAULT_BOUNDARY, *, creases=None, corners=None,
+          holes=None) -> Split | None:
+    """The manifold split of `faces` with OpenSubdiv's rules as tags, or None
+    for a manifold mesh (nothing to split). Warns NonmanifoldWarning
+    otherwise.
+
+    Raises MeshError for what the split cannot reproduce: a face that repeats
+    a vertex; a crease vertex whose fans do not all lie between its two
+    non-manifold edges; a crease vertex with a fan of one face under the
+    "edge-and-corner" boundary rule (which makes that copy a corner; "edge-only"
+    does not); a caller's crease at a crease vertex (OpenSubdiv counts it with
+    the creases of every sheet).
+    """
+    from .mesh_repair import RepairResult, _core_faces, _faces_as_given, _mapped_tags
+
+    rows, triangles, polygons = _core_faces(faces, n_vertices)
+    if triangles is not None:
+        found = _core.split_nonmanifold(triangles, n_vertices)
+        if found is None:
+            return None
+        split_faces, vertex_map, report = found
+    else:
+        found = _core.split_nonmanifold_polygons(*polygons, n_vertices)
+        if found is None:
+            return None
+        counts, indices, vertex_map, report = found
+        split_faces = _faces_as_given(rows, counts, indices)
+    warnings.warn(f"nonmanifold=\"sharp\": {len(report['nonmanifold_edges'])} non-manifold edges and "
+                  f"{len(report['nonmanifold_vertices'])} non-manifold vertices kept with OpenSubdiv's rules, "
+                  "whose result OpenSubdiv's documentation calls undefined for now", NonmanifoldWarning,
+                  stacklevel=4)
+    crease_vertices = sorted(set(report["nonmanifold_vertices"]) - set(report["corners"]))
+    if report["single_face_sheets"] and as_boundary(boundary) == _core.Boundary.edge_and_corner:
+        v = report["single_face_sheets"][0]
+        raise MeshError(f"vertex {v} is on an interior non-manifold crease, where OpenSubdiv gives it the crease "
+                        "rule, but one of its sheets has a single face at it, which the \"edge-and-corner\" "
+                        "boundary rule makes a corner of the split: pass boundary=\"edge-only\" (--boundary "
+                        "edge-only), or repair the mesh")
+
+    n_faces = len(polygons[0]) if triangles is None else len(triangles)
+    given = {kind for kind, value in (("creases", creases), ("corners", corners), ("holes", holes))
+             if value is not None}
+    tags = {}
+    if given:
+        checked = as_tags(creases, corners, holes, n_vertices=n_vertices, n_faces=n_faces)
+        at_crease = np.isin(checked.crease_vertices, crease_vertices).any(axis=1)
+        if at_crease.any():
+            a, b = checked.crease_vertices[np.flatnonzero(at_crease)[0]]
+            raise MeshError(f"creases: edge ({a}, {b}) ends at a vertex on an interior non-manifold crease, whose "
+                            "rule OpenSubdiv takes from the creases of all its sheets at once: nonmanifold=\"sharp\" "
+                            "cannot reproduce it; repair the mesh or leave that crease out")
+        result = RepairResult(None, split_faces, vertex_map, np.arange(n_faces, dtype=np.int32), {})
+        tags = _mapped_tags(checked, result, n_vertices, given)
+    copies = np.flatnonzero(np.isin(vertex_map, report["corners"])).astype(np.int32)
+    user_corners, user_sharpness = tags.get("corners", (np.zeros(0, np.int32), np.zeros(0)))
+    # ours last: a corner given twice counts with its last sharpness, as in OpenSubdiv
+    tags["corners"] = (np.concatenate([user_corners, copies]),
+                       np.concatenate([user_sharpness, np.full(len(copies), _core.INFINITE_SHARPNESS)]))
+    return Split(split_faces, vertex_map, tags, report)
+
+
+def _columns_to_input(vertex_map: np.ndarray, n: int):
+    """The (len(vertex_map), n) 0/1 matrix that adds each copy's column to its input vertex's."""
+    import scipy.sparse
+
+    k = len(vertex_map)
+    return scipy.sparse.csr_matrix((np.ones(k), (np.arange(k), vertex_map)), shape=(k, n))
+
+
+def limit_points(vertices, faces, boundary, scheme, tags: dict):
+    """`sorpia.limit_points` with nonmanifold="sharp"."""
+    from .limit import limit_points as manifold_limit_points
+
+    vertices = as_vertices(vertices, columns=None)
+    s = split(faces, len(vertices), boundary, **tags)
+    if s is None:
+        return manifold_limit_points(vertices, faces, boundary, scheme=scheme, **tags)
+    return manifold_limit_points(vertices[s.vertex_map], s.faces, boundary, scheme=scheme, **s.tags)[: len(vertices)]
+
+
+def limit_matrix(faces, n_vertices: int, boundary, scheme, tags: dict):
+    """`sorpia.limit_matrix` with nonmanifold="sharp": the split's rows of the
+    input vertices, each copy's column added to its input vertex's."""
+    from .limit import limit_matrix as manifold_limit_matrix
+
+    s = split(faces, n_vertices, boundary, **tags)
+    if s is None:
+        return manifold_limit_matrix(faces, n_vertices, boundary, scheme=scheme, **tags)
+    b = manifold_limit_matrix(s.faces, len(s.vertex_map), boundary, scheme=scheme, **s.tags)
+    return (b[:n_vertices] @ _columns_to_input(s.vertex_map, n_vertices)).tocsr()
+
+
+def interpolate(vertices, faces, boundary, scheme, tags: dict, **options):
+    """`sorpia.interpolate` with nonmanifold="sharp": the split solved (its
+    copies' targets their input vertices'), the input vertices' control
+    vertices returned (each copy's equals its input vertex's to the solver's
+    tolerance)."""
+    from .solve import interpolate as manifold_interpolate
+
+    vertices = as_vertices(vertices, columns=None)
+    s = split(faces, len(vertices), boundary, **tags)
+    if s is None:
+        return manifold_interpolate(vertices, faces, boundary=boundary, scheme=scheme, **tags, **options)
+    if options.get("initial") is not None:  # a warm start of the input vertices: each copy starts as its vertex
+        options["initial"] = as_vertices(options["initial"], "initial", columns=None)[s.vertex_map]
+    result = manifold_interpolate(vertices[s.vertex_map], s.faces, boundary=boundary, scheme=scheme, **s.tags,
+                                  **options)
+    return InputVertices(result, len(vertices))
+
+
+class InputVertices:
+    """The InterpolationResult of a split, seen through the input vertices:
+    control_vertices has their n rows; every other attribute is the split
+    solve's (its errors are those of the split system, the same equations)."""
+
+    def __init__(self, result, n: int):
+        self.result = result
+        self.control_vertices = result.control_vertices[:n]
+
+    def __getattr__(self, name):
+        return getattr(self.result, name)

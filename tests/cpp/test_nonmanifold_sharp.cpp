@@ -1,0 +1,287 @@
+// sorpia::split_nonmanifold (nonmanifold="sharp") against OpenSubdiv itself:
+// Far's Limit() on the whole non-manifold mesh (a refiner built here from the
+// raw faces, which OpenSubdiv accepts as they are) must equal, vertex by
+// vertex, Far's Limit() on the split mesh with an infinitely sharp corner on
+// every copy of each vertex in `corners`. Generated meshes always; the
+// OpenSubdiv non-manifold shapes of ../shared/meshes when present (their faces
+// that repeat a vertex left out: the split refuses them).
+#include <opensubdiv/far/primvarRefiner.h>
+#include <opensubdiv/far/topologyDescriptor.h>
+#include <opensubdiv/far/topologyRefinerFactory.h>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <random>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "expect_error.hpp"
+#include "osd_refiner.hpp"
+#include "sorpia/errors.hpp"
+#include "sorpia/io.hpp"
+#include "sorpia/repair.hpp"
+#include "sorpia/shapes.hpp"
+#include "sorpia/topology.hpp"
+
+namespace {
+
+namespace Far = OpenSubdiv::Far;
+namespace Sdc = OpenSubdiv::Sdc;
+using Ints = std::vector<std::int32_t>;
+using sorpia::detail::Point3;
+
+struct Mesh {
+  Ints counts, indices;
+  std::size_t n_vertices = 0;
+  void add(std::initializer_list<std::int32_t> f) {
+    counts.push_back(static_cast<std::int32_t>(f.size()));
+    indices.insert(indices.end(), f);
+  }
+};
+
+// Far's Limit() of every vertex of the raw faces (OpenSubdiv takes
+// non-manifold topology as it is); unreferenced vertices: themselves.
+std::vector<Point3> far_limit(const Mesh& m, const std::vector<Point3>& p, sorpia::Scheme scheme,
+                              sorpia::Boundary boundary) {
+  Far::TopologyDescriptor desc;
+  desc.numVertices = static_cast<int>(m.n_vertices);
+  desc.numFaces = static_cast<int>(m.counts.size());
+  desc.numVertsPerFace = m.counts.data();
+  desc.vertIndicesPerFace = m.indices.data();
+  Sdc::Options sdc;
+  sdc.SetVtxBoundaryInterpolation(boundary == sorpia::Boundary::EdgeOnly
+                                      ? Sdc::Options::VTX_BOUNDARY_EDGE_ONLY
+                                      : Sdc::Options::VTX_BOUNDARY_EDGE_AND_CORNER);
+  using Factory = Far::TopologyRefinerFactory<Far::TopologyDescriptor>;
+  std::unique_ptr<Far::TopologyRefiner> refiner(Factory::Create(
+      desc, Factory::Options(scheme == sorpia::Scheme::Loop ? Sdc::SCHEME_LOOP : Sdc::SCHEME_CATMARK, sdc)));
+  EXPECT_TRUE(refiner);
+  std::vector<Point3> out(p.size());
+  Far::PrimvarRefinerReal<double>(*refiner).Limit(p, out);
+  std::set<std::int32_t> used(m.indices.begin(), m.indices.end());
+  for (std::size_t v = 0; v < p.size(); ++v)
+    if (!used.count(static_cast<std::int32_t>(v))) out[v] = p[v];
+  return out;
+}
+
+// Checks the split of `m` against far_limit; returns the split.
+sorpia::NonmanifoldSplit expect_split_is_opensubdiv(const Mesh& m, sorpia::Scheme scheme,
+                                                    sorpia::Boundary boundary = sorpia::Boundary::EdgeAndCorner) {
+  const sorpia::NonmanifoldSplit s =
+      sorpia::split_nonmanifold(m.counts.data(), m.counts.size(), m.indices.data(), m.n_vertices);
+  EXPECT_FALSE(s.empty());
+  if (s.empty()) return s;
+  std::mt19937 rng(7);
+  std::normal_distribution<double> normal;
+  std::vector<double> p(3 * m.n_vertices);
+  for (double& x : p) x = normal(rng);
+  std::vector<Point3> points(m.n_vertices);
+  for (std::size_t v = 0; v < m.n_vertices; ++v) points[v] = {p[3 * v], p[3 * v + 1], p[3 * v + 2]};
+  const std::vector<Point3> want = far_limit(m, points, scheme, boundary);
+
+  const std::size_t n_out = s.vertex_map.size();
+  const sorpia::Topology split(s.face_counts.data(), s.face_counts.size(), s.faces.data(), n_out);
+  sorpia::Tags tags;
+  for (std::size_t o = 0; o < n_out; ++o)
+    if (std::binary_search(s.corners.begin(), s.corners.end(), s.vertex_map[o]) && !split.is_unreferenced(o)) {
+      tags.corner_vertices.push_back(static_cast<std::int32_t>(o));
+      tags.corner_sharpness.push_back(sorpia::kInfiniteSharpness);
+    }
+  std::vector<double> q(3 * n_out), got(3 * n_out);
+  for (std::size_t o = 0; o < n_out; ++o) std::copy_n(p.begin() + 3 * s.vertex_map[o], 3, q.begin() + 3 * o);
+  const sorpia::detail::Refiner osd = sorpia::detail::make_refiner(split, scheme, boundary, tags);
+  std::vector<Point3> gathered;
+  sorpia::detail::gather_points(osd, q.data(), gathered);
+  sorpia::detail::limit_positions(osd, gathered, q.data(), n_out, got.data());
+  const bool corner_sheets = boundary == sorpia::Boundary::EdgeAndCorner && !s.single_face_sheets.empty();
+  for (std::size_t o = 0; o < n_out; ++o) {
+    const std::int32_t v = s.vertex_map[o];
+    if (corner_sheets && std::binary_search(s.single_face_sheets.begin(), s.single_face_sheets.end(), v)) continue;
+    const Point3& w = want[v];
+    EXPECT_NEAR(got[3 * o], w.x, 1e-14) << "output vertex " << o << " (input " << v << ")";
+    EXPECT_NEAR(got[3 * o + 1], w.y, 1e-14) << "output vertex " << o << " (input " << v << ")";
+    EXPECT_NEAR(got[3 * o + 2], w.z, 1e-14) << "output vertex " << o << " (input " << v << ")";
+  }
+  return s;
+}
+
+// An open book: `pages` strips of 2 x `rows` quads (triangles: each quad split)
+// sharing their spine, the edges (0, 1), (1, 2), ..., (rows - 1, rows).
+Mesh book(int pages, int rows, bool triangles) {
+  Mesh m;
+  m.n_vertices = static_cast<std::size_t>((rows + 1) * (1 + 2 * pages));
+  auto id = [&](int page, int column, int row) {  // column 0 is the spine
+    return column == 0 ? row : (rows + 1) * (1 + 2 * page + column - 1) + row;
+  };
+  for (int page = 0; page < pages; ++page)
+    for (int c = 0; c < 2; ++c)
+      for (int r = 0; r < rows; ++r) {
+        std::int32_t a = id(page, c, r), b = id(page, c + 1, r), cc = id(page, c + 1, r + 1), d = id(page, c, r + 1);
+        if (page % 2) std::swap(b, d);  // alternate pages run the spine the other way
+        if (triangles) {
+          m.add({a, b, cc});
+          m.add({a, cc, d});
+        } else {
+          m.add({a, b, cc, d});
+        }
+      }
+  return m;
+}
+
+}  // namespace
+
+TEST(NonmanifoldSharp, BookOfPagesMatchesOpenSubdiv) {
+  for (bool triangles : {true, false})
+    for (int pages : {3, 4}) {
+      const Mesh m = book(pages, 3, triangles);
+      const auto s = expect_split_is_opensubdiv(m, triangles ? sorpia::Scheme::Loop : sorpia::Scheme::CatmullClark);
+      EXPECT_EQ(s.nonmanifold_edges.size(), 3u);
+      EXPECT_EQ(s.nonmanifold_vertices, (Ints{0, 1, 2, 3}));
+      EXPECT_EQ(s.corners, (Ints{0, 3}));  // the spine's ends; 1 and 2 are on an interior crease
+      expect_split_is_opensubdiv(m, triangles ? sorpia::Scheme::Loop : sorpia::Scheme::CatmullClark,
+                                 sorpia::Boundary::EdgeOnly);
+    }
+}
+
+TEST(NonmanifoldSharp, BowtiesAndMisorientedFacesMatchOpenSubdiv) {
+  Mesh cones;  // two closed cones (tetrahedra) touching at vertex 0
+  cones.n_vertices = 7;
+  for (auto f : {Ints{0, 1, 2}, Ints{0, 2, 3}, Ints{0, 3, 1}, Ints{1, 3, 2}, Ints{0, 4, 5}, Ints{0, 5, 6}, Ints{0, 6, 4},
+                 Ints{4, 6, 5}}) {
+    cones.counts.push_back(3);
+    cones.indices.insert(cones.indices.end(), f.begin(), f.end());
+  }
+  EXPECT_EQ(expect_split_is_opensubdiv(cones, sorpia::Scheme::Loop).corners, Ints{0});
+
+  Mesh grid = book(1, 4, false);  // one page: a 2 x 4 quad grid; reverse one inner quad
+  std::reverse(grid.indices.begin() + 4 * 1 + 1, grid.indices.begin() + 4 * 1 + 4);
+  const auto s = expect_split_is_opensubdiv(grid, sorpia::Scheme::CatmullClark);
+  EXPECT_EQ(s.nonmanifold_edges.size(), 3u);  // the reversed quad's edges shared with another quad (its fourth is on the boundary)
+}
+
+TEST(NonmanifoldSharp, OneFaceSheetsAreReportedAndEdgeOnlyMatches) {
+  Mesh m = book(3, 3, false);
+  // a fourth page of one quad over the spine's vertex 1 (edges (0, 1) and (1, 2)): vertex 1 keeps the
+  // crease rule, and its copy in that quad is a boundary vertex of one face
+  const auto n = static_cast<std::int32_t>(m.n_vertices);
+  m.add({0, 1, 2, n});
+  m.n_vertices += 1;
+  const auto s = expect_split_is_opensubdiv(m, sorpia::Scheme::CatmullClark, sorpia::Boundary::EdgeOnly);
+  EXPECT_EQ(s.single_face_sheets, Ints{1});
+  EXPECT_EQ(s.corners, (Ints{0, 2, 3}));
+  expect_split_is_opensubdiv(m, sorpia::Scheme::CatmullClark);  // the other rows still match
+}
+
+TEST(NonmanifoldSharp, ManifoldMeshesAndWhatTheSplitRefuses) {
+  const Mesh page = book(1, 3, true);
+  EXPECT_TRUE(sorpia::split_nonmanifold(page.counts.data(), page.counts.size(), page.indices.data(), page.n_vertices)
+                  .empty());
+  Mesh degenerate = book(3, 2, false);
+  degenerate.add({0, 0, 5});
+  sorpia_test::expect_error<sorpia::MeshError>(
+      [&] {
+        sorpia::split_nonmanifold(degenerate.counts.data(), degenerate.counts.size(), degenerate.indices.data(),
+                                  degenerate.n_vertices);
+      },
+      {"repeats vertex 0", "nonmanifold=\"sharp\"", "repair"});
+}
+
+// OpenSubdiv's own non-manifold shapes, their faces that repeat a vertex left out.
+TEST(NonmanifoldSharp, OpenSubdivShapesMatch) {
+  const std::filesystem::path dir = std::filesystem::path(__FILE__).parent_path() / "../../../shared/meshes";
+  int checked = 0;
+  for (const char* name : {"osd_loop_nonman_edges.obj", "osd_loop_nonman_verts.obj", "osd_catmark_nonman_edges.obj",
+                           "osd_catmark_nonman_verts.obj"}) {
+    const auto path = dir / name;
+    if (!std::filesystem::exists(path)) continue;
+    const sorpia::MeshFile file = sorpia::read_mesh(path.string());
+    Mesh m;
+    m.n_vertices = file.n_vertices();
+    for (std::size_t f = 0, at = 0; f < file.n_faces(); ++f) {
+      const std::int32_t k = file.face_sizes.empty() ? file.face_size : file.face_sizes[f];
+      const Ints face(file.faces.begin() + at, file.faces.begin() + at + k);
+      at += k;
+      if (std::set<std::int32_t>(face.begin(), face.end()).size() < face.size()) continue;
+      m.counts.push_back(k);
+      m.indices.insert(m.indices.end(), face.begin(), face.end());
+    }
+    SCOPED_TRACE(name);
+    const bool loop = std::string(name).find("loop") != std::string::npos;
+    expect_split_is_opensubdiv(m, loop ? sorpia::Scheme::Loop : sorpia::Scheme::CatmullClark);
+    ++checked;
+  }
+  if (checked == 0) GTEST_SKIP() << "../shared/meshes absent";
+}
+
+// Random corruptions of small closed and open meshes (faces reversed,
+// duplicated, added on existing vertices, vertices welded), both schemes and
+// boundary rules: wherever the split takes the mesh, it matches OpenSubdiv.
+TEST(NonmanifoldSharp, RandomCorruptionsMatchOpenSubdiv) {
+  std::vector<std::pair<Mesh, sorpia::Scheme>> bases;
+  for (const auto& t : {sorpia::icosphere(1), sorpia::grid(4, 4)}) {
+    Mesh m;
+    m.n_vertices = t.n_vertices();
+    m.counts.assign(t.n_faces(), 3);
+    m.indices = t.faces;
+    bases.push_back({m, sorpia::Scheme::Loop});
+  }
+  for (const auto& q : {sorpia::quad_torus(6, 4), sorpia::quad_grid(5, 4)}) {
+    Mesh m;
+    m.n_vertices = q.n_vertices();
+    m.counts = q.face_counts;
+    m.indices = q.face_indices;
+    bases.push_back({m, sorpia::Scheme::CatmullClark});
+  }
+  int compared = 0, refused = 0;
+  for (unsigned seed = 0; seed < 160; ++seed) {
+    std::mt19937 rng(seed);
+    auto [m, scheme] = bases[seed % bases.size()];
+    std::vector<Ints> faces;
+    for (std::size_t f = 0, at = 0; f < m.counts.size(); at += m.counts[f], ++f)
+      faces.emplace_back(m.indices.begin() + at, m.indices.begin() + at + m.counts[f]);
+    const int k = static_cast<int>(faces.front().size());
+    for (int e = 0; e < 1 + static_cast<int>(rng() % 4); ++e) {
+      const std::size_t i = rng() % faces.size();
+      const auto v = [&] { return static_cast<std::int32_t>(rng() % m.n_vertices); };
+      switch (rng() % 4) {
+        case 0: std::reverse(faces[i].begin(), faces[i].end()); break;
+        case 1: faces.push_back(faces[i]); break;
+        case 2: {
+          Ints f(static_cast<std::size_t>(k));
+          for (auto& x : f) x = v();
+          faces.push_back(f);
+          break;
+        }
+        default: {
+          const std::int32_t a = v(), b = v();
+          for (auto& f : faces) std::replace(f.begin(), f.end(), b, a);
+        }
+      }
+    }
+    Mesh c;
+    c.n_vertices = m.n_vertices;
+    for (const auto& f : faces) {
+      if (std::set<std::int32_t>(f.begin(), f.end()).size() < f.size()) continue;  // refused by the split
+      c.counts.push_back(static_cast<std::int32_t>(f.size()));
+      c.indices.insert(c.indices.end(), f.begin(), f.end());
+    }
+    if (c.counts.empty()) continue;
+    sorpia::NonmanifoldSplit s;
+    try {
+      s = sorpia::split_nonmanifold(c.counts.data(), c.counts.size(), c.indices.data(), c.n_vertices);
+    } catch (const sorpia::MeshError& e) {
+      EXPECT_NE(std::string(e.what()).find("interior non-manifold crease"), std::string::npos) << e.what();
+      ++refused;
+      continue;
+    }
+    if (s.empty()) continue;
+    SCOPED_TRACE("seed " + std::to_string(seed));
+    expect_split_is_opensubdiv(c, scheme, sorpia::Boundary::EdgeOnly);
+    expect_split_is_opensubdiv(c, scheme, sorpia::Boundary::EdgeAndCorner);
+    ++compared;
+  }
+  EXPECT_GT(compared, 100) << refused << " refused";
+}

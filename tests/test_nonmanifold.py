@@ -1,0 +1,200 @@
+"""nonmanifold="sharp": OpenSubdiv's rules for non-manifold topology. The split
+itself is compared with Far's Limit() on the whole raw mesh in
+tests/cpp/test_nonmanifold_sharp.cpp; here the public API is checked against
+the closed forms of those rules (a corner row is the identity, an interior
+non-manifold crease row 2/3 v + 1/6 of its two crease neighbours), against the
+rows of the same mesh without its non-manifold parts (far from them nothing
+changes), and the fit passes through every vertex. Meshes built in code, and
+OpenSubdiv's non-manifold shapes of ../shared/meshes when present."""
+
+from __future__ import annotations
+
+import json
+import warnings
+
+import numpy as np
+import pytest
+
+import sorpia
+from sorpia.nonmanifold import NonmanifoldWarning
+from test_io import SHARED_MESHES
+
+
+def book(pages, rows, triangles=True):
+    """`pages` strips of 2 x `rows` quads (or their triangles) sharing the spine 0, 1, ..., rows: every spine
+    edge non-manifold, its inner vertices on an interior non-manifold crease, its ends corners."""
+    def vid(page, column, row):
+        return row if column == 0 else (rows + 1) * (1 + 2 * page + column - 1) + row
+
+    faces = []
+    for page in range(pages):
+        for c in range(2):
+            for r in range(rows):
+                a, b, cc, d = vid(page, c, r), vid(page, c + 1, r), vid(page, c + 1, r + 1), vid(page, c, r + 1)
+                if page % 2:
+                    b, d = d, b
+                faces += [[a, b, cc], [a, cc, d]] if triangles else [[a, b, cc, d]]
+    n = (rows + 1) * (1 + 2 * pages)
+    x = np.random.default_rng(pages + rows).normal(size=(n, 3))
+    return x, np.array(faces)
+
+
+def sharp(call, *args, **kwargs):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", NonmanifoldWarning)
+        warnings.simplefilter("ignore", sorpia.UnreferencedVerticesWarning)
+        return call(*args, nonmanifold="sharp", **kwargs)
+
+
+@pytest.mark.parametrize("scheme, triangles", [("loop", True), ("catmull-clark", False)])
+def test_rows_are_opensubdivs_rules(scheme, triangles):
+    v, f = book(3, 3, triangles)
+    b = sharp(sorpia.limit_matrix, f, len(v), scheme=scheme).toarray()
+    for corner in (0, 3):  # the spine's ends: identity rows
+        assert np.array_equal(b[corner], np.eye(len(v))[corner])
+    for v_, (a, c) in ((1, (0, 2)), (2, (1, 3))):  # inner spine vertices: the crease rule along the spine
+        want = np.zeros(len(v))
+        want[[v_, a, c]] = [2 / 3, 1 / 6, 1 / 6]
+        assert np.abs(b[v_] - want).max() <= 1e-15
+    # a vertex away from the spine has the row it has in its page alone (a manifold mesh)
+    page = f[: len(f) // 3]
+    far = 4 * 2 + 2  # column 2 of page 0, row 2: vid(0, 2, 2)
+    used = np.unique(page)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", sorpia.UnreferencedVerticesWarning)
+        alone = sorpia.limit_matrix(page, len(v), scheme=scheme).toarray()
+    assert far in used
+    assert np.abs(b[far] - alone[far]).max() <= 1e-15
+    # limit_points is B V
+    assert np.abs(sharp(sorpia.limit_points, v, f, scheme=scheme) - b @ v).max() <= 1e-14
+
+
+@pytest.mark.parametrize("scheme, triangles", [("loop", True), ("catmull-clark", False)])
+def test_fit_passes_through_every_vertex(scheme, triangles):
+    v, f = book(4, 3, triangles)
+    res = sharp(sorpia.interpolate, v, f, scheme=scheme)
+    assert res.converged and res.control_vertices.shape == v.shape
+    b = sharp(sorpia.limit_matrix, f, len(v), scheme=scheme)
+    assert np.abs(b @ res.control_vertices - v).max() <= 1e-8 * np.abs(v).max()
+
+
+def test_bowtie_vertex_is_a_corner_and_warned():
+    cones = np.array([[0, 1, 2], [0, 2, 3], [0, 3, 1], [1, 3, 2], [0, 4, 5], [0, 5, 6], [0, 6, 4], [4, 6, 5]])
+    v = np.random.default_rng(1).normal(size=(7, 3))
+    with pytest.warns(NonmanifoldWarning, match="undefined"):
+        limit = sorpia.limit_points(v, cones, nonmanifold="sharp")
+    assert np.array_equal(limit[0], v[0])
+    # vertex 1 is manifold: its row is that of the first cone alone
+    alone = sorpia.limit_points(v[:4], cones[:4])
+    assert np.abs(limit[1:4] - alone[1:4]).max() <= 1e-15
+
+
+def test_default_error_names_both_ways_out():
+    v, f = book(3, 2)
+    with pytest.raises(sorpia.MeshError, match=r"non-manifold edge.*--repair.*--nonmanifold sharp"):
+        sorpia.limit_points(v, f)
+    with pytest.raises(sorpia.ParameterError, match="nonmanifold"):
+        sorpia.limit_points(v, f, nonmanifold="smooth")
+
+
+def test_a_manifold_mesh_is_unchanged_by_sharp():
+    v, f = sorpia.shapes.icosphere(2)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", NonmanifoldWarning)  # no warning: nothing non-manifold
+        assert np.array_equal(sorpia.limit_points(v, f, nonmanifold="sharp"), sorpia.limit_points(v, f))
+
+
+def test_what_the_split_refuses():
+    v, f = book(3, 2, triangles=False)
+    with pytest.raises(sorpia.MeshError, match="repeats vertex.*repair"):
+        sharp(sorpia.limit_points, v, np.vstack([f, [[0, 0, 4, 5]]]), scheme="catmull-clark")
+    # a sheet of one quad over crease vertex 1: a corner under edge-and-corner, so refused there
+    single = [list(q) for q in f] + [[0, 1, 2, len(v)]]
+    w = np.vstack([v, [[0.0, 0.0, 9.0]]])
+    with pytest.raises(sorpia.MeshError, match="single face.*edge-only"):
+        sharp(sorpia.limit_points, w, single, scheme="catmull-clark")
+    b = sharp(sorpia.limit_matrix, single, len(w), "edge-only", scheme="catmull-clark").toarray()
+    want = np.zeros(len(w))
+    want[[1, 0, 2]] = [2 / 3, 1 / 6, 1 / 6]
+    assert np.abs(b[1] - want).max() <= 1e-15
+
+
+def test_tags_are_kept_away_from_the_crease():
+    v, f = book(3, 3)
+    # two crease edges through vertex 6, inside page 0 (its middle column): the crease rule there
+    b = sharp(sorpia.limit_matrix, f, len(v), creases=([[5, 6], [6, 7]], 10.0)).toarray()
+    want = np.zeros(len(v))
+    want[[6, 5, 7]] = [2 / 3, 1 / 6, 1 / 6]
+    assert np.abs(b[6] - want).max() <= 1e-15
+    with pytest.raises(sorpia.MeshError, match="interior non-manifold crease"):
+        sharp(sorpia.limit_matrix, f, len(v), creases=([[1, 4 * 1 + 1]], 10.0))
+
+
+NONMAN = [SHARED_MESHES / name for name in ("osd_loop_nonman_edges.obj", "osd_loop_nonman_verts.obj",
+                                            "osd_catmark_nonman_edges.obj", "osd_catmark_nonman_verts.obj")]
+
+
+@pytest.mark.parametrize("path", NONMAN, ids=lambda p: p.name)
+def test_opensubdiv_shapes_fit_through_their_vertices(path):
+    if not path.exists():
+        pytest.skip("../shared/meshes absent")
+    v, f = sorpia.read_mesh(path)
+    faces = f.tolist() if isinstance(f, np.ndarray) else [
+        list(map(int, x)) for x in np.split(f.face_vertex_indices, np.cumsum(f.face_vertex_counts)[:-1])]
+    faces = [x for x in faces if len(set(x)) == len(x)]  # faces that repeat a vertex: refused, left out
+    scheme = "loop" if "loop" in path.name else "catmull-clark"
+    if scheme == "loop":
+        faces = np.array(faces)
+    res = sharp(sorpia.interpolate, v, faces, scheme=scheme)
+    b = sharp(sorpia.limit_matrix, faces, len(v), scheme=scheme)
+    assert res.converged
+    assert np.abs(b @ res.control_vertices - v).max() <= 1e-8 * np.abs(v).max()
+    # every row is one diagonal weight and one equal weight on some neighbours (the form OpenSubdiv keeps)
+    b = b.tocsr()
+    for i in range(b.shape[0]):
+        row = b.data[b.indptr[i]:b.indptr[i + 1]]
+        off = row[b.indices[b.indptr[i]:b.indptr[i + 1]] != i]
+        if scheme == "loop":
+            assert len(off) == 0 or np.ptp(off) <= 1e-15
+
+
+# shown as the command shows warnings (pytest's own filter would raise it)
+@pytest.mark.filterwarnings("default::sorpia.NonmanifoldWarning")
+def test_fit_on_the_command_line(tmp_path, monkeypatch, command):
+    """sorpia fit --nonmanifold sharp writes the split control mesh with its corner tags: refitted from the file as
+    it is, its limit passes through every input vertex at each of its copies."""
+    from cli_support import write_obj
+
+    monkeypatch.chdir(tmp_path)
+    v, f = book(3, 3)
+    write_obj(tmp_path / "book.obj", v, f)
+    code, _, err = command("fit", "book.obj", "-o", "ctrl.obj")
+    assert code != 0 and "--nonmanifold sharp" in err and "--repair" in err
+    code, out, err = command("fit", "book.obj", "-o", "ctrl.obj", "--nonmanifold", "sharp", "--report", "r.json")
+    assert code == 0, err
+    assert "undefined" in err and "nonmanifold" in out
+    report = json.loads((tmp_path / "r.json").read_text())["nonmanifold"]
+    assert report["corners"] == [0, 3] and report["nonmanifold_vertices"] == [0, 1, 2, 3]
+    ctrl, faces, tags = sorpia.read_mesh("ctrl.obj", tags=True)
+    vertex_map = np.asarray(report["vertex_map"])
+    assert sorted(vertex_map[tags["corners"][0]].tolist()) == [0] * 3 + [3] * 3  # every copy of the corners
+    limit = sorpia.limit_points(ctrl, faces, corners=tags["corners"])
+    assert np.abs(limit - v[vertex_map]).max() <= 1e-8 * np.abs(v).max()
+
+
+@pytest.mark.filterwarnings("default::sorpia.NonmanifoldWarning")
+def test_the_fan_shape_fits_on_the_command_line(tmp_path, command):
+    """osd_catmark_fan.obj (quads fanned round edges of 3 and more faces): fit --nonmanifold sharp, the written
+    split control mesh refitted as it is passes through every input vertex at each of its copies."""
+    path = SHARED_MESHES / "osd_catmark_fan.obj"
+    if not path.exists():
+        pytest.skip("../shared/meshes absent")
+    v, _ = sorpia.read_mesh(path)
+    code, _, err = command("fit", path, "-o", tmp_path / "c.obj", "-q", "--nonmanifold", "sharp",
+                           "--report", tmp_path / "r.json")
+    assert code == 0, err
+    report = json.loads((tmp_path / "r.json").read_text())["nonmanifold"]
+    assert report["nonmanifold_edges"]
+    ctrl, faces, tags = sorpia.read_mesh(tmp_path / "c.obj", tags=True)
+    limit = sorpia.limit_points(ctrl, faces, scheme="catmull-clark", corners=tags["corners"])
+    assert np.abs(limit - v[report["vertex_map"]]).max() <= 1e-9 * np.abs(v).max()
