@@ -91,15 +91,19 @@ def test_polygons_are_refused_by_loop_unless_triangulate(tmp_path, monkeypatch, 
     verdict = described["loop_pia"]
     assert verdict["can_run"] is False and "--triangulate" in verdict["reason"]
     assert described["scheme"] == "catmull-clark" and described["face_sizes"] == {"4": 2}
-    # With --triangulate the same fan triangulation is described (one read
-    # either way), and nothing stands in the way of a fit.
+    # Under Catmull-Clark the two quads are counted as they are (6 vertices, 2 faces, 7 edges); with
+    # --triangulate the 4 triangles (9 edges), and nothing stands in the way of a Loop fit.
+    assert described["triangulated"] is False and (described["faces"], described["edges"]) == (2, 7)
     code, stdout, err = command("info", src, "--json", "--triangulate")
     assert code == 0, err
     described_t = json.loads(stdout)
-    assert described["triangulated"] is True and described_t["triangulated"] is True
+    assert described_t["triangulated"] is True and (described_t["faces"], described_t["edges"]) == (4, 9)
     assert described_t["loop_pia"]["can_run"] is True and described_t["scheme"] == "loop"
-    for key in ("vertices", "faces", "edges"):
-        assert described[key] == described_t[key], key
+    # --scheme loop without --triangulate: counted as the triangulation, the verdict the refusal
+    code, stdout, err = command("info", src, "--json", "--scheme", "loop")
+    described_l = json.loads(stdout)
+    assert described_l["triangulated"] is True and described_l["edges"] == 9
+    assert described_l["pia"]["can_run"] is False and "--triangulate" in described_l["pia"]["reason"]
 
     out = tmp_path / "c.ply"
     assert command("fit", src, "-o", out, "--triangulate", "--binary", "--quiet")[0] == 0

@@ -208,19 +208,29 @@ def _solves(scheme: str) -> bool:
 CATMULL_CLARK = pytest.mark.skipif(not _solves("catmull-clark"), reason="Interpolator takes no scheme= yet")
 
 
+def quad_torus(nu: int, nv: int):
+    """A torus of nu x nv quads (every vertex of valence 4), its vertices moved a little at random."""
+    u, w = np.meshgrid(2 * np.pi * np.arange(nu) / nu, 2 * np.pi * np.arange(nv) / nv, indexing="ij")
+    r = 1.0 + 0.4 * np.cos(w)
+    v = np.column_stack([(r * np.cos(u)).ravel(), (r * np.sin(u)).ravel(), (0.4 * np.sin(w)).ravel()])
+    i, j = np.meshgrid(np.arange(nu), np.arange(nv), indexing="ij")
+    quads = np.column_stack([(i * nv + j).ravel(), (((i + 1) % nu) * nv + j).ravel(),
+                             (((i + 1) % nu) * nv + (j + 1) % nv).ravel(), (i * nv + (j + 1) % nv).ravel()])
+    return v + np.random.default_rng(6).normal(0, 0.02, v.shape), quads
+
+
 @CATMULL_CLARK
 def test_fit_solves_a_quad_mesh_with_catmull_clark_by_default(tmp_path, monkeypatch, command):
+    # (Not a cube: a cube's Catmull-Clark limit matrix is singular, the vector +1/-1 on alternate vertices
+    # gives (9 - 4*3 + 3)/24 = 0, so no interpolating control mesh need exist.)
     monkeypatch.chdir(tmp_path)
-    # Not the cube: its Catmull-Clark B is singular (test_catmull_clark.py), no method can fit it.
-    v, quads = sorpia.shapes.quad_torus(6, 5)
-    v = v + np.random.default_rng(6).normal(0, 0.05, v.shape)
-    quads = quads.tolist()
-    tagged_obj(tmp_path / "q.obj", v, quads, ["t crease 2/1/0 0 1 1.5"])
+    v, quads = quad_torus(8, 6)
+    tagged_obj(tmp_path / "q.obj", v, quads, ["t crease 2/1/0 0 1 1.5", "t crease 2/1/0 1 2 10"])
     code, stdout, err = command("fit", "q.obj", "-o", "c.obj", "--report", "r.json")
     assert code == 0, err
     assert json.loads((tmp_path / "r.json").read_text())["scheme"] == "catmull-clark"
     ctrl, f, tags = sorpia.read_mesh("c.obj", tags=True)
-    assert np.array_equal(f, quads) and tags["creases"][0].tolist() == [[0, 1]]
+    assert np.array_equal(f, quads) and tags["creases"][0].tolist() == [[0, 1], [1, 2]]
     limit = sorpia.limit_points(ctrl, f, scheme="catmull-clark", **tags)
     assert np.abs(limit - v).max() < 1e-9
     code, stdout, err = command("info", "q.obj", "--json")
@@ -234,22 +244,77 @@ SHARED = [p for p in sorted((Path(__file__).resolve().parents[2] / "shared" / "m
 @pytest.mark.skipif(not SHARED, reason="../shared/meshes is not present")
 @pytest.mark.parametrize("path", SHARED or [None], ids=[p.name for p in SHARED] or ["none"])
 def test_opensubdiv_shapes_fit_with_their_tags(path, tmp_path, command):
+    """Every osd_* shape through `sorpia fit` with its tags: fitted (its limit, with the tags written to the
+    control mesh, through the given vertices), or stopped at --max-iter with exit 1 and everything written (the
+    car's Catmull-Clark B is singular), or refused with the topology's message (the fan has an edge of 3 faces)."""
     v, f, tags = sorpia.read_mesh(path, tags=True)
     scheme = "loop" if isinstance(f, np.ndarray) and f.shape[1] == 3 else "catmull-clark"
     if not _solves(scheme):
         pytest.skip("Interpolator takes no scheme= yet")
     out = tmp_path / "c.obj"
-    code, _, err = command("fit", path, "-o", out, "--quiet", "--report", tmp_path / "r.json")
-    if path.name == "osd_catmark_fan.obj":  # three faces on edge (7, 8): refused like any non-manifold mesh
-        assert code != 0 and "non-manifold edge (7, 8)" in err
+    code, _, err = command("fit", path, "-o", out, "--quiet", "--report", tmp_path / "r.json", "--max-iter", "300")
+    if code == 2:
+        assert_user_error(code, err)
+        assert "PIA cannot run on this mesh: non-manifold" in err
         return
-    if path.name == "osd_catmark_car.obj":  # it holds a separate cube, whose Catmull-Clark B is singular
-        assert code == 1 and not json.loads((tmp_path / "r.json").read_text())["result"]["converged"]
-        return
-    assert code == 0, err
     report = json.loads((tmp_path / "r.json").read_text())
-    assert report["scheme"] == scheme
+    assert report["scheme"] == scheme and report["converged"] is (code == 0)
     ctrl, f2, written = sorpia.read_mesh(out, tags=True)
+    assert written.keys() == tags.keys()
     limit = sorpia.limit_points(ctrl, f2, **({} if scheme == "loop" else {"scheme": scheme}), **written)
     diagonal = np.linalg.norm(v.max(axis=0) - v.min(axis=0))
-    assert np.abs(limit - v).max() < 1e-9 * diagonal
+    # The report's check of what was written agrees with limit_points on the file read back (to rounding).
+    assert report["max_residual"] == pytest.approx(np.abs(limit - v).max(), rel=1e-6, abs=1e-11 * diagonal)
+    if code == 0:
+        assert np.abs(limit - v).max() < 1e-9 * diagonal
+
+
+def test_info_explains_a_crease_that_is_not_an_edge(tmp_path, monkeypatch, command):
+    monkeypatch.chdir(tmp_path)
+    v, tris, _ = cube_of_triangles()
+    tagged_obj(tmp_path / "bad.obj", v, tris, ["t crease 2/1/0 0 7 10"])  # opposite corners of the cube
+    with pytest.raises(sorpia.MeshError) as refused:
+        sorpia.Interpolator(tris, len(v), creases=([[0, 7]], 10.0))
+    code, stdout, err = command("info", "bad.obj", "--json")
+    assert code == 0, err
+    assert json.loads(stdout)["pia"] == {"scheme": "loop", "can_run": False, "reason": str(refused.value)}
+    code, _, err = command("fit", "bad.obj", "-o", "c.obj")
+    assert_user_error(code, err)
+    assert str(refused.value) in err and "Loop PIA cannot run on this mesh" in err
+
+
+def test_info_counts_a_quad_mesh_as_catmull_clark_sees_it(tmp_path, monkeypatch, command):
+    monkeypatch.chdir(tmp_path)
+    v, quads = quad_torus(8, 6)
+    open_quads = quads[quads.max(axis=1) < 6 * 7]  # drop the faces of the last ring of the torus: an open tube
+    for name, faces in (("torus.obj", quads), ("tube.obj", open_quads)):
+        tagged_obj(tmp_path / name, v, faces, [])
+        code, stdout, err = command("info", name, "--json")
+        assert code == 0, err
+        info = json.loads(stdout)
+        # Independent counts from the face list: edges, Euler characteristic, valences.
+        edges = {tuple(sorted(e)) for f in faces.tolist() for e in zip(f, f[1:] + f[:1])}
+        used = np.unique(faces)
+        sides = np.zeros(len(v), int)
+        for a, b in edges:
+            sides[a] += 1
+            sides[b] += 1
+        assert info["faces"] == len(faces) and info["edges"] == len(edges)
+        assert info["euler_characteristic"] == len(used) - len(edges) + len(faces)
+        assert info["genus"] == (1 if name == "torus.obj" else 0)  # a torus; a tube (chi 0, 2 boundary loops)
+        assert info["boundary_loops"] == (0 if name == "torus.obj" else 2)
+        # Regular under Catmull-Clark: valence 4 inside, 3 on the boundary; every vertex here is regular.
+        assert info["regular_valence"] == [4, 3] and info["extraordinary_vertices"] == 0
+        assert sorted(set(sides[used])) == ([4] if name == "torus.obj" else [3, 4])
+
+
+@CATMULL_CLARK
+def test_demo_with_catmull_clark_fits_its_quad_sample(tmp_path, command):
+    code, stdout, err = command("demo", "--scheme", "catmull-clark", "--out", tmp_path / "d", "--quiet")
+    assert code == 0, err
+    v, f = sorpia.read_mesh(tmp_path / "d" / "sample.obj")
+    assert f.shape[1] == 4
+    report = json.loads((tmp_path / "d" / "fit-report.json").read_text())
+    assert report["scheme"] == "catmull-clark" and report["converged"]
+    ctrl, _ = sorpia.read_mesh(tmp_path / "d" / "control.obj")
+    assert np.abs(sorpia.limit_points(ctrl, f, scheme="catmull-clark") - v).max() < 1e-9

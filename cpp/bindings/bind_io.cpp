@@ -53,7 +53,8 @@ void bind_io(py::module_& m) {
           view.face_sizes = face_sizes->data();
           view.n_faces = static_cast<std::size_t>(face_sizes->size());
           std::size_t total = 0;
-          for (py::ssize_t i = 0; i < face_sizes->size(); ++i) total += static_cast<std::size_t>(std::max(0, view.face_sizes[i]));
+          for (py::ssize_t i = 0; i < face_sizes->size(); ++i)
+            total += static_cast<std::size_t>(std::max(0, view.face_sizes[i]));
           if (total != static_cast<std::size_t>(faces.size()))
             throw sorpia::ParameterError("write_mesh: the face sizes add up to " + std::to_string(total) +
                                          " corners but the faces list " + std::to_string(faces.size()));
@@ -62,7 +63,8 @@ void bind_io(py::module_& m) {
           view.face_size = face_size;
           view.n_faces = static_cast<std::size_t>(faces.size()) / static_cast<std::size_t>(face_size);
           if (view.n_faces * static_cast<std::size_t>(face_size) != static_cast<std::size_t>(faces.size()))
-            throw sorpia::ParameterError("write_mesh: the faces do not divide into faces of " + std::to_string(face_size));
+            throw sorpia::ParameterError("write_mesh: the faces do not divide into faces of " +
+                                         std::to_string(face_size));
         }
         sorpia::FileTags file_tags;
         if (tags) file_tags.tags = *tags;

@@ -50,7 +50,8 @@ void bind_mesh_checks(py::module_& m) {
          double angle_degrees) {
         check_shape(vertices, 3, "vertices");
         long long corners = 0;
-        for (py::ssize_t f = 0; f < face_vertex_counts.size(); ++f) corners += std::max(face_vertex_counts.data()[f], 0);
+        for (py::ssize_t f = 0; f < face_vertex_counts.size(); ++f)
+          corners += std::max(face_vertex_counts.data()[f], 0);
         if (corners != static_cast<long long>(face_vertex_indices.size()))
           throw sorpia::ParameterError("face_vertex_counts add up to " + std::to_string(corners) +
                                        " corners but face_vertex_indices holds " +
@@ -67,16 +68,24 @@ void bind_mesh_checks(py::module_& m) {
       "vertices"_a.noconvert(), "face_vertex_counts"_a.noconvert(), "face_vertex_indices"_a.noconvert(),
       "angle_degrees"_a, "(k, 2) edges whose faces meet at more than angle_degrees (sorpia::sharp_edges).");
   m.def(
+      "regular_valence",
+      [](sorpia::Scheme scheme) {
+        const sorpia::RegularValence r = sorpia::regular_valence(scheme);
+        return py::make_tuple(r.interior, r.boundary);
+      },
+      "scheme"_a, "(inside, on the boundary): the valences of a regular vertex (sorpia::regular_valence).");
+  m.def(
       "mesh_statistics",
-      [](const sorpia::Topology& topology) {
+      [](const sorpia::Topology& topology, sorpia::Scheme scheme) {
         sorpia::MeshStatistics s;
         {
           py::gil_scoped_release release;
-          s = sorpia::mesh_statistics(topology);
+          s = sorpia::mesh_statistics(topology, scheme);
         }
         return statistics_dict(std::move(s));
       },
-      "topology"_a, "Statistics of a validated mesh (a dict), from its one-ring.");
+      "topology"_a, "scheme"_a = sorpia::Scheme::Loop,
+      "Statistics of a validated mesh (a dict), from its one-ring; extraordinary vertices as the scheme has them.");
   m.def(
       "face_list_statistics",
       [](const Faces& faces, std::size_t n_vertices) -> py::object {

@@ -435,7 +435,8 @@ void write_mesh(const std::string& path, const MeshView& mesh, bool binary, cons
     throw ParameterError(where + "OBJ and OFF are text formats; binary=true is for .ply and .stl");
   const bool triangles = !mesh.face_sizes && mesh.face_size == 3;
   if (format == MeshFormat::Stl && !triangles)
-    throw ParameterError(where + "STL stores triangles only; write polygons to .obj, .off or .ply, or triangulate them");
+    throw ParameterError(where +
+                         "STL stores triangles only; write polygons to .obj, .off or .ply, or triangulate them");
   if (tags && !tags->empty() && format != MeshFormat::Obj)
     throw ParameterError(where + "sharpness tags (creases, corners, holes, boundary) are written to .obj files only "
                          "(OpenSubdiv's 't' lines); no other format has them");
@@ -446,8 +447,8 @@ void write_mesh(const std::string& path, const MeshView& mesh, bool binary, cons
   std::size_t face = 0;
   detail::io::for_each_face(mesh, [&](const std::int32_t* f, std::size_t k) {
     if (k < 3 || k > static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max()))
-      throw MeshError("write_mesh: face " + std::to_string(face) + " has " + std::to_string(static_cast<std::int32_t>(k)) +
-                      " vertices; a face needs at least 3");
+      throw MeshError("write_mesh: face " + std::to_string(face) + " has " +
+                      std::to_string(static_cast<std::int32_t>(k)) + " vertices; a face needs at least 3");
     for (std::size_t c = 0; c < k; ++c)
       if (f[c] < 0 || static_cast<std::size_t>(f[c]) >= mesh.n_vertices)
         throw MeshError("write_mesh: face " + std::to_string(face) + " has vertex index " + std::to_string(f[c]) +

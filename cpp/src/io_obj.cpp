@@ -55,7 +55,8 @@ TagLine parse_tag(const FileData& f, const Where& w, std::string_view rest) {
   };
   t.ints.resize(static_cast<std::size_t>(counts[0]));
   for (auto& x : t.ints)
-    if (!parse_int(need("integer"), x)) fail(f, w, "tag " + quoted(t.name) + ": expected an integer, found " + quoted(tok));
+    if (!parse_int(need("integer"), x))
+      fail(f, w, "tag " + quoted(t.name) + ": expected an integer, found " + quoted(tok));
   t.floats.resize(static_cast<std::size_t>(counts[1]));
   for (auto& x : t.floats) {
     if (parse_number(need("number"), x) != std::errc() || std::isnan(x))
@@ -80,8 +81,8 @@ class TagReader {
     // One sharpness for all, or one per tag; negative counts as 0 (OpenSubdiv: max(0, s)).
     const auto sharpness = [&](std::size_t n_tags, std::size_t i) {
       if (t.floats.size() != 1 && t.floats.size() != n_tags)
-        fail(f_, w, "tag " + name + ": " + std::to_string(n_tags) + " tags need one sharpness for all or one each, found " +
-                        std::to_string(t.floats.size()));
+        fail(f_, w, "tag " + name + ": " + std::to_string(n_tags) +
+                        " tags need one sharpness for all or one each, found " + std::to_string(t.floats.size()));
       return std::max(0.0, t.floats[t.floats.size() == 1 ? 0 : i]);
     };
     if (t.name == "crease") {
@@ -90,7 +91,8 @@ class TagReader {
                         " integers");
       for (std::size_t e = 0; e < t.ints.size() / 2; ++e) {
         const long long a = t.ints[2 * e], b = t.ints[2 * e + 1];
-        if (a == b) fail(f_, w, "tag 'crease': edge (" + std::to_string(a) + ", " + std::to_string(b) + ") has one vertex twice");
+        if (a == b)
+          fail(f_, w, "tag 'crease': edge (" + std::to_string(a) + ", " + std::to_string(b) + ") has one vertex twice");
         vertex(w, a, out.tags.crease_vertices);
         vertex(w, b, out.tags.crease_vertices);
         out.tags.crease_sharpness.push_back(sharpness(t.ints.size() / 2, e));
@@ -109,7 +111,8 @@ class TagReader {
         out.tags.holes.push_back(static_cast<std::int32_t>(h));
       }
     } else if (t.name == "interpolateboundary") {
-      if (t.ints.size() != 1) fail(f_, w, "tag 'interpolateboundary' takes one integer (1 edge-and-corner, 2 edge-only)");
+      if (t.ints.size() != 1)
+        fail(f_, w, "tag 'interpolateboundary' takes one integer (1 edge-and-corner, 2 edge-only)");
       if (t.ints[0] == 1)
         out.boundary = Boundary::EdgeAndCorner;
       else if (t.ints[0] == 2)

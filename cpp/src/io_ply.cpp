@@ -409,7 +409,8 @@ std::string format_ply(const MeshView& mesh, bool binary) {
   out << "ply\nformat " << (binary ? "binary_little_endian" : "ascii") << " 1.0\ncomment written by sorpia "
       << SORPIA_VERSION << "\nelement vertex " << std::to_string(n)
       << "\nproperty double x\nproperty double y\nproperty double z\nelement face " << std::to_string(m)
-      << (wide ? "\nproperty list int int vertex_indices\nend_header\n" : "\nproperty list uchar int vertex_indices\nend_header\n");
+      << (wide ? "\nproperty list int int vertex_indices\nend_header\n"
+               : "\nproperty list uchar int vertex_indices\nend_header\n");
   std::string& s = out.str();
   if (!binary) {
     for (std::size_t i = 0; i < n; ++i) out.xyz(v + 3 * i) << '\n';

@@ -26,7 +26,10 @@ struct EdgeCounts {
   std::size_t n_edges = 0, n_boundary_edges = 0;
 };
 
-MeshStatistics finish(EdgeCounts& c, std::size_t n_faces, bool oriented_manifold) {
+// `face_vertex`: one vertex of each face, to count the faces of each component
+// (null: triangles, whose corners / 3 count them). `regular`: the scheme's.
+MeshStatistics finish(EdgeCounts& c, std::size_t n_faces, bool oriented_manifold, const std::int32_t* face_vertex,
+                      RegularValence regular) {
   const std::size_t n = c.valence.size();
   MeshStatistics s;
   s.n_vertices = n;
@@ -34,9 +37,9 @@ MeshStatistics finish(EdgeCounts& c, std::size_t n_faces, bool oriented_manifold
   s.n_edges = c.n_edges;
   s.n_boundary_edges = c.n_boundary_edges;
   s.n_boundary_loops = c.loop_vertex.size();
-  // Per component: referenced vertices, edge ends, face corners, boundary loops.
+  // Per component: referenced vertices, edge ends, face corners, faces, boundary loops.
   struct Piece {
-    std::int64_t vertices = 0, edge_ends = 0, corners = 0, loops = 0;
+    std::int64_t vertices = 0, edge_ends = 0, corners = 0, faces = 0, loops = 0;
   };
   std::vector<std::int32_t> piece_of(n, -1);  // indexed by a component's label
   std::vector<Piece> pieces;
@@ -61,11 +64,14 @@ MeshStatistics finish(EdgeCounts& c, std::size_t n_faces, bool oriented_manifold
     auto& histogram = c.boundary[v] ? s.boundary_valences : s.interior_valences;
     if (histogram.size() <= static_cast<std::size_t>(valence)) histogram.resize(valence + 1);
     ++histogram[valence];
-    const int regular = c.boundary[v] ? regular_boundary_valence : regular_interior_valence;
-    if (valence != regular)
+    if (valence != (c.boundary[v] ? regular.boundary : regular.interior))
       s.extraordinary.push_back({static_cast<std::int32_t>(v), valence, c.boundary[v] != 0});
   }
   for (const std::int32_t v : c.loop_vertex) ++pieces[piece_of[c.component[v]]].loops;
+  if (face_vertex)
+    for (std::size_t f = 0; f < n_faces; ++f) ++pieces[piece_of[c.component[face_vertex[f]]]].faces;
+  else
+    for (Piece& p : pieces) p.faces = p.corners / 3;
   s.n_components = pieces.size();
   s.n_unreferenced = n - n_referenced;
   s.valence_min = vmin;
@@ -76,7 +82,7 @@ MeshStatistics finish(EdgeCounts& c, std::size_t n_faces, bool oriented_manifold
     // chi_c = 2 - 2 g_c - b_c on each connected orientable surface.
     std::int64_t genus = 0;
     for (const Piece& p : pieces) {
-      const std::int64_t chi = p.vertices - p.edge_ends / 2 + p.corners / 3;
+      const std::int64_t chi = p.vertices - p.edge_ends / 2 + p.faces;
       const std::int64_t twice = 2 - chi - p.loops;
       genus += twice >= 0 ? twice / 2 : -((1 - twice) / 2);  // floor division
     }
@@ -166,7 +172,12 @@ void count_loops(const std::int32_t* faces, std::size_t n_half, const std::vecto
 
 }  // namespace
 
-MeshStatistics mesh_statistics(const Topology& topology) {
+RegularValence regular_valence(Scheme scheme) {
+  return scheme == Scheme::CatmullClark ? RegularValence{4, 3}
+                                        : RegularValence{regular_interior_valence, regular_boundary_valence};
+}
+
+MeshStatistics mesh_statistics(const Topology& topology, Scheme scheme) {
   const std::size_t n = topology.n_vertices();
   const auto& offsets = topology.ring_offsets();
   const auto& ring = topology.ring_neighbors();
@@ -207,7 +218,10 @@ MeshStatistics mesh_statistics(const Topology& topology) {
       v = next;
     }
   }
-  return finish(c, topology.n_faces(), true);
+  std::vector<std::int32_t> face_vertex(topology.n_faces());
+  for (std::size_t f = 0; f < face_vertex.size(); ++f)
+    face_vertex[f] = topology.face_indices()[static_cast<std::size_t>(topology.face_offset(f))];
+  return finish(c, topology.n_faces(), true, face_vertex.data(), regular_valence(scheme));
 }
 
 std::optional<MeshStatistics> face_list_statistics(const std::int32_t* faces, std::size_t n_faces,
@@ -244,7 +258,7 @@ std::optional<MeshStatistics> face_list_statistics(const std::int32_t* faces, st
   }
   for (std::size_t v = 0; v < n_vertices; ++v) c.component[v] = components.find(static_cast<std::int32_t>(v));
   count_loops(faces, n_half, mate, c);
-  return finish(c, n_faces, false);
+  return finish(c, n_faces, false, nullptr, regular_valence(Scheme::Loop));
 }
 
 }  // namespace sorpia

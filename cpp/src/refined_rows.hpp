@@ -33,8 +33,8 @@ struct VertexTags {
   // vertex with exactly one infinitely sharp edge and no infinitely sharp
   // corner. Sdc gives a dart the smooth limit mask, which is not the limit of
   // its refinement (the sharp edge's children are midpoints, not smooth edge
-  // points), so Far's Limit() of a dart depends on the level it is taken at:
-  // the only rows that do.
+  // points), so Far's Limit() of a dart depends on the level it is taken at
+  // (row_levels names the other rows that do).
   bool dart(const Topology& topology, std::int32_t v) const {
     return !topology.is_boundary(v) && !infinite(corner[v]) && infinite_creases(v) == 1;
   }

@@ -37,7 +37,8 @@ std::vector<std::int32_t> sharp_edges(const double* vertices, std::size_t n_vert
     if (!mesh.add_face(corners).is_valid())
       throw MeshError("sharp edges: face " + std::to_string(f) +
                       " cannot join OpenMesh's half-edge mesh (fewer than 3 vertices, a repeated vertex, an edge of "
-                      "three or more faces, a bowtie vertex or a face oriented against its neighbours); sorpia.repair makes such a mesh valid");
+                      "three or more faces, a bowtie vertex or a face oriented against its neighbours); "
+                      "sorpia.repair makes such a mesh valid");
   }
   // Between unit normals, angle > threshold  <=>  atan2(|n0 x n1|, n0 . n1) > threshold.
   const double threshold = angle_degrees * (M_PI / 180.0);

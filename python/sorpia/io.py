@@ -79,8 +79,8 @@ def read_mesh(path, triangulate: bool = False, tags: bool = False):
     ``t hole K/0/0 F...``, ``t interpolateboundary 1/0/0 MODE`` (1:
     edge-and-corner, 2: edge-only; 0, OpenSubdiv's "none", is refused),
     ``t creasemethod 0/0/1 normal`` (``chaikin`` is refused: sorpia's
-    semi-sharp creases decay uniformly) and ``t smoothtriangles 0/0/1
-    catmark`` (``smooth`` is refused). The face-varying tags are skipped
+    semi-sharp creases decay uniformly) and
+    ``t smoothtriangles 0/0/1 catmark`` (``smooth`` is refused). The face-varying tags are skipped
     (they do not move vertices); any other name is skipped with an
     `UnknownTagWarning`.
 

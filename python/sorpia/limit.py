@@ -54,7 +54,7 @@ TAGS_DOC = """creases : (edges (k, 2) int, sharpness (k,) float or one float), o
         (or 10 and above) infinitely sharp, anything between semi-sharp (it
         decays by one per subdivision level). A crease given twice counts
         with its last sharpness, as in OpenSubdiv.
-    corners : (vertices (c,) int, sharpness), optional
+    corners : (vertex indices (c,) int, sharpness), optional
         OpenSubdiv's corner tags (vertex sharpness).
     holes : (h,) int, optional
         Faces cut out of the surface. They change no row of B: OpenSubdiv
@@ -71,7 +71,7 @@ def limit_points(vertices, faces, boundary: str = DEFAULT_BOUNDARY, *, scheme: s
     vertices : array_like, (n, 3) float
         Control vertices.
     faces : array_like (m, k) int, list of polygons or sorpia.Polygons
-        Faces, indices into `vertices`, consistently oriented; triangles for
+        Faces, indices into ``vertices``, consistently oriented; triangles for
         Loop, any polygons for Catmull-Clark.
     boundary : {"edge-and-corner", "edge-only"}
         Boundary rule (OpenSubdiv's VTX_BOUNDARY_EDGE_AND_CORNER or

@@ -16,7 +16,7 @@ from .errors import MeshError
 from .limit import topology as _topology
 
 
-def topology_info(vertices, topology, list_extraordinary: bool | int = False) -> dict:
+def topology_info(vertices, topology, list_extraordinary: bool | int = False, scheme: str = "loop") -> dict:
     """Statistics of a mesh from its validated topology (`Interpolator.topology`).
 
     Parameters
@@ -27,6 +27,8 @@ def topology_info(vertices, topology, list_extraordinary: bool | int = False) ->
     list_extraordinary : bool or int
         Include the index, valence and side of every extraordinary vertex
         (True), of the first N (an int), or of none (False).
+    scheme : {"loop", "catmull-clark"}
+        Whose regular valence the extraordinary vertices are counted against.
 
     Returns
     -------
@@ -37,18 +39,33 @@ def topology_info(vertices, topology, list_extraordinary: bool | int = False) ->
         is not a valid oriented manifold), ``components``,
         ``unreferenced_vertices``, ``valence_min``, ``valence_max``,
         ``valence_histogram`` ({"interior": {valence: count}, "boundary": ...}),
-        ``extraordinary_vertices`` (count: interior valence != 6 or boundary
-        valence != 4), ``extraordinary_share`` (of the referenced vertices),
+        ``extraordinary_vertices`` (count: a valence other than the scheme's
+        regular one, ``regular_valence`` [inside, on the boundary]: Loop 6 and
+        4, Catmull-Clark 4 and 3), ``extraordinary_share`` (of the referenced vertices),
         ``extraordinary`` (list of [index, valence, "interior"|"boundary"],
         if asked), ``bounding_box`` ([min xyz, max xyz]), ``diagonal``.
     """
-    return _layout(vertices, topology.n_faces, _core.mesh_statistics(topology), list_extraordinary)
+    from ._validate import as_scheme
+
+    info = _layout(vertices, topology.n_faces, _core.mesh_statistics(topology, as_scheme(scheme)), list_extraordinary)
+    return _with_regular(info, scheme)
 
 
-def mesh_info(vertices, faces, boundary: str = "edge-and-corner", list_extraordinary: bool | int = True) -> dict:
-    """Statistics of a triangle mesh (`topology_info`'s dict) and whether Loop
-    PIA can run on it: ``loop_pia``: {"can_run": bool, "reason": str | None,
-    "notes": [str]}.
+def _with_regular(info: dict, scheme: str) -> dict:
+    """info with "regular_valence": [inside, on the boundary], the valences the
+    scheme calls regular (Loop 6 and 4, Catmull-Clark 4 and 3)."""
+    from ._validate import as_scheme
+
+    info["regular_valence"] = list(_core.regular_valence(as_scheme(scheme)))
+    return info
+
+
+def mesh_info(vertices, faces, boundary: str = "edge-and-corner", list_extraordinary: bool | int = True,
+              scheme: str = "loop") -> dict:
+    """Statistics of a mesh (`topology_info`'s dict) and whether PIA of the
+    scheme can run on it: ``loop_pia``: {"can_run": bool, "reason": str | None,
+    "notes": [str]} (the faces' validation for `scheme`: triangles for Loop,
+    any polygons for "catmull-clark").
 
     The mesh goes through sorpia's validation (`boundary` is the rule the
     verdict refers to); a mesh it refuses is still counted from its face
@@ -57,21 +74,26 @@ def mesh_info(vertices, faces, boundary: str = "edge-and-corner", list_extraordi
     """
     from ._validate import as_boundary, as_vertices
 
+    from ._validate import Polygons, as_scheme
+
     vertices = np.asarray(vertices, dtype=np.float64)
-    faces = np.asarray(faces)
+    n_faces = len(faces.face_vertex_counts) if isinstance(faces, Polygons) else None
+    if n_faces is None:
+        faces = np.asarray(faces)
+        n_faces = len(faces) if faces.ndim else 0
     notes: list[str] = []
     topo, reason = None, None
     try:
         as_boundary(boundary)
         as_vertices(vertices)
-        topo = _topology(faces, len(vertices), warn=False, count_name="len(vertices)")  # validates the faces
+        topo = _topology(faces, len(vertices), scheme=scheme, warn=False, count_name="len(vertices)")  # validates
     except (MeshError, ValueError, TypeError) as exc:
         reason = str(exc)
     if topo is not None:
-        stats = _core.mesh_statistics(topo)
+        stats = _core.mesh_statistics(topo, as_scheme(scheme))
     else:
-        stats = _face_list_statistics(faces, len(vertices))
-    info = _layout(vertices, len(faces) if faces.ndim else 0, stats, list_extraordinary)
+        stats = None if isinstance(faces, Polygons) else _face_list_statistics(faces, len(vertices))
+    info = _with_regular(_layout(vertices, n_faces, stats, list_extraordinary), scheme)
     if reason is None:
         notes.append(f"boundary rule {boundary!r}")
         if topo.n_unreferenced:
@@ -170,7 +192,8 @@ def format_info(info: dict, name: str | None = None, max_listed: int = 16, extra
                 rows.append((f"  {kind} valences", "  ".join(f"{v}:{c}" for v, c in hist.items())))
         rows.append(("extraordinary vertices",
                      f"{info['extraordinary_vertices']} ({100 * info['extraordinary_share']:.1f}% of the "
-                     f"referenced vertices; regular: valence 6 inside, 4 on the boundary)"))
+                     f"referenced vertices; regular: valence {info['regular_valence'][0]} inside, "
+                     f"{info['regular_valence'][1]} on the boundary)"))
     if "diagonal" in info:
         rows.append(("bounding-box diagonal", f"{info['diagonal']:.6g}"))
     verdict = info["loop_pia"]

@@ -293,7 +293,7 @@ def interpolate(vertices, faces, method: str = "sor", omega="auto", tol: float =
                 sigma=None, alpha=None, weight=None, threads: int = 1, scheme: str = DEFAULT_SCHEME,
                 creases=None, corners=None, holes=None) -> InterpolationResult:
     """Control vertices whose limit surface (Loop, or Catmull-Clark with
-    ``scheme="catmull-clark"``) interpolates `vertices`.
+    ``scheme="catmull-clark"``) interpolates ``vertices``.
 
     One call of ``Interpolator(faces, len(vertices), boundary, scheme=,
     creases=, corners=, holes=).solve(...)``; see `Interpolator` for the

@@ -29,7 +29,7 @@ src="$root/cpp/src"
 # The readers, the topology validation and the limit: what a file goes through.
 sources=("$src"/io.cpp "$src"/io_obj.cpp "$src"/io_off.cpp "$src"/io_ply.cpp "$src"/io_stl.cpp
          "$src"/topology.cpp "$src"/one_ring.cpp "$src"/limit.cpp "$src"/limit_operator.cpp "$src"/limit_masks.cpp
-         "$src"/interrupt.cpp "$src"/subdivision.cpp)
+         "$src"/interrupt.cpp "$src"/subdivision.cpp "$src"/refined_rows.cpp)
 if [ ! -x "$out/fuzz_readers" ] || [ -n "$(find "${sources[@]}" "$root/tests/fuzz/fuzz_readers.cpp" "$root/cpp/include" -newer "$out/fuzz_readers" -print -quit)" ]; then
   echo "building $out/fuzz_readers"
   "$CXX" -std=c++17 -g -O1 -fno-omit-frame-pointer -fsanitize=fuzzer,address,undefined \

@@ -74,7 +74,9 @@ struct MeshFile {
   FileTags tags;                         ///< the OBJ file's `t` lines (ReadOptions::tags)
 
   std::size_t n_vertices() const { return vertices.size() / 3; }
-  std::size_t n_faces() const { return face_sizes.empty() ? faces.size() / static_cast<std::size_t>(face_size) : face_sizes.size(); }
+  std::size_t n_faces() const {
+    return face_sizes.empty() ? faces.size() / static_cast<std::size_t>(face_size) : face_sizes.size();
+  }
   bool all_triangles() const { return face_sizes.empty() && face_size == 3; }
 };
 

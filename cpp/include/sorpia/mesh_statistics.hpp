@@ -1,6 +1,6 @@
 #pragma once
 /// @file mesh_statistics.hpp
-/// Counts that describe a triangle mesh (the paper's Table 2 and more): edges,
+/// Counts that describe a mesh (the paper's Table 2 and more): edges,
 /// boundary loops, components, Euler characteristic, genus, valences and the
 /// extraordinary vertices.
 ///
@@ -14,6 +14,7 @@
 #include <optional>
 #include <vector>
 
+#include "sorpia/subdivision.hpp"
 #include "sorpia/topology.hpp"
 
 namespace sorpia {
@@ -22,6 +23,13 @@ namespace sorpia {
 /// on its boundary; any other valence makes it extraordinary (paper section 2).
 constexpr int regular_interior_valence = 6;
 constexpr int regular_boundary_valence = 4;
+
+/// The valences of a regular vertex, inside the mesh and on its boundary:
+/// Loop 6 and 4, Catmull-Clark 4 and 3 (the valences of a regular quad grid).
+struct RegularValence {
+  int interior, boundary;
+};
+RegularValence regular_valence(Scheme scheme);
 
 /// An extraordinary vertex: its index, valence and whether it is on the boundary.
 struct ExtraordinaryVertex {
@@ -52,12 +60,14 @@ struct MeshStatistics {
   /// [k]: referenced vertices of valence k off the boundary (interior) and on it.
   std::vector<std::size_t> interior_valences;
   std::vector<std::size_t> boundary_valences;
-  /// In increasing vertex order: interior valence other than 6, boundary valence other than 4.
+  /// In increasing vertex order: a valence other than the scheme's regular
+  /// one (regular_valence), inside or on the boundary.
   std::vector<ExtraordinaryVertex> extraordinary;
 };
 
-/// The statistics of a validated mesh, from its one-ring, in O(n_vertices + n_edges).
-MeshStatistics mesh_statistics(const Topology& topology);
+/// The statistics of a validated mesh (any polygons), from its one-ring, in
+/// O(n_vertices + n_edges + n_faces); extraordinary vertices as `scheme` has them.
+MeshStatistics mesh_statistics(const Topology& topology, Scheme scheme = Scheme::Loop);
 
 /// The statistics of a raw triangle list that may fail sorpia's validation
 /// (non-manifold edges or vertices, flipped faces, duplicates, repeated

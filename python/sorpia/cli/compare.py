@@ -66,7 +66,7 @@ def run_compare(input_path, *, methods=DISPLAY_ORDER, tol=1e-10, max_iter=1000, 
         interp, build = build_interpolator(V0, F, boundary=boundary, progress=progress, source=input_path,
                                            scheme=scheme, tags=tags)
         progress.status("mesh statistics")
-        stats = topology_info(V0, interp.topology)
+        stats = topology_info(V0, interp.topology, scheme=scheme)
         for method in methods:
             n_threads = threads_for(method, threads)
             res, wall, cpu = run_solver(interp, V0, phase="solving", method=method, omega=None, tol=tol,

@@ -55,7 +55,7 @@ def run_fit(input_path, output, *, method="sor", omega="auto", tol=1e-10, max_it
             boundary=boundary, threads=threads, progress=progress, source=input_path, scheme=scheme, tags=tags)
         progress.status("mesh statistics")
         t0 = time.perf_counter()
-        stats = topology_info(V0, interp.topology)
+        stats = topology_info(V0, interp.topology, scheme=scheme)
         timings["statistics"] = time.perf_counter() - t0
         ctrl = np.asarray(res.control_vertices)
 

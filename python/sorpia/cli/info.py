@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import sys
+import warnings
 
 from .common import (EXIT_OK, SCHEME_LABELS, UserError, boundary_rule, choose_scheme, face_size_histogram,
                      is_triangles, read_input, repair_lines, scheme_kwargs, solve_tags, tags_lines, tags_summary)
@@ -19,8 +20,8 @@ def run_info(input_path, *, as_json=False, boundary=None, triangulate=False, rep
     can run (exit 0 either way).
 
     The statistics are of the mesh as the scheme sees it: a file with
-    polygons is counted as its triangulation (the read with --triangulate),
-    with its faces by size. The verdict is the library's own: the solve's
+    polygons as it is under Catmull-Clark, as its triangulation (the read with
+    --triangulate) when Loop was asked for; its faces by size either way. The verdict is the library's own: the solve's
     validation of the faces, scheme and tags. Tags the reader refuses (a
     crease method sorpia does not have, a malformed tag) are reported, and
     the mesh described without them. With `repair`, everything is of the
@@ -45,12 +46,13 @@ def run_info(input_path, *, as_json=False, boundary=None, triangulate=False, rep
         refusal = None
     except UserError as exc:  # --scheme loop on polygons
         chosen, refusal = scheme, str(exc)
-    # The statistics of a polygon file are those of its triangulation.
-    counted = read_input(input_path, triangulate=True, repair=repair, tags=False) if polygons else mesh
+    # The statistics are of the mesh under its scheme (polygons as they are for Catmull-Clark); with Loop
+    # refused on polygons, of their triangulation.
+    counted = read_input(input_path, triangulate=True, repair=repair, tags=False) if polygons and refusal else mesh
     info = mesh_info(counted.vertices, counted.faces, boundary=boundary_rule(boundary, mesh),
-                     list_extraordinary=True if as_json else MAX_LISTED)
+                     list_extraordinary=True if as_json else MAX_LISTED, scheme="loop" if refusal else chosen)
     info["face_sizes"] = face_size_histogram(mesh.faces)
-    info["triangulated"] = bool(triangulate or polygons)
+    info["triangulated"] = bool(triangulate or (polygons and refusal))
     info["scheme"] = chosen
     info["boundary"] = boundary_rule(boundary, mesh)
     tags = solve_tags(mesh, sharp_angle, input_path)
@@ -59,12 +61,14 @@ def run_info(input_path, *, as_json=False, boundary=None, triangulate=False, rep
     if repair:
         info["repair"] = {"applied": True, "changes": repair_lines(mesh.repair),
                           "counts": mesh.repair.report["counts"]}
-    elif not info["loop_pia"]["can_run"]:
+    elif not info["loop_pia"]["can_run"] and is_triangles(counted.faces):  # sorpia.repair takes triangles
         info["repair"] = _what_repair_would_do(counted.vertices, counted.faces)
-    if polygons and info["loop_pia"]["can_run"]:
+    if polygons:
         info["loop_pia"] = {"can_run": False, "notes": [],
-                            "reason": "the file has faces of more than 3 vertices (the counts are of their "
-                            "triangulation); pass --triangulate to split them, or --scheme catmull-clark"}
+                            "reason": "the file has faces of more than 3 vertices" + (
+                                " (the counts are of their triangulation); pass --triangulate to split them, or "
+                                "--scheme catmull-clark" if refusal else ": Loop needs triangles (--triangulate "
+                                "splits them)")}
     info["pia"] = _verdict(chosen, refusal, mesh, tags, info)
     if as_json:
         print(json.dumps(jsonable({"input": str(input_path), **info}), indent=2), file=out)
@@ -84,7 +88,9 @@ def _verdict(scheme: str, refusal, mesh, tags: dict, info: dict) -> dict:
         return {"scheme": scheme, **{k: info["loop_pia"][k] for k in ("can_run", "reason")}}
     try:
         kwargs = scheme_kwargs(scheme, tags)
-        Interpolator(mesh.faces, len(mesh.vertices), boundary=info["boundary"], **kwargs)
+        with warnings.catch_warnings():  # unreferenced vertices: the statistics' notes say it
+            warnings.simplefilter("ignore")
+            Interpolator(mesh.faces, len(mesh.vertices), boundary=info["boundary"], **kwargs)
     except (UserError, MeshError, ParameterError, TypeError) as exc:
         return {"scheme": scheme, "can_run": False, "reason": str(exc)}
     return {"scheme": scheme, "can_run": True, "reason": None}

@@ -10,8 +10,8 @@ import numpy as np
 
 from ..plotting import FACE_BUDGET  # plotting imports matplotlib only when drawing
 from .common import (EXIT_NOT_CONVERGED, EXIT_OK, SCHEME_LABELS, UserError, boundary_rule, check_paths,
-                     check_solver_options, choose_scheme, face_counts, fit_once, fmt_seconds, omega_text, read_input, repair_lines,
-                     require_plotting, scheme_kwargs, solve_tags)
+                     check_solver_options, choose_scheme, face_counts, fit_once, fmt_seconds, omega_text, read_input,
+                     repair_lines, require_plotting, scheme_kwargs, solve_tags)
 from .output import save_figure
 from .progress import Progress
 
@@ -71,8 +71,8 @@ def run_render(input_path, output, *, level=3, tol=1e-10, max_iter=1000, boundar
                                    creases=creases, crease_curves=curves)
         save_figure(fig, output)
         timings["draw"] = time.perf_counter() - t0
-    data = {"output": str(output), "scheme": scheme, "level": drawn_level, "threads": threads, "iterations": int(res.iterations),
-            "converged": bool(res.converged), "omega": res.omega, "timings": timings}
+    data = {"output": str(output), "scheme": scheme, "level": drawn_level, "threads": threads,
+            "iterations": int(res.iterations), "converged": bool(res.converged), "omega": res.omega, "timings": timings}
     if not quiet:
         lvl = f"level {drawn_level}" + (f" (asked {level}; face budget {budget})" if drawn_level < level else "")
         state = "" if res.converged else f"; NOT converged to tol {tol:g} (exit code 1)"
