@@ -6,6 +6,7 @@ the closed form of their limit curve (a uniform cubic B-spline)."""
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -370,3 +371,91 @@ def test_a_dart_is_the_one_place_where_opensubdiv_s_limits_disagree(scheme):
         p = s.tessellate(level)[0][f.ravel()]
         assert np.abs(p - bfr)[~at_dart].max() <= 1e-12
         assert np.abs(p - bfr)[at_dart].max() <= 0.01 * edge
+
+
+# ---- OpenSubdiv's shapes ----------------------------------------------------
+
+SHARED_MESHES = Path(__file__).resolve().parents[2] / "shared" / "meshes"
+# Not the non-manifold shapes (refused; the fan has edges of three faces), nor the car: it holds a
+# separate cube, whose Catmull-Clark B is singular (the checkerboard vector), so no fit exists.
+OSD_SHAPES = (sorted(p.name for p in SHARED_MESHES.glob("osd_*.obj")
+                    if "nonman" not in p.name and p.name not in ("osd_catmark_car.obj", "osd_catmark_fan.obj"))
+              if SHARED_MESHES.exists() else [])
+
+
+def darts(f, n, creases):
+    """Interior vertices with exactly one infinitely sharp crease edge."""
+    on_boundary = np.zeros(n, bool)
+    edges = {}
+    for face in face_list(f):
+        for a, b in zip(face, face[1:] + face[:1]):
+            edges[(min(a, b), max(a, b))] = edges.get((min(a, b), max(a, b)), 0) + 1
+    for (a, b), count in edges.items():
+        if count == 1:
+            on_boundary[[a, b]] = True
+    sharp = np.zeros(n, int)
+    if creases is not None:
+        e, s = np.asarray(creases[0]), np.broadcast_to(creases[1], (len(creases[0]),))
+        np.add.at(sharp, e[s >= 10].ravel(), 1)
+    return np.flatnonzero((sharp == 1) & ~on_boundary)
+
+
+@pytest.mark.skipif(not OSD_SHAPES, reason="../shared/meshes is not present")
+@pytest.mark.parametrize("name", OSD_SHAPES or ["absent"])
+def test_opensubdiv_shapes_fitted_surfaces_pass_through_their_vertices(name):
+    # Fit with the file's tags and scheme, then evaluate the limit surface of
+    # the control mesh by Bfr (OpenSubdiv's own evaluation, not sorpia's B) at
+    # every corner of every face that is not a hole: the given vertices, to
+    # 1e-9 of the diagonal, except at darts (docs/surfaces.md).
+    v, f, tags = sorpia.read_mesh(SHARED_MESHES / name, tags=True)
+    scheme = "loop" if name.startswith("osd_loop") else "catmull-clark"
+    boundary = tags.pop("boundary", "edge-and-corner")
+    res = sorpia.interpolate(v, f, boundary=boundary, scheme=scheme, tol=1e-14, max_iter=5000, **tags)
+    assert res.converged
+    s = sorpia.LimitSurface(res.control_vertices, f, boundary, scheme=scheme, **tags)
+    faces = face_list(f)
+    holes = set(np.asarray(tags.get("holes", [])).tolist())
+    keep = [i for i in range(len(faces)) if i not in holes]
+    ids = np.concatenate([[i] * len(faces[i]) for i in keep])
+    uv = np.array([corner_uv(scheme, len(faces[i]), j) for i in keep for j in range(len(faces[i]))])
+    corners = np.concatenate([faces[i] for i in keep])
+    ok = ~np.isin(corners, darts(f, len(v), tags.get("creases")))
+    p = s.evaluate(ids, uv)
+    assert np.abs(p - v[corners])[ok].max() <= 1e-9 * diagonal(v)
+
+
+def test_evaluation_on_threads_and_from_threads_gives_the_points_of_one_thread():
+    # Each point is computed alone: a large query (split over the core's
+    # threads, 64 faces a chunk), small queries of at most 64 faces (on the
+    # calling thread) and four Python threads querying one surface at once
+    # (the GIL released) give the same bits. Catmull-Clark with semi-sharp and
+    # infinitely sharp creases, so that Bfr's cache is shared by irregular
+    # patches.
+    import threading
+
+    v, f = sorpia.shapes.quad_irregular(3000, seed=5)
+    f = np.asarray(f)
+    edges = np.unique(np.sort(f[::7, :2], axis=1), axis=0)
+    sharpness = np.where(np.arange(len(edges)) % 2, np.inf, 2.5)
+    s = sorpia.LimitSurface(v, f, scheme="catmull-clark", creases=(edges, sharpness))
+    rng = np.random.default_rng(4)
+    ids = rng.integers(0, len(f), 20000)
+    uv = rng.uniform(0, 1, (20000, 2))
+    whole = s.evaluate(ids, uv, derivatives=True)
+    order = np.argsort(ids, kind="stable")
+    pieces = np.empty_like(whole[0])
+    for chunk in np.array_split(order, 400):  # about 50 points, at most 50 faces each
+        pieces[chunk] = s.evaluate(ids[chunk], uv[chunk])
+    assert np.array_equal(pieces, whole[0])
+    results = [None] * 4
+
+    def query(k):
+        results[k] = s.evaluate(ids, uv, derivatives=True)
+
+    workers = [threading.Thread(target=query, args=(k,)) for k in range(4)]
+    for w in workers:
+        w.start()
+    for w in workers:
+        w.join()
+    for r in results:
+        assert all(np.array_equal(a, b) for a, b in zip(r, whole))

@@ -25,6 +25,7 @@
 #include "sorpia/errors.hpp"
 #include "sorpia/interrupt.hpp"
 #include "sorpia/limit.hpp"
+#include "sorpia/limit_operator.hpp"
 
 namespace sorpia {
 
@@ -499,7 +500,10 @@ PolyMesh LimitSurface::tessellate(int level) {
   // Where Limit() is not the limit, Bfr evaluates the control faces' surface
   // at the vertex's parameter (exact at the corners of its refined patches).
   const auto& last = refiner.GetLevel(level);
-  {
+  // Only semi-sharp tags, or Catmull-Clark's level 0 of a mesh with other
+  // faces than quads, make such vertices: the common case skips the search.
+  if (impl_->tags.max_semi_sharpness() > 0.0 ||
+      (scheme == Scheme::CatmullClark && level == 0 && n_face_vertices != 4 * m)) {
     const std::vector<int> fix = inexact_limit_vertices(refiner, level);
     std::vector<int> fixed;
     std::vector<std::int32_t> face_ids;
@@ -533,20 +537,12 @@ PolyMesh LimitSurface::tessellate(int level) {
   const std::size_t n_out = n + (n_level - n_osd);
   PolyMesh out;
   out.vertices.resize(3 * n_out);
-  if (scheme == Scheme::Loop) {
-    // Control vertices: B V exactly as sorpia::limit_points computes it (the
-    // refined level gives the same point up to rounding, except at a dart,
-    // whose limit mask is not the limit of its refinement).
-    limit_points(impl_->topology, impl_->vertices.data(), impl_->boundary, impl_->tags, out.vertices.data());
-  } else {
-    std::copy(impl_->vertices.begin(), impl_->vertices.end(), out.vertices.begin());
-    for (std::size_t i = 0; i < n_osd; ++i) {
-      double* q = &out.vertices[3 * static_cast<std::size_t>(from[i])];
-      q[0] = limit[i].x;
-      q[1] = limit[i].y;
-      q[2] = limit[i].z;
-    }
-  }
+  // Control vertices: B V exactly as sorpia::limit_points computes it (one
+  // B; the refined level gives the same points up to rounding, except at the
+  // few vertices whose Sdc limit mask is not the limit of their refinement,
+  // darts and Catmull-Clark's interior vertices of two faces).
+  apply(limit_operator(impl_->topology, scheme, impl_->boundary, impl_->tags), impl_->vertices.data(),
+        out.vertices.data());
   for (std::size_t i = n_osd; i < n_level; ++i) {
     if (i % kRowsPerPoll == 0) poll_interrupt();
     double* q = &out.vertices[3 * (n + i - n_osd)];

@@ -108,7 +108,7 @@ class LimitSurface:
         Sharp edges: an (k, 2) int array of vertex pairs and a sharpness per
         edge (or one for all); ``inf`` (or 10 and more) is infinitely sharp,
         smaller values are semi-sharp.
-    corners : (vertices, sharpness), optional
+    corners : (vertex indices, sharpness), optional
         Sharp vertices, as for creases.
     holes : array_like of int, optional
         Faces that are holes: they have no limit surface.
