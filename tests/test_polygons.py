@@ -109,3 +109,13 @@ def test_quad_irregular_has_the_advertised_valences():
     assert topo.n_boundary_edges == 0 and topo.all_quads
     assert set(np.unique(valence)) <= set(range(3, 13)) and (valence == 3).any() and (valence >= 5).any()
     assert abs(len(V) - 3000) < 300
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_polygon_torus_has_no_vertex_of_valence_two(seed):
+    """Interior vertices of valence 2 make Catmull-Clark's B indefinite; the generator never makes one."""
+    V, F = sorpia.shapes.polygon_torus(40, 30, seed=seed)
+    valence = np.diff(topology(F, len(V), scheme="catmull-clark").ring_offsets)
+    assert valence.min() >= 3
+    assert sorted(set(np.asarray(F.face_vertex_counts).tolist())) == [3, 4, 5, 6]
+

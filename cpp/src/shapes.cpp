@@ -200,6 +200,19 @@ PolyMesh quad_irregular(int n_vertices, std::uint32_t seed) {
     // corner k: (t[k], mid(k, k+1), centroid, mid(k-1, k)), counter-clockwise as the triangle
     for (int k = 0; k < 3; ++k) m.face_indices.insert(m.face_indices.end(), {t[k], mid[k], c, mid[(k + 2) % 3]});
   }
+  // Number the vertices in the order the faces first reach them, as a mesh
+  // exported from a modeller would be: the triangle mesh's own vertices
+  // otherwise all come before the points added between them.
+  std::vector<std::int32_t> renumber(m.n_vertices(), -1);
+  std::int32_t next = 0;
+  for (std::int32_t& v : m.face_indices) {
+    if (renumber[v] < 0) renumber[v] = next++;
+    v = renumber[v];
+  }
+  std::vector<double> moved(m.vertices.size());
+  for (std::size_t v = 0; v < renumber.size(); ++v)
+    std::copy_n(&m.vertices[3 * v], 3, &moved[3 * static_cast<std::size_t>(renumber[v])]);
+  m.vertices.swap(moved);
   return m;
 }
 
@@ -209,7 +222,7 @@ PolyMesh polygon_torus(int nu, int nv, std::uint32_t seed) {
   PolyMesh m;
   m.vertices = torus(nu, nv).vertices;
   auto id = [&](int i, int j) { return ((i + nu) % nu) * nv + (j + nv) % nv; };
-  std::vector<std::uint8_t> used(static_cast<std::size_t>(nu) * nv, 0);
+  std::vector<std::uint8_t> used(static_cast<std::size_t>(nu) * nv, 0), joined(used.size(), 0);
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> u01(0.0, 1.0);
   const auto face = [&](std::initializer_list<std::int32_t> vs) {
@@ -224,12 +237,17 @@ PolyMesh polygon_torus(int nu, int nv, std::uint32_t seed) {
       used[i * nv + j] = 1;
       const int a = id(i, j), b = id(i + 1, j), c = id(i + 1, j + 1), d = id(i, j + 1);
       const double r = u01(rng);
-      const bool right_free = i + 1 < nu && !used[(i + 1) * nv + j];
+      // Two joins stacked in one column would leave the vertex between them
+      // with two edges, an interior vertex of valence 2 (whose limit masks
+      // make B indefinite): a join needs its column's neighbours unjoined.
+      const bool right_free = i + 1 < nu && !used[(i + 1) * nv + j] && !joined[i * nv + (j + nv - 1) % nv] &&
+                              !joined[i * nv + (j + 1) % nv];
       if (r < 0.10) {
         face({a, b, c});
         face({a, c, d});
       } else if (r < 0.24 && right_free) {
         used[(i + 1) * nv + j] = 1;
+        joined[i * nv + j] = 1;
         const int e = id(i + 2, j), f = id(i + 2, j + 1);
         if (r < 0.17) {  // the neighbour's half (b, f, c) joined: a pentagon and a triangle
           face({a, b, f, c, d});

@@ -18,7 +18,13 @@ const Kernels& uniform_kernels(int choice) {
   return slot_kernels(choice);
 }
 
-const Kernels& per_entry_kernels() { return kernel_table<kPerEntry>; }
+const Kernels& per_entry_kernels() {
+#ifdef SORPIA_AVX2_KERNELS
+  static const bool has_avx2 = __builtin_cpu_supports("avx2");
+  if (has_avx2) return avx2_per_entry_kernels();
+#endif
+  return kernel_table<kPerEntry>;
+}
 
 // The slot count K with the least expected cost per vertex: a slot costs
 // about one cycle, a vertex of valence above K (a loop exit the branch

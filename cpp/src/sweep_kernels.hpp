@@ -85,12 +85,15 @@ int choose_slots(const OpView& op);
 // where the processor has it, else the baseline one (the same bits).
 const Kernels& uniform_kernels(int choice);
 
-// The kernels for rows with per-entry weights (OpView::values).
+// The kernels for rows with per-entry weights (OpView::values): the AVX2
+// build where the processor has it, else the baseline one (the same bits).
 const Kernels& per_entry_kernels();
 
-// The AVX2 build of uniform_kernels (sweep_kernels_avx2.cpp), present when
-// CMake compiles that unit with -mavx2 (SORPIA_AVX2_KERNELS).
+// The AVX2 builds of uniform_kernels and per_entry_kernels
+// (sweep_kernels_avx2.cpp), present when CMake compiles that unit with -mavx2
+// (SORPIA_AVX2_KERNELS).
 const Kernels& avx2_uniform_kernels(int choice);
+const Kernels& avx2_per_entry_kernels();
 
 }  // namespace detail
 }  // namespace sorpia

@@ -60,13 +60,15 @@ PolyMesh quad_grid(int nu, int nv);
 /// seed) with each triangle split into three quads (its centroid joined to
 /// its edge midpoints). About n_vertices vertices: the triangle mesh's own
 /// (valences 3..12), the edge midpoints (valence 4) and the centroids
-/// (valence 3). @param n_vertices at least 96
+/// (valence 3), numbered in the order the faces first reach them.
+/// @param n_vertices at least 96
 PolyMesh quad_irregular(int n_vertices, std::uint32_t seed = 1);
 
 /// quad_torus(nu, nv) with about 10% of its quads split into two triangles,
 /// 7% joined with half of their neighbour into pentagons and 7% joined with
 /// their neighbour into hexagons, at random: triangles, quads and n-gons
-/// mixed, vertices of valence 3 to 6. Deterministic for a given seed.
+/// mixed, vertices of valence 3 to 6 (never 2: no two joins are stacked).
+/// Deterministic for a given seed.
 /// @param nu, nv at least 4
 PolyMesh polygon_torus(int nu, int nv, std::uint32_t seed = 1);
 
