@@ -117,8 +117,8 @@ def test_triangles_under_catmull_clark_are_refined_once():
 
 def test_a_cube_has_a_singular_catmull_clark_matrix():
     """Every vertex of a cube has valence 3: (3/8) x_i + 3 (1/6) x_e + 3 (1/24) x_f with the checkerboard x
-    (x_e = -x_i across an edge, x_f = x_i across a face) is 3/8 - 1/2 + 1/8 = 0, so B has a null vector and no
-    method can fit the cube (OpenSubdiv's osd_catmark_car holds such a cube)."""
+    (x_e = -x_i across an edge, x_f = x_i across a face) is 3/8 - 1/2 + 1/8 = 0, so B has a null vector: only targets without a
+    checkerboard component can be fitted (OpenSubdiv's osd_catmark_car holds such cubes)."""
     V = np.array([[x, y, z] for x in (0, 1) for y in (0, 1) for z in (0, 1)], dtype=float)
     quads = [[0, 1, 3, 2], [4, 6, 7, 5], [0, 4, 5, 1], [2, 3, 7, 6], [0, 2, 6, 4], [1, 5, 7, 3]]
     b = sorpia.limit_matrix(quads, 8, scheme=CC)

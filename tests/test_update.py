@@ -308,6 +308,7 @@ def test_update_on_shared_meshes(name):
     B = sorpia.limit_matrix(F, len(V), **tags)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ConvergenceWarning)
+        warnings.simplefilter("ignore", sorpia.SingularMatrixWarning)  # the car's cubes (test_singular_cubes)
         res = interp.solve(V, max_iter=5000)
     if not res.converged:  # a full solve is the reference: without one there is nothing to match
         pytest.skip(f"the full solve stops at E/E_0 = {res.errors[-1]:.3g} (docs: Creases, corners and holes)")

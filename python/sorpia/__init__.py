@@ -8,7 +8,8 @@ with SOR-PIA and the rest of the PIA family.
 from ._core import __version__
 from .errors import MeshError, MeshFileError, ParameterError
 from .limit import UnreferencedVerticesWarning, limit_matrix, limit_points
-from .solve import ConvergenceWarning, InterpolationResult, Interpolator, OmegaWarning, interpolate
+from .solve import (ConvergenceWarning, InterpolationResult, Interpolator, OmegaWarning, SingularMatrixWarning,
+                    interpolate)
 from .io import UnknownTagWarning, read_mesh, write_mesh
 from .sharp import sharp_edges
 from ._validate import Polygons
@@ -23,7 +24,8 @@ __all__ = [
     "MeshFileError",
     "ParameterError",
     "UnreferencedVerticesWarning",
-    "ConvergenceWarning", "InterpolationResult", "Interpolator", "OmegaWarning", "interpolate",
+    "ConvergenceWarning", "InterpolationResult", "Interpolator", "OmegaWarning", "SingularMatrixWarning",
+    "interpolate",
     "limit_matrix",
     "Polygons",
     "limit_points",

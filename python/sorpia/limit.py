@@ -54,6 +54,43 @@ def topology(faces, n_vertices: int, *, scheme: str = DEFAULT_SCHEME, warn: bool
 NONMANIFOLD_KINDS = ("non-manifold edge", "non-manifold vertex", "inconsistent orientation", "duplicate faces")
 
 
+def singular_cubes(topo: _core.Topology, tag_set: _core.Tags) -> list:
+    """The parts of a Catmull-Clark mesh on which B is singular for a reason
+    known in closed form: closed cubes (connected parts of 8 vertices, each
+    interior, of valence 3, on quads) that no crease or corner touches. The
+    alternating +1/-1 vector over a cube's corners (its two colours) is a null
+    vector of their CATMARK limit masks, 3/8 - 3 (1/6) + 3 (1/24) = 0, so
+    only targets without a component along it can be interpolated there.
+    Returns the vertices of each such cube (sorted arrays)."""
+    import scipy.sparse.csgraph  # here, not at import: sorpia's commands need no scipy
+
+    offsets, neighbours = np.asarray(topo.ring_offsets), np.asarray(topo.ring_neighbors)
+    n = topo.n_vertices
+    candidate = (np.diff(offsets) == 3) & ~np.asarray(topo.is_boundary)
+    if candidate.sum() < 8:
+        return []
+    graph = scipy.sparse.csr_matrix((np.ones(len(neighbours)), neighbours, offsets), shape=(n, n))
+    n_parts, part = scipy.sparse.csgraph.connected_components(graph, directed=False)
+    tagged = np.zeros(n, dtype=bool)
+    tagged[np.asarray(tag_set.crease_vertices).ravel()] = True
+    tagged[np.asarray(tag_set.corner_vertices)] = True
+    size = np.bincount(part, minlength=n_parts)
+    valence_3 = np.bincount(part, weights=candidate, minlength=n_parts)
+    touched = np.bincount(part, weights=tagged, minlength=n_parts) > 0
+    cubes = []
+    found = np.flatnonzero((size == 8) & (valence_3 == 8) & ~touched)
+    if len(found) == 0 or topo.all_triangles:
+        return cubes
+    counts, face_offsets, faces = (np.asarray(a) for a in (topo.face_counts, topo.vertex_face_offsets,
+                                                            topo.vertex_faces))
+    for p in found:
+        vertices = np.flatnonzero(part == p)
+        around = np.concatenate([faces[face_offsets[v]:face_offsets[v + 1]] for v in vertices])
+        if np.all(counts[around] == 4):
+            cubes.append(vertices)
+    return cubes
+
+
 def tags(topo: _core.Topology, creases=None, corners=None, holes=None) -> _core.Tags:
     """The sharpness tags of a mesh, checked against its counts (`_validate.as_tags`);
     whether each crease is an edge of the mesh is checked where B is built."""

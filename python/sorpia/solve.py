@@ -89,6 +89,7 @@ from . import nonmanifold as nonmanifold_sharp
 from ._validate import DEFAULT_BOUNDARY, DEFAULT_SCHEME, as_boundary, as_scheme, as_vertices
 from .errors import ParameterError
 from .limit import TAGS_DOC as _TAGS_DOC
+from .limit import singular_cubes
 from .limit import tags as _tags
 from .limit import topology as _topology
 from .nonmanifold import as_nonmanifold
@@ -103,6 +104,11 @@ _INT64_MAX = 2**63 - 1
 
 class ConvergenceWarning(UserWarning):
     """A solve stopped at max_iter or diverged before reaching tol."""
+
+
+class SingularMatrixWarning(UserWarning):
+    """Issued after a solve that stopped short on a mesh whose B is singular
+    on a part known in closed form (`sorpia.limit.singular_cubes`)."""
 
 
 class OmegaWarning(UserWarning):
@@ -401,8 +407,23 @@ class Interpolator:
                     else "diverged (E_k grew past 1e6 E_0 or was not finite)")
             warnings.warn(f"method={method!r} {what} with E_k/E_0 = {r.errors[-1]:.3g} > tol = {tol_value:g}",
                           ConvergenceWarning, stacklevel=3)
+            if self.scheme == "catmull-clark":
+                self._warn_singular()
         r._record_build(time.perf_counter() - t0, 0.0, 0.0)
         return r
+
+
+    def _warn_singular(self) -> None:
+        """After a solve that stopped short: name the parts of the mesh where B
+        is singular in closed form (limit.singular_cubes), which no method can
+        fit unless the targets lack the null vector's component."""
+        cubes = singular_cubes(self.topology, self.tags)
+        if cubes:
+            warnings.warn(
+                f"B is singular on {len(cubes)} closed cube{'s' if len(cubes) > 1 else ''} of valence-3 vertices "
+                f"(the first: vertices {cubes[0].tolist()}): under Catmull-Clark the alternating +1/-1 vector "
+                "over a cube's corners is a null vector of B (3/8 - 3/6 + 3/24 = 0), so targets with a component "
+                "along it cannot be interpolated there (docs: Catmull-Clark)", SingularMatrixWarning, stacklevel=4)
 
 
 Interpolator.__doc__ = Interpolator.__doc__.replace("{tags}", _TAGS_DOC)
