@@ -128,19 +128,21 @@ void bind_limit(py::module_& m) {
       "limit_points",
       [](const sorpia::Topology& topology, const Vertices& vertices, sorpia::Boundary b, const sorpia::Tags& tags,
          sorpia::Scheme scheme) {
-        check_shape(vertices, 3, "vertices");
+        if (vertices.ndim() != 2 || vertices.shape(1) < 1)
+          throw sorpia::ParameterError("vertices must have shape (n, k), k >= 1");
         check_rows(vertices, topology.n_vertices(), "vertices", "the topology");
-        Vertices out({vertices.shape(0), py::ssize_t{3}});
+        const auto k = static_cast<std::size_t>(vertices.shape(1));
+        Vertices out({vertices.shape(0), vertices.shape(1)});
         double* dst = out.mutable_data();
         const double* src = vertices.data();
         {
           py::gil_scoped_release release;
-          sorpia::limit_points(topology, src, scheme, b, tags, dst);
+          sorpia::limit_points(topology, src, scheme, b, tags, dst, k);
         }
         return out;
       },
       "topology"_a, "vertices"_a.noconvert(), "boundary"_a, "tags"_a = sorpia::Tags{},
-      "scheme"_a = sorpia::Scheme::Loop, "Limit positions B V, (n, 3).");
+      "scheme"_a = sorpia::Scheme::Loop, "Limit positions B V of (n, k) data, (n, k).");
 
   m.def("icosphere", [](int level) { return mesh_tuple(sorpia::icosphere(level)); }, "level"_a);
   m.def("torus", [](int nu, int nv) { return mesh_tuple(sorpia::torus(nu, nv)); }, "nu"_a, "nv"_a);

@@ -23,9 +23,25 @@ thread_local std::string osd_error;
 void record_osd_error(Far::ErrorType, const char* message) { osd_error = message ? message : ""; }
 }  // namespace
 
-std::unique_ptr<Far::TopologyRefiner> create_refiner(const Far::TopologyDescriptor& desc, Scheme scheme,
-                                                     Boundary boundary) {
+float osd_sharpness(double s) {
+  return s >= kInfiniteSharpness ? OpenSubdiv::Sdc::Crease::SHARPNESS_INFINITE : static_cast<float>(s);
+}
+
+std::unique_ptr<Far::TopologyRefiner> create_refiner(const RefinerInput& input, Scheme scheme, Boundary boundary) {
   using namespace OpenSubdiv;
+  Far::TopologyDescriptor desc;
+  desc.numVertices = input.n_vertices;
+  desc.numFaces = static_cast<int>(input.counts.size());
+  desc.numVertsPerFace = input.counts.data();
+  desc.vertIndicesPerFace = input.indices.data();
+  desc.numCreases = static_cast<int>(input.crease_sharpness.size());
+  desc.creaseVertexIndexPairs = input.crease_pairs.data();
+  desc.creaseWeights = input.crease_sharpness.data();
+  desc.numCorners = static_cast<int>(input.corner_sharpness.size());
+  desc.cornerVertexIndices = input.corners.data();
+  desc.cornerWeights = input.corner_sharpness.data();
+  desc.numHoles = static_cast<int>(input.holes.size());
+  desc.holeIndices = input.holes.data();
   Sdc::Options sdc;
   sdc.SetVtxBoundaryInterpolation(boundary == Boundary::EdgeOnly ? Sdc::Options::VTX_BOUNDARY_EDGE_ONLY
                                                                  : Sdc::Options::VTX_BOUNDARY_EDGE_AND_CORNER);
@@ -50,48 +66,30 @@ Refiner make_refiner(const Topology& topology, Scheme scheme, Boundary boundary,
       out.to_osd[v] = static_cast<std::int32_t>(out.from_osd.size());
       out.from_osd.push_back(static_cast<std::int32_t>(v));
     }
-  const std::vector<std::int32_t>& faces = topology.face_indices();
-  std::vector<int> osd_faces(faces.size());
-  for (std::size_t k = 0; k < faces.size(); ++k) osd_faces[k] = out.to_osd[faces[k]];
+  if (scheme == Scheme::Loop) {
+    const std::string not_triangles = loop_needs_triangles(topology);
+    if (!not_triangles.empty()) throw MeshError(not_triangles);
+  }
   const auto to_osd = [&](std::int32_t v, const char* what, std::size_t i) {
     if (out.to_osd[v] < 0)
       throw MeshError(std::string(what) + "[" + std::to_string(i) + "] names vertex " + std::to_string(v) +
                       ", which no face uses");
     return out.to_osd[v];
   };
-  const auto sharpness = [](const std::vector<double>& s) {
-    std::vector<float> w(s.size());
-    for (std::size_t i = 0; i < s.size(); ++i)
-      w[i] = s[i] >= kInfiniteSharpness ? Sdc::Crease::SHARPNESS_INFINITE : static_cast<float>(s[i]);
-    return w;
-  };
-  std::vector<int> crease_pairs(tags.crease_vertices.size()), corners(tags.corner_vertices.size());
-  for (std::size_t i = 0; i < crease_pairs.size(); ++i) crease_pairs[i] = to_osd(tags.crease_vertices[i], "creases", i / 2);
-  for (std::size_t i = 0; i < corners.size(); ++i) corners[i] = to_osd(tags.corner_vertices[i], "corners", i);
-  const std::vector<float> crease_weights = sharpness(tags.crease_sharpness);
-  const std::vector<float> corner_weights = sharpness(tags.corner_sharpness);
-  const std::vector<int> holes(tags.holes.begin(), tags.holes.end());
-
-  if (scheme == Scheme::Loop) {
-    const std::string not_triangles = loop_needs_triangles(topology);
-    if (!not_triangles.empty()) throw MeshError(not_triangles);
-  }
-  Far::TopologyDescriptor desc;
-  desc.numVertices = static_cast<int>(out.from_osd.size());
-  desc.numFaces = static_cast<int>(topology.n_faces());
-  const std::vector<std::int32_t> face_counts = topology.face_counts();
-  desc.numVertsPerFace = face_counts.data();
-  desc.vertIndicesPerFace = osd_faces.data();
-  desc.numCreases = static_cast<int>(tags.n_creases());
-  desc.creaseVertexIndexPairs = crease_pairs.data();
-  desc.creaseWeights = crease_weights.data();
-  desc.numCorners = static_cast<int>(tags.n_corners());
-  desc.cornerVertexIndices = corners.data();
-  desc.cornerWeights = corner_weights.data();
-  desc.numHoles = static_cast<int>(holes.size());
-  desc.holeIndices = holes.data();
-
-  out.refiner = create_refiner(desc, scheme, boundary);
+  RefinerInput input;
+  input.n_vertices = static_cast<int>(out.from_osd.size());
+  input.counts = topology.face_counts();
+  const std::vector<std::int32_t>& faces = topology.face_indices();
+  input.indices.resize(faces.size());
+  for (std::size_t k = 0; k < faces.size(); ++k) input.indices[k] = out.to_osd[faces[k]];
+  for (std::size_t i = 0; i < tags.crease_vertices.size(); ++i)
+    input.crease_pairs.push_back(to_osd(tags.crease_vertices[i], "creases", i / 2));
+  for (std::size_t i = 0; i < tags.corner_vertices.size(); ++i)
+    input.corners.push_back(to_osd(tags.corner_vertices[i], "corners", i));
+  for (const double s : tags.crease_sharpness) input.crease_sharpness.push_back(osd_sharpness(s));
+  for (const double s : tags.corner_sharpness) input.corner_sharpness.push_back(osd_sharpness(s));
+  input.holes.assign(tags.holes.begin(), tags.holes.end());
+  out.refiner = create_refiner(input, scheme, boundary);
   return out;
 }
 
@@ -215,8 +213,8 @@ CsrMatrix limit_matrix(const Topology& topology, Boundary boundary, const Tags& 
 }
 
 void limit_points(const Topology& topology, const double* vertices, Scheme scheme, Boundary boundary,
-                  const Tags& tags, double* out) {
-  apply(limit_operator(topology, scheme, boundary, tags), vertices, out);
+                  const Tags& tags, double* out, std::size_t columns) {
+  apply(limit_operator(topology, scheme, boundary, tags), vertices, columns, out);
 }
 
 void limit_points(const Topology& topology, const double* vertices, Boundary boundary, double* out) {

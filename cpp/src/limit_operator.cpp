@@ -265,6 +265,10 @@ CsrMatrix to_csr(const LimitOperator& op) {
 
 void apply(const LimitOperator& op, const double* x, double* y) { detail::apply_cols<3>(op, x, y); }
 
+void apply(const LimitOperator& op, const double* x, std::size_t k, double* y) {
+  detail::apply_columns(op, k, x, y);
+}
+
 namespace {
 // Where row j stores column i, or -1. Rows are short (valence), so a linear
 // scan of row j is cheaper than sorting.

@@ -24,11 +24,26 @@ struct Refiner {
   std::vector<std::int32_t> from_osd;
 };
 
-// A refiner for `desc` under `scheme` and `boundary` (Sdc's other options at
+// Far's float sharpness of a sorpia sharpness: kInfiniteSharpness and above
+// become Sdc::Crease::SHARPNESS_INFINITE.
+float osd_sharpness(double s);
+
+// The arrays a Far::TopologyDescriptor points to: the faces, and the tags in
+// the refiner's own vertex and face numbering (sharpness as osd_sharpness).
+struct RefinerInput {
+  int n_vertices = 0;
+  std::vector<int> counts, indices;
+  std::vector<int> crease_pairs;  // (k, 2) row-major
+  std::vector<float> crease_sharpness;
+  std::vector<int> corners;
+  std::vector<float> corner_sharpness;
+  std::vector<int> holes;
+};
+
+// A refiner for `input` under `scheme` and `boundary` (Sdc's other options at
 // their defaults: CREASE_UNIFORM, the rules sorpia's limit masks assume).
 // Throws sorpia::MeshError when OpenSubdiv refuses the topology.
-std::unique_ptr<Far::TopologyRefiner> create_refiner(const Far::TopologyDescriptor& desc, Scheme scheme,
-                                                     Boundary boundary);
+std::unique_ptr<Far::TopologyRefiner> create_refiner(const RefinerInput& input, Scheme scheme, Boundary boundary);
 
 // The unrefined Far::TopologyRefiner of the mesh under `scheme` and
 // `boundary`, with the sharpness tags in its TopologyDescriptor (creases and

@@ -18,10 +18,6 @@ namespace sorpia::detail {
 
 namespace {
 
-float osd_sharpness(double s) {
-  return s >= kInfiniteSharpness ? static_cast<float>(kInfiniteSharpness) : static_cast<float>(s);
-}
-
 int decay_levels(float s) { return s > 0.0f && s < kInfiniteSharpness ? static_cast<int>(std::ceil(s)) : 0; }
 
 // The vertices of face f.
@@ -56,34 +52,16 @@ struct Rows {
   RowRef operator[](int i) const { return RowRef{data + static_cast<std::size_t>(i) * n, n}; }
 };
 
-// The faces incident to one vertex (local index 0) with its tags, in the form
-// Far::TopologyDescriptor takes.
-struct LocalMesh {
-  int n_vertices = 0;
-  std::vector<int> counts, indices;
-  std::vector<int> crease_pairs;  // (0, other)
-  std::vector<float> crease_sharpness;
-  float corner = 0.0f;
-  std::vector<int> holes;
+// The faces incident to one vertex (local index 0) with its tags (creases as
+// (0, other); its own sharpness as a corner at 0).
+using LocalMesh = RefinerInput;
 
-  std::unique_ptr<Far::TopologyRefiner> refiner(Scheme scheme, Boundary boundary) const {
-    static const int centre = 0;
-    Far::TopologyDescriptor d;
-    d.numVertices = n_vertices;
-    d.numFaces = static_cast<int>(counts.size());
-    d.numVertsPerFace = counts.data();
-    d.vertIndicesPerFace = indices.data();
-    d.numCreases = static_cast<int>(crease_sharpness.size());
-    d.creaseVertexIndexPairs = crease_pairs.data();
-    d.creaseWeights = crease_sharpness.data();
-    d.numCorners = corner > 0.0f ? 1 : 0;
-    d.cornerVertexIndices = &centre;
-    d.cornerWeights = &corner;
-    d.numHoles = static_cast<int>(holes.size());
-    d.holeIndices = holes.data();
-    return create_refiner(d, scheme, boundary);
+void set_centre_sharpness(LocalMesh& m, float s) {
+  if (s > 0.0f) {
+    m.corners.assign(1, 0);
+    m.corner_sharpness.assign(1, s);
   }
-};
+}
 
 // The local mesh of the child `c` of the centre in `level` (its faces, the
 // sharpness of its edges and its own, the holes among its faces); `to_local`
@@ -113,7 +91,7 @@ LocalMesh child_mesh(const Far::TopologyLevel& level, int c, std::vector<int>& t
     m.crease_pairs.push_back(to_local[ev[0] == c ? ev[1] : ev[0]]);
     m.crease_sharpness.push_back(s);
   }
-  m.corner = level.GetVertexSharpness(c);
+  set_centre_sharpness(m, level.GetVertexSharpness(c));
   m.n_vertices = static_cast<int>(taken.size());
   for (const int u : taken) to_local[u] = -1;
   return m;
@@ -128,7 +106,7 @@ std::vector<double> local_limit_row(LocalMesh m, Scheme scheme, Boundary boundar
   std::vector<double> next, limit;
   std::vector<int> to_local, taken;
   for (;;) {
-    const auto refiner = m.refiner(scheme, boundary);
+    const auto refiner = create_refiner(m, scheme, boundary);
     int centre = 0;
     Rows src{rows.data(), n0};
     if (levels > 0) {
@@ -313,7 +291,7 @@ CsrMatrix refined_limit_rows(const Topology& topology, Scheme scheme, Boundary b
       m.crease_pairs.push_back(to_local[tags.crease_other[p]]);
       m.crease_sharpness.push_back(tags.crease_sharpness[p]);
     }
-    m.corner = tags.corner[v];
+    set_centre_sharpness(m, tags.corner[v]);
     m.n_vertices = static_cast<int>(base.size());
     for (const std::int32_t u : base) to_local[u] = -1;
     append_row(b, base, local_limit_row(std::move(m), scheme, boundary, levels[k]));

@@ -160,20 +160,8 @@ def limit_points(vertices, faces, boundary: str = DEFAULT_BOUNDARY, *, scheme: s
                                               dict(creases=creases, corners=corners, holes=holes))
     vertices = as_vertices(vertices, columns=None)
     topo = topology(faces, vertices.shape[0], scheme=scheme, count_name="len(vertices)")
-    k = vertices.shape[1]
-    rule, tag_set, scheme_value = as_boundary(boundary), tags(topo, creases, corners, holes), as_scheme(scheme)
-    if k == 3:
-        return _core.limit_points(topo, vertices, rule, tag_set, scheme_value)
-    # B acts on each column alike: the columns three at a time (the last
-    # group padded with zero columns) through the (n, 3) core.
-    n, groups = vertices.shape[0], -(-k // 3)
-    padded = np.zeros((n, 3 * groups))
-    padded[:, :k] = vertices
-    out = np.empty_like(padded)
-    for g in range(groups):
-        out[:, 3 * g:3 * g + 3] = _core.limit_points(topo, np.ascontiguousarray(padded[:, 3 * g:3 * g + 3]),
-                                                     rule, tag_set, scheme_value)
-    return np.ascontiguousarray(out[:, :k])
+    return _core.limit_points(topo, vertices, as_boundary(boundary), tags(topo, creases, corners, holes),
+                              as_scheme(scheme))
 
 
 NONMANIFOLD_DOC = """nonmanifold : {"error", "sharp"}

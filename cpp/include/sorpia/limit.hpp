@@ -43,8 +43,9 @@ CsrMatrix limit_matrix(const Topology& topology, Boundary boundary, const Tags& 
 /// @param boundary  boundary interpolation rule
 /// @param tags      OpenSubdiv's sharpness tags
 /// @param out       row-major (n_vertices, 3) limit positions (written)
+/// @param columns   k of (n_vertices, k) data in `vertices` and `out` (any per-vertex data, each column mapped alike)
 void limit_points(const Topology& topology, const double* vertices, Scheme scheme, Boundary boundary,
-                  const Tags& tags, double* out);
+                  const Tags& tags, double* out, std::size_t columns = 3);
 /// Loop without tags.
 void limit_points(const Topology& topology, const double* vertices, Boundary boundary, double* out);
 /// Loop with OpenSubdiv's sharpness tags.

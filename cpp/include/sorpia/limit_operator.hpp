@@ -99,6 +99,8 @@ CsrMatrix to_csr(const LimitOperator& op);
 
 /// y = B x, x and y row-major (n, 3), distinct arrays.
 void apply(const LimitOperator& op, const double* x, double* y);
+/// y = B x, x and y row-major (n, k) for any k >= 1 (each column mapped alike), distinct arrays.
+void apply(const LimitOperator& op, const double* x, std::size_t k, double* y);
 
 /// Gamma^-1 of B = Gamma Upsilon with Gamma diagonal, positive, and Upsilon
 /// symmetric on the entries whose mirror is stored (paper section 3.2): d with

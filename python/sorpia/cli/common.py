@@ -241,6 +241,16 @@ def solve_tags(mesh: InputMesh, sharp_angle, source) -> dict:
     return tags
 
 
+def read_solve_input(path, *, triangulate: bool, repair: bool, ignore_tags: bool, nonmanifold: str, scheme: str,
+                     boundary, sharp_angle) -> tuple[InputMesh, str, str, dict]:
+    """read_input for the commands that solve (fit, compare, render), then
+    what they solve with: (mesh, scheme (choose_scheme), boundary rule
+    (boundary_rule), creases/corners/holes (solve_tags))."""
+    mesh = read_input(path, triangulate, repair, tags=not ignore_tags, nonmanifold=nonmanifold)
+    return (mesh, choose_scheme(scheme, mesh.faces, path), boundary_rule(boundary, mesh),
+            solve_tags(mesh, sharp_angle, path))
+
+
 def boundary_rule(boundary, mesh: InputMesh) -> str:
     """--boundary when given, else the file's interpolateboundary tag, else the default rule."""
     from .._validate import DEFAULT_BOUNDARY

@@ -11,10 +11,10 @@ from pathlib import Path
 import numpy as np
 
 from .. import __version__
-from .common import (DISPLAY_ORDER, EXIT_NOT_CONVERGED, EXIT_OK, SCHEME_LABELS, boundary_rule, build_interpolator,
-                     check_paths, check_solver_options, choose_scheme, cpu_clock, method_label, mesh_line,
-                     omega_text, read_input, repair_json, repair_lines, require_plotting, result_fields, run_solver,
-                     solve_tags, tags_lines, tags_summary, threads_for)
+from .common import (DISPLAY_ORDER, EXIT_NOT_CONVERGED, EXIT_OK, SCHEME_LABELS, build_interpolator, check_paths,
+                     check_solver_options, cpu_clock, mesh_line, method_label, omega_text, read_solve_input,
+                     repair_json, repair_lines, require_plotting, result_fields, run_solver, tags_lines, tags_summary,
+                     threads_for)
 from .output import save_figure, write_json, write_text
 from .progress import Progress
 
@@ -58,11 +58,10 @@ def run_compare(input_path, *, methods=DISPLAY_ORDER, tol=1e-10, max_iter=1000, 
     rows = []
     with Progress(enabled=not quiet) as progress:
         progress.status(f"reading {input_path}")
-        mesh = read_input(input_path, triangulate, repair, tags=not ignore_tags, nonmanifold=nonmanifold)
+        mesh, scheme, boundary, tags = read_solve_input(
+            input_path, triangulate=triangulate, repair=repair, ignore_tags=ignore_tags, nonmanifold=nonmanifold,
+            scheme=scheme, boundary=boundary, sharp_angle=sharp_angle)
         V0, F, read_seconds = mesh.vertices, mesh.faces, mesh.seconds
-        scheme = choose_scheme(scheme, F, input_path)
-        boundary = boundary_rule(boundary, mesh)
-        tags = solve_tags(mesh, sharp_angle, input_path)
         interp, build = build_interpolator(V0, F, boundary=boundary, progress=progress, source=input_path,
                                            scheme=scheme, tags=tags)
         progress.status("mesh statistics")

@@ -10,11 +10,10 @@ import numpy as np
 
 from .. import __version__
 from .._validate import as_boundary
-from .common import (EXIT_NOT_CONVERGED, EXIT_OK, SCHEME_LABELS, UserError, boundary_rule, check_mesh_suffix,
-                     check_paths, check_solver_options, choose_scheme, cpu_clock, face_counts, face_size_histogram,
-                     fit_once, fmt_seconds, method_label, mesh_line, read_input, repair_json, repair_lines,
-                     result_fields, scheme_kwargs, solve_tags, split_json, split_lines, tags_lines, tags_summary,
-                     warn_once)
+from .common import (EXIT_NOT_CONVERGED, EXIT_OK, SCHEME_LABELS, UserError, check_mesh_suffix, check_paths,
+                     check_solver_options, cpu_clock, face_counts, face_size_histogram, fit_once, fmt_seconds,
+                     mesh_line, method_label, read_solve_input, repair_json, repair_lines, result_fields,
+                     scheme_kwargs, split_json, split_lines, tags_lines, tags_summary, warn_once)
 from .output import write_json
 from .progress import Progress
 
@@ -41,12 +40,11 @@ def run_fit(input_path, output, *, method="sor", omega="auto", tol=1e-10, max_it
     timings: dict[str, float] = {}
     with Progress(enabled=not quiet) as progress:
         progress.status(f"reading {input_path}")
-        mesh = read_input(input_path, triangulate, repair, tags=not ignore_tags, nonmanifold=nonmanifold)
+        mesh, scheme, boundary, tags = read_solve_input(
+            input_path, triangulate=triangulate, repair=repair, ignore_tags=ignore_tags, nonmanifold=nonmanifold,
+            scheme=scheme, boundary=boundary, sharp_angle=sharp_angle)
         V0, F = mesh.vertices, mesh.faces
         timings.update(mesh.timings)
-        scheme = choose_scheme(scheme, F, input_path)
-        boundary = boundary_rule(boundary, mesh)
-        tags = solve_tags(mesh, sharp_angle, input_path)
         if surface is not None:
             _check_surface_fits(len(V0), face_counts(F), level, scheme)
         timings["statistics"] = 0.0  # reported before the fit, measured after the topology is built

@@ -9,9 +9,9 @@ from pathlib import Path
 import numpy as np
 
 from ..plotting import FACE_BUDGET  # plotting imports matplotlib only when drawing
-from .common import (EXIT_NOT_CONVERGED, EXIT_OK, SCHEME_LABELS, UserError, boundary_rule, check_paths,
-                     check_solver_options, choose_scheme, face_counts, fit_once, fmt_seconds, omega_text, read_input,
-                     repair_lines, require_plotting, scheme_kwargs, solve_tags)
+from .common import (EXIT_NOT_CONVERGED, EXIT_OK, SCHEME_LABELS, UserError, check_paths, check_solver_options,
+                     face_counts, fit_once, fmt_seconds, omega_text, read_solve_input, repair_lines, require_plotting,
+                     scheme_kwargs)
 from .output import save_figure
 from .progress import Progress
 
@@ -34,12 +34,11 @@ def run_render(input_path, output, *, level=3, tol=1e-10, max_iter=1000, boundar
     timings = {}
     with Progress(enabled=not quiet) as progress:
         progress.status(f"reading {input_path}")
-        mesh = read_input(input_path, triangulate, repair, tags=not ignore_tags, nonmanifold=nonmanifold)
+        mesh, scheme, boundary, tags = read_solve_input(
+            input_path, triangulate=triangulate, repair=repair, ignore_tags=ignore_tags, nonmanifold=nonmanifold,
+            scheme=scheme, boundary=boundary, sharp_angle=sharp_angle)
         V0, F = mesh.vertices, mesh.faces
         timings.update(mesh.timings)
-        scheme = choose_scheme(scheme, F, input_path)
-        boundary = boundary_rule(boundary, mesh)
-        tags = solve_tags(mesh, sharp_angle, input_path)
         _, res, timings["fit"], _ = fit_once(V0, F, method="sor", omega="auto", tol=tol, max_iter=max_iter,
                                              boundary=boundary, threads=threads, progress=progress,
                                              source=input_path, scheme=scheme, tags=tags)
