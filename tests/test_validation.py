@@ -195,9 +195,9 @@ def test_vertex_count_entries_accept_numpy_integers(count, closed_form):
 @pytest.mark.parametrize("call", [
     lambda: sorpia.limit_points(V1[:10], F1),
     lambda: sorpia.interpolate(V1[:10], F1),
-    lambda: sorpia.LoopSurface(V1[:10], F1),
+    lambda: sorpia.LimitSurface(V1[:10], F1),
     lambda: sorpia.limit_surface(V1[:10], F1, level=1),
-], ids=["limit_points", "interpolate", "LoopSurface", "limit_surface"])
+], ids=["limit_points", "interpolate", "LimitSurface", "limit_surface"])
 def test_too_few_vertices_for_the_faces_names_len_vertices(call):
     # Where the count is the rows of `vertices`, the message names it so (there is no n_vertices argument).
     with pytest.raises(sorpia.MeshError, match=r"out of range \[0, 10\): len\(vertices\) = 10 is too small for faces, "
@@ -576,3 +576,15 @@ def test_an_unreachable_tol_ends_at_rounding_level(method, recwarn):
         assert any(issubclass(w.category, sorpia.ConvergenceWarning) for w in recwarn)
     residual = sorpia.limit_points(res.control_vertices, f) - v
     assert np.abs(residual).max() <= 1e-12  # B V = V0 to rounding level either way
+
+
+def test_every_warning_sorpia_issues_derives_from_one_base_class():
+    # One filter catches them all: every UserWarning subclass the package exports derives from SorpiaWarning,
+    # and the classes are the ones the modules raise (the same objects, not copies).
+    exported = [getattr(sorpia, name) for name in sorpia.__all__]
+    warning_classes = [c for c in exported if isinstance(c, type) and issubclass(c, Warning)]
+    assert len(warning_classes) >= 7
+    assert all(issubclass(c, sorpia.SorpiaWarning) for c in warning_classes)
+    assert sorpia.solve.ConvergenceWarning is sorpia.errors.ConvergenceWarning
+    with pytest.warns(sorpia.SorpiaWarning):
+        sorpia.interpolate(V1, F1, method="pia", max_iter=1)

@@ -10,12 +10,8 @@ from . import _core
 from . import nonmanifold as nonmanifold_sharp
 from ._validate import (DEFAULT_BOUNDARY, DEFAULT_SCHEME, as_boundary, as_faces, as_polygons, as_scheme, as_tags,
                         as_vertex_count, as_vertices)
-from .errors import MeshError
+from .errors import MeshError, UnreferencedVerticesWarning
 from .nonmanifold import NONMANIFOLD_HINT, as_nonmanifold
-
-
-class UnreferencedVerticesWarning(UserWarning):
-    """Some vertices belong to no face; their limit is themselves."""
 
 
 def topology(faces, n_vertices: int, *, scheme: str = DEFAULT_SCHEME, warn: bool = True,

@@ -30,7 +30,7 @@ import numpy as np
 
 from . import _core
 from ._validate import DEFAULT_BOUNDARY, as_boundary, as_tags, as_vertices
-from .errors import MeshError, ParameterError
+from .errors import MeshError, NonmanifoldWarning, ParameterError
 
 NONMANIFOLD_MODES = ("error", "sharp")
 DEFAULT_NONMANIFOLD = "error"
@@ -39,11 +39,6 @@ DEFAULT_NONMANIFOLD = "error"
 NONMANIFOLD_HINT = ("sorpia.repair (command line: --repair) makes the mesh manifold by splitting it, or "
                     "nonmanifold=\"sharp\" (--nonmanifold sharp) keeps it with OpenSubdiv's rules for it "
                     "(non-manifold edges infinitely sharp, non-manifold vertices corners)")
-
-
-class NonmanifoldWarning(UserWarning):
-    """nonmanifold="sharp" on a non-manifold mesh: OpenSubdiv's documentation
-    calls the surface of non-manifold topology undefined for now."""
 
 
 def as_nonmanifold(value) -> str:

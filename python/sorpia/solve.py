@@ -87,7 +87,7 @@ import numpy as np
 from . import _core
 from . import nonmanifold as nonmanifold_sharp
 from ._validate import DEFAULT_BOUNDARY, DEFAULT_SCHEME, as_boundary, as_scheme, as_vertices
-from .errors import ParameterError
+from .errors import ConvergenceWarning, OmegaWarning, ParameterError, SingularMatrixWarning
 from .limit import TAGS_DOC as _TAGS_DOC
 from .limit import singular_cubes
 from .limit import tags as _tags
@@ -100,19 +100,6 @@ THREADED_METHODS = ("sor", "gs")  # the methods that sweep on threads > 1
 YOUNG_RHO_CLAMP = float(_core.YOUNG_RHO_CLAMP)
 MAX_THREADS = int(_core.MAX_THREADS)
 _INT64_MAX = 2**63 - 1
-
-
-class ConvergenceWarning(UserWarning):
-    """A solve stopped at max_iter or diverged before reaching tol."""
-
-
-class SingularMatrixWarning(UserWarning):
-    """Issued after a solve that stopped short on a mesh whose B is singular
-    on a part known in closed form (`sorpia.limit.singular_cubes`)."""
-
-
-class OmegaWarning(UserWarning):
-    """omega="young" met rho(I - D^-1 B) >= 0.9999: Young's formula has no real value (rho >= 1) or none of use."""
 
 
 # The one result type, defined in the core's binding (its docstring lists the fields).
