@@ -14,7 +14,7 @@ What is checked where:
   int64 index of 2**32 + 1 is refused rather than wrapped to 1), faces of
   fewer than 3 vertices, and for Loop polygons that are not triangles (with
   the recipe to triangulate them, or to use scheme="catmull-clark");
-- in the C++ core (sorpia::Topology, validate_faces in cpp/src/topology.cpp),
+- in the C++ core (sorpia::Topology, validate_faces in cpp/mesh/src/topology.cpp),
   for every caller including sorpia-bench: indices again, a vertex repeated
   in a face, duplicate triangles, edges of three or more faces, inconsistent
   orientation (with the faces to flip, or "not orientable" for a Moebius

@@ -19,7 +19,7 @@
 #include <vector>
 
 #include "expect_error.hpp"
-#include "osd_refiner.hpp"
+#include "sorpia/detail/osd_refiner.hpp"
 #include "sorpia/errors.hpp"
 #include "sorpia/io.hpp"
 #include "sorpia/repair.hpp"

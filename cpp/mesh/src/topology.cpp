@@ -13,7 +13,7 @@
 #include <type_traits>
 #include <utility>
 
-#include "half_edges.hpp"
+#include "sorpia/detail/half_edges.hpp"
 #include "one_ring.hpp"
 #include "openmesh_types.hpp"
 #include "sorpia/errors.hpp"

@@ -16,7 +16,7 @@
 #include <string>
 #include <utility>
 
-#include "half_edges.hpp"
+#include "sorpia/detail/half_edges.hpp"
 #include "sorpia/errors.hpp"
 #include "sorpia/topology.hpp"
 
