@@ -28,8 +28,8 @@ QUAD_MESHES = {
 def far_matrix(faces, n, boundary="edge-and-corner"):
     """B from OpenSubdiv's Far (Limit(); after one refinement where a face is not a quad)."""
     topo = topology(faces, n, scheme=CC)
-    data, indices, indptr = _core.reference_limit_matrix(topo, _core.Scheme.catmull_clark, _core.parse_boundary(boundary),
-                                                         _core.Tags())
+    data, indices, indptr = _core.reference_limit_matrix(
+        topo, _core.Rules(scheme=_core.Scheme.catmull_clark, boundary=_core.parse_boundary(boundary)))
     return scipy.sparse.csr_matrix((data, indices, indptr), shape=(n, n))
 
 
@@ -37,10 +37,10 @@ def far_matrix(faces, n, boundary="edge-and-corner"):
 @pytest.mark.parametrize("boundary", ["edge-and-corner", "edge-only"])
 def test_limit_matrix_equals_far(name, boundary):
     V, F = QUAD_MESHES[name]()
-    b = sorpia.limit_matrix(F, len(V), boundary, scheme=CC)
+    b = sorpia.limit_matrix(F, len(V), boundary=boundary, scheme=CC)
     ref = far_matrix(F, len(V), boundary)
     assert abs(b - ref).max() <= 1e-15
-    assert np.allclose(sorpia.limit_points(V, F, boundary, scheme=CC), ref @ V, rtol=0, atol=1e-14)
+    assert np.allclose(sorpia.limit_points(V, F, boundary=boundary, scheme=CC), ref @ V, rtol=0, atol=1e-14)
 
 
 @pytest.mark.parametrize("name", sorted(QUAD_MESHES))
@@ -68,7 +68,7 @@ def test_closed_quad_mesh_is_symmetrisable_and_cg_runs_cg():
     assert abs(upsilon - upsilon.T).max() <= 1e-12
     assert set(np.unique(upsilon.data.round(12))) <= {1.0, 4.0} | set((valence ** 2).astype(float))
     assert np.linalg.eigvalsh(upsilon.toarray()).min() > 0
-    gamma_inverse = interp._operator.symmetriser
+    gamma_inverse = interp._impl.symmetriser
     assert np.allclose(gamma_inverse / gamma_inverse[0], valence * (valence + 5.0) / (valence[0] * (valence[0] + 5)))
     assert interp.solve(V, method="cg").variant == "cg"
 
@@ -81,7 +81,7 @@ def test_composed_rows_of_closed_polygon_meshes_are_symmetrisable_too(name):
     V, F = QUAD_MESHES[name]() if name in QUAD_MESHES else sorpia.shapes.irregular(300, seed=3)
     interp = sorpia.Interpolator(F, len(V), scheme=CC)
     assert interp.closed
-    upsilon = scipy.sparse.diags(interp._operator.symmetriser) @ interp.limit_matrix()
+    upsilon = scipy.sparse.diags(interp._impl.symmetriser) @ interp.limit_matrix()
     assert abs(upsilon - upsilon.T).max() <= 1e-12 * abs(upsilon).max()
     assert np.linalg.eigvalsh(upsilon.toarray()).min() > 0
     assert interp.solve(V, method="cg").variant == "cg"

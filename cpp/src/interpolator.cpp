@@ -2,13 +2,16 @@
 // and local updates on it.
 #include "sorpia/interpolator.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <limits>
 #include <string>
 #include <utility>
 
+#include "solver_detail.hpp"
 #include "sorpia/errors.hpp"
 
 namespace sorpia {
@@ -23,7 +26,10 @@ std::string repr(double x) {
   if (std::isnan(x)) return "nan";
   if (std::isinf(x)) return x > 0 ? "inf" : "-inf";
   char buf[32];
-  std::snprintf(buf, sizeof buf, "%.17g", x);
+  for (int digits = 15; digits <= 17; ++digits) {  // the shortest that reads back
+    std::snprintf(buf, sizeof buf, "%.*g", digits, x);
+    if (std::strtod(buf, nullptr) == x) break;
+  }
   return buf;
 }
 
@@ -37,16 +43,21 @@ Topology timed(Build build, double& seconds) {
 
 }  // namespace
 
-void check_values(const double* x, std::size_t rows, std::size_t k, const char* name) {
+double check_values(const double* x, std::size_t rows, std::size_t k, const char* name, double bound) {
+  double largest = 0.0;
   for (std::size_t i = 0; i < rows * k; ++i) {
-    const double value = x[i];
-    if (std::fabs(value) <= max_coordinate) continue;  // false for NaN too
+    const double magnitude = std::fabs(x[i]);
+    if (magnitude <= bound) {  // false for NaN too
+      largest = std::max(largest, magnitude);
+      continue;
+    }
     const std::string where = std::string(name) + "[" + std::to_string(i / k) + ", " + std::to_string(i % k) +
-                              "] = " + repr(value);
-    if (!std::isfinite(value)) throw ParameterError(where + " is not finite");
-    throw ParameterError(where + " is beyond the largest magnitude accepted, " + repr(max_coordinate) +
-                         " (the squared norms of the residual would overflow): scale the data down");
+                              "] = " + repr(x[i]);
+    if (!std::isfinite(x[i])) throw ParameterError(where + " is not finite");
+    throw ParameterError(where + " is beyond " + repr(bound) + ", the largest magnitude accepted here (the " +
+                         "squared norms of the residual would overflow; sorpia::max_coordinate): scale it down");
   }
+  return largest;
 }
 
 Interpolator::Interpolator(const std::int32_t* triangles, std::size_t n_faces, std::size_t n_vertices, Rules rules)
@@ -79,8 +90,10 @@ SolveResult Interpolator::solve(const double* v0, std::size_t k, const double* i
                                 bool keep_targets) {
   if (k < 1) throw ParameterError("vertices must have shape (n, k), k >= 1");
   check_options(opt);
-  check_values(v0, op_.n, k, "vertices");
-  if (initial) check_values(initial, op_.n, k, "initial");
+  const double largest = check_values(v0, op_.n, k, "vertices", INFINITY);
+  if (initial)  // within the bound once scaled as the solvers scale V0
+    check_values(initial, op_.n, k, "initial",
+                 std::ldexp(max_coordinate, detail::scale_exponent(v0, op_.n * k)));
   SolveResult r = sorpia::solve(op_, v0, k, initial, opt, &cache_);
   if (keep_targets) {
     const std::lock_guard<std::mutex> lock(*targets_mutex_);
@@ -88,6 +101,7 @@ SolveResult Interpolator::solve(const double* v0, std::size_t k, const double* i
     solved_k_ = k;
     solved_options_ = opt;
     solved_options_.callback = nullptr;  // the caller's, for that solve only
+    targets_max_ = largest;
   }
   return r;
 }
@@ -113,6 +127,10 @@ bool Interpolator::update(SolveResult& r, bool result_is_last, const std::int32_
       throw ParameterError("indices[" + std::to_string(q) + "] = " + std::to_string(indices[q]) +
                            " is not a vertex (0.." + std::to_string(n - 1) + ")");
   check_values(positions, count, k, "positions");
+  if (targets_max_ > max_coordinate)
+    throw ParameterError("update needs targets within " + repr(max_coordinate) +
+                         " in magnitude (the local relaxation does not rescale them), but the last solve's reach " +
+                         repr(targets_max_) + ": solve the moved targets instead");
 
   if (!local_) local_ = std::make_unique<LocalSolver>(op_);
   if (solved_k_) {

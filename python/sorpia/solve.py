@@ -277,7 +277,9 @@ class Interpolator:
             the input order. With more than 3 columns of data, 1 only.
         initial : array_like, same shape as ``vertices``, or None
             A warm start V^(0) (e.g. the previous frame's control_vertices),
-            for every method. The stopping rule is unchanged: E_0 is the error
+            for every method; finite and at most 1e150 times the targets'
+            scale (1, or about max |V0| for targets beyond 2^+-200, which the
+            solvers scale exactly), so that no squared norm overflows. The stopping rule is unchanged: E_0 is the error
             of the cold start V = V0, so the result meets the same E_k / E_0 <
             tol; errors[0] = E(initial) / E_0 and iterations count from the
             warm start (0 when it already meets tol).
@@ -344,6 +346,22 @@ class Interpolator:
             E(result) / E_0] (only the first when nothing needed relaxing);
             iterations 1 when any vertex was relaxed, else 0; relaxations the
             single-vertex relaxations done; initial_error E_0 of the new targets.
+            Where the local relaxation diverges (B indefinite, e.g. interior
+            vertices of valence 2), the new targets are solved in full by the
+            last solve's method from previous, and the result is that solve's.
+            An update that cannot meet tol (max_iter, or divergence of both)
+            changes nothing — targets, kept residual, previous's vertices —
+            and warns with ConvergenceWarning; its result holds previous's
+            vertices and says why (stop_reason).
+
+        Raises
+        ------
+        ParameterError
+            Before anything changes: positions beyond 1e150 in magnitude
+            (their squared norms would overflow; non-finite ones raise
+            MeshError as vertices do), targets of the last solve beyond 1e150
+            (the local relaxation does not rescale), an index that is not a
+            vertex, previous of another shape.
         """
         t0 = time.perf_counter()
         if not isinstance(previous, InterpolationResult):

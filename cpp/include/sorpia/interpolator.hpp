@@ -35,19 +35,22 @@
 
 namespace sorpia {
 
-/// The largest magnitude accepted for a value of targets, warm starts and
-/// update positions. E_k sums the squares of a row's k values: at 1e150 a
-/// square is 1e300, so rows of up to 10^8 columns, and B V (whose rows are
-/// combinations of weights of magnitude at most 1) stay below the largest
-/// double (1.8e308). Beyond it E_k could overflow to inf and the stopping
-/// rule would mean nothing.
+/// The bound on values that keeps the squared norms in E_k finite: a row of
+/// k values at most 1e150 in magnitude squares to at most k 1e300, below the
+/// largest double (1.8e308) for k up to 10^8, and B's rows (weights summing
+/// to 1) keep B V within it too. Targets of any finite magnitude are solved
+/// (sorpia::solve scales them by a power of two, 2^e ~ max |V0| beyond
+/// 2^+-200, exactly); a warm start may be at most max_coordinate times that
+/// scale (1 within 2^+-200); local updates do not rescale, so their
+/// positions and the kept targets must be within max_coordinate.
 constexpr double max_coordinate = 1e150;
 
 /// Checks that every value of the row-major (rows, k) array `x` is finite and
-/// at most max_coordinate in magnitude.
+/// at most `bound` in magnitude; returns the largest magnitude.
 /// @throw ParameterError naming `name`, the first bad row and column and its
 ///        value, e.g. "vertices[3, 1] = inf is not finite"
-void check_values(const double* x, std::size_t rows, std::size_t k, const char* name);
+double check_values(const double* x, std::size_t rows, std::size_t k, const char* name,
+                    double bound = max_coordinate);
 
 /// One mesh and its rules: B built once; solves and local updates on it.
 /// Thread-safe for concurrent solves (the spectral cache is), and one update
@@ -81,9 +84,10 @@ class Interpolator {
   double operator_seconds() const { return operator_seconds_; }
 
   /// Solves B V = V0 (sorpia::solve on B with the kept spectral estimates).
-  /// @param v0       row-major (n, k) targets, finite, within max_coordinate
+  /// @param v0       row-major (n, k) targets, finite
   /// @param k        columns >= 1
-  /// @param initial  row-major (n, k) warm start, checked as v0, or null
+  /// @param initial  row-major (n, k) warm start, finite, within
+  ///                 max_coordinate times the targets' scale, or null
   /// @param opt      solver options (check_options)
   /// @param keep_targets  the targets of later updates become v0 (a copy),
   ///                 and the options those of an update's fallback solve
@@ -116,7 +120,8 @@ class Interpolator {
   /// @throw ParameterError before any state changes: no solve kept its targets
   ///        yet, the vertices' shape differs from the targets', an index
   ///        outside [0, n), positions not finite or beyond max_coordinate,
-  ///        tol or max_iter out of range (check_options)
+  ///        kept targets beyond max_coordinate, tol or max_iter out of range
+  ///        (check_options)
   bool update(SolveResult& result, bool result_is_last, const std::int32_t* indices, std::size_t count,
               const double* positions, double tol, long long max_iter);
 
@@ -138,6 +143,7 @@ class Interpolator {
   std::vector<double> solved_targets_;
   std::size_t solved_k_ = 0;
   SolveOptions solved_options_;
+  double targets_max_ = 0.0;  // max |v0| of the last solve keeping its targets
   std::unique_ptr<LocalSolver> local_;
   // Held while the targets or local_ are read or changed.
   std::unique_ptr<std::mutex> targets_mutex_ = std::make_unique<std::mutex>();
