@@ -125,3 +125,29 @@ def test_a_cube_has_a_singular_catmull_clark_matrix():
     checkerboard = np.array([(-1.0) ** (x + y + z) for x, y, z in V.astype(int)])
     assert np.abs(b @ checkerboard).max() <= 1e-15
     assert np.allclose(far_matrix(quads, 8).toarray(), b.toarray(), atol=1e-15)
+
+
+def test_scheme_auto_picks_loop_for_triangles_and_catmull_clark_otherwise():
+    """scheme="auto" (the command's default, now the library's too): the
+    result is bit for bit that of the scheme it names, for every face form."""
+    V, F = sorpia.shapes.quad_torus(8, 6)
+    polygons = sorpia.Polygons(np.full(len(F), 4), np.ravel(F))
+    for faces in (F, [list(f) for f in F], polygons):
+        auto = sorpia.interpolate(V, faces, scheme="auto")
+        assert sorpia.Interpolator(faces, len(V), scheme="auto").scheme == "catmull-clark"
+        np.testing.assert_array_equal(auto.control_vertices,
+                                      sorpia.interpolate(V, faces, scheme="catmull-clark").control_vertices)
+    T, G = sorpia.shapes.icosphere(2)
+    assert sorpia.Interpolator(G, len(T), scheme="auto").scheme == "loop"
+    np.testing.assert_array_equal(sorpia.limit_points(T, G, scheme="auto"), sorpia.limit_points(T, G))
+    assert (sorpia.limit_matrix(F, len(V), scheme="auto") != sorpia.limit_matrix(F, len(V), scheme=CC)).nnz == 0
+    with pytest.raises(sorpia.ParameterError, match="unknown scheme 'quad'.*'auto'"):
+        sorpia.limit_points(T, G, scheme="quad")
+
+
+def test_boundary_is_keyword_only():
+    V, F = sorpia.shapes.grid(4, 3)
+    for call in (lambda: sorpia.limit_points(V, F, "edge-only"), lambda: sorpia.limit_matrix(F, len(V), "edge-only"),
+                 lambda: sorpia.Interpolator(F, len(V), "edge-only")):
+        with pytest.raises(TypeError, match="positional"):
+            call()

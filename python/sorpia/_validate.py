@@ -288,6 +288,17 @@ def as_scheme(scheme: str, faces=None) -> _core.Scheme:
         raise ParameterError(f"{exc}, or 'auto' (Loop for triangles, else Catmull-Clark)") from None
 
 
+NONMANIFOLD_MODES = ("error", "sharp")
+DEFAULT_NONMANIFOLD = "error"
+
+
+def as_nonmanifold(value) -> str:
+    """"error" or "sharp" (what non-manifold topology gets), checked."""
+    if value not in NONMANIFOLD_MODES:
+        raise ParameterError(f"nonmanifold must be one of {', '.join(map(repr, NONMANIFOLD_MODES))}, got {value!r}")
+    return value
+
+
 def as_rules(faces, n_vertices, *, scheme, boundary, creases=None, corners=None, holes=None,
              count_name: str = "n_vertices") -> tuple[tuple, int, _core.Rules]:
     """The one check of a mesh's faces and its rule options (scheme, boundary,

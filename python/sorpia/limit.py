@@ -8,9 +8,9 @@ import numpy as np
 
 from . import _core
 from . import nonmanifold as nonmanifold_sharp
-from ._validate import DEFAULT_BOUNDARY, DEFAULT_SCHEME, as_rules, as_tags, as_vertices
+from ._validate import DEFAULT_BOUNDARY, DEFAULT_SCHEME, as_nonmanifold, as_rules, as_tags, as_vertices
 from .errors import MeshError
-from .nonmanifold import NONMANIFOLD_HINT, as_nonmanifold
+from .nonmanifold import NONMANIFOLD_HINT
 
 
 class UnreferencedVerticesWarning(UserWarning):

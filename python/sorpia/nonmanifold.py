@@ -30,10 +30,8 @@ import numpy as np
 
 from . import _core
 from ._validate import DEFAULT_BOUNDARY, as_boundary, as_tags, as_vertices
-from .errors import MeshError, ParameterError
+from .errors import MeshError
 
-NONMANIFOLD_MODES = ("error", "sharp")
-DEFAULT_NONMANIFOLD = "error"
 
 # Appended to the messages that refuse non-manifold topology.
 NONMANIFOLD_HINT = ("sorpia.repair (command line: --repair) makes the mesh manifold by splitting it, or "
@@ -44,13 +42,6 @@ NONMANIFOLD_HINT = ("sorpia.repair (command line: --repair) makes the mesh manif
 class NonmanifoldWarning(UserWarning):
     """nonmanifold="sharp" on a non-manifold mesh: OpenSubdiv's documentation
     calls the surface of non-manifold topology undefined for now."""
-
-
-def as_nonmanifold(value) -> str:
-    """"error" or "sharp", checked."""
-    if value not in NONMANIFOLD_MODES:
-        raise ParameterError(f"nonmanifold must be one of {', '.join(map(repr, NONMANIFOLD_MODES))}, got {value!r}")
-    return value
 
 
 class Split(NamedTuple):

@@ -86,12 +86,11 @@ import numpy as np
 
 from . import _core
 from . import nonmanifold as nonmanifold_sharp
-from ._validate import DEFAULT_BOUNDARY, DEFAULT_SCHEME, as_rules, as_vertices
+from ._validate import DEFAULT_BOUNDARY, DEFAULT_SCHEME, as_nonmanifold, as_rules, as_vertices
 from .errors import ParameterError
 from .limit import TAGS_DOC as _TAGS_DOC
 from .limit import singular_cubes
 from .limit import built, warn_unreferenced
-from .nonmanifold import as_nonmanifold
 
 METHODS = tuple(_core.method_names())  # the core's one list, in its order
 OMEGA_RULES = ("auto", "young")
