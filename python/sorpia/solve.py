@@ -277,11 +277,14 @@ class Interpolator:
         initial : array_like, same shape as ``vertices``, or None
             A warm start V^(0) (e.g. the previous frame's control_vertices),
             for every method; finite and at most 1e150 times the targets'
-            scale (1, or about max |V0| for targets beyond 2^+-200, which the
-            solvers scale exactly), so that no squared norm overflows. The stopping rule is unchanged: E_0 is the error
-            of the cold start V = V0, so the result meets the same E_k / E_0 <
-            tol; errors[0] = E(initial) / E_0 and iterations count from the
-            warm start (0 when it already meets tol).
+            scale (1, or about the largest magnitude in V0 for targets
+            beyond 2^+-200, which the solvers scale exactly), so that no
+            squared norm overflows. The stopping rule is unchanged: E_0 is
+            the error of the cold start V = V0, so the result meets the same
+            E_k / E_0 < tol; errors[0] = E(initial) / E_0 and iterations
+            count from the warm start (0 when it already meets tol); a start
+            far off iterates (divergence is measured against the larger of
+            E_0 and the start's error).
 
         Returns
         -------
