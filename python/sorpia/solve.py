@@ -412,8 +412,6 @@ class Interpolator:
         these targets from now on. Warnings point at the caller of solve() or
         interpolate()."""
         tol_value, max_iter = options.tol, options.max_iter
-        if v0.shape[0] != self.n_vertices:
-            raise ParameterError(f"vertices has {v0.shape[0]} rows but the mesh has {self.n_vertices} vertices")
         r = self._impl.solve(v0, options, callback, initial, keep_targets)
         if keep_targets:
             self._last_update = None
