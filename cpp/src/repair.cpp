@@ -24,7 +24,8 @@ namespace sorpia {
 
 bool RepairReport::empty() const {
   return degenerate_faces.empty() && collapsed_faces.empty() && duplicate_faces.empty() && reversed_duplicate_faces.empty() &&
-         nonmanifold_edges.empty() && sheet_vertices.empty() && bowtie_vertices.empty() && flipped_faces.empty();
+         nonmanifold_edges.empty() && sheet_vertices.empty() && bowtie_vertices.empty() &&
+         cut_nonmanifold_edges.empty() && cut_edges.empty() && cut_vertices.empty() && flipped_faces.empty();
 }
 
 namespace {
@@ -158,29 +159,16 @@ OwnedFaces drop_repeated_corners(const FaceList& fl, std::size_t n_vertices, std
 // higher end stamped with the lower end. A duplicate face shares each of its
 // edges with the face it repeats, so it is found at its first edge, before it
 // could be joined. The ends of edges of three or more faces are marked in
-// `sheet_end`. Needs faces without a repeated vertex (rule 1).
+// `sheet_end`, the half-edges of the faces paired there in `paired`. Needs
+// faces without a repeated vertex (rule 1).
 template <bool kPolygons>
 std::vector<std::int32_t> join_edges(const Faces<kPolygons>& fl, std::size_t n_vertices, bool pair_sheets,
                                      std::vector<std::uint8_t>& removed, RepairReport& rep,
-                                     std::vector<std::uint8_t>& sheet_end) {
+                                     std::vector<std::uint8_t>& sheet_end, std::vector<std::uint8_t>& paired) {
   const std::int32_t* faces = fl.idx;
   const std::size_t n_half = fl.n_corners();
   auto lo = [&](std::size_t h) { return std::min(faces[h], faces[fl.next(h)]); };
   auto hi = [&](std::size_t h) { return std::max(faces[h], faces[fl.next(h)]); };
-  // Whether the faces of half-edges g and h, which lie on one edge, have the
-  // same vertices in the same cyclic order, either way round: for triangles,
-  // the same third vertex; polygons are walked from the edge's end faces[g],
-  // h's face backwards where it runs the edge the other way.
-  auto same_face = [&](std::int32_t g, std::int32_t h) {
-    if (fl.triangles()) return faces[fl.prev(g)] == faces[fl.prev(h)];
-    const std::int32_t fg = fl.face_of(g), fh = fl.face_of(h), n = fl.end(fg) - fl.begin(fg);
-    if (n != fl.end(fh) - fl.begin(fh)) return false;
-    const bool forward = faces[g] == faces[h];
-    std::size_t a = static_cast<std::size_t>(g), b = forward ? static_cast<std::size_t>(h) : fl.next(h);
-    for (std::int32_t i = 0; i < n; ++i, a = fl.next(a), b = forward ? fl.next(b) : fl.prev(b))
-      if (faces[a] != faces[b]) return false;
-    return true;
-  };
   std::vector<std::int32_t> bucket(n_vertices + 1, 0);
   for (std::size_t h = 0; h < n_half; ++h)
     if (!removed[fl.face_of(h)]) ++bucket[lo(h) + 1];
@@ -218,7 +206,7 @@ std::vector<std::int32_t> join_edges(const Faces<kPolygons>& fl, std::size_t n_v
       if (count[x] == 2) {
         const std::int32_t g = first[x];
         if (g == h || removed[fl.face_of(g)] || removed[fl.face_of(h)]) continue;  // removed: a duplicate found at another edge
-        if (same_face(g, h)) {
+        if (fl.same_face(g, h)) {
           drop_duplicate(g, h);
         } else {
           mate[g] = h;
@@ -230,7 +218,7 @@ std::vector<std::int32_t> join_edges(const Faces<kPolygons>& fl, std::size_t n_v
         for (std::int32_t j = i; j < k; ++j) {
           const std::int32_t hj = b[j];
           if (hi(hj) != x || removed[fl.face_of(hj)]) continue;
-          const auto same = std::find_if(live.begin(), live.end(), [&](std::int32_t g) { return same_face(g, hj); });
+          const auto same = std::find_if(live.begin(), live.end(), [&](std::int32_t g) { return fl.same_face(g, hj); });
           if (same != live.end())
             drop_duplicate(*same, hj);
           else
@@ -252,6 +240,7 @@ std::vector<std::int32_t> join_edges(const Faces<kPolygons>& fl, std::size_t n_v
             if (!partner) break;
             mate[live[p]] = live[partner];
             mate[live[partner]] = live[p];
+            paired[live[p]] = paired[live[partner]] = 1;
           }
         }
       }
@@ -261,6 +250,110 @@ std::vector<std::int32_t> join_edges(const Faces<kPolygons>& fl, std::size_t n_v
   std::sort(rep.reversed_duplicate_faces.begin(), rep.reversed_duplicate_faces.end());
   std::sort(rep.nonmanifold_edges.begin(), rep.nonmanifold_edges.end());
   return mate;
+}
+
+// Whether the faces of joined half-edges h and g run their edge the same way
+// (then one of them must be reversed).
+inline bool same_way(const std::int32_t* faces, std::int32_t h, std::int32_t g) { return faces[h] == faces[g]; }
+
+// An edge (lower, higher end) for the report.
+inline std::array<std::int32_t, 2> edge_of(const std::int32_t* faces, std::size_t h, std::size_t h_next) {
+  return {std::min(faces[h], faces[h_next]), std::max(faces[h], faces[h_next])};
+}
+
+void sort_unique(std::vector<std::array<std::int32_t, 2>>& edges) {
+  std::sort(edges.begin(), edges.end());
+  edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+}
+
+// Rule 5 of repair.hpp: breaks (sets to -1 in `mate`) the joins that no
+// orientation of the faces keeps, so that every connected part can be
+// oriented. First the joins of edges of two faces, per part joined by them:
+// a breadth-first search from its lowest face orients the faces it reaches
+// and breaks each join that disagrees ("cut_edges", their ends marked in
+// `cut_end`); then the pairs of faces at edges of three or more
+// (`paired`), in half-edge order: a pair that would join two parts already
+// oriented against each other is broken ("cut_nonmanifold_edges"), every
+// other pair joins its two parts. The joins broken are then exactly those
+// that disagree with one orientation of the whole, and each fan round a
+// vertex holds an even number of them or is not closed, so that every
+// broken join separates its two faces at both ends of the edge (rule 4).
+template <bool kPolygons>
+void cut_twists(const Faces<kPolygons>& fl, std::vector<std::int32_t>& mate, const std::vector<std::uint8_t>& paired,
+                const std::vector<std::uint8_t>& removed, RepairReport& rep, std::vector<std::uint8_t>& cut_end) {
+  const std::int32_t* faces = fl.idx;
+  const std::size_t n_faces = fl.n_faces, n_half = fl.n_corners();
+  bool any_same_way = false;
+  for (std::size_t h = 0; h < n_half && !any_same_way; ++h)
+    any_same_way = mate[h] >= 0 && same_way(faces, static_cast<std::int32_t>(h), mate[h]);
+  if (!any_same_way) return;  // every join keeps the faces as they are
+  auto cut = [&](std::int32_t h) {
+    const std::int32_t g = mate[h];
+    mate[h] = mate[g] = -1;
+    return edge_of(faces, static_cast<std::size_t>(h), fl.next(h));
+  };
+  // The parts joined by edges of two faces: `up` is each face's part (its
+  // lowest face), `odd` whether the face is reversed against that face.
+  std::vector<std::int32_t> up(n_faces, -1);
+  std::vector<std::uint8_t> odd(n_faces, 0);
+  std::vector<std::int32_t> queue;
+  for (std::size_t f0 = 0; f0 < n_faces; ++f0) {
+    if (removed[f0] || up[f0] >= 0) continue;
+    queue.assign(1, static_cast<std::int32_t>(f0));
+    up[f0] = static_cast<std::int32_t>(f0);
+    for (std::size_t q = 0; q < queue.size(); ++q) {
+      const std::int32_t f = queue[q];
+      for (std::int32_t h = fl.begin(f); h < fl.end(f); ++h) {
+        const std::int32_t g = mate[h];
+        if (g < 0 || paired[h]) continue;
+        const std::int32_t fg = fl.face_of(g);
+        const auto want = static_cast<std::uint8_t>(odd[f] ^ same_way(faces, h, g));
+        if (up[fg] < 0) {
+          up[fg] = static_cast<std::int32_t>(f0);
+          odd[fg] = want;
+          queue.push_back(fg);
+        } else if (odd[fg] != want) {
+          const auto e = cut(h);
+          rep.cut_edges.push_back(e);
+          cut_end[e[0]] = cut_end[e[1]] = 1;
+        }
+      }
+    }
+  }
+  // The pairs at edges of three or more faces join parts: `up` and `odd`
+  // become a union-find over the faces, `odd` whether a face is reversed
+  // against the one `up` names.
+  auto find = [&](std::int32_t f) {  // the root of face f, and whether f is reversed against it
+    std::int32_t root = f;
+    std::uint8_t flipped = 0;
+    for (; up[root] != root; root = up[root]) flipped ^= odd[root];
+    for (std::uint8_t rest = flipped; up[f] != f;) {  // path compression
+      const std::int32_t next = up[f];
+      const std::uint8_t step = odd[f];
+      up[f] = root;
+      odd[f] = rest;
+      rest ^= step;
+      f = next;
+    }
+    return std::make_pair(root, flipped);
+  };
+  for (std::size_t hi = 0; hi < n_half; ++hi) {
+    const auto h = static_cast<std::int32_t>(hi);
+    const std::int32_t g = mate[h];
+    if (g < h || !paired[h]) continue;
+    const auto [ph, oh] = find(fl.face_of(h));
+    const auto [pg, og] = find(fl.face_of(g));
+    const auto differ = static_cast<std::uint8_t>(same_way(faces, h, g));  // the two faces' orientations must differ
+    if (ph != pg) {
+      const std::int32_t lo = std::min(ph, pg), other = std::max(ph, pg);
+      up[other] = lo;
+      odd[other] = static_cast<std::uint8_t>(oh ^ og ^ differ);
+    } else if ((oh ^ og) != differ) {
+      rep.cut_nonmanifold_edges.push_back(cut(h));
+    }
+  }
+  sort_unique(rep.cut_edges);
+  sort_unique(rep.cut_nonmanifold_edges);
 }
 
 // Rule 4: the output vertex of each corner of the faces not removed (-1 for
@@ -320,22 +413,33 @@ RepairResult repair_pass(const FaceList& input, std::size_t n_vertices, bool pai
   const Faces<kPolygons> fl{collapsed.empty() ? input : collapsed.view()};
   const std::int32_t* faces = fl.idx;
   const std::size_t n_faces = fl.n_faces, n_half = fl.n_corners();
-  std::vector<std::uint8_t> sheet_end(n_vertices, 0);
-  const std::vector<std::int32_t> mate = join_edges(fl, n_vertices, pair_sheets, removed, rep, sheet_end);
+  std::vector<std::uint8_t> sheet_end(n_vertices, 0), cut_end(n_vertices, 0), paired(n_half, 0);
+  std::vector<std::int32_t> mate = join_edges(fl, n_vertices, pair_sheets, removed, rep, sheet_end, paired);
+  cut_twists(fl, mate, paired, removed, rep, cut_end);
 
   bool misoriented = false;
   std::vector<std::int32_t> copies(n_vertices, 0);
   r.vertex_map.resize(n_vertices);
   std::iota(r.vertex_map.begin(), r.vertex_map.end(), 0);
   const std::vector<std::int32_t> vertex_of = fan_vertices(fl, mate, removed, r.vertex_map, copies, misoriented);
-  for (std::size_t v = 0; v < n_vertices; ++v)
-    if (copies[v]) {
-      (sheet_end[v] ? rep.sheet_vertices : rep.bowtie_vertices).push_back(static_cast<std::int32_t>(v));
-      (sheet_end[v] ? rep.sheet_copies : rep.bowtie_copies).push_back(copies[v]);
+  for (std::size_t vi = 0; vi < n_vertices; ++vi) {
+    if (!copies[vi]) continue;
+    const auto v = static_cast<std::int32_t>(vi);
+    if (sheet_end[v]) {
+      rep.sheet_vertices.push_back(v);
+      rep.sheet_copies.push_back(copies[v]);
+    } else if (cut_end[v]) {
+      rep.cut_vertices.push_back(v);
+      rep.cut_copies.push_back(copies[v]);
+    } else {
+      rep.bowtie_vertices.push_back(v);
+      rep.bowtie_copies.push_back(copies[v]);
     }
+  }
 
   // Orientation: per component, the class of faces to reverse (none where
-  // every joined pair of faces runs its edge both ways).
+  // every joined pair of faces runs its edge both ways). After cut_twists
+  // every component has one.
   std::vector<std::int8_t> flip(n_faces, misoriented ? -1 : 0);
   std::vector<std::int32_t> component;
   for (std::size_t f0 = 0; f0 < n_faces && misoriented; ++f0) {
@@ -343,7 +447,6 @@ RepairResult repair_pass(const FaceList& input, std::size_t n_vertices, bool pai
     component.assign(1, static_cast<std::int32_t>(f0));
     flip[f0] = 0;
     std::size_t n_flipped = 0;
-    std::int32_t clash = -1;  // a face whose orientation is forced both ways
     for (std::size_t q = 0; q < component.size(); ++q) {
       const std::int32_t f = component[q];
       for (std::int32_t h = fl.begin(f); h < fl.end(f); ++h) {
@@ -356,16 +459,11 @@ RepairResult repair_pass(const FaceList& input, std::size_t n_vertices, bool pai
           flip[fg] = want;
           n_flipped += static_cast<std::size_t>(want);
           component.push_back(fg);
-        } else if (flip[fg] != want && clash < 0) {
-          clash = fg;
+        } else if (flip[fg] != want) {
+          throw std::logic_error("sorpia::repair: cut_twists left " + fl.str(f0) + "'s part without an orientation");
         }
       }
     }
-    if (clash >= 0)
-      throw MeshError("the connected part of " + std::to_string(component.size()) + " faces containing " +
-                      fl.str(f0) + " is not orientable (like a Moebius strip: no choice of face "
-                      "orientations is consistent, e.g. at " + fl.str(clash) +
-                      "): subdivision needs an orientable surface, and repair cannot make one");
     const std::int8_t reverse = n_flipped <= component.size() - n_flipped ? 1 : 0;
     for (std::int32_t f : component) {
       flip[f] = flip[f] == reverse;
@@ -408,10 +506,17 @@ void compose(RepairResult& first, RepairResult&& later) {
   std::set_symmetric_difference(a.flipped_faces.begin(), a.flipped_faces.end(), flipped.begin(), flipped.end(),
                                 std::back_inserter(both));
   a.flipped_faces = std::move(both);
-  for (const auto& [u, v] : b.nonmanifold_edges) {
-    const std::int32_t p = first.vertex_map[u], q = first.vertex_map[v];
-    a.nonmanifold_edges.push_back({std::min(p, q), std::max(p, q)});
-  }
+  auto edges_of = [&](const std::vector<std::array<std::int32_t, 2>>& es,
+                      std::vector<std::array<std::int32_t, 2>>& into) {  // an edge of both passes once
+    for (const auto& [u, v] : es) {
+      const std::int32_t p = first.vertex_map[u], q = first.vertex_map[v];
+      into.push_back({std::min(p, q), std::max(p, q)});
+    }
+    sort_unique(into);
+  };
+  edges_of(b.nonmanifold_edges, a.nonmanifold_edges);
+  edges_of(b.cut_nonmanifold_edges, a.cut_nonmanifold_edges);
+  edges_of(b.cut_edges, a.cut_edges);
   auto add_copies = [&](const std::vector<std::int32_t>& vs, const std::vector<std::int32_t>& ns,
                         std::vector<std::int32_t>& into_v, std::vector<std::int32_t>& into_n) {
     for (std::size_t i = 0; i < vs.size(); ++i) {
@@ -428,6 +533,7 @@ void compose(RepairResult& first, RepairResult&& later) {
   };
   add_copies(b.sheet_vertices, b.sheet_copies, a.sheet_vertices, a.sheet_copies);
   add_copies(b.bowtie_vertices, b.bowtie_copies, a.bowtie_vertices, a.bowtie_copies);
+  add_copies(b.cut_vertices, b.cut_copies, a.cut_vertices, a.cut_copies);
   std::vector<std::int32_t> vertex_map(later.vertex_map.size()), face_map(later.face_map.size());
   for (std::size_t i = 0; i < vertex_map.size(); ++i) vertex_map[i] = first.vertex_map[later.vertex_map[i]];
   for (std::size_t i = 0; i < face_map.size(); ++i) face_map[i] = first.face_map[later.face_map[i]];

@@ -14,7 +14,8 @@ from ._validate import Polygons, _face_rows, as_faces, as_polygons, as_tags, as_
 
 # The report's keys, in the order the repair applies its rules (see `repair`).
 REPORT_KINDS = ("degenerate_faces", "collapsed_faces", "duplicate_faces", "reversed_duplicate_faces", "nonmanifold_edges",
-                "sheet_vertices", "sheet_copies", "bowtie_vertices", "bowtie_copies", "flipped_faces")
+                "sheet_vertices", "sheet_copies", "bowtie_vertices", "bowtie_copies", "cut_nonmanifold_edges",
+                "cut_edges", "cut_vertices", "cut_copies", "flipped_faces")
 
 
 def _counts(report: dict) -> dict:
@@ -57,6 +58,15 @@ def describe_changes(report: dict, max_listed: int = 5) -> list[str]:
         lines.append(f"bowtie vertices (fans meeting at one vertex): {len(r['bowtie_vertices'])} split into one "
                      f"vertex per fan, {_copies(r['bowtie_copies'])} "
                      f"{_listed(_VERTICES, r['bowtie_vertices'], max_listed)}")
+    if r["cut_nonmanifold_edges"]:
+        lines.append(f"sheets that no orientation fits: at {len(r['cut_nonmanifold_edges'])} of the non-manifold "
+                     "edges some faces left unpaired, each bordering the edge alone "
+                     f"{_listed(_EDGES, r['cut_nonmanifold_edges'], max_listed)}")
+    if r["cut_edges"]:
+        n = len(r["cut_edges"])
+        lines.append(f"not orientable (a twist, like a Moebius strip): cut along {n} {_EDGES[n > 1]} "
+                     f"{_listed(_EDGES, r['cut_edges'], max_listed)}, their {len(r['cut_vertices'])} end vertices "
+                     f"split with {_copies(r['cut_copies'])}")
     if r["flipped_faces"]:
         lines.append(f"inconsistent orientation: {len(r['flipped_faces'])} faces reversed "
                      f"{_listed(_FACES, r['flipped_faces'], max_listed)}")

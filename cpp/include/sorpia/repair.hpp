@@ -35,6 +35,17 @@ struct RepairReport {
   /// Vertices where fans of faces met at a point only ('bowties'), split into
   /// one vertex per fan, and the number of copies each got.
   std::vector<std::int32_t> bowtie_vertices, bowtie_copies;
+  /// Edges of three or more faces (among nonmanifold_edges) where a pair of
+  /// faces was left unpaired, each face bordering the edge alone, because
+  /// the pair would have joined a part that no orientation fits (rule 5).
+  std::vector<std::array<std::int32_t, 2>> cut_nonmanifold_edges;
+  /// Edges of two faces cut apart, each face bordering the edge alone, so
+  /// that a part with no consistent orientation (a Moebius strip) can be
+  /// oriented (rule 5).
+  std::vector<std::array<std::int32_t, 2>> cut_edges;
+  /// Vertices split by the cut of cut_edges (an end of such an edge that is
+  /// no end of a non-manifold edge), and the number of copies each got.
+  std::vector<std::int32_t> cut_vertices, cut_copies;
   /// Faces whose vertex order was reversed to orient their component consistently.
   std::vector<std::int32_t> flipped_faces;
 
