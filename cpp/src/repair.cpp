@@ -266,7 +266,7 @@ void sort_unique(std::vector<std::array<std::int32_t, 2>>& edges) {
   edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
 }
 
-// Rule 5 of repair.hpp: breaks (sets to -1 in `mate`) the joins that no
+// Rule 4 of repair.hpp: breaks (sets to -1 in `mate`) the joins that no
 // orientation of the faces keeps, so that every connected part can be
 // oriented. First the joins of edges of two faces, per part joined by them:
 // a breadth-first search from its lowest face orients the faces it reaches
@@ -277,7 +277,7 @@ void sort_unique(std::vector<std::array<std::int32_t, 2>>& edges) {
 // other pair joins its two parts. The joins broken are then exactly those
 // that disagree with one orientation of the whole, and each fan round a
 // vertex holds an even number of them or is not closed, so that every
-// broken join separates its two faces at both ends of the edge (rule 4).
+// broken join separates its two faces at both ends of the edge (rule 5).
 template <bool kPolygons>
 void cut_twists(const Faces<kPolygons>& fl, std::vector<std::int32_t>& mate, const std::vector<std::uint8_t>& paired,
                 const std::vector<std::uint8_t>& removed, RepairReport& rep, std::vector<std::uint8_t>& cut_end) {
@@ -356,7 +356,7 @@ void cut_twists(const Faces<kPolygons>& fl, std::vector<std::int32_t>& mate, con
   sort_unique(rep.cut_nonmanifold_edges);
 }
 
-// Rule 4: the output vertex of each corner of the faces not removed (-1 for
+// Rule 5: the output vertex of each corner of the faces not removed (-1 for
 // the others): one per fan, the corners of one vertex joined across joined
 // edges. `vertex_map` holds the input vertices on entry; the copies are
 // appended, and counted per input vertex in `copies`. Sets `misoriented` when

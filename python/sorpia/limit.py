@@ -11,7 +11,7 @@ from . import nonmanifold as nonmanifold_sharp
 from ._validate import (DEFAULT_BOUNDARY, DEFAULT_SCHEME, as_boundary, as_faces, as_polygons, as_scheme, as_tags,
                         as_vertex_count, as_vertices)
 from .errors import MeshError
-from .nonmanifold import NONMANIFOLD_HINT, as_nonmanifold
+from .nonmanifold import as_nonmanifold, refusal_hint
 
 
 class UnreferencedVerticesWarning(UserWarning):
@@ -37,9 +37,10 @@ def topology(faces, n_vertices: int, *, scheme: str = DEFAULT_SCHEME, warn: bool
             counts, indices = as_polygons(faces, n_vertices, count_name=count_name)
             topo = _core.Topology(counts, indices, n_vertices)
     except MeshError as exc:
-        if not any(kind in str(exc) for kind in NONMANIFOLD_KINDS):
+        hint = refusal_hint(str(exc))
+        if hint is None:
             raise
-        raise MeshError(f"{exc}; {NONMANIFOLD_HINT}") from None
+        raise MeshError(f"{exc}; {hint}") from None
     if warn and topo.n_unreferenced:
         warnings.warn(
             f"{topo.n_unreferenced} of {n_vertices} vertices belong to no face; "
@@ -50,8 +51,6 @@ def topology(faces, n_vertices: int, *, scheme: str = DEFAULT_SCHEME, warn: bool
     return topo
 
 
-# The refusals of sorpia::Topology that OpenSubdiv takes as non-manifold topology.
-NONMANIFOLD_KINDS = ("non-manifold edge", "non-manifold vertex", "inconsistent orientation", "duplicate faces")
 
 
 def singular_cubes(topo: _core.Topology, tag_set: _core.Tags) -> list:

@@ -41,6 +41,21 @@ NONMANIFOLD_HINT = ("sorpia.repair (command line: --repair) makes the mesh manif
                     "(non-manifold edges infinitely sharp, non-manifold vertices corners)")
 
 
+# The refusals of sorpia::Topology that OpenSubdiv takes as non-manifold topology.
+NONMANIFOLD_KINDS = ("non-manifold edge", "non-manifold vertex", "inconsistent orientation", "duplicate faces")
+
+
+def refusal_hint(message: str) -> str | None:
+    """The ways out to append to a refusal of sorpia::Topology (`message`),
+    or None where it is not about topology repair or OpenSubdiv's
+    non-manifold rules change. Two faces with the same vertices in the
+    opposite order are a closed surface of two faces to OpenSubdiv, not
+    non-manifold: only repair removes one."""
+    if "duplicate faces" in message and "opposite" in message:
+        return "sorpia.repair (command line: --repair) removes the second of them"
+    return NONMANIFOLD_HINT if any(kind in message for kind in NONMANIFOLD_KINDS) else None
+
+
 class NonmanifoldWarning(UserWarning):
     """nonmanifold="sharp" on a non-manifold mesh: OpenSubdiv's documentation
     calls the surface of non-manifold topology undefined for now."""

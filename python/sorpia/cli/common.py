@@ -315,8 +315,8 @@ def scheme_kwargs(scheme: str, tags: dict) -> dict:
 
 def repair_input(vertices, faces, source, tags=None):
     """sorpia.repair of a command's input, with its sharpness `tags` (a dict
-    of creases, corners, holes); a mesh it refuses (a Moebius strip) is a
-    UserError naming the file `source`."""
+    of creases, corners, holes); a mesh it refuses (no face left, an index
+    out of range) is a UserError naming the file `source`."""
     from .. import MeshError, repair
 
     try:
