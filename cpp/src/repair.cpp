@@ -266,9 +266,10 @@ void sort_unique(std::vector<std::array<std::int32_t, 2>>& edges) {
   edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
 }
 
-// Rule 4 of repair.hpp: breaks (sets to -1 in `mate`) the joins that no
-// orientation of the faces keeps, so that every connected part can be
-// oriented. First the joins of edges of two faces, per part joined by them:
+// Rules 4 and 6 of repair.hpp: breaks (sets to -1 in `mate`) the joins that
+// no orientation of the faces keeps, so that every connected part can be
+// oriented, and returns for each face whether to reverse it (empty: none).
+// First the joins of edges of two faces, per part joined by them:
 // a breadth-first search from its lowest face orients the faces it reaches
 // and breaks each join that disagrees ("cut_edges", their ends marked in
 // `cut_end`); then the pairs of faces at edges of three or more
@@ -278,15 +279,18 @@ void sort_unique(std::vector<std::array<std::int32_t, 2>>& edges) {
 // that disagree with one orientation of the whole, and each fan round a
 // vertex holds an even number of them or is not closed, so that every
 // broken join separates its two faces at both ends of the edge (rule 5).
+// The union-find's classes are then the connected parts, each rooted at its
+// lowest face, against which every face's `odd` says its orientation.
 template <bool kPolygons>
-void cut_twists(const Faces<kPolygons>& fl, std::vector<std::int32_t>& mate, const std::vector<std::uint8_t>& paired,
-                const std::vector<std::uint8_t>& removed, RepairReport& rep, std::vector<std::uint8_t>& cut_end) {
+std::vector<std::uint8_t> orient(const Faces<kPolygons>& fl, std::vector<std::int32_t>& mate,
+                                 const std::vector<std::uint8_t>& paired, const std::vector<std::uint8_t>& removed,
+                                 RepairReport& rep, std::vector<std::uint8_t>& cut_end) {
   const std::int32_t* faces = fl.idx;
   const std::size_t n_faces = fl.n_faces, n_half = fl.n_corners();
   bool any_same_way = false;
   for (std::size_t h = 0; h < n_half && !any_same_way; ++h)
     any_same_way = mate[h] >= 0 && same_way(faces, static_cast<std::int32_t>(h), mate[h]);
-  if (!any_same_way) return;  // every join keeps the faces as they are
+  if (!any_same_way) return {};  // every join keeps the faces as they are
   auto cut = [&](std::int32_t h) {
     const std::int32_t g = mate[h];
     mate[h] = mate[g] = -1;
@@ -354,17 +358,33 @@ void cut_twists(const Faces<kPolygons>& fl, std::vector<std::int32_t>& mate, con
   }
   sort_unique(rep.cut_edges);
   sort_unique(rep.cut_nonmanifold_edges);
+  // Rule 6: per part, the smaller class reversed (on a tie, the faces
+  // disagreeing with its lowest face, the root).
+  std::vector<std::int32_t> n_faces_of(n_faces, 0), n_odd(n_faces, 0);
+  for (std::size_t f = 0; f < n_faces; ++f) {
+    if (removed[f]) continue;
+    const auto [root, flipped] = find(static_cast<std::int32_t>(f));  // compressed: up[f] is the root from now on
+    ++n_faces_of[root];
+    n_odd[root] += flipped;
+  }
+  std::vector<std::uint8_t> flip(n_faces, 0);
+  for (std::size_t f = 0; f < n_faces; ++f) {
+    if (removed[f]) continue;
+    const std::int32_t root = up[f];
+    flip[f] = odd[f] == (n_odd[root] <= n_faces_of[root] - n_odd[root] ? 1 : 0);
+    if (flip[f]) rep.flipped_faces.push_back(static_cast<std::int32_t>(f));
+  }
+  return flip;
 }
 
 // Rule 5: the output vertex of each corner of the faces not removed (-1 for
 // the others): one per fan, the corners of one vertex joined across joined
 // edges. `vertex_map` holds the input vertices on entry; the copies are
-// appended, and counted per input vertex in `copies`. Sets `misoriented` when
-// some joined faces run their edge the same way.
+// appended, and counted per input vertex in `copies`.
 template <bool kPolygons>
 std::vector<std::int32_t> fan_vertices(const Faces<kPolygons>& fl, const std::vector<std::int32_t>& mate,
                                        const std::vector<std::uint8_t>& removed, std::vector<std::int32_t>& vertex_map,
-                                       std::vector<std::int32_t>& copies, bool& misoriented) {
+                                       std::vector<std::int32_t>& copies) {
   const std::int32_t* faces = fl.idx;
   const std::size_t n_half = fl.n_corners();
   Corners fans(n_half);
@@ -373,7 +393,6 @@ std::vector<std::int32_t> fan_vertices(const Faces<kPolygons>& fl, const std::ve
     if (g < static_cast<std::int32_t>(h)) continue;  // unjoined, or joined from g already
     const auto hn = static_cast<std::int32_t>(fl.next(h)), gn = static_cast<std::int32_t>(fl.next(g));
     const bool same_way = faces[g] == faces[h];
-    misoriented |= same_way;
     fans.unite(static_cast<std::int32_t>(h), same_way ? g : gn);
     fans.unite(hn, same_way ? gn : g);
   }
@@ -415,13 +434,12 @@ RepairResult repair_pass(const FaceList& input, std::size_t n_vertices, bool pai
   const std::size_t n_faces = fl.n_faces, n_half = fl.n_corners();
   std::vector<std::uint8_t> sheet_end(n_vertices, 0), cut_end(n_vertices, 0), paired(n_half, 0);
   std::vector<std::int32_t> mate = join_edges(fl, n_vertices, pair_sheets, removed, rep, sheet_end, paired);
-  cut_twists(fl, mate, paired, removed, rep, cut_end);
+  const std::vector<std::uint8_t> flip = orient(fl, mate, paired, removed, rep, cut_end);
 
-  bool misoriented = false;
   std::vector<std::int32_t> copies(n_vertices, 0);
   r.vertex_map.resize(n_vertices);
   std::iota(r.vertex_map.begin(), r.vertex_map.end(), 0);
-  const std::vector<std::int32_t> vertex_of = fan_vertices(fl, mate, removed, r.vertex_map, copies, misoriented);
+  const std::vector<std::int32_t> vertex_of = fan_vertices(fl, mate, removed, r.vertex_map, copies);
   for (std::size_t vi = 0; vi < n_vertices; ++vi) {
     if (!copies[vi]) continue;
     const auto v = static_cast<std::int32_t>(vi);
@@ -437,40 +455,6 @@ RepairResult repair_pass(const FaceList& input, std::size_t n_vertices, bool pai
     }
   }
 
-  // Orientation: per component, the class of faces to reverse (none where
-  // every joined pair of faces runs its edge both ways). After cut_twists
-  // every component has one.
-  std::vector<std::int8_t> flip(n_faces, misoriented ? -1 : 0);
-  std::vector<std::int32_t> component;
-  for (std::size_t f0 = 0; f0 < n_faces && misoriented; ++f0) {
-    if (removed[f0] || flip[f0] >= 0) continue;
-    component.assign(1, static_cast<std::int32_t>(f0));
-    flip[f0] = 0;
-    std::size_t n_flipped = 0;
-    for (std::size_t q = 0; q < component.size(); ++q) {
-      const std::int32_t f = component[q];
-      for (std::int32_t h = fl.begin(f); h < fl.end(f); ++h) {
-        const std::int32_t g = mate[h];
-        if (g < 0) continue;
-        // running the edge the same way as h needs the other orientation
-        const auto want = static_cast<std::int8_t>(flip[f] ^ (faces[g] == faces[h]));
-        const std::int32_t fg = fl.face_of(g);
-        if (flip[fg] < 0) {
-          flip[fg] = want;
-          n_flipped += static_cast<std::size_t>(want);
-          component.push_back(fg);
-        } else if (flip[fg] != want) {
-          throw std::logic_error("sorpia::repair: cut_twists left " + fl.str(f0) + "'s part without an orientation");
-        }
-      }
-    }
-    const std::int8_t reverse = n_flipped <= component.size() - n_flipped ? 1 : 0;
-    for (std::int32_t f : component) {
-      flip[f] = flip[f] == reverse;
-      if (flip[f]) rep.flipped_faces.push_back(f);
-    }
-  }
-  std::sort(rep.flipped_faces.begin(), rep.flipped_faces.end());
 
   // A reversed face keeps its first corner: (a, b, c, d) becomes (a, d, c, b).
   r.faces.reserve(n_half);
@@ -478,7 +462,7 @@ RepairResult repair_pass(const FaceList& input, std::size_t n_vertices, bool pai
     if (removed[f]) continue;
     const std::int32_t lo = fl.begin(f), hi = fl.end(f);
     r.faces.push_back(vertex_of[lo]);
-    if (flip[f])
+    if (!flip.empty() && flip[f])
       for (std::int32_t h = hi - 1; h > lo; --h) r.faces.push_back(vertex_of[h]);
     else
       for (std::int32_t h = lo + 1; h < hi; ++h) r.faces.push_back(vertex_of[h]);
@@ -686,8 +670,7 @@ NonmanifoldSplit split_pass(const Faces<kPolygons>& fl, std::size_t n_vertices) 
   std::vector<std::int32_t> copies(n_vertices, 0);
   s.vertex_map.resize(n_vertices);
   std::iota(s.vertex_map.begin(), s.vertex_map.end(), 0);
-  bool misoriented = false;  // stays false: only edges run both ways are joined
-  const std::vector<std::int32_t> vertex_of = fan_vertices(fl, mate, removed, s.vertex_map, copies, misoriented);
+  const std::vector<std::int32_t> vertex_of = fan_vertices(fl, mate, removed, s.vertex_map, copies);
 
   std::vector<std::uint8_t> crease(n_vertices, 0);
   for (std::size_t vi = 0; vi < n_vertices; ++vi) {
