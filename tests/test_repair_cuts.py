@@ -9,7 +9,8 @@ every face its input face (reversed exactly where the report says), every
 edge the report says was cut really separates its faces; and the fit of the
 repaired mesh (its Interpolator, its scipy direct solve and its limit points)
 passes through every input vertex at each copy. --nonmanifold sharp fits the
-same files (with the boundary rule its message asks for)."""
+same files, under either boundary rule, the one given winning over the
+file's."""
 
 from __future__ import annotations
 
@@ -267,21 +268,16 @@ def test_the_same_files_fit_with_nonmanifold_sharp(name, tri):
     if tri:
         f = triangles(f)
     scheme = scheme_of(f)
-    try:
-        res = sharp(sorpia.interpolate, v, f, scheme=scheme, tol=1e-12)
-        boundary = "edge-and-corner"
-    except sorpia.MeshError as exc:  # a sheet of one face at a crease vertex: the message names the way out
-        assert "single face" in str(exc) and "edge-only" in str(exc)
-        boundary = "edge-only"
-        res = sharp(sorpia.interpolate, v, f, scheme=scheme, boundary=boundary, tol=1e-12)
-    b = sharp(sorpia.limit_matrix, f, len(v), boundary, scheme=scheme).tocsc()
+    res = sharp(sorpia.interpolate, v, f, scheme=scheme, tol=1e-12)
+    b = sharp(sorpia.limit_matrix, f, len(v), scheme=scheme).tocsc()
     assert res.converged
     direct = scipy.sparse.linalg.spsolve(b, v)
     assert np.abs(b @ res.control_vertices - v).max() <= 1e-9 * np.abs(v).max()
     assert np.abs(res.control_vertices - direct).max() <= 1e-8 * np.abs(v).max()
 
 
-def test_hex_grid_file_fits_with_repair(tmp_path, monkeypatch, command):
+@pytest.mark.filterwarnings("default::sorpia.NonmanifoldWarning")
+def test_hex_grid_file_fits_with_repair_and_with_nonmanifold_sharp(tmp_path, monkeypatch, command):
     monkeypatch.chdir(tmp_path)
     v, f = hex_grid_faces(2, "axis")
     sorpia.write_mesh("hex.obj", v, f)
@@ -293,29 +289,42 @@ def test_hex_grid_file_fits_with_repair(tmp_path, monkeypatch, command):
     ctrl, faces = sorpia.read_mesh("ctrl.obj")
     target = v[np.asarray(data["repair"]["vertex_map"])]
     assert np.abs(sorpia.limit_points(ctrl, faces, scheme="catmull-clark") - target).max() <= 1e-9 * np.abs(v).max()
+    code, _, err = command("fit", "hex.obj", "-o", "split.obj", "--nonmanifold", "sharp", "--report", "s.json",
+                           "--tol", "1e-12")
+    assert code == 0, err
+    vertex_map = np.asarray(json.loads((tmp_path / "s.json").read_text())["nonmanifold"]["vertex_map"])
+    ctrl, faces, tags = sorpia.read_mesh("split.obj", tags=True)  # refitted from the file as it is
+    limit = sorpia.limit_points(ctrl, faces, scheme="catmull-clark", **tags)
+    assert np.abs(limit - v[vertex_map]).max() <= 1e-9 * np.abs(v).max()
 
 
 @pytest.mark.filterwarnings("default::sorpia.NonmanifoldWarning")
-def test_nonmanifold_sharp_takes_the_boundary_option_over_the_file(tmp_path, monkeypatch, command):
-    """Issue 20, item 5: the file says edge-and-corner, under which the split refuses the hex grid's faces
-    and asks for --boundary edge-only; given, the option wins: the written split control mesh is the Python
-    call's (nonmanifold="sharp", boundary="edge-only"), and its limit, refitted from the file as it is,
-    passes through every input vertex at each copy."""
+@pytest.mark.parametrize("in_file, option", [("edge-and-corner", "edge-only"), ("edge-only", "edge-and-corner")])
+def test_nonmanifold_sharp_takes_the_boundary_option_over_the_file(tmp_path, monkeypatch, command, in_file, option):
+    """Issue 20, item 5: --boundary wins over the file's 't interpolateboundary' under --nonmanifold sharp:
+    the written split control mesh is the Python call's with that rule (and not the file's rule's), and its
+    limit, refitted from the file as it is (its tags, its rule), passes through every input vertex at each
+    copy."""
+    from test_nonmanifold import book
+
     monkeypatch.chdir(tmp_path)
-    v, f = hex_grid_faces(2)
-    sorpia.write_mesh("hex.obj", v, f, boundary="edge-and-corner")
-    code, _, err = command("fit", "hex.obj", "-o", "split.obj", "--nonmanifold", "sharp")
-    assert code == 2 and "--boundary edge-only" in err and not (tmp_path / "split.obj").exists()
-    code, _, err = command("fit", "hex.obj", "-o", "split.obj", "--nonmanifold", "sharp", "--boundary", "edge-only",
+    # pages of quads on a spine, and a sheet of one quad over its crease vertex 1: the split depends on the rule
+    # (that quad's copy of 1 keeps the crease rule; edge-and-corner makes its free vertex, of one face, a corner)
+    v, f = book(3, 2, triangles=False)
+    f = [list(q) for q in f] + [[0, 1, 2, len(v)]]
+    v = np.vstack([v, [[0.5, -0.3, 2.0]]])
+    sorpia.write_mesh("book.obj", v, f, boundary=in_file)
+    code, _, err = command("fit", "book.obj", "-o", "split.obj", "--nonmanifold", "sharp", "--boundary", option,
                            "--report", "s.json", "--tol", "1e-12")
     assert code == 0, err
     vertex_map = np.asarray(json.loads((tmp_path / "s.json").read_text())["nonmanifold"]["vertex_map"])
     ctrl, faces, tags = sorpia.read_mesh("split.obj", tags=True)
-    assert tags["boundary"] == "edge-only"
-    python = sharp(sorpia.interpolate, v, f, scheme="catmull-clark", boundary="edge-only", tol=1e-12)
+    python = {rule: sharp(sorpia.interpolate, v, f, scheme="catmull-clark", boundary=rule, tol=1e-12)
+              for rule in (in_file, option)}
     scale = np.abs(v).max()
-    # both solve the same system to tol 1e-12: equal to its condition times that
-    assert np.abs(ctrl[: len(v)] - python.control_vertices).max() <= 1e-9 * scale
+    # both solve the same system to tol 1e-12: equal to its condition times that; the other rule is far off
+    assert np.abs(ctrl[: len(v)] - python[option].control_vertices).max() <= 1e-9 * scale
+    assert np.abs(ctrl[: len(v)] - python[in_file].control_vertices).max() >= 1e-3 * scale
     assert np.abs(ctrl - ctrl[vertex_map]).max() <= 1e-9 * scale  # each copy is its vertex's control point
     limit = sorpia.limit_points(ctrl, faces, scheme="catmull-clark", **tags)
     assert np.abs(limit - v[vertex_map]).max() <= 1e-9 * scale

@@ -146,7 +146,9 @@ RepairResult repair(const std::int32_t* face_vertex_counts, std::size_t n_faces,
 /// a crease vertex's copies each lie on the boundary between the copies of
 /// its two non-manifold edges, whose boundary rule is the crease rule, except
 /// a copy in a fan of one face (`single_face_sheets`), which the
-/// edge-and-corner boundary rule makes a corner.
+/// edge-and-corner boundary rule makes a corner (sorpia.nonmanifold.split
+/// then solves the split under edge-only, with the corners edge-and-corner
+/// makes, every other vertex of one face, as tags: OpenSubdiv's rows).
 struct NonmanifoldSplit {
   std::vector<std::int32_t> faces;        ///< the vertices of every face, renumbered, face after face
   std::vector<std::int32_t> face_counts;  ///< polygons: the vertex count of each face; empty for triangles

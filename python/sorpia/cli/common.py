@@ -245,10 +245,11 @@ def read_solve_input(path, *, triangulate: bool, repair: bool, ignore_tags: bool
                      boundary, sharp_angle) -> tuple[InputMesh, str, str, dict]:
     """read_input for the commands that solve (fit, compare, render), then
     what they solve with: (mesh, scheme (choose_scheme), boundary rule
-    (boundary_rule), creases/corners/holes (solve_tags))."""
+    (boundary_rule; with --nonmanifold sharp, the rule its split is solved
+    under), creases/corners/holes (solve_tags))."""
     mesh = read_input(path, triangulate, repair, tags=not ignore_tags, nonmanifold=nonmanifold, boundary=boundary)
-    return (mesh, choose_scheme(scheme, mesh.faces, path), boundary_rule(boundary, mesh),
-            solve_tags(mesh, sharp_angle, path))
+    rule = mesh.split.boundary if mesh.split is not None else boundary_rule(boundary, mesh)
+    return mesh, choose_scheme(scheme, mesh.faces, path), rule, solve_tags(mesh, sharp_angle, path)
 
 
 def boundary_rule(boundary, mesh: InputMesh) -> str:
