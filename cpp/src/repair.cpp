@@ -269,9 +269,10 @@ void sort_unique(std::vector<std::array<std::int32_t, 2>>& edges) {
 // Rules 4 and 6 of repair.hpp: breaks (sets to -1 in `mate`) the joins that
 // no orientation of the faces keeps, so that every connected part can be
 // oriented, and returns for each face whether to reverse it (empty: none).
-// First the joins of edges of two faces, per part joined by them:
-// a breadth-first search from its lowest face orients the faces it reaches
-// and breaks each join that disagrees ("cut_edges", their ends marked in
+// First the joins of edges of two faces, per part joined by them: a
+// breadth-first search orients the faces it reaches; where a join disagrees
+// (a twist), a second search from the face farthest from the part's boundary
+// breaks each join that disagrees ("cut_edges", their ends marked in
 // `cut_end`); then the pairs of faces at edges of three or more
 // (`paired`), in half-edge order: a pair that would join two parts already
 // oriented against each other is broken ("cut_nonmanifold_edges"), every
@@ -298,31 +299,77 @@ std::vector<std::uint8_t> orient(const Faces<kPolygons>& fl, std::vector<std::in
   };
   // The parts joined by edges of two faces: `up` is each face's part (its
   // lowest face), `odd` whether the face is reversed against that face.
-  std::vector<std::int32_t> up(n_faces, -1);
+  std::vector<std::int32_t> up(n_faces, -1), queue, depth;
   std::vector<std::uint8_t> odd(n_faces, 0);
-  std::vector<std::int32_t> queue;
-  for (std::size_t f0 = 0; f0 < n_faces; ++f0) {
-    if (removed[f0] || up[f0] >= 0) continue;
-    queue.assign(1, static_cast<std::int32_t>(f0));
-    up[f0] = static_cast<std::int32_t>(f0);
+  auto joined = [&](std::int32_t h) { return mate[h] >= 0 && !paired[h]; };
+  // The breadth-first search of part `part` from face `root` (queue: the
+  // part's faces in the order reached); with `cut`, breaks each join that
+  // disagrees; returns whether one does.
+  auto search = [&](std::int32_t root, std::int32_t part, bool cut_them) {
+    bool twisted = false;
+    queue.assign(1, root);
+    up[root] = part;
+    odd[root] = 0;
     for (std::size_t q = 0; q < queue.size(); ++q) {
       const std::int32_t f = queue[q];
       for (std::int32_t h = fl.begin(f); h < fl.end(f); ++h) {
-        const std::int32_t g = mate[h];
-        if (g < 0 || paired[h]) continue;
-        const std::int32_t fg = fl.face_of(g);
+        if (!joined(h)) continue;
+        const std::int32_t g = mate[h], fg = fl.face_of(g);
         const auto want = static_cast<std::uint8_t>(odd[f] ^ same_way(faces, h, g));
         if (up[fg] < 0) {
-          up[fg] = static_cast<std::int32_t>(f0);
+          up[fg] = part;
           odd[fg] = want;
           queue.push_back(fg);
         } else if (odd[fg] != want) {
+          twisted = true;
+          if (!cut_them) continue;
           const auto e = cut(h);
           rep.cut_edges.push_back(e);
           cut_end[e[0]] = cut_end[e[1]] = 1;
         }
       }
     }
+    return twisted;
+  };
+  // The face of a part farthest from its boundary (the faces with an edge
+  // not joined; the lowest face of those farthest), or `part` where it has
+  // none: searched from there, a twist is cut where the fronts meet, across
+  // a band from side to side rather than on a slant.
+  auto farthest_from_boundary = [&](std::int32_t part) {
+    depth.resize(n_faces);
+    std::vector<std::int32_t> ring;
+    for (std::int32_t f : queue) {
+      depth[f] = -1;
+      for (std::int32_t h = fl.begin(f); h < fl.end(f) && depth[f] < 0; ++h)
+        if (!joined(h)) depth[f] = 0;
+      if (depth[f] == 0) ring.push_back(f);
+    }
+    if (ring.empty()) return part;
+    std::int32_t best = part;
+    for (std::size_t q = 0; q < ring.size(); ++q) {
+      const std::int32_t f = ring[q];
+      if (depth[f] > depth[best] || (depth[f] == depth[best] && f < best)) best = f;
+      for (std::int32_t h = fl.begin(f); h < fl.end(f); ++h) {
+        if (!joined(h)) continue;
+        const std::int32_t fg = fl.face_of(mate[h]);
+        if (depth[fg] < 0) {
+          depth[fg] = depth[f] + 1;
+          ring.push_back(fg);
+        }
+      }
+    }
+    return best;
+  };
+  for (std::size_t fi = 0; fi < n_faces; ++fi) {
+    const auto f0 = static_cast<std::int32_t>(fi);
+    if (removed[f0] || up[f0] >= 0 || !search(f0, f0, false)) continue;
+    // A twist: searched again from the face farthest from the boundary,
+    // cutting; `odd` then made relative to the part's lowest face.
+    const std::int32_t root = farthest_from_boundary(f0);
+    for (std::int32_t f : queue) up[f] = -1;
+    search(root, f0, true);
+    const std::uint8_t at_f0 = odd[f0];
+    for (std::int32_t f : queue) odd[f] ^= at_f0;
   }
   // The pairs at edges of three or more faces join parts: `up` and `odd`
   // become a union-find over the faces, `odd` whether a face is reversed

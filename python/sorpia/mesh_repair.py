@@ -125,10 +125,10 @@ def repair(vertices, faces, *, creases=None, corners=None, holes=None) -> Repair
        unpaired face); a face left over borders the edge alone;
     4. where no orientation of the faces fits, the joins that disagree are
        cut, each face then bordering the edge alone: first, per part joined
-       by edges of two faces, a breadth-first search from its lowest face
-       cuts a twist (a Moebius strip) across where its fronts meet
-       ("cut_edges": a short path of edges from boundary to boundary, or a
-       closed one); then the pairs of rule 3, in face order, join the parts
+       by edges of two faces, a twist (a Moebius strip) is cut across where
+       the fronts of a breadth-first search from the face farthest from the
+       part's boundary meet ("cut_edges": a short path of edges from
+       boundary to boundary, or a closed one); then the pairs of rule 3, in face order, join the parts
        they connect, and a pair that would join two faces already oriented
        against it is left unpaired ("cut_nonmanifold_edges"). Nothing is cut
        where every part orients with its pairs;

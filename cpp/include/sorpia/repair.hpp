@@ -80,10 +80,12 @@ struct RepairResult {
 ///    or two faces;
 /// 4. the joins no orientation of the faces keeps are broken, each face then
 ///    bordering the edge alone. First, per part of faces joined by edges of
-///    two faces, a breadth-first search from the part's lowest face orients
-///    the faces it reaches and cuts each join that disagrees: a twist (a
-///    Moebius strip) is cut across, where the search's two fronts meet
-///    ("cut_edges"); then the pairs of rule 3, in face order, join the parts
+///    two faces, a breadth-first search orients the faces it reaches; where
+///    a join disagrees (a twist: a Moebius strip, a Klein bottle), a search
+///    from the face farthest from the part's boundary (the lowest of those;
+///    the part's lowest face where it has no boundary) cuts each join that
+///    disagrees, across a band where its two fronts meet ("cut_edges");
+///    then the pairs of rule 3, in face order, join the parts
 ///    they connect, and a pair that would join two faces already oriented
 ///    against it is left unpaired ("cut_nonmanifold_edges"). Where every
 ///    part can be oriented with its pairs (as whenever the pairs run their
