@@ -129,6 +129,39 @@ def test_bad_arrays_are_refused_with_the_index(vertices, faces, exc, match):
         sorpia.limit_points(vertices, faces)
 
 
+# Two faces with the same vertices in the opposite order (issue 20, item 1): alone, a closed 'pillow' of two faces;
+# beside other faces (of another size they took the polygon path, which let them through and the solve
+# diverged). Refused in every case naming both; repair removes the second.
+PILLOWS = {
+    "triangles-alone": [[0, 1, 2], [0, 2, 1]],
+    "triangles-and-a-triangle": [[0, 1, 2], [0, 2, 1], [3, 4, 5]],
+    "triangles-and-a-quad": [[0, 1, 2], [0, 2, 1], [3, 4, 5, 6]],
+    "triangles-and-a-quad-on-an-edge": [[0, 1, 2], [0, 2, 1], [1, 3, 4, 2]],
+    "quads-alone": [[0, 1, 2, 3], [0, 3, 2, 1]],
+    "quads-and-a-quad": [[0, 1, 2, 3], [0, 3, 2, 1], [4, 5, 6, 7]],
+    "quads-and-a-triangle": [[0, 1, 2, 3], [0, 3, 2, 1], [4, 5, 6]],
+}
+
+
+@pytest.mark.parametrize("faces", PILLOWS.values(), ids=PILLOWS.keys())
+def test_reversed_duplicates_are_refused_whatever_else_the_mesh_has(faces):
+    from test_fuzz import mesh_problems
+
+    assert "duplicate faces" in mesh_problems(faces, 8)  # the independent checker's verdict
+    v = np.random.default_rng(0).normal(size=(8, 3))
+    first, second = (" ".join(map(str, f)).replace(" ", ", ") for f in faces[:2])
+    for call in (lambda: sorpia.interpolate(v, faces, scheme="catmull-clark"),
+                 lambda: sorpia.interpolate(v, faces, scheme="catmull-clark", nonmanifold="sharp")):
+        with pytest.raises(sorpia.MeshError, match=rf"duplicate faces: face 0 \({first}\) and face 1 "
+                           rf"\({second}\) have the same .*opposite.*; sorpia.repair .* removes the second"):
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", sorpia.UnreferencedVerticesWarning)
+                warnings.simplefilter("ignore", sorpia.NonmanifoldWarning)  # a third face on an edge
+                call()
+    r = sorpia.repair(v, faces)
+    assert r.report["reversed_duplicate_faces"] == [1] and r.face_map.tolist() == [0] + list(range(2, len(faces)))
+
+
 def test_every_refusal_is_a_value_or_type_error():
     # The sorpia exceptions are ValueError subclasses: `except ValueError` catches bad input of every kind.
     assert issubclass(sorpia.MeshError, ValueError)
