@@ -15,6 +15,7 @@ from .io import read_mesh, write_mesh
 from .sharp import sharp_edges
 from ._validate import Polygons
 from .mesh_repair import RepairResult, repair
+from .meshinfo import mesh_statistics
 from .surface import LimitSurface, evaluate_limit, limit_surface
 from . import shapes
 
@@ -34,5 +35,6 @@ __all__ = [
     "LimitSurface", "evaluate_limit", "limit_surface", "read_mesh", "write_mesh",
     "UnknownTagWarning", "sharp_edges",
     "RepairResult", "repair",
+    "mesh_statistics",
     "NonmanifoldWarning",
 ]
