@@ -80,6 +80,19 @@ void check_tags(const Tags& tags, std::size_t n_vertices, std::size_t n_faces) {
                       ": a crease edge joins two distinct vertices");
   check_indices(tags.corner_vertices.data(), tags.n_corners(), 1, n_vertices, "corners", "vertex");
   check_indices(tags.holes.data(), tags.holes.size(), 1, n_faces, "holes", "face");
+  if (n_faces > 0 && tags.holes.size() >= n_faces) {  // every face a hole: no surface at all
+    std::vector<char> hole(n_faces, 0);
+    std::size_t distinct = 0;
+    for (const std::int32_t h : tags.holes) {
+      char& seen = hole[static_cast<std::size_t>(h)];
+      distinct += seen ? 0 : 1;
+      seen = 1;
+    }
+    if (distinct == n_faces)
+      throw MeshError("holes: every one of the " + std::to_string(n_faces) +
+                      " faces is a hole, so the limit surface is empty: there is nothing to interpolate, evaluate "
+                      "or draw");
+  }
   check_sharpness(tags.crease_sharpness, "creases");
   check_sharpness(tags.corner_sharpness, "corners");
 }

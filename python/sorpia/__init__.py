@@ -10,7 +10,7 @@ from .errors import MeshError, MeshFileError, ParameterError
 from .limit import UnreferencedVerticesWarning, limit_matrix, limit_points
 from .solve import (ConvergenceWarning, InterpolationResult, Interpolator, OmegaWarning, SingularMatrixWarning,
                     interpolate)
-from .io import UnknownTagWarning, read_mesh, write_mesh
+from .io import AttributeWarning, FaceVarying, UnknownTagWarning, read_mesh, write_mesh
 from .sharp import sharp_edges
 from ._validate import Polygons
 from .mesh_repair import RepairResult, repair
@@ -31,7 +31,7 @@ __all__ = [
     "limit_points",
     "shapes",
     "LimitSurface", "LoopSurface", "evaluate_limit", "limit_surface", "read_mesh", "write_mesh",
-    "UnknownTagWarning", "sharp_edges",
+    "UnknownTagWarning", "AttributeWarning", "FaceVarying", "sharp_edges",
     "RepairResult", "repair",
     "NonmanifoldWarning",
 ]

@@ -60,7 +60,8 @@ struct Tags {
 
 /// Checks what can be checked without the topology: array sizes, vertex and
 /// face indices in range, a crease's two ends distinct, sharpness not NaN and
-/// not negative. Messages name the tag ("creases[3] = [4, 4]: ...").
+/// not negative, not every face a hole (an empty limit surface). Messages
+/// name the tag ("creases[3] = [4, 4]: ...").
 /// Whether a crease is an edge of the mesh is checked against the topology.
 /// @throw MeshError
 void check_tags(const Tags& tags, std::size_t n_vertices, std::size_t n_faces);
