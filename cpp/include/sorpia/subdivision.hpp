@@ -60,10 +60,16 @@ struct Tags {
 
 /// Checks what can be checked without the topology: array sizes, vertex and
 /// face indices in range, a crease's two ends distinct, sharpness not NaN and
-/// not negative, not every face a hole (an empty limit surface). Messages
-/// name the tag ("creases[3] = [4, 4]: ...").
+/// not negative. Messages name the tag ("creases[3] = [4, 4]: ...").
 /// Whether a crease is an edge of the mesh is checked against the topology.
 /// @throw MeshError
 void check_tags(const Tags& tags, std::size_t n_vertices, std::size_t n_faces);
+
+/// Checks that the holes (already in range, check_tags) leave a face with a
+/// limit surface: a mesh of holes only has nothing to interpolate or evaluate,
+/// though a file may hold it. Called where tags meet a mesh to solve or
+/// evaluate (the limit operator, the surface's refiner).
+/// @throw MeshError
+void check_surface_left(const Tags& tags, std::size_t n_faces);
 
 }  // namespace sorpia
