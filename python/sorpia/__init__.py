@@ -1,8 +1,9 @@
-"""sorpia: interpolating Loop subdivision surfaces.
+"""sorpia: interpolating subdivision surfaces.
 
-Moves the control vertices of a triangle mesh so that its Loop limit surface
-(as OpenSubdiv defines it) passes through the given vertices: solves B V = V0
-with SOR-PIA and the rest of the PIA family.
+Moves the control vertices of a mesh so that its limit surface (Loop for
+triangles, Catmull-Clark for quads and polygons, with OpenSubdiv's creases,
+corners and holes, as OpenSubdiv defines them) passes through the given
+vertices: solves B V = V0 with SOR-PIA and the rest of the PIA family.
 """
 
 from ._core import __version__
