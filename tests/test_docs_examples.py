@@ -132,3 +132,29 @@ def test_shell_examples_run(page, example_folder, command):
                     f"{page_id(page)}: {line!r} is neither run by this test nor listed in NOT_RUN with a reason")
     if not ran:
         pytest.skip(f"{page_id(page)}: every shell line is in NOT_RUN (set-up, build or benchmark)")
+
+
+def test_help_texts_hold_for_what_each_command_does():
+    """Each command's help names only options it has and outputs it writes, and no scheme as the only one."""
+    from sorpia.cli import build_parser
+    from sorpia.cli.common import CLI_SCHEMES
+
+    parser = build_parser()
+    subparsers = next(a for a in parser._actions if a.__class__.__name__ == "_SubParsersAction").choices
+    for name, sub in subparsers.items():
+        options = {o for a in sub._actions for o in a.option_strings}
+        own = " ".join(" ".join(filter(None, [sub.description, *(a.help for a in sub._actions)])).split())
+        text = own + " " + " ".join((sub.epilog or "").split())
+        mentioned = set(re.findall(r"(?<![\w-])--[a-z][a-z-]*", own))  # the exit codes' text is the program's
+        # --scheme names a value of another command's option only where this command has --scheme.
+        assert mentioned <= options, (name, mentioned - options)
+        solves = name in ("fit", "compare", "render", "demo")
+        assert ("1 a solve stopped" in text) == solves, name
+        # The control mesh is written by fit alone.
+        assert ("control mesh is written" in text) == (name == "fit"), name
+        # No claim that holds for one scheme only, where the command takes both.
+        if "--scheme" in options:
+            assert set(sub._option_string_actions["--scheme"].choices) == set(CLI_SCHEMES)
+            for one_scheme in ("a triangle mesh", "triangles per input triangle", "Loop limit surface interpolates",
+                               "whether Loop PIA can run"):
+                assert one_scheme not in text, (name, one_scheme)
