@@ -163,8 +163,17 @@ extern thread_local double estimate_seconds_on_this_thread;
 // x[k] *= 2^e for k < n (exactly, or rounded as ldexp rounds a subnormal).
 void scale_pow2(double* x, std::size_t n, int e);
 
+// The exponent e with 2^e ~ max |v0| when |e| > 200, else 0. The methods solve
+// for V0 / 2^e: multiplying by a power of two is exact and B is linear, so the
+// iterates are those of V0 scaled, and norms can neither overflow (|v| > 1e154
+// squares to inf) nor underflow. Within 2^+-200 no squared norm down to
+// rounding level (2^-53 max |v0|) can do either, and the scaling would change
+// no bit of any iterate: then V0 is used as it is, without a copy.
+int scale_exponent(const double* v0, std::size_t count);
+
 // Records E_k / E_0 and decides when to stop (paper section 5), the same for
-// every method. A run whose error grows past 1e6 E_0 or turns non-finite
+// every method. A run whose error grows past 1e6 times the larger of E_0 and
+// the start's error (a warm start far off iterates) or turns non-finite
 // stops as diverged while the iterate is still finite. E_k at rounding level
 // (at most 64 eps max_i ||v_i^0||: nearly flat input, where E_0 itself is
 // rounding noise) counts as converged: no method can go below it.
@@ -192,6 +201,7 @@ class Monitor {
     const double e0 = std::isnan(reference_) ? e : reference_;
     res_.initial_error = e0;
     e0_ = e0;
+    limit_ = divergence_limit * std::max(1.0, e / e0);
     if (!(e0 > 0.0)) {
       res_.errors.push_back(0.0);
       res_.iterations = 0;
@@ -218,7 +228,7 @@ class Monitor {
     res_.errors.push_back(rel);
     res_.iterations = k;
     const bool asked = opt_.callback && opt_.callback(k, rel);
-    if (!std::isfinite(rel) || rel > divergence_limit) return stop(StopReason::Diverged);
+    if (!std::isfinite(rel) || rel > limit_) return stop(StopReason::Diverged);
     if (rel < opt_.tol || e <= floor_) return stop(StopReason::Converged);
     if (asked) return stop(StopReason::Callback);
     if (k >= opt_.max_iter) return stop(StopReason::MaxIter);
@@ -235,6 +245,7 @@ class Monitor {
   double floor_;
   double e0_ = 0.0;
   double reference_ = NAN;
+  double limit_ = divergence_limit;  // E_k / E_0 beyond which the run diverged
 };
 
 // "sor" and "gs" (solver_sweep.cpp) on (n, 3) data: sweeps of V0 / 2^exponent
