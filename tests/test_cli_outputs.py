@@ -106,6 +106,34 @@ def test_fit_carries_texture_coordinates_through_triangulate_and_repair(tmp_path
             assert tuple(got[t, c]) == value[(f, int(vertex_map[v]))]
 
 
+def test_repair_keeps_texture_coordinates_and_normals(tmp_path, monkeypatch, command):
+    monkeypatch.chdir(tmp_path)
+    # A quad grid with face 2 given twice and face 4 reversed; corner j of face f has texture coordinate (f, j)
+    # and normal (0, f, j): a seam everywhere, so only a per-corner reading can pass.
+    V, F = sorpia.shapes.quad_grid(4, 4)
+    F = np.vstack([F, F[2:3]])
+    F[4] = F[4, ::-1]
+    lines = [f"v {x!r} {y!r} {z!r}" for x, y, z in V.tolist()]
+    lines += [f"vt {f} {j}" for f in range(len(F)) for j in range(4)]
+    lines += [f"vn 0 {f} {j}" for f in range(len(F)) for j in range(4)]
+    lines += ["f " + " ".join(f"{v + 1}/{4 * f + j + 1}/{4 * f + j + 1}" for j, v in enumerate(face))
+              for f, face in enumerate(F)]
+    (tmp_path / "in.obj").write_text("\n".join(lines) + "\n")
+    code, _, err = command("repair", "in.obj", "-o", "out.obj", "--report", "r.json")
+    assert code == 0, err
+    report = json.loads((tmp_path / "r.json").read_text())
+    vertex_map, face_map = np.asarray(report["vertex_map"]), np.asarray(report["face_map"])
+    _, G, attributes = sorpia.read_mesh("out.obj", attributes=True)
+    assert len(G) == len(F) - 1  # the duplicate dropped
+    uv = attributes["uvs"].values[attributes["uvs"].indices].reshape(len(G), 4, 2)
+    normals = attributes["normals"].values[attributes["normals"].indices].reshape(len(G), 4, 3)
+    for g, face in enumerate(G):
+        f = int(face_map[g])
+        for c, v in enumerate(face):
+            j = F[f].tolist().index(int(vertex_map[v]))  # the input corner at the same input vertex
+            assert tuple(uv[g, c]) == (f, j) and tuple(normals[g, c]) == (0, f, j)
+
+
 def test_ply_control_mesh_takes_per_vertex_uvs_and_a_seam_is_warned_before_the_solve(tmp_path, monkeypatch,
                                                                                        command):
     monkeypatch.chdir(tmp_path)

@@ -148,45 +148,59 @@ def _tags_to_write(output, tags: dict, boundary: str, mesh) -> dict:
 ATTRIBUTE_LABELS = {"uvs": "texture coordinates", "normals": "normals"}
 
 
-def _attributes_to_write(output, attributes: dict, faces, n_vertices: int) -> tuple[dict, dict]:
-    """The input's texture coordinates and normals the control mesh is written
-    with, and a note on each: {name: "written" or why not}.
+def _attributes_to_write(output, attributes: dict, faces, n_vertices: int, keep_normals: bool = False
+                         ) -> tuple[dict, dict]:
+    """The input's texture coordinates and normals an output is written with,
+    and a note on each: {name: "written" or why not}.
 
     Texture coordinates are carried: the control mesh has the input's faces,
     and OpenSubdiv interpolates face-varying data over the control mesh's faces
-    (as the input's were meant to be). Normals are not: they describe the
-    input surface, the control mesh is no surface to shade (a subdivision
-    renderer takes the limit surface's normals from its derivatives), and the
-    limit surface through the targets has its own normals there. A format that
-    cannot hold texture coordinates (OFF, STL; PLY where a vertex has several,
-    a seam) leaves them out with a warning, before the solve."""
-    normals = {"normals": "not written: they are the input surface's; the limit surface has its own"} if (
-        "normals" in attributes) else {}
-    if "uvs" not in attributes:
-        return {}, normals
+    (as the input's were meant to be). Normals only with `keep_normals` (a
+    repaired mesh, the same surface): a control mesh's are not written, since
+    they describe the input surface, the control mesh is no surface to shade
+    (a subdivision renderer takes the limit surface's normals from its
+    derivatives), and the limit surface through the targets has its own
+    normals there. A format that cannot hold them (OFF, STL; PLY where a
+    vertex has several, a seam) leaves them out with a warning, before the
+    solve."""
+    written, notes = {}, {}
+    for name, channel in attributes.items():
+        if name == "normals" and not keep_normals:
+            notes[name] = "not written: they are the input surface's; the limit surface has its own"
+            continue
+        reason = _unwritable(output, channel, faces, n_vertices, 3 if name == "normals" else 2)
+        if reason is None:
+            written[name], notes[name] = channel, "written"
+            continue
+        label = ATTRIBUTE_LABELS[name]
+        warn_once(f"-o {output}: the input's {label} are not written: {reason}; write .obj to keep them")
+        notes[name] = f"not written: {reason}; .obj holds them per face corner"
+    return written, notes
+
+
+def _unwritable(output, channel, faces, n_vertices: int, width: int) -> str | None:
+    """Why `output`'s format cannot hold the face-varying `channel`, or None:
+    OFF and STL hold none, PLY one value of `width` numbers per vertex (the
+    check write_mesh makes, sorpia::detail::io::per_vertex_values, made here
+    before the solve)."""
     suffix = Path(output).suffix.lower()
-    reason = None
     if suffix in (".off", ".stl"):
-        reason = f"{suffix[1:].upper()} has no texture coordinates"
-    elif suffix == ".ply":
-        uvs = attributes["uvs"]
-        corners = np.asarray(faces).reshape(-1) if isinstance(faces, np.ndarray) else np.asarray(
-            faces.face_vertex_indices)
-        # The check write_mesh makes (sorpia::detail::io::per_vertex_values), made here before the solve.
-        values = uvs.values[uvs.indices]
-        first = np.zeros((n_vertices, values.shape[1]))
-        used, first_corner = np.unique(corners, return_index=True)
-        first[used] = values[first_corner]  # the value of each vertex's first corner
-        seams = np.flatnonzero((first[corners] != values).any(axis=1))
-        if uvs.values.shape[1] != 2:
-            reason = "PLY stores 2 texture coordinates per vertex, these have 3"
-        elif len(seams):
-            reason = (f"PLY stores them per vertex, and vertex {int(corners[seams[0]])} has several (a seam; "
-                      f"{len(np.unique(corners[seams]))} such vertices)")
-    if reason is None:
-        return {"uvs": attributes["uvs"]}, {"uvs": "written", **normals}
-    warn_once(f"-o {output}: the input's texture coordinates are not written: {reason}; write .obj to keep them")
-    return {}, {"uvs": f"not written: {reason}; .obj holds them per face corner", **normals}
+        return f"{suffix[1:].upper()} has no per-vertex or per-corner values"
+    if suffix != ".ply":
+        return None
+    if channel.values.shape[1] != width:
+        return f"PLY stores {width} numbers per vertex, these have {channel.values.shape[1]}"
+    corners = np.asarray(faces).reshape(-1) if isinstance(faces, np.ndarray) else np.asarray(
+        faces.face_vertex_indices)
+    values = channel.values[channel.indices]
+    first = np.zeros((n_vertices, width))
+    used, first_corner = np.unique(corners, return_index=True)
+    first[used] = values[first_corner]  # the value of each vertex's first corner
+    seams = np.flatnonzero((first[corners] != values).any(axis=1))
+    if len(seams):
+        return (f"PLY stores them per vertex, and vertex {int(corners[seams[0]])} has several (a seam; "
+                f"{len(np.unique(corners[seams]))} such vertices)")
+    return None
 
 
 def _check_outputs_hold(output, surface, faces, scheme: str, level: int) -> None:
