@@ -79,17 +79,25 @@ def test_fit_carries_texture_coordinates_not_normals(tmp_path, monkeypatch, comm
     assert "texture coordinates written" in stdout
 
 
-def test_fit_carries_texture_coordinates_through_triangulate_and_repair(tmp_path, monkeypatch, command):
-    monkeypatch.chdir(tmp_path)
-    # A quad grid whose face 3 is given twice (repair drops one) and face 5 reversed (repair flips it back),
-    # with a seam: each face's corners have their own texture coordinates (face f, corner j: (f, j)).
+def seam_file(path, normals: bool):
+    """A quad grid whose face 3 is given twice (repair drops one) and face 5 reversed (repair flips it back),
+    written by hand with a seam everywhere: corner j of face f has texture coordinate (f, j) (and normal
+    (0, f, j)), so only a per-corner reading passes. Returns the faces as written."""
     V, F = sorpia.shapes.quad_grid(5, 4)
     F = np.vstack([F, F[3:4]])
     F[5] = F[5, ::-1]
+    corner = (lambda f, j: f"{4 * f + j + 1}/{4 * f + j + 1}") if normals else (lambda f, j: f"{4 * f + j + 1}")
     lines = [f"v {x!r} {y!r} {z!r}" for x, y, z in V.tolist()]
     lines += [f"vt {f} {j}" for f in range(len(F)) for j in range(4)]
-    lines += ["f " + " ".join(f"{v + 1}/{4 * f + j + 1}" for j, v in enumerate(face)) for f, face in enumerate(F)]
-    (tmp_path / "seams.obj").write_text("\n".join(lines) + "\n")
+    lines += [f"vn 0 {f} {j}" for f in range(len(F)) for j in range(4)] if normals else []
+    lines += ["f " + " ".join(f"{v + 1}/{corner(f, j)}" for j, v in enumerate(face)) for f, face in enumerate(F)]
+    path.write_text("\n".join(lines) + "\n")
+    return F
+
+
+def test_fit_carries_texture_coordinates_through_triangulate_and_repair(tmp_path, monkeypatch, command):
+    monkeypatch.chdir(tmp_path)
+    F = seam_file(tmp_path / "seams.obj", normals=False)
     # Independent: the value of (input face, input vertex) straight from the lines above.
     value = {(f, int(v)): (float(f), float(j)) for f, face in enumerate(F) for j, v in enumerate(face)}
     code, _, err = command("fit", "seams.obj", "-o", "c.obj", "--repair", "--triangulate", "--report", "r.json")
@@ -108,17 +116,7 @@ def test_fit_carries_texture_coordinates_through_triangulate_and_repair(tmp_path
 
 def test_repair_keeps_texture_coordinates_and_normals(tmp_path, monkeypatch, command):
     monkeypatch.chdir(tmp_path)
-    # A quad grid with face 2 given twice and face 4 reversed; corner j of face f has texture coordinate (f, j)
-    # and normal (0, f, j): a seam everywhere, so only a per-corner reading can pass.
-    V, F = sorpia.shapes.quad_grid(4, 4)
-    F = np.vstack([F, F[2:3]])
-    F[4] = F[4, ::-1]
-    lines = [f"v {x!r} {y!r} {z!r}" for x, y, z in V.tolist()]
-    lines += [f"vt {f} {j}" for f in range(len(F)) for j in range(4)]
-    lines += [f"vn 0 {f} {j}" for f in range(len(F)) for j in range(4)]
-    lines += ["f " + " ".join(f"{v + 1}/{4 * f + j + 1}/{4 * f + j + 1}" for j, v in enumerate(face))
-              for f, face in enumerate(F)]
-    (tmp_path / "in.obj").write_text("\n".join(lines) + "\n")
+    F = seam_file(tmp_path / "in.obj", normals=True)
     code, _, err = command("repair", "in.obj", "-o", "out.obj", "--report", "r.json")
     assert code == 0, err
     report = json.loads((tmp_path / "r.json").read_text())
