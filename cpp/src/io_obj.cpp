@@ -193,6 +193,7 @@ struct CornerValues {
   std::vector<std::int32_t> indices;
   std::vector<std::pair<std::size_t, std::size_t>> pending;  // (corner, line): indices past the values read so far
   bool any = false;                  // a corner names a value
+  std::size_t leading = 0;           // corners naming none before the first that does (a file without any: no list)
 
   void add_value(const FileData& f, const Where& w, std::string_view rest, int min, int max) {
     std::string_view tok;
@@ -209,9 +210,13 @@ struct CornerValues {
   // Index text `t` of a corner ("" for none), OBJ's 1-based or negative relative form.
   void add_index(const FileData& f, const Where& w, std::string_view t) {
     if (t.empty()) {
-      indices.push_back(-1);
+      if (any)
+        indices.push_back(-1);
+      else
+        ++leading;
       return;
     }
+    if (!any) indices.assign(leading, -1);
     const auto n = static_cast<long long>(values.size() / 3);
     long long i = 0;
     if (!parse_int(t, i)) fail(f, w, std::string("expected a ") + what + " index, found " + quoted(t));
