@@ -234,6 +234,12 @@ def _valid_files():
                 with open(path, "rb") as fh:
                     out[f"{name}{'-binary' if binary else ''}.{ext}"] = fh.read()
     out["quad.obj"] = b"v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvn 0 0 1\nf 1/1/1 2/1/1 3/1/1 4/1/1\n"
+    out["uv.obj"] = (b"v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 2 0 0\nvt 0 0\nvt 1 0\nvt 1 1 0.5\nvn 0 0 1\n"
+                     b"f 1/1/1 2/2/1 3/3/1 4/1/1\nf 2/-1/-1 5/2/1 3/-2/1\n")
+    out["uv.ply"] = (b"ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
+                     b"property float u\nproperty float v\nproperty float nx\nproperty float ny\nproperty float nz\n"
+                     b"element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0 0 0 0 0 1\n"
+                     b"1 0 0 1 0 0 0 1\n1 1 0 1 1 0 0 1\n0 1 0 0 1 0 0 1\n4 0 1 2 3\n")
     out["tags.obj"] = (b"v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 2 0 0\nv 2 1 0\nf 1 2 3 4\nf 2 5 3\nf 5 6 3\n"
                        b"t crease 2/1/0 0 1 2.5\nt crease 4/2/0 1 2 4 5 10 0.5\nt corner 1/1/0 4 0.7\nt hole 1/0/0 1\n"
                        b"t interpolateboundary 1/0/0 2\nt creasemethod 0/0/1 normal\n")
@@ -289,7 +295,8 @@ def test_corrupted_files_read_or_fail_cleanly(name, edits, triangulate):
         try:
             with warnings.catch_warnings():  # a corrupted tag name is an unknown tag: skipped with a warning
                 warnings.simplefilter("ignore", sorpia.UnknownTagWarning)
-                v, f, tags = sorpia.read_mesh(path, triangulate=triangulate, tags=True)
+                warnings.simplefilter("ignore", sorpia.AttributeWarning)  # a corrupted corner loses its vt
+                v, f, tags, attributes = sorpia.read_mesh(path, triangulate=triangulate, tags=True, attributes=True)
         except sorpia.MeshFileError as e:
             # The message names the file and is printable (it goes to a terminal or a log).
             assert str(e).startswith(path) and str(e).isprintable(), str(e)
@@ -311,6 +318,9 @@ def test_corrupted_files_read_or_fail_cleanly(name, edits, triangulate):
     for kind, (indices, sharpness) in ((k, tags[k]) for k in ("creases", "corners") if k in tags):
         assert indices.min() >= 0 and indices.max() < len(v) and (sharpness >= 0).all(), kind
     assert "holes" not in tags or (tags["holes"].min() >= 0 and tags["holes"].max() < n_faces)
+    for name, (values, indices) in attributes.items():  # a value for every corner, finite, in range
+        assert values.ndim == 2 and np.isfinite(values).all() and len(indices) == len(corners), name
+        assert indices.min() >= 0 and indices.max() < len(values), name
     if not (isinstance(f, np.ndarray) and f.shape[1] == 3):
         return  # the topology checks below are Loop's
     # ... and a triangle mesh is then either a valid mesh or refused by the topology checks, never anything else.

@@ -14,19 +14,20 @@ using namespace pybind11::literals;
 void bind_io(py::module_& m) {
   m.def(
       "read_mesh",
-      [](const std::string& path, bool triangulate, bool tags) {
+      [](const std::string& path, bool triangulate, bool tags, bool attributes) {
         sorpia::MeshFile mesh;
         // A read interrupted by a signal (waiting on a pipe, a device) runs
         // Python's signal handlers: KeyboardInterrupt, or whatever a handler
         // raises, ends the read; a handler that returns lets it go on.
         {
           LongCall call;
-          mesh = sorpia::read_mesh(path, sorpia::ReadOptions{triangulate, tags});
+          mesh = sorpia::read_mesh(path, sorpia::ReadOptions{triangulate, tags, attributes});
         }
         // sorpia.io.read_mesh makes its result of: vertices (n, 3); the faces,
         // (m, face_size) when face_sizes is None, else the flat corner list;
-        // face_sizes; polygons split; and, with tags, (Tags, Boundary or None,
-        // unknown tag names).
+        // face_sizes; polygons split; with tags, (Tags, Boundary or None,
+        // unknown tag names); with attributes, ((uv values, uv indices) or
+        // None, (normal values, normal indices) or None).
         const bool uniform = mesh.face_sizes.empty();
         py::object sizes = uniform ? py::object(py::none()) : py::object(to_numpy(std::move(mesh.face_sizes), 0));
         py::object file_tags = py::none();
@@ -34,16 +35,24 @@ void bind_io(py::module_& m) {
           py::object boundary = mesh.tags.boundary ? py::cast(*mesh.tags.boundary) : py::object(py::none());
           file_tags = py::make_tuple(py::cast(std::move(mesh.tags.tags)), boundary, py::cast(mesh.tags.unknown));
         }
+        const auto channel = [](sorpia::FaceVarying& c) -> py::object {
+          if (c.empty()) return py::none();
+          return py::make_tuple(to_numpy(std::move(c.values), c.width), to_numpy(std::move(c.indices), 0));
+        };
+        py::object file_attributes = attributes ? py::object(py::make_tuple(channel(mesh.uvs), channel(mesh.normals)))
+                                                : py::object(py::none());
         return py::make_tuple(to_numpy(std::move(mesh.vertices), 3),
                               to_numpy(std::move(mesh.faces), uniform ? mesh.face_size : 0), sizes,
-                              mesh.polygons_split, file_tags);
+                              mesh.polygons_split, file_tags, file_attributes);
       },
-      "path"_a, "triangulate"_a, "tags"_a);
+      "path"_a, "triangulate"_a, "tags"_a, "attributes"_a);
   m.def(
       "write_mesh",
       [](const std::string& path, const Vertices& vertices, const Faces& faces, const std::optional<Faces>& face_sizes,
          std::int32_t face_size, bool binary, const std::optional<sorpia::Tags>& tags,
-         std::optional<sorpia::Boundary> boundary) {
+         std::optional<sorpia::Boundary> boundary, const std::optional<Vertices>& uv_values,
+         const std::optional<Faces>& uv_indices, const std::optional<Vertices>& normal_values,
+         const std::optional<Faces>& normal_indices) {
         check_shape(vertices, 3, "vertices");
         sorpia::MeshView view;
         view.vertices = vertices.data();
@@ -66,6 +75,20 @@ void bind_io(py::module_& m) {
             throw sorpia::ParameterError("write_mesh: the faces do not divide into faces of " +
                                          std::to_string(face_size));
         }
+        // Texture coordinates and normals: (values (k, width), one index per corner), shapes checked by sorpia.io.
+        const auto channel = [&](const std::optional<Vertices>& values, const std::optional<Faces>& indices,
+                                 sorpia::FaceVaryingView& out, const char* what) {
+          if (!values || !indices) return;
+          if (values->ndim() != 2 || static_cast<std::size_t>(indices->size()) != static_cast<std::size_t>(faces.size()))
+            throw sorpia::ParameterError(std::string("write_mesh: ") + what +
+                                         " need (values (k, width), one index per face corner)");
+          out.values = values->data();
+          out.n_values = static_cast<std::size_t>(values->shape(0));
+          out.width = static_cast<int>(values->shape(1));
+          out.indices = indices->data();
+        };
+        channel(uv_values, uv_indices, view.uvs, "texture coordinates");
+        channel(normal_values, normal_indices, view.normals, "normals");
         sorpia::FileTags file_tags;
         if (tags) file_tags.tags = *tags;
         file_tags.boundary = boundary;
@@ -73,7 +96,8 @@ void bind_io(py::module_& m) {
         sorpia::write_mesh(path, view, binary, &file_tags);
       },
       "path"_a, "vertices"_a.noconvert(), "faces"_a.noconvert(), "face_sizes"_a.noconvert(), "face_size"_a,
-      "binary"_a, "tags"_a, "boundary"_a);
+      "binary"_a, "tags"_a, "boundary"_a, "uv_values"_a.noconvert() = py::none(), "uv_indices"_a.noconvert() = py::none(),
+      "normal_values"_a.noconvert() = py::none(), "normal_indices"_a.noconvert() = py::none());
   m.def(
       "write_file_atomic",
       [](const std::string& path, const py::bytes& data) {

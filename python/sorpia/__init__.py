@@ -7,11 +7,12 @@ given vertices: solves B V = V0 with SOR-PIA and the rest of the PIA family.
 """
 
 from ._core import __version__
-from .errors import (ConvergenceWarning, MeshError, MeshFileError, NonmanifoldWarning, OmegaWarning, ParameterError,
-                     SingularMatrixWarning, SorpiaWarning, UnknownTagWarning, UnreferencedVerticesWarning)
+from .errors import (AttributeWarning, ConvergenceWarning, MeshError, MeshFileError, NonmanifoldWarning, OmegaWarning,
+                     ParameterError, SingularMatrixWarning, SorpiaWarning, UnknownTagWarning,
+                     UnreferencedVerticesWarning)
 from .limit import limit_matrix, limit_points
 from .solve import InterpolationResult, Interpolator, interpolate
-from .io import read_mesh, write_mesh
+from .io import FaceVarying, read_mesh, write_mesh
 from .sharp import sharp_edges
 from ._validate import Polygons
 from .mesh_repair import RepairResult, repair
@@ -33,7 +34,7 @@ __all__ = [
     "limit_points",
     "shapes",
     "LimitSurface", "evaluate_limit", "limit_surface", "read_mesh", "write_mesh",
-    "UnknownTagWarning", "sharp_edges",
+    "UnknownTagWarning", "AttributeWarning", "FaceVarying", "sharp_edges",
     "RepairResult", "repair",
     "mesh_statistics",
     "NonmanifoldWarning",

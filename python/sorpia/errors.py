@@ -53,6 +53,12 @@ class UnknownTagWarning(SorpiaWarning):
     OpenSubdiv's own shape parser skips them."""
 
 
+class AttributeWarning(SorpiaWarning):
+    """A file's texture coordinates or normals that cannot be kept: given on
+    some face corners and not others (OpenSubdiv's face-varying channels need
+    a value at every corner)."""
+
+
 class NonmanifoldWarning(SorpiaWarning):
     """nonmanifold="sharp" on a non-manifold mesh: OpenSubdiv's documentation
     calls the surface of non-manifold topology undefined for now."""
@@ -60,4 +66,4 @@ class NonmanifoldWarning(SorpiaWarning):
 
 __all__ = ["MeshError", "MeshFileError", "ParameterError", "SorpiaWarning", "ConvergenceWarning",
            "SingularMatrixWarning", "OmegaWarning", "UnreferencedVerticesWarning", "UnknownTagWarning",
-           "NonmanifoldWarning"]
+           "AttributeWarning", "NonmanifoldWarning"]

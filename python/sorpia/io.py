@@ -14,10 +14,25 @@ import numpy as np
 
 from . import _core
 from ._validate import Polygons, as_boundary, as_polygons, as_tags, as_vertices
-from .errors import UnknownTagWarning
+from .errors import AttributeWarning, UnknownTagWarning
 
 
-def read_mesh(path, triangulate: bool = False, tags: bool = False):
+class FaceVarying(NamedTuple):
+    """Values given per face corner, as OpenSubdiv's face-varying channels
+    (Far::TopologyDescriptor::FVarChannel) hold them: texture coordinates or
+    normals.
+
+    ``values`` (k, width) float64; ``indices`` (c,) int32, one per face corner
+    in the faces' order (row by row of an (m, k) face array, or
+    ``Polygons.face_vertex_indices``' order): corner j's value is
+    ``values[indices[j]]``. A per-vertex attribute (PLY) has one value per
+    vertex and the faces' vertex indices as ``indices``."""
+
+    values: np.ndarray
+    indices: np.ndarray
+
+
+def read_mesh(path, triangulate: bool = False, tags: bool = False, attributes: bool = False):
     """Read a mesh from an .obj, .off, .ply or .stl file.
 
     Parameters
@@ -65,6 +80,17 @@ def read_mesh(path, triangulate: bool = False, tags: bool = False):
         tags; with ``triangulate`` a hole is every triangle of its face.
         Sharpness is as written (10 and above, or inf, is infinitely sharp;
         a negative one reads as 0, as OpenSubdiv reads it).
+    attributes : dict
+        Only with ``attributes=True`` (returned after the tags when both are
+        asked for): ``uvs`` (texture coordinates) and ``normals``, each a
+        `FaceVarying` (values, one index per face corner), for those the file
+        has: OBJ ``vt`` (2 or 3 numbers) and ``vn`` lines with the faces'
+        ``a/b/c`` indices; PLY per-vertex ``u v`` (or ``s t``, ``texture_u
+        texture_v``, ``texture_s texture_t``) and ``nx ny nz``. With
+        ``triangulate`` each triangle corner keeps the value of its polygon's
+        corner. OBJ values named by only some corners are dropped with an
+        `AttributeWarning`. ``write_mesh(path, v, f, **attributes)`` writes
+        them back.
 
     Notes
     -----
@@ -81,8 +107,9 @@ def read_mesh(path, triangulate: bool = False, tags: bool = False):
     `UnknownTagWarning`.
 
     **Formats.** OBJ: ``v``, ``f`` and (with ``tags``) ``t`` lines; ``f`` accepts ``a``, ``a/b``, ``a//c``,
-    ``a/b/c`` and negative (relative) indices; texture coordinates, normals,
-    groups, materials and every other statement are ignored.
+    ``a/b/c`` and negative (relative) indices; texture coordinates and
+    normals only with ``attributes``; groups, materials and every other
+    statement are ignored.
     OFF: OFF/COFF/NOFF/STOFF headers (extra per-vertex numbers and face colours
     ignored), ``#`` comments, records running over several lines. PLY: ascii, binary little- and big-endian; x, y, z
     of any numeric type and the ``vertex_indices`` list of the ``face`` element;
@@ -102,10 +129,9 @@ def read_mesh(path, triangulate: bool = False, tags: bool = False):
         ``tags``, a malformed tag, an index out of range, or a rule sorpia
         does not have (above).
     """
-    contents = read_mesh_file(path, triangulate, tags)
-    if not tags:
-        return contents.vertices, contents.faces
-    return contents.vertices, contents.faces, contents.tags
+    contents = read_mesh_file(path, triangulate, tags, attributes)
+    out = (contents.vertices, contents.faces)
+    return out + ((contents.tags,) if tags else ()) + ((contents.attributes,) if attributes else ())
 
 
 class MeshFileContents(NamedTuple):
@@ -115,14 +141,30 @@ class MeshFileContents(NamedTuple):
     faces: object  # (m, k) int32 array or Polygons
     tags: dict | None  # None unless asked for
     polygons_split: int
+    attributes: dict | None = None  # None unless asked for
 
 
-def read_mesh_file(path, triangulate: bool = False, tags: bool = False) -> MeshFileContents:
+def read_mesh_file(path, triangulate: bool = False, tags: bool = False, attributes: bool = False) -> MeshFileContents:
     """`read_mesh` with the count of polygons it split (0 without
-    `triangulate`); warns (UnknownTagWarning) of tags it skipped."""
-    vertices, faces, counts, split, file_tags = _core.read_mesh(os.fsencode(path), bool(triangulate), bool(tags))
+    `triangulate`); warns (UnknownTagWarning) of tags it skipped and
+    (AttributeWarning) of attributes it drops."""
+    vertices, faces, counts, split, file_tags, file_attributes = _core.read_mesh(
+        os.fsencode(path), bool(triangulate), bool(tags), bool(attributes))
     if counts is not None:
         faces = Polygons(counts, faces)
+    attribute_dict = None
+    if attributes:
+        attribute_dict = {}
+        for name, label, channel in zip(("uvs", "normals"), ("texture coordinates", "normals"), file_attributes):
+            if channel is None:
+                continue
+            missing = np.flatnonzero(channel[1] < 0)
+            if len(missing):
+                warnings.warn(f"{os.fsdecode(path)}: {label} dropped: {len(missing)} of {len(channel[1])} face "
+                              f"corners name none (the first is corner {missing[0]}), and a face-varying channel "
+                              "needs one at every corner", AttributeWarning, stacklevel=3)
+                continue
+            attribute_dict[name] = FaceVarying(*channel)
     tag_dict = None
     if tags:
         core_tags, boundary, unknown = file_tags
@@ -130,7 +172,7 @@ def read_mesh_file(path, triangulate: bool = False, tags: bool = False) -> MeshF
         for text in unknown:
             warnings.warn(f"{os.fsdecode(path)}: skipped tag {text}: sorpia does not know it (OpenSubdiv skips it "
                           "too)", UnknownTagWarning, stacklevel=3)
-    return MeshFileContents(vertices, faces, tag_dict, int(split))
+    return MeshFileContents(vertices, faces, tag_dict, int(split), attribute_dict)
 
 
 def tags_dict(core_tags, boundary=None) -> dict:
@@ -148,7 +190,7 @@ def tags_dict(core_tags, boundary=None) -> dict:
 
 
 def write_mesh(path, vertices, faces, binary: bool = False, *, creases=None, corners=None, holes=None,
-               boundary=None) -> None:
+               boundary=None, uvs=None, normals=None) -> None:
     """Write a mesh to an .obj, .off, .ply or .stl file, atomically.
 
     The file is written to a temporary file in the same folder, flushed to disk
@@ -174,6 +216,13 @@ def write_mesh(path, vertices, faces, binary: bool = False, *, creases=None, cor
         written to OBJ as OpenSubdiv's ``t`` lines, one tag a line; another
         format is a ParameterError. Sharpness is written as given (inf as
         ``inf``), exactly.
+    uvs, normals : FaceVarying or (values (k, width), indices (c,)), optional
+        Texture coordinates (width 1 to 3) and normals (width 3), one index per
+        face corner, as `read_mesh` returns them (``attributes=True``): OBJ
+        ``vt``/``vn`` lines and ``f a/b/c`` corners; PLY per-vertex ``u v`` and
+        ``nx ny nz`` (width 2 and 3), where every corner of a vertex must have
+        the same value (a seam is a ParameterError: OBJ holds it); OFF and STL
+        hold neither (ParameterError).
 
     Notes
     -----
@@ -200,7 +249,30 @@ def write_mesh(path, vertices, faces, binary: bool = False, *, creases=None, cor
         n_faces = len(indices) // size if counts is None else len(counts)
         core_tags = as_tags(creases, corners, holes, n_vertices=n, n_faces=n_faces)
     boundary_rule = None if boundary is None else as_boundary(boundary)
-    _core.write_mesh(os.fsencode(path), vertices, indices, counts, size, bool(binary), core_tags, boundary_rule)
+    channels = [_as_face_varying(channel, name, len(indices), width)
+                for channel, name, width in ((uvs, "uvs", (1, 3)), (normals, "normals", (3, 3)))]
+    _core.write_mesh(os.fsencode(path), vertices, indices, counts, size, bool(binary), core_tags, boundary_rule,
+                     *channels[0], *channels[1])
 
 
-__all__ = ["read_mesh", "write_mesh", "UnknownTagWarning"]
+def _as_face_varying(channel, name: str, n_corners: int, widths: tuple[int, int]):
+    """write_mesh's `uvs` or `normals` as (values (k, width) float64, indices (c,) int32), or (None, None)."""
+    from .errors import ParameterError
+
+    if channel is None:
+        return None, None
+    try:
+        values, indices = channel
+    except (TypeError, ValueError):
+        raise ParameterError(f"{name} must be (values (k, width), indices (corners,)), e.g. a FaceVarying") from None
+    values = np.ascontiguousarray(values, dtype=np.float64)
+    indices = np.asarray(indices)
+    if values.ndim != 2 or not widths[0] <= values.shape[1] <= widths[1]:
+        raise ParameterError(f"{name} values must be (k, {widths[0]}..{widths[1]}), got shape {values.shape}")
+    if indices.ndim != 1 or len(indices) != n_corners or not np.issubdtype(indices.dtype, np.integer):
+        raise ParameterError(f"{name} indices must be {n_corners} integers, one per face corner, got shape "
+                             f"{indices.shape} of {indices.dtype}")
+    return values, np.ascontiguousarray(indices, dtype=np.int32)
+
+
+__all__ = ["read_mesh", "write_mesh", "FaceVarying", "AttributeWarning", "UnknownTagWarning"]

@@ -194,18 +194,25 @@ class _Faces:
         return out
 
 
-def crease_curves(surface, faces, edges, samples: int = 9):
+def crease_curves(surface, faces, edges, samples: int = 9, holes=None):
     """The limit curves of crease edges on a `sorpia.LimitSurface`, for
     `interpolation_figure`: (points (k, samples, 3), normals (k, samples, 2,
     3)), the unit normals of the surface on either side of the curve (the
-    same twice on a boundary), evaluated by Bfr along each edge's parameter
-    line (`sorpia.surface.edge_uv`)."""
+    same twice on a boundary or beside a hole), evaluated by Bfr along each
+    edge's parameter line (`sorpia.surface.edge_uv`). `holes`: the surface's
+    hole faces, which have no surface: a side that is a hole takes the other
+    side's values, and an edge both of whose faces are holes has no curve
+    (NaN, which matplotlib leaves undrawn)."""
     from .surface import edge_uv
 
     edges = np.asarray(edges, dtype=np.int64).reshape(-1, 2)
     F = _Faces(faces)
     rows = F.rows()
     sides = F.edge_sides(edges)
+    in_hole = np.isin(sides[:, :, 0], np.asarray(holes if holes is not None else [], dtype=np.int64))
+    sides[in_hole[:, 0], 0] = sides[in_hole[:, 0], 1]
+    sides[in_hole[:, 1], 1] = sides[in_hole[:, 1], 0]
+    no_surface = in_hole.all(axis=1)
     t = np.linspace(0.0, 1.0, samples)
     ids, uv = [], []
     for k, (side_a, side_b) in enumerate(sides.tolist()):
@@ -214,9 +221,13 @@ def crease_curves(surface, faces, edges, samples: int = 9):
             forward = rows[f][j] == edges[k][0]
             ids.append(np.full(samples, f))
             uv.append(edge_uv(surface.scheme, len(rows[f]), j, t if forward else t[::-1]))
-    p, _, _, n = surface.evaluate(np.concatenate(ids), np.concatenate(uv), derivatives=True)
-    p = p.reshape(len(sides), 2, samples, 3)
-    n = n.reshape(len(sides), 2, samples, 3)
+    p = np.full((len(sides), 2, samples, 3), np.nan)
+    n = np.full((len(sides), 2, samples, 3), np.nan)
+    if not no_surface.all():
+        keep = np.repeat(~no_surface, 2 * samples)
+        p_kept, _, _, n_kept = surface.evaluate(np.concatenate(ids)[keep], np.concatenate(uv)[keep], derivatives=True)
+        p[~no_surface] = p_kept.reshape(-1, 2, samples, 3)
+        n[~no_surface] = n_kept.reshape(-1, 2, samples, 3)
     return p[:, 0], np.transpose(n, (0, 2, 1, 3))
 
 
@@ -277,12 +288,14 @@ def _crease_segments(points, normals, view, side, closed):
     """Segments (s, 2, 3) of polylines `points` (k, p, 3) to draw, with the
     unit normals (k, p, 2, 3) of the two sides: on a closed mesh only those
     with a side facing the camera at an end (matplotlib does not hide lines
-    behind a surface)."""
+    behind a surface); none where a point is NaN (no surface: crease_curves)."""
     seg = np.stack([points[:, :-1], points[:, 1:]], axis=2).reshape(-1, 2, 3)
-    if not closed:
-        return seg
-    facing = (side * (normals @ view) > 0).any(axis=2)  # (k, p): a side faces the camera
-    return seg[(facing[:, :-1] | facing[:, 1:]).ravel()]
+    keep = np.isfinite(seg).all(axis=(1, 2))
+    if closed:
+        with np.errstate(invalid="ignore"):
+            facing = (side * (normals @ view) > 0).any(axis=2)  # (k, p): a side faces the camera
+        keep &= (facing[:, :-1] | facing[:, 1:]).ravel()
+    return seg[keep]
 
 
 def interpolation_figure(vertices, faces, given_surface, control_vertices, fitted_surface, *,

@@ -161,6 +161,64 @@ TEST_F(IoTest, TagsRoundTripBitForBit) {
   sorpia_test::expect_error<sorpia::ParameterError>([&] { sorpia::write_mesh(path("out.ply"), view, false, &m.tags); }, {".obj files only"});
 }
 
+// Texture coordinates and normals: per corner from OBJ (the values each corner names in the text, relative indices
+// too), kept through triangulation by vertex, written back as "f a/b/c"; per vertex from and to PLY.
+TEST_F(IoTest, ObjFaceVaryingValuesFollowTheirCorners) {
+  write_text("in.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 2 0 0\nvt 0 0\nvt 0.5 0\nvt 0.5 0.5\nvt 0 0.5\n"
+                       "vt 0.75 0.25\nvn 0 0 1\nf 1/1/1 2/2/1 3/3/1 4/4/1\nf 2/-1/-1 5/-1/1 3/3/1\n");
+  sorpia::ReadOptions options;
+  options.attributes = true;
+  const auto m = sorpia::read_mesh(path("in.obj"), options);
+  ASSERT_EQ(m.uvs.width, 2);
+  EXPECT_EQ(m.uvs.indices, (std::vector<std::int32_t>{0, 1, 2, 3, 4, 4, 2}));  // vt -1 of 5 read: the 5th (index 4)
+  EXPECT_EQ(m.normals.indices, (std::vector<std::int32_t>(7, 0)));
+  EXPECT_EQ(m.uvs.values[2 * 4], 0.75);
+  // Triangulated: each triangle corner keeps the value its quad corner had at the same vertex.
+  options.triangulate = true;
+  const auto t = sorpia::read_mesh(path("in.obj"), options);
+  ASSERT_EQ(t.faces.size(), t.uvs.indices.size());
+  const std::int32_t quad_value[4] = {0, 1, 2, 3};  // vertex v of the quad has value v
+  for (std::size_t c = 0; c < 6; ++c) EXPECT_EQ(t.uvs.indices[c], quad_value[t.faces[c]]) << c;
+  // Written back and read again: the same value at every corner.
+  sorpia::MeshView view{m.vertices.data(), m.n_vertices(), m.faces.data(), m.n_faces(), m.face_sizes.data(), 0};
+  view.uvs = {m.uvs.values.data(), m.uvs.n_values(), m.uvs.width, m.uvs.indices.data()};
+  view.normals = {m.normals.values.data(), m.normals.n_values(), m.normals.width, m.normals.indices.data()};
+  sorpia::write_mesh(path("out.obj"), view);
+  options.triangulate = false;
+  const auto r = sorpia::read_mesh(path("out.obj"), options);
+  ASSERT_EQ(r.uvs.indices.size(), m.uvs.indices.size());
+  for (std::size_t c = 0; c < r.uvs.indices.size(); ++c)
+    for (int k = 0; k < 2; ++k) EXPECT_EQ(r.uvs.values[2 * r.uvs.indices[c] + k], m.uvs.values[2 * m.uvs.indices[c] + k]);
+  // PLY holds one value per vertex: vertex 1 has two (0.5 0 and 0.75 0.25).
+  sorpia_test::expect_error<sorpia::ParameterError>([&] { sorpia::write_mesh(path("out.ply"), view); },
+                                                    {"vertex 1 has different ones in different faces"});
+  sorpia_test::expect_error<sorpia::ParameterError>([&] { sorpia::write_mesh(path("out.off"), view); },
+                                                    {".obj and .ply files only"});
+  // An index past the values names its line, once the whole file is read.
+  write_text("bad.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1/2 2/1 3/1\nvt 0 0\n");
+  sorpia_test::expect_error<sorpia::FileError>([&] { sorpia::read_mesh(path("bad.obj"), options); },
+                                               {"line 4: texture coordinate index 2 is out of range"});
+}
+
+TEST_F(IoTest, PlyPerVertexValuesRoundTrip) {
+  const auto m = sorpia::icosphere(1);
+  std::vector<double> uv(2 * m.n_vertices()), normal(m.vertices);
+  for (std::size_t i = 0; i < uv.size(); ++i) uv[i] = 1.0 / (3.0 + static_cast<double>(i));
+  sorpia::MeshView view{m.vertices.data(), m.n_vertices(), m.faces.data(), m.n_faces(), nullptr, 3};
+  view.uvs = {uv.data(), m.n_vertices(), 2, m.faces.data()};  // per vertex: the corner's vertex is its value
+  view.normals = {normal.data(), m.n_vertices(), 3, m.faces.data()};
+  sorpia::ReadOptions options;
+  options.attributes = true;
+  for (const bool binary : {false, true}) {
+    sorpia::write_mesh(path("a.ply"), view, binary);
+    const auto r = sorpia::read_mesh(path("a.ply"), options);
+    EXPECT_EQ(r.uvs.values, uv) << binary;  // bit for bit: double properties
+    EXPECT_EQ(r.normals.values, normal) << binary;
+    EXPECT_EQ(r.uvs.indices, m.faces) << binary;
+    EXPECT_EQ(r.vertices, m.vertices) << binary;
+  }
+}
+
 TEST_F(IoTest, BadTagsNameTheirLine) {
   const std::string head = "v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 3\n";
   const std::pair<const char*, const char*> cases[] = {

@@ -66,7 +66,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   if (file.bytes.empty()) return 0;  // load_file refuses empty files before any reader runs
   sorpia::MeshFile mesh;
   try {
-    mesh = io::parse_mesh(file, formats[reader], sorpia::ReadOptions{triangulate, true});
+    mesh = io::parse_mesh(file, formats[reader], sorpia::ReadOptions{triangulate, true, true});
   } catch (const sorpia::FileError& e) {
     check_message(e);
     return 0;
@@ -90,6 +90,15 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     if (h < 0 || static_cast<std::size_t>(h) >= mesh.n_faces()) finding("reader returned a hole out of range");
   for (const std::int32_t v : mesh.tags.tags.crease_vertices)
     if (v < 0 || static_cast<std::size_t>(v) >= n) finding("reader returned a crease vertex out of range");
+  for (const sorpia::FaceVarying* channel : {&mesh.uvs, &mesh.normals}) {
+    if (channel->empty()) continue;
+    if (channel->indices.size() != mesh.faces.size()) finding("reader returned attributes not one per corner");
+    for (const std::int32_t i : channel->indices)  // -1: a corner without a value (OBJ)
+      if (i < -1 || (i >= 0 && static_cast<std::size_t>(i) >= channel->n_values()))
+        finding("reader returned an attribute index out of range");
+    for (const double x : channel->values)
+      if (!(x - x == 0)) finding("reader returned a non-finite attribute");
+  }
   if (!mesh.all_triangles()) return 0;  // the limit below is Loop's
   try {
     const sorpia::Topology topo(mesh.faces.data(), mesh.n_faces(), n);

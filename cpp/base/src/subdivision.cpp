@@ -66,6 +66,21 @@ void check_indices(const std::int32_t* p, std::size_t n_rows, std::size_t width,
 
 }  // namespace
 
+void check_surface_left(const Tags& tags, std::size_t n_faces) {
+  if (n_faces == 0 || tags.holes.size() < n_faces) return;
+  std::vector<char> hole(n_faces, 0);
+  std::size_t distinct = 0;
+  for (const std::int32_t h : tags.holes) {
+    char& seen = hole[static_cast<std::size_t>(h)];
+    distinct += seen ? 0 : 1;
+    seen = 1;
+  }
+  if (distinct == n_faces)
+    throw MeshError("holes: every one of the " + std::to_string(n_faces) +
+                    " faces is a hole, so the limit surface is empty: there is nothing to interpolate, evaluate or "
+                    "draw");
+}
+
 void check_tags(const Tags& tags, std::size_t n_vertices, std::size_t n_faces) {
   if (tags.crease_vertices.size() != 2 * tags.crease_sharpness.size())
     throw MeshError("creases: " + std::to_string(tags.crease_vertices.size() / 2) + " edges but " +

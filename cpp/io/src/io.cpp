@@ -381,14 +381,68 @@ std::vector<std::int32_t> triangle_rows(const Polygons& polygons, const std::vec
   return rows;
 }
 
+void split_corner_values(const Polygons& polygons, const std::vector<std::int32_t>& faces,
+                         std::vector<std::int32_t>& corner_values) {
+  if (polygons.list.empty()) return;
+  std::vector<std::int32_t> out(faces.size());
+  std::size_t row = 0, corner = 0, next = 0;  // a row of `faces`, a corner of the file's faces, a polygon
+  while (row < faces.size() / 3) {
+    if (next < polygons.list.size() && polygons.list[next].first_row == row) {
+      const auto& p = polygons.list[next++];
+      const std::int32_t* q = polygons.indices.data() + p.first_index;
+      for (std::size_t r = 0; r + 2 < p.k; ++r, ++row)
+        for (std::size_t c = 3 * row; c < 3 * row + 3; ++c) {
+          std::size_t j = 0;
+          while (q[j] != faces[c]) ++j;  // every vertex of the split is one of the polygon's corners
+          out[c] = corner_values[corner + j];
+        }
+      corner += p.k;
+    } else {
+      std::copy(corner_values.begin() + static_cast<std::ptrdiff_t>(corner),
+                corner_values.begin() + static_cast<std::ptrdiff_t>(corner + 3), out.begin() + 3 * row);
+      corner += 3, ++row;
+    }
+  }
+  corner_values = std::move(out);
+}
+
+std::vector<double> per_vertex_values(const MeshView& m, const FaceVaryingView& channel, const char* what) {
+  std::vector<double> out;
+  if (!channel.width) return out;
+  const int width = std::string_view(what) == "normals" ? 3 : 2;
+  if (channel.width != width)
+    throw ParameterError(std::string("PLY stores ") + what + " per vertex as " + std::to_string(width) +
+                         " numbers; these have " + std::to_string(channel.width) + ": write them to .obj");
+  const auto w = static_cast<std::size_t>(width);
+  out.assign(w * m.n_vertices, 0.0);
+  std::vector<std::int32_t> value_of(m.n_vertices, -1);
+  std::size_t corner = 0;
+  for_each_face(m, [&](const std::int32_t* f, std::size_t k) {
+    for (std::size_t c = 0; c < k; ++c, ++corner) {
+      const auto v = static_cast<std::size_t>(f[c]);
+      const std::int32_t value = channel.indices[corner];
+      const double* x = channel.values + w * static_cast<std::size_t>(value);
+      if (value_of[v] < 0) {
+        value_of[v] = value;
+        std::copy(x, x + w, out.begin() + static_cast<std::ptrdiff_t>(w * v));
+      } else if (value_of[v] != value && !std::equal(x, x + w, out.begin() + static_cast<std::ptrdiff_t>(w * v))) {
+        throw ParameterError(std::string("PLY stores ") + what + " per vertex, but vertex " + std::to_string(v) +
+                             " has different ones in different faces (a seam): write them to .obj, which holds "
+                             "them per face corner");
+      }
+    }
+  });
+  return out;
+}
+
 MeshFile parse_mesh(const FileData& file, MeshFormat format, const ReadOptions& options) {
   Polygons polygons;
   polygons.triangulate = options.triangulate;
   MeshFile mesh;
   switch (format) {
-    case MeshFormat::Obj: mesh = read_obj(file, polygons, options.tags); break;
+    case MeshFormat::Obj: mesh = read_obj(file, polygons, options.tags, options.attributes); break;
     case MeshFormat::Off: mesh = read_off(file, polygons); break;
-    case MeshFormat::Ply: mesh = read_ply(file, polygons); break;
+    case MeshFormat::Ply: mesh = read_ply(file, polygons, options.attributes); break;
     case MeshFormat::Stl: mesh = read_stl(file, polygons); break;
   }
   if (mesh.n_vertices() == 0) fail(file, "no vertices: not a mesh file of this format, or an empty mesh");
@@ -400,6 +454,13 @@ MeshFile parse_mesh(const FileData& file, MeshFormat format, const ReadOptions& 
   triangulate_polygons(polygons, mesh.vertices, mesh.faces);
   if (!polygons.list.empty() && !mesh.tags.tags.holes.empty())
     mesh.tags.tags.holes = triangle_rows(polygons, mesh.tags.tags.holes);
+  for (FaceVarying* channel : {&mesh.uvs, &mesh.normals}) {
+    if (channel->empty()) continue;
+    if (channel->indices.empty())
+      channel->indices = mesh.faces;  // per vertex: each corner's value is its vertex's
+    else
+      split_corner_values(polygons, mesh.faces, channel->indices);
+  }
   return mesh;
 }
 
@@ -456,6 +517,28 @@ void write_mesh(const std::string& path, const MeshView& mesh, bool binary, cons
     ++face;
   });
   if (tags) check_tags(tags->tags, mesh.n_vertices, mesh.n_faces);
+  for (const auto* channel : {&mesh.uvs, &mesh.normals}) {
+    if (!channel->width) continue;
+    const char* what = channel == &mesh.uvs ? "texture coordinates" : "normals";
+    if (format == MeshFormat::Off || format == MeshFormat::Stl)
+      throw ParameterError(where + what + " are written to .obj and .ply files only");
+    if (channel->width < 1 || channel->width > 3)
+      throw ParameterError(where + what + " have 1 to 3 numbers each, not " + std::to_string(channel->width));
+    for (std::size_t i = 0; i < channel->n_values * static_cast<std::size_t>(channel->width); ++i)
+      if (!std::isfinite(channel->values[i]))
+        throw MeshError(std::string("write_mesh: ") + what + " value " + std::to_string(i / static_cast<std::size_t>(channel->width)) +
+                        " is not finite");
+    std::size_t corner = 0;
+    face = 0;
+    detail::io::for_each_face(mesh, [&](const std::int32_t*, std::size_t k) {
+      for (std::size_t c = 0; c < k; ++c, ++corner)
+        if (channel->indices[corner] < 0 || static_cast<std::size_t>(channel->indices[corner]) >= channel->n_values)
+          throw MeshError(std::string("write_mesh: face ") + std::to_string(face) + " has " + what + " index " +
+                          std::to_string(channel->indices[corner]) + " out of range [0, " +
+                          std::to_string(channel->n_values) + ")");
+      ++face;
+    });
+  }
   std::string data;
   switch (format) {
     case MeshFormat::Obj: data = detail::io::format_obj(mesh, tags && !tags->empty() ? tags : nullptr); break;

@@ -396,6 +396,20 @@ void for_each_face(const MeshView& m, F f) {
   }
 }
 
+// The values of a face-varying channel per vertex (n_vertices, width), for
+// formats that store them per vertex (PLY): empty when the channel is absent;
+// a vertex no face uses gets zeros. Throws ParameterError naming `what` and
+// the first vertex whose corners have different values (a seam), or when the
+// width is not that of the format's properties (2 for texture coordinates, 3
+// for normals).
+std::vector<double> per_vertex_values(const MeshView& m, const FaceVaryingView& channel, const char* what);
+
+// Moves values given per file corner (`corner_values`, one per corner of the
+// file's faces, file order) onto the faces once `polygons` are split: a
+// triangle's corner takes the value of its polygon's corner at the same vertex.
+void split_corner_values(const Polygons& polygons, const std::vector<std::int32_t>& faces,
+                         std::vector<std::int32_t>& corner_values);
+
 // The mesh in `file`, read as `format` (read_mesh without the path: the
 // fuzz target feeds bytes here). Throws FileError for a malformed file and
 // for a mesh without vertices or faces, or with more vertices than int32
@@ -403,10 +417,12 @@ void for_each_face(const MeshView& m, F f) {
 MeshFile parse_mesh(const FileData& file, MeshFormat format, const ReadOptions& options);
 
 // Format readers and writers (io_obj.cpp, io_off.cpp, io_ply.cpp, io_stl.cpp).
-// `tags`: read the OBJ `t` lines (read_obj only).
-MeshFile read_obj(const FileData& f, Polygons& polygons, bool tags);
+// `tags`: read the OBJ `t` lines (read_obj only); `attributes`: texture
+// coordinates and normals (ReadOptions::attributes), per file corner from
+// read_obj, per vertex (indices empty) from read_ply.
+MeshFile read_obj(const FileData& f, Polygons& polygons, bool tags, bool attributes);
 MeshFile read_off(const FileData& f, Polygons& polygons);
-MeshFile read_ply(const FileData& f, Polygons& polygons);
+MeshFile read_ply(const FileData& f, Polygons& polygons, bool attributes);
 MeshFile read_stl(const FileData& f, Polygons& polygons);
 std::string format_obj(const MeshView& m, const FileTags* tags);
 std::string format_off(const MeshView& m);

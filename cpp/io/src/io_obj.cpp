@@ -1,8 +1,10 @@
 // Wavefront OBJ: "v x y z" vertices and "f" faces (1-based indices, "a",
 // "a/b", "a//c", "a/b/c" forms, negative indices counted from the last vertex
 // read), and, when asked, OpenSubdiv's "t" tag lines (FileTags in
-// sorpia/io.hpp). Every other statement (vt, vn, vp, g, o, s, usemtl, mtllib,
-// l, p, curves, ...) is skipped. A line ending in "\\" continues on the next; a
+// sorpia/io.hpp) and the texture coordinates ("vt u [v [w]]") and normals
+// ("vn x y z") with the faces' indices of them (MeshFile::uvs, normals:
+// face-varying). Every other statement (vp, g, o, s, usemtl, mtllib, l, p,
+// curves, ...) is skipped. A line ending in "\\" continues on the next; a
 // UTF-8 byte-order mark is skipped; after "v x y z" only numbers may follow
 // (the weight w, or colours).
 #include <algorithm>
@@ -182,7 +184,71 @@ class TagReader {
 
 }  // namespace
 
-MeshFile read_obj(const FileData& f, Polygons& polygons, bool tags) {
+// The values of "vt" or "vn" lines and the faces' indices of them, one per
+// file corner (-1 where a corner names none), checked once the file is read.
+struct CornerValues {
+  const char* what;                  // "texture coordinate", "normal"
+  std::vector<double> values;        // 3 numbers per value, missing ones 0
+  int width = 0;                     // the most numbers a line gave
+  std::vector<std::int32_t> indices;
+  std::vector<std::pair<std::size_t, std::size_t>> pending;  // (corner, line): indices past the values read so far
+  bool any = false;                  // a corner names a value
+  std::size_t leading = 0;           // corners naming none before the first that does (a file without any: no list)
+
+  void add_value(const FileData& f, const Where& w, std::string_view rest, int min, int max) {
+    std::string_view tok;
+    int count = 0;
+    double x[3] = {0, 0, 0};
+    while (next_token(rest, tok)) {
+      if (count == max) fail(f, w, std::string("a ") + what + " has at most " + std::to_string(max) + " numbers");
+      x[count++] = parse_coordinate(f, w, tok);
+    }
+    if (count < min) fail(f, w, std::string("a ") + what + " needs " + std::to_string(min) + " numbers");
+    width = std::max(width, count);
+    values.insert(values.end(), x, x + 3);
+  }
+  // Index text `t` of a corner ("" for none), OBJ's 1-based or negative relative form.
+  void add_index(const FileData& f, const Where& w, std::string_view t) {
+    if (t.empty()) {
+      if (any)
+        indices.push_back(-1);
+      else
+        ++leading;
+      return;
+    }
+    if (!any) indices.assign(leading, -1);
+    const auto n = static_cast<long long>(values.size() / 3);
+    long long i = 0;
+    if (!parse_int(t, i)) fail(f, w, std::string("expected a ") + what + " index, found " + quoted(t));
+    if (i == 0) fail(f, w, std::string(what) + " index 0: OBJ indices start at 1");
+    if (i < 0 && i < -n)
+      fail(f, w, std::string("relative ") + what + " index " + std::to_string(i) + " points before the first one");
+    if (i > std::numeric_limits<std::int32_t>::max())
+      fail(f, w, std::string(what) + " index " + std::to_string(i) + " is out of range");
+    i = i < 0 ? i + n : i - 1;
+    if (i >= n) pending.push_back({indices.size(), w.index});
+    indices.push_back(static_cast<std::int32_t>(i));
+    any = true;
+  }
+  // Into `out` (none when no corner names a value).
+  void finish(const FileData& f, FaceVarying& out) {
+    const std::size_t n = values.size() / 3;
+    for (const auto& [corner, line] : pending)
+      if (static_cast<std::size_t>(indices[corner]) >= n)
+        fail(f, Where{"line", line}, std::string(what) + " index " + std::to_string(indices[corner] + 1) +
+                                         " is out of range: the file has " + std::to_string(n));
+    if (!any) return;
+    out.width = std::max(width, 2);
+    out.values.resize(n * static_cast<std::size_t>(out.width));
+    for (std::size_t i = 0; i < n; ++i)
+      std::copy(values.begin() + static_cast<std::ptrdiff_t>(3 * i),
+                values.begin() + static_cast<std::ptrdiff_t>(3 * i + out.width),
+                out.values.begin() + static_cast<std::ptrdiff_t>(i * out.width));
+    out.indices = std::move(indices);
+  }
+};
+
+MeshFile read_obj(const FileData& f, Polygons& polygons, bool tags, bool attributes) {
   MeshFile mesh;
   mesh.vertices.reserve(f.bytes.size() / 16);
   mesh.faces.reserve(f.bytes.size() / 16);
@@ -195,6 +261,7 @@ MeshFile read_obj(const FileData& f, Polygons& polygons, bool tags) {
   };
   std::vector<Pending> pending;
   std::vector<std::int64_t> idx;
+  CornerValues uvs{"texture coordinate"}, normals{"normal"};
   LineReader lines(text_begin(f), f.bytes.data() + f.bytes.size());
   std::string_view line, tok;
   std::string joined;  // a statement continued over lines ending in '\\'
@@ -223,7 +290,18 @@ MeshFile read_obj(const FileData& f, Polygons& polygons, bool tags) {
       const auto n = static_cast<long long>(mesh.n_vertices());
       bool forward = false;
       while (next_token(rest, tok)) {
-        const std::string_view v = tok.substr(0, tok.find('/'));
+        const std::size_t slash = tok.find('/');
+        const std::string_view v = tok.substr(0, slash);
+        if (attributes) {  // "a", "a/b", "a//c", "a/b/c"
+          std::string_view b, c;
+          if (slash != std::string_view::npos) {
+            b = tok.substr(slash + 1);
+            const std::size_t second = b.find('/');
+            if (second != std::string_view::npos) c = b.substr(second + 1), b = b.substr(0, second);
+          }
+          uvs.add_index(f, w, b);
+          normals.add_index(f, w, c);
+        }
         long long i = 0;
         if (!parse_int(v, i)) fail(f, w, "expected a vertex index, found " + quoted(tok));
         if (i == 0) fail(f, w, "vertex index 0: OBJ indices start at 1");
@@ -244,6 +322,10 @@ MeshFile read_obj(const FileData& f, Polygons& polygons, bool tags) {
       const std::size_t before = mesh.faces.size();
       sink.add(idx.data(), idx.size(), w);
       if (forward) pending.push_back({before, mesh.faces.size(), w.index});
+    } else if (attributes && tok == "vt") {
+      uvs.add_value(f, w, rest, 1, 3);
+    } else if (attributes && tok == "vn") {
+      normals.add_value(f, w, rest, 3, 3);
     } else if (tags && tok == "t") {
       tag_reader.add(w, rest, mesh.tags);
     } else if (!is_obj_keyword(tok)) {
@@ -258,6 +340,10 @@ MeshFile read_obj(const FileData& f, Polygons& polygons, bool tags) {
              "vertex index " + std::to_string(mesh.faces[k] + 1) + " is out of range: the file has " +
                  std::to_string(n) + " vertices");
   if (tags) tag_reader.finish(n, sink.n_faces(), mesh.tags);
+  if (attributes) {
+    uvs.finish(f, mesh.uvs);
+    normals.finish(f, mesh.normals);
+  }
   return mesh;
 }
 
@@ -266,7 +352,26 @@ std::string format_obj(const MeshView& m, const FileTags* tags) {
   out << "# written by sorpia " << SORPIA_VERSION << ": " << std::to_string(m.n_vertices) << " vertices, "
       << std::to_string(m.n_faces) << (m.face_sizes || m.face_size != 3 ? " faces\n" : " triangles\n");
   for (std::size_t i = 0; i < m.n_vertices; ++i) (out << "v ").xyz(m.vertices + 3 * i) << '\n';
-  for_each_face(m, [&](const std::int32_t* f, std::size_t k) { (out << "f ").face(f, k, 1) << '\n'; });
+  for (std::size_t i = 0; i < m.uvs.n_values; ++i) {
+    out << "vt";
+    for (int c = 0; c < m.uvs.width; ++c) (out << ' ').num(m.uvs.values[i * static_cast<std::size_t>(m.uvs.width) + c]);
+    out << '\n';
+  }
+  for (std::size_t i = 0; i < m.normals.n_values; ++i) (out << "vn ").xyz(m.normals.values + 3 * i) << '\n';
+  if (!m.uvs.width && !m.normals.width) {
+    for_each_face(m, [&](const std::int32_t* f, std::size_t k) { (out << "f ").face(f, k, 1) << '\n'; });
+  } else {  // "f a/b/c ...", "a/b" or "a//c"
+    for_each_face(m, [&](const std::int32_t* f, std::size_t k) {
+      const auto corner = static_cast<std::size_t>(f - m.faces);
+      out << 'f';
+      for (std::size_t c = 0; c < k; ++c) {
+        (out << ' ').num(f[c] + 1);
+        if (m.uvs.width) (out << '/').num(m.uvs.indices[corner + c] + 1);
+        if (m.normals.width) (m.uvs.width ? out << '/' : out << "//").num(m.normals.indices[corner + c] + 1);
+      }
+      out << '\n';
+    });
+  }
   if (!tags) return std::move(out.str());
   // One tag a line, as OpenSubdiv's shapes have them (its parser reads lines of at most 255 characters).
   const Tags& t = tags->tags;

@@ -3,7 +3,11 @@
 // The "vertex" element's x, y, z (any numeric type) and the "face" element's
 // "vertex_indices" (or "vertex_index") list are read, or, without a "face"
 // element, the triangle strips of a "tristrips" element (as several of
-// Stanford's scans come); every other property and element is skipped.
+// Stanford's scans come); with ReadOptions::attributes also the vertex
+// element's texture coordinates (u v, s t, texture_u texture_v or texture_s
+// texture_t) and normals (nx ny nz); every other property and element is
+// skipped. The writer writes texture coordinates (u v) and normals (nx ny nz)
+// per vertex, after x y z.
 #include <algorithm>
 #include <cmath>
 #include <string>
@@ -188,7 +192,27 @@ Header parse_header(const FileData& f) {
 // Where the coordinates and the face indices are.
 struct Layout {
   const Element* vertex = nullptr;
+  // The vertex properties read, by slot: x y z, then (ReadOptions::attributes)
+  // the texture coordinates u v and the normal nx ny nz; -1 where absent.
   int xyz[3] = {-1, -1, -1};
+  int uv[2] = {-1, -1};
+  int normal[3] = {-1, -1, -1};
+  // The place of vertex property k of vertex i in `mesh`, or null when it is not read.
+  double* target(MeshFile& mesh, int k, std::size_t i) const {
+    for (int c = 0; c < 3; ++c)
+      if (k == xyz[c]) return mesh.vertices.data() + 3 * i + c;
+    for (int c = 0; c < 2; ++c)
+      if (k == uv[c]) return mesh.uvs.values.data() + 2 * i + c;
+    for (int c = 0; c < 3; ++c)
+      if (k == normal[c]) return mesh.normals.values.data() + 3 * i + c;
+    return nullptr;
+  }
+  // Sizes the arrays of the vertex properties read for n vertices.
+  void allocate(MeshFile& mesh, std::size_t n) const {
+    mesh.vertices.resize(3 * n);
+    if (uv[0] >= 0) mesh.uvs.values.resize(2 * n), mesh.uvs.width = 2;
+    if (normal[0] >= 0) mesh.normals.values.resize(3 * n), mesh.normals.width = 3;
+  }
   const Element* face = nullptr;  // the "face" element, or else the "tristrips" element
   int indices = -1;
   bool strips = false;  // face is "tristrips": its lists are triangle strips
@@ -217,17 +241,37 @@ void add_faces(const Layout& l, const std::int64_t* idx, std::size_t n, FaceSink
   }
 }
 
-Layout find_layout(const FileData& f, const Header& h) {
+// The scalar property of `e` named `name`, or -1.
+int find_scalar(const Element& e, std::string_view name) {
+  for (int k = 0; k < static_cast<int>(e.props.size()); ++k)
+    if (e.props[k].name == name && !e.props[k].is_list) return k;
+  return -1;
+}
+
+Layout find_layout(const FileData& f, const Header& h, bool attributes) {
   Layout l;
   for (const auto& e : h.elements) {
     if (e.name == "vertex" && !l.vertex) {
       l.vertex = &e;
-      for (int k = 0; k < static_cast<int>(e.props.size()); ++k)
-        for (int c = 0; c < 3; ++c)
-          if (e.props[k].name == std::string(1, static_cast<char>('x' + c)) && !e.props[k].is_list) l.xyz[c] = k;
-      for (int c = 0; c < 3; ++c)
+      for (int c = 0; c < 3; ++c) {
+        l.xyz[c] = find_scalar(e, std::string(1, static_cast<char>('x' + c)));
         if (l.xyz[c] < 0)
           fail(f, Where{"line", e.line}, std::string("the vertex element has no property ") + char('x' + c));
+      }
+      if (attributes) {
+        // Texture coordinates by the names the common writers use (Blender, MeshLab, trimesh, Open3D).
+        static const char* const uv_names[][2] = {{"u", "v"}, {"s", "t"}, {"texture_u", "texture_v"},
+                                                  {"texture_s", "texture_t"}};
+        for (const auto& names : uv_names) {
+          const int a = find_scalar(e, names[0]), b = find_scalar(e, names[1]);
+          if (a >= 0 && b >= 0) {
+            l.uv[0] = a, l.uv[1] = b;
+            break;
+          }
+        }
+        const int n[3] = {find_scalar(e, "nx"), find_scalar(e, "ny"), find_scalar(e, "nz")};
+        if (n[0] >= 0 && n[1] >= 0 && n[2] >= 0) std::copy(n, n + 3, l.normal);
+      }
     }
     if ((e.name == "face" && (!l.face || l.strips)) || (e.name == "tristrips" && !l.face)) {
       l.face = &e;
@@ -262,7 +306,7 @@ MeshFile read_binary(const FileData& f, const Header& h, const Layout& l, Polygo
   for (const auto& e : h.elements) {
     const bool is_vertex = &e == l.vertex;
     const bool is_face = &e == l.face;
-    if (is_vertex) mesh.vertices.resize(3 * e.count);
+    if (is_vertex) l.allocate(mesh, e.count);
     if (is_face) mesh.faces.reserve(3 * e.count);
     if (e.fixed_size()) {
       std::size_t stride = 0;
@@ -284,6 +328,15 @@ MeshFile read_binary(const FileData& f, const Header& h, const Layout& l, Polygo
         }
         for (std::size_t i = 0; i < 3 * e.count; ++i)
           if (!std::isfinite(out[i])) fail(f, Where{"vertex", i / 3}, "a coordinate is not finite");
+        for (int k : {l.uv[0], l.uv[1], l.normal[0], l.normal[1], l.normal[2]}) {
+          if (k < 0) continue;
+          const auto uk = static_cast<std::size_t>(k);
+          for (std::size_t i = 0; i < e.count; ++i) {
+            const double x = load_number(p + i * stride + offset[uk], e.props[uk].type, swap);
+            if (!std::isfinite(x)) fail(f, Where{"vertex", i}, "property " + quoted(e.props[uk].name) + " is not finite");
+            *l.target(mesh, k, i) = x;
+          }
+        }
       }
       p += stride * e.count;
       continue;
@@ -294,13 +347,10 @@ MeshFile read_binary(const FileData& f, const Header& h, const Layout& l, Polygo
         if (!pr.is_list) {
           const std::size_t s = type_size(pr.type);
           if (static_cast<std::size_t>(end - p) < s) truncated(e, i);
-          if (is_vertex) {
-            for (int c = 0; c < 3; ++c)
-              if (static_cast<int>(k) == l.xyz[c]) {
-                const double x = load_number(p, pr.type, swap);
-                if (!std::isfinite(x)) fail(f, Where{"vertex", i}, "a coordinate is not finite");
-                mesh.vertices[3 * i + c] = x;
-              }
+          if (double* to = is_vertex ? l.target(mesh, static_cast<int>(k), i) : nullptr) {
+            const double x = load_number(p, pr.type, swap);
+            if (!std::isfinite(x)) fail(f, Where{"vertex", i}, "property " + quoted(pr.name) + " is not finite");
+            *to = x;
           }
           p += s;
           continue;
@@ -340,7 +390,7 @@ MeshFile read_ascii(const FileData& f, const Header& h, const Layout& l, Polygon
   for (const auto& e : h.elements) {
     const bool is_vertex = &e == l.vertex;
     const bool is_face = &e == l.face;
-    if (is_vertex) mesh.vertices.resize(3 * e.count);
+    if (is_vertex) l.allocate(mesh, e.count);
     if (is_face) mesh.faces.reserve(3 * e.count);
     for (std::size_t i = 0; i < e.count; ++i) {
       do {
@@ -358,9 +408,7 @@ MeshFile read_ascii(const FileData& f, const Header& h, const Layout& l, Polygon
         const Property& pr = e.props[k];
         if (!pr.is_list) {
           const std::string_view t = need();
-          if (is_vertex)
-            for (int c = 0; c < 3; ++c)
-              if (static_cast<int>(k) == l.xyz[c]) mesh.vertices[3 * i + c] = parse_coordinate(f, w, t);
+          if (double* to = is_vertex ? l.target(mesh, static_cast<int>(k), i) : nullptr) *to = parse_coordinate(f, w, t);
           continue;
         }
         long long n = 0;
@@ -388,9 +436,9 @@ MeshFile read_ascii(const FileData& f, const Header& h, const Layout& l, Polygon
 
 }  // namespace
 
-MeshFile read_ply(const FileData& f, Polygons& polygons) {
+MeshFile read_ply(const FileData& f, Polygons& polygons, bool attributes) {
   const Header h = parse_header(f);
-  const Layout l = find_layout(f, h);
+  const Layout l = find_layout(f, h, attributes);
   return h.encoding == Encoding::Ascii ? read_ascii(f, h, l, polygons) : read_binary(f, h, l, polygons);
 }
 
@@ -405,15 +453,33 @@ std::string format_ply(const MeshView& mesh, bool binary) {
     largest = std::max(largest, k);
   });
   const bool wide = largest > 255;
-  TextOut out(binary ? 300 + 24 * n + (wide ? 4 : 1) * m + 4 * n_indices : n * 60 + m * 30);
+  // Per-vertex texture coordinates and normals (per_vertex_values refuses seams).
+  const std::vector<double> uvs = per_vertex_values(mesh, mesh.uvs, "texture coordinates");
+  const std::vector<double> normals = per_vertex_values(mesh, mesh.normals, "normals");
+  const std::size_t uw = uvs.empty() ? 0 : 2, nw = normals.empty() ? 0 : 3, width = 3 + uw + nw;
+  TextOut out(binary ? 300 + 8 * width * n + (wide ? 4 : 1) * m + 4 * n_indices : n * 20 * width + m * 30);
   out << "ply\nformat " << (binary ? "binary_little_endian" : "ascii") << " 1.0\ncomment written by sorpia "
       << SORPIA_VERSION << "\nelement vertex " << std::to_string(n)
-      << "\nproperty double x\nproperty double y\nproperty double z\nelement face " << std::to_string(m)
+      << "\nproperty double x\nproperty double y\nproperty double z\n"
+      << (uw ? "property double u\nproperty double v\n" : "")
+      << (nw ? "property double nx\nproperty double ny\nproperty double nz\n" : "") << "element face "
+      << std::to_string(m)
       << (wide ? "\nproperty list int int vertex_indices\nend_header\n"
                : "\nproperty list uchar int vertex_indices\nend_header\n");
   std::string& s = out.str();
+  // Vertex i's record: x y z [u v] [nx ny nz].
+  const auto record = [&](std::size_t i, double* r) {
+    std::copy(v + 3 * i, v + 3 * i + 3, r);
+    if (uw) std::copy(uvs.data() + 2 * i, uvs.data() + 2 * i + 2, r + 3);
+    if (nw) std::copy(normals.data() + 3 * i, normals.data() + 3 * i + 3, r + 3 + uw);
+  };
   if (!binary) {
-    for (std::size_t i = 0; i < n; ++i) out.xyz(v + 3 * i) << '\n';
+    double r[8];
+    for (std::size_t i = 0; i < n; ++i) {
+      record(i, r);
+      for (std::size_t c = 0; c < width; ++c) (c ? out << ' ' : out).num(r[c]);
+      out << '\n';
+    }
     for_each_face(mesh, [&](const std::int32_t* f, std::size_t k) { (out.num(k) << ' ').face(f, k, 0) << '\n'; });
     return std::move(s);
   }
@@ -421,10 +487,18 @@ std::string format_ply(const MeshView& mesh, bool binary) {
 #error "the binary PLY writer assumes a little-endian machine"
 #endif
   const std::size_t head = s.size();
-  s.resize(head + 24 * n + (wide ? 4 : 1) * m + 4 * n_indices);
+  s.resize(head + 8 * width * n + (wide ? 4 : 1) * m + 4 * n_indices);
   char* p = s.data() + head;
-  std::memcpy(p, v, 24 * n);
-  p += 24 * n;
+  if (width == 3) {
+    std::memcpy(p, v, 24 * n);
+  } else {
+    double r[8];
+    for (std::size_t i = 0; i < n; ++i) {
+      record(i, r);
+      std::memcpy(p + 8 * width * i, r, 8 * width);
+    }
+  }
+  p += 8 * width * n;
   if (!mesh.face_sizes && mesh.face_size == 3) {  // triangles: fixed 13-byte records
     for (std::size_t i = 0; i < m; ++i, p += 13) {
       p[0] = 3;

@@ -70,6 +70,7 @@ Refiner make_refiner(const Topology& topology, Scheme scheme, Boundary boundary,
     const std::string not_triangles = loop_needs_triangles(topology);
     if (!not_triangles.empty()) throw MeshError(not_triangles);
   }
+  check_surface_left(tags, topology.n_faces());
   const auto to_osd = [&](std::int32_t v, const char* what, std::size_t i) {
     if (out.to_osd[v] < 0)
       throw MeshError(std::string(what) + "[" + std::to_string(i) + "] names vertex " + std::to_string(v) +

@@ -187,6 +187,7 @@ std::vector<int> row_levels(const Topology& topology, Scheme scheme, const Verte
 }
 
 VertexTags vertex_tags(const Topology& topology, const Tags& tags) {
+  check_surface_left(tags, topology.n_faces());
   const std::size_t n = topology.n_vertices();
   VertexTags out;
   // Last sharpness per edge: sort the creases by edge, keep the last of each run.

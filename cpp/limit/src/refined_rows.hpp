@@ -50,8 +50,9 @@ struct VertexTags {
 // the whole mesh refined to L).
 std::vector<int> row_levels(const Topology& topology, Scheme scheme, const VertexTags& tags);
 
-// Groups `tags` by vertex. Every crease must be an edge of `topology`.
-// @throw MeshError naming the first crease that is not an edge
+// Groups `tags` by vertex. Every crease must be an edge of `topology`, and a
+// face must be left that is not a hole (check_surface_left).
+// @throw MeshError naming the first crease that is not an edge, or for holes only
 VertexTags vertex_tags(const Topology& topology, const Tags& tags);
 
 // Rows of B (limit positions of the control vertices) for `vertices`, from

@@ -1,6 +1,6 @@
 """The ``sorpia`` command (also ``python -m sorpia``).
 
-Subcommands, one module each: ``fit`` (control mesh whose Loop limit surface
+Subcommands, one module each: ``fit`` (control mesh whose limit surface
 interpolates a mesh file), ``compare`` (the paper's Table 1 and Figure 7 for
 one mesh), ``render`` (the paper's Figure 3), ``info`` (mesh statistics, the
 paper's Table 2), ``repair`` (a mesh made valid, sorpia.repair) and ``demo``

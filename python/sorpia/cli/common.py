@@ -98,6 +98,7 @@ class InputMesh(NamedTuple):
     repair_seconds: float = 0.0
     tags: dict = {}  # the file's tags as read_mesh(tags=True) returns them ({} with --ignore-tags)
     split: object = None  # sorpia.nonmanifold.Split with --nonmanifold sharp: vertices and faces are the split's
+    attributes: dict = {}  # texture coordinates and normals (read_mesh(attributes=True)), on the faces above
 
     @property
     def timings(self) -> dict:
@@ -106,14 +107,16 @@ class InputMesh(NamedTuple):
 
 
 def read_input(path, triangulate: bool = False, repair: bool = False, tags: bool = True,
-               nonmanifold: str = "error", boundary=None) -> InputMesh:
+               nonmanifold: str = "error", boundary=None, attributes: bool = False) -> InputMesh:
     """Read the input mesh of every subcommand: polygons kept (or split with
     `triangulate`), the OBJ file's sharpness tags read unless `tags` is
     False (--ignore-tags), the mesh repaired with `repair` (repair_input),
     its tags carried onto the repaired mesh; with `nonmanifold` "sharp", a
     non-manifold mesh replaced by its manifold split (split_input) under the
     boundary rule the command solves with (`boundary`: --boundary, None for
-    the file's, see boundary_rule)."""
+    the file's, see boundary_rule); with `attributes`, the file's texture
+    coordinates and normals, carried onto the repaired or split faces
+    (carry_attributes)."""
     from ..io import read_mesh_file
 
     if not Path(path).exists():
@@ -121,17 +124,46 @@ def read_input(path, triangulate: bool = False, repair: bool = False, tags: bool
     if Path(path).is_dir():
         raise UserError(f"{path} is a folder, not a mesh file")
     t0 = time.perf_counter()
-    contents = read_mesh_file(path, triangulate=triangulate, tags=tags and Path(path).suffix.lower() == ".obj")
+    contents = read_mesh_file(path, triangulate=triangulate, tags=tags and Path(path).suffix.lower() == ".obj",
+                              attributes=attributes)
     seconds = time.perf_counter() - t0
     vertices, faces, file_tags = contents.vertices, contents.faces, contents.tags or {}
+    file_attributes = contents.attributes or {}
     if not repair:
-        mesh = InputMesh(vertices, faces, seconds, contents.polygons_split, tags=file_tags)
+        mesh = InputMesh(vertices, faces, seconds, contents.polygons_split, tags=file_tags, attributes=file_attributes)
     else:
         t0 = time.perf_counter()
         result = repair_input(vertices, faces, path, sharpness_tags(file_tags))
         mesh = InputMesh(result.vertices, result.faces, seconds, contents.polygons_split, result,
-                         time.perf_counter() - t0, {**file_tags, **result.tags})
+                         time.perf_counter() - t0, {**file_tags, **result.tags},
+                         attributes=carry_attributes(file_attributes, faces, len(vertices), result.faces,
+                                                     result.vertex_map, result.face_map))
     return split_input(mesh, path, boundary_rule(boundary, mesh)) if nonmanifold == "sharp" else mesh
+
+
+def carry_attributes(attributes: dict, faces, n_vertices: int, new_faces, vertex_map, face_map) -> dict:
+    """Face-varying attributes (sorpia.FaceVarying per name) of `faces` onto
+    `new_faces`, whose face f is input face face_map[f] (None: the same face)
+    with vertex v a copy of input vertex vertex_map[v], its corners in any
+    order: each corner takes the value of its input face's corner at the same
+    input vertex."""
+    from .._validate import as_polygons
+    from ..io import FaceVarying
+
+    if not attributes:
+        return {}
+    vertex_map = np.asarray(vertex_map, dtype=np.int64)
+    counts, indices = as_polygons(faces, n_vertices)
+    new_counts, new_indices = as_polygons(new_faces, len(vertex_map))
+    face_map = np.arange(len(new_counts)) if face_map is None else np.asarray(face_map, dtype=np.int64)
+    keys = np.repeat(np.arange(len(counts), dtype=np.int64), counts) * n_vertices + indices
+    order = np.argsort(keys, kind="stable")
+    new_keys = np.repeat(face_map, new_counts) * n_vertices + vertex_map[new_indices]
+    corner = order[np.minimum(np.searchsorted(keys[order], new_keys), len(keys) - 1)]
+    if not np.array_equal(keys[corner], new_keys):  # a contract of repair and split, checked
+        raise AssertionError("carry_attributes: a new corner has no input corner at its vertex")
+    return {name: FaceVarying(channel.values, np.ascontiguousarray(channel.indices[corner]))
+            for name, channel in attributes.items()}
 
 
 def sharpness_tags(tags: dict) -> dict:
@@ -153,7 +185,9 @@ def split_input(mesh: InputMesh, source, boundary: str) -> InputMesh:
         raise UserError(f"{source}: --nonmanifold sharp: {exc}") from None
     if s is None:
         return mesh
-    return mesh._replace(vertices=mesh.vertices[s.vertex_map], faces=s.faces, tags={**mesh.tags, **s.tags}, split=s)
+    return mesh._replace(vertices=mesh.vertices[s.vertex_map], faces=s.faces, tags={**mesh.tags, **s.tags}, split=s,
+                         attributes=carry_attributes(mesh.attributes, mesh.faces, len(mesh.vertices), s.faces,
+                                                     s.vertex_map, None))
 
 
 def split_json(split) -> dict:
@@ -243,12 +277,13 @@ def solve_tags(mesh: InputMesh, sharp_angle, source) -> dict:
 
 
 def read_solve_input(path, *, triangulate: bool, repair: bool, ignore_tags: bool, nonmanifold: str, scheme: str,
-                     boundary, sharp_angle) -> tuple[InputMesh, str, str, dict]:
+                     boundary, sharp_angle, attributes: bool = False) -> tuple[InputMesh, str, str, dict]:
     """read_input for the commands that solve (fit, compare, render), then
     what they solve with: (mesh, scheme (choose_scheme), boundary rule
     (boundary_rule; with --nonmanifold sharp, the rule its split is solved
     under), creases/corners/holes (solve_tags))."""
-    mesh = read_input(path, triangulate, repair, tags=not ignore_tags, nonmanifold=nonmanifold, boundary=boundary)
+    mesh = read_input(path, triangulate, repair, tags=not ignore_tags, nonmanifold=nonmanifold, boundary=boundary,
+                      attributes=attributes)
     rule = mesh.split.boundary if mesh.split is not None else boundary_rule(boundary, mesh)
     return mesh, choose_scheme(scheme, mesh.faces, path), rule, solve_tags(mesh, sharp_angle, path)
 

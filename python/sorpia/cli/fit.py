@@ -1,4 +1,4 @@
-"""``sorpia fit``: a control mesh whose Loop limit surface interpolates a mesh file."""
+"""``sorpia fit``: a control mesh whose limit surface (Loop or Catmull-Clark) interpolates a mesh file."""
 
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ from .. import __version__
 from .._validate import as_boundary
 from .common import (EXIT_NOT_CONVERGED, EXIT_OK, SCHEME_LABELS, UserError, check_mesh_suffix, check_paths,
                      check_solver_options, cpu_clock, face_counts, face_size_histogram, fit_once, fmt_seconds,
-                     mesh_line, method_label, read_solve_input, repair_json, repair_lines, result_fields,
+                     is_triangles, mesh_line, method_label, read_solve_input, repair_json, repair_lines, result_fields,
                      scheme_kwargs, split_json, split_lines, tags_lines, tags_summary, warn_once)
 from .output import write_json
 from .progress import Progress
@@ -42,9 +42,11 @@ def run_fit(input_path, output, *, method="sor", omega="auto", tol=1e-10, max_it
         progress.status(f"reading {input_path}")
         mesh, scheme, boundary, tags = read_solve_input(
             input_path, triangulate=triangulate, repair=repair, ignore_tags=ignore_tags, nonmanifold=nonmanifold,
-            scheme=scheme, boundary=boundary, sharp_angle=sharp_angle)
+            scheme=scheme, boundary=boundary, sharp_angle=sharp_angle, attributes=True)
         V0, F = mesh.vertices, mesh.faces
         timings.update(mesh.timings)
+        _check_outputs_hold(output, surface, F, scheme, level)
+        attributes, attribute_notes = _attributes_to_write(output, mesh.attributes, F, len(V0))
         if surface is not None:
             _check_surface_fits(len(V0), face_counts(F), level, scheme)
         timings["statistics"] = 0.0  # reported before the fit, measured after the topology is built
@@ -61,7 +63,7 @@ def run_fit(input_path, output, *, method="sor", omega="auto", tol=1e-10, max_it
         t0 = time.perf_counter()
         # The control mesh keeps the tags it was fitted with (OBJ), so that it can be refitted.
         written_tags = _tags_to_write(output, tags, boundary, mesh)
-        write_mesh(output, ctrl, F, binary=_binary_for(output, binary), **written_tags)
+        write_mesh(output, ctrl, F, binary=_binary_for(output, binary), **written_tags, **attributes)
         timings["write"] = time.perf_counter() - t0
         surface_stats = None
         if surface is not None:
@@ -95,6 +97,7 @@ def run_fit(input_path, output, *, method="sor", omega="auto", tol=1e-10, max_it
         "face_sizes": face_size_histogram(F),
         "tags": {"from_file": not ignore_tags, "sharp_angle": sharp_angle, **tags_summary(tags),
                  "written_to_output": sorted(written_tags)},
+        "attributes": attribute_notes,
         "repair": repair_json(mesh.repair) if repair else None,
         "nonmanifold": split_json(mesh.split) if mesh.split is not None else None,
         "output": str(output),
@@ -129,19 +132,91 @@ def run_fit(input_path, output, *, method="sor", omega="auto", tol=1e-10, max_it
 
 def _tags_to_write(output, tags: dict, boundary: str, mesh) -> dict:
     """The tags the control mesh is written with: those it was fitted with,
-    and the boundary rule when it is not the default or the file named it;
-    OBJ only (another format cannot hold them: a warning says they are left out)."""
-    from .._validate import DEFAULT_BOUNDARY
-
-    out = dict(tags)
-    if boundary != DEFAULT_BOUNDARY or "boundary" in mesh.tags:
-        out["boundary"] = boundary
+    and always the boundary rule (a reader without the tag takes its own
+    default: OpenSubdiv's regression reader, far_utils.h, edge-only); OBJ only
+    (another format cannot hold them: a warning says the sharpness tags are
+    left out)."""
+    out = {**tags, "boundary": boundary}
     if Path(output).suffix.lower() == ".obj":
         return out
     if tags:
         warn_once(f"-o {output}: the sharpness tags ({', '.join(sorted(tags))}) are not written: only .obj files "
                   "hold them; refitting this file would solve without them")
     return {}
+
+
+ATTRIBUTE_LABELS = {"uvs": "texture coordinates", "normals": "normals"}
+
+
+def _attributes_to_write(output, attributes: dict, faces, n_vertices: int, keep_normals: bool = False
+                         ) -> tuple[dict, dict]:
+    """The input's texture coordinates and normals an output is written with,
+    and a note on each: {name: "written" or why not}.
+
+    Texture coordinates are carried: the control mesh has the input's faces,
+    and OpenSubdiv interpolates face-varying data over the control mesh's faces
+    (as the input's were meant to be). Normals only with `keep_normals` (a
+    repaired mesh, the same surface): a control mesh's are not written, since
+    they describe the input surface, the control mesh is no surface to shade
+    (a subdivision renderer takes the limit surface's normals from its
+    derivatives), and the limit surface through the targets has its own
+    normals there. A format that cannot hold them (OFF, STL; PLY where a
+    vertex has several, a seam) leaves them out with a warning, before the
+    solve."""
+    written, notes = {}, {}
+    for name, channel in attributes.items():
+        if name == "normals" and not keep_normals:
+            notes[name] = "not written: they are the input surface's; the limit surface has its own"
+            continue
+        reason = _unwritable(output, channel, faces, n_vertices, 3 if name == "normals" else 2)
+        if reason is None:
+            written[name], notes[name] = channel, "written"
+            continue
+        label = ATTRIBUTE_LABELS[name]
+        warn_once(f"-o {output}: the input's {label} are not written: {reason}; write .obj to keep them")
+        notes[name] = f"not written: {reason}; .obj holds them per face corner"
+    return written, notes
+
+
+def _unwritable(output, channel, faces, n_vertices: int, width: int) -> str | None:
+    """Why `output`'s format cannot hold the face-varying `channel`, or None:
+    OFF and STL hold none, PLY one value of `width` numbers per vertex (the
+    check write_mesh makes, sorpia::detail::io::per_vertex_values, made here
+    before the solve)."""
+    suffix = Path(output).suffix.lower()
+    if suffix in (".off", ".stl"):
+        return f"{suffix[1:].upper()} has no per-vertex or per-corner values"
+    if suffix != ".ply":
+        return None
+    if channel.values.shape[1] != width:
+        return f"PLY stores {width} numbers per vertex, these have {channel.values.shape[1]}"
+    corners = np.asarray(faces).reshape(-1) if isinstance(faces, np.ndarray) else np.asarray(
+        faces.face_vertex_indices)
+    values = channel.values[channel.indices]
+    first = np.zeros((n_vertices, width))
+    used, first_corner = np.unique(corners, return_index=True)
+    first[used] = values[first_corner]  # the value of each vertex's first corner
+    seams = np.flatnonzero((first[corners] != values).any(axis=1))
+    if len(seams):
+        return (f"PLY stores them per vertex, and vertex {int(corners[seams[0]])} has several (a seam; "
+                f"{len(np.unique(corners[seams]))} such vertices)")
+    return None
+
+
+def _check_outputs_hold(output, surface, faces, scheme: str, level: int) -> None:
+    """Refuse, before the solve, an output whose format cannot hold its faces:
+    STL stores triangles only, and the control mesh has the input's faces, a
+    Catmull-Clark limit surface quads (its control polygons at level 0)."""
+    from .common import face_sizes_text
+
+    if output is not None and Path(output).suffix.lower() == ".stl" and not is_triangles(faces):
+        raise UserError(f"-o {output}: STL holds triangles only, and the control mesh has the input's faces (of "
+                        f"{face_sizes_text(faces)} vertices): write .obj, .off or .ply, or pass --triangulate to "
+                        "fit a triangulation with Loop")
+    surface_triangles = scheme == "loop" or (level == 0 and is_triangles(faces))
+    if surface is not None and Path(surface).suffix.lower() == ".stl" and not surface_triangles:
+        raise UserError(f"--surface {surface}: STL holds triangles only, and the Catmull-Clark limit surface is "
+                        f"{'the control polygons' if level == 0 else 'a quad mesh'}: write .obj, .off or .ply")
 
 
 def _max_residual(interp, ctrl, V0, faces, boundary, scheme, tags) -> float:
@@ -216,6 +291,8 @@ def fit_summary(d: dict, repaired=(), kept=()) -> str:
         f"  mesh        {mesh_line(d['mesh'])}",
         f"  scheme      {SCHEME_LABELS[d['scheme']]}" + (f", boundary {d['boundary']}"),
         *(f"  {'tags' if j == 0 else '':<12}{line}" for j, line in enumerate(tags_lines(d["tags"]))),
+        *(f"  {'attributes' if j == 0 else '':<12}{ATTRIBUTE_LABELS[name]} {note}"
+          for j, (name, note) in enumerate(d.get("attributes", {}).items())),
         f"  method      {label}",
         f"  result      {state}",
         f"  check       max |B V - V0| = {d['max_residual']:.3g} "

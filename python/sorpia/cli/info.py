@@ -15,7 +15,7 @@ MAX_LISTED = 16  # extraordinary vertices listed in the text output (--json list
 
 
 def run_info(input_path, *, as_json=False, boundary=None, triangulate=False, repair=False, scheme="auto",
-             ignore_tags=False, sharp_angle=None, out=None) -> tuple[int, dict]:
+             ignore_tags=False, sharp_angle=None, nonmanifold="error", out=None) -> tuple[int, dict]:
     """`sorpia info`: mesh statistics, the scheme, the tags, and whether PIA
     can run (exit 0 either way).
 
@@ -24,7 +24,8 @@ def run_info(input_path, *, as_json=False, boundary=None, triangulate=False, rep
     --triangulate) when Loop was asked for; its faces by size either way. The verdict is the library's own: the solve's
     validation of the faces, scheme and tags. Tags the reader refuses (a
     crease method sorpia does not have, a malformed tag) are reported, and
-    the mesh described without them. With `repair`, everything is of the
+    the mesh described without them, and the verdict is fit's: it cannot
+    run (fit refuses the file). With `repair`, everything is of the
     repaired mesh and info["repair"] says what changed; without it, a mesh
     Loop PIA cannot run on is repaired in memory and info["repair"] says what
     --repair would change (or why it cannot)."""
@@ -34,12 +35,13 @@ def run_info(input_path, *, as_json=False, boundary=None, triangulate=False, rep
     out = out if out is not None else sys.stdout
     tags_refused = None
     try:
-        mesh = read_input(input_path, triangulate=triangulate, repair=repair, tags=not ignore_tags)
+        mesh = read_input(input_path, triangulate=triangulate, repair=repair, tags=not ignore_tags,
+                          nonmanifold=nonmanifold)
     except MeshFileError as exc:
         if ignore_tags or "tag" not in str(exc):
             raise
         tags_refused = str(exc)
-        mesh = read_input(input_path, triangulate=triangulate, repair=repair, tags=False)
+        mesh = read_input(input_path, triangulate=triangulate, repair=repair, tags=False, nonmanifold=nonmanifold)
     polygons = not is_triangles(mesh.faces)
     try:
         chosen = choose_scheme(scheme, mesh.faces, input_path)
@@ -69,6 +71,11 @@ def run_info(input_path, *, as_json=False, boundary=None, triangulate=False, rep
                                 " (the counts are of their triangulation); pass --triangulate to split them, or "
                                 "--scheme catmull-clark" if refusal else ": Loop needs triangles (--triangulate "
                                 "splits them)")}
+    if tags_refused:  # fit refuses the file: so does the verdict
+        reason = f"fit refuses the file's tags: {tags_refused} (--ignore-tags fits without them)"
+        if info["loop_pia"]["can_run"]:
+            info["loop_pia"] = {"can_run": False, "notes": info["loop_pia"].get("notes", []), "reason": reason}
+        refusal = refusal or reason
     info["pia"] = _verdict(chosen, refusal, mesh, tags, info)
     if as_json:
         print(json.dumps(jsonable({"input": str(input_path), **info}), indent=2), file=out)

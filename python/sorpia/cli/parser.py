@@ -95,32 +95,37 @@ class _Formatter(argparse.ArgumentDefaultsHelpFormatter):
 EXIT_HELP = ("exit codes: 0 done; 1 a solve stopped at --max-iter before reaching --tol (all outputs still "
              "written); 2 bad input or options, or not enough memory (one line on stderr); 130 interrupted "
              "(Ctrl-C); 143 terminated (SIGTERM).")
+# info and repair solve nothing: no exit code 1.
+EXIT_HELP_NO_SOLVE = ("exit codes: 0 done; 2 bad input or options, or not enough memory (one line on stderr); "
+                      "130 interrupted (Ctrl-C); 143 terminated (SIGTERM).")
 
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="sorpia",
-        description="Interpolating Loop subdivision surfaces: move the control vertices of a triangle mesh so "
-        "that its Loop limit surface passes through the given vertices (SOR-PIA and the PIA family).",
+        description="Interpolating subdivision surfaces: move the control vertices of a mesh so that its limit "
+        "surface (Loop for triangles, Catmull-Clark for quads and polygons, with OpenSubdiv's creases, corners "
+        "and holes) passes through the given vertices (SOR-PIA and the PIA family).",
         epilog=EXIT_HELP + " Run 'sorpia COMMAND --help' for the options of a command.",
         formatter_class=_Formatter,
     )
     parser.add_argument("--version", action="version", version=f"sorpia {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
 
-    def command(name, help_text, description, input_arg=True):
-        p = sub.add_parser(name, help=help_text, description=description, epilog=EXIT_HELP,
-                           formatter_class=_Formatter)
+    def command(name, help_text, description, input_arg=True, solves=True):
+        p = sub.add_parser(name, help=help_text, description=description,
+                           epilog=EXIT_HELP if solves else EXIT_HELP_NO_SOLVE, formatter_class=_Formatter)
         if input_arg:
             p.add_argument("input", metavar="IN", help="input mesh (.obj, .off, .ply, .stl; triangles, quads or any "
                            "polygons, and OpenSubdiv's sharpness tags in .obj); only read")
         return p
 
-    def triangulate_flag(p):
+    def triangulate_flag(p, scheme=True):
         p.add_argument("--triangulate", action="store_true",
                        help="split faces of more than 3 vertices into triangles (a quad along its shorter "
-                       "diagonal, keeping the mesh manifold where it can), which makes --scheme auto pick Loop; "
-                       "hole tags follow their faces' triangles")
+                       "diagonal, keeping the mesh manifold where it can)" +
+                       (", which makes --scheme auto pick Loop" if scheme else "") +
+                       "; hole tags follow their faces' triangles")
 
     def scheme_options(p):
         p.add_argument("--scheme", choices=CLI_SCHEMES, default="auto",
@@ -143,12 +148,12 @@ def build_parser() -> argparse.ArgumentParser:
                        "removed, non-manifold edges and bowtie vertices split by copying vertices, orientation "
                        f"made consistent; no vertex moves); {effect}")
 
-    def nonmanifold_flag(p):
+    def nonmanifold_flag(p, effect):
         p.add_argument("--nonmanifold", choices=("error", "sharp"), default="error",
                        help="what non-manifold topology gets: error (the default) refuses it; sharp keeps it with "
                        "OpenSubdiv's rules (non-manifold edges infinitely sharp, non-manifold vertices corners) "
-                       "through a manifold split with corner tags, whose control mesh is written; OpenSubdiv's "
-                       "documentation calls that result undefined")
+                       f"through a manifold split with corner tags, {effect}; OpenSubdiv's documentation calls "
+                       "that result undefined")
 
     def quiet_flag(p):
         p.add_argument("--quiet", "-q", action="store_true", help="print nothing but errors and warnings")
@@ -180,21 +185,25 @@ def build_parser() -> argparse.ArgumentParser:
                        "vertices they share (iterations may differ by a few percent from one thread); more "
                        "than the free cores only slows down")
 
-    fit = command("fit", "fit a control mesh whose Loop limit surface interpolates a mesh",
-                  "Read a triangle mesh, solve B V = V0 for control vertices V whose Loop limit surface passes "
-                  "through the given vertices V0, write the control mesh (same faces, same vertex order) and, if "
-                  "asked, the tessellated limit surface and a JSON report. Prints a short summary; long runs "
-                  "show progress on stderr.")
+    fit = command("fit", "fit a control mesh whose limit surface interpolates a mesh",
+                  "Read a mesh, solve B V = V0 for control vertices V whose limit surface (Loop for triangles, "
+                  "Catmull-Clark for quads and polygons: --scheme) passes through the given vertices V0, write "
+                  "the control mesh (same faces, same vertex order; in .obj also the tags and the boundary rule "
+                  "it was fitted with, and the input's texture coordinates) and, if asked, the tessellated limit "
+                  "surface and a JSON report. Every output is checked before the solve. Prints a short summary; "
+                  "long runs show progress on stderr.")
     mesh_output(fit, "control mesh")
     solver_options(fit)
     fit.add_argument("--omega", type=_omega_arg, default="auto",
                      help="relaxation of --method sor: auto (sorpia's measured rule), young (paper Remark 1, "
                      "from the spectral radius of the Jacobi matrix) or a number in (0, 2)")
     fit.add_argument("--surface", metavar="SURF",
-                     help="also write the limit surface of the control mesh, refined --level times (a triangle "
-                     "mesh with every vertex at its exact limit position)")
+                     help="also write the limit surface of the control mesh, refined --level times, every vertex "
+                     "at its exact limit position: triangles (Loop) or quads (Catmull-Clark; STL holds triangles "
+                     "only)")
     fit.add_argument("--level", type=_level_arg, default=3, metavar="L",
-                     help="refinement level of --surface: 4^L triangles per input triangle")
+                     help="refinement level of --surface: Loop gives 4^L triangles per triangle, Catmull-Clark "
+                     "k * 4^(L-1) quads per k-sided face")
     fit.add_argument("--report", metavar="REPORT.json",
                      help="write a JSON report: mesh statistics, method, omega, E_k/E_0 per iteration, seconds "
                      "per phase (read, statistics, fit, write, check, surface)")
@@ -205,7 +214,7 @@ def build_parser() -> argparse.ArgumentParser:
     triangulate_flag(fit)
     repair_flag(fit, "the control mesh is that of the repaired mesh (its extra vertices copy input vertices) and "
                 "--report holds the repair report and the vertex map")
-    nonmanifold_flag(fit)
+    nonmanifold_flag(fit, "whose control mesh is written")
     output_flags(fit)
     fit.set_defaults(func=lambda a: run_fit(
         a.input, a.output, method=a.method, omega=a.omega, tol=a.tol, max_iter=a.max_iter, boundary=a.boundary,
@@ -230,7 +239,7 @@ def build_parser() -> argparse.ArgumentParser:
     scheme_options(comp)
     triangulate_flag(comp)
     repair_flag(comp, "--json holds the repair report and the vertex map")
-    nonmanifold_flag(comp)
+    nonmanifold_flag(comp, "on which every method runs")
     output_flags(comp)
     comp.set_defaults(func=lambda a: run_compare(
         a.input, methods=a.methods, tol=a.tol, max_iter=a.max_iter, boundary=a.boundary, table=a.table,
@@ -240,7 +249,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     ren = command("render", "draw the paper's Figure 3 for a mesh (PNG)",
                   "Fit the mesh with SOR-PIA and draw four shaded panels, the same camera in each: (a) the given "
-                  "mesh, (b) its Loop limit surface (it shrinks away from the given vertices, red), (c) the "
+                  "mesh, (b) its limit surface (Loop or Catmull-Clark: --scheme; it shrinks away from the given "
+                  "vertices, red), (c) the "
                   "control mesh found by SOR-PIA, given vertices red and control vertices blue, (d) the limit "
                   "surface of the control mesh through the red points. Big meshes are drawn at a lower level "
                   "or with part of their faces (--face-budget) so that drawing takes seconds.")
@@ -259,7 +269,7 @@ def build_parser() -> argparse.ArgumentParser:
     scheme_options(ren)
     triangulate_flag(ren)
     repair_flag(ren, "the panels show the repaired mesh")
-    nonmanifold_flag(ren)
+    nonmanifold_flag(ren, "whose panels are drawn")
     output_flags(ren)
     ren.set_defaults(func=lambda a: run_render(
         a.input, a.output, level=a.level, tol=a.tol, max_iter=a.max_iter, boundary=a.boundary, size=a.size,
@@ -267,21 +277,25 @@ def build_parser() -> argparse.ArgumentParser:
         triangulate=a.triangulate, up=a.up, threads=a.threads, repair=a.repair, scheme=a.scheme,
         ignore_tags=a.ignore_tags, sharp_angle=a.sharp_angle, nonmanifold=a.nonmanifold)[0])
 
-    inf = command("info", "mesh statistics (the paper's Table 2) and whether Loop PIA can run on it",
+    inf = command("info", "mesh statistics (the paper's Table 2) and whether PIA can run on it",
                   "Print vertices, faces, edges, boundary loops, Euler characteristic, genus, components, "
                   "unreferenced vertices, the valence histogram and the extraordinary vertices (valence other "
-                  "than 6 inside, 4 on the boundary; the paper's Table 2), and whether Loop PIA can run on the "
-                  "mesh and if not why (and what --repair would change). Exit code 0 whenever the file can be "
-                  "read (and, with --repair, repaired).")
+                  "than 6 inside, 4 on the boundary for Loop; 4 and 3 for Catmull-Clark; the paper's Table 2), "
+                  "the scheme and the tags, and whether PIA can run on the mesh with them, by the checks 'sorpia "
+                  "fit' makes with the same options, and if not why (and what --repair would change). Exit code "
+                  "0 whenever the file can be read (and, with --repair, repaired), whatever the verdict.",
+                  solves=False)
     inf.add_argument("--json", action="store_true", help="print JSON (every extraordinary vertex listed) instead")
     boundary_option(inf, "boundary rule the verdict refers to")
     scheme_options(inf)
     triangulate_flag(inf)
     repair_flag(inf, "the statistics and the verdict are of the repaired mesh (without it, a refused mesh is "
                 "told what --repair would change)")
+    nonmanifold_flag(inf, "which the statistics and the verdict are of")
     inf.set_defaults(func=lambda a: run_info(a.input, as_json=a.json, boundary=a.boundary,
                                              triangulate=a.triangulate, repair=a.repair, scheme=a.scheme,
-                                             ignore_tags=a.ignore_tags, sharp_angle=a.sharp_angle)[0])
+                                             ignore_tags=a.ignore_tags, sharp_angle=a.sharp_angle,
+                                             nonmanifold=a.nonmanifold)[0])
 
     rep = command("repair", "make a mesh valid for subdivision without moving a vertex",
                   "Read a mesh of triangles, quads or any polygons and write it repaired (sorpia.repair), its "
@@ -292,12 +306,13 @@ def build_parser() -> argparse.ArgumentParser:
                   "vertex per fan; where no orientation fits, sheets left unpaired and a twist (a Moebius "
                   "strip) cut along a short path of edges; each connected part oriented consistently. No "
                   "vertex moves; copies are appended after the input vertices. Prints one line per kind of "
-                  "change; a valid mesh is written unchanged.")
+                  "change; a valid mesh is written unchanged.",
+                  solves=False)
     mesh_output(rep, "repaired mesh")
     rep.add_argument("--report", metavar="REPORT.json",
                      help="write a JSON report: every change with its input faces, edges or vertices, the "
                      "counts, and vertex_map (for every output vertex, the input vertex it copies)")
-    triangulate_flag(rep)
+    triangulate_flag(rep, scheme=False)
     output_flags(rep)
     rep.set_defaults(func=lambda a: run_repair(a.input, a.output, report=a.report, triangulate=a.triangulate,
                                                quiet=a.quiet, force=a.force)[0])

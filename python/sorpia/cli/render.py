@@ -56,10 +56,12 @@ def run_render(input_path, output, *, level=3, tol=1e-10, max_iter=1000, boundar
             edges, sharpness = tags["creases"]
             creases = np.asarray(edges)[np.asarray(sharpness) > 0]
         given = surface.tessellate(drawn_level)
-        given_curves = crease_curves(surface, F, creases) if creases is not None and len(creases) else None
+        holes = tags.get("holes")
+        given_curves = (crease_curves(surface, F, creases, holes=holes) if creases is not None and len(creases)
+                        else None)
         surface.set_vertices(ctrl)
         fitted = surface.tessellate(drawn_level)
-        curves = None if given_curves is None else (given_curves, crease_curves(surface, F, creases))
+        curves = None if given_curves is None else (given_curves, crease_curves(surface, F, creases, holes=holes))
         timings["surface"] = time.perf_counter() - t0
         progress.status(f"drawing {output}")
         t0 = time.perf_counter()

@@ -20,13 +20,14 @@ def run_repair(input_path, output, *, report=None, triangulate=False, quiet=Fals
     check_mesh_suffix("-o", output)
     check_paths([input_path], {"-o": output, "--report": report}, force)
     from .._validate import DEFAULT_BOUNDARY
-    from .fit import _tags_to_write
+    from .fit import _attributes_to_write, _tags_to_write
 
-    mesh = read_input(input_path, triangulate, repair=True)
-    # the file's tags, carried onto the repaired mesh, written with it (OBJ)
+    mesh = read_input(input_path, triangulate, repair=True, attributes=True)
+    # the file's tags, texture coordinates and normals, carried onto the repaired mesh (the same surface)
     sharpness = sharpness_tags(mesh.tags)
+    attributes, _ = _attributes_to_write(output, mesh.attributes, mesh.faces, len(mesh.vertices), keep_normals=True)
     write_mesh(output, mesh.vertices, mesh.faces,
-               **_tags_to_write(output, sharpness, mesh.tags.get("boundary", DEFAULT_BOUNDARY), mesh))
+               **_tags_to_write(output, sharpness, mesh.tags.get("boundary", DEFAULT_BOUNDARY), mesh), **attributes)
     n_faces = len(face_counts(mesh.faces))
     data = {"sorpia_version": __version__, "command": "repair", "input": str(input_path),
             "triangulated": triangulate, "output": str(output), "vertices": len(mesh.vertices),

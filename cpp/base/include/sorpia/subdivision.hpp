@@ -74,4 +74,11 @@ struct Rules {
 /// @throw MeshError
 void check_tags(const Tags& tags, std::size_t n_vertices, std::size_t n_faces);
 
+/// Checks that the holes (already in range, check_tags) leave a face with a
+/// limit surface: a mesh of holes only has nothing to interpolate or evaluate,
+/// though a file may hold it. Called where tags meet a mesh to solve or
+/// evaluate (the limit operator, the surface's refiner).
+/// @throw MeshError
+void check_surface_left(const Tags& tags, std::size_t n_faces);
+
 }  // namespace sorpia

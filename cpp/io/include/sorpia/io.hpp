@@ -55,6 +55,27 @@ struct FileTags {
   bool empty() const { return tags.empty() && !boundary; }
 };
 
+/// A face-varying channel as OpenSubdiv's Far::TopologyDescriptor::FVarChannel
+/// holds one: values, and for every face corner (in the order of the faces'
+/// corners) the index of its value. Texture coordinates (OBJ `vt`, PLY `u v`)
+/// and normals (OBJ `vn`, PLY `nx ny nz`). A per-vertex attribute (PLY) has
+/// one value per vertex and the faces' vertex indices as its value indices.
+struct FaceVarying {
+  std::vector<double> values;         ///< (n_values, width)
+  std::vector<std::int32_t> indices;  ///< one per face corner; -1: this corner has no value (OBJ `f a b/c ...`)
+  int width = 0;                      ///< numbers per value (2 or 3 for texture coordinates, 3 for normals); 0: none
+  bool empty() const { return width == 0; }
+  std::size_t n_values() const { return width ? values.size() / static_cast<std::size_t>(width) : 0; }
+};
+
+/// A FaceVarying borrowed from the caller (MeshView).
+struct FaceVaryingView {
+  const double* values = nullptr;  ///< (n_values, width), finite
+  std::size_t n_values = 0;
+  int width = 0;                         ///< 0: none
+  const std::int32_t* indices = nullptr;  ///< one per face corner, in [0, n_values)
+};
+
 /// The format named by the file's extension (.obj, .off, .ply, .stl, any case).
 /// @throws FileError for any other extension
 MeshFormat mesh_format(const std::string& path);
@@ -72,6 +93,8 @@ struct MeshFile {
   std::int32_t face_size = 3;            ///< the corners of every face when face_sizes is empty
   std::size_t polygons_split = 0;        ///< faces of more than 3 corners split (ReadOptions::triangulate)
   FileTags tags;                         ///< the OBJ file's `t` lines (ReadOptions::tags)
+  FaceVarying uvs;      ///< texture coordinates (ReadOptions::attributes), following the faces as triangulated
+  FaceVarying normals;  ///< normals (ReadOptions::attributes), as `uvs`
 
   std::size_t n_vertices() const { return vertices.size() / 3; }
   std::size_t n_faces() const {
@@ -92,6 +115,11 @@ struct ReadOptions {
   /// Read OpenSubdiv's `t` tag lines of an OBJ file (FileTags); without it
   /// they are skipped unread, as every other OBJ statement sorpia does not use.
   bool tags = false;
+  /// Read texture coordinates and normals (MeshFile::uvs, normals): OBJ `vt`
+  /// and `vn` with the faces' `a/b/c` indices (face-varying), PLY per-vertex
+  /// `u v` (or `s t`, `texture_u texture_v`, `texture_s texture_t`) and `nx ny
+  /// nz`. Without it they are skipped unread. OFF and STL give none.
+  bool attributes = false;
 };
 
 /// Read a mesh.
@@ -117,6 +145,8 @@ struct MeshView {
   std::size_t n_faces = 0;
   const std::int32_t* face_sizes = nullptr;  ///< (n_faces,) corners per face (at least 3); null: `face_size` each
   std::int32_t face_size = 3;
+  FaceVaryingView uvs;      ///< texture coordinates to write (OBJ `vt`; PLY `u v` when each vertex has one value)
+  FaceVaryingView normals;  ///< normals to write (OBJ `vn`; PLY `nx ny nz` when each vertex has one value)
 };
 
 /// Write a mesh atomically: to a temporary file in the same folder, then
@@ -129,7 +159,10 @@ struct MeshView {
 /// @throws FileError when the file cannot be written; MeshError for a bad
 ///         index, a face of fewer than 3 corners or a non-finite coordinate;
 ///         ParameterError for binary OBJ/OFF, polygons to STL, tags to
-///         anything but OBJ
+///         anything but OBJ, texture coordinates or normals to OFF or STL, or
+///         to PLY where a vertex has several different values (a seam: OBJ
+///         holds them per corner); MeshError for a value index out of range
+///         or a non-finite value
 void write_mesh(const std::string& path, const MeshView& mesh, bool binary = false, const FileTags* tags = nullptr);
 
 /// write_mesh of a triangle mesh: faces (n_faces, 3).

@@ -50,7 +50,8 @@ std::unique_ptr<Far::TopologyRefiner> create_refiner(const RefinerInput& input, 
 // corners mapped through to_osd; sharpness as float, kInfiniteSharpness and
 // above as Sdc::Crease::SHARPNESS_INFINITE). `tags` must have passed
 // check_tags. Throws sorpia::MeshError when OpenSubdiv refuses the topology
-// (Loop with a non-triangle face) or a tag names a vertex no face uses.
+// (Loop with a non-triangle face), a tag names a vertex no face uses, or
+// every face is a hole (the limit surface is empty).
 Refiner make_refiner(const Topology& topology, Scheme scheme, Boundary boundary, const Tags& tags = {});
 
 // A position as OpenSubdiv's PrimvarRefiner combines them (Clear, AddWithWeight).
