@@ -176,14 +176,14 @@ LimitOperator limit_operator(const Topology& topology, Boundary boundary, const 
   if (tags.empty())
     return uniform_operator(topology, [&](std::size_t v) { return untagged_row(topology, v, boundary); });
   const detail::VertexTags vt = detail::vertex_tags(topology, tags);
-  // Rows with a semi-sharp tag, and darts when the mesh has one, come from
-  // OpenSubdiv's refinement (refined_rows.hpp); every other row is the same
-  // at any level.
+  // Rows with a semi-sharp tag come from OpenSubdiv's refinement, darts from
+  // the limit of their refinement (refined_rows.hpp); every other row is the
+  // same at any level.
   const std::vector<int> level = detail::row_levels(topology, Scheme::Loop, vt);
   std::vector<std::int32_t> refined;
   std::vector<int> refined_levels;
   for (std::size_t v = 0; v < topology.n_vertices(); ++v)
-    if (level[v] > 0) {
+    if (level[v] > 0 || vt.dart(topology, static_cast<std::int32_t>(v))) {
       refined.push_back(static_cast<std::int32_t>(v));
       refined_levels.push_back(level[v]);
     }
