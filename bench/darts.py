@@ -30,7 +30,7 @@ import scipy.sparse.linalg
 
 import sorpia
 from sorpia import _core
-from sorpia.limit import as_boundary, as_scheme
+from sorpia._validate import as_boundary, as_scheme
 from sorpia.limit import tags as make_tags
 from sorpia.limit import topology as make_topology
 from sorpia.surface import corner_uv
@@ -58,7 +58,7 @@ def face_list(f):
 
 def corner_misses(x, v, f, boundary, scheme, tags, at):
     """Largest |P - V| / diagonal at the face corners of the vertices in `at` and at the others."""
-    s = sorpia.LimitSurface(x, f, boundary, scheme=scheme, **tags)
+    s = sorpia.LimitSurface(x, f, boundary=boundary, scheme=scheme, **tags)
     holes = set(np.asarray(tags.get("holes", []), int).tolist())
     faces = face_list(f)
     ids, uv, corner = [], [], []
@@ -122,10 +122,10 @@ def main():
     for name, v, f, scheme, boundary, tags in shapes(args.shared, args.names.split(",")):
         n = len(v)
         at = darts(f, n, **tags)
-        B = sorpia.limit_matrix(f, n, boundary, scheme=scheme, **tags)
+        B = sorpia.limit_matrix(f, n, boundary=boundary, scheme=scheme, **tags)
         topo = make_topology(f, n, scheme=scheme, warn=False)
-        data, indices, indptr = _core.reference_limit_matrix(topo, as_scheme(scheme), as_boundary(boundary),
-                                                             make_tags(topo, **tags))
+        data, indices, indptr = _core.reference_limit_matrix(
+            topo, _core.Rules(scheme=as_scheme(scheme), boundary=as_boundary(boundary), tags=make_tags(topo, **tags)))
         far = scipy.sparse.csr_matrix((data, indices, indptr), shape=(n, n))
         before, other_before = corner_misses(fit(far, v), v, f, boundary, scheme, tags, at)
         after, other_after = corner_misses(fit(B, v), v, f, boundary, scheme, tags, at)

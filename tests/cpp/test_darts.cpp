@@ -425,7 +425,7 @@ TEST(Darts, RowsAreTheLimitOfFarsRefinement) {
     const std::vector<int> dart = darts(s);
     ASSERT_FALSE(dart.empty());
     const sorpia::Topology t = s.topology();
-    const auto b = sorpia::limit_matrix(t, s.scheme, s.boundary, s.tags);
+    const auto b = sorpia::limit_matrix(t, sorpia::Rules{s.scheme, s.boundary, s.tags});
     for (const int v : dart) {
       SCOPED_TRACE("dart " + std::to_string(v));
       const auto exact = far_deep_limit_row(s, v, 80);
@@ -450,7 +450,7 @@ TEST(Darts, RowsAreFarsLimitExtrapolated) {
   int checked = 0;
   for (const Shape& s : shapes()) {
     const sorpia::Topology t = s.topology();
-    const auto b = sorpia::limit_matrix(t, s.scheme, s.boundary, s.tags);
+    const auto b = sorpia::limit_matrix(t, sorpia::Rules{s.scheme, s.boundary, s.tags});
     for (const int v : darts(s)) {
       const std::size_t regular = s.scheme == Scheme::Loop ? 6 : 4;
       if (faces_at(s, v).size() != regular) continue;
@@ -470,7 +470,7 @@ TEST(Darts, OtherRowsAreFarsLimit) {
     SCOPED_TRACE(s.name);
     const std::vector<int> dart = darts(s);
     const sorpia::Topology t = s.topology();
-    const auto b = sorpia::limit_matrix(t, s.scheme, s.boundary, s.tags);
+    const auto b = sorpia::limit_matrix(t, sorpia::Rules{s.scheme, s.boundary, s.tags});
     for (std::size_t v = 0; v < s.n_vertices(); ++v) {
       if (std::binary_search(dart.begin(), dart.end(), static_cast<int>(v))) continue;
       ASSERT_LE(max_diff(row(b, v), far_limit_row(s, static_cast<int>(v), 3)), 1e-14) << "vertex " << v;
@@ -528,7 +528,7 @@ TEST(Darts, FittedCagesPassThroughTheirTargets) {
     SCOPED_TRACE(s.name);
     const std::vector<int> dart = darts(s);
     const sorpia::Topology t = s.topology();
-    const auto x = dense_solve(sorpia::limit_matrix(t, s.scheme, s.boundary, s.tags), s.vertices, 3);
+    const auto x = dense_solve(sorpia::limit_matrix(t, sorpia::Rules{s.scheme, s.boundary, s.tags}), s.vertices, 3);
     const sorpia::LimitSurface surface(t, x.data(), s.scheme, s.boundary, s.tags);
     std::map<int, int> local;
     const auto refiner = far_refiner(s, {}, local);
