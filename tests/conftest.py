@@ -60,6 +60,40 @@ def zigzag_strip(n: int):
     return v, np.array([[i, i + 1, i + 2] if i % 2 == 0 else [i + 1, i, i + 2] for i in range(n)])
 
 
+def darts(faces, n_vertices: int, creases=None, corners=None, **_) -> np.ndarray:
+    """Which vertices are darts, from the faces and tags alone: interior vertices with exactly one infinitely sharp
+    crease edge (sharpness 10 or more, each edge given once) and no infinitely sharp corner. Their rows of B are
+    the limit of refinement, which OpenSubdiv's Limit() after any finite number of levels (the whole-mesh
+    reference, _core.reference_limit_matrix) is not: comparisons with that reference skip them, and
+    tests/cpp/test_darts.cpp checks them. Other tags (holes) are taken and ignored."""
+    if isinstance(faces, sorpia.Polygons):
+        ends = np.cumsum(faces.face_vertex_counts)
+        face_list = [faces.face_vertex_indices[e - c:e].tolist() for c, e in zip(faces.face_vertex_counts, ends)]
+    else:
+        face_list = np.asarray(faces).tolist()
+    edge_faces = {}
+    for face in face_list:
+        for a, b in zip(face, face[1:] + face[:1]):
+            key = (min(a, b), max(a, b))
+            edge_faces[key] = edge_faces.get(key, 0) + 1
+    on_boundary = np.zeros(n_vertices, bool)
+    used = np.zeros(n_vertices, bool)
+    for (a, b), count in edge_faces.items():
+        used[[a, b]] = True
+        if count == 1:
+            on_boundary[[a, b]] = True
+    sharp = np.zeros(n_vertices, int)
+    if creases is not None:
+        e = np.asarray(creases[0]).reshape(-1, 2)
+        s = np.broadcast_to(np.asarray(creases[1], float), (len(e),))
+        np.add.at(sharp, e[s >= 10].ravel(), 1)
+    if corners is not None:
+        c = np.atleast_1d(np.asarray(corners[0]))
+        s = np.broadcast_to(np.asarray(corners[1], float), (len(c),))
+        sharp[c[s >= 10]] = 99
+    return used & ~on_boundary & (sharp == 1)
+
+
 def loop_alpha(n):
     """alpha_n = 3 / (3 + 8 n beta_n), n beta_n = 5/8 - (3/8 + cos(2 pi/n)/4)^2."""
     n = np.asarray(n, dtype=float)

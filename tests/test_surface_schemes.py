@@ -348,29 +348,34 @@ def test_tagged_loop_tessellation_starts_with_limit_points():
 
 
 @pytest.mark.parametrize("scheme", SCHEMES)
-def test_a_dart_is_the_one_place_where_opensubdiv_s_limits_disagree(scheme):
+def test_at_a_dart_evaluate_and_tessellate_give_the_limit_of_refinement(scheme):
     # An interior vertex with one infinitely sharp edge (a dart; both ends of
     # the one crease here): Sdc gives it the smooth limit mask, which is not
-    # the limit of its refinement, so Far's Limit() on the control mesh (B),
-    # after L levels, and Bfr's corner (Limit() after its 4 local refinements)
-    # are different points, all within 1% of the edge length here
-    # (docs/surfaces.md). Every other corner agrees to rounding.
+    # the limit of its refinement, and Bfr's own corner there is Far's Limit()
+    # after its 4 local refinements. B's row is the limit (checked against Far
+    # in tests/cpp/test_darts.cpp); evaluate() at every corner, the darts'
+    # included, and the tessellation's control vertices at every level are
+    # B V. A point just off a dart's corner is Bfr's, which starts from its
+    # level-4 point: within 1% of the edge length of the limit, not at it.
     v, f = sorpia.shapes.grid(7, 7)
     v = np.asarray(v, dtype=float)
     v[:, 2] += 0.1 * np.random.default_rng(0).standard_normal(49)  # a bumpy height field
     f = np.asarray(f)
     dart = 24
     other = int(next(x for face in f if dart in face for x in face if x != dart))
-    s = sorpia.LimitSurface(v, f, scheme=scheme, creases=([[dart, other]], np.inf))
+    creases = ([[dart, other]], np.inf)
+    s = sorpia.LimitSurface(v, f, scheme=scheme, creases=creases)
     ids = np.repeat(np.arange(len(f)), 3)
     uv = np.array([corner_uv(scheme, 3, j) for j in range(3)] * len(f))
-    bfr = s.evaluate(ids, uv)
-    at_dart = np.isin(f.ravel(), [dart, other])
-    edge = 1 / 6
+    limit = sorpia.limit_points(v, f, scheme=scheme, creases=creases)
+    assert np.abs(s.evaluate(ids, uv) - limit[f.ravel()]).max() <= 1e-14
     for level in (0, 1, 2, 3):
-        p = s.tessellate(level)[0][f.ravel()]
-        assert np.abs(p - bfr)[~at_dart].max() <= 1e-12
-        assert np.abs(p - bfr)[at_dart].max() <= 0.01 * edge
+        assert np.abs(s.tessellate(level)[0][:len(v)] - limit).max() <= 1e-14
+    at_dart = np.flatnonzero(f.ravel() == dart)
+    # into the face: the triangle's corner, or the corner's quad sub-face of side 1/2
+    near = uv[at_dart] + 1e-9 * ((1.0 - 3 * uv[at_dart]) if scheme == "loop" else 1.0)
+    off = np.abs(s.evaluate(ids[at_dart], near) - limit[dart])
+    assert 1e-7 <= off.max() <= 0.01 / 6
 
 
 # ---- OpenSubdiv's shapes ----------------------------------------------------
@@ -383,30 +388,14 @@ OSD_SHAPES = (sorted(p.name for p in SHARED_MESHES.glob("osd_*.obj")
               if SHARED_MESHES.exists() else [])
 
 
-def darts(f, n, creases):
-    """Interior vertices with exactly one infinitely sharp crease edge."""
-    on_boundary = np.zeros(n, bool)
-    edges = {}
-    for face in face_list(f):
-        for a, b in zip(face, face[1:] + face[:1]):
-            edges[(min(a, b), max(a, b))] = edges.get((min(a, b), max(a, b)), 0) + 1
-    for (a, b), count in edges.items():
-        if count == 1:
-            on_boundary[[a, b]] = True
-    sharp = np.zeros(n, int)
-    if creases is not None:
-        e, s = np.asarray(creases[0]), np.broadcast_to(creases[1], (len(creases[0]),))
-        np.add.at(sharp, e[s >= 10].ravel(), 1)
-    return np.flatnonzero((sharp == 1) & ~on_boundary)
-
-
 @pytest.mark.skipif(not OSD_SHAPES, reason="../shared/meshes is not present")
 @pytest.mark.parametrize("name", OSD_SHAPES or ["absent"])
 def test_opensubdiv_shapes_fitted_surfaces_pass_through_their_vertices(name):
     # Fit with the file's tags and scheme, then evaluate the limit surface of
     # the control mesh by Bfr (OpenSubdiv's own evaluation, not sorpia's B) at
     # every corner of every face that is not a hole: the given vertices, to
-    # 1e-9 of the diagonal, except at darts (docs/surfaces.md).
+    # 1e-9 of the diagonal (at darts too: evaluate takes their corners from B,
+    # the limit of refinement there).
     v, f, tags = sorpia.read_mesh(SHARED_MESHES / name, tags=True)
     scheme = "loop" if name.startswith("osd_loop") else "catmull-clark"
     boundary = tags.pop("boundary", "edge-and-corner")
@@ -419,9 +408,8 @@ def test_opensubdiv_shapes_fitted_surfaces_pass_through_their_vertices(name):
     ids = np.concatenate([[i] * len(faces[i]) for i in keep])
     uv = np.array([corner_uv(scheme, len(faces[i]), j) for i in keep for j in range(len(faces[i]))])
     corners = np.concatenate([faces[i] for i in keep])
-    ok = ~np.isin(corners, darts(f, len(v), tags.get("creases")))
     p = s.evaluate(ids, uv)
-    assert np.abs(p - v[corners])[ok].max() <= 1e-9 * diagonal(v)
+    assert np.abs(p - v[corners]).max() <= 1e-9 * diagonal(v)
 
 
 def test_evaluation_on_threads_and_from_threads_gives_the_points_of_one_thread():

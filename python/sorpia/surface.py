@@ -201,7 +201,11 @@ class LimitSurface:
         rational Gregory weights): tangents within a few percent, normals
         within a few hundredths of a radian of finite differences (the tests
         hold them to 0.05 rad). Semi-sharp creases and corners are resolved
-        by Bfr's local refinement until their sharpness has decayed.
+        by Bfr's local refinement until their sharpness has decayed. At a
+        dart (an interior vertex with one infinitely sharp edge) Bfr's own
+        corner is OpenSubdiv's ``Limit()`` after those 4 refinements, not the
+        limit of refinement: the corner itself is taken from B (exact), and
+        points next to it start from Bfr's point (the Creases page says more).
         Elsewhere tangents and normals agree with finite differences of the
         positions to 1e-9.
         """

@@ -75,7 +75,8 @@ LimitOperator uniform_operator(const Topology& topology, RowRule row) {
 
 // The rule of a Loop vertex whose tags are all infinitely sharp (OpenSubdiv's
 // Sdc::Crease rules, boundary edges counting as sharp edges): an infinitely
-// sharp corner keeps itself; with one sharp edge (a dart) the smooth rule, two
+// sharp corner keeps itself; with one sharp edge (a dart) the smooth rule (its
+// row is replaced by the limit of its refinement afterwards), two
 // the crease rule on their ends, three or more the corner rule.
 UniformRow infinitely_sharp_row(const Topology& topology, std::size_t v, Boundary boundary,
                                 const detail::VertexTags& tags) {
@@ -134,9 +135,10 @@ namespace {
 // Catmull-Clark: the masks' operator (detail::catmark_limit_operator) with the
 // rows whose level (detail::row_levels) the masks do not give replaced by
 // OpenSubdiv's refinement around their vertex (refined_rows.hpp): vertices a
-// tag touches (a crease edge or a corner at them), darts, and interior
-// vertices of two faces (their Sdc limit mask, the corner rule, is not the
-// limit of their refinement, so they are taken at the mesh's deepest level).
+// tag touches (a crease edge or a corner at them), darts (the limit of their
+// refinement), and interior vertices of two faces (their Sdc limit mask, the
+// corner rule, is not the limit of their refinement, so they are taken at the
+// mesh's deepest level).
 LimitOperator catmark_operator(const Topology& topology, Boundary boundary, const Tags& tags) {
   LimitOperator op = detail::catmark_limit_operator(topology, boundary);
   const std::size_t n = topology.n_vertices();
@@ -176,14 +178,14 @@ LimitOperator limit_operator(const Topology& topology, Boundary boundary, const 
   if (tags.empty())
     return uniform_operator(topology, [&](std::size_t v) { return untagged_row(topology, v, boundary); });
   const detail::VertexTags vt = detail::vertex_tags(topology, tags);
-  // Rows with a semi-sharp tag, and darts when the mesh has one, come from
-  // OpenSubdiv's refinement (refined_rows.hpp); every other row is the same
-  // at any level.
+  // Rows with a semi-sharp tag come from OpenSubdiv's refinement, darts from
+  // the limit of their refinement (refined_rows.hpp); every other row is the
+  // same at any level.
   const std::vector<int> level = detail::row_levels(topology, Scheme::Loop, vt);
   std::vector<std::int32_t> refined;
   std::vector<int> refined_levels;
   for (std::size_t v = 0; v < topology.n_vertices(); ++v)
-    if (level[v] > 0) {
+    if (level[v] > 0 || vt.dart(topology, static_cast<std::int32_t>(v))) {
       refined.push_back(static_cast<std::int32_t>(v));
       refined_levels.push_back(level[v]);
     }

@@ -8,9 +8,11 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <stdexcept>
 #include <string>
 #include <utility>
 
+#include "sorpia/detail/dart_rows.hpp"
 #include "sorpia/detail/osd_refiner.hpp"
 #include "sorpia/errors.hpp"
 
@@ -97,6 +99,21 @@ LocalMesh child_mesh(const Far::TopologyLevel& level, int c, std::vector<int>& t
   return m;
 }
 
+// One uniform level of `m` (one local refiner): `next` gets the weights of
+// the refined level's vertices over the original local mesh (`rows`: those
+// of m's vertices, n0 columns); returns the refiner, refined once.
+std::unique_ptr<Far::TopologyRefiner> refine_once(const LocalMesh& m, Scheme scheme, Boundary boundary,
+                                                  std::vector<double>& rows, int n0, std::vector<double>& next) {
+  auto refiner = create_refiner(m, scheme, boundary);
+  Far::TopologyRefiner::UniformOptions options(1);
+  options.fullTopologyInLastLevel = true;
+  refiner->RefineUniform(options);
+  next.assign(static_cast<std::size_t>(refiner->GetLevel(1).GetNumVertices()) * n0, 0.0);
+  Rows src{rows.data(), n0}, dst{next.data(), n0};
+  Far::PrimvarRefinerReal<double>(*refiner).Interpolate(1, src, dst);
+  return refiner;
+}
+
 // The limit row of the centre of `m` over m's vertices: `levels` uniform
 // levels (one local refiner each), then Limit().
 std::vector<double> local_limit_row(LocalMesh m, Scheme scheme, Boundary boundary, int levels) {
@@ -106,17 +123,12 @@ std::vector<double> local_limit_row(LocalMesh m, Scheme scheme, Boundary boundar
   std::vector<double> next, limit;
   std::vector<int> to_local, taken;
   for (;;) {
-    const auto refiner = create_refiner(m, scheme, boundary);
+    std::unique_ptr<Far::TopologyRefiner> refiner;
     int centre = 0;
     Rows src{rows.data(), n0};
     if (levels > 0) {
-      Far::TopologyRefiner::UniformOptions options(1);
-      options.fullTopologyInLastLevel = true;
-      refiner->RefineUniform(options);
+      refiner = refine_once(m, scheme, boundary, rows, n0, next);
       const Far::TopologyLevel& child = refiner->GetLevel(1);
-      next.assign(static_cast<std::size_t>(child.GetNumVertices()) * n0, 0.0);
-      Rows dst{next.data(), n0};
-      Far::PrimvarRefinerReal<double>(*refiner).Interpolate(1, src, dst);
       centre = refiner->GetLevel(0).GetVertexChildVertex(0);
       if (--levels > 0) {  // the faces around the centre's child are all the next level needs
         to_local.assign(child.GetNumVertices(), -1);
@@ -126,7 +138,9 @@ std::vector<double> local_limit_row(LocalMesh m, Scheme scheme, Boundary boundar
           std::copy_n(next.data() + static_cast<std::size_t>(taken[i]) * n0, n0, rows.data() + i * n0);
         continue;
       }
-      src = dst;
+      src = Rows{next.data(), n0};
+    } else {
+      refiner = create_refiner(m, scheme, boundary);
     }
     const int n_last = refiner->GetLevel(refiner->GetMaxLevel()).GetNumVertices();
     limit.assign(static_cast<std::size_t>(n_last) * n0, 0.0);
@@ -135,6 +149,98 @@ std::vector<double> local_limit_row(LocalMesh m, Scheme scheme, Boundary boundar
     return std::vector<double>(limit.begin() + static_cast<std::size_t>(centre) * n0,
                                limit.begin() + static_cast<std::size_t>(centre + 1) * n0);
   }
+}
+
+// The u with u^T S = u^T and sum(u) = 1, for an m x m row-major S whose rows
+// sum to 1 and whose eigenvalue 1 is simple: M^T u = 1/m with
+// M = I - S + 1 1^T / m (M shares S's right eigenvector 1, with eigenvalue 1
+// instead of 0, and I - S's other eigenvalues, so it is invertible), by
+// Gaussian elimination with partial pivoting.
+std::vector<double> stationary_weights(const std::vector<double>& s, int m) {
+  const auto at = [m](int i, int j) { return static_cast<std::size_t>(i) * m + j; };
+  std::vector<double> a(static_cast<std::size_t>(m) * m), u(m, 1.0 / m);
+  for (int i = 0; i < m; ++i)  // a = M^T
+    for (int j = 0; j < m; ++j) a[at(i, j)] = (i == j ? 1.0 : 0.0) - s[at(j, i)] + 1.0 / m;
+  for (int c = 0; c < m; ++c) {
+    int p = c;
+    for (int i = c + 1; i < m; ++i)
+      if (std::abs(a[at(i, c)]) > std::abs(a[at(p, c)])) p = i;
+    if (!(std::abs(a[at(p, c)]) > 0.0))
+      throw std::logic_error("sorpia: the subdivision matrix around a dart has eigenvalue 1 more than once");
+    if (p != c) {
+      for (int j = 0; j < m; ++j) std::swap(a[at(p, j)], a[at(c, j)]);
+      std::swap(u[p], u[c]);
+    }
+    for (int i = c + 1; i < m; ++i) {
+      const double f = a[at(i, c)] / a[at(c, c)];
+      if (f == 0.0) continue;
+      for (int j = c; j < m; ++j) a[at(i, j)] -= f * a[at(c, j)];
+      u[i] -= f * u[c];
+    }
+  }
+  for (int i = m - 1; i >= 0; --i) {
+    double x = u[i];
+    for (int j = i + 1; j < m; ++j) x -= a[at(i, j)] * u[j];
+    u[i] = x / a[at(i, i)];
+  }
+  return u;
+}
+
+// The limit row of a dart, the centre of `m` (an interior vertex whose only
+// infinitely sharp edge is its one tag left after `levels` >= 1 levels), over
+// m's vertices: the limit as the level L grows of Far's Limit() after L
+// levels, which Sdc's (smooth) limit mask does not give at any finite L.
+//
+// After `levels` levels the faces around the centre's child are quads
+// (Catmull-Clark) or triangles (Loop) and the rules of every vertex they hold
+// no longer change (semi-sharp tags have decayed, infinitely sharp edges stay
+// sharp), so one level maps the local mesh's vertices to the same
+// configuration one level down: the centre to its child, the other end of
+// each of its edges to that edge's child, the corner opposite the centre in
+// each quad to that face's child. That map is the local subdivision matrix S
+// (the same at every later level), and the limit row is S^L's rows' common
+// limit, u^T with u S's dominant left eigenvector (eigenvalue 1, weights
+// summing to 1: stationary_weights), composed back through the levels.
+std::vector<double> local_dart_row(LocalMesh m, Scheme scheme, Boundary boundary, int levels) {
+  const int n0 = m.n_vertices;
+  std::vector<double> rows(static_cast<std::size_t>(n0) * n0, 0.0);  // level 0: the identity
+  for (int i = 0; i < n0; ++i) rows[static_cast<std::size_t>(i) * n0 + i] = 1.0;
+  std::vector<double> next;
+  std::vector<int> to_local, taken;
+  for (int l = 0; l < levels; ++l) {
+    const auto refiner = refine_once(m, scheme, boundary, rows, n0, next);
+    const Far::TopologyLevel& child = refiner->GetLevel(1);
+    to_local.assign(child.GetNumVertices(), -1);
+    m = child_mesh(child, refiner->GetLevel(0).GetVertexChildVertex(0), to_local, taken);
+    rows.resize(taken.size() * static_cast<std::size_t>(n0));
+    for (std::size_t i = 0; i < taken.size(); ++i)
+      std::copy_n(next.data() + static_cast<std::size_t>(taken[i]) * n0, n0, rows.data() + i * n0);
+  }
+  // S: one more level of m, each vertex of m followed to its counterpart.
+  const int k = m.n_vertices;
+  std::vector<double> identity(static_cast<std::size_t>(k) * k, 0.0), s(identity.size());
+  for (int i = 0; i < k; ++i) identity[static_cast<std::size_t>(i) * k + i] = 1.0;
+  const auto refiner = refine_once(m, scheme, boundary, identity, k, next);
+  const Far::TopologyLevel& top = refiner->GetLevel(0);
+  for (int i = 0; i < k; ++i) {
+    int c = -1;
+    if (i == 0) {
+      c = top.GetVertexChildVertex(0);
+    } else if (const int e = top.FindEdge(0, i); e >= 0) {
+      c = top.GetEdgeChildVertex(e);
+    } else {
+      for (const int f : top.GetVertexFaces(0))
+        if (top.GetFaceVertices(f).size() == 4 && top.GetFaceVertices(f)[(top.GetFaceVertices(f).FindIndex(0) + 2) % 4] == i)
+          c = top.GetFaceChildVertex(f);
+    }
+    if (c < 0) throw std::logic_error("sorpia: a vertex around a dart is neither on an edge nor opposite in a quad");
+    std::copy_n(next.data() + static_cast<std::size_t>(c) * k, k, s.data() + static_cast<std::size_t>(i) * k);
+  }
+  const std::vector<double> u = stationary_weights(s, k);
+  std::vector<double> row(n0, 0.0);
+  for (int i = 0; i < k; ++i)
+    for (int j = 0; j < n0; ++j) row[j] += u[i] * rows[static_cast<std::size_t>(i) * n0 + j];
+  return row;
 }
 
 // Appends the entries of a row (columns `cols`, weights `w`) to `b`, sorted,
@@ -181,7 +287,7 @@ std::vector<int> row_levels(const Topology& topology, Scheme scheme, const Verte
     for (std::size_t v = 0; v < n; ++v) {
       if (topology.is_unreferenced(v)) continue;
       const bool valence_two = !topology.is_boundary(v) && topology.valence(v) == 2;  // Catmull-Clark only
-      if (valence_two || tags.dart(topology, static_cast<std::int32_t>(v))) level[v] = deepest;
+      if (valence_two) level[v] = deepest;
     }
   return level;
 }
@@ -295,9 +401,27 @@ CsrMatrix refined_limit_rows(const Topology& topology, Scheme scheme, Boundary b
     set_centre_sharpness(m, tags.corner[v]);
     m.n_vertices = static_cast<int>(base.size());
     for (const std::int32_t u : base) to_local[u] = -1;
-    append_row(b, base, local_limit_row(std::move(m), scheme, boundary, levels[k]));
+    if (tags.dart(topology, v))
+      append_row(b, base, local_dart_row(std::move(m), scheme, boundary, std::max(levels[k], 1)));
+    else
+      append_row(b, base, local_limit_row(std::move(m), scheme, boundary, levels[k]));
   }
   return b;
+}
+
+DartRows dart_rows(const Topology& topology, Scheme scheme, Boundary boundary, const Tags& tags) {
+  DartRows out;
+  if (tags.n_creases() == 0) return out;
+  const VertexTags vt = vertex_tags(topology, tags);
+  const std::vector<int> level = row_levels(topology, scheme, vt);
+  std::vector<int> levels;
+  for (std::size_t v = 0; v < topology.n_vertices(); ++v)
+    if (!topology.is_unreferenced(v) && vt.dart(topology, static_cast<std::int32_t>(v))) {
+      out.vertices.push_back(static_cast<std::int32_t>(v));
+      levels.push_back(level[v]);
+    }
+  out.rows = refined_limit_rows(topology, scheme, boundary, vt, out.vertices, levels);
+  return out;
 }
 
 }  // namespace sorpia::detail

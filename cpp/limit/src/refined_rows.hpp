@@ -34,20 +34,20 @@ struct VertexTags {
   // corner. Sdc gives a dart the smooth limit mask, which is not the limit of
   // its refinement (the sharp edge's children are midpoints, not smooth edge
   // points), so Far's Limit() of a dart depends on the level it is taken at
-  // (row_levels names the other rows that do).
+  // and converges as the level grows: refined_limit_rows takes its limit.
   bool dart(const Topology& topology, std::int32_t v) const {
     return !topology.is_boundary(v) && !infinite(corner[v]) && infinite_creases(v) == 1;
   }
 };
 
 // The level each row of B is taken at (B is OpenSubdiv's Limit() after
-// L = the largest of these levels): for each vertex tags.levels(v), at least
-// 1 under Catmull-Clark next to a face that is not a quad (Sdc's limit masks
-// assume quads), and L when L > 0 for a dart (see VertexTags::dart) and for
-// an interior vertex of two faces (Catmull-Clark), whose Sdc limit masks are
-// not the limit of their own refinement either; 0 for an unreferenced vertex.
-// Every other row is the same at any deeper level (tests: every row against
-// the whole mesh refined to L).
+// L = the largest of these levels, except at darts): for each vertex
+// tags.levels(v), at least 1 under Catmull-Clark next to a face that is not a
+// quad (Sdc's limit masks assume quads), and L when L > 0 for an interior
+// vertex of two faces (Catmull-Clark), whose Sdc limit mask is not the limit
+// of its refinement; 0 for an unreferenced vertex. Every other row is the
+// same at any deeper level (tests: every row against the whole mesh refined
+// to L). A dart's level is where refined_limit_rows starts its limit from.
 std::vector<int> row_levels(const Topology& topology, Scheme scheme, const VertexTags& tags);
 
 // Groups `tags` by vertex. Every crease must be an edge of `topology`, and a
@@ -63,6 +63,12 @@ VertexTags vertex_tags(const Topology& topology, const Tags& tags);
 // (at least tags.levels(v), where v's semi-sharp tags have decayed), then
 // Limit() on the last level. After each level the local mesh is
 // replaced by the faces incident to v's child, with their decayed sharpness.
+// A dart (VertexTags::dart) instead gets the limit as the level grows: after
+// max(levels[k], 1) levels one more level maps the local mesh's vertices to
+// the same configuration one level down (the local subdivision matrix S, the
+// same at every later level), and the row is S's dominant left eigenvector
+// (eigenvalue 1, weights summing to 1) composed back; Far's Limit() after L
+// levels tends to it as rho^L, rho about 1/3 at valence 6 and 0.6 at 12.
 //
 // Exact because of locality (Sdc's CREASE_UNIFORM rules): v's child depends
 // on v's faces only, and its one-ring on the children of those faces, so v's

@@ -20,6 +20,7 @@
 #include <utility>
 #include <vector>
 
+#include "sorpia/detail/dart_rows.hpp"
 #include "sorpia/detail/osd_refiner.hpp"
 #include "sorpia/detail/parallel.hpp"
 #include "sorpia/errors.hpp"
@@ -130,6 +131,13 @@ struct LimitSurface::Impl {
   std::unique_ptr<SurfaceFactory> factory;
   std::vector<double> vertices;  // (n, 3), as given
   std::vector<Point3> points;    // referenced vertices in OpenSubdiv's order
+  // Darts (interior vertices with one infinitely sharp edge): Bfr's corner
+  // there is Far's Limit() after its local refinements, not the limit of
+  // refinement, so evaluate() takes a dart's corner from its row of B
+  // (dart_slot[v]: v's row in darts.rows, or -1) at the current vertices.
+  detail::DartRows darts;
+  std::vector<std::int32_t> dart_slot;
+  std::vector<double> dart_points;  // (darts, 3)
   // Uniformly refined to refined_level (built on demand); shares base's level
   // 0 (Far::TopologyRefinerFactory::Create), so it is declared after base and
   // destroyed before it.
@@ -140,7 +148,17 @@ struct LimitSurface::Impl {
   mutable std::shared_mutex mutex;
 
   Impl(const Topology& t, Scheme s, Boundary b, const Tags& g)
-      : topology(t), scheme(s), boundary(b), tags(g), base(detail::make_refiner(t, s, b, g)) {}
+      : topology(t),
+        scheme(s),
+        boundary(b),
+        tags(g),
+        base(detail::make_refiner(t, s, b, g)),
+        darts(detail::dart_rows(t, s, b, g)) {
+    if (darts.vertices.empty()) return;
+    dart_slot.assign(t.n_vertices(), -1);
+    for (std::size_t k = 0; k < darts.vertices.size(); ++k)
+      dart_slot[darts.vertices[k]] = static_cast<std::int32_t>(k);
+  }
 };
 
 namespace {
@@ -252,6 +270,11 @@ void LimitSurface::set_vertices(const double* vertices) {
   const std::size_t n = n_vertices();
   impl_->vertices.assign(vertices, vertices + 3 * n);
   detail::gather_points(impl_->base, vertices, impl_->points);
+  const CsrMatrix& rows = impl_->darts.rows;
+  impl_->dart_points.assign(3 * rows.n_rows, 0.0);
+  for (std::size_t k = 0; k < rows.n_rows; ++k)
+    for (std::int32_t p = rows.indptr[k]; p < rows.indptr[k + 1]; ++p)
+      for (int c = 0; c < 3; ++c) impl_->dart_points[3 * k + c] += rows.data[p] * vertices[3 * rows.indices[p] + c];
 }
 
 void LimitSurface::get_vertices(double* out) const {
@@ -348,6 +371,21 @@ void LimitSurface::evaluate(const std::int32_t* face_ids, const double* uv, std:
   }
   const std::shared_lock<std::shared_mutex> lock(impl_->mutex);
   evaluate_points(factory, &impl_->points.data()->x, face_ids, params.data(), k, positions, du, dv, normals);
+  if (impl_->darts.vertices.empty()) return;
+  // A point at the corner of a dart: its limit position (see Impl::darts).
+  const Topology& t = impl_->topology;
+  for (std::size_t i = 0; i < k; ++i) {
+    const std::int32_t f = face_ids[i];
+    const std::int32_t* fv = t.face_indices().data() + t.face_offset(f);
+    for (int j = 0; j < t.face_size(f); ++j) {
+      const std::int32_t slot = impl_->dart_slot[fv[j]];
+      if (slot < 0) continue;
+      double corner[2];
+      factory.GetFaceParameterization(f).GetVertexCoord(j, corner);
+      if (corner[0] == params[2 * i] && corner[1] == params[2 * i + 1])
+        std::copy_n(&impl_->dart_points[3 * static_cast<std::size_t>(slot)], 3, positions + 3 * i);
+    }
+  }
 }
 
 // The output loops of tessellate() poll for an interrupt once per this many rows.

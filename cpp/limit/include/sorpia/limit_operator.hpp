@@ -54,19 +54,23 @@ std::string loop_needs_triangles(const Topology& topology);
 
 /// Loop's B with OpenSubdiv's sharpness tags (Far::TopologyDescriptor's creases,
 /// corners and holes; a tag given twice counts with its last sharpness).
-/// Rows of vertices no tag touches are the masks above. Infinitely sharp tags
-/// keep the uniform form (Sdc's rules, boundary edges counting as sharp
-/// edges): at an infinitely sharp corner, or at three or more sharp edges, the
-/// vertex keeps itself; at two, the crease rule 2/3 and 1/6 on their two ends;
-/// at one (a dart), the smooth rule. With semi-sharp tags, B is OpenSubdiv's
-/// Limit() after uniform refinement to ceil(the largest finite sharpness)
-/// levels, composed back to the control vertices: a vertex with a semi-sharp
-/// edge or corner gets its row from that refinement (rows of any width:
-/// `values` is then filled), and so does a dart, whose Sdc limit mask (the
-/// smooth one) gives a different point at each level; every other row is the
-/// same at any level. Holes change no
-/// row of B (Far's refinement and Limit() treat a hole's vertices as if the
-/// face were there); they only cut faces out of the surface.
+/// Every row is the limit of OpenSubdiv's refinement. Rows of vertices no tag
+/// touches are the masks above. Infinitely sharp tags keep the uniform form
+/// (Sdc's rules, boundary edges counting as sharp edges): at an infinitely
+/// sharp corner, or at three or more sharp edges, the vertex keeps itself; at
+/// two, the crease rule 2/3 and 1/6 on their two ends. With semi-sharp tags,
+/// a vertex with a semi-sharp edge or corner gets OpenSubdiv's Limit() after
+/// uniform refinement around it to ceil(its largest finite sharpness)
+/// levels, composed back to the control vertices (rows of any width:
+/// `values` is then filled); every other row is the same at any level. A
+/// dart (an interior vertex with one infinitely sharp edge once its
+/// semi-sharp tags have decayed) gets the limit of its refinement, which
+/// Far's Limit() at no finite level gives (Sdc's smooth limit mask ignores
+/// that the sharp edge's children are midpoints): the dominant left
+/// eigenvector of its local subdivision matrix (detail::refined_limit_rows),
+/// a row with several weights, so a mesh with a dart fills `values`. Holes
+/// change no row of B (Far's refinement and Limit() treat a hole's vertices
+/// as if the face were there); they only cut faces out of the surface.
 /// @throw MeshError naming the first crease that is not an edge of the mesh,
 ///        or the first face that is not a triangle
 LimitOperator limit_operator(const Topology& topology, Boundary boundary, const Tags& tags);
@@ -81,9 +85,12 @@ LimitOperator limit_operator(const Topology& topology, Boundary boundary, const 
 /// a one-face corner keeps itself under EdgeAndCorner); an interior vertex
 /// with a non-quad face gets its limit after one uniform refinement,
 /// composed back onto its faces' vertices (detail::catmark_refined_row). Rows
-/// of vertices a tag touches, of darts and of interior vertices of two faces
-/// (whose Sdc limit masks change with the level) come from OpenSubdiv's
-/// refinement around the vertex and Limit() at their row level.
+/// of vertices a tag touches and of interior vertices of two faces (whose Sdc
+/// limit masks change with the level) come from OpenSubdiv's refinement
+/// around the vertex and Limit() at their row level; darts get the limit of
+/// their refinement, as under Loop (those rows are not Far's Limit() at any
+/// level: tests/cpp/test_darts.cpp checks them against Far refined around the
+/// dart until it no longer changes).
 /// @throw MeshError naming the first crease that is not an edge of the mesh
 LimitOperator limit_operator(const Topology& topology, const Rules& rules);
 

@@ -93,7 +93,10 @@ class LimitSurface {
   /// points (face_ids[i], uv[2i], uv[2i+1]), evaluated by Bfr::Surface<double>
   /// in the face's parameterisation (see the class comment).
   /// Exact at face corners (the limit position B V of the corner vertex) under
-  /// both boundary rules, and wherever the patch is regular (box spline).
+  /// both boundary rules, and wherever the patch is regular (box spline). At
+  /// a dart's corner the point is B V's (the limit of refinement; Bfr's own
+  /// corner there is Far's Limit() after its 4 local refinements, which the
+  /// points next to that corner start from: docs/surfaces.md).
   /// Within the corner region of side 1/16 at an extraordinary vertex Bfr
   /// uses a Gregory patch: positions approximate the limit surface there
   /// and OpenSubdiv's derivatives approximate the positions' derivatives

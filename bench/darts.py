@@ -1,0 +1,168 @@
+"""Fits through darts: how far the fitted surface misses its targets at darts
+with OpenSubdiv's Limit() rows (what B had before) and with the limit of
+refinement (B now), and what the dart rows cost.
+
+For each shape (OpenSubdiv's tagged shapes in ../shared/meshes when present,
+and generated ones): the cage fitted by a direct solve (scipy's splu) with
+OpenSubdiv's B (_core.reference_limit_matrix: Far's Limit() after the levels
+the semi-sharp tags need, 0 with infinitely sharp tags alone, which gives a
+dart Sdc's smooth mask) and with sorpia's B; each cage's limit surface
+evaluated at every face corner (sorpia.LimitSurface: Bfr, and the limit of
+refinement at darts' corners); the largest miss |P - V| over the diagonal, at
+darts and elsewhere. Then the cost: B built with k darts against the same
+vertices made infinitely sharp corners (uniform rows), per dart.
+Writes docs/benchmarks/darts.md (unless --no-page).
+
+    python bench/darts.py [--shared ../shared/meshes] [--names a.obj,b.obj] [--no-page]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import scipy.sparse
+import scipy.sparse.linalg
+
+import sorpia
+from sorpia import _core
+from sorpia._validate import as_boundary, as_scheme
+from sorpia.limit import tags as make_tags
+from sorpia.limit import topology as make_topology
+from sorpia.surface import corner_uv
+
+sys.path.insert(0, os.path.dirname(__file__))
+sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "tests"))
+from _report import write_page  # noqa: E402
+from conftest import darts as dart_mask  # noqa: E402  (the tests' own: from the faces and tags alone)
+
+
+def darts(f, n, **tags):
+    return np.flatnonzero(dart_mask(f, n, **tags))
+
+SHARED = Path(__file__).resolve().parents[2] / "shared" / "meshes"
+OSD = ["osd_loop_icos_infsharp.obj", "osd_loop_cube_creases0.obj", "osd_catmark_cube_creases1.obj",
+       "osd_catmark_torus_creases0.obj", "osd_catmark_helmet.obj"]
+
+
+def face_list(f):
+    if isinstance(f, sorpia.Polygons):
+        ends = np.cumsum(f.face_vertex_counts)
+        return [f.face_vertex_indices[e - c:e].tolist() for c, e in zip(f.face_vertex_counts, ends)]
+    return np.asarray(f).tolist()
+
+
+def corner_misses(x, v, f, boundary, scheme, tags, at):
+    """Largest |P - V| / diagonal at the face corners of the vertices in `at` and at the others."""
+    s = sorpia.LimitSurface(x, f, boundary=boundary, scheme=scheme, **tags)
+    holes = set(np.asarray(tags.get("holes", []), int).tolist())
+    faces = face_list(f)
+    ids, uv, corner = [], [], []
+    for i, face in enumerate(faces):
+        if i in holes:
+            continue
+        for j, u in enumerate(face):
+            ids.append(i)
+            corner.append(u)
+            uv.append(corner_uv(scheme, len(face), j))
+    p = s.evaluate(np.array(ids), np.array(uv, float))
+    miss = np.linalg.norm(p - v[np.array(corner)], axis=1) / np.linalg.norm(np.ptp(v, axis=0))
+    mask = np.isin(corner, at)
+    return (miss[mask].max() if mask.any() else 0.0), (miss[~mask].max() if (~mask).any() else 0.0)
+
+
+def generated():
+    """A bumpy quad grid and its triangulation with a sharp path ending inside; an irregular torus with paths."""
+    out = []
+    v, f = sorpia.shapes.quad_grid(12, 12)
+    v = np.asarray(v, float)
+    v[:, 2] += 0.05 * np.sin(9.0 * v[:, 0]) * np.cos(7.0 * v[:, 1])
+    path = [12 * i + 6 for i in range(0, 6)]  # from the boundary to the middle
+    creases = (np.column_stack([path[:-1], path[1:]]), np.inf)
+    out.append(("quad grid 12x12, path ending inside", v, f, "catmull-clark", "edge-and-corner", {"creases": creases}))
+    t = sorpia.shapes.grid(12, 12)[1]
+    out.append(("triangle grid 12x12, same path", v, t, "loop", "edge-and-corner", {"creases": creases}))
+    v, f = sorpia.shapes.irregular(400, seed=2)
+    e = np.unique(np.sort(np.asarray(f)[::37, :2], axis=1), axis=0)
+    out.append(("irregular(400), isolated sharp edges", np.asarray(v), f, "loop", "edge-and-corner",
+                {"creases": (e, np.inf)}))
+    v, f = sorpia.shapes.quad_irregular(1200, seed=2)
+    f = np.asarray(f)
+    e = np.unique(np.sort(f[::41, :2], axis=1), axis=0)
+    out.append(("quad_irregular(1200), sharp 2.5 and inf edges", np.asarray(v), f, "catmull-clark", "edge-only",
+                {"creases": (e, np.where(np.arange(len(e)) % 3, np.inf, 2.5))}))
+    return out
+
+
+def shapes(shared: Path, names):
+    out = []
+    for name in names if shared.exists() else []:
+        v, f, tags = sorpia.read_mesh(shared / name, tags=True)
+        boundary = tags.pop("boundary", "edge-and-corner")
+        out.append((name, v, f, "loop" if name.startswith("osd_loop") else "catmull-clark", boundary, tags))
+    return out + generated()
+
+
+def fit(B, v):
+    return scipy.sparse.linalg.splu(B.tocsc()).solve(v)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--shared", type=Path, default=SHARED, help="the folder of OpenSubdiv's shapes (skipped if absent)")
+    ap.add_argument("--names", default=",".join(OSD), help="comma-separated files in --shared")
+    ap.add_argument("--no-page", action="store_true", help="print only; do not write the page")
+    args = ap.parse_args()
+    lines = ["| shape | scheme | vertices | darts | miss at darts, Far's Limit() rows | miss at darts, limit rows "
+             "| miss elsewhere (both) |", "|---|---|---:|---:|---:|---:|---:|"]
+    for name, v, f, scheme, boundary, tags in shapes(args.shared, args.names.split(",")):
+        n = len(v)
+        at = darts(f, n, **tags)
+        B = sorpia.limit_matrix(f, n, boundary=boundary, scheme=scheme, **tags)
+        topo = make_topology(f, n, scheme=scheme, warn=False)
+        data, indices, indptr = _core.reference_limit_matrix(
+            topo, _core.Rules(scheme=as_scheme(scheme), boundary=as_boundary(boundary), tags=make_tags(topo, **tags)))
+        far = scipy.sparse.csr_matrix((data, indices, indptr), shape=(n, n))
+        before, other_before = corner_misses(fit(far, v), v, f, boundary, scheme, tags, at)
+        after, other_after = corner_misses(fit(B, v), v, f, boundary, scheme, tags, at)
+        line = (f"| {name} | {scheme} | {n} | {len(at)} | {before:.1e} | {after:.1e} | "
+                f"{max(other_before, other_after):.1e} |")
+        print(line, flush=True)
+        lines.append(line)
+
+    # Cost: k isolated infinitely sharp edges (2k darts) against the same 2k vertices as infinitely sharp corners.
+    cost = ["", "| mesh | scheme | darts | B with darts (s) | B with corners there (s) | per dart (us) |",
+            "|---|---|---:|---:|---:|---:|"]
+    for scheme, (v, f) in [("loop", sorpia.shapes.irregular(100_000, seed=1)),
+                           ("catmull-clark", sorpia.shapes.quad_irregular(100_000, seed=1))]:
+        f = np.asarray(f) if not isinstance(f, sorpia.Polygons) else f
+        fl = np.asarray(f)
+        e = np.unique(np.sort(fl[::50, :2], axis=1), axis=0)
+        ends = np.unique(e)
+        at = darts(f, len(v), creases=(e, np.inf))
+        times = {}
+        for kind, tags in (("darts", {"creases": (e, np.inf)}),
+                           ("corners", {"creases": (e, np.inf), "corners": (ends, np.inf)})):
+            best = np.inf
+            for _ in range(3):
+                t0 = time.perf_counter()
+                sorpia.limit_matrix(f, len(v), scheme=scheme, **tags)
+                best = min(best, time.perf_counter() - t0)
+            times[kind] = best
+        per = (times["darts"] - times["corners"]) / max(len(at), 1) * 1e6
+        line = (f"| {'irregular' if scheme == 'loop' else 'quad_irregular'}({len(v)}) | {scheme} | {len(at)} | "
+                f"{times['darts']:.3f} | {times['corners']:.3f} | {per:.1f} |")
+        print(line, flush=True)
+        cost.append(line)
+    if not args.no_page:
+        body = ("Misses are the largest |P - V| over the diagonal at the face corners (the limit surface of the "
+                "fitted cage, evaluated by sorpia.LimitSurface), at darts and elsewhere.\n\n" + "\n".join(lines + cost))
+        write_page("darts", "Fits through darts", body, settings=(ap, args))
+
+
+if __name__ == "__main__":
+    main()
