@@ -164,17 +164,16 @@ extern thread_local double estimate_seconds_on_this_thread;
 void scale_pow2(double* x, std::size_t n, int e);
 
 // Records E_k / E_0 and decides when to stop (paper section 5), the same for
-// every method. A run whose error grows past 1e6 E_0 or turns non-finite
-// stops as diverged while the iterate is still finite. E_k at rounding level
+// every method. A run whose error grows past divergence_growth(method) times
+// the lowest before it, or turns non-finite, stops as diverged (the iterate
+// is still finite; solve() then returns the lowest E_k's). E_k at rounding level
 // (at most 64 eps max_i ||v_i^0||: nearly flat input, where E_0 itself is
 // rounding noise) counts as converged: no method can go below it.
 class Monitor {
  public:
-  static constexpr double divergence_limit = 1e6;
-
   // scale: max_i ||v_i^0||
   Monitor(const SolveOptions& opt, SolveResult& res, double scale)
-      : opt_(opt), res_(res), floor_(64.0 * 2.220446049250313e-16 * scale) {
+      : opt_(opt), res_(res), floor_(64.0 * 2.220446049250313e-16 * scale), growth_(divergence_growth(opt.method)) {
     res_.errors.clear();
     // A generous max_iter must not reserve memory it will not use.
     res_.errors.reserve(static_cast<std::size_t>(std::min(opt.max_iter, 4096LL)) + 1);
@@ -209,6 +208,10 @@ class Monitor {
   // an updated residual check the true one before they record it.
   bool converges(double e) const { return e / e0_ < opt_.tol || e <= floor_; }
 
+  // Stops the run for a reason the method found itself ("stalled",
+  // "singular") after the last record().
+  void finish(StopReason r) { stop(r); }
+
   // E_k for the next k; returns true to stop. Polls for an interrupt first
   // (once per iteration, on the calling thread, between sweeps).
   bool record(double e) {
@@ -218,7 +221,8 @@ class Monitor {
     res_.errors.push_back(rel);
     res_.iterations = k;
     const bool asked = opt_.callback && opt_.callback(k, rel);
-    if (!std::isfinite(rel) || rel > divergence_limit) return stop(StopReason::Diverged);
+    if (!std::isfinite(rel) || rel > growth_ * best_) return stop(StopReason::Diverged);
+    best_ = std::min(best_, rel);
     if (rel < opt_.tol || e <= floor_) return stop(StopReason::Converged);
     if (asked) return stop(StopReason::Callback);
     if (k >= opt_.max_iter) return stop(StopReason::MaxIter);
@@ -233,6 +237,8 @@ class Monitor {
   const SolveOptions& opt_;
   SolveResult& res_;
   double floor_;
+  double growth_;
+  double best_ = INFINITY;  // the lowest E_k / E_0 recorded so far
   double e0_ = 0.0;
   double reference_ = NAN;
 };
@@ -261,6 +267,8 @@ extern std::size_t sweep_min_vertices_per_thread;
 // The Krylov and HSS methods (solver_krylov.cpp) on (n, k) data, iterating on
 // res.control_vertices, which holds V^(0) on entry.
 void solve_cg(const LimitOperator& op, const double* v0, std::size_t k, Monitor& mon, SolveResult& res);
+void solve_gmres(const LimitOperator& op, const double* v0, std::size_t k, Monitor& mon, SolveResult& res);
+void solve_cgls(const LimitOperator& op, const double* v0, std::size_t k, Monitor& mon, SolveResult& res);
 void solve_hss(const LimitOperator& op, const double* v0, std::size_t k, double alpha, double weight, Monitor& mon,
                SolveResult& res);
 
