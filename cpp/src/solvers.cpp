@@ -83,8 +83,9 @@ std::string quoted(Method m) { return std::string("'") + method_name(m) + "'"; }
 void check_applies(const char* name, const std::string& value, Method method, std::initializer_list<Method> users) {
   for (Method u : users)
     if (u == method) return;
-  std::string list;
-  for (Method u : users) list += (list.empty() ? "" : " or ") + quoted(u);
+  std::string list;  // 'a', 'b' or 'c'
+  std::size_t k = 0;
+  for (Method u : users) list += (k++ == 0 ? "" : k == users.size() ? " or " : ", ") + quoted(u);
   throw ParameterError(std::string(name) + " = " + value + " applies to method=" + list + " only (method=" +
                        quoted(method) + ")");
 }

@@ -210,14 +210,14 @@ TEST(SolveOptions, MessagesWriteValuesAsPythonRepr) {
   EXPECT_EQ(message(o), "omega = 2.0 is outside (0, 2)");
   o.omega = 1.5;
   o.method = sorpia::Method::Pia;
-  EXPECT_EQ(message(o), "omega = 1.5 applies to method='sor' only (method='pia')");
+  EXPECT_EQ(message(o), "omega = 1.5 applies to method='sor' or 'auto' only (method='pia')");
   o = {};
   o.tol = -1.5e-7;
   EXPECT_EQ(message(o), "tol = -1.5e-07 must be a positive finite number");
   o = {};
   o.method = sorpia::Method::Cg;
   o.threads = 2;
-  EXPECT_EQ(message(o), "threads = 2 applies to method='sor' or 'gs' only (method='cg')");
+  EXPECT_EQ(message(o), "threads = 2 applies to method='sor', 'gs' or 'auto' only (method='cg')");
   o = {};
   o.method = sorpia::Method::Wpia;
   o.sigma = 0.001;
