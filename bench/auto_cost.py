@@ -7,11 +7,13 @@ sorpia.shapes.quad_irregular, Catmull-Clark, of --vertices each): "auto" and
 "sor" on one Interpolator, alternated, medians of --repeat solves; auto's
 result must be SOR's, bit for bit, and nothing else may run.
 Part 2, valence-2 meshes: sorpia.shapes.quad_torus(--torus) with a share
-(--split) of its quads split in two through a new vertex joined to two
-opposite corners (an interior vertex of valence 2): every method with its
-outcome, iterations, products of B and solve seconds (medians of --repeat),
-and the singular prism of --prism sides (Catmull-Clark, targets jiggled), where
-"auto" ends with the least-squares answer.
+(--split) of its edges split at their midpoints (pentagons on both sides, an
+interior vertex of valence 2 as at OpenSubdiv's gregory_test8: B indefinite),
+or of its quads split in two through a new vertex joined to two opposite
+corners (valence 2, B definite): every method with its outcome, iterations,
+products of B and solve seconds (medians of --repeat), and the singular prism
+of --prism sides (Catmull-Clark, targets jiggled), where "auto" ends with the
+least-squares answer.
 Prints Markdown tables and writes them into docs/benchmarks/auto-cost.md
 (unless --no-page).
 
@@ -39,7 +41,7 @@ from _report import write_page  # noqa: E402
 def split_quads(v, f, share: float, seed: int = 1):
     """Quads (a, b, c, d) of `f` picked at random with probability `share`,
     each replaced by (a, b, c, x) and (a, x, c, d), x a new vertex near the
-    quad's centre: x is interior and of valence 2."""
+    quad's centre: x is interior and of valence 2 (B stays definite here)."""
     f = np.asarray(f)
     pick = np.random.default_rng(seed).random(len(f)) < share
     quads = f[pick]
@@ -47,7 +49,34 @@ def split_quads(v, f, share: float, seed: int = 1):
     centre = v[quads].mean(axis=1)
     new_v = np.vstack([v, centre + 0.1 * (v[quads[:, 1]] - centre)])
     halves = np.vstack([np.c_[quads[:, 0], quads[:, 1], quads[:, 2], x], np.c_[quads[:, 0], x, quads[:, 2], quads[:, 3]]])
-    return new_v, np.vstack([f[~pick], halves]), len(quads)
+    return new_v, [list(q) for q in np.vstack([f[~pick], halves])], len(quads)
+
+
+def split_edges(v, f, share: float, seed: int = 1):
+    """Edges of the quad mesh `f` picked at random with probability `share`
+    (no two on one face), each split at its midpoint by a new vertex inserted
+    into both its faces, which become pentagons: as at OpenSubdiv's
+    gregory_test8, the new vertex is interior of valence 2 and B gets negative
+    eigenvalues."""
+    faces = [list(q) for q in np.asarray(f)]
+    faces_of = {}
+    for i, face in enumerate(faces):
+        for a, b in zip(face, face[1:] + face[:1]):
+            faces_of.setdefault((min(a, b), max(a, b)), []).append(i)
+    edges = sorted(faces_of)
+    used, new_v = set(), [np.asarray(v, float)]
+    picked = np.random.default_rng(seed).random(len(edges)) < share
+    for (a, b), take in zip(edges, picked):
+        if not take or not used.isdisjoint(faces_of[a, b]):
+            continue
+        used.update(faces_of[a, b])
+        x = len(v) + len(new_v) - 1
+        new_v.append(((v[a] + v[b]) / 2)[None])
+        for i in faces_of[a, b]:
+            face = faces[i]
+            j = next(j for j in range(len(face)) if {face[j], face[(j + 1) % len(face)]} == {a, b})
+            face.insert(j + 1, x)
+    return np.vstack(new_v), faces, len(new_v) - 1
 
 
 def prism(m: int):
@@ -101,16 +130,19 @@ def main():
         del interp
 
     nu, nv = (int(x) for x in args.torus.lower().split("x"))
-    v, f = sorpia.shapes.quad_torus(nu, nv)
-    v, f, n_split = split_quads(v, f, args.split)
+    torus = sorpia.shapes.quad_torus(nu, nv)
+    ev, ef, n_edges = split_edges(*torus, args.split)
+    qv, qf, n_quads = split_quads(*torus, args.split)
     lines += ["", "## Interior vertices of valence 2: auto against cg and gmres", "",
-              f"sorpia.shapes.quad_torus({nu}, {nv}) with {n_split:,} of its quads split through a valence-2 vertex "
-              f"({len(v):,} vertices), and a prism of {args.prism} sides (B singular, targets jiggled); "
-              f"Catmull-Clark; medians of {args.repeat} solves.", "",
+              f"sorpia.shapes.quad_torus({nu}, {nv}) with {n_edges:,} edges split at their midpoints (valence-2 "
+              f"vertices between pentagons, B indefinite), or {n_quads:,} quads split through a valence-2 vertex "
+              f"(B definite), and a prism of {args.prism} sides (B singular, targets jiggled); Catmull-Clark; "
+              f"medians of {args.repeat} solves.", "",
               "| mesh | method | outcome (iterations) | E_k/E_0 | products of B | solve (s) |",
               "|---|---|---|---:|---:|---:|"]
     methods = ("sor", "pia", "cg", "gmres", "auto")
-    for name, (mv, mf) in ((f"torus, {n_split:,} valence-2 vertices", (v, f)), (f"prism {args.prism}", prism(args.prism))):
+    for name, (mv, mf) in ((f"torus, {n_edges:,} edges split", (ev, ef)), (f"torus, {n_quads:,} quads split", (qv, qf)),
+                           (f"prism {args.prism}", prism(args.prism))):
         interp = sorpia.Interpolator(mf, len(mv), scheme="catmull-clark")
         times = {m: [] for m in methods}
         results = {}

@@ -95,8 +95,7 @@ stop_reason : {"converged", "max_iter", "diverged", "callback", "singular", "sta
     above tol: B is singular and the targets have a part outside its range,
     control_vertices are the least-squares solution of least norm, and
     `worst_vertices` says where the targets are missed. "stalled": "gmres"
-    made no progress over a whole cycle at its longest restart length (B
-    singular, or numerically so). "slow" (in `attempts` only): "auto"
+    made no progress over a whole cycle (B singular, or numerically so). "slow" (in `attempts` only): "auto"
     stopped "sor", whose rate would not reach tol by max_iter.
 initial_error : float
     E_0, absolute.

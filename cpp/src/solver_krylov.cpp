@@ -238,10 +238,12 @@ std::size_t gmres_max_basis(std::size_t n, std::size_t kc) {
 // product) and recorded, and the next cycle starts from it. The restart
 // length starts at gmres_restart and doubles (up to gmres_max_basis) after a
 // cycle that did not halve the residual: on an indefinite B a short restart
-// can stagnate, full GMRES (length n) cannot, on an invertible B. A cycle at
-// the longest length that leaves the residual where it was (ratio above
-// gmres_stall_ratio) stops as "stalled": B is singular (or numerically so)
-// and the targets have a component outside its range.
+// can slow down, full GMRES (length n) cannot, on an invertible B. A cycle
+// that leaves the residual where it was (ratio above gmres_stall_ratio)
+// stops as "stalled": B is singular (or numerically so) and the residual
+// has reached the part of the targets outside its range, or, rarely, a
+// restarted GMRES stagnates on an invertible B; "auto" then runs "cgls",
+// which converges in both cases.
 void solve_gmres(const LimitOperator& op, const double* v0, std::size_t kc, Monitor& mon, SolveResult& res) {
   const std::size_t n = op.n, len = kc * n;
   std::vector<double>& x = res.control_vertices;
@@ -345,12 +347,11 @@ void solve_gmres(const LimitOperator& op, const double* v0, std::size_t kc, Moni
     double ratio = 0.0;
     for (std::size_t c = 0; c < kc; ++c)
       if (beta[c] > 0.0) ratio = std::max(ratio, after[c] / beta[c]);
-    if (ratio > 0.5 && m < m_cap) {
-      m = std::min(2 * m, m_cap);
-    } else if (ratio > gmres_stall_ratio && m == m_cap) {
+    if (ratio > gmres_stall_ratio) {
       mon.finish(StopReason::Stalled);
       return;
     }
+    if (ratio > 0.5 && m < m_cap) m = std::min(2 * m, m_cap);
   }
 }
 

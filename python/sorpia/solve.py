@@ -59,8 +59,9 @@ Methods (the iteration itself runs in the C++ core):
   (Jacobi preconditioning, D = diag(B)), restart length 30, doubled after a
   cycle that does not halve the residual (up to the longest basis that fits
   in 512 MiB, or n: full GMRES, exact on any invertible B); E_k of the
-  current iterate at every Arnoldi step (one product each). A cycle at the
-  longest length that leaves the residual where it was stops as "stalled".
+  current iterate at every Arnoldi step (one product each). A cycle that
+  leaves the residual where it was (ratio above 0.999) stops as "stalled":
+  B is singular, or (rarely) a restarted GMRES stagnates.
 - ``"cgls"``: CG on the normal equations B^T B V = B^T V0 (LSQR's iterates),
   two products per iteration: the least-squares solution nearest the start
   for any B; from ``initial=np.zeros_like(V0)`` (where "auto" starts it) the
