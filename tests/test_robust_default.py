@@ -258,3 +258,29 @@ def test_compare_marks_a_refusing_method_and_writes_its_table(gregory_file, tmp_
 def test_info_notes_the_valence_two_vertex(gregory_file, command):
     code, stdout, err = command("info", gregory_file)
     assert code == 0 and "interior vertices of valence 2" in stdout and "[1]" in stdout
+
+
+def test_many_valence_two_vertices_between_pentagons():
+    # A quad torus with every 5th face's first edge split at its midpoint (both faces of the edge become
+    # pentagons, as at gregory_test8): B indefinite; sor diverges, auto converges (gmres) to scipy's splu solve.
+    import scipy.sparse.linalg
+
+    v, quads = sorpia.shapes.quad_torus(16, 8)
+    faces = [list(q) for q in quads]
+    for i in range(0, len(faces), 5):
+        a, b = faces[i][0], faces[i][1]
+        owners = [face for face in faces if a in face and b in face]
+        if any(len(face) != 4 for face in owners):
+            continue
+        v = np.vstack([v, (v[a] + v[b]) / 2])
+        for face in owners:  # insert the new vertex between a and b, whichever way the face runs
+            j = face.index(a)
+            face.insert(j + 1 if face[(j + 1) % 4] == b else j, len(v) - 1)
+    b_ = sorpia.limit_matrix(faces, len(v), **CC)
+    assert np.linalg.eigvals(b_.toarray()).real.min() < -0.01
+    with pytest.warns(ConvergenceWarning, match="diverged"):
+        assert sorpia.interpolate(v, faces, method="sor", **CC).stop_reason == "diverged"
+    res = sorpia.interpolate(v, faces, **CC)
+    assert res.converged and res.variant == "gmres"
+    ref = scipy.sparse.linalg.splu(b_.tocsc()).solve(v)
+    assert np.abs(res.control_vertices - ref).max() / np.abs(ref).max() < 1e-8

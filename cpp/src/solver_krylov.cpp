@@ -233,12 +233,14 @@ std::size_t gmres_max_basis(std::size_t n, std::size_t kc) {
 // space and scalars, all k columns in one pass per Arnoldi step (modified
 // Gram-Schmidt, Givens rotations). E_k is that of the current iterate at
 // every Arnoldi step: its residual is V_{j+1} Q^T (g_{j+1} e_{j+1}) by the
-// Arnoldi relation, scaled back by D; where it says converged, and at the end
+// Arnoldi relation (updated by one vector operation a step), scaled back by
+// D; where it says converged, and at the end
 // of every cycle, the iterate is formed and its true residual computed (one
 // product) and recorded, and the next cycle starts from it. The restart
 // length starts at gmres_restart and doubles (up to gmres_max_basis) after a
-// cycle that did not halve the residual: on an indefinite B a short restart
-// can slow down, full GMRES (length n) cannot, on an invertible B. A cycle
+// cycle that left the residual above gmres_grow_ratio of its start: on an
+// indefinite B a short restart can slow down, full GMRES (length n) cannot,
+// on an invertible B. A cycle
 // that leaves the residual where it was (ratio above gmres_stall_ratio)
 // stops as "stalled": B is singular (or numerically so) and the residual
 // has reached the part of the targets outside its range, or, rarely, a
@@ -247,13 +249,13 @@ std::size_t gmres_max_basis(std::size_t n, std::size_t kc) {
 void solve_gmres(const LimitOperator& op, const double* v0, std::size_t kc, Monitor& mon, SolveResult& res) {
   const std::size_t n = op.n, len = kc * n;
   std::vector<double>& x = res.control_vertices;
-  std::vector<double> r(len), w(len), z(len);
+  std::vector<double> r(len), w(len), z(len), zs(len);
   double e = residual(op, v0, x.data(), r.data(), kc);
   if (mon.start(e)) return;
   const std::size_t m_cap = std::max<std::size_t>(gmres_max_basis(n, kc), 1);
   std::size_t m = std::min<std::size_t>(gmres_restart, m_cap);
   std::vector<std::vector<double>> basis;
-  std::vector<double> h, cs, sn, g, y, u;
+  std::vector<double> h, cs, sn, g, y;
   const auto scale_down = [&](std::vector<double>& a) {
     for (std::size_t i = 0; i < n; ++i)
       for (std::size_t c = 0; c < kc; ++c) a[kc * i + c] /= op.diag[i];
@@ -261,6 +263,7 @@ void solve_gmres(const LimitOperator& op, const double* v0, std::size_t kc, Moni
   for (;;) {
     z = r;
     scale_down(z);
+    zs = z;
     const Cols beta = norms(z, kc);
     while (basis.size() < m + 1) basis.emplace_back(len);
     scaled_copy(z, beta, basis[0]);
@@ -304,18 +307,14 @@ void solve_gmres(const LimitOperator& op, const double* v0, std::size_t kc, Moni
         g[j * kc + c] *= cs[j * kc + c];
       }
       steps = j + 1;
-      // The scaled residual of the step's iterate, V_{j+1} Q^T (g_{j+1} e_{j+1}).
-      u.assign((j + 2) * kc, 0.0);
-      for (std::size_t c = 0; c < kc; ++c) {
-        u[(j + 1) * kc + c] = g[(j + 1) * kc + c];
-        for (std::size_t i = j + 1; i-- > 0;) {
-          const double a = u[i * kc + c], b = u[(i + 1) * kc + c];
-          u[i * kc + c] = cs[i * kc + c] * a - sn[i * kc + c] * b;
-          u[(i + 1) * kc + c] = sn[i * kc + c] * a + cs[i * kc + c] * b;
+      // The scaled residual of the step's iterate, V_{j+1} Q^T (g_{j+1} e_{j+1}),
+      // by its recurrence z_j = s_j^2 z_{j-1} + c_j g_{j+1} v_{j+1} (z_{-1} = D^-1 r).
+      for (std::size_t k = 0; k < len; k += kc)
+        for (std::size_t c = 0; c < kc; ++c) {
+          const double sj = sn[j * kc + c];
+          zs[k + c] = sj * sj * zs[k + c] + cs[j * kc + c] * g[(j + 1) * kc + c] * basis[j + 1][k + c];
         }
-      }
-      std::fill(z.begin(), z.end(), 0.0);
-      for (std::size_t i = 0; i <= j + 1; ++i) axpy(Cols(u.begin() + i * kc, u.begin() + (i + 1) * kc), basis[i], z);
+      z = zs;
       for (std::size_t i = 0; i < n; ++i)
         for (std::size_t c = 0; c < kc; ++c) z[kc * i + c] *= op.diag[i];
       e = max_row_norm(z.data(), n, kc);
@@ -351,7 +350,7 @@ void solve_gmres(const LimitOperator& op, const double* v0, std::size_t kc, Moni
       mon.finish(StopReason::Stalled);
       return;
     }
-    if (ratio > 0.5 && m < m_cap) m = std::min(2 * m, m_cap);
+    if (ratio > gmres_grow_ratio && m < m_cap) m = std::min(2 * m, m_cap);
   }
 }
 

@@ -57,7 +57,7 @@ Methods (the iteration itself runs in the C++ core):
   says which ran.
 - ``"gmres"``: GMRES(m) (Saad and Schultz 1986) on D^-1 B V = D^-1 V0
   (Jacobi preconditioning, D = diag(B)), restart length 30, doubled after a
-  cycle that does not halve the residual (up to the longest basis that fits
+  cycle that leaves the residual above 0.9 of its start (up to the longest basis that fits
   in 512 MiB, or n: full GMRES, exact on any invertible B); E_k of the
   current iterate at every Arnoldi step (one product each). A cycle that
   leaves the residual where it was (ratio above 0.999) stops as "stalled":
@@ -118,7 +118,7 @@ from .nonmanifold import as_nonmanifold
 
 METHODS = tuple(_core.method_names())  # the core's one list, in its order
 OMEGA_RULES = ("auto", "young")
-THREADED_METHODS = ("sor", "gs")  # the methods that sweep on threads > 1
+THREADED_METHODS = ("sor", "gs", "auto")  # the methods that sweep on threads > 1 (auto: its sor run)
 YOUNG_RHO_CLAMP = float(_core.YOUNG_RHO_CLAMP)
 MAX_THREADS = int(_core.MAX_THREADS)
 _INT64_MAX = 2**63 - 1
@@ -286,7 +286,8 @@ class Interpolator:
         callback : callable(k, error) or None
             Called with k = 0, 1, ... and error = E_k / E_0 as each E_k is
             known; a true return value stops the run (stop_reason "callback",
-            no warning). None costs nothing per iteration.
+            no warning). None costs nothing per iteration. Under "auto", k
+            counts on across its runs (a fallback's E_k follow "sor"'s).
         sigma : float in (0, 2), "wpia" only
             Step; default 2 / (lambda_min(B) + 1).
         alpha : float > 0, "hss"/"whss" only

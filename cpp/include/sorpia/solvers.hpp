@@ -150,9 +150,11 @@ std::optional<Method> recommended_after(Method method);
 
 /// "gmres": the restart length it starts with, the memory its basis may take
 /// (it grows to gmres_max_basis vectors at most, never fewer than
-/// gmres_restart), and the ratio above which a cycle that leaves the residual
-/// where it was stops the run as "stalled".
+/// gmres_restart), the ratio of a cycle's residual to its start above which
+/// the next cycle is twice as long, and the ratio above which a cycle that
+/// leaves the residual where it was stops the run as "stalled".
 constexpr std::size_t gmres_restart = 30;
+constexpr double gmres_grow_ratio = 0.9;
 constexpr std::size_t gmres_basis_bytes = std::size_t{512} << 20;
 constexpr double gmres_stall_ratio = 0.999;
 

@@ -236,7 +236,8 @@ def build_parser() -> argparse.ArgumentParser:
     comp.add_argument("--csv", metavar="T.csv", help="write the table as CSV")
     comp.add_argument("--plot", metavar="P.png", help="write the convergence plot (paper Figure 7) as PNG")
     comp.add_argument("--json", metavar="J.json", help="write every figure (E_k/E_0 per iteration, timings) as JSON")
-    threads_option(comp, "applied to sor and gs only (the other methods always run on one thread)")
+    threads_option(comp, "applied to auto (its sor run), sor and gs only (the other methods always run on one "
+                   "thread)")
     scheme_options(comp)
     triangulate_flag(comp)
     repair_flag(comp, "--json holds the repair report and the vertex map")
