@@ -149,15 +149,21 @@ TEST(Solve, EveryMethodSolvesBVEqualsV0) {
     }
 }
 
-TEST(Solve, DivergenceStopsWhileFinite) {
-  // Not a Loop matrix: diag 0.1 and two neighbours of weight 0.45 make
-  // I - B have eigenvalues beyond -1, so PIA diverges.
+// Not a Loop matrix: diag 0.1 and two neighbours of weight 0.45 on 3
+// vertices, eigenvalues 1 and -0.35 (twice): invertible, indefinite, and
+// I - B has eigenvalues beyond -1, so PIA diverges.
+sorpia::LimitOperator indefinite_triangle() {
   sorpia::LimitOperator op;
   op.n = 3;
   op.offsets = {0, 2, 4, 6};
   op.neighbors = {1, 2, 0, 2, 0, 1};
   op.diag = {0.1, 0.1, 0.1};
   op.weight = {0.45, 0.45, 0.45};
+  return op;
+}
+
+TEST(Solve, DivergenceStopsWhileFinite) {
+  const sorpia::LimitOperator op = indefinite_triangle();
   const std::vector<double> v0 = {1, 0, 0, 0, 1, 0, 0, 0, 1};
   sorpia::SolveOptions opt;
   opt.method = sorpia::Method::Pia;
@@ -177,13 +183,7 @@ double max_residual(const sorpia::LimitOperator& op, const std::vector<double>& 
 }
 
 TEST(Solve, DivergenceReturnsTheBestIterateAndAutoFallsBackToGmres) {
-  // The matrix above: eigenvalues 1 and -0.35 (twice), invertible, indefinite.
-  sorpia::LimitOperator op;
-  op.n = 3;
-  op.offsets = {0, 2, 4, 6};
-  op.neighbors = {1, 2, 0, 2, 0, 1};
-  op.diag = {0.1, 0.1, 0.1};
-  op.weight = {0.45, 0.45, 0.45};
+  const sorpia::LimitOperator op = indefinite_triangle();
   const std::vector<double> v0 = {1, 0, 0, 0, 1, 0, 0, 0, 1};
   using M = sorpia::Method;
   for (M m : {M::Pia, M::Gs, M::Sor}) {
