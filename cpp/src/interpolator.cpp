@@ -164,11 +164,9 @@ bool Interpolator::update(SolveResult& r, bool result_is_last, const std::int32_
         local_->set_targets(std::move(targets), k);
         r = std::move(full);
         moved = true;
-      } else {
-        r.errors = std::move(full.errors);
-        r.iterations = full.iterations;
-        r.stop_reason = full.stop_reason;
-        r.products = full.products;
+      } else {  // that solve's report, with the vertices as they were
+        full.control_vertices = std::move(r.control_vertices);
+        r = std::move(full);
       }
     }
   }
