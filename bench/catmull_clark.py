@@ -86,7 +86,7 @@ def spectrum(interp, dense_limit):
     if interp.n_vertices <= dense_limit:
         ev = np.linalg.eigvals(interp.limit_matrix().toarray())
         return ev.real.min(), ev.real.max(), np.abs(ev.imag).max(), "dense"
-    return interp._operator.lambda_min(), 1.0, float("nan"), "estimate"
+    return interp._impl.lambda_min(), 1.0, float("nan"), "estimate"
 
 
 def mesh_rows(name, v, f, dense_limit):

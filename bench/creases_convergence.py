@@ -32,7 +32,7 @@ import scipy.sparse
 
 import sorpia
 from sorpia import _core
-from sorpia.limit import as_boundary, as_scheme
+from sorpia._validate import as_boundary, as_scheme
 from sorpia.limit import tags as make_tags
 from sorpia.limit import topology as make_topology
 from sorpia.solve import METHODS
@@ -100,12 +100,12 @@ def main():
     rows, worst = [], 0.0
     for name, v, f, tags, boundary, scheme, whole in cases():
         n = len(v)
-        B = sorpia.limit_matrix(f, n, boundary, scheme=scheme, **tags)
+        B = sorpia.limit_matrix(f, n, boundary=boundary, scheme=scheme, **tags)
         ref = B
         if whole:
             topo = make_topology(f, n, scheme=scheme, warn=False)
-            data, indices, indptr = _core.reference_limit_matrix(topo, as_scheme(scheme), as_boundary(boundary),
-                                                                 make_tags(topo, **tags))
+            data, indices, indptr = _core.reference_limit_matrix(
+                topo, _core.Rules(scheme=as_scheme(scheme), boundary=as_boundary(boundary), tags=make_tags(topo, **tags)))
             ref = scipy.sparse.csr_matrix((data, indices, indptr), shape=(n, n))
         ev = np.linalg.eigvals(B.toarray())
         hmin = np.linalg.eigvalsh(((B + B.T) / 2).toarray()).min()

@@ -27,7 +27,7 @@ import scipy.sparse
 
 import sorpia
 from sorpia import _core
-from sorpia.limit import as_boundary, as_scheme
+from sorpia._validate import as_boundary, as_scheme
 from sorpia.limit import tags as make_tags
 from sorpia.limit import topology as make_topology
 
@@ -50,11 +50,12 @@ def main():
         boundary = tags.pop("boundary", "edge-and-corner")
         scheme = "loop" if name.startswith("osd_loop") else "catmull-clark"
         n = len(v)
-        B = sorpia.limit_matrix(f, n, boundary, scheme=scheme, **tags)
+        B = sorpia.limit_matrix(f, n, boundary=boundary, scheme=scheme, **tags)
         topo = make_topology(f, n, scheme=scheme, warn=False)
         core_tags = make_tags(topo, **tags)
         t0 = time.perf_counter()
-        data, indices, indptr = _core.reference_limit_matrix(topo, as_scheme(scheme), as_boundary(boundary), core_tags)
+        data, indices, indptr = _core.reference_limit_matrix(
+            topo, _core.Rules(scheme=as_scheme(scheme), boundary=as_boundary(boundary), tags=core_tags))
         seconds = time.perf_counter() - t0
         ref = scipy.sparse.csr_matrix((data, indices, indptr), shape=(n, n))
         levels = math.ceil(core_tags.max_semi_sharpness())

@@ -59,7 +59,7 @@ def main():
         for side, tags in sides.items():
             interp = sorpia.Interpolator(f, len(v), **tags)
             build[side].append(interp.build_timings["operator"])
-            uniform[side] = interp._operator.uniform
+            uniform[side] = interp._impl.uniform
             for m in methods:
                 with warnings.catch_warnings():
                     warnings.simplefilter("error")  # a run that does not converge is no measurement

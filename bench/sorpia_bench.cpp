@@ -14,6 +14,7 @@
 #include <fstream>
 #include <functional>
 #include <iostream>
+#include <optional>
 #include <random>
 #include <sstream>
 #include <stdexcept>
@@ -22,6 +23,7 @@
 #include <vector>
 
 #include "sorpia/errors.hpp"
+#include "sorpia/interpolator.hpp"
 #include "sorpia/io.hpp"
 #include "sorpia/limit.hpp"
 #include "sorpia/limit_masks.hpp"
@@ -431,19 +433,22 @@ MeshRun run_mesh(const Options& o, const std::string& spec) {
     const long input_kb = status_kb("VmRSS");
 
     t0 = Clock::now();
-    const sorpia::Topology topology = mesh.topology(o.topology);
+    sorpia::Topology topology = mesh.topology(o.topology);
     run.topology.push_back(seconds_since(t0));
 
     add_random_creases(topology, o.crease_share, o.crease_sharpness, tags);
     run.n_creases = tags.n_creases();
+    sorpia::Rules rules{o.scheme, o.boundary, std::move(tags)};
     t0 = Clock::now();
-    const sorpia::LimitOperator op =
-        o.opensubdiv_operator
-            ? sorpia::limit_operator(tags.empty() && o.scheme == sorpia::Scheme::Loop
-                                         ? sorpia::reference_limit_matrix(topology, o.boundary)
-                                         : sorpia::reference_limit_matrix(topology, o.scheme, o.boundary, tags))
-            : sorpia::limit_operator(topology, o.scheme, o.boundary, tags);
+    std::optional<sorpia::LimitOperator> reference;
+    if (o.opensubdiv_operator)
+      reference = sorpia::limit_operator(rules.tags.empty() && o.scheme == sorpia::Scheme::Loop
+                                             ? sorpia::reference_limit_matrix(topology, o.boundary)
+                                             : sorpia::reference_limit_matrix(topology, rules));
+    sorpia::Interpolator interp = reference ? sorpia::Interpolator(std::move(topology), rules, std::move(*reference))
+                                            : sorpia::Interpolator(std::move(topology), rules);
     run.op.push_back(seconds_since(t0));
+    const sorpia::LimitOperator& op = interp.limit_operator();
 
     for (auto& mr : run.methods) {
       sorpia::SolveOptions so;
@@ -457,8 +462,10 @@ MeshRun run_mesh(const Options& o, const std::string& spec) {
         so.omega_rule = o.omega_rule;
         so.omega = o.omega;
       }
+      // Each method pays for its own spectral estimates, as a single solve does.
+      interp.spectral_cache() = sorpia::SpectralCache{};
       t0 = Clock::now();
-      const sorpia::SolveResult res = sorpia::solve(op, mesh.vertices().data(), so);
+      const sorpia::SolveResult res = interp.solve(mesh.vertices().data(), 3, nullptr, so, false);
       const double wall = seconds_since(t0);
       mr.solve.push_back(wall - res.estimate_seconds);
       mr.estimate.push_back(res.estimate_seconds);

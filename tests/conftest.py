@@ -102,7 +102,7 @@ def closed_form_limit_matrix(faces, n_vertices: int, boundary: str = "edge-and-c
 def direct_solve(faces, vertices, boundary: str = "edge-and-corner"):
     """B^-1 V0 by scipy's sparse LU of sorpia.limit_matrix: the reference the
     iterative solvers are checked against."""
-    b = sorpia.limit_matrix(faces, len(vertices), boundary).tocsc()
+    b = sorpia.limit_matrix(faces, len(vertices), boundary=boundary).tocsc()
     return scipy.sparse.linalg.splu(b).solve(vertices)
 
 

@@ -28,8 +28,8 @@ QUAD_MESHES = {
 def far_matrix(faces, n, boundary="edge-and-corner"):
     """B from OpenSubdiv's Far (Limit(); after one refinement where a face is not a quad)."""
     topo = topology(faces, n, scheme=CC)
-    data, indices, indptr = _core.reference_limit_matrix(topo, _core.Scheme.catmull_clark, _core.parse_boundary(boundary),
-                                                         _core.Tags())
+    data, indices, indptr = _core.reference_limit_matrix(
+        topo, _core.Rules(scheme=_core.Scheme.catmull_clark, boundary=_core.parse_boundary(boundary)))
     return scipy.sparse.csr_matrix((data, indices, indptr), shape=(n, n))
 
 
@@ -37,10 +37,10 @@ def far_matrix(faces, n, boundary="edge-and-corner"):
 @pytest.mark.parametrize("boundary", ["edge-and-corner", "edge-only"])
 def test_limit_matrix_equals_far(name, boundary):
     V, F = QUAD_MESHES[name]()
-    b = sorpia.limit_matrix(F, len(V), boundary, scheme=CC)
+    b = sorpia.limit_matrix(F, len(V), boundary=boundary, scheme=CC)
     ref = far_matrix(F, len(V), boundary)
     assert abs(b - ref).max() <= 1e-15
-    assert np.allclose(sorpia.limit_points(V, F, boundary, scheme=CC), ref @ V, rtol=0, atol=1e-14)
+    assert np.allclose(sorpia.limit_points(V, F, boundary=boundary, scheme=CC), ref @ V, rtol=0, atol=1e-14)
 
 
 @pytest.mark.parametrize("name", sorted(QUAD_MESHES))
@@ -68,7 +68,7 @@ def test_closed_quad_mesh_is_symmetrisable_and_cg_runs_cg():
     assert abs(upsilon - upsilon.T).max() <= 1e-12
     assert set(np.unique(upsilon.data.round(12))) <= {1.0, 4.0} | set((valence ** 2).astype(float))
     assert np.linalg.eigvalsh(upsilon.toarray()).min() > 0
-    gamma_inverse = interp._operator.symmetriser
+    gamma_inverse = interp._impl.symmetriser
     assert np.allclose(gamma_inverse / gamma_inverse[0], valence * (valence + 5.0) / (valence[0] * (valence[0] + 5)))
     assert interp.solve(V, method="cg").variant == "cg"
 
@@ -81,7 +81,7 @@ def test_composed_rows_of_closed_polygon_meshes_are_symmetrisable_too(name):
     V, F = QUAD_MESHES[name]() if name in QUAD_MESHES else sorpia.shapes.irregular(300, seed=3)
     interp = sorpia.Interpolator(F, len(V), scheme=CC)
     assert interp.closed
-    upsilon = scipy.sparse.diags(interp._operator.symmetriser) @ interp.limit_matrix()
+    upsilon = scipy.sparse.diags(interp._impl.symmetriser) @ interp.limit_matrix()
     assert abs(upsilon - upsilon.T).max() <= 1e-12 * abs(upsilon).max()
     assert np.linalg.eigvalsh(upsilon.toarray()).min() > 0
     assert interp.solve(V, method="cg").variant == "cg"
@@ -125,3 +125,29 @@ def test_a_cube_has_a_singular_catmull_clark_matrix():
     checkerboard = np.array([(-1.0) ** (x + y + z) for x, y, z in V.astype(int)])
     assert np.abs(b @ checkerboard).max() <= 1e-15
     assert np.allclose(far_matrix(quads, 8).toarray(), b.toarray(), atol=1e-15)
+
+
+def test_scheme_auto_picks_loop_for_triangles_and_catmull_clark_otherwise():
+    """scheme="auto" (the command's default, now the library's too): the
+    result is bit for bit that of the scheme it names, for every face form."""
+    V, F = sorpia.shapes.quad_torus(8, 6)
+    polygons = sorpia.Polygons(np.full(len(F), 4), np.ravel(F))
+    for faces in (F, [list(f) for f in F], polygons):
+        auto = sorpia.interpolate(V, faces, scheme="auto")
+        assert sorpia.Interpolator(faces, len(V), scheme="auto").scheme == "catmull-clark"
+        np.testing.assert_array_equal(auto.control_vertices,
+                                      sorpia.interpolate(V, faces, scheme="catmull-clark").control_vertices)
+    T, G = sorpia.shapes.icosphere(2)
+    assert sorpia.Interpolator(G, len(T), scheme="auto").scheme == "loop"
+    np.testing.assert_array_equal(sorpia.limit_points(T, G, scheme="auto"), sorpia.limit_points(T, G))
+    assert (sorpia.limit_matrix(F, len(V), scheme="auto") != sorpia.limit_matrix(F, len(V), scheme=CC)).nnz == 0
+    with pytest.raises(sorpia.ParameterError, match="unknown scheme 'quad'.*'auto'"):
+        sorpia.limit_points(T, G, scheme="quad")
+
+
+def test_boundary_is_keyword_only():
+    V, F = sorpia.shapes.grid(4, 3)
+    for call in (lambda: sorpia.limit_points(V, F, "edge-only"), lambda: sorpia.limit_matrix(F, len(V), "edge-only"),
+                 lambda: sorpia.Interpolator(F, len(V), "edge-only")):
+        with pytest.raises(TypeError, match="positional"):
+            call()

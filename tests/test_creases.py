@@ -13,6 +13,7 @@ import scipy.sparse.linalg
 
 import sorpia
 from sorpia import _core
+from sorpia._validate import as_boundary, as_scheme
 from sorpia.limit import tags as make_tags
 from sorpia.limit import topology as make_topology
 from sorpia.solve import METHODS
@@ -30,8 +31,8 @@ def edges_of(faces):
 def reference_b(faces, n, boundary="edge-and-corner", **tags):
     """B from OpenSubdiv's whole-mesh refinement and Limit() (the test reference)."""
     topo = make_topology(faces, n, warn=False)
-    data, indices, indptr = _core.reference_limit_matrix(topo, _core.Scheme.loop, sorpia.limit.as_boundary(boundary),
-                                                         make_tags(topo, **tags))
+    data, indices, indptr = _core.reference_limit_matrix(
+        topo, _core.Rules(scheme=_core.Scheme.loop, boundary=as_boundary(boundary), tags=make_tags(topo, **tags)))
     return scipy.sparse.csr_matrix((data, indices, indptr), shape=(n, n))
 
 
@@ -87,9 +88,9 @@ def test_infinitely_sharp_tags_keep_the_uniform_kernel(sphere):
     v, f = sphere
     e = edges_of(f)[::7]
     interp = sorpia.Interpolator(f, len(v), creases=(e, math.inf), corners=([3], math.inf))
-    assert interp._operator.uniform
+    assert interp._impl.uniform
     semi = sorpia.Interpolator(f, len(v), creases=(e, 1.5))
-    assert not semi._operator.uniform
+    assert not semi._impl.uniform
 
 
 @pytest.mark.parametrize("boundary", ["edge-and-corner", "edge-only"])
@@ -105,7 +106,7 @@ def test_rows_equal_opensubdivs_whole_mesh_refinement(name, boundary):
     sharp = rng.choice([0.25, 1.0, 1.75, 2.5, math.inf], pick.sum())
     corners = rng.choice(len(v), 4, replace=False)
     tags = dict(creases=(e[pick], sharp), corners=(corners, [0.5, 2.0, math.inf, 1.25]), holes=[0, 5])
-    B = sorpia.limit_matrix(f, len(v), boundary, **tags)
+    B = sorpia.limit_matrix(f, len(v), boundary=boundary, **tags)
     ref = reference_b(f, len(v), boundary, **tags)
     assert abs(B - ref).max() < 1e-14
     # Rows of semi-sharp vertices are wider than a ring mask and still sum to 1.
@@ -178,7 +179,7 @@ def test_opensubdiv_shapes_rows_and_fits(name):
     v, f, tags, boundary = read_osd_shape(SHARED_MESHES / name)
     assert tags
     ref = reference_b(f, len(v), boundary, **tags)
-    B = sorpia.limit_matrix(f, len(v), boundary, **tags)
+    B = sorpia.limit_matrix(f, len(v), boundary=boundary, **tags)
     assert abs(B - ref).max() < 1e-14
     for method in METHODS:
         res = sorpia.interpolate(v, f, method=method, boundary=boundary, max_iter=3000, **tags)
@@ -188,8 +189,8 @@ def test_opensubdiv_shapes_rows_and_fits(name):
 
 def reference_b_scheme(faces, n, boundary, scheme, **tags):
     topo = make_topology(faces, n, scheme=scheme, warn=False)
-    data, indices, indptr = _core.reference_limit_matrix(topo, sorpia.limit.as_scheme(scheme),
-                                                         sorpia.limit.as_boundary(boundary), make_tags(topo, **tags))
+    data, indices, indptr = _core.reference_limit_matrix(
+        topo, _core.Rules(scheme=as_scheme(scheme), boundary=as_boundary(boundary), tags=make_tags(topo, **tags)))
     return scipy.sparse.csr_matrix((data, indices, indptr), shape=(n, n))
 
 
@@ -202,7 +203,7 @@ def test_catmull_clark_rows_with_tags_equal_opensubdivs(boundary):
         rng = np.random.default_rng(3)
         pick = rng.random(len(e)) < 0.15
         tags = dict(creases=(e[pick], rng.choice([0.5, 1.5, 2.5, math.inf], pick.sum())), corners=([2], 1.5))
-        B = sorpia.limit_matrix(f, len(v), boundary, scheme="catmull-clark", **tags)
+        B = sorpia.limit_matrix(f, len(v), boundary=boundary, scheme="catmull-clark", **tags)
         assert abs(B - reference_b_scheme(f, len(v), boundary, "catmull-clark", **tags)).max() < 1e-14
 
 
@@ -229,7 +230,7 @@ def test_opensubdiv_catmull_clark_shapes_rows_and_fits(name):
     checked with that B."""
     v, f, tags, boundary = read_osd_shape(SHARED_MESHES / name)
     ref = reference_b_scheme(f, len(v), boundary, "catmull-clark", **tags)
-    assert abs(sorpia.limit_matrix(f, len(v), boundary, scheme="catmull-clark", **tags) - ref).max() < 1e-14
+    assert abs(sorpia.limit_matrix(f, len(v), boundary=boundary, scheme="catmull-clark", **tags) - ref).max() < 1e-14
     for method in METHODS:
         res = sorpia.interpolate(v, f, method=method, boundary=boundary, scheme="catmull-clark", max_iter=3000, **tags)
         assert res.converged, method
@@ -244,7 +245,7 @@ def test_large_opensubdiv_shapes_rows_on_whole_neighbourhoods(name):
     vertices are checked against OpenSubdiv's refinement of the whole two-ring around them (faces beyond the
     one-ring that sorpia's rows are computed from), with their tags."""
     v, f, tags, boundary = read_osd_shape(SHARED_MESHES / name)
-    B = sorpia.limit_matrix(f, len(v), boundary, scheme="catmull-clark", **tags).tocsr()
+    B = sorpia.limit_matrix(f, len(v), boundary=boundary, scheme="catmull-clark", **tags).tocsr()
     faces = [np.asarray(x) for x in (f if not isinstance(f, sorpia.Polygons) else np.split(
         np.asarray(f.face_vertex_indices), np.cumsum(f.face_vertex_counts)[:-1]))]
     edges, sharp = tags["creases"]

@@ -113,7 +113,7 @@ def test_what_the_split_refuses():
     w = np.vstack([v, [[0.0, 0.0, 9.0]]])
     with pytest.raises(sorpia.MeshError, match="single face.*edge-only"):
         sharp(sorpia.limit_points, w, single, scheme="catmull-clark")
-    b = sharp(sorpia.limit_matrix, single, len(w), "edge-only", scheme="catmull-clark").toarray()
+    b = sharp(sorpia.limit_matrix, single, len(w), boundary="edge-only", scheme="catmull-clark").toarray()
     want = np.zeros(len(w))
     want[[1, 0, 2]] = [2 / 3, 1 / 6, 1 / 6]
     assert np.abs(b[1] - want).max() <= 1e-15

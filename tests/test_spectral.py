@@ -50,7 +50,7 @@ def case(name):
     v, f = make()
     f = np.ascontiguousarray(f, dtype=np.int32)
     b = sorpia.limit_matrix(f, len(v), boundary=boundary).toarray()
-    op = _core.LimitOperator(_core.Topology(f, len(v)), _core.parse_boundary(boundary))
+    op = _core.Interpolator(f, len(v), _core.Rules(boundary=_core.parse_boundary(boundary)))
     return v, f, boundary, op, np.linalg.eigvals(b), np.linalg.eigvalsh((b + b.T) / 2)
 
 

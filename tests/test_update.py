@@ -164,7 +164,7 @@ def test_update_with_creases(sharpness):
     tags = {"creases": (edges, sharpness), "corners": ([0], np.inf)}
     B = sorpia.limit_matrix(F, len(V), **tags)
     interp = sorpia.Interpolator(F, len(V), **tags)
-    assert interp._operator.uniform == (sharpness == np.inf)
+    assert interp._impl.uniform == (sharpness == np.inf)
     res = interp.solve(V)
     targets = V.copy()
     for i in (row * nv + 5, 5, len(V) - 1):
@@ -191,7 +191,7 @@ def test_update_catmull_clark(k):
     data = V[:, :k].copy()
     B = sorpia.limit_matrix(F, len(V), scheme="catmull-clark")
     interp = sorpia.Interpolator(F, len(V), scheme="catmull-clark")
-    assert not interp._operator.uniform
+    assert not interp._impl.uniform
     res = interp.solve(data)
     for i in (50, 3, len(V) - 1):
         data[i] += 0.2
@@ -329,3 +329,121 @@ def test_move_vertex_example_meets_the_guarantee():
     targets, F, result = example["main"](3000, moves=3)
     e = np.linalg.norm(targets - sorpia.limit_points(result.control_vertices, F), axis=1).max()
     assert result.converged and e < 1.0001e-10 * result.initial_error
+
+
+def folded_hexagon():
+    """A hexagon folded onto two quads (vertices 2 and 5 interior, of valence
+    2): under Catmull-Clark B is invertible but indefinite, so Gauss-Seidel,
+    local or not, diverges while CG (BiCGSTAB here) converges."""
+    rng = np.random.default_rng(7)
+    return rng.normal(size=(6, 3)), [[0, 1, 2, 3, 4, 5], [5, 4, 3, 2], [5, 2, 1, 0]]
+
+
+def test_folded_hexagon_is_indefinite():
+    V, F = folded_hexagon()
+    eigenvalues = np.linalg.eigvals(sorpia.limit_matrix(F, len(V), scheme="catmull-clark").toarray())
+    assert eigenvalues.real.min() < -0.1  # what makes Gauss-Seidel diverge
+
+
+@pytest.mark.parametrize("in_place", [False, True])
+def test_update_after_cg_on_valence_2_shape_matches_direct_solve(in_place):
+    """Issue 20: after a converged cg solve, update returned inf/NaN (its
+    local Gauss-Seidel diverged). Now the divergence is caught and the new
+    targets are solved in full by the last solve's method: the result equals
+    scipy's direct solve of the limit matrix to 1e-8 (tol 1e-10 on E/E_0,
+    B's condition number about 11)."""
+    V, F = folded_hexagon()
+    B = sorpia.limit_matrix(F, len(V), scheme="catmull-clark").tocsc()
+    interp = sorpia.Interpolator(F, len(V), scheme="catmull-clark")
+    res = interp.solve(V, method="cg")
+    assert res.converged
+    targets = V.copy()
+    for step, (i, move) in enumerate([(1, 0.5), (4, -0.3)]):
+        targets[i] = targets[i] + move
+        res = interp.update(res, [i], targets[i], in_place=in_place)
+        assert res.converged and np.isfinite(res.control_vertices).all(), step
+        direct = scipy.sparse.linalg.spsolve(B, targets)
+        assert np.abs(res.control_vertices - direct).max() < 1e-8 * np.abs(direct).max()
+        np.testing.assert_array_equal(interp.targets, targets)
+
+
+@pytest.mark.filterwarnings("ignore::sorpia.solve.ConvergenceWarning")
+def test_update_that_diverges_leaves_the_interpolator_as_it_was():
+    """The last solve's method (sor) diverges on the folded hexagon too: the
+    update says so, and the targets, the vertices and later updates are as if
+    it had not been called."""
+    V, F = folded_hexagon()
+    interp = sorpia.Interpolator(F, len(V), scheme="catmull-clark")
+    res = interp.solve(V, method="cg")
+    interp.solve(V, method="sor")  # the last solve keeping its targets: its method is the fallback's
+    start = res.control_vertices.copy()
+    with pytest.warns(ConvergenceWarning, match="diverged.*targets are left as they were"):
+        failed = interp.update(res, [1], V[1] + 0.5, in_place=True)
+    assert failed.stop_reason == "diverged"
+    np.testing.assert_array_equal(res.control_vertices, start)
+    np.testing.assert_array_equal(interp.targets, V)
+
+
+def test_update_at_max_iter_leaves_the_interpolator_as_it_was():
+    """An update that cannot meet tol (max_iter) changes nothing: the next
+    update from the last good result gives what it gives without the failed
+    one, and agrees with scipy's direct solve."""
+    V, F = meshes()["irregular"]
+    B = sorpia.limit_matrix(F, len(V)).tocsc()
+    interp, fresh = sorpia.Interpolator(F, len(V)), sorpia.Interpolator(F, len(V))
+    good = interp.update(interp.solve(V), [0], V[0] + 0.1)
+    same = fresh.update(fresh.solve(V), [0], V[0] + 0.1)
+    kept = good.control_vertices.copy()
+    with pytest.warns(ConvergenceWarning, match="max_iter.*targets are left as they were"):
+        failed = interp.update(good, [5], V[5] + 1.0, tol=1e-300, max_iter=1, in_place=True)
+    assert failed.stop_reason == "max_iter"
+    np.testing.assert_array_equal(good.control_vertices, kept)
+    np.testing.assert_array_equal(interp.targets, fresh.targets)
+    after = interp.update(good, [7], V[7] - 0.1)
+    expected = fresh.update(same, [7], V[7] - 0.1)
+    np.testing.assert_array_equal(after.control_vertices, expected.control_vertices)
+    targets = interp.targets
+    assert np.abs(after.control_vertices - scipy.sparse.linalg.spsolve(B, targets)).max() < 1e-8
+
+
+@pytest.mark.parametrize("value", [np.inf, np.nan, 1e155, -1e200])
+def test_overflowing_or_non_finite_data_refused_before_any_change(value):
+    """Issue 20: an update to 1e155 reported converged with errors [nan, 0],
+    and a warm start of 1e200 "diverged after 0 iterations". Values whose
+    squares overflow (beyond 1e150, sorpia::max_coordinate, for update
+    positions; 1e150 times the targets' scale for a warm start) or that are
+    not finite are refused naming the argument, row and column, before
+    anything changes."""
+    V, F = meshes()["irregular"]
+    interp = sorpia.Interpolator(F, len(V))
+    res = interp.solve(V)
+    bad = V.copy()
+    bad[9, 1] = value
+    kind = (MeshError, ParameterError)  # non-finite: the Python edge's check (MeshError), large: the core's
+    with pytest.raises(kind, match=r"positions\[0(, 1)?\]"):
+        interp.update(res, [9], bad[9])
+    np.testing.assert_array_equal(interp.targets, V)
+    with pytest.raises(kind, match=r"initial\[9(, 1)?\]"):
+        interp.solve(V, initial=bad)
+    np.testing.assert_array_equal(interp.targets, V)
+    up = interp.update(res, [9], V[9] + 0.1)  # the kept state still serves
+    assert up.converged and up.control_vertices.shape == V.shape
+    if np.isfinite(value):  # huge targets are solved (scaled exactly), but not updated locally
+        huge = interp.solve(bad)
+        assert huge.converged
+        with pytest.raises(ParameterError, match="update needs targets within 1e.150"):
+            interp.update(huge, [0], V[0])
+    else:
+        with pytest.raises(kind, match=r"vertices\[9(, 1)?\]"):
+            interp.solve(bad)
+
+
+def test_far_warm_start_iterates():
+    """A warm start far off (1e100 times the targets, within the bound) iterates
+    to the answer instead of stopping as diverged after 0 iterations: divergence
+    is measured against the larger of E_0 and the start's error."""
+    V, F = meshes()["irregular"]
+    res = sorpia.interpolate(V, F, initial=V * 1e100, max_iter=5000)
+    assert res.converged and res.iterations > 0 and res.errors[0] > 1e99
+    B = sorpia.limit_matrix(F, len(V))
+    assert residual(B, V, res.control_vertices) < 1e-10 * residual(B, V, V)

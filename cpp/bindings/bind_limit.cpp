@@ -50,6 +50,16 @@ void bind_limit(py::module_& m) {
       .def("empty", &sorpia::Tags::empty)
       .def("max_semi_sharpness", &sorpia::Tags::max_semi_sharpness);
 
+  py::class_<sorpia::Rules>(m, "Rules", "Scheme, boundary rule and sharpness tags (sorpia::Rules).")
+      .def(py::init([](sorpia::Scheme scheme, sorpia::Boundary boundary, const sorpia::Tags& tags) {
+             return sorpia::Rules{scheme, boundary, tags};
+           }),
+           py::kw_only(), "scheme"_a = sorpia::Scheme::Loop, "boundary"_a = sorpia::Boundary::EdgeAndCorner,
+           "tags"_a = sorpia::Tags{})
+      .def_readonly("scheme", &sorpia::Rules::scheme)
+      .def_readonly("boundary", &sorpia::Rules::boundary)
+      .def_readonly("tags", &sorpia::Rules::tags);
+
   py::class_<sorpia::Topology>(m, "Topology")
       .def(py::init([](const Faces& faces, std::size_t n_vertices) {
              check_shape(faces, 3, "faces");
@@ -58,14 +68,7 @@ void bind_limit(py::module_& m) {
            }),
            "faces"_a.noconvert(), "n_vertices"_a)
       .def(py::init([](const Faces& face_vertex_counts, const Faces& face_vertex_indices, std::size_t n_vertices) {
-             if (face_vertex_counts.ndim() != 1 || face_vertex_indices.ndim() != 1)
-               throw sorpia::ParameterError("face_vertex_counts and face_vertex_indices must be one-dimensional");
-             std::int64_t total = 0;
-             for (py::ssize_t f = 0; f < face_vertex_counts.shape(0); ++f) total += face_vertex_counts.data()[f];
-             if (total != face_vertex_indices.shape(0))
-               throw sorpia::MeshError("face_vertex_counts sum to " + std::to_string(total) +
-                                       " but face_vertex_indices has " +
-                                       std::to_string(face_vertex_indices.shape(0)) + " entries");
+             check_polygon_arrays(face_vertex_counts, face_vertex_indices);
              py::gil_scoped_release release;
              return sorpia::Topology(face_vertex_counts.data(), static_cast<std::size_t>(face_vertex_counts.shape(0)),
                                      face_vertex_indices.data(), n_vertices);
@@ -109,25 +112,23 @@ void bind_limit(py::module_& m) {
   };
   m.def(
       "limit_matrix",
-      [csr_of](const sorpia::Topology& topology, sorpia::Boundary b, const sorpia::Tags& tags, sorpia::Scheme scheme) {
-        return csr_of([&] { return sorpia::limit_matrix(topology, scheme, b, tags); });
+      [csr_of](const sorpia::Topology& topology, const sorpia::Rules& rules) {
+        return csr_of([&] { return sorpia::limit_matrix(topology, rules); });
       },
-      "topology"_a, "boundary"_a, "tags"_a = sorpia::Tags{}, "scheme"_a = sorpia::Scheme::Loop,
-      "Limit matrix B as CSR arrays (data, indices, indptr).");
+      "topology"_a, "rules"_a, "Limit matrix B as CSR arrays (data, indices, indptr).");
   m.def(
       "reference_limit_matrix",
-      [csr_of](const sorpia::Topology& topology, sorpia::Scheme scheme, sorpia::Boundary b, const sorpia::Tags& tags) {
-        return csr_of([&] { return sorpia::reference_limit_matrix(topology, scheme, b, tags); });
+      [csr_of](const sorpia::Topology& topology, const sorpia::Rules& rules) {
+        return csr_of([&] { return sorpia::reference_limit_matrix(topology, rules); });
       },
-      "topology"_a, "scheme"_a, "boundary"_a, "tags"_a,
+      "topology"_a, "rules"_a,
       "For tests: B from OpenSubdiv's refinement of the whole mesh until every semi-sharp tag has decayed (and, "
       "for Catmull-Clark with a non-quad face, at least once) and Limit() on the last level "
       "(sorpia::reference_limit_matrix), as CSR arrays.");
 
   m.def(
       "limit_points",
-      [](const sorpia::Topology& topology, const Vertices& vertices, sorpia::Boundary b, const sorpia::Tags& tags,
-         sorpia::Scheme scheme) {
+      [](const sorpia::Topology& topology, const Vertices& vertices, const sorpia::Rules& rules) {
         if (vertices.ndim() != 2 || vertices.shape(1) < 1)
           throw sorpia::ParameterError("vertices must have shape (n, k), k >= 1");
         check_rows(vertices, topology.n_vertices(), "vertices", "the topology");
@@ -137,12 +138,11 @@ void bind_limit(py::module_& m) {
         const double* src = vertices.data();
         {
           py::gil_scoped_release release;
-          sorpia::limit_points(topology, src, scheme, b, tags, dst, k);
+          sorpia::limit_points(topology, src, rules, dst, k);
         }
         return out;
       },
-      "topology"_a, "vertices"_a.noconvert(), "boundary"_a, "tags"_a = sorpia::Tags{},
-      "scheme"_a = sorpia::Scheme::Loop, "Limit positions B V of (n, k) data, (n, k).");
+      "topology"_a, "vertices"_a.noconvert(), "rules"_a, "Limit positions B V of (n, k) data, (n, k).");
 
   m.def("icosphere", [](int level) { return mesh_tuple(sorpia::icosphere(level)); }, "level"_a);
   m.def("torus", [](int nu, int nv) { return mesh_tuple(sorpia::torus(nu, nv)); }, "nu"_a, "nv"_a);

@@ -1,40 +1,23 @@
-// Bindings of the PIA-family solvers: the compact limit operator with its
-// spectral-estimate cache (built once per mesh) and solve().
+// Bindings of the PIA-family solvers: the options, the result type and
+// sorpia::Interpolator (one mesh, its rules and B: solve and update).
 #include <pybind11/functional.h>
 #include <pybind11/stl.h>
 
-#include <chrono>
 #include <cmath>
 #include <memory>
-#include <mutex>
-#include <limits>
 #include <iterator>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "bindings.hpp"
-#include "sorpia/local_update.hpp"
+#include "sorpia/interpolator.hpp"
 #include "sorpia/solvers.hpp"
 
 namespace sorpia_py {
 using namespace pybind11::literals;
 
 namespace {
-
-// One mesh's operator, the spectral estimates found so far, and the state of
-// local updates: the targets of the last solve that kept them (handed to the
-// LocalSolver, built on the first update, when an update comes).
-struct OperatorState {
-  sorpia::LimitOperator op;
-  sorpia::SpectralCache cache;
-  std::vector<double> solved_targets;  // (n, k) of the last solve, not yet in `local`
-  std::size_t solved_k = 0;
-  std::unique_ptr<sorpia::LocalSolver> local;
-  // Held while the targets or `local` are read or changed: one update (or
-  // solve keeping its targets) at a time. In a unique_ptr: the state is moved.
-  std::unique_ptr<std::mutex> targets_mutex = std::make_unique<std::mutex>();
-};
 
 // An (n, k) array's k, checked: two dimensions, at least one column.
 std::size_t columns_of(const py::array& a, const char* name) {
@@ -57,7 +40,7 @@ py::array view(const std::vector<double>& v, py::ssize_t cols, const py::object&
 // What the local updates call their results (SolveResult::variant): their
 // vertices are read-only, since the next update from them relies on the
 // residual the Interpolator keeps for them.
-constexpr const char* kLocalVariant = "local";
+constexpr const char* kLocalVariant = "local";  // LocalSolver::update's variant
 
 const char* const kResultDoc = R"doc(What a solve returns (sorpia.interpolate, Interpolator.solve).
 
@@ -353,59 +336,82 @@ void bind_solvers(py::module_& m) {
       },
       "text"_a, "(OmegaRule, omega) from 'auto', 'young' or a number.");
 
-  py::class_<OperatorState>(m, "LimitOperator")
-      .def(py::init([](const sorpia::Topology& topology, sorpia::Boundary b, const sorpia::Tags& tags,
-                       sorpia::Scheme scheme) {
+  // sorpia::Interpolator: arrays and errors converted, nothing else.
+  using sorpia::Interpolator;
+  py::class_<Interpolator>(m, "Interpolator", "One mesh, its rules and B (sorpia::Interpolator).")
+      .def(py::init([](const Faces& faces, std::size_t n_vertices, const sorpia::Rules& rules) {
+             check_shape(faces, 3, "faces");
              py::gil_scoped_release release;
-             return OperatorState{sorpia::limit_operator(topology, scheme, b, tags), {}};
+             return std::make_unique<Interpolator>(faces.data(), static_cast<std::size_t>(faces.shape(0)), n_vertices,
+                                                   rules);
            }),
-           "topology"_a, "boundary"_a, "tags"_a = sorpia::Tags{}, "scheme"_a = sorpia::Scheme::Loop)
-      .def_property_readonly("uniform", [](const OperatorState& s) { return s.op.uniform(); })
-      .def_property_readonly("n", [](const OperatorState& s) { return s.op.n; })
-      .def_property_readonly("offsets", [](const OperatorState& s) { return to_numpy(s.op.offsets, 0); })
-      .def_property_readonly("neighbors", [](const OperatorState& s) { return to_numpy(s.op.neighbors, 0); })
-      .def_property_readonly("diag", [](const OperatorState& s) { return to_numpy(s.op.diag, 0); })
-      .def_property_readonly("weight", [](const OperatorState& s) { return to_numpy(s.op.weight, 0); })
-      .def("limit_matrix", [](const OperatorState& s) { return csr_tuple(sorpia::to_csr(s.op)); },
+           "faces"_a.noconvert(), "n_vertices"_a, "rules"_a, "Triangles, (m, 3).")
+      .def(py::init([](const Faces& face_vertex_counts, const Faces& face_vertex_indices, std::size_t n_vertices,
+                       const sorpia::Rules& rules) {
+             check_polygon_arrays(face_vertex_counts, face_vertex_indices);
+             py::gil_scoped_release release;
+             return std::make_unique<Interpolator>(face_vertex_counts.data(),
+                                                   static_cast<std::size_t>(face_vertex_counts.shape(0)),
+                                                   face_vertex_indices.data(), n_vertices, rules);
+           }),
+           "face_vertex_counts"_a.noconvert(), "face_vertex_indices"_a.noconvert(), "n_vertices"_a, "rules"_a,
+           "Polygons as counts and indices.")
+      .def_property_readonly("topology", &Interpolator::topology, py::return_value_policy::reference_internal)
+      .def_property_readonly("rules", &Interpolator::rules, py::return_value_policy::reference_internal)
+      .def_property_readonly("n_vertices", &Interpolator::n_vertices)
+      .def_property_readonly("build_timings",
+                             [](const Interpolator& s) {
+                               py::dict d;
+                               d["topology"] = s.topology_seconds();
+                               d["operator"] = s.operator_seconds();
+                               return d;
+                             })
+      .def_property_readonly("uniform", [](const Interpolator& s) { return s.limit_operator().uniform(); })
+      .def_property_readonly("offsets", [](const Interpolator& s) { return to_numpy(s.limit_operator().offsets, 0); })
+      .def_property_readonly("neighbors",
+                             [](const Interpolator& s) { return to_numpy(s.limit_operator().neighbors, 0); })
+      .def_property_readonly("diag", [](const Interpolator& s) { return to_numpy(s.limit_operator().diag, 0); })
+      .def_property_readonly("weight", [](const Interpolator& s) { return to_numpy(s.limit_operator().weight, 0); })
+      .def("limit_matrix", [](const Interpolator& s) { return csr_tuple(sorpia::to_csr(s.limit_operator())); },
            "B as CSR arrays (data, indices, indptr).")
-      .def_property_readonly("symmetrisable", [](const OperatorState& s) { return sorpia::is_symmetrisable(s.op); })
+      .def_property_readonly("symmetrisable",
+                             [](const Interpolator& s) { return sorpia::is_symmetrisable(s.limit_operator()); })
       .def_property_readonly(
-          "symmetriser", [](const OperatorState& s) { return to_numpy(sorpia::symmetriser(s.op), 0); },
+          "symmetriser", [](const Interpolator& s) { return to_numpy(sorpia::symmetriser(s.limit_operator()), 0); },
           "Gamma^-1 with Gamma^-1 B symmetric on its two-way entries (sorpia::symmetriser), or empty.")
       .def(
           "apply",
-          [](const OperatorState& s, const Vertices& x) {
+          [](const Interpolator& s, const Vertices& x) {
             check_shape(x, 3, "x");
-            check_rows(x, s.op.n, "x", "the operator");
+            check_rows(x, s.n_vertices(), "x", "the operator");
             Vertices y({x.shape(0), py::ssize_t{3}});
-            sorpia::apply(s.op, x.data(), y.mutable_data());
+            sorpia::apply(s.limit_operator(), x.data(), y.mutable_data());
             return y;
           },
           "x"_a.noconvert(), "B x for (n, 3) x.")
-      .def("lambda_min", [](OperatorState& s) { return sorpia::estimate_lambda_min(s.op, s.cache); },
+      .def("lambda_min",
+           [](Interpolator& s) { return sorpia::estimate_lambda_min(s.limit_operator(), s.spectral_cache()); },
            py::call_guard<LongCall>())
-      .def("jacobi_rho", [](OperatorState& s) { return sorpia::estimate_jacobi_rho(s.op, s.cache); },
+      .def("jacobi_rho",
+           [](Interpolator& s) { return sorpia::estimate_jacobi_rho(s.limit_operator(), s.spectral_cache()); },
            py::call_guard<LongCall>())
       .def("hermitian_extremes",
-           [](OperatorState& s) {
-             // The pair itself: reading s.cache.hermitian_max as a second argument
-             // could happen before the estimate fills it (unsequenced).
-             std::pair<double, double> ends;
-             {
+           [](Interpolator& s) {
+             const auto ends = [&] {
                LongCall call;
-               ends = sorpia::estimate_hermitian_extremes(s.op, s.cache);
-             }
+               return sorpia::estimate_hermitian_extremes(s.limit_operator(), s.spectral_cache());
+             }();
              return py::make_tuple(ends.first, ends.second);
            })
       .def(
           "solve",
-          [](OperatorState& s, const Vertices& v0, sorpia::SolveOptions opt, const py::object& callback,
+          [](Interpolator& s, const Vertices& v0, sorpia::SolveOptions opt, const py::object& callback,
              const std::optional<Vertices>& initial, bool keep_targets) {
             const std::size_t k = columns_of(v0, "vertices");
-            check_rows(v0, s.op.n, "vertices", "the mesh");
+            check_rows(v0, s.n_vertices(), "vertices", "the mesh");
             if (initial) {
               check_shape(*initial, static_cast<py::ssize_t>(k), "initial");
-              check_rows(*initial, s.op.n, "initial", "the mesh");
+              check_rows(*initial, s.n_vertices(), "initial", "the mesh");
             }
             // The callback runs with the GIL; what it raises (KeyboardInterrupt too) ends the solve.
             if (!callback.is_none())
@@ -413,101 +419,57 @@ void bind_solvers(py::module_& m) {
                 py::gil_scoped_acquire acquire;
                 return py::bool_(callback(k, e)).cast<bool>();
               };
-            sorpia::SolveResult r;
-            {
-              LongCall call;
-              r = sorpia::solve(s.op, v0.data(), k, initial ? initial->data() : nullptr, opt, &s.cache);
-              if (keep_targets) {
-                const std::lock_guard<std::mutex> lock(*s.targets_mutex);
-                s.solved_targets.assign(v0.data(), v0.data() + k * s.op.n);
-                s.solved_k = k;
-              }
-            }
-            return r;
+            LongCall call;
+            return s.solve(v0.data(), k, initial ? initial->data() : nullptr, opt, keep_targets);
           },
           "vertices"_a.noconvert(), "options"_a, "callback"_a, "initial"_a.noconvert() = py::none(),
           "keep_targets"_a = false,
-          "Solve B V = V0 ((n, k) data) with checked options, from `initial` when given. keep_targets: the "
-          "targets of later updates are these. Returns an InterpolationResult.")
+          "sorpia::Interpolator::solve on (n, k) data with checked options, from `initial` when given. "
+          "Returns an InterpolationResult.")
       .def(
           "update",
-          [](OperatorState& s, const py::object& previous_obj, bool previous_is_last, const Faces& indices,
+          [](Interpolator& s, const py::object& previous_obj, bool previous_is_last, const Faces& indices,
              const Vertices& positions, double tol, long long max_iter, bool in_place) {
             sorpia::SolveResult& previous = previous_obj.cast<sorpia::SolveResult&>();
             if (indices.ndim() != 1) throw sorpia::ParameterError("indices must be one-dimensional");
+            const std::size_t k = s.targets_columns();
+            if (k && (positions.ndim() != 2 || positions.shape(1) != static_cast<py::ssize_t>(k)))
+              throw sorpia::ParameterError("positions must have shape (n, " + std::to_string(k) + ")");
             if (positions.ndim() != 2 || positions.shape(0) != indices.shape(0))
               throw sorpia::ParameterError("positions must have one row per index (" +
                                            std::to_string(indices.shape(0)) + ")");
             sorpia::SolveResult fresh;
-            sorpia::SolveResult& r = in_place ? previous : fresh;
+            bool moved = false;
             {
-              // The GIL released before the lock: a thread holding the lock
-              // takes the GIL back when its call ends.
               LongCall call;
-              const std::lock_guard<std::mutex> lock(*s.targets_mutex);
-              if (!s.local && s.solved_k == 0)
-                throw sorpia::ParameterError("update needs the targets of a solve first: call solve(vertices)");
-              const std::size_t k = s.solved_k ? s.solved_k : s.local->columns();
-              if (previous.columns != k || previous.control_vertices.size() != k * s.op.n)
-                throw sorpia::ParameterError("previous has shape (" +
-                                             std::to_string(previous.control_vertices.size() / previous.columns) +
-                                             ", " + std::to_string(previous.columns) + ") but the targets are (" +
-                                             std::to_string(s.op.n) + ", " + std::to_string(k) + ")");
-              if (positions.shape(1) != static_cast<py::ssize_t>(k))
-                throw sorpia::ParameterError("positions must have shape (n, " + std::to_string(k) + ")");
-              const auto t0 = std::chrono::steady_clock::now();
-              if (!s.local) s.local = std::make_unique<sorpia::LocalSolver>(s.op);
-              if (s.solved_k) {
-                s.local->set_targets(std::move(s.solved_targets), s.solved_k);
-                s.solved_targets = {};
-                s.solved_k = 0;
-                previous_is_last = false;
+              if (!in_place) {
+                fresh.control_vertices = previous.control_vertices;
+                fresh.columns = previous.columns;
               }
-              if (!in_place) r.control_vertices = previous.control_vertices;
-              const long long n = static_cast<long long>(s.op.n);
-              // At most max_iter sweeps' worth of relaxations.
-              const long long cap = max_iter > std::numeric_limits<long long>::max() / std::max(n, 1LL)
-                                        ? std::numeric_limits<long long>::max() : max_iter * n;
-              r.rho = r.sigma = r.lambda_min = r.alpha = r.weight = NAN;
-              r.omega_clamped = r.reordered = false;
-              r.attempts.clear();
-              r.recommended.reset();
-              r.worst_vertices.clear();
-              r.worst_residuals.clear();
-              r.estimate_seconds = r.topology_seconds = r.operator_seconds = 0.0;
-              s.local->update(r.control_vertices.data(), previous_is_last, indices.data(),
-                              static_cast<std::size_t>(indices.shape(0)), positions.data(), tol, cap, r);
-              r.solve_seconds = r.seconds =
-                  std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-              r.returned_iteration = r.iterations;
+              moved = s.update(in_place ? previous : fresh, previous_is_last, indices.data(),
+                               static_cast<std::size_t>(indices.shape(0)), positions.data(), tol, max_iter);
             }
-            return in_place ? previous_obj : py::cast(std::move(fresh));
+            return py::make_tuple(in_place ? previous_obj : py::cast(std::move(fresh)), moved);
           },
           "previous"_a, "previous_is_last"_a, "indices"_a.noconvert(), "positions"_a.noconvert(), "tol"_a,
           "max_iter"_a, "in_place"_a,
-          "Move the kept targets at `indices` to `positions` and relax from previous.control_vertices "
-          "(sorpia::LocalSolver::update). previous_is_last: previous is the last update's result, unchanged.")
+          "sorpia::Interpolator::update from previous.control_vertices (in place, or on a copy). previous_is_last: "
+          "previous is the last update's result, unchanged. Returns (result, whether the targets moved).")
       .def_property_readonly(
           "targets_columns",
-          [](const OperatorState& s) -> std::size_t {
-            py::gil_scoped_release release;
-            const std::lock_guard<std::mutex> lock(*s.targets_mutex);
-            return s.solved_k ? s.solved_k : s.local && s.local->has_targets() ? s.local->columns() : 0;
+          [](const Interpolator& s) {
+            py::gil_scoped_release release;  // waits for an update in progress
+            return s.targets_columns();
           },
           "k of the kept (n, k) targets; 0 before a solve that kept them.")
       .def_property_readonly(
           "targets",
-          [](const OperatorState& s) -> py::object {
+          [](const Interpolator& s) -> py::object {
             std::vector<double> copy;
             std::size_t k = 0;
             {
               py::gil_scoped_release release;
-              const std::lock_guard<std::mutex> lock(*s.targets_mutex);
-              if (s.solved_k) {
-                copy = s.solved_targets, k = s.solved_k;
-              } else if (s.local && s.local->has_targets()) {
-                copy = s.local->targets(), k = s.local->columns();
-              }
+              copy = s.targets(k);
             }
             if (k == 0) return py::none();
             return to_numpy(std::move(copy), static_cast<py::ssize_t>(k));

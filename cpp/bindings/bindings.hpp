@@ -36,6 +36,19 @@ inline void check_rows(const py::array& a, std::size_t n, const char* name, cons
                                  " has " + std::to_string(n) + " vertices");
 }
 
+// Polygons as (face_vertex_counts, face_vertex_indices): one-dimensional,
+// the counts summing to the indices' length (what the core reads).
+inline void check_polygon_arrays(const py::array_t<std::int32_t, py::array::c_style>& counts,
+                                 const py::array_t<std::int32_t, py::array::c_style>& indices) {
+  if (counts.ndim() != 1 || indices.ndim() != 1)
+    throw sorpia::ParameterError("face_vertex_counts and face_vertex_indices must be one-dimensional");
+  std::int64_t total = 0;
+  for (py::ssize_t f = 0; f < counts.shape(0); ++f) total += counts.data()[f];
+  if (total != indices.shape(0))
+    throw sorpia::MeshError("face_vertex_counts sum to " + std::to_string(total) + " but face_vertex_indices has " +
+                            std::to_string(indices.shape(0)) + " entries");
+}
+
 // The interrupt checker of a long call (sorpia/interrupt.hpp): runs Python's
 // signal handlers, with the GIL; true when one raised (KeyboardInterrupt),
 // its exception left set for the module's translation of sorpia::Interrupted.

@@ -204,26 +204,24 @@ void reference_limit_points(const Topology& topology, const double* vertices, Bo
   detail::limit_positions(osd, points, vertices, topology.n_vertices(), out);
 }
 
-CsrMatrix limit_matrix(const Topology& topology, Scheme scheme, Boundary boundary, const Tags& tags) {
-  return to_csr(limit_operator(topology, scheme, boundary, tags));
-}
+CsrMatrix limit_matrix(const Topology& topology, const Rules& rules) { return to_csr(limit_operator(topology, rules)); }
 
 CsrMatrix limit_matrix(const Topology& topology, Boundary boundary, const Tags& tags) {
-  return limit_matrix(topology, Scheme::Loop, boundary, tags);
+  return limit_matrix(topology, Rules{Scheme::Loop, boundary, tags});
 }
 
-void limit_points(const Topology& topology, const double* vertices, Scheme scheme, Boundary boundary,
-                  const Tags& tags, double* out, std::size_t columns) {
-  apply(limit_operator(topology, scheme, boundary, tags), vertices, columns, out);
+void limit_points(const Topology& topology, const double* vertices, const Rules& rules, double* out,
+                  std::size_t columns) {
+  apply(limit_operator(topology, rules), vertices, columns, out);
 }
 
 void limit_points(const Topology& topology, const double* vertices, Boundary boundary, double* out) {
-  limit_points(topology, vertices, Scheme::Loop, boundary, Tags{}, out);
+  limit_points(topology, vertices, Rules{Scheme::Loop, boundary, {}}, out);
 }
 
 void limit_points(const Topology& topology, const double* vertices, Boundary boundary, const Tags& tags,
                   double* out) {
-  limit_points(topology, vertices, Scheme::Loop, boundary, tags, out);
+  limit_points(topology, vertices, Rules{Scheme::Loop, boundary, tags}, out);
 }
 
 }  // namespace sorpia

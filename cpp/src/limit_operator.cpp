@@ -194,9 +194,9 @@ LimitOperator limit_operator(const Topology& topology, Boundary boundary, const 
       replace_rows(to_csr(op), refined, detail::refined_limit_rows(topology, Scheme::Loop, boundary, vt, refined, refined_levels)));
 }
 
-LimitOperator limit_operator(const Topology& topology, Scheme scheme, Boundary boundary, const Tags& tags) {
-  if (scheme == Scheme::CatmullClark) return catmark_operator(topology, boundary, tags);
-  return limit_operator(topology, boundary, tags);
+LimitOperator limit_operator(const Topology& topology, const Rules& rules) {
+  if (rules.scheme == Scheme::CatmullClark) return catmark_operator(topology, rules.boundary, rules.tags);
+  return limit_operator(topology, rules.boundary, rules.tags);
 }
 
 LimitOperator limit_operator(const CsrMatrix& b) {

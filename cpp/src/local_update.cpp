@@ -73,7 +73,7 @@ std::vector<double> row_norms2(const std::vector<double>& x, std::size_t k) {
 
 }  // namespace
 
-LocalSolver::LocalSolver(const LimitOperator& op) : op_(op), mark_(op.n, 0) {
+LocalSolver::LocalSolver(const LimitOperator& op) : op_(op), mark_(op.n, 0), logged_(op.n, 0) {
   detail::Transposed t = detail::transpose(op);
   t_offsets_ = std::move(t.offsets);
   t_rows_ = std::move(t.rows);
@@ -110,8 +110,8 @@ void LocalSolver::set_targets(std::vector<double> targets, std::size_t k) {
 // until max_relaxations (`stopped`). K: the columns when known at compile
 // time (3), 0 for k_ at run time. Returns the relaxations done.
 template <int K>
-long long LocalSolver::relax(double* v, std::vector<std::int32_t>& work, double threshold, long long max_relaxations,
-                             bool& stopped) {
+long long LocalSolver::relax(double* v, std::vector<std::int32_t>& work, double threshold, double limit,
+                             long long max_relaxations, bool& stopped, bool& diverged) {
   const std::size_t k = K ? static_cast<std::size_t>(K) : k_;
   const auto norm2 = [k](const double* x) {
     double e = 0.0;
@@ -144,14 +144,17 @@ long long LocalSolver::relax(double* v, std::vector<std::int32_t>& work, double 
       const std::size_t i = static_cast<std::size_t>(work[head]);
       mark[i] &= static_cast<std::uint8_t>(~1u);
       double* ri = res + k * i;
-      if (!(norm2(ri) >= threshold)) continue;
-      if (relaxations >= max_relaxations) {
+      const double e = norm2(ri);
+      if (!(e >= threshold)) continue;
+      if (relaxations >= max_relaxations || !(e <= limit)) {
         stopped = true;
+        diverged = !(e <= limit);
         break;
       }
       ++relaxations;
       if ((relaxations & 4095) == 0) poll_interrupt();
       const double f = 1.0 / diag[i];
+      if (!logged_[i]) log_row(v, i);
       for (std::size_t c = 0; c < k; ++c) {
         d[c] = f * ri[c];
         v[k * i + c] += d[c];
@@ -161,6 +164,7 @@ long long LocalSolver::relax(double* v, std::vector<std::int32_t>& work, double 
       mark[i] |= 2;
       for (std::int32_t p = t_off[i]; p < t_off[i + 1]; ++p) {
         const std::size_t j = static_cast<std::size_t>(t_rows[p]);
+        if (!logged_[j]) log_row(v, j);
         double* rj = res + k * j;
         const double w = t_val[p];
         for (std::size_t c = 0; c < k; ++c) rj[c] -= w * d[c];
@@ -194,6 +198,43 @@ long long LocalSolver::relax(double* v, std::vector<std::int32_t>& work, double 
   return relaxations;
 }
 
+void LocalSolver::log_row(const double* v, std::size_t i) {
+  logged_[i] = 1;
+  log_rows_.push_back(static_cast<std::int32_t>(i));
+  log_v_.insert(log_v_.end(), v + k_ * i, v + k_ * (i + 1));
+  log_r_.insert(log_r_.end(), r_.begin() + static_cast<std::ptrdiff_t>(k_ * i),
+                r_.begin() + static_cast<std::ptrdiff_t>(k_ * (i + 1)));
+}
+
+void LocalSolver::undo(double* v) {
+  const std::size_t k = k_;
+  for (std::size_t q = 0; q < log_rows_.size(); ++q) {
+    const std::size_t i = static_cast<std::size_t>(log_rows_[q]);
+    double e = 0.0;
+    for (std::size_t c = 0; c < k; ++c) {
+      v[k * i + c] = log_v_[k * q + c];
+      r_[k * i + c] = log_r_[k * q + c];
+      e += r_[k * i + c] * r_[k * i + c];
+    }
+    residual_.set(i, e);
+    logged_[i] = 0;
+  }
+  // In reverse: an index moved twice gets its first value back.
+  for (std::size_t q = log_targets_.size(); q-- > 0;) {
+    const std::size_t i = static_cast<std::size_t>(log_targets_[q]);
+    double e = 0.0;
+    for (std::size_t c = 0; c < k; ++c) {
+      targets_[k * i + c] = log_target_values_[k * q + c];
+      e += targets_[k * i + c] * targets_[k * i + c];
+    }
+    target_norm_.set(i, e);
+  }
+  for (std::int32_t j : log_cold_) cold_.set(static_cast<std::size_t>(j), cold_row(static_cast<std::size_t>(j)));
+  residual_valid_ = log_residual_valid_;
+  log_rows_.clear(), log_targets_.clear(), log_cold_.clear();
+  log_v_.clear(), log_r_.clear(), log_target_values_.clear();
+}
+
 void LocalSolver::update(double* v, bool v_is_last, const std::int32_t* indices, std::size_t count,
                          const double* positions, double tol, long long max_relaxations, SolveResult& res) {
   if (!has_targets()) throw std::logic_error("LocalSolver::update before set_targets");
@@ -208,6 +249,12 @@ void LocalSolver::update(double* v, bool v_is_last, const std::int32_t* indices,
     return e;
   };
 
+  // The undo log of the last update, dropped.
+  for (std::int32_t i : log_rows_) logged_[i] = 0;
+  log_rows_.clear(), log_targets_.clear(), log_cold_.clear();
+  log_v_.clear(), log_r_.clear(), log_target_values_.clear();
+  log_residual_valid_ = v_is_last && residual_valid_;
+
   // The start's residual, in full unless it is the last update's result.
   if (!v_is_last || !residual_valid_) {
     r_.resize(k * n);
@@ -221,7 +268,10 @@ void LocalSolver::update(double* v, bool v_is_last, const std::int32_t* indices,
   std::vector<std::int32_t> cold_dirty;
   for (std::size_t q = 0; q < count; ++q) {
     const std::size_t i = static_cast<std::size_t>(indices[q]);
+    log_targets_.push_back(static_cast<std::int32_t>(i));
+    log_target_values_.insert(log_target_values_.end(), &targets_[k * i], &targets_[k * i] + k);
     for (std::size_t c = 0; c < k; ++c) targets_[k * i + c] = positions[k * q + c];
+    if (!logged_[i]) log_row(v, i);
     residual_row(v, i, &r_[k * i]);  // exact, as every residual kept
     residual_.set(i, norm2(&r_[k * i]));
     target_norm_.set(i, norm2(&targets_[k * i]));
@@ -229,6 +279,7 @@ void LocalSolver::update(double* v, bool v_is_last, const std::int32_t* indices,
     for (std::int32_t p = t_offsets_[i]; p < t_offsets_[i + 1]; ++p) cold_dirty.push_back(t_rows_[p]);
   }
   for (std::int32_t j : cold_dirty) cold_.set(static_cast<std::size_t>(j), cold_row(static_cast<std::size_t>(j)));
+  log_cold_ = cold_dirty;
 
   res.method = Method::Gs;
   res.variant = "local";  // bind_solvers.cpp keys read-only vertices on it
@@ -258,24 +309,25 @@ void LocalSolver::update(double* v, bool v_is_last, const std::int32_t* indices,
 
   std::vector<std::int32_t> work;
   residual_.collect(threshold, work);
-  bool stopped = false;
+  bool stopped = false, diverged = false;
   long long relaxations = 0;
+  // Divergence: a residual past 1e6 times the start's and E_0 (as a solve's).
+  const double limit = 1e6 * std::max(e_start, e0);
   try {
-    relaxations = k == 3 ? relax<3>(v, work, threshold, max_relaxations, stopped)
-                         : relax<0>(v, work, threshold, max_relaxations, stopped);
+    relaxations = k == 3 ? relax<3>(v, work, threshold, limit * limit, max_relaxations, stopped, diverged)
+                         : relax<0>(v, work, threshold, limit * limit, max_relaxations, stopped, diverged);
   } catch (...) {
-    // Interrupted (poll_interrupt): v is half relaxed and may be dropped by
-    // the caller, so the kept residual belongs to no result any more; the
-    // next update computes its start's in full. The marks go back to zero.
-    residual_valid_ = false;
+    // Interrupted (poll_interrupt): the update taken back whole (targets,
+    // kept residual, v), the marks back to zero.
     std::fill(mark_.begin(), mark_.end(), 0);
+    undo(v);
     throw;
   }
   res.relaxations = relaxations;
   res.iterations = relaxations > 0 ? 1 : 0;
   const double e_end = std::sqrt(residual_.max());
   if (res.iterations) res.errors.push_back(e_end / e0);
-  res.stop_reason = e_end < bound ? StopReason::Converged : StopReason::MaxIter;
+  res.stop_reason = e_end < bound ? StopReason::Converged : diverged ? StopReason::Diverged : StopReason::MaxIter;
 }
 
 }  // namespace sorpia

@@ -322,8 +322,11 @@ struct SparseRow {
 
 }  // namespace
 
-CsrMatrix reference_limit_matrix(const Topology& topology, Scheme scheme, Boundary boundary, const Tags& tags) {
+CsrMatrix reference_limit_matrix(const Topology& topology, const Rules& rules) {
   using namespace detail;
+  const Scheme scheme = rules.scheme;
+  const Boundary boundary = rules.boundary;
+  const Tags& tags = rules.tags;
   const std::size_t n = topology.n_vertices();
   const VertexTags vt = vertex_tags(topology, tags);  // checks the creases against the topology
   const Refiner osd = make_refiner(topology, scheme, boundary, tags);

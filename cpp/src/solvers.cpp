@@ -302,19 +302,17 @@ void resolve_parameters(const LimitOperator& op, const SolveOptions& opt, Spectr
   }
 }
 
-// The exponent e with 2^e ~ max |v0| when |e| > 200, else 0. The methods solve
-// for V0 / 2^e: multiplying by a power of two is exact and B is linear, so the
-// iterates are those of V0 scaled, and norms can neither overflow (|v| > 1e154
-// squares to inf) nor underflow. Within 2^+-200 no squared norm down to
-// rounding level (2^-53 max |v0|) can do either, and the scaling would change
-// no bit of any iterate: then V0 is used as it is, without a copy.
-int scale_exponent(const double* v0, std::size_t count) {
+}  // namespace
+
+int detail::scale_exponent(const double* v0, std::size_t count) {
   double max_abs = 0.0;
   for (std::size_t k = 0; k < count; ++k) max_abs = std::max(max_abs, std::abs(v0[k]));
   int exponent = 0;
   if (max_abs > 0.0 && std::isfinite(max_abs)) std::frexp(max_abs, &exponent);
   return std::abs(exponent) <= 200 ? 0 : exponent;
 }
+
+namespace {
 
 // Whether V0, scaled up by 2^-exponent for the solve, has a residual that is 0
 // at V0's own scale: E_0 = max_i ||v_i^0 - (B V0)_i|| underflows (subnormal
@@ -425,7 +423,7 @@ SolveResult solve_one(const LimitOperator& op, const double* v0, std::size_t k, 
   res.estimate_seconds = detail::estimate_seconds_on_this_thread - spent_before;
 
   const auto t0 = clock::now();
-  const int exponent = scale_exponent(v0, k * op.n);
+  const int exponent = detail::scale_exponent(v0, k * op.n);
   if (exponent < 0 && nothing_to_solve(op, v0, k, exponent)) {
     res.control_vertices.assign(v0, v0 + k * op.n);
     res.errors.assign(1, 0.0);

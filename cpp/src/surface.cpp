@@ -541,7 +541,7 @@ PolyMesh LimitSurface::tessellate(int level) {
   // B; the refined level gives the same points up to rounding, except at the
   // few vertices whose Sdc limit mask is not the limit of their refinement,
   // darts and Catmull-Clark's interior vertices of two faces).
-  apply(limit_operator(impl_->topology, scheme, impl_->boundary, impl_->tags), impl_->vertices.data(),
+  apply(limit_operator(impl_->topology, Rules{scheme, impl_->boundary, impl_->tags}), impl_->vertices.data(),
         out.vertices.data());
   for (std::size_t i = n_osd; i < n_level; ++i) {
     if (i % kRowsPerPoll == 0) poll_interrupt();

@@ -251,14 +251,70 @@ def as_boundary(boundary: str) -> _core.Boundary:
 
 SCHEMES = tuple(_core.scheme_name(s) for s in _core.Scheme.__members__.values())
 DEFAULT_SCHEME = "loop"
+# scheme="auto": Loop when every face is a triangle, else Catmull-Clark (the command's default too).
+AUTO_SCHEME = "auto"
 
 
-def as_scheme(scheme: str) -> _core.Scheme:
-    """The core's Scheme for a scheme's name ("loop", "catmull-clark"); the
-    message of an unknown one comes from the core (sorpia::parse_scheme)."""
+def all_triangles(faces) -> bool:
+    """Whether every face of `faces` (any form faces are accepted in) has 3
+    vertices; what is not faces at all counts as triangles (as_faces names
+    its problem)."""
+    if isinstance(faces, Polygons):
+        counts = np.asarray(faces.face_vertex_counts)
+        return bool(counts.size and np.all(counts == 3))
+    try:
+        arr = np.asarray(faces)
+    except (ValueError, TypeError):  # ragged nested lists
+        arr = None
+    if arr is not None and arr.ndim == 2 and arr.dtype != object:
+        return arr.shape[1] == 3
+    return _first_polygon(faces) is None
+
+
+def as_scheme(scheme: str, faces=None) -> _core.Scheme:
+    """The core's Scheme for a scheme's name ("loop", "catmull-clark"), or for
+    "auto" the one `faces` call for: Loop when every face is a triangle
+    (`all_triangles`), else Catmull-Clark. The message of an unknown name
+    comes from the core (sorpia::parse_scheme)."""
     if not isinstance(scheme, str):
         raise ParameterError(f"scheme must be a string, got {scheme!r}")
-    return _core.parse_scheme(scheme)
+    if scheme == AUTO_SCHEME:
+        if faces is None:
+            raise ParameterError('scheme="auto" needs the faces to choose from')
+        return _core.Scheme.loop if all_triangles(faces) else _core.Scheme.catmull_clark
+    try:
+        return _core.parse_scheme(scheme)
+    except ParameterError as exc:
+        raise ParameterError(f"{exc}, or 'auto' (Loop for triangles, else Catmull-Clark)") from None
+
+
+NONMANIFOLD_MODES = ("error", "sharp")
+DEFAULT_NONMANIFOLD = "error"
+
+
+def as_nonmanifold(value) -> str:
+    """"error" or "sharp" (what non-manifold topology gets), checked."""
+    if value not in NONMANIFOLD_MODES:
+        raise ParameterError(f"nonmanifold must be one of {', '.join(map(repr, NONMANIFOLD_MODES))}, got {value!r}")
+    return value
+
+
+def as_rules(faces, n_vertices, *, scheme, boundary, creases=None, corners=None, holes=None,
+             count_name: str = "n_vertices") -> tuple[tuple, int, _core.Rules]:
+    """The one check of a mesh's faces and its rule options (scheme, boundary,
+    creases, corners, holes) for the core: returns (face arrays, n_vertices,
+    rules), the face arrays ``(triangles,)`` (int32 (m, 3)) under Loop and
+    ``(face_vertex_counts, face_vertex_indices)`` under Catmull-Clark, as
+    _core.Topology and _core.Interpolator take them."""
+    n_vertices = as_vertex_count(n_vertices, count_name)
+    boundary_value = as_boundary(boundary)
+    scheme_value = as_scheme(scheme, faces)
+    if scheme_value == _core.Scheme.loop:
+        arrays = (as_faces(faces, n_vertices, count_name=count_name),)
+    else:
+        arrays = as_polygons(faces, n_vertices, count_name=count_name)
+    tags = as_tags(creases, corners, holes, n_vertices=n_vertices, n_faces=len(arrays[0]))
+    return arrays, n_vertices, _core.Rules(scheme=scheme_value, boundary=boundary_value, tags=tags)
 
 
 class Polygons(NamedTuple):

@@ -8,10 +8,9 @@ import numpy as np
 
 from . import _core
 from . import nonmanifold as nonmanifold_sharp
-from ._validate import (DEFAULT_BOUNDARY, DEFAULT_SCHEME, as_boundary, as_faces, as_polygons, as_scheme, as_tags,
-                        as_vertex_count, as_vertices)
+from ._validate import DEFAULT_BOUNDARY, DEFAULT_SCHEME, as_nonmanifold, as_rules, as_tags, as_vertices
 from .errors import MeshError
-from .nonmanifold import NONMANIFOLD_HINT, as_nonmanifold
+from .nonmanifold import NONMANIFOLD_HINT
 
 
 class UnreferencedVerticesWarning(UserWarning):
@@ -24,30 +23,36 @@ def topology(faces, n_vertices: int, *, scheme: str = DEFAULT_SCHEME, warn: bool
 
     Loop (``scheme="loop"``) takes triangles only (`as_faces`); Catmull-Clark
     any polygons (`as_polygons`: (m, k) arrays, lists of polygons,
-    `sorpia.Polygons`). `count_name` names the vertex count in messages:
-    "n_vertices" where the caller passed the count, "len(vertices)" where it is
-    the rows of an array. Warns with UnreferencedVerticesWarning when some
-    vertices belong to no face.
+    `sorpia.Polygons`); "auto" picks Loop when every face is a triangle.
+    `count_name` names the vertex count in messages: "n_vertices" where the
+    caller passed the count, "len(vertices)" where it is the rows of an array.
+    Warns with UnreferencedVerticesWarning when some vertices belong to no face.
     """
-    n_vertices = as_vertex_count(n_vertices, count_name)
+    arrays, n_vertices, _ = as_rules(faces, n_vertices, scheme=scheme, boundary=DEFAULT_BOUNDARY,
+                                     count_name=count_name)
+    topo = built(lambda: _core.Topology(*arrays, n_vertices))
+    if warn:
+        warn_unreferenced(topo, stacklevel=4)
+    return topo
+
+
+def built(build):
+    """build() (a core object made from faces), its refusal of non-manifold
+    topology (MeshError) completed with the ways to keep or repair it."""
     try:
-        if as_scheme(scheme) == _core.Scheme.loop:
-            topo = _core.Topology(as_faces(faces, n_vertices, count_name=count_name), n_vertices)
-        else:
-            counts, indices = as_polygons(faces, n_vertices, count_name=count_name)
-            topo = _core.Topology(counts, indices, n_vertices)
+        return build()
     except MeshError as exc:
         if not any(kind in str(exc) for kind in NONMANIFOLD_KINDS):
             raise
         raise MeshError(f"{exc}; {NONMANIFOLD_HINT}") from None
-    if warn and topo.n_unreferenced:
-        warnings.warn(
-            f"{topo.n_unreferenced} of {n_vertices} vertices belong to no face; "
-            "they pass through unchanged (their limit is themselves)",
-            UnreferencedVerticesWarning,
-            stacklevel=3,
-        )
-    return topo
+
+
+def warn_unreferenced(topo: _core.Topology, stacklevel: int) -> None:
+    """UnreferencedVerticesWarning when some vertices of `topo` belong to no face."""
+    if topo.n_unreferenced:
+        warnings.warn(f"{topo.n_unreferenced} of {topo.n_vertices} vertices belong to no face; "
+                      "they pass through unchanged (their limit is themselves)", UnreferencedVerticesWarning,
+                      stacklevel=stacklevel)
 
 
 # The refusals of sorpia::Topology that OpenSubdiv takes as non-manifold topology.
@@ -111,7 +116,7 @@ TAGS_DOC = """creases : (edges (k, 2) int, sharpness (k,) float or one float), o
         there."""
 
 
-def limit_points(vertices, faces, boundary: str = DEFAULT_BOUNDARY, *, scheme: str = DEFAULT_SCHEME, creases=None,
+def limit_points(vertices, faces, *, scheme: str = DEFAULT_SCHEME, boundary: str = DEFAULT_BOUNDARY, creases=None,
                  corners=None, holes=None, nonmanifold: str = "error") -> np.ndarray:
     """Limit positions of the vertices of a mesh (paper eq. 5-6), B V.
 
@@ -123,13 +128,15 @@ def limit_points(vertices, faces, boundary: str = DEFAULT_BOUNDARY, *, scheme: s
     faces : array_like (m, k) int, list of polygons or sorpia.Polygons
         Faces, indices into ``vertices``, consistently oriented; triangles for
         Loop, any polygons for Catmull-Clark.
+    scheme : {"loop", "catmull-clark", "auto"}
+        The subdivision scheme (OpenSubdiv's SCHEME_LOOP or SCHEME_CATMARK);
+        "auto" is Loop when every face is a triangle, else Catmull-Clark (the
+        command line's default).
     boundary : {"edge-and-corner", "edge-only"}
         Boundary rule (OpenSubdiv's VTX_BOUNDARY_EDGE_AND_CORNER or
         VTX_BOUNDARY_EDGE_ONLY). With "edge-and-corner" (the default) a
         boundary vertex with a single face stays where it is; with "edge-only"
         it gets the boundary mask (1/6, 2/3, 1/6).
-    scheme : {"loop", "catmull-clark"}
-        The subdivision scheme (OpenSubdiv's SCHEME_LOOP or SCHEME_CATMARK).
     {tags}
     {nonmanifold}
 
@@ -159,9 +166,11 @@ def limit_points(vertices, faces, boundary: str = DEFAULT_BOUNDARY, *, scheme: s
         return nonmanifold_sharp.limit_points(vertices, faces, boundary, scheme,
                                               dict(creases=creases, corners=corners, holes=holes))
     vertices = as_vertices(vertices, columns=None)
-    topo = topology(faces, vertices.shape[0], scheme=scheme, count_name="len(vertices)")
-    return _core.limit_points(topo, vertices, as_boundary(boundary), tags(topo, creases, corners, holes),
-                              as_scheme(scheme))
+    arrays, n, rules = as_rules(faces, vertices.shape[0], scheme=scheme, boundary=boundary, creases=creases,
+                                corners=corners, holes=holes, count_name="len(vertices)")
+    topo = built(lambda: _core.Topology(*arrays, n))
+    warn_unreferenced(topo, stacklevel=3)
+    return _core.limit_points(topo, vertices, rules)
 
 
 NONMANIFOLD_DOC = """nonmanifold : {"error", "sharp"}
@@ -177,13 +186,13 @@ NONMANIFOLD_DOC = """nonmanifold : {"error", "sharp"}
 limit_points.__doc__ = limit_points.__doc__.replace("{tags}", TAGS_DOC).replace("{nonmanifold}", NONMANIFOLD_DOC)
 
 
-def limit_matrix(faces, n_vertices: int, boundary: str = DEFAULT_BOUNDARY, *, scheme: str = DEFAULT_SCHEME,
+def limit_matrix(faces, n_vertices: int, *, scheme: str = DEFAULT_SCHEME, boundary: str = DEFAULT_BOUNDARY,
                  creases=None, corners=None, holes=None, nonmanifold: str = "error") -> scipy.sparse.csr_matrix:
     """The limit matrix B (paper eq. 7) as a scipy CSR matrix, (n, n) float64.
 
     Row i holds the limit mask of vertex i as OpenSubdiv evaluates it, so that
     ``limit_matrix(F, len(V)) @ V == limit_points(V, F)``. Unreferenced vertices
-    get an identity row. See `limit_points` for `boundary`, `scheme`, the
+    get an identity row. See `limit_points` for `scheme`, `boundary`, the
     tags (`creases`, `corners`, `holes`) and `nonmanifold`.
     """
     import scipy.sparse  # here, not at import: sorpia's commands need no scipy
@@ -191,8 +200,9 @@ def limit_matrix(faces, n_vertices: int, boundary: str = DEFAULT_BOUNDARY, *, sc
     if as_nonmanifold(nonmanifold) == "sharp":
         return nonmanifold_sharp.limit_matrix(faces, n_vertices, boundary, scheme,
                                               dict(creases=creases, corners=corners, holes=holes))
-    topo = topology(faces, n_vertices, scheme=scheme)  # validates n_vertices (as_vertex_count) and the faces
-    n = topo.n_vertices
-    data, indices, indptr = _core.limit_matrix(topo, as_boundary(boundary), tags(topo, creases, corners, holes),
-                                               as_scheme(scheme))
+    arrays, n, rules = as_rules(faces, n_vertices, scheme=scheme, boundary=boundary, creases=creases,
+                                corners=corners, holes=holes)
+    topo = built(lambda: _core.Topology(*arrays, n))
+    warn_unreferenced(topo, stacklevel=3)
+    data, indices, indptr = _core.limit_matrix(topo, rules)
     return scipy.sparse.csr_matrix((data, indices, indptr), shape=(n, n))

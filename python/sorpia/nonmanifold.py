@@ -30,10 +30,8 @@ import numpy as np
 
 from . import _core
 from ._validate import DEFAULT_BOUNDARY, as_boundary, as_tags, as_vertices
-from .errors import MeshError, ParameterError
+from .errors import MeshError
 
-NONMANIFOLD_MODES = ("error", "sharp")
-DEFAULT_NONMANIFOLD = "error"
 
 # Appended to the messages that refuse non-manifold topology.
 NONMANIFOLD_HINT = ("sorpia.repair (command line: --repair) makes the mesh manifold by splitting it, or "
@@ -44,13 +42,6 @@ NONMANIFOLD_HINT = ("sorpia.repair (command line: --repair) makes the mesh manif
 class NonmanifoldWarning(UserWarning):
     """nonmanifold="sharp" on a non-manifold mesh: OpenSubdiv's documentation
     calls the surface of non-manifold topology undefined for now."""
-
-
-def as_nonmanifold(value) -> str:
-    """"error" or "sharp", checked."""
-    if value not in NONMANIFOLD_MODES:
-        raise ParameterError(f"nonmanifold must be one of {', '.join(map(repr, NONMANIFOLD_MODES))}, got {value!r}")
-    return value
 
 
 class Split(NamedTuple):
@@ -138,8 +129,9 @@ def limit_points(vertices, faces, boundary, scheme, tags: dict):
     vertices = as_vertices(vertices, columns=None)
     s = split(faces, len(vertices), boundary, **tags)
     if s is None:
-        return manifold_limit_points(vertices, faces, boundary, scheme=scheme, **tags)
-    return manifold_limit_points(vertices[s.vertex_map], s.faces, boundary, scheme=scheme, **s.tags)[: len(vertices)]
+        return manifold_limit_points(vertices, faces, boundary=boundary, scheme=scheme, **tags)
+    return manifold_limit_points(vertices[s.vertex_map], s.faces, boundary=boundary, scheme=scheme,
+                                 **s.tags)[: len(vertices)]
 
 
 def limit_matrix(faces, n_vertices: int, boundary, scheme, tags: dict):
@@ -149,12 +141,12 @@ def limit_matrix(faces, n_vertices: int, boundary, scheme, tags: dict):
 
     s = split(faces, n_vertices, boundary, **tags)
     if s is None:
-        return manifold_limit_matrix(faces, n_vertices, boundary, scheme=scheme, **tags)
-    b = manifold_limit_matrix(s.faces, len(s.vertex_map), boundary, scheme=scheme, **s.tags)
+        return manifold_limit_matrix(faces, n_vertices, boundary=boundary, scheme=scheme, **tags)
+    b = manifold_limit_matrix(s.faces, len(s.vertex_map), boundary=boundary, scheme=scheme, **s.tags)
     return (b[:n_vertices] @ _columns_to_input(s.vertex_map, n_vertices)).tocsr()
 
 
-def interpolate(vertices, faces, boundary, scheme, tags: dict, **options):
+def interpolate(vertices, faces, rule_options: dict, **options):
     """`sorpia.interpolate` with nonmanifold="sharp": the split solved (its
     copies' targets their input vertices'), the input vertices' control
     vertices returned (each copy's equals its input vertex's to the solver's
@@ -162,9 +154,11 @@ def interpolate(vertices, faces, boundary, scheme, tags: dict, **options):
     from .solve import interpolate as manifold_interpolate
 
     vertices = as_vertices(vertices, columns=None)
+    scheme, boundary = rule_options["scheme"], rule_options["boundary"]
+    tags = {kind: rule_options[kind] for kind in ("creases", "corners", "holes")}
     s = split(faces, len(vertices), boundary, **tags)
     if s is None:
-        return manifold_interpolate(vertices, faces, boundary=boundary, scheme=scheme, **tags, **options)
+        return manifold_interpolate(vertices, faces, **rule_options, **options)
     if options.get("initial") is not None:  # a warm start of the input vertices: each copy starts as its vertex
         options["initial"] = as_vertices(options["initial"], "initial", columns=None)[s.vertex_map]
     result = manifold_interpolate(vertices[s.vertex_map], s.faces, boundary=boundary, scheme=scheme, **s.tags,

@@ -108,13 +108,11 @@ import numpy as np
 
 from . import _core
 from . import nonmanifold as nonmanifold_sharp
-from ._validate import DEFAULT_BOUNDARY, DEFAULT_SCHEME, as_boundary, as_scheme, as_vertices
+from ._validate import DEFAULT_BOUNDARY, DEFAULT_SCHEME, as_nonmanifold, as_rules, as_vertices
 from .errors import ParameterError
 from .limit import TAGS_DOC as _TAGS_DOC
 from .limit import singular_cubes
-from .limit import tags as _tags
-from .limit import topology as _topology
-from .nonmanifold import as_nonmanifold
+from .limit import built, warn_unreferenced
 
 METHODS = tuple(_core.method_names())  # the core's one list, in its order
 OMEGA_RULES = ("auto", "young")
@@ -187,7 +185,8 @@ def check_options(method: str = "auto", omega="auto", tol: float = 1e-10, max_it
 
 
 class Interpolator:
-    """Build once, solve many: the topology and the limit operator B of one mesh.
+    """Build once, solve many: the topology and the limit operator B of one mesh
+    (the core's sorpia::Interpolator).
 
     Parameters
     ----------
@@ -200,10 +199,11 @@ class Interpolator:
         TypeError; a count below the largest face index + 1, MeshError).
         Vertices no face references pass through unchanged, with an
         UnreferencedVerticesWarning.
+    scheme : {"loop", "catmull-clark", "auto"}
+        The subdivision scheme whose limit surface interpolates, see
+        sorpia.limit_points ("auto": Loop when every face is a triangle).
     boundary : {"edge-and-corner", "edge-only"}
         Boundary rule, see sorpia.limit_points.
-    scheme : {"loop", "catmull-clark"}
-        The subdivision scheme whose limit surface interpolates, see sorpia.limit_points.
     {tags}
 
     The spectral estimates a method needs (lambda_min for "wpia", rho for
@@ -214,52 +214,50 @@ class Interpolator:
     `update` moves: see `targets` and `update`.
     """
 
-    def __init__(self, faces, n_vertices: int, boundary: str = DEFAULT_BOUNDARY, *, scheme: str = DEFAULT_SCHEME,
+    def __init__(self, faces, n_vertices: int, *, scheme: str = DEFAULT_SCHEME, boundary: str = DEFAULT_BOUNDARY,
                  creases=None, corners=None, holes=None):
-        self._build(faces, n_vertices, boundary, scheme, "n_vertices", (creases, corners, holes))
+        self._build(faces, n_vertices, "n_vertices",
+                    dict(scheme=scheme, boundary=boundary, creases=creases, corners=corners, holes=holes))
 
     @classmethod
-    def _for_vertices(cls, faces, n_vertices: int, boundary: str, scheme: str, tags: tuple) -> Interpolator:
-        """As Interpolator(faces, n_vertices, boundary, scheme=, creases=, corners=,
-        holes=), for interpolate(): its messages call the count len(vertices),
-        the rows of the caller's array."""
+    def _for_vertices(cls, faces, n_vertices: int, rule_options: dict) -> Interpolator:
+        """As Interpolator(faces, n_vertices, **rule_options), for
+        interpolate(): its messages call the count len(vertices), the rows of
+        the caller's array."""
         self = cls.__new__(cls)
-        self._build(faces, n_vertices, boundary, scheme, "len(vertices)", tags)
+        self._build(faces, n_vertices, "len(vertices)", rule_options)
         return self
 
-    def _build(self, faces, n_vertices, boundary, scheme, count_name: str, tags: tuple) -> None:
-        t0 = time.perf_counter()
-        self._boundary = as_boundary(boundary)
-        self.boundary = _core.boundary_name(self._boundary)
-        self._scheme = as_scheme(scheme)
-        self.scheme = _core.scheme_name(self._scheme)
-        # validates n_vertices as limit_matrix does (as_vertex_count: no float, bool or negative count)
-        self.topology = _topology(faces, n_vertices, scheme=self.scheme, count_name=count_name)
-        self.n_vertices = self.topology.n_vertices
-        self.tags = _tags(self.topology, *tags)
-        t1 = time.perf_counter()
-        self._operator = _core.LimitOperator(self.topology, self._boundary, self.tags, self._scheme)
-        t2 = time.perf_counter()
-        self.build_timings = {"topology": t1 - t0, "operator": t2 - t1}
+    def _build(self, faces, n_vertices, count_name: str, rule_options: dict) -> None:
+        arrays, n, rules = as_rules(faces, n_vertices, count_name=count_name, **rule_options)
+        self._impl = built(lambda: _core.Interpolator(*arrays, n, rules))
+        self.topology = self._impl.topology
+        warn_unreferenced(self.topology, stacklevel=5)
+        self.n_vertices = n
+        self.scheme = _core.scheme_name(rules.scheme)
+        self.boundary = _core.boundary_name(rules.boundary)
+        self.tags = rules.tags
+        self.build_timings = self._impl.build_timings
         self._last_update = None  # weak reference to the result the last update returned
+        self._solved_method = None  # the method of the last solve keeping its targets
 
     @property
     def targets(self) -> Optional[np.ndarray]:
         """A copy of the targets `update` moves: those of the last `solve`, moved
         by every `update` since; None before the first solve."""
-        return self._operator.targets
+        return self._impl.targets
 
     @property
     def closed(self) -> bool:
         """True when B = Gamma Upsilon with Upsilon symmetric ("cg" runs CG, not BiCGSTAB)."""
-        return bool(self._operator.symmetrisable)
+        return bool(self._impl.symmetrisable)
 
     def limit_matrix(self) -> scipy.sparse.csr_matrix:
         """B as a scipy CSR matrix: the operator the solvers use, as `sorpia.limit_matrix` gives it."""
         import scipy.sparse  # here, not at import: sorpia's commands need no scipy
 
         n = self.n_vertices
-        return scipy.sparse.csr_matrix(self._operator.limit_matrix(), shape=(n, n))
+        return scipy.sparse.csr_matrix(self._impl.limit_matrix(), shape=(n, n))
 
     def solve(self, vertices, method: str = "auto", omega="auto", tol: float = 1e-10, max_iter: int = 1000,
               callback: Optional[Callable[[int, float], object]] = None, *, sigma=None, alpha=None, weight=None,
@@ -308,10 +306,15 @@ class Interpolator:
             the input order. With more than 3 columns of data, 1 only.
         initial : array_like, same shape as ``vertices``, or None
             A warm start V^(0) (e.g. the previous frame's control_vertices),
-            for every method. The stopping rule is unchanged: E_0 is the error
-            of the cold start V = V0, so the result meets the same E_k / E_0 <
-            tol; errors[0] = E(initial) / E_0 and iterations count from the
-            warm start (0 when it already meets tol).
+            for every method; finite and at most 1e150 times the targets'
+            scale (1, or about the largest magnitude in V0 for targets
+            beyond 2^+-200, which the solvers scale exactly), so that no
+            squared norm overflows. The stopping rule is unchanged: E_0 is
+            the error of the cold start V = V0, so the result meets the same
+            E_k / E_0 < tol; errors[0] = E(initial) / E_0 and iterations
+            count from the warm start (0 when it already meets tol); a start
+            far off iterates (divergence is measured against the larger of
+            E_0 and the start's error).
 
         Returns
         -------
@@ -379,39 +382,59 @@ class Interpolator:
             E(result) / E_0] (only the first when nothing needed relaxing);
             iterations 1 when any vertex was relaxed, else 0; relaxations the
             single-vertex relaxations done; initial_error E_0 of the new targets.
+            Where the local relaxation diverges (B indefinite, e.g. interior
+            vertices of valence 2), the new targets are solved in full by the
+            last solve's method from previous, and the result is that solve's.
+            An update that cannot meet tol (max_iter, or divergence of both)
+            changes nothing — targets, kept residual, previous's vertices —
+            and warns with ConvergenceWarning; its result holds previous's
+            vertices and says why (stop_reason).
+
+        Raises
+        ------
+        ParameterError
+            Before anything changes: positions beyond 1e150 in magnitude
+            (their squared norms would overflow; non-finite ones raise
+            MeshError as vertices do), targets of the last solve beyond 1e150
+            (the local relaxation does not rescale), an index that is not a
+            vertex, previous of another shape.
         """
         t0 = time.perf_counter()
         if not isinstance(previous, InterpolationResult):
             raise ParameterError(f"previous must be an InterpolationResult, got {type(previous).__name__}")
         options = check_options(tol=tol, max_iter=max_iter)
-        tol_value, max_iter = options.tol, options.max_iter
         idx = np.asarray(indices)
         if idx.ndim == 0:
             idx = idx.reshape(1)
         if idx.ndim != 1 or not (np.issubdtype(idx.dtype, np.integer) or idx.size == 0):
             raise ParameterError(f"indices must be a 1-D array of vertex indices, got {idx.dtype} {idx.shape}")
-        if idx.size and (idx.min() < 0 or idx.max() >= self.n_vertices):
+        if idx.size and (idx.min() < np.iinfo(np.int32).min or idx.max() > np.iinfo(np.int32).max):
             bad = int(np.flatnonzero((idx < 0) | (idx >= self.n_vertices))[0])
             raise ParameterError(f"indices[{bad}] = {int(idx[bad])} is not a vertex (0..{self.n_vertices - 1})")
         idx = np.ascontiguousarray(idx, dtype=np.int32)
-        targets_k = self._operator.targets_columns
-        if targets_k == 0:
-            raise ParameterError("update needs the targets of a solve first: call solve(vertices)")
-        if previous.control_vertices.shape != (self.n_vertices, targets_k):
-            raise ParameterError(f"previous has shape {previous.control_vertices.shape} but the targets are "
-                                 f"{(self.n_vertices, targets_k)}")
+        targets_k = self._impl.targets_columns
         pos = np.asarray(positions)
         if pos.ndim == 1 and idx.size == 1:  # one vertex: its position alone
             pos = pos.reshape(1, -1)
-        pos = as_vertices(pos, "positions", columns=targets_k) if idx.size else np.zeros((0, targets_k))
+        if targets_k == 0:  # no targets yet: the core says so
+            pos = np.zeros((len(idx), 1))
+        elif idx.size:
+            pos = as_vertices(pos, "positions", columns=targets_k)
+        else:
+            pos = np.zeros((0, targets_k))
         if len(pos) != len(idx):
             raise ParameterError(f"positions has {len(pos)} rows but indices has {len(idx)}")
         last = self._last_update() if self._last_update is not None else None
-        r = self._operator.update(previous, last is previous, idx, pos, tol_value, max_iter, bool(in_place))
-        self._last_update = weakref.ref(r)
-        if r.stop_reason == "max_iter":
-            warnings.warn(f"update reached max_iter = {max_iter} sweeps' worth of relaxations with "
-                          f"E/E_0 = {r.errors[-1]:.3g} > tol = {tol_value:g}", ConvergenceWarning, stacklevel=2)
+        r, moved = self._impl.update(previous, last is previous, idx, pos, options.tol, options.max_iter,
+                                     bool(in_place))
+        if moved:
+            self._last_update = weakref.ref(r)
+        else:
+            what = ("reached max_iter = {max_iter} sweeps' worth of relaxations" if r.stop_reason == "max_iter"
+                    else f"diverged, and so did method={self._solved_method!r} on the whole mesh")
+            warnings.warn(f"update {what.format(max_iter=options.max_iter)} with E/E_0 = {r.errors[-1]:.3g} > "
+                          f"tol = {options.tol:g}: the targets are left as they were, and the result holds "
+                          "previous's vertices", ConvergenceWarning, stacklevel=2)
         r._record_build(time.perf_counter() - t0, 0.0, 0.0)
         return r
 
@@ -423,11 +446,10 @@ class Interpolator:
         these targets from now on. Warnings point at the caller of solve() or
         interpolate()."""
         tol_value, max_iter = options.tol, options.max_iter
-        if v0.shape[0] != self.n_vertices:
-            raise ParameterError(f"vertices has {v0.shape[0]} rows but the mesh has {self.n_vertices} vertices")
-        r = self._operator.solve(v0, options, callback, initial, keep_targets)
+        r = self._impl.solve(v0, options, callback, initial, keep_targets)
         if keep_targets:
             self._last_update = None
+            self._solved_method = method
         seconds = time.perf_counter() - t0
         if r.omega_clamped:
             warnings.warn(
@@ -507,11 +529,12 @@ def _as_initial(initial, v0: np.ndarray) -> Optional[np.ndarray]:
 
 
 def interpolate(vertices, faces, method: str = "auto", omega="auto", tol: float = 1e-10, max_iter: int = 1000,
-                boundary: str = DEFAULT_BOUNDARY, callback: Optional[Callable[[int, float], object]] = None, *,
-                sigma=None, alpha=None, weight=None, threads: int = 1, scheme: str = DEFAULT_SCHEME, creases=None,
-                corners=None, holes=None, initial=None, nonmanifold: str = "error") -> InterpolationResult:
+                callback: Optional[Callable[[int, float], object]] = None, *, scheme: str = DEFAULT_SCHEME,
+                boundary: str = DEFAULT_BOUNDARY, creases=None, corners=None, holes=None, nonmanifold: str = "error",
+                sigma=None, alpha=None, weight=None, threads: int = 1, initial=None) -> InterpolationResult:
     """Control vertices whose limit surface (Loop, or Catmull-Clark with
-    ``scheme="catmull-clark"``) interpolates ``vertices``.
+    ``scheme="catmull-clark"``; ``scheme="auto"`` picks Loop when every face
+    is a triangle) interpolates ``vertices``.
 
     ``vertices`` may be (n, k) data for any k >= 1 (every column interpolated);
     `initial` is a warm start, see `Interpolator.solve`. With
@@ -519,12 +542,11 @@ def interpolate(vertices, faces, method: str = "auto", omega="auto", tol: float 
     with OpenSubdiv's rules for it, and the result's control_vertices are those
     of the input vertices.
 
-    One call of ``Interpolator(faces, len(vertices), boundary, scheme=,
+    One call of ``Interpolator(faces, len(vertices), scheme=, boundary=,
     creases=, corners=, holes=).solve(...)``; see `Interpolator` for the
-    scheme and the tags, `Interpolator.solve` for the other parameters and the
-    module docstring for
-    the methods and their formulas. `seconds` and `timings` include building
-    the topology and B.
+    rules and the tags, `Interpolator.solve` for the other parameters and the
+    module docstring for the methods and their formulas. `seconds` and
+    `timings` include building the topology and B.
 
     Examples
     --------
@@ -535,18 +557,18 @@ def interpolate(vertices, faces, method: str = "auto", omega="auto", tol: float 
     >>> np.allclose(sorpia.limit_points(res.control_vertices, F), V, atol=1e-9)
     True
     """
+    rule_options = dict(scheme=scheme, boundary=boundary, creases=creases, corners=corners, holes=holes)
     if as_nonmanifold(nonmanifold) == "sharp":
         return nonmanifold_sharp.interpolate(
-            vertices, faces, boundary, scheme, dict(creases=creases, corners=corners, holes=holes), method=method,
-            omega=omega, tol=tol, max_iter=max_iter, callback=callback, sigma=sigma, alpha=alpha, weight=weight,
-            threads=threads, initial=initial)
+            vertices, faces, rule_options, method=method, omega=omega, tol=tol, max_iter=max_iter,
+            callback=callback, sigma=sigma, alpha=alpha, weight=weight, threads=threads, initial=initial)
     t0 = time.perf_counter()
     # Options are checked before the (costly) operator is built.
     options = check_options(method, omega, tol, max_iter, callback, sigma=sigma, alpha=alpha, weight=weight,
                             threads=threads)
     v0 = as_vertices(vertices, columns=None)
     start = _as_initial(initial, v0)
-    interp = Interpolator._for_vertices(faces, v0.shape[0], boundary, scheme, (creases, corners, holes))
+    interp = Interpolator._for_vertices(faces, v0.shape[0], rule_options)
     res = interp._solve(v0, method, options, callback, t0, start)
     res._record_build(time.perf_counter() - t0, interp.build_timings["topology"], interp.build_timings["operator"])
     return res

@@ -50,8 +50,8 @@ TEST(Catmark, EveryRowEqualsOpenSubdivFar) {
     for (auto rule : {Boundary::EdgeOnly, Boundary::EdgeAndCorner}) {
       SCOPED_TRACE(name + (rule == Boundary::EdgeOnly ? " edge-only" : " edge-and-corner"));
       const auto t = build(m);
-      const auto fast = sorpia::limit_matrix(t, Scheme::CatmullClark, rule);
-      const auto ref = sorpia::reference_limit_matrix(t, Scheme::CatmullClark, rule, {});
+      const auto fast = sorpia::limit_matrix(t, sorpia::Rules{Scheme::CatmullClark, rule});
+      const auto ref = sorpia::reference_limit_matrix(t, sorpia::Rules{Scheme::CatmullClark, rule});
       ASSERT_EQ(fast.n_rows, m.n_vertices());
       for (std::size_t i = 0; i < fast.n_rows; ++i) {
         const auto a = row(fast, i), b = row(ref, i);
@@ -69,7 +69,7 @@ TEST(Catmark, EveryRowEqualsOpenSubdivFar) {
 TEST(Catmark, RefinedRowsOfQuadVerticesEqualTheirMasks) {
   const auto m = sorpia::quad_irregular(600, 3);
   const auto t = build(m);
-  const auto op = sorpia::limit_operator(t, Scheme::CatmullClark, Boundary::EdgeAndCorner);
+  const auto op = sorpia::limit_operator(t, sorpia::Rules{Scheme::CatmullClark, Boundary::EdgeAndCorner});
   std::vector<std::pair<std::int32_t, double>> refined;
   for (std::size_t v = 0; v < t.n_vertices(); ++v) {
     if (t.is_boundary(v) || t.is_unreferenced(v)) continue;
@@ -88,7 +88,7 @@ TEST(Catmark, InteriorMaskIsTheClosedForm) {
   for (int n = 3; n <= 12; ++n) {
     SCOPED_TRACE("valence " + std::to_string(n));
     const auto t = build(quad_pole(n));
-    const auto b = sorpia::limit_matrix(t, Scheme::CatmullClark, Boundary::EdgeAndCorner);
+    const auto b = sorpia::limit_matrix(t, sorpia::Rules{Scheme::CatmullClark, Boundary::EdgeAndCorner});
     const auto r = row(b, 0);
     const double denom = n * (n + 5.0);
     ASSERT_EQ(r.size(), static_cast<std::size_t>(2 * n + 1));
@@ -112,7 +112,7 @@ TEST(Catmark, BoundaryAndCornerRules) {
   const auto m = sorpia::quad_grid(5, 4);
   const auto t = build(m);
   for (auto rule : {Boundary::EdgeOnly, Boundary::EdgeAndCorner}) {
-    const auto b = sorpia::limit_matrix(t, Scheme::CatmullClark, rule);
+    const auto b = sorpia::limit_matrix(t, sorpia::Rules{Scheme::CatmullClark, rule});
     for (std::size_t v = 0; v < t.n_vertices(); ++v) {
       if (!t.is_boundary(v)) continue;
       const auto r = row(b, v);
@@ -133,7 +133,7 @@ TEST(Catmark, BoundaryAndCornerRules) {
 TEST(Catmark, RowsSumToOne) {
   for (const auto& [name, m] : sorpia_test::polygon_meshes()) {
     SCOPED_TRACE(name);
-    const auto op = sorpia::limit_operator(build(m), Scheme::CatmullClark, Boundary::EdgeAndCorner);
+    const auto op = sorpia::limit_operator(build(m), sorpia::Rules{Scheme::CatmullClark, Boundary::EdgeAndCorner});
     for (std::size_t i = 0; i < op.n; ++i) {
       double s = op.diag[i];
       for (std::int32_t p = op.offsets[i]; p < op.offsets[i + 1]; ++p) s += op.entry(i, p);
@@ -165,8 +165,8 @@ TEST(Catmark, TaggedRowsEqualTheWholeMeshRefinement) {
     tags.corner_vertices = {v, static_cast<std::int32_t>(t.n_vertices() / 2)};
     tags.corner_sharpness = {2.0, sorpia::kInfiniteSharpness};
     for (auto rule : {Boundary::EdgeOnly, Boundary::EdgeAndCorner}) {
-      const auto fast = sorpia::limit_matrix(t, Scheme::CatmullClark, rule, tags);
-      const auto ref = sorpia::reference_limit_matrix(t, Scheme::CatmullClark, rule, tags);
+      const auto fast = sorpia::limit_matrix(t, sorpia::Rules{Scheme::CatmullClark, rule, tags});
+      const auto ref = sorpia::reference_limit_matrix(t, sorpia::Rules{Scheme::CatmullClark, rule, tags});
       for (std::size_t i = 0; i < fast.n_rows; ++i) {
         const auto a = row(fast, i), b = row(ref, i);
         ASSERT_EQ(a.size(), b.size()) << "row " << i;

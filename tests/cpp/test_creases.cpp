@@ -84,7 +84,7 @@ const double kInf = std::numeric_limits<double>::infinity();
 void expect_rows_match(const Case& c, const Tags& tags, Boundary boundary, const std::string& what) {
   const sorpia::Topology t(c.mesh.faces.data(), c.mesh.n_faces(), c.mesh.n_vertices());
   const auto op = sorpia::limit_operator(t, boundary, tags);
-  const auto ref = sorpia::reference_limit_matrix(t, Scheme::Loop, boundary, tags);
+  const auto ref = sorpia::reference_limit_matrix(t, sorpia::Rules{Scheme::Loop, boundary, tags});
   EXPECT_LE(max_entry_diff(sorpia::to_csr(op), ref), 1e-14) << c.name << " " << what;
 }
 
@@ -118,7 +118,7 @@ TEST(Creases, HolesAloneChangeNoRow) {
     const sorpia::Topology t(c.mesh.faces.data(), c.mesh.n_faces(), c.mesh.n_vertices());
     Tags tags;
     for (std::size_t f = 0; f < t.n_faces(); f += 3) tags.holes.push_back(static_cast<std::int32_t>(f));
-    const auto ref = sorpia::reference_limit_matrix(t, Scheme::Loop, Boundary::EdgeAndCorner, tags);
+    const auto ref = sorpia::reference_limit_matrix(t, sorpia::Rules{Scheme::Loop, Boundary::EdgeAndCorner, tags});
     EXPECT_LE(max_entry_diff(sorpia::limit_matrix(t, Boundary::EdgeAndCorner), ref), 1e-15) << c.name;
   }
 }
@@ -137,7 +137,7 @@ TEST(Creases, RepeatedCreaseTakesTheLastSharpness) {
   const auto a = sorpia::to_csr(sorpia::limit_operator(t, Boundary::EdgeAndCorner, twice));
   const auto b = sorpia::to_csr(sorpia::limit_operator(t, Boundary::EdgeAndCorner, once));
   EXPECT_EQ(a.data, b.data);
-  EXPECT_LE(max_entry_diff(a, sorpia::reference_limit_matrix(t, Scheme::Loop, Boundary::EdgeAndCorner, twice)),
+  EXPECT_LE(max_entry_diff(a, sorpia::reference_limit_matrix(t, sorpia::Rules{Scheme::Loop, Boundary::EdgeAndCorner, twice})),
             1e-14);
 }
 
@@ -174,8 +174,8 @@ TEST(Creases, CatmullClarkRowsAreFarsRefinedLimit) {
       for (unsigned seed : {0u, 6u}) {
         const sorpia::Topology t(m.face_counts.data(), m.n_faces(), m.face_indices.data(), m.n_vertices());
         const Tags tags = seed ? random_tags(t, seed, {0.5, 1.0, 2.0, 2.5, kInf}, 0.12) : Tags{};
-        const auto op = sorpia::limit_operator(t, Scheme::CatmullClark, b, tags);
-        const auto ref = sorpia::reference_limit_matrix(t, Scheme::CatmullClark, b, tags);
+        const auto op = sorpia::limit_operator(t, sorpia::Rules{Scheme::CatmullClark, b, tags});
+        const auto ref = sorpia::reference_limit_matrix(t, sorpia::Rules{Scheme::CatmullClark, b, tags});
         EXPECT_LE(max_entry_diff(sorpia::to_csr(op), ref), 1e-14) << name << " seed " << seed;
       }
 }

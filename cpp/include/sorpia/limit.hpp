@@ -24,28 +24,24 @@ struct CsrMatrix {
 
 /// The limit matrix B: row i holds the limit mask of vertex i, so that
 /// B V gives the limit positions of the control vertices V.
-/// to_csr(limit_operator(topology, scheme, boundary, tags)) (limit_operator.hpp):
+/// to_csr(limit_operator(topology, rules)) (limit_operator.hpp):
 /// OpenSubdiv's limit masks; unreferenced vertices get an identity row.
 /// @param topology  the mesh connectivity
-/// @param scheme    Loop (triangles only) or Catmull-Clark
-/// @param boundary  boundary interpolation rule
-/// @param tags      OpenSubdiv's sharpness tags (creases, corners, holes)
+/// @param rules     scheme (Loop: triangles only), boundary rule, sharpness tags
 /// @return B, (n_vertices, n_vertices), columns sorted within a row
-CsrMatrix limit_matrix(const Topology& topology, Scheme scheme, Boundary boundary, const Tags& tags = Tags{});
-/// Loop: limit_matrix(topology, Scheme::Loop, boundary, tags).
+CsrMatrix limit_matrix(const Topology& topology, const Rules& rules);
+/// Loop: limit_matrix(topology, Rules{Scheme::Loop, boundary, tags}).
 CsrMatrix limit_matrix(const Topology& topology, Boundary boundary, const Tags& tags = Tags{});
 
 /// Limit positions of the vertices, B V: apply(limit_operator(topology,
-/// scheme, boundary, tags), ...); unreferenced vertices are their own limit.
+/// rules), ...); unreferenced vertices are their own limit.
 /// @param topology  the mesh connectivity
 /// @param vertices  row-major (n_vertices, 3) control vertices
-/// @param scheme    Loop (triangles only) or Catmull-Clark
-/// @param boundary  boundary interpolation rule
-/// @param tags      OpenSubdiv's sharpness tags
+/// @param rules     scheme (Loop: triangles only), boundary rule, sharpness tags
 /// @param out       row-major (n_vertices, 3) limit positions (written)
 /// @param columns   k of (n_vertices, k) data in `vertices` and `out` (any per-vertex data, each column mapped alike)
-void limit_points(const Topology& topology, const double* vertices, Scheme scheme, Boundary boundary,
-                  const Tags& tags, double* out, std::size_t columns = 3);
+void limit_points(const Topology& topology, const double* vertices, const Rules& rules, double* out,
+                  std::size_t columns = 3);
 /// Loop without tags.
 void limit_points(const Topology& topology, const double* vertices, Boundary boundary, double* out);
 /// Loop with OpenSubdiv's sharpness tags.
@@ -68,10 +64,10 @@ CsrMatrix reference_limit_matrix(const Topology& topology, Boundary boundary);
 /// an unrefined level would treat an n-gon as a quad),
 /// PrimvarRefinerReal<double>::Interpolate level by level and Limit() on the
 /// last level, composed back to the control vertices (identity rows for
-/// unreferenced vertices). limit_matrix(topology, boundary, scheme, tags) must
-/// equal it to rounding. Its cost grows as 4^levels.
+/// unreferenced vertices). limit_matrix(topology, rules) must equal it to
+/// rounding. Its cost grows as 4^levels.
 /// @throw MeshError naming the first crease that is not an edge of the mesh
-CsrMatrix reference_limit_matrix(const Topology& topology, Scheme scheme, Boundary boundary, const Tags& tags);
+CsrMatrix reference_limit_matrix(const Topology& topology, const Rules& rules);
 
 /// Reference, for tests: B V evaluated by Far::PrimvarRefinerReal<double>::Limit (Loop).
 void reference_limit_points(const Topology& topology, const double* vertices, Boundary boundary, double* out);

@@ -71,7 +71,7 @@ std::string loop_needs_triangles(const Topology& topology);
 ///        or the first face that is not a triangle
 LimitOperator limit_operator(const Topology& topology, Boundary boundary, const Tags& tags);
 
-/// B under either scheme with OpenSubdiv's sharpness tags (empty: none).
+/// B under the rules: either scheme, with OpenSubdiv's sharpness tags (empty: none).
 /// Loop as above. Catmull-Clark (rows in `values`), equal to OpenSubdiv's
 /// Limit() of the whole mesh refined to the deepest level detail::row_levels
 /// gives (tests/cpp/test_catmark.cpp): Sdc's CATMARK limit masks where every
@@ -85,7 +85,7 @@ LimitOperator limit_operator(const Topology& topology, Boundary boundary, const 
 /// (whose Sdc limit masks change with the level) come from OpenSubdiv's
 /// refinement around the vertex and Limit() at their row level.
 /// @throw MeshError naming the first crease that is not an edge of the mesh
-LimitOperator limit_operator(const Topology& topology, Scheme scheme, Boundary boundary, const Tags& tags = Tags{});
+LimitOperator limit_operator(const Topology& topology, const Rules& rules);
 
 /// The compact form of a square CSR matrix whose rows each have a positive
 /// diagonal entry (explicit zero off-diagonal entries are dropped). Rows whose

@@ -67,20 +67,32 @@ class LocalSolver {
   /// so its residual is the one kept; otherwise (the first update, a solve's
   /// result) it is computed in full first, O(n).
   ///
+  /// The relaxation stops as diverged at the first relaxation of a row whose
+  /// residual exceeds 1e6 times the larger of E(start) and E_0, or is not
+  /// finite (Gauss-Seidel diverges where B is indefinite): v stays finite.
+  ///
   /// Fills in `res` (its control_vertices are left alone): method "gs",
   /// variant "local", omega 1; errors = [E(start) / E_0] and, when a vertex
   /// was relaxed, E(end) / E_0 after it (iterations 0 or 1); relaxations;
-  /// initial_error = E_0; stop_reason converged or max_iter.
+  /// initial_error = E_0; stop_reason converged, max_iter or diverged.
   /// @throw ParameterError for an index outside [0, n)
+  /// @throw Interrupted (poll_interrupt) after taking the update back (undo)
   void update(double* v, bool v_is_last, const std::int32_t* indices, std::size_t count, const double* positions,
               double tol, long long max_relaxations, SolveResult& res);
+
+  /// Takes the last update back: its targets, and the rows of `v` (the
+  /// array that update changed) and of the kept residual it changed, O(rows
+  /// changed). The kept residual stays valid when that update started from
+  /// the last result; otherwise the next update computes its start's in full.
+  void undo(double* v);
 
  private:
   void residual_row(const double* v, std::size_t i, double* r) const;  // v0_i - (B v)_i
   double cold_row(std::size_t i);                                      // ||v0_i - (B V0)_i||^2
   template <int K>
-  long long relax(double* v, std::vector<std::int32_t>& work, double threshold, long long max_relaxations,
-                  bool& stopped);
+  long long relax(double* v, std::vector<std::int32_t>& work, double threshold, double limit, long long max_relaxations,
+                  bool& stopped, bool& diverged);
+  void log_row(const double* v, std::size_t i);  // keeps row i of v and r_ for undo, once per update
 
   const LimitOperator& op_;
   std::vector<std::int32_t> t_offsets_, t_rows_;  // B^T: the rows reading each vertex
@@ -93,6 +105,13 @@ class LocalSolver {
   bool residual_valid_ = false;
   std::vector<std::uint8_t> mark_;  // 1: in the work list, 2: residual changed this update
   std::vector<double> scratch_;     // k: one row
+  // The last update's undo log: rows of v and r_ before their first change,
+  // target rows before each move (in order), the rows whose cold residual
+  // changed, and whether the kept residual was valid before it.
+  std::vector<std::uint8_t> logged_;
+  std::vector<std::int32_t> log_rows_, log_targets_, log_cold_;
+  std::vector<double> log_v_, log_r_, log_target_values_;
+  bool log_residual_valid_ = false;
 };
 
 }  // namespace sorpia

@@ -58,6 +58,15 @@ struct Tags {
   double max_semi_sharpness() const;
 };
 
+/// The rules a limit surface is defined by: the scheme, the boundary
+/// interpolation and the sharpness tags. What every function that builds B,
+/// its rows or the surface takes, as one value.
+struct Rules {
+  Scheme scheme = Scheme::Loop;
+  Boundary boundary = Boundary::EdgeAndCorner;
+  Tags tags;
+};
+
 /// Checks what can be checked without the topology: array sizes, vertex and
 /// face indices in range, a crease's two ends distinct, sharpness not NaN and
 /// not negative. Messages name the tag ("creases[3] = [4, 4]: ...").

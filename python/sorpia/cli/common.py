@@ -12,6 +12,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from .._validate import AUTO_SCHEME, SCHEMES
 from ..solve import METHODS, THREADED_METHODS, ConvergenceWarning  # ConvergenceWarning: the summary says it
 from . import progress as _progress
 
@@ -27,7 +28,7 @@ DISPLAY_ORDER = tuple(sorted(METHODS, key=lambda m: list(METHOD_LABELS).index(m)
                              else len(METHOD_LABELS)))
 MESH_SUFFIXES = (".obj", ".off", ".ply", ".stl")
 # --scheme: the library's schemes, and "auto" (Loop for an all-triangle mesh, Catmull-Clark otherwise).
-CLI_SCHEMES = ("auto", "loop", "catmull-clark")
+CLI_SCHEMES = (AUTO_SCHEME,) + SCHEMES  # the library's names (_validate.as_scheme)
 SCHEME_LABELS = {"loop": "Loop", "catmull-clark": "Catmull-Clark"}
 
 
@@ -202,16 +203,16 @@ def choose_scheme(scheme: str, faces, source) -> str:
     """--scheme resolved for the mesh: auto is Loop for an all-triangle mesh
     and Catmull-Clark otherwise; Loop on polygons is a PolygonError naming the
     first face that is not a triangle and the two ways out."""
-    triangles = is_triangles(faces)
-    if scheme == "auto":
-        return "loop" if triangles else "catmull-clark"
-    if scheme == "loop" and not triangles:
+    from .. import _core
+    from .._validate import as_scheme
+
+    if scheme == "loop" and not is_triangles(faces):
         counts = face_counts(faces)
         f = int(np.flatnonzero(counts != 3)[0])
         raise PolygonError(f"{source}: face {f} has {counts[f]} vertices and Loop subdivision needs triangles; "
                            "pass --triangulate to split the polygons, or --scheme catmull-clark (or auto) to "
                            "keep them")
-    return scheme
+    return _core.scheme_name(as_scheme(scheme, faces))  # auto: the library's one rule
 
 
 def solve_tags(mesh: InputMesh, sharp_angle, source) -> dict:

@@ -1,0 +1,152 @@
+#pragma once
+/// @file interpolator.hpp
+/// One mesh, its subdivision rules and its limit operator B, built once:
+/// solve B V = V0 for any targets, and re-solve locally after a few move.
+///
+/// The Interpolator owns the Topology, B (LimitOperator), the spectral
+/// estimates (SpectralCache), the targets of its last solve and the
+/// LocalSolver that moves them. It is what Python's sorpia.Interpolator and
+/// sorpia.interpolate wrap and what sorpia-bench times; every check of the
+/// data it is given (shapes, finite values within max_coordinate, indices)
+/// is made here, once, before any state changes.
+///
+/// Extending it to rows of the limit surface at arbitrary points (fair
+/// interpolation, approximation of scans): B's rows are the limit at the
+/// vertices; a row at (face, u, v) is the same kind of object, a sparse
+/// combination of control vertices, which Bfr's surface of that face gives
+/// (the patch points' weights composed with the face's control points, as
+/// refined_rows.hpp composes refined rows back). Such rows would be added as a
+/// second operator C (CSR, one row per sample, LimitOperator's layout) held
+/// beside B, and the solves on [B; C] (least squares, or B with C as soft
+/// constraints) would take their targets alongside V0; solve() and update()
+/// keep their contract for the vertex rows.
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <vector>
+
+#include "sorpia/limit_operator.hpp"
+#include "sorpia/local_update.hpp"
+#include "sorpia/solvers.hpp"
+#include "sorpia/subdivision.hpp"
+#include "sorpia/topology.hpp"
+
+namespace sorpia {
+
+/// The bound on values that keeps the squared norms in E_k finite: a row of
+/// k values at most 1e150 in magnitude squares to at most k 1e300, below the
+/// largest double (1.8e308) for k up to 10^8, and B's rows (weights summing
+/// to 1) keep B V within it too. Targets of any finite magnitude are solved
+/// (sorpia::solve scales them by a power of two, 2^e ~ max |V0| beyond
+/// 2^+-200, exactly); a warm start may be at most max_coordinate times that
+/// scale (1 within 2^+-200); local updates do not rescale, so their
+/// positions and the kept targets must be within max_coordinate.
+constexpr double max_coordinate = 1e150;
+
+/// Checks that every value of the row-major (rows, k) array `x` is finite and
+/// at most `bound` in magnitude; returns the largest magnitude.
+/// @throw ParameterError naming `name`, the first bad row and column and its
+///        value, e.g. "vertices[3, 1] = inf is not finite"
+double check_values(const double* x, std::size_t rows, std::size_t k, const char* name,
+                    double bound = max_coordinate);
+
+/// One mesh and its rules: B built once; solves and local updates on it.
+/// Thread-safe for concurrent solves (the spectral cache is), and one update
+/// (or solve keeping its targets) at a time changes the targets.
+class Interpolator {
+ public:
+  /// Triangles: row-major (n_faces, 3) vertex indices (Topology's triangle
+  /// constructor, the fast path of Loop meshes).
+  Interpolator(const std::int32_t* triangles, std::size_t n_faces, std::size_t n_vertices, Rules rules);
+  /// Polygons as face sizes and indices (Topology's polygon constructor,
+  /// Far::TopologyDescriptor's form).
+  Interpolator(const std::int32_t* face_sizes, std::size_t n_faces, const std::int32_t* indices,
+               std::size_t n_vertices, Rules rules);
+  /// A topology already built (taken over).
+  Interpolator(Topology topology, Rules rules);
+  /// A topology and B already built (taken over): B from elsewhere than
+  /// limit_operator(topology, rules), e.g. OpenSubdiv's reference build, for
+  /// benchmarks and tests.
+  Interpolator(Topology topology, Rules rules, LimitOperator b);
+  /// Not copied or moved: the local solver refers to B.
+  Interpolator(const Interpolator&) = delete;
+  Interpolator& operator=(const Interpolator&) = delete;
+
+  const Topology& topology() const { return topology_; }
+  const Rules& rules() const { return rules_; }
+  const LimitOperator& limit_operator() const { return op_; }
+  SpectralCache& spectral_cache() { return cache_; }
+  std::size_t n_vertices() const { return op_.n; }
+  /// Seconds spent building the topology and B (0 for a topology given).
+  double topology_seconds() const { return topology_seconds_; }
+  double operator_seconds() const { return operator_seconds_; }
+
+  /// Solves B V = V0 (sorpia::solve on B with the kept spectral estimates).
+  /// @param v0       row-major (n, k) targets, finite
+  /// @param k        columns >= 1
+  /// @param initial  row-major (n, k) warm start, finite, within
+  ///                 max_coordinate times the targets' scale, or null
+  /// @param opt      solver options (check_options)
+  /// @param keep_targets  the targets of later updates become v0 (a copy),
+  ///                 and the options those of an update's fallback solve
+  /// @return the result in the caller's vertex order, with topology_seconds
+  ///         and operator_seconds 0 (the build is timed once, above)
+  /// @throw ParameterError for bad values (before any state changes)
+  SolveResult solve(const double* v0, std::size_t k, const double* initial, const SolveOptions& opt,
+                    bool keep_targets = true);
+
+  /// Moves the kept targets at `indices` (count of them) to `positions`
+  /// (row-major (count, k), checked as solve's targets) and re-solves from
+  /// `result.control_vertices` ((n, k) previous control vertices, changed in
+  /// place) by local relaxation (LocalSolver::update, at most max_iter * n
+  /// relaxations). `result_is_last`: `result` is the one the last update
+  /// returned, unchanged since, whose residual is kept. Every other field of
+  /// `result` is set for this update.
+  ///
+  /// The relaxation is Gauss-Seidel on a work list: where Gauss-Seidel
+  /// diverges (B indefinite, e.g. interior vertices of valence 2) it stops at
+  /// the first sign (the largest residual past 1e6 times that of the start
+  /// and of the cold start) and the new targets are solved in full instead,
+  /// by sorpia::solve with the options of the last solve that kept its
+  /// targets, from v: `res` is then that solve's result.
+  ///
+  /// When neither meets tol, nothing changes: the targets, the kept residual
+  /// and the vertices are as before the call; `result` says why (stop_reason
+  /// max_iter or diverged, errors [E(start) / E_0, E(last iterate) / E_0]
+  /// for the new targets).
+  /// @return true when the targets moved (tol met), false when rolled back
+  /// @throw ParameterError before any state changes: no solve kept its targets
+  ///        yet, the vertices' shape differs from the targets', an index
+  ///        outside [0, n), positions not finite or beyond max_coordinate,
+  ///        kept targets beyond max_coordinate, tol or max_iter out of range
+  ///        (check_options)
+  bool update(SolveResult& result, bool result_is_last, const std::int32_t* indices, std::size_t count,
+              const double* positions, double tol, long long max_iter);
+
+  /// k of the kept targets; 0 before a solve that kept them.
+  std::size_t targets_columns() const;
+  /// A copy of the kept (n, k) targets, k set (empty, k = 0, before a solve that kept them).
+  std::vector<double> targets(std::size_t& k) const;
+
+ private:
+  void build_operator();
+
+  Topology topology_;
+  Rules rules_;
+  LimitOperator op_;
+  SpectralCache cache_;
+  double topology_seconds_ = 0.0, operator_seconds_ = 0.0;
+  // The targets of the last solve that kept them, not yet in `local_` (an
+  // update hands them over), and that solve's options (callback dropped).
+  std::vector<double> solved_targets_;
+  std::size_t solved_k_ = 0;
+  SolveOptions solved_options_;
+  double targets_max_ = 0.0;  // max |v0| of the last solve keeping its targets
+  std::unique_ptr<LocalSolver> local_;
+  // Held while the targets or local_ are read or changed.
+  std::unique_ptr<std::mutex> targets_mutex_ = std::make_unique<std::mutex>();
+};
+
+}  // namespace sorpia
