@@ -75,6 +75,9 @@ def test_the_command_line_prints_the_singular_warning(tmp_path, command):
     v[cube[0]] += [0.1, 0.0, 0.0]
     src = tmp_path / "cube.obj"
     sorpia.write_mesh(src, v, f)
-    code, _, err = command("fit", src, "-o", tmp_path / "c.obj", "--max-iter", 200, "--keep-unconverged")
+    out = tmp_path / "c.obj"
+    code, stdout, err = command("fit", src, "-o", out, "--max-iter", 200)
     assert code == 1
     assert "B is singular on 1 closed cube" in err
+    # The least-squares answer is written (no --keep-unconverged needed), and the summary says what it misses.
+    assert out.exists() and "NOT converged (singular)" in stdout and "least-squares" in stdout

@@ -499,9 +499,12 @@ def stopped_short_message(r: InterpolationResult, method: str, tol: float, max_i
                 f"{_where(r)} (result.worst_vertices)")
     tried = "" if len(r.attempts) < 2 else " (tried: " + ", ".join(
         f"{a['method']} {a['stop_reason']} after {a['iterations']}" for a in r.attempts) + ")"
+    if reason == "diverged":
+        final = (f"E_k/E_0 = {r.errors[r.returned_iteration]:.3g} > tol = {tol:g} at iteration "
+                 f"{r.returned_iteration}, the iterate returned (the lowest E_k; the run stopped at "
+                 f"{r.errors[-1]:.3g})")
     what = {"max_iter": f"reached max_iter = {max_iter}",
-            "diverged": ("diverged (E_k rose above a multiple of its lowest value, or was not finite); the result "
-                         f"is the iterate of the lowest E_k, iteration {r.returned_iteration}"),
+            "diverged": "diverged (E_k rose above a multiple of its lowest value, or was not finite)",
             "stalled": "stalled (no progress over a whole GMRES cycle: B is singular, or numerically so)"}[reason]
     advice = f"; use method={r.recommended!r}, which works here" if r.recommended else ""
     if r.recommended == "gmres" and method != "auto":

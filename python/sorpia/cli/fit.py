@@ -107,7 +107,8 @@ def run_fit(input_path, output, *, method="auto", omega="auto", tol=1e-10, max_i
                  "written_to_output": sorted(written_tags)},
         "repair": repair_json(mesh.repair) if repair else None,
         "nonmanifold": split_json(mesh.split) if mesh.split is not None else None,
-        "output": str(output) if keep else None,
+        "output": str(output),
+        "written": bool(keep),
         "not_written": [] if keep else [str(p) for p in (output, surface) if p is not None],
         "surface": surface_stats,
         "report": None if report is None else str(report),
@@ -227,7 +228,7 @@ def fit_summary(d: dict, repaired=(), kept=()) -> str:
     inner = ", ".join(f"{k[4:]} {fmt_seconds(v)}" for k, v in t.items() if k.startswith("fit."))
     phases = ", ".join(f"{k} {fmt_seconds(v)}" + (f" ({inner})" if k == "fit" and inner else "")
                        for k, v in t.items() if not k.startswith("fit."))
-    written = ([d["output"]] if d["output"] else []) + ([d["surface"]["path"]] if d["surface"] else []) + (
+    written = ([d["output"]] if d["written"] else []) + ([d["surface"]["path"]] if d["surface"] else []) + (
         [d["report"]] if d["report"] else [])
     lines = [
         f"sorpia fit: {d['input']} -> {d['output']}",
