@@ -49,8 +49,9 @@ MESH is a mesh file (.obj .off .ply .stl) or a generated mesh:
   polygons:NUxNV[:SEED]  the quad torus with triangles, pentagons, hexagons
 
 options:
-  --method LIST      comma-separated: sor gs pia wpia cg hss whss, or none
-                     (time topology and operator only); default sor
+  --method LIST      comma-separated: auto sor gs pia wpia cg hss whss gmres
+                     cgls, or none (time topology and operator only);
+                     default sor
   --tol X            stop when E_k/E_0 < X (default 1e-10)
   --max-iter N       default 1000
   --omega W          omega for sor: a number in (0, 2), auto or young (default: auto)

@@ -37,7 +37,10 @@ def test_fit_writes_a_control_mesh_that_interpolates_the_file(mesh_file, tmp_pat
 
     data = json.loads(report.read_text())
     ref = sorpia.interpolate(V0, F)  # the same run through the Python API
-    assert data["method"] == "sor" and data["converged"] is True
+    assert data["method"] == "auto" and data["converged"] is True
+    # An ordinary mesh: auto's sor run makes the result, nothing else is tried.
+    assert data["variant"] == "sor" and data["stop_reason"] == "converged"
+    assert [a["method"] for a in data["attempts"]] == ["sor"]
     assert data["iterations"] == ref.iterations == len(data["errors"]) - 1
     np.testing.assert_allclose(data["errors"], ref.errors, rtol=1e-9, atol=1e-15)
     assert data["omega"] == pytest.approx(ref.omega, rel=1e-12)
@@ -58,14 +61,18 @@ def test_fit_quiet_prints_nothing(torus_file, tmp_path, command):
     assert command("fit", src, "-o", tmp_path / "c.ply", "--quiet") == (0, "", "")
 
 
-def test_fit_not_converged_exits_1_and_still_writes(torus_file, tmp_path, command):
+def test_fit_not_converged_exits_1_and_writes_only_when_asked(torus_file, tmp_path, command):
     src, V0, F = torus_file
     out, report = tmp_path / "ctrl.off", tmp_path / "r.json"
     code, stdout, err = command("fit", src, "-o", out, "--method", "pia", "--max-iter", 3, "--report", report)
     assert code == 1, err
-    assert "NOT converged" in stdout and "Traceback" not in err
+    assert "NOT converged (max_iter)" in stdout and "Traceback" not in err
+    assert "--keep-unconverged" in stdout and not out.exists()
     data = json.loads(report.read_text())
     assert data["converged"] is False and data["iterations"] == 3 and len(data["errors"]) == 4
+    assert data["stop_reason"] == "max_iter" and data["recommended"] == "gmres" and data["not_written"] == [str(out)]
+    code, stdout, err = command("fit", src, "-o", out, "--method", "pia", "--max-iter", 3, "--keep-unconverged")
+    assert code == 1, err
     Vc, _ = sorpia.read_mesh(out)
     # Three PIA steps from V0 (paper eq. 9), computed independently with B.
     B = sorpia.limit_matrix(F, len(V0))

@@ -56,10 +56,18 @@ def test_a_stopped_solve_names_the_cube_and_a_symmetric_cube_converges():
     v[cube[0]] += [0.1, 0.0, 0.0]
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        res = sorpia.interpolate(v, f, scheme="catmull-clark", max_iter=200)
+        res = sorpia.interpolate(v, f, scheme="catmull-clark", method="sor", max_iter=200)
     assert not res.converged
     assert [w.category for w in caught] == [sorpia.ConvergenceWarning, sorpia.SingularMatrixWarning]
     assert f"vertices {cube.tolist()}" in str(caught[1].message)
+    # The default ("auto") ends with the least-squares answer, missing the targets on the cube only.
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        res = sorpia.interpolate(v, f, scheme="catmull-clark", max_iter=200)
+    assert res.stop_reason == "singular" and res.variant == "cgls"
+    assert [w.category for w in caught] == [sorpia.SingularMatrixWarning, sorpia.SingularMatrixWarning]
+    assert f"vertices {cube.tolist()}" in str(caught[1].message)
+    assert set(res.worst_vertices[:8].tolist()) == set(cube.tolist())
 
 
 def test_the_command_line_prints_the_singular_warning(tmp_path, command):
@@ -67,6 +75,9 @@ def test_the_command_line_prints_the_singular_warning(tmp_path, command):
     v[cube[0]] += [0.1, 0.0, 0.0]
     src = tmp_path / "cube.obj"
     sorpia.write_mesh(src, v, f)
-    code, _, err = command("fit", src, "-o", tmp_path / "c.obj", "--max-iter", 200)
+    out = tmp_path / "c.obj"
+    code, stdout, err = command("fit", src, "-o", out, "--max-iter", 200)
     assert code == 1
     assert "B is singular on 1 closed cube" in err
+    # The least-squares answer is written (no --keep-unconverged needed), and the summary says what it misses.
+    assert out.exists() and "NOT converged (singular)" in stdout and "least-squares" in stdout

@@ -102,7 +102,7 @@ def test_young_warns_and_clamps_when_rho_at_least_one():
     # eigenvalue above 2 and rho(I - D^-1 B) > 1.
     v, f = sorpia.shapes.icosphere(2)
     with pytest.warns(sorpia.OmegaWarning, match="rho"):
-        res = sorpia.interpolate(v, f, omega="young", max_iter=3000)
+        res = sorpia.interpolate(v, f, method="sor", omega="young", max_iter=3000)
     assert res.rho >= 1.0
     assert res.omega == pytest.approx(2.0 / (1.0 + math.sqrt(1.0 - YOUNG_RHO_CLAMP**2)), rel=1e-12)
     # The clamped omega (1.972) is slow, but it converges and stays finite.
@@ -234,7 +234,7 @@ def test_timings_and_products():
         ({"omega": float("nan")}, "omega = nan"),
         ({"omega": "fast"}, "omega = 'fast'"),
         ({"omega": True}, "omega must be a real number"),
-        ({"method": "pia", "omega": 1.5}, "applies to method='sor' only"),
+        ({"method": "pia", "omega": 1.5}, "applies to method='sor' or 'auto' only"),
         ({"tol": 0.0}, "tol = 0.0 must be"),
         ({"tol": float("nan")}, "tol = nan"),
         ({"tol": -1e-3}, "tol = -0.001"),
@@ -255,7 +255,7 @@ def test_timings_and_products():
         ({"max_iter": np.int64(0)}, r"max_iter = (np\.int64\()?0\)? must be an integer >= 1"),
         ({"max_iter": -5}, r"max_iter = -5 must be an integer >= 1"),
         ({"max_iter": 10**12}, r"max_iter = 1000000000000 is too large"),
-        ({"method": "SOR"}, r"unknown method 'SOR': use one of 'pia'"),
+        ({"method": "SOR"}, r"unknown method 'SOR': use one of 'auto', 'pia'"),
         ({"method": None}, r"method must be a string, got None"),
         ({"boundary": "Edge-Only"}, r"unknown boundary 'Edge-Only': use one of 'edge-and-corner', 'edge-only'"),
         ({"boundary": None}, r"boundary must be a string, got None"),

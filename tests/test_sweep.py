@@ -116,8 +116,8 @@ def test_interpolator_solve_takes_threads():
         ({"threads": True}, r"threads = True must be an integer"),
         ({"threads": "2"}, r"threads = '2' must be an integer"),
         ({"threads": None}, r"threads = None must be an integer"),
-        ({"method": "cg", "threads": 2}, r"threads = 2 applies to method='sor' or 'gs' only"),
-        ({"method": "pia", "threads": 3}, r"threads = 3 applies to method='sor' or 'gs' only"),
+        ({"method": "cg", "threads": 2}, r"threads = 2 applies to method='sor', 'gs' or 'auto' only"),
+        ({"method": "pia", "threads": 3}, r"threads = 3 applies to method='sor', 'gs' or 'auto' only"),
     ],
 )
 def test_bad_threads(kwargs, match):

@@ -70,12 +70,40 @@ omega : float or None
     "sor"/"gs": the omega used (1.0 for "gs"); None for other methods.
 seconds : float
     Wall time of the whole call, every phase in `timings` included.
-stop_reason : {"converged", "max_iter", "diverged", "callback"}
+stop_reason : {"converged", "max_iter", "diverged", "callback", "singular", "stalled", "slow"}
+    "diverged": E_k rose above 10 times (the Krylov methods: 1e4 times) its
+    lowest value before, or was not finite; control_vertices are then the
+    iterate of the lowest E_k (`returned_iteration`). "singular": "cgls"
+    ("auto"'s last resort) solved the least-squares problem, E_k / E_0 still
+    above tol: B is singular and the targets have a part outside its range,
+    control_vertices are the least-squares solution of least norm, and
+    `worst_vertices` says where the targets are missed. "stalled": "gmres"
+    made no progress over a whole cycle (B singular, or numerically so). "slow" (in `attempts` only): "auto"
+    stopped "sor", whose rate would not reach tol by max_iter.
 initial_error : float
     E_0, absolute.
 variant : str
-    The algorithm that ran: the method's name, or "bicgstab" for "cg" on a
-    mesh with boundary.
+    The algorithm that made control_vertices: the method's name, "bicgstab"
+    for "cg" on a mesh with boundary, and for "auto" the method it ended
+    with ("sor", "gmres" or "cgls").
+attempts : list of dict
+    Every method run, in order, each {"method", "variant", "iterations",
+    "stop_reason", "final_error" (its last E_k / E_0), "products",
+    "seconds"}: one for an explicit method; for "auto" its "sor" run and,
+    where that stopped short, "gmres" and "cgls". errors and iterations are
+    those of the last.
+returned_iteration : int
+    The iteration whose iterate control_vertices holds: `iterations`, or
+    after a divergence the one of the lowest E_k.
+recommended : str or None
+    Not converged: the method that would work here ("gmres" after a method
+    that diverged or stopped at max_iter, "cgls" after "gmres" stalled);
+    None otherwise.
+worst_vertices : (m,) int64
+    Not converged: the (at most 10) vertices where ||v_i^0 - (B V)_i|| is
+    largest, largest first; empty when converged.
+worst_residuals : (m,) float64
+    Their residual norms ||v_i^0 - (B V)_i||, absolute.
 rho : float or None
     omega="young": the estimated spectral radius of I - D^-1 B.
 sigma : float or None
@@ -99,11 +127,41 @@ timings : dict
 )doc";
 
 // The public attributes, in the order of the docstring (and of _fields).
-const char* const kResultFields[] = {"control_vertices", "iterations", "converged",  "errors", "method",
-                                     "omega",            "seconds",    "stop_reason", "initial_error",
-                                     "variant",          "rho",        "sigma",       "lambda_min",
-                                     "alpha",            "weight",     "products",    "relaxations",
-                                     "timings"};
+const char* const kResultFields[] = {"control_vertices", "iterations",     "converged",          "errors",
+                                     "method",           "omega",          "seconds",            "stop_reason",
+                                     "initial_error",    "variant",        "attempts",           "returned_iteration",
+                                     "recommended",      "worst_vertices", "worst_residuals",    "rho",
+                                     "sigma",            "lambda_min",     "alpha",              "weight",
+                                     "products",         "relaxations",    "timings"};
+
+py::dict attempt_dict(const sorpia::Attempt& a) {
+  py::dict d;
+  d["method"] = sorpia::method_name(a.method);
+  d["variant"] = a.variant;
+  d["iterations"] = a.iterations;
+  d["stop_reason"] = sorpia::stop_reason_name(a.stop_reason);
+  d["final_error"] = a.final_error;
+  d["products"] = a.products;
+  d["seconds"] = a.seconds;
+  return d;
+}
+
+py::tuple attempt_state(const sorpia::Attempt& a) {
+  return py::make_tuple(static_cast<int>(a.method), a.variant, a.iterations, static_cast<int>(a.stop_reason),
+                        a.final_error, a.products, a.seconds);
+}
+
+sorpia::Attempt attempt_from(const py::tuple& t) {
+  sorpia::Attempt a;
+  a.method = static_cast<sorpia::Method>(t[0].cast<int>());
+  a.variant = t[1].cast<std::string>();
+  a.iterations = t[2].cast<int>();
+  a.stop_reason = static_cast<sorpia::StopReason>(t[3].cast<int>());
+  a.final_error = t[4].cast<double>();
+  a.products = t[5].cast<long long>();
+  a.seconds = t[6].cast<double>();
+  return a;
+}
 
 void bind_result(py::module_& m) {
   using R = sorpia::SolveResult;
@@ -123,6 +181,20 @@ void bind_result(py::module_& m) {
       .def_property_readonly("stop_reason", [](const R& r) { return std::string(sorpia::stop_reason_name(r.stop_reason)); })
       .def_readonly("initial_error", &R::initial_error)
       .def_readonly("variant", &R::variant)
+      .def_property_readonly("attempts",
+                             [](const R& r) {
+                               py::list out;
+                               for (const auto& a : r.attempts) out.append(attempt_dict(a));
+                               return out;
+                             })
+      .def_readonly("returned_iteration", &R::returned_iteration)
+      .def_property_readonly("recommended",
+                             [](const R& r) -> py::object {
+                               if (!r.recommended) return py::none();
+                               return py::str(sorpia::method_name(*r.recommended));
+                             })
+      .def_property_readonly("worst_vertices", [](const R& r) { return to_numpy(r.worst_vertices, 0); })
+      .def_property_readonly("worst_residuals", [](const R& r) { return to_numpy(r.worst_residuals, 0); })
       .def_property_readonly("rho", [](const R& r) { return optional_float(r.rho); })
       .def_property_readonly("sigma", [](const R& r) { return optional_float(r.sigma); })
       .def_property_readonly("lambda_min", [](const R& r) { return optional_float(r.lambda_min); })
@@ -151,14 +223,18 @@ void bind_result(py::module_& m) {
           "For sorpia's Python layer: the whole call's wall time and the build phases it timed.")
       .def(py::pickle(
           [](const R& r) {
+            py::list attempts;
+            for (const auto& a : r.attempts) attempts.append(attempt_state(a));
             return py::make_tuple(r.control_vertices, r.errors, r.initial_error, r.iterations,
                                   static_cast<int>(r.stop_reason), static_cast<int>(r.method), r.variant, r.omega,
                                   r.reordered, r.rho, r.omega_clamped, r.sigma, r.lambda_min, r.alpha, r.weight,
                                   r.products, r.estimate_seconds, r.solve_seconds, r.topology_seconds,
-                                  r.operator_seconds, r.seconds, r.columns, r.relaxations);
+                                  r.operator_seconds, r.seconds, r.columns, r.relaxations, attempts,
+                                  r.returned_iteration, r.recommended ? static_cast<int>(*r.recommended) : -1,
+                                  r.worst_vertices, r.worst_residuals);
           },
           [](const py::tuple& t) {
-            if (t.size() != 23) throw std::runtime_error("InterpolationResult: bad pickle state");
+            if (t.size() != 28) throw std::runtime_error("InterpolationResult: bad pickle state");
             R r;
             r.control_vertices = t[0].cast<std::vector<double>>();
             r.errors = t[1].cast<std::vector<double>>();
@@ -183,6 +259,12 @@ void bind_result(py::module_& m) {
             r.seconds = t[20].cast<double>();
             r.columns = t[21].cast<std::size_t>();
             r.relaxations = t[22].cast<long long>();
+            for (const auto& a : t[23].cast<py::list>()) r.attempts.push_back(attempt_from(a.cast<py::tuple>()));
+            r.returned_iteration = t[24].cast<int>();
+            const int recommended = t[25].cast<int>();
+            if (recommended >= 0) r.recommended = static_cast<sorpia::Method>(recommended);
+            r.worst_vertices = t[26].cast<std::vector<std::int64_t>>();
+            r.worst_residuals = t[27].cast<std::vector<double>>();
             return r;
           }))
       .def("__repr__", [](const py::object& self) {

@@ -32,12 +32,16 @@ class SorpiaWarning(UserWarning):
 
 
 class ConvergenceWarning(SorpiaWarning):
-    """A solve stopped at max_iter or diverged before reaching tol."""
+    """A solve stopped at max_iter or diverged before reaching tol; the message
+    names the method that would work (result.recommended)."""
 
 
 class SingularMatrixWarning(SorpiaWarning):
-    """The limit matrix B is singular (or numerically so) on the mesh solved:
-    targets with a component along its null space cannot be interpolated."""
+    """B is singular and the targets have a part outside its range: the result
+    is the least-squares control mesh of least norm (stop_reason "singular"),
+    and the message says how far the targets are missed and where
+    (result.worst_vertices); or a solve stopped short on a mesh whose B is
+    singular on a part known in closed form (`sorpia.limit.singular_cubes`)."""
 
 
 class OmegaWarning(SorpiaWarning):

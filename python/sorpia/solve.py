@@ -14,6 +14,15 @@ Any per-vertex data can be interpolated on the limit surface: V0 may be
 
 Methods (the iteration itself runs in the C++ core):
 
+- ``"auto"`` (default): ``"sor"`` watched over its sweeps; at the first sign
+  of divergence (E_k not below E_{k-5}) or of a rate too slow to reach tol
+  within max_iter (the contraction of the last 5 sweeps, from sweep 10 on),
+  ``"gmres"``, which converges on any invertible B; where that stalls (B
+  singular), ``"cgls"``: the least-squares control mesh of least norm, with
+  a `SingularMatrixWarning` naming where the targets are missed.
+  ``result.variant`` says which method made the result, ``result.attempts``
+  what was tried. Where "sor" converges it costs nothing more than "sor".
+
 - ``"pia"``: V += V0 - B V (paper eq. 9).
 - ``"wpia"``: V += sigma (V0 - B V), sigma = 2 / (lambda_min + lambda_max) by
   default. lambda_max(B) = 1 exactly (B's rows are non-negative and sum to 1,
@@ -46,6 +55,19 @@ Methods (the iteration itself runs in the C++ core):
   symmetrises the rows): "cg" then runs BiCGSTAB (van der Vorst 1992) on
   Gamma^-1 B V = Gamma^-1 V0 (two products per iteration); ``result.variant``
   says which ran.
+- ``"gmres"``: GMRES(m) (Saad and Schultz 1986) on D^-1 B V = D^-1 V0
+  (Jacobi preconditioning, D = diag(B)), restart length 30, doubled after a
+  cycle that leaves the residual above 0.9 of its start (up to the longest basis that fits
+  in 512 MiB, or n: full GMRES, exact on any invertible B); E_k of the
+  current iterate at every Arnoldi step (one product each). A cycle that
+  leaves the residual where it was (ratio above 0.999) stops as "stalled":
+  B is singular, or (rarely) a restarted GMRES stagnates.
+- ``"cgls"``: CG on the normal equations B^T B V = B^T V0 (LSQR's iterates),
+  two products per iteration: the least-squares solution nearest the start
+  for any B; from ``initial=np.zeros_like(V0)`` (where "auto" starts it) the
+  least-squares solution of least norm. Where the normal
+  equations are solved and E_k / E_0 is still above tol it stops as
+  "singular".
 - ``"hss"``: Bai, Golub and Ng (2003) on B V = V0, H = (B + B^T)/2,
   S = (B - B^T)/2::
 
@@ -94,7 +116,7 @@ from .limit import built, warn_unreferenced
 
 METHODS = tuple(_core.method_names())  # the core's one list, in its order
 OMEGA_RULES = ("auto", "young")
-THREADED_METHODS = ("sor", "gs")  # the methods that sweep on threads > 1
+THREADED_METHODS = ("sor", "gs", "auto")  # the methods that sweep on threads > 1 (auto: its sor run)
 YOUNG_RHO_CLAMP = float(_core.YOUNG_RHO_CLAMP)
 MAX_THREADS = int(_core.MAX_THREADS)
 _INT64_MAX = 2**63 - 1
@@ -116,7 +138,7 @@ def _integer(value, name: str, what: str) -> int:
     return min(int(value), _INT64_MAX)  # beyond any limit: the core names it as too large
 
 
-def check_options(method: str = "sor", omega="auto", tol: float = 1e-10, max_iter: int = 1000,
+def check_options(method: str = "auto", omega="auto", tol: float = 1e-10, max_iter: int = 1000,
                   callback: Optional[Callable[[int, float], object]] = None, *, sigma=None, alpha=None,
                   weight=None, threads: int = 1) -> _core.SolveOptions:
     """The solver options, checked: what `interpolate` and `Interpolator.solve`
@@ -220,7 +242,7 @@ class Interpolator:
         n = self.n_vertices
         return scipy.sparse.csr_matrix(self._impl.limit_matrix(), shape=(n, n))
 
-    def solve(self, vertices, method: str = "sor", omega="auto", tol: float = 1e-10, max_iter: int = 1000,
+    def solve(self, vertices, method: str = "auto", omega="auto", tol: float = 1e-10, max_iter: int = 1000,
               callback: Optional[Callable[[int, float], object]] = None, *, sigma=None, alpha=None, weight=None,
               threads: int = 1, initial=None) -> InterpolationResult:
         """Solve B V = V0 for the control vertices V.
@@ -233,23 +255,27 @@ class Interpolator:
             surface, E_k is the largest Euclidean norm of a row of the
             residual over all k. The Interpolator keeps a copy, the targets
             of later `update` calls.
-        method : {"sor", "gs", "pia", "wpia", "cg", "hss", "whss"}
+        method : {"auto", "sor", "gs", "pia", "wpia", "cg", "hss", "whss", "gmres", "cgls"}
+            "auto" (default) runs "sor" and falls back to "gmres" (then
+            "cgls" where B is singular) at the first sign that "sor" will
+            not reach tol: see the module docstring.
         omega : float in (0, 2), "auto" or "young"
-            SOR relaxation ("sor" only; other methods accept only the default).
+            SOR relaxation ("sor", and "auto"'s "sor" run; other methods accept only the default).
         tol : float > 0
             Stop when E_k / E_0 < tol.
         max_iter : int >= 1
         callback : callable(k, error) or None
             Called with k = 0, 1, ... and error = E_k / E_0 as each E_k is
             known; a true return value stops the run (stop_reason "callback",
-            no warning). None costs nothing per iteration.
+            no warning). None costs nothing per iteration. Under "auto", k
+            counts on across its runs (a fallback's E_k follow "sor"'s).
         sigma : float in (0, 2), "wpia" only
             Step; default 2 / (lambda_min(B) + 1).
         alpha : float > 0, "hss"/"whss" only
             Shift; default sqrt(lambda_min(H) lambda_max(H)).
         weight : float in (0, 2), "whss" only
             Relaxation weight; default 2 / (2 - mu_min - mu_max) (module docstring).
-        threads : int >= 1, "sor"/"gs" only
+        threads : int >= 1, "sor"/"gs"/"auto" only (the fallbacks of "auto" run on one thread)
             Threads sweeping at once. The vertices are split into one
             contiguous index range per thread (renumbered into slabs across
             the mesh first when more than 1/16 of them would have a
@@ -277,7 +303,11 @@ class Interpolator:
         -------
         InterpolationResult
             Warns with ConvergenceWarning when tol was not reached (max_iter,
-            divergence) and with OmegaWarning when omega="young" met rho >= 0.9999.
+            divergence: the result is then the iterate of the lowest E_k, and
+            the message names the method that would work), with
+            SingularMatrixWarning when B is singular (the least-squares
+            solution, stop_reason "singular") and with OmegaWarning when
+            omega="young" met rho >= 0.9999.
         """
         t0 = time.perf_counter()
         options = check_options(method, omega, tol, max_iter, callback, sigma=sigma, alpha=alpha, weight=weight,
@@ -410,14 +440,9 @@ class Interpolator:
                 f"(paper Remark 1) has no real value (rho >= 1) or none of use; rho clamped to {YOUNG_RHO_CLAMP}, "
                 f"omega = {r.omega:.4f} (slow: omega='auto' is the measured choice)",
                 OmegaWarning, stacklevel=3)
-        reason = r.stop_reason
-        if reason in ("max_iter", "diverged"):
-            what = (f"reached max_iter = {max_iter}" if reason == "max_iter"
-                    else "diverged (E_k grew past 1e6 E_0 or was not finite)")
-            warnings.warn(f"method={method!r} {what} with E_k/E_0 = {r.errors[-1]:.3g} > tol = {tol_value:g}",
-                          ConvergenceWarning, stacklevel=3)
-            if self.scheme == "catmull-clark":
-                self._warn_singular()
+        _warn_stopped_short(r, method, tol_value, max_iter)
+        if r.stop_reason in ("max_iter", "diverged", "stalled", "singular") and self.scheme == "catmull-clark":
+            self._warn_singular()
         r._record_build(time.perf_counter() - t0, 0.0, 0.0)
         return r
 
@@ -438,6 +463,47 @@ class Interpolator:
 Interpolator.__doc__ = Interpolator.__doc__.replace("{tags}", _TAGS_DOC)
 
 
+def _where(r: InterpolationResult) -> str:
+    """'vertex 7 (|r| = 0.12), vertex 3 (0.05), ...': where the targets are missed most."""
+    pairs = list(zip(r.worst_vertices.tolist(), r.worst_residuals.tolist()))[:5]
+    return ", ".join(f"vertex {v} ({e:.3g})" for v, e in pairs)
+
+
+def stopped_short_message(r: InterpolationResult, method: str, tol: float, max_iter: int) -> Optional[str]:
+    """What a result that did not reach tol says to its user (the warning of
+    `Interpolator.solve` and the command line's summary), or None."""
+    reason = r.stop_reason
+    if reason in ("converged", "callback"):
+        return None
+    final = f"E_k/E_0 = {r.errors[-1]:.3g} > tol = {tol:g}"
+    if reason == "singular":
+        return (f"B is singular and the targets have a part outside its range: method={method!r} returns the "
+                f"least-squares control mesh of least norm ({r.variant}), {final}; the targets are missed most at "
+                f"{_where(r)} (result.worst_vertices)")
+    tried = "" if len(r.attempts) < 2 else " (tried: " + ", ".join(
+        f"{a['method']} {a['stop_reason']} after {a['iterations']}" for a in r.attempts) + ")"
+    if reason == "diverged":
+        final = (f"E_k/E_0 = {r.errors[r.returned_iteration]:.3g} > tol = {tol:g} at iteration "
+                 f"{r.returned_iteration}, the iterate returned (the lowest E_k; the run stopped at "
+                 f"{r.errors[-1]:.3g})")
+    what = {"max_iter": f"reached max_iter = {max_iter}",
+            "diverged": "diverged (E_k rose above a multiple of its lowest value, or was not finite)",
+            "stalled": "stalled (no progress over a whole GMRES cycle: B is singular, or numerically so)"}[reason]
+    advice = f"; use method={r.recommended!r}, which works here" if r.recommended else ""
+    if r.recommended == "gmres" and method != "auto":
+        advice += " (or the default 'auto', which falls back to it)"
+    return f"method={method!r} {what}{tried} with {final}{advice}"
+
+
+def _warn_stopped_short(r: InterpolationResult, method: str, tol: float, max_iter: int) -> None:
+    """The warning of a result that did not reach tol: SingularMatrixWarning
+    for the least-squares answer, ConvergenceWarning otherwise."""
+    text = stopped_short_message(r, method, tol, max_iter)
+    if text is not None:
+        category = SingularMatrixWarning if r.stop_reason == "singular" else ConvergenceWarning
+        warnings.warn(text, category, stacklevel=4)
+
+
 def _as_initial(initial, v0: np.ndarray) -> Optional[np.ndarray]:
     """A warm start checked against V0: None, or a finite float64 array of V0's shape."""
     if initial is None:
@@ -448,7 +514,7 @@ def _as_initial(initial, v0: np.ndarray) -> Optional[np.ndarray]:
     return arr
 
 
-def interpolate(vertices, faces, method: str = "sor", omega="auto", tol: float = 1e-10, max_iter: int = 1000,
+def interpolate(vertices, faces, method: str = "auto", omega="auto", tol: float = 1e-10, max_iter: int = 1000,
                 callback: Optional[Callable[[int, float], object]] = None, *, scheme: str = DEFAULT_SCHEME,
                 boundary: str = DEFAULT_BOUNDARY, creases=None, corners=None, holes=None, nonmanifold: str = "error",
                 sigma=None, alpha=None, weight=None, threads: int = 1, initial=None) -> InterpolationResult:
@@ -471,7 +537,9 @@ def interpolate(vertices, faces, method: str = "sor", omega="auto", tol: float =
     Examples
     --------
     >>> V, F = sorpia.shapes.icosphere(3)
-    >>> res = sorpia.interpolate(V, F)                   # SOR-PIA, omega="auto"
+    >>> res = sorpia.interpolate(V, F)                   # method="auto": SOR-PIA here
+    >>> res.variant
+    'sor'
     >>> np.allclose(sorpia.limit_points(res.control_vertices, F), V, atol=1e-9)
     True
     """

@@ -156,8 +156,9 @@ TEST(LocalUpdate, OneTargetStaysLocal) {
   EXPECT_LT(r.relaxations, static_cast<long long>(c.op.n) / 4);
 }
 
-TEST(LocalUpdate, InterruptedUpdateKeepsNoStaleResidual) {
+TEST(LocalUpdate, InterruptedUpdateIsTakenBack) {
   Solved s(sorpia::irregular(20000, 5));
+  const std::vector<double> before = s.targets;
   // A patch of targets moved: far more relaxations than the 4096 between polls.
   std::vector<std::int32_t> idx;
   std::vector<double> pos;
@@ -165,24 +166,24 @@ TEST(LocalUpdate, InterruptedUpdateKeepsNoStaleResidual) {
     idx.push_back(i);
     for (int a = 0; a < 3; ++a) pos.push_back(s.targets[3 * i + a] += (a == 2 ? 0.05 : 0.0));
   }
-  std::vector<double> dropped = s.v;  // the iterate an interrupted call leaves half relaxed
+  std::vector<double> start = s.v;
   sorpia::SolveResult r;
   {
     const sorpia::InterruptScope scope([] { return true; });
     std::this_thread::sleep_for(sorpia::kInterruptPollInterval * 3 / 2);
-    EXPECT_THROW(s.local.update(dropped.data(), false, idx.data(), idx.size(), pos.data(), 1e-10, 1LL << 40, r),
+    EXPECT_THROW(s.local.update(start.data(), false, idx.data(), idx.size(), pos.data(), 1e-10, 1LL << 40, r),
                  sorpia::Interrupted);
   }
-  EXPECT_EQ(s.local.targets(), s.targets);  // the targets moved all the same
-  // From the untouched start, said to be the last result: the residual kept
-  // for `dropped` must not be used, so the update is that of a fresh solver
-  // on the moved targets from the same start, bit for bit.
+  // Nothing changed: the targets and the start's vertices are as before the call.
+  EXPECT_EQ(s.local.targets(), before);
+  EXPECT_EQ(start, s.v);
+  // The same update again, uninterrupted, is that of a fresh solver, bit for bit.
   std::vector<double> fresh_v = s.v;
   sorpia::LocalSolver fresh(s.c.op);
-  fresh.set_targets(s.targets, 3);
+  fresh.set_targets(before, 3);
   sorpia::SolveResult ref;
-  fresh.update(fresh_v.data(), false, nullptr, 0, nullptr, 1e-10, 1LL << 40, ref);
-  s.local.update(s.v.data(), true, nullptr, 0, nullptr, 1e-10, 1LL << 40, r);
+  fresh.update(fresh_v.data(), false, idx.data(), idx.size(), pos.data(), 1e-10, 1LL << 40, ref);
+  s.local.update(s.v.data(), true, idx.data(), idx.size(), pos.data(), 1e-10, 1LL << 40, r);
   ASSERT_TRUE(r.converged());
   EXPECT_EQ(r.relaxations, ref.relaxations);
   EXPECT_EQ(s.v, fresh_v);

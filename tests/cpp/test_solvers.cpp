@@ -2,6 +2,7 @@
 // sweep, one PIA step, the full solves, the stopping monitor.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <thread>
@@ -135,7 +136,7 @@ TEST(Solve, OnePiaStepEqualsDenseReference) {
 TEST(Solve, EveryMethodSolvesBVEqualsV0) {
   using M = sorpia::Method;
   for (const Case& c : cases())
-    for (M m : {M::Pia, M::Wpia, M::Gs, M::Sor, M::Cg, M::Hss, M::Whss}) {
+    for (M m : {M::Pia, M::Wpia, M::Gs, M::Sor, M::Cg, M::Hss, M::Whss, M::Gmres, M::Cgls, M::Auto}) {
       sorpia::SolveOptions opt;
       opt.method = m;
       const sorpia::SolveResult r = sorpia::solve(c.op, c.mesh.vertices.data(), opt);
@@ -148,21 +149,90 @@ TEST(Solve, EveryMethodSolvesBVEqualsV0) {
     }
 }
 
-TEST(Solve, DivergenceStopsWhileFinite) {
-  // Not a Loop matrix: diag 0.1 and two neighbours of weight 0.45 make
-  // I - B have eigenvalues beyond -1, so PIA diverges.
+// Not a Loop matrix: diag 0.1 and two neighbours of weight 0.45 on 3
+// vertices, eigenvalues 1 and -0.35 (twice): invertible, indefinite, and
+// I - B has eigenvalues beyond -1, so PIA diverges.
+sorpia::LimitOperator indefinite_triangle() {
   sorpia::LimitOperator op;
   op.n = 3;
   op.offsets = {0, 2, 4, 6};
   op.neighbors = {1, 2, 0, 2, 0, 1};
   op.diag = {0.1, 0.1, 0.1};
   op.weight = {0.45, 0.45, 0.45};
+  return op;
+}
+
+TEST(Solve, DivergenceStopsWhileFinite) {
+  const sorpia::LimitOperator op = indefinite_triangle();
   const std::vector<double> v0 = {1, 0, 0, 0, 1, 0, 0, 0, 1};
   sorpia::SolveOptions opt;
   opt.method = sorpia::Method::Pia;
   const sorpia::SolveResult r = sorpia::solve(op, v0.data(), opt);
   EXPECT_EQ(r.stop_reason, sorpia::StopReason::Diverged);
   for (double x : r.control_vertices) EXPECT_TRUE(std::isfinite(x));
+}
+
+// max_i ||v0_i - (B x)_i||, by the public B x.
+double max_residual(const sorpia::LimitOperator& op, const std::vector<double>& v0, const std::vector<double>& x) {
+  std::vector<double> bx(x.size());
+  sorpia::apply(op, x.data(), bx.data());
+  double m = 0.0;
+  for (std::size_t i = 0; i < op.n; ++i)
+    m = std::max(m, std::hypot(v0[3 * i] - bx[3 * i], v0[3 * i + 1] - bx[3 * i + 1], v0[3 * i + 2] - bx[3 * i + 2]));
+  return m;
+}
+
+TEST(Solve, DivergenceReturnsTheBestIterateAndAutoFallsBackToGmres) {
+  const sorpia::LimitOperator op = indefinite_triangle();
+  const std::vector<double> v0 = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+  using M = sorpia::Method;
+  for (M m : {M::Pia, M::Gs, M::Sor}) {
+    sorpia::SolveOptions opt;
+    opt.method = m;
+    const sorpia::SolveResult r = sorpia::solve(op, v0.data(), opt);
+    ASSERT_EQ(r.stop_reason, sorpia::StopReason::Diverged) << sorpia::method_name(m);
+    const auto best = std::min_element(r.errors.begin(), r.errors.end()) - r.errors.begin();
+    EXPECT_EQ(r.returned_iteration, best);
+    // The first E_k above 10 times the lowest before it (sorpia::divergence_growth).
+    EXPECT_GT(r.errors.back(), 10.0 * *std::min_element(r.errors.begin(), r.errors.end() - 1));
+    EXPECT_NEAR(max_residual(op, v0, r.control_vertices) / r.initial_error, r.errors[best], 1e-12);
+    ASSERT_TRUE(r.recommended.has_value());
+    EXPECT_EQ(*r.recommended, M::Gmres);
+    EXPECT_EQ(r.worst_vertices.size(), 3u);
+  }
+  sorpia::SolveOptions opt;
+  opt.method = M::Auto;
+  const sorpia::SolveResult r = sorpia::solve(op, v0.data(), opt);
+  ASSERT_TRUE(r.converged());
+  EXPECT_EQ(r.variant, "gmres");
+  ASSERT_EQ(r.attempts.size(), 2u);
+  EXPECT_EQ(r.attempts[0].method, M::Sor);
+  EXPECT_EQ(r.attempts[1].method, M::Gmres);
+  EXPECT_LT(max_residual(op, v0, r.control_vertices), 1e-10 * r.initial_error);
+}
+
+TEST(Solve, SingularBGetsTheLeastSquaresSolutionOfLeastNorm) {
+  // B = [[1/2, 1/2], [1/2, 1/2]] = u u^T, u = (1, 1) / sqrt(2): rank 1, and
+  // pinv(B) = B. Targets (1, 0, 0), (0, 0, 0) have a part outside B's range.
+  sorpia::LimitOperator op;
+  op.n = 2;
+  op.offsets = {0, 1, 2};
+  op.neighbors = {1, 0};
+  op.diag = {0.5, 0.5};
+  op.weight = {0.5, 0.5};
+  const std::vector<double> v0 = {1, 0, 0, 0, 0, 0};
+  sorpia::SolveOptions opt;
+  opt.method = sorpia::Method::Auto;
+  const sorpia::SolveResult r = sorpia::solve(op, v0.data(), opt);
+  EXPECT_EQ(r.stop_reason, sorpia::StopReason::Singular);
+  EXPECT_EQ(r.variant, "cgls");
+  // pinv(B) V0 = B V0 = (1/2, 0, 0) on both rows; the residual (1/2, -1/2) in x.
+  for (std::size_t i = 0; i < 2; ++i) {
+    EXPECT_NEAR(r.control_vertices[3 * i], 0.5, 1e-12);
+    EXPECT_NEAR(r.control_vertices[3 * i + 1], 0.0, 1e-12);
+  }
+  ASSERT_EQ(r.worst_residuals.size(), 2u);
+  EXPECT_NEAR(r.worst_residuals[0], 0.5, 1e-12);
 }
 
 TEST(Solve, ParametersAreChecked) {
@@ -210,14 +280,14 @@ TEST(SolveOptions, MessagesWriteValuesAsPythonRepr) {
   EXPECT_EQ(message(o), "omega = 2.0 is outside (0, 2)");
   o.omega = 1.5;
   o.method = sorpia::Method::Pia;
-  EXPECT_EQ(message(o), "omega = 1.5 applies to method='sor' only (method='pia')");
+  EXPECT_EQ(message(o), "omega = 1.5 applies to method='sor' or 'auto' only (method='pia')");
   o = {};
   o.tol = -1.5e-7;
   EXPECT_EQ(message(o), "tol = -1.5e-07 must be a positive finite number");
   o = {};
   o.method = sorpia::Method::Cg;
   o.threads = 2;
-  EXPECT_EQ(message(o), "threads = 2 applies to method='sor' or 'gs' only (method='cg')");
+  EXPECT_EQ(message(o), "threads = 2 applies to method='sor', 'gs' or 'auto' only (method='cg')");
   o = {};
   o.method = sorpia::Method::Wpia;
   o.sigma = 0.001;

@@ -142,12 +142,17 @@ bool Interpolator::update(SolveResult& r, bool result_is_last, const std::int32_
   // What a local update reports (LocalSolver::update fills the rest).
   r.rho = r.sigma = r.lambda_min = r.alpha = r.weight = NAN;
   r.omega_clamped = r.reordered = false;
+  r.attempts.clear();
+  r.recommended.reset();
+  r.worst_vertices.clear();
+  r.worst_residuals.clear();
   r.estimate_seconds = r.topology_seconds = r.operator_seconds = 0.0;
   // At most max_iter sweeps' worth of relaxations.
   const long long nn = static_cast<long long>(std::max<std::size_t>(n, 1));
   const long long cap = max_iter > std::numeric_limits<long long>::max() / nn ? std::numeric_limits<long long>::max()
                                                                               : max_iter * nn;
   local_->update(r.control_vertices.data(), result_is_last, indices, count, positions, tol, cap, r);
+  r.returned_iteration = r.iterations;
   bool moved = r.converged();
   if (!moved) {
     // Local Gauss-Seidel diverges where B is indefinite: the new targets
@@ -164,11 +169,9 @@ bool Interpolator::update(SolveResult& r, bool result_is_last, const std::int32_
         local_->set_targets(std::move(targets), k);
         r = std::move(full);
         moved = true;
-      } else {
-        r.errors = std::move(full.errors);
-        r.iterations = full.iterations;
-        r.stop_reason = full.stop_reason;
-        r.products = full.products;
+      } else {  // that solve's report, with the vertices as they were
+        full.control_vertices = std::move(r.control_vertices);
+        r = std::move(full);
       }
     }
   }

@@ -317,11 +317,10 @@ void LocalSolver::update(double* v, bool v_is_last, const std::int32_t* indices,
     relaxations = k == 3 ? relax<3>(v, work, threshold, limit * limit, max_relaxations, stopped, diverged)
                          : relax<0>(v, work, threshold, limit * limit, max_relaxations, stopped, diverged);
   } catch (...) {
-    // Interrupted (poll_interrupt): v is half relaxed and may be dropped by
-    // the caller, so the kept residual belongs to no result any more; the
-    // next update computes its start's in full. The marks go back to zero.
-    residual_valid_ = false;
+    // Interrupted (poll_interrupt): the update taken back whole (targets,
+    // kept residual, v), the marks back to zero.
     std::fill(mark_.begin(), mark_.end(), 0);
+    undo(v);
     throw;
   }
   res.relaxations = relaxations;

@@ -93,18 +93,16 @@ void scale_pow2(double* x, std::size_t n, int e);
 int scale_exponent(const double* v0, std::size_t count);
 
 // Records E_k / E_0 and decides when to stop (paper section 5), the same for
-// every method. A run whose error grows past 1e6 times the larger of E_0 and
-// the start's error (a warm start far off iterates) or turns non-finite
-// stops as diverged while the iterate is still finite. E_k at rounding level
+// every method. A run whose error grows past divergence_growth(method) times
+// the lowest before it, or turns non-finite, stops as diverged (the iterate
+// is still finite; solve() then returns the lowest E_k's). E_k at rounding level
 // (at most 64 eps max_i ||v_i^0||: nearly flat input, where E_0 itself is
 // rounding noise) counts as converged: no method can go below it.
 class Monitor {
  public:
-  static constexpr double divergence_limit = 1e6;
-
   // scale: max_i ||v_i^0||
   Monitor(const SolveOptions& opt, SolveResult& res, double scale)
-      : opt_(opt), res_(res), floor_(64.0 * 2.220446049250313e-16 * scale) {
+      : opt_(opt), res_(res), floor_(64.0 * 2.220446049250313e-16 * scale), growth_(divergence_growth(opt.method)) {
     res_.errors.clear();
     // A generous max_iter must not reserve memory it will not use.
     res_.errors.reserve(static_cast<std::size_t>(std::min(opt.max_iter, 4096LL)) + 1);
@@ -122,7 +120,6 @@ class Monitor {
     const double e0 = std::isnan(reference_) ? e : reference_;
     res_.initial_error = e0;
     e0_ = e0;
-    limit_ = divergence_limit * std::max(1.0, e / e0);
     if (!(e0 > 0.0)) {
       res_.errors.push_back(0.0);
       res_.iterations = 0;
@@ -140,6 +137,10 @@ class Monitor {
   // an updated residual check the true one before they record it.
   bool converges(double e) const { return e / e0_ < opt_.tol || e <= floor_; }
 
+  // Stops the run for a reason the method found itself ("stalled",
+  // "singular") after the last record().
+  void finish(StopReason r) { stop(r); }
+
   // E_k for the next k; returns true to stop. Polls for an interrupt first
   // (once per iteration, on the calling thread, between sweeps).
   bool record(double e) {
@@ -149,7 +150,8 @@ class Monitor {
     res_.errors.push_back(rel);
     res_.iterations = k;
     const bool asked = opt_.callback && opt_.callback(k, rel);
-    if (!std::isfinite(rel) || rel > limit_) return stop(StopReason::Diverged);
+    if (!std::isfinite(rel) || rel > growth_ * best_) return stop(StopReason::Diverged);
+    best_ = std::min(best_, rel);
     if (rel < opt_.tol || e <= floor_) return stop(StopReason::Converged);
     if (asked) return stop(StopReason::Callback);
     if (k >= opt_.max_iter) return stop(StopReason::MaxIter);
@@ -164,9 +166,10 @@ class Monitor {
   const SolveOptions& opt_;
   SolveResult& res_;
   double floor_;
+  double growth_;
+  double best_ = INFINITY;  // the lowest E_k / E_0 recorded so far
   double e0_ = 0.0;
   double reference_ = NAN;
-  double limit_ = divergence_limit;  // E_k / E_0 beyond which the run diverged
 };
 
 // "sor" and "gs" (solver_sweep.cpp) on (n, 3) data: sweeps of V0 / 2^exponent
@@ -193,6 +196,8 @@ extern std::size_t sweep_min_vertices_per_thread;
 // The Krylov and HSS methods (solver_krylov.cpp) on (n, k) data, iterating on
 // res.control_vertices, which holds V^(0) on entry.
 void solve_cg(const LimitOperator& op, const double* v0, std::size_t k, Monitor& mon, SolveResult& res);
+void solve_gmres(const LimitOperator& op, const double* v0, std::size_t k, Monitor& mon, SolveResult& res);
+void solve_cgls(const LimitOperator& op, const double* v0, std::size_t k, Monitor& mon, SolveResult& res);
 void solve_hss(const LimitOperator& op, const double* v0, std::size_t k, double alpha, double weight, Monitor& mon,
                SolveResult& res);
 

@@ -1,5 +1,6 @@
 // Krylov and splitting methods: "cg" (CG on the symmetrised system, BiCGSTAB
-// where boundaries break the symmetry) and "hss"/"whss" (Bai, Golub and Ng 2003).
+// where boundaries break the symmetry), "gmres" (any invertible B), "cgls"
+// (least squares, any B) and "hss"/"whss" (Bai, Golub and Ng 2003).
 // The k columns of the data (three coordinates for vertices) are k
 // independent right-hand sides: every scalar of a Krylov method is kept per
 // column, the stopping rule looks at all of them. The column loops take k at
@@ -61,6 +62,19 @@ Cols wdot(const std::vector<double>& a, const std::vector<double>& b, const std:
   return s;
 }
 
+// x += a p, r -= a q per column, a = num / den (0 where den = 0).
+void step_along(const Cols& num, const Cols& den, const std::vector<double>& p, const std::vector<double>& q,
+                std::vector<double>& x, std::vector<double>& r) {
+  const std::size_t kc = num.size();
+  Cols a(kc), na(kc);
+  for (std::size_t c = 0; c < kc; ++c) {
+    a[c] = safe_div(num[c], den[c]);
+    na[c] = -a[c];
+  }
+  axpy(a, p, x);
+  axpy(na, q, r);
+}
+
 // The rest of a CG iteration once q = M p (M self-adjoint in the w-weighted
 // inner product), per column: x += a p, r -= a q, p = r + b p, with
 // a = rr / <p, q>, b = rr_new / rr; rr = <r, r> is updated. A column already
@@ -68,14 +82,7 @@ Cols wdot(const std::vector<double>& a, const std::vector<double>& b, const std:
 void cg_step(const std::vector<double>& w, std::vector<double>& x, std::vector<double>& r, std::vector<double>& p,
              const std::vector<double>& q, Cols& rr) {
   const std::size_t kc = rr.size();
-  const Cols pq = wdot(p, q, w, kc);
-  Cols a(kc), na(kc);
-  for (std::size_t c = 0; c < kc; ++c) {
-    a[c] = safe_div(rr[c], pq[c]);
-    na[c] = -a[c];
-  }
-  axpy(a, p, x);
-  axpy(na, q, r);
+  step_along(rr, wdot(p, q, w, kc), p, q, x, r);
   const Cols rr_new = wdot(r, r, w, kc);
   Cols b(kc);
   for (std::size_t c = 0; c < kc; ++c) b[c] = safe_div(rr_new[c], rr[c]);
@@ -197,7 +204,217 @@ long long inner_cg(std::size_t n, std::size_t kc, ApplyM apply_m, int cost, cons
   return products;
 }
 
+// Columns' Euclidean norms.
+Cols norms(const std::vector<double>& a, std::size_t kc) {
+  Cols s = dot(a, a, kc);
+  for (double& x : s) x = std::sqrt(x);
+  return s;
+}
+
+// y = x / s per column (0 where s = 0: a solved column).
+void scaled_copy(const std::vector<double>& x, const Cols& s, std::vector<double>& y) {
+  const std::size_t kc = s.size();
+  for (std::size_t k = 0; k < x.size(); k += kc)
+    for (std::size_t c = 0; c < kc; ++c) y[k + c] = safe_div(x[k + c], s[c]);
+}
+
+// The longest GMRES basis: every vector is (n, k) doubles; the basis stays
+// within gmres_basis_bytes, with at least gmres_restart vectors, and needs no
+// more than n + 1 (full GMRES, exact in n steps).
+std::size_t gmres_max_basis(std::size_t n, std::size_t kc) {
+  const std::size_t by_memory = gmres_basis_bytes / (sizeof(double) * kc * std::max<std::size_t>(n, 1));
+  return std::min<std::size_t>(n, std::max<std::size_t>(by_memory, gmres_restart + 1) - 1);
+}
+
 }  // namespace
+
+// GMRES(m) (Saad and Schultz 1986) on D^-1 B V = D^-1 V0 (Jacobi
+// preconditioning from the left, D = diag(B)), every column its own Krylov
+// space and scalars, all k columns in one pass per Arnoldi step (modified
+// Gram-Schmidt, Givens rotations). E_k is that of the current iterate at
+// every Arnoldi step: its residual is V_{j+1} Q^T (g_{j+1} e_{j+1}) by the
+// Arnoldi relation (updated by one vector operation a step), scaled back by
+// D; where it says converged, and at the end
+// of every cycle, the iterate is formed and its true residual computed (one
+// product) and recorded, and the next cycle starts from it. The restart
+// length starts at gmres_restart and doubles (up to gmres_max_basis) after a
+// cycle that left the residual above gmres_grow_ratio of its start: on an
+// indefinite B a short restart can slow down, full GMRES (length n) cannot,
+// on an invertible B. A cycle
+// that leaves the residual where it was (ratio above gmres_stall_ratio)
+// stops as "stalled": B is singular (or numerically so) and the residual
+// has reached the part of the targets outside its range, or, rarely, a
+// restarted GMRES stagnates on an invertible B; "auto" then runs "cgls",
+// which converges in both cases.
+void solve_gmres(const LimitOperator& op, const double* v0, std::size_t kc, Monitor& mon, SolveResult& res) {
+  const std::size_t n = op.n, len = kc * n;
+  std::vector<double>& x = res.control_vertices;
+  std::vector<double> r(len), w(len), z(len), zs(len);
+  double e = residual(op, v0, x.data(), r.data(), kc);
+  if (mon.start(e)) return;
+  const std::size_t m_cap = std::max<std::size_t>(gmres_max_basis(n, kc), 1);
+  std::size_t m = std::min<std::size_t>(gmres_restart, m_cap);
+  std::vector<std::vector<double>> basis;
+  std::vector<double> h, cs, sn, g, y;
+  const auto scale_down = [&](std::vector<double>& a) {
+    for (std::size_t i = 0; i < n; ++i)
+      for (std::size_t c = 0; c < kc; ++c) a[kc * i + c] /= op.diag[i];
+  };
+  for (;;) {
+    z = r;
+    scale_down(z);
+    zs = z;
+    const Cols beta = norms(z, kc);
+    while (basis.size() < m + 1) basis.emplace_back(len);
+    scaled_copy(z, beta, basis[0]);
+    // H column j, row i, column of the data c at h[(j (m + 1) + i) kc + c].
+    h.assign((m + 1) * m * kc, 0.0);
+    cs.assign(m * kc, 1.0);
+    sn.assign(m * kc, 0.0);
+    g.assign((m + 1) * kc, 0.0);
+    for (std::size_t c = 0; c < kc; ++c) g[c] = beta[c];
+    const auto H = [&](std::size_t i, std::size_t j, std::size_t c) -> double& { return h[(j * (m + 1) + i) * kc + c]; };
+    std::size_t steps = 0;
+    bool stop = false, checked = false;
+    for (std::size_t j = 0; j < m; ++j) {
+      apply_columns(op, kc, basis[j].data(), w.data());
+      scale_down(w);
+      ++res.products;
+      for (std::size_t i = 0; i <= j; ++i) {
+        const Cols hij = dot(w, basis[i], kc);
+        Cols neg(kc);
+        for (std::size_t c = 0; c < kc; ++c) {
+          H(i, j, c) = hij[c];
+          neg[c] = -hij[c];
+        }
+        axpy(neg, basis[i], w);
+      }
+      const Cols hn = norms(w, kc);
+      scaled_copy(w, hn, basis[j + 1]);
+      for (std::size_t c = 0; c < kc; ++c) {
+        H(j + 1, j, c) = hn[c];
+        for (std::size_t i = 0; i < j; ++i) {  // the earlier rotations on column j
+          const double a = H(i, j, c), b = H(i + 1, j, c);
+          H(i, j, c) = cs[i * kc + c] * a + sn[i * kc + c] * b;
+          H(i + 1, j, c) = -sn[i * kc + c] * a + cs[i * kc + c] * b;
+        }
+        const double a = H(j, j, c), b = H(j + 1, j, c), rr = std::hypot(a, b);
+        cs[j * kc + c] = rr > 0.0 ? a / rr : 1.0;
+        sn[j * kc + c] = rr > 0.0 ? b / rr : 0.0;
+        H(j, j, c) = rr;
+        H(j + 1, j, c) = 0.0;
+        g[(j + 1) * kc + c] = -sn[j * kc + c] * g[j * kc + c];
+        g[j * kc + c] *= cs[j * kc + c];
+      }
+      steps = j + 1;
+      // The scaled residual of the step's iterate, V_{j+1} Q^T (g_{j+1} e_{j+1}),
+      // by its recurrence z_j = s_j^2 z_{j-1} + c_j g_{j+1} v_{j+1} (z_{-1} = D^-1 r).
+      for (std::size_t k = 0; k < len; k += kc)
+        for (std::size_t c = 0; c < kc; ++c) {
+          const double sj = sn[j * kc + c];
+          zs[k + c] = sj * sj * zs[k + c] + cs[j * kc + c] * g[(j + 1) * kc + c] * basis[j + 1][k + c];
+        }
+      z = zs;
+      for (std::size_t i = 0; i < n; ++i)
+        for (std::size_t c = 0; c < kc; ++c) z[kc * i + c] *= op.diag[i];
+      e = max_row_norm(z.data(), n, kc);
+      if (mon.converges(e) || j + 1 == m) {
+        checked = true;
+        break;
+      }
+      if ((stop = mon.record(e))) break;
+    }
+    // x += V y, H y = g (upper triangular after the rotations).
+    y.assign(steps * kc, 0.0);
+    for (std::size_t c = 0; c < kc; ++c)
+      for (std::size_t i = steps; i-- > 0;) {
+        double s = g[i * kc + c];
+        for (std::size_t l = i + 1; l < steps; ++l) s -= H(i, l, c) * y[l * kc + c];
+        y[i * kc + c] = safe_div(s, H(i, i, c));
+      }
+    for (std::size_t i = 0; i < steps; ++i) axpy(Cols(y.begin() + i * kc, y.begin() + (i + 1) * kc), basis[i], x);
+    if (stop) return;
+    if (checked) {
+      e = residual(op, v0, x.data(), r.data(), kc);
+      ++res.products;
+      if (mon.record(e)) return;
+    }
+    // How far the cycle brought the scaled residual down (the worst column).
+    z = r;
+    scale_down(z);
+    const Cols after = norms(z, kc);
+    double ratio = 0.0;
+    for (std::size_t c = 0; c < kc; ++c)
+      if (beta[c] > 0.0) ratio = std::max(ratio, after[c] / beta[c]);
+    if (ratio > gmres_stall_ratio) {
+      mon.finish(StopReason::Stalled);
+      return;
+    }
+    if (ratio > gmres_grow_ratio && m < m_cap) m = std::min(2 * m, m_cap);
+  }
+}
+
+// CGLS (Hestenes and Stiefel 1952; LSQR's iterates, Paige and Saunders 1982):
+// CG on B^T B V = B^T V0, from the start in res.control_vertices, every
+// column its own scalars; two products per iteration (B and B^T). The
+// limit is the least-squares solution nearest the start, whatever the rank
+// of B: from V = 0 ("auto" starts it there) the iterates stay in the range
+// of B^T, and the limit is the least-squares solution of least norm. E_k is that of the updated
+// residual r = V0 - B V (the true one where it says converged). Stops as
+// "singular" where r is orthogonal to B's range as far as doubles tell,
+// ||B^T r|| <= cgls_singular_angle ||B|| ||r|| in every column (LSQR's test),
+// with E_k / E_0 still above tol: the part of V0 outside the range of B,
+// which cannot be interpolated. On an invertible B, ||B^T r|| >= ||r|| /
+// ||B^-1||, so that test holds only where cond(B) > 1 / cgls_singular_angle.
+void solve_cgls(const LimitOperator& op, const double* v0, std::size_t kc, Monitor& mon, SolveResult& res) {
+  const std::size_t len = kc * op.n;
+  const Transposed tr = transpose(op);
+  std::vector<double>& x = res.control_vertices;
+  std::vector<double> r(len), s(len), p(len), q(len);
+  double e = residual(op, v0, x.data(), r.data(), kc);
+  if (mon.start(e)) return;
+  apply_transpose_columns(op, tr, kc, r.data(), s.data());
+  ++res.products;
+  p = s;
+  Cols ss = dot(s, s, kc);
+  // ||B||_2 <= sqrt(||B||_1 ||B||_inf), from the row and column sums of |B|.
+  std::vector<double> column_sums(op.n, 0.0);
+  double row_max = 0.0;
+  for (std::size_t i = 0; i < op.n; ++i) {
+    double row = std::abs(op.diag[i]);
+    column_sums[i] += std::abs(op.diag[i]);
+    for (std::int32_t q = op.offsets[i]; q < op.offsets[i + 1]; ++q) {
+      row += std::abs(op.entry(i, q));
+      column_sums[op.neighbors[q]] += std::abs(op.entry(i, q));
+    }
+    row_max = std::max(row_max, row);
+  }
+  const double norm_b = std::sqrt(row_max * *std::max_element(column_sums.begin(), column_sums.end()));
+  for (;;) {
+    apply_columns(op, kc, p.data(), q.data());
+    step_along(ss, dot(q, q, kc), p, q, x, r);
+    e = max_row_norm(r.data(), op.n, kc);
+    if (mon.converges(e)) {
+      e = residual(op, v0, x.data(), r.data(), kc);
+      ++res.products;
+    }
+    apply_transpose_columns(op, tr, kc, r.data(), s.data());
+    res.products += 2;
+    const Cols ss_new = dot(s, s, kc), rr = dot(r, r, kc);
+    bool solved = true;
+    for (std::size_t c = 0; c < kc; ++c) {
+      const double b = safe_div(ss_new[c], ss[c]);
+      for (std::size_t k = c; k < len; k += kc) p[k] = s[k] + b * p[k];
+      solved = solved && std::sqrt(ss_new[c]) <= cgls_singular_angle * norm_b * std::sqrt(rr[c]);
+    }
+    ss = ss_new;
+    if (mon.record(e)) return;
+    if (solved) {
+      mon.finish(StopReason::Singular);
+      return;
+    }
+  }
+}
 
 void solve_cg(const LimitOperator& op, const double* v0, std::size_t k, Monitor& mon, SolveResult& res) {
   if (is_symmetrisable(op)) {

@@ -33,6 +33,9 @@ const char* method_name(Method method) {
     case Method::Cg: return "cg";
     case Method::Hss: return "hss";
     case Method::Whss: return "whss";
+    case Method::Gmres: return "gmres";
+    case Method::Cgls: return "cgls";
+    case Method::Auto: return "auto";
   }
   return "?";
 }
@@ -43,8 +46,34 @@ const char* stop_reason_name(StopReason reason) {
     case StopReason::MaxIter: return "max_iter";
     case StopReason::Diverged: return "diverged";
     case StopReason::Callback: return "callback";
+    case StopReason::Slow: return "slow";
+    case StopReason::Stalled: return "stalled";
+    case StopReason::Singular: return "singular";
   }
   return "?";
+}
+
+double divergence_growth(Method method) {
+  switch (method) {
+    case Method::Cg:
+      return 1e8;
+    case Method::Gmres:
+    case Method::Cgls:
+      return 1e4;
+    case Method::Hss:
+    case Method::Whss:
+      return 100.0;
+    default:
+      return 10.0;
+  }
+}
+
+std::optional<Method> recommended_after(Method method) {
+  switch (method) {
+    case Method::Cgls: return std::nullopt;
+    case Method::Gmres: return Method::Cgls;
+    default: return Method::Gmres;
+  }
 }
 
 namespace {
@@ -55,8 +84,9 @@ std::string quoted(Method m) { return std::string("'") + method_name(m) + "'"; }
 void check_applies(const char* name, const std::string& value, Method method, std::initializer_list<Method> users) {
   for (Method u : users)
     if (u == method) return;
-  std::string list;
-  for (Method u : users) list += (list.empty() ? "" : " or ") + quoted(u);
+  std::string list;  // 'a', 'b' or 'c'
+  std::size_t k = 0;
+  for (Method u : users) list += (k++ == 0 ? "" : k == users.size() ? " or " : ", ") + quoted(u);
   throw ParameterError(std::string(name) + " = " + value + " applies to method=" + list + " only (method=" +
                        quoted(method) + ")");
 }
@@ -77,7 +107,7 @@ void check_options(const SolveOptions& opt) {
   const Method m = opt.method;
   if (opt.omega_rule != OmegaRule::Auto) {
     const std::string shown = opt.omega_rule == OmegaRule::Young ? "'young'" : detail::repr(opt.omega);
-    check_applies("omega", shown, m, {Method::Sor});
+    check_applies("omega", shown, m, {Method::Sor, Method::Auto});
     if (opt.omega_rule == OmegaRule::Given) check_relaxation("omega", opt.omega);
   }
   if (opt.sigma) {
@@ -100,7 +130,8 @@ void check_options(const SolveOptions& opt) {
   if (opt.threads < 1 || opt.threads > max_threads)
     throw ParameterError("threads = " + detail::repr(opt.threads) + " must be an integer in 1.." +
                          std::to_string(max_threads));
-  if (opt.threads > 1) check_applies("threads", detail::repr(opt.threads), m, {Method::Sor, Method::Gs});
+  if (opt.threads > 1)
+    check_applies("threads", detail::repr(opt.threads), m, {Method::Sor, Method::Gs, Method::Auto});
 }
 
 void parse_omega(const std::string& text, SolveOptions& opt) {
@@ -224,12 +255,18 @@ void resolve_parameters(const LimitOperator& op, const SolveOptions& opt, Spectr
         if (!(res.lambda_min > 0.0))
           throw MeshError("method 'wpia': the limit matrix has an eigenvalue with real part <= 0 (estimated "
                           "lambda_min = " + detail::repr(res.lambda_min) +
-                          "), where no step sigma is known to converge; use 'sor', 'gs' or 'cg'");
+                          "), where no step sigma is known to converge, and 'pia', 'gs' and 'sor' diverge; use "
+                          "'auto' (the default) or 'gmres', which converge on any invertible B");
         res.sigma = 2.0 / (res.lambda_min + 1.0);  // lambda_max(B) = 1
       }
       break;
     case Method::Gs:
       res.omega = 1.0;
+      break;
+    case Method::Cg:
+    case Method::Gmres:
+    case Method::Cgls:
+    case Method::Auto:  // its runs resolve their own
       break;
     case Method::Sor:
       if (opt.omega_rule == OmegaRule::Given) {
@@ -240,8 +277,6 @@ void resolve_parameters(const LimitOperator& op, const SolveOptions& opt, Spectr
       } else {
         res.omega = sor_auto_omega;
       }
-      break;
-    case Method::Cg:
       break;
     case Method::Hss:
     case Method::Whss: {
@@ -323,6 +358,12 @@ void run_iteration(const LimitOperator& op, const double* v0, std::size_t k, con
     case Method::Cg:
       detail::solve_cg(op, v0, k, mon, res);
       break;
+    case Method::Gmres:
+      detail::solve_gmres(op, v0, k, mon, res);
+      break;
+    case Method::Cgls:
+      detail::solve_cgls(op, v0, k, mon, res);
+      break;
     case Method::Gs:
     case Method::Sor:
       detail::solve_sor_columns(op, v0, k, res.omega, mon, res);
@@ -351,19 +392,18 @@ SolveResult solve(const LimitOperator& op, const double* v0, const SolveOptions&
   return solve(op, v0, 3, nullptr, opt, cache);
 }
 
-SolveResult solve(const LimitOperator& op, const double* v0, std::size_t k, const double* initial,
-                  const SolveOptions& opt, SpectralCache* cache) {
+namespace {
+
+// One method's run, without the divergence replay and the diagnosis
+// (finish_run): solve() for an explicit method, and each run of "auto".
+SolveResult solve_one(const LimitOperator& op, const double* v0, std::size_t k, const double* initial,
+                      const SolveOptions& opt, SpectralCache* cache) {
   using clock = std::chrono::steady_clock;
-  check_options(opt);
-  if (k < 1) throw ParameterError("the data must have at least one column (k = 0)");
   const bool sweep = opt.method == Method::Gs || opt.method == Method::Sor;
-  if (opt.threads > 1 && k > 3)
-    throw ParameterError("threads = " + detail::repr(opt.threads) + " sweeps (n, 3) data and fewer columns only; " +
-                         "this data has " + std::to_string(k) + " columns: use threads=1");
   if (sweep && k < 3) {
     const std::vector<double> v0p = padded(v0, op.n, k);
     const std::vector<double> initialp = initial ? padded(initial, op.n, k) : std::vector<double>();
-    SolveResult res = solve(op, v0p.data(), 3, initial ? initialp.data() : nullptr, opt, cache);
+    SolveResult res = solve_one(op, v0p.data(), 3, initial ? initialp.data() : nullptr, opt, cache);
     for (std::size_t i = 0; i < op.n; ++i)
       for (std::size_t c = 0; c < k; ++c) res.control_vertices[k * i + c] = res.control_vertices[3 * i + c];
     res.control_vertices.resize(k * op.n);
@@ -405,6 +445,181 @@ SolveResult solve(const LimitOperator& op, const double* v0, std::size_t k, cons
   res.initial_error = std::ldexp(res.initial_error, exponent);
   res.solve_seconds = std::chrono::duration<double>(clock::now() - t0).count();
   res.seconds = res.estimate_seconds + res.solve_seconds;
+  return res;
+}
+
+
+// The attempt `res` records.
+Attempt attempt_of(const SolveResult& res) {
+  Attempt a;
+  a.method = res.method;
+  a.variant = res.variant;
+  a.iterations = res.iterations;
+  a.stop_reason = res.stop_reason;
+  a.final_error = res.errors.empty() ? NAN : res.errors.back();
+  a.products = res.products;
+  a.seconds = res.seconds;
+  return a;
+}
+
+// What every solve's result gets once its method has stopped: after a
+// divergence, the iterate of the lowest E_k, by running the method again
+// (every method is deterministic, threads included) to that iteration
+// without callback; and where it did not converge, the method to use
+// instead and the vertices whose residual is largest.
+void finish_run(const LimitOperator& op, const double* v0, std::size_t k, const double* initial,
+                const SolveOptions& opt, SpectralCache* cache, SolveResult& res) {
+  res.returned_iteration = res.iterations;
+  if (res.stop_reason == StopReason::Diverged && !res.errors.empty()) {
+    const auto best = std::min_element(res.errors.begin(), res.errors.end()) - res.errors.begin();
+    if (best < res.iterations) {
+      if (best == 0) {
+        const double* start = initial ? initial : v0;
+        res.control_vertices.assign(start, start + k * op.n);
+      } else {
+        SolveOptions again = opt;
+        again.callback = nullptr;
+        again.max_iter = best;
+        SolveResult replay = solve_one(op, v0, k, initial, again, cache);
+        res.control_vertices = std::move(replay.control_vertices);
+        res.products += replay.products;
+        res.solve_seconds += replay.solve_seconds;
+        res.seconds += replay.seconds;
+      }
+      res.returned_iteration = static_cast<int>(best);
+    }
+  }
+  if (res.converged() || res.stop_reason == StopReason::Callback) return;
+  res.recommended = recommended_after(res.method == Method::Auto ? Method::Cgls : res.method);
+  std::vector<double> r(k * op.n);
+  detail::residual(op, v0, res.control_vertices.data(), r.data(), k);
+  std::vector<std::pair<double, std::int64_t>> rows(op.n);
+  for (std::size_t i = 0; i < op.n; ++i) {
+    double e = 0.0;
+    for (std::size_t c = 0; c < k; ++c) e += r[k * i + c] * r[k * i + c];
+    rows[i] = {std::sqrt(e), static_cast<std::int64_t>(i)};
+  }
+  const std::size_t listed = std::min(worst_vertices_listed, rows.size());
+  std::partial_sort(rows.begin(), rows.begin() + static_cast<std::ptrdiff_t>(listed), rows.end(),
+                    [](const auto& a, const auto& b) { return a.first > b.first || (a.first == b.first && a.second < b.second); });
+  res.worst_vertices.clear();
+  res.worst_residuals.clear();
+  for (std::size_t j = 0; j < listed; ++j) {
+    res.worst_vertices.push_back(rows[j].second);
+    res.worst_residuals.push_back(rows[j].first);
+  }
+}
+
+// Whether "auto" stops its "sor" run after E_k / E_0 = errors[k]: E_k not
+// below E_{k-auto_window} (growth or stagnation: the sweep's iteration
+// matrix has a spectral radius at or near 1 or above), or, from
+// auto_first_check on, a contraction per sweep q = (E_k /
+// E_{k-auto_window})^(1/auto_window) too slow to reach tol by max_iter. On
+// the meshes where Gauss-Seidel converges the rate of the first sweeps is at
+// or above the asymptotic one, so the estimate errs towards keeping "sor".
+bool too_slow(const std::vector<double>& errors, double tol, long long max_iter) {
+  const std::size_t k = errors.size() - 1;
+  if (k < static_cast<std::size_t>(auto_window)) return false;
+  const double now = errors[k], before = errors[k - auto_window];
+  if (!(now < before)) return true;
+  if (k < static_cast<std::size_t>(auto_first_check) || k % auto_window != 0 || !(now > tol)) return false;
+  const double q = std::pow(now / before, 1.0 / auto_window);
+  const double needed = std::log(tol / now) / std::log(q);
+  return static_cast<double>(k) + needed > static_cast<double>(max_iter);
+}
+
+// "auto": "sor" (omega and threads as given), watched by too_slow and the
+// divergence rule; where it stops short, "gmres" from the better of its
+// iterate and the start; where that stalls (B singular), "cgls" from 0: the
+// least-squares solution of least norm. The callback sees one count of
+// iterations across the runs.
+SolveResult solve_auto(const LimitOperator& op, const double* v0, std::size_t k, const double* initial,
+                       const SolveOptions& opt, SpectralCache* cache) {
+  using clock = std::chrono::steady_clock;
+  const auto t0 = clock::now();
+  std::vector<Attempt> attempts;
+  long long offset = 0;
+  bool user_stop = false, slow = false;
+  std::vector<double> watched;
+  const auto forward = [&](int it, double e) {
+    if (opt.callback && opt.callback(static_cast<int>(std::min<long long>(offset + it, max_iterations)), e))
+      user_stop = true;
+    return user_stop;
+  };
+  SolveOptions sor = opt;
+  sor.method = Method::Sor;
+  sor.callback = [&](int it, double e) {
+    watched.push_back(e);
+    if (forward(it, e)) return true;
+    slow = too_slow(watched, opt.tol, opt.max_iter);
+    return slow;
+  };
+  SolveResult res = solve_one(op, v0, k, initial, sor, cache);
+  if (slow) res.stop_reason = StopReason::Slow;
+  // The "sor" run's parameters stay in the result whichever run made it.
+  const double omega = res.omega, rho = res.rho;
+  const bool omega_clamped = res.omega_clamped, reordered = res.reordered;
+  double estimates = res.estimate_seconds;
+  long long products = res.products, relaxations = res.relaxations;
+  attempts.push_back(attempt_of(res));
+  const bool stopped_short = !res.converged() && !user_stop;
+  if (stopped_short) {
+    // "gmres", from "sor"'s iterate where it got below the start.
+    const bool better = res.stop_reason != StopReason::Diverged && res.errors.back() < res.errors.front();
+    std::vector<double> start;
+    if (better) start = res.control_vertices;
+    offset += res.iterations;
+    SolveOptions gmres = opt;
+    gmres.method = Method::Gmres;
+    gmres.omega_rule = OmegaRule::Auto;
+    gmres.threads = 1;
+    gmres.callback = forward;
+    res = solve_one(op, v0, k, better ? start.data() : initial, gmres, cache);
+    finish_run(op, v0, k, better ? start.data() : initial, gmres, cache, res);
+    estimates += res.estimate_seconds;
+    products += res.products;
+    attempts.push_back(attempt_of(res));
+    if (res.stop_reason == StopReason::Stalled && !user_stop) {
+      offset += res.iterations;
+      SolveOptions cgls = gmres;
+      cgls.method = Method::Cgls;
+      const std::vector<double> zero(k * op.n, 0.0);  // from 0: the least-squares solution of least norm
+      res = solve_one(op, v0, k, zero.data(), cgls, cache);
+      finish_run(op, v0, k, zero.data(), cgls, cache, res);
+      estimates += res.estimate_seconds;
+      products += res.products;
+      attempts.push_back(attempt_of(res));
+    }
+  }
+  res.method = Method::Auto;
+  res.omega = omega;
+  res.rho = rho;
+  res.omega_clamped = omega_clamped;
+  res.reordered = reordered;
+  if (!stopped_short) finish_run(op, v0, k, initial, sor, cache, res);
+  res.attempts = std::move(attempts);
+  res.products = products;
+  res.relaxations = relaxations;
+  res.estimate_seconds = estimates;
+  res.seconds = std::chrono::duration<double>(clock::now() - t0).count();
+  res.solve_seconds = res.seconds - estimates;
+  if (!res.converged() && res.stop_reason != StopReason::Callback) res.recommended.reset();
+  return res;
+}
+
+}  // namespace
+
+SolveResult solve(const LimitOperator& op, const double* v0, std::size_t k, const double* initial,
+                  const SolveOptions& opt, SpectralCache* cache) {
+  check_options(opt);
+  if (k < 1) throw ParameterError("the data must have at least one column (k = 0)");
+  if (opt.threads > 1 && k > 3)
+    throw ParameterError("threads = " + detail::repr(opt.threads) + " sweeps (n, 3) data and fewer columns only; " +
+                         "this data has " + std::to_string(k) + " columns: use threads=1");
+  if (opt.method == Method::Auto) return solve_auto(op, v0, k, initial, opt, cache);
+  SolveResult res = solve_one(op, v0, k, initial, opt, cache);
+  finish_run(op, v0, k, initial, opt, cache, res);
+  res.attempts.assign(1, attempt_of(res));
   return res;
 }
 

@@ -20,8 +20,10 @@ EXIT_OK, EXIT_NOT_CONVERGED, EXIT_USAGE, EXIT_INTERRUPTED, EXIT_TERMINATED = 0, 
 
 # The paper's names (Table 1) for the methods it compares, and ours for the
 # rest; compare's rows and the help list the methods in this order.
-METHOD_LABELS = {"pia": "PIA", "wpia": "W-PIA", "hss": "HSS-PIA", "whss": "WHSS-PIA", "gs": "Gauss-Seidel",
-                 "sor": "SOR-PIA", "cg": "CG"}
+METHOD_LABELS = {"auto": "auto", "pia": "PIA", "wpia": "W-PIA", "hss": "HSS-PIA", "whss": "WHSS-PIA",
+                 "gs": "Gauss-Seidel", "sor": "SOR-PIA", "cg": "CG", "gmres": "GMRES", "cgls": "CGLS"}
+# The methods that take --omega: sor, and auto for its sor run.
+OMEGA_METHODS = ("sor", "auto")
 DISPLAY_ORDER = tuple(sorted(METHODS, key=lambda m: list(METHOD_LABELS).index(m) if m in METHOD_LABELS
                              else len(METHOD_LABELS)))
 MESH_SUFFIXES = (".obj", ".off", ".ply", ".stl")

@@ -11,7 +11,8 @@ from pathlib import Path
 import numpy as np
 
 from .. import __version__
-from .common import (DISPLAY_ORDER, EXIT_NOT_CONVERGED, EXIT_OK, SCHEME_LABELS, build_interpolator, check_paths,
+from .common import (DISPLAY_ORDER, EXIT_NOT_CONVERGED, EXIT_OK, OMEGA_METHODS, SCHEME_LABELS, UserError,
+                     build_interpolator, check_paths,
                      check_solver_options, cpu_clock, mesh_line, method_label, omega_text, read_solve_input,
                      repair_json, repair_lines, require_plotting, result_fields, run_solver, tags_lines, tags_summary,
                      threads_for)
@@ -38,19 +39,23 @@ def iterations_to_reach(errors, tolerances=TABLE_TOLERANCES) -> list:
     return out
 
 
-def run_compare(input_path, *, methods=DISPLAY_ORDER, tol=1e-10, max_iter=1000, boundary=None,
+def run_compare(input_path, *, methods=DISPLAY_ORDER, omega="auto", tol=1e-10, max_iter=1000, boundary=None,
                 table=None, csv_path=None, plot=None, json_path=None, quiet=False, force=False,
                 triangulate=False, threads=1, repair=False, scheme="auto", ignore_tags=False, sharp_angle=None,
                 nonmanifold="error", out=None) -> tuple[int, dict]:
     """`sorpia compare`: every method to the same tolerance, on one
     sorpia.Interpolator (topology, limit operator and spectral estimates built
-    once and shared); returns (exit code, data). `threads` applies to sor/gs."""
+    once and shared); returns (exit code, data). `threads` applies to sor/gs
+    (and auto's sor run), `omega` to sor and auto. A method that refuses the
+    mesh (wpia where B has an eigenvalue at or below 0) gets a row marked
+    "refused" with its reason, and the others run."""
     from ..meshinfo import topology_info
 
     out = out if out is not None else sys.stdout
     given = f"--methods {','.join(methods)}" + (f" --threads {threads}" if threads != 1 else "")
     for method in methods:
-        check_solver_options(given, method=method, tol=tol, max_iter=max_iter, threads=threads_for(method, threads))
+        check_solver_options(given, method=method, tol=tol, max_iter=max_iter, threads=threads_for(method, threads),
+                             **({"omega": omega} if method in OMEGA_METHODS else {}))
     check_solver_options(given, method="sor", threads=threads)  # --threads as sor takes it, whichever methods run
     check_paths([input_path], {"--table": table, "--csv": csv_path, "--plot": plot, "--json": json_path}, force)
     if plot is not None:
@@ -68,9 +73,14 @@ def run_compare(input_path, *, methods=DISPLAY_ORDER, tol=1e-10, max_iter=1000, 
         stats = topology_info(V0, interp.topology, scheme=scheme)
         for method in methods:
             n_threads = threads_for(method, threads)
-            res, wall, cpu = run_solver(interp, V0, phase="solving", method=method, omega=None, tol=tol,
-                                        max_iter=max_iter, threads=n_threads, progress=progress, source=input_path,
-                                        scheme=scheme)
+            try:
+                res, wall, cpu = run_solver(interp, V0, phase="solving", method=method,
+                                            omega=omega if method in OMEGA_METHODS else None, tol=tol,
+                                            max_iter=max_iter, threads=n_threads, progress=progress,
+                                            source=input_path, scheme=scheme)
+            except UserError as exc:  # this method refuses the mesh: say so in its row, run the others
+                rows.append(_refused_row(method, n_threads, str(exc)))
+                continue
             fields = result_fields(res)
             rows.append({
                 "method": method,
@@ -78,6 +88,9 @@ def run_compare(input_path, *, methods=DISPLAY_ORDER, tol=1e-10, max_iter=1000, 
                 "omega": res.omega,  # None but for sor and gs
                 "iterations": int(res.iterations),
                 "converged": bool(res.converged),
+                "stop_reason": res.stop_reason,
+                "variant": res.variant,
+                "refused": None,
                 "reached": iterations_to_reach(res.errors),
                 "threads": n_threads,
                 "cpu_seconds": cpu,
@@ -115,7 +128,7 @@ def run_compare(input_path, *, methods=DISPLAY_ORDER, tol=1e-10, max_iter=1000, 
     if plot is not None:
         from ..plotting import convergence_figure
 
-        curves = [(_curve_label(r), r["errors"]) for r in rows]
+        curves = [(_curve_label(r), r["errors"]) for r in rows if r["refused"] is None]
         save_figure(convergence_figure(curves, tol=tol, title=f"Convergence on {Path(input_path).name} "
                                        f"(paper Figure 7)"), plot)
     if not quiet:
@@ -125,7 +138,10 @@ def run_compare(input_path, *, methods=DISPLAY_ORDER, tol=1e-10, max_iter=1000, 
             print(f"  repaired: {line}", file=out)
         print(markdown, file=out)
         print(_setup_line(data), file=out)
-        failed = [r["label"] for r in rows if not r["converged"]]
+        for r in rows:
+            if r["refused"] is not None:
+                print(f"{r['label']} refused: {r['refused']}", file=out)
+        failed = [f"{r['label']} ({r['stop_reason']})" for r in rows if not r["converged"] and r["refused"] is None]
         if failed:
             print(f"NOT converged to tol {tol:g} within {max_iter} iterations: {', '.join(failed)} (exit code 1)",
                   file=out)
@@ -134,6 +150,14 @@ def run_compare(input_path, *, methods=DISPLAY_ORDER, tol=1e-10, max_iter=1000, 
             print(f"wrote {', '.join(map(str, written))}", file=out)
     ok = all(r["converged"] for r in rows)
     return (EXIT_OK if ok else EXIT_NOT_CONVERGED), data
+
+
+def _refused_row(method: str, threads: int, reason: str) -> dict:
+    """The row of a method that refused the mesh: no iterations, the reason."""
+    return {"method": method, "label": method_label(method), "omega": None, "iterations": 0, "converged": False,
+            "stop_reason": "refused", "variant": None, "refused": reason, "reached": [None] * len(TABLE_TOLERANCES),
+            "threads": threads, "cpu_seconds": 0.0, "cpu_clock": cpu_clock(threads), "wall_seconds": 0.0,
+            "errors": np.zeros(0), "result": None}
 
 
 def _curve_label(row) -> str:
@@ -159,8 +183,11 @@ def compare_markdown(data: dict, name: str) -> str:
     lines = ["| " + " | ".join(head) + " |", "|" + "|".join(["---"] * 3 + ["---:"] * (len(head) - 3)) + "|"]
     for j, r in enumerate(data["methods"]):
         cells = [name if j == 0 else "", r["label"], omega_text(r["omega"])]
-        cells += ["-" if k is None else str(k) for k in r["reached"]]
-        cells += [f"{r['cpu_seconds']:.4f}", f"{r['wall_seconds']:.4f}"]
+        if r["refused"] is not None:
+            cells += ["refused"] + [""] * (len(r["reached"]) - 1) + ["-", "-"]
+        else:
+            cells += ["-" if k is None else str(k) for k in r["reached"]]
+            cells += [f"{r['cpu_seconds']:.4f}", f"{r['wall_seconds']:.4f}"]
         lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines)
 
@@ -168,11 +195,11 @@ def compare_markdown(data: dict, name: str) -> str:
 def compare_csv(data: dict) -> str:
     buf = io.StringIO()
     writer = csv.writer(buf, lineterminator="\n")
-    writer.writerow(["method", "omega", "iterations", "converged"]
+    writer.writerow(["method", "omega", "iterations", "converged", "stop_reason"]
                     + [f"iterations_to_{_tol_header(t)}" for t in data["tolerances"]]
                     + ["cpu_seconds", "wall_seconds"])
     for r in data["methods"]:
         writer.writerow([r["method"], "" if r["omega"] is None else repr(float(r["omega"])), r["iterations"],
-                         r["converged"]] + ["" if k is None else k for k in r["reached"]]
+                         r["converged"], r["stop_reason"]] + ["" if k is None else k for k in r["reached"]]
                         + [f"{r['cpu_seconds']:.6f}", f"{r['wall_seconds']:.6f}"])
     return buf.getvalue()

@@ -10,7 +10,8 @@ import numpy as np
 
 from .. import __version__
 from .._validate import as_boundary
-from .common import (EXIT_NOT_CONVERGED, EXIT_OK, SCHEME_LABELS, UserError, check_mesh_suffix, check_paths,
+from ..solve import stopped_short_message
+from .common import (EXIT_NOT_CONVERGED, EXIT_OK, OMEGA_METHODS, SCHEME_LABELS, UserError, check_mesh_suffix, check_paths,
                      check_solver_options, cpu_clock, face_counts, face_size_histogram, fit_once, fmt_seconds,
                      is_triangles, mesh_line, method_label, read_solve_input, repair_json, repair_lines, result_fields,
                      scheme_kwargs, split_json, split_lines, tags_lines, tags_summary, warn_once)
@@ -18,12 +19,15 @@ from .output import write_json
 from .progress import Progress
 
 
-def run_fit(input_path, output, *, method="sor", omega="auto", tol=1e-10, max_iter=1000,
+def run_fit(input_path, output, *, method="auto", omega="auto", tol=1e-10, max_iter=1000,
             boundary=None, surface=None, level=3, report=None, quiet=False, force=False,
             triangulate=False, binary=False, threads=1, repair=False, scheme="auto", ignore_tags=False,
-            sharp_angle=None, nonmanifold="error", out=None) -> tuple[int, dict]:
+            sharp_angle=None, nonmanifold="error", keep_unconverged=False, out=None) -> tuple[int, dict]:
     """`sorpia fit`: returns (exit code, report dict). `boundary` None: the
-    file's interpolateboundary tag, else the default rule."""
+    file's interpolateboundary tag, else the default rule. A solve that did
+    not reach tol writes no control mesh or surface (only the report) unless
+    `keep_unconverged`, or unless it is the least-squares answer on a
+    singular B (stop_reason "singular"), which is written with its warning."""
     from .. import _core, write_mesh
     from ..meshinfo import topology_info
 
@@ -34,6 +38,7 @@ def run_fit(input_path, output, *, method="sor", omega="auto", tol=1e-10, max_it
     given = f"--method {method}" + (f" --omega {omega}" if omega != "auto" else "") + (
         f" --threads {threads}" if threads != 1 else "")
     check_solver_options(given, method=method, omega=omega, tol=tol, max_iter=max_iter, threads=threads)
+    uses_omega = method in OMEGA_METHODS
     if binary and not any(Path(p).suffix.lower() in (".ply", ".stl") for p in (output, surface) if p):
         raise UserError("--binary applies to .ply and .stl outputs only (OBJ and OFF are text formats)")
 
@@ -51,22 +56,27 @@ def run_fit(input_path, output, *, method="sor", omega="auto", tol=1e-10, max_it
             _check_surface_fits(len(V0), face_counts(F), level, scheme)
         timings["statistics"] = 0.0  # reported before the fit, measured after the topology is built
         interp, res, timings["fit"], cpu = fit_once(
-            V0, F, method=method, omega=omega if method == "sor" else None, tol=tol, max_iter=max_iter,
+            V0, F, method=method, omega=omega if uses_omega else None, tol=tol, max_iter=max_iter,
             boundary=boundary, threads=threads, progress=progress, source=input_path, scheme=scheme, tags=tags)
         progress.status("mesh statistics")
         t0 = time.perf_counter()
         stats = topology_info(V0, interp.topology, scheme=scheme)
         timings["statistics"] = time.perf_counter() - t0
         ctrl = np.asarray(res.control_vertices)
+        # What a solve that stopped short left is no answer (a diverged
+        # iterate, or one of --max-iter): written only when asked for. The
+        # least-squares answer on a singular B is the best there is: written.
+        keep = res.converged or res.stop_reason == "singular" or keep_unconverged
 
-        progress.status(f"writing {output}")
-        t0 = time.perf_counter()
-        # The control mesh keeps the tags it was fitted with (OBJ), so that it can be refitted.
         written_tags = _tags_to_write(output, tags, boundary, mesh)
-        write_mesh(output, ctrl, F, binary=_binary_for(output, binary), **written_tags, **attributes)
-        timings["write"] = time.perf_counter() - t0
+        if keep:
+            progress.status(f"writing {output}")
+            t0 = time.perf_counter()
+            # The control mesh keeps the tags it was fitted with (OBJ), so that it can be refitted.
+            write_mesh(output, ctrl, F, binary=_binary_for(output, binary), **written_tags, **attributes)
+            timings["write"] = time.perf_counter() - t0
         surface_stats = None
-        if surface is not None:
+        if surface is not None and keep:
             from .. import limit_surface
 
             progress.status(f"limit surface, level {level}")
@@ -101,11 +111,18 @@ def run_fit(input_path, output, *, method="sor", omega="auto", tol=1e-10, max_it
         "repair": repair_json(mesh.repair) if repair else None,
         "nonmanifold": split_json(mesh.split) if mesh.split is not None else None,
         "output": str(output),
+        "written": bool(keep),
+        "not_written": [] if keep else [str(p) for p in (output, surface) if p is not None],
         "surface": surface_stats,
         "report": None if report is None else str(report),
         "mesh": stats,
         "method": method,
-        "omega_rule": omega if method == "sor" else None,
+        "variant": res.variant,
+        "stop_reason": res.stop_reason,
+        "attempts": res.attempts,
+        "recommended": res.recommended,
+        "stopped_short": stopped_short_message(res, method, tol, max_iter),
+        "omega_rule": omega if uses_omega else None,
         "omega": res.omega,
         "tol": tol,
         "max_iter": max_iter,
@@ -266,7 +283,10 @@ def fit_summary(d: dict, repaired=(), kept=()) -> str:
     --nonmanifold sharp kept."""
     label = method_label(d["method"])
     omega = d["omega"]
-    if d["method"] == "sor" and omega is not None:
+    if d["method"] == "auto":
+        label += ": " + ", then ".join(f"{method_label(a['method'])} ({a['stop_reason']}, {a['iterations']} "
+                                      "iterations)" for a in d["attempts"])
+    elif d["method"] == "sor" and omega is not None:
         label += f", omega {omega:.4f} ({d['omega_rule']})"
     elif d["method"] == "gs":
         label += ", omega 1"
@@ -276,13 +296,14 @@ def fit_summary(d: dict, repaired=(), kept=()) -> str:
              f"< tol {d['tol']:g}" if d["final_error"] < d["tol"] else
              f"(tol {d['tol']:g} is below what float64 reaches: E_k stopped at rounding level)")
              if d["converged"] else
-             f"NOT converged: stopped after {d['iterations']} iterations at E_k/E_0 = {d['final_error']:.3g} "
-             f"(tol {d['tol']:g}); outputs written anyway, exit code 1")
+             f"NOT converged ({d['stop_reason']}): {d['stopped_short']}; " + (
+                 "outputs written, exit code 1" if not d["not_written"] else
+                 f"{', '.join(d['not_written'])} NOT written (--keep-unconverged writes them), exit code 1"))
     t = d["timings"]
     inner = ", ".join(f"{k[4:]} {fmt_seconds(v)}" for k, v in t.items() if k.startswith("fit."))
     phases = ", ".join(f"{k} {fmt_seconds(v)}" + (f" ({inner})" if k == "fit" and inner else "")
                        for k, v in t.items() if not k.startswith("fit."))
-    written = [d["output"]] + ([d["surface"]["path"]] if d["surface"] else []) + (
+    written = ([d["output"]] if d["written"] else []) + ([d["surface"]["path"]] if d["surface"] else []) + (
         [d["report"]] if d["report"] else [])
     lines = [
         f"sorpia fit: {d['input']} -> {d['output']}",
@@ -298,7 +319,7 @@ def fit_summary(d: dict, repaired=(), kept=()) -> str:
         f"  check       max |B V - V0| = {d['max_residual']:.3g} "
         f"({d['max_residual_relative']:.3g} of the bounding-box diagonal)",
         f"  seconds     {phases}",
-        f"  wrote       {', '.join(written)}",
+        f"  wrote       {', '.join(written) or 'nothing'}",
     ]
     if d["surface"]:
         s = d["surface"]

@@ -97,10 +97,25 @@ def _verdict(scheme: str, refusal, mesh, tags: dict, info: dict) -> dict:
         kwargs = scheme_kwargs(scheme, tags)
         with warnings.catch_warnings():  # unreferenced vertices: the statistics' notes say it
             warnings.simplefilter("ignore")
-            Interpolator(mesh.faces, len(mesh.vertices), boundary=info["boundary"], **kwargs)
+            interp = Interpolator(mesh.faces, len(mesh.vertices), boundary=info["boundary"], **kwargs)
     except (UserError, MeshError, ParameterError, TypeError) as exc:
         return {"scheme": scheme, "can_run": False, "reason": str(exc)}
-    return {"scheme": scheme, "can_run": True, "reason": None}
+    return {"scheme": scheme, "can_run": True, "reason": None, **_valence_two(interp.topology)}
+
+
+def _valence_two(topo) -> dict:
+    """Interior vertices of valence 2, which can make B indefinite: the
+    stationary methods (pia, wpia, gs, sor, hss, whss) may diverge there, and
+    the default method auto then falls back to gmres."""
+    import numpy as np
+
+    valence = np.diff(np.asarray(topo.ring_offsets))
+    found = np.flatnonzero((valence == 2) & ~np.asarray(topo.is_boundary))
+    if len(found) == 0:
+        return {}
+    return {"valence_two": found[:MAX_LISTED].tolist(), "note": (
+        f"{len(found)} interior vertices of valence 2 (the first: {found[:4].tolist()}) can make B indefinite: "
+        "pia, wpia, gs, sor, hss and whss may diverge there; the default method auto falls back to gmres")}
 
 
 def _scheme_rows(info: dict) -> list[tuple[str, str]]:
@@ -121,6 +136,8 @@ def _scheme_rows(info: dict) -> list[tuple[str, str]]:
     label = f"{SCHEME_LABELS.get(v['scheme'], v['scheme'])} PIA"
     if v["scheme"] != "loop" or lines:  # Loop without tags: the Loop PIA row above says it
         rows.append((label, "can run" if v["can_run"] else f"cannot run: {v['reason']}"))
+    if v.get("note"):
+        rows.append(("", v["note"]))
     return rows
 
 

@@ -92,8 +92,8 @@ class _Formatter(argparse.ArgumentDefaultsHelpFormatter):
         return super()._get_help_string(action)
 
 
-EXIT_HELP = ("exit codes: 0 done; 1 a solve stopped at --max-iter before reaching --tol (all outputs still "
-             "written); 2 bad input or options, or not enough memory (one line on stderr); 130 interrupted "
+EXIT_HELP = ("exit codes: 0 done; 1 a solve did not reach --tol (it diverged, stopped at --max-iter, or B is "
+             "singular and the least-squares answer was written); 2 bad input or options, or not enough memory (one line on stderr); 130 interrupted "
              "(Ctrl-C); 143 terminated (SIGTERM).")
 # info and repair solve nothing: no exit code 1.
 EXIT_HELP_NO_SOLVE = ("exit codes: 0 done; 2 bad input or options, or not enough memory (one line on stderr); "
@@ -164,10 +164,15 @@ def build_parser() -> argparse.ArgumentParser:
 
     def solver_options(p, with_method=True):
         if with_method:
-            p.add_argument("--method", choices=DISPLAY_ORDER, default="sor",
-                           help="iteration: sor = SOR-PIA (paper eq. 18), gs = Gauss-Seidel, pia = PIA (eq. 9), "
-                           "wpia = weighted PIA, hss/whss = (weighted) Hermitian/skew-Hermitian splitting, "
-                           "cg = conjugate gradients")
+            p.add_argument("--method", choices=DISPLAY_ORDER, default="auto",
+                           help="iteration: auto = sor, falling back to gmres at the first sign that it will not "
+                           "reach --tol, and to cgls where B is singular (the least-squares answer); sor = SOR-PIA "
+                           "(paper eq. 18), gs = Gauss-Seidel, pia = PIA (eq. 9), wpia = weighted PIA, hss/whss = "
+                           "(weighted) Hermitian/skew-Hermitian splitting, cg = conjugate gradients (BiCGSTAB with "
+                           "a boundary), gmres = GMRES (any invertible B), cgls = least squares (any B)")
+            p.add_argument("--omega", type=_omega_arg, default="auto",
+                           help="relaxation of sor (and of auto's sor run): auto (sorpia's measured rule), young "
+                           "(paper Remark 1, from the spectral radius of the Jacobi matrix) or a number in (0, 2)")
         p.add_argument("--tol", type=_float_arg, default=1e-10,
                        help="stop when E_k/E_0 < TOL, E_k = max_i |v_i^0 - (B V_k)_i| (paper section 5)")
         p.add_argument("--max-iter", type=_int_arg, default=1000, metavar="N",
@@ -194,9 +199,10 @@ def build_parser() -> argparse.ArgumentParser:
                   "long runs show progress on stderr.")
     mesh_output(fit, "control mesh")
     solver_options(fit)
-    fit.add_argument("--omega", type=_omega_arg, default="auto",
-                     help="relaxation of --method sor: auto (sorpia's measured rule), young (paper Remark 1, "
-                     "from the spectral radius of the Jacobi matrix) or a number in (0, 2)")
+    fit.add_argument("--keep-unconverged", action="store_true",
+                     help="write the control mesh (and --surface) of a solve that diverged or stopped at --max-iter "
+                     "(the iterate of the lowest E_k); without it only --report is written then. The "
+                     "least-squares answer on a singular B is always written")
     fit.add_argument("--surface", metavar="SURF",
                      help="also write the limit surface of the control mesh, refined --level times, every vertex "
                      "at its exact limit position: triangles (Loop) or quads (Catmull-Clark; STL holds triangles "
@@ -207,7 +213,8 @@ def build_parser() -> argparse.ArgumentParser:
     fit.add_argument("--report", metavar="REPORT.json",
                      help="write a JSON report: mesh statistics, method, omega, E_k/E_0 per iteration, seconds "
                      "per phase (read, statistics, fit, write, check, surface)")
-    threads_option(fit, "--method sor or gs only (refused with other methods, which run on one thread)")
+    threads_option(fit, "--method auto (its sor run), sor or gs only (refused with other methods, which run on one "
+                   "thread)")
     fit.add_argument("--binary", action="store_true", help="write .ply and .stl outputs in binary (faster, "
                      "smaller; PLY keeps float64 either way)")
     scheme_options(fit)
@@ -220,7 +227,7 @@ def build_parser() -> argparse.ArgumentParser:
         a.input, a.output, method=a.method, omega=a.omega, tol=a.tol, max_iter=a.max_iter, boundary=a.boundary,
         surface=a.surface, level=a.level, report=a.report, quiet=a.quiet, force=a.force, triangulate=a.triangulate,
         binary=a.binary, threads=a.threads, repair=a.repair, scheme=a.scheme, ignore_tags=a.ignore_tags,
-        sharp_angle=a.sharp_angle, nonmanifold=a.nonmanifold)[0])
+        sharp_angle=a.sharp_angle, nonmanifold=a.nonmanifold, keep_unconverged=a.keep_unconverged)[0])
 
     comp = command("compare", "run several methods to one tolerance: the paper's Table 1 and Figure 7",
                    "Run each method on the mesh to the same tolerance and print the paper's Table 1 layout for "
@@ -229,35 +236,40 @@ def build_parser() -> argparse.ArgumentParser:
                    "methods, their seconds printed below the table). Optionally write the table (Markdown, CSV), every figure (JSON) and "
                    "the convergence plot (Figure 7: log10(E_k/E_0) against k, one line per method).")
     comp.add_argument("--methods", type=_methods_arg, default=",".join(DISPLAY_ORDER), metavar="LIST",
-                      help=f"comma-separated methods, from {','.join(DISPLAY_ORDER)} (sor with omega auto)")
+                      help=f"comma-separated methods, from {','.join(DISPLAY_ORDER)} (sor with --omega); a method "
+                      "that refuses the mesh is marked in the table and the others still run")
     solver_options(comp, with_method=False)
+    comp.add_argument("--omega", type=_omega_arg, default="auto",
+                      help="relaxation of sor and of auto's sor run: auto, young or a number in (0, 2)")
     comp.add_argument("--table", metavar="T.md", help="write the table as Markdown")
     comp.add_argument("--csv", metavar="T.csv", help="write the table as CSV")
     comp.add_argument("--plot", metavar="P.png", help="write the convergence plot (paper Figure 7) as PNG")
     comp.add_argument("--json", metavar="J.json", help="write every figure (E_k/E_0 per iteration, timings) as JSON")
-    threads_option(comp, "applied to sor and gs only (the other methods always run on one thread)")
+    threads_option(comp, "applied to auto (its sor run), sor and gs only (the other methods always run on one "
+                   "thread)")
     scheme_options(comp)
     triangulate_flag(comp)
     repair_flag(comp, "--json holds the repair report and the vertex map")
     nonmanifold_flag(comp, "on which every method runs")
     output_flags(comp)
     comp.set_defaults(func=lambda a: run_compare(
-        a.input, methods=a.methods, tol=a.tol, max_iter=a.max_iter, boundary=a.boundary, table=a.table,
+        a.input, methods=a.methods, omega=a.omega, tol=a.tol, max_iter=a.max_iter, boundary=a.boundary,
+        table=a.table,
         csv_path=a.csv, plot=a.plot, json_path=a.json, quiet=a.quiet, force=a.force, triangulate=a.triangulate,
         threads=a.threads, repair=a.repair, scheme=a.scheme, ignore_tags=a.ignore_tags,
         sharp_angle=a.sharp_angle, nonmanifold=a.nonmanifold)[0])
 
     ren = command("render", "draw the paper's Figure 3 for a mesh (PNG)",
-                  "Fit the mesh with SOR-PIA and draw four shaded panels, the same camera in each: (a) the given "
-                  "mesh, (b) its limit surface (Loop or Catmull-Clark: --scheme; it shrinks away from the given "
-                  "vertices, red), (c) the "
-                  "control mesh found by SOR-PIA, given vertices red and control vertices blue, (d) the limit "
+                  "Fit the mesh (--method, auto by default) and draw four shaded panels, the same camera in "
+                  "each: (a) the given mesh, (b) its limit surface (Loop or Catmull-Clark: --scheme; it shrinks "
+                  "away from the given vertices, red), (c) the control mesh found, given vertices red and "
+                  "control vertices blue, (d) the limit "
                   "surface of the control mesh through the red points. Big meshes are drawn at a lower level "
                   "or with part of their faces (--face-budget) so that drawing takes seconds.")
     ren.add_argument("-o", "--output", metavar="FIG.png", required=True, help="PNG image to write")
     ren.add_argument("--level", type=_level_arg, default=3, metavar="L",
                      help="refinement level of the limit surfaces drawn (lowered to fit --face-budget)")
-    solver_options(ren, with_method=False)
+    solver_options(ren)
     ren.add_argument("--size", type=_size_arg, default="1200x1000", metavar="WxH", help="image size in pixels")
     ren.add_argument("--elev", type=float, default=30.0, help="camera elevation in degrees")
     ren.add_argument("--azim", type=float, default=-60.0, help="camera azimuth in degrees")
@@ -265,14 +277,15 @@ def build_parser() -> argparse.ArgumentParser:
                      help="the axis drawn vertical (many mesh files, e.g. the Stanford bunny, have y up)")
     ren.add_argument("--face-budget", type=_positive_int, default=FACE_BUDGET, metavar="N",
                      help="most triangles drawn per panel")
-    threads_option(ren, "in the SOR-PIA fit")
+    threads_option(ren, "--method auto, sor or gs only")
     scheme_options(ren)
     triangulate_flag(ren)
     repair_flag(ren, "the panels show the repaired mesh")
     nonmanifold_flag(ren, "whose panels are drawn")
     output_flags(ren)
     ren.set_defaults(func=lambda a: run_render(
-        a.input, a.output, level=a.level, tol=a.tol, max_iter=a.max_iter, boundary=a.boundary, size=a.size,
+        a.input, a.output, level=a.level, method=a.method, omega=a.omega, tol=a.tol, max_iter=a.max_iter,
+        boundary=a.boundary, size=a.size,
         elev=a.elev, azim=a.azim, face_budget=a.face_budget, quiet=a.quiet, force=a.force,
         triangulate=a.triangulate, up=a.up, threads=a.threads, repair=a.repair, scheme=a.scheme,
         ignore_tags=a.ignore_tags, sharp_angle=a.sharp_angle, nonmanifold=a.nonmanifold)[0])

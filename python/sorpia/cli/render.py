@@ -9,14 +9,15 @@ from pathlib import Path
 import numpy as np
 
 from ..plotting import FACE_BUDGET  # plotting imports matplotlib only when drawing
-from .common import (EXIT_NOT_CONVERGED, EXIT_OK, SCHEME_LABELS, UserError, check_paths, check_solver_options,
-                     face_counts, fit_once, fmt_seconds, omega_text, read_solve_input, repair_lines, require_plotting,
-                     scheme_kwargs)
+from ..solve import stopped_short_message
+from .common import (EXIT_NOT_CONVERGED, EXIT_OK, OMEGA_METHODS, SCHEME_LABELS, UserError, check_paths,
+                     check_solver_options, face_counts, fit_once, fmt_seconds, method_label, omega_text,
+                     read_solve_input, repair_lines, require_plotting, scheme_kwargs)
 from .output import save_figure
 from .progress import Progress
 
 
-def run_render(input_path, output, *, level=3, tol=1e-10, max_iter=1000, boundary=None,
+def run_render(input_path, output, *, level=3, method="auto", omega="auto", tol=1e-10, max_iter=1000, boundary=None,
                size=(1200, 1000), elev=30.0, azim=-60.0, face_budget=FACE_BUDGET, quiet=False, force=False,
                triangulate=False, up="z", threads=1, repair=False, scheme="auto", ignore_tags=False,
                sharp_angle=None, nonmanifold="error", out=None) -> tuple[int, dict]:
@@ -28,7 +29,10 @@ def run_render(input_path, output, *, level=3, tol=1e-10, max_iter=1000, boundar
     if Path(output).suffix.lower() != ".png":
         raise UserError(f"-o {output}: render writes a PNG image, give a file name ending in .png")
     check_paths([input_path], {"-o": output}, force)
-    check_solver_options(f"--threads {threads}", method="sor", tol=tol, max_iter=max_iter, threads=threads)
+    uses_omega = method in OMEGA_METHODS
+    check_solver_options(f"--method {method}" + (f" --omega {omega}" if omega != "auto" else "")
+                         + (f" --threads {threads}" if threads != 1 else ""), method=method,
+                         **({"omega": omega} if uses_omega else {}), tol=tol, max_iter=max_iter, threads=threads)
     require_plotting()
     budget = face_budget
     timings = {}
@@ -39,7 +43,8 @@ def run_render(input_path, output, *, level=3, tol=1e-10, max_iter=1000, boundar
             scheme=scheme, boundary=boundary, sharp_angle=sharp_angle)
         V0, F = mesh.vertices, mesh.faces
         timings.update(mesh.timings)
-        _, res, timings["fit"], _ = fit_once(V0, F, method="sor", omega="auto", tol=tol, max_iter=max_iter,
+        _, res, timings["fit"], _ = fit_once(V0, F, method=method, omega=omega if uses_omega else None, tol=tol,
+                                             max_iter=max_iter,
                                              boundary=boundary, threads=threads, progress=progress,
                                              source=input_path, scheme=scheme, tags=tags)
         ctrl = np.asarray(res.control_vertices)
@@ -66,19 +71,22 @@ def run_render(input_path, output, *, level=3, tol=1e-10, max_iter=1000, boundar
         progress.status(f"drawing {output}")
         t0 = time.perf_counter()
         fig = interpolation_figure(V0, F, given, ctrl, fitted, size=size, elev=elev, azim=azim, face_budget=budget,
-                                   title=f"{Path(input_path).name}: {SCHEME_LABELS[scheme]} limit surface and SOR-PIA "
-                                   "(paper Figure 3)",
+                                   title=f"{Path(input_path).name}: {SCHEME_LABELS[scheme]} limit surface and "
+                                   f"{method_label(res.variant)} (paper Figure 3)",
                                    iterations=int(res.iterations), level=drawn_level, up=up, scheme=scheme,
                                    creases=creases, crease_curves=curves)
         save_figure(fig, output)
         timings["draw"] = time.perf_counter() - t0
-    data = {"output": str(output), "scheme": scheme, "level": drawn_level, "threads": threads,
+    data = {"output": str(output), "scheme": scheme, "level": drawn_level, "threads": threads, "method": method,
+            "variant": res.variant, "stop_reason": res.stop_reason, "attempts": res.attempts,
             "iterations": int(res.iterations), "converged": bool(res.converged), "omega": res.omega, "timings": timings}
     if not quiet:
         lvl = f"level {drawn_level}" + (f" (asked {level}; face budget {budget})" if drawn_level < level else "")
-        state = "" if res.converged else f"; NOT converged to tol {tol:g} (exit code 1)"
+        state = "" if res.converged else (f"; NOT converged ({res.stop_reason}): "
+                                          f"{stopped_short_message(res, method, tol, max_iter)} (exit code 1)")
         print(f"sorpia render: {input_path} -> {output} ({size[0]}x{size[1]} px, limit surfaces at {lvl}; "
-              f"SOR-PIA omega {omega_text(res.omega)}, {res.iterations} iterations{state})", file=out)
+              f"{method_label(method)}" + (f" ({method_label(res.variant)})" if res.variant != method else "")
+              + f", omega {omega_text(res.omega)}, {res.iterations} iterations{state})", file=out)
         for line in repair_lines(mesh.repair) if repair else ():
             print(f"  repaired    {line}", file=out)
         print("  seconds     " + ", ".join(f"{k} {fmt_seconds(v)}" for k, v in timings.items()), file=out)

@@ -76,6 +76,7 @@ class LocalSolver {
   /// was relaxed, E(end) / E_0 after it (iterations 0 or 1); relaxations;
   /// initial_error = E_0; stop_reason converged, max_iter or diverged.
   /// @throw ParameterError for an index outside [0, n)
+  /// @throw Interrupted (poll_interrupt) after taking the update back (undo)
   void update(double* v, bool v_is_last, const std::int32_t* indices, std::size_t count, const double* positions,
               double tol, long long max_relaxations, SolveResult& res);
 

@@ -10,7 +10,9 @@
 /// or k = max_iter, E_0 always that of V^(0) = V0 (so a warm start meets the
 /// same guarantee as a cold one).
 /// Also: E_k <= 64 eps max_i ||v_i^0|| (rounding level) counts as converged;
-/// E_k > 1e6 E_0 or not finite stops as diverged (the iterate is still finite).
+/// E_k above divergence_growth(method) times the lowest E_j before it, or not
+/// finite, stops as diverged, and the result is the iterate of the lowest E_k
+/// (replayed: every method is deterministic).
 
 #include <cmath>
 #include <cstddef>
@@ -35,14 +37,18 @@ enum class Method {
   Cg,    ///< conjugate gradients on Upsilon V = Gamma^-1 V0; BiCGSTAB when B is not symmetrisable
   Hss,   ///< Hermitian/skew-Hermitian splitting (Bai, Golub, Ng 2003) of B
   Whss,  ///< HSS relaxed: V <- V + weight (HSS(V) - V)
+  Gmres, ///< GMRES(m), Jacobi-preconditioned, restart length growing on stagnation: any invertible B
+  Cgls,  ///< CG on the normal equations B^T B V = B^T V0: the least-squares solution, any B
+  Auto,  ///< "sor" watched over its first sweeps, falling back to "gmres", then "cgls" (solve_auto)
 };
 
 /// Every method, in the order documented and listed in messages: the one list
 /// of method names (Python's sorpia.solve.METHODS is read from it).
-constexpr Method all_methods[] = {Method::Pia, Method::Wpia, Method::Gs, Method::Sor,
-                                  Method::Cg,  Method::Hss,  Method::Whss};
+constexpr Method all_methods[] = {Method::Auto, Method::Pia,  Method::Wpia,  Method::Gs,  Method::Sor,
+                                  Method::Cg,   Method::Hss,  Method::Whss,  Method::Gmres, Method::Cgls};
 
-/// "pia", "wpia", "gs", "sor", "cg", "hss", "whss". @throw ParameterError on another name
+/// "auto", "pia", "wpia", "gs", "sor", "cg", "hss", "whss", "gmres", "cgls".
+/// @throw ParameterError on another name
 Method parse_method(const std::string& name);
 const char* method_name(Method method);
 
@@ -125,6 +131,45 @@ double young_omega(double rho, bool* clamped);
 /// estimate to pay for and is never slower than "gs".
 constexpr double sor_auto_omega = 1.0;
 
+/// The divergence rule: a run stops as diverged at the first E_k above
+/// divergence_growth(method) times the lowest E_j (j < k) of the run, or not
+/// finite. A stationary method has E_k = max_i ||(B G^k e_0)_i|| for its
+/// iteration matrix G: where it converges, E_k rises above an earlier E_j
+/// by no more than the transient growth of G's powers, while a spectral
+/// radius above 1 multiplies it without bound. BiCGSTAB ("cg" on meshes
+/// with boundary) has residual spikes of several orders of magnitude on its
+/// way to convergence, so "cg" stops only at a rise no converging run comes
+/// near. The factors, chosen well above the largest rises measured on runs
+/// that converged (docs/convergence.md has the figures): 10 for "pia",
+/// "wpia", "gs" and "sor", 100 for "hss" and "whss", 1e4 for "gmres" and
+/// "cgls", 1e8 for "cg".
+double divergence_growth(Method method);
+
+/// The method a user is told to use after `method` stopped short
+/// (SolveResult::recommended): "gmres" after any method but "gmres" and
+/// "cgls", "cgls" after "gmres" (it stalled: B is singular), none after "cgls".
+std::optional<Method> recommended_after(Method method);
+
+/// "gmres": the restart length it starts with, the memory its basis may take
+/// (it grows to gmres_max_basis vectors at most, never fewer than
+/// gmres_restart), the ratio of a cycle's residual to its start above which
+/// the next cycle is twice as long, and the ratio above which a cycle that
+/// leaves the residual where it was stops the run as "stalled".
+constexpr std::size_t gmres_restart = 30;
+constexpr double gmres_grow_ratio = 0.9;
+constexpr std::size_t gmres_basis_bytes = std::size_t{512} << 20;
+constexpr double gmres_stall_ratio = 0.999;
+
+/// "cgls" stops as "singular" where ||B^T r|| <= cgls_singular_angle ||B||
+/// ||r|| in every column (r orthogonal to B's range as far as doubles tell):
+/// never on a B of condition number below 1 / cgls_singular_angle.
+constexpr double cgls_singular_angle = 1e-8;
+
+/// "auto": how many of the last sweeps its contraction estimate spans, and
+/// from which sweep on it is checked (every auto_window sweeps).
+constexpr int auto_window = 5;
+constexpr int auto_first_check = 10;
+
 /// The largest SolveOptions::threads accepted.
 constexpr int max_threads = 1024;
 
@@ -179,8 +224,28 @@ void check_options(const SolveOptions& opt);
 /// @throw ParameterError on other text
 void parse_omega(const std::string& text, SolveOptions& opt);
 
-enum class StopReason { Converged, MaxIter, Diverged, Callback };
+/// Why a run stopped. "slow": "auto" stopped its "sor" run, whose rate
+/// would not reach tol within max_iter; "stalled": "gmres" left the residual
+/// where it was over a cycle at its longest restart length (B singular, or
+/// numerically so); "singular": "cgls" solved the normal equations, E_k / E_0
+/// above tol (the least-squares solution: the targets have a part outside
+/// B's range).
+enum class StopReason { Converged, MaxIter, Diverged, Callback, Slow, Stalled, Singular };
 const char* stop_reason_name(StopReason reason);
+
+/// One method's run inside a solve (SolveResult::attempts).
+struct Attempt {
+  Method method = Method::Sor;
+  std::string variant;      ///< what ran, as SolveResult::variant
+  int iterations = 0;
+  StopReason stop_reason = StopReason::MaxIter;
+  double final_error = NAN; ///< its last E_k / E_0
+  long long products = 0;
+  double seconds = 0.0;
+};
+
+/// How many vertices SolveResult::worst_vertices names at most.
+constexpr std::size_t worst_vertices_listed = 10;
 
 struct SolveResult {
   std::vector<double> control_vertices;  ///< (n, columns)
@@ -192,8 +257,23 @@ struct SolveResult {
   int iterations = 0;
   StopReason stop_reason = StopReason::MaxIter;
   bool converged() const { return stop_reason == StopReason::Converged; }
-  Method method = Method::Sor;
-  std::string variant;                   ///< what ran: e.g. "cg" or "bicgstab" for Method::Cg
+  Method method = Method::Sor;            ///< the method asked for ("auto" too)
+  /// what produced control_vertices: e.g. "cg" or "bicgstab" for Method::Cg,
+  /// "sor", "gmres" or "cgls" for Method::Auto
+  std::string variant;
+  /// Every run, in order: one for an explicit method, those "auto" tried
+  /// (the last made the result; errors, iterations are the last one's).
+  std::vector<Attempt> attempts;
+  /// The iteration whose iterate control_vertices holds: `iterations`, or
+  /// after a divergence the lowest E_k's
+  int returned_iteration = 0;
+  /// Not converged: the method that would work here (recommended_after).
+  std::optional<Method> recommended;
+  /// Not converged: the vertices of the largest residual rows ||v_i^0 -
+  /// (B V)_i|| of the result, largest first (at most worst_vertices_listed),
+  /// and those norms (absolute): where the targets are not met.
+  std::vector<std::int64_t> worst_vertices;
+  std::vector<double> worst_residuals;
   double omega = NAN;                    ///< "sor"/"gs": the omega used
   /// "sor"/"gs": swept in a locality order of its own (breadth-first) because
   /// the input order was too poor (most vertices' neighbours far away in
