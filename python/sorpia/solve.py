@@ -414,11 +414,14 @@ class Interpolator:
         if moved:
             self._last_update = weakref.ref(r)
         else:
-            what = ("reached max_iter = {max_iter} sweeps' worth of relaxations" if r.stop_reason == "max_iter"
-                    else f"diverged, and so did method={self._solved_method!r} on the whole mesh")
-            warnings.warn(f"update {what.format(max_iter=options.max_iter)} with E/E_0 = {r.errors[-1]:.3g} > "
-                          f"tol = {options.tol:g}: the targets are left as they were, and the result holds "
-                          "previous's vertices", ConvergenceWarning, stacklevel=2)
+            if r.variant == "local":
+                what = f"reached max_iter = {options.max_iter} sweeps' worth of relaxations"
+            else:  # the local relaxation diverged, and the full solve that followed stopped short
+                what = (f"diverged, and method={self._solved_method!r} on the whole mesh stopped short "
+                        f"({r.stop_reason})")
+            warnings.warn(f"update {what} with E/E_0 = {r.errors[-1]:.3g} > tol = {options.tol:g}: the targets "
+                          "are left as they were, and the result holds previous's vertices", ConvergenceWarning,
+                          stacklevel=2)
         r._record_build(time.perf_counter() - t0, 0.0, 0.0)
         return r
 
