@@ -37,8 +37,8 @@ namespace sorpia {
 
 /// The bound on values that keeps the squared norms in E_k finite: a row of
 /// k values at most 1e150 in magnitude squares to at most k 1e300, below the
-/// largest double (1.8e308) for k up to 10^8, and B's rows (weights summing
-/// to 1) keep B V within it too. Targets of any finite magnitude are solved
+/// largest double (1.8e308) for k up to 10^8, with room for B V (rows of
+/// weights summing to 1, a small multiple of the largest value at most). Targets of any finite magnitude are solved
 /// (sorpia::solve scales them by a power of two, 2^e ~ max |V0| beyond
 /// 2^+-200, exactly); a warm start may be at most max_coordinate times that
 /// scale (1 within 2^+-200); local updates do not rescale, so their
