@@ -75,16 +75,22 @@ def test_repair_of_a_valid_mesh_writes_it_unchanged(tmp_path, monkeypatch, comma
     assert report["vertex_map"] == list(range(len(v)))
 
 
-def test_repair_refuses_a_moebius_strip_in_one_line(tmp_path, monkeypatch, command):
+def test_repair_cuts_a_moebius_strip_and_says_where(tmp_path, monkeypatch, command):
     monkeypatch.chdir(tmp_path)
-    src = write_obj(tmp_path / "band.obj", points(16), moebius(8))
-    code, out, err = command("repair", src, "-o", "fixed.obj")
-    assert_user_error(code, err)
-    assert len(err.strip().splitlines()) == 1 and "not orientable" in err and "band.obj" in err
-    assert not (tmp_path / "fixed.obj").exists()
-    code, _, err = command("fit", src, "-o", "ctrl.obj", "--repair")
-    assert_user_error(code, err)
-    assert "not orientable" in err
+    v, f = points(16), moebius(8)
+    src = write_obj(tmp_path / "band.obj", v, f)
+    code, out, err = command("repair", src, "-o", "fixed.obj", "--report", "r.json")
+    assert code == 0, err
+    report = json.loads((tmp_path / "r.json").read_text())
+    cut = report["report"]["cut_edges"]
+    assert len(cut) == 1 and f"cut along 1 edge (edge ({cut[0][0]}, {cut[0][1]}))" in out
+    check_repaired(v, f, result_from_files(tmp_path / "fixed.obj", report))
+    code, _, err = command("fit", src, "-o", "ctrl.obj", "--repair", "--report", "fit.json", "--tol", "1e-12")
+    assert code == 0, err
+    vertex_map = np.asarray(json.loads((tmp_path / "fit.json").read_text())["repair"]["vertex_map"])
+    ctrl, faces = sorpia.read_mesh("ctrl.obj")
+    # the written cage's limit passes through every input vertex at each copy: dense solve tolerance
+    assert np.abs(sorpia.limit_points(ctrl, faces) - v[vertex_map]).max() <= 1e-8 * np.abs(v).max()
 
 
 def test_fit_repair_passes_through_every_input_vertex_at_each_copy(defect_file, command):
@@ -131,12 +137,12 @@ def test_info_says_what_repair_would_change(defect_file, command):
     assert info["vertices"] == len(v) + counts["sheet_copies"] + counts["bowtie_copies"]
 
 
-def test_info_on_a_moebius_strip_says_repair_cannot_help(tmp_path, monkeypatch, command):
+def test_info_on_a_moebius_strip_says_repair_cuts_it(tmp_path, monkeypatch, command):
     monkeypatch.chdir(tmp_path)
     src = write_obj(tmp_path / "band.obj", points(16), moebius(8))
     code, out, err = command("info", src)
     assert code == 0, err
-    assert "--repair" in out and "not orientable" in out.split("--repair", 1)[1]
+    assert "--repair would fix" in out and "cut along 1 edge" in out.split("--repair would fix", 1)[1]
 
 
 def test_compare_repair_reports_the_vertex_map(defect_file, command):

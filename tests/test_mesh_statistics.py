@@ -128,3 +128,35 @@ def test_raw_face_lists_that_fail_validation_are_still_counted(faces, loops):
 def test_no_counts_without_faces_or_with_an_index_out_of_range():
     assert _core.face_list_statistics(np.zeros((0, 3), np.int32), 4) is None
     assert _core.face_list_statistics(np.array([[0, 1, 5]], np.int32), 4) is None
+
+
+def _numpy_counts(V, faces):
+    """Vertices, edges, faces and the Euler characteristic of a closed polygon mesh from its face list alone."""
+    edges = {tuple(sorted((f[j], f[(j + 1) % len(f)]))) for f in faces for j in range(len(f))}
+    return len(V), len(edges), len(faces), len(V) - len(edges) + len(faces)
+
+
+@pytest.mark.parametrize("shape", ["icosphere", "quad_torus"])
+def test_public_mesh_statistics_count_as_numpy_does(shape):
+    # sorpia.mesh_statistics (the Python API of `sorpia info`'s counts) against counts from the face list, and the
+    # scheme "auto" picks the regular valences of the scheme the faces call for (Loop for triangles, else
+    # Catmull-Clark).
+    V, F = sorpia.shapes.icosphere(2) if shape == "icosphere" else sorpia.shapes.quad_torus()
+    faces = [list(map(int, f)) for f in np.asarray(F)]
+    n, e, f, chi = _numpy_counts(np.asarray(V), faces)
+    s = sorpia.mesh_statistics(V, F)
+    assert (s["vertices"], s["edges"], s["faces"], s["euler_characteristic"]) == (n, e, f, chi)
+    assert s["genus"] == (2 - chi) // 2 and "refused" not in s
+    assert s["regular_valence"] == ([6, 4] if shape == "icosphere" else [4, 3])
+    valences = np.bincount(np.array([v for fc in faces for v in fc]), minlength=n)  # faces per vertex = valence
+    assert (s["valence_min"], s["valence_max"]) == (valences.min(), valences.max())
+
+
+def test_public_mesh_statistics_of_a_refused_mesh_say_why():
+    # A bowtie (two triangles sharing one vertex only) is refused by validation: counted from its face list, genus
+    # unknown, and the reason given.
+    V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [-1, 0, 0], [0, -1, 0]], float)
+    F = np.array([[0, 1, 2], [0, 3, 4]])
+    s = sorpia.mesh_statistics(V, F)
+    assert s["faces"] == 2 and s["genus"] is None
+    assert "refused" in s and "vertex 0" in s["refused"]

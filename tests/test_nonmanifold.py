@@ -136,15 +136,25 @@ def test_what_the_split_refuses():
     v, f = book(3, 2, triangles=False)
     with pytest.raises(sorpia.MeshError, match="repeats vertex.*repair"):
         sharp(sorpia.limit_points, v, np.vstack([f, [[0, 0, 4, 5]]]), scheme="catmull-clark")
-    # a sheet of one quad over crease vertex 1: a corner under edge-and-corner, so refused there
+
+
+def test_a_sheet_of_one_face_at_a_crease_vertex_keeps_the_crease_rule():
+    # a sheet of one quad over crease vertex 1: its copy there is a boundary vertex of one face, which
+    # "edge-and-corner" would make a corner; OpenSubdiv gives vertex 1 the crease rule under both rules, and
+    # makes the quad's free vertex (one face) a corner under "edge-and-corner" only
+    v, f = book(3, 2, triangles=False)
     single = [list(q) for q in f] + [[0, 1, 2, len(v)]]
     w = np.vstack([v, [[0.0, 0.0, 9.0]]])
-    with pytest.raises(sorpia.MeshError, match="single face.*edge-only"):
-        sharp(sorpia.limit_points, w, single, scheme="catmull-clark")
-    b = sharp(sorpia.limit_matrix, single, len(w), boundary="edge-only", scheme="catmull-clark").toarray()
-    want = np.zeros(len(w))
-    want[[1, 0, 2]] = [2 / 3, 1 / 6, 1 / 6]
-    assert np.abs(b[1] - want).max() <= 1e-15
+    crease = np.zeros(len(w))
+    crease[[1, 0, 2]] = [2 / 3, 1 / 6, 1 / 6]
+    rows = {rule: sharp(sorpia.limit_matrix, single, len(w), boundary=rule, scheme="catmull-clark").toarray()
+            for rule in ("edge-and-corner", "edge-only")}
+    for b in rows.values():
+        assert np.abs(b[1] - crease).max() <= 1e-15
+    assert np.array_equal(rows["edge-and-corner"][len(v)], np.eye(len(w))[len(v)])
+    assert rows["edge-only"][len(v), len(v)] < 1
+    res = sharp(sorpia.interpolate, w, single, scheme="catmull-clark", tol=1e-12)
+    assert np.abs(rows["edge-and-corner"] @ res.control_vertices - w).max() <= 1e-9 * np.abs(w).max()
 
 
 def test_tags_are_kept_away_from_the_crease():

@@ -1,4 +1,4 @@
-"""The Loop limit surface (LoopSurface, limit_surface, evaluate_limit) against
+"""The Loop limit surface (LimitSurface, limit_surface, evaluate_limit) against
 limit_points, a direct sparse solve and finite differences."""
 
 from __future__ import annotations
@@ -124,7 +124,7 @@ def test_tangents_and_normals_agree_with_finite_differences(mesh, boundary):
     k = 300
     face_ids = rng.integers(0, len(f), size=k)
     uv = rng.dirichlet([1, 1, 1], size=k)[:, :2] * 0.85 + 0.05
-    s = sorpia.LoopSurface(v, f, boundary=boundary)
+    s = sorpia.LimitSurface(v, f, boundary=boundary)
     tangent_err, normal_err = finite_difference_check(s, face_ids, uv, 1e-6)
     assert tangent_err <= 1e-7 and normal_err <= 1e-7
 
@@ -139,7 +139,7 @@ def test_near_extraordinary_vertices_normals_stay_within_the_documented_bound():
         k = 300
         face_ids = rng.integers(0, len(f), size=k)
         uv = rng.uniform(0.002, 0.04, size=(k, 2))
-        _, normal_err = finite_difference_check(sorpia.LoopSurface(v, f), face_ids, uv, 1e-7)
+        _, normal_err = finite_difference_check(sorpia.LimitSurface(v, f), face_ids, uv, 1e-7)
         assert normal_err <= bound
 
 
@@ -157,10 +157,10 @@ def test_set_vertices_gives_the_surface_of_the_new_control_mesh():
     # for evaluation and for a tessellation at the level kept from before.
     v, f = sorpia.shapes.irregular(400, seed=5)
     v2 = v * 1.5 + np.sin(v)
-    s = sorpia.LoopSurface(v, f)
+    s = sorpia.LimitSurface(v, f)
     s.tessellate(2)
     s.set_vertices(v2)
-    fresh = sorpia.LoopSurface(v2, f)
+    fresh = sorpia.LimitSurface(v2, f)
     rng = np.random.default_rng(2)
     face_ids, uv = rng.integers(0, len(f), 50), rng.dirichlet([1, 1, 1], 50)[:, :2]
     assert np.array_equal(s.vertices, v2)
@@ -174,7 +174,7 @@ def test_changing_the_tessellation_level_gives_the_fresh_surfaces_tessellation()
     # level changes (down, to 0 and back up): bit-identical to a new surface's,
     # and evaluation on the same object is unaffected (same Bfr factory).
     v, f = sorpia.shapes.grid(6, 5)
-    s = sorpia.LoopSurface(v, f, boundary="edge-only")
+    s = sorpia.LimitSurface(v, f, boundary="edge-only")
     rng = np.random.default_rng(3)
     face_ids, uv = rng.integers(0, len(f), 20), rng.dirichlet([1, 1, 1], 20)[:, :2]
     before = s.evaluate(face_ids, uv)
@@ -215,7 +215,7 @@ def test_bad_levels_are_refused(level):
 
 def test_bad_evaluation_points_are_refused():
     v, f = sorpia.shapes.icosphere(0)
-    s = sorpia.LoopSurface(v, f)
+    s = sorpia.LimitSurface(v, f)
     with pytest.raises(sorpia.ParameterError, match=r"face_ids\[1\] = 20 is out of range"):
         s.evaluate([0, 20], [[0.1, 0.1], [0.1, 0.1]])
     with pytest.raises(sorpia.ParameterError, match=r"uv\[0\] = \(0\.8.*outside the triangle"):
@@ -235,7 +235,7 @@ def test_parameters_a_rounding_error_outside_are_accepted():
 
 def test_wrong_vertex_count_for_set_vertices_is_refused():
     v, f = sorpia.shapes.grid(4, 4)
-    s = sorpia.LoopSurface(v, f)
+    s = sorpia.LimitSurface(v, f)
     with pytest.raises(sorpia.ParameterError, match="rows"):
         s.set_vertices(np.asarray(v)[:-1])
 

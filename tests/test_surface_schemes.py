@@ -230,8 +230,8 @@ def test_sub_face_parameters_outside_every_sub_face_are_refused():
     assert np.isfinite(s.evaluate([0] * len(ok), ok)).all()
 
 
-def test_limit_surface_is_the_alias_and_names_its_scheme():
-    assert sorpia.LoopSurface is sorpia.LimitSurface
+def test_limit_surface_names_its_scheme_and_the_loop_alias_is_gone():
+    assert not hasattr(sorpia, "LoopSurface")
     v, f = sorpia.shapes.icosphere(0)
     assert sorpia.LimitSurface(v, f).scheme == "loop"
     assert sorpia.LimitSurface(v, f, scheme="catmull-clark").scheme == "catmull-clark"

@@ -129,6 +129,39 @@ def test_bad_arrays_are_refused_with_the_index(vertices, faces, exc, match):
         sorpia.limit_points(vertices, faces)
 
 
+# Two faces with the same vertices in the opposite order (issue 20, item 1): alone, a closed 'pillow' of two faces;
+# beside other faces (of another size they took the polygon path, which let them through and the solve
+# diverged). Refused in every case naming both; repair removes the second.
+PILLOWS = {
+    "triangles-alone": [[0, 1, 2], [0, 2, 1]],
+    "triangles-and-a-triangle": [[0, 1, 2], [0, 2, 1], [3, 4, 5]],
+    "triangles-and-a-quad": [[0, 1, 2], [0, 2, 1], [3, 4, 5, 6]],
+    "triangles-and-a-quad-on-an-edge": [[0, 1, 2], [0, 2, 1], [1, 3, 4, 2]],
+    "quads-alone": [[0, 1, 2, 3], [0, 3, 2, 1]],
+    "quads-and-a-quad": [[0, 1, 2, 3], [0, 3, 2, 1], [4, 5, 6, 7]],
+    "quads-and-a-triangle": [[0, 1, 2, 3], [0, 3, 2, 1], [4, 5, 6]],
+}
+
+
+@pytest.mark.parametrize("faces", PILLOWS.values(), ids=PILLOWS.keys())
+def test_reversed_duplicates_are_refused_whatever_else_the_mesh_has(faces):
+    from test_fuzz import mesh_problems
+
+    assert "duplicate faces" in mesh_problems(faces, 8)  # the independent checker's verdict
+    v = np.random.default_rng(0).normal(size=(8, 3))
+    first, second = (" ".join(map(str, f)).replace(" ", ", ") for f in faces[:2])
+    for call in (lambda: sorpia.interpolate(v, faces, scheme="catmull-clark"),
+                 lambda: sorpia.interpolate(v, faces, scheme="catmull-clark", nonmanifold="sharp")):
+        with pytest.raises(sorpia.MeshError, match=rf"duplicate faces: face 0 \({first}\) and face 1 "
+                           rf"\({second}\) have the same .*opposite.*; sorpia.repair .* removes the second"):
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", sorpia.UnreferencedVerticesWarning)
+                warnings.simplefilter("ignore", sorpia.NonmanifoldWarning)  # a third face on an edge
+                call()
+    r = sorpia.repair(v, faces)
+    assert r.report["reversed_duplicate_faces"] == [1] and r.face_map.tolist() == [0] + list(range(2, len(faces)))
+
+
 def test_every_refusal_is_a_value_or_type_error():
     # The sorpia exceptions are ValueError subclasses: `except ValueError` catches bad input of every kind.
     assert issubclass(sorpia.MeshError, ValueError)
@@ -195,9 +228,9 @@ def test_vertex_count_entries_accept_numpy_integers(count, closed_form):
 @pytest.mark.parametrize("call", [
     lambda: sorpia.limit_points(V1[:10], F1),
     lambda: sorpia.interpolate(V1[:10], F1),
-    lambda: sorpia.LoopSurface(V1[:10], F1),
+    lambda: sorpia.LimitSurface(V1[:10], F1),
     lambda: sorpia.limit_surface(V1[:10], F1, level=1),
-], ids=["limit_points", "interpolate", "LoopSurface", "limit_surface"])
+], ids=["limit_points", "interpolate", "LimitSurface", "limit_surface"])
 def test_too_few_vertices_for_the_faces_names_len_vertices(call):
     # Where the count is the rows of `vertices`, the message names it so (there is no n_vertices argument).
     with pytest.raises(sorpia.MeshError, match=r"out of range \[0, 10\): len\(vertices\) = 10 is too small for faces, "
@@ -576,3 +609,15 @@ def test_an_unreachable_tol_ends_at_rounding_level(method, recwarn):
         assert any(issubclass(w.category, sorpia.ConvergenceWarning) for w in recwarn)
     residual = sorpia.limit_points(res.control_vertices, f) - v
     assert np.abs(residual).max() <= 1e-12  # B V = V0 to rounding level either way
+
+
+def test_every_warning_sorpia_issues_derives_from_one_base_class():
+    # One filter catches them all: every UserWarning subclass the package exports derives from SorpiaWarning,
+    # and the classes are the ones the modules raise (the same objects, not copies).
+    exported = [getattr(sorpia, name) for name in sorpia.__all__]
+    warning_classes = [c for c in exported if isinstance(c, type) and issubclass(c, Warning)]
+    assert len(warning_classes) >= 7
+    assert all(issubclass(c, sorpia.SorpiaWarning) for c in warning_classes)
+    assert sorpia.solve.ConvergenceWarning is sorpia.errors.ConvergenceWarning
+    with pytest.warns(sorpia.SorpiaWarning):
+        sorpia.interpolate(V1, F1, method="pia", max_iter=1)

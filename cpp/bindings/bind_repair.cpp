@@ -21,6 +21,10 @@ py::dict report_dict(const sorpia::RepairReport& r) {
   d["sheet_copies"] = py::cast(r.sheet_copies);
   d["bowtie_vertices"] = py::cast(r.bowtie_vertices);
   d["bowtie_copies"] = py::cast(r.bowtie_copies);
+  d["cut_nonmanifold_edges"] = py::cast(r.cut_nonmanifold_edges);
+  d["cut_edges"] = py::cast(r.cut_edges);
+  d["cut_vertices"] = py::cast(r.cut_vertices);
+  d["cut_copies"] = py::cast(r.cut_copies);
   d["flipped_faces"] = py::cast(r.flipped_faces);
   return d;
 }

@@ -1,21 +1,22 @@
-"""sorpia: interpolating Loop subdivision surfaces.
+"""sorpia: subdivision surfaces through given points.
 
-Moves the control vertices of a triangle mesh so that its Loop limit surface
-(as OpenSubdiv defines it) passes through the given vertices: solves B V = V0
-with SOR-PIA and the rest of the PIA family.
+Moves the control vertices of a mesh so that its limit surface (Loop for
+triangle meshes, Catmull-Clark for quad and polygon meshes, with OpenSubdiv's
+creases, corners and holes, as OpenSubdiv defines them) passes through the
+given vertices: solves B V = V0 with SOR-PIA and the rest of the PIA family.
 """
 
 from ._core import __version__
-from .errors import MeshError, MeshFileError, ParameterError
-from .limit import UnreferencedVerticesWarning, limit_matrix, limit_points
-from .solve import (ConvergenceWarning, InterpolationResult, Interpolator, OmegaWarning, SingularMatrixWarning,
-                    interpolate)
-from .io import UnknownTagWarning, read_mesh, write_mesh
+from .errors import (ConvergenceWarning, MeshError, MeshFileError, NonmanifoldWarning, OmegaWarning, ParameterError,
+                     SingularMatrixWarning, SorpiaWarning, UnknownTagWarning, UnreferencedVerticesWarning)
+from .limit import limit_matrix, limit_points
+from .solve import InterpolationResult, Interpolator, interpolate
+from .io import read_mesh, write_mesh
 from .sharp import sharp_edges
 from ._validate import Polygons
 from .mesh_repair import RepairResult, repair
-from .nonmanifold import NonmanifoldWarning
-from .surface import LimitSurface, LoopSurface, evaluate_limit, limit_surface
+from .meshinfo import mesh_statistics
+from .surface import LimitSurface, evaluate_limit, limit_surface
 from . import shapes
 
 __all__ = [
@@ -23,6 +24,7 @@ __all__ = [
     "MeshError",
     "MeshFileError",
     "ParameterError",
+    "SorpiaWarning",
     "UnreferencedVerticesWarning",
     "ConvergenceWarning", "InterpolationResult", "Interpolator", "OmegaWarning", "SingularMatrixWarning",
     "interpolate",
@@ -30,8 +32,9 @@ __all__ = [
     "Polygons",
     "limit_points",
     "shapes",
-    "LimitSurface", "LoopSurface", "evaluate_limit", "limit_surface", "read_mesh", "write_mesh",
+    "LimitSurface", "evaluate_limit", "limit_surface", "read_mesh", "write_mesh",
     "UnknownTagWarning", "sharp_edges",
     "RepairResult", "repair",
+    "mesh_statistics",
     "NonmanifoldWarning",
 ]

@@ -14,14 +14,14 @@ What is checked where:
   int64 index of 2**32 + 1 is refused rather than wrapped to 1), faces of
   fewer than 3 vertices, and for Loop polygons that are not triangles (with
   the recipe to triangulate them, or to use scheme="catmull-clark");
-- in the C++ core (sorpia::Topology, validate_faces in cpp/src/topology.cpp),
+- in the C++ core (sorpia::Topology, validate_faces in cpp/mesh/src/topology.cpp),
   for every caller including sorpia-bench: indices again, a vertex repeated
-  in a face, duplicate triangles, edges of three or more faces, inconsistent
+  in a face, duplicate faces, edges of three or more faces, inconsistent
   orientation (with the faces to flip, or "not orientable" for a Moebius
   strip) and non-manifold ("bowtie") vertices, raised as sorpia.MeshError.
 
 sorpia.repair changes the faces the core refuses (all but indices out of
-range and a non-orientable surface) into a valid mesh without moving a vertex.
+range) into a valid mesh without moving a vertex.
 
 Faces given as floats are refused with TypeError even when they hold whole
 numbers, as numpy refuses float indices: a float face array is more often a

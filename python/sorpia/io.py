@@ -14,11 +14,7 @@ import numpy as np
 
 from . import _core
 from ._validate import Polygons, as_boundary, as_polygons, as_tags, as_vertices
-
-
-class UnknownTagWarning(UserWarning):
-    """An OBJ file has `t` tags sorpia does not know; they are skipped, as
-    OpenSubdiv's own shape parser skips them."""
+from .errors import UnknownTagWarning
 
 
 def read_mesh(path, triangulate: bool = False, tags: bool = False):

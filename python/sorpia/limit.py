@@ -9,12 +9,8 @@ import numpy as np
 from . import _core
 from . import nonmanifold as nonmanifold_sharp
 from ._validate import DEFAULT_BOUNDARY, DEFAULT_SCHEME, as_nonmanifold, as_rules, as_tags, as_vertices
-from .errors import MeshError
-from .nonmanifold import NONMANIFOLD_HINT
-
-
-class UnreferencedVerticesWarning(UserWarning):
-    """Some vertices belong to no face; their limit is themselves."""
+from .errors import MeshError, UnreferencedVerticesWarning
+from .nonmanifold import refusal_hint
 
 
 def topology(faces, n_vertices: int, *, scheme: str = DEFAULT_SCHEME, warn: bool = True,
@@ -42,9 +38,10 @@ def built(build):
     try:
         return build()
     except MeshError as exc:
-        if not any(kind in str(exc) for kind in NONMANIFOLD_KINDS):
+        hint = refusal_hint(str(exc))
+        if hint is None:
             raise
-        raise MeshError(f"{exc}; {NONMANIFOLD_HINT}") from None
+        raise MeshError(f"{exc}; {hint}") from None
 
 
 def warn_unreferenced(topo: _core.Topology, stacklevel: int) -> None:
@@ -55,8 +52,6 @@ def warn_unreferenced(topo: _core.Topology, stacklevel: int) -> None:
                       stacklevel=stacklevel)
 
 
-# The refusals of sorpia::Topology that OpenSubdiv takes as non-manifold topology.
-NONMANIFOLD_KINDS = ("non-manifold edge", "non-manifold vertex", "inconsistent orientation", "duplicate faces")
 
 
 def singular_cubes(topo: _core.Topology, tag_set: _core.Tags) -> list:

@@ -14,7 +14,8 @@ from ._validate import Polygons, _face_rows, as_faces, as_polygons, as_tags, as_
 
 # The report's keys, in the order the repair applies its rules (see `repair`).
 REPORT_KINDS = ("degenerate_faces", "collapsed_faces", "duplicate_faces", "reversed_duplicate_faces", "nonmanifold_edges",
-                "sheet_vertices", "sheet_copies", "bowtie_vertices", "bowtie_copies", "flipped_faces")
+                "sheet_vertices", "sheet_copies", "bowtie_vertices", "bowtie_copies", "cut_nonmanifold_edges",
+                "cut_edges", "cut_vertices", "cut_copies", "flipped_faces")
 
 
 def _counts(report: dict) -> dict:
@@ -57,6 +58,15 @@ def describe_changes(report: dict, max_listed: int = 5) -> list[str]:
         lines.append(f"bowtie vertices (fans meeting at one vertex): {len(r['bowtie_vertices'])} split into one "
                      f"vertex per fan, {_copies(r['bowtie_copies'])} "
                      f"{_listed(_VERTICES, r['bowtie_vertices'], max_listed)}")
+    if r["cut_nonmanifold_edges"]:
+        lines.append(f"sheets that no orientation fits: at {len(r['cut_nonmanifold_edges'])} of the non-manifold "
+                     "edges some faces left unpaired, each bordering the edge alone "
+                     f"{_listed(_EDGES, r['cut_nonmanifold_edges'], max_listed)}")
+    if r["cut_edges"]:
+        n = len(r["cut_edges"])
+        lines.append(f"not orientable (a twist, like a Moebius strip): cut along {n} {_EDGES[n > 1]} "
+                     f"{_listed(_EDGES, r['cut_edges'], max_listed)}, their {len(r['cut_vertices'])} end vertices "
+                     f"split with {_copies(r['cut_copies'])}")
     if r["flipped_faces"]:
         lines.append(f"inconsistent orientation: {len(r['flipped_faces'])} faces reversed "
                      f"{_listed(_FACES, r['flipped_faces'], max_listed)}")
@@ -113,14 +123,24 @@ def repair(vertices, faces, *, creases=None, corners=None, holes=None) -> Repair
        paired into sheets in face order: the lowest-numbered unpaired face with
        the next unpaired face running the edge the other way (else the next
        unpaired face); a face left over borders the edge alone;
-    4. a vertex whose faces form several fans (joined across the edges of
-       rule 3) gets one vertex per fan: the ends of a non-manifold edge
-       ("sheet_vertices") and the 'bowtie' vertices where fans meet at a point
-       ("bowtie_vertices"), with the number of copies each got in
-       "sheet_copies" and "bowtie_copies". The fan holding the vertex's first
-       corner in face order keeps the input vertex; every other fan gets a copy
-       appended after the input vertices, in the order of its first corner;
-    5. each connected part is oriented consistently by reversing the smaller of
+    4. where no orientation of the faces fits, the joins that disagree are
+       cut, each face then bordering the edge alone: first, per part joined
+       by edges of two faces, a twist (a Moebius strip) is cut across where
+       the fronts of a breadth-first search from the face farthest from the
+       part's boundary meet ("cut_edges": a short path of edges from
+       boundary to boundary, or a closed one); then the pairs of rule 3, in face order, join the parts
+       they connect, and a pair that would join two faces already oriented
+       against it is left unpaired ("cut_nonmanifold_edges"). Nothing is cut
+       where every part orients with its pairs;
+    5. a vertex whose faces form several fans (joined across the edges of
+       rules 3 and 4) gets one vertex per fan: the ends of a non-manifold edge
+       ("sheet_vertices"), the ends of a cut edge ("cut_vertices") and the
+       'bowtie' vertices where fans meet at a point ("bowtie_vertices"), with
+       the number of copies each got in "sheet_copies", "cut_copies" and
+       "bowtie_copies". The fan holding the vertex's first corner in face
+       order keeps the input vertex; every other fan gets a copy appended
+       after the input vertices, in the order of its first corner;
+    6. each connected part is oriented consistently by reversing the smaller of
        its two classes of faces (on a tie, those disagreeing with its
        lowest-numbered face) ("flipped_faces"); a reversed face keeps its
        first corner: ``(a, b, c, d)`` becomes ``(a, d, c, b)``.
@@ -155,7 +175,7 @@ def repair(vertices, faces, *, creases=None, corners=None, holes=None) -> Repair
         ``report`` has one key per kind above, holding the input face
         indices, the input edges ``[a, b]`` (a < b) or the input vertex
         indices concerned, and "counts", the number of each kind (for
-        "sheet_copies" and "bowtie_copies", the number of vertices added). For
+        the "_copies" kinds, the number of vertices added). For
         a valid mesh every count is 0 and the validated input arrays come back
         themselves (no copy; they are the caller's arrays, or the caller's
         `sorpia.Polygons`, when these are already float64 and int32,
@@ -164,9 +184,7 @@ def repair(vertices, faces, *, creases=None, corners=None, holes=None) -> Repair
     Raises
     ------
     sorpia.MeshError
-        A connected part with no consistent orientation (a Moebius strip),
-        named by its lowest face and its size; faces that all repeat a vertex;
-        or a problem repair does not change (index out of range, a face of
+        Faces that all repeat a vertex, or a problem repair does not change (index out of range, a face of
         fewer than 3 vertices, no faces, a vertex of more edges than
         OpenSubdiv takes).
     """

@@ -103,6 +103,50 @@ def mesh_info(vertices, faces, boundary: str = "edge-and-corner", list_extraordi
     return info
 
 
+def mesh_statistics(vertices, faces, *, scheme: str = "auto", list_extraordinary: bool | int = False) -> dict:
+    """Statistics of a mesh, as ``sorpia info`` prints them (the paper's Table 2).
+
+    Parameters
+    ----------
+    vertices : array_like (n, 3) float
+        For the counts and the bounding box.
+    faces : array_like (m, k) int, list of polygons or sorpia.Polygons
+    scheme : {"auto", "loop", "catmull-clark"}
+        Whose regular valence the extraordinary vertices are counted against
+        (Loop 6 inside and 4 on the boundary, Catmull-Clark 4 and 3); "auto":
+        Loop when every face is a triangle.
+    list_extraordinary : bool or int
+        Include the index, valence and side of every extraordinary vertex
+        (True), of the first N (an int), or of none (False).
+
+    Returns
+    -------
+    dict
+        ``vertices, faces, edges, boundary_edges, boundary_loops,
+        euler_characteristic, genus, components, unreferenced_vertices,
+        valence_min, valence_max, valence_histogram, extraordinary_vertices,
+        extraordinary_share, regular_valence, bounding_box, diagonal`` (see
+        `topology_info`). A mesh sorpia's validation refuses (non-manifold,
+        inconsistently oriented) is counted from its face list where it can
+        be, with ``genus`` None; ``refused`` then holds the reason.
+
+    Examples
+    --------
+    >>> V, F = sorpia.shapes.icosphere(1)
+    >>> s = sorpia.mesh_statistics(V, F)
+    >>> s["vertices"], s["edges"], s["faces"], s["genus"]
+    (42, 120, 80, 0)
+    """
+    from ._validate import as_scheme
+
+    name = _core.scheme_name(as_scheme(scheme, faces))
+    info = mesh_info(vertices, faces, list_extraordinary=list_extraordinary, scheme=name)
+    verdict = info.pop("loop_pia")
+    if not verdict["can_run"]:
+        info["refused"] = verdict["reason"]
+    return info
+
+
 def _face_list_statistics(faces: np.ndarray, n: int):
     """The core's counts of a raw face list; None where there is none to count."""
     if faces.ndim != 2 or faces.shape[1] != 3 or len(faces) == 0 or n == 0 or faces.dtype.kind not in "iu":

@@ -14,7 +14,9 @@ sorpia computes exactly those rows through a manifold split
 vertices, one vertex per fan (copies of the input vertices), with an
 infinitely sharp corner on every copy of each corner vertex; the copies of a
 crease vertex lie on boundaries of the split whose boundary rule is the
-crease rule. The limit rows of the split, their columns mapped back through
+crease rule (where such a copy has one face, which "edge-and-corner" would
+make a corner, the split is solved under "edge-only" with that rule's
+corners as tags). The limit rows of the split, their columns mapped back through
 the vertex map, are OpenSubdiv's rows of the input mesh (to rounding, tested
 against Far's Limit() on the whole mesh). Faces that repeat a vertex, to
 which OpenSubdiv gives degenerate edges, are refused: `sorpia.repair` drops
@@ -30,7 +32,7 @@ import numpy as np
 
 from . import _core
 from ._validate import DEFAULT_BOUNDARY, as_boundary, as_tags, as_vertices
-from .errors import MeshError
+from .errors import MeshError, NonmanifoldWarning
 
 
 # Appended to the messages that refuse non-manifold topology.
@@ -39,9 +41,19 @@ NONMANIFOLD_HINT = ("sorpia.repair (command line: --repair) makes the mesh manif
                     "(non-manifold edges infinitely sharp, non-manifold vertices corners)")
 
 
-class NonmanifoldWarning(UserWarning):
-    """nonmanifold="sharp" on a non-manifold mesh: OpenSubdiv's documentation
-    calls the surface of non-manifold topology undefined for now."""
+# The refusals of sorpia::Topology that OpenSubdiv takes as non-manifold topology.
+NONMANIFOLD_KINDS = ("non-manifold edge", "non-manifold vertex", "inconsistent orientation", "duplicate faces")
+
+
+def refusal_hint(message: str) -> str | None:
+    """The ways out to append to a refusal of sorpia::Topology (`message`),
+    or None where it is not about topology repair or OpenSubdiv's
+    non-manifold rules change. Two faces with the same vertices in the
+    opposite order are a closed surface of two faces to OpenSubdiv, not
+    non-manifold: only repair removes one."""
+    if "duplicate faces" in message and "opposite" in message:
+        return "sorpia.repair (command line: --repair) removes the second of them"
+    return NONMANIFOLD_HINT if any(kind in message for kind in NONMANIFOLD_KINDS) else None
 
 
 class Split(NamedTuple):
@@ -51,6 +63,7 @@ class Split(NamedTuple):
     vertex_map: np.ndarray  # for every vertex of the split, the input vertex it copies
     tags: dict  # the split's tags: the caller's, carried over, and the corners
     report: dict  # nonmanifold_edges, nonmanifold_vertices, corners, single_face_sheets (input indices)
+    boundary: str = DEFAULT_BOUNDARY  # the boundary rule the split is solved under (see split)
 
 
 def split(faces, n_vertices: int, boundary: str = DEFAULT_BOUNDARY, *, creases=None, corners=None,
@@ -59,12 +72,18 @@ def split(faces, n_vertices: int, boundary: str = DEFAULT_BOUNDARY, *, creases=N
     for a manifold mesh (nothing to split). Warns NonmanifoldWarning
     otherwise.
 
+    The split is solved under `boundary`, except where a crease vertex has a
+    copy in a sheet of one face and the rule is "edge-and-corner", which
+    would make that copy a corner: there it is solved under "edge-only" with
+    the corners "edge-and-corner" makes (every other vertex of one face) as
+    infinitely sharp corner tags, the same rows (OpenSubdiv sharpens such
+    vertices whatever their tags). `Split.boundary` is the rule to solve it
+    under.
+
     Raises MeshError for what the split cannot reproduce: a face that repeats
     a vertex; a crease vertex whose fans do not all lie between its two
-    non-manifold edges; a crease vertex with a fan of one face under the
-    "edge-and-corner" boundary rule (which makes that copy a corner; "edge-only"
-    does not); a caller's crease at a crease vertex (OpenSubdiv counts it with
-    the creases of every sheet).
+    non-manifold edges; a caller's crease at a crease vertex (OpenSubdiv
+    counts it with the creases of every sheet).
     """
     from .mesh_repair import RepairResult, _core_faces, _faces_as_given, _mapped_tags
 
@@ -74,23 +93,23 @@ def split(faces, n_vertices: int, boundary: str = DEFAULT_BOUNDARY, *, creases=N
         if found is None:
             return None
         split_faces, vertex_map, report = found
+        split_indices = split_faces.ravel()
     else:
         found = _core.split_nonmanifold_polygons(*polygons, n_vertices)
         if found is None:
             return None
-        counts, indices, vertex_map, report = found
-        split_faces = _faces_as_given(rows, counts, indices)
+        counts, split_indices, vertex_map, report = found
+        split_faces = _faces_as_given(rows, counts, split_indices)
     warnings.warn(f"nonmanifold=\"sharp\": {len(report['nonmanifold_edges'])} non-manifold edges and "
                   f"{len(report['nonmanifold_vertices'])} non-manifold vertices kept with OpenSubdiv's rules, "
                   "whose result OpenSubdiv's documentation calls undefined for now", NonmanifoldWarning,
                   stacklevel=4)
     crease_vertices = sorted(set(report["nonmanifold_vertices"]) - set(report["corners"]))
+    corner_vertices = report["corners"]
     if report["single_face_sheets"] and as_boundary(boundary) == _core.Boundary.edge_and_corner:
-        v = report["single_face_sheets"][0]
-        raise MeshError(f"vertex {v} is on an interior non-manifold crease, where OpenSubdiv gives it the crease "
-                        "rule, but one of its sheets has a single face at it, which the \"edge-and-corner\" "
-                        "boundary rule makes a corner of the split: pass boundary=\"edge-only\" (--boundary "
-                        "edge-only), or repair the mesh")
+        boundary = "edge-only"
+        one_face = np.bincount(split_indices, minlength=len(vertex_map)) == 1
+        corner_vertices = np.union1d(corner_vertices, vertex_map[one_face & ~np.isin(vertex_map, crease_vertices)])
 
     n_faces = len(polygons[0]) if triangles is None else len(triangles)
     given = {kind for kind, value in (("creases", creases), ("corners", corners), ("holes", holes))
@@ -106,12 +125,12 @@ def split(faces, n_vertices: int, boundary: str = DEFAULT_BOUNDARY, *, creases=N
                             "cannot reproduce it; repair the mesh or leave that crease out")
         result = RepairResult(None, split_faces, vertex_map, np.arange(n_faces, dtype=np.int32), {})
         tags = _mapped_tags(checked, result, n_vertices, given)
-    copies = np.flatnonzero(np.isin(vertex_map, report["corners"])).astype(np.int32)
+    copies = np.flatnonzero(np.isin(vertex_map, corner_vertices)).astype(np.int32)
     user_corners, user_sharpness = tags.get("corners", (np.zeros(0, np.int32), np.zeros(0)))
     # ours last: a corner given twice counts with its last sharpness, as in OpenSubdiv
     tags["corners"] = (np.concatenate([user_corners, copies]),
                        np.concatenate([user_sharpness, np.full(len(copies), _core.INFINITE_SHARPNESS)]))
-    return Split(split_faces, vertex_map, tags, report)
+    return Split(split_faces, vertex_map, tags, report, boundary)
 
 
 def _columns_to_input(vertex_map: np.ndarray, n: int):
@@ -130,7 +149,7 @@ def limit_points(vertices, faces, boundary, scheme, tags: dict):
     s = split(faces, len(vertices), boundary, **tags)
     if s is None:
         return manifold_limit_points(vertices, faces, boundary=boundary, scheme=scheme, **tags)
-    return manifold_limit_points(vertices[s.vertex_map], s.faces, boundary=boundary, scheme=scheme,
+    return manifold_limit_points(vertices[s.vertex_map], s.faces, boundary=s.boundary, scheme=scheme,
                                  **s.tags)[: len(vertices)]
 
 
@@ -142,7 +161,7 @@ def limit_matrix(faces, n_vertices: int, boundary, scheme, tags: dict):
     s = split(faces, n_vertices, boundary, **tags)
     if s is None:
         return manifold_limit_matrix(faces, n_vertices, boundary=boundary, scheme=scheme, **tags)
-    return folded(manifold_limit_matrix(s.faces, len(s.vertex_map), boundary=boundary, scheme=scheme, **s.tags),
+    return folded(manifold_limit_matrix(s.faces, len(s.vertex_map), boundary=s.boundary, scheme=scheme, **s.tags),
                   s.vertex_map, n_vertices)
 
 

@@ -86,8 +86,9 @@ import numpy as np
 
 from . import _core
 from . import nonmanifold as nonmanifold_sharp
-from ._validate import DEFAULT_BOUNDARY, DEFAULT_SCHEME, as_nonmanifold, as_rules, as_vertex_count, as_vertices
-from .errors import ParameterError
+from ._validate import (DEFAULT_BOUNDARY, DEFAULT_SCHEME, as_boundary, as_nonmanifold, as_rules, as_vertex_count,
+                        as_vertices)
+from .errors import ConvergenceWarning, OmegaWarning, ParameterError, SingularMatrixWarning
 from .limit import NONMANIFOLD_DOC as _NONMANIFOLD_DOC
 from .limit import TAGS_DOC as _TAGS_DOC
 from .limit import singular_cubes
@@ -99,19 +100,6 @@ THREADED_METHODS = ("sor", "gs")  # the methods that sweep on threads > 1
 YOUNG_RHO_CLAMP = float(_core.YOUNG_RHO_CLAMP)
 MAX_THREADS = int(_core.MAX_THREADS)
 _INT64_MAX = 2**63 - 1
-
-
-class ConvergenceWarning(UserWarning):
-    """A solve stopped at max_iter or diverged before reaching tol."""
-
-
-class SingularMatrixWarning(UserWarning):
-    """Issued after a solve that stopped short on a mesh whose B is singular
-    on a part known in closed form (`sorpia.limit.singular_cubes`)."""
-
-
-class OmegaWarning(UserWarning):
-    """omega="young" met rho(I - D^-1 B) >= 0.9999: Young's formula has no real value (rho >= 1) or none of use."""
 
 
 # The one result type, defined in the core's binding (its docstring lists the fields).
@@ -210,6 +198,7 @@ class Interpolator:
         # nonmanifold="sharp": the core solves the manifold split, with the
         # caller's vertices in and out (sorpia::Interpolator's vertex_map).
         self._split = None
+        boundary = rule_options["boundary"]
         if as_nonmanifold(nonmanifold) == "sharp":
             tags = {kind: rule_options[kind] for kind in ("creases", "corners", "holes")}
             self._split = nonmanifold_sharp.split(faces, as_vertex_count(n_vertices, count_name),
@@ -217,14 +206,16 @@ class Interpolator:
         vertex_map = None
         if self._split is not None:
             faces, n_vertices, vertex_map = self._split.faces, len(self._split.vertex_map), self._split.vertex_map
-            rule_options = {**rule_options, "creases": None, "corners": None, "holes": None, **self._split.tags}
+            rule_options = {**rule_options, "boundary": self._split.boundary, "creases": None, "corners": None,
+                            "holes": None, **self._split.tags}
         arrays, n, rules = as_rules(faces, n_vertices, count_name=count_name, **rule_options)
         self._impl = built(lambda: _core.Interpolator(*arrays, n, rules, vertex_map=vertex_map))
         self.topology = self._impl.topology
         warn_unreferenced(self.topology, stacklevel=5)
         self.n_vertices = self._impl.n_vertices
         self.scheme = _core.scheme_name(rules.scheme)
-        self.boundary = _core.boundary_name(rules.boundary)
+        # the caller's rule (a split may be solved under another that gives the same rows: nonmanifold.split)
+        self.boundary = _core.boundary_name(as_boundary(boundary))
         self.tags = rules.tags
         self.build_timings = self._impl.build_timings
         self._last_update = None  # weak reference to the result the last update returned

@@ -116,8 +116,7 @@ class LimitSurface:
     Notes
     -----
     The parameterisation of each kind of face is described in the module
-    docstring (`sorpia.surface`). ``LoopSurface`` is another name for this
-    class.
+    docstring (`sorpia.surface`).
     """
 
     def __init__(self, vertices, faces, boundary: str = DEFAULT_BOUNDARY, *, scheme: str = DEFAULT_SCHEME,
@@ -236,9 +235,6 @@ class LimitSurface:
         """
         vertices, faces, counts = self._surface.tessellate(_as_level(level))
         return vertices, _faces_out(faces, counts)
-
-
-LoopSurface = LimitSurface
 
 
 def limit_surface(vertices, faces, level: int = 3, boundary: str = DEFAULT_BOUNDARY, *,

@@ -19,7 +19,7 @@
 #include <vector>
 
 #include "expect_error.hpp"
-#include "osd_refiner.hpp"
+#include "sorpia/detail/osd_refiner.hpp"
 #include "sorpia/errors.hpp"
 #include "sorpia/io.hpp"
 #include "sorpia/repair.hpp"
@@ -84,22 +84,30 @@ sorpia::NonmanifoldSplit expect_split_is_opensubdiv(const Mesh& m, sorpia::Schem
 
   const std::size_t n_out = s.vertex_map.size();
   const sorpia::Topology split(s.face_counts.data(), s.face_counts.size(), s.faces.data(), n_out);
+  // A crease vertex's copy in a sheet of one face, which "edge-and-corner" would make a corner: the split is
+  // taken under "edge-only", with the corners "edge-and-corner" makes (every other vertex of one face) as tags.
+  const bool corner_sheets = boundary == sorpia::Boundary::EdgeAndCorner && !s.single_face_sheets.empty();
+  auto crease_vertex = [&](std::int32_t v) {
+    return std::binary_search(s.nonmanifold_vertices.begin(), s.nonmanifold_vertices.end(), v) &&
+           !std::binary_search(s.corners.begin(), s.corners.end(), v);
+  };
   sorpia::Tags tags;
   for (std::size_t o = 0; o < n_out; ++o)
-    if (std::binary_search(s.corners.begin(), s.corners.end(), s.vertex_map[o]) && !split.is_unreferenced(o)) {
+    if ((std::binary_search(s.corners.begin(), s.corners.end(), s.vertex_map[o]) ||
+         (corner_sheets && split.face_count(o) == 1 && !crease_vertex(s.vertex_map[o]))) &&
+        !split.is_unreferenced(o)) {
       tags.corner_vertices.push_back(static_cast<std::int32_t>(o));
       tags.corner_sharpness.push_back(sorpia::kInfiniteSharpness);
     }
   std::vector<double> q(3 * n_out), got(3 * n_out);
   for (std::size_t o = 0; o < n_out; ++o) std::copy_n(p.begin() + 3 * s.vertex_map[o], 3, q.begin() + 3 * o);
-  const sorpia::detail::Refiner osd = sorpia::detail::make_refiner(split, scheme, boundary, tags);
+  const sorpia::detail::Refiner osd =
+      sorpia::detail::make_refiner(split, scheme, corner_sheets ? sorpia::Boundary::EdgeOnly : boundary, tags);
   std::vector<Point3> gathered;
   sorpia::detail::gather_points(osd, q.data(), gathered);
   sorpia::detail::limit_positions(osd, gathered, q.data(), n_out, got.data());
-  const bool corner_sheets = boundary == sorpia::Boundary::EdgeAndCorner && !s.single_face_sheets.empty();
   for (std::size_t o = 0; o < n_out; ++o) {
     const std::int32_t v = s.vertex_map[o];
-    if (corner_sheets && std::binary_search(s.single_face_sheets.begin(), s.single_face_sheets.end(), v)) continue;
     const Point3& w = want[v];
     EXPECT_NEAR(got[3 * o], w.x, 1e-14) << "output vertex " << o << " (input " << v << ")";
     EXPECT_NEAR(got[3 * o + 1], w.y, 1e-14) << "output vertex " << o << " (input " << v << ")";
@@ -173,6 +181,47 @@ TEST(NonmanifoldSharp, OneFaceSheetsAreReportedAndEdgeOnlyMatches) {
   EXPECT_EQ(s.single_face_sheets, Ints{1});
   EXPECT_EQ(s.corners, (Ints{0, 2, 3}));
   expect_split_is_opensubdiv(m, sorpia::Scheme::CatmullClark);  // the other rows still match
+}
+
+// The faces of an n x n x n hex grid, every quad once, outward from the first
+// hex that has it: edges of four faces inside, of three on the sides, whose
+// crease vertices have sheets of one face (split under "edge-only" with the
+// corners of "edge-and-corner" as tags, see expect_split_is_opensubdiv).
+Mesh hex_grid_faces(int n, bool triangles) {
+  Mesh m;
+  m.n_vertices = static_cast<std::size_t>((n + 1) * (n + 1) * (n + 1));
+  auto id = [&](int x, int y, int z) { return (x * (n + 1) + y) * (n + 1) + z; };
+  const int quads[6][4][3] = {{{0, 0, 0}, {0, 1, 0}, {1, 1, 0}, {1, 0, 0}}, {{0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}},
+                              {{0, 0, 0}, {1, 0, 0}, {1, 0, 1}, {0, 0, 1}}, {{0, 1, 0}, {0, 1, 1}, {1, 1, 1}, {1, 1, 0}},
+                              {{0, 0, 0}, {0, 0, 1}, {0, 1, 1}, {0, 1, 0}}, {{1, 0, 0}, {1, 1, 0}, {1, 1, 1}, {1, 0, 1}}};
+  std::set<std::vector<std::int32_t>> seen;
+  for (int x = 0; x < n; ++x)
+    for (int y = 0; y < n; ++y)
+      for (int z = 0; z < n; ++z)
+        for (const auto& q : quads) {
+          Ints f;
+          for (const auto& c : q) f.push_back(id(x + c[0], y + c[1], z + c[2]));
+          Ints key = f;
+          std::sort(key.begin(), key.end());
+          if (!seen.insert(key).second) continue;
+          if (triangles) {
+            m.add({f[0], f[1], f[2]});
+            m.add({f[0], f[2], f[3]});
+          } else {
+            m.add({f[0], f[1], f[2], f[3]});
+          }
+        }
+  return m;
+}
+
+TEST(NonmanifoldSharp, HexGridFacesMatchOpenSubdivUnderBothBoundaryRules) {
+  for (bool triangles : {false, true}) {
+    const Mesh m = hex_grid_faces(2, triangles);
+    const auto scheme = triangles ? sorpia::Scheme::Loop : sorpia::Scheme::CatmullClark;
+    const auto s = expect_split_is_opensubdiv(m, scheme, sorpia::Boundary::EdgeAndCorner);
+    EXPECT_FALSE(s.single_face_sheets.empty());
+    expect_split_is_opensubdiv(m, scheme, sorpia::Boundary::EdgeOnly);
+  }
 }
 
 TEST(NonmanifoldSharp, ManifoldMeshesAndWhatTheSplitRefuses) {

@@ -120,6 +120,24 @@ TEST(PolygonTopology, BadPolygonsAreNamed) {
   expect_refused({4, 4}, {0, 1, 2, 3, 0, 4, 5, 6}, 7, {"non-manifold vertex 0", "bowtie"});
 }
 
+// Two polygons with the same vertices in the same or the opposite cyclic
+// order are refused, naming both, as two such triangles are: alone (a closed
+// 'pillow' of two faces when reversed), beside a face elsewhere, and (two
+// triangles among quads) on the polygon path. Not duplicates: two quads that
+// share only the two edges at a vertex of two faces (next test).
+TEST(PolygonTopology, DuplicatePolygonsAreNamedWhateverElseTheMeshHas) {
+  const std::vector<std::string> reversed = {"duplicate faces", "face 0 (0, 1, 2, 3)", "face 1 (0, 3, 2, 1)",
+                                             "opposite cyclic order"};
+  expect_refused({4, 4}, {0, 1, 2, 3, 0, 3, 2, 1}, 4, reversed);
+  expect_refused({4, 4, 4}, {0, 1, 2, 3, 0, 3, 2, 1, 4, 5, 6, 7}, 8, reversed);
+  expect_refused({4, 4, 3}, {0, 1, 2, 3, 0, 3, 2, 1, 4, 5, 6}, 7, reversed);
+  expect_refused({4, 4, 4}, {0, 1, 2, 3, 0, 3, 2, 1, 1, 4, 5, 2}, 6, reversed);  // a third face on edge (1, 2)
+  expect_refused({4, 4, 4}, {0, 1, 2, 3, 4, 5, 6, 7, 2, 3, 0, 1}, 8,
+                 {"duplicate faces", "face 0 (0, 1, 2, 3)", "face 2 (2, 3, 0, 1)", "same cyclic order"});
+  expect_refused({3, 3, 4}, {0, 1, 2, 0, 2, 1, 3, 4, 5, 6}, 7,
+                 {"duplicate faces", "face 0 (0, 1, 2)", "face 1 (0, 2, 1)", "three vertices, in the opposite order"});
+}
+
 // Two quads sharing both edges at vertex 1 make it an interior vertex of two
 // faces (OpenSubdiv's "valence 2"), which polygon meshes may have; as
 // triangles the same pair would be one face given twice.

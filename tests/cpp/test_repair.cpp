@@ -162,10 +162,14 @@ TEST(Repair, MixedOrientationFlipsTheFewerFaces) {
   EXPECT_TRUE(sorpia::repair(all.data(), m.n_faces(), m.n_vertices()).report.empty());
 }
 
-TEST(Repair, MoebiusStripIsRefused) {
-  const Faces f = sorpia_test::moebius(8);
-  sorpia_test::expect_error<sorpia::MeshError>([&] { sorpia::repair(f.data(), f.size() / 3, 16); },
-                                               {"16 faces", "face 0", "not orientable", "Moebius"});
+TEST(Repair, MoebiusStripIsCutAlongOneEdge) {
+  // a band one quad wide: every vertex on its boundary, so one edge across it, its ends split, orients it
+  const auto r = repaired(sorpia_test::moebius(8), 16);
+  ASSERT_EQ(r.report.cut_edges.size(), 1u);
+  EXPECT_EQ(r.report.cut_vertices, (Ints{r.report.cut_edges[0][0], r.report.cut_edges[0][1]}));
+  EXPECT_EQ(r.report.cut_copies, (Ints{1, 1}));
+  EXPECT_TRUE(r.report.nonmanifold_edges.empty() && r.report.cut_nonmanifold_edges.empty());
+  EXPECT_EQ(r.vertex_map.size(), 18u);
 }
 
 TEST(Repair, WhatRepairDoesNotChangeIsRefusedAsValidationRefusesIt) {

@@ -260,11 +260,12 @@ TEST(RepairPolygons, MixedOrientationFlipsTheFewerQuads) {
   EXPECT_EQ(out.indices, grid.indices);
 }
 
-TEST(RepairPolygons, QuadMoebiusStripIsRefused) {
-  const Poly p = quad_moebius(7);
-  sorpia_test::expect_error<sorpia::MeshError>(
-      [&] { sorpia::repair(p.counts.data(), p.n_faces(), p.indices.data(), p.n_vertices); },
-      {"7 faces", "face 0 (0, 2, 3, 1)", "not orientable", "Moebius"});
+TEST(RepairPolygons, QuadMoebiusStripIsCutAlongOneEdge) {
+  sorpia::RepairResult r;
+  const Poly out = repaired(quad_moebius(7), &r);
+  ASSERT_EQ(r.report.cut_edges.size(), 1u);
+  EXPECT_EQ(r.report.cut_copies, (Ints{1, 1}));
+  EXPECT_EQ(out.n_vertices, 16u);
 }
 
 TEST(RepairPolygons, WhatRepairDoesNotChangeIsRefusedAsValidationRefusesIt) {

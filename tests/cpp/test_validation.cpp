@@ -44,7 +44,9 @@ TEST(Validation, NoFacesIsRefused) { expect_refused({}, 3, {"no faces"}); }
 TEST(Validation, DuplicateFacesInEitherOrientation) {
   expect_refused({0, 1, 2, 1, 3, 2, 2, 0, 1}, 4, {"duplicate faces", "face 0 (0, 1, 2)", "face 2 (2, 0, 1)"});
   // reversed: every edge then has two opposite faces, a closed 'pillow'
-  expect_refused({0, 1, 2, 0, 2, 1}, 3, {"duplicate faces", "face 0", "face 1"});
+  expect_refused({0, 1, 2, 0, 2, 1}, 3, {"duplicate faces", "face 0", "face 1", "in the opposite order"});
+  // the same beside another face (issue 20: accepted on the polygon path, then the solve diverged)
+  expect_refused({0, 1, 2, 0, 2, 1, 3, 4, 5}, 6, {"duplicate faces", "face 0 (0, 1, 2)", "face 1 (0, 2, 1)"});
 }
 
 TEST(Validation, NonManifoldEdgeNamesTheEdgeAndItsFaces) {

@@ -25,16 +25,19 @@ mkdir -p "$out/corpus" "$out/artifacts"
 osd_h=$(find /usr/include /usr/local/include -path '*opensubdiv/far/topologyRefiner.h' -print -quit)
 osd_flags=()
 case "$osd_h" in /usr/include/*|"") ;; *) osd_flags=(-isystem "${osd_h%/opensubdiv/far/topologyRefiner.h}") ;; esac
-src="$root/cpp/src"
-# The readers, the topology validation and the limit: what a file goes through.
-sources=("$src"/io.cpp "$src"/io_obj.cpp "$src"/io_off.cpp "$src"/io_ply.cpp "$src"/io_stl.cpp
-         "$src"/topology.cpp "$src"/one_ring.cpp "$src"/limit.cpp "$src"/limit_operator.cpp "$src"/limit_masks.cpp
-         "$src"/interrupt.cpp "$src"/subdivision.cpp "$src"/refined_rows.cpp)
-if [ ! -x "$out/fuzz_readers" ] || [ -n "$(find "${sources[@]}" "$root/tests/fuzz/fuzz_readers.cpp" "$root/cpp/include" -newer "$out/fuzz_readers" -print -quit)" ]; then
+cpp="$root/cpp"
+# The readers, the topology validation and the limit: what a file goes through (the layers base, mesh, io, limit).
+sources=("$cpp"/io/src/io.cpp "$cpp"/io/src/io_obj.cpp "$cpp"/io/src/io_off.cpp "$cpp"/io/src/io_ply.cpp
+         "$cpp"/io/src/io_stl.cpp "$cpp"/mesh/src/topology.cpp "$cpp"/mesh/src/one_ring.cpp "$cpp"/limit/src/limit.cpp
+         "$cpp"/limit/src/limit_operator.cpp "$cpp"/limit/src/limit_operator_catmark.cpp "$cpp"/limit/src/limit_masks.cpp
+         "$cpp"/base/src/interrupt.cpp "$cpp"/base/src/subdivision.cpp "$cpp"/limit/src/refined_rows.cpp)
+includes=()
+for layer in base mesh io limit; do includes+=(-I"$cpp/$layer/include" -I"$cpp/$layer/src"); done
+if [ ! -x "$out/fuzz_readers" ] || [ -n "$(find "${sources[@]}" "$root/tests/fuzz/fuzz_readers.cpp" "$cpp" -newer "$out/fuzz_readers" -print -quit)" ]; then
   echo "building $out/fuzz_readers"
   "$CXX" -std=c++17 -g -O1 -fno-omit-frame-pointer -fsanitize=fuzzer,address,undefined \
     -fno-sanitize-recover=undefined -DSORPIA_VERSION='"fuzz"' \
-    -I"$root/cpp/include" -I"$src" "${osd_flags[@]}" \
+    "${includes[@]}" "${osd_flags[@]}" \
     "$root/tests/fuzz/fuzz_readers.cpp" "${sources[@]}" \
     -o "$out/fuzz_readers" -lOpenMeshCore -losdCPU
 fi

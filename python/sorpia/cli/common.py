@@ -106,12 +106,14 @@ class InputMesh(NamedTuple):
 
 
 def read_input(path, triangulate: bool = False, repair: bool = False, tags: bool = True,
-               nonmanifold: str = "error") -> InputMesh:
+               nonmanifold: str = "error", boundary=None) -> InputMesh:
     """Read the input mesh of every subcommand: polygons kept (or split with
     `triangulate`), the OBJ file's sharpness tags read unless `tags` is
     False (--ignore-tags), the mesh repaired with `repair` (repair_input),
     its tags carried onto the repaired mesh; with `nonmanifold` "sharp", a
-    non-manifold mesh replaced by its manifold split (split_input)."""
+    non-manifold mesh replaced by its manifold split (split_input) under the
+    boundary rule the command solves with (`boundary`: --boundary, None for
+    the file's, see boundary_rule)."""
     from ..io import read_mesh_file
 
     if not Path(path).exists():
@@ -129,7 +131,7 @@ def read_input(path, triangulate: bool = False, repair: bool = False, tags: bool
         result = repair_input(vertices, faces, path, sharpness_tags(file_tags))
         mesh = InputMesh(result.vertices, result.faces, seconds, contents.polygons_split, result,
                          time.perf_counter() - t0, {**file_tags, **result.tags})
-    return split_input(mesh, path) if nonmanifold == "sharp" else mesh
+    return split_input(mesh, path, boundary_rule(boundary, mesh)) if nonmanifold == "sharp" else mesh
 
 
 def sharpness_tags(tags: dict) -> dict:
@@ -137,18 +139,16 @@ def sharpness_tags(tags: dict) -> dict:
     return {k: v for k, v in tags.items() if k in ("creases", "corners", "holes")}
 
 
-def split_input(mesh: InputMesh, source) -> InputMesh:
+def split_input(mesh: InputMesh, source, boundary: str) -> InputMesh:
     """--nonmanifold sharp: a non-manifold mesh replaced by its manifold split
-    with OpenSubdiv's rules as corner tags (sorpia.nonmanifold.split; its
-    NonmanifoldWarning is printed); what the split cannot reproduce is a
-    UserError naming the file `source`."""
+    with OpenSubdiv's rules as corner tags (sorpia.nonmanifold.split under the
+    `boundary` rule; its NonmanifoldWarning is printed); what the split
+    cannot reproduce is a UserError naming the file `source`."""
     from .. import MeshError
-    from .._validate import DEFAULT_BOUNDARY
     from ..nonmanifold import split
 
     try:
-        s = split(mesh.faces, len(mesh.vertices), mesh.tags.get("boundary", DEFAULT_BOUNDARY),
-                  **sharpness_tags(mesh.tags))
+        s = split(mesh.faces, len(mesh.vertices), boundary, **sharpness_tags(mesh.tags))
     except MeshError as exc:
         raise UserError(f"{source}: --nonmanifold sharp: {exc}") from None
     if s is None:
@@ -246,10 +246,11 @@ def read_solve_input(path, *, triangulate: bool, repair: bool, ignore_tags: bool
                      boundary, sharp_angle) -> tuple[InputMesh, str, str, dict]:
     """read_input for the commands that solve (fit, compare, render), then
     what they solve with: (mesh, scheme (choose_scheme), boundary rule
-    (boundary_rule), creases/corners/holes (solve_tags))."""
-    mesh = read_input(path, triangulate, repair, tags=not ignore_tags, nonmanifold=nonmanifold)
-    return (mesh, choose_scheme(scheme, mesh.faces, path), boundary_rule(boundary, mesh),
-            solve_tags(mesh, sharp_angle, path))
+    (boundary_rule; with --nonmanifold sharp, the rule its split is solved
+    under), creases/corners/holes (solve_tags))."""
+    mesh = read_input(path, triangulate, repair, tags=not ignore_tags, nonmanifold=nonmanifold, boundary=boundary)
+    rule = mesh.split.boundary if mesh.split is not None else boundary_rule(boundary, mesh)
+    return mesh, choose_scheme(scheme, mesh.faces, path), rule, solve_tags(mesh, sharp_angle, path)
 
 
 def boundary_rule(boundary, mesh: InputMesh) -> str:
@@ -316,8 +317,8 @@ def scheme_kwargs(scheme: str, tags: dict) -> dict:
 
 def repair_input(vertices, faces, source, tags=None):
     """sorpia.repair of a command's input, with its sharpness `tags` (a dict
-    of creases, corners, holes); a mesh it refuses (a Moebius strip) is a
-    UserError naming the file `source`."""
+    of creases, corners, holes); a mesh it refuses (no face left, an index
+    out of range) is a UserError naming the file `source`."""
     from .. import MeshError, repair
 
     try:

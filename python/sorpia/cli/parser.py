@@ -289,9 +289,10 @@ def build_parser() -> argparse.ArgumentParser:
                   "repeated corners dropped where a polygon of 3 or more vertices is left, other faces with a "
                   "repeated vertex and duplicate faces (either orientation) removed; at an edge of three or more faces the faces "
                   "paired into sheets and the edge's vertices copied per sheet; bowtie vertices split into one "
-                  "vertex per fan; each connected part oriented consistently. No vertex moves; copies are "
-                  "appended after the input vertices. Prints one line per kind of change; a valid mesh is "
-                  "written unchanged. A surface with no consistent orientation (a Moebius strip) is refused.")
+                  "vertex per fan; where no orientation fits, sheets left unpaired and a twist (a Moebius "
+                  "strip) cut along a short path of edges; each connected part oriented consistently. No "
+                  "vertex moves; copies are appended after the input vertices. Prints one line per kind of "
+                  "change; a valid mesh is written unchanged.")
     mesh_output(rep, "repaired mesh")
     rep.add_argument("--report", metavar="REPORT.json",
                      help="write a JSON report: every change with its input faces, edges or vertices, the "

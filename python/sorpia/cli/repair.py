@@ -13,7 +13,7 @@ from .output import write_json
 def run_repair(input_path, output, *, report=None, triangulate=False, quiet=False, force=False,
                out=None) -> tuple[int, dict]:
     """`sorpia repair`: returns (exit code, report dict). A valid mesh is
-    written unchanged; one repair refuses (a Moebius strip) is a UserError."""
+    written unchanged; one repair refuses (no face left) is a UserError."""
     from .. import write_mesh
 
     out = out if out is not None else sys.stdout

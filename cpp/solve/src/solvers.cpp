@@ -10,7 +10,7 @@
 #include <tuple>
 
 #include "solver_detail.hpp"
-#include "repr.hpp"
+#include "sorpia/detail/repr.hpp"
 #include "sorpia/errors.hpp"
 
 namespace sorpia {

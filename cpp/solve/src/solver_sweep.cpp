@@ -58,7 +58,7 @@
 #include <vector>
 
 #include "aligned_buffer.hpp"
-#include "parallel.hpp"
+#include "sorpia/detail/parallel.hpp"
 #include "solver_detail.hpp"
 #include "sweep_kernels.hpp"
 #include "sweep_plan.hpp"

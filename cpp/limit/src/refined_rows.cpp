@@ -11,7 +11,7 @@
 #include <string>
 #include <utility>
 
-#include "osd_refiner.hpp"
+#include "sorpia/detail/osd_refiner.hpp"
 #include "sorpia/errors.hpp"
 
 namespace sorpia::detail {

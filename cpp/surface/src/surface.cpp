@@ -20,8 +20,8 @@
 #include <utility>
 #include <vector>
 
-#include "osd_refiner.hpp"
-#include "parallel.hpp"
+#include "sorpia/detail/osd_refiner.hpp"
+#include "sorpia/detail/parallel.hpp"
 #include "sorpia/errors.hpp"
 #include "sorpia/interrupt.hpp"
 #include "sorpia/limit.hpp"

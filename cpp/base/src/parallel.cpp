@@ -1,4 +1,4 @@
-#include "parallel.hpp"
+#include "sorpia/detail/parallel.hpp"
 
 #include <pthread.h>
 #include <sched.h>

@@ -10,7 +10,7 @@
 #include "catmark_rows.hpp"
 #include "refined_rows.hpp"
 #include "sorpia/errors.hpp"
-#include "solver_detail.hpp"
+#include "sorpia/detail/apply.hpp"
 #include "sorpia/limit_masks.hpp"
 
 namespace sorpia {

@@ -9,7 +9,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "osd_refiner.hpp"
+#include "sorpia/detail/osd_refiner.hpp"
 #include "sorpia/errors.hpp"
 #include "sorpia/limit_operator.hpp"
 

@@ -2,7 +2,7 @@
 // lag of the fused residual and the deferred residuals.
 #include "sweep_plan.hpp"
 
-#include "parallel.hpp"
+#include "sorpia/detail/parallel.hpp"
 
 #include <algorithm>
 #include <cstring>

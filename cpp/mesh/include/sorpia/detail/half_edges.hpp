@@ -56,6 +56,24 @@ struct FaceList {
     const std::int32_t f = corner_face[h];
     return h == static_cast<std::size_t>(begin(f)) ? static_cast<std::size_t>(end(f)) - 1 : h - 1;
   }
+  // Whether the faces of corners a and b, at one vertex, have the same
+  // vertices in the same cyclic order, b's face walked backwards when
+  // `reversed`.
+  bool same_cycle(std::size_t a, std::size_t b, bool reversed) const {
+    const std::int32_t fa = face_of(a), fb = face_of(b), n = end(fa) - begin(fa);
+    if (n != end(fb) - begin(fb)) return false;
+    for (std::int32_t i = 0; i < n; ++i, a = next(a), b = reversed ? prev(b) : next(b))
+      if (idx[a] != idx[b]) return false;
+    return true;
+  }
+  // Whether the faces of half-edges g and h, which lie on one edge, have the
+  // same vertices in the same cyclic order, either way round (duplicate
+  // faces): for triangles, the same third vertex.
+  bool same_face(std::size_t g, std::size_t h) const {
+    if (triangles()) return idx[prev(g)] == idx[prev(h)];
+    const bool forward = idx[g] == idx[h];
+    return same_cycle(g, forward ? h : next(h), !forward);
+  }
   // "face f (a, b, c, ...)", for messages.
   std::string str(std::size_t f) const {
     std::string s = "face " + std::to_string(f) + " (";

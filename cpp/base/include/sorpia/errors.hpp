@@ -8,8 +8,8 @@
 
 namespace sorpia {
 
-/// The mesh given by the caller is not one Loop PIA can run on (bad index,
-/// repeated vertex, non-manifold edge, ...). Maps to Python's ValueError.
+/// The mesh given by the caller is not one the scheme can run on (bad index,
+/// repeated vertex, non-manifold edge, a non-triangle under Loop, ...). Maps to Python's ValueError.
 class MeshError : public std::invalid_argument {
  public:
   using std::invalid_argument::invalid_argument;

@@ -5,7 +5,7 @@
 #include <algorithm>
 #include <cstddef>
 
-#include "parallel.hpp"
+#include "sorpia/detail/parallel.hpp"
 #include "sweep_plan.hpp"
 
 namespace sorpia {

@@ -5,7 +5,7 @@
 #include <cmath>
 #include <string>
 
-#include "repr.hpp"
+#include "sorpia/detail/repr.hpp"
 #include "sorpia/errors.hpp"
 
 namespace sorpia {

@@ -2,7 +2,7 @@
 // a raw face list's half-edges) into one EdgeCounts, counted by one finish().
 #include "sorpia/mesh_statistics.hpp"
 
-#include "half_edges.hpp"
+#include "sorpia/detail/half_edges.hpp"
 
 #include <algorithm>
 #include <numeric>

@@ -16,7 +16,7 @@
 #include <string>
 #include <utility>
 
-#include "half_edges.hpp"
+#include "sorpia/detail/half_edges.hpp"
 #include "sorpia/errors.hpp"
 #include "sorpia/topology.hpp"
 
@@ -24,7 +24,8 @@ namespace sorpia {
 
 bool RepairReport::empty() const {
   return degenerate_faces.empty() && collapsed_faces.empty() && duplicate_faces.empty() && reversed_duplicate_faces.empty() &&
-         nonmanifold_edges.empty() && sheet_vertices.empty() && bowtie_vertices.empty() && flipped_faces.empty();
+         nonmanifold_edges.empty() && sheet_vertices.empty() && bowtie_vertices.empty() &&
+         cut_nonmanifold_edges.empty() && cut_edges.empty() && cut_vertices.empty() && flipped_faces.empty();
 }
 
 namespace {
@@ -158,29 +159,16 @@ OwnedFaces drop_repeated_corners(const FaceList& fl, std::size_t n_vertices, std
 // higher end stamped with the lower end. A duplicate face shares each of its
 // edges with the face it repeats, so it is found at its first edge, before it
 // could be joined. The ends of edges of three or more faces are marked in
-// `sheet_end`. Needs faces without a repeated vertex (rule 1).
+// `sheet_end`, the half-edges of the faces paired there in `paired`. Needs
+// faces without a repeated vertex (rule 1).
 template <bool kPolygons>
 std::vector<std::int32_t> join_edges(const Faces<kPolygons>& fl, std::size_t n_vertices, bool pair_sheets,
                                      std::vector<std::uint8_t>& removed, RepairReport& rep,
-                                     std::vector<std::uint8_t>& sheet_end) {
+                                     std::vector<std::uint8_t>& sheet_end, std::vector<std::uint8_t>& paired) {
   const std::int32_t* faces = fl.idx;
   const std::size_t n_half = fl.n_corners();
   auto lo = [&](std::size_t h) { return std::min(faces[h], faces[fl.next(h)]); };
   auto hi = [&](std::size_t h) { return std::max(faces[h], faces[fl.next(h)]); };
-  // Whether the faces of half-edges g and h, which lie on one edge, have the
-  // same vertices in the same cyclic order, either way round: for triangles,
-  // the same third vertex; polygons are walked from the edge's end faces[g],
-  // h's face backwards where it runs the edge the other way.
-  auto same_face = [&](std::int32_t g, std::int32_t h) {
-    if (fl.triangles()) return faces[fl.prev(g)] == faces[fl.prev(h)];
-    const std::int32_t fg = fl.face_of(g), fh = fl.face_of(h), n = fl.end(fg) - fl.begin(fg);
-    if (n != fl.end(fh) - fl.begin(fh)) return false;
-    const bool forward = faces[g] == faces[h];
-    std::size_t a = static_cast<std::size_t>(g), b = forward ? static_cast<std::size_t>(h) : fl.next(h);
-    for (std::int32_t i = 0; i < n; ++i, a = fl.next(a), b = forward ? fl.next(b) : fl.prev(b))
-      if (faces[a] != faces[b]) return false;
-    return true;
-  };
   std::vector<std::int32_t> bucket(n_vertices + 1, 0);
   for (std::size_t h = 0; h < n_half; ++h)
     if (!removed[fl.face_of(h)]) ++bucket[lo(h) + 1];
@@ -218,7 +206,7 @@ std::vector<std::int32_t> join_edges(const Faces<kPolygons>& fl, std::size_t n_v
       if (count[x] == 2) {
         const std::int32_t g = first[x];
         if (g == h || removed[fl.face_of(g)] || removed[fl.face_of(h)]) continue;  // removed: a duplicate found at another edge
-        if (same_face(g, h)) {
+        if (fl.same_face(g, h)) {
           drop_duplicate(g, h);
         } else {
           mate[g] = h;
@@ -230,7 +218,7 @@ std::vector<std::int32_t> join_edges(const Faces<kPolygons>& fl, std::size_t n_v
         for (std::int32_t j = i; j < k; ++j) {
           const std::int32_t hj = b[j];
           if (hi(hj) != x || removed[fl.face_of(hj)]) continue;
-          const auto same = std::find_if(live.begin(), live.end(), [&](std::int32_t g) { return same_face(g, hj); });
+          const auto same = std::find_if(live.begin(), live.end(), [&](std::int32_t g) { return fl.same_face(g, hj); });
           if (same != live.end())
             drop_duplicate(*same, hj);
           else
@@ -252,6 +240,7 @@ std::vector<std::int32_t> join_edges(const Faces<kPolygons>& fl, std::size_t n_v
             if (!partner) break;
             mate[live[p]] = live[partner];
             mate[live[partner]] = live[p];
+            paired[live[p]] = paired[live[partner]] = 1;
           }
         }
       }
@@ -263,15 +252,186 @@ std::vector<std::int32_t> join_edges(const Faces<kPolygons>& fl, std::size_t n_v
   return mate;
 }
 
-// Rule 4: the output vertex of each corner of the faces not removed (-1 for
+// Whether the faces of joined half-edges h and g run their edge the same way
+// (then one of them must be reversed).
+inline bool same_way(const std::int32_t* faces, std::int32_t h, std::int32_t g) { return faces[h] == faces[g]; }
+
+// An edge (lower, higher end) for the report.
+inline std::array<std::int32_t, 2> edge_of(const std::int32_t* faces, std::size_t h, std::size_t h_next) {
+  return {std::min(faces[h], faces[h_next]), std::max(faces[h], faces[h_next])};
+}
+
+void sort_unique(std::vector<std::array<std::int32_t, 2>>& edges) {
+  std::sort(edges.begin(), edges.end());
+  edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+}
+
+// Rules 4 and 6 of repair.hpp: breaks (sets to -1 in `mate`) the joins that
+// no orientation of the faces keeps, so that every connected part can be
+// oriented, and returns for each face whether to reverse it (empty: none).
+// First the joins of edges of two faces, per part joined by them: a
+// breadth-first search orients the faces it reaches; where a join disagrees
+// (a twist), a second search from the face farthest from the part's boundary
+// breaks each join that disagrees ("cut_edges", their ends marked in
+// `cut_end`); then the pairs of faces at edges of three or more
+// (`paired`), in half-edge order: a pair that would join two parts already
+// oriented against each other is broken ("cut_nonmanifold_edges"), every
+// other pair joins its two parts. The joins broken are then exactly those
+// that disagree with one orientation of the whole, and each fan round a
+// vertex holds an even number of them or is not closed, so that every
+// broken join separates its two faces at both ends of the edge (rule 5).
+// The union-find's classes are then the connected parts, each rooted at its
+// lowest face, against which every face's `odd` says its orientation.
+template <bool kPolygons>
+std::vector<std::uint8_t> orient(const Faces<kPolygons>& fl, std::vector<std::int32_t>& mate,
+                                 const std::vector<std::uint8_t>& paired, const std::vector<std::uint8_t>& removed,
+                                 RepairReport& rep, std::vector<std::uint8_t>& cut_end) {
+  const std::int32_t* faces = fl.idx;
+  const std::size_t n_faces = fl.n_faces, n_half = fl.n_corners();
+  bool any_same_way = false;
+  for (std::size_t h = 0; h < n_half && !any_same_way; ++h)
+    any_same_way = mate[h] >= 0 && same_way(faces, static_cast<std::int32_t>(h), mate[h]);
+  if (!any_same_way) return {};  // every join keeps the faces as they are
+  auto cut = [&](std::int32_t h) {
+    const std::int32_t g = mate[h];
+    mate[h] = mate[g] = -1;
+    return edge_of(faces, static_cast<std::size_t>(h), fl.next(h));
+  };
+  // The parts joined by edges of two faces: `up` is each face's part (its
+  // lowest face), `odd` whether the face is reversed against that face.
+  std::vector<std::int32_t> up(n_faces, -1), queue, depth;
+  std::vector<std::uint8_t> odd(n_faces, 0);
+  auto joined = [&](std::int32_t h) { return mate[h] >= 0 && !paired[h]; };
+  // The breadth-first search of part `part` from face `root` (queue: the
+  // part's faces in the order reached); with `cut`, breaks each join that
+  // disagrees; returns whether one does.
+  auto search = [&](std::int32_t root, std::int32_t part, bool cut_them) {
+    bool twisted = false;
+    queue.assign(1, root);
+    up[root] = part;
+    odd[root] = 0;
+    for (std::size_t q = 0; q < queue.size(); ++q) {
+      const std::int32_t f = queue[q];
+      for (std::int32_t h = fl.begin(f); h < fl.end(f); ++h) {
+        if (!joined(h)) continue;
+        const std::int32_t g = mate[h], fg = fl.face_of(g);
+        const auto want = static_cast<std::uint8_t>(odd[f] ^ same_way(faces, h, g));
+        if (up[fg] < 0) {
+          up[fg] = part;
+          odd[fg] = want;
+          queue.push_back(fg);
+        } else if (odd[fg] != want) {
+          twisted = true;
+          if (!cut_them) continue;
+          const auto e = cut(h);
+          rep.cut_edges.push_back(e);
+          cut_end[e[0]] = cut_end[e[1]] = 1;
+        }
+      }
+    }
+    return twisted;
+  };
+  // The face of a part farthest from its boundary (the faces with an edge
+  // not joined; the lowest face of those farthest), or `part` where it has
+  // none: searched from there, a twist is cut where the fronts meet, across
+  // a band from side to side rather than on a slant.
+  auto farthest_from_boundary = [&](std::int32_t part) {
+    depth.resize(n_faces);
+    std::vector<std::int32_t> ring;
+    for (std::int32_t f : queue) {
+      depth[f] = -1;
+      for (std::int32_t h = fl.begin(f); h < fl.end(f) && depth[f] < 0; ++h)
+        if (!joined(h)) depth[f] = 0;
+      if (depth[f] == 0) ring.push_back(f);
+    }
+    if (ring.empty()) return part;
+    std::int32_t best = part;
+    for (std::size_t q = 0; q < ring.size(); ++q) {
+      const std::int32_t f = ring[q];
+      if (depth[f] > depth[best] || (depth[f] == depth[best] && f < best)) best = f;
+      for (std::int32_t h = fl.begin(f); h < fl.end(f); ++h) {
+        if (!joined(h)) continue;
+        const std::int32_t fg = fl.face_of(mate[h]);
+        if (depth[fg] < 0) {
+          depth[fg] = depth[f] + 1;
+          ring.push_back(fg);
+        }
+      }
+    }
+    return best;
+  };
+  for (std::size_t fi = 0; fi < n_faces; ++fi) {
+    const auto f0 = static_cast<std::int32_t>(fi);
+    if (removed[f0] || up[f0] >= 0 || !search(f0, f0, false)) continue;
+    // A twist: searched again from the face farthest from the boundary,
+    // cutting; `odd` then made relative to the part's lowest face.
+    const std::int32_t root = farthest_from_boundary(f0);
+    for (std::int32_t f : queue) up[f] = -1;
+    search(root, f0, true);
+    const std::uint8_t at_f0 = odd[f0];
+    for (std::int32_t f : queue) odd[f] ^= at_f0;
+  }
+  // The pairs at edges of three or more faces join parts: `up` and `odd`
+  // become a union-find over the faces, `odd` whether a face is reversed
+  // against the one `up` names.
+  auto find = [&](std::int32_t f) {  // the root of face f, and whether f is reversed against it
+    std::int32_t root = f;
+    std::uint8_t flipped = 0;
+    for (; up[root] != root; root = up[root]) flipped ^= odd[root];
+    for (std::uint8_t rest = flipped; up[f] != f;) {  // path compression
+      const std::int32_t next = up[f];
+      const std::uint8_t step = odd[f];
+      up[f] = root;
+      odd[f] = rest;
+      rest ^= step;
+      f = next;
+    }
+    return std::make_pair(root, flipped);
+  };
+  for (std::size_t hi = 0; hi < n_half; ++hi) {
+    const auto h = static_cast<std::int32_t>(hi);
+    const std::int32_t g = mate[h];
+    if (g < h || !paired[h]) continue;
+    const auto [ph, oh] = find(fl.face_of(h));
+    const auto [pg, og] = find(fl.face_of(g));
+    const auto differ = static_cast<std::uint8_t>(same_way(faces, h, g));  // the two faces' orientations must differ
+    if (ph != pg) {
+      const std::int32_t lo = std::min(ph, pg), other = std::max(ph, pg);
+      up[other] = lo;
+      odd[other] = static_cast<std::uint8_t>(oh ^ og ^ differ);
+    } else if ((oh ^ og) != differ) {
+      rep.cut_nonmanifold_edges.push_back(cut(h));
+    }
+  }
+  sort_unique(rep.cut_edges);
+  sort_unique(rep.cut_nonmanifold_edges);
+  // Rule 6: per part, the smaller class reversed (on a tie, the faces
+  // disagreeing with its lowest face, the root).
+  std::vector<std::int32_t> n_faces_of(n_faces, 0), n_odd(n_faces, 0);
+  for (std::size_t f = 0; f < n_faces; ++f) {
+    if (removed[f]) continue;
+    const auto [root, flipped] = find(static_cast<std::int32_t>(f));  // compressed: up[f] is the root from now on
+    ++n_faces_of[root];
+    n_odd[root] += flipped;
+  }
+  std::vector<std::uint8_t> flip(n_faces, 0);
+  for (std::size_t f = 0; f < n_faces; ++f) {
+    if (removed[f]) continue;
+    const std::int32_t root = up[f];
+    flip[f] = odd[f] == (n_odd[root] <= n_faces_of[root] - n_odd[root] ? 1 : 0);
+    if (flip[f]) rep.flipped_faces.push_back(static_cast<std::int32_t>(f));
+  }
+  return flip;
+}
+
+// Rule 5: the output vertex of each corner of the faces not removed (-1 for
 // the others): one per fan, the corners of one vertex joined across joined
 // edges. `vertex_map` holds the input vertices on entry; the copies are
-// appended, and counted per input vertex in `copies`. Sets `misoriented` when
-// some joined faces run their edge the same way.
+// appended, and counted per input vertex in `copies`.
 template <bool kPolygons>
 std::vector<std::int32_t> fan_vertices(const Faces<kPolygons>& fl, const std::vector<std::int32_t>& mate,
                                        const std::vector<std::uint8_t>& removed, std::vector<std::int32_t>& vertex_map,
-                                       std::vector<std::int32_t>& copies, bool& misoriented) {
+                                       std::vector<std::int32_t>& copies) {
   const std::int32_t* faces = fl.idx;
   const std::size_t n_half = fl.n_corners();
   Corners fans(n_half);
@@ -280,7 +440,6 @@ std::vector<std::int32_t> fan_vertices(const Faces<kPolygons>& fl, const std::ve
     if (g < static_cast<std::int32_t>(h)) continue;  // unjoined, or joined from g already
     const auto hn = static_cast<std::int32_t>(fl.next(h)), gn = static_cast<std::int32_t>(fl.next(g));
     const bool same_way = faces[g] == faces[h];
-    misoriented |= same_way;
     fans.unite(static_cast<std::int32_t>(h), same_way ? g : gn);
     fans.unite(hn, same_way ? gn : g);
   }
@@ -320,59 +479,29 @@ RepairResult repair_pass(const FaceList& input, std::size_t n_vertices, bool pai
   const Faces<kPolygons> fl{collapsed.empty() ? input : collapsed.view()};
   const std::int32_t* faces = fl.idx;
   const std::size_t n_faces = fl.n_faces, n_half = fl.n_corners();
-  std::vector<std::uint8_t> sheet_end(n_vertices, 0);
-  const std::vector<std::int32_t> mate = join_edges(fl, n_vertices, pair_sheets, removed, rep, sheet_end);
+  std::vector<std::uint8_t> sheet_end(n_vertices, 0), cut_end(n_vertices, 0), paired(n_half, 0);
+  std::vector<std::int32_t> mate = join_edges(fl, n_vertices, pair_sheets, removed, rep, sheet_end, paired);
+  const std::vector<std::uint8_t> flip = orient(fl, mate, paired, removed, rep, cut_end);
 
-  bool misoriented = false;
   std::vector<std::int32_t> copies(n_vertices, 0);
   r.vertex_map.resize(n_vertices);
   std::iota(r.vertex_map.begin(), r.vertex_map.end(), 0);
-  const std::vector<std::int32_t> vertex_of = fan_vertices(fl, mate, removed, r.vertex_map, copies, misoriented);
-  for (std::size_t v = 0; v < n_vertices; ++v)
-    if (copies[v]) {
-      (sheet_end[v] ? rep.sheet_vertices : rep.bowtie_vertices).push_back(static_cast<std::int32_t>(v));
-      (sheet_end[v] ? rep.sheet_copies : rep.bowtie_copies).push_back(copies[v]);
-    }
-
-  // Orientation: per component, the class of faces to reverse (none where
-  // every joined pair of faces runs its edge both ways).
-  std::vector<std::int8_t> flip(n_faces, misoriented ? -1 : 0);
-  std::vector<std::int32_t> component;
-  for (std::size_t f0 = 0; f0 < n_faces && misoriented; ++f0) {
-    if (removed[f0] || flip[f0] >= 0) continue;
-    component.assign(1, static_cast<std::int32_t>(f0));
-    flip[f0] = 0;
-    std::size_t n_flipped = 0;
-    std::int32_t clash = -1;  // a face whose orientation is forced both ways
-    for (std::size_t q = 0; q < component.size(); ++q) {
-      const std::int32_t f = component[q];
-      for (std::int32_t h = fl.begin(f); h < fl.end(f); ++h) {
-        const std::int32_t g = mate[h];
-        if (g < 0) continue;
-        // running the edge the same way as h needs the other orientation
-        const auto want = static_cast<std::int8_t>(flip[f] ^ (faces[g] == faces[h]));
-        const std::int32_t fg = fl.face_of(g);
-        if (flip[fg] < 0) {
-          flip[fg] = want;
-          n_flipped += static_cast<std::size_t>(want);
-          component.push_back(fg);
-        } else if (flip[fg] != want && clash < 0) {
-          clash = fg;
-        }
-      }
-    }
-    if (clash >= 0)
-      throw MeshError("the connected part of " + std::to_string(component.size()) + " faces containing " +
-                      fl.str(f0) + " is not orientable (like a Moebius strip: no choice of face "
-                      "orientations is consistent, e.g. at " + fl.str(clash) +
-                      "): subdivision needs an orientable surface, and repair cannot make one");
-    const std::int8_t reverse = n_flipped <= component.size() - n_flipped ? 1 : 0;
-    for (std::int32_t f : component) {
-      flip[f] = flip[f] == reverse;
-      if (flip[f]) rep.flipped_faces.push_back(f);
+  const std::vector<std::int32_t> vertex_of = fan_vertices(fl, mate, removed, r.vertex_map, copies);
+  for (std::size_t vi = 0; vi < n_vertices; ++vi) {
+    if (!copies[vi]) continue;
+    const auto v = static_cast<std::int32_t>(vi);
+    if (sheet_end[v]) {
+      rep.sheet_vertices.push_back(v);
+      rep.sheet_copies.push_back(copies[v]);
+    } else if (cut_end[v]) {
+      rep.cut_vertices.push_back(v);
+      rep.cut_copies.push_back(copies[v]);
+    } else {
+      rep.bowtie_vertices.push_back(v);
+      rep.bowtie_copies.push_back(copies[v]);
     }
   }
-  std::sort(rep.flipped_faces.begin(), rep.flipped_faces.end());
+
 
   // A reversed face keeps its first corner: (a, b, c, d) becomes (a, d, c, b).
   r.faces.reserve(n_half);
@@ -380,7 +509,7 @@ RepairResult repair_pass(const FaceList& input, std::size_t n_vertices, bool pai
     if (removed[f]) continue;
     const std::int32_t lo = fl.begin(f), hi = fl.end(f);
     r.faces.push_back(vertex_of[lo]);
-    if (flip[f])
+    if (!flip.empty() && flip[f])
       for (std::int32_t h = hi - 1; h > lo; --h) r.faces.push_back(vertex_of[h]);
     else
       for (std::int32_t h = lo + 1; h < hi; ++h) r.faces.push_back(vertex_of[h]);
@@ -408,10 +537,17 @@ void compose(RepairResult& first, RepairResult&& later) {
   std::set_symmetric_difference(a.flipped_faces.begin(), a.flipped_faces.end(), flipped.begin(), flipped.end(),
                                 std::back_inserter(both));
   a.flipped_faces = std::move(both);
-  for (const auto& [u, v] : b.nonmanifold_edges) {
-    const std::int32_t p = first.vertex_map[u], q = first.vertex_map[v];
-    a.nonmanifold_edges.push_back({std::min(p, q), std::max(p, q)});
-  }
+  auto edges_of = [&](const std::vector<std::array<std::int32_t, 2>>& es,
+                      std::vector<std::array<std::int32_t, 2>>& into) {  // an edge of both passes once
+    for (const auto& [u, v] : es) {
+      const std::int32_t p = first.vertex_map[u], q = first.vertex_map[v];
+      into.push_back({std::min(p, q), std::max(p, q)});
+    }
+    sort_unique(into);
+  };
+  edges_of(b.nonmanifold_edges, a.nonmanifold_edges);
+  edges_of(b.cut_nonmanifold_edges, a.cut_nonmanifold_edges);
+  edges_of(b.cut_edges, a.cut_edges);
   auto add_copies = [&](const std::vector<std::int32_t>& vs, const std::vector<std::int32_t>& ns,
                         std::vector<std::int32_t>& into_v, std::vector<std::int32_t>& into_n) {
     for (std::size_t i = 0; i < vs.size(); ++i) {
@@ -428,6 +564,7 @@ void compose(RepairResult& first, RepairResult&& later) {
   };
   add_copies(b.sheet_vertices, b.sheet_copies, a.sheet_vertices, a.sheet_copies);
   add_copies(b.bowtie_vertices, b.bowtie_copies, a.bowtie_vertices, a.bowtie_copies);
+  add_copies(b.cut_vertices, b.cut_copies, a.cut_vertices, a.cut_copies);
   std::vector<std::int32_t> vertex_map(later.vertex_map.size()), face_map(later.face_map.size());
   for (std::size_t i = 0; i < vertex_map.size(); ++i) vertex_map[i] = first.vertex_map[later.vertex_map[i]];
   for (std::size_t i = 0; i < face_map.size(); ++i) face_map[i] = first.face_map[later.face_map[i]];
@@ -580,8 +717,7 @@ NonmanifoldSplit split_pass(const Faces<kPolygons>& fl, std::size_t n_vertices) 
   std::vector<std::int32_t> copies(n_vertices, 0);
   s.vertex_map.resize(n_vertices);
   std::iota(s.vertex_map.begin(), s.vertex_map.end(), 0);
-  bool misoriented = false;  // stays false: only edges run both ways are joined
-  const std::vector<std::int32_t> vertex_of = fan_vertices(fl, mate, removed, s.vertex_map, copies, misoriented);
+  const std::vector<std::int32_t> vertex_of = fan_vertices(fl, mate, removed, s.vertex_map, copies);
 
   std::vector<std::uint8_t> crease(n_vertices, 0);
   for (std::size_t vi = 0; vi < n_vertices; ++vi) {

@@ -35,6 +35,17 @@ struct RepairReport {
   /// Vertices where fans of faces met at a point only ('bowties'), split into
   /// one vertex per fan, and the number of copies each got.
   std::vector<std::int32_t> bowtie_vertices, bowtie_copies;
+  /// Edges of three or more faces (among nonmanifold_edges) where a pair of
+  /// faces was left unpaired, each face bordering the edge alone, because
+  /// the pair would have joined a part that no orientation fits (rule 4).
+  std::vector<std::array<std::int32_t, 2>> cut_nonmanifold_edges;
+  /// Edges of two faces cut apart, each face bordering the edge alone, so
+  /// that a part with no consistent orientation (a Moebius strip) can be
+  /// oriented (rule 4).
+  std::vector<std::array<std::int32_t, 2>> cut_edges;
+  /// Vertices split by the cut of cut_edges (an end of such an edge that is
+  /// no end of a non-manifold edge), and the number of copies each got.
+  std::vector<std::int32_t> cut_vertices, cut_copies;
   /// Faces whose vertex order was reversed to orient their component consistently.
   std::vector<std::int32_t> flipped_faces;
 
@@ -67,12 +78,28 @@ struct RepairResult {
 ///    face that runs the edge the other way (else with the next unpaired face);
 ///    a face left over borders the edge alone. Every other edge joins its one
 ///    or two faces;
-/// 4. each vertex gets one copy per fan of faces joined by those edges (a
+/// 4. the joins no orientation of the faces keeps are broken, each face then
+///    bordering the edge alone. First, per part of faces joined by edges of
+///    two faces, a breadth-first search orients the faces it reaches; where
+///    a join disagrees (a twist: a Moebius strip, a Klein bottle), a search
+///    from the face farthest from the part's boundary (the lowest of those;
+///    the part's lowest face where it has no boundary) cuts each join that
+///    disagrees, across a band where its two fronts meet ("cut_edges");
+///    then the pairs of rule 3, in face order, join the parts
+///    they connect, and a pair that would join two faces already oriented
+///    against it is left unpaired ("cut_nonmanifold_edges"). Where every
+///    part can be oriented with its pairs (as whenever the pairs run their
+///    edges both ways) nothing is cut. The joins broken disagree with one
+///    orientation of the whole, and every fan round a vertex holds an even
+///    number of them or is open, so that rule 5 separates the two faces of
+///    each at both ends of its edge;
+/// 5. each vertex gets one copy per fan of faces joined by those edges (a
 ///    bowtie vertex one per fan, the ends of a non-manifold edge one per
-///    sheet): the fan holding the vertex's first corner in face order keeps
-///    the input index, every other fan gets a new vertex appended after the
-///    input ones, numbered in the order of the fans' first corners;
-/// 5. each connected component is oriented consistently: the faces of the
+///    sheet, the ends of a cut edge one per side): the fan holding the
+///    vertex's first corner in face order keeps the input index, every other
+///    fan gets a new vertex appended after the input ones, numbered in the
+///    order of the fans' first corners;
+/// 6. each connected component is oriented consistently: the faces of the
 ///    smaller of its two orientation classes are reversed (on a tie, those
 ///    disagreeing with the component's lowest-numbered face). A face is
 ///    reversed keeping its first corner: (a, b, c, d) becomes (a, d, c, b).
@@ -84,9 +111,7 @@ struct RepairResult {
 /// its output is valid.
 ///
 /// @param faces       row-major (n_faces, 3) vertex indices in [0, n_vertices)
-/// @throw MeshError   a component that has no consistent orientation (a
-///                    Moebius strip), named by its lowest face and its size;
-///                    faces that all repeat a vertex; or
+/// @throw MeshError   faces that all repeat a vertex; or
 ///                    a problem repair does not change (an index out of range,
 ///                    no faces, a vertex of more edges than OpenSubdiv takes),
 ///                    with sorpia::Topology's message
@@ -123,7 +148,9 @@ RepairResult repair(const std::int32_t* face_vertex_counts, std::size_t n_faces,
 /// a crease vertex's copies each lie on the boundary between the copies of
 /// its two non-manifold edges, whose boundary rule is the crease rule, except
 /// a copy in a fan of one face (`single_face_sheets`), which the
-/// edge-and-corner boundary rule makes a corner.
+/// edge-and-corner boundary rule makes a corner (sorpia.nonmanifold.split
+/// then solves the split under edge-only, with the corners edge-and-corner
+/// makes, every other vertex of one face, as tags: OpenSubdiv's rows).
 struct NonmanifoldSplit {
   std::vector<std::int32_t> faces;        ///< the vertices of every face, renumbered, face after face
   std::vector<std::int32_t> face_counts;  ///< polygons: the vertex count of each face; empty for triangles

@@ -13,7 +13,7 @@
 #include <type_traits>
 #include <utility>
 
-#include "half_edges.hpp"
+#include "sorpia/detail/half_edges.hpp"
 #include "one_ring.hpp"
 #include "openmesh_types.hpp"
 #include "sorpia/errors.hpp"
@@ -67,11 +67,26 @@ void mark_fan(const FaceList& fl, const std::vector<std::int32_t>& mate, std::in
   } while (h != h0);
 }
 
-// Error path only. Some edge (v, x > v) has three or more faces or (triangles)
-// two faces with the same third vertex: sort the half-edges of the edges
-// (v, x > v) by (x, third vertex, id), so that the half-edges of one edge, and
-// two faces with the same three vertices, are adjacent, and name the first
-// such edge. (Two polygons may share two edges at a vertex of two faces.)
+// Error path only: the faces of half-edges g and h, on one edge, are
+// duplicates (FaceList::same_face).
+[[noreturn]] void refuse_duplicate(const FaceList& fl, std::int32_t g, std::int32_t h) {
+  const std::int32_t f0 = std::min(fl.face_of(g), fl.face_of(h)), f1 = std::max(fl.face_of(g), fl.face_of(h));
+  const std::int32_t n = fl.end(f0) - fl.begin(f0);
+  const bool reversed = fl.idx[g] != fl.idx[h];
+  throw MeshError("duplicate faces: " + fl.str(f0) + " and " + fl.str(f1) + " have the same " +
+                  (n == 3 ? std::string("three vertices") + (reversed ? ", in the opposite order" : "")
+                          : std::to_string(n) + " vertices in the " + (reversed ? "opposite" : "same") +
+                                " cyclic order") +
+                  "; remove one of them");
+}
+
+// Error path only. Some edge (v, x > v) has three or more faces or two
+// duplicate faces: sort the half-edges of the edges (v, x > v) by (x, third
+// vertex (triangles), id), so that the half-edges of one edge, and two
+// triangles with the same three vertices, are adjacent, and name the first
+// such edge. (Two polygons may share two edges at a vertex of two faces
+// without being duplicates; two duplicate polygons with a third face on an
+// edge are named by that edge.)
 [[noreturn]] void refuse_edge(const FaceList& fl, std::int32_t v) {
   const std::int32_t* faces = fl.idx;
   const std::size_t n_half = fl.n_corners();
@@ -83,12 +98,12 @@ void mark_fan(const FaceList& fl, const std::vector<std::int32_t>& mate, std::in
   auto key = [&](std::int32_t h) { return std::make_tuple(other(h), third(h), h); };
   std::sort(hs.begin(), hs.end(), [&](std::int32_t a, std::int32_t b) { return key(a) < key(b); });
   for (std::size_t i = 0, j; i < hs.size(); i = j) {
-    for (j = i + 1; j < hs.size() && other(hs[j]) == other(hs[i]); ++j)
-      if (fl.triangles() && third(hs[j]) == third(hs[j - 1])) {
-        const std::int32_t f0 = std::min(hs[j - 1], hs[j]) / 3, f1 = std::max(hs[j - 1], hs[j]) / 3;
-        throw MeshError("duplicate faces: " + fl.str(f0) + " and " + fl.str(f1) +
-                        " have the same three vertices; remove one of them");
-      }
+    for (j = i + 1; j < hs.size() && other(hs[j]) == other(hs[i]); ++j) {
+    }
+    // Triangles: two of the same third vertex are adjacent. Polygons: an
+    // edge of two faces is checked; an edge of more is named as such.
+    for (std::size_t p = i + 1; p < j && (fl.triangles() || j - i == 2); ++p)
+      if (fl.same_face(hs[p - 1], hs[p])) refuse_duplicate(fl, hs[p - 1], hs[p]);
     if (j - i > 2) {
       std::vector<std::int32_t> users;
       for (std::size_t p = i; p < j; ++p) users.push_back(fl.face_of(hs[p]));
@@ -283,7 +298,7 @@ void refuse_findings(const Findings& found, const FaceList& fl, std::size_t n_ve
 template <bool kPolygons>
 class VertexEdges {
  public:
-  explicit VertexEdges(std::size_t n_vertices) : slots_(n_vertices) {}
+  VertexEdges(const FaceList& fl, std::size_t n_vertices) : fl_(fl), slots_(n_vertices) {}
 
   // Matches the edges of v's k corners c (with their corner ids for
   // polygons), recording problems in `found`; returns whether the fan can be
@@ -368,7 +383,7 @@ class VertexEdges {
     }
     if (s.users == 1) {
       --n_single_;
-      if (!kPolygons && s.third == third) {
+      if (s.third == third && duplicate(s, id, out)) {
         found.bad_lo = std::min(found.bad_lo, std::min(v_, x));
         checkable_ = false;
       } else if (s.outs == static_cast<std::uint8_t>(out)) {
@@ -387,6 +402,18 @@ class VertexEdges {
     }
   }
 
+  // Whether the second face at v on the edge of slot `s`, with the same third
+  // vertex as the first (both share both their edges at v), is a duplicate of
+  // the first: always for triangles; for polygons, the same cycle (corner
+  // `id`, running the edge out of v if `out`).
+  bool duplicate(const EdgeSlot& s, std::int32_t id, bool out) const {
+    if constexpr (kPolygons)
+      return fl_.same_cycle(static_cast<std::size_t>(s.corner), static_cast<std::size_t>(id),
+                            s.outs != static_cast<std::uint8_t>(out));
+    return true;
+  }
+
+  FaceList fl_;
   std::vector<EdgeSlot> slots_;
   std::int32_t v_ = -1, n_edges_ = 0, n_single_ = 0;  // the vertex, its edges, those of one face
   bool checkable_ = true;
@@ -480,7 +507,7 @@ std::pair<std::size_t, std::size_t> validate_faces(const FaceList& fl, std::size
   detail::CornerBuckets buckets = kPolygons ? detail::bucket_polygon_corners(fl.idx, fl.off, fl.n_faces, n_vertices)
                                             : detail::bucket_corners(fl.idx, fl.n_faces, n_vertices);
   face_checks::RingBuilder builder(ring, fl, n_vertices);
-  face_checks::VertexEdges<kPolygons> edges(n_vertices);
+  face_checks::VertexEdges<kPolygons> edges(fl, n_vertices);
   face_checks::Findings found;
   for (std::size_t vi = 0; vi < n_vertices; ++vi) {
     if (valid && found.any()) break;  // a yes-or-no answer is known at the first problem

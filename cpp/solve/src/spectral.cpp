@@ -11,7 +11,7 @@
 #include <limits>
 #include <vector>
 
-#include "half_edges.hpp"
+#include "sorpia/detail/half_edges.hpp"
 #include "solver_detail.hpp"
 #include "sorpia/solvers.hpp"
 
