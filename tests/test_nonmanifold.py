@@ -78,6 +78,34 @@ def test_fit_passes_through_every_vertex(scheme, triangles):
     assert np.abs(b @ res.control_vertices - v).max() <= 1e-8 * np.abs(v).max()
 
 
+@pytest.mark.parametrize("scheme, triangles", [("loop", True), ("catmull-clark", False)])
+@pytest.mark.parametrize("in_place", [False, True])
+def test_interpolator_sharp_solves_and_updates_the_input_vertices(scheme, triangles, in_place):
+    """Interpolator(nonmanifold="sharp") returns the one result type with the
+    input vertices' rows, and update moves a target (all its copies in the
+    split): each result equals scipy's direct solve of the input mesh's B
+    (limit_matrix with nonmanifold="sharp") to 1e-8 (tol 1e-10 on E/E_0)."""
+    import scipy.sparse.linalg
+
+    v, f = book(4, 3, triangles)
+    b = sharp(sorpia.limit_matrix, f, len(v), scheme=scheme).tocsc()
+    interp = sharp(sorpia.Interpolator, f, len(v), scheme=scheme)
+    assert interp.n_vertices == len(v)
+    assert (abs(interp.limit_matrix() - b)).max() == 0
+    res = interp.solve(v, initial=v)
+    assert isinstance(res, sorpia.InterpolationResult) and res.converged
+    targets = v.copy()
+    for i in (1, 5, 0):  # a crease vertex (copied in every page), an ordinary one, a corner
+        targets[i] += 0.1
+        res = interp.update(res, [i], targets[i], in_place=in_place)
+        assert res.converged and res.control_vertices.shape == v.shape
+        direct = scipy.sparse.linalg.spsolve(b, targets)
+        assert np.abs(res.control_vertices - direct).max() <= 1e-8 * np.abs(direct).max()
+        np.testing.assert_array_equal(interp.targets, targets)
+    whole = sharp(sorpia.interpolate, v, f, scheme=scheme)
+    assert isinstance(whole, sorpia.InterpolationResult)
+
+
 def test_bowtie_vertex_is_a_corner_and_warned():
     cones = np.array([[0, 1, 2], [0, 2, 3], [0, 3, 1], [1, 3, 2], [0, 4, 5], [0, 5, 6], [0, 6, 4], [4, 6, 5]])
     v = np.random.default_rng(1).normal(size=(7, 3))
