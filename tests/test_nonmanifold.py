@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 import sorpia
-from sorpia.nonmanifold import NonmanifoldWarning
+from sorpia import NonmanifoldWarning
 from test_io import SHARED_MESHES
 
 
@@ -236,3 +236,27 @@ def test_the_fan_shape_fits_on_the_command_line(tmp_path, command):
     ctrl, faces, tags = sorpia.read_mesh(tmp_path / "c.obj", tags=True)
     limit = sorpia.limit_points(ctrl, faces, scheme="catmull-clark", corners=tags["corners"])
     assert np.abs(limit - v[report["vertex_map"]]).max() <= 1e-9 * np.abs(v).max()
+
+
+@pytest.mark.parametrize("scheme, triangles", [("loop", True), ("catmull-clark", False)])
+def test_limit_surface_takes_nonmanifold_sharp(scheme, triangles):
+    # LimitSurface, evaluate_limit and limit_surface with nonmanifold="sharp": at every face corner (Bfr) and in the
+    # tessellation's first rows the surface of the input vertices is B V with B = limit_matrix(nonmanifold="sharp")
+    # (independent of the surface code: the rows are checked against OpenSubdiv's rules above); 1e-12 of the
+    # coordinates' size is rounding.
+    v, f = book(3, 2, triangles)
+    b = sharp(sorpia.limit_matrix, f, len(v), scheme=scheme)
+    want = b @ v
+    corners = [0.0, 0.0], [1.0, 0.0], ([0.0, 1.0] if triangles else [1.0, 1.0])
+    face_ids = np.repeat(np.arange(len(f)), 3)
+    uv = np.tile(np.array(corners), (len(f), 1))
+    vertex_at = f[:, [0, 1, 2]].ravel()  # (0,0), (1,0) and the third corner of each face
+    got = sharp(sorpia.evaluate_limit, v, f, face_ids, uv, scheme=scheme)
+    assert np.abs(got - want[vertex_at]).max() <= 1e-12 * np.abs(v).max()
+    surface = sharp(sorpia.LimitSurface, v, f, scheme=scheme)
+    surface.set_vertices(2 * v)  # the input's rows, mapped onto the split's copies
+    assert np.abs(surface.evaluate(face_ids, uv) - 2 * want[vertex_at]).max() <= 1e-12 * np.abs(v).max()
+    vs, _ = sharp(sorpia.limit_surface, v, f, level=1, scheme=scheme)
+    assert np.abs(vs[: len(v)] - want).max() <= 1e-12 * np.abs(v).max()
+    with pytest.raises(sorpia.MeshError, match="non-manifold"):
+        sorpia.LimitSurface(v, f, scheme=scheme)
