@@ -13,10 +13,10 @@ from .errors import (AttributeWarning, ConvergenceWarning, MeshError, MeshFileEr
 from .limit import limit_matrix, limit_points
 from .solve import InterpolationResult, Interpolator, interpolate
 from .io import FaceVarying, read_mesh, write_mesh
-from .sharp import sharp_edges
+from ._sharp import sharp_edges
 from ._validate import Polygons
-from .mesh_repair import RepairResult, repair
-from .meshinfo import mesh_statistics
+from ._repair import RepairResult, repair
+from ._meshinfo import mesh_statistics
 from .surface import LimitSurface, evaluate_limit, limit_surface
 from . import shapes
 

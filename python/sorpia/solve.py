@@ -107,7 +107,7 @@ from typing import Callable, Optional
 import numpy as np
 
 from . import _core
-from . import nonmanifold as nonmanifold_sharp
+from . import _nonmanifold as nonmanifold_sharp
 from ._validate import (DEFAULT_BOUNDARY, DEFAULT_SCHEME, as_boundary, as_nonmanifold, as_rules, as_vertex_count,
                         as_vertices)
 from .errors import ConvergenceWarning, OmegaWarning, ParameterError, SingularMatrixWarning

@@ -117,7 +117,7 @@ class LimitSurface:
         "sharp": a non-manifold mesh is taken with OpenSubdiv's rules for it
         (edges of three or more faces infinitely sharp, non-manifold vertices
         corners), as `sorpia.limit_points` takes it: the surface is that of
-        its manifold split (`sorpia.nonmanifold.split`), whose faces are the
+        its manifold split (`sorpia._nonmanifold.split`), whose faces are the
         input's, in order, so face ids and (u, v) mean what they mean on the
         input. `vertices`, `set_vertices` and the rows of `tessellate` are
         the split's (the input's vertices, then the copies).
@@ -133,7 +133,7 @@ class LimitSurface:
         vertices = as_vertices(vertices)
         self._vertex_map, self._n_input = None, vertices.shape[0]
         if as_nonmanifold(nonmanifold) == "sharp":
-            from .nonmanifold import split
+            from ._nonmanifold import split
 
             s = split(faces, vertices.shape[0], boundary, creases=creases, corners=corners, holes=holes)
             if s is not None:

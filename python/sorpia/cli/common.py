@@ -99,7 +99,7 @@ class InputMesh(NamedTuple):
     repair: object = None  # sorpia.RepairResult with --repair: vertices and faces are its output
     repair_seconds: float = 0.0
     tags: dict = {}  # the file's tags as read_mesh(tags=True) returns them ({} with --ignore-tags)
-    split: object = None  # sorpia.nonmanifold.Split with --nonmanifold sharp: vertices and faces are the split's
+    split: object = None  # sorpia._nonmanifold.Split with --nonmanifold sharp: vertices and faces are the split's
     attributes: dict = {}  # texture coordinates and normals (read_mesh(attributes=True)), on the faces above
 
     @property
@@ -175,11 +175,11 @@ def sharpness_tags(tags: dict) -> dict:
 
 def split_input(mesh: InputMesh, source, boundary: str) -> InputMesh:
     """--nonmanifold sharp: a non-manifold mesh replaced by its manifold split
-    with OpenSubdiv's rules as corner tags (sorpia.nonmanifold.split under the
+    with OpenSubdiv's rules as corner tags (sorpia._nonmanifold.split under the
     `boundary` rule; its NonmanifoldWarning is printed); what the split
     cannot reproduce is a UserError naming the file `source`."""
     from .. import MeshError
-    from ..nonmanifold import split
+    from .._nonmanifold import split
 
     try:
         s = split(mesh.faces, len(mesh.vertices), boundary, **sharpness_tags(mesh.tags))
@@ -374,13 +374,13 @@ def repair_json(result) -> dict:
 
 def repair_lines(result) -> list[str]:
     """The repair's summary: one line per kind of change, or one saying there was none."""
-    from ..mesh_repair import describe_changes
+    from .._repair import describe_changes
 
     return describe_changes(result.report) or ["nothing to repair: the mesh is valid"]
 
 
 def require_plotting() -> None:
-    from ..plotting import require_matplotlib
+    from .._plotting import require_matplotlib
 
     try:
         require_matplotlib()

@@ -49,7 +49,7 @@ def run_compare(input_path, *, methods=DISPLAY_ORDER, omega="auto", tol=1e-10, m
     (and auto's sor run), `omega` to sor and auto. A method that refuses the
     mesh (wpia where B has an eigenvalue at or below 0) gets a row marked
     "refused" with its reason, and the others run."""
-    from ..meshinfo import topology_info
+    from .._meshinfo import topology_info
 
     out = out if out is not None else sys.stdout
     given = f"--methods {','.join(methods)}" + (f" --threads {threads}" if threads != 1 else "")
@@ -126,7 +126,7 @@ def run_compare(input_path, *, methods=DISPLAY_ORDER, omega="auto", tol=1e-10, m
     if json_path is not None:
         write_json(json_path, data)
     if plot is not None:
-        from ..plotting import convergence_figure
+        from .._plotting import convergence_figure
 
         curves = [(_curve_label(r), r["errors"]) for r in rows if r["refused"] is None]
         save_figure(convergence_figure(curves, tol=tol, title=f"Convergence on {Path(input_path).name} "

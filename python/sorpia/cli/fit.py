@@ -29,7 +29,7 @@ def run_fit(input_path, output, *, method="auto", omega="auto", tol=1e-10, max_i
     `keep_unconverged`, or unless it is the least-squares answer on a
     singular B (stop_reason "singular"), which is written with its warning."""
     from .. import _core, write_mesh
-    from ..meshinfo import topology_info
+    from .._meshinfo import topology_info
 
     out = out if out is not None else sys.stdout
     check_mesh_suffix("-o", output)

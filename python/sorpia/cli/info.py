@@ -30,7 +30,7 @@ def run_info(input_path, *, as_json=False, boundary=None, triangulate=False, rep
     Loop PIA cannot run on is repaired in memory and info["repair"] says what
     --repair would change (or why it cannot)."""
     from .. import MeshFileError
-    from ..meshinfo import format_info, mesh_info
+    from .._meshinfo import format_info, mesh_info
 
     out = out if out is not None else sys.stdout
     tags_refused = None
@@ -147,7 +147,7 @@ def _what_repair_would_do(vertices, faces) -> dict:
     per kind, or the reason it refuses the mesh too."""
     from .. import MeshError
     from .. import repair as repair_mesh
-    from ..mesh_repair import describe_changes
+    from .._repair import describe_changes
 
     try:
         result = repair_mesh(vertices, faces)

@@ -6,7 +6,7 @@ import argparse
 
 from .. import __version__
 from .._validate import BOUNDARY_RULES, DEFAULT_BOUNDARY
-from ..plotting import FACE_BUDGET  # plotting imports matplotlib only when drawing
+from .._plotting import FACE_BUDGET  # plotting imports matplotlib only when drawing
 from .common import CLI_SCHEMES, DISPLAY_ORDER
 from .compare import run_compare
 from .demo import run_demo

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..plotting import FACE_BUDGET  # plotting imports matplotlib only when drawing
+from .._plotting import FACE_BUDGET  # plotting imports matplotlib only when drawing
 from ..solve import stopped_short_message
 from .common import (EXIT_NOT_CONVERGED, EXIT_OK, OMEGA_METHODS, SCHEME_LABELS, UserError, check_paths,
                      check_solver_options, face_counts, fit_once, fmt_seconds, method_label, omega_text,
@@ -23,7 +23,7 @@ def run_render(input_path, output, *, level=3, method="auto", omega="auto", tol=
                sharp_angle=None, nonmanifold="error", out=None) -> tuple[int, dict]:
     """`sorpia render`: the paper's Figure 3 for a mesh file."""
     from .. import LimitSurface
-    from ..plotting import crease_curves, interpolation_figure, level_for_budget
+    from .._plotting import crease_curves, interpolation_figure, level_for_budget
 
     out = out if out is not None else sys.stdout
     if Path(output).suffix.lower() != ".png":

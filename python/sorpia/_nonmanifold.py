@@ -85,7 +85,7 @@ def split(faces, n_vertices: int, boundary: str = DEFAULT_BOUNDARY, *, creases=N
     non-manifold edges; a caller's crease at a crease vertex (OpenSubdiv
     counts it with the creases of every sheet).
     """
-    from .mesh_repair import RepairResult, _core_faces, _faces_as_given, _mapped_tags
+    from ._repair import RepairResult, _core_faces, _faces_as_given, _mapped_tags
 
     rows, triangles, polygons = _core_faces(faces, n_vertices)
     if triangles is not None:
