@@ -26,7 +26,7 @@ METHOD_LABELS = {"auto": "auto", "pia": "PIA", "wpia": "W-PIA", "hss": "HSS-PIA"
 OMEGA_METHODS = ("sor", "auto")
 DISPLAY_ORDER = tuple(sorted(METHODS, key=lambda m: list(METHOD_LABELS).index(m) if m in METHOD_LABELS
                              else len(METHOD_LABELS)))
-MESH_SUFFIXES = (".obj", ".off", ".ply", ".stl")
+MESH_SUFFIXES = (".obj", ".off", ".ply", ".stl", ".usd", ".usda", ".usdc")
 # --scheme: the library's schemes, and "auto" (Loop for an all-triangle mesh, Catmull-Clark otherwise).
 CLI_SCHEMES = (AUTO_SCHEME,) + SCHEMES  # the library's names (_validate.as_scheme)
 SCHEME_LABELS = {"loop": "Loop", "catmull-clark": "Catmull-Clark"}
@@ -109,7 +109,7 @@ class InputMesh(NamedTuple):
 
 
 def read_input(path, triangulate: bool = False, repair: bool = False, tags: bool = True,
-               nonmanifold: str = "error", boundary=None, attributes: bool = False) -> InputMesh:
+               nonmanifold: str = "error", boundary=None, attributes: bool = False, prim=None) -> InputMesh:
     """Read the input mesh of every subcommand: polygons kept (or split with
     `triangulate`), the OBJ file's sharpness tags read unless `tags` is
     False (--ignore-tags), the mesh repaired with `repair` (repair_input),
@@ -118,7 +118,9 @@ def read_input(path, triangulate: bool = False, repair: bool = False, tags: bool
     boundary rule the command solves with (`boundary`: --boundary, None for
     the file's, see boundary_rule); with `attributes`, the file's texture
     coordinates and normals, carried onto the repaired or split faces
-    (carry_attributes)."""
+    (carry_attributes); `prim`: a USD file's mesh prim (--prim). A USD
+    mesh's subdivisionScheme is in `tags` as "scheme" (choose_scheme)."""
+    from .._usd import is_usd
     from ..io import read_mesh_file
 
     if not Path(path).exists():
@@ -126,8 +128,9 @@ def read_input(path, triangulate: bool = False, repair: bool = False, tags: bool
     if Path(path).is_dir():
         raise UserError(f"{path} is a folder, not a mesh file")
     t0 = time.perf_counter()
-    contents = read_mesh_file(path, triangulate=triangulate, tags=tags and Path(path).suffix.lower() == ".obj",
-                              attributes=attributes)
+    has_tags = Path(path).suffix.lower() == ".obj" or is_usd(path)
+    contents = read_mesh_file(path, triangulate=triangulate, tags=tags and has_tags, attributes=attributes,
+                              prim=prim)
     seconds = time.perf_counter() - t0
     vertices, faces, file_tags = contents.vertices, contents.faces, contents.tags or {}
     file_attributes = contents.attributes or {}
@@ -233,12 +236,17 @@ def face_size_histogram(faces) -> dict:
     return {int(k): int(c) for k, c in zip(sizes, counts)}
 
 
-def choose_scheme(scheme: str, faces, source) -> str:
-    """--scheme resolved for the mesh: auto is Loop for an all-triangle mesh
-    and Catmull-Clark otherwise; Loop on polygons is a PolygonError naming the
-    first face that is not a triangle and the two ways out."""
+def choose_scheme(scheme: str, faces, source, file_scheme=None) -> str:
+    """--scheme resolved for the mesh: auto is the file's scheme (a USD
+    mesh's subdivisionScheme, `file_scheme`) when it has one, else Loop for
+    an all-triangle mesh and Catmull-Clark otherwise; Loop on polygons is a
+    PolygonError naming the first face that is not a triangle and the two
+    ways out."""
     from .. import _core
     from .._validate import as_scheme
+
+    if scheme == AUTO_SCHEME and file_scheme is not None:
+        scheme = file_scheme
 
     if scheme == "loop" and not is_triangles(faces):
         counts = face_counts(faces)
@@ -279,15 +287,16 @@ def solve_tags(mesh: InputMesh, sharp_angle, source) -> dict:
 
 
 def read_solve_input(path, *, triangulate: bool, repair: bool, ignore_tags: bool, nonmanifold: str, scheme: str,
-                     boundary, sharp_angle, attributes: bool = False) -> tuple[InputMesh, str, str, dict]:
+                     boundary, sharp_angle, attributes: bool = False, prim=None) -> tuple[InputMesh, str, str, dict]:
     """read_input for the commands that solve (fit, compare, render), then
     what they solve with: (mesh, scheme (choose_scheme), boundary rule
     (boundary_rule; with --nonmanifold sharp, the rule its split is solved
     under), creases/corners/holes (solve_tags))."""
     mesh = read_input(path, triangulate, repair, tags=not ignore_tags, nonmanifold=nonmanifold, boundary=boundary,
-                      attributes=attributes)
+                      attributes=attributes, prim=prim)
     rule = mesh.split.boundary if mesh.split is not None else boundary_rule(boundary, mesh)
-    return mesh, choose_scheme(scheme, mesh.faces, path), rule, solve_tags(mesh, sharp_angle, path)
+    return mesh, choose_scheme(scheme, mesh.faces, path, mesh.tags.get("scheme")), rule, solve_tags(
+        mesh, sharp_angle, path)
 
 
 def boundary_rule(boundary, mesh: InputMesh) -> str:
