@@ -42,17 +42,26 @@ BLENDER = blender_python()
 needs_bpy = pytest.mark.skipif(BLENDER is None, reason="bpy is not installed: `make blender-venv` builds "
                                ".venv-blender with bpy 5.0.1 (about 400 MB), or set SORPIA_BLENDER_PYTHON")
 
-# Runs in Blender's Python: the script sorpia wrote, then the modifier at level 1 with the limit surface on,
-# whose first vertices are the control vertices' limit positions, in order.
+# Runs in Blender's Python: the script sorpia wrote, or Blender's own USD import of the file sorpia wrote (its
+# Subdivision Surface modifier made from subdivisionScheme, quality raised as docs/blender.md says), then the
+# modifier at level 1 with the limit surface on, whose first vertices are the control vertices' limit positions,
+# in order.
 RUNNER = textwrap.dedent("""
     import runpy, sys
     import bpy
     import numpy as np
-    script, out, n = sys.argv[-3], sys.argv[-2], int(sys.argv[-1])
+    how, path, out, n = sys.argv[-4], sys.argv[-3], sys.argv[-2], int(sys.argv[-1])
     bpy.ops.wm.read_factory_settings(use_empty=True)
-    runpy.run_path(script)
-    obj = bpy.data.objects["sorpia_cage"]
-    obj.modifiers["Subdivision"].levels = 1
+    if how == "script":
+        runpy.run_path(path)
+        obj = bpy.data.objects["sorpia_cage"]
+    else:
+        bpy.ops.wm.usd_import(filepath=path, import_subdivision=True)
+        (obj,) = [o for o in bpy.data.objects if o.type == "MESH"]
+        (modifier,) = obj.modifiers
+        assert modifier.type == "SUBSURF" and modifier.use_limit_surface, modifier
+        modifier.quality = 10
+    obj.modifiers[0].levels = 1
     mesh = obj.evaluated_get(bpy.context.evaluated_depsgraph_get()).to_mesh()
     co = np.empty(3 * len(mesh.vertices), dtype=np.float32)
     mesh.vertices.foreach_get("co", co)
@@ -60,12 +69,18 @@ RUNNER = textwrap.dedent("""
 """)
 
 
-def blender_limit(tmp_path, ctrl, faces, **options) -> np.ndarray:
-    """The limit positions Blender draws for the cage (n, 3) float32."""
-    script, out, runner = tmp_path / "cage.py", tmp_path / "limit.npy", tmp_path / "runner.py"
-    write_blender_script(script, ctrl, faces, **options)
+def blender_limit(tmp_path, ctrl, faces, how: str = "script", **options) -> np.ndarray:
+    """The limit positions Blender draws for the cage (n, 3) float32, loaded through sorpia's bpy script
+    (`how` "script") or Blender's USD import of the cage sorpia wrote ("usd")."""
+    out, runner = tmp_path / "limit.npy", tmp_path / "runner.py"
+    if how == "script":
+        path = tmp_path / "cage.py"
+        write_blender_script(path, ctrl, faces, **options)
+    else:
+        path = tmp_path / "cage.usda"
+        sorpia.write_mesh(path, ctrl, faces, scheme="catmull-clark", **options)
     runner.write_text(RUNNER)
-    done = subprocess.run([BLENDER, str(runner), str(script), str(out), str(len(ctrl))], capture_output=True,
+    done = subprocess.run([BLENDER, str(runner), how, str(path), str(out), str(len(ctrl))], capture_output=True,
                           text=True, timeout=300)
     assert done.returncode == 0, done.stderr[-3000:]
     return np.load(out)
@@ -89,19 +104,20 @@ CASES = {
 
 
 @needs_bpy
+@pytest.mark.parametrize("how", ["script", "usd"])
 @pytest.mark.parametrize("case", sorted(CASES))
-def test_blender_draws_the_fitted_surface(tmp_path, case):
+def test_blender_draws_the_fitted_surface(tmp_path, case, how):
     V, F, tags = CASES[case]()
     V = V + 0.05 * np.sin(3 * V[:, [1, 2, 0]])  # no symmetry for a wrong rule to hide behind
     res = sorpia.interpolate(V, F, scheme="catmull-clark", tol=1e-12, **tags)
     assert res.converged
-    limit = blender_limit(tmp_path, res.control_vertices, F, **tags)
+    limit = blender_limit(tmp_path, res.control_vertices, F, how, **tags)
     diagonal = np.linalg.norm(V.max(axis=0) - V.min(axis=0))
     # Blender evaluates in float32: the cage is rounded to float32 and the patches summed in float32, a few
     # ulps of the coordinates (float32's epsilon is 6e-8 of the diagonal).
     assert np.abs(limit - V).max() < 1e-6 * diagonal
     # Without the fit, Blender's surface misses the points by far more: the comparison sees the fit.
-    assert np.abs(blender_limit(tmp_path, V, F, **tags) - V).max() > 1e-3 * diagonal
+    assert np.abs(blender_limit(tmp_path, V, F, how, **tags) - V).max() > 1e-3 * diagonal
 
 
 def test_crease_weights_are_blenders_mapping():

@@ -345,7 +345,8 @@ def fit_summary(d: dict, repaired=(), kept=()) -> str:
         f"  method      {label}",
         f"  result      {state}",
         f"  check       max |B V - V0| = {d['max_residual']:.3g} "
-        f"({d['max_residual_relative']:.3g} of the bounding-box diagonal)",
+        f"({d['max_residual_relative']:.3g} of the bounding-box diagonal)"
+        + (", of the cage as written (USD stores float32)" if is_usd(d["output"]) else ""),
         f"  seconds     {phases}",
         f"  wrote       {', '.join(written) or 'nothing'}",
     ]
