@@ -258,6 +258,9 @@ def test_fit_usd_keeps_the_stage(command, tmp_path):
     assert tags2.pop("scheme") == "catmull-clark"
     assert np.array_equal(F2, F) and tags2["boundary"] == "edge-only"
     assert np.array_equal(tags2["creases"][0], edges) and tags2["creases"][1].tolist() == [10.0, 3.0]
+    # To the bit what the library fits with the file's scheme and tags (the same solve), rounded to float32.
+    library = sorpia.interpolate(V, F, scheme="catmull-clark", **tags).control_vertices
+    assert np.array_equal(ctrl, library.astype(np.float32).astype(np.float64))
     limit = sorpia.limit_points(ctrl, F2, scheme="catmull-clark", **tags2)
     diagonal = np.linalg.norm(V.max(axis=0) - V.min(axis=0))
     assert np.abs(limit - V).max() < 1e-6 * diagonal  # float32 coordinates: a few ulps of the diagonal
@@ -307,3 +310,22 @@ def test_fit_repair_blocks_primvars_that_no_longer_fit(command, tmp_path):
     cage = UsdGeom.Mesh(stage.GetPrimAtPath("/World/Cage"))
     assert len(cage.GetPointsAttr().Get()) > len(V)
     assert UsdGeom.PrimvarsAPI(cage.GetPrim()).GetPrimvar("displayColor").Get() is None
+
+
+@pytest.mark.filterwarnings("default::sorpia.UsdWarning")  # printed by the command, as a user sees it
+def test_repair_and_info_read_usd(command, tmp_path):
+    """repair keeps the stage as fit does; info describes a USD mesh with its scheme and tags."""
+    V, F = sorpia.shapes.quad_grid(4, 4)
+    scene(tmp_path / "in.usda", V, np.vstack([F, F[:1]]), creases=(np.array([[5, 6]]), 4.0))  # a duplicated face
+    code, out, err = command("repair", str(tmp_path / "in.usda"), "-o", str(tmp_path / "out.usda"))
+    assert code == 0, err
+    assert "primvars displayColor no longer fit them" in err  # the faces changed (the duplicate removed)
+    stage = Usd.Stage.Open(str(tmp_path / "out.usda"))
+    assert UsdGeom.Sphere(stage.GetPrimAtPath("/World/Ball")).GetRadiusAttr().Get() == 0.5
+    _, F2, tags = sorpia.read_mesh(tmp_path / "out.usda", tags=True)
+    assert np.array_equal(F2, F) and tags["creases"][0].tolist() == [[5, 6]]
+    code, out, err = command("info", str(tmp_path / "out.usda"))
+    assert code == 0, err
+    assert "Catmull-Clark, boundary edge-and-corner" in out and "creases 1: 1 semi-sharp" in out
+    code, out, err = command("info", str(tmp_path / "out.usda"), "--scheme", "loop")
+    assert code == 0 and "Loop subdivision needs triangles" in out, err

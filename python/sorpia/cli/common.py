@@ -83,6 +83,15 @@ def check_paths(inputs, outputs: dict, force: bool = False) -> None:
                 raise UserError(f"{opt_a} and {opt_b} name the same file {a}")
 
 
+def usd_template(input_path, output, prim) -> dict:
+    """write_mesh's keywords for a USD output of a USD input: the input's stage
+    as the template, the mesh written into its prim (`prim`, --prim); {}
+    otherwise."""
+    from .._usd import is_usd
+
+    return {"template": input_path, "prim": prim} if is_usd(output) and is_usd(input_path) else {}
+
+
 def check_mesh_suffix(opt: str, path) -> None:
     if path is not None and Path(path).suffix.lower() not in MESH_SUFFIXES:
         raise UserError(f"{opt} {path}: unknown mesh format {Path(path).suffix or '(no suffix)'!r}; "

@@ -15,7 +15,7 @@ from ..solve import stopped_short_message
 from .common import (EXIT_NOT_CONVERGED, EXIT_OK, OMEGA_METHODS, SCHEME_LABELS, UserError, check_mesh_suffix, check_paths,
                      check_solver_options, cpu_clock, face_counts, face_size_histogram, fit_once, fmt_seconds,
                      is_triangles, mesh_line, method_label, read_solve_input, repair_json, repair_lines, result_fields,
-                     scheme_kwargs, split_json, split_lines, tags_lines, tags_summary, warn_once)
+                     scheme_kwargs, split_json, split_lines, tags_lines, tags_summary, usd_template, warn_once)
 from .output import write_json
 from .progress import Progress
 
@@ -78,13 +78,13 @@ def run_fit(input_path, output, *, method="auto", omega="auto", tol=1e-10, max_i
         keep = res.converged or res.stop_reason == "singular" or keep_unconverged
 
         written_tags = _tags_to_write(output, tags, boundary, mesh, scheme)
-        usd_output = {"template": input_path, "prim": prim} if is_usd(output) and is_usd(input_path) else {}
+
         if keep:
             progress.status(f"writing {output}")
             t0 = time.perf_counter()
             # The control mesh keeps the tags it was fitted with (OBJ), so that it can be refitted.
             write_mesh(output, ctrl, F, binary=_binary_for(output, binary), **written_tags, **attributes,
-                       **usd_output)
+                       **usd_template(input_path, output, prim))
             if blender is not None:
                 from ..blender import write_blender_script
 

@@ -30,6 +30,7 @@ def run_info(input_path, *, as_json=False, boundary=None, triangulate=False, rep
     Loop PIA cannot run on is repaired in memory and info["repair"] says what
     --repair would change (or why it cannot)."""
     from .. import MeshFileError
+    from .._usd import is_usd
     from ..meshinfo import format_info, mesh_info
 
     out = out if out is not None else sys.stdout
@@ -50,8 +51,10 @@ def run_info(input_path, *, as_json=False, boundary=None, triangulate=False, rep
     except UserError as exc:  # --scheme loop on polygons
         chosen, refusal = scheme, str(exc)
     # The statistics are of the mesh under its scheme (polygons as they are for Catmull-Clark); with Loop
-    # refused on polygons, of their triangulation.
-    counted = read_input(input_path, triangulate=True, repair=repair, tags=False, prim=prim) if polygons and refusal else mesh
+    # refused on polygons, of their triangulation (a USD file's as they are: sorpia triangulates while reading
+    # the other formats only).
+    counted = (read_input(input_path, triangulate=True, repair=repair, tags=False, prim=prim)
+               if polygons and refusal and not is_usd(input_path) else mesh)
     info = mesh_info(counted.vertices, counted.faces, boundary=boundary_rule(boundary, mesh),
                      list_extraordinary=True if as_json else MAX_LISTED, scheme="loop" if refusal else chosen)
     info["face_sizes"] = face_size_histogram(mesh.faces)
