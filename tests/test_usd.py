@@ -328,4 +328,8 @@ def test_repair_and_info_read_usd(command, tmp_path):
     assert code == 0, err
     assert "Catmull-Clark, boundary edge-and-corner" in out and "creases 1: 1 semi-sharp" in out
     code, out, err = command("info", str(tmp_path / "out.usda"), "--scheme", "loop")
-    assert code == 0 and "Loop subdivision needs triangles" in out, err
+    assert code == 0 and "Loop subdivision needs triangles; pass --scheme catmull-clark" in out, err
+    sorpia.write_mesh(tmp_path / "loop.usda", V, F, scheme="loop")  # quads marked loop: refused by fit, said why
+    code, out, err = command("fit", str(tmp_path / "loop.usda"), "-o", str(tmp_path / "o.usda"))
+    assert_user_error(code, err)
+    assert "needs triangles (the file's subdivisionScheme is loop); pass --scheme catmull-clark" in err

@@ -252,17 +252,22 @@ def choose_scheme(scheme: str, faces, source, file_scheme=None) -> str:
     PolygonError naming the first face that is not a triangle and the two
     ways out."""
     from .. import _core
+    from .._usd import is_usd
     from .._validate import as_scheme
 
+    scheme_asked = scheme
     if scheme == AUTO_SCHEME and file_scheme is not None:
         scheme = file_scheme
 
     if scheme == "loop" and not is_triangles(faces):
         counts = face_counts(faces)
         f = int(np.flatnonzero(counts != 3)[0])
-        raise PolygonError(f"{source}: face {f} has {counts[f]} vertices and Loop subdivision needs triangles; "
-                           "pass --triangulate to split the polygons, or --scheme catmull-clark (or auto) to "
-                           "keep them")
+        given = "the file's subdivisionScheme is loop" if file_scheme == "loop" and scheme_asked == AUTO_SCHEME else ""
+        ways = ("pass --scheme catmull-clark to keep them (a USD file cannot be triangulated while read)"
+                if is_usd(source) else "pass --triangulate to split the polygons, or --scheme catmull-clark (or "
+                "auto) to keep them")
+        raise PolygonError(f"{source}: face {f} has {counts[f]} vertices and Loop subdivision needs triangles"
+                           f"{' (' + given + ')' if given else ''}; {ways}")
     return _core.scheme_name(as_scheme(scheme, faces))  # auto: the library's one rule
 
 
