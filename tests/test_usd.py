@@ -333,3 +333,24 @@ def test_repair_and_info_read_usd(command, tmp_path):
     code, out, err = command("fit", str(tmp_path / "loop.usda"), "-o", str(tmp_path / "o.usda"))
     assert_user_error(code, err)
     assert "needs triangles (the file's subdivisionScheme is loop); pass --scheme catmull-clark" in err
+
+
+@pytest.mark.filterwarnings("default::sorpia.UsdWarning")  # printed by the command, as a user sees it
+def test_fit_time_sampled_points_fits_one_time_and_says_so(command, tmp_path):
+    """Time-sampled points: the default time is fitted (a warning says so) and the cage is written without
+    samples, so that no other pose overrides it."""
+    V, F = sorpia.shapes.quad_grid(5, 5)
+    V = V.astype(np.float32).astype(np.float64)
+    stage = scene(tmp_path / "in.usda", V, F)
+    points = UsdGeom.Mesh(stage.GetPrimAtPath("/World/Cage")).GetPointsAttr()
+    points.Set(Vt.Vec3fArray.FromNumpy((V * 2).astype(np.float32)), 10.0)
+    stage.Save()
+    code, out, err = command("fit", str(tmp_path / "in.usda"), "-o", str(tmp_path / "out.usda"), "-q")
+    assert code == 0, err
+    assert "points has 1 time samples: read the default value" in err
+    out_stage = Usd.Stage.Open(str(tmp_path / "out.usda"))
+    cage = UsdGeom.Mesh(out_stage.GetPrimAtPath("/World/Cage"))
+    assert cage.GetPointsAttr().GetNumTimeSamples() == 0
+    ctrl = np.array(cage.GetPointsAttr().Get(10.0), dtype=np.float64)  # any time: the fitted cage
+    diagonal = np.linalg.norm(V.max(axis=0) - V.min(axis=0))
+    assert np.abs(sorpia.limit_points(ctrl, F, scheme="catmull-clark") - V).max() < 1e-6 * diagonal
