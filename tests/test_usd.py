@@ -206,6 +206,11 @@ def test_vertex_and_indexed_primvars(tmp_path):
     assert np.array_equal(uvs.values[uvs.indices], np.array([[0, 0], [1, 0], [1, 1], [0, 1]] * 1 + [
         [1, 0], [2, 0], [2, 1], [1, 1]], dtype=float))
     assert np.array_equal(normals.values[normals.indices][:, 2], [1, 1, 1, 1, -1, -1, -1, -1])
+    # The normals attribute (not a primvar), per vertex: each corner takes its vertex's normal.
+    body = 'normal3f[] normals = [(0,0,1), (0,0,2), (0,0,3), (0,0,4), (0,0,5), (0,0,6)] (interpolation = "vertex")'
+    _, F, attributes = sorpia.read_mesh(write_usda(tmp_path / "n.usda", body), attributes=True)
+    normals = attributes["normals"]
+    assert np.array_equal(normals.values[normals.indices][:, 2], F.reshape(-1) + 1)
     body = 'texCoord2f[] primvars:st = [(0,0), (1,1)] (interpolation = "uniform")'
     with pytest.warns(UsdWarning, match="primvars:st: left out: uniform interpolation"):
         assert "uvs" not in sorpia.read_mesh(write_usda(tmp_path / "b.usda", body), attributes=True)[2]

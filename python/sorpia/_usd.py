@@ -215,21 +215,20 @@ def _read_attributes(mesh, where: str, counts, indices, n_points: int) -> dict:
 
     out = {}
     api = UsdGeom.PrimvarsAPI(mesh.GetPrim())
-    primvars = [("uvs", api.GetPrimvar(UV_PRIMVAR))]
-    normals = api.GetPrimvar("normals")
-    if normals and normals.HasAuthoredValue():
-        primvars.append(("normals", normals))
-    elif mesh.GetNormalsAttr().HasAuthoredValue():
-        primvars.append(("normals", UsdGeom.Primvar(mesh.GetNormalsAttr())))
-    for key, pv in primvars:
-        if not pv or not pv.HasAuthoredValue():
-            continue
-        label = f"{where}: {pv.GetAttr().GetName()}"
-        values = _array(pv.GetAttr(), np.float64, label)
+    # (key, values attribute, interpolation, indices attribute or None) of each channel the mesh has.
+    channels = []
+    for key, name in (("uvs", UV_PRIMVAR), ("normals", "normals")):
+        pv = api.GetPrimvar(name)
+        if pv and pv.HasAuthoredValue():
+            channels.append((key, pv.GetAttr(), pv.GetInterpolation(), pv.GetIndicesAttr() if pv.IsIndexed()
+                             else None))
+    if not any(key == "normals" for key, *_ in channels) and mesh.GetNormalsAttr().HasAuthoredValue():
+        channels.append(("normals", mesh.GetNormalsAttr(), mesh.GetNormalsInterpolation(), None))
+    for key, attr, interpolation, indices_attr in channels:
+        label = f"{where}: {attr.GetName()}"
+        values = _array(attr, np.float64, label)
         values = values.reshape(len(values), -1)
-        interpolation = pv.GetInterpolation() if key == "uvs" or pv.GetAttr().GetName() != "normals" \
-            else mesh.GetNormalsInterpolation()
-        index = _array(pv.GetIndicesAttr(), np.int64, label) if pv.IsIndexed() else np.arange(len(values))
+        index = _array(indices_attr, np.int64, label) if indices_attr is not None else np.arange(len(values))
         if interpolation == UsdGeom.Tokens.faceVarying:
             corner = index
         elif interpolation in (UsdGeom.Tokens.vertex, UsdGeom.Tokens.varying):
