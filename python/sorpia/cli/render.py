@@ -20,7 +20,7 @@ from .progress import Progress
 def run_render(input_path, output, *, level=3, method="auto", omega="auto", tol=1e-10, max_iter=1000, boundary=None,
                size=(1200, 1000), elev=30.0, azim=-60.0, face_budget=FACE_BUDGET, quiet=False, force=False,
                triangulate=False, up="z", threads=1, repair=False, scheme="auto", ignore_tags=False,
-               sharp_angle=None, nonmanifold="error", out=None) -> tuple[int, dict]:
+               sharp_angle=None, nonmanifold="error", out=None, prim=None) -> tuple[int, dict]:
     """`sorpia render`: the paper's Figure 3 for a mesh file."""
     from .. import LimitSurface
     from .._plotting import crease_curves, interpolation_figure, level_for_budget
@@ -40,7 +40,7 @@ def run_render(input_path, output, *, level=3, method="auto", omega="auto", tol=
         progress.status(f"reading {input_path}")
         mesh, scheme, boundary, tags = read_solve_input(
             input_path, triangulate=triangulate, repair=repair, ignore_tags=ignore_tags, nonmanifold=nonmanifold,
-            scheme=scheme, boundary=boundary, sharp_angle=sharp_angle)
+            scheme=scheme, boundary=boundary, sharp_angle=sharp_angle, prim=prim)
         V0, F = mesh.vertices, mesh.faces
         timings.update(mesh.timings)
         _, res, timings["fit"], _ = fit_once(V0, F, method=method, omega=omega if uses_omega else None, tol=tol,
