@@ -518,7 +518,7 @@ TEST(Darts, RowsAreFarsLimitExtrapolated) {
   // levels, extrapolated by Aitken twice, on the darts of regular valence
   // (6 under Loop, 4 under Catmull-Clark), where the row's differences
   // shrink by about 1/3 a level, and on Catmull-Clark's untagged vertices of
-  // two faces (by 1/2 a level); the extrapolation settles to about 1e-10.
+  // two faces (by 1/4 a level); the extrapolation settles to about 1e-10.
   // (Tagged ones change rules within L = 3..7 or have eigenvalues close in
   // modulus: far_deep_limit_row is their reference.)
   // (At other valences the next eigenvalues are complex or close in modulus
@@ -612,6 +612,44 @@ bool at_two_face_dart(const Shape& s, int f) {
       return true;
   }
   return false;
+}
+
+TEST(Darts, TwoFaceRowsBetweenQuadsAreTheSmoothMasksClosedForm) {
+  // The dominant left eigenvector of the subdivision matrix of an untagged
+  // vertex of two quads is the smooth limit mask's closed form at n = 2,
+  // (n^2 v + 4 sum e_j + sum f_j) / (n (n + 5)) = (4 v + 4 (e_1 + e_2) +
+  // f_1 + f_2) / 14 (f_j the corners opposite v), which Sdc replaces by the
+  // corner mask; to rounding.
+  int checked = 0;
+  for (const Shape& s : shapes()) {
+    if (s.scheme != Scheme::CatmullClark) continue;
+    const sorpia::Topology t = s.topology();
+    const auto b = sorpia::limit_matrix(t, sorpia::Rules{s.scheme, s.boundary, s.tags});
+    for (const int v : level_dependent(s)) {
+      const std::vector<int> faces = faces_at(s, v);
+      if (faces.size() != 2 || darts_only(s, v) ||
+          std::count(s.tags.corner_vertices.begin(), s.tags.corner_vertices.end(), v) ||
+          std::count(s.tags.crease_vertices.begin(), s.tags.crease_vertices.end(), v))
+        continue;
+      std::map<int, double> expected{{v, 4.0 / 14.0}};
+      bool quads = true;
+      for (const int f : faces) {
+        std::size_t o = 0;
+        for (int g = 0; g < f; ++g) o += s.counts[g];
+        quads = quads && s.counts[f] == 4;
+        if (!quads) break;
+        const int j = static_cast<int>(std::find(s.indices.begin() + o, s.indices.begin() + o + 4, v) - s.indices.begin() - o);
+        expected[s.indices[o + (j + 1) % 4]] = 4.0 / 14.0;  // each edge end twice over the two faces: set, not add
+        expected[s.indices[o + (j + 3) % 4]] = 4.0 / 14.0;
+        expected[s.indices[o + (j + 2) % 4]] += 1.0 / 14.0;
+      }
+      if (!quads) continue;
+      SCOPED_TRACE(s.name + ", vertex " + std::to_string(v));
+      EXPECT_LE(max_diff(row(b, v), expected), 1e-14);
+      ++checked;
+    }
+  }
+  EXPECT_GE(checked, 5);
 }
 
 // x = B^-1 y by Gaussian elimination with partial pivoting (dense; small meshes).

@@ -46,8 +46,9 @@ struct VertexTags {
   // which moves as L grows). Every other vertex's mask, once its semi-sharp
   // tags have decayed (and, under Catmull-Clark, its faces are quads), is the
   // dominant left eigenvector of its own subdivision matrix: the same at
-  // every level. (Under Loop an interior vertex of two triangles exists only
-  // in a closed mesh of two faces, which Topology refuses.)
+  // every level. (Under Loop, Sdc's smooth mask at an interior vertex of two
+  // triangles is its subdivision matrix's eigenvector too: Loop has no
+  // corner-mask exception.)
   bool level_dependent(const Topology& topology, Scheme scheme, std::int32_t v) const {
     if (dart(topology, v)) return true;
     return scheme == Scheme::CatmullClark && !topology.is_boundary(v) && topology.valence(v) == 2 &&
@@ -86,7 +87,7 @@ VertexTags vertex_tags(const Topology& topology, const Tags& tags);
 // row is S's dominant left eigenvector (eigenvalue 1, weights summing to 1)
 // composed back; Far's Limit() after L levels tends to it as rho^L, rho the
 // largest modulus of S's other eigenvalues (darts: about 1/3 at valence 6 and
-// 0.6 at 12; two faces: 1/2).
+// 0.6 at 12; two faces of quads: 1/4).
 //
 // Exact because of locality (Sdc's CREASE_UNIFORM rules): v's child depends
 // on v's faces only, and its one-ring on the children of those faces, so v's

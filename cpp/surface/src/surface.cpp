@@ -68,6 +68,15 @@ std::string human_bytes(double b) {
 // approximate (it drops the derivative of the rational Gregory weights), at a
 // small cost in evaluation time.
 constexpr int kApproxLevelSmooth = 4;
+// The smooth level on a mesh with darts (an interior vertex with one
+// infinitely sharp edge): Bfr's corner there is Far's Limit() after this many
+// local refinements, which is not the limit (evaluate() takes the corner
+// itself from B), so the points next to it jump by that point's distance to
+// the limit, which shrinks as rho^level (rho about 1/3 at the regular
+// valences). One level for the whole surface: a higher level for the faces at
+// darts alone would crack their other edges, where a neighbouring face
+// approximates an extraordinary vertex at the lower level.
+constexpr int kApproxLevelDarts = 10;
 // Local refinements around semi-sharp features (default 6): 10, the deepest
 // OpenSubdiv isolates, so that every semi-sharp feature (sharpness below 10)
 // has decayed before Bfr stops refining.
@@ -146,6 +155,7 @@ struct LimitSurface::Impl {
   // evaluation refuses them (bfr_unsafe[f]: that vertex, or -1; empty when
   // there are none or OpenSubdiv is new enough).
   std::vector<std::int32_t> bfr_unsafe;
+  bool has_darts = false;  // among exact.vertices
   // Uniformly refined to refined_level (built on demand); shares base's level
   // 0 (Far::TopologyRefinerFactory::Create), so it is declared after base and
   // destroyed before it.
@@ -166,18 +176,16 @@ struct LimitSurface::Impl {
     exact_slot.assign(t.n_vertices(), -1);
     for (std::size_t k = 0; k < exact.vertices.size(); ++k)
       exact_slot[exact.vertices[k]] = static_cast<std::int32_t>(k);
-#if OPENSUBDIV_VERSION_NUMBER < 30600
     const Far::TopologyLevel& level0 = base.refiner->GetLevel(0);
     for (const std::int32_t v : exact.vertices) {
       const int o = base.to_osd[v];
-      if (level0.GetVertexFaces(o).size() != 2) continue;
-      bool sharp = false;
+      bool sharp = false;  // a dart: level-dependent with an infinitely sharp edge
       for (const int e : level0.GetVertexEdges(o)) sharp = sharp || level0.IsEdgeInfSharp(e);
-      if (!sharp) continue;
+      has_darts = has_darts || sharp;
+      if (!sharp || level0.GetVertexFaces(o).size() != 2 || OPENSUBDIV_VERSION_NUMBER >= 30600) continue;
       if (bfr_unsafe.empty()) bfr_unsafe.assign(t.n_faces(), -1);
       for (const int f : level0.GetVertexFaces(o)) bfr_unsafe[f] = v;
     }
-#endif
   }
 };
 
@@ -269,7 +277,7 @@ LimitSurface::LimitSurface(const Topology& topology, const double* vertices, Sch
                            const Tags& tags)
     : impl_(std::make_unique<Impl>(topology, scheme, boundary, tags)) {
   Bfr::SurfaceFactory::Options options;
-  options.SetApproxLevelSmooth(kApproxLevelSmooth);
+  options.SetApproxLevelSmooth(impl_->has_darts ? kApproxLevelDarts : kApproxLevelSmooth);
   options.SetApproxLevelSharp(kApproxLevelSharp);
   impl_->factory = std::make_unique<SurfaceFactory>(*impl_->base.refiner, options);
   set_vertices(vertices);
