@@ -223,8 +223,8 @@ def main():
                 "the way to the face's (or the corner's sub-face's) centre (Bfr's corner there is its own, Far's Limit() after its smooth level: "
                 "10 on a mesh with darts). On quad_irregular with split quads the miss elsewhere is OpenSubdiv "
                 "3.5.0's Bfr: at some corners of faces that hold a vertex of two faces, next to extraordinary "
-                "vertices, the corners of different faces at one vertex disagree (by up to 6e-2 of the diagonal "
-                "there), while B and Far's refinement agree; on grids and tori with split quads Bfr is exact.\n\n" + "\n".join(lines + cost))
+                "vertices, the corners of different faces at one vertex disagree (by 6e-2 with a random cage of "
+                "unit size), while B and Far's refinement agree; on grids and tori with split quads Bfr is exact.\n\n" + "\n".join(lines + cost))
         write_page("darts", "Fits through darts", body, settings=(ap, args))
 
 

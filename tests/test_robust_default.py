@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 import sorpia
 from sorpia.solve import ConvergenceWarning, SingularMatrixWarning
+from sorpia.surface import corner_uv
 
 CC = {"scheme": "catmull-clark"}
 STATIONARY = ("pia", "gs", "sor", "hss", "whss")
@@ -315,3 +316,47 @@ def test_many_valence_two_vertices_between_pentagons():
     assert res.converged and res.variant == "sor"
     ref = scipy.sparse.linalg.splu(b_.tocsc()).solve(v)
     assert np.abs(res.control_vertices - ref).max() / np.abs(ref).max() < 1e-8
+
+
+def split_quad_grid():
+    """A bumpy 6 x 6 quad grid with two interior quads split along a diagonal
+    by a new vertex of two faces (vertices 36 and 37)."""
+    v, f = sorpia.shapes.quad_grid(6, 6)
+    v = np.asarray(v, float)
+    v[:, 2] += 0.05 * np.sin(7.0 * np.arange(len(v)))
+    f = np.asarray(f).tolist()
+    for i in (6, 18):
+        a, b_, c, d = f[i]
+        v = np.vstack([v, v[[a, b_, c, d]].mean(0) + [0.0, 0.0, 0.2]])
+        f[i] = [a, b_, c, len(v) - 1]
+        f.append([len(v) - 1, c, d, a])
+    return v, f
+
+
+def two_face_shapes():
+    v, f = gregory_test8()
+    yield "gregory_test8", v, f, {}
+    yield "gregory_test8 semi-sharp", v, f, {"creases": (np.array([[1, 0], [1, 2]]), 1.5)}
+    yield "folded octagon", *folded_octagon(), {}
+    v, f = split_quad_grid()
+    yield "split grid", v, f, {}
+    yield "split grid, dart next to it", v, f, {"creases": (np.array([[3, 9], [9, 15]]), np.inf),
+                                                "corners": (np.array([37]), 2.0)}
+
+
+@pytest.mark.parametrize("name, v, f, tags", list(two_face_shapes()), ids=lambda x: x if isinstance(x, str) else "")
+def test_fitted_cages_pass_through_their_targets_at_every_corner(name, v, f, tags):
+    """B's rows at vertices of two faces are the limit of refinement (tests/cpp/test_darts.cpp checks them against
+    Far refined 80 levels): a cage fitted by a dense solve with B passes through its targets under evaluate_limit
+    at every face corner, to 1e-10 of the targets' size (the dense solve's rounding times B's condition, at most
+    about 64 here)."""
+    b = dense_b(f, len(v), **tags)
+    x = np.linalg.solve(b, v)
+    ids, uv, corner = [], [], []
+    for i, face in enumerate(f):
+        for j, u in enumerate(face):
+            ids.append(i)
+            uv.append(corner_uv("catmull-clark", len(face), j))
+            corner.append(u)
+    p = sorpia.evaluate_limit(x, f, np.array(ids), np.array(uv, float), **CC, **tags)
+    assert np.abs(p - v[corner]).max() <= 1e-10 * np.abs(v).max()
