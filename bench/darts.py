@@ -1,6 +1,7 @@
-"""Fits through darts: how far the fitted surface misses its targets at darts
-with OpenSubdiv's Limit() rows (what B had before) and with the limit of
-refinement (B now), and what the dart rows cost.
+"""Fits through darts and Catmull-Clark's vertices of two faces (the vertices
+whose OpenSubdiv Limit() changes with the level): how far the fitted surface
+misses its targets there with OpenSubdiv's Limit() rows (what B had before)
+and with the limit of refinement (B now), and what those rows cost.
 
 For each shape (OpenSubdiv's tagged shapes in ../shared/meshes when present,
 and generated ones): the cage fitted by a direct solve (scipy's splu) with
@@ -8,9 +9,11 @@ OpenSubdiv's B (_core.reference_limit_matrix: Far's Limit() after the levels
 the semi-sharp tags need, 0 with infinitely sharp tags alone, which gives a
 dart Sdc's smooth mask) and with sorpia's B; each cage's limit surface
 evaluated at every face corner (sorpia.LimitSurface: Bfr, and the limit of
-refinement at darts' corners); the largest miss |P - V| over the diagonal, at
-darts and elsewhere. Then the cost: B built with k darts against the same
-vertices made infinitely sharp corners (uniform rows), per dart.
+refinement at such vertices' corners); the largest miss |P - V| over the
+diagonal, at those vertices and elsewhere. Then the cost: B built with k darts
+against the same vertices made infinitely sharp corners (uniform rows), per
+dart; and B of a quad mesh with k quads split by a vertex of two faces against
+the same mesh unsplit, per such vertex.
 Writes docs/benchmarks/darts.md (unless --no-page).
 
     python bench/darts.py [--shared ../shared/meshes] [--names a.obj,b.obj] [--no-page]
@@ -38,11 +41,26 @@ from sorpia.surface import corner_uv
 sys.path.insert(0, os.path.dirname(__file__))
 sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "tests"))
 from _report import write_page  # noqa: E402
-from conftest import darts as dart_mask  # noqa: E402  (the tests' own: from the faces and tags alone)
+from conftest import level_dependent  # noqa: E402  (the tests' own: from the faces and tags alone)
+from test_robust_default import gregory_test8  # noqa: E402
 
 
-def darts(f, n, **tags):
-    return np.flatnonzero(dart_mask(f, n, **tags))
+def darts(f, n, scheme="loop", **tags):
+    """Darts, and under Catmull-Clark the vertices of two faces too."""
+    return np.flatnonzero(level_dependent(f, n, scheme, **tags))
+
+
+def split_quads(v, f, faces, lift):
+    """Each quad in `faces` split along its diagonal (corners 0 and 2) by a new vertex at its centre raised by
+    `lift` in z (an interior vertex of two faces)."""
+    v, f = np.asarray(v, float).tolist(), np.asarray(f).tolist()
+    for i in faces:
+        a, b, c, d = f[i]
+        centre = np.mean([v[a], v[b], v[c], v[d]], axis=0) + [0.0, 0.0, lift]
+        v.append(centre.tolist())
+        f[i] = [a, b, c, len(v) - 1]
+        f.append([len(v) - 1, c, d, a])
+    return np.array(v), np.array(f)
 
 SHARED = Path(__file__).resolve().parents[2] / "shared" / "meshes"
 OSD = ["osd_loop_icos_infsharp.obj", "osd_loop_cube_creases0.obj", "osd_catmark_cube_creases1.obj",
@@ -61,7 +79,7 @@ def corner_misses(x, v, f, boundary, scheme, tags, at):
     s = sorpia.LimitSurface(x, f, boundary=boundary, scheme=scheme, **tags)
     holes = set(np.asarray(tags.get("holes", []), int).tolist())
     faces = face_list(f)
-    ids, uv, corner = [], [], []
+    ids, uv, corner, inward = [], [], [], []
     for i, face in enumerate(faces):
         if i in holes:
             continue
@@ -69,10 +87,20 @@ def corner_misses(x, v, f, boundary, scheme, tags, at):
             ids.append(i)
             corner.append(u)
             uv.append(corner_uv(scheme, len(face), j))
-    p = s.evaluate(np.array(ids), np.array(uv, float))
-    miss = np.linalg.norm(p - v[np.array(corner)], axis=1) / np.linalg.norm(np.ptp(v, axis=0))
+            # towards the face's centre (Loop, quads) or the corner's sub-face's (other polygons: side 1/2)
+            centre = [1 / 3, 1 / 3] if scheme == "loop" else [0.5, 0.5] if len(face) == 4 else np.add(uv[-1], 0.25)
+            inward.append(np.subtract(centre, uv[-1]))
+    ids, uv = np.array(ids), np.array(uv, float)
+    p = s.evaluate(ids, uv)
+    diagonal = np.linalg.norm(np.ptp(v, axis=0))
+    miss = np.linalg.norm(p - v[np.array(corner)], axis=1) / diagonal
     mask = np.isin(corner, at)
-    return (miss[mask].max() if mask.any() else 0.0), (miss[~mask].max() if (~mask).any() else 0.0)
+    # The jump next to those corners: the point 1e-9 of the way inward against the corner's.
+    jump = 0.0
+    if mask.any():
+        near = s.evaluate(ids[mask], uv[mask] + 1e-9 * np.array(inward)[mask])
+        jump = np.linalg.norm(near - p[mask], axis=1).max() / diagonal
+    return (miss[mask].max() if mask.any() else 0.0), (miss[~mask].max() if (~mask).any() else 0.0), jump
 
 
 def generated():
@@ -95,6 +123,17 @@ def generated():
     e = np.unique(np.sort(f[::41, :2], axis=1), axis=0)
     out.append(("quad_irregular(1200), sharp 2.5 and inf edges", np.asarray(v), f, "catmull-clark", "edge-only",
                 {"creases": (e, np.where(np.arange(len(e)) % 3, np.inf, 2.5))}))
+    v, f = sorpia.shapes.quad_grid(12, 12)
+    v = np.asarray(v, float)
+    v[:, 2] += 0.05 * np.sin(9.0 * v[:, 0]) * np.cos(7.0 * v[:, 1])
+    v, f = split_quads(v, f, [13, 40, 66, 100], 0.1)
+    out.append(("quad grid 12x12, 4 quads split", v, f, "catmull-clark", "edge-and-corner", {}))
+    v, f = gregory_test8()
+    f = sorpia.Polygons(np.array([len(x) for x in f]), np.concatenate(f))
+    out.append(("gregory_test8 (topology)", v, f, "catmull-clark", "edge-and-corner", {}))
+    v, f = sorpia.shapes.quad_irregular(1200, seed=2)
+    v, f = split_quads(v, f, range(0, 1000, 50), 0.02)
+    out.append(("quad_irregular(1200), 20 quads split", v, f, "catmull-clark", "edge-only", {}))
     return out
 
 
@@ -117,20 +156,21 @@ def main():
     ap.add_argument("--names", default=",".join(OSD), help="comma-separated files in --shared")
     ap.add_argument("--no-page", action="store_true", help="print only; do not write the page")
     args = ap.parse_args()
-    lines = ["| shape | scheme | vertices | darts | miss at darts, Far's Limit() rows | miss at darts, limit rows "
-             "| miss elsewhere (both) |", "|---|---|---:|---:|---:|---:|---:|"]
+    lines = ["| shape | scheme | vertices | darts and two-face vertices | miss there, Far's Limit() rows "
+             "| miss there, limit rows | miss elsewhere (both) | jump next to them |",
+             "|---|---|---:|---:|---:|---:|---:|---:|"]
     for name, v, f, scheme, boundary, tags in shapes(args.shared, args.names.split(",")):
         n = len(v)
-        at = darts(f, n, **tags)
+        at = darts(f, n, scheme, **tags)
         B = sorpia.limit_matrix(f, n, boundary=boundary, scheme=scheme, **tags)
         topo = make_topology(f, n, scheme=scheme, warn=False)
         data, indices, indptr = _core.reference_limit_matrix(
             topo, _core.Rules(scheme=as_scheme(scheme), boundary=as_boundary(boundary), tags=make_tags(topo, **tags)))
         far = scipy.sparse.csr_matrix((data, indices, indptr), shape=(n, n))
-        before, other_before = corner_misses(fit(far, v), v, f, boundary, scheme, tags, at)
-        after, other_after = corner_misses(fit(B, v), v, f, boundary, scheme, tags, at)
+        before, other_before, _ = corner_misses(fit(far, v), v, f, boundary, scheme, tags, at)
+        after, other_after, jump = corner_misses(fit(B, v), v, f, boundary, scheme, tags, at)
         line = (f"| {name} | {scheme} | {n} | {len(at)} | {before:.1e} | {after:.1e} | "
-                f"{max(other_before, other_after):.1e} |")
+                f"{max(other_before, other_after):.1e} | {jump:.1e} |")
         print(line, flush=True)
         lines.append(line)
 
@@ -158,9 +198,33 @@ def main():
                 f"{times['darts']:.3f} | {times['corners']:.3f} | {per:.1f} |")
         print(line, flush=True)
         cost.append(line)
+    # Cost: k quads split by a vertex of two faces against the same mesh unsplit.
+    cost += ["", "| mesh | vertices of two faces | B split (s) | B unsplit (s) | per vertex of two faces (us) |",
+             "|---|---:|---:|---:|---:|"]
+    v, f = sorpia.shapes.quad_irregular(100_000, seed=1)
+    split = split_quads(v, f, range(0, len(np.asarray(f)), 50), 0.01)
+    times = {}
+    for kind, (vv, ff) in (("split", split), ("plain", (np.asarray(v), np.asarray(f)))):
+        best = np.inf
+        for _ in range(3):
+            t0 = time.perf_counter()
+            sorpia.limit_matrix(ff, len(vv), scheme="catmull-clark")
+            best = min(best, time.perf_counter() - t0)
+        times[kind] = best
+    k = len(split[0]) - len(v)
+    line = (f"| quad_irregular({len(v)}) | {k} | {times['split']:.3f} | {times['plain']:.3f} | "
+            f"{(times['split'] - times['plain']) / k * 1e6:.1f} |")
+    print(line, flush=True)
+    cost.append(line)
     if not args.no_page:
         body = ("Misses are the largest |P - V| over the diagonal at the face corners (the limit surface of the "
-                "fitted cage, evaluated by sorpia.LimitSurface), at darts and elsewhere.\n\n" + "\n".join(lines + cost))
+                "fitted cage, evaluated by sorpia.LimitSurface), at darts and Catmull-Clark's vertices of two faces, "
+                "and elsewhere; the jump is the distance from such a corner's point to the surface's point 1e-9 of "
+                "the way to the face's (or the corner's sub-face's) centre (Bfr's corner there is its own, Far's Limit() after its smooth level: "
+                "10 on a mesh with darts). On quad_irregular with split quads the miss elsewhere is OpenSubdiv "
+                "3.5.0's Bfr: at some corners of faces that hold a vertex of two faces, next to extraordinary "
+                "vertices, the corners of different faces at one vertex disagree (by 6e-2 with a random cage of "
+                "unit size), while B and Far's refinement agree; on grids and tori with split quads Bfr is exact.\n\n" + "\n".join(lines + cost))
         write_page("darts", "Fits through darts", body, settings=(ap, args))
 
 

@@ -60,28 +60,54 @@ def zigzag_strip(n: int):
     return v, np.array([[i, i + 1, i + 2] if i % 2 == 0 else [i + 1, i, i + 2] for i in range(n)])
 
 
-def darts(faces, n_vertices: int, creases=None, corners=None, **_) -> np.ndarray:
-    """Which vertices are darts, from the faces and tags alone: interior vertices with exactly one infinitely sharp
-    crease edge (sharpness 10 or more, each edge given once) and no infinitely sharp corner. Their rows of B are
-    the limit of refinement, which OpenSubdiv's Limit() after any finite number of levels (the whole-mesh
-    reference, _core.reference_limit_matrix) is not: comparisons with that reference skip them, and
-    tests/cpp/test_darts.cpp checks them. Other tags (holes) are taken and ignored."""
+def level_dependent(faces, n_vertices: int, scheme: str = "loop", creases=None, corners=None, **_) -> np.ndarray:
+    """Which vertices' OpenSubdiv Limit() changes with the level, from the faces and tags alone: darts (below)
+    and, under Catmull-Clark, interior vertices of two faces with no infinitely sharp tag (Sdc gives them the
+    corner mask). Their rows of B are the limit of refinement; tests/cpp/test_darts.cpp checks them."""
+    out = darts(faces, n_vertices, creases=creases, corners=corners)
+    if scheme != "catmull-clark":
+        return out
+    face_list = _face_list(faces)
+    count = np.zeros(n_vertices, int)
+    for face in face_list:
+        count[face] += 1
+    interior = _used(face_list, n_vertices) & ~_on_boundary(face_list, n_vertices)
+    return out | (interior & (count == 2) & (_sharp(n_vertices, creases, corners) == 0))
+
+
+def _face_list(faces):
     if isinstance(faces, sorpia.Polygons):
         ends = np.cumsum(faces.face_vertex_counts)
-        face_list = [faces.face_vertex_indices[e - c:e].tolist() for c, e in zip(faces.face_vertex_counts, ends)]
-    else:
-        face_list = np.asarray(faces).tolist()
+        return [faces.face_vertex_indices[e - c:e].tolist() for c, e in zip(faces.face_vertex_counts, ends)]
+    return np.asarray(faces).tolist()
+
+
+def _edge_faces(face_list):
     edge_faces = {}
     for face in face_list:
         for a, b in zip(face, face[1:] + face[:1]):
             key = (min(a, b), max(a, b))
             edge_faces[key] = edge_faces.get(key, 0) + 1
-    on_boundary = np.zeros(n_vertices, bool)
+    return edge_faces
+
+
+def _used(face_list, n_vertices):
     used = np.zeros(n_vertices, bool)
-    for (a, b), count in edge_faces.items():
-        used[[a, b]] = True
+    for face in face_list:
+        used[face] = True
+    return used
+
+
+def _on_boundary(face_list, n_vertices):
+    on_boundary = np.zeros(n_vertices, bool)
+    for (a, b), count in _edge_faces(face_list).items():
         if count == 1:
             on_boundary[[a, b]] = True
+    return on_boundary
+
+
+def _sharp(n_vertices, creases, corners):
+    """Per vertex: its infinitely sharp crease edges, 99 at an infinitely sharp corner."""
     sharp = np.zeros(n_vertices, int)
     if creases is not None:
         e = np.asarray(creases[0]).reshape(-1, 2)
@@ -91,6 +117,18 @@ def darts(faces, n_vertices: int, creases=None, corners=None, **_) -> np.ndarray
         c = np.atleast_1d(np.asarray(corners[0]))
         s = np.broadcast_to(np.asarray(corners[1], float), (len(c),))
         sharp[c[s >= 10]] = 99
+    return sharp
+
+
+def darts(faces, n_vertices: int, creases=None, corners=None, **_) -> np.ndarray:
+    """Which vertices are darts, from the faces and tags alone: interior vertices with exactly one infinitely sharp
+    crease edge (sharpness 10 or more, each edge given once) and no infinitely sharp corner. Their rows of B are
+    the limit of refinement, which OpenSubdiv's Limit() after any finite number of levels (the whole-mesh
+    reference, _core.reference_limit_matrix) is not: comparisons with that reference skip them, and
+    tests/cpp/test_darts.cpp checks them. Other tags (holes) are taken and ignored."""
+    face_list = _face_list(faces)
+    used, on_boundary = _used(face_list, n_vertices), _on_boundary(face_list, n_vertices)
+    sharp = _sharp(n_vertices, creases, corners)
     return used & ~on_boundary & (sharp == 1)
 
 

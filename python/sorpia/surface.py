@@ -216,7 +216,8 @@ class LimitSurface:
         Accuracy near extraordinary vertices: Bfr represents the surface in
         the corner region of side 1/16 (in u, v) at an extraordinary vertex
         (valence other than 6 for Loop, 4 for Catmull-Clark; 4 and 3 on the
-        boundary) by a Gregory patch, after 4 local refinements. There
+        boundary) by a Gregory patch, after 4 local refinements (10 on a mesh
+        with darts, so that the points next to a dart's corner meet it). There
         positions approximate the limit surface (exactly at the corners of the
         refined faces) and OpenSubdiv's derivatives approximate the
         derivatives of those positions (it drops the derivative of the

@@ -135,10 +135,9 @@ namespace {
 // Catmull-Clark: the masks' operator (detail::catmark_limit_operator) with the
 // rows whose level (detail::row_levels) the masks do not give replaced by
 // OpenSubdiv's refinement around their vertex (refined_rows.hpp): vertices a
-// tag touches (a crease edge or a corner at them), darts (the limit of their
-// refinement), and interior vertices of two faces (their Sdc limit mask, the
-// corner rule, is not the limit of their refinement, so they are taken at the
-// mesh's deepest level).
+// tag touches (a crease edge or a corner at them), and darts and interior
+// vertices of two faces (their Sdc limit masks, the smooth mask and the corner
+// mask, are not the limit of their refinement: they get that limit).
 LimitOperator catmark_operator(const Topology& topology, Boundary boundary, const Tags& tags) {
   LimitOperator op = detail::catmark_limit_operator(topology, boundary);
   const std::size_t n = topology.n_vertices();
@@ -156,7 +155,7 @@ LimitOperator catmark_operator(const Topology& topology, Boundary boundary, cons
     const auto i = static_cast<std::int32_t>(v);
     if (topology.is_unreferenced(v)) continue;
     const bool tagged = vt.crease_offsets[v + 1] > vt.crease_offsets[v] || vt.corner[v] > 0.0f;
-    if (tagged || valence_two(v) || vt.dart(topology, i)) {
+    if (tagged || valence_two(v) || vt.level_dependent(topology, Scheme::CatmullClark, i)) {
       refined.push_back(i);
       refined_levels.push_back(level[v]);
     }
@@ -185,7 +184,7 @@ LimitOperator limit_operator(const Topology& topology, Boundary boundary, const 
   std::vector<std::int32_t> refined;
   std::vector<int> refined_levels;
   for (std::size_t v = 0; v < topology.n_vertices(); ++v)
-    if (level[v] > 0 || vt.dart(topology, static_cast<std::int32_t>(v))) {
+    if (level[v] > 0 || vt.level_dependent(topology, Scheme::Loop, static_cast<std::int32_t>(v))) {
       refined.push_back(static_cast<std::int32_t>(v));
       refined_levels.push_back(level[v]);
     }

@@ -12,7 +12,7 @@
 #include <string>
 #include <utility>
 
-#include "sorpia/detail/dart_rows.hpp"
+#include "sorpia/detail/level_dependent_rows.hpp"
 #include "sorpia/detail/osd_refiner.hpp"
 #include "sorpia/errors.hpp"
 
@@ -166,7 +166,7 @@ std::vector<double> stationary_weights(const std::vector<double>& s, int m) {
     for (int i = c + 1; i < m; ++i)
       if (std::abs(a[at(i, c)]) > std::abs(a[at(p, c)])) p = i;
     if (!(std::abs(a[at(p, c)]) > 0.0))
-      throw std::logic_error("sorpia: the subdivision matrix around a dart has eigenvalue 1 more than once");
+      throw std::logic_error("sorpia: a vertex's local subdivision matrix has eigenvalue 1 more than once");
     if (p != c) {
       for (int j = 0; j < m; ++j) std::swap(a[at(p, j)], a[at(c, j)]);
       std::swap(u[p], u[c]);
@@ -186,10 +186,12 @@ std::vector<double> stationary_weights(const std::vector<double>& s, int m) {
   return u;
 }
 
-// The limit row of a dart, the centre of `m` (an interior vertex whose only
-// infinitely sharp edge is its one tag left after `levels` >= 1 levels), over
-// m's vertices: the limit as the level L grows of Far's Limit() after L
-// levels, which Sdc's (smooth) limit mask does not give at any finite L.
+// The limit row of the centre of `m` over m's vertices where Far's Limit()
+// of it changes with the level (VertexTags::level_dependent: a dart, whose
+// one tag left after `levels` >= 1 levels is an infinitely sharp edge, or a
+// smooth Catmull-Clark vertex of two faces): the limit as the level L grows
+// of Far's Limit() after L levels, which Sdc's mask (the smooth mask at a
+// dart, the corner mask at two faces) does not give at any finite L.
 //
 // After `levels` levels the faces around the centre's child are quads
 // (Catmull-Clark) or triangles (Loop) and the rules of every vertex they hold
@@ -201,7 +203,7 @@ std::vector<double> stationary_weights(const std::vector<double>& s, int m) {
 // (the same at every later level), and the limit row is S^L's rows' common
 // limit, u^T with u S's dominant left eigenvector (eigenvalue 1, weights
 // summing to 1: stationary_weights), composed back through the levels.
-std::vector<double> local_dart_row(LocalMesh m, Scheme scheme, Boundary boundary, int levels) {
+std::vector<double> local_stationary_row(LocalMesh m, Scheme scheme, Boundary boundary, int levels) {
   const int n0 = m.n_vertices;
   std::vector<double> rows(static_cast<std::size_t>(n0) * n0, 0.0);  // level 0: the identity
   for (int i = 0; i < n0; ++i) rows[static_cast<std::size_t>(i) * n0 + i] = 1.0;
@@ -233,7 +235,7 @@ std::vector<double> local_dart_row(LocalMesh m, Scheme scheme, Boundary boundary
         if (top.GetFaceVertices(f).size() == 4 && top.GetFaceVertices(f)[(top.GetFaceVertices(f).FindIndex(0) + 2) % 4] == i)
           c = top.GetFaceChildVertex(f);
     }
-    if (c < 0) throw std::logic_error("sorpia: a vertex around a dart is neither on an edge nor opposite in a quad");
+    if (c < 0) throw std::logic_error("sorpia: a vertex around a level-dependent vertex is neither on an edge nor opposite in a quad");
     std::copy_n(next.data() + static_cast<std::size_t>(c) * k, k, s.data() + static_cast<std::size_t>(i) * k);
   }
   const std::vector<double> u = stationary_weights(s, k);
@@ -276,19 +278,11 @@ int VertexTags::infinite_creases(std::int32_t v) const {
 std::vector<int> row_levels(const Topology& topology, Scheme scheme, const VertexTags& tags) {
   const std::size_t n = topology.n_vertices();
   std::vector<int> level(n, 0);
-  int deepest = 0;
   for (std::size_t v = 0; v < n; ++v) {
     if (topology.is_unreferenced(v)) continue;
     level[v] = tags.levels(static_cast<std::int32_t>(v));
     if (scheme == Scheme::CatmullClark && !topology.quad_ring(v)) level[v] = std::max(level[v], 1);
-    deepest = std::max(deepest, level[v]);
   }
-  if (deepest > 0)
-    for (std::size_t v = 0; v < n; ++v) {
-      if (topology.is_unreferenced(v)) continue;
-      const bool valence_two = !topology.is_boundary(v) && topology.valence(v) == 2;  // Catmull-Clark only
-      if (valence_two) level[v] = deepest;
-    }
   return level;
 }
 
@@ -401,25 +395,27 @@ CsrMatrix refined_limit_rows(const Topology& topology, Scheme scheme, Boundary b
     set_centre_sharpness(m, tags.corner[v]);
     m.n_vertices = static_cast<int>(base.size());
     for (const std::int32_t u : base) to_local[u] = -1;
-    if (tags.dart(topology, v))
-      append_row(b, base, local_dart_row(std::move(m), scheme, boundary, std::max(levels[k], 1)));
+    if (tags.level_dependent(topology, scheme, v))
+      append_row(b, base, local_stationary_row(std::move(m), scheme, boundary, std::max(levels[k], 1)));
     else
       append_row(b, base, local_limit_row(std::move(m), scheme, boundary, levels[k]));
   }
   return b;
 }
 
-DartRows dart_rows(const Topology& topology, Scheme scheme, Boundary boundary, const Tags& tags) {
-  DartRows out;
-  if (tags.n_creases() == 0) return out;
+LevelDependentRows level_dependent_rows(const Topology& topology, Scheme scheme, Boundary boundary,
+                                        const Tags& tags) {
+  LevelDependentRows out;
+  if (tags.n_creases() == 0 && scheme != Scheme::CatmullClark) return out;  // Loop: darts only
   const VertexTags vt = vertex_tags(topology, tags);
   const std::vector<int> level = row_levels(topology, scheme, vt);
   std::vector<int> levels;
   for (std::size_t v = 0; v < topology.n_vertices(); ++v)
-    if (!topology.is_unreferenced(v) && vt.dart(topology, static_cast<std::int32_t>(v))) {
+    if (!topology.is_unreferenced(v) && vt.level_dependent(topology, scheme, static_cast<std::int32_t>(v))) {
       out.vertices.push_back(static_cast<std::int32_t>(v));
       levels.push_back(level[v]);
     }
+  if (out.vertices.empty()) return out;
   out.rows = refined_limit_rows(topology, scheme, boundary, vt, out.vertices, levels);
   return out;
 }

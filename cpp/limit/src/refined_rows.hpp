@@ -38,16 +38,32 @@ struct VertexTags {
   bool dart(const Topology& topology, std::int32_t v) const {
     return !topology.is_boundary(v) && !infinite(corner[v]) && infinite_creases(v) == 1;
   }
+  // Whether Far's Limit() of v after L levels changes with L (so that no
+  // finite level gives v's limit and refined_limit_rows takes the limit as L
+  // grows): a dart, and under Catmull-Clark an interior vertex of two faces
+  // that is smooth once its semi-sharp tags have decayed, to which Sdc gives
+  // the corner mask (Far's Limit() after L levels is v's point at level L,
+  // which moves as L grows). Every other vertex's mask, once its semi-sharp
+  // tags have decayed (and, under Catmull-Clark, its faces are quads), is the
+  // dominant left eigenvector of its own subdivision matrix: the same at
+  // every level. (Under Loop, Sdc's smooth mask at an interior vertex of two
+  // triangles is its subdivision matrix's eigenvector too: Loop has no
+  // corner-mask exception.)
+  bool level_dependent(const Topology& topology, Scheme scheme, std::int32_t v) const {
+    if (dart(topology, v)) return true;
+    return scheme == Scheme::CatmullClark && !topology.is_boundary(v) && topology.valence(v) == 2 &&
+           !infinite(corner[v]) && infinite_creases(v) == 0;
+  }
 };
 
 // The level each row of B is taken at (B is OpenSubdiv's Limit() after
-// L = the largest of these levels, except at darts): for each vertex
+// L = the largest of these levels, except at the vertices whose Limit()
+// changes with the level, VertexTags::level_dependent): for each vertex
 // tags.levels(v), at least 1 under Catmull-Clark next to a face that is not a
-// quad (Sdc's limit masks assume quads), and L when L > 0 for an interior
-// vertex of two faces (Catmull-Clark), whose Sdc limit mask is not the limit
-// of its refinement; 0 for an unreferenced vertex. Every other row is the
-// same at any deeper level (tests: every row against the whole mesh refined
-// to L). A dart's level is where refined_limit_rows starts its limit from.
+// quad (Sdc's limit masks assume quads); 0 for an unreferenced vertex. Every
+// other row is the same at any deeper level (tests: every row against the
+// whole mesh refined to L). A level-dependent vertex's level is where
+// refined_limit_rows starts its limit from.
 std::vector<int> row_levels(const Topology& topology, Scheme scheme, const VertexTags& tags);
 
 // Groups `tags` by vertex. Every crease must be an edge of `topology`, and a
@@ -63,12 +79,15 @@ VertexTags vertex_tags(const Topology& topology, const Tags& tags);
 // (at least tags.levels(v), where v's semi-sharp tags have decayed), then
 // Limit() on the last level. After each level the local mesh is
 // replaced by the faces incident to v's child, with their decayed sharpness.
-// A dart (VertexTags::dart) instead gets the limit as the level grows: after
-// max(levels[k], 1) levels one more level maps the local mesh's vertices to
-// the same configuration one level down (the local subdivision matrix S, the
-// same at every later level), and the row is S's dominant left eigenvector
-// (eigenvalue 1, weights summing to 1) composed back; Far's Limit() after L
-// levels tends to it as rho^L, rho about 1/3 at valence 6 and 0.6 at 12.
+// A vertex whose Limit() changes with the level (VertexTags::level_dependent:
+// darts, Catmull-Clark's smooth interior vertices of two faces) instead gets
+// the limit as the level grows: after max(levels[k], 1) levels one more level
+// maps the local mesh's vertices to the same configuration one level down
+// (the local subdivision matrix S, the same at every later level), and the
+// row is S's dominant left eigenvector (eigenvalue 1, weights summing to 1)
+// composed back; Far's Limit() after L levels tends to it as rho^L, rho the
+// largest modulus of S's other eigenvalues (darts: about 1/3 at valence 6 and
+// 0.6 at 12; two faces of quads: 1/4).
 //
 // Exact because of locality (Sdc's CREASE_UNIFORM rules): v's child depends
 // on v's faces only, and its one-ring on the children of those faces, so v's

@@ -7,6 +7,7 @@
 #include <opensubdiv/far/primvarRefiner.h>
 #include <opensubdiv/far/topologyDescriptor.h>
 #include <opensubdiv/far/topologyRefinerFactory.h>
+#include <opensubdiv/version.h>
 
 #include <algorithm>
 #include <atomic>
@@ -20,7 +21,7 @@
 #include <utility>
 #include <vector>
 
-#include "sorpia/detail/dart_rows.hpp"
+#include "sorpia/detail/level_dependent_rows.hpp"
 #include "sorpia/detail/osd_refiner.hpp"
 #include "sorpia/detail/parallel.hpp"
 #include "sorpia/errors.hpp"
@@ -67,6 +68,15 @@ std::string human_bytes(double b) {
 // approximate (it drops the derivative of the rational Gregory weights), at a
 // small cost in evaluation time.
 constexpr int kApproxLevelSmooth = 4;
+// The smooth level on a mesh with darts (an interior vertex with one
+// infinitely sharp edge): Bfr's corner there is Far's Limit() after this many
+// local refinements, which is not the limit (evaluate() takes the corner
+// itself from B), so the points next to it jump by that point's distance to
+// the limit, which shrinks as rho^level (rho about 1/3 at the regular
+// valences). One level for the whole surface: a higher level for the faces at
+// darts alone would crack their other edges, where a neighbouring face
+// approximates an extraordinary vertex at the lower level.
+constexpr int kApproxLevelDarts = 10;
 // Local refinements around semi-sharp features (default 6): 10, the deepest
 // OpenSubdiv isolates, so that every semi-sharp feature (sharpness below 10)
 // has decayed before Bfr stops refining.
@@ -131,13 +141,21 @@ struct LimitSurface::Impl {
   std::unique_ptr<SurfaceFactory> factory;
   std::vector<double> vertices;  // (n, 3), as given
   std::vector<Point3> points;    // referenced vertices in OpenSubdiv's order
-  // Darts (interior vertices with one infinitely sharp edge): Bfr's corner
-  // there is Far's Limit() after its local refinements, not the limit of
-  // refinement, so evaluate() takes a dart's corner from its row of B
-  // (dart_slot[v]: v's row in darts.rows, or -1) at the current vertices.
-  detail::DartRows darts;
-  std::vector<std::int32_t> dart_slot;
-  std::vector<double> dart_points;  // (darts, 3)
+  // Darts and Catmull-Clark's interior vertices of two faces
+  // (detail::level_dependent_rows): Bfr's corner there is Far's Limit() after
+  // its local refinements, not the limit of refinement, so evaluate() takes
+  // such a corner from the vertex's row of B (exact_slot[v]: v's row in
+  // exact.rows, or -1) at the current vertices.
+  detail::LevelDependentRows exact;
+  std::vector<std::int32_t> exact_slot;
+  std::vector<double> exact_points;  // (exact.vertices, 3)
+  // Faces at a dart of two faces (an interior vertex of two faces with one
+  // infinitely sharp edge): OpenSubdiv's Bfr before 3.6.0 builds a wrong
+  // patch there and writes out of bounds (OpenSubdiv pull request 1336), so
+  // evaluation refuses them (bfr_unsafe[f]: that vertex, or -1; empty when
+  // there are none or OpenSubdiv is new enough).
+  std::vector<std::int32_t> bfr_unsafe;
+  bool has_darts = false;  // among exact.vertices
   // Uniformly refined to refined_level (built on demand); shares base's level
   // 0 (Far::TopologyRefinerFactory::Create), so it is declared after base and
   // destroyed before it.
@@ -153,11 +171,21 @@ struct LimitSurface::Impl {
         boundary(b),
         tags(g),
         base(detail::make_refiner(t, s, b, g)),
-        darts(detail::dart_rows(t, s, b, g)) {
-    if (darts.vertices.empty()) return;
-    dart_slot.assign(t.n_vertices(), -1);
-    for (std::size_t k = 0; k < darts.vertices.size(); ++k)
-      dart_slot[darts.vertices[k]] = static_cast<std::int32_t>(k);
+        exact(detail::level_dependent_rows(t, s, b, g)) {
+    if (exact.vertices.empty()) return;
+    exact_slot.assign(t.n_vertices(), -1);
+    for (std::size_t k = 0; k < exact.vertices.size(); ++k)
+      exact_slot[exact.vertices[k]] = static_cast<std::int32_t>(k);
+    const Far::TopologyLevel& level0 = base.refiner->GetLevel(0);
+    for (const std::int32_t v : exact.vertices) {
+      const int o = base.to_osd[v];
+      bool sharp = false;  // a dart: level-dependent with an infinitely sharp edge
+      for (const int e : level0.GetVertexEdges(o)) sharp = sharp || level0.IsEdgeInfSharp(e);
+      has_darts = has_darts || sharp;
+      if (!sharp || level0.GetVertexFaces(o).size() != 2 || OPENSUBDIV_VERSION_NUMBER >= 30600) continue;
+      if (bfr_unsafe.empty()) bfr_unsafe.assign(t.n_faces(), -1);
+      for (const int f : level0.GetVertexFaces(o)) bfr_unsafe[f] = v;
+    }
   }
 };
 
@@ -249,7 +277,7 @@ LimitSurface::LimitSurface(const Topology& topology, const double* vertices, Sch
                            const Tags& tags)
     : impl_(std::make_unique<Impl>(topology, scheme, boundary, tags)) {
   Bfr::SurfaceFactory::Options options;
-  options.SetApproxLevelSmooth(kApproxLevelSmooth);
+  options.SetApproxLevelSmooth(impl_->has_darts ? kApproxLevelDarts : kApproxLevelSmooth);
   options.SetApproxLevelSharp(kApproxLevelSharp);
   impl_->factory = std::make_unique<SurfaceFactory>(*impl_->base.refiner, options);
   set_vertices(vertices);
@@ -270,11 +298,11 @@ void LimitSurface::set_vertices(const double* vertices) {
   const std::size_t n = n_vertices();
   impl_->vertices.assign(vertices, vertices + 3 * n);
   detail::gather_points(impl_->base, vertices, impl_->points);
-  const CsrMatrix& rows = impl_->darts.rows;
-  impl_->dart_points.assign(3 * rows.n_rows, 0.0);
+  const CsrMatrix& rows = impl_->exact.rows;
+  impl_->exact_points.assign(3 * rows.n_rows, 0.0);
   for (std::size_t k = 0; k < rows.n_rows; ++k)
     for (std::int32_t p = rows.indptr[k]; p < rows.indptr[k + 1]; ++p)
-      for (int c = 0; c < 3; ++c) impl_->dart_points[3 * k + c] += rows.data[p] * vertices[3 * rows.indices[p] + c];
+      for (int c = 0; c < 3; ++c) impl_->exact_points[3 * k + c] += rows.data[p] * vertices[3 * rows.indices[p] + c];
 }
 
 void LimitSurface::get_vertices(double* out) const {
@@ -367,23 +395,30 @@ void LimitSurface::evaluate(const std::int32_t* face_ids, const double* uv, std:
     if (level0.IsFaceHole(f))
       throw ParameterError("face_ids[" + std::to_string(i) + "] = " + std::to_string(f) +
                            " is a hole: it has no limit surface");
+    if (!impl_->bfr_unsafe.empty() && impl_->bfr_unsafe[f] >= 0)
+      throw MeshError("face_ids[" + std::to_string(i) + "] = " + std::to_string(f) + " is at vertex " +
+                      std::to_string(impl_->bfr_unsafe[f]) +
+                      ", an interior vertex of two faces with one infinitely sharp edge, where OpenSubdiv's Bfr "
+                      "before 3.6.0 (this build has " + std::to_string(OPENSUBDIV_VERSION_NUMBER) +
+                      ") evaluates no valid surface: remove that sharp edge, or split the vertex's faces");
     check_uv(factory.GetFaceParameterization(f), i, params[2 * i], params[2 * i + 1]);
   }
   const std::shared_lock<std::shared_mutex> lock(impl_->mutex);
   evaluate_points(factory, &impl_->points.data()->x, face_ids, params.data(), k, positions, du, dv, normals);
-  if (impl_->darts.vertices.empty()) return;
-  // A point at the corner of a dart: its limit position (see Impl::darts).
+  if (impl_->exact.vertices.empty()) return;
+  // A point at the corner of a dart or a vertex of two faces: its limit
+  // position (see Impl::exact).
   const Topology& t = impl_->topology;
   for (std::size_t i = 0; i < k; ++i) {
     const std::int32_t f = face_ids[i];
     const std::int32_t* fv = t.face_indices().data() + t.face_offset(f);
     for (int j = 0; j < t.face_size(f); ++j) {
-      const std::int32_t slot = impl_->dart_slot[fv[j]];
+      const std::int32_t slot = impl_->exact_slot[fv[j]];
       if (slot < 0) continue;
       double corner[2];
       factory.GetFaceParameterization(f).GetVertexCoord(j, corner);
       if (corner[0] == params[2 * i] && corner[1] == params[2 * i + 1])
-        std::copy_n(&impl_->dart_points[3 * static_cast<std::size_t>(slot)], 3, positions + 3 * i);
+        std::copy_n(&impl_->exact_points[3 * static_cast<std::size_t>(slot)], 3, positions + 3 * i);
     }
   }
 }
@@ -555,6 +590,8 @@ PolyMesh LimitSurface::tessellate(int level) {
       int control_face = 0;
       double uv[2];
       refined_corner_uv(refiner, *impl_->factory, level, faces[k], corners[k], &control_face, uv);
+      // Bfr cannot evaluate there (Impl::bfr_unsafe): Limit() at this level stays.
+      if (!impl_->bfr_unsafe.empty() && impl_->bfr_unsafe[control_face] >= 0) continue;
       fixed.push_back(v);
       face_ids.push_back(control_face);
       params.insert(params.end(), uv, uv + 2);

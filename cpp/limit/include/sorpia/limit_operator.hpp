@@ -85,12 +85,14 @@ LimitOperator limit_operator(const Topology& topology, Boundary boundary, const 
 /// a one-face corner keeps itself under EdgeAndCorner); an interior vertex
 /// with a non-quad face gets its limit after one uniform refinement,
 /// composed back onto its faces' vertices (detail::catmark_refined_row). Rows
-/// of vertices a tag touches and of interior vertices of two faces (whose Sdc
-/// limit masks change with the level) come from OpenSubdiv's refinement
-/// around the vertex and Limit() at their row level; darts get the limit of
-/// their refinement, as under Loop (those rows are not Far's Limit() at any
-/// level: tests/cpp/test_darts.cpp checks them against Far refined around the
-/// dart until it no longer changes).
+/// of vertices a tag touches come from OpenSubdiv's refinement around the
+/// vertex and Limit() at their row level; darts, as under Loop, and interior
+/// vertices of two faces (to which Sdc gives the corner mask: Far's Limit()
+/// after L levels is the vertex's level-L point) get the limit of their
+/// refinement, the dominant left eigenvector of their local subdivision
+/// matrix (those rows are not Far's Limit() at any level:
+/// tests/cpp/test_darts.cpp checks them against Far refined around the vertex
+/// until it no longer changes).
 /// @throw MeshError naming the first crease that is not an edge of the mesh
 LimitOperator limit_operator(const Topology& topology, const Rules& rules);
 

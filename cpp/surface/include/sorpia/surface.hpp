@@ -94,9 +94,12 @@ class LimitSurface {
   /// in the face's parameterisation (see the class comment).
   /// Exact at face corners (the limit position B V of the corner vertex) under
   /// both boundary rules, and wherever the patch is regular (box spline). At
-  /// a dart's corner the point is B V's (the limit of refinement; Bfr's own
-  /// corner there is Far's Limit() after its 4 local refinements, which the
-  /// points next to that corner start from: docs/surfaces.md).
+  /// a dart's corner and at an interior vertex of two faces (Catmull-Clark)
+  /// the point is B V's (the limit of refinement; Bfr's own corner at a dart
+  /// is Far's Limit() after its local refinements, 10 on a mesh with darts,
+  /// which the points next to that corner start from: docs/surfaces.md).
+  /// With OpenSubdiv before 3.6.0 a face at a dart of two faces is refused
+  /// (MeshError): Bfr writes out of bounds building its surface.
   /// Within the corner region of side 1/16 at an extraordinary vertex Bfr
   /// uses a Gregory patch: positions approximate the limit surface there
   /// and OpenSubdiv's derivatives approximate the positions' derivatives
