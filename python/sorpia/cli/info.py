@@ -108,9 +108,10 @@ def _verdict(scheme: str, refusal, mesh, tags: dict, info: dict) -> dict:
 
 
 def _valence_two(topo) -> dict:
-    """Interior vertices of valence 2, which can make B indefinite: the
-    stationary methods (pia, wpia, gs, sor, hss, whss) may diverge there, and
-    the default method auto then falls back to gmres."""
+    """Interior vertices of valence 2, which can make B indefinite (next to
+    faces of more than four sides: with exact rows, quads split by them keep
+    B positive): the stationary methods (pia, wpia, gs, sor, hss, whss) may
+    diverge there, and the default method auto then falls back to gmres."""
     import numpy as np
 
     valence = np.diff(np.asarray(topo.ring_offsets))
@@ -118,8 +119,9 @@ def _valence_two(topo) -> dict:
     if len(found) == 0:
         return {}
     return {"valence_two": found[:MAX_LISTED].tolist(), "note": (
-        f"{len(found)} interior vertices of valence 2 (the first: {found[:4].tolist()}) can make B indefinite: "
-        "pia, wpia, gs, sor, hss and whss may diverge there; the default method auto falls back to gmres")}
+        f"{len(found)} interior vert{'ex' if len(found) == 1 else 'ices'} of valence 2 (the first: "
+        f"{found[:4].tolist()}): next to faces of more than four sides they can make B indefinite, where pia, wpia, "
+        "gs, sor, hss and whss may diverge; the default method auto then falls back to gmres")}
 
 
 def _scheme_rows(info: dict) -> list[tuple[str, str]]:
