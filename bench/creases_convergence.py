@@ -10,7 +10,7 @@ For each case: B's eigenvalues (dense, numpy): the smallest real part, the
 largest |imaginary part|, rho(I - B) (PIA converges iff < 1), the smallest
 eigenvalue of H = (B + B^T)/2 (HSS's assumption: > 0); then every method at
 tol 1e-10: iterations, stop reason, and the error E_k/E_0 of its result
-measured with OpenSubdiv's B (_core.reference_limit_matrix: refinement of the
+measured with OpenSubdiv's B (sorpia._reference.reference_limit_matrix: refinement of the
 whole mesh and Limit()), not with sorpia's operator, where that refinement
 fits in memory. Writes
 docs/benchmarks/creases-convergence.md (unless --no-page).
@@ -32,6 +32,7 @@ import scipy.sparse
 
 import sorpia
 from sorpia import _core
+from sorpia import _reference  # the test-only module: a `make test` build (SORPIA_BUILD_TESTS)
 from sorpia._validate import as_boundary, as_scheme
 from sorpia.limit import tags as make_tags
 from sorpia.limit import topology as make_topology
@@ -104,7 +105,7 @@ def main():
         ref = B
         if whole:
             topo = make_topology(f, n, scheme=scheme, warn=False)
-            data, indices, indptr = _core.reference_limit_matrix(
+            data, indices, indptr = _reference.reference_limit_matrix(
                 topo, _core.Rules(scheme=as_scheme(scheme), boundary=as_boundary(boundary), tags=make_tags(topo, **tags)))
             ref = scipy.sparse.csr_matrix((data, indices, indptr), shape=(n, n))
         ev = np.linalg.eigvals(B.toarray())

@@ -3,7 +3,7 @@ on OpenSubdiv's tagged shapes where that refinement fits in memory.
 
 For each shape (its own tags, read with read_mesh(tags=True)): sorpia's B
 (sorpia.limit_matrix: rows from the faces around each vertex) and the
-reference (_core.reference_limit_matrix: the whole mesh refined uniformly
+reference (sorpia._reference.reference_limit_matrix: the whole mesh refined uniformly
 until every semi-sharp tag has decayed, Limit() on the last level, composed
 back to the control vertices); the largest entry of their difference and the
 reference's time. The unit tests do the same on the shapes that refine in
@@ -27,6 +27,7 @@ import scipy.sparse
 
 import sorpia
 from sorpia import _core
+from sorpia import _reference  # the test-only module: a `make test` build (SORPIA_BUILD_TESTS)
 from sorpia._validate import as_boundary, as_scheme
 from sorpia.limit import tags as make_tags
 from sorpia.limit import topology as make_topology
@@ -54,7 +55,7 @@ def main():
         topo = make_topology(f, n, scheme=scheme, warn=False)
         core_tags = make_tags(topo, **tags)
         t0 = time.perf_counter()
-        data, indices, indptr = _core.reference_limit_matrix(
+        data, indices, indptr = _reference.reference_limit_matrix(
             topo, _core.Rules(scheme=as_scheme(scheme), boundary=as_boundary(boundary), tags=core_tags))
         seconds = time.perf_counter() - t0
         ref = scipy.sparse.csr_matrix((data, indices, indptr), shape=(n, n))

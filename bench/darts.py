@@ -5,7 +5,7 @@ and with the limit of refinement (B now), and what those rows cost.
 
 For each shape (OpenSubdiv's tagged shapes in ../shared/meshes when present,
 and generated ones): the cage fitted by a direct solve (scipy's splu) with
-OpenSubdiv's B (_core.reference_limit_matrix: Far's Limit() after the levels
+OpenSubdiv's B (sorpia._reference.reference_limit_matrix: Far's Limit() after the levels
 the semi-sharp tags need, 0 with infinitely sharp tags alone, which gives a
 dart Sdc's smooth mask) and with sorpia's B; each cage's limit surface
 evaluated at every face corner (sorpia.LimitSurface: Bfr, and the limit of
@@ -33,6 +33,7 @@ import scipy.sparse.linalg
 
 import sorpia
 from sorpia import _core
+from sorpia import _reference  # the test-only module: a `make test` build (SORPIA_BUILD_TESTS)
 from sorpia._validate import as_boundary, as_scheme
 from sorpia.limit import tags as make_tags
 from sorpia.limit import topology as make_topology
@@ -164,7 +165,7 @@ def main():
         at = darts(f, n, scheme, **tags)
         B = sorpia.limit_matrix(f, n, boundary=boundary, scheme=scheme, **tags)
         topo = make_topology(f, n, scheme=scheme, warn=False)
-        data, indices, indptr = _core.reference_limit_matrix(
+        data, indices, indptr = _reference.reference_limit_matrix(
             topo, _core.Rules(scheme=as_scheme(scheme), boundary=as_boundary(boundary), tags=make_tags(topo, **tags)))
         far = scipy.sparse.csr_matrix((data, indices, indptr), shape=(n, n))
         before, other_before, _ = corner_misses(fit(far, v), v, f, boundary, scheme, tags, at)

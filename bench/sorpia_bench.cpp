@@ -61,8 +61,6 @@ options:
                      (the reference) instead of inside the sweep
   --boundary RULE    edge-and-corner (default) or edge-only
   --scheme NAME      loop (default; triangles only) or catmull-clark
-  --operator HOW     masks (default: limit masks from the one-ring) or
-                     opensubdiv (B from Far::PrimvarRefiner::Limit, the reference)
   --topology HOW     direct (default) or openmesh (the reference build)
   --triangulate      split polygons of mesh files into triangles
   --tags             use the OpenSubdiv tags (t lines) of OBJ files: creases,
@@ -99,7 +97,6 @@ struct Options {
   bool two_pass = false;
   sorpia::Boundary boundary = sorpia::Boundary::EdgeAndCorner;
   sorpia::Scheme scheme = sorpia::Scheme::Loop;
-  bool opensubdiv_operator = false;
   sorpia::TopologyBuild topology = sorpia::TopologyBuild::Direct;
   bool triangulate = false;
   bool file_tags = false;
@@ -187,10 +184,6 @@ Options parse(int argc, char** argv) {
       } catch (const sorpia::ParameterError& e) {
         throw Usage(std::string("--scheme: ") + e.what());
       }
-    } else if (a == "--operator") {
-      const std::string v = value();
-      if (v != "masks" && v != "opensubdiv") throw Usage("--operator: masks or opensubdiv");
-      o.opensubdiv_operator = v == "opensubdiv";
     } else if (a == "--topology") {
       const std::string v = value();
       if (v != "direct" && v != "openmesh") throw Usage("--topology: direct or openmesh");
@@ -440,13 +433,7 @@ MeshRun run_mesh(const Options& o, const std::string& spec) {
     run.n_creases = tags.n_creases();
     sorpia::Rules rules{o.scheme, o.boundary, std::move(tags)};
     t0 = Clock::now();
-    std::optional<sorpia::LimitOperator> reference;
-    if (o.opensubdiv_operator)
-      reference = sorpia::limit_operator(rules.tags.empty() && o.scheme == sorpia::Scheme::Loop
-                                             ? sorpia::reference_limit_matrix(topology, o.boundary)
-                                             : sorpia::reference_limit_matrix(topology, rules));
-    sorpia::Interpolator interp = reference ? sorpia::Interpolator(std::move(topology), rules, std::move(*reference))
-                                            : sorpia::Interpolator(std::move(topology), rules);
+    sorpia::Interpolator interp(std::move(topology), rules);
     run.op.push_back(seconds_since(t0));
     const sorpia::LimitOperator& op = interp.limit_operator();
 
@@ -533,11 +520,10 @@ std::string cpu_model() {
 void print_json(const Options& o, const std::vector<MeshRun>& runs) {
   std::printf("{\n  \"machine\": {\"cpu\": %s, \"hardware_threads\": %u},\n", json_str(cpu_model()).c_str(),
               std::thread::hardware_concurrency());
-  std::printf("  \"options\": {\"tol\": %s, \"max_iter\": %d, \"scheme\": %s, \"boundary\": %s, \"operator\": %s, "
+  std::printf("  \"options\": {\"tol\": %s, \"max_iter\": %d, \"scheme\": %s, \"boundary\": %s, "
               "\"topology\": %s, \"threads\": %d, \"two_pass\": %s, \"repeat\": %d},\n",
               num(o.tol).c_str(), o.max_iter, json_str(sorpia::scheme_name(o.scheme)).c_str(),
               json_str(sorpia::boundary_name(o.boundary)).c_str(),
-              json_str(o.opensubdiv_operator ? "opensubdiv" : "masks").c_str(),
               json_str(o.topology == sorpia::TopologyBuild::OpenMesh ? "openmesh" : "direct").c_str(), o.threads,
               o.two_pass ? "true" : "false", o.repeat);
   std::printf("  \"meshes\": [");
@@ -567,11 +553,10 @@ void print_json(const Options& o, const std::vector<MeshRun>& runs) {
 }
 
 void print_table(const Options& o, const std::vector<MeshRun>& runs) {
-  std::printf("sorpia-bench: %s, %u hardware threads; sor/gs on %d thread%s%s; tol %g; %s; %s; operator %s; "
+  std::printf("sorpia-bench: %s, %u hardware threads; sor/gs on %d thread%s%s; tol %g; %s; %s; "
               "topology %s; medians of %d\n",
               cpu_model().c_str(), std::thread::hardware_concurrency(), o.threads, o.threads > 1 ? "s" : "",
               o.two_pass ? " (two-pass E_k)" : "", o.tol, sorpia::scheme_name(o.scheme), sorpia::boundary_name(o.boundary),
-              o.opensubdiv_operator ? "opensubdiv" : "masks",
               o.topology == sorpia::TopologyBuild::OpenMesh ? "openmesh" : "direct", o.repeat);
   std::printf("%-22s %9s %7s %8s %8s %-6s %7s %8s %6s %9s %8s %9s %8s %8s\n", "mesh", "vertices", "read", "topology",
               "operator", "method", "solve", "estimate", "iters", "E_k/E_0", "write", "sweep/fl", "peak MB",

@@ -124,7 +124,7 @@ def darts(faces, n_vertices: int, creases=None, corners=None, **_) -> np.ndarray
     """Which vertices are darts, from the faces and tags alone: interior vertices with exactly one infinitely sharp
     crease edge (sharpness 10 or more, each edge given once) and no infinitely sharp corner. Their rows of B are
     the limit of refinement, which OpenSubdiv's Limit() after any finite number of levels (the whole-mesh
-    reference, _core.reference_limit_matrix) is not: comparisons with that reference skip them, and
+    reference, reference_limit_matrix) is not: comparisons with that reference skip them, and
     tests/cpp/test_darts.cpp checks them. Other tags (holes) are taken and ignored."""
     face_list = _face_list(faces)
     used, on_boundary = _used(face_list, n_vertices), _on_boundary(face_list, n_vertices)
@@ -234,3 +234,12 @@ def torus_file(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     V, F = CLI_MESHES["irregular-torus"]()
     return write_obj(tmp_path / "torus.obj", V, F), np.asarray(V), np.asarray(F)
+
+
+def reference_limit_matrix(topology, rules):
+    """B from OpenSubdiv's Far::Limit() after refinement of the whole mesh (sorpia._reference, the test-only module
+    built with SORPIA_BUILD_TESTS, as `make test` builds it) as CSR arrays; the calling test is skipped where the
+    module was not built."""
+    reference = pytest.importorskip("sorpia._reference", reason="sorpia was built without SORPIA_BUILD_TESTS: "
+                                    "no reference builds (tests/reference)")
+    return reference.reference_limit_matrix(topology, rules)

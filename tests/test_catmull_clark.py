@@ -11,6 +11,8 @@ import scipy.sparse.linalg
 
 import sorpia
 from sorpia import _core
+
+from conftest import reference_limit_matrix
 from sorpia.limit import topology
 from sorpia.solve import METHODS
 
@@ -28,7 +30,7 @@ QUAD_MESHES = {
 def far_matrix(faces, n, boundary="edge-and-corner"):
     """B from OpenSubdiv's Far (Limit(); after one refinement where a face is not a quad)."""
     topo = topology(faces, n, scheme=CC)
-    data, indices, indptr = _core.reference_limit_matrix(
+    data, indices, indptr = reference_limit_matrix(
         topo, _core.Rules(scheme=_core.Scheme.catmull_clark, boundary=_core.parse_boundary(boundary)))
     return scipy.sparse.csr_matrix((data, indices, indptr), shape=(n, n))
 

@@ -1,6 +1,6 @@
 """Sharpness tags (creases, corners, holes) in B and in the solvers: rows
 against closed forms and against OpenSubdiv's refinement of the whole mesh
-(_core.reference_limit_matrix), fits through the input vertices with every
+(reference_limit_matrix, sorpia._reference), fits through the input vertices with every
 method, and the OpenSubdiv shapes in ../shared/meshes when present."""
 
 import math
@@ -18,7 +18,7 @@ from sorpia.limit import tags as make_tags
 from sorpia.limit import topology as make_topology
 from sorpia.solve import METHODS
 
-from conftest import darts, direct_solve, loop_alpha
+from conftest import reference_limit_matrix, darts, direct_solve, loop_alpha
 
 SHARED_MESHES = Path(__file__).resolve().parents[2] / "shared" / "meshes"
 
@@ -31,7 +31,7 @@ def edges_of(faces):
 def reference_b(faces, n, boundary="edge-and-corner", **tags):
     """B from OpenSubdiv's whole-mesh refinement and Limit() (the test reference)."""
     topo = make_topology(faces, n, warn=False)
-    data, indices, indptr = _core.reference_limit_matrix(
+    data, indices, indptr = reference_limit_matrix(
         topo, _core.Rules(scheme=_core.Scheme.loop, boundary=as_boundary(boundary), tags=make_tags(topo, **tags)))
     return scipy.sparse.csr_matrix((data, indices, indptr), shape=(n, n))
 
@@ -203,7 +203,7 @@ def test_opensubdiv_shapes_rows_and_fits(name):
 
 def reference_b_scheme(faces, n, boundary, scheme, **tags):
     topo = make_topology(faces, n, scheme=scheme, warn=False)
-    data, indices, indptr = _core.reference_limit_matrix(
+    data, indices, indptr = reference_limit_matrix(
         topo, _core.Rules(scheme=as_scheme(scheme), boundary=as_boundary(boundary), tags=make_tags(topo, **tags)))
     return scipy.sparse.csr_matrix((data, indices, indptr), shape=(n, n))
 

@@ -290,7 +290,7 @@ def test_compare_marks_a_refusing_method_and_writes_its_table(folded_file, tmp_p
 
 def test_info_notes_the_valence_two_vertex(gregory_file, command):
     code, stdout, err = command("info", gregory_file)
-    assert code == 0 and "interior vertices of valence 2" in stdout and "[1]" in stdout
+    assert code == 0 and "interior vertex of valence 2" in stdout and "[1]" in stdout
 
 
 def test_many_valence_two_vertices_between_pentagons():

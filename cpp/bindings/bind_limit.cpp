@@ -115,16 +115,6 @@ void bind_limit(py::module_& m) {
       },
       "topology"_a, "rules"_a, "Limit matrix B as CSR arrays (data, indices, indptr).");
   m.def(
-      "reference_limit_matrix",
-      [csr_of](const sorpia::Topology& topology, const sorpia::Rules& rules) {
-        return csr_of([&] { return sorpia::reference_limit_matrix(topology, rules); });
-      },
-      "topology"_a, "rules"_a,
-      "For tests: B from OpenSubdiv's refinement of the whole mesh until every semi-sharp tag has decayed (and, "
-      "for Catmull-Clark with a non-quad face, at least once) and Limit() on the last level "
-      "(sorpia::reference_limit_matrix), as CSR arrays.");
-
-  m.def(
       "limit_points",
       [](const sorpia::Topology& topology, const Vertices& vertices, const sorpia::Rules& rules) {
         if (vertices.ndim() != 2 || vertices.shape(1) < 1)

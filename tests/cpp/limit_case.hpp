@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "sorpia/limit.hpp"
+#include "sorpia/reference.hpp"
 #include "sorpia/shapes.hpp"
 #include "sorpia/solvers.hpp"
 #include "sorpia/topology.hpp"

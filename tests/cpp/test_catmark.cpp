@@ -16,6 +16,7 @@
 #include "poly_meshes.hpp"
 #include "sorpia/errors.hpp"
 #include "sorpia/limit.hpp"
+#include "sorpia/reference.hpp"
 #include "sorpia/limit_masks.hpp"
 #include "sorpia/limit_operator.hpp"
 #include "sorpia/shapes.hpp"

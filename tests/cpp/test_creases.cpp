@@ -13,6 +13,7 @@
 
 #include "darts.hpp"
 #include "expect_error.hpp"
+#include "sorpia/reference.hpp"
 #include "refined_rows.hpp"
 #include "sorpia/errors.hpp"
 #include "sorpia/limit_operator.hpp"

@@ -10,6 +10,7 @@
 #include "loop_masks.hpp"
 #include "sorpia/errors.hpp"
 #include "sorpia/limit.hpp"
+#include "sorpia/reference.hpp"
 #include "sorpia/shapes.hpp"
 #include "sorpia/topology.hpp"
 

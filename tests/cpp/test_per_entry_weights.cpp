@@ -16,6 +16,7 @@
 #include "limit_case.hpp"
 #include "parallel_ranges.hpp"
 #include "sorpia/limit.hpp"
+#include "sorpia/reference.hpp"
 #include "sorpia/limit_operator.hpp"
 #include "sorpia/shapes.hpp"
 #include "sorpia/solvers.hpp"

@@ -245,9 +245,8 @@ std::vector<double> local_stationary_row(LocalMesh m, Scheme scheme, Boundary bo
   return row;
 }
 
-// Appends the entries of a row (columns `cols`, weights `w`) to `b`, sorted,
-// exact zeros dropped (OpenSubdiv's masks list interior neighbours of crease
-// vertices with weight 0).
+}  // namespace
+
 void append_row(CsrMatrix& b, const std::vector<std::int32_t>& cols, const std::vector<double>& w) {
   std::vector<std::pair<std::int32_t, double>> e;
   for (std::size_t k = 0; k < cols.size(); ++k)
@@ -260,7 +259,6 @@ void append_row(CsrMatrix& b, const std::vector<std::int32_t>& cols, const std::
   b.indptr.push_back(static_cast<std::int32_t>(b.indices.size()));
 }
 
-}  // namespace
 
 int VertexTags::levels(std::int32_t v) const {
   int l = decay_levels(corner[v]);
@@ -421,81 +419,3 @@ LevelDependentRows level_dependent_rows(const Topology& topology, Scheme scheme,
 }
 
 }  // namespace sorpia::detail
-
-namespace sorpia {
-
-namespace {
-
-// A primvar that is a sparse row of weights over the control vertices.
-struct SparseRow {
-  std::vector<std::pair<std::int32_t, double>> e;
-  void Clear() { e.clear(); }
-  void AddWithWeight(const SparseRow& src, double w) {
-    for (const auto& [j, x] : src.e) {
-      auto it = std::find_if(e.begin(), e.end(), [j = j](const auto& q) { return q.first == j; });
-      if (it == e.end())
-        e.emplace_back(j, w * x);
-      else
-        it->second += w * x;
-    }
-  }
-};
-
-}  // namespace
-
-CsrMatrix reference_limit_matrix(const Topology& topology, const Rules& rules) {
-  using namespace detail;
-  const Scheme scheme = rules.scheme;
-  const Boundary boundary = rules.boundary;
-  const Tags& tags = rules.tags;
-  const std::size_t n = topology.n_vertices();
-  const VertexTags vt = vertex_tags(topology, tags);  // checks the creases against the topology
-  const Refiner osd = make_refiner(topology, scheme, boundary, tags);
-  const auto& refiner = osd.refiner;
-  const std::vector<std::int32_t>& to_osd = osd.to_osd;
-  const std::vector<std::int32_t>& from_osd = osd.from_osd;
-
-  const std::vector<int> row_level = row_levels(topology, scheme, vt);
-  const int levels = row_level.empty() ? 0 : *std::max_element(row_level.begin(), row_level.end());
-  std::vector<SparseRow> rows(from_osd.size()), next;
-  for (std::size_t i = 0; i < rows.size(); ++i) rows[i].e.emplace_back(from_osd[i], 1.0);
-  if (levels > 0) {
-    Far::TopologyRefiner::UniformOptions options(levels);
-    options.fullTopologyInLastLevel = true;
-    refiner->RefineUniform(options);
-  }
-  const Far::PrimvarRefinerReal<double> primvar(*refiner);
-  std::vector<int> descendant(from_osd.size());
-  std::iota(descendant.begin(), descendant.end(), 0);
-  for (int l = 1; l <= levels; ++l) {
-    next.assign(refiner->GetLevel(l).GetNumVertices(), SparseRow{});
-    primvar.Interpolate(l, rows, next);
-    rows.swap(next);
-    for (int& c : descendant) c = refiner->GetLevel(l - 1).GetVertexChildVertex(c);
-  }
-  std::vector<SparseRow> limit(rows.size());
-  primvar.Limit(rows, limit);
-
-  CsrMatrix b;
-  b.n_rows = b.n_cols = n;
-  b.indptr.assign(1, 0);
-  std::vector<std::int32_t> cols;
-  std::vector<double> w;
-  for (std::size_t v = 0; v < n; ++v) {
-    cols.clear();
-    w.clear();
-    if (to_osd[v] < 0) {
-      cols.push_back(static_cast<std::int32_t>(v));
-      w.push_back(1.0);
-    } else {
-      for (const auto& [j, x] : limit[descendant[to_osd[v]]].e) {
-        cols.push_back(j);
-        w.push_back(x);
-      }
-    }
-    append_row(b, cols, w);
-  }
-  return b;
-}
-
-}  // namespace sorpia

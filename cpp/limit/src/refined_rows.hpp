@@ -99,6 +99,11 @@ VertexTags vertex_tags(const Topology& topology, const Tags& tags);
 // Returns a CSR matrix with one row per entry of `vertices` (in that order),
 // n_vertices columns, the diagonal included, columns sorted, exact zeros
 // dropped. An unreferenced vertex gets its identity row.
+// Appends the entries of a row (columns `cols`, weights `w`) to `b`, sorted,
+// exact zeros dropped (OpenSubdiv's masks list interior neighbours of crease
+// vertices with weight 0).
+void append_row(CsrMatrix& b, const std::vector<std::int32_t>& cols, const std::vector<double>& w);
+
 CsrMatrix refined_limit_rows(const Topology& topology, Scheme scheme, Boundary boundary, const VertexTags& tags,
                              const std::vector<std::int32_t>& vertices, const std::vector<int>& levels);
 
