@@ -4,7 +4,9 @@
 // sweep_kernels_avx2.cpp: -mavx2). Everything here has internal linkage, so
 // no function compiled for AVX2 can stand in for a baseline one at link time;
 // for the same reason the loops call no inline function of the standard
-// library that the compiler might leave out of line. Not a public header.
+// library that the compiler might leave out of line, and the row kernels of
+// apply.hpp they call are always inlined (no out-of-line copy is emitted).
+// Not a public header.
 //
 // The rows are the row kernels of sorpia/detail/apply.hpp on 4-lane rows:
 // the arithmetic is per lane in the same order as on (n, k) arrays, so both
