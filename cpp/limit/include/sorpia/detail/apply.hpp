@@ -120,7 +120,8 @@ struct NeighbourSum {
 template <class Kind, class R, class X, class I, class Sum>
 SORPIA_ROW_KERNEL R row_product(const Rows& op, const X& x, I i, const Sum& sum) {
   if constexpr (Kind::uniform) {
-    return op.diag[i] * x(i) + op.weight[i] * sum(i);
+    const R s = sum(i);  // first: the gather is the long part, the diagonal term waits for it
+    return op.diag[i] * x(i) + op.weight[i] * s;
   } else {
     R s{};
     for (std::int32_t p = op.offsets[i]; p < op.offsets[i + 1]; ++p) s += op.values[p] * x(op.neighbors[p]);
