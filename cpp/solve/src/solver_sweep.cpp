@@ -210,7 +210,7 @@ class Engine {
   }
 
  private:
-  Rows op_;                             // the operator swept: the caller's or reordered_
+  Rows op_;                               // the operator swept: the caller's or reordered_
   bool parallel_;                         // threads really run in parallel
   std::vector<std::int32_t> perm_, inv_;  // the sweep's order (empty: the caller's): perm[new] = old
   Renumbered reordered_;                  // the caller's operator in that order
