@@ -244,6 +244,45 @@ TEST(Sweep, OneThreadIsTheTextbookSweepOrder) {
   EXPECT_EQ(run(c, 1, false, omega, 1).control_vertices, x);
 }
 
+TEST(Sweep, AnyColumnCountSweepsAsThreeColumns) {
+  // (n, 5) data runs the row kernels on (n, k) arrays (solve_sor_columns),
+  // (n, 3) data the engine's 4-lane rows: the columns of a sweep are
+  // independent, so after the same sweeps (one thread: the engine in the
+  // caller's order, as OneThreadIsTheTextbookSweepOrder checks) each column
+  // has the bits of the 3-column solve. Uniform rows and per-entry weights.
+  const Case& c = cases()[0];
+  const sorpia::LimitOperator per_entry = sorpia::limit_operator(sorpia_test::perturbed(c.b, 0.3, 5));
+  const std::vector<double>& v = c.mesh.vertices;
+  const std::size_t n = c.op.n;
+  std::vector<double> five(5 * n), b(3 * n, 0.0);
+  for (std::size_t i = 0; i < n; ++i) {
+    for (int a = 0; a < 3; ++a) five[5 * i + a] = v[3 * i + a];
+    five[5 * i + 3] = b[3 * i] = 2.0 * v[3 * i];
+    five[5 * i + 4] = b[3 * i + 1] = -v[3 * i + 1];
+  }
+  sorpia::SolveOptions opt;
+  opt.method = sorpia::Method::Sor;
+  opt.omega_rule = sorpia::OmegaRule::Given;
+  opt.omega = 1.3;
+  opt.threads = 1;
+  opt.tol = 1e-300;  // never met: every run makes max_iter sweeps
+  opt.max_iter = 4;
+  for (const sorpia::LimitOperator* op : {&c.op, &per_entry}) {
+    const sorpia::SolveResult r5 = sorpia::solve(*op, five.data(), 5, nullptr, opt);
+    const sorpia::SolveResult ra = sorpia::solve(*op, v.data(), 3, nullptr, opt);
+    const sorpia::SolveResult rb = sorpia::solve(*op, b.data(), 3, nullptr, opt);
+    ASSERT_EQ(r5.iterations, 4);
+    ASSERT_EQ(ra.iterations, 4);
+    ASSERT_EQ(rb.iterations, 4);
+    std::vector<double> split(5 * n);
+    for (std::size_t i = 0; i < n; ++i) {
+      for (int a = 0; a < 3; ++a) split[5 * i + a] = ra.control_vertices[3 * i + a];
+      for (int a = 0; a < 2; ++a) split[5 * i + 3 + a] = rb.control_vertices[3 * i + a];
+    }
+    EXPECT_EQ(r5.control_vertices, split) << (op == &c.op ? "uniform rows" : "per-entry weights");
+  }
+}
+
 TEST(Sweep, ThreadsParameterChecked) {
   const Case c = limit_case(sorpia::pole(48), "pole");  // parameter checks: no large case needed
   for (int bad : {0, -1, sorpia::max_threads + 1}) {

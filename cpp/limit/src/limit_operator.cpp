@@ -264,7 +264,7 @@ CsrMatrix to_csr(const LimitOperator& op) {
   return b;
 }
 
-void apply(const LimitOperator& op, const double* x, double* y) { detail::apply_cols<3>(op, x, y); }
+void apply(const LimitOperator& op, const double* x, double* y) { detail::apply_columns(op, 3, x, y); }
 
 void apply(const LimitOperator& op, const double* x, std::size_t k, double* y) {
   detail::apply_columns(op, k, x, y);

@@ -80,17 +80,14 @@ LocalSolver::LocalSolver(const LimitOperator& op) : op_(op), mark_(op.n, 0), log
   t_values_ = std::move(t.values);
 }
 
-void LocalSolver::residual_row(const double* v, std::size_t i, double* r) const {
-  detail::row_product_cols(op_, v, k_, i, r);
-  for (std::size_t c = 0; c < k_; ++c) r[c] = targets_[k_ * i + c] - r[c];
+double LocalSolver::residual_row(const double* v, std::size_t i, double* r) const {
+  const detail::Rows rows = detail::rows_of(op_);
+  return detail::with_row_kind(rows, [&](auto kind) {
+    return detail::residual_row<0, decltype(kind)>(rows, targets_.data(), v, k_, i, r);
+  });
 }
 
-double LocalSolver::cold_row(std::size_t i) {
-  residual_row(targets_.data(), i, scratch_.data());
-  double e = 0.0;
-  for (std::size_t c = 0; c < k_; ++c) e += scratch_[c] * scratch_[c];
-  return e;
-}
+double LocalSolver::cold_row(std::size_t i) { return residual_row(targets_.data(), i, scratch_.data()); }
 
 void LocalSolver::set_targets(std::vector<double> targets, std::size_t k) {
   if (k < 1 || targets.size() != k * op_.n)
@@ -108,8 +105,10 @@ void LocalSolver::set_targets(std::vector<double> targets, std::size_t k) {
 // The work list from `work` (the rows at the threshold) until it runs dry
 // and every row changed, recomputed from its row, is below the threshold, or
 // until max_relaxations (`stopped`). K: the columns when known at compile
-// time (3), 0 for k_ at run time. Returns the relaxations done.
-template <int K>
+// time (3), 0 for k_ at run time; Kind: op_'s rows. Each relaxation and each
+// residual recomputed from its row is the row kernels' (apply.hpp), those of
+// the full sweep. Returns the relaxations done.
+template <int K, class Kind>
 long long LocalSolver::relax(double* v, std::vector<std::int32_t>& work, double threshold, double limit,
                              long long max_relaxations, bool& stopped, bool& diverged) {
   const std::size_t k = K ? static_cast<std::size_t>(K) : k_;
@@ -118,10 +117,7 @@ long long LocalSolver::relax(double* v, std::vector<std::int32_t>& work, double 
     for (std::size_t c = 0; c < k; ++c) e += x[c] * x[c];
     return e;
   };
-  const auto row_residual = [&](std::size_t i, double* r) {
-    detail::row_product_cols<K>(op_, v, k, i, r);
-    for (std::size_t c = 0; c < k; ++c) r[c] = targets_[k * i + c] - r[c];
-  };
+  const detail::Rows rows = detail::rows_of(op_);
   std::vector<std::int32_t> changed;
   double delta[K ? K : 1];
   std::vector<double> delta_run(K ? 0 : k);
@@ -133,7 +129,6 @@ long long LocalSolver::relax(double* v, std::vector<std::int32_t>& work, double 
   const std::int32_t* const t_off = t_offsets_.data();
   const std::int32_t* const t_rows = t_rows_.data();
   const double* const t_val = t_values_.data();
-  const double* const diag = op_.diag.data();
   for (std::int32_t i : work) mark[i] |= 1;
   long long relaxations = 0;
   while (!work.empty() && !stopped) {
@@ -153,7 +148,7 @@ long long LocalSolver::relax(double* v, std::vector<std::int32_t>& work, double 
       }
       ++relaxations;
       if ((relaxations & 4095) == 0) poll_interrupt();
-      const double f = 1.0 / diag[i];
+      const double f = detail::relaxation_factor(rows, i, 1.0);
       if (!logged_[i]) log_row(v, i);
       for (std::size_t c = 0; c < k; ++c) {
         d[c] = f * ri[c];
@@ -183,8 +178,7 @@ long long LocalSolver::relax(double* v, std::vector<std::int32_t>& work, double 
     // Every residual changed, from its row; those still at the threshold go round again.
     for (std::int32_t j : changed) {
       double* rj = &r_[k * static_cast<std::size_t>(j)];
-      row_residual(static_cast<std::size_t>(j), rj);
-      const double e = norm2(rj);
+      const double e = detail::residual_row<K, Kind>(rows, targets_.data(), v, k, static_cast<std::size_t>(j), rj);
       residual_.set(static_cast<std::size_t>(j), e);
       mark_[j] = 0;
       if (!stopped && e >= threshold) {
@@ -272,8 +266,7 @@ void LocalSolver::update(double* v, bool v_is_last, const std::int32_t* indices,
     log_target_values_.insert(log_target_values_.end(), &targets_[k * i], &targets_[k * i] + k);
     for (std::size_t c = 0; c < k; ++c) targets_[k * i + c] = positions[k * q + c];
     if (!logged_[i]) log_row(v, i);
-    residual_row(v, i, &r_[k * i]);  // exact, as every residual kept
-    residual_.set(i, norm2(&r_[k * i]));
+    residual_.set(i, residual_row(v, i, &r_[k * i]));  // exact, as every residual kept
     target_norm_.set(i, norm2(&targets_[k * i]));
     cold_dirty.push_back(static_cast<std::int32_t>(i));
     for (std::int32_t p = t_offsets_[i]; p < t_offsets_[i + 1]; ++p) cold_dirty.push_back(t_rows_[p]);
@@ -314,8 +307,11 @@ void LocalSolver::update(double* v, bool v_is_last, const std::int32_t* indices,
   // Divergence: a residual past 1e6 times the start's and E_0 (as a solve's).
   const double limit = 1e6 * std::max(e_start, e0);
   try {
-    relaxations = k == 3 ? relax<3>(v, work, threshold, limit * limit, max_relaxations, stopped, diverged)
-                         : relax<0>(v, work, threshold, limit * limit, max_relaxations, stopped, diverged);
+    relaxations = detail::with_row_kind(detail::rows_of(op_), [&](auto kind) {
+      using Kind = decltype(kind);
+      return k == 3 ? relax<3, Kind>(v, work, threshold, limit * limit, max_relaxations, stopped, diverged)
+                    : relax<0, Kind>(v, work, threshold, limit * limit, max_relaxations, stopped, diverged);
+    });
   } catch (...) {
     // Interrupted (poll_interrupt): the update taken back whole (targets,
     // kept residual, v), the marks back to zero.

@@ -108,12 +108,18 @@ class Monitor {
     res_.errors.reserve(static_cast<std::size_t>(std::min(opt.max_iter, 4096LL)) + 1);
   }
 
-  // A warm start: E_0 is that of the cold start V^(0) = V0, given here before
-  // start(), so that E_k / E_0 < tol is the same guarantee from any start;
-  // start() then gets the error of the warm start itself (errors[0]).
-  void reference(double e0) { reference_ = e0; }
+  // A warm start, given e0 = E_0 of the cold start V^(0) = V0 before
+  // start(): E_k / E_0 < tol is then the same guarantee from any start, and
+  // start() gets the error of the warm start itself (errors[0]). Returns
+  // whether to start from the warm start at all: not when E_0 = 0 (or NaN):
+  // V0 solves it exactly, the answer whatever the start.
+  bool warm_start(double e0) {
+    if (!(e0 > 0.0)) return false;
+    reference_ = e0;
+    return true;
+  }
 
-  // The error of the start (E_0 unless reference() gave it); records it as
+  // The error of the start (E_0 unless warm_start() gave it); records it as
   // errors[0] and returns true when there is nothing to do (E_0 == 0: V0
   // already solves it; or the start already meets tol).
   bool start(double e) {
@@ -180,9 +186,10 @@ class Monitor {
 void solve_sor(const LimitOperator& op, const double* v0, int exponent, const SolveOptions& opt, double omega,
                SolveResult& res, const double* initial = nullptr);
 
-// "sor" and "gs" on (n, k) data with k other than 3 (the engine above is built
-// for 3 columns): the same sweep (eq. 18) in vertex order on one thread, E_k
-// by a residual pass after each sweep, on res.control_vertices (V^(0) on entry).
+// "sor" and "gs" on (n, k) data with k > 3 (the engine above holds up to 3
+// columns; solve() pads fewer to 3): the same row kernels (relax_row,
+// apply.hpp) in vertex order on one thread, E_k by a residual pass after each
+// sweep, on res.control_vertices (V^(0) on entry).
 void solve_sor_columns(const LimitOperator& op, const double* v0, std::size_t k, double omega, Monitor& mon,
                        SolveResult& res);
 

@@ -71,17 +71,12 @@ std::size_t sweep_min_vertices_per_thread = 8192;
 
 namespace {
 
-OpView view(const LimitOperator& op) {
-  return {op.n,         op.offsets.data(), op.neighbors.data(), op.diag.data(), op.weight.data(),
-          op.uniform() ? nullptr : op.values.data()};
-}
-
 class Engine {
  public:
   // v0: the caller's (n, 3) vertices, solved for as V0 / 2^exponent (in place
   // when exponent = 0 and the order is kept).
   Engine(const LimitOperator& op, const double* v0, int exponent, double omega, int threads)
-      : op_(view(op)),
+      : op_(rows_of(op)),
         // Below sweep_min_vertices_per_thread, waking the threads costs more
         // than they save. The ranges then run one after the other (the same
         // order, so the same result).
@@ -131,8 +126,7 @@ class Engine {
     } else {
       k_ = &per_entry_kernels();
     }
-    ctx_ = Ctx{op_.offsets, op_.neighbors, static_cast<std::int32_t>(n), slots_end, op_.diag, op_.weight,
-               op_.values,  v0,            x_.data(), plan_.flags.data(), omega, plan_.lag};
+    ctx_ = Ctx{op_, static_cast<std::int32_t>(n), slots_end, v0, x_.data(), plan_.flags.data(), omega, plan_.lag};
   }
 
   // Whether E_k inside the sweep is faster than a residual pass after it.
@@ -216,7 +210,7 @@ class Engine {
   }
 
  private:
-  OpView op_;                             // the operator swept: the caller's or reordered_
+  Rows op_;                               // the operator swept: the caller's or reordered_
   bool parallel_;                         // threads really run in parallel
   std::vector<std::int32_t> perm_, inv_;  // the sweep's order (empty: the caller's): perm[new] = old
   Renumbered reordered_;                  // the caller's operator in that order
@@ -238,8 +232,7 @@ void solve_sor(const LimitOperator& op, const double* v0, int exponent, const So
   const double e0 = engine.start();
   Monitor mon(opt, res, engine.scale());
   double first = e0;
-  if (initial && e0 > 0.0) {  // E_0 = 0: V0 solves it exactly, whatever the start
-    mon.reference(e0);
+  if (initial && mon.warm_start(e0)) {
     engine.load(initial);
     first = engine.residual();
   }
@@ -258,17 +251,15 @@ void solve_sor(const LimitOperator& op, const double* v0, int exponent, const So
 void solve_sor_columns(const LimitOperator& op, const double* v0, std::size_t k, double omega, Monitor& mon,
                        SolveResult& res) {
   double* x = res.control_vertices.data();
-  std::vector<double> bx(k);
   if (mon.start(residual(op, v0, x, nullptr, k))) return;
-  for (;;) {
-    for (std::size_t i = 0; i < op.n; ++i) {
-      row_product_cols(op, x, k, i, bx.data());
-      const double f = omega / op.diag[i];
-      for (std::size_t c = 0; c < k; ++c) x[k * i + c] += f * (v0[k * i + c] - bx[c]);
+  const Rows rows = rows_of(op);
+  with_row_kind(rows, [&](auto kind) {
+    for (;;) {
+      for (std::size_t i = 0; i < op.n; ++i) relax_row<0, decltype(kind)>(rows, v0, x, k, i, omega);
+      res.products += 2;  // a sweep and a residual
+      if (mon.record(residual(op, v0, x, nullptr, k))) return;
     }
-    res.products += 2;  // a sweep and a residual
-    if (mon.record(residual(op, v0, x, nullptr, k))) return;
-  }
+  });
 }
 
 }  // namespace detail

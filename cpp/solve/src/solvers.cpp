@@ -157,35 +157,15 @@ double young_omega(double rho, bool* clamped) {
 namespace detail {
 
 double residual(const LimitOperator& op, const double* v0, const double* v, double* r, std::size_t k) {
-  double m = 0.0;
-  if (k != 3) {
-    std::vector<double> bv(k);
-    for (std::size_t i = 0; i < op.n; ++i) {
-      row_product_cols(op, v, k, i, bv.data());
-      double e = 0.0;
-      for (std::size_t c = 0; c < k; ++c) {
-        const double rc = v0[k * i + c] - bv[c];
-        if (r) r[k * i + c] = rc;
-        e += rc * rc;
-      }
-      m = std::max(m, e);
-    }
-    return std::sqrt(m);
-  }
-  for (std::size_t i = 0; i < op.n; ++i) {
-    double bv[3];
-    row_product(op, v, i, bv);
-    const double r0 = v0[3 * i] - bv[0];
-    const double r1 = v0[3 * i + 1] - bv[1];
-    const double r2 = v0[3 * i + 2] - bv[2];
-    if (r) {
-      r[3 * i] = r0;
-      r[3 * i + 1] = r1;
-      r[3 * i + 2] = r2;
-    }
-    m = std::max(m, r0 * r0 + r1 * r1 + r2 * r2);
-  }
-  return std::sqrt(m);
+  const Rows rows = rows_of(op);
+  return with_columns(k, [&](auto cols) {
+    return with_row_kind(rows, [&](auto kind) {
+      double m = 0.0;
+      for (std::size_t i = 0; i < rows.n; ++i)
+        m = std::max(m, residual_row<cols(), decltype(kind)>(rows, v0, v, k, i, r ? r + k * i : nullptr));
+      return std::sqrt(m);
+    });
+  });
 }
 
 void scale_pow2(double* x, std::size_t n, int e) {
@@ -337,16 +317,9 @@ void run_iteration(const LimitOperator& op, const double* v0, std::size_t k, con
     v0 = scaled.data();
   }
   detail::Monitor mon(opt, res, detail::max_row_norm(v0, op.n, k));
-  if (initial) {
-    // E_0 of the cold start: a warm start meets the same E_k / E_0 < tol.
-    const double e0 = detail::residual(op, v0, v0, nullptr, k);
-    mon.reference(e0);
-    if (e0 > 0.0) {
-      res.control_vertices.assign(initial, initial + m);
-      detail::scale_pow2(res.control_vertices.data(), m, -exponent);
-    } else {
-      res.control_vertices.assign(v0, v0 + m);  // V0 solves it exactly: the answer, whatever the start
-    }
+  if (initial && mon.warm_start(detail::residual(op, v0, v0, nullptr, k))) {
+    res.control_vertices.assign(initial, initial + m);
+    detail::scale_pow2(res.control_vertices.data(), m, -exponent);
   } else {
     res.control_vertices.assign(v0, v0 + m);  // V^(0) = V0 (paper: M^0 = M)
   }

@@ -239,7 +239,7 @@ struct SelfAdjointPart {
   const LimitOperator& op;
   std::vector<OneWay> one_way = one_way_entries(op);
   void operator()(const double* x, double* y) const {
-    detail::apply_cols<1>(op, x, y);
+    detail::apply_columns(op, 1, x, y);
     for (const OneWay& e : one_way) y[e.row] -= op.entry(e.row, e.entry) * x[e.column];
   }
 };
@@ -273,7 +273,7 @@ double estimate_lambda_min(const LimitOperator& op, SpectralCache& cache) {
     // of B's eigenvalues (which may be complex then).
     std::vector<double> bx(op.n);
     const auto i_minus_b = [&](const double* x, double* y) {
-      detail::apply_cols<1>(op, x, bx.data());
+      detail::apply_columns(op, 1, x, bx.data());
       for (std::size_t i = 0; i < op.n; ++i) y[i] = x[i] - bx[i];
     };
     cache.lambda_min = 1.0 - power_radius(op.n, i_minus_b, std::vector<double>(op.n, 1.0), 300, 1e-6);
@@ -293,7 +293,7 @@ double estimate_jacobi_rho(const LimitOperator& op, SpectralCache& cache) {
   // D^-1 B = D^-1 Gamma Upsilon is self-adjoint for the weights D Gamma^-1.
   for (std::size_t i = 0; i < op.n; ++i) w[i] *= op.diag[i];
   const auto jacobi = [&](const double* x, double* y) {
-    detail::apply_cols<1>(op, x, bx.data());
+    detail::apply_columns(op, 1, x, bx.data());
     for (std::size_t i = 0; i < op.n; ++i) y[i] = x[i] - bx[i] / op.diag[i];
   };
   cache.jacobi_rho = power_radius(op.n, jacobi, w, 500, 1e-7);

@@ -31,7 +31,7 @@ const Kernels& per_entry_kernels() {
 // predictor cannot know) about 15. A mesh of one valence gets the plain loop
 // (its exit always predicted); a mesh of valences 3..12, nine in ten at most
 // 8, gets K = 8.
-int choose_slots(const OpView& op) {
+int choose_slots(const Rows& op) {
   std::vector<std::int64_t> above(kSlotChoices[std::size(kSlotChoices) - 1] + 2, 0);
   for (std::size_t i = 0; i < op.n; ++i) {
     const std::int32_t v = op.offsets[i + 1] - op.offsets[i];

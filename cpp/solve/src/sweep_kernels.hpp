@@ -8,27 +8,19 @@
 #include <cstddef>
 #include <cstdint>
 
+// Every function taking or returning these vectors is internal: the ABI note
+// about passing AVX vectors without AVX does not concern us (here or in the
+// row kernels of apply.hpp, instantiated for them).
+#pragma GCC diagnostic ignored "-Wpsabi"
+
+#include "sorpia/detail/apply.hpp"
+
 namespace sorpia {
 namespace detail {
 
-// Every function taking or returning these vectors is internal: the ABI note
-// about passing AVX vectors without AVX does not concern us.
-#pragma GCC diagnostic ignored "-Wpsabi"
 typedef double d4 __attribute__((vector_size(32)));
 typedef std::int32_t i4 __attribute__((vector_size(16)));
 typedef std::uint32_t u4 __attribute__((vector_size(16)));
-
-// A LimitOperator's arrays as the engine reads them: the caller's, or a
-// renumbered copy of its own (Renumbered, vertex_order.hpp).
-struct OpView {
-  std::size_t n;
-  const std::int32_t* offsets;  // n + 1
-  const std::int32_t* neighbors;
-  const double* diag;
-  const double* weight;         // uniform rows: one weight per row
-  const double* values;         // rows with several weights: one per entry of neighbors; else null
-  bool uniform() const { return values == nullptr; }
-};
 
 // Per-vertex flags of the plan (sweep_plan.hpp).
 constexpr std::uint8_t kInterface = 1;  // swept after the ranges, by one thread
@@ -36,13 +28,9 @@ constexpr std::uint8_t kDeferred = 2;   // residual after the sweep, not in it
 
 // What the kernels read and write.
 struct Ctx {
-  const std::int32_t* off;
-  const std::int32_t* nb;
+  Rows rows;                  // the operator swept: the caller's, or a renumbered copy (Renumbered)
   std::int32_t n;             // the zero row of x
-  std::int32_t slots_end;     // the slot kernels may read K entries of nb from off[i] for i below it
-  const double* diag;
-  const double* weight;
-  const double* values;       // null: uniform rows
+  std::int32_t slots_end;     // the slot kernels may read K entries of neighbors from offsets[i] for i below it
   const double* v0;           // (n, 3)
   d4* x;                      // (n + 1, 4), row n and lane 3 zero
   const std::uint8_t* flags;
@@ -52,8 +40,9 @@ struct Ctx {
 
 // The kernels for one kind of row (a slot count K for uniform rows, or
 // per-entry weights). Each computes ||v_i^0 - (B x)_i||^2 and the update of
-// eq. 18 by one formula, so a residual inside the sweep and one in a separate
-// pass give the same bits.
+// eq. 18 by the row kernels of detail/apply.hpp, so a residual inside the
+// sweep and one in a separate pass give the same bits, those of every other
+// product with B.
 struct Kernels {
   // Sweep [b, e) in vertex order, skipping interface vertices; returns the max
   // ||r||^2 of its non-deferred vertices, lag behind the front.
@@ -79,13 +68,13 @@ constexpr int kSlotChoices[] = {0, 4, 8, 12};
 constexpr std::size_t kMaxSlotRows = std::size_t{1} << 27;
 
 // Index into kSlotChoices for op's valences (uniform rows).
-int choose_slots(const OpView& op);
+int choose_slots(const Rows& op);
 
 // The kernels for uniform rows with kSlotChoices[choice] slots: the AVX2 build
 // where the processor has it, else the baseline one (the same bits).
 const Kernels& uniform_kernels(int choice);
 
-// The kernels for rows with per-entry weights (OpView::values): the AVX2
+// The kernels for rows with per-entry weights (Rows::values): the AVX2
 // build where the processor has it, else the baseline one (the same bits).
 const Kernels& per_entry_kernels();
 

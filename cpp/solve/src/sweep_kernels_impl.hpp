@@ -4,13 +4,17 @@
 // sweep_kernels_avx2.cpp: -mavx2). Everything here has internal linkage, so
 // no function compiled for AVX2 can stand in for a baseline one at link time;
 // for the same reason the loops call no inline function of the standard
-// library that the compiler might leave out of line. Not a public header.
+// library that the compiler might leave out of line, and the row kernels of
+// apply.hpp they call are always inlined (no out-of-line copy is emitted).
+// Not a public header.
 //
-// The arithmetic is per lane in the same order as the scalar formula of
-// row_product (solver_detail.hpp), so both builds give the same bits: the
-// AVX2 unit is compiled without FMA, so nothing is contracted.
+// The rows are the row kernels of sorpia/detail/apply.hpp on 4-lane rows:
+// the arithmetic is per lane in the same order as on (n, k) arrays, so both
+// builds give the same bits as every other product with B: the AVX2 unit is
+// compiled without FMA, so nothing is contracted.
 #include <cstdint>
 #include <cstring>
+#include <type_traits>
 
 #include "sweep_kernels.hpp"
 
@@ -21,79 +25,81 @@ namespace {
 // The template argument of the kernels for rows with per-entry weights.
 constexpr int kPerEntry = -1;
 
+// The kind of rows (apply.hpp) of the kernels for K.
+template <int K>
+using KindOf = std::conditional_t<K == kPerEntry, PerEntryRows, UniformRows>;
+
 inline double larger(double a, double b) { return a < b ? b : a; }
 inline std::int32_t smaller(std::int32_t a, std::int32_t b) { return b < a ? b : a; }
 
-inline d4 splat(double a) { return d4{a, a, a, a}; }
+// Row j of x as the row kernels read it.
+struct Lanes {
+  const d4* x;
+  __attribute__((always_inline)) const d4& operator()(std::int32_t j) const { return x[j]; }
+};
 
-// Sum of the neighbours' rows of x, in neighbour order (as row_product).
-// The first K neighbours are summed by a loop of fixed length K: a loop over
-// each vertex's own count mispredicts its exit about once per vertex on
-// meshes that mix valences, the largest cost of a sweep on such meshes. Slots
-// past the valence add the zero row n, and adding +0.0 leaves every sum bit
-// for bit as the plain loop gives it. K (a multiple of 4) is chosen per mesh
-// from its valences (choose_slots); K = 0 is the plain loop.
+// The sum of the neighbours' rows of x (uniform rows), in neighbour order,
+// the first K neighbours by a loop of fixed length K: a loop over each
+// vertex's own count mispredicts its exit about once per vertex on meshes
+// that mix valences, the largest cost of a sweep on such meshes. Slots past
+// the valence add the zero row n, and adding +0.0 leaves every sum bit for
+// bit as NeighbourSum (apply.hpp) gives it. K (a multiple of 4) is chosen per
+// mesh from its valences (choose_slots); K = 0 is NeighbourSum's loop.
 template <int K>
-__attribute__((always_inline)) inline d4 ring_sum(const Ctx& c, std::int32_t i) {
-  const std::int32_t b = c.off[i], v = c.off[i + 1] - b;
-  const std::int32_t* q = c.nb + b;
-  d4 s = splat(0.0);
-  std::int32_t k = 0;
-  if (K > 0 && __builtin_expect(i < c.slots_end, 1)) {
-    // Four slots at a time: the indices, or the zero row past the valence,
-    // chosen by a vector mask and turned into byte offsets in one go (a
-    // scalar select per slot costs seven instructions; written as a
-    // conditional, GCC turns it back into a branch per slot).
-    const i4 lane = {0, 1, 2, 3};
-    const i4 valence = {v, v, v, v}, zero_row = {c.n, c.n, c.n, c.n};
-    const char* base = reinterpret_cast<const char*>(c.x);
-    for (; k < K; k += 4) {
-      i4 j;
-      std::memcpy(&j, q + k, sizeof j);  // readable below slots_end
-      const i4 real = (lane + k) < valence;
-      // Unsigned: a lane moved to a register is zero-extended for free,
-      // where a signed one took a sign extension per neighbour; 32 * row
-      // is exact below kMaxSlotRows rows.
-      const u4 bytes = reinterpret_cast<u4>((j & real) | (zero_row & ~real)) << 5;
-      for (int a = 0; a < 4; ++a) s += *reinterpret_cast<const d4*>(base + bytes[a]);
+struct SlotSum {
+  const Ctx& c;
+  __attribute__((always_inline)) d4 operator()(std::int32_t i) const {
+    const std::int32_t b = c.rows.offsets[i], v = c.rows.offsets[i + 1] - b;
+    const std::int32_t* q = c.rows.neighbors + b;
+    d4 s{};
+    std::int32_t k = 0;
+    if (K > 0 && __builtin_expect(i < c.slots_end, 1)) {
+      // Four slots at a time: the indices, or the zero row past the valence,
+      // chosen by a vector mask and turned into byte offsets in one go (a
+      // scalar select per slot costs seven instructions; written as a
+      // conditional, GCC turns it back into a branch per slot).
+      const i4 lane = {0, 1, 2, 3};
+      const i4 valence = {v, v, v, v}, zero_row = {c.n, c.n, c.n, c.n};
+      const char* base = reinterpret_cast<const char*>(c.x);
+      for (; k < K; k += 4) {
+        i4 j;
+        std::memcpy(&j, q + k, sizeof j);  // readable below slots_end
+        const i4 real = (lane + k) < valence;
+        // Unsigned: a lane moved to a register is zero-extended for free,
+        // where a signed one took a sign extension per neighbour; 32 * row
+        // is exact below kMaxSlotRows rows.
+        const u4 bytes = reinterpret_cast<u4>((j & real) | (zero_row & ~real)) << 5;
+        for (int a = 0; a < 4; ++a) s += *reinterpret_cast<const d4*>(base + bytes[a]);
+      }
     }
+    for (; k < v; ++k) s += c.x[q[k]];
+    return s;
   }
-  for (; k < v; ++k) s += c.x[q[k]];
-  return s;
-}
+};
 
 __attribute__((always_inline)) inline d4 v0_row(const Ctx& c, std::int32_t i) {
   const double* y = c.v0 + 3 * static_cast<std::ptrdiff_t>(i);
   return d4{y[0], y[1], y[2], 0.0};
 }
 
-// (B x)_i: diag x_i + weight (sum of the neighbours) for uniform rows,
-// diag x_i + sum of weight_p x_p for per-entry weights (K = kPerEntry).
+// v_i^0 - (B x)_i.
 template <int K>
-__attribute__((always_inline)) inline d4 row_product(const Ctx& c, std::int32_t i) {
-  if constexpr (K == kPerEntry) {
-    d4 s = splat(0.0);
-    for (std::int32_t p = c.off[i]; p < c.off[i + 1]; ++p) s += splat(c.values[p]) * c.x[c.nb[p]];
-    return splat(c.diag[i]) * c.x[i] + s;
-  } else {
-    const d4 s = ring_sum<K>(c, i);
-    return splat(c.diag[i]) * c.x[i] + splat(c.weight[i]) * s;
-  }
+__attribute__((always_inline)) inline d4 residual(const Ctx& c, std::int32_t i) {
+  return v0_row(c, i) - row_product<KindOf<K>, d4>(c.rows, Lanes{c.x}, i, SlotSum<K>{c});
 }
 
-// ||v_i^0 - (B x)_i||^2, as residual() computes it.
+// ||v_i^0 - (B x)_i||^2, as residual() (solver_detail.hpp) computes it.
 template <int K>
 __attribute__((always_inline)) inline double residual_sq(const Ctx& c, std::int32_t i) {
-  const d4 r = v0_row(c, i) - row_product<K>(c, i);
+  const d4 r = residual<K>(c, i);
   return r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
 }
 
-// One vertex of the SOR-PIA sweep (paper eq. 18): d_i = (v_i^0 - v_i^inf) /
-// alpha_i with the neighbours as they are now, v_i += omega d_i.
+// One vertex of the SOR-PIA sweep (paper eq. 18), with the neighbours as
+// they are now.
 template <int K>
 __attribute__((always_inline)) inline void update(const Ctx& c, std::int32_t i) {
-  const d4 r = v0_row(c, i) - row_product<K>(c, i);
-  c.x[i] += splat(c.omega / c.diag[i]) * r;
+  c.x[i] += relaxation(c.rows, i, c.omega, residual<K>(c, i));
 }
 
 // The row of x the front will first need `lag` vertices from now: on

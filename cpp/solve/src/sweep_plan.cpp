@@ -37,7 +37,7 @@ inline const std::int32_t* ring_slots(const std::int32_t* off, const std::int32_
 
 }  // namespace
 
-std::vector<std::int32_t> equal_work_ranges(const OpView& op, int threads) {
+std::vector<std::int32_t> equal_work_ranges(const Rows& op, int threads) {
   const auto n = static_cast<std::int32_t>(op.n);
   const std::int32_t* off = op.offsets;
   const double total = static_cast<double>(off[n]) + 2.0 * n;
@@ -56,7 +56,7 @@ std::vector<std::int32_t> equal_work_ranges(const OpView& op, int threads) {
   return begin;
 }
 
-Plan make_plan(const OpView& op, int threads, [[maybe_unused]] bool parallel,
+Plan make_plan(const Rows& op, int threads, [[maybe_unused]] bool parallel,
                const std::vector<std::int32_t>& begin) {
   const auto n = static_cast<std::int32_t>(op.n);
   const std::int32_t* off = op.offsets;

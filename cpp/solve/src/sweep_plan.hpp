@@ -31,11 +31,11 @@ struct Plan {
 // Index ranges of equal work, one per thread: starts, threads + 1 of them,
 // the last n. A vertex costs its neighbours plus about two neighbours' worth
 // of its own loads and arithmetic.
-std::vector<std::int32_t> equal_work_ranges(const OpView& op, int threads);
+std::vector<std::int32_t> equal_work_ranges(const Rows& op, int threads);
 
 // The plan for the ranges `begin` (threads + 1 starts, the last n).
 // parallel: run its passes on the threads (the plan does not depend on it).
-Plan make_plan(const OpView& op, int threads, bool parallel, const std::vector<std::int32_t>& begin);
+Plan make_plan(const Rows& op, int threads, bool parallel, const std::vector<std::int32_t>& begin);
 
 }  // namespace detail
 }  // namespace sorpia

@@ -11,7 +11,7 @@
 namespace sorpia {
 namespace detail {
 
-std::vector<std::int32_t> locality_order(const OpView& op) {
+std::vector<std::int32_t> locality_order(const Rows& op) {
   const auto n = static_cast<std::int32_t>(op.n);
   std::vector<std::int32_t> order;
   order.reserve(op.n);
@@ -45,7 +45,7 @@ std::vector<std::int32_t> locality_order(const OpView& op) {
   return order;
 }
 
-std::vector<std::int32_t> slab_order(const OpView& op, const double* v0, int threads,
+std::vector<std::int32_t> slab_order(const Rows& op, const double* v0, int threads,
                                      std::vector<std::int32_t>& begin) {
   const auto n = static_cast<std::ptrdiff_t>(op.n);
   // The bounding box, each thread over its range, then combined.
@@ -98,7 +98,7 @@ std::vector<std::int32_t> slab_order(const OpView& op, const double* v0, int thr
   return perm;
 }
 
-Renumbered::Renumbered(const OpView& op, const std::int32_t* perm, const std::int32_t* inv,
+Renumbered::Renumbered(const Rows& op, const std::int32_t* perm, const std::int32_t* inv,
                        int threads, bool parallel)
     : offsets(op.n + 1, false),
       neighbors(static_cast<std::size_t>(op.offsets[op.n]), false),
@@ -130,7 +130,7 @@ Renumbered::Renumbered(const OpView& op, const std::int32_t* perm, const std::in
   view = {op.n, offsets.data(), neighbors.data(), diag.data(), weight.data(), values.data()};
 }
 
-OrderSurvey survey_order(const OpView& op, const std::vector<std::int32_t>& begin) {
+OrderSurvey survey_order(const Rows& op, const std::vector<std::int32_t>& begin) {
   // 64 runs of 64 consecutive vertices, evenly spread: a few cache misses
   // a run rather than a few a vertex.
   const auto n = static_cast<std::int32_t>(op.n);

@@ -15,7 +15,7 @@ namespace detail {
 // an icosphere whose vertices come level by level): breadth-first search
 // from the last vertex reached by a first search (Cuthill-McKee without its
 // degree sort), component by component. Returns perm, perm[new] = old.
-std::vector<std::int32_t> locality_order(const OpView& op);
+std::vector<std::int32_t> locality_order(const Rows& op);
 
 // An order for threads when index ranges split the mesh badly (most vertices
 // would be interface vertices, swept by one thread; an icosphere numbered
@@ -25,7 +25,7 @@ std::vector<std::int32_t> locality_order(const OpView& op);
 // stays one; a breadth-first order would cost the icosphere's coarse-to-fine
 // order sweeps). Only the slabs' common faces are interface.
 // Returns perm (perm[new] = old); begin gets the slabs' starts.
-std::vector<std::int32_t> slab_order(const OpView& op, const double* v0, int threads,
+std::vector<std::int32_t> slab_order(const Rows& op, const double* v0, int threads,
                                      std::vector<std::int32_t>& begin);
 
 // op with its vertices renumbered: row k is row perm[k] of op, neighbours
@@ -34,11 +34,11 @@ std::vector<std::int32_t> slab_order(const OpView& op, const double* v0, int thr
 struct Renumbered {
   AlignedBuffer<std::int32_t> offsets, neighbors;
   AlignedBuffer<double> diag, weight, values;
-  OpView view{};
+  Rows view{};
 
   Renumbered() = default;
   // parallel: copy the rows on `threads` threads.
-  Renumbered(const OpView& op, const std::int32_t* perm, const std::int32_t* inv, int threads, bool parallel);
+  Renumbered(const Rows& op, const std::int32_t* perm, const std::int32_t* inv, int threads, bool parallel);
   Renumbered& operator=(Renumbered&&) = default;
 };
 
@@ -49,7 +49,7 @@ struct Renumbered {
 struct OrderSurvey {
   double far = 0.0, interface = 0.0;
 };
-OrderSurvey survey_order(const OpView& op, const std::vector<std::int32_t>& begin);
+OrderSurvey survey_order(const Rows& op, const std::vector<std::int32_t>& begin);
 
 // Too poor an order: more than half of the vertices reach further ahead than
 // kMaxLag, so that most residuals wait for a second pass and most gathers

@@ -87,9 +87,10 @@ class LocalSolver {
   void undo(double* v);
 
  private:
-  void residual_row(const double* v, std::size_t i, double* r) const;  // v0_i - (B v)_i
-  double cold_row(std::size_t i);                                      // ||v0_i - (B V0)_i||^2
-  template <int K>
+  double residual_row(const double* v, std::size_t i, double* r) const;  // r = v0_i - (B v)_i; ||r||^2
+  double cold_row(std::size_t i);                                        // ||v0_i - (B V0)_i||^2
+  // K: the columns when known at compile time (apply.hpp), Kind: op's rows.
+  template <int K, class Kind>
   long long relax(double* v, std::vector<std::int32_t>& work, double threshold, double limit, long long max_relaxations,
                   bool& stopped, bool& diverged);
   void log_row(const double* v, std::size_t i);  // keeps row i of v and r_ for undo, once per update
