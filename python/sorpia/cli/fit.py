@@ -265,18 +265,18 @@ def _check_outputs_hold(output, surface, faces, scheme: str, level: int) -> None
 
 
 def _max_residual(interp, ctrl, V0, faces, boundary, scheme, tags) -> float:
-    """max |B V - V0| of the control mesh written, independent of the
-    solver: Loop without tags from OpenSubdiv's masks over the topology's
-    one-ring (limit_residual); otherwise from the library's limit points of
-    the scheme and tags."""
+    """max_i ||(B V)_i - v0_i|| (the Euclidean norm of a row, as E_k is) of the
+    control mesh written, independent of the solver: Loop without tags from
+    OpenSubdiv's masks over the topology's one-ring (limit_residual);
+    otherwise from the library's limit points of the scheme and tags."""
     from .. import _core
 
     if not scheme_kwargs(scheme, tags):
         return float(_core.limit_residual(interp.topology, ctrl, V0, as_boundary(boundary))[0])
     from .. import limit_points
 
-    return float(np.abs(limit_points(ctrl, faces, boundary=boundary, **scheme_kwargs(scheme, tags))
-                        - V0).max())
+    miss = limit_points(ctrl, faces, boundary=boundary, **scheme_kwargs(scheme, tags)) - V0
+    return float(np.linalg.norm(miss, axis=1).max()) if len(miss) else 0.0
 
 
 def _check_surface_fits(n_vertices: int, counts: np.ndarray, level: int, scheme: str) -> None:
