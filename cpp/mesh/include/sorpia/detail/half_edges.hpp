@@ -12,6 +12,7 @@
 #include <limits>
 #include <numeric>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "sorpia/errors.hpp"
@@ -107,6 +108,74 @@ inline std::vector<std::int32_t> corner_faces(const std::vector<std::int32_t>& o
     std::fill(face.begin() + off[f], face.begin() + off[f + 1], static_cast<std::int32_t>(f));
   return face;
 }
+
+// The half-edge matcher: the half-edges of a face list grouped by
+// undirected edge, in (lower end, higher end, id) order, so that the
+// half-edges of one edge are adjacent, in face order. A counting sort by the
+// lower end, then each bucket (the edges at one vertex towards higher
+// vertices: few) sorted by (higher end, id). Linear in the half-edges but for
+// those small sorts. `keep(h)` leaves out half-edges (of removed or
+// degenerate faces). Topology's error paths, repair, the non-manifold split
+// and the statistics of a raw face list all match edges through it; the
+// direct one-ring build matches each vertex's edges while it walks the fans
+// (topology.cpp's VertexEdges).
+class EdgeGroups {
+ public:
+  template <class Faces, class Keep>
+  EdgeGroups(const Faces& fl, std::size_t n_vertices, Keep keep) : idx_(fl.idx) {
+    const std::size_t n_half = fl.n_corners();
+    next_.resize(n_half);
+    for (std::size_t h = 0; h < n_half; ++h) next_[h] = static_cast<std::int32_t>(fl.next(h));
+    std::vector<std::int32_t> start(n_vertices + 1, 0);
+    for (std::size_t h = 0; h < n_half; ++h)
+      if (keep(h)) ++start[lo(h) + 1];
+    std::partial_sum(start.begin(), start.end(), start.begin());
+    order_.resize(static_cast<std::size_t>(start[n_vertices]));
+    std::vector<std::int32_t> fill(start.begin(), start.end() - 1);
+    for (std::size_t h = 0; h < n_half; ++h)
+      if (keep(h)) order_[fill[lo(h)]++] = static_cast<std::int32_t>(h);
+    for (std::size_t v = 0; v < n_vertices; ++v)
+      std::sort(order_.begin() + start[v], order_.begin() + start[v + 1], [&](std::int32_t a, std::int32_t b) {
+        return std::make_pair(hi(a), a) < std::make_pair(hi(b), b);
+      });
+  }
+  template <class Faces>
+  EdgeGroups(const Faces& fl, std::size_t n_vertices)
+      : EdgeGroups(fl, n_vertices, [](std::size_t) { return true; }) {}
+
+  // Calls fn(a, b, hs, k) for every edge (a < b) in (a, b) order, hs its k
+  // half-edges in id order.
+  template <class Fn>
+  void for_each(Fn fn) const {
+    for (std::size_t i = 0, j; i < order_.size(); i = j) {
+      const std::int32_t a = lo(order_[i]), b = hi(order_[i]);
+      for (j = i + 1; j < order_.size() && hi(order_[j]) == b && lo(order_[j]) == a; ++j) {
+      }
+      fn(a, b, order_.data() + i, static_cast<std::int32_t>(j - i));
+    }
+  }
+
+  // The other half-edge of each half-edge's edge where the edge has exactly
+  // two (kept) half-edges; `single` where it has one, `many` where more.
+  std::vector<std::int32_t> mates(std::int32_t single = -1, std::int32_t many = -1) const {
+    std::vector<std::int32_t> mate(next_.size(), many);
+    for_each([&](std::int32_t, std::int32_t, const std::int32_t* hs, std::int32_t k) {
+      if (k == 1) mate[hs[0]] = single;
+      if (k != 2) return;
+      mate[hs[0]] = hs[1];
+      mate[hs[1]] = hs[0];
+    });
+    return mate;
+  }
+
+ private:
+  std::int32_t lo(std::size_t h) const { return std::min(idx_[h], idx_[next_[h]]); }
+  std::int32_t hi(std::size_t h) const { return std::max(idx_[h], idx_[next_[h]]); }
+
+  const std::int32_t* idx_;
+  std::vector<std::int32_t> next_;  // the next corner of each corner's face
+  std::vector<std::int32_t> order_;
+};
 
 // Union-find over indices 0..n-1 with path halving; the root of a class is its
 // lowest index.
