@@ -30,6 +30,7 @@ bool RepairReport::empty() const {
 
 namespace {
 
+using detail::FaceArrays;
 using detail::FaceList;
 // Union-find over corners: the root of a class is its lowest corner.
 using Corners = detail::DisjointSets;
@@ -57,22 +58,6 @@ struct Faces : FaceList {
     return static_cast<std::int32_t>(3 * f);
   }
   std::int32_t end(std::size_t f) const { return begin(f + 1); }
-};
-
-// The offsets and corner faces of a FaceList of polygons (none for triangles).
-struct FaceArrays {
-  std::size_t n_faces = 0;
-  std::vector<std::int32_t> off, corner_face;
-
-  static FaceArrays triangles(std::size_t n_faces) { return {n_faces, {}, {}}; }
-  static FaceArrays polygons(const std::int32_t* counts, std::size_t n_faces) {
-    FaceArrays a{n_faces, detail::polygon_offsets(counts, n_faces), {}};
-    a.corner_face = detail::corner_faces(a.off);
-    return a;
-  }
-  FaceList over(const std::int32_t* idx) const {
-    return {idx, off.empty() ? nullptr : off.data(), corner_face.empty() ? nullptr : corner_face.data(), n_faces};
-  }
 };
 
 // A polygon list owning its arrays.

@@ -671,9 +671,8 @@ bool faces_valid(const std::int32_t* face_vertex_counts, std::size_t n_faces, co
   bool valid = true;
   try {
     check_counts(n_faces, n_vertices);
-    const std::vector<std::int32_t> off = detail::polygon_offsets(face_vertex_counts, n_faces);
-    const std::vector<std::int32_t> corner_face = detail::corner_faces(off);
-    validate_faces(FaceList{face_vertex_indices, off.data(), corner_face.data(), n_faces}, n_vertices, nullptr, &valid);
+    const detail::FaceArrays arrays = detail::FaceArrays::polygons(face_vertex_counts, n_faces);
+    validate_faces(arrays.over(face_vertex_indices), n_vertices, nullptr, &valid);
   } catch (const MeshError&) {
     return false;
   }

@@ -1,7 +1,9 @@
 #pragma once
-// The half-edges of a triangle or polygon list, and a union-find, shared by
-// the face checks (topology.cpp), repair (repair.cpp) and the statistics of a
-// raw face list (mesh_statistics.cpp). Not a public header.
+// The half-edges of a triangle or polygon list (a sorpia::Mesh's
+// face_vertex_indices, with offsets from its face_vertex_counts), the one
+// half-edge matcher (EdgeGroups) and a union-find, shared by the face checks
+// (topology.cpp), repair and the non-manifold split (repair.cpp) and the
+// statistics of a raw face list (mesh_statistics.cpp). Not a public header.
 //
 // Half-edge h (0 <= h < 3 n_faces) runs from the corner faces[h] to the next
 // corner of its face, faces[next_corner(h)]; it also names that corner.
@@ -108,6 +110,23 @@ inline std::vector<std::int32_t> corner_faces(const std::vector<std::int32_t>& o
     std::fill(face.begin() + off[f], face.begin() + off[f + 1], static_cast<std::int32_t>(f));
   return face;
 }
+
+// The offsets and corner faces of a FaceList of polygons (none for triangles),
+// owned: FaceArrays::over(indices) is the FaceList.
+struct FaceArrays {
+  std::size_t n_faces = 0;
+  std::vector<std::int32_t> off, corner_face;
+
+  static FaceArrays triangles(std::size_t n_faces) { return {n_faces, {}, {}}; }
+  static FaceArrays polygons(const std::int32_t* counts, std::size_t n_faces) {
+    FaceArrays a{n_faces, detail::polygon_offsets(counts, n_faces), {}};
+    a.corner_face = detail::corner_faces(a.off);
+    return a;
+  }
+  FaceList over(const std::int32_t* idx) const {
+    return {idx, off.empty() ? nullptr : off.data(), corner_face.empty() ? nullptr : corner_face.data(), n_faces};
+  }
+};
 
 // The half-edge matcher: the half-edges of a face list grouped by
 // undirected edge, in (lower end, higher end, id) order, so that the
