@@ -2,6 +2,8 @@
 #   make demo   installs what is missing, builds sorpia into .venv, runs `sorpia demo`
 #   make test   installs what is missing, builds, runs the C++ tests (ctest) and pytest, and builds the docs
 #               with warnings as errors
+#   make blender-venv  Blender as a Python module (bpy, about 400 MB, its own numpy pin) in .venv-blender, for
+#               tests/test_blender.py; make test builds it where bpy installs and goes on without it otherwise
 #   make docs   the documentation (Sphinx, from the installed package's docstrings) into build/docs
 # Each is harmless to run twice: each step checks what is already there.
 
@@ -20,7 +22,7 @@ PIP_BUILD := -C build-dir=$(BUILD_DIR) -C cmake.define.SORPIA_BUILD_TESTS=ON
 # --help) never come from a stale cache; the whole build takes seconds.
 SPHINX := $(PY) -m sphinx -b html -E -q docs build/docs
 
-.PHONY: demo test deps venv install cpp-test py-test docs docs-test clean
+.PHONY: demo test deps venv install cpp-test py-test docs docs-test clean blender-venv
 
 demo: install
 	$(VENV)/bin/sorpia demo
@@ -48,7 +50,17 @@ install: deps venv
 cpp-test: install
 	cd $(BUILD_DIR) && ../../$(VENV)/bin/ctest --output-on-failure
 
-py-test: install
+# bpy 5.0.1 is the newest for Python 3.11; where it cannot install, the Blender tests skip and say why.
+BLENDER_VENV := .venv-blender
+BPY_VERSION := 5.0.1
+
+blender-venv:
+	@if ! $(BLENDER_VENV)/bin/python -c "import bpy" >/dev/null 2>&1; then \
+	  ( $(PYTHON) -m venv $(BLENDER_VENV) && $(BLENDER_VENV)/bin/python -m pip install -q bpy==$(BPY_VERSION) ) \
+	    || echo "bpy $(BPY_VERSION) could not be installed: tests/test_blender.py will skip"; \
+	fi
+
+py-test: install blender-venv
 	cd tests && ../$(PY) -m pytest
 
 docs: install

@@ -41,7 +41,7 @@ LIBRARY = """
 import sys
 import sorpia
 from sorpia import _core
-from sorpia.meshinfo import topology_info
+from sorpia._meshinfo import topology_info
 V0, F = sorpia.read_mesh(sys.argv[1])
 interp = sorpia.Interpolator(F, len(V0))
 stats = topology_info(V0, interp.topology)

@@ -207,7 +207,7 @@ def test_render_a_crease_beside_a_hole(tmp_path, monkeypatch, command):
     assert code == 0, err
     assert (tmp_path / "r.png").stat().st_size > 0
 
-    from sorpia.plotting import crease_curves
+    from sorpia._plotting import crease_curves
 
     surface = sorpia.LimitSurface(V, F, scheme="catmull-clark", creases=(creases, np.inf), holes=holes)
     points, normals = crease_curves(surface, F, creases, holes=holes)

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 import sorpia
-from sorpia.mesh_repair import RepairResult
+from sorpia._repair import RepairResult
 
 from cli_support import CLI_MESHES, assert_user_error, write_obj
 from test_repair import check_repaired, defect_mesh, fit_passes_through_inputs, moebius, points

@@ -163,7 +163,7 @@ def test_fit_solves_with_the_file_tags_and_writes_them_with_the_control_mesh(tmp
     assert np.abs(sorpia.limit_points(ctrl, f, boundary="edge-only") - v).max() > 1e-3
     # A format without tags: the control mesh is written without them, with a warning saying so.
     code, _, err = command("fit", "tags.obj", "-o", "c.ply", "--quiet")
-    assert code == 0 and "sharpness tags (corners, creases) are not written: only .obj files hold them" in err
+    assert code == 0 and "sharpness tags (corners, creases) are not written: only .obj and USD files hold them" in err
 
 
 def test_fit_with_sharp_angle_writes_the_creases_it_found(tmp_path, monkeypatch, command):

@@ -84,6 +84,9 @@ def make_files(folder: Path) -> None:
     for name in ("car.obj", "osd_catmark_car.obj"):
         sorpia.write_mesh(folder / name, qV, qF, creases=(qF[:6, :2], np.full(6, 3.0)))
     sorpia.write_mesh(folder / "cylinder.obj", *_quad_cylinder())
+    # A USD stage: the tagged quad part as /World/Part, Catmull-Clark, with its texture coordinates (st).
+    sorpia.write_mesh(folder / "scene.usda", qV, qF, scheme="catmull-clark", creases=(qF[:6, :2], np.inf),
+                      corners=([20], [2.0]), uvs=sorpia.FaceVarying(qV[:, :2], corners), prim="/World/Part")
     # Files to repair: a quad grid with a duplicated face (bad.obj, polygons kept), an irregular triangle mesh
     # with a duplicated and a reversed face (scan.ply).
     gV, gF = sorpia.shapes.quad_grid(6, 5)

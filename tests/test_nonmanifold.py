@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 import sorpia
-from sorpia.nonmanifold import NonmanifoldWarning
+from sorpia import NonmanifoldWarning
 from test_io import SHARED_MESHES
 
 
@@ -76,6 +76,34 @@ def test_fit_passes_through_every_vertex(scheme, triangles):
     assert res.converged and res.control_vertices.shape == v.shape
     b = sharp(sorpia.limit_matrix, f, len(v), scheme=scheme)
     assert np.abs(b @ res.control_vertices - v).max() <= 1e-8 * np.abs(v).max()
+
+
+@pytest.mark.parametrize("scheme, triangles", [("loop", True), ("catmull-clark", False)])
+@pytest.mark.parametrize("in_place", [False, True])
+def test_interpolator_sharp_solves_and_updates_the_input_vertices(scheme, triangles, in_place):
+    """Interpolator(nonmanifold="sharp") returns the one result type with the
+    input vertices' rows, and update moves a target (all its copies in the
+    split): each result equals scipy's direct solve of the input mesh's B
+    (limit_matrix with nonmanifold="sharp") to 1e-8 (tol 1e-10 on E/E_0)."""
+    import scipy.sparse.linalg
+
+    v, f = book(4, 3, triangles)
+    b = sharp(sorpia.limit_matrix, f, len(v), scheme=scheme).tocsc()
+    interp = sharp(sorpia.Interpolator, f, len(v), scheme=scheme)
+    assert interp.n_vertices == len(v)
+    assert (abs(interp.limit_matrix() - b)).max() == 0
+    res = interp.solve(v, initial=v)
+    assert isinstance(res, sorpia.InterpolationResult) and res.converged
+    targets = v.copy()
+    for i in (1, 5, 0):  # a crease vertex (copied in every page), an ordinary one, a corner
+        targets[i] += 0.1
+        res = interp.update(res, [i], targets[i], in_place=in_place)
+        assert res.converged and res.control_vertices.shape == v.shape
+        direct = scipy.sparse.linalg.spsolve(b, targets)
+        assert np.abs(res.control_vertices - direct).max() <= 1e-8 * np.abs(direct).max()
+        np.testing.assert_array_equal(interp.targets, targets)
+    whole = sharp(sorpia.interpolate, v, f, scheme=scheme)
+    assert isinstance(whole, sorpia.InterpolationResult)
 
 
 def test_bowtie_vertex_is_a_corner_and_warned():
@@ -208,3 +236,27 @@ def test_the_fan_shape_fits_on_the_command_line(tmp_path, command):
     ctrl, faces, tags = sorpia.read_mesh(tmp_path / "c.obj", tags=True)
     limit = sorpia.limit_points(ctrl, faces, scheme="catmull-clark", corners=tags["corners"])
     assert np.abs(limit - v[report["vertex_map"]]).max() <= 1e-9 * np.abs(v).max()
+
+
+@pytest.mark.parametrize("scheme, triangles", [("loop", True), ("catmull-clark", False)])
+def test_limit_surface_takes_nonmanifold_sharp(scheme, triangles):
+    # LimitSurface, evaluate_limit and limit_surface with nonmanifold="sharp": at every face corner (Bfr) and in the
+    # tessellation's first rows the surface of the input vertices is B V with B = limit_matrix(nonmanifold="sharp")
+    # (independent of the surface code: the rows are checked against OpenSubdiv's rules above); 1e-12 of the
+    # coordinates' size is rounding.
+    v, f = book(3, 2, triangles)
+    b = sharp(sorpia.limit_matrix, f, len(v), scheme=scheme)
+    want = b @ v
+    corners = [0.0, 0.0], [1.0, 0.0], ([0.0, 1.0] if triangles else [1.0, 1.0])
+    face_ids = np.repeat(np.arange(len(f)), 3)
+    uv = np.tile(np.array(corners), (len(f), 1))
+    vertex_at = f[:, [0, 1, 2]].ravel()  # (0,0), (1,0) and the third corner of each face
+    got = sharp(sorpia.evaluate_limit, v, f, face_ids, uv, scheme=scheme)
+    assert np.abs(got - want[vertex_at]).max() <= 1e-12 * np.abs(v).max()
+    surface = sharp(sorpia.LimitSurface, v, f, scheme=scheme)
+    surface.set_vertices(2 * v)  # the input's rows, mapped onto the split's copies
+    assert np.abs(surface.evaluate(face_ids, uv) - 2 * want[vertex_at]).max() <= 1e-12 * np.abs(v).max()
+    vs, _ = sharp(sorpia.limit_surface, v, f, level=1, scheme=scheme)
+    assert np.abs(vs[: len(v)] - want).max() <= 1e-12 * np.abs(v).max()
+    with pytest.raises(sorpia.MeshError, match="non-manifold"):
+        sorpia.LimitSurface(v, f, scheme=scheme)

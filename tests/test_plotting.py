@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import sorpia
-from sorpia import plotting
+from sorpia import _plotting as plotting
 
 
 def orange_pixels(fig) -> int:

@@ -14,7 +14,7 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 import sorpia
-from sorpia.mesh_repair import REPORT_KINDS
+from sorpia._repair import REPORT_KINDS
 from test_fuzz import BASE_MESHES, CORRUPTIONS, FUZZ, corrupt, mesh_problems
 
 

@@ -23,7 +23,7 @@ import pytest
 import scipy.sparse.linalg
 
 import sorpia
-from sorpia.nonmanifold import NonmanifoldWarning
+from sorpia._nonmanifold import NonmanifoldWarning
 from test_fuzz import cycle, face_lists, mesh_problems
 from test_repair_polygons import check_repaired
 

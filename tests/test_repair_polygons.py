@@ -16,7 +16,7 @@ from hypothesis import strategies as st
 
 import sorpia
 from sorpia.limit import topology
-from sorpia.mesh_repair import REPORT_KINDS
+from sorpia._repair import REPORT_KINDS
 from test_fuzz import CORRUPTIONS, FUZZ, corrupt, cycle, face_lists, mesh_problems
 from test_io import SHARED_MESHES as SHARED
 
@@ -194,7 +194,7 @@ def test_repeated_corners_collapse_to_a_smaller_polygon_or_remove_the_face():
     assert r.faces.face_vertex_counts.tolist() == [4, 4, 3, 3]
     assert face_lists(r.faces)[2:] == [[2, 6, 5], [2, 7, 6]]
     check_repaired(v, bad, r)
-    assert any("repeated corner" in line for line in sorpia.mesh_repair.describe_changes(r.report))
+    assert any("repeated corner" in line for line in sorpia._repair.describe_changes(r.report))
 
 
 def test_degenerate_quad_removed_keeps_the_array_form():

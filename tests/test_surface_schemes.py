@@ -133,7 +133,7 @@ def test_catmull_clark_corners_are_the_limit_points_of_the_tessellation(cc_mesh,
     # Far's Limit() on the descendants of the control vertices at levels 1 and
     # 2: two OpenSubdiv paths; 1e-12 of the diagonal allows for their rounding.
     v, f = cc_mesh
-    s = sorpia.LimitSurface(v, f, boundary, scheme="catmull-clark")
+    s = sorpia.LimitSurface(v, f, boundary=boundary, scheme="catmull-clark")
     ids = np.concatenate([[i] * len(face) for i, face in enumerate(f)])
     uv = np.array([corner_uv("catmull-clark", len(face), j) for face in f for j in range(len(face))])
     corners = np.concatenate(f)
@@ -401,7 +401,7 @@ def test_opensubdiv_shapes_fitted_surfaces_pass_through_their_vertices(name):
     boundary = tags.pop("boundary", "edge-and-corner")
     res = sorpia.interpolate(v, f, boundary=boundary, scheme=scheme, tol=1e-14, max_iter=5000, **tags)
     assert res.converged
-    s = sorpia.LimitSurface(res.control_vertices, f, boundary, scheme=scheme, **tags)
+    s = sorpia.LimitSurface(res.control_vertices, f, boundary=boundary, scheme=scheme, **tags)
     faces = face_list(f)
     holes = set(np.asarray(tags.get("holes", [])).tolist())
     keep = [i for i in range(len(faces)) if i not in holes]

@@ -621,3 +621,13 @@ def test_every_warning_sorpia_issues_derives_from_one_base_class():
     assert sorpia.solve.ConvergenceWarning is sorpia.errors.ConvergenceWarning
     with pytest.warns(sorpia.SorpiaWarning):
         sorpia.interpolate(V1, F1, method="pia", max_iter=1)
+
+
+def test_modules_that_are_not_api_are_private():
+    # The public modules are those the reference documents (docs/api.rst, docs/layout.md); helpers of the commands
+    # and of the Python API (statistics layout, the non-manifold split, repair's wrapper, sharp edges, figures) are
+    # private, so that renaming them breaks no user.
+    import pkgutil
+
+    public = {m.name for m in pkgutil.iter_modules(sorpia.__path__) if not m.name.startswith("_")}
+    assert public == {"blender", "cli", "errors", "io", "limit", "shapes", "solve", "surface"}

@@ -25,14 +25,12 @@ void bind_limit(py::module_& m) {
   // Tags are built from arrays _validate.as_tags has already converted; the
   // constructor copies them and runs the core's checks (sorpia::check_tags).
   using Doubles = py::array_t<double, py::array::c_style>;
-  const auto copy_ints = [](const Faces& a) { return std::vector<std::int32_t>(a.data(), a.data() + a.size()); };
-  const auto copy_doubles = [](const Doubles& a) { return std::vector<double>(a.data(), a.data() + a.size()); };
   py::class_<sorpia::Tags>(m, "Tags", "OpenSubdiv's sharpness tags (sorpia::Tags).")
-      .def(py::init([=](const Faces& crease_vertices, const Doubles& crease_sharpness, const Faces& corner_vertices,
+      .def(py::init([](const Faces& crease_vertices, const Doubles& crease_sharpness, const Faces& corner_vertices,
                         const Doubles& corner_sharpness, const Faces& holes, std::size_t n_vertices,
                         std::size_t n_faces) {
-             sorpia::Tags t{copy_ints(crease_vertices), copy_doubles(crease_sharpness), copy_ints(corner_vertices),
-                            copy_doubles(corner_sharpness), copy_ints(holes)};
+             sorpia::Tags t{to_vector(crease_vertices), to_vector(crease_sharpness), to_vector(corner_vertices),
+                            to_vector(corner_sharpness), to_vector(holes)};
              sorpia::check_tags(t, n_vertices, n_faces);
              return t;
            }),

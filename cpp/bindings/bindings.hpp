@@ -36,6 +36,12 @@ inline void check_rows(const py::array& a, std::size_t n, const char* name, cons
                                  " has " + std::to_string(n) + " vertices");
 }
 
+// A copy of a C-contiguous array's values.
+template <class T>
+std::vector<T> to_vector(const py::array_t<T, py::array::c_style>& a) {
+  return std::vector<T>(a.data(), a.data() + a.size());
+}
+
 // Polygons as (face_vertex_counts, face_vertex_indices): one-dimensional,
 // the counts summing to the indices' length (what the core reads).
 inline void check_polygon_arrays(const py::array_t<std::int32_t, py::array::c_style>& counts,

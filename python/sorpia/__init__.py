@@ -9,14 +9,14 @@ given vertices: solves B V = V0 with SOR-PIA and the rest of the PIA family.
 from ._core import __version__
 from .errors import (AttributeWarning, ConvergenceWarning, MeshError, MeshFileError, NonmanifoldWarning, OmegaWarning,
                      ParameterError, SingularMatrixWarning, SorpiaWarning, UnknownTagWarning,
-                     UnreferencedVerticesWarning)
+                     UnreferencedVerticesWarning, UsdWarning)
 from .limit import limit_matrix, limit_points
 from .solve import InterpolationResult, Interpolator, interpolate
 from .io import FaceVarying, read_mesh, write_mesh
-from .sharp import sharp_edges
+from ._sharp import sharp_edges
 from ._validate import Polygons
-from .mesh_repair import RepairResult, repair
-from .meshinfo import mesh_statistics
+from ._repair import RepairResult, repair
+from ._meshinfo import mesh_statistics
 from .surface import LimitSurface, evaluate_limit, limit_surface
 from . import shapes
 
@@ -37,5 +37,5 @@ __all__ = [
     "UnknownTagWarning", "AttributeWarning", "FaceVarying", "sharp_edges",
     "RepairResult", "repair",
     "mesh_statistics",
-    "NonmanifoldWarning",
+    "NonmanifoldWarning", "UsdWarning",
 ]

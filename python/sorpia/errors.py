@@ -63,6 +63,13 @@ class AttributeWarning(SorpiaWarning):
     a value at every corner)."""
 
 
+class UsdWarning(SorpiaWarning):
+    """What a USD stage holds that sorpia reads or writes otherwise than as it
+    is: time-sampled points (one time is read, and the fitted cage written
+    without samples), a primvar sorpia cannot carry, primvars that no longer
+    fit the faces written."""
+
+
 class NonmanifoldWarning(SorpiaWarning):
     """nonmanifold="sharp" on a non-manifold mesh: OpenSubdiv's documentation
     calls the surface of non-manifold topology undefined for now."""
@@ -70,4 +77,4 @@ class NonmanifoldWarning(SorpiaWarning):
 
 __all__ = ["MeshError", "MeshFileError", "ParameterError", "SorpiaWarning", "ConvergenceWarning",
            "SingularMatrixWarning", "OmegaWarning", "UnreferencedVerticesWarning", "UnknownTagWarning",
-           "AttributeWarning", "NonmanifoldWarning"]
+           "AttributeWarning", "UsdWarning", "NonmanifoldWarning"]

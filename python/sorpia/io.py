@@ -1,7 +1,9 @@
-"""Mesh files that keep every digit: OBJ, OFF, PLY and STL.
+"""Mesh files that keep every digit: OBJ, OFF, PLY and STL; and USD.
 
-sorpia reads and writes these itself (C++, std::to_chars / std::from_chars)
-rather than through OpenMesh, whose readers and writers go through float32.
+sorpia reads and writes OBJ, OFF, PLY and STL itself (C++, std::to_chars /
+std::from_chars) rather than through OpenMesh, whose readers and writers go
+through float32. USD files (.usd, .usda, .usdc) go through usd-core
+(``pip install sorpia[usd]``, see ``sorpia._usd``).
 """
 
 from __future__ import annotations
@@ -14,7 +16,8 @@ import numpy as np
 
 from . import _core
 from ._validate import Polygons, as_boundary, as_polygons, as_tags, as_vertices
-from .errors import AttributeWarning, UnknownTagWarning
+from ._usd import is_usd
+from .errors import AttributeWarning, MeshFileError, ParameterError, UnknownTagWarning
 
 
 class FaceVarying(NamedTuple):
@@ -32,8 +35,8 @@ class FaceVarying(NamedTuple):
     indices: np.ndarray
 
 
-def read_mesh(path, triangulate: bool = False, tags: bool = False, attributes: bool = False):
-    """Read a mesh from an .obj, .off, .ply or .stl file.
+def read_mesh(path, triangulate: bool = False, tags: bool = False, attributes: bool = False, *, prim=None):
+    """Read a mesh from an .obj, .off, .ply, .stl, .usd, .usda or .usdc file.
 
     Parameters
     ----------
@@ -51,8 +54,8 @@ def read_mesh(path, triangulate: bool = False, tags: bool = False, attributes: b
         they are.
     tags : bool
         Also read OpenSubdiv's sharpness tags from an OBJ file (``t`` lines,
-        see Tags below) and return them as a third value. Other formats have
-        no tags (an empty dict).
+        see Tags below) or a USD mesh (see USD below) and return them as a
+        third value. Other formats have no tags (an empty dict).
 
     Returns
     -------
@@ -119,6 +122,24 @@ def read_mesh(path, triangulate: bool = False, tags: bool = False, attributes: b
     separately, corners with exactly equal coordinates (no tolerance) are
     merged into one vertex, numbered in order of first appearance.
 
+    **USD** (needs usd-core: ``pip install sorpia[usd]``). The mesh prim's
+    ``points`` (float32 in USD: read exactly into float64) at the default time
+    (time-sampled points without a default value: the first sample, with a
+    `UsdWarning`), ``faceVertexCounts`` and ``faceVertexIndices`` (checked by
+    UsdGeom.Mesh.ValidateTopology). With ``tags`` the dict also holds
+    ``scheme`` (``subdivisionScheme`` catmullClark: "catmull-clark", loop:
+    "loop"; bilinear and none are refused), always ``boundary``
+    (``interpolateBoundary``, USD's fallback edgeAndCorner when not authored;
+    none is refused), ``creases`` from ``creaseIndices``/``creaseLengths``/
+    ``creaseSharpnesses`` (each chain of L vertices gives its L - 1 edges, a
+    sharpness per crease or per edge), ``corners`` from ``cornerIndices``/
+    ``cornerSharpnesses`` and ``holes`` from ``holeIndices``;
+    ``triangleSubdivisionRule`` smooth is refused. With ``attributes``,
+    ``uvs`` from the ``st`` primvar and ``normals`` from the ``normals``
+    primvar or attribute, face-varying (indexed or not) or per vertex; a
+    constant or uniform one is left out with a `UsdWarning`. ``triangulate``
+    is refused for USD.
+
     Raises
     ------
     MeshFileError
@@ -129,7 +150,7 @@ def read_mesh(path, triangulate: bool = False, tags: bool = False, attributes: b
         ``tags``, a malformed tag, an index out of range, or a rule sorpia
         does not have (above).
     """
-    contents = read_mesh_file(path, triangulate, tags, attributes)
+    contents = read_mesh_file(path, triangulate, tags, attributes, prim)
     out = (contents.vertices, contents.faces)
     return out + ((contents.tags,) if tags else ()) + ((contents.attributes,) if attributes else ())
 
@@ -142,12 +163,16 @@ class MeshFileContents(NamedTuple):
     tags: dict | None  # None unless asked for
     polygons_split: int
     attributes: dict | None = None  # None unless asked for
+    scheme: str | None = None  # a USD mesh's subdivisionScheme (sorpia's name: "loop", "catmull-clark"; else USD's)
 
 
-def read_mesh_file(path, triangulate: bool = False, tags: bool = False, attributes: bool = False) -> MeshFileContents:
+def read_mesh_file(path, triangulate: bool = False, tags: bool = False, attributes: bool = False, prim=None
+                   ) -> MeshFileContents:
     """`read_mesh` with the count of polygons it split (0 without
     `triangulate`); warns (UnknownTagWarning) of tags it skipped and
     (AttributeWarning) of attributes it drops."""
+    if is_usd(path):
+        return _read_usd_file(path, triangulate, tags, attributes, prim)
     vertices, faces, counts, split, file_tags, file_attributes = _core.read_mesh(
         os.fsencode(path), bool(triangulate), bool(tags), bool(attributes))
     if counts is not None:
@@ -175,6 +200,16 @@ def read_mesh_file(path, triangulate: bool = False, tags: bool = False, attribut
     return MeshFileContents(vertices, faces, tag_dict, int(split), attribute_dict)
 
 
+def _read_usd_file(path, triangulate: bool, tags: bool, attributes: bool, prim) -> MeshFileContents:
+    from ._usd import read_usd
+
+    if triangulate:
+        raise MeshFileError(f"{os.fsdecode(path)}: triangulate is not available for USD files (sorpia splits "
+                            "polygons while reading OBJ, OFF and PLY): fit the polygons with Catmull-Clark")
+    vertices, faces, tag_dict, attribute_dict, scheme = read_usd(path, prim=prim, tags=tags, attributes=attributes)
+    return MeshFileContents(vertices, faces, tag_dict, 0, attribute_dict, scheme)
+
+
 def tags_dict(core_tags, boundary=None) -> dict:
     """A _core.Tags (and Boundary or None) as read_mesh's keyword dict: only the kinds present."""
     out: dict = {}
@@ -190,8 +225,8 @@ def tags_dict(core_tags, boundary=None) -> dict:
 
 
 def write_mesh(path, vertices, faces, binary: bool = False, *, creases=None, corners=None, holes=None,
-               boundary=None, uvs=None, normals=None) -> None:
-    """Write a mesh to an .obj, .off, .ply or .stl file, atomically.
+               boundary=None, uvs=None, normals=None, scheme=None, prim=None, template=None) -> None:
+    """Write a mesh to an .obj, .off, .ply, .stl, .usd, .usda or .usdc file, atomically.
 
     The file is written to a temporary file in the same folder, flushed to disk
     and renamed over `path`: a failure (full disk, no permission, bad input)
@@ -213,16 +248,34 @@ def write_mesh(path, vertices, faces, binary: bool = False, *, creases=None, cor
     creases, corners, holes, boundary
         Sharpness tags, as `read_mesh` returns them (``write_mesh(path, v, f,
         **tags)`` writes back what ``read_mesh(path, tags=True)`` read):
-        written to OBJ as OpenSubdiv's ``t`` lines, one tag a line; another
-        format is a ParameterError. Sharpness is written as given (inf as
-        ``inf``), exactly.
+        written to OBJ as OpenSubdiv's ``t`` lines, one tag a line, and to
+        USD as the mesh's attributes (see Notes); another format is a
+        ParameterError. Sharpness is written as given (inf as ``inf``),
+        exactly in OBJ, rounded to float32 in USD (its type there).
     uvs, normals : FaceVarying or (values (k, width), indices (c,)), optional
         Texture coordinates (width 1 to 3) and normals (width 3), one index per
         face corner, as `read_mesh` returns them (``attributes=True``): OBJ
         ``vt``/``vn`` lines and ``f a/b/c`` corners; PLY per-vertex ``u v`` and
         ``nx ny nz`` (width 2 and 3), where every corner of a vertex must have
         the same value (a seam is a ParameterError: OBJ holds it); OFF and STL
-        hold neither (ParameterError).
+        hold neither (ParameterError). USD: ``uvs`` the ``st`` primvar and
+        ``normals`` the ``normals`` primvar, face-varying and indexed.
+    scheme : "loop" or "catmull-clark", optional
+        USD only (other formats do not hold it: ParameterError): the
+        ``subdivisionScheme`` written (USD's fallback, catmullClark, when not
+        given), as ``read_mesh(path, tags=True)`` returns it.
+    prim : str, optional
+        USD only: the mesh prim's path (default ``/Mesh``; with `template`,
+        the template's mesh, chosen as `read_mesh` chooses it).
+    template : str or os.PathLike, optional
+        USD only: a USD file whose stage is written with this mesh put into
+        its mesh prim (points, faces, scheme, tags, uvs); every other prim,
+        transform and attribute stays as it was. Time samples of the points
+        are cleared (the mesh written is one shape); when the faces differ
+        from the template's, the mesh's per-point, per-face and per-corner
+        primvars no longer fit and are blocked, with a `UsdWarning`. The
+        template's root layer is what is written: its sublayers and
+        references stay as authored.
 
     Notes
     -----
@@ -231,8 +284,15 @@ def write_mesh(path, vertices, faces, binary: bool = False, *, creases=None, cor
     stores ``double`` x, y, z and ``list uchar int vertex_indices`` (``list
     int int`` when a face has more than 255 vertices). STL stores float32 by
     definition: coordinates are rounded to float32, and vertices no face uses
-    are not stored.
+    are not stored. USD stores ``points`` as float32 (point3f, the schema's
+    type): coordinates are rounded to float32, and read back as written. Each
+    crease edge is written as a crease of its own (``creaseLengths`` 2).
     """
+    usd = is_usd(path)
+    if not usd and (scheme is not None or prim is not None or template is not None):
+        given = [k for k, v in (("scheme", scheme), ("prim", prim), ("template", template)) if v is not None]
+        raise ParameterError(f"{os.fsdecode(path)}: {', '.join(given)} apply to USD files only (.usd, .usda, "
+                             ".usdc); OBJ, OFF, PLY and STL do not hold them")
     vertices = as_vertices(vertices)
     n = vertices.shape[0]
     arr = faces if isinstance(faces, np.ndarray) else None
@@ -251,6 +311,20 @@ def write_mesh(path, vertices, faces, binary: bool = False, *, creases=None, cor
     boundary_rule = None if boundary is None else as_boundary(boundary)
     channels = [_as_face_varying(channel, name, len(indices), width)
                 for channel, name, width in ((uvs, "uvs", (1, 3)), (normals, "normals", (3, 3)))]
+    if usd:
+        from ._usd import write_usd
+
+        if scheme is not None and scheme not in ("loop", "catmull-clark"):
+            raise ParameterError(f"scheme must be 'loop' or 'catmull-clark', got {scheme!r}")
+        if counts is None:
+            counts = np.full(len(indices) // size, size, dtype=np.int32)
+        tag_dict = {} if core_tags is None else tags_dict(core_tags)
+        if boundary is not None:
+            tag_dict["boundary"] = _core.boundary_name(boundary_rule)
+        uv, normal = ((None if c[0] is None else c) for c in (channels[0], channels[1]))
+        write_usd(path, vertices, counts, indices, scheme=scheme, tags=tag_dict, uvs=uv, normals=normal, prim=prim,
+                  template=template)
+        return
     _core.write_mesh(os.fsencode(path), vertices, indices, counts, size, bool(binary), core_tags, boundary_rule,
                      *channels[0], *channels[1])
 

@@ -7,10 +7,10 @@ import warnings
 import numpy as np
 
 from . import _core
-from . import nonmanifold as nonmanifold_sharp
+from . import _nonmanifold as nonmanifold_sharp
 from ._validate import DEFAULT_BOUNDARY, DEFAULT_SCHEME, as_nonmanifold, as_rules, as_tags, as_vertices
 from .errors import MeshError, UnreferencedVerticesWarning
-from .nonmanifold import refusal_hint
+from ._nonmanifold import refusal_hint
 
 
 def topology(faces, n_vertices: int, *, scheme: str = DEFAULT_SCHEME, warn: bool = True,
@@ -175,7 +175,7 @@ NONMANIFOLD_DOC = """nonmanifold : {"error", "sharp"}
         OpenSubdiv's own rules for it, non-manifold edges infinitely sharp and
         non-manifold vertices corners (a vertex on an interior non-manifold
         crease gets the crease rule), with a `NonmanifoldWarning`: OpenSubdiv's
-        documentation calls that result undefined (`sorpia.nonmanifold`)."""
+        documentation calls that result undefined (`sorpia._nonmanifold`)."""
 
 
 limit_points.__doc__ = limit_points.__doc__.replace("{tags}", TAGS_DOC).replace("{nonmanifold}", NONMANIFOLD_DOC)

@@ -107,9 +107,11 @@ from typing import Callable, Optional
 import numpy as np
 
 from . import _core
-from . import nonmanifold as nonmanifold_sharp
-from ._validate import DEFAULT_BOUNDARY, DEFAULT_SCHEME, as_nonmanifold, as_rules, as_vertices
+from . import _nonmanifold as nonmanifold_sharp
+from ._validate import (DEFAULT_BOUNDARY, DEFAULT_SCHEME, as_boundary, as_nonmanifold, as_rules, as_vertex_count,
+                        as_vertices)
 from .errors import ConvergenceWarning, OmegaWarning, ParameterError, SingularMatrixWarning
+from .limit import NONMANIFOLD_DOC as _NONMANIFOLD_DOC
 from .limit import TAGS_DOC as _TAGS_DOC
 from .limit import singular_cubes
 from .limit import built, warn_unreferenced
@@ -188,6 +190,9 @@ class Interpolator:
     boundary : {"edge-and-corner", "edge-only"}
         Boundary rule, see sorpia.limit_points.
     {tags}
+    {nonmanifold}
+        With "sharp", solves and updates take and return the rows of the
+        caller's vertices (the split's copies follow their vertex).
 
     The spectral estimates a method needs (lambda_min for "wpia", rho for
     omega="young", H's extremes for "hss"/"whss", ...) are computed on first
@@ -198,27 +203,41 @@ class Interpolator:
     """
 
     def __init__(self, faces, n_vertices: int, *, scheme: str = DEFAULT_SCHEME, boundary: str = DEFAULT_BOUNDARY,
-                 creases=None, corners=None, holes=None):
+                 creases=None, corners=None, holes=None, nonmanifold: str = "error"):
         self._build(faces, n_vertices, "n_vertices",
-                    dict(scheme=scheme, boundary=boundary, creases=creases, corners=corners, holes=holes))
+                    dict(scheme=scheme, boundary=boundary, creases=creases, corners=corners, holes=holes), nonmanifold)
 
     @classmethod
-    def _for_vertices(cls, faces, n_vertices: int, rule_options: dict) -> Interpolator:
-        """As Interpolator(faces, n_vertices, **rule_options), for
-        interpolate(): its messages call the count len(vertices), the rows of
-        the caller's array."""
+    def _for_vertices(cls, faces, n_vertices: int, rule_options: dict, nonmanifold: str) -> Interpolator:
+        """As Interpolator(faces, n_vertices, nonmanifold=, **rule_options),
+        for interpolate(): its messages call the count len(vertices), the rows
+        of the caller's array."""
         self = cls.__new__(cls)
-        self._build(faces, n_vertices, "len(vertices)", rule_options)
+        self._build(faces, n_vertices, "len(vertices)", rule_options, nonmanifold)
         return self
 
-    def _build(self, faces, n_vertices, count_name: str, rule_options: dict) -> None:
+    def _build(self, faces, n_vertices, count_name: str, rule_options: dict, nonmanifold: str) -> None:
+        # nonmanifold="sharp": the core solves the manifold split, with the
+        # caller's vertices in and out (sorpia::Interpolator's vertex_map).
+        self._split = None
+        boundary = rule_options["boundary"]
+        if as_nonmanifold(nonmanifold) == "sharp":
+            tags = {kind: rule_options[kind] for kind in ("creases", "corners", "holes")}
+            self._split = nonmanifold_sharp.split(faces, as_vertex_count(n_vertices, count_name),
+                                                  rule_options["boundary"], **tags)
+        vertex_map = None
+        if self._split is not None:
+            faces, n_vertices, vertex_map = self._split.faces, len(self._split.vertex_map), self._split.vertex_map
+            rule_options = {**rule_options, "boundary": self._split.boundary, "creases": None, "corners": None,
+                            "holes": None, **self._split.tags}
         arrays, n, rules = as_rules(faces, n_vertices, count_name=count_name, **rule_options)
-        self._impl = built(lambda: _core.Interpolator(*arrays, n, rules))
+        self._impl = built(lambda: _core.Interpolator(*arrays, n, rules, vertex_map=vertex_map))
         self.topology = self._impl.topology
         warn_unreferenced(self.topology, stacklevel=5)
-        self.n_vertices = n
+        self.n_vertices = self._impl.n_vertices
         self.scheme = _core.scheme_name(rules.scheme)
-        self.boundary = _core.boundary_name(rules.boundary)
+        # the caller's rule (a split may be solved under another that gives the same rows: nonmanifold.split)
+        self.boundary = _core.boundary_name(as_boundary(boundary))
         self.tags = rules.tags
         self.build_timings = self._impl.build_timings
         self._last_update = None  # weak reference to the result the last update returned
@@ -239,8 +258,11 @@ class Interpolator:
         """B as a scipy CSR matrix: the operator the solvers use, as `sorpia.limit_matrix` gives it."""
         import scipy.sparse  # here, not at import: sorpia's commands need no scipy
 
-        n = self.n_vertices
-        return scipy.sparse.csr_matrix(self._impl.limit_matrix(), shape=(n, n))
+        data, indices, indptr = self._impl.limit_matrix()
+        b = scipy.sparse.csr_matrix((data, indices, indptr), shape=(len(indptr) - 1, len(indptr) - 1))
+        if self._split is not None:  # the split's rows of the caller's vertices, copies' columns added
+            return nonmanifold_sharp.folded(b, self._split.vertex_map, self.n_vertices)
+        return b
 
     def solve(self, vertices, method: str = "auto", omega="auto", tol: float = 1e-10, max_iter: int = 1000,
               callback: Optional[Callable[[int, float], object]] = None, *, sigma=None, alpha=None, weight=None,
@@ -413,11 +435,14 @@ class Interpolator:
         if moved:
             self._last_update = weakref.ref(r)
         else:
-            what = ("reached max_iter = {max_iter} sweeps' worth of relaxations" if r.stop_reason == "max_iter"
-                    else f"diverged, and so did method={self._solved_method!r} on the whole mesh")
-            warnings.warn(f"update {what.format(max_iter=options.max_iter)} with E/E_0 = {r.errors[-1]:.3g} > "
-                          f"tol = {options.tol:g}: the targets are left as they were, and the result holds "
-                          "previous's vertices", ConvergenceWarning, stacklevel=2)
+            if r.variant == "local":
+                what = f"reached max_iter = {options.max_iter} sweeps' worth of relaxations"
+            else:  # the local relaxation diverged, and the full solve that followed stopped short
+                what = (f"diverged, and method={self._solved_method!r} on the whole mesh stopped short "
+                        f"({r.stop_reason})")
+            warnings.warn(f"update {what} with E/E_0 = {r.errors[-1]:.3g} > tol = {options.tol:g}: the targets "
+                          "are left as they were, and the result holds previous's vertices", ConvergenceWarning,
+                          stacklevel=2)
         r._record_build(time.perf_counter() - t0, 0.0, 0.0)
         return r
 
@@ -460,7 +485,7 @@ class Interpolator:
                 "along it cannot be interpolated there (docs: Catmull-Clark)", SingularMatrixWarning, stacklevel=4)
 
 
-Interpolator.__doc__ = Interpolator.__doc__.replace("{tags}", _TAGS_DOC)
+Interpolator.__doc__ = Interpolator.__doc__.replace("{tags}", _TAGS_DOC).replace("{nonmanifold}", _NONMANIFOLD_DOC)
 
 
 def _where(r: InterpolationResult) -> str:
@@ -544,17 +569,14 @@ def interpolate(vertices, faces, method: str = "auto", omega="auto", tol: float 
     True
     """
     rule_options = dict(scheme=scheme, boundary=boundary, creases=creases, corners=corners, holes=holes)
-    if as_nonmanifold(nonmanifold) == "sharp":
-        return nonmanifold_sharp.interpolate(
-            vertices, faces, rule_options, method=method, omega=omega, tol=tol, max_iter=max_iter,
-            callback=callback, sigma=sigma, alpha=alpha, weight=weight, threads=threads, initial=initial)
+    as_nonmanifold(nonmanifold)
     t0 = time.perf_counter()
     # Options are checked before the (costly) operator is built.
     options = check_options(method, omega, tol, max_iter, callback, sigma=sigma, alpha=alpha, weight=weight,
                             threads=threads)
     v0 = as_vertices(vertices, columns=None)
     start = _as_initial(initial, v0)
-    interp = Interpolator._for_vertices(faces, v0.shape[0], rule_options)
+    interp = Interpolator._for_vertices(faces, v0.shape[0], rule_options, nonmanifold)
     res = interp._solve(v0, method, options, callback, t0, start)
     res._record_build(time.perf_counter() - t0, interp.build_timings["topology"], interp.build_timings["operator"])
     return res

@@ -28,7 +28,8 @@ import math
 import numpy as np
 
 from . import _core
-from ._validate import DEFAULT_BOUNDARY, DEFAULT_SCHEME, Polygons, as_boundary, as_scheme, as_tags, as_vertices
+from ._validate import (DEFAULT_BOUNDARY, DEFAULT_SCHEME, Polygons, as_boundary, as_nonmanifold, as_scheme, as_tags,
+                        as_vertices)
 from .errors import ParameterError
 from .limit import topology
 
@@ -112,6 +113,14 @@ class LimitSurface:
         Sharp vertices, as for creases.
     holes : array_like of int, optional
         Faces that are holes: they have no limit surface.
+    nonmanifold : {"error", "sharp"}
+        "sharp": a non-manifold mesh is taken with OpenSubdiv's rules for it
+        (edges of three or more faces infinitely sharp, non-manifold vertices
+        corners), as `sorpia.limit_points` takes it: the surface is that of
+        its manifold split (`sorpia._nonmanifold.split`), whose faces are the
+        input's, in order, so face ids and (u, v) mean what they mean on the
+        input. `vertices`, `set_vertices` and the rows of `tessellate` are
+        the split's (the input's vertices, then the copies).
 
     Notes
     -----
@@ -119,11 +128,20 @@ class LimitSurface:
     docstring (`sorpia.surface`).
     """
 
-    def __init__(self, vertices, faces, boundary: str = DEFAULT_BOUNDARY, *, scheme: str = DEFAULT_SCHEME,
-                 creases=None, corners=None, holes=None):
+    def __init__(self, vertices, faces, *, boundary: str = DEFAULT_BOUNDARY, scheme: str = DEFAULT_SCHEME,
+                 creases=None, corners=None, holes=None, nonmanifold: str = "error"):
         vertices = as_vertices(vertices)
+        self._vertex_map, self._n_input = None, vertices.shape[0]
+        if as_nonmanifold(nonmanifold) == "sharp":
+            from ._nonmanifold import split
+
+            s = split(faces, vertices.shape[0], boundary, creases=creases, corners=corners, holes=holes)
+            if s is not None:
+                self._vertex_map = s.vertex_map
+                vertices, faces, boundary = vertices[s.vertex_map], s.faces, s.boundary
+                creases, corners, holes = (s.tags.get(name) for name in ("creases", "corners", "holes"))
         self._boundary = as_boundary(boundary)
-        self._scheme = as_scheme(scheme)
+        self._scheme = as_scheme(scheme, faces)
         self._topology = topology(faces, vertices.shape[0], scheme=scheme, count_name="len(vertices)")
         tags = as_tags(creases, corners, holes, n_vertices=vertices.shape[0], n_faces=self._topology.n_faces)
         self._surface = _core.LimitSurface(self._topology, vertices, self._scheme, self._boundary, tags)
@@ -154,8 +172,12 @@ class LimitSurface:
         return self._surface.get_vertices()
 
     def set_vertices(self, vertices) -> None:
-        """Replace the control vertices, (n, 3) float, on the same faces."""
-        self._surface.set_vertices(as_vertices(vertices))
+        """Replace the control vertices, (n, 3) float, on the same faces (with
+        nonmanifold="sharp", those of the input mesh or of its split)."""
+        vertices = as_vertices(vertices)
+        if self._vertex_map is not None and vertices.shape[0] == self._n_input:
+            vertices = vertices[self._vertex_map]
+        self._surface.set_vertices(vertices)
 
     def evaluate(self, face_ids, uv, derivatives: bool = False):
         """Limit positions at k points (face_ids[i], uv[i]), by OpenSubdiv's
@@ -241,8 +263,8 @@ class LimitSurface:
         return vertices, _faces_out(faces, counts)
 
 
-def limit_surface(vertices, faces, level: int = 3, boundary: str = DEFAULT_BOUNDARY, *,
-                  scheme: str = DEFAULT_SCHEME, creases=None, corners=None, holes=None):
+def limit_surface(vertices, faces, level: int = 3, *, boundary: str = DEFAULT_BOUNDARY,
+                  scheme: str = DEFAULT_SCHEME, creases=None, corners=None, holes=None, nonmanifold: str = "error"):
     """The limit surface as a mesh: uniform refinement to `level` with every
     output vertex at its exact limit position.
 
@@ -274,7 +296,7 @@ def limit_surface(vertices, faces, level: int = 3, boundary: str = DEFAULT_BOUND
         limit) raises ParameterError.
     boundary : {"edge-and-corner", "edge-only"}
         Boundary rule, as in `sorpia.limit_points`.
-    scheme, creases, corners, holes
+    scheme, creases, corners, holes, nonmanifold
         As in `LimitSurface`.
 
     Returns
@@ -292,16 +314,17 @@ def limit_surface(vertices, faces, level: int = 3, boundary: str = DEFAULT_BOUND
         (``f * 4**level .. (f + 1) * 4**level - 1`` for Loop). Faces of holes
         are left out.
     """
-    return LimitSurface(vertices, faces, boundary, scheme=scheme, creases=creases, corners=corners,
-                        holes=holes).tessellate(level)
+    return LimitSurface(vertices, faces, boundary=boundary, scheme=scheme, creases=creases, corners=corners,
+                        holes=holes, nonmanifold=nonmanifold).tessellate(level)
 
 
-def evaluate_limit(vertices, faces, face_ids, uv, derivatives: bool = False, boundary: str = DEFAULT_BOUNDARY, *,
-                   scheme: str = DEFAULT_SCHEME, creases=None, corners=None, holes=None):
+def evaluate_limit(vertices, faces, face_ids, uv, derivatives: bool = False, *, boundary: str = DEFAULT_BOUNDARY,
+                   scheme: str = DEFAULT_SCHEME, creases=None, corners=None, holes=None, nonmanifold: str = "error"):
     """Limit surface positions (and with ``derivatives=True`` the tangents and
     the unit normal) at points (face_ids[i], uv[i]); one-call form of
-    ``LimitSurface(vertices, faces, boundary, scheme=...).evaluate(face_ids,
-    uv, derivatives)``.
+    ``LimitSurface(vertices, faces, boundary=..., scheme=..., ...).evaluate(face_ids,
+    uv, derivatives)``; the rule options (boundary, scheme, creases, corners,
+    holes, nonmanifold) as in `LimitSurface`.
 
     The parameterisation of each kind of face is in `LimitSurface.evaluate`
     and the module docstring; for a Loop triangle ``(a, b, c)``, ``(0, 0)`` is
@@ -314,5 +337,5 @@ def evaluate_limit(vertices, faces, face_ids, uv, derivatives: bool = False, bou
     positions : (k, 3) float64, or the tuple (positions, du, dv, normals) of
     (k, 3) float64 arrays with ``derivatives=True``; see `LimitSurface.evaluate`.
     """
-    return LimitSurface(vertices, faces, boundary, scheme=scheme, creases=creases, corners=corners,
-                        holes=holes).evaluate(face_ids, uv, derivatives)
+    return LimitSurface(vertices, faces, boundary=boundary, scheme=scheme, creases=creases, corners=corners,
+                        holes=holes, nonmanifold=nonmanifold).evaluate(face_ids, uv, derivatives)

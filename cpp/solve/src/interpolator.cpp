@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <limits>
+#include <stdexcept>
 #include <string>
 #include <utility>
 
@@ -60,17 +61,20 @@ double check_values(const double* x, std::size_t rows, std::size_t k, const char
   return largest;
 }
 
-Interpolator::Interpolator(const std::int32_t* triangles, std::size_t n_faces, std::size_t n_vertices, Rules rules)
+Interpolator::Interpolator(const std::int32_t* triangles, std::size_t n_faces, std::size_t n_vertices, Rules rules,
+                           std::vector<std::int32_t> vertex_map)
     : topology_(timed([&] { return Topology(triangles, n_faces, n_vertices); }, topology_seconds_)),
       rules_(std::move(rules)) {
   build_operator();
+  if (!vertex_map.empty()) set_vertex_map(std::move(vertex_map));
 }
 
 Interpolator::Interpolator(const std::int32_t* face_sizes, std::size_t n_faces, const std::int32_t* indices,
-                           std::size_t n_vertices, Rules rules)
+                           std::size_t n_vertices, Rules rules, std::vector<std::int32_t> vertex_map)
     : topology_(timed([&] { return Topology(face_sizes, n_faces, indices, n_vertices); }, topology_seconds_)),
       rules_(std::move(rules)) {
   build_operator();
+  if (!vertex_map.empty()) set_vertex_map(std::move(vertex_map));
 }
 
 Interpolator::Interpolator(Topology topology, Rules rules) : topology_(std::move(topology)), rules_(std::move(rules)) {
@@ -78,23 +82,71 @@ Interpolator::Interpolator(Topology topology, Rules rules) : topology_(std::move
 }
 
 Interpolator::Interpolator(Topology topology, Rules rules, LimitOperator b)
-    : topology_(std::move(topology)), rules_(std::move(rules)), op_(std::move(b)) {}
+    : topology_(std::move(topology)), rules_(std::move(rules)), op_(std::move(b)), n_(op_.n) {}
 
 void Interpolator::build_operator() {
   const auto t0 = Clock::now();
   op_ = sorpia::limit_operator(topology_, rules_);
   operator_seconds_ = seconds_since(t0);
+  n_ = op_.n;
+}
+
+void Interpolator::set_vertex_map(std::vector<std::int32_t> vertex_map) {
+  const std::size_t m = op_.n;
+  std::size_t n = 0;
+  while (n < vertex_map.size() && vertex_map[n] == static_cast<std::int32_t>(n)) ++n;
+  if (vertex_map.size() != m || n == 0)
+    throw std::logic_error("Interpolator: vertex_map must have one entry per vertex, the first n the identity");
+  for (std::size_t j = n; j < m; ++j)
+    if (vertex_map[j] < 0 || static_cast<std::size_t>(vertex_map[j]) >= n)
+      throw std::logic_error("Interpolator: vertex_map[" + std::to_string(j) + "] is not one of the first vertices");
+  copy_offsets_.assign(n + 1, 0);
+  for (std::size_t j = n; j < m; ++j) ++copy_offsets_[vertex_map[j] + 1];
+  for (std::size_t i = 0; i < n; ++i) copy_offsets_[i + 1] += copy_offsets_[i];
+  copies_.resize(m - n);
+  std::vector<std::int32_t> at(copy_offsets_.begin(), copy_offsets_.end() - 1);
+  for (std::size_t j = n; j < m; ++j) copies_[at[vertex_map[j]]++] = static_cast<std::int32_t>(j);
+  vertex_map_ = std::move(vertex_map);
+  n_ = n;
+}
+
+std::vector<double> Interpolator::expanded(const double* x, std::size_t k) const {
+  std::vector<double> out(op_.n * k);
+  for (std::size_t j = 0; j < op_.n; ++j) {
+    const std::size_t i = vertex_map_.empty() ? j : static_cast<std::size_t>(vertex_map_[j]);
+    std::copy(x + k * i, x + k * (i + 1), out.begin() + static_cast<std::ptrdiff_t>(k * j));
+  }
+  return out;
+}
+
+void Interpolator::expand_moves(const std::int32_t* indices, std::size_t count, const double* positions,
+                                std::size_t k, std::vector<std::int32_t>& rows, std::vector<double>& values) const {
+  for (std::size_t q = 0; q < count; ++q) {
+    const std::int32_t i = indices[q];
+    rows.push_back(i);
+    values.insert(values.end(), positions + k * q, positions + k * (q + 1));
+    for (std::int32_t p = copy_offsets_[i]; p < copy_offsets_[i + 1]; ++p) {
+      rows.push_back(copies_[p]);
+      values.insert(values.end(), positions + k * q, positions + k * (q + 1));
+    }
+  }
 }
 
 SolveResult Interpolator::solve(const double* v0, std::size_t k, const double* initial, const SolveOptions& opt,
                                 bool keep_targets) {
   if (k < 1) throw ParameterError("vertices must have shape (n, k), k >= 1");
   check_options(opt);
-  const double largest = check_values(v0, op_.n, k, "vertices", INFINITY);
+  const double largest = check_values(v0, n_, k, "vertices", INFINITY);
   if (initial)  // within the bound once scaled as the solvers scale V0
-    check_values(initial, op_.n, k, "initial",
-                 std::ldexp(max_coordinate, detail::scale_exponent(v0, op_.n * k)));
+    check_values(initial, n_, k, "initial", std::ldexp(max_coordinate, detail::scale_exponent(v0, n_ * k)));
+  std::vector<double> split_v0, split_initial;  // a split's rows: every copy its vertex's
+  if (!vertex_map_.empty()) {
+    split_v0 = expanded(v0, k);
+    v0 = split_v0.data();
+    if (initial) initial = (split_initial = expanded(initial, k)).data();
+  }
   SolveResult r = sorpia::solve(op_, v0, k, initial, opt, &cache_);
+  r.control_vertices.resize(n_ * k);  // the caller's vertices, the first rows
   if (keep_targets) {
     const std::lock_guard<std::mutex> lock(*targets_mutex_);
     solved_targets_.assign(v0, v0 + k * op_.n);
@@ -116,7 +168,7 @@ bool Interpolator::update(SolveResult& r, bool result_is_last, const std::int32_
   const std::lock_guard<std::mutex> lock(*targets_mutex_);
   if (!local_ && solved_k_ == 0)
     throw ParameterError("update needs the targets of a solve first: call solve(vertices)");
-  const std::size_t n = op_.n;
+  const std::size_t n = n_;
   const std::size_t k = solved_k_ ? solved_k_ : local_->columns();
   if (r.columns != k || r.control_vertices.size() != k * n)
     throw ParameterError("previous has shape (" + std::to_string(r.columns ? r.control_vertices.size() / r.columns : 0) +
@@ -148,10 +200,27 @@ bool Interpolator::update(SolveResult& r, bool result_is_last, const std::int32_
   r.worst_residuals.clear();
   r.estimate_seconds = r.topology_seconds = r.operator_seconds = 0.0;
   // At most max_iter sweeps' worth of relaxations.
-  const long long nn = static_cast<long long>(std::max<std::size_t>(n, 1));
+  const long long nn = static_cast<long long>(std::max<std::size_t>(op_.n, 1));
   const long long cap = max_iter > std::numeric_limits<long long>::max() / nn ? std::numeric_limits<long long>::max()
                                                                               : max_iter * nn;
-  local_->update(r.control_vertices.data(), result_is_last, indices, count, positions, tol, cap, r);
+  // A split works on all its rows: the start's copies are their vertices'
+  // (so its residual is computed in full), the moves go to every copy, and
+  // the caller's rows are written back into r's vertices (in place).
+  std::vector<double> split_v;
+  std::vector<std::int32_t> split_rows;
+  std::vector<double> split_positions;
+  double* v = r.control_vertices.data();
+  if (!vertex_map_.empty()) {
+    split_v = expanded(v, k);
+    v = split_v.data();
+    expand_moves(indices, count, positions, k, split_rows, split_positions);
+    indices = split_rows.data(), count = split_rows.size(), positions = split_positions.data();
+    result_is_last = false;
+  }
+  const auto write_back = [&] {
+    if (!vertex_map_.empty()) std::copy(v, v + n * k, r.control_vertices.begin());
+  };
+  local_->update(v, result_is_last, indices, count, positions, tol, cap, r);
   r.returned_iteration = r.iterations;
   bool moved = r.converged();
   if (!moved) {
@@ -159,22 +228,24 @@ bool Interpolator::update(SolveResult& r, bool result_is_last, const std::int32_
     // solved in full by the last solve's method, from the start.
     const StopReason local_stop = r.stop_reason;
     std::vector<double> targets = local_->targets();  // the moved ones
-    local_->undo(r.control_vertices.data());
+    local_->undo(v);
     if (local_stop == StopReason::Diverged) {
       SolveOptions opt = solved_options_;
       opt.tol = tol;
       opt.max_iter = max_iter;
-      SolveResult full = sorpia::solve(op_, targets.data(), k, r.control_vertices.data(), opt, &cache_);
+      SolveResult full = sorpia::solve(op_, targets.data(), k, v, opt, &cache_);
       if (full.converged()) {
         local_->set_targets(std::move(targets), k);
-        r = std::move(full);
+        std::copy(full.control_vertices.begin(), full.control_vertices.end(), v);
         moved = true;
-      } else {  // that solve's report, with the vertices as they were
-        full.control_vertices = std::move(r.control_vertices);
-        r = std::move(full);
       }
+      // That solve's report, with its vertices or (failed) the start's, in r's vertex array.
+      full.control_vertices = std::move(r.control_vertices);
+      r = std::move(full);
+      if (vertex_map_.empty()) v = r.control_vertices.data();
     }
   }
+  write_back();
   r.solve_seconds = r.seconds = seconds_since(t0);
   return moved;
 }
@@ -187,9 +258,10 @@ std::size_t Interpolator::targets_columns() const {
 std::vector<double> Interpolator::targets(std::size_t& k) const {
   const std::lock_guard<std::mutex> lock(*targets_mutex_);
   k = solved_k_ ? solved_k_ : local_ && local_->has_targets() ? local_->columns() : 0;
-  if (solved_k_) return solved_targets_;
-  if (local_ && local_->has_targets()) return local_->targets();
-  return {};
+  std::vector<double> out = solved_k_ ? solved_targets_ : local_ && local_->has_targets() ? local_->targets()
+                                                                                          : std::vector<double>{};
+  out.resize(n_ * k);  // the caller's vertices, the first rows
+  return out;
 }
 
 }  // namespace sorpia

@@ -26,7 +26,7 @@ METHOD_LABELS = {"auto": "auto", "pia": "PIA", "wpia": "W-PIA", "hss": "HSS-PIA"
 OMEGA_METHODS = ("sor", "auto")
 DISPLAY_ORDER = tuple(sorted(METHODS, key=lambda m: list(METHOD_LABELS).index(m) if m in METHOD_LABELS
                              else len(METHOD_LABELS)))
-MESH_SUFFIXES = (".obj", ".off", ".ply", ".stl")
+MESH_SUFFIXES = (".obj", ".off", ".ply", ".stl", ".usd", ".usda", ".usdc")
 # --scheme: the library's schemes, and "auto" (Loop for an all-triangle mesh, Catmull-Clark otherwise).
 CLI_SCHEMES = (AUTO_SCHEME,) + SCHEMES  # the library's names (_validate.as_scheme)
 SCHEME_LABELS = {"loop": "Loop", "catmull-clark": "Catmull-Clark"}
@@ -83,6 +83,15 @@ def check_paths(inputs, outputs: dict, force: bool = False) -> None:
                 raise UserError(f"{opt_a} and {opt_b} name the same file {a}")
 
 
+def usd_template(input_path, output, prim) -> dict:
+    """write_mesh's keywords for a USD output of a USD input: the input's stage
+    as the template, the mesh written into its prim (`prim`, --prim); {}
+    otherwise."""
+    from .._usd import is_usd
+
+    return {"template": input_path, "prim": prim} if is_usd(output) and is_usd(input_path) else {}
+
+
 def check_mesh_suffix(opt: str, path) -> None:
     if path is not None and Path(path).suffix.lower() not in MESH_SUFFIXES:
         raise UserError(f"{opt} {path}: unknown mesh format {Path(path).suffix or '(no suffix)'!r}; "
@@ -99,7 +108,7 @@ class InputMesh(NamedTuple):
     repair: object = None  # sorpia.RepairResult with --repair: vertices and faces are its output
     repair_seconds: float = 0.0
     tags: dict = {}  # the file's tags as read_mesh(tags=True) returns them ({} with --ignore-tags)
-    split: object = None  # sorpia.nonmanifold.Split with --nonmanifold sharp: vertices and faces are the split's
+    split: object = None  # sorpia._nonmanifold.Split with --nonmanifold sharp: vertices and faces are the split's
     attributes: dict = {}  # texture coordinates and normals (read_mesh(attributes=True)), on the faces above
 
     @property
@@ -109,7 +118,7 @@ class InputMesh(NamedTuple):
 
 
 def read_input(path, triangulate: bool = False, repair: bool = False, tags: bool = True,
-               nonmanifold: str = "error", boundary=None, attributes: bool = False) -> InputMesh:
+               nonmanifold: str = "error", boundary=None, attributes: bool = False, prim=None) -> InputMesh:
     """Read the input mesh of every subcommand: polygons kept (or split with
     `triangulate`), the OBJ file's sharpness tags read unless `tags` is
     False (--ignore-tags), the mesh repaired with `repair` (repair_input),
@@ -118,7 +127,9 @@ def read_input(path, triangulate: bool = False, repair: bool = False, tags: bool
     boundary rule the command solves with (`boundary`: --boundary, None for
     the file's, see boundary_rule); with `attributes`, the file's texture
     coordinates and normals, carried onto the repaired or split faces
-    (carry_attributes)."""
+    (carry_attributes); `prim`: a USD file's mesh prim (--prim). A USD
+    mesh's subdivisionScheme is in `tags` as "scheme" (choose_scheme)."""
+    from .._usd import is_usd
     from ..io import read_mesh_file
 
     if not Path(path).exists():
@@ -126,8 +137,9 @@ def read_input(path, triangulate: bool = False, repair: bool = False, tags: bool
     if Path(path).is_dir():
         raise UserError(f"{path} is a folder, not a mesh file")
     t0 = time.perf_counter()
-    contents = read_mesh_file(path, triangulate=triangulate, tags=tags and Path(path).suffix.lower() == ".obj",
-                              attributes=attributes)
+    has_tags = Path(path).suffix.lower() == ".obj" or is_usd(path)
+    contents = read_mesh_file(path, triangulate=triangulate, tags=tags and has_tags, attributes=attributes,
+                              prim=prim)
     seconds = time.perf_counter() - t0
     vertices, faces, file_tags = contents.vertices, contents.faces, contents.tags or {}
     file_attributes = contents.attributes or {}
@@ -175,11 +187,11 @@ def sharpness_tags(tags: dict) -> dict:
 
 def split_input(mesh: InputMesh, source, boundary: str) -> InputMesh:
     """--nonmanifold sharp: a non-manifold mesh replaced by its manifold split
-    with OpenSubdiv's rules as corner tags (sorpia.nonmanifold.split under the
+    with OpenSubdiv's rules as corner tags (sorpia._nonmanifold.split under the
     `boundary` rule; its NonmanifoldWarning is printed); what the split
     cannot reproduce is a UserError naming the file `source`."""
     from .. import MeshError
-    from ..nonmanifold import split
+    from .._nonmanifold import split
 
     try:
         s = split(mesh.faces, len(mesh.vertices), boundary, **sharpness_tags(mesh.tags))
@@ -233,19 +245,29 @@ def face_size_histogram(faces) -> dict:
     return {int(k): int(c) for k, c in zip(sizes, counts)}
 
 
-def choose_scheme(scheme: str, faces, source) -> str:
-    """--scheme resolved for the mesh: auto is Loop for an all-triangle mesh
-    and Catmull-Clark otherwise; Loop on polygons is a PolygonError naming the
-    first face that is not a triangle and the two ways out."""
+def choose_scheme(scheme: str, faces, source, file_scheme=None) -> str:
+    """--scheme resolved for the mesh: auto is the file's scheme (a USD
+    mesh's subdivisionScheme, `file_scheme`) when it has one, else Loop for
+    an all-triangle mesh and Catmull-Clark otherwise; Loop on polygons is a
+    PolygonError naming the first face that is not a triangle and the two
+    ways out."""
     from .. import _core
+    from .._usd import is_usd
     from .._validate import as_scheme
+
+    scheme_asked = scheme
+    if scheme == AUTO_SCHEME and file_scheme is not None:
+        scheme = file_scheme
 
     if scheme == "loop" and not is_triangles(faces):
         counts = face_counts(faces)
         f = int(np.flatnonzero(counts != 3)[0])
-        raise PolygonError(f"{source}: face {f} has {counts[f]} vertices and Loop subdivision needs triangles; "
-                           "pass --triangulate to split the polygons, or --scheme catmull-clark (or auto) to "
-                           "keep them")
+        given = "the file's subdivisionScheme is loop" if file_scheme == "loop" and scheme_asked == AUTO_SCHEME else ""
+        ways = ("pass --scheme catmull-clark to keep them (a USD file cannot be triangulated while read)"
+                if is_usd(source) else "pass --triangulate to split the polygons, or --scheme catmull-clark (or "
+                "auto) to keep them")
+        raise PolygonError(f"{source}: face {f} has {counts[f]} vertices and Loop subdivision needs triangles"
+                           f"{' (' + given + ')' if given else ''}; {ways}")
     return _core.scheme_name(as_scheme(scheme, faces))  # auto: the library's one rule
 
 
@@ -279,15 +301,16 @@ def solve_tags(mesh: InputMesh, sharp_angle, source) -> dict:
 
 
 def read_solve_input(path, *, triangulate: bool, repair: bool, ignore_tags: bool, nonmanifold: str, scheme: str,
-                     boundary, sharp_angle, attributes: bool = False) -> tuple[InputMesh, str, str, dict]:
+                     boundary, sharp_angle, attributes: bool = False, prim=None) -> tuple[InputMesh, str, str, dict]:
     """read_input for the commands that solve (fit, compare, render), then
     what they solve with: (mesh, scheme (choose_scheme), boundary rule
     (boundary_rule; with --nonmanifold sharp, the rule its split is solved
     under), creases/corners/holes (solve_tags))."""
     mesh = read_input(path, triangulate, repair, tags=not ignore_tags, nonmanifold=nonmanifold, boundary=boundary,
-                      attributes=attributes)
+                      attributes=attributes, prim=prim)
     rule = mesh.split.boundary if mesh.split is not None else boundary_rule(boundary, mesh)
-    return mesh, choose_scheme(scheme, mesh.faces, path), rule, solve_tags(mesh, sharp_angle, path)
+    return mesh, choose_scheme(scheme, mesh.faces, path, mesh.tags.get("scheme")), rule, solve_tags(
+        mesh, sharp_angle, path)
 
 
 def boundary_rule(boundary, mesh: InputMesh) -> str:
@@ -374,13 +397,13 @@ def repair_json(result) -> dict:
 
 def repair_lines(result) -> list[str]:
     """The repair's summary: one line per kind of change, or one saying there was none."""
-    from ..mesh_repair import describe_changes
+    from .._repair import describe_changes
 
     return describe_changes(result.report) or ["nothing to repair: the mesh is valid"]
 
 
 def require_plotting() -> None:
-    from ..plotting import require_matplotlib
+    from .._plotting import require_matplotlib
 
     try:
         require_matplotlib()

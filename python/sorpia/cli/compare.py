@@ -42,14 +42,14 @@ def iterations_to_reach(errors, tolerances=TABLE_TOLERANCES) -> list:
 def run_compare(input_path, *, methods=DISPLAY_ORDER, omega="auto", tol=1e-10, max_iter=1000, boundary=None,
                 table=None, csv_path=None, plot=None, json_path=None, quiet=False, force=False,
                 triangulate=False, threads=1, repair=False, scheme="auto", ignore_tags=False, sharp_angle=None,
-                nonmanifold="error", out=None) -> tuple[int, dict]:
+                nonmanifold="error", out=None, prim=None) -> tuple[int, dict]:
     """`sorpia compare`: every method to the same tolerance, on one
     sorpia.Interpolator (topology, limit operator and spectral estimates built
     once and shared); returns (exit code, data). `threads` applies to sor/gs
     (and auto's sor run), `omega` to sor and auto. A method that refuses the
     mesh (wpia where B has an eigenvalue at or below 0) gets a row marked
     "refused" with its reason, and the others run."""
-    from ..meshinfo import topology_info
+    from .._meshinfo import topology_info
 
     out = out if out is not None else sys.stdout
     given = f"--methods {','.join(methods)}" + (f" --threads {threads}" if threads != 1 else "")
@@ -65,7 +65,7 @@ def run_compare(input_path, *, methods=DISPLAY_ORDER, omega="auto", tol=1e-10, m
         progress.status(f"reading {input_path}")
         mesh, scheme, boundary, tags = read_solve_input(
             input_path, triangulate=triangulate, repair=repair, ignore_tags=ignore_tags, nonmanifold=nonmanifold,
-            scheme=scheme, boundary=boundary, sharp_angle=sharp_angle)
+            scheme=scheme, boundary=boundary, sharp_angle=sharp_angle, prim=prim)
         V0, F, read_seconds = mesh.vertices, mesh.faces, mesh.seconds
         interp, build = build_interpolator(V0, F, boundary=boundary, progress=progress, source=input_path,
                                            scheme=scheme, tags=tags)
@@ -126,7 +126,7 @@ def run_compare(input_path, *, methods=DISPLAY_ORDER, omega="auto", tol=1e-10, m
     if json_path is not None:
         write_json(json_path, data)
     if plot is not None:
-        from ..plotting import convergence_figure
+        from .._plotting import convergence_figure
 
         curves = [(_curve_label(r), r["errors"]) for r in rows if r["refused"] is None]
         save_figure(convergence_figure(curves, tol=tol, title=f"Convergence on {Path(input_path).name} "

@@ -9,12 +9,13 @@ from pathlib import Path
 import numpy as np
 
 from .. import __version__
+from .._usd import is_usd
 from .._validate import as_boundary
 from ..solve import stopped_short_message
 from .common import (EXIT_NOT_CONVERGED, EXIT_OK, OMEGA_METHODS, SCHEME_LABELS, UserError, check_mesh_suffix, check_paths,
                      check_solver_options, cpu_clock, face_counts, face_size_histogram, fit_once, fmt_seconds,
                      is_triangles, mesh_line, method_label, read_solve_input, repair_json, repair_lines, result_fields,
-                     scheme_kwargs, split_json, split_lines, tags_lines, tags_summary, warn_once)
+                     scheme_kwargs, split_json, split_lines, tags_lines, tags_summary, usd_template, warn_once)
 from .output import write_json
 from .progress import Progress
 
@@ -22,19 +23,25 @@ from .progress import Progress
 def run_fit(input_path, output, *, method="auto", omega="auto", tol=1e-10, max_iter=1000,
             boundary=None, surface=None, level=3, report=None, quiet=False, force=False,
             triangulate=False, binary=False, threads=1, repair=False, scheme="auto", ignore_tags=False,
-            sharp_angle=None, nonmanifold="error", keep_unconverged=False, out=None) -> tuple[int, dict]:
+            sharp_angle=None, nonmanifold="error", keep_unconverged=False, out=None, prim=None, blender=None
+            ) -> tuple[int, dict]:
     """`sorpia fit`: returns (exit code, report dict). `boundary` None: the
     file's interpolateboundary tag, else the default rule. A solve that did
     not reach tol writes no control mesh or surface (only the report) unless
     `keep_unconverged`, or unless it is the least-squares answer on a
-    singular B (stop_reason "singular"), which is written with its warning."""
+    singular B (stop_reason "singular"), which is written with its warning.
+    A USD output of a USD input is the input's stage with the fitted mesh in
+    its prim (`prim`); `blender` a bpy script (sorpia.blender) for the control
+    mesh."""
     from .. import _core, write_mesh
-    from ..meshinfo import topology_info
+    from .._meshinfo import topology_info
 
     out = out if out is not None else sys.stdout
     check_mesh_suffix("-o", output)
     check_mesh_suffix("--surface", surface)
-    check_paths([input_path], {"-o": output, "--surface": surface, "--report": report}, force)
+    check_paths([input_path], {"-o": output, "--surface": surface, "--report": report, "--blender": blender}, force)
+    if blender is not None and Path(blender).suffix.lower() != ".py":
+        raise UserError(f"--blender {blender}: the script is Python, give a file name ending in .py")
     given = f"--method {method}" + (f" --omega {omega}" if omega != "auto" else "") + (
         f" --threads {threads}" if threads != 1 else "")
     check_solver_options(given, method=method, omega=omega, tol=tol, max_iter=max_iter, threads=threads)
@@ -47,10 +54,12 @@ def run_fit(input_path, output, *, method="auto", omega="auto", tol=1e-10, max_i
         progress.status(f"reading {input_path}")
         mesh, scheme, boundary, tags = read_solve_input(
             input_path, triangulate=triangulate, repair=repair, ignore_tags=ignore_tags, nonmanifold=nonmanifold,
-            scheme=scheme, boundary=boundary, sharp_angle=sharp_angle, attributes=True)
+            scheme=scheme, boundary=boundary, sharp_angle=sharp_angle, attributes=True, prim=prim)
         V0, F = mesh.vertices, mesh.faces
         timings.update(mesh.timings)
         _check_outputs_hold(output, surface, F, scheme, level)
+        if blender is not None:
+            _check_blender(blender, scheme, tags)
         attributes, attribute_notes = _attributes_to_write(output, mesh.attributes, F, len(V0))
         if surface is not None:
             _check_surface_fits(len(V0), face_counts(F), level, scheme)
@@ -68,12 +77,18 @@ def run_fit(input_path, output, *, method="auto", omega="auto", tol=1e-10, max_i
         # least-squares answer on a singular B is the best there is: written.
         keep = res.converged or res.stop_reason == "singular" or keep_unconverged
 
-        written_tags = _tags_to_write(output, tags, boundary, mesh)
+        written_tags = _tags_to_write(output, tags, boundary, mesh, scheme)
+
         if keep:
             progress.status(f"writing {output}")
             t0 = time.perf_counter()
             # The control mesh keeps the tags it was fitted with (OBJ), so that it can be refitted.
-            write_mesh(output, ctrl, F, binary=_binary_for(output, binary), **written_tags, **attributes)
+            write_mesh(output, ctrl, F, binary=_binary_for(output, binary), **written_tags, **attributes,
+                       **usd_template(input_path, output, prim))
+            if blender is not None:
+                from ..blender import write_blender_script
+
+                write_blender_script(blender, ctrl, F, boundary=boundary, **tags)
             timings["write"] = time.perf_counter() - t0
         surface_stats = None
         if surface is not None and keep:
@@ -90,7 +105,9 @@ def run_fit(input_path, output, *, method="auto", omega="auto", tol=1e-10, max_i
         # topology's one-ring, against the given vertices.
         progress.status("checking B V = V0")
         t0 = time.perf_counter()
-        max_residual = _max_residual(interp, ctrl, V0, F, boundary, scheme, tags)
+        # USD stores float32 points: the check is of the cage as written.
+        written = ctrl.astype(np.float32).astype(np.float64) if is_usd(output) else ctrl
+        max_residual = _max_residual(interp, written, V0, F, boundary, scheme, tags)
         timings["check"] = time.perf_counter() - t0
 
     fields = result_fields(res)
@@ -147,18 +164,20 @@ def run_fit(input_path, output, *, method="auto", omega="auto", tol=1e-10, max_i
     return (EXIT_OK if res.converged else EXIT_NOT_CONVERGED), data
 
 
-def _tags_to_write(output, tags: dict, boundary: str, mesh) -> dict:
+def _tags_to_write(output, tags: dict, boundary: str, mesh, scheme=None) -> dict:
     """The tags the control mesh is written with: those it was fitted with,
     and always the boundary rule (a reader without the tag takes its own
-    default: OpenSubdiv's regression reader, far_utils.h, edge-only); OBJ only
-    (another format cannot hold them: a warning says the sharpness tags are
-    left out)."""
+    default: OpenSubdiv's regression reader, far_utils.h, edge-only); OBJ and
+    USD only (another format cannot hold them: a warning says the sharpness
+    tags are left out); USD also the scheme."""
     out = {**tags, "boundary": boundary}
     if Path(output).suffix.lower() == ".obj":
         return out
+    if is_usd(output):
+        return {**out, **({"scheme": scheme} if scheme is not None else {})}
     if tags:
-        warn_once(f"-o {output}: the sharpness tags ({', '.join(sorted(tags))}) are not written: only .obj files "
-                  "hold them; refitting this file would solve without them")
+        warn_once(f"-o {output}: the sharpness tags ({', '.join(sorted(tags))}) are not written: only .obj and "
+                  "USD files hold them; refitting this file would solve without them")
     return {}
 
 
@@ -218,6 +237,15 @@ def _unwritable(output, channel, faces, n_vertices: int, width: int) -> str | No
         return (f"PLY stores them per vertex, and vertex {int(corners[seams[0]])} has several (a seam; "
                 f"{len(np.unique(corners[seams]))} such vertices)")
     return None
+
+
+def _check_blender(path, scheme: str, tags: dict) -> None:
+    """Refuse --blender before the solve where Blender cannot draw the surface (sorpia.blender.blender_refusal)."""
+    from ..blender import blender_refusal
+
+    reason = blender_refusal(scheme, tags)
+    if reason is not None:
+        raise UserError(f"--blender {path}: {reason}")
 
 
 def _check_outputs_hold(output, surface, faces, scheme: str, level: int) -> None:
@@ -317,7 +345,8 @@ def fit_summary(d: dict, repaired=(), kept=()) -> str:
         f"  method      {label}",
         f"  result      {state}",
         f"  check       max |B V - V0| = {d['max_residual']:.3g} "
-        f"({d['max_residual_relative']:.3g} of the bounding-box diagonal)",
+        f"({d['max_residual_relative']:.3g} of the bounding-box diagonal)"
+        + (", of the cage as written (USD stores float32)" if is_usd(d["output"]) else ""),
         f"  seconds     {phases}",
         f"  wrote       {', '.join(written) or 'nothing'}",
     ]

@@ -15,7 +15,7 @@ MAX_LISTED = 16  # extraordinary vertices listed in the text output (--json list
 
 
 def run_info(input_path, *, as_json=False, boundary=None, triangulate=False, repair=False, scheme="auto",
-             ignore_tags=False, sharp_angle=None, nonmanifold="error", out=None) -> tuple[int, dict]:
+             ignore_tags=False, sharp_angle=None, nonmanifold="error", out=None, prim=None) -> tuple[int, dict]:
     """`sorpia info`: mesh statistics, the scheme, the tags, and whether PIA
     can run (exit 0 either way).
 
@@ -30,27 +30,31 @@ def run_info(input_path, *, as_json=False, boundary=None, triangulate=False, rep
     Loop PIA cannot run on is repaired in memory and info["repair"] says what
     --repair would change (or why it cannot)."""
     from .. import MeshFileError
-    from ..meshinfo import format_info, mesh_info
+    from .._meshinfo import format_info, mesh_info
+    from .._usd import is_usd
 
     out = out if out is not None else sys.stdout
     tags_refused = None
     try:
         mesh = read_input(input_path, triangulate=triangulate, repair=repair, tags=not ignore_tags,
-                          nonmanifold=nonmanifold)
+                          nonmanifold=nonmanifold, prim=prim)
     except MeshFileError as exc:
         if ignore_tags or "tag" not in str(exc):
             raise
         tags_refused = str(exc)
-        mesh = read_input(input_path, triangulate=triangulate, repair=repair, tags=False, nonmanifold=nonmanifold)
+        mesh = read_input(input_path, triangulate=triangulate, repair=repair, tags=False, nonmanifold=nonmanifold,
+                          prim=prim)
     polygons = not is_triangles(mesh.faces)
     try:
-        chosen = choose_scheme(scheme, mesh.faces, input_path)
+        chosen = choose_scheme(scheme, mesh.faces, input_path, mesh.tags.get("scheme"))
         refusal = None
     except UserError as exc:  # --scheme loop on polygons
         chosen, refusal = scheme, str(exc)
     # The statistics are of the mesh under its scheme (polygons as they are for Catmull-Clark); with Loop
-    # refused on polygons, of their triangulation.
-    counted = read_input(input_path, triangulate=True, repair=repair, tags=False) if polygons and refusal else mesh
+    # refused on polygons, of their triangulation (a USD file's as they are: sorpia triangulates while reading
+    # the other formats only).
+    counted = (read_input(input_path, triangulate=True, repair=repair, tags=False, prim=prim)
+               if polygons and refusal and not is_usd(input_path) else mesh)
     info = mesh_info(counted.vertices, counted.faces, boundary=boundary_rule(boundary, mesh),
                      list_extraordinary=True if as_json else MAX_LISTED, scheme="loop" if refusal else chosen)
     info["face_sizes"] = face_size_histogram(mesh.faces)
@@ -147,7 +151,7 @@ def _what_repair_would_do(vertices, faces) -> dict:
     per kind, or the reason it refuses the mesh too."""
     from .. import MeshError
     from .. import repair as repair_mesh
-    from ..mesh_repair import describe_changes
+    from .._repair import describe_changes
 
     try:
         result = repair_mesh(vertices, faces)

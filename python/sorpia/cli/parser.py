@@ -6,7 +6,7 @@ import argparse
 
 from .. import __version__
 from .._validate import BOUNDARY_RULES, DEFAULT_BOUNDARY
-from ..plotting import FACE_BUDGET  # plotting imports matplotlib only when drawing
+from .._plotting import FACE_BUDGET  # plotting imports matplotlib only when drawing
 from .common import CLI_SCHEMES, DISPLAY_ORDER
 from .compare import run_compare
 from .demo import run_demo
@@ -116,8 +116,11 @@ def build_parser() -> argparse.ArgumentParser:
         p = sub.add_parser(name, help=help_text, description=description,
                            epilog=EXIT_HELP if solves else EXIT_HELP_NO_SOLVE, formatter_class=_Formatter)
         if input_arg:
-            p.add_argument("input", metavar="IN", help="input mesh (.obj, .off, .ply, .stl; triangles, quads or any "
-                           "polygons, and OpenSubdiv's sharpness tags in .obj); only read")
+            p.add_argument("input", metavar="IN", help="input mesh (.obj, .off, .ply, .stl, .usd, .usda, .usdc; "
+                           "triangles, quads or any polygons, and OpenSubdiv's sharpness tags in .obj and USD); "
+                           "only read")
+            p.add_argument("--prim", metavar="PATH", default=None,
+                           help="USD input: the mesh prim to read (default: the stage's only mesh)")
         return p
 
     def triangulate_flag(p, scheme=True):
@@ -133,14 +136,16 @@ def build_parser() -> argparse.ArgumentParser:
                        "polygons), or auto: Loop for an all-triangle mesh, Catmull-Clark otherwise")
         p.add_argument("--ignore-tags", action="store_true",
                        help="drop the sharpness tags of an .obj file (OpenSubdiv's 't crease', 't corner', "
-                       "'t hole', 't interpolateboundary' lines), which are used by default")
+                       "'t hole', 't interpolateboundary' lines) or of a USD mesh (and its subdivisionScheme), "
+                       "which are used by default")
         p.add_argument("--sharp-angle", type=_angle_arg, metavar="DEG",
                        help="make every edge whose two faces' normals are more than DEG degrees apart an "
                        "infinitely sharp crease (added to the file's creases)")
 
     def mesh_output(p, what):
         p.add_argument("-o", "--output", metavar="OUT", required=True,
-                       help=f"{what} to write (.obj, .off, .ply or .stl; .stl stores float32 only)")
+                       help=f"{what} to write (.obj, .off, .ply, .stl or .usd/.usda/.usdc; .stl and USD store "
+                       "float32 only)")
 
     def repair_flag(p, effect):
         p.add_argument("--repair", action="store_true",
@@ -215,6 +220,10 @@ def build_parser() -> argparse.ArgumentParser:
                      "per phase (read, statistics, fit, write, check, surface)")
     threads_option(fit, "--method auto (its sor run), sor or gs only (refused with other methods, which run on one "
                    "thread)")
+    fit.add_argument("--blender", metavar="SCRIPT.py",
+                     help="also write a Python script for Blender (bpy) that builds the control mesh with its "
+                     "creases and corners as Blender's crease weights and a Subdivision Surface modifier that "
+                     "draws the fitted limit surface (Catmull-Clark only: Blender has no Loop)")
     fit.add_argument("--binary", action="store_true", help="write .ply and .stl outputs in binary (faster, "
                      "smaller; PLY keeps float64 either way)")
     scheme_options(fit)
@@ -227,7 +236,8 @@ def build_parser() -> argparse.ArgumentParser:
         a.input, a.output, method=a.method, omega=a.omega, tol=a.tol, max_iter=a.max_iter, boundary=a.boundary,
         surface=a.surface, level=a.level, report=a.report, quiet=a.quiet, force=a.force, triangulate=a.triangulate,
         binary=a.binary, threads=a.threads, repair=a.repair, scheme=a.scheme, ignore_tags=a.ignore_tags,
-        sharp_angle=a.sharp_angle, nonmanifold=a.nonmanifold, keep_unconverged=a.keep_unconverged)[0])
+        sharp_angle=a.sharp_angle, nonmanifold=a.nonmanifold, keep_unconverged=a.keep_unconverged, prim=a.prim,
+        blender=a.blender)[0])
 
     comp = command("compare", "run several methods to one tolerance: the paper's Table 1 and Figure 7",
                    "Run each method on the mesh to the same tolerance and print the paper's Table 1 layout for "
@@ -257,7 +267,7 @@ def build_parser() -> argparse.ArgumentParser:
         table=a.table,
         csv_path=a.csv, plot=a.plot, json_path=a.json, quiet=a.quiet, force=a.force, triangulate=a.triangulate,
         threads=a.threads, repair=a.repair, scheme=a.scheme, ignore_tags=a.ignore_tags,
-        sharp_angle=a.sharp_angle, nonmanifold=a.nonmanifold)[0])
+        sharp_angle=a.sharp_angle, nonmanifold=a.nonmanifold, prim=a.prim)[0])
 
     ren = command("render", "draw the paper's Figure 3 for a mesh (PNG)",
                   "Fit the mesh (--method, auto by default) and draw four shaded panels, the same camera in "
@@ -288,7 +298,7 @@ def build_parser() -> argparse.ArgumentParser:
         boundary=a.boundary, size=a.size,
         elev=a.elev, azim=a.azim, face_budget=a.face_budget, quiet=a.quiet, force=a.force,
         triangulate=a.triangulate, up=a.up, threads=a.threads, repair=a.repair, scheme=a.scheme,
-        ignore_tags=a.ignore_tags, sharp_angle=a.sharp_angle, nonmanifold=a.nonmanifold)[0])
+        ignore_tags=a.ignore_tags, sharp_angle=a.sharp_angle, nonmanifold=a.nonmanifold, prim=a.prim)[0])
 
     inf = command("info", "mesh statistics (the paper's Table 2) and whether PIA can run on it",
                   "Print vertices, faces, edges, boundary loops, Euler characteristic, genus, components, "
@@ -308,7 +318,7 @@ def build_parser() -> argparse.ArgumentParser:
     inf.set_defaults(func=lambda a: run_info(a.input, as_json=a.json, boundary=a.boundary,
                                              triangulate=a.triangulate, repair=a.repair, scheme=a.scheme,
                                              ignore_tags=a.ignore_tags, sharp_angle=a.sharp_angle,
-                                             nonmanifold=a.nonmanifold)[0])
+                                             nonmanifold=a.nonmanifold, prim=a.prim)[0])
 
     rep = command("repair", "make a mesh valid for subdivision without moving a vertex",
                   "Read a mesh of triangles, quads or any polygons and write it repaired (sorpia.repair), its "
@@ -328,7 +338,7 @@ def build_parser() -> argparse.ArgumentParser:
     triangulate_flag(rep, scheme=False)
     output_flags(rep)
     rep.set_defaults(func=lambda a: run_repair(a.input, a.output, report=a.report, triangulate=a.triangulate,
-                                               quiet=a.quiet, force=a.force)[0])
+                                               quiet=a.quiet, force=a.force, prim=a.prim)[0])
 
     demo = command("demo", "fit, compare and render on a built-in sample mesh",
                    "Generate a small sample mesh (a wavy torus with random edge flips: valences 3 to 12, visible "

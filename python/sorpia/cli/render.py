@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..plotting import FACE_BUDGET  # plotting imports matplotlib only when drawing
+from .._plotting import FACE_BUDGET  # plotting imports matplotlib only when drawing
 from ..solve import stopped_short_message
 from .common import (EXIT_NOT_CONVERGED, EXIT_OK, OMEGA_METHODS, SCHEME_LABELS, UserError, check_paths,
                      check_solver_options, face_counts, fit_once, fmt_seconds, method_label, omega_text,
@@ -20,10 +20,10 @@ from .progress import Progress
 def run_render(input_path, output, *, level=3, method="auto", omega="auto", tol=1e-10, max_iter=1000, boundary=None,
                size=(1200, 1000), elev=30.0, azim=-60.0, face_budget=FACE_BUDGET, quiet=False, force=False,
                triangulate=False, up="z", threads=1, repair=False, scheme="auto", ignore_tags=False,
-               sharp_angle=None, nonmanifold="error", out=None) -> tuple[int, dict]:
+               sharp_angle=None, nonmanifold="error", out=None, prim=None) -> tuple[int, dict]:
     """`sorpia render`: the paper's Figure 3 for a mesh file."""
     from .. import LimitSurface
-    from ..plotting import crease_curves, interpolation_figure, level_for_budget
+    from .._plotting import crease_curves, interpolation_figure, level_for_budget
 
     out = out if out is not None else sys.stdout
     if Path(output).suffix.lower() != ".png":
@@ -40,7 +40,7 @@ def run_render(input_path, output, *, level=3, method="auto", omega="auto", tol=
         progress.status(f"reading {input_path}")
         mesh, scheme, boundary, tags = read_solve_input(
             input_path, triangulate=triangulate, repair=repair, ignore_tags=ignore_tags, nonmanifold=nonmanifold,
-            scheme=scheme, boundary=boundary, sharp_angle=sharp_angle)
+            scheme=scheme, boundary=boundary, sharp_angle=sharp_angle, prim=prim)
         V0, F = mesh.vertices, mesh.faces
         timings.update(mesh.timings)
         _, res, timings["fit"], _ = fit_once(V0, F, method=method, omega=omega if uses_omega else None, tol=tol,

@@ -37,8 +37,8 @@ namespace sorpia {
 
 /// The bound on values that keeps the squared norms in E_k finite: a row of
 /// k values at most 1e150 in magnitude squares to at most k 1e300, below the
-/// largest double (1.8e308) for k up to 10^8, and B's rows (weights summing
-/// to 1) keep B V within it too. Targets of any finite magnitude are solved
+/// largest double (1.8e308) for k up to 10^8, with room for B V (rows of
+/// weights summing to 1, a small multiple of the largest value at most). Targets of any finite magnitude are solved
 /// (sorpia::solve scales them by a power of two, 2^e ~ max |V0| beyond
 /// 2^+-200, exactly); a warm start may be at most max_coordinate times that
 /// scale (1 within 2^+-200); local updates do not rescale, so their
@@ -59,11 +59,22 @@ class Interpolator {
  public:
   /// Triangles: row-major (n_faces, 3) vertex indices (Topology's triangle
   /// constructor, the fast path of Loop meshes).
-  Interpolator(const std::int32_t* triangles, std::size_t n_faces, std::size_t n_vertices, Rules rules);
+  ///
+  /// `vertex_map`, when not empty, makes the mesh a manifold split of the
+  /// caller's non-manifold mesh (sorpia::split_nonmanifold; its rules carry
+  /// OpenSubdiv's rules for non-manifold topology as tags): the caller's
+  /// vertex each of the n_vertices vertices copies, the first n being the
+  /// caller's n vertices themselves (vertex_map[i] = i). Solves and updates
+  /// then take and return the caller's n rows: targets, warm starts and
+  /// positions go to every copy of their vertex, and results hold the rows
+  /// of the caller's vertices.
+  /// @throw std::logic_error when vertex_map does not have that form
+  Interpolator(const std::int32_t* triangles, std::size_t n_faces, std::size_t n_vertices, Rules rules,
+               std::vector<std::int32_t> vertex_map = {});
   /// Polygons as face sizes and indices (Topology's polygon constructor,
-  /// Far::TopologyDescriptor's form).
+  /// Far::TopologyDescriptor's form); `vertex_map` as above.
   Interpolator(const std::int32_t* face_sizes, std::size_t n_faces, const std::int32_t* indices,
-               std::size_t n_vertices, Rules rules);
+               std::size_t n_vertices, Rules rules, std::vector<std::int32_t> vertex_map = {});
   /// A topology already built (taken over).
   Interpolator(Topology topology, Rules rules);
   /// A topology and B already built (taken over): B from elsewhere than
@@ -78,7 +89,8 @@ class Interpolator {
   const Rules& rules() const { return rules_; }
   const LimitOperator& limit_operator() const { return op_; }
   SpectralCache& spectral_cache() { return cache_; }
-  std::size_t n_vertices() const { return op_.n; }
+  /// The caller's vertices (those of the split's vertex map, else B's rows).
+  std::size_t n_vertices() const { return n_; }
   /// Seconds spent building the topology and B (0 for a topology given).
   double topology_seconds() const { return topology_seconds_; }
   double operator_seconds() const { return operator_seconds_; }
@@ -132,12 +144,22 @@ class Interpolator {
 
  private:
   void build_operator();
+  void set_vertex_map(std::vector<std::int32_t> vertex_map);
+  // The caller's (rows, k) array on B's rows: each copy gets its vertex's row.
+  std::vector<double> expanded(const double* x, std::size_t k) const;
+  // Positions of the caller's indices as positions of B's rows (every copy).
+  void expand_moves(const std::int32_t* indices, std::size_t count, const double* positions, std::size_t k,
+                    std::vector<std::int32_t>& rows, std::vector<double>& values) const;
 
   Topology topology_;
   Rules rules_;
   LimitOperator op_;
   SpectralCache cache_;
   double topology_seconds_ = 0.0, operator_seconds_ = 0.0;
+  std::size_t n_ = 0;  // the caller's vertices
+  // A split's copies: vertex_map_ (empty when B's rows are the caller's
+  // vertices) and, per caller vertex, its copies beyond the first n rows.
+  std::vector<std::int32_t> vertex_map_, copy_offsets_, copies_;
   // The targets of the last solve that kept them, not yet in `local_` (an
   // update hands them over), and that solve's options (callback dropped).
   std::vector<double> solved_targets_;

@@ -85,7 +85,7 @@ def split(faces, n_vertices: int, boundary: str = DEFAULT_BOUNDARY, *, creases=N
     non-manifold edges; a caller's crease at a crease vertex (OpenSubdiv
     counts it with the creases of every sheet).
     """
-    from .mesh_repair import RepairResult, _core_faces, _faces_as_given, _mapped_tags
+    from ._repair import RepairResult, _core_faces, _faces_as_given, _mapped_tags
 
     rows, triangles, polygons = _core_faces(faces, n_vertices)
     if triangles is not None:
@@ -161,38 +161,11 @@ def limit_matrix(faces, n_vertices: int, boundary, scheme, tags: dict):
     s = split(faces, n_vertices, boundary, **tags)
     if s is None:
         return manifold_limit_matrix(faces, n_vertices, boundary=boundary, scheme=scheme, **tags)
-    b = manifold_limit_matrix(s.faces, len(s.vertex_map), boundary=s.boundary, scheme=scheme, **s.tags)
-    return (b[:n_vertices] @ _columns_to_input(s.vertex_map, n_vertices)).tocsr()
+    return folded(manifold_limit_matrix(s.faces, len(s.vertex_map), boundary=s.boundary, scheme=scheme, **s.tags),
+                  s.vertex_map, n_vertices)
 
 
-def interpolate(vertices, faces, rule_options: dict, **options):
-    """`sorpia.interpolate` with nonmanifold="sharp": the split solved (its
-    copies' targets their input vertices'), the input vertices' control
-    vertices returned (each copy's equals its input vertex's to the solver's
-    tolerance)."""
-    from .solve import interpolate as manifold_interpolate
-
-    vertices = as_vertices(vertices, columns=None)
-    scheme, boundary = rule_options["scheme"], rule_options["boundary"]
-    tags = {kind: rule_options[kind] for kind in ("creases", "corners", "holes")}
-    s = split(faces, len(vertices), boundary, **tags)
-    if s is None:
-        return manifold_interpolate(vertices, faces, **rule_options, **options)
-    if options.get("initial") is not None:  # a warm start of the input vertices: each copy starts as its vertex
-        options["initial"] = as_vertices(options["initial"], "initial", columns=None)[s.vertex_map]
-    result = manifold_interpolate(vertices[s.vertex_map], s.faces, boundary=s.boundary, scheme=scheme, **s.tags,
-                                  **options)
-    return InputVertices(result, len(vertices))
-
-
-class InputVertices:
-    """The InterpolationResult of a split, seen through the input vertices:
-    control_vertices has their n rows; every other attribute is the split
-    solve's (its errors are those of the split system, the same equations)."""
-
-    def __init__(self, result, n: int):
-        self.result = result
-        self.control_vertices = result.control_vertices[:n]
-
-    def __getattr__(self, name):
-        return getattr(self.result, name)
+def folded(b, vertex_map: np.ndarray, n: int):
+    """The split's B as the input mesh's: the rows of the input vertices,
+    each copy's column added to its input vertex's."""
+    return (b[:n] @ _columns_to_input(vertex_map, n)).tocsr()

@@ -250,7 +250,7 @@ def _vertex_normals(face_normals: np.ndarray, faces: np.ndarray, n_vertices: int
 
 def _boundary_share(faces: np.ndarray, n_vertices: int) -> float:
     """Boundary edges / edges: 0 for a closed mesh."""
-    from .meshinfo import boundary_share
+    from ._meshinfo import boundary_share
 
     return boundary_share(faces, n_vertices)
 
