@@ -45,7 +45,8 @@ void expect_same_groups(const sorpia::detail::FaceList& fl, std::size_t n_vertic
     const Groups want = by_map(fl, keep), got = by_matcher(fl, n_vertices, keep);
     EXPECT_EQ(got, want);
     // mates(): the other half-edge of an edge of two, `single` for one, `many` for more.
-    const Ints mate = sorpia::detail::EdgeGroups(fl, n_vertices, [&](std::size_t h) { return keep[h]; }).mates(-1, -2);
+    const sorpia::detail::EdgeGroups groups(fl, n_vertices, [&](std::size_t h) { return keep[h]; });
+    const Ints mate = groups.mates(-1, -2);
     for (const auto& [edge, hs] : want)
       for (std::size_t i = 0; i < hs.size(); ++i)
         EXPECT_EQ(mate[hs[i]], hs.size() == 1 ? -1 : hs.size() == 2 ? hs[1 - i] : -2);

@@ -158,6 +158,17 @@ std::vector<std::int32_t> join_edges(const Faces<kPolygons>& fl, std::size_t n_v
   std::vector<std::int32_t> live;
   const detail::EdgeGroups edges(fl, n_vertices, [&](std::size_t h) { return !removed[fl.face_of(h)]; });
   edges.for_each([&](std::int32_t v, std::int32_t x, const std::int32_t* b, std::int32_t k) {
+    if (k == 2) {  // most edges: joined, or one face a duplicate of the other
+      const std::int32_t g = b[0], h = b[1];
+      if (removed[fl.face_of(g)] || removed[fl.face_of(h)]) return;  // a duplicate found at another edge
+      if (fl.same_face(g, h)) {
+        drop_duplicate(g, h);
+      } else {
+        mate[g] = h;
+        mate[h] = g;
+      }
+      return;
+    }
     // The faces of edge (v, x) not removed (a duplicate found at another
     // edge), each compared with those kept before it.
     live.clear();

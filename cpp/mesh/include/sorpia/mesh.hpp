@@ -19,7 +19,7 @@ namespace sorpia {
 struct Mesh {
   std::vector<double> vertices;                   ///< (n_vertices, 3), row-major
   std::vector<std::int32_t> face_vertex_counts;   ///< corners per face; empty when every face has `face_size`
-  std::vector<std::int32_t> face_vertex_indices;  ///< every face's corners (0-based), face after face, counter-clockwise
+  std::vector<std::int32_t> face_vertex_indices;  ///< every face's corners, face after face, counter-clockwise
   std::int32_t face_size = 3;                     ///< the corners of every face when face_vertex_counts is empty
 
   std::size_t n_vertices() const { return vertices.size() / 3; }

@@ -138,27 +138,32 @@ struct FaceArrays {
 // and the statistics of a raw face list all match edges through it; the
 // direct one-ring build matches each vertex's edges while it walks the fans
 // (topology.cpp's VertexEdges).
+template <class Faces>
 class EdgeGroups {
  public:
-  template <class Faces, class Keep>
-  EdgeGroups(const Faces& fl, std::size_t n_vertices, Keep keep) : idx_(fl.idx) {
+  template <class Keep>
+  EdgeGroups(const Faces& fl, std::size_t n_vertices, Keep keep) : fl_(fl), start_(n_vertices + 1, 0) {
     const std::size_t n_half = fl.n_corners();
-    next_.resize(n_half);
-    for (std::size_t h = 0; h < n_half; ++h) next_[h] = static_cast<std::int32_t>(fl.next(h));
-    std::vector<std::int32_t> start(n_vertices + 1, 0);
     for (std::size_t h = 0; h < n_half; ++h)
-      if (keep(h)) ++start[lo(h) + 1];
-    std::partial_sum(start.begin(), start.end(), start.begin());
-    order_.resize(static_cast<std::size_t>(start[n_vertices]));
-    std::vector<std::int32_t> fill(start.begin(), start.end() - 1);
+      if (keep(h)) ++start_[lo(h) + 1];
+    std::partial_sum(start_.begin(), start_.end(), start_.begin());
+    order_.resize(static_cast<std::size_t>(start_[n_vertices]));
+    std::vector<std::int32_t> fill(start_.begin(), start_.end() - 1);
     for (std::size_t h = 0; h < n_half; ++h)
       if (keep(h)) order_[fill[lo(h)]++] = static_cast<std::int32_t>(h);
-    for (std::size_t v = 0; v < n_vertices; ++v)
-      std::sort(order_.begin() + start[v], order_.begin() + start[v + 1], [&](std::int32_t a, std::int32_t b) {
-        return std::make_pair(hi(a), a) < std::make_pair(hi(b), b);
-      });
+    // Each bucket by (higher end, id), compared as one integer.
+    std::vector<std::uint64_t> key;
+    for (std::size_t v = 0; v < n_vertices; ++v) {
+      std::int32_t* b = order_.data() + start_[v];
+      const std::size_t k = static_cast<std::size_t>(start_[v + 1] - start_[v]);
+      if (k < 2) continue;
+      key.resize(k);
+      for (std::size_t i = 0; i < k; ++i)
+        key[i] = static_cast<std::uint64_t>(hi(b[i])) << 32 | static_cast<std::uint32_t>(b[i]);
+      std::sort(key.begin(), key.end());
+      for (std::size_t i = 0; i < k; ++i) b[i] = static_cast<std::int32_t>(key[i] & 0xffffffffu);
+    }
   }
-  template <class Faces>
   EdgeGroups(const Faces& fl, std::size_t n_vertices)
       : EdgeGroups(fl, n_vertices, [](std::size_t) { return true; }) {}
 
@@ -166,18 +171,20 @@ class EdgeGroups {
   // half-edges in id order.
   template <class Fn>
   void for_each(Fn fn) const {
-    for (std::size_t i = 0, j; i < order_.size(); i = j) {
-      const std::int32_t a = lo(order_[i]), b = hi(order_[i]);
-      for (j = i + 1; j < order_.size() && hi(order_[j]) == b && lo(order_[j]) == a; ++j) {
+    for (std::size_t v = 0; v + 1 < start_.size(); ++v)
+      for (std::int32_t i = start_[v], j, end = start_[v + 1]; i < end; i = j) {
+        const std::int32_t b = hi(order_[i]);
+        for (j = i + 1; j < end && hi(order_[j]) == b; ++j) {
+        }
+        fn(static_cast<std::int32_t>(v), b, order_.data() + i, j - i);
       }
-      fn(a, b, order_.data() + i, static_cast<std::int32_t>(j - i));
-    }
   }
 
   // The other half-edge of each half-edge's edge where the edge has exactly
-  // two (kept) half-edges; `single` where it has one, `many` where more.
+  // two (kept) half-edges; `single` where it has one, `many` where more
+  // (and for the half-edges left out).
   std::vector<std::int32_t> mates(std::int32_t single = -1, std::int32_t many = -1) const {
-    std::vector<std::int32_t> mate(next_.size(), many);
+    std::vector<std::int32_t> mate(fl_.n_corners(), many);
     for_each([&](std::int32_t, std::int32_t, const std::int32_t* hs, std::int32_t k) {
       if (k == 1) mate[hs[0]] = single;
       if (k != 2) return;
@@ -188,12 +195,12 @@ class EdgeGroups {
   }
 
  private:
-  std::int32_t lo(std::size_t h) const { return std::min(idx_[h], idx_[next_[h]]); }
-  std::int32_t hi(std::size_t h) const { return std::max(idx_[h], idx_[next_[h]]); }
+  std::int32_t lo(std::size_t h) const { return std::min(fl_.idx[h], fl_.idx[fl_.next(h)]); }
+  std::int32_t hi(std::size_t h) const { return std::max(fl_.idx[h], fl_.idx[fl_.next(h)]); }
 
-  const std::int32_t* idx_;
-  std::vector<std::int32_t> next_;  // the next corner of each corner's face
-  std::vector<std::int32_t> order_;
+  Faces fl_;                         // a FaceList, or a type with the same members (repair's Faces<kPolygons>)
+  std::vector<std::int32_t> start_;  // the kept half-edges of lower end v: order_[start_[v] .. start_[v + 1])
+  std::vector<std::int32_t> order_;  // sorted by (higher end, id) within each lower end
 };
 
 // Union-find over indices 0..n-1 with path halving; the root of a class is its
