@@ -233,39 +233,33 @@ std::vector<int> spec_numbers(const std::string& spec, char sep, std::size_t lo,
   return out;
 }
 
-// A triangle mesh (`tri`), or a polygon mesh (`poly`, when `polygons`): the
-// triangle path builds its Topology exactly as before polygons existed.
+// A mesh: triangles without counts take Topology's triangle path (exactly
+// as before polygons existed), any other mesh its polygon path with a count
+// per face.
 struct BenchMesh {
-  sorpia::TriMesh tri;
-  sorpia::PolyMesh poly;
-  bool polygons = false;
-  BenchMesh(sorpia::TriMesh m) : tri(std::move(m)) {}
-  BenchMesh(sorpia::PolyMesh m) : poly(std::move(m)), polygons(true) {}
-  const std::vector<double>& vertices() const { return polygons ? poly.vertices : tri.vertices; }
-  std::size_t n_vertices() const { return vertices().size() / 3; }
-  std::size_t n_faces() const { return polygons ? poly.n_faces() : tri.n_faces(); }
+  sorpia::Mesh mesh;
+  BenchMesh(sorpia::Mesh m) : mesh(std::move(m)) {
+    if (mesh.uniform() && !mesh.all_triangles()) mesh.face_vertex_counts = mesh.counts();
+  }
+  bool polygons() const { return !mesh.all_triangles(); }
+  const std::vector<double>& vertices() const { return mesh.vertices; }
+  std::size_t n_vertices() const { return mesh.n_vertices(); }
+  std::size_t n_faces() const { return mesh.n_faces(); }
   sorpia::Topology topology(sorpia::TopologyBuild how) const {
-    if (!polygons) return sorpia::Topology(tri.faces.data(), tri.n_faces(), tri.n_vertices(), how);
-    return sorpia::Topology(poly.face_counts.data(), poly.n_faces(), poly.face_indices.data(), poly.n_vertices(), how);
+    if (!polygons()) return sorpia::Topology(mesh.face_vertex_indices.data(), n_faces(), n_vertices(), how);
+    return sorpia::Topology(mesh.face_vertex_counts.data(), n_faces(), mesh.face_vertex_indices.data(), n_vertices(),
+                            how);
   }
 };
 
 BenchMesh generate(const std::string& spec);
 
-// A file's triangles stay a TriMesh (the triangle path); other polygons a PolyMesh.
 BenchMesh load(const std::string& spec, bool triangulate, bool file_tags, sorpia::Tags& tags) {
   tags = sorpia::Tags{};
   if (!is_generated(spec)) {
     sorpia::MeshFile file = sorpia::read_mesh(spec, sorpia::ReadOptions{triangulate, file_tags});
     tags = std::move(file.tags.tags);
-    if (file.all_triangles()) return sorpia::TriMesh{std::move(file.vertices), std::move(file.faces)};
-    sorpia::PolyMesh poly;
-    poly.face_counts = file.face_sizes.empty()
-                           ? std::vector<std::int32_t>(file.n_faces(), file.face_size)
-                           : std::move(file.face_sizes);
-    poly.vertices = std::move(file.vertices);
-    poly.face_indices = std::move(file.faces);
-    return poly;
+    return sorpia::Mesh(std::move(file));
   }
   try {
     return generate(spec);
@@ -464,11 +458,9 @@ MeshRun run_mesh(const Options& o, const std::string& spec) {
       mr.reordered = res.reordered;
       if (!o.write_dir.empty()) {
         t0 = Clock::now();
-        const sorpia::MeshView view =
-            mesh.polygons ? sorpia::MeshView{res.control_vertices.data(), mesh.n_vertices(), mesh.poly.face_indices.data(),
-                                             mesh.n_faces(), mesh.poly.face_counts.data(), 0}
-                          : sorpia::MeshView{res.control_vertices.data(), mesh.n_vertices(), mesh.tri.faces.data(),
-                                             mesh.n_faces(), nullptr, 3};
+        const sorpia::MeshView view{res.control_vertices.data(), mesh.n_vertices(),
+                                    mesh.mesh.face_vertex_indices.data(), mesh.n_faces(),
+                                    mesh.polygons() ? mesh.mesh.face_vertex_counts.data() : nullptr, 3};
         sorpia::write_mesh(output_path(o, run.label, mr.method), view, o.format == "ply");
         mr.write.push_back(seconds_since(t0));
       }

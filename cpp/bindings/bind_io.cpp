@@ -24,12 +24,13 @@ void bind_io(py::module_& m) {
           mesh = sorpia::read_mesh(path, sorpia::ReadOptions{triangulate, tags, attributes});
         }
         // sorpia.io.read_mesh makes its result of: vertices (n, 3); the faces,
-        // (m, face_size) when face_sizes is None, else the flat corner list;
-        // face_sizes; polygons split; with tags, (Tags, Boundary or None,
+        // (m, face_size) when face_vertex_counts is None, else the flat corner list;
+        // face_vertex_counts; polygons split; with tags, (Tags, Boundary or None,
         // unknown tag names); with attributes, ((uv values, uv indices) or
         // None, (normal values, normal indices) or None).
-        const bool uniform = mesh.face_sizes.empty();
-        py::object sizes = uniform ? py::object(py::none()) : py::object(to_numpy(std::move(mesh.face_sizes), 0));
+        const bool uniform = mesh.face_vertex_counts.empty();
+        py::object sizes =
+            uniform ? py::object(py::none()) : py::object(to_numpy(std::move(mesh.face_vertex_counts), 0));
         py::object file_tags = py::none();
         if (tags) {
           py::object boundary = mesh.tags.boundary ? py::cast(*mesh.tags.boundary) : py::object(py::none());
@@ -42,13 +43,14 @@ void bind_io(py::module_& m) {
         py::object file_attributes = attributes ? py::object(py::make_tuple(channel(mesh.uvs), channel(mesh.normals)))
                                                 : py::object(py::none());
         return py::make_tuple(to_numpy(std::move(mesh.vertices), 3),
-                              to_numpy(std::move(mesh.faces), uniform ? mesh.face_size : 0), sizes,
+                              to_numpy(std::move(mesh.face_vertex_indices), uniform ? mesh.face_size : 0), sizes,
                               mesh.polygons_split, file_tags, file_attributes);
       },
       "path"_a, "triangulate"_a, "tags"_a, "attributes"_a);
   m.def(
       "write_mesh",
-      [](const std::string& path, const Vertices& vertices, const Faces& faces, const std::optional<Faces>& face_sizes,
+      [](const std::string& path, const Vertices& vertices, const Faces& faces,
+         const std::optional<Faces>& face_vertex_counts,
          std::int32_t face_size, bool binary, const std::optional<sorpia::Tags>& tags,
          std::optional<sorpia::Boundary> boundary, const std::optional<Vertices>& uv_values,
          const std::optional<Faces>& uv_indices, const std::optional<Vertices>& normal_values,
@@ -57,13 +59,13 @@ void bind_io(py::module_& m) {
         sorpia::MeshView view;
         view.vertices = vertices.data();
         view.n_vertices = static_cast<std::size_t>(vertices.shape(0));
-        view.faces = faces.data();
-        if (face_sizes) {
-          view.face_sizes = face_sizes->data();
-          view.n_faces = static_cast<std::size_t>(face_sizes->size());
+        view.face_vertex_indices = faces.data();
+        if (face_vertex_counts) {
+          view.face_vertex_counts = face_vertex_counts->data();
+          view.n_faces = static_cast<std::size_t>(face_vertex_counts->size());
           std::size_t total = 0;
-          for (py::ssize_t i = 0; i < face_sizes->size(); ++i)
-            total += static_cast<std::size_t>(std::max(0, view.face_sizes[i]));
+          for (py::ssize_t i = 0; i < face_vertex_counts->size(); ++i)
+            total += static_cast<std::size_t>(std::max(0, view.face_vertex_counts[i]));
           if (total != static_cast<std::size_t>(faces.size()))
             throw sorpia::ParameterError("write_mesh: the face sizes add up to " + std::to_string(total) +
                                          " corners but the faces list " + std::to_string(faces.size()));
@@ -95,7 +97,8 @@ void bind_io(py::module_& m) {
         py::gil_scoped_release release;
         sorpia::write_mesh(path, view, binary, &file_tags);
       },
-      "path"_a, "vertices"_a.noconvert(), "faces"_a.noconvert(), "face_sizes"_a.noconvert(), "face_size"_a,
+      "path"_a, "vertices"_a.noconvert(), "face_vertex_indices"_a.noconvert(), "face_vertex_counts"_a.noconvert(),
+      "face_size"_a,
       "binary"_a, "tags"_a, "boundary"_a, "uv_values"_a.noconvert() = py::none(), "uv_indices"_a.noconvert() = py::none(),
       "normal_values"_a.noconvert() = py::none(), "normal_indices"_a.noconvert() = py::none());
   m.def(

@@ -53,7 +53,7 @@ void bind_repair(py::module_& m) {
         }
         if (r.report.empty()) return py::none();
         py::dict report = report_dict(r.report);
-        return py::make_tuple(to_numpy(std::move(r.faces), 3), to_numpy(std::move(r.vertex_map), 0),
+        return py::make_tuple(to_numpy(std::move(r.face_vertex_indices), 3), to_numpy(std::move(r.vertex_map), 0),
                               to_numpy(std::move(r.face_map), 0), report);
       },
       "faces"_a.noconvert(), "n_vertices"_a,
@@ -70,7 +70,8 @@ void bind_repair(py::module_& m) {
         }
         if (r.report.empty()) return py::none();
         py::dict report = report_dict(r.report);
-        return py::make_tuple(to_numpy(std::move(r.face_counts), 0), to_numpy(std::move(r.faces), 0),
+        return py::make_tuple(to_numpy(std::move(r.face_vertex_counts), 0),
+                              to_numpy(std::move(r.face_vertex_indices), 0),
                               to_numpy(std::move(r.vertex_map), 0), to_numpy(std::move(r.face_map), 0), report);
       },
       "face_vertex_counts"_a.noconvert(), "face_vertex_indices"_a.noconvert(), "n_vertices"_a,
@@ -87,7 +88,8 @@ void bind_repair(py::module_& m) {
         }
         if (s.empty()) return py::none();
         py::dict report = split_dict(s);
-        return py::make_tuple(to_numpy(std::move(s.faces), 3), to_numpy(std::move(s.vertex_map), 0), report);
+        return py::make_tuple(to_numpy(std::move(s.face_vertex_indices), 3), to_numpy(std::move(s.vertex_map), 0),
+                              report);
       },
       "faces"_a.noconvert(), "n_vertices"_a,
       "sorpia::split_nonmanifold: None for a manifold mesh, else (faces, vertex_map, report dict).");
@@ -104,7 +106,8 @@ void bind_repair(py::module_& m) {
         }
         if (s.empty()) return py::none();
         py::dict report = split_dict(s);
-        return py::make_tuple(to_numpy(std::move(s.face_counts), 0), to_numpy(std::move(s.faces), 0),
+        return py::make_tuple(to_numpy(std::move(s.face_vertex_counts), 0),
+                              to_numpy(std::move(s.face_vertex_indices), 0),
                               to_numpy(std::move(s.vertex_map), 0), report);
       },
       "face_vertex_counts"_a.noconvert(), "face_vertex_indices"_a.noconvert(), "n_vertices"_a,

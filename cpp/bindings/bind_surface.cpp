@@ -19,12 +19,13 @@ void check_vertices(const Vertices& a, std::size_t n_vertices) {
 // (vertices (n, 3), faces, face_counts): faces (m, k) with face_counts None
 // when every face has k vertices (every tessellation but Catmull-Clark's
 // level 0 of a mixed mesh), else the concatenated indices and the counts.
-py::tuple tessellation_tuple(sorpia::PolyMesh&& t) {
+py::tuple tessellation_tuple(sorpia::Mesh&& t) {
   auto vertices = to_numpy(std::move(t.vertices), 3);
-  const auto& c = t.face_counts;
+  const auto& c = t.face_vertex_counts;
   if (!c.empty() && std::all_of(c.begin(), c.end(), [&](std::int32_t k) { return k == c.front(); }))
-    return py::make_tuple(vertices, to_numpy(std::move(t.face_indices), c.front()), py::none());
-  return py::make_tuple(vertices, to_numpy(std::move(t.face_indices), 0), to_numpy(std::move(t.face_counts), 0));
+    return py::make_tuple(vertices, to_numpy(std::move(t.face_vertex_indices), c.front()), py::none());
+  return py::make_tuple(vertices, to_numpy(std::move(t.face_vertex_indices), 0),
+                        to_numpy(std::move(t.face_vertex_counts), 0));
 }
 }  // namespace
 
@@ -84,7 +85,7 @@ void bind_surface(py::module_& m) {
            "face_ids"_a.noconvert(), "uv"_a.noconvert(), "derivatives"_a)
       .def("tessellate",
            [](sorpia::LimitSurface& s, int level) {
-             sorpia::PolyMesh t;
+             sorpia::Mesh t;
              {
                LongCall call;
                t = s.tessellate(level);

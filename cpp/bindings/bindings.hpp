@@ -101,15 +101,14 @@ inline py::tuple csr_tuple(sorpia::CsrMatrix&& b) {
                         to_numpy(std::move(b.indptr), 0));
 }
 
-// (vertices (n, 3), faces (m, 3)), taking the mesh's storage over.
-inline py::tuple mesh_tuple(sorpia::TriMesh&& m) {
-  return py::make_tuple(to_numpy(std::move(m.vertices), 3), to_numpy(std::move(m.faces), 3));
-}
-
-// (vertices (n, 3), face_vertex_counts (m,), face_vertex_indices (sum of counts,)).
-inline py::tuple mesh_tuple(sorpia::PolyMesh&& m) {
-  return py::make_tuple(to_numpy(std::move(m.vertices), 3), to_numpy(std::move(m.face_counts), 0),
-                        to_numpy(std::move(m.face_indices), 0));
+// Taking the mesh's storage over: (vertices (n, 3), faces (m, 3)) for
+// triangles without counts, else (vertices (n, 3), face_vertex_counts (m,),
+// face_vertex_indices (sum of counts,)).
+inline py::tuple mesh_tuple(sorpia::Mesh&& m) {
+  if (m.all_triangles())
+    return py::make_tuple(to_numpy(std::move(m.vertices), 3), to_numpy(std::move(m.face_vertex_indices), 3));
+  return py::make_tuple(to_numpy(std::move(m.vertices), 3), to_numpy(m.counts(), 0),
+                        to_numpy(std::move(m.face_vertex_indices), 0));
 }
 
 void bind_limit(py::module_& m);

@@ -19,13 +19,13 @@ namespace sorpia_test {
 
 struct LimitCase {
   const char* name;
-  sorpia::TriMesh mesh;
+  sorpia::Mesh mesh;
   sorpia::CsrMatrix b;
   sorpia::LimitOperator op;
 };
 
-inline LimitCase limit_case(const sorpia::TriMesh& m, const char* name = "") {
-  const sorpia::Topology topo(m.faces.data(), m.n_faces(), m.n_vertices());
+inline LimitCase limit_case(const sorpia::Mesh& m, const char* name = "") {
+  const sorpia::Topology topo(m.face_vertex_indices.data(), m.n_faces(), m.n_vertices());
   return LimitCase{name, m, sorpia::reference_limit_matrix(topo, sorpia::Boundary::EdgeAndCorner),
                    sorpia::limit_operator(topo, sorpia::Boundary::EdgeAndCorner)};
 }

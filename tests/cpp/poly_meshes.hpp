@@ -15,9 +15,9 @@
 
 namespace sorpia_test {
 
-inline sorpia::Topology build(const sorpia::PolyMesh& m,
+inline sorpia::Topology build(const sorpia::Mesh& m,
                               sorpia::TopologyBuild how = sorpia::TopologyBuild::Direct) {
-  return sorpia::Topology(m.face_counts.data(), m.n_faces(), m.face_indices.data(), m.n_vertices(), how);
+  return sorpia::Topology(m.face_vertex_counts.data(), m.n_faces(), m.face_vertex_indices.data(), m.n_vertices(), how);
 }
 
 // The two builds of one mesh (TopologyBuild::Direct and ::OpenMesh) agree on
@@ -39,36 +39,36 @@ inline void expect_same_topology(const sorpia::Topology& direct, const sorpia::T
   }
 }
 
-inline sorpia::PolyMesh scrambled(const sorpia::PolyMesh& m, unsigned seed) {
+inline sorpia::Mesh scrambled(const sorpia::Mesh& m, unsigned seed) {
   std::mt19937 rng(seed);
   std::vector<std::int32_t> off(m.n_faces() + 1, 0);
-  for (std::size_t f = 0; f < m.n_faces(); ++f) off[f + 1] = off[f] + m.face_counts[f];
+  for (std::size_t f = 0; f < m.n_faces(); ++f) off[f + 1] = off[f] + m.face_vertex_counts[f];
   std::vector<std::size_t> order(m.n_faces());
   std::iota(order.begin(), order.end(), 0);
   std::shuffle(order.begin(), order.end(), rng);
-  sorpia::PolyMesh s;
+  sorpia::Mesh s;
   s.vertices = m.vertices;
   for (std::size_t f : order) {
-    const int n = m.face_counts[f], r = static_cast<int>(rng() % n);
-    s.face_counts.push_back(n);
-    for (int k = 0; k < n; ++k) s.face_indices.push_back(m.face_indices[off[f] + (k + r) % n]);
+    const int n = m.face_vertex_counts[f], r = static_cast<int>(rng() % n);
+    s.face_vertex_counts.push_back(n);
+    for (int k = 0; k < n; ++k) s.face_vertex_indices.push_back(m.face_vertex_indices[off[f] + (k + r) % n]);
   }
   s.vertices.insert(s.vertices.end(), 6, 0.5);
   return s;
 }
 
 // A single polygon of n vertices (all boundary).
-inline sorpia::PolyMesh ngon(int n) {
-  sorpia::PolyMesh m;
+inline sorpia::Mesh ngon(int n) {
+  sorpia::Mesh m;
   for (int k = 0; k < n; ++k) m.vertices.insert(m.vertices.end(), {1.0 * k, 0.5 * k * k, 0.0});
-  m.face_counts = {n};
-  for (int k = 0; k < n; ++k) m.face_indices.push_back(k);
+  m.face_vertex_counts = {n};
+  for (int k = 0; k < n; ++k) m.face_vertex_indices.push_back(k);
   return m;
 }
 
 struct NamedPoly {
   std::string name;
-  sorpia::PolyMesh mesh;
+  sorpia::Mesh mesh;
 };
 
 inline std::vector<NamedPoly> polygon_meshes() {

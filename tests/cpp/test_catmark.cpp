@@ -37,12 +37,12 @@ std::map<int, double> row(const sorpia::CsrMatrix& b, std::size_t i) {
 
 // A disk of n quads round vertex 0 (valence n, interior): edge neighbours
 // 1..n, opposite corners n+1..2n.
-sorpia::PolyMesh quad_pole(int n) {
-  sorpia::PolyMesh m;
+sorpia::Mesh quad_pole(int n) {
+  sorpia::Mesh m;
   m.vertices.assign(3 * (2 * n + 1), 0.0);
   for (int j = 0; j < n; ++j) {
-    m.face_counts.push_back(4);
-    m.face_indices.insert(m.face_indices.end(), {0, 1 + j, n + 1 + j, 1 + (j + 1) % n});
+    m.face_vertex_counts.push_back(4);
+    m.face_vertex_indices.insert(m.face_vertex_indices.end(), {0, 1 + j, n + 1 + j, 1 + (j + 1) % n});
   }
   return m;
 }
@@ -152,7 +152,7 @@ TEST(Catmark, RowsSumToOne) {
 TEST(Catmark, TaggedRowsEqualTheWholeMeshRefinement) {
   for (const char* name : {"quad-irregular", "polygon-torus", "quad-grid"}) {
     SCOPED_TRACE(name);
-    sorpia::PolyMesh m;
+    sorpia::Mesh m;
     for (const auto& [n, mesh] : sorpia_test::polygon_meshes())
       if (n == name) m = mesh;
     const auto t = build(m);

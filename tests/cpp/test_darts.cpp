@@ -62,11 +62,11 @@ struct Shape {
   }
 };
 
-Shape from_tri(std::string name, const sorpia::TriMesh& m, Boundary b = Boundary::EdgeAndCorner) {
-  return {std::move(name), Scheme::Loop, b, std::vector<std::int32_t>(m.n_faces(), 3), m.faces, m.vertices, {}};
+Shape from_tri(std::string name, const sorpia::Mesh& m, Boundary b = Boundary::EdgeAndCorner) {
+  return {std::move(name), Scheme::Loop, b, std::vector<std::int32_t>(m.n_faces(), 3), m.face_vertex_indices, m.vertices, {}};
 }
-Shape from_poly(std::string name, const sorpia::PolyMesh& m, Boundary b = Boundary::EdgeAndCorner) {
-  return {std::move(name), Scheme::CatmullClark, b, m.face_counts, m.face_indices, m.vertices, {}};
+Shape from_poly(std::string name, const sorpia::Mesh& m, Boundary b = Boundary::EdgeAndCorner) {
+  return {std::move(name), Scheme::CatmullClark, b, m.face_vertex_counts, m.face_vertex_indices, m.vertices, {}};
 }
 
 // Edge (min, max) -> number of faces, from the faces alone.

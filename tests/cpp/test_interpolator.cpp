@@ -30,8 +30,8 @@ double error_of(const sorpia::CsrMatrix& b, const std::vector<double>& t, const 
   return e;
 }
 
-sorpia::Interpolator make(const sorpia::TriMesh& m) {
-  return sorpia::Interpolator(m.faces.data(), m.n_faces(), m.n_vertices(), sorpia::Rules{});
+sorpia::Interpolator make(const sorpia::Mesh& m) {
+  return sorpia::Interpolator(m.face_vertex_indices.data(), m.n_faces(), m.n_vertices(), sorpia::Rules{});
 }
 
 TEST(Interpolator, SolveIsTheCoreSolveOnItsOperator) {

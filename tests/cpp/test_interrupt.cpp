@@ -128,8 +128,8 @@ TEST(Interrupt, SpectralEstimateStopsAndLeavesItsCacheUnset) {
 }
 
 TEST(Interrupt, TessellationAndEvaluationStop) {
-  const sorpia::TriMesh m = sorpia::icosphere(2);
-  const sorpia::Topology topo(m.faces.data(), m.n_faces(), m.n_vertices());
+  const sorpia::Mesh m = sorpia::icosphere(2);
+  const sorpia::Topology topo(m.face_vertex_indices.data(), m.n_faces(), m.n_vertices());
   sorpia::LimitSurface s(topo, m.vertices.data(), sorpia::Scheme::Loop, sorpia::Boundary::EdgeAndCorner);
   sorpia::LimitSurface fresh(topo, m.vertices.data(), sorpia::Scheme::Loop, sorpia::Boundary::EdgeAndCorner);
   const std::vector<std::int32_t> face(1, 0);
@@ -145,15 +145,15 @@ TEST(Interrupt, TessellationAndEvaluationStop) {
     EXPECT_THROW(s.evaluate(face.data(), uv.data(), 1, p, nullptr, nullptr, nullptr), Interrupted);
   }
   EXPECT_EQ(stop.asked, 2);
-  const sorpia::PolyMesh t = s.tessellate(2), f = fresh.tessellate(2);
+  const sorpia::Mesh t = s.tessellate(2), f = fresh.tessellate(2);
   EXPECT_EQ(t.vertices, f.vertices);
-  EXPECT_EQ(t.face_indices, f.face_indices);
+  EXPECT_EQ(t.face_vertex_indices, f.face_vertex_indices);
 }
 
 TEST(Interrupt, ReadingAFileStops) {
-  const sorpia::TriMesh m = sorpia::icosphere(1);
+  const sorpia::Mesh m = sorpia::icosphere(1);
   const std::string path = ::testing::TempDir() + "sorpia_interrupt_" + std::to_string(::getpid()) + ".off";
-  sorpia::write_mesh(path, m.vertices.data(), m.n_vertices(), m.faces.data(), m.n_faces(), false);
+  sorpia::write_mesh(path, m.vertices.data(), m.n_vertices(), m.face_vertex_indices.data(), m.n_faces(), false);
   Counting stop;
   stop.stop = true;
   {
@@ -161,7 +161,7 @@ TEST(Interrupt, ReadingAFileStops) {
     wait_past_interval();
     EXPECT_THROW(sorpia::read_mesh(path), Interrupted);
   }
-  EXPECT_EQ(sorpia::read_mesh(path).faces, m.faces);
+  EXPECT_EQ(sorpia::read_mesh(path).face_vertex_indices, m.face_vertex_indices);
   std::remove(path.c_str());
 }
 

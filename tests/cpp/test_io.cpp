@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -32,46 +33,67 @@ class IoTest : public ::testing::Test {
 };
 
 // float64 values with no short decimal form, extremes, -0.0 and subnormals.
-sorpia::TriMesh awkward_mesh() {
-  sorpia::TriMesh m;
+sorpia::Mesh awkward_mesh() {
+  sorpia::Mesh m;
   m.vertices = {1.0 / 3.0, M_PI * 1e-7, 1e300, -0.0, 5e-324, std::numeric_limits<double>::denorm_min() * 12345,
                 0.1, 0.2, 0.30000000000000004, -std::numeric_limits<double>::max(), 2.2250738585072014e-308, 1.0};
-  m.faces = {0, 1, 2, 0, 2, 3};
+  m.face_vertex_indices = {0, 1, 2, 0, 2, 3};
   return m;
 }
 
 TEST_F(IoTest, FloatFormatsRoundTripBitForBit) {
   const auto m = awkward_mesh();
   for (const auto& [name, binary] : {std::pair{"a.obj", false}, {"a.off", false}, {"a.ply", false}, {"b.ply", true}}) {
-    sorpia::write_mesh(path(name), m.vertices.data(), m.n_vertices(), m.faces.data(), m.n_faces(), binary);
+    sorpia::write_mesh(path(name), m.vertices.data(), m.n_vertices(), m.face_vertex_indices.data(), m.n_faces(), binary);
     const auto r = sorpia::read_mesh(path(name));
     ASSERT_EQ(r.vertices.size(), m.vertices.size()) << name;
     EXPECT_EQ(std::memcmp(r.vertices.data(), m.vertices.data(), 8 * m.vertices.size()), 0) << name;
-    EXPECT_EQ(r.faces, m.faces) << name;
+    EXPECT_EQ(r.face_vertex_indices, m.face_vertex_indices) << name;
+  }
+}
+
+// write_mesh(Mesh) and read_mesh agree on the one mesh type: a mixed polygon
+// mesh keeps its counts, a uniform one (quads, triangles) comes back with
+// empty counts and its face size. Compared with the mesh written, exactly.
+TEST_F(IoTest, MeshRoundTripKeepsCountsAndUniformFaces) {
+  sorpia::Mesh quads = sorpia::quad_grid(4, 3);
+  quads.face_vertex_counts.clear();  // the uniform form: every face has face_size corners
+  quads.face_size = 4;
+  for (const auto& [name, m] : {std::pair{"poly.obj", sorpia::polygon_torus(6, 5, 2)}, {"quads.ply", quads},
+                                {"tri.off", sorpia::torus(5, 4)}}) {
+    sorpia::write_mesh(path(name), m, false);
+    const sorpia::MeshFile r = sorpia::read_mesh(path(name));
+    EXPECT_EQ(r.vertices, m.vertices) << name;
+    EXPECT_EQ(r.face_vertex_indices, m.face_vertex_indices) << name;
+    EXPECT_EQ(r.counts(), m.counts()) << name;
+    const bool mixed = !m.uniform() && std::any_of(m.face_vertex_counts.begin(), m.face_vertex_counts.end(),
+                                                   [&](std::int32_t k) { return k != m.face_vertex_counts[0]; });
+    EXPECT_EQ(r.uniform(), !mixed) << name;
+    EXPECT_EQ(r.n_faces(), m.n_faces()) << name;
   }
 }
 
 TEST_F(IoTest, StlRoundsToFloat32AndMergesEqualCorners) {
   const auto m = sorpia::icosphere(1);
-  sorpia::write_mesh(path("a.stl"), m.vertices.data(), m.n_vertices(), m.faces.data(), m.n_faces(), true);
+  sorpia::write_mesh(path("a.stl"), m.vertices.data(), m.n_vertices(), m.face_vertex_indices.data(), m.n_faces(), true);
   const auto r = sorpia::read_mesh(path("a.stl"));
   EXPECT_EQ(r.n_vertices(), m.n_vertices());  // corners merged back into the 42 vertices
   ASSERT_EQ(r.n_faces(), m.n_faces());
-  for (std::size_t k = 0; k < r.faces.size(); ++k)
+  for (std::size_t k = 0; k < r.face_vertex_indices.size(); ++k)
     for (int c = 0; c < 3; ++c)
-      EXPECT_EQ(r.vertices[3 * r.faces[k] + c], static_cast<double>(static_cast<float>(m.vertices[3 * m.faces[k] + c])));
+      EXPECT_EQ(r.vertices[3 * r.face_vertex_indices[k] + c], static_cast<double>(static_cast<float>(m.vertices[3 * m.face_vertex_indices[k] + c])));
 }
 
 TEST_F(IoTest, PolygonsAreKeptUnlessTriangulated) {
   write_text("quad.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n# a quad\nf 1 2 3 4\n");
   const auto q = sorpia::read_mesh(path("quad.obj"));
-  EXPECT_EQ(q.faces, (std::vector<std::int32_t>{0, 1, 2, 3}));
-  EXPECT_TRUE(q.face_sizes.empty());
+  EXPECT_EQ(q.face_vertex_indices, (std::vector<std::int32_t>{0, 1, 2, 3}));
+  EXPECT_TRUE(q.face_vertex_counts.empty());
   EXPECT_EQ(q.face_size, 4);
   EXPECT_EQ(q.n_faces(), 1u);
   EXPECT_EQ(q.polygons_split, 0u);
   const auto r = sorpia::read_mesh(path("quad.obj"), {true, false});
-  EXPECT_EQ(r.faces, (std::vector<std::int32_t>{0, 1, 2, 0, 2, 3}));
+  EXPECT_EQ(r.face_vertex_indices, (std::vector<std::int32_t>{0, 1, 2, 0, 2, 3}));
   EXPECT_TRUE(r.all_triangles());
   EXPECT_EQ(r.polygons_split, 1u);
 }
@@ -87,11 +109,11 @@ TEST_F(IoTest, MixedPolygonsKeepTheirSizesAndSplitsAreCounted) {
   const std::vector<std::int32_t> corners{0, 1, 2, 0, 1, 2, 3, 1, 4, 5, 2, 0, 1, 4, 5, 3};
   for (const char* name : {"mix.obj", "mix.off"}) {
     const auto kept = sorpia::read_mesh(path(name));
-    EXPECT_EQ(kept.face_sizes, (std::vector<std::int32_t>{3, 4, 4, 5})) << name;
-    EXPECT_EQ(kept.faces, corners) << name;
+    EXPECT_EQ(kept.face_vertex_counts, (std::vector<std::int32_t>{3, 4, 4, 5})) << name;
+    EXPECT_EQ(kept.face_vertex_indices, corners) << name;
     const auto r = sorpia::read_mesh(path(name), {true, false});
     EXPECT_EQ(r.polygons_split, 3u) << name;
-    EXPECT_EQ(r.faces.size(), 3u * (1 + 2 + 2 + 3)) << name;
+    EXPECT_EQ(r.face_vertex_indices.size(), 3u * (1 + 2 + 2 + 3)) << name;
     EXPECT_TRUE(r.all_triangles()) << name;
   }
   write_text("tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
@@ -110,8 +132,8 @@ TEST_F(IoTest, PolygonsRoundTripInEveryFormatButStl) {
     sorpia::write_mesh(path(name), view, binary);
     const auto r = sorpia::read_mesh(path(name));
     EXPECT_EQ(r.vertices, v) << name;
-    EXPECT_EQ(r.faces, faces) << name;
-    EXPECT_EQ(r.face_sizes, sizes) << name;
+    EXPECT_EQ(r.face_vertex_indices, faces) << name;
+    EXPECT_EQ(r.face_vertex_counts, sizes) << name;
   }
   sorpia_test::expect_error<sorpia::ParameterError>([&] { sorpia::write_mesh(path("p.stl"), view); }, {"STL stores triangles only"});
 }
@@ -149,7 +171,7 @@ TEST_F(IoTest, TagsRoundTripBitForBit) {
                        "t crease 2/1/0 1 2 0.30000000000000004\nt corner 1/1/0 0 inf\nt hole 1/0/0 0\n"
                        "t interpolateboundary 1/0/0 1\n");
   const auto m = sorpia::read_mesh(path("in.obj"), {false, true});
-  const sorpia::MeshView view{m.vertices.data(), m.n_vertices(), m.faces.data(), m.n_faces(), nullptr, m.face_size};
+  const sorpia::MeshView view{m.vertices.data(), m.n_vertices(), m.face_vertex_indices.data(), m.n_faces(), nullptr, m.face_size};
   sorpia::write_mesh(path("out.obj"), view, false, &m.tags);
   const auto r = sorpia::read_mesh(path("out.obj"), {false, true});
   EXPECT_EQ(r.tags.tags.crease_vertices, m.tags.tags.crease_vertices);
@@ -176,11 +198,11 @@ TEST_F(IoTest, ObjFaceVaryingValuesFollowTheirCorners) {
   // Triangulated: each triangle corner keeps the value its quad corner had at the same vertex.
   options.triangulate = true;
   const auto t = sorpia::read_mesh(path("in.obj"), options);
-  ASSERT_EQ(t.faces.size(), t.uvs.indices.size());
+  ASSERT_EQ(t.face_vertex_indices.size(), t.uvs.indices.size());
   const std::int32_t quad_value[4] = {0, 1, 2, 3};  // vertex v of the quad has value v
-  for (std::size_t c = 0; c < 6; ++c) EXPECT_EQ(t.uvs.indices[c], quad_value[t.faces[c]]) << c;
+  for (std::size_t c = 0; c < 6; ++c) EXPECT_EQ(t.uvs.indices[c], quad_value[t.face_vertex_indices[c]]) << c;
   // Written back and read again: the same value at every corner.
-  sorpia::MeshView view{m.vertices.data(), m.n_vertices(), m.faces.data(), m.n_faces(), m.face_sizes.data(), 0};
+  sorpia::MeshView view{m.vertices.data(), m.n_vertices(), m.face_vertex_indices.data(), m.n_faces(), m.face_vertex_counts.data(), 0};
   view.uvs = {m.uvs.values.data(), m.uvs.n_values(), m.uvs.width, m.uvs.indices.data()};
   view.normals = {m.normals.values.data(), m.normals.n_values(), m.normals.width, m.normals.indices.data()};
   sorpia::write_mesh(path("out.obj"), view);
@@ -204,9 +226,9 @@ TEST_F(IoTest, PlyPerVertexValuesRoundTrip) {
   const auto m = sorpia::icosphere(1);
   std::vector<double> uv(2 * m.n_vertices()), normal(m.vertices);
   for (std::size_t i = 0; i < uv.size(); ++i) uv[i] = 1.0 / (3.0 + static_cast<double>(i));
-  sorpia::MeshView view{m.vertices.data(), m.n_vertices(), m.faces.data(), m.n_faces(), nullptr, 3};
-  view.uvs = {uv.data(), m.n_vertices(), 2, m.faces.data()};  // per vertex: the corner's vertex is its value
-  view.normals = {normal.data(), m.n_vertices(), 3, m.faces.data()};
+  sorpia::MeshView view{m.vertices.data(), m.n_vertices(), m.face_vertex_indices.data(), m.n_faces(), nullptr, 3};
+  view.uvs = {uv.data(), m.n_vertices(), 2, m.face_vertex_indices.data()};  // per vertex: the corner's vertex is its value
+  view.normals = {normal.data(), m.n_vertices(), 3, m.face_vertex_indices.data()};
   sorpia::ReadOptions options;
   options.attributes = true;
   for (const bool binary : {false, true}) {
@@ -214,7 +236,7 @@ TEST_F(IoTest, PlyPerVertexValuesRoundTrip) {
     const auto r = sorpia::read_mesh(path("a.ply"), options);
     EXPECT_EQ(r.uvs.values, uv) << binary;  // bit for bit: double properties
     EXPECT_EQ(r.normals.values, normal) << binary;
-    EXPECT_EQ(r.uvs.indices, m.faces) << binary;
+    EXPECT_EQ(r.uvs.indices, m.face_vertex_indices) << binary;
     EXPECT_EQ(r.vertices, m.vertices) << binary;
   }
 }
@@ -254,14 +276,14 @@ TEST_F(IoTest, HeaderClaimingATrillionVerticesFailsAtOnce) {
 TEST_F(IoTest, FailedWriteKeepsTheOldFile) {
   write_text("keep.obj", "old");
   const auto m = sorpia::icosphere(0);
-  std::vector<std::int32_t> bad = m.faces;
+  std::vector<std::int32_t> bad = m.face_vertex_indices;
   bad[4] = 99;  // out of range: refused before anything is written
   EXPECT_THROW(sorpia::write_mesh(path("keep.obj"), m.vertices.data(), m.n_vertices(), bad.data(), m.n_faces()),
                sorpia::MeshError);
   std::ifstream in(path("keep.obj"));
   std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   EXPECT_EQ(text, "old");
-  EXPECT_THROW(sorpia::write_mesh(path("missing/dir/x.obj"), m.vertices.data(), m.n_vertices(), m.faces.data(),
+  EXPECT_THROW(sorpia::write_mesh(path("missing/dir/x.obj"), m.vertices.data(), m.n_vertices(), m.face_vertex_indices.data(),
                                   m.n_faces()),
                sorpia::FileError);
   std::size_t n_files = 0;
@@ -276,7 +298,7 @@ TEST_F(IoTest, NamesOfNameMaxBytesAreWrittenLongerOnesRefusedBeforeAnyFile) {
   const std::string longest = std::string(static_cast<std::size_t>(name_max) - 4, 'c') + ".obj";
   sorpia::check_writable(path(longest));
   const auto m = sorpia::icosphere(1);
-  sorpia::write_mesh(path(longest), m.vertices.data(), m.n_vertices(), m.faces.data(), m.n_faces());
+  sorpia::write_mesh(path(longest), m.vertices.data(), m.n_vertices(), m.face_vertex_indices.data(), m.n_faces());
   EXPECT_EQ(sorpia::read_mesh(path(longest)).vertices, m.vertices);
   const std::string too_long = "c" + longest;
   sorpia_test::expect_error<sorpia::FileError>([&] { sorpia::check_writable(path(too_long)); },

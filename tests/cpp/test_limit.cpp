@@ -26,7 +26,7 @@ struct Rings {
   std::vector<int> faces;
 };
 
-Rings rings_of(const sorpia::TriMesh& m) {
+Rings rings_of(const sorpia::Mesh& m) {
   Rings r;
   const std::size_t n = m.n_vertices();
   r.nbr.resize(n);
@@ -36,7 +36,7 @@ Rings rings_of(const sorpia::TriMesh& m) {
   std::map<std::pair<int, int>, int> edge_use;
   for (std::size_t f = 0; f < m.n_faces(); ++f)
     for (int k = 0; k < 3; ++k) {
-      const int a = m.faces[3 * f + k], b = m.faces[3 * f + (k + 1) % 3];
+      const int a = m.face_vertex_indices[3 * f + k], b = m.face_vertex_indices[3 * f + (k + 1) % 3];
       r.nbr[a].insert(b);
       r.nbr[b].insert(a);
       ++r.faces[a];
@@ -58,8 +58,8 @@ double entry(const sorpia::CsrMatrix& b, int i, int j) {
 }
 
 // Every entry of B equals the closed-form mask to `tol`.
-void expect_closed_form(const sorpia::TriMesh& m, sorpia::Boundary rule, double tol) {
-  const sorpia::Topology topo(m.faces.data(), m.n_faces(), m.n_vertices());
+void expect_closed_form(const sorpia::Mesh& m, sorpia::Boundary rule, double tol) {
+  const sorpia::Topology topo(m.face_vertex_indices.data(), m.n_faces(), m.n_vertices());
   const auto b = sorpia::limit_matrix(topo, rule);
   const Rings r = rings_of(m);
   ASSERT_EQ(b.n_rows, m.n_vertices());
@@ -115,7 +115,7 @@ TEST(LimitMatrix, KnownValuesFromTheLiterature) {
 TEST(LimitPoints, EqualsOpenSubdivLimit) {
   for (auto rule : {sorpia::Boundary::EdgeOnly, sorpia::Boundary::EdgeAndCorner}) {
     const auto m = sorpia::irregular(400, 3);
-    const sorpia::Topology topo(m.faces.data(), m.n_faces(), m.n_vertices());
+    const sorpia::Topology topo(m.face_vertex_indices.data(), m.n_faces(), m.n_vertices());
     std::vector<double> ref(m.vertices.size()), lp(m.vertices.size());
     sorpia::reference_limit_points(topo, m.vertices.data(), rule, ref.data());
     sorpia::limit_points(topo, m.vertices.data(), rule, lp.data());
@@ -126,7 +126,7 @@ TEST(LimitPoints, EqualsOpenSubdivLimit) {
 TEST(LimitMatrix, UnreferencedVertexGetsIdentityRow) {
   auto m = sorpia::icosphere(1);
   m.vertices.insert(m.vertices.end(), {5.0, 5.0, 5.0});  // vertex no face uses
-  const sorpia::Topology topo(m.faces.data(), m.n_faces(), m.n_vertices());
+  const sorpia::Topology topo(m.face_vertex_indices.data(), m.n_faces(), m.n_vertices());
   EXPECT_EQ(topo.n_unreferenced(), 1u);
   const auto b = sorpia::limit_matrix(topo, sorpia::Boundary::EdgeOnly);
   const int last = static_cast<int>(m.n_vertices()) - 1;
@@ -145,7 +145,7 @@ TEST(Topology, RefusesBadFacesWithTheirIndex) {
 
 TEST(Topology, BoundaryRingStartsAndEndsOnTheBoundary) {
   const auto m = sorpia::grid(5, 5);
-  const sorpia::Topology topo(m.faces.data(), m.n_faces(), m.n_vertices());
+  const sorpia::Topology topo(m.face_vertex_indices.data(), m.n_faces(), m.n_vertices());
   const Rings r = rings_of(m);
   for (std::size_t v = 0; v < m.n_vertices(); ++v) {
     ASSERT_EQ(topo.is_boundary(v), r.boundary[v]);

@@ -27,22 +27,22 @@ namespace {
 using sorpia::Boundary;
 using sorpia::TopologyBuild;
 
-sorpia::Topology build(const sorpia::TriMesh& m, TopologyBuild how) {
-  return sorpia::Topology(m.faces.data(), m.n_faces(), m.n_vertices(), how);
+sorpia::Topology build(const sorpia::Mesh& m, TopologyBuild how) {
+  return sorpia::Topology(m.face_vertex_indices.data(), m.n_faces(), m.n_vertices(), how);
 }
 
 // A boundary vertex (0) with n - 1 faces: the high-valence boundary case.
-sorpia::TriMesh fan(int n) {
-  sorpia::TriMesh m;
+sorpia::Mesh fan(int n) {
+  sorpia::Mesh m;
   m.vertices.assign(3 * (n + 1), 0.0);
-  for (int i = 1; i < n; ++i) m.faces.insert(m.faces.end(), {0, i, i + 1});
+  for (int i = 1; i < n; ++i) m.face_vertex_indices.insert(m.face_vertex_indices.end(), {0, i, i + 1});
   return m;
 }
 
 // The same mesh with its faces shuffled, each face's corners rotated at random
 // and two unreferenced vertices appended: the one-ring must not depend on
 // the face order OpenMesh's add_face happens to see.
-sorpia::TriMesh scrambled(sorpia::TriMesh m, unsigned seed) {
+sorpia::Mesh scrambled(sorpia::Mesh m, unsigned seed) {
   std::mt19937 rng(seed);
   std::vector<std::size_t> order(m.n_faces());
   std::iota(order.begin(), order.end(), 0);
@@ -50,16 +50,16 @@ sorpia::TriMesh scrambled(sorpia::TriMesh m, unsigned seed) {
   std::vector<std::int32_t> faces;
   for (std::size_t f : order) {
     const int r = static_cast<int>(rng() % 3);
-    for (int k = 0; k < 3; ++k) faces.push_back(m.faces[3 * f + (k + r) % 3]);
+    for (int k = 0; k < 3; ++k) faces.push_back(m.face_vertex_indices[3 * f + (k + r) % 3]);
   }
-  m.faces = faces;
+  m.face_vertex_indices = faces;
   m.vertices.insert(m.vertices.end(), 6, 0.5);
   return m;
 }
 
 struct Named {
   std::string name;
-  sorpia::TriMesh mesh;
+  sorpia::Mesh mesh;
 };
 
 // Closed irregular (valences 3..12), closed with valence 5 and 6, boundary
@@ -95,7 +95,7 @@ TEST(FastTopology, DirectOneRingIsTheClockwiseFan) {
     std::vector<std::vector<std::pair<int, int>>> wedges(m.n_vertices());  // (next, prev) per corner
     for (std::size_t f = 0; f < m.n_faces(); ++f)
       for (int k = 0; k < 3; ++k)
-        wedges[m.faces[3 * f + k]].push_back({m.faces[3 * f + (k + 1) % 3], m.faces[3 * f + (k + 2) % 3]});
+        wedges[m.face_vertex_indices[3 * f + k]].push_back({m.face_vertex_indices[3 * f + (k + 1) % 3], m.face_vertex_indices[3 * f + (k + 2) % 3]});
     for (std::size_t v = 0; v < m.n_vertices(); ++v) {
       const int lo = t.ring_offsets()[v], hi = t.ring_offsets()[v + 1];
       const int steps = t.is_boundary(v) ? hi - lo - 1 : hi - lo;

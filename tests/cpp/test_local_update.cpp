@@ -126,7 +126,7 @@ TEST(LocalUpdate, MeetsTheFullSolveGuaranteeAndComposes) {
 
 // A mesh solved to 1e-10, with a LocalSolver holding its vertices as targets.
 struct Solved {
-  explicit Solved(const sorpia::TriMesh& m)
+  explicit Solved(const sorpia::Mesh& m)
       : c(sorpia_test::limit_case(m, "irregular")),
         targets(c.mesh.vertices),
         solved(full_solve(c, targets, 1e-10)),

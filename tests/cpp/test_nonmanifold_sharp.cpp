@@ -83,7 +83,7 @@ sorpia::NonmanifoldSplit expect_split_is_opensubdiv(const Mesh& m, sorpia::Schem
   const std::vector<Point3> want = far_limit(m, points, scheme, boundary);
 
   const std::size_t n_out = s.vertex_map.size();
-  const sorpia::Topology split(s.face_counts.data(), s.face_counts.size(), s.faces.data(), n_out);
+  const sorpia::Topology split(s.face_vertex_counts.data(), s.face_vertex_counts.size(), s.face_vertex_indices.data(), n_out);
   // A crease vertex's copy in a sheet of one face, which "edge-and-corner" would make a corner: the split is
   // taken under "edge-only", with the corners "edge-and-corner" makes (every other vertex of one face) as tags.
   const bool corner_sheets = boundary == sorpia::Boundary::EdgeAndCorner && !s.single_face_sheets.empty();
@@ -250,8 +250,8 @@ TEST(NonmanifoldSharp, OpenSubdivShapesMatch) {
     Mesh m;
     m.n_vertices = file.n_vertices();
     for (std::size_t f = 0, at = 0; f < file.n_faces(); ++f) {
-      const std::int32_t k = file.face_sizes.empty() ? file.face_size : file.face_sizes[f];
-      const Ints face(file.faces.begin() + at, file.faces.begin() + at + k);
+      const std::int32_t k = file.face_vertex_counts.empty() ? file.face_size : file.face_vertex_counts[f];
+      const Ints face(file.face_vertex_indices.begin() + at, file.face_vertex_indices.begin() + at + k);
       at += k;
       if (std::set<std::int32_t>(face.begin(), face.end()).size() < face.size()) continue;
       m.counts.push_back(k);
@@ -274,14 +274,14 @@ TEST(NonmanifoldSharp, RandomCorruptionsMatchOpenSubdiv) {
     Mesh m;
     m.n_vertices = t.n_vertices();
     m.counts.assign(t.n_faces(), 3);
-    m.indices = t.faces;
+    m.indices = t.face_vertex_indices;
     bases.push_back({m, sorpia::Scheme::Loop});
   }
   for (const auto& q : {sorpia::quad_torus(6, 4), sorpia::quad_grid(5, 4)}) {
     Mesh m;
     m.n_vertices = q.n_vertices();
-    m.counts = q.face_counts;
-    m.indices = q.face_indices;
+    m.counts = q.face_vertex_counts;
+    m.indices = q.face_vertex_indices;
     bases.push_back({m, sorpia::Scheme::CatmullClark});
   }
   int compared = 0, refused = 0;

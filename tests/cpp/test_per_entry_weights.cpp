@@ -33,8 +33,8 @@ using sorpia_test::SweepRangesOnThreads;
 // with) and the operator built from it.
 using WeightedCase = sorpia_test::LimitCase;
 
-WeightedCase weighted_case(const sorpia::TriMesh& m, const char* name, unsigned seed) {
-  const sorpia::Topology topo(m.faces.data(), m.n_faces(), m.n_vertices());
+WeightedCase weighted_case(const sorpia::Mesh& m, const char* name, unsigned seed) {
+  const sorpia::Topology topo(m.face_vertex_indices.data(), m.n_faces(), m.n_vertices());
   sorpia::CsrMatrix b = perturbed(sorpia::reference_limit_matrix(topo, sorpia::Boundary::EdgeAndCorner), 0.2, seed);
   sorpia::LimitOperator op = sorpia::limit_operator(b);
   return {name, m, std::move(b), std::move(op)};
@@ -115,7 +115,7 @@ TEST(PerEntryWeights, EveryMethodGivesTheDirectSolution) {
 // breadth-first) and level by level (swept in slabs on threads).
 const std::vector<WeightedCase>& sweep_cases() {
   static const std::vector<WeightedCase> c = [] {
-    sorpia::TriMesh shuffled = sorpia::irregular(30000, 3);
+    sorpia::Mesh shuffled = sorpia::irregular(30000, 3);
     std::vector<std::int32_t> perm(shuffled.n_vertices());
     std::iota(perm.begin(), perm.end(), 0);
     std::shuffle(perm.begin(), perm.end(), std::mt19937(11));
@@ -123,7 +123,7 @@ const std::vector<WeightedCase>& sweep_cases() {
     for (std::size_t i = 0; i < perm.size(); ++i)
       for (int a = 0; a < 3; ++a) v[3 * perm[i] + a] = shuffled.vertices[3 * i + a];
     shuffled.vertices = v;
-    for (std::int32_t& f : shuffled.faces) f = perm[f];
+    for (std::int32_t& f : shuffled.face_vertex_indices) f = perm[f];
     return std::vector<WeightedCase>{weighted_case(sorpia::irregular(20000, 7), "irregular", 3),
                                      weighted_case(sorpia::torus(120, 110), "torus", 4),
                                      weighted_case(sorpia::grid(90, 70), "grid", 5),

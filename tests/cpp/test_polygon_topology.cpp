@@ -1,5 +1,5 @@
 // Polygon topology: the direct one-ring (edge and face neighbours) against
-// OpenMesh's PolyMesh and against the face list itself; the face checks on
+// OpenMesh's Mesh and against the face list itself; the face checks on
 // polygons; triangles through the polygon constructor unchanged.
 #include <gtest/gtest.h>
 
@@ -17,7 +17,7 @@
 
 namespace {
 
-using sorpia::PolyMesh;
+using sorpia::Mesh;
 using sorpia::TopologyBuild;
 using sorpia_test::build;
 
@@ -71,10 +71,10 @@ TEST(PolygonTopology, FaceRingIsTheFacesBetweenConsecutiveNeighbours) {
 }
 
 TEST(PolygonTopology, TrianglesThroughThePolygonConstructorAreTheTriangleTopology) {
-  const sorpia::TriMesh tri = sorpia::irregular(2000, 3);
+  const sorpia::Mesh tri = sorpia::irregular(2000, 3);
   const std::vector<std::int32_t> counts(tri.n_faces(), 3);
-  const sorpia::Topology a(tri.faces.data(), tri.n_faces(), tri.n_vertices());
-  const sorpia::Topology b(counts.data(), counts.size(), tri.faces.data(), tri.n_vertices());
+  const sorpia::Topology a(tri.face_vertex_indices.data(), tri.n_faces(), tri.n_vertices());
+  const sorpia::Topology b(counts.data(), counts.size(), tri.face_vertex_indices.data(), tri.n_vertices());
   EXPECT_TRUE(b.all_triangles());
   EXPECT_FALSE(b.has_face_ring());
   EXPECT_EQ(a.ring_offsets(), b.ring_offsets());
@@ -85,7 +85,7 @@ TEST(PolygonTopology, TrianglesThroughThePolygonConstructorAreTheTriangleTopolog
 }
 
 TEST(PolygonTopology, QuadTorusIsRegular) {
-  const PolyMesh m = sorpia::quad_torus(7, 5);
+  const Mesh m = sorpia::quad_torus(7, 5);
   const auto t = build(m, TopologyBuild::Direct);
   EXPECT_TRUE(t.all_quads());
   EXPECT_EQ(t.n_edges(), 2 * m.n_vertices());

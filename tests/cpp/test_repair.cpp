@@ -59,19 +59,19 @@ sorpia::RepairResult repaired(const Faces& faces, std::size_t n_vertices) {
     if (i < n_vertices) EXPECT_EQ(r.vertex_map[i], static_cast<std::int32_t>(i));
     else EXPECT_LT(static_cast<std::size_t>(r.vertex_map[i]), n_vertices);
   }
-  EXPECT_NO_THROW(sorpia::Topology(r.faces.data(), r.faces.size() / 3, n_out));
-  expect_openmesh_manifold(r.faces, n_out);
+  EXPECT_NO_THROW(sorpia::Topology(r.face_vertex_indices.data(), r.face_vertex_indices.size() / 3, n_out));
+  expect_openmesh_manifold(r.face_vertex_indices, n_out);
   // each output face: its input face, renumbered, reversed if flipped
   const std::set<std::int32_t> flipped(r.report.flipped_faces.begin(), r.report.flipped_faces.end());
-  EXPECT_EQ(r.face_map.size(), r.faces.size() / 3);
+  EXPECT_EQ(r.face_map.size(), r.face_vertex_indices.size() / 3);
   for (std::size_t j = 0; j < r.face_map.size(); ++j) {
     const std::int32_t f = r.face_map[j];
-    const std::array<std::int32_t, 3> mapped = {r.vertex_map[r.faces[3 * j]], r.vertex_map[r.faces[3 * j + 1]],
-                                                r.vertex_map[r.faces[3 * j + 2]]};
+    const std::array<std::int32_t, 3> mapped = {r.vertex_map[r.face_vertex_indices[3 * j]], r.vertex_map[r.face_vertex_indices[3 * j + 1]],
+                                                r.vertex_map[r.face_vertex_indices[3 * j + 2]]};
     EXPECT_EQ(cyclic(mapped.data(), false), cyclic(faces.data() + 3 * f, flipped.count(f) > 0)) << "face " << j;
   }
   // idempotent: the output is valid, so a second repair changes nothing
-  EXPECT_TRUE(sorpia::repair(r.faces.data(), r.faces.size() / 3, n_out).report.empty());
+  EXPECT_TRUE(sorpia::repair(r.face_vertex_indices.data(), r.face_vertex_indices.size() / 3, n_out).report.empty());
   return r;
 }
 
@@ -79,9 +79,9 @@ sorpia::RepairResult repaired(const Faces& faces, std::size_t n_vertices) {
 
 TEST(Repair, ValidMeshesComeBackUnchanged) {
   for (const auto& m : {sorpia::icosphere(2), sorpia::grid(5, 4), sorpia::irregular(300, 2), sorpia::pole(9)}) {
-    const sorpia::RepairResult r = sorpia::repair(m.faces.data(), m.n_faces(), m.n_vertices());
+    const sorpia::RepairResult r = sorpia::repair(m.face_vertex_indices.data(), m.n_faces(), m.n_vertices());
     EXPECT_TRUE(r.report.empty());
-    EXPECT_TRUE(r.faces.empty() && r.vertex_map.empty() && r.face_map.empty());  // "use the input"
+    EXPECT_TRUE(r.face_vertex_indices.empty() && r.vertex_map.empty() && r.face_map.empty());  // "use the input"
   }
 }
 
@@ -89,7 +89,7 @@ TEST(Repair, OpenBowtieGetsOneVertexPerFan) {
   const auto r = repaired(sorpia_test::bowtie_open_fans, 5);
   EXPECT_EQ(r.report.bowtie_vertices, Ints{0});
   EXPECT_EQ(r.report.bowtie_copies, Ints{1});
-  EXPECT_EQ(r.faces, (Faces{0, 1, 2, 5, 3, 4}));  // the first fan keeps vertex 0, the second gets copy 5
+  EXPECT_EQ(r.face_vertex_indices, (Faces{0, 1, 2, 5, 3, 4}));  // the first fan keeps vertex 0, the second gets copy 5
   EXPECT_TRUE(r.report.sheet_vertices.empty() && r.report.flipped_faces.empty());
 }
 
@@ -100,8 +100,8 @@ TEST(Repair, ClosedBowtieGetsOneVertexPerCone) {
   EXPECT_EQ(r.vertex_map.size(), 8u);
   EXPECT_EQ(r.vertex_map[7], 0);
   // the first cone (faces 0-3) keeps vertex 0; the second's apex (faces 4-6) is the copy
-  EXPECT_EQ(std::count(r.faces.begin(), r.faces.begin() + 12, 7), 0);
-  for (int f = 4; f < 7; ++f) EXPECT_EQ(r.faces[3 * f], 7);
+  EXPECT_EQ(std::count(r.face_vertex_indices.begin(), r.face_vertex_indices.begin() + 12, 7), 0);
+  for (int f = 4; f < 7; ++f) EXPECT_EQ(r.face_vertex_indices[3 * f], 7);
 }
 
 TEST(Repair, ThreeSheetsOnOneEdge) {
@@ -110,7 +110,7 @@ TEST(Repair, ThreeSheetsOnOneEdge) {
   EXPECT_EQ(r.report.nonmanifold_edges, (std::vector<std::array<std::int32_t, 2>>{{0, 1}}));
   EXPECT_EQ(r.report.sheet_vertices, (Ints{0, 1}));
   EXPECT_EQ(r.report.sheet_copies, (Ints{1, 1}));
-  EXPECT_EQ(r.faces, (Faces{0, 1, 2, 1, 0, 3, 5, 6, 4}));
+  EXPECT_EQ(r.face_vertex_indices, (Faces{0, 1, 2, 1, 0, 3, 5, 6, 4}));
 }
 
 TEST(Repair, FourSheetsOnOneEdgeFromTwoClosedSurfaces) {
@@ -123,41 +123,41 @@ TEST(Repair, FourSheetsOnOneEdgeFromTwoClosedSurfaces) {
   EXPECT_EQ(r.report.sheet_vertices, (Ints{0, 1}));
   EXPECT_EQ(r.report.sheet_copies, (Ints{1, 1}));
   // a closed result: every edge has two faces
-  const sorpia::Topology topo(r.faces.data(), r.faces.size() / 3, r.vertex_map.size());
+  const sorpia::Topology topo(r.face_vertex_indices.data(), r.face_vertex_indices.size() / 3, r.vertex_map.size());
   EXPECT_EQ(topo.n_boundary_edges(), 0u);
-  EXPECT_EQ(r.faces, (Faces{0, 1, 2, 6, 7, 4, 1, 0, 3, 7, 6, 5, 0, 2, 3, 1, 3, 2, 6, 4, 5, 7, 5, 4}));
+  EXPECT_EQ(r.face_vertex_indices, (Faces{0, 1, 2, 6, 7, 4, 1, 0, 3, 7, 6, 5, 0, 2, 3, 1, 3, 2, 6, 4, 5, 7, 5, 4}));
 }
 
 TEST(Repair, DuplicateAndReversedDuplicateFacesKeepTheFirst) {
   auto m = sorpia::icosphere(1);
-  Faces f = m.faces;
-  f.insert(f.end(), {m.faces[4], m.faces[5], m.faces[3]});  // face 1 again, rotated
-  f.insert(f.end(), {m.faces[6], m.faces[8], m.faces[7]});  // face 2 reversed
+  Faces f = m.face_vertex_indices;
+  f.insert(f.end(), {m.face_vertex_indices[4], m.face_vertex_indices[5], m.face_vertex_indices[3]});  // face 1 again, rotated
+  f.insert(f.end(), {m.face_vertex_indices[6], m.face_vertex_indices[8], m.face_vertex_indices[7]});  // face 2 reversed
   const auto r = repaired(f, m.n_vertices());
   EXPECT_EQ(r.report.duplicate_faces, Ints{80});
   EXPECT_EQ(r.report.reversed_duplicate_faces, Ints{81});
-  EXPECT_EQ(r.faces, m.faces);
+  EXPECT_EQ(r.face_vertex_indices, m.face_vertex_indices);
 }
 
 TEST(Repair, DegenerateFacesAreRemovedAndTheirVerticesKept) {
   auto m = sorpia::grid(3, 3);
-  Faces f = m.faces;
+  Faces f = m.face_vertex_indices;
   f.insert(f.begin(), {4, 4, 9});  // vertex 9 is new: used by this face only
   const auto r = repaired(f, 10);
   EXPECT_EQ(r.report.degenerate_faces, Ints{0});
   EXPECT_EQ(r.vertex_map.size(), 10u);
-  EXPECT_EQ(r.faces, m.faces);
+  EXPECT_EQ(r.face_vertex_indices, m.face_vertex_indices);
 }
 
 TEST(Repair, MixedOrientationFlipsTheFewerFaces) {
   auto m = sorpia::icosphere(2);
-  Faces f = m.faces;
+  Faces f = m.face_vertex_indices;
   for (int g : {3, 50, 51, 200}) std::swap(f[3 * g + 1], f[3 * g + 2]);
   const auto r = repaired(f, m.n_vertices());
   EXPECT_EQ(r.report.flipped_faces, (Ints{3, 50, 51, 200}));
-  EXPECT_EQ(r.faces, m.faces);
+  EXPECT_EQ(r.face_vertex_indices, m.face_vertex_indices);
   // a whole component reversed is consistent: left as it is
-  Faces all = m.faces;
+  Faces all = m.face_vertex_indices;
   for (std::size_t g = 0; g < m.n_faces(); ++g) std::swap(all[3 * g + 1], all[3 * g + 2]);
   EXPECT_TRUE(sorpia::repair(all.data(), m.n_faces(), m.n_vertices()).report.empty());
 }
@@ -180,15 +180,15 @@ TEST(Repair, WhatRepairDoesNotChangeIsRefusedAsValidationRefusesIt) {
 
 TEST(Repair, ManyDefectsAtOnceOnAnIrregularMesh) {
   auto m = sorpia::irregular(2000, 4);
-  Faces f = m.faces;
+  Faces f = m.face_vertex_indices;
   const auto n = static_cast<std::int32_t>(m.n_vertices());
   for (int g = 0; g < 40; ++g) std::swap(f[3 * (50 * g) + 1], f[3 * (50 * g) + 2]);   // flipped
   for (int g = 0; g < 20; ++g) {  // duplicates
-    const std::int32_t* t = m.faces.data() + 3 * (17 * g + 1);
+    const std::int32_t* t = m.face_vertex_indices.data() + 3 * (17 * g + 1);
     f.insert(f.end(), {t[0], t[1], t[2]});
   }
   for (int g = 0; g < 10; ++g) {  // a third face on an edge
-    const std::int32_t* t = m.faces.data() + 3 * (31 * g + 3);
+    const std::int32_t* t = m.face_vertex_indices.data() + 3 * (31 * g + 3);
     f.insert(f.end(), {t[0], t[1], n + 20 + g});
   }
   for (int g = 0; g < 10; ++g) f.insert(f.end(), {(13 * g) % n, n + 2 * g, n + 2 * g + 1});  // bowties

@@ -1,6 +1,6 @@
 // sorpia::repair on polygon meshes: each kind of defect built in code on quad
 // and mixed polygon meshes. Every repaired mesh is checked against OpenMesh's
-// PolyMesh, independently of sorpia's validation (add_face refuses a complex
+// Mesh, independently of sorpia's validation (add_face refuses a complex
 // edge or an orientation clash; every vertex must be manifold), and against
 // the input: each output face is its input face (consecutive repeats dropped)
 // renumbered through vertex_map, reversed if flipped. And sorpia's polygon
@@ -69,7 +69,7 @@ Poly quad_moebius(int n) {
   return p;
 }
 
-// OpenMesh's PolyMesh takes every output face and finds every referenced vertex manifold.
+// OpenMesh's Mesh takes every output face and finds every referenced vertex manifold.
 void expect_openmesh_manifold(const Poly& p) {
   OpenMesh::PolyMesh_ArrayKernelT<> mesh;
   omerr().disable();
@@ -104,7 +104,7 @@ Ints without_repeats(const Ints& face) {
 Poly repaired(const Poly& in, sorpia::RepairResult* result = nullptr) {
   sorpia::RepairResult r = sorpia::repair(in.counts.data(), in.n_faces(), in.indices.data(), in.n_vertices);
   EXPECT_FALSE(r.report.empty());
-  Poly out{r.face_counts, r.faces, r.vertex_map.size()};
+  Poly out{r.face_vertex_counts, r.face_vertex_indices, r.vertex_map.size()};
   EXPECT_GE(out.n_vertices, in.n_vertices);
   for (std::size_t i = 0; i < out.n_vertices; ++i) {  // the input vertices in place, then copies of them
     if (i < in.n_vertices) EXPECT_EQ(r.vertex_map[i], static_cast<std::int32_t>(i));
@@ -138,7 +138,7 @@ TEST(RepairPolygons, ValidPolygonMeshesComeBackUnchanged) {
   for (const Poly& p : {quad_grid(4, 3), cube, mixed}) {
     const sorpia::RepairResult r = sorpia::repair(p.counts.data(), p.n_faces(), p.indices.data(), p.n_vertices);
     EXPECT_TRUE(r.report.empty());
-    EXPECT_TRUE(r.faces.empty() && r.face_counts.empty() && r.vertex_map.empty());  // "use the input"
+    EXPECT_TRUE(r.face_vertex_indices.empty() && r.face_vertex_counts.empty() && r.vertex_map.empty());  // "use the input"
   }
 }
 
@@ -293,10 +293,10 @@ TEST(RepairPolygons, TrianglesAsPolygonsRepairAsTriangles) {
   const Ints counts(5, 3);
   const auto a = sorpia::repair(tri.data(), 5, 7);
   const auto b = sorpia::repair(counts.data(), 5, tri.data(), 7);
-  EXPECT_EQ(a.faces, b.faces);
+  EXPECT_EQ(a.face_vertex_indices, b.face_vertex_indices);
   EXPECT_EQ(a.vertex_map, b.vertex_map);
   EXPECT_EQ(a.face_map, b.face_map);
-  EXPECT_EQ(b.face_counts, Ints(b.face_map.size(), 3));
+  EXPECT_EQ(b.face_vertex_counts, Ints(b.face_map.size(), 3));
   EXPECT_EQ(a.report.reversed_duplicate_faces, b.report.reversed_duplicate_faces);
   EXPECT_EQ(a.report.sheet_copies, b.report.sheet_copies);
 }

@@ -18,7 +18,7 @@ TEST(LimitSurface, CornersEqualLimitPointsUnderBothBoundaryRules) {
   // (0,0), (1,0), (0,1) are the face's vertices 0, 1, 2. Bfr and Far's Limit
   // use different arithmetic: 1e-14 on a unit-sized mesh.
   const auto m = sorpia::grid(6, 5);
-  const sorpia::Topology topo(m.faces.data(), m.n_faces(), m.n_vertices());
+  const sorpia::Topology topo(m.face_vertex_indices.data(), m.n_faces(), m.n_vertices());
   for (const Boundary b : {Boundary::EdgeAndCorner, Boundary::EdgeOnly}) {
     std::vector<double> lp(m.vertices.size());
     sorpia::limit_points(topo, m.vertices.data(), b, lp.data());
@@ -34,13 +34,13 @@ TEST(LimitSurface, CornersEqualLimitPointsUnderBothBoundaryRules) {
     s.evaluate(ids.data(), uv.data(), ids.size(), p.data(), nullptr, nullptr, nullptr);
     for (std::size_t i = 0; i < ids.size(); ++i)
       for (int c = 0; c < 3; ++c)
-        EXPECT_NEAR(p[3 * i + c], lp[3 * m.faces[i] + c], 1e-14) << "point " << i;
+        EXPECT_NEAR(p[3 * i + c], lp[3 * m.face_vertex_indices[i] + c], 1e-14) << "point " << i;
   }
 }
 
 TEST(LimitSurface, TessellationStartsWithTheLimitPointsAndGrowsFourfold) {
   const auto m = sorpia::icosphere(1);
-  const sorpia::Topology topo(m.faces.data(), m.n_faces(), m.n_vertices());
+  const sorpia::Topology topo(m.face_vertex_indices.data(), m.n_faces(), m.n_vertices());
   sorpia::LimitSurface s(topo, m.vertices.data(), sorpia::Scheme::Loop, Boundary::EdgeAndCorner);
   std::vector<double> lp(m.vertices.size());
   sorpia::limit_points(topo, m.vertices.data(), Boundary::EdgeAndCorner, lp.data());
@@ -55,7 +55,7 @@ TEST(LimitSurface, TessellationStartsWithTheLimitPointsAndGrowsFourfold) {
 
 TEST(LimitSurface, RefusesBadLevelsAndPoints) {
   const auto m = sorpia::icosphere(0);
-  const sorpia::Topology topo(m.faces.data(), m.n_faces(), m.n_vertices());
+  const sorpia::Topology topo(m.face_vertex_indices.data(), m.n_faces(), m.n_vertices());
   sorpia::LimitSurface s(topo, m.vertices.data(), sorpia::Scheme::Loop, Boundary::EdgeAndCorner);
   EXPECT_THROW(s.tessellate(16), sorpia::ParameterError);
   const std::int32_t bad_face = 20;
@@ -84,21 +84,21 @@ TEST(LimitSurface, CatmullClarkPolygonsGiveQuadsAndExactCorners) {
   // polygons, level 1 one quad per corner, level 2 four times as many; Bfr at
   // every corner equals the tessellation's control vertex (Far refinement +
   // Limit(), or Bfr where Far's Limit() does not apply) to 1e-12.
-  const sorpia::PolyMesh m = sorpia::polygon_torus(10, 6, 3);
-  const sorpia::Topology topo(m.face_counts.data(), m.n_faces(), m.face_indices.data(), m.n_vertices());
+  const sorpia::Mesh m = sorpia::polygon_torus(10, 6, 3);
+  const sorpia::Topology topo(m.face_vertex_counts.data(), m.n_faces(), m.face_vertex_indices.data(), m.n_vertices());
   sorpia::LimitSurface s(topo, m.vertices.data(), sorpia::Scheme::CatmullClark, Boundary::EdgeAndCorner);
-  const sorpia::PolyMesh t0 = s.tessellate(0), t1 = s.tessellate(1), t2 = s.tessellate(2);
-  EXPECT_EQ(t0.face_counts, m.face_counts);
-  EXPECT_EQ(t0.face_indices, m.face_indices);
-  EXPECT_EQ(t1.n_faces(), m.face_indices.size());
-  EXPECT_EQ(t2.n_faces(), 4 * m.face_indices.size());
+  const sorpia::Mesh t0 = s.tessellate(0), t1 = s.tessellate(1), t2 = s.tessellate(2);
+  EXPECT_EQ(t0.face_vertex_counts, m.face_vertex_counts);
+  EXPECT_EQ(t0.face_vertex_indices, m.face_vertex_indices);
+  EXPECT_EQ(t1.n_faces(), m.face_vertex_indices.size());
+  EXPECT_EQ(t2.n_faces(), 4 * m.face_vertex_indices.size());
   for (const auto* t : {&t1, &t2})
-    EXPECT_TRUE(std::all_of(t->face_counts.begin(), t->face_counts.end(), [](int k) { return k == 4; }));
+    EXPECT_TRUE(std::all_of(t->face_vertex_counts.begin(), t->face_vertex_counts.end(), [](int k) { return k == 4; }));
   std::vector<std::int32_t> ids;
   std::vector<double> uv;
-  for (std::size_t f = 0, o = 0; f < m.n_faces(); o += m.face_counts[f++])
-    for (int j = 0; j < m.face_counts[f]; ++j) {
-      const auto c = catmark_corner(m.face_counts[f], j);
+  for (std::size_t f = 0, o = 0; f < m.n_faces(); o += m.face_vertex_counts[f++])
+    for (int j = 0; j < m.face_vertex_counts[f]; ++j) {
+      const auto c = catmark_corner(m.face_vertex_counts[f], j);
       ids.push_back(static_cast<std::int32_t>(f));
       uv.insert(uv.end(), {c.first, c.second});
     }
@@ -107,7 +107,7 @@ TEST(LimitSurface, CatmullClarkPolygonsGiveQuadsAndExactCorners) {
   for (const auto* t : {&t0, &t1, &t2})
     for (std::size_t i = 0; i < ids.size(); ++i)
       for (int c = 0; c < 3; ++c)
-        EXPECT_NEAR(p[3 * i + c], t->vertices[3 * static_cast<std::size_t>(m.face_indices[i]) + c], 1e-12);
+        EXPECT_NEAR(p[3 * i + c], t->vertices[3 * static_cast<std::size_t>(m.face_vertex_indices[i]) + c], 1e-12);
 }
 
 }  // namespace

@@ -41,13 +41,13 @@ std::vector<std::int32_t> permutation(std::size_t n, unsigned seed) {
 // vertex permutation(n, seed)[i]): every neighbour far away in index, so
 // almost every residual is deferred past the sweep and the thread ranges
 // share most vertices (interface).
-sorpia::TriMesh shuffled(const sorpia::TriMesh& m, unsigned seed) {
+sorpia::Mesh shuffled(const sorpia::Mesh& m, unsigned seed) {
   const std::vector<std::int32_t> perm = permutation(m.n_vertices(), seed);
-  sorpia::TriMesh out;
+  sorpia::Mesh out;
   out.vertices.resize(m.vertices.size());
   for (std::size_t i = 0; i < m.n_vertices(); ++i)
     for (int a = 0; a < 3; ++a) out.vertices[3 * perm[i] + a] = m.vertices[3 * i + a];
-  for (std::int32_t f : m.faces) out.faces.push_back(perm[f]);
+  for (std::int32_t f : m.face_vertex_indices) out.face_vertex_indices.push_back(perm[f]);
   return out;
 }
 
@@ -165,7 +165,7 @@ TEST(Sweep, PoorOrderIsSweptInItsOwnOrderAndReturnedInTheCallers) {
   const SweepRangesOnThreads on_threads;
   // The shuffled mesh is the irregular one renumbered: its solution must be
   // the same vertices renumbered, though the core sweeps it breadth-first.
-  const sorpia::TriMesh m = sorpia::irregular(40000, 3);
+  const sorpia::Mesh m = sorpia::irregular(40000, 3);
   const Case a = limit_case(m, "natural");
   const Case& b = cases()[4];  // shuffled(irregular(40000, 3), 11)
   const std::vector<std::int32_t> perm = permutation(m.n_vertices(), 11);  // as shuffled() numbered it
@@ -212,7 +212,7 @@ TEST(Sweep, StopAtZeroReturnsV0) {
   // E_0 is at rounding level and the run stops at k = 0; the first sweep,
   // which computed E_0, must be undone. The icosphere is swept in slabs on
   // two threads: with no extent to cut, all its vertices fall in the first.
-  for (sorpia::TriMesh m : {sorpia::irregular(20000, 5), sorpia::icosphere(6)}) {
+  for (sorpia::Mesh m : {sorpia::irregular(20000, 5), sorpia::icosphere(6)}) {
     for (std::size_t i = 0; i < m.n_vertices(); ++i)
       for (int a = 0; a < 3; ++a) m.vertices[3 * i + a] = 0.1 * (a + 1);
     const Case c = limit_case(m, "point");

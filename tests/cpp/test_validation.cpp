@@ -55,8 +55,8 @@ TEST(Validation, NonManifoldEdgeNamesTheEdgeAndItsFaces) {
 
 TEST(Validation, InconsistentOrientationSaysWhichFacesToFlip) {
   auto m = sorpia::icosphere(1);
-  std::swap(m.faces[3 * 7 + 1], m.faces[3 * 7 + 2]);  // reverse face 7
-  expect_refused(m.faces, m.n_vertices(), {"inconsistent orientation at edge", "face 7", "1 of the 80 faces",
+  std::swap(m.face_vertex_indices[3 * 7 + 1], m.face_vertex_indices[3 * 7 + 2]);  // reverse face 7
+  expect_refused(m.face_vertex_indices, m.n_vertices(), {"inconsistent orientation at edge", "face 7", "1 of the 80 faces",
                                            "(faces 7)"});
 }
 
@@ -83,8 +83,8 @@ TEST(Validation, UnusualButValidMeshesAreAccepted) {
   // two components (an icosphere and a disjoint triangle) and an unreferenced vertex
   auto m = sorpia::icosphere(1);
   const auto n = static_cast<std::int32_t>(m.n_vertices());
-  m.faces.insert(m.faces.end(), {n, n + 1, n + 2});
-  const sorpia::Topology two(m.faces.data(), m.n_faces(), m.n_vertices() + 4);
+  m.face_vertex_indices.insert(m.face_vertex_indices.end(), {n, n + 1, n + 2});
+  const sorpia::Topology two(m.face_vertex_indices.data(), m.n_faces(), m.n_vertices() + 4);
   EXPECT_EQ(two.n_unreferenced(), 1u);
   EXPECT_EQ(two.n_boundary_edges(), 3u);
 }
@@ -93,7 +93,7 @@ TEST(Validation, Valence360PoleMatchesTheClosedForm) {
   // The closed-form mask alpha_n (paper eq. 5, loop_masks.hpp);
   // pole(n): the centre (vertex 0) is an interior vertex of valence n.
   const auto m = sorpia::pole(360);
-  const sorpia::Topology topo(m.faces.data(), m.n_faces(), m.n_vertices());
+  const sorpia::Topology topo(m.face_vertex_indices.data(), m.n_faces(), m.n_vertices());
   ASSERT_EQ(topo.valence(0), 360);
   const auto b = sorpia::limit_matrix(topo, sorpia::Boundary::EdgeOnly);
   const double alpha = sorpia_test::loop_alpha(360);
@@ -104,9 +104,9 @@ TEST(Validation, Valence360PoleMatchesTheClosedForm) {
 
 TEST(Validation, ValenceBeyondOpenSubdivsLimitNamesTheVertex) {
   const auto m = sorpia::pole(65536);  // its centre, vertex 0, has 65536 neighbours
-  expect_refused(m.faces, m.n_vertices(), {"vertex 0 has 65536 neighbours", "at most 65535"});
+  expect_refused(m.face_vertex_indices, m.n_vertices(), {"vertex 0 has 65536 neighbours", "at most 65535"});
   const auto ok = sorpia::pole(65535);
-  EXPECT_EQ(sorpia::Topology(ok.faces.data(), ok.n_faces(), ok.n_vertices()).valence(0), 65535);
+  EXPECT_EQ(sorpia::Topology(ok.face_vertex_indices.data(), ok.n_faces(), ok.n_vertices()).valence(0), 65535);
 }
 
 TEST(Validation, FaceOrderDoesNotMatter) {
@@ -117,8 +117,8 @@ TEST(Validation, FaceOrderDoesNotMatter) {
   std::reverse(order.begin(), order.end());
   for (std::size_t i = 0; i + 7 < order.size(); i += 7) std::swap(order[i], order[i + 3]);
   Faces shuffled;
-  for (std::size_t f : order) shuffled.insert(shuffled.end(), m.faces.begin() + 3 * f, m.faces.begin() + 3 * f + 3);
-  const sorpia::Topology a(m.faces.data(), m.n_faces(), m.n_vertices());
+  for (std::size_t f : order) shuffled.insert(shuffled.end(), m.face_vertex_indices.begin() + 3 * f, m.face_vertex_indices.begin() + 3 * f + 3);
+  const sorpia::Topology a(m.face_vertex_indices.data(), m.n_faces(), m.n_vertices());
   const sorpia::Topology b(shuffled.data(), m.n_faces(), m.n_vertices());
   EXPECT_EQ(a.n_edges(), b.n_edges());
   for (std::size_t v = 0; v < m.n_vertices(); ++v) EXPECT_EQ(a.valence(v), b.valence(v));
@@ -136,28 +136,28 @@ TEST(Validation, ProblemsAreNamedInAFixedOrder) {
   // reversed and, on higher-numbered vertices, a third face on an edge.
   auto m = sorpia::icosphere(1);
   const auto n = static_cast<std::int32_t>(m.n_vertices());
-  std::swap(m.faces[3 * 7 + 1], m.faces[3 * 7 + 2]);
-  const std::int32_t a = m.faces[3 * 70], b = m.faces[3 * 70 + 1];
-  m.faces.insert(m.faces.end(), {a, b, n});
-  expect_refused(m.faces, m.n_vertices() + 1,
+  std::swap(m.face_vertex_indices[3 * 7 + 1], m.face_vertex_indices[3 * 7 + 2]);
+  const std::int32_t a = m.face_vertex_indices[3 * 70], b = m.face_vertex_indices[3 * 70 + 1];
+  m.face_vertex_indices.insert(m.face_vertex_indices.end(), {a, b, n});
+  expect_refused(m.face_vertex_indices, m.n_vertices() + 1,
                  {"non-manifold edge (" + std::to_string(std::min(a, b)) + ", " + std::to_string(std::max(a, b)) + ")"});
 
   // Of several misoriented edges the first by (lower end, higher end) is named,
   // found here by comparing every pair of faces.
   m = sorpia::icosphere(1);
-  std::swap(m.faces[3 * 7 + 1], m.faces[3 * 7 + 2]);
-  std::swap(m.faces[3 * 60 + 1], m.faces[3 * 60 + 2]);
+  std::swap(m.face_vertex_indices[3 * 7 + 1], m.face_vertex_indices[3 * 7 + 2]);
+  std::swap(m.face_vertex_indices[3 * 60 + 1], m.face_vertex_indices[3 * 60 + 2]);
   std::pair<std::int32_t, std::int32_t> first{n, n};
   for (std::size_t f = 0; f < m.n_faces(); ++f)
     for (std::size_t g = f + 1; g < m.n_faces(); ++g)
       for (int i = 0; i < 3; ++i)
         for (int j = 0; j < 3; ++j) {
-          const std::int32_t p = m.faces[3 * f + i], q = m.faces[3 * f + (i + 1) % 3];
-          if (p == m.faces[3 * g + j] && q == m.faces[3 * g + (j + 1) % 3])
+          const std::int32_t p = m.face_vertex_indices[3 * f + i], q = m.face_vertex_indices[3 * f + (i + 1) % 3];
+          if (p == m.face_vertex_indices[3 * g + j] && q == m.face_vertex_indices[3 * g + (j + 1) % 3])
             first = std::min(first, std::make_pair(std::min(p, q), std::max(p, q)));
         }
   ASSERT_LT(first.first, n);
-  expect_refused(m.faces, m.n_vertices(),
+  expect_refused(m.face_vertex_indices, m.n_vertices(),
                  {"inconsistent orientation at edge (" + std::to_string(first.first) + ", " +
                   std::to_string(first.second) + ")"});
 }

@@ -75,24 +75,24 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   }
   // What a reader accepts is well formed: indices in range, finite coordinates.
   const std::size_t n = mesh.n_vertices();
-  for (const std::int32_t i : mesh.faces)
+  for (const std::int32_t i : mesh.face_vertex_indices)
     if (i < 0 || static_cast<std::size_t>(i) >= n) finding("reader returned a face index out of range");
   for (const double x : mesh.vertices)
     if (!(x - x == 0)) finding("reader returned a non-finite coordinate");
   std::size_t corners = 0;
   for (std::size_t f = 0; f < mesh.n_faces(); ++f) {
-    const std::int32_t k = mesh.face_sizes.empty() ? mesh.face_size : mesh.face_sizes[f];
+    const std::int32_t k = mesh.face_vertex_counts.empty() ? mesh.face_size : mesh.face_vertex_counts[f];
     if (k < 3) finding("reader returned a face of fewer than 3 vertices");
     corners += static_cast<std::size_t>(k);
   }
-  if (corners != mesh.faces.size()) finding("reader's face sizes do not add up to its corner list");
+  if (corners != mesh.face_vertex_indices.size()) finding("reader's face sizes do not add up to its corner list");
   for (const std::int32_t h : mesh.tags.tags.holes)
     if (h < 0 || static_cast<std::size_t>(h) >= mesh.n_faces()) finding("reader returned a hole out of range");
   for (const std::int32_t v : mesh.tags.tags.crease_vertices)
     if (v < 0 || static_cast<std::size_t>(v) >= n) finding("reader returned a crease vertex out of range");
   for (const sorpia::FaceVarying* channel : {&mesh.uvs, &mesh.normals}) {
     if (channel->empty()) continue;
-    if (channel->indices.size() != mesh.faces.size()) finding("reader returned attributes not one per corner");
+    if (channel->indices.size() != mesh.face_vertex_indices.size()) finding("reader returned attributes not one per corner");
     for (const std::int32_t i : channel->indices)  // -1: a corner without a value (OBJ)
       if (i < -1 || (i >= 0 && static_cast<std::size_t>(i) >= channel->n_values()))
         finding("reader returned an attribute index out of range");
@@ -101,7 +101,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   }
   if (!mesh.all_triangles()) return 0;  // the limit below is Loop's
   try {
-    const sorpia::Topology topo(mesh.faces.data(), mesh.n_faces(), n);
+    const sorpia::Topology topo(mesh.face_vertex_indices.data(), mesh.n_faces(), n);
     std::vector<double> out(mesh.vertices.size());
     sorpia::limit_points(topo, mesh.vertices.data(), sorpia::Boundary::EdgeOnly, out.data());
     for (const double x : out)

@@ -287,7 +287,7 @@ double squared_distance(const std::vector<double>& v, std::int32_t a, std::int32
 
 }  // namespace
 
-void triangulate_polygons(const Polygons& polygons, const std::vector<double>& vertices,
+void triangulate_polygons(const PolygonSplits& polygons, const std::vector<double>& vertices,
                           std::vector<std::int32_t>& faces) {
   if (polygons.list.empty()) return;
   // Calls f(row) for every row of `faces` that is a triangle of the file (not
@@ -363,7 +363,7 @@ void triangulate_polygons(const Polygons& polygons, const std::vector<double>& v
   }
 }
 
-std::vector<std::int32_t> triangle_rows(const Polygons& polygons, const std::vector<std::int32_t>& holes) {
+std::vector<std::int32_t> triangle_rows(const PolygonSplits& polygons, const std::vector<std::int32_t>& holes) {
   // extra[i]: rows the polygons before polygons.list[i] add beyond one per face.
   std::vector<std::size_t> extra(polygons.list.size() + 1, 0);
   for (std::size_t i = 0; i < polygons.list.size(); ++i) extra[i + 1] = extra[i] + polygons.list[i].k - 3;
@@ -372,7 +372,7 @@ std::vector<std::int32_t> triangle_rows(const Polygons& polygons, const std::vec
   for (const std::int32_t h : holes) {
     const auto face = static_cast<std::size_t>(h);
     const auto it = std::lower_bound(polygons.list.begin(), polygons.list.end(), face,
-                                     [](const Polygons::Polygon& p, std::size_t f) { return p.face < f; });
+                                     [](const PolygonSplits::Polygon& p, std::size_t f) { return p.face < f; });
     const auto i = static_cast<std::size_t>(it - polygons.list.begin());
     const std::size_t first = face + extra[i];
     const std::size_t count = it != polygons.list.end() && it->face == face ? it->k - 2 : 1;
@@ -381,7 +381,7 @@ std::vector<std::int32_t> triangle_rows(const Polygons& polygons, const std::vec
   return rows;
 }
 
-void split_corner_values(const Polygons& polygons, const std::vector<std::int32_t>& faces,
+void split_corner_values(const PolygonSplits& polygons, const std::vector<std::int32_t>& faces,
                          std::vector<std::int32_t>& corner_values) {
   if (polygons.list.empty()) return;
   std::vector<std::int32_t> out(faces.size());
@@ -436,7 +436,7 @@ std::vector<double> per_vertex_values(const MeshView& m, const FaceVaryingView& 
 }
 
 MeshFile parse_mesh(const FileData& file, MeshFormat format, const ReadOptions& options) {
-  Polygons polygons;
+  PolygonSplits polygons;
   polygons.triangulate = options.triangulate;
   MeshFile mesh;
   switch (format) {
@@ -451,15 +451,15 @@ MeshFile parse_mesh(const FileData& file, MeshFormat format, const ReadOptions& 
     fail(file, "more vertices than int32 indices hold");
   if (mesh.n_faces() > static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max()))
     fail(file, "more faces than int32 indices hold");
-  triangulate_polygons(polygons, mesh.vertices, mesh.faces);
+  triangulate_polygons(polygons, mesh.vertices, mesh.face_vertex_indices);
   if (!polygons.list.empty() && !mesh.tags.tags.holes.empty())
     mesh.tags.tags.holes = triangle_rows(polygons, mesh.tags.tags.holes);
   for (FaceVarying* channel : {&mesh.uvs, &mesh.normals}) {
     if (channel->empty()) continue;
     if (channel->indices.empty())
-      channel->indices = mesh.faces;  // per vertex: each corner's value is its vertex's
+      channel->indices = mesh.face_vertex_indices;  // per vertex: each corner's value is its vertex's
     else
-      split_corner_values(polygons, mesh.faces, channel->indices);
+      split_corner_values(polygons, mesh.face_vertex_indices, channel->indices);
   }
   return mesh;
 }
@@ -494,7 +494,7 @@ void write_mesh(const std::string& path, const MeshView& mesh, bool binary, cons
   const std::string where = detail::io::printable_path(path) + ": ";
   if (binary && (format == MeshFormat::Obj || format == MeshFormat::Off))
     throw ParameterError(where + "OBJ and OFF are text formats; binary=true is for .ply and .stl");
-  const bool triangles = !mesh.face_sizes && mesh.face_size == 3;
+  const bool triangles = !mesh.face_vertex_counts && mesh.face_size == 3;
   if (format == MeshFormat::Stl && !triangles)
     throw ParameterError(where +
                          "STL stores triangles only; write polygons to .obj, .off or .ply, or triangulate them");

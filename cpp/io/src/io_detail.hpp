@@ -258,7 +258,7 @@ double parse_coordinate(const FileData& f, const Where& w, std::string_view toke
 // Polygons to triangulate are kept (their fans hold their rows of the face
 // list meanwhile) until the whole file is read: the split of each is chosen
 // with every edge of the mesh known (triangulate_polygons).
-struct Polygons {
+struct PolygonSplits {
   bool triangulate = false;  // split each into triangles; else kept as they are
   struct Polygon {
     std::size_t face;         // its index among the file's faces
@@ -275,29 +275,31 @@ struct Polygons {
 // diagonal is already an edge of the mesh (then the other one); a larger
 // polygon is fanned from its first corner whose diagonals are all new edges
 // (its first corner if none is, or if it has more than 32 corners). A new diagonal cannot repeat a face or give
-// an edge a third face. Polygons are taken in file order, each seeing the
+// an edge a third face. PolygonSplits are taken in file order, each seeing the
 // diagonals chosen before it. `vertices` (n, 3) give the diagonals' lengths.
-void triangulate_polygons(const Polygons& polygons, const std::vector<double>& vertices,
+void triangulate_polygons(const PolygonSplits& polygons, const std::vector<double>& vertices,
                           std::vector<std::int32_t>& faces);
 
 // The rows of the triangles of the file's faces `holes` (indices among the
 // file's faces, fewer than `n_file_faces`) once `polygons` are split: a
 // triangle keeps its face, a polygon of k corners gives k - 2 rows.
-std::vector<std::int32_t> triangle_rows(const Polygons& polygons, const std::vector<std::int32_t>& holes);
+std::vector<std::int32_t> triangle_rows(const PolygonSplits& polygons, const std::vector<std::int32_t>& holes);
 
 // Collects faces (0-based indices) into a MeshFile: as they are, the sizes
 // recorded only once a face differs from those before it; or, with
 // triangulate, polygons as fans recorded for triangulate_polygons.
 class FaceSink {
  public:
-  FaceSink(const FileData& file, Polygons& polygons, MeshFile& mesh) : file_(file), polygons_(polygons), mesh_(mesh) {}
+  FaceSink(const FileData& file, PolygonSplits& polygons, MeshFile& mesh)
+      : file_(file), polygons_(polygons), mesh_(mesh) {}
   // `idx` holds k indices already checked to lie in [0, n_vertices) (or, in
   // OBJ, to be checked against the final vertex count: the fan's rows hold
   // every corner until then).
   void add(const std::int64_t* idx, std::size_t k, const Where& w) {
-    if (mesh_.face_sizes.empty() && k == static_cast<std::size_t>(mesh_.face_size) && k == 3) {
-      mesh_.faces.insert(mesh_.faces.end(), {static_cast<std::int32_t>(idx[0]), static_cast<std::int32_t>(idx[1]),
-                                             static_cast<std::int32_t>(idx[2])});
+    if (mesh_.face_vertex_counts.empty() && k == static_cast<std::size_t>(mesh_.face_size) && k == 3) {
+      mesh_.face_vertex_indices.insert(mesh_.face_vertex_indices.end(),
+                                       {static_cast<std::int32_t>(idx[0]), static_cast<std::int32_t>(idx[1]),
+                                        static_cast<std::int32_t>(idx[2])});
       ++n_faces_;
       return;
     }
@@ -311,30 +313,31 @@ class FaceSink {
     if (k < 3) fail(file_, w, "a face needs at least 3 vertices, this one has " + std::to_string(k));
     if (polygons_.triangulate && k > 3) {
       ++mesh_.polygons_split;
-      polygons_.list.push_back({n_faces_, mesh_.faces.size() / 3, polygons_.indices.size(), k});
+      polygons_.list.push_back({n_faces_, mesh_.face_vertex_indices.size() / 3, polygons_.indices.size(), k});
       for (std::size_t i = 0; i < k; ++i) polygons_.indices.push_back(static_cast<std::int32_t>(idx[i]));
       for (std::size_t i = 1; i + 1 < k; ++i)
-        mesh_.faces.insert(mesh_.faces.end(), {static_cast<std::int32_t>(idx[0]), static_cast<std::int32_t>(idx[i]),
-                                               static_cast<std::int32_t>(idx[i + 1])});
+        mesh_.face_vertex_indices.insert(mesh_.face_vertex_indices.end(),
+                                         {static_cast<std::int32_t>(idx[0]), static_cast<std::int32_t>(idx[i]),
+                                          static_cast<std::int32_t>(idx[i + 1])});
       ++n_faces_;
       return;
     }
     if (k > static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max()))
       fail(file_, w, "a face of " + std::to_string(k) + " vertices: more than int32 counts hold");
     const auto size = static_cast<std::int32_t>(k);
-    if (mesh_.face_sizes.empty() && size != mesh_.face_size) {
+    if (mesh_.face_vertex_counts.empty() && size != mesh_.face_size) {
       if (n_faces_ == 0)
         mesh_.face_size = size;  // the first face sets the common size
       else
-        mesh_.face_sizes.assign(n_faces_, mesh_.face_size);  // sizes differ from here on: record every one
+        mesh_.face_vertex_counts.assign(n_faces_, mesh_.face_size);  // sizes differ from here on: record every one
     }
-    if (!mesh_.face_sizes.empty()) mesh_.face_sizes.push_back(size);
-    for (std::size_t i = 0; i < k; ++i) mesh_.faces.push_back(static_cast<std::int32_t>(idx[i]));
+    if (!mesh_.face_vertex_counts.empty()) mesh_.face_vertex_counts.push_back(size);
+    for (std::size_t i = 0; i < k; ++i) mesh_.face_vertex_indices.push_back(static_cast<std::int32_t>(idx[i]));
     ++n_faces_;
   }
 
   const FileData& file_;
-  Polygons& polygons_;
+  PolygonSplits& polygons_;
   MeshFile& mesh_;
   std::size_t n_faces_ = 0;
 };
@@ -390,8 +393,8 @@ template <class F>
 void for_each_face(const MeshView& m, F f) {
   std::size_t at = 0;
   for (std::size_t i = 0; i < m.n_faces; ++i) {
-    const auto k = static_cast<std::size_t>(m.face_sizes ? m.face_sizes[i] : m.face_size);
-    f(m.faces + at, k);
+    const auto k = static_cast<std::size_t>(m.face_vertex_counts ? m.face_vertex_counts[i] : m.face_size);
+    f(m.face_vertex_indices + at, k);
     at += k;
   }
 }
@@ -407,7 +410,7 @@ std::vector<double> per_vertex_values(const MeshView& m, const FaceVaryingView& 
 // Moves values given per file corner (`corner_values`, one per corner of the
 // file's faces, file order) onto the faces once `polygons` are split: a
 // triangle's corner takes the value of its polygon's corner at the same vertex.
-void split_corner_values(const Polygons& polygons, const std::vector<std::int32_t>& faces,
+void split_corner_values(const PolygonSplits& polygons, const std::vector<std::int32_t>& faces,
                          std::vector<std::int32_t>& corner_values);
 
 // The mesh in `file`, read as `format` (read_mesh without the path: the
@@ -420,10 +423,10 @@ MeshFile parse_mesh(const FileData& file, MeshFormat format, const ReadOptions& 
 // `tags`: read the OBJ `t` lines (read_obj only); `attributes`: texture
 // coordinates and normals (ReadOptions::attributes), per file corner from
 // read_obj, per vertex (indices empty) from read_ply.
-MeshFile read_obj(const FileData& f, Polygons& polygons, bool tags, bool attributes);
-MeshFile read_off(const FileData& f, Polygons& polygons);
-MeshFile read_ply(const FileData& f, Polygons& polygons, bool attributes);
-MeshFile read_stl(const FileData& f, Polygons& polygons);
+MeshFile read_obj(const FileData& f, PolygonSplits& polygons, bool tags, bool attributes);
+MeshFile read_off(const FileData& f, PolygonSplits& polygons);
+MeshFile read_ply(const FileData& f, PolygonSplits& polygons, bool attributes);
+MeshFile read_stl(const FileData& f, PolygonSplits& polygons);
 std::string format_obj(const MeshView& m, const FileTags* tags);
 std::string format_off(const MeshView& m);
 std::string format_ply(const MeshView& m, bool binary);

@@ -248,10 +248,10 @@ struct CornerValues {
   }
 };
 
-MeshFile read_obj(const FileData& f, Polygons& polygons, bool tags, bool attributes) {
+MeshFile read_obj(const FileData& f, PolygonSplits& polygons, bool tags, bool attributes) {
   MeshFile mesh;
   mesh.vertices.reserve(f.bytes.size() / 16);
-  mesh.faces.reserve(f.bytes.size() / 16);
+  mesh.face_vertex_indices.reserve(f.bytes.size() / 16);
   FaceSink sink(f, polygons, mesh);
   TagReader tag_reader(f);
   // Faces may name vertices defined further down: positive indices past the
@@ -319,9 +319,9 @@ MeshFile read_obj(const FileData& f, Polygons& polygons, bool tags, bool attribu
         }
         idx.push_back(i);
       }
-      const std::size_t before = mesh.faces.size();
+      const std::size_t before = mesh.face_vertex_indices.size();
       sink.add(idx.data(), idx.size(), w);
-      if (forward) pending.push_back({before, mesh.faces.size(), w.index});
+      if (forward) pending.push_back({before, mesh.face_vertex_indices.size(), w.index});
     } else if (attributes && tok == "vt") {
       uvs.add_value(f, w, rest, 1, 3);
     } else if (attributes && tok == "vn") {
@@ -335,9 +335,9 @@ MeshFile read_obj(const FileData& f, Polygons& polygons, bool tags, bool attribu
   const std::size_t n = mesh.n_vertices();
   for (const Pending& p : pending)
     for (std::size_t k = p.first; k < p.end; ++k)
-      if (static_cast<std::size_t>(mesh.faces[k]) >= n)
+      if (static_cast<std::size_t>(mesh.face_vertex_indices[k]) >= n)
         fail(f, Where{"line", p.line},
-             "vertex index " + std::to_string(mesh.faces[k] + 1) + " is out of range: the file has " +
+             "vertex index " + std::to_string(mesh.face_vertex_indices[k] + 1) + " is out of range: the file has " +
                  std::to_string(n) + " vertices");
   if (tags) tag_reader.finish(n, sink.n_faces(), mesh.tags);
   if (attributes) {
@@ -350,7 +350,7 @@ MeshFile read_obj(const FileData& f, Polygons& polygons, bool tags, bool attribu
 std::string format_obj(const MeshView& m, const FileTags* tags) {
   TextOut out(m.n_vertices * 60 + m.n_faces * 30);
   out << "# written by sorpia " << SORPIA_VERSION << ": " << std::to_string(m.n_vertices) << " vertices, "
-      << std::to_string(m.n_faces) << (m.face_sizes || m.face_size != 3 ? " faces\n" : " triangles\n");
+      << std::to_string(m.n_faces) << (m.face_vertex_counts || m.face_size != 3 ? " faces\n" : " triangles\n");
   for (std::size_t i = 0; i < m.n_vertices; ++i) (out << "v ").xyz(m.vertices + 3 * i) << '\n';
   for (std::size_t i = 0; i < m.uvs.n_values; ++i) {
     out << "vt";
@@ -362,7 +362,7 @@ std::string format_obj(const MeshView& m, const FileTags* tags) {
     for_each_face(m, [&](const std::int32_t* f, std::size_t k) { (out << "f ").face(f, k, 1) << '\n'; });
   } else {  // "f a/b/c ...", "a/b" or "a//c"
     for_each_face(m, [&](const std::int32_t* f, std::size_t k) {
-      const auto corner = static_cast<std::size_t>(f - m.faces);
+      const auto corner = static_cast<std::size_t>(f - m.face_vertex_indices);
       out << 'f';
       for (std::size_t c = 0; c < k; ++c) {
         (out << ' ').num(f[c] + 1);

@@ -23,7 +23,7 @@ std::size_t parse_count(const FileData& f, const Where& w, std::string_view rest
 
 }  // namespace
 
-MeshFile read_off(const FileData& f, Polygons& polygons) {
+MeshFile read_off(const FileData& f, PolygonSplits& polygons) {
   TokenReader in(text_begin(f), f.bytes.data() + f.bytes.size());
   std::string_view tok;
   const auto at = [&in] { return Where{"line", in.line()}; };
@@ -62,7 +62,7 @@ MeshFile read_off(const FileData& f, Polygons& polygons) {
     }
     in.skip_line();
   }
-  mesh.faces.reserve(3 * nf);
+  mesh.face_vertex_indices.reserve(3 * nf);
   FaceSink sink(f, polygons, mesh);
   std::vector<std::int64_t> idx;
   for (std::size_t i = 0; i < nf; ++i) {

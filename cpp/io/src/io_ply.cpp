@@ -291,7 +291,7 @@ Layout find_layout(const FileData& f, const Header& h, bool attributes) {
   return l;
 }
 
-MeshFile read_binary(const FileData& f, const Header& h, const Layout& l, Polygons& polygons) {
+MeshFile read_binary(const FileData& f, const Header& h, const Layout& l, PolygonSplits& polygons) {
   const bool swap = h.encoding == Encoding::BigEndian;
   const char* p = h.data;
   const char* end = f.bytes.data() + f.bytes.size();
@@ -307,7 +307,7 @@ MeshFile read_binary(const FileData& f, const Header& h, const Layout& l, Polygo
     const bool is_vertex = &e == l.vertex;
     const bool is_face = &e == l.face;
     if (is_vertex) l.allocate(mesh, e.count);
-    if (is_face) mesh.faces.reserve(3 * e.count);
+    if (is_face) mesh.face_vertex_indices.reserve(3 * e.count);
     if (e.fixed_size()) {
       std::size_t stride = 0;
       std::vector<std::size_t> offset;
@@ -379,7 +379,7 @@ MeshFile read_binary(const FileData& f, const Header& h, const Layout& l, Polygo
   return mesh;
 }
 
-MeshFile read_ascii(const FileData& f, const Header& h, const Layout& l, Polygons& polygons) {
+MeshFile read_ascii(const FileData& f, const Header& h, const Layout& l, PolygonSplits& polygons) {
   LineReader lines(h.data, f.bytes.data() + f.bytes.size());
   const std::size_t first_line = h.data_line - 1;
   MeshFile mesh;
@@ -391,7 +391,7 @@ MeshFile read_ascii(const FileData& f, const Header& h, const Layout& l, Polygon
     const bool is_vertex = &e == l.vertex;
     const bool is_face = &e == l.face;
     if (is_vertex) l.allocate(mesh, e.count);
-    if (is_face) mesh.faces.reserve(3 * e.count);
+    if (is_face) mesh.face_vertex_indices.reserve(3 * e.count);
     for (std::size_t i = 0; i < e.count; ++i) {
       do {
         if (!lines.next(line))
@@ -436,7 +436,7 @@ MeshFile read_ascii(const FileData& f, const Header& h, const Layout& l, Polygon
 
 }  // namespace
 
-MeshFile read_ply(const FileData& f, Polygons& polygons, bool attributes) {
+MeshFile read_ply(const FileData& f, PolygonSplits& polygons, bool attributes) {
   const Header h = parse_header(f);
   const Layout l = find_layout(f, h, attributes);
   return h.encoding == Encoding::Ascii ? read_ascii(f, h, l, polygons) : read_binary(f, h, l, polygons);
@@ -499,10 +499,10 @@ std::string format_ply(const MeshView& mesh, bool binary) {
     }
   }
   p += 8 * width * n;
-  if (!mesh.face_sizes && mesh.face_size == 3) {  // triangles: fixed 13-byte records
+  if (!mesh.face_vertex_counts && mesh.face_size == 3) {  // triangles: fixed 13-byte records
     for (std::size_t i = 0; i < m; ++i, p += 13) {
       p[0] = 3;
-      std::memcpy(p + 1, mesh.faces + 3 * i, 12);
+      std::memcpy(p + 1, mesh.face_vertex_indices + 3 * i, 12);
     }
     return std::move(s);
   }

@@ -50,7 +50,7 @@ class Welder {
 
 MeshFile read_binary(const FileData& f, std::size_t count) {
   MeshFile mesh;
-  mesh.faces.reserve(3 * count);
+  mesh.face_vertex_indices.reserve(3 * count);
   Welder weld(mesh, count);
   const char* p = f.bytes.data() + 84;
   // A binary facet has three corners by layout: no polygons, straight to the faces.
@@ -62,13 +62,13 @@ MeshFile read_binary(const FileData& f, std::size_t count) {
       const double d[3] = {q[0], q[1], q[2]};
       if (!std::isfinite(d[0]) || !std::isfinite(d[1]) || !std::isfinite(d[2]))
         fail(f, Where{"triangle", t}, "a coordinate is not finite");
-      mesh.faces.push_back(static_cast<std::int32_t>(weld.add(d)));
+      mesh.face_vertex_indices.push_back(static_cast<std::int32_t>(weld.add(d)));
     }
   }
   return mesh;
 }
 
-MeshFile read_ascii(const FileData& f, Polygons& polygons) {
+MeshFile read_ascii(const FileData& f, PolygonSplits& polygons) {
   MeshFile mesh;
   Welder weld(mesh, f.bytes.size() / 200);
   FaceSink sink(f, polygons, mesh);
@@ -116,7 +116,7 @@ void facet(const double* v, const std::int32_t* t, float out[12]) {
 
 }  // namespace
 
-MeshFile read_stl(const FileData& f, Polygons& polygons) {
+MeshFile read_stl(const FileData& f, PolygonSplits& polygons) {
   const std::size_t size = f.bytes.size();
   // Binary files may begin with "solid" too: the size decides first.
   std::uint32_t count = 0;
@@ -135,7 +135,7 @@ MeshFile read_stl(const FileData& f, Polygons& polygons) {
 std::string format_stl(const MeshView& mesh, bool binary) {
   // write_mesh refuses polygons for STL before this is called.
   const double* v = mesh.vertices;
-  const std::int32_t* faces = mesh.faces;
+  const std::int32_t* faces = mesh.face_vertex_indices;
   const std::size_t n = mesh.n_vertices, m = mesh.n_faces;
   for (std::size_t i = 0; i < 3 * n; ++i)
     if (std::fabs(v[i]) > std::numeric_limits<float>::max())

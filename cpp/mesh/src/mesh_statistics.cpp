@@ -100,26 +100,6 @@ constexpr std::int32_t kNoFan = -2;     // an edge of three or more faces, or a 
 // A face with a repeated vertex has no edges of its own: its half-edges are left out.
 inline bool degenerate_face(const std::int32_t* f) { return f[0] == f[1] || f[1] == f[2] || f[2] == f[0]; }
 
-// The half-edges of the proper faces sorted by undirected edge (min end, max
-// end, id): a counting sort by the min end, then each (small) bucket by the max end.
-std::vector<std::int32_t> sorted_half_edges(const std::int32_t* faces, std::size_t n_half, std::size_t n) {
-  auto lo = [&](std::size_t h) { return std::min(faces[h], faces[next_corner(h)]); };
-  auto hi = [&](std::size_t h) { return std::max(faces[h], faces[next_corner(h)]); };
-  auto proper = [&](std::size_t h) { return !degenerate_face(faces + (h - h % 3)); };
-  std::vector<std::int32_t> start(n + 1, 0);
-  for (std::size_t h = 0; h < n_half; ++h)
-    if (proper(h)) ++start[lo(h) + 1];
-  std::partial_sum(start.begin(), start.end(), start.begin());
-  std::vector<std::int32_t> order(start[n]);
-  std::vector<std::int32_t> fill(start.begin(), start.end() - 1);
-  for (std::size_t h = 0; h < n_half; ++h)
-    if (proper(h)) order[fill[lo(h)]++] = static_cast<std::int32_t>(h);
-  for (std::size_t v = 0; v < n; ++v)
-    std::sort(order.begin() + start[v], order.begin() + start[v + 1],
-              [&](std::int32_t a, std::int32_t b) { return std::make_pair(hi(a), a) < std::make_pair(hi(b), b); });
-  return order;
-}
-
 // The boundary half-edge that follows boundary half-edge h round its loop:
 // from h's end vertex v, across the faces of h's fan at v (each step from the
 // half-edge leaving v in a face to its mate's face), until a half-edge leaving
@@ -232,30 +212,21 @@ std::optional<MeshStatistics> face_list_statistics(const std::int32_t* faces, st
     if (faces[h] < 0 || static_cast<std::size_t>(faces[h]) >= n_vertices) return std::nullopt;
   EdgeCounts c(n_vertices);
   for (std::size_t h = 0; h < n_half; ++h) ++c.corners[faces[h]];
-  const std::vector<std::int32_t> order = sorted_half_edges(faces, n_half, n_vertices);
-  std::vector<std::int32_t> mate(n_half, kNoFan);
+  const detail::FaceList fl{faces, nullptr, nullptr, n_faces};
+  const detail::EdgeGroups edges(fl, n_vertices,
+                                 [&](std::size_t h) { return !degenerate_face(faces + (h - h % 3)); });
+  std::vector<std::int32_t> mate = edges.mates(kBoundary, kNoFan);
   DisjointSets components(n_vertices);
-  auto ends = [&](std::int32_t h) {
-    const std::int32_t a = faces[h], b = faces[next_corner(h)];
-    return std::make_pair(std::min(a, b), std::max(a, b));
-  };
-  for (std::size_t i = 0, j; i < order.size(); i = j) {
-    const auto [a, b] = ends(order[i]);
-    for (j = i + 1; j < order.size() && ends(order[j]) == std::make_pair(a, b); ++j) {
-    }
+  edges.for_each([&](std::int32_t a, std::int32_t b, const std::int32_t*, std::int32_t k) {
     ++c.n_edges;
     ++c.valence[a];
     ++c.valence[b];
     components.unite(a, b);
-    if (j - i == 1) {
+    if (k == 1) {
       ++c.n_boundary_edges;
       c.boundary[a] = c.boundary[b] = 1;
-      mate[order[i]] = kBoundary;
-    } else if (j - i == 2) {
-      mate[order[i]] = order[i + 1];
-      mate[order[i + 1]] = order[i];
     }
-  }
+  });
   for (std::size_t v = 0; v < n_vertices; ++v) c.component[v] = components.find(static_cast<std::int32_t>(v));
   count_loops(faces, n_half, mate, c);
   return finish(c, n_faces, false, nullptr, regular_valence(Scheme::Loop));

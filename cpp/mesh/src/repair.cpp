@@ -3,7 +3,7 @@
 // corner h to the next corner of its face and also names corner h, as in
 // topology.cpp. Linear time apart
 // from the faces of one edge, which are few: the half-edges are grouped by
-// edge with a counting sort on the lower end and a slot per higher end, the
+// edge (half_edges.hpp's EdgeGroups), the
 // fans are the classes of a union-find over corners, the orientation a
 // breadth-first search over the joined edges.
 #include "sorpia/repair.hpp"
@@ -30,6 +30,7 @@ bool RepairReport::empty() const {
 
 namespace {
 
+using detail::FaceArrays;
 using detail::FaceList;
 // Union-find over corners: the root of a class is its lowest corner.
 using Corners = detail::DisjointSets;
@@ -57,22 +58,6 @@ struct Faces : FaceList {
     return static_cast<std::int32_t>(3 * f);
   }
   std::int32_t end(std::size_t f) const { return begin(f + 1); }
-};
-
-// The offsets and corner faces of a FaceList of polygons (none for triangles).
-struct FaceArrays {
-  std::size_t n_faces = 0;
-  std::vector<std::int32_t> off, corner_face;
-
-  static FaceArrays triangles(std::size_t n_faces) { return {n_faces, {}, {}}; }
-  static FaceArrays polygons(const std::int32_t* counts, std::size_t n_faces) {
-    FaceArrays a{n_faces, detail::polygon_offsets(counts, n_faces), {}};
-    a.corner_face = detail::corner_faces(a.off);
-    return a;
-  }
-  FaceList over(const std::int32_t* idx) const {
-    return {idx, off.empty() ? nullptr : off.data(), corner_face.empty() ? nullptr : corner_face.data(), n_faces};
-  }
 };
 
 // A polygon list owning its arrays.
@@ -154,11 +139,10 @@ OwnedFaces drop_repeated_corners(const FaceList& fl, std::size_t n_vertices, std
 // Rules 2 and 3 of repair.hpp: removes (in `removed`, reported in `rep`) the
 // duplicate faces, and returns for each half-edge the half-edge of the face it
 // is joined to across its edge, or -1. The half-edges of the faces not yet
-// removed are bucketed by their lower end (a counting sort, in face order
-// within a bucket); within a bucket the edges are told apart by a slot per
-// higher end stamped with the lower end. A duplicate face shares each of its
-// edges with the face it repeats, so it is found at its first edge, before it
-// could be joined. The ends of edges of three or more faces are marked in
+// removed are grouped by edge (detail::EdgeGroups, in face order within an
+// edge). A duplicate face shares each of its edges with the face it repeats,
+// so it is found at its first edge, before it could be joined, and the face
+// kept is the first of its copies whichever edge finds them. The ends of edges of three or more faces are marked in
 // `sheet_end`, the half-edges of the faces paired there in `paired`. Needs
 // faces without a repeated vertex (rule 1).
 template <bool kPolygons>
@@ -166,86 +150,57 @@ std::vector<std::int32_t> join_edges(const Faces<kPolygons>& fl, std::size_t n_v
                                      std::vector<std::uint8_t>& removed, RepairReport& rep,
                                      std::vector<std::uint8_t>& sheet_end, std::vector<std::uint8_t>& paired) {
   const std::int32_t* faces = fl.idx;
-  const std::size_t n_half = fl.n_corners();
-  auto lo = [&](std::size_t h) { return std::min(faces[h], faces[fl.next(h)]); };
-  auto hi = [&](std::size_t h) { return std::max(faces[h], faces[fl.next(h)]); };
-  std::vector<std::int32_t> bucket(n_vertices + 1, 0);
-  for (std::size_t h = 0; h < n_half; ++h)
-    if (!removed[fl.face_of(h)]) ++bucket[lo(h) + 1];
-  for (std::size_t v = 0; v < n_vertices; ++v) bucket[v + 1] += bucket[v];
-  std::vector<std::int32_t> by_lo(bucket[n_vertices]);
-  {
-    std::vector<std::int32_t> fill(bucket.begin(), bucket.end() - 1);
-    for (std::size_t h = 0; h < n_half; ++h)
-      if (!removed[fl.face_of(h)]) by_lo[fill[lo(h)]++] = static_cast<std::int32_t>(h);
-  }
   auto drop_duplicate = [&](std::int32_t kept, std::int32_t h) {
     removed[fl.face_of(h)] = 1;
     (faces[kept] == faces[h] ? rep.duplicate_faces : rep.reversed_duplicate_faces).push_back(fl.face_of(h));
   };
-  std::vector<std::int32_t> mate(n_half, -1);
-  // Per higher end x of an edge (v, x): stamp v, the number of faces (-1 once
-  // an edge of 3+ is done) and the first half-edge.
-  std::vector<std::int32_t> stamp(n_vertices, -1), count(n_vertices), first(n_vertices);
+  std::vector<std::int32_t> mate(fl.n_corners(), -1);
   std::vector<std::int32_t> live;
-  for (std::size_t vi = 0; vi < n_vertices; ++vi) {
-    const auto v = static_cast<std::int32_t>(vi);
-    const std::int32_t* b = by_lo.data() + bucket[v];
-    const std::int32_t k = bucket[v + 1] - bucket[v];
-    for (std::int32_t i = 0; i < k; ++i) {
-      const std::int32_t x = hi(b[i]);
-      if (stamp[x] != v) {
-        stamp[x] = v;
-        count[x] = 0;
-        first[x] = b[i];
+  const detail::EdgeGroups edges(fl, n_vertices, [&](std::size_t h) { return !removed[fl.face_of(h)]; });
+  edges.for_each([&](std::int32_t v, std::int32_t x, const std::int32_t* b, std::int32_t k) {
+    if (k == 2) {  // most edges: joined, or one face a duplicate of the other
+      const std::int32_t g = b[0], h = b[1];
+      if (removed[fl.face_of(g)] || removed[fl.face_of(h)]) return;  // a duplicate found at another edge
+      if (fl.same_face(g, h)) {
+        drop_duplicate(g, h);
+      } else {
+        mate[g] = h;
+        mate[h] = g;
       }
-      ++count[x];
+      return;
     }
-    for (std::int32_t i = 0; i < k; ++i) {
-      const std::int32_t h = b[i], x = hi(h);
-      if (count[x] == 2) {
-        const std::int32_t g = first[x];
-        if (g == h || removed[fl.face_of(g)] || removed[fl.face_of(h)]) continue;  // removed: a duplicate found at another edge
-        if (fl.same_face(g, h)) {
-          drop_duplicate(g, h);
-        } else {
-          mate[g] = h;
-          mate[h] = g;
-        }
-      } else if (count[x] > 2) {  // every face of edge (v, x), at once
-        count[x] = -1;
-        live.clear();
-        for (std::int32_t j = i; j < k; ++j) {
-          const std::int32_t hj = b[j];
-          if (hi(hj) != x || removed[fl.face_of(hj)]) continue;
-          const auto same = std::find_if(live.begin(), live.end(), [&](std::int32_t g) { return fl.same_face(g, hj); });
-          if (same != live.end())
-            drop_duplicate(*same, hj);
-          else
-            live.push_back(hj);
-        }
-        if (live.size() == 2) {
-          mate[live[0]] = live[1];
-          mate[live[1]] = live[0];
-        } else if (live.size() > 2) {
-          rep.nonmanifold_edges.push_back({v, x});
-          sheet_end[v] = sheet_end[x] = 1;
-          for (std::size_t p = 0; p < live.size() && pair_sheets; ++p) {
-            if (mate[live[p]] >= 0) continue;
-            std::size_t partner = 0;
-            for (std::size_t q = p + 1; q < live.size() && !partner; ++q)
-              if (mate[live[q]] < 0 && faces[live[q]] != faces[live[p]]) partner = q;
-            for (std::size_t q = p + 1; q < live.size() && !partner; ++q)
-              if (mate[live[q]] < 0) partner = q;
-            if (!partner) break;
-            mate[live[p]] = live[partner];
-            mate[live[partner]] = live[p];
-            paired[live[p]] = paired[live[partner]] = 1;
-          }
-        }
+    // The faces of edge (v, x) not removed (a duplicate found at another
+    // edge), each compared with those kept before it.
+    live.clear();
+    for (std::int32_t j = 0; j < k; ++j) {
+      const std::int32_t hj = b[j];
+      if (removed[fl.face_of(hj)]) continue;
+      const auto same = std::find_if(live.begin(), live.end(), [&](std::int32_t g) { return fl.same_face(g, hj); });
+      if (same != live.end())
+        drop_duplicate(*same, hj);
+      else
+        live.push_back(hj);
+    }
+    if (live.size() == 2) {
+      mate[live[0]] = live[1];
+      mate[live[1]] = live[0];
+    } else if (live.size() > 2) {
+      rep.nonmanifold_edges.push_back({v, x});
+      sheet_end[v] = sheet_end[x] = 1;
+      for (std::size_t p = 0; p < live.size() && pair_sheets; ++p) {
+        if (mate[live[p]] >= 0) continue;
+        std::size_t partner = 0;
+        for (std::size_t q = p + 1; q < live.size() && !partner; ++q)
+          if (mate[live[q]] < 0 && faces[live[q]] != faces[live[p]]) partner = q;
+        for (std::size_t q = p + 1; q < live.size() && !partner; ++q)
+          if (mate[live[q]] < 0) partner = q;
+        if (!partner) break;
+        mate[live[p]] = live[partner];
+        mate[live[partner]] = live[p];
+        paired[live[p]] = paired[live[partner]] = 1;
       }
     }
-  }
+  });
   std::sort(rep.duplicate_faces.begin(), rep.duplicate_faces.end());
   std::sort(rep.reversed_duplicate_faces.begin(), rep.reversed_duplicate_faces.end());
   std::sort(rep.nonmanifold_edges.begin(), rep.nonmanifold_edges.end());
@@ -469,7 +424,7 @@ std::vector<std::int32_t> fan_vertices(const Faces<kPolygons>& fl, const std::ve
 
 // One pass of the rules in repair.hpp over valid indices; without
 // `pair_sheets`, every face of an edge of three or more borders it alone.
-// The output faces are polygons (with face_counts) unless `input` is triangles.
+// The output faces are polygons (with face_vertex_counts) unless `input` is triangles.
 template <bool kPolygons>
 RepairResult repair_pass(const FaceList& input, std::size_t n_vertices, bool pair_sheets) {
   RepairResult r;
@@ -477,7 +432,6 @@ RepairResult repair_pass(const FaceList& input, std::size_t n_vertices, bool pai
   std::vector<std::uint8_t> removed(input.n_faces, 0);
   const OwnedFaces collapsed = drop_repeated_corners(input, n_vertices, removed, rep);
   const Faces<kPolygons> fl{collapsed.empty() ? input : collapsed.view()};
-  const std::int32_t* faces = fl.idx;
   const std::size_t n_faces = fl.n_faces, n_half = fl.n_corners();
   std::vector<std::uint8_t> sheet_end(n_vertices, 0), cut_end(n_vertices, 0), paired(n_half, 0);
   std::vector<std::int32_t> mate = join_edges(fl, n_vertices, pair_sheets, removed, rep, sheet_end, paired);
@@ -504,16 +458,16 @@ RepairResult repair_pass(const FaceList& input, std::size_t n_vertices, bool pai
 
 
   // A reversed face keeps its first corner: (a, b, c, d) becomes (a, d, c, b).
-  r.faces.reserve(n_half);
+  r.face_vertex_indices.reserve(n_half);
   for (std::size_t f = 0; f < n_faces; ++f) {
     if (removed[f]) continue;
     const std::int32_t lo = fl.begin(f), hi = fl.end(f);
-    r.faces.push_back(vertex_of[lo]);
+    r.face_vertex_indices.push_back(vertex_of[lo]);
     if (!flip.empty() && flip[f])
-      for (std::int32_t h = hi - 1; h > lo; --h) r.faces.push_back(vertex_of[h]);
+      for (std::int32_t h = hi - 1; h > lo; --h) r.face_vertex_indices.push_back(vertex_of[h]);
     else
-      for (std::int32_t h = lo + 1; h < hi; ++h) r.faces.push_back(vertex_of[h]);
-    if (kPolygons) r.face_counts.push_back(hi - lo);
+      for (std::int32_t h = lo + 1; h < hi; ++h) r.face_vertex_indices.push_back(vertex_of[h]);
+    if (kPolygons) r.face_vertex_counts.push_back(hi - lo);
     r.face_map.push_back(static_cast<std::int32_t>(f));
   }
   return r;
@@ -570,8 +524,8 @@ void compose(RepairResult& first, RepairResult&& later) {
   for (std::size_t i = 0; i < face_map.size(); ++i) face_map[i] = first.face_map[later.face_map[i]];
   first.vertex_map = std::move(vertex_map);
   first.face_map = std::move(face_map);
-  first.faces = std::move(later.faces);
-  first.face_counts = std::move(later.face_counts);
+  first.face_vertex_indices = std::move(later.face_vertex_indices);
+  first.face_vertex_counts = std::move(later.face_vertex_counts);
 }
 
 }  // namespace
@@ -610,7 +564,7 @@ RepairResult repair_faces(const std::int32_t* counts, const FaceList& fl, std::s
     return counts ? repair_pass<true>(faces, n, pair_sheets) : repair_pass<false>(faces, n, pair_sheets);
   };
   RepairResult result = pass(fl, n_vertices, true);
-  if (result.faces.empty())
+  if (result.face_vertex_indices.empty())
     throw MeshError("every face repeats a vertex (" + std::to_string(fl.n_faces) +
                     " degenerate faces): no face is left, and subdivision needs at least one face");
   // Pairing sheets can join them into one fan at both ends of their edge (two
@@ -619,10 +573,10 @@ RepairResult repair_faces(const std::int32_t* counts, const FaceList& fl, std::s
   constexpr int max_passes = 4;
   for (int n_pass = 1;; ++n_pass) {
     const std::size_t n_out = result.vertex_map.size(), n_faces_out = result.face_map.size();
-    const std::int32_t* counts_out = counts ? result.face_counts.data() : nullptr;
+    const std::int32_t* counts_out = counts ? result.face_vertex_counts.data() : nullptr;
     const FaceArrays arrays =
         counts ? FaceArrays::polygons(counts_out, n_faces_out) : FaceArrays::triangles(n_faces_out);
-    const FaceList out = arrays.over(result.faces.data());
+    const FaceList out = arrays.over(result.face_vertex_indices.data());
     if (valid(counts_out, out, n_out)) return result;
     RepairResult next;
     if (n_pass < max_passes) next = pass(out, n_out, false);
@@ -672,16 +626,6 @@ NonmanifoldSplit split_pass(const Faces<kPolygons>& fl, std::size_t n_vertices) 
       stamp[faces[h]] = static_cast<std::int32_t>(f);
       ++n_faces_at[faces[h]];
     }
-  // The half-edges by lower end, then by higher end: the faces of each edge together.
-  auto lo = [&](std::size_t h) { return std::min(faces[h], faces[fl.next(h)]); };
-  auto hi = [&](std::int32_t h) { return std::max(faces[h], faces[fl.next(h)]); };
-  std::vector<std::int32_t> bucket(n_vertices + 1, 0), by_lo(n_half);
-  for (std::size_t h = 0; h < n_half; ++h) ++bucket[lo(h) + 1];
-  for (std::size_t v = 0; v < n_vertices; ++v) bucket[v + 1] += bucket[v];
-  {
-    std::vector<std::int32_t> fill(bucket.begin(), bucket.end() - 1);
-    for (std::size_t h = 0; h < n_half; ++h) by_lo[fill[lo(h)]++] = static_cast<std::int32_t>(h);
-  }
   std::vector<std::int32_t> mate(n_half, -1), n_edges(n_vertices, 0), n_boundary(n_vertices, 0),
       n_nonmanifold(n_vertices, 0);
   std::vector<std::array<std::int32_t, 2>> nonmanifold_ends(n_vertices, {-1, -1});  // the first two
@@ -689,30 +633,22 @@ NonmanifoldSplit split_pass(const Faces<kPolygons>& fl, std::size_t n_vertices) 
     if (n_nonmanifold[v] < 2) nonmanifold_ends[v][n_nonmanifold[v]] = x;
     ++n_nonmanifold[v];
   };
-  for (std::size_t vi = 0; vi < n_vertices; ++vi) {
-    const auto v = static_cast<std::int32_t>(vi);
-    std::int32_t* b = by_lo.data() + bucket[v];
-    const std::int32_t k = bucket[v + 1] - bucket[v];
-    std::sort(b, b + k, [&](std::int32_t g, std::int32_t h) { return std::make_pair(hi(g), g) < std::make_pair(hi(h), h); });
-    for (std::int32_t i = 0, j; i < k; i = j) {
-      const std::int32_t x = hi(b[i]);
-      for (j = i + 1; j < k && hi(b[j]) == x; ++j) {
-      }
-      ++n_edges[v];
-      ++n_edges[x];
-      if (j - i == 1) {
-        ++n_boundary[v];
-        ++n_boundary[x];
-      } else if (j - i == 2 && faces[b[i]] != faces[b[i + 1]]) {
-        mate[b[i]] = b[i + 1];
-        mate[b[i + 1]] = b[i];
-      } else {
-        s.nonmanifold_edges.push_back({v, x});
-        nonmanifold_end(v, x);
-        nonmanifold_end(x, v);
-      }
+  const detail::EdgeGroups edges(fl, n_vertices);
+  edges.for_each([&](std::int32_t v, std::int32_t x, const std::int32_t* b, std::int32_t k) {
+    ++n_edges[v];
+    ++n_edges[x];
+    if (k == 1) {
+      ++n_boundary[v];
+      ++n_boundary[x];
+    } else if (k == 2 && faces[b[0]] != faces[b[1]]) {
+      mate[b[0]] = b[1];
+      mate[b[1]] = b[0];
+    } else {
+      s.nonmanifold_edges.push_back({v, x});
+      nonmanifold_end(v, x);
+      nonmanifold_end(x, v);
     }
-  }
+  });
   const std::vector<std::uint8_t> removed(fl.n_faces, 0);
   std::vector<std::int32_t> copies(n_vertices, 0);
   s.vertex_map.resize(n_vertices);
@@ -765,10 +701,10 @@ NonmanifoldSplit split_pass(const Faces<kPolygons>& fl, std::size_t n_vertices) 
   s.single_face_sheets.erase(std::unique(s.single_face_sheets.begin(), s.single_face_sheets.end()),
                              s.single_face_sheets.end());
   if (s.empty()) return {};
-  s.faces.reserve(n_half);
+  s.face_vertex_indices.reserve(n_half);
   for (std::size_t f = 0; f < fl.n_faces; ++f) {
-    for (std::int32_t h = fl.begin(f); h < fl.end(f); ++h) s.faces.push_back(vertex_of[h]);
-    if (kPolygons) s.face_counts.push_back(fl.end(f) - fl.begin(f));
+    for (std::int32_t h = fl.begin(f); h < fl.end(f); ++h) s.face_vertex_indices.push_back(vertex_of[h]);
+    if (kPolygons) s.face_vertex_counts.push_back(fl.end(f) - fl.begin(f));
   }
   return s;
 }

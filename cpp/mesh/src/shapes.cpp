@@ -21,13 +21,13 @@ void check(bool ok, const std::string& what) {
 }
 }  // namespace
 
-TriMesh icosphere(int level) {
+Mesh icosphere(int level) {
   check(level >= 0 && level <= 10, "icosphere level must be in 0..10, got " + std::to_string(level));
   const double t = (1.0 + std::sqrt(5.0)) / 2.0;
-  TriMesh m;
+  Mesh m;
   m.vertices = {-1, t, 0, 1, t, 0, -1, -t, 0, 1, -t, 0, 0, -1, t, 0, 1, t,
                 0, -1, -t, 0, 1, -t, t, 0, -1, t, 0, 1, -t, 0, -1, -t, 0, 1};
-  m.faces = {0, 11, 5, 0, 5,  1,  0, 1, 7, 0, 7,  10, 0, 10, 11, 1, 5, 9, 5, 11,
+  m.face_vertex_indices = {0, 11, 5, 0, 5,  1,  0, 1, 7, 0, 7,  10, 0, 10, 11, 1, 5, 9, 5, 11,
              4, 11, 10, 2, 10, 7, 6, 7, 1, 8, 3,  9,  4, 3, 4,  2,  3, 2, 6, 3,
              6, 8,  3, 8,  9,  4,  9, 5, 2, 4, 11, 6,  2, 10, 8, 6,  7, 9, 8, 1};
   auto normalise = [&](std::size_t v) {
@@ -49,21 +49,22 @@ TriMesh icosphere(int level) {
       return v;
     };
     std::vector<std::int32_t> faces;
-    faces.reserve(4 * m.faces.size());
+    faces.reserve(4 * m.face_vertex_indices.size());
     for (std::size_t f = 0; f < m.n_faces(); ++f) {
-      const int a = m.faces[3 * f], b = m.faces[3 * f + 1], c = m.faces[3 * f + 2];
+      const std::int32_t* t = m.face_vertex_indices.data() + 3 * f;
+      const int a = t[0], b = t[1], c = t[2];
       const int ab = midpoint(a, b), bc = midpoint(b, c), ca = midpoint(c, a);
       faces.insert(faces.end(), {a, ab, ca, b, bc, ab, c, ca, bc, ab, bc, ca});
     }
-    m.faces.swap(faces);
+    m.face_vertex_indices.swap(faces);
   }
   return m;
 }
 
-TriMesh torus(int nu, int nv) {
+Mesh torus(int nu, int nv) {
   check(nu >= 3 && nv >= 3, "torus needs at least 3 x 3 vertices, got " + std::to_string(nu) + " x " +
                                 std::to_string(nv));
-  TriMesh m;
+  Mesh m;
   m.vertices.reserve(3 * static_cast<std::size_t>(nu) * nv);
   for (int i = 0; i < nu; ++i)
     for (int j = 0; j < nv; ++j) {
@@ -72,19 +73,19 @@ TriMesh torus(int nu, int nv) {
                         {(1 + 0.4 * std::cos(v)) * std::cos(u), (1 + 0.4 * std::cos(v)) * std::sin(u), 0.4 * std::sin(v)});
     }
   auto id = [&](int i, int j) { return ((i + nu) % nu) * nv + (j + nv) % nv; };
-  m.faces.reserve(6 * static_cast<std::size_t>(nu) * nv);
+  m.face_vertex_indices.reserve(6 * static_cast<std::size_t>(nu) * nv);
   for (int i = 0; i < nu; ++i)
     for (int j = 0; j < nv; ++j) {
       const int a = id(i, j), b = id(i + 1, j), c = id(i + 1, j + 1), d = id(i, j + 1);
-      m.faces.insert(m.faces.end(), {a, b, c, a, c, d});
+      m.face_vertex_indices.insert(m.face_vertex_indices.end(), {a, b, c, a, c, d});
     }
   return m;
 }
 
-TriMesh grid(int nu, int nv) {
+Mesh grid(int nu, int nv) {
   check(nu >= 2 && nv >= 2, "grid needs at least 2 x 2 vertices, got " + std::to_string(nu) + " x " +
                                 std::to_string(nv));
-  TriMesh m;
+  Mesh m;
   for (int i = 0; i < nu; ++i)
     for (int j = 0; j < nv; ++j) {
       const double x = static_cast<double>(i) / (nu - 1), y = static_cast<double>(j) / (nv - 1);
@@ -93,14 +94,14 @@ TriMesh grid(int nu, int nv) {
   for (int i = 0; i + 1 < nu; ++i)
     for (int j = 0; j + 1 < nv; ++j) {
       const int a = i * nv + j, b = (i + 1) * nv + j, c = (i + 1) * nv + j + 1, d = i * nv + j + 1;
-      m.faces.insert(m.faces.end(), {a, b, c, a, c, d});
+      m.face_vertex_indices.insert(m.face_vertex_indices.end(), {a, b, c, a, c, d});
     }
   return m;
 }
 
-TriMesh pole(int n) {
+Mesh pole(int n) {
   check(n >= 3, "pole valence must be at least 3, got " + std::to_string(n));
-  TriMesh m;
+  Mesh m;
   m.vertices = {0, 0, 0.3};
   for (int r = 1; r <= 2; ++r)
     for (int k = 0; k < n; ++k) {
@@ -108,19 +109,20 @@ TriMesh pole(int n) {
       m.vertices.insert(m.vertices.end(), {r * std::cos(a), r * std::sin(a), 0.3 / (1 + r * r)});
     }
   auto ring = [&](int r, int k) { return 1 + (r - 1) * n + (k % n); };
-  for (int k = 0; k < n; ++k) m.faces.insert(m.faces.end(), {0, ring(1, k), ring(1, k + 1)});
+  std::vector<std::int32_t>& idx = m.face_vertex_indices;
+  for (int k = 0; k < n; ++k) idx.insert(idx.end(), {0, ring(1, k), ring(1, k + 1)});
   for (int k = 0; k < n; ++k) {
-    m.faces.insert(m.faces.end(), {ring(1, k), ring(2, k), ring(1, k + 1)});
-    m.faces.insert(m.faces.end(), {ring(1, k + 1), ring(2, k), ring(2, k + 1)});
+    idx.insert(idx.end(), {ring(1, k), ring(2, k), ring(1, k + 1)});
+    idx.insert(idx.end(), {ring(1, k + 1), ring(2, k), ring(2, k + 1)});
   }
   return m;
 }
 
-TriMesh irregular(int n_vertices, std::uint32_t seed) {
+Mesh irregular(int n_vertices, std::uint32_t seed) {
   check(n_vertices >= 16, "irregular needs at least 16 vertices, got " + std::to_string(n_vertices));
   const int nv = std::max(4, static_cast<int>(std::sqrt(n_vertices / 2.5)));
   const int nu = std::max(4, n_vertices / nv);
-  TriMesh m = torus(nu, nv);
+  Mesh m = torus(nu, nv);
 
   detail::silence_openmesh();
   detail::OMesh mesh;
@@ -128,7 +130,8 @@ TriMesh irregular(int n_vertices, std::uint32_t seed) {
   for (std::size_t v = 0; v < m.n_vertices(); ++v)
     vh.push_back(mesh.add_vertex(detail::OMesh::Point(m.vertices[3 * v], m.vertices[3 * v + 1], m.vertices[3 * v + 2])));
   for (std::size_t f = 0; f < m.n_faces(); ++f)
-    mesh.add_face(vh[m.faces[3 * f]], vh[m.faces[3 * f + 1]], vh[m.faces[3 * f + 2]]);
+    mesh.add_face(vh[m.face_vertex_indices[3 * f]], vh[m.face_vertex_indices[3 * f + 1]],
+                  vh[m.face_vertex_indices[3 * f + 2]]);
 
   // Flip about a third of the edges at random, keeping every valence in 3..12.
   std::mt19937 rng(seed);
@@ -144,35 +147,35 @@ TriMesh irregular(int n_vertices, std::uint32_t seed) {
     if (mesh.valence(a) <= 3 || mesh.valence(b) <= 3 || mesh.valence(c) >= 12 || mesh.valence(d) >= 12) continue;
     mesh.flip(eh);
   }
-  m.faces.clear();
+  m.face_vertex_indices.clear();
   for (const auto fh : mesh.faces())
-    for (const auto v : mesh.fv_range(fh)) m.faces.push_back(v.idx());
+    for (const auto v : mesh.fv_range(fh)) m.face_vertex_indices.push_back(v.idx());
   return m;
 }
 
 namespace {
 // The quads (a, b, c, d) of the vertex grid of torus(nu, nv) (wrapped) or
 // grid(nu, nv) (not), counter-clockwise as their triangles (a, b, c), (a, c, d).
-PolyMesh quads_of(TriMesh tri) {
-  PolyMesh m;
+Mesh quads_of(Mesh tri) {
+  Mesh m;
   m.vertices = std::move(tri.vertices);
   for (std::size_t f = 0; f < tri.n_faces(); f += 2) {
-    const std::int32_t* t = tri.faces.data() + 3 * f;
-    m.face_indices.insert(m.face_indices.end(), {t[0], t[1], t[2], t[5]});
-    m.face_counts.push_back(4);
+    const std::int32_t* t = tri.face_vertex_indices.data() + 3 * f;
+    m.face_vertex_indices.insert(m.face_vertex_indices.end(), {t[0], t[1], t[2], t[5]});
+    m.face_vertex_counts.push_back(4);
   }
   return m;
 }
 }  // namespace
 
-PolyMesh quad_torus(int nu, int nv) { return quads_of(torus(nu, nv)); }
+Mesh quad_torus(int nu, int nv) { return quads_of(torus(nu, nv)); }
 
-PolyMesh quad_grid(int nu, int nv) { return quads_of(grid(nu, nv)); }
+Mesh quad_grid(int nu, int nv) { return quads_of(grid(nu, nv)); }
 
-PolyMesh quad_irregular(int n_vertices, std::uint32_t seed) {
+Mesh quad_irregular(int n_vertices, std::uint32_t seed) {
   check(n_vertices >= 96, "quad_irregular needs at least 96 vertices, got " + std::to_string(n_vertices));
-  const TriMesh tri = irregular(n_vertices / 6, seed);
-  PolyMesh m;
+  const Mesh tri = irregular(n_vertices / 6, seed);
+  Mesh m;
   m.vertices = tri.vertices;
   const auto point = [&](std::initializer_list<std::int32_t> corners) {
     const auto v = static_cast<std::int32_t>(m.n_vertices());
@@ -191,21 +194,22 @@ PolyMesh quad_irregular(int n_vertices, std::uint32_t seed) {
     midpoints.emplace(key, v);
     return v;
   };
-  m.face_counts.assign(3 * tri.n_faces(), 4);
-  m.face_indices.reserve(12 * tri.n_faces());
+  m.face_vertex_counts.assign(3 * tri.n_faces(), 4);
+  m.face_vertex_indices.reserve(12 * tri.n_faces());
   for (std::size_t f = 0; f < tri.n_faces(); ++f) {
-    const std::int32_t* t = tri.faces.data() + 3 * f;
+    const std::int32_t* t = tri.face_vertex_indices.data() + 3 * f;
     const std::int32_t c = point({t[0], t[1], t[2]});
     const std::int32_t mid[3] = {midpoint(t[0], t[1]), midpoint(t[1], t[2]), midpoint(t[2], t[0])};
     // corner k: (t[k], mid(k, k+1), centroid, mid(k-1, k)), counter-clockwise as the triangle
-    for (int k = 0; k < 3; ++k) m.face_indices.insert(m.face_indices.end(), {t[k], mid[k], c, mid[(k + 2) % 3]});
+    for (int k = 0; k < 3; ++k)
+      m.face_vertex_indices.insert(m.face_vertex_indices.end(), {t[k], mid[k], c, mid[(k + 2) % 3]});
   }
   // Number the vertices in the order the faces first reach them, as a mesh
   // exported from a modeller would be: the triangle mesh's own vertices
   // otherwise all come before the points added between them.
   std::vector<std::int32_t> renumber(m.n_vertices(), -1);
   std::int32_t next = 0;
-  for (std::int32_t& v : m.face_indices) {
+  for (std::int32_t& v : m.face_vertex_indices) {
     if (renumber[v] < 0) renumber[v] = next++;
     v = renumber[v];
   }
@@ -216,18 +220,18 @@ PolyMesh quad_irregular(int n_vertices, std::uint32_t seed) {
   return m;
 }
 
-PolyMesh polygon_torus(int nu, int nv, std::uint32_t seed) {
+Mesh polygon_torus(int nu, int nv, std::uint32_t seed) {
   check(nu >= 4 && nv >= 4, "polygon_torus needs at least 4 x 4 vertices, got " + std::to_string(nu) + " x " +
                                 std::to_string(nv));
-  PolyMesh m;
+  Mesh m;
   m.vertices = torus(nu, nv).vertices;
   auto id = [&](int i, int j) { return ((i + nu) % nu) * nv + (j + nv) % nv; };
   std::vector<std::uint8_t> used(static_cast<std::size_t>(nu) * nv, 0), joined(used.size(), 0);
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> u01(0.0, 1.0);
   const auto face = [&](std::initializer_list<std::int32_t> vs) {
-    m.face_counts.push_back(static_cast<std::int32_t>(vs.size()));
-    m.face_indices.insert(m.face_indices.end(), vs);
+    m.face_vertex_counts.push_back(static_cast<std::int32_t>(vs.size()));
+    m.face_vertex_indices.insert(m.face_vertex_indices.end(), vs);
   };
   // A quad is joined only with its neighbour i + 1 < nu (never across the
   // wrap), which no earlier quad has used.

@@ -116,24 +116,10 @@ void mark_fan(const FaceList& fl, const std::vector<std::int32_t>& mate, std::in
   throw std::logic_error("sorpia: refuse_edge found no bad edge at vertex " + std::to_string(v));
 }
 
-// Error path only: the other half-edge of each half-edge's edge, or -1, by
-// sorting the half-edges by edge (needs edges of at most two faces).
-std::vector<std::int32_t> mates(const FaceList& fl) {
-  const std::size_t n_half = fl.n_corners();
-  std::vector<std::pair<std::uint64_t, std::int32_t>> by_edge(n_half);
-  for (std::size_t h = 0; h < n_half; ++h) {
-    const auto a = static_cast<std::uint64_t>(fl.idx[h]), b = static_cast<std::uint64_t>(fl.idx[fl.next(h)]);
-    by_edge[h] = {std::min(a, b) << 32 | std::max(a, b), static_cast<std::int32_t>(h)};
-  }
-  std::sort(by_edge.begin(), by_edge.end());
-  std::vector<std::int32_t> mate(n_half, -1);
-  for (std::size_t i = 0; i + 1 < n_half; ++i)
-    if (by_edge[i].first == by_edge[i + 1].first) {
-      mate[by_edge[i].second] = by_edge[i + 1].second;
-      mate[by_edge[i + 1].second] = by_edge[i].second;
-      ++i;
-    }
-  return mate;
+// Error path only: the other half-edge of each half-edge's edge, or -1
+// (needs edges of at most two faces).
+std::vector<std::int32_t> mates(const FaceList& fl, std::size_t n_vertices) {
+  return detail::EdgeGroups(fl, n_vertices).mates();
 }
 
 // Error path only. Some vertex has more than one fan of faces: name the vertex
@@ -142,7 +128,7 @@ std::vector<std::int32_t> mates(const FaceList& fl) {
 [[noreturn]] void refuse_bowtie(const FaceList& fl, std::size_t n_vertices) {
   const std::int32_t* faces = fl.idx;
   const std::size_t n_half = fl.n_corners();
-  const std::vector<std::int32_t> mate = mates(fl);
+  const std::vector<std::int32_t> mate = mates(fl, n_vertices);
   std::vector<std::int32_t> first_corner(n_vertices, -1);
   for (std::size_t h = 0; h < n_half; ++h)
     if (first_corner[faces[h]] < 0) first_corner[faces[h]] = static_cast<std::int32_t>(h);
@@ -208,9 +194,9 @@ std::string orientation_advice(const FaceList& fl, std::size_t start, Mate mate)
 
 // Error path only. Edge e is run the same way by two faces: names them and
 // says how to fix the orientation of their connected part.
-[[noreturn]] void refuse_misoriented(const FaceList& fl, Edge e) {
+[[noreturn]] void refuse_misoriented(const FaceList& fl, std::size_t n_vertices, Edge e) {
   const std::int32_t* faces = fl.idx;
-  const std::vector<std::int32_t> mate = mates(fl);
+  const std::vector<std::int32_t> mate = mates(fl, n_vertices);
   std::int32_t h0 = 0;
   while (edge(faces[h0], faces[fl.next(h0)]) != e) ++h0;
   const std::int32_t h1 = mate[h0];
@@ -278,7 +264,7 @@ struct Findings {
 // vertex whatever order the pass met them in.
 void refuse_findings(const Findings& found, const FaceList& fl, std::size_t n_vertices) {
   if (found.bad_lo != none) refuse_edge(fl, found.bad_lo);
-  if (found.misoriented.first != none) refuse_misoriented(fl, found.misoriented);
+  if (found.misoriented.first != none) refuse_misoriented(fl, n_vertices, found.misoriented);
   if (found.bowtie) refuse_bowtie(fl, n_vertices);
   if (found.crowded >= 0)
     throw MeshError("vertex " + std::to_string(found.crowded) + " has " + std::to_string(found.crowded_valence) +
@@ -685,9 +671,8 @@ bool faces_valid(const std::int32_t* face_vertex_counts, std::size_t n_faces, co
   bool valid = true;
   try {
     check_counts(n_faces, n_vertices);
-    const std::vector<std::int32_t> off = detail::polygon_offsets(face_vertex_counts, n_faces);
-    const std::vector<std::int32_t> corner_face = detail::corner_faces(off);
-    validate_faces(FaceList{face_vertex_indices, off.data(), corner_face.data(), n_faces}, n_vertices, nullptr, &valid);
+    const detail::FaceArrays arrays = detail::FaceArrays::polygons(face_vertex_counts, n_faces);
+    validate_faces(arrays.over(face_vertex_indices), n_vertices, nullptr, &valid);
   } catch (const MeshError&) {
     return false;
   }

@@ -519,7 +519,7 @@ std::vector<int> inexact_limit_vertices(const Far::TopologyRefiner& refiner, int
 
 }  // namespace
 
-PolyMesh LimitSurface::tessellate(int level) {
+Mesh LimitSurface::tessellate(int level) {
   if (level < 0 || level > 15)
     throw ParameterError("level must be in 0..15, got " + std::to_string(level));
   const Scheme scheme = impl_->scheme;
@@ -610,7 +610,7 @@ PolyMesh LimitSurface::tessellate(int level) {
   const std::size_t n_osd = from.size();
   const auto n_level = static_cast<std::size_t>(last.GetNumVertices());
   const std::size_t n_out = n + (n_level - n_osd);
-  PolyMesh out;
+  Mesh out;
   out.vertices.resize(3 * n_out);
   // Control vertices: B V exactly as sorpia::limit_points computes it (one
   // B; the refined level gives the same points up to rounding, except at the
@@ -632,14 +632,14 @@ PolyMesh LimitSurface::tessellate(int level) {
                                                                          : n + static_cast<std::size_t>(i) - n_osd);
   };
   const auto n_faces_level = static_cast<std::size_t>(last.GetNumFaces());
-  out.face_counts.reserve(n_faces_level);
-  out.face_indices.reserve(static_cast<std::size_t>(last.GetNumFaceVertices()));
+  out.face_vertex_counts.reserve(n_faces_level);
+  out.face_vertex_indices.reserve(static_cast<std::size_t>(last.GetNumFaceVertices()));
   for (std::size_t f = 0; f < n_faces_level; ++f) {
     if (f % kRowsPerPoll == 0) poll_interrupt();
     if (last.IsFaceHole(static_cast<int>(f))) continue;
     const auto fv = last.GetFaceVertices(static_cast<int>(f));
-    out.face_counts.push_back(fv.size());
-    for (int c = 0; c < fv.size(); ++c) out.face_indices.push_back(to_out(fv[c]));
+    out.face_vertex_counts.push_back(fv.size());
+    for (int c = 0; c < fv.size(); ++c) out.face_vertex_indices.push_back(to_out(fv[c]));
   }
   return out;
 }

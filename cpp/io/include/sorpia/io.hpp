@@ -24,6 +24,7 @@
 #include <string>
 #include <vector>
 
+#include "sorpia/mesh.hpp"
 #include "sorpia/subdivision.hpp"
 
 namespace sorpia {
@@ -80,27 +81,14 @@ struct FaceVaryingView {
 /// @throws FileError for any other extension
 MeshFormat mesh_format(const std::string& path);
 
-/// A mesh as a file holds it: vertices, and faces in the counts + indices
-/// form of OpenSubdiv's Far::TopologyDescriptor (numVertsPerFace,
-/// vertIndicesPerFace) and USD (faceVertexCounts, faceVertexIndices). When
-/// every face has the same number of corners, `face_sizes` stays empty and
-/// `face_size` holds that number, so a triangle (or all-quad) mesh costs
-/// nothing beyond its index list.
-struct MeshFile {
-  std::vector<double> vertices;          ///< (n, 3), in file order
-  std::vector<std::int32_t> faces;       ///< every face's corners (0-based), face after face
-  std::vector<std::int32_t> face_sizes;  ///< corners per face; empty when every face has `face_size`
-  std::int32_t face_size = 3;            ///< the corners of every face when face_sizes is empty
-  std::size_t polygons_split = 0;        ///< faces of more than 3 corners split (ReadOptions::triangulate)
-  FileTags tags;                         ///< the OBJ file's `t` lines (ReadOptions::tags)
+/// A mesh as a file holds it: a sorpia::Mesh (vertices in file order, faces
+/// in the counts + indices form, face_vertex_counts empty when every face has
+/// the same number of corners) and what else the file says.
+struct MeshFile : Mesh {
+  std::size_t polygons_split = 0;  ///< faces of more than 3 corners split (ReadOptions::triangulate)
+  FileTags tags;                   ///< the OBJ file's `t` lines (ReadOptions::tags)
   FaceVarying uvs;      ///< texture coordinates (ReadOptions::attributes), following the faces as triangulated
   FaceVarying normals;  ///< normals (ReadOptions::attributes), as `uvs`
-
-  std::size_t n_vertices() const { return vertices.size() / 3; }
-  std::size_t n_faces() const {
-    return face_sizes.empty() ? faces.size() / static_cast<std::size_t>(face_size) : face_sizes.size();
-  }
-  bool all_triangles() const { return face_sizes.empty() && face_size == 3; }
 };
 
 struct ReadOptions {
@@ -137,13 +125,13 @@ struct ReadOptions {
 ///         options.tags) a malformed tag or one whose rule sorpia does not have
 MeshFile read_mesh(const std::string& path, const ReadOptions& options = {});
 
-/// A mesh to write, borrowed from the caller: as MeshFile, by pointers.
+/// A mesh to write, borrowed from the caller: a sorpia::Mesh by pointers.
 struct MeshView {
   const double* vertices = nullptr;  ///< (n_vertices, 3), finite
   std::size_t n_vertices = 0;
-  const std::int32_t* faces = nullptr;  ///< every face's corners, face after face, in [0, n_vertices)
+  const std::int32_t* face_vertex_indices = nullptr;  ///< every face's corners, face after face, in [0, n_vertices)
   std::size_t n_faces = 0;
-  const std::int32_t* face_sizes = nullptr;  ///< (n_faces,) corners per face (at least 3); null: `face_size` each
+  const std::int32_t* face_vertex_counts = nullptr;  ///< (n_faces,) corners per face (at least 3); null: face_size
   std::int32_t face_size = 3;
   FaceVaryingView uvs;      ///< texture coordinates to write (OBJ `vt`; PLY `u v` when each vertex has one value)
   FaceVaryingView normals;  ///< normals to write (OBJ `vn`; PLY `nx ny nz` when each vertex has one value)
@@ -165,10 +153,18 @@ struct MeshView {
 ///         or a non-finite value
 void write_mesh(const std::string& path, const MeshView& mesh, bool binary = false, const FileTags* tags = nullptr);
 
+/// write_mesh of a sorpia::Mesh.
+inline void write_mesh(const std::string& path, const Mesh& mesh, bool binary = false) {
+  write_mesh(path,
+             MeshView{mesh.vertices.data(), mesh.n_vertices(), mesh.face_vertex_indices.data(), mesh.n_faces(),
+                      mesh.uniform() ? nullptr : mesh.face_vertex_counts.data(), mesh.face_size, {}, {}},
+             binary);
+}
+
 /// write_mesh of a triangle mesh: faces (n_faces, 3).
 inline void write_mesh(const std::string& path, const double* vertices, std::size_t n_vertices,
                        const std::int32_t* faces, std::size_t n_faces, bool binary = false) {
-  write_mesh(path, MeshView{vertices, n_vertices, faces, n_faces, nullptr, 3}, binary);
+  write_mesh(path, MeshView{vertices, n_vertices, faces, n_faces, nullptr, 3, {}, {}}, binary);
 }
 
 /// Write `data` to `path` atomically, as write_mesh writes its bytes: to a

@@ -58,8 +58,8 @@ struct RepairReport {
 /// renumbered (and reversed if it was flipped: first corner kept, the others
 /// in the opposite order), without the corners dropped from a collapsed face.
 struct RepairResult {
-  std::vector<std::int32_t> faces;        ///< the vertices of every face, face after face
-  std::vector<std::int32_t> face_counts;  ///< polygons: the vertex count of each face; empty for triangles
+  std::vector<std::int32_t> face_vertex_indices;  ///< the vertices of every face, face after face
+  std::vector<std::int32_t> face_vertex_counts;   ///< polygons: the vertex count of each face; empty for triangles
   std::vector<std::int32_t> vertex_map;  ///< n_vertices + the copies; vertex_map[i] = i for i < n_vertices
   std::vector<std::int32_t> face_map;    ///< one entry per output face
   RepairReport report;
@@ -120,7 +120,7 @@ RepairResult repair(const std::int32_t* faces, std::size_t n_faces, std::size_t 
 /// The same rules for polygons in the counts + indices form of sorpia::Topology
 /// (face f has face_vertex_counts[f] >= 3 vertices, listed in
 /// face_vertex_indices after those of the faces before it). The result's faces
-/// are polygons with their face_counts (a collapsed face has fewer vertices
+/// are polygons with their face_vertex_counts (a collapsed face has fewer vertices
 /// than its input face); the same errors, and a face of fewer than three
 /// vertices is refused as the validation refuses it.
 RepairResult repair(const std::int32_t* face_vertex_counts, std::size_t n_faces, const std::int32_t* face_vertex_indices,
@@ -152,8 +152,8 @@ RepairResult repair(const std::int32_t* face_vertex_counts, std::size_t n_faces,
 /// then solves the split under edge-only, with the corners edge-and-corner
 /// makes, every other vertex of one face, as tags: OpenSubdiv's rows).
 struct NonmanifoldSplit {
-  std::vector<std::int32_t> faces;        ///< the vertices of every face, renumbered, face after face
-  std::vector<std::int32_t> face_counts;  ///< polygons: the vertex count of each face; empty for triangles
+  std::vector<std::int32_t> face_vertex_indices;  ///< the vertices of every face, renumbered, face after face
+  std::vector<std::int32_t> face_vertex_counts;   ///< polygons: the vertex count of each face; empty for triangles
   std::vector<std::int32_t> vertex_map;   ///< for every output vertex, the input vertex it copies
   /// The non-manifold edges (lower, higher input vertex), OpenSubdiv's infinitely sharp ones.
   std::vector<std::array<std::int32_t, 2>> nonmanifold_edges;
@@ -162,7 +162,7 @@ struct NonmanifoldSplit {
   /// Crease vertices with a copy in a fan of one face.
   std::vector<std::int32_t> single_face_sheets;
 
-  /// True for a manifold mesh (then faces and vertex_map are empty: the input is the split).
+  /// True for a manifold mesh (then face_vertex_indices and vertex_map are empty: the input is the split).
   bool empty() const { return nonmanifold_vertices.empty(); }
 };
 

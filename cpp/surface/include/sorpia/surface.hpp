@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "sorpia/memory.hpp"  // available_memory_bytes, which tessellate checks
-#include "sorpia/shapes.hpp"  // PolyMesh
+#include "sorpia/mesh.hpp"
 #include "sorpia/subdivision.hpp"
 #include "sorpia/topology.hpp"
 
@@ -135,7 +135,7 @@ class LimitSurface {
   /// @param level  0..15
   /// @throws ParameterError when the level is out of range or the estimated
   ///         memory (tessellation_bytes) exceeds the memory available
-  PolyMesh tessellate(int level);
+  Mesh tessellate(int level);
 
  private:
   struct Impl;

@@ -1,7 +1,9 @@
 #pragma once
-// The half-edges of a triangle or polygon list, and a union-find, shared by
-// the face checks (topology.cpp), repair (repair.cpp) and the statistics of a
-// raw face list (mesh_statistics.cpp). Not a public header.
+// The half-edges of a triangle or polygon list (a sorpia::Mesh's
+// face_vertex_indices, with offsets from its face_vertex_counts), the one
+// half-edge matcher (EdgeGroups) and a union-find, shared by the face checks
+// (topology.cpp), repair and the non-manifold split (repair.cpp) and the
+// statistics of a raw face list (mesh_statistics.cpp). Not a public header.
 //
 // Half-edge h (0 <= h < 3 n_faces) runs from the corner faces[h] to the next
 // corner of its face, faces[next_corner(h)]; it also names that corner.
@@ -12,6 +14,7 @@
 #include <limits>
 #include <numeric>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "sorpia/errors.hpp"
@@ -107,6 +110,98 @@ inline std::vector<std::int32_t> corner_faces(const std::vector<std::int32_t>& o
     std::fill(face.begin() + off[f], face.begin() + off[f + 1], static_cast<std::int32_t>(f));
   return face;
 }
+
+// The offsets and corner faces of a FaceList of polygons (none for triangles),
+// owned: FaceArrays::over(indices) is the FaceList.
+struct FaceArrays {
+  std::size_t n_faces = 0;
+  std::vector<std::int32_t> off, corner_face;
+
+  static FaceArrays triangles(std::size_t n_faces) { return {n_faces, {}, {}}; }
+  static FaceArrays polygons(const std::int32_t* counts, std::size_t n_faces) {
+    FaceArrays a{n_faces, detail::polygon_offsets(counts, n_faces), {}};
+    a.corner_face = detail::corner_faces(a.off);
+    return a;
+  }
+  FaceList over(const std::int32_t* idx) const {
+    return {idx, off.empty() ? nullptr : off.data(), corner_face.empty() ? nullptr : corner_face.data(), n_faces};
+  }
+};
+
+// The half-edge matcher: the half-edges of a face list grouped by
+// undirected edge, in (lower end, higher end, id) order, so that the
+// half-edges of one edge are adjacent, in face order. A counting sort by the
+// lower end, then each bucket (the edges at one vertex towards higher
+// vertices: few) sorted by (higher end, id). Linear in the half-edges but for
+// those small sorts. `keep(h)` leaves out half-edges (of removed or
+// degenerate faces). Topology's error paths, repair, the non-manifold split
+// and the statistics of a raw face list all match edges through it; the
+// direct one-ring build matches each vertex's edges while it walks the fans
+// (topology.cpp's VertexEdges).
+template <class Faces>
+class EdgeGroups {
+ public:
+  template <class Keep>
+  EdgeGroups(const Faces& fl, std::size_t n_vertices, Keep keep) : fl_(fl), start_(n_vertices + 1, 0) {
+    const std::size_t n_half = fl.n_corners();
+    for (std::size_t h = 0; h < n_half; ++h)
+      if (keep(h)) ++start_[lo(h) + 1];
+    std::partial_sum(start_.begin(), start_.end(), start_.begin());
+    order_.resize(static_cast<std::size_t>(start_[n_vertices]));
+    std::vector<std::int32_t> fill(start_.begin(), start_.end() - 1);
+    for (std::size_t h = 0; h < n_half; ++h)
+      if (keep(h)) order_[fill[lo(h)]++] = static_cast<std::int32_t>(h);
+    // Each bucket by (higher end, id), compared as one integer.
+    std::vector<std::uint64_t> key;
+    for (std::size_t v = 0; v < n_vertices; ++v) {
+      std::int32_t* b = order_.data() + start_[v];
+      const std::size_t k = static_cast<std::size_t>(start_[v + 1] - start_[v]);
+      if (k < 2) continue;
+      key.resize(k);
+      for (std::size_t i = 0; i < k; ++i)
+        key[i] = static_cast<std::uint64_t>(hi(b[i])) << 32 | static_cast<std::uint32_t>(b[i]);
+      std::sort(key.begin(), key.end());
+      for (std::size_t i = 0; i < k; ++i) b[i] = static_cast<std::int32_t>(key[i] & 0xffffffffu);
+    }
+  }
+  EdgeGroups(const Faces& fl, std::size_t n_vertices)
+      : EdgeGroups(fl, n_vertices, [](std::size_t) { return true; }) {}
+
+  // Calls fn(a, b, hs, k) for every edge (a < b) in (a, b) order, hs its k
+  // half-edges in id order.
+  template <class Fn>
+  void for_each(Fn fn) const {
+    for (std::size_t v = 0; v + 1 < start_.size(); ++v)
+      for (std::int32_t i = start_[v], j, end = start_[v + 1]; i < end; i = j) {
+        const std::int32_t b = hi(order_[i]);
+        for (j = i + 1; j < end && hi(order_[j]) == b; ++j) {
+        }
+        fn(static_cast<std::int32_t>(v), b, order_.data() + i, j - i);
+      }
+  }
+
+  // The other half-edge of each half-edge's edge where the edge has exactly
+  // two (kept) half-edges; `single` where it has one, `many` where more
+  // (and for the half-edges left out).
+  std::vector<std::int32_t> mates(std::int32_t single = -1, std::int32_t many = -1) const {
+    std::vector<std::int32_t> mate(fl_.n_corners(), many);
+    for_each([&](std::int32_t, std::int32_t, const std::int32_t* hs, std::int32_t k) {
+      if (k == 1) mate[hs[0]] = single;
+      if (k != 2) return;
+      mate[hs[0]] = hs[1];
+      mate[hs[1]] = hs[0];
+    });
+    return mate;
+  }
+
+ private:
+  std::int32_t lo(std::size_t h) const { return std::min(fl_.idx[h], fl_.idx[fl_.next(h)]); }
+  std::int32_t hi(std::size_t h) const { return std::max(fl_.idx[h], fl_.idx[fl_.next(h)]); }
+
+  Faces fl_;                         // a FaceList, or a type with the same members (repair's Faces<kPolygons>)
+  std::vector<std::int32_t> start_;  // the kept half-edges of lower end v: order_[start_[v] .. start_[v + 1])
+  std::vector<std::int32_t> order_;  // sorted by (higher end, id) within each lower end
+};
 
 // Union-find over indices 0..n-1 with path halving; the root of a class is its
 // lowest index.
