@@ -69,9 +69,11 @@ Interpolator::Interpolator(const std::int32_t* triangles, std::size_t n_faces, s
   if (!vertex_map.empty()) set_vertex_map(std::move(vertex_map));
 }
 
-Interpolator::Interpolator(const std::int32_t* face_sizes, std::size_t n_faces, const std::int32_t* indices,
-                           std::size_t n_vertices, Rules rules, std::vector<std::int32_t> vertex_map)
-    : topology_(timed([&] { return Topology(face_sizes, n_faces, indices, n_vertices); }, topology_seconds_)),
+Interpolator::Interpolator(const std::int32_t* face_vertex_counts, std::size_t n_faces,
+                           const std::int32_t* face_vertex_indices, std::size_t n_vertices, Rules rules,
+                           std::vector<std::int32_t> vertex_map)
+    : topology_(timed([&] { return Topology(face_vertex_counts, n_faces, face_vertex_indices, n_vertices); },
+                      topology_seconds_)),
       rules_(std::move(rules)) {
   build_operator();
   if (!vertex_map.empty()) set_vertex_map(std::move(vertex_map));

@@ -71,9 +71,9 @@ class Interpolator {
   /// @throw std::logic_error when vertex_map does not have that form
   Interpolator(const std::int32_t* triangles, std::size_t n_faces, std::size_t n_vertices, Rules rules,
                std::vector<std::int32_t> vertex_map = {});
-  /// Polygons as face sizes and indices (Topology's polygon constructor,
+  /// Polygons as face_vertex_counts and face_vertex_indices (Topology's polygon constructor,
   /// Far::TopologyDescriptor's form); `vertex_map` as above.
-  Interpolator(const std::int32_t* face_sizes, std::size_t n_faces, const std::int32_t* indices,
+  Interpolator(const std::int32_t* face_vertex_counts, std::size_t n_faces, const std::int32_t* face_vertex_indices,
                std::size_t n_vertices, Rules rules, std::vector<std::int32_t> vertex_map = {});
   /// A topology already built (taken over).
   Interpolator(Topology topology, Rules rules);
