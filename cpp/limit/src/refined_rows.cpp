@@ -286,7 +286,8 @@ std::vector<int> row_levels(const Topology& topology, Scheme scheme, const Verte
   if (deepest > 0)
     for (std::size_t v = 0; v < n; ++v) {
       if (topology.is_unreferenced(v)) continue;
-      const bool valence_two = !topology.is_boundary(v) && topology.valence(v) == 2;  // Catmull-Clark only
+      // Catmull-Clark only: Loop's valence-2 mask (a pillow) is the limit of refinement
+      const bool valence_two = scheme == Scheme::CatmullClark && !topology.is_boundary(v) && topology.valence(v) == 2;
       if (valence_two) level[v] = deepest;
     }
   return level;

@@ -183,6 +183,22 @@ std::vector<std::int32_t> join_edges(const Faces<kPolygons>& fl, std::size_t n_v
     removed[fl.face_of(h)] = 1;
     (faces[kept] == faces[h] ? rep.duplicate_faces : rep.reversed_duplicate_faces).push_back(fl.face_of(h));
   };
+  // Whether duplicate faces g and h (half-edges of one edge) are a pillow,
+  // which is valid and kept: the opposite order, and no other live face on
+  // any of their edges.
+  auto pillow = [&](std::int32_t g, std::int32_t h) {
+    if (faces[g] == faces[h]) return false;
+    const std::int32_t fg = fl.face_of(g), fh = fl.face_of(h);
+    for (std::int32_t e = fl.begin(fg); e < fl.end(fg); ++e) {
+      const std::int32_t* b = by_lo.data() + bucket[lo(e)];
+      const std::int32_t* b_end = by_lo.data() + bucket[lo(e) + 1];
+      if (std::any_of(b, b_end, [&](std::int32_t d) {
+            return hi(d) == hi(e) && fl.face_of(d) != fg && fl.face_of(d) != fh && !removed[fl.face_of(d)];
+          }))
+        return false;
+    }
+    return true;
+  };
   std::vector<std::int32_t> mate(n_half, -1);
   // Per higher end x of an edge (v, x): stamp v, the number of faces (-1 once
   // an edge of 3+ is done) and the first half-edge.
@@ -206,7 +222,7 @@ std::vector<std::int32_t> join_edges(const Faces<kPolygons>& fl, std::size_t n_v
       if (count[x] == 2) {
         const std::int32_t g = first[x];
         if (g == h || removed[fl.face_of(g)] || removed[fl.face_of(h)]) continue;  // removed: a duplicate found at another edge
-        if (fl.same_face(g, h)) {
+        if (fl.same_face(g, h) && !pillow(g, h)) {
           drop_duplicate(g, h);
         } else {
           mate[g] = h;
