@@ -123,16 +123,15 @@ TEST(PolygonTopology, BadPolygonsAreNamed) {
 // Two polygons with the same vertices in the same cyclic order are refused,
 // naming both, as two such triangles are; in the opposite order they are a
 // closed 'pillow' of two faces (valid: OpenSubdiv takes it), refused only
-// with a third face on one of their edges (named by that edge for polygons,
-// as duplicates for triangles). Not duplicates: two quads that share only
+// with a third face on one of their edges (named by that edge on the polygon
+// path, as duplicates on the triangle path). Not duplicates: two quads that share only
 // the two edges at a vertex of two faces (next test).
 TEST(PolygonTopology, DuplicatePolygonsAreNamedAndPillowsAccepted) {
   expect_refused({4, 4, 4}, {0, 1, 2, 3, 0, 3, 2, 1, 1, 4, 5, 2}, 6,
                  {"non-manifold edge (1, 2)", "faces 0, 1, 2"});  // a third face on edge (1, 2)
   expect_refused({4, 4, 4}, {0, 1, 2, 3, 4, 5, 6, 7, 2, 3, 0, 1}, 8,
                  {"duplicate faces", "face 0 (0, 1, 2, 3)", "face 2 (2, 3, 0, 1)", "same cyclic order"});
-  expect_refused({3, 3, 4}, {0, 1, 2, 0, 2, 1, 1, 3, 4, 2}, 5,
-                 {"duplicate faces", "face 0 (0, 1, 2)", "face 1 (0, 2, 1)", "three vertices, in the opposite order"});
+  expect_refused({3, 3, 4}, {0, 1, 2, 0, 2, 1, 1, 3, 4, 2}, 5, {"non-manifold edge (1, 2)", "faces 0, 1, 2"});
   const std::vector<std::pair<std::vector<std::int32_t>, std::vector<std::int32_t>>> pillows = {
       {{4, 4}, {0, 1, 2, 3, 0, 3, 2, 1}},
       {{4, 4, 4}, {0, 1, 2, 3, 0, 3, 2, 1, 4, 5, 6, 7}},
