@@ -75,8 +75,12 @@ def mesh_problems(faces, n_vertices: int) -> set[str]:
     if any(len(set(f)) < len(f) for f in faces):
         return {"repeats vertex"}
     problems = set()
-    if len({min(cycle(f), cycle(f, True)) for f in faces}) < len(faces):
+    # The same cycle twice is a duplicate; the same vertices in the opposite order only where one of their
+    # edges has a third face (alone, the two are a closed 'pillow', valid).
+    if len({cycle(f) for f in faces}) < len(faces):
         problems.add("duplicate faces")
+    cycles = {cycle(g) for g in faces}
+    reversed_pairs = [f for f in faces if cycle(f, True) in cycles]
     directed = defaultdict(int)
     for f in faces:
         for i, a in enumerate(f):
@@ -88,6 +92,8 @@ def mesh_problems(faces, n_vertices: int) -> set[str]:
             problems.add("inconsistent orientation")
     if any(k > 2 for k in undirected.values()):
         problems.add("non-manifold edge")
+        if any(undirected[min(a, b), max(a, b)] > 2 for f in reversed_pairs for a, b in zip(f, f[1:] + f[:1])):
+            problems.add("duplicate faces")
     if problems:
         return problems
     # Fans: the faces at v joined when they share an edge (v, w) of both.

@@ -48,11 +48,9 @@ NONMANIFOLD_KINDS = ("non-manifold edge", "non-manifold vertex", "inconsistent o
 def refusal_hint(message: str) -> str | None:
     """The ways out to append to a refusal of sorpia::Topology (`message`),
     or None where it is not about topology repair or OpenSubdiv's
-    non-manifold rules change. Two faces with the same vertices in the
-    opposite order are a closed surface of two faces to OpenSubdiv, not
-    non-manifold: only repair removes one."""
-    if "duplicate faces" in message and "opposite" in message:
-        return "sorpia.repair (command line: --repair) removes the second of them"
+    non-manifold rules change. (Two faces with the same vertices in the
+    opposite order are refused only beside a third face on one of their
+    edges, which is non-manifold; alone they are a valid closed 'pillow'.)"""
     return NONMANIFOLD_HINT if any(kind in message for kind in NONMANIFOLD_KINDS) else None
 
 

@@ -118,7 +118,9 @@ def repair(vertices, faces, *, creases=None, corners=None, holes=None) -> Repair
        removed ("degenerate_faces");
     2. of faces with the same vertices in the same cyclic sequence the first is
        kept; later ones in the same direction ("duplicate_faces") or the
-       opposite one ("reversed_duplicate_faces") are removed;
+       opposite one ("reversed_duplicate_faces") are removed, except a pair in
+       the opposite order with no other face on their edges (a closed
+       "pillow" of two faces, valid), which is kept;
     3. at an edge of three or more faces ("nonmanifold_edges"), the faces are
        paired into sheets in face order: the lowest-numbered unpaired face with
        the next unpaired face running the edge the other way (else the next

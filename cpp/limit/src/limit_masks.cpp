@@ -78,7 +78,7 @@ constexpr int kTabulated = 64;  // valences up to this are looked up
 const std::array<LimitMask, kTabulated + 1>& smooth_table() {
   static const std::array<LimitMask, kTabulated + 1> table = [] {
     std::array<LimitMask, kTabulated + 1> t{};
-    for (int n = 3; n <= kTabulated; ++n) t[n] = sdc_limit_mask(n, n, Sdc::Crease::RULE_SMOOTH);
+    for (int n = 2; n <= kTabulated; ++n) t[n] = sdc_limit_mask(n, n, Sdc::Crease::RULE_SMOOTH);
     return t;
   }();
   return table;
@@ -109,7 +109,7 @@ CatmarkMask catmark_crease_limit_mask() {
 }
 
 LimitMask smooth_limit_mask(int valence) {
-  if (valence < 3) throw ParameterError("an interior vertex has valence at least 3, got " + std::to_string(valence));
+  if (valence < 2) throw ParameterError("an interior vertex has valence at least 2, got " + std::to_string(valence));
   if (valence <= kTabulated) return smooth_table()[valence];
   return sdc_limit_mask(valence, valence, Sdc::Crease::RULE_SMOOTH);
 }

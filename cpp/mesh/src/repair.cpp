@@ -157,11 +157,22 @@ std::vector<std::int32_t> join_edges(const Faces<kPolygons>& fl, std::size_t n_v
   std::vector<std::int32_t> mate(fl.n_corners(), -1);
   std::vector<std::int32_t> live;
   const detail::EdgeGroups edges(fl, n_vertices, [&](std::size_t h) { return !removed[fl.face_of(h)]; });
+  // The faces with an edge of three or more faces: two duplicate faces in the
+  // opposite order none of which has one are a pillow (a closed surface of
+  // two faces, valid), kept.
+  std::vector<std::uint8_t> crowded(fl.n_faces, 0);
+  edges.for_each([&](std::int32_t, std::int32_t, const std::int32_t* b, std::int32_t k) {
+    if (k > 2)
+      for (std::int32_t j = 0; j < k; ++j) crowded[fl.face_of(b[j])] = 1;
+  });
+  auto pillow = [&](std::int32_t g, std::int32_t h) {
+    return faces[g] != faces[h] && !crowded[fl.face_of(g)] && !crowded[fl.face_of(h)];
+  };
   edges.for_each([&](std::int32_t v, std::int32_t x, const std::int32_t* b, std::int32_t k) {
     if (k == 2) {  // most edges: joined, or one face a duplicate of the other
       const std::int32_t g = b[0], h = b[1];
       if (removed[fl.face_of(g)] || removed[fl.face_of(h)]) return;  // a duplicate found at another edge
-      if (fl.same_face(g, h)) {
+      if (fl.same_face(g, h) && !pillow(g, h)) {
         drop_duplicate(g, h);
       } else {
         mate[g] = h;

@@ -81,7 +81,8 @@ void mark_fan(const FaceList& fl, const std::vector<std::int32_t>& mate, std::in
 }
 
 // Error path only. Some edge (v, x > v) has three or more faces or two
-// duplicate faces: sort the half-edges of the edges (v, x > v) by (x, third
+// duplicate faces (the same order; in the opposite order only beside a third
+// face on the edge): sort the half-edges of the edges (v, x > v) by (x, third
 // vertex (triangles), id), so that the half-edges of one edge, and two
 // triangles with the same three vertices, are adjacent, and name the first
 // such edge. (Two polygons may share two edges at a vertex of two faces
@@ -103,7 +104,8 @@ void mark_fan(const FaceList& fl, const std::vector<std::int32_t>& mate, std::in
     // Triangles: two of the same third vertex are adjacent. Polygons: an
     // edge of two faces is checked; an edge of more is named as such.
     for (std::size_t p = i + 1; p < j && (fl.triangles() || j - i == 2); ++p)
-      if (fl.same_face(hs[p - 1], hs[p])) refuse_duplicate(fl, hs[p - 1], hs[p]);
+      if (fl.same_face(hs[p - 1], hs[p]) && (j - i > 2 || faces[hs[p - 1]] == faces[hs[p]]))
+        refuse_duplicate(fl, hs[p - 1], hs[p]);  // not a pillow: the same order, or a third face on the edge
     if (j - i > 2) {
       std::vector<std::int32_t> users;
       for (std::size_t p = i; p < j; ++p) users.push_back(fl.face_of(hs[p]));
@@ -369,7 +371,10 @@ class VertexEdges {
     }
     if (s.users == 1) {
       --n_single_;
-      if (s.third == third && duplicate(s, id, out)) {
+      // Two faces running the edge both ways are manifold there, even with
+      // the same vertices in the opposite order (a closed 'pillow' of two
+      // faces, which OpenSubdiv takes); the same way, equal faces are duplicates.
+      if (s.outs == static_cast<std::uint8_t>(out) && s.third == third && duplicate(s, id, out)) {
         found.bad_lo = std::min(found.bad_lo, std::min(v_, x));
         checkable_ = false;
       } else if (s.outs == static_cast<std::uint8_t>(out)) {
@@ -388,10 +393,10 @@ class VertexEdges {
     }
   }
 
-  // Whether the second face at v on the edge of slot `s`, with the same third
-  // vertex as the first (both share both their edges at v), is a duplicate of
-  // the first: always for triangles; for polygons, the same cycle (corner
-  // `id`, running the edge out of v if `out`).
+  // Whether the second face at v on the edge of slot `s`, running it the same
+  // way and with the same third vertex as the first (both share both their
+  // edges at v), is a duplicate of the first: always for triangles; for
+  // polygons, the same cycle (corner `id`, running the edge out of v if `out`).
   bool duplicate(const EdgeSlot& s, std::int32_t id, bool out) const {
     if constexpr (kPolygons)
       return fl_.same_cycle(static_cast<std::size_t>(s.corner), static_cast<std::size_t>(id),
@@ -469,7 +474,8 @@ class RingBuilder {
 }  // namespace face_checks
 
 // Checks what OpenMesh and OpenSubdiv would not: indices in range and distinct
-// (OpenMesh aborts on a repeated vertex), no duplicate triangles, at most two
+// (OpenMesh aborts on a repeated vertex), no duplicate faces (a pair in the
+// opposite order alone on its edges is a closed 'pillow', kept), at most two
 // faces per edge, consistent orientation (OpenMesh would fail add_face without
 // saying why) and one fan of faces per vertex (a 'bowtie' is accepted by
 // OpenMesh and quietly made a corner by OpenSubdiv). Throws MeshError naming

@@ -26,7 +26,10 @@ struct LimitMask {
 /// Smooth rule, an interior vertex of valence n (paper eq. 5):
 /// weight = 1 / (n + 3 / (8 gamma)), gamma = (5/8 - beta^2) / n,
 /// beta = 3/8 + cos(2 pi / n) / 4, diag = 1 - n weight  (alpha_n = 3 / (3 + 8 n beta_n));
-/// n = 6 gives 1/2 and 1/12. Tabulated for small n. @param valence at least 3
+/// n = 6 gives 1/2 and 1/12; n = 2 (a vertex of a pillow: two triangles with
+/// the same vertices in the opposite order) is also the limit of refinement
+/// there, whose one-ring stays a pillow. Tabulated for small n.
+/// @param valence at least 2
 LimitMask smooth_limit_mask(int valence);
 /// Crease rule, a boundary vertex: 2/3 and 1/6 on its two boundary neighbours.
 LimitMask crease_limit_mask();

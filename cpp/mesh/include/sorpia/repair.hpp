@@ -24,7 +24,8 @@ struct RepairReport {
   /// face, removed (the first of the equal faces is kept).
   std::vector<std::int32_t> duplicate_faces;
   /// Faces with the same vertices as an earlier face in the opposite cyclic
-  /// order, removed (the first is kept).
+  /// order, removed (the first is kept), except where the two are a pillow
+  /// (rule 2).
   std::vector<std::int32_t> reversed_duplicate_faces;
   /// Edges (lower, higher vertex) of three or more faces (after removing the
   /// duplicates), whose sheets were separated.
@@ -72,7 +73,9 @@ struct RepairResult {
 ///    polygon of three or more distinct vertices; otherwise (every triangle
 ///    with a repeat, (a, b, a, c)) it is removed;
 /// 2. of faces with the same vertices in the same cyclic sequence (either
-///    way round) the first is kept, the others removed;
+///    way round) the first is kept, the others removed, except a pair in
+///    the opposite order with no other face on their edges (a closed
+///    'pillow' of two faces, valid), which is kept;
 /// 3. at an edge of three or more faces, the faces are paired into sheets in
 ///    face order: the lowest-numbered unpaired face with the next unpaired
 ///    face that runs the edge the other way (else with the next unpaired face);
