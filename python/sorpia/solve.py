@@ -388,7 +388,7 @@ class Interpolator:
             iterations 1 when any vertex was relaxed, else 0; relaxations the
             single-vertex relaxations done; initial_error E_0 of the new targets.
             Where the local relaxation diverges (B indefinite, e.g. interior
-            vertices of valence 2), the new targets are solved in full by the
+            vertices of valence 2 next to faces of more than four sides), the new targets are solved in full by the
             last solve's method from previous, and the result is that solve's.
             An update that cannot meet tol (max_iter, or divergence of both)
             changes nothing — targets, kept residual, previous's vertices —
