@@ -126,17 +126,12 @@ class TagReader {
         fail(f_, w, "tag 'interpolateboundary': unknown mode " + std::to_string(t.ints[0]) +
                         " (1 edge-and-corner, 2 edge-only)");
     } else if (t.name == "creasemethod") {
-      if (t.strings.size() != 1) fail(f_, w, "tag 'creasemethod' takes one word (normal or chaikin)");
-      if (t.strings[0] == "chaikin")
-        fail(f_, w, "tag 'creasemethod chaikin' is not supported: sorpia's semi-sharp creases decay uniformly "
-                    "(OpenSubdiv's CREASE_UNIFORM, 'normal')");
-      if (t.strings[0] != "normal") fail(f_, w, "tag 'creasemethod': unknown method " + quoted(t.strings[0]));
+      one_word_option(t, w, "method", "normal", "chaikin",
+                      "sorpia's semi-sharp creases decay uniformly (OpenSubdiv's CREASE_UNIFORM, 'normal')");
     } else if (t.name == "smoothtriangles") {
-      if (t.strings.size() != 1) fail(f_, w, "tag 'smoothtriangles' takes one word (catmark or smooth)");
-      if (t.strings[0] == "smooth")
-        fail(f_, w, "tag 'smoothtriangles smooth' is not supported: sorpia's Catmull-Clark triangles follow the "
-                    "Catmull-Clark rule (OpenSubdiv's TRI_SUB_CATMARK, 'catmark')");
-      if (t.strings[0] != "catmark") fail(f_, w, "tag 'smoothtriangles': unknown value " + quoted(t.strings[0]));
+      one_word_option(t, w, "value", "catmark", "smooth",
+                      "sorpia's Catmull-Clark triangles follow the Catmull-Clark rule (OpenSubdiv's TRI_SUB_CATMARK, "
+                      "'catmark')");
     } else if (t.name != "facevaryinginterpolateboundary" && t.name != "facevaryingpropagatecorners") {
       // Unknown names are skipped, as OpenSubdiv's parser skips them, and listed.
       auto it = unknown_.begin();
@@ -166,6 +161,16 @@ class TagReader {
   }
 
  private:
+  // A tag of one word whose only value sorpia implements is `supported`:
+  // `refused` fails with `why`, any other word as unknown `kind`.
+  void one_word_option(const TagLine& t, const Where& w, const char* kind, const std::string& supported,
+                       const std::string& refused, const char* why) {
+    const std::string name(t.name);
+    if (t.strings.size() != 1) fail(f_, w, "tag '" + name + "' takes one word (" + supported + " or " + refused + ")");
+    if (t.strings[0] == refused) fail(f_, w, "tag '" + name + " " + refused + "' is not supported: " + why);
+    if (t.strings[0] != supported) fail(f_, w, "tag '" + name + "': unknown " + kind + " " + quoted(t.strings[0]));
+  }
+
   void vertex(const Where& w, long long v, std::vector<std::int32_t>& out) {
     if (v < 0 || v > std::numeric_limits<std::int32_t>::max())
       fail(f_, w, "tag vertex " + std::to_string(v) + " is out of range (tag indices are 0-based)");
