@@ -160,3 +160,13 @@ def test_public_mesh_statistics_of_a_refused_mesh_say_why():
     s = sorpia.mesh_statistics(V, F)
     assert s["faces"] == 2 and s["genus"] is None
     assert "refused" in s and "vertex 0" in s["refused"]
+
+
+def test_the_diagonal_of_huge_coordinates_is_finite():
+    # Coordinates of 1e155 square past the largest double; the diagonal (and fit's figures relative to it) must
+    # still be the bounding box's: sqrt(3) * 2e155 for the cube [-1e155, 1e155]^3 of an icosphere's extremes,
+    # compared with the same mesh at scale 1 (relative 1e-15: rounding of a scaled norm).
+    V, F = sorpia.shapes.icosphere(1)
+    small = sorpia.mesh_statistics(V, F)["diagonal"]
+    huge = sorpia.mesh_statistics(np.asarray(V) * 1e155, F)["diagonal"]
+    assert np.isfinite(huge) and huge == pytest.approx(small * 1e155, rel=1e-15)

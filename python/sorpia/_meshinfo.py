@@ -174,7 +174,11 @@ def _layout(vertices, n_faces: int, stats, list_extraordinary) -> dict:
             lo, hi = (vertices[finite].min(axis=0), vertices[finite].max(axis=0)) if finite.any() else (None, None)
         if lo is not None:
             info["bounding_box"] = [lo.tolist(), hi.tolist()]
-            info["diagonal"] = float(np.linalg.norm(hi - lo))
+            # Scaled first: the squares of coordinates beyond 1e154 overflow (the diagonal then read inf and every
+            # figure relative to it 0).
+            extent = hi - lo
+            scale = float(np.abs(extent).max())
+            info["diagonal"] = scale * float(np.linalg.norm(extent / scale)) if scale > 0 else 0.0
     if stats is None:
         return info
     for key in ("edges", "boundary_edges", "boundary_loops", "euler_characteristic", "genus", "components",
