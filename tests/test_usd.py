@@ -6,7 +6,6 @@ refused by name."""
 from __future__ import annotations
 
 import json
-
 import sys
 
 import numpy as np
