@@ -128,7 +128,9 @@ TEST(FastTopology, BadMeshesRefusedByTopologyAndOpenMesh) {
     SCOPED_TRACE(what);
     const sorpia::Mesh m = sorpia_test::triangles(faces);
     EXPECT_THROW(sorpia::Topology(m, 7), sorpia::MeshError);
-    if (openmesh) EXPECT_THROW(sorpia::reference_one_ring(m, 7), sorpia::MeshError);
+    if (openmesh) {
+      EXPECT_THROW(sorpia::reference_one_ring(m, 7), sorpia::MeshError);
+    }
   }
 }
 

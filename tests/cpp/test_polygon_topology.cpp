@@ -84,6 +84,29 @@ TEST(PolygonTopology, TrianglesWithCountsAreTheTriangleTopology) {
   for (std::size_t f = 0; f <= tri.n_faces(); ++f) ASSERT_EQ(b.face_offsets()[f], static_cast<int>(3 * f));
 }
 
+// A uniform mesh given by face_size alone (no counts) is the mesh with its
+// counts written out; counts and face_size that do not fit the indices are refused.
+TEST(PolygonTopology, UniformFaceSizeIsTheMeshWithCounts) {
+  const Mesh quads = sorpia::quad_irregular(300, 2);
+  Mesh uniform = quads;
+  uniform.face_vertex_counts.clear();
+  uniform.face_size = 4;
+  const sorpia::Topology a(quads), b(uniform);
+  EXPECT_TRUE(b.all_quads());
+  EXPECT_EQ(a.face_offsets(), b.face_offsets());
+  EXPECT_EQ(a.ring_neighbors(), b.ring_neighbors());
+  EXPECT_EQ(a.face_ring_neighbors(), b.face_ring_neighbors());
+  Mesh bad = uniform;
+  bad.face_size = 2;
+  sorpia_test::expect_error<sorpia::MeshError>([&] { sorpia::Topology t(bad); }, {"face_size is 2", "at least 3"});
+  bad.face_size = 5;
+  ASSERT_NE(uniform.face_vertex_indices.size() % 5, 0u);
+  sorpia_test::expect_error<sorpia::MeshError>([&] { sorpia::Topology t(bad); }, {"not a multiple of face_size 5"});
+  sorpia_test::expect_error<sorpia::MeshError>(
+      [&] { sorpia::Topology t(polygons({4, 4}, {0, 1, 2, 3, 0, 3, 2}), 4); },
+      {"face_vertex_counts sum to 8 but face_vertex_indices has 7 entries"});
+}
+
 TEST(PolygonTopology, QuadTorusIsRegular) {
   const Mesh m = sorpia::quad_torus(7, 5);
   const auto t = sorpia::Topology(m);
