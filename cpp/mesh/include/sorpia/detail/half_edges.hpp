@@ -1,9 +1,11 @@
 #pragma once
 // The half-edges of a triangle or polygon list (a sorpia::Mesh's
-// face_vertex_indices, with offsets from its face_vertex_counts), the one
-// half-edge matcher (EdgeGroups) and a union-find, shared by the face checks
-// (topology.cpp), repair and the non-manifold split (repair.cpp) and the
-// statistics of a raw face list (mesh_statistics.cpp). Not a public header.
+// face_vertex_indices, with offsets from its face_vertex_counts), its corners
+// bucketed by vertex (CornerBuckets, what Topology's build walks), the
+// half-edge matcher of face lists that may be invalid (EdgeGroups) and a
+// union-find, shared by the face checks (topology.cpp), repair and the
+// non-manifold split (repair.cpp) and the statistics of a raw face list
+// (mesh_statistics.cpp). Not a public header.
 //
 // Half-edge h (0 <= h < 3 n_faces) runs from the corner faces[h] to the next
 // corner of its face, faces[next_corner(h)]; it also names that corner.
@@ -204,9 +206,11 @@ inline CornerBuckets bucket_polygon_corners(const std::int32_t* indices, const s
 // vertices: few) sorted by (higher end, id). Linear in the half-edges but for
 // those small sorts. `keep(h)` leaves out half-edges (of removed or
 // degenerate faces). Topology's error paths, repair, the non-manifold split
-// and the statistics of a raw face list all match edges through it; the
-// direct one-ring build matches each vertex's edges while it walks the fans
-// (topology.cpp's VertexEdges).
+// and the statistics of a raw face list all match edges through it, in that
+// order, as often as they need. Topology's one-ring build instead matches each
+// vertex's edges (both ends, no order) while it walks the vertex's fan
+// (topology.cpp's VertexEdges over CornerBuckets): one pass without sorts or a
+// stored grouping, cheaper than this grouping alone.
 template <class Faces>
 class EdgeGroups {
  public:
