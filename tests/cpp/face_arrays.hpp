@@ -28,7 +28,7 @@ inline sorpia::Mesh polygons(std::vector<std::int32_t> counts, std::vector<std::
   return m;
 }
 
-// The direct build and OpenMesh's (the reference) agree on every array: edge
+// Topology's build and OpenMesh's (the reference) agree on every array: edge
 // neighbours, and for polygons the faces and face neighbours.
 inline void expect_same_topology(const sorpia::Topology& t, const sorpia::ReferenceOneRing& ref) {
   EXPECT_EQ(t.ring_offsets(), ref.offsets);

@@ -493,7 +493,7 @@ class RingBuilder {
 // chained into a fan; problems are named afterwards by
 // face_checks::refuse_findings.
 // Returns the number of edges and of boundary edges. With `ring`, also fills
-// it with the fans that walk passes, which are the one-ring (the direct build).
+// it with the fans that walk passes, which are the one-ring.
 // With `valid`, the walk stops at the first problem and sets *valid = false
 // instead of naming it (naming may sort every half-edge).
 // kPolygons is fl.triangles() == false: triangles take the path without corner ids.
