@@ -99,24 +99,41 @@ def test_corner_rows_are_limit_matrix_rows():
     assert abs(rows - expected).max() < 1e-12
 
 
-def test_second_derivatives_match_differences_of_first():
+def _interior_of_grid(f, n):
+    return [i for i, face in enumerate(f) if all(0 < x % (n + 1) < n and 0 < x // (n + 1) < n for x in face)]
+
+
+@pytest.mark.parametrize("scheme", ["catmull-clark", "loop"])
+def test_second_derivatives_match_differences_of_first(scheme):
     """duu, duv, dvv rows against central differences of the du, dv rows
-    (step h, error O(h^2) on the polynomial patches of a regular grid's
-    interior)."""
-    v, f = sorpia.shapes.quad_grid(8, 8)
+    (step h, error O(h^2) where the surface is smooth): on a regular grid's
+    polynomial patches, and on Loop's irregular faces (an icosahedron: every
+    vertex of valence 5), whose rotated middle sub-patches OpenSubdiv gives
+    second derivatives of the wrong sign that rows() corrects."""
     rng = np.random.default_rng(5)
+    if scheme == "catmull-clark":
+        v, f = sorpia.shapes.quad_grid(8, 8)
+        face_ids = np.array(_interior_of_grid(f, 8)[:10])
+        uv = rng.uniform(0.2, 0.8, (len(face_ids), 2))
+    else:
+        v, f = sorpia.shapes.icosphere(0)
+        face_ids = np.repeat(np.arange(len(f)), 6)
+        a = rng.uniform(0.05, 0.9, (len(face_ids), 2))
+        a[a.sum(axis=1) > 0.95] *= 0.45  # inside the triangle, away from its edges by more than h
+        # the centres of the middle sub-triangles of levels 1 and 2 (rotated sub-patches)
+        a[::6] = [1 / 3, 1 / 3]
+        a[1::6] = [1 / 6 + 1 / 12, 1 / 6 + 1 / 12]
+        uv = a
     v = v + 0.05 * rng.standard_normal(v.shape)
-    surface = sorpia.LimitSurface(v, f, scheme="catmull-clark")
-    interior = [i for i, face in enumerate(f) if all(0 < x % 9 < 8 and 0 < x // 9 < 8 for x in face)]
-    face_ids = np.array(interior[:10])
-    uv = rng.uniform(0.2, 0.8, (len(face_ids), 2))
-    h = 1e-4
+    surface = sorpia.LimitSurface(v, f, scheme=scheme)
+    h = 1e-5
     _, du, dv, duu, duv, dvv = (m @ v for m in surface.rows(face_ids, uv, derivatives=2))
     e_u, e_v = np.array([h, 0.0]), np.array([0.0, h])
     d = lambda shift, which: surface.rows(face_ids, uv + shift, derivatives=1)[which] @ v
-    np.testing.assert_allclose(duu, (d(e_u, 1) - d(-e_u, 1)) / (2 * h), atol=1e-6)
-    np.testing.assert_allclose(duv, (d(e_v, 1) - d(-e_v, 1)) / (2 * h), atol=1e-6)
-    np.testing.assert_allclose(dvv, (d(e_v, 2) - d(-e_v, 2)) / (2 * h), atol=1e-6)
+    scale = np.abs(duu).max()
+    np.testing.assert_allclose(duu, (d(e_u, 1) - d(-e_u, 1)) / (2 * h), atol=1e-5 * scale)
+    np.testing.assert_allclose(duv, (d(e_v, 1) - d(-e_v, 1)) / (2 * h), atol=1e-5 * scale)
+    np.testing.assert_allclose(dvv, (d(e_v, 2) - d(-e_v, 2)) / (2 * h), atol=1e-5 * scale)
 
 
 def test_nonmanifold_rows_are_over_input_vertices():

@@ -392,6 +392,41 @@ void evaluate_points(const SurfaceFactory& factory, const double* mesh_points, c
                         });
 }
 
+// Whether Bfr's second-derivative stencils s[3..5] at `uv` of an irregular
+// Loop face carry the wrong sign. OpenSubdiv (3.5 and 3.6:
+// Far::internal::EvaluatePatchBasisNormalized) scales the second derivatives
+// of a sub-patch rotated by 180 degrees (the middle triangle of a split
+// triangle) by derivSign * d1Scale^2 with d1Scale already signed, so they
+// come out negated there; the rotation is internal to Bfr's patch tree.
+// Decided against a one-sided difference of the first-derivative stencils
+// towards the triangle's centre, h = 2^-20 (the derivative of du along that
+// direction, duu d_u + duv d_v, is what it approximates to O(h)); `scratch`
+// holds the stencils at the shifted point.
+bool second_derivatives_reversed(const Bfr::Surface<double>& surface, const double* uv, double* const s[6],
+                                 std::vector<double>& scratch) {
+  const int n = surface.GetNumControlPoints();
+  double d[2] = {1.0 / 3.0 - uv[0], 1.0 / 3.0 - uv[1]};
+  const double len = std::hypot(d[0], d[1]);
+  if (len < 1e-3) {  // at the centre: along u (the centre is far from every edge)
+    d[0] = 1.0;
+    d[1] = 0.0;
+  } else {
+    d[0] /= len;
+    d[1] /= len;
+  }
+  const double h = std::ldexp(1.0, -20);
+  const double shifted[2] = {uv[0] + h * d[0], uv[1] + h * d[1]};
+  scratch.resize(3 * static_cast<std::size_t>(n));
+  surface.EvaluateStencil(shifted, scratch.data(), scratch.data() + n, scratch.data() + 2 * n);
+  // (du(shifted) - du(uv)) / h against duu d_u + duv d_v, and likewise dv.
+  double agree = 0.0;
+  for (int c = 0; c < n; ++c) {
+    const double fu = (scratch[n + c] - s[1][c]) / h, fv = (scratch[2 * n + c] - s[2][c]) / h;
+    agree += fu * (s[3][c] * d[0] + s[4][c] * d[1]) + fv * (s[4][c] * d[0] + s[5][c] * d[1]);
+  }
+  return agree < 0.0;
+}
+
 // The stencils of one face's points: the face's control points as mesh
 // vertices (sorted, distinct) and, per point and per matrix d, one weight per
 // column (weights[d][j * columns.size() + c]).
@@ -484,7 +519,7 @@ SurfaceRows LimitSurface::rows(const std::int32_t* face_ids, const double* uv, s
           FaceStencils& out = stencils[std::lower_bound(faces.begin(), faces.end(), face) - faces.begin()];
           const int n_cv = surface.GetNumControlPoints();
           thread_local std::vector<int> cv;
-          thread_local std::vector<double> w;
+          thread_local std::vector<double> w, w2;
           cv.resize(n_cv);
           surface.GetControlPointIndices(cv.data());
           // A mesh vertex may be more than one control point of the surface
@@ -515,8 +550,13 @@ SurfaceRows LimitSurface::rows(const std::int32_t* face_ids, const double* uv, s
               surface.EvaluateStencil(t, s[0]);
             else if (derivatives == 1)
               surface.EvaluateStencil(t, s[0], s[1], s[2]);
-            else
+            else {
               surface.EvaluateStencil(t, s[0], s[1], s[2], s[3], s[4], s[5]);
+              if (!surface.IsRegular() && surface.GetParameterization().GetType() == Bfr::Parameterization::TRI &&
+                  second_derivatives_reversed(surface, t, s, w2))
+                for (int d = 3; d < 6; ++d)
+                  for (int c = 0; c < n_cv; ++c) s[d][c] = -s[d][c];
+            }
             for (int d = 0; d < n_mats; ++d)
               for (int c = 0; c < n_cv; ++c) out.weights[d][j * width + slot[c]] += s[d][c];
           }

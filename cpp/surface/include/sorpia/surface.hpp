@@ -139,7 +139,9 @@ class LimitSurface {
   /// face_ids[i]'s surface (its one-ring neighbourhood, and more near
   /// semi-sharp features), columns sorted and distinct. The rows do not
   /// depend on the vertices: they are what fitting (fair interpolation,
-  /// approximation) composes into its linear systems.
+  /// approximation) composes into its linear systems. OpenSubdiv's second
+  /// derivatives on the rotated middle sub-patches of irregular Loop faces
+  /// have the wrong sign (through 3.6.0); rows() corrects them.
   /// @param derivatives  0: position; 1: also du, dv; 2: also duu, duv, dvv
   /// @throws ParameterError as evaluate(), or for derivatives outside 0..2
   SurfaceRows rows(const std::int32_t* face_ids, const double* uv, std::size_t k, int derivatives = 0) const;
