@@ -126,11 +126,16 @@ constexpr double kSquareData[2] = {0.5 - 0.5 / 1.7320508075688772, 0.5 + 0.5 / 1
 // piece of Bfr's surface: Bfr's own isolation level at extraordinary vertices
 // (surface.cpp); below it lies its Gregory corner patch.
 constexpr int kExactLevel = 4;
+// Dunavant's 6-point rule on a triangle, exact to degree 4: barycentric
+// (a, a, 1 - 2a) and its rotations, with weight w each (weights sum to 1).
+constexpr double kDegree4[2][3] = {{0.445948490915965, 0.108103018168070, 0.223381589678011},
+                                   {0.091576213509771, 0.816847572980459, 0.109951743655322}};
 
 // The pieces of one face and their points (u, v, Gauss weight or 0).
 class Pieces {
  public:
-  Pieces(const Rule& rule, int depth) : g_(rule), depth_(depth) {}
+  Pieces(const Rule& rule, int depth, bool thin_plate_only)
+      : g_(rule), depth_(depth), thin_plate_only_(thin_plate_only) {}
 
   void square(UV o, double h, int level, const Marks& m, std::vector<Piece>& out, std::vector<double>& uvw) const {
     const UV c[4] = {o, {o.u + h, o.v}, {o.u + h, o.v + h}, {o.u, o.v + h}};
@@ -169,11 +174,20 @@ class Pieces {
     const double e[4] = {b.u - a.u, b.v - a.v, c.u - a.u, c.v - a.v};
     out.push_back({false, h, {e[0], e[1], e[2], e[3]}, uvw.size() / 3, 0});
     auto at = [&](double s, double r, double w) { add(a.u + s * e[0] + r * e[2], a.v + s * e[1] + r * e[3], w, uvw); };
-    {
+    const double area2 = std::abs(e[0] * e[3] - e[1] * e[2]);
+    if (!touches && level <= kExactLevel && thin_plate_only_) {
+      // A quartic piece, the thin-plate integrand of degree 4 whatever the
+      // sign of Bfr's second derivatives: the 6-point rule exact to degree 4
+      // (Dunavant 1985), weights summing to 1 times the piece's area.
+      for (const auto& q : kDegree4) {  // (s, t) the barycentrics of b and c
+        at(q[0], q[1], 0.5 * area2 * q[2]);
+        at(q[1], q[0], 0.5 * area2 * q[2]);
+        at(q[0], q[0], 0.5 * area2 * q[2]);
+      }
+    } else {
       // The collapsed (Duffy) product rule: (s, t) = (x_i, x_j (1 - x_i))
       // with weight w_i w_j (1 - x_i) on the unit right triangle, times twice
       // the piece's area in (u, v).
-      const double area2 = std::abs(e[0] * e[3] - e[1] * e[2]);
       const std::size_t n = g_.x.size();
       for (std::size_t i = 0; i < n; ++i)
         for (std::size_t j = 0; j < n; ++j)
@@ -190,6 +204,7 @@ class Pieces {
   }
   const Rule& g_;
   int depth_;
+  bool thin_plate_only_;
 };
 
 // Solves a x = b for the columns of b (n x m, row-major) in place, a (n x n)
@@ -629,7 +644,7 @@ CsrMatrix fairness_matrix(const LimitSurface& surface, double thin_plate, double
   std::vector<std::uint8_t> hole(n_faces, 0);
   for (const std::int32_t f : surface.tags().holes) hole[static_cast<std::size_t>(f)] = 1;
   const Rule rule = gauss_legendre(quadrature.gauss_points);
-  const Pieces pieces(rule, quadrature.depth);
+  const Pieces pieces(rule, quadrature.depth, membrane == 0.0);
   const std::vector<Term> terms = energy_terms(scheme, thin_plate, membrane);
 
   const int n_threads = std::max(1, std::min<int>(detail::available_processors(),
