@@ -10,7 +10,7 @@ assembly time.
    LimitSurface.rows with 8 x 8 Gauss points per piece: the ratio between
    rings tends to 4 lambda^2 (lambda the subdominant eigenvalue), so that
    the integral over all rings of the exact limit surface diverges where
-   lambda > 1/2.
+   lambda > 1/2. The same under Loop.
 3. Assembly time against mesh size (medians of --repeat runs), both schemes,
    the default rule: irregular meshes, the same refined once (the fine mesh of
    fair interpolation), and a regular quad torus.
@@ -99,6 +99,53 @@ def ring_energies(valence: int, levels=(2, 3, 4)):
     return out
 
 
+def loop_ring_energies(valence: int, levels=(2, 3, 4)):
+    """The same under Loop at the centre of `shapes.pole(valence)`: ring l the three triangles of the corner
+    triangle of level l - 1 other than its own corner triangle, 8 x 8 collapsed Gauss points each, in the
+    equilateral measure of sorpia.energy."""
+    v, f = sorpia.shapes.pole(valence)
+    f = np.asarray(f)
+    centre = int(np.argmax(np.bincount(f.ravel())))
+    surface = sorpia.LimitSurface(v, f, scheme="loop")
+    x, w = np.polynomial.legendre.leggauss(8)
+    x, w = (x + 1) / 2, w / 2
+    s, t = np.meshgrid(x, x, indexing="ij")
+    weights = (np.outer(w, w) * (1 - s)).ravel()
+    s, t = s.ravel(), t.ravel() * (1 - s.ravel())
+    corners = [np.array(c, float) for c in ((0, 0), (1, 0), (0, 1))]
+    out = []
+    for level in levels:
+        e = 0.0
+        for fi in range(len(f)):
+            if centre not in f[fi]:
+                continue
+            j = list(f[fi]).index(centre)
+            a, b, c = corners[j], corners[(j + 1) % 3], corners[(j + 2) % 3]
+            h = 0.5 ** (level - 1)
+            b, c = a + h * (b - a), a + h * (c - a)
+            ab, bc, ca = (a + b) / 2, (b + c) / 2, (c + a) / 2
+            for p, q, r in [(ab, b, bc), (ca, bc, c), (bc, ca, ab)]:
+                uv = p + s[:, None] * (q - p) + t[:, None] * (r - p)
+                area2 = abs((q - p)[0] * (r - p)[1] - (q - p)[1] * (r - p)[0])
+                rows = surface.rows(np.full(len(uv), fi), uv, derivatives=2)
+                uu, uvd, vv = (m @ v for m in rows[3:])
+                xx, xy, yy = uu, (2 * uvd - uu) / np.sqrt(3), (uu - 4 * uvd + 4 * vv) / 3
+                dens = (xx ** 2).sum(1) + 2 * (xy ** 2).sum(1) + (yy ** 2).sum(1)
+                e += float(weights @ dens) * area2 * np.sqrt(3) / 2
+        out.append(e)
+    return out
+
+
+def loop_ring_table():
+    lines = ["| valence | 4 lambda^2 | ring 2 | ring 3 | ring 4 | ratio 4/3 |", "|---|---|---|---|---|---|"]
+    for n in (4, 5, 7, 8, 10):
+        lam = 3 / 8 + np.cos(2 * np.pi / n) / 4  # Loop's subdominant eigenvalue
+        e = loop_ring_energies(n)
+        lines.append(f"| {n} | {4 * lam * lam:.3f} | {e[0]:.4g} | {e[1]:.4g} | {e[2]:.4g} | {e[2] / e[1]:.3f} |")
+        print(lines[-1], flush=True)
+    return "\n".join(lines) + "\n"
+
+
 def ring_table():
     lines = ["| valence | 4 lambda^2 | ring 2 | ring 3 | ring 4 | ratio 4/3 |", "|---|---|---|---|---|---|"]
     for n in (3, 5, 6, 8):
@@ -151,10 +198,13 @@ def main():
     sizes = [int(s) for s in args.sizes.split(",") if s]
     errors = quadrature_errors()
     rings = ring_table()
+    loop_rings = loop_ring_table()
     times = assembly_times(sizes, args.repeat)
     body = (f"## Quadrature error\n\n{errors}\n"
             f"## Rings at an extraordinary vertex (Catmull-Clark)\n\nThin-plate energy of Bfr's polynomial rings "
             f"at the centre of `shapes.pole(n)` refined once by Catmull-Clark, ring l the three squares of side 2^-l next to the corner piece:\n\n{rings}\n"
+            f"## Rings at an extraordinary vertex (Loop)\n\nThe same at the centre of `shapes.pole(n)` under Loop, ring l "
+            f"the three triangles of the corner triangle of level l - 1 other than its corner:\n\n{loop_rings}\n"
             f"## Assembly time\n\nThe default rule (4 x 4 points, depth 4), `sorpia.fairness_matrix` from faces to "
             f"scipy matrix:\n\n{times}")
     if not args.no_page:
