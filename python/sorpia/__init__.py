@@ -18,6 +18,7 @@ from ._validate import Polygons
 from ._repair import RepairResult, repair
 from ._meshinfo import mesh_statistics
 from .surface import LimitSurface, evaluate_limit, limit_surface
+from .fair import FairResult, fair_interpolate
 from . import shapes
 
 __all__ = [
@@ -37,5 +38,6 @@ __all__ = [
     "UnknownTagWarning", "AttributeWarning", "FaceVarying", "sharp_edges",
     "RepairResult", "repair",
     "mesh_statistics",
+    "FairResult", "fair_interpolate",
     "NonmanifoldWarning", "UsdWarning",
 ]
