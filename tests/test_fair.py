@@ -63,33 +63,10 @@ def tagged(scheme):
     return v, f, dict(scheme=scheme, creases=creases, corners=corners, holes=np.array([25]))
 
 
-def umbrella_energy(faces, n):
-    """A symmetric positive semidefinite K for meshes where no real fairness
-    matrix is wanted: the squared umbrella Laplacian of the face graph."""
-    rows, cols = [], []
-    for f in face_rows(faces):
-        for i in range(len(f)):
-            rows += [f[i], f[(i + 1) % len(f)]]
-            cols += [f[(i + 1) % len(f)], f[i]]
-    a = scipy.sparse.csr_matrix((np.ones(len(rows)), (rows, cols)), shape=(n, n))
-    a.data[:] = 1.0
-    deg = np.maximum(np.asarray(a.sum(axis=1)).ravel(), 1)
-    lap = scipy.sparse.eye(n) - scipy.sparse.diags(1 / deg) @ a
-    return (lap.T @ lap).tocsr()
-
-
-@pytest.fixture(autouse=True)
-def energy_hook(monkeypatch):
-    # Until sorpia.energy lands: the squared umbrella Laplacian stands in for K.
-    monkeypatch.setattr(fair, "_fairness_matrix", lambda faces, n, rules, thin_plate, membrane:
-                        thin_plate * umbrella_energy(faces, n) + membrane * scipy.sparse.eye(n, format="csr"))
-
-
 def fine_energy(res, thin_plate=1.0, membrane=0.0):
-    """The K the solve used (the module's one source of it), rebuilt for the fine mesh."""
-    rules = sorpia._validate.as_rules(res.faces, len(res.control_vertices), scheme=res.scheme,
-                                      boundary=res.boundary, **res.tags)[2]
-    return fair._fairness_matrix(res.faces, len(res.control_vertices), rules, thin_plate, membrane).toarray()
+    """K of the fine mesh with its tags (sorpia.fairness_matrix), dense."""
+    return sorpia.fairness_matrix(res.faces, len(res.control_vertices), thin_plate=thin_plate, membrane=membrane,
+                                  **fine_kwargs(res)).toarray()
 
 
 def fine_kwargs(res):
@@ -347,9 +324,7 @@ def test_a_fine_mesh_beyond_the_memory_left_is_refused_before_any_work(tmp_path)
     assert sorpia._core.refinement_bytes(162, 320, 6, sorpia._core.Scheme.loop) > 256 * mib
     script = textwrap.dedent(f"""
         import resource, sys, time
-        import numpy as np, scipy.sparse, sorpia
-        from sorpia import fair
-        fair._fairness_matrix = lambda faces, n, rules, tp, mb: scipy.sparse.eye(n, format="csr")
+        import numpy as np, sorpia
         def vm():
             for line in open("/proc/self/status"):
                 if line.startswith("VmSize:"):

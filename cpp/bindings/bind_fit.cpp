@@ -1,9 +1,10 @@
-// Bindings of the fit layer: uniform refinement with its matrix R, and the
-// fair solve. Conversion and error translation only.
+// Bindings of the fitting layer: the fairness matrix, uniform refinement
+// with its matrix R, and the fair solve. Conversion and error translation only.
 #include <pybind11/stl.h>
 
 #include "bindings.hpp"
 #include "sorpia/fair.hpp"
+#include "sorpia/fairness.hpp"
 #include "sorpia/refine.hpp"
 
 namespace sorpia_py {
@@ -40,6 +41,18 @@ sorpia::CsrMatrix csr_from(const Doubles& data, const Indices& indices, const In
 }  // namespace
 
 void bind_fit(py::module_& m) {
+  m.def(
+      "fairness_matrix",
+      [](const sorpia::LimitSurface& surface, double thin_plate, double membrane, int gauss_points, int depth) {
+        sorpia::CsrMatrix k;
+        {
+          LongCall call;
+          k = sorpia::fairness_matrix(surface, thin_plate, membrane, sorpia::FairnessQuadrature{gauss_points, depth});
+        }
+        return csr_tuple(std::move(k));
+      },
+      "surface"_a, "thin_plate"_a, "membrane"_a, "gauss_points"_a, "depth"_a,
+      "Fairness matrix K (thin-plate and membrane energy) as CSR arrays (data, indices, indptr).");
   m.def(
       "refine_uniform",
       [](const sorpia::Topology& topology, const sorpia::Rules& rules, int levels) {

@@ -18,6 +18,7 @@ from ._validate import Polygons
 from ._repair import RepairResult, repair
 from ._meshinfo import mesh_statistics
 from .surface import LimitSurface, evaluate_limit, limit_surface
+from .energy import fairness_matrix, thin_plate_energy
 from .fair import FairResult, fair_interpolate
 from . import shapes
 
@@ -38,6 +39,7 @@ __all__ = [
     "UnknownTagWarning", "AttributeWarning", "FaceVarying", "sharp_edges",
     "RepairResult", "repair",
     "mesh_statistics",
+    "fairness_matrix", "thin_plate_energy",
     "FairResult", "fair_interpolate",
     "NonmanifoldWarning", "UsdWarning",
 ]

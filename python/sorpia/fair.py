@@ -204,11 +204,13 @@ def _fine_tags(tags: _core.Tags) -> tuple:
     return creases, corners, holes
 
 
-def _fairness_matrix(faces, n_vertices: int, rules: _core.Rules, thin_plate: float, membrane: float):
-    """K of the fine mesh (sorpia.energy.fairness_matrix)."""
-    from .energy import fairness_matrix
-
-    return fairness_matrix(faces, n_vertices, rules, thin_plate=thin_plate, membrane=membrane)
+def _fairness_matrix(topology: _core.Topology, rules: _core.Rules, thin_plate: float, membrane: float) -> tuple:
+    """K of the fine mesh as CSR arrays (data, indices, indptr): the core's
+    sorpia::fairness_matrix (`sorpia.fairness_matrix`) with its default
+    quadrature, on the topology already built."""
+    surface = _core.LimitSurface(topology, np.zeros((topology.n_vertices, 3)), rules.scheme, rules.boundary,
+                                 rules.tags)
+    return _core.fairness_matrix(surface, thin_plate, membrane, 4, 4)
 
 
 def fair_interpolate(vertices, faces, *, scheme: str = DEFAULT_SCHEME, levels: int = 1, thin_plate: float = 1.0,
@@ -276,16 +278,14 @@ def fair_interpolate(vertices, faces, *, scheme: str = DEFAULT_SCHEME, levels: i
     R = scipy.sparse.csr_matrix(fine["refinement"], shape=(n_fine, n))
     fine_faces = fine["faces"]
     fine_rules = _core.Rules(scheme=rules.scheme, boundary=rules.boundary, tags=fine["tags"])
-    t = time.perf_counter()
-    K = _fairness_matrix(fine_faces, n_fine, fine_rules, thin_plate, membrane).tocsr()
-    timings["energy"] = time.perf_counter() - t
-
     fine_topology = _core.Topology(fine_faces, n_fine) if rules.scheme == _core.Scheme.loop else _core.Topology(
         np.full(len(fine_faces), 4, np.int32), np.ascontiguousarray(fine_faces.reshape(-1)), n_fine)
+    t = time.perf_counter()
+    k_data, k_indices, k_indptr = _fairness_matrix(fine_topology, fine_rules, thin_plate, membrane)
+    timings["energy"] = time.perf_counter() - t
+
     start = np.ascontiguousarray(R @ np.asarray(plain.control_vertices))
-    sol = _core.fair_solve(fine_topology, fine_rules, np.ascontiguousarray(K.data, dtype=np.float64),
-                           np.ascontiguousarray(K.indices, dtype=np.int32),
-                           np.ascontiguousarray(K.indptr, dtype=np.int32), target_ids,
+    sol = _core.fair_solve(fine_topology, fine_rules, k_data, k_indices, k_indptr, target_ids,
                            np.ascontiguousarray(v0[target_ids]), start, tol, ENERGY_WINDOW, int(max_iter),
                            int(threads))
     timings["setup"], timings["solve"] = sol["setup_seconds"], sol["seconds"]
