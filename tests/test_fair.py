@@ -157,7 +157,7 @@ def test_tags_are_decayed_as_far_carries_them():
     # One semi-sharp crease of 2.3 on a closed mesh: level 1 carries its two
     # child edges at 1.3 (Far keeps float sharpness), level 2 four at 0.3,
     # level 3 none; an infinitely sharp one stays infinite at every level.
-    v, f = sorpia.shapes.icosphere(1)
+    v, f = sorpia.shapes.icosphere(0)
     edge = np.array([[f[0][0], f[0][1]]])
     for sharpness, levels, count, value in [(2.3, 1, 2, 1.3), (2.3, 2, 4, 0.3), (2.3, 3, 0, None),
                                             (np.inf, 3, 8, sorpia._core.INFINITE_SHARPNESS)]:

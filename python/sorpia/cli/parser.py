@@ -226,6 +226,19 @@ def build_parser() -> argparse.ArgumentParser:
                      "draws the fitted limit surface (Catmull-Clark only: Blender has no Loop)")
     fit.add_argument("--binary", action="store_true", help="write .ply and .stl outputs in binary (faster, "
                      "smaller; PLY keeps float64 either way)")
+    fit.add_argument("--fair", action="store_true",
+                     help="fair interpolation (Halstead, Kass and DeRose 1993): write a control mesh --levels "
+                     "subdivision steps finer (faces and tags as OpenSubdiv's refinement carries them) whose limit "
+                     "surface passes through the given vertices (or --targets) and bends least (thin-plate energy, "
+                     "plus --membrane); --tol then bounds the energy's relative change over 10 iterations and "
+                     "--max-iter its iterations")
+    fit.add_argument("--levels", type=_positive_int, default=None, metavar="N",
+                     help="--fair: subdivision steps from the input to the fair control mesh (default 1)")
+    fit.add_argument("--membrane", type=_float_arg, default=None, metavar="W",
+                     help="--fair: weight of the membrane term beside the thin plate's 1 (default 0)")
+    fit.add_argument("--targets", metavar="FILE",
+                     help="--fair: interpolate only these vertices (a text file of 0-based vertex indices, '#' "
+                     "comments); the others are free")
     scheme_options(fit)
     triangulate_flag(fit)
     repair_flag(fit, "the control mesh is that of the repaired mesh (its extra vertices copy input vertices) and "
@@ -237,7 +250,7 @@ def build_parser() -> argparse.ArgumentParser:
         surface=a.surface, level=a.level, report=a.report, quiet=a.quiet, force=a.force, triangulate=a.triangulate,
         binary=a.binary, threads=a.threads, repair=a.repair, scheme=a.scheme, ignore_tags=a.ignore_tags,
         sharp_angle=a.sharp_angle, nonmanifold=a.nonmanifold, keep_unconverged=a.keep_unconverged, prim=a.prim,
-        blender=a.blender)[0])
+        blender=a.blender, fair=a.fair, levels=a.levels, membrane=a.membrane, targets=a.targets)[0])
 
     comp = command("compare", "run several methods to one tolerance: the paper's Table 1 and Figure 7",
                    "Run each method on the mesh to the same tolerance and print the paper's Table 1 layout for "
