@@ -301,6 +301,13 @@ def build_parser() -> argparse.ArgumentParser:
     ren.add_argument("--face-budget", type=_positive_int, default=FACE_BUDGET, metavar="N",
                      help="most triangles drawn per panel")
     threads_option(ren, "--method auto, sor or gs only")
+    ren.add_argument("--fair", action="store_true",
+                     help="draw plain and fair interpolation side by side (as 'sorpia fit --fair'): the plain "
+                     "control mesh and limit surface, then the fair control mesh --levels finer and its surface")
+    ren.add_argument("--levels", type=_positive_int, default=None, metavar="N",
+                     help="--fair: subdivision steps from the input to the fair control mesh (default 1)")
+    ren.add_argument("--membrane", type=_float_arg, default=None, metavar="W",
+                     help="--fair: weight of the membrane term beside the thin plate's 1 (default 0)")
     scheme_options(ren)
     triangulate_flag(ren)
     repair_flag(ren, "the panels show the repaired mesh")
@@ -311,7 +318,8 @@ def build_parser() -> argparse.ArgumentParser:
         boundary=a.boundary, size=a.size,
         elev=a.elev, azim=a.azim, face_budget=a.face_budget, quiet=a.quiet, force=a.force,
         triangulate=a.triangulate, up=a.up, threads=a.threads, repair=a.repair, scheme=a.scheme,
-        ignore_tags=a.ignore_tags, sharp_angle=a.sharp_angle, nonmanifold=a.nonmanifold, prim=a.prim)[0])
+        ignore_tags=a.ignore_tags, sharp_angle=a.sharp_angle, nonmanifold=a.nonmanifold, prim=a.prim, fair=a.fair,
+        levels=a.levels, membrane=a.membrane)[0])
 
     inf = command("info", "mesh statistics (the paper's Table 2) and whether PIA can run on it",
                   "Print vertices, faces, edges, boundary loops, Euler characteristic, genus, components, "
