@@ -5,6 +5,7 @@ refused by name."""
 
 from __future__ import annotations
 
+import json
 import sys
 
 import numpy as np
@@ -148,6 +149,18 @@ def test_rules_sorpia_has_not_are_refused(tmp_path, body, message):
     with pytest.raises(MeshFileError, match=message):
         sorpia.read_mesh(path, tags=True)
     assert sorpia.read_mesh(path)[0].shape == (6, 3)  # without tags, the mesh reads
+
+
+def test_info_gives_a_verdict_on_rules_sorpia_has_not(tmp_path, command):
+    """`sorpia info` describes a bilinear mesh and says fit refuses it (exit 0), where fit stops with the reader's error."""
+    path = write_usda(tmp_path / "a.usda", 'uniform token subdivisionScheme = "bilinear"')
+    code, out, err = command("info", path, "--json")
+    assert code == 0
+    info = json.loads(out)
+    assert info["faces"] == 2 and not info["pia"]["can_run"]
+    assert "subdivisionScheme = bilinear is refused" in info["pia"]["reason"]
+    code, _, err = command("fit", path, "-o", tmp_path / "out.obj")
+    assert code == 2 and "subdivisionScheme = bilinear is refused" in err
 
 
 def test_bad_stages(tmp_path):

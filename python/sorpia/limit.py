@@ -62,29 +62,35 @@ def singular_cubes(topo: _core.Topology, tag_set: _core.Tags) -> list:
     vector of their CATMARK limit masks, 3/8 - 3 (1/6) + 3 (1/24) = 0, so
     only targets without a component along it can be interpolated there.
     Returns the vertices of each such cube (sorted arrays)."""
-    import scipy.sparse.csgraph  # here, not at import: sorpia's commands need no scipy
-
     offsets, neighbours = np.asarray(topo.ring_offsets), np.asarray(topo.ring_neighbors)
     n = topo.n_vertices
-    candidate = (np.diff(offsets) == 3) & ~np.asarray(topo.is_boundary)
-    if candidate.sum() < 8:
+    closed = (np.diff(offsets) == 3) & ~np.asarray(topo.is_boundary)
+    closed[np.asarray(tag_set.crease_vertices, dtype=np.intp).ravel()] = False
+    closed[np.asarray(tag_set.corner_vertices, dtype=np.intp)] = False
+    # A cube's corners are closed: untagged interior vertices of valence 3
+    # whose neighbours are closed too (peeled until that holds). Labels (the
+    # smallest vertex index reachable) spread over a cube in 3 steps, its
+    # diameter; a group of 8 sharing one label whose neighbours all carry it
+    # is a whole connected part, a cube.
+    ring = np.zeros((n, 3), dtype=np.int64)
+    ring[closed] = neighbours[offsets[:-1][closed, None] + np.arange(3)]
+    while True:
+        keep = closed & closed[ring].all(axis=1)
+        if (keep == closed).all():
+            break
+        closed = keep
+    if closed.sum() < 8 or topo.all_triangles:
         return []
-    graph = scipy.sparse.csr_matrix((np.ones(len(neighbours)), neighbours, offsets), shape=(n, n))
-    n_parts, part = scipy.sparse.csgraph.connected_components(graph, directed=False)
-    tagged = np.zeros(n, dtype=bool)
-    tagged[np.asarray(tag_set.crease_vertices).ravel()] = True
-    tagged[np.asarray(tag_set.corner_vertices)] = True
-    size = np.bincount(part, minlength=n_parts)
-    valence_3 = np.bincount(part, weights=candidate, minlength=n_parts)
-    touched = np.bincount(part, weights=tagged, minlength=n_parts) > 0
+    label = np.arange(n)
+    for _ in range(3):
+        label = np.where(closed, np.minimum(label, label[ring].min(axis=1)), label)
+    groups, size = np.unique(label[closed], return_counts=True)
+    found = [g for g in groups[size == 8] if (label[ring[(label == g) & closed]] == g).all()]
     cubes = []
-    found = np.flatnonzero((size == 8) & (valence_3 == 8) & ~touched)
-    if len(found) == 0 or topo.all_triangles:
-        return cubes
     counts, face_offsets, faces = (np.asarray(a) for a in (topo.face_counts, topo.vertex_face_offsets,
                                                             topo.vertex_faces))
-    for p in found:
-        vertices = np.flatnonzero(part == p)
+    for g in found:
+        vertices = np.flatnonzero((label == g) & closed)
         around = np.concatenate([faces[face_offsets[v]:face_offsets[v + 1]] for v in vertices])
         if np.all(counts[around] == 4):
             cubes.append(vertices)

@@ -465,24 +465,25 @@ class Interpolator:
                 f"(paper Remark 1) has no real value (rho >= 1) or none of use; rho clamped to {YOUNG_RHO_CLAMP}, "
                 f"omega = {r.omega:.4f} (slow: omega='auto' is the measured choice)",
                 OmegaWarning, stacklevel=3)
-        _warn_stopped_short(r, method, tol_value, max_iter)
+        why = None
         if r.stop_reason in ("max_iter", "diverged", "stalled", "singular") and self.scheme == "catmull-clark":
-            self._warn_singular()
+            why = self._singular_cubes_message()
+        _warn_stopped_short(r, method, tol_value, max_iter, why)
         r._record_build(time.perf_counter() - t0, 0.0, 0.0)
         return r
 
 
-    def _warn_singular(self) -> None:
-        """After a solve that stopped short: name the parts of the mesh where B
-        is singular in closed form (limit.singular_cubes), which no method can
-        fit unless the targets lack the null vector's component."""
+    def _singular_cubes_message(self) -> Optional[str]:
+        """After a solve that stopped short: where B is singular in closed
+        form (limit.singular_cubes), which no method can fit unless the
+        targets lack the null vector's component; None when nowhere."""
         cubes = singular_cubes(self.topology, self.tags)
-        if cubes:
-            warnings.warn(
-                f"B is singular on {len(cubes)} closed cube{'s' if len(cubes) > 1 else ''} of valence-3 vertices "
+        if not cubes:
+            return None
+        return (f"B is singular on {len(cubes)} closed cube{'s' if len(cubes) > 1 else ''} of valence-3 vertices "
                 f"(the first: vertices {cubes[0].tolist()}): under Catmull-Clark the alternating +1/-1 vector "
                 "over a cube's corners is a null vector of B (3/8 - 3/6 + 3/24 = 0), so targets with a component "
-                "along it cannot be interpolated there (docs: Catmull-Clark)", SingularMatrixWarning, stacklevel=4)
+                "along it cannot be interpolated there (docs: Catmull-Clark)")
 
 
 Interpolator.__doc__ = Interpolator.__doc__.replace("{tags}", _TAGS_DOC).replace("{nonmanifold}", _NONMANIFOLD_DOC)
@@ -520,13 +521,22 @@ def stopped_short_message(r: InterpolationResult, method: str, tol: float, max_i
     return f"method={method!r} {what}{tried} with {final}{advice}"
 
 
-def _warn_stopped_short(r: InterpolationResult, method: str, tol: float, max_iter: int) -> None:
-    """The warning of a result that did not reach tol: SingularMatrixWarning
-    for the least-squares answer, ConvergenceWarning otherwise."""
+def _warn_stopped_short(r: InterpolationResult, method: str, tol: float, max_iter: int,
+                        singular_where: Optional[str] = None) -> None:
+    """The warnings of a result that did not reach tol: SingularMatrixWarning
+    for the least-squares answer, ConvergenceWarning otherwise; and
+    `singular_where` (where B is singular, when known) as a
+    SingularMatrixWarning, in the same warning as the least-squares answer's."""
     text = stopped_short_message(r, method, tol, max_iter)
-    if text is not None:
-        category = SingularMatrixWarning if r.stop_reason == "singular" else ConvergenceWarning
-        warnings.warn(text, category, stacklevel=4)
+    if text is None:
+        return
+    if r.stop_reason == "singular":
+        warnings.warn(text if singular_where is None else f"{text}. {singular_where}", SingularMatrixWarning,
+                      stacklevel=4)
+        return
+    warnings.warn(text, ConvergenceWarning, stacklevel=4)
+    if singular_where is not None:
+        warnings.warn(singular_where, SingularMatrixWarning, stacklevel=4)
 
 
 def _as_initial(initial, v0: np.ndarray) -> Optional[np.ndarray]:

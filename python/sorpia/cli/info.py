@@ -39,7 +39,7 @@ def run_info(input_path, *, as_json=False, boundary=None, triangulate=False, rep
         mesh = read_input(input_path, triangulate=triangulate, repair=repair, tags=not ignore_tags,
                           nonmanifold=nonmanifold, prim=prim)
     except MeshFileError as exc:
-        if ignore_tags or "tag" not in str(exc):
+        if ignore_tags or ("tag" not in str(exc) and "subdivisionScheme" not in str(exc)):
             raise
         tags_refused = str(exc)
         mesh = read_input(input_path, triangulate=triangulate, repair=repair, tags=False, nonmanifold=nonmanifold,
