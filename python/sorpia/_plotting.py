@@ -72,8 +72,6 @@ def convergence_figure(curves, tol: float | None = None, title: str | None = Non
         Drawn as a dashed horizontal line at log10(tol).
     size : (width, height) in pixels of the saved PNG (at the figure's dpi).
     """
-    if fair is not None:  # panel by panel: the plain mesh's creases on (a), its curves on (b)
-        lines = [lines[2], None if crease_curves is None else lines[3], None, None]
     fig = _new_figure(*size)
     ax = fig.add_subplot(1, 1, 1)
     markers = "osD^vP*Xh<>"
