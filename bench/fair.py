@@ -237,7 +237,8 @@ def figure(path: Path):
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--shared", type=Path, default=Path(__file__).resolve().parents[1] / ".." / "shared" / "meshes")
+    parser.add_argument("--shared", type=Path,
+                        default=Path(__file__).resolve().parents[1] / ".." / "shared" / "meshes")
     parser.add_argument("--max-shared", type=int, default=4000, help="largest shared mesh measured (vertices)")
     parser.add_argument("--max-two-levels", type=int, default=1000,
                         help="largest mesh also measured two levels finer (vertices)")

@@ -263,6 +263,22 @@ def test_targets_on_a_plane_give_a_control_mesh_on_it():
     assert np.abs(c[:, 2] - (0.3 * c[:, 0] - 0.2 * c[:, 1])).max() <= 1e-12
 
 
+def test_one_target_on_a_flat_regular_grid_leaves_a_semidefinite_system():
+    # The thin plate alone on a flat regular Catmull-Clark grid with one
+    # target: the reduced energy is only semidefinite (a plane through the
+    # target costs nothing); the conjugate gradients on the consistent system
+    # converge to a minimiser of energy zero (rounding: 1e-10 of the start's)
+    # and the target is met.
+    v, f = sorpia.shapes.quad_grid(8, 8)
+    v = np.asarray(v, float)
+    v[:, 2] = 0.05 * np.random.default_rng(3).standard_normal(len(v))
+    res = sorpia.fair_interpolate(v, f, scheme="catmull-clark", boundary="edge-only", targets=[27])
+    assert res.converged
+    assert res.energy <= 1e-10 * res.plain_energy
+    hit = sorpia.limit_points(res.control_vertices, res.faces, **fine_kwargs(res))[27]
+    assert np.abs(hit - v[27]).max() <= 1e-14
+
+
 # ---- bad input ----------------------------------------------------------------------------------------------
 
 

@@ -17,7 +17,7 @@ equal the targets, and the rest of the freedom minimises the fairness energy
          + membrane   * integral(|S_u|^2 + |S_v|^2)
 
 of the fine mesh's limit surface S, a quadratic form tr(V^T K V) in the fine
-control vertices (`sorpia.energy.fairness_matrix`).
+control vertices (K: `sorpia.fairness_matrix` of the fine mesh).
 
 The solve (sorpia::fair_solve in the C++ core): the constraint rows, the fine
 mesh's limit matrix B at the targets' children, touch no other target's child
@@ -50,7 +50,7 @@ from . import _core
 from ._validate import DEFAULT_BOUNDARY, DEFAULT_SCHEME, as_rules, as_vertices
 from .errors import ParameterError
 from .limit import TAGS_DOC as _TAGS_DOC
-from .limit import built, warn_unreferenced
+from .limit import built
 from .solve import InterpolationResult, Interpolator, check_options
 
 # The iteration's window: the energy change is measured over this many iterations.
@@ -261,8 +261,7 @@ def fair_interpolate(vertices, faces, *, scheme: str = DEFAULT_SCHEME, levels: i
     timings = {}
 
     t = time.perf_counter()
-    topology = built(lambda: _core.Topology(*arrays, n))
-    warn_unreferenced(topology, stacklevel=2)
+    topology = built(lambda: _core.Topology(*arrays, n))  # unreferenced vertices: the Interpolator below warns
     fine = _core.refine_uniform(topology, rules, levels)  # refuses a fine mesh too big before building it
     timings["refine"] = time.perf_counter() - t
 

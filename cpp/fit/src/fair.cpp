@@ -178,7 +178,8 @@ FairSolution fair_solve(const Topology& topology, const Rules& rules, const CsrM
     if (t < 0 || static_cast<std::size_t>(t) >= n)
       throw ParameterError("targets[" + std::to_string(i) + "] = " + std::to_string(t) + " is out of range [0, " +
                            std::to_string(n) + ")");
-    if (e.is_target[t]) throw ParameterError("targets[" + std::to_string(i) + "] = " + std::to_string(t) + " is repeated");
+    if (e.is_target[t])
+      throw ParameterError("targets[" + std::to_string(i) + "] = " + std::to_string(t) + " is repeated");
     e.is_target[t] = 1;
   }
   const LimitOperator b = limit_operator(topology, rules);

@@ -36,7 +36,8 @@ constexpr double kFairBytesPerVertex = 2000.0;
 
 // Faces of the fine mesh `levels` below a coarse mesh.
 double fine_faces(Scheme scheme, std::size_t n_faces, std::size_t n_face_vertices, int levels) {
-  const double first = scheme == Scheme::Loop ? 4.0 * static_cast<double>(n_faces) : static_cast<double>(n_face_vertices);
+  const double first =
+      scheme == Scheme::Loop ? 4.0 * static_cast<double>(n_faces) : static_cast<double>(n_face_vertices);
   return first * std::pow(4.0, levels - 1);
 }
 
@@ -80,8 +81,12 @@ RefinedMesh refine_uniform(const Topology& topology, const Rules& rules, int lev
   detail::Refiner osd = detail::make_refiner(topology, scheme, rules.boundary, rules.tags);
   Far::TopologyRefiner& refiner = *osd.refiner;
   Far::TopologyRefiner::UniformOptions options(levels);
-  // The last level's edges (their sharpness) and vertex-face relations.
-  options.fullTopologyInLastLevel = true;
+  // The last level's edges (their sharpness) and vertex-face relations, read
+  // only where creases or corners have sharpness to carry: without them the
+  // fine mesh has no tags but holes (boundary edges and one-face corners are
+  // sharp by the rules).
+  const bool sharp_tags = !rules.tags.crease_sharpness.empty() || !rules.tags.corner_sharpness.empty();
+  options.fullTopologyInLastLevel = sharp_tags;
   poll_interrupt();
   refiner.RefineUniform(options);
   poll_interrupt();
@@ -129,7 +134,7 @@ RefinedMesh refine_uniform(const Topology& topology, const Rules& rules, int lev
   const auto sharpness = [](float s) {
     return s >= static_cast<float>(kInfiniteSharpness) ? kInfiniteSharpness : static_cast<double>(s);
   };
-  for (int e = 0; e < last.GetNumEdges(); ++e) {
+  for (int e = 0; sharp_tags && e < last.GetNumEdges(); ++e) {
     const float s = last.GetEdgeSharpness(e);
     if (s <= 0.0f || last.IsEdgeBoundary(e)) continue;
     const auto ev = last.GetEdgeVertices(e);
@@ -137,7 +142,7 @@ RefinedMesh refine_uniform(const Topology& topology, const Rules& rules, int lev
     out.tags.crease_vertices.push_back(fine_index(ev[1]));
     out.tags.crease_sharpness.push_back(sharpness(s));
   }
-  for (int v = 0; v < last.GetNumVertices(); ++v) {
+  for (int v = 0; sharp_tags && v < last.GetNumVertices(); ++v) {
     const float s = last.GetVertexSharpness(v);
     if (s <= 0.0f) continue;
     if (corner_rule && last.GetVertexFaces(v).size() == 1 && s >= static_cast<float>(kInfiniteSharpness)) continue;
@@ -164,7 +169,8 @@ RefinedMesh refine_uniform(const Topology& topology, const Rules& rules, int lev
   // Rows by fine index: the first n rows are the coarse vertices' children
   // (or, unreferenced, themselves), then Far's new vertices.
   std::vector<std::int32_t> slot(n, -1);  // coarse vertex -> Far's vertex j of the last level, or -1
-  for (std::size_t j = 0; j < n_osd; ++j) slot[static_cast<std::size_t>(osd.from_osd[j])] = static_cast<std::int32_t>(j);
+  for (std::size_t j = 0; j < n_osd; ++j)
+    slot[static_cast<std::size_t>(osd.from_osd[j])] = static_cast<std::int32_t>(j);
   r.indptr.reserve(r.n_rows + 1);
   r.indptr.push_back(0);
   const auto& sizes = stencils->GetSizes();

@@ -12,8 +12,8 @@ import numpy as np
 
 from .. import __version__
 from .common import (EXIT_NOT_CONVERGED, EXIT_OK, SCHEME_LABELS, UserError, check_mesh_suffix, check_paths,
-                     face_counts, face_size_histogram, fmt_seconds, read_solve_input, repair_json, repair_lines, scheme_kwargs,
-                     tags_lines, tags_summary, usd_template)
+                     face_counts, face_size_histogram, fmt_seconds, read_solve_input, repair_json, repair_lines,
+                     scheme_kwargs, tags_lines, tags_summary, usd_template)
 from .output import write_json
 from .progress import Progress
 
