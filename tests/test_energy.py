@@ -268,3 +268,35 @@ def test_bad_mesh_is_refused_by_the_one_check():
         sorpia.fairness_matrix(np.array([[0, 1, 5]]), 3, scheme="loop")
     with pytest.raises(sorpia.MeshError, match="holes"):
         sorpia.fairness_matrix(cube()[1], 8, scheme="catmull-clark", holes=[6])
+
+
+def test_polygon_sub_faces_are_measured_in_bfr_parameters():
+    """Catmull-Clark k-gons: each of the k sub-faces is the square of side 1/2
+    at (j % w, j // w) in Bfr's (u, v), measured by du dv. An independent
+    quadrature here (every sub-face cut into 8 x 8 squares, 6 x 6 Gauss points
+    each, LimitSurface.rows' second derivatives) agrees with K to the error
+    both make at the extraordinary corners (Bfr's Gregory patch), far below
+    the factor 4 a sub-face measured as a unit square would give."""
+    v, f = sorpia.shapes.polygon_torus(6, 5)
+    counts = np.asarray(f.face_vertex_counts)
+    assert (counts != 4).any()
+    surface = sorpia.LimitSurface(v, f, scheme="catmull-clark")
+    x, w = np.polynomial.legendre.leggauss(6)
+    x, w = (x + 1) / 2, w / 2
+    cells = 8
+    s, t = (g.ravel() for g in np.meshgrid((np.arange(cells)[:, None] + x).ravel() / cells,
+                                           (np.arange(cells)[:, None] + x).ravel() / cells, indexing="ij"))
+    ws = np.outer(np.tile(w, cells), np.tile(w, cells)).ravel() / cells ** 2
+    total = 0.0
+    for face, k in enumerate(counts):
+        cols = sorpia.surface.subface_columns(k) if k != 4 else 1
+        corners = [(0.0, 0.0)] if k == 4 else [(j % cols, j // cols) for j in range(k)]
+        side = 1.0 if k == 4 else 0.5
+        for cu, cv in corners:
+            uv = np.column_stack([cu + side * s, cv + side * t])
+            rows = surface.rows(np.full(len(uv), face), uv, derivatives=2)
+            duu, duv, dvv = (r @ v for r in rows[3:])
+            dens = (duu ** 2).sum(1) + 2 * (duv ** 2).sum(1) + (dvv ** 2).sum(1)
+            total += side * side * float(ws @ dens)
+    k = sorpia.fairness_matrix(f, len(v), scheme="catmull-clark")
+    assert energy(k, v) == pytest.approx(total, rel=2e-3)

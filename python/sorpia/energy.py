@@ -19,26 +19,29 @@ sqrt(3)/2, area sqrt(3)/4), so that K does not depend on which corner a face
 lists first and a flat regular triangle grid has a membrane energy of twice
 its area.
 
-The quadrature: OpenSubdiv's stencils (`LimitSurface.rows`, second and first
-derivatives) at Gauss-Legendre points, n x n on squares and the collapsed n x
-n rule on triangles (``gauss_points`` = n = 4 integrates both terms exactly on
-regular patches: bicubic B-splines, Loop's quartic box splines); the domain is
-split ``depth`` times towards irregular corners (extraordinary, boundary and
-tagged vertices, a k-gon's centre) and tagged edges, following the rings of
-polynomial pieces of Bfr's surface there, so that only the last corner piece
-(Bfr's Gregory patch, within 2^-depth of the corner) is integrated
-approximately. The error this leaves is measured by ``bench/energy.py``
-against much finer rules.
+The quadrature: OpenSubdiv's stencils (`LimitSurface.rows`, first and second
+derivatives). Each face's domain is split ``depth`` times towards its
+irregular corners (extraordinary, boundary and tagged vertices, a k-gon's
+centre) and tagged edges, following the rings of polynomial pieces of Bfr's
+surface there. A Catmull-Clark piece away from them is a bicubic B-spline
+piece, integrated in closed form from the derivatives at 2 x 2 points; the
+others (all Loop pieces, and the pieces at the marks) by Gauss-Legendre, n x n
+on squares and the collapsed n x n rule on triangles (``gauss_points`` = n =
+4 is exact on polynomial pieces: bicubic B-splines, Loop's quartic box
+splines). Only the last corner piece (Bfr's Gregory patch, within 2^-4 of an
+extraordinary corner) is integrated approximately: ``bench/energy.py``
+measures the error against much finer rules (about 1e-4 relative under
+Catmull-Clark and 5e-3 under Loop on irregular meshes, at the defaults).
 
-Near an extraordinary vertex whose subdominant eigenvalue exceeds 1/2
-(Catmull-Clark valence 5 and more, Loop 7 and more) the parametric second
-derivatives of the exact limit surface grow without bound towards the
-vertex, and their squared integral diverges slowly: K measures Bfr's surface,
-whose corner patch is a Gregory patch after 4 local refinements (10 on meshes
-with darts). Constant control values have zero energy; affine functions of
-the parameters have zero energy where every face is regular (a flat regular
-grid), not near extraordinary vertices, where the parameterisation is not
-affine.
+Near an extraordinary vertex whose subdominant eigenvalue lambda exceeds 1/2
+(Catmull-Clark valence 5 and more, Loop 7 and more) the parametric thin-plate
+energy of the exact limit surface grows by 4 lambda^2 from one ring of
+polynomial pieces to the next, so its integral diverges: K measures Bfr's
+surface, whose corner patch is a Gregory patch after 4 local refinements (10
+on meshes with darts). Constant control values have zero energy; affine
+functions of the parameters have zero energy where every face is regular (a
+flat regular grid), not near extraordinary vertices, where the
+parameterisation is not affine.
 """
 
 from __future__ import annotations

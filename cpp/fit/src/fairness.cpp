@@ -105,54 +105,203 @@ struct Marks {
   }
 };
 
-// Quadrature points (u, v, weight) of one face, appended to `uvw`.
+// A leaf of a face's domain split: under Catmull-Clark, a bicubic B-spline
+// piece (it touches no mark and lies within Bfr's isolation level, outside its
+// Gregory corner patch) is integrated in closed form from the derivatives at
+// four points; every other piece, and every Loop piece, by the Gauss rule.
+// (Loop's pieces are quartic, but Bfr's second derivatives change sign on the
+// rotated middle sub-triangles of its irregular patches, which squares do not
+// see and a fit to first and second derivatives would.)
+struct Piece {
+  bool exact;
+  double scale;  // side (squares) or leg (triangles) of the piece: 2^-level
+  double e[4];   // the piece's local axes in (u, v): s along (e[0], e[1]), t along (e[2], e[3])
+  std::size_t first, count;  // its points
+};
+
+// Points of the closed-form pieces, in a piece's local (s, t) on the unit
+// square (see ExactForms).
+constexpr double kSquareData[2] = {0.5 - 0.5 / 1.7320508075688772, 0.5 + 0.5 / 1.7320508075688772};
+// The deepest level at which a piece away from the marks is a polynomial
+// piece of Bfr's surface: Bfr's own isolation level at extraordinary vertices
+// (surface.cpp); below it lies its Gregory corner patch.
+constexpr int kExactLevel = 4;
+// Dunavant's 6-point rule on a triangle, exact to degree 4: barycentric
+// (a, a, 1 - 2a) and its rotations, with weight w each (weights sum to 1).
+constexpr double kDegree4[2][3] = {{0.445948490915965, 0.108103018168070, 0.223381589678011},
+                                   {0.091576213509771, 0.816847572980459, 0.109951743655322}};
+
+// The pieces of one face and their points (u, v, Gauss weight or 0).
 class Pieces {
  public:
-  Pieces(const Rule& rule, int depth) : g_(rule), depth_(depth) {}
+  Pieces(const Rule& rule, int depth, bool thin_plate_only)
+      : g_(rule), depth_(depth), thin_plate_only_(thin_plate_only) {}
 
-  void square(UV o, double h, int level, const Marks& m, std::vector<double>& uvw) const {
+  void square(UV o, double h, int level, const Marks& m, std::vector<Piece>& out, std::vector<double>& uvw) const {
     const UV c[4] = {o, {o.u + h, o.v}, {o.u + h, o.v + h}, {o.u, o.v + h}};
-    if (level < depth_ && m.touches(c, 4)) {
+    const bool touches = m.touches(c, 4);
+    if (touches && level < depth_) {
       const double k = 0.5 * h;
-      for (const UV& d : {UV{0, 0}, UV{k, 0}, UV{k, k}, UV{0, k}}) square({o.u + d.u, o.v + d.v}, k, level + 1, m, uvw);
+      for (const UV& d : {UV{0, 0}, UV{k, 0}, UV{k, k}, UV{0, k}})
+        square({o.u + d.u, o.v + d.v}, k, level + 1, m, out, uvw);
       return;
     }
-    const std::size_t n = g_.x.size();
-    for (std::size_t i = 0; i < n; ++i)
-      for (std::size_t j = 0; j < n; ++j) {
-        uvw.push_back(o.u + h * g_.x[i]);
-        uvw.push_back(o.v + h * g_.x[j]);
-        uvw.push_back(h * h * g_.w[i] * g_.w[j]);
-      }
+    const bool exact = !touches && level <= kExactLevel;
+    out.push_back({exact, h, {h, 0.0, 0.0, h}, uvw.size() / 3, 0});
+    if (exact) {
+      for (const double t : kSquareData)
+        for (const double s : kSquareData) add(o.u + h * s, o.v + h * t, 0.0, uvw);
+    } else {
+      const std::size_t n = g_.x.size();
+      for (std::size_t j = 0; j < n; ++j)
+        for (std::size_t i = 0; i < n; ++i) add(o.u + h * g_.x[i], o.v + h * g_.x[j], h * h * g_.w[i] * g_.w[j], uvw);
+    }
+    out.back().count = uvw.size() / 3 - out.back().first;
   }
 
-  void triangle(UV a, UV b, UV c, int level, const Marks& m, std::vector<double>& uvw) const {
+  void triangle(UV a, UV b, UV c, double h, int level, const Marks& m, std::vector<Piece>& out,
+                std::vector<double>& uvw) const {
     const UV t[3] = {a, b, c};
-    if (level < depth_ && m.touches(t, 3)) {
+    const bool touches = m.touches(t, 3);
+    if (touches && level < depth_) {
       const UV ab = mid(a, b), bc = mid(b, c), ca = mid(c, a);
-      triangle(a, ab, ca, level + 1, m, uvw);
-      triangle(ab, b, bc, level + 1, m, uvw);
-      triangle(ca, bc, c, level + 1, m, uvw);
-      triangle(bc, ca, ab, level + 1, m, uvw);
+      triangle(a, ab, ca, 0.5 * h, level + 1, m, out, uvw);
+      triangle(ab, b, bc, 0.5 * h, level + 1, m, out, uvw);
+      triangle(ca, bc, c, 0.5 * h, level + 1, m, out, uvw);
+      triangle(bc, ca, ab, 0.5 * h, level + 1, m, out, uvw);
       return;
     }
-    // The collapsed (Duffy) product rule: (s, t) = (x_i, x_j (1 - x_i)) with
-    // weight w_i w_j (1 - x_i) on the unit right triangle, scaled by twice the
-    // piece's area.
-    const double area2 = std::abs((b.u - a.u) * (c.v - a.v) - (b.v - a.v) * (c.u - a.u));
-    const std::size_t n = g_.x.size();
-    for (std::size_t i = 0; i < n; ++i)
-      for (std::size_t j = 0; j < n; ++j) {
-        const double s = g_.x[i], r = g_.x[j] * (1.0 - g_.x[i]);
-        uvw.push_back(a.u + s * (b.u - a.u) + r * (c.u - a.u));
-        uvw.push_back(a.v + s * (b.v - a.v) + r * (c.v - a.v));
-        uvw.push_back(area2 * g_.w[i] * g_.w[j] * (1.0 - g_.x[i]));
+    const double e[4] = {b.u - a.u, b.v - a.v, c.u - a.u, c.v - a.v};
+    out.push_back({false, h, {e[0], e[1], e[2], e[3]}, uvw.size() / 3, 0});
+    auto at = [&](double s, double r, double w) { add(a.u + s * e[0] + r * e[2], a.v + s * e[1] + r * e[3], w, uvw); };
+    const double area2 = std::abs(e[0] * e[3] - e[1] * e[2]);
+    if (!touches && level <= kExactLevel && thin_plate_only_) {
+      // A quartic piece, the thin-plate integrand of degree 4 whatever the
+      // sign of Bfr's second derivatives: the 6-point rule exact to degree 4
+      // (Dunavant 1985), weights summing to 1 times the piece's area.
+      for (const auto& q : kDegree4) {  // (s, t) the barycentrics of b and c
+        at(q[0], q[1], 0.5 * area2 * q[2]);
+        at(q[1], q[0], 0.5 * area2 * q[2]);
+        at(q[0], q[0], 0.5 * area2 * q[2]);
       }
+    } else {
+      // The collapsed (Duffy) product rule: (s, t) = (x_i, x_j (1 - x_i))
+      // with weight w_i w_j (1 - x_i) on the unit right triangle, times twice
+      // the piece's area in (u, v).
+      const std::size_t n = g_.x.size();
+      for (std::size_t i = 0; i < n; ++i)
+        for (std::size_t j = 0; j < n; ++j)
+          at(g_.x[i], g_.x[j] * (1.0 - g_.x[i]), area2 * g_.w[i] * g_.w[j] * (1.0 - g_.x[i]));
+    }
+    out.back().count = uvw.size() / 3 - out.back().first;
   }
 
  private:
+  static void add(double u, double v, double w, std::vector<double>& uvw) {
+    uvw.push_back(u);
+    uvw.push_back(v);
+    uvw.push_back(w);
+  }
   const Rule& g_;
   int depth_;
+  bool thin_plate_only_;
+};
+
+// Solves a x = b for the columns of b (n x m, row-major) in place, a (n x n)
+// destroyed: Gauss-Jordan with partial pivoting, for the small fixed systems
+// of ExactForms.
+void solve_dense(std::vector<double> a, std::vector<double>& b, std::size_t n, std::size_t m) {
+  for (std::size_t c = 0; c < n; ++c) {
+    std::size_t piv = c;
+    for (std::size_t r = c + 1; r < n; ++r)
+      if (std::abs(a[r * n + c]) > std::abs(a[piv * n + c])) piv = r;
+    for (std::size_t k = 0; k < n; ++k) std::swap(a[c * n + k], a[piv * n + k]);
+    for (std::size_t k = 0; k < m; ++k) std::swap(b[c * m + k], b[piv * m + k]);
+    const double d = a[c * n + c];
+    for (std::size_t r = 0; r < n; ++r) {
+      if (r == c) continue;
+      const double f = a[r * n + c] / d;
+      if (f == 0.0) continue;
+      for (std::size_t k = 0; k < n; ++k) a[r * n + k] -= f * a[c * n + k];
+      for (std::size_t k = 0; k < m; ++k) b[r * m + k] -= f * b[c * m + k];
+    }
+  }
+  for (std::size_t c = 0; c < n; ++c)
+    for (std::size_t k = 0; k < m; ++k) b[c * m + k] /= a[c * n + c];
+}
+
+// The energy of a bicubic piece as a quadratic form in its data: the
+// derivatives (f_s, f_t, f_ss, f_st, f_tt) in the piece's local (s, t) on the
+// unit square at the 2 x 2 points kSquareData. These 20 values determine a
+// bicubic up to a constant (on each line t = t_j, f_s is the quadratic with
+// those values and slopes, likewise f_t on s = s_i; a bicubic vanishing on
+// the four lines is (s - s0)(s - s1)(t - t0)(t - t1) g with g bilinear, which
+// f_st at the four points makes zero), and positions, whose weights are of
+// order 1 where the energy's are of order h^2, are left out for accuracy.
+// Q = C^T G C: C the least-squares data-to-coefficients map (exact on
+// bicubics), G the energy's Gram matrix of the monomials (Gauss 4 x 4:
+// exact). For a piece of side h the thin-plate form scales as h^-2, the
+// membrane form stays.
+struct ExactForms {
+  static constexpr std::size_t kData = 20;
+  std::vector<double> thin_plate, membrane;  // kData x kData
+
+  ExactForms() {
+    std::vector<std::pair<int, int>> mono;  // s^a t^b but the constant
+    for (int a = 0; a < 4; ++a)
+      for (int b = 0; b < 4; ++b)
+        if (a + b > 0) mono.emplace_back(a, b);
+    const std::size_t nm = mono.size();
+    // d^(i, j) of monomial (a, b) at (s, t), centred on the piece (better conditioned)
+    auto deriv = [](std::pair<int, int> m, int i, int j, double s, double t) {
+      if (m.first < i || m.second < j) return 0.0;
+      double c = 1.0;
+      for (int k = 0; k < i; ++k) c *= m.first - k;
+      for (int k = 0; k < j; ++k) c *= m.second - k;
+      return c * std::pow(s - 0.5, m.first - i) * std::pow(t - 0.5, m.second - j);
+    };
+    const std::pair<int, int> orders[5] = {{1, 0}, {0, 1}, {2, 0}, {1, 1}, {0, 2}};
+    std::vector<std::pair<UV, std::pair<int, int>>> data;
+    for (const double t : kSquareData)
+      for (const double s : kSquareData)
+        for (const auto& o : orders) data.push_back({{s, t}, o});
+    // C = (P^T P)^-1 P^T, P (kData x nm) the functionals on the monomials.
+    std::vector<double> pm(kData * nm), ptp(nm * nm, 0.0), c(nm * kData);
+    for (std::size_t d = 0; d < kData; ++d)
+      for (std::size_t k = 0; k < nm; ++k)
+        pm[d * nm + k] = deriv(mono[k], data[d].second.first, data[d].second.second, data[d].first.u, data[d].first.v);
+    for (std::size_t i = 0; i < nm; ++i)
+      for (std::size_t j = 0; j < nm; ++j)
+        for (std::size_t d = 0; d < kData; ++d) ptp[i * nm + j] += pm[d * nm + i] * pm[d * nm + j];
+    for (std::size_t k = 0; k < nm; ++k)
+      for (std::size_t d = 0; d < kData; ++d) c[k * kData + d] = pm[d * nm + k];
+    solve_dense(ptp, c, nm, kData);
+    const Rule g = gauss_legendre(4);
+    std::vector<double> gtp(nm * nm, 0.0), gmb(nm * nm, 0.0);
+    for (std::size_t i = 0; i < 4; ++i)
+      for (std::size_t j = 0; j < 4; ++j) {
+        const double s = g.x[i], t = g.x[j], w = g.w[i] * g.w[j];
+        for (std::size_t a = 0; a < nm; ++a)
+          for (std::size_t b = 0; b < nm; ++b) {
+            auto dd = [&](int p, int q) { return deriv(mono[a], p, q, s, t) * deriv(mono[b], p, q, s, t); };
+            gtp[a * nm + b] += w * (dd(2, 0) + 2.0 * dd(1, 1) + dd(0, 2));
+            gmb[a * nm + b] += w * (dd(1, 0) + dd(0, 1));
+          }
+      }
+    auto form = [&](const std::vector<double>& gm) {
+      std::vector<double> q(kData * kData, 0.0);
+      for (std::size_t a = 0; a < kData; ++a)
+        for (std::size_t b = 0; b < kData; ++b) {
+          double sum = 0.0;
+          for (std::size_t i = 0; i < nm; ++i)
+            for (std::size_t j = 0; j < nm; ++j) sum += c[i * kData + a] * gm[i * nm + j] * c[j * kData + b];
+          q[a * kData + b] = sum;
+        }
+      return q;
+    };
+    thin_plate = form(gtp);
+    membrane = form(gmb);
+  }
 };
 
 // Columns of the grid of sub-faces of a k-gon under Catmull-Clark (surface.hpp).
@@ -198,9 +347,9 @@ struct Irregular {
   bool tagged(std::int32_t a, std::int32_t b) const { return !edges.empty() && edges.count(edge_key(a, b)) != 0; }
 };
 
-// The quadrature points of face f (u, v, weight with the face's measure).
-void face_points(const Topology& t, Scheme scheme, const Irregular& irr, const Pieces& pieces, std::size_t f,
-                 Marks& m, std::vector<double>& uvw) {
+// The pieces of face f and their points (u, v, Gauss weight with the face's measure).
+void face_pieces(const Topology& t, Scheme scheme, const Irregular& irr, const Pieces& pieces, std::size_t f,
+                 Marks& m, std::vector<Piece>& out, std::vector<double>& uvw) {
   const std::int32_t k = t.face_size(f);
   const std::int32_t* vs = t.face_indices().data() + t.face_offset(f);
   auto corner_marks = [&](const UV* c) {
@@ -214,7 +363,7 @@ void face_points(const Topology& t, Scheme scheme, const Irregular& irr, const P
     const UV c[3] = {{0, 0}, {1, 0}, {0, 1}};
     corner_marks(c);
     const std::size_t first = uvw.size();
-    pieces.triangle(c[0], c[1], c[2], 0, m, uvw);
+    pieces.triangle(c[0], c[1], c[2], 1.0, 0, m, out, uvw);
     // The equilateral measure: dx dy = (sqrt(3) / 2) du dv.
     for (std::size_t i = first + 2; i < uvw.size(); i += 3) uvw[i] *= 0.5 * std::sqrt(3.0);
     return;
@@ -222,7 +371,7 @@ void face_points(const Topology& t, Scheme scheme, const Irregular& irr, const P
   if (k == 4) {
     const UV c[4] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
     corner_marks(c);
-    pieces.square(c[0], 1.0, 0, m, uvw);
+    pieces.square(c[0], 1.0, 0, m, out, uvw);
     return;
   }
   // A k-gon's sub-face j: the square of side 1/2 at corner j, its far corner the
@@ -242,7 +391,7 @@ void face_points(const Topology& t, Scheme scheme, const Irregular& irr, const P
       m.points.push_back(back);
       m.segments.push_back({o, back});
     }
-    pieces.square(o, 0.5, 1, m, uvw);
+    pieces.square(o, 0.5, 1, m, out, uvw);
   }
 }
 
@@ -302,23 +451,45 @@ struct Worker {
   std::vector<Entry> chunk;
   std::vector<std::int32_t> local;  // column -> its place in `cols`, -1 elsewhere
   std::vector<std::int32_t> cols;
-  std::vector<double> a, e;
+  std::vector<double> a, e, qd;
 };
 
-// Face f's element matrix, from its points' rows [r0, r1), added to w.chunk
-// (upper triangle, global indices).
-void add_element(const SurfaceRows& rows, const double* weights, std::size_t r0, std::size_t r1,
-                 const std::vector<Term>& terms, Worker& w) {
-  const CsrMatrix* d[5] = {&rows.du, &rows.dv, &rows.duu, &rows.duv, &rows.dvv};
-  bool used[5] = {false, false, false, false, false};
-  for (const Term& t : terms)
-    for (int i = 0; i < 5; ++i) used[i] = used[i] || t.coef[i] != 0.0;
+// What an element needs besides the rows: the weights, the Gauss terms and
+// the closed forms.
+struct ElementRules {
+  const std::vector<Term>& terms;
+  const ExactForms& exact;
+  double thin_plate, membrane;
+};
+
+// Adds coef * row r of m to the dense row `a` (over the element's columns).
+void add_row(const CsrMatrix& m, std::size_t r, double coef, const std::vector<std::int32_t>& local, double* a) {
+  if (coef == 0.0) return;
+  for (auto p = static_cast<std::size_t>(m.indptr[r]); p < static_cast<std::size_t>(m.indptr[r + 1]); ++p)
+    a[static_cast<std::size_t>(local[static_cast<std::size_t>(m.indices[p])])] += coef * m.data[p];
+}
+
+// E += s a a^T on the upper triangle (n x n, row-major).
+void add_outer(double s, const double* a, std::size_t n, double* e) {
+  for (std::size_t i = 0; i < n; ++i) {
+    const double ai = s * a[i];
+    if (ai == 0.0) continue;
+    double* row = e + i * n;
+    for (std::size_t j = i; j < n; ++j) row[j] += ai * a[j];
+  }
+}
+
+// A face's element matrix from the rows of its pieces' points, added to
+// w.chunk (upper triangle, global indices).
+void add_element(const SurfaceRows& rows, const double* weights, const Piece* pieces, std::size_t n_pieces,
+                 const ElementRules& er, Worker& w) {
+  const CsrMatrix* d[6] = {&rows.position, &rows.du, &rows.dv, &rows.duu, &rows.duv, &rows.dvv};
+  const std::size_t r0 = pieces[0].first, r1 = pieces[n_pieces - 1].first + pieces[n_pieces - 1].count;
   w.cols.clear();
-  for (int i = 0; i < 5; ++i) {
-    if (!used[i]) continue;
-    const CsrMatrix& m = *d[i];
-    for (auto p = static_cast<std::size_t>(m.indptr[r0]); p < static_cast<std::size_t>(m.indptr[r1]); ++p) {
-      const std::int32_t c = m.indices[p];
+  for (const CsrMatrix* m : d) {
+    if (m == d[0]) continue;  // positions do not enter the energy
+    for (auto p = static_cast<std::size_t>(m->indptr[r0]); p < static_cast<std::size_t>(m->indptr[r1]); ++p) {
+      const std::int32_t c = m->indices[p];
       if (w.local[static_cast<std::size_t>(c)] < 0) {
         w.local[static_cast<std::size_t>(c)] = 0;
         w.cols.push_back(c);
@@ -329,22 +500,49 @@ void add_element(const SurfaceRows& rows, const double* weights, std::size_t r0,
   const std::size_t n = w.cols.size();
   for (std::size_t i = 0; i < n; ++i) w.local[static_cast<std::size_t>(w.cols[i])] = static_cast<std::int32_t>(i);
   w.e.assign(n * n, 0.0);
-  w.a.resize(n);
-  for (std::size_t r = r0; r < r1; ++r) {
-    for (const Term& t : terms) {
-      std::fill(w.a.begin(), w.a.end(), 0.0);
-      for (int i = 0; i < 5; ++i) {
-        if (t.coef[i] == 0.0) continue;
-        const CsrMatrix& m = *d[i];
-        for (auto p = static_cast<std::size_t>(m.indptr[r]); p < static_cast<std::size_t>(m.indptr[r + 1]); ++p)
-          w.a[static_cast<std::size_t>(w.local[static_cast<std::size_t>(m.indices[p])])] += t.coef[i] * m.data[p];
+  const std::size_t nd = ExactForms::kData;
+  for (std::size_t pi = 0; pi < n_pieces; ++pi) {
+    const Piece& pc = pieces[pi];
+    if (!pc.exact) {
+      w.a.resize(n);
+      for (std::size_t r = pc.first; r < pc.first + pc.count; ++r)
+        for (const Term& t : er.terms) {
+          std::fill(w.a.begin(), w.a.end(), 0.0);
+          for (int i = 0; i < 5; ++i) add_row(*d[i + 1], r, t.coef[i], w.local, w.a.data());
+          add_outer(weights[r] * t.weight, w.a.data(), n, w.e.data());
+        }
+      continue;
+    }
+    // The data (derivatives in the piece's (s, t) = (u, v) / h) as dense rows.
+    w.a.assign(nd * n, 0.0);
+    const double h = pc.scale;
+    for (std::size_t q = 0; q < pc.count; ++q) {
+      const std::size_t r = pc.first + q;
+      double* a = w.a.data() + q * 5 * n;
+      add_row(*d[1], r, h, w.local, a);
+      add_row(*d[2], r, h, w.local, a + n);
+      add_row(*d[3], r, h * h, w.local, a + 2 * n);
+      add_row(*d[4], r, h * h, w.local, a + 3 * n);
+      add_row(*d[5], r, h * h, w.local, a + 4 * n);
+    }
+    // E += D^T Q D, Q = thin_plate h^-2 Q_tp + membrane Q_mb.
+    const double tp = er.thin_plate / (pc.scale * pc.scale);
+    w.qd.assign(nd * n, 0.0);
+    for (std::size_t i = 0; i < nd; ++i)
+      for (std::size_t j = 0; j < nd; ++j) {
+        const double q = tp * er.exact.thin_plate[i * nd + j] + er.membrane * er.exact.membrane[i * nd + j];
+        if (q == 0.0) continue;
+        const double* dj = w.a.data() + j * n;
+        double* out = w.qd.data() + i * n;
+        for (std::size_t k = 0; k < n; ++k) out[k] += q * dj[k];
       }
-      const double s = weights[r] * t.weight;
-      for (std::size_t i = 0; i < n; ++i) {
-        const double ai = s * w.a[i];
-        if (ai == 0.0) continue;
-        double* row = w.e.data() + i * n;
-        for (std::size_t j = i; j < n; ++j) row[j] += ai * w.a[j];
+    for (std::size_t i = 0; i < nd; ++i) {
+      const double* di = w.a.data() + i * n;
+      const double* qi = w.qd.data() + i * n;
+      for (std::size_t a = 0; a < n; ++a) {
+        if (di[a] == 0.0) continue;
+        double* row = w.e.data() + a * n;
+        for (std::size_t b = a; b < n; ++b) row[b] += di[a] * qi[b];
       }
     }
   }
@@ -446,7 +644,7 @@ CsrMatrix fairness_matrix(const LimitSurface& surface, double thin_plate, double
   std::vector<std::uint8_t> hole(n_faces, 0);
   for (const std::int32_t f : surface.tags().holes) hole[static_cast<std::size_t>(f)] = 1;
   const Rule rule = gauss_legendre(quadrature.gauss_points);
-  const Pieces pieces(rule, quadrature.depth);
+  const Pieces pieces(rule, quadrature.depth, membrane == 0.0);
   const std::vector<Term> terms = energy_terms(scheme, thin_plate, membrane);
 
   const int n_threads = std::max(1, std::min<int>(detail::available_processors(),
@@ -454,43 +652,45 @@ CsrMatrix fairness_matrix(const LimitSurface& surface, double thin_plate, double
   std::vector<Worker> workers(static_cast<std::size_t>(n_threads));
   for (Worker& w : workers) w.local.assign(surface.n_vertices(), -1);
 
-  std::vector<std::int32_t> chunk_faces, point_faces;
-  std::vector<std::size_t> face_first;  // per chunk face, its first point; one past the end last
+  const ExactForms exact;
+  const ElementRules er{terms, exact, thin_plate, membrane};
+  std::vector<std::int32_t> point_faces;
+  std::vector<std::size_t> face_first;  // per chunk face, its first piece; one past the end last
+  std::vector<Piece> chunk_pieces;
   std::vector<double> uvw, uv, weights;
   Marks marks;
   std::size_t f = 0;
   while (f < n_faces) {
     poll_interrupt();
-    chunk_faces.clear();
     face_first.clear();
+    chunk_pieces.clear();
     uvw.clear();
+    point_faces.clear();
     for (; f < n_faces && uvw.size() < 3 * kChunkPoints; ++f) {
       if (hole[f]) continue;
-      chunk_faces.push_back(static_cast<std::int32_t>(f));
-      face_first.push_back(uvw.size() / 3);
-      face_points(topo, scheme, irr, pieces, f, marks, uvw);
+      face_first.push_back(chunk_pieces.size());
+      face_pieces(topo, scheme, irr, pieces, f, marks, chunk_pieces, uvw);
+      point_faces.resize(uvw.size() / 3, static_cast<std::int32_t>(f));
     }
     const std::size_t k = uvw.size() / 3;
-    face_first.push_back(k);
-    if (chunk_faces.empty()) continue;
-    point_faces.resize(k);
+    const std::size_t n_chunk = face_first.size();
+    face_first.push_back(chunk_pieces.size());
+    if (n_chunk == 0) continue;
     uv.resize(2 * k);
     weights.resize(k);
-    for (std::size_t c = 0; c < chunk_faces.size(); ++c)
-      for (std::size_t p = face_first[c]; p < face_first[c + 1]; ++p) point_faces[p] = chunk_faces[c];
     for (std::size_t p = 0; p < k; ++p) {
       uv[2 * p] = uvw[3 * p];
       uv[2 * p + 1] = uvw[3 * p + 1];
       weights[p] = uvw[3 * p + 2];
     }
     const SurfaceRows rows = surface.rows(point_faces.data(), uv.data(), k, 2);
-    const std::size_t n_chunk = chunk_faces.size();
     detail::for_each_task(n_threads > 1, n_threads, [&](int t) {
       Worker& w = workers[static_cast<std::size_t>(t)];
       const auto nt = static_cast<std::size_t>(n_threads), ut = static_cast<std::size_t>(t);
       w.chunk.clear();
       for (std::size_t c = n_chunk * ut / nt; c < n_chunk * (ut + 1) / nt; ++c)
-        add_element(rows, weights.data(), face_first[c], face_first[c + 1], terms, w);
+        add_element(rows, weights.data(), chunk_pieces.data() + face_first[c], face_first[c + 1] - face_first[c], er,
+                    w);
       merge_entries(w.chunk);
       w.merged.insert(w.merged.end(), w.chunk.begin(), w.chunk.end());
     });

@@ -43,17 +43,22 @@ struct FairnessQuadrature {
 /// of side 1 (x = u + v/2, y = v sqrt(3)/2, area sqrt(3)/4), so that K does not
 /// depend on which corner a triangle lists first.
 ///
-/// Assembled from the derivative rows of LimitSurface::rows (Bfr's stencils)
-/// at the quadrature points of FairnessQuadrature: K = sum over points q of
-/// w_q (thin_plate (Dxx^T Dxx + 2 Dxy^T Dxy + Dyy^T Dyy) + membrane (Dx^T Dx +
-/// Dy^T Dy)), one dense element matrix per face, merged per row; threads from
-/// the core's pool. Exact (to rounding) on regular faces; near extraordinary
-/// vertices the integral is that of Bfr's surface (rings of polynomial
-/// pieces, a Gregory patch in the last corner piece), whose parametric
-/// second derivatives grow without bound at an extraordinary vertex whose
-/// subdominant eigenvalue exceeds 1/2 (Catmull-Clark valence 5 and more, Loop
-/// 7 and more): there the thin-plate integral of the exact limit surface
-/// diverges, and K measures Bfr's approximation at its refinement level.
+/// Assembled from the derivative rows of LimitSurface::rows (Bfr's stencils),
+/// one dense element matrix per face, merged per row; threads from the
+/// core's pool. Each face's domain is split `depth` times towards its marks;
+/// a Catmull-Clark piece away from them (down to Bfr's isolation level 4) is
+/// a bicubic B-spline piece, integrated in closed form from the derivative
+/// rows at 2 x 2 points; every other piece (Loop's, those at the marks) by
+/// the Gauss rule: K = sum over points q of w_q (thin_plate (Dxx^T Dxx + 2
+/// Dxy^T Dxy + Dyy^T Dyy) + membrane (Dx^T Dx + Dy^T Dy)). Exact (to rounding)
+/// on regular faces and on the rings of polynomial pieces next to an
+/// extraordinary vertex; the corner piece (Bfr's Gregory patch) is
+/// approximated by the Gauss rule. The integral is that of Bfr's surface: at
+/// an extraordinary vertex whose subdominant eigenvalue lambda exceeds 1/2
+/// (Catmull-Clark valence 5 and more, Loop 7 and more) the thin-plate energy
+/// of the exact limit surface's rings grows by 4 lambda^2 per ring, so its
+/// integral diverges, and K measures Bfr's approximation at its isolation
+/// level (4; 10 on meshes with darts).
 /// Constant V is in K's null space; so are the affine functions of the
 /// parameter wherever every face is regular (a flat regular grid).
 /// @param surface     the topology and rules (its vertices are not used)
