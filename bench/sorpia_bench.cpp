@@ -61,7 +61,6 @@ options:
                      (the reference) instead of inside the sweep
   --boundary RULE    edge-and-corner (default) or edge-only
   --scheme NAME      loop (default; triangles only) or catmull-clark
-  --topology HOW     direct (default) or openmesh (the reference build)
   --triangulate      split polygons of mesh files into triangles
   --tags             use the OpenSubdiv tags (t lines) of OBJ files: creases,
                      corners, holes (their interpolateboundary is left to
@@ -97,7 +96,6 @@ struct Options {
   bool two_pass = false;
   sorpia::Boundary boundary = sorpia::Boundary::EdgeAndCorner;
   sorpia::Scheme scheme = sorpia::Scheme::Loop;
-  sorpia::TopologyBuild topology = sorpia::TopologyBuild::Direct;
   bool triangulate = false;
   bool file_tags = false;
   double crease_share = 0.0, crease_sharpness = sorpia::kInfiniteSharpness;
@@ -184,10 +182,6 @@ Options parse(int argc, char** argv) {
       } catch (const sorpia::ParameterError& e) {
         throw Usage(std::string("--scheme: ") + e.what());
       }
-    } else if (a == "--topology") {
-      const std::string v = value();
-      if (v != "direct" && v != "openmesh") throw Usage("--topology: direct or openmesh");
-      o.topology = v == "openmesh" ? sorpia::TopologyBuild::OpenMesh : sorpia::TopologyBuild::Direct;
     } else if (a == "--tags") {
       o.file_tags = true;
     } else if (a == "--creases") {
@@ -245,11 +239,6 @@ struct BenchMesh {
   const std::vector<double>& vertices() const { return mesh.vertices; }
   std::size_t n_vertices() const { return mesh.n_vertices(); }
   std::size_t n_faces() const { return mesh.n_faces(); }
-  sorpia::Topology topology(sorpia::TopologyBuild how) const {
-    if (!polygons()) return sorpia::Topology(mesh.face_vertex_indices.data(), n_faces(), n_vertices(), how);
-    return sorpia::Topology(mesh.face_vertex_counts.data(), n_faces(), mesh.face_vertex_indices.data(), n_vertices(),
-                            how);
-  }
 };
 
 BenchMesh generate(const std::string& spec);
@@ -420,7 +409,7 @@ MeshRun run_mesh(const Options& o, const std::string& spec) {
     const long input_kb = status_kb("VmRSS");
 
     t0 = Clock::now();
-    sorpia::Topology topology = mesh.topology(o.topology);
+    sorpia::Topology topology(mesh.mesh);
     run.topology.push_back(seconds_since(t0));
 
     add_random_creases(topology, o.crease_share, o.crease_sharpness, tags);
@@ -513,10 +502,9 @@ void print_json(const Options& o, const std::vector<MeshRun>& runs) {
   std::printf("{\n  \"machine\": {\"cpu\": %s, \"hardware_threads\": %u},\n", json_str(cpu_model()).c_str(),
               std::thread::hardware_concurrency());
   std::printf("  \"options\": {\"tol\": %s, \"max_iter\": %d, \"scheme\": %s, \"boundary\": %s, "
-              "\"topology\": %s, \"threads\": %d, \"two_pass\": %s, \"repeat\": %d},\n",
+              "\"threads\": %d, \"two_pass\": %s, \"repeat\": %d},\n",
               num(o.tol).c_str(), o.max_iter, json_str(sorpia::scheme_name(o.scheme)).c_str(),
-              json_str(sorpia::boundary_name(o.boundary)).c_str(),
-              json_str(o.topology == sorpia::TopologyBuild::OpenMesh ? "openmesh" : "direct").c_str(), o.threads,
+              json_str(sorpia::boundary_name(o.boundary)).c_str(), o.threads,
               o.two_pass ? "true" : "false", o.repeat);
   std::printf("  \"meshes\": [");
   for (std::size_t k = 0; k < runs.size(); ++k) {
@@ -546,10 +534,10 @@ void print_json(const Options& o, const std::vector<MeshRun>& runs) {
 
 void print_table(const Options& o, const std::vector<MeshRun>& runs) {
   std::printf("sorpia-bench: %s, %u hardware threads; sor/gs on %d thread%s%s; tol %g; %s; %s; "
-              "topology %s; medians of %d\n",
+              "medians of %d\n",
               cpu_model().c_str(), std::thread::hardware_concurrency(), o.threads, o.threads > 1 ? "s" : "",
               o.two_pass ? " (two-pass E_k)" : "", o.tol, sorpia::scheme_name(o.scheme), sorpia::boundary_name(o.boundary),
-              o.topology == sorpia::TopologyBuild::OpenMesh ? "openmesh" : "direct", o.repeat);
+              o.repeat);
   std::printf("%-22s %9s %7s %8s %8s %-6s %7s %8s %6s %9s %8s %9s %8s %8s\n", "mesh", "vertices", "read", "topology",
               "operator", "method", "solve", "estimate", "iters", "E_k/E_0", "write", "sweep/fl", "peak MB",
               "B/vertex");

@@ -243,3 +243,12 @@ def reference_limit_matrix(topology, rules):
     reference = pytest.importorskip("sorpia._reference", reason="sorpia was built without SORPIA_BUILD_TESTS: "
                                     "no reference builds (tests/reference)")
     return reference.reference_limit_matrix(topology, rules)
+
+
+def reference_one_ring(face_vertex_counts, face_vertex_indices, n_vertices):
+    """The one-ring of the faces from OpenMesh's half-edge mesh (sorpia._reference, the test-only module), a dict
+    named after _core.Topology's properties; the calling test is skipped where the module was not built."""
+    reference = pytest.importorskip("sorpia._reference", reason="sorpia was built without SORPIA_BUILD_TESTS: "
+                                    "no reference builds (tests/reference)")
+    return reference.reference_one_ring(np.ascontiguousarray(face_vertex_counts, dtype=np.int32),
+                                        np.ascontiguousarray(face_vertex_indices, dtype=np.int32), n_vertices)

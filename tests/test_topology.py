@@ -1,5 +1,5 @@
-"""The one-ring the default (direct) topology build gives, checked against the
-face list alone."""
+"""The one-ring sorpia::Topology builds, checked against the face list alone and
+against OpenMesh's half-edge mesh (the test-only reference)."""
 
 from __future__ import annotations
 
@@ -8,8 +8,9 @@ import pytest
 
 import sorpia
 from sorpia import _core
+from sorpia._validate import as_rules
 
-from conftest import MESHES
+from conftest import MESHES, reference_one_ring
 
 
 def scrambled(vertices, faces, seed):
@@ -52,3 +53,25 @@ def test_ring_is_the_clockwise_fan_of_each_vertex(name):
         else:
             pairs = set(zip(r, r[1:] + r[:1]))
         assert pairs == steps[v], f"vertex {v}: ring {r} is not the clockwise fan"
+
+
+POLYGON_CASES = {"quad-torus": lambda: sorpia.shapes.quad_torus(6, 5),
+                 "quad-grid": lambda: sorpia.shapes.quad_grid(5, 4),
+                 "polygon-torus": lambda: sorpia.shapes.polygon_torus(10, 8, seed=2)}
+
+
+@pytest.mark.parametrize("name", sorted(CASES) + sorted(POLYGON_CASES))
+def test_one_ring_is_openmeshs(name):
+    """Every array of the one-ring equals the one from OpenMesh's half-edge mesh and its circulators (an
+    independent build: add_face per face), exactly: they are integer arrays in the same documented order."""
+    V, F = (CASES if name in CASES else POLYGON_CASES)[name]()
+    arrays, n, _ = as_rules(F, len(V), scheme="catmull-clark" if name in POLYGON_CASES else "loop",
+                            boundary="edge-and-corner")
+    counts, indices = (np.full(len(arrays[0]), 3, np.int32), arrays[0].ravel()) if len(arrays) == 1 else arrays
+    topo = _core.Topology(*arrays, n)
+    ref = reference_one_ring(counts, indices, n)
+    for key in ("ring_offsets", "ring_neighbors", "is_boundary", "vertex_face_offsets", "vertex_faces",
+                "face_ring_offsets", "face_ring_neighbors"):
+        assert np.array_equal(np.asarray(getattr(topo, key)), ref[key]), key
+    assert (topo.n_edges, topo.n_boundary_edges, topo.n_unreferenced) == (
+        ref["n_edges"], ref["n_boundary_edges"], ref["n_unreferenced"])

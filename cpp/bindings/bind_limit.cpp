@@ -60,16 +60,15 @@ void bind_limit(py::module_& m) {
 
   py::class_<sorpia::Topology>(m, "Topology")
       .def(py::init([](const Faces& faces, std::size_t n_vertices) {
-             check_shape(faces, 3, "faces");
+             sorpia::Mesh mesh = faces_of(faces);
              py::gil_scoped_release release;
-             return sorpia::Topology(faces.data(), static_cast<std::size_t>(faces.shape(0)), n_vertices);
+             return sorpia::Topology(std::move(mesh), n_vertices);
            }),
            "faces"_a.noconvert(), "n_vertices"_a)
       .def(py::init([](const Faces& face_vertex_counts, const Faces& face_vertex_indices, std::size_t n_vertices) {
-             check_polygon_arrays(face_vertex_counts, face_vertex_indices);
+             sorpia::Mesh mesh = faces_of(face_vertex_counts, face_vertex_indices);
              py::gil_scoped_release release;
-             return sorpia::Topology(face_vertex_counts.data(), static_cast<std::size_t>(face_vertex_counts.shape(0)),
-                                     face_vertex_indices.data(), n_vertices);
+             return sorpia::Topology(std::move(mesh), n_vertices);
            }),
            "face_vertex_counts"_a.noconvert(), "face_vertex_indices"_a.noconvert(), "n_vertices"_a)
       .def_property_readonly("n_vertices", &sorpia::Topology::n_vertices)

@@ -341,22 +341,19 @@ void bind_solvers(py::module_& m) {
   py::class_<Interpolator>(m, "Interpolator", "One mesh, its rules and B (sorpia::Interpolator).")
       .def(py::init([](const Faces& faces, std::size_t n_vertices, const sorpia::Rules& rules,
                        const std::optional<Faces>& vertex_map) {
-             check_shape(faces, 3, "faces");
+             sorpia::Mesh mesh = faces_of(faces);
              std::vector<std::int32_t> map = vertex_map ? to_vector(*vertex_map) : std::vector<std::int32_t>{};
              py::gil_scoped_release release;
-             return std::make_unique<Interpolator>(faces.data(), static_cast<std::size_t>(faces.shape(0)), n_vertices,
-                                                   rules, std::move(map));
+             return std::make_unique<Interpolator>(std::move(mesh), n_vertices, rules, std::move(map));
            }),
            "faces"_a.noconvert(), "n_vertices"_a, "rules"_a, py::kw_only(), "vertex_map"_a.noconvert() = py::none(),
            "Triangles, (m, 3); vertex_map: a non-manifold mesh's split (sorpia::Interpolator).")
       .def(py::init([](const Faces& face_vertex_counts, const Faces& face_vertex_indices, std::size_t n_vertices,
                        const sorpia::Rules& rules, const std::optional<Faces>& vertex_map) {
-             check_polygon_arrays(face_vertex_counts, face_vertex_indices);
+             sorpia::Mesh mesh = faces_of(face_vertex_counts, face_vertex_indices);
              std::vector<std::int32_t> map = vertex_map ? to_vector(*vertex_map) : std::vector<std::int32_t>{};
              py::gil_scoped_release release;
-             return std::make_unique<Interpolator>(face_vertex_counts.data(),
-                                                   static_cast<std::size_t>(face_vertex_counts.shape(0)),
-                                                   face_vertex_indices.data(), n_vertices, rules, std::move(map));
+             return std::make_unique<Interpolator>(std::move(mesh), n_vertices, rules, std::move(map));
            }),
            "face_vertex_counts"_a.noconvert(), "face_vertex_indices"_a.noconvert(), "n_vertices"_a, "rules"_a,
            py::kw_only(), "vertex_map"_a.noconvert() = py::none(), "Polygons as counts and indices.")

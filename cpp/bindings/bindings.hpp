@@ -55,6 +55,23 @@ inline void check_polygon_arrays(const py::array_t<std::int32_t, py::array::c_st
                             std::to_string(indices.shape(0)) + " entries");
 }
 
+// The faces of a sorpia::Mesh without coordinates (copied): triangles (m, 3)
+// without counts, or polygons as (face_vertex_counts, face_vertex_indices).
+inline sorpia::Mesh faces_of(const py::array_t<std::int32_t, py::array::c_style>& triangles) {
+  check_shape(triangles, 3, "faces");
+  sorpia::Mesh m;
+  m.face_vertex_indices = to_vector(triangles);
+  return m;
+}
+inline sorpia::Mesh faces_of(const py::array_t<std::int32_t, py::array::c_style>& counts,
+                             const py::array_t<std::int32_t, py::array::c_style>& indices) {
+  check_polygon_arrays(counts, indices);
+  sorpia::Mesh m;
+  m.face_vertex_counts = to_vector(counts);
+  m.face_vertex_indices = to_vector(indices);
+  return m;
+}
+
 // The interrupt checker of a long call (sorpia/interrupt.hpp): runs Python's
 // signal handlers, with the GIL; true when one raised (KeyboardInterrupt),
 // its exception left set for the module's translation of sorpia::Interrupted.

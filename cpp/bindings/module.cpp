@@ -21,7 +21,7 @@ sorpia::InterruptChecker python_signal_checker() {
 }  // namespace sorpia_py
 
 PYBIND11_MODULE(_core, m) {
-  m.doc() = "sorpia's compiled core (OpenMesh topology, OpenSubdiv Loop and Catmull-Clark limits, PIA solvers)";
+  m.doc() = "sorpia's compiled core (mesh topology, OpenSubdiv Loop and Catmull-Clark limits, PIA solvers)";
   m.attr("__version__") = SORPIA_VERSION;
 
   py::register_exception<sorpia::MeshError>(m, "MeshError", PyExc_ValueError);

@@ -1,6 +1,6 @@
 #pragma once
 // Face lists that are no manifold surface, refused by both topology builds
-// (test_validation.cpp, test_fast_operator.cpp) and repaired by test_repair.cpp.
+// (test_validation.cpp, test_limit_operator.cpp) and repaired by test_repair.cpp.
 #include <cstdint>
 #include <vector>
 

@@ -25,7 +25,7 @@ struct LimitCase {
 };
 
 inline LimitCase limit_case(const sorpia::Mesh& m, const char* name = "") {
-  const sorpia::Topology topo(m.face_vertex_indices.data(), m.n_faces(), m.n_vertices());
+  const sorpia::Topology topo(m);
   return LimitCase{name, m, sorpia::reference_limit_matrix(topo, sorpia::Boundary::EdgeAndCorner),
                    sorpia::limit_operator(topo, sorpia::Boundary::EdgeAndCorner)};
 }

@@ -11,33 +11,8 @@
 #include <vector>
 
 #include "sorpia/shapes.hpp"
-#include "sorpia/topology.hpp"
 
 namespace sorpia_test {
-
-inline sorpia::Topology build(const sorpia::Mesh& m,
-                              sorpia::TopologyBuild how = sorpia::TopologyBuild::Direct) {
-  return sorpia::Topology(m.face_vertex_counts.data(), m.n_faces(), m.face_vertex_indices.data(), m.n_vertices(), how);
-}
-
-// The two builds of one mesh (TopologyBuild::Direct and ::OpenMesh) agree on
-// every array: edge neighbours, and for polygons the faces and face neighbours.
-inline void expect_same_topology(const sorpia::Topology& direct, const sorpia::Topology& ref) {
-  EXPECT_EQ(direct.ring_offsets(), ref.ring_offsets());
-  EXPECT_EQ(direct.ring_neighbors(), ref.ring_neighbors());
-  EXPECT_EQ(direct.vertex_face_offsets(), ref.vertex_face_offsets());
-  EXPECT_EQ(direct.vertex_faces(), ref.vertex_faces());
-  EXPECT_EQ(direct.face_ring_offsets(), ref.face_ring_offsets());
-  EXPECT_EQ(direct.face_ring_neighbors(), ref.face_ring_neighbors());
-  EXPECT_EQ(direct.n_edges(), ref.n_edges());
-  EXPECT_EQ(direct.n_boundary_edges(), ref.n_boundary_edges());
-  EXPECT_EQ(direct.n_unreferenced(), ref.n_unreferenced());
-  for (std::size_t v = 0; v < direct.n_vertices(); ++v) {
-    ASSERT_EQ(direct.is_boundary(v), ref.is_boundary(v)) << "vertex " << v;
-    ASSERT_EQ(direct.face_count(v), ref.face_count(v)) << "vertex " << v;
-    ASSERT_EQ(direct.quad_ring(v), ref.quad_ring(v)) << "vertex " << v;
-  }
-}
 
 inline sorpia::Mesh scrambled(const sorpia::Mesh& m, unsigned seed) {
   std::mt19937 rng(seed);

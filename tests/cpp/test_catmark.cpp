@@ -26,7 +26,6 @@ namespace {
 
 using sorpia::Boundary;
 using sorpia::Scheme;
-using sorpia_test::build;
 
 // Row i of a CSR matrix as column -> weight.
 std::map<int, double> row(const sorpia::CsrMatrix& b, std::size_t i) {
@@ -51,7 +50,7 @@ TEST(Catmark, EveryRowEqualsOpenSubdivFar) {
   for (const auto& [name, m] : sorpia_test::polygon_meshes())
     for (auto rule : {Boundary::EdgeOnly, Boundary::EdgeAndCorner}) {
       SCOPED_TRACE(name + (rule == Boundary::EdgeOnly ? " edge-only" : " edge-and-corner"));
-      const auto t = build(m);
+      const auto t = sorpia::Topology(m);
       const auto fast = sorpia::limit_matrix(t, sorpia::Rules{Scheme::CatmullClark, rule});
       const auto ref = sorpia::reference_limit_matrix(t, sorpia::Rules{Scheme::CatmullClark, rule});
       ASSERT_EQ(fast.n_rows, m.n_vertices());
@@ -70,7 +69,7 @@ TEST(Catmark, EveryRowEqualsOpenSubdivFar) {
 // that reference on a quad mesh, where it must equal Limit() on level 0.
 TEST(Catmark, RefinedRowsOfQuadVerticesEqualTheirMasks) {
   const auto m = sorpia::quad_irregular(600, 3);
-  const auto t = build(m);
+  const auto t = sorpia::Topology(m);
   const auto op = sorpia::limit_operator(t, sorpia::Rules{Scheme::CatmullClark, Boundary::EdgeAndCorner});
   std::vector<std::pair<std::int32_t, double>> refined;
   for (std::size_t v = 0; v < t.n_vertices(); ++v) {
@@ -89,7 +88,7 @@ TEST(Catmark, RefinedRowsOfQuadVerticesEqualTheirMasks) {
 TEST(Catmark, InteriorMaskIsTheClosedForm) {
   for (int n = 3; n <= 12; ++n) {
     SCOPED_TRACE("valence " + std::to_string(n));
-    const auto t = build(quad_pole(n));
+    const auto t = sorpia::Topology(quad_pole(n));
     const auto b = sorpia::limit_matrix(t, sorpia::Rules{Scheme::CatmullClark, Boundary::EdgeAndCorner});
     const auto r = row(b, 0);
     const double denom = n * (n + 5.0);
@@ -112,7 +111,7 @@ TEST(Catmark, InteriorMaskIsTheClosedForm) {
 // edge-and-corner and takes the boundary rule under edge-only.
 TEST(Catmark, BoundaryAndCornerRules) {
   const auto m = sorpia::quad_grid(5, 4);
-  const auto t = build(m);
+  const auto t = sorpia::Topology(m);
   for (auto rule : {Boundary::EdgeOnly, Boundary::EdgeAndCorner}) {
     const auto b = sorpia::limit_matrix(t, sorpia::Rules{Scheme::CatmullClark, rule});
     for (std::size_t v = 0; v < t.n_vertices(); ++v) {
@@ -135,7 +134,7 @@ TEST(Catmark, BoundaryAndCornerRules) {
 TEST(Catmark, RowsSumToOne) {
   for (const auto& [name, m] : sorpia_test::polygon_meshes()) {
     SCOPED_TRACE(name);
-    const auto op = sorpia::limit_operator(build(m), sorpia::Rules{Scheme::CatmullClark, Boundary::EdgeAndCorner});
+    const auto op = sorpia::limit_operator(sorpia::Topology(m), sorpia::Rules{Scheme::CatmullClark, Boundary::EdgeAndCorner});
     for (std::size_t i = 0; i < op.n; ++i) {
       double s = op.diag[i];
       for (std::int32_t p = op.offsets[i]; p < op.offsets[i + 1]; ++p) s += op.entry(i, p);
@@ -155,7 +154,7 @@ TEST(Catmark, TaggedRowsEqualTheWholeMeshRefinement) {
     sorpia::Mesh m;
     for (const auto& [n, mesh] : sorpia_test::polygon_meshes())
       if (n == name) m = mesh;
-    const auto t = build(m);
+    const auto t = sorpia::Topology(m);
     sorpia::Tags tags;
     // a chain of edges from vertex 0, alternately infinitely sharp and semi-sharp, and two corners
     std::int32_t v = 0;
@@ -182,7 +181,7 @@ TEST(Catmark, TaggedRowsEqualTheWholeMeshRefinement) {
 }
 
 TEST(Catmark, LoopRefusesPolygonsNamingTheFace) {
-  const auto t = build(sorpia::polygon_torus(8, 6, 2));
+  const auto t = sorpia::Topology(sorpia::polygon_torus(8, 6, 2));
   std::size_t f = 0;
   while (t.face_size(f) == 3) ++f;
   sorpia_test::expect_error<sorpia::MeshError>([&] { sorpia::limit_operator(t, Boundary::EdgeAndCorner); },

@@ -86,7 +86,7 @@ std::vector<Case> meshes() {
 const double kInf = std::numeric_limits<double>::infinity();
 
 void expect_rows_match(const Case& c, const Tags& tags, Boundary boundary, const std::string& what) {
-  const sorpia::Topology t(c.mesh.face_vertex_indices.data(), c.mesh.n_faces(), c.mesh.n_vertices());
+  const sorpia::Topology t(c.mesh);
   const auto op = sorpia::limit_operator(t, boundary, tags);
   const auto ref = sorpia::reference_limit_matrix(t, sorpia::Rules{Scheme::Loop, boundary, tags});
   // Darts: test_darts.cpp.
@@ -99,7 +99,7 @@ TEST(Creases, InfinitelySharpRowsAreFarsAndStayUniformWithoutDarts) {
   for (const auto& c : meshes())
     for (unsigned seed : {1u, 2u, 3u})
       for (Boundary b : {Boundary::EdgeAndCorner, Boundary::EdgeOnly}) {
-        const sorpia::Topology t(c.mesh.face_vertex_indices.data(), c.mesh.n_faces(), c.mesh.n_vertices());
+        const sorpia::Topology t(c.mesh);
         const Tags tags = random_tags(t, seed, {kInf, 10.0, 12.5}, 0.15);
         ASSERT_FALSE(tags.crease_sharpness.empty());
         const auto darts = sorpia_test::darts(t, tags);
@@ -113,7 +113,7 @@ TEST(Creases, SemiSharpRowsAreFarsRefinedLimit) {
   for (const auto& c : meshes())
     for (unsigned seed : {4u, 5u})
       for (Boundary b : {Boundary::EdgeAndCorner, Boundary::EdgeOnly}) {
-        const sorpia::Topology t(c.mesh.face_vertex_indices.data(), c.mesh.n_faces(), c.mesh.n_vertices());
+        const sorpia::Topology t(c.mesh);
         // Up to 3 levels of refinement of the whole mesh for the reference.
         const Tags tags = random_tags(t, seed, {0.3, 1.0, 1.5, 2.0, 2.7, kInf}, 0.12);
         const auto op = sorpia::limit_operator(t, b, tags);
@@ -124,7 +124,7 @@ TEST(Creases, SemiSharpRowsAreFarsRefinedLimit) {
 
 TEST(Creases, HolesAloneChangeNoRow) {
   for (const auto& c : meshes()) {
-    const sorpia::Topology t(c.mesh.face_vertex_indices.data(), c.mesh.n_faces(), c.mesh.n_vertices());
+    const sorpia::Topology t(c.mesh);
     Tags tags;
     for (std::size_t f = 0; f < t.n_faces(); f += 3) tags.holes.push_back(static_cast<std::int32_t>(f));
     const auto ref = sorpia::reference_limit_matrix(t, sorpia::Rules{Scheme::Loop, Boundary::EdgeAndCorner, tags});
@@ -135,7 +135,7 @@ TEST(Creases, HolesAloneChangeNoRow) {
 // A crease given twice counts with its last sharpness, as in Far's descriptor.
 TEST(Creases, RepeatedCreaseTakesTheLastSharpness) {
   const Case c{"icosphere(1)", sorpia::icosphere(1)};
-  const sorpia::Topology t(c.mesh.face_vertex_indices.data(), c.mesh.n_faces(), c.mesh.n_vertices());
+  const sorpia::Topology t(c.mesh);
   const auto e = edges(t);
   Tags twice;
   twice.crease_vertices = {e[0].first, e[0].second, e[0].second, e[0].first};
@@ -152,7 +152,7 @@ TEST(Creases, RepeatedCreaseTakesTheLastSharpness) {
 
 TEST(Creases, ACreaseThatIsNoEdgeIsNamed) {
   const auto m = sorpia::icosphere(1);
-  const sorpia::Topology t(m.face_vertex_indices.data(), m.n_faces(), m.n_vertices());
+  const sorpia::Topology t(m);
   const auto e = edges(t);
   // Two vertices that share no edge: 0 and a vertex outside its ring.
   std::int32_t far = 0;
@@ -181,7 +181,7 @@ TEST(Creases, CatmullClarkRowsAreFarsRefinedLimit) {
   for (const auto& [name, m] : polys)
     for (Boundary b : {Boundary::EdgeAndCorner, Boundary::EdgeOnly})
       for (unsigned seed : {0u, 6u}) {
-        const sorpia::Topology t(m.face_vertex_counts.data(), m.n_faces(), m.face_vertex_indices.data(), m.n_vertices());
+        const sorpia::Topology t(m);
         const Tags tags = seed ? random_tags(t, seed, {0.5, 1.0, 2.0, 2.5, kInf}, 0.12) : Tags{};
         const auto op = sorpia::limit_operator(t, sorpia::Rules{Scheme::CatmullClark, b, tags});
         const auto ref = sorpia::reference_limit_matrix(t, sorpia::Rules{Scheme::CatmullClark, b, tags});

@@ -15,6 +15,9 @@
 // to other polygons; quads split by a vertex of two faces (inside, at the
 // boundary, next to darts, with semi-sharp tags, a dart of two faces), and
 // OpenSubdiv's gregory_test8 topology (two faces, pentagons among them).
+// Pillows (two faces with the same vertices in the opposite order, alone on
+// their edges: every vertex interior of two faces) against Far refined 80
+// levels too, under both schemes.
 #include <gtest/gtest.h>
 #include <opensubdiv/bfr/refinerSurfaceFactory.h>
 #include <opensubdiv/bfr/surface.h>
@@ -58,7 +61,10 @@ struct Shape {
   Tags tags;
   std::size_t n_vertices() const { return vertices.size() / 3; }
   sorpia::Topology topology() const {
-    return sorpia::Topology(counts.data(), counts.size(), indices.data(), n_vertices());
+    sorpia::Mesh m;
+    m.face_vertex_counts = counts;
+    m.face_vertex_indices = indices;
+    return sorpia::Topology(std::move(m), n_vertices());
   }
 };
 
@@ -755,6 +761,104 @@ TEST(Darts, FittedCagesPassThroughTheirTargets) {
     EXPECT_LE(worst_bfr_dart, 2e-5);
     std::printf("%s: |B X - V| / diagonal under sorpia's surface %.1e, Bfr %.1e, Bfr at darts %.1e\n",
                 s.name.c_str(), worst_sorpia, worst_bfr, worst_bfr_dart);
+  }
+}
+
+// Pillows: a face and its reverse, alone on their edges (issue 20), every
+// vertex interior of two faces. Alone, beside other components, and
+// OpenSubdiv's regression shape catmark_val2_back2back (its face list: four
+// pillows of 3 to 6 sides).
+std::vector<Shape> pillows() {
+  auto pillow = [](std::vector<std::int32_t> face, std::int32_t first) {
+    std::vector<std::int32_t> out;
+    for (std::int32_t& v : face) v += first;
+    out.insert(out.end(), face.begin(), face.end());
+    out.insert(out.end(), face.rbegin(), face.rend());
+    return out;
+  };
+  auto with = [&](Shape s, std::vector<std::int32_t> face) {
+    const auto n = static_cast<std::int32_t>(s.n_vertices());
+    const auto k = static_cast<std::int32_t>(face.size());
+    for (std::int32_t i = 0; i < k; ++i)  // on a bumpy circle off to the side
+      s.vertices.insert(s.vertices.end(), {3.0 + std::cos(6.283185307179586 * i / k),
+                                           std::sin(6.283185307179586 * i / k), 0.3 * std::cos(2.0 * i) + 0.1 * i});
+    const std::vector<std::int32_t> pair = pillow(std::move(face), n);
+    s.counts.insert(s.counts.end(), {k, k});
+    s.indices.insert(s.indices.end(), pair.begin(), pair.end());
+    return s;
+  };
+  const Shape none_loop{"", Scheme::Loop, Boundary::EdgeAndCorner, {}, {}, {}, {}};
+  const Shape none_catmark{"", Scheme::CatmullClark, Boundary::EdgeAndCorner, {}, {}, {}, {}};
+  std::vector<Shape> out;
+  auto add = [&](std::string name, Shape s) {
+    s.name = std::move(name);
+    out.push_back(std::move(s));
+  };
+  add("triangle pillow, Loop", with(none_loop, {0, 1, 2}));
+  add("triangle pillow, Loop, edge-only", with({"", Scheme::Loop, Boundary::EdgeOnly, {}, {}, {}, {}}, {0, 1, 2}));
+  add("triangle pillow, Catmull-Clark", with(none_catmark, {0, 1, 2}));
+  add("quad pillow", with(none_catmark, {0, 1, 2, 3}));
+  add("pentagon pillow", with(none_catmark, {0, 1, 2, 3, 4}));
+  add("icosphere(1) and a triangle pillow", with(from_tri("", sorpia::icosphere(1)), {0, 1, 2}));
+  add("quad_torus(6, 4) and a quad pillow", with(from_poly("", sorpia::quad_torus(6, 4)), {0, 1, 2, 3}));
+  Shape back2back = none_catmark;
+  for (const auto& face : std::vector<std::vector<std::int32_t>>{{0, 1, 2}, {3, 4, 5, 6}, {7, 8, 9, 10, 11},
+                                                                 {12, 13, 14, 15, 16, 17}}) {
+    const std::vector<std::int32_t> pair = pillow(face, 0);
+    const auto k = static_cast<std::int32_t>(face.size());
+    back2back.counts.insert(back2back.counts.end(), {k, k});
+    back2back.indices.insert(back2back.indices.end(), pair.begin(), pair.end());
+  }
+  for (int i = 0; i < 18; ++i) back2back.vertices.insert(back2back.vertices.end(), {0.1 * i, std::sin(i), std::cos(3.0 * i)});
+  add("catmark_val2_back2back", back2back);
+  return out;
+}
+
+TEST(Pillows, RowsAreTheLimitOfFarsRefinement) {
+  for (const Shape& s : pillows()) {
+    SCOPED_TRACE(s.name);
+    const sorpia::Topology t = s.topology();
+    const auto b = sorpia::limit_matrix(t, sorpia::Rules{s.scheme, s.boundary, s.tags});
+    int checked = 0;
+    for (std::size_t v = 0; v < s.n_vertices(); ++v) {
+      if (t.valence(v) != 2 || t.is_boundary(v)) continue;  // a pillow's vertex
+      SCOPED_TRACE("vertex " + std::to_string(v));
+      const auto exact = far_deep_limit_row(s, static_cast<int>(v), 80);
+      // Rounding: the weights are sums of about 80 levels of products (as for darts).
+      EXPECT_LE(max_diff(row(b, v), exact), 1e-13);
+      // Catmull-Clark: Far's Limit() at level 0 (Sdc's corner mask there) is
+      // not the limit, so the row is not a level-0 mask.
+      if (s.scheme == Scheme::CatmullClark) {
+        EXPECT_GE(max_diff(far_limit_row(s, static_cast<int>(v), 0), exact), 1e-3);
+      }
+      ++checked;
+    }
+    EXPECT_GE(checked, 3);
+  }
+}
+
+TEST(Pillows, QuadPillowRowsAreTheSmoothMasksClosedForm) {
+  // A vertex of a quad pillow: its two faces share both edge neighbours and
+  // the opposite corner, so the closed form at n = 2 (previous test's)
+  // is (4 v + 8 (e_1 + e_2) / 2 + 2 f) / 14 = (4 v + 4 e_1 + 4 e_2 + 2 f) / 14; to rounding.
+  for (const Shape& s : pillows()) {
+    if (s.scheme != Scheme::CatmullClark) continue;
+    const sorpia::Topology t = s.topology();
+    const auto b = sorpia::limit_matrix(t, sorpia::Rules{s.scheme, s.boundary, s.tags});
+    std::size_t o = 0;
+    for (std::size_t f = 0; f < s.counts.size(); o += static_cast<std::size_t>(s.counts[f]), ++f) {
+      if (s.counts[f] != 4) continue;
+      for (int j = 0; j < 4; ++j) {
+        const int v = s.indices[o + j];
+        if (t.valence(v) != 2) continue;
+        SCOPED_TRACE(s.name + ", vertex " + std::to_string(v));
+        const std::map<int, double> expected{{v, 4.0 / 14.0},
+                                             {s.indices[o + (j + 1) % 4], 4.0 / 14.0},
+                                             {s.indices[o + (j + 3) % 4], 4.0 / 14.0},
+                                             {s.indices[o + (j + 2) % 4], 2.0 / 14.0}};
+        EXPECT_LE(max_diff(row(b, v), expected), 1e-14);
+      }
+    }
   }
 }
 

@@ -31,7 +31,7 @@ double error_of(const sorpia::CsrMatrix& b, const std::vector<double>& t, const 
 }
 
 sorpia::Interpolator make(const sorpia::Mesh& m) {
-  return sorpia::Interpolator(m.face_vertex_indices.data(), m.n_faces(), m.n_vertices(), sorpia::Rules{});
+  return sorpia::Interpolator(m, m.n_vertices(), sorpia::Rules{});
 }
 
 TEST(Interpolator, SolveIsTheCoreSolveOnItsOperator) {

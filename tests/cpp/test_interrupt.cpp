@@ -129,7 +129,7 @@ TEST(Interrupt, SpectralEstimateStopsAndLeavesItsCacheUnset) {
 
 TEST(Interrupt, TessellationAndEvaluationStop) {
   const sorpia::Mesh m = sorpia::icosphere(2);
-  const sorpia::Topology topo(m.face_vertex_indices.data(), m.n_faces(), m.n_vertices());
+  const sorpia::Topology topo(m);
   sorpia::LimitSurface s(topo, m.vertices.data(), sorpia::Scheme::Loop, sorpia::Boundary::EdgeAndCorner);
   sorpia::LimitSurface fresh(topo, m.vertices.data(), sorpia::Scheme::Loop, sorpia::Boundary::EdgeAndCorner);
   const std::vector<std::int32_t> face(1, 0);

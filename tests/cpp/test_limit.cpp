@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "expect_error.hpp"
+#include "face_arrays.hpp"
 #include "loop_masks.hpp"
 #include "sorpia/errors.hpp"
 #include "sorpia/limit.hpp"
@@ -59,7 +60,7 @@ double entry(const sorpia::CsrMatrix& b, int i, int j) {
 
 // Every entry of B equals the closed-form mask to `tol`.
 void expect_closed_form(const sorpia::Mesh& m, sorpia::Boundary rule, double tol) {
-  const sorpia::Topology topo(m.face_vertex_indices.data(), m.n_faces(), m.n_vertices());
+  const sorpia::Topology topo(m);
   const auto b = sorpia::limit_matrix(topo, rule);
   const Rings r = rings_of(m);
   ASSERT_EQ(b.n_rows, m.n_vertices());
@@ -115,7 +116,7 @@ TEST(LimitMatrix, KnownValuesFromTheLiterature) {
 TEST(LimitPoints, EqualsOpenSubdivLimit) {
   for (auto rule : {sorpia::Boundary::EdgeOnly, sorpia::Boundary::EdgeAndCorner}) {
     const auto m = sorpia::irregular(400, 3);
-    const sorpia::Topology topo(m.face_vertex_indices.data(), m.n_faces(), m.n_vertices());
+    const sorpia::Topology topo(m);
     std::vector<double> ref(m.vertices.size()), lp(m.vertices.size());
     sorpia::reference_limit_points(topo, m.vertices.data(), rule, ref.data());
     sorpia::limit_points(topo, m.vertices.data(), rule, lp.data());
@@ -126,7 +127,7 @@ TEST(LimitPoints, EqualsOpenSubdivLimit) {
 TEST(LimitMatrix, UnreferencedVertexGetsIdentityRow) {
   auto m = sorpia::icosphere(1);
   m.vertices.insert(m.vertices.end(), {5.0, 5.0, 5.0});  // vertex no face uses
-  const sorpia::Topology topo(m.face_vertex_indices.data(), m.n_faces(), m.n_vertices());
+  const sorpia::Topology topo(m);
   EXPECT_EQ(topo.n_unreferenced(), 1u);
   const auto b = sorpia::limit_matrix(topo, sorpia::Boundary::EdgeOnly);
   const int last = static_cast<int>(m.n_vertices()) - 1;
@@ -136,16 +137,16 @@ TEST(LimitMatrix, UnreferencedVertexGetsIdentityRow) {
 
 TEST(Topology, RefusesBadFacesWithTheirIndex) {
   const std::vector<std::int32_t> out_of_range = {0, 1, 2, 0, 2, 9};
-  EXPECT_THROW(sorpia::Topology(out_of_range.data(), 2, 4), sorpia::MeshError);
+  EXPECT_THROW(sorpia::Topology(sorpia_test::triangles(out_of_range), 4), sorpia::MeshError);
   const std::vector<std::int32_t> repeated = {0, 1, 2, 0, 2, 2};
-  sorpia_test::expect_error<sorpia::MeshError>([&] { sorpia::Topology topo(repeated.data(), 2, 4); }, {"face 1"});
+  sorpia_test::expect_error<sorpia::MeshError>([&] { sorpia::Topology topo(sorpia_test::triangles(repeated), 4); }, {"face 1"});
   const std::vector<std::int32_t> fin = {0, 1, 2, 0, 1, 3, 1, 0, 4};  // edge (0,1) in three faces
-  EXPECT_THROW(sorpia::Topology(fin.data(), 3, 5), sorpia::MeshError);
+  EXPECT_THROW(sorpia::Topology(sorpia_test::triangles(fin), 5), sorpia::MeshError);
 }
 
 TEST(Topology, BoundaryRingStartsAndEndsOnTheBoundary) {
   const auto m = sorpia::grid(5, 5);
-  const sorpia::Topology topo(m.face_vertex_indices.data(), m.n_faces(), m.n_vertices());
+  const sorpia::Topology topo(m);
   const Rings r = rings_of(m);
   for (std::size_t v = 0; v < m.n_vertices(); ++v) {
     ASSERT_EQ(topo.is_boundary(v), r.boundary[v]);

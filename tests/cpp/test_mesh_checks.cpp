@@ -15,7 +15,7 @@
 namespace {
 
 sorpia::Topology topology_of(const sorpia::Mesh& m) {
-  return sorpia::Topology(m.face_vertex_indices.data(), m.n_faces(), m.n_vertices());
+  return sorpia::Topology(m);
 }
 
 TEST(MeshStatistics, TorusAndGridMatchTheirClosedForms) {

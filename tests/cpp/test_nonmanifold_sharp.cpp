@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "expect_error.hpp"
+#include "face_arrays.hpp"
 #include "sorpia/detail/osd_refiner.hpp"
 #include "sorpia/errors.hpp"
 #include "sorpia/io.hpp"
@@ -83,7 +84,7 @@ sorpia::NonmanifoldSplit expect_split_is_opensubdiv(const Mesh& m, sorpia::Schem
   const std::vector<Point3> want = far_limit(m, points, scheme, boundary);
 
   const std::size_t n_out = s.vertex_map.size();
-  const sorpia::Topology split(s.face_vertex_counts.data(), s.face_vertex_counts.size(), s.face_vertex_indices.data(), n_out);
+  const sorpia::Topology split(sorpia_test::polygons(s.face_vertex_counts, s.face_vertex_indices), n_out);
   // A crease vertex's copy in a sheet of one face, which "edge-and-corner" would make a corner: the split is
   // taken under "edge-only", with the corners "edge-and-corner" makes (every other vertex of one face) as tags.
   const bool corner_sheets = boundary == sorpia::Boundary::EdgeAndCorner && !s.single_face_sheets.empty();

@@ -34,7 +34,7 @@ using sorpia_test::SweepRangesOnThreads;
 using WeightedCase = sorpia_test::LimitCase;
 
 WeightedCase weighted_case(const sorpia::Mesh& m, const char* name, unsigned seed) {
-  const sorpia::Topology topo(m.face_vertex_indices.data(), m.n_faces(), m.n_vertices());
+  const sorpia::Topology topo(m);
   sorpia::CsrMatrix b = perturbed(sorpia::reference_limit_matrix(topo, sorpia::Boundary::EdgeAndCorner), 0.2, seed);
   sorpia::LimitOperator op = sorpia::limit_operator(b);
   return {name, m, std::move(b), std::move(op)};

@@ -1,6 +1,6 @@
-// Polygon topology: the direct one-ring (edge and face neighbours) against
-// OpenMesh's Mesh and against the face list itself; the face checks on
-// polygons; triangles through the polygon constructor unchanged.
+// Polygon topology: the one-ring (edge and face neighbours) against OpenMesh's
+// PolyMesh (sorpia::reference_one_ring) and against the face list itself; the
+// face checks on polygons; triangles given with counts unchanged.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "expect_error.hpp"
+#include "face_arrays.hpp"
 #include "poly_meshes.hpp"
 #include "sorpia/errors.hpp"
 #include "sorpia/shapes.hpp"
@@ -18,15 +19,14 @@
 namespace {
 
 using sorpia::Mesh;
-using sorpia::TopologyBuild;
-using sorpia_test::build;
+using sorpia_test::polygons;
 
-TEST(PolygonTopology, DirectOneRingEqualsOpenMeshPolyMesh) {
+TEST(PolygonTopology, OneRingEqualsOpenMeshPolyMesh) {
   for (const auto& [name, m] : sorpia_test::polygon_meshes()) {
     SCOPED_TRACE(name);
-    const auto direct = build(m, TopologyBuild::Direct);
-    ASSERT_TRUE(direct.has_face_ring());
-    sorpia_test::expect_same_topology(direct, build(m, TopologyBuild::OpenMesh));
+    const sorpia::Topology t(m);
+    ASSERT_TRUE(t.has_face_ring());
+    sorpia_test::expect_same_topology(t, sorpia::reference_one_ring(m, m.n_vertices()));
   }
 }
 
@@ -37,7 +37,7 @@ TEST(PolygonTopology, DirectOneRingEqualsOpenMeshPolyMesh) {
 TEST(PolygonTopology, FaceRingIsTheFacesBetweenConsecutiveNeighbours) {
   for (const auto& [name, m] : sorpia_test::polygon_meshes()) {
     SCOPED_TRACE(name);
-    const auto t = build(m, TopologyBuild::Direct);
+    const auto t = sorpia::Topology(m);
     if (!t.has_face_ring()) continue;
     const auto& off = t.face_offsets();
     const auto& idx = t.face_indices();
@@ -70,11 +70,11 @@ TEST(PolygonTopology, FaceRingIsTheFacesBetweenConsecutiveNeighbours) {
   }
 }
 
-TEST(PolygonTopology, TrianglesThroughThePolygonConstructorAreTheTriangleTopology) {
+TEST(PolygonTopology, TrianglesWithCountsAreTheTriangleTopology) {
   const sorpia::Mesh tri = sorpia::irregular(2000, 3);
   const std::vector<std::int32_t> counts(tri.n_faces(), 3);
-  const sorpia::Topology a(tri.face_vertex_indices.data(), tri.n_faces(), tri.n_vertices());
-  const sorpia::Topology b(counts.data(), counts.size(), tri.face_vertex_indices.data(), tri.n_vertices());
+  const sorpia::Topology a(tri);
+  const sorpia::Topology b(polygons(counts, tri.face_vertex_indices), tri.n_vertices());
   EXPECT_TRUE(b.all_triangles());
   EXPECT_FALSE(b.has_face_ring());
   EXPECT_EQ(a.ring_offsets(), b.ring_offsets());
@@ -84,9 +84,32 @@ TEST(PolygonTopology, TrianglesThroughThePolygonConstructorAreTheTriangleTopolog
   for (std::size_t f = 0; f <= tri.n_faces(); ++f) ASSERT_EQ(b.face_offsets()[f], static_cast<int>(3 * f));
 }
 
+// A uniform mesh given by face_size alone (no counts) is the mesh with its
+// counts written out; counts and face_size that do not fit the indices are refused.
+TEST(PolygonTopology, UniformFaceSizeIsTheMeshWithCounts) {
+  const Mesh quads = sorpia::quad_irregular(300, 2);
+  Mesh uniform = quads;
+  uniform.face_vertex_counts.clear();
+  uniform.face_size = 4;
+  const sorpia::Topology a(quads), b(uniform);
+  EXPECT_TRUE(b.all_quads());
+  EXPECT_EQ(a.face_offsets(), b.face_offsets());
+  EXPECT_EQ(a.ring_neighbors(), b.ring_neighbors());
+  EXPECT_EQ(a.face_ring_neighbors(), b.face_ring_neighbors());
+  Mesh bad = uniform;
+  bad.face_size = 2;
+  sorpia_test::expect_error<sorpia::MeshError>([&] { sorpia::Topology t(bad); }, {"face_size is 2", "at least 3"});
+  bad.face_size = 5;
+  ASSERT_NE(uniform.face_vertex_indices.size() % 5, 0u);
+  sorpia_test::expect_error<sorpia::MeshError>([&] { sorpia::Topology t(bad); }, {"not a multiple of face_size 5"});
+  sorpia_test::expect_error<sorpia::MeshError>(
+      [&] { sorpia::Topology t(polygons({4, 4}, {0, 1, 2, 3, 0, 3, 2}), 4); },
+      {"face_vertex_counts sum to 8 but face_vertex_indices has 7 entries"});
+}
+
 TEST(PolygonTopology, QuadTorusIsRegular) {
   const Mesh m = sorpia::quad_torus(7, 5);
-  const auto t = build(m, TopologyBuild::Direct);
+  const auto t = sorpia::Topology(m);
   EXPECT_TRUE(t.all_quads());
   EXPECT_EQ(t.n_edges(), 2 * m.n_vertices());
   for (std::size_t v = 0; v < m.n_vertices(); ++v) {
@@ -99,9 +122,8 @@ TEST(PolygonTopology, QuadTorusIsRegular) {
 
 void expect_refused(const std::vector<std::int32_t>& counts, const std::vector<std::int32_t>& indices, int n_vertices,
                     const std::vector<std::string>& parts) {
-  for (auto how : {TopologyBuild::Direct, TopologyBuild::OpenMesh})
-    sorpia_test::expect_error<sorpia::MeshError>(
-        [&] { sorpia::Topology(counts.data(), counts.size(), indices.data(), n_vertices, how); }, parts);
+  sorpia_test::expect_error<sorpia::MeshError>([&] { sorpia::Topology(polygons(counts, indices), n_vertices); },
+                                               parts);
 }
 
 TEST(PolygonTopology, BadPolygonsAreNamed) {
@@ -139,14 +161,12 @@ TEST(PolygonTopology, DuplicatePolygonsAreNamedAndPillowsAccepted) {
       {{3, 3, 4}, {0, 1, 2, 0, 2, 1, 3, 4, 5, 6}}};
   for (const auto& [counts, idx] : pillows) {
     const std::size_t n = static_cast<std::size_t>(*std::max_element(idx.begin(), idx.end()) + 1);
-    const sorpia::Topology t(counts.data(), counts.size(), idx.data(), n);
-    const sorpia::Topology r(counts.data(), counts.size(), idx.data(), n, TopologyBuild::OpenMesh);
+    const sorpia::Topology t(polygons(counts, idx), n);
     for (std::size_t v = 0; v < static_cast<std::size_t>(counts[0]); ++v) {
       EXPECT_FALSE(t.is_boundary(v));
       EXPECT_EQ(t.valence(v), 2);
     }
-    EXPECT_EQ(t.ring_neighbors(), r.ring_neighbors());
-    EXPECT_EQ(t.face_ring_neighbors(), r.face_ring_neighbors());
+    sorpia_test::expect_reference_topology(polygons(counts, idx), n);
   }
 }
 
@@ -155,13 +175,11 @@ TEST(PolygonTopology, DuplicatePolygonsAreNamedAndPillowsAccepted) {
 // triangles the same pair would be one face given twice.
 TEST(PolygonTopology, VertexOfTwoFacesIsAccepted) {
   const std::vector<std::int32_t> counts = {4, 4}, idx = {0, 1, 2, 3, 2, 1, 0, 4};
-  const sorpia::Topology t(counts.data(), 2, idx.data(), 5);
+  const sorpia::Topology t(polygons(counts, idx), 5);
   EXPECT_FALSE(t.is_boundary(1));
   EXPECT_EQ(t.valence(1), 2);
   EXPECT_EQ(t.face_count(1), 2);
-  const sorpia::Topology r(counts.data(), 2, idx.data(), 5, TopologyBuild::OpenMesh);
-  EXPECT_EQ(t.ring_neighbors(), r.ring_neighbors());
-  EXPECT_EQ(t.face_ring_neighbors(), r.face_ring_neighbors());
+  sorpia_test::expect_reference_topology(polygons(counts, idx), 5);
 }
 
 }  // namespace

@@ -15,6 +15,7 @@
 
 #include "bad_faces.hpp"
 #include "expect_error.hpp"
+#include "face_arrays.hpp"
 #include "sorpia/errors.hpp"
 #include "sorpia/repair.hpp"
 #include "sorpia/shapes.hpp"
@@ -59,7 +60,7 @@ sorpia::RepairResult repaired(const Faces& faces, std::size_t n_vertices) {
     if (i < n_vertices) EXPECT_EQ(r.vertex_map[i], static_cast<std::int32_t>(i));
     else EXPECT_LT(static_cast<std::size_t>(r.vertex_map[i]), n_vertices);
   }
-  EXPECT_NO_THROW(sorpia::Topology(r.face_vertex_indices.data(), r.face_vertex_indices.size() / 3, n_out));
+  EXPECT_NO_THROW(sorpia::Topology(sorpia_test::triangles(r.face_vertex_indices), n_out));
   expect_openmesh_manifold(r.face_vertex_indices, n_out);
   // each output face: its input face, renumbered, reversed if flipped
   const std::set<std::int32_t> flipped(r.report.flipped_faces.begin(), r.report.flipped_faces.end());
@@ -123,7 +124,7 @@ TEST(Repair, FourSheetsOnOneEdgeFromTwoClosedSurfaces) {
   EXPECT_EQ(r.report.sheet_vertices, (Ints{0, 1}));
   EXPECT_EQ(r.report.sheet_copies, (Ints{1, 1}));
   // a closed result: every edge has two faces
-  const sorpia::Topology topo(r.face_vertex_indices.data(), r.face_vertex_indices.size() / 3, r.vertex_map.size());
+  const sorpia::Topology topo(sorpia_test::triangles(r.face_vertex_indices), r.vertex_map.size());
   EXPECT_EQ(topo.n_boundary_edges(), 0u);
   EXPECT_EQ(r.face_vertex_indices, (Faces{0, 1, 2, 6, 7, 4, 1, 0, 3, 7, 6, 5, 0, 2, 3, 1, 3, 2, 6, 4, 5, 7, 5, 4}));
 }

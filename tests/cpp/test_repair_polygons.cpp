@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "expect_error.hpp"
+#include "face_arrays.hpp"
 #include "sorpia/errors.hpp"
 #include "sorpia/repair.hpp"
 #include "sorpia/topology.hpp"
@@ -111,7 +112,7 @@ Poly repaired(const Poly& in, sorpia::RepairResult* result = nullptr) {
     else EXPECT_LT(static_cast<std::size_t>(r.vertex_map[i]), in.n_vertices);
   }
   expect_openmesh_manifold(out);
-  EXPECT_NO_THROW(sorpia::Topology(out.counts.data(), out.n_faces(), out.indices.data(), out.n_vertices));
+  EXPECT_NO_THROW(sorpia::Topology(sorpia_test::polygons(out.counts, out.indices), out.n_vertices));
   const std::set<std::int32_t> flipped(r.report.flipped_faces.begin(), r.report.flipped_faces.end());
   EXPECT_EQ(r.face_map.size(), out.n_faces());
   for (std::size_t j = 0; j < out.n_faces(); ++j) {

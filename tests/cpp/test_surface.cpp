@@ -18,7 +18,7 @@ TEST(LimitSurface, CornersEqualLimitPointsUnderBothBoundaryRules) {
   // (0,0), (1,0), (0,1) are the face's vertices 0, 1, 2. Bfr and Far's Limit
   // use different arithmetic: 1e-14 on a unit-sized mesh.
   const auto m = sorpia::grid(6, 5);
-  const sorpia::Topology topo(m.face_vertex_indices.data(), m.n_faces(), m.n_vertices());
+  const sorpia::Topology topo(m);
   for (const Boundary b : {Boundary::EdgeAndCorner, Boundary::EdgeOnly}) {
     std::vector<double> lp(m.vertices.size());
     sorpia::limit_points(topo, m.vertices.data(), b, lp.data());
@@ -40,7 +40,7 @@ TEST(LimitSurface, CornersEqualLimitPointsUnderBothBoundaryRules) {
 
 TEST(LimitSurface, TessellationStartsWithTheLimitPointsAndGrowsFourfold) {
   const auto m = sorpia::icosphere(1);
-  const sorpia::Topology topo(m.face_vertex_indices.data(), m.n_faces(), m.n_vertices());
+  const sorpia::Topology topo(m);
   sorpia::LimitSurface s(topo, m.vertices.data(), sorpia::Scheme::Loop, Boundary::EdgeAndCorner);
   std::vector<double> lp(m.vertices.size());
   sorpia::limit_points(topo, m.vertices.data(), Boundary::EdgeAndCorner, lp.data());
@@ -55,7 +55,7 @@ TEST(LimitSurface, TessellationStartsWithTheLimitPointsAndGrowsFourfold) {
 
 TEST(LimitSurface, RefusesBadLevelsAndPoints) {
   const auto m = sorpia::icosphere(0);
-  const sorpia::Topology topo(m.face_vertex_indices.data(), m.n_faces(), m.n_vertices());
+  const sorpia::Topology topo(m);
   sorpia::LimitSurface s(topo, m.vertices.data(), sorpia::Scheme::Loop, Boundary::EdgeAndCorner);
   EXPECT_THROW(s.tessellate(16), sorpia::ParameterError);
   const std::int32_t bad_face = 20;
@@ -85,7 +85,7 @@ TEST(LimitSurface, CatmullClarkPolygonsGiveQuadsAndExactCorners) {
   // every corner equals the tessellation's control vertex (Far refinement +
   // Limit(), or Bfr where Far's Limit() does not apply) to 1e-12.
   const sorpia::Mesh m = sorpia::polygon_torus(10, 6, 3);
-  const sorpia::Topology topo(m.face_vertex_counts.data(), m.n_faces(), m.face_vertex_indices.data(), m.n_vertices());
+  const sorpia::Topology topo(m);
   sorpia::LimitSurface s(topo, m.vertices.data(), sorpia::Scheme::CatmullClark, Boundary::EdgeAndCorner);
   const sorpia::Mesh t0 = s.tessellate(0), t1 = s.tessellate(1), t2 = s.tessellate(2);
   EXPECT_EQ(t0.face_vertex_counts, m.face_vertex_counts);

@@ -11,6 +11,7 @@
 
 #include "bad_faces.hpp"
 #include "expect_error.hpp"
+#include "face_arrays.hpp"
 #include "loop_masks.hpp"
 #include "sorpia/errors.hpp"
 #include "sorpia/limit.hpp"
@@ -24,7 +25,7 @@ using sorpia_test::Faces;
 // The Topology constructor throws MeshError whose message contains every one of `parts`.
 void expect_refused(const Faces& faces, std::size_t n_vertices, const std::vector<std::string>& parts) {
   sorpia_test::expect_error<sorpia::MeshError>(
-      [&] { sorpia::Topology topo(faces.data(), faces.size() / 3, n_vertices); }, parts);
+      [&] { sorpia::Topology topo(sorpia_test::triangles(faces), n_vertices); }, parts);
 }
 
 }  // namespace
@@ -50,18 +51,17 @@ TEST(Validation, DuplicateFacesInTheSameOrderOrBesideAThirdFace) {
 
 // Reversed alone (every edge of two opposite faces: a closed 'pillow', which
 // OpenSubdiv takes; issue 20) and beside other faces: valid, each vertex
-// interior of valence 2, the same one-ring from the direct build and OpenMesh.
+// interior of valence 2, the same one-ring as OpenMesh's.
 TEST(Validation, PillowsAreAccepted) {
   for (const Faces& faces : {Faces{0, 1, 2, 0, 2, 1}, Faces{0, 1, 2, 0, 2, 1, 3, 4, 5}}) {
     const std::size_t n = faces.size() == 6 ? 3 : 6;
     EXPECT_TRUE(sorpia::faces_valid(faces.data(), faces.size() / 3, n));
-    const sorpia::Topology t(faces.data(), faces.size() / 3, n);
-    const sorpia::Topology r(faces.data(), faces.size() / 3, n, sorpia::TopologyBuild::OpenMesh);
+    const sorpia::Topology t(sorpia_test::triangles(faces), n);
     for (std::size_t v = 0; v < 3; ++v) {
       EXPECT_FALSE(t.is_boundary(v));
       EXPECT_EQ(t.valence(v), 2);
     }
-    EXPECT_EQ(t.ring_neighbors(), r.ring_neighbors());
+    sorpia_test::expect_reference_topology(sorpia_test::triangles(faces), n);
   }
 }
 
@@ -90,17 +90,17 @@ TEST(Validation, BowtieVertexIsNamed) {
 
 TEST(Validation, UnusualButValidMeshesAreAccepted) {
   const Faces single = {0, 1, 2};
-  EXPECT_EQ(sorpia::Topology(single.data(), 1, 3).n_boundary_edges(), 3u);
+  EXPECT_EQ(sorpia::Topology(sorpia_test::triangles(single), 3).n_boundary_edges(), 3u);
   // a strip: every vertex on the boundary
   const Faces strip = {0, 1, 2, 2, 1, 3, 2, 3, 4, 4, 3, 5};
-  const sorpia::Topology s(strip.data(), 4, 6);
+  const sorpia::Topology s(sorpia_test::triangles(strip), 6);
   for (std::size_t v = 0; v < 6; ++v) EXPECT_TRUE(s.is_boundary(v));
   EXPECT_EQ(s.n_edges(), 9u);
   // two components (an icosphere and a disjoint triangle) and an unreferenced vertex
   auto m = sorpia::icosphere(1);
   const auto n = static_cast<std::int32_t>(m.n_vertices());
   m.face_vertex_indices.insert(m.face_vertex_indices.end(), {n, n + 1, n + 2});
-  const sorpia::Topology two(m.face_vertex_indices.data(), m.n_faces(), m.n_vertices() + 4);
+  const sorpia::Topology two(m, m.n_vertices() + 4);
   EXPECT_EQ(two.n_unreferenced(), 1u);
   EXPECT_EQ(two.n_boundary_edges(), 3u);
 }
@@ -109,7 +109,7 @@ TEST(Validation, Valence360PoleMatchesTheClosedForm) {
   // The closed-form mask alpha_n (paper eq. 5, loop_masks.hpp);
   // pole(n): the centre (vertex 0) is an interior vertex of valence n.
   const auto m = sorpia::pole(360);
-  const sorpia::Topology topo(m.face_vertex_indices.data(), m.n_faces(), m.n_vertices());
+  const sorpia::Topology topo(m);
   ASSERT_EQ(topo.valence(0), 360);
   const auto b = sorpia::limit_matrix(topo, sorpia::Boundary::EdgeOnly);
   const double alpha = sorpia_test::loop_alpha(360);
@@ -122,11 +122,11 @@ TEST(Validation, ValenceBeyondOpenSubdivsLimitNamesTheVertex) {
   const auto m = sorpia::pole(65536);  // its centre, vertex 0, has 65536 neighbours
   expect_refused(m.face_vertex_indices, m.n_vertices(), {"vertex 0 has 65536 neighbours", "at most 65535"});
   const auto ok = sorpia::pole(65535);
-  EXPECT_EQ(sorpia::Topology(ok.face_vertex_indices.data(), ok.n_faces(), ok.n_vertices()).valence(0), 65535);
+  EXPECT_EQ(sorpia::Topology(ok).valence(0), 65535);
 }
 
 TEST(Validation, FaceOrderDoesNotMatter) {
-  // OpenMesh builds the mesh face by face; a shuffled order must give the same rings.
+  // A shuffled face order must give the same rings.
   const auto m = sorpia::irregular(400, 3);
   std::vector<std::size_t> order(m.n_faces());
   std::iota(order.begin(), order.end(), 0);
@@ -134,8 +134,8 @@ TEST(Validation, FaceOrderDoesNotMatter) {
   for (std::size_t i = 0; i + 7 < order.size(); i += 7) std::swap(order[i], order[i + 3]);
   Faces shuffled;
   for (std::size_t f : order) shuffled.insert(shuffled.end(), m.face_vertex_indices.begin() + 3 * f, m.face_vertex_indices.begin() + 3 * f + 3);
-  const sorpia::Topology a(m.face_vertex_indices.data(), m.n_faces(), m.n_vertices());
-  const sorpia::Topology b(shuffled.data(), m.n_faces(), m.n_vertices());
+  const sorpia::Topology a(m);
+  const sorpia::Topology b(sorpia_test::triangles(shuffled), m.n_vertices());
   EXPECT_EQ(a.n_edges(), b.n_edges());
   for (std::size_t v = 0; v < m.n_vertices(); ++v) EXPECT_EQ(a.valence(v), b.valence(v));
 }

@@ -101,7 +101,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   }
   if (!mesh.all_triangles()) return 0;  // the limit below is Loop's
   try {
-    const sorpia::Topology topo(mesh.face_vertex_indices.data(), mesh.n_faces(), n);
+    const sorpia::Topology topo(mesh, n);
     std::vector<double> out(mesh.vertices.size());
     sorpia::limit_points(topo, mesh.vertices.data(), sorpia::Boundary::EdgeOnly, out.data());
     for (const double x : out)

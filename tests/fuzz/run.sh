@@ -28,7 +28,7 @@ case "$osd_h" in /usr/include/*|"") ;; *) osd_flags=(-isystem "${osd_h%/opensubd
 cpp="$root/cpp"
 # The readers, the topology validation and the limit: what a file goes through (the layers base, mesh, io, limit).
 sources=("$cpp"/io/src/io.cpp "$cpp"/io/src/io_obj.cpp "$cpp"/io/src/io_off.cpp "$cpp"/io/src/io_ply.cpp
-         "$cpp"/io/src/io_stl.cpp "$cpp"/mesh/src/topology.cpp "$cpp"/mesh/src/one_ring.cpp "$cpp"/limit/src/limit.cpp
+         "$cpp"/io/src/io_stl.cpp "$cpp"/mesh/src/topology.cpp "$cpp"/limit/src/limit.cpp
          "$cpp"/limit/src/limit_operator.cpp "$cpp"/limit/src/limit_operator_catmark.cpp "$cpp"/limit/src/limit_masks.cpp
          "$cpp"/base/src/interrupt.cpp "$cpp"/base/src/subdivision.cpp "$cpp"/limit/src/refined_rows.cpp)
 includes=()

@@ -550,10 +550,10 @@ bool valid(const std::int32_t* counts, const FaceList& fl, std::size_t n_vertice
 
 // Throws sorpia::Topology's MeshError for faces it refuses.
 void validate(const std::int32_t* counts, const FaceList& fl, std::size_t n_vertices) {
-  if (counts)
-    static_cast<void>(Topology(counts, fl.n_faces, fl.idx, n_vertices));
-  else
-    static_cast<void>(Topology(fl.idx, fl.n_faces, n_vertices));
+  Mesh faces;
+  faces.face_vertex_indices.assign(fl.idx, fl.idx + fl.n_corners());
+  if (counts) faces.face_vertex_counts.assign(counts, counts + fl.n_faces);
+  static_cast<void>(Topology(std::move(faces), n_vertices));
 }
 
 // The index checks repair does not change, by the validation's message.

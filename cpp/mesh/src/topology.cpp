@@ -1,12 +1,8 @@
 #include "sorpia/topology.hpp"
 
-#include <OpenMesh/Core/System/omstream.hh>
-
 #include <algorithm>
 #include <limits>
 #include <memory>
-#include <mutex>
-#include <numeric>
 #include <stdexcept>
 #include <string>
 #include <tuple>
@@ -14,21 +10,33 @@
 #include <utility>
 
 #include "sorpia/detail/half_edges.hpp"
-#include "one_ring.hpp"
-#include "openmesh_types.hpp"
 #include "sorpia/errors.hpp"
 
 namespace sorpia {
 
 namespace detail {
-void silence_openmesh() {
-  static std::once_flag once;
-  std::call_once(once, [] {
-    omlog().disable();
-    omout().disable();
-    omerr().disable();
-  });
-}
+
+// What sorpia::Topology keeps of the half-edge structure: per vertex its
+// neighbours in clockwise order (a boundary vertex from one boundary neighbour
+// to the other; an interior vertex starting at the second corner of the
+// lowest-numbered face around it), its number of faces and whether it is on
+// the boundary.
+// For polygon meshes also the faces round each vertex in ring order and their
+// other vertices (Topology::vertex_faces, face_ring_neighbors).
+struct OneRing {
+  std::vector<std::int32_t> offsets;    // n_vertices + 1
+  std::vector<std::int32_t> neighbors;  // 2 n_edges
+  std::vector<std::int32_t> face_count;
+  std::vector<std::uint8_t> boundary;
+  std::size_t n_unreferenced = 0;
+  // polygons only (empty for triangles)
+  std::vector<std::int32_t> face_offsets;        // n_vertices + 1
+  std::vector<std::int32_t> faces;               // sum of face_count
+  std::vector<std::int32_t> face_ring_offsets;   // n_vertices + 1
+  std::vector<std::int32_t> face_ring;           // the faces' other vertices
+  std::vector<std::uint8_t> quad_ring;           // every face at the vertex is a quad
+};
+
 }  // namespace detail
 
 namespace {
@@ -278,7 +286,7 @@ void refuse_findings(const Findings& found, const FaceList& fl, std::size_t n_ve
 // stamped with v so that it is never cleared: the faces at v using edge
 // (v, x) (`users`, at most 3 counted; `outs` of them run v -> x), the third
 // vertex of the first one, and the neighbour after x clockwise round v: the
-// `next` of the corner whose `prev` is x (as one_ring.hpp's Corner chains a
+// `next` of the corner whose `prev` is x (as half_edges.hpp's Corner chains a
 // fan). No sort, so a high-valence vertex costs no more than its edges.
 // kPolygons: the slot also keeps that corner (the face between x and the next
 // neighbour, for the face ring), and two faces sharing both edges at v are a
@@ -485,7 +493,7 @@ class RingBuilder {
 // chained into a fan; problems are named afterwards by
 // face_checks::refuse_findings.
 // Returns the number of edges and of boundary edges. With `ring`, also fills
-// it with the fans that walk passes, which are the one-ring (the direct build).
+// it with the fans that walk passes, which are the one-ring.
 // With `valid`, the walk stops at the first problem and sets *valid = false
 // instead of naming it (naming may sort every half-edge).
 // kPolygons is fl.triangles() == false: triangles take the path without corner ids.
@@ -549,118 +557,6 @@ void check_counts(std::size_t n_faces, std::size_t n_vertices) {
 
 }  // namespace
 
-namespace {
-
-// The reference build: OpenMesh's half-edge mesh by add_face (TriMesh for
-// triangles, PolyMesh for polygons), flattened by circulating clockwise round
-// each vertex. Rotated so that an interior ring starts where validate_faces's
-// walk starts it (both builds give the same arrays).
-template <class Mesh>
-detail::OneRing one_ring_openmesh(const FaceList& fl, std::size_t n_vertices, std::size_t n_edges) {
-  detail::OneRing r;
-  Mesh mesh;
-  mesh.reserve(n_vertices, n_edges, fl.n_faces);
-  for (std::size_t v = 0; v < n_vertices; ++v) mesh.add_vertex(typename Mesh::Point(0, 0, 0));
-  r.face_count.assign(n_vertices, 0);
-  std::vector<typename Mesh::VertexHandle> handles;
-  for (std::size_t f = 0; f < fl.n_faces; ++f) {
-    handles.clear();
-    for (std::int32_t h = fl.begin(f); h < fl.end(f); ++h) {
-      ++r.face_count[fl.idx[h]];
-      handles.push_back(mesh.vertex_handle(fl.idx[h]));
-    }
-    const auto fh = mesh.add_face(handles);
-    if (!fh.is_valid())
-      throw MeshError(fl.str(f) + " makes a non-manifold vertex (two fans of faces meet at one vertex, a 'bowtie')");
-  }
-
-  const bool polygons = !fl.triangles();
-  r.offsets.assign(n_vertices + 1, 0);
-  r.boundary.assign(n_vertices, 0);
-  r.neighbors.reserve(2 * n_edges);
-  if (polygons) {
-    r.face_offsets.assign(n_vertices + 1, 0);
-    r.face_ring_offsets.assign(n_vertices + 1, 0);
-    r.quad_ring.assign(n_vertices, 0);
-  }
-  std::vector<std::int32_t> faces, face_ring_sizes, face_ring;  // of one vertex, in circulation order
-  for (std::size_t v = 0; v < n_vertices; ++v) {
-    const auto vh = mesh.vertex_handle(static_cast<int>(v));
-    r.offsets[v] = static_cast<std::int32_t>(r.neighbors.size());
-    if (polygons) {
-      r.face_offsets[v] = static_cast<std::int32_t>(r.faces.size());
-      r.face_ring_offsets[v] = static_cast<std::int32_t>(r.face_ring.size());
-    }
-    if (r.face_count[v] == 0) {
-      ++r.n_unreferenced;
-      continue;
-    }
-    // A boundary vertex's outgoing half-edge is its boundary half-edge: start
-    // there so the ring runs from one boundary neighbour to the other.
-    const auto h0 = mesh.halfedge_handle(vh);
-    const bool on_boundary = mesh.is_boundary(h0);
-    r.boundary[v] = on_boundary;
-    int faces_seen = 0;
-    int lowest_face = -1;
-    std::size_t lowest_at = 0;
-    faces.clear();
-    face_ring_sizes.clear();
-    face_ring.clear();
-    bool quads = true;
-    auto h = h0;
-    do {
-      if (!mesh.is_boundary(h)) {
-        ++faces_seen;
-        if (lowest_face < 0 || mesh.face_handle(h).idx() < lowest_face) {
-          lowest_face = mesh.face_handle(h).idx();
-          lowest_at = r.neighbors.size() - r.offsets[v];
-        }
-      }
-      r.neighbors.push_back(mesh.to_vertex_handle(h).idx());
-      const auto across = mesh.opposite_halfedge_handle(h);  // x -> v, in the face after x clockwise
-      h = mesh.next_halfedge_handle(across);                  // clockwise
-      if (polygons && !mesh.is_boundary(across)) {
-        // The face between x and the next neighbour y: its vertices from the
-        // one after y to the one before x, counter-clockwise.
-        const std::size_t before = face_ring.size();
-        const auto x = mesh.from_vertex_handle(across);
-        for (auto g = mesh.next_halfedge_handle(h); mesh.to_vertex_handle(g) != x; g = mesh.next_halfedge_handle(g))
-          face_ring.push_back(mesh.to_vertex_handle(g).idx());
-        faces.push_back(mesh.face_handle(across).idx());
-        face_ring_sizes.push_back(static_cast<std::int32_t>(face_ring.size() - before));
-        quads = quads && face_ring.size() - before == 1;
-      }
-    } while (h != h0);
-    if (faces_seen != r.face_count[v]) detail::refuse_second_fan(v, r.face_count[v]);
-    // h = v -> x lies in the face (v, x, .): start an interior ring at the x
-    // of the lowest-numbered face. The faces listed after neighbour j are
-    // those between j and j + 1: they rotate with the neighbours.
-    if (!on_boundary) {
-      std::rotate(r.neighbors.begin() + r.offsets[v], r.neighbors.begin() + r.offsets[v] + lowest_at,
-                  r.neighbors.end());
-      if (polygons) {
-        const auto at = static_cast<std::ptrdiff_t>(lowest_at);
-        const std::ptrdiff_t skip = std::accumulate(face_ring_sizes.begin(), face_ring_sizes.begin() + at, 0);
-        std::rotate(faces.begin(), faces.begin() + at, faces.end());
-        std::rotate(face_ring.begin(), face_ring.begin() + skip, face_ring.end());
-      }
-    }
-    if (polygons) {
-      r.faces.insert(r.faces.end(), faces.begin(), faces.end());
-      r.face_ring.insert(r.face_ring.end(), face_ring.begin(), face_ring.end());
-      r.quad_ring[v] = quads;
-    }
-  }
-  r.offsets[n_vertices] = static_cast<std::int32_t>(r.neighbors.size());
-  if (polygons) {
-    r.face_offsets[n_vertices] = static_cast<std::int32_t>(r.faces.size());
-    r.face_ring_offsets[n_vertices] = static_cast<std::int32_t>(r.face_ring.size());
-  }
-  return r;
-}
-
-}  // namespace
-
 bool faces_valid(const std::int32_t* faces, std::size_t n_faces, std::size_t n_vertices) {
   bool valid = true;
   try {
@@ -685,27 +581,46 @@ bool faces_valid(const std::int32_t* face_vertex_counts, std::size_t n_faces, co
   return valid;
 }
 
-Topology::Topology(const std::int32_t* faces, std::size_t n_faces, std::size_t n_vertices)
-    : Topology(faces, n_faces, n_vertices, TopologyBuild::Direct) {}
-
-Topology::Topology(const std::int32_t* faces, std::size_t n_faces, std::size_t n_vertices, TopologyBuild how)
-    : n_vertices_(n_vertices), n_faces_(n_faces) {
-  check_counts(n_faces, n_vertices);
-  face_indices_.assign(faces, faces + 3 * n_faces);
-  build(how);
+Topology::Topology(const Mesh& mesh) : n_vertices_(mesh.n_vertices()) {
+  init(mesh.face_vertex_counts, mesh.face_vertex_indices, mesh.face_size);
 }
 
-Topology::Topology(const std::int32_t* face_vertex_counts, std::size_t n_faces,
-                   const std::int32_t* face_vertex_indices, std::size_t n_vertices, TopologyBuild how)
-    : n_vertices_(n_vertices), n_faces_(n_faces) {
-  check_counts(n_faces, n_vertices);
-  face_offsets_ = detail::polygon_offsets(face_vertex_counts, n_faces);
-  face_indices_.assign(face_vertex_indices, face_vertex_indices + face_offsets_.back());
-  const auto* counts_end = face_vertex_counts + n_faces;
-  all_triangles_ = std::all_of(face_vertex_counts, counts_end, [](std::int32_t k) { return k == 3; });
-  all_quads_ = std::all_of(face_vertex_counts, counts_end, [](std::int32_t k) { return k == 4; });
+Topology::Topology(Mesh faces, std::size_t n_vertices) : n_vertices_(n_vertices) {
+  init(faces.face_vertex_counts, std::move(faces.face_vertex_indices), faces.face_size);
+}
+
+void Topology::init(const std::vector<std::int32_t>& counts, std::vector<std::int32_t> indices,
+                    std::int32_t face_size) {
+  if (counts.empty()) {
+    if (face_size < 3)
+      throw MeshError("face_size is " + std::to_string(face_size) + ": a face needs at least 3 vertices");
+    if (indices.size() % static_cast<std::size_t>(face_size) != 0)
+      throw MeshError("face_vertex_indices has " + std::to_string(indices.size()) +
+                      " entries, not a multiple of face_size " + std::to_string(face_size));
+    n_faces_ = indices.size() / static_cast<std::size_t>(face_size);
+  } else {
+    n_faces_ = counts.size();
+  }
+  check_counts(n_faces_, n_vertices_);
+  if (counts.empty() && face_size == 3) {  // the triangle fast path: no counts, no offsets
+    face_indices_ = std::move(indices);
+    build();
+    return;
+  }
+  face_offsets_ = counts.empty() ? detail::uniform_offsets(face_size, n_faces_)
+                                 : detail::polygon_offsets(counts.data(), n_faces_);
+  if (static_cast<std::size_t>(face_offsets_.back()) != indices.size())
+    throw MeshError("face_vertex_counts sum to " + std::to_string(face_offsets_.back()) +
+                    " but face_vertex_indices has " + std::to_string(indices.size()) + " entries");
+  face_indices_ = std::move(indices);
+  auto size = [&](std::size_t f) { return face_offsets_[f + 1] - face_offsets_[f]; };
+  all_triangles_ = all_quads_ = true;
+  for (std::size_t f = 0; f < n_faces_; ++f) {
+    all_triangles_ = all_triangles_ && size(f) == 3;
+    all_quads_ = all_quads_ && size(f) == 4;
+  }
   if (all_triangles_) face_offsets_.clear();
-  build(how);
+  build();
 }
 
 std::vector<std::int32_t> Topology::face_counts() const {
@@ -727,18 +642,13 @@ const std::vector<std::int32_t>& Topology::faces() const {
   return face_indices_;
 }
 
-void Topology::build(TopologyBuild how) {
-  detail::silence_openmesh();
+void Topology::build() {
   const std::vector<std::int32_t> corner_face =
       all_triangles_ ? std::vector<std::int32_t>{} : detail::corner_faces(face_offsets_);
   const FaceList fl{face_indices_.data(), all_triangles_ ? nullptr : face_offsets_.data(),
                     all_triangles_ ? nullptr : corner_face.data(), n_faces_};
   detail::OneRing r;
-  std::tie(n_edges_, n_boundary_edges_) =
-      validate_faces(fl, n_vertices_, how == TopologyBuild::Direct ? &r : nullptr);
-  if (how == TopologyBuild::OpenMesh)
-    r = all_triangles_ ? one_ring_openmesh<detail::OMesh>(fl, n_vertices_, n_edges_)
-                       : one_ring_openmesh<detail::OPolyMesh>(fl, n_vertices_, n_edges_);
+  std::tie(n_edges_, n_boundary_edges_) = validate_faces(fl, n_vertices_, &r);
   ring_offsets_ = std::move(r.offsets);
   ring_neighbors_ = std::move(r.neighbors);
   face_count_ = std::move(r.face_count);

@@ -61,19 +61,8 @@ double check_values(const double* x, std::size_t rows, std::size_t k, const char
   return largest;
 }
 
-Interpolator::Interpolator(const std::int32_t* triangles, std::size_t n_faces, std::size_t n_vertices, Rules rules,
-                           std::vector<std::int32_t> vertex_map)
-    : topology_(timed([&] { return Topology(triangles, n_faces, n_vertices); }, topology_seconds_)),
-      rules_(std::move(rules)) {
-  build_operator();
-  if (!vertex_map.empty()) set_vertex_map(std::move(vertex_map));
-}
-
-Interpolator::Interpolator(const std::int32_t* face_vertex_counts, std::size_t n_faces,
-                           const std::int32_t* face_vertex_indices, std::size_t n_vertices, Rules rules,
-                           std::vector<std::int32_t> vertex_map)
-    : topology_(timed([&] { return Topology(face_vertex_counts, n_faces, face_vertex_indices, n_vertices); },
-                      topology_seconds_)),
+Interpolator::Interpolator(Mesh faces, std::size_t n_vertices, Rules rules, std::vector<std::int32_t> vertex_map)
+    : topology_(timed([&] { return Topology(std::move(faces), n_vertices); }, topology_seconds_)),
       rules_(std::move(rules)) {
   build_operator();
   if (!vertex_map.empty()) set_vertex_map(std::move(vertex_map));

@@ -1,12 +1,18 @@
 #pragma once
 /// @file reference.hpp
-/// Reference builds of the limit matrix B from OpenSubdiv's own Far::Limit(),
-/// for the tests only (the library sorpia_reference, built with
-/// SORPIA_BUILD_TESTS, and the test-only module sorpia._reference): the
-/// independent computation the production build (sorpia::limit_operator,
-/// from Sdc's limit masks and local refinement) is checked against.
+/// Reference builds for the tests only (the library sorpia_reference, built
+/// with SORPIA_BUILD_TESTS, and the test-only module sorpia._reference): the
+/// limit matrix B from OpenSubdiv's own Far::Limit(), the independent
+/// computation the production build (sorpia::limit_operator, from Sdc's limit
+/// masks and local refinement) is checked against, and the one-ring from
+/// OpenMesh's half-edge mesh, which sorpia::Topology's is checked against.
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
 
 #include "sorpia/limit.hpp"
+#include "sorpia/mesh.hpp"
 
 namespace sorpia {
 
@@ -33,5 +39,28 @@ CsrMatrix reference_limit_matrix(const Topology& topology, const Rules& rules);
 
 /// Reference, for tests: B V evaluated by Far::PrimvarRefinerReal<double>::Limit (Loop).
 void reference_limit_points(const Topology& topology, const double* vertices, Boundary boundary, double* out);
+
+/// Reference, for tests: the one-ring of a mesh from OpenMesh's half-edge
+/// mesh (TriMesh for triangles, PolyMesh otherwise, add_face per face, then
+/// its circulators), in sorpia::Topology's layout: the arrays of the same
+/// names there (ring_offsets = offsets, ring_neighbors = neighbors,
+/// vertex_face_offsets = face_offsets, vertex_faces = faces,
+/// face_ring_offsets, face_ring_neighbors = face_ring; the last four, and
+/// quad_ring, empty for a triangle mesh) must equal these.
+struct ReferenceOneRing {
+  std::vector<std::int32_t> offsets, neighbors, face_count;
+  std::vector<std::uint8_t> boundary;
+  std::vector<std::int32_t> face_offsets, faces, face_ring_offsets, face_ring;
+  std::vector<std::uint8_t> quad_ring;
+  std::size_t n_edges = 0, n_boundary_edges = 0, n_unreferenced = 0;
+};
+
+/// The faces of `faces` over n_vertices vertices (its coordinates are not
+/// read), which sorpia::Topology accepts (OpenMesh aborts on a repeated
+/// vertex in a face).
+/// @throw MeshError when OpenMesh refuses a face, finds a vertex non-manifold
+///        (more than one boundary gap) or circulates round a vertex without
+///        passing all its faces (more than one fan)
+ReferenceOneRing reference_one_ring(const Mesh& faces, std::size_t n_vertices);
 
 }  // namespace sorpia

@@ -1,26 +1,17 @@
 #pragma once
 /// @file topology.hpp
-/// Polygon-mesh topology: validation, half-edge connectivity (OpenMesh) and
-/// the flat one-ring structure the limit operator and the solvers run over.
+/// Polygon-mesh topology: validation, half-edge connectivity and the flat
+/// one-ring structure the limit operator and the solvers run over.
 
 #include <cstddef>
 #include <cstdint>
 #include <string>
 #include <vector>
 
+#include "sorpia/mesh.hpp"
 #include "sorpia/subdivision.hpp"
 
 namespace sorpia {
-
-/// How sorpia::Topology turns the validated faces into its one-ring. Both give
-/// the same arrays (tests/cpp/test_fast_operator.cpp checks it).
-enum class TopologyBuild {
-  /// Linear-time half-edge matching on the face array (the default): faster
-  /// than OpenMesh's add_face, and no half-edge mesh in memory.
-  Direct,
-  /// OpenMesh's TriMesh: add_face per face, then circulators (the reference).
-  OpenMesh,
-};
 
 /// Whether the sorpia::Topology constructor accepts these faces, found by its
 /// checks without building the one-ring or naming the problem.
@@ -32,17 +23,19 @@ bool faces_valid(const std::int32_t* face_vertex_counts, std::size_t n_faces, co
 /// Connectivity of a polygon mesh (triangles, quads, any n-gons), built once
 /// and shared by the limit operator, the solvers and surface evaluation.
 ///
-/// Faces are given as OpenSubdiv's Far::TopologyDescriptor and USD take them:
-/// face f has face_counts()[f] vertices, face_indices()[face_offsets()[f] ..
-/// face_offsets()[f + 1]), counter-clockwise seen from outside.
+/// It is built from a sorpia::Mesh, whose faces are given as OpenSubdiv's
+/// Far::TopologyDescriptor and USD take them: face f has face_counts()[f]
+/// vertices, face_indices()[face_offsets()[f] .. face_offsets()[f + 1]),
+/// counter-clockwise seen from outside.
 ///
 /// The constructor validates the faces (indices in range, at least three
 /// vertices and no repeated vertex in a face, every edge shared by at most two
 /// faces, consistent orientation, manifold vertices) and throws
 /// sorpia::MeshError naming the first offending face, edge or vertex. The
-/// half-edges are then matched into a flat CSR one-ring (directly from the
-/// faces by default, or through OpenMesh), so that no circulator runs in an
-/// inner loop.
+/// half-edges are then matched into a flat CSR one-ring in linear time,
+/// straight from the face array, so that no circulator runs in an inner loop
+/// (the tests compare it with OpenMesh's half-edge one-ring, a reference
+/// that tests/reference builds).
 ///
 /// Edge neighbours (ring_*) exist for every mesh. The face neighbours
 /// (vertex_faces, face_ring_*), which only Catmull-Clark needs, are built when
@@ -50,19 +43,18 @@ bool faces_valid(const std::int32_t* face_vertex_counts, std::size_t n_faces, co
 /// exactly what Loop reads and nothing more.
 class Topology {
  public:
-  /// Triangles: row-major (n_faces, 3) vertex indices.
-  /// @param faces       row-major (n_faces, 3) vertex indices
-  /// @param n_faces     number of triangles
-  /// @param n_vertices  number of vertices (some may be unreferenced)
-  Topology(const std::int32_t* faces, std::size_t n_faces, std::size_t n_vertices);
-  /// As above, choosing how the one-ring is built (see TopologyBuild).
-  Topology(const std::int32_t* faces, std::size_t n_faces, std::size_t n_vertices, TopologyBuild build);
-  /// Polygons: face f has face_vertex_counts[f] vertices, listed in
-  /// face_vertex_indices after those of faces 0 .. f-1 (their total is the sum
-  /// of the counts). An all-triangle input gives the same Topology as the
-  /// triangle constructor.
-  Topology(const std::int32_t* face_vertex_counts, std::size_t n_faces, const std::int32_t* face_vertex_indices,
-           std::size_t n_vertices, TopologyBuild build = TopologyBuild::Direct);
+  /// The faces of `mesh` over its mesh.n_vertices() vertices (some may be
+  /// unreferenced; the coordinates are not read). A triangle mesh given
+  /// without counts (Mesh::all_triangles) takes the fast path that stores no
+  /// counts or offsets; counts that are all 3, or a uniform `face_size` of 3,
+  /// give the same Topology.
+  /// @throw MeshError for faces of fewer than three corners, counts that do
+  ///        not add up to the indices given, and everything listed above
+  explicit Topology(const Mesh& mesh);
+  /// Faces without coordinates: those of `faces` over `n_vertices` vertices
+  /// (faces.vertices is not read and may be empty). Its face arrays are taken
+  /// over when it is passed as an rvalue.
+  Topology(Mesh faces, std::size_t n_vertices);
 
   std::size_t n_vertices() const { return n_vertices_; }
   std::size_t n_faces() const { return n_faces_; }
@@ -131,7 +123,9 @@ class Topology {
   std::size_t n_unreferenced() const { return n_unreferenced_; }
 
  private:
-  void build(TopologyBuild build);
+  // The faces' checks of form and their arrays (face_size stands for counts when these are empty), then build().
+  void init(const std::vector<std::int32_t>& counts, std::vector<std::int32_t> indices, std::int32_t face_size);
+  void build();
 
   std::size_t n_vertices_ = 0;
   std::size_t n_faces_ = 0;

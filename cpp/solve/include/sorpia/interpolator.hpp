@@ -57,8 +57,10 @@ double check_values(const double* x, std::size_t rows, std::size_t k, const char
 /// (or solve keeping its targets) at a time changes the targets.
 class Interpolator {
  public:
-  /// Triangles: row-major (n_faces, 3) vertex indices (Topology's triangle
-  /// constructor, the fast path of Loop meshes).
+  /// The faces of `faces` over n_vertices vertices (Topology(Mesh,
+  /// std::size_t): its coordinates are not read, its face arrays are taken
+  /// over when it is passed as an rvalue; a triangle mesh without counts
+  /// takes Topology's triangle fast path).
   ///
   /// `vertex_map`, when not empty, makes the mesh a manifold split of the
   /// caller's non-manifold mesh (sorpia::split_nonmanifold; its rules carry
@@ -69,12 +71,7 @@ class Interpolator {
   /// positions go to every copy of their vertex, and results hold the rows
   /// of the caller's vertices.
   /// @throw std::logic_error when vertex_map does not have that form
-  Interpolator(const std::int32_t* triangles, std::size_t n_faces, std::size_t n_vertices, Rules rules,
-               std::vector<std::int32_t> vertex_map = {});
-  /// Polygons as face_vertex_counts and face_vertex_indices (Topology's polygon constructor,
-  /// Far::TopologyDescriptor's form); `vertex_map` as above.
-  Interpolator(const std::int32_t* face_vertex_counts, std::size_t n_faces, const std::int32_t* face_vertex_indices,
-               std::size_t n_vertices, Rules rules, std::vector<std::int32_t> vertex_map = {});
+  Interpolator(Mesh faces, std::size_t n_vertices, Rules rules, std::vector<std::int32_t> vertex_map = {});
   /// A topology already built (taken over).
   Interpolator(Topology topology, Rules rules);
   /// A topology and B already built (taken over): B from elsewhere than

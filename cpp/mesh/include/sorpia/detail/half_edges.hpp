@@ -1,9 +1,11 @@
 #pragma once
 // The half-edges of a triangle or polygon list (a sorpia::Mesh's
-// face_vertex_indices, with offsets from its face_vertex_counts), the one
-// half-edge matcher (EdgeGroups) and a union-find, shared by the face checks
-// (topology.cpp), repair and the non-manifold split (repair.cpp) and the
-// statistics of a raw face list (mesh_statistics.cpp). Not a public header.
+// face_vertex_indices, with offsets from its face_vertex_counts), its corners
+// bucketed by vertex (CornerBuckets, what Topology's build walks), the
+// half-edge matcher of face lists that may be invalid (EdgeGroups) and a
+// union-find, shared by the face checks (topology.cpp), repair and the
+// non-manifold split (repair.cpp) and the statistics of a raw face list
+// (mesh_statistics.cpp). Not a public header.
 //
 // Half-edge h (0 <= h < 3 n_faces) runs from the corner faces[h] to the next
 // corner of its face, faces[next_corner(h)]; it also names that corner.
@@ -12,6 +14,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <limits>
+#include <memory>
 #include <numeric>
 #include <string>
 #include <utility>
@@ -103,6 +106,17 @@ inline std::vector<std::int32_t> polygon_offsets(const std::int32_t* counts, std
   return off;
 }
 
+// The offsets of n_faces faces of `face_size` corners each (a uniform
+// sorpia::Mesh), the total within int32.
+inline std::vector<std::int32_t> uniform_offsets(std::int32_t face_size, std::size_t n_faces) {
+  if (static_cast<std::uint64_t>(face_size) * n_faces > static_cast<std::uint64_t>(std::numeric_limits<std::int32_t>::max()))
+    throw MeshError("too many face vertices: " + std::to_string(n_faces) + " faces of " + std::to_string(face_size) +
+                    " have more than 2^31 - 1 corners");
+  std::vector<std::int32_t> off(n_faces + 1);
+  for (std::size_t f = 0; f <= n_faces; ++f) off[f] = static_cast<std::int32_t>(f) * face_size;
+  return off;
+}
+
 // The face of every corner of the faces with offsets `off` (FaceList::corner_face).
 inline std::vector<std::int32_t> corner_faces(const std::vector<std::int32_t>& off) {
   std::vector<std::int32_t> face(static_cast<std::size_t>(off.back()));
@@ -128,6 +142,63 @@ struct FaceArrays {
   }
 };
 
+// Corner of a face (v, a, ..., b) at v, counter-clockwise: `next` = a, `prev` = b.
+// Going clockwise round v, the ring passes b and then a: the step from
+// neighbour x is to the `next` of the corner whose `prev` is x.
+struct Corner {
+  std::int32_t next;
+  std::int32_t prev;
+};
+
+// The corners of a triangle list bucketed by vertex (a counting sort, linear
+// time), in face order within a bucket: vertex v's corners are
+// corners[start[v] .. start[v + 1]). Used by validate_faces (topology.cpp).
+// `faces` must hold indices in [0, n_vertices); bucket_polygon_corners takes
+// polygons (face f is indices[offsets[f] .. offsets[f + 1])) and also fills `ids`.
+struct CornerBuckets {
+  std::vector<std::int32_t> start;     // n_vertices + 1
+  std::unique_ptr<Corner[]> corners;   // one per corner of every face
+  std::unique_ptr<std::int32_t[]> ids; // polygons only: the index of each corner in the face list
+};
+
+inline CornerBuckets bucket_corners(const std::int32_t* faces, std::size_t n_faces, std::size_t n_vertices) {
+  CornerBuckets b;
+  b.start.assign(n_vertices + 1, 0);
+  for (std::size_t h = 0; h < 3 * n_faces; ++h) ++b.start[faces[h] + 1];
+  for (std::size_t v = 0; v < n_vertices; ++v) b.start[v + 1] += b.start[v];
+  // Left uninitialised: the fill below writes every entry.
+  b.corners.reset(new Corner[3 * n_faces]);
+  std::vector<std::int32_t> fill(b.start.begin(), b.start.end() - 1);
+  for (std::size_t f = 0; f < n_faces; ++f) {
+    const std::int32_t* t = faces + 3 * f;
+    b.corners[fill[t[0]]++] = {t[1], t[2]};
+    b.corners[fill[t[1]]++] = {t[2], t[0]};
+    b.corners[fill[t[2]]++] = {t[0], t[1]};
+  }
+  return b;
+}
+
+inline CornerBuckets bucket_polygon_corners(const std::int32_t* indices, const std::int32_t* offsets, std::size_t n_faces,
+                                     std::size_t n_vertices) {
+  CornerBuckets b;
+  const auto n_corners = static_cast<std::size_t>(offsets[n_faces]);
+  b.start.assign(n_vertices + 1, 0);
+  for (std::size_t h = 0; h < n_corners; ++h) ++b.start[indices[h] + 1];
+  for (std::size_t v = 0; v < n_vertices; ++v) b.start[v + 1] += b.start[v];
+  b.corners.reset(new Corner[n_corners]);
+  b.ids.reset(new std::int32_t[n_corners]);
+  std::vector<std::int32_t> fill(b.start.begin(), b.start.end() - 1);
+  for (std::size_t f = 0; f < n_faces; ++f) {
+    const std::int32_t lo = offsets[f], hi = offsets[f + 1];
+    for (std::int32_t h = lo; h < hi; ++h) {
+      const std::int32_t at = fill[indices[h]]++;
+      b.corners[at] = {indices[h + 1 == hi ? lo : h + 1], indices[h == lo ? hi - 1 : h - 1]};
+      b.ids[at] = h;
+    }
+  }
+  return b;
+}
+
 // The half-edge matcher: the half-edges of a face list grouped by
 // undirected edge, in (lower end, higher end, id) order, so that the
 // half-edges of one edge are adjacent, in face order. A counting sort by the
@@ -135,9 +206,11 @@ struct FaceArrays {
 // vertices: few) sorted by (higher end, id). Linear in the half-edges but for
 // those small sorts. `keep(h)` leaves out half-edges (of removed or
 // degenerate faces). Topology's error paths, repair, the non-manifold split
-// and the statistics of a raw face list all match edges through it; the
-// direct one-ring build matches each vertex's edges while it walks the fans
-// (topology.cpp's VertexEdges).
+// and the statistics of a raw face list all match edges through it, in that
+// order, as often as they need. Topology's one-ring build instead matches each
+// vertex's edges (both ends, no order) while it walks the vertex's fan
+// (topology.cpp's VertexEdges over CornerBuckets): one pass without sorts or a
+// stored grouping, cheaper than this grouping alone.
 template <class Faces>
 class EdgeGroups {
  public:
