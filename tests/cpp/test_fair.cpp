@@ -43,14 +43,14 @@ TEST(RefineUniform, RefinedControlMeshHasTheCoarseLimitPointsAtEveryVertex) {
   // tessellation at the same level (Far's refinement and Limit()), vertex by
   // vertex: both are short weighted sums, 1e-13 on a unit-sized mesh.
   const auto m = sorpia::grid(7, 6);
-  const sorpia::Topology topo(m.face_vertex_indices.data(), m.n_faces(), m.n_vertices());
+  const sorpia::Topology topo(m);
   const sorpia::Rules rules = creased_rules(m);
   for (int levels = 1; levels <= 2; ++levels) {
     const sorpia::RefinedMesh fine = sorpia::refine_uniform(topo, rules, levels);
     ASSERT_EQ(fine.mesh.n_faces(), m.n_faces() * (levels == 1 ? 4u : 16u));
     EXPECT_FALSE(fine.tags.crease_sharpness.empty());
     const std::vector<double> rv = times(fine.refinement, m.vertices);
-    const sorpia::Topology fine_topo(fine.mesh.face_vertex_indices.data(), fine.mesh.n_faces(), fine.n_vertices);
+    const sorpia::Topology fine_topo(fine.mesh, fine.n_vertices);
     std::vector<double> got(rv.size());
     sorpia::limit_points(fine_topo, rv.data(), sorpia::Rules{Scheme::Loop, rules.boundary, fine.tags}, got.data());
     sorpia::LimitSurface surface(topo, m.vertices.data(), Scheme::Loop, rules.boundary, rules.tags);
@@ -62,7 +62,7 @@ TEST(RefineUniform, RefinedControlMeshHasTheCoarseLimitPointsAtEveryVertex) {
 
 TEST(RefineUniform, LevelsOutOfRangeAreRefused) {
   const auto m = sorpia::icosphere(0);
-  const sorpia::Topology topo(m.face_vertex_indices.data(), m.n_faces(), m.n_vertices());
+  const sorpia::Topology topo(m);
   EXPECT_THROW(sorpia::refine_uniform(topo, sorpia::Rules{}, 0), sorpia::ParameterError);
   EXPECT_THROW(sorpia::refine_uniform(topo, sorpia::Rules{}, sorpia::kMaxRefinementLevels + 1),
                sorpia::ParameterError);
@@ -72,10 +72,10 @@ TEST(FairSolve, TargetsAreMetAndTheEnergyFallsFromTheStart) {
   // K = I (a positive definite stand-in): the solve meets B_t V = T_t to
   // rounding whatever it stops at, and the energy is at most the start's.
   const auto m = sorpia::icosphere(1);
-  const sorpia::Topology topo(m.face_vertex_indices.data(), m.n_faces(), m.n_vertices());
+  const sorpia::Topology topo(m);
   const sorpia::Rules rules{Scheme::Loop, Boundary::EdgeAndCorner, {}};
   const sorpia::RefinedMesh fine = sorpia::refine_uniform(topo, rules, 1);
-  const sorpia::Topology fine_topo(fine.mesh.face_vertex_indices.data(), fine.mesh.n_faces(), fine.n_vertices);
+  const sorpia::Topology fine_topo(fine.mesh, fine.n_vertices);
   const sorpia::Rules fine_rules{Scheme::Loop, rules.boundary, fine.tags};
   sorpia::CsrMatrix k;
   k.n_rows = k.n_cols = fine.n_vertices;

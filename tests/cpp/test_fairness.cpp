@@ -18,8 +18,7 @@ namespace {
 using sorpia::CsrMatrix;
 
 sorpia::LimitSurface quad_surface(const sorpia::Mesh& m) {
-  const auto counts = m.counts();
-  const sorpia::Topology topo(counts.data(), m.n_faces(), m.face_vertex_indices.data(), m.n_vertices());
+  const sorpia::Topology topo(m);
   return sorpia::LimitSurface(topo, m.vertices.data(), sorpia::Scheme::CatmullClark, sorpia::Boundary::EdgeAndCorner);
 }
 
