@@ -19,6 +19,7 @@ from ._repair import RepairResult, repair
 from ._meshinfo import mesh_statistics
 from .surface import LimitSurface, evaluate_limit, limit_surface
 from .energy import fairness_matrix, thin_plate_energy
+from .fair import FairResult, fair_interpolate
 from . import shapes
 
 __all__ = [
@@ -39,5 +40,6 @@ __all__ = [
     "RepairResult", "repair",
     "mesh_statistics",
     "fairness_matrix", "thin_plate_energy",
+    "FairResult", "fair_interpolate",
     "NonmanifoldWarning", "UsdWarning",
 ]

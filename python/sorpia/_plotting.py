@@ -302,8 +302,9 @@ def interpolation_figure(vertices, faces, given_surface, control_vertices, fitte
                          size: tuple[int, int] = (1200, 1000), elev: float = 30.0, azim: float = -60.0,
                          face_budget: int = FACE_BUDGET, point_budget: int = POINT_BUDGET,
                          title: str | None = None, iterations: int | None = None, level: int | None = None,
-                         up: str = "z", scheme: str = "loop", creases=None, crease_curves=None):
-    """The paper's Figure 3 in four panels, the same camera in each.
+                         up: str = "z", scheme: str = "loop", creases=None, crease_curves=None, fair=None):
+    """The paper's Figure 3 in four panels, the same camera in each; with
+    `fair`, plain and fair interpolation side by side instead.
 
     Parameters
     ----------
@@ -332,6 +333,13 @@ def interpolation_figure(vertices, faces, given_surface, control_vertices, fitte
     crease_curves : (given, fitted), optional
         Their limit curves on the two surfaces, each as `crease_curves`
         returns them, drawn orange on panels b and d.
+    fair : (control_vertices, faces, (V_s, F_s), levels), optional
+        A fair interpolation (`sorpia.fair_interpolate`): its fine control
+        mesh (rows 0..n-1 the children of the given vertices) and its
+        tessellated limit surface. The panels are then (a) the plain control
+        mesh, (b) its limit surface, (c) the fair control mesh, (d) its limit
+        surface, given vertices red; `given_surface` is not drawn and
+        `crease_curves` only on panel b (the plain surface).
     """
     from mpl_toolkits.mplot3d.art3d import Line3DCollection, Poly3DCollection
 
@@ -352,7 +360,11 @@ def interpolation_figure(vertices, faces, given_surface, control_vertices, fitte
 
     # One box of axis limits around everything drawn, equal scale on the three
     # axes (box aspect = extents): the same camera in every panel.
-    allpts = np.concatenate([V0, Vc, Vg, Vf])
+    if fair is not None:
+        Vfc, Ffc = np.asarray(fair[0], float)[:, axes], _Faces(fair[1])
+        Vfs, Ffs = np.asarray(fair[2][0], float)[:, axes], _Faces(fair[2][1])
+        Vg = np.zeros((0, 3))  # not drawn
+    allpts = np.concatenate([V0, Vc, Vg, Vf] + ([Vfc, Vfs] if fair is not None else []))
     allpts = allpts[np.isfinite(allpts).all(axis=1)]
     lo, hi = allpts.min(axis=0), allpts.max(axis=0)
     extent = np.maximum(hi - lo, 0.05 * max(float((hi - lo).max()), 1e-12))  # flat meshes keep some depth
@@ -399,6 +411,8 @@ def interpolation_figure(vertices, faces, given_surface, control_vertices, fitte
     fit = max(np.abs(box * right).sum(), np.abs(box * screen_up).sum() / (0.86 * size[1] / size[0]))
     zoom = min(1.35, 1.4 / fit)
 
+    if fair is not None:  # panel by panel: the plain mesh's creases on (a), its curves on (b)
+        lines = [lines[2], None if crease_curves is None else lines[3], None, None]
     fig = _new_figure(*size)
     name = {"loop": "Loop", "catmull-clark": "Catmull-Clark"}.get(scheme, scheme)
     panels = [
@@ -408,6 +422,15 @@ def interpolation_figure(vertices, faces, given_surface, control_vertices, fitte
          Vc, F, MESH_COLOR, True, [(Vc, CONTROL_COLOR), (V0, GIVEN_COLOR)]),
         ("(d) limit surface of the control mesh", Vf, Ff, SURFACE_COLOR, False, [(V0, GIVEN_COLOR)]),
     ]
+    if fair is not None:
+        panels = [
+            ("(a) plain control mesh (SOR-PIA)" + (f", {iterations} iterations" if iterations is not None else ""),
+             Vc, F, MESH_COLOR, True, [(Vc, CONTROL_COLOR), (V0, GIVEN_COLOR)]),
+            ("(b) its limit surface: plain interpolation", Vf, Ff, SURFACE_COLOR, False, [(V0, GIVEN_COLOR)]),
+            (f"(c) fair control mesh, {fair[3]} level{'s' if fair[3] > 1 else ''} finer", Vfc, Ffc, MESH_COLOR, True,
+             [(Vfc[:len(V0)], CONTROL_COLOR), (V0, GIVEN_COLOR)]),
+            ("(d) its limit surface: fair interpolation", Vfs, Ffs, SURFACE_COLOR, False, [(V0, GIVEN_COLOR)]),
+        ]
     for j, (label, Vp, Fp, base, edges, points) in enumerate(panels):
         ax = fig.add_subplot(2, 2, j + 1, projection="3d")
         ax.computed_zorder = False  # markers painted over the surface, not sorted with it

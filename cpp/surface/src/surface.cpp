@@ -53,15 +53,6 @@ using detail::Point3;
 constexpr double kRefinerBytesPerTriangle = 220.0;
 constexpr double kRefinerBytesPerQuad = 300.0;
 
-std::string human_bytes(double b) {
-  char buf[64];
-  if (b >= 1e9)
-    std::snprintf(buf, sizeof buf, "%.1f GB", b / 1e9);
-  else
-    std::snprintf(buf, sizeof buf, "%.0f MB", b / 1e6);
-  return buf;
-}
-
 // Bfr represents the surface next to an extraordinary vertex by Gregory
 // patches after this many local refinements (default 2): 4 shrinks that
 // region to the corners of side 1/16, where OpenSubdiv's derivatives are

@@ -226,6 +226,19 @@ def build_parser() -> argparse.ArgumentParser:
                      "draws the fitted limit surface (Catmull-Clark only: Blender has no Loop)")
     fit.add_argument("--binary", action="store_true", help="write .ply and .stl outputs in binary (faster, "
                      "smaller; PLY keeps float64 either way)")
+    fit.add_argument("--fair", action="store_true",
+                     help="fair interpolation (Halstead, Kass and DeRose 1993): write a control mesh --levels "
+                     "subdivision steps finer (faces and tags as OpenSubdiv's refinement carries them) whose limit "
+                     "surface passes through the given vertices (or --targets) and bends least (thin-plate energy, "
+                     "plus --membrane); --tol then bounds the energy's relative change over 10 iterations and "
+                     "--max-iter its iterations")
+    fit.add_argument("--levels", type=_positive_int, default=None, metavar="N",
+                     help="--fair: subdivision steps from the input to the fair control mesh (default 1)")
+    fit.add_argument("--membrane", type=_float_arg, default=None, metavar="W",
+                     help="--fair: weight of the membrane term beside the thin plate's 1 (default 0)")
+    fit.add_argument("--targets", metavar="FILE",
+                     help="--fair: interpolate only these vertices (a text file of 0-based vertex indices, '#' "
+                     "comments); the others are free")
     scheme_options(fit)
     triangulate_flag(fit)
     repair_flag(fit, "the control mesh is that of the repaired mesh (its extra vertices copy input vertices) and "
@@ -237,7 +250,7 @@ def build_parser() -> argparse.ArgumentParser:
         surface=a.surface, level=a.level, report=a.report, quiet=a.quiet, force=a.force, triangulate=a.triangulate,
         binary=a.binary, threads=a.threads, repair=a.repair, scheme=a.scheme, ignore_tags=a.ignore_tags,
         sharp_angle=a.sharp_angle, nonmanifold=a.nonmanifold, keep_unconverged=a.keep_unconverged, prim=a.prim,
-        blender=a.blender)[0])
+        blender=a.blender, fair=a.fair, levels=a.levels, membrane=a.membrane, targets=a.targets)[0])
 
     comp = command("compare", "run several methods to one tolerance: the paper's Table 1 and Figure 7",
                    "Run each method on the mesh to the same tolerance and print the paper's Table 1 layout for "
@@ -288,6 +301,13 @@ def build_parser() -> argparse.ArgumentParser:
     ren.add_argument("--face-budget", type=_positive_int, default=FACE_BUDGET, metavar="N",
                      help="most triangles drawn per panel")
     threads_option(ren, "--method auto, sor or gs only")
+    ren.add_argument("--fair", action="store_true",
+                     help="draw plain and fair interpolation side by side (as 'sorpia fit --fair'): the plain "
+                     "control mesh and limit surface, then the fair control mesh --levels finer and its surface")
+    ren.add_argument("--levels", type=_positive_int, default=None, metavar="N",
+                     help="--fair: subdivision steps from the input to the fair control mesh (default 1)")
+    ren.add_argument("--membrane", type=_float_arg, default=None, metavar="W",
+                     help="--fair: weight of the membrane term beside the thin plate's 1 (default 0)")
     scheme_options(ren)
     triangulate_flag(ren)
     repair_flag(ren, "the panels show the repaired mesh")
@@ -298,7 +318,8 @@ def build_parser() -> argparse.ArgumentParser:
         boundary=a.boundary, size=a.size,
         elev=a.elev, azim=a.azim, face_budget=a.face_budget, quiet=a.quiet, force=a.force,
         triangulate=a.triangulate, up=a.up, threads=a.threads, repair=a.repair, scheme=a.scheme,
-        ignore_tags=a.ignore_tags, sharp_angle=a.sharp_angle, nonmanifold=a.nonmanifold, prim=a.prim)[0])
+        ignore_tags=a.ignore_tags, sharp_angle=a.sharp_angle, nonmanifold=a.nonmanifold, prim=a.prim, fair=a.fair,
+        levels=a.levels, membrane=a.membrane)[0])
 
     inf = command("info", "mesh statistics (the paper's Table 2) and whether PIA can run on it",
                   "Print vertices, faces, edges, boundary loops, Euler characteristic, genus, components, "
