@@ -1,8 +1,9 @@
-// Bindings of approximation's geometry (cpp/fit footpoints.hpp): the k-d tree
-// and the footpoints of data points on a limit surface. Conversion and error
-// translation only.
+// Bindings of approximation (cpp/fit footpoints.hpp, normal_matrix.hpp): the
+// k-d tree, the footpoints of data points on a limit surface, and the normal
+// matrix of the fit. Conversion and error translation only.
 #include "bindings.hpp"
 #include "sorpia/footpoints.hpp"
+#include "sorpia/normal_matrix.hpp"
 
 namespace sorpia_py {
 using namespace pybind11::literals;
@@ -12,7 +13,8 @@ using FaceIds = py::array_t<std::int32_t, py::array::c_style>;
 
 py::tuple footpoint_tuple(sorpia::Footpoints&& fp) {
   return py::make_tuple(to_numpy(std::move(fp.face_ids), 0), to_numpy(std::move(fp.uv), 2),
-                        to_numpy(std::move(fp.positions), 3), to_numpy(std::move(fp.distances), 0));
+                        to_numpy(std::move(fp.positions), 3), to_numpy(std::move(fp.distances), 0),
+                        to_numpy(std::move(fp.normals), 3));
 }
 
 sorpia::FootpointOptions footpoint_options(int grid, int max_steps) {
@@ -65,6 +67,41 @@ void bind_approximate(py::module_& m) {
           return footpoint_tuple(std::move(fp));
         },
         "surface"_a, "topology"_a, "points"_a.noconvert(), "grid"_a, "max_steps"_a);
+
+  m.def("normal_matrix",
+        [](const py::array_t<std::int32_t, py::array::c_style>& indptr,
+           const py::array_t<std::int32_t, py::array::c_style>& indices, const Vertices& data,
+           std::size_t n_cols, const py::object& weights) {
+          sorpia::CsrMatrix A;
+          A.n_rows = static_cast<std::size_t>(indptr.shape(0)) - 1;
+          A.n_cols = n_cols;
+          A.indptr = to_vector(indptr);
+          A.indices = to_vector(indices);
+          A.data = to_vector(data);
+          if (A.indices.size() != A.data.size() || static_cast<std::size_t>(A.indptr.back()) != A.data.size())
+            throw sorpia::ParameterError("normal_matrix: indptr, indices and data disagree");
+          for (const std::int32_t j : A.indices)
+            if (j < 0 || static_cast<std::size_t>(j) >= n_cols)
+              throw sorpia::ParameterError("normal_matrix: a column index is out of range");
+          int count = 0;
+          Vertices w;
+          if (!weights.is_none()) {
+            w = weights.cast<Vertices>();
+            if (w.ndim() != 2 || static_cast<std::size_t>(w.shape(0)) != A.n_rows)
+              throw sorpia::ParameterError("weights must have one row per row of A");
+            count = static_cast<int>(w.shape(1));
+          }
+          const double* wp = count ? w.data() : nullptr;
+          sorpia::NormalMatrix M;
+          {
+            LongCall call;
+            M = sorpia::normal_matrix(A, wp, count);
+          }
+          const int nb = M.blocks;
+          return py::make_tuple(to_numpy(std::move(M.indptr), 0), to_numpy(std::move(M.indices), 0),
+                                to_numpy(std::move(M.values), nb));
+        },
+        "indptr"_a.noconvert(), "indices"_a.noconvert(), "data"_a.noconvert(), "n_cols"_a, "weights"_a);
 
   m.def("refine_footpoints",
         [](const sorpia::LimitSurface& surface, const sorpia::Topology& topology, const Vertices& points,

@@ -242,9 +242,53 @@ def _lspia(M: scipy.sparse.csr_matrix, rhs: np.ndarray, x: np.ndarray, rtol: flo
     return x, max_iter
 
 
+def _normal_equations(A, points, normals, V, tangential: float, fairness: float, K):
+    """The normal equations of one update: (M, rhs, mu) with M = A^T W A +
+    fairness m K + mu I, rhs = A^T W P + mu V, m the mean diagonal of A^T A
+    and mu = _PROXIMAL m. W_i = I (tangential = 1: point distance, one (n, n)
+    system for three columns) or W_i = tangential I + (1 - tangential) n_i
+    n_i^T (the (3n, 3n) system over x..., y..., z...; a point whose normal is
+    zero keeps W_i = I)."""
+    n = A.shape[1]
+    A = A.tocsr()
+    if tangential == 1.0:
+        ip, ix, val = _core.normal_matrix(A.indptr, A.indices, A.data, n, None)
+        AtA = scipy.sparse.csr_matrix((val[:, 0], ix, ip), shape=(n, n))
+        mean_diag = float(AtA.diagonal().mean()) or 1.0
+        mu = _PROXIMAL * mean_diag
+        M = AtA + scipy.sparse.identity(n, format="csr") * mu
+        if K is not None:
+            M = M + (fairness * mean_diag) * K
+        return M.tocsr(), A.T @ points + mu * V, mu
+    nrm = normals * (np.linalg.norm(normals, axis=1) > 0)[:, None]
+    w, c = tangential, 1.0 - tangential
+    flat = (nrm == 0).all(axis=1)
+    c_i = np.where(flat, 0.0, c)
+    w_i = np.where(flat, 1.0, w)
+    pairs = ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2))
+    weights = np.empty((len(nrm), 6))
+    for col, (a, b) in enumerate(pairs):
+        weights[:, col] = c_i * nrm[:, a] * nrm[:, b] + (w_i if a == b else 0.0)
+    ip, ix, val = _core.normal_matrix(A.indptr, A.indices, A.data, n, np.ascontiguousarray(weights))
+    block = {}
+    for col, (a, b) in enumerate(pairs):
+        block[a, b] = scipy.sparse.csr_matrix((val[:, col], ix, ip), shape=(n, n))
+        block[b, a] = block[a, b]
+    mean_diag = float(sum(block[a, a].diagonal().mean() for a in range(3)) / 3) or 1.0
+    mu = _PROXIMAL * mean_diag
+    M = scipy.sparse.bmat([[block[a, b] for b in range(3)] for a in range(3)], format="csr")
+    M = M + scipy.sparse.identity(3 * n, format="csr") * mu
+    if K is not None:
+        M = M + scipy.sparse.block_diag([K] * 3, format="csr") * (fairness * mean_diag)
+    # W_i p_i = w_i p_i + c_i n_i (n_i . p_i)
+    wp = w_i[:, None] * points + (c_i * np.einsum("ij,ij->i", nrm, points))[:, None] * nrm
+    rhs = A.T @ wp + mu * V
+    return M.tocsr(), rhs, mu
+
+
 def approximate(points, cage_vertices, cage_faces, *, scheme: str = "auto", boundary: str = DEFAULT_BOUNDARY,
                 creases=None, corners=None, holes=None, iterations: int = 10, tol: float = 1e-3,
-                fairness: float = 0.0, method: str = DEFAULT_UPDATE, solver_tol: float = 1e-6,
+                fairness: float = 0.0, tangential: float = 1.0, method: str = DEFAULT_UPDATE, solver_tol: float = 1e-6,
                 solver_max_iter: int = 2000, grid: int = 4, newton_steps: int = 12, report_level: int = 2,
                 callback: Optional[Callable[[dict], object]] = None) -> ApproximationResult:
     """Control vertices of a cage whose limit surface approximates `points`
@@ -307,6 +351,9 @@ def approximate(points, cage_vertices, cage_faces, *, scheme: str = "auto", boun
     iterations = _count(iterations, "iterations", 1)
     tol = _nonnegative(tol, "tol")
     fairness = _nonnegative(fairness, "fairness")
+    tangential = _nonnegative(tangential, "tangential")
+    if tangential > 1:
+        raise ParameterError(f"tangential = {tangential!r} must be in [0, 1]")
     solver_tol = _nonnegative(solver_tol, "solver_tol")
     solver_max_iter = _count(solver_max_iter, "solver_max_iter", 1)
     grid = _count(grid, "grid", 1)
@@ -316,6 +363,8 @@ def approximate(points, cage_vertices, cage_faces, *, scheme: str = "auto", boun
     report_level = _count(report_level, "report_level", 0)
     if method not in UPDATE_METHODS:
         raise ParameterError(f"method = {method!r} must be one of {', '.join(UPDATE_METHODS)}")
+    if method == "lspia" and tangential != 1.0:
+        raise ParameterError("method = 'lspia' moves each coordinate on its own: it takes tangential = 1 only")
     if callback is not None and not callable(callback):
         raise ParameterError(f"callback = {callback!r} must be callable (record) or None")
     cage_vertices = as_vertices(cage_vertices, "cage_vertices")
@@ -346,9 +395,10 @@ def approximate(points, cage_vertices, cage_faces, *, scheme: str = "auto", boun
             callback(dict(rec))
         return rec
 
-    face_ids, uv, _, distances = fit.footpoints()
+    face_ids, uv, _, distances, normals = fit.footpoints()
     record(0, distances, 0)
     V = cage_vertices.copy()
+    best = (history[0]["rms"], V, face_ids, uv, distances)
     K = None
     if fairness > 0:
         from .energy import fairness_matrix
@@ -360,29 +410,30 @@ def approximate(points, cage_vertices, cage_faces, *, scheme: str = "auto", boun
     for k in range(1, iterations + 1):
         A = fit.rows(face_ids, uv)
         t = time.perf_counter()
-        AtA = (A.T @ A).tocsr()
-        rhs = A.T @ points
-        mean_diag = float(AtA.diagonal().mean()) or 1.0
-        mu = _PROXIMAL * mean_diag
-        M = AtA + scipy.sparse.identity(AtA.shape[0], format="csr") * mu
-        if K is not None:
-            M = M + (fairness * mean_diag) * K
-        rhs = rhs + mu * V
+        M, rhs, mu = _normal_equations(A, points, normals, V, tangential, fairness, K)
         fit.timings["normal"] += time.perf_counter() - t
         t = time.perf_counter()
-        if method == "cg":
-            V, used = _pcg(M, rhs, V.copy(), solver_tol, solver_max_iter)
-        else:
+        if method == "lspia":
             V, used = _lspia(M, rhs, V.copy(), solver_tol, solver_max_iter)
+        elif tangential == 1.0:
+            V, used = _pcg(M, rhs, V.copy(), solver_tol, solver_max_iter)
+        else:  # the 3n unknowns x..., y..., z... in one system
+            x, used = _pcg(M, rhs.reshape(-1, 1, order="F"), V.reshape(-1, 1, order="F"), solver_tol,
+                           solver_max_iter)
+            V = x.reshape(-1, 3, order="F")
         fit.timings["solve"] += time.perf_counter() - t
         surface.set_vertices(V)
-        face_ids, uv, _, distances = fit.footpoints((face_ids, uv))
+        previous = best
+        face_ids, uv, _, distances, normals = fit.footpoints((face_ids, uv))
         done = k
-        rms_before = history[-1]["rms"]
         rec = record(k, distances, used)
-        if rms_before - rec["rms"] <= tol * rms_before or rec["rms"] <= 1e-15 * unit:
+        if rec["rms"] <= previous[0]:
+            best = (rec["rms"], V, face_ids, uv, distances)
+        if previous[0] - rec["rms"] < tol * previous[0] or rec["rms"] <= 1e-15 * unit:
             converged = True
             break
+    # The iterate of the lowest RMS distance (an update that raised it is not returned).
+    _, V, face_ids, uv, distances = best
     fit.timings["total"] = time.perf_counter() - t0
     return ApproximationResult(control_vertices=V, face_ids=face_ids, uv=uv, distances=distances, iterations=done,
                                converged=converged, method=method, fairness=fairness, diagonal=diagonal,

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "sorpia/detail/parallel.hpp"
+#include "sorpia/detail/unit_normal.hpp"
 #include "sorpia/errors.hpp"
 #include "sorpia/interrupt.hpp"
 
@@ -428,6 +429,11 @@ void refine_footpoints(const LimitSurface& surface, const Topology& topology, co
   std::vector<std::uint8_t> keep;
   const int tasks_for = task_count(n, 8192);
   for (int step = 0; step <= options.max_steps && !active.empty(); ++step) {
+    // Queried in face order: the surface groups its points by face, and
+    // points of one face in a row share a patch (and its memory).
+    std::sort(active.begin(), active.end(), [&](std::size_t x, std::size_t y) {
+      return fp.face_ids[x] != fp.face_ids[y] ? fp.face_ids[x] < fp.face_ids[y] : x < y;
+    });
     const std::size_t k = active.size();
     q_face.resize(k);
     q_chart.resize(k);
@@ -518,6 +524,8 @@ void refine_footpoints(const LimitSurface& surface, const Topology& topology, co
   }
   fp.face_ids.swap(best_face);
   fp.uv.swap(best_uv);
+  fp.normals.assign(3 * n, 0.0);
+  for (std::size_t i = 0; i < n; ++i) detail::unit_normal(&best_du[3 * i], &best_dv[3 * i], &fp.normals[3 * i]);
 }
 
 }  // namespace sorpia

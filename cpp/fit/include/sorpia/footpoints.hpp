@@ -45,12 +45,15 @@ class PointIndex {
 
 /// Footpoints of data points on a limit surface: for point i the face
 /// face_ids[i], its parameters (uv[2i], uv[2i+1]), the surface point
-/// positions[3i..] and the distance |point - surface point|.
+/// positions[3i..], the distance |point - surface point| and the normal.
 struct Footpoints {
   std::vector<std::int32_t> face_ids;
   std::vector<double> uv;
   std::vector<double> positions;
   std::vector<double> distances;
+  /// Unit normals du x dv / |du x dv| at the footpoints (zero where the
+  /// tangents are parallel), as LimitSurface::evaluate gives them.
+  std::vector<double> normals;
 };
 
 /// Options of the footpoint search.
@@ -79,8 +82,8 @@ Footpoints closest_points(const LimitSurface& surface, const Topology& topology,
 /// the distance. A step that
 /// leaves the face's domain stops on its edge and, where a face lies across
 /// that edge (not a hole), continues in that face from the same surface point
-/// ("hops"); on a boundary edge it slides along the edge. Fills positions and
-/// distances.
+/// ("hops"); on a boundary edge it slides along the edge. Fills positions,
+/// distances and normals.
 void refine_footpoints(const LimitSurface& surface, const Topology& topology, const double* points, std::size_t n,
                        const FootpointOptions& options, Footpoints& footpoints);
 
