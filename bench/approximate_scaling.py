@@ -26,7 +26,7 @@ import time
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from _report import PAGES, write_page  # noqa: E402
+from _report import PAGES, print_json_plot, write_page  # noqa: E402
 
 PHASES = ("decimate", "footpoints", "rows", "normal", "solve", "report")
 
@@ -119,15 +119,9 @@ def main(argv=None):
                      f"| {r['peak_mb']:.0f} |")
     lines += ["", "approximate s: the whole call of `sorpia.approximate` (its phases and the rest: validation, "
               "the limit surface's set-up); decimate s: `sorpia.decimate`, before it."]
-    print("\n".join(lines))
-    if a.json:
-        with open(a.json, "w") as fh:
-            json.dump(rows, fh, indent=1)
-    plot = a.plot or (None if a.no_page else str(PAGES / "approximate-scaling.png"))
-    if len(rows) >= 2 and plot:
-        draw(rows, plot)
-        if not a.no_page and os.path.dirname(os.path.abspath(plot)) == str(PAGES):
-            lines += ["", f"![time and memory against the number of points]({os.path.basename(plot)})"]
+    lines = print_json_plot(lines, rows, json_path=a.json, plot=a.plot, no_page=a.no_page,
+                            default_plot=PAGES / "approximate-scaling.png", draw=draw,
+                            caption="time and memory against the number of points")
     if not a.no_page:
         intro = __doc__.split("\n\n", 2)[2].split(" Writes\ndocs/")[0]
         write_page("approximate-scaling", "Approximation: cost of each phase against the number of points",
