@@ -162,10 +162,14 @@ def distances_to_mesh(points, vertices, triangles, k=16, chunk=200_000):
     return out
 
 
-def measure(points, cage_vertices, cage_faces, diag):
-    """(RMS, max) distance from the points to the cage's Loop limit surface (level-4 tessellation), / diag."""
-    tv, tf = sorpia.limit_surface(cage_vertices, cage_faces, LEVEL)
-    d = distances_to_mesh(points, tv, np.asarray(tf)) / diag
+def measure(points, cage_vertices, cage_faces, diag, scheme="loop"):
+    """(RMS, max) distance from the points to the cage's limit surface (level-4 tessellation; under
+    Catmull-Clark its quads split into two triangles each along a diagonal), / diag."""
+    tv, tf = sorpia.limit_surface(cage_vertices, cage_faces, LEVEL, scheme=scheme)
+    tf = np.asarray(tf)
+    if tf.shape[1] == 4:  # a level >= 1 Catmull-Clark tessellation is all quads
+        tf = np.vstack([tf[:, [0, 1, 2]], tf[:, [0, 2, 3]]])
+    d = distances_to_mesh(points, tv, tf) / diag
     return float(np.sqrt(np.mean(d ** 2))), float(d.max())
 
 
@@ -231,6 +235,24 @@ def check_rules(exe, workdir, vertices, triangles, diag):
     return float(gap.max()), int((gap > 1e-5).sum()), len(gap)
 
 
+PAGE_INTRO = """
+On each mesh the data points are its vertices (those its faces use); the cage is `sorpia.decimate` of the mesh to
+the stated number of vertices (Loop; OpenMesh's quadric decimation), and for the Catmull-Clark rows the quad cage of
+as many vertices (`sorpia.decimate(..., scheme="catmull-clark")`). Every row fits its cage to those points and is
+measured the same way: the distance from each data point to the row's limit surface (sorpia's limit surface of the
+row's cage, tessellated at level 4), exact point-to-triangle distance, as RMS and max over the bounding-box
+diagonal of the points. Subdivfit (Hoppe et al., "Piecewise smooth surface reconstruction", SIGGRAPH 1994; Loop
+only) is built from hhoppe/Mesh-processing-library at commit b79dd12; its time is the process's wall clock (its
+reading of the text files included), its output cage is evaluated by sorpia's Loop limit surface. Its Loop rules
+are OpenSubdiv's inside the mesh but not along a boundary (the check under each table), so its rows are also
+measured to its own surface (its subdivision of its cage to level 4 with the vertices at their limit positions,
+`Subdivfit -nsubdiv 4 -outn`), the one it fits. "interpolation" is `sorpia.interpolate` of the cage (the limit
+surface through the decimated cage's vertices); "decimated cage as it is" the cage's own limit surface. Times are
+of one run on a shared machine (the load average is in the stamp).
+
+"""
+
+
 # ---- the table -----------------------------------------------------------------------------------------------
 
 def run_mesh(spec, args, gfit, exe):
@@ -244,13 +266,13 @@ def run_mesh(spec, args, gfit, exe):
     out = {"mesh": name, "points": len(v), "cage_vertices": n_cage, "decimate_seconds": t_decimate, "rows": rows}
     print(f"{name}: {len(v)} points, cage {n_cage} vertices ({t_decimate:.2f} s)", file=sys.stderr)
 
-    def add(label, vertices, seconds, **extra):
-        rms, mx = measure(v, vertices, cage.faces, diag)
+    def add(label, vertices, seconds, faces=cage.faces, scheme="loop", **extra):
+        rms, mx = measure(v, vertices, faces, diag, scheme)
         if "own" in extra:  # the distances to Subdivfit's own level-4 surface of the same cage
             d = distances_to_mesh(v, *extra["own"]) / diag
             extra["own"] = (float(np.sqrt(np.mean(d ** 2))), float(d.max()))
-        rows.append({"row": label, "rms": rms, "max": mx, "seconds": seconds, **extra})
-        print(f"  {label}: rms {rms:.3g} max {mx:.3g} ({seconds:.2f} s)", file=sys.stderr)
+        rows.append({"row": label, "scheme": scheme, "rms": rms, "max": mx, "seconds": seconds, **extra})
+        print(f"  {label} ({scheme}): rms {rms:.3g} max {mx:.3g} ({seconds:.2f} s)", file=sys.stderr)
 
     if exe is not None:
         with tempfile.TemporaryDirectory() as work:
@@ -264,15 +286,21 @@ def run_mesh(spec, args, gfit, exe):
                 add(f"Subdivfit -gfit {k}", fitted, seconds, own=subdivfit_surface(exe, work, fitted, faces, LEVEL))
             if args.check_rules:
                 out["rules_check"] = check_rules(exe, work, cage.vertices, cage.faces, diag)
-    t0 = time.perf_counter()
-    interp = sorpia.interpolate(cage.vertices, cage.faces)
-    add("interpolation of the cage's vertices", interp.control_vertices, time.perf_counter() - t0)
-    add("decimated cage as it is", cage.vertices, 0.0)
-    approximate = getattr(sorpia, "approximate", None)
-    if approximate is not None:
+    # The same rows of sorpia's on the Loop cage, then on the quad cage of as many vertices (Catmull-Clark).
+    quads = sorpia.decimate(v, f, n_cage, scheme="catmull-clark")
+    out["quad_cage_vertices"] = len(quads.vertices)
+    for scheme, c in (("loop", cage), ("catmull-clark", quads)):
         t0 = time.perf_counter()
-        result = approximate(v, cage.vertices, cage.faces)
-        add("sorpia.approximate", result.control_vertices, time.perf_counter() - t0)
+        interp = sorpia.interpolate(c.vertices, c.faces, scheme=scheme)
+        add("interpolation of the cage's vertices", interp.control_vertices, time.perf_counter() - t0, c.faces,
+            scheme)
+        add("decimated cage as it is", c.vertices, 0.0, c.faces, scheme)
+        approximate = getattr(sorpia, "approximate", None)
+        if approximate is not None:
+            t0 = time.perf_counter()
+            result = approximate(v, c.vertices, c.faces, scheme=scheme)
+            add("sorpia.approximate", result.control_vertices, time.perf_counter() - t0, c.faces, scheme,
+                iterations=result.iterations)
     return out
 
 
@@ -280,13 +308,16 @@ def table(results, have_subdivfit):
     lines = []
     for r in results:
         lines.append(f"### {r['mesh']}: {r['points']:,} points, cage of {r['cage_vertices']:,} vertices "
-                     f"(decimated in {r['decimate_seconds']:.2f} s)\n")
-        lines.append("| fit | RMS / diagonal | max / diagonal | seconds | on Subdivfit's own surface: RMS, max |")
-        lines.append("|---|---|---|---|---|")
+                     f"(decimated in {r['decimate_seconds']:.2f} s; the quad cage: "
+                     f"{r['quad_cage_vertices']:,} vertices)\n")
+        lines.append("| fit | scheme | RMS / diagonal | max / diagonal | seconds "
+                     "| on Subdivfit's own surface: RMS, max |")
+        lines.append("|---|---|---|---|---|---|")
         for row in r["rows"]:
             seconds = f"{row['seconds']:.3g}" if row["seconds"] else "-"
             own = f"{row['own'][0]:.3g}, {row['own'][1]:.3g}" if "own" in row else ""
-            lines.append(f"| {row['row']} | {row['rms']:.3g} | {row['max']:.3g} | {seconds} | {own} |")
+            lines.append(f"| {row['row']} | {row['scheme']} | {row['rms']:.3g} | {row['max']:.3g} | {seconds} "
+                         f"| {own} |")
         if "rules_check" in r:
             gap, n_apart, n = r["rules_check"]
             where = ("all within float32 rounding" if n_apart == 0 else
