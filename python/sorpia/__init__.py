@@ -18,6 +18,7 @@ from ._validate import Polygons
 from ._repair import RepairResult, repair
 from ._meshinfo import mesh_statistics
 from .surface import LimitSurface, evaluate_limit, limit_surface
+from .cage import Cage, decimate
 from . import shapes
 
 __all__ = [
@@ -38,4 +39,5 @@ __all__ = [
     "RepairResult", "repair",
     "mesh_statistics",
     "NonmanifoldWarning", "UsdWarning",
+    "Cage", "decimate",
 ]
