@@ -119,5 +119,6 @@ void bind_mesh_checks(py::module_& m);
 void bind_repair(py::module_& m);
 void bind_approximate(py::module_& m);
 void bind_cage(py::module_& m);
+void bind_fit(py::module_& m);
 
 }  // namespace sorpia_py

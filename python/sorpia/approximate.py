@@ -403,8 +403,8 @@ def approximate(points, cage_vertices, cage_faces, *, scheme: str = "auto", boun
     if fairness > 0:
         from .energy import fairness_matrix
 
-        K = fairness_matrix(V, cage_faces, scheme=scheme, boundary=boundary, creases=creases, corners=corners,
-                            holes=holes)
+        K = fairness_matrix(cage_faces, V.shape[0], scheme=scheme, boundary=boundary, creases=creases,
+                            corners=corners, holes=holes)
     converged = False
     done = 0
     for k in range(1, iterations + 1):

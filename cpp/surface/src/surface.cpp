@@ -269,6 +269,7 @@ std::size_t LimitSurface::n_faces() const { return impl_->topology.n_faces(); }
 Scheme LimitSurface::scheme() const { return impl_->scheme; }
 Boundary LimitSurface::boundary() const { return impl_->boundary; }
 const Tags& LimitSurface::tags() const { return impl_->tags; }
+const Topology& LimitSurface::topology() const { return impl_->topology; }
 
 void LimitSurface::set_vertices(const double* vertices) {
   const std::unique_lock<std::shared_mutex> lock(impl_->mutex);

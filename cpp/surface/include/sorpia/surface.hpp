@@ -92,6 +92,8 @@ class LimitSurface {
   Scheme scheme() const;
   Boundary boundary() const;
   const Tags& tags() const;
+  /// The mesh connectivity the surface was built on.
+  const Topology& topology() const;
 
   /// Replace the control vertices (same topology).
   /// @param vertices  row-major (n_vertices, 3)
