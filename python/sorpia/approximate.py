@@ -289,7 +289,7 @@ def _normal_equations(A, points, normals, V, tangential: float, fairness: float,
 def approximate(points, cage_vertices, cage_faces, *, scheme: str = "auto", boundary: str = DEFAULT_BOUNDARY,
                 creases=None, corners=None, holes=None, iterations: int = 10, tol: float = 1e-3,
                 fairness: float = 0.0, tangential: float = 1.0, method: str = DEFAULT_UPDATE, solver_tol: float = 1e-6,
-                solver_max_iter: int = 2000, grid: int = 4, newton_steps: int = 12, report_level: int = 2,
+                solver_max_iter: int = 2000, grid: int = 4, newton_steps: int = 10, report_level: int = 2,
                 callback: Optional[Callable[[dict], object]] = None) -> ApproximationResult:
     """Control vertices of a cage whose limit surface approximates `points`
     in the least-squares sense (the module docstring describes the method).

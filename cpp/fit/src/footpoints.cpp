@@ -402,6 +402,13 @@ Footpoints closest_points(const LimitSurface& surface, const Topology& topology,
   return fp;
 }
 
+namespace {
+// A footpoint is final when its next step in (u, v) is below this (a face's
+// domain has side 1): its distance is then exact to about this times the
+// surface's size.
+constexpr double kUvTolerance = 1e-11;
+}  // namespace
+
 void refine_footpoints(const LimitSurface& surface, const Topology& topology, const double* points, std::size_t n,
                        const FootpointOptions& options, Footpoints& fp) {
   if (fp.face_ids.size() != n || fp.uv.size() != 2 * n)
@@ -415,7 +422,7 @@ void refine_footpoints(const LimitSurface& surface, const Topology& topology, co
   std::vector<std::int32_t> chart(n);
   // Trust region: a step's largest (u, v) component is at most radius[i],
   // which starts at one grid spacing, doubles after a step that lowers the
-  // distance and shrinks to a quarter of the failed step after one that does not.
+  // distance and shrinks to a tenth of the failed step after one that does not.
   std::vector<double> ab(2 * n), best_du(3 * n), best_dv(3 * n),
       radius(n, 1.0 / std::max(1, options.grid > 0 ? options.grid : 4));
   std::vector<std::int32_t> best_face(fp.face_ids), best_chart(n);
@@ -478,12 +485,12 @@ void refine_footpoints(const LimitSurface& surface, const Topology& topology, co
           radius[i] = std::min(2.0 * radius[i], 1.0);
         } else {
           // No better: back to the best point, a smaller region.
-          radius[i] *= 0.25;
+          radius[i] *= 0.1;
           fp.face_ids[i] = best_face[i];
           chart[i] = best_chart[i];
           ab[2 * i] = best_ab[2 * i];
           ab[2 * i + 1] = best_ab[2 * i + 1];
-          if (radius[i] < 1e-15) continue;
+          if (radius[i] < kUvTolerance) continue;
         }
         if (last || fp.distances[i] == 0.0) continue;
         // The Gauss-Newton step at the best point, in (u, v), within the trust region.
@@ -500,11 +507,11 @@ void refine_footpoints(const LimitSurface& surface, const Topology& topology, co
         const double det = m11 * m22 - a12 * a12;
         if (!(det > 0.0) || !std::isfinite(det)) continue;
         double d[2] = {(m22 * g1 - a12 * g2) / det, (m11 * g2 - a12 * g1) / det};
-        // Converged: the step moves the point by a rounding error of its distance.
-        const double moved2 = a11 * d[0] * d[0] + 2 * a12 * d[0] * d[1] + a22 * d[1] * d[1];
-        if (!(moved2 > 1e-26 * (fp.distances[i] * fp.distances[i] + bp[0] * bp[0] + bp[1] * bp[1] + bp[2] * bp[2])))
-          continue;
+        // Converged: a step below the tolerance in (u, v). (Near extraordinary
+        // vertices Bfr's derivatives are approximate, so the steps there need
+        // not vanish: the trust region shrinks to the tolerance instead.)
         const double len = std::max(std::abs(d[0]), std::abs(d[1]));
+        if (!(len > kUvTolerance)) continue;
         if (len > radius[i]) d[0] *= radius[i] / len, d[1] *= radius[i] / len;
         radius[i] = std::min(radius[i], len);  // a failure shrinks the step taken
         if (dom.kind(fp.face_ids[i]) == Kind::Sub) d[0] *= 2.0, d[1] *= 2.0;  // local = 2 (u, v)
