@@ -429,59 +429,43 @@ void refine_footpoints(const LimitSurface& surface, const Topology& topology, co
   std::vector<double> best_uv(fp.uv), best_ab;
   for (std::size_t i = 0; i < n; ++i) chart[i] = best_chart[i] = dom.from_uv(fp.face_ids[i], &fp.uv[2 * i], &ab[2 * i]);
   best_ab = ab;
-  std::vector<std::size_t> active(n);
-  for (std::size_t i = 0; i < n; ++i) active[i] = i;
-  std::vector<std::int32_t> q_face, q_chart;
-  std::vector<double> q_uv, q_p, q_du, q_dv;
-  std::vector<std::uint8_t> keep;
-  const int tasks_for = task_count(n, 8192);
-  for (int step = 0; step <= options.max_steps && !active.empty(); ++step) {
-    // Queried in face order: the surface groups its points by face, and
-    // points of one face in a row share a patch (and its memory).
-    std::sort(active.begin(), active.end(), [&](std::size_t x, std::size_t y) {
-      return fp.face_ids[x] != fp.face_ids[y] ? fp.face_ids[x] < fp.face_ids[y] : x < y;
-    });
-    const std::size_t k = active.size();
-    q_face.resize(k);
-    q_chart.resize(k);
-    q_uv.resize(2 * k);
-    for (std::size_t j = 0; j < k; ++j) {
-      const std::size_t i = active[j];
-      q_face[j] = fp.face_ids[i];
-      q_chart[j] = chart[i];
-      dom.to_uv(fp.face_ids[i], chart[i], ab[2 * i], ab[2 * i + 1], &q_uv[2 * j]);
-    }
-    q_p.resize(3 * k);
-    q_du.resize(3 * k);
-    q_dv.resize(3 * k);
-    surface.evaluate(q_face.data(), q_uv.data(), k, q_p.data(), q_du.data(), q_dv.data(), nullptr);
-    keep.assign(k, 0);
-    const bool last = step == options.max_steps;
-    const int tasks = std::min(tasks_for, task_count(k, 8192));
-    detail::for_each_task(tasks > 1, tasks, [&](int t) {
-      for (std::size_t j = k * t / tasks; j < k * (t + 1) / tasks; ++j) {
-        const std::size_t i = active[j];
-        const double* x = points + 3 * i;
-        const double* p = &q_p[3 * j];
+  // Each round visits the faces the pending points are in, and runs each
+  // point's steps there (the face's patch prepared once) until the point is
+  // done or crosses into another face, where the next round takes it on.
+  std::vector<int> steps(n, 0);
+  std::vector<std::uint8_t> fresh(n, 1);  // the current point is not evaluated yet
+  std::vector<std::int32_t> pending(n);
+  for (std::size_t i = 0; i < n; ++i) pending[i] = static_cast<std::int32_t>(i);
+  std::vector<std::uint8_t> again(n, 0);
+  std::vector<std::int32_t> pending_faces;
+  const auto run = [&](std::size_t i, std::int32_t face, const LimitSurface::FaceEvaluation& evaluate) {
+    const double* x = points + 3 * i;
+    for (;;) {
+      if (fresh[i]) {
+        if (steps[i] > options.max_steps) return;
+        ++steps[i];
+        double uv[2], p[3], du[3], dv[3];
+        dom.to_uv(face, chart[i], ab[2 * i], ab[2 * i + 1], uv);
+        evaluate(uv, p, du, dv);
         const double r[3] = {x[0] - p[0], x[1] - p[1], x[2] - p[2]};
         const double dist = std::sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
         // A point across an edge (a hop) starts at the surface point it left:
         // as good as the best within rounding, and accepted so that the next
         // step is taken in the new face.
         const double scale = std::abs(p[0]) + std::abs(p[1]) + std::abs(p[2]) + fp.distances[i];
-        const bool hopped = (q_face[j] != best_face[i] || q_chart[j] != best_chart[i]) &&
-                            dist <= fp.distances[i] + 1e-12 * scale;
+        const bool hopped =
+            (face != best_face[i] || chart[i] != best_chart[i]) && dist <= fp.distances[i] + 1e-12 * scale;
         if (dist < fp.distances[i] || hopped) {
           fp.distances[i] = dist;
           std::copy_n(p, 3, &fp.positions[3 * i]);
-          std::copy_n(&q_du[3 * j], 3, &best_du[3 * i]);
-          std::copy_n(&q_dv[3 * j], 3, &best_dv[3 * i]);
-          best_face[i] = q_face[j];
-          best_chart[i] = q_chart[j];
+          std::copy_n(du, 3, &best_du[3 * i]);
+          std::copy_n(dv, 3, &best_dv[3 * i]);
+          best_face[i] = face;
+          best_chart[i] = chart[i];
           best_ab[2 * i] = ab[2 * i];
           best_ab[2 * i + 1] = ab[2 * i + 1];
-          best_uv[2 * i] = q_uv[2 * j];
-          best_uv[2 * i + 1] = q_uv[2 * j + 1];
+          best_uv[2 * i] = uv[0];
+          best_uv[2 * i + 1] = uv[1];
           radius[i] = std::min(2.0 * radius[i], 1.0);
         } else {
           // No better: back to the best point, a smaller region.
@@ -490,43 +474,65 @@ void refine_footpoints(const LimitSurface& surface, const Topology& topology, co
           chart[i] = best_chart[i];
           ab[2 * i] = best_ab[2 * i];
           ab[2 * i + 1] = best_ab[2 * i + 1];
-          if (radius[i] < kUvTolerance) continue;
+          if (radius[i] < kUvTolerance) return;
+          if (best_face[i] != face) {  // the best is in another face: the next round steps from there
+            fresh[i] = 0;
+            again[i] = 1;
+            return;
+          }
         }
-        if (last || fp.distances[i] == 0.0) continue;
-        // The Gauss-Newton step at the best point, in (u, v), within the trust region.
-        const double* bp = &fp.positions[3 * i];
-        const double* su = &best_du[3 * i];
-        const double* sv = &best_dv[3 * i];
-        const double br[3] = {x[0] - bp[0], x[1] - bp[1], x[2] - bp[2]};
-        const double a11 = su[0] * su[0] + su[1] * su[1] + su[2] * su[2];
-        const double a12 = su[0] * sv[0] + su[1] * sv[1] + su[2] * sv[2];
-        const double a22 = sv[0] * sv[0] + sv[1] * sv[1] + sv[2] * sv[2];
-        const double g1 = su[0] * br[0] + su[1] * br[1] + su[2] * br[2];
-        const double g2 = sv[0] * br[0] + sv[1] * br[1] + sv[2] * br[2];
-        const double m11 = a11 * (1.0 + 1e-12) + 1e-300, m22 = a22 * (1.0 + 1e-12) + 1e-300;
-        const double det = m11 * m22 - a12 * a12;
-        if (!(det > 0.0) || !std::isfinite(det)) continue;
-        double d[2] = {(m22 * g1 - a12 * g2) / det, (m11 * g2 - a12 * g1) / det};
-        // Converged: a step below the tolerance in (u, v). (Near extraordinary
-        // vertices Bfr's derivatives are approximate, so the steps there need
-        // not vanish: the trust region shrinks to the tolerance instead.)
-        const double len = std::max(std::abs(d[0]), std::abs(d[1]));
-        if (!(len > kUvTolerance)) continue;
-        if (len > radius[i]) d[0] *= radius[i] / len, d[1] *= radius[i] / len;
-        radius[i] = std::min(radius[i], len);  // a failure shrinks the step taken
-        if (dom.kind(fp.face_ids[i]) == Kind::Sub) d[0] *= 2.0, d[1] *= 2.0;  // local = 2 (u, v)
-        std::int32_t f = fp.face_ids[i];
-        int c = chart[i];
-        if (!move(dom, f, c, &ab[2 * i], d)) continue;
-        fp.face_ids[i] = f;
-        chart[i] = c;
-        keep[j] = 1;
       }
-    });
+      if (steps[i] > options.max_steps || fp.distances[i] == 0.0) return;
+      // The Gauss-Newton step at the best point, in (u, v), within the trust region.
+      const double* bp = &fp.positions[3 * i];
+      const double* su = &best_du[3 * i];
+      const double* sv = &best_dv[3 * i];
+      const double br[3] = {x[0] - bp[0], x[1] - bp[1], x[2] - bp[2]};
+      const double a11 = su[0] * su[0] + su[1] * su[1] + su[2] * su[2];
+      const double a12 = su[0] * sv[0] + su[1] * sv[1] + su[2] * sv[2];
+      const double a22 = sv[0] * sv[0] + sv[1] * sv[1] + sv[2] * sv[2];
+      const double g1 = su[0] * br[0] + su[1] * br[1] + su[2] * br[2];
+      const double g2 = sv[0] * br[0] + sv[1] * br[1] + sv[2] * br[2];
+      const double m11 = a11 * (1.0 + 1e-12) + 1e-300, m22 = a22 * (1.0 + 1e-12) + 1e-300;
+      const double det = m11 * m22 - a12 * a12;
+      if (!(det > 0.0) || !std::isfinite(det)) return;
+      double d[2] = {(m22 * g1 - a12 * g2) / det, (m11 * g2 - a12 * g1) / det};
+      // Converged: a step below the tolerance in (u, v). (Near extraordinary
+      // vertices Bfr's derivatives are approximate, so the steps there need
+      // not vanish: the trust region shrinks to the tolerance instead.)
+      const double len = std::max(std::abs(d[0]), std::abs(d[1]));
+      if (!(len > kUvTolerance)) return;
+      if (len > radius[i]) d[0] *= radius[i] / len, d[1] *= radius[i] / len;
+      radius[i] = std::min(radius[i], len);  // a failure shrinks the step taken
+      if (dom.kind(fp.face_ids[i]) == Kind::Sub) d[0] *= 2.0, d[1] *= 2.0;  // local = 2 (u, v)
+      std::int32_t f = fp.face_ids[i];
+      int c = chart[i];
+      if (!move(dom, f, c, &ab[2 * i], d)) return;
+      fp.face_ids[i] = f;
+      chart[i] = c;
+      fresh[i] = 1;
+      if (f != face) {  // across an edge: the next round
+        again[i] = 1;
+        return;
+      }
+    }
+  };
+  while (!pending.empty()) {
+    pending_faces.resize(pending.size());
+    for (std::size_t j = 0; j < pending.size(); ++j) pending_faces[j] = fp.face_ids[static_cast<std::size_t>(pending[j])];
+    surface.visit_faces(pending_faces.data(), pending.size(),
+                        [&](std::int32_t face, const std::size_t* first, const std::size_t* last,
+                            const LimitSurface::FaceEvaluation& evaluate) {
+                          for (const std::size_t* it = first; it != last; ++it)
+                            run(static_cast<std::size_t>(pending[*it]), face, evaluate);
+                        });
     std::size_t w = 0;
-    for (std::size_t j = 0; j < k; ++j)
-      if (keep[j]) active[w++] = active[j];
-    active.resize(w);
+    for (const std::int32_t i : pending)
+      if (again[static_cast<std::size_t>(i)]) {
+        again[static_cast<std::size_t>(i)] = 0;
+        pending[w++] = i;
+      }
+    pending.resize(w);
     poll_interrupt();
   }
   fp.face_ids.swap(best_face);

@@ -380,6 +380,28 @@ struct FaceStencils {
 
 }  // namespace
 
+void LimitSurface::visit_faces(const std::int32_t* face_ids, std::size_t k,
+                               const std::function<void(std::int32_t, const std::size_t*, const std::size_t*,
+                                                        const FaceEvaluation&)>& visit) const {
+  // The faces' checks: (0, 0) lies in every face's domain.
+  const std::vector<double> origin(2 * k, 0.0);
+  checked_params(face_ids, origin.data(), k);
+  const std::shared_lock<std::shared_mutex> lock(impl_->mutex);
+  const double* mesh_points = &impl_->points.data()->x;
+  const Bfr::Surface<double>::PointDescriptor desc(3);
+  for_each_face_surface(*impl_->factory, face_ids, k,
+                        [&](const Bfr::Surface<double>& surface, int face, const std::size_t* first,
+                            const std::size_t* last) {
+                          thread_local std::vector<double> patch;
+                          patch.resize(3 * static_cast<std::size_t>(surface.GetNumPatchPoints()));
+                          surface.PreparePatchPoints(mesh_points, desc, patch.data(), desc);
+                          const FaceEvaluation evaluate = [&](const double* uv, double* p, double* du, double* dv) {
+                            surface.Evaluate(uv, patch.data(), desc, p, du, dv);
+                          };
+                          visit(face, first, last, evaluate);
+                        });
+}
+
 std::vector<double> LimitSurface::checked_params(const std::int32_t* face_ids, const double* uv,
                                                  std::size_t k) const {
   const std::size_t n_f = n_faces();
