@@ -296,3 +296,15 @@ def test_command_refuses_bad_input_and_writes_nothing(tmp_path):
     r = run_cli("cloud.ply", "-o", "out.obj", "--vertices", 3, cwd=tmp_path)
     assert r.returncode == 2 and "cloud.ply" in r.stderr
     assert sorted(p.name for p in tmp_path.iterdir()) == ["cage.obj", "cloud.ply", "scan.ply"]
+
+
+def test_render_draws_the_data_with_the_fitted_surface(tmp_path):
+    pytest.importorskip("matplotlib")
+    V, F = shapes.icosphere(3)
+    sorpia.write_mesh(tmp_path / "scan.ply", V, F)
+    sorpia.write_mesh(tmp_path / "cage.obj", *shapes.icosphere(1))
+    r = subprocess.run([sys.executable, "-m", "sorpia", "render", "scan.ply", "--cage", "cage.obj", "-o", "fig.png",
+                        "--iterations", "2", "--size", "400x300"], cwd=tmp_path, capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    assert "approximation" in r.stdout
+    assert (tmp_path / "fig.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

@@ -334,6 +334,12 @@ def build_parser() -> argparse.ArgumentParser:
                      help="the axis drawn vertical (many mesh files, e.g. the Stanford bunny, have y up)")
     ren.add_argument("--face-budget", type=_positive_int, default=FACE_BUDGET, metavar="N",
                      help="most triangles drawn per panel")
+    ren.add_argument("--cage", metavar="CAGE",
+                     help="approximation instead: IN's vertices are data points, CAGE (a mesh file) is fitted to them "
+                     "(sorpia approximate) and the panels show the cage and its limit surface with the data, before "
+                     "and after")
+    ren.add_argument("--iterations", type=_positive_int, default=10, metavar="K",
+                     help="with --cage: the approximation's updates at most")
     threads_option(ren, "--method auto, sor or gs only")
     scheme_options(ren)
     triangulate_flag(ren)
@@ -345,7 +351,8 @@ def build_parser() -> argparse.ArgumentParser:
         boundary=a.boundary, size=a.size,
         elev=a.elev, azim=a.azim, face_budget=a.face_budget, quiet=a.quiet, force=a.force,
         triangulate=a.triangulate, up=a.up, threads=a.threads, repair=a.repair, scheme=a.scheme,
-        ignore_tags=a.ignore_tags, sharp_angle=a.sharp_angle, nonmanifold=a.nonmanifold, prim=a.prim)[0])
+        ignore_tags=a.ignore_tags, sharp_angle=a.sharp_angle, nonmanifold=a.nonmanifold, prim=a.prim, cage=a.cage,
+        iterations=a.iterations)[0])
 
     inf = command("info", "mesh statistics (the paper's Table 2) and whether PIA can run on it",
                   "Print vertices, faces, edges, boundary loops, Euler characteristic, genus, components, "
