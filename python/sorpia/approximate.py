@@ -408,9 +408,11 @@ def approximate(points, cage_vertices, cage_faces, *, scheme: str = "auto", boun
     converged = False
     done = 0
     for k in range(1, iterations + 1):
-        A = fit.rows(face_ids, uv)
+        # The rows in face order: the points of a face share their columns, which the normal matrix reads once.
+        order = np.argsort(face_ids, kind="stable")
+        A = fit.rows(face_ids[order], uv[order])
         t = time.perf_counter()
-        M, rhs, mu = _normal_equations(A, points, normals, V, tangential, fairness, K)
+        M, rhs, mu = _normal_equations(A, points[order], normals[order], V, tangential, fairness, K)
         fit.timings["normal"] += time.perf_counter() - t
         t = time.perf_counter()
         if method == "lspia":

@@ -26,7 +26,9 @@ struct NormalMatrix {
 /// row, stored xx, xy, xz, yy, yz, zz: the six (n, n) blocks sum_r W_r[c] a_r
 /// a_r^T, the normal matrix of sum_r (A_r V - p_r)^T W_r (A_r V - p_r) over
 /// the 3n unknowns V). Entries the rows make structurally nonzero are stored
-/// (a zero from cancellation stays).
+/// (a zero from cancellation stays). Fastest with the rows ordered so that
+/// rows with the same columns (the points of one face) are consecutive: each
+/// such run is read in order, once per column it holds.
 /// @param weights  (k, weight_count) row-major, or null when weight_count is 0
 /// @throws ParameterError for a weight count other than 0, 1 or 6
 NormalMatrix normal_matrix(const CsrMatrix& rows, const double* weights, int weight_count);
