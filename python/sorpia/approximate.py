@@ -7,21 +7,26 @@ by the limit surface S(V) of a cage with control vertices V and fixed faces:
 
 - **footpoints**: for each point p_i the closest point of S(V) as (face, u, v)
   in OpenSubdiv Bfr's parameterisation (`sorpia.surface`): the nearest of a
-  grid of limit points (a k-d tree), then Levenberg-Marquardt steps on (u, v)
-  with Bfr's derivatives, crossing into the neighbouring face where a step
-  leaves the face (the core's ``sorpia::closest_points``);
+  grid of limit points (a k-d tree), then Gauss-Newton steps on (u, v) with
+  Bfr's derivatives in a trust region, crossing into the neighbouring face
+  where a step leaves the face (the core's ``sorpia::closest_points``);
 - **rows**: the limit basis at the footpoints, A (one row per point, one
   column per control vertex; ``LimitSurface.rows``), so that A V are the
   footpoints' positions;
-- **the update**: V minimising ``|A V - P|^2 + fairness |V|_K^2 + mu |V -
-  V_prev|^2``, the normal equations ``(A^T A + fairness K + mu I) V = A^T P +
-  mu V_prev`` solved by conjugate gradients (Jacobi preconditioner, the three
+- **the update**: V minimising ``|A V - P|^2 + fairness m V^T K V + mu |V -
+  V_prev|^2`` (K the thin-plate energy, `sorpia.fairness_matrix`; m the mean
+  diagonal of A^T A), the normal equations ``(A^T A + fairness m K + mu I) V =
+  A^T P + mu V_prev`` solved by conjugate gradients (Jacobi preconditioner, the three
   coordinates together), or by LSPIA (Deng and Lin 2014: each control vertex
   moves by the sum of its points' residuals weighted by the basis, divided by
   the sum of those weights). mu is 1e-6 of the mean diagonal of A^T A: a
   proximal pull towards the previous control vertices which leaves the
   least-squares solution unchanged (it vanishes at a fixed point) and keeps a
   vertex no point influences where it is;
+- with ``tangential`` < 1 the distance along the surface counts less
+  (``W_i = tangential I + (1 - tangential) n_i n_i^T`` per point, n_i the
+  normal at the footpoint: the tangent-distance fit of Marinov and Kobbelt
+  and of Cheng, Wang et al., blended with the point distance);
 - **parameter correction**: the footpoints re-projected onto the new surface
   (from their previous (face, u, v)), and again, until the RMS distance stops
   decreasing by more than ``tol`` relatively, or ``iterations``.
@@ -90,7 +95,8 @@ class ApproximationResult:
     timings : dict
         Seconds spent in each phase: ``footpoints``, ``rows``, ``normal``
         (forming A^T A and A^T P), ``solve``, ``report`` (surface to data),
-        ``total``.
+        ``total``; and ``cpu``: the process's CPU seconds of each (all
+        threads).
     """
 
     control_vertices: np.ndarray
@@ -169,11 +175,13 @@ class _Fit:
         self.grid, self.steps, self.level = grid, steps, level
         self.data_index = None
         self.timings = dict.fromkeys(("footpoints", "rows", "normal", "solve", "report"), 0.0)
+        self.cpu = dict.fromkeys(self.timings, 0.0)
 
     def _timed(self, phase: str, fn, *args):
-        t = time.perf_counter()
+        t, c = time.perf_counter(), time.process_time()
         out = fn(*args)
         self.timings[phase] += time.perf_counter() - t
+        self.cpu[phase] += time.process_time() - c
         return out
 
     def footpoints(self, previous=None):
@@ -286,6 +294,17 @@ def _normal_equations(A, points, normals, V, tangential: float, fairness: float,
     return M.tocsr(), rhs, mu
 
 
+def _update(M, rhs, V, method: str, tangential: float, solver_tol: float, solver_max_iter: int):
+    """New control vertices from the normal equations: (V, solver iterations)."""
+    if method == "lspia":
+        return _lspia(M, rhs, V.copy(), solver_tol, solver_max_iter)
+    if tangential == 1.0:
+        return _pcg(M, rhs, V.copy(), solver_tol, solver_max_iter)
+    # the 3n unknowns x..., y..., z... in one system
+    x, used = _pcg(M, rhs.reshape(-1, 1, order="F"), V.reshape(-1, 1, order="F"), solver_tol, solver_max_iter)
+    return x.reshape(-1, 3, order="F"), used
+
+
 def approximate(points, cage_vertices, cage_faces, *, scheme: str = "auto", boundary: str = DEFAULT_BOUNDARY,
                 creases=None, corners=None, holes=None, iterations: int = 10, tol: float = 1e-3,
                 fairness: float = 0.0, tangential: float = 1.0, method: str = DEFAULT_UPDATE, solver_tol: float = 1e-6,
@@ -316,9 +335,16 @@ def approximate(points, cage_vertices, cage_faces, *, scheme: str = "auto", boun
         Weight of the thin-plate fairness term V^T K V (the energy shared with
         fair interpolation), relative to the mean diagonal of A^T A; 0 for
         none.
+    tangential : float in [0, 1]
+        Weight of the distance along the surface: 1 fits each point's full
+        distance to its footpoint (point distance, three independent
+        coordinates); 0 its distance to the tangent plane there (tangent
+        distance, one (3n, 3n) system, converging much faster on clean
+        data but less robust far from the solution); between, a blend.
     method : {"cg", "lspia"}
         The update: conjugate gradients on the normal equations (default:
-        the faster, bench/approximate_speed.py), or LSPIA's iteration.
+        the faster, bench/approximate_speed.py), or LSPIA's iteration (with
+        tangential=1 only).
     solver_tol, solver_max_iter
         Each update stops when the normal equations' residual is below
         solver_tol times its value at the start of the update, or after
@@ -346,7 +372,7 @@ def approximate(points, cage_vertices, cage_faces, *, scheme: str = "auto", boun
     sorpia.MeshError
         A cage with no faces, or one the scheme cannot take.
     """
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     points = as_points(points)
     iterations = _count(iterations, "iterations", 1)
     tol = _nonnegative(tol, "tol")
@@ -411,19 +437,9 @@ def approximate(points, cage_vertices, cage_faces, *, scheme: str = "auto", boun
         # The rows in face order: the points of a face share their columns, which the normal matrix reads once.
         order = np.argsort(face_ids, kind="stable")
         A = fit.rows(face_ids[order], uv[order])
-        t = time.perf_counter()
-        M, rhs, mu = _normal_equations(A, points[order], normals[order], V, tangential, fairness, K)
-        fit.timings["normal"] += time.perf_counter() - t
-        t = time.perf_counter()
-        if method == "lspia":
-            V, used = _lspia(M, rhs, V.copy(), solver_tol, solver_max_iter)
-        elif tangential == 1.0:
-            V, used = _pcg(M, rhs, V.copy(), solver_tol, solver_max_iter)
-        else:  # the 3n unknowns x..., y..., z... in one system
-            x, used = _pcg(M, rhs.reshape(-1, 1, order="F"), V.reshape(-1, 1, order="F"), solver_tol,
-                           solver_max_iter)
-            V = x.reshape(-1, 3, order="F")
-        fit.timings["solve"] += time.perf_counter() - t
+        M, rhs, mu = fit._timed("normal", _normal_equations, A, points[order], normals[order], V, tangential,
+                                fairness, K)
+        V, used = fit._timed("solve", _update, M, rhs, V, method, tangential, solver_tol, solver_max_iter)
         surface.set_vertices(V)
         previous = best
         face_ids, uv, _, distances, normals = fit.footpoints((face_ids, uv))
@@ -437,6 +453,7 @@ def approximate(points, cage_vertices, cage_faces, *, scheme: str = "auto", boun
     # The iterate of the lowest RMS distance (an update that raised it is not returned).
     _, V, face_ids, uv, distances = best
     fit.timings["total"] = time.perf_counter() - t0
+    fit.timings["cpu"] = dict(fit.cpu, total=time.process_time() - c0)
     return ApproximationResult(control_vertices=V, face_ids=face_ids, uv=uv, distances=distances, iterations=done,
                                converged=converged, method=method, fairness=fairness, diagonal=diagonal,
                                history=history, timings=fit.timings)

@@ -94,15 +94,56 @@ void PointIndex::build(std::uint32_t node, std::uint32_t begin, std::uint32_t en
   build(left + 1, mid, end);
 }
 
+namespace {
+
+// Spreads the low 21 bits of x to every third bit (a Morton code's one axis).
+std::uint64_t spread3(std::uint64_t x) {
+  x &= 0x1fffff;
+  x = (x | x << 32) & 0x1f00000000ffffULL;
+  x = (x | x << 16) & 0x1f0000ff0000ffULL;
+  x = (x | x << 8) & 0x100f00f00f00f00fULL;
+  x = (x | x << 4) & 0x10c30c30c30c30c3ULL;
+  x = (x | x << 2) & 0x1249249249249249ULL;
+  return x;
+}
+
+// The order of k points along a Morton (Z-order) curve over their bounding
+// box: neighbours in this order are near in space, so that queries taken in
+// it find the tree's nodes in cache.
+std::vector<std::size_t> spatial_order(const double* p, std::size_t k) {
+  if (k == 0) return {};
+  double lo[3] = {p[0], p[1], p[2]}, hi[3] = {p[0], p[1], p[2]};
+  for (std::size_t i = 0; i < k; ++i)
+    for (int c = 0; c < 3; ++c) lo[c] = std::min(lo[c], p[3 * i + c]), hi[c] = std::max(hi[c], p[3 * i + c]);
+  std::vector<std::pair<std::uint64_t, std::size_t>> keyed(k);
+  for (std::size_t i = 0; i < k; ++i) {
+    std::uint64_t code = 0;
+    for (int c = 0; c < 3; ++c) {
+      const double span = hi[c] - lo[c];
+      const double t = span > 0 && std::isfinite(span) ? (p[3 * i + c] - lo[c]) / span : 0.0;
+      code |= spread3(static_cast<std::uint64_t>(std::clamp(t, 0.0, 1.0) * 2097151.0)) << c;
+    }
+    keyed[i] = {code, i};
+  }
+  std::sort(keyed.begin(), keyed.end());
+  std::vector<std::size_t> order(k);
+  for (std::size_t i = 0; i < k; ++i) order[i] = keyed[i].second;
+  return order;
+}
+
+}  // namespace
+
 void PointIndex::nearest(const double* queries, std::size_t k, std::int64_t* index, double* distance) const {
+  const std::vector<std::size_t> order = spatial_order(queries, k);
   const int tasks = task_count(k, 4096);
   detail::for_each_task(tasks > 1, tasks, [&](int t) {
     std::vector<std::uint32_t> stack;
     stack.reserve(64);
     const std::size_t first = k * static_cast<std::size_t>(t) / static_cast<std::size_t>(tasks);
     const std::size_t last = k * static_cast<std::size_t>(t + 1) / static_cast<std::size_t>(tasks);
-    for (std::size_t qi = first; qi < last; ++qi) {
-      if (t == 0 && (qi - first) % 65536 == 0) poll_interrupt();
+    for (std::size_t j = first; j < last; ++j) {
+      if (t == 0 && (j - first) % 65536 == 0) poll_interrupt();
+      const std::size_t qi = order[j];
       const double* q = queries + 3 * qi;
       double best = std::numeric_limits<double>::infinity();
       std::uint32_t best_i = 0;

@@ -104,7 +104,8 @@ def run_approximate(input_path, output, *, vertices=None, cage=None, scheme="aut
                                                                            "faces": int(len(cage_f))},
             "scheme": scheme, "boundary": rule, "tags": {"sharp_angle": sharp_angle, **tags_summary(tags)},
             "surface": surface_stats, "report": None if report is None else str(report), **res.report(),
-            "timings": {**timings, **{f"approximate.{k}": v for k, v in res.timings.items()}}}
+            "timings": {**timings, **{f"approximate.{k}": v for k, v in res.timings.items() if k != "cpu"}},
+            "cpu_seconds": res.timings["cpu"]}
     if report is not None:
         write_json(report, data)
     if not quiet:
