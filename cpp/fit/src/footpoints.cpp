@@ -392,7 +392,11 @@ bool move(const Domains& dom, std::int32_t& f, int& c, double* ab, const double*
 }
 
 // The grid of starting samples: for each face (not a hole), each chart, the
-// local points (i / r, j / r) (i + j <= r in a triangle).
+// local points (i / r, j / r) (i + j <= r in a triangle), drawn towards the
+// chart's centre by a factor r / (r + 1) so that every sample lies inside
+// its face: a point nearest to a sample starts in that sample's face (a
+// sample on a corner, shared by every face there, would start it in any one
+// of them, and the walk round the vertex can take a step per face).
 void grid_samples(const Domains& dom, int r, std::vector<std::int32_t>& face_ids, std::vector<double>& uv) {
   const auto m = static_cast<std::int32_t>(dom.topology.n_faces());
   for (std::int32_t f = 0; f < m; ++f) {
@@ -401,8 +405,10 @@ void grid_samples(const Domains& dom, int r, std::vector<std::int32_t>& face_ids
     for (int c = 0; c < dom.charts(f); ++c)
       for (int j = 0; j <= r; ++j)
         for (int i = 0; i <= (tri ? r - j : r); ++i) {
+          const double centre = tri ? 1.0 / 3.0 : 0.5, shrink = static_cast<double>(r) / (r + 1);
           double p[2];
-          dom.to_uv(f, c, static_cast<double>(i) / r, static_cast<double>(j) / r, p);
+          dom.to_uv(f, c, centre + shrink * (static_cast<double>(i) / r - centre),
+                    centre + shrink * (static_cast<double>(j) / r - centre), p);
           face_ids.push_back(f);
           uv.push_back(p[0]);
           uv.push_back(p[1]);
