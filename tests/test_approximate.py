@@ -290,12 +290,41 @@ def test_command_refuses_bad_input_and_writes_nothing(tmp_path):
         r = run_cli(*args, cwd=tmp_path)
         assert r.returncode == 2 and message in r.stderr, (args, r.stderr)
         assert not (tmp_path / "out.obj").exists()
-    # a mesh file without faces is refused by the reader, before anything is written
+    # a point cloud has no faces to decimate: --vertices needs a mesh, the cage must be given
     (tmp_path / "cloud.ply").write_text("ply\nformat ascii 1.0\nelement vertex 3\nproperty double x\n"
                                         "property double y\nproperty double z\nend_header\n0 0 0\n1 0 0\n0 1 0\n")
     r = run_cli("cloud.ply", "-o", "out.obj", "--vertices", 3, cwd=tmp_path)
-    assert r.returncode == 2 and "cloud.ply" in r.stderr
+    assert r.returncode == 2 and "cloud.ply is a point cloud (no faces)" in r.stderr and "--cage" in r.stderr
     assert sorted(p.name for p in tmp_path.iterdir()) == ["cage.obj", "cloud.ply", "scan.ply"]
+
+
+POINT_CLOUDS = {
+    "cloud.ply": "ply\nformat ascii 1.0\nelement vertex {n}\nproperty double x\nproperty double y\n"
+                 "property double z\nend_header\n{rows}",
+    "cloud.obj": "{vrows}",
+    "cloud.off": "OFF\n{n} 0 0\n{rows}",
+}
+
+
+@pytest.mark.parametrize("name", sorted(POINT_CLOUDS))
+def test_point_cloud_files_are_read_as_points_and_fitted(tmp_path, name):
+    # A file of vertices alone: read with points=True (its faces empty), refused as a mesh; the command fits a
+    # given cage to it, the same as to the points in memory.
+    V, F = shapes.icosphere(3)
+    rows = "".join(f"{x!r} {y!r} {z!r}\n" for x, y, z in V.tolist())
+    (tmp_path / name).write_text(POINT_CLOUDS[name].format(n=len(V), rows=rows, vrows="v " + rows.replace("\n", "\nv ")[:-2]))
+    from sorpia.io import read_mesh_file
+
+    got = read_mesh_file(tmp_path / name, points=True)
+    np.testing.assert_array_equal(got.vertices, V)
+    assert got.faces.shape == (0, 3)
+    with pytest.raises(sorpia.MeshFileError):
+        sorpia.read_mesh(tmp_path / name)
+    sorpia.write_mesh(tmp_path / "cage.obj", *shapes.icosphere(1))
+    r = run_cli(name, "-o", "fitted.obj", "--cage", "cage.obj", "--iterations", 2, "--report", "r.json", cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    want = approximate(V, *shapes.icosphere(1), iterations=2)
+    np.testing.assert_allclose(sorpia.read_mesh(tmp_path / "fitted.obj")[0], want.control_vertices, atol=1e-12)
 
 
 def test_render_draws_the_data_with_the_fitted_surface(tmp_path):

@@ -66,7 +66,7 @@ def run_approximate(input_path, output, *, vertices=None, cage=None, scheme="aut
     with Progress("approximate", enabled=not quiet) as progress:
         progress.status(f"reading {input_path}")
         t0 = time.perf_counter()
-        mesh = read_input(input_path, tags=False)
+        mesh = read_input(input_path, tags=False, points=True)
         timings["read"] = time.perf_counter() - t0
         points = mesh.vertices
         t0 = time.perf_counter()

@@ -113,7 +113,7 @@ def render_approximation(input_path, cage_path, output, *, level, boundary, size
     timings = {}
     with Progress(enabled=not quiet) as progress:
         progress.status(f"reading {input_path}")
-        points = read_input(input_path, tags=False).vertices
+        points = read_input(input_path, tags=False, points=True).vertices
         mesh = read_input(cage_path)
         tags = solve_tags(mesh, sharp_angle, cage_path)
         scheme = ("loop" if is_triangles(mesh.faces) else "catmull-clark") if scheme == "auto" else scheme
