@@ -41,6 +41,8 @@ struct Mesh {
     counts.push_back(static_cast<std::int32_t>(f.size()));
     indices.insert(indices.end(), f);
   }
+  // The faces as the split takes them (with counts, also for triangles).
+  sorpia::Mesh faces() const { return sorpia_test::polygons(counts, indices); }
 };
 
 // Far's Limit() of every vertex of the raw faces (OpenSubdiv takes
@@ -72,7 +74,7 @@ std::vector<Point3> far_limit(const Mesh& m, const std::vector<Point3>& p, sorpi
 sorpia::NonmanifoldSplit expect_split_is_opensubdiv(const Mesh& m, sorpia::Scheme scheme,
                                                     sorpia::Boundary boundary = sorpia::Boundary::EdgeAndCorner) {
   const sorpia::NonmanifoldSplit s =
-      sorpia::split_nonmanifold(m.counts.data(), m.counts.size(), m.indices.data(), m.n_vertices);
+      sorpia::split_nonmanifold(m.faces(), m.n_vertices);
   EXPECT_FALSE(s.empty());
   if (s.empty()) return s;
   std::mt19937 rng(7);
@@ -84,7 +86,7 @@ sorpia::NonmanifoldSplit expect_split_is_opensubdiv(const Mesh& m, sorpia::Schem
   const std::vector<Point3> want = far_limit(m, points, scheme, boundary);
 
   const std::size_t n_out = s.vertex_map.size();
-  const sorpia::Topology split(sorpia_test::polygons(s.face_vertex_counts, s.face_vertex_indices), n_out);
+  const sorpia::Topology split(s.faces, n_out);
   // A crease vertex's copy in a sheet of one face, which "edge-and-corner" would make a corner: the split is
   // taken under "edge-only", with the corners "edge-and-corner" makes (every other vertex of one face) as tags.
   const bool corner_sheets = boundary == sorpia::Boundary::EdgeAndCorner && !s.single_face_sheets.empty();
@@ -227,14 +229,12 @@ TEST(NonmanifoldSharp, HexGridFacesMatchOpenSubdivUnderBothBoundaryRules) {
 
 TEST(NonmanifoldSharp, ManifoldMeshesAndWhatTheSplitRefuses) {
   const Mesh page = book(1, 3, true);
-  EXPECT_TRUE(sorpia::split_nonmanifold(page.counts.data(), page.counts.size(), page.indices.data(), page.n_vertices)
-                  .empty());
+  EXPECT_TRUE(sorpia::split_nonmanifold(page.faces(), page.n_vertices).empty());
   Mesh degenerate = book(3, 2, false);
   degenerate.add({0, 0, 5});
   sorpia_test::expect_error<sorpia::MeshError>(
       [&] {
-        sorpia::split_nonmanifold(degenerate.counts.data(), degenerate.counts.size(), degenerate.indices.data(),
-                                  degenerate.n_vertices);
+        sorpia::split_nonmanifold(degenerate.faces(), degenerate.n_vertices);
       },
       {"repeats vertex 0", "nonmanifold=\"sharp\"", "repair"});
 }
@@ -321,7 +321,7 @@ TEST(NonmanifoldSharp, RandomCorruptionsMatchOpenSubdiv) {
     if (c.counts.empty()) continue;
     sorpia::NonmanifoldSplit s;
     try {
-      s = sorpia::split_nonmanifold(c.counts.data(), c.counts.size(), c.indices.data(), c.n_vertices);
+      s = sorpia::split_nonmanifold(c.faces(), c.n_vertices);
     } catch (const sorpia::MeshError& e) {
       EXPECT_NE(std::string(e.what()).find("interior non-manifold crease"), std::string::npos) << e.what();
       ++refused;
