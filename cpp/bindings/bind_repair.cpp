@@ -36,6 +36,7 @@ py::dict split_dict(const sorpia::NonmanifoldSplit& s) {
   d["nonmanifold_vertices"] = py::cast(s.nonmanifold_vertices);
   d["corners"] = py::cast(s.corners);
   d["single_face_sheets"] = py::cast(s.single_face_sheets);
+  d["sharp_edges"] = py::cast(s.sharp_edges);
   return d;
 }
 

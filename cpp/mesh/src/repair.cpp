@@ -625,6 +625,7 @@ NonmanifoldSplit split_pass(const Faces<kPolygons>& fl, std::size_t n_vertices) 
     ++n_nonmanifold[v];
   };
   const detail::EdgeGroups edges(fl, n_vertices);
+  std::vector<std::pair<const std::int32_t*, std::int32_t>> nonmanifold_groups;  // their half-edges, in `edges`
   edges.for_each([&](std::int32_t v, std::int32_t x, const std::int32_t* b, std::int32_t k) {
     ++n_edges[v];
     ++n_edges[x];
@@ -636,6 +637,7 @@ NonmanifoldSplit split_pass(const Faces<kPolygons>& fl, std::size_t n_vertices) 
       mate[b[1]] = b[0];
     } else {
       s.nonmanifold_edges.push_back({v, x});
+      nonmanifold_groups.emplace_back(b, k);
       nonmanifold_end(v, x);
       nonmanifold_end(x, v);
     }
@@ -646,6 +648,20 @@ NonmanifoldSplit split_pass(const Faces<kPolygons>& fl, std::size_t n_vertices) 
   std::iota(s.vertex_map.begin(), s.vertex_map.end(), 0);
   const std::vector<std::int32_t> vertex_of = fan_vertices(fl, mate, removed, s.vertex_map, copies);
 
+  // Two faces of a non-manifold edge that run it opposite ways and lie in one
+  // fan at each end (a pillow beside a third face: joined through the
+  // pillow's other edges) have the same output vertices at both ends: the
+  // split mesh joins them across that edge, which OpenSubdiv makes
+  // infinitely sharp (sharp_edges). Two faces of an edge lie in one fan only
+  // as its two open ends, so no output edge gets more than two faces.
+  for (const auto& [b, k] : nonmanifold_groups)
+    for (std::int32_t i = 0; i < k; ++i)
+      for (std::int32_t j = i + 1; j < k; ++j) {
+        const std::int32_t g = b[i], h = b[j];
+        if (faces[g] != faces[h] && vertex_of[g] == vertex_of[fl.next(h)] && vertex_of[fl.next(g)] == vertex_of[h])
+          s.sharp_edges.push_back({std::min(vertex_of[g], vertex_of[h]), std::max(vertex_of[g], vertex_of[h])});
+      }
+  std::sort(s.sharp_edges.begin(), s.sharp_edges.end());
   std::vector<std::uint8_t> crease(n_vertices, 0);
   for (std::size_t vi = 0; vi < n_vertices; ++vi) {
     if (n_nonmanifold[vi] == 0 && copies[vi] == 0) continue;

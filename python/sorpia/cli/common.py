@@ -207,8 +207,9 @@ def split_input(mesh: InputMesh, source, boundary: str) -> InputMesh:
 def split_json(split) -> dict:
     """What a command's JSON report holds of --nonmanifold sharp: the
     non-manifold edges and vertices (input indices), the corners among them,
-    and the vertex map of the split (for every vertex of the split, the input
-    vertex it copies)."""
+    the edges of the split made infinitely sharp creases (sharp_edges, the
+    split's indices) and the vertex map of the split (for every vertex of the
+    split, the input vertex it copies)."""
     return {**split.report, "vertex_map": split.vertex_map}
 
 

@@ -146,8 +146,13 @@ RepairResult repair(const Mesh& faces, std::size_t n_vertices);
 /// edge becomes one boundary edge (infinitely sharp, as OpenSubdiv makes it)
 /// per face, and each vertex gets one output vertex per fan (the first fan in
 /// face order keeps the input index, copies are appended). Faces are neither
-/// removed nor reversed. On the split mesh with an infinitely sharp corner
-/// tag on every copy of each vertex in `corners`, every vertex's limit row is
+/// removed nor reversed. Where two faces of a non-manifold edge that run it
+/// opposite ways lie in one fan at both its ends (a pillow beside a third
+/// face), the split mesh has them as the two faces of one edge again: those
+/// edges are `sharp_edges`. On the split mesh with an infinitely sharp corner
+/// tag on every copy of each vertex in `corners` and an infinitely sharp
+/// crease on each of sharp_edges, OpenSubdiv's refinement makes the points
+/// of its refinement of the input mesh, and every vertex's limit row is
 /// OpenSubdiv's row on the input mesh, its columns mapped through vertex_map;
 /// a crease vertex's copies each lie on the boundary between the copies of
 /// its two non-manifold edges, whose boundary rule is the crease rule, except
@@ -167,6 +172,9 @@ struct NonmanifoldSplit {
   std::vector<std::int32_t> nonmanifold_vertices, corners;
   /// Crease vertices with a copy in a fan of one face.
   std::vector<std::int32_t> single_face_sheets;
+  /// Edges of the split (lower, higher output vertex) whose two faces border
+  /// a non-manifold input edge: to be tagged infinitely sharp creases.
+  std::vector<std::array<std::int32_t, 2>> sharp_edges;
 
   /// True for a manifold mesh (then faces and vertex_map are empty: the input is the split).
   bool empty() const { return nonmanifold_vertices.empty(); }
