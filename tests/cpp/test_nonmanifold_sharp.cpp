@@ -339,6 +339,34 @@ TEST(NonmanifoldSharp, PillowBesideAThirdFaceKeepsItsEdgeSharp) {
   }
 }
 
+// A fin (one more face) on an edge of a closed surface: the surface's two
+// faces of that edge lie in one fan at each of its ends (the fans round the
+// surface), so the split joins them again there: sharp_edges, as for a pillow.
+TEST(NonmanifoldSharp, FinOnAClosedSurfaceKeepsItsEdgeSharp) {
+  for (const bool triangles : {true, false}) {
+    const sorpia::Mesh closed = triangles ? sorpia::icosphere(1) : sorpia::quad_torus(6, 4);
+    Mesh m;
+    m.n_vertices = closed.n_vertices();
+    m.counts = closed.counts();
+    m.indices = closed.face_vertex_indices;
+    const std::int32_t a = m.indices[0], b = m.indices[1], n = static_cast<std::int32_t>(m.n_vertices);
+    if (triangles) {
+      m.add({a, b, n});
+      m.n_vertices += 1;
+    } else {
+      m.add({a, b, n, n + 1});
+      m.n_vertices += 2;
+    }
+    const auto scheme = triangles ? sorpia::Scheme::Loop : sorpia::Scheme::CatmullClark;
+    for (const auto boundary : {sorpia::Boundary::EdgeAndCorner, sorpia::Boundary::EdgeOnly}) {
+      SCOPED_TRACE(triangles ? "icosphere" : "quad torus");
+      const auto s = expect_split_is_opensubdiv(m, scheme, boundary);
+      EXPECT_EQ(s.nonmanifold_edges, (std::vector<std::array<std::int32_t, 2>>{{std::min(a, b), std::max(a, b)}}));
+      EXPECT_EQ(s.sharp_edges, (std::vector<std::array<std::int32_t, 2>>{{std::min(a, b), std::max(a, b)}}));
+    }
+  }
+}
+
 // OpenSubdiv's own non-manifold shapes, their faces that repeat a vertex left out.
 TEST(NonmanifoldSharp, OpenSubdivShapesMatch) {
   const std::filesystem::path dir = std::filesystem::path(__FILE__).parent_path() / "../../../shared/meshes";
