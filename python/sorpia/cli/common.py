@@ -187,7 +187,7 @@ def sharpness_tags(tags: dict) -> dict:
 
 def split_input(mesh: InputMesh, source, boundary: str) -> InputMesh:
     """--nonmanifold sharp: a non-manifold mesh replaced by its manifold split
-    with OpenSubdiv's rules as corner tags (sorpia._nonmanifold.split under the
+    with OpenSubdiv's rules as corner and crease tags (sorpia._nonmanifold.split under the
     `boundary` rule; its NonmanifoldWarning is printed); what the split
     cannot reproduce is a UserError naming the file `source`."""
     from .. import MeshError
