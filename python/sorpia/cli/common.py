@@ -189,7 +189,7 @@ def sharpness_tags(tags: dict) -> dict:
 
 def split_input(mesh: InputMesh, source, boundary: str) -> InputMesh:
     """--nonmanifold sharp: a non-manifold mesh replaced by its manifold split
-    with OpenSubdiv's rules as corner tags (sorpia._nonmanifold.split under the
+    with OpenSubdiv's rules as corner and crease tags (sorpia._nonmanifold.split under the
     `boundary` rule; its NonmanifoldWarning is printed); what the split
     cannot reproduce is a UserError naming the file `source`."""
     from .. import MeshError
@@ -209,8 +209,9 @@ def split_input(mesh: InputMesh, source, boundary: str) -> InputMesh:
 def split_json(split) -> dict:
     """What a command's JSON report holds of --nonmanifold sharp: the
     non-manifold edges and vertices (input indices), the corners among them,
-    and the vertex map of the split (for every vertex of the split, the input
-    vertex it copies)."""
+    the edges of the split made infinitely sharp creases (sharp_edges, the
+    split's indices) and the vertex map of the split (for every vertex of the
+    split, the input vertex it copies)."""
     return {**split.report, "vertex_map": split.vertex_map}
 
 
