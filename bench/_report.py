@@ -12,6 +12,7 @@ machine skew timings), the command line, and the UTC date.
 from __future__ import annotations
 
 import datetime
+import json
 import os
 import pathlib
 import platform
@@ -167,6 +168,23 @@ def write_readme_excerpt(name: str, slug: str, body_markdown: str) -> pathlib.Pa
     readme.write_text(text[:m.start(1)] + excerpt + text[m.end(1):])
     print(f"README excerpt: {name}", file=sys.stderr)
     return readme
+
+
+def print_json_plot(lines, rows, *, json_path, plot, no_page, default_plot, draw, caption) -> list:
+    """A scaling script's ending: print the table `lines`, write `rows` to json_path (when given), draw the plot
+    (`draw(rows, path)`, when there are two rows or more) at `plot`, or with a page at default_plot (beside it);
+    returns the lines with the plot's image line added when the plot lies beside the pages."""
+    print("\n".join(lines))
+    if json_path:
+        with open(json_path, "w") as fh:
+            json.dump(rows, fh, indent=1)
+    plot = plot or (None if no_page else str(default_plot))
+    if len(rows) >= 2 and plot:
+        os.makedirs(os.path.dirname(os.path.abspath(plot)), exist_ok=True)
+        draw(rows, plot)
+        if not no_page and os.path.dirname(os.path.abspath(plot)) == str(PAGES):
+            lines = lines + ["", f"![{caption}]({os.path.basename(plot)})"]
+    return lines
 
 
 def settings_note(parser, args) -> str:

@@ -23,7 +23,7 @@ import sys
 import sysconfig
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from _report import PAGES, write_page, write_readme_excerpt  # noqa: E402
+from _report import PAGES, print_json_plot, write_page, write_readme_excerpt  # noqa: E402
 
 
 def bench_exe():
@@ -93,16 +93,9 @@ def main(argv=None):
                      f"| {r['sweep_over_floor']:.2f} | {r['peak_mb']:.0f} | {r['bytes_per_vertex']:.0f} |")
     lines += ["", "sweep/floor: solve seconds per iteration over the streaming floor (one plain pass over the "
               "arrays a sweep touches, measured by `sorpia-bench`)."]
-    print("\n".join(lines))
-    if a.json:
-        with open(a.json, "w") as fh:
-            json.dump(rows, fh, indent=1)
-    plot = a.plot or (None if a.no_page else str(PAGES / "scaling.png"))
-    if len(rows) >= 2 and plot:
-        os.makedirs(os.path.dirname(os.path.abspath(plot)), exist_ok=True)
-        draw(rows, a.kind, a.method, plot)
-        if not a.no_page and os.path.dirname(os.path.abspath(plot)) == str(PAGES):
-            lines += ["", f"![time and memory against size]({os.path.basename(plot)})"]
+    lines = print_json_plot(lines, rows, json_path=a.json, plot=a.plot, no_page=a.no_page,
+                            default_plot=PAGES / "scaling.png", draw=lambda r, path: draw(r, a.kind, a.method, path),
+                            caption="time and memory against size")
     if not a.no_page:
         write_page("scaling", "Growth with size", "\n".join(lines), settings=(p, a))
     if a.readme:

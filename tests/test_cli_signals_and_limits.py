@@ -185,7 +185,7 @@ def test_ctrl_c_while_a_failed_read_is_reported_is_one_line(ico_file, tmp_path):
     run = child("""
         from sorpia import MeshFileError
         import sorpia.io
-        def read_then_fail(path, triangulate=False, tags=False, attributes=False, prim=None):
+        def read_then_fail(path, triangulate=False, tags=False, attributes=False, prim=None, points=False):
             os.kill(os.getpid(), signal.SIGINT)
             raise MeshFileError(f"{path}, line 3: unknown header line 'garbage'")
         sorpia.io.read_mesh_file = read_then_fail

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 import sorpia
-from sorpia import NonmanifoldWarning
+from sorpia import NonmanifoldWarning, _nonmanifold
 from test_io import SHARED_MESHES
 
 
@@ -260,3 +260,28 @@ def test_limit_surface_takes_nonmanifold_sharp(scheme, triangles):
     assert np.abs(vs[: len(v)] - want).max() <= 1e-12 * np.abs(v).max()
     with pytest.raises(sorpia.MeshError, match="non-manifold"):
         sorpia.LimitSurface(v, f, scheme=scheme)
+
+
+@pytest.mark.parametrize("scheme, faces", [("loop", [[0, 1, 2], [0, 2, 1], [0, 1, 3]]),
+                                           ("catmull-clark", [[0, 1, 2, 3], [0, 3, 2, 1], [0, 1, 4, 5]])])
+def test_pillow_beside_a_third_face_keeps_its_edge_sharp(scheme, faces):
+    # Edge (0, 1) has three faces: OpenSubdiv makes it infinitely sharp and its ends corners, so the limit surface
+    # along it is the segment from vertex 0 to vertex 1 (the crease rule puts every refined point of the edge on it)
+    # on each of its faces, the pillow's two (joined again in the split) included. 1e-12 of the coordinates' size is
+    # rounding; the pillow's faces left smooth there bulged off it by about 0.2.
+    f = np.array(faces)
+    v = np.random.default_rng(5).normal(size=(f.max() + 1, 3))
+    surface = sharp(sorpia.LimitSurface, v, f, scheme=scheme)
+    t = np.linspace(0.0, 1.0, 9)
+    along = np.column_stack([t, np.zeros_like(t)])  # from corner 0 (vertex 0) to corner 1 (vertex 1)
+    back = along[:, ::-1]  # the pillow's second face runs (0, ..., 1): from its last corner (vertex 1) to vertex 0
+    direction = (v[1] - v[0]) / np.linalg.norm(v[1] - v[0])
+    for face, uv in ((0, along), (1, back), (2, along)):
+        p = surface.evaluate(np.full(len(t), face), uv) - v[0]
+        off_line = p - np.outer(p @ direction, direction)
+        assert np.abs(off_line).max() <= 1e-12 * np.abs(v).max(), face
+    with pytest.warns(NonmanifoldWarning):
+        split = _nonmanifold.split(f, len(v))
+    assert split.report["sharp_edges"] == [[0, 1]]
+    edges, sharpness = split.tags["creases"]
+    assert edges.tolist() == [[0, 1]] and (sharpness >= 10).all()  # OpenSubdiv's infinite sharpness (Sdc: 10)

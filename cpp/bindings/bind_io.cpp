@@ -14,14 +14,14 @@ using namespace pybind11::literals;
 void bind_io(py::module_& m) {
   m.def(
       "read_mesh",
-      [](const std::string& path, bool triangulate, bool tags, bool attributes) {
+      [](const std::string& path, bool triangulate, bool tags, bool attributes, bool points) {
         sorpia::MeshFile mesh;
         // A read interrupted by a signal (waiting on a pipe, a device) runs
         // Python's signal handlers: KeyboardInterrupt, or whatever a handler
         // raises, ends the read; a handler that returns lets it go on.
         {
           LongCall call;
-          mesh = sorpia::read_mesh(path, sorpia::ReadOptions{triangulate, tags, attributes});
+          mesh = sorpia::read_mesh(path, sorpia::ReadOptions{triangulate, tags, attributes, points});
         }
         // sorpia.io.read_mesh makes its result of: vertices (n, 3); the faces,
         // (m, face_size) when face_vertex_counts is None, else the flat corner list;
@@ -46,7 +46,7 @@ void bind_io(py::module_& m) {
                               to_numpy(std::move(mesh.face_vertex_indices), uniform ? mesh.face_size : 0), sizes,
                               mesh.polygons_split, file_tags, file_attributes);
       },
-      "path"_a, "triangulate"_a, "tags"_a, "attributes"_a);
+      "path"_a, "triangulate"_a, "tags"_a, "attributes"_a, "points"_a = false);
   m.def(
       "write_mesh",
       [](const std::string& path, const Vertices& vertices, const Faces& faces,

@@ -89,11 +89,11 @@ void bind_mesh_checks(py::module_& m) {
   m.def(
       "face_list_statistics",
       [](const Faces& faces, std::size_t n_vertices) -> py::object {
-        check_shape(faces, 3, "faces");
+        const sorpia::Mesh mesh = faces_of(faces);
         std::optional<sorpia::MeshStatistics> s;
         {
           py::gil_scoped_release release;
-          s = sorpia::face_list_statistics(faces.data(), static_cast<std::size_t>(faces.shape(0)), n_vertices);
+          s = sorpia::face_list_statistics(mesh, n_vertices);
         }
         if (!s) return py::none();
         return statistics_dict(std::move(*s));

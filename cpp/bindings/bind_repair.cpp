@@ -36,6 +36,7 @@ py::dict split_dict(const sorpia::NonmanifoldSplit& s) {
   d["nonmanifold_vertices"] = py::cast(s.nonmanifold_vertices);
   d["corners"] = py::cast(s.corners);
   d["single_face_sheets"] = py::cast(s.single_face_sheets);
+  d["sharp_edges"] = py::cast(s.sharp_edges);
   return d;
 }
 
@@ -45,15 +46,15 @@ void bind_repair(py::module_& m) {
   m.def(
       "repair",
       [](const Faces& faces, std::size_t n_vertices) -> py::object {
-        check_shape(faces, 3, "faces");
+        const sorpia::Mesh mesh = faces_of(faces);
         sorpia::RepairResult r;
         {
           py::gil_scoped_release release;
-          r = sorpia::repair(faces.data(), static_cast<std::size_t>(faces.shape(0)), n_vertices);
+          r = sorpia::repair(mesh, n_vertices);
         }
         if (r.report.empty()) return py::none();
         py::dict report = report_dict(r.report);
-        return py::make_tuple(to_numpy(std::move(r.face_vertex_indices), 3), to_numpy(std::move(r.vertex_map), 0),
+        return py::make_tuple(to_numpy(std::move(r.faces.face_vertex_indices), 3), to_numpy(std::move(r.vertex_map), 0),
                               to_numpy(std::move(r.face_map), 0), report);
       },
       "faces"_a.noconvert(), "n_vertices"_a,
@@ -61,17 +62,16 @@ void bind_repair(py::module_& m) {
   m.def(
       "repair_polygons",
       [](const Faces& counts, const Faces& indices, std::size_t n_vertices) -> py::object {
-        if (counts.ndim() != 1 || indices.ndim() != 1)
-          throw sorpia::ParameterError("face_vertex_counts and face_vertex_indices must be one-dimensional");
+        const sorpia::Mesh mesh = faces_of(counts, indices);
         sorpia::RepairResult r;
         {
           py::gil_scoped_release release;
-          r = sorpia::repair(counts.data(), static_cast<std::size_t>(counts.shape(0)), indices.data(), n_vertices);
+          r = sorpia::repair(mesh, n_vertices);
         }
         if (r.report.empty()) return py::none();
         py::dict report = report_dict(r.report);
-        return py::make_tuple(to_numpy(std::move(r.face_vertex_counts), 0),
-                              to_numpy(std::move(r.face_vertex_indices), 0),
+        return py::make_tuple(to_numpy(std::move(r.faces.face_vertex_counts), 0),
+                              to_numpy(std::move(r.faces.face_vertex_indices), 0),
                               to_numpy(std::move(r.vertex_map), 0), to_numpy(std::move(r.face_map), 0), report);
       },
       "face_vertex_counts"_a.noconvert(), "face_vertex_indices"_a.noconvert(), "n_vertices"_a,
@@ -80,15 +80,15 @@ void bind_repair(py::module_& m) {
   m.def(
       "split_nonmanifold",
       [](const Faces& faces, std::size_t n_vertices) -> py::object {
-        check_shape(faces, 3, "faces");
+        const sorpia::Mesh mesh = faces_of(faces);
         sorpia::NonmanifoldSplit s;
         {
           py::gil_scoped_release release;
-          s = sorpia::split_nonmanifold(faces.data(), static_cast<std::size_t>(faces.shape(0)), n_vertices);
+          s = sorpia::split_nonmanifold(mesh, n_vertices);
         }
         if (s.empty()) return py::none();
         py::dict report = split_dict(s);
-        return py::make_tuple(to_numpy(std::move(s.face_vertex_indices), 3), to_numpy(std::move(s.vertex_map), 0),
+        return py::make_tuple(to_numpy(std::move(s.faces.face_vertex_indices), 3), to_numpy(std::move(s.vertex_map), 0),
                               report);
       },
       "faces"_a.noconvert(), "n_vertices"_a,
@@ -96,18 +96,16 @@ void bind_repair(py::module_& m) {
   m.def(
       "split_nonmanifold_polygons",
       [](const Faces& counts, const Faces& indices, std::size_t n_vertices) -> py::object {
-        if (counts.ndim() != 1 || indices.ndim() != 1)
-          throw sorpia::ParameterError("face_vertex_counts and face_vertex_indices must be one-dimensional");
+        const sorpia::Mesh mesh = faces_of(counts, indices);
         sorpia::NonmanifoldSplit s;
         {
           py::gil_scoped_release release;
-          s = sorpia::split_nonmanifold(counts.data(), static_cast<std::size_t>(counts.shape(0)), indices.data(),
-                                        n_vertices);
+          s = sorpia::split_nonmanifold(mesh, n_vertices);
         }
         if (s.empty()) return py::none();
         py::dict report = split_dict(s);
-        return py::make_tuple(to_numpy(std::move(s.face_vertex_counts), 0),
-                              to_numpy(std::move(s.face_vertex_indices), 0),
+        return py::make_tuple(to_numpy(std::move(s.faces.face_vertex_counts), 0),
+                              to_numpy(std::move(s.faces.face_vertex_indices), 0),
                               to_numpy(std::move(s.vertex_map), 0), report);
       },
       "face_vertex_counts"_a.noconvert(), "face_vertex_indices"_a.noconvert(), "n_vertices"_a,

@@ -1,6 +1,6 @@
 #pragma once
 // Shared helpers of the pybind11 module sorpia._core. One binding file per
-// topic (limit, solvers, surface, io, repair), each with a bind_<topic>(module) that
+// topic (limit, solvers, surface, io, repair, cage), each with a bind_<topic>(module) that
 // module.cpp calls: conversion and error translation only, no mathematics.
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
@@ -134,6 +134,8 @@ void bind_surface(py::module_& m);
 void bind_io(py::module_& m);
 void bind_mesh_checks(py::module_& m);
 void bind_repair(py::module_& m);
+void bind_approximate(py::module_& m);
+void bind_cage(py::module_& m);
 void bind_fit(py::module_& m);
 
 }  // namespace sorpia_py

@@ -18,7 +18,10 @@ from ._validate import Polygons
 from ._repair import RepairResult, repair
 from ._meshinfo import mesh_statistics
 from .surface import LimitSurface, evaluate_limit, limit_surface
+from .cage import Cage, decimate
 from .energy import fairness_matrix, thin_plate_energy
+from .fair import FairResult, fair_interpolate
+from .approximate import ApproximationResult, approximate
 from . import shapes
 
 __all__ = [
@@ -39,5 +42,8 @@ __all__ = [
     "RepairResult", "repair",
     "mesh_statistics",
     "fairness_matrix", "thin_plate_energy",
+    "FairResult", "fair_interpolate",
     "NonmanifoldWarning", "UsdWarning",
+    "Cage", "decimate",
+    "ApproximationResult", "approximate",
 ]

@@ -16,7 +16,11 @@ infinitely sharp corner on every copy of each corner vertex; the copies of a
 crease vertex lie on boundaries of the split whose boundary rule is the
 crease rule (where such a copy has one face, which "edge-and-corner" would
 make a corner, the split is solved under "edge-only" with that rule's
-corners as tags). The limit rows of the split, their columns mapped back through
+corners as tags). Where two faces of a non-manifold edge meet again in the
+split (a pillow, two faces with the same vertices in the opposite order,
+beside a third face on one of its edges: the pillow's faces stay joined at
+both ends of that edge), that edge of the split gets an infinitely sharp
+crease, as OpenSubdiv makes it. The limit rows of the split, their columns mapped back through
 the vertex map, are OpenSubdiv's rows of the input mesh (to rounding, tested
 against Far's Limit() on the whole mesh). Faces that repeat a vertex, to
 which OpenSubdiv gives degenerate edges, are refused: `sorpia.repair` drops
@@ -59,8 +63,9 @@ class Split(NamedTuple):
 
     faces: object  # as the faces were given: (m, k) array or sorpia.Polygons
     vertex_map: np.ndarray  # for every vertex of the split, the input vertex it copies
-    tags: dict  # the split's tags: the caller's, carried over, and the corners
-    report: dict  # nonmanifold_edges, nonmanifold_vertices, corners, single_face_sheets (input indices)
+    tags: dict  # the split's tags: the caller's, carried over, the corners and the creases of sharp_edges
+    report: dict  # nonmanifold_edges, nonmanifold_vertices, corners, single_face_sheets (input indices); sharp_edges
+    # (the split's indices: its edges whose two faces border a non-manifold edge, infinitely sharp creases in tags)
     boundary: str = DEFAULT_BOUNDARY  # the boundary rule the split is solved under (see split)
 
 
@@ -128,6 +133,12 @@ def split(faces, n_vertices: int, boundary: str = DEFAULT_BOUNDARY, *, creases=N
     # ours last: a corner given twice counts with its last sharpness, as in OpenSubdiv
     tags["corners"] = (np.concatenate([user_corners, copies]),
                        np.concatenate([user_sharpness, np.full(len(copies), _core.INFINITE_SHARPNESS)]))
+    sharp = np.asarray(report["sharp_edges"], dtype=np.int32).reshape(-1, 2)
+    if len(sharp):  # faces of a non-manifold edge joined again in the split (a pillow beside a third face)
+        user_edges, user_sharpness = tags.get("creases", (np.zeros((0, 2), np.int32), np.zeros(0)))
+        # ours last: an edge given twice counts with its last sharpness, as in OpenSubdiv
+        tags["creases"] = (np.concatenate([user_edges, sharp]),
+                           np.concatenate([user_sharpness, np.full(len(sharp), _core.INFINITE_SHARPNESS)]))
     return Split(split_faces, vertex_map, tags, report, boundary)
 
 

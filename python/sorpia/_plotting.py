@@ -302,8 +302,10 @@ def interpolation_figure(vertices, faces, given_surface, control_vertices, fitte
                          size: tuple[int, int] = (1200, 1000), elev: float = 30.0, azim: float = -60.0,
                          face_budget: int = FACE_BUDGET, point_budget: int = POINT_BUDGET,
                          title: str | None = None, iterations: int | None = None, level: int | None = None,
-                         up: str = "z", scheme: str = "loop", creases=None, crease_curves=None):
-    """The paper's Figure 3 in four panels, the same camera in each.
+                         up: str = "z", scheme: str = "loop", creases=None, crease_curves=None, fair=None,
+                         data_points=None, labels=None):
+    """The paper's Figure 3 in four panels, the same camera in each; with
+    `fair`, plain and fair interpolation side by side instead.
 
     Parameters
     ----------
@@ -332,6 +334,19 @@ def interpolation_figure(vertices, faces, given_surface, control_vertices, fitte
     crease_curves : (given, fitted), optional
         Their limit curves on the two surfaces, each as `crease_curves`
         returns them, drawn orange on panels b and d.
+    fair : (control_vertices, faces, (V_s, F_s), levels), optional
+        A fair interpolation (`sorpia.fair_interpolate`): its fine control
+        mesh (rows 0..n-1 the children of the given vertices) and its
+        tessellated limit surface. The panels are then (a) the plain control
+        mesh, (b) its limit surface, (c) the fair control mesh, (d) its limit
+        surface, given vertices red; `given_surface` is not drawn and
+        `crease_curves` only on panel b (the plain surface).
+    data_points : (k, 3) float, optional
+        Approximation's data (drawn red on panels b and d instead of the
+        given vertices, at most `point_budget` of them, an even stride; the
+        mesh panels then mark their own vertices blue).
+    labels : four str, optional
+        The panels' titles instead of Figure 3's.
     """
     from mpl_toolkits.mplot3d.art3d import Line3DCollection, Poly3DCollection
 
@@ -352,7 +367,13 @@ def interpolation_figure(vertices, faces, given_surface, control_vertices, fitte
 
     # One box of axis limits around everything drawn, equal scale on the three
     # axes (box aspect = extents): the same camera in every panel.
-    allpts = np.concatenate([V0, Vc, Vg, Vf])
+    if fair is not None:
+        Vfc, Ffc = np.asarray(fair[0], float)[:, axes], _Faces(fair[1])
+        Vfs, Ffs = np.asarray(fair[2][0], float)[:, axes], _Faces(fair[2][1])
+        Vg = np.zeros((0, 3))  # not drawn
+    data = None if data_points is None else np.asarray(data_points, dtype=float)[:, axes]
+    allpts = np.concatenate([V0, Vc, Vg, Vf] + ([Vfc, Vfs] if fair is not None else [])
+                            + ([] if data is None else [data]))
     allpts = allpts[np.isfinite(allpts).all(axis=1)]
     lo, hi = allpts.min(axis=0), allpts.max(axis=0)
     extent = np.maximum(hi - lo, 0.05 * max(float((hi - lo).max()), 1e-12))  # flat meshes keep some depth
@@ -375,6 +396,10 @@ def interpolation_figure(vertices, faces, given_surface, control_vertices, fitte
     stride = max(1, math.ceil(len(shown) / point_budget))
     shown = shown[::stride]
     marker = float(np.clip(3000.0 / max(len(shown), 1), 1.0, 14.0))
+    if data is not None:
+        data_stride = max(1, math.ceil(len(data) / point_budget))
+        data = data[::data_stride]
+        data_marker = float(np.clip(3000.0 / max(len(data), 1), 1.0, 14.0))
 
     # Crease lines: the mesh edges with the normals of their two faces, the
     # limit curves with the surface's normals on either side.
@@ -399,15 +424,34 @@ def interpolation_figure(vertices, faces, given_surface, control_vertices, fitte
     fit = max(np.abs(box * right).sum(), np.abs(box * screen_up).sum() / (0.86 * size[1] / size[0]))
     zoom = min(1.35, 1.4 / fit)
 
+    if fair is not None:  # panel by panel: the plain mesh's creases on (a), its curves on (b)
+        lines = [lines[2], None if crease_curves is None else lines[3], None, None]
     fig = _new_figure(*size)
     name = {"loop": "Loop", "catmull-clark": "Catmull-Clark"}.get(scheme, scheme)
+    given, control = (V0[shown], marker, GIVEN_COLOR), (Vc[shown], marker, CONTROL_COLOR)
     panels = [
-        ("(a) given mesh", V0, F, MESH_COLOR, True, [(V0, GIVEN_COLOR)]),
-        (f"(b) {name} limit surface of the given mesh", Vg, Fg, SURFACE_COLOR, False, [(V0, GIVEN_COLOR)]),
+        ("(a) given mesh", V0, F, MESH_COLOR, True, [given]),
+        (f"(b) {name} limit surface of the given mesh", Vg, Fg, SURFACE_COLOR, False, [given]),
         ("(c) control mesh by SOR-PIA" + (f", {iterations} iterations" if iterations is not None else ""),
-         Vc, F, MESH_COLOR, True, [(Vc, CONTROL_COLOR), (V0, GIVEN_COLOR)]),
-        ("(d) limit surface of the control mesh", Vf, Ff, SURFACE_COLOR, False, [(V0, GIVEN_COLOR)]),
+         Vc, F, MESH_COLOR, True, [control, given]),
+        ("(d) limit surface of the control mesh", Vf, Ff, SURFACE_COLOR, False, [given]),
     ]
+    if fair is not None:
+        fine_control = (Vfc[:len(V0)][shown], marker, CONTROL_COLOR)
+        panels = [
+            ("(a) plain control mesh (SOR-PIA)" + (f", {iterations} iterations" if iterations is not None else ""),
+             Vc, F, MESH_COLOR, True, [control, given]),
+            ("(b) its limit surface: plain interpolation", Vf, Ff, SURFACE_COLOR, False, [given]),
+            (f"(c) fair control mesh, {fair[3]} level{'s' if fair[3] > 1 else ''} finer", Vfc, Ffc, MESH_COLOR, True,
+             [fine_control, given]),
+            ("(d) its limit surface: fair interpolation", Vfs, Ffs, SURFACE_COLOR, False, [given]),
+        ]
+    if data is not None:
+        marks = [(data, data_marker, GIVEN_COLOR)]
+        panels = [(label, Vp, Fp, base, edges, marks if not edges else [(Vp[shown], marker, CONTROL_COLOR)])
+                  for label, Vp, Fp, base, edges, _ in panels]
+    if labels is not None:
+        panels = [(label,) + panel[1:] for label, panel in zip(labels, panels)]
     for j, (label, Vp, Fp, base, edges, points) in enumerate(panels):
         ax = fig.add_subplot(2, 2, j + 1, projection="3d")
         ax.computed_zorder = False  # markers painted over the surface, not sorted with it
@@ -425,9 +469,8 @@ def interpolation_figure(vertices, faces, given_surface, control_vertices, fitte
             crease = Line3DCollection(lines[j], colors=CREASE_COLOR, linewidths=1.6)
             crease.set_zorder(1.5)
             ax.add_collection3d(crease)
-        for z, (P, color) in enumerate(points):
-            ax.scatter(P[shown, 0], P[shown, 1], P[shown, 2], s=marker, c=color, depthshade=False,
-                       linewidths=0, zorder=2 + z)
+        for z, (P, size, color) in enumerate(points):
+            ax.scatter(P[:, 0], P[:, 1], P[:, 2], s=size, c=color, depthshade=False, linewidths=0, zorder=2 + z)
         if len(keep) < len(Fp):
             label += f"\n({len(keep)} of {len(Fp)} faces drawn)"
         ax.set_title(label, fontsize=10)

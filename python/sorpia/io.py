@@ -166,16 +166,19 @@ class MeshFileContents(NamedTuple):
     scheme: str | None = None  # a USD mesh's subdivisionScheme (sorpia's name: "loop", "catmull-clark"; else USD's)
 
 
-def read_mesh_file(path, triangulate: bool = False, tags: bool = False, attributes: bool = False, prim=None
-                   ) -> MeshFileContents:
+def read_mesh_file(path, triangulate: bool = False, tags: bool = False, attributes: bool = False, prim=None,
+                   points: bool = False) -> MeshFileContents:
     """`read_mesh` with the count of polygons it split (0 without
     `triangulate`); warns (UnknownTagWarning) of tags it skipped and
-    (AttributeWarning) of attributes it drops."""
+    (AttributeWarning) of attributes it drops. `points`: a file without
+    faces (a point cloud) is read, with faces of shape (0, 3)."""
     if is_usd(path):
         return _read_usd_file(path, triangulate, tags, attributes, prim)
     vertices, faces, counts, split, file_tags, file_attributes = _core.read_mesh(
-        os.fsencode(path), bool(triangulate), bool(tags), bool(attributes))
-    if counts is not None:
+        os.fsencode(path), bool(triangulate), bool(tags), bool(attributes), bool(points))
+    if len(faces) == 0:
+        faces = np.zeros((0, 3), dtype=np.int32)
+    elif counts is not None:
         faces = Polygons(counts, faces)
     attribute_dict = None
     if attributes:

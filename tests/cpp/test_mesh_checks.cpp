@@ -6,6 +6,8 @@
 #include <cmath>
 #include <vector>
 
+#include "face_arrays.hpp"
+#include "sorpia/errors.hpp"
 #include "sorpia/limit.hpp"
 #include "sorpia/limit_residual.hpp"
 #include "sorpia/mesh_statistics.hpp"
@@ -43,7 +45,7 @@ TEST(MeshStatistics, TorusAndGridMatchTheirClosedForms) {
 TEST(MeshStatistics, RawFaceListCountsEqualTheTopologys) {
   for (const auto& m : {sorpia::irregular(300, 2), sorpia::grid(7, 5), sorpia::pole(9)}) {
     const auto a = sorpia::mesh_statistics(topology_of(m));
-    const auto b = sorpia::face_list_statistics(m.face_vertex_indices.data(), m.n_faces(), m.n_vertices());
+    const auto b = sorpia::face_list_statistics(m, m.n_vertices());
     ASSERT_TRUE(b.has_value());
     EXPECT_FALSE(b->genus.has_value());
     EXPECT_EQ(a.n_edges, b->n_edges);
@@ -64,11 +66,21 @@ TEST(MeshStatistics, RawFaceListCountsEqualTheTopologys) {
 TEST(MeshStatistics, BowtieHasTwoLoopsTouchingAtOneVertex) {
   // Two fans round vertex 0 sharing only it: loops 0-1-2-3 and 0-4-5.
   const std::vector<std::int32_t> faces = {0, 1, 2, 0, 2, 3, 0, 4, 5};
-  const auto s = sorpia::face_list_statistics(faces.data(), 3, 6);
+  const auto s = sorpia::face_list_statistics(sorpia_test::triangles(faces), 6);
   ASSERT_TRUE(s.has_value());
   EXPECT_EQ(s->n_boundary_loops, 2u);
   EXPECT_EQ(s->n_components, 1u);
-  EXPECT_FALSE(sorpia::face_list_statistics(faces.data(), 3, 5).has_value());  // index 5 out of range
+  EXPECT_FALSE(sorpia::face_list_statistics(sorpia_test::triangles(faces), 5).has_value());  // index 5 out of range
+}
+
+TEST(MeshStatistics, RawFaceListIsATriangleList) {
+  // Polygons (with counts, or a uniform face_size other than 3) are counted from a Topology only.
+  const sorpia::Mesh quads = sorpia::quad_grid(2, 2);
+  EXPECT_THROW(sorpia::face_list_statistics(quads, quads.n_vertices()), sorpia::MeshError);
+  sorpia::Mesh uniform = quads;
+  uniform.face_vertex_counts.clear();
+  uniform.face_size = 4;
+  EXPECT_THROW(sorpia::face_list_statistics(uniform, uniform.n_vertices()), sorpia::MeshError);
 }
 
 TEST(LimitResidual, IsZeroAgainstOpenSubdivsLimitAndNamesTheWorstVertex) {

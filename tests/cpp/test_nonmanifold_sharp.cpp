@@ -2,7 +2,9 @@
 // Far's Limit() on the whole non-manifold mesh (a refiner built here from the
 // raw faces, which OpenSubdiv accepts as they are) must equal, vertex by
 // vertex, Far's Limit() on the split mesh with an infinitely sharp corner on
-// every copy of each vertex in `corners`. Generated meshes always; the
+// every copy of each vertex in `corners` (and an infinitely sharp crease on
+// each of `sharp_edges`), and Far's uniform refinement of both must make the
+// same points. Generated meshes always; the
 // OpenSubdiv non-manifold shapes of ../shared/meshes when present (their faces
 // that repeat a vertex left out: the split refuses them).
 #include <opensubdiv/far/primvarRefiner.h>
@@ -41,12 +43,12 @@ struct Mesh {
     counts.push_back(static_cast<std::int32_t>(f.size()));
     indices.insert(indices.end(), f);
   }
+  // The faces as the split takes them (with counts, also for triangles).
+  sorpia::Mesh faces() const { return sorpia_test::polygons(counts, indices); }
 };
 
-// Far's Limit() of every vertex of the raw faces (OpenSubdiv takes
-// non-manifold topology as it is); unreferenced vertices: themselves.
-std::vector<Point3> far_limit(const Mesh& m, const std::vector<Point3>& p, sorpia::Scheme scheme,
-                              sorpia::Boundary boundary) {
+// A refiner of the raw faces (OpenSubdiv takes non-manifold topology as it is).
+std::unique_ptr<Far::TopologyRefiner> raw_refiner(const Mesh& m, sorpia::Scheme scheme, sorpia::Boundary boundary) {
   Far::TopologyDescriptor desc;
   desc.numVertices = static_cast<int>(m.n_vertices);
   desc.numFaces = static_cast<int>(m.counts.size());
@@ -60,6 +62,13 @@ std::vector<Point3> far_limit(const Mesh& m, const std::vector<Point3>& p, sorpi
   std::unique_ptr<Far::TopologyRefiner> refiner(Factory::Create(
       desc, Factory::Options(scheme == sorpia::Scheme::Loop ? Sdc::SCHEME_LOOP : Sdc::SCHEME_CATMARK, sdc)));
   EXPECT_TRUE(refiner);
+  return refiner;
+}
+
+// Far's Limit() of every vertex of the raw faces; unreferenced vertices: themselves.
+std::vector<Point3> far_limit(const Mesh& m, const std::vector<Point3>& p, sorpia::Scheme scheme,
+                              sorpia::Boundary boundary) {
+  const std::unique_ptr<Far::TopologyRefiner> refiner = raw_refiner(m, scheme, boundary);
   std::vector<Point3> out(p.size());
   Far::PrimvarRefinerReal<double>(*refiner).Limit(p, out);
   std::set<std::int32_t> used(m.indices.begin(), m.indices.end());
@@ -68,11 +77,41 @@ std::vector<Point3> far_limit(const Mesh& m, const std::vector<Point3>& p, sorpi
   return out;
 }
 
-// Checks the split of `m` against far_limit; returns the split.
+// The points of `refiner`'s last level after refining `points` (its level 0)
+// uniformly `levels` levels with Far's Interpolate().
+std::vector<Point3> far_refined(Far::TopologyRefiner& refiner, std::vector<Point3> points, int levels) {
+  refiner.RefineUniform(Far::TopologyRefiner::UniformOptions(levels));
+  const Far::PrimvarRefinerReal<double> primvars(refiner);
+  for (int level = 1; level <= levels; ++level) {
+    std::vector<Point3> next(static_cast<std::size_t>(refiner.GetLevel(level).GetNumVertices()));
+    primvars.Interpolate(level, points, next);
+    points = std::move(next);
+  }
+  return points;
+}
+
+// Every point of `a` is one of `b` (to `tol`), and the other way round.
+void expect_same_points(const std::vector<Point3>& a, const std::vector<Point3>& b, double tol) {
+  auto missing = [&](const std::vector<Point3>& from, const std::vector<Point3>& in) {
+    std::size_t n = 0;
+    for (const Point3& p : from)
+      n += std::none_of(in.begin(), in.end(), [&](const Point3& q) {
+        return std::abs(p.x - q.x) <= tol && std::abs(p.y - q.y) <= tol && std::abs(p.z - q.z) <= tol;
+      });
+    return n;
+  };
+  EXPECT_EQ(missing(a, b), 0u) << "points of the split's refinement that OpenSubdiv's of the raw mesh has not";
+  EXPECT_EQ(missing(b, a), 0u) << "points of OpenSubdiv's refinement of the raw mesh that the split's has not";
+}
+
+// Checks the split of `m` against far_limit, and the points of both refined
+// `refined_levels` levels (every edge and face point: also the sharpness of
+// edges that no vertex row reads); returns the split.
 sorpia::NonmanifoldSplit expect_split_is_opensubdiv(const Mesh& m, sorpia::Scheme scheme,
-                                                    sorpia::Boundary boundary = sorpia::Boundary::EdgeAndCorner) {
+                                                    sorpia::Boundary boundary = sorpia::Boundary::EdgeAndCorner,
+                                                    int refined_levels = 2) {
   const sorpia::NonmanifoldSplit s =
-      sorpia::split_nonmanifold(m.counts.data(), m.counts.size(), m.indices.data(), m.n_vertices);
+      sorpia::split_nonmanifold(m.faces(), m.n_vertices);
   EXPECT_FALSE(s.empty());
   if (s.empty()) return s;
   std::mt19937 rng(7);
@@ -84,7 +123,7 @@ sorpia::NonmanifoldSplit expect_split_is_opensubdiv(const Mesh& m, sorpia::Schem
   const std::vector<Point3> want = far_limit(m, points, scheme, boundary);
 
   const std::size_t n_out = s.vertex_map.size();
-  const sorpia::Topology split(sorpia_test::polygons(s.face_vertex_counts, s.face_vertex_indices), n_out);
+  const sorpia::Topology split(s.faces, n_out);
   // A crease vertex's copy in a sheet of one face, which "edge-and-corner" would make a corner: the split is
   // taken under "edge-only", with the corners "edge-and-corner" makes (every other vertex of one face) as tags.
   const bool corner_sheets = boundary == sorpia::Boundary::EdgeAndCorner && !s.single_face_sheets.empty();
@@ -100,6 +139,10 @@ sorpia::NonmanifoldSplit expect_split_is_opensubdiv(const Mesh& m, sorpia::Schem
       tags.corner_vertices.push_back(static_cast<std::int32_t>(o));
       tags.corner_sharpness.push_back(sorpia::kInfiniteSharpness);
     }
+  for (const auto& [a, b] : s.sharp_edges) {
+    tags.crease_vertices.insert(tags.crease_vertices.end(), {a, b});
+    tags.crease_sharpness.push_back(sorpia::kInfiniteSharpness);
+  }
   std::vector<double> q(3 * n_out), got(3 * n_out);
   for (std::size_t o = 0; o < n_out; ++o) std::copy_n(p.begin() + 3 * s.vertex_map[o], 3, q.begin() + 3 * o);
   const sorpia::detail::Refiner osd =
@@ -113,6 +156,15 @@ sorpia::NonmanifoldSplit expect_split_is_opensubdiv(const Mesh& m, sorpia::Schem
     EXPECT_NEAR(got[3 * o], w.x, 1e-14) << "output vertex " << o << " (input " << v << ")";
     EXPECT_NEAR(got[3 * o + 1], w.y, 1e-14) << "output vertex " << o << " (input " << v << ")";
     EXPECT_NEAR(got[3 * o + 2], w.z, 1e-14) << "output vertex " << o << " (input " << v << ")";
+  }
+  if (refined_levels > 0) {
+    // Rounding: each refined point is a convex combination of O(1) inputs, a few levels deep.
+    const std::unique_ptr<Far::TopologyRefiner> raw = raw_refiner(m, scheme, boundary);
+    std::vector<Point3> split_points = far_refined(*osd.refiner, gathered, refined_levels);
+    const std::set<std::int32_t> used(m.indices.begin(), m.indices.end());
+    for (std::size_t v = 0; v < m.n_vertices; ++v)  // Far refines an unreferenced vertex to itself; the split leaves it out
+      if (!used.count(static_cast<std::int32_t>(v))) split_points.push_back(points[v]);
+    expect_same_points(split_points, far_refined(*raw, points, refined_levels), 1e-12);
   }
   return s;
 }
@@ -227,16 +279,92 @@ TEST(NonmanifoldSharp, HexGridFacesMatchOpenSubdivUnderBothBoundaryRules) {
 
 TEST(NonmanifoldSharp, ManifoldMeshesAndWhatTheSplitRefuses) {
   const Mesh page = book(1, 3, true);
-  EXPECT_TRUE(sorpia::split_nonmanifold(page.counts.data(), page.counts.size(), page.indices.data(), page.n_vertices)
-                  .empty());
+  EXPECT_TRUE(sorpia::split_nonmanifold(page.faces(), page.n_vertices).empty());
   Mesh degenerate = book(3, 2, false);
   degenerate.add({0, 0, 5});
   sorpia_test::expect_error<sorpia::MeshError>(
       [&] {
-        sorpia::split_nonmanifold(degenerate.counts.data(), degenerate.counts.size(), degenerate.indices.data(),
-                                  degenerate.n_vertices);
+        sorpia::split_nonmanifold(degenerate.faces(), degenerate.n_vertices);
       },
       {"repeats vertex 0", "nonmanifold=\"sharp\"", "repair"});
+}
+
+// A pillow (two faces with the same vertices in the opposite order) beside a
+// third face on one of its edges: OpenSubdiv makes that edge (three faces)
+// non-manifold, infinitely sharp. The pillow's two faces stay joined at both
+// its ends in the split (one fan each, through the pillow's other edges), so
+// the split mesh has them as the two faces of one edge again: an infinitely
+// sharp crease there (sharp_edges) keeps OpenSubdiv's rule. The vertex rows do
+// not read that edge (its ends are corners); the refined edge points do.
+TEST(NonmanifoldSharp, PillowBesideAThirdFaceKeepsItsEdgeSharp) {
+  for (const bool triangles : {true, false}) {
+    Mesh m;
+    if (triangles) {
+      m.add({0, 1, 2});
+      m.add({0, 2, 1});
+      m.add({0, 1, 3});
+      m.n_vertices = 4;
+    } else {
+      m.add({0, 1, 2, 3});
+      m.add({0, 3, 2, 1});
+      m.add({0, 1, 4, 5});
+      m.n_vertices = 6;
+    }
+    Mesh two = m;  // the third face with its own pillow: two pillows on the edge
+    const auto n = static_cast<std::int32_t>(m.n_vertices);
+    if (triangles) {
+      two.add({0, 3, 1});
+    } else {
+      two.add({0, 5, 4, 1});
+    }
+    Mesh fourth = m;  // and a fourth face, running the edge the other way
+    if (triangles) {
+      fourth.add({1, 0, n});
+      fourth.n_vertices += 1;
+    } else {
+      fourth.add({1, 0, n, n + 1});
+      fourth.n_vertices += 2;
+    }
+    const auto scheme = triangles ? sorpia::Scheme::Loop : sorpia::Scheme::CatmullClark;
+    for (const Mesh* c : {&m, &two, &fourth})
+      for (const auto boundary : {sorpia::Boundary::EdgeAndCorner, sorpia::Boundary::EdgeOnly}) {
+        SCOPED_TRACE(std::string(triangles ? "triangles, " : "quads, ") +
+                     (c == &m ? "a third face" : c == &two ? "two pillows" : "a third and a fourth face") + ", " +
+                     (boundary == sorpia::Boundary::EdgeOnly ? "edge-only" : "edge-and-corner"));
+        const auto s = expect_split_is_opensubdiv(*c, scheme, boundary, 3);
+        EXPECT_EQ(s.nonmanifold_edges, (std::vector<std::array<std::int32_t, 2>>{{0, 1}}));
+        EXPECT_EQ(s.corners, (Ints{0, 1}));
+        EXPECT_EQ(s.sharp_edges.size(), c == &two ? 2u : 1u);
+      }
+  }
+}
+
+// A fin (one more face) on an edge of a closed surface: the surface's two
+// faces of that edge lie in one fan at each of its ends (the fans round the
+// surface), so the split joins them again there: sharp_edges, as for a pillow.
+TEST(NonmanifoldSharp, FinOnAClosedSurfaceKeepsItsEdgeSharp) {
+  for (const bool triangles : {true, false}) {
+    const sorpia::Mesh closed = triangles ? sorpia::icosphere(1) : sorpia::quad_torus(6, 4);
+    Mesh m;
+    m.n_vertices = closed.n_vertices();
+    m.counts = closed.counts();
+    m.indices = closed.face_vertex_indices;
+    const std::int32_t a = m.indices[0], b = m.indices[1], n = static_cast<std::int32_t>(m.n_vertices);
+    if (triangles) {
+      m.add({a, b, n});
+      m.n_vertices += 1;
+    } else {
+      m.add({a, b, n, n + 1});
+      m.n_vertices += 2;
+    }
+    const auto scheme = triangles ? sorpia::Scheme::Loop : sorpia::Scheme::CatmullClark;
+    for (const auto boundary : {sorpia::Boundary::EdgeAndCorner, sorpia::Boundary::EdgeOnly}) {
+      SCOPED_TRACE(triangles ? "icosphere" : "quad torus");
+      const auto s = expect_split_is_opensubdiv(m, scheme, boundary);
+      EXPECT_EQ(s.nonmanifold_edges, (std::vector<std::array<std::int32_t, 2>>{{std::min(a, b), std::max(a, b)}}));
+      EXPECT_EQ(s.sharp_edges, (std::vector<std::array<std::int32_t, 2>>{{std::min(a, b), std::max(a, b)}}));
+    }
+  }
 }
 
 // OpenSubdiv's own non-manifold shapes, their faces that repeat a vertex left out.
@@ -321,7 +449,7 @@ TEST(NonmanifoldSharp, RandomCorruptionsMatchOpenSubdiv) {
     if (c.counts.empty()) continue;
     sorpia::NonmanifoldSplit s;
     try {
-      s = sorpia::split_nonmanifold(c.counts.data(), c.counts.size(), c.indices.data(), c.n_vertices);
+      s = sorpia::split_nonmanifold(c.faces(), c.n_vertices);
     } catch (const sorpia::MeshError& e) {
       EXPECT_NE(std::string(e.what()).find("interior non-manifold crease"), std::string::npos) << e.what();
       ++refused;

@@ -52,7 +52,7 @@ std::array<std::int32_t, 3> cyclic(const std::int32_t* t, bool reverse) {
 
 // Repairs `faces`, checks what every repair must hold and returns the result.
 sorpia::RepairResult repaired(const Faces& faces, std::size_t n_vertices) {
-  sorpia::RepairResult r = sorpia::repair(faces.data(), faces.size() / 3, n_vertices);
+  sorpia::RepairResult r = sorpia::repair(sorpia_test::triangles(faces), n_vertices);
   EXPECT_FALSE(r.report.empty());
   const std::size_t n_out = r.vertex_map.size();
   EXPECT_GE(n_out, n_vertices);
@@ -60,19 +60,19 @@ sorpia::RepairResult repaired(const Faces& faces, std::size_t n_vertices) {
     if (i < n_vertices) EXPECT_EQ(r.vertex_map[i], static_cast<std::int32_t>(i));
     else EXPECT_LT(static_cast<std::size_t>(r.vertex_map[i]), n_vertices);
   }
-  EXPECT_NO_THROW(sorpia::Topology(sorpia_test::triangles(r.face_vertex_indices), n_out));
-  expect_openmesh_manifold(r.face_vertex_indices, n_out);
+  EXPECT_NO_THROW(sorpia::Topology(sorpia_test::triangles(r.faces.face_vertex_indices), n_out));
+  expect_openmesh_manifold(r.faces.face_vertex_indices, n_out);
   // each output face: its input face, renumbered, reversed if flipped
   const std::set<std::int32_t> flipped(r.report.flipped_faces.begin(), r.report.flipped_faces.end());
-  EXPECT_EQ(r.face_map.size(), r.face_vertex_indices.size() / 3);
+  EXPECT_EQ(r.face_map.size(), r.faces.face_vertex_indices.size() / 3);
   for (std::size_t j = 0; j < r.face_map.size(); ++j) {
     const std::int32_t f = r.face_map[j];
-    const std::array<std::int32_t, 3> mapped = {r.vertex_map[r.face_vertex_indices[3 * j]], r.vertex_map[r.face_vertex_indices[3 * j + 1]],
-                                                r.vertex_map[r.face_vertex_indices[3 * j + 2]]};
+    const std::array<std::int32_t, 3> mapped = {r.vertex_map[r.faces.face_vertex_indices[3 * j]], r.vertex_map[r.faces.face_vertex_indices[3 * j + 1]],
+                                                r.vertex_map[r.faces.face_vertex_indices[3 * j + 2]]};
     EXPECT_EQ(cyclic(mapped.data(), false), cyclic(faces.data() + 3 * f, flipped.count(f) > 0)) << "face " << j;
   }
   // idempotent: the output is valid, so a second repair changes nothing
-  EXPECT_TRUE(sorpia::repair(r.face_vertex_indices.data(), r.face_vertex_indices.size() / 3, n_out).report.empty());
+  EXPECT_TRUE(sorpia::repair(r.faces, n_out).report.empty());
   return r;
 }
 
@@ -80,9 +80,9 @@ sorpia::RepairResult repaired(const Faces& faces, std::size_t n_vertices) {
 
 TEST(Repair, ValidMeshesComeBackUnchanged) {
   for (const auto& m : {sorpia::icosphere(2), sorpia::grid(5, 4), sorpia::irregular(300, 2), sorpia::pole(9)}) {
-    const sorpia::RepairResult r = sorpia::repair(m.face_vertex_indices.data(), m.n_faces(), m.n_vertices());
+    const sorpia::RepairResult r = sorpia::repair(m, m.n_vertices());
     EXPECT_TRUE(r.report.empty());
-    EXPECT_TRUE(r.face_vertex_indices.empty() && r.vertex_map.empty() && r.face_map.empty());  // "use the input"
+    EXPECT_TRUE(r.faces.face_vertex_indices.empty() && r.vertex_map.empty() && r.face_map.empty());  // "use the input"
   }
 }
 
@@ -90,7 +90,7 @@ TEST(Repair, OpenBowtieGetsOneVertexPerFan) {
   const auto r = repaired(sorpia_test::bowtie_open_fans, 5);
   EXPECT_EQ(r.report.bowtie_vertices, Ints{0});
   EXPECT_EQ(r.report.bowtie_copies, Ints{1});
-  EXPECT_EQ(r.face_vertex_indices, (Faces{0, 1, 2, 5, 3, 4}));  // the first fan keeps vertex 0, the second gets copy 5
+  EXPECT_EQ(r.faces.face_vertex_indices, (Faces{0, 1, 2, 5, 3, 4}));  // the first fan keeps vertex 0, the second gets copy 5
   EXPECT_TRUE(r.report.sheet_vertices.empty() && r.report.flipped_faces.empty());
 }
 
@@ -101,8 +101,8 @@ TEST(Repair, ClosedBowtieGetsOneVertexPerCone) {
   EXPECT_EQ(r.vertex_map.size(), 8u);
   EXPECT_EQ(r.vertex_map[7], 0);
   // the first cone (faces 0-3) keeps vertex 0; the second's apex (faces 4-6) is the copy
-  EXPECT_EQ(std::count(r.face_vertex_indices.begin(), r.face_vertex_indices.begin() + 12, 7), 0);
-  for (int f = 4; f < 7; ++f) EXPECT_EQ(r.face_vertex_indices[3 * f], 7);
+  EXPECT_EQ(std::count(r.faces.face_vertex_indices.begin(), r.faces.face_vertex_indices.begin() + 12, 7), 0);
+  for (int f = 4; f < 7; ++f) EXPECT_EQ(r.faces.face_vertex_indices[3 * f], 7);
 }
 
 TEST(Repair, ThreeSheetsOnOneEdge) {
@@ -111,7 +111,7 @@ TEST(Repair, ThreeSheetsOnOneEdge) {
   EXPECT_EQ(r.report.nonmanifold_edges, (std::vector<std::array<std::int32_t, 2>>{{0, 1}}));
   EXPECT_EQ(r.report.sheet_vertices, (Ints{0, 1}));
   EXPECT_EQ(r.report.sheet_copies, (Ints{1, 1}));
-  EXPECT_EQ(r.face_vertex_indices, (Faces{0, 1, 2, 1, 0, 3, 5, 6, 4}));
+  EXPECT_EQ(r.faces.face_vertex_indices, (Faces{0, 1, 2, 1, 0, 3, 5, 6, 4}));
 }
 
 TEST(Repair, FourSheetsOnOneEdgeFromTwoClosedSurfaces) {
@@ -124,9 +124,9 @@ TEST(Repair, FourSheetsOnOneEdgeFromTwoClosedSurfaces) {
   EXPECT_EQ(r.report.sheet_vertices, (Ints{0, 1}));
   EXPECT_EQ(r.report.sheet_copies, (Ints{1, 1}));
   // a closed result: every edge has two faces
-  const sorpia::Topology topo(sorpia_test::triangles(r.face_vertex_indices), r.vertex_map.size());
+  const sorpia::Topology topo(sorpia_test::triangles(r.faces.face_vertex_indices), r.vertex_map.size());
   EXPECT_EQ(topo.n_boundary_edges(), 0u);
-  EXPECT_EQ(r.face_vertex_indices, (Faces{0, 1, 2, 6, 7, 4, 1, 0, 3, 7, 6, 5, 0, 2, 3, 1, 3, 2, 6, 4, 5, 7, 5, 4}));
+  EXPECT_EQ(r.faces.face_vertex_indices, (Faces{0, 1, 2, 6, 7, 4, 1, 0, 3, 7, 6, 5, 0, 2, 3, 1, 3, 2, 6, 4, 5, 7, 5, 4}));
 }
 
 TEST(Repair, DuplicateAndReversedDuplicateFacesKeepTheFirst) {
@@ -137,7 +137,7 @@ TEST(Repair, DuplicateAndReversedDuplicateFacesKeepTheFirst) {
   const auto r = repaired(f, m.n_vertices());
   EXPECT_EQ(r.report.duplicate_faces, Ints{80});
   EXPECT_EQ(r.report.reversed_duplicate_faces, Ints{81});
-  EXPECT_EQ(r.face_vertex_indices, m.face_vertex_indices);
+  EXPECT_EQ(r.faces.face_vertex_indices, m.face_vertex_indices);
 }
 
 TEST(Repair, DegenerateFacesAreRemovedAndTheirVerticesKept) {
@@ -147,7 +147,7 @@ TEST(Repair, DegenerateFacesAreRemovedAndTheirVerticesKept) {
   const auto r = repaired(f, 10);
   EXPECT_EQ(r.report.degenerate_faces, Ints{0});
   EXPECT_EQ(r.vertex_map.size(), 10u);
-  EXPECT_EQ(r.face_vertex_indices, m.face_vertex_indices);
+  EXPECT_EQ(r.faces.face_vertex_indices, m.face_vertex_indices);
 }
 
 TEST(Repair, MixedOrientationFlipsTheFewerFaces) {
@@ -156,11 +156,11 @@ TEST(Repair, MixedOrientationFlipsTheFewerFaces) {
   for (int g : {3, 50, 51, 200}) std::swap(f[3 * g + 1], f[3 * g + 2]);
   const auto r = repaired(f, m.n_vertices());
   EXPECT_EQ(r.report.flipped_faces, (Ints{3, 50, 51, 200}));
-  EXPECT_EQ(r.face_vertex_indices, m.face_vertex_indices);
+  EXPECT_EQ(r.faces.face_vertex_indices, m.face_vertex_indices);
   // a whole component reversed is consistent: left as it is
   Faces all = m.face_vertex_indices;
   for (std::size_t g = 0; g < m.n_faces(); ++g) std::swap(all[3 * g + 1], all[3 * g + 2]);
-  EXPECT_TRUE(sorpia::repair(all.data(), m.n_faces(), m.n_vertices()).report.empty());
+  EXPECT_TRUE(sorpia::repair(sorpia_test::triangles(all), m.n_vertices()).report.empty());
 }
 
 TEST(Repair, MoebiusStripIsCutAlongOneEdge) {
@@ -175,8 +175,8 @@ TEST(Repair, MoebiusStripIsCutAlongOneEdge) {
 
 TEST(Repair, WhatRepairDoesNotChangeIsRefusedAsValidationRefusesIt) {
   const Faces f = {0, 1, 2, 0, 2, 9};
-  sorpia_test::expect_error<sorpia::MeshError>([&] { sorpia::repair(f.data(), 2, 4); }, {"out of range"});
-  sorpia_test::expect_error<sorpia::MeshError>([&] { sorpia::repair(f.data(), 0, 4); }, {"no faces"});
+  sorpia_test::expect_error<sorpia::MeshError>([&] { sorpia::repair(sorpia_test::triangles(f), 4); }, {"out of range"});
+  sorpia_test::expect_error<sorpia::MeshError>([&] { sorpia::repair(sorpia_test::triangles({}), 4); }, {"no faces"});
 }
 
 TEST(Repair, ManyDefectsAtOnceOnAnIrregularMesh) {

@@ -103,9 +103,9 @@ Ints without_repeats(const Ints& face) {
 
 // Repairs `in`, checks what every repair must hold and returns the repaired mesh.
 Poly repaired(const Poly& in, sorpia::RepairResult* result = nullptr) {
-  sorpia::RepairResult r = sorpia::repair(in.counts.data(), in.n_faces(), in.indices.data(), in.n_vertices);
+  sorpia::RepairResult r = sorpia::repair(sorpia_test::polygons(in.counts, in.indices), in.n_vertices);
   EXPECT_FALSE(r.report.empty());
-  Poly out{r.face_vertex_counts, r.face_vertex_indices, r.vertex_map.size()};
+  Poly out{r.faces.face_vertex_counts, r.faces.face_vertex_indices, r.vertex_map.size()};
   EXPECT_GE(out.n_vertices, in.n_vertices);
   for (std::size_t i = 0; i < out.n_vertices; ++i) {  // the input vertices in place, then copies of them
     if (i < in.n_vertices) EXPECT_EQ(r.vertex_map[i], static_cast<std::int32_t>(i));
@@ -122,7 +122,7 @@ Poly repaired(const Poly& in, sorpia::RepairResult* result = nullptr) {
     EXPECT_EQ(cyclic(mapped, false), cyclic(without_repeats(in.face(f)), flipped.count(f) > 0)) << "face " << j;
   }
   // idempotent: the output is valid, so a second repair changes nothing
-  EXPECT_TRUE(sorpia::repair(out.counts.data(), out.n_faces(), out.indices.data(), out.n_vertices).report.empty());
+  EXPECT_TRUE(sorpia::repair(sorpia_test::polygons(out.counts, out.indices), out.n_vertices).report.empty());
   if (result) *result = std::move(r);
   return out;
 }
@@ -137,9 +137,9 @@ TEST(RepairPolygons, ValidPolygonMeshesComeBackUnchanged) {
   mixed.add({8, 9, 10, 11, 12});
   mixed.add({8, 12, 13});
   for (const Poly& p : {quad_grid(4, 3), cube, mixed}) {
-    const sorpia::RepairResult r = sorpia::repair(p.counts.data(), p.n_faces(), p.indices.data(), p.n_vertices);
+    const sorpia::RepairResult r = sorpia::repair(sorpia_test::polygons(p.counts, p.indices), p.n_vertices);
     EXPECT_TRUE(r.report.empty());
-    EXPECT_TRUE(r.face_vertex_indices.empty() && r.face_vertex_counts.empty() && r.vertex_map.empty());  // "use the input"
+    EXPECT_TRUE(r.faces.face_vertex_indices.empty() && r.faces.face_vertex_counts.empty() && r.vertex_map.empty());  // "use the input"
   }
 }
 
@@ -275,29 +275,68 @@ TEST(RepairPolygons, WhatRepairDoesNotChangeIsRefusedAsValidationRefusesIt) {
   p.add({0, 1, 2, 3});
   p.add({0, 3, 9});
   sorpia_test::expect_error<sorpia::MeshError>(
-      [&] { sorpia::repair(p.counts.data(), p.n_faces(), p.indices.data(), p.n_vertices); }, {"out of range"});
+      [&] { sorpia::repair(sorpia_test::polygons(p.counts, p.indices), p.n_vertices); }, {"out of range"});
   const Ints two = {4, 2}, idx = {0, 1, 2, 3, 0, 1};
-  sorpia_test::expect_error<sorpia::MeshError>([&] { sorpia::repair(two.data(), 2, idx.data(), 4); },
+  sorpia_test::expect_error<sorpia::MeshError>([&] { sorpia::repair(sorpia_test::polygons(two, idx), 4); },
                                                {"face 1 has 2 vertices"});
   Poly flat;
   flat.n_vertices = 3;
   flat.add({0, 1, 1});
   flat.add({2, 2, 2, 2});
   sorpia_test::expect_error<sorpia::MeshError>(
-      [&] { sorpia::repair(flat.counts.data(), flat.n_faces(), flat.indices.data(), flat.n_vertices); },
+      [&] { sorpia::repair(sorpia_test::polygons(flat.counts, flat.indices), flat.n_vertices); },
       {"no face is left"});
+}
+
+TEST(RepairPolygons, AUniformMeshIsTheMeshWithCounts) {
+  // Quads given as a uniform sorpia::Mesh (face_size 4, no counts) repair and
+  // split as the same quads with counts; repair gives counts, the split keeps
+  // the input's form; the form is checked with Topology's messages.
+  Poly p = quad_grid(3, 2);
+  std::reverse(p.indices.begin() + 5, p.indices.begin() + 8);  // quad 1 flipped
+  p.counts.push_back(4);
+  p.indices.insert(p.indices.end(), p.indices.begin(), p.indices.begin() + 4);  // quad 0 twice
+  sorpia::Mesh uniform;
+  uniform.face_vertex_indices = p.indices;
+  uniform.face_size = 4;
+  const sorpia::Mesh counted = sorpia_test::polygons(p.counts, p.indices);
+  const auto a = sorpia::repair(uniform, p.n_vertices), b = sorpia::repair(counted, p.n_vertices);
+  EXPECT_EQ(a.report.duplicate_faces, Ints{6});
+  EXPECT_EQ(a.report.flipped_faces, b.report.flipped_faces);
+  EXPECT_EQ(a.faces.face_vertex_counts, Ints(6, 4));
+  EXPECT_EQ(a.faces.face_vertex_indices, b.faces.face_vertex_indices);
+  EXPECT_EQ(a.vertex_map, b.vertex_map);
+  EXPECT_EQ(a.face_map, b.face_map);
+  const auto s = sorpia::split_nonmanifold(uniform, p.n_vertices), t = sorpia::split_nonmanifold(counted, p.n_vertices);
+  ASSERT_FALSE(s.empty());
+  EXPECT_TRUE(s.faces.uniform());
+  EXPECT_EQ(s.faces.face_size, 4);
+  EXPECT_EQ(s.faces.face_vertex_indices, t.faces.face_vertex_indices);
+  EXPECT_EQ(t.faces.face_vertex_counts, p.counts);
+  EXPECT_EQ(s.vertex_map, t.vertex_map);
+
+  uniform.face_size = 3;  // 28 indices
+  sorpia_test::expect_error<sorpia::MeshError>([&] { sorpia::repair(uniform, p.n_vertices); },
+                                               {"28 entries, not a multiple of face_size 3"});
+  uniform.face_size = 2;
+  sorpia_test::expect_error<sorpia::MeshError>([&] { sorpia::split_nonmanifold(uniform, p.n_vertices); },
+                                               {"face_size is 2"});
+  Ints short_indices(p.indices.begin(), p.indices.end() - 1);
+  sorpia_test::expect_error<sorpia::MeshError>(
+      [&] { sorpia::repair(sorpia_test::polygons(p.counts, short_indices), p.n_vertices); },
+      {"face_vertex_counts sum to 28 but face_vertex_indices has 27 entries"});
 }
 
 TEST(RepairPolygons, TrianglesAsPolygonsRepairAsTriangles) {
   // the polygon entry on an all-triangle list makes the triangle entry's changes
   const std::vector<std::int32_t> tri = {0, 1, 2, 1, 0, 3, 0, 1, 4, 0, 5, 6, 2, 1, 0};
   const Ints counts(5, 3);
-  const auto a = sorpia::repair(tri.data(), 5, 7);
-  const auto b = sorpia::repair(counts.data(), 5, tri.data(), 7);
-  EXPECT_EQ(a.face_vertex_indices, b.face_vertex_indices);
+  const auto a = sorpia::repair(sorpia_test::triangles(tri), 7);
+  const auto b = sorpia::repair(sorpia_test::polygons(counts, tri), 7);
+  EXPECT_EQ(a.faces.face_vertex_indices, b.faces.face_vertex_indices);
   EXPECT_EQ(a.vertex_map, b.vertex_map);
   EXPECT_EQ(a.face_map, b.face_map);
-  EXPECT_EQ(b.face_vertex_counts, Ints(b.face_map.size(), 3));
+  EXPECT_EQ(b.faces.face_vertex_counts, Ints(b.face_map.size(), 3));
   EXPECT_EQ(a.report.reversed_duplicate_faces, b.report.reversed_duplicate_faces);
   EXPECT_EQ(a.report.sheet_copies, b.report.sheet_copies);
 }

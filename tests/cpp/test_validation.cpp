@@ -55,7 +55,7 @@ TEST(Validation, DuplicateFacesInTheSameOrderOrBesideAThirdFace) {
 TEST(Validation, PillowsAreAccepted) {
   for (const Faces& faces : {Faces{0, 1, 2, 0, 2, 1}, Faces{0, 1, 2, 0, 2, 1, 3, 4, 5}}) {
     const std::size_t n = faces.size() == 6 ? 3 : 6;
-    EXPECT_TRUE(sorpia::faces_valid(faces.data(), faces.size() / 3, n));
+    EXPECT_TRUE(sorpia::faces_valid(sorpia_test::triangles(faces), n));
     const sorpia::Topology t(sorpia_test::triangles(faces), n);
     for (std::size_t v = 0; v < 3; ++v) {
       EXPECT_FALSE(t.is_boundary(v));

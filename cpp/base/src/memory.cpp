@@ -4,6 +4,7 @@
 #include <sys/resource.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <fstream>
 #include <optional>
 #include <sstream>
@@ -115,6 +116,15 @@ std::size_t available_memory_bytes(const std::string& proc, const std::string& c
 }
 
 }  // namespace detail
+
+std::string human_bytes(double b) {
+  char buf[64];
+  if (b >= 1e9)
+    std::snprintf(buf, sizeof buf, "%.1f GB", b / 1e9);
+  else
+    std::snprintf(buf, sizeof buf, "%.0f MB", b / 1e6);
+  return buf;
+}
 
 std::size_t available_memory_bytes() {
   const auto soft = [](int resource) {

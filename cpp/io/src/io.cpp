@@ -442,11 +442,11 @@ MeshFile parse_mesh(const FileData& file, MeshFormat format, const ReadOptions& 
   switch (format) {
     case MeshFormat::Obj: mesh = read_obj(file, polygons, options.tags, options.attributes); break;
     case MeshFormat::Off: mesh = read_off(file, polygons); break;
-    case MeshFormat::Ply: mesh = read_ply(file, polygons, options.attributes); break;
+    case MeshFormat::Ply: mesh = read_ply(file, polygons, options.attributes, options.points); break;
     case MeshFormat::Stl: mesh = read_stl(file, polygons); break;
   }
   if (mesh.n_vertices() == 0) fail(file, "no vertices: not a mesh file of this format, or an empty mesh");
-  if (mesh.n_faces() == 0) fail(file, "has " + std::to_string(mesh.n_vertices()) + " vertices but no faces");
+  if (mesh.n_faces() == 0 && !options.points) fail(file, "has " + std::to_string(mesh.n_vertices()) + " vertices but no faces");
   if (mesh.n_vertices() > static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max()))
     fail(file, "more vertices than int32 indices hold");
   if (mesh.n_faces() > static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max()))

@@ -425,7 +425,7 @@ MeshFile parse_mesh(const FileData& file, MeshFormat format, const ReadOptions& 
 // read_obj, per vertex (indices empty) from read_ply.
 MeshFile read_obj(const FileData& f, PolygonSplits& polygons, bool tags, bool attributes);
 MeshFile read_off(const FileData& f, PolygonSplits& polygons);
-MeshFile read_ply(const FileData& f, PolygonSplits& polygons, bool attributes);
+MeshFile read_ply(const FileData& f, PolygonSplits& polygons, bool attributes, bool points = false);
 MeshFile read_stl(const FileData& f, PolygonSplits& polygons);
 std::string format_obj(const MeshView& m, const FileTags* tags);
 std::string format_off(const MeshView& m);

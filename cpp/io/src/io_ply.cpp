@@ -248,7 +248,7 @@ int find_scalar(const Element& e, std::string_view name) {
   return -1;
 }
 
-Layout find_layout(const FileData& f, const Header& h, bool attributes) {
+Layout find_layout(const FileData& f, const Header& h, bool attributes, bool points) {
   Layout l;
   for (const auto& e : h.elements) {
     if (e.name == "vertex" && !l.vertex) {
@@ -287,7 +287,7 @@ Layout find_layout(const FileData& f, const Header& h, bool attributes) {
     }
   }
   if (!l.vertex) fail(f, "no 'vertex' element in the header");
-  if (!l.face) fail(f, "no 'face' or 'tristrips' element in the header: sorpia needs a triangle mesh");
+  if (!l.face && !points) fail(f, "no 'face' or 'tristrips' element in the header: sorpia needs a triangle mesh");
   return l;
 }
 
@@ -436,9 +436,9 @@ MeshFile read_ascii(const FileData& f, const Header& h, const Layout& l, Polygon
 
 }  // namespace
 
-MeshFile read_ply(const FileData& f, PolygonSplits& polygons, bool attributes) {
+MeshFile read_ply(const FileData& f, PolygonSplits& polygons, bool attributes, bool points) {
   const Header h = parse_header(f);
-  const Layout l = find_layout(f, h, attributes);
+  const Layout l = find_layout(f, h, attributes, points);
   return h.encoding == Encoding::Ascii ? read_ascii(f, h, l, polygons) : read_binary(f, h, l, polygons);
 }
 

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <numeric>
+#include <string>
 #include <utility>
 
 namespace sorpia {
@@ -204,8 +205,13 @@ MeshStatistics mesh_statistics(const Topology& topology, Scheme scheme) {
   return finish(c, topology.n_faces(), true, face_vertex.data(), regular_valence(scheme));
 }
 
-std::optional<MeshStatistics> face_list_statistics(const std::int32_t* faces, std::size_t n_faces,
-                                                   std::size_t n_vertices) {
+std::optional<MeshStatistics> face_list_statistics(const Mesh& mesh, std::size_t n_vertices) {
+  if (!mesh.all_triangles())
+    throw MeshError("face_list_statistics counts a triangle list (a sorpia::Mesh without face_vertex_counts, "
+                    "face_size 3); this mesh has " +
+                    std::string(mesh.uniform() ? "face_size " + std::to_string(mesh.face_size) : "face_vertex_counts"));
+  const std::size_t n_faces = detail::mesh_face_count(mesh);
+  const std::int32_t* faces = mesh.face_vertex_indices.data();
   const std::size_t n_half = 3 * n_faces;
   if (n_faces == 0) return std::nullopt;
   for (std::size_t h = 0; h < n_half; ++h)

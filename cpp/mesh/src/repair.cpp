@@ -469,16 +469,16 @@ RepairResult repair_pass(const FaceList& input, std::size_t n_vertices, bool pai
 
 
   // A reversed face keeps its first corner: (a, b, c, d) becomes (a, d, c, b).
-  r.face_vertex_indices.reserve(n_half);
+  r.faces.face_vertex_indices.reserve(n_half);
   for (std::size_t f = 0; f < n_faces; ++f) {
     if (removed[f]) continue;
     const std::int32_t lo = fl.begin(f), hi = fl.end(f);
-    r.face_vertex_indices.push_back(vertex_of[lo]);
+    r.faces.face_vertex_indices.push_back(vertex_of[lo]);
     if (!flip.empty() && flip[f])
-      for (std::int32_t h = hi - 1; h > lo; --h) r.face_vertex_indices.push_back(vertex_of[h]);
+      for (std::int32_t h = hi - 1; h > lo; --h) r.faces.face_vertex_indices.push_back(vertex_of[h]);
     else
-      for (std::int32_t h = lo + 1; h < hi; ++h) r.face_vertex_indices.push_back(vertex_of[h]);
-    if (kPolygons) r.face_vertex_counts.push_back(hi - lo);
+      for (std::int32_t h = lo + 1; h < hi; ++h) r.faces.face_vertex_indices.push_back(vertex_of[h]);
+    if (kPolygons) r.faces.face_vertex_counts.push_back(hi - lo);
     r.face_map.push_back(static_cast<std::int32_t>(f));
   }
   return r;
@@ -535,47 +535,37 @@ void compose(RepairResult& first, RepairResult&& later) {
   for (std::size_t i = 0; i < face_map.size(); ++i) face_map[i] = first.face_map[later.face_map[i]];
   first.vertex_map = std::move(vertex_map);
   first.face_map = std::move(face_map);
-  first.face_vertex_indices = std::move(later.face_vertex_indices);
-  first.face_vertex_counts = std::move(later.face_vertex_counts);
+  first.faces = std::move(later.faces);
 }
 
 }  // namespace
 
 namespace {
 
-// Whether sorpia::Topology accepts the faces (`counts`: nullptr for triangles).
-bool valid(const std::int32_t* counts, const FaceList& fl, std::size_t n_vertices) {
-  return counts ? faces_valid(counts, fl.n_faces, fl.idx, n_vertices) : faces_valid(fl.idx, fl.n_faces, n_vertices);
-}
-
 // Throws sorpia::Topology's MeshError for faces it refuses.
-void validate(const std::int32_t* counts, const FaceList& fl, std::size_t n_vertices) {
-  Mesh faces;
-  faces.face_vertex_indices.assign(fl.idx, fl.idx + fl.n_corners());
-  if (counts) faces.face_vertex_counts.assign(counts, counts + fl.n_faces);
-  static_cast<void>(Topology(std::move(faces), n_vertices));
-}
+void validate(const Mesh& faces, std::size_t n_vertices) { static_cast<void>(Topology(faces, n_vertices)); }
 
-// The index checks repair does not change, by the validation's message.
-void check_indices(const std::int32_t* counts, const FaceList& fl, std::size_t n_vertices) {
+// The index checks repair does not change (`fl` the FaceList of `faces`), by the validation's message.
+void check_indices(const Mesh& faces, const FaceList& fl, std::size_t n_vertices) {
   const bool ok = fl.n_faces > 0 && n_vertices <= static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max()) &&
                   std::all_of(fl.idx, fl.idx + fl.n_corners(), [&](std::int32_t v) {
                     return v >= 0 && static_cast<std::size_t>(v) < n_vertices;
                   });
   if (!ok) {
-    validate(counts, fl, n_vertices);
+    validate(faces, n_vertices);
     throw std::logic_error("sorpia::split_nonmanifold: the validation accepted faces with an index out of range");
   }
 }
 
-// repair() of faces sorpia::Topology refuses.
-RepairResult repair_faces(const std::int32_t* counts, const FaceList& fl, std::size_t n_vertices) {
-  check_indices(counts, fl, n_vertices);  // what repair does not change: refused as the validation refuses it
-  auto pass = [&](const FaceList& faces, std::size_t n, bool pair_sheets) {
-    return counts ? repair_pass<true>(faces, n, pair_sheets) : repair_pass<false>(faces, n, pair_sheets);
+// repair() of faces sorpia::Topology refuses (`fl` their FaceList).
+RepairResult repair_faces(const Mesh& faces, const FaceList& fl, std::size_t n_vertices) {
+  check_indices(faces, fl, n_vertices);  // what repair does not change: refused as the validation refuses it
+  const bool polygons = !faces.all_triangles();
+  auto pass = [&](const FaceList& in, std::size_t n, bool pair_sheets) {
+    return polygons ? repair_pass<true>(in, n, pair_sheets) : repair_pass<false>(in, n, pair_sheets);
   };
   RepairResult result = pass(fl, n_vertices, true);
-  if (result.face_vertex_indices.empty())
+  if (result.faces.face_vertex_indices.empty())
     throw MeshError("every face repeats a vertex (" + std::to_string(fl.n_faces) +
                     " degenerate faces): no face is left, and subdivision needs at least one face");
   // Pairing sheets can join them into one fan at both ends of their edge (two
@@ -583,17 +573,14 @@ RepairResult repair_faces(const std::int32_t* counts, const FaceList& fl, std::s
   // than two faces: a further pass makes each face of such an edge border it alone.
   constexpr int max_passes = 4;
   for (int n_pass = 1;; ++n_pass) {
-    const std::size_t n_out = result.vertex_map.size(), n_faces_out = result.face_map.size();
-    const std::int32_t* counts_out = counts ? result.face_vertex_counts.data() : nullptr;
-    const FaceArrays arrays =
-        counts ? FaceArrays::polygons(counts_out, n_faces_out) : FaceArrays::triangles(n_faces_out);
-    const FaceList out = arrays.over(result.face_vertex_indices.data());
-    if (valid(counts_out, out, n_out)) return result;
+    const std::size_t n_out = result.vertex_map.size();
+    if (faces_valid(result.faces, n_out)) return result;
+    const FaceArrays arrays = FaceArrays::of(result.faces);
     RepairResult next;
-    if (n_pass < max_passes) next = pass(out, n_out, false);
+    if (n_pass < max_passes) next = pass(arrays.over(result.faces), n_out, false);
     if (next.report.empty()) {  // nothing more repair changes (e.g. a vertex of too many edges)
       try {
-        validate(counts_out, out, n_out);
+        validate(result.faces, n_out);
       } catch (const MeshError& e) {
         throw MeshError(std::string("repair could not make a valid mesh: ") + e.what());
       }
@@ -606,17 +593,10 @@ RepairResult repair_faces(const std::int32_t* counts, const FaceList& fl, std::s
 }  // namespace
 
 // A valid mesh costs the validation alone, and comes back as it is.
-RepairResult repair(const std::int32_t* faces, std::size_t n_faces, std::size_t n_vertices) {
-  if (faces_valid(faces, n_faces, n_vertices)) return {};  // before FaceArrays: a valid mesh allocates nothing
-  const FaceArrays arrays = FaceArrays::triangles(n_faces);
-  return repair_faces(nullptr, arrays.over(faces), n_vertices);
-}
-
-RepairResult repair(const std::int32_t* face_vertex_counts, std::size_t n_faces, const std::int32_t* face_vertex_indices,
-                    std::size_t n_vertices) {
-  if (faces_valid(face_vertex_counts, n_faces, face_vertex_indices, n_vertices)) return {};
-  const FaceArrays arrays = FaceArrays::polygons(face_vertex_counts, n_faces);
-  return repair_faces(face_vertex_counts, arrays.over(face_vertex_indices), n_vertices);
+RepairResult repair(const Mesh& faces, std::size_t n_vertices) {
+  if (faces_valid(faces, n_vertices)) return {};  // before FaceArrays: a valid mesh allocates nothing
+  const FaceArrays arrays = FaceArrays::of(faces);
+  return repair_faces(faces, arrays.over(faces), n_vertices);
 }
 
 namespace {
@@ -645,6 +625,7 @@ NonmanifoldSplit split_pass(const Faces<kPolygons>& fl, std::size_t n_vertices) 
     ++n_nonmanifold[v];
   };
   const detail::EdgeGroups edges(fl, n_vertices);
+  std::vector<std::pair<const std::int32_t*, std::int32_t>> nonmanifold_groups;  // their half-edges, in `edges`
   edges.for_each([&](std::int32_t v, std::int32_t x, const std::int32_t* b, std::int32_t k) {
     ++n_edges[v];
     ++n_edges[x];
@@ -656,6 +637,7 @@ NonmanifoldSplit split_pass(const Faces<kPolygons>& fl, std::size_t n_vertices) 
       mate[b[1]] = b[0];
     } else {
       s.nonmanifold_edges.push_back({v, x});
+      nonmanifold_groups.emplace_back(b, k);
       nonmanifold_end(v, x);
       nonmanifold_end(x, v);
     }
@@ -666,6 +648,20 @@ NonmanifoldSplit split_pass(const Faces<kPolygons>& fl, std::size_t n_vertices) 
   std::iota(s.vertex_map.begin(), s.vertex_map.end(), 0);
   const std::vector<std::int32_t> vertex_of = fan_vertices(fl, mate, removed, s.vertex_map, copies);
 
+  // Two faces of a non-manifold edge that run it opposite ways and lie in one
+  // fan at each end (a pillow beside a third face: joined through the
+  // pillow's other edges) have the same output vertices at both ends: the
+  // split mesh joins them across that edge, which OpenSubdiv makes
+  // infinitely sharp (sharp_edges). Two faces of an edge lie in one fan only
+  // as its two open ends, so no output edge gets more than two faces.
+  for (const auto& [b, k] : nonmanifold_groups)
+    for (std::int32_t i = 0; i < k; ++i)
+      for (std::int32_t j = i + 1; j < k; ++j) {
+        const std::int32_t g = b[i], h = b[j];
+        if (faces[g] != faces[h] && vertex_of[g] == vertex_of[fl.next(h)] && vertex_of[fl.next(g)] == vertex_of[h])
+          s.sharp_edges.push_back({std::min(vertex_of[g], vertex_of[h]), std::max(vertex_of[g], vertex_of[h])});
+      }
+  std::sort(s.sharp_edges.begin(), s.sharp_edges.end());
   std::vector<std::uint8_t> crease(n_vertices, 0);
   for (std::size_t vi = 0; vi < n_vertices; ++vi) {
     if (n_nonmanifold[vi] == 0 && copies[vi] == 0) continue;
@@ -712,29 +708,25 @@ NonmanifoldSplit split_pass(const Faces<kPolygons>& fl, std::size_t n_vertices) 
   s.single_face_sheets.erase(std::unique(s.single_face_sheets.begin(), s.single_face_sheets.end()),
                              s.single_face_sheets.end());
   if (s.empty()) return {};
-  s.face_vertex_indices.reserve(n_half);
-  for (std::size_t f = 0; f < fl.n_faces; ++f) {
-    for (std::int32_t h = fl.begin(f); h < fl.end(f); ++h) s.face_vertex_indices.push_back(vertex_of[h]);
-    if (kPolygons) s.face_vertex_counts.push_back(fl.end(f) - fl.begin(f));
-  }
+  s.faces.face_vertex_indices.reserve(n_half);
+  for (std::size_t h = 0; h < n_half; ++h) s.faces.face_vertex_indices.push_back(vertex_of[h]);
   return s;
 }
 
 }  // namespace
 
-NonmanifoldSplit split_nonmanifold(const std::int32_t* faces, std::size_t n_faces, std::size_t n_vertices) {
-  if (faces_valid(faces, n_faces, n_vertices)) return {};
-  const FaceArrays arrays = FaceArrays::triangles(n_faces);
-  check_indices(nullptr, arrays.over(faces), n_vertices);
-  return split_pass(Faces<false>{arrays.over(faces)}, n_vertices);
-}
-
-NonmanifoldSplit split_nonmanifold(const std::int32_t* face_vertex_counts, std::size_t n_faces,
-                                   const std::int32_t* face_vertex_indices, std::size_t n_vertices) {
-  if (faces_valid(face_vertex_counts, n_faces, face_vertex_indices, n_vertices)) return {};
-  const FaceArrays arrays = FaceArrays::polygons(face_vertex_counts, n_faces);
-  check_indices(face_vertex_counts, arrays.over(face_vertex_indices), n_vertices);
-  return split_pass(Faces<true>{arrays.over(face_vertex_indices)}, n_vertices);
+NonmanifoldSplit split_nonmanifold(const Mesh& faces, std::size_t n_vertices) {
+  if (faces_valid(faces, n_vertices)) return {};
+  const FaceArrays arrays = FaceArrays::of(faces);
+  const FaceList fl = arrays.over(faces);
+  check_indices(faces, fl, n_vertices);
+  NonmanifoldSplit s = faces.all_triangles() ? split_pass(Faces<false>{fl}, n_vertices)
+                                             : split_pass(Faces<true>{fl}, n_vertices);
+  if (!s.empty()) {  // faces are neither removed nor resized: the input's counts
+    s.faces.face_vertex_counts = faces.face_vertex_counts;
+    s.faces.face_size = faces.face_size;
+  }
+  return s;
 }
 
 }  // namespace sorpia

@@ -10,6 +10,7 @@
 #include <utility>
 
 #include "openmesh_types.hpp"
+#include "sorpia/cage.hpp"
 #include "sorpia/errors.hpp"
 
 namespace sorpia {
@@ -174,36 +175,7 @@ Mesh quad_grid(int nu, int nv) { return quads_of(grid(nu, nv)); }
 
 Mesh quad_irregular(int n_vertices, std::uint32_t seed) {
   check(n_vertices >= 96, "quad_irregular needs at least 96 vertices, got " + std::to_string(n_vertices));
-  const Mesh tri = irregular(n_vertices / 6, seed);
-  Mesh m;
-  m.vertices = tri.vertices;
-  const auto point = [&](std::initializer_list<std::int32_t> corners) {
-    const auto v = static_cast<std::int32_t>(m.n_vertices());
-    double p[3] = {0, 0, 0};
-    for (std::int32_t c : corners)
-      for (int k = 0; k < 3; ++k) p[k] += tri.vertices[3 * c + k] / static_cast<double>(corners.size());
-    m.vertices.insert(m.vertices.end(), p, p + 3);
-    return v;
-  };
-  std::map<std::pair<std::int32_t, std::int32_t>, std::int32_t> midpoints;
-  const auto midpoint = [&](std::int32_t a, std::int32_t b) {
-    const auto key = std::minmax(a, b);
-    const auto it = midpoints.find(key);
-    if (it != midpoints.end()) return it->second;
-    const std::int32_t v = point({a, b});
-    midpoints.emplace(key, v);
-    return v;
-  };
-  m.face_vertex_counts.assign(3 * tri.n_faces(), 4);
-  m.face_vertex_indices.reserve(12 * tri.n_faces());
-  for (std::size_t f = 0; f < tri.n_faces(); ++f) {
-    const std::int32_t* t = tri.face_vertex_indices.data() + 3 * f;
-    const std::int32_t c = point({t[0], t[1], t[2]});
-    const std::int32_t mid[3] = {midpoint(t[0], t[1]), midpoint(t[1], t[2]), midpoint(t[2], t[0])};
-    // corner k: (t[k], mid(k, k+1), centroid, mid(k-1, k)), counter-clockwise as the triangle
-    for (int k = 0; k < 3; ++k)
-      m.face_vertex_indices.insert(m.face_vertex_indices.end(), {t[k], mid[k], c, mid[(k + 2) % 3]});
-  }
+  Mesh m = quads_from_triangles(irregular(n_vertices / 6, seed));
   // Number the vertices in the order the faces first reach them, as a mesh
   // exported from a modeller would be: the triangle mesh's own vertices
   // otherwise all come before the points added between them.

@@ -557,24 +557,12 @@ void check_counts(std::size_t n_faces, std::size_t n_vertices) {
 
 }  // namespace
 
-bool faces_valid(const std::int32_t* faces, std::size_t n_faces, std::size_t n_vertices) {
+bool faces_valid(const Mesh& faces, std::size_t n_vertices) {
   bool valid = true;
   try {
-    check_counts(n_faces, n_vertices);
-    validate_faces(FaceList{faces, nullptr, nullptr, n_faces}, n_vertices, nullptr, &valid);
-  } catch (const MeshError&) {
-    return false;
-  }
-  return valid;
-}
-
-bool faces_valid(const std::int32_t* face_vertex_counts, std::size_t n_faces, const std::int32_t* face_vertex_indices,
-                 std::size_t n_vertices) {
-  bool valid = true;
-  try {
-    check_counts(n_faces, n_vertices);
-    const detail::FaceArrays arrays = detail::FaceArrays::polygons(face_vertex_counts, n_faces);
-    validate_faces(arrays.over(face_vertex_indices), n_vertices, nullptr, &valid);
+    const detail::FaceArrays arrays = detail::FaceArrays::of(faces);  // none for a triangle list
+    check_counts(arrays.n_faces, n_vertices);
+    validate_faces(arrays.over(faces), n_vertices, nullptr, &valid);
   } catch (const MeshError&) {
     return false;
   }
@@ -582,37 +570,23 @@ bool faces_valid(const std::int32_t* face_vertex_counts, std::size_t n_faces, co
 }
 
 Topology::Topology(const Mesh& mesh) : n_vertices_(mesh.n_vertices()) {
-  init(mesh.face_vertex_counts, mesh.face_vertex_indices, mesh.face_size);
+  init(Mesh{{}, mesh.face_vertex_counts, mesh.face_vertex_indices, mesh.face_size});  // the faces copied, not the vertices
 }
 
-Topology::Topology(Mesh faces, std::size_t n_vertices) : n_vertices_(n_vertices) {
-  init(faces.face_vertex_counts, std::move(faces.face_vertex_indices), faces.face_size);
-}
+Topology::Topology(Mesh faces, std::size_t n_vertices) : n_vertices_(n_vertices) { init(std::move(faces)); }
 
-void Topology::init(const std::vector<std::int32_t>& counts, std::vector<std::int32_t> indices,
-                    std::int32_t face_size) {
-  if (counts.empty()) {
-    if (face_size < 3)
-      throw MeshError("face_size is " + std::to_string(face_size) + ": a face needs at least 3 vertices");
-    if (indices.size() % static_cast<std::size_t>(face_size) != 0)
-      throw MeshError("face_vertex_indices has " + std::to_string(indices.size()) +
-                      " entries, not a multiple of face_size " + std::to_string(face_size));
-    n_faces_ = indices.size() / static_cast<std::size_t>(face_size);
-  } else {
-    n_faces_ = counts.size();
-  }
+void Topology::init(Mesh faces) {
+  n_faces_ = detail::mesh_face_count(faces);
   check_counts(n_faces_, n_vertices_);
-  if (counts.empty() && face_size == 3) {  // the triangle fast path: no counts, no offsets
-    face_indices_ = std::move(indices);
+  if (faces.all_triangles()) {  // the triangle fast path: no counts, no offsets
+    face_indices_ = std::move(faces.face_vertex_indices);
     build();
     return;
   }
-  face_offsets_ = counts.empty() ? detail::uniform_offsets(face_size, n_faces_)
-                                 : detail::polygon_offsets(counts.data(), n_faces_);
-  if (static_cast<std::size_t>(face_offsets_.back()) != indices.size())
-    throw MeshError("face_vertex_counts sum to " + std::to_string(face_offsets_.back()) +
-                    " but face_vertex_indices has " + std::to_string(indices.size()) + " entries");
-  face_indices_ = std::move(indices);
+  face_offsets_ = faces.uniform() ? detail::uniform_offsets(faces.face_size, n_faces_)
+                                  : detail::polygon_offsets(faces.face_vertex_counts.data(), n_faces_);
+  detail::check_counts_sum(face_offsets_, faces.face_vertex_indices.size());
+  face_indices_ = std::move(faces.face_vertex_indices);
   auto size = [&](std::size_t f) { return face_offsets_[f + 1] - face_offsets_[f]; };
   all_triangles_ = all_quads_ = true;
   for (std::size_t f = 0; f < n_faces_; ++f) {

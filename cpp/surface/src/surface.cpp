@@ -24,6 +24,7 @@
 #include "sorpia/detail/level_dependent_rows.hpp"
 #include "sorpia/detail/osd_refiner.hpp"
 #include "sorpia/detail/parallel.hpp"
+#include "sorpia/detail/unit_normal.hpp"
 #include "sorpia/errors.hpp"
 #include "sorpia/interrupt.hpp"
 #include "sorpia/limit.hpp"
@@ -52,15 +53,6 @@ using detail::Point3;
 // schemes: it measures Loop and Catmull-Clark).
 constexpr double kRefinerBytesPerTriangle = 220.0;
 constexpr double kRefinerBytesPerQuad = 300.0;
-
-std::string human_bytes(double b) {
-  char buf[64];
-  if (b >= 1e9)
-    std::snprintf(buf, sizeof buf, "%.1f GB", b / 1e9);
-  else
-    std::snprintf(buf, sizeof buf, "%.0f MB", b / 1e6);
-  return buf;
-}
 
 // Bfr represents the surface next to an extraordinary vertex by Gregory
 // patches after this many local refinements (default 2): 4 shrinks that
@@ -190,30 +182,6 @@ struct LimitSurface::Impl {
 };
 
 namespace {
-
-// v scaled by a power of two (exactly) so that its largest component lies in
-// [0.5, 1): products and squares of such vectors neither overflow nor underflow.
-void scale_to_unit(const double* v, double* out) {
-  const double m = std::max({std::abs(v[0]), std::abs(v[1]), std::abs(v[2])});
-  int e = 0;
-  if (m > 0.0 && std::isfinite(m)) std::frexp(m, &e);
-  for (int c = 0; c < 3; ++c) out[c] = std::ldexp(v[c], -e);
-}
-
-// The unit normal du x dv / |du x dv| at any scale of the coordinates (the
-// plain formula squares the cross product: it overflows from about 1e77 and
-// underflows below about 1e-77); zero where du and dv are parallel or zero.
-void unit_normal(const double* du, const double* dv, double* out) {
-  double a[3], b[3], n[3], u[3];
-  scale_to_unit(du, a);
-  scale_to_unit(dv, b);
-  n[0] = a[1] * b[2] - a[2] * b[1];
-  n[1] = a[2] * b[0] - a[0] * b[2];
-  n[2] = a[0] * b[1] - a[1] * b[0];
-  scale_to_unit(n, u);
-  const double len = std::sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
-  for (int c = 0; c < 3; ++c) out[c] = len > 0.0 ? u[c] / len : 0.0;
-}
 
 // Columns w of the tiles of a face split into quad sub-faces: corner j lies
 // at (j mod w, j div w).
@@ -388,7 +356,7 @@ void evaluate_points(const SurfaceFactory& factory, const double* mesh_points, c
                             std::copy(p, p + 3, positions + 3 * i);
                             if (du) std::copy(d1, d1 + 3, du + 3 * i);
                             if (dv) std::copy(d2, d2 + 3, dv + 3 * i);
-                            if (normals) unit_normal(d1, d2, normals + 3 * i);
+                            if (normals) detail::unit_normal(d1, d2, normals + 3 * i);
                           }
                         });
 }
@@ -437,6 +405,28 @@ struct FaceStencils {
 };
 
 }  // namespace
+
+void LimitSurface::visit_faces(const std::int32_t* face_ids, std::size_t k,
+                               const std::function<void(std::int32_t, const std::size_t*, const std::size_t*,
+                                                        const FaceEvaluation&)>& visit) const {
+  // The faces' checks: (0, 0) lies in every face's domain.
+  const std::vector<double> origin(2 * k, 0.0);
+  checked_params(face_ids, origin.data(), k);
+  const std::shared_lock<std::shared_mutex> lock(impl_->mutex);
+  const double* mesh_points = &impl_->points.data()->x;
+  const Bfr::Surface<double>::PointDescriptor desc(3);
+  for_each_face_surface(*impl_->factory, face_ids, k,
+                        [&](const Bfr::Surface<double>& surface, int face, const std::size_t* first,
+                            const std::size_t* last) {
+                          thread_local std::vector<double> patch;
+                          patch.resize(3 * static_cast<std::size_t>(surface.GetNumPatchPoints()));
+                          surface.PreparePatchPoints(mesh_points, desc, patch.data(), desc);
+                          const FaceEvaluation evaluate = [&](const double* uv, double* p, double* du, double* dv) {
+                            surface.Evaluate(uv, patch.data(), desc, p, du, dv);
+                          };
+                          visit(face, first, last, evaluate);
+                        });
+}
 
 std::vector<double> LimitSurface::checked_params(const std::int32_t* face_ids, const double* uv,
                                                  std::size_t k) const {

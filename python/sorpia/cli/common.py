@@ -118,7 +118,8 @@ class InputMesh(NamedTuple):
 
 
 def read_input(path, triangulate: bool = False, repair: bool = False, tags: bool = True,
-               nonmanifold: str = "error", boundary=None, attributes: bool = False, prim=None) -> InputMesh:
+               nonmanifold: str = "error", boundary=None, attributes: bool = False, prim=None,
+               points: bool = False) -> InputMesh:
     """Read the input mesh of every subcommand: polygons kept (or split with
     `triangulate`), the OBJ file's sharpness tags read unless `tags` is
     False (--ignore-tags), the mesh repaired with `repair` (repair_input),
@@ -127,8 +128,9 @@ def read_input(path, triangulate: bool = False, repair: bool = False, tags: bool
     boundary rule the command solves with (`boundary`: --boundary, None for
     the file's, see boundary_rule); with `attributes`, the file's texture
     coordinates and normals, carried onto the repaired or split faces
-    (carry_attributes); `prim`: a USD file's mesh prim (--prim). A USD
-    mesh's subdivisionScheme is in `tags` as "scheme" (choose_scheme)."""
+    (carry_attributes); `prim`: a USD file's mesh prim (--prim); `points`: a
+    file without faces (a point cloud) is read too. A USD mesh's
+    subdivisionScheme is in `tags` as "scheme" (choose_scheme)."""
     from .._usd import is_usd
     from ..io import read_mesh_file
 
@@ -139,7 +141,7 @@ def read_input(path, triangulate: bool = False, repair: bool = False, tags: bool
     t0 = time.perf_counter()
     has_tags = Path(path).suffix.lower() == ".obj" or is_usd(path)
     contents = read_mesh_file(path, triangulate=triangulate, tags=tags and has_tags, attributes=attributes,
-                              prim=prim)
+                              prim=prim, points=points)
     seconds = time.perf_counter() - t0
     vertices, faces, file_tags = contents.vertices, contents.faces, contents.tags or {}
     file_attributes = contents.attributes or {}
@@ -187,7 +189,7 @@ def sharpness_tags(tags: dict) -> dict:
 
 def split_input(mesh: InputMesh, source, boundary: str) -> InputMesh:
     """--nonmanifold sharp: a non-manifold mesh replaced by its manifold split
-    with OpenSubdiv's rules as corner tags (sorpia._nonmanifold.split under the
+    with OpenSubdiv's rules as corner and crease tags (sorpia._nonmanifold.split under the
     `boundary` rule; its NonmanifoldWarning is printed); what the split
     cannot reproduce is a UserError naming the file `source`."""
     from .. import MeshError
@@ -207,8 +209,9 @@ def split_input(mesh: InputMesh, source, boundary: str) -> InputMesh:
 def split_json(split) -> dict:
     """What a command's JSON report holds of --nonmanifold sharp: the
     non-manifold edges and vertices (input indices), the corners among them,
-    and the vertex map of the split (for every vertex of the split, the input
-    vertex it copies)."""
+    the edges of the split made infinitely sharp creases (sharp_edges, the
+    split's indices) and the vertex map of the split (for every vertex of the
+    split, the input vertex it copies)."""
     return {**split.report, "vertex_map": split.vertex_map}
 
 

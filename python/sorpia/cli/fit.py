@@ -23,8 +23,8 @@ from .progress import Progress
 def run_fit(input_path, output, *, method="auto", omega="auto", tol=1e-10, max_iter=1000,
             boundary=None, surface=None, level=3, report=None, quiet=False, force=False,
             triangulate=False, binary=False, threads=1, repair=False, scheme="auto", ignore_tags=False,
-            sharp_angle=None, nonmanifold="error", keep_unconverged=False, out=None, prim=None, blender=None
-            ) -> tuple[int, dict]:
+            sharp_angle=None, nonmanifold="error", keep_unconverged=False, out=None, prim=None, blender=None,
+            fair=False, levels=None, membrane=None, targets=None) -> tuple[int, dict]:
     """`sorpia fit`: returns (exit code, report dict). `boundary` None: the
     file's interpolateboundary tag, else the default rule. A solve that did
     not reach tol writes no control mesh or surface (only the report) unless
@@ -32,7 +32,28 @@ def run_fit(input_path, output, *, method="auto", omega="auto", tol=1e-10, max_i
     singular B (stop_reason "singular"), which is written with its warning.
     A USD output of a USD input is the input's stage with the fitted mesh in
     its prim (`prim`); `blender` a bpy script (sorpia.blender) for the control
-    mesh."""
+    mesh. `fair`: fair interpolation instead (cli.fair.run_fair), with
+    `levels`, `membrane` and `targets` (a file of vertex indices)."""
+    if not fair:
+        for opt, value in (("--levels", levels), ("--membrane", membrane), ("--targets", targets)):
+            if value is not None:
+                raise UserError(f"{opt} applies to fair interpolation only: add --fair")
+    else:
+        refused = [opt for opt, given in (("--method", method != "auto"), ("--omega", omega != "auto"),
+                                          ("--keep-unconverged", keep_unconverged),
+                                          ("--nonmanifold sharp", nonmanifold != "error")) if given]
+        if refused:
+            raise UserError(f"{', '.join(refused)} cannot go with --fair: fair interpolation starts from the default "
+                            "plain solve (auto), always writes its control mesh (the targets are met whatever the "
+                            "iteration stops at) and takes manifold meshes only")
+        from .fair import run_fair
+
+        return run_fair(input_path, output, levels=1 if levels is None else levels,
+                        membrane=0.0 if membrane is None else membrane, targets=targets, tol=tol,
+                        max_iter=max_iter, boundary=boundary, surface=surface, level=level, report=report,
+                        quiet=quiet, force=force, triangulate=triangulate, binary=binary, threads=threads,
+                        repair=repair, scheme=scheme, ignore_tags=ignore_tags, sharp_angle=sharp_angle, out=out,
+                        prim=prim, blender=blender)
     from .. import _core, write_mesh
     from .._meshinfo import topology_info
 

@@ -8,6 +8,7 @@ from .. import __version__
 from .._validate import BOUNDARY_RULES, DEFAULT_BOUNDARY
 from .._plotting import FACE_BUDGET  # plotting imports matplotlib only when drawing
 from .common import CLI_SCHEMES, DISPLAY_ORDER
+from .approximate import run_approximate
 from .compare import run_compare
 from .demo import run_demo
 from .fit import run_fit
@@ -226,6 +227,19 @@ def build_parser() -> argparse.ArgumentParser:
                      "draws the fitted limit surface (Catmull-Clark only: Blender has no Loop)")
     fit.add_argument("--binary", action="store_true", help="write .ply and .stl outputs in binary (faster, "
                      "smaller; PLY keeps float64 either way)")
+    fit.add_argument("--fair", action="store_true",
+                     help="fair interpolation (Halstead, Kass and DeRose 1993): write a control mesh --levels "
+                     "subdivision steps finer (faces and tags as OpenSubdiv's refinement carries them) whose limit "
+                     "surface passes through the given vertices (or --targets) and bends least (thin-plate energy, "
+                     "plus --membrane); --tol then bounds the energy's relative change over 10 iterations and "
+                     "--max-iter its iterations")
+    fit.add_argument("--levels", type=_positive_int, default=None, metavar="N",
+                     help="--fair: subdivision steps from the input to the fair control mesh (default 1)")
+    fit.add_argument("--membrane", type=_float_arg, default=None, metavar="W",
+                     help="--fair: weight of the membrane term beside the thin plate's 1 (default 0)")
+    fit.add_argument("--targets", metavar="FILE",
+                     help="--fair: interpolate only these vertices (a text file of 0-based vertex indices, '#' "
+                     "comments); the others are free")
     scheme_options(fit)
     triangulate_flag(fit)
     repair_flag(fit, "the control mesh is that of the repaired mesh (its extra vertices copy input vertices) and "
@@ -237,7 +251,53 @@ def build_parser() -> argparse.ArgumentParser:
         surface=a.surface, level=a.level, report=a.report, quiet=a.quiet, force=a.force, triangulate=a.triangulate,
         binary=a.binary, threads=a.threads, repair=a.repair, scheme=a.scheme, ignore_tags=a.ignore_tags,
         sharp_angle=a.sharp_angle, nonmanifold=a.nonmanifold, keep_unconverged=a.keep_unconverged, prim=a.prim,
-        blender=a.blender)[0])
+        blender=a.blender, fair=a.fair, levels=a.levels, membrane=a.membrane, targets=a.targets)[0])
+
+    app = command("approximate", "fit a light cage whose limit surface approximates a scan's points",
+                  "Read a dense mesh or a point cloud (its vertices are the data points), take a cage (--cage, a "
+                  "mesh file, or --vertices N: the input decimated to N vertices by OpenMesh's Decimater, quads "
+                  "for Catmull-Clark) and move the cage's control vertices so that its limit surface fits the "
+                  "points in the least-squares sense (sorpia.approximate: footpoints on the limit surface, the "
+                  "normal equations by conjugate gradients or LSPIA, footpoints re-projected after each update). "
+                  "Writes the fitted cage (same faces; in .obj also its creases and boundary rule) and, if asked, "
+                  "its limit surface and a JSON report with the RMS and max distances both ways per iteration. "
+                  "Every output is checked before the work. Prints a short summary; the progress line on stderr.",
+                  solves=False)
+    mesh_output(app, "fitted cage")
+    cage_source = app.add_mutually_exclusive_group(required=True)
+    cage_source.add_argument("--vertices", type=_positive_int, metavar="N",
+                             help="make the cage by decimating the input's triangles to N vertices")
+    cage_source.add_argument("--cage", metavar="CAGE", help="the cage as a mesh file (its tags are used); only read")
+    app.add_argument("--scheme", choices=CLI_SCHEMES, default="auto",
+                     help="subdivision scheme: auto = Loop for a triangle cage (and for --vertices), Catmull-Clark "
+                     "otherwise; catmull-clark with --vertices makes a quad cage")
+    app.add_argument("--sharp-angle", type=_angle_arg, metavar="DEG",
+                     help="make every edge of the cage whose faces' normals are more than DEG degrees apart an "
+                     "infinitely sharp crease")
+    boundary_option(app, "boundary rule of the limit surface")
+    app.add_argument("--iterations", type=_positive_int, default=10, metavar="K",
+                     help="updates at most, each followed by re-projecting the footpoints")
+    app.add_argument("--tol", type=_float_arg, default=1e-3,
+                     help="stop when an update lowers the RMS distance by less than this fraction")
+    app.add_argument("--method", choices=("cg", "lspia"), default="cg",
+                     help="the update: cg = conjugate gradients on the normal equations, lspia = LSPIA's iteration")
+    app.add_argument("--tangential", type=_float_arg, default=1.0,
+                     help="weight of the distance along the surface: 1 = point distance, 0 = distance to the "
+                     "tangent plane (faster convergence on clean data)")
+    app.add_argument("--fairness", type=_float_arg, default=0.0,
+                     help="weight of the thin-plate fairness term, relative to the data term")
+    app.add_argument("--surface", metavar="SURF",
+                     help="also write the fitted limit surface, refined --level times, every vertex at its exact "
+                     "limit position")
+    app.add_argument("--level", type=_level_arg, default=3, metavar="L", help="refinement level of --surface")
+    app.add_argument("--report", metavar="REPORT.json",
+                     help="write a JSON report: the cage, the distances both ways per iteration, seconds per phase")
+    output_flags(app)
+    app.set_defaults(func=lambda a: run_approximate(
+        a.input, a.output, vertices=a.vertices, cage=a.cage, scheme=a.scheme, sharp_angle=a.sharp_angle,
+        report=a.report, surface=a.surface, level=a.level, iterations=a.iterations, tol=a.tol,
+        fairness=a.fairness, tangential=a.tangential, method=a.method, boundary=a.boundary, quiet=a.quiet,
+        force=a.force)[0])
 
     comp = command("compare", "run several methods to one tolerance: the paper's Table 1 and Figure 7",
                    "Run each method on the mesh to the same tolerance and print the paper's Table 1 layout for "
@@ -287,7 +347,20 @@ def build_parser() -> argparse.ArgumentParser:
                      help="the axis drawn vertical (many mesh files, e.g. the Stanford bunny, have y up)")
     ren.add_argument("--face-budget", type=_positive_int, default=FACE_BUDGET, metavar="N",
                      help="most triangles drawn per panel")
+    ren.add_argument("--cage", metavar="CAGE",
+                     help="approximation instead: IN's vertices are data points, CAGE (a mesh file) is fitted to them "
+                     "(sorpia approximate) and the panels show the cage and its limit surface with the data, before "
+                     "and after")
+    ren.add_argument("--iterations", type=_positive_int, default=10, metavar="K",
+                     help="with --cage: the approximation's updates at most")
     threads_option(ren, "--method auto, sor or gs only")
+    ren.add_argument("--fair", action="store_true",
+                     help="draw plain and fair interpolation side by side (as 'sorpia fit --fair'): the plain "
+                     "control mesh and limit surface, then the fair control mesh --levels finer and its surface")
+    ren.add_argument("--levels", type=_positive_int, default=None, metavar="N",
+                     help="--fair: subdivision steps from the input to the fair control mesh (default 1)")
+    ren.add_argument("--membrane", type=_float_arg, default=None, metavar="W",
+                     help="--fair: weight of the membrane term beside the thin plate's 1 (default 0)")
     scheme_options(ren)
     triangulate_flag(ren)
     repair_flag(ren, "the panels show the repaired mesh")
@@ -298,7 +371,8 @@ def build_parser() -> argparse.ArgumentParser:
         boundary=a.boundary, size=a.size,
         elev=a.elev, azim=a.azim, face_budget=a.face_budget, quiet=a.quiet, force=a.force,
         triangulate=a.triangulate, up=a.up, threads=a.threads, repair=a.repair, scheme=a.scheme,
-        ignore_tags=a.ignore_tags, sharp_angle=a.sharp_angle, nonmanifold=a.nonmanifold, prim=a.prim)[0])
+        ignore_tags=a.ignore_tags, sharp_angle=a.sharp_angle, nonmanifold=a.nonmanifold, prim=a.prim, fair=a.fair,
+        levels=a.levels, membrane=a.membrane, cage=a.cage, iterations=a.iterations)[0])
 
     inf = command("info", "mesh statistics (the paper's Table 2) and whether PIA can run on it",
                   "Print vertices, faces, edges, boundary loops, Euler characteristic, genus, components, "

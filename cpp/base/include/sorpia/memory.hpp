@@ -22,6 +22,9 @@ namespace sorpia {
 /// A limit used up gives 1 (known, and nothing left), not 0.
 std::size_t available_memory_bytes();
 
+/// A byte count for a message: "1.5 GB" from 1e9 on, else "420 MB".
+std::string human_bytes(double bytes);
+
 namespace detail {
 
 /// No limit, for the arguments below.

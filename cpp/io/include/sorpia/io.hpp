@@ -108,6 +108,10 @@ struct ReadOptions {
   /// `u v` (or `s t`, `texture_u texture_v`, `texture_s texture_t`) and `nx ny
   /// nz`. Without it they are skipped unread. OFF and STL give none.
   bool attributes = false;
+  /// Accept a file without faces, a point cloud (a PLY file with no face
+  /// element, an OBJ file of `v` lines, an OFF file of 0 faces): its
+  /// vertices with no faces. Without it such a file is refused.
+  bool points = false;
 };
 
 /// Read a mesh.

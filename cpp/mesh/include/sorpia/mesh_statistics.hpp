@@ -71,9 +71,11 @@ MeshStatistics mesh_statistics(const Topology& topology, Scheme scheme = Scheme:
 
 /// The statistics of a raw triangle list that may fail sorpia's validation
 /// (non-manifold edges or vertices, flipped faces, duplicates, repeated
-/// vertices in a face); genus stays unknown. std::nullopt when there is no face
-/// or an index is outside [0, n_vertices): there is no edge list to count.
-std::optional<MeshStatistics> face_list_statistics(const std::int32_t* faces, std::size_t n_faces,
-                                                   std::size_t n_vertices);
+/// vertices in a face); genus stays unknown. `faces` is a triangle list
+/// (Mesh::all_triangles) over n_vertices vertices; faces.vertices is not read.
+/// std::nullopt when there is no face or an index is outside [0, n_vertices):
+/// there is no edge list to count.
+/// @throw MeshError  faces that are not a triangle list given without counts
+std::optional<MeshStatistics> face_list_statistics(const Mesh& faces, std::size_t n_vertices);
 
 }  // namespace sorpia

@@ -9,6 +9,8 @@
 #include <cstdint>
 #include <vector>
 
+#include "sorpia/mesh.hpp"
+
 namespace sorpia {
 
 /// Every change sorpia::repair made, in the input's indices.
@@ -59,8 +61,12 @@ struct RepairReport {
 /// renumbered (and reversed if it was flipped: first corner kept, the others
 /// in the opposite order), without the corners dropped from a collapsed face.
 struct RepairResult {
-  std::vector<std::int32_t> face_vertex_indices;  ///< the vertices of every face, face after face
-  std::vector<std::int32_t> face_vertex_counts;   ///< polygons: the vertex count of each face; empty for triangles
+  /// The repaired faces, without coordinates (faces.vertices is empty), over
+  /// vertex_map.size() vertices: a triangle list given without counts
+  /// (Mesh::all_triangles) comes back so, any other mesh with its
+  /// face_vertex_counts (a collapsed face has fewer corners than its input
+  /// face). Empty for a valid input.
+  Mesh faces;
   std::vector<std::int32_t> vertex_map;  ///< n_vertices + the copies; vertex_map[i] = i for i < n_vertices
   std::vector<std::int32_t> face_map;    ///< one entry per output face
   RepairReport report;
@@ -113,21 +119,16 @@ struct RepairResult {
 /// arrays: the input is the result, nothing is copied. Repair is idempotent:
 /// its output is valid.
 ///
-/// @param faces       row-major (n_faces, 3) vertex indices in [0, n_vertices)
+/// @param faces       the faces of a sorpia::Mesh (triangles or polygons, as
+///                    Topology takes them; faces.vertices is not read) over
+///                    n_vertices vertices
 /// @throw MeshError   faces that all repeat a vertex; or
 ///                    a problem repair does not change (an index out of range,
-///                    no faces, a vertex of more edges than OpenSubdiv takes),
-///                    with sorpia::Topology's message
-RepairResult repair(const std::int32_t* faces, std::size_t n_faces, std::size_t n_vertices);
-
-/// The same rules for polygons in the counts + indices form of sorpia::Topology
-/// (face f has face_vertex_counts[f] >= 3 vertices, listed in
-/// face_vertex_indices after those of the faces before it). The result's faces
-/// are polygons with their face_vertex_counts (a collapsed face has fewer vertices
-/// than its input face); the same errors, and a face of fewer than three
-/// vertices is refused as the validation refuses it.
-RepairResult repair(const std::int32_t* face_vertex_counts, std::size_t n_faces, const std::int32_t* face_vertex_indices,
-                    std::size_t n_vertices);
+///                    no faces, a vertex of more edges than OpenSubdiv takes,
+///                    counts that do not add up to the indices), with
+///                    sorpia::Topology's message. A polygon of fewer than
+///                    three vertices is refused as the validation refuses it.
+RepairResult repair(const Mesh& faces, std::size_t n_vertices);
 
 /// For nonmanifold="sharp": the mesh kept as it is, but cut apart where
 /// OpenSubdiv sees non-manifold topology, so that OpenSubdiv's own rules for
@@ -145,8 +146,13 @@ RepairResult repair(const std::int32_t* face_vertex_counts, std::size_t n_faces,
 /// edge becomes one boundary edge (infinitely sharp, as OpenSubdiv makes it)
 /// per face, and each vertex gets one output vertex per fan (the first fan in
 /// face order keeps the input index, copies are appended). Faces are neither
-/// removed nor reversed. On the split mesh with an infinitely sharp corner
-/// tag on every copy of each vertex in `corners`, every vertex's limit row is
+/// removed nor reversed. Where two faces of a non-manifold edge that run it
+/// opposite ways lie in one fan at both its ends (a pillow beside a third
+/// face), the split mesh has them as the two faces of one edge again: those
+/// edges are `sharp_edges`. On the split mesh with an infinitely sharp corner
+/// tag on every copy of each vertex in `corners` and an infinitely sharp
+/// crease on each of sharp_edges, OpenSubdiv's refinement makes the points
+/// of its refinement of the input mesh, and every vertex's limit row is
 /// OpenSubdiv's row on the input mesh, its columns mapped through vertex_map;
 /// a crease vertex's copies each lie on the boundary between the copies of
 /// its two non-manifold edges, whose boundary rule is the crease rule, except
@@ -155,8 +161,10 @@ RepairResult repair(const std::int32_t* face_vertex_counts, std::size_t n_faces,
 /// then solves the split under edge-only, with the corners edge-and-corner
 /// makes, every other vertex of one face, as tags: OpenSubdiv's rows).
 struct NonmanifoldSplit {
-  std::vector<std::int32_t> face_vertex_indices;  ///< the vertices of every face, renumbered, face after face
-  std::vector<std::int32_t> face_vertex_counts;   ///< polygons: the vertex count of each face; empty for triangles
+  /// The faces, their vertices renumbered, without coordinates (faces.vertices
+  /// is empty), over vertex_map.size() vertices: counts as the input had
+  /// them (none for Mesh::all_triangles).
+  Mesh faces;
   std::vector<std::int32_t> vertex_map;   ///< for every output vertex, the input vertex it copies
   /// The non-manifold edges (lower, higher input vertex), OpenSubdiv's infinitely sharp ones.
   std::vector<std::array<std::int32_t, 2>> nonmanifold_edges;
@@ -164,21 +172,22 @@ struct NonmanifoldSplit {
   std::vector<std::int32_t> nonmanifold_vertices, corners;
   /// Crease vertices with a copy in a fan of one face.
   std::vector<std::int32_t> single_face_sheets;
+  /// Edges of the split (lower, higher output vertex) whose two faces border
+  /// a non-manifold input edge: to be tagged infinitely sharp creases.
+  std::vector<std::array<std::int32_t, 2>> sharp_edges;
 
-  /// True for a manifold mesh (then face_vertex_indices and vertex_map are empty: the input is the split).
+  /// True for a manifold mesh (then faces and vertex_map are empty: the input is the split).
   bool empty() const { return nonmanifold_vertices.empty(); }
 };
 
-/// The split of `faces` (row-major (n_faces, 3)) described at NonmanifoldSplit.
+/// The split of `faces` (the faces of a sorpia::Mesh, triangles or polygons
+/// as Topology takes them, over n_vertices vertices; faces.vertices is not
+/// read) described at NonmanifoldSplit.
 /// @throw MeshError  a face that repeats a vertex (OpenSubdiv would give it a
 ///                   degenerate edge, which no sorpia mesh has); a crease
 ///                   vertex some fan of which is not bounded by its two
 ///                   non-manifold edges (the split would not reproduce its
 ///                   crease rule); a problem of the indices, as Topology says it
-NonmanifoldSplit split_nonmanifold(const std::int32_t* faces, std::size_t n_faces, std::size_t n_vertices);
-
-/// The same for polygons (counts + indices, as Topology takes them).
-NonmanifoldSplit split_nonmanifold(const std::int32_t* face_vertex_counts, std::size_t n_faces,
-                                   const std::int32_t* face_vertex_indices, std::size_t n_vertices);
+NonmanifoldSplit split_nonmanifold(const Mesh& faces, std::size_t n_vertices);
 
 }  // namespace sorpia

@@ -13,12 +13,10 @@
 
 namespace sorpia {
 
-/// Whether the sorpia::Topology constructor accepts these faces, found by its
-/// checks without building the one-ring or naming the problem.
-bool faces_valid(const std::int32_t* faces, std::size_t n_faces, std::size_t n_vertices);
-/// The same for polygons (the Topology constructor that takes counts and indices).
-bool faces_valid(const std::int32_t* face_vertex_counts, std::size_t n_faces, const std::int32_t* face_vertex_indices,
-                 std::size_t n_vertices);
+/// Whether Topology(faces, n_vertices) accepts these faces (faces.vertices is
+/// not read), found by its checks without building the one-ring or naming
+/// the problem.
+bool faces_valid(const Mesh& faces, std::size_t n_vertices);
 
 /// Connectivity of a polygon mesh (triangles, quads, any n-gons), built once
 /// and shared by the limit operator, the solvers and surface evaluation.
@@ -123,8 +121,8 @@ class Topology {
   std::size_t n_unreferenced() const { return n_unreferenced_; }
 
  private:
-  // The faces' checks of form and their arrays (face_size stands for counts when these are empty), then build().
-  void init(const std::vector<std::int32_t>& counts, std::vector<std::int32_t> indices, std::int32_t face_size);
+  // The faces' checks of form and their arrays (taken over), then build().
+  void init(Mesh faces);
   void build();
 
   std::size_t n_vertices_ = 0;

@@ -7,6 +7,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -183,6 +184,23 @@ class LimitSurface {
   /// @throws ParameterError when the level is out of range or the estimated
   ///         memory (tessellation_bytes) exceeds the memory available
   Mesh tessellate(int level);
+
+  /// Evaluation of one face's surface at any parameter in its domain, with
+  /// both first derivatives: (uv[2], position[3], du[3], dv[3]). Bfr's own
+  /// evaluation (no exact corner from B, see evaluate()).
+  using FaceEvaluation = std::function<void(const double*, double*, double*, double*)>;
+  /// Visits the distinct faces of k entries face_ids[0..k), each on one of
+  /// the core's threads with its surface built and its patch points prepared
+  /// once: visit(face, first, last, evaluate), where [first, last) are the
+  /// indices i of the entries with face_ids[i] == face. For work that
+  /// evaluates one face many times (Newton steps on footpoints) without
+  /// rebuilding its patch at each step. The calls run concurrently on
+  /// different faces; an exception from one is rethrown here.
+  /// @throws ParameterError for a face index out of range or a hole;
+  ///         MeshError as evaluate()
+  void visit_faces(const std::int32_t* face_ids, std::size_t k,
+                   const std::function<void(std::int32_t, const std::size_t*, const std::size_t*,
+                                            const FaceEvaluation&)>& visit) const;
 
  private:
   // The parameters of k points after evaluate()'s checks (pulled onto the

@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "sorpia/errors.hpp"
+#include "sorpia/mesh.hpp"
 
 namespace sorpia {
 namespace detail {
@@ -117,6 +118,26 @@ inline std::vector<std::int32_t> uniform_offsets(std::int32_t face_size, std::si
   return off;
 }
 
+// The number of faces of a sorpia::Mesh, its uniform form checked (face_size
+// at least 3 and dividing the indices; counts are checked by polygon_offsets
+// and check_counts_sum).
+inline std::size_t mesh_face_count(const Mesh& m) {
+  if (!m.uniform()) return m.face_vertex_counts.size();
+  if (m.face_size < 3)
+    throw MeshError("face_size is " + std::to_string(m.face_size) + ": a face needs at least 3 vertices");
+  if (m.face_vertex_indices.size() % static_cast<std::size_t>(m.face_size) != 0)
+    throw MeshError("face_vertex_indices has " + std::to_string(m.face_vertex_indices.size()) +
+                    " entries, not a multiple of face_size " + std::to_string(m.face_size));
+  return m.face_vertex_indices.size() / static_cast<std::size_t>(m.face_size);
+}
+
+// Offsets (polygon_offsets, uniform_offsets) that end at the number of indices given.
+inline void check_counts_sum(const std::vector<std::int32_t>& off, std::size_t n_indices) {
+  if (static_cast<std::size_t>(off.back()) != n_indices)
+    throw MeshError("face_vertex_counts sum to " + std::to_string(off.back()) + " but face_vertex_indices has " +
+                    std::to_string(n_indices) + " entries");
+}
+
 // The face of every corner of the faces with offsets `off` (FaceList::corner_face).
 inline std::vector<std::int32_t> corner_faces(const std::vector<std::int32_t>& off) {
   std::vector<std::int32_t> face(static_cast<std::size_t>(off.back()));
@@ -137,9 +158,25 @@ struct FaceArrays {
     a.corner_face = detail::corner_faces(a.off);
     return a;
   }
+  // The arrays of a sorpia::Mesh's faces (none for Mesh::all_triangles), its
+  // form checked with sorpia::Topology's messages (mesh_face_count, polygon_offsets).
+  static FaceArrays of(const Mesh& m) {
+    const std::size_t n = mesh_face_count(m);
+    if (m.all_triangles()) return triangles(n);
+    if (!m.uniform()) {
+      FaceArrays a = polygons(m.face_vertex_counts.data(), n);
+      check_counts_sum(a.off, m.face_vertex_indices.size());
+      return a;
+    }
+    FaceArrays a{n, uniform_offsets(m.face_size, n), {}};
+    a.corner_face = detail::corner_faces(a.off);
+    return a;
+  }
   FaceList over(const std::int32_t* idx) const {
     return {idx, off.empty() ? nullptr : off.data(), corner_face.empty() ? nullptr : corner_face.data(), n_faces};
   }
+  // The FaceList of the mesh these arrays were made `of`.
+  FaceList over(const Mesh& m) const { return over(m.face_vertex_indices.data()); }
 };
 
 // Corner of a face (v, a, ..., b) at v, counter-clockwise: `next` = a, `prev` = b.

@@ -1,0 +1,364 @@
+"""Approximation of dense meshes side by side with Subdivfit (issue 23, item 7).
+
+    python bench/approximate_peers.py                      # the shared scans and two generated meshes
+    python bench/approximate_peers.py --meshes noisy-sphere:40962 --fraction 0.02 --no-page
+    SUBDIVFIT=/path/to/Subdivfit python bench/approximate_peers.py
+
+On each mesh the data points are its vertices (those its faces use), and the
+cage is `sorpia.decimate(vertices, faces, N)` with N = --fraction of them
+(Loop, OpenMesh's quadric decimation). Every row fits that cage to those
+points, and every row is measured the same way: the distance from each data
+point to the row's limit surface (sorpia's Loop limit of the row's cage,
+tessellated at level 4), exact point-to-triangle distance, as RMS and max,
+divided by the bounding-box diagonal of the points. Rows:
+
+- Subdivfit -gfit 10 and -gfit 30: Hugues Hoppe's program (Hoppe et al.,
+  "Piecewise smooth surface reconstruction", SIGGRAPH 1994), built from
+  hhoppe/Mesh-processing-library at commit b79dd12 (`make CC=gcc -C libHh`,
+  `-C Subdivfit`); its output cage is read back and evaluated by sorpia's
+  Loop limit surface. Time: the process, wall clock (its own reading of the
+  text files included).
+- interpolation: `sorpia.interpolate` of the cage: the limit surface through
+  the decimated cage's vertices.
+- decimated cage: the cage's own limit surface, unchanged.
+- sorpia.approximate: when the installed sorpia has it.
+
+The check that Subdivfit's Loop rules are OpenSubdiv's on smooth parts
+(--check-rules, on by default): its own subdivided surface (`-outn`, two
+levels, vertices sent to their limit positions) against sorpia's level-2
+tessellation of the same closed cage, the largest distance from each of its
+vertices to the nearest of sorpia's, over the diagonal.
+
+Subdivfit's input converters (.m: ``Vertex i x y z`` / ``Face j a b c``,
+1-based; points: ``p x y z``) live here, not in the product. Nothing here runs
+under pytest.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import pathlib
+import subprocess
+import sys
+import tempfile
+import time
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+import sorpia
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from _report import ROOT, write_page  # noqa: E402
+
+SHARED = ROOT.parent / "shared" / "meshes"
+DEFAULT_MESHES = ("mountain.obj", "stanford-bunny.obj", "igl_bumpy-cube.obj", "airplane.obj",
+                  "noisy-sphere:163842", "noisy-torus:100000")
+DEFAULT_SUBDIVFIT = pathlib.Path("/work/peers/mpl/bin/unix/Subdivfit")
+LEVEL = 4  # the tessellation the distances are measured to
+
+
+# ---- meshes ----------------------------------------------------------------------------------------------------
+
+def load(spec: str):
+    """(name, vertices, triangles): a file (relative names under ../shared/meshes) or a generated noisy mesh
+    ``noisy-sphere:N`` / ``noisy-torus:N`` (about N vertices, displaced along the normal by Gaussian noise of
+    1e-3 of the bounding-box diagonal, seed 1). The vertices no face uses are left out (they are no data)."""
+    rng = np.random.default_rng(1)
+    if ":" in spec and not spec.endswith((".obj", ".ply", ".off", ".stl")):
+        kind, _, n = spec.partition(":")
+        n = int(n)
+        if kind == "noisy-sphere":
+            level = int(round(np.log((n - 2) / 10) / np.log(4)))
+            v, f = sorpia.shapes.icosphere(level)
+            normals = v / np.linalg.norm(v, axis=1, keepdims=True)
+        elif kind == "noisy-torus":
+            nv = max(3, round(np.sqrt(n / 2.5)))
+            v, f = sorpia.shapes.torus(max(3, n // nv), nv)
+            ring = v.copy()
+            ring[:, 2] = 0
+            ring *= 1.0 / np.linalg.norm(ring, axis=1, keepdims=True)
+            normals = v - ring
+            normals /= np.linalg.norm(normals, axis=1, keepdims=True)
+        else:
+            raise SystemExit(f"unknown mesh {spec!r}")
+        diag = np.linalg.norm(v.max(0) - v.min(0))
+        v = v + normals * rng.normal(scale=1e-3 * diag, size=(len(v), 1))
+        return f"{kind} ({len(v)})", v, f
+    path = pathlib.Path(spec)
+    if not path.is_absolute() and not path.exists():
+        path = SHARED / spec
+    v, f = sorpia.read_mesh(str(path))
+    f = np.asarray(f)
+    used = np.unique(f)
+    if len(used) < len(v):
+        renumber = np.full(len(v), -1, np.int64)
+        renumber[used] = np.arange(len(used))
+        v, f = v[used], renumber[f]
+    return path.name, np.asarray(v, dtype=float), np.asarray(f, dtype=np.int32)
+
+
+# ---- exact point-to-triangle distance ----------------------------------------------------------------------------
+
+def point_triangle_distance(p, a, b, c):
+    """Distance from each p[i] to the triangle (a[i], b[i], c[i]), exact: the closest point by the Voronoi
+    regions of the triangle's vertices, edges and face (Ericson, Real-Time Collision Detection, 5.1.5)."""
+    ab, ac, ap = b - a, c - a, p - a
+    d1, d2 = np.einsum("ij,ij->i", ab, ap), np.einsum("ij,ij->i", ac, ap)
+    bp = p - b
+    d3, d4 = np.einsum("ij,ij->i", ab, bp), np.einsum("ij,ij->i", ac, bp)
+    cp = p - c
+    d5, d6 = np.einsum("ij,ij->i", ab, cp), np.einsum("ij,ij->i", ac, cp)
+    va, vb, vc = d3 * d6 - d5 * d4, d5 * d2 - d1 * d6, d1 * d4 - d3 * d2
+    with np.errstate(divide="ignore", invalid="ignore"):
+        denom = va + vb + vc
+        v = np.where(denom != 0, vb / denom, 0.0)
+        w = np.where(denom != 0, vc / denom, 0.0)
+        closest = a + ab * v[:, None] + ac * w[:, None]  # inside the face
+        # edge ab
+        t = d1 / (d1 - d3)
+        sel = (vc <= 0) & (d1 >= 0) & (d3 <= 0)
+        closest[sel] = a[sel] + t[sel, None] * ab[sel]
+        # edge ac
+        t = d2 / (d2 - d6)
+        sel = (vb <= 0) & (d2 >= 0) & (d6 <= 0)
+        closest[sel] = a[sel] + t[sel, None] * ac[sel]
+        # edge bc
+        t = (d4 - d3) / ((d4 - d3) + (d5 - d6))
+        sel = (va <= 0) & ((d4 - d3) >= 0) & ((d5 - d6) >= 0)
+        closest[sel] = b[sel] + t[sel, None] * (c[sel] - b[sel])
+    for sel, q in (((d1 <= 0) & (d2 <= 0), a), ((d3 >= 0) & (d4 <= d3), b), ((d6 >= 0) & (d5 <= d6), c)):
+        closest[sel] = q[sel]  # vertex regions last: they take precedence, as in Ericson's order of tests
+    return np.linalg.norm(p - closest, axis=1)
+
+
+def distances_to_mesh(points, vertices, triangles, k=16, chunk=200_000):
+    """Exact distance from every point to the triangle mesh. Candidates: the k triangles of nearest centroids;
+    a triangle outside them is at least (k-th centroid distance - largest centroid-to-corner radius) away, so
+    the answer is exact where the best found is below that bound, and the points where it is not are answered
+    over every triangle whose centroid lies within (best + radius)."""
+    tri = vertices[triangles]
+    centroids = tri.mean(axis=1)
+    radius = float(np.linalg.norm(tri - centroids[:, None, :], axis=2).max())
+    tree = cKDTree(centroids)
+    k = min(k, len(triangles))
+    out = np.empty(len(points))
+    for s in range(0, len(points), chunk):
+        p = points[s:s + chunk]
+        dist, idx = tree.query(p, k=k)
+        dist, idx = dist.reshape(len(p), k), idx.reshape(len(p), k)
+        pp = np.repeat(p, k, axis=0)
+        t = tri[idx.ravel()]
+        d = point_triangle_distance(pp, t[:, 0], t[:, 1], t[:, 2]).reshape(len(p), k).min(axis=1)
+        for i in np.flatnonzero(d > dist[:, -1] - radius):
+            cand = np.asarray(tree.query_ball_point(p[i], d[i] + radius), dtype=np.int64)
+            if len(cand):
+                t = tri[cand]
+                d[i] = min(d[i], point_triangle_distance(np.repeat(p[i:i + 1], len(cand), 0), t[:, 0], t[:, 1],
+                                                         t[:, 2]).min())
+        out[s:s + chunk] = d
+    return out
+
+
+def measure(points, cage_vertices, cage_faces, diag, scheme="loop"):
+    """(RMS, max) distance from the points to the cage's limit surface (level-4 tessellation; under
+    Catmull-Clark its quads split into two triangles each along a diagonal), / diag."""
+    tv, tf = sorpia.limit_surface(cage_vertices, cage_faces, LEVEL, scheme=scheme)
+    tf = np.asarray(tf)
+    if tf.shape[1] == 4:  # a level >= 1 Catmull-Clark tessellation is all quads
+        tf = np.vstack([tf[:, [0, 1, 2]], tf[:, [0, 2, 3]]])
+    d = distances_to_mesh(points, tv, tf) / diag
+    return float(np.sqrt(np.mean(d ** 2))), float(d.max())
+
+
+# ---- Subdivfit -------------------------------------------------------------------------------------------------
+
+def write_m(path, vertices, triangles):
+    """Hoppe's .m mesh: ``Vertex i x y z`` and ``Face j a b c``, both 1-based."""
+    with open(path, "w") as fh:
+        fh.writelines(f"Vertex {i + 1} {x:.17g} {y:.17g} {z:.17g}\n" for i, (x, y, z) in enumerate(vertices))
+        fh.writelines(f"Face {j + 1} {a + 1} {b + 1} {c + 1}\n" for j, (a, b, c) in enumerate(triangles))
+
+
+def write_points(path, points):
+    """Hoppe's point file: one ``p x y z`` line per point."""
+    with open(path, "w") as fh:
+        fh.writelines(f"p {x:.9g} {y:.9g} {z:.9g}\n" for x, y, z in points)
+
+
+def read_m(text):
+    """(vertices, triangles) of a .m mesh, renumbered 0-based in the order of its Vertex lines; lines other
+    than Vertex and Face (comments, Edge attributes) are skipped."""
+    number, vertices, faces = {}, [], []
+    for line in text.splitlines():
+        tok = line.split()
+        if not tok:
+            continue
+        if tok[0] == "Vertex":
+            number[int(tok[1])] = len(vertices)
+            vertices.append([float(x) for x in tok[2:5]])
+        elif tok[0] == "Face":
+            faces.append([int(x) for x in tok[2:5]])
+    faces = np.array([[number[i] for i in f] for f in faces], dtype=np.int32)
+    return np.array(vertices, dtype=float), faces
+
+
+def subdivfit(exe, workdir, options):
+    """Run Subdivfit on cage.m and points.pts in workdir: (output mesh text, wall seconds)."""
+    t0 = time.perf_counter()
+    run = subprocess.run([str(exe), "-mf", "cage.m", "-fi", "points.pts", *options], cwd=workdir,
+                         capture_output=True, text=True)
+    seconds = time.perf_counter() - t0
+    if run.returncode != 0:
+        raise RuntimeError(f"Subdivfit {' '.join(options)} failed: {run.stderr[-2000:]}")
+    return run.stdout, seconds
+
+
+def subdivfit_surface(exe, workdir, vertices, triangles, level):
+    """Subdivfit's own surface of a cage: its subdivided mesh at `level` (-outn), vertices sent to their limit
+    positions, as (vertices, triangles)."""
+    write_m(pathlib.Path(workdir) / "surface.m", vertices, triangles)
+    run = subprocess.run([str(exe), "-mf", "surface.m", "-nsubdiv", str(level), "-outn"], cwd=workdir,
+                         capture_output=True, text=True, check=True)
+    return read_m(run.stdout)
+
+
+def check_rules(exe, workdir, vertices, triangles, diag):
+    """Subdivfit's Loop rules against OpenSubdiv's on a cage: the distance from each vertex of Subdivfit's
+    two-level surface (sent to the limit) to the nearest vertex of sorpia's level-2 limit tessellation, / diag:
+    (largest, how many above 1e-5, how many)."""
+    theirs, _ = subdivfit_surface(exe, workdir, vertices, triangles, 2)
+    ours, _ = sorpia.limit_surface(vertices, triangles, 2)
+    gap = cKDTree(ours).query(theirs)[0] / diag
+    return float(gap.max()), int((gap > 1e-5).sum()), len(gap)
+
+
+PAGE_INTRO = """
+On each mesh the data points are its vertices (those its faces use); the cage is `sorpia.decimate` of the mesh to
+the stated number of vertices (Loop; OpenMesh's quadric decimation), and for the Catmull-Clark rows the quad cage of
+as many vertices (`sorpia.decimate(..., scheme="catmull-clark")`). Every row fits its cage to those points and is
+measured the same way: the distance from each data point to the row's limit surface (sorpia's limit surface of the
+row's cage, tessellated at level 4), exact point-to-triangle distance, as RMS and max over the bounding-box
+diagonal of the points. Subdivfit (Hoppe et al., "Piecewise smooth surface reconstruction", SIGGRAPH 1994; Loop
+only) is built from hhoppe/Mesh-processing-library at commit b79dd12; its time is the process's wall clock (its
+reading of the text files included), its output cage is evaluated by sorpia's Loop limit surface. Its Loop rules
+are OpenSubdiv's inside the mesh but not along a boundary (the check under each table), so its rows are also
+measured to its own surface (its subdivision of its cage to level 4 with the vertices at their limit positions,
+`Subdivfit -nsubdiv 4 -outn`), the one it fits. "interpolation" is `sorpia.interpolate` of the cage (the limit
+surface through the decimated cage's vertices); "decimated cage as it is" the cage's own limit surface. Times are
+of one run on a shared machine (the load average is in the stamp).
+
+"""
+
+
+# ---- the table -----------------------------------------------------------------------------------------------
+
+def run_mesh(spec, args, gfit, exe):
+    name, v, f = load(spec)
+    diag = float(np.linalg.norm(v.max(0) - v.min(0)))
+    n_cage = max(4, int(round(args.fraction * len(v))))
+    t0 = time.perf_counter()
+    cage = sorpia.decimate(v, f, n_cage)
+    t_decimate = time.perf_counter() - t0
+    rows = []
+    out = {"mesh": name, "points": len(v), "cage_vertices": n_cage, "decimate_seconds": t_decimate, "rows": rows}
+    print(f"{name}: {len(v)} points, cage {n_cage} vertices ({t_decimate:.2f} s)", file=sys.stderr)
+
+    def add(label, vertices, seconds, faces=cage.faces, scheme="loop", **extra):
+        rms, mx = measure(v, vertices, faces, diag, scheme)
+        if "own" in extra:  # the distances to Subdivfit's own level-4 surface of the same cage
+            d = distances_to_mesh(v, *extra["own"]) / diag
+            extra["own"] = (float(np.sqrt(np.mean(d ** 2))), float(d.max()))
+        rows.append({"row": label, "scheme": scheme, "rms": rms, "max": mx, "seconds": seconds, **extra})
+        print(f"  {label} ({scheme}): rms {rms:.3g} max {mx:.3g} ({seconds:.2f} s)", file=sys.stderr)
+
+    if exe is not None:
+        with tempfile.TemporaryDirectory() as work:
+            write_m(pathlib.Path(work) / "cage.m", cage.vertices, cage.faces)
+            write_points(pathlib.Path(work) / "points.pts", v)
+            for k in gfit:
+                text, seconds = subdivfit(exe, work, ["-gfit", str(k)])
+                fitted, faces = read_m(text)
+                if not np.array_equal(faces, cage.faces):
+                    raise RuntimeError(f"Subdivfit -gfit {k} changed the cage's faces")
+                add(f"Subdivfit -gfit {k}", fitted, seconds, own=subdivfit_surface(exe, work, fitted, faces, LEVEL))
+            if args.check_rules:
+                out["rules_check"] = check_rules(exe, work, cage.vertices, cage.faces, diag)
+    # The same rows of sorpia's on the Loop cage, then on the quad cage of as many vertices (Catmull-Clark).
+    quads = sorpia.decimate(v, f, n_cage, scheme="catmull-clark")
+    out["quad_cage_vertices"] = len(quads.vertices)
+    for scheme, c in (("loop", cage), ("catmull-clark", quads)):
+        t0 = time.perf_counter()
+        interp = sorpia.interpolate(c.vertices, c.faces, scheme=scheme)
+        add("interpolation of the cage's vertices", interp.control_vertices, time.perf_counter() - t0, c.faces,
+            scheme)
+        add("decimated cage as it is", c.vertices, 0.0, c.faces, scheme)
+        approximate = getattr(sorpia, "approximate", None)
+        if approximate is not None:
+            t0 = time.perf_counter()
+            result = approximate(v, c.vertices, c.faces, scheme=scheme)
+            add("sorpia.approximate", result.control_vertices, time.perf_counter() - t0, c.faces, scheme,
+                iterations=result.iterations)
+    return out
+
+
+def table(results, have_subdivfit):
+    lines = []
+    for r in results:
+        lines.append(f"### {r['mesh']}: {r['points']:,} points, cage of {r['cage_vertices']:,} vertices "
+                     f"(decimated in {r['decimate_seconds']:.2f} s; the quad cage: "
+                     f"{r['quad_cage_vertices']:,} vertices)\n")
+        lines.append("| fit | scheme | RMS / diagonal | max / diagonal | seconds "
+                     "| on Subdivfit's own surface: RMS, max |")
+        lines.append("|---|---|---|---|---|---|")
+        for row in r["rows"]:
+            seconds = f"{row['seconds']:.3g}" if row["seconds"] else "-"
+            own = f"{row['own'][0]:.3g}, {row['own'][1]:.3g}" if "own" in row else ""
+            lines.append(f"| {row['row']} | {row['scheme']} | {row['rms']:.3g} | {row['max']:.3g} | {seconds} "
+                         f"| {own} |")
+        if "rules_check" in r:
+            gap, n_apart, n = r["rules_check"]
+            where = ("all within float32 rounding" if n_apart == 0 else
+                     f"{n_apart:,} of them (along the boundary) farther than 1e-5 of the diagonal")
+            lines.append(f"\nSubdivfit's Loop rules against OpenSubdiv's on the decimated cage: its two-level "
+                         f"surface's {n:,} limit vertices lie within {gap:.2g} of the diagonal of sorpia's "
+                         f"level-2 limit tessellation, {where}.")
+        lines.append("")
+    if not have_subdivfit:
+        lines.append("Subdivfit was not found (set SUBDIVFIT): its rows are missing.")
+    return "\n".join(lines)
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--meshes", default=",".join(DEFAULT_MESHES),
+                        help="comma-separated files (names under ../shared/meshes) or noisy-sphere:N, noisy-torus:N")
+    parser.add_argument("--fraction", type=float, default=0.02, help="cage vertices per data point")
+    parser.add_argument("--gfit", default="10,30", help="Subdivfit -gfit iteration counts, comma-separated")
+    parser.add_argument("--no-check-rules", dest="check_rules", action="store_false",
+                        help="skip the check of Subdivfit's Loop rules against OpenSubdiv's")
+    parser.add_argument("--json", help="also write the results here")
+    parser.add_argument("--no-page", action="store_true", help="do not write docs/benchmarks/approximate.md")
+    args = parser.parse_args(argv)
+    gfit = [int(k) for k in args.gfit.split(",") if k]
+    exe = pathlib.Path(os.environ.get("SUBDIVFIT", DEFAULT_SUBDIVFIT))
+    exe = exe if exe.exists() else None
+    results = []
+    for spec in args.meshes.split(","):
+        if not spec.startswith("noisy-") and not (SHARED / spec).exists() and not pathlib.Path(spec).exists():
+            print(f"{spec}: not found, skipped", file=sys.stderr)
+            continue
+        results.append(run_mesh(spec, args, gfit, exe))
+    body = table(results, exe is not None)
+    print(body)
+    if args.json:
+        pathlib.Path(args.json).write_text(json.dumps(results, indent=1))
+    if not args.no_page:
+        write_page("approximate", "Approximation of dense meshes, side by side with Subdivfit", PAGE_INTRO + body,
+                   settings=(parser, args))
+
+
+if __name__ == "__main__":
+    main()

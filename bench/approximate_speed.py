@@ -1,0 +1,93 @@
+"""Approximation's speed at one size, phase by phase, and the update's two methods side by side (issue 23, items
+4 and 6).
+
+    python bench/approximate_speed.py                       # 1M points onto a 20k-vertex cage
+    python bench/approximate_speed.py --points 200000 --cage 5000 --iterations 3
+
+The data: the limit surface of `sorpia.shapes.irregular(--cage)` (Loop, valences 3 to 12) sampled at --points
+random (face, u, v), moved by Gaussian noise of 1e-4 of the bounding-box diagonal; the cage: the same mesh with
+its vertices moved by noise of 2e-3 of the diagonal. Prints, as JSON:
+
+- ``update``: on the footpoints of the starting cage, the same normal equations (A^T A + mu I) V = A^T P + mu V0
+  solved by conjugate gradients (Jacobi preconditioner) and by LSPIA (Deng and Lin 2014) to residuals of 1e-2 ...
+  1e-8 of the start: iterations and seconds of each, and the RMS distance at the footpoints
+  (|A V - P|) each reaches;
+- ``phases``: `sorpia.approximate` with the default update for --iterations, its own timings (footpoints, rows,
+  normal equations, solve, report) and history, with the process's CPU seconds and peak resident memory.
+
+Nothing here runs under pytest. Timings depend on the machine's load: the JSON holds the load average.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import resource
+import time
+
+import numpy as np
+
+
+def data(n_points: int, n_cage: int):
+    import sorpia
+
+    V, F = sorpia.shapes.irregular(n_cage)
+    s = sorpia.LimitSurface(V, F)
+    rng = np.random.default_rng(1)
+    fid = rng.integers(0, s.n_faces, n_points).astype(np.int32)
+    uv = rng.random((n_points, 2))
+    flip = uv.sum(axis=1) > 1
+    uv[flip] = 1 - uv[flip]
+    P = s.evaluate(fid, uv)
+    diag = float(np.linalg.norm(P.max(0) - P.min(0)))
+    P += 1e-4 * diag * rng.standard_normal(P.shape)
+    return P, V + 2e-3 * diag * rng.standard_normal(V.shape), F
+
+
+def compare_updates(P, V0, F) -> dict:
+    import sorpia
+    from sorpia import _core
+    from sorpia.approximate import _lspia, _normal_equations, _pcg
+
+    s = sorpia.LimitSurface(V0, F)
+    fid, uv, _, _, normals = _core.closest_points(s._surface, s._topology, P, 4, 10)
+    A = s.rows(fid, uv)[0]
+    M, rhs, _ = _normal_equations(A, P, normals, V0, 1.0, 0.0, None)
+    out = {}
+    for name, solve in (("cg", _pcg), ("lspia", _lspia)):
+        rows = []
+        for rtol in (1e-2, 1e-4, 1e-6, 1e-8):
+            t0 = time.perf_counter()
+            V, used = solve(M, rhs, V0.copy(), rtol, 100000)
+            rows.append({"rtol": rtol, "iterations": used, "seconds": time.perf_counter() - t0,
+                         "rms": float(np.sqrt(np.mean(np.sum((A @ V - P) ** 2, axis=1))))})
+        out[name] = rows
+    return out
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--points", type=int, default=1_000_000)
+    ap.add_argument("--cage", type=int, default=20_000)
+    ap.add_argument("--iterations", type=int, default=3)
+    ap.add_argument("--no-update-comparison", action="store_true")
+    args = ap.parse_args()
+    import sorpia
+
+    P, V0, F = data(args.points, args.cage)
+    out = {"points": len(P), "cage_vertices": len(V0), "load_average": os.getloadavg()}
+    if not args.no_update_comparison:
+        out["update"] = compare_updates(P, V0, F)
+    cpu0 = time.process_time()
+    t0 = time.perf_counter()
+    r = sorpia.approximate(P, V0, F, iterations=args.iterations, tol=0)
+    out["phases"] = {"wall_seconds": time.perf_counter() - t0, "cpu_seconds": time.process_time() - cpu0,
+                     "timings": r.timings, "history": r.history,
+                     "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}
+    out["load_average_after"] = os.getloadavg()
+    print(json.dumps(out, indent=1))
+
+
+if __name__ == "__main__":
+    main()

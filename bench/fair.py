@@ -1,0 +1,323 @@
+"""Fair interpolation (sorpia.fair_interpolate) against plain interpolation
+(sorpia.interpolate): how much less the surface bends, how far it strays
+from the input mesh, and what it costs.
+
+Like with like: plain interpolation's control mesh refined `levels` times by
+the same refinement (R V_plain, the same surface) lies on the same fine mesh
+as the fair control mesh, so both surfaces are measured on the same faces
+with the same rules:
+
+- the thin-plate energy tr(V^T K V) (K = sorpia.fairness_matrix of the fine
+  mesh, its default quadrature: what fair interpolation minimises);
+- the integral of the squared mean curvature, int H^2 dA, by Gauss points in
+  every fine face (3 x 3 on quads, Dunavant's 6 points on triangles) from the
+  limit surface's first and second derivatives (LimitSurface.rows);
+- the largest distance from a point of the surface (the fine mesh tessellated
+  twice, every vertex at its limit position) to the input mesh's faces
+  (polygons split into fans), over the bounding-box diagonal.
+
+Meshes: the demo mesh (`sorpia demo`'s sample, both schemes), the shared
+meshes in ../shared/meshes when present (manifold ones up to --max-shared
+vertices, with their tags), and generated noisy meshes. Then the time of
+fair against plain interpolation of generated noisy meshes of --sizes
+vertices (both schemes, one thread each), with fair's phases. Writes
+docs/benchmarks/fair.md and docs/benchmarks/fair.png (plain and fair side by
+side, `sorpia render --fair`'s figure) unless --no-page.
+
+    python bench/fair.py [--shared ../shared/meshes] [--sizes 10000,100000] [--no-page]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import scipy.spatial
+
+import sorpia
+from sorpia.cli.demo import sample_mesh
+
+sys.path.insert(0, os.path.dirname(__file__))
+from _report import PAGES, write_page  # noqa: E402
+
+# Dunavant's degree-4 rule on the triangle u, v >= 0, u + v <= 1 (weights sum to 1/2).
+_A, _B = 0.445948490915965, 0.091576213509771
+_WA, _WB = 0.223381589678011 / 2, 0.109951743655322 / 2
+TRI_POINTS = np.array([[_A, _A], [1 - 2 * _A, _A], [_A, 1 - 2 * _A], [_B, _B], [1 - 2 * _B, _B], [_B, 1 - 2 * _B]])
+TRI_WEIGHTS = np.array([_WA] * 3 + [_WB] * 3)
+_G = np.array([0.5 - np.sqrt(0.15), 0.5, 0.5 + np.sqrt(0.15)])
+_GW = np.array([5, 8, 5]) / 18
+QUAD_POINTS = np.array([[u, v] for u in _G for v in _G])
+QUAD_WEIGHTS = np.array([a * b for a in _GW for b in _GW])
+
+
+def diagonal(v) -> float:
+    return float(np.linalg.norm(v.max(axis=0) - v.min(axis=0)))
+
+
+def mean_curvature_integral(res, vertices_list):
+    """(int H^2 dA, the median of H^2 over the points) of the limit surface
+    of each (n_fine, 3) control mesh in `vertices_list` on the fine mesh of
+    `res`, by the Gauss points of every face that is not a hole (the rows
+    computed once for all). The integral is dominated by a few points where
+    a surface through noisy points nearly folds (|S_u x S_v| small, H large):
+    the median says how the bulk of the surface bends."""
+    faces = np.asarray(res.faces)
+    tri = faces.shape[1] == 3
+    pts, wts = (TRI_POINTS, TRI_WEIGHTS) if tri else (QUAD_POINTS, QUAD_WEIGHTS)
+    keep = np.setdiff1d(np.arange(len(faces)), res.holes if res.holes is not None else [])
+    face_ids = np.repeat(keep, len(pts)).astype(np.int32)
+    uv = np.tile(pts, (len(keep), 1))
+    w = np.tile(wts, len(keep))
+    surface = sorpia.LimitSurface(vertices_list[0], res.faces, scheme=res.scheme, boundary=res.boundary, **res.tags)
+    rows = surface.rows(face_ids, uv, derivatives=2)
+    out = []
+    for v in vertices_list:
+        _, su, sv, suu, suv, svv = (r @ v for r in rows)
+        n = np.cross(su, sv)
+        area = np.linalg.norm(n, axis=1)
+        n = n / np.maximum(area, 1e-300)[:, None]
+        e, f, g = (su * su).sum(1), (su * sv).sum(1), (sv * sv).sum(1)
+        l, m, nn = (suu * n).sum(1), (suv * n).sum(1), (svv * n).sum(1)
+        det = np.maximum(e * g - f * f, 1e-300)
+        h = (e * nn - 2 * f * m + g * l) / (2 * det)
+        out.append((float(np.sum(w * h * h * area)), float(np.median(h * h))))
+    return out
+
+
+def _closest_on_triangles(p, a, b, c):
+    """Closest points to p on triangles (a, b, c), all (k, 3) (Ericson, Real-Time Collision Detection 5.1.5)."""
+    ab, ac, ap = b - a, c - a, p - a
+    d1, d2 = (ab * ap).sum(1), (ac * ap).sum(1)
+    bp = p - b
+    d3, d4 = (ab * bp).sum(1), (ac * bp).sum(1)
+    cp = p - c
+    d5, d6 = (ab * cp).sum(1), (ac * cp).sum(1)
+    va, vb, vc = d3 * d6 - d5 * d4, d5 * d2 - d1 * d6, d1 * d4 - d3 * d2
+    denom = va + vb + vc
+    denom = np.where(denom == 0, 1.0, denom)
+    v, w = vb / denom, vc / denom
+    out = a + ab * v[:, None] + ac * w[:, None]  # inside the face
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t_ab = np.clip(d1 / (d1 - d3), 0, 1)
+        t_ac = np.clip(d2 / (d2 - d6), 0, 1)
+        t_bc = np.clip((d4 - d3) / ((d4 - d3) + (d5 - d6)), 0, 1)
+    cases = [
+        (vc <= 0) & (d1 >= 0) & (d3 <= 0), a + ab * np.nan_to_num(t_ab)[:, None],
+        (vb <= 0) & (d2 >= 0) & (d6 <= 0), a + ac * np.nan_to_num(t_ac)[:, None],
+        (va <= 0) & (d4 - d3 >= 0) & (d5 - d6 >= 0), b + (c - b) * np.nan_to_num(t_bc)[:, None],
+    ]
+    for mask, point in zip(cases[::2], cases[1::2]):
+        out = np.where(mask[:, None], point, out)
+    for mask, point in (((d1 <= 0) & (d2 <= 0), a), ((d3 >= 0) & (d4 <= d3), b), ((d6 >= 0) & (d5 <= d6), c)):
+        out = np.where(mask[:, None], point, out)
+    return out
+
+
+def distance_to_faces(points, vertices, faces, k=12):
+    """The distance from each point to the nearest of the faces (fans of
+    triangles), among the k triangles whose centroids are nearest."""
+    rows = [list(f) for f in (faces.tolist() if isinstance(faces, np.ndarray) else faces)] \
+        if not isinstance(faces, sorpia.Polygons) else np.split(faces.face_vertex_indices,
+                                                                np.cumsum(faces.face_vertex_counts)[:-1])
+    tris = np.array([[f[0], f[j], f[j + 1]] for f in rows for j in range(1, len(f) - 1)])
+    a, b, c = vertices[tris[:, 0]], vertices[tris[:, 1]], vertices[tris[:, 2]]
+    tree = scipy.spatial.cKDTree((a + b + c) / 3)
+    _, near = tree.query(points, k=min(k, len(tris)))
+    best = np.full(len(points), np.inf)
+    for j in range(near.shape[1]):
+        t = near[:, j]
+        q = _closest_on_triangles(points, a[t], b[t], c[t])
+        best = np.minimum(best, np.linalg.norm(points - q, axis=1))
+    return best
+
+
+def measure(name, v, f, scheme, tags, two_levels: bool):
+    """One mesh: the figures of plain and fair interpolation, side by side
+    (and the energy ratio two levels finer where `two_levels`)."""
+    v = np.asarray(v, float)
+    res = sorpia.fair_interpolate(v, f, scheme=scheme, **tags)
+    ratio2 = None
+    if two_levels:
+        res2 = sorpia.fair_interpolate(v, f, scheme=scheme, levels=2, **tags)
+        ratio2 = res2.energy / res2.plain_energy
+    plain_fine = res.refinement @ np.asarray(res.plain.control_vertices)
+    (h_plain, m_plain), (h_fair, m_fair) = mean_curvature_integral(res, [plain_fine, res.control_vertices])
+    surface = sorpia.LimitSurface(plain_fine, res.faces, scheme=res.scheme, boundary=res.boundary, **res.tags)
+    dist = []
+    for ctrl in (plain_fine, res.control_vertices):
+        surface.set_vertices(ctrl)
+        points, _ = surface.tessellate(2)
+        dist.append(float(distance_to_faces(points, v, f).max()) / diagonal(v))
+    return {"mesh": name, "scheme": scheme, "vertices": len(v), "fine_faces": len(res.faces),
+            "plain_energy": res.plain_energy, "fair_energy": res.energy, "energy_ratio": res.energy / res.plain_energy,
+            "plain_h2": h_plain, "fair_h2": h_fair, "h2_ratio": h_fair / h_plain, "median_h2_ratio": m_fair / m_plain,
+            "energy_ratio_2": ratio2,
+            "plain_distance": dist[0], "fair_distance": dist[1], "iterations": res.iterations,
+            "max_error_relative": res.max_error_relative, "seconds": res.seconds}
+
+
+def meshes(shared: Path | None, max_shared: int):
+    """(name, vertices, faces, scheme, tags) of every mesh measured."""
+    rng = np.random.default_rng(2026)
+    for scheme in ("loop", "catmull-clark"):
+        v, f = sample_mesh(scheme)
+        yield f"demo ({scheme})", v, f, scheme, {}
+    if shared is not None and shared.is_dir():
+        for path in sorted(shared.glob("*.obj")) + sorted(shared.glob("*.off")):
+            if "nonman" in path.name:
+                continue
+            try:
+                v, f, tags = sorpia.read_mesh(path, tags=True)
+            except ValueError:
+                continue
+            if len(v) > max_shared or len(v) < 20:
+                continue
+            scheme = "catmull-clark" if "catmark" in path.name or "quads" in path.name else "loop"
+            tags = {k: t for k, t in tags.items() if k in ("creases", "corners", "holes", "boundary")}
+            try:
+                sorpia.limit_points(v, f, scheme=scheme, **tags)  # a mesh the library refuses is left out
+            except (ValueError, sorpia.MeshError):
+                continue
+            yield path.name, v, f, scheme, tags
+    for noise in (0.01, 0.03):
+        v, f = sorpia.shapes.icosphere(3)
+        yield f"icosphere(3), noise {noise}", v + noise * rng.standard_normal(v.shape), f, "loop", {}
+        v, f = sorpia.shapes.irregular(2000, seed=4)
+        v = np.asarray(v, float)
+        yield f"irregular(2000), noise {noise}", v + noise * rng.standard_normal(v.shape), f, "loop", {}
+        v, f = sorpia.shapes.quad_torus(32, 16)
+        v = np.asarray(v, float)
+        yield f"quad_torus(32, 16), noise {noise}", v + noise * rng.standard_normal(v.shape), f, "catmull-clark", {}
+        v, f = sorpia.shapes.quad_irregular(2000, seed=4)
+        v = np.asarray(v, float)
+        yield f"quad_irregular(2000), noise {noise}", v + noise * rng.standard_normal(v.shape), f, "catmull-clark", {}
+
+
+def timing(n, scheme, repeats=3):
+    """Best-of-`repeats` seconds of plain interpolation and one fair
+    interpolation of a noisy generated mesh of about n vertices, one thread."""
+    rng = np.random.default_rng(n)
+    v, f = (sorpia.shapes.irregular if scheme == "loop" else sorpia.shapes.quad_irregular)(n, seed=1)
+    v = np.asarray(v, float)
+    v = v + 0.2 * np.mean(np.linalg.norm(v[np.asarray(f)[:, 0]] - v[np.asarray(f)[:, 1]], axis=1)) * \
+        rng.standard_normal(v.shape)
+    plain = []
+    for _ in range(repeats):
+        t = time.perf_counter()
+        sorpia.interpolate(v, f, scheme=scheme)
+        plain.append(time.perf_counter() - t)
+    res = sorpia.fair_interpolate(v, f, scheme=scheme)
+    return {"scheme": scheme, "vertices": len(v), "fine_faces": len(res.faces), "plain_seconds": min(plain),
+            "fair_seconds": res.seconds, "ratio": res.seconds / min(plain), "iterations": res.iterations,
+            **res.timings}
+
+
+def figure(path: Path):
+    """Plain and fair interpolation of the demo mesh side by side (`sorpia render --fair`'s panels)."""
+    from sorpia._plotting import interpolation_figure
+
+    v, f = sample_mesh("loop")
+    res = sorpia.fair_interpolate(v, f)
+    plain = np.asarray(res.plain.control_vertices)
+    surface = sorpia.LimitSurface(v, f)
+    given = surface.tessellate(3)
+    surface.set_vertices(plain)
+    fitted = surface.tessellate(3)
+    fine = sorpia.LimitSurface(res.control_vertices, res.faces, **res.tags).tessellate(2)
+    fig = interpolation_figure(v, f, given, plain, fitted, size=(1200, 1000), title="sorpia demo mesh: plain "
+                               "against fair interpolation (Loop)", iterations=int(res.plain.iterations), level=3,
+                               fair=(res.control_vertices, res.faces, fine, 1))
+    fig.savefig(path, dpi=100)
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--shared", type=Path,
+                        default=Path(__file__).resolve().parents[1] / ".." / "shared" / "meshes")
+    parser.add_argument("--max-shared", type=int, default=4000, help="largest shared mesh measured (vertices)")
+    parser.add_argument("--max-two-levels", type=int, default=1000,
+                        help="largest mesh also measured two levels finer (vertices)")
+    parser.add_argument("--sizes", default="10000,100000", help="vertex counts of the timed meshes")
+    parser.add_argument("--no-page", action="store_true")
+    args = parser.parse_args(argv)
+
+    rows = []
+    for name, v, f, scheme, tags in meshes(args.shared, args.max_shared):
+        r = measure(name, v, f, scheme, tags, two_levels=len(v) <= args.max_two_levels)
+        rows.append(r)
+        print(f"{name}: energy {r['energy_ratio']:.3f}, H^2 {r['h2_ratio']:.3f}, distance {r['plain_distance']:.2e} "
+              f"-> {r['fair_distance']:.2e}, {r['seconds']:.2f} s", file=sys.stderr, flush=True)
+    times = []
+    for n in (int(s) for s in args.sizes.split(",") if s):
+        for scheme in ("loop", "catmull-clark"):
+            t = timing(n, scheme)
+            times.append(t)
+            print(f"time {scheme} {n}: plain {t['plain_seconds']:.3f} s, fair {t['fair_seconds']:.2f} s "
+                  f"({t['ratio']:.0f}x)",
+                  file=sys.stderr, flush=True)
+
+    energy = np.array([r["energy_ratio"] for r in rows])
+    h2 = np.array([r["h2_ratio"] for r in rows])
+    mh2 = np.array([r["median_h2_ratio"] for r in rows])
+    two = np.array([r["energy_ratio_2"] for r in rows if r["energy_ratio_2"] is not None])
+    lines = [
+        "Fair interpolation (`sorpia.fair_interpolate`, one level finer, thin plate alone, every vertex a target) "
+        "against plain interpolation (`sorpia.interpolate`), both on the same fine mesh: plain's control mesh "
+        "refined once by the same refinement (the same surface). Energy: the thin-plate energy tr(V^T K V) with K "
+        "from `sorpia.fairness_matrix` of the fine mesh (its default quadrature), what fair interpolation "
+        "minimises; H^2: the integral of the squared mean curvature by Gauss points in every fine face; distance: "
+        "the largest distance of the surface (the fine mesh tessellated twice) from the input mesh's faces, over "
+        "the bounding-box diagonal. Ratios are fair / plain.",
+        "",
+        f"**Median energy ratio {np.median(energy):.3f}** (goal: at most 0.5), largest {energy.max():.3f} "
+        f"(goal: below 1 on every mesh); two levels finer (meshes up to {args.max_two_levels} vertices) median "
+        f"{np.median(two) if len(two) else float('nan'):.3f}. int H^2 dA ratio: median {np.median(h2):.3f}, "
+        f"largest {h2.max():.3f}; the ratio of the pointwise medians of H^2: median {np.median(mh2):.3f}, largest "
+        f"{mh2.max():.3f}. "
+        f"The targets are met to {max(r['max_error_relative'] for r in rows):.1e} of the diagonal at most.",
+        "",
+        "| mesh | scheme | vertices | fine faces | energy plain | energy fair | ratio | ratio, 2 levels | "
+        "int H^2 plain | int H^2 fair | ratio | median H^2 ratio | distance plain | distance fair | iterations | "
+        "seconds |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for r in rows:
+        two_text = "" if r["energy_ratio_2"] is None else f"{r['energy_ratio_2']:.3f}"
+        lines.append(f"| {r['mesh']} | {r['scheme']} | {r['vertices']} | {r['fine_faces']} | {r['plain_energy']:.4g} "
+                     f"| {r['fair_energy']:.4g} | {r['energy_ratio']:.3f} | {two_text} | {r['plain_h2']:.4g} | "
+                     f"{r['fair_h2']:.4g} | {r['h2_ratio']:.3f} | {r['median_h2_ratio']:.3f} | "
+                     f"{r['plain_distance']:.2e} | {r['fair_distance']:.2e} | {r['iterations']} | {r['seconds']:.2f} |")
+    lines += [
+        "",
+        "## Time",
+        "",
+        "Noisy generated meshes (`shapes.irregular` for Loop, `shapes.quad_irregular` for Catmull-Clark, each "
+        "vertex moved by 0.2 of the mean edge length), one thread. Plain: `sorpia.interpolate`, best of 3. Fair: "
+        "one `sorpia.fair_interpolate` (goal: at most 10 times plain at 100k targets), with its phases: refine "
+        "(Far's refinement and R), plain (the plain solve it starts from), energy (K of the fine mesh), setup "
+        "(the fine mesh's B, the elimination, the preconditioner), solve (the conjugate gradients).",
+        "",
+        "| scheme | vertices | fine faces | plain s | fair s | fair / plain | refine | plain | energy | setup | "
+        "solve | iterations |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for t in times:
+        lines.append(f"| {t['scheme']} | {t['vertices']} | {t['fine_faces']} | {t['plain_seconds']:.3f} | {t['fair_seconds']:.2f} | "
+                     f"{t['ratio']:.0f} | {t['refine']:.2f} | {t['plain']:.2f} | {t['energy']:.2f} | "
+                     f"{t['setup']:.2f} | {t['solve']:.2f} | {t['iterations']} |")
+    lines += ["", "![plain and fair interpolation of the demo mesh](fair.png)"]
+    if not args.no_page:
+        figure(PAGES / "fair.png")
+        write_page("fair", "Fair interpolation against plain", "\n".join(lines), settings=(parser, args))
+    else:
+        print("\n".join(lines))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,317 @@
+#include "sorpia/fair.hpp"
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "sorpia/detail/parallel.hpp"
+#include "sorpia/errors.hpp"
+#include "sorpia/interrupt.hpp"
+#include "sorpia/limit_operator.hpp"
+#include "sorpia/solvers.hpp"
+
+namespace sorpia {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+using Col3 = std::array<double, 3>;
+
+// Rows per task of a product with K below which it runs on one thread.
+constexpr std::size_t kRowsPerTask = 20000;
+
+// The constraints eliminated: V_t = g_t - sum_j m_tj V_j for each target t,
+// and the transposed entries (for each free j: the targets whose row has j).
+struct Elimination {
+  std::vector<std::int32_t> targets;          // fine indices
+  std::vector<double> g;                      // (k, 3): T_t / B_tt
+  std::vector<std::int32_t> offsets, cols;    // rows of m
+  std::vector<double> weights;
+  std::vector<std::int32_t> t_offsets, t_rows;  // m^T by free vertex: positions in `targets`
+  std::vector<double> t_weights;
+  std::vector<char> is_target;
+};
+
+// K's entry (i, j), by binary search in row i (0 when absent).
+double entry(const CsrMatrix& k, std::int32_t i, std::int32_t j) {
+  const auto* first = k.indices.data() + k.indptr[i];
+  const auto* last = k.indices.data() + k.indptr[i + 1];
+  const auto* it = std::lower_bound(first, last, j);
+  return it != last && *it == j ? k.data[static_cast<std::size_t>(it - k.indices.data())] : 0.0;
+}
+
+class Problem {
+ public:
+  Problem(const CsrMatrix& k, Elimination&& e, int threads) : k_(k), e_(std::move(e)), threads_(threads) {
+    const std::size_t n = k_.n_rows;
+    tasks_ = static_cast<int>(std::clamp<std::size_t>(n / kRowsPerTask, 1, static_cast<std::size_t>(threads_)));
+    y_.assign(3 * n, 0.0);
+  }
+
+  std::size_t n() const { return k_.n_rows; }
+
+  // The full V of the free vertices' values in x (target rows of x ignored),
+  // written into v: v = S x + g.
+  void expand(const std::vector<double>& x, std::vector<double>& v, bool with_g) const {
+    v = x;
+    for (std::size_t t = 0; t < e_.targets.size(); ++t) {
+      Col3 s{0.0, 0.0, 0.0};
+      if (with_g) s = {e_.g[3 * t], e_.g[3 * t + 1], e_.g[3 * t + 2]};
+      for (std::int32_t p = e_.offsets[t]; p < e_.offsets[t + 1]; ++p) {
+        const double* xj = &x[3 * static_cast<std::size_t>(e_.cols[p])];
+        for (int c = 0; c < 3; ++c) s[c] -= e_.weights[p] * xj[c];
+      }
+      std::copy(s.begin(), s.end(), &v[3 * static_cast<std::size_t>(e_.targets[t])]);
+    }
+  }
+
+  // out = K v (v and out (n, 3)).
+  void apply_k(const std::vector<double>& v, std::vector<double>& out) const {
+    out.resize(v.size());
+    detail::for_each_index(tasks_ > 1, tasks_, n(), [&](std::size_t i) {
+      double a = 0.0, b = 0.0, c = 0.0;
+      for (std::int32_t p = k_.indptr[i]; p < k_.indptr[i + 1]; ++p) {
+        const double w = k_.data[p];
+        const double* x = &v[3 * static_cast<std::size_t>(k_.indices[p])];
+        a += w * x[0];
+        b += w * x[1];
+        c += w * x[2];
+      }
+      out[3 * i] = a;
+      out[3 * i + 1] = b;
+      out[3 * i + 2] = c;
+    });
+  }
+
+  // out = S^T z: z on the free rows, minus m^T z_t, target rows zero.
+  void restrict_to_free(std::vector<double>& z) const {
+    for (std::size_t t = 0; t < e_.targets.size(); ++t) {
+      const double* zt = &z[3 * static_cast<std::size_t>(e_.targets[t])];
+      for (std::int32_t p = e_.offsets[t]; p < e_.offsets[t + 1]; ++p) {
+        double* zj = &z[3 * static_cast<std::size_t>(e_.cols[p])];
+        for (int c = 0; c < 3; ++c) zj[c] -= e_.weights[p] * zt[c];
+      }
+    }
+    for (const std::int32_t t : e_.targets)
+      for (int c = 0; c < 3; ++c) z[3 * static_cast<std::size_t>(t) + c] = 0.0;
+  }
+
+  // out = A x = S^T K S x (the reduced Hessian, halved).
+  void apply(const std::vector<double>& x, std::vector<double>& out) {
+    expand(x, y_, false);
+    apply_k(y_, out);
+    restrict_to_free(out);
+  }
+
+  // diag(S^T K S), 0 on target rows.
+  std::vector<double> diagonal() const {
+    std::vector<double> d(n(), 0.0);
+    for (std::size_t j = 0; j < n(); ++j) {
+      if (e_.is_target[j]) continue;
+      const auto jj = static_cast<std::int32_t>(j);
+      double s = entry(k_, jj, jj);
+      for (std::int32_t p = e_.t_offsets[j]; p < e_.t_offsets[j + 1]; ++p) {
+        const std::int32_t t = e_.targets[e_.t_rows[p]];
+        s -= 2.0 * e_.t_weights[p] * entry(k_, t, jj);
+        for (std::int32_t q = e_.t_offsets[j]; q < e_.t_offsets[j + 1]; ++q)
+          s += e_.t_weights[p] * e_.t_weights[q] * entry(k_, t, e_.targets[e_.t_rows[q]]);
+      }
+      d[j] = s;
+    }
+    return d;
+  }
+
+  const Elimination& elimination() const { return e_; }
+
+ private:
+  const CsrMatrix& k_;
+  Elimination e_;
+  int threads_;
+  int tasks_ = 1;
+  std::vector<double> y_;
+};
+
+Col3 dots(const std::vector<double>& a, const std::vector<double>& b) {
+  Col3 s{0.0, 0.0, 0.0};
+  for (std::size_t i = 0; i < a.size(); i += 3)
+    for (int c = 0; c < 3; ++c) s[c] += a[i + c] * b[i + c];
+  return s;
+}
+
+double energy_of(const Problem& problem, const std::vector<double>& v, std::vector<double>& kv) {
+  problem.apply_k(v, kv);
+  const Col3 e = dots(v, kv);
+  return e[0] + e[1] + e[2];
+}
+
+void check_options(const FairOptions& o) {
+  if (!(o.tol > 0.0 && std::isfinite(o.tol)))
+    throw ParameterError("tol must be positive and finite, got " + std::to_string(o.tol));
+  if (o.window < 1) throw ParameterError("window must be >= 1, got " + std::to_string(o.window));
+  if (o.max_iter < 1) throw ParameterError("max_iter must be >= 1, got " + std::to_string(o.max_iter));
+  if (o.threads < 1 || o.threads > max_threads)
+    throw ParameterError("threads must be in 1.." + std::to_string(max_threads) + ", got " +
+                         std::to_string(o.threads));
+}
+
+}  // namespace
+
+FairSolution fair_solve(const Topology& topology, const Rules& rules, const CsrMatrix& energy,
+                        const std::int32_t* targets, std::size_t n_targets, const double* positions,
+                        const double* start, const FairOptions& options) {
+  check_options(options);
+  const auto t_setup = Clock::now();
+  const std::size_t n = topology.n_vertices();
+  if (energy.n_rows != n || energy.n_cols != n)
+    throw ParameterError("the fairness matrix is " + std::to_string(energy.n_rows) + " x " +
+                         std::to_string(energy.n_cols) + " but the mesh has " + std::to_string(n) + " vertices");
+  Elimination e;
+  e.is_target.assign(n, 0);
+  for (std::size_t i = 0; i < n_targets; ++i) {
+    const std::int32_t t = targets[i];
+    if (t < 0 || static_cast<std::size_t>(t) >= n)
+      throw ParameterError("targets[" + std::to_string(i) + "] = " + std::to_string(t) + " is out of range [0, " +
+                           std::to_string(n) + ")");
+    if (e.is_target[t])
+      throw ParameterError("targets[" + std::to_string(i) + "] = " + std::to_string(t) + " is repeated");
+    e.is_target[t] = 1;
+  }
+  const LimitOperator b = limit_operator(topology, rules);
+  poll_interrupt();
+  e.targets.assign(targets, targets + n_targets);
+  e.g.resize(3 * n_targets);
+  e.offsets.push_back(0);
+  std::vector<std::int32_t> count(n + 1, 0);
+  for (std::size_t i = 0; i < n_targets; ++i) {
+    const std::int32_t t = targets[i];
+    const double d = b.diag[t];
+    for (int c = 0; c < 3; ++c) e.g[3 * i + c] = positions[3 * i + c] / d;
+    for (std::int32_t p = b.offsets[t]; p < b.offsets[t + 1]; ++p) {
+      const double w = b.entry(static_cast<std::size_t>(t), static_cast<std::size_t>(p));
+      if (w == 0.0) continue;
+      const std::int32_t j = b.neighbors[p];
+      if (e.is_target[j])
+        throw std::logic_error("targets " + std::to_string(t) + " and " + std::to_string(j) +
+                               " share a row of the limit matrix: the constraints are not diagonal");
+      e.cols.push_back(j);
+      e.weights.push_back(w / d);
+      ++count[j + 1];
+    }
+    e.offsets.push_back(static_cast<std::int32_t>(e.cols.size()));
+  }
+  for (std::size_t j = 0; j < n; ++j) count[j + 1] += count[j];
+  e.t_offsets = count;
+  e.t_rows.resize(e.cols.size());
+  e.t_weights.resize(e.cols.size());
+  for (std::size_t i = 0; i < n_targets; ++i)
+    for (std::int32_t p = e.offsets[i]; p < e.offsets[i + 1]; ++p) {
+      const std::int32_t slot = count[e.cols[p]]++;
+      e.t_rows[slot] = static_cast<std::int32_t>(i);
+      e.t_weights[slot] = e.weights[p];
+    }
+
+  FairSolution out;
+  out.free_vertices = n - n_targets;
+  Problem problem(energy, std::move(e), options.threads);
+  std::vector<double> diag = problem.diagonal();
+  std::vector<double> kv;
+  out.start_energy = energy_of(problem, std::vector<double>(start, start + 3 * n), kv);
+
+  // x: the free vertices (target rows zero); V = S x + g.
+  std::vector<double> x(start, start + 3 * n), v;
+  for (const std::int32_t t : problem.elimination().targets)
+    for (int c = 0; c < 3; ++c) x[3 * static_cast<std::size_t>(t) + c] = 0.0;
+  problem.expand(x, v, true);
+  double e_now = energy_of(problem, v, kv);
+  // r = -S^T K V: the negative gradient of E / 2 in the free vertices.
+  std::vector<double> r = kv;
+  problem.restrict_to_free(r);
+  for (double& ri : r) ri = -ri;
+  const auto precondition = [&](const std::vector<double>& res, std::vector<double>& z) {
+    z.resize(res.size());
+    for (std::size_t i = 0; i < n; ++i)
+      for (int c = 0; c < 3; ++c) z[3 * i + c] = diag[i] > 0.0 ? res[3 * i + c] / diag[i] : 0.0;
+  };
+  std::vector<double> z, p, q;
+  precondition(r, z);
+  p = z;
+  Col3 rz = dots(r, z);
+  std::array<bool, 3> active{};
+  for (int c = 0; c < 3; ++c) active[c] = rz[c] > 0.0;
+  out.setup_seconds = since(t_setup);
+
+  const auto t_solve = Clock::now();
+  out.energies.push_back(e_now);
+  out.stop_reason = "max_iter";
+  for (long long k = 0;; ++k) {
+    if (!active[0] && !active[1] && !active[2]) {
+      out.stop_reason = "exact";
+      break;
+    }
+    const std::size_t w = static_cast<std::size_t>(options.window);
+    if (out.energies.size() > w && out.energies[out.energies.size() - 1 - w] - e_now <= options.tol * e_now) {
+      out.stop_reason = "converged";
+      break;
+    }
+    if (k == options.max_iter) break;
+    poll_interrupt();
+    problem.apply(p, q);
+    const Col3 pq = dots(p, q);
+    Col3 alpha{0.0, 0.0, 0.0};
+    for (int c = 0; c < 3; ++c) {
+      if (!active[c]) continue;
+      if (!(pq[c] > 0.0)) {  // no descent left along p (the semidefinite case, or rounding)
+        active[c] = false;
+        continue;
+      }
+      alpha[c] = rz[c] / pq[c];
+      e_now -= alpha[c] * rz[c];
+    }
+    for (std::size_t i = 0; i < 3 * n; i += 3)
+      for (int c = 0; c < 3; ++c) {
+        x[i + c] += alpha[c] * p[i + c];
+        r[i + c] -= alpha[c] * q[i + c];
+      }
+    precondition(r, z);
+    const Col3 rz_new = dots(r, z);
+    for (int c = 0; c < 3; ++c) {
+      if (!active[c]) continue;
+      if (!(rz_new[c] > 0.0)) {
+        active[c] = false;
+        continue;
+      }
+      const double beta = rz_new[c] / rz[c];
+      for (std::size_t i = 0; i < 3 * n; i += 3) p[i + c] = z[i + c] + beta * p[i + c];
+      rz[c] = rz_new[c];
+    }
+    e_now = std::max(e_now, 0.0);
+    out.energies.push_back(e_now);
+    out.iterations = k + 1;
+  }
+  out.seconds = since(t_solve);
+
+  problem.expand(x, out.vertices, true);
+  out.energy = energy_of(problem, out.vertices, kv);
+  // The targets, checked through B's rows.
+  for (std::size_t i = 0; i < n_targets; ++i) {
+    const std::int32_t t = targets[i];
+    Col3 s;
+    for (int c = 0; c < 3; ++c) s[c] = b.diag[t] * out.vertices[3 * static_cast<std::size_t>(t) + c];
+    for (std::int32_t pp = b.offsets[t]; pp < b.offsets[t + 1]; ++pp) {
+      const double wgt = b.entry(static_cast<std::size_t>(t), static_cast<std::size_t>(pp));
+      for (int c = 0; c < 3; ++c) s[c] += wgt * out.vertices[3 * static_cast<std::size_t>(b.neighbors[pp]) + c];
+    }
+    double d2 = 0.0;
+    for (int c = 0; c < 3; ++c) d2 += (s[c] - positions[3 * i + c]) * (s[c] - positions[3 * i + c]);
+    out.max_error = std::max(out.max_error, std::sqrt(d2));
+  }
+  return out;
+}
+
+}  // namespace sorpia

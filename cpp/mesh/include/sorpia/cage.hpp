@@ -1,0 +1,68 @@
+#pragma once
+/// @file cage.hpp
+/// A light control mesh (a cage) made from a dense triangle mesh: OpenMesh's
+/// Decimater down to a given number of vertices, and for Catmull-Clark the
+/// decimated triangles split into quads.
+
+#include <cstddef>
+
+#include "sorpia/mesh.hpp"
+#include "sorpia/subdivision.hpp"
+
+namespace sorpia {
+
+/// The guards of decimate(): a collapse that breaks one is never made.
+struct DecimateOptions {
+  /// The cage's scheme: Loop gives the decimated triangles, Catmull-Clark
+  /// their split into quads (quads_from_triangles).
+  Scheme scheme = Scheme::Loop;
+  /// OpenMesh's ModNormalFlippingT: no face's normal may turn by more than
+  /// this in one collapse (degrees, in (0, 180]).
+  double max_normal_deviation = 60.0;
+  /// OpenMesh's ModAspectRatioT: a collapse may not leave a face with a
+  /// longer edge-to-height ratio than this, unless it improves the worst
+  /// face around it (at least 1).
+  double max_aspect_ratio = 10.0;
+  /// A boundary vertex is removed only where the boundary turns by at most
+  /// this angle (degrees, in [0, 180]) between its two boundary edges, so that
+  /// corners and the outline of an open mesh stay; 0 removes boundary
+  /// vertices only where the boundary runs straight, 180 lets the quadric
+  /// alone decide.
+  double max_boundary_angle = 30.0;
+};
+
+/// The mesh decimated by OpenMesh's DecimaterT with the quadric error module
+/// (ModQuadricT, Garland and Heckbert's quadrics of the faces' planes; a
+/// collapse moves a vertex onto its neighbour, so the cage's vertices are
+/// input vertices), guarded by ModNormalFlippingT, ModAspectRatioT and the
+/// boundary angle of `options`.
+///
+/// Loop: a triangle mesh of exactly `n_vertices` vertices. Catmull-Clark: the
+/// decimated triangles split into three quads each (quads_from_triangles),
+/// decimated until that quad mesh has at most `n_vertices` vertices (and at
+/// most 5 fewer: one collapse removes 4 to 6 of them).
+///
+/// Vertices no face references are left out (they count neither towards the
+/// mesh's vertices nor towards `n_vertices`). The result's vertices are
+/// numbered in the order of the input's that remain.
+/// @param mesh       triangles (all_triangles() or every count 3), manifold and consistently oriented
+/// @param n_vertices the cage's vertices, at least 4 and at most the mesh's referenced vertices
+/// @throw MeshError  a face that is not a triangle, an index out of range, a
+///                   face OpenMesh's half-edge mesh cannot take (named), a
+///                   mesh with fewer referenced vertices than `n_vertices`,
+///                   or a decimation the guards stop before `n_vertices`
+///                   (saying how far it got)
+/// @throw ParameterError n_vertices < 4 or an option out of range
+Mesh decimate(const Mesh& mesh, std::size_t n_vertices, const DecimateOptions& options = {});
+
+/// Each triangle split into three quads by joining its centroid to its edge
+/// midpoints: corner k of triangle (a, b, c) gives the quad
+/// (t[k], mid(t[k], t[k+1]), centroid, mid(t[k-1], t[k])), counter-clockwise
+/// as the triangle. The triangles' vertices keep their numbers; the edge
+/// midpoints (one per edge, shared by its faces) and the centroids follow,
+/// numbered in the order the faces reach them. A midpoint has valence 4 inside
+/// (3 on the boundary), a centroid valence 3.
+/// @param triangles a triangle mesh (all_triangles())
+Mesh quads_from_triangles(const Mesh& triangles);
+
+}  // namespace sorpia

@@ -1,0 +1,107 @@
+"""Light cages for dense meshes: OpenMesh's quadric decimation down to a
+given number of vertices, split into quads for Catmull-Clark, with the sharp
+edges found on the cage as creases. The control mesh that
+approximation (issue 23) fits to a scan's points."""
+
+from __future__ import annotations
+
+from typing import NamedTuple, Optional
+
+import numpy as np
+
+from . import _core
+from ._sharp import sharp_edges
+from ._validate import as_faces, as_scheme, as_vertex_count, as_vertices
+
+
+class Cage(NamedTuple):
+    """A control mesh made by `decimate`.
+
+    vertices : (n, 3) float64
+    faces : (m, 3) int32 triangles (Loop) or (m, 4) int32 quads (Catmull-Clark)
+    creases : ``(edges (k, 2) int32, sharpness (k,) float64)`` or None
+        The cage's edges sharper than `sharp_angle`, infinitely sharp: ready
+        for ``creases=`` of `sorpia.interpolate`, `sorpia.limit_surface` and
+        the rest. None without a `sharp_angle`.
+    """
+
+    vertices: np.ndarray
+    faces: np.ndarray
+    creases: Optional[tuple]
+
+
+def decimate(vertices, faces, n_vertices: int, *, scheme: str = "loop", sharp_angle: Optional[float] = None,
+             max_normal_deviation: float = 60.0, max_aspect_ratio: float = 10.0,
+             max_boundary_angle: float = 30.0) -> Cage:
+    """A cage of `n_vertices` vertices for a dense triangle mesh.
+
+    OpenMesh's Decimater (``DecimaterT``) collapses edges in the order of
+    Garland and Heckbert's quadric error (``ModQuadricT``; a collapse moves
+    a vertex onto a neighbour, so the cage's vertices are vertices of the
+    mesh), refusing any collapse that turns a face's normal by more than
+    `max_normal_deviation` degrees (``ModNormalFlippingT``), that leaves a
+    face with an aspect ratio above `max_aspect_ratio` unless it improves the
+    worst one around (``ModAspectRatioT``), or that removes a boundary vertex
+    where the boundary turns by more than `max_boundary_angle` degrees (so
+    that the outline and corners of an open mesh stay; 0 removes them only
+    where the boundary runs straight, 180 leaves them to the quadric).
+
+    Under Catmull-Clark each decimated triangle is split into three quads at
+    its centroid and edge midpoints (as `sorpia.shapes.quad_irregular` is
+    made), the triangles decimated until the quad cage has at most
+    `n_vertices` vertices and at most 5 fewer.
+
+    Parameters
+    ----------
+    vertices : (n, 3) float
+    faces : (m, 3) int
+        Triangles, manifold and consistently oriented (`sorpia.repair` makes
+        a mesh so). Vertices no face uses are left out.
+    n_vertices : int
+        The cage's vertices: at least 4, at most the mesh's (under
+        Catmull-Clark, its vertices, edges and faces together).
+    scheme : {"loop", "catmull-clark"}
+        Loop gives a triangle cage, Catmull-Clark a quad cage.
+    sharp_angle : float, optional
+        Degrees in [0, 180]: the cage's edges whose faces meet at more than
+        this (`sorpia.sharp_edges` on the cage) become infinitely sharp
+        creases.
+    max_normal_deviation, max_aspect_ratio, max_boundary_angle : float
+        The decimation's guards, above.
+
+    Returns
+    -------
+    Cage
+        ``(vertices, faces, creases)``.
+
+    Raises
+    ------
+    MeshError
+        A face that is not a triangle, a mesh OpenMesh's half-edge mesh
+        cannot take (the face named), `n_vertices` above the mesh's, or a
+        decimation the guards stop before `n_vertices` (the message says how
+        far it got).
+    ParameterError
+        `n_vertices` below 4, an unknown scheme, an angle or ratio out of range.
+    """
+    vertices = as_vertices(vertices)
+    triangles = as_faces(faces, len(vertices), count_name="len(vertices)")
+    n = as_vertex_count(n_vertices, "n_vertices")
+    scheme_value = as_scheme(scheme)
+    if sharp_angle is not None:  # the angle's one check (sorpia::sharp_edges), before the decimation's long work
+        _core.sharp_edges(np.zeros((0, 3)), np.zeros(0, np.int32), np.zeros(0, np.int32), float(sharp_angle))
+    mesh = _core.decimate(vertices, triangles, n, scheme_value, float(max_normal_deviation), float(max_aspect_ratio),
+                          float(max_boundary_angle))
+    if scheme_value == _core.Scheme.loop:
+        cage_vertices, cage_faces = mesh
+    else:
+        cage_vertices, counts, indices = mesh
+        cage_faces = indices.reshape(len(counts), 4)
+    creases = None
+    if sharp_angle is not None:
+        edges = sharp_edges(cage_vertices, cage_faces, sharp_angle)
+        creases = (edges, np.full(len(edges), _core.INFINITE_SHARPNESS))
+    return Cage(cage_vertices, cage_faces, creases)
+
+
+__all__ = ["Cage", "decimate"]

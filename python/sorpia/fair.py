@@ -1,0 +1,305 @@
+"""Fair interpolation: a finer control mesh whose limit surface passes through
+the given vertices and bends least (Halstead, Kass and DeRose, "Efficient,
+fair interpolation using Catmull-Clark surfaces", SIGGRAPH 1993), under Loop
+or Catmull-Clark, with OpenSubdiv's creases, corners and holes.
+
+Plain interpolation (`sorpia.interpolate`) has as many control vertices as
+targets, so its surface has no freedom left and undulates between uneven
+targets. Here the control mesh is first refined ``levels`` times uniformly by
+OpenSubdiv's Far (its faces and tags as Far's refinement carries them: edge
+and vertex sharpness decayed by one per level, holes from their parent faces;
+the refinement matrix R from Far's stencils, so that R V on the fine mesh has
+the coarse mesh's limit surface). Vertex i of the fine mesh is the child of
+input vertex i; the limit positions of the targets' children are required to
+equal the targets, and the rest of the freedom minimises the fairness energy
+
+    E(V) = thin_plate * integral(|S_uu|^2 + 2 |S_uv|^2 + |S_vv|^2)
+         + membrane   * integral(|S_u|^2 + |S_v|^2)
+
+of the fine mesh's limit surface S, a quadratic form tr(V^T K V) in the fine
+control vertices (K: `sorpia.fairness_matrix` of the fine mesh).
+
+The solve (sorpia::fair_solve in the C++ core): the constraint rows, the fine
+mesh's limit matrix B at the targets' children, touch no other target's child
+(a vertex child's limit mask covers the faces around it, whose other corners
+are edge and face children), so each constraint gives its vertex from the
+others, V_t = (T_t - sum_j B_tj V_j) / B_tt, exactly; what is left is an
+unconstrained quadratic in the free vertices, minimised by conjugate gradients
+with Jacobi preconditioning, started from the plain interpolation refined
+(R V_plain: the plain surface, which meets the constraints). The targets are
+met to rounding whatever the iteration stops at; the iteration stops when the
+energy fell by at most ``tol`` times itself over the last 10 iterations.
+
+Where the reduced energy has a null space (thin plate alone with few targets:
+a flat regular grid's affine functions), the conjugate gradients on the
+consistent semidefinite system keep the start's component along it: the
+result is a minimiser, the one nearest the plain interpolation in that sense.
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+import time
+from dataclasses import dataclass, field
+from typing import Optional
+
+import numpy as np
+
+from . import _core
+from ._validate import DEFAULT_BOUNDARY, DEFAULT_SCHEME, as_rules, as_vertices
+from .errors import ParameterError
+from .limit import TAGS_DOC as _TAGS_DOC
+from .limit import built
+from .solve import InterpolationResult, Interpolator, check_options
+
+# The iteration's window: the energy change is measured over this many iterations.
+ENERGY_WINDOW = 10
+MAX_LEVELS = int(_core.MAX_REFINEMENT_LEVELS)
+
+
+@dataclass(frozen=True, eq=False)
+class FairResult:
+    """What `fair_interpolate` returns: a control mesh ``levels`` subdivision
+    steps finer than the input, with its faces and tags (pass them on as
+    they are: ``sorpia.LimitSurface(r.control_vertices, r.faces,
+    scheme=r.scheme, boundary=r.boundary, creases=r.creases,
+    corners=r.corners, holes=r.holes)`` is the fair surface).
+
+    Attributes
+    ----------
+    control_vertices : (n_fine, 3) float64
+        V on the fine mesh; row i < len(vertices) is the child of input vertex i.
+    faces : (m_fine, 3) or (m_fine, 4) int32
+        The fine mesh's faces (triangles under Loop, quads under
+        Catmull-Clark), Far's level ``levels`` in its order, holes included.
+    creases, corners : (indices, sharpness) or None
+        The fine mesh's tags, as `sorpia.limit_points` takes them.
+    holes : (h,) int32 or None
+        The fine faces whose input face is a hole.
+    scheme, boundary : str
+    levels : int
+    targets : (k,) int64
+        The interpolated vertices (input indices, which are also their
+        children's indices in the fine mesh).
+    energy : float
+        tr(V^T K V) of the result.
+    plain_energy : float
+        tr(V^T K V) of the plain interpolation's control mesh refined
+        (R V_plain: the same surface as plain interpolation's, on the same
+        fine mesh), which the iteration starts from.
+    energies : (iterations + 1,) float64
+        The energy after each iteration (energies[0]: the start's, after its
+        target vertices were recomputed from the others).
+    max_error : float
+        max over the targets of ||(B_fine V)_t - v_t||, absolute.
+    max_error_relative : float
+        max_error over the bounding-box diagonal of the input vertices.
+    iterations : int
+    stop_reason : {"converged", "max_iter", "exact"}
+        "converged": the energy fell by at most tol times itself over the
+        last 10 iterations; "exact": the gradient vanished in every column.
+    converged : bool
+        stop_reason is "converged" or "exact".
+    seconds : float
+        Wall time of the whole call.
+    timings : dict
+        Seconds per phase: "refine" (Far's refinement and R), "plain" (the
+        plain interpolation, topology and B included), "energy" (K),
+        "setup" (the fine mesh's B, the elimination, the preconditioner),
+        "solve" (the iteration).
+    plain : InterpolationResult
+        The plain interpolation of every input vertex on the input mesh
+        (`sorpia.interpolate`), whose refined control mesh starts the
+        iteration.
+    refinement : scipy.sparse.csr_matrix (n_fine, n)
+        R: ``R @ plain.control_vertices`` is the plain surface's control
+        mesh on the fine faces.
+    """
+
+    control_vertices: np.ndarray
+    faces: np.ndarray
+    creases: Optional[tuple]
+    corners: Optional[tuple]
+    holes: Optional[np.ndarray]
+    scheme: str
+    boundary: str
+    levels: int
+    targets: np.ndarray
+    energy: float
+    plain_energy: float
+    energies: np.ndarray
+    max_error: float
+    max_error_relative: float
+    iterations: int
+    stop_reason: str
+    seconds: float
+    timings: dict = field(repr=False)
+    plain: InterpolationResult = field(repr=False)
+    refinement: object = field(repr=False)
+
+    @property
+    def converged(self) -> bool:
+        return self.stop_reason in ("converged", "exact")
+
+    @property
+    def tags(self) -> dict:
+        """The fine mesh's tags as keyword arguments (creases=, corners=, holes=; absent kinds left out)."""
+        return {k: v for k, v in (("creases", self.creases), ("corners", self.corners), ("holes", self.holes))
+                if v is not None}
+
+
+def _weight(value, name: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not math.isfinite(float(value)):
+        raise ParameterError(f"{name} must be a finite real number, got {value!r}")
+    if value < 0:
+        raise ParameterError(f"{name} = {value!r} is negative: the energy's weights must be >= 0")
+    return float(value)
+
+
+def check_fair_options(levels, thin_plate, membrane, tol) -> tuple[int, float, float, float]:
+    """levels, thin_plate, membrane and tol, checked (ParameterError) before any work."""
+    if isinstance(levels, bool) or not isinstance(levels, numbers.Integral) or not 1 <= levels <= MAX_LEVELS:
+        raise ParameterError(f"levels must be an integer in 1..{MAX_LEVELS}, got {levels!r}")
+    tp, mb = _weight(thin_plate, "thin_plate"), _weight(membrane, "membrane")
+    if tp == 0 and mb == 0:
+        raise ParameterError("thin_plate and membrane are both 0: the energy would be zero for every surface; "
+                             "give one of them a positive weight")
+    if isinstance(tol, bool) or not isinstance(tol, numbers.Real) or not (0 < tol < 1):
+        raise ParameterError(f"tol must be a real number in (0, 1), got {tol!r}")
+    return int(levels), tp, mb, float(tol)
+
+
+def as_targets(targets, n_vertices: int) -> np.ndarray:
+    """The target vertex indices, checked: None (every vertex), or distinct
+    integers in [0, n_vertices), at least one."""
+    if targets is None:
+        return np.arange(n_vertices, dtype=np.int32)
+    arr = np.asarray(targets)
+    if arr.dtype == bool or not np.issubdtype(arr.dtype, np.integer):
+        raise TypeError(f"targets must be integer vertex indices, got dtype {arr.dtype}")
+    if arr.ndim != 1:
+        raise ParameterError(f"targets must have shape (k,), got {arr.shape}")
+    if len(arr) == 0:
+        raise ParameterError("targets is empty: give at least one vertex to interpolate (None: every vertex)")
+    bad = np.flatnonzero((arr < 0) | (arr >= n_vertices))
+    if len(bad):
+        raise ParameterError(f"targets[{bad[0]}] = {arr[bad[0]]} is out of range [0, {n_vertices})")
+    order = np.argsort(arr, kind="stable")
+    repeated = np.flatnonzero(arr[order][1:] == arr[order][:-1])
+    if len(repeated):
+        first, second = sorted(order[repeated[0]:repeated[0] + 2])
+        raise ParameterError(f"targets[{second}] = {arr[second]} repeats targets[{first}]")
+    return np.ascontiguousarray(arr, dtype=np.int32)
+
+
+def _fine_tags(tags: _core.Tags) -> tuple:
+    creases = corners = holes = None
+    if len(tags.crease_sharpness):
+        creases = (np.asarray(tags.crease_vertices), np.asarray(tags.crease_sharpness))
+    if len(tags.corner_sharpness):
+        corners = (np.asarray(tags.corner_vertices), np.asarray(tags.corner_sharpness))
+    if len(tags.holes):
+        holes = np.asarray(tags.holes)
+    return creases, corners, holes
+
+
+def _fairness_matrix(topology: _core.Topology, rules: _core.Rules, thin_plate: float, membrane: float) -> tuple:
+    """K of the fine mesh as CSR arrays (data, indices, indptr): the core's
+    sorpia::fairness_matrix (`sorpia.fairness_matrix`) with its default
+    quadrature, on the topology already built."""
+    surface = _core.LimitSurface(topology, np.zeros((topology.n_vertices, 3)), rules.scheme, rules.boundary,
+                                 rules.tags)
+    return _core.fairness_matrix(surface, thin_plate, membrane, 4, 4)
+
+
+def fair_interpolate(vertices, faces, *, scheme: str = DEFAULT_SCHEME, levels: int = 1, thin_plate: float = 1.0,
+                     membrane: float = 0.0, targets=None, boundary: str = DEFAULT_BOUNDARY, creases=None,
+                     corners=None, holes=None, tol: float = 1e-6, max_iter: int = 2000,
+                     threads: int = 1) -> FairResult:
+    """A control mesh `levels` subdivision steps finer than (`vertices`,
+    `faces`) whose limit surface passes through the targets and whose
+    fairness energy is least (module docstring).
+
+    Parameters
+    ----------
+    vertices : (n, 3) array_like float
+        The points to interpolate (and the input control mesh's vertices).
+    faces : faces as `sorpia.interpolate` takes them
+    scheme : {"loop", "catmull-clark", "auto"}
+    levels : int
+        Uniform refinement steps, 1..10 (each multiplies the faces by 4).
+        Refused before any work when the fine mesh and its solve would not
+        fit in the memory left (sorpia::refinement_bytes).
+    thin_plate, membrane : float
+        The energy's weights, >= 0, not both 0.
+    targets : (k,) int, optional
+        The vertices to interpolate (distinct indices); the others are free
+        (partial interpolation). None: every vertex.
+    boundary : {"edge-and-corner", "edge-only"}
+    {tags}
+    tol : float
+        Stop when the energy fell by at most tol times itself over the last
+        10 iterations, in (0, 1).
+    max_iter : int
+        At most this many iterations.
+    threads : int
+        Threads for the products with the fairness matrix.
+
+    Returns
+    -------
+    FairResult
+    """
+    t0 = time.perf_counter()
+    levels, thin_plate, membrane, tol = check_fair_options(levels, thin_plate, membrane, tol)
+    check_options("auto", tol=1e-10, max_iter=max_iter, threads=threads)  # max_iter and threads, as interpolate's
+    v0 = as_vertices(vertices)
+    n = v0.shape[0]
+    arrays, n, rules = as_rules(faces, n, scheme=scheme, boundary=boundary, creases=creases, corners=corners,
+                                holes=holes, count_name="len(vertices)")
+    target_ids = as_targets(targets, n)
+    timings = {}
+
+    t = time.perf_counter()
+    topology = built(lambda: _core.Topology(*arrays, n))  # unreferenced vertices: the Interpolator below warns
+    fine = _core.refine_uniform(topology, rules, levels)  # refuses a fine mesh too big before building it
+    timings["refine"] = time.perf_counter() - t
+
+    t = time.perf_counter()
+    rule_options = dict(scheme=scheme, boundary=boundary, creases=creases, corners=corners, holes=holes)
+    interp = Interpolator._for_vertices(faces, n, rule_options, "error")
+    plain = interp.solve(v0)
+    timings["plain"] = time.perf_counter() - t
+
+    import scipy.sparse
+
+    n_fine = int(fine["n_vertices"])
+    R = scipy.sparse.csr_matrix(fine["refinement"], shape=(n_fine, n))
+    fine_faces = fine["faces"]
+    fine_rules = _core.Rules(scheme=rules.scheme, boundary=rules.boundary, tags=fine["tags"])
+    fine_topology = _core.Topology(fine_faces, n_fine) if rules.scheme == _core.Scheme.loop else _core.Topology(
+        np.full(len(fine_faces), 4, np.int32), np.ascontiguousarray(fine_faces.reshape(-1)), n_fine)
+    t = time.perf_counter()
+    k_data, k_indices, k_indptr = _fairness_matrix(fine_topology, fine_rules, thin_plate, membrane)
+    timings["energy"] = time.perf_counter() - t
+
+    start = np.ascontiguousarray(R @ np.asarray(plain.control_vertices))
+    sol = _core.fair_solve(fine_topology, fine_rules, k_data, k_indices, k_indptr, target_ids,
+                           np.ascontiguousarray(v0[target_ids]), start, tol, ENERGY_WINDOW, int(max_iter),
+                           int(threads))
+    timings["setup"], timings["solve"] = sol["setup_seconds"], sol["seconds"]
+
+    diagonal = float(np.linalg.norm(v0.max(axis=0) - v0.min(axis=0))) if n else 0.0
+    max_error = float(sol["max_error"])
+    fine_creases, fine_corners, fine_holes = _fine_tags(fine["tags"])
+    return FairResult(
+        control_vertices=sol["vertices"], faces=fine_faces, creases=fine_creases, corners=fine_corners,
+        holes=fine_holes, scheme=_core.scheme_name(rules.scheme), boundary=_core.boundary_name(rules.boundary),
+        levels=levels, targets=target_ids.astype(np.int64), energy=float(sol["energy"]),
+        plain_energy=float(sol["start_energy"]), energies=sol["energies"], max_error=max_error,
+        max_error_relative=max_error / diagonal if diagonal > 0 else max_error,
+        iterations=int(sol["iterations"]), stop_reason=sol["stop_reason"], seconds=time.perf_counter() - t0,
+        timings=timings, plain=plain, refinement=R)
+
+
+fair_interpolate.__doc__ = fair_interpolate.__doc__.replace("{tags}", _TAGS_DOC)

@@ -1,0 +1,339 @@
+"""sorpia.approximate and its parts (footpoints, the k-d tree, the update), against independent computations:
+brute-force distances in numpy, point-to-triangle distances to fine tessellations, a dense least-squares solve,
+and points sampled from a known cage's limit surface."""
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import sorpia
+from sorpia import _core, shapes
+from sorpia.approximate import approximate
+from sorpia.surface import LimitSurface, subface_columns
+
+
+def sample_surface(surface: LimitSurface, faces, k: int, seed: int = 0):
+    """k random (face, uv) in the faces' domains (sub-faces of Catmull-Clark k-gons) and their limit points."""
+    rng = np.random.default_rng(seed)
+    fid = rng.integers(0, surface.n_faces, k).astype(np.int32)
+    uv = rng.random((k, 2))
+    if surface.scheme == "loop":
+        flip = uv.sum(axis=1) > 1
+        uv[flip] = 1 - uv[flip]
+    else:
+        sizes = np.diff(np.r_[0, np.cumsum(faces.face_vertex_counts)]) if hasattr(faces, "face_vertex_counts") \
+            else np.full(surface.n_faces, np.asarray(faces).shape[1])
+        for i in np.flatnonzero(sizes[fid] != 4):
+            n = sizes[fid[i]]
+            w, j = subface_columns(n), rng.integers(n)
+            uv[i] = [j % w + 0.5 * uv[i, 0], j // w + 0.5 * uv[i, 1]]
+    return fid, uv, surface.evaluate(fid, uv)
+
+
+CASES = {
+    "loop-closed": (shapes.icosphere(2), "loop"),
+    "loop-boundary": (shapes.grid(5, 5), "loop"),
+    "cc-quads": (shapes.quad_torus(10, 5), "catmull-clark"),
+    "cc-triangles": (shapes.icosphere(1), "catmull-clark"),  # every face split into 3 sub-faces
+    "cc-polygons": (shapes.polygon_torus(10, 5), "catmull-clark"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(CASES))
+def test_footpoints_of_points_on_the_surface_are_those_points(case):
+    # A point of the limit surface is its own closest point: the search finds it again from the grid, crossing
+    # face and sub-face edges where its nearest grid sample lies in another face. The parameters stop at a step
+    # of 1e-11 in (u, v), so the distance is that times the surface's size, far below 1e-9.
+    (V, F), scheme = CASES[case]
+    s = LimitSurface(V, F, scheme=scheme)
+    fid, uv, P = sample_surface(s, F, 1500)
+    f2, uv2, pos, d, nrm = _core.closest_points(s._surface, s._topology, P, 4, 20)
+    assert d.max() < 1e-9
+    np.testing.assert_allclose(s.evaluate(f2, uv2), pos, atol=1e-14)  # positions are those of (face, u, v)
+    np.testing.assert_allclose(np.linalg.norm(P - pos, axis=1), d, atol=1e-15)
+    np.testing.assert_allclose(np.linalg.norm(nrm, axis=1), 1.0, atol=1e-12)
+
+
+def point_triangle_distance(p, a, b, c):
+    """Exact distance from each point p (k, 3) to each triangle (a, b, c) (t, 3): (k, t), by the closest point
+    on the triangle (Ericson, Real-Time Collision Detection 5.1.5), vectorised."""
+    p = p[:, None, :]
+    ab, ac, ap = b - a, c - a, p - a
+    d1, d2 = (ab * ap).sum(-1), (ac * ap).sum(-1)
+    bp = p - b
+    d3, d4 = (ab * bp).sum(-1), (ac * bp).sum(-1)
+    cp = p - c
+    d5, d6 = (ab * cp).sum(-1), (ac * cp).sum(-1)
+    va, vb, vc = d3 * d6 - d5 * d4, d5 * d2 - d1 * d6, d1 * d4 - d3 * d2
+    denom = va + vb + vc
+    with np.errstate(divide="ignore", invalid="ignore"):
+        v = vb / denom
+        w = vc / denom
+        q = a + v[..., None] * ab + w[..., None] * ac  # inside
+        t_ab = d1 / (d1 - d3)
+        t_ac = d2 / (d2 - d6)
+        t_bc = (d4 - d3) / ((d4 - d3) + (d5 - d6))
+    regions = [
+        ((d1 <= 0) & (d2 <= 0), np.broadcast_to(a, q.shape)),
+        ((d3 >= 0) & (d4 <= d3), np.broadcast_to(b, q.shape)),
+        ((d6 >= 0) & (d5 <= d6), np.broadcast_to(c, q.shape)),
+        ((vc <= 0) & (d1 >= 0) & (d3 <= 0), a + t_ab[..., None] * ab),
+        ((vb <= 0) & (d2 >= 0) & (d6 <= 0), a + t_ac[..., None] * ac),
+        ((va <= 0) & ((d4 - d3) >= 0) & ((d5 - d6) >= 0), b + t_bc[..., None] * (c - b)),
+    ]
+    for mask, point in reversed(regions):  # the first region that holds wins
+        q = np.where(mask[..., None], point, q)
+    return np.linalg.norm(p - q, axis=-1)
+
+
+@pytest.mark.parametrize("scheme", ["loop", "catmull-clark"])
+def test_footpoint_distance_is_the_limit_of_distances_to_finer_tessellations(scheme):
+    # Independent of the search: the exact point-to-triangle distance to the tessellations of levels 3 and 4
+    # (every vertex an exact limit point). Their chords leave the surface by O(h^2), so the distance to them
+    # converges to the distance to the surface at that rate: level 4 must be closer to our distance than
+    # level 3, and within the chord error (a quarter of level 3's difference, with slack).
+    V, F = shapes.icosphere(1) if scheme == "loop" else shapes.quad_torus(6, 4)
+    s = LimitSurface(V, F, scheme=scheme)
+    _, _, P = sample_surface(s, F, 40, seed=3)
+    rng = np.random.default_rng(4)
+    P = P + 0.05 * rng.standard_normal(P.shape)
+    d = _core.closest_points(s._surface, s._topology, P, 4, 20)[3]
+    gaps = []
+    for level in (3, 4):
+        Vt, Ft = s.tessellate(level)
+        Ft = np.asarray(Ft)
+        tris = Ft if Ft.shape[1] == 3 else np.vstack([Ft[:, [0, 1, 2]], Ft[:, [0, 2, 3]]])
+        dt = point_triangle_distance(P, Vt[tris[:, 0]], Vt[tris[:, 1]], Vt[tris[:, 2]]).min(axis=1)
+        gaps.append(np.abs(dt - d).max())
+    assert gaps[1] < gaps[0]
+    assert gaps[1] < 0.4 * gaps[0] + 1e-12
+
+
+def test_point_index_finds_the_nearest_point_as_brute_force_does():
+    rng = np.random.default_rng(0)
+    pts = rng.random((3000, 3))
+    q = rng.random((500, 3)) * 1.2 - 0.1
+    index, dist = _core.PointIndex(pts).nearest(q)
+    brute = np.linalg.norm(q[:, None, :] - pts[None, :, :], axis=-1)
+    np.testing.assert_allclose(dist, brute.min(axis=1), rtol=0, atol=1e-15)
+    np.testing.assert_allclose(np.linalg.norm(q - pts[index], axis=1), dist, atol=1e-15)
+
+
+def dense_rows(surface: LimitSurface, face_ids, uv):
+    """The limit basis at (face, u, v) by evaluating the surface of each unit control vertex (Bfr's Evaluate,
+    not the stencils approximate uses): (k, n) dense."""
+    n = surface.n_vertices
+    saved = surface.vertices
+    A = np.empty((len(face_ids), n))
+    for j in range(0, n, 3):  # three basis functions at once, one per coordinate
+        E = np.zeros((n, 3))
+        for c in range(3):
+            if j + c < n:
+                E[j + c, c] = 1.0
+        surface.set_vertices(E)
+        P = surface.evaluate(face_ids, uv)
+        for c in range(3):
+            if j + c < n:
+                A[:, j + c] = P[:, c]
+    surface.set_vertices(saved)
+    return A
+
+
+@pytest.mark.parametrize("method", ["cg", "lspia"])
+@pytest.mark.parametrize("scheme", ["loop", "catmull-clark"])
+def test_one_update_is_the_dense_least_squares_solution(scheme, method):
+    # With the footpoints of the given cage fixed, one update minimises |A V - P|^2 + mu |V - V0|^2 (mu = 1e-6 of
+    # the mean diagonal of A^T A, the documented proximal term): numpy's dense least squares on the stacked
+    # system, with A from Bfr's evaluation of unit control vertices, gives the same control vertices.
+    V, F = shapes.icosphere(1) if scheme == "loop" else shapes.quad_torus(6, 4)
+    rng = np.random.default_rng(5)
+    s = LimitSurface(V, F, scheme=scheme)
+    _, _, P = sample_surface(s, F, 400, seed=6)
+    P = P + 0.01 * rng.standard_normal(P.shape)
+    V0 = V + 0.03 * rng.standard_normal(V.shape)
+    s.set_vertices(V0)
+    fid, uv = _core.closest_points(s._surface, s._topology, P, 4, 10)[:2]
+    A = dense_rows(s, fid, uv)
+    mu = 1e-6 * np.mean(np.einsum("ij,ij->j", A, A))
+    stacked = np.vstack([A, np.sqrt(mu) * np.eye(len(V))])
+    want = np.linalg.lstsq(stacked, np.vstack([P, np.sqrt(mu) * V0]), rcond=None)[0]
+    r = approximate(P, V0, F, scheme=scheme, iterations=1, method=method, solver_tol=1e-13,
+                    solver_max_iter=200000, newton_steps=10)
+    assert r.iterations == 1
+    np.testing.assert_allclose(r.control_vertices, want, atol=1e-9 * np.abs(want).max())
+
+
+@pytest.mark.parametrize("scheme", ["loop", "catmull-clark"])
+def test_points_sampled_from_a_cage_fit_that_cage_back(scheme):
+    # Points sampled densely on a known cage's limit surface determine the cage: from a perturbed start the
+    # tangent-distance update (tangential=0) converges to it, distances to rounding level.
+    V, F = shapes.icosphere(1) if scheme == "loop" else shapes.quad_torus(8, 4)
+    s = LimitSurface(V, F, scheme=scheme)
+    _, _, P = sample_surface(s, F, 30 * s.n_faces, seed=7)
+    V0 = V + 1e-2 * np.random.default_rng(8).standard_normal(V.shape)
+    r = approximate(P, V0, F, scheme=scheme, iterations=40, tol=0, tangential=0.0, solver_tol=1e-12,
+                    solver_max_iter=20000)
+    assert r.max_distance < 1e-9
+    assert r.history[0]["max"] > 1e-3  # the start was far off
+    np.testing.assert_allclose(r.control_vertices, V, atol=1e-8)
+
+
+def test_report_distances_both_ways_against_brute_force():
+    V, F = shapes.icosphere(1)
+    s = LimitSurface(V, F)
+    _, _, P = sample_surface(s, F, 600, seed=9)
+    P = P * 1.02
+    r = approximate(P, V, F, iterations=2, report_level=2)
+    assert len(r.history) == r.iterations + 1
+    last = r.history[-1]
+    # data to surface: the footpoint distances of the returned footpoints, evaluated independently
+    d = np.linalg.norm(P - LimitSurface(r.control_vertices, F).evaluate(r.face_ids, r.uv), axis=1)
+    np.testing.assert_allclose(d, r.distances, atol=1e-14)
+    assert last["rms"] == pytest.approx(np.sqrt(np.mean(d ** 2)), rel=1e-12)
+    assert last["max"] == pytest.approx(d.max(), rel=1e-12)
+    # surface to data: tessellation vertices of the fitted surface to their nearest data point, brute force
+    Vt, _ = sorpia.limit_surface(r.control_vertices, F, level=2)
+    near = np.linalg.norm(Vt[:, None, :] - P[None, :, :], axis=-1).min(axis=1)
+    assert last["surface_rms"] == pytest.approx(np.sqrt(np.mean(near ** 2)), rel=1e-12)
+    assert last["surface_max"] == pytest.approx(near.max(), rel=1e-12)
+    assert last["rms_relative"] == pytest.approx(last["rms"] / r.diagonal)
+    assert r.diagonal == pytest.approx(np.linalg.norm(P.max(0) - P.min(0)))
+    json.dumps(r.report())  # JSON-ready
+
+
+def test_vertices_no_point_influences_stay_where_they_are():
+    # Points on one half of a sphere only: the control vertices of the other half have no data; the proximal
+    # term keeps them where they were (within what the data's vertices pull through shared support).
+    V, F = shapes.icosphere(2)
+    s = LimitSurface(V, F)
+    _, _, P = sample_surface(s, F, 3000, seed=10)
+    P = P[P[:, 2] > 0.3]
+    r = approximate(P, V * 1.05, F, iterations=3)
+    far = V[:, 2] < -0.6
+    np.testing.assert_allclose(r.control_vertices[far], 1.05 * V[far], atol=1e-9)
+    assert r.rms < r.history[0]["rms"]
+
+
+def test_fairness_term_smooths_and_costs_distance():
+    V, F = shapes.icosphere(1)
+    s = LimitSurface(V, F)
+    _, _, P = sample_surface(s, F, 800, seed=11)
+    P = P + 0.02 * np.random.default_rng(12).standard_normal(P.shape)
+    plain = approximate(P, V, F, iterations=3)
+    fair = approximate(P, V, F, iterations=3, fairness=1.0)
+    energy = [sorpia.thin_plate_energy(r.control_vertices, F) for r in (plain, fair)]
+    assert energy[1] < energy[0]
+    assert fair.rms >= plain.rms
+
+
+@pytest.mark.parametrize("points, message", [
+    (np.zeros((0, 3)), "points is empty"),
+    (np.array([[0.0, 0, 0], [np.nan, 0, 0]]), r"points\[1\]"),
+    (np.array([[0.0, 0, 0], [np.inf, 0, 0]]), r"points\[1\]"),
+])
+def test_bad_points_are_refused_naming_the_problem(points, message):
+    V, F = shapes.icosphere(1)
+    with pytest.raises(sorpia.ParameterError, match=message):
+        approximate(points, V, F)
+
+
+def test_bad_cage_and_options_are_refused():
+    V, F = shapes.icosphere(1)
+    P = V.copy()
+    with pytest.raises(sorpia.MeshError, match="cage_faces is empty"):
+        approximate(P, V, np.zeros((0, 3), np.int32))
+    for kwargs, message in [({"iterations": 0}, "iterations"), ({"tol": -1}, "tol"), ({"fairness": np.nan}, "fairness"),
+                            ({"method": "sor"}, "method"), ({"tangential": 2}, "tangential"),
+                            ({"method": "lspia", "tangential": 0.5}, "lspia"), ({"grid": 0}, "grid")]:
+        with pytest.raises(sorpia.ParameterError, match=message):
+            approximate(P, V, F, **kwargs)
+
+
+def run_cli(*args, cwd):
+    return subprocess.run([sys.executable, "-m", "sorpia", "approximate", *map(str, args)], cwd=cwd,
+                          capture_output=True, text=True)
+
+
+def test_command_decimates_fits_and_writes_its_outputs(tmp_path):
+    V, F = shapes.icosphere(3)
+    sorpia.write_mesh(tmp_path / "scan.ply", V, F)
+    r = run_cli("scan.ply", "-o", "cage.obj", "--vertices", 60, "--report", "r.json", "--surface", "s.ply",
+                "--iterations", 3, cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    assert "data->surf" in r.stdout and "surf->data" in r.stdout
+    report = json.loads((tmp_path / "r.json").read_text())
+    assert report["cage"]["vertices"] == 60 and report["n_points"] == len(V)
+    Vc, Fc = sorpia.read_mesh(tmp_path / "cage.obj")
+    assert len(Vc) == 60
+    # The report's final RMS is that of the cage as written: its footpoints recomputed independently.
+    s = LimitSurface(Vc, Fc)
+    d = _core.closest_points(s._surface, s._topology, V, 4, 20)[3]
+    assert report["final"]["rms"] == pytest.approx(np.sqrt(np.mean(d ** 2)), rel=1e-6)
+    assert report["final"]["rms"] < report["history"][0]["rms"]
+
+
+def test_command_refuses_bad_input_and_writes_nothing(tmp_path):
+    V, F = shapes.icosphere(2)
+    sorpia.write_mesh(tmp_path / "scan.ply", V, F)
+    sorpia.write_mesh(tmp_path / "cage.obj", *shapes.icosphere(1))
+    cases = [
+        (("scan.ply", "-o", "out.obj", "--vertices", 100000), "100000 vertices asked"),
+        (("missing.ply", "-o", "out.obj", "--vertices", 50), "no such file"),
+        (("scan.ply", "-o", "out.obj"), "one of the arguments --vertices --cage is required"),
+        (("scan.ply", "-o", "out.obj", "--vertices", 50, "--cage", "cage.obj"), "not allowed with"),
+        (("scan.ply", "-o", "out.xyz", "--cage", "cage.obj"), "unknown mesh format"),
+    ]
+    for args, message in cases:
+        r = run_cli(*args, cwd=tmp_path)
+        assert r.returncode == 2 and message in r.stderr, (args, r.stderr)
+        assert not (tmp_path / "out.obj").exists()
+    # a point cloud has no faces to decimate: --vertices needs a mesh, the cage must be given
+    (tmp_path / "cloud.ply").write_text("ply\nformat ascii 1.0\nelement vertex 3\nproperty double x\n"
+                                        "property double y\nproperty double z\nend_header\n0 0 0\n1 0 0\n0 1 0\n")
+    r = run_cli("cloud.ply", "-o", "out.obj", "--vertices", 3, cwd=tmp_path)
+    assert r.returncode == 2 and "cloud.ply is a point cloud (no faces)" in r.stderr and "--cage" in r.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["cage.obj", "cloud.ply", "scan.ply"]
+
+
+POINT_CLOUDS = {
+    "cloud.ply": "ply\nformat ascii 1.0\nelement vertex {n}\nproperty double x\nproperty double y\n"
+                 "property double z\nend_header\n{rows}",
+    "cloud.obj": "{vrows}",
+    "cloud.off": "OFF\n{n} 0 0\n{rows}",
+}
+
+
+@pytest.mark.parametrize("name", sorted(POINT_CLOUDS))
+def test_point_cloud_files_are_read_as_points_and_fitted(tmp_path, name):
+    # A file of vertices alone: read with points=True (its faces empty), refused as a mesh; the command fits a
+    # given cage to it, the same as to the points in memory.
+    V, F = shapes.icosphere(3)
+    rows = "".join(f"{x!r} {y!r} {z!r}\n" for x, y, z in V.tolist())
+    (tmp_path / name).write_text(POINT_CLOUDS[name].format(n=len(V), rows=rows, vrows="v " + rows.replace("\n", "\nv ")[:-2]))
+    from sorpia.io import read_mesh_file
+
+    got = read_mesh_file(tmp_path / name, points=True)
+    np.testing.assert_array_equal(got.vertices, V)
+    assert got.faces.shape == (0, 3)
+    with pytest.raises(sorpia.MeshFileError):
+        sorpia.read_mesh(tmp_path / name)
+    sorpia.write_mesh(tmp_path / "cage.obj", *shapes.icosphere(1))
+    r = run_cli(name, "-o", "fitted.obj", "--cage", "cage.obj", "--iterations", 2, "--report", "r.json", cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    want = approximate(V, *shapes.icosphere(1), iterations=2)
+    np.testing.assert_allclose(sorpia.read_mesh(tmp_path / "fitted.obj")[0], want.control_vertices, atol=1e-12)
+
+
+def test_render_draws_the_data_with_the_fitted_surface(tmp_path):
+    pytest.importorskip("matplotlib")
+    V, F = shapes.icosphere(3)
+    sorpia.write_mesh(tmp_path / "scan.ply", V, F)
+    sorpia.write_mesh(tmp_path / "cage.obj", *shapes.icosphere(1))
+    r = subprocess.run([sys.executable, "-m", "sorpia", "render", "scan.ply", "--cage", "cage.obj", "-o", "fig.png",
+                        "--iterations", "2", "--size", "400x300"], cwd=tmp_path, capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    assert "approximation" in r.stdout
+    assert (tmp_path / "fig.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

@@ -1,0 +1,216 @@
+"""sorpia.decimate: cages made by OpenMesh's quadric decimation, split into quads for Catmull-Clark, with the sharp
+edges of the cage as creases. Checked against properties computed here in numpy and scipy: counts, edge incidences,
+Euler characteristic, distances to the sphere, the quad split's affine identity, dihedral angles."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.spatial import cKDTree
+
+import sorpia
+
+
+def edge_counts(faces):
+    """{directed edge (a, b): how many faces have it}, over the faces' consecutive corners."""
+    faces = np.asarray(faces)
+    a, b = faces.ravel(), np.roll(faces, -1, axis=1).ravel()
+    keys, counts = np.unique(np.stack([a, b], axis=1), axis=0, return_counts=True)
+    return {tuple(k): c for k, c in zip(keys.tolist(), counts.tolist())}
+
+
+def check_oriented_manifold(vertices, faces, closed):
+    """Every directed edge in one face (consistent orientation), every edge in at most two faces, and on a closed
+    mesh in exactly two (its opposite present); every vertex used."""
+    directed = edge_counts(faces)
+    assert max(directed.values()) == 1
+    unpaired = [e for e in directed if (e[1], e[0]) not in directed]
+    assert (not unpaired) if closed else bool(unpaired)
+    assert np.array_equal(np.unique(faces), np.arange(len(vertices)))
+    return unpaired
+
+
+def euler_characteristic(vertices, faces):
+    edges = {tuple(sorted(e)) for e in edge_counts(faces)}
+    return len(vertices) - len(edges) + len(faces)
+
+
+def boundary_loops(unpaired):
+    """The boundary's directed edges chained into loops; the number of loops."""
+    succ = dict(unpaired)
+    seen, loops = set(), 0
+    for start in succ:
+        if start in seen:
+            continue
+        loops += 1
+        v = start
+        while v not in seen:
+            seen.add(v)
+            v = succ[v]
+    return loops
+
+
+def surface_samples(vertices, faces, n=8):
+    """Points on every face: a barycentric grid of n + 1 points a side (triangles) or a bilinear n x n grid
+    (quads)."""
+    t = np.linspace(0, 1, n + 1)
+    corners = vertices[np.asarray(faces)]
+    if corners.shape[1] == 3:
+        u, v = np.meshgrid(t, t)
+        keep = u + v <= 1 + 1e-12
+        u, v = u[keep], v[keep]
+        w = np.stack([1 - u - v, u, v], axis=1)
+    else:
+        u, v = (x.ravel() for x in np.meshgrid(t, t))
+        w = np.stack([(1 - u) * (1 - v), u * (1 - v), u * v, (1 - u) * v], axis=1)
+    return np.einsum("pk,fkd->fpd", w, corners).reshape(-1, 3)
+
+
+def flat_split(vertices, faces, n):
+    """Each triangle split into n * n flat triangles (points of a barycentric grid, shared along the edges): the
+    same polyhedron, densely meshed."""
+    points, tris = [], []
+    for a, b, c in np.asarray(vertices)[np.asarray(faces)]:
+        index = {}
+        for i in range(n + 1):
+            for j in range(n + 1 - i):
+                index[i, j] = len(points)
+                points.append(a + (b - a) * i / n + (c - a) * j / n)
+        for i in range(n):
+            for j in range(n - i):
+                tris.append([index[i, j], index[i + 1, j], index[i, j + 1]])
+                if i + j + 1 < n:
+                    tris.append([index[i + 1, j], index[i + 1, j + 1], index[i, j + 1]])
+    points = np.array(points)
+    _, first, inverse = np.unique(np.round(points, 12), axis=0, return_index=True, return_inverse=True)
+    return points[first], inverse.ravel()[np.array(tris)].astype(np.int32)
+
+
+def test_loop_cage_has_the_count_and_stays_on_the_sphere():
+    v, f = sorpia.shapes.icosphere(4)  # 2562 vertices on the unit sphere
+    cage = sorpia.decimate(v, f, 300)
+    assert cage.vertices.shape == (300, 3) and cage.faces.shape[1] == 3 and cage.creases is None
+    check_oriented_manifold(cage.vertices, cage.faces, closed=True)
+    assert euler_characteristic(cage.vertices, cage.faces) == 2
+    # A collapse moves a vertex onto a neighbour: the cage's vertices are input vertices.
+    assert cKDTree(v).query(cage.vertices)[0].max() < 1e-15
+    # Hausdorff-like, both ways. Cage to sphere: a face inscribed in the unit sphere lies in a plane at distance
+    # sqrt(1 - R^2) from the centre (R its circumradius), so it is within 1 - sqrt(1 - R^2) of the sphere; the
+    # quadric keeps the faces even (a uniform 300-vertex triangulation has R about 0.15), none above 0.3, so within
+    # 0.05. Sphere to cage: every input vertex near the cage, by the nearest of 45 samples per face (an upper
+    # bound, the samples 1/8 of an edge apart).
+    t = cage.vertices[cage.faces]
+    a, b, c = (np.linalg.norm(t[:, i] - t[:, j], axis=1) for i, j in ((1, 2), (2, 0), (0, 1)))
+    area = np.linalg.norm(np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]), axis=1) / 2
+    circumradius = a * b * c / (4 * area)
+    assert circumradius.max() < 0.3
+    samples = surface_samples(cage.vertices, cage.faces)
+    assert np.abs(np.linalg.norm(samples, axis=1) - 1).max() <= 1 - np.sqrt(1 - circumradius.max() ** 2) + 1e-12
+    assert cKDTree(samples).query(v)[0].max() < 0.05
+
+
+def test_catmull_clark_cage_is_the_quad_split_of_the_triangles():
+    v, f = sorpia.shapes.icosphere(4)
+    cage = sorpia.decimate(v, f, 600, scheme="catmull-clark")
+    assert cage.faces.shape[1] == 4
+    # A collapse removes 4 to 6 quad vertices: the count is at most the one asked and at most 5 below it.
+    assert 595 <= len(cage.vertices) <= 600
+    check_oriented_manifold(cage.vertices, cage.faces, closed=True)
+    assert euler_characteristic(cage.vertices, cage.faces) == 2
+    # Quad (t, mid(t, t+), centroid, mid(t-, t)) of a triangle (t-, t, t+): 2 (q1 + q3) = q0 + 3 q2.
+    q = cage.vertices[cage.faces]
+    assert np.abs(2 * (q[:, 1] + q[:, 3]) - q[:, 0] - 3 * q[:, 2]).max() < 1e-12
+    # Three quads per triangle, the triangles' vertices first (input vertices, on the sphere): corner 0 of each quad.
+    corners = np.unique(cage.faces[:, 0])
+    assert np.array_equal(corners, np.arange(len(corners)))
+    assert np.abs(np.linalg.norm(cage.vertices[corners], axis=1) - 1).max() < 1e-12
+    assert len(cage.faces) % 3 == 0
+    # The centroids (corner 2) have valence 3, the midpoints (corners 1 and 3) valence 4.
+    valence = np.bincount(cage.faces.ravel(), minlength=len(cage.vertices))
+    assert (valence[cage.faces[:, 2]] == 3).all() and (valence[cage.faces[:, [1, 3]]] == 4).all()
+    # And OpenSubdiv takes it: its limit surface lies in the convex hull of the cage (inside the unit ball), and
+    # near the sphere (Catmull-Clark's limit shrinks a cage of this density by a few percent).
+    tv, _ = sorpia.limit_surface(cage.vertices, cage.faces, 2, scheme="catmull-clark")
+    radius = np.linalg.norm(tv, axis=1)
+    assert radius.max() <= 1 + 1e-12 and radius.min() > 0.9
+
+
+def test_boundary_keeps_its_corners_and_outline():
+    v, f = sorpia.shapes.grid(30, 30)  # [0, 1]^2, wavy in z; corners (0,0) (1,0) (0,1) (1,1)
+    cage = sorpia.decimate(v, f, 150)
+    assert len(cage.vertices) == 150
+    unpaired = check_oriented_manifold(cage.vertices, cage.faces, closed=False)
+    assert boundary_loops(unpaired) == 1
+    for corner in ([0, 0], [1, 0], [0, 1], [1, 1]):
+        assert np.min(np.abs(cage.vertices[:, :2] - corner).sum(axis=1)) == 0
+    # Every boundary edge runs along one side of the square: none cuts a corner.
+    for a, b in unpaired:
+        pa, pb = cage.vertices[a, :2], cage.vertices[b, :2]
+        assert any(pa[k] == pb[k] and pa[k] in (0.0, 1.0) for k in (0, 1))
+    # max_boundary_angle=0 keeps every boundary vertex where the boundary turns: the 2 * 30 of the wavy sides
+    # y = 0 and y = 1 (z = 0.1 sin(2 pi x)); the straight sides x = 0 and x = 1 may lose theirs.
+    kept = sorpia.decimate(v, f, 300, max_boundary_angle=0)
+    wavy = v[np.isin(v[:, 1], (0.0, 1.0))]
+    assert len(wavy) == 60 and cKDTree(kept.vertices).query(wavy)[0].max() == 0
+
+
+def test_sharp_angle_creases_are_the_edges_whose_faces_meet_at_more_than_it():
+    tetra = np.array([[1, 1, 1], [1, -1, -1], [-1, 1, -1], [-1, -1, 1]], dtype=float)
+    v, f = flat_split(tetra, [[0, 1, 2], [0, 3, 1], [0, 2, 3], [1, 3, 2]], 12)
+    for scheme in ("loop", "catmull-clark"):
+        cage = sorpia.decimate(v, f, 40, scheme=scheme, sharp_angle=30)
+        edges, sharpness = cage.creases
+        assert len(edges) and np.all(sharpness >= 10)  # OpenSubdiv's infinitely sharp
+        # The dihedral angle of every interior edge, here in numpy: a crease exactly where it exceeds 30 degrees.
+        corners = cage.vertices[cage.faces]
+        normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+        normals /= np.linalg.norm(normals, axis=1, keepdims=True)
+        face_of = {}
+        for i, face in enumerate(cage.faces.tolist()):
+            for a, b in zip(face, face[1:] + face[:1]):
+                face_of[a, b] = i
+        creases = {tuple(e) for e in edges.tolist()}
+        for (a, b), i in face_of.items():
+            if a < b:
+                cos = np.clip(normals[i] @ normals[face_of[b, a]], -1, 1)
+                assert ((a, b) in creases) == (np.degrees(np.arccos(cos)) > 30)
+        # They lie along the tetrahedron's six edges, the points (+-1, t, +-t) and their permutations: the
+        # midpoint of each crease has a coordinate of magnitude 1 and two of equal magnitude.
+        mid = np.sort(np.abs(cage.vertices[edges].mean(axis=1)), axis=1)
+        assert np.allclose(mid[:, 2], 1, atol=1e-9) and np.allclose(mid[:, 0], mid[:, 1], atol=1e-9)
+
+
+def test_unreferenced_vertices_are_left_out():
+    v, f = sorpia.shapes.icosphere(2)  # 162 vertices
+    extra = np.vstack([v, [[5.0, 5.0, 5.0]]])
+    cage = sorpia.decimate(extra, f, 100)
+    assert len(cage.vertices) == 100 and np.linalg.norm(cage.vertices, axis=1).max() < 1 + 1e-12
+    with pytest.raises(sorpia.MeshError, match="163 vertices asked but the mesh has 162 vertices in its faces"):
+        sorpia.decimate(extra, f, 163)
+
+
+def test_bad_input_is_named():
+    v, f = sorpia.shapes.icosphere(2)
+    with pytest.raises(sorpia.MeshError, match="200 vertices asked but the mesh has 162 vertices"):
+        sorpia.decimate(v, f, 200)
+    with pytest.raises(sorpia.ParameterError, match="at least 4 vertices, got 3"):
+        sorpia.decimate(v, f, 3)
+    with pytest.raises(sorpia.MeshError, match="Catmull-Clark|triangulate"):
+        sorpia.decimate(*sorpia.shapes.quad_torus(8, 6), 20)
+    with pytest.raises(sorpia.ParameterError, match="sharp angle"):
+        sorpia.decimate(v, f, 100, sharp_angle=200)
+    with pytest.raises(sorpia.ParameterError, match="max_aspect_ratio"):
+        sorpia.decimate(v, f, 100, max_aspect_ratio=0.5)
+    with pytest.raises(sorpia.ParameterError, match="unknown|scheme"):
+        sorpia.decimate(v, f, 100, scheme="butterfly")
+    # An edge of three faces: named.
+    fan = np.vstack([f, [[f[0, 0], f[0, 1], next(x for x in range(len(v)) if x not in f[0])]]])
+    with pytest.raises(sorpia.MeshError, match=f"face {len(f)} cannot join OpenMesh's half-edge mesh"):
+        sorpia.decimate(v, fan, 100)
+    # Decimation the guards stop: the 60 vertices of the wavy sides kept cannot reach 50.
+    gv, gf = sorpia.shapes.grid(30, 30)
+    with pytest.raises(sorpia.MeshError, match=r"decimate stopped at \d+ vertices of the 50 asked \(from 900\)"):
+        sorpia.decimate(gv, gf, 50, max_boundary_angle=0)
+    # Under Catmull-Clark the count is the quad cage's: vertices, edges and faces of the triangles.
+    with pytest.raises(sorpia.MeshError, match=r"vertices as quads"):
+        sorpia.decimate(v, f, 162 + 480 + 320 + 1, scheme="catmull-clark")
