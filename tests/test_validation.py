@@ -625,4 +625,4 @@ def test_modules_that_are_not_api_are_private():
     import pkgutil
 
     public = {m.name for m in pkgutil.iter_modules(sorpia.__path__) if not m.name.startswith("_")}
-    assert public == {"blender", "cage", "cli", "errors", "io", "limit", "shapes", "solve", "surface"}
+    assert public == {"approximate", "blender", "cage", "cli", "energy", "errors", "io", "limit", "shapes", "solve", "surface"}

@@ -16,6 +16,13 @@ void check_vertices(const Vertices& a, std::size_t n_vertices) {
   check_rows(a, n_vertices, "vertices", "the mesh");
 }
 
+// k points of a surface: face_ids (k,) and uv (k, 2).
+void check_points(const FaceIds& face_ids, const Vertices& uv) {
+  check_shape(uv, 2, "uv");
+  if (face_ids.ndim() != 1 || face_ids.shape(0) != uv.shape(0))
+    throw sorpia::ParameterError("face_ids must have shape (k,) with k = len(uv) = " + std::to_string(uv.shape(0)));
+}
+
 // (vertices (n, 3), faces, face_counts): faces (m, k) with face_counts None
 // when every face has k vertices (every tessellation but Catmull-Clark's
 // level 0 of a mixed mesh), else the concatenated indices and the counts.
@@ -57,10 +64,7 @@ void bind_surface(py::module_& m) {
            })
       .def("evaluate",
            [](const sorpia::LimitSurface& s, const FaceIds& face_ids, const Vertices& uv, bool derivatives) {
-             check_shape(uv, 2, "uv");
-             if (face_ids.ndim() != 1 || face_ids.shape(0) != uv.shape(0))
-               throw sorpia::ParameterError("face_ids must have shape (k,) with k = len(uv) = " +
-                                            std::to_string(uv.shape(0)));
+             check_points(face_ids, uv);
              const auto k = static_cast<std::size_t>(uv.shape(0));
              const std::vector<py::ssize_t> shape{uv.shape(0), py::ssize_t{3}};
              Vertices p(shape);
@@ -81,6 +85,22 @@ void bind_surface(py::module_& m) {
                s.evaluate(f, t, k, pp, a, b, c);
              }
              return py::object(py::make_tuple(p, du, dv, nrm));
+           },
+           "face_ids"_a.noconvert(), "uv"_a.noconvert(), "derivatives"_a)
+      .def("rows",
+           [](const sorpia::LimitSurface& s, const FaceIds& face_ids, const Vertices& uv, int derivatives) {
+             check_points(face_ids, uv);
+             sorpia::SurfaceRows r;
+             {
+               LongCall call;
+               r = s.rows(face_ids.data(), uv.data(), static_cast<std::size_t>(uv.shape(0)), derivatives);
+             }
+             // The matrices asked for: 1, 3 or 6 (the first of SurfaceRows' order).
+             sorpia::CsrMatrix* mats[] = {&r.position, &r.du, &r.dv, &r.duu, &r.duv, &r.dvv};
+             py::list out;
+             for (int d = 0; d < (derivatives == 0 ? 1 : derivatives == 1 ? 3 : 6); ++d)
+               out.append(csr_tuple(std::move(*mats[d])));
+             return out;
            },
            "face_ids"_a.noconvert(), "uv"_a.noconvert(), "derivatives"_a)
       .def("tessellate",

@@ -117,6 +117,8 @@ void bind_surface(py::module_& m);
 void bind_io(py::module_& m);
 void bind_mesh_checks(py::module_& m);
 void bind_repair(py::module_& m);
+void bind_approximate(py::module_& m);
 void bind_cage(py::module_& m);
+void bind_fit(py::module_& m);
 
 }  // namespace sorpia_py

@@ -44,6 +44,8 @@ PYBIND11_MODULE(_core, m) {
   sorpia_py::bind_io(m);
   sorpia_py::bind_mesh_checks(m);
   sorpia_py::bind_repair(m);
+  sorpia_py::bind_approximate(m);
   sorpia_py::bind_cage(m);
+  sorpia_py::bind_fit(m);
   // One line per topic; each bind_<topic> lives in cpp/bindings/bind_<topic>.cpp.
 }

@@ -19,6 +19,8 @@ from ._repair import RepairResult, repair
 from ._meshinfo import mesh_statistics
 from .surface import LimitSurface, evaluate_limit, limit_surface
 from .cage import Cage, decimate
+from .energy import fairness_matrix, thin_plate_energy
+from .approximate import ApproximationResult, approximate
 from . import shapes
 
 __all__ = [
@@ -38,6 +40,8 @@ __all__ = [
     "UnknownTagWarning", "AttributeWarning", "FaceVarying", "sharp_edges",
     "RepairResult", "repair",
     "mesh_statistics",
+    "fairness_matrix", "thin_plate_energy",
     "NonmanifoldWarning", "UsdWarning",
     "Cage", "decimate",
+    "ApproximationResult", "approximate",
 ]

@@ -232,6 +232,11 @@ class LimitSurface:
         Elsewhere tangents and normals agree with finite differences of the
         positions to 1e-9.
         """
+        face_ids, uv = self._points(face_ids, uv)
+        return self._surface.evaluate(face_ids, uv, bool(derivatives))
+
+    def _points(self, face_ids, uv):
+        """(face_ids, uv) as the core takes them: int32 (k,), float64 (k, 2), checked."""
         uv = np.asarray(uv)
         if uv.ndim != 2 or uv.shape[1] != 2:
             raise ParameterError(f"uv must have shape (k, 2), got {uv.shape}")
@@ -251,7 +256,55 @@ class LimitSurface:
             i = int(np.flatnonzero(bad)[0])
             raise ParameterError(f"face_ids[{i}] = {int(face_ids[i])} is out of range [0, {self.n_faces})")
         face_ids = np.ascontiguousarray(face_ids, dtype=np.int32)
-        return self._surface.evaluate(face_ids, uv, bool(derivatives))
+        return face_ids, uv
+
+    def rows(self, face_ids, uv, derivatives: int = 0):
+        """Rows of the limit surface at k points: the weights of the control
+        vertices in each point and its derivatives, so that
+        ``rows[0] @ vertices`` is `evaluate`'s positions (to rounding) and
+        ``rows[1] @ vertices`` its ``du``, and so on.
+
+        These are what fitting composes into its linear systems (the limit
+        matrix B holds the same rows at the vertices). They come from
+        OpenSubdiv's ``Bfr::Surface::EvaluateStencil`` over each face's control
+        points, and do not depend on the control vertices.
+
+        Parameters
+        ----------
+        face_ids, uv : array_like
+            The points, as in `evaluate`.
+        derivatives : {0, 1, 2}
+            0: positions; 1: also dP/du, dP/dv; 2: also the second
+            derivatives d2P/du2, d2P/dudv, d2P/dv2.
+
+        Returns
+        -------
+        tuple of scipy.sparse.csr_matrix, each (k, n)
+            ``(position,)``, ``(position, du, dv)`` or ``(position, du, dv,
+            duu, duv, dvv)``; n is the number of control vertices (with
+            nonmanifold="sharp", of the input's vertices: the weights of a
+            vertex's copies add up). At a dart's corner, and at an interior
+            vertex of two faces under Catmull-Clark, the position row is the
+            vertex's row of B (as `evaluate` takes it); near extraordinary
+            vertices the derivative rows are those of Bfr's Gregory patches
+            (see `evaluate`'s notes).
+        """
+        import scipy.sparse
+
+        if isinstance(derivatives, bool) or derivatives not in (0, 1, 2):
+            raise ParameterError(f"derivatives = {derivatives!r} must be 0, 1 or 2")
+        face_ids, uv = self._points(face_ids, uv)
+        n = self.n_vertices
+        mats = [scipy.sparse.csr_matrix(t, shape=(len(face_ids), n))
+                for t in self._surface.rows(face_ids, uv, int(derivatives))]
+        if self._vertex_map is not None:
+            # V_split = V[vertex_map]: compose with the selection matrix.
+            select = scipy.sparse.csr_matrix((np.ones(n), (np.arange(n), self._vertex_map)),
+                                             shape=(n, self._n_input))
+            mats = [(m @ select).tocsr() for m in mats]
+            for m in mats:
+                m.sort_indices()
+        return tuple(mats)
 
     def tessellate(self, level: int = 3):
         """The limit surface as a mesh; see `limit_surface`.

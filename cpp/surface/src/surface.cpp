@@ -24,6 +24,7 @@
 #include "sorpia/detail/level_dependent_rows.hpp"
 #include "sorpia/detail/osd_refiner.hpp"
 #include "sorpia/detail/parallel.hpp"
+#include "sorpia/detail/unit_normal.hpp"
 #include "sorpia/errors.hpp"
 #include "sorpia/interrupt.hpp"
 #include "sorpia/limit.hpp"
@@ -191,30 +192,6 @@ struct LimitSurface::Impl {
 
 namespace {
 
-// v scaled by a power of two (exactly) so that its largest component lies in
-// [0.5, 1): products and squares of such vectors neither overflow nor underflow.
-void scale_to_unit(const double* v, double* out) {
-  const double m = std::max({std::abs(v[0]), std::abs(v[1]), std::abs(v[2])});
-  int e = 0;
-  if (m > 0.0 && std::isfinite(m)) std::frexp(m, &e);
-  for (int c = 0; c < 3; ++c) out[c] = std::ldexp(v[c], -e);
-}
-
-// The unit normal du x dv / |du x dv| at any scale of the coordinates (the
-// plain formula squares the cross product: it overflows from about 1e77 and
-// underflows below about 1e-77); zero where du and dv are parallel or zero.
-void unit_normal(const double* du, const double* dv, double* out) {
-  double a[3], b[3], n[3], u[3];
-  scale_to_unit(du, a);
-  scale_to_unit(dv, b);
-  n[0] = a[1] * b[2] - a[2] * b[1];
-  n[1] = a[2] * b[0] - a[0] * b[2];
-  n[2] = a[0] * b[1] - a[1] * b[0];
-  scale_to_unit(n, u);
-  const double len = std::sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
-  for (int c = 0; c < 3; ++c) out[c] = len > 0.0 ? u[c] / len : 0.0;
-}
-
 // Columns w of the tiles of a face split into quad sub-faces: corner j lies
 // at (j mod w, j div w).
 int subface_columns(const Bfr::Parameterization& param) {
@@ -292,6 +269,7 @@ std::size_t LimitSurface::n_faces() const { return impl_->topology.n_faces(); }
 Scheme LimitSurface::scheme() const { return impl_->scheme; }
 Boundary LimitSurface::boundary() const { return impl_->boundary; }
 const Tags& LimitSurface::tags() const { return impl_->tags; }
+const Topology& LimitSurface::topology() const { return impl_->topology; }
 
 void LimitSurface::set_vertices(const double* vertices) {
   const std::unique_lock<std::shared_mutex> lock(impl_->mutex);
@@ -312,12 +290,13 @@ void LimitSurface::get_vertices(double* out) const {
 
 namespace {
 
-// Bfr evaluation of k checked points (face_ids[i], params[2i..2i+1]) of the
-// surface whose control points (in OpenSubdiv's order) are `mesh_points`;
-// derivative outputs may be null. The caller holds the surface's lock.
-void evaluate_points(const SurfaceFactory& factory, const double* mesh_points, const std::int32_t* face_ids,
-                     const double* params, std::size_t k, double* positions, double* du, double* dv,
-                     double* normals) {
+// Calls fn(surface, face, first, last) for each face of the k points, in
+// parallel over chunks of faces: [first, last) are the indices of that face's
+// points, `surface` its Bfr surface. Each point is computed alone, so the
+// thread count changes nothing in the results. The caller holds the
+// surface's lock.
+template <class Fn>
+void for_each_face_surface(const SurfaceFactory& factory, const std::int32_t* face_ids, std::size_t k, Fn fn) {
   // Group the points by face so that each face's surface is built once.
   std::vector<std::size_t> order(k);
   std::iota(order.begin(), order.end(), std::size_t{0});
@@ -329,17 +308,13 @@ void evaluate_points(const SurfaceFactory& factory, const double* mesh_points, c
   group_start.push_back(k);
   const auto n_groups = static_cast<std::ptrdiff_t>(group_start.size()) - 1;
 
-  const bool want_derivs = du || dv || normals;
   std::atomic<int> failed_face{-1};
-  // Each point is computed alone, so the thread count changes nothing in the
-  // results. Chunks of faces are handed out in turn (their costs differ).
+  // Chunks of faces are handed out in turn (their costs differ).
   std::atomic<std::ptrdiff_t> next_chunk{0};
   std::atomic<bool> stop{false};
   const int threads = evaluate_threads(n_groups);
   detail::for_each_task(threads > 1, threads, [&](int) {
     Bfr::Surface<double> surface;
-    std::vector<double> patch;
-    const Bfr::Surface<double>::PointDescriptor desc(3);
     for (;;) {
       // Only the calling thread's poll can throw (workers have no checker);
       // the others then stop at their next chunk.
@@ -358,20 +333,7 @@ void evaluate_points(const SurfaceFactory& factory, const double* mesh_points, c
           failed_face = face;
           continue;
         }
-        patch.resize(3 * static_cast<std::size_t>(surface.GetNumPatchPoints()));
-        surface.PreparePatchPoints(mesh_points, desc, patch.data(), desc);
-        for (std::size_t j = group_start[g]; j < group_start[g + 1]; ++j) {
-          const std::size_t i = order[j];
-          double p[3], d1[3], d2[3];
-          if (want_derivs)
-            surface.Evaluate(&params[2 * i], patch.data(), desc, p, d1, d2);
-          else
-            surface.Evaluate(&params[2 * i], patch.data(), desc, p);
-          std::copy(p, p + 3, positions + 3 * i);
-          if (du) std::copy(d1, d1 + 3, du + 3 * i);
-          if (dv) std::copy(d2, d2 + 3, dv + 3 * i);
-          if (normals) unit_normal(d1, d2, normals + 3 * i);
-        }
+        fn(surface, face, order.data() + group_start[g], order.data() + group_start[g + 1]);
       }
     }
   });
@@ -379,10 +341,47 @@ void evaluate_points(const SurfaceFactory& factory, const double* mesh_points, c
     throw MeshError("OpenSubdiv's Bfr could not build the limit surface of face " + std::to_string(failed_face.load()));
 }
 
+// Bfr evaluation of k checked points (face_ids[i], params[2i..2i+1]) of the
+// surface whose control points (in OpenSubdiv's order) are `mesh_points`;
+// derivative outputs may be null. The caller holds the surface's lock.
+void evaluate_points(const SurfaceFactory& factory, const double* mesh_points, const std::int32_t* face_ids,
+                     const double* params, std::size_t k, double* positions, double* du, double* dv,
+                     double* normals) {
+  const bool want_derivs = du || dv || normals;
+  const Bfr::Surface<double>::PointDescriptor desc(3);
+  for_each_face_surface(factory, face_ids, k,
+                        [&](const Bfr::Surface<double>& surface, int, const std::size_t* first,
+                            const std::size_t* last) {
+                          thread_local std::vector<double> patch;
+                          patch.resize(3 * static_cast<std::size_t>(surface.GetNumPatchPoints()));
+                          surface.PreparePatchPoints(mesh_points, desc, patch.data(), desc);
+                          for (const std::size_t* it = first; it != last; ++it) {
+                            const std::size_t i = *it;
+                            double p[3], d1[3], d2[3];
+                            if (want_derivs)
+                              surface.Evaluate(&params[2 * i], patch.data(), desc, p, d1, d2);
+                            else
+                              surface.Evaluate(&params[2 * i], patch.data(), desc, p);
+                            std::copy(p, p + 3, positions + 3 * i);
+                            if (du) std::copy(d1, d1 + 3, du + 3 * i);
+                            if (dv) std::copy(d2, d2 + 3, dv + 3 * i);
+                            if (normals) detail::unit_normal(d1, d2, normals + 3 * i);
+                          }
+                        });
+}
+
+// The stencils of one face's points: the face's control points as mesh
+// vertices (sorted, distinct) and, per point and per matrix d, one weight per
+// column (weights[d][j * columns.size() + c]).
+struct FaceStencils {
+  std::vector<std::int32_t> columns;
+  std::vector<double> weights[6];
+};
+
 }  // namespace
 
-void LimitSurface::evaluate(const std::int32_t* face_ids, const double* uv, std::size_t k, double* positions,
-                            double* du, double* dv, double* normals) const {
+std::vector<double> LimitSurface::checked_params(const std::int32_t* face_ids, const double* uv,
+                                                 std::size_t k) const {
   const std::size_t n_f = n_faces();
   const SurfaceFactory& factory = *impl_->factory;
   const auto& level0 = impl_->base.refiner->GetLevel(0);
@@ -403,12 +402,16 @@ void LimitSurface::evaluate(const std::int32_t* face_ids, const double* uv, std:
                       ") evaluates no valid surface: remove that sharp edge, or split the vertex's faces");
     check_uv(factory.GetFaceParameterization(f), i, params[2 * i], params[2 * i + 1]);
   }
-  const std::shared_lock<std::shared_mutex> lock(impl_->mutex);
-  evaluate_points(factory, &impl_->points.data()->x, face_ids, params.data(), k, positions, du, dv, normals);
-  if (impl_->exact.vertices.empty()) return;
-  // A point at the corner of a dart or a vertex of two faces: its limit
-  // position (see Impl::exact).
+  return params;
+}
+
+std::vector<std::int32_t> LimitSurface::exact_corners(const std::int32_t* face_ids, const double* params,
+                                                      std::size_t k) const {
+  std::vector<std::int32_t> slots;
+  if (impl_->exact.vertices.empty()) return slots;
+  slots.assign(k, -1);
   const Topology& t = impl_->topology;
+  const SurfaceFactory& factory = *impl_->factory;
   for (std::size_t i = 0; i < k; ++i) {
     const std::int32_t f = face_ids[i];
     const std::int32_t* fv = t.face_indices().data() + t.face_offset(f);
@@ -417,10 +420,125 @@ void LimitSurface::evaluate(const std::int32_t* face_ids, const double* uv, std:
       if (slot < 0) continue;
       double corner[2];
       factory.GetFaceParameterization(f).GetVertexCoord(j, corner);
-      if (corner[0] == params[2 * i] && corner[1] == params[2 * i + 1])
-        std::copy_n(&impl_->exact_points[3 * static_cast<std::size_t>(slot)], 3, positions + 3 * i);
+      if (corner[0] == params[2 * i] && corner[1] == params[2 * i + 1]) slots[i] = slot;
     }
   }
+  return slots;
+}
+
+void LimitSurface::evaluate(const std::int32_t* face_ids, const double* uv, std::size_t k, double* positions,
+                            double* du, double* dv, double* normals) const {
+  const std::vector<double> params = checked_params(face_ids, uv, k);
+  const std::shared_lock<std::shared_mutex> lock(impl_->mutex);
+  evaluate_points(*impl_->factory, &impl_->points.data()->x, face_ids, params.data(), k, positions, du, dv,
+                  normals);
+  // A point at the corner of a dart or a vertex of two faces: its limit
+  // position (see Impl::exact).
+  const std::vector<std::int32_t> slots = exact_corners(face_ids, params.data(), k);
+  for (std::size_t i = 0; i < slots.size(); ++i)
+    if (slots[i] >= 0)
+      std::copy_n(&impl_->exact_points[3 * static_cast<std::size_t>(slots[i])], 3, positions + 3 * i);
+}
+
+SurfaceRows LimitSurface::rows(const std::int32_t* face_ids, const double* uv, std::size_t k, int derivatives) const {
+  if (derivatives < 0 || derivatives > 2)
+    throw ParameterError("derivatives = " + std::to_string(derivatives) +
+                         " must be 0 (positions), 1 (and first derivatives) or 2 (and second derivatives)");
+  const std::vector<double> params = checked_params(face_ids, uv, k);
+  const int n_mats = derivatives == 0 ? 1 : derivatives == 1 ? 3 : 6;
+  const std::vector<std::int32_t>& from_osd = impl_->base.from_osd;
+
+  // Stencils per face (faces in increasing order), and each point's face slot.
+  std::vector<std::int32_t> faces(face_ids, face_ids + k);
+  std::sort(faces.begin(), faces.end());
+  faces.erase(std::unique(faces.begin(), faces.end()), faces.end());
+  std::vector<FaceStencils> stencils(faces.size());
+  std::vector<std::size_t> rank(k);  // the point's index among its face's points
+  {
+    const std::shared_lock<std::shared_mutex> lock(impl_->mutex);
+    for_each_face_surface(
+        *impl_->factory, face_ids, k,
+        [&](const Bfr::Surface<double>& surface, int face, const std::size_t* first, const std::size_t* last) {
+          FaceStencils& out = stencils[std::lower_bound(faces.begin(), faces.end(), face) - faces.begin()];
+          const int n_cv = surface.GetNumControlPoints();
+          thread_local std::vector<int> cv;
+          thread_local std::vector<double> w;
+          cv.resize(n_cv);
+          surface.GetControlPointIndices(cv.data());
+          // A mesh vertex may be more than one control point of the surface
+          // (a face meeting itself around a vertex): its weights add up.
+          std::vector<std::int32_t>& cols = out.columns;
+          cols.resize(n_cv);
+          for (int c = 0; c < n_cv; ++c) cols[c] = from_osd[cv[c]];
+          std::vector<std::int32_t> slot(n_cv);
+          {
+            std::vector<std::int32_t> sorted = cols;
+            std::sort(sorted.begin(), sorted.end());
+            sorted.erase(std::unique(sorted.begin(), sorted.end()), sorted.end());
+            for (int c = 0; c < n_cv; ++c)
+              slot[c] = static_cast<std::int32_t>(std::lower_bound(sorted.begin(), sorted.end(), cols[c]) -
+                                                  sorted.begin());
+            cols = std::move(sorted);
+          }
+          const std::size_t width = cols.size(), count = static_cast<std::size_t>(last - first);
+          for (int d = 0; d < n_mats; ++d) out.weights[d].assign(count * width, 0.0);
+          w.resize(6 * static_cast<std::size_t>(n_cv));
+          double* s[6];
+          for (int d = 0; d < 6; ++d) s[d] = w.data() + d * n_cv;
+          for (std::size_t j = 0; j < count; ++j) {
+            const std::size_t i = first[j];
+            rank[i] = j;
+            const double* t = &params[2 * i];
+            if (derivatives == 0)
+              surface.EvaluateStencil(t, s[0]);
+            else if (derivatives == 1)
+              surface.EvaluateStencil(t, s[0], s[1], s[2]);
+            else
+              surface.EvaluateStencil(t, s[0], s[1], s[2], s[3], s[4], s[5]);
+            for (int d = 0; d < n_mats; ++d)
+              for (int c = 0; c < n_cv; ++c) out.weights[d][j * width + slot[c]] += s[d][c];
+          }
+        });
+  }
+
+  // Points at the corner of a vertex whose position row is B's (see evaluate()).
+  const std::vector<std::int32_t> slots = exact_corners(face_ids, params.data(), k);
+  const CsrMatrix& exact = impl_->exact.rows;
+  SurfaceRows out;
+  CsrMatrix* mats[6] = {&out.position, &out.du, &out.dv, &out.duu, &out.duv, &out.dvv};
+  for (int d = 0; d < n_mats; ++d) {
+    CsrMatrix& m = *mats[d];
+    m.n_rows = k;
+    m.n_cols = n_vertices();
+    m.indptr.assign(k + 1, 0);
+    const auto stencil_of = [&](std::size_t i) -> const FaceStencils& {
+      return stencils[std::lower_bound(faces.begin(), faces.end(), face_ids[i]) - faces.begin()];
+    };
+    const auto from_b = [&](std::size_t i) { return d == 0 && !slots.empty() && slots[i] >= 0; };
+    for (std::size_t i = 0; i < k; ++i) {
+      const std::size_t width = from_b(i) ? static_cast<std::size_t>(exact.indptr[slots[i] + 1] - exact.indptr[slots[i]])
+                                          : stencil_of(i).columns.size();
+      if (width > static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max() - m.indptr[i]))
+        throw ParameterError("rows: more than 2^31 - 1 weights in all; ask for fewer points at a time");
+      m.indptr[i + 1] = m.indptr[i] + static_cast<std::int32_t>(width);
+    }
+    m.indices.resize(m.indptr[k]);
+    m.data.resize(m.indptr[k]);
+    for (std::size_t i = 0; i < k; ++i) {
+      const std::size_t at = m.indptr[i];
+      if (from_b(i)) {
+        const std::int32_t b0 = exact.indptr[slots[i]], b1 = exact.indptr[slots[i] + 1];
+        std::copy(exact.indices.begin() + b0, exact.indices.begin() + b1, m.indices.begin() + at);
+        std::copy(exact.data.begin() + b0, exact.data.begin() + b1, m.data.begin() + at);
+        continue;
+      }
+      const FaceStencils& f = stencil_of(i);
+      const std::size_t width = f.columns.size();
+      std::copy(f.columns.begin(), f.columns.end(), m.indices.begin() + at);
+      std::copy_n(f.weights[d].begin() + rank[i] * width, width, m.data.begin() + at);
+    }
+  }
+  return out;
 }
 
 // The output loops of tessellate() poll for an interrupt once per this many rows.

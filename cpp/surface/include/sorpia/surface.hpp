@@ -10,6 +10,7 @@
 #include <memory>
 #include <vector>
 
+#include "sorpia/limit.hpp"   // CsrMatrix
 #include "sorpia/memory.hpp"  // available_memory_bytes, which tessellate checks
 #include "sorpia/mesh.hpp"
 #include "sorpia/subdivision.hpp"
@@ -31,6 +32,15 @@ namespace sorpia {
 /// @param level           refinement level, 0..15
 std::size_t tessellation_bytes(Scheme scheme, std::size_t n_vertices, std::size_t n_faces,
                                std::size_t n_face_vertices, int level);
+
+/// Rows of the limit surface at k points: each a (k, n_vertices) sparse
+/// matrix over the control vertices, so that position * V is the limit
+/// position at the points and du * V, dv * V, duu * V, duv * V, dvv * V its
+/// derivatives in the faces' parameters (LimitSurface::rows). Matrices not
+/// asked for are empty (0 rows).
+struct SurfaceRows {
+  CsrMatrix position, du, dv, duu, duv, dvv;
+};
 
 /// The limit surface of one mesh topology under one subdivision scheme,
 /// boundary rule and set of sharpness tags: build once, query many.
@@ -82,6 +92,8 @@ class LimitSurface {
   Scheme scheme() const;
   Boundary boundary() const;
   const Tags& tags() const;
+  /// The mesh connectivity the surface was built on.
+  const Topology& topology() const;
 
   /// Replace the control vertices (same topology).
   /// @param vertices  row-major (n_vertices, 3)
@@ -118,6 +130,22 @@ class LimitSurface {
   void evaluate(const std::int32_t* face_ids, const double* uv, std::size_t k, double* positions, double* du,
                 double* dv, double* normals) const;
 
+  /// Rows of the limit surface at k points (face_ids[i], uv[2i], uv[2i+1]),
+  /// checked as evaluate() checks them: the weights of the control vertices
+  /// in the point and its derivatives, from Bfr's stencils
+  /// (Bfr::Surface::EvaluateStencil over the face's control points), so that
+  /// rows.position * V equals evaluate()'s positions at the current vertices
+  /// V to rounding, and likewise du, dv; at a dart's corner and at an
+  /// interior vertex of two faces (Catmull-Clark) the position row is the
+  /// vertex's row of B, as in evaluate(). Row i holds the control points of
+  /// face_ids[i]'s surface (its one-ring neighbourhood, and more near
+  /// semi-sharp features), columns sorted and distinct. The rows do not
+  /// depend on the vertices: they are what fitting (fair interpolation,
+  /// approximation) composes into its linear systems.
+  /// @param derivatives  0: position; 1: also du, dv; 2: also duu, duv, dvv
+  /// @throws ParameterError as evaluate(), or for derivatives outside 0..2
+  SurfaceRows rows(const std::int32_t* face_ids, const double* uv, std::size_t k, int derivatives = 0) const;
+
   /// Uniform refinement to `level` with every vertex moved to its limit
   /// position (Far::PrimvarRefinerReal<double>: Interpolate level by level,
   /// then Limit on the last level; with semi-sharp tags the refinement goes
@@ -138,6 +166,13 @@ class LimitSurface {
   Mesh tessellate(int level);
 
  private:
+  // The parameters of k points after evaluate()'s checks (pulled onto the
+  // domain where a rounding error outside).
+  std::vector<double> checked_params(const std::int32_t* face_ids, const double* uv, std::size_t k) const;
+  // For each point at the corner of a vertex whose position comes from B
+  // (Impl::exact), its row in the exact rows, else -1; empty when none.
+  std::vector<std::int32_t> exact_corners(const std::int32_t* face_ids, const double* params, std::size_t k) const;
+
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };

@@ -1,0 +1,90 @@
+#pragma once
+/// @file footpoints.hpp
+/// Closest points of a limit surface to data points (footpoints), as
+/// (face, u, v) in OpenSubdiv Bfr's parameterisation (surface.hpp), and a
+/// k-d tree for nearest-point queries: the geometric half of approximation
+/// (sorpia.approximate).
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "sorpia/surface.hpp"
+#include "sorpia/topology.hpp"
+
+namespace sorpia {
+
+/// A static k-d tree over points in 3D (copied): nearest-neighbour queries,
+/// exact (Euclidean), run on the core's threads.
+class PointIndex {
+ public:
+  /// @param points  row-major (n, 3), finite
+  /// @param n       number of points, at least 1
+  /// @throws ParameterError when n is 0
+  PointIndex(const double* points, std::size_t n);
+  std::size_t size() const { return n_; }
+  /// For each of k queries the index of its nearest point (the lowest index
+  /// among ties is not promised) and the distance to it.
+  /// @param queries   row-major (k, 3)
+  /// @param index     k entries, written
+  /// @param distance  k entries, written (Euclidean, not squared)
+  void nearest(const double* queries, std::size_t k, std::int64_t* index, double* distance) const;
+
+ private:
+  struct Node {
+    float lo[3], hi[3];      // bounding box of the node's points (rounded outward)
+    std::uint32_t begin, end;  // range in order_
+    std::uint32_t left;        // child index, 0 for a leaf (the right child is left + 1)
+  };
+  void build(std::uint32_t node, std::uint32_t begin, std::uint32_t end);
+  std::size_t n_ = 0;
+  std::vector<double> points_;       // (n, 3) in tree order
+  std::vector<std::int64_t> order_;  // tree position -> input index
+  std::vector<Node> nodes_;
+};
+
+/// Footpoints of data points on a limit surface: for point i the face
+/// face_ids[i], its parameters (uv[2i], uv[2i+1]), the surface point
+/// positions[3i..], the distance |point - surface point| and the normal.
+struct Footpoints {
+  std::vector<std::int32_t> face_ids;
+  std::vector<double> uv;
+  std::vector<double> positions;
+  std::vector<double> distances;
+  /// Unit normals du x dv / |du x dv| at the footpoints (zero where the
+  /// tangents are parallel), as LimitSurface::evaluate gives them.
+  std::vector<double> normals;
+};
+
+/// Options of the footpoint search.
+struct FootpointOptions {
+  /// Samples per side of each face's domain (each quad sub-face of a
+  /// Catmull-Clark k-gon counts as one) whose nearest one starts the search.
+  int grid = 4;
+  /// Gauss-Newton steps on (u, v) at most, per point.
+  int max_steps = 20;
+};
+
+/// The closest point of the limit surface to each of n points: start at the
+/// nearest of a grid of limit points with known (face, u, v) (a k-d tree over
+/// the grid), then refine_footpoints.
+/// @param surface   the limit surface (its current control vertices)
+/// @param topology  the surface's topology (faces and their sizes)
+/// @param points    row-major (n, 3), finite
+/// @throws ParameterError when the surface has no face outside holes
+Footpoints closest_points(const LimitSurface& surface, const Topology& topology, const double* points,
+                          std::size_t n, const FootpointOptions& options);
+
+/// Moves footpoints (face_ids, uv: the input state, e.g. those of the
+/// previous control vertices) to local minima of the distance to their
+/// points: Gauss-Newton steps on (u, v) with Bfr's first derivatives in a
+/// trust region (one grid spacing at the start), a step never increasing
+/// the distance. A step that
+/// leaves the face's domain stops on its edge and, where a face lies across
+/// that edge (not a hole), continues in that face from the same surface point
+/// ("hops"); on a boundary edge it slides along the edge. Fills positions,
+/// distances and normals.
+void refine_footpoints(const LimitSurface& surface, const Topology& topology, const double* points, std::size_t n,
+                       const FootpointOptions& options, Footpoints& footpoints);
+
+}  // namespace sorpia

@@ -1,0 +1,531 @@
+#include "sorpia/footpoints.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <string>
+#include <unordered_map>
+#include <utility>
+#include <vector>
+
+#include "sorpia/detail/parallel.hpp"
+#include "sorpia/detail/unit_normal.hpp"
+#include "sorpia/errors.hpp"
+#include "sorpia/interrupt.hpp"
+
+namespace sorpia {
+
+// ---- k-d tree ----------------------------------------------------------------
+
+namespace {
+
+constexpr std::uint32_t kLeafSize = 12;
+
+// Squared distance from q to a box (0 inside).
+inline double box_distance2(const float* lo, const float* hi, const double* q) {
+  double d2 = 0.0;
+  for (int c = 0; c < 3; ++c) {
+    const double e = q[c] < lo[c] ? lo[c] - q[c] : (q[c] > hi[c] ? q[c] - hi[c] : 0.0);
+    d2 += e * e;
+  }
+  return d2;
+}
+
+int task_count(std::size_t n, std::size_t per_task) {
+  const std::size_t want = (n + per_task - 1) / per_task;
+  return static_cast<int>(std::max<std::size_t>(
+      1, std::min<std::size_t>(want, static_cast<std::size_t>(detail::available_processors()))));
+}
+
+}  // namespace
+
+PointIndex::PointIndex(const double* points, std::size_t n) : n_(n) {
+  if (n == 0) throw ParameterError("a point index needs at least one point");
+  if (n >= std::numeric_limits<std::uint32_t>::max())
+    throw ParameterError("a point index holds fewer than 2^32 - 1 points, got " + std::to_string(n));
+  order_.resize(n);
+  for (std::size_t i = 0; i < n; ++i) order_[i] = static_cast<std::int64_t>(i);
+  points_.assign(points, points + 3 * n);
+  nodes_.reserve(2 * (n / kLeafSize + 1) + 1);
+  nodes_.push_back(Node{});
+  build(0, 0, static_cast<std::uint32_t>(n));
+  // Tree order for the points, so that a leaf's points lie together.
+  std::vector<double> sorted(3 * n);
+  for (std::size_t i = 0; i < n; ++i)
+    for (int c = 0; c < 3; ++c) sorted[3 * i + c] = points[3 * order_[i] + c];
+  points_.swap(sorted);
+}
+
+void PointIndex::build(std::uint32_t node, std::uint32_t begin, std::uint32_t end) {
+  // points_ is still in input order here; order_[begin..end) are the node's points.
+  double lo[3] = {std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
+                  std::numeric_limits<double>::infinity()};
+  double hi[3] = {-lo[0], -lo[1], -lo[2]};
+  for (std::uint32_t i = begin; i < end; ++i)
+    for (int c = 0; c < 3; ++c) {
+      const double x = points_[3 * order_[i] + c];
+      lo[c] = std::min(lo[c], x);
+      hi[c] = std::max(hi[c], x);
+    }
+  Node& nd = nodes_[node];
+  for (int c = 0; c < 3; ++c) {
+    nd.lo[c] = std::nextafter(static_cast<float>(lo[c]), -std::numeric_limits<float>::infinity());
+    nd.hi[c] = std::nextafter(static_cast<float>(hi[c]), std::numeric_limits<float>::infinity());
+    if (static_cast<double>(nd.lo[c]) > lo[c]) nd.lo[c] = -std::numeric_limits<float>::infinity();
+    if (static_cast<double>(nd.hi[c]) < hi[c]) nd.hi[c] = std::numeric_limits<float>::infinity();
+  }
+  nd.begin = begin;
+  nd.end = end;
+  nd.left = 0;
+  if (end - begin <= kLeafSize) return;
+  int axis = 0;
+  for (int c = 1; c < 3; ++c)
+    if (hi[c] - lo[c] > hi[axis] - lo[axis]) axis = c;
+  const std::uint32_t mid = begin + (end - begin) / 2;
+  std::nth_element(order_.begin() + begin, order_.begin() + mid, order_.begin() + end,
+                   [&](std::int64_t a, std::int64_t b) { return points_[3 * a + axis] < points_[3 * b + axis]; });
+  const auto left = static_cast<std::uint32_t>(nodes_.size());
+  nodes_[node].left = left;  // nodes_ may grow below: index, not reference
+  nodes_.push_back(Node{});
+  nodes_.push_back(Node{});
+  build(left, begin, mid);
+  build(left + 1, mid, end);
+}
+
+void PointIndex::nearest(const double* queries, std::size_t k, std::int64_t* index, double* distance) const {
+  const int tasks = task_count(k, 4096);
+  detail::for_each_task(tasks > 1, tasks, [&](int t) {
+    std::vector<std::uint32_t> stack;
+    stack.reserve(64);
+    const std::size_t first = k * static_cast<std::size_t>(t) / static_cast<std::size_t>(tasks);
+    const std::size_t last = k * static_cast<std::size_t>(t + 1) / static_cast<std::size_t>(tasks);
+    for (std::size_t qi = first; qi < last; ++qi) {
+      if (t == 0 && (qi - first) % 65536 == 0) poll_interrupt();
+      const double* q = queries + 3 * qi;
+      double best = std::numeric_limits<double>::infinity();
+      std::uint32_t best_i = 0;
+      stack.clear();
+      stack.push_back(0);
+      while (!stack.empty()) {
+        const Node& nd = nodes_[stack.back()];
+        stack.pop_back();
+        if (box_distance2(nd.lo, nd.hi, q) >= best) continue;
+        if (nd.left == 0) {
+          for (std::uint32_t i = nd.begin; i < nd.end; ++i) {
+            const double* p = &points_[3 * static_cast<std::size_t>(i)];
+            const double dx = p[0] - q[0], dy = p[1] - q[1], dz = p[2] - q[2];
+            const double d2 = dx * dx + dy * dy + dz * dz;
+            if (d2 < best) best = d2, best_i = i;
+          }
+          continue;
+        }
+        // The nearer child last, so that it is searched first.
+        const Node& a = nodes_[nd.left];
+        const Node& b = nodes_[nd.left + 1];
+        const bool a_first = box_distance2(a.lo, a.hi, q) <= box_distance2(b.lo, b.hi, q);
+        stack.push_back(a_first ? nd.left + 1 : nd.left);
+        stack.push_back(a_first ? nd.left : nd.left + 1);
+      }
+      index[qi] = order_[best_i];
+      distance[qi] = std::sqrt(best);
+    }
+  });
+}
+
+// ---- charts of a face's domain ---------------------------------------------------
+
+namespace {
+
+// A face's domain in Bfr's parameterisation is one chart (a Loop triangle, a
+// Catmull-Clark quad) or k square charts (the quad sub-faces of a
+// Catmull-Clark k-gon, k != 4). Local coordinates (a, b): the triangle
+// a, b >= 0, a + b <= 1 or the unit square; sub-face j's (a, b) = 2 ((u, v) -
+// (x_j, y_j)), so that (0, 0) is corner j, (1, 0) the midpoint of edge j,
+// (1, 1) the centre and (0, 1) the midpoint of edge j - 1 (surface.hpp).
+enum class Kind : std::uint8_t { Triangle, Quad, Sub };
+
+struct Domains {
+  const Topology& topology;
+  Scheme scheme;
+  std::vector<std::int32_t> opposite;  // half-edge (face_offset(f) + e) -> half-edge across, or -1
+  std::vector<std::int32_t> half_edge_face;
+  std::vector<std::uint8_t> hole;
+
+  Domains(const Topology& t, Scheme s, const std::vector<std::int32_t>& holes) : topology(t), scheme(s) {
+    const std::size_t m = t.n_faces();
+    hole.assign(m, 0);
+    for (const std::int32_t f : holes) hole[static_cast<std::size_t>(f)] = 1;
+    const auto& fi = t.face_indices();
+    opposite.assign(fi.size(), -1);
+    half_edge_face.assign(fi.size(), 0);
+    std::unordered_map<std::uint64_t, std::int32_t> by_ends;
+    by_ends.reserve(fi.size());
+    const auto key = [](std::int32_t a, std::int32_t b) {
+      return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(a)) << 32) | static_cast<std::uint32_t>(b);
+    };
+    for (std::size_t f = 0; f < m; ++f) {
+      const std::int32_t o = t.face_offset(f), k = t.face_size(f);
+      for (std::int32_t e = 0; e < k; ++e) {
+        half_edge_face[static_cast<std::size_t>(o + e)] = static_cast<std::int32_t>(f);
+        by_ends.emplace(key(fi[o + e], fi[o + (e + 1) % k]), o + e);
+      }
+    }
+    for (std::size_t f = 0; f < m; ++f) {
+      const std::int32_t o = t.face_offset(f), k = t.face_size(f);
+      for (std::int32_t e = 0; e < k; ++e) {
+        const auto it = by_ends.find(key(fi[o + (e + 1) % k], fi[o + e]));
+        if (it != by_ends.end()) opposite[static_cast<std::size_t>(o + e)] = it->second;
+      }
+    }
+  }
+
+  Kind kind(std::int32_t f) const {
+    if (scheme == Scheme::Loop) return Kind::Triangle;
+    return topology.face_size(static_cast<std::size_t>(f)) == 4 ? Kind::Quad : Kind::Sub;
+  }
+  int columns(std::int32_t f) const {
+    const int k = topology.face_size(static_cast<std::size_t>(f));
+    return k < 10 ? (k > 4 ? 3 : 2) : 1 + static_cast<int>(std::sqrt(static_cast<double>(k - 1)) + 1e-9);
+  }
+  int charts(std::int32_t f) const { return kind(f) == Kind::Sub ? topology.face_size(static_cast<std::size_t>(f)) : 1; }
+
+  // (u, v) of local (a, b) in chart c of face f, and back.
+  void to_uv(std::int32_t f, int c, double a, double b, double* uv) const {
+    if (kind(f) != Kind::Sub) {
+      uv[0] = a, uv[1] = b;
+      return;
+    }
+    const int w = columns(f);
+    uv[0] = (c % w) + 0.5 * a;
+    uv[1] = (c / w) + 0.5 * b;
+  }
+  // The chart of (u, v) in face f (a point on a sub-face's edge: the sub-face
+  // Bfr's evaluation takes it in) and its local coordinates.
+  int from_uv(std::int32_t f, const double* uv, double* ab) const {
+    if (kind(f) != Kind::Sub) {
+      ab[0] = uv[0], ab[1] = uv[1];
+      return 0;
+    }
+    const int w = columns(f), k = topology.face_size(static_cast<std::size_t>(f));
+    const int tu = std::clamp(static_cast<int>(std::floor(uv[0] + 1e-12)), 0, w - 1);
+    int tv = std::max(0, static_cast<int>(std::floor(uv[1] + 1e-12)));
+    int c = tv * w + tu;
+    if (c >= k) c = k - 1, tv = c / w;
+    ab[0] = std::clamp(2.0 * (uv[0] - (c % w)), 0.0, 1.0);
+    ab[1] = std::clamp(2.0 * (uv[1] - tv), 0.0, 1.0);
+    return c;
+  }
+
+  // Local coordinates at parameter s along face f's edge e (corner e to e + 1)
+  // and the chart they lie in.
+  int on_edge(std::int32_t f, int e, double s, double* ab) const {
+    switch (kind(f)) {
+      case Kind::Triangle: {
+        static constexpr double kA[3][2] = {{0, 0}, {1, 0}, {0, 1}};
+        const double* p = kA[e];
+        const double* q = kA[(e + 1) % 3];
+        ab[0] = p[0] + s * (q[0] - p[0]), ab[1] = p[1] + s * (q[1] - p[1]);
+        return 0;
+      }
+      case Kind::Quad: {
+        static constexpr double kA[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+        const double* p = kA[e];
+        const double* q = kA[(e + 1) % 4];
+        ab[0] = p[0] + s * (q[0] - p[0]), ab[1] = p[1] + s * (q[1] - p[1]);
+        return 0;
+      }
+      case Kind::Sub: {
+        const int k = topology.face_size(static_cast<std::size_t>(f));
+        if (s < 0.5) {
+          ab[0] = 2.0 * s, ab[1] = 0.0;
+          return e;
+        }
+        ab[0] = 0.0, ab[1] = 2.0 * (1.0 - s);
+        return (e + 1) % k;
+      }
+    }
+    return 0;
+  }
+};
+
+// Where a step from local point p by d in chart c of face f ends: inside the
+// chart, on a chart's edge across which the domain goes on (then in the next
+// chart or face, at the same surface point), or slid along the domain's
+// boundary. Returns true when the point moved.
+bool move(const Domains& dom, std::int32_t& f, int& c, double* ab, const double* d) {
+  const Kind kind = dom.kind(f);
+  const double a0 = ab[0], b0 = ab[1];
+  const double a1 = a0 + d[0], b1 = b0 + d[1];
+  // Fraction t of the step at which each side is crossed (sides: 0 b = 0,
+  // 1 a + b = 1 or a = 1, 2 a = 0 for a triangle / b = 1 for a square, 3 a = 0).
+  double t_exit = 1.0;
+  int side = -1;
+  const auto cross = [&](double from, double to, int s) {  // crossing of a linear function from >= 0 to < 0
+    if (to < 0.0 && from >= 0.0) {
+      const double t = from / (from - to);
+      if (t < t_exit) t_exit = t, side = s;
+    }
+  };
+  if (kind == Kind::Triangle) {
+    cross(b0, b1, 0);
+    cross(1.0 - a0 - b0, 1.0 - a1 - b1, 1);
+    cross(a0, a1, 2);
+  } else {
+    cross(b0, b1, 0);
+    cross(1.0 - a0, 1.0 - a1, 1);
+    cross(1.0 - b0, 1.0 - b1, 2);
+    cross(a0, a1, 3);
+  }
+  if (side < 0) {
+    if (a1 == a0 && b1 == b0) return false;
+    ab[0] = a1, ab[1] = b1;
+    return true;
+  }
+  double a = a0 + t_exit * d[0], b = b0 + t_exit * d[1];
+  // On the side exactly.
+  if (kind == Kind::Triangle) {
+    if (side == 0) b = 0.0;
+    if (side == 1) b = 1.0 - a;
+    if (side == 2) a = 0.0;
+    a = std::clamp(a, 0.0, 1.0), b = std::clamp(b, 0.0, 1.0 - a);
+  } else {
+    if (side == 0) b = 0.0;
+    if (side == 1) a = 1.0;
+    if (side == 2) b = 1.0;
+    if (side == 3) a = 0.0;
+    a = std::clamp(a, 0.0, 1.0), b = std::clamp(b, 0.0, 1.0);
+  }
+  // The face edge (and the parameter along it) that the side lies on, or
+  // the next sub-face of the same face.
+  int edge = -1;
+  double s = 0.0;
+  if (kind == Kind::Triangle) {
+    edge = side;
+    s = side == 0 ? a : (side == 1 ? b : 1.0 - b);
+  } else if (kind == Kind::Quad) {
+    edge = side;
+    s = side == 0 ? a : side == 1 ? b : side == 2 ? 1.0 - a : 1.0 - b;
+  } else {
+    const int k = dom.topology.face_size(static_cast<std::size_t>(f));
+    if (side == 1) {  // a = 1: into sub-face c + 1 at its side b = 1
+      const double nb = b;
+      c = (c + 1) % k;
+      ab[0] = nb, ab[1] = 1.0;
+      return true;
+    }
+    if (side == 2) {  // b = 1: into sub-face c - 1 at its side a = 1
+      const double na = a;
+      c = (c + k - 1) % k;
+      ab[0] = 1.0, ab[1] = na;
+      return true;
+    }
+    if (side == 0) edge = c, s = 0.5 * a;
+    else edge = (c + k - 1) % k, s = 1.0 - 0.5 * b;
+  }
+  const std::int32_t h = dom.topology.face_offset(static_cast<std::size_t>(f)) + edge;
+  const std::int32_t across = dom.opposite[static_cast<std::size_t>(h)];
+  const std::int32_t g = across < 0 ? -1 : dom.half_edge_face[static_cast<std::size_t>(across)];
+  if (g < 0 || dom.hole[static_cast<std::size_t>(g)]) {
+    // A boundary: slide, the step's component along the side kept.
+    double pa = a1, pb = b1;
+    if (kind == Kind::Triangle) {
+      pa = std::max(pa, 0.0), pb = std::max(pb, 0.0);
+      if (pa + pb > 1.0) {
+        const double e = 0.5 * (pa + pb - 1.0);
+        pa -= e, pb -= e;
+        pa = std::clamp(pa, 0.0, 1.0), pb = std::clamp(pb, 0.0, 1.0 - pa);
+      }
+    } else {
+      pa = std::clamp(pa, 0.0, 1.0), pb = std::clamp(pb, 0.0, 1.0);
+    }
+    if (pa == a0 && pb == b0) return false;
+    ab[0] = pa, ab[1] = pb;
+    return true;
+  }
+  const int e_g = across - dom.topology.face_offset(static_cast<std::size_t>(g));
+  f = g;
+  c = dom.on_edge(g, e_g, std::clamp(1.0 - s, 0.0, 1.0), ab);
+  return true;
+}
+
+// The grid of starting samples: for each face (not a hole), each chart, the
+// local points (i / r, j / r) (i + j <= r in a triangle).
+void grid_samples(const Domains& dom, int r, std::vector<std::int32_t>& face_ids, std::vector<double>& uv) {
+  const auto m = static_cast<std::int32_t>(dom.topology.n_faces());
+  for (std::int32_t f = 0; f < m; ++f) {
+    if (dom.hole[static_cast<std::size_t>(f)]) continue;
+    const bool tri = dom.kind(f) == Kind::Triangle;
+    for (int c = 0; c < dom.charts(f); ++c)
+      for (int j = 0; j <= r; ++j)
+        for (int i = 0; i <= (tri ? r - j : r); ++i) {
+          double p[2];
+          dom.to_uv(f, c, static_cast<double>(i) / r, static_cast<double>(j) / r, p);
+          face_ids.push_back(f);
+          uv.push_back(p[0]);
+          uv.push_back(p[1]);
+        }
+  }
+}
+
+}  // namespace
+
+Footpoints closest_points(const LimitSurface& surface, const Topology& topology, const double* points, std::size_t n,
+                          const FootpointOptions& options) {
+  if (options.grid < 1 || options.grid > 64)
+    throw ParameterError("grid must be in 1..64, got " + std::to_string(options.grid));
+  const Domains dom(topology, surface.scheme(), surface.tags().holes);
+  std::vector<std::int32_t> sample_faces;
+  std::vector<double> sample_uv;
+  grid_samples(dom, options.grid, sample_faces, sample_uv);
+  if (sample_faces.empty()) throw ParameterError("the surface has no face outside its holes");
+  std::vector<double> sample_points(3 * sample_faces.size());
+  surface.evaluate(sample_faces.data(), sample_uv.data(), sample_faces.size(), sample_points.data(), nullptr,
+                   nullptr, nullptr);
+  Footpoints fp;
+  fp.face_ids.resize(n);
+  fp.uv.resize(2 * n);
+  {
+    const PointIndex index(sample_points.data(), sample_faces.size());
+    std::vector<std::int64_t> nearest(n);
+    std::vector<double> dist(n);
+    index.nearest(points, n, nearest.data(), dist.data());
+    for (std::size_t i = 0; i < n; ++i) {
+      const auto s = static_cast<std::size_t>(nearest[i]);
+      fp.face_ids[i] = sample_faces[s];
+      fp.uv[2 * i] = sample_uv[2 * s];
+      fp.uv[2 * i + 1] = sample_uv[2 * s + 1];
+    }
+  }
+  refine_footpoints(surface, topology, points, n, options, fp);
+  return fp;
+}
+
+void refine_footpoints(const LimitSurface& surface, const Topology& topology, const double* points, std::size_t n,
+                       const FootpointOptions& options, Footpoints& fp) {
+  if (fp.face_ids.size() != n || fp.uv.size() != 2 * n)
+    throw ParameterError("footpoints hold " + std::to_string(fp.face_ids.size()) + " faces and " +
+                         std::to_string(fp.uv.size() / 2) + " parameters for " + std::to_string(n) + " points");
+  const Domains dom(topology, surface.scheme(), surface.tags().holes);
+  fp.positions.assign(3 * n, 0.0);
+  fp.distances.assign(n, std::numeric_limits<double>::infinity());
+  // Per point: the current chart and local coordinates, the best point so
+  // far with its derivatives, and the damping.
+  std::vector<std::int32_t> chart(n);
+  // Trust region: a step's largest (u, v) component is at most radius[i],
+  // which starts at one grid spacing, doubles after a step that lowers the
+  // distance and shrinks to a quarter of the failed step after one that does not.
+  std::vector<double> ab(2 * n), best_du(3 * n), best_dv(3 * n),
+      radius(n, 1.0 / std::max(1, options.grid > 0 ? options.grid : 4));
+  std::vector<std::int32_t> best_face(fp.face_ids), best_chart(n);
+  std::vector<double> best_uv(fp.uv), best_ab;
+  for (std::size_t i = 0; i < n; ++i) chart[i] = best_chart[i] = dom.from_uv(fp.face_ids[i], &fp.uv[2 * i], &ab[2 * i]);
+  best_ab = ab;
+  std::vector<std::size_t> active(n);
+  for (std::size_t i = 0; i < n; ++i) active[i] = i;
+  std::vector<std::int32_t> q_face, q_chart;
+  std::vector<double> q_uv, q_p, q_du, q_dv;
+  std::vector<std::uint8_t> keep;
+  const int tasks_for = task_count(n, 8192);
+  for (int step = 0; step <= options.max_steps && !active.empty(); ++step) {
+    // Queried in face order: the surface groups its points by face, and
+    // points of one face in a row share a patch (and its memory).
+    std::sort(active.begin(), active.end(), [&](std::size_t x, std::size_t y) {
+      return fp.face_ids[x] != fp.face_ids[y] ? fp.face_ids[x] < fp.face_ids[y] : x < y;
+    });
+    const std::size_t k = active.size();
+    q_face.resize(k);
+    q_chart.resize(k);
+    q_uv.resize(2 * k);
+    for (std::size_t j = 0; j < k; ++j) {
+      const std::size_t i = active[j];
+      q_face[j] = fp.face_ids[i];
+      q_chart[j] = chart[i];
+      dom.to_uv(fp.face_ids[i], chart[i], ab[2 * i], ab[2 * i + 1], &q_uv[2 * j]);
+    }
+    q_p.resize(3 * k);
+    q_du.resize(3 * k);
+    q_dv.resize(3 * k);
+    surface.evaluate(q_face.data(), q_uv.data(), k, q_p.data(), q_du.data(), q_dv.data(), nullptr);
+    keep.assign(k, 0);
+    const bool last = step == options.max_steps;
+    const int tasks = std::min(tasks_for, task_count(k, 8192));
+    detail::for_each_task(tasks > 1, tasks, [&](int t) {
+      for (std::size_t j = k * t / tasks; j < k * (t + 1) / tasks; ++j) {
+        const std::size_t i = active[j];
+        const double* x = points + 3 * i;
+        const double* p = &q_p[3 * j];
+        const double r[3] = {x[0] - p[0], x[1] - p[1], x[2] - p[2]};
+        const double dist = std::sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
+        // A point across an edge (a hop) starts at the surface point it left:
+        // as good as the best within rounding, and accepted so that the next
+        // step is taken in the new face.
+        const double scale = std::abs(p[0]) + std::abs(p[1]) + std::abs(p[2]) + fp.distances[i];
+        const bool hopped = (q_face[j] != best_face[i] || q_chart[j] != best_chart[i]) &&
+                            dist <= fp.distances[i] + 1e-12 * scale;
+        if (dist < fp.distances[i] || hopped) {
+          fp.distances[i] = dist;
+          std::copy_n(p, 3, &fp.positions[3 * i]);
+          std::copy_n(&q_du[3 * j], 3, &best_du[3 * i]);
+          std::copy_n(&q_dv[3 * j], 3, &best_dv[3 * i]);
+          best_face[i] = q_face[j];
+          best_chart[i] = q_chart[j];
+          best_ab[2 * i] = ab[2 * i];
+          best_ab[2 * i + 1] = ab[2 * i + 1];
+          best_uv[2 * i] = q_uv[2 * j];
+          best_uv[2 * i + 1] = q_uv[2 * j + 1];
+          radius[i] = std::min(2.0 * radius[i], 1.0);
+        } else {
+          // No better: back to the best point, a smaller region.
+          radius[i] *= 0.25;
+          fp.face_ids[i] = best_face[i];
+          chart[i] = best_chart[i];
+          ab[2 * i] = best_ab[2 * i];
+          ab[2 * i + 1] = best_ab[2 * i + 1];
+          if (radius[i] < 1e-15) continue;
+        }
+        if (last || fp.distances[i] == 0.0) continue;
+        // The Gauss-Newton step at the best point, in (u, v), within the trust region.
+        const double* bp = &fp.positions[3 * i];
+        const double* su = &best_du[3 * i];
+        const double* sv = &best_dv[3 * i];
+        const double br[3] = {x[0] - bp[0], x[1] - bp[1], x[2] - bp[2]};
+        const double a11 = su[0] * su[0] + su[1] * su[1] + su[2] * su[2];
+        const double a12 = su[0] * sv[0] + su[1] * sv[1] + su[2] * sv[2];
+        const double a22 = sv[0] * sv[0] + sv[1] * sv[1] + sv[2] * sv[2];
+        const double g1 = su[0] * br[0] + su[1] * br[1] + su[2] * br[2];
+        const double g2 = sv[0] * br[0] + sv[1] * br[1] + sv[2] * br[2];
+        const double m11 = a11 * (1.0 + 1e-12) + 1e-300, m22 = a22 * (1.0 + 1e-12) + 1e-300;
+        const double det = m11 * m22 - a12 * a12;
+        if (!(det > 0.0) || !std::isfinite(det)) continue;
+        double d[2] = {(m22 * g1 - a12 * g2) / det, (m11 * g2 - a12 * g1) / det};
+        // Converged: the step moves the point by a rounding error of its distance.
+        const double moved2 = a11 * d[0] * d[0] + 2 * a12 * d[0] * d[1] + a22 * d[1] * d[1];
+        if (!(moved2 > 1e-26 * (fp.distances[i] * fp.distances[i] + bp[0] * bp[0] + bp[1] * bp[1] + bp[2] * bp[2])))
+          continue;
+        const double len = std::max(std::abs(d[0]), std::abs(d[1]));
+        if (len > radius[i]) d[0] *= radius[i] / len, d[1] *= radius[i] / len;
+        radius[i] = std::min(radius[i], len);  // a failure shrinks the step taken
+        if (dom.kind(fp.face_ids[i]) == Kind::Sub) d[0] *= 2.0, d[1] *= 2.0;  // local = 2 (u, v)
+        std::int32_t f = fp.face_ids[i];
+        int c = chart[i];
+        if (!move(dom, f, c, &ab[2 * i], d)) continue;
+        fp.face_ids[i] = f;
+        chart[i] = c;
+        keep[j] = 1;
+      }
+    });
+    std::size_t w = 0;
+    for (std::size_t j = 0; j < k; ++j)
+      if (keep[j]) active[w++] = active[j];
+    active.resize(w);
+    poll_interrupt();
+  }
+  fp.face_ids.swap(best_face);
+  fp.uv.swap(best_uv);
+  fp.normals.assign(3 * n, 0.0);
+  for (std::size_t i = 0; i < n; ++i) detail::unit_normal(&best_du[3 * i], &best_dv[3 * i], &fp.normals[3 * i]);
+}
+
+}  // namespace sorpia

@@ -1,0 +1,440 @@
+"""Approximation of dense data by a light cage: control vertices whose limit
+surface (Loop or Catmull-Clark, with OpenSubdiv's tags) lies close to many
+points, in the least-squares sense.
+
+The data points P (a scan, a point cloud, a dense mesh's vertices) are fitted
+by the limit surface S(V) of a cage with control vertices V and fixed faces:
+
+- **footpoints**: for each point p_i the closest point of S(V) as (face, u, v)
+  in OpenSubdiv Bfr's parameterisation (`sorpia.surface`): the nearest of a
+  grid of limit points (a k-d tree), then Levenberg-Marquardt steps on (u, v)
+  with Bfr's derivatives, crossing into the neighbouring face where a step
+  leaves the face (the core's ``sorpia::closest_points``);
+- **rows**: the limit basis at the footpoints, A (one row per point, one
+  column per control vertex; ``LimitSurface.rows``), so that A V are the
+  footpoints' positions;
+- **the update**: V minimising ``|A V - P|^2 + fairness |V|_K^2 + mu |V -
+  V_prev|^2``, the normal equations ``(A^T A + fairness K + mu I) V = A^T P +
+  mu V_prev`` solved by conjugate gradients (Jacobi preconditioner, the three
+  coordinates together), or by LSPIA (Deng and Lin 2014: each control vertex
+  moves by the sum of its points' residuals weighted by the basis, divided by
+  the sum of those weights). mu is 1e-6 of the mean diagonal of A^T A: a
+  proximal pull towards the previous control vertices which leaves the
+  least-squares solution unchanged (it vanishes at a fixed point) and keeps a
+  vertex no point influences where it is;
+- **parameter correction**: the footpoints re-projected onto the new surface
+  (from their previous (face, u, v)), and again, until the RMS distance stops
+  decreasing by more than ``tol`` relatively, or ``iterations``.
+
+Distances are reported both ways at every iteration: data to surface (the
+footpoint distances) and surface to data (from the vertices of a uniform
+tessellation of the limit surface, exact limit points, to the nearest data
+point), as RMS and max, in model units and as fractions of the diagonal of
+the data's bounding box.
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+import time
+from dataclasses import dataclass, field
+from typing import Callable, Optional
+
+import numpy as np
+import scipy.sparse
+
+from . import _core
+from ._validate import DEFAULT_BOUNDARY, as_vertices
+from .errors import MeshError, ParameterError
+from .surface import LimitSurface
+
+UPDATE_METHODS = ("cg", "lspia")
+DEFAULT_UPDATE = "cg"
+# The proximal weight mu, relative to the mean diagonal of A^T A.
+_PROXIMAL = 1e-6
+
+
+@dataclass
+class ApproximationResult:
+    """What `approximate` returns: the fitted cage, the footpoints of the data
+    on its limit surface, and the distances per iteration.
+
+    Attributes
+    ----------
+    control_vertices : (n, 3) float64
+        The cage's new control vertices (faces and tags unchanged).
+    face_ids : (k,) int32, uv : (k, 2) float64
+        Footpoint of each data point on the final limit surface, as
+        (face, u, v) in Bfr's parameterisation (`sorpia.surface`).
+    distances : (k,) float64
+        Distance of each data point to its footpoint.
+    iterations : int
+        Updates made (each followed by a re-projection of the footpoints).
+    converged : bool
+        True when the RMS distance stopped decreasing by more than ``tol``
+        (relatively) before ``iterations`` ran out.
+    method : str
+        The update that ran, "cg" or "lspia".
+    fairness : float
+        The weight of the fairness term.
+    diagonal : float
+        The diagonal of the data points' bounding box, the unit of the
+        relative distances.
+    history : list of dict
+        One record per iteration, from 0 (the cage as given): ``iteration``,
+        ``rms``, ``max`` (data to surface), ``surface_rms``, ``surface_max``
+        (surface to data), each also ``_relative`` (divided by ``diagonal``),
+        ``solver_iterations`` (of the update before it; 0 at iteration 0) and
+        ``seconds`` (since the start).
+    timings : dict
+        Seconds spent in each phase: ``footpoints``, ``rows``, ``normal``
+        (forming A^T A and A^T P), ``solve``, ``report`` (surface to data),
+        ``total``.
+    """
+
+    control_vertices: np.ndarray
+    face_ids: np.ndarray
+    uv: np.ndarray
+    distances: np.ndarray
+    iterations: int
+    converged: bool
+    method: str
+    fairness: float
+    diagonal: float
+    history: list = field(default_factory=list)
+    timings: dict = field(default_factory=dict)
+
+    @property
+    def rms(self) -> float:
+        """RMS distance of the data points to the final limit surface."""
+        return self.history[-1]["rms"]
+
+    @property
+    def max_distance(self) -> float:
+        """Largest distance of a data point to the final limit surface."""
+        return self.history[-1]["max"]
+
+    def report(self) -> dict:
+        """The result as a JSON-ready dict (what ``sorpia approximate --report``
+        writes): the history, the timings and the final figures, without the
+        per-point arrays."""
+        last = self.history[-1]
+        return {"iterations": self.iterations, "converged": self.converged, "method": self.method,
+                "fairness": self.fairness, "diagonal": self.diagonal, "n_points": int(self.distances.shape[0]),
+                "n_control_vertices": int(self.control_vertices.shape[0]),
+                "final": {k: v for k, v in last.items() if k not in ("iteration", "seconds")},
+                "history": self.history, "timings": self.timings}
+
+
+def _count(value, name: str, low: int) -> int:
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Integral) or value < low:
+        raise ParameterError(f"{name} = {value!r} must be an integer >= {low}")
+    return int(value)
+
+
+def _nonnegative(value, name: str) -> float:
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real) or not (
+            math.isfinite(value) and value >= 0):
+        raise ParameterError(f"{name} = {value!r} must be a finite number >= 0")
+    return float(value)
+
+
+def as_points(points) -> np.ndarray:
+    """`points` as a C-contiguous (k, 3) float64 array of finite values, k >= 1
+    (sorpia.ParameterError naming the first bad row otherwise)."""
+    arr = np.asarray(points) if not isinstance(points, np.ndarray) else points
+    if arr.ndim == 2 and arr.shape[0] == 0:
+        raise ParameterError("points is empty: there is nothing to approximate")
+    try:
+        return as_vertices(arr, "points")
+    except MeshError as e:
+        raise ParameterError(str(e)) from None
+
+
+def bounding_box_diagonal(points: np.ndarray) -> float:
+    """Length of the diagonal of the points' bounding box, scaled before
+    squaring (finite for any finite coordinates)."""
+    extent = points.max(axis=0) - points.min(axis=0)
+    scale = float(np.abs(extent).max())
+    return 0.0 if scale == 0.0 else scale * float(np.linalg.norm(extent / scale))
+
+
+class _Fit:
+    """One approximation run's state: the surface, the data and its k-d tree."""
+
+    def __init__(self, points, surface: LimitSurface, grid: int, steps: int, level: int):
+        self.points = points
+        self.surface = surface
+        self.grid, self.steps, self.level = grid, steps, level
+        self.data_index = None
+        self.timings = dict.fromkeys(("footpoints", "rows", "normal", "solve", "report"), 0.0)
+
+    def _timed(self, phase: str, fn, *args):
+        t = time.perf_counter()
+        out = fn(*args)
+        self.timings[phase] += time.perf_counter() - t
+        return out
+
+    def footpoints(self, previous=None):
+        core, topo = self.surface._surface, self.surface._topology
+        if previous is None:
+            return self._timed("footpoints", _core.closest_points, core, topo, self.points, self.grid, self.steps)
+        return self._timed("footpoints", _core.refine_footpoints, core, topo, self.points, previous[0],
+                           previous[1], self.steps)
+
+    def rows(self, face_ids, uv) -> scipy.sparse.csr_matrix:
+        return self._timed("rows", lambda: self.surface.rows(face_ids, uv)[0])
+
+    def surface_to_data(self) -> np.ndarray:
+        def run():
+            if self.data_index is None:
+                self.data_index = _core.PointIndex(self.points)
+            vertices, _ = self.surface.tessellate(self.level)
+            return self.data_index.nearest(np.ascontiguousarray(vertices))[1]
+
+        return self._timed("report", run)
+
+
+def _pcg(M: scipy.sparse.csr_matrix, rhs: np.ndarray, x: np.ndarray, rtol: float, max_iter: int):
+    """Conjugate gradients on M X = rhs for the columns of X together, Jacobi
+    preconditioned, from x; stops when every column's residual is below rtol
+    times its initial one (or its right-hand side's norm times 1e-15)."""
+    d = M.diagonal()
+    inv = np.where(d > 0, 1.0 / np.where(d > 0, d, 1.0), 1.0)[:, None]
+    r = rhs - M @ x
+    stop = np.maximum(rtol * np.linalg.norm(r, axis=0), 1e-15 * np.linalg.norm(rhs, axis=0))
+    z = inv * r
+    p = z.copy()
+    rz = np.einsum("ij,ij->j", r, z)
+    for k in range(1, max_iter + 1):
+        if (np.linalg.norm(r, axis=0) <= stop).all():
+            return x, k - 1
+        q = M @ p
+        pq = np.einsum("ij,ij->j", p, q)
+        alpha = np.divide(rz, pq, out=np.zeros_like(rz), where=pq > 0)
+        x += alpha * p
+        r -= alpha * q
+        z = inv * r
+        rz_new = np.einsum("ij,ij->j", r, z)
+        beta = np.divide(rz_new, rz, out=np.zeros_like(rz), where=rz > 0)
+        p = z + beta * p
+        rz = rz_new
+    return x, max_iter
+
+
+def _lspia(M: scipy.sparse.csr_matrix, rhs: np.ndarray, x: np.ndarray, rtol: float, max_iter: int):
+    """LSPIA (Deng and Lin 2014) on the normal equations: x += D^-1 (rhs - M x),
+    D the row sums of |M|. Without the fairness and proximal terms M = A^T A
+    with A >= 0 and rows summing to 1, so D_j is the sum of column j of A: each
+    control vertex moves by its points' residuals weighted by the basis,
+    divided by the sum of those weights. Stops when every column's residual
+    is below rtol times its initial one (or 1e-15 times its right-hand side)."""
+    scale = np.asarray(abs(M).sum(axis=1)).ravel()
+    inv = np.where(scale > 0, 1.0 / np.where(scale > 0, scale, 1.0), 0.0)[:, None]
+    r = rhs - M @ x
+    stop = np.maximum(rtol * np.linalg.norm(r, axis=0), 1e-15 * np.linalg.norm(rhs, axis=0))
+    for k in range(1, max_iter + 1):
+        if (np.linalg.norm(r, axis=0) <= stop).all():
+            return x, k - 1
+        x += inv * r
+        r = rhs - M @ x
+    return x, max_iter
+
+
+def _normal_equations(A, points, normals, V, tangential: float, fairness: float, K):
+    """The normal equations of one update: (M, rhs, mu) with M = A^T W A +
+    fairness m K + mu I, rhs = A^T W P + mu V, m the mean diagonal of A^T A
+    and mu = _PROXIMAL m. W_i = I (tangential = 1: point distance, one (n, n)
+    system for three columns) or W_i = tangential I + (1 - tangential) n_i
+    n_i^T (the (3n, 3n) system over x..., y..., z...; a point whose normal is
+    zero keeps W_i = I)."""
+    n = A.shape[1]
+    A = A.tocsr()
+    if tangential == 1.0:
+        ip, ix, val = _core.normal_matrix(A.indptr, A.indices, A.data, n, None)
+        AtA = scipy.sparse.csr_matrix((val[:, 0], ix, ip), shape=(n, n))
+        mean_diag = float(AtA.diagonal().mean()) or 1.0
+        mu = _PROXIMAL * mean_diag
+        M = AtA + scipy.sparse.identity(n, format="csr") * mu
+        if K is not None:
+            M = M + (fairness * mean_diag) * K
+        return M.tocsr(), A.T @ points + mu * V, mu
+    nrm = normals * (np.linalg.norm(normals, axis=1) > 0)[:, None]
+    w, c = tangential, 1.0 - tangential
+    flat = (nrm == 0).all(axis=1)
+    c_i = np.where(flat, 0.0, c)
+    w_i = np.where(flat, 1.0, w)
+    pairs = ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2))
+    weights = np.empty((len(nrm), 6))
+    for col, (a, b) in enumerate(pairs):
+        weights[:, col] = c_i * nrm[:, a] * nrm[:, b] + (w_i if a == b else 0.0)
+    ip, ix, val = _core.normal_matrix(A.indptr, A.indices, A.data, n, np.ascontiguousarray(weights))
+    block = {}
+    for col, (a, b) in enumerate(pairs):
+        block[a, b] = scipy.sparse.csr_matrix((val[:, col], ix, ip), shape=(n, n))
+        block[b, a] = block[a, b]
+    mean_diag = float(sum(block[a, a].diagonal().mean() for a in range(3)) / 3) or 1.0
+    mu = _PROXIMAL * mean_diag
+    M = scipy.sparse.bmat([[block[a, b] for b in range(3)] for a in range(3)], format="csr")
+    M = M + scipy.sparse.identity(3 * n, format="csr") * mu
+    if K is not None:
+        M = M + scipy.sparse.block_diag([K] * 3, format="csr") * (fairness * mean_diag)
+    # W_i p_i = w_i p_i + c_i n_i (n_i . p_i)
+    wp = w_i[:, None] * points + (c_i * np.einsum("ij,ij->i", nrm, points))[:, None] * nrm
+    rhs = A.T @ wp + mu * V
+    return M.tocsr(), rhs, mu
+
+
+def approximate(points, cage_vertices, cage_faces, *, scheme: str = "auto", boundary: str = DEFAULT_BOUNDARY,
+                creases=None, corners=None, holes=None, iterations: int = 10, tol: float = 1e-3,
+                fairness: float = 0.0, tangential: float = 1.0, method: str = DEFAULT_UPDATE, solver_tol: float = 1e-6,
+                solver_max_iter: int = 2000, grid: int = 4, newton_steps: int = 12, report_level: int = 2,
+                callback: Optional[Callable[[dict], object]] = None) -> ApproximationResult:
+    """Control vertices of a cage whose limit surface approximates `points`
+    in the least-squares sense (the module docstring describes the method).
+
+    Parameters
+    ----------
+    points : array_like, (k, 3) float
+        The data: a point cloud or a dense mesh's vertices; finite, k >= 1.
+    cage_vertices : array_like, (n, 3) float
+        The cage's control vertices at the start (e.g. a decimated mesh).
+    cage_faces : array_like
+        The cage's faces: triangles for Loop, any polygons for Catmull-Clark.
+    scheme : {"auto", "loop", "catmull-clark"}
+        "auto": Loop when every face is a triangle, else Catmull-Clark.
+    boundary, creases, corners, holes
+        The rules of the cage's limit surface, as in `sorpia.LimitSurface`.
+    iterations : int >= 1
+        Updates at most, each followed by a re-projection of the footpoints
+        (parameter correction).
+    tol : float >= 0
+        Stop when an update lowers the RMS distance by less than this
+        fraction of it.
+    fairness : float >= 0
+        Weight of the thin-plate fairness term V^T K V (the energy shared with
+        fair interpolation), relative to the mean diagonal of A^T A; 0 for
+        none.
+    method : {"cg", "lspia"}
+        The update: conjugate gradients on the normal equations (default:
+        the faster, bench/approximate_speed.py), or LSPIA's iteration.
+    solver_tol, solver_max_iter
+        Each update stops when the normal equations' residual is below
+        solver_tol times its value at the start of the update, or after
+        solver_max_iter iterations.
+    grid : int 1..64
+        Samples per side of each face's domain whose nearest one starts a
+        point's footpoint search.
+    newton_steps : int >= 1
+        Levenberg-Marquardt steps on each footpoint at most, per projection.
+    report_level : int 0..15
+        Tessellation level of the limit surface whose vertices measure the
+        distance from the surface to the data.
+    callback : callable(record) or None
+        Called with each iteration's record (see `ApproximationResult.history`)
+        as soon as it is known.
+
+    Returns
+    -------
+    ApproximationResult
+
+    Raises
+    ------
+    sorpia.ParameterError
+        Empty or non-finite points, an option out of range.
+    sorpia.MeshError
+        A cage with no faces, or one the scheme cannot take.
+    """
+    t0 = time.perf_counter()
+    points = as_points(points)
+    iterations = _count(iterations, "iterations", 1)
+    tol = _nonnegative(tol, "tol")
+    fairness = _nonnegative(fairness, "fairness")
+    tangential = _nonnegative(tangential, "tangential")
+    if tangential > 1:
+        raise ParameterError(f"tangential = {tangential!r} must be in [0, 1]")
+    solver_tol = _nonnegative(solver_tol, "solver_tol")
+    solver_max_iter = _count(solver_max_iter, "solver_max_iter", 1)
+    grid = _count(grid, "grid", 1)
+    if grid > 64:
+        raise ParameterError(f"grid = {grid} must be in 1..64")
+    newton_steps = _count(newton_steps, "newton_steps", 1)
+    report_level = _count(report_level, "report_level", 0)
+    if method not in UPDATE_METHODS:
+        raise ParameterError(f"method = {method!r} must be one of {', '.join(UPDATE_METHODS)}")
+    if method == "lspia" and tangential != 1.0:
+        raise ParameterError("method = 'lspia' moves each coordinate on its own: it takes tangential = 1 only")
+    if callback is not None and not callable(callback):
+        raise ParameterError(f"callback = {callback!r} must be callable (record) or None")
+    cage_vertices = as_vertices(cage_vertices, "cage_vertices")
+    if len(cage_faces) == 0:
+        raise MeshError("cage_faces is empty: the cage needs at least one face")
+    if scheme == "auto":
+        from ._validate import all_triangles
+
+        scheme = "loop" if all_triangles(cage_faces) else "catmull-clark"
+    surface = LimitSurface(cage_vertices, cage_faces, boundary=boundary, scheme=scheme, creases=creases,
+                           corners=corners, holes=holes)
+    fit = _Fit(points, surface, grid, newton_steps, report_level)
+    diagonal = bounding_box_diagonal(points)
+    unit = diagonal if diagonal > 0 else 1.0
+    history = []
+
+    def record(iteration: int, distances: np.ndarray, solver_iterations: int) -> dict:
+        s = fit.surface_to_data()
+        rec = {"iteration": iteration, "rms": float(np.sqrt(np.mean(distances ** 2))),
+               "max": float(distances.max()), "surface_rms": float(np.sqrt(np.mean(s ** 2))),
+               "surface_max": float(s.max())}
+        for key in ("rms", "max", "surface_rms", "surface_max"):
+            rec[key + "_relative"] = rec[key] / unit
+        rec["solver_iterations"] = solver_iterations
+        rec["seconds"] = time.perf_counter() - t0
+        history.append(rec)
+        if callback is not None:
+            callback(dict(rec))
+        return rec
+
+    face_ids, uv, _, distances, normals = fit.footpoints()
+    record(0, distances, 0)
+    V = cage_vertices.copy()
+    best = (history[0]["rms"], V, face_ids, uv, distances)
+    K = None
+    if fairness > 0:
+        from .energy import fairness_matrix
+
+        K = fairness_matrix(cage_faces, V.shape[0], scheme=scheme, boundary=boundary, creases=creases,
+                            corners=corners, holes=holes)
+    converged = False
+    done = 0
+    for k in range(1, iterations + 1):
+        A = fit.rows(face_ids, uv)
+        t = time.perf_counter()
+        M, rhs, mu = _normal_equations(A, points, normals, V, tangential, fairness, K)
+        fit.timings["normal"] += time.perf_counter() - t
+        t = time.perf_counter()
+        if method == "lspia":
+            V, used = _lspia(M, rhs, V.copy(), solver_tol, solver_max_iter)
+        elif tangential == 1.0:
+            V, used = _pcg(M, rhs, V.copy(), solver_tol, solver_max_iter)
+        else:  # the 3n unknowns x..., y..., z... in one system
+            x, used = _pcg(M, rhs.reshape(-1, 1, order="F"), V.reshape(-1, 1, order="F"), solver_tol,
+                           solver_max_iter)
+            V = x.reshape(-1, 3, order="F")
+        fit.timings["solve"] += time.perf_counter() - t
+        surface.set_vertices(V)
+        previous = best
+        face_ids, uv, _, distances, normals = fit.footpoints((face_ids, uv))
+        done = k
+        rec = record(k, distances, used)
+        if rec["rms"] <= previous[0]:
+            best = (rec["rms"], V, face_ids, uv, distances)
+        if previous[0] - rec["rms"] < tol * previous[0] or rec["rms"] <= 1e-15 * unit:
+            converged = True
+            break
+    # The iterate of the lowest RMS distance (an update that raised it is not returned).
+    _, V, face_ids, uv, distances = best
+    fit.timings["total"] = time.perf_counter() - t0
+    return ApproximationResult(control_vertices=V, face_ids=face_ids, uv=uv, distances=distances, iterations=done,
+                               converged=converged, method=method, fairness=fairness, diagonal=diagonal,
+                               history=history, timings=fit.timings)

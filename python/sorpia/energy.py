@@ -1,0 +1,124 @@
+"""The fairness energy of a limit surface: thin plate and membrane, as a
+sparse symmetric quadratic form in the control vertices (Halstead, Kass &
+DeRose 1993), the energy fair interpolation minimises and approximation's
+fairness term adds.
+
+``E(V) = sum over columns c of V[:, c] @ K @ V[:, c]`` with
+
+``K = thin_plate * integral (|S_xx|^2 + 2 |S_xy|^2 + |S_yy|^2) + membrane * integral (|S_x|^2 + |S_y|^2)``
+
+over the faces' parameter domains (holes left out), S the limit surface as a
+function of its control values.
+
+The measure (x, y): Catmull-Clark integrates in Bfr's parameters (x, y) = (u,
+v) (`sorpia.surface`): a quad is the unit square (area 1), each of a k-gon's k
+sub-faces a square of side 1/2 (area 1/4, as a quarter of a quad), so a k-gon
+counts as k/4 quads, as it does after one subdivision step. Loop maps each
+triangle onto the equilateral triangle of side 1 (x = u + v/2, y = v
+sqrt(3)/2, area sqrt(3)/4), so that K does not depend on which corner a face
+lists first and a flat regular triangle grid has a membrane energy of twice
+its area.
+
+The quadrature: OpenSubdiv's stencils (`LimitSurface.rows`, second and first
+derivatives) at Gauss-Legendre points, n x n on squares and the collapsed n x
+n rule on triangles (``gauss_points`` = n = 4 integrates both terms exactly on
+regular patches: bicubic B-splines, Loop's quartic box splines); the domain is
+split ``depth`` times towards irregular corners (extraordinary, boundary and
+tagged vertices, a k-gon's centre) and tagged edges, following the rings of
+polynomial pieces of Bfr's surface there, so that only the last corner piece
+(Bfr's Gregory patch, within 2^-depth of the corner) is integrated
+approximately. The error this leaves is measured by ``bench/energy.py``
+against much finer rules.
+
+Near an extraordinary vertex whose subdominant eigenvalue exceeds 1/2
+(Catmull-Clark valence 5 and more, Loop 7 and more) the parametric second
+derivatives of the exact limit surface grow without bound towards the
+vertex, and their squared integral diverges slowly: K measures Bfr's surface,
+whose corner patch is a Gregory patch after 4 local refinements (10 on meshes
+with darts). Constant control values have zero energy; affine functions of
+the parameters have zero energy where every face is regular (a flat regular
+grid), not near extraordinary vertices, where the parameterisation is not
+affine.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from . import _core
+from ._validate import DEFAULT_BOUNDARY, DEFAULT_SCHEME, as_rules, as_vertices
+from .limit import built, warn_unreferenced
+from .solve import _integer, _real
+
+__all__ = ["fairness_matrix", "thin_plate_energy"]
+
+
+def fairness_matrix(faces, n_vertices: int, *, scheme: str = DEFAULT_SCHEME, boundary: str = DEFAULT_BOUNDARY,
+                    creases=None, corners=None, holes=None, thin_plate: float = 1.0, membrane: float = 0.0,
+                    gauss_points: int = 4, depth: int = 4):
+    """The fairness matrix K of a mesh's limit surface, (n, n) scipy CSR,
+    symmetric positive semidefinite: ``V[:, c] @ K @ V[:, c]`` summed over the
+    columns is the energy of control vertices V (see the module docstring
+    for the energy, its measure and its quadrature).
+
+    Parameters
+    ----------
+    faces, n_vertices, scheme, boundary, creases, corners, holes
+        The mesh and its rules, as for `sorpia.limit_matrix`. K depends on
+        them alone, not on the vertices' positions.
+    thin_plate, membrane : float
+        Weights of the two terms, finite and >= 0, not both 0.
+    gauss_points : int
+        Gauss-Legendre points per direction on each piece, 1..16 (4: exact on
+        regular patches).
+    depth : int
+        Splits of a face's domain towards its irregular corners and tagged
+        edges, 0..12 (4: Bfr's own refinement there).
+
+    Returns
+    -------
+    scipy.sparse.csr_matrix
+        (n, n) float64, columns sorted within each row; unreferenced vertices
+        have empty rows.
+
+    Raises
+    ------
+    sorpia.ParameterError
+        A weight negative, not finite or both zero; gauss_points or depth out
+        of range (the message names the option).
+    """
+    import scipy.sparse  # here, not at import: sorpia's commands need no scipy
+
+    surface, n = _core_surface(faces, n_vertices, scheme, boundary, creases, corners, holes)
+    data, indices, indptr = _core.fairness_matrix(surface, *_options(thin_plate, membrane, gauss_points, depth))
+    return scipy.sparse.csr_matrix((data, indices, indptr), shape=(n, n))
+
+
+def thin_plate_energy(vertices, faces, *, scheme: str = DEFAULT_SCHEME, boundary: str = DEFAULT_BOUNDARY,
+                      creases=None, corners=None, holes=None, thin_plate: float = 1.0, membrane: float = 0.0,
+                      gauss_points: int = 4, depth: int = 4) -> float:
+    """The fairness energy of the limit surface of control vertices
+    `vertices` (n, 3): ``sum(V * (K @ V))`` with K = `fairness_matrix` of the
+    same faces, rules and options (by default the thin-plate term alone)."""
+    vertices = as_vertices(vertices)
+    k = fairness_matrix(faces, vertices.shape[0], scheme=scheme, boundary=boundary, creases=creases, corners=corners,
+                        holes=holes, thin_plate=thin_plate, membrane=membrane, gauss_points=gauss_points,
+                        depth=depth)
+    return float(np.sum(vertices * (k @ vertices)))
+
+
+def _options(thin_plate, membrane, gauss_points, depth) -> tuple:
+    """The options as the core takes them; the core checks their ranges once."""
+    return (_real(thin_plate, "thin_plate"), _real(membrane, "membrane"),
+            min(_integer(gauss_points, "gauss_points", "an integer in 1..16"), 2**31 - 1),
+            min(_integer(depth, "depth", "an integer in 0..12"), 2**31 - 1))
+
+
+def _core_surface(faces, n_vertices, scheme, boundary, creases, corners, holes):
+    """A core LimitSurface of the mesh (its vertices zero: K does not use
+    them), and the vertex count."""
+    arrays, n, rules = as_rules(faces, n_vertices, scheme=scheme, boundary=boundary, creases=creases,
+                                corners=corners, holes=holes)
+    topo = built(lambda: _core.Topology(*arrays, n))
+    warn_unreferenced(topo, stacklevel=4)
+    return _core.LimitSurface(topo, np.zeros((n, 3)), rules.scheme, rules.boundary, rules.tags), n
