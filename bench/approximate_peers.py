@@ -134,31 +134,32 @@ def point_triangle_distance(p, a, b, c):
     return np.linalg.norm(p - closest, axis=1)
 
 
-def distances_to_mesh(points, vertices, triangles, k=16, chunk=200_000):
+def distances_to_mesh(points, vertices, triangles, chunk=100_000):
     """Exact distance from every point to the triangle mesh. Candidates: the k triangles of nearest centroids;
     a triangle outside them is at least (k-th centroid distance - largest centroid-to-corner radius) away, so
-    the answer is exact where the best found is below that bound, and the points where it is not are answered
-    over every triangle whose centroid lies within (best + radius)."""
+    the best found is exact where it is below that bound. The points where it is not are asked again with 4k
+    candidates, up to every triangle."""
     tri = vertices[triangles]
     centroids = tri.mean(axis=1)
     radius = float(np.linalg.norm(tri - centroids[:, None, :], axis=2).max())
     tree = cKDTree(centroids)
-    k = min(k, len(triangles))
     out = np.empty(len(points))
-    for s in range(0, len(points), chunk):
-        p = points[s:s + chunk]
-        dist, idx = tree.query(p, k=k)
-        dist, idx = dist.reshape(len(p), k), idx.reshape(len(p), k)
-        pp = np.repeat(p, k, axis=0)
-        t = tri[idx.ravel()]
-        d = point_triangle_distance(pp, t[:, 0], t[:, 1], t[:, 2]).reshape(len(p), k).min(axis=1)
-        for i in np.flatnonzero(d > dist[:, -1] - radius):
-            cand = np.asarray(tree.query_ball_point(p[i], d[i] + radius), dtype=np.int64)
-            if len(cand):
-                t = tri[cand]
-                d[i] = min(d[i], point_triangle_distance(np.repeat(p[i:i + 1], len(cand), 0), t[:, 0], t[:, 1],
-                                                         t[:, 2]).min())
-        out[s:s + chunk] = d
+    todo = np.arange(len(points))
+    k = 16
+    while len(todo):
+        k = min(k, len(triangles))
+        for s in range(0, len(todo), max(1, chunk * 16 // k)):
+            rows = todo[s:s + max(1, chunk * 16 // k)]
+            p = points[rows]
+            dist, idx = tree.query(p, k=k)
+            dist, idx = dist.reshape(len(p), k), idx.reshape(len(p), k)
+            t = tri[idx.ravel()]
+            out[rows] = point_triangle_distance(np.repeat(p, k, axis=0), t[:, 0], t[:, 1], t[:, 2]).reshape(
+                len(p), k).min(axis=1)
+            bound = dist[:, -1] - radius if k < len(triangles) else np.full(len(p), np.inf)
+            todo[s:s + len(rows)] = np.where(out[rows] <= bound, -1, rows)
+        todo = todo[todo >= 0]
+        k *= 4
     return out
 
 
