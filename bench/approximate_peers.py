@@ -135,32 +135,36 @@ def point_triangle_distance(p, a, b, c):
 
 
 def distances_to_mesh(points, vertices, triangles, chunk=100_000):
-    """Exact distance from every point to the triangle mesh. Candidates: the k triangles of nearest centroids;
-    a triangle outside them is at least (k-th centroid distance - largest centroid-to-corner radius) away, so
-    the best found is exact where it is below that bound. The points where it is not are asked again with 4k
-    candidates, up to every triangle."""
+    """Exact distance from every point to the triangle mesh. The triangles are grouped by their radius (largest
+    centroid-to-corner distance; the radii of a group within a factor 2 of its largest, r). In each group a
+    point's candidates are the k triangles of nearest centroids: any other is at least (k-th centroid distance
+    - r) away, so where that exceeds the best distance found so far the group cannot improve it; elsewhere the
+    group is asked again with 4k candidates, up to all of its triangles."""
     tri = vertices[triangles]
     centroids = tri.mean(axis=1)
-    radius = float(np.linalg.norm(tri - centroids[:, None, :], axis=2).max())
-    tree = cKDTree(centroids)
-    out = np.empty(len(points))
-    todo = np.arange(len(points))
-    k = 16
-    while len(todo):
-        k = min(k, len(triangles))
-        for s in range(0, len(todo), max(1, chunk * 16 // k)):
-            rows = todo[s:s + max(1, chunk * 16 // k)]
-            p = points[rows]
-            dist, idx = tree.query(p, k=k)
-            dist, idx = dist.reshape(len(p), k), idx.reshape(len(p), k)
-            t = tri[idx.ravel()]
-            out[rows] = point_triangle_distance(np.repeat(p, k, axis=0), t[:, 0], t[:, 1], t[:, 2]).reshape(
-                len(p), k).min(axis=1)
-            bound = dist[:, -1] - radius if k < len(triangles) else np.full(len(p), np.inf)
-            todo[s:s + len(rows)] = np.where(out[rows] <= bound, -1, rows)
-        todo = todo[todo >= 0]
-        k *= 4
-    return out
+    r = np.linalg.norm(tri - centroids[:, None, :], axis=2).max(axis=1)
+    group = np.floor(np.log2(np.maximum(r / r.max(), 2.0 ** -20)))
+    labels, sizes = np.unique(group, return_counts=True)
+    best = np.full(len(points), np.inf)
+    for label in labels[np.argsort(-sizes)]:  # the most triangles first: the best drops early
+        members = np.flatnonzero(group == label)
+        tree, radius, k = cKDTree(centroids[members]), float(r[members].max()), 16
+        todo = np.arange(len(points))
+        while len(todo):
+            k = min(k, len(members))
+            step = max(1, chunk * 16 // k)
+            for s in range(0, len(todo), step):
+                rows = todo[s:s + step]
+                dist, idx = tree.query(points[rows], k=k)
+                dist, idx = dist.reshape(len(rows), k), members[idx.reshape(len(rows), k)]
+                t = tri[idx.ravel()]
+                d = point_triangle_distance(np.repeat(points[rows], k, axis=0), t[:, 0], t[:, 1], t[:, 2])
+                best[rows] = np.minimum(best[rows], d.reshape(len(rows), k).min(axis=1))
+                done = (best[rows] <= dist[:, -1] - radius) | (k == len(members))
+                todo[s:s + len(rows)] = np.where(done, -1, rows)
+            todo = todo[todo >= 0]
+            k *= 4
+    return best
 
 
 def measure(points, cage_vertices, cage_faces, diag, scheme="loop"):
