@@ -40,6 +40,7 @@ import argparse
 import json
 import os
 import pathlib
+import re
 import subprocess
 import sys
 import tempfile
@@ -265,10 +266,20 @@ def run_mesh(spec, args, gfit, exe):
     diag = float(np.linalg.norm(v.max(0) - v.min(0)))
     n_cage = max(4, int(round(args.fraction * len(v))))
     t0 = time.perf_counter()
-    cage = sorpia.decimate(v, f, n_cage)
+    note = ""
+    try:
+        cage = sorpia.decimate(v, f, n_cage)
+    except sorpia.MeshError as exc:  # the guards stopped it: take the cage where it stopped, and say so
+        stopped = re.search(r"stopped at (\d+) vertices", str(exc))
+        if stopped is None:
+            raise
+        note = f"decimation to {n_cage:,} vertices stopped at {stopped.group(1)}: the cage has that many"
+        n_cage = int(stopped.group(1))
+        cage = sorpia.decimate(v, f, n_cage)
     t_decimate = time.perf_counter() - t0
     rows = []
-    out = {"mesh": name, "points": len(v), "cage_vertices": n_cage, "decimate_seconds": t_decimate, "rows": rows}
+    out = {"mesh": name, "points": len(v), "cage_vertices": n_cage, "decimate_seconds": t_decimate, "rows": rows,
+           "note": note}
     print(f"{name}: {len(v)} points, cage {n_cage} vertices ({t_decimate:.2f} s)", file=sys.stderr)
 
     def add(label, vertices, seconds, faces=cage.faces, scheme="loop", **extra):
@@ -315,6 +326,8 @@ def table(results, have_subdivfit):
         lines.append(f"### {r['mesh']}: {r['points']:,} points, cage of {r['cage_vertices']:,} vertices "
                      f"(decimated in {r['decimate_seconds']:.2f} s; the quad cage: "
                      f"{r['quad_cage_vertices']:,} vertices)\n")
+        if r["note"]:
+            lines.append(f"({r['note']}.)\n")
         lines.append("| fit | scheme | RMS / diagonal | max / diagonal | seconds "
                      "| on Subdivfit's own surface: RMS, max |")
         lines.append("|---|---|---|---|---|---|")
