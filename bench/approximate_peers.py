@@ -303,9 +303,14 @@ def run_mesh(spec, args, gfit, exe):
             if args.check_rules:
                 out["rules_check"] = check_rules(exe, work, cage.vertices, cage.faces, diag)
     # The same rows of sorpia's on the Loop cage, then on the quad cage of as many vertices (Catmull-Clark).
-    quads = sorpia.decimate(v, f, n_cage, scheme="catmull-clark")
-    out["quad_cage_vertices"] = len(quads.vertices)
-    for scheme, c in (("loop", cage), ("catmull-clark", quads)):
+    cages = [("loop", cage)]
+    try:
+        cages.append(("catmull-clark", sorpia.decimate(v, f, n_cage, scheme="catmull-clark")))
+        out["quad_cage_vertices"] = len(cages[-1][1].vertices)
+    except sorpia.MeshError as exc:  # the guards stopped it: no Catmull-Clark rows, and the page says why
+        out["quad_cage_vertices"] = 0
+        out["note"] = "; ".join(x for x in (out["note"], f"no quad cage: {exc}") if x)
+    for scheme, c in cages:
         t0 = time.perf_counter()
         interp = sorpia.interpolate(c.vertices, c.faces, scheme=scheme)
         add("interpolation of the cage's vertices", interp.control_vertices, time.perf_counter() - t0, c.faces,
@@ -325,7 +330,7 @@ def table(results, have_subdivfit):
     for r in results:
         lines.append(f"### {r['mesh']}: {r['points']:,} points, cage of {r['cage_vertices']:,} vertices "
                      f"(decimated in {r['decimate_seconds']:.2f} s; the quad cage: "
-                     f"{r['quad_cage_vertices']:,} vertices)\n")
+                     f"{r['quad_cage_vertices'] or 'none'} vertices)\n")
         if r["note"]:
             lines.append(f"({r['note']}.)\n")
         lines.append("| fit | scheme | RMS / diagonal | max / diagonal | seconds "
