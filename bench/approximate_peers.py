@@ -328,9 +328,9 @@ def run_mesh(spec, args, gfit, exe):
 def table(results, have_subdivfit):
     lines = []
     for r in results:
-        lines.append(f"### {r['mesh']}: {r['points']:,} points, cage of {r['cage_vertices']:,} vertices "
+        lines.append(f"## {r['mesh']}: {r['points']:,} points, cage of {r['cage_vertices']:,} vertices "
                      f"(decimated in {r['decimate_seconds']:.2f} s; the quad cage: "
-                     f"{r['quad_cage_vertices'] or 'none'} vertices)\n")
+                     f"{r['quad_cage_vertices'] or 'none'}{' vertices' if r['quad_cage_vertices'] else ''})\n")
         if r["note"]:
             lines.append(f"({r['note']}.)\n")
         lines.append("| fit | scheme | RMS / diagonal | max / diagonal | seconds "
@@ -364,12 +364,15 @@ def main(argv=None):
                         help="skip the check of Subdivfit's Loop rules against OpenSubdiv's")
     parser.add_argument("--json", help="also write the results here")
     parser.add_argument("--no-page", action="store_true", help="do not write docs/benchmarks/approximate.md")
+    parser.add_argument("--from-json", metavar="PATH", help="the tables from an earlier --json, without running")
     args = parser.parse_args(argv)
     gfit = [int(k) for k in args.gfit.split(",") if k]
     exe = pathlib.Path(os.environ.get("SUBDIVFIT", DEFAULT_SUBDIVFIT))
     exe = exe if exe.exists() else None
     results = []
-    for spec in args.meshes.split(","):
+    if args.from_json:
+        results = json.loads(pathlib.Path(args.from_json).read_text())
+    for spec in [] if args.from_json else args.meshes.split(","):
         if not spec.startswith("noisy-") and not (SHARED / spec).exists() and not pathlib.Path(spec).exists():
             print(f"{spec}: not found, skipped", file=sys.stderr)
             continue
