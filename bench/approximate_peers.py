@@ -40,6 +40,7 @@ import argparse
 import json
 import os
 import pathlib
+import re
 import subprocess
 import sys
 import tempfile
@@ -134,32 +135,37 @@ def point_triangle_distance(p, a, b, c):
     return np.linalg.norm(p - closest, axis=1)
 
 
-def distances_to_mesh(points, vertices, triangles, k=16, chunk=200_000):
-    """Exact distance from every point to the triangle mesh. Candidates: the k triangles of nearest centroids;
-    a triangle outside them is at least (k-th centroid distance - largest centroid-to-corner radius) away, so
-    the answer is exact where the best found is below that bound, and the points where it is not are answered
-    over every triangle whose centroid lies within (best + radius)."""
+def distances_to_mesh(points, vertices, triangles, chunk=100_000):
+    """Exact distance from every point to the triangle mesh. The triangles are grouped by their radius (largest
+    centroid-to-corner distance; the radii of a group within a factor 2 of its largest, r). In each group a
+    point's candidates are the k triangles of nearest centroids: any other is at least (k-th centroid distance
+    - r) away, so where that exceeds the best distance found so far the group cannot improve it; elsewhere the
+    group is asked again with 4k candidates, up to all of its triangles."""
     tri = vertices[triangles]
     centroids = tri.mean(axis=1)
-    radius = float(np.linalg.norm(tri - centroids[:, None, :], axis=2).max())
-    tree = cKDTree(centroids)
-    k = min(k, len(triangles))
-    out = np.empty(len(points))
-    for s in range(0, len(points), chunk):
-        p = points[s:s + chunk]
-        dist, idx = tree.query(p, k=k)
-        dist, idx = dist.reshape(len(p), k), idx.reshape(len(p), k)
-        pp = np.repeat(p, k, axis=0)
-        t = tri[idx.ravel()]
-        d = point_triangle_distance(pp, t[:, 0], t[:, 1], t[:, 2]).reshape(len(p), k).min(axis=1)
-        for i in np.flatnonzero(d > dist[:, -1] - radius):
-            cand = np.asarray(tree.query_ball_point(p[i], d[i] + radius), dtype=np.int64)
-            if len(cand):
-                t = tri[cand]
-                d[i] = min(d[i], point_triangle_distance(np.repeat(p[i:i + 1], len(cand), 0), t[:, 0], t[:, 1],
-                                                         t[:, 2]).min())
-        out[s:s + chunk] = d
-    return out
+    r = np.linalg.norm(tri - centroids[:, None, :], axis=2).max(axis=1)
+    group = np.floor(np.log2(np.maximum(r / r.max(), 2.0 ** -20)))
+    labels, sizes = np.unique(group, return_counts=True)
+    best = np.full(len(points), np.inf)
+    for label in labels[np.argsort(-sizes)]:  # the most triangles first: the best drops early
+        members = np.flatnonzero(group == label)
+        tree, radius, k = cKDTree(centroids[members]), float(r[members].max()), 16
+        todo = np.arange(len(points))
+        while len(todo):
+            k = min(k, len(members))
+            step = max(1, chunk * 16 // k)
+            for s in range(0, len(todo), step):
+                rows = todo[s:s + step]
+                dist, idx = tree.query(points[rows], k=k)
+                dist, idx = dist.reshape(len(rows), k), members[idx.reshape(len(rows), k)]
+                t = tri[idx.ravel()]
+                d = point_triangle_distance(np.repeat(points[rows], k, axis=0), t[:, 0], t[:, 1], t[:, 2])
+                best[rows] = np.minimum(best[rows], d.reshape(len(rows), k).min(axis=1))
+                done = (best[rows] <= dist[:, -1] - radius) | (k == len(members))
+                todo[s:s + len(rows)] = np.where(done, -1, rows)
+            todo = todo[todo >= 0]
+            k *= 4
+    return best
 
 
 def measure(points, cage_vertices, cage_faces, diag, scheme="loop"):
@@ -260,10 +266,20 @@ def run_mesh(spec, args, gfit, exe):
     diag = float(np.linalg.norm(v.max(0) - v.min(0)))
     n_cage = max(4, int(round(args.fraction * len(v))))
     t0 = time.perf_counter()
-    cage = sorpia.decimate(v, f, n_cage)
+    note = ""
+    try:
+        cage = sorpia.decimate(v, f, n_cage)
+    except sorpia.MeshError as exc:  # the guards stopped it: take the cage where it stopped, and say so
+        stopped = re.search(r"stopped at (\d+) vertices", str(exc))
+        if stopped is None:
+            raise
+        note = f"decimation to {n_cage:,} vertices stopped at {stopped.group(1)}: the cage has that many"
+        n_cage = int(stopped.group(1))
+        cage = sorpia.decimate(v, f, n_cage)
     t_decimate = time.perf_counter() - t0
     rows = []
-    out = {"mesh": name, "points": len(v), "cage_vertices": n_cage, "decimate_seconds": t_decimate, "rows": rows}
+    out = {"mesh": name, "points": len(v), "cage_vertices": n_cage, "decimate_seconds": t_decimate, "rows": rows,
+           "note": note}
     print(f"{name}: {len(v)} points, cage {n_cage} vertices ({t_decimate:.2f} s)", file=sys.stderr)
 
     def add(label, vertices, seconds, faces=cage.faces, scheme="loop", **extra):
@@ -287,9 +303,14 @@ def run_mesh(spec, args, gfit, exe):
             if args.check_rules:
                 out["rules_check"] = check_rules(exe, work, cage.vertices, cage.faces, diag)
     # The same rows of sorpia's on the Loop cage, then on the quad cage of as many vertices (Catmull-Clark).
-    quads = sorpia.decimate(v, f, n_cage, scheme="catmull-clark")
-    out["quad_cage_vertices"] = len(quads.vertices)
-    for scheme, c in (("loop", cage), ("catmull-clark", quads)):
+    cages = [("loop", cage)]
+    try:
+        cages.append(("catmull-clark", sorpia.decimate(v, f, n_cage, scheme="catmull-clark")))
+        out["quad_cage_vertices"] = len(cages[-1][1].vertices)
+    except sorpia.MeshError as exc:  # the guards stopped it: no Catmull-Clark rows, and the page says why
+        out["quad_cage_vertices"] = 0
+        out["note"] = "; ".join(x for x in (out["note"], f"no quad cage: {exc}") if x)
+    for scheme, c in cages:
         t0 = time.perf_counter()
         interp = sorpia.interpolate(c.vertices, c.faces, scheme=scheme)
         add("interpolation of the cage's vertices", interp.control_vertices, time.perf_counter() - t0, c.faces,
@@ -307,9 +328,11 @@ def run_mesh(spec, args, gfit, exe):
 def table(results, have_subdivfit):
     lines = []
     for r in results:
-        lines.append(f"### {r['mesh']}: {r['points']:,} points, cage of {r['cage_vertices']:,} vertices "
+        lines.append(f"## {r['mesh']}: {r['points']:,} points, cage of {r['cage_vertices']:,} vertices "
                      f"(decimated in {r['decimate_seconds']:.2f} s; the quad cage: "
-                     f"{r['quad_cage_vertices']:,} vertices)\n")
+                     f"{r['quad_cage_vertices'] or 'none'}{' vertices' if r['quad_cage_vertices'] else ''})\n")
+        if r["note"]:
+            lines.append(f"({r['note']}.)\n")
         lines.append("| fit | scheme | RMS / diagonal | max / diagonal | seconds "
                      "| on Subdivfit's own surface: RMS, max |")
         lines.append("|---|---|---|---|---|---|")
@@ -341,12 +364,15 @@ def main(argv=None):
                         help="skip the check of Subdivfit's Loop rules against OpenSubdiv's")
     parser.add_argument("--json", help="also write the results here")
     parser.add_argument("--no-page", action="store_true", help="do not write docs/benchmarks/approximate.md")
+    parser.add_argument("--from-json", metavar="PATH", help="the tables from an earlier --json, without running")
     args = parser.parse_args(argv)
     gfit = [int(k) for k in args.gfit.split(",") if k]
     exe = pathlib.Path(os.environ.get("SUBDIVFIT", DEFAULT_SUBDIVFIT))
     exe = exe if exe.exists() else None
     results = []
-    for spec in args.meshes.split(","):
+    if args.from_json:
+        results = json.loads(pathlib.Path(args.from_json).read_text())
+    for spec in [] if args.from_json else args.meshes.split(","):
         if not spec.startswith("noisy-") and not (SHARED / spec).exists() and not pathlib.Path(spec).exists():
             print(f"{spec}: not found, skipped", file=sys.stderr)
             continue

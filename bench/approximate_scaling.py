@@ -96,13 +96,17 @@ def main(argv=None):
     p.add_argument("--plot", help="where to draw the plot (default: beside the page; with --no-page, none)")
     p.add_argument("--json", metavar="PATH", help="also write the figures as JSON")
     p.add_argument("--no-page", action="store_true", help="print only; do not write the page")
+    p.add_argument("--from-json", metavar="PATH", help="rows measured earlier (a --json file), before the new ones")
     p.add_argument("--one", type=int, help=argparse.SUPPRESS)  # a child: one size, JSON on stdout
     a = p.parse_args(argv)
     if a.one:
         print(json.dumps(one(a.one, a.fraction)))
         return
     rows = []
-    for n in (int(s) for s in a.sizes.split(",")):
+    if a.from_json:
+        with open(a.from_json) as fh:
+            rows = json.load(fh)
+    for n in (int(s) for s in a.sizes.split(",") if s):
         out = subprocess.run([sys.executable, __file__, "--one", str(n), "--fraction", str(a.fraction)],
                              capture_output=True, text=True)
         if out.returncode != 0:

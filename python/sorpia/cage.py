@@ -17,6 +17,8 @@ from ._validate import as_faces, as_scheme, as_vertex_count, as_vertices
 class Cage(NamedTuple):
     """A control mesh made by `decimate`.
 
+    Attributes
+    ----------
     vertices : (n, 3) float64
     faces : (m, 3) int32 triangles (Loop) or (m, 4) int32 quads (Catmull-Clark)
     creases : ``(edges (k, 2) int32, sharpness (k,) float64)`` or None

@@ -43,8 +43,8 @@ struct DecimateOptions {
 /// most 5 fewer: one collapse removes 4 to 6 of them).
 ///
 /// Vertices no face references are left out (they count neither towards the
-/// mesh's vertices nor towards `n_vertices`). The result's vertices are
-/// numbered in the order of the input's that remain.
+/// mesh's vertices nor towards `n_vertices`). The result's vertices are input
+/// vertices, in the order OpenMesh's garbage collection leaves them.
 /// @param mesh       triangles (all_triangles() or every count 3), manifold and consistently oriented
 /// @param n_vertices the cage's vertices, at least 4 and at most the mesh's referenced vertices
 /// @throw MeshError  a face that is not a triangle, an index out of range, a

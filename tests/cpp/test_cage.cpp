@@ -1,0 +1,66 @@
+// sorpia::decimate and sorpia::quads_from_triangles through the C++ API: the
+// paths the Python layer does not take (faces with counts), the split's
+// geometry against closed forms, and the Catmull-Clark count.
+#include <gtest/gtest.h>
+
+#include <cstdint>
+#include <set>
+#include <utility>
+#include <vector>
+
+#include "expect_error.hpp"
+#include "sorpia/cage.hpp"
+#include "sorpia/errors.hpp"
+#include "sorpia/shapes.hpp"
+
+namespace {
+
+using sorpia_test::expect_error;
+
+TEST(Cage, OneTriangleSplitsIntoThreeQuadsAtItsCentroidAndMidpoints) {
+  sorpia::Mesh tri;
+  tri.vertices = {0, 0, 0, 3, 0, 0, 0, 3, 0};
+  tri.face_vertex_indices = {0, 1, 2};
+  const sorpia::Mesh q = sorpia::quads_from_triangles(tri);
+  ASSERT_EQ(q.n_faces(), 3u);
+  ASSERT_EQ(q.n_vertices(), 7u);  // 3 corners, 3 midpoints, 1 centroid
+  const auto p = [&](std::int32_t v) { return std::vector<double>(&q.vertices[3 * v], &q.vertices[3 * v + 3]); };
+  // Corner k's quad: (t[k], mid(t[k], t[k+1]), centroid, mid(t[k-1], t[k])), counter-clockwise as the triangle.
+  const std::vector<std::vector<double>> expected[3] = {
+      {{0, 0, 0}, {1.5, 0, 0}, {1, 1, 0}, {0, 1.5, 0}},
+      {{3, 0, 0}, {1.5, 1.5, 0}, {1, 1, 0}, {1.5, 0, 0}},
+      {{0, 3, 0}, {0, 1.5, 0}, {1, 1, 0}, {1.5, 1.5, 0}}};
+  for (int f = 0; f < 3; ++f)
+    for (int c = 0; c < 4; ++c) EXPECT_EQ(p(q.face_vertex_indices[4 * f + c]), expected[f][c]) << f << " " << c;
+}
+
+TEST(Cage, FacesGivenWithCountsOfThreeDecimateAsWithout) {
+  const sorpia::Mesh sphere = sorpia::icosphere(3);
+  sorpia::Mesh counted = sphere;
+  counted.face_vertex_counts.assign(sphere.n_faces(), 3);
+  const sorpia::Mesh a = sorpia::decimate(sphere, 100), b = sorpia::decimate(counted, 100);
+  EXPECT_EQ(a.n_vertices(), 100u);
+  EXPECT_EQ(a.vertices, b.vertices);
+  EXPECT_EQ(a.face_vertex_indices, b.face_vertex_indices);
+  counted.face_vertex_counts[7] = 4;
+  counted.face_vertex_counts[8] = 2;
+  expect_error<sorpia::MeshError>([&] { sorpia::decimate(counted, 100); }, {"face 7 has 4 corners", "triangulate"});
+}
+
+TEST(Cage, CatmullClarkCountIsTheQuadCagesWithinFive) {
+  const sorpia::Mesh sphere = sorpia::icosphere(3);  // 642 vertices, 1920 edges, 1280 faces
+  sorpia::DecimateOptions options;
+  options.scheme = sorpia::Scheme::CatmullClark;
+  for (std::size_t n : {3842u, 1000u, 301u}) {
+    const sorpia::Mesh q = sorpia::decimate(sphere, n, options);
+    EXPECT_LE(q.n_vertices(), n);
+    EXPECT_GE(q.n_vertices() + 5, n);
+    EXPECT_EQ(q.counts(), std::vector<std::int32_t>(q.n_faces(), 4));
+  }
+  expect_error<sorpia::MeshError>([&] { sorpia::decimate(sphere, 3843, options); },
+                                  {"3843 vertices asked", "3842 vertices as quads"});
+  options.max_normal_deviation = 0;
+  expect_error<sorpia::ParameterError>([&] { sorpia::decimate(sphere, 100, options); }, {"max_normal_deviation"});
+}
+
+}  // namespace
