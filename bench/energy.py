@@ -13,10 +13,11 @@ assembly time.
    lambda > 1/2. The same under Loop.
 3. Assembly time against mesh size (medians of --repeat runs), both schemes,
    the default rule: irregular meshes, the same refined once (the fine mesh of
-   fair interpolation), and a regular quad torus.
+   fair interpolation), and a regular quad torus; element matrices shared
+   between faces of one local topology against every face on its own.
 Writes docs/benchmarks/energy.md (unless --no-page).
 
-    python bench/energy.py [--sizes 2000,10000] [--repeat 3] [--no-page]
+    python bench/energy.py [--sizes 2000,10000] [--repeat 3] [--alone-up-to N] [--times-only] [--no-page]
 """
 
 from __future__ import annotations
@@ -157,35 +158,50 @@ def ring_table():
     return "\n".join(lines) + "\n"
 
 
-def assembly_times(sizes, repeat):
+def _median_seconds(fn, repeat):
+    times = []
+    for _ in range(repeat):
+        t = time.perf_counter()
+        out = fn()
+        times.append(time.perf_counter() - t)
+    return float(np.median(times)), out
+
+
+def _matrix_seconds(faces, n, scheme, repeat, reuse):
+    """Median seconds of the default rule from faces to CSR arrays, with element matrices shared between faces of
+    one local topology (reuse, the default) or every face integrated on its own; and K's entry count."""
+    from sorpia.energy import _core, _core_surface
+
+    def build():
+        surface, _ = _core_surface(faces, n, scheme, "edge-and-corner", None, None, None)
+        return _core.fairness_matrix(surface, 1.0, 0.0, 4, 4, reuse=reuse)
+    s, (data, _, _) = _median_seconds(build, repeat)
+    return s, len(data)
+
+
+def assembly_times(sizes, repeat, alone_up_to):
     """Generated irregular meshes of each size (most vertices extraordinary), and the same refined once by their
-    scheme (extraordinary vertices only at the original vertices: the fine mesh fair interpolation builds K on)."""
-    lines = ["| mesh | vertices | faces | nnz(K) | seconds (median) | microseconds per face |",
-             "|---|---|---|---|---|---|"]
+    scheme (extraordinary vertices only at the original vertices: the fine mesh fair interpolation builds K on),
+    and a regular quad torus: shared element matrices against every face on its own (the latter only up to
+    `alone_up_to` vertices, once)."""
+    lines = ["| mesh | vertices | faces | nnz(K) | seconds, shared (median) | seconds, face by face | speed-up | "
+             "microseconds per face, shared |", "|---|---|---|---|---|---|---|---|"]
+    meshes = []
     for n in sizes:
         for name, (v, f), scheme in [("quad_irregular", sorpia.shapes.quad_irregular(n, 1), "catmull-clark"),
                                      ("irregular", sorpia.shapes.irregular(n, 1), "loop")]:
             fine = sorpia.LimitSurface(v, f, scheme=scheme).tessellate(1)
-            for label, (mv, mf) in [(name, (v, f)), (f"{name} refined once", fine)]:
-                times = []
-                for _ in range(repeat):
-                    t = time.perf_counter()
-                    k = sorpia.fairness_matrix(mf, len(mv), scheme=scheme)
-                    times.append(time.perf_counter() - t)
-                s = float(np.median(times))
-                lines.append(f"| {label} ({scheme}) | {len(mv)} | {len(mf)} | {k.nnz} | {s:.2f} | "
-                             f"{1e6 * s / len(mf):.0f} |")
-                print(lines[-1], flush=True)
-    (v, f) = sorpia.shapes.quad_torus(200, 200)
-    times = []
-    for _ in range(repeat):
-        t = time.perf_counter()
-        k = sorpia.fairness_matrix(f, len(v), scheme="catmull-clark")
-        times.append(time.perf_counter() - t)
-    s = float(np.median(times))
-    lines.append(f"| quad_torus 200x200, regular (catmull-clark) | {len(v)} | {len(f)} | {k.nnz} | {s:.2f} | "
-                 f"{1e6 * s / len(f):.0f} |")
-    print(lines[-1], flush=True)
+            meshes += [(f"{name} {n} ({scheme})", v, f, scheme),
+                       (f"{name} {n} refined once ({scheme})", *fine, scheme)]
+    meshes.append(("quad_torus 200x200, regular (catmull-clark)", *sorpia.shapes.quad_torus(200, 200),
+                   "catmull-clark"))
+    for label, v, f, scheme in meshes:
+        shared, nnz = _matrix_seconds(f, len(v), scheme, repeat, True)
+        alone = _matrix_seconds(f, len(v), scheme, 1, False)[0] if len(v) <= alone_up_to else None
+        lines.append(f"| {label} | {len(v)} | {len(f)} | {nnz} | {shared:.3f} | "
+                     + (f"{alone:.2f} | {alone / shared:.0f} | " if alone is not None else "- | - | ")
+                     + f"{1e6 * shared / len(f):.1f} |")
+        print(lines[-1], flush=True)
     return "\n".join(lines) + "\n"
 
 
@@ -193,20 +209,27 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--sizes", default="2000,10000")
     parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument("--alone-up-to", type=int, default=200000,
+                        help="time the face-by-face assembly (once) on meshes of at most this many vertices")
+    parser.add_argument("--times-only", action="store_true", help="only the assembly times (implies --no-page)")
     parser.add_argument("--no-page", action="store_true")
     args = parser.parse_args()
     sizes = [int(s) for s in args.sizes.split(",") if s]
+    if args.times_only:
+        assembly_times(sizes, args.repeat, args.alone_up_to)
+        return
     errors = quadrature_errors()
     rings = ring_table()
     loop_rings = loop_ring_table()
-    times = assembly_times(sizes, args.repeat)
+    times = assembly_times(sizes, args.repeat, args.alone_up_to)
     body = (f"## Quadrature error\n\n{errors}\n"
             f"## Rings at an extraordinary vertex (Catmull-Clark)\n\nThin-plate energy of Bfr's polynomial rings "
             f"at the centre of `shapes.pole(n)` refined once by Catmull-Clark, ring l the three squares of side 2^-l next to the corner piece:\n\n{rings}\n"
             f"## Rings at an extraordinary vertex (Loop)\n\nThe same at the centre of `shapes.pole(n)` under Loop, ring l "
             f"the three triangles of the corner triangle of level l - 1 other than its corner:\n\n{loop_rings}\n"
-            f"## Assembly time\n\nThe default rule (4 x 4 points, depth 4), `sorpia.fairness_matrix` from faces to "
-            f"scipy matrix:\n\n{times}")
+            f"## Assembly time\n\nThe default rule (4 x 4 points, depth 4), thin plate, from faces to CSR arrays; "
+            f"element matrices shared between faces of one local topology (the default) against every face "
+            f"integrated on its own (FairnessQuadrature::reuse = false):\n\n{times}")
     if not args.no_page:
         write_page("energy", "Fairness matrix: quadrature error and assembly time", body, settings=(parser, args))
 

@@ -43,16 +43,19 @@ sorpia::CsrMatrix csr_from(const Doubles& data, const Indices& indices, const In
 void bind_fit(py::module_& m) {
   m.def(
       "fairness_matrix",
-      [](const sorpia::LimitSurface& surface, double thin_plate, double membrane, int gauss_points, int depth) {
+      [](const sorpia::LimitSurface& surface, double thin_plate, double membrane, int gauss_points, int depth,
+         bool reuse) {
         sorpia::CsrMatrix k;
         {
           LongCall call;
-          k = sorpia::fairness_matrix(surface, thin_plate, membrane, sorpia::FairnessQuadrature{gauss_points, depth});
+          k = sorpia::fairness_matrix(surface, thin_plate, membrane,
+                                     sorpia::FairnessQuadrature{gauss_points, depth, reuse});
         }
         return csr_tuple(std::move(k));
       },
-      "surface"_a, "thin_plate"_a, "membrane"_a, "gauss_points"_a, "depth"_a,
-      "Fairness matrix K (thin-plate and membrane energy) as CSR arrays (data, indices, indptr).");
+      "surface"_a, "thin_plate"_a, "membrane"_a, "gauss_points"_a, "depth"_a, "reuse"_a = true,
+      "Fairness matrix K (thin-plate and membrane energy) as CSR arrays (data, indices, indptr); reuse=False\n"
+      "integrates every face on its own (FairnessQuadrature::reuse).");
   m.def(
       "refine_uniform",
       [](const sorpia::Topology& topology, const sorpia::Rules& rules, int levels) {

@@ -32,6 +32,12 @@ splines). Only the last corner piece (Bfr's Gregory patch, within 2^-4 of an
 extraordinary corner) is integrated approximately: ``bench/energy.py``
 measures the error against much finer rules (about 1e-4 relative under
 Catmull-Clark and 5e-3 under Loop on irregular meshes, at the defaults).
+A face's energy, as a quadratic form over its control points, depends only on
+its local topology: faces that agree in it (size, valences and boundary
+places of the corners) share one element matrix, computed once, so a once
+refined mesh (a few extraordinary vertices among regular ones) costs little
+more than gathering the matrix; faces near tags, holes or n-gons are
+integrated on their own.
 
 Near an extraordinary vertex whose subdominant eigenvalue lambda exceeds 1/2
 (Catmull-Clark valence 5 and more, Loop 7 and more) the parametric thin-plate

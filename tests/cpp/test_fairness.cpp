@@ -1,10 +1,14 @@
 // fairness_matrix (cpp/fit): options refused with their names; K symmetric
 // with the constants in its null space; the regular quad torus's diagonal
-// against the bicubic B-spline's closed form.
+// against the bicubic B-spline's closed form; K with shared element matrices
+// equal to K integrated face by face.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <numeric>
+#include <string>
 #include <vector>
 
 #include "expect_error.hpp"
@@ -85,6 +89,98 @@ TEST(FairnessMatrix, RegularTorusDiagonalIsTheBicubicClosedForm) {
   const auto s = quad_surface(sorpia::quad_torus(8, 7));
   const CsrMatrix k = sorpia::fairness_matrix(s, 1.0, 0.0);
   for (std::size_t i = 0; i < k.n_rows; ++i) EXPECT_NEAR(entry(k, i, i), expected, 1e-12 * expected) << "vertex " << i;
+}
+
+// `m` without the faces in `drop` (which share no vertex, so that every new
+// boundary is a manifold loop): boundaries inside an irregular mesh.
+sorpia::Mesh without_faces(const sorpia::Mesh& m, const std::vector<std::size_t>& drop) {
+  sorpia::Mesh out = m;
+  out.face_vertex_indices.clear();
+  out.face_vertex_counts.clear();
+  const std::vector<std::int32_t> counts = m.counts();
+  std::size_t at = 0;
+  for (std::size_t f = 0; f < m.n_faces(); ++f) {
+    const auto k = static_cast<std::size_t>(counts[f]);
+    if (std::find(drop.begin(), drop.end(), f) == drop.end()) {
+      out.face_vertex_indices.insert(out.face_vertex_indices.end(),
+                                     m.face_vertex_indices.begin() + static_cast<std::ptrdiff_t>(at),
+                                     m.face_vertex_indices.begin() + static_cast<std::ptrdiff_t>(at + k));
+      if (!m.uniform()) out.face_vertex_counts.push_back(counts[f]);
+    }
+    at += k;
+  }
+  return out;
+}
+
+// The largest difference of two matrices' entries over the largest entry.
+double relative_difference(const CsrMatrix& a, const CsrMatrix& b) {
+  double diff = 0.0, scale = 0.0;
+  for (const CsrMatrix* x : {&a, &b})
+    for (std::size_t i = 0; i < x->n_rows; ++i)
+      for (auto p = static_cast<std::size_t>(x->indptr[i]); p < static_cast<std::size_t>(x->indptr[i + 1]); ++p) {
+        const auto j = static_cast<std::size_t>(x->indices[p]);
+        scale = std::max(scale, std::abs(x->data[p]));
+        diff = std::max(diff, std::abs(entry(a, i, j) - entry(b, i, j)));
+      }
+  return diff / scale;
+}
+
+TEST(FairnessMatrix, SharedElementMatricesGiveTheFaceByFaceMatrix) {
+  // Faces of one local topology share one element matrix (reuse = true); the
+  // reference integrates every face on its own. Meshes with many
+  // configurations: extraordinary vertices inside and on boundaries (dropped
+  // faces), grids' boundary corners, n-gons (their neighbours integrated on
+  // their own), once-refined meshes (mostly shared), creases, a corner and a
+  // hole (faces touching them integrated on their own). The same integrals
+  // summed in another order: 1e-12 of the largest entry.
+  struct Case {
+    std::string name;
+    sorpia::Mesh mesh;
+    sorpia::Scheme scheme;
+    sorpia::Tags tags;
+  };
+  // An infinitely sharp and a semi-sharp crease along two edges of face 5, a
+  // corner at a vertex of face 60, face 30 a hole.
+  auto tagged = [](const sorpia::Mesh& m) {
+    const std::vector<std::int32_t> counts = m.counts();
+    auto first = [&](std::size_t f) {
+      return m.face_vertex_indices.data() + std::accumulate(counts.begin(), counts.begin() + f, std::size_t{0});
+    };
+    const std::int32_t* f5 = first(5);
+    sorpia::Tags t;
+    t.crease_vertices = {f5[0], f5[1], f5[1], f5[2]};
+    t.crease_sharpness = {sorpia::kInfiniteSharpness, 1.5};
+    t.corner_vertices = {*first(60)};
+    t.corner_sharpness = {2.0};
+    t.holes = {30};
+    return t;
+  };
+  const auto loop = sorpia::Scheme::Loop;
+  const auto cc = sorpia::Scheme::CatmullClark;
+  std::vector<Case> cases = {
+      {"loop irregular, boundaries", without_faces(sorpia::irregular(150, 3), {0, 50, 100}), loop, {}},
+      {"loop grid", sorpia::grid(5, 4), loop, {}},
+      {"loop irregular, tags", sorpia::irregular(150, 3), loop, tagged(sorpia::irregular(150, 3))},
+      {"cc irregular, boundaries", without_faces(sorpia::quad_irregular(150, 3), {0, 50, 100}), cc, {}},
+      {"cc grid", sorpia::quad_grid(5, 4), cc, {}},
+      {"cc polygons, boundary", without_faces(sorpia::polygon_torus(7, 6), {0, 20}), cc, {}},
+      {"cc irregular, tags", sorpia::quad_irregular(150, 3), cc, tagged(sorpia::quad_irregular(150, 3))},
+  };
+  for (std::size_t c = 0; c < 2; ++c) {  // once refined: a few configurations, many faces each
+    const sorpia::Topology topo(cases[3 * c].mesh);
+    sorpia::LimitSurface s(topo, cases[3 * c].mesh.vertices.data(), cases[3 * c].scheme,
+                           sorpia::Boundary::EdgeAndCorner);
+    cases.push_back({cases[3 * c].name + ", refined once", s.tessellate(1), cases[3 * c].scheme, {}});
+  }
+  for (const Case& c : cases) {
+    const sorpia::Topology topo(c.mesh);
+    const sorpia::LimitSurface s(topo, c.mesh.vertices.data(), c.scheme, sorpia::Boundary::EdgeAndCorner, c.tags);
+    sorpia::FairnessQuadrature alone;
+    alone.reuse = false;
+    const CsrMatrix shared = sorpia::fairness_matrix(s, 1.0, 0.5);
+    const CsrMatrix reference = sorpia::fairness_matrix(s, 1.0, 0.5, alone);
+    EXPECT_LE(relative_difference(shared, reference), 1e-12) << c.name;
+  }
 }
 
 }  // namespace

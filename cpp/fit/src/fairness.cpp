@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <map>
 #include <string>
 #include <unordered_set>
 #include <utility>
@@ -430,6 +431,89 @@ std::vector<Term> energy_terms(Scheme scheme, double thin_plate, double membrane
   return terms;
 }
 
+// The faces that share element matrices (FairnessQuadrature::reuse): faces
+// of one class have the same local topology, so the same element matrix over
+// their control points in Bfr's order.
+struct SharedElements {
+  FaceControlPoints cps;                    // of the non-hole faces, in face order
+  std::vector<std::int64_t> slot;           // per face, its place in cps; -1 for a hole
+  std::vector<std::int32_t> face_class;     // per face, its class; -1 when integrated on its own
+  std::vector<std::int32_t> representative;  // per class, the face integrated for it
+  std::vector<std::vector<double>> element;  // per class, n_cv x n_cv over the control points
+
+  bool reused(std::size_t f) const { return !face_class.empty() && face_class[f] >= 0; }
+  const std::int32_t* control_points(std::size_t f) const {
+    return cps.indices.data() + cps.offsets[static_cast<std::size_t>(slot[f])];
+  }
+  std::size_t n_control_points(std::size_t f) const {
+    const auto s = static_cast<std::size_t>(slot[f]);
+    return static_cast<std::size_t>(cps.offsets[s + 1] - cps.offsets[s]);
+  }
+};
+
+// The classes of faces by local topology. The key: the number of control
+// points, Bfr's IsRegular(), the face's size, and per corner (from corner 0)
+// its valence, whether it is on the boundary and, there, the place of the
+// next corner in its ring (where the face lies in the fan; inside, Bfr lists
+// the control points from the face, so the place does not matter). Faces whose
+// control points touch a tag, a hole or a face of irregular size (their
+// surface depends on more than the key says), or repeat a vertex (no one-to-one
+// map of the representative's matrix), are left out.
+SharedElements shared_elements(const LimitSurface& surface, const std::vector<std::uint8_t>& hole) {
+  const Topology& t = surface.topology();
+  const Tags& tags = surface.tags();
+  const std::int32_t regular_size = surface.scheme() == Scheme::Loop ? 3 : 4;
+  const auto& fi = t.face_indices();
+  std::vector<std::uint8_t> special(t.n_vertices(), 0);
+  for (std::size_t f = 0; f < t.n_faces(); ++f)
+    if (hole[f] || t.face_size(f) != regular_size)
+      for (std::int32_t i = 0; i < t.face_size(f); ++i) special[static_cast<std::size_t>(fi[t.face_offset(f) + i])] = 1;
+  for (const std::int32_t v : tags.corner_vertices) special[static_cast<std::size_t>(v)] = 1;
+  for (const std::int32_t v : tags.crease_vertices) special[static_cast<std::size_t>(v)] = 1;
+
+  SharedElements s;
+  std::vector<std::int32_t> live;
+  s.slot.assign(t.n_faces(), -1);
+  for (std::size_t f = 0; f < t.n_faces(); ++f)
+    if (!hole[f]) {
+      s.slot[f] = static_cast<std::int64_t>(live.size());
+      live.push_back(static_cast<std::int32_t>(f));
+    }
+  s.cps = surface.control_points(live.data(), live.size());
+  s.face_class.assign(t.n_faces(), -1);
+  const auto& ro = t.ring_offsets();
+  const auto& rn = t.ring_neighbors();
+  std::map<std::vector<std::int32_t>, std::int32_t> classes;
+  std::vector<std::int32_t> key, sorted;
+  for (const std::int32_t f : live) {
+    const auto uf = static_cast<std::size_t>(f);
+    const std::int32_t* cv = s.control_points(uf);
+    const std::size_t n_cv = s.n_control_points(uf);
+    if (std::any_of(cv, cv + n_cv, [&](std::int32_t v) { return special[static_cast<std::size_t>(v)] != 0; }))
+      continue;
+    sorted.assign(cv, cv + n_cv);
+    std::sort(sorted.begin(), sorted.end());
+    if (std::adjacent_find(sorted.begin(), sorted.end()) != sorted.end()) continue;
+    const std::int32_t k = t.face_size(uf);
+    const std::int32_t* vs = fi.data() + t.face_offset(uf);
+    key.assign({static_cast<std::int32_t>(n_cv), s.cps.regular[static_cast<std::size_t>(s.slot[uf])], k});
+    for (std::int32_t i = 0; i < k; ++i) {
+      const auto v = static_cast<std::size_t>(vs[i]);
+      const bool boundary = t.is_boundary(v);
+      std::int32_t place = -1;
+      if (boundary)
+        place = static_cast<std::int32_t>(std::find(rn.begin() + ro[v], rn.begin() + ro[v + 1], vs[(i + 1) % k]) -
+                                          (rn.begin() + ro[v]));
+      key.insert(key.end(), {t.valence(v), boundary ? 1 : 0, place});
+    }
+    const auto it = classes.emplace(key, static_cast<std::int32_t>(s.representative.size())).first;
+    if (it->second == static_cast<std::int32_t>(s.representative.size())) s.representative.push_back(f);
+    s.face_class[uf] = it->second;
+  }
+  s.element.resize(s.representative.size());
+  return s;
+}
+
 using Entry = std::pair<std::uint64_t, double>;  // (row << 32 | column, value), row <= column
 
 // Sorts entries by (row, column) and adds up repeated ones, in place.
@@ -479,9 +563,10 @@ void add_outer(double s, const double* a, std::size_t n, double* e) {
   }
 }
 
-// A face's element matrix from the rows of its pieces' points, added to
-// w.chunk (upper triangle, global indices).
-void add_element(const SurfaceRows& rows, const double* weights, const Piece* pieces, std::size_t n_pieces,
+// A face's element matrix from the rows of its pieces' points: w.e (upper
+// triangle, row-major) over the sorted global columns w.cols, w.local their
+// places (emit_element or local_element clear them).
+void element_matrix(const SurfaceRows& rows, const double* weights, const Piece* pieces, std::size_t n_pieces,
                  const ElementRules& er, Worker& w) {
   const CsrMatrix* d[6] = {&rows.position, &rows.du, &rows.dv, &rows.duu, &rows.duv, &rows.dvv};
   const std::size_t r0 = pieces[0].first, r1 = pieces[n_pieces - 1].first + pieces[n_pieces - 1].count;
@@ -546,12 +631,96 @@ void add_element(const SurfaceRows& rows, const double* weights, const Piece* pi
       }
     }
   }
+}
+
+// Adds the element matrix of element_matrix (w.e over w.cols) to w.chunk
+// (upper triangle, global indices) and clears w.local.
+void emit_element(Worker& w) {
+  const std::size_t n = w.cols.size();
   for (std::size_t i = 0; i < n; ++i) {
     const auto ri = static_cast<std::uint64_t>(static_cast<std::uint32_t>(w.cols[i])) << 32;
     for (std::size_t j = i; j < n; ++j)
       w.chunk.emplace_back(ri | static_cast<std::uint32_t>(w.cols[j]), w.e[i * n + j]);
     w.local[static_cast<std::size_t>(w.cols[i])] = -1;
   }
+}
+
+// The element matrix of element_matrix (w.e over w.cols) as the full
+// symmetric n_cv x n_cv matrix over the face's control points `cv` (distinct,
+// in Bfr's order), written to `out`; clears w.local.
+void local_element(Worker& w, const std::int32_t* cv, std::size_t n_cv, std::vector<double>& out) {
+  const std::size_t n = w.cols.size();
+  out.assign(n_cv * n_cv, 0.0);
+  for (std::size_t i = 0; i < n_cv; ++i) {
+    const std::int32_t a = w.local[static_cast<std::size_t>(cv[i])];
+    if (a < 0) continue;  // no weight at any point: a zero row
+    for (std::size_t j = 0; j < n_cv; ++j) {
+      const std::int32_t b = w.local[static_cast<std::size_t>(cv[j])];
+      if (b < 0) continue;
+      const auto lo = static_cast<std::size_t>(std::min(a, b)), hi = static_cast<std::size_t>(std::max(a, b));
+      out[i * n_cv + j] = w.e[lo * n + hi];
+    }
+  }
+  for (const std::int32_t c : w.cols) w.local[static_cast<std::size_t>(c)] = -1;
+}
+
+// Adds the faces that share element matrices to the workers' merged upper
+// triangles, row by row (threads take ranges of rows): row r gathers, from
+// every shared face with r among its control points, the entries of r's row of
+// the face's matrix in the columns >= r. No sort of all entries: each row's
+// few columns are sorted on their own.
+void add_shared(const SharedElements& shared, int n_threads, std::vector<Worker>& workers) {
+  const std::size_t n_vertices = workers.front().local.size();
+  std::vector<std::int32_t> faces;  // the shared faces
+  for (std::size_t f = 0; f < shared.face_class.size(); ++f)
+    if (shared.reused(f)) faces.push_back(static_cast<std::int32_t>(f));
+  // Per vertex, its incidences (face, place among the face's control points).
+  std::vector<std::int64_t> start(n_vertices + 1, 0);
+  for (const std::int32_t f : faces) {
+    const std::int32_t* cv = shared.control_points(static_cast<std::size_t>(f));
+    for (std::size_t i = 0; i < shared.n_control_points(static_cast<std::size_t>(f)); ++i)
+      ++start[static_cast<std::size_t>(cv[i]) + 1];
+  }
+  for (std::size_t v = 0; v < n_vertices; ++v) start[v + 1] += start[v];
+  std::vector<std::pair<std::int32_t, std::int32_t>> incidence(static_cast<std::size_t>(start[n_vertices]));
+  {
+    std::vector<std::int64_t> cursor(start.begin(), start.end() - 1);
+    for (const std::int32_t f : faces) {
+      const std::int32_t* cv = shared.control_points(static_cast<std::size_t>(f));
+      for (std::size_t i = 0; i < shared.n_control_points(static_cast<std::size_t>(f)); ++i)
+        incidence[static_cast<std::size_t>(cursor[static_cast<std::size_t>(cv[i])]++)] = {f, static_cast<std::int32_t>(i)};
+    }
+  }
+  detail::for_each_task(n_threads > 1, n_threads, [&](int t) {
+    Worker& w = workers[static_cast<std::size_t>(t)];
+    const auto nt = static_cast<std::size_t>(n_threads), ut = static_cast<std::size_t>(t);
+    std::vector<std::pair<std::int32_t, double>> row;
+    for (std::size_t r = n_vertices * ut / nt; r < n_vertices * (ut + 1) / nt; ++r) {
+      row.clear();
+      for (auto p = static_cast<std::size_t>(start[r]); p < static_cast<std::size_t>(start[r + 1]); ++p) {
+        const auto f = static_cast<std::size_t>(incidence[p].first);
+        const auto i = static_cast<std::size_t>(incidence[p].second);
+        const std::int32_t* cv = shared.control_points(f);
+        const std::size_t n_cv = shared.n_control_points(f);
+        const double* e = shared.element[static_cast<std::size_t>(shared.face_class[f])].data() + i * n_cv;
+        for (std::size_t j = 0; j < n_cv; ++j) {
+          const auto c = static_cast<std::size_t>(cv[j]);
+          if (c < r) continue;
+          if (w.local[c] < 0) {
+            w.local[c] = static_cast<std::int32_t>(row.size());
+            row.emplace_back(cv[j], 0.0);
+          }
+          row[static_cast<std::size_t>(w.local[c])].second += e[j];
+        }
+      }
+      std::sort(row.begin(), row.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+      const auto ri = static_cast<std::uint64_t>(r) << 32;
+      for (const auto& [c, x] : row) {
+        w.merged.emplace_back(ri | static_cast<std::uint32_t>(c), x);
+        w.local[static_cast<std::size_t>(c)] = -1;
+      }
+    }
+  });
 }
 
 // The symmetric CSR matrix of the merged upper triangles.
@@ -654,28 +823,38 @@ CsrMatrix fairness_matrix(const LimitSurface& surface, double thin_plate, double
 
   const ExactForms exact;
   const ElementRules er{terms, exact, thin_plate, membrane};
+  SharedElements shared = quadrature.reuse ? shared_elements(surface, hole) : SharedElements{};
+  // The faces integrated here: those that share no element matrix and each
+  // class's representative.
+  std::vector<std::int32_t> direct;
+  for (std::size_t f = 0; f < n_faces; ++f)
+    if (!hole[f] && (!shared.reused(f) || shared.representative[static_cast<std::size_t>(shared.face_class[f])] ==
+                                              static_cast<std::int32_t>(f)))
+      direct.push_back(static_cast<std::int32_t>(f));
   std::vector<std::int32_t> point_faces;
   std::vector<std::size_t> face_first;  // per chunk face, its first piece; one past the end last
+  std::vector<std::int32_t> chunk_faces;
   std::vector<Piece> chunk_pieces;
   std::vector<double> uvw, uv, weights;
   Marks marks;
-  std::size_t f = 0;
-  while (f < n_faces) {
+  std::size_t d = 0;
+  while (d < direct.size()) {
     poll_interrupt();
     face_first.clear();
+    chunk_faces.clear();
     chunk_pieces.clear();
     uvw.clear();
     point_faces.clear();
-    for (; f < n_faces && uvw.size() < 3 * kChunkPoints; ++f) {
-      if (hole[f]) continue;
+    for (; d < direct.size() && uvw.size() < 3 * kChunkPoints; ++d) {
+      const auto f = static_cast<std::size_t>(direct[d]);
       face_first.push_back(chunk_pieces.size());
+      chunk_faces.push_back(direct[d]);
       face_pieces(topo, scheme, irr, pieces, f, marks, chunk_pieces, uvw);
-      point_faces.resize(uvw.size() / 3, static_cast<std::int32_t>(f));
+      point_faces.resize(uvw.size() / 3, direct[d]);
     }
     const std::size_t k = uvw.size() / 3;
     const std::size_t n_chunk = face_first.size();
     face_first.push_back(chunk_pieces.size());
-    if (n_chunk == 0) continue;
     uv.resize(2 * k);
     weights.resize(k);
     for (std::size_t p = 0; p < k; ++p) {
@@ -688,13 +867,22 @@ CsrMatrix fairness_matrix(const LimitSurface& surface, double thin_plate, double
       Worker& w = workers[static_cast<std::size_t>(t)];
       const auto nt = static_cast<std::size_t>(n_threads), ut = static_cast<std::size_t>(t);
       w.chunk.clear();
-      for (std::size_t c = n_chunk * ut / nt; c < n_chunk * (ut + 1) / nt; ++c)
-        add_element(rows, weights.data(), chunk_pieces.data() + face_first[c], face_first[c + 1] - face_first[c], er,
-                    w);
+      for (std::size_t c = n_chunk * ut / nt; c < n_chunk * (ut + 1) / nt; ++c) {
+        element_matrix(rows, weights.data(), chunk_pieces.data() + face_first[c], face_first[c + 1] - face_first[c],
+                       er, w);
+        const auto f = static_cast<std::size_t>(chunk_faces[c]);
+        if (shared.reused(f))
+          local_element(w, shared.control_points(f), shared.n_control_points(f),
+                        shared.element[static_cast<std::size_t>(shared.face_class[f])]);
+        else
+          emit_element(w);
+      }
       merge_entries(w.chunk);
       w.merged.insert(w.merged.end(), w.chunk.begin(), w.chunk.end());
     });
   }
+  // Every face of a class (its representative too) from the class's matrix.
+  if (quadrature.reuse) add_shared(shared, n_threads, workers);
   for (Worker& w : workers) {
     std::vector<Entry>().swap(w.chunk);
     std::vector<std::int32_t>().swap(w.local);

@@ -594,6 +594,38 @@ SurfaceRows LimitSurface::rows(const std::int32_t* face_ids, const double* uv, s
   return out;
 }
 
+FaceControlPoints LimitSurface::control_points(const std::int32_t* face_ids, std::size_t k) const {
+  // The corner (0, 0) lies in every face's domain: the checks are evaluate()'s.
+  const std::vector<double> corner(2 * k, 0.0);
+  (void)checked_params(face_ids, corner.data(), k);
+  const std::vector<std::int32_t>& from_osd = impl_->base.from_osd;
+  std::vector<std::vector<std::int32_t>> per_point(k);
+  FaceControlPoints out;
+  out.regular.assign(k, 0);
+  {
+    const std::shared_lock<std::shared_mutex> lock(impl_->mutex);
+    for_each_face_surface(
+        *impl_->factory, face_ids, k,
+        [&](const Bfr::Surface<double>& surface, int, const std::size_t* first, const std::size_t* last) {
+          thread_local std::vector<int> cv;
+          cv.resize(static_cast<std::size_t>(surface.GetNumControlPoints()));
+          surface.GetControlPointIndices(cv.data());
+          for (const std::size_t* i = first; i != last; ++i) {
+            per_point[*i].resize(cv.size());
+            for (std::size_t c = 0; c < cv.size(); ++c) per_point[*i][c] = from_osd[static_cast<std::size_t>(cv[c])];
+            out.regular[*i] = static_cast<std::uint8_t>(surface.IsRegular());
+          }
+        });
+  }
+  out.offsets.assign(k + 1, 0);
+  for (std::size_t i = 0; i < k; ++i)
+    out.offsets[i + 1] = out.offsets[i] + static_cast<std::int64_t>(per_point[i].size());
+  out.indices.resize(static_cast<std::size_t>(out.offsets[k]));
+  for (std::size_t i = 0; i < k; ++i)
+    std::copy(per_point[i].begin(), per_point[i].end(), out.indices.begin() + out.offsets[i]);
+  return out;
+}
+
 // The output loops of tessellate() poll for an interrupt once per this many rows.
 constexpr std::size_t kRowsPerPoll = std::size_t{1} << 16;
 

@@ -25,6 +25,17 @@ struct FairnessQuadrature {
   /// Bfr builds before its Gregory patch at such a corner (surface.hpp), so
   /// every ring but that last corner piece is integrated exactly. 0..12.
   int depth = 4;
+  /// Reuse element matrices: the energy of a face as a quadratic form over
+  /// its control points (in Bfr's order) depends only on the face's local
+  /// topology, so faces that agree in it (the face's size and Bfr's
+  /// IsRegular(), the number of its control points, and per corner its
+  /// valence, whether it is on the boundary and, there, where the face lies
+  /// in its fan) share one, computed once. Faces whose control points touch a
+  /// tag, a hole or a face of another size than the scheme's (triangles for
+  /// Loop, quads for Catmull-Clark), or list a vertex twice, are integrated
+  /// on their own. false integrates every face on its own: the same K to
+  /// rounding, much slower (what the tests compare against).
+  bool reuse = true;
 };
 
 /// The fairness matrix K (n_vertices x n_vertices, symmetric, positive
@@ -44,8 +55,8 @@ struct FairnessQuadrature {
 /// depend on which corner a triangle lists first.
 ///
 /// Assembled from the derivative rows of LimitSurface::rows (Bfr's stencils),
-/// one dense element matrix per face, merged per row; threads from the
-/// core's pool. Each face's domain is split `depth` times towards its marks;
+/// one dense element matrix per face (one per local topology with
+/// FairnessQuadrature::reuse), merged per row; threads from the core's pool. Each face's domain is split `depth` times towards its marks;
 /// a Catmull-Clark piece away from them (down to Bfr's isolation level 4) is
 /// a bicubic B-spline piece, integrated in closed form from the derivative
 /// rows at 2 x 2 points; every other piece (Loop's, those at the marks) by

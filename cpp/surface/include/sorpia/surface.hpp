@@ -43,6 +43,14 @@ struct SurfaceRows {
   CsrMatrix position, du, dv, duu, duv, dvv;
 };
 
+/// The control points of k faces (LimitSurface::control_points): face i's
+/// are indices[offsets[i] .. offsets[i + 1]).
+struct FaceControlPoints {
+  std::vector<std::int64_t> offsets;
+  std::vector<std::int32_t> indices;
+  std::vector<std::uint8_t> regular;  // Bfr's Surface::IsRegular() per face
+};
+
 /// The limit surface of one mesh topology under one subdivision scheme,
 /// boundary rule and set of sharpness tags: build once, query many.
 ///
@@ -148,6 +156,15 @@ class LimitSurface {
   /// @param derivatives  0: position; 1: also du, dv; 2: also duu, duv, dvv
   /// @throws ParameterError as evaluate(), or for derivatives outside 0..2
   SurfaceRows rows(const std::int32_t* face_ids, const double* uv, std::size_t k, int derivatives = 0) const;
+
+  /// The control points of faces' surfaces in Bfr's order
+  /// (Bfr::Surface::GetControlPointIndices, as mesh vertex indices; a vertex
+  /// may appear more than once where a face meets itself), with Bfr's
+  /// Surface::IsRegular(): what lets a caller reuse a quantity computed over
+  /// one face's control points for another face of the same local topology.
+  /// @param face_ids  k face indices, each in [0, n_faces) and not a hole
+  /// @throws ParameterError for a face index out of range or a hole
+  FaceControlPoints control_points(const std::int32_t* face_ids, std::size_t k) const;
 
   /// Uniform refinement to `level` with every vertex moved to its limit
   /// position (Far::PrimvarRefinerReal<double>: Interpolate level by level,
