@@ -10,16 +10,12 @@
 /// data it is given (shapes, finite values within max_coordinate, indices)
 /// is made here, once, before any state changes.
 ///
-/// Extending it to rows of the limit surface at arbitrary points (fair
-/// interpolation, approximation of scans): B's rows are the limit at the
-/// vertices; a row at (face, u, v) is the same kind of object, a sparse
-/// combination of control vertices, which Bfr's surface of that face gives
-/// (the patch points' weights composed with the face's control points, as
-/// refined_rows.hpp composes refined rows back). Such rows would be added as a
-/// second operator C (CSR, one row per sample, LimitOperator's layout) held
-/// beside B, and the solves on [B; C] (least squares, or B with C as soft
-/// constraints) would take their targets alongside V0; solve() and update()
-/// keep their contract for the vertex rows.
+/// Rows of the limit surface at arbitrary points (face, u, v) are the surface
+/// layer's LimitSurface::rows (sparse combinations of control vertices, the
+/// same kind of object as B's rows at the vertices); fair interpolation and
+/// approximation of scans compose them in the fit layer above this one
+/// (fairness.hpp, fair.hpp, footpoints.hpp), where the solves on those rows
+/// live. solve() and update() are the vertex rows' contract alone.
 
 #include <cstddef>
 #include <cstdint>
