@@ -288,15 +288,20 @@ namespace {
 // surface's lock.
 template <class Fn>
 void for_each_face_surface(const SurfaceFactory& factory, const std::int32_t* face_ids, std::size_t k, Fn fn) {
-  // Group the points by face so that each face's surface is built once.
-  std::vector<std::size_t> order(k);
-  std::iota(order.begin(), order.end(), std::size_t{0});
-  std::stable_sort(order.begin(), order.end(),
-                   [&](std::size_t a, std::size_t b) { return face_ids[a] < face_ids[b]; });
+  // Group the points by face so that each face's surface is built once: a
+  // counting sort by face (stable, linear; the ids are checked, >= 0).
+  std::int32_t max_face = -1;
+  for (std::size_t i = 0; i < k; ++i) max_face = std::max(max_face, face_ids[i]);
+  std::vector<std::size_t> count(static_cast<std::size_t>(max_face) + 2, 0);
+  for (std::size_t i = 0; i < k; ++i) ++count[static_cast<std::size_t>(face_ids[i]) + 1];
   std::vector<std::size_t> group_start;
-  for (std::size_t j = 0; j < k; ++j)
-    if (j == 0 || face_ids[order[j]] != face_ids[order[j - 1]]) group_start.push_back(j);
+  for (std::size_t f = 1; f < count.size(); ++f) {
+    if (count[f] > 0) group_start.push_back(count[f - 1]);
+    count[f] += count[f - 1];
+  }
   group_start.push_back(k);
+  std::vector<std::size_t> order(k);
+  for (std::size_t i = 0; i < k; ++i) order[count[static_cast<std::size_t>(face_ids[i])]++] = i;
   const auto n_groups = static_cast<std::ptrdiff_t>(group_start.size()) - 1;
 
   std::atomic<int> failed_face{-1};
