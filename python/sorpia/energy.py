@@ -98,8 +98,11 @@ def fairness_matrix(faces, n_vertices: int, *, scheme: str = DEFAULT_SCHEME, bou
     """
     import scipy.sparse  # here, not at import: sorpia's commands need no scipy
 
-    surface, n = _core_surface(faces, n_vertices, scheme, boundary, creases, corners, holes)
-    data, indices, indptr = _core.fairness_matrix(surface, *_options(thin_plate, membrane, gauss_points, depth))
+    arrays, n, rules = as_rules(faces, n_vertices, scheme=scheme, boundary=boundary, creases=creases,
+                                corners=corners, holes=holes)
+    topo = built(lambda: _core.Topology(*arrays, n))
+    warn_unreferenced(topo, stacklevel=3)
+    data, indices, indptr = matrix_arrays(topo, rules, thin_plate, membrane, gauss_points, depth)
     return scipy.sparse.csr_matrix((data, indices, indptr), shape=(n, n))
 
 
@@ -123,11 +126,12 @@ def _options(thin_plate, membrane, gauss_points, depth) -> tuple:
             min(_integer(depth, "depth", "an integer in 0..12"), 2**31 - 1))
 
 
-def _core_surface(faces, n_vertices, scheme, boundary, creases, corners, holes):
-    """A core LimitSurface of the mesh (its vertices zero: K does not use
-    them), and the vertex count."""
-    arrays, n, rules = as_rules(faces, n_vertices, scheme=scheme, boundary=boundary, creases=creases,
-                                corners=corners, holes=holes)
-    topo = built(lambda: _core.Topology(*arrays, n))
-    warn_unreferenced(topo, stacklevel=4)
-    return _core.LimitSurface(topo, np.zeros((n, 3)), rules.scheme, rules.boundary, rules.tags), n
+def matrix_arrays(topology: _core.Topology, rules: _core.Rules, thin_plate=1.0, membrane=0.0, gauss_points=4,
+                  depth=4) -> tuple:
+    """K of a topology already built, under `rules`, as CSR arrays (data,
+    indices, indptr): what `fairness_matrix` returns, for callers that hold
+    the topology (fair interpolation's fine mesh). The surface's vertices are
+    zero: K does not use them."""
+    surface = _core.LimitSurface(topology, np.zeros((topology.n_vertices, 3)), rules.scheme, rules.boundary,
+                                 rules.tags)
+    return _core.fairness_matrix(surface, *_options(thin_plate, membrane, gauss_points, depth))

@@ -50,7 +50,7 @@ from . import _core
 from ._validate import DEFAULT_BOUNDARY, DEFAULT_SCHEME, as_rules, as_vertices
 from .errors import ParameterError
 from .limit import TAGS_DOC as _TAGS_DOC
-from .limit import built
+from .energy import matrix_arrays
 from .solve import InterpolationResult, Interpolator, check_options
 
 # The iteration's window: the energy change is measured over this many iterations.
@@ -204,15 +204,6 @@ def _fine_tags(tags: _core.Tags) -> tuple:
     return creases, corners, holes
 
 
-def _fairness_matrix(topology: _core.Topology, rules: _core.Rules, thin_plate: float, membrane: float) -> tuple:
-    """K of the fine mesh as CSR arrays (data, indices, indptr): the core's
-    sorpia::fairness_matrix (`sorpia.fairness_matrix`) with its default
-    quadrature, on the topology already built."""
-    surface = _core.LimitSurface(topology, np.zeros((topology.n_vertices, 3)), rules.scheme, rules.boundary,
-                                 rules.tags)
-    return _core.fairness_matrix(surface, thin_plate, membrane, 4, 4)
-
-
 def fair_interpolate(vertices, faces, *, scheme: str = DEFAULT_SCHEME, levels: int = 1, thin_plate: float = 1.0,
                      membrane: float = 0.0, targets=None, boundary: str = DEFAULT_BOUNDARY, creases=None,
                      corners=None, holes=None, tol: float = 1e-6, max_iter: int = 2000,
@@ -260,16 +251,18 @@ def fair_interpolate(vertices, faces, *, scheme: str = DEFAULT_SCHEME, levels: i
     target_ids = as_targets(targets, n)
     timings = {}
 
-    t = time.perf_counter()
-    topology = built(lambda: _core.Topology(*arrays, n))  # unreferenced vertices: the Interpolator below warns
-    fine = _core.refine_uniform(topology, rules, levels)  # refuses a fine mesh too big before building it
-    timings["refine"] = time.perf_counter() - t
-
+    # One topology for the plain solve and the refinement: the Interpolator's.
     t = time.perf_counter()
     rule_options = dict(scheme=scheme, boundary=boundary, creases=creases, corners=corners, holes=holes)
     interp = Interpolator._for_vertices(faces, n, rule_options, "error")
+    build = time.perf_counter() - t
+    t = time.perf_counter()
+    fine = _core.refine_uniform(interp.topology, rules, levels)  # refuses a fine mesh too big before building it
+    timings["refine"] = time.perf_counter() - t
+
+    t = time.perf_counter()
     plain = interp.solve(v0)
-    timings["plain"] = time.perf_counter() - t
+    timings["plain"] = build + time.perf_counter() - t
 
     import scipy.sparse
 
@@ -280,7 +273,7 @@ def fair_interpolate(vertices, faces, *, scheme: str = DEFAULT_SCHEME, levels: i
     fine_topology = _core.Topology(fine_faces, n_fine) if rules.scheme == _core.Scheme.loop else _core.Topology(
         np.full(len(fine_faces), 4, np.int32), np.ascontiguousarray(fine_faces.reshape(-1)), n_fine)
     t = time.perf_counter()
-    k_data, k_indices, k_indptr = _fairness_matrix(fine_topology, fine_rules, thin_plate, membrane)
+    k_data, k_indices, k_indptr = matrix_arrays(fine_topology, fine_rules, thin_plate, membrane)
     timings["energy"] = time.perf_counter() - t
 
     start = np.ascontiguousarray(R @ np.asarray(plain.control_vertices))
