@@ -116,3 +116,18 @@ def test_render_fair_draws_plain_and_fair(torus_file, tmp_path, command):
     assert "thin-plate energy" in stdout
     code, _, err = command("render", src, "-o", png, "--levels", 2, "--force")
     assert_user_error(code, err)
+
+
+def test_fit_fair_says_the_inputs_texture_coordinates_are_not_written(tmp_path, command):
+    """The fine cage has refined faces and fit --fair does not refine face-varying data: the input's UVs are
+    named as not written (a warning), never dropped silently; plain fit writes them."""
+    v, f = sorpia.shapes.quad_torus(8, 6)
+    corners = np.ascontiguousarray(f.reshape(-1), dtype=np.int32)
+    src = tmp_path / "textured.obj"
+    sorpia.write_mesh(src, v, f, uvs=sorpia.FaceVarying(v[:, :2], corners))
+    code, _, err = command("fit", src, "-o", tmp_path / "fair.obj", "--fair")
+    assert code == 0 and "texture coordinates are not written" in err
+    assert "uvs" not in sorpia.read_mesh(tmp_path / "fair.obj", attributes=True)[2]
+    code, _, err = command("fit", src, "-o", tmp_path / "plain.obj")
+    assert code == 0 and "texture coordinates" not in err
+    assert "uvs" in sorpia.read_mesh(tmp_path / "plain.obj", attributes=True)[2]

@@ -11,9 +11,9 @@ from pathlib import Path
 import numpy as np
 
 from .. import __version__
-from .common import (EXIT_NOT_CONVERGED, EXIT_OK, SCHEME_LABELS, UserError, check_mesh_suffix, check_paths,
-                     face_counts, face_size_histogram, fmt_seconds, read_solve_input, repair_json, repair_lines,
-                     scheme_kwargs, tags_lines, tags_summary, usd_template)
+from .common import (EXIT_NOT_CONVERGED, EXIT_OK, SCHEME_LABELS, UserError, face_counts, face_size_histogram,
+                     fmt_seconds, read_solve_input, repair_json, repair_lines, scheme_kwargs, tags_lines, tags_summary,
+                     usd_template, warn_once)
 from .output import write_json
 from .progress import Progress
 
@@ -56,24 +56,23 @@ def run_fair(input_path, output, *, levels=1, membrane=0.0, targets=None, tol=1e
     from .. import fair_interpolate, limit_points, write_mesh
     from .._meshinfo import topology_info
     from ..limit import topology as build_topology
-    from .fit import _binary_for, _check_blender, _check_surface_fits, _tags_to_write
+    from .fit import (ATTRIBUTE_LABELS, _binary_for, _check_blender, _check_surface_fits, _tags_to_write,
+                  check_fit_paths)
 
     out = out if out is not None else sys.stdout
-    check_mesh_suffix("-o", output)
-    check_mesh_suffix("--surface", surface)
-    check_paths([input_path] + ([targets] if targets is not None else []),
-                {"-o": output, "--surface": surface, "--report": report, "--blender": blender}, force)
-    if blender is not None and Path(blender).suffix.lower() != ".py":
-        raise UserError(f"--blender {blender}: the script is Python, give a file name ending in .py")
-    if binary and not any(Path(p).suffix.lower() in (".ply", ".stl") for p in (output, surface) if p):
-        raise UserError("--binary applies to .ply and .stl outputs only (OBJ and OFF are text formats)")
+    check_fit_paths([input_path] + ([targets] if targets is not None else []), output, surface, report, blender,
+                    binary, force)
 
     timings: dict[str, float] = {}
     with Progress(enabled=not quiet) as progress:
         progress.status(f"reading {input_path}")
         mesh, scheme, boundary, tags = read_solve_input(
             input_path, triangulate=triangulate, repair=repair, ignore_tags=ignore_tags, nonmanifold="error",
-            scheme=scheme, boundary=boundary, sharp_angle=sharp_angle, prim=prim)
+            scheme=scheme, boundary=boundary, sharp_angle=sharp_angle, attributes=True, prim=prim)
+        if "uvs" in mesh.attributes:  # read to say so: the fine cage has other faces, and nothing refines them
+            warn_once(f"-o {output}: the input's {ATTRIBUTE_LABELS['uvs']} are not written: the fair control mesh "
+                      f"has the faces of {levels} refinement{'s' if levels > 1 else ''}, and fit --fair does not refine "
+                      "face-varying data; fit without --fair keeps them")
         V0, F = mesh.vertices, mesh.faces
         timings.update(mesh.timings)
         fine_kind = "triangles" if scheme == "loop" else "quads"

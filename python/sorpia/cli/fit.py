@@ -58,17 +58,11 @@ def run_fit(input_path, output, *, method="auto", omega="auto", tol=1e-10, max_i
     from .._meshinfo import topology_info
 
     out = out if out is not None else sys.stdout
-    check_mesh_suffix("-o", output)
-    check_mesh_suffix("--surface", surface)
-    check_paths([input_path], {"-o": output, "--surface": surface, "--report": report, "--blender": blender}, force)
-    if blender is not None and Path(blender).suffix.lower() != ".py":
-        raise UserError(f"--blender {blender}: the script is Python, give a file name ending in .py")
+    check_fit_paths([input_path], output, surface, report, blender, binary, force)
     given = f"--method {method}" + (f" --omega {omega}" if omega != "auto" else "") + (
         f" --threads {threads}" if threads != 1 else "")
     check_solver_options(given, method=method, omega=omega, tol=tol, max_iter=max_iter, threads=threads)
     uses_omega = method in OMEGA_METHODS
-    if binary and not any(Path(p).suffix.lower() in (".ply", ".stl") for p in (output, surface) if p):
-        raise UserError("--binary applies to .ply and .stl outputs only (OBJ and OFF are text formats)")
 
     timings: dict[str, float] = {}
     with Progress(enabled=not quiet) as progress:
@@ -200,6 +194,20 @@ def _tags_to_write(output, tags: dict, boundary: str, mesh, scheme=None) -> dict
         warn_once(f"-o {output}: the sharpness tags ({', '.join(sorted(tags))}) are not written: only .obj and "
                   "USD files hold them; refitting this file would solve without them")
     return {}
+
+
+def check_fit_paths(inputs: list, output, surface, report, blender, binary: bool, force: bool) -> None:
+    """The checks of fit's (and fit --fair's) paths before any work: mesh
+    suffixes of -o and --surface, inputs readable and outputs writable
+    (check_paths), --blender a .py script, --binary only with a PLY or STL
+    output."""
+    check_mesh_suffix("-o", output)
+    check_mesh_suffix("--surface", surface)
+    check_paths(inputs, {"-o": output, "--surface": surface, "--report": report, "--blender": blender}, force)
+    if blender is not None and Path(blender).suffix.lower() != ".py":
+        raise UserError(f"--blender {blender}: the script is Python, give a file name ending in .py")
+    if binary and not any(Path(p).suffix.lower() in (".ply", ".stl") for p in (output, surface) if p):
+        raise UserError("--binary applies to .ply and .stl outputs only (OBJ and OFF are text formats)")
 
 
 ATTRIBUTE_LABELS = {"uvs": "texture coordinates", "normals": "normals"}
