@@ -506,6 +506,10 @@ SurfaceRows LimitSurface::rows(const std::int32_t* face_ids, const double* uv, s
   std::sort(faces.begin(), faces.end());
   faces.erase(std::unique(faces.begin(), faces.end()), faces.end());
   std::vector<FaceStencils> stencils(faces.size());
+  std::vector<std::size_t> face_slot(k);  // the point's face in `faces`, found once for every matrix
+  for (std::size_t i = 0; i < k; ++i)
+    face_slot[i] =
+        static_cast<std::size_t>(std::lower_bound(faces.begin(), faces.end(), face_ids[i]) - faces.begin());
   std::vector<std::size_t> rank(k);  // the point's index among its face's points
   {
     const std::shared_lock<std::shared_mutex> lock(impl_->mutex);
@@ -569,9 +573,7 @@ SurfaceRows LimitSurface::rows(const std::int32_t* face_ids, const double* uv, s
     m.n_rows = k;
     m.n_cols = n_vertices();
     m.indptr.assign(k + 1, 0);
-    const auto stencil_of = [&](std::size_t i) -> const FaceStencils& {
-      return stencils[std::lower_bound(faces.begin(), faces.end(), face_ids[i]) - faces.begin()];
-    };
+    const auto stencil_of = [&](std::size_t i) -> const FaceStencils& { return stencils[face_slot[i]]; };
     const auto from_b = [&](std::size_t i) { return d == 0 && !slots.empty() && slots[i] >= 0; };
     for (std::size_t i = 0; i < k; ++i) {
       const std::size_t width = from_b(i) ? static_cast<std::size_t>(exact.indptr[slots[i] + 1] - exact.indptr[slots[i]])
