@@ -337,3 +337,18 @@ def test_render_draws_the_data_with_the_fitted_surface(tmp_path):
     assert r.returncode == 0, r.stderr
     assert "approximation" in r.stdout
     assert (tmp_path / "fig.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+@pytest.mark.parametrize("scale", [1e155, 1e-155])
+def test_coordinates_near_the_limits_of_double(scale):
+    """Points and cage at 1e155 or 1e-155 fit as at scale 1, the result times the scale (the fit runs scaled by a
+    power of two): distances, RMS and control vertices."""
+    v, f = sorpia.shapes.icosphere(1)
+    v = np.asarray(v, float)
+    points = 1.02 * v
+    one = sorpia.approximate(points, v, f, iterations=2)
+    big = sorpia.approximate(points * scale, v * scale, f, iterations=2)
+    assert np.isfinite(big.rms) and big.iterations == one.iterations
+    np.testing.assert_allclose(big.control_vertices / scale, one.control_vertices, rtol=0, atol=1e-12)
+    assert abs(big.rms / scale - one.rms) <= 1e-12 and big.history[-1]["rms_relative"] == pytest.approx(
+        one.history[-1]["rms_relative"], abs=1e-12)

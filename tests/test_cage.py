@@ -214,3 +214,16 @@ def test_bad_input_is_named():
     # Under Catmull-Clark the count is the quad cage's: vertices, edges and faces of the triangles.
     with pytest.raises(sorpia.MeshError, match=r"vertices as quads"):
         sorpia.decimate(v, f, 162 + 480 + 320 + 1, scheme="catmull-clark")
+
+
+@pytest.mark.parametrize("scale", [1e20, 1e155, 1e-155])
+def test_decimation_does_not_depend_on_the_scale(scale):
+    """A cage at any scale: OpenMesh works on coordinates scaled by a power of two, so the cage of 20 vertices
+    is reached as at scale 1 (which vertices survive may differ where priorities tie on this flat grid) and its
+    vertices are input vertices, unmoved (a half-edge collapse keeps them)."""
+    v, f = sorpia.shapes.grid(8, 8)
+    v = np.asarray(v, float)
+    big = sorpia.decimate(v * scale, f, 20)
+    assert len(big.vertices) == len(sorpia.decimate(v, f, 20).vertices) == 20
+    kept = {tuple(p) for p in (v * scale).tolist()}
+    assert all(tuple(p) in kept for p in big.vertices.tolist())

@@ -360,3 +360,28 @@ def test_a_fine_mesh_beyond_the_memory_left_is_refused_before_any_work(tmp_path)
     first, second = run.stdout.strip().splitlines()
     assert first.startswith("levels = 6 makes 1310720 triangles and needs about ") and "use fewer levels" in first
     assert second == str(320 * 4)
+
+
+@pytest.mark.parametrize("scheme", ["loop", "catmull-clark"])
+@pytest.mark.parametrize("scale", [1e155, 1e-155])
+def test_coordinates_near_the_limits_of_double(scheme, scale):
+    """Vertices at 1e155 (whose squares overflow) and 1e-155 (whose squares underflow) give the control mesh of
+    the same vertices at scale 1, times the scale (fair_solve works scaled by a power of two), and the targets
+    are met through the fine mesh's limit points."""
+    v, f = (sorpia.shapes.icosphere(1) if scheme == "loop" else sorpia.shapes.quad_torus(8, 6))
+    v = np.asarray(v, float)
+    one = sorpia.fair_interpolate(v, f, scheme=scheme)
+    big = sorpia.fair_interpolate(v * scale, f, scheme=scheme)
+    assert np.isfinite(big.control_vertices).all()
+    np.testing.assert_allclose(big.control_vertices / scale, one.control_vertices, rtol=0, atol=1e-12)
+    limit = sorpia.limit_points(big.control_vertices / scale, big.faces, scheme=scheme, **big.tags)
+    assert np.abs(limit[:len(v)] - v).max() <= 1e-12
+
+
+def test_empty_target_list_and_a_loop_pillow_are_named():
+    v, f = sorpia.shapes.icosphere(0)
+    with pytest.raises(sorpia.ParameterError, match="targets is empty"):
+        sorpia.fair_interpolate(v, f, targets=[])
+    with pytest.raises(sorpia.MeshError, match="pillow"):
+        sorpia.fair_interpolate(np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0.]]), np.array([[0, 1, 2], [0, 2, 1]]),
+                                scheme="loop")

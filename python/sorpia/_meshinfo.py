@@ -162,6 +162,20 @@ def boundary_share(faces, n_vertices: int) -> float:
     return stats["boundary_edges"] / stats["edges"] if stats and stats["edges"] else 0.0
 
 
+def extent_length(extent: np.ndarray) -> float:
+    """The length of a bounding box's extent (its diagonal), scaled before
+    squaring: the squares of coordinates beyond 1e154 overflow (the diagonal
+    would read inf and every figure relative to it 0)."""
+    scale = float(np.abs(extent).max())
+    return scale * float(np.linalg.norm(extent / scale)) if scale > 0 else 0.0
+
+
+def bounding_box_diagonal(points: np.ndarray) -> float:
+    """Length of the diagonal of the points' bounding box, finite for any
+    finite coordinates (extent_length)."""
+    return extent_length(points.max(axis=0) - points.min(axis=0)) if len(points) else 0.0
+
+
 def _layout(vertices, n_faces: int, stats, list_extraordinary) -> dict:
     vertices = np.asarray(vertices, dtype=np.float64)
     info: dict = {"vertices": len(vertices), "faces": n_faces}
@@ -174,11 +188,7 @@ def _layout(vertices, n_faces: int, stats, list_extraordinary) -> dict:
             lo, hi = (vertices[finite].min(axis=0), vertices[finite].max(axis=0)) if finite.any() else (None, None)
         if lo is not None:
             info["bounding_box"] = [lo.tolist(), hi.tolist()]
-            # Scaled first: the squares of coordinates beyond 1e154 overflow (the diagonal then read inf and every
-            # figure relative to it 0).
-            extent = hi - lo
-            scale = float(np.abs(extent).max())
-            info["diagonal"] = scale * float(np.linalg.norm(extent / scale)) if scale > 0 else 0.0
+            info["diagonal"] = extent_length(hi - lo)
     if stats is None:
         return info
     for key in ("edges", "boundary_edges", "boundary_loops", "euler_characteristic", "genus", "components",

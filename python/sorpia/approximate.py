@@ -50,6 +50,7 @@ import numpy as np
 import scipy.sparse
 
 from . import _core
+from ._meshinfo import bounding_box_diagonal
 from ._validate import DEFAULT_BOUNDARY, as_vertices
 from .errors import MeshError, ParameterError
 from .surface import LimitSurface
@@ -156,14 +157,6 @@ def as_points(points) -> np.ndarray:
         return as_vertices(arr, "points")
     except MeshError as e:
         raise ParameterError(str(e)) from None
-
-
-def bounding_box_diagonal(points: np.ndarray) -> float:
-    """Length of the diagonal of the points' bounding box, scaled before
-    squaring (finite for any finite coordinates)."""
-    extent = points.max(axis=0) - points.min(axis=0)
-    scale = float(np.abs(extent).max())
-    return 0.0 if scale == 0.0 else scale * float(np.linalg.norm(extent / scale))
 
 
 class _Fit:
@@ -396,6 +389,13 @@ def approximate(points, cage_vertices, cage_faces, *, scheme: str = "auto", boun
     cage_vertices = as_vertices(cage_vertices, "cage_vertices")
     if len(cage_faces) == 0:
         raise MeshError("cage_faces is empty: the cage needs at least one face")
+    # Data beyond 2^+-200 in magnitude is fitted scaled by a power of two (exact, as `interpolate` scales its
+    # targets): squared distances and the solver's norms would overflow or underflow. Records and the result are
+    # in the caller's units.
+    largest = max(float(np.abs(points).max(initial=0.0)), float(np.abs(cage_vertices).max(initial=0.0)))
+    e = int(np.frexp(largest)[1]) if largest > 0 else 0
+    e = e if abs(e) > 200 else 0
+    points, cage_vertices = np.ldexp(points, -e), np.ldexp(cage_vertices, -e)
     if scheme == "auto":
         from ._validate import all_triangles
 
@@ -414,6 +414,7 @@ def approximate(points, cage_vertices, cage_faces, *, scheme: str = "auto", boun
                "surface_max": float(s.max())}
         for key in ("rms", "max", "surface_rms", "surface_max"):
             rec[key + "_relative"] = rec[key] / unit
+            rec[key] = float(np.ldexp(rec[key], e))
         rec["solver_iterations"] = solver_iterations
         rec["seconds"] = time.perf_counter() - t0
         history.append(rec)
@@ -447,13 +448,14 @@ def approximate(points, cage_vertices, cage_faces, *, scheme: str = "auto", boun
         rec = record(k, distances, used)
         if rec["rms"] <= previous[0]:
             best = (rec["rms"], V, face_ids, uv, distances)
-        if previous[0] - rec["rms"] < tol * previous[0] or rec["rms"] <= 1e-15 * unit:
+        if previous[0] - rec["rms"] < tol * previous[0] or rec["rms_relative"] <= 1e-15:
             converged = True
             break
     # The iterate of the lowest RMS distance (an update that raised it is not returned).
     _, V, face_ids, uv, distances = best
     fit.timings["total"] = time.perf_counter() - t0
     fit.timings["cpu"] = dict(fit.cpu, total=time.process_time() - c0)
-    return ApproximationResult(control_vertices=V, face_ids=face_ids, uv=uv, distances=distances, iterations=done,
-                               converged=converged, method=method, fairness=fairness, diagonal=diagonal,
+    return ApproximationResult(control_vertices=np.ldexp(V, e), face_ids=face_ids, uv=uv,
+                               distances=np.ldexp(distances, e), iterations=done, converged=converged, method=method,
+                               fairness=fairness, diagonal=float(np.ldexp(diagonal, e)),
                                history=history, timings=fit.timings)

@@ -47,8 +47,9 @@ from typing import Optional
 import numpy as np
 
 from . import _core
+from ._meshinfo import bounding_box_diagonal
 from ._validate import DEFAULT_BOUNDARY, DEFAULT_SCHEME, as_rules, as_vertices
-from .errors import ParameterError
+from .errors import MeshError, ParameterError
 from .limit import TAGS_DOC as _TAGS_DOC
 from .energy import matrix_arrays
 from .solve import InterpolationResult, Interpolator, check_options
@@ -176,12 +177,12 @@ def as_targets(targets, n_vertices: int) -> np.ndarray:
     if targets is None:
         return np.arange(n_vertices, dtype=np.int32)
     arr = np.asarray(targets)
+    if arr.size == 0:  # before the dtype: an empty list is float64 to numpy
+        raise ParameterError("targets is empty: give at least one vertex to interpolate (None: every vertex)")
     if arr.dtype == bool or not np.issubdtype(arr.dtype, np.integer):
         raise TypeError(f"targets must be integer vertex indices, got dtype {arr.dtype}")
     if arr.ndim != 1:
         raise ParameterError(f"targets must have shape (k,), got {arr.shape}")
-    if len(arr) == 0:
-        raise ParameterError("targets is empty: give at least one vertex to interpolate (None: every vertex)")
     bad = np.flatnonzero((arr < 0) | (arr >= n_vertices))
     if len(bad):
         raise ParameterError(f"targets[{bad[0]}] = {arr[bad[0]]} is out of range [0, {n_vertices})")
@@ -270,8 +271,16 @@ def fair_interpolate(vertices, faces, *, scheme: str = DEFAULT_SCHEME, levels: i
     R = scipy.sparse.csr_matrix(fine["refinement"], shape=(n_fine, n))
     fine_faces = fine["faces"]
     fine_rules = _core.Rules(scheme=rules.scheme, boundary=rules.boundary, tags=fine["tags"])
-    fine_topology = _core.Topology(fine_faces, n_fine) if rules.scheme == _core.Scheme.loop else _core.Topology(
-        np.full(len(fine_faces), 4, np.int32), np.ascontiguousarray(fine_faces.reshape(-1)), n_fine)
+    try:
+        fine_topology = _core.Topology(fine_faces, n_fine) if rules.scheme == _core.Scheme.loop else _core.Topology(
+            np.full(len(fine_faces), 4, np.int32), np.ascontiguousarray(fine_faces.reshape(-1)), n_fine)
+    except MeshError as exc:
+        # Far refines by topology, a face list names faces by their vertices: two faces back to back (a pillow)
+        # refine into faces whose middle triangles share all their vertices under Loop, along edges of four faces.
+        raise MeshError(f"the mesh refined {levels} time{'s' if levels > 1 else ''} is not a face list sorpia can "
+                        f"take ({exc}); under Loop this comes from two triangles with the same vertices in the "
+                        "opposite order (a pillow), whose refined faces meet along edges of four faces: fair "
+                        "interpolation cannot refine them (interpolate can fit such a mesh)") from None
     t = time.perf_counter()
     k_data, k_indices, k_indptr = matrix_arrays(fine_topology, fine_rules, thin_plate, membrane)
     timings["energy"] = time.perf_counter() - t
@@ -282,7 +291,7 @@ def fair_interpolate(vertices, faces, *, scheme: str = DEFAULT_SCHEME, levels: i
                            int(threads))
     timings["setup"], timings["solve"] = sol["setup_seconds"], sol["seconds"]
 
-    diagonal = float(np.linalg.norm(v0.max(axis=0) - v0.min(axis=0))) if n else 0.0
+    diagonal = bounding_box_diagonal(v0)
     max_error = float(sol["max_error"])
     fine_creases, fine_corners, fine_holes = _fine_tags(fine["tags"])
     return FairResult(

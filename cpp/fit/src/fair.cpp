@@ -162,10 +162,12 @@ void check_options(const FairOptions& o) {
 
 }  // namespace
 
-FairSolution fair_solve(const Topology& topology, const Rules& rules, const CsrMatrix& energy,
-                        const std::int32_t* targets, std::size_t n_targets, const double* positions,
-                        const double* start, const FairOptions& options) {
-  check_options(options);
+namespace {
+
+// fair_solve on data whose magnitude is within 2^+-200 (see fair_solve).
+FairSolution solve_scaled(const Topology& topology, const Rules& rules, const CsrMatrix& energy,
+                          const std::int32_t* targets, std::size_t n_targets, const double* positions,
+                          const double* start, const FairOptions& options) {
   const auto t_setup = Clock::now();
   const std::size_t n = topology.n_vertices();
   if (energy.n_rows != n || energy.n_cols != n)
@@ -311,6 +313,34 @@ FairSolution fair_solve(const Topology& topology, const Rules& rules, const CsrM
     for (int c = 0; c < 3; ++c) d2 += (s[c] - positions[3 * i + c]) * (s[c] - positions[3 * i + c]);
     out.max_error = std::max(out.max_error, std::sqrt(d2));
   }
+  return out;
+}
+
+}  // namespace
+
+FairSolution fair_solve(const Topology& topology, const Rules& rules, const CsrMatrix& energy,
+                        const std::int32_t* targets, std::size_t n_targets, const double* positions,
+                        const double* start, const FairOptions& options) {
+  check_options(options);
+  // The energy squares the coordinates and the iteration multiplies them
+  // further: data beyond 2^+-200 in magnitude is solved scaled by a power of
+  // two (exact, as sorpia::solve scales its targets), the result scaled back.
+  double largest = 0.0;
+  for (std::size_t i = 0; i < 3 * n_targets; ++i) largest = std::max(largest, std::abs(positions[i]));
+  for (std::size_t i = 0; i < 3 * topology.n_vertices(); ++i) largest = std::max(largest, std::abs(start[i]));
+  int e = 0;
+  if (largest > 0.0 && std::isfinite(largest)) std::frexp(largest, &e);
+  if (std::abs(e) <= 200)
+    return solve_scaled(topology, rules, energy, targets, n_targets, positions, start, options);
+  std::vector<double> p(positions, positions + 3 * n_targets), v(start, start + 3 * topology.n_vertices());
+  for (double& x : p) x = std::ldexp(x, -e);
+  for (double& x : v) x = std::ldexp(x, -e);
+  FairSolution out = solve_scaled(topology, rules, energy, targets, n_targets, p.data(), v.data(), options);
+  for (double& x : out.vertices) x = std::ldexp(x, e);
+  for (double& x : out.energies) x = std::ldexp(x, 2 * e);
+  out.energy = std::ldexp(out.energy, 2 * e);
+  out.start_energy = std::ldexp(out.start_energy, 2 * e);
+  out.max_error = std::ldexp(out.max_error, e);
   return out;
 }
 

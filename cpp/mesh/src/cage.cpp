@@ -149,8 +149,22 @@ Mesh from_openmesh(const OMesh& om) {
 Mesh decimate(const Mesh& mesh, std::size_t n_vertices, const DecimateOptions& options) {
   check_options(options);
   if (n_vertices < 4) throw ParameterError("a cage needs at least 4 vertices, got " + std::to_string(n_vertices));
+  // OpenMesh's normals and quadrics square and multiply coordinates, and its
+  // degeneracy checks are absolute: coordinates beyond 2^+-20 in magnitude
+  // are decimated scaled by a power of two (exact; a half-edge collapse keeps
+  // the surviving vertices where they are) and scaled back.
+  double largest = 0.0;
+  for (const double x : mesh.vertices) largest = std::max(largest, std::abs(x));
+  int e = 0;
+  if (largest > 0.0 && std::isfinite(largest)) std::frexp(largest, &e);
+  if (std::abs(e) <= 20) e = 0;
+  Mesh scaled;
+  if (e != 0) {
+    scaled = mesh;
+    for (double& x : scaled.vertices) x = std::ldexp(x, -e);
+  }
   std::vector<std::int32_t> kept;
-  OMesh om = to_openmesh(mesh, kept);
+  OMesh om = to_openmesh(e != 0 ? scaled : mesh, kept);
   const std::size_t start = om.n_vertices();
   const bool quads = options.scheme == Scheme::CatmullClark;
   const std::size_t have = quads ? quad_vertices(om) : start;
@@ -196,6 +210,7 @@ Mesh decimate(const Mesh& mesh, std::size_t n_vertices, const DecimateOptions& o
                     "): every further collapse would flip a normal, thin a face or cut a boundary corner "
                     "(max_normal_deviation, max_aspect_ratio, max_boundary_angle)");
   Mesh triangles = from_openmesh(om);
+  for (double& x : triangles.vertices) x = std::ldexp(x, e);
   return quads ? quads_from_triangles(triangles) : triangles;
 }
 
