@@ -153,3 +153,43 @@ def test_fit_blender_option(command, tmp_path):
     code, out, err = command("fit", str(tmp_path / "tri.obj"), "-o", str(tmp_path / "o.obj"),
                              "--blender", str(tmp_path / "c.py"))
     assert code == 2 and "has no Loop scheme" in err and not (tmp_path / "c.py").exists()
+
+
+@needs_bpy
+@pytest.mark.parametrize("how", ["script", "usd"])
+def test_blender_draws_the_fair_surface(tmp_path, how):
+    """Fair interpolation's fine cage with the tags Far's refinement decayed (2.5 -> 1.5, a semi-sharp corner,
+    infinitely sharp loops) as Blender draws it: through the input vertices (the fine mesh's first vertices are
+    their children) and, at every fine vertex, at sorpia's own limit point of the fine cage."""
+    V, F, tags = CASES["creases and a corner"]()
+    V = V + 0.05 * np.sin(3 * V[:, [1, 2, 0]])
+    res = sorpia.fair_interpolate(V, F, scheme="catmull-clark", **tags)
+    limit = blender_limit(tmp_path, res.control_vertices, res.faces, how, creases=res.creases,
+                          corners=res.corners)
+    ours = sorpia.limit_points(res.control_vertices, res.faces, scheme="catmull-clark", creases=res.creases,
+                               corners=res.corners)
+    diagonal = np.linalg.norm(V.max(axis=0) - V.min(axis=0))
+    # float32 in Blender, as above.
+    assert np.abs(limit[:len(V)] - V).max() < 1e-6 * diagonal
+    assert np.abs(limit - ours).max() < 1e-6 * diagonal
+    # Tags dropped, the surface misses the points: the comparison sees the tags.
+    assert np.abs(blender_limit(tmp_path, res.control_vertices, res.faces, how)[:len(V)] - V).max() > 1e-3 * diagonal
+
+
+@needs_bpy
+def test_blender_draws_the_approximated_cage(tmp_path):
+    """A quad cage made by decimation with --sharp-angle creases and fitted to points by approximate, as
+    Blender draws it: at sorpia's limit points of that cage, every vertex."""
+    V, F = sorpia.shapes.quad_torus(24, 12)
+    V = V * np.where(V[:, 2:3] > 0, 1.0, 0.7)  # a flattened bottom half: an edge the sharp angle finds
+    F = np.vstack([F[:, [0, 1, 2]], F[:, [0, 2, 3]]])  # decimation takes triangles
+    cage = sorpia.decimate(V, F, 120, scheme="catmull-clark", sharp_angle=30)
+    res = sorpia.approximate(V, cage.vertices, cage.faces, scheme="catmull-clark", creases=cage.creases,
+                             iterations=3)
+    limit = blender_limit(tmp_path, res.control_vertices, cage.faces, "script", creases=cage.creases)
+    ours = sorpia.limit_points(res.control_vertices, cage.faces, scheme="catmull-clark", creases=cage.creases)
+    diagonal = np.linalg.norm(V.max(axis=0) - V.min(axis=0))
+    assert len(cage.creases[0]) > 0
+    assert np.abs(limit - ours).max() < 1e-6 * diagonal
+    # Creases dropped, Blender's surface is another one: the comparison sees them.
+    assert np.abs(blender_limit(tmp_path, res.control_vertices, cage.faces) - ours).max() > 1e-3 * diagonal
