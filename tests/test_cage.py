@@ -4,6 +4,11 @@ Euler characteristic, distances to the sphere, the quad split's affine identity,
 
 from __future__ import annotations
 
+import json
+import subprocess
+import sys
+import warnings
+
 import numpy as np
 import pytest
 from scipy.spatial import cKDTree
@@ -214,6 +219,71 @@ def test_bad_input_is_named():
     # Under Catmull-Clark the count is the quad cage's: vertices, edges and faces of the triangles.
     with pytest.raises(sorpia.MeshError, match=r"vertices as quads"):
         sorpia.decimate(v, f, 162 + 480 + 320 + 1, scheme="catmull-clark")
+
+
+def holed_plate(m=12):
+    """A flat m x m plate of unit squares (two triangles each) with the cells (i, j), i % 3 == j % 3 == 1, cut
+    out: 16 square holes for m = 12. Returns (vertices, triangles, the 4 + 4 * holes corners where the boundary
+    turns by 90 degrees)."""
+    index = lambda i, j: i * (m + 1) + j  # noqa: E731
+    vertices = np.array([[i, j, 0.0] for i in range(m + 1) for j in range(m + 1)])
+    holes = [(i, j) for i in range(m) for j in range(m) if i % 3 == 1 and j % 3 == 1]
+    tris = []
+    for i in range(m):
+        for j in range(m):
+            if (i, j) not in holes:
+                a, b, c, d = index(i, j), index(i + 1, j), index(i + 1, j + 1), index(i, j + 1)
+                tris += [[a, b, c], [a, c, d]]
+    corners = [[0, 0], [m, 0], [0, m], [m, m]] + [[i + di, j + dj] for i, j in holes for di in (0, 1) for dj in (0, 1)]
+    return vertices, np.array(tris, dtype=np.int32), np.array(corners, dtype=float)
+
+
+def test_not_strict_returns_the_cage_the_guards_stopped_at():
+    """strict=False: where the guards stop decimation above the count asked, the cage reached comes back with a
+    DecimationWarning (the MeshError's words) instead of the error. Why it stopped is checked here: the boundary
+    turns by 90 degrees at the plate's 68 corners (more than max_boundary_angle, 30), so every one of them stays."""
+    v, f, corners = holed_plate()
+    with pytest.raises(sorpia.MeshError, match=r"decimate stopped at (\d+) vertices of the 20 asked") as raised:
+        sorpia.decimate(v, f, 20)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        cage = sorpia.decimate(v, f, 20, strict=False)
+    assert [w.category for w in caught] == [sorpia.DecimationWarning]
+    assert str(caught[0].message) == str(raised.value)
+    assert f"stopped at {len(cage.vertices)} vertices of the 20 asked (from 169)" in str(raised.value)
+    assert len(cage.vertices) >= len(corners) == 68
+    assert cKDTree(cage.vertices[:, :2]).query(corners)[0].max() == 0
+    check_oriented_manifold(cage.vertices, cage.faces, closed=False)
+    # Reached counts give no warning and the cage asked.
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert len(sorpia.decimate(v, f, 120, strict=False).vertices) == 120
+
+
+def test_command_fits_the_cage_the_guards_stopped_at_and_says_so(tmp_path):
+    """`sorpia approximate --vertices N` where decimation stops above N: the cage reached is fitted and written,
+    a warning on stderr says how far decimation got and why, the report records it ("stopped"), exit 0."""
+    v, f, corners = holed_plate()
+    sorpia.write_mesh(tmp_path / "plate.ply", v, f)
+    r = subprocess.run([sys.executable, "-m", "sorpia", "approximate", "plate.ply", "-o", "cage.obj", "--vertices",
+                        "20", "--iterations", "2", "--report", "r.json"], cwd=tmp_path, capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    report = json.loads((tmp_path / "r.json").read_text())
+    cage_v, _ = sorpia.read_mesh(tmp_path / "cage.obj")
+    n = report["cage"]["vertices"]
+    assert n == len(cage_v) >= 68 and report["cage"]["vertices_asked"] == 20
+    assert report["cage"]["stopped"].startswith(f"decimate stopped at {n} vertices of the 20 asked (from 169)")
+    assert f"sorpia: warning: decimate stopped at {n} vertices of the 20 asked" in r.stderr
+    assert f"fitting the cage of {n} vertices it reached" in r.stderr
+    assert "20 asked: the guards stopped decimation" in r.stdout
+    # The plate is flat: its fitted limit surface lies in z = 0 (the data there), to rounding.
+    assert np.abs(cage_v[:, 2]).max() < 1e-9
+    # A count reached records no stop.
+    r = subprocess.run([sys.executable, "-m", "sorpia", "approximate", "plate.ply", "-o", "cage2.obj", "--vertices",
+                        "120", "--iterations", "1", "--report", "r2.json", "--quiet"], cwd=tmp_path,
+                       capture_output=True, text=True)
+    assert r.returncode == 0 and "warning" not in r.stderr, r.stderr
+    assert json.loads((tmp_path / "r2.json").read_text())["cage"]["stopped"] is None
 
 
 @pytest.mark.parametrize("scale", [1e20, 1e155, 1e-155])

@@ -7,8 +7,8 @@ given vertices: solves B V = V0 with SOR-PIA and the rest of the PIA family.
 """
 
 from ._core import __version__
-from .errors import (AttributeWarning, ConvergenceWarning, MeshError, MeshFileError, NonmanifoldWarning, OmegaWarning,
-                     ParameterError, SingularMatrixWarning, SorpiaWarning, UnknownTagWarning,
+from .errors import (AttributeWarning, ConvergenceWarning, DecimationWarning, MeshError, MeshFileError,
+                     NonmanifoldWarning, OmegaWarning, ParameterError, SingularMatrixWarning, SorpiaWarning, UnknownTagWarning,
                      UnreferencedVerticesWarning, UsdWarning)
 from .limit import limit_matrix, limit_points
 from .solve import InterpolationResult, Interpolator, interpolate
@@ -43,7 +43,7 @@ __all__ = [
     "mesh_statistics",
     "fairness_matrix", "thin_plate_energy",
     "FairResult", "fair_interpolate",
-    "NonmanifoldWarning", "UsdWarning",
+    "NonmanifoldWarning", "UsdWarning", "DecimationWarning",
     "Cage", "decimate",
     "ApproximationResult", "approximate",
 ]

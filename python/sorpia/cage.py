@@ -5,12 +5,14 @@ approximation (issue 23) fits to a scan's points."""
 
 from __future__ import annotations
 
+import warnings
 from typing import NamedTuple, Optional
 
 import numpy as np
 
 from . import _core
 from ._sharp import sharp_edges
+from .errors import DecimationWarning
 from ._validate import as_faces, as_scheme, as_vertex_count, as_vertices
 
 
@@ -34,13 +36,13 @@ class Cage(NamedTuple):
 
 def decimate(vertices, faces, n_vertices: int, *, scheme: str = "loop", sharp_angle: Optional[float] = None,
              max_normal_deviation: float = 60.0, max_aspect_ratio: float = 10.0,
-             max_boundary_angle: float = 30.0) -> Cage:
+             max_boundary_angle: float = 30.0, strict: bool = True) -> Cage:
     """A cage of `n_vertices` vertices for a dense triangle mesh.
 
-    OpenMesh's Decimater (``DecimaterT``) collapses edges in the order of
-    Garland and Heckbert's quadric error (``ModQuadricT``; a collapse moves
-    a vertex onto a neighbour, so the cage's vertices are vertices of the
-    mesh), refusing any collapse that turns a face's normal by more than
+    OpenMesh's Decimater framework collapses edges in the order of Garland
+    and Heckbert's quadric error (``ModQuadricT``; a collapse moves a vertex
+    onto a neighbour, so the cage's vertices are vertices of the mesh),
+    refusing any collapse that turns a face's normal by more than
     `max_normal_deviation` degrees (``ModNormalFlippingT``), that leaves a
     face with an aspect ratio above `max_aspect_ratio` unless it improves the
     worst one around (``ModAspectRatioT``), or that removes a boundary vertex
@@ -70,6 +72,10 @@ def decimate(vertices, faces, n_vertices: int, *, scheme: str = "loop", sharp_an
         creases.
     max_normal_deviation, max_aspect_ratio, max_boundary_angle : float
         The decimation's guards, above.
+    strict : bool
+        True: a decimation the guards stop before `n_vertices` raises
+        `MeshError`. False: it returns the cage it reached (more vertices than
+        asked) with a `DecimationWarning` saying how far it got.
 
     Returns
     -------
@@ -80,9 +86,9 @@ def decimate(vertices, faces, n_vertices: int, *, scheme: str = "loop", sharp_an
     ------
     MeshError
         A face that is not a triangle, a mesh OpenMesh's half-edge mesh
-        cannot take (the face named), `n_vertices` above the mesh's, or a
-        decimation the guards stop before `n_vertices` (the message says how
-        far it got).
+        cannot take (the face named), `n_vertices` above the mesh's, or
+        (`strict`) a decimation the guards stop before `n_vertices` (the
+        message says how far it got).
     ParameterError
         `n_vertices` below 4, an unknown scheme, an angle or ratio out of range.
     """
@@ -92,8 +98,10 @@ def decimate(vertices, faces, n_vertices: int, *, scheme: str = "loop", sharp_an
     scheme_value = as_scheme(scheme)
     if sharp_angle is not None:  # the angle's one check (sorpia::sharp_edges), before the decimation's long work
         _core.sharp_edges(np.zeros((0, 3)), np.zeros(0, np.int32), np.zeros(0, np.int32), float(sharp_angle))
-    mesh = _core.decimate(vertices, triangles, n, scheme_value, float(max_normal_deviation), float(max_aspect_ratio),
-                          float(max_boundary_angle))
+    mesh, stopped = _core.decimate(vertices, triangles, n, scheme_value, float(max_normal_deviation),
+                                   float(max_aspect_ratio), float(max_boundary_angle), bool(strict))
+    if stopped is not None:
+        warnings.warn(stopped, DecimationWarning, stacklevel=2)
     if scheme_value == _core.Scheme.loop:
         cage_vertices, cage_faces = mesh
     else:

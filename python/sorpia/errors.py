@@ -70,6 +70,12 @@ class UsdWarning(SorpiaWarning):
     fit the faces written."""
 
 
+class DecimationWarning(SorpiaWarning):
+    """`sorpia.decimate` with ``strict=False``: the guards refused every
+    further collapse before the count asked; the cage returned has the
+    vertices decimation reached, and the message says how many of how many."""
+
+
 class NonmanifoldWarning(SorpiaWarning):
     """nonmanifold="sharp" on a non-manifold mesh: OpenSubdiv's documentation
     calls the surface of non-manifold topology undefined for now."""
@@ -77,4 +83,4 @@ class NonmanifoldWarning(SorpiaWarning):
 
 __all__ = ["MeshError", "MeshFileError", "ParameterError", "SorpiaWarning", "ConvergenceWarning",
            "SingularMatrixWarning", "OmegaWarning", "UnreferencedVerticesWarning", "UnknownTagWarning",
-           "AttributeWarning", "UsdWarning", "NonmanifoldWarning"]
+           "AttributeWarning", "UsdWarning", "NonmanifoldWarning", "DecimationWarning"]

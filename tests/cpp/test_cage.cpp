@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <set>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -61,6 +62,35 @@ TEST(Cage, CatmullClarkCountIsTheQuadCagesWithinFive) {
                                   {"3843 vertices asked", "3842 vertices as quads"});
   options.max_normal_deviation = 0;
   expect_error<sorpia::ParameterError>([&] { sorpia::decimate(sphere, 100, options); }, {"max_normal_deviation"});
+}
+
+TEST(Cage, StoppedReturnsTheMeshTheGuardsStoppedAtWithTheErrorsWords) {
+  // A 30 x 30 grid wavy along two sides: with max_boundary_angle 0 the 60
+  // vertices where those sides turn stay, so 50 cannot be reached.
+  const sorpia::Mesh grid = sorpia::grid(30, 30);
+  for (const auto scheme : {sorpia::Scheme::Loop, sorpia::Scheme::CatmullClark}) {
+    sorpia::DecimateOptions options;
+    options.scheme = scheme;
+    options.max_boundary_angle = 0;
+    std::string thrown;
+    try {
+      sorpia::decimate(grid, 50, options);
+    } catch (const sorpia::MeshError& e) {
+      thrown = e.what();
+    }
+    ASSERT_NE(thrown.find("decimate stopped at"), std::string::npos);
+    std::string stopped;
+    const sorpia::Mesh reached = sorpia::decimate(grid, 50, options, &stopped);
+    EXPECT_EQ(stopped, thrown);
+    EXPECT_NE(stopped.find("stopped at " + std::to_string(reached.n_vertices()) + " vertices"), std::string::npos);
+    EXPECT_GE(reached.n_vertices(), 60u);
+    // A count reached: the mesh asked, and `stopped` cleared.
+    const std::size_t n = scheme == sorpia::Scheme::Loop ? 400 : 1500;
+    const sorpia::Mesh full = sorpia::decimate(grid, n, options, &stopped);
+    EXPECT_TRUE(stopped.empty());
+    EXPECT_LE(full.n_vertices(), n);
+    EXPECT_GE(full.n_vertices() + 5, n);
+  }
 }
 
 }  // namespace

@@ -1,12 +1,14 @@
 #include "sorpia/cage.hpp"
 
-#include <OpenMesh/Tools/Decimater/DecimaterT.hh>
+#include <OpenMesh/Tools/Decimater/BaseDecimaterT.hh>
 #include <OpenMesh/Tools/Decimater/ModAspectRatioT.hh>
 #include <OpenMesh/Tools/Decimater/ModNormalFlippingT.hh>
 #include <OpenMesh/Tools/Decimater/ModQuadricT.hh>
 #include <OpenMesh/Tools/Decimater/Observer.hh>
+#include <OpenMesh/Tools/Utils/HeapT.hh>
 
 #include <algorithm>
+#include <cfloat>
 #include <cmath>
 #include <exception>
 #include <initializer_list>
@@ -72,6 +74,121 @@ class InterruptObserver : public OpenMesh::Decimater::Observer {
 
  private:
   std::exception_ptr stopped_;
+};
+
+// OpenMesh's Decimater framework (BaseDecimaterT: its modules, its legality
+// test, OpenMesh's collapse) driven lazily. Each vertex waits in the heap under
+// the priority module's cost (the quadric error) of its cheapest outgoing
+// collapse not refused; the legality test (is_collapse_ok and the Decimater's
+// boundary rules) and the binary modules (the guards) judge only the collapse
+// at the heap's front. A refused collapse is marked and its vertex goes back
+// under its next cheapest. After a collapse the removed vertex's one-ring is
+// costed again, as DecimaterT does, and the refusals are lifted wherever a
+// one-ring their tests read has changed. DecimaterT instead runs every test on
+// every outgoing half-edge of every vertex it costs, most of its time (and at
+// the front only the legality test).
+class LazyDecimater : public OpenMesh::Decimater::BaseDecimaterT<OMesh> {
+ public:
+  using Base = OpenMesh::Decimater::BaseDecimaterT<OMesh>;
+  using VertexHandle = OMesh::VertexHandle;
+  using HalfedgeHandle = OMesh::HalfedgeHandle;
+
+  explicit LazyDecimater(OMesh& mesh) : Base(mesh), mesh_(mesh) {}
+
+  // Collapses until `count` (reduced by removed(ci) before each collapse) is
+  // at most `target`, or no collapse is allowed; returns the collapses made.
+  // `priority` is the priority module; initialize() must have succeeded.
+  template <class Removed>
+  std::size_t decimate_to(std::size_t& count, std::size_t target, Module& priority, Removed removed) {
+    priority_module_ = &priority;
+    target_.assign(mesh_.n_vertices(), HalfedgeHandle());
+    priority_.assign(mesh_.n_vertices(), -1.0f);
+    position_.assign(mesh_.n_vertices(), -1);
+    refused_.assign(mesh_.n_halfedges(), 0);
+    Heap heap{HeapInterface{this}};
+    heap_ = &heap;
+    heap.reserve(mesh_.n_vertices());
+    for (const auto v : mesh_.vertices())
+      if (!mesh_.status(v).deleted()) cost(v);
+    const bool update_normals = mesh_.has_face_normals();
+    std::vector<VertexHandle> support;
+    std::size_t made = 0;
+    while (count > target && !heap.empty()) {
+      const VertexHandle v = heap.front();
+      const HalfedgeHandle h = target_[v.idx()];
+      heap.pop_front();
+      CollapseInfo ci(mesh_, h);
+      if (!this->is_collapse_legal(ci) || Base::collapse_priority(ci) < 0.0f) {
+        refused_[h.idx()] = 1;
+        cost(v);
+        continue;
+      }
+      support.clear();
+      for (const auto w : mesh_.vv_range(ci.v0)) support.push_back(w);
+      count -= std::min(count, removed(ci));
+      this->preprocess_collapse(ci);
+      mesh_.collapse(h);
+      if (update_normals)
+        for (const auto f : mesh_.vf_range(ci.v1))
+          if (!mesh_.status(f).deleted()) mesh_.set_normal(f, mesh_.calc_face_normal(f));
+      this->postprocess_collapse(ci);
+      // The removed vertex's one-ring is costed again, as DecimaterT does. A
+      // refusal stands while the one-rings its tests read stay as they were:
+      // those of the collapse's two ends.
+      for (const VertexHandle w : support) {
+        for (const auto out : mesh_.voh_range(w)) refused_[out.idx()] = 0;
+        cost(w);
+      }
+      for (const VertexHandle w : support)
+        for (const auto in : mesh_.vih_range(w))
+          if (refused_[in.idx()]) {
+            refused_[in.idx()] = 0;
+            cost(mesh_.from_vertex_handle(in));
+          }
+      if (!this->notify_observer(++made)) break;
+    }
+    heap_ = nullptr;
+    return made;
+  }
+
+ private:
+  struct HeapInterface {
+    LazyDecimater* d;
+    bool less(VertexHandle a, VertexHandle b) const { return d->priority_[a.idx()] < d->priority_[b.idx()]; }
+    bool greater(VertexHandle a, VertexHandle b) const { return d->priority_[a.idx()] > d->priority_[b.idx()]; }
+    int get_heap_position(VertexHandle v) const { return d->position_[v.idx()]; }
+    void set_heap_position(VertexHandle v, int p) { d->position_[v.idx()] = p; }
+  };
+  using Heap = OpenMesh::Utils::HeapT<VertexHandle, HeapInterface>;
+
+  // v in the heap under its cheapest collapse not refused, or out of it.
+  void cost(VertexHandle v) {
+    float best = FLT_MAX;
+    HalfedgeHandle target;
+    for (const auto h : mesh_.voh_range(v)) {
+      if (refused_[h.idx()]) continue;
+      const float p = priority_module_->collapse_priority(CollapseInfo(mesh_, h));
+      if (p >= 0.0f && p < best) {
+        best = p;
+        target = h;
+      }
+    }
+    const bool stored = heap_->is_stored(v);
+    target_[v.idx()] = target;
+    priority_[v.idx()] = target.is_valid() ? best : -1.0f;
+    if (target.is_valid())
+      stored ? heap_->update(v) : heap_->insert(v);
+    else if (stored)
+      heap_->remove(v);
+  }
+
+  OMesh& mesh_;
+  Module* priority_module_ = nullptr;
+  Heap* heap_ = nullptr;
+  std::vector<HalfedgeHandle> target_;
+  std::vector<float> priority_;
+  std::vector<int> position_;
+  std::vector<char> refused_;
 };
 
 void check_options(const DecimateOptions& o) {
@@ -146,8 +263,9 @@ Mesh from_openmesh(const OMesh& om) {
 
 }  // namespace
 
-Mesh decimate(const Mesh& mesh, std::size_t n_vertices, const DecimateOptions& options) {
+Mesh decimate(const Mesh& mesh, std::size_t n_vertices, const DecimateOptions& options, std::string* stopped) {
   check_options(options);
+  if (stopped != nullptr) stopped->clear();
   if (n_vertices < 4) throw ParameterError("a cage needs at least 4 vertices, got " + std::to_string(n_vertices));
   // OpenMesh's normals and quadrics square and multiply coordinates, and its
   // degeneracy checks are absolute: coordinates beyond 2^+-20 in magnitude
@@ -173,16 +291,16 @@ Mesh decimate(const Mesh& mesh, std::size_t n_vertices, const DecimateOptions& o
     throw MeshError("decimate: " + std::to_string(n_vertices) + " vertices asked but the mesh has " +
                     std::to_string(have) + what + (kept.size() < mesh.n_vertices() ? " in its faces" : ""));
 
-  using Decimater = OpenMesh::Decimater::DecimaterT<OMesh>;
-  Decimater decimater(om);
+  LazyDecimater decimater(om);
   OpenMesh::Decimater::ModQuadricT<OMesh>::Handle quadric;
   OpenMesh::Decimater::ModNormalFlippingT<OMesh>::Handle normals;
   OpenMesh::Decimater::ModAspectRatioT<OMesh>::Handle aspect;
   ModBoundaryAngleT<OMesh>::Handle boundary;
+  // The binary modules run in this order: the cheapest first.
   decimater.add(quadric);
-  decimater.add(normals);
-  decimater.add(aspect);
   decimater.add(boundary);
+  decimater.add(aspect);
+  decimater.add(normals);
   decimater.module(normals).set_max_normal_deviation(options.max_normal_deviation);
   decimater.module(aspect).set_aspect_ratio(static_cast<float>(options.max_aspect_ratio));
   decimater.module(boundary).set_max_angle(options.max_boundary_angle);
@@ -190,25 +308,26 @@ Mesh decimate(const Mesh& mesh, std::size_t n_vertices, const DecimateOptions& o
   decimater.set_observer(&observer);
   if (!decimater.initialize()) throw MeshError("decimate: OpenMesh's decimater did not initialize");
 
-  // Loop: one pass to the count. Catmull-Clark: a collapse removes 4 (on the
-  // boundary) to 6 (inside) quad vertices; collapse a sixth of the excess at
-  // a time (never overshooting by more than 5). Garbage collection
-  // after each pass keeps the counts exact; the next pass rebuilds its heap.
+  // One pass to the count. Catmull-Clark counts the quad cage's vertices (the
+  // triangles' vertices, edges and faces): a collapse removes one vertex, two
+  // edges and a face on the boundary (4), three edges and two faces inside
+  // (6), so the first count at most n_vertices is at least n_vertices - 5.
   std::size_t count = have;
-  while (count > n_vertices) {
-    const std::size_t excess = count - n_vertices;
-    const std::size_t collapses = quads ? std::max<std::size_t>(excess / 6, 1) : excess;
-    const std::size_t made = decimater.decimate(collapses);
-    observer.rethrow();
-    om.garbage_collection();
-    count = quads ? quad_vertices(om) : om.n_vertices();
-    if (made == 0) break;
+  decimater.decimate_to(count, n_vertices, decimater.module(quadric), [&](const auto& ci) -> std::size_t {
+    if (!quads) return 1;
+    return om.is_boundary(ci.v0v1) || om.is_boundary(ci.v1v0) ? 4 : 6;
+  });
+  observer.rethrow();
+  om.garbage_collection();
+  count = quads ? quad_vertices(om) : om.n_vertices();
+  if (count > n_vertices) {
+    std::string why = "decimate stopped at " + std::to_string(count) + what + " of the " +
+                      std::to_string(n_vertices) + " asked (from " + std::to_string(have) +
+                      "): every further collapse would flip a normal, thin a face or cut a boundary corner "
+                      "(max_normal_deviation, max_aspect_ratio, max_boundary_angle)";
+    if (stopped == nullptr) throw MeshError(why);
+    *stopped = std::move(why);
   }
-  if (count > n_vertices || (quads && count + 5 < n_vertices))
-    throw MeshError("decimate stopped at " + std::to_string(count) + what + " of the " + std::to_string(n_vertices) +
-                    " asked (from " + std::to_string(have) +
-                    "): every further collapse would flip a normal, thin a face or cut a boundary corner "
-                    "(max_normal_deviation, max_aspect_ratio, max_boundary_angle)");
   Mesh triangles = from_openmesh(om);
   for (double& x : triangles.vertices) x = std::ldexp(x, e);
   return quads ? quads_from_triangles(triangles) : triangles;

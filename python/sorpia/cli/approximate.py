@@ -4,19 +4,22 @@ from __future__ import annotations
 
 import sys
 import time
+import warnings
 
 import numpy as np
 
 from .. import __version__
 from .common import (EXIT_OK, SCHEME_LABELS, UserError, check_mesh_suffix, check_paths, fmt_seconds, is_triangles,
-                     read_input, solve_tags, tags_summary)
+                     read_input, report_warnings, solve_tags, tags_summary, warn_once)
 from .output import write_json
 from .progress import Progress
 
 
 def _cage(input_mesh, vertices, cage, scheme, sharp_angle, source, progress):
     """The cage to fit: (vertices, faces, tags, scheme, how it was made). --cage: read (its tags kept, with
-    --sharp-angle's creases added); --vertices N: the input mesh decimated (sorpia.decimate)."""
+    --sharp-angle's creases added); --vertices N: the input mesh decimated (sorpia.decimate). Where the guards stop
+    decimation above N, the cage it reached is fitted: a warning says so, and how it was made records why
+    ("stopped")."""
     if cage is not None:
         progress.status(f"reading {cage}")
         mesh = read_input(cage)
@@ -26,7 +29,7 @@ def _cage(input_mesh, vertices, cage, scheme, sharp_angle, source, progress):
         if scheme == "auto":
             scheme = "loop" if is_triangles(mesh.faces) else "catmull-clark"
         return mesh.vertices, mesh.faces, tags, scheme, {"from": "file", "path": str(cage)}
-    from .. import decimate
+    from .. import DecimationWarning, decimate
 
     if len(input_mesh.faces) == 0:
         raise UserError(f"{source} is a point cloud (no faces): --vertices decimates a mesh's faces; give the "
@@ -38,10 +41,18 @@ def _cage(input_mesh, vertices, cage, scheme, sharp_angle, source, progress):
     scheme = "loop" if scheme == "auto" else scheme
     progress.status(f"decimating to {vertices} vertices")
     t0 = time.perf_counter()
-    made = decimate(input_mesh.vertices, input_mesh.faces, vertices, scheme=scheme, sharp_angle=sharp_angle)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        made = decimate(input_mesh.vertices, input_mesh.faces, vertices, scheme=scheme, sharp_angle=sharp_angle,
+                        strict=False)
+    stopped = next((str(w.message) for w in caught if issubclass(w.category, DecimationWarning)), None)
+    if stopped is not None:
+        caught = [w for w in caught if not issubclass(w.category, DecimationWarning)]
+        warn_once(f"{stopped}; fitting the cage of {len(made.vertices)} vertices it reached")
+    report_warnings(caught)
     tags = {"creases": made.creases} if made.creases is not None and len(made.creases[0]) else {}
     return made.vertices, made.faces, tags, scheme, {"from": "decimation", "vertices_asked": vertices,
-                                                     "mesh_vertices": n_referenced,
+                                                     "mesh_vertices": n_referenced, "stopped": stopped,
                                                      "seconds": time.perf_counter() - t0}
 
 
@@ -117,7 +128,8 @@ def approximate_summary(d: dict) -> str:
     """The summary `sorpia approximate` prints."""
     f, first = d["final"], d["history"][0]
     made = (f"read from {d['cage']['path']}" if d["cage"]["from"] == "file" else
-            f"decimated from {d['cage']['mesh_vertices']} vertices")
+            f"decimated from {d['cage']['mesh_vertices']} vertices" +
+            (f" ({d['cage']['vertices_asked']} asked: the guards stopped decimation)" if d["cage"]["stopped"] else ""))
     t = d["timings"]
     inner = ", ".join(f"{k.split('.', 1)[1]} {fmt_seconds(v)}" for k, v in t.items()
                       if k.startswith("approximate.") and k != "approximate.total")

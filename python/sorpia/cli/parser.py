@@ -266,7 +266,8 @@ def build_parser() -> argparse.ArgumentParser:
     mesh_output(app, "fitted cage")
     cage_source = app.add_mutually_exclusive_group(required=True)
     cage_source.add_argument("--vertices", type=_positive_int, metavar="N",
-                             help="make the cage by decimating the input's triangles to N vertices")
+                             help="make the cage by decimating the input's triangles to N vertices (where the "
+                             "guards stop decimation above N, the cage reached is fitted, with a warning)")
     cage_source.add_argument("--cage", metavar="CAGE", help="the cage as a mesh file (its tags are used); only read")
     app.add_argument("--scheme", choices=CLI_SCHEMES, default="auto",
                      help="subdivision scheme: auto = Loop for a triangle cage (and for --vertices), Catmull-Clark "

@@ -5,6 +5,7 @@
 /// decimated triangles split into quads.
 
 #include <cstddef>
+#include <string>
 
 #include "sorpia/mesh.hpp"
 #include "sorpia/subdivision.hpp"
@@ -31,11 +32,15 @@ struct DecimateOptions {
   double max_boundary_angle = 30.0;
 };
 
-/// The mesh decimated by OpenMesh's DecimaterT with the quadric error module
-/// (ModQuadricT, Garland and Heckbert's quadrics of the faces' planes; a
-/// collapse moves a vertex onto its neighbour, so the cage's vertices are
-/// input vertices), guarded by ModNormalFlippingT, ModAspectRatioT and the
-/// boundary angle of `options`.
+/// The mesh decimated on OpenMesh's Decimater framework (BaseDecimaterT) with
+/// the quadric error module (ModQuadricT, Garland and Heckbert's quadrics of
+/// the faces' planes; a collapse moves a vertex onto its neighbour, so the
+/// cage's vertices are input vertices), guarded by ModNormalFlippingT,
+/// ModAspectRatioT and the boundary angle of `options`. Collapses are made
+/// cheapest first, their costs kept up to date as DecimaterT keeps them;
+/// OpenMesh's legality test and the guards judge the cheapest candidate when
+/// it comes up (a refused one makes way for the next), not every candidate of
+/// every vertex whose one-ring changed as DecimaterT does.
 ///
 /// Loop: a triangle mesh of exactly `n_vertices` vertices. Catmull-Clark: the
 /// decimated triangles split into three quads each (quads_from_triangles),
@@ -50,10 +55,15 @@ struct DecimateOptions {
 /// @throw MeshError  a face that is not a triangle, an index out of range, a
 ///                   face OpenMesh's half-edge mesh cannot take (named), a
 ///                   mesh with fewer referenced vertices than `n_vertices`,
-///                   or a decimation the guards stop before `n_vertices`
-///                   (saying how far it got)
+///                   or, without `stopped`, a decimation the guards stop
+///                   before `n_vertices` (saying how far it got)
+/// @param stopped    when given: a decimation the guards stop before
+///                   `n_vertices` returns the mesh it reached (more vertices
+///                   than asked) and says so here, in the words of that
+///                   MeshError; cleared when the count is reached
 /// @throw ParameterError n_vertices < 4 or an option out of range
-Mesh decimate(const Mesh& mesh, std::size_t n_vertices, const DecimateOptions& options = {});
+Mesh decimate(const Mesh& mesh, std::size_t n_vertices, const DecimateOptions& options = {},
+              std::string* stopped = nullptr);
 
 /// Each triangle split into three quads by joining its centroid to its edge
 /// midpoints: corner k of triangle (a, b, c) gives the quad
