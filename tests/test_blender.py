@@ -190,6 +190,12 @@ def test_blender_draws_the_approximated_cage(tmp_path):
     ours = sorpia.limit_points(res.control_vertices, cage.faces, scheme="catmull-clark", creases=cage.creases)
     diagonal = np.linalg.norm(V.max(axis=0) - V.min(axis=0))
     assert len(cage.creases[0]) > 0
-    assert np.abs(limit - ours).max() < 1e-6 * diagonal
+    # Where a crease ends inside the surface (a dart: one crease edge at the vertex) Blender's patches, isolated
+    # to its highest quality and summed in float32, sit a few 1e-6 of the diagonal off the limit point, which
+    # OpenSubdiv's Bfr in double puts where Far's limit mask does (1e-16): looser there, float32's bound elsewhere.
+    darts = np.bincount(np.asarray(cage.creases[0]).ravel(), minlength=len(ours)) == 1
+    error = np.abs(limit - ours).max(axis=1)
+    assert error[~darts].max() < 1e-6 * diagonal
+    assert error.max() < 1e-5 * diagonal
     # Creases dropped, Blender's surface is another one: the comparison sees them.
     assert np.abs(blender_limit(tmp_path, res.control_vertices, cage.faces) - ours).max() > 1e-3 * diagonal
