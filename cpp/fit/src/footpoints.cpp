@@ -50,7 +50,31 @@ PointIndex::PointIndex(const double* points, std::size_t n) : n_(n) {
   points_.assign(points, points + 3 * n);
   nodes_.reserve(2 * (n / kLeafSize + 1) + 1);
   nodes_.push_back(Node{});
-  build(0, 0, static_cast<std::uint32_t>(n));
+  // The top levels on this thread, down to one subtree per task; the
+  // subtrees (disjoint ranges of order_) on the core's threads, each into
+  // nodes of its own, appended after.
+  const int tasks = task_count(n, 65536);
+  int depth = 0;
+  while ((1 << depth) < tasks) ++depth;
+  std::vector<std::array<std::uint32_t, 3>> subtrees;  // (node, begin, end)
+  build(nodes_, 0, 0, static_cast<std::uint32_t>(n), depth, &subtrees);
+  std::vector<std::vector<Node>> built(subtrees.size());
+  detail::for_each_task(subtrees.size() > 1, static_cast<int>(subtrees.size()), [&](int t) {
+    const auto& [node, begin, end] = subtrees[static_cast<std::size_t>(t)];
+    std::vector<Node>& nodes = built[static_cast<std::size_t>(t)];
+    nodes.reserve(2 * ((end - begin) / kLeafSize + 1) + 1);
+    nodes.push_back(Node{});
+    build(nodes, 0, begin, end, -1, nullptr);
+  });
+  for (std::size_t t = 0; t < subtrees.size(); ++t) {
+    // Local node j >= 1 lands at offset + j - 1; its children stay a pair.
+    const auto offset = static_cast<std::uint32_t>(nodes_.size());
+    std::vector<Node>& nodes = built[t];
+    for (Node& nd : nodes)
+      if (nd.left != 0) nd.left += offset - 1;
+    nodes_[subtrees[t][0]] = nodes[0];
+    nodes_.insert(nodes_.end(), nodes.begin() + 1, nodes.end());
+  }
   // Tree order for the points, so that a leaf's points lie together.
   std::vector<double> sorted(3 * n);
   for (std::size_t i = 0; i < n; ++i)
@@ -58,8 +82,13 @@ PointIndex::PointIndex(const double* points, std::size_t n) : n_(n) {
   points_.swap(sorted);
 }
 
-void PointIndex::build(std::uint32_t node, std::uint32_t begin, std::uint32_t end) {
+void PointIndex::build(std::vector<Node>& nodes, std::uint32_t node, std::uint32_t begin, std::uint32_t end, int depth,
+                       std::vector<std::array<std::uint32_t, 3>>* subtrees) {
   // points_ is still in input order here; order_[begin..end) are the node's points.
+  if (depth == 0 && end - begin > kLeafSize) {
+    subtrees->push_back({node, begin, end});
+    return;
+  }
   double lo[3] = {std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
                   std::numeric_limits<double>::infinity()};
   double hi[3] = {-lo[0], -lo[1], -lo[2]};
@@ -69,7 +98,7 @@ void PointIndex::build(std::uint32_t node, std::uint32_t begin, std::uint32_t en
       lo[c] = std::min(lo[c], x);
       hi[c] = std::max(hi[c], x);
     }
-  Node& nd = nodes_[node];
+  Node& nd = nodes[node];
   for (int c = 0; c < 3; ++c) {
     nd.lo[c] = std::nextafter(static_cast<float>(lo[c]), -std::numeric_limits<float>::infinity());
     nd.hi[c] = std::nextafter(static_cast<float>(hi[c]), std::numeric_limits<float>::infinity());
@@ -86,12 +115,12 @@ void PointIndex::build(std::uint32_t node, std::uint32_t begin, std::uint32_t en
   const std::uint32_t mid = begin + (end - begin) / 2;
   std::nth_element(order_.begin() + begin, order_.begin() + mid, order_.begin() + end,
                    [&](std::int64_t a, std::int64_t b) { return points_[3 * a + axis] < points_[3 * b + axis]; });
-  const auto left = static_cast<std::uint32_t>(nodes_.size());
-  nodes_[node].left = left;  // nodes_ may grow below: index, not reference
-  nodes_.push_back(Node{});
-  nodes_.push_back(Node{});
-  build(left, begin, mid);
-  build(left + 1, mid, end);
+  const auto left = static_cast<std::uint32_t>(nodes.size());
+  nodes[node].left = left;  // nodes may grow below: index, not reference
+  nodes.push_back(Node{});
+  nodes.push_back(Node{});
+  build(nodes, left, begin, mid, depth - 1, subtrees);
+  build(nodes, left + 1, mid, end, depth - 1, subtrees);
 }
 
 namespace {
@@ -454,6 +483,9 @@ namespace {
 // domain has side 1): its distance is then exact to about this times the
 // surface's size.
 constexpr double kUvTolerance = 1e-11;
+// The rounding of a computed distance, in units of epsilon times the size of
+// the surface point's coordinates (|p|_1 + distance).
+constexpr double kRounding = 8.0;
 }  // namespace
 
 void refine_footpoints(const LimitSurface& surface, const Topology& topology, const double* points, std::size_t n,
@@ -480,6 +512,7 @@ void refine_footpoints(const LimitSurface& surface, const Topology& topology, co
   // point's steps there (the face's patch prepared once) until the point is
   // done or crosses into another face, where the next round takes it on.
   std::vector<int> steps(n, 0);
+  std::vector<float> predicted(n, -1.0f);  // of the last step taken (below)
   std::vector<std::uint8_t> fresh(n, 1);  // the current point is not evaluated yet
   std::vector<std::int32_t> pending(n);
   for (std::size_t i = 0; i < n; ++i) pending[i] = static_cast<std::int32_t>(i);
@@ -522,6 +555,11 @@ void refine_footpoints(const LimitSurface& surface, const Topology& topology, co
           ab[2 * i] = best_ab[2 * i];
           ab[2 * i + 1] = best_ab[2 * i + 1];
           if (radius[i] < kUvTolerance) return;
+          // A failed full Gauss-Newton step whose predicted decrease of the
+          // distance is within the distance's rounding: a shorter step's
+          // decrease would be rounding too, so the best point is final.
+          if (predicted[i] >= 0.0 && predicted[i] <= kRounding * std::numeric_limits<double>::epsilon() * scale)
+            return;
           if (best_face[i] != face) {  // the best is in another face: the next round steps from there
             fresh[i] = 0;
             again[i] = 1;
@@ -549,6 +587,10 @@ void refine_footpoints(const LimitSurface& surface, const Topology& topology, co
       // not vanish: the trust region shrinks to the tolerance instead.)
       const double len = std::max(std::abs(d[0]), std::abs(d[1]));
       if (!(len > kUvTolerance)) return;
+      // The decrease of the distance that the Gauss-Newton model predicts
+      // for the full step (g . d / 2 over the distance); -1 when the trust
+      // region cuts the step.
+      predicted[i] = len > radius[i] ? -1.0f : static_cast<float>(0.5 * (g1 * d[0] + g2 * d[1]) / fp.distances[i]);
       if (len > radius[i]) d[0] *= radius[i] / len, d[1] *= radius[i] / len;
       radius[i] = std::min(radius[i], len);  // a failure shrinks the step taken
       if (dom.kind(fp.face_ids[i]) == Kind::Sub) d[0] *= 2.0, d[1] *= 2.0;  // local = 2 (u, v)

@@ -5,6 +5,7 @@
 /// k-d tree for nearest-point queries: the geometric half of approximation
 /// (sorpia.approximate).
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -36,7 +37,11 @@ class PointIndex {
     std::uint32_t begin, end;  // range in order_
     std::uint32_t left;        // child index, 0 for a leaf (the right child is left + 1)
   };
-  void build(std::uint32_t node, std::uint32_t begin, std::uint32_t end);
+  /// Node `node` of `nodes` over order_[begin, end) and its subtree; at
+  /// `depth` 0 (counting down; -1: never) an inner node is only listed in
+  /// `subtrees` as (node, begin, end), to be built later.
+  void build(std::vector<Node>& nodes, std::uint32_t node, std::uint32_t begin, std::uint32_t end, int depth,
+             std::vector<std::array<std::uint32_t, 3>>* subtrees);
   std::size_t n_ = 0;
   std::vector<double> points_;       // (n, 3) in tree order
   std::vector<std::int64_t> order_;  // tree position -> input index
@@ -79,7 +84,9 @@ Footpoints closest_points(const LimitSurface& surface, const Topology& topology,
 /// previous control vertices) to local minima of the distance to their
 /// points: Gauss-Newton steps on (u, v) with Bfr's first derivatives in a
 /// trust region (one grid spacing at the start), a step never increasing
-/// the distance. A step that
+/// the distance. A point is final when its next step is below 1e-11 in
+/// (u, v), or when a full (uncut) step failed although the model predicted a
+/// decrease of the distance no larger than the distance's rounding. A step that
 /// leaves the face's domain stops on its edge and, where a face lies across
 /// that edge (not a hole), continues in that face from the same surface point
 /// ("hops"); on a boundary edge it slides along the edge. Fills positions,
