@@ -505,7 +505,7 @@ void refine_footpoints(const LimitSurface& surface, const Topology& topology, co
   std::vector<double> ab(2 * n), best_du(3 * n), best_dv(3 * n),
       radius(n, 1.0 / std::max(1, options.grid > 0 ? options.grid : 4));
   std::vector<std::int32_t> best_face(fp.face_ids), best_chart(n);
-  std::vector<double> best_uv(fp.uv), best_ab;
+  std::vector<double> best_ab;
   for (std::size_t i = 0; i < n; ++i) chart[i] = best_chart[i] = dom.from_uv(fp.face_ids[i], &fp.uv[2 * i], &ab[2 * i]);
   best_ab = ab;
   // Each round visits the faces the pending points are in, and runs each
@@ -544,8 +544,6 @@ void refine_footpoints(const LimitSurface& surface, const Topology& topology, co
           best_chart[i] = chart[i];
           best_ab[2 * i] = ab[2 * i];
           best_ab[2 * i + 1] = ab[2 * i + 1];
-          best_uv[2 * i] = uv[0];
-          best_uv[2 * i + 1] = uv[1];
           radius[i] = std::min(2.0 * radius[i], 1.0);
         } else {
           // No better: back to the best point, a smaller region.
@@ -625,7 +623,10 @@ void refine_footpoints(const LimitSurface& surface, const Topology& topology, co
     poll_interrupt();
   }
   fp.face_ids.swap(best_face);
-  fp.uv.swap(best_uv);
+  // The best point's (u, v) (a point never evaluated keeps its own).
+  for (std::size_t i = 0; i < n; ++i)
+    if (fp.distances[i] < std::numeric_limits<double>::infinity())
+      dom.to_uv(fp.face_ids[i], best_chart[i], best_ab[2 * i], best_ab[2 * i + 1], &fp.uv[2 * i]);
   fp.normals.assign(3 * n, 0.0);
   for (std::size_t i = 0; i < n; ++i) detail::unit_normal(&best_du[3 * i], &best_dv[3 * i], &fp.normals[3 * i]);
 }
