@@ -112,13 +112,16 @@ def test_footpoint_distance_is_the_limit_of_distances_to_finer_tessellations(sch
     assert gaps[1] < 0.4 * gaps[0] + 1e-12
 
 
-def test_point_index_finds_the_nearest_point_as_brute_force_does():
+@pytest.mark.parametrize("n_points", [3000, 150_000])
+def test_point_index_finds_the_nearest_point_as_brute_force_does(n_points):
+    # 150,000 points: beyond 65,536 the tree's subtrees are built on the core's threads where it has several.
     rng = np.random.default_rng(0)
-    pts = rng.random((3000, 3))
+    pts = rng.random((n_points, 3))
     q = rng.random((500, 3)) * 1.2 - 0.1
     index, dist = _core.PointIndex(pts).nearest(q)
-    brute = np.linalg.norm(q[:, None, :] - pts[None, :, :], axis=-1)
-    np.testing.assert_allclose(dist, brute.min(axis=1), rtol=0, atol=1e-15)
+    brute = np.concatenate([np.linalg.norm(q[j:j + 20, None, :] - pts[None, :, :], axis=-1).min(axis=1)
+                            for j in range(0, len(q), 20)])
+    np.testing.assert_allclose(dist, brute, rtol=0, atol=1e-15)
     np.testing.assert_allclose(np.linalg.norm(q - pts[index], axis=1), dist, atol=1e-15)
 
 
