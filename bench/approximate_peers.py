@@ -255,7 +255,8 @@ measured to its own surface (its subdivision of its cage to level 4 with the ver
 `Subdivfit -nsubdiv 4 -outn`), the one it fits. "interpolation" is `sorpia.interpolate` of the cage (the limit
 surface through the decimated cage's vertices); "decimated cage as it is" the cage's own limit surface.
 "sorpia.approximate" is the call with its defaults (point distance, at most 10 iterations, tol 1e-3; its time is
-the call's, its iterations and why it stopped in brackets); "tangential=0.1" the same with the tangent-distance
+the call's, the first in the process; its iterations and why it stopped in brackets: "the limit" of
+10, "converged" by tol); "tangential=0.1" the same with the tangent-distance
 blend W_i = 0.1 I + 0.9 n_i n_i^T. Times are of one run on a shared machine (the load average is in the stamp).
 
 """
@@ -342,7 +343,7 @@ def table(results, have_subdivfit):
         for row in r["rows"]:
             seconds = f"{row['seconds']:.3g}" if row["seconds"] else "-"
             if row.get("iterations"):
-                why = f", {row['stop_reason']}" if row.get("stop_reason") else ""
+                why = {"iterations": ", the limit", None: ""}.get(row.get("stop_reason"), f", {row.get('stop_reason')}")
                 seconds += f" ({row['iterations']} iterations{why})"
             own = f"{row['own'][0]:.3g}, {row['own'][1]:.3g}" if "own" in row else ""
             lines.append(f"| {row['row']} | {row['scheme']} | {row['rms']:.3g} | {row['max']:.3g} | {seconds} "

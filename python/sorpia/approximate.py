@@ -632,7 +632,8 @@ def approximate(points, cage_vertices, cage_faces, *, scheme: str = "auto", boun
     fit.timings["total"] = time.perf_counter() - t0
     fit.timings["cpu"] = dict(fit.cpu, total=time.process_time() - c0)
     return ApproximationResult(control_vertices=np.ldexp(V, e), face_ids=face_ids, uv=uv,
-                               distances=np.ldexp(distances, e), points=data, weights=weights, iterations=done, converged=stop_reason != "iterations",
-                               stop_reason=stop_reason, best_iteration=best_iteration, method=method,
+                               distances=np.ldexp(distances, e), points=data, weights=weights, iterations=done,
+                               converged=stop_reason != "iterations", stop_reason=stop_reason,
+                               best_iteration=best_iteration, method=method,
                                fairness=fairness, diagonal=float(np.ldexp(diagonal, e)),
                                history=history, timings=fit.timings)

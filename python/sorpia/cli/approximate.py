@@ -109,8 +109,8 @@ def run_approximate(input_path, output, *, vertices=None, cage=None, scheme="aut
             write_mesh(surface, Vs, Fs)
         timings["write"] = time.perf_counter() - t0
     data = {"sorpia_version": __version__, "command": "approximate", "input": str(input_path),
-            "input_points": int(len(points)), "sampling": sampling, "output": str(output), "cage": {**origin, "vertices": int(len(cage_v)),
-                                                                           "faces": int(len(cage_f))},
+            "input_points": int(len(points)), "sampling": sampling, "output": str(output),
+            "cage": {**origin, "vertices": int(len(cage_v)), "faces": int(len(cage_f))},
             "scheme": scheme, "boundary": rule, "tags": {"sharp_angle": sharp_angle, **tags_summary(tags)},
             "surface": surface_stats, "report": None if report is None else str(report), **res.report(),
             "timings": {**timings, **{f"approximate.{k}": v for k, v in res.timings.items() if k != "cpu"}},
