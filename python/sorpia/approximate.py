@@ -223,6 +223,27 @@ def surface_samples(vertices, faces, sampling: str = "area") -> tuple[np.ndarray
     uses weighs 0). "midpoints": the midpoints of the edges, each weighted by
     a third of the area of its triangles (exact for g quadratic on each
     triangle; about three times as many points as vertices).
+
+    Parameters
+    ----------
+    vertices : array_like, (k, 3) float
+        The mesh's vertices; finite.
+    faces : array_like
+        Its faces: an (m, 3) or (m, k) integer array, a list of polygons or
+        `sorpia.Polygons`.
+    sampling : {"area", "midpoints"}
+
+    Returns
+    -------
+    points : (p, 3) float64, weights : (p,) float64
+        The samples and their weights (the weights sum to the area).
+
+    Raises
+    ------
+    sorpia.ParameterError
+        Non-finite vertices, an unknown `sampling`.
+    sorpia.MeshError
+        A face with fewer than 3 vertices or an index out of range.
     """
     if sampling not in SAMPLINGS:
         raise ParameterError(f"sampling = {sampling!r} must be one of {', '.join(SAMPLINGS)}")
