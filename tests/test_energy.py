@@ -244,6 +244,37 @@ def test_quadrature_converges_on_a_closed_mesh():
         assert errors[2] < 1e-2, errors  # the default: Bfr's polynomial rings exact, its corner patch approximated
 
 
+def test_semi_sharp_creases_are_measured_on_each_side():
+    """A roof: a flat 8 x 8 quad grid folded along its middle column, the fold
+    tagged as a crease. Each side's surface, with the crease infinitely
+    sharp, is the affine map of that side (the crease and boundary rules
+    reproduce linear functions), so semi_sharp="sharp" measures zero bending
+    whatever the tagged sharpness. As tagged, a crease of sharpness s turns
+    the surface within a layer 2^-s of a face wide, the same shape scaled in
+    the parameter (subdivision is self-similar): its bending, (d / w)^2 over
+    width w for a turn d, doubles with each unit of sharpness."""
+    n = 9
+    v, f = flat_quad_grid(n)
+    v[:, 2] = 0.5 * np.abs(v[:, 0] - 4)
+    edges = np.array([[4 + n * j, 4 + n * (j + 1)] for j in range(n - 1)])
+    tagged = []
+    for s in (1.0, 2.0, 3.0, 4.0):
+        creases = (edges, np.full(len(edges), s))
+        k = sorpia.fairness_matrix(f, len(v), scheme="catmull-clark", creases=creases)
+        # zero to rounding: the entries of K are of order 1, the vertices of order 10
+        assert abs(energy(k, v)) < 1e-9 * abs(k).max() * np.abs(v).max() ** 2
+        tagged.append(energy(sorpia.fairness_matrix(f, len(v), scheme="catmull-clark", creases=creases,
+                                                    semi_sharp="as-tagged"), v))
+    assert tagged[0] > 1.0
+    # exact doubling to rounding: the layers are polynomial pieces integrated exactly at every s here
+    assert np.allclose(np.array(tagged[1:]) / tagged[:-1], 2.0, rtol=1e-9), tagged
+    # an infinitely sharp crease is the same under both
+    infinite = (edges, np.full(len(edges), sorpia._core.INFINITE_SHARPNESS))
+    a = sorpia.fairness_matrix(f, len(v), scheme="catmull-clark", creases=infinite)
+    b = sorpia.fairness_matrix(f, len(v), scheme="catmull-clark", creases=infinite, semi_sharp="as-tagged")
+    assert abs(a - b).max() == 0.0
+
+
 @pytest.mark.parametrize("options, words", [
     (dict(thin_plate=-1.0), "thin_plate must be a finite number >= 0"),
     (dict(membrane=float("nan")), "membrane must be a finite number >= 0"),
@@ -256,6 +287,7 @@ def test_quadrature_converges_on_a_closed_mesh():
     (dict(thin_plate="1"), "thin_plate must be a real number"),
     (dict(depth=True), "depth = True must be an integer"),
     (dict(gauss_points=2.5), "gauss_points = 2.5 must be an integer"),
+    (dict(semi_sharp="smooth"), "semi_sharp must be one of 'sharp', 'as-tagged'"),
 ])
 def test_bad_options(options, words):
     v, f = cube()

@@ -316,6 +316,7 @@ def test_float_targets_are_refused(ico):
     (dict(thin_plate=0.0, membrane=0.0), "thin_plate and membrane are both 0"),
     (dict(tol=0.0), r"tol must be a real number in \(0, 1\)"),
     (dict(max_iter=0), "max_iter"),
+    (dict(semi_sharp="layer"), "semi_sharp must be one of 'sharp', 'as-tagged'"),
 ])
 def test_bad_options_are_refused(ico, options, message):
     with pytest.raises(ParameterError, match=message):

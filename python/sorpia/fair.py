@@ -17,7 +17,10 @@ equal the targets, and the rest of the freedom minimises the fairness energy
          + membrane   * integral(|S_u|^2 + |S_v|^2)
 
 of the fine mesh's limit surface S, a quadratic form tr(V^T K V) in the fine
-control vertices (K: `sorpia.fairness_matrix` of the fine mesh).
+control vertices (K: `sorpia.fairness_matrix` of the fine mesh; by default
+with its semi-sharp creases and corners taken as infinitely sharp, so that
+the bending is measured on each side of a crease and the fairing does not
+flatten the creases: see `sorpia.energy`).
 
 The solve (sorpia::fair_solve in the C++ core): the constraint rows, the fine
 mesh's limit matrix B at the targets' children, touch no other target's child
@@ -51,7 +54,7 @@ from ._meshinfo import bounding_box_diagonal
 from ._validate import DEFAULT_BOUNDARY, DEFAULT_SCHEME, as_rules, as_vertices
 from .errors import MeshError, ParameterError
 from .limit import TAGS_DOC as _TAGS_DOC
-from .energy import matrix_arrays
+from .energy import check_semi_sharp, matrix_arrays
 from .solve import InterpolationResult, Interpolator, check_options
 
 # The iteration's window: the energy change is measured over this many iterations.
@@ -208,7 +211,7 @@ def _fine_tags(tags: _core.Tags) -> tuple:
 def fair_interpolate(vertices, faces, *, scheme: str = DEFAULT_SCHEME, levels: int = 1, thin_plate: float = 1.0,
                      membrane: float = 0.0, targets=None, boundary: str = DEFAULT_BOUNDARY, creases=None,
                      corners=None, holes=None, tol: float = 1e-6, max_iter: int = 2000,
-                     threads: int = 1) -> FairResult:
+                     threads: int = 1, semi_sharp: str = "sharp") -> FairResult:
     """A control mesh `levels` subdivision steps finer than (`vertices`,
     `faces`) whose limit surface passes through the targets and whose
     fairness energy is least (module docstring).
@@ -237,6 +240,12 @@ def fair_interpolate(vertices, faces, *, scheme: str = DEFAULT_SCHEME, levels: i
         At most this many iterations.
     threads : int
         Threads for the products with the fairness matrix.
+    semi_sharp : {"sharp", "as-tagged"}
+        How the energy takes semi-sharp creases and corners
+        (`sorpia.fairness_matrix`): "sharp" measures the bending on each side
+        of a crease and keeps the crease; "as-tagged" also counts the thin
+        layer where a semi-sharp crease turns, which the minimiser then
+        flattens at the cost of bending elsewhere.
 
     Returns
     -------
@@ -244,6 +253,7 @@ def fair_interpolate(vertices, faces, *, scheme: str = DEFAULT_SCHEME, levels: i
     """
     t0 = time.perf_counter()
     levels, thin_plate, membrane, tol = check_fair_options(levels, thin_plate, membrane, tol)
+    semi_sharp = check_semi_sharp(semi_sharp)
     check_options("auto", tol=1e-10, max_iter=max_iter, threads=threads)  # max_iter and threads, as interpolate's
     v0 = as_vertices(vertices)
     n = v0.shape[0]
@@ -282,7 +292,8 @@ def fair_interpolate(vertices, faces, *, scheme: str = DEFAULT_SCHEME, levels: i
                         "opposite order (a pillow), whose refined faces meet along edges of four faces: fair "
                         "interpolation cannot refine them (interpolate can fit such a mesh)") from None
     t = time.perf_counter()
-    k_data, k_indices, k_indptr = matrix_arrays(fine_topology, fine_rules, thin_plate, membrane)
+    k_data, k_indices, k_indptr = matrix_arrays(fine_topology, fine_rules, thin_plate, membrane,
+                                                semi_sharp=semi_sharp)
     timings["energy"] = time.perf_counter() - t
 
     start = np.ascontiguousarray(R @ np.asarray(plain.control_vertices))
