@@ -56,7 +56,9 @@ struct FairnessQuadrature {
 ///
 /// Assembled from the derivative rows of LimitSurface::rows (Bfr's stencils),
 /// one dense element matrix per face (one per local topology with
-/// FairnessQuadrature::reuse), merged per row; threads from the core's pool. Each face's domain is split `depth` times towards its marks;
+/// FairnessQuadrature::reuse), summed row by row straight into the CSR;
+/// threads from the core's pool. Each face's domain is split `depth` times
+/// towards its marks;
 /// a Catmull-Clark piece away from them (down to Bfr's isolation level 4) is
 /// a bicubic B-spline piece, integrated in closed form from the derivative
 /// rows at 2 x 2 points; every other piece (Loop's, those at the marks) by
