@@ -64,9 +64,10 @@ def tagged(scheme):
 
 
 def fine_energy(res, thin_plate=1.0, membrane=0.0):
-    """K of the fine mesh with its tags (sorpia.fairness_matrix), dense."""
+    """K of the fine mesh with its tags (sorpia.fairness_matrix, with
+    fair_interpolate's default depth 0), dense."""
     return sorpia.fairness_matrix(res.faces, len(res.control_vertices), thin_plate=thin_plate, membrane=membrane,
-                                  **fine_kwargs(res)).toarray()
+                                  depth=0, **fine_kwargs(res)).toarray()
 
 
 def fine_kwargs(res):
@@ -317,6 +318,8 @@ def test_float_targets_are_refused(ico):
     (dict(tol=0.0), r"tol must be a real number in \(0, 1\)"),
     (dict(max_iter=0), "max_iter"),
     (dict(semi_sharp="layer"), "semi_sharp must be one of 'sharp', 'as-tagged'"),
+    (dict(depth=13), r"depth must be in 0\.\.12, got 13"),
+    (dict(depth=1.5), "depth = 1.5 must be an integer"),
 ])
 def test_bad_options_are_refused(ico, options, message):
     with pytest.raises(ParameterError, match=message):

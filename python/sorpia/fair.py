@@ -55,7 +55,7 @@ from ._validate import DEFAULT_BOUNDARY, DEFAULT_SCHEME, as_rules, as_vertices
 from .errors import MeshError, ParameterError
 from .limit import TAGS_DOC as _TAGS_DOC
 from .energy import check_semi_sharp, matrix_arrays
-from .solve import InterpolationResult, Interpolator, check_options
+from .solve import InterpolationResult, Interpolator, _integer, check_options
 
 # The iteration's window: the energy change is measured over this many iterations.
 ENERGY_WINDOW = 10
@@ -211,7 +211,7 @@ def _fine_tags(tags: _core.Tags) -> tuple:
 def fair_interpolate(vertices, faces, *, scheme: str = DEFAULT_SCHEME, levels: int = 1, thin_plate: float = 1.0,
                      membrane: float = 0.0, targets=None, boundary: str = DEFAULT_BOUNDARY, creases=None,
                      corners=None, holes=None, tol: float = 1e-6, max_iter: int = 2000,
-                     threads: int = 1, semi_sharp: str = "sharp") -> FairResult:
+                     threads: int = 1, semi_sharp: str = "sharp", depth: int = 0) -> FairResult:
     """A control mesh `levels` subdivision steps finer than (`vertices`,
     `faces`) whose limit surface passes through the targets and whose
     fairness energy is least (module docstring).
@@ -246,6 +246,15 @@ def fair_interpolate(vertices, faces, *, scheme: str = DEFAULT_SCHEME, levels: i
         of a crease and keeps the crease; "as-tagged" also counts the thin
         layer where a semi-sharp crease turns, which the minimiser then
         flattens at the cost of bending elsewhere.
+    depth : int
+        The energy's quadrature (`sorpia.fairness_matrix`'s depth), 0..12.
+        0 (the default) integrates the faces at extraordinary vertices by
+        the Gauss rule over the whole face, like every other face: the
+        parametric thin-plate energy there grows by 4 lambda^2 per ring of
+        Bfr's pieces and diverges on the exact surface, so a rule that looks
+        closer (4: Bfr's own isolation level) weighs the few vertices of
+        high valence more, and the minimiser flattens their neighbourhoods
+        at the cost of bending elsewhere (docs/fair.md).
 
     Returns
     -------
@@ -254,6 +263,9 @@ def fair_interpolate(vertices, faces, *, scheme: str = DEFAULT_SCHEME, levels: i
     t0 = time.perf_counter()
     levels, thin_plate, membrane, tol = check_fair_options(levels, thin_plate, membrane, tol)
     semi_sharp = check_semi_sharp(semi_sharp)
+    depth = _integer(depth, "depth", "an integer in 0..12")
+    if not 0 <= depth <= 12:
+        raise ParameterError(f"depth must be in 0..12, got {depth}")
     check_options("auto", tol=1e-10, max_iter=max_iter, threads=threads)  # max_iter and threads, as interpolate's
     v0 = as_vertices(vertices)
     n = v0.shape[0]
@@ -293,7 +305,7 @@ def fair_interpolate(vertices, faces, *, scheme: str = DEFAULT_SCHEME, levels: i
                         "interpolation cannot refine them (interpolate can fit such a mesh)") from None
     t = time.perf_counter()
     k_data, k_indices, k_indptr = matrix_arrays(fine_topology, fine_rules, thin_plate, membrane,
-                                                semi_sharp=semi_sharp)
+                                                depth=depth, semi_sharp=semi_sharp)
     timings["energy"] = time.perf_counter() - t
 
     start = np.ascontiguousarray(R @ np.asarray(plain.control_vertices))
