@@ -1,5 +1,7 @@
 // Bindings of the fitting layer: the fairness matrix, uniform refinement
 // with its matrix R, and the fair solve. Conversion and error translation only.
+#include <optional>
+
 #include <pybind11/stl.h>
 
 #include "bindings.hpp"
@@ -44,18 +46,25 @@ void bind_fit(py::module_& m) {
   m.def(
       "fairness_matrix",
       [](const sorpia::LimitSurface& surface, double thin_plate, double membrane, int gauss_points, int depth,
-         bool reuse) {
+         bool reuse, std::optional<Vertices> reference) {
+        if (reference) {
+          check_shape(*reference, 3, "reference");
+          check_rows(*reference, surface.n_vertices(), "reference", "the surface");
+        }
         sorpia::CsrMatrix k;
         {
           LongCall call;
           k = sorpia::fairness_matrix(surface, thin_plate, membrane,
-                                     sorpia::FairnessQuadrature{gauss_points, depth, reuse});
+                                     sorpia::FairnessQuadrature{gauss_points, depth, reuse},
+                                     reference ? reference->data() : nullptr);
         }
         return csr_tuple(std::move(k));
       },
       "surface"_a, "thin_plate"_a, "membrane"_a, "gauss_points"_a, "depth"_a, "reuse"_a = true,
+      "reference"_a.noconvert() = py::none(),
       "Fairness matrix K (thin-plate and membrane energy) as CSR arrays (data, indices, indptr); reuse=False\n"
-      "integrates every face on its own (FairnessQuadrature::reuse).");
+      "integrates every face on its own (FairnessQuadrature::reuse); reference: (n, 3) control vertices whose\n"
+      "limit surface gives each face its metric (sorpia::fairness_matrix).");
   m.def(
       "refine_uniform",
       [](const sorpia::Topology& topology, const sorpia::Rules& rules, int levels) {

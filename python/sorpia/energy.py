@@ -79,7 +79,7 @@ SEMI_SHARP = ("sharp", "as-tagged")
 
 def fairness_matrix(faces, n_vertices: int, *, scheme: str = DEFAULT_SCHEME, boundary: str = DEFAULT_BOUNDARY,
                     creases=None, corners=None, holes=None, thin_plate: float = 1.0, membrane: float = 0.0,
-                    gauss_points: int = 4, depth: int = 4, semi_sharp: str = "sharp"):
+                    gauss_points: int = 4, depth: int = 4, semi_sharp: str = "sharp", reference=None):
     """The fairness matrix K of a mesh's limit surface, (n, n) scipy CSR,
     symmetric positive semidefinite: ``V[:, c] @ K @ V[:, c]`` summed over the
     columns is the energy of control vertices V (see the module docstring
@@ -103,6 +103,19 @@ def fairness_matrix(faces, n_vertices: int, *, scheme: str = DEFAULT_SCHEME, bou
         docstring): "sharp" measures the surface with them infinitely sharp,
         the bending on each side of a crease; "as-tagged" the surface as
         tagged, the thin layer where a crease turns included.
+    reference : (n_vertices, 3) array_like float, optional
+        None: the parametric measure (module docstring). Given: each face is
+        measured in a fixed first fundamental form G, that of the limit
+        surface of these control vertices at the face's centre (a reference
+        shape: fair interpolation passes the input mesh refined), so that a
+        face's energy is the integral of tr(G^-1 H G^-1 H) sqrt(det G) per
+        coordinate (membrane: tr(G^-1 J^T J) sqrt(det G)), H the Hessian and
+        J the Jacobian in Bfr's (u, v); at faces with an extraordinary
+        corner the parametric shape scaled to the area sqrt(det G), since
+        Bfr's parameterisation there is far from affine within the face.
+        Invariant (thin plate) under rotations and uniform scalings of
+        the coordinates; every face integrated on its own (slower); needs
+        a mesh of triangles (Loop) or quads (Catmull-Clark) only.
 
     Returns
     -------
@@ -123,7 +136,10 @@ def fairness_matrix(faces, n_vertices: int, *, scheme: str = DEFAULT_SCHEME, bou
                                 corners=corners, holes=holes)
     topo = built(lambda: _core.Topology(*arrays, n))
     warn_unreferenced(topo, stacklevel=3)
-    data, indices, indptr = matrix_arrays(topo, rules, thin_plate, membrane, gauss_points, depth, semi_sharp)
+    if reference is not None:
+        reference = as_vertices(reference)
+    data, indices, indptr = matrix_arrays(topo, rules, thin_plate, membrane, gauss_points, depth, semi_sharp,
+                                          reference)
     return scipy.sparse.csr_matrix((data, indices, indptr), shape=(n, n))
 
 
@@ -171,11 +187,12 @@ def energy_tags(tags: _core.Tags, n_vertices: int, n_faces: int, semi_sharp: str
 
 
 def matrix_arrays(topology: _core.Topology, rules: _core.Rules, thin_plate=1.0, membrane=0.0, gauss_points=4,
-                  depth=4, semi_sharp="sharp") -> tuple:
+                  depth=4, semi_sharp="sharp", reference=None) -> tuple:
     """K of a topology already built, under `rules`, as CSR arrays (data,
     indices, indptr): what `fairness_matrix` returns, for callers that hold
     the topology (fair interpolation's fine mesh). The surface's vertices are
     zero: K does not use them."""
     tags = energy_tags(rules.tags, topology.n_vertices, topology.n_faces, check_semi_sharp(semi_sharp))
     surface = _core.LimitSurface(topology, np.zeros((topology.n_vertices, 3)), rules.scheme, rules.boundary, tags)
-    return _core.fairness_matrix(surface, *_options(thin_plate, membrane, gauss_points, depth))
+    return _core.fairness_matrix(surface, *_options(thin_plate, membrane, gauss_points, depth),
+                                 reference=None if reference is None else np.ascontiguousarray(reference, np.float64))

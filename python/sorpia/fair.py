@@ -57,6 +57,7 @@ from .limit import TAGS_DOC as _TAGS_DOC
 from .energy import check_semi_sharp, matrix_arrays
 from .solve import InterpolationResult, Interpolator, _integer, check_options
 
+METRICS = ("parameter", "reference")
 # The iteration's window: the energy change is measured over this many iterations.
 ENERGY_WINDOW = 10
 MAX_LEVELS = int(_core.MAX_REFINEMENT_LEVELS)
@@ -211,7 +212,8 @@ def _fine_tags(tags: _core.Tags) -> tuple:
 def fair_interpolate(vertices, faces, *, scheme: str = DEFAULT_SCHEME, levels: int = 1, thin_plate: float = 1.0,
                      membrane: float = 0.0, targets=None, boundary: str = DEFAULT_BOUNDARY, creases=None,
                      corners=None, holes=None, tol: float = 1e-6, max_iter: int = 2000,
-                     threads: int = 1, semi_sharp: str = "sharp", depth: int = 0) -> FairResult:
+                     threads: int = 1, semi_sharp: str = "sharp", depth: int = 0,
+                     metric: str = "parameter") -> FairResult:
     """A control mesh `levels` subdivision steps finer than (`vertices`,
     `faces`) whose limit surface passes through the targets and whose
     fairness energy is least (module docstring).
@@ -255,6 +257,12 @@ def fair_interpolate(vertices, faces, *, scheme: str = DEFAULT_SCHEME, levels: i
         closer (4: Bfr's own isolation level) weighs the few vertices of
         high valence more, and the minimiser flattens their neighbourhoods
         at the cost of bending elsewhere (docs/fair.md).
+    metric : {"parameter", "reference"}
+        How the energy measures a face (`sorpia.fairness_matrix`):
+        "parameter", in Bfr's parameters, every face a unit domain; "reference",
+        in the first fundamental form of the input mesh's own limit surface
+        (the input refined) at the face's centre, so that bending across a
+        face that is long and thin in space is not cheap (docs/fair.md).
 
     Returns
     -------
@@ -266,6 +274,8 @@ def fair_interpolate(vertices, faces, *, scheme: str = DEFAULT_SCHEME, levels: i
     depth = _integer(depth, "depth", "an integer in 0..12")
     if not 0 <= depth <= 12:
         raise ParameterError(f"depth must be in 0..12, got {depth}")
+    if metric not in METRICS:
+        raise ParameterError(f"metric must be one of {', '.join(map(repr, METRICS))}, got {metric!r}")
     check_options("auto", tol=1e-10, max_iter=max_iter, threads=threads)  # max_iter and threads, as interpolate's
     v0 = as_vertices(vertices)
     n = v0.shape[0]
@@ -305,7 +315,8 @@ def fair_interpolate(vertices, faces, *, scheme: str = DEFAULT_SCHEME, levels: i
                         "interpolation cannot refine them (interpolate can fit such a mesh)") from None
     t = time.perf_counter()
     k_data, k_indices, k_indptr = matrix_arrays(fine_topology, fine_rules, thin_plate, membrane,
-                                                depth=depth, semi_sharp=semi_sharp)
+                                                depth=depth, semi_sharp=semi_sharp,
+                                                reference=R @ v0 if metric == "reference" else None)
     timings["energy"] = time.perf_counter() - t
 
     start = np.ascontiguousarray(R @ np.asarray(plain.control_vertices))

@@ -135,8 +135,10 @@ constexpr double kDegree4[2][3] = {{0.445948490915965, 0.108103018168070, 0.2233
 // The pieces of one face and their points (u, v, Gauss weight or 0).
 class Pieces {
  public:
-  Pieces(const Rule& rule, int depth, bool thin_plate_only)
-      : g_(rule), depth_(depth), thin_plate_only_(thin_plate_only) {}
+  // closed_forms: integrate Catmull-Clark's polynomial pieces by ExactForms
+  // (the parametric energy); false: by the Gauss rule (a face metric).
+  Pieces(const Rule& rule, int depth, bool thin_plate_only, bool closed_forms = true)
+      : g_(rule), depth_(depth), thin_plate_only_(thin_plate_only), closed_forms_(closed_forms) {}
 
   void square(UV o, double h, int level, const Marks& m, std::vector<Piece>& out, std::vector<double>& uvw) const {
     const UV c[4] = {o, {o.u + h, o.v}, {o.u + h, o.v + h}, {o.u, o.v + h}};
@@ -147,7 +149,7 @@ class Pieces {
         square({o.u + d.u, o.v + d.v}, k, level + 1, m, out, uvw);
       return;
     }
-    const bool exact = !touches && level <= kExactLevel;
+    const bool exact = closed_forms_ && !touches && level <= kExactLevel;
     out.push_back({exact, h, {h, 0.0, 0.0, h}, uvw.size() / 3, 0});
     if (exact) {
       for (const double t : kSquareData)
@@ -206,6 +208,7 @@ class Pieces {
   const Rule& g_;
   int depth_;
   bool thin_plate_only_;
+  bool closed_forms_;
 };
 
 // Solves a x = b for the columns of b (n x m, row-major) in place, a (n x n)
@@ -541,6 +544,93 @@ Elements face_classes(const LimitSurface& surface, const std::vector<std::uint8_
   return s;
 }
 
+// The terms of the energy of face f measured in a fixed first fundamental
+// form G of the reference surface (fairness_matrix's reference): with G^-1 =
+// L L^T (L lower triangular), tr(G^-1 H G^-1 H) = |L^T H L|_F^2 and
+// tr(G^-1 J^T J) = |J L|_F^2, each term weighted by sqrt(det G).
+std::vector<Term> metric_terms(const double g[3], double thin_plate, double membrane) {
+  const double det = g[0] * g[2] - g[1] * g[1];
+  // G^-1 = [[g2, -g1], [-g1, g0]] / det; its Cholesky factor
+  const double i00 = g[2] / det, i01 = -g[1] / det, i11 = g[0] / det;
+  const double l11 = std::sqrt(i00), l21 = i01 / l11, l22 = std::sqrt(i11 - l21 * l21);
+  const double area = std::sqrt(det);
+  std::vector<Term> terms;
+  if (thin_plate > 0.0) {
+    terms.push_back({{0, 0, l11 * l11, 2 * l11 * l21, l21 * l21}, thin_plate * area});  // (L^T H L)_11
+    terms.push_back({{0, 0, 0, l22 * l11, l22 * l21}, 2.0 * thin_plate * area});        // (L^T H L)_12
+    terms.push_back({{0, 0, 0, 0, l22 * l22}, thin_plate * area});                      // (L^T H L)_22
+  }
+  if (membrane > 0.0) {
+    terms.push_back({{l11, l21, 0, 0, 0}, membrane * area});
+    terms.push_back({{0, l22, 0, 0, 0}, membrane * area});
+  }
+  return terms;
+}
+
+// Per face, the terms of fairness_matrix's reference metric: G the first
+// fundamental form of the limit surface of `reference` at the face's
+// centre; at a face with an extraordinary corner (inside the mesh, valence
+// other than the scheme's), where Bfr's parameterisation is far from affine
+// within the face and a constant G would charge that, the face's parametric
+// shape (the unit square, or the equilateral triangle of Loop) scaled to the
+// area sqrt(det G).
+std::vector<std::vector<Term>> reference_terms(const LimitSurface& surface, const double* reference,
+                                               const std::vector<std::uint8_t>& hole, double thin_plate,
+                                               double membrane) {
+  const Topology& t = surface.topology();
+  const bool loop = surface.scheme() == Scheme::Loop;
+  const std::int32_t size = loop ? 3 : 4, regular_valence = loop ? 6 : 4;
+  std::vector<std::int32_t> faces;
+  std::vector<double> uv;
+  for (std::size_t f = 0; f < t.n_faces(); ++f) {
+    if (hole[f]) continue;
+    if (t.face_size(f) != size)
+      throw ParameterError("the reference metric needs a mesh of " + std::string(loop ? "triangles" : "quads") +
+                           ": face " + std::to_string(f) + " has " + std::to_string(t.face_size(f)) +
+                           " corners (refine the mesh first)");
+    faces.push_back(static_cast<std::int32_t>(f));
+    uv.insert(uv.end(), {loop ? 1.0 / 3.0 : 0.5, loop ? 1.0 / 3.0 : 0.5});
+  }
+  const SurfaceRows rows = surface.rows(faces.data(), uv.data(), faces.size(), 1);
+  const auto& fi = t.face_indices();
+  auto times_reference = [&](const CsrMatrix& m, std::size_t q, double out[3]) {
+    for (auto p = static_cast<std::size_t>(m.indptr[q]); p < static_cast<std::size_t>(m.indptr[q + 1]); ++p)
+      for (std::size_t c = 0; c < 3; ++c) out[c] += m.data[p] * reference[3 * static_cast<std::size_t>(m.indices[p]) + c];
+  };
+  std::vector<std::vector<Term>> out(t.n_faces());
+  for (std::size_t q = 0; q < faces.size(); ++q) {
+    const auto f = static_cast<std::size_t>(faces[q]);
+    double su[3] = {0, 0, 0}, sv[3] = {0, 0, 0};
+    times_reference(rows.du, q, su);
+    times_reference(rows.dv, q, sv);
+    double g[3] = {su[0] * su[0] + su[1] * su[1] + su[2] * su[2], su[0] * sv[0] + su[1] * sv[1] + su[2] * sv[2],
+                   sv[0] * sv[0] + sv[1] * sv[1] + sv[2] * sv[2]};
+    // A guard against a degenerate G (a reference face folded flat): a floor
+    // of 1e-9 of its trace on both axes.
+    const double trace = g[0] + g[2];
+    if (!(trace > 0.0) || !std::isfinite(trace))
+      throw ParameterError("the reference surface is degenerate at face " + std::to_string(f) +
+                           ": its derivatives there are zero or not finite");
+    g[0] += 1e-9 * trace;
+    g[2] += 1e-9 * trace;
+    bool extraordinary = false;
+    for (std::int32_t i = 0; i < size; ++i) {
+      const auto v = static_cast<std::size_t>(fi[static_cast<std::size_t>(t.face_offset(f) + i)]);
+      if (!t.is_boundary(v) && t.valence(v) != regular_valence) extraordinary = true;
+    }
+    if (extraordinary) {
+      const double area = std::sqrt(g[0] * g[2] - g[1] * g[1]);
+      // unit square: I; Loop's equilateral triangle in (u, v): [[1, 1/2], [1/2, 1]] / sqrt(3/4), determinant 1
+      const double k = loop ? area / std::sqrt(0.75) : area;
+      g[0] = k;
+      g[1] = loop ? 0.5 * k : 0.0;
+      g[2] = k;
+    }
+    out[f] = metric_terms(g, thin_plate, membrane);
+  }
+  return out;
+}
+
 // One thread's work space.
 struct Worker {
   std::vector<std::int32_t> local;  // column -> its place in `cols`, -1 elsewhere
@@ -577,7 +667,7 @@ void add_outer(double s, const double* a, std::size_t n, double* e) {
 // triangle, row-major) over the sorted global columns w.cols, w.local their
 // places (store_element clears them).
 void element_matrix(const SurfaceRows& rows, const double* weights, const Piece* pieces, std::size_t n_pieces,
-                 const ElementRules& er, Worker& w) {
+                 const ElementRules& er, const std::vector<Term>& terms, Worker& w) {
   const CsrMatrix* d[6] = {&rows.position, &rows.du, &rows.dv, &rows.duu, &rows.duv, &rows.dvv};
   const std::size_t r0 = pieces[0].first, r1 = pieces[n_pieces - 1].first + pieces[n_pieces - 1].count;
   w.cols.clear();
@@ -601,7 +691,7 @@ void element_matrix(const SurfaceRows& rows, const double* weights, const Piece*
     if (!pc.exact) {
       w.a.resize(n);
       for (std::size_t r = pc.first; r < pc.first + pc.count; ++r)
-        for (const Term& t : er.terms) {
+        for (const Term& t : terms) {
           std::fill(w.a.begin(), w.a.end(), 0.0);
           for (int i = 0; i < 5; ++i) add_row(*d[i + 1], r, t.coef[i], w.local, w.a.data());
           add_outer(weights[r] * t.weight, w.a.data(), n, w.e.data());
@@ -782,7 +872,7 @@ CsrMatrix assemble(const Elements& el, std::size_t n_rows, int n_threads) {
 }  // namespace
 
 CsrMatrix fairness_matrix(const LimitSurface& surface, double thin_plate, double membrane,
-                          const FairnessQuadrature& quadrature) {
+                          const FairnessQuadrature& quadrature, const double* reference) {
   check_options(thin_plate, membrane, quadrature);
   const Topology& topo = surface.topology();
   const Scheme scheme = surface.scheme();
@@ -791,8 +881,10 @@ CsrMatrix fairness_matrix(const LimitSurface& surface, double thin_plate, double
   std::vector<std::uint8_t> hole(n_faces, 0);
   for (const std::int32_t f : surface.tags().holes) hole[static_cast<std::size_t>(f)] = 1;
   const Rule rule = gauss_legendre(quadrature.gauss_points);
-  const Pieces pieces(rule, quadrature.depth, membrane == 0.0);
+  const Pieces pieces(rule, quadrature.depth, membrane == 0.0, reference == nullptr);
   const std::vector<Term> terms = energy_terms(scheme, thin_plate, membrane);
+  const std::vector<std::vector<Term>> face_terms =
+      reference ? reference_terms(surface, reference, hole, thin_plate, membrane) : std::vector<std::vector<Term>>{};
 
   const int n_threads = std::max(1, std::min<int>(detail::available_processors(),
                                                   static_cast<int>(n_faces / kFacesPerTask)));
@@ -801,7 +893,7 @@ CsrMatrix fairness_matrix(const LimitSurface& surface, double thin_plate, double
 
   const ExactForms exact;
   const ElementRules er{terms, exact, thin_plate, membrane};
-  Elements el = face_classes(surface, hole, quadrature.reuse);
+  Elements el = face_classes(surface, hole, quadrature.reuse && reference == nullptr);
   // The faces integrated here: each class's representative, in face order.
   const std::vector<std::int32_t>& direct = el.representative;
   std::vector<std::int32_t> point_faces;
@@ -840,9 +932,9 @@ CsrMatrix fairness_matrix(const LimitSurface& surface, double thin_plate, double
       Worker& w = workers[static_cast<std::size_t>(t)];
       const auto nt = static_cast<std::size_t>(n_threads), ut = static_cast<std::size_t>(t);
       for (std::size_t c = n_chunk * ut / nt; c < n_chunk * (ut + 1) / nt; ++c) {
-        element_matrix(rows, weights.data(), chunk_pieces.data() + face_first[c], face_first[c + 1] - face_first[c],
-                       er, w);
         const auto f = static_cast<std::size_t>(chunk_faces[c]);
+        element_matrix(rows, weights.data(), chunk_pieces.data() + face_first[c], face_first[c + 1] - face_first[c],
+                       er, reference ? face_terms[f] : terms, w);
         const auto cls = static_cast<std::size_t>(el.face_class[f]);
         store_element(w, el.shared[cls] ? el.columns(f) : nullptr, el.shared[cls] ? el.n_columns(f) : 0, cls, el);
       }

@@ -77,9 +77,26 @@ struct FairnessQuadrature {
 /// @param surface     the topology and rules (its vertices are not used)
 /// @param thin_plate  weight of the thin-plate term, finite, >= 0
 /// @param membrane    weight of the membrane term, finite, >= 0; not both 0
+///
+/// With `reference` (n_vertices x 3, row-major) each face is measured in a
+/// fixed first fundamental form G instead of its parameters: the face's
+/// energy is the integral of tr(G^-1 H G^-1 H) sqrt(det G) (membrane:
+/// tr(G^-1 J^T J) sqrt(det G)) per coordinate, H the Hessian and J the
+/// Jacobian in Bfr's (u, v), G that of the limit surface of `reference` at
+/// the face's centre; at a face with an extraordinary corner (inside the mesh,
+/// valence other than 4 / 6), where Bfr's parameterisation is far from affine
+/// within the face and a constant G would charge that, the face's parametric
+/// shape (unit square; Loop's equilateral triangle) scaled to the area
+/// sqrt(det G). Still a quadratic form in V; the thin-plate term is invariant
+/// under rotations and uniform scalings of the coordinates (of V and
+/// `reference` together). Every piece by the Gauss rule, every face on its
+/// own (no shared element matrices). Needs a mesh of the scheme's faces only.
 /// @param quadrature  the rule on each face
-/// @throws ParameterError naming the weight or option out of range
+/// @param reference   nullptr: the parametric measure; else the reference control vertices
+/// @throws ParameterError naming the weight or option out of range; for a
+///         reference, a face of another size or a degenerate reference face
 CsrMatrix fairness_matrix(const LimitSurface& surface, double thin_plate, double membrane,
-                          const FairnessQuadrature& quadrature = FairnessQuadrature{});
+                          const FairnessQuadrature& quadrature = FairnessQuadrature{},
+                          const double* reference = nullptr);
 
 }  // namespace sorpia
