@@ -129,9 +129,9 @@ def _options(thin_plate, membrane, gauss_points, depth) -> tuple:
 def matrix_arrays(topology: _core.Topology, rules: _core.Rules, thin_plate=1.0, membrane=0.0, gauss_points=4,
                   depth=4) -> tuple:
     """K of a topology already built, under `rules`, as CSR arrays (data,
-    indices, indptr): what `fairness_matrix` returns, for callers that hold
-    the topology (fair interpolation's fine mesh). The surface's vertices are
-    zero: K does not use them."""
+    indices, indptr): what `fairness_matrix` returns. The surface's vertices
+    are zero: K does not use them. (Fair interpolation builds its K in the
+    core, next to the solve that uses it.)"""
     surface = _core.LimitSurface(topology, np.zeros((topology.n_vertices, 3)), rules.scheme, rules.boundary,
                                  rules.tags)
     return _core.fairness_matrix(surface, *_options(thin_plate, membrane, gauss_points, depth))
