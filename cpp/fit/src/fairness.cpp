@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdint>
 #include <map>
+#include <stdexcept>
 #include <string>
 #include <unordered_set>
 #include <utility>
@@ -458,6 +459,54 @@ struct Elements {
   }
 };
 
+// The control points of an interior face listed from the topology, for
+// faces whose corners are all interior (Bfr is then not asked): the face's
+// corners, then for each corner i its ring (Catmull-Clark: each edge
+// neighbour followed by the opposite corner of the face after it) from the
+// next corner on, clockwise, each vertex once. Where the corners' rings meet
+// only as they must around one face (a number of repeats fixed by the face's
+// size: 9 for a triangle, 20 for a quad), this is the face's neighbourhood,
+// the vertices its surface depends on, in an order fixed by the corners'
+// valences; otherwise (rings that wrap around and meet again) it returns
+// false. `stamp` marks listed vertices with `mark` (no clearing needed).
+bool topology_control_points(const Topology& t, bool quads, std::size_t f, std::vector<std::int32_t>& out,
+                             std::vector<std::int32_t>& stamp, std::int32_t mark) {
+  const std::int32_t k = t.face_size(f);
+  if (k != (quads ? 4 : 3)) return false;
+  const std::int32_t* vs = t.face_indices().data() + t.face_offset(f);
+  for (std::int32_t i = 0; i < k; ++i) {
+    const auto v = static_cast<std::size_t>(vs[i]);
+    if (t.is_boundary(v) || (quads && !t.quad_ring(v))) return false;
+  }
+  out.clear();
+  int repeats = 0;
+  const auto list = [&](std::int32_t u) {
+    if (stamp[static_cast<std::size_t>(u)] == mark) {
+      ++repeats;
+      return;
+    }
+    stamp[static_cast<std::size_t>(u)] = mark;
+    out.push_back(u);
+  };
+  for (std::int32_t i = 0; i < k; ++i) list(vs[i]);
+  repeats = 0;
+  const auto& ro = t.ring_offsets();
+  const auto& rn = t.ring_neighbors();
+  for (std::int32_t i = 0; i < k; ++i) {
+    const auto v = static_cast<std::size_t>(vs[i]);
+    const std::int32_t b = ro[v], n = ro[v + 1] - b;
+    std::int32_t s0 = 0;
+    while (s0 < n && rn[static_cast<std::size_t>(b + s0)] != vs[(i + 1) % k]) ++s0;
+    if (s0 == n) return false;
+    for (std::int32_t j = 0; j < n; ++j) {
+      const std::int32_t at = (s0 + j) % n;
+      list(rn[static_cast<std::size_t>(b + at)]);
+      if (quads) list(t.face_ring_neighbors()[static_cast<std::size_t>(t.face_ring_offsets()[v] + at)]);
+    }
+  }
+  return repeats == (quads ? 20 : 9);
+}
+
 // The classes of faces. With reuse, by local topology; the key: the number of
 // control points, Bfr's IsRegular(), the face's size, and per corner (from
 // corner 0) its valence, whether it is on the boundary and, there, the place
@@ -500,7 +549,42 @@ Elements face_classes(const LimitSurface& surface, const std::vector<std::uint8_
       s.slot[f] = static_cast<std::int64_t>(live.size());
       live.push_back(static_cast<std::int32_t>(f));
     }
-  s.cps = surface.control_points(live.data(), live.size());
+  // Control points: from the topology where it gives them (regular[] = 2
+  // for those, a key of their own), Bfr's for the other faces.
+  {
+    const bool quads = surface.scheme() == Scheme::CatmullClark;
+    std::vector<std::int32_t> stamp(t.n_vertices(), -1), listed, ask;
+    std::vector<std::int64_t> from_topology(live.size(), -1);  // per live face: its start in `listed`, or -1
+    std::vector<std::int32_t> topo_indices;
+    for (std::size_t l = 0; l < live.size(); ++l) {
+      const auto f = static_cast<std::size_t>(live[l]);
+      if (topology_control_points(t, quads, f, listed, stamp, static_cast<std::int32_t>(f))) {
+        from_topology[l] = static_cast<std::int64_t>(topo_indices.size());
+        topo_indices.insert(topo_indices.end(), listed.begin(), listed.end());
+        topo_indices.push_back(-1);  // end of this face's list
+      } else {
+        ask.push_back(live[l]);
+      }
+    }
+    const FaceControlPoints bfr = surface.control_points(ask.data(), ask.size());
+    s.cps.offsets.assign(1, 0);
+    s.cps.indices.reserve(topo_indices.size() + bfr.indices.size());
+    s.cps.regular.reserve(live.size());
+    std::size_t a = 0;
+    for (std::size_t l = 0; l < live.size(); ++l) {
+      if (from_topology[l] >= 0) {
+        for (auto p = static_cast<std::size_t>(from_topology[l]); topo_indices[p] >= 0; ++p)
+          s.cps.indices.push_back(topo_indices[p]);
+        s.cps.regular.push_back(2);
+      } else {
+        s.cps.indices.insert(s.cps.indices.end(), bfr.indices.begin() + bfr.offsets[a],
+                             bfr.indices.begin() + bfr.offsets[a + 1]);
+        s.cps.regular.push_back(bfr.regular[a]);
+        ++a;
+      }
+      s.cps.offsets.push_back(static_cast<std::int64_t>(s.cps.indices.size()));
+    }
+  }
   const auto& ro = t.ring_offsets();
   const auto& rn = t.ring_neighbors();
   std::map<std::vector<std::int32_t>, std::int32_t> classes;
@@ -657,6 +741,11 @@ void store_element(Worker& w, const std::int32_t* cv, std::size_t n_cv, std::siz
       for (std::size_t j = i; j < n; ++j) out[i * n + j] = out[j * n + i] = w.e[i * n + j];
   } else {
     out.assign(n_cv * n_cv, 0.0);
+    std::size_t found = 0;
+    for (std::size_t i = 0; i < n_cv; ++i) found += w.local[static_cast<std::size_t>(cv[i])] >= 0 ? 1 : 0;
+    if (found != n)
+      throw std::logic_error("a face's stencils reach beyond its control points: the fairness matrix would lose "
+                             "entries");
     for (std::size_t i = 0; i < n_cv; ++i) {
       const std::int32_t a = w.local[static_cast<std::size_t>(cv[i])];
       if (a < 0) continue;  // no weight at any point: a zero row
