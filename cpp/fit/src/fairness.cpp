@@ -3,9 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <map>
 #include <stdexcept>
 #include <string>
+#include <unordered_map>
 #include <unordered_set>
 #include <utility>
 #include <vector>
@@ -587,7 +587,14 @@ Elements face_classes(const LimitSurface& surface, const std::vector<std::uint8_
   }
   const auto& ro = t.ring_offsets();
   const auto& rn = t.ring_neighbors();
-  std::map<std::vector<std::int32_t>, std::int32_t> classes;
+  struct KeyHash {
+    std::size_t operator()(const std::vector<std::int32_t>& key) const {
+      std::uint64_t h = 1469598103934665603ull;  // FNV-1a over the entries
+      for (const std::int32_t x : key) h = (h ^ static_cast<std::uint32_t>(x)) * 1099511628211ull;
+      return static_cast<std::size_t>(h);
+    }
+  };
+  std::unordered_map<std::vector<std::int32_t>, std::int32_t, KeyHash> classes;
   std::vector<std::int32_t> key, sorted;
   for (const std::int32_t f : live) {
     const auto uf = static_cast<std::size_t>(f);
