@@ -435,8 +435,9 @@ std::vector<Term> energy_terms(Scheme scheme, double thin_plate, double membrane
 // K as a sum of element matrices, one per face that is not a hole: a dense
 // symmetric matrix over the face's columns (the vertices its stencils
 // reach). Faces grouped into one class (FairnessQuadrature::reuse) share one
-// matrix over their own control points in Bfr's order; every other face is a
-// class of its own, its matrix over its own sorted columns.
+// matrix over their own control points (topology_control_points' order or
+// Bfr's); every other face is a class of its own, its matrix over its own
+// sorted columns.
 struct Elements {
   FaceControlPoints cps;                     // of the non-hole faces, in face order (with reuse)
   std::vector<std::int64_t> slot;            // per face, its place in cps; -1 for a hole
@@ -508,14 +509,14 @@ bool topology_control_points(const Topology& t, bool quads, std::size_t f, std::
 }
 
 // The classes of faces. With reuse, by local topology; the key: the number of
-// control points, Bfr's IsRegular(), the face's size, and per corner (from
-// corner 0) its valence, whether it is on the boundary and, there, the place
-// of the next corner in its ring (where the face lies in the fan; inside, Bfr
-// lists the control points from the face, so the place does not matter).
-// Faces whose control points touch a tag, a hole or a face of irregular size
-// (their surface depends on more than the key says), or repeat a vertex (no
-// one-to-one map of the representative's matrix), and every face without
-// reuse, are classes of their own.
+// control points, Bfr's IsRegular() (2 for a list from the topology), the
+// face's size, and per corner (from corner 0) its valence, whether it is on the
+// boundary and, there, the place of the next corner in its ring (where the face
+// lies in the fan; inside, Bfr lists the control points from the face, so the
+// place does not matter). Faces whose control points touch a tag, a hole or a
+// face of irregular size (their surface depends on more than the key says), or
+// repeat a vertex (no one-to-one map of the representative's matrix), and every
+// face without reuse, are classes of their own.
 Elements face_classes(const LimitSurface& surface, const std::vector<std::uint8_t>& hole, bool reuse) {
   const Topology& t = surface.topology();
   Elements s;
@@ -736,7 +737,7 @@ void element_matrix(const SurfaceRows& rows, const double* weights, const Piece*
 
 // The element matrix of element_matrix (w.e, upper triangle over w.cols) as
 // the full symmetric matrix of class c over its columns: for a shared class
-// the control points `cv` of its representative (distinct, in Bfr's order),
+// the control points `cv` of its representative (distinct, in its class's order),
 // else the face's own columns w.cols. Clears w.local.
 void store_element(Worker& w, const std::int32_t* cv, std::size_t n_cv, std::size_t c, Elements& el) {
   const std::size_t n = w.cols.size();
