@@ -189,9 +189,10 @@ def energy_tags(tags: _core.Tags, n_vertices: int, n_faces: int, semi_sharp: str
 def matrix_arrays(topology: _core.Topology, rules: _core.Rules, thin_plate=1.0, membrane=0.0, gauss_points=4,
                   depth=4, semi_sharp="sharp", reference=None) -> tuple:
     """K of a topology already built, under `rules`, as CSR arrays (data,
-    indices, indptr): what `fairness_matrix` returns, for callers that hold
-    the topology (fair interpolation's fine mesh). The surface's vertices are
-    zero: K does not use them."""
+    indices, indptr): what `fairness_matrix` returns. The surface's vertices
+    are zero: K does not use them (the reference, when given, sets each
+    face's metric). Fair interpolation builds its K in the core, next to the
+    solve that uses it, with the same tags (`energy_tags`)."""
     tags = energy_tags(rules.tags, topology.n_vertices, topology.n_faces, check_semi_sharp(semi_sharp))
     surface = _core.LimitSurface(topology, np.zeros((topology.n_vertices, 3)), rules.scheme, rules.boundary, tags)
     return _core.fairness_matrix(surface, *_options(thin_plate, membrane, gauss_points, depth),

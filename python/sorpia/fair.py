@@ -54,7 +54,7 @@ from ._meshinfo import bounding_box_diagonal
 from ._validate import DEFAULT_BOUNDARY, DEFAULT_SCHEME, as_rules, as_vertices
 from .errors import MeshError, ParameterError
 from .limit import TAGS_DOC as _TAGS_DOC
-from .energy import check_semi_sharp, matrix_arrays
+from .energy import check_semi_sharp, energy_tags
 from .solve import InterpolationResult, Interpolator, _integer, check_options
 
 METRICS = ("parameter", "reference")
@@ -313,17 +313,14 @@ def fair_interpolate(vertices, faces, *, scheme: str = DEFAULT_SCHEME, levels: i
                         f"take ({exc}); under Loop this comes from two triangles with the same vertices in the "
                         "opposite order (a pillow), whose refined faces meet along edges of four faces: fair "
                         "interpolation cannot refine them (interpolate can fit such a mesh)") from None
-    t = time.perf_counter()
-    k_data, k_indices, k_indptr = matrix_arrays(fine_topology, fine_rules, thin_plate, membrane,
-                                                depth=depth, semi_sharp=semi_sharp,
-                                                reference=R @ v0 if metric == "reference" else None)
-    timings["energy"] = time.perf_counter() - t
-
     start = np.ascontiguousarray(R @ np.asarray(plain.control_vertices))
-    sol = _core.fair_solve(fine_topology, fine_rules, k_data, k_indices, k_indptr, target_ids,
+    sol = _core.fair_solve(fine_topology, fine_rules, thin_plate, membrane, target_ids,
                            np.ascontiguousarray(v0[target_ids]), start, tol, ENERGY_WINDOW, int(max_iter),
-                           int(threads))
-    timings["setup"], timings["solve"] = sol["setup_seconds"], sol["seconds"]
+                           int(threads), energy_tags=energy_tags(fine_rules.tags, n_fine, len(fine_faces), semi_sharp),
+                           depth=depth,
+                           reference=np.ascontiguousarray(R @ v0) if metric == "reference" else None)
+    timings["energy"], timings["setup"], timings["solve"] = (sol["energy_seconds"], sol["setup_seconds"],
+                                                             sol["seconds"])
 
     diagonal = bounding_box_diagonal(v0)
     max_error = float(sol["max_error"])

@@ -3,8 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <map>
+#include <stdexcept>
 #include <string>
+#include <unordered_map>
 #include <unordered_set>
 #include <utility>
 #include <vector>
@@ -437,8 +438,9 @@ std::vector<Term> energy_terms(Scheme scheme, double thin_plate, double membrane
 // K as a sum of element matrices, one per face that is not a hole: a dense
 // symmetric matrix over the face's columns (the vertices its stencils
 // reach). Faces grouped into one class (FairnessQuadrature::reuse) share one
-// matrix over their own control points in Bfr's order; every other face is a
-// class of its own, its matrix over its own sorted columns.
+// matrix over their own control points (topology_control_points' order or
+// Bfr's); every other face is a class of its own, its matrix over its own
+// sorted columns.
 struct Elements {
   FaceControlPoints cps;                     // of the non-hole faces, in face order (with reuse)
   std::vector<std::int64_t> slot;            // per face, its place in cps; -1 for a hole
@@ -461,15 +463,63 @@ struct Elements {
   }
 };
 
+// The control points of an interior face listed from the topology, for
+// faces whose corners are all interior (Bfr is then not asked): the face's
+// corners, then for each corner i its ring (Catmull-Clark: each edge
+// neighbour followed by the opposite corner of the face after it) from the
+// next corner on, clockwise, each vertex once. Where the corners' rings meet
+// only as they must around one face (a number of repeats fixed by the face's
+// size: 9 for a triangle, 20 for a quad), this is the face's neighbourhood,
+// the vertices its surface depends on, in an order fixed by the corners'
+// valences; otherwise (rings that wrap around and meet again) it returns
+// false. `stamp` marks listed vertices with `mark` (no clearing needed).
+bool topology_control_points(const Topology& t, bool quads, std::size_t f, std::vector<std::int32_t>& out,
+                             std::vector<std::int32_t>& stamp, std::int32_t mark) {
+  const std::int32_t k = t.face_size(f);
+  if (k != (quads ? 4 : 3)) return false;
+  const std::int32_t* vs = t.face_indices().data() + t.face_offset(f);
+  for (std::int32_t i = 0; i < k; ++i) {
+    const auto v = static_cast<std::size_t>(vs[i]);
+    if (t.is_boundary(v) || (quads && !t.quad_ring(v))) return false;
+  }
+  out.clear();
+  int repeats = 0;
+  const auto list = [&](std::int32_t u) {
+    if (stamp[static_cast<std::size_t>(u)] == mark) {
+      ++repeats;
+      return;
+    }
+    stamp[static_cast<std::size_t>(u)] = mark;
+    out.push_back(u);
+  };
+  for (std::int32_t i = 0; i < k; ++i) list(vs[i]);
+  repeats = 0;
+  const auto& ro = t.ring_offsets();
+  const auto& rn = t.ring_neighbors();
+  for (std::int32_t i = 0; i < k; ++i) {
+    const auto v = static_cast<std::size_t>(vs[i]);
+    const std::int32_t b = ro[v], n = ro[v + 1] - b;
+    std::int32_t s0 = 0;
+    while (s0 < n && rn[static_cast<std::size_t>(b + s0)] != vs[(i + 1) % k]) ++s0;
+    if (s0 == n) return false;
+    for (std::int32_t j = 0; j < n; ++j) {
+      const std::int32_t at = (s0 + j) % n;
+      list(rn[static_cast<std::size_t>(b + at)]);
+      if (quads) list(t.face_ring_neighbors()[static_cast<std::size_t>(t.face_ring_offsets()[v] + at)]);
+    }
+  }
+  return repeats == (quads ? 20 : 9);
+}
+
 // The classes of faces. With reuse, by local topology; the key: the number of
-// control points, Bfr's IsRegular(), the face's size, and per corner (from
-// corner 0) its valence, whether it is on the boundary and, there, the place
-// of the next corner in its ring (where the face lies in the fan; inside, Bfr
-// lists the control points from the face, so the place does not matter).
-// Faces whose control points touch a tag, a hole or a face of irregular size
-// (their surface depends on more than the key says), or repeat a vertex (no
-// one-to-one map of the representative's matrix), and every face without
-// reuse, are classes of their own.
+// control points, Bfr's IsRegular() (2 for a list from the topology), the
+// face's size, and per corner (from corner 0) its valence, whether it is on the
+// boundary and, there, the place of the next corner in its ring (where the face
+// lies in the fan; inside, Bfr lists the control points from the face, so the
+// place does not matter). Faces whose control points touch a tag, a hole or a
+// face of irregular size (their surface depends on more than the key says), or
+// repeat a vertex (no one-to-one map of the representative's matrix), and every
+// face without reuse, are classes of their own.
 Elements face_classes(const LimitSurface& surface, const std::vector<std::uint8_t>& hole, bool reuse) {
   const Topology& t = surface.topology();
   Elements s;
@@ -503,10 +553,52 @@ Elements face_classes(const LimitSurface& surface, const std::vector<std::uint8_
       s.slot[f] = static_cast<std::int64_t>(live.size());
       live.push_back(static_cast<std::int32_t>(f));
     }
-  s.cps = surface.control_points(live.data(), live.size());
+  // Control points: from the topology where it gives them (regular[] = 2
+  // for those, a key of their own), Bfr's for the other faces.
+  {
+    const bool quads = surface.scheme() == Scheme::CatmullClark;
+    std::vector<std::int32_t> stamp(t.n_vertices(), -1), listed, ask;
+    std::vector<std::int64_t> from_topology(live.size(), -1);  // per live face: its start in `listed`, or -1
+    std::vector<std::int32_t> topo_indices;
+    for (std::size_t l = 0; l < live.size(); ++l) {
+      const auto f = static_cast<std::size_t>(live[l]);
+      if (topology_control_points(t, quads, f, listed, stamp, static_cast<std::int32_t>(f))) {
+        from_topology[l] = static_cast<std::int64_t>(topo_indices.size());
+        topo_indices.insert(topo_indices.end(), listed.begin(), listed.end());
+        topo_indices.push_back(-1);  // end of this face's list
+      } else {
+        ask.push_back(live[l]);
+      }
+    }
+    const FaceControlPoints bfr = surface.control_points(ask.data(), ask.size());
+    s.cps.offsets.assign(1, 0);
+    s.cps.indices.reserve(topo_indices.size() + bfr.indices.size());
+    s.cps.regular.reserve(live.size());
+    std::size_t a = 0;
+    for (std::size_t l = 0; l < live.size(); ++l) {
+      if (from_topology[l] >= 0) {
+        for (auto p = static_cast<std::size_t>(from_topology[l]); topo_indices[p] >= 0; ++p)
+          s.cps.indices.push_back(topo_indices[p]);
+        s.cps.regular.push_back(2);
+      } else {
+        s.cps.indices.insert(s.cps.indices.end(), bfr.indices.begin() + bfr.offsets[a],
+                             bfr.indices.begin() + bfr.offsets[a + 1]);
+        s.cps.regular.push_back(bfr.regular[a]);
+        ++a;
+      }
+      s.cps.offsets.push_back(static_cast<std::int64_t>(s.cps.indices.size()));
+    }
+  }
   const auto& ro = t.ring_offsets();
   const auto& rn = t.ring_neighbors();
-  std::map<std::vector<std::int32_t>, std::int32_t> classes;
+  struct KeyHash {
+    std::size_t operator()(const std::vector<std::int32_t>& key) const {
+      std::uint64_t h = 1469598103934665603ull;  // FNV-1a over the entries
+      for (const std::int32_t x : key) h = (h ^ static_cast<std::uint32_t>(x)) * 1099511628211ull;
+      return static_cast<std::size_t>(h);
+    }
+  };
+  std::unordered_map<std::vector<std::int32_t>, std::int32_t, KeyHash> classes;
   std::vector<std::int32_t> key, sorted;
   for (const std::int32_t f : live) {
     const auto uf = static_cast<std::size_t>(f);
@@ -735,7 +827,7 @@ void element_matrix(const SurfaceRows& rows, const double* weights, const Piece*
 
 // The element matrix of element_matrix (w.e, upper triangle over w.cols) as
 // the full symmetric matrix of class c over its columns: for a shared class
-// the control points `cv` of its representative (distinct, in Bfr's order),
+// the control points `cv` of its representative (distinct, in its class's order),
 // else the face's own columns w.cols. Clears w.local.
 void store_element(Worker& w, const std::int32_t* cv, std::size_t n_cv, std::size_t c, Elements& el) {
   const std::size_t n = w.cols.size();
@@ -747,6 +839,11 @@ void store_element(Worker& w, const std::int32_t* cv, std::size_t n_cv, std::siz
       for (std::size_t j = i; j < n; ++j) out[i * n + j] = out[j * n + i] = w.e[i * n + j];
   } else {
     out.assign(n_cv * n_cv, 0.0);
+    std::size_t found = 0;
+    for (std::size_t i = 0; i < n_cv; ++i) found += w.local[static_cast<std::size_t>(cv[i])] >= 0 ? 1 : 0;
+    if (found != n)
+      throw std::logic_error("a face's stencils reach beyond its control points: the fairness matrix would lose "
+                             "entries");
     for (std::size_t i = 0; i < n_cv; ++i) {
       const std::int32_t a = w.local[static_cast<std::size_t>(cv[i])];
       if (a < 0) continue;  // no weight at any point: a zero row

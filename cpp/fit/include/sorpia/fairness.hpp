@@ -26,11 +26,13 @@ struct FairnessQuadrature {
   /// every ring but that last corner piece is integrated exactly. 0..12.
   int depth = 4;
   /// Reuse element matrices: the energy of a face as a quadratic form over
-  /// its control points (in Bfr's order) depends only on the face's local
-  /// topology, so faces that agree in it (the face's size and Bfr's
-  /// IsRegular(), the number of its control points, and per corner its
-  /// valence, whether it is on the boundary and, there, where the face lies
-  /// in its fan) share one, computed once. Faces whose control points touch a
+  /// its control points (listed in an order fixed by the local topology:
+  /// from the one-ring where every corner is interior, else Bfr's) depends
+  /// only on the face's local topology, so faces that agree in it (the
+  /// face's size and, for Bfr's lists, Bfr's IsRegular(), the number of its
+  /// control points, and per corner its valence, whether it is on the
+  /// boundary and, there, where the face lies in its fan) share one, computed
+  /// once. Faces whose control points touch a
   /// tag, a hole or a face of another size than the scheme's (triangles for
   /// Loop, quads for Catmull-Clark), or list a vertex twice, are integrated
   /// on their own. false integrates every face on its own: the same K to
