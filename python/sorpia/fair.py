@@ -263,6 +263,8 @@ def fair_interpolate(vertices, faces, *, scheme: str = DEFAULT_SCHEME, levels: i
         in the first fundamental form of the input mesh's own limit surface
         (the input refined) at the face's centre, so that bending across a
         face that is long and thin in space is not cheap (docs/fair.md).
+        Bends less where faces differ in shape, but slower: K face by face
+        and many more iterations (raise max_iter on large meshes).
 
     Returns
     -------
