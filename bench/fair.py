@@ -316,23 +316,37 @@ def meshes(shared: Path | None, max_shared: int):
         yield f"quad_irregular(2000), noise {noise}", v + noise * rng.standard_normal(v.shape), f, "catmull-clark", {}
 
 
-def timing(n, scheme, repeats=3):
-    """Best-of-`repeats` seconds of plain interpolation and one fair
-    interpolation of a noisy generated mesh of about n vertices, one thread."""
+def timing(n, scheme, threads, repeats=3):
+    """Seconds of plain interpolation (median of 2 * `repeats` runs) and of
+    fair interpolation (median of `repeats` runs, each phase its own median)
+    of a noisy generated mesh of about n vertices, plain and fair on the same
+    `threads`. One thread: the process pinned to one processor for the
+    measurement (K's assembly and Bfr's evaluation use every processor the
+    process may run on; `threads` sets the solves' threads)."""
     rng = np.random.default_rng(n)
     v, f = (sorpia.shapes.irregular if scheme == "loop" else sorpia.shapes.quad_irregular)(n, seed=1)
     v = np.asarray(v, float)
     v = v + 0.2 * np.mean(np.linalg.norm(v[np.asarray(f)[:, 0]] - v[np.asarray(f)[:, 1]], axis=1)) * \
         rng.standard_normal(v.shape)
-    plain = []
-    for _ in range(repeats):
-        t = time.perf_counter()
-        sorpia.interpolate(v, f, scheme=scheme)
-        plain.append(time.perf_counter() - t)
-    res = sorpia.fair_interpolate(v, f, scheme=scheme)
-    return {"scheme": scheme, "vertices": len(v), "fine_faces": len(res.faces), "plain_seconds": min(plain),
-            "fair_seconds": res.seconds, "ratio": res.seconds / min(plain), "iterations": res.iterations,
-            **res.timings}
+    processors = os.sched_getaffinity(0)
+    if threads == 1:
+        os.sched_setaffinity(0, {min(processors)})
+    try:
+        plain, fair = [], []
+        for _ in range(repeats):
+            for _ in range(2):
+                t = time.perf_counter()
+                sorpia.interpolate(v, f, scheme=scheme, threads=threads)
+                plain.append(time.perf_counter() - t)
+            res = sorpia.fair_interpolate(v, f, scheme=scheme, threads=threads)
+            fair.append({"fair_seconds": res.seconds, **res.timings})
+    finally:
+        os.sched_setaffinity(0, processors)
+    phases = {k: float(np.median([r[k] for r in fair])) for k in fair[0]}
+    phases["rest"] = phases["fair_seconds"] - sum(phases[k] for k in ("refine", "plain", "energy", "setup", "solve"))
+    return {"scheme": scheme, "vertices": len(v), "fine_faces": len(res.faces), "threads": threads,
+            "plain_seconds": float(np.median(plain)), "ratio": phases["fair_seconds"] / float(np.median(plain)),
+            "iterations": res.iterations, **phases}
 
 
 def figure(path: Path):
@@ -363,6 +377,8 @@ def main(argv=None) -> int:
     parser.add_argument("--max-three-levels", type=int, default=400,
                         help="largest mesh also measured three levels finer (vertices)")
     parser.add_argument("--sizes", default="10000,100000", help="vertex counts of the timed meshes")
+    parser.add_argument("--threads", default="1,2", help="thread counts of the timed runs")
+    parser.add_argument("--repeats", type=int, default=3, help="fair runs per timed mesh (plain: twice as many)")
     parser.add_argument("--no-page", action="store_true")
     args = parser.parse_args(argv)
 
@@ -380,11 +396,11 @@ def main(argv=None) -> int:
     times = []
     for n in (int(s) for s in args.sizes.split(",") if s):
         for scheme in ("loop", "catmull-clark"):
-            t = timing(n, scheme)
-            times.append(t)
-            print(f"time {scheme} {n}: plain {t['plain_seconds']:.3f} s, fair {t['fair_seconds']:.2f} s "
-                  f"({t['ratio']:.0f}x)",
-                  file=sys.stderr, flush=True)
+            for threads in (int(s) for s in args.threads.split(",") if s):
+                t = timing(n, scheme, threads, args.repeats)
+                times.append(t)
+                print(f"time {scheme} {n}, {threads} thread(s): plain {t['plain_seconds']:.3f} s, fair "
+                      f"{t['fair_seconds']:.2f} s ({t['ratio']:.0f}x)", file=sys.stderr, flush=True)
 
     energy = np.array([r["energy_ratio"] for r in rows])
     h2 = np.array([r["h2_ratio"] for r in rows])
@@ -515,19 +531,23 @@ def main(argv=None) -> int:
         "## Time",
         "",
         "Noisy generated meshes (`shapes.irregular` for Loop, `shapes.quad_irregular` for Catmull-Clark, each "
-        "vertex moved by 0.2 of the mean edge length), one thread. Plain: `sorpia.interpolate`, best of 3. Fair: "
-        "one `sorpia.fair_interpolate` (goal: at most 10 times plain at 100k targets), with its phases: refine "
-        "(Far's refinement and R), plain (the plain solve it starts from), energy (K of the fine mesh), setup "
-        "(the fine mesh's B, the elimination, the preconditioner), solve (the conjugate gradients).",
+        "vertex moved by 0.2 of the mean edge length), plain and fair on the same threads; one thread: the process "
+        "pinned to one processor (the fairness matrix's assembly and Bfr's evaluation use every processor the "
+        "process may run on). Plain: `sorpia.interpolate`, median of "
+        f"{2 * args.repeats} runs. Fair: `sorpia.fair_interpolate` (goal: at most 10 times plain at 100k targets), "
+        f"median of {args.repeats} runs, and the median of each phase: refine (Far's refinement and R), plain (the "
+        "plain solve it starts from), energy (K of the fine mesh), setup (the fine mesh's B, the elimination, the "
+        "preconditioner), solve (the conjugate gradients), rest (the fine mesh's topology, R's product, checks).",
         "",
-        "| scheme | vertices | fine faces | plain s | fair s | fair / plain | refine | plain | energy | setup | "
-        "solve | iterations |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|",
+        "| scheme | vertices | fine faces | threads | plain s | fair s | fair / plain | refine | plain | energy | "
+        "setup | solve | rest | iterations |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for t in times:
-        lines.append(f"| {t['scheme']} | {t['vertices']} | {t['fine_faces']} | {t['plain_seconds']:.3f} | {t['fair_seconds']:.2f} | "
-                     f"{t['ratio']:.0f} | {t['refine']:.2f} | {t['plain']:.2f} | {t['energy']:.2f} | "
-                     f"{t['setup']:.2f} | {t['solve']:.2f} | {t['iterations']} |")
+        lines.append(f"| {t['scheme']} | {t['vertices']} | {t['fine_faces']} | {t['threads']} | "
+                     f"{t['plain_seconds']:.3f} | {t['fair_seconds']:.2f} | {t['ratio']:.0f} | {t['refine']:.2f} | "
+                     f"{t['plain']:.2f} | {t['energy']:.2f} | {t['setup']:.2f} | {t['solve']:.2f} | "
+                     f"{t['rest']:.2f} | {t['iterations']} |")
     lines += ["", "![plain and fair interpolation of the demo mesh](fair.png)"]
     if not args.no_page:
         figure(PAGES / "fair.png")
