@@ -14,7 +14,7 @@ import scipy.sparse
 
 import sorpia
 from sorpia import fair
-from sorpia.errors import ParameterError
+from sorpia.errors import MeshError, ParameterError
 from sorpia.surface import corner_uv
 
 # Loop's child triangle j of a parent (a, b, c) in the parent's (u, v):
@@ -341,6 +341,17 @@ def test_float_targets_are_refused(ico):
 def test_bad_options_are_refused(ico, options, message):
     with pytest.raises(ParameterError, match=message):
         sorpia.fair_interpolate(*ico, **options)
+
+
+def test_a_nonmanifold_mesh_is_refused_with_the_way_out_fair_interpolation_has():
+    """An edge of three faces: named as interpolate names it, with the repair as the way out and not
+    nonmanifold="sharp", which fair interpolation does not take."""
+    V = np.array([[0, 0, 0], [1, 0, 0], [0.5, 1, 0], [0.5, -1, 0], [0.5, 0, 1]], float)
+    F = np.array([[0, 1, 2], [1, 0, 3], [0, 1, 4]])
+    with pytest.raises(MeshError, match=r"non-manifold edge \(0, 1\).*--repair.*fair interpolation takes "
+                       "manifold meshes only") as info:
+        sorpia.fair_interpolate(V, F)
+    assert "nonmanifold=" not in str(info.value)
 
 
 def test_a_fine_mesh_beyond_int32_is_refused_before_any_work():

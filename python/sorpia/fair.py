@@ -51,6 +51,7 @@ import numpy as np
 
 from . import _core
 from ._meshinfo import bounding_box_diagonal
+from ._nonmanifold import manifold_only
 from ._validate import DEFAULT_BOUNDARY, DEFAULT_SCHEME, as_rules, as_vertices
 from .errors import MeshError, ParameterError
 from .limit import TAGS_DOC as _TAGS_DOC
@@ -289,7 +290,10 @@ def fair_interpolate(vertices, faces, *, scheme: str = DEFAULT_SCHEME, levels: i
     # One topology for the plain solve and the refinement: the Interpolator's.
     t = time.perf_counter()
     rule_options = dict(scheme=scheme, boundary=boundary, creases=creases, corners=corners, holes=holes)
-    interp = Interpolator._for_vertices(faces, n, rule_options, "error")
+    try:
+        interp = Interpolator._for_vertices(faces, n, rule_options, "error")
+    except MeshError as exc:
+        raise manifold_only(exc, "fair interpolation") from None
     build = time.perf_counter() - t
     t = time.perf_counter()
     fine = _core.refine_uniform(interp.topology, rules, levels)  # refuses a fine mesh too big before building it
