@@ -21,7 +21,7 @@ divided by the bounding-box diagonal of the points. Rows:
 - interpolation: `sorpia.interpolate` of the cage: the limit surface through
   the decimated cage's vertices.
 - decimated cage: the cage's own limit surface, unchanged.
-- sorpia.approximate: when the installed sorpia has it.
+- sorpia.approximate: with its defaults, and with tangential=0.1 (Loop; 10 and 4 iterations).
 
 The check that Subdivfit's Loop rules are OpenSubdiv's on smooth parts
 (--check-rules, on by default): its own subdivided surface (`-outn`, two
@@ -253,8 +253,11 @@ reading of the text files included), its output cage is evaluated by sorpia's Lo
 are OpenSubdiv's inside the mesh but not along a boundary (the check under each table), so its rows are also
 measured to its own surface (its subdivision of its cage to level 4 with the vertices at their limit positions,
 `Subdivfit -nsubdiv 4 -outn`), the one it fits. "interpolation" is `sorpia.interpolate` of the cage (the limit
-surface through the decimated cage's vertices); "decimated cage as it is" the cage's own limit surface. Times are
-of one run on a shared machine (the load average is in the stamp).
+surface through the decimated cage's vertices); "decimated cage as it is" the cage's own limit surface.
+"sorpia.approximate" is the call with its defaults (point distance, at most 10 iterations, tol 1e-3; its time is
+the call's, the first in the process; its iterations and why it stopped in brackets: "the limit" of
+10, "converged" by tol); "tangential=0.1" the same with the tangent-distance
+blend W_i = 0.1 I + 0.9 n_i n_i^T, and with at most 4 iterations. Times are of one run on a shared machine (the load average is in the stamp).
 
 """
 
@@ -317,11 +320,13 @@ def run_mesh(spec, args, gfit, exe):
             scheme)
         add("decimated cage as it is", c.vertices, 0.0, c.faces, scheme)
         approximate = getattr(sorpia, "approximate", None)
-        if approximate is not None:
+        runs = (("sorpia.approximate", {}), ("sorpia.approximate tangential=0.1", {"tangential": 0.1}),
+                ("sorpia.approximate tangential=0.1, 4 iterations", {"tangential": 0.1, "iterations": 4}))
+        for label, options in runs[:3 if scheme == "loop" else 1]:
             t0 = time.perf_counter()
-            result = approximate(v, c.vertices, c.faces, scheme=scheme)
-            add("sorpia.approximate", result.control_vertices, time.perf_counter() - t0, c.faces, scheme,
-                iterations=result.iterations)
+            result = approximate(v, c.vertices, c.faces, scheme=scheme, **options)
+            add(label, result.control_vertices, time.perf_counter() - t0, c.faces, scheme,
+                iterations=result.iterations, stop_reason=getattr(result, "stop_reason", None))
     return out
 
 
@@ -338,6 +343,9 @@ def table(results, have_subdivfit):
         lines.append("|---|---|---|---|---|---|")
         for row in r["rows"]:
             seconds = f"{row['seconds']:.3g}" if row["seconds"] else "-"
+            if row.get("iterations"):
+                why = {"iterations": ", the limit", None: ""}.get(row.get("stop_reason"), f", {row.get('stop_reason')}")
+                seconds += f" ({row['iterations']} iterations{why})"
             own = f"{row['own'][0]:.3g}, {row['own'][1]:.3g}" if "own" in row else ""
             lines.append(f"| {row['row']} | {row['scheme']} | {row['rms']:.3g} | {row['max']:.3g} | {seconds} "
                          f"| {own} |")

@@ -264,17 +264,22 @@ def test_command_decimates_fits_and_writes_its_outputs(tmp_path):
     V, F = shapes.icosphere(3)
     sorpia.write_mesh(tmp_path / "scan.ply", V, F)
     r = run_cli("scan.ply", "-o", "cage.obj", "--vertices", 60, "--report", "r.json", "--surface", "s.ply",
-                "--iterations", 3, cwd=tmp_path)
+                "--iterations", 3, "--sampling", "area", cwd=tmp_path)
     assert r.returncode == 0, r.stderr
     assert "data->surf" in r.stdout and "surf->data" in r.stdout
     report = json.loads((tmp_path / "r.json").read_text())
-    assert report["cage"]["vertices"] == 60 and report["n_points"] == len(V)
+    assert report["cage"]["vertices"] == 60 and report["n_points"] == len(V) and report["sampling"] == "area"
     Vc, Fc = sorpia.read_mesh(tmp_path / "cage.obj")
     assert len(Vc) == 60
-    # The report's final RMS is that of the cage as written: its footpoints recomputed independently.
+    # The report's final RMS is that of the cage as written, per area of the input's surface (
+    # --sampling area): its footpoints recomputed independently, each vertex weighted by a third of
+    # the area of its triangles.
     s = LimitSurface(Vc, Fc)
     d = _core.closest_points(s._surface, s._topology, V, 4, 20)[3]
-    assert report["final"]["rms"] == pytest.approx(np.sqrt(np.mean(d ** 2)), rel=1e-6)
+    area = np.linalg.norm(np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]]), axis=1) / 2
+    w = np.zeros(len(V))
+    np.add.at(w, F, area[:, None] / 3)
+    assert report["final"]["rms"] == pytest.approx(np.sqrt(np.sum(w * d ** 2) / w.sum()), rel=1e-6)
     assert report["final"]["rms"] < report["history"][0]["rms"]
 
 
@@ -355,3 +360,125 @@ def test_coordinates_near_the_limits_of_double(scale):
     np.testing.assert_allclose(big.control_vertices / scale, one.control_vertices, rtol=0, atol=1e-12)
     assert abs(big.rms / scale - one.rms) <= 1e-12 and big.history[-1]["rms_relative"] == pytest.approx(
         one.history[-1]["rms_relative"], abs=1e-12)
+
+
+def test_stopping_rule_looks_at_three_iterations():
+    # The rule on the lowest RMS after each iteration: one small step before large ones (a plateau) does not stop
+    # a run; three small ones in a row do; with tol = 0 only no decrease at all over three does.
+    from sorpia.approximate import _levelled
+
+    assert not _levelled([1.0, 0.9999, 0.5], 1e-3)  # too few iterations to judge
+    assert not _levelled([1.0, 0.9999, 0.9998, 0.5], 1e-3)
+    assert not _levelled([0.2, 0.1, 0.09995, 0.0999], 1e-3)  # the large step is still in the window
+    assert _levelled([1.0, 0.9999, 0.9998, 0.9997], 1e-3)
+    assert _levelled([0.5, 0.3, 0.2999, 0.2998, 0.2998], 1e-3)
+    assert not _levelled([1.0, 1.0, 1.0, 0.9999], 0.0) and _levelled([1.0, 0.5, 0.5, 0.5, 0.5], 0.0)
+
+
+@pytest.mark.parametrize("scheme", ["loop", "catmull-clark"])
+def test_a_fit_that_converges_stops_early_and_says_why(scheme):
+    # Points on the plane z = 1 over one face of a cube cage: a plane patch is in the cage's family of surfaces,
+    # so the fit converges (to rounding, as tol = 0 shows) and the default tol stops it well before 60 iterations
+    # at that level; a run cut short says "iterations".
+    V = np.array([[x, y, z] for z in (-1, 1) for y in (-1, 1) for x in (-1, 1)], float)
+    F = np.array([[0, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]])
+    if scheme == "loop":
+        F = np.vstack([F[:, [0, 1, 2]], F[:, [0, 2, 3]]])
+    g = np.linspace(-1, 1, 15)
+    X, Y = np.meshgrid(g, g)
+    P = np.c_[X.ravel(), Y.ravel(), np.ones(X.size)]
+    r = approximate(P, V, F, scheme=scheme, iterations=60)
+    assert r.converged and r.stop_reason in ("converged", "exact") and r.iterations < 20
+    assert r.rms < 1e-9 * r.diagonal
+    assert r.rms == r.history[r.best_iteration]["rms"] == min(h["rms"] for h in r.history)
+    short = approximate(P, V, F, scheme=scheme, iterations=1)
+    assert not short.converged and short.stop_reason == "iterations"
+
+
+def _triangle_area(V, F):
+    return np.linalg.norm(np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]]), axis=1) / 2
+
+
+@pytest.mark.parametrize("sampling, degree", [("area", 1), ("midpoints", 2)])
+def test_surface_samples_integrate_polynomials_over_the_faces(sampling, degree):
+    # The samples' weighted sums are quadratures of the integral over the faces: exact for polynomials up to
+    # `degree` on each triangle, against the closed forms (the integral of x_a over a triangle is its area times
+    # the mean of the corners; of x_a x_b, area / 12 * (sum of corner products + the product of the sums)).
+    from sorpia.approximate import surface_samples
+
+    rng = np.random.default_rng(20)
+    V, F = shapes.icosphere(2)
+    V = V * (1 + 0.2 * rng.random((len(V), 1)))
+    area = _triangle_area(V, F)
+    T = V[F]
+    P, w = surface_samples(V, F, sampling)
+    np.testing.assert_allclose(w.sum(), area.sum(), rtol=1e-13)
+    np.testing.assert_allclose(w @ P, (area[:, None] * T.mean(axis=1)).sum(axis=0), rtol=1e-12)
+    quadratic = (area / 12 * (np.einsum("tij,tij->t", T[..., [0]], T[..., [1]])
+                              + T[..., 0].sum(axis=1) * T[..., 1].sum(axis=1))).sum()
+    if degree == 2:
+        assert w @ (P[:, 0] * P[:, 1]) == pytest.approx(quadratic, rel=1e-12)
+    else:  # a first-order rule: not exact, within its O(h^2) error
+        assert w @ (P[:, 0] * P[:, 1]) == pytest.approx(quadratic, abs=0.05 * np.abs(quadratic) + 1e-3)
+    # polygons are fanned into triangles: a quad mesh's samples are those of its triangles
+    Vq, Fq = shapes.quad_grid(3, 3)
+    Pq, wq = surface_samples(Vq, Fq, sampling)
+    Pt, wt = surface_samples(Vq, np.vstack([Fq[:, [0, 1, 2]], Fq[:, [0, 2, 3]]]), sampling)
+    np.testing.assert_allclose(wq @ Pq, wt @ Pt, rtol=1e-13)
+
+
+def test_fit_to_a_mesh_surface_is_its_weighted_squared_distance():
+    # With faces the reported RMS is the root of the integral of the squared distance over the dense surface per
+    # area. Independently: a fine quadrature of it (each dense triangle cut into 16, their centroids) with exact
+    # point-to-triangle distances to the fitted limit surface's level-4 tessellation; within the quadrature and
+    # chord errors of the midpoint rule on this mesh (5%).
+    rng = np.random.default_rng(21)
+    V, F = shapes.icosphere(2)
+    V = V * (1 + 0.03 * rng.standard_normal((len(V), 1)))
+    Vc, Fc = shapes.icosphere(0)
+    r = approximate(V, Vc, Fc, faces=F, sampling="midpoints", iterations=3)
+    assert r.weights is not None and len(r.points) > len(V)
+    b = np.array([(i + 1 / 3, j + 1 / 3) for i in range(4) for j in range(4 - i)]
+                 + [(i + 2 / 3, j + 2 / 3) for i in range(3) for j in range(3 - i)]) / 4
+    T = V[F]
+    Q = (T[:, None, 0] * (1 - b.sum(1))[None, :, None] + T[:, None, 1] * b[None, :, 0, None]
+         + T[:, None, 2] * b[None, :, 1, None]).reshape(-1, 3)
+    Vt, Ft = sorpia.limit_surface(r.control_vertices, Fc, level=4)
+    Ft = np.asarray(Ft)
+    # each point against the 32 triangles of nearest centroids (the tessellation's triangles are small and even:
+    # the closest one is among them)
+    from scipy.spatial import cKDTree
+
+    near = cKDTree(Vt[Ft].mean(axis=1)).query(Q, k=32)[1]
+    T4 = Vt[Ft[near]]
+    d = point_triangle_distance(Q, T4[:, :, 0], T4[:, :, 1], T4[:, :, 2]).min(axis=1)
+    wq = np.repeat(_triangle_area(V, F) / 16, 16)
+    assert r.rms == pytest.approx(np.sqrt(wq @ d ** 2 / wq.sum()), rel=0.05)
+
+
+def test_weights_and_faces_are_checked():
+    V, F = shapes.icosphere(1)
+    with pytest.raises(sorpia.ParameterError, match=r"weights\[2\]"):
+        approximate(V, V, F, weights=np.r_[1.0, 1.0, -1.0, np.ones(len(V) - 3)])
+    with pytest.raises(sorpia.ParameterError, match="one weight per point"):
+        approximate(V, V, F, weights=np.ones(3))
+    with pytest.raises(sorpia.ParameterError, match="all 0"):
+        approximate(V, V, F, weights=np.zeros(len(V)))
+    with pytest.raises(sorpia.ParameterError, match="give one"):
+        approximate(V, V, F, weights=np.ones(len(V)), faces=F)
+    with pytest.raises(sorpia.ParameterError, match="sampling"):
+        approximate(V, V, F, faces=F, sampling="centroids")
+    with pytest.raises(sorpia.MeshError, match="faces"):
+        approximate(V, V, F, faces=[[0, 1, len(V)]])
+
+
+def test_command_samples_a_mesh_only(tmp_path):
+    # --sampling area or midpoints needs faces: a point cloud is refused by name, and nothing is written.
+    V, F = shapes.icosphere(2)
+    Vc, Fc = shapes.icosphere(1)
+    with open(tmp_path / "cloud.obj", "w") as fh:
+        fh.writelines(f"v {x} {y} {z}\n" for x, y, z in V)
+    sorpia.write_mesh(tmp_path / "cage.obj", Vc, Fc)
+    r = run_cli("cloud.obj", "-o", "out.obj", "--cage", "cage.obj", "--sampling", "area", cwd=tmp_path)
+    assert r.returncode == 2 and "point cloud" in r.stderr and "--sampling area" in r.stderr
+    assert not (tmp_path / "out.obj").exists()

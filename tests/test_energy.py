@@ -244,6 +244,115 @@ def test_quadrature_converges_on_a_closed_mesh():
         assert errors[2] < 1e-2, errors  # the default: Bfr's polynomial rings exact, its corner patch approximated
 
 
+def test_semi_sharp_creases_are_measured_on_each_side():
+    """A roof: a flat 8 x 8 quad grid folded along its middle column, the fold
+    tagged as a crease. Each side's surface, with the crease infinitely
+    sharp, is the affine map of that side (the crease and boundary rules
+    reproduce linear functions), so semi_sharp="sharp" measures zero bending
+    whatever the tagged sharpness. As tagged, a crease of sharpness s turns
+    the surface within a layer 2^-s of a face wide, the same shape scaled in
+    the parameter (subdivision is self-similar): its bending, (d / w)^2 over
+    width w for a turn d, doubles with each unit of sharpness."""
+    n = 9
+    v, f = flat_quad_grid(n)
+    v[:, 2] = 0.5 * np.abs(v[:, 0] - 4)
+    edges = np.array([[4 + n * j, 4 + n * (j + 1)] for j in range(n - 1)])
+    tagged = []
+    for s in (1.0, 2.0, 3.0, 4.0):
+        creases = (edges, np.full(len(edges), s))
+        k = sorpia.fairness_matrix(f, len(v), scheme="catmull-clark", creases=creases)
+        # zero to rounding: the entries of K are of order 1, the vertices of order 10
+        assert abs(energy(k, v)) < 1e-9 * abs(k).max() * np.abs(v).max() ** 2
+        tagged.append(energy(sorpia.fairness_matrix(f, len(v), scheme="catmull-clark", creases=creases,
+                                                    semi_sharp="as-tagged"), v))
+    assert tagged[0] > 1.0
+    # exact doubling to rounding: the layers are polynomial pieces integrated exactly at every s here
+    assert np.allclose(np.array(tagged[1:]) / tagged[:-1], 2.0, rtol=1e-9), tagged
+    # an infinitely sharp crease is the same under both
+    infinite = (edges, np.full(len(edges), sorpia._core.INFINITE_SHARPNESS))
+    a = sorpia.fairness_matrix(f, len(v), scheme="catmull-clark", creases=infinite)
+    b = sorpia.fairness_matrix(f, len(v), scheme="catmull-clark", creases=infinite, semi_sharp="as-tagged")
+    assert abs(a - b).max() == 0.0
+
+
+def rotation(seed: int) -> np.ndarray:
+    q, _ = np.linalg.qr(np.random.default_rng(seed).standard_normal((3, 3)))
+    return q
+
+
+@pytest.mark.parametrize("scheme", ["catmull-clark", "loop"])
+def test_reference_metric_is_invariant_under_rotation_and_scaling(scheme):
+    # A bumpy closed mesh with regular and extraordinary vertices (the
+    # hybrid's two kinds of faces): K measured in the reference surface's
+    # metric depends on it through inner products only, and the thin plate,
+    # |H|^2 / |G| times area, is of degree 0 in the coordinates.
+    v, f = (sorpia.shapes.quad_torus(8, 6) if scheme == "catmull-clark" else sorpia.shapes.icosphere(1))
+    v = np.asarray(v, float)
+    v = v + 0.05 * np.random.default_rng(3).standard_normal(v.shape)
+    if scheme == "catmull-clark":  # the torus is regular: the cube's corners are all extraordinary
+        cv, cf = cube()
+        for vv, ff in ((v, f), (cv + 0.1 * np.random.default_rng(4).standard_normal(cv.shape), cf)):
+            check_invariance(vv, ff, scheme)
+    else:
+        check_invariance(v, f, scheme)
+
+
+def check_invariance(v, f, scheme):
+    k = sorpia.fairness_matrix(f, len(v), scheme=scheme, reference=v)
+    scale = 3.7
+    moved = scale * v @ rotation(5).T + np.array([1.0, -2.0, 0.5])
+    k2 = sorpia.fairness_matrix(f, len(v), scheme=scheme, reference=moved)
+    # G scales by s^2, so K by s^-2: the energy of the moved surface, sum over
+    # columns of (s Q V)^T K2 (s Q V), is that of V (to rounding)
+    assert abs(scale ** 2 * k2 - k).max() < 1e-10 * abs(k).max()
+    assert np.sum(moved * (k2 @ moved)) == pytest.approx(np.sum(v * (k @ v)), rel=1e-10)
+    # symmetric, constants in its null space
+    assert abs(k - k.T).max() < 1e-12 * abs(k).max()
+    assert np.abs(k @ np.ones(len(v))).max() < 1e-10 * abs(k).max()
+    # it is not the parametric energy
+    p = sorpia.fairness_matrix(f, len(v), scheme=scheme)
+    assert abs(k - p).max() > 1e-3 * abs(p).max()
+
+
+def test_reference_metric_on_a_stretched_grid_is_the_geometric_thin_plate():
+    # A flat grid of spacing a by b as its own reference: on the faces whose 16
+    # control points are all inside the grid the surface is the uniform
+    # bicubic B-spline, which reproduces quadratics, and G = diag(a^2, b^2),
+    # so the energy of a height z is the geometric thin plate, int z_xx^2 + 2
+    # z_xy^2 + z_yy^2 dx dy: 4 per unit area for x^2 and y^2, 2 for x y; the
+    # other faces are holes. The parametric energy differs: (2 a^2)^2 per face
+    # for x^2.
+    n, a, b = 9, 0.5, 2.0
+    v, f = flat_quad_grid(n, a, b)
+    inner = [i + (n - 1) * j for j in range(1, n - 2) for i in range(1, n - 2)]
+    holes = np.setdiff1d(np.arange(len(f)), inner)
+    k = sorpia.fairness_matrix(f, len(v), scheme="catmull-clark", holes=holes, reference=v)
+    x, y = v[:, 0], v[:, 1]
+    area = len(inner) * a * b
+    # rel 1e-6: G carries a floor of 1e-9 of its trace against degenerate reference faces, here
+    # (b/a)^2 = 16 times that relative to the small axis
+    for z, density in ((x * x, 4.0), (x * y, 2.0), (y * y, 4.0)):
+        assert float(z @ k @ z) == pytest.approx(density * area, rel=1e-6)
+    p = sorpia.fairness_matrix(f, len(v), scheme="catmull-clark", holes=holes)
+    assert float((x * x) @ p @ (x * x)) == pytest.approx(len(inner) * (2 * a * a) ** 2, rel=1e-12)
+    # a plane: the limit surface of the grid itself, affine everywhere (boundary rules too), has zero energy
+    full = sorpia.fairness_matrix(f, len(v), scheme="catmull-clark", reference=v)
+    assert np.abs(full @ v).max() < 1e-9 * abs(full).max() * np.abs(v).max()
+
+
+def test_reference_metric_refuses_what_it_cannot_measure():
+    v, f = cube()
+    with pytest.raises(sorpia.ParameterError, match="reference has 7 rows"):
+        sorpia.fairness_matrix(f, len(v), scheme="catmull-clark", reference=v[:7])
+    with pytest.raises(sorpia.ParameterError, match="degenerate at face"):
+        sorpia.fairness_matrix(f, len(v), scheme="catmull-clark", reference=np.zeros_like(v))
+    # a quad and a pentagon side by side (test_cli_fit's mesh)
+    pv = np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0], [0, 1, 0], [1, 1, 0], [2.5, 0.5, 0], [2, 1, 0]], dtype=float)
+    pf = sorpia.Polygons(np.array([4, 5]), np.array([0, 1, 4, 3, 1, 2, 5, 6, 4]))
+    with pytest.raises(sorpia.ParameterError, match="face 1 has 5 corners"):
+        sorpia.fairness_matrix(pf, len(pv), scheme="catmull-clark", reference=pv)
+
+
 @pytest.mark.parametrize("options, words", [
     (dict(thin_plate=-1.0), "thin_plate must be a finite number >= 0"),
     (dict(membrane=float("nan")), "membrane must be a finite number >= 0"),
@@ -256,6 +365,7 @@ def test_quadrature_converges_on_a_closed_mesh():
     (dict(thin_plate="1"), "thin_plate must be a real number"),
     (dict(depth=True), "depth = True must be an integer"),
     (dict(gauss_points=2.5), "gauss_points = 2.5 must be an integer"),
+    (dict(semi_sharp="smooth"), "semi_sharp must be one of 'sharp', 'as-tagged'"),
 ])
 def test_bad_options(options, words):
     v, f = cube()

@@ -14,7 +14,7 @@ import scipy.sparse
 
 import sorpia
 from sorpia import fair
-from sorpia.errors import ParameterError
+from sorpia.errors import MeshError, ParameterError
 from sorpia.surface import corner_uv
 
 # Loop's child triangle j of a parent (a, b, c) in the parent's (u, v):
@@ -64,9 +64,10 @@ def tagged(scheme):
 
 
 def fine_energy(res, thin_plate=1.0, membrane=0.0):
-    """K of the fine mesh with its tags (sorpia.fairness_matrix), dense."""
+    """K of the fine mesh with its tags (sorpia.fairness_matrix, with
+    fair_interpolate's default depth 0), dense."""
     return sorpia.fairness_matrix(res.faces, len(res.control_vertices), thin_plate=thin_plate, membrane=membrane,
-                                  **fine_kwargs(res)).toarray()
+                                  depth=0, **fine_kwargs(res)).toarray()
 
 
 def fine_kwargs(res):
@@ -211,6 +212,22 @@ def test_the_solve_is_the_dense_kkt_solution(scheme, partial):
     assert np.abs(res.control_vertices - ref).max() <= 1e-9 * diagonal(v)
 
 
+
+@pytest.mark.parametrize("scheme", ["loop", "catmull-clark"])
+def test_the_reference_metric_solve_is_the_dense_kkt_solution(scheme):
+    # metric="reference": K measured in the input mesh's own limit surface
+    # (the input refined, R V0), the same constrained minimum as a dense KKT
+    # solve with that K from sorpia.fairness_matrix.
+    v, f = (sorpia.shapes.icosphere(1) if scheme == "loop" else sorpia.shapes.quad_torus(8, 6))
+    v = np.asarray(v, float) + 0.03 * np.random.default_rng(7).standard_normal(np.shape(v))
+    res = sorpia.fair_interpolate(v, f, scheme=scheme, metric="reference", tol=1e-14)
+    assert res.converged
+    k = sorpia.fairness_matrix(res.faces, len(res.control_vertices), scheme=scheme, depth=0,
+                               reference=res.refinement @ v).toarray()
+    ref = dense_kkt(res, v[res.targets], k)
+    assert np.abs(res.control_vertices - ref).max() <= 1e-9 * diagonal(v)  # as the parametric test above
+
+
 @pytest.mark.parametrize("scheme", ["loop", "catmull-clark"])
 def test_the_targets_are_met_through_bfr_on_the_fine_mesh(scheme):
     # OpenSubdiv's Bfr on the fine mesh at a face corner of each target's
@@ -316,10 +333,25 @@ def test_float_targets_are_refused(ico):
     (dict(thin_plate=0.0, membrane=0.0), "thin_plate and membrane are both 0"),
     (dict(tol=0.0), r"tol must be a real number in \(0, 1\)"),
     (dict(max_iter=0), "max_iter"),
+    (dict(semi_sharp="layer"), "semi_sharp must be one of 'sharp', 'as-tagged'"),
+    (dict(depth=13), r"depth must be in 0\.\.12, got 13"),
+    (dict(metric="surface"), "metric must be one of 'parameter', 'reference'"),
+    (dict(depth=1.5), "depth = 1.5 must be an integer"),
 ])
 def test_bad_options_are_refused(ico, options, message):
     with pytest.raises(ParameterError, match=message):
         sorpia.fair_interpolate(*ico, **options)
+
+
+def test_a_nonmanifold_mesh_is_refused_with_the_way_out_fair_interpolation_has():
+    """An edge of three faces: named as interpolate names it, with the repair as the way out and not
+    nonmanifold="sharp", which fair interpolation does not take."""
+    V = np.array([[0, 0, 0], [1, 0, 0], [0.5, 1, 0], [0.5, -1, 0], [0.5, 0, 1]], float)
+    F = np.array([[0, 1, 2], [1, 0, 3], [0, 1, 4]])
+    with pytest.raises(MeshError, match=r"non-manifold edge \(0, 1\).*--repair.*fair interpolation takes "
+                       "manifold meshes only") as info:
+        sorpia.fair_interpolate(V, F)
+    assert "nonmanifold=" not in str(info.value)
 
 
 def test_a_fine_mesh_beyond_int32_is_refused_before_any_work():

@@ -1,6 +1,11 @@
 // Bindings of the fitting layer: the fairness matrix, uniform refinement
 // with its matrix R, and the fair solve. Conversion and error translation only.
+#include <optional>
+
 #include <pybind11/stl.h>
+
+#include <chrono>
+#include <vector>
 
 #include "bindings.hpp"
 #include "sorpia/fair.hpp"
@@ -12,50 +17,32 @@ using namespace pybind11::literals;
 
 namespace {
 using Indices = py::array_t<std::int32_t, py::array::c_style>;
-using Doubles = py::array_t<double, py::array::c_style>;
 
-// A square CSR matrix from scipy's (data, indices, indptr), checked for shape
-// and index ranges (what the core's loops rely on).
-sorpia::CsrMatrix csr_from(const Doubles& data, const Indices& indices, const Indices& indptr, std::size_t n,
-                           const char* name) {
-  if (data.ndim() != 1 || indices.ndim() != 1 || indptr.ndim() != 1 ||
-      static_cast<std::size_t>(indptr.shape(0)) != n + 1 || data.shape(0) != indices.shape(0))
-    throw sorpia::ParameterError(std::string(name) + " must be an (n, n) CSR matrix with n = " + std::to_string(n));
-  sorpia::CsrMatrix m;
-  m.n_rows = m.n_cols = n;
-  m.data = to_vector(data);
-  m.indices = to_vector(indices);
-  m.indptr = to_vector(indptr);
-  if (m.indptr.front() != 0 || m.indptr.back() != static_cast<std::int32_t>(m.indices.size()))
-    throw sorpia::ParameterError(std::string(name) + ": indptr does not span its entries");
-  for (std::size_t i = 0; i < n; ++i) {
-    if (m.indptr[i + 1] < m.indptr[i]) throw sorpia::ParameterError(std::string(name) + ": indptr decreases");
-    for (std::int32_t p = m.indptr[i]; p < m.indptr[i + 1]; ++p)
-      if (m.indices[p] < 0 || static_cast<std::size_t>(m.indices[p]) >= n ||
-          (p > m.indptr[i] && m.indices[p] <= m.indices[p - 1]))
-        throw sorpia::ParameterError(std::string(name) + ": row " + std::to_string(i) +
-                                     " has column indices out of range or not sorted");
-  }
-  return m;
-}
 }  // namespace
 
 void bind_fit(py::module_& m) {
   m.def(
       "fairness_matrix",
       [](const sorpia::LimitSurface& surface, double thin_plate, double membrane, int gauss_points, int depth,
-         bool reuse) {
+         bool reuse, std::optional<Vertices> reference) {
+        if (reference) {
+          check_shape(*reference, 3, "reference");
+          check_rows(*reference, surface.n_vertices(), "reference", "the surface");
+        }
         sorpia::CsrMatrix k;
         {
           LongCall call;
           k = sorpia::fairness_matrix(surface, thin_plate, membrane,
-                                     sorpia::FairnessQuadrature{gauss_points, depth, reuse});
+                                     sorpia::FairnessQuadrature{gauss_points, depth, reuse},
+                                     reference ? reference->data() : nullptr);
         }
         return csr_tuple(std::move(k));
       },
       "surface"_a, "thin_plate"_a, "membrane"_a, "gauss_points"_a, "depth"_a, "reuse"_a = true,
+      "reference"_a.noconvert() = py::none(),
       "Fairness matrix K (thin-plate and membrane energy) as CSR arrays (data, indices, indptr); reuse=False\n"
-      "integrates every face on its own (FairnessQuadrature::reuse).");
+      "integrates every face on its own (FairnessQuadrature::reuse); reference: (n, 3) control vertices whose\n"
+      "limit surface gives each face its metric (sorpia::fairness_matrix).");
   m.def(
       "refine_uniform",
       [](const sorpia::Topology& topology, const sorpia::Rules& rules, int levels) {
@@ -86,11 +73,15 @@ void bind_fit(py::module_& m) {
 
   m.def(
       "fair_solve",
-      [](const sorpia::Topology& topology, const sorpia::Rules& rules, const Doubles& k_data, const Indices& k_indices,
-         const Indices& k_indptr, const Indices& targets, const Vertices& positions, const Vertices& start,
-         double tol, int window, long long max_iter, int threads) {
+      [](const sorpia::Topology& topology, const sorpia::Rules& rules, double thin_plate, double membrane,
+         const Indices& targets, const Vertices& positions, const Vertices& start, double tol, int window,
+         long long max_iter, int threads, std::optional<sorpia::Tags> energy_tags, int depth,
+         std::optional<Vertices> reference) {
         const std::size_t n = topology.n_vertices();
-        const sorpia::CsrMatrix k = csr_from(k_data, k_indices, k_indptr, n, "the fairness matrix");
+        if (reference) {
+          check_shape(*reference, 3, "reference");
+          check_rows(*reference, n, "reference", "the fine mesh");
+        }
         if (targets.ndim() != 1) throw sorpia::ParameterError("targets must be one-dimensional");
         check_shape(positions, 3, "positions");
         if (positions.shape(0) != targets.shape(0))
@@ -103,8 +94,19 @@ void bind_fit(py::module_& m) {
         options.max_iter = max_iter;
         options.threads = threads;
         sorpia::FairSolution s;
+        double energy_seconds = 0.0;
         {
           LongCall call;
+          // K stays in the core: built here, used by fair_solve, never copied.
+          const auto t0 = std::chrono::steady_clock::now();
+          const std::vector<double> zeros(3 * n, 0.0);  // K does not use the control vertices
+          const sorpia::LimitSurface surface(topology, zeros.data(), rules.scheme, rules.boundary,
+                                             energy_tags ? *energy_tags : rules.tags);
+          sorpia::FairnessQuadrature quadrature;
+          quadrature.depth = depth;
+          const sorpia::CsrMatrix k = sorpia::fairness_matrix(surface, thin_plate, membrane, quadrature,
+                                                              reference ? reference->data() : nullptr);
+          energy_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
           s = sorpia::fair_solve(topology, rules, k, targets.data(), static_cast<std::size_t>(targets.shape(0)),
                                  positions.data(), start.data(), options);
         }
@@ -119,12 +121,16 @@ void bind_fit(py::module_& m) {
         out["free_vertices"] = s.free_vertices;
         out["seconds"] = s.seconds;
         out["setup_seconds"] = s.setup_seconds;
+        out["energy_seconds"] = energy_seconds;
         return out;
       },
-      "topology"_a, "rules"_a, "k_data"_a.noconvert(), "k_indices"_a.noconvert(), "k_indptr"_a.noconvert(),
-      "targets"_a.noconvert(), "positions"_a.noconvert(), "start"_a.noconvert(), "tol"_a, "window"_a, "max_iter"_a,
-      "threads"_a,
-      "Least tr(V^T K V) with the limit positions of `targets` at `positions` (sorpia::fair_solve): a dict.");
+      "topology"_a, "rules"_a, "thin_plate"_a, "membrane"_a, "targets"_a.noconvert(), "positions"_a.noconvert(),
+      "start"_a.noconvert(), "tol"_a, "window"_a, "max_iter"_a, "threads"_a, "energy_tags"_a = py::none(),
+      "depth"_a = sorpia::FairnessQuadrature{}.depth, "reference"_a.noconvert() = py::none(),
+      "Least tr(V^T K V) with the limit positions of `targets` at `positions` (sorpia::fair_solve), K the\n"
+      "fairness matrix of the topology under `rules` with the given weights (sorpia::fairness_matrix; its tags\n"
+      "energy_tags when given, the quadrature's depth, the reference metric when given): a dict, with\n"
+      "energy_seconds (K) besides the solve's own.");
 }
 
 }  // namespace sorpia_py

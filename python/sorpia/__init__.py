@@ -21,7 +21,7 @@ from .surface import LimitSurface, evaluate_limit, limit_surface
 from .cage import Cage, decimate
 from .energy import fairness_matrix, thin_plate_energy
 from .fair import FairResult, fair_interpolate
-from .approximate import ApproximationResult, approximate
+from .approximate import ApproximationResult, approximate, surface_samples
 from . import shapes
 
 __all__ = [
@@ -45,5 +45,5 @@ __all__ = [
     "FairResult", "fair_interpolate",
     "NonmanifoldWarning", "UsdWarning", "DecimationWarning",
     "Cage", "decimate",
-    "ApproximationResult", "approximate",
+    "ApproximationResult", "approximate", "surface_samples",
 ]

@@ -40,9 +40,9 @@ from .errors import MeshError, NonmanifoldWarning
 
 
 # Appended to the messages that refuse non-manifold topology.
-NONMANIFOLD_HINT = ("sorpia.repair (command line: --repair) makes the mesh manifold by splitting it, or "
-                    "nonmanifold=\"sharp\" (--nonmanifold sharp) keeps it with OpenSubdiv's rules for it "
-                    "(non-manifold edges infinitely sharp, non-manifold vertices corners)")
+REPAIR_HINT = "sorpia.repair (command line: --repair) makes the mesh manifold by splitting it"
+NONMANIFOLD_HINT = (REPAIR_HINT + ", or nonmanifold=\"sharp\" (--nonmanifold sharp) keeps it with OpenSubdiv's "
+                    "rules for it (non-manifold edges infinitely sharp, non-manifold vertices corners)")
 
 
 # The refusals of sorpia::Topology that OpenSubdiv takes as non-manifold topology.
@@ -56,6 +56,12 @@ def refusal_hint(message: str) -> str | None:
     opposite order are refused only beside a third face on one of their
     edges, which is non-manifold; alone they are a valid closed 'pillow'.)"""
     return NONMANIFOLD_HINT if any(kind in message for kind in NONMANIFOLD_KINDS) else None
+
+
+def manifold_only(exc: MeshError, what: str) -> MeshError:
+    """`exc` for a caller that has no nonmanifold="sharp" (`what`, e.g. "fair
+    interpolation"): the refusal's hint offers the repair alone."""
+    return MeshError(str(exc).replace(NONMANIFOLD_HINT, f"{REPAIR_HINT}; {what} takes manifold meshes only"))
 
 
 class Split(NamedTuple):

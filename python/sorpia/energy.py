@@ -48,6 +48,18 @@ on meshes with darts). Constant control values have zero energy; affine
 functions of the parameters have zero energy where every face is regular (a
 flat regular grid), not near extraordinary vertices, where the
 parameterisation is not affine.
+
+Semi-sharp creases and corners (``semi_sharp``): a crease of sharpness s
+turns the surface within a layer about 2^-s of a face wide, and the bending
+in that layer, of order 2^s times the square of the crease's turn per unit
+of its length, dominates the parametric thin-plate energy of a surface with
+sharp features (OpenSubdiv's shapes carry sharpness 6 to 8). Minimising it
+undoes the crease: the surface turns less there and bends more everywhere
+else. ``semi_sharp="sharp"`` (the default) measures the energy of the surface
+with every semi-sharp tag made infinitely sharp, which agrees with the
+surface away from the layers and measures the bending on each side of a
+crease, leaving the crease's own turn free, as an infinitely sharp crease
+is; ``"as-tagged"`` integrates the surface as tagged, layers included.
 """
 
 from __future__ import annotations
@@ -57,14 +69,17 @@ import numpy as np
 from . import _core
 from ._validate import DEFAULT_BOUNDARY, DEFAULT_SCHEME, as_rules, as_vertices
 from .limit import built, warn_unreferenced
+from .errors import ParameterError
 from .solve import _integer, _real
 
 __all__ = ["fairness_matrix", "thin_plate_energy"]
 
+SEMI_SHARP = ("sharp", "as-tagged")
+
 
 def fairness_matrix(faces, n_vertices: int, *, scheme: str = DEFAULT_SCHEME, boundary: str = DEFAULT_BOUNDARY,
                     creases=None, corners=None, holes=None, thin_plate: float = 1.0, membrane: float = 0.0,
-                    gauss_points: int = 4, depth: int = 4):
+                    gauss_points: int = 4, depth: int = 4, semi_sharp: str = "sharp", reference=None):
     """The fairness matrix K of a mesh's limit surface, (n, n) scipy CSR,
     symmetric positive semidefinite: ``V[:, c] @ K @ V[:, c]`` summed over the
     columns is the energy of control vertices V (see the module docstring
@@ -83,6 +98,24 @@ def fairness_matrix(faces, n_vertices: int, *, scheme: str = DEFAULT_SCHEME, bou
     depth : int
         Splits of a face's domain towards its irregular corners and tagged
         edges, 0..12 (4: Bfr's own refinement there).
+    semi_sharp : {"sharp", "as-tagged"}
+        How semi-sharp creases and corners enter the energy (module
+        docstring): "sharp" measures the surface with them infinitely sharp,
+        the bending on each side of a crease; "as-tagged" the surface as
+        tagged, the thin layer where a crease turns included.
+    reference : (n_vertices, 3) array_like float, optional
+        None: the parametric measure (module docstring). Given: each face is
+        measured in a fixed first fundamental form G, that of the limit
+        surface of these control vertices at the face's centre (a reference
+        shape: fair interpolation passes the input mesh refined), so that a
+        face's energy is the integral of tr(G^-1 H G^-1 H) sqrt(det G) per
+        coordinate (membrane: tr(G^-1 J^T J) sqrt(det G)), H the Hessian and
+        J the Jacobian in Bfr's (u, v); at faces with an extraordinary
+        corner the parametric shape scaled to the area sqrt(det G), since
+        Bfr's parameterisation there is far from affine within the face.
+        Invariant (thin plate) under rotations and uniform scalings of
+        the coordinates; every face integrated on its own (slower); needs
+        a mesh of triangles (Loop) or quads (Catmull-Clark) only.
 
     Returns
     -------
@@ -93,29 +126,33 @@ def fairness_matrix(faces, n_vertices: int, *, scheme: str = DEFAULT_SCHEME, bou
     Raises
     ------
     sorpia.ParameterError
-        A weight negative, not finite or both zero; gauss_points or depth out
-        of range (the message names the option).
+        A weight negative, not finite or both zero; gauss_points, depth or
+        semi_sharp out of range (the message names the option).
     """
     import scipy.sparse  # here, not at import: sorpia's commands need no scipy
 
+    semi_sharp = check_semi_sharp(semi_sharp)
     arrays, n, rules = as_rules(faces, n_vertices, scheme=scheme, boundary=boundary, creases=creases,
                                 corners=corners, holes=holes)
     topo = built(lambda: _core.Topology(*arrays, n))
     warn_unreferenced(topo, stacklevel=3)
-    data, indices, indptr = matrix_arrays(topo, rules, thin_plate, membrane, gauss_points, depth)
+    if reference is not None:
+        reference = as_vertices(reference)
+    data, indices, indptr = matrix_arrays(topo, rules, thin_plate, membrane, gauss_points, depth, semi_sharp,
+                                          reference)
     return scipy.sparse.csr_matrix((data, indices, indptr), shape=(n, n))
 
 
 def thin_plate_energy(vertices, faces, *, scheme: str = DEFAULT_SCHEME, boundary: str = DEFAULT_BOUNDARY,
                       creases=None, corners=None, holes=None, thin_plate: float = 1.0, membrane: float = 0.0,
-                      gauss_points: int = 4, depth: int = 4) -> float:
+                      gauss_points: int = 4, depth: int = 4, semi_sharp: str = "sharp") -> float:
     """The fairness energy of the limit surface of control vertices
     `vertices` (n, 3): ``sum(V * (K @ V))`` with K = `fairness_matrix` of the
     same faces, rules and options (by default the thin-plate term alone)."""
     vertices = as_vertices(vertices)
     k = fairness_matrix(faces, vertices.shape[0], scheme=scheme, boundary=boundary, creases=creases, corners=corners,
                         holes=holes, thin_plate=thin_plate, membrane=membrane, gauss_points=gauss_points,
-                        depth=depth)
+                        depth=depth, semi_sharp=semi_sharp)
     return float(np.sum(vertices * (k @ vertices)))
 
 
@@ -126,12 +163,37 @@ def _options(thin_plate, membrane, gauss_points, depth) -> tuple:
             min(_integer(depth, "depth", "an integer in 0..12"), 2**31 - 1))
 
 
+def check_semi_sharp(semi_sharp) -> str:
+    """The semi_sharp option, checked (ParameterError naming it)."""
+    if not isinstance(semi_sharp, str) or semi_sharp not in SEMI_SHARP:
+        raise ParameterError(f"semi_sharp must be one of {', '.join(map(repr, SEMI_SHARP))}, got {semi_sharp!r}")
+    return semi_sharp
+
+
+def energy_tags(tags: _core.Tags, n_vertices: int, n_faces: int, semi_sharp: str = "sharp") -> _core.Tags:
+    """The tags K integrates: `tags` as given ("as-tagged"), or with every
+    positive sharpness made infinite (INFINITE_SHARPNESS, "sharp"; sharpness 0 stays
+    smooth)."""
+    if semi_sharp == "as-tagged" or tags.max_semi_sharpness() <= 0:
+        return tags
+
+    def sharp(s):
+        s = np.asarray(s, dtype=np.float64)
+        return np.ascontiguousarray(np.where(s > 0, _core.INFINITE_SHARPNESS, s))
+
+    return _core.Tags(np.asarray(tags.crease_vertices, dtype=np.int32), sharp(tags.crease_sharpness),
+                      np.asarray(tags.corner_vertices, dtype=np.int32), sharp(tags.corner_sharpness),
+                      np.asarray(tags.holes, dtype=np.int32), n_vertices, n_faces)
+
+
 def matrix_arrays(topology: _core.Topology, rules: _core.Rules, thin_plate=1.0, membrane=0.0, gauss_points=4,
-                  depth=4) -> tuple:
+                  depth=4, semi_sharp="sharp", reference=None) -> tuple:
     """K of a topology already built, under `rules`, as CSR arrays (data,
-    indices, indptr): what `fairness_matrix` returns, for callers that hold
-    the topology (fair interpolation's fine mesh). The surface's vertices are
-    zero: K does not use them."""
-    surface = _core.LimitSurface(topology, np.zeros((topology.n_vertices, 3)), rules.scheme, rules.boundary,
-                                 rules.tags)
-    return _core.fairness_matrix(surface, *_options(thin_plate, membrane, gauss_points, depth))
+    indices, indptr): what `fairness_matrix` returns. The surface's vertices
+    are zero: K does not use them (the reference, when given, sets each
+    face's metric). Fair interpolation builds its K in the core, next to the
+    solve that uses it, with the same tags (`energy_tags`)."""
+    tags = energy_tags(rules.tags, topology.n_vertices, topology.n_faces, check_semi_sharp(semi_sharp))
+    surface = _core.LimitSurface(topology, np.zeros((topology.n_vertices, 3)), rules.scheme, rules.boundary, tags)
+    return _core.fairness_matrix(surface, *_options(thin_plate, membrane, gauss_points, depth),
+                                 reference=None if reference is None else np.ascontiguousarray(reference, np.float64))

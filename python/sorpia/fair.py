@@ -17,7 +17,10 @@ equal the targets, and the rest of the freedom minimises the fairness energy
          + membrane   * integral(|S_u|^2 + |S_v|^2)
 
 of the fine mesh's limit surface S, a quadratic form tr(V^T K V) in the fine
-control vertices (K: `sorpia.fairness_matrix` of the fine mesh).
+control vertices (K: `sorpia.fairness_matrix` of the fine mesh; by default
+with its semi-sharp creases and corners taken as infinitely sharp, so that
+the bending is measured on each side of a crease and the fairing does not
+flatten the creases: see `sorpia.energy`).
 
 The solve (sorpia::fair_solve in the C++ core): the constraint rows, the fine
 mesh's limit matrix B at the targets' children, touch no other target's child
@@ -48,12 +51,14 @@ import numpy as np
 
 from . import _core
 from ._meshinfo import bounding_box_diagonal
+from ._nonmanifold import manifold_only
 from ._validate import DEFAULT_BOUNDARY, DEFAULT_SCHEME, as_rules, as_vertices
 from .errors import MeshError, ParameterError
 from .limit import TAGS_DOC as _TAGS_DOC
-from .energy import matrix_arrays
-from .solve import InterpolationResult, Interpolator, check_options
+from .energy import check_semi_sharp, energy_tags
+from .solve import InterpolationResult, Interpolator, _integer, check_options
 
+METRICS = ("parameter", "reference")
 # The iteration's window: the energy change is measured over this many iterations.
 ENERGY_WINDOW = 10
 MAX_LEVELS = int(_core.MAX_REFINEMENT_LEVELS)
@@ -208,7 +213,8 @@ def _fine_tags(tags: _core.Tags) -> tuple:
 def fair_interpolate(vertices, faces, *, scheme: str = DEFAULT_SCHEME, levels: int = 1, thin_plate: float = 1.0,
                      membrane: float = 0.0, targets=None, boundary: str = DEFAULT_BOUNDARY, creases=None,
                      corners=None, holes=None, tol: float = 1e-6, max_iter: int = 2000,
-                     threads: int = 1) -> FairResult:
+                     threads: int = 1, semi_sharp: str = "sharp", depth: int = 0,
+                     metric: str = "parameter") -> FairResult:
     """A control mesh `levels` subdivision steps finer than (`vertices`,
     `faces`) whose limit surface passes through the targets and whose
     fairness energy is least (module docstring).
@@ -237,6 +243,29 @@ def fair_interpolate(vertices, faces, *, scheme: str = DEFAULT_SCHEME, levels: i
         At most this many iterations.
     threads : int
         Threads for the products with the fairness matrix.
+    semi_sharp : {"sharp", "as-tagged"}
+        How the energy takes semi-sharp creases and corners
+        (`sorpia.fairness_matrix`): "sharp" measures the bending on each side
+        of a crease and keeps the crease; "as-tagged" also counts the thin
+        layer where a semi-sharp crease turns, which the minimiser then
+        flattens at the cost of bending elsewhere.
+    depth : int
+        The energy's quadrature (`sorpia.fairness_matrix`'s depth), 0..12.
+        0 (the default) integrates the faces at extraordinary vertices by
+        the Gauss rule over the whole face, like every other face: the
+        parametric thin-plate energy there grows by 4 lambda^2 per ring of
+        Bfr's pieces and diverges on the exact surface, so a rule that looks
+        closer (4: Bfr's own isolation level) weighs the few vertices of
+        high valence more, and the minimiser flattens their neighbourhoods
+        at the cost of bending elsewhere (docs/fair.md).
+    metric : {"parameter", "reference"}
+        How the energy measures a face (`sorpia.fairness_matrix`):
+        "parameter", in Bfr's parameters, every face a unit domain; "reference",
+        in the first fundamental form of the input mesh's own limit surface
+        (the input refined) at the face's centre, so that bending across a
+        face that is long and thin in space is not cheap (docs/fair.md).
+        Bends less where faces differ in shape, but slower: K face by face
+        and many more iterations (raise max_iter on large meshes).
 
     Returns
     -------
@@ -244,6 +273,12 @@ def fair_interpolate(vertices, faces, *, scheme: str = DEFAULT_SCHEME, levels: i
     """
     t0 = time.perf_counter()
     levels, thin_plate, membrane, tol = check_fair_options(levels, thin_plate, membrane, tol)
+    semi_sharp = check_semi_sharp(semi_sharp)
+    depth = _integer(depth, "depth", "an integer in 0..12")
+    if not 0 <= depth <= 12:
+        raise ParameterError(f"depth must be in 0..12, got {depth}")
+    if metric not in METRICS:
+        raise ParameterError(f"metric must be one of {', '.join(map(repr, METRICS))}, got {metric!r}")
     check_options("auto", tol=1e-10, max_iter=max_iter, threads=threads)  # max_iter and threads, as interpolate's
     v0 = as_vertices(vertices)
     n = v0.shape[0]
@@ -255,7 +290,10 @@ def fair_interpolate(vertices, faces, *, scheme: str = DEFAULT_SCHEME, levels: i
     # One topology for the plain solve and the refinement: the Interpolator's.
     t = time.perf_counter()
     rule_options = dict(scheme=scheme, boundary=boundary, creases=creases, corners=corners, holes=holes)
-    interp = Interpolator._for_vertices(faces, n, rule_options, "error")
+    try:
+        interp = Interpolator._for_vertices(faces, n, rule_options, "error")
+    except MeshError as exc:
+        raise manifold_only(exc, "fair interpolation") from None
     build = time.perf_counter() - t
     t = time.perf_counter()
     fine = _core.refine_uniform(interp.topology, rules, levels)  # refuses a fine mesh too big before building it
@@ -281,15 +319,14 @@ def fair_interpolate(vertices, faces, *, scheme: str = DEFAULT_SCHEME, levels: i
                         f"take ({exc}); under Loop this comes from two triangles with the same vertices in the "
                         "opposite order (a pillow), whose refined faces meet along edges of four faces: fair "
                         "interpolation cannot refine them (interpolate can fit such a mesh)") from None
-    t = time.perf_counter()
-    k_data, k_indices, k_indptr = matrix_arrays(fine_topology, fine_rules, thin_plate, membrane)
-    timings["energy"] = time.perf_counter() - t
-
     start = np.ascontiguousarray(R @ np.asarray(plain.control_vertices))
-    sol = _core.fair_solve(fine_topology, fine_rules, k_data, k_indices, k_indptr, target_ids,
+    sol = _core.fair_solve(fine_topology, fine_rules, thin_plate, membrane, target_ids,
                            np.ascontiguousarray(v0[target_ids]), start, tol, ENERGY_WINDOW, int(max_iter),
-                           int(threads))
-    timings["setup"], timings["solve"] = sol["setup_seconds"], sol["seconds"]
+                           int(threads), energy_tags=energy_tags(fine_rules.tags, n_fine, len(fine_faces), semi_sharp),
+                           depth=depth,
+                           reference=np.ascontiguousarray(R @ v0) if metric == "reference" else None)
+    timings["energy"], timings["setup"], timings["solve"] = (sol["energy_seconds"], sol["setup_seconds"],
+                                                             sol["seconds"])
 
     diagonal = bounding_box_diagonal(v0)
     max_error = float(sol["max_error"])

@@ -275,23 +275,32 @@ FairSolution solve_scaled(const Topology& topology, const Rules& rules, const Cs
       alpha[c] = rz[c] / pq[c];
       e_now -= alpha[c] * rz[c];
     }
-    for (std::size_t i = 0; i < 3 * n; i += 3)
+    // x += alpha p, r -= alpha q, z = the preconditioned r and r^T z, in one
+    // pass over the vectors (the same operations as one pass each).
+    Col3 rz_new{0.0, 0.0, 0.0};
+    for (std::size_t i = 0; i < n; ++i)
       for (int c = 0; c < 3; ++c) {
-        x[i + c] += alpha[c] * p[i + c];
-        r[i + c] -= alpha[c] * q[i + c];
+        const std::size_t ic = 3 * i + static_cast<std::size_t>(c);
+        x[ic] += alpha[c] * p[ic];
+        r[ic] -= alpha[c] * q[ic];
+        z[ic] = diag[i] > 0.0 ? r[ic] / diag[i] : 0.0;
+        rz_new[c] += r[ic] * z[ic];
       }
-    precondition(r, z);
-    const Col3 rz_new = dots(r, z);
+    Col3 beta{0.0, 0.0, 0.0};
+    std::array<bool, 3> update{};
     for (int c = 0; c < 3; ++c) {
       if (!active[c]) continue;
       if (!(rz_new[c] > 0.0)) {
         active[c] = false;
         continue;
       }
-      const double beta = rz_new[c] / rz[c];
-      for (std::size_t i = 0; i < 3 * n; i += 3) p[i + c] = z[i + c] + beta * p[i + c];
+      beta[c] = rz_new[c] / rz[c];
+      update[c] = true;
       rz[c] = rz_new[c];
     }
+    for (std::size_t i = 0; i < 3 * n; i += 3)
+      for (int c = 0; c < 3; ++c)
+        if (update[c]) p[i + c] = z[i + c] + beta[c] * p[i + c];
     e_now = std::max(e_now, 0.0);
     out.energies.push_back(e_now);
     out.iterations = k + 1;

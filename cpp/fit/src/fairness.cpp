@@ -3,8 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <map>
+#include <stdexcept>
 #include <string>
+#include <unordered_map>
 #include <unordered_set>
 #include <utility>
 #include <vector>
@@ -135,8 +136,10 @@ constexpr double kDegree4[2][3] = {{0.445948490915965, 0.108103018168070, 0.2233
 // The pieces of one face and their points (u, v, Gauss weight or 0).
 class Pieces {
  public:
-  Pieces(const Rule& rule, int depth, bool thin_plate_only)
-      : g_(rule), depth_(depth), thin_plate_only_(thin_plate_only) {}
+  // closed_forms: integrate Catmull-Clark's polynomial pieces by ExactForms
+  // (the parametric energy); false: by the Gauss rule (a face metric).
+  Pieces(const Rule& rule, int depth, bool thin_plate_only, bool closed_forms = true)
+      : g_(rule), depth_(depth), thin_plate_only_(thin_plate_only), closed_forms_(closed_forms) {}
 
   void square(UV o, double h, int level, const Marks& m, std::vector<Piece>& out, std::vector<double>& uvw) const {
     const UV c[4] = {o, {o.u + h, o.v}, {o.u + h, o.v + h}, {o.u, o.v + h}};
@@ -147,7 +150,7 @@ class Pieces {
         square({o.u + d.u, o.v + d.v}, k, level + 1, m, out, uvw);
       return;
     }
-    const bool exact = !touches && level <= kExactLevel;
+    const bool exact = closed_forms_ && !touches && level <= kExactLevel;
     out.push_back({exact, h, {h, 0.0, 0.0, h}, uvw.size() / 3, 0});
     if (exact) {
       for (const double t : kSquareData)
@@ -206,6 +209,7 @@ class Pieces {
   const Rule& g_;
   int depth_;
   bool thin_plate_only_;
+  bool closed_forms_;
 };
 
 // Solves a x = b for the columns of b (n x m, row-major) in place, a (n x n)
@@ -431,36 +435,107 @@ std::vector<Term> energy_terms(Scheme scheme, double thin_plate, double membrane
   return terms;
 }
 
-// The faces that share element matrices (FairnessQuadrature::reuse): faces
-// of one class have the same local topology, so the same element matrix over
-// their control points in Bfr's order.
-struct SharedElements {
-  FaceControlPoints cps;                    // of the non-hole faces, in face order
-  std::vector<std::int64_t> slot;           // per face, its place in cps; -1 for a hole
-  std::vector<std::int32_t> face_class;     // per face, its class; -1 when integrated on its own
+// K as a sum of element matrices, one per face that is not a hole: a dense
+// symmetric matrix over the face's columns (the vertices its stencils
+// reach). Faces grouped into one class (FairnessQuadrature::reuse) share one
+// matrix over their own control points (topology_control_points' order or
+// Bfr's); every other face is a class of its own, its matrix over its own
+// sorted columns.
+struct Elements {
+  FaceControlPoints cps;                     // of the non-hole faces, in face order (with reuse)
+  std::vector<std::int64_t> slot;            // per face, its place in cps; -1 for a hole
+  std::vector<std::int32_t> face_class;      // per face, its class; -1 for a hole
   std::vector<std::int32_t> representative;  // per class, the face integrated for it
-  std::vector<std::vector<double>> element;  // per class, n_cv x n_cv over the control points
+  std::vector<std::uint8_t> shared;          // per class: 1 when its faces use their control points as columns
+  std::vector<std::vector<std::int32_t>> own_columns;  // per class of one face: its sorted columns
+  std::vector<std::vector<double>> element;  // per class, n x n (n its faces' column count), row-major
 
-  bool reused(std::size_t f) const { return !face_class.empty() && face_class[f] >= 0; }
-  const std::int32_t* control_points(std::size_t f) const {
-    return cps.indices.data() + cps.offsets[static_cast<std::size_t>(slot[f])];
+  bool live(std::size_t f) const { return face_class[f] >= 0; }
+  const std::int32_t* columns(std::size_t f) const {
+    const auto c = static_cast<std::size_t>(face_class[f]);
+    return shared[c] ? cps.indices.data() + cps.offsets[static_cast<std::size_t>(slot[f])] : own_columns[c].data();
   }
-  std::size_t n_control_points(std::size_t f) const {
+  std::size_t n_columns(std::size_t f) const {
+    const auto c = static_cast<std::size_t>(face_class[f]);
+    if (!shared[c]) return own_columns[c].size();
     const auto s = static_cast<std::size_t>(slot[f]);
     return static_cast<std::size_t>(cps.offsets[s + 1] - cps.offsets[s]);
   }
 };
 
-// The classes of faces by local topology. The key: the number of control
-// points, Bfr's IsRegular(), the face's size, and per corner (from corner 0)
-// its valence, whether it is on the boundary and, there, the place of the
-// next corner in its ring (where the face lies in the fan; inside, Bfr lists
-// the control points from the face, so the place does not matter). Faces whose
-// control points touch a tag, a hole or a face of irregular size (their
-// surface depends on more than the key says), or repeat a vertex (no one-to-one
-// map of the representative's matrix), are left out.
-SharedElements shared_elements(const LimitSurface& surface, const std::vector<std::uint8_t>& hole) {
+// The control points of an interior face listed from the topology, for
+// faces whose corners are all interior (Bfr is then not asked): the face's
+// corners, then for each corner i its ring (Catmull-Clark: each edge
+// neighbour followed by the opposite corner of the face after it) from the
+// next corner on, clockwise, each vertex once. Where the corners' rings meet
+// only as they must around one face (a number of repeats fixed by the face's
+// size: 9 for a triangle, 20 for a quad), this is the face's neighbourhood,
+// the vertices its surface depends on, in an order fixed by the corners'
+// valences; otherwise (rings that wrap around and meet again) it returns
+// false. `stamp` marks listed vertices with `mark` (no clearing needed).
+bool topology_control_points(const Topology& t, bool quads, std::size_t f, std::vector<std::int32_t>& out,
+                             std::vector<std::int32_t>& stamp, std::int32_t mark) {
+  const std::int32_t k = t.face_size(f);
+  if (k != (quads ? 4 : 3)) return false;
+  const std::int32_t* vs = t.face_indices().data() + t.face_offset(f);
+  for (std::int32_t i = 0; i < k; ++i) {
+    const auto v = static_cast<std::size_t>(vs[i]);
+    if (t.is_boundary(v) || (quads && !t.quad_ring(v))) return false;
+  }
+  out.clear();
+  int repeats = 0;
+  const auto list = [&](std::int32_t u) {
+    if (stamp[static_cast<std::size_t>(u)] == mark) {
+      ++repeats;
+      return;
+    }
+    stamp[static_cast<std::size_t>(u)] = mark;
+    out.push_back(u);
+  };
+  for (std::int32_t i = 0; i < k; ++i) list(vs[i]);
+  repeats = 0;
+  const auto& ro = t.ring_offsets();
+  const auto& rn = t.ring_neighbors();
+  for (std::int32_t i = 0; i < k; ++i) {
+    const auto v = static_cast<std::size_t>(vs[i]);
+    const std::int32_t b = ro[v], n = ro[v + 1] - b;
+    std::int32_t s0 = 0;
+    while (s0 < n && rn[static_cast<std::size_t>(b + s0)] != vs[(i + 1) % k]) ++s0;
+    if (s0 == n) return false;
+    for (std::int32_t j = 0; j < n; ++j) {
+      const std::int32_t at = (s0 + j) % n;
+      list(rn[static_cast<std::size_t>(b + at)]);
+      if (quads) list(t.face_ring_neighbors()[static_cast<std::size_t>(t.face_ring_offsets()[v] + at)]);
+    }
+  }
+  return repeats == (quads ? 20 : 9);
+}
+
+// The classes of faces. With reuse, by local topology; the key: the number of
+// control points, Bfr's IsRegular() (2 for a list from the topology), the
+// face's size, and per corner (from corner 0) its valence, whether it is on the
+// boundary and, there, the place of the next corner in its ring (where the face
+// lies in the fan; inside, Bfr lists the control points from the face, so the
+// place does not matter). Faces whose control points touch a tag, a hole or a
+// face of irregular size (their surface depends on more than the key says), or
+// repeat a vertex (no one-to-one map of the representative's matrix), and every
+// face without reuse, are classes of their own.
+Elements face_classes(const LimitSurface& surface, const std::vector<std::uint8_t>& hole, bool reuse) {
   const Topology& t = surface.topology();
+  Elements s;
+  s.face_class.assign(t.n_faces(), -1);
+  const auto own_class = [&](std::size_t f) {
+    s.face_class[f] = static_cast<std::int32_t>(s.representative.size());
+    s.representative.push_back(static_cast<std::int32_t>(f));
+    s.shared.push_back(0);
+  };
+  if (!reuse) {
+    for (std::size_t f = 0; f < t.n_faces(); ++f)
+      if (!hole[f]) own_class(f);
+    s.own_columns.resize(s.representative.size());
+    s.element.resize(s.representative.size());
+    return s;
+  }
   const Tags& tags = surface.tags();
   const std::int32_t regular_size = surface.scheme() == Scheme::Loop ? 3 : 4;
   const auto& fi = t.face_indices();
@@ -471,7 +546,6 @@ SharedElements shared_elements(const LimitSurface& surface, const std::vector<st
   for (const std::int32_t v : tags.corner_vertices) special[static_cast<std::size_t>(v)] = 1;
   for (const std::int32_t v : tags.crease_vertices) special[static_cast<std::size_t>(v)] = 1;
 
-  SharedElements s;
   std::vector<std::int32_t> live;
   s.slot.assign(t.n_faces(), -1);
   for (std::size_t f = 0; f < t.n_faces(); ++f)
@@ -479,24 +553,68 @@ SharedElements shared_elements(const LimitSurface& surface, const std::vector<st
       s.slot[f] = static_cast<std::int64_t>(live.size());
       live.push_back(static_cast<std::int32_t>(f));
     }
-  s.cps = surface.control_points(live.data(), live.size());
-  s.face_class.assign(t.n_faces(), -1);
+  // Control points: from the topology where it gives them (regular[] = 2
+  // for those, a key of their own), Bfr's for the other faces.
+  {
+    const bool quads = surface.scheme() == Scheme::CatmullClark;
+    std::vector<std::int32_t> stamp(t.n_vertices(), -1), listed, ask;
+    std::vector<std::int64_t> from_topology(live.size(), -1);  // per live face: its start in `listed`, or -1
+    std::vector<std::int32_t> topo_indices;
+    for (std::size_t l = 0; l < live.size(); ++l) {
+      const auto f = static_cast<std::size_t>(live[l]);
+      if (topology_control_points(t, quads, f, listed, stamp, static_cast<std::int32_t>(f))) {
+        from_topology[l] = static_cast<std::int64_t>(topo_indices.size());
+        topo_indices.insert(topo_indices.end(), listed.begin(), listed.end());
+        topo_indices.push_back(-1);  // end of this face's list
+      } else {
+        ask.push_back(live[l]);
+      }
+    }
+    const FaceControlPoints bfr = surface.control_points(ask.data(), ask.size());
+    s.cps.offsets.assign(1, 0);
+    s.cps.indices.reserve(topo_indices.size() + bfr.indices.size());
+    s.cps.regular.reserve(live.size());
+    std::size_t a = 0;
+    for (std::size_t l = 0; l < live.size(); ++l) {
+      if (from_topology[l] >= 0) {
+        for (auto p = static_cast<std::size_t>(from_topology[l]); topo_indices[p] >= 0; ++p)
+          s.cps.indices.push_back(topo_indices[p]);
+        s.cps.regular.push_back(2);
+      } else {
+        s.cps.indices.insert(s.cps.indices.end(), bfr.indices.begin() + bfr.offsets[a],
+                             bfr.indices.begin() + bfr.offsets[a + 1]);
+        s.cps.regular.push_back(bfr.regular[a]);
+        ++a;
+      }
+      s.cps.offsets.push_back(static_cast<std::int64_t>(s.cps.indices.size()));
+    }
+  }
   const auto& ro = t.ring_offsets();
   const auto& rn = t.ring_neighbors();
-  std::map<std::vector<std::int32_t>, std::int32_t> classes;
+  struct KeyHash {
+    std::size_t operator()(const std::vector<std::int32_t>& key) const {
+      std::uint64_t h = 1469598103934665603ull;  // FNV-1a over the entries
+      for (const std::int32_t x : key) h = (h ^ static_cast<std::uint32_t>(x)) * 1099511628211ull;
+      return static_cast<std::size_t>(h);
+    }
+  };
+  std::unordered_map<std::vector<std::int32_t>, std::int32_t, KeyHash> classes;
   std::vector<std::int32_t> key, sorted;
   for (const std::int32_t f : live) {
     const auto uf = static_cast<std::size_t>(f);
-    const std::int32_t* cv = s.control_points(uf);
-    const std::size_t n_cv = s.n_control_points(uf);
-    if (std::any_of(cv, cv + n_cv, [&](std::int32_t v) { return special[static_cast<std::size_t>(v)] != 0; }))
-      continue;
+    const auto sl = static_cast<std::size_t>(s.slot[uf]);
+    const std::int32_t* cv = s.cps.indices.data() + s.cps.offsets[sl];
+    const auto n_cv = static_cast<std::size_t>(s.cps.offsets[sl + 1] - s.cps.offsets[sl]);
     sorted.assign(cv, cv + n_cv);
     std::sort(sorted.begin(), sorted.end());
-    if (std::adjacent_find(sorted.begin(), sorted.end()) != sorted.end()) continue;
+    if (std::any_of(cv, cv + n_cv, [&](std::int32_t v) { return special[static_cast<std::size_t>(v)] != 0; }) ||
+        std::adjacent_find(sorted.begin(), sorted.end()) != sorted.end()) {
+      own_class(uf);
+      continue;
+    }
     const std::int32_t k = t.face_size(uf);
     const std::int32_t* vs = fi.data() + t.face_offset(uf);
-    key.assign({static_cast<std::int32_t>(n_cv), s.cps.regular[static_cast<std::size_t>(s.slot[uf])], k});
+    key.assign({static_cast<std::int32_t>(n_cv), s.cps.regular[sl], k});
     for (std::int32_t i = 0; i < k; ++i) {
       const auto v = static_cast<std::size_t>(vs[i]);
       const bool boundary = t.is_boundary(v);
@@ -507,32 +625,106 @@ SharedElements shared_elements(const LimitSurface& surface, const std::vector<st
       key.insert(key.end(), {t.valence(v), boundary ? 1 : 0, place});
     }
     const auto it = classes.emplace(key, static_cast<std::int32_t>(s.representative.size())).first;
-    if (it->second == static_cast<std::int32_t>(s.representative.size())) s.representative.push_back(f);
+    if (it->second == static_cast<std::int32_t>(s.representative.size())) {
+      s.representative.push_back(f);
+      s.shared.push_back(1);
+    }
     s.face_class[uf] = it->second;
   }
+  s.own_columns.resize(s.representative.size());
   s.element.resize(s.representative.size());
   return s;
 }
 
-using Entry = std::pair<std::uint64_t, double>;  // (row << 32 | column, value), row <= column
-
-// Sorts entries by (row, column) and adds up repeated ones, in place.
-void merge_entries(std::vector<Entry>& e) {
-  std::sort(e.begin(), e.end(), [](const Entry& a, const Entry& b) { return a.first < b.first; });
-  std::size_t out = 0;
-  for (std::size_t i = 0; i < e.size(); ++i) {
-    if (out > 0 && e[out - 1].first == e[i].first)
-      e[out - 1].second += e[i].second;
-    else
-      e[out++] = e[i];
+// The terms of the energy of face f measured in a fixed first fundamental
+// form G of the reference surface (fairness_matrix's reference): with G^-1 =
+// L L^T (L lower triangular), tr(G^-1 H G^-1 H) = |L^T H L|_F^2 and
+// tr(G^-1 J^T J) = |J L|_F^2, each term weighted by sqrt(det G).
+std::vector<Term> metric_terms(const double g[3], double thin_plate, double membrane) {
+  const double det = g[0] * g[2] - g[1] * g[1];
+  // G^-1 = [[g2, -g1], [-g1, g0]] / det; its Cholesky factor
+  const double i00 = g[2] / det, i01 = -g[1] / det, i11 = g[0] / det;
+  const double l11 = std::sqrt(i00), l21 = i01 / l11, l22 = std::sqrt(i11 - l21 * l21);
+  const double area = std::sqrt(det);
+  std::vector<Term> terms;
+  if (thin_plate > 0.0) {
+    terms.push_back({{0, 0, l11 * l11, 2 * l11 * l21, l21 * l21}, thin_plate * area});  // (L^T H L)_11
+    terms.push_back({{0, 0, 0, l22 * l11, l22 * l21}, 2.0 * thin_plate * area});        // (L^T H L)_12
+    terms.push_back({{0, 0, 0, 0, l22 * l22}, thin_plate * area});                      // (L^T H L)_22
   }
-  e.resize(out);
+  if (membrane > 0.0) {
+    terms.push_back({{l11, l21, 0, 0, 0}, membrane * area});
+    terms.push_back({{0, l22, 0, 0, 0}, membrane * area});
+  }
+  return terms;
 }
 
-// One thread's work space and its merged share of K's upper triangle.
+// Per face, the terms of fairness_matrix's reference metric: G the first
+// fundamental form of the limit surface of `reference` at the face's
+// centre; at a face with an extraordinary corner (inside the mesh, valence
+// other than the scheme's), where Bfr's parameterisation is far from affine
+// within the face and a constant G would charge that, the face's parametric
+// shape (the unit square, or the equilateral triangle of Loop) scaled to the
+// area sqrt(det G).
+std::vector<std::vector<Term>> reference_terms(const LimitSurface& surface, const double* reference,
+                                               const std::vector<std::uint8_t>& hole, double thin_plate,
+                                               double membrane) {
+  const Topology& t = surface.topology();
+  const bool loop = surface.scheme() == Scheme::Loop;
+  const std::int32_t size = loop ? 3 : 4, regular_valence = loop ? 6 : 4;
+  std::vector<std::int32_t> faces;
+  std::vector<double> uv;
+  for (std::size_t f = 0; f < t.n_faces(); ++f) {
+    if (hole[f]) continue;
+    if (t.face_size(f) != size)
+      throw ParameterError("the reference metric needs a mesh of " + std::string(loop ? "triangles" : "quads") +
+                           ": face " + std::to_string(f) + " has " + std::to_string(t.face_size(f)) +
+                           " corners (refine the mesh first)");
+    faces.push_back(static_cast<std::int32_t>(f));
+    uv.insert(uv.end(), {loop ? 1.0 / 3.0 : 0.5, loop ? 1.0 / 3.0 : 0.5});
+  }
+  const SurfaceRows rows = surface.rows(faces.data(), uv.data(), faces.size(), 1);
+  const auto& fi = t.face_indices();
+  auto times_reference = [&](const CsrMatrix& m, std::size_t q, double out[3]) {
+    for (auto p = static_cast<std::size_t>(m.indptr[q]); p < static_cast<std::size_t>(m.indptr[q + 1]); ++p)
+      for (std::size_t c = 0; c < 3; ++c) out[c] += m.data[p] * reference[3 * static_cast<std::size_t>(m.indices[p]) + c];
+  };
+  std::vector<std::vector<Term>> out(t.n_faces());
+  for (std::size_t q = 0; q < faces.size(); ++q) {
+    const auto f = static_cast<std::size_t>(faces[q]);
+    double su[3] = {0, 0, 0}, sv[3] = {0, 0, 0};
+    times_reference(rows.du, q, su);
+    times_reference(rows.dv, q, sv);
+    double g[3] = {su[0] * su[0] + su[1] * su[1] + su[2] * su[2], su[0] * sv[0] + su[1] * sv[1] + su[2] * sv[2],
+                   sv[0] * sv[0] + sv[1] * sv[1] + sv[2] * sv[2]};
+    // A guard against a degenerate G (a reference face folded flat): a floor
+    // of 1e-9 of its trace on both axes.
+    const double trace = g[0] + g[2];
+    if (!(trace > 0.0) || !std::isfinite(trace))
+      throw ParameterError("the reference surface is degenerate at face " + std::to_string(f) +
+                           ": its derivatives there are zero or not finite");
+    g[0] += 1e-9 * trace;
+    g[2] += 1e-9 * trace;
+    bool extraordinary = false;
+    for (std::int32_t i = 0; i < size; ++i) {
+      const auto v = static_cast<std::size_t>(fi[static_cast<std::size_t>(t.face_offset(f) + i)]);
+      if (!t.is_boundary(v) && t.valence(v) != regular_valence) extraordinary = true;
+    }
+    if (extraordinary) {
+      const double area = std::sqrt(g[0] * g[2] - g[1] * g[1]);
+      // unit square: I; Loop's equilateral triangle in (u, v): [[1, 1/2], [1/2, 1]] / sqrt(3/4), determinant 1
+      const double k = loop ? area / std::sqrt(0.75) : area;
+      g[0] = k;
+      g[1] = loop ? 0.5 * k : 0.0;
+      g[2] = k;
+    }
+    out[f] = metric_terms(g, thin_plate, membrane);
+  }
+  return out;
+}
+
+// One thread's work space.
 struct Worker {
-  std::vector<Entry> merged;
-  std::vector<Entry> chunk;
   std::vector<std::int32_t> local;  // column -> its place in `cols`, -1 elsewhere
   std::vector<std::int32_t> cols;
   std::vector<double> a, e, qd;
@@ -565,9 +757,9 @@ void add_outer(double s, const double* a, std::size_t n, double* e) {
 
 // A face's element matrix from the rows of its pieces' points: w.e (upper
 // triangle, row-major) over the sorted global columns w.cols, w.local their
-// places (emit_element or local_element clear them).
+// places (store_element clears them).
 void element_matrix(const SurfaceRows& rows, const double* weights, const Piece* pieces, std::size_t n_pieces,
-                 const ElementRules& er, Worker& w) {
+                 const ElementRules& er, const std::vector<Term>& terms, Worker& w) {
   const CsrMatrix* d[6] = {&rows.position, &rows.du, &rows.dv, &rows.duu, &rows.duv, &rows.dvv};
   const std::size_t r0 = pieces[0].first, r1 = pieces[n_pieces - 1].first + pieces[n_pieces - 1].count;
   w.cols.clear();
@@ -591,7 +783,7 @@ void element_matrix(const SurfaceRows& rows, const double* weights, const Piece*
     if (!pc.exact) {
       w.a.resize(n);
       for (std::size_t r = pc.first; r < pc.first + pc.count; ++r)
-        for (const Term& t : er.terms) {
+        for (const Term& t : terms) {
           std::fill(w.a.begin(), w.a.end(), 0.0);
           for (int i = 0; i < 5; ++i) add_row(*d[i + 1], r, t.coef[i], w.local, w.a.data());
           add_outer(weights[r] * t.weight, w.a.data(), n, w.e.data());
@@ -633,170 +825,143 @@ void element_matrix(const SurfaceRows& rows, const double* weights, const Piece*
   }
 }
 
-// Adds the element matrix of element_matrix (w.e over w.cols) to w.chunk
-// (upper triangle, global indices) and clears w.local.
-void emit_element(Worker& w) {
+// The element matrix of element_matrix (w.e, upper triangle over w.cols) as
+// the full symmetric matrix of class c over its columns: for a shared class
+// the control points `cv` of its representative (distinct, in its class's order),
+// else the face's own columns w.cols. Clears w.local.
+void store_element(Worker& w, const std::int32_t* cv, std::size_t n_cv, std::size_t c, Elements& el) {
   const std::size_t n = w.cols.size();
-  for (std::size_t i = 0; i < n; ++i) {
-    const auto ri = static_cast<std::uint64_t>(static_cast<std::uint32_t>(w.cols[i])) << 32;
-    for (std::size_t j = i; j < n; ++j)
-      w.chunk.emplace_back(ri | static_cast<std::uint32_t>(w.cols[j]), w.e[i * n + j]);
-    w.local[static_cast<std::size_t>(w.cols[i])] = -1;
-  }
-}
-
-// The element matrix of element_matrix (w.e over w.cols) as the full
-// symmetric n_cv x n_cv matrix over the face's control points `cv` (distinct,
-// in Bfr's order), written to `out`; clears w.local.
-void local_element(Worker& w, const std::int32_t* cv, std::size_t n_cv, std::vector<double>& out) {
-  const std::size_t n = w.cols.size();
-  out.assign(n_cv * n_cv, 0.0);
-  for (std::size_t i = 0; i < n_cv; ++i) {
-    const std::int32_t a = w.local[static_cast<std::size_t>(cv[i])];
-    if (a < 0) continue;  // no weight at any point: a zero row
-    for (std::size_t j = 0; j < n_cv; ++j) {
-      const std::int32_t b = w.local[static_cast<std::size_t>(cv[j])];
-      if (b < 0) continue;
-      const auto lo = static_cast<std::size_t>(std::min(a, b)), hi = static_cast<std::size_t>(std::max(a, b));
-      out[i * n_cv + j] = w.e[lo * n + hi];
-    }
-  }
-  for (const std::int32_t c : w.cols) w.local[static_cast<std::size_t>(c)] = -1;
-}
-
-// Adds the faces that share element matrices to the workers' merged upper
-// triangles, row by row (threads take ranges of rows): row r gathers, from
-// every shared face with r among its control points, the entries of r's row of
-// the face's matrix in the columns >= r. No sort of all entries: each row's
-// few columns are sorted on their own.
-void add_shared(const SharedElements& shared, int n_threads, std::vector<Worker>& workers) {
-  const std::size_t n_vertices = workers.front().local.size();
-  std::vector<std::int32_t> faces;  // the shared faces
-  for (std::size_t f = 0; f < shared.face_class.size(); ++f)
-    if (shared.reused(f)) faces.push_back(static_cast<std::int32_t>(f));
-  // Per vertex, its incidences (face, place among the face's control points).
-  std::vector<std::int64_t> start(n_vertices + 1, 0);
-  for (const std::int32_t f : faces) {
-    const std::int32_t* cv = shared.control_points(static_cast<std::size_t>(f));
-    for (std::size_t i = 0; i < shared.n_control_points(static_cast<std::size_t>(f)); ++i)
-      ++start[static_cast<std::size_t>(cv[i]) + 1];
-  }
-  for (std::size_t v = 0; v < n_vertices; ++v) start[v + 1] += start[v];
-  std::vector<std::pair<std::int32_t, std::int32_t>> incidence(static_cast<std::size_t>(start[n_vertices]));
-  {
-    std::vector<std::int64_t> cursor(start.begin(), start.end() - 1);
-    for (const std::int32_t f : faces) {
-      const std::int32_t* cv = shared.control_points(static_cast<std::size_t>(f));
-      for (std::size_t i = 0; i < shared.n_control_points(static_cast<std::size_t>(f)); ++i)
-        incidence[static_cast<std::size_t>(cursor[static_cast<std::size_t>(cv[i])]++)] = {f, static_cast<std::int32_t>(i)};
-    }
-  }
-  detail::for_each_task(n_threads > 1, n_threads, [&](int t) {
-    Worker& w = workers[static_cast<std::size_t>(t)];
-    const auto nt = static_cast<std::size_t>(n_threads), ut = static_cast<std::size_t>(t);
-    std::vector<std::pair<std::int32_t, double>> row;
-    for (std::size_t r = n_vertices * ut / nt; r < n_vertices * (ut + 1) / nt; ++r) {
-      row.clear();
-      for (auto p = static_cast<std::size_t>(start[r]); p < static_cast<std::size_t>(start[r + 1]); ++p) {
-        const auto f = static_cast<std::size_t>(incidence[p].first);
-        const auto i = static_cast<std::size_t>(incidence[p].second);
-        const std::int32_t* cv = shared.control_points(f);
-        const std::size_t n_cv = shared.n_control_points(f);
-        const double* e = shared.element[static_cast<std::size_t>(shared.face_class[f])].data() + i * n_cv;
-        for (std::size_t j = 0; j < n_cv; ++j) {
-          const auto c = static_cast<std::size_t>(cv[j]);
-          if (c < r) continue;
-          if (w.local[c] < 0) {
-            w.local[c] = static_cast<std::int32_t>(row.size());
-            row.emplace_back(cv[j], 0.0);
-          }
-          row[static_cast<std::size_t>(w.local[c])].second += e[j];
-        }
-      }
-      std::sort(row.begin(), row.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
-      const auto ri = static_cast<std::uint64_t>(r) << 32;
-      for (const auto& [c, x] : row) {
-        w.merged.emplace_back(ri | static_cast<std::uint32_t>(c), x);
-        w.local[static_cast<std::size_t>(c)] = -1;
+  std::vector<double>& out = el.element[c];
+  if (!el.shared[c]) {
+    el.own_columns[c] = w.cols;
+    out.resize(n * n);
+    for (std::size_t i = 0; i < n; ++i)
+      for (std::size_t j = i; j < n; ++j) out[i * n + j] = out[j * n + i] = w.e[i * n + j];
+  } else {
+    out.assign(n_cv * n_cv, 0.0);
+    std::size_t found = 0;
+    for (std::size_t i = 0; i < n_cv; ++i) found += w.local[static_cast<std::size_t>(cv[i])] >= 0 ? 1 : 0;
+    if (found != n)
+      throw std::logic_error("a face's stencils reach beyond its control points: the fairness matrix would lose "
+                             "entries");
+    for (std::size_t i = 0; i < n_cv; ++i) {
+      const std::int32_t a = w.local[static_cast<std::size_t>(cv[i])];
+      if (a < 0) continue;  // no weight at any point: a zero row
+      for (std::size_t j = 0; j < n_cv; ++j) {
+        const std::int32_t b = w.local[static_cast<std::size_t>(cv[j])];
+        if (b < 0) continue;
+        const auto lo = static_cast<std::size_t>(std::min(a, b)), hi = static_cast<std::size_t>(std::max(a, b));
+        out[i * n_cv + j] = w.e[lo * n + hi];
       }
     }
-  });
+  }
+  for (const std::int32_t col : w.cols) w.local[static_cast<std::size_t>(col)] = -1;
 }
 
-// The symmetric CSR matrix of the merged upper triangles.
-CsrMatrix symmetric_csr(std::vector<Worker>& workers, std::size_t n_rows, bool parallel, int n_tasks) {
-  // Upper triangle by rows: counts, then entries bucketed by row.
+// A face's element as assemble reads it: its columns and its matrix.
+struct FaceElement {
+  const std::int32_t* columns;
+  const double* matrix;  // n x n, row-major
+  std::size_t n;
+};
+
+// Per face (empty for holes), its element, once every class's matrix is stored.
+std::vector<FaceElement> face_elements(const Elements& el) {
+  std::vector<FaceElement> out(el.face_class.size(), FaceElement{nullptr, nullptr, 0});
+  for (std::size_t f = 0; f < out.size(); ++f)
+    if (el.live(f))
+      out[f] = {el.columns(f), el.element[static_cast<std::size_t>(el.face_class[f])].data(), el.n_columns(f)};
+  return out;
+}
+
+// Row i of a face's element matrix (its row of the face's i-th column) added
+// into `row` at each column's place: row[place[col_j]] += E[i][j]. The one
+// step where a face's element matrix enters K.
+inline void add_element_row(const FaceElement& face, std::size_t i, const std::int32_t* place, double* row) {
+  const double* e = face.matrix + i * face.n;
+  for (std::size_t j = 0; j < face.n; ++j) row[place[face.columns[j]]] += e[j];
+}
+
+// K in CSR from the element matrices, assembled row by row (threads take
+// ranges of rows): row r's columns are the union of the columns of the faces
+// that have r among theirs, sorted; its values the sum of those faces' rows
+// for r (add_element_row), written in place. No list of entries, no sort of
+// all entries: each row's few columns are sorted on their own.
+CsrMatrix assemble(const Elements& el, std::size_t n_rows, int n_threads) {
+  const std::vector<FaceElement> faces = face_elements(el);
+  const std::size_t n_faces = faces.size();
+  // Per vertex, its incidences (face, place among the face's columns).
   std::vector<std::int64_t> start(n_rows + 1, 0);
-  for (const Worker& w : workers)
-    for (const Entry& e : w.merged) ++start[(e.first >> 32) + 1];
-  for (std::size_t i = 0; i < n_rows; ++i) start[i + 1] += start[i];
-  std::vector<std::int32_t> ucol(static_cast<std::size_t>(start[n_rows]));
-  std::vector<double> uval(ucol.size());
+  for (const FaceElement& face : faces)
+    for (std::size_t i = 0; i < face.n; ++i) ++start[static_cast<std::size_t>(face.columns[i]) + 1];
+  for (std::size_t v = 0; v < n_rows; ++v) start[v + 1] += start[v];
+  std::vector<std::pair<std::int32_t, std::int32_t>> incidence(static_cast<std::size_t>(start[n_rows]));
   {
     std::vector<std::int64_t> cursor(start.begin(), start.end() - 1);
-    for (Worker& w : workers) {
-      for (const Entry& e : w.merged) {
-        const auto p = static_cast<std::size_t>(cursor[e.first >> 32]++);
-        ucol[p] = static_cast<std::int32_t>(e.first & 0xffffffffu);
-        uval[p] = e.second;
-      }
-      std::vector<Entry>().swap(w.merged);
-    }
+    for (std::size_t f = 0; f < n_faces; ++f)
+      for (std::size_t i = 0; i < faces[f].n; ++i)
+        incidence[static_cast<std::size_t>(cursor[static_cast<std::size_t>(faces[f].columns[i])]++)] = {
+            static_cast<std::int32_t>(f), static_cast<std::int32_t>(i)};
   }
-  // Each row's columns sorted, repeated ones (from different threads) added.
-  std::vector<std::int64_t> ucount(n_rows, 0);
-  detail::for_each_index(parallel, n_tasks, n_rows, [&](std::size_t i) {
-    const auto b = static_cast<std::size_t>(start[i]), e = static_cast<std::size_t>(start[i + 1]);
-    std::vector<std::pair<std::int32_t, double>> row;
-    row.reserve(e - b);
-    for (std::size_t p = b; p < e; ++p) row.emplace_back(ucol[p], uval[p]);
-    std::sort(row.begin(), row.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
-    std::size_t out = b;
-    for (std::size_t p = 0; p < row.size(); ++p) {
-      if (out > b && ucol[out - 1] == row[p].first) {
-        uval[out - 1] += row[p].second;
-      } else {
-        ucol[out] = row[p].first;
-        uval[out++] = row[p].second;
+  // Each task's rows, into arrays of its own (the final ones for one task).
+  struct Part {
+    std::vector<std::int32_t> indices;
+    std::vector<double> data;
+  };
+  std::vector<Part> parts(static_cast<std::size_t>(n_threads));
+  std::vector<std::int64_t> count(n_rows + 1, 0);
+  const auto nt = static_cast<std::size_t>(n_threads);
+  detail::for_each_task(n_threads > 1, n_threads, [&](int t) {
+    const auto ut = static_cast<std::size_t>(t);
+    const std::size_t r0 = n_rows * ut / nt, r1 = n_rows * (ut + 1) / nt;
+    Part& part = parts[ut];
+    // Reserve by the incidences, a bound on the row lengths' sum.
+    part.indices.reserve(static_cast<std::size_t>(start[r1] - start[r0]) / 4);
+    part.data.reserve(part.indices.capacity());
+    std::vector<std::int32_t> place(n_rows, -1);
+    std::vector<std::int32_t> cols;
+    for (std::size_t r = r0; r < r1; ++r) {
+      cols.clear();
+      for (auto p = static_cast<std::size_t>(start[r]); p < static_cast<std::size_t>(start[r + 1]); ++p) {
+        const FaceElement& face = faces[static_cast<std::size_t>(incidence[p].first)];
+        for (std::size_t j = 0; j < face.n; ++j)
+          if (place[static_cast<std::size_t>(face.columns[j])] < 0) {
+            place[static_cast<std::size_t>(face.columns[j])] = 0;
+            cols.push_back(face.columns[j]);
+          }
       }
+      std::sort(cols.begin(), cols.end());
+      const std::size_t first = part.indices.size();
+      for (std::size_t k = 0; k < cols.size(); ++k) place[static_cast<std::size_t>(cols[k])] = static_cast<std::int32_t>(k);
+      part.indices.insert(part.indices.end(), cols.begin(), cols.end());
+      part.data.resize(part.indices.size(), 0.0);
+      for (auto p = static_cast<std::size_t>(start[r]); p < static_cast<std::size_t>(start[r + 1]); ++p)
+        add_element_row(faces[static_cast<std::size_t>(incidence[p].first)],
+                        static_cast<std::size_t>(incidence[p].second), place.data(), part.data.data() + first);
+      for (const std::int32_t c : cols) place[static_cast<std::size_t>(c)] = -1;
+      count[r + 1] = static_cast<std::int64_t>(cols.size());
     }
-    ucount[i] = static_cast<std::int64_t>(out - b);
   });
-  // The full matrix: row i holds the mirrored entries (j, i), j < i, in
-  // increasing j, then its own upper entries.
-  std::vector<std::int64_t> full(n_rows + 1, 0);
-  for (std::size_t i = 0; i < n_rows; ++i) {
-    full[i + 1] += ucount[i];
-    for (std::int64_t p = start[i]; p < start[i] + ucount[i]; ++p)
-      if (static_cast<std::size_t>(ucol[static_cast<std::size_t>(p)]) != i)
-        ++full[static_cast<std::size_t>(ucol[static_cast<std::size_t>(p)]) + 1];
-  }
-  for (std::size_t i = 0; i < n_rows; ++i) full[i + 1] += full[i];
-  if (full[n_rows] > static_cast<std::int64_t>(INT32_MAX))
-    throw ParameterError("the fairness matrix has " + std::to_string(full[n_rows]) +
+  for (std::size_t r = 0; r < n_rows; ++r) count[r + 1] += count[r];
+  if (count[n_rows] > static_cast<std::int64_t>(INT32_MAX))
+    throw ParameterError("the fairness matrix has " + std::to_string(count[n_rows]) +
                          " entries, more than 32-bit CSR indices address");
   CsrMatrix k;
   k.n_rows = k.n_cols = n_rows;
   k.indptr.resize(n_rows + 1);
-  for (std::size_t i = 0; i <= n_rows; ++i) k.indptr[i] = static_cast<std::int32_t>(full[i]);
-  k.indices.resize(static_cast<std::size_t>(full[n_rows]));
-  k.data.resize(k.indices.size());
-  std::vector<std::int64_t> cursor(full.begin(), full.end() - 1);
-  for (std::size_t i = 0; i < n_rows; ++i) {
-    for (std::int64_t p = start[i]; p < start[i] + ucount[i]; ++p) {
-      const auto j = static_cast<std::size_t>(ucol[static_cast<std::size_t>(p)]);
-      if (j == i) continue;
-      const auto q = static_cast<std::size_t>(cursor[j]++);
-      k.indices[q] = static_cast<std::int32_t>(i);
-      k.data[q] = uval[static_cast<std::size_t>(p)];
-    }
+  for (std::size_t r = 0; r <= n_rows; ++r) k.indptr[r] = static_cast<std::int32_t>(count[r]);
+  if (n_threads == 1) {
+    k.indices = std::move(parts[0].indices);
+    k.data = std::move(parts[0].data);
+    return k;
   }
-  detail::for_each_index(parallel, n_tasks, n_rows, [&](std::size_t i) {
-    auto q = static_cast<std::size_t>(cursor[i]);
-    for (std::int64_t p = start[i]; p < start[i] + ucount[i]; ++p, ++q) {
-      k.indices[q] = ucol[static_cast<std::size_t>(p)];
-      k.data[q] = uval[static_cast<std::size_t>(p)];
-    }
+  k.indices.resize(static_cast<std::size_t>(count[n_rows]));
+  k.data.resize(k.indices.size());
+  detail::for_each_task(true, n_threads, [&](int t) {
+    const auto ut = static_cast<std::size_t>(t);
+    const auto at = static_cast<std::size_t>(count[n_rows * ut / nt]);
+    std::copy(parts[ut].indices.begin(), parts[ut].indices.end(), k.indices.begin() + static_cast<std::ptrdiff_t>(at));
+    std::copy(parts[ut].data.begin(), parts[ut].data.end(), k.data.begin() + static_cast<std::ptrdiff_t>(at));
   });
   return k;
 }
@@ -804,7 +969,7 @@ CsrMatrix symmetric_csr(std::vector<Worker>& workers, std::size_t n_rows, bool p
 }  // namespace
 
 CsrMatrix fairness_matrix(const LimitSurface& surface, double thin_plate, double membrane,
-                          const FairnessQuadrature& quadrature) {
+                          const FairnessQuadrature& quadrature, const double* reference) {
   check_options(thin_plate, membrane, quadrature);
   const Topology& topo = surface.topology();
   const Scheme scheme = surface.scheme();
@@ -813,8 +978,10 @@ CsrMatrix fairness_matrix(const LimitSurface& surface, double thin_plate, double
   std::vector<std::uint8_t> hole(n_faces, 0);
   for (const std::int32_t f : surface.tags().holes) hole[static_cast<std::size_t>(f)] = 1;
   const Rule rule = gauss_legendre(quadrature.gauss_points);
-  const Pieces pieces(rule, quadrature.depth, membrane == 0.0);
+  const Pieces pieces(rule, quadrature.depth, membrane == 0.0, reference == nullptr);
   const std::vector<Term> terms = energy_terms(scheme, thin_plate, membrane);
+  const std::vector<std::vector<Term>> face_terms =
+      reference ? reference_terms(surface, reference, hole, thin_plate, membrane) : std::vector<std::vector<Term>>{};
 
   const int n_threads = std::max(1, std::min<int>(detail::available_processors(),
                                                   static_cast<int>(n_faces / kFacesPerTask)));
@@ -823,14 +990,9 @@ CsrMatrix fairness_matrix(const LimitSurface& surface, double thin_plate, double
 
   const ExactForms exact;
   const ElementRules er{terms, exact, thin_plate, membrane};
-  SharedElements shared = quadrature.reuse ? shared_elements(surface, hole) : SharedElements{};
-  // The faces integrated here: those that share no element matrix and each
-  // class's representative.
-  std::vector<std::int32_t> direct;
-  for (std::size_t f = 0; f < n_faces; ++f)
-    if (!hole[f] && (!shared.reused(f) || shared.representative[static_cast<std::size_t>(shared.face_class[f])] ==
-                                              static_cast<std::int32_t>(f)))
-      direct.push_back(static_cast<std::int32_t>(f));
+  Elements el = face_classes(surface, hole, quadrature.reuse && reference == nullptr);
+  // The faces integrated here: each class's representative, in face order.
+  const std::vector<std::int32_t>& direct = el.representative;
   std::vector<std::int32_t> point_faces;
   std::vector<std::size_t> face_first;  // per chunk face, its first piece; one past the end last
   std::vector<std::int32_t> chunk_faces;
@@ -866,28 +1028,17 @@ CsrMatrix fairness_matrix(const LimitSurface& surface, double thin_plate, double
     detail::for_each_task(n_threads > 1, n_threads, [&](int t) {
       Worker& w = workers[static_cast<std::size_t>(t)];
       const auto nt = static_cast<std::size_t>(n_threads), ut = static_cast<std::size_t>(t);
-      w.chunk.clear();
       for (std::size_t c = n_chunk * ut / nt; c < n_chunk * (ut + 1) / nt; ++c) {
-        element_matrix(rows, weights.data(), chunk_pieces.data() + face_first[c], face_first[c + 1] - face_first[c],
-                       er, w);
         const auto f = static_cast<std::size_t>(chunk_faces[c]);
-        if (shared.reused(f))
-          local_element(w, shared.control_points(f), shared.n_control_points(f),
-                        shared.element[static_cast<std::size_t>(shared.face_class[f])]);
-        else
-          emit_element(w);
+        element_matrix(rows, weights.data(), chunk_pieces.data() + face_first[c], face_first[c + 1] - face_first[c],
+                       er, reference ? face_terms[f] : terms, w);
+        const auto cls = static_cast<std::size_t>(el.face_class[f]);
+        store_element(w, el.shared[cls] ? el.columns(f) : nullptr, el.shared[cls] ? el.n_columns(f) : 0, cls, el);
       }
-      merge_entries(w.chunk);
-      w.merged.insert(w.merged.end(), w.chunk.begin(), w.chunk.end());
     });
   }
-  // Every face of a class (its representative too) from the class's matrix.
-  if (quadrature.reuse) add_shared(shared, n_threads, workers);
-  for (Worker& w : workers) {
-    std::vector<Entry>().swap(w.chunk);
-    std::vector<std::int32_t>().swap(w.local);
-  }
-  return symmetric_csr(workers, surface.n_vertices(), n_threads > 1, n_threads);
+  workers.clear();
+  return assemble(el, surface.n_vertices(), n_threads);
 }
 
 }  // namespace sorpia

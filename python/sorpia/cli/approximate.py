@@ -14,6 +14,9 @@ from .common import (EXIT_OK, SCHEME_LABELS, UserError, check_mesh_suffix, check
 from .output import write_json
 from .progress import Progress
 
+# The data of an input mesh with faces when --sampling is not given (measured in docs/approximation.md).
+DEFAULT_SAMPLING = "vertices"
+
 
 def _cage(input_mesh, vertices, cage, scheme, sharp_angle, source, progress):
     """The cage to fit: (vertices, faces, tags, scheme, how it was made). --cage: read (its tags kept, with
@@ -58,7 +61,7 @@ def _cage(input_mesh, vertices, cage, scheme, sharp_angle, source, progress):
 
 def run_approximate(input_path, output, *, vertices=None, cage=None, scheme="auto", sharp_angle=None, report=None,
                     surface=None, level=3, iterations=10, tol=1e-3, fairness=0.0, tangential=1.0, method="cg",
-                    boundary=None, quiet=False, force=False, out=None) -> tuple[int, dict]:
+                    boundary=None, sampling=None, quiet=False, force=False, out=None) -> tuple[int, dict]:
     """`sorpia approximate`: returns (exit code, report dict). Every output
     is checked before the work and written atomically after it; an error
     leaves none of them."""
@@ -80,6 +83,11 @@ def run_approximate(input_path, output, *, vertices=None, cage=None, scheme="aut
         mesh = read_input(input_path, tags=False, points=True)
         timings["read"] = time.perf_counter() - t0
         points = mesh.vertices
+        if sampling not in (None, "vertices") and len(mesh.faces) == 0:
+            raise UserError(f"--sampling {sampling} samples a mesh's faces and {input_path} is a point cloud: "
+                            "its points are the data as they are")
+        sampling = sampling or (DEFAULT_SAMPLING if len(mesh.faces) else "vertices")
+        surface_data = {} if sampling == "vertices" else {"faces": mesh.faces, "sampling": sampling}
         t0 = time.perf_counter()
         cage_v, cage_f, tags, scheme, origin = _cage(mesh, vertices, cage, scheme, sharp_angle, input_path, progress)
         timings["cage"] = time.perf_counter() - t0
@@ -95,7 +103,8 @@ def run_approximate(input_path, output, *, vertices=None, cage=None, scheme="aut
         progress.status("footpoints")
         t0 = time.perf_counter()
         res = approximate(points, cage_v, cage_f, scheme=scheme, boundary=rule, iterations=iterations, tol=tol,
-                          fairness=fairness, tangential=tangential, method=method, callback=on_iteration, **tags)
+                          fairness=fairness, tangential=tangential, method=method, callback=on_iteration,
+                          **surface_data, **tags)
         timings["approximate"] = time.perf_counter() - t0
         t0 = time.perf_counter()
         surface_stats = None
@@ -111,8 +120,8 @@ def run_approximate(input_path, output, *, vertices=None, cage=None, scheme="aut
             write_mesh(surface, Vs, Fs)
         timings["write"] = time.perf_counter() - t0
     data = {"sorpia_version": __version__, "command": "approximate", "input": str(input_path),
-            "n_points": int(len(points)), "output": str(output), "cage": {**origin, "vertices": int(len(cage_v)),
-                                                                           "faces": int(len(cage_f))},
+            "input_points": int(len(points)), "sampling": sampling, "output": str(output),
+            "cage": {**origin, "vertices": int(len(cage_v)), "faces": int(len(cage_f))},
             "scheme": scheme, "boundary": rule, "tags": {"sharp_angle": sharp_angle, **tags_summary(tags)},
             "surface": surface_stats, "report": None if report is None else str(report), **res.report(),
             "timings": {**timings, **{f"approximate.{k}": v for k, v in res.timings.items() if k != "cpu"}},
@@ -136,10 +145,13 @@ def approximate_summary(d: dict) -> str:
     phases = ", ".join(f"{k} {fmt_seconds(v)}" + (f" ({inner})" if k == "approximate" else "")
                        for k, v in t.items() if "." not in k)
     written = [d["output"]] + ([d["surface"]["path"]] if d["surface"] else []) + ([d["report"]] if d["report"] else [])
-    state = "stopped: the RMS distance no longer fell by --tol" if d["converged"] else "stopped at --iterations"
+    state = {"converged": "stopped: the RMS distance no longer fell by --tol", "exact": "stopped: the data lie on "
+             "the surface to rounding", "iterations": "stopped at --iterations"}[d["stop_reason"]]
     return "\n".join([
         f"sorpia approximate: {d['input']} -> {d['output']}",
-        f"  data        {d['n_points']} points, bounding-box diagonal {d['diagonal']:.4g}",
+        f"  data        {d['input_points']} points, bounding-box diagonal {d['diagonal']:.4g}; " + (
+            "the points, equally weighted" if d["sampling"] == "vertices" else
+            f"the surface: {d['n_points']} samples ({d['sampling']}), RMS distances per area"),
         f"  cage        {d['cage']['vertices']} vertices, {d['cage']['faces']} faces, {made}",
         f"  scheme      {SCHEME_LABELS[d['scheme']]}, boundary {d['boundary']}",
         f"  update      {d['method']}, {d['iterations']} iterations ({state})",

@@ -8,7 +8,8 @@ from .. import __version__
 from .._validate import BOUNDARY_RULES, DEFAULT_BOUNDARY
 from .._plotting import FACE_BUDGET  # plotting imports matplotlib only when drawing
 from .common import CLI_SCHEMES, DISPLAY_ORDER
-from .approximate import run_approximate
+from ..approximate import SAMPLINGS
+from .approximate import DEFAULT_SAMPLING, run_approximate
 from .compare import run_compare
 from .demo import run_demo
 from .fit import run_fit
@@ -254,7 +255,8 @@ def build_parser() -> argparse.ArgumentParser:
         blender=a.blender, fair=a.fair, levels=a.levels, membrane=a.membrane, targets=a.targets)[0])
 
     app = command("approximate", "fit a light cage whose limit surface approximates a scan's points",
-                  "Read a dense mesh or a point cloud (its vertices are the data points), take a cage (--cage, a "
+                  "Read a dense mesh or a point cloud (the data: a mesh's surface, sampled as --sampling says, "
+                  "or the cloud's points), take a cage (--cage, a "
                   "mesh file, or --vertices N: the input decimated to N vertices by OpenMesh's Decimater, quads "
                   "for Catmull-Clark) and move the cage's control vertices so that its limit surface fits the "
                   "points in the least-squares sense (sorpia.approximate: footpoints on the limit surface, the "
@@ -279,12 +281,18 @@ def build_parser() -> argparse.ArgumentParser:
     app.add_argument("--iterations", type=_positive_int, default=10, metavar="K",
                      help="updates at most, each followed by re-projecting the footpoints")
     app.add_argument("--tol", type=_float_arg, default=1e-3,
-                     help="stop when an update lowers the RMS distance by less than this fraction")
+                     help="stop when the RMS distance fell by less than this fraction per iteration over the last "
+                     "three (and a fresh search of the footpoints finds none closer by more)")
+    app.add_argument("--sampling", choices=("vertices",) + SAMPLINGS, default=None,
+                     help="the data of an input mesh with faces: vertices = its vertices, equally weighted; area = "
+                     "its vertices weighted by their share of the surface's area; midpoints = its edges' midpoints "
+                     f"likewise (default: {DEFAULT_SAMPLING}; a point cloud's points are always equally weighted)")
     app.add_argument("--method", choices=("cg", "lspia"), default="cg",
                      help="the update: cg = conjugate gradients on the normal equations, lspia = LSPIA's iteration")
     app.add_argument("--tangential", type=_float_arg, default=1.0,
-                     help="weight of the distance along the surface: 1 = point distance, 0 = distance to the "
-                     "tangent plane (faster convergence on clean data)")
+                     help="weight of the distance along the surface: 1 = point distance (robust), 0 = distance to "
+                     "the tangent plane (ill-posed alone on scans); 0.1 reaches a given RMS in about a third of the "
+                     "iterations on clean scans")
     app.add_argument("--fairness", type=_float_arg, default=0.0,
                      help="weight of the thin-plate fairness term, relative to the data term")
     app.add_argument("--surface", metavar="SURF",
@@ -297,8 +305,8 @@ def build_parser() -> argparse.ArgumentParser:
     app.set_defaults(func=lambda a: run_approximate(
         a.input, a.output, vertices=a.vertices, cage=a.cage, scheme=a.scheme, sharp_angle=a.sharp_angle,
         report=a.report, surface=a.surface, level=a.level, iterations=a.iterations, tol=a.tol,
-        fairness=a.fairness, tangential=a.tangential, method=a.method, boundary=a.boundary, quiet=a.quiet,
-        force=a.force)[0])
+        fairness=a.fairness, tangential=a.tangential, method=a.method, boundary=a.boundary, sampling=a.sampling,
+        quiet=a.quiet, force=a.force)[0])
 
     comp = command("compare", "run several methods to one tolerance: the paper's Table 1 and Figure 7",
                    "Run each method on the mesh to the same tolerance and print the paper's Table 1 layout for "

@@ -26,11 +26,13 @@ struct FairnessQuadrature {
   /// every ring but that last corner piece is integrated exactly. 0..12.
   int depth = 4;
   /// Reuse element matrices: the energy of a face as a quadratic form over
-  /// its control points (in Bfr's order) depends only on the face's local
-  /// topology, so faces that agree in it (the face's size and Bfr's
-  /// IsRegular(), the number of its control points, and per corner its
-  /// valence, whether it is on the boundary and, there, where the face lies
-  /// in its fan) share one, computed once. Faces whose control points touch a
+  /// its control points (listed in an order fixed by the local topology:
+  /// from the one-ring where every corner is interior, else Bfr's) depends
+  /// only on the face's local topology, so faces that agree in it (the
+  /// face's size and, for Bfr's lists, Bfr's IsRegular(), the number of its
+  /// control points, and per corner its valence, whether it is on the
+  /// boundary and, there, where the face lies in its fan) share one, computed
+  /// once. Faces whose control points touch a
   /// tag, a hole or a face of another size than the scheme's (triangles for
   /// Loop, quads for Catmull-Clark), or list a vertex twice, are integrated
   /// on their own. false integrates every face on its own: the same K to
@@ -56,7 +58,9 @@ struct FairnessQuadrature {
 ///
 /// Assembled from the derivative rows of LimitSurface::rows (Bfr's stencils),
 /// one dense element matrix per face (one per local topology with
-/// FairnessQuadrature::reuse), merged per row; threads from the core's pool. Each face's domain is split `depth` times towards its marks;
+/// FairnessQuadrature::reuse), summed row by row straight into the CSR;
+/// threads from the core's pool. Each face's domain is split `depth` times
+/// towards its marks;
 /// a Catmull-Clark piece away from them (down to Bfr's isolation level 4) is
 /// a bicubic B-spline piece, integrated in closed form from the derivative
 /// rows at 2 x 2 points; every other piece (Loop's, those at the marks) by
@@ -75,9 +79,26 @@ struct FairnessQuadrature {
 /// @param surface     the topology and rules (its vertices are not used)
 /// @param thin_plate  weight of the thin-plate term, finite, >= 0
 /// @param membrane    weight of the membrane term, finite, >= 0; not both 0
+///
+/// With `reference` (n_vertices x 3, row-major) each face is measured in a
+/// fixed first fundamental form G instead of its parameters: the face's
+/// energy is the integral of tr(G^-1 H G^-1 H) sqrt(det G) (membrane:
+/// tr(G^-1 J^T J) sqrt(det G)) per coordinate, H the Hessian and J the
+/// Jacobian in Bfr's (u, v), G that of the limit surface of `reference` at
+/// the face's centre; at a face with an extraordinary corner (inside the mesh,
+/// valence other than 4 / 6), where Bfr's parameterisation is far from affine
+/// within the face and a constant G would charge that, the face's parametric
+/// shape (unit square; Loop's equilateral triangle) scaled to the area
+/// sqrt(det G). Still a quadratic form in V; the thin-plate term is invariant
+/// under rotations and uniform scalings of the coordinates (of V and
+/// `reference` together). Every piece by the Gauss rule, every face on its
+/// own (no shared element matrices). Needs a mesh of the scheme's faces only.
 /// @param quadrature  the rule on each face
-/// @throws ParameterError naming the weight or option out of range
+/// @param reference   nullptr: the parametric measure; else the reference control vertices
+/// @throws ParameterError naming the weight or option out of range; for a
+///         reference, a face of another size or a degenerate reference face
 CsrMatrix fairness_matrix(const LimitSurface& surface, double thin_plate, double membrane,
-                          const FairnessQuadrature& quadrature = FairnessQuadrature{});
+                          const FairnessQuadrature& quadrature = FairnessQuadrature{},
+                          const double* reference = nullptr);
 
 }  // namespace sorpia
