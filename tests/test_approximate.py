@@ -347,15 +347,19 @@ def test_render_draws_the_data_with_the_fitted_surface(tmp_path):
     assert (tmp_path / "fig.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
+@pytest.mark.parametrize("faces", [False, True])
 @pytest.mark.parametrize("scale", [1e155, 1e-155])
-def test_coordinates_near_the_limits_of_double(scale):
+def test_coordinates_near_the_limits_of_double(scale, faces):
     """Points and cage at 1e155 or 1e-155 fit as at scale 1, the result times the scale (the fit runs scaled by a
-    power of two): distances, RMS and control vertices."""
+    power of two): distances, RMS and control vertices; with the dense mesh's faces too, whose areas (squares of
+    the coordinates) would overflow or underflow."""
     v, f = sorpia.shapes.icosphere(1)
     v = np.asarray(v, float)
     points = 1.02 * v
-    one = sorpia.approximate(points, v, f, iterations=2)
-    big = sorpia.approximate(points * scale, v * scale, f, iterations=2)
+    dense = dict(faces=f, sampling="area") if faces else {}
+    one = sorpia.approximate(points, v, f, iterations=2, **dense)
+    big = sorpia.approximate(points * scale, v * scale, f, iterations=2, **dense)
+    np.testing.assert_allclose(big.points / scale, one.points, rtol=0, atol=1e-15)  # 1e155 is no power of two
     assert np.isfinite(big.rms) and big.iterations == one.iterations
     np.testing.assert_allclose(big.control_vertices / scale, one.control_vertices, rtol=0, atol=1e-12)
     assert abs(big.rms / scale - one.rms) <= 1e-12 and big.history[-1]["rms_relative"] == pytest.approx(
@@ -468,6 +472,8 @@ def test_weights_and_faces_are_checked():
         approximate(V, V, F, weights=np.ones(len(V)), faces=F)
     with pytest.raises(sorpia.ParameterError, match="sampling"):
         approximate(V, V, F, faces=F, sampling="centroids")
+    with pytest.raises(sorpia.ParameterError, match="give faces= too"):
+        approximate(V, V, F, sampling="area")
     with pytest.raises(sorpia.MeshError, match="faces"):
         approximate(V, V, F, faces=[[0, 1, len(V)]])
 

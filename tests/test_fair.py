@@ -394,20 +394,31 @@ def test_a_fine_mesh_beyond_the_memory_left_is_refused_before_any_work(tmp_path)
     assert second == str(320 * 4)
 
 
+@pytest.mark.parametrize("metric", ["parameter", "reference"])
 @pytest.mark.parametrize("scheme", ["loop", "catmull-clark"])
 @pytest.mark.parametrize("scale", [1e155, 1e-155])
-def test_coordinates_near_the_limits_of_double(scheme, scale):
+def test_coordinates_near_the_limits_of_double(scheme, scale, metric):
     """Vertices at 1e155 (whose squares overflow) and 1e-155 (whose squares underflow) give the control mesh of
-    the same vertices at scale 1, times the scale (fair_solve works scaled by a power of two), and the targets
-    are met through the fine mesh's limit points."""
+    the same vertices at scale 1, times the scale (fair_solve works scaled by a power of two; the reference
+    metric's thin plate is unchanged when data and reference scale together), and the targets are met through
+    the fine mesh's limit points."""
     v, f = (sorpia.shapes.icosphere(1) if scheme == "loop" else sorpia.shapes.quad_torus(8, 6))
     v = np.asarray(v, float)
-    one = sorpia.fair_interpolate(v, f, scheme=scheme)
-    big = sorpia.fair_interpolate(v * scale, f, scheme=scheme)
+    one = sorpia.fair_interpolate(v, f, scheme=scheme, metric=metric)
+    big = sorpia.fair_interpolate(v * scale, f, scheme=scheme, metric=metric)
     assert np.isfinite(big.control_vertices).all()
+    if metric == "reference":  # scale-free: the same energy
+        assert big.energy == pytest.approx(one.energy, rel=1e-10)
     np.testing.assert_allclose(big.control_vertices / scale, one.control_vertices, rtol=0, atol=1e-12)
     limit = sorpia.limit_points(big.control_vertices / scale, big.faces, scheme=scheme, **big.tags)
     assert np.abs(limit[:len(v)] - v).max() <= 1e-12
+
+
+def test_reference_metric_with_a_membrane_beyond_double_range_is_refused():
+    v, f = sorpia.shapes.icosphere(1)
+    with pytest.raises(ParameterError, match=r"metric='reference' with a membrane term needs coordinates within "
+                       r"2\^\+-200"):
+        sorpia.fair_interpolate(np.asarray(v, float) * 1e155, f, metric="reference", membrane=0.5)
 
 
 def test_empty_target_list_and_a_loop_pillow_are_named():

@@ -456,7 +456,7 @@ def approximate(points, cage_vertices, cage_faces, *, scheme: str = "auto", boun
                 fairness: float = 0.0, tangential: float = 1.0, method: str = DEFAULT_UPDATE, solver_tol: float = 1e-3,
                 solver_max_iter: int = 2000, grid: int = 4, newton_steps: int = 10, report_level: int = 2,
                 callback: Optional[Callable[[dict], object]] = None, weights=None, faces=None,
-                sampling: str = "area") -> ApproximationResult:
+                sampling: Optional[str] = None) -> ApproximationResult:
     """Control vertices of a cage whose limit surface approximates `points`
     in the least-squares sense (the module docstring describes the method).
 
@@ -525,9 +525,10 @@ def approximate(points, cage_vertices, cage_faces, *, scheme: str = "auto", boun
         (the fit then minimises a quadrature of the integral of the squared
         distance over the surface, and the RMS distances are per area). Not
         with `weights`.
-    sampling : {"area", "midpoints"}
-        With `faces`: "area", the vertices weighted by their share of the
-        area; "midpoints", the edges' midpoints likewise.
+    sampling : {"area", "midpoints"}, optional
+        With `faces` (None means "area"): "area", the vertices weighted by
+        their share of the area; "midpoints", the edges' midpoints likewise.
+        Refused without `faces`.
 
     Returns
     -------
@@ -561,22 +562,24 @@ def approximate(points, cage_vertices, cage_faces, *, scheme: str = "auto", boun
         raise ParameterError("method = 'lspia' moves each coordinate on its own: it takes tangential = 1 only")
     if callback is not None and not callable(callback):
         raise ParameterError(f"callback = {callback!r} must be callable (record) or None")
-    if faces is not None:
-        if weights is not None:
-            raise ParameterError("weights and faces: give one (with faces the weights are the faces' areas)")
-        points, weights = surface_samples(points, faces, sampling)
-    weights = _weights(weights, len(points))
-    data = points
+    if faces is None and sampling is not None:
+        raise ParameterError(f"sampling = {sampling!r} samples a dense mesh's faces: give faces= too")
+    if faces is not None and weights is not None:
+        raise ParameterError("weights and faces: give one (with faces the weights are the faces' areas)")
     cage_vertices = as_vertices(cage_vertices, "cage_vertices")
     if len(cage_faces) == 0:
         raise MeshError("cage_faces is empty: the cage needs at least one face")
     # Data beyond 2^+-200 in magnitude is fitted scaled by a power of two (exact, as `interpolate` scales its
-    # targets): squared distances and the solver's norms would overflow or underflow. Records and the result are
-    # in the caller's units.
+    # targets): squared distances, areas and the solver's norms would overflow or underflow. Records and the
+    # result are in the caller's units.
     largest = max(float(np.abs(points).max(initial=0.0)), float(np.abs(cage_vertices).max(initial=0.0)))
     e = int(np.frexp(largest)[1]) if largest > 0 else 0
     e = e if abs(e) > 200 else 0
     points, cage_vertices = np.ldexp(points, -e), np.ldexp(cage_vertices, -e)
+    if faces is not None:
+        points, weights = surface_samples(points, faces, sampling or "area")
+    weights = _weights(weights, len(points))
+    data = np.ldexp(points, e)
     if scheme == "auto":
         from ._validate import all_triangles
 

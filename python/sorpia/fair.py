@@ -319,20 +319,34 @@ def fair_interpolate(vertices, faces, *, scheme: str = DEFAULT_SCHEME, levels: i
                         f"take ({exc}); under Loop this comes from two triangles with the same vertices in the "
                         "opposite order (a pillow), whose refined faces meet along edges of four faces: fair "
                         "interpolation cannot refine them (interpolate can fit such a mesh)") from None
-    start = np.ascontiguousarray(R @ np.asarray(plain.control_vertices))
+    start = R @ np.asarray(plain.control_vertices)
+    reference, e = None, 0
+    if metric == "reference":
+        # The thin plate in the reference's own metric does not change when the data and the reference are scaled
+        # together; beyond 2^+-200 the metric's squares leave double's range, so the solve then works scaled by a
+        # power of two (exact) and the vertices come back in the caller's units. The membrane term grows with the
+        # square of the scale (it is not scale-free), so a membrane with such data is refused.
+        largest = float(np.abs(v0).max(initial=0.0))
+        e = int(np.frexp(largest)[1]) if largest > 0 else 0
+        e = e if abs(e) > 200 else 0
+        if e and membrane > 0:
+            raise ParameterError(f"metric='reference' with a membrane term needs coordinates within 2^+-200 in "
+                                 f"magnitude (the largest is {largest:.3g}): the membrane energy scales with the "
+                                 "square of the units; scale the data, or use the thin plate alone")
+        reference = np.ascontiguousarray(np.ldexp(R @ v0, -e))
     sol = _core.fair_solve(fine_topology, fine_rules, thin_plate, membrane, target_ids,
-                           np.ascontiguousarray(v0[target_ids]), start, tol, ENERGY_WINDOW, int(max_iter),
+                           np.ascontiguousarray(np.ldexp(v0[target_ids], -e)),
+                           np.ascontiguousarray(np.ldexp(start, -e)), tol, ENERGY_WINDOW, int(max_iter),
                            int(threads), energy_tags=energy_tags(fine_rules.tags, n_fine, len(fine_faces), semi_sharp),
-                           depth=depth,
-                           reference=np.ascontiguousarray(R @ v0) if metric == "reference" else None)
+                           depth=depth, reference=reference)
     timings["energy"], timings["setup"], timings["solve"] = (sol["energy_seconds"], sol["setup_seconds"],
                                                              sol["seconds"])
 
     diagonal = bounding_box_diagonal(v0)
-    max_error = float(sol["max_error"])
+    max_error = float(np.ldexp(sol["max_error"], e))
     fine_creases, fine_corners, fine_holes = _fine_tags(fine["tags"])
     return FairResult(
-        control_vertices=sol["vertices"], faces=fine_faces, creases=fine_creases, corners=fine_corners,
+        control_vertices=np.ldexp(sol["vertices"], e), faces=fine_faces, creases=fine_creases, corners=fine_corners,
         holes=fine_holes, scheme=_core.scheme_name(rules.scheme), boundary=_core.boundary_name(rules.boundary),
         levels=levels, targets=target_ids.astype(np.int64), energy=float(sol["energy"]),
         plain_energy=float(sol["start_energy"]), energies=sol["energies"], max_error=max_error,
