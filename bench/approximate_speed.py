@@ -3,6 +3,7 @@
 
     python bench/approximate_speed.py                       # 1M points onto a 20k-vertex cage
     python bench/approximate_speed.py --points 200000 --cage 5000 --iterations 3
+    python bench/approximate_speed.py --no-update-comparison --tangential 0.1   # the blend's cost at 1M points
 
 The data: the limit surface of `sorpia.shapes.irregular(--cage)` (Loop, valences 3 to 12) sampled at --points
 random (face, u, v), moved by Gaussian noise of 1e-4 of the bounding-box diagonal; the cage: the same mesh with
@@ -72,6 +73,8 @@ def main() -> None:
     ap.add_argument("--cage", type=int, default=20_000)
     ap.add_argument("--iterations", type=int, default=3)
     ap.add_argument("--no-update-comparison", action="store_true")
+    ap.add_argument("--tangential", type=float, default=None,
+                    help="approximate()'s tangential (default: approximate()'s own default)")
     args = ap.parse_args()
     import sorpia
 
@@ -81,10 +84,12 @@ def main() -> None:
         out["update"] = compare_updates(P, V0, F)
     cpu0 = time.process_time()
     t0 = time.perf_counter()
-    r = sorpia.approximate(P, V0, F, iterations=args.iterations, tol=0)
+    blend = {} if args.tangential is None else {"tangential": args.tangential}
+    r = sorpia.approximate(P, V0, F, iterations=args.iterations, tol=0, **blend)
     out["phases"] = {"wall_seconds": time.perf_counter() - t0, "cpu_seconds": time.process_time() - cpu0,
                      "timings": r.timings, "history": r.history,
                      "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}
+    out["tangential"] = args.tangential
     out["load_average_after"] = os.getloadavg()
     print(json.dumps(out, indent=1))
 

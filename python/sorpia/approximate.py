@@ -493,7 +493,10 @@ def approximate(points, cage_vertices, cage_faces, *, scheme: str = "auto", boun
         distance, one (3n, 3n) system of 3x3 blocks, converging much faster
         on clean data but ill-posed alone on scans); between, a blend (0.1
         reaches a given RMS on scans in about a third of the iterations of
-        point distance; docs/approximation.md).
+        point distance). The default is 1: below it each iteration costs
+        more and, where few points hold a part of the cage (thin parts,
+        boundaries), the surface between the points strays farther from
+        them; docs/approximation.md has the measurements.
     method : {"cg", "lspia"}
         The update: conjugate gradients on the normal equations (default:
         the faster, bench/approximate_speed.py), or LSPIA's iteration (with

@@ -292,7 +292,8 @@ def build_parser() -> argparse.ArgumentParser:
     app.add_argument("--tangential", type=_float_arg, default=1.0,
                      help="weight of the distance along the surface: 1 = point distance (robust), 0 = distance to "
                      "the tangent plane (ill-posed alone on scans); 0.1 reaches a given RMS in about a third of the "
-                     "iterations on clean scans")
+                     "iterations on clean, closed, evenly sampled scans, but the surface strays farther between "
+                     "loosely held points (default: 1)")
     app.add_argument("--fairness", type=_float_arg, default=0.0,
                      help="weight of the thin-plate fairness term, relative to the data term")
     app.add_argument("--surface", metavar="SURF",
