@@ -23,22 +23,22 @@ using Indices = py::array_t<std::int32_t, py::array::c_style>;
 void bind_fit(py::module_& m) {
   m.def(
       "fairness_matrix",
-      [](const sorpia::LimitSurface& surface, double thin_plate, double membrane, int gauss_points, int depth,
-         bool reuse, std::optional<Vertices> reference) {
+      [](const sorpia::Topology& topology, const sorpia::Rules& rules, double thin_plate, double membrane,
+         int gauss_points, int depth, bool reuse, std::optional<Vertices> reference) {
         if (reference) {
           check_shape(*reference, 3, "reference");
-          check_rows(*reference, surface.n_vertices(), "reference", "the surface");
+          check_rows(*reference, topology.n_vertices(), "reference", "the surface");
         }
         sorpia::CsrMatrix k;
         {
           LongCall call;
-          k = sorpia::fairness_matrix(surface, thin_plate, membrane,
+          k = sorpia::fairness_matrix(topology, rules, thin_plate, membrane,
                                      sorpia::FairnessQuadrature{gauss_points, depth, reuse},
                                      reference ? reference->data() : nullptr);
         }
         return csr_tuple(std::move(k));
       },
-      "surface"_a, "thin_plate"_a, "membrane"_a, "gauss_points"_a, "depth"_a, "reuse"_a = true,
+      "topology"_a, "rules"_a, "thin_plate"_a, "membrane"_a, "gauss_points"_a, "depth"_a, "reuse"_a = true,
       "reference"_a.noconvert() = py::none(),
       "Fairness matrix K (thin-plate and membrane energy) as CSR arrays (data, indices, indptr); reuse=False\n"
       "integrates every face on its own (FairnessQuadrature::reuse); reference: (n, 3) control vertices whose\n"
@@ -99,12 +99,11 @@ void bind_fit(py::module_& m) {
           LongCall call;
           // K stays in the core: built here, used by fair_solve, never copied.
           const auto t0 = std::chrono::steady_clock::now();
-          const std::vector<double> zeros(3 * n, 0.0);  // K does not use the control vertices
-          const sorpia::LimitSurface surface(topology, zeros.data(), rules.scheme, rules.boundary,
-                                             energy_tags ? *energy_tags : rules.tags);
           sorpia::FairnessQuadrature quadrature;
           quadrature.depth = depth;
-          const sorpia::CsrMatrix k = sorpia::fairness_matrix(surface, thin_plate, membrane, quadrature,
+          const sorpia::CsrMatrix k = sorpia::fairness_matrix(
+              topology, sorpia::Rules{rules.scheme, rules.boundary, energy_tags ? *energy_tags : rules.tags},
+              thin_plate, membrane, quadrature,
                                                               reference ? reference->data() : nullptr);
           energy_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
           s = sorpia::fair_solve(topology, rules, k, targets.data(), static_cast<std::size_t>(targets.shape(0)),

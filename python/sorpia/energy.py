@@ -194,6 +194,6 @@ def matrix_arrays(topology: _core.Topology, rules: _core.Rules, thin_plate=1.0, 
     face's metric). Fair interpolation builds its K in the core, next to the
     solve that uses it, with the same tags (`energy_tags`)."""
     tags = energy_tags(rules.tags, topology.n_vertices, topology.n_faces, check_semi_sharp(semi_sharp))
-    surface = _core.LimitSurface(topology, np.zeros((topology.n_vertices, 3)), rules.scheme, rules.boundary, tags)
-    return _core.fairness_matrix(surface, *_options(thin_plate, membrane, gauss_points, depth),
+    return _core.fairness_matrix(topology, _core.Rules(scheme=rules.scheme, boundary=rules.boundary, tags=tags),
+                                 *_options(thin_plate, membrane, gauss_points, depth),
                                  reference=None if reference is None else np.ascontiguousarray(reference, np.float64))

@@ -1041,4 +1041,11 @@ CsrMatrix fairness_matrix(const LimitSurface& surface, double thin_plate, double
   return assemble(el, surface.n_vertices(), n_threads);
 }
 
+CsrMatrix fairness_matrix(const Topology& topology, const Rules& rules, double thin_plate, double membrane,
+                          const FairnessQuadrature& quadrature, const double* reference) {
+  const std::vector<double> zeros(3 * topology.n_vertices(), 0.0);
+  const LimitSurface surface(topology, zeros.data(), rules.scheme, rules.boundary, rules.tags);
+  return fairness_matrix(surface, thin_plate, membrane, quadrature, reference);
+}
+
 }  // namespace sorpia

@@ -101,4 +101,11 @@ CsrMatrix fairness_matrix(const LimitSurface& surface, double thin_plate, double
                           const FairnessQuadrature& quadrature = FairnessQuadrature{},
                           const double* reference = nullptr);
 
+/// K of a mesh's limit surface under `rules` (K does not depend on the control
+/// vertices): the surface built here with zero vertices, for callers that hold
+/// a topology and no surface (fair interpolation's fine mesh, the binding).
+CsrMatrix fairness_matrix(const Topology& topology, const Rules& rules, double thin_plate, double membrane,
+                          const FairnessQuadrature& quadrature = FairnessQuadrature{},
+                          const double* reference = nullptr);
+
 }  // namespace sorpia
