@@ -138,7 +138,6 @@ class ApproximationResult:
     points: np.ndarray
     weights: Optional[np.ndarray]
     iterations: int
-    converged: bool
     stop_reason: str
     best_iteration: int
     method: str
@@ -146,6 +145,11 @@ class ApproximationResult:
     diagonal: float
     history: list = field(default_factory=list)
     timings: dict = field(default_factory=dict)
+
+    @property
+    def converged(self) -> bool:
+        """True when the run stopped before ``iterations`` ran out."""
+        return self.stop_reason != "iterations"
 
     @property
     def rms(self) -> float:
@@ -663,7 +667,7 @@ def approximate(points, cage_vertices, cage_faces, *, scheme: str = "auto", boun
     fit.timings["cpu"] = dict(fit.cpu, total=time.process_time() - c0)
     return ApproximationResult(control_vertices=np.ldexp(V, e), face_ids=face_ids, uv=uv,
                                distances=np.ldexp(distances, e), points=data, weights=weights, iterations=done,
-                               converged=stop_reason != "iterations", stop_reason=stop_reason,
+                               stop_reason=stop_reason,
                                best_iteration=best_iteration, method=method,
                                fairness=fairness, diagonal=float(np.ldexp(diagonal, e)),
                                history=history, timings=fit.timings)

@@ -14,6 +14,7 @@ from .. import __version__
 from .common import (EXIT_NOT_CONVERGED, EXIT_OK, SCHEME_LABELS, UserError, face_counts, face_size_histogram,
                      fmt_seconds, read_solve_input, repair_json, repair_lines, scheme_kwargs, tags_lines, tags_summary,
                      usd_template, warn_once)
+from .fit import summary_text
 from .output import write_json
 from .progress import Progress
 
@@ -204,7 +205,4 @@ def fair_summary(d: dict, repaired=()) -> str:
         f"  seconds     {phases}",
         f"  wrote       {', '.join(written)}",
     ]
-    if d["surface"]:
-        s = d["surface"]
-        lines.insert(-1, f"  surface     level {s['level']}: {s['vertices']} vertices, {s['faces']} faces")
-    return "\n".join(lines)
+    return summary_text(lines, d["surface"])

@@ -335,6 +335,15 @@ def _binary_for(path, binary: bool) -> bool:
     return binary and Path(path).suffix.lower() in (".ply", ".stl")
 
 
+def summary_text(lines: list, surface) -> str:
+    """A fit's summary lines, the written surface's line (`surface`: the report's "surface" entry, or None)
+    before the last ("wrote"), as one text: what fit and fit --fair print."""
+    if surface:
+        lines.insert(-1, f"  surface     level {surface['level']}: {surface['vertices']} vertices, "
+                         f"{surface['faces']} faces")
+    return "\n".join(lines)
+
+
 def fit_summary(d: dict, repaired=(), kept=()) -> str:
     """The summary printed by fit; `repaired`: a line per kind of change --repair made; `kept`: what
     --nonmanifold sharp kept."""
@@ -379,7 +388,4 @@ def fit_summary(d: dict, repaired=(), kept=()) -> str:
         f"  seconds     {phases}",
         f"  wrote       {', '.join(written) or 'nothing'}",
     ]
-    if d["surface"]:
-        s = d["surface"]
-        lines.insert(-1, f"  surface     level {s['level']}: {s['vertices']} vertices, {s['faces']} faces")
-    return "\n".join(lines)
+    return summary_text(lines, d["surface"])
