@@ -212,6 +212,12 @@ def test_bad_input_is_named():
     fan = np.vstack([f, [[f[0, 0], f[0, 1], next(x for x in range(len(v)) if x not in f[0])]]])
     with pytest.raises(sorpia.MeshError, match=f"face {len(f)} cannot join OpenMesh's half-edge mesh"):
         sorpia.decimate(v, fan, 100)
+    # A face oriented against its neighbours: the edge and the faces named, as Topology names them.
+    twisted = f.copy()
+    twisted[3] = twisted[3][::-1]
+    with pytest.raises(sorpia.MeshError, match=r"cannot join OpenMesh's half-edge mesh: inconsistent orientation at "
+                       r"edge \(\d+, \d+\)"):
+        sorpia.decimate(v, twisted, 100)
     # Decimation the guards stop: the 60 vertices of the wavy sides kept cannot reach 50.
     gv, gf = sorpia.shapes.grid(30, 30)
     with pytest.raises(sorpia.MeshError, match=r"decimate stopped at \d+ vertices of the 50 asked \(from 900\)"):

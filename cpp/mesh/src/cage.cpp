@@ -20,6 +20,7 @@
 #include "openmesh_types.hpp"
 #include "sorpia/errors.hpp"
 #include "sorpia/interrupt.hpp"
+#include "sorpia/topology.hpp"
 
 namespace sorpia {
 namespace {
@@ -236,10 +237,19 @@ OMesh to_openmesh(const Mesh& mesh, std::vector<std::int32_t>& kept) {
     const std::int32_t* t = &mesh.face_vertex_indices[3 * f];
     const OMesh::VertexHandle c[3] = {OMesh::VertexHandle(handle[t[0]]), OMesh::VertexHandle(handle[t[1]]),
                                       OMesh::VertexHandle(handle[t[2]])};
-    if (!om.add_face(c[0], c[1], c[2]).is_valid())
+    if (!om.add_face(c[0], c[1], c[2]).is_valid()) {
+      // OpenMesh says only that the face does not fit; the project's one check of a mesh's form names the
+      // problem (the edge, the faces, the fix) as every other refusal does. Run on this failure path only.
+      try {
+        const Topology named(mesh);
+      } catch (const MeshError& e) {
+        throw MeshError("decimate: face " + std::to_string(f) + " cannot join OpenMesh's half-edge mesh: " +
+                        e.what());
+      }
       throw MeshError("decimate: face " + std::to_string(f) +
                       " cannot join OpenMesh's half-edge mesh (a repeated vertex, an edge of three or more faces, a "
                       "bowtie vertex or a face oriented against its neighbours); sorpia.repair makes such a mesh valid");
+    }
   }
   return om;
 }
