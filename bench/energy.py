@@ -170,11 +170,11 @@ def _median_seconds(fn, repeat):
 def _matrix_seconds(faces, n, scheme, repeat, reuse):
     """Median seconds of the default rule from faces to CSR arrays, with element matrices shared between faces of
     one local topology (reuse, the default) or every face integrated on its own; and K's entry count."""
-    from sorpia.energy import _core, _core_surface
+    from sorpia.energy import _core, as_rules
 
     def build():
-        surface, _ = _core_surface(faces, n, scheme, "edge-and-corner", None, None, None)
-        return _core.fairness_matrix(surface, 1.0, 0.0, 4, 4, reuse=reuse)
+        arrays, count, rules = as_rules(faces, n, scheme=scheme, boundary="edge-and-corner")
+        return _core.fairness_matrix(_core.Topology(*arrays, count), rules, 1.0, 0.0, 4, 4, reuse=reuse)
     s, (data, _, _) = _median_seconds(build, repeat)
     return s, len(data)
 
