@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "bindings.hpp"
+#include "sorpia/detail/parallel.hpp"
 #include "sorpia/fair.hpp"
 #include "sorpia/fairness.hpp"
 #include "sorpia/refine.hpp"
@@ -45,24 +46,38 @@ void bind_fit(py::module_& m) {
       "limit surface gives each face its metric (sorpia::fairness_matrix).");
   m.def(
       "refine_uniform",
-      [](const sorpia::Topology& topology, const sorpia::Rules& rules, int levels) {
+      [](const sorpia::Topology& topology, const sorpia::Rules& rules, int levels, std::optional<Vertices> vertices,
+         bool refinement) {
+        if (vertices) {
+          check_shape(*vertices, 3, "vertices");
+          check_rows(*vertices, topology.n_vertices(), "vertices", "the mesh");
+        }
         sorpia::RefinedMesh r;
         {
           LongCall call;
-          r = sorpia::refine_uniform(topology, rules, levels);
+          r = sorpia::refine_uniform(topology, rules, levels, vertices ? vertices->data() : nullptr, refinement);
         }
         py::dict out;
         const auto face_size = r.mesh.face_size;
         out["faces"] = to_numpy(std::move(r.mesh.face_vertex_indices), face_size);
         out["n_vertices"] = r.n_vertices;
         out["tags"] = std::move(r.tags);
-        out["refinement"] = csr_tuple(std::move(r.refinement));
+        if (refinement) out["refinement"] = csr_tuple(std::move(r.refinement));
+        if (vertices) out["vertices"] = to_numpy(std::move(r.vertices), 3);
         out["coarse_face"] = to_numpy(std::move(r.coarse_face), 0);
         return out;
       },
-      "topology"_a, "rules"_a, "levels"_a,
+      "topology"_a, "rules"_a, "levels"_a, "vertices"_a.noconvert() = py::none(), "refinement"_a = true,
       "The mesh refined `levels` times by OpenSubdiv's Far (sorpia::refine_uniform): a dict with faces, "
-      "n_vertices, tags, refinement (R as CSR arrays (data, indices, indptr)) and coarse_face.");
+      "n_vertices, tags, refinement (R as CSR arrays (data, indices, indptr); left out with refinement=False), "
+      "vertices (R V, with vertices= V) and coarse_face.");
+  m.def(
+      "check_refinement",
+      [](const sorpia::Topology& topology, const sorpia::Rules& rules, int levels) {
+        sorpia::check_refinement(topology, rules, levels);
+      },
+      "topology"_a, "rules"_a, "levels"_a,
+      "refine_uniform's checks before any work (sorpia::check_refinement): raises for levels it refuses.");
   m.def("refinement_bytes",
         [](std::size_t n_vertices, std::size_t n_faces, int levels, sorpia::Scheme scheme,
            std::size_t n_face_vertices) {
@@ -97,6 +112,8 @@ void bind_fit(py::module_& m) {
         double energy_seconds = 0.0;
         {
           LongCall call;
+          // `threads` caps K's assembly and Bfr's evaluation in it too.
+          const sorpia::detail::ThreadCap cap(threads);
           // K stays in the core: built here, used by fair_solve, never copied.
           const auto t0 = std::chrono::steady_clock::now();
           sorpia::FairnessQuadrature quadrature;

@@ -31,7 +31,11 @@ unconstrained quadratic in the free vertices, minimised by conjugate gradients
 with Jacobi preconditioning, started from the plain interpolation refined
 (R V_plain: the plain surface, which meets the constraints). The targets are
 met to rounding whatever the iteration stops at; the iteration stops when the
-energy fell by at most ``tol`` times itself over the last 10 iterations.
+energy fell by at most ``tol`` times itself over the last d iterations, d the
+iterations so far over 5, at least 2 and at most 10 (`ENERGY_WINDOW`): the
+fall over the last d iterations estimates how far the energy was above its
+minimum d iterations ago, closely where it falls fast (every vertex a
+target), and a slow iteration is judged over more of them.
 
 Where the reduced energy has a null space (thin plate alone with few targets:
 a flat regular grid's affine functions), the conjugate gradients on the
@@ -59,7 +63,8 @@ from .energy import check_semi_sharp, energy_tags
 from .solve import InterpolationResult, Interpolator, _integer, check_options
 
 METRICS = ("parameter", "reference")
-# The iteration's window: the energy change is measured over this many iterations.
+# The iteration's largest window: the energy change is measured over the iterations so far over 5, at least 2
+# and at most this many.
 ENERGY_WINDOW = 10
 MAX_LEVELS = int(_core.MAX_REFINEMENT_LEVELS)
 
@@ -104,7 +109,8 @@ class FairResult:
     iterations : int
     stop_reason : {"converged", "max_iter", "exact"}
         "converged": the energy fell by at most tol times itself over the
-        last 10 iterations; "exact": the gradient vanished in every column.
+        last d iterations (d: the iterations over 5, 2..10); "exact": the
+        gradient vanished in every column.
     converged : bool
         stop_reason is "converged" or "exact".
     seconds : float
@@ -142,7 +148,13 @@ class FairResult:
     seconds: float
     timings: dict = field(repr=False)
     plain: InterpolationResult = field(repr=False)
-    refinement: object = field(repr=False)
+    _refinement: "_Refinement" = field(repr=False)
+
+    @property
+    def refinement(self):
+        """R, (n_fine, n) scipy.sparse.csr_matrix (class docstring), built
+        on first access (Far's stencil tables) and kept."""
+        return self._refinement()
 
     @property
     def converged(self) -> bool:
@@ -199,6 +211,26 @@ def as_targets(targets, n_vertices: int) -> np.ndarray:
     return np.ascontiguousarray(arr, dtype=np.int32)
 
 
+class _Refinement:
+    """R of a refinement, built by Far on the first call and kept: fair
+    interpolation needs only R V_plain (Far's PrimvarRefiner), so R is built
+    when FairResult.refinement is read (or a reference metric needs it)."""
+
+    def __init__(self, topology, rules, levels: int):
+        self._args, self._matrix = (topology, rules, levels), None
+
+    def __call__(self):
+        if self._matrix is None:
+            import scipy.sparse
+
+            topology, rules, levels = self._args
+            fine = _core.refine_uniform(topology, rules, levels)
+            self._matrix = scipy.sparse.csr_matrix(fine["refinement"],
+                                                   shape=(int(fine["n_vertices"]), topology.n_vertices))
+            self._args = None
+        return self._matrix
+
+
 def _fine_tags(tags: _core.Tags) -> tuple:
     creases = corners = holes = None
     if len(tags.crease_sharpness):
@@ -238,11 +270,13 @@ def fair_interpolate(vertices, faces, *, scheme: str = DEFAULT_SCHEME, levels: i
     {tags}
     tol : float
         Stop when the energy fell by at most tol times itself over the last
-        10 iterations, in (0, 1).
+        d iterations (d: the iterations so far over 5, at least 2, at most
+        10), in (0, 1).
     max_iter : int
         At most this many iterations.
     threads : int
-        Threads for the products with the fairness matrix.
+        Threads for the fairness matrix (its assembly and Bfr's evaluation
+        in it) and the products with it: at most this many.
     semi_sharp : {"sharp", "as-tagged"}
         How the energy takes semi-sharp creases and corners
         (`sorpia.fairness_matrix`): "sharp" measures the bending on each side
@@ -295,18 +329,20 @@ def fair_interpolate(vertices, faces, *, scheme: str = DEFAULT_SCHEME, levels: i
     except MeshError as exc:
         raise manifold_only(exc, "fair interpolation") from None
     build = time.perf_counter() - t
-    t = time.perf_counter()
-    fine = _core.refine_uniform(interp.topology, rules, levels)  # refuses a fine mesh too big before building it
-    timings["refine"] = time.perf_counter() - t
+    _core.check_refinement(interp.topology, rules, levels)  # refuses a fine mesh too big before any work
 
     t = time.perf_counter()
     plain = interp.solve(v0)
     timings["plain"] = build + time.perf_counter() - t
 
-    import scipy.sparse
+    # The fine mesh and the start R V_plain (Far's PrimvarRefiner); R itself only when FairResult.refinement is read.
+    t = time.perf_counter()
+    fine = _core.refine_uniform(interp.topology, rules, levels, vertices=np.ascontiguousarray(plain.control_vertices, dtype=np.float64),
+                                refinement=False)
+    timings["refine"] = time.perf_counter() - t
+    refinement = _Refinement(interp.topology, rules, levels)
 
     n_fine = int(fine["n_vertices"])
-    R = scipy.sparse.csr_matrix(fine["refinement"], shape=(n_fine, n))
     fine_faces = fine["faces"]
     fine_rules = _core.Rules(scheme=rules.scheme, boundary=rules.boundary, tags=fine["tags"])
     try:
@@ -319,7 +355,7 @@ def fair_interpolate(vertices, faces, *, scheme: str = DEFAULT_SCHEME, levels: i
                         f"take ({exc}); under Loop this comes from two triangles with the same vertices in the "
                         "opposite order (a pillow), whose refined faces meet along edges of four faces: fair "
                         "interpolation cannot refine them (interpolate can fit such a mesh)") from None
-    start = R @ np.asarray(plain.control_vertices)
+    start = fine["vertices"]
     reference, e = None, 0
     if metric == "reference":
         # The thin plate in the reference's own metric does not change when the data and the reference are scaled
@@ -333,7 +369,7 @@ def fair_interpolate(vertices, faces, *, scheme: str = DEFAULT_SCHEME, levels: i
             raise ParameterError(f"metric='reference' with a membrane term needs coordinates within 2^+-200 in "
                                  f"magnitude (the largest is {largest:.3g}): the membrane energy scales with the "
                                  "square of the units; scale the data, or use the thin plate alone")
-        reference = np.ascontiguousarray(np.ldexp(R @ v0, -e))
+        reference = np.ascontiguousarray(np.ldexp(refinement() @ v0, -e))
     sol = _core.fair_solve(fine_topology, fine_rules, thin_plate, membrane, target_ids,
                            np.ascontiguousarray(np.ldexp(v0[target_ids], -e)),
                            np.ascontiguousarray(np.ldexp(start, -e)), tol, ENERGY_WINDOW, int(max_iter),
@@ -352,7 +388,7 @@ def fair_interpolate(vertices, faces, *, scheme: str = DEFAULT_SCHEME, levels: i
         plain_energy=float(sol["start_energy"]), energies=sol["energies"], max_error=max_error,
         max_error_relative=max_error / diagonal if diagonal > 0 else max_error,
         iterations=int(sol["iterations"]), stop_reason=sol["stop_reason"], seconds=time.perf_counter() - t0,
-        timings=timings, plain=plain, refinement=R)
+        timings=timings, plain=plain, _refinement=refinement)
 
 
 fair_interpolate.__doc__ = fair_interpolate.__doc__.replace("{tags}", _TAGS_DOC)

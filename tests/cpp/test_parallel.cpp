@@ -1,6 +1,7 @@
 // The core's fork-join pool: every task runs once, exceptions come back to
 // the caller, and a forked child can run tasks too (libgomp hangs there).
 #include <gtest/gtest.h>
+#include <sched.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -14,6 +15,7 @@
 
 namespace {
 
+using sorpia::detail::available_processors;
 using sorpia::detail::for_each_index;
 using sorpia::detail::max_over_tasks;
 using sorpia::detail::run_tasks;
@@ -29,6 +31,34 @@ TEST(Parallel, EveryTaskRunsOnceOnDistinctThreads) {
     for (int t = 0; t < n; ++t) EXPECT_EQ(runs[t].load(), 1) << "task " << t << " of " << n;
     EXPECT_EQ(who[0], std::this_thread::get_id());  // task 0 on the caller
     for (int t = 1; t < n; ++t) EXPECT_NE(who[t], who[0]);
+  }
+}
+
+TEST(Parallel, AThreadCapBoundsTheProcessorsWhileItLives) {
+  // The uncapped count is the affinity mask's (sched_getaffinity, read here
+  // on its own); a cap lowers it on this thread only, nested caps keep the
+  // smallest, and each cap's end restores what was before.
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  ASSERT_EQ(sched_getaffinity(0, sizeof set, &set), 0);
+  const int all = CPU_COUNT(&set);
+  EXPECT_EQ(available_processors(), all);
+  {
+    const sorpia::detail::ThreadCap one(1);
+    EXPECT_EQ(available_processors(), 1);
+    int elsewhere = 0;
+    std::thread([&] { elsewhere = available_processors(); }).join();
+    EXPECT_EQ(elsewhere, all);  // another thread is not capped
+    {
+      const sorpia::detail::ThreadCap more(4);  // a larger cap inside a smaller one
+      EXPECT_EQ(available_processors(), 1);
+    }
+    EXPECT_EQ(available_processors(), 1);
+  }
+  EXPECT_EQ(available_processors(), all);
+  {
+    const sorpia::detail::ThreadCap none(0);  // < 1: no cap
+    EXPECT_EQ(available_processors(), all);
   }
 }
 

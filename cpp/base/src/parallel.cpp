@@ -134,12 +134,27 @@ void run_tasks(int n_tasks, const std::function<void(int)>& task) { Pool::instan
 
 int pool_workers() { return Pool::instance().size(); }
 
+namespace {
+// The calling thread's cap (ThreadCap); 0: none.
+thread_local int thread_cap = 0;
+}  // namespace
+
 int available_processors() {
   cpu_set_t set;
   CPU_ZERO(&set);
-  if (sched_getaffinity(0, sizeof set, &set) == 0) return std::max(1, CPU_COUNT(&set));
-  return std::max(1u, std::thread::hardware_concurrency());
+  int n = 0;
+  if (sched_getaffinity(0, sizeof set, &set) == 0)
+    n = std::max(1, CPU_COUNT(&set));
+  else
+    n = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  return thread_cap > 0 ? std::min(n, thread_cap) : n;
 }
+
+ThreadCap::ThreadCap(int n) : previous_(thread_cap) {
+  if (n >= 1) thread_cap = previous_ > 0 ? std::min(previous_, n) : n;
+}
+
+ThreadCap::~ThreadCap() { thread_cap = previous_; }
 
 }  // namespace detail
 }  // namespace sorpia

@@ -150,6 +150,17 @@ double energy_of(const Problem& problem, const std::vector<double>& v, std::vect
   return e[0] + e[1] + e[2];
 }
 
+// The window of the stopping rule after k iterations: k / 5, at least 2 (or
+// `window` when smaller) and at most `window`. E_{k-d} - E_k estimates from
+// below how far the energy of x_{k-d} is above the minimum (the energy falls
+// by the rest of that distance in the iterations to come); the estimate is
+// close when the energy falls fast over the window, as it does where the
+// iteration needs few steps, and the window grows with the iterations so
+// that a slow iteration is judged over as many as before (FairOptions::window).
+std::size_t energy_window(long long k, int window) {
+  return static_cast<std::size_t>(std::clamp<long long>(k / 5, std::min(2, window), window));
+}
+
 void check_options(const FairOptions& o) {
   if (!(o.tol > 0.0 && std::isfinite(o.tol)))
     throw ParameterError("tol must be positive and finite, got " + std::to_string(o.tol));
@@ -256,7 +267,7 @@ FairSolution solve_scaled(const Topology& topology, const Rules& rules, const Cs
       out.stop_reason = "exact";
       break;
     }
-    const std::size_t w = static_cast<std::size_t>(options.window);
+    const std::size_t w = energy_window(static_cast<long long>(out.energies.size()) - 1, options.window);
     if (out.energies.size() > w && out.energies[out.energies.size() - 1 - w] - e_now <= options.tol * e_now) {
       out.stop_reason = "converged";
       break;

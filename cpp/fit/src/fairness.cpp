@@ -599,16 +599,20 @@ Elements face_classes(const LimitSurface& surface, const std::vector<std::uint8_
     }
   };
   std::unordered_map<std::vector<std::int32_t>, std::int32_t, KeyHash> classes;
-  std::vector<std::int32_t> key, sorted;
+  std::vector<std::int32_t> key;
+  std::vector<std::int32_t> seen(t.n_vertices(), -1);  // per vertex, the last face that listed it
   for (const std::int32_t f : live) {
     const auto uf = static_cast<std::size_t>(f);
     const auto sl = static_cast<std::size_t>(s.slot[uf]);
     const std::int32_t* cv = s.cps.indices.data() + s.cps.offsets[sl];
     const auto n_cv = static_cast<std::size_t>(s.cps.offsets[sl + 1] - s.cps.offsets[sl]);
-    sorted.assign(cv, cv + n_cv);
-    std::sort(sorted.begin(), sorted.end());
-    if (std::any_of(cv, cv + n_cv, [&](std::int32_t v) { return special[static_cast<std::size_t>(v)] != 0; }) ||
-        std::adjacent_find(sorted.begin(), sorted.end()) != sorted.end()) {
+    bool alone = false;  // a special control point, or one listed twice
+    for (std::size_t i = 0; i < n_cv && !alone; ++i) {
+      const auto v = static_cast<std::size_t>(cv[i]);
+      alone = special[v] != 0 || seen[v] == f;
+      seen[v] = f;
+    }
+    if (alone) {
       own_class(uf);
       continue;
     }
@@ -624,8 +628,9 @@ Elements face_classes(const LimitSurface& surface, const std::vector<std::uint8_
                                           (rn.begin() + ro[v]));
       key.insert(key.end(), {t.valence(v), boundary ? 1 : 0, place});
     }
-    const auto it = classes.emplace(key, static_cast<std::int32_t>(s.representative.size())).first;
-    if (it->second == static_cast<std::int32_t>(s.representative.size())) {
+    auto it = classes.find(key);  // looked up first: emplace would build a node (a copy of the key) every time
+    if (it == classes.end()) {
+      it = classes.emplace(key, static_cast<std::int32_t>(s.representative.size())).first;
       s.representative.push_back(f);
       s.shared.push_back(1);
     }
@@ -875,12 +880,16 @@ std::vector<FaceElement> face_elements(const Elements& el) {
 }
 
 // Row i of a face's element matrix (its row of the face's i-th column) added
-// into `row` at each column's place: row[place[col_j]] += E[i][j]. The one
-// step where a face's element matrix enters K.
-inline void add_element_row(const FaceElement& face, std::size_t i, const std::int32_t* place, double* row) {
+// into `row` at the slots of the face's columns: row[slot[j]] += E[i][j]. The
+// one step where a face's element matrix enters K.
+inline void add_element_row(const FaceElement& face, std::size_t i, const std::int32_t* slot, double* row) {
   const double* e = face.matrix + i * face.n;
-  for (std::size_t j = 0; j < face.n; ++j) row[place[face.columns[j]]] += e[j];
+  for (std::size_t j = 0; j < face.n; ++j) row[slot[j]] += e[j];
 }
+
+// Rows assemble builds before it reserves the rest of its arrays by their
+// lengths so far.
+constexpr std::size_t kRowsToEstimate = 1024;
 
 // K in CSR from the element matrices, assembled row by row (threads take
 // ranges of rows): row r's columns are the union of the columns of the faces
@@ -890,6 +899,8 @@ inline void add_element_row(const FaceElement& face, std::size_t i, const std::i
 CsrMatrix assemble(const Elements& el, std::size_t n_rows, int n_threads) {
   const std::vector<FaceElement> faces = face_elements(el);
   const std::size_t n_faces = faces.size();
+  std::size_t max_n = 0;
+  for (const FaceElement& face : faces) max_n = std::max(max_n, face.n);
   // Per vertex, its incidences (face, place among the face's columns).
   std::vector<std::int64_t> start(n_rows + 1, 0);
   for (const FaceElement& face : faces)
@@ -915,31 +926,56 @@ CsrMatrix assemble(const Elements& el, std::size_t n_rows, int n_threads) {
     const auto ut = static_cast<std::size_t>(t);
     const std::size_t r0 = n_rows * ut / nt, r1 = n_rows * (ut + 1) / nt;
     Part& part = parts[ut];
-    // Reserve by the incidences, a bound on the row lengths' sum.
-    part.indices.reserve(static_cast<std::size_t>(start[r1] - start[r0]) / 4);
-    part.data.reserve(part.indices.capacity());
-    std::vector<std::int32_t> place(n_rows, -1);
+    // place[col]: the column's slot in the row being built (its first
+    // appearance), -1 elsewhere; slots[q]: the slot of the q-th (incidence,
+    // column) pair of the row, so that the values are summed from this
+    // buffer without looking the columns up again.
+    std::vector<std::int32_t> place(n_rows, -1), slots;
     std::vector<std::int32_t> cols;
+    std::vector<double> sums;
     for (std::size_t r = r0; r < r1; ++r) {
-      cols.clear();
-      for (auto p = static_cast<std::size_t>(start[r]); p < static_cast<std::size_t>(start[r + 1]); ++p) {
-        const FaceElement& face = faces[static_cast<std::size_t>(incidence[p].first)];
-        for (std::size_t j = 0; j < face.n; ++j)
-          if (place[static_cast<std::size_t>(face.columns[j])] < 0) {
-            place[static_cast<std::size_t>(face.columns[j])] = 0;
-            cols.push_back(face.columns[j]);
-          }
+      if (r == r0 + kRowsToEstimate) {  // the entries per incidence so far, times the incidences left, and a tenth
+        const double per_incidence = static_cast<double>(part.indices.size()) /
+                                     static_cast<double>(std::max<std::int64_t>(1, start[r] - start[r0]));
+        const auto want = part.indices.size() +
+                          static_cast<std::size_t>(1.1 * per_incidence * static_cast<double>(start[r1] - start[r]));
+        part.indices.reserve(want);
+        part.data.reserve(want);
       }
-      std::sort(cols.begin(), cols.end());
-      const std::size_t first = part.indices.size();
-      for (std::size_t k = 0; k < cols.size(); ++k) place[static_cast<std::size_t>(cols[k])] = static_cast<std::int32_t>(k);
-      part.indices.insert(part.indices.end(), cols.begin(), cols.end());
-      part.data.resize(part.indices.size(), 0.0);
-      for (auto p = static_cast<std::size_t>(start[r]); p < static_cast<std::size_t>(start[r + 1]); ++p)
-        add_element_row(faces[static_cast<std::size_t>(incidence[p].first)],
-                        static_cast<std::size_t>(incidence[p].second), place.data(), part.data.data() + first);
-      for (const std::int32_t c : cols) place[static_cast<std::size_t>(c)] = -1;
-      count[r + 1] = static_cast<std::int64_t>(cols.size());
+      const auto p0 = static_cast<std::size_t>(start[r]), p1 = static_cast<std::size_t>(start[r + 1]);
+      if (slots.size() < (p1 - p0) * max_n) slots.resize((p1 - p0) * max_n);
+      if (cols.size() < (p1 - p0) * max_n) cols.resize((p1 - p0) * max_n);
+      std::int32_t* slot = slots.data();
+      std::int32_t n_cols = 0;
+      for (std::size_t p = p0; p < p1; ++p) {
+        const FaceElement& face = faces[static_cast<std::size_t>(incidence[p].first)];
+        for (std::size_t j = 0; j < face.n; ++j) {
+          const std::int32_t c = face.columns[j];
+          std::int32_t at = place[static_cast<std::size_t>(c)];
+          if (at < 0) {
+            at = n_cols++;
+            place[static_cast<std::size_t>(c)] = at;
+            cols[static_cast<std::size_t>(at)] = c;
+          }
+          *slot++ = at;
+        }
+      }
+      // The values in the incidences' order (each slot's sum as add_element_row forms it).
+      sums.assign(static_cast<std::size_t>(n_cols), 0.0);
+      slot = slots.data();
+      for (std::size_t p = p0; p < p1; ++p) {
+        const FaceElement& face = faces[static_cast<std::size_t>(incidence[p].first)];
+        add_element_row(face, static_cast<std::size_t>(incidence[p].second), slot, sums.data());
+        slot += face.n;
+      }
+      std::sort(cols.begin(), cols.begin() + n_cols);
+      for (std::int32_t k = 0; k < n_cols; ++k) {
+        const std::int32_t c = cols[static_cast<std::size_t>(k)];
+        part.indices.push_back(c);
+        part.data.push_back(sums[static_cast<std::size_t>(place[static_cast<std::size_t>(c)])]);
+        place[static_cast<std::size_t>(c)] = -1;
+      }
+      count[r + 1] = n_cols;
     }
   });
   for (std::size_t r = 0; r < n_rows; ++r) count[r + 1] += count[r];

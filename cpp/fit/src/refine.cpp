@@ -1,5 +1,6 @@
 #include "sorpia/refine.hpp"
 
+#include <opensubdiv/far/primvarRefiner.h>
 #include <opensubdiv/far/stencilTable.h>
 #include <opensubdiv/far/stencilTableFactory.h>
 #include <opensubdiv/far/topologyRefiner.h>
@@ -56,7 +57,7 @@ std::size_t refinement_bytes(Scheme scheme, std::size_t n_vertices, std::size_t 
              : static_cast<std::size_t>(bytes);
 }
 
-RefinedMesh refine_uniform(const Topology& topology, const Rules& rules, int levels) {
+void check_refinement(const Topology& topology, const Rules& rules, int levels) {
   if (levels < 1 || levels > kMaxRefinementLevels)
     throw ParameterError("levels must be in 1.." + std::to_string(kMaxRefinementLevels) + ", got " +
                          std::to_string(levels));
@@ -77,6 +78,28 @@ RefinedMesh refine_uniform(const Topology& topology, const Rules& rules, int lev
     throw ParameterError("levels = " + std::to_string(levels) + " makes " + count + face_kind +
                          " and needs about " + human_bytes(static_cast<double>(need)) + ", but only " +
                          human_bytes(static_cast<double>(avail)) + " of memory is available: use fewer levels");
+}
+
+namespace {
+
+// A point of PrimvarRefinerReal's interpolation.
+struct Point {
+  double p[3];
+  void Clear(void* = nullptr) { p[0] = p[1] = p[2] = 0.0; }
+  void AddWithWeight(const Point& src, double w) {
+    p[0] += w * src.p[0];
+    p[1] += w * src.p[1];
+    p[2] += w * src.p[2];
+  }
+};
+
+}  // namespace
+
+RefinedMesh refine_uniform(const Topology& topology, const Rules& rules, int levels, const double* vertices,
+                           bool with_refinement) {
+  check_refinement(topology, rules, levels);
+  const Scheme scheme = rules.scheme;
+  const std::size_t n = topology.n_vertices();
 
   detail::Refiner osd = detail::make_refiner(topology, scheme, rules.boundary, rules.tags);
   Far::TopologyRefiner& refiner = *osd.refiner;
@@ -149,6 +172,27 @@ RefinedMesh refine_uniform(const Topology& topology, const Rules& rules, int lev
     out.tags.corner_vertices.push_back(fine_index(v));
     out.tags.corner_sharpness.push_back(sharpness(s));
   }
+  poll_interrupt();
+
+  if (vertices) {
+    // R V level by level (Far's PrimvarRefiner): the same weights as R's rows
+    // without building them; unreferenced vertices keep their place.
+    std::vector<Point> src(n_osd), dst;
+    for (std::size_t j = 0; j < n_osd; ++j)
+      std::copy_n(vertices + 3 * static_cast<std::size_t>(osd.from_osd[j]), 3, src[j].p);
+    const Far::PrimvarRefinerReal<double> primvar(refiner);
+    for (int l = 1; l <= levels; ++l) {
+      dst.resize(static_cast<std::size_t>(refiner.GetLevel(l).GetNumVertices()));
+      Point* out_points = dst.data();
+      primvar.Interpolate(l, src.data(), out_points);
+      src.swap(dst);
+    }
+    out.vertices.assign(vertices, vertices + 3 * std::min(n, out.n_vertices));
+    out.vertices.resize(3 * out.n_vertices);
+    for (std::size_t j = 0; j < n_last; ++j)
+      std::copy_n(src[j].p, 3, out.vertices.data() + 3 * static_cast<std::size_t>(fine_index(static_cast<int>(j))));
+  }
+  if (!with_refinement) return out;
   poll_interrupt();
 
   // R from Far's stencils of the last level, factorised down to the control

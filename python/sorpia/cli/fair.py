@@ -178,7 +178,7 @@ def fair_summary(d: dict, repaired=()) -> str:
     """The summary `sorpia fit --fair` prints."""
     ratio = d["energy_ratio"]
     state = (f"{d['iterations']} iterations ({d['stop_reason']}: the energy fell by less than {d['tol']:g} of "
-             "itself over the last 10)" if d["converged"] else
+             "itself over the last iterations)" if d["converged"] else
              f"stopped at --max-iter {d['max_iter']} before the energy settled (exit code 1; the targets are met "
              "all the same)")
     t = d["timings"]

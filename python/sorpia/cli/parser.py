@@ -232,7 +232,7 @@ def build_parser() -> argparse.ArgumentParser:
                      help="fair interpolation (Halstead, Kass and DeRose 1993): write a control mesh --levels "
                      "subdivision steps finer (faces and tags as OpenSubdiv's refinement carries them) whose limit "
                      "surface passes through the given vertices (or --targets) and bends least (thin-plate energy, "
-                     "plus --membrane); --tol then bounds the energy's relative change over 10 iterations and "
+                     "plus --membrane); --tol then bounds the energy's relative change over the last iterations (2 to 10) and "
                      "--max-iter its iterations")
     fit.add_argument("--levels", type=_positive_int, default=None, metavar="N",
                      help="--fair: subdivision steps from the input to the fair control mesh (default 1)")

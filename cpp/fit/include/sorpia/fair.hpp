@@ -32,9 +32,16 @@ namespace sorpia {
 /// When the conjugate gradients stop.
 struct FairOptions {
   /// Stop when the energy fell by at most tol times its value over the last
-  /// `window` iterations (the relative energy change). Positive and finite.
+  /// d iterations (the relative energy change), d = k / 5 after k iterations,
+  /// at least 2 and at most `window`. The fall over the last d iterations is
+  /// how far the energy d iterations ago was above the minimum, less what is
+  /// still to come: close to all of it where the energy falls fast (every
+  /// vertex a target, where the reduced system is well conditioned), and the
+  /// window grows with the
+  /// iterations so that a slow iteration (few targets, a face metric) is
+  /// judged over up to `window`. Positive and finite.
   double tol = 1e-6;
-  /// The number of iterations the change is measured over, >= 1.
+  /// The most iterations the change is measured over, >= 1.
   int window = 10;
   /// At most this many iterations, >= 1.
   long long max_iter = 2000;

@@ -33,10 +33,13 @@ struct RefinedMesh {
   /// edges and one-face corners under edge-and-corner left out (the rules
   /// make them sharp anyway), and the faces whose coarse ancestor is a hole.
   Tags tags;
-  /// R, (n_vertices, n): row i the weights of the coarse control vertices in
+  /// R, (n_vertices, n) (empty unless asked for): row i the weights of the coarse control vertices in
   /// fine vertex i (Far::StencilTableFactoryReal<double>, factorised over the
   /// levels); an unreferenced vertex's row is 1 on itself.
   CsrMatrix refinement;
+  /// (n_vertices, 3) row-major: R V for the coarse vertices V given to
+  /// refine_uniform (Far's PrimvarRefiner, level by level), else empty.
+  std::vector<double> vertices;
   /// For each fine face, the coarse face it lies in.
   std::vector<std::int32_t> coarse_face;
 };
@@ -52,13 +55,24 @@ std::size_t refinement_bytes(Scheme scheme, std::size_t n_vertices, std::size_t 
 /// factorised by Far, whose StencilTableFactory takes at most 10 levels).
 constexpr int kMaxRefinementLevels = 10;
 
+/// Whether refine_uniform takes these levels, without refining: the checks
+/// it makes before any work.
+/// @throws ParameterError for levels out of range, a fine mesh beyond int32
+///         indices, or more memory than available (refinement_bytes)
+void check_refinement(const Topology& topology, const Rules& rules, int levels);
+
 /// The control mesh refined `levels` times uniformly by Far under `rules`.
 /// @param topology  coarse connectivity
 /// @param rules     scheme, boundary rule, tags (checked as for B)
 /// @param levels    1..kMaxRefinementLevels
+/// @param vertices  nullptr, or (n, 3) row-major coarse vertices V: then
+///                  RefinedMesh::vertices is R V (without R when
+///                  with_refinement is false: a start needs R V, not R)
+/// @param with_refinement  build R (RefinedMesh::refinement)
 /// @throws ParameterError for levels out of range, a fine mesh beyond int32
-///         indices, or more memory than available (refinement_bytes), before
+///         indices, or more memory than available (check_refinement), before
 ///         any work; MeshError when OpenSubdiv refuses the mesh or a tag
-RefinedMesh refine_uniform(const Topology& topology, const Rules& rules, int levels);
+RefinedMesh refine_uniform(const Topology& topology, const Rules& rules, int levels, const double* vertices = nullptr,
+                           bool with_refinement = true);
 
 }  // namespace sorpia

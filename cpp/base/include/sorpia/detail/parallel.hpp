@@ -22,8 +22,24 @@ void run_tasks(int n_tasks, const std::function<void(int)>& task);
 /// Workers the pool holds now (for tests).
 int pool_workers();
 
-/// The processors this process may run on (its affinity mask), at least 1.
+/// The processors this process may run on (its affinity mask), at least 1,
+/// and no more than the cap a ThreadCap on the calling thread sets.
 int available_processors();
+
+/// Caps available_processors() on the calling thread while it lives, so that
+/// the work below a call that takes a thread count (fair interpolation's
+/// fairness matrix and Bfr's evaluation in it) runs on no more threads than
+/// asked. Nested caps: the smallest holds. n < 1 caps nothing.
+class ThreadCap {
+ public:
+  explicit ThreadCap(int n);
+  ~ThreadCap();
+  ThreadCap(const ThreadCap&) = delete;
+  ThreadCap& operator=(const ThreadCap&) = delete;
+
+ private:
+  int previous_;
+};
 
 /// task(t) for t in [0, n_tasks): through run_tasks when `parallel`, else one
 /// after another on the calling thread.
