@@ -120,8 +120,8 @@ void bind_fit(py::module_& m) {
           quadrature.depth = depth;
           const sorpia::CsrMatrix k = sorpia::fairness_matrix(
               topology, sorpia::Rules{rules.scheme, rules.boundary, energy_tags ? *energy_tags : rules.tags},
-              thin_plate, membrane, quadrature,
-                                                              reference ? reference->data() : nullptr);
+              thin_plate, membrane, quadrature, reference ? reference->data() : nullptr,
+              /*sorted_columns=*/false);
           energy_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
           s = sorpia::fair_solve(topology, rules, k, targets.data(), static_cast<std::size_t>(targets.shape(0)),
                                  positions.data(), start.data(), options);

@@ -38,12 +38,12 @@ struct Elimination {
   std::vector<char> is_target;
 };
 
-// K's entry (i, j), by binary search in row i (0 when absent).
+// K's entry (i, j), by a scan of row i (0 when absent): K's columns may come
+// in any order within a row (fairness_matrix's sorted_columns = false).
 double entry(const CsrMatrix& k, std::int32_t i, std::int32_t j) {
-  const auto* first = k.indices.data() + k.indptr[i];
-  const auto* last = k.indices.data() + k.indptr[i + 1];
-  const auto* it = std::lower_bound(first, last, j);
-  return it != last && *it == j ? k.data[static_cast<std::size_t>(it - k.indices.data())] : 0.0;
+  for (std::int32_t p = k.indptr[i]; p < k.indptr[i + 1]; ++p)
+    if (k.indices[p] == j) return k.data[p];
+  return 0.0;
 }
 
 class Problem {
@@ -109,20 +109,28 @@ class Problem {
     restrict_to_free(out);
   }
 
-  // diag(S^T K S), 0 on target rows.
+  // diag(S^T K S), 0 on target rows: for free j, K_jj - 2 sum_t m_tj K_tj
+  // + sum_{t, t'} m_tj m_t'j K_tt' over the targets t, t' whose rows have j,
+  // gathered target by target with K's row t spread out once (its entries
+  // found by column without a search).
   std::vector<double> diagonal() const {
     std::vector<double> d(n(), 0.0);
-    for (std::size_t j = 0; j < n(); ++j) {
-      if (e_.is_target[j]) continue;
-      const auto jj = static_cast<std::int32_t>(j);
-      double s = entry(k_, jj, jj);
-      for (std::int32_t p = e_.t_offsets[j]; p < e_.t_offsets[j + 1]; ++p) {
-        const std::int32_t t = e_.targets[e_.t_rows[p]];
-        s -= 2.0 * e_.t_weights[p] * entry(k_, t, jj);
-        for (std::int32_t q = e_.t_offsets[j]; q < e_.t_offsets[j + 1]; ++q)
-          s += e_.t_weights[p] * e_.t_weights[q] * entry(k_, t, e_.targets[e_.t_rows[q]]);
+    for (std::size_t j = 0; j < n(); ++j)
+      if (!e_.is_target[j]) d[j] = entry(k_, static_cast<std::int32_t>(j), static_cast<std::int32_t>(j));
+    std::vector<std::int32_t> at(n(), -1);  // column -> its place in K's row t, -1 elsewhere
+    const auto k_tj = [&](std::int32_t j) { return at[static_cast<std::size_t>(j)] < 0 ? 0.0 : k_.data[at[j]]; };
+    for (std::size_t i = 0; i < e_.targets.size(); ++i) {
+      const auto t = static_cast<std::size_t>(e_.targets[i]);
+      for (std::int32_t p = k_.indptr[t]; p < k_.indptr[t + 1]; ++p) at[static_cast<std::size_t>(k_.indices[p])] = p;
+      for (std::int32_t q = e_.offsets[i]; q < e_.offsets[i + 1]; ++q) {
+        const auto j = static_cast<std::size_t>(e_.cols[q]);
+        const double w = e_.weights[q];
+        double s = -2.0 * w * k_tj(e_.cols[q]);
+        for (std::int32_t r = e_.t_offsets[j]; r < e_.t_offsets[j + 1]; ++r)
+          s += w * e_.t_weights[r] * k_tj(e_.targets[e_.t_rows[r]]);
+        d[j] += s;
       }
-      d[j] = s;
+      for (std::int32_t p = k_.indptr[t]; p < k_.indptr[t + 1]; ++p) at[static_cast<std::size_t>(k_.indices[p])] = -1;
     }
     return d;
   }

@@ -893,10 +893,12 @@ constexpr std::size_t kRowsToEstimate = 1024;
 
 // K in CSR from the element matrices, assembled row by row (threads take
 // ranges of rows): row r's columns are the union of the columns of the faces
-// that have r among theirs, sorted; its values the sum of those faces' rows
-// for r (add_element_row), written in place. No list of entries, no sort of
-// all entries: each row's few columns are sorted on their own.
-CsrMatrix assemble(const Elements& el, std::size_t n_rows, int n_threads) {
+// that have r among theirs, sorted (or, without sorted_columns, in the order
+// they first appear); its values the sum of those faces' rows for r
+// (add_element_row, from the slots found with the columns). No list of
+// entries, no sort of all entries: each row's few columns are sorted on
+// their own.
+CsrMatrix assemble(const Elements& el, std::size_t n_rows, int n_threads, bool sorted_columns) {
   const std::vector<FaceElement> faces = face_elements(el);
   const std::size_t n_faces = faces.size();
   std::size_t max_n = 0;
@@ -968,7 +970,7 @@ CsrMatrix assemble(const Elements& el, std::size_t n_rows, int n_threads) {
         add_element_row(face, static_cast<std::size_t>(incidence[p].second), slot, sums.data());
         slot += face.n;
       }
-      std::sort(cols.begin(), cols.begin() + n_cols);
+      if (sorted_columns) std::sort(cols.begin(), cols.begin() + n_cols);
       for (std::int32_t k = 0; k < n_cols; ++k) {
         const std::int32_t c = cols[static_cast<std::size_t>(k)];
         part.indices.push_back(c);
@@ -1005,7 +1007,7 @@ CsrMatrix assemble(const Elements& el, std::size_t n_rows, int n_threads) {
 }  // namespace
 
 CsrMatrix fairness_matrix(const LimitSurface& surface, double thin_plate, double membrane,
-                          const FairnessQuadrature& quadrature, const double* reference) {
+                          const FairnessQuadrature& quadrature, const double* reference, bool sorted_columns) {
   check_options(thin_plate, membrane, quadrature);
   const Topology& topo = surface.topology();
   const Scheme scheme = surface.scheme();
@@ -1074,14 +1076,14 @@ CsrMatrix fairness_matrix(const LimitSurface& surface, double thin_plate, double
     });
   }
   workers.clear();
-  return assemble(el, surface.n_vertices(), n_threads);
+  return assemble(el, surface.n_vertices(), n_threads, sorted_columns);
 }
 
 CsrMatrix fairness_matrix(const Topology& topology, const Rules& rules, double thin_plate, double membrane,
-                          const FairnessQuadrature& quadrature, const double* reference) {
+                          const FairnessQuadrature& quadrature, const double* reference, bool sorted_columns) {
   const std::vector<double> zeros(3 * topology.n_vertices(), 0.0);
   const LimitSurface surface(topology, zeros.data(), rules.scheme, rules.boundary, rules.tags);
-  return fairness_matrix(surface, thin_plate, membrane, quadrature, reference);
+  return fairness_matrix(surface, thin_plate, membrane, quadrature, reference, sorted_columns);
 }
 
 }  // namespace sorpia

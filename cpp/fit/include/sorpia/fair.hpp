@@ -73,7 +73,8 @@ struct FairSolution {
 /// @param rules     its rules (the refined tags)
 /// @param energy    K, (n, n), symmetric positive semidefinite (only its
 ///                  pattern's symmetry is relied on: K's rows are read, as
-///                  K x and for its diagonal)
+///                  K x and for its diagonal; columns in any order within a
+///                  row)
 /// @param targets   k distinct vertex indices, whose rows of B have no other
 ///                  target in them (the children of coarse vertices)
 /// @param positions (k, 3) row-major T

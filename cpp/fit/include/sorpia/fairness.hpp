@@ -41,7 +41,8 @@ struct FairnessQuadrature {
 };
 
 /// The fairness matrix K (n_vertices x n_vertices, symmetric, positive
-/// semidefinite, columns sorted within a row) of the surface's topology and
+/// semidefinite, columns sorted within a row unless sorted_columns is
+/// false) of the surface's topology and
 /// rules (its control vertices do not enter):
 ///
 ///   V^T K V = thin_plate * integral (|S_xx|^2 + 2 |S_xy|^2 + |S_yy|^2)
@@ -95,17 +96,21 @@ struct FairnessQuadrature {
 /// own (no shared element matrices). Needs a mesh of the scheme's faces only.
 /// @param quadrature  the rule on each face
 /// @param reference   nullptr: the parametric measure; else the reference control vertices
+/// @param sorted_columns  false: each row's columns in the order the faces
+///                    first give them (the same entries; for callers that
+///                    only multiply with K, such as fair_solve, which then
+///                    need not pay for the sorts)
 /// @throws ParameterError naming the weight or option out of range; for a
 ///         reference, a face of another size or a degenerate reference face
 CsrMatrix fairness_matrix(const LimitSurface& surface, double thin_plate, double membrane,
                           const FairnessQuadrature& quadrature = FairnessQuadrature{},
-                          const double* reference = nullptr);
+                          const double* reference = nullptr, bool sorted_columns = true);
 
 /// K of a mesh's limit surface under `rules` (K does not depend on the control
 /// vertices): the surface built here with zero vertices, for callers that hold
 /// a topology and no surface (fair interpolation's fine mesh, the binding).
 CsrMatrix fairness_matrix(const Topology& topology, const Rules& rules, double thin_plate, double membrane,
                           const FairnessQuadrature& quadrature = FairnessQuadrature{},
-                          const double* reference = nullptr);
+                          const double* reference = nullptr, bool sorted_columns = true);
 
 }  // namespace sorpia
