@@ -132,7 +132,8 @@ TEST(FairnessMatrix, SharedElementMatricesGiveTheFaceByFaceMatrix) {
   // faces), grids' boundary corners, n-gons (their neighbours integrated on
   // their own), once-refined meshes (mostly shared), creases, a corner and a
   // hole (faces touching them integrated on their own). The same integrals
-  // summed in another order: 1e-12 of the largest entry.
+  // summed in another order: 1e-12 of the largest entry. And the rows with
+  // their columns left unsorted.
   struct Case {
     std::string name;
     sorpia::Mesh mesh;
@@ -180,6 +181,17 @@ TEST(FairnessMatrix, SharedElementMatricesGiveTheFaceByFaceMatrix) {
     const CsrMatrix shared = sorpia::fairness_matrix(s, 1.0, 0.5);
     const CsrMatrix reference = sorpia::fairness_matrix(s, 1.0, 0.5, alone);
     EXPECT_LE(relative_difference(shared, reference), 1e-12) << c.name;
+    // Unsorted rows (what fair_solve takes): the same entries exactly, each
+    // row's columns distinct, the same rows' lengths.
+    const CsrMatrix unsorted = sorpia::fairness_matrix(s, 1.0, 0.5, {}, nullptr, /*sorted_columns=*/false);
+    EXPECT_EQ(unsorted.indptr, shared.indptr) << c.name;
+    EXPECT_EQ(relative_difference(unsorted, shared), 0.0) << c.name;
+    for (std::size_t i = 0; i < unsorted.n_rows; ++i) {
+      std::vector<std::int32_t> cols(unsorted.indices.begin() + unsorted.indptr[i],
+                                     unsorted.indices.begin() + unsorted.indptr[i + 1]);
+      std::sort(cols.begin(), cols.end());
+      EXPECT_EQ(std::adjacent_find(cols.begin(), cols.end()), cols.end()) << c.name << " row " << i;
+    }
   }
 }
 
