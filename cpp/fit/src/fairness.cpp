@@ -516,9 +516,11 @@ bool topology_control_points(const Topology& t, bool quads, std::size_t f, std::
 // face's size, and per corner (from corner 0) its valence, whether it is on the
 // boundary and, there, the place of the next corner in its ring (where the face
 // lies in the fan; inside, Bfr lists the control points from the face, so the
-// place does not matter). Faces whose control points touch a tag, a hole or a
-// face of irregular size (their surface depends on more than the key says), or
-// repeat a vertex (no one-to-one map of the representative's matrix), and every
+// place does not matter), and where the list names a vertex again (rings
+// that wrap around and meet beyond the face), the places of the repeats and of
+// their first listings: the element matrix is over the first listings, zero
+// at the repeats. Faces whose control points touch a tag, a hole or a face of
+// irregular size (their surface depends on more than the key says), and every
 // face without reuse, are classes of their own.
 Elements face_classes(const LimitSurface& surface, const std::vector<std::uint8_t>& hole, bool reuse) {
   const Topology& t = surface.topology();
@@ -599,18 +601,25 @@ Elements face_classes(const LimitSurface& surface, const std::vector<std::uint8_
     }
   };
   std::unordered_map<std::vector<std::int32_t>, std::int32_t, KeyHash> classes;
-  std::vector<std::int32_t> key;
-  std::vector<std::int32_t> seen(t.n_vertices(), -1);  // per vertex, the last face that listed it
+  std::vector<std::int32_t> key, repeats;
+  // Per vertex, the last face that listed it and its place in that list.
+  std::vector<std::int32_t> seen(t.n_vertices(), -1), seen_at(t.n_vertices(), -1);
   for (const std::int32_t f : live) {
     const auto uf = static_cast<std::size_t>(f);
     const auto sl = static_cast<std::size_t>(s.slot[uf]);
     const std::int32_t* cv = s.cps.indices.data() + s.cps.offsets[sl];
     const auto n_cv = static_cast<std::size_t>(s.cps.offsets[sl + 1] - s.cps.offsets[sl]);
-    bool alone = false;  // a special control point, or one listed twice
+    bool alone = false;  // a special control point
+    repeats.clear();
     for (std::size_t i = 0; i < n_cv && !alone; ++i) {
       const auto v = static_cast<std::size_t>(cv[i]);
-      alone = special[v] != 0 || seen[v] == f;
-      seen[v] = f;
+      alone = special[v] != 0;
+      if (seen[v] == f) {
+        repeats.insert(repeats.end(), {static_cast<std::int32_t>(i), seen_at[v]});
+      } else {
+        seen[v] = f;
+        seen_at[v] = static_cast<std::int32_t>(i);
+      }
     }
     if (alone) {
       own_class(uf);
@@ -628,6 +637,7 @@ Elements face_classes(const LimitSurface& surface, const std::vector<std::uint8_
                                           (rn.begin() + ro[v]));
       key.insert(key.end(), {t.valence(v), boundary ? 1 : 0, place});
     }
+    key.insert(key.end(), repeats.begin(), repeats.end());
     auto it = classes.find(key);  // looked up first: emplace would build a node (a copy of the key) every time
     if (it == classes.end()) {
       it = classes.emplace(key, static_cast<std::int32_t>(s.representative.size())).first;
@@ -733,6 +743,7 @@ struct Worker {
   std::vector<std::int32_t> local;  // column -> its place in `cols`, -1 elsewhere
   std::vector<std::int32_t> cols;
   std::vector<double> a, e, qd;
+  std::vector<std::int32_t> first;  // per control point of a shared class: its place in `cols`, or -1
 };
 
 // What an element needs besides the rows: the weights, the Gauss terms and
@@ -844,16 +855,24 @@ void store_element(Worker& w, const std::int32_t* cv, std::size_t n_cv, std::siz
       for (std::size_t j = i; j < n; ++j) out[i * n + j] = out[j * n + i] = w.e[i * n + j];
   } else {
     out.assign(n_cv * n_cv, 0.0);
+    // Each column at its first listing; a repeat (the list names the vertex
+    // again) and a control point without weight at any point stay zero.
     std::size_t found = 0;
-    for (std::size_t i = 0; i < n_cv; ++i) found += w.local[static_cast<std::size_t>(cv[i])] >= 0 ? 1 : 0;
+    w.first.assign(n_cv, -1);
+    for (std::size_t i = 0; i < n_cv; ++i) {
+      const std::int32_t a = w.local[static_cast<std::size_t>(cv[i])];
+      if (a < 0 || std::find(cv, cv + i, cv[i]) != cv + i) continue;
+      w.first[i] = a;
+      ++found;
+    }
     if (found != n)
       throw std::logic_error("a face's stencils reach beyond its control points: the fairness matrix would lose "
                              "entries");
     for (std::size_t i = 0; i < n_cv; ++i) {
-      const std::int32_t a = w.local[static_cast<std::size_t>(cv[i])];
-      if (a < 0) continue;  // no weight at any point: a zero row
+      const std::int32_t a = w.first[i];
+      if (a < 0) continue;
       for (std::size_t j = 0; j < n_cv; ++j) {
-        const std::int32_t b = w.local[static_cast<std::size_t>(cv[j])];
+        const std::int32_t b = w.first[j];
         if (b < 0) continue;
         const auto lo = static_cast<std::size_t>(std::min(a, b)), hi = static_cast<std::size_t>(std::max(a, b));
         out[i * n_cv + j] = w.e[lo * n + hi];

@@ -31,11 +31,11 @@ struct FairnessQuadrature {
   /// only on the face's local topology, so faces that agree in it (the
   /// face's size and, for Bfr's lists, Bfr's IsRegular(), the number of its
   /// control points, and per corner its valence, whether it is on the
-  /// boundary and, there, where the face lies in its fan) share one, computed
+  /// boundary and, there, where the face lies in its fan, and where Bfr's
+  /// list names a vertex twice, the places of the repeats) share one, computed
   /// once. Faces whose control points touch a
   /// tag, a hole or a face of another size than the scheme's (triangles for
-  /// Loop, quads for Catmull-Clark), or list a vertex twice, are integrated
-  /// on their own. false integrates every face on its own: the same K to
+  /// Loop, quads for Catmull-Clark) are integrated on their own. false integrates every face on its own: the same K to
   /// rounding, much slower (what the tests compare against).
   bool reuse = true;
 };
