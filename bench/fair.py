@@ -320,9 +320,9 @@ def timing(n, scheme, threads, repeats=3):
     """Seconds of plain interpolation (median of 2 * `repeats` runs) and of
     fair interpolation (median of `repeats` runs, each phase its own median)
     of a noisy generated mesh of about n vertices, plain and fair on the same
-    `threads`. One thread: the process pinned to one processor for the
-    measurement (K's assembly and Bfr's evaluation use every processor the
-    process may run on; `threads` sets the solves' threads)."""
+    `threads`. One thread: the process also pinned to one processor for the
+    measurement (`threads` caps the solves, K's assembly and Bfr's
+    evaluation; the pin keeps anything else on one processor too)."""
     rng = np.random.default_rng(n)
     v, f = (sorpia.shapes.irregular if scheme == "loop" else sorpia.shapes.quad_irregular)(n, seed=1)
     v = np.asarray(v, float)
@@ -532,12 +532,14 @@ def main(argv=None) -> int:
         "",
         "Noisy generated meshes (`shapes.irregular` for Loop, `shapes.quad_irregular` for Catmull-Clark, each "
         "vertex moved by 0.2 of the mean edge length), plain and fair on the same threads; one thread: the process "
-        "pinned to one processor (the fairness matrix's assembly and Bfr's evaluation use every processor the "
-        "process may run on). Plain: `sorpia.interpolate`, median of "
+        "also pinned to one processor (`threads` caps fair interpolation's solve, its fairness matrix's assembly "
+        "and Bfr's evaluation; the pin keeps anything else on one processor too). Plain: `sorpia.interpolate`, "
+        "median of "
         f"{2 * args.repeats} runs. Fair: `sorpia.fair_interpolate` (goal: at most 10 times plain at 100k targets), "
-        f"median of {args.repeats} runs, and the median of each phase: refine (Far's refinement and R), plain (the "
+        f"median of {args.repeats} runs, and the median of each phase: refine (Far's refinement and the start R "
+        "V_plain by Far's PrimvarRefiner; R itself is built only when `FairResult.refinement` is read), plain (the "
         "plain solve it starts from), energy (K of the fine mesh), setup (the fine mesh's B, the elimination, the "
-        "preconditioner), solve (the conjugate gradients), rest (the fine mesh's topology, R's product, checks).",
+        "preconditioner), solve (the conjugate gradients), rest (the fine mesh's topology, checks).",
         "",
         "| scheme | vertices | fine faces | threads | plain s | fair s | fair / plain | refine | plain | energy | "
         "setup | solve | rest | iterations |",

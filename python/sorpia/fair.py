@@ -116,7 +116,8 @@ class FairResult:
     seconds : float
         Wall time of the whole call.
     timings : dict
-        Seconds per phase: "refine" (Far's refinement and R), "plain" (the
+        Seconds per phase: "refine" (Far's refinement and the start R
+        V_plain; R itself is built when `refinement` is read), "plain" (the
         plain interpolation, topology and B included), "energy" (K),
         "setup" (the fine mesh's B, the elimination, the preconditioner),
         "solve" (the iteration).
@@ -126,7 +127,8 @@ class FairResult:
         iteration.
     refinement : scipy.sparse.csr_matrix (n_fine, n)
         R: ``R @ plain.control_vertices`` is the plain surface's control
-        mesh on the fine faces.
+        mesh on the fine faces. Built by Far when first read (a property),
+        then kept.
     """
 
     control_vertices: np.ndarray
