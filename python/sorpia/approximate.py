@@ -321,67 +321,6 @@ class _Fit:
         return self._timed("report", run)
 
 
-def _pcg(M, rhs: np.ndarray, x: np.ndarray, rtol: float, max_iter: int, precondition=None):
-    """Conjugate gradients on M X = rhs for the columns of X together, from x,
-    preconditioned by ``precondition(r)`` (default: Jacobi, the inverse of
-    M's diagonal); stops when every column's residual is below rtol times
-    its initial one (or its right-hand side's norm times 1e-15)."""
-    if precondition is None:
-        d = M.diagonal()
-        inv = np.where(d > 0, 1.0 / np.where(d > 0, d, 1.0), 1.0)[:, None]
-
-        def precondition(r):
-            return inv * r
-    r = rhs - M @ x
-    stop = np.maximum(rtol * np.linalg.norm(r, axis=0), 1e-15 * np.linalg.norm(rhs, axis=0))
-    z = precondition(r)
-    p = z.copy()
-    rz = np.einsum("ij,ij->j", r, z)
-    for k in range(1, max_iter + 1):
-        if (np.linalg.norm(r, axis=0) <= stop).all():
-            return x, k - 1
-        q = M @ p
-        pq = np.einsum("ij,ij->j", p, q)
-        alpha = np.divide(rz, pq, out=np.zeros_like(rz), where=pq > 0)
-        x += alpha * p
-        r -= alpha * q
-        z = precondition(r)
-        rz_new = np.einsum("ij,ij->j", r, z)
-        beta = np.divide(rz_new, rz, out=np.zeros_like(rz), where=rz > 0)
-        p = z + beta * p
-        rz = rz_new
-    return x, max_iter
-
-
-class _Coupled:
-    """The tangent-distance normal matrix over the unknowns x0, y0, z0, x1, ...
-    (V row by row): A^T W A as 3x3 blocks (scipy BSR) plus ``shift`` (mu I,
-    and the fairness term c K on each coordinate), applied to one column;
-    ``precondition`` is block Jacobi (the inverses of the 3x3 diagonal
-    blocks)."""
-
-    def __init__(self, blocks: scipy.sparse.bsr_matrix, mu: float, K, c: float):
-        self.blocks, self.mu, self.K, self.c = blocks, mu, K, c
-        n = blocks.shape[0] // 3
-        rows = np.repeat(np.arange(n), np.diff(blocks.indptr))
-        on = blocks.indices == rows
-        diag = np.zeros((n, 3, 3))
-        diag[rows[on]] = blocks.data[on]
-        diag += mu * np.eye(3)
-        if K is not None:
-            diag += (c * K.diagonal())[:, None, None] * np.eye(3)
-        self.inverse = np.linalg.inv(diag)
-
-    def __matmul__(self, x: np.ndarray) -> np.ndarray:
-        out = self.blocks @ x[:, 0] + self.mu * x[:, 0]
-        if self.K is not None:
-            out += (self.c * (self.K @ x[:, 0].reshape(-1, 3))).ravel()
-        return out[:, None]
-
-    def precondition(self, r: np.ndarray) -> np.ndarray:
-        return np.einsum("nij,nj->ni", self.inverse, r[:, 0].reshape(-1, 3)).reshape(-1, 1)
-
-
 def _lspia(M: scipy.sparse.csr_matrix, rhs: np.ndarray, x: np.ndarray, rtol: float, max_iter: int):
     """LSPIA (Deng and Lin 2014) on the normal equations: x += D^-1 (rhs - M x),
     D the row sums of |M|. Without the fairness and proximal terms M = A^T A
@@ -401,27 +340,15 @@ def _lspia(M: scipy.sparse.csr_matrix, rhs: np.ndarray, x: np.ndarray, rtol: flo
     return x, max_iter
 
 
-def _normal_equations(A, points, normals, V, tangential: float, fairness: float, K, weights=None):
-    """The normal equations of one update: (M, rhs, mu) with M = A^T W A +
-    fairness m K + mu I, rhs = A^T W P + mu V, m the mean diagonal of A^T A
-    and mu = _PROXIMAL m. W_i = w_i I (tangential = 1: point distance, one
-    (n, n) CSR system for three columns) or W_i = w_i (tangential I + (1 -
-    tangential) n_i n_i^T) (a `_Coupled` system over the 3n unknowns; a point
-    whose normal is zero keeps W_i = w_i I); w_i the points' weights (1 when
-    None)."""
-    n = A.shape[1]
-    A = A.tocsr()
+def _row_weights(points, normals, tangential: float, weights=None):
+    """Each point's weight W_i in the fit and W_i p_i: W_i = w_i I (tangential
+    = 1: point distance; returned as (k, 1) w_i, or None when all are 1) or
+    W_i = w_i (tangential I + (1 - tangential) n_i n_i^T) (returned as (k, 6):
+    xx, xy, xz, yy, yz, zz; a point whose normal is zero keeps W_i = w_i I);
+    w_i the points' weights (1 when None)."""
     if tangential == 1.0:
         w = None if weights is None else np.ascontiguousarray(weights[:, None])
-        ip, ix, val = _core.normal_matrix(A.indptr, A.indices, A.data, n, w)
-        AtA = scipy.sparse.csr_matrix((val[:, 0], ix, ip), shape=(n, n))
-        mean_diag = float(AtA.diagonal().mean()) or 1.0
-        mu = _PROXIMAL * mean_diag
-        M = AtA + scipy.sparse.identity(n, format="csr") * mu
-        if K is not None:
-            M = M + (fairness * mean_diag) * K
-        wp = points if weights is None else weights[:, None] * points
-        return M.tocsr(), A.T @ wp + mu * V, mu
+        return w, (points if weights is None else weights[:, None] * points)
     nrm = normals * (np.linalg.norm(normals, axis=1) > 0)[:, None]
     flat = (nrm == 0).all(axis=1)
     c_i = np.where(flat, 0.0, 1.0 - tangential)
@@ -432,27 +359,43 @@ def _normal_equations(A, points, normals, V, tangential: float, fairness: float,
     wts = np.empty((len(nrm), 6))
     for col, (a, b) in enumerate(pairs):
         wts[:, col] = c_i * nrm[:, a] * nrm[:, b] + (w_i if a == b else 0.0)
-    ip, ix, val = _core.normal_matrix(A.indptr, A.indices, A.data, n, wts)
-    # the 3x3 block of each nonzero of A^T A, from its six distinct entries
-    blocks = scipy.sparse.bsr_matrix((val[:, [0, 1, 2, 1, 3, 4, 2, 4, 5]].reshape(-1, 3, 3), ix, ip),
-                                     shape=(3 * n, 3 * n))
-    mean_diag = float(val[:, [0, 3, 5]][ix == np.repeat(np.arange(n), np.diff(ip))].sum() / (3 * n)) or 1.0
-    mu = _PROXIMAL * mean_diag
     # W_i p_i = w_i p_i + c_i n_i (n_i . p_i)
-    wp = w_i[:, None] * points + (c_i * np.einsum("ij,ij->i", nrm, points))[:, None] * nrm
-    rhs = A.T @ wp + mu * V
-    return _Coupled(blocks, mu, K, fairness * mean_diag), rhs, mu
+    return wts, w_i[:, None] * points + (c_i * np.einsum("ij,ij->i", nrm, points))[:, None] * nrm
 
 
-def _update(M, rhs, V, method: str, tangential: float, solver_tol: float, solver_max_iter: int):
+def _normal_equations(A, points, normals, V, tangential: float, fairness: float, K, weights=None,
+                      method: str = DEFAULT_UPDATE):
+    """The normal equations of one update, (M, rhs): M = A^T W A + fairness m
+    K + mu I, rhs = A^T W P + mu V, m the mean diagonal of A^T A and mu =
+    _PROXIMAL m, W_i as `_row_weights` gives them. For "cg" M is the core's
+    `NormalEquations` (the normal matrix stays in the core: with tangential =
+    1 one (n, n) matrix for the three coordinates, below 1 one system of 3x3
+    blocks over the 3n unknowns); for "lspia" (tangential = 1 only) a scipy
+    CSR matrix."""
+    n = A.shape[1]
+    A = A.tocsr()
+    w, wp = _row_weights(points, normals, tangential, weights)
+    if method == "cg":
+        k = None if K is None else (K.data, K.indices.astype(np.int32, copy=False),
+                                    K.indptr.astype(np.int32, copy=False))
+        M = _core.NormalEquations(A.indptr, A.indices, A.data, n, w, k, fairness, _PROXIMAL)
+        return M, A.T @ wp + M.mu * V
+    ip, ix, val = _core.normal_matrix(A.indptr, A.indices, A.data, n, w)
+    AtA = scipy.sparse.csr_matrix((val[:, 0], ix, ip), shape=(n, n))
+    mean_diag = float(AtA.diagonal().mean()) or 1.0
+    mu = _PROXIMAL * mean_diag
+    M = AtA + scipy.sparse.identity(n, format="csr") * mu
+    if K is not None:
+        M = M + (fairness * mean_diag) * K
+    return M.tocsr(), A.T @ wp + mu * V
+
+
+def _update(M, rhs, V, method: str, solver_tol: float, solver_max_iter: int):
     """New control vertices from the normal equations: (V, solver iterations)."""
     if method == "lspia":
         return _lspia(M, rhs, V.copy(), solver_tol, solver_max_iter)
-    if tangential == 1.0:
-        return _pcg(M, rhs, V.copy(), solver_tol, solver_max_iter)
-    # the 3n unknowns x0, y0, z0, x1, ... in one system
-    x, used = _pcg(M, rhs.reshape(-1, 1), V.reshape(-1, 1).copy(), solver_tol, solver_max_iter, M.precondition)
-    return x.reshape(-1, 3), used
+    x, used, _ = M.solve(np.ascontiguousarray(rhs), V, solver_tol, solver_max_iter)
+    return x, used
 
 
 def approximate(points, cage_vertices, cage_faces, *, scheme: str = "auto", boundary: str = DEFAULT_BOUNDARY,
@@ -633,9 +576,9 @@ def approximate(points, cage_vertices, cage_faces, *, scheme: str = "auto", boun
         # The rows in face order: the points of a face share their columns, which the normal matrix reads once.
         order = np.argsort(face_ids, kind="stable")
         A = fit.rows(face_ids[order], uv[order])
-        M, rhs, mu = fit._timed("normal", _normal_equations, A, points[order], normals[order], V, tangential,
-                                fairness, K, None if weights is None else weights[order])
-        V, used = fit._timed("solve", _update, M, rhs, V, method, tangential, solver_tol, solver_max_iter)
+        M, rhs = fit._timed("normal", _normal_equations, A, points[order], normals[order], V, tangential,
+                            fairness, K, None if weights is None else weights[order], method)
+        V, used = fit._timed("solve", _update, M, rhs, V, method, solver_tol, solver_max_iter)
         surface.set_vertices(V)
         face_ids, uv, _, distances, normals = fit.footpoints((face_ids, uv))
         done = k
