@@ -575,10 +575,12 @@ def approximate(points, cage_vertices, cage_faces, *, scheme: str = "auto", boun
     for k in range(1, iterations + 1):
         # The rows in face order: the points of a face share their columns, which the normal matrix reads once.
         order = np.argsort(face_ids, kind="stable")
-        A = fit.rows(face_ids[order], uv[order])
-        M, rhs = fit._timed("normal", _normal_equations, A, points[order], normals[order], V, tangential,
-                            fairness, K, None if weights is None else weights[order], method)
+        # The rows A (the largest array of a run) live only until the normal equations are formed from them.
+        M, rhs = fit._timed("normal", _normal_equations, fit.rows(face_ids[order], uv[order]), points[order],
+                            normals[order], V, tangential, fairness, K,
+                            None if weights is None else weights[order], method)
         V, used = fit._timed("solve", _update, M, rhs, V, method, solver_tol, solver_max_iter)
+        del M, rhs
         surface.set_vertices(V)
         face_ids, uv, _, distances, normals = fit.footpoints((face_ids, uv))
         done = k

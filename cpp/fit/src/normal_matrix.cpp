@@ -14,6 +14,8 @@ namespace {
 
 // Stored entries (of N and K together) per task of a product below which it runs on one thread.
 constexpr std::size_t kEntriesPerTask = 100000;
+// Stored entries of the rows A per task of the normal matrix's assembly, at least.
+constexpr std::size_t kRowEntriesPerTask = 32768;
 
 // The upper triangle (columns >= the row) of A^T W A, row by row: (row lengths, columns, values).
 struct Upper {
@@ -21,6 +23,21 @@ struct Upper {
   std::vector<std::vector<std::int32_t>> part_idx;  // per task, its rows in order
   std::vector<std::vector<double>> part_val;
 };
+
+// out[b * NB + c] += sum over the rows r0 .. r1 - 1 (a run with the same columns) of w_r[c] a_r[li] a_r[li + b],
+// b < width; w_r = weights[NB r ..] (1 when null). The weights' count a constant, so that each a_r[li + b] is
+// read once for all NB sums.
+template <int NB>
+void gram_row(const CsrRows& A, const double* weights, std::size_t r0, std::size_t r1, std::int32_t li,
+              std::size_t width, double* out) {
+  for (std::size_t r = r0; r < r1; ++r) {
+    const double* a = A.data + A.indptr[r] + li;
+    double w[NB];
+    for (int c = 0; c < NB; ++c) w[c] = a[0] * (weights == nullptr ? 1.0 : weights[NB * r + static_cast<std::size_t>(c)]);
+    for (std::size_t b = 0; b < width; ++b)
+      for (int c = 0; c < NB; ++c) out[b * NB + static_cast<std::size_t>(c)] += w[c] * a[b];
+  }
+}
 
 }  // namespace
 
@@ -68,7 +85,11 @@ NormalMatrix normal_matrix(const CsrRows& A, const double* weights, int weight_c
   poll_interrupt();
   // Row i of A^T W A on and above the diagonal from the runs holding column i (Gustavson; a run's columns are
   // sorted, so those >= i are its positions from i's on), a range of rows per task.
-  const int tasks = std::max(1, std::min(detail::available_processors(), static_cast<int>(n / 256 + 1)));
+  // Tasks by the work (the rows' stored entries) as well as by the rows, so that few rows with many points share
+  // the work too.
+  const auto nnz_rows = static_cast<std::size_t>(A.indptr[k]);
+  const int tasks = static_cast<int>(std::clamp<std::size_t>(std::min(nnz_rows / kRowEntriesPerTask, n / 16), 1,
+                                                             static_cast<std::size_t>(detail::available_processors())));
   Upper up;
   up.part_idx.resize(static_cast<std::size_t>(tasks));
   up.part_val.resize(static_cast<std::size_t>(tasks));
@@ -90,16 +111,13 @@ NormalMatrix normal_matrix(const CsrRows& A, const double* weights, int weight_c
         const std::int32_t m = A.indptr[r0 + 1] - A.indptr[r0];
         const std::int32_t* cols = A.indices + A.indptr[r0];
         const auto width = static_cast<std::size_t>(m - li);
-        // Row li of the run's Gram matrix from column li on, sum_r w_r a_r[li] a_r[li:], added at its columns.
+        // Row li of the run's Gram matrix from column li on, sum_r w_r a_r[li] a_r[li:] ((width, nb) row-major),
+        // added at its columns.
         row.assign(width * unb, 0.0);
-        for (std::size_t r = r0; r < r1; ++r) {
-          const double* a = A.data + A.indptr[r] + li;
-          for (std::size_t c = 0; c < unb; ++c) {
-            const double w = a[0] * (weight_count == 0 ? 1.0 : weights[static_cast<std::size_t>(weight_count) * r + c]);
-            double* dst = row.data() + c * width;
-            for (std::size_t b = 0; b < width; ++b) dst[b] += w * a[b];
-          }
-        }
+        if (nb == 6)
+          gram_row<6>(A, weights, r0, r1, li, width, row.data());
+        else
+          gram_row<1>(A, weight_count == 0 ? nullptr : weights, r0, r1, li, width, row.data());
         for (std::size_t b = 0; b < width; ++b) {
           const auto j = static_cast<std::size_t>(cols[static_cast<std::size_t>(li) + b]);
           double* dst = &acc[j * unb];
@@ -108,7 +126,7 @@ NormalMatrix normal_matrix(const CsrRows& A, const double* weights, int weight_c
             touched.push_back(static_cast<std::int32_t>(j));
             std::fill(dst, dst + nb, 0.0);
           }
-          for (std::size_t c = 0; c < unb; ++c) dst[c] += row[c * width + b];
+          for (std::size_t c = 0; c < unb; ++c) dst[c] += row[b * unb + c];
         }
       }
       std::sort(touched.begin(), touched.end());
