@@ -16,10 +16,12 @@ by the limit surface S(V) of a cage with control vertices V and fixed faces:
 - **the update**: V minimising ``|A V - P|^2 + fairness m V^T K V + mu |V -
   V_prev|^2`` (K the thin-plate energy, `sorpia.fairness_matrix`; m the mean
   diagonal of A^T A), the normal equations ``(A^T A + fairness m K + mu I) V =
-  A^T P + mu V_prev`` solved by conjugate gradients (Jacobi preconditioner, the three
-  coordinates together), or by LSPIA (Deng and Lin 2014: each control vertex
-  moves by the sum of its points' residuals weighted by the basis, divided by
-  the sum of those weights). mu is 1e-6 of the mean diagonal of A^T A: a
+  A^T P + mu V_prev`` formed and solved in the core (``sorpia::NormalEquations``:
+  the fitting layer's preconditioned conjugate gradients, Jacobi for the
+  three coordinates; block Jacobi on the 3x3 blocks with ``tangential`` < 1,
+  below), or by LSPIA (Deng and Lin 2014: each control vertex moves by the
+  sum of its points' residuals weighted by the basis, divided by the sum of
+  those weights). mu is 1e-6 of the mean diagonal of A^T A: a
   proximal pull towards the previous control vertices which leaves the
   least-squares solution unchanged (it vanishes at a fixed point) and keeps a
   vertex no point influences where it is;

@@ -13,9 +13,9 @@
 /// restricted to the target vertices are diagonal, and
 ///     V_t = (T_t - sum_{j != t} B_tj V_j) / B_tt
 /// eliminates them exactly: the energy becomes an unconstrained quadratic in
-/// the other (free) vertices, solved by conjugate gradients with Jacobi
-/// preconditioning (each column of V on its own, one product with K per
-/// iteration for all three). Whatever the iteration stops at, the targets are
+/// the other (free) vertices, solved by the fitting layer's conjugate
+/// gradients (sorpia::pcg) with Jacobi preconditioning (each column of V on
+/// its own, one product with K per iteration for all three). Whatever the iteration stops at, the targets are
 /// met to rounding.
 
 #include <cstddef>
