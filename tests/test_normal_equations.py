@@ -158,3 +158,24 @@ def test_bad_rows_are_refused():
         _core.NormalEquations(A.indptr, A.indices, A.data, 8, np.ones((6, 2)), None, 0.0, 1e-6)
     with pytest.raises(ParameterError, match="fairness matrix"):
         _core.NormalEquations(A.indptr, A.indices, A.data, 8, None, k_arrays(fairness(5, 1)), 1.0, 1e-6)
+
+
+@pytest.mark.parametrize("with_weights", [False, True])
+def test_blend_weights_are_the_blended_matrices(with_weights):
+    # W_i = w_i (t I + (1 - t) n_i n_i^T), a zero (or NaN) normal giving w_i I, against the 3x3 matrices formed
+    # by numpy, and W_i p_i against their products (sums of three products: 1e-15).
+    rng = np.random.default_rng(11)
+    k, t = 50, 0.3
+    normals = rng.standard_normal((k, 3))
+    normals /= np.linalg.norm(normals, axis=1, keepdims=True)
+    normals[3] = 0.0
+    normals[7] = np.nan
+    points = rng.standard_normal((k, 3))
+    w = rng.random(k) + 0.1 if with_weights else None
+    W, Wp = _core.blend_weights(points, normals, t, w)
+    for i in range(k):
+        scale = 1.0 if w is None else w[i]
+        n = normals[i] if np.all(np.isfinite(normals[i])) and normals[i].any() else None
+        full = scale * (np.eye(3) if n is None else t * np.eye(3) + (1 - t) * np.outer(n, n))
+        np.testing.assert_allclose(W[i], [full[a, b] for a, b in PAIRS], rtol=0, atol=1e-15)
+        np.testing.assert_allclose(Wp[i], full @ points[i], rtol=0, atol=1e-15)

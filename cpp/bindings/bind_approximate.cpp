@@ -125,6 +125,27 @@ void bind_approximate(py::module_& m) {
         },
         "indptr"_a.noconvert(), "indices"_a.noconvert(), "data"_a.noconvert(), "n_cols"_a, "weights"_a);
 
+  m.def("blend_weights",
+        [](const Vertices& points, const Vertices& normals, double tangential, const py::object& row_weights) {
+          check_shape(points, 3, "points");
+          check_shape(normals, 3, "normals");
+          const auto k = static_cast<std::size_t>(points.shape(0));
+          if (static_cast<std::size_t>(normals.shape(0)) != k)
+            throw sorpia::ParameterError("normals must have one row per point");
+          Vertices w;
+          if (!row_weights.is_none()) {
+            w = row_weights.cast<Vertices>();
+            if (w.ndim() != 1 || static_cast<std::size_t>(w.shape(0)) != k)
+              throw sorpia::ParameterError("weights must have one entry per point");
+          }
+          std::vector<double> weights(6 * k), weighted(3 * k);
+          sorpia::blend_weights(points.data(), normals.data(), row_weights.is_none() ? nullptr : w.data(), k,
+                                tangential, weights.data(), weighted.data());
+          return py::make_tuple(to_numpy(std::move(weights), 6), to_numpy(std::move(weighted), 3));
+        },
+        "points"_a.noconvert(), "normals"_a.noconvert(), "tangential"_a, "weights"_a = py::none(),
+        "(W (k, 6), W p (k, 3)) of the tangent-distance blend (sorpia::blend_weights).");
+
   py::class_<sorpia::NormalEquations>(m, "NormalEquations")
       .def(py::init([](const Indices32& indptr, const Indices32& indices, const Vertices& data, std::size_t n_cols,
                        const py::object& weights, const py::object& fairness_matrix, double fairness,

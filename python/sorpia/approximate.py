@@ -351,18 +351,8 @@ def _row_weights(points, normals, tangential: float, weights=None):
     if tangential == 1.0:
         w = None if weights is None else np.ascontiguousarray(weights[:, None])
         return w, (points if weights is None else weights[:, None] * points)
-    nrm = normals * (np.linalg.norm(normals, axis=1) > 0)[:, None]
-    flat = (nrm == 0).all(axis=1)
-    c_i = np.where(flat, 0.0, 1.0 - tangential)
-    w_i = np.where(flat, 1.0, tangential)
-    if weights is not None:
-        c_i, w_i = c_i * weights, w_i * weights
-    pairs = ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2))
-    wts = np.empty((len(nrm), 6))
-    for col, (a, b) in enumerate(pairs):
-        wts[:, col] = c_i * nrm[:, a] * nrm[:, b] + (w_i if a == b else 0.0)
-    # W_i p_i = w_i p_i + c_i n_i (n_i . p_i)
-    return wts, w_i[:, None] * points + (c_i * np.einsum("ij,ij->i", nrm, points))[:, None] * nrm
+    return _core.blend_weights(np.ascontiguousarray(points), np.ascontiguousarray(normals), tangential,
+                               None if weights is None else np.ascontiguousarray(weights))
 
 
 def _normal_equations(A, points, normals, V, tangential: float, fairness: float, K, weights=None,

@@ -175,6 +175,30 @@ NormalMatrix normal_matrix(const CsrRows& A, const double* weights, int weight_c
   return M;
 }
 
+void blend_weights(const double* points, const double* normals, const double* row_weights, std::size_t k,
+                   double tangential, double* weights, double* weighted_points) {
+  for (std::size_t r = 0; r < k; ++r) {
+    const double* nr = normals + 3 * r;
+    const double* pr = points + 3 * r;
+    const double w = row_weights == nullptr ? 1.0 : row_weights[r];
+    const bool normal = nr[0] * nr[0] + nr[1] * nr[1] + nr[2] * nr[2] > 0.0;  // false for zero and NaN
+    const double c = normal ? (1.0 - tangential) * w : 0.0;                     // the n n^T part
+    const double d = normal ? tangential * w : w;                               // the identity part
+    const double n0 = normal ? nr[0] : 0.0, n1 = normal ? nr[1] : 0.0, n2 = normal ? nr[2] : 0.0;
+    double* out = weights + 6 * r;
+    out[0] = c * n0 * n0 + d;
+    out[1] = c * n0 * n1;
+    out[2] = c * n0 * n2;
+    out[3] = c * n1 * n1 + d;
+    out[4] = c * n1 * n2;
+    out[5] = c * n2 * n2 + d;
+    const double np = c * (n0 * pr[0] + n1 * pr[1] + n2 * pr[2]);
+    weighted_points[3 * r] = d * pr[0] + np * n0;
+    weighted_points[3 * r + 1] = d * pr[1] + np * n1;
+    weighted_points[3 * r + 2] = d * pr[2] + np * n2;
+  }
+}
+
 NormalEquations::NormalEquations(NormalMatrix normal, CsrMatrix fairness_matrix, double fairness, double proximal)
     : n_(std::move(normal)), k_(std::move(fairness_matrix)) {
   if (n_.blocks != 1 && n_.blocks != 6)

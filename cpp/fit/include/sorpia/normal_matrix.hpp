@@ -46,6 +46,14 @@ struct CsrRows {
 NormalMatrix normal_matrix(const CsrRows& rows, const double* weights, int weight_count);
 NormalMatrix normal_matrix(const CsrMatrix& rows, const double* weights, int weight_count);
 
+/// The weights of the tangent-distance blend for normal_matrix: for each row
+/// r, W_r = w_r (t I + (1 - t) n_r n_r^T), n_r the unit normal at the point's
+/// footpoint (a zero or non-finite normal keeps W_r = w_r I), stored xx, xy,
+/// xz, yy, yz, zz into weights (k, 6), and W_r p_r into weighted_points (k, 3).
+/// @param row_weights  w_r (k), or null for all 1
+void blend_weights(const double* points, const double* normals, const double* row_weights, std::size_t k,
+                   double tangential, double* weights, double* weighted_points);
+
 /// The normal equations of one least-squares update of control vertices X
 /// (n, 3) row-major, with a proximal term mu |X - X_prev|^2 and a fairness
 /// term c tr(X^T K X):
