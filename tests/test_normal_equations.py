@@ -179,3 +179,21 @@ def test_blend_weights_are_the_blended_matrices(with_weights):
         full = scale * (np.eye(3) if n is None else t * np.eye(3) + (1 - t) * np.outer(n, n))
         np.testing.assert_allclose(W[i], [full[a, b] for a, b in PAIRS], rtol=0, atol=1e-15)
         np.testing.assert_allclose(Wp[i], full @ points[i], rtol=0, atol=1e-15)
+
+
+def test_pcg_result_does_not_depend_on_the_threads():
+    # Above 100k rows the vector updates and products run on several threads; the sums are formed over fixed
+    # chunks of rows in order, so one thread and two give the same bits (a tridiagonal-like system of 120k
+    # unknowns from rows with two columns each).
+    n = 120_000
+    rng = np.random.default_rng(13)
+    cols = np.stack([np.arange(n), (np.arange(n) + 1) % n], axis=1)
+    cols.sort(axis=1)
+    A = scipy.sparse.csr_matrix((rng.random(2 * n) + 0.1, cols.ravel().astype(np.int32),
+                                 np.arange(0, 2 * n + 1, 2, dtype=np.int32)), shape=(n, n))
+    eq = _core.NormalEquations(A.indptr, A.indices, A.data, n, spd_weights(n, 14), None, 0.0, 1e-6)
+    rhs, x0 = rng.standard_normal((n, 3)), np.zeros((n, 3))
+    one = eq.solve(rhs, x0, 1e-12, 15, 1)
+    two = eq.solve(rhs, x0, 1e-12, 15, 2)
+    assert one[1] == two[1] == 15
+    np.testing.assert_array_equal(one[0], two[0])

@@ -1,6 +1,7 @@
 #include "sorpia/pcg.hpp"
 
 #include <algorithm>
+#include <functional>
 #include <stdexcept>
 
 #include "sorpia/detail/parallel.hpp"
@@ -24,8 +25,16 @@ PcgResult pcg(std::size_t n, int columns, bool coupled, const PcgApply& apply, c
   if (blocks ? precondition.blocks.size() != n * kc * kc : precondition.scalars.size() != n)
     throw std::invalid_argument("pcg: the preconditioner has the wrong size");
   const std::size_t systems = coupled ? 1 : kc;
-  const int tasks = static_cast<int>(std::clamp<std::size_t>(n / kRowsPerTask, 1, static_cast<std::size_t>(
-                                                                                      std::max(threads, 1))));
+  // The rows in chunks of a count that does not depend on the threads, each chunk's part of the sums kept and
+  // the parts summed in chunk order: the same rounding on any number of threads.
+  const std::size_t chunks = std::max<std::size_t>(1, n / kRowsPerTask);
+  const int tasks = static_cast<int>(std::min<std::size_t>(chunks, static_cast<std::size_t>(std::max(threads, 1))));
+  const auto for_chunks = [&](const std::function<void(std::size_t)>& body) {
+    detail::for_each_task(tasks > 1, tasks, [&](int t) {
+      const auto k = static_cast<std::size_t>(t), count = static_cast<std::size_t>(tasks);
+      for (std::size_t ch = chunks * k / count; ch < chunks * (k + 1) / count; ++ch) body(ch);
+    });
+  };
   // z_i = P_i r_i for the rows [first, last).
   const auto precondition_rows = [&](std::size_t first, std::size_t last, std::vector<double>& z) {
     for (std::size_t i = first; i < last; ++i) {
@@ -43,22 +52,18 @@ PcgResult pcg(std::size_t n, int columns, bool coupled, const PcgApply& apply, c
       }
     }
   };
-  // Per task: (r^T z, r^T r) per system, then summed in task order.
-  std::vector<double> part(static_cast<std::size_t>(tasks) * 2 * systems);
+  // Per chunk: (r^T z, r^T r) per system.
+  std::vector<double> part(chunks * 2 * systems);
   const auto sum_parts = [&](std::vector<double>& rz, std::vector<double>& rr) {
     std::fill(rz.begin(), rz.end(), 0.0);
     std::fill(rr.begin(), rr.end(), 0.0);
-    for (std::size_t t = 0; t < static_cast<std::size_t>(tasks); ++t)
+    for (std::size_t t = 0; t < chunks; ++t)
       for (std::size_t s = 0; s < systems; ++s) {
         rz[s] += part[(2 * t) * systems + s];
         rr[s] += part[(2 * t + 1) * systems + s];
       }
   };
-  const auto range = [&](int t) {
-    const auto k = static_cast<std::size_t>(t);
-    const auto count = static_cast<std::size_t>(tasks);
-    return std::pair<std::size_t, std::size_t>{n * k / count, n * (k + 1) / count};
-  };
+  const auto range = [&](std::size_t ch) { return std::pair<std::size_t, std::size_t>{n * ch / chunks, n * (ch + 1) / chunks}; };
 
   PcgProgress progress;
   progress.rz.assign(systems, 0.0);
@@ -66,11 +71,11 @@ PcgResult pcg(std::size_t n, int columns, bool coupled, const PcgApply& apply, c
   progress.decrease.assign(systems, 0.0);
   progress.active.assign(systems, 0);
   std::vector<double> z(n * kc), p, q(n * kc);
-  // z = P r on task t's rows, and its part of r^T z and r^T r.
-  const auto precondition_part = [&](int t) {
+  // z = P r on chunk t's rows, and its part of r^T z and r^T r.
+  const auto precondition_part = [&](std::size_t t) {
     const auto [first, last] = range(t);
     precondition_rows(first, last, z);
-    double* rz = &part[static_cast<std::size_t>(2 * t) * systems];
+    double* rz = &part[2 * t * systems];
     double* rr = rz + systems;
     std::fill(rz, rr + systems, 0.0);
     for (std::size_t i = first; i < last; ++i)
@@ -80,7 +85,7 @@ PcgResult pcg(std::size_t n, int columns, bool coupled, const PcgApply& apply, c
         rr[s] += r[i * kc + c] * r[i * kc + c];
       }
   };
-  detail::for_each_task(tasks > 1, tasks, precondition_part);
+  for_chunks(precondition_part);
   sum_parts(progress.rz, progress.rr);
   for (std::size_t s = 0; s < systems; ++s) progress.active[s] = progress.rz[s] > 0.0;
   p = z;
@@ -113,8 +118,8 @@ PcgResult pcg(std::size_t n, int columns, bool coupled, const PcgApply& apply, c
       alpha[s] = progress.rz[s] / pq[s];
       progress.decrease[s] = alpha[s] * progress.rz[s];
     }
-    // x += alpha p, r -= alpha q, z = P r, r^T z and r^T r: task by task, each over its own rows.
-    detail::for_each_task(tasks > 1, tasks, [&](int t) {
+    // x += alpha p, r -= alpha q, z = P r, r^T z and r^T r: chunk by chunk, each over its own rows.
+    for_chunks([&](std::size_t t) {
       const auto [first, last] = range(t);
       for (std::size_t i = first; i < last; ++i)
         for (std::size_t c = 0; c < kc; ++c) {

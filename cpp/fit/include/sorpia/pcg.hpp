@@ -64,7 +64,9 @@ struct PcgResult {
 ///                  (as updated by the iteration)
 /// @param max_iter  iterations at most (>= 0)
 /// @param threads   threads for the vector updates (1: the calling thread;
-///                  more only where the vectors are long enough to pay)
+///                  more only where the vectors are long enough to pay); the
+///                  result does not depend on it (the sums are formed over
+///                  fixed chunks of rows, in order)
 /// The stop rule is asked before every iteration and after the last (it
 /// sees every iterate); a system whose p^T M p or r^T z is not positive stops
 /// moving (its active flag drops), and all of them stopped ends the run as
