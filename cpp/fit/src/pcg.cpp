@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <functional>
 #include <stdexcept>
+#include <type_traits>
 
 #include "sorpia/detail/parallel.hpp"
 #include "sorpia/interrupt.hpp"
@@ -11,19 +12,16 @@ namespace sorpia {
 
 namespace {
 
-// Rows of X per task of a vector update below which it runs on one thread.
+// Rows of X per chunk of the vector updates (a thread takes whole chunks: fewer rows run on one thread).
 constexpr std::size_t kRowsPerTask = 50000;
 
-}  // namespace
-
-PcgResult pcg(std::size_t n, int columns, bool coupled, const PcgApply& apply, const BlockDiagonal& precondition,
-              const PcgStop& stop, std::vector<double>& x, std::vector<double>& r, long long max_iter, int threads) {
-  const auto kc = static_cast<std::size_t>(columns);
-  if (columns < 1 || x.size() != n * kc || r.size() != n * kc)
-    throw std::invalid_argument("pcg: x and r must have n * columns entries");
+// pcg with KC columns known at compile time (0: `columns`, known at run time).
+template <int KC>
+PcgResult pcg_impl(std::size_t n, int columns, bool coupled, const PcgApply& apply, const BlockDiagonal& precondition,
+                   const PcgStop& stop, std::vector<double>& x, std::vector<double>& r, long long max_iter,
+                   int threads) {
+  const std::size_t kc = KC > 0 ? static_cast<std::size_t>(KC) : static_cast<std::size_t>(columns);
   const bool blocks = precondition.scalars.empty();
-  if (blocks ? precondition.blocks.size() != n * kc * kc : precondition.scalars.size() != n)
-    throw std::invalid_argument("pcg: the preconditioner has the wrong size");
   const std::size_t systems = coupled ? 1 : kc;
   // The rows in chunks of a count that does not depend on the threads, each chunk's part of the sums kept and
   // the parts summed in chunk order: the same rounding on any number of threads.
@@ -35,62 +33,81 @@ PcgResult pcg(std::size_t n, int columns, bool coupled, const PcgApply& apply, c
       for (std::size_t ch = chunks * k / count; ch < chunks * (k + 1) / count; ++ch) body(ch);
     });
   };
-  // z_i = P_i r_i for the rows [first, last).
-  const auto precondition_rows = [&](std::size_t first, std::size_t last, std::vector<double>& z) {
+  const auto range = [&](std::size_t ch) {
+    return std::pair<std::size_t, std::size_t>{n * ch / chunks, n * (ch + 1) / chunks};
+  };
+  std::vector<double> z(n * kc), p, q(n * kc);
+  // Per chunk and column: r^T z and r^T r (rows 2 ch and 2 ch + 1 of kc entries).
+  std::vector<double> part(chunks * 2 * kc);
+  // For chunk ch's rows: x += alpha p and r -= alpha q (with `step`), z = P r, and the chunk's sums; one pass.
+  std::vector<double> col_alpha(kc, 0.0), col_beta(kc, 0.0);
+  const auto step_kernel = [&](std::size_t ch, auto step_tag, auto blocks_tag) {
+    constexpr bool step = decltype(step_tag)::value;
+    constexpr bool blocks = decltype(blocks_tag)::value;
+    const auto [first, last] = range(ch);
+    double* rz = &part[2 * ch * kc];
+    double* rr = rz + kc;
+    std::fill(rz, rr + kc, 0.0);
     for (std::size_t i = first; i < last; ++i) {
-      const double* ri = &r[i * kc];
+      double* ri = &r[i * kc];
       double* zi = &z[i * kc];
-      if (!blocks) {
-        for (std::size_t c = 0; c < kc; ++c) zi[c] = precondition.scalars[i] * ri[c];
-        continue;
+      if constexpr (step) {
+        double* xi = &x[i * kc];
+        const double* pi = &p[i * kc];
+        const double* qi = &q[i * kc];
+        for (std::size_t c = 0; c < kc; ++c) {
+          xi[c] += col_alpha[c] * pi[c];
+          ri[c] -= col_alpha[c] * qi[c];
+        }
       }
-      const double* b = &precondition.blocks[i * kc * kc];
+      if constexpr (!blocks) {
+        for (std::size_t c = 0; c < kc; ++c) zi[c] = precondition.scalars[i] * ri[c];
+      } else {
+        const double* b = &precondition.blocks[i * kc * kc];
+        for (std::size_t c = 0; c < kc; ++c) {
+          double sum = 0.0;
+          for (std::size_t d = 0; d < kc; ++d) sum += b[c * kc + d] * ri[d];
+          zi[c] = sum;
+        }
+      }
       for (std::size_t c = 0; c < kc; ++c) {
-        double s = 0.0;
-        for (std::size_t d = 0; d < kc; ++d) s += b[c * kc + d] * ri[d];
-        zi[c] = s;
+        rz[c] += ri[c] * zi[c];
+        rr[c] += ri[c] * ri[c];
       }
     }
   };
-  // Per chunk: (r^T z, r^T r) per system.
-  std::vector<double> part(chunks * 2 * systems);
+  const auto step_rows = [&](std::size_t ch, bool step) {
+    using Yes = std::true_type;
+    using No = std::false_type;
+    if (step) {
+      if (blocks) step_kernel(ch, Yes{}, Yes{}); else step_kernel(ch, Yes{}, No{});
+    } else {
+      if (blocks) step_kernel(ch, No{}, Yes{}); else step_kernel(ch, No{}, No{});
+    }
+  };
+  // The chunks' sums, in chunk order, folded into the systems.
   const auto sum_parts = [&](std::vector<double>& rz, std::vector<double>& rr) {
     std::fill(rz.begin(), rz.end(), 0.0);
     std::fill(rr.begin(), rr.end(), 0.0);
-    for (std::size_t t = 0; t < chunks; ++t)
-      for (std::size_t s = 0; s < systems; ++s) {
-        rz[s] += part[(2 * t) * systems + s];
-        rr[s] += part[(2 * t + 1) * systems + s];
+    for (std::size_t ch = 0; ch < chunks; ++ch)
+      for (std::size_t c = 0; c < kc; ++c) {
+        rz[coupled ? 0 : c] += part[2 * ch * kc + c];
+        rr[coupled ? 0 : c] += part[(2 * ch + 1) * kc + c];
       }
   };
-  const auto range = [&](std::size_t ch) { return std::pair<std::size_t, std::size_t>{n * ch / chunks, n * (ch + 1) / chunks}; };
 
   PcgProgress progress;
   progress.rz.assign(systems, 0.0);
   progress.rr.assign(systems, 0.0);
   progress.decrease.assign(systems, 0.0);
   progress.active.assign(systems, 0);
-  std::vector<double> z(n * kc), p, q(n * kc);
-  // z = P r on chunk t's rows, and its part of r^T z and r^T r.
-  const auto precondition_part = [&](std::size_t t) {
-    const auto [first, last] = range(t);
-    precondition_rows(first, last, z);
-    double* rz = &part[2 * t * systems];
-    double* rr = rz + systems;
-    std::fill(rz, rr + systems, 0.0);
-    for (std::size_t i = first; i < last; ++i)
-      for (std::size_t c = 0; c < kc; ++c) {
-        const std::size_t s = coupled ? 0 : c;
-        rz[s] += r[i * kc + c] * z[i * kc + c];
-        rr[s] += r[i * kc + c] * r[i * kc + c];
-      }
-  };
-  for_chunks(precondition_part);
+  for_chunks([&](std::size_t ch) { step_rows(ch, false); });
   sum_parts(progress.rz, progress.rr);
   for (std::size_t s = 0; s < systems; ++s) progress.active[s] = progress.rz[s] > 0.0;
   p = z;
 
-  std::vector<double> alpha(systems), beta(systems), pq(systems), rz_new(systems), rr_new(systems);
+  std::vector<double> pq(systems), col_pq(kc), rz_new(systems), rr_new(systems);
+  std::vector<char> col_update(kc);
   PcgResult out;
   out.stop_reason = "max_iter";
   for (long long k = 0;; ++k) {
@@ -105,33 +122,27 @@ PcgResult pcg(std::size_t n, int columns, bool coupled, const PcgApply& apply, c
     if (k >= max_iter) break;
     poll_interrupt();
     apply(p, q);
+    std::fill(col_pq.begin(), col_pq.end(), 0.0);
+    for (std::size_t i = 0; i < n; ++i)
+      for (std::size_t c = 0; c < kc; ++c) col_pq[c] += p[i * kc + c] * q[i * kc + c];
     std::fill(pq.begin(), pq.end(), 0.0);
-    for (std::size_t i = 0; i < n * kc; ++i) pq[coupled ? 0 : i % kc] += p[i] * q[i];
+    for (std::size_t c = 0; c < kc; ++c) pq[coupled ? 0 : c] += col_pq[c];
     for (std::size_t s = 0; s < systems; ++s) {
-      alpha[s] = 0.0;
       progress.decrease[s] = 0.0;
       if (!progress.active[s]) continue;
       if (!(pq[s] > 0.0)) {  // no descent left along p (the semidefinite case, or rounding)
         progress.active[s] = 0;
         continue;
       }
-      alpha[s] = progress.rz[s] / pq[s];
-      progress.decrease[s] = alpha[s] * progress.rz[s];
+      progress.decrease[s] = progress.rz[s] / pq[s] * progress.rz[s];
     }
-    // x += alpha p, r -= alpha q, z = P r, r^T z and r^T r: chunk by chunk, each over its own rows.
-    for_chunks([&](std::size_t t) {
-      const auto [first, last] = range(t);
-      for (std::size_t i = first; i < last; ++i)
-        for (std::size_t c = 0; c < kc; ++c) {
-          const double a = alpha[coupled ? 0 : c];
-          x[i * kc + c] += a * p[i * kc + c];
-          r[i * kc + c] -= a * q[i * kc + c];
-        }
-      precondition_part(t);
-    });
+    for (std::size_t c = 0; c < kc; ++c) {
+      const std::size_t s = coupled ? 0 : c;
+      col_alpha[c] = progress.active[s] ? progress.rz[s] / pq[s] : 0.0;
+    }
+    for_chunks([&](std::size_t ch) { step_rows(ch, true); });
     sum_parts(rz_new, rr_new);
     for (std::size_t s = 0; s < systems; ++s) {
-      beta[s] = 0.0;
       progress.rr[s] = rr_new[s];
       if (!progress.active[s]) continue;
       if (!(rz_new[s] > 0.0)) {
@@ -139,17 +150,34 @@ PcgResult pcg(std::size_t n, int columns, bool coupled, const PcgApply& apply, c
         progress.rz[s] = 0.0;
         continue;
       }
-      beta[s] = rz_new[s] / progress.rz[s];
+      const double beta = rz_new[s] / progress.rz[s];
+      for (std::size_t c = 0; c < kc; ++c)
+        if (coupled || c == s) col_beta[c] = beta;
       progress.rz[s] = rz_new[s];
     }
-    for (std::size_t i = 0; i < n; ++i)
-      for (std::size_t c = 0; c < kc; ++c) {
-        const std::size_t s = coupled ? 0 : c;
-        if (progress.active[s]) p[i * kc + c] = z[i * kc + c] + beta[s] * p[i * kc + c];
-      }
+    for (std::size_t c = 0; c < kc; ++c) col_update[c] = progress.active[coupled ? 0 : c];
+    for_chunks([&](std::size_t ch) {
+      const auto [first, last] = range(ch);
+      for (std::size_t i = first; i < last; ++i)
+        for (std::size_t c = 0; c < kc; ++c)
+          if (col_update[c]) p[i * kc + c] = z[i * kc + c] + col_beta[c] * p[i * kc + c];
+    });
     out.iterations = k + 1;
   }
   return out;
+}
+
+}  // namespace
+
+PcgResult pcg(std::size_t n, int columns, bool coupled, const PcgApply& apply, const BlockDiagonal& precondition,
+              const PcgStop& stop, std::vector<double>& x, std::vector<double>& r, long long max_iter, int threads) {
+  const auto kc = static_cast<std::size_t>(columns);
+  if (columns < 1 || x.size() != n * kc || r.size() != n * kc)
+    throw std::invalid_argument("pcg: x and r must have n * columns entries");
+  if (precondition.scalars.empty() ? precondition.blocks.size() != n * kc * kc : precondition.scalars.size() != n)
+    throw std::invalid_argument("pcg: the preconditioner has the wrong size");
+  if (columns == 3) return pcg_impl<3>(n, columns, coupled, apply, precondition, stop, x, r, max_iter, threads);
+  return pcg_impl<0>(n, columns, coupled, apply, precondition, stop, x, r, max_iter, threads);
 }
 
 }  // namespace sorpia
