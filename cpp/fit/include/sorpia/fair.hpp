@@ -38,7 +38,8 @@ struct FairOptions {
   int window = 10;
   /// At most this many iterations, >= 1.
   long long max_iter = 2000;
-  /// Threads for the products with K (1..max_threads).
+  /// Threads for the products with K and the CG's vector updates (1..max_threads;
+  /// the vector updates use more than one only above 100,000 vertices).
   int threads = 1;
 };
 
