@@ -13,20 +13,22 @@ by the limit surface S(V) of a cage with control vertices V and fixed faces:
 - **rows**: the limit basis at the footpoints, A (one row per point, one
   column per control vertex; ``LimitSurface.rows``), so that A V are the
   footpoints' positions;
-- **the update**: V minimising ``|A V - P|^2 + fairness m V^T K V + mu |V -
-  V_prev|^2`` (K the thin-plate energy, `sorpia.fairness_matrix`; m the mean
-  diagonal of A^T A), the normal equations ``(A^T A + fairness m K + mu I) V =
-  A^T P + mu V_prev`` formed and solved in the core (``sorpia::NormalEquations``:
+- **the update**: V minimising ``sum_i (A_i V - p_i)^T W_i (A_i V - p_i) +
+  fairness m V^T K V + mu |V - V_prev|^2`` (W_i below; K the thin-plate
+  energy, `sorpia.fairness_matrix` at depth 0; m the mean diagonal of the
+  data term's normal matrix A^T W A), the normal equations ``(A^T W A +
+  fairness m K + mu I) V = A^T W P + mu V_prev`` formed and solved in the core (``sorpia::NormalEquations``:
   the fitting layer's preconditioned conjugate gradients, Jacobi for the
   three coordinates; block Jacobi on the 3x3 blocks with ``tangential`` < 1,
   below), or by LSPIA (Deng and Lin 2014: each control vertex moves by the
   sum of its points' residuals weighted by the basis, divided by the sum of
-  those weights). mu is 1e-6 of the mean diagonal of A^T A: a
+  those weights). mu is 1e-6 of the mean diagonal of A^T W A: a
   proximal pull towards the previous control vertices which leaves the
   least-squares solution unchanged (it vanishes at a fixed point) and keeps a
   vertex no point influences where it is;
-- with ``tangential`` < 1 the distance along the surface counts less
-  (``W_i = tangential I + (1 - tangential) n_i n_i^T`` per point, n_i the
+- W_i = I fits the points' full distances (point distance, ``tangential`` =
+  1); below 1 the distance along the surface counts less (the default 0.1:
+  ``W_i = tangential I + (1 - tangential) n_i n_i^T`` per point, n_i the
   normal at the footpoint: the tangent-distance fit of Marinov and Kobbelt
   and of Cheng, Wang et al., blended with the point distance);
 - **parameter correction**: the footpoints re-projected onto the new surface
@@ -65,7 +67,16 @@ from .surface import LimitSurface
 UPDATE_METHODS = ("cg", "lspia")
 SAMPLINGS = ("area", "midpoints")
 DEFAULT_UPDATE = "cg"
-# The proximal weight mu, relative to the mean diagonal of A^T A.
+# The defaults of the fit's objective (docs/approximation.md, "The default", has the measurements): the
+# tangent-distance blend, which removes most of point distance's slow footpoint slide, held by a small thin-plate
+# term where few points hold the cage (without it the blend, and on cages with faces that no point reaches point
+# distance too, let the surface stray or fly off between the points).
+DEFAULT_TANGENTIAL = 0.1
+DEFAULT_FAIRNESS = 3e-4
+# The quadrature depth of approximation's K: a regulariser, whose exactness at extraordinary vertices matters
+# less than its cost (depth 4 on a 20k-vertex cage costs several times the rest of a 1M-point update).
+_FAIRNESS_DEPTH = 0
+# The proximal weight mu, relative to the mean diagonal of A^T W A.
 _PROXIMAL = 1e-6
 # The stopping rule's window: iterations over which the RMS distance must fall by less than tol each on average.
 _WINDOW = 3
@@ -117,6 +128,9 @@ class ApproximationResult:
         The update that ran, "cg" or "lspia".
     fairness : float
         The weight of the fairness term.
+    tangential : float
+        The weight of the distance along the surface that ran (the default
+        resolved: 0.1 for CG, 1 for LSPIA).
     diagonal : float
         The diagonal of the data points' bounding box, the unit of the
         relative distances.
@@ -144,6 +158,7 @@ class ApproximationResult:
     best_iteration: int
     method: str
     fairness: float
+    tangential: float
     diagonal: float
     history: list = field(default_factory=list)
     timings: dict = field(default_factory=dict)
@@ -170,7 +185,7 @@ class ApproximationResult:
         last = self.history[self.best_iteration]
         return {"iterations": self.iterations, "converged": self.converged, "stop_reason": self.stop_reason,
                 "best_iteration": self.best_iteration, "method": self.method,
-                "fairness": self.fairness, "diagonal": self.diagonal, "n_points": int(self.distances.shape[0]),
+                "fairness": self.fairness, "tangential": self.tangential, "diagonal": self.diagonal, "n_points": int(self.distances.shape[0]),
                 "n_control_vertices": int(self.control_vertices.shape[0]),
                 "final": {k: v for k, v in last.items() if k not in ("iteration", "seconds")},
                 "history": self.history, "timings": self.timings}
@@ -358,7 +373,7 @@ def _row_weights(points, normals, tangential: float, weights=None):
 def _normal_equations(A, points, normals, V, tangential: float, fairness: float, K, weights=None,
                       method: str = DEFAULT_UPDATE):
     """The normal equations of one update, (M, rhs): M = A^T W A + fairness m
-    K + mu I, rhs = A^T W P + mu V, m the mean diagonal of A^T A and mu =
+    K + mu I, rhs = A^T W P + mu V, m the mean diagonal of A^T W A and mu =
     _PROXIMAL m, W_i as `_row_weights` gives them. For "cg" M is the core's
     `NormalEquations` (the normal matrix stays in the core: with tangential =
     1 one (n, n) matrix for the three coordinates, below 1 one system of 3x3
@@ -392,7 +407,8 @@ def _update(M, rhs, V, method: str, solver_tol: float, solver_max_iter: int):
 
 def approximate(points, cage_vertices, cage_faces, *, scheme: str = "auto", boundary: str = DEFAULT_BOUNDARY,
                 creases=None, corners=None, holes=None, iterations: int = 10, tol: float = 1e-3,
-                fairness: float = 0.0, tangential: float = 1.0, method: str = DEFAULT_UPDATE, solver_tol: float = 1e-3,
+                fairness: float = DEFAULT_FAIRNESS, tangential: Optional[float] = None,
+                method: str = DEFAULT_UPDATE, solver_tol: float = 1e-3,
                 solver_max_iter: int = 2000, grid: int = 4, newton_steps: int = 10, report_level: int = 2,
                 callback: Optional[Callable[[dict], object]] = None, weights=None, faces=None,
                 sampling: Optional[str] = None) -> ApproximationResult:
@@ -423,19 +439,23 @@ def approximate(points, cage_vertices, cage_faces, *, scheme: str = "auto", boun
         fall at all over three iterations.
     fairness : float >= 0
         Weight of the thin-plate fairness term V^T K V (the energy shared with
-        fair interpolation), relative to the mean diagonal of A^T A; 0 for
-        none.
-    tangential : float in [0, 1]
+        fair interpolation, `sorpia.fairness_matrix` with depth 0), relative
+        to the mean diagonal of A^T W A; 0 for none. The default, 3e-4, holds
+        the surface where few points hold the cage (a cage face that no point
+        reaches, thin parts, boundaries) and moves the fit little elsewhere;
+        with 0 the fit of points sampled on a cage's own limit surface
+        returns that cage exactly, with 3e-4 within about the fairness term's
+        pull.
+    tangential : float in [0, 1], optional
         Weight of the distance along the surface: 1 fits each point's full
         distance to its footpoint (point distance, three independent
-        coordinates); 0 its distance to the tangent plane there (tangent
-        distance, one (3n, 3n) system of 3x3 blocks, converging much faster
-        on clean data but ill-posed alone on scans); between, a blend (0.1
-        reaches a given RMS on scans in about a third of the iterations of
-        point distance). The default is 1: below it each iteration costs
-        more and, where few points hold a part of the cage (thin parts,
-        boundaries), the surface between the points strays farther from
-        them; docs/approximation.md has the measurements.
+        coordinates, converging slowly: the footpoints must slide along the
+        surface between updates); 0 its distance to the tangent plane there
+        (tangent distance, one (3n, 3n) system of 3x3 blocks, converging much
+        faster on clean data but ill-posed alone on scans); between, a blend.
+        None (the default): 0.1, or 1 with method="lspia". Below 1 the
+        surface between loosely held points strays farther unless the
+        fairness term holds it; docs/approximation.md has the measurements.
     method : {"cg", "lspia"}
         The update: conjugate gradients on the normal equations (default:
         the faster, bench/approximate_speed.py), or LSPIA's iteration (with
@@ -488,6 +508,8 @@ def approximate(points, cage_vertices, cage_faces, *, scheme: str = "auto", boun
     iterations = _count(iterations, "iterations", 1)
     tol = _nonnegative(tol, "tol")
     fairness = _nonnegative(fairness, "fairness")
+    if tangential is None:  # the blend for CG; LSPIA moves each coordinate on its own
+        tangential = 1.0 if method == "lspia" else DEFAULT_TANGENTIAL
     tangential = _nonnegative(tangential, "tangential")
     if tangential > 1:
         raise ParameterError(f"tangential = {tangential!r} must be in [0, 1]")
@@ -560,7 +582,7 @@ def approximate(points, cage_vertices, cage_faces, *, scheme: str = "auto", boun
         from .energy import fairness_matrix
 
         K = fairness_matrix(cage_faces, V.shape[0], scheme=scheme, boundary=boundary, creases=creases,
-                            corners=corners, holes=holes)
+                            corners=corners, holes=holes, depth=_FAIRNESS_DEPTH)
     stop_reason = "iterations"
     searched = 0  # the iteration after which every footpoint was last searched for afresh
     done = 0
@@ -606,5 +628,5 @@ def approximate(points, cage_vertices, cage_faces, *, scheme: str = "auto", boun
                                distances=np.ldexp(distances, e), points=data, weights=weights, iterations=done,
                                stop_reason=stop_reason,
                                best_iteration=best_iteration, method=method,
-                               fairness=fairness, diagonal=float(np.ldexp(diagonal, e)),
+                               fairness=fairness, tangential=tangential, diagonal=float(np.ldexp(diagonal, e)),
                                history=history, timings=fit.timings)
