@@ -21,7 +21,8 @@ divided by the bounding-box diagonal of the points. Rows:
 - interpolation: `sorpia.interpolate` of the cage: the limit surface through
   the decimated cage's vertices.
 - decimated cage: the cage's own limit surface, unchanged.
-- sorpia.approximate: with its defaults, and with tangential=0.1 (Loop; 10 and 4 iterations).
+- sorpia.approximate: with its defaults, with point distance and no fairness (the default before),
+  and the blend without fairness stopped at 4 iterations (Loop).
 
 The check that Subdivfit's Loop rules are OpenSubdiv's on smooth parts
 (--check-rules, on by default): its own subdivided surface (`-outn`, two
@@ -179,6 +180,15 @@ def measure(points, cage_vertices, cage_faces, diag, scheme="loop"):
     return float(np.sqrt(np.mean(d ** 2))), float(d.max())
 
 
+def measure_back(vertices, triangles, cage_vertices, cage_faces, diag, scheme="loop"):
+    """(RMS, max) distance from the row's limit surface to the dense mesh, / diag: from each vertex of the
+    level-4 tessellation (an exact limit point) to the nearest of the dense mesh's triangles, exact. A surface
+    that strays between loosely held points, or flies off where a cage face holds none, shows here."""
+    tv, _ = sorpia.limit_surface(cage_vertices, cage_faces, LEVEL, scheme=scheme)
+    d = distances_to_mesh(np.asarray(tv), vertices, np.asarray(triangles)) / diag
+    return float(np.sqrt(np.mean(d ** 2))), float(d.max())
+
+
 # ---- Subdivfit -------------------------------------------------------------------------------------------------
 
 def write_m(path, vertices, triangles):
@@ -254,10 +264,14 @@ are OpenSubdiv's inside the mesh but not along a boundary (the check under each 
 measured to its own surface (its subdivision of its cage to level 4 with the vertices at their limit positions,
 `Subdivfit -nsubdiv 4 -outn`), the one it fits. "interpolation" is `sorpia.interpolate` of the cage (the limit
 surface through the decimated cage's vertices); "decimated cage as it is" the cage's own limit surface.
-"sorpia.approximate" is the call with its defaults (point distance, at most 10 iterations, tol 1e-3; its time is
-the call's, the first in the process; its iterations and why it stopped in brackets: "the limit" of
-10, "converged" by tol); "tangential=0.1" the same with the tangent-distance
-blend W_i = 0.1 I + 0.9 n_i n_i^T, and with at most 4 iterations. Times are of one run on a shared machine (the load average is in the stamp).
+"sorpia.approximate" is the call with its defaults (the tangent-distance blend W_i = 0.1 I + 0.9 n_i n_i^T with the
+fairness term 3e-4, at most 10 iterations, tol 1e-3; its time is the call's, the first in the process; its
+iterations and why it stopped in brackets: "the limit" of 10, "converged" by tol); "tangential=1, fairness=0"
+point distance without fairness (the default before); "fairness=0, 4 iterations" the blend alone, stopped at 4.
+The last column measures the other way, from the surface to the dense mesh (its level-4 tessellation's
+vertices to the nearest dense triangle, exact): where the cage has faces that few points hold, a fit can stray
+between the points, or fly off, without the data -> surface distance showing it. Times are of one run on a
+shared machine (the load average is in the stamp).
 
 """
 
@@ -287,6 +301,7 @@ def run_mesh(spec, args, gfit, exe):
 
     def add(label, vertices, seconds, faces=cage.faces, scheme="loop", **extra):
         rms, mx = measure(v, vertices, faces, diag, scheme)
+        extra["surface"] = measure_back(v, f, vertices, faces, diag, scheme)
         if "own" in extra:  # the distances to Subdivfit's own level-4 surface of the same cage
             d = distances_to_mesh(v, *extra["own"]) / diag
             extra["own"] = (float(np.sqrt(np.mean(d ** 2))), float(d.max()))
@@ -320,9 +335,10 @@ def run_mesh(spec, args, gfit, exe):
             scheme)
         add("decimated cage as it is", c.vertices, 0.0, c.faces, scheme)
         approximate = getattr(sorpia, "approximate", None)
-        runs = (("sorpia.approximate", {}), ("sorpia.approximate tangential=0.1", {"tangential": 0.1}),
-                ("sorpia.approximate tangential=0.1, 4 iterations", {"tangential": 0.1, "iterations": 4}))
-        for label, options in runs[:3 if scheme == "loop" else 1]:
+        runs = (("sorpia.approximate", {}),
+                ("sorpia.approximate tangential=1, fairness=0 (point distance)", {"tangential": 1.0, "fairness": 0.0}),
+                ("sorpia.approximate fairness=0, 4 iterations", {"fairness": 0.0, "iterations": 4}))
+        for label, options in runs[:3 if scheme == "loop" else 2]:
             t0 = time.perf_counter()
             result = approximate(v, c.vertices, c.faces, scheme=scheme, **options)
             add(label, result.control_vertices, time.perf_counter() - t0, c.faces, scheme,
@@ -339,16 +355,17 @@ def table(results, have_subdivfit):
         if r["note"]:
             lines.append(f"({r['note']}.)\n")
         lines.append("| fit | scheme | RMS / diagonal | max / diagonal | seconds "
-                     "| on Subdivfit's own surface: RMS, max |")
-        lines.append("|---|---|---|---|---|---|")
+                     "| on Subdivfit's own surface: RMS, max | surface -> dense: RMS, max |")
+        lines.append("|---|---|---|---|---|---|---|")
         for row in r["rows"]:
             seconds = f"{row['seconds']:.3g}" if row["seconds"] else "-"
             if row.get("iterations"):
                 why = {"iterations": ", the limit", None: ""}.get(row.get("stop_reason"), f", {row.get('stop_reason')}")
                 seconds += f" ({row['iterations']} iterations{why})"
             own = f"{row['own'][0]:.3g}, {row['own'][1]:.3g}" if "own" in row else ""
+            back = f"{row['surface'][0]:.3g}, {row['surface'][1]:.3g}" if "surface" in row else ""
             lines.append(f"| {row['row']} | {row['scheme']} | {row['rms']:.3g} | {row['max']:.3g} | {seconds} "
-                         f"| {own} |")
+                         f"| {own} | {back} |")
         if "rules_check" in r:
             gap, n_apart, n = r["rules_check"]
             where = ("all within float32 rounding" if n_apart == 0 else

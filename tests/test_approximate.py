@@ -145,26 +145,63 @@ def dense_rows(surface: LimitSurface, face_ids, uv):
     return A
 
 
+def one_update_case(scheme: str, seed: int):
+    """A cage near a small mesh, noisy points sampled on that mesh's limit surface, and the footpoints on the
+    cage's surface with the dense rows A there: (cage V0, faces, points, surface at V0, face ids, uv, A)."""
+    V, F = shapes.icosphere(1) if scheme == "loop" else shapes.quad_torus(6, 4)
+    rng = np.random.default_rng(seed)
+    s = LimitSurface(V, F, scheme=scheme)
+    _, _, P = sample_surface(s, F, 400, seed=seed + 1)
+    P = P + 0.01 * rng.standard_normal(P.shape)
+    V0 = V + 0.03 * rng.standard_normal(V.shape)
+    s.set_vertices(V0)
+    fid, uv = _core.closest_points(s._surface, s._topology, P, 4, 10)[:2]
+    return V0, F, P, s, fid, uv, dense_rows(s, fid, uv)
+
+
 @pytest.mark.parametrize("method", ["cg", "lspia"])
 @pytest.mark.parametrize("scheme", ["loop", "catmull-clark"])
 def test_one_update_is_the_dense_least_squares_solution(scheme, method):
     # With the footpoints of the given cage fixed, one update minimises |A V - P|^2 + mu |V - V0|^2 (mu = 1e-6 of
     # the mean diagonal of A^T A, the documented proximal term): numpy's dense least squares on the stacked
     # system, with A from Bfr's evaluation of unit control vertices, gives the same control vertices.
-    V, F = shapes.icosphere(1) if scheme == "loop" else shapes.quad_torus(6, 4)
-    rng = np.random.default_rng(5)
-    s = LimitSurface(V, F, scheme=scheme)
-    _, _, P = sample_surface(s, F, 400, seed=6)
-    P = P + 0.01 * rng.standard_normal(P.shape)
-    V0 = V + 0.03 * rng.standard_normal(V.shape)
-    s.set_vertices(V0)
-    fid, uv = _core.closest_points(s._surface, s._topology, P, 4, 10)[:2]
-    A = dense_rows(s, fid, uv)
+    V0, F, P, _, _, _, A = one_update_case(scheme, 5)
     mu = 1e-6 * np.mean(np.einsum("ij,ij->j", A, A))
-    stacked = np.vstack([A, np.sqrt(mu) * np.eye(len(V))])
+    stacked = np.vstack([A, np.sqrt(mu) * np.eye(len(V0))])
     want = np.linalg.lstsq(stacked, np.vstack([P, np.sqrt(mu) * V0]), rcond=None)[0]
     r = approximate(P, V0, F, scheme=scheme, iterations=1, method=method, solver_tol=1e-13,
-                    solver_max_iter=200000, newton_steps=10)
+                    solver_max_iter=200000, newton_steps=10, tangential=1.0, fairness=0.0)
+    assert r.iterations == 1
+    np.testing.assert_allclose(r.control_vertices, want, atol=1e-9 * np.abs(want).max())
+
+
+@pytest.mark.parametrize("scheme", ["loop", "catmull-clark"])
+def test_one_update_with_the_defaults_is_the_dense_solution_of_its_objective(scheme):
+    # The default objective: sum_i (A_i V - p_i)^T W_i (A_i V - p_i) with W_i = t I + (1 - t) n_i n_i^T (t = 0.1,
+    # n_i the unit normal at the footpoint, here the cross product of Bfr's first derivatives), plus fairness m
+    # V^T K V (fairness = 3e-4, K = sorpia.fairness_matrix at depth 0, m the mean diagonal of the data term's
+    # normal matrix A^T W A over the 3n unknowns) plus the proximal mu |V - V0|^2, mu = 1e-6 m. Minimised
+    # densely over the 3n unknowns with numpy (A from unit control vertices), it gives the control vertices of
+    # one default update.
+    from sorpia.approximate import DEFAULT_FAIRNESS, DEFAULT_TANGENTIAL
+
+    V0, F, P, s, fid, uv, A = one_update_case(scheme, 15)
+    _, du, dv, _ = s.evaluate(fid, uv, derivatives=True)
+    nrm = np.cross(du, dv)
+    nrm /= np.linalg.norm(nrm, axis=1, keepdims=True)
+    t = DEFAULT_TANGENTIAL
+    W = t * np.eye(3)[None] + (1 - t) * nrm[:, :, None] * nrm[:, None, :]  # (k, 3, 3)
+    n = len(V0)
+    K = sorpia.fairness_matrix(F, n, scheme=scheme, depth=0).toarray()
+    # The normal equations over x = V.ravel() (x0, y0, z0, x1, ...): sum_i kron(a_i a_i^T, W_i) + ...
+    N = np.einsum("ia,ib,icd->acbd", A, A, W).reshape(3 * n, 3 * n)
+    m = np.mean(np.diag(N))
+    N += np.kron(DEFAULT_FAIRNESS * m * K + 1e-6 * m * np.eye(n), np.eye(3))
+    rhs = np.einsum("ia,icd,id->ac", A, W, P).reshape(-1) + 1e-6 * m * V0.reshape(-1)
+    want = np.linalg.solve(N, rhs).reshape(n, 3)
+    r = approximate(P, V0, F, scheme=scheme, iterations=1, solver_tol=1e-13, solver_max_iter=200000,
+                    newton_steps=10)
+    assert (r.tangential, r.fairness) == (DEFAULT_TANGENTIAL, DEFAULT_FAIRNESS)
     assert r.iterations == 1
     np.testing.assert_allclose(r.control_vertices, want, atol=1e-9 * np.abs(want).max())
 
@@ -177,7 +214,7 @@ def test_points_sampled_from_a_cage_fit_that_cage_back(scheme):
     s = LimitSurface(V, F, scheme=scheme)
     _, _, P = sample_surface(s, F, 30 * s.n_faces, seed=7)
     V0 = V + 1e-2 * np.random.default_rng(8).standard_normal(V.shape)
-    r = approximate(P, V0, F, scheme=scheme, iterations=40, tol=0, tangential=0.0, solver_tol=1e-12,
+    r = approximate(P, V0, F, scheme=scheme, iterations=40, tol=0, tangential=0.0, fairness=0.0, solver_tol=1e-12,
                     solver_max_iter=20000)
     assert r.max_distance < 1e-9
     assert r.history[0]["max"] > 1e-3  # the start was far off
@@ -208,13 +245,14 @@ def test_report_distances_both_ways_against_brute_force():
 
 
 def test_vertices_no_point_influences_stay_where_they_are():
-    # Points on one half of a sphere only: the control vertices of the other half have no data; the proximal
-    # term keeps them where they were (within what the data's vertices pull through shared support).
+    # Points on one half of a sphere only: the control vertices of the other half have no data; without the
+    # fairness term the proximal term keeps them where they were (within what the data's vertices pull through
+    # shared support).
     V, F = shapes.icosphere(2)
     s = LimitSurface(V, F)
     _, _, P = sample_surface(s, F, 3000, seed=10)
     P = P[P[:, 2] > 0.3]
-    r = approximate(P, V * 1.05, F, iterations=3)
+    r = approximate(P, V * 1.05, F, iterations=3, fairness=0.0)
     far = V[:, 2] < -0.6
     np.testing.assert_allclose(r.control_vertices[far], 1.05 * V[far], atol=1e-9)
     assert r.rms < r.history[0]["rms"]
@@ -225,7 +263,7 @@ def test_fairness_term_smooths_and_costs_distance():
     s = LimitSurface(V, F)
     _, _, P = sample_surface(s, F, 800, seed=11)
     P = P + 0.02 * np.random.default_rng(12).standard_normal(P.shape)
-    plain = approximate(P, V, F, iterations=3)
+    plain = approximate(P, V, F, iterations=3, fairness=0.0)
     fair = approximate(P, V, F, iterations=3, fairness=1.0)
     energy = [sorpia.thin_plate_energy(r.control_vertices, F) for r in (plain, fair)]
     assert energy[1] < energy[0]
@@ -391,7 +429,7 @@ def test_a_fit_that_converges_stops_early_and_says_why(scheme):
     g = np.linspace(-1, 1, 15)
     X, Y = np.meshgrid(g, g)
     P = np.c_[X.ravel(), Y.ravel(), np.ones(X.size)]
-    r = approximate(P, V, F, scheme=scheme, iterations=60)
+    r = approximate(P, V, F, scheme=scheme, iterations=60, fairness=0.0)
     assert r.converged and r.stop_reason in ("converged", "exact") and r.iterations < 20
     assert r.rms < 1e-9 * r.diagonal
     assert r.rms == r.history[r.best_iteration]["rms"] == min(h["rms"] for h in r.history)

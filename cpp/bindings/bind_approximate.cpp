@@ -1,6 +1,7 @@
 // Bindings of approximation (cpp/fit footpoints.hpp, normal_matrix.hpp): the
 // k-d tree, the footpoints of data points on a limit surface, and the normal
-// matrix of the fit. Conversion and error translation only.
+// matrix of the fit and its normal equations (solved by the fitting layer's
+// PCG). Conversion and error translation only.
 #include "bindings.hpp"
 #include "sorpia/footpoints.hpp"
 #include "sorpia/normal_matrix.hpp"
@@ -16,6 +17,47 @@ py::tuple footpoint_tuple(sorpia::Footpoints&& fp) {
                         to_numpy(std::move(fp.positions), 3), to_numpy(std::move(fp.distances), 0),
                         to_numpy(std::move(fp.normals), 3));
 }
+
+using Indices32 = py::array_t<std::int32_t, py::array::c_style>;
+
+// Rows A (k, n_cols) as CSR arrays and per-row weights ((k, 1) or (k, 6), or None), checked and borrowed (the
+// arrays must outlive it).
+struct NormalInput {
+  sorpia::CsrRows rows;
+  const double* weights = nullptr;
+  int count = 0;
+
+  NormalInput(const Indices32& indptr, const Indices32& indices, const Vertices& data, std::size_t n_cols,
+              const py::object& w) {
+    if (indptr.ndim() != 1 || indptr.shape(0) < 1 || indices.ndim() != 1 || data.ndim() != 1)
+      throw sorpia::ParameterError("normal_matrix: indptr, indices and data must be one-dimensional");
+    rows = {static_cast<std::size_t>(indptr.shape(0)) - 1, n_cols, indptr.data(), indices.data(), data.data()};
+    const auto nnz = static_cast<std::size_t>(indices.shape(0));
+    if (static_cast<std::size_t>(data.shape(0)) != nnz || indptr.data()[0] != 0 ||
+        static_cast<std::size_t>(indptr.data()[rows.n_rows]) != nnz)
+      throw sorpia::ParameterError("normal_matrix: indptr, indices and data disagree");
+    for (std::size_t r = 0; r < rows.n_rows; ++r)
+      if (rows.indptr[r + 1] < rows.indptr[r]) throw sorpia::ParameterError("normal_matrix: indptr decreases");
+    for (std::size_t p = 0; p < nnz; ++p)
+      if (rows.indices[p] < 0 || static_cast<std::size_t>(rows.indices[p]) >= n_cols)
+        throw sorpia::ParameterError("normal_matrix: a column index is out of range");
+    for (std::size_t r = 0; r < rows.n_rows; ++r)
+      for (std::int32_t p = rows.indptr[r] + 1; p < rows.indptr[r + 1]; ++p)
+        if (rows.indices[p] <= rows.indices[p - 1])
+          throw sorpia::ParameterError("normal_matrix: the columns of row " + std::to_string(r) +
+                                       " are not sorted and distinct");
+    if (!w.is_none()) {
+      weights_ = w.cast<Vertices>();
+      if (weights_.ndim() != 2 || static_cast<std::size_t>(weights_.shape(0)) != rows.n_rows)
+        throw sorpia::ParameterError("weights must have one row per row of A");
+      count = static_cast<int>(weights_.shape(1));
+      weights = weights_.data();
+    }
+  }
+
+ private:
+  Vertices weights_;
+};
 
 sorpia::FootpointOptions footpoint_options(int grid, int max_steps) {
   sorpia::FootpointOptions o;
@@ -69,39 +111,93 @@ void bind_approximate(py::module_& m) {
         "surface"_a, "topology"_a, "points"_a.noconvert(), "grid"_a, "max_steps"_a);
 
   m.def("normal_matrix",
-        [](const py::array_t<std::int32_t, py::array::c_style>& indptr,
-           const py::array_t<std::int32_t, py::array::c_style>& indices, const Vertices& data,
-           std::size_t n_cols, const py::object& weights) {
-          sorpia::CsrMatrix A;
-          A.n_rows = static_cast<std::size_t>(indptr.shape(0)) - 1;
-          A.n_cols = n_cols;
-          A.indptr = to_vector(indptr);
-          A.indices = to_vector(indices);
-          A.data = to_vector(data);
-          if (A.indices.size() != A.data.size() || static_cast<std::size_t>(A.indptr.back()) != A.data.size())
-            throw sorpia::ParameterError("normal_matrix: indptr, indices and data disagree");
-          for (const std::int32_t j : A.indices)
-            if (j < 0 || static_cast<std::size_t>(j) >= n_cols)
-              throw sorpia::ParameterError("normal_matrix: a column index is out of range");
-          int count = 0;
-          Vertices w;
-          if (!weights.is_none()) {
-            w = weights.cast<Vertices>();
-            if (w.ndim() != 2 || static_cast<std::size_t>(w.shape(0)) != A.n_rows)
-              throw sorpia::ParameterError("weights must have one row per row of A");
-            count = static_cast<int>(w.shape(1));
-          }
-          const double* wp = count ? w.data() : nullptr;
+        [](const Indices32& indptr, const Indices32& indices, const Vertices& data, std::size_t n_cols,
+           const py::object& weights) {
+          const NormalInput in(indptr, indices, data, n_cols, weights);
           sorpia::NormalMatrix M;
           {
             LongCall call;
-            M = sorpia::normal_matrix(A, wp, count);
+            M = sorpia::normal_matrix(in.rows, in.weights, in.count);
           }
           const int nb = M.blocks;
           return py::make_tuple(to_numpy(std::move(M.indptr), 0), to_numpy(std::move(M.indices), 0),
                                 to_numpy(std::move(M.values), nb));
         },
         "indptr"_a.noconvert(), "indices"_a.noconvert(), "data"_a.noconvert(), "n_cols"_a, "weights"_a);
+
+  m.def("blend_weights",
+        [](const Vertices& points, const Vertices& normals, double tangential, const py::object& row_weights) {
+          check_shape(points, 3, "points");
+          check_shape(normals, 3, "normals");
+          const auto k = static_cast<std::size_t>(points.shape(0));
+          if (static_cast<std::size_t>(normals.shape(0)) != k)
+            throw sorpia::ParameterError("normals must have one row per point");
+          Vertices w;
+          if (!row_weights.is_none()) {
+            w = row_weights.cast<Vertices>();
+            if (w.ndim() != 1 || static_cast<std::size_t>(w.shape(0)) != k)
+              throw sorpia::ParameterError("weights must have one entry per point");
+          }
+          std::vector<double> weights(6 * k), weighted(3 * k);
+          sorpia::blend_weights(points.data(), normals.data(), row_weights.is_none() ? nullptr : w.data(), k,
+                                tangential, weights.data(), weighted.data());
+          return py::make_tuple(to_numpy(std::move(weights), 6), to_numpy(std::move(weighted), 3));
+        },
+        "points"_a.noconvert(), "normals"_a.noconvert(), "tangential"_a, "weights"_a = py::none(),
+        "(W (k, 6), W p (k, 3)) of the tangent-distance blend (sorpia::blend_weights).");
+
+  py::class_<sorpia::NormalEquations>(m, "NormalEquations")
+      .def(py::init([](const Indices32& indptr, const Indices32& indices, const Vertices& data, std::size_t n_cols,
+                       const py::object& weights, const py::object& fairness_matrix, double fairness,
+                       double proximal) {
+             const NormalInput in(indptr, indices, data, n_cols, weights);
+             sorpia::CsrMatrix k;
+             if (!fairness_matrix.is_none()) {
+               const auto t = fairness_matrix.cast<py::tuple>();  // (data, indices, indptr), as csr_tuple gives
+               k.n_rows = k.n_cols = n_cols;
+               k.data = to_vector(t[0].cast<py::array_t<double, py::array::c_style>>());
+               k.indices = to_vector(t[1].cast<Indices32>());
+               k.indptr = to_vector(t[2].cast<Indices32>());
+               if (k.indptr.size() != n_cols + 1 || k.indices.size() != k.data.size() ||
+                   static_cast<std::size_t>(k.indptr.back()) != k.data.size())
+                 throw sorpia::ParameterError("NormalEquations: the fairness matrix's arrays disagree with " +
+                                              std::to_string(n_cols) + " vertices");
+             }
+             LongCall call;
+             return sorpia::NormalEquations(sorpia::normal_matrix(in.rows, in.weights, in.count), std::move(k),
+                                            fairness, proximal);
+           }),
+           "indptr"_a.noconvert(), "indices"_a.noconvert(), "data"_a.noconvert(), "n_cols"_a, "weights"_a,
+           "fairness_matrix"_a, "fairness"_a, "proximal"_a)
+      .def_property_readonly("mean_diagonal", &sorpia::NormalEquations::mean_diagonal)
+      .def_property_readonly("mu", &sorpia::NormalEquations::mu)
+      .def("apply",
+           [](const sorpia::NormalEquations& e, const Vertices& x) {
+             check_shape(x, 3, "x");
+             check_rows(x, e.n(), "x", "the normal equations");
+             std::vector<double> out(3 * e.n());
+             e.apply(x.data(), out.data());
+             return to_numpy(std::move(out), 3);
+           },
+           "x"_a.noconvert())
+      .def("solve",
+           [](const sorpia::NormalEquations& e, const Vertices& rhs, const Vertices& start, double rtol,
+              long long max_iter, int threads) {
+             check_shape(rhs, 3, "rhs");
+             check_rows(rhs, e.n(), "rhs", "the normal equations");
+             check_shape(start, 3, "start");
+             check_rows(start, e.n(), "start", "the normal equations");
+             std::vector<double> x(start.data(), start.data() + 3 * e.n());
+             sorpia::PcgResult res;
+             {
+               LongCall call;
+               res = e.solve(rhs.data(), x.data(), rtol, max_iter, threads);
+             }
+             return py::make_tuple(to_numpy(std::move(x), 3), res.iterations, res.stop_reason);
+           },
+           "rhs"_a.noconvert(), "start"_a.noconvert(), "rtol"_a, "max_iter"_a, "threads"_a = 0,
+           "(N + mu I + c K) X = rhs by the fitting layer's PCG from `start` (sorpia::NormalEquations::solve):\n"
+           "(X, iterations, stop_reason).");
 
   m.def("refine_footpoints",
         [](const sorpia::LimitSurface& surface, const sorpia::Topology& topology, const Vertices& points,

@@ -13,18 +13,22 @@ by the limit surface S(V) of a cage with control vertices V and fixed faces:
 - **rows**: the limit basis at the footpoints, A (one row per point, one
   column per control vertex; ``LimitSurface.rows``), so that A V are the
   footpoints' positions;
-- **the update**: V minimising ``|A V - P|^2 + fairness m V^T K V + mu |V -
-  V_prev|^2`` (K the thin-plate energy, `sorpia.fairness_matrix`; m the mean
-  diagonal of A^T A), the normal equations ``(A^T A + fairness m K + mu I) V =
-  A^T P + mu V_prev`` solved by conjugate gradients (Jacobi preconditioner, the three
-  coordinates together), or by LSPIA (Deng and Lin 2014: each control vertex
-  moves by the sum of its points' residuals weighted by the basis, divided by
-  the sum of those weights). mu is 1e-6 of the mean diagonal of A^T A: a
+- **the update**: V minimising ``sum_i (A_i V - p_i)^T W_i (A_i V - p_i) +
+  fairness m V^T K V + mu |V - V_prev|^2`` (W_i below; K the thin-plate
+  energy, `sorpia.fairness_matrix` at depth 0; m the mean diagonal of the
+  data term's normal matrix A^T W A), the normal equations ``(A^T W A +
+  fairness m K + mu I) V = A^T W P + mu V_prev`` formed and solved in the core (``sorpia::NormalEquations``:
+  the fitting layer's preconditioned conjugate gradients, Jacobi for the
+  three coordinates; block Jacobi on the 3x3 blocks with ``tangential`` < 1,
+  below), or by LSPIA (Deng and Lin 2014: each control vertex moves by the
+  sum of its points' residuals weighted by the basis, divided by the sum of
+  those weights). mu is 1e-6 of the mean diagonal of A^T W A: a
   proximal pull towards the previous control vertices which leaves the
   least-squares solution unchanged (it vanishes at a fixed point) and keeps a
   vertex no point influences where it is;
-- with ``tangential`` < 1 the distance along the surface counts less
-  (``W_i = tangential I + (1 - tangential) n_i n_i^T`` per point, n_i the
+- W_i = I fits the points' full distances (point distance, ``tangential`` =
+  1); below 1 the distance along the surface counts less (the default 0.1:
+  ``W_i = tangential I + (1 - tangential) n_i n_i^T`` per point, n_i the
   normal at the footpoint: the tangent-distance fit of Marinov and Kobbelt
   and of Cheng, Wang et al., blended with the point distance);
 - **parameter correction**: the footpoints re-projected onto the new surface
@@ -63,7 +67,16 @@ from .surface import LimitSurface
 UPDATE_METHODS = ("cg", "lspia")
 SAMPLINGS = ("area", "midpoints")
 DEFAULT_UPDATE = "cg"
-# The proximal weight mu, relative to the mean diagonal of A^T A.
+# The defaults of the fit's objective (docs/approximation.md, "The default", has the measurements): the
+# tangent-distance blend, which removes most of point distance's slow footpoint slide, held by a small thin-plate
+# term where few points hold the cage (without it the blend, and on cages with faces that no point reaches point
+# distance too, let the surface stray or fly off between the points).
+DEFAULT_TANGENTIAL = 0.1
+DEFAULT_FAIRNESS = 3e-4
+# The quadrature depth of approximation's K: a regulariser, whose exactness at extraordinary vertices matters
+# less than its cost (depth 4 on a 20k-vertex cage costs several times the rest of a 1M-point update).
+_FAIRNESS_DEPTH = 0
+# The proximal weight mu, relative to the mean diagonal of A^T W A.
 _PROXIMAL = 1e-6
 # The stopping rule's window: iterations over which the RMS distance must fall by less than tol each on average.
 _WINDOW = 3
@@ -115,6 +128,9 @@ class ApproximationResult:
         The update that ran, "cg" or "lspia".
     fairness : float
         The weight of the fairness term.
+    tangential : float
+        The weight of the distance along the surface that ran (the default
+        resolved: 0.1 for CG, 1 for LSPIA).
     diagonal : float
         The diagonal of the data points' bounding box, the unit of the
         relative distances.
@@ -142,6 +158,7 @@ class ApproximationResult:
     best_iteration: int
     method: str
     fairness: float
+    tangential: float
     diagonal: float
     history: list = field(default_factory=list)
     timings: dict = field(default_factory=dict)
@@ -168,7 +185,7 @@ class ApproximationResult:
         last = self.history[self.best_iteration]
         return {"iterations": self.iterations, "converged": self.converged, "stop_reason": self.stop_reason,
                 "best_iteration": self.best_iteration, "method": self.method,
-                "fairness": self.fairness, "diagonal": self.diagonal, "n_points": int(self.distances.shape[0]),
+                "fairness": self.fairness, "tangential": self.tangential, "diagonal": self.diagonal, "n_points": int(self.distances.shape[0]),
                 "n_control_vertices": int(self.control_vertices.shape[0]),
                 "final": {k: v for k, v in last.items() if k not in ("iteration", "seconds")},
                 "history": self.history, "timings": self.timings}
@@ -321,67 +338,6 @@ class _Fit:
         return self._timed("report", run)
 
 
-def _pcg(M, rhs: np.ndarray, x: np.ndarray, rtol: float, max_iter: int, precondition=None):
-    """Conjugate gradients on M X = rhs for the columns of X together, from x,
-    preconditioned by ``precondition(r)`` (default: Jacobi, the inverse of
-    M's diagonal); stops when every column's residual is below rtol times
-    its initial one (or its right-hand side's norm times 1e-15)."""
-    if precondition is None:
-        d = M.diagonal()
-        inv = np.where(d > 0, 1.0 / np.where(d > 0, d, 1.0), 1.0)[:, None]
-
-        def precondition(r):
-            return inv * r
-    r = rhs - M @ x
-    stop = np.maximum(rtol * np.linalg.norm(r, axis=0), 1e-15 * np.linalg.norm(rhs, axis=0))
-    z = precondition(r)
-    p = z.copy()
-    rz = np.einsum("ij,ij->j", r, z)
-    for k in range(1, max_iter + 1):
-        if (np.linalg.norm(r, axis=0) <= stop).all():
-            return x, k - 1
-        q = M @ p
-        pq = np.einsum("ij,ij->j", p, q)
-        alpha = np.divide(rz, pq, out=np.zeros_like(rz), where=pq > 0)
-        x += alpha * p
-        r -= alpha * q
-        z = precondition(r)
-        rz_new = np.einsum("ij,ij->j", r, z)
-        beta = np.divide(rz_new, rz, out=np.zeros_like(rz), where=rz > 0)
-        p = z + beta * p
-        rz = rz_new
-    return x, max_iter
-
-
-class _Coupled:
-    """The tangent-distance normal matrix over the unknowns x0, y0, z0, x1, ...
-    (V row by row): A^T W A as 3x3 blocks (scipy BSR) plus ``shift`` (mu I,
-    and the fairness term c K on each coordinate), applied to one column;
-    ``precondition`` is block Jacobi (the inverses of the 3x3 diagonal
-    blocks)."""
-
-    def __init__(self, blocks: scipy.sparse.bsr_matrix, mu: float, K, c: float):
-        self.blocks, self.mu, self.K, self.c = blocks, mu, K, c
-        n = blocks.shape[0] // 3
-        rows = np.repeat(np.arange(n), np.diff(blocks.indptr))
-        on = blocks.indices == rows
-        diag = np.zeros((n, 3, 3))
-        diag[rows[on]] = blocks.data[on]
-        diag += mu * np.eye(3)
-        if K is not None:
-            diag += (c * K.diagonal())[:, None, None] * np.eye(3)
-        self.inverse = np.linalg.inv(diag)
-
-    def __matmul__(self, x: np.ndarray) -> np.ndarray:
-        out = self.blocks @ x[:, 0] + self.mu * x[:, 0]
-        if self.K is not None:
-            out += (self.c * (self.K @ x[:, 0].reshape(-1, 3))).ravel()
-        return out[:, None]
-
-    def precondition(self, r: np.ndarray) -> np.ndarray:
-        return np.einsum("nij,nj->ni", self.inverse, r[:, 0].reshape(-1, 3)).reshape(-1, 1)
-
-
 def _lspia(M: scipy.sparse.csr_matrix, rhs: np.ndarray, x: np.ndarray, rtol: float, max_iter: int):
     """LSPIA (Deng and Lin 2014) on the normal equations: x += D^-1 (rhs - M x),
     D the row sums of |M|. Without the fairness and proximal terms M = A^T A
@@ -401,63 +357,58 @@ def _lspia(M: scipy.sparse.csr_matrix, rhs: np.ndarray, x: np.ndarray, rtol: flo
     return x, max_iter
 
 
-def _normal_equations(A, points, normals, V, tangential: float, fairness: float, K, weights=None):
-    """The normal equations of one update: (M, rhs, mu) with M = A^T W A +
-    fairness m K + mu I, rhs = A^T W P + mu V, m the mean diagonal of A^T A
-    and mu = _PROXIMAL m. W_i = w_i I (tangential = 1: point distance, one
-    (n, n) CSR system for three columns) or W_i = w_i (tangential I + (1 -
-    tangential) n_i n_i^T) (a `_Coupled` system over the 3n unknowns; a point
-    whose normal is zero keeps W_i = w_i I); w_i the points' weights (1 when
-    None)."""
-    n = A.shape[1]
-    A = A.tocsr()
+def _row_weights(points, normals, tangential: float, weights=None):
+    """Each point's weight W_i in the fit and W_i p_i: W_i = w_i I (tangential
+    = 1: point distance; returned as (k, 1) w_i, or None when all are 1) or
+    W_i = w_i (tangential I + (1 - tangential) n_i n_i^T) (returned as (k, 6):
+    xx, xy, xz, yy, yz, zz; a point whose normal is zero keeps W_i = w_i I);
+    w_i the points' weights (1 when None)."""
     if tangential == 1.0:
         w = None if weights is None else np.ascontiguousarray(weights[:, None])
-        ip, ix, val = _core.normal_matrix(A.indptr, A.indices, A.data, n, w)
-        AtA = scipy.sparse.csr_matrix((val[:, 0], ix, ip), shape=(n, n))
-        mean_diag = float(AtA.diagonal().mean()) or 1.0
-        mu = _PROXIMAL * mean_diag
-        M = AtA + scipy.sparse.identity(n, format="csr") * mu
-        if K is not None:
-            M = M + (fairness * mean_diag) * K
-        wp = points if weights is None else weights[:, None] * points
-        return M.tocsr(), A.T @ wp + mu * V, mu
-    nrm = normals * (np.linalg.norm(normals, axis=1) > 0)[:, None]
-    flat = (nrm == 0).all(axis=1)
-    c_i = np.where(flat, 0.0, 1.0 - tangential)
-    w_i = np.where(flat, 1.0, tangential)
-    if weights is not None:
-        c_i, w_i = c_i * weights, w_i * weights
-    pairs = ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2))
-    wts = np.empty((len(nrm), 6))
-    for col, (a, b) in enumerate(pairs):
-        wts[:, col] = c_i * nrm[:, a] * nrm[:, b] + (w_i if a == b else 0.0)
-    ip, ix, val = _core.normal_matrix(A.indptr, A.indices, A.data, n, wts)
-    # the 3x3 block of each nonzero of A^T A, from its six distinct entries
-    blocks = scipy.sparse.bsr_matrix((val[:, [0, 1, 2, 1, 3, 4, 2, 4, 5]].reshape(-1, 3, 3), ix, ip),
-                                     shape=(3 * n, 3 * n))
-    mean_diag = float(val[:, [0, 3, 5]][ix == np.repeat(np.arange(n), np.diff(ip))].sum() / (3 * n)) or 1.0
+        return w, (points if weights is None else weights[:, None] * points)
+    return _core.blend_weights(np.ascontiguousarray(points), np.ascontiguousarray(normals), tangential,
+                               None if weights is None else np.ascontiguousarray(weights))
+
+
+def _normal_equations(A, points, normals, V, tangential: float, fairness: float, K, weights=None,
+                      method: str = DEFAULT_UPDATE):
+    """The normal equations of one update, (M, rhs): M = A^T W A + fairness m
+    K + mu I, rhs = A^T W P + mu V, m the mean diagonal of A^T W A and mu =
+    _PROXIMAL m, W_i as `_row_weights` gives them. For "cg" M is the core's
+    `NormalEquations` (the normal matrix stays in the core: with tangential =
+    1 one (n, n) matrix for the three coordinates, below 1 one system of 3x3
+    blocks over the 3n unknowns); for "lspia" (tangential = 1 only) a scipy
+    CSR matrix."""
+    n = A.shape[1]
+    A = A.tocsr()
+    w, wp = _row_weights(points, normals, tangential, weights)
+    if method == "cg":
+        k = None if K is None else (K.data, K.indices.astype(np.int32, copy=False),
+                                    K.indptr.astype(np.int32, copy=False))
+        M = _core.NormalEquations(A.indptr, A.indices, A.data, n, w, k, fairness, _PROXIMAL)
+        return M, A.T @ wp + M.mu * V
+    ip, ix, val = _core.normal_matrix(A.indptr, A.indices, A.data, n, w)
+    AtA = scipy.sparse.csr_matrix((val[:, 0], ix, ip), shape=(n, n))
+    mean_diag = float(AtA.diagonal().mean()) or 1.0
     mu = _PROXIMAL * mean_diag
-    # W_i p_i = w_i p_i + c_i n_i (n_i . p_i)
-    wp = w_i[:, None] * points + (c_i * np.einsum("ij,ij->i", nrm, points))[:, None] * nrm
-    rhs = A.T @ wp + mu * V
-    return _Coupled(blocks, mu, K, fairness * mean_diag), rhs, mu
+    M = AtA + scipy.sparse.identity(n, format="csr") * mu
+    if K is not None:
+        M = M + (fairness * mean_diag) * K
+    return M.tocsr(), A.T @ wp + mu * V
 
 
-def _update(M, rhs, V, method: str, tangential: float, solver_tol: float, solver_max_iter: int):
+def _update(M, rhs, V, method: str, solver_tol: float, solver_max_iter: int):
     """New control vertices from the normal equations: (V, solver iterations)."""
     if method == "lspia":
         return _lspia(M, rhs, V.copy(), solver_tol, solver_max_iter)
-    if tangential == 1.0:
-        return _pcg(M, rhs, V.copy(), solver_tol, solver_max_iter)
-    # the 3n unknowns x0, y0, z0, x1, ... in one system
-    x, used = _pcg(M, rhs.reshape(-1, 1), V.reshape(-1, 1).copy(), solver_tol, solver_max_iter, M.precondition)
-    return x.reshape(-1, 3), used
+    x, used, _ = M.solve(np.ascontiguousarray(rhs), V, solver_tol, solver_max_iter)
+    return x, used
 
 
 def approximate(points, cage_vertices, cage_faces, *, scheme: str = "auto", boundary: str = DEFAULT_BOUNDARY,
                 creases=None, corners=None, holes=None, iterations: int = 10, tol: float = 1e-3,
-                fairness: float = 0.0, tangential: float = 1.0, method: str = DEFAULT_UPDATE, solver_tol: float = 1e-3,
+                fairness: float = DEFAULT_FAIRNESS, tangential: Optional[float] = None,
+                method: str = DEFAULT_UPDATE, solver_tol: float = 1e-3,
                 solver_max_iter: int = 2000, grid: int = 4, newton_steps: int = 10, report_level: int = 2,
                 callback: Optional[Callable[[dict], object]] = None, weights=None, faces=None,
                 sampling: Optional[str] = None) -> ApproximationResult:
@@ -488,19 +439,23 @@ def approximate(points, cage_vertices, cage_faces, *, scheme: str = "auto", boun
         fall at all over three iterations.
     fairness : float >= 0
         Weight of the thin-plate fairness term V^T K V (the energy shared with
-        fair interpolation), relative to the mean diagonal of A^T A; 0 for
-        none.
-    tangential : float in [0, 1]
+        fair interpolation, `sorpia.fairness_matrix` with depth 0), relative
+        to the mean diagonal of A^T W A; 0 for none. The default, 3e-4, holds
+        the surface where few points hold the cage (a cage face that no point
+        reaches, thin parts, boundaries) and moves the fit little elsewhere;
+        with 0 the fit of points sampled on a cage's own limit surface
+        returns that cage exactly, with 3e-4 within about the fairness term's
+        pull.
+    tangential : float in [0, 1], optional
         Weight of the distance along the surface: 1 fits each point's full
         distance to its footpoint (point distance, three independent
-        coordinates); 0 its distance to the tangent plane there (tangent
-        distance, one (3n, 3n) system of 3x3 blocks, converging much faster
-        on clean data but ill-posed alone on scans); between, a blend (0.1
-        reaches a given RMS on scans in about a third of the iterations of
-        point distance). The default is 1: below it each iteration costs
-        more and, where few points hold a part of the cage (thin parts,
-        boundaries), the surface between the points strays farther from
-        them; docs/approximation.md has the measurements.
+        coordinates, converging slowly: the footpoints must slide along the
+        surface between updates); 0 its distance to the tangent plane there
+        (tangent distance, one (3n, 3n) system of 3x3 blocks, converging much
+        faster on clean data but ill-posed alone on scans); between, a blend.
+        None (the default): 0.1, or 1 with method="lspia". Below 1 the
+        surface between loosely held points strays farther unless the
+        fairness term holds it; docs/approximation.md has the measurements.
     method : {"cg", "lspia"}
         The update: conjugate gradients on the normal equations (default:
         the faster, bench/approximate_speed.py), or LSPIA's iteration (with
@@ -553,6 +508,8 @@ def approximate(points, cage_vertices, cage_faces, *, scheme: str = "auto", boun
     iterations = _count(iterations, "iterations", 1)
     tol = _nonnegative(tol, "tol")
     fairness = _nonnegative(fairness, "fairness")
+    if tangential is None:  # the blend for CG; LSPIA moves each coordinate on its own
+        tangential = 1.0 if method == "lspia" else DEFAULT_TANGENTIAL
     tangential = _nonnegative(tangential, "tangential")
     if tangential > 1:
         raise ParameterError(f"tangential = {tangential!r} must be in [0, 1]")
@@ -625,17 +582,19 @@ def approximate(points, cage_vertices, cage_faces, *, scheme: str = "auto", boun
         from .energy import fairness_matrix
 
         K = fairness_matrix(cage_faces, V.shape[0], scheme=scheme, boundary=boundary, creases=creases,
-                            corners=corners, holes=holes)
+                            corners=corners, holes=holes, depth=_FAIRNESS_DEPTH)
     stop_reason = "iterations"
     searched = 0  # the iteration after which every footpoint was last searched for afresh
     done = 0
     for k in range(1, iterations + 1):
         # The rows in face order: the points of a face share their columns, which the normal matrix reads once.
         order = np.argsort(face_ids, kind="stable")
-        A = fit.rows(face_ids[order], uv[order])
-        M, rhs, mu = fit._timed("normal", _normal_equations, A, points[order], normals[order], V, tangential,
-                                fairness, K, None if weights is None else weights[order])
-        V, used = fit._timed("solve", _update, M, rhs, V, method, tangential, solver_tol, solver_max_iter)
+        # The rows A (the largest array of a run) live only until the normal equations are formed from them.
+        M, rhs = fit._timed("normal", _normal_equations, fit.rows(face_ids[order], uv[order]), points[order],
+                            normals[order], V, tangential, fairness, K,
+                            None if weights is None else weights[order], method)
+        V, used = fit._timed("solve", _update, M, rhs, V, method, solver_tol, solver_max_iter)
+        del M, rhs
         surface.set_vertices(V)
         face_ids, uv, _, distances, normals = fit.footpoints((face_ids, uv))
         done = k
@@ -669,5 +628,5 @@ def approximate(points, cage_vertices, cage_faces, *, scheme: str = "auto", boun
                                distances=np.ldexp(distances, e), points=data, weights=weights, iterations=done,
                                stop_reason=stop_reason,
                                best_iteration=best_iteration, method=method,
-                               fairness=fairness, diagonal=float(np.ldexp(diagonal, e)),
+                               fairness=fairness, tangential=tangential, diagonal=float(np.ldexp(diagonal, e)),
                                history=history, timings=fit.timings)

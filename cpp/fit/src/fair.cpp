@@ -12,6 +12,7 @@
 #include "sorpia/errors.hpp"
 #include "sorpia/interrupt.hpp"
 #include "sorpia/limit_operator.hpp"
+#include "sorpia/pcg.hpp"
 #include "sorpia/solvers.hpp"
 
 namespace sorpia {
@@ -254,76 +255,31 @@ FairSolution solve_scaled(const Topology& topology, const Rules& rules, const Cs
   std::vector<double> r = kv;
   problem.restrict_to_free(r);
   for (double& ri : r) ri = -ri;
-  const auto precondition = [&](const std::vector<double>& res, std::vector<double>& z) {
-    z.resize(res.size());
-    for (std::size_t i = 0; i < n; ++i)
-      for (int c = 0; c < 3; ++c) z[3 * i + c] = diag[i] > 0.0 ? res[3 * i + c] / diag[i] : 0.0;
-  };
-  std::vector<double> z, p, q;
-  precondition(r, z);
-  p = z;
-  Col3 rz = dots(r, z);
-  std::array<bool, 3> active{};
-  for (int c = 0; c < 3; ++c) active[c] = rz[c] > 0.0;
+  // Jacobi: the inverse of diag(S^T K S), 0 on the target rows (they stay 0).
+  BlockDiagonal jacobi;
+  jacobi.scalars.resize(n);
+  for (std::size_t i = 0; i < n; ++i) jacobi.scalars[i] = diag[i] > 0.0 ? 1.0 / diag[i] : 0.0;
   out.setup_seconds = since(t_setup);
 
   const auto t_solve = Clock::now();
-  out.energies.push_back(e_now);
-  out.stop_reason = "max_iter";
-  for (long long k = 0;; ++k) {
-    if (!active[0] && !active[1] && !active[2]) {
-      out.stop_reason = "exact";
-      break;
+  // The energy tracked by the iteration: E_k = E_{k-1} minus each column's step's decrease; the stop rule is the
+  // relative change over the last energy_window iterations.
+  const auto stop = [&](const PcgProgress& progress) -> std::string {
+    if (progress.iteration > 0) {
+      for (const double d : progress.decrease) e_now -= d;
+      e_now = std::max(e_now, 0.0);
     }
-    const std::size_t w = energy_window(static_cast<long long>(out.energies.size()) - 1, options.window);
-    if (out.energies.size() > w && out.energies[out.energies.size() - 1 - w] - e_now <= options.tol * e_now) {
-      out.stop_reason = "converged";
-      break;
-    }
-    if (k == options.max_iter) break;
-    poll_interrupt();
-    problem.apply(p, q);
-    const Col3 pq = dots(p, q);
-    Col3 alpha{0.0, 0.0, 0.0};
-    for (int c = 0; c < 3; ++c) {
-      if (!active[c]) continue;
-      if (!(pq[c] > 0.0)) {  // no descent left along p (the semidefinite case, or rounding)
-        active[c] = false;
-        continue;
-      }
-      alpha[c] = rz[c] / pq[c];
-      e_now -= alpha[c] * rz[c];
-    }
-    // x += alpha p, r -= alpha q, z = the preconditioned r and r^T z, in one
-    // pass over the vectors (the same operations as one pass each).
-    Col3 rz_new{0.0, 0.0, 0.0};
-    for (std::size_t i = 0; i < n; ++i)
-      for (int c = 0; c < 3; ++c) {
-        const std::size_t ic = 3 * i + static_cast<std::size_t>(c);
-        x[ic] += alpha[c] * p[ic];
-        r[ic] -= alpha[c] * q[ic];
-        z[ic] = diag[i] > 0.0 ? r[ic] / diag[i] : 0.0;
-        rz_new[c] += r[ic] * z[ic];
-      }
-    Col3 beta{0.0, 0.0, 0.0};
-    std::array<bool, 3> update{};
-    for (int c = 0; c < 3; ++c) {
-      if (!active[c]) continue;
-      if (!(rz_new[c] > 0.0)) {
-        active[c] = false;
-        continue;
-      }
-      beta[c] = rz_new[c] / rz[c];
-      update[c] = true;
-      rz[c] = rz_new[c];
-    }
-    for (std::size_t i = 0; i < 3 * n; i += 3)
-      for (int c = 0; c < 3; ++c)
-        if (update[c]) p[i + c] = z[i + c] + beta[c] * p[i + c];
-    e_now = std::max(e_now, 0.0);
     out.energies.push_back(e_now);
-    out.iterations = k + 1;
-  }
+    const std::size_t w = energy_window(static_cast<long long>(out.energies.size()) - 1, options.window);
+    if (out.energies.size() > w && out.energies[out.energies.size() - 1 - w] - e_now <= options.tol * e_now)
+      return "converged";
+    return {};
+  };
+  const PcgResult run = pcg(
+      n, 3, false, [&](const std::vector<double>& pv, std::vector<double>& qv) { problem.apply(pv, qv); }, jacobi,
+      stop, x, r, options.max_iter, options.threads);
+  out.iterations = run.iterations;
+  out.stop_reason = run.stop_reason;
   out.seconds = since(t_solve);
 
   problem.expand(x, out.vertices, true);

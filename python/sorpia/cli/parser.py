@@ -8,7 +8,7 @@ from .. import __version__
 from .._validate import BOUNDARY_RULES, DEFAULT_BOUNDARY
 from .._plotting import FACE_BUDGET  # plotting imports matplotlib only when drawing
 from .common import CLI_SCHEMES, DISPLAY_ORDER
-from ..approximate import SAMPLINGS
+from ..approximate import DEFAULT_FAIRNESS, DEFAULT_TANGENTIAL, SAMPLINGS
 from .approximate import DEFAULT_SAMPLING, run_approximate
 from .compare import run_compare
 from .demo import run_demo
@@ -289,13 +289,13 @@ def build_parser() -> argparse.ArgumentParser:
                      f"likewise (default: {DEFAULT_SAMPLING}; a point cloud's points are always equally weighted)")
     app.add_argument("--method", choices=("cg", "lspia"), default="cg",
                      help="the update: cg = conjugate gradients on the normal equations, lspia = LSPIA's iteration")
-    app.add_argument("--tangential", type=_float_arg, default=1.0,
-                     help="weight of the distance along the surface: 1 = point distance (robust), 0 = distance to "
-                     "the tangent plane (ill-posed alone on scans); 0.1 reaches a given RMS in about a third of the "
-                     "iterations on clean, closed, evenly sampled scans, but the surface strays farther between "
-                     "loosely held points (default: 1)")
-    app.add_argument("--fairness", type=_float_arg, default=0.0,
-                     help="weight of the thin-plate fairness term, relative to the data term")
+    app.add_argument("--tangential", type=_float_arg, default=None,
+                     help="weight of the distance along the surface: 1 = point distance (slow to converge), 0 = "
+                     "distance to the tangent plane (ill-posed alone on scans), between a blend (default: "
+                     f"{DEFAULT_TANGENTIAL:g}; 1 with --method lspia)")
+    app.add_argument("--fairness", type=_float_arg, default=DEFAULT_FAIRNESS,
+                     help="weight of the thin-plate fairness term, relative to the data term: it holds the surface "
+                     "where few points hold the cage; 0 for none (default: %(default)r)")
     app.add_argument("--surface", metavar="SURF",
                      help="also write the fitted limit surface, refined --level times, every vertex at its exact "
                      "limit position")

@@ -13,9 +13,9 @@
 /// restricted to the target vertices are diagonal, and
 ///     V_t = (T_t - sum_{j != t} B_tj V_j) / B_tt
 /// eliminates them exactly: the energy becomes an unconstrained quadratic in
-/// the other (free) vertices, solved by conjugate gradients with Jacobi
-/// preconditioning (each column of V on its own, one product with K per
-/// iteration for all three). Whatever the iteration stops at, the targets are
+/// the other (free) vertices, solved by the fitting layer's conjugate
+/// gradients (sorpia::pcg) with Jacobi preconditioning (each column of V on
+/// its own, one product with K per iteration for all three). Whatever the iteration stops at, the targets are
 /// met to rounding.
 
 #include <cstddef>
@@ -37,15 +37,15 @@ struct FairOptions {
   /// how far the energy d iterations ago was above the minimum, less what is
   /// still to come: close to all of it where the energy falls fast (every
   /// vertex a target, where the reduced system is well conditioned), and the
-  /// window grows with the
-  /// iterations so that a slow iteration (few targets, a face metric) is
-  /// judged over up to `window`. Positive and finite.
+  /// window grows with the iterations so that a slow iteration (few targets,
+  /// a face metric) is judged over up to `window`. Positive and finite.
   double tol = 1e-6;
   /// The most iterations the change is measured over, >= 1.
   int window = 10;
   /// At most this many iterations, >= 1.
   long long max_iter = 2000;
-  /// Threads for the products with K (1..max_threads).
+  /// Threads for the products with K and the CG's vector updates (1..max_threads;
+  /// the vector updates use more than one only above 100,000 vertices).
   int threads = 1;
 };
 

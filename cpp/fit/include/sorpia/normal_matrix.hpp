@@ -1,14 +1,16 @@
 #pragma once
 /// @file normal_matrix.hpp
-/// The normal matrix A^T W A of a least-squares fit over the rows A of a
-/// limit surface at data points (approximation's linear systems), formed on
-/// the core's threads.
+/// The normal equations of a least-squares fit over the rows A of a limit
+/// surface at data points (approximation's linear systems): the normal
+/// matrix A^T W A, formed on the core's threads, and the system with a
+/// proximal and a fairness term, solved by the layer's PCG (pcg.hpp).
 
 #include <cstddef>
 #include <cstdint>
 #include <vector>
 
 #include "sorpia/limit.hpp"  // CsrMatrix
+#include "sorpia/pcg.hpp"
 
 namespace sorpia {
 
@@ -21,6 +23,15 @@ struct NormalMatrix {
   std::vector<double> values;         ///< (nnz, blocks) row-major
 };
 
+/// CSR rows held elsewhere (borrowed, not copied: e.g. numpy's arrays).
+struct CsrRows {
+  std::size_t n_rows = 0;
+  std::size_t n_cols = 0;
+  const std::int32_t* indptr = nullptr;   ///< n_rows + 1 entries
+  const std::int32_t* indices = nullptr;  ///< sorted and distinct within a row (relied on)
+  const double* data = nullptr;
+};
+
 /// A^T W A for rows A (k, n) and per-row weights: with `weight_count` 0 (W = I),
 /// 1 (a scalar w_r per row: sum_r w_r a_r a_r^T) or 6 (a symmetric 3x3 W_r per
 /// row, stored xx, xy, xz, yy, yz, zz: the six (n, n) blocks sum_r W_r[c] a_r
@@ -28,9 +39,64 @@ struct NormalMatrix {
 /// the 3n unknowns V). Entries the rows make structurally nonzero are stored
 /// (a zero from cancellation stays). Fastest with the rows ordered so that
 /// rows with the same columns (the points of one face) are consecutive: each
-/// such run is read in order, once per column it holds.
+/// such run is read in order, once per column it holds, for the entries on
+/// and above the diagonal (the rest mirrored).
 /// @param weights  (k, weight_count) row-major, or null when weight_count is 0
 /// @throws ParameterError for a weight count other than 0, 1 or 6
+NormalMatrix normal_matrix(const CsrRows& rows, const double* weights, int weight_count);
 NormalMatrix normal_matrix(const CsrMatrix& rows, const double* weights, int weight_count);
+
+/// The weights of the tangent-distance blend for normal_matrix: for each row
+/// r, W_r = w_r (t I + (1 - t) n_r n_r^T), n_r the unit normal at the point's
+/// footpoint (a zero or non-finite normal keeps W_r = w_r I), stored xx, xy,
+/// xz, yy, yz, zz into weights (k, 6), and W_r p_r into weighted_points (k, 3).
+/// @param row_weights  w_r (k), or null for all 1
+void blend_weights(const double* points, const double* normals, const double* row_weights, std::size_t k,
+                   double tangential, double* weights, double* weighted_points);
+
+/// The normal equations of one least-squares update of control vertices X
+/// (n, 3) row-major, with a proximal term mu |X - X_prev|^2 and a fairness
+/// term c tr(X^T K X):
+///     (N + mu I + c K) X = rhs,
+/// N = A^T W A from normal_matrix: with 1 value per entry the same matrix on
+/// each coordinate (three independent systems, one per column of X); with 6
+/// the 3x3 blocks of one system over the 3n unknowns x0, y0, z0, x1, ...
+/// (K on each coordinate). mu and c are given relative to N's mean diagonal.
+class NormalEquations {
+ public:
+  /// @param normal    N (blocks 1 or 6)
+  /// @param fairness_matrix  K, (n, n) symmetric positive semidefinite, or
+  ///                  empty (no rows) for none
+  /// @param fairness  c divided by mean_diagonal() (>= 0)
+  /// @param proximal  mu divided by mean_diagonal() (> 0 keeps the system
+  ///                  positive definite where no row reaches a vertex)
+  /// @throws ParameterError for K of another size or N with another
+  ///         number of values per entry
+  NormalEquations(NormalMatrix normal, CsrMatrix fairness_matrix, double fairness, double proximal);
+
+  std::size_t n() const { return n_.n; }
+  /// The mean of N's diagonal (with 6 values per entry: of its xx, yy and
+  /// zz entries), or 1 where it is 0.
+  double mean_diagonal() const { return mean_diagonal_; }
+  double mu() const { return mu_; }
+
+  /// out = (N + mu I + c K) x, both (n, 3) row-major, on up to `threads`
+  /// threads where the matrix is large enough to pay.
+  void apply(const double* x, double* out, int threads = 1) const;
+
+  /// PCG (sorpia::pcg) from x (in: the start, out: the result): Jacobi with
+  /// 1 value per entry, block Jacobi (the inverses of the 3x3 diagonal
+  /// blocks) with 6. Stops when every system's residual norm is below rtol
+  /// times its value at the start (or 1e-15 times its right-hand side's), or
+  /// after max_iter iterations. Products with the matrix on up to `threads`
+  /// threads (0: the processors this process may run on), where the matrix
+  /// is large enough to pay.
+  PcgResult solve(const double* rhs, double* x, double rtol, long long max_iter, int threads) const;
+
+ private:
+  NormalMatrix n_;
+  CsrMatrix k_;
+  double mean_diagonal_ = 1.0, mu_ = 0.0, c_ = 0.0;
+};
 
 }  // namespace sorpia
