@@ -57,6 +57,93 @@ def test_footpoints_of_points_on_the_surface_are_those_points(case):
     np.testing.assert_allclose(np.linalg.norm(nrm, axis=1), 1.0, atol=1e-12)
 
 
+FOOTPOINT_CASES = {
+    "loop-irregular": (shapes.irregular(300), "loop"),  # valences 3 to 12: Bfr's irregular patches everywhere
+    "loop-boundary": (shapes.grid(5, 5), "loop"),
+    "cc-polygons": (shapes.polygon_torus(8, 5), "catmull-clark"),
+}
+
+
+def noisy_points(surface: LimitSurface, faces, k: int, noise: float, seed: int):
+    """k points off the limit surface: random limit points moved by Gaussian noise of `noise` times the
+    bounding-box diagonal."""
+    _, _, P = sample_surface(surface, faces, k, seed=seed)
+    diag = np.linalg.norm(P.max(0) - P.min(0))
+    return P + noise * diag * np.random.default_rng(seed + 1).standard_normal(P.shape)
+
+
+@pytest.mark.parametrize("case", sorted(FOOTPOINT_CASES))
+def test_footpoints_do_not_depend_on_the_order_or_company_of_the_points(case):
+    # Each point's search is its own: the core holds the points' states in the order of their faces, so a
+    # shuffled input, or a point alone, must give each point the same footpoint, bit for bit.
+    (V, F), scheme = FOOTPOINT_CASES[case]
+    s = LimitSurface(V, F, scheme=scheme)
+    P = noisy_points(s, F, 600, 0.02, seed=5)
+    perm = np.random.default_rng(6).permutation(len(P))
+    first = _core.closest_points(s._surface, s._topology, P, 4, 10)
+    shuffled = _core.closest_points(s._surface, s._topology, P[perm], 4, 10)
+    for a, b in zip(first, shuffled):
+        np.testing.assert_array_equal(a[perm], b)
+    # Re-projection after the control vertices moved, from the footpoints found above.
+    s.set_vertices(V + 0.01 * np.random.default_rng(7).standard_normal(V.shape))
+    again = _core.refine_footpoints(s._surface, s._topology, P, first[0], first[1], 10)
+    again_shuffled = _core.refine_footpoints(s._surface, s._topology, P[perm], first[0][perm], first[1][perm], 10)
+    for a, b in zip(again, again_shuffled):
+        np.testing.assert_array_equal(a[perm], b)
+    for i in (0, 17, 599):
+        alone = _core.refine_footpoints(s._surface, s._topology, P[i:i + 1], first[0][i:i + 1], first[1][i:i + 1], 10)
+        for a, b in zip(again, alone):
+            np.testing.assert_array_equal(a[i:i + 1], b)
+
+
+@pytest.mark.parametrize("case", sorted(FOOTPOINT_CASES))
+def test_footpoints_are_closest_points_to_rounding(case):
+    # Independent references: (1) brute force over the limit surface's level-4 tessellation vertices (exact limit
+    # points, so the closest point of the surface is at most that far); (2) the first-order condition: the
+    # residual is normal to the surface, checked with evaluate()'s derivatives; (3) a second refinement from the
+    # footpoints found lowers no distance by more than rounding (the search stops where its next step is below
+    # 1e-11 in (u, v), or where a step failed whose predicted gain was rounding: 8 epsilon times the size of the
+    # coordinates; twice that here). The points lie within 1e-4 of the
+    # diagonal of the surface, where the search finds the global minimum (at 1e-3, on the rough irregular mesh,
+    # one point in 400 stops in a local minimum: a closer part of the surface lies between its grid samples).
+    (V, F), scheme = FOOTPOINT_CASES[case]
+    s = LimitSurface(V, F, scheme=scheme)
+    P = noisy_points(s, F, 400, 1e-4, seed=8)
+    fid, uv, pos, d, nrm = _core.closest_points(s._surface, s._topology, P, 4, 20)
+    Vt, _ = s.tessellate(4)
+    brute = np.sqrt(((P[:, None, :] - Vt[None, :, :]) ** 2).sum(-1).min(axis=1))
+    scale = np.abs(pos).sum(axis=1) + d
+    eps = np.finfo(float).eps
+    assert np.all(d <= brute + 16 * eps * scale)
+    p2, du, dv, _ = s.evaluate(fid, uv, derivatives=True)
+    np.testing.assert_array_equal(p2, pos)
+    r = P - pos
+    # Stationary: the residual's tangential components vanish, relative to |r| |S_u|. Near an extraordinary
+    # vertex Bfr's derivatives only approximate the positions' (its Gregory patch; normals within a few
+    # hundredths of a radian, docs of LimitSurface.evaluate), so the bound is that angle there. Footpoints on
+    # a face's edge are left out: on the mesh's boundary the closest point need not be stationary.
+    frac = uv - np.floor(uv)  # Catmull-Clark sub-faces: local coordinates 2 (uv - corner)
+    inside = (np.minimum(frac, 1 - frac).min(axis=1) > 1e-9) if scheme != "loop" else \
+        (np.minimum(uv.min(axis=1), 1 - uv.sum(axis=1)) > 1e-9)
+    assert inside.mean() > 0.8
+    for t in (du[inside], dv[inside]):
+        ri = r[inside]
+        assert np.all(np.abs((ri * t).sum(1)) <= 0.05 * np.linalg.norm(ri, axis=1) * np.linalg.norm(t, axis=1))
+    again = _core.refine_footpoints(s._surface, s._topology, P, fid, uv, 20)
+    assert np.all(again[3] >= d - 16 * eps * scale)
+    assert np.all(again[3] <= d)  # a refinement never increases a distance
+
+
+def test_refine_footpoints_refuses_faces_out_of_range():
+    V, F = shapes.icosphere(1)
+    s = LimitSurface(V, F)
+    P = V[:3] * 1.1
+    for bad in (-1, len(F)):
+        fid = np.array([0, bad, 1], np.int32)
+        with pytest.raises(sorpia.ParameterError, match=rf"face_ids\[1\] = {bad} is out of range"):
+            _core.refine_footpoints(s._surface, s._topology, P, fid, np.full((3, 2), 0.25), 10)
+
+
 def point_triangle_distance(p, a, b, c):
     """Exact distance from each point p (k, 3) to each triangle (a, b, c) (t, 3): (k, t), by the closest point
     on the triangle (Ericson, Real-Time Collision Detection 5.1.5), vectorised."""

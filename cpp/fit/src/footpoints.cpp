@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <memory>
 #include <string>
 #include <unordered_map>
 #include <utility>
@@ -459,6 +460,246 @@ void grid_samples(const Domains& dom, int r, std::vector<std::int32_t>& face_ids
 
 }  // namespace
 
+namespace {
+// A footpoint is final when its next step in (u, v) is below this (a face's
+// domain has side 1): its distance is then exact to about this times the
+// surface's size.
+constexpr double kUvTolerance = 1e-11;
+// The rounding of a computed distance, in units of epsilon times the size of
+// the surface point's coordinates (|p|_1 + distance).
+constexpr double kRounding = 8.0;
+
+// Limit points known where the search starts (closest_points' grid samples,
+// evaluated with their derivatives): point i starts at sample nearest[i],
+// whose position and first derivatives are those of its (face, u, v), so
+// that its first evaluation is already made. refine releases them once
+// read.
+struct KnownStart {
+  std::vector<std::int64_t> nearest;
+  std::vector<double> positions, du, dv;  // per sample, (3) each
+};
+
+// One point's state in refine: the point, its current face, chart and
+// local coordinates, and the best point so far (face, chart, local
+// coordinates, position, derivatives, distance). Trust region: a step's
+// largest (u, v) component is at most `radius`, which starts at one grid
+// spacing, doubles after a step that lowers the distance and shrinks to a
+// tenth of the failed step after one that does not.
+struct Slot {
+  double x[3];
+  double ab[2], best_ab[2];
+  double best_p[3], best_du[3], best_dv[3];
+  double best_dist;
+  double radius;
+  std::size_t point;  // its index in the input
+  std::int32_t face, chart, best_face, best_chart;
+  int steps;           // evaluations made
+  std::uint8_t fresh;  // the current point is not evaluated yet
+  std::uint8_t again;  // to be taken on in the next round
+  // The decrease of the distance that the Gauss-Newton model predicted for
+  // the step taken last; -1 for a step the trust region cut.
+  float predicted;
+};
+
+// refine_footpoints, optionally from known start points. The points' states
+// are held in one array in face order, so that the points of the face being
+// visited lie together in memory (and, one block, it goes back to the system
+// as a whole when freed).
+void refine(const LimitSurface& surface, const Topology& topology, const double* points, std::size_t n,
+            const FootpointOptions& options, Footpoints& fp, KnownStart* known) {
+  if (fp.face_ids.size() != n || fp.uv.size() != 2 * n)
+    throw ParameterError("footpoints hold " + std::to_string(fp.face_ids.size()) + " faces and " +
+                         std::to_string(fp.uv.size() / 2) + " parameters for " + std::to_string(n) + " points");
+  const Domains dom(topology, surface.scheme(), surface.tags().holes);
+  const auto m = static_cast<std::int32_t>(topology.n_faces());
+  for (std::size_t i = 0; i < n; ++i)
+    if (fp.face_ids[i] < 0 || fp.face_ids[i] >= m)
+      throw ParameterError("face_ids[" + std::to_string(i) + "] = " + std::to_string(fp.face_ids[i]) +
+                           " is out of range [0, " + std::to_string(m) + ")");
+  const std::unique_ptr<Slot[]> slots(new Slot[n]);  // each field set below
+  {
+    // The points in the order of their starting faces (a counting sort).
+    std::vector<std::size_t> start(static_cast<std::size_t>(m) + 1, 0);
+    for (std::size_t i = 0; i < n; ++i) ++start[static_cast<std::size_t>(fp.face_ids[i]) + 1];
+    for (std::size_t f = 1; f < start.size(); ++f) start[f] += start[f - 1];
+    for (std::size_t i = 0; i < n; ++i) slots[start[static_cast<std::size_t>(fp.face_ids[i])]++].point = i;
+  }
+  // The Gauss-Newton step at q's best point, in (u, v), within the trust
+  // region: false when the point is final, else q's current point has moved
+  // (fresh, possibly into another face).
+  const auto step = [&](Slot& q) -> bool {
+    if (q.steps > options.max_steps || q.best_dist == 0.0) return false;
+    const double* x = q.x;
+    const double* bp = q.best_p;
+    const double* su = q.best_du;
+    const double* sv = q.best_dv;
+    const double br[3] = {x[0] - bp[0], x[1] - bp[1], x[2] - bp[2]};
+    const double a11 = su[0] * su[0] + su[1] * su[1] + su[2] * su[2];
+    const double a12 = su[0] * sv[0] + su[1] * sv[1] + su[2] * sv[2];
+    const double a22 = sv[0] * sv[0] + sv[1] * sv[1] + sv[2] * sv[2];
+    const double g1 = su[0] * br[0] + su[1] * br[1] + su[2] * br[2];
+    const double g2 = sv[0] * br[0] + sv[1] * br[1] + sv[2] * br[2];
+    const double m11 = a11 * (1.0 + 1e-12) + 1e-300, m22 = a22 * (1.0 + 1e-12) + 1e-300;
+    const double det = m11 * m22 - a12 * a12;
+    if (!(det > 0.0) || !std::isfinite(det)) return false;
+    double d[2] = {(m22 * g1 - a12 * g2) / det, (m11 * g2 - a12 * g1) / det};
+    // Converged: a step below the tolerance in (u, v). (Near extraordinary
+    // vertices Bfr's derivatives are approximate, so the steps there need
+    // not vanish: the trust region shrinks to the tolerance instead.)
+    const double len = std::max(std::abs(d[0]), std::abs(d[1]));
+    if (!(len > kUvTolerance)) return false;
+    // The decrease of the distance that the Gauss-Newton model predicts
+    // for the full step (g . d / 2 over the distance); -1 when the trust
+    // region cuts the step.
+    q.predicted = len > q.radius ? -1.0f : static_cast<float>(0.5 * (g1 * d[0] + g2 * d[1]) / q.best_dist);
+    if (len > q.radius) d[0] *= q.radius / len, d[1] *= q.radius / len;
+    q.radius = std::min(q.radius, len);  // a failure shrinks the step taken
+    if (dom.kind(q.face) == Kind::Sub) d[0] *= 2.0, d[1] *= 2.0;  // local = 2 (u, v)
+    std::int32_t f = q.face;
+    int c = q.chart;
+    if (!move(dom, f, c, q.ab, d)) return false;
+    q.face = f;
+    q.chart = c;
+    q.fresh = 1;
+    return true;
+  };
+  const double radius0 = 1.0 / std::max(1, options.grid > 0 ? options.grid : 4);
+  const int tasks = task_count(n, 16384);
+  detail::for_each_index(tasks > 1, tasks, n, [&](std::size_t s) {
+    Slot& q = slots[s];
+    const std::size_t i = q.point;
+    std::copy_n(points + 3 * i, 3, q.x);
+    q.face = q.best_face = fp.face_ids[i];
+    q.chart = q.best_chart = dom.from_uv(q.face, &fp.uv[2 * i], q.ab);
+    std::copy_n(q.ab, 2, q.best_ab);
+    q.radius = radius0;
+    q.again = 0;
+    q.predicted = -1.0f;
+    if (known == nullptr) {
+      std::fill_n(q.best_p, 3, 0.0);
+      std::fill_n(q.best_du, 3, 0.0);
+      std::fill_n(q.best_dv, 3, 0.0);
+      q.best_dist = std::numeric_limits<double>::infinity();
+      q.steps = 0;
+      q.fresh = 1;
+      return;
+    }
+    // The first evaluation, made: as run() below takes it.
+    const auto k = static_cast<std::size_t>(known->nearest[i]);
+    const double* p = &known->positions[3 * k];
+    const double r[3] = {q.x[0] - p[0], q.x[1] - p[1], q.x[2] - p[2]};
+    q.best_dist = std::sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
+    std::copy_n(p, 3, q.best_p);
+    std::copy_n(&known->du[3 * k], 3, q.best_du);
+    std::copy_n(&known->dv[3 * k], 3, q.best_dv);
+    q.radius = std::min(2.0 * q.radius, 1.0);
+    q.steps = 1;
+    q.fresh = 0;
+    // Its first step too: a point whose step crosses into another face is
+    // then taken in that face in the first round.
+    step(q);
+  });
+  // The inputs are in the slots now.
+  if (known != nullptr) *known = KnownStart{};
+  std::vector<std::int32_t>().swap(fp.face_ids);
+  std::vector<double>().swap(fp.uv);
+  // Each round visits the faces the pending points are in, and runs each
+  // point's steps there (the face's patch prepared once) until the point is
+  // done or crosses into another face, where the next round takes it on.
+  const auto run = [&](Slot& q, std::int32_t f_visit, const LimitSurface::FaceEvaluation& evaluate) {
+    const double* x = q.x;
+    for (;;) {
+      if (q.fresh) {
+        if (q.steps > options.max_steps) return;
+        ++q.steps;
+        double uv[2], p[3], du[3], dv[3];
+        dom.to_uv(f_visit, q.chart, q.ab[0], q.ab[1], uv);
+        evaluate(uv, p, du, dv);
+        const double r[3] = {x[0] - p[0], x[1] - p[1], x[2] - p[2]};
+        const double dist = std::sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
+        // A point across an edge (a hop) starts at the surface point it left:
+        // as good as the best within rounding, and accepted so that the next
+        // step is taken in the new face.
+        const double scale = std::abs(p[0]) + std::abs(p[1]) + std::abs(p[2]) + q.best_dist;
+        const bool hopped = (f_visit != q.best_face || q.chart != q.best_chart) && dist <= q.best_dist + 1e-12 * scale;
+        if (dist < q.best_dist || hopped) {
+          q.best_dist = dist;
+          std::copy_n(p, 3, q.best_p);
+          std::copy_n(du, 3, q.best_du);
+          std::copy_n(dv, 3, q.best_dv);
+          q.best_face = f_visit;
+          q.best_chart = q.chart;
+          std::copy_n(q.ab, 2, q.best_ab);
+          q.radius = std::min(2.0 * q.radius, 1.0);
+        } else {
+          // No better: back to the best point, a smaller region.
+          q.radius *= 0.1;
+          q.face = q.best_face;
+          q.chart = q.best_chart;
+          std::copy_n(q.best_ab, 2, q.ab);
+          if (q.radius < kUvTolerance) return;
+          // A failed full Gauss-Newton step whose predicted decrease of the
+          // distance is within the distance's rounding: a shorter step's
+          // decrease would be rounding too, so the best point is final.
+          if (q.predicted >= 0.0f && q.predicted <= kRounding * std::numeric_limits<double>::epsilon() * scale) return;
+          if (q.best_face != f_visit) {  // the best is in another face: the next round steps from there
+            q.fresh = 0;
+            q.again = 1;
+            return;
+          }
+        }
+      }
+      if (!step(q)) return;
+      if (q.face != f_visit) {  // across an edge: the next round
+        q.again = 1;
+        return;
+      }
+    }
+  };
+  std::vector<std::size_t> pending;
+  pending.reserve(n);
+  for (std::size_t s = 0; s < n; ++s)
+    if (slots[s].fresh) pending.push_back(s);
+  std::vector<std::int32_t> pending_faces;
+  while (!pending.empty()) {
+    pending_faces.resize(pending.size());
+    for (std::size_t j = 0; j < pending.size(); ++j) pending_faces[j] = slots[pending[j]].face;
+    surface.visit_faces(pending_faces.data(), pending.size(),
+                        [&](std::int32_t f_visit, const std::size_t* first, const std::size_t* last,
+                            const LimitSurface::FaceEvaluation& evaluate) {
+                          for (const std::size_t* it = first; it != last; ++it)
+                            run(slots[pending[*it]], f_visit, evaluate);
+                        });
+    std::size_t w = 0;
+    for (const std::size_t s : pending)
+      if (slots[s].again) {
+        slots[s].again = 0;
+        pending[w++] = s;
+      }
+    pending.resize(w);
+    poll_interrupt();
+  }
+  std::vector<std::size_t>().swap(pending);
+  std::vector<std::int32_t>().swap(pending_faces);
+  // Back in input order, at the best points.
+  fp.face_ids.resize(n);
+  fp.uv.resize(2 * n);
+  fp.positions.resize(3 * n);
+  fp.distances.resize(n);
+  fp.normals.resize(3 * n);
+  detail::for_each_index(tasks > 1, tasks, n, [&](std::size_t s) {
+    const Slot& q = slots[s];
+    const std::size_t i = q.point;
+    fp.face_ids[i] = q.best_face;
+    dom.to_uv(q.best_face, q.best_chart, q.best_ab[0], q.best_ab[1], &fp.uv[2 * i]);
+    std::copy_n(q.best_p, 3, &fp.positions[3 * i]);
+    fp.distances[i] = q.best_dist;
+    detail::unit_normal(q.best_du, q.best_dv, &fp.normals[3 * i]);
+  });
+}
+
+}  // namespace
+
 Footpoints closest_points(const LimitSurface& surface, const Topology& topology, const double* points, std::size_t n,
                           const FootpointOptions& options) {
   if (options.grid < 1 || options.grid > 64)
@@ -468,179 +709,37 @@ Footpoints closest_points(const LimitSurface& surface, const Topology& topology,
   std::vector<double> sample_uv;
   grid_samples(dom, options.grid, sample_faces, sample_uv);
   if (sample_faces.empty()) throw ParameterError("the surface has no face outside its holes");
-  std::vector<double> sample_points(3 * sample_faces.size());
-  surface.evaluate(sample_faces.data(), sample_uv.data(), sample_faces.size(), sample_points.data(), nullptr,
-                   nullptr, nullptr);
+  const std::size_t k = sample_faces.size();
+  KnownStart known;
+  known.positions.resize(3 * k);
+  known.du.resize(3 * k);
+  known.dv.resize(3 * k);
+  surface.evaluate(sample_faces.data(), sample_uv.data(), k, known.positions.data(), known.du.data(),
+                   known.dv.data(), nullptr);
   Footpoints fp;
   fp.face_ids.resize(n);
   fp.uv.resize(2 * n);
+  known.nearest.resize(n);
   {
-    const PointIndex index(sample_points.data(), sample_faces.size());
-    std::vector<std::int64_t> nearest(n);
+    const PointIndex index(known.positions.data(), k);
     std::vector<double> dist(n);
-    index.nearest(points, n, nearest.data(), dist.data());
-    for (std::size_t i = 0; i < n; ++i) {
-      const auto s = static_cast<std::size_t>(nearest[i]);
-      fp.face_ids[i] = sample_faces[s];
-      fp.uv[2 * i] = sample_uv[2 * s];
-      fp.uv[2 * i + 1] = sample_uv[2 * s + 1];
-    }
+    index.nearest(points, n, known.nearest.data(), dist.data());
   }
-  refine_footpoints(surface, topology, points, n, options, fp);
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto s = static_cast<std::size_t>(known.nearest[i]);
+    fp.face_ids[i] = sample_faces[s];
+    fp.uv[2 * i] = sample_uv[2 * s];
+    fp.uv[2 * i + 1] = sample_uv[2 * s + 1];
+  }
+  std::vector<std::int32_t>().swap(sample_faces);
+  std::vector<double>().swap(sample_uv);
+  refine(surface, topology, points, n, options, fp, &known);
   return fp;
 }
 
-namespace {
-// A footpoint is final when its next step in (u, v) is below this (a face's
-// domain has side 1): its distance is then exact to about this times the
-// surface's size.
-constexpr double kUvTolerance = 1e-11;
-// The rounding of a computed distance, in units of epsilon times the size of
-// the surface point's coordinates (|p|_1 + distance).
-constexpr double kRounding = 8.0;
-}  // namespace
-
 void refine_footpoints(const LimitSurface& surface, const Topology& topology, const double* points, std::size_t n,
                        const FootpointOptions& options, Footpoints& fp) {
-  if (fp.face_ids.size() != n || fp.uv.size() != 2 * n)
-    throw ParameterError("footpoints hold " + std::to_string(fp.face_ids.size()) + " faces and " +
-                         std::to_string(fp.uv.size() / 2) + " parameters for " + std::to_string(n) + " points");
-  const Domains dom(topology, surface.scheme(), surface.tags().holes);
-  fp.positions.assign(3 * n, 0.0);
-  fp.distances.assign(n, std::numeric_limits<double>::infinity());
-  // Per point: the current chart and local coordinates, the best point so
-  // far with its derivatives, and the damping.
-  std::vector<std::int32_t> chart(n);
-  // Trust region: a step's largest (u, v) component is at most radius[i],
-  // which starts at one grid spacing, doubles after a step that lowers the
-  // distance and shrinks to a tenth of the failed step after one that does not.
-  std::vector<double> ab(2 * n), best_du(3 * n), best_dv(3 * n),
-      radius(n, 1.0 / std::max(1, options.grid > 0 ? options.grid : 4));
-  std::vector<std::int32_t> best_face(fp.face_ids), best_chart(n);
-  std::vector<double> best_ab;
-  for (std::size_t i = 0; i < n; ++i) chart[i] = best_chart[i] = dom.from_uv(fp.face_ids[i], &fp.uv[2 * i], &ab[2 * i]);
-  best_ab = ab;
-  // Each round visits the faces the pending points are in, and runs each
-  // point's steps there (the face's patch prepared once) until the point is
-  // done or crosses into another face, where the next round takes it on.
-  std::vector<int> steps(n, 0);
-  std::vector<float> predicted(n, -1.0f);  // of the last step taken (below)
-  std::vector<std::uint8_t> fresh(n, 1);  // the current point is not evaluated yet
-  std::vector<std::int32_t> pending(n);
-  for (std::size_t i = 0; i < n; ++i) pending[i] = static_cast<std::int32_t>(i);
-  std::vector<std::uint8_t> again(n, 0);
-  std::vector<std::int32_t> pending_faces;
-  const auto run = [&](std::size_t i, std::int32_t face, const LimitSurface::FaceEvaluation& evaluate) {
-    const double* x = points + 3 * i;
-    for (;;) {
-      if (fresh[i]) {
-        if (steps[i] > options.max_steps) return;
-        ++steps[i];
-        double uv[2], p[3], du[3], dv[3];
-        dom.to_uv(face, chart[i], ab[2 * i], ab[2 * i + 1], uv);
-        evaluate(uv, p, du, dv);
-        const double r[3] = {x[0] - p[0], x[1] - p[1], x[2] - p[2]};
-        const double dist = std::sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
-        // A point across an edge (a hop) starts at the surface point it left:
-        // as good as the best within rounding, and accepted so that the next
-        // step is taken in the new face.
-        const double scale = std::abs(p[0]) + std::abs(p[1]) + std::abs(p[2]) + fp.distances[i];
-        const bool hopped =
-            (face != best_face[i] || chart[i] != best_chart[i]) && dist <= fp.distances[i] + 1e-12 * scale;
-        if (dist < fp.distances[i] || hopped) {
-          fp.distances[i] = dist;
-          std::copy_n(p, 3, &fp.positions[3 * i]);
-          std::copy_n(du, 3, &best_du[3 * i]);
-          std::copy_n(dv, 3, &best_dv[3 * i]);
-          best_face[i] = face;
-          best_chart[i] = chart[i];
-          best_ab[2 * i] = ab[2 * i];
-          best_ab[2 * i + 1] = ab[2 * i + 1];
-          radius[i] = std::min(2.0 * radius[i], 1.0);
-        } else {
-          // No better: back to the best point, a smaller region.
-          radius[i] *= 0.1;
-          fp.face_ids[i] = best_face[i];
-          chart[i] = best_chart[i];
-          ab[2 * i] = best_ab[2 * i];
-          ab[2 * i + 1] = best_ab[2 * i + 1];
-          if (radius[i] < kUvTolerance) return;
-          // A failed full Gauss-Newton step whose predicted decrease of the
-          // distance is within the distance's rounding: a shorter step's
-          // decrease would be rounding too, so the best point is final.
-          if (predicted[i] >= 0.0 && predicted[i] <= kRounding * std::numeric_limits<double>::epsilon() * scale)
-            return;
-          if (best_face[i] != face) {  // the best is in another face: the next round steps from there
-            fresh[i] = 0;
-            again[i] = 1;
-            return;
-          }
-        }
-      }
-      if (steps[i] > options.max_steps || fp.distances[i] == 0.0) return;
-      // The Gauss-Newton step at the best point, in (u, v), within the trust region.
-      const double* bp = &fp.positions[3 * i];
-      const double* su = &best_du[3 * i];
-      const double* sv = &best_dv[3 * i];
-      const double br[3] = {x[0] - bp[0], x[1] - bp[1], x[2] - bp[2]};
-      const double a11 = su[0] * su[0] + su[1] * su[1] + su[2] * su[2];
-      const double a12 = su[0] * sv[0] + su[1] * sv[1] + su[2] * sv[2];
-      const double a22 = sv[0] * sv[0] + sv[1] * sv[1] + sv[2] * sv[2];
-      const double g1 = su[0] * br[0] + su[1] * br[1] + su[2] * br[2];
-      const double g2 = sv[0] * br[0] + sv[1] * br[1] + sv[2] * br[2];
-      const double m11 = a11 * (1.0 + 1e-12) + 1e-300, m22 = a22 * (1.0 + 1e-12) + 1e-300;
-      const double det = m11 * m22 - a12 * a12;
-      if (!(det > 0.0) || !std::isfinite(det)) return;
-      double d[2] = {(m22 * g1 - a12 * g2) / det, (m11 * g2 - a12 * g1) / det};
-      // Converged: a step below the tolerance in (u, v). (Near extraordinary
-      // vertices Bfr's derivatives are approximate, so the steps there need
-      // not vanish: the trust region shrinks to the tolerance instead.)
-      const double len = std::max(std::abs(d[0]), std::abs(d[1]));
-      if (!(len > kUvTolerance)) return;
-      // The decrease of the distance that the Gauss-Newton model predicts
-      // for the full step (g . d / 2 over the distance); -1 when the trust
-      // region cuts the step.
-      predicted[i] = len > radius[i] ? -1.0f : static_cast<float>(0.5 * (g1 * d[0] + g2 * d[1]) / fp.distances[i]);
-      if (len > radius[i]) d[0] *= radius[i] / len, d[1] *= radius[i] / len;
-      radius[i] = std::min(radius[i], len);  // a failure shrinks the step taken
-      if (dom.kind(fp.face_ids[i]) == Kind::Sub) d[0] *= 2.0, d[1] *= 2.0;  // local = 2 (u, v)
-      std::int32_t f = fp.face_ids[i];
-      int c = chart[i];
-      if (!move(dom, f, c, &ab[2 * i], d)) return;
-      fp.face_ids[i] = f;
-      chart[i] = c;
-      fresh[i] = 1;
-      if (f != face) {  // across an edge: the next round
-        again[i] = 1;
-        return;
-      }
-    }
-  };
-  while (!pending.empty()) {
-    pending_faces.resize(pending.size());
-    for (std::size_t j = 0; j < pending.size(); ++j) pending_faces[j] = fp.face_ids[static_cast<std::size_t>(pending[j])];
-    surface.visit_faces(pending_faces.data(), pending.size(),
-                        [&](std::int32_t face, const std::size_t* first, const std::size_t* last,
-                            const LimitSurface::FaceEvaluation& evaluate) {
-                          for (const std::size_t* it = first; it != last; ++it)
-                            run(static_cast<std::size_t>(pending[*it]), face, evaluate);
-                        });
-    std::size_t w = 0;
-    for (const std::int32_t i : pending)
-      if (again[static_cast<std::size_t>(i)]) {
-        again[static_cast<std::size_t>(i)] = 0;
-        pending[w++] = i;
-      }
-    pending.resize(w);
-    poll_interrupt();
-  }
-  fp.face_ids.swap(best_face);
-  // The best point's (u, v) (a point never evaluated keeps its own).
-  for (std::size_t i = 0; i < n; ++i)
-    if (fp.distances[i] < std::numeric_limits<double>::infinity())
-      dom.to_uv(fp.face_ids[i], best_chart[i], best_ab[2 * i], best_ab[2 * i + 1], &fp.uv[2 * i]);
-  fp.normals.assign(3 * n, 0.0);
-  for (std::size_t i = 0; i < n; ++i) detail::unit_normal(&best_du[3 * i], &best_dv[3 * i], &fp.normals[3 * i]);
+  refine(surface, topology, points, n, options, fp, nullptr);
 }
 
 }  // namespace sorpia

@@ -72,7 +72,8 @@ struct FootpointOptions {
 
 /// The closest point of the limit surface to each of n points: start at the
 /// nearest of a grid of limit points with known (face, u, v) (a k-d tree over
-/// the grid), then refine_footpoints.
+/// the grid), then refine_footpoints (from the grid sample's position and
+/// derivatives, evaluated with the grid).
 /// @param surface   the limit surface (its current control vertices)
 /// @param topology  the surface's topology (faces and their sizes)
 /// @param points    row-major (n, 3), finite
@@ -86,7 +87,10 @@ Footpoints closest_points(const LimitSurface& surface, const Topology& topology,
 /// trust region (one grid spacing at the start), a step never increasing
 /// the distance. A point is final when its next step is below 1e-11 in
 /// (u, v), or when a full (uncut) step failed although the model predicted a
-/// decrease of the distance no larger than the distance's rounding. A step that
+/// decrease of the distance no larger than the distance's rounding. Each
+/// point's result depends on that point alone (not on the others or
+/// their order). A face index out of range is refused (ParameterError,
+/// naming it). A step that
 /// leaves the face's domain stops on its edge and, where a face lies across
 /// that edge (not a hole), continues in that face from the same surface point
 /// ("hops"); on a boundary edge it slides along the edge. Fills positions,

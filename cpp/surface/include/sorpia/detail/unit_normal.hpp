@@ -14,6 +14,11 @@ inline void scale_to_unit(const double* v, double* out) {
   const double m = std::max({std::abs(v[0]), std::abs(v[1]), std::abs(v[2])});
   int e = 0;
   if (m > 0.0 && std::isfinite(m)) std::frexp(m, &e);
+  if (e >= -1021 && e <= 1022) {  // 2^-e a normal double: the product is ldexp's, exactly
+    const double f = std::ldexp(1.0, -e);
+    for (int c = 0; c < 3; ++c) out[c] = v[c] * f;
+    return;
+  }
   for (int c = 0; c < 3; ++c) out[c] = std::ldexp(v[c], -e);
 }
 
