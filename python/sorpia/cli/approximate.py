@@ -12,7 +12,7 @@ from .. import __version__
 from .common import (EXIT_OK, SCHEME_LABELS, UserError, check_mesh_suffix, check_paths, fmt_seconds, is_triangles,
                      read_input, report_warnings, solve_tags, tags_summary, warn_once)
 from .output import write_json
-from ..approximate import DEFAULT_FAIRNESS
+from ..approximate import DEFAULT_FAIRNESS, DEFAULT_TOL
 from .progress import Progress
 
 # The data of an input mesh with faces when --sampling is not given (measured in docs/approximation.md).
@@ -61,7 +61,7 @@ def _cage(input_mesh, vertices, cage, scheme, sharp_angle, source, progress):
 
 
 def run_approximate(input_path, output, *, vertices=None, cage=None, scheme="auto", sharp_angle=None, report=None,
-                    surface=None, level=3, iterations=10, tol=1e-3, fairness=DEFAULT_FAIRNESS, tangential=None,
+                    surface=None, level=3, iterations=10, tol=DEFAULT_TOL, fairness=DEFAULT_FAIRNESS, tangential=None,
                     method="cg", boundary=None, sampling=None, quiet=False, force=False, out=None) -> tuple[int, dict]:
     """`sorpia approximate`: returns (exit code, report dict). Every output
     is checked before the work and written atomically after it; an error

@@ -8,7 +8,7 @@ from .. import __version__
 from .._validate import BOUNDARY_RULES, DEFAULT_BOUNDARY
 from .._plotting import FACE_BUDGET  # plotting imports matplotlib only when drawing
 from .common import CLI_SCHEMES, DISPLAY_ORDER
-from ..approximate import DEFAULT_FAIRNESS, DEFAULT_TANGENTIAL, SAMPLINGS
+from ..approximate import DEFAULT_FAIRNESS, DEFAULT_TANGENTIAL, DEFAULT_TOL, SAMPLINGS
 from .approximate import DEFAULT_SAMPLING, run_approximate
 from .compare import run_compare
 from .demo import run_demo
@@ -280,7 +280,7 @@ def build_parser() -> argparse.ArgumentParser:
     boundary_option(app, "boundary rule of the limit surface")
     app.add_argument("--iterations", type=_positive_int, default=10, metavar="K",
                      help="updates at most, each followed by re-projecting the footpoints")
-    app.add_argument("--tol", type=_float_arg, default=1e-3,
+    app.add_argument("--tol", type=_float_arg, default=DEFAULT_TOL,
                      help="stop when the RMS distance fell by less than this fraction per iteration over the last "
                      "three (and a fresh search of the footpoints finds none closer by more)")
     app.add_argument("--sampling", choices=("vertices",) + SAMPLINGS, default=None,
