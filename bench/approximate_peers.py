@@ -265,7 +265,7 @@ measured to its own surface (its subdivision of its cage to level 4 with the ver
 `Subdivfit -nsubdiv 4 -outn`), the one it fits. "interpolation" is `sorpia.interpolate` of the cage (the limit
 surface through the decimated cage's vertices); "decimated cage as it is" the cage's own limit surface.
 "sorpia.approximate" is the call with its defaults (the tangent-distance blend W_i = 0.1 I + 0.9 n_i n_i^T with the
-fairness term 3e-4, at most 10 iterations, tol 1e-3; its time is the call's, the first in the process; its
+fairness term 3e-4, at most 10 iterations, tol 3e-3; its time is the call's, the first in the process; its
 iterations and why it stopped in brackets: "the limit" of 10, "converged" by tol); "tangential=1, fairness=0"
 point distance without fairness (the default before); "fairness=0, 4 iterations" the blend alone, stopped at 4.
 The last column measures the other way, from the surface to the dense mesh (its level-4 tessellation's
