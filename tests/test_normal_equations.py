@@ -10,6 +10,7 @@ import scipy.sparse
 import scipy.sparse.linalg
 
 from sorpia import _core
+from sorpia.approximate import _core_csr
 from sorpia.errors import ParameterError
 
 PAIRS = ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2))  # the six stored entries of a symmetric 3x3 weight
@@ -50,7 +51,7 @@ def fairness(n, seed):
 
 
 def k_arrays(K):
-    return None if K is None else (K.data, K.indices.astype(np.int32), K.indptr.astype(np.int32))
+    return None if K is None else _core_csr(K)
 
 
 def scipy_matrix(A, weights, K, c, mu):
@@ -158,6 +159,13 @@ def test_bad_rows_are_refused():
         _core.NormalEquations(A.indptr, A.indices, A.data, 8, np.ones((6, 2)), None, 0.0, 1e-6)
     with pytest.raises(ParameterError, match="fairness matrix"):
         _core.NormalEquations(A.indptr, A.indices, A.data, 8, None, k_arrays(fairness(5, 1)), 1.0, 1e-6)
+    data, indices, indptr = k_arrays(fairness(8, 1))
+    r = int(np.argmax(np.diff(indptr)))  # a row of several entries
+    unordered = indices.copy()
+    unordered[indptr[r]:indptr[r + 1]] = unordered[indptr[r]:indptr[r + 1]][::-1]
+    for broken in (np.where(indices == indices.max(), 8, indices).astype(np.int32), unordered):
+        with pytest.raises(ParameterError, match="row .* out of range or out of order"):
+            _core.NormalEquations(A.indptr, A.indices, A.data, 8, None, (data, broken, indptr), 1.0, 1e-6)
 
 
 @pytest.mark.parametrize("with_weights", [False, True])

@@ -158,10 +158,22 @@ void bind_approximate(py::module_& m) {
                k.data = to_vector(t[0].cast<py::array_t<double, py::array::c_style>>());
                k.indices = to_vector(t[1].cast<Indices32>());
                k.indptr = to_vector(t[2].cast<Indices32>());
-               if (k.indptr.size() != n_cols + 1 || k.indices.size() != k.data.size() ||
+               if (k.indptr.size() != n_cols + 1 || k.indices.size() != k.data.size() || k.indptr.front() != 0 ||
                    static_cast<std::size_t>(k.indptr.back()) != k.data.size())
                  throw sorpia::ParameterError("NormalEquations: the fairness matrix's arrays disagree with " +
                                               std::to_string(n_cols) + " vertices");
+               // Products read x at every column and the preconditioner finds the diagonal by binary search.
+               for (std::size_t r = 0; r < n_cols; ++r) {
+                 if (k.indptr[r + 1] < k.indptr[r])
+                   throw sorpia::ParameterError("NormalEquations: the fairness matrix's indptr decreases");
+                 for (std::int32_t p = k.indptr[r]; p < k.indptr[r + 1]; ++p) {
+                   const auto up = static_cast<std::size_t>(p);
+                   if (k.indices[up] < 0 || static_cast<std::size_t>(k.indices[up]) >= n_cols ||
+                       (p > k.indptr[r] && k.indices[up] <= k.indices[up - 1]))
+                     throw sorpia::ParameterError("NormalEquations: the fairness matrix's row " + std::to_string(r) +
+                                                  " has a column out of range or out of order");
+                 }
+               }
              }
              LongCall call;
              return sorpia::NormalEquations(sorpia::normal_matrix(in.rows, in.weights, in.count), std::move(k),

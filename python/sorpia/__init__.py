@@ -8,8 +8,8 @@ given vertices: solves B V = V0 with SOR-PIA and the rest of the PIA family.
 
 from ._core import __version__
 from .errors import (AttributeWarning, ConvergenceWarning, DecimationWarning, MeshError, MeshFileError,
-                     NonmanifoldWarning, OmegaWarning, ParameterError, SingularMatrixWarning, SorpiaWarning, UnknownTagWarning,
-                     UnreferencedVerticesWarning, UsdWarning)
+                     NonmanifoldWarning, OmegaWarning, ParameterError, SingularMatrixWarning, SorpiaWarning,
+                     UnknownTagWarning, UnreferencedVerticesWarning, UsdWarning)
 from .limit import limit_matrix, limit_points
 from .solve import InterpolationResult, Interpolator, interpolate
 from .io import FaceVarying, read_mesh, write_mesh

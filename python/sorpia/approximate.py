@@ -188,7 +188,8 @@ class ApproximationResult:
         last = self.history[self.best_iteration]
         return {"iterations": self.iterations, "converged": self.converged, "stop_reason": self.stop_reason,
                 "best_iteration": self.best_iteration, "method": self.method,
-                "fairness": self.fairness, "tangential": self.tangential, "diagonal": self.diagonal, "n_points": int(self.distances.shape[0]),
+                "fairness": self.fairness, "tangential": self.tangential, "diagonal": self.diagonal,
+                "n_points": int(self.distances.shape[0]),
                 "n_control_vertices": int(self.control_vertices.shape[0]),
                 "final": {k: v for k, v in last.items() if k not in ("iteration", "seconds")},
                 "history": self.history, "timings": self.timings}
@@ -377,7 +378,9 @@ def _normal_equations(A, points, normals, V, tangential: float, fairness: float,
                       method: str = DEFAULT_UPDATE):
     """The normal equations of one update, (M, rhs): M = A^T W A + fairness m
     K + mu I, rhs = A^T W P + mu V, m the mean diagonal of A^T W A and mu =
-    _PROXIMAL m, W_i as `_row_weights` gives them. For "cg" M is the core's
+    _PROXIMAL m, W_i as `_row_weights` gives them; K None or, for "cg", the
+    core's (data, indices, indptr) arrays of it (`_core_csr`), for "lspia" a
+    scipy CSR matrix. For "cg" M is the core's
     `NormalEquations` (the normal matrix stays in the core: with tangential =
     1 one (n, n) matrix for the three coordinates, below 1 one system of 3x3
     blocks over the 3n unknowns); for "lspia" (tangential = 1 only) a scipy
@@ -386,9 +389,7 @@ def _normal_equations(A, points, normals, V, tangential: float, fairness: float,
     A = A.tocsr()
     w, wp = _row_weights(points, normals, tangential, weights)
     if method == "cg":
-        k = None if K is None else (K.data, K.indices.astype(np.int32, copy=False),
-                                    K.indptr.astype(np.int32, copy=False))
-        M = _core.NormalEquations(A.indptr, A.indices, A.data, n, w, k, fairness, _PROXIMAL)
+        M = _core.NormalEquations(A.indptr, A.indices, A.data, n, w, K, fairness, _PROXIMAL)
         return M, A.T @ wp + M.mu * V
     ip, ix, val = _core.normal_matrix(A.indptr, A.indices, A.data, n, w)
     AtA = scipy.sparse.csr_matrix((val[:, 0], ix, ip), shape=(n, n))
@@ -398,6 +399,13 @@ def _normal_equations(A, points, normals, V, tangential: float, fairness: float,
     if K is not None:
         M = M + (fairness * mean_diag) * K
     return M.tocsr(), A.T @ wp + mu * V
+
+
+def _core_csr(K: scipy.sparse.csr_matrix) -> tuple:
+    """(data, indices, indptr) of a CSR matrix as the core's NormalEquations
+    takes it (float64, int32, int32, contiguous)."""
+    return (np.ascontiguousarray(K.data, dtype=np.float64), np.ascontiguousarray(K.indices, dtype=np.int32),
+            np.ascontiguousarray(K.indptr, dtype=np.int32))
 
 
 def _update(M, rhs, V, method: str, solver_tol: float, solver_max_iter: int):
@@ -589,6 +597,8 @@ def approximate(points, cage_vertices, cage_faces, *, scheme: str = "auto", boun
 
         K = fairness_matrix(cage_faces, V.shape[0], scheme=scheme, boundary=boundary, creases=creases,
                             corners=corners, holes=holes, depth=_FAIRNESS_DEPTH)
+        if method == "cg":  # the core's arrays, converted once for every update
+            K = _core_csr(K)
     stop_reason = "iterations"
     searched = 0  # the iteration after which every footpoint was last searched for afresh
     done = 0

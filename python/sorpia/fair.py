@@ -339,8 +339,8 @@ def fair_interpolate(vertices, faces, *, scheme: str = DEFAULT_SCHEME, levels: i
 
     # The fine mesh and the start R V_plain (Far's PrimvarRefiner); R itself only when FairResult.refinement is read.
     t = time.perf_counter()
-    fine = _core.refine_uniform(interp.topology, rules, levels, vertices=np.ascontiguousarray(plain.control_vertices, dtype=np.float64),
-                                refinement=False)
+    coarse = np.ascontiguousarray(plain.control_vertices, dtype=np.float64)
+    fine = _core.refine_uniform(interp.topology, rules, levels, vertices=coarse, refinement=False)
     timings["refine"] = time.perf_counter() - t
     refinement = _Refinement(interp.topology, rules, levels)
 
