@@ -56,10 +56,10 @@ from dataclasses import dataclass, field
 from typing import Callable, Optional
 
 import numpy as np
-import scipy.sparse
 
-from . import _core
+from . import _core, _scipy
 from ._meshinfo import bounding_box_diagonal
+from ._scipy import CSRMatrix
 from ._validate import DEFAULT_BOUNDARY, as_vertices
 from .errors import MeshError, ParameterError
 from .surface import LimitSurface
@@ -329,7 +329,7 @@ class _Fit:
         return self._timed("footpoints", _core.refine_footpoints, core, topo, self.points, previous[0],
                            previous[1], self.steps)
 
-    def rows(self, face_ids, uv) -> scipy.sparse.csr_matrix:
+    def rows(self, face_ids, uv) -> CSRMatrix:
         return self._timed("rows", lambda: self.surface.rows(face_ids, uv)[0])
 
     def surface_to_data(self) -> np.ndarray:
@@ -342,7 +342,7 @@ class _Fit:
         return self._timed("report", run)
 
 
-def _lspia(M: scipy.sparse.csr_matrix, rhs: np.ndarray, x: np.ndarray, rtol: float, max_iter: int):
+def _lspia(M: CSRMatrix, rhs: np.ndarray, x: np.ndarray, rtol: float, max_iter: int):
     """LSPIA (Deng and Lin 2014) on the normal equations: x += D^-1 (rhs - M x),
     D the row sums of |M|. Without the fairness and proximal terms M = A^T A
     with A >= 0 and rows summing to 1, so D_j is the sum of column j of A: each
@@ -392,16 +392,17 @@ def _normal_equations(A, points, normals, V, tangential: float, fairness: float,
         M = _core.NormalEquations(A.indptr, A.indices, A.data, n, w, K, fairness, _PROXIMAL)
         return M, A.T @ wp + M.mu * V
     ip, ix, val = _core.normal_matrix(A.indptr, A.indices, A.data, n, w)
-    AtA = scipy.sparse.csr_matrix((val[:, 0], ix, ip), shape=(n, n))
+    sparse = _scipy.sparse("sorpia.approximate")
+    AtA = sparse.csr_matrix((val[:, 0], ix, ip), shape=(n, n))
     mean_diag = float(AtA.diagonal().mean()) or 1.0
     mu = _PROXIMAL * mean_diag
-    M = AtA + scipy.sparse.identity(n, format="csr") * mu
+    M = AtA + sparse.identity(n, format="csr") * mu
     if K is not None:
         M = M + (fairness * mean_diag) * K
     return M.tocsr(), A.T @ wp + mu * V
 
 
-def _core_csr(K: scipy.sparse.csr_matrix) -> tuple:
+def _core_csr(K: CSRMatrix) -> tuple:
     """(data, indices, indptr) of a CSR matrix as the core's NormalEquations
     takes it (float64, int32, int32, contiguous)."""
     return (np.ascontiguousarray(K.data, dtype=np.float64), np.ascontiguousarray(K.indices, dtype=np.int32),
@@ -518,6 +519,7 @@ def approximate(points, cage_vertices, cage_faces, *, scheme: str = "auto", boun
         A cage with no faces, or one the scheme cannot take.
     """
     t0, c0 = time.perf_counter(), time.process_time()
+    _scipy.sparse("sorpia.approximate")  # each update's basis rows are a scipy matrix: say so before any work
     points = as_points(points)
     iterations = _count(iterations, "iterations", 1)
     tol = _nonnegative(tol, "tol")

@@ -66,7 +66,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import _core
+from . import _core, _scipy
 from ._validate import DEFAULT_BOUNDARY, DEFAULT_SCHEME, as_rules, as_vertices
 from .limit import built, warn_unreferenced
 from .errors import ParameterError
@@ -129,7 +129,7 @@ def fairness_matrix(faces, n_vertices: int, *, scheme: str = DEFAULT_SCHEME, bou
         A weight negative, not finite or both zero; gauss_points, depth or
         semi_sharp out of range (the message names the option).
     """
-    import scipy.sparse  # here, not at import: sorpia's commands need no scipy
+    sparse = _scipy.sparse("sorpia.fairness_matrix")
 
     semi_sharp = check_semi_sharp(semi_sharp)
     arrays, n, rules = as_rules(faces, n_vertices, scheme=scheme, boundary=boundary, creases=creases,
@@ -140,7 +140,7 @@ def fairness_matrix(faces, n_vertices: int, *, scheme: str = DEFAULT_SCHEME, bou
         reference = as_vertices(reference)
     data, indices, indptr = matrix_arrays(topo, rules, thin_plate, membrane, gauss_points, depth, semi_sharp,
                                           reference)
-    return scipy.sparse.csr_matrix((data, indices, indptr), shape=(n, n))
+    return sparse.csr_matrix((data, indices, indptr), shape=(n, n))
 
 
 def thin_plate_energy(vertices, faces, *, scheme: str = DEFAULT_SCHEME, boundary: str = DEFAULT_BOUNDARY,

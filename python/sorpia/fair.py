@@ -53,7 +53,7 @@ from typing import Optional
 
 import numpy as np
 
-from . import _core
+from . import _core, _scipy
 from ._meshinfo import bounding_box_diagonal
 from ._nonmanifold import manifold_only
 from ._validate import DEFAULT_BOUNDARY, DEFAULT_SCHEME, as_rules, as_vertices
@@ -223,12 +223,12 @@ class _Refinement:
 
     def __call__(self):
         if self._matrix is None:
-            import scipy.sparse
+            sparse = _scipy.sparse("FairResult.refinement")
 
             topology, rules, levels = self._args
             fine = _core.refine_uniform(topology, rules, levels)
-            self._matrix = scipy.sparse.csr_matrix(fine["refinement"],
-                                                   shape=(int(fine["n_vertices"]), topology.n_vertices))
+            self._matrix = sparse.csr_matrix(fine["refinement"],
+                                             shape=(int(fine["n_vertices"]), topology.n_vertices))
             self._args = None
         return self._matrix
 

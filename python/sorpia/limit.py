@@ -6,11 +6,12 @@ import warnings
 
 import numpy as np
 
-from . import _core
+from . import _core, _scipy
 from . import _nonmanifold as nonmanifold_sharp
 from ._validate import DEFAULT_BOUNDARY, DEFAULT_SCHEME, as_nonmanifold, as_rules, as_tags, as_vertices
 from .errors import MeshError, UnreferencedVerticesWarning
 from ._nonmanifold import refusal_hint
+from ._scipy import CSRMatrix
 
 
 def topology(faces, n_vertices: int, *, scheme: str = DEFAULT_SCHEME, warn: bool = True,
@@ -188,7 +189,7 @@ limit_points.__doc__ = limit_points.__doc__.replace("{tags}", TAGS_DOC).replace(
 
 
 def limit_matrix(faces, n_vertices: int, *, scheme: str = DEFAULT_SCHEME, boundary: str = DEFAULT_BOUNDARY,
-                 creases=None, corners=None, holes=None, nonmanifold: str = "error") -> scipy.sparse.csr_matrix:
+                 creases=None, corners=None, holes=None, nonmanifold: str = "error") -> CSRMatrix:
     """The limit matrix B (paper eq. 7) as a scipy CSR matrix, (n, n) float64.
 
     Row i holds the limit mask of vertex i as OpenSubdiv evaluates it, so that
@@ -196,7 +197,7 @@ def limit_matrix(faces, n_vertices: int, *, scheme: str = DEFAULT_SCHEME, bounda
     get an identity row. See `limit_points` for `scheme`, `boundary`, the
     tags (`creases`, `corners`, `holes`) and `nonmanifold`.
     """
-    import scipy.sparse  # here, not at import: sorpia's commands need no scipy
+    sparse = _scipy.sparse("sorpia.limit_matrix")
 
     if as_nonmanifold(nonmanifold) == "sharp":
         return nonmanifold_sharp.limit_matrix(faces, n_vertices, boundary, scheme,
@@ -206,4 +207,4 @@ def limit_matrix(faces, n_vertices: int, *, scheme: str = DEFAULT_SCHEME, bounda
     topo = built(lambda: _core.Topology(*arrays, n))
     warn_unreferenced(topo, stacklevel=3)
     data, indices, indptr = _core.limit_matrix(topo, rules)
-    return scipy.sparse.csr_matrix((data, indices, indptr), shape=(n, n))
+    return sparse.csr_matrix((data, indices, indptr), shape=(n, n))
