@@ -14,9 +14,13 @@ boundary, another surface): those cages are refused.
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 
+from . import _core
 from ._validate import as_boundary, as_polygons, as_tags, as_vertices
+from .errors import ParameterError
 
 # Blender's default isolation; QUALITY_EXACT where features need the deepest isolation (darts, semi-sharp
 # creases and corners, one-face corners under edge-only): the limit positions there are then exact to float32.
@@ -60,8 +64,6 @@ def blender_script(vertices, faces, *, boundary: str = "edge-and-corner", crease
     the boundary rule, and `levels` subdivisions in the viewport and render.
     The coordinates are written as Python's shortest repr (Blender keeps
     float32). Holes are refused (`blender_refusal`)."""
-    from .errors import ParameterError
-
     vertices = as_vertices(vertices)
     counts, indices = as_polygons(faces, len(vertices))
     as_tags(creases, corners, holes, n_vertices=len(vertices), n_faces=len(counts))  # checked as a solve checks
@@ -115,10 +117,6 @@ modifier.levels = modifier.render_levels = {int(levels)}
 
 def write_blender_script(path, vertices, faces, **options) -> None:
     """`blender_script` written to `path` atomically."""
-    import os
-
-    from . import _core
-
     _core.write_file_atomic(os.fsencode(path), blender_script(vertices, faces, **options).encode("utf-8"))
 
 
