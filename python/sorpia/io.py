@@ -23,7 +23,13 @@ from .errors import AttributeWarning, MeshFileError, ParameterError, UnknownTagW
 
 
 def read_mesh(path, triangulate: bool = False, tags: bool = False, attributes: bool = False, *, prim=None):
-    """Read a mesh from an .obj, .off, .ply, .stl, .usd, .usda or .usdc file.
+    """Read a mesh from an .obj, .off, .ply, .stl, .usd, .usda or .usdc file
+    as arrays: ``V, F = read_mesh(path)``, with ``tags`` and ``attributes``
+    a third and fourth value.
+
+    `sorpia.read` reads the same file into one `sorpia.SubdivisionMesh`
+    (tags, scheme and attributes included), the form every function takes;
+    this array form stays for the callers written for it.
 
     Parameters
     ----------
