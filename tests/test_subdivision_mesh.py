@@ -262,3 +262,12 @@ def test_old_names_are_deprecated_aliases():
     with pytest.warns(DeprecationWarning, match="changes"):
         assert results["repair"].report["counts"] == results["repair"].changes["counts"]
     assert results["repair"].report()["changes"] is results["repair"].changes
+
+
+def test_the_blender_script_takes_a_catmull_clark_mesh():
+    V, F = sorpia.shapes.quad_torus(6, 4)
+    creases = (F[:3, :2], 2.0)
+    assert sorpia.blender.blender_script(SubdivisionMesh(V, F, creases=creases)) == \
+        sorpia.blender.blender_script(V, F, creases=creases)
+    with pytest.raises(ParameterError, match="Catmull-Clark only"):
+        sorpia.blender.blender_script(SubdivisionMesh(*sorpia.shapes.icosphere(1)))

@@ -80,7 +80,8 @@ __all__ = ["fairness_matrix", "thin_plate_energy"]
 SEMI_SHARP = ("sharp", "as-tagged")
 
 
-def fairness_matrix(faces, n_vertices: Optional[int] = None, *, scheme: str = DEFAULT_SCHEME, boundary: str = DEFAULT_BOUNDARY,
+def fairness_matrix(faces, n_vertices: Optional[int] = None, *, scheme: str = DEFAULT_SCHEME,
+                    boundary: str = DEFAULT_BOUNDARY,
                     creases=None, corners=None, holes=None, thin_plate: float = 1.0, membrane: float = 0.0,
                     gauss_points: int = 4, depth: int = 4, semi_sharp: str = "sharp", reference=None):
     """The fairness matrix K of a mesh's limit surface, (n, n) scipy CSR,
@@ -159,7 +160,8 @@ def thin_plate_energy(vertices, faces=None, *, scheme: str = DEFAULT_SCHEME, bou
     vertices, faces, rules = mesh_arguments(vertices, faces, dict(
         scheme=scheme, boundary=boundary, creases=creases, corners=corners, holes=holes), "thin_plate_energy")
     vertices = as_vertices(vertices)
-    k = fairness_matrix(faces, vertices.shape[0], **rules, thin_plate=thin_plate, membrane=membrane, gauss_points=gauss_points,
+    k = fairness_matrix(faces, vertices.shape[0], **rules, thin_plate=thin_plate, membrane=membrane,
+                        gauss_points=gauss_points,
                         depth=depth, semi_sharp=semi_sharp)
     return float(np.sum(vertices * (k @ vertices)))
 

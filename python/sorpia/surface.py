@@ -30,10 +30,10 @@ import numpy as np
 from . import _core
 from ._mesh import SubdivisionMesh, mesh_arguments
 from ._nonmanifold import split
-from ._validate import (DEFAULT_BOUNDARY, DEFAULT_NONMANIFOLD, DEFAULT_SCHEME, Polygons, as_boundary, as_nonmanifold,
-                        as_scheme, as_tags, as_vertices)
+from ._validate import (DEFAULT_BOUNDARY, DEFAULT_NONMANIFOLD, DEFAULT_SCHEME, Polygons, as_nonmanifold, as_rules,
+                        as_vertices)
 from .errors import ParameterError
-from .limit import topology
+from .limit import built, warn_unreferenced
 
 
 def _as_level(level) -> int:
@@ -147,11 +147,13 @@ class LimitSurface:
                 self._vertex_map = s.vertex_map
                 vertices, faces, boundary = vertices[s.vertex_map], s.faces, s.boundary
                 creases, corners, holes = (s.tags.get(name) for name in ("creases", "corners", "holes"))
-        self._boundary = as_boundary(boundary)
-        self._scheme = as_scheme(scheme, faces)
-        self._topology = topology(faces, vertices.shape[0], scheme=scheme, count_name="len(vertices)")
-        tags = as_tags(creases, corners, holes, n_vertices=vertices.shape[0], n_faces=self._topology.n_faces)
-        self._surface = _core.LimitSurface(self._topology, vertices, self._scheme, self._boundary, tags)
+        # The faces and rules checked once (as_rules), as every entry point checks them.
+        arrays, n, checked = as_rules(faces, vertices.shape[0], scheme=scheme, boundary=boundary, creases=creases,
+                                      corners=corners, holes=holes, count_name="len(vertices)")
+        self._topology = built(lambda: _core.Topology(*arrays, n))
+        warn_unreferenced(self._topology, stacklevel=3)
+        self._scheme, self._boundary = checked.scheme, checked.boundary
+        self._surface = _core.LimitSurface(self._topology, vertices, checked.scheme, checked.boundary, checked.tags)
 
     @property
     def n_vertices(self) -> int:
