@@ -108,7 +108,7 @@ def fairness_matrix(faces, n_vertices: Optional[int] = None, *, scheme: str = DE
         docstring): "sharp" measures the surface with them infinitely sharp,
         the bending on each side of a crease; "as-tagged" the surface as
         tagged, the thin layer where a crease turns included.
-    reference : (n_vertices, 3) array_like float, optional
+    reference : (n, 3) array_like float, optional (n the vertex count)
         None: the parametric measure (module docstring). Given: each face is
         measured in a fixed first fundamental form G, that of the limit
         surface of these control vertices at the face's centre (a reference
