@@ -77,7 +77,7 @@ class Split(NamedTuple):
 
 
 def split(faces, n_vertices: int, boundary: str = DEFAULT_BOUNDARY, *, creases=None, corners=None,
-          holes=None) -> Split | None:
+          holes=None, stacklevel: int = 4) -> Split | None:
     """The manifold split of `faces` with OpenSubdiv's rules as tags, or None
     for a manifold mesh (nothing to split). Warns NonmanifoldWarning
     otherwise.
@@ -111,7 +111,7 @@ def split(faces, n_vertices: int, boundary: str = DEFAULT_BOUNDARY, *, creases=N
     warnings.warn(f"nonmanifold=\"sharp\": {len(report['nonmanifold_edges'])} non-manifold edges and "
                   f"{len(report['nonmanifold_vertices'])} non-manifold vertices kept with OpenSubdiv's rules, "
                   "whose result OpenSubdiv's documentation calls undefined for now", NonmanifoldWarning,
-                  stacklevel=4)
+                  stacklevel=stacklevel)
     crease_vertices = sorted(set(report["nonmanifold_vertices"]) - set(report["corners"]))
     corner_vertices = report["corners"]
     if report["single_face_sheets"] and as_boundary(boundary) == _core.Boundary.edge_and_corner:
