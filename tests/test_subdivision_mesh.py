@@ -5,6 +5,7 @@ the one scheme default ("auto") and its one resolver; the file round trip."""
 from __future__ import annotations
 
 import json
+import pickle
 
 import numpy as np
 import pytest
@@ -165,6 +166,10 @@ def test_with_vertices_and_replace():
         mesh.with_vertices(V[:3])
     assert mesh.replace(boundary="edge-only").boundary == "edge-only"
     assert "creases=1" in repr(mesh)
+    again = pickle.loads(pickle.dumps(mesh))  # made again by the constructor: read-only, equal
+    assert not again.vertices.flags.writeable and not again.creases[0].flags.writeable
+    np.testing.assert_array_equal(again.vertices, mesh.vertices)
+    np.testing.assert_array_equal(again.faces, mesh.faces)
 
 
 @pytest.mark.parametrize("suffix", [".obj", ".ply", ".off"])
