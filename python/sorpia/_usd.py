@@ -418,4 +418,4 @@ def check_float32(vertices, what: str = "USD") -> None:
     if beyond.any():
         i = int(np.flatnonzero(beyond.any(axis=1))[0])
         x = float(v[i][np.flatnonzero(beyond[i])[0]])
-        raise MeshError(f"write_mesh: vertex {i} has coordinate {x:.17g}, beyond float32, which {what} stores")
+        raise MeshError(f"write_mesh: vertex {i} has coordinate {x!r}, beyond float32, which {what} stores")

@@ -447,11 +447,11 @@ def build_parser() -> argparse.ArgumentParser:
                    "approximation",
                    "Generate a small sample mesh (a wavy torus with random edge flips: valences 3 to 12, visible "
                    "shrinkage), then run fit (control mesh, limit surface, report), compare (Table 1 as Markdown "
-                   "and CSV, Figure 7) and render (Figure 3) on it; fit --fair (a control mesh one level finer "
-                   "through the same vertices, bending least) and render --fair (plain and fair side by side); and "
-                   "approximate (a cage decimated from the sample, fitted to the points of the limit surface written "
-                   "by fit) and render --cage (the cage and its surface with the points, before and after); every "
-                   "file into one folder, and print where they are. Takes some seconds.", input_arg=False)
+                   "and CSV, Figure 7) and render (Figure 3) on it; fair interpolation (a control mesh one level "
+                   "finer through the same vertices, bending least, drawn beside the plain one); and approximate (a "
+                   "cage decimated from the sample, fitted to the points of the limit surface that fit wrote, drawn "
+                   "with the points before and after); every file into one folder, and print where they are. "
+                   "Takes some seconds.", input_arg=False)
     demo.add_argument("--out", metavar="DIR", default=None,
                       help="folder for the files (created if needed; default: a new folder "
                       "sorpia-demo-YYYYMMDD-HHMMSS in the working directory)")
