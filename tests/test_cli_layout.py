@@ -159,3 +159,24 @@ def test_sharp_angle_creases_after_the_files_follow_the_librarys_rule(tmp_path, 
     _, _, tags = sorpia.read_mesh(tmp_path / "out.obj", tags=True)
     assert len(tags["creases"][0]) == len(edges)
     assert np.all(tags["creases"][1] == sorpia._core.INFINITE_SHARPNESS)
+
+
+def test_the_ply_seam_check_before_the_work_is_the_writers(tmp_path):
+    # The command line's check before the solve (sorpia.io.attribute_refusal) is the core's PLY writer's own:
+    # the same refusal, word for word, as write_mesh raises (main at dc25e4d had a copy in cli/fit.py).
+    from sorpia.io import attribute_refusal
+
+    V, F = sorpia.shapes.quad_grid(3, 3)
+    corners = np.asarray(F).reshape(-1)
+    values = np.vstack([np.asarray(V)[:, :2], [[5.0, 5.0]]])
+    indices = corners.astype(np.int32).copy()
+    indices[6] = len(V)  # corner 6 gives its vertex a second value: a seam
+    seam = sorpia.FaceVarying(values, indices)
+    with pytest.raises(sorpia.ParameterError) as raised:
+        sorpia.write_mesh(tmp_path / "x.ply", V, F, uvs=seam)
+    assert attribute_refusal(tmp_path / "x.ply", "uvs", seam, F, len(V)) == str(raised.value)
+    assert f"vertex {corners[6]} has different ones" in str(raised.value)
+    clean = sorpia.FaceVarying(values, corners.astype(np.int32))
+    assert attribute_refusal(tmp_path / "x.ply", "uvs", clean, F, len(V)) is None
+    assert attribute_refusal(tmp_path / "x.off", "uvs", clean, F, len(V)) == "OFF has no per-vertex or per-corner values"
+    assert not list(tmp_path.iterdir())

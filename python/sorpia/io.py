@@ -407,31 +407,31 @@ def write_mesh_file(path, vertices, faces, *, scheme=None, boundary=None, crease
     return WrittenMesh(back, tuple(sorted(kept)), tuple(dropped))
 
 
+ATTRIBUTE_WORDS = {"uvs": "texture coordinates", "normals": "normals"}
+
+
 def attribute_refusal(path, name: str, channel, faces, n_vertices: int) -> str | None:
     """Why a mesh file of `path`'s format cannot hold the face-varying
     attribute `name` ("uvs" or "normals", a FaceVarying of `faces`), or None
     where it can: OFF and STL hold none; PLY one value of 2 (uvs) or 3
     (normals) numbers per vertex, so not a seam (a vertex with different
-    values in different faces). The check `write_mesh` makes (the core's
-    PLY writer), made before the work."""
+    values in different faces). The check `write_mesh` makes, the core's
+    PLY writer's own (sorpia::check_ply_per_vertex, with its words), made
+    before the work."""
     suffix = os.fsdecode(path).lower().rsplit(".", 1)[-1]
     if suffix in ("off", "stl"):
         return f"{suffix.upper()} has no per-vertex or per-corner values"
     if suffix != "ply":
         return None
-    values, indices = np.asarray(channel[0], dtype=np.float64), np.asarray(channel[1])
-    width = 3 if name == "normals" else 2
-    if values.shape[1] != width:
-        return f"PLY stores {width} numbers per vertex, these have {values.shape[1]}"
-    corners = as_polygons(faces, n_vertices)[1].astype(np.int64)
-    corner_values = values[indices]
-    first = np.zeros((n_vertices, width))
-    used, first_corner = np.unique(corners, return_index=True)
-    first[used] = corner_values[first_corner]  # the value of each vertex's first corner
-    seams = np.flatnonzero((first[corners] != corner_values).any(axis=1))
-    if len(seams):
-        return (f"PLY stores them per vertex, and vertex {int(corners[seams[0]])} has several (a seam; "
-                f"{len(np.unique(corners[seams]))} such vertices)")
+    values = np.ascontiguousarray(channel[0], dtype=np.float64)
+    indices = np.ascontiguousarray(channel[1], dtype=np.int32)
+    counts, corners = as_polygons(faces, n_vertices)
+    uniform = bool((counts == counts[0]).all()) if len(counts) else True
+    try:
+        _core.check_ply_per_vertex(corners, None if uniform else counts, int(counts[0]) if len(counts) else 3,
+                                   int(n_vertices), values, indices, ATTRIBUTE_WORDS[name])
+    except ParameterError as exc:
+        return str(exc)
     return None
 
 

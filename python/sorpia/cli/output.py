@@ -178,8 +178,9 @@ def attributes_to_write(output, attributes: dict, faces, n_vertices: int, keep_n
             written[name], notes[name] = channel, "written"
             continue
         label = ATTRIBUTE_LABELS[name]
-        warn_once(f"-o {output}: the input's {label} are not written: {reason}; write .obj to keep them")
-        notes[name] = f"not written: {reason}; .obj holds them per face corner"
+        way = "" if ".obj" in reason else "; write .obj to keep them"
+        warn_once(f"-o {output}: the input's {label} are not written: {reason}{way}")
+        notes[name] = f"not written: {reason}{way}"
     return written, notes
 
 
