@@ -103,8 +103,11 @@ def test_approximate_writes_scheme_boundary_and_tags_to_usd_as_to_obj(tmp_path, 
     gap = np.abs(sorpia.limit_points(Vu, Fu, scheme=kind, **usd_rules)
                  - sorpia.limit_points(Vo, Fo, scheme=kind, **tags_obj)).max()
     assert gap <= 1e-6 * diag
-    # the summary names the tags (item 16)
+    # the summary names the tags (item 16) and says how far the cage as written (read back) is from the fitted one
     assert "creases" in out_usd and "boundary edge-only" in out_usd
+    moved = np.abs(Vu - Vo).max()
+    assert report["written_max_change"] == moved > 0 and f"moved by at most {moved:.3g} model units" in out_usd
+    assert json.loads((tmp_path / "obj.json").read_text())["written_max_change"] == 0.0
 
 
 def test_approximate_to_ply_warns_that_the_tags_are_left_out(tmp_path, monkeypatch, command):

@@ -257,11 +257,11 @@ def _crease_edges(chain, lengths, sharpness, where: str):
 
 
 def _read_attributes(mesh, where: str, counts, indices, n_points: int) -> dict:
-    """The texture coordinates (the ``st`` primvar) and normals, each a FaceVarying; a
-    primvar sorpia cannot carry (constant or uniform) is left out with a UsdWarning."""
+    """The texture coordinates (the ``st`` primvar) and normals, each as
+    (values (k, width), one index per face corner), which sorpia.io makes
+    FaceVarying; a primvar sorpia cannot carry (constant or uniform) is left
+    out with a UsdWarning."""
     from pxr import UsdGeom
-
-    from .io import FaceVarying
 
     out = {}
     api = UsdGeom.PrimvarsAPI(mesh.GetPrim())
@@ -296,7 +296,7 @@ def _read_attributes(mesh, where: str, counts, indices, n_points: int) -> dict:
         if len(corner) and (corner.min() < 0 or corner.max() >= len(values)):
             bad = int(np.flatnonzero((corner < 0) | (corner >= len(values)))[0])
             raise MeshFileError(f"{label}: corner {bad} names value {corner[bad]}; there are {len(values)}")
-        out[key] = FaceVarying(np.ascontiguousarray(values), np.ascontiguousarray(corner, dtype=np.int32))
+        out[key] = (np.ascontiguousarray(values), np.ascontiguousarray(corner, dtype=np.int32))
     return out
 
 

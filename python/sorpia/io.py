@@ -17,7 +17,7 @@ import numpy as np
 from . import _core
 from ._validate import (DEFAULT_BOUNDARY, Polygons, all_triangles, as_boundary, as_polygons, as_tags,
                         as_vertices)
-from ._usd import _mesh, _open, is_usd
+from ._usd import _mesh, _open, is_usd, read_usd, write_usd
 from .errors import AttributeWarning, FormatWarning, MeshFileError, ParameterError, UnknownTagWarning
 
 
@@ -205,12 +205,11 @@ def read_mesh_file(path, triangulate: bool = False, tags: bool = False, attribut
 
 
 def _read_usd_file(path, triangulate: bool, tags: bool, attributes: bool, prim) -> MeshFileContents:
-    from ._usd import read_usd
-
     if triangulate:
         raise MeshFileError(f"{os.fsdecode(path)}: triangulate is not available for USD files (sorpia splits "
                             "polygons while reading OBJ, OFF and PLY): fit the polygons with Catmull-Clark")
-    vertices, faces, tag_dict, attribute_dict, scheme = read_usd(path, prim=prim, tags=tags, attributes=attributes)
+    vertices, faces, tag_dict, channels, scheme = read_usd(path, prim=prim, tags=tags, attributes=attributes)
+    attribute_dict = None if channels is None else {k: FaceVarying(*v) for k, v in channels.items()}
     return MeshFileContents(vertices, faces, tag_dict, 0, attribute_dict, scheme)
 
 
@@ -316,8 +315,6 @@ def write_mesh(path, vertices, faces, binary: bool = False, *, creases=None, cor
     channels = [_as_face_varying(channel, name, len(indices), width)
                 for channel, name, width in ((uvs, "uvs", (1, 3)), (normals, "normals", (3, 3)))]
     if usd:
-        from ._usd import write_usd
-
         if scheme is not None and scheme not in ("loop", "catmull-clark"):
             raise ParameterError(f"scheme must be 'loop' or 'catmull-clark', got {scheme!r}")
         if counts is None:
@@ -455,8 +452,6 @@ def _template_prim(template, prim):
 
 def _as_face_varying(channel, name: str, n_corners: int, widths: tuple[int, int]):
     """write_mesh's `uvs` or `normals` as (values (k, width) float64, indices (c,) int32), or (None, None)."""
-    from .errors import ParameterError
-
     if channel is None:
         return None, None
     try:

@@ -151,6 +151,8 @@ def run_approximate(input_path, output, *, vertices=None, cage=None, scheme="aut
             "scheme": scheme, "boundary": rule,
             "tags": {"sharp_angle": sharp_angle, **tags_summary(tags), "written_to_output": list(written.written)},
             "surface": surface_stats, "report": None if report is None else str(report), **res.report(),
+            # the cage as read back from the file against the fitted one (USD stores float32): 0 for OBJ, OFF, PLY
+            "written_max_change": float(np.abs(written.vertices - res.control_vertices).max(initial=0.0)),
             "timings": {**timings, **{f"approximate.{k}": v for k, v in res.timings.items() if k != "cpu"}},
             "cpu_seconds": res.timings["cpu"]}
     if report is not None:
@@ -199,5 +201,8 @@ def approximate_summary(d: dict) -> str:
         f"  data->surf  {_distances(f)}; {given}",
         f"  surf->data  {_distances(f, 'surface_')}",
         f"  seconds     {phases}",
-        f"  wrote       {', '.join(written)}",
+        f"  wrote       {', '.join(written)}" + (
+            f" (the cage as written, read back, moved by at most {d['written_max_change']:.3g} model units, "
+            f"{d['written_max_change'] / (d['diagonal'] or 1.0):.3g} of the diagonal: USD stores float32)"
+            if d["written_max_change"] else ""),
     ])
