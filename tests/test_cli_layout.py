@@ -178,5 +178,6 @@ def test_the_ply_seam_check_before_the_work_is_the_writers(tmp_path):
     assert f"vertex {corners[6]} has different ones" in str(raised.value)
     clean = sorpia.FaceVarying(values, corners.astype(np.int32))
     assert attribute_refusal(tmp_path / "x.ply", "uvs", clean, F, len(V)) is None
-    assert attribute_refusal(tmp_path / "x.off", "uvs", clean, F, len(V)) == "OFF has no per-vertex or per-corner values"
+    off = attribute_refusal(tmp_path / "x.off", "uvs", clean, F, len(V))
+    assert off == "OFF has no per-vertex or per-corner values"
     assert not list(tmp_path.iterdir())

@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from ._validate import as_polygons
-from .io import FaceVarying
+from ._mesh import FaceVarying
 
 
 def merge_sharpness(*tags, width: int = 2) -> tuple[np.ndarray, np.ndarray]:

@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from . import _core
+from ._mesh import FaceVarying
 from ._validate import Polygons
 from .errors import MeshError, MeshFileError, ParameterError, UsdWarning
 
@@ -257,10 +258,8 @@ def _crease_edges(chain, lengths, sharpness, where: str):
 
 
 def _read_attributes(mesh, where: str, counts, indices, n_points: int) -> dict:
-    """The texture coordinates (the ``st`` primvar) and normals, each as
-    (values (k, width), one index per face corner), which sorpia.io makes
-    FaceVarying; a primvar sorpia cannot carry (constant or uniform) is left
-    out with a UsdWarning."""
+    """The texture coordinates (the ``st`` primvar) and normals, each a FaceVarying; a
+    primvar sorpia cannot carry (constant or uniform) is left out with a UsdWarning."""
     from pxr import UsdGeom
 
     out = {}
@@ -296,7 +295,7 @@ def _read_attributes(mesh, where: str, counts, indices, n_points: int) -> dict:
         if len(corner) and (corner.min() < 0 or corner.max() >= len(values)):
             bad = int(np.flatnonzero((corner < 0) | (corner >= len(values)))[0])
             raise MeshFileError(f"{label}: corner {bad} names value {corner[bad]}; there are {len(values)}")
-        out[key] = (np.ascontiguousarray(values), np.ascontiguousarray(corner, dtype=np.int32))
+        out[key] = FaceVarying(np.ascontiguousarray(values), np.ascontiguousarray(corner, dtype=np.int32))
     return out
 
 

@@ -10,10 +10,10 @@ import numpy as np
 
 from .. import DecimationWarning, MeshError, __version__, approximate, decimate, limit_surface
 from .._nonmanifold import NONMANIFOLD_HINT, REPAIR_HINT
-from .._validate import DEFAULT_BOUNDARY
+from .._validate import DEFAULT_BOUNDARY, resolve_scheme
 from ..approximate import DEFAULT_FAIRNESS, DEFAULT_TOL
-from .common import (EXIT_OK, SCHEME_LABELS, UserError, check_mesh_suffix, choose_scheme, fmt_seconds, is_triangles, read_input,
-                     report_warnings, solve_tags, tags_lines, tags_summary, warn_once)
+from .common import (EXIT_OK, SCHEME_LABELS, UserError, check_mesh_suffix, choose_scheme, fmt_seconds, is_triangles,
+                     read_input, report_warnings, solve_tags, tags_lines, tags_summary, warn_once)
 from .output import check_float32_outputs, check_outputs, write_control_mesh, write_json, write_surface
 from .progress import Progress
 
@@ -43,7 +43,7 @@ def _cage(input_mesh, vertices, cage, scheme, sharp_angle, source, progress):
                         "--triangulate to split them (the data points stay the mesh's vertices), or give the cage "
                         "with --cage CAGE")
     n_referenced = len(np.unique(np.asarray(input_mesh.faces).reshape(-1)))
-    scheme = "loop" if scheme == "auto" else scheme
+    scheme = resolve_scheme(scheme, input_mesh.faces)  # triangles: auto is Loop
     progress.status(f"decimating to {vertices} vertices")
     t0 = time.perf_counter()
     with warnings.catch_warnings(record=True) as caught:
@@ -184,7 +184,7 @@ def approximate_summary(d: dict) -> str:
                        for k, v in t.items() if "." not in k)
     written = [d["output"]] + ([d["surface"]["path"]] if d["surface"] else []) + ([d["report"]] if d["report"] else [])
     state = {"converged": "stopped: the RMS distance no longer fell by --tol", "exact": "stopped: the data lie on "
-             "the surface to rounding", "iterations": "stopped at --iterations"}[d["stop_reason"]]
+             "the surface to rounding", "max_iter": "stopped at --iterations"}[d["stop_reason"]]
     given = ("unchanged: no update lowered the RMS distance of the cage as given (best iteration 0), which is "
              "written" if d["best_iteration"] == 0 else
              f"the cage as given: RMS {first['rms_relative']:.3g}, max {first['max_relative']:.3g} of the diagonal")

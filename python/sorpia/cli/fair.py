@@ -17,9 +17,9 @@ from .._meshinfo import topology_info
 from .._usd import is_usd
 from ..blender import write_blender_script
 from ..limit import topology as build_topology
-from .common import (EXIT_NOT_CONVERGED, EXIT_OK, FAIR_DEFAULTS, SCHEME_LABELS, UserError, face_counts, face_size_histogram,
-                     fmt_seconds, read_solve_input, repair_json, repair_lines, scheme_kwargs, tags_lines, tags_summary,
-                     usd_template, warn_once)
+from .common import (EXIT_NOT_CONVERGED, EXIT_OK, FAIR_DEFAULTS, SCHEME_LABELS, UserError, face_counts,
+                     face_size_histogram, fmt_seconds, read_solve_input, repair_json, repair_lines, scheme_kwargs,
+                     tags_lines, tags_summary, usd_template, warn_once)
 from .output import (ATTRIBUTE_LABELS, check_blender, check_float32_outputs, check_outputs, check_surface_fits,
                      summary_text, write_control_mesh, write_json, write_surface)
 from .progress import Progress
@@ -140,7 +140,7 @@ def run_fair(input_path, output, *, levels=1, membrane=0.0, targets=None, tol=No
     diag = stats.get("diagonal") or 1.0
     with np.errstate(over="ignore"):  # energies beyond double in model units: inf, and given scaled too
         energies = (float(np.ldexp(res.plain_energy, 2 * e)), float(np.ldexp(res.energy, 2 * e)),
-                    np.ldexp(np.asarray(res.energies), 2 * e))
+                    np.ldexp(np.asarray(res.history), 2 * e))
     data = {
         "sorpia_version": __version__,
         "command": "fit",
@@ -172,7 +172,7 @@ def run_fair(input_path, output, *, levels=1, membrane=0.0, targets=None, tol=No
         "plain_energy": energies[0],
         "energy": energies[1],
         "energy_ratio": res.energy / res.plain_energy if res.plain_energy > 0 else None,
-        "energies": energies[2],
+        "history": energies[2],
         "tol": tol,
         "max_iter": max_iter,
         "threads": threads,

@@ -14,9 +14,9 @@ from .._usd import is_usd
 from ..blender import write_blender_script
 from ..solve import stopped_short_message
 from .common import (EXIT_NOT_CONVERGED, EXIT_OK, FAIR_DEFAULTS, FIT_DEFAULTS, OMEGA_METHODS, SCHEME_LABELS,
-                     UserError, check_solver_options, cpu_clock, face_counts, face_size_histogram, fit_once, fmt_seconds, mesh_line, method_label,
-                     read_solve_input, repair_json, repair_lines, result_fields, scheme_kwargs, split_json,
-                     split_lines, tags_lines, tags_summary, usd_template)
+                     UserError, check_solver_options, cpu_clock, face_counts, face_size_histogram, fit_once,
+                     fmt_seconds, mesh_line, method_label, read_solve_input, repair_json, repair_lines, result_fields,
+                     scheme_kwargs, split_json, split_lines, tags_lines, tags_summary, usd_template)
 from .fair import run_fair
 from .output import (ATTRIBUTE_LABELS, attributes_to_write, check_blender, check_faces_fit, check_float32_outputs,
                      check_outputs, check_surface_fits, summary_text, write_control_mesh, write_json, write_surface)
@@ -124,7 +124,7 @@ def run_fit(input_path, output, *, method="auto", omega="auto", tol=None, max_it
     fields = result_fields(res)
     # The solver's own phases (topology, operator, estimate, solve), inside "fit".
     fit_phases = {f"fit.{k}": float(v) for k, v in res.timings.items()}
-    errors = np.asarray(res.errors, dtype=float)
+    errors = np.asarray(res.history, dtype=float)
     diag = stats.get("diagonal") or 1.0
     data = {
         "sorpia_version": __version__,
@@ -160,13 +160,13 @@ def run_fit(input_path, output, *, method="auto", omega="auto", tol=None, max_it
         "iterations": int(res.iterations),
         "converged": bool(res.converged),
         "final_error": float(errors[-1]),
-        "errors": errors,
+        "history": errors,
         "max_residual": float(max_residual),
         "max_residual_relative": float(max_residual / diag),
         "cpu_seconds": cpu,
         "cpu_clock": cpu_clock(threads),
         "timings": {**timings, **fit_phases},
-        "result": {k: v for k, v in fields.items() if k not in ("errors", "timings")},
+        "result": {k: v for k, v in fields.items() if k not in ("history", "timings")},
     }
     if report is not None:
         write_json(report, data)
