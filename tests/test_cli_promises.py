@@ -148,6 +148,18 @@ def test_write_mesh_file_returns_what_the_file_holds_and_warns_of_what_it_cannot
     got = write_mesh_file(tmp_path / "a.obj", V, F, scheme="catmull-clark", boundary="edge-only", creases=creases)
     assert set(got.written) >= {"boundary", "creases"} and got.dropped == ()
     np.testing.assert_array_equal(got.vertices, V)
+    # a SubdivisionMesh is written with all its rules: USD holds them all, read back by usd-core's API
+    pytest.importorskip("pxr", reason="usd-core is not installed (pip install 'sorpia[usd]')")
+    mesh = sorpia.SubdivisionMesh(V, tri, scheme="catmull-clark", boundary="edge-only", creases=creases)
+    got = write_mesh_file(tmp_path / "m.usda", mesh)
+    assert got.written == ("boundary", "creases", "scheme") and got.dropped == ()
+    usd = usd_mesh(tmp_path / "m.usda")
+    assert usd.GetSubdivisionSchemeAttr().Get() == "catmullClark"
+    assert usd.GetInterpolateBoundaryAttr().Get() == "edgeOnly"
+    assert list(usd.GetCreaseIndicesAttr().Get()) == [0, 1]
+    np.testing.assert_array_equal(got.vertices, V.astype(np.float32).astype(np.float64))
+    with pytest.raises(sorpia.ParameterError, match="the mesh carries its rules"):
+        write_mesh_file(tmp_path / "n.usda", mesh, scheme="loop")
 
 
 # --------------------------------------------------------------------------- item 2: --prim

@@ -15,7 +15,7 @@ from typing import NamedTuple, Optional
 import numpy as np
 
 from . import _core
-from ._mesh import FaceVarying, SubdivisionMesh, tags_dict
+from ._mesh import FaceVarying, SubdivisionMesh, mesh_arguments, tags_dict
 from ._usd import _mesh as _usd_mesh
 from ._usd import _open as _usd_open
 from ._usd import is_usd, read_usd, write_usd
@@ -384,8 +384,9 @@ class WrittenMesh(NamedTuple):
     dropped: tuple  # the rules the format could not hold and a reader would miss (each named in a FormatWarning)
 
 
-def write_mesh_file(path, vertices, faces, *, scheme=None, boundary=None, creases=None, corners=None, holes=None,
-                    uvs=None, normals=None, binary: bool = False, prim=None, template=None) -> WrittenMesh:
+def write_mesh_file(path, vertices, faces=None, *, scheme=None, boundary=None, creases=None, corners=None,
+                    holes=None, uvs=None, normals=None, binary: bool = False, prim=None,
+                    template=None) -> WrittenMesh:
     """Write a subdivision mesh with every rule the format holds, warn of those
     it cannot hold, and read back what was written: the one path by which the
     command line writes a control mesh.
@@ -399,6 +400,10 @@ def write_mesh_file(path, vertices, faces, *, scheme=None, boundary=None, crease
     reader's "auto" picks for the faces (Loop for triangles, Catmull-Clark
     otherwise). Empty tags are not written.
 
+    A `SubdivisionMesh` in the place of `vertices` is written with all of
+    its rules and attributes (``write_mesh_file(path, mesh)``; a rule given
+    beside it as well must agree, as everywhere).
+
     Returns a `WrittenMesh`: the vertices as the file holds them, read back
     from it (USD rounds them to float32; STL too, and since an STL file
     merges its corners, its vertices are the float32 rounding of those given,
@@ -407,6 +412,13 @@ def write_mesh_file(path, vertices, faces, *, scheme=None, boundary=None, crease
     float32 for USD and STL, a seam for PLY).
     """
     rules = {"scheme": scheme, "boundary": boundary, "creases": creases, "corners": corners, "holes": holes}
+    if isinstance(vertices, SubdivisionMesh):
+        mesh = vertices
+        vertices, faces, _ = mesh_arguments(mesh, faces, {k: v for k, v in rules.items() if v is not None},
+                                                     "write_mesh_file")
+        rules = {k: v for k, v in mesh.rules.items() if k in rules}
+        uvs = mesh.uvs if uvs is None else uvs
+        normals = mesh.normals if normals is None else normals
     given = {k: v for k, v in rules.items() if v is not None and not (k in TAG_KINDS and _empty_tag(k, v))}
     held = rules_held(path)
     name, fmt = os.fsdecode(path), _format_label(path)

@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import _core
+from .. import SubdivisionMesh, _core
 from .._usd import is_usd
 from ..blender import blender_refusal
 from .._validate import as_scheme
@@ -186,13 +186,18 @@ def attributes_to_write(output, attributes: dict, faces, n_vertices: int, keep_n
 
 def write_control_mesh(output, vertices, faces, *, scheme, boundary, tags: dict, binary: bool = False,
                        attributes=None, template=None):
-    """A command's control mesh (cage) through the library's one writer path
-    (sorpia.io.write_mesh_file): the scheme, the boundary rule and the tags
-    written where the format holds them, a warning for each that it cannot;
-    returns its WrittenMesh (the vertices read back from the file, the rules
-    written)."""
-    return write_mesh_file(output, vertices, faces, scheme=scheme, boundary=boundary, binary=binary_for(output, binary),
-                           **tags, **(attributes or {}), **(template or {}))
+    """A command's control mesh (cage), as one sorpia.SubdivisionMesh (its
+    scheme, boundary rule, tags and attributes), through the library's one
+    writer path (sorpia.io.write_mesh_file): the rules written where the
+    format holds them, a warning for each that it cannot; returns its
+    WrittenMesh (the vertices read back from the file, the rules written).
+    `scheme` None (a mesh file without one, `repair`): not written, nor
+    warned of."""
+    if scheme is None:
+        return write_mesh_file(output, vertices, faces, boundary=boundary, binary=binary_for(output, binary),
+                               **tags, **(attributes or {}), **(template or {}))
+    mesh = SubdivisionMesh(vertices, faces, scheme=scheme, boundary=boundary, **tags, **(attributes or {}))
+    return write_mesh_file(output, mesh, binary=binary_for(output, binary), **(template or {}))
 
 
 def write_surface(path, vertices, faces, binary: bool = False) -> None:
