@@ -6,13 +6,13 @@
 #include <stdexcept>
 #include <string>
 #include <unordered_map>
-#include <unordered_set>
 #include <utility>
 #include <vector>
 
 #include "sorpia/detail/parallel.hpp"
 #include "sorpia/errors.hpp"
 #include "sorpia/interrupt.hpp"
+#include "sorpia/subface_grid.hpp"
 
 namespace sorpia {
 
@@ -309,23 +309,11 @@ struct ExactForms {
   }
 };
 
-// Columns of the grid of sub-faces of a k-gon under Catmull-Clark (surface.hpp).
-int subface_columns(int k) {
-  if (k < 5) return 2;
-  if (k < 10) return 3;
-  return 1 + static_cast<int>(std::floor(std::sqrt(static_cast<double>(k - 1)) + 1e-9));
-}
-
-std::uint64_t edge_key(std::int32_t a, std::int32_t b) {
-  if (a > b) std::swap(a, b);
-  return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(a)) << 32) | static_cast<std::uint32_t>(b);
-}
-
 // Which vertices and edges make a face's patch other than a regular box
 // spline, so that its domain is refined towards them.
 struct Irregular {
   std::vector<std::uint8_t> vertex;
-  std::unordered_set<std::uint64_t> edges;  // tagged (edge_key)
+  std::vector<std::uint8_t> half_edge;  // per half-edge (Topology::half_edge_twins): its edge is tagged; empty if none
 
   Irregular(const Topology& t, Scheme scheme, const Tags& tags) : vertex(t.n_vertices(), 0) {
     const int regular_valence = scheme == Scheme::Loop ? 6 : 4;
@@ -342,26 +330,36 @@ struct Irregular {
     for (const std::int32_t f : tags.holes) mark_face(static_cast<std::size_t>(f));
     for (std::size_t c = 0; c < tags.n_corners(); ++c)
       if (tags.corner_sharpness[c] > 0.0) vertex[static_cast<std::size_t>(tags.corner_vertices[c])] = 1;
+    std::vector<std::int32_t> pairs;
     for (std::size_t e = 0; e < tags.n_creases(); ++e) {
       if (!(tags.crease_sharpness[e] > 0.0)) continue;
       const std::int32_t a = tags.crease_vertices[2 * e], b = tags.crease_vertices[2 * e + 1];
       vertex[static_cast<std::size_t>(a)] = vertex[static_cast<std::size_t>(b)] = 1;
-      edges.insert(edge_key(a, b));
+      pairs.insert(pairs.end(), {a, b});
+    }
+    if (pairs.empty()) return;
+    const std::vector<std::int32_t> twin = t.half_edge_twins();
+    half_edge.assign(twin.size(), 0);
+    for (const std::int32_t h : t.find_half_edges(pairs.data(), pairs.size() / 2)) {
+      if (h < 0) continue;  // not an edge (check_tags refuses it): nothing to refine towards
+      half_edge[static_cast<std::size_t>(h)] = 1;
+      if (twin[static_cast<std::size_t>(h)] >= 0) half_edge[static_cast<std::size_t>(twin[static_cast<std::size_t>(h)])] = 1;
     }
   }
-  bool tagged(std::int32_t a, std::int32_t b) const { return !edges.empty() && edges.count(edge_key(a, b)) != 0; }
+  // Whether the edge of half-edge h (corner i to i + 1 of a face: face_offset + i) is tagged.
+  bool tagged(std::int32_t h) const { return !half_edge.empty() && half_edge[static_cast<std::size_t>(h)] != 0; }
 };
 
 // The pieces of face f and their points (u, v, Gauss weight with the face's measure).
 void face_pieces(const Topology& t, Scheme scheme, const Irregular& irr, const Pieces& pieces, std::size_t f,
                  Marks& m, std::vector<Piece>& out, std::vector<double>& uvw) {
-  const std::int32_t k = t.face_size(f);
-  const std::int32_t* vs = t.face_indices().data() + t.face_offset(f);
+  const std::int32_t k = t.face_size(f), h0 = t.face_offset(f);  // h0 + i: the half-edge from corner i
+  const std::int32_t* vs = t.face_indices().data() + h0;
   auto corner_marks = [&](const UV* c) {
     m.clear();
     for (std::int32_t i = 0; i < k; ++i) {
       if (irr.vertex[static_cast<std::size_t>(vs[i])]) m.points.push_back(c[i]);
-      if (irr.tagged(vs[i], vs[(i + 1) % k])) m.segments.push_back({c[i], c[(i + 1) % k]});
+      if (irr.tagged(h0 + i)) m.segments.push_back({c[i], c[(i + 1) % k]});
     }
   };
   if (scheme == Scheme::Loop) {
@@ -383,16 +381,18 @@ void face_pieces(const Topology& t, Scheme scheme, const Irregular& irr, const P
   // face's centre (extraordinary of valence k), its sides along edges j and j - 1.
   const int w = subface_columns(k);
   for (std::int32_t j = 0; j < k; ++j) {
-    const UV o{static_cast<double>(j % w), static_cast<double>(j / w)};
+    double origin[2];
+    subface_origin(w, j, origin);
+    const UV o{origin[0], origin[1]};
     const UV along{o.u + 0.5, o.v}, back{o.u, o.v + 0.5};
     m.clear();
     m.points.push_back({o.u + 0.5, o.v + 0.5});
     if (irr.vertex[static_cast<std::size_t>(vs[j])]) m.points.push_back(o);
-    if (irr.tagged(vs[j], vs[(j + 1) % k])) {
+    if (irr.tagged(h0 + j)) {
       m.points.push_back(along);
       m.segments.push_back({o, along});
     }
-    if (irr.tagged(vs[(j + k - 1) % k], vs[j])) {
+    if (irr.tagged(h0 + (j + k - 1) % k)) {
       m.points.push_back(back);
       m.segments.push_back({o, back});
     }
