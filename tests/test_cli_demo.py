@@ -6,6 +6,7 @@ import json
 import sys
 
 import numpy as np
+import pytest
 
 import sorpia
 
@@ -13,6 +14,7 @@ from cli_support import assert_user_error
 
 
 def test_demo_writes_everything_in_a_new_folder(tmp_path, monkeypatch, command):
+    pytest.importorskip("matplotlib", reason="matplotlib is not installed (pip install 'sorpia[plot]')")
     from matplotlib.image import imread
 
     monkeypatch.chdir(tmp_path)

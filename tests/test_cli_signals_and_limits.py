@@ -136,7 +136,7 @@ def test_max_iter_at_int32_max_is_one_solve_not_a_memory_error(ico_file, tmp_pat
     assert run.returncode == 0 and run.stderr == "", run.stderr
     report = json.loads((tmp_path / "r.json").read_text())
     assert report["converged"] and report["max_iter"] == 2 ** 31 - 1
-    assert len(report["errors"]) == report["iterations"] + 1 < 1000
+    assert len(report["history"]) == report["iterations"] + 1 < 1000
 
 
 # --------------------------------------------------------------------------- Ctrl-C and SIGTERM (items 6, 10)

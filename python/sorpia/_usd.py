@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ._mesh import FaceVarying
 from ._validate import Polygons
 from .errors import MeshFileError, ParameterError, UsdWarning
 
@@ -210,8 +211,6 @@ def _read_attributes(mesh, where: str, counts, indices, n_points: int) -> dict:
     """The texture coordinates (the ``st`` primvar) and normals, each a FaceVarying; a
     primvar sorpia cannot carry (constant or uniform) is left out with a UsdWarning."""
     from pxr import UsdGeom
-
-    from .io import FaceVarying
 
     out = {}
     api = UsdGeom.PrimvarsAPI(mesh.GetPrim())

@@ -10,33 +10,26 @@ from __future__ import annotations
 
 import os
 import warnings
-from typing import NamedTuple
+from typing import NamedTuple, Optional
 
 import numpy as np
 
 from . import _core
-from ._validate import Polygons, as_boundary, as_polygons, as_tags, as_vertices
-from ._usd import is_usd
+from ._mesh import FaceVarying, SubdivisionMesh, tags_dict
+from ._usd import is_usd, read_usd, write_usd
+from ._validate import (AUTO_SCHEME, DEFAULT_BOUNDARY, Polygons, as_boundary, as_polygons, as_tags, as_vertices,
+                        resolve_scheme)
 from .errors import AttributeWarning, MeshFileError, ParameterError, UnknownTagWarning
 
 
-class FaceVarying(NamedTuple):
-    """Values given per face corner, as OpenSubdiv's face-varying channels
-    (Far::TopologyDescriptor::FVarChannel) hold them: texture coordinates or
-    normals.
-
-    ``values`` (k, width) float64; ``indices`` (c,) int32, one per face corner
-    in the faces' order (row by row of an (m, k) face array, or
-    ``Polygons.face_vertex_indices``' order): corner j's value is
-    ``values[indices[j]]``. A per-vertex attribute (PLY) has one value per
-    vertex and the faces' vertex indices as ``indices``."""
-
-    values: np.ndarray
-    indices: np.ndarray
-
-
 def read_mesh(path, triangulate: bool = False, tags: bool = False, attributes: bool = False, *, prim=None):
-    """Read a mesh from an .obj, .off, .ply, .stl, .usd, .usda or .usdc file.
+    """Read a mesh from an .obj, .off, .ply, .stl, .usd, .usda or .usdc file
+    as arrays: ``V, F = read_mesh(path)``, with ``tags`` and ``attributes``
+    a third and fourth value.
+
+    `sorpia.read` reads the same file into one `sorpia.SubdivisionMesh`
+    (tags, scheme and attributes included), the form every function takes;
+    this array form stays for the callers written for it.
 
     Parameters
     ----------
@@ -155,6 +148,32 @@ def read_mesh(path, triangulate: bool = False, tags: bool = False, attributes: b
     return out + ((contents.tags,) if tags else ()) + ((contents.attributes,) if attributes else ())
 
 
+def read(path: str | os.PathLike[str] | bytes, *, triangulate: bool = False,
+         prim: Optional[str] = None) -> SubdivisionMesh:
+    """Read a mesh file as one `SubdivisionMesh`: vertices, faces, the file's
+    scheme, boundary rule and sharpness tags, and its texture coordinates and
+    normals, whatever the file holds.
+
+    The one shape of a mesh read: ``read_mesh(path)`` returns the arrays
+    ``(vertices, faces)`` and, by its flags, the tags and attributes as a
+    third and fourth value; this function reads them all into the mesh
+    (``mesh.tags``, ``mesh.attributes``), which every function of sorpia
+    takes: ``sorpia.interpolate(sorpia.read("part.obj"))``.
+
+    The scheme is the file's own where it has one (a USD mesh's
+    ``subdivisionScheme``), else "auto" resolved on the faces: Loop for
+    triangles, Catmull-Clark otherwise (`resolve_scheme`). Formats, tags,
+    attributes, `triangulate`, `prim` and the errors are `read_mesh`'s.
+    """
+    contents = read_mesh_file(path, triangulate, True, True, prim)
+    tags = contents.tags or {}
+    attributes = contents.attributes or {}
+    return SubdivisionMesh(contents.vertices, contents.faces, scheme=tags.get("scheme") or AUTO_SCHEME,
+                           boundary=tags.get("boundary", DEFAULT_BOUNDARY), creases=tags.get("creases"),
+                           corners=tags.get("corners"), holes=tags.get("holes"), uvs=attributes.get("uvs"),
+                           normals=attributes.get("normals"))
+
+
 class MeshFileContents(NamedTuple):
     """What `read_mesh_file` returns: read_mesh's values and how many polygons were split."""
 
@@ -204,8 +223,6 @@ def read_mesh_file(path, triangulate: bool = False, tags: bool = False, attribut
 
 
 def _read_usd_file(path, triangulate: bool, tags: bool, attributes: bool, prim) -> MeshFileContents:
-    from ._usd import read_usd
-
     if triangulate:
         raise MeshFileError(f"{os.fsdecode(path)}: triangulate is not available for USD files (sorpia splits "
                             "polygons while reading OBJ, OFF and PLY): fit the polygons with Catmull-Clark")
@@ -213,21 +230,7 @@ def _read_usd_file(path, triangulate: bool, tags: bool, attributes: bool, prim) 
     return MeshFileContents(vertices, faces, tag_dict, 0, attribute_dict, scheme)
 
 
-def tags_dict(core_tags, boundary=None) -> dict:
-    """A _core.Tags (and Boundary or None) as read_mesh's keyword dict: only the kinds present."""
-    out: dict = {}
-    if len(core_tags.crease_sharpness):
-        out["creases"] = (core_tags.crease_vertices, core_tags.crease_sharpness)
-    if len(core_tags.corner_sharpness):
-        out["corners"] = (core_tags.corner_vertices, core_tags.corner_sharpness)
-    if len(core_tags.holes):
-        out["holes"] = core_tags.holes
-    if boundary is not None:
-        out["boundary"] = _core.boundary_name(boundary)
-    return out
-
-
-def write_mesh(path, vertices, faces, binary: bool = False, *, creases=None, corners=None, holes=None,
+def write_mesh(path, vertices, faces=None, binary: bool = False, *, creases=None, corners=None, holes=None,
                boundary=None, uvs=None, normals=None, scheme=None, prim=None, template=None) -> None:
     """Write a mesh to an .obj, .off, .ply, .stl, .usd, .usda or .usdc file, atomically.
 
@@ -240,8 +243,15 @@ def write_mesh(path, vertices, faces, binary: bool = False, *, creases=None, cor
     ----------
     path : str or os.PathLike
         The extension (any case) names the format.
-    vertices : array_like, (n, 3) float
-        Finite coordinates.
+    vertices : array_like, (n, 3) float, or sorpia.SubdivisionMesh
+        Finite coordinates; or a mesh, written with its rules and attributes
+        (``write_mesh(path, mesh)``, ``write_mesh(path, mesh, True)`` for
+        binary): its tags, a boundary rule other than the default and its
+        uvs and normals as the keywords below write them, its scheme in USD.
+        A format that cannot hold what the mesh carries is a ParameterError
+        (as for the keywords), as is OBJ, OFF, PLY or STL for a mesh whose
+        scheme is not the one its faces imply ("auto": Loop for triangles):
+        ``mesh.replace(...)`` drops what is not to be written.
     faces : (m, k) int array, list of index lists, or sorpia.Polygons
         Faces of 3 or more vertices (any mix in OBJ, OFF and PLY; STL stores
         triangles only: anything else is a ParameterError).
@@ -291,6 +301,26 @@ def write_mesh(path, vertices, faces, binary: bool = False, *, creases=None, cor
     type): coordinates are rounded to float32, and read back as written. Each
     crease edge is written as a crease of its own (``creaseLengths`` 2).
     """
+    if isinstance(vertices, SubdivisionMesh):
+        mesh = vertices
+        if faces is not None:  # write_mesh(path, mesh, binary)
+            if binary is not False or not isinstance(faces, bool):
+                raise TypeError("write_mesh(path, mesh, binary): the faces come from the SubdivisionMesh")
+            binary = faces
+        given = [k for k, v in (("creases", creases), ("corners", corners), ("holes", holes), ("boundary", boundary),
+                                ("uvs", uvs), ("normals", normals), ("scheme", scheme)) if v is not None]
+        if given:
+            raise ParameterError(f"write_mesh: {', '.join(given)} given beside a SubdivisionMesh, which carries its "
+                                 "own: use mesh.replace(...)")
+        vertices, faces = mesh.vertices, mesh.faces
+        creases, corners, holes, uvs, normals = mesh.creases, mesh.corners, mesh.holes, mesh.uvs, mesh.normals
+        boundary = None if mesh.boundary == DEFAULT_BOUNDARY else mesh.boundary
+        if is_usd(path):
+            scheme = mesh.scheme
+        elif mesh.scheme != resolve_scheme(AUTO_SCHEME, mesh.faces):
+            raise ParameterError(f"{os.fsdecode(path)}: the mesh's scheme {mesh.scheme!r} is not the one its faces "
+                                 "imply, and OBJ, OFF, PLY and STL do not hold a scheme: write USD, or "
+                                 "mesh.replace(scheme=\"auto\")")
     usd = is_usd(path)
     if not usd and (scheme is not None or prim is not None or template is not None):
         given = [k for k, v in (("scheme", scheme), ("prim", prim), ("template", template)) if v is not None]
@@ -315,8 +345,6 @@ def write_mesh(path, vertices, faces, binary: bool = False, *, creases=None, cor
     channels = [_as_face_varying(channel, name, len(indices), width)
                 for channel, name, width in ((uvs, "uvs", (1, 3)), (normals, "normals", (3, 3)))]
     if usd:
-        from ._usd import write_usd
-
         if scheme is not None and scheme not in ("loop", "catmull-clark"):
             raise ParameterError(f"scheme must be 'loop' or 'catmull-clark', got {scheme!r}")
         if counts is None:
@@ -334,8 +362,6 @@ def write_mesh(path, vertices, faces, binary: bool = False, *, creases=None, cor
 
 def _as_face_varying(channel, name: str, n_corners: int, widths: tuple[int, int]):
     """write_mesh's `uvs` or `normals` as (values (k, width) float64, indices (c,) int32), or (None, None)."""
-    from .errors import ParameterError
-
     if channel is None:
         return None, None
     try:
@@ -352,4 +378,4 @@ def _as_face_varying(channel, name: str, n_corners: int, widths: tuple[int, int]
     return values, np.ascontiguousarray(indices, dtype=np.int32)
 
 
-__all__ = ["read_mesh", "write_mesh", "FaceVarying", "AttributeWarning", "UnknownTagWarning"]
+__all__ = ["read", "read_mesh", "write_mesh", "FaceVarying", "AttributeWarning", "UnknownTagWarning"]

@@ -13,6 +13,7 @@ from .common import (EXIT_OK, SCHEME_LABELS, UserError, check_mesh_suffix, check
                      read_input, report_warnings, solve_tags, tags_summary, warn_once)
 from .output import write_json
 from ..approximate import DEFAULT_FAIRNESS, DEFAULT_TOL
+from .._validate import resolve_scheme
 from .progress import Progress
 
 # The data of an input mesh with faces when --sampling is not given (measured in docs/approximation.md).
@@ -30,8 +31,7 @@ def _cage(input_mesh, vertices, cage, scheme, sharp_angle, source, progress):
         if len(mesh.faces) == 0:
             raise UserError(f"--cage {cage} has no faces: a cage is a mesh of triangles, quads or polygons")
         tags = solve_tags(mesh, sharp_angle, cage)
-        if scheme == "auto":
-            scheme = "loop" if is_triangles(mesh.faces) else "catmull-clark"
+        scheme = resolve_scheme(scheme, mesh.faces, mesh.tags.get("scheme"))  # a USD cage's own scheme first
         return mesh.vertices, mesh.faces, tags, scheme, {"from": "file", "path": str(cage)}
     from .. import DecimationWarning, decimate
 
@@ -42,7 +42,7 @@ def _cage(input_mesh, vertices, cage, scheme, sharp_angle, source, progress):
         raise UserError(f"{source}: --vertices decimates triangle meshes and this one has other faces; "
                         "give the cage with --cage CAGE")
     n_referenced = len(np.unique(np.asarray(input_mesh.faces).reshape(-1)))
-    scheme = "loop" if scheme == "auto" else scheme
+    scheme = resolve_scheme(scheme, input_mesh.faces)  # triangles: auto is Loop
     progress.status(f"decimating to {vertices} vertices")
     t0 = time.perf_counter()
     with warnings.catch_warnings(record=True) as caught:
@@ -147,7 +147,7 @@ def approximate_summary(d: dict) -> str:
                        for k, v in t.items() if "." not in k)
     written = [d["output"]] + ([d["surface"]["path"]] if d["surface"] else []) + ([d["report"]] if d["report"] else [])
     state = {"converged": "stopped: the RMS distance no longer fell by --tol", "exact": "stopped: the data lie on "
-             "the surface to rounding", "iterations": "stopped at --iterations"}[d["stop_reason"]]
+             "the surface to rounding", "max_iter": "stopped at --iterations"}[d["stop_reason"]]
     return "\n".join([
         f"sorpia approximate: {d['input']} -> {d['output']}",
         f"  data        {d['input_points']} points, bounding-box diagonal {d['diagonal']:.4g}; " + (

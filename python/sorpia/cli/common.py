@@ -12,7 +12,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .._validate import AUTO_SCHEME, SCHEMES
+from .._validate import AUTO_SCHEME, SCHEMES, resolve_scheme
 from ..solve import METHODS, THREADED_METHODS, ConvergenceWarning  # ConvergenceWarning: the summary says it
 from . import progress as _progress
 
@@ -254,14 +254,10 @@ def choose_scheme(scheme: str, faces, source, file_scheme=None) -> str:
     an all-triangle mesh and Catmull-Clark otherwise; Loop on polygons is a
     PolygonError naming the first face that is not a triangle and the two
     ways out."""
-    from .. import _core
     from .._usd import is_usd
-    from .._validate import as_scheme
 
     scheme_asked = scheme
-    if scheme == AUTO_SCHEME and file_scheme is not None:
-        scheme = file_scheme
-
+    scheme = resolve_scheme(scheme, faces, file_scheme)  # the library's one rule
     if scheme == "loop" and not is_triangles(faces):
         counts = face_counts(faces)
         f = int(np.flatnonzero(counts != 3)[0])
@@ -271,7 +267,7 @@ def choose_scheme(scheme: str, faces, source, file_scheme=None) -> str:
                 "auto) to keep them")
         raise PolygonError(f"{source}: face {f} has {counts[f]} vertices and Loop subdivision needs triangles"
                            f"{' (' + given + ')' if given else ''}; {ways}")
-    return _core.scheme_name(as_scheme(scheme, faces))  # auto: the library's one rule
+    return scheme
 
 
 def solve_tags(mesh: InputMesh, sharp_angle, source) -> dict:
@@ -395,14 +391,14 @@ def repair_json(result) -> dict:
     change, with input indices), the vertex map (for every output vertex, the
     input vertex it copies) and the face map (for every output face, the input
     face it comes from; with --triangulate, a face of the triangulation)."""
-    return {"report": result.report, "vertex_map": result.vertex_map, "face_map": result.face_map}
+    return {"report": result.changes, "vertex_map": result.vertex_map, "face_map": result.face_map}
 
 
 def repair_lines(result) -> list[str]:
     """The repair's summary: one line per kind of change, or one saying there was none."""
     from .._repair import describe_changes
 
-    return describe_changes(result.report) or ["nothing to repair: the mesh is valid"]
+    return describe_changes(result.changes) or ["nothing to repair: the mesh is valid"]
 
 
 def require_plotting() -> None:

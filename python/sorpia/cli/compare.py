@@ -91,13 +91,13 @@ def run_compare(input_path, *, methods=DISPLAY_ORDER, omega="auto", tol=1e-10, m
                 "stop_reason": res.stop_reason,
                 "variant": res.variant,
                 "refused": None,
-                "reached": iterations_to_reach(res.errors),
+                "reached": iterations_to_reach(res.history),
                 "threads": n_threads,
                 "cpu_seconds": cpu,
                 "cpu_clock": cpu_clock(n_threads),
                 "wall_seconds": wall,
-                "errors": np.asarray(res.errors, dtype=float),
-                "result": {k: v for k, v in fields.items() if k != "errors"},
+                "history": np.asarray(res.history, dtype=float),
+                "result": {k: v for k, v in fields.items() if k != "history"},
             })
     data = {
         "sorpia_version": __version__,
@@ -128,7 +128,7 @@ def run_compare(input_path, *, methods=DISPLAY_ORDER, omega="auto", tol=1e-10, m
     if plot is not None:
         from .._plotting import convergence_figure
 
-        curves = [(_curve_label(r), r["errors"]) for r in rows if r["refused"] is None]
+        curves = [(_curve_label(r), r["history"]) for r in rows if r["refused"] is None]
         save_figure(convergence_figure(curves, tol=tol, title=f"Convergence on {Path(input_path).name} "
                                        f"(paper Figure 7)"), plot)
     if not quiet:
@@ -157,7 +157,7 @@ def _refused_row(method: str, threads: int, reason: str) -> dict:
     return {"method": method, "label": method_label(method), "omega": None, "iterations": 0, "converged": False,
             "stop_reason": "refused", "variant": None, "refused": reason, "reached": [None] * len(TABLE_TOLERANCES),
             "threads": threads, "cpu_seconds": 0.0, "cpu_clock": cpu_clock(threads), "wall_seconds": 0.0,
-            "errors": np.zeros(0), "result": None}
+            "history": np.zeros(0), "result": None}
 
 
 def _curve_label(row) -> str:

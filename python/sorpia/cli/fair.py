@@ -154,7 +154,7 @@ def run_fair(input_path, output, *, levels=1, membrane=0.0, targets=None, tol=1e
         "plain_energy": res.plain_energy,
         "energy": res.energy,
         "energy_ratio": res.energy / res.plain_energy if res.plain_energy > 0 else None,
-        "energies": np.asarray(res.energies),
+        "history": np.asarray(res.history),
         "tol": tol,
         "max_iter": max_iter,
         "threads": threads,

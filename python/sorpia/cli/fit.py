@@ -128,7 +128,7 @@ def run_fit(input_path, output, *, method="auto", omega="auto", tol=1e-10, max_i
     fields = result_fields(res)
     # The solver's own phases (topology, operator, estimate, solve), inside "fit".
     fit_phases = {f"fit.{k}": float(v) for k, v in res.timings.items()}
-    errors = np.asarray(res.errors, dtype=float)
+    errors = np.asarray(res.history, dtype=float)
     diag = stats.get("diagonal") or 1.0
     data = {
         "sorpia_version": __version__,
@@ -163,13 +163,13 @@ def run_fit(input_path, output, *, method="auto", omega="auto", tol=1e-10, max_i
         "iterations": int(res.iterations),
         "converged": bool(res.converged),
         "final_error": float(errors[-1]),
-        "errors": errors,
+        "history": errors,
         "max_residual": float(max_residual),
         "max_residual_relative": float(max_residual / diag),
         "cpu_seconds": cpu,
         "cpu_clock": cpu_clock(threads),
         "timings": {**timings, **fit_phases},
-        "result": {k: v for k, v in fields.items() if k not in ("errors", "timings")},
+        "result": {k: v for k, v in fields.items() if k not in ("history", "timings")},
     }
     if report is not None:
         write_json(report, data)

@@ -66,7 +66,7 @@ def run_info(input_path, *, as_json=False, boundary=None, triangulate=False, rep
                     **({"refused": tags_refused} if tags_refused else {})}
     if repair:
         info["repair"] = {"applied": True, "changes": repair_lines(mesh.repair),
-                          "counts": mesh.repair.report["counts"]}
+                          "counts": mesh.repair.changes["counts"]}
     elif not info["loop_pia"]["can_run"]:  # what --repair would do: to the faces as read (polygons kept)
         info["repair"] = _what_repair_would_do(mesh.vertices, mesh.faces)
     if polygons and info["loop_pia"]["can_run"]:
@@ -159,4 +159,4 @@ def _what_repair_would_do(vertices, faces) -> dict:
         result = repair_mesh(vertices, faces)
     except (MeshError, ValueError, TypeError) as exc:
         return {"applied": False, "refused": str(exc)}
-    return {"applied": False, "changes": describe_changes(result.report), "counts": result.report["counts"]}
+    return {"applied": False, "changes": describe_changes(result.changes), "counts": result.changes["counts"]}

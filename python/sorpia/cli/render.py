@@ -9,9 +9,10 @@ from pathlib import Path
 import numpy as np
 
 from .._plotting import FACE_BUDGET  # plotting imports matplotlib only when drawing
+from .._validate import resolve_scheme
 from ..solve import stopped_short_message
 from .common import (EXIT_NOT_CONVERGED, EXIT_OK, OMEGA_METHODS, SCHEME_LABELS, UserError, check_paths,
-                     check_solver_options, face_counts, fit_once, fmt_seconds, is_triangles, method_label, omega_text,
+                     check_solver_options, face_counts, fit_once, fmt_seconds, method_label, omega_text,
                      read_solve_input, repair_lines, require_plotting, scheme_kwargs)
 from .output import save_figure
 from .progress import Progress
@@ -149,7 +150,7 @@ def render_approximation(input_path, cage_path, output, *, level, boundary, size
         points = read_input(input_path, tags=False, points=True).vertices
         mesh = read_input(cage_path)
         tags = solve_tags(mesh, sharp_angle, cage_path)
-        scheme = ("loop" if is_triangles(mesh.faces) else "catmull-clark") if scheme == "auto" else scheme
+        scheme = resolve_scheme(scheme, mesh.faces, mesh.tags.get("scheme"))  # a USD cage's own scheme first
         rule = boundary if boundary is not None else mesh.tags.get("boundary", DEFAULT_BOUNDARY)
         progress.status("approximate")
         t0 = time.perf_counter()

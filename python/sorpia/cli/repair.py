@@ -37,7 +37,7 @@ def run_repair(input_path, output, *, report=None, triangulate=False, quiet=Fals
     if report is not None:
         write_json(report, data)
     if not quiet:
-        changed = any(mesh.repair.report["counts"].values())
+        changed = any(mesh.repair.changes["counts"].values())
         print(f"sorpia repair: {input_path} -> {output} ({len(mesh.vertices)} vertices, {n_faces} faces"
               + ("" if changed else "; the mesh is valid: written unchanged") + ")", file=out)
         for line in repair_lines(mesh.repair) if changed else []:
