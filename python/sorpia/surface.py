@@ -23,8 +23,6 @@ onto it, others refused):
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from . import _core
@@ -47,11 +45,9 @@ def _as_level(level) -> int:
 
 def subface_columns(face_size: int) -> int:
     """Columns w of the grid of sub-faces of a k-gon under Catmull-Clark
-    (k != 4): corner j of the face is at ``(u, v) = (j % w, j // w)``."""
-    k = int(face_size)
-    if k < 3:
-        raise ParameterError(f"face_size must be at least 3, got {k}")
-    return (3 if k > 4 else 2) if k < 10 else 1 + math.isqrt(k - 1)
+    (k != 4): corner j of the face is at ``(u, v) = (j % w, j // w)``; the
+    core's one definition (``sorpia/subface_grid.hpp``)."""
+    return _core.subface_columns(int(face_size))
 
 
 def corner_uv(scheme: str, face_size: int, corner: int) -> tuple[float, float]:
