@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy
 import numpy.typing
 import typing
-__all__: list[str] = ['Boundary', 'INFINITE_SHARPNESS', 'InterpolationResult', 'Interpolator', 'LimitSurface', 'MAX_REFINEMENT_LEVELS', 'MAX_THREADS', 'MeshError', 'MeshFileError', 'Method', 'NormalEquations', 'OmegaRule', 'ParameterError', 'PointIndex', 'Rules', 'Scheme', 'SolveOptions', 'Tags', 'Topology', 'YOUNG_RHO_CLAMP', 'available_memory_bytes', 'blend_weights', 'boundary_name', 'check_refinement', 'check_writable', 'closest_points', 'decimate', 'face_list_statistics', 'fair_solve', 'fairness_matrix', 'grid', 'icosphere', 'irregular', 'limit_matrix', 'limit_points', 'limit_residual', 'mesh_statistics', 'method_names', 'normal_matrix', 'parse_boundary', 'parse_method', 'parse_omega', 'parse_scheme', 'pole', 'polygon_torus', 'quad_grid', 'quad_irregular', 'quad_torus', 'read_mesh', 'refine_footpoints', 'refine_uniform', 'refinement_bytes', 'regular_valence', 'repair', 'repair_polygons', 'scheme_name', 'sharp_edges', 'split_nonmanifold', 'split_nonmanifold_polygons', 'tessellation_bytes', 'torus', 'write_file_atomic', 'write_mesh']
+__all__: list[str] = ['Boundary', 'INFINITE_SHARPNESS', 'InterpolationResult', 'Interpolator', 'LimitSurface', 'MAX_REFINEMENT_LEVELS', 'MAX_THREADS', 'MeshError', 'MeshFileError', 'Method', 'NormalEquations', 'OmegaRule', 'ParameterError', 'PointIndex', 'Rules', 'Scheme', 'SolveOptions', 'Tags', 'Topology', 'YOUNG_RHO_CLAMP', 'available_memory_bytes', 'blend_weights', 'boundary_name', 'check_ply_per_vertex', 'check_refinement', 'check_writable', 'closest_points', 'decimate', 'face_list_statistics', 'fair_solve', 'fairness_matrix', 'grid', 'icosphere', 'irregular', 'limit_matrix', 'limit_points', 'limit_residual', 'mesh_statistics', 'method_names', 'normal_matrix', 'parse_boundary', 'parse_method', 'parse_omega', 'parse_scheme', 'pole', 'polygon_torus', 'quad_grid', 'quad_irregular', 'quad_torus', 'read_mesh', 'refine_footpoints', 'refine_uniform', 'refinement_bytes', 'regular_valence', 'repair', 'repair_polygons', 'scheme_name', 'sharp_edges', 'split_nonmanifold', 'split_nonmanifold_polygons', 'subface_columns', 'tessellation_bytes', 'torus', 'write_file_atomic', 'write_mesh']
 class MeshError(ValueError):
     """
     The faces or coordinates cannot be used: an index out of range, a repeated
@@ -226,6 +226,10 @@ class InterpolationResult:
     """
     What a solve returns (sorpia.interpolate, Interpolator.solve).
     
+    ``report()`` gives every attribute but control_vertices as a JSON-ready dict
+    (arrays as lists), as every sorpia result's report() does. ``errors`` is the
+    deprecated name of ``history`` (DeprecationWarning), for one release.
+    
     Attributes
     ----------
     control_vertices : (n, k) float64
@@ -238,11 +242,11 @@ class InterpolationResult:
         counted from the start: 0 when a warm start already met tol. An update
         (Interpolator.update): 1 when it relaxed any vertex, else 0.
     converged : bool
-        errors[-1] < tol, or E_k at the rounding floor (E_k <= 64 eps max_i ||v_i^0||),
+        history[-1] < tol, or E_k at the rounding floor (E_k <= 64 eps max_i ||v_i^0||),
         below which no method can go: a tol of 1e-300 ends there, converged.
-    errors : (iterations + 1,) float64
-        errors[k] = E_k / E_0, E_0 = max_i ||v_i^0 - (B V0)_i|| the error of the
-        cold start V = V0 whatever the start, so errors[0] = 1 from a cold start
+    history : (iterations + 1,) float64
+        history[k] = E_k / E_0, E_0 = max_i ||v_i^0 - (B V0)_i|| the error of the
+        cold start V = V0 whatever the start, so history[0] = 1 from a cold start
         and E(start) / E_0 from a warm one (`initial`, an update); a single 0.0
         when E_0 = 0: V0 already interpolates and is the result. An update:
         [E(previous) / E_0, E(result) / E_0] with E_0 of the new targets, E over
@@ -251,7 +255,8 @@ class InterpolationResult:
     omega : float or None
         "sor"/"gs": the omega used (1.0 for "gs"); None for other methods.
     seconds : float
-        Wall time of the whole call, every phase in `timings` included.
+        Wall time of the whole call, every phase in `timings` included
+        (timings["total"]).
     stop_reason : {"converged", "max_iter", "diverged", "callback", "singular", "stalled", "slow"}
         "diverged": E_k rose above 10 times (the Krylov methods: 1e4 times) its
         lowest value before, or was not finite; control_vertices are then the
@@ -286,6 +291,9 @@ class InterpolationResult:
         largest, largest first; empty when converged.
     worst_residuals : (m,) float64
         Their residual norms ||v_i^0 - (B V)_i||, absolute.
+    max_error : float
+        The largest miss of the returned control vertices, max_i ||v_i^0 -
+        (B V)_i||, absolute: history[returned_iteration] * initial_error.
     rho : float or None
         omega="young": the estimated spectral radius of I - D^-1 B.
     sigma : float or None
@@ -305,9 +313,10 @@ class InterpolationResult:
     timings : dict
         Seconds per phase: "topology" (faces validated, one-ring), "operator"
         (B from OpenSubdiv's limit masks), "estimate" (spectral estimates for the
-        parameters: 0 when an Interpolator already holds them), "solve".
+        parameters: 0 when an Interpolator already holds them), "solve", and
+        "total", equal to `seconds`.
     """
-    _fields: typing.ClassVar[tuple] = ('control_vertices', 'iterations', 'converged', 'errors', 'method', 'omega', 'seconds', 'stop_reason', 'initial_error', 'variant', 'attempts', 'returned_iteration', 'recommended', 'worst_vertices', 'worst_residuals', 'rho', 'sigma', 'lambda_min', 'alpha', 'weight', 'products', 'relaxations', 'timings')
+    _fields: typing.ClassVar[tuple] = ('control_vertices', 'iterations', 'converged', 'history', 'method', 'omega', 'seconds', 'stop_reason', 'initial_error', 'variant', 'attempts', 'returned_iteration', 'recommended', 'worst_vertices', 'worst_residuals', 'max_error', 'rho', 'sigma', 'lambda_min', 'alpha', 'weight', 'products', 'relaxations', 'timings')
     def __getstate__(self) -> tuple[list[float], list[float], float, int, int, int, str, float, bool, float, bool, float, float, float, float, int, float, float, float, float, float, int, int, list, int, int, list[int], list[float]]:
         ...
     def __repr__(self) -> str:
@@ -317,6 +326,10 @@ class InterpolationResult:
     def _record_build(self, seconds: typing.SupportsFloat | typing.SupportsIndex, topology_seconds: typing.SupportsFloat | typing.SupportsIndex, operator_seconds: typing.SupportsFloat | typing.SupportsIndex) -> None:
         """
         For sorpia's Python layer: the whole call's wall time and the build phases it timed.
+        """
+    def report(self) -> dict:
+        """
+        Every attribute but control_vertices, JSON-ready (arrays as lists), as every sorpia result's report().
         """
     @property
     def alpha(self) -> typing.Any:
@@ -334,6 +347,9 @@ class InterpolationResult:
     def errors(self) -> numpy.ndarray:
         ...
     @property
+    def history(self) -> numpy.ndarray:
+        ...
+    @property
     def initial_error(self) -> float:
         ...
     @property
@@ -341,6 +357,9 @@ class InterpolationResult:
         ...
     @property
     def lambda_min(self) -> typing.Any:
+        ...
+    @property
+    def max_error(self) -> float:
         ...
     @property
     def method(self) -> str:
@@ -669,6 +688,10 @@ def blend_weights(points: numpy.typing.NDArray[numpy.float64], normals: numpy.ty
     """
 def boundary_name(boundary: Boundary) -> str:
     ...
+def check_ply_per_vertex(face_vertex_indices: numpy.typing.NDArray[numpy.int32], face_vertex_counts: numpy.typing.NDArray[numpy.int32] | None, face_size: typing.SupportsInt | typing.SupportsIndex, n_vertices: typing.SupportsInt | typing.SupportsIndex, values: numpy.typing.NDArray[numpy.float64], indices: numpy.typing.NDArray[numpy.int32], what: str) -> None:
+    """
+    Raise ParameterError where PLY cannot hold the channel per vertex (write_mesh's check: the width, a seam).
+    """
 def check_refinement(topology: Topology, rules: Rules, levels: typing.SupportsInt | typing.SupportsIndex) -> None:
     """
     refine_uniform's checks before any work (sorpia::check_refinement): raises for levels it refuses.
@@ -782,6 +805,8 @@ def split_nonmanifold_polygons(face_vertex_counts: numpy.typing.NDArray[numpy.in
     """
     sorpia::split_nonmanifold of polygons: None for a manifold mesh, else (face_vertex_counts, face_vertex_indices, vertex_map, report dict).
     """
+def subface_columns(face_size: typing.SupportsInt | typing.SupportsIndex) -> int:
+    ...
 def tessellation_bytes(n_vertices: typing.SupportsInt | typing.SupportsIndex, n_faces: typing.SupportsInt | typing.SupportsIndex, level: typing.SupportsInt | typing.SupportsIndex, scheme: Scheme = Scheme.loop, n_face_vertices: typing.SupportsInt | typing.SupportsIndex = 0) -> int:
     ...
 def torus(nu: typing.SupportsInt | typing.SupportsIndex, nv: typing.SupportsInt | typing.SupportsIndex) -> tuple:
