@@ -35,10 +35,8 @@ def test_core_stubs_are_what_pybind11_stubgen_makes_of_the_module():
     spec = importlib.util.spec_from_file_location("core_stubs", CORE_STUBS_TOOL)
     tool = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(tool)
-    generated = tool.generate()
-    # The repository's file and the installed copy of it (what a wheel carries) both equal the generated text.
-    assert tool.STUB.read_text() == generated, "python/sorpia/_core.pyi is stale: run `make stubs` and commit it"
-    assert (PACKAGE / "_core.pyi").read_text() == generated
+    # The repository's file, which the wheel and the install carry (the test above finds it installed).
+    assert tool.STUB.read_text() == tool.generate(), "python/sorpia/_core.pyi is stale: run `make stubs`, commit it"
 
 
 def _public_modules():
@@ -103,10 +101,12 @@ def _mypy(*files: Path, cache: Path) -> subprocess.CompletedProcess:
                            *map(str, files)], capture_output=True, text=True, timeout=600, cwd=HERE)
 
 
-def test_a_users_script_passes_mypy_strict_and_its_mistakes_are_caught(tmp_path):
+def test_a_users_script_passes_mypy_strict_and_its_mistakes_are_caught(request, tmp_path):
     pytest.importorskip("mypy", reason="mypy is not installed (pip install 'sorpia[test]')")
     script, mistakes = HERE / "typing" / "user_script.py", HERE / "typing" / "user_mistakes.py"
-    run = _mypy(script, mistakes, cache=tmp_path)
+    # mypy's cache in pytest's (numpy's stubs take most of a cold run; mypy checks its cache against the files).
+    cache = request.config.cache.mkdir("mypy") if getattr(request.config, "cache", None) else tmp_path
+    run = _mypy(script, mistakes, cache=cache)
     errors = [line for line in run.stdout.splitlines() if ": error:" in line]
     assert not [e for e in errors if "user_script.py" in e], run.stdout
     # Exactly the marked lines of the mistakes, and each for the reason marked: mypy sees sorpia's own types.

@@ -1,5 +1,6 @@
 """sorpia where scipy is not installed (Blender ships numpy but no scipy): ``import sorpia`` imports no scipy,
-interpolation, fair interpolation, limit points and surfaces and mesh files work, and what needs scipy says so.
+interpolation, fair interpolation, limit points and surfaces, mesh files and `sorpia fit` work, and what needs
+scipy says so.
 
 Standalone (no conftest): tools/clean_root_test.sh runs this file in a venv that has no scipy at all; here, where
 scipy is installed, the fixture hides it as a missing module does (None in sys.modules makes the import fail).
@@ -74,6 +75,17 @@ def test_mesh_files_need_no_scipy(no_scipy, tmp_path):
     # OBJ writes 17 significant digits: the coordinates come back to the last bit or two.
     assert np.abs(V2 - V).max() < 1e-15 * diagonal(np.asarray(V, float)) + 1e-300
     assert np.array_equal(F2, F)
+
+
+def test_the_fit_command_needs_no_scipy(no_scipy, tmp_path, capsys):
+    from sorpia.cli import main
+
+    V, F = sorpia.shapes.quad_torus(8, 6)
+    sorpia.write_mesh(tmp_path / "torus.obj", V, F)
+    assert main(["fit", str(tmp_path / "torus.obj"), "-o", str(tmp_path / "control.obj"), "-q"]) == 0
+    control, _ = sorpia.read_mesh(tmp_path / "control.obj")
+    # The cage as written (OBJ, 17 digits): its limit points are the input vertices, to the solve's tolerance.
+    assert np.abs(sorpia.limit_points(control, F) - V).max() < 1e-9 * diagonal(np.asarray(V, float))
 
 
 def test_what_needs_scipy_names_itself_and_the_package(no_scipy):
