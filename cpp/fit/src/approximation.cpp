@@ -75,6 +75,51 @@ double bounding_box_diagonal(const double* p, std::size_t k) {
   return scale * std::sqrt(std::fma(x[2], x[2], std::fma(x[1], x[1], x[0] * x[0])));
 }
 
+// Data a surface can be fitted to: points that span more than a line (issue 33, 8). All at one place (one point,
+// or every point a duplicate of the first), the fit would collapse the cage onto it; on one line, the cage onto
+// the line: no surface is determined by them. A line: every point within 1e-12 of the diagonal of the line
+// through the points' mean along their covariance's main axis (found by power iteration: for points on a line
+// the covariance is that axis's outer product, so one step finds it; for any other points no line holds them all
+// that closely, whatever its direction).
+void check_spread(const double* p, std::size_t k, double diagonal) {
+  if (!(diagonal > 0))
+    throw ParameterError("the points all lie at one place (" + std::to_string(k) +
+                         (k == 1 ? " point" : " points, all equal") +
+                         "): there is no surface to fit; give points that span the surface");
+  double mean[3] = {0.0, 0.0, 0.0};
+  for (std::size_t i = 0; i < k; ++i)
+    for (std::size_t c = 0; c < 3; ++c) mean[c] += p[3 * i + c] / static_cast<double>(k);
+  double a[3][3] = {};
+  for (std::size_t i = 0; i < k; ++i) {
+    double d[3];
+    for (std::size_t c = 0; c < 3; ++c) d[c] = (p[3 * i + c] - mean[c]) / diagonal;
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) a[r][c] += d[r] * d[c];
+  }
+  double u[3] = {1.0, 0.7, 0.4};
+  for (int it = 0; it < 100; ++it) {
+    double w[3];
+    for (int r = 0; r < 3; ++r) w[r] = a[r][0] * u[0] + a[r][1] * u[1] + a[r][2] * u[2];
+    const double norm = std::sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
+    if (!(norm > 0)) break;
+    for (int r = 0; r < 3; ++r) u[r] = w[r] / norm;
+  }
+  const double un = std::sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+  for (double& x : u) x /= un;
+  double off = 0.0;  // the largest distance from the line, over the diagonal
+  for (std::size_t i = 0; i < k; ++i) {
+    double d[3];
+    for (std::size_t c = 0; c < 3; ++c) d[c] = (p[3 * i + c] - mean[c]) / diagonal;
+    const double along = d[0] * u[0] + d[1] * u[1] + d[2] * u[2];
+    double r2 = 0.0;
+    for (int c = 0; c < 3; ++c) r2 += (d[c] - along * u[c]) * (d[c] - along * u[c]);
+    off = std::max(off, std::sqrt(r2));
+  }
+  if (off <= 1e-12)
+    throw ParameterError("the points all lie on one line (" + std::to_string(k) +
+                         " points): no surface is determined by them; give points that span the surface");
+}
+
 void check_options(const ApproximationOptions& o) {
   const auto nonnegative = [](double v, const char* name) {
     if (!(std::isfinite(v) && v >= 0))
@@ -303,7 +348,8 @@ ApproximationResult approximate(LimitSurface& surface, const double* points, std
     surface.set_vertices(V.data());
   }
   const double diagonal = bounding_box_diagonal(points, k);
-  const double unit = diagonal > 0 ? diagonal : 1.0;
+  check_spread(points, k, diagonal);
+  const double unit = diagonal;
 
   ApproximationResult out;
   Phases phases;
@@ -324,6 +370,14 @@ ApproximationResult approximate(LimitSurface& surface, const double* points, std
       nearest.resize(nv);
       near_distance.resize(nv);
       data_index->nearest(mesh.vertices.data(), nv, nearest.data(), near_distance.data());
+      // Vertex i < n of the tessellation is control vertex i at its limit position; a control vertex no face uses
+      // stays where it is and is no point of the surface: left out of the surface's distances (issue 33, 12).
+      if (topology.n_unreferenced() > 0) {
+        std::size_t kept = 0;
+        for (std::size_t i = 0; i < nv; ++i)
+          if (i >= n || !topology.is_unreferenced(i)) near_distance[kept++] = near_distance[i];
+        near_distance.resize(kept);
+      }
       return 0;
     });
     ApproximationRecord rec;
