@@ -117,7 +117,8 @@ class ApproximationResult:
         The iteration whose control vertices and footpoints are returned:
         that of the lowest RMS distance (an update that raised it is not
         returned); `rms`, `max_distance` and the report's ``final`` are its
-        record's.
+        record's, measured after a fresh search of every footpoint on its
+        surface (the closer kept: `distances`, `face_ids` and `uv` are those).
     method : str
         The update that ran, "cg" or "lspia".
     fairness : float

@@ -430,6 +430,8 @@ ApproximationResult approximate(LimitSurface& surface, const double* points, std
   const bool blend = options.tangential != 1.0;
   out.stop_reason = "iterations";
   int searched = 0;  // the iteration after which every footpoint was last searched for afresh
+  Feet last_fresh;           // the last fresh search, made at iteration fresh_iteration
+  int fresh_iteration = -1;
   int done = 0;
   std::vector<std::size_t> order(k);
   std::vector<std::int32_t> face_o(k);
@@ -547,7 +549,7 @@ ApproximationResult approximate(LimitSurface& surface, const double* points, std
     // footpoint is searched for afresh (the grid's nearest sample, then Gauss-Newton) and the closer one kept; a
     // gain of more than tol goes on.
     searched = it;
-    const Feet fresh = search();
+    Feet fresh = search();
     std::vector<char> closer(k);
     std::vector<double> merged(k);
     for (std::size_t i = 0; i < k; ++i) {
@@ -565,7 +567,36 @@ ApproximationResult approximate(LimitSurface& surface, const double* points, std
       continue;
     }
     out.stop_reason = "converged";
+    if (best.iteration == it) {  // the fresh search was made on the iterate returned: the final step reuses it
+      last_fresh = std::move(fresh);
+      fresh_iteration = it;
+    }
     break;
+  }
+  // Reported distances are true distances (issue 33, 6): re-projection from the previous footpoints keeps a point
+  // in a local minimum of its distance, so the returned iterate's footpoints are searched for afresh (the grid's
+  // nearest sample, then Gauss-Newton: closest_points), any closer one kept, and its record measured again from
+  // them before the result reports it.
+  if (best.iteration != fresh_iteration) {
+    surface.set_vertices(best.V.data());
+    last_fresh = search();
+  }
+  bool closer_found = false;
+  for (std::size_t i = 0; i < k; ++i)
+    if (last_fresh.distances[i] < best.distances[i]) {
+      best.face_ids[i] = last_fresh.face_ids[i];
+      best.uv[2 * i] = last_fresh.uv[2 * i];
+      best.uv[2 * i + 1] = last_fresh.uv[2 * i + 1];
+      best.distances[i] = last_fresh.distances[i];
+      closer_found = true;
+    }
+  if (closer_found) {
+    ApproximationRecord& rec = out.history[static_cast<std::size_t>(best.iteration)];
+    const double r = rms(best.distances), m = *std::max_element(best.distances.begin(), best.distances.end());
+    rec.rms_relative = r / unit;
+    rec.max_relative = m / unit;
+    rec.rms = std::ldexp(r, e);
+    rec.max = std::ldexp(m, e);
   }
   // The iterate of the lowest RMS distance (an update that raised it is not returned).
   out.iterations = done;

@@ -25,7 +25,10 @@
 ///      when it does), or the RMS is at rounding level (`exact` of the
 ///      diagonal), or `iterations` ran out.
 ///
-/// The control vertices of the lowest RMS are returned. Data beyond 2^+-200
+/// The control vertices of the lowest RMS are returned, with their
+/// footpoints searched for afresh (closest_points, any closer one kept) and
+/// their record measured again from them: re-projection keeps a point in a
+/// local minimum of its distance, a fresh search finds the closer surface. Data beyond 2^+-200
 /// in magnitude is fitted scaled by a power of two (sorpia/detail/scaling.hpp,
 /// exact); records and results are in the caller's units.
 
@@ -86,8 +89,8 @@ struct ApproximationTimings {
 /// What approximate returns, in the caller's units.
 struct ApproximationResult {
   std::vector<double> control_vertices;  ///< (n, 3) row-major: V of the lowest RMS
-  /// The footpoints on that V's surface: face_ids, uv and distances (the
-  /// other fields empty).
+  /// The footpoints on that V's surface after the final fresh search:
+  /// face_ids, uv and distances (the other fields empty).
   Footpoints footpoints;
   int iterations = 0;      ///< updates made
   /// "converged", "exact" or "iterations" (step 4).
