@@ -46,8 +46,15 @@ def _digest(arr) -> str:
     return hashlib.sha256(np.ascontiguousarray(arr, dtype=np.float64).tobytes()).hexdigest()
 
 
+def _series(res, old: str):
+    """A result's per-iteration array: `history` since the one result vocabulary, `old` (errors, energies)
+    before it, so that the script runs against both."""
+    value = getattr(res, old, None)
+    return res.history if value is None else value
+
+
 def _fingerprint(res) -> dict:
-    return {"control_vertices": _digest(res.control_vertices), "errors": _digest(res.errors),
+    return {"control_vertices": _digest(res.control_vertices), "errors": _digest(_series(res, "errors")),
             "iterations": int(res.iterations), "stop_reason": str(res.stop_reason)}
 
 
@@ -103,7 +110,7 @@ def mesh_cases(path: str, max_iter: int) -> dict:
 
 
 def _fair_fingerprint(res) -> dict:
-    return {"control_vertices": _digest(res.control_vertices), "energies": _digest(res.energies),
+    return {"control_vertices": _digest(res.control_vertices), "energies": _digest(_series(res, "energies")),
             "faces": hashlib.sha256(np.ascontiguousarray(res.faces, dtype=np.int64).tobytes()).hexdigest(),
             "energy": float(res.energy), "plain_energy": float(res.plain_energy), "max_error": float(res.max_error),
             "iterations": int(res.iterations), "stop_reason": str(res.stop_reason),

@@ -257,7 +257,7 @@ TEST(Approximate, OneUpdateEqualsADenseSolveOfItsNormalEquations) {
                                                          << " fairness " << c.fairness;
     EXPECT_LT(r.history[1].rms, r.history[0].rms);
     EXPECT_EQ(r.iterations, 1);
-    EXPECT_EQ(r.stop_reason, "iterations");
+    EXPECT_EQ(r.stop_reason, "max_iter");
   }
 }
 
@@ -283,7 +283,7 @@ TEST(Approximate, StopsAndReportsAsItsHistorySays) {
   double d2 = 0.0;
   for (const double d : r.footpoints.distances) d2 += d * d;
   EXPECT_NEAR(std::sqrt(d2 / static_cast<double>(r.footpoints.distances.size())), lowest, 1e-15);
-  EXPECT_TRUE(r.stop_reason == "converged" || r.stop_reason == "iterations");
+  EXPECT_TRUE(r.stop_reason == "converged" || r.stop_reason == "max_iter");
 }
 
 TEST(Approximate, DataBeyondTwoToThe200IsFittedScaledExactly) {

@@ -428,7 +428,7 @@ ApproximationResult approximate(LimitSurface& surface, const double* points, std
   }
   const bool cg = options.update == ApproximationUpdate::CG;
   const bool blend = options.tangential != 1.0;
-  out.stop_reason = "iterations";
+  out.stop_reason = "max_iter";
   int searched = 0;  // the iteration after which every footpoint was last searched for afresh
   Feet last_fresh;           // the last fresh search, made at iteration fresh_iteration
   int fresh_iteration = -1;

@@ -93,7 +93,7 @@ struct ApproximationResult {
   /// face_ids, uv and distances (the other fields empty).
   Footpoints footpoints;
   int iterations = 0;      ///< updates made
-  /// "converged", "exact" or "iterations" (step 4).
+  /// "converged", "exact" or "max_iter" (`iterations` ran out; step 4).
   std::string stop_reason;
   int best_iteration = 0;  ///< the iteration whose V is returned
   double diagonal = 0.0;   ///< of the data's bounding box: the unit of the relative figures
