@@ -5,6 +5,7 @@ the one scheme default ("auto") and its one resolver; the file round trip."""
 from __future__ import annotations
 
 import json
+import pickle
 
 import numpy as np
 import pytest
@@ -165,6 +166,10 @@ def test_with_vertices_and_replace():
         mesh.with_vertices(V[:3])
     assert mesh.replace(boundary="edge-only").boundary == "edge-only"
     assert "creases=1" in repr(mesh)
+    again = pickle.loads(pickle.dumps(mesh))  # made again by the constructor: read-only, equal
+    assert not again.vertices.flags.writeable and not again.creases[0].flags.writeable
+    np.testing.assert_array_equal(again.vertices, mesh.vertices)
+    np.testing.assert_array_equal(again.faces, mesh.faces)
 
 
 @pytest.mark.parametrize("suffix", [".obj", ".ply", ".off"])
@@ -272,3 +277,19 @@ def test_the_blender_script_takes_a_catmull_clark_mesh():
     assert blender_script(SubdivisionMesh(V, F, creases=creases)) == blender_script(V, F, creases=creases)
     with pytest.raises(ParameterError, match="Catmull-Clark only"):
         blender_script(SubdivisionMesh(*sorpia.shapes.icosphere(1)))
+
+
+def test_a_mesh_carries_nonmanifold_sharp():
+    """Two fans meeting at vertex 0 (a bowtie): nonmanifold="sharp" travels with the mesh."""
+    V = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [-1, 0, 0.5], [0, -1, 0.5]])
+    F = np.array([[0, 1, 2], [0, 3, 4]])
+    mesh = SubdivisionMesh(V, F, nonmanifold="sharp")
+    with pytest.warns(sorpia.NonmanifoldWarning):
+        arrays = sorpia.limit_points(V, F, nonmanifold="sharp")
+    with pytest.warns(sorpia.NonmanifoldWarning):
+        np.testing.assert_array_equal(sorpia.limit_points(mesh), arrays)
+    with pytest.warns(sorpia.NonmanifoldWarning):
+        np.testing.assert_array_equal(sorpia.interpolate(mesh).control_vertices,
+                                      sorpia.interpolate(V, F, nonmanifold="sharp").control_vertices)
+    with pytest.raises(MeshError, match="non-manifold vertex 0"):
+        sorpia.limit_points(mesh.replace(nonmanifold="error"))

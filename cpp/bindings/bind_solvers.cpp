@@ -44,6 +44,10 @@ constexpr const char* kLocalVariant = "local";  // LocalSolver::update's variant
 
 const char* const kResultDoc = R"doc(What a solve returns (sorpia.interpolate, Interpolator.solve).
 
+``report()`` gives every attribute but control_vertices as a JSON-ready dict
+(arrays as lists), as every sorpia result's report() does. ``errors`` is the
+deprecated name of ``history`` (DeprecationWarning), for one release.
+
 Attributes
 ----------
 control_vertices : (n, k) float64
@@ -129,13 +133,6 @@ timings : dict
     (B from OpenSubdiv's limit masks), "estimate" (spectral estimates for the
     parameters: 0 when an Interpolator already holds them), "solve", and
     "total", equal to `seconds`.
-
-Methods
--------
-report() -> dict
-    Every attribute but control_vertices, JSON-ready (arrays as lists).
-
-errors: the deprecated name of `history` (DeprecationWarning), for one release.
 )doc";
 
 // The public attributes, in the order of the docstring (and of _fields).

@@ -7,7 +7,7 @@ given vertices: solves B V = V0 with SOR-PIA and the rest of the PIA family.
 """
 
 from ._core import __version__
-from .errors import (AttributeWarning, ConvergenceWarning, DecimationWarning, MeshError, MeshFileError,
+from .errors import (AttributeWarning, ConvergenceWarning, DecimationWarning, FormatWarning, MeshError, MeshFileError,
                      NonmanifoldWarning, OmegaWarning, ParameterError, SingularMatrixWarning, SorpiaWarning,
                      UnknownTagWarning, UnreferencedVerticesWarning, UsdWarning)
 from ._mesh import FaceVarying, SubdivisionMesh
@@ -33,6 +33,7 @@ __all__ = [
     "MeshFileError",
     "ParameterError",
     "SorpiaWarning",
+    "FormatWarning",
     "UnreferencedVerticesWarning",
     "ConvergenceWarning", "InterpolationResult", "Interpolator", "OmegaWarning", "SingularMatrixWarning",
     "interpolate",

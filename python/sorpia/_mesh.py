@@ -243,6 +243,10 @@ class SubdivisionMesh:
         (``mesh.replace(scheme="catmull-clark", creases=None)``)."""
         return dataclasses.replace(self, **changes)
 
+    def __reduce__(self) -> tuple[type, tuple[Any, ...]]:
+        """Pickled as its fields and made again by the constructor (unpickled arrays would be writeable)."""
+        return (SubdivisionMesh, tuple(getattr(self, f.name) for f in dataclasses.fields(self)))
+
     def __repr__(self) -> str:
         parts = [f"n_vertices={self.n_vertices}", f"n_faces={self.n_faces}", f"scheme={self.scheme!r}",
                  f"boundary={self.boundary!r}"]

@@ -35,6 +35,7 @@ from typing import NamedTuple
 import numpy as np
 
 from . import _core
+from ._meshdata import merge_sharpness
 from ._remap import core_faces, faces_as_given, mapped_tags
 from ._validate import DEFAULT_BOUNDARY, as_boundary, as_tags
 from .errors import MeshError, NonmanifoldWarning
@@ -77,7 +78,7 @@ class Split(NamedTuple):
 
 
 def split(faces, n_vertices: int, boundary: str = DEFAULT_BOUNDARY, *, creases=None, corners=None,
-          holes=None) -> Split | None:
+          holes=None, stacklevel: int = 4) -> Split | None:
     """The manifold split of `faces` with OpenSubdiv's rules as tags, or None
     for a manifold mesh (nothing to split). Warns NonmanifoldWarning
     otherwise.
@@ -111,7 +112,7 @@ def split(faces, n_vertices: int, boundary: str = DEFAULT_BOUNDARY, *, creases=N
     warnings.warn(f"nonmanifold=\"sharp\": {len(report['nonmanifold_edges'])} non-manifold edges and "
                   f"{len(report['nonmanifold_vertices'])} non-manifold vertices kept with OpenSubdiv's rules, "
                   "whose result OpenSubdiv's documentation calls undefined for now", NonmanifoldWarning,
-                  stacklevel=4)
+                  stacklevel=stacklevel)
     crease_vertices = sorted(set(report["nonmanifold_vertices"]) - set(report["corners"]))
     corner_vertices = report["corners"]
     if report["single_face_sheets"] and as_boundary(boundary) == _core.Boundary.edge_and_corner:
@@ -133,16 +134,11 @@ def split(faces, n_vertices: int, boundary: str = DEFAULT_BOUNDARY, *, creases=N
                             "cannot reproduce it; repair the mesh or leave that crease out")
         tags = mapped_tags(checked, split_faces, vertex_map, np.arange(n_faces, dtype=np.int32), n_vertices, given)
     copies = np.flatnonzero(np.isin(vertex_map, corner_vertices)).astype(np.int32)
-    user_corners, user_sharpness = tags.get("corners", (np.zeros(0, np.int32), np.zeros(0)))
-    # ours last: a corner given twice counts with its last sharpness, as in OpenSubdiv
-    tags["corners"] = (np.concatenate([user_corners, copies]),
-                       np.concatenate([user_sharpness, np.full(len(copies), _core.INFINITE_SHARPNESS)]))
+    # ours last: a corner or edge given twice counts with its last sharpness (OpenSubdiv's rule, merge_sharpness)
+    tags["corners"] = merge_sharpness(tags.get("corners"), (copies, _core.INFINITE_SHARPNESS), width=1)
     sharp = np.asarray(report["sharp_edges"], dtype=np.int32).reshape(-1, 2)
     if len(sharp):  # faces of a non-manifold edge joined again in the split (a pillow beside a third face)
-        user_edges, user_sharpness = tags.get("creases", (np.zeros((0, 2), np.int32), np.zeros(0)))
-        # ours last: an edge given twice counts with its last sharpness, as in OpenSubdiv
-        tags["creases"] = (np.concatenate([user_edges, sharp]),
-                           np.concatenate([user_sharpness, np.full(len(sharp), _core.INFINITE_SHARPNESS)]))
+        tags["creases"] = merge_sharpness(tags.get("creases"), (sharp, _core.INFINITE_SHARPNESS))
     return Split(split_faces, vertex_map, tags, report, boundary)
 
 

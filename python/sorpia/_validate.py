@@ -30,6 +30,7 @@ mistake (vertices and faces swapped) than a convenience.
 
 from __future__ import annotations
 
+import numbers
 import operator
 from typing import NamedTuple, Optional
 
@@ -95,6 +96,25 @@ def as_vertex_count(n_vertices, name: str = "n_vertices") -> int:
     if n < 0:
         raise ParameterError(f"{name} = {n} must be >= 0")
     return n
+
+
+_INT64_MAX = 2**63 - 1
+
+
+def as_real(value, name: str) -> float:
+    """An option that is a real number as a float: the one type check of scalar options (a bool, a string or None
+    where a number belongs is a ParameterError); its range is the core's to check, once."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
+        raise ParameterError(f"{name} must be a real number, got {value!r}")
+    return float(value)
+
+
+def as_integer(value, name: str, what: str) -> int:
+    """An option that is an integer as an int (`what` says which integers the option takes, for the message);
+    beyond int64 it is clamped there, where the core names it as too large."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Integral):
+        raise ParameterError(f"{name} = {value!r} must be {what}")
+    return min(int(value), _INT64_MAX)
 
 
 def _first_polygon(faces) -> tuple[int, int] | None:

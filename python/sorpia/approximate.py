@@ -201,7 +201,7 @@ class ApproximationResult:
 
     @property
     def max_distance(self) -> float:
-        """Deprecated name of `max_error` (DeprecationWarning), for one release."""
+        """Deprecated name of ``max_error`` (DeprecationWarning), for one release."""
         warnings.warn("ApproximationResult.max_distance is deprecated: use max_error (the same value; the name "
                       "every sorpia result uses)", DeprecationWarning, stacklevel=2)
         return self.max_error

@@ -55,7 +55,7 @@ def decimate(vertices, faces=None, n_vertices: Optional[int] = None, *, scheme: 
              sharp_angle: Optional[float] = None,
              max_normal_deviation: float = 60.0, max_aspect_ratio: float = 10.0,
              max_boundary_angle: float = 30.0, strict: bool = True) -> Cage:
-    """A cage of `n_vertices` vertices for a dense triangle mesh.
+    """A cage of ``n_vertices`` vertices for a dense triangle mesh.
 
     OpenMesh's Decimater framework collapses edges in the order of Garland
     and Heckbert's quadric error (``ModQuadricT``; a collapse moves a vertex
@@ -71,7 +71,7 @@ def decimate(vertices, faces=None, n_vertices: Optional[int] = None, *, scheme: 
     Under Catmull-Clark each decimated triangle is split into three quads at
     its centroid and edge midpoints (as `sorpia.shapes.quad_irregular` is
     made), the triangles decimated until the quad cage has at most
-    `n_vertices` vertices and at most 5 fewer.
+    ``n_vertices`` vertices and at most 5 fewer.
 
     Parameters
     ----------
@@ -95,7 +95,7 @@ def decimate(vertices, faces=None, n_vertices: Optional[int] = None, *, scheme: 
     max_normal_deviation, max_aspect_ratio, max_boundary_angle : float
         The decimation's guards, above.
     strict : bool
-        True: a decimation the guards stop before `n_vertices` raises
+        True: a decimation the guards stop before ``n_vertices`` raises
         `MeshError`. False: it returns the cage it reached (more vertices than
         asked) with a `DecimationWarning` saying how far it got.
 
@@ -108,11 +108,11 @@ def decimate(vertices, faces=None, n_vertices: Optional[int] = None, *, scheme: 
     ------
     MeshError
         A face that is not a triangle, a mesh OpenMesh's half-edge mesh
-        cannot take (the face named), `n_vertices` above the mesh's, or
-        (`strict`) a decimation the guards stop before `n_vertices` (the
+        cannot take (the face named), ``n_vertices`` above the mesh's, or
+        (`strict`) a decimation the guards stop before ``n_vertices`` (the
         message says how far it got).
     ParameterError
-        `n_vertices` below 4, an unknown scheme, an angle or ratio out of range.
+        ``n_vertices`` below 4, an unknown scheme, an angle or ratio out of range.
     """
     if isinstance(vertices, SubdivisionMesh):  # decimate(mesh, n_vertices)
         if faces is not None:  # decimate(mesh, n)

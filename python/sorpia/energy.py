@@ -70,10 +70,9 @@ import numpy as np
 
 from . import _core
 from ._mesh import mesh_arguments, mesh_count
-from ._validate import DEFAULT_BOUNDARY, DEFAULT_SCHEME, as_rules, as_vertices
+from ._validate import DEFAULT_BOUNDARY, DEFAULT_SCHEME, as_integer, as_real, as_rules, as_vertices
 from .limit import built, warn_unreferenced
 from .errors import ParameterError
-from .solve import _integer, _real
 
 __all__ = ["fairness_matrix", "thin_plate_energy"]
 
@@ -108,7 +107,7 @@ def fairness_matrix(faces, n_vertices: Optional[int] = None, *, scheme: str = DE
         docstring): "sharp" measures the surface with them infinitely sharp,
         the bending on each side of a crease; "as-tagged" the surface as
         tagged, the thin layer where a crease turns included.
-    reference : (n_vertices, 3) array_like float, optional
+    reference : (n, 3) array_like float, optional (n the vertex count)
         None: the parametric measure (module docstring). Given: each face is
         measured in a fixed first fundamental form G, that of the limit
         surface of these control vertices at the face's centre (a reference
@@ -168,9 +167,9 @@ def thin_plate_energy(vertices, faces=None, *, scheme: str = DEFAULT_SCHEME, bou
 
 def _options(thin_plate, membrane, gauss_points, depth) -> tuple:
     """The options as the core takes them; the core checks their ranges once."""
-    return (_real(thin_plate, "thin_plate"), _real(membrane, "membrane"),
-            min(_integer(gauss_points, "gauss_points", "an integer in 1..16"), 2**31 - 1),
-            min(_integer(depth, "depth", "an integer in 0..12"), 2**31 - 1))
+    return (as_real(thin_plate, "thin_plate"), as_real(membrane, "membrane"),
+            min(as_integer(gauss_points, "gauss_points", "an integer in 1..16"), 2**31 - 1),
+            min(as_integer(depth, "depth", "an integer in 0..12"), 2**31 - 1))
 
 
 def check_semi_sharp(semi_sharp) -> str:

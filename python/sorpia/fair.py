@@ -183,7 +183,7 @@ class FairResult:
 
     @property
     def energies(self) -> np.ndarray:
-        """Deprecated name of `history` (DeprecationWarning), for one release."""
+        """Deprecated name of ``history`` (DeprecationWarning), for one release."""
         warnings.warn("FairResult.energies is deprecated: use history (the same array; the name every sorpia "
                       "result uses)", DeprecationWarning, stacklevel=2)
         return self.history

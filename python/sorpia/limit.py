@@ -174,7 +174,7 @@ def limit_points(vertices, faces=None, *, scheme: str = DEFAULT_SCHEME, boundary
                                                                     "holes"))
     vertices = as_vertices(vertices, columns=None)
     if as_nonmanifold(rules["nonmanifold"]) == "sharp":
-        s = split(faces, len(vertices), boundary, creases=creases, corners=corners, holes=holes)
+        s = split(faces, len(vertices), boundary, creases=creases, corners=corners, holes=holes, stacklevel=3)
         if s is not None:  # the split's rows of the input vertices
             return limit_points(vertices[s.vertex_map], s.faces, boundary=s.boundary, scheme=scheme,
                                 **s.tags)[: len(vertices)]
@@ -217,7 +217,8 @@ def limit_matrix(faces, n_vertices: Optional[int] = None, *, scheme: str = DEFAU
     scheme, boundary, creases, corners, holes = (rules[k] for k in ("scheme", "boundary", "creases", "corners",
                                                                     "holes"))
     if as_nonmanifold(rules["nonmanifold"]) == "sharp":
-        s = split(faces, as_vertex_count(n_vertices), boundary, creases=creases, corners=corners, holes=holes)
+        s = split(faces, as_vertex_count(n_vertices), boundary, creases=creases, corners=corners, holes=holes,
+                  stacklevel=3)
         if s is not None:  # the split's rows of the input vertices, each copy's column added to its vertex's
             return folded(limit_matrix(s.faces, len(s.vertex_map), boundary=s.boundary, scheme=scheme, **s.tags),
                           s.vertex_map, as_vertex_count(n_vertices))

@@ -98,7 +98,6 @@ more sweeps than Gauss-Seidel (figures on the omega study's page of the docs).
 from __future__ import annotations
 
 import math
-import numbers
 import time
 import warnings
 import weakref
@@ -109,8 +108,9 @@ import numpy as np
 from . import _core
 from ._mesh import mesh_arguments, mesh_count
 from ._nonmanifold import folded, split
-from ._validate import (DEFAULT_BOUNDARY, DEFAULT_NONMANIFOLD, DEFAULT_SCHEME, as_boundary, as_nonmanifold, as_rules,
-                        as_vertex_count, as_vertices)
+from ._validate import (DEFAULT_BOUNDARY, DEFAULT_NONMANIFOLD, DEFAULT_SCHEME, as_boundary, as_integer,
+                        as_nonmanifold, as_real, as_rules, as_vertex_count, as_vertices)
+from ._validate import as_integer as _integer  # noqa: F401  (fair.py's name until it takes as_integer)
 from .errors import ConvergenceWarning, OmegaWarning, ParameterError, SingularMatrixWarning
 from .limit import NONMANIFOLD_DOC as _NONMANIFOLD_DOC
 from .limit import TAGS_DOC as _TAGS_DOC
@@ -122,23 +122,10 @@ OMEGA_RULES = ("auto", "young")
 THREADED_METHODS = ("sor", "gs", "auto")  # the methods that sweep on threads > 1 (auto: its sor run)
 YOUNG_RHO_CLAMP = float(_core.YOUNG_RHO_CLAMP)
 MAX_THREADS = int(_core.MAX_THREADS)
-_INT64_MAX = 2**63 - 1
 
 
 # The one result type, defined in the core's binding (its docstring lists the fields).
 InterpolationResult = _core.InterpolationResult
-
-
-def _real(value, name: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, numbers.Real):
-        raise ParameterError(f"{name} must be a real number, got {value!r}")
-    return float(value)
-
-
-def _integer(value, name: str, what: str) -> int:
-    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
-        raise ParameterError(f"{name} = {value!r} must be {what}")
-    return min(int(value), _INT64_MAX)  # beyond any limit: the core names it as too large
 
 
 def check_options(method: str = "auto", omega="auto", tol: float = 1e-10, max_iter: int = 1000,
@@ -158,16 +145,16 @@ def check_options(method: str = "auto", omega="auto", tol: float = 1e-10, max_it
     if isinstance(omega, str):
         rule, omega_value = _core.parse_omega(omega)
     else:
-        rule, omega_value = _core.OmegaRule.given, _real(omega, "omega")
+        rule, omega_value = _core.OmegaRule.given, as_real(omega, "omega")
     if callback is not None and not callable(callback):
         raise ParameterError(f"callback = {callback!r} must be callable (k, error) or None")
     return _core.SolveOptions(
         method=method_value, omega_rule=rule, omega=omega_value,
-        sigma=None if sigma is None else _real(sigma, "sigma"),
-        alpha=None if alpha is None else _real(alpha, "alpha"),
-        weight=None if weight is None else _real(weight, "weight"),
-        tol=_real(tol, "tol"), max_iter=_integer(max_iter, "max_iter", "an integer >= 1"),
-        threads=min(_integer(threads, "threads", "an integer >= 1"), 2**31 - 1))
+        sigma=None if sigma is None else as_real(sigma, "sigma"),
+        alpha=None if alpha is None else as_real(alpha, "alpha"),
+        weight=None if weight is None else as_real(weight, "weight"),
+        tol=as_real(tol, "tol"), max_iter=as_integer(max_iter, "max_iter", "an integer >= 1"),
+        threads=min(as_integer(threads, "threads", "an integer >= 1"), 2**31 - 1))
 
 
 class Interpolator:

@@ -138,7 +138,7 @@ class LimitSurface:
         vertices = as_vertices(vertices)
         self._vertex_map, self._n_input = None, vertices.shape[0]
         if as_nonmanifold(nonmanifold) == "sharp":
-            s = split(faces, vertices.shape[0], boundary, creases=creases, corners=corners, holes=holes)
+            s = split(faces, vertices.shape[0], boundary, creases=creases, corners=corners, holes=holes, stacklevel=3)
             if s is not None:
                 self._vertex_map = s.vertex_map
                 vertices, faces, boundary = vertices[s.vertex_map], s.faces, s.boundary
