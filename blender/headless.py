@@ -15,7 +15,7 @@ MODULE = "bl_ext.user_default.sorpia_blender"
 
 def install(zip_path: str) -> str:
     """Install and enable the extension zip in the user repository; returns the add-on's module name."""
-    repo = bpy.context.preferences.extensions.repos["user_default"]
+    (repo,) = [r for r in bpy.context.preferences.extensions.repos if r.module == "user_default"]
     # Without the repository's folder Blender installs the files but fails to load the add-on ("No module named
     # bl_ext.user_default...").
     os.makedirs(repo.directory, exist_ok=True)

@@ -155,11 +155,12 @@ def decorate(obj) -> None:
     mesh.update()
 
 
-def fit_scenario(obj, **options) -> dict:
-    """Fit Subdivision Through Vertices on one object: its targets, Blender's limit after, what stayed."""
+def fit_scenario(obj, method="auto", tolerance=1e-10) -> dict:
+    """Fit Subdivision Through Vertices on one object: its targets, Blender's limit after, what stayed. The
+    options are given each time: Blender remembers an operator's last options for its next run."""
     select(obj)
     before = snapshot(obj)
-    error = run_op("sorpia_fit", **options)
+    error = run_op("sorpia_fit", method=method, tolerance=tolerance)
     after = snapshot(obj)
     out = {"error": error, "targets": before["co"], "moved": after["co"]}
     out.update({f"before/{k}": v for k, v in before.items()})

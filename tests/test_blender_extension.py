@@ -12,6 +12,7 @@ the tests skip, saying so."""
 from __future__ import annotations
 
 import os
+import re
 import subprocess
 from pathlib import Path
 
@@ -69,7 +70,7 @@ FITS = {
     "fit_grid_no_modifier": ("ALL", QUALITY_EXACT),  # added: Blender's default boundary, one-face corners
     "fit_grid_preserve_corners": ("PRESERVE_CORNERS", QUALITY_DEFAULT),
     "fit_ngons": ("ALL", QUALITY_DEFAULT),
-    "fit_suzanne": ("ALL", QUALITY_EXACT),
+    "fit_suzanne": ("ALL", QUALITY_DEFAULT),  # no corner of one face, no crease
     "fit_two_face_vertex": ("ALL", QUALITY_EXACT),
 }
 
@@ -105,7 +106,7 @@ def test_fit_keeps_the_decorations(run):
 
 
 def test_fit_warns_of_two_face_vertices(run):
-    assert "1 interior vertices of two faces" in run[1] and "Blender 5.0 and older" in run[1]
+    assert "1 interior vertex of two faces" in run[1] and "Blender 5.0 and older" in run[1]
 
 
 def test_fit_reports_the_largest_miss(run):
@@ -160,20 +161,38 @@ def test_fair_fit(run):
         assert child in F[parent_of[j]] and material[j] == r["coarse_material"][parent_of[j]]
 
 
+def tangent_rms(points, cage, faces, level: int = 5) -> float:
+    """RMS distance from the points to the cage's limit surface, measured here independently of the fit: to the
+    tangent plane at the nearest vertex of the surface tessellated `level` times (Catmull-Clark, scipy's KD
+    tree; the plane's error is the curvature times the squared spacing, 1e-5 of the diagonal here)."""
+    import scipy.spatial
+
+    Vs, Fs = sorpia.limit_surface(cage, faces, level=level, scheme="catmull-clark")
+    normals = np.zeros_like(Vs)
+    for k in range(4):
+        a, b, c = Fs[:, k], Fs[:, (k + 1) % 4], Fs[:, (k + 3) % 4]
+        np.add.at(normals, a, np.cross(Vs[b] - Vs[a], Vs[c] - Vs[a]))
+    normals /= np.linalg.norm(normals, axis=1, keepdims=True)
+    _, nearest = scipy.spatial.cKDTree(Vs).query(points)
+    return float(np.sqrt(np.mean(np.einsum("ij,ij->i", points - Vs[nearest], normals[nearest]) ** 2)))
+
+
 @pytest.mark.parametrize("name", ["cage_mesh", "cage_points"])
 def test_fit_cage_to_target(run, name):
-    """The cage fitted to a scan (the limit surface of a cage, tessellated, with noise, in another object with
-    its own transform): Blender draws sorpia's limit surface of the fitted cage, which lies near the cage
-    that made the scan."""
+    """The cage fitted to a scan (the limit surface of a torus cage tessellated, with noise of 1e-4, in another
+    object with its own transform), from that cage shrunk by 0.9: Blender draws sorpia's limit surface of the
+    fitted cage, which lies at the RMS distance the operator reports from the points, far closer than before."""
     r = result(run, name)
     assert str(r["error"]) == ""
-    diag = diagonal(r["points"])
-    ours = sorpia.limit_points(r["fitted"], r["faces"], scheme="catmull-clark")
+    points, faces = r["points"], r["faces"]
+    diag = diagonal(points)
+    ours = sorpia.limit_points(r["fitted"], faces, scheme="catmull-clark")
     assert np.abs(r["limit"] - ours).max() < BLENDER_TOL * diag
-    true_cage = r["before"] / 0.9
-    assert np.abs(r["before"] - true_cage).max() > 0.04 * diag
-    assert np.abs(r["fitted"] - true_cage).max() < 5e-3 * diag
-    assert "RMS distance" in run[1]
+    rms = tangent_rms(points, r["fitted"], faces)
+    assert rms < 3e-4 * diag and tangent_rms(points, r["before"], faces) > 1e-2 * diag
+    # the reports, in the order the scenarios ran (cage_mesh, cage_points): the RMS sorpia.approximate found
+    reported = [float(x) for x in re.findall(r"RMS distance ([0-9.e+-]+) ", run[1])]
+    assert reported[["cage_mesh", "cage_points"].index(name)] == pytest.approx(rms, rel=0.1)
 
 
 BAD = {  # the phrase each refusal must say

@@ -25,7 +25,7 @@ from bpy.props import EnumProperty, FloatProperty
 
 import sorpia
 from sorpia.blender import (EDGE_CREASE, VERTEX_CREASE, BlenderMesh, blender_rules, crease_weights_of,
-                            mesh_refusal, modifier_settings, two_face_vertices)
+                            mesh_refusal, modifier_settings, two_face_note)
 from sorpia.solve import METHODS
 
 SCHEME = "catmull-clark"  # Blender's Subdivision Surface modifier: Catmull-Clark (its "Simple" is refused)
@@ -83,8 +83,8 @@ def subdivision_modifier(obj):
                       ": the second subdivides the first's result; keep one")
     first = subsurf[0] if subsurf else len(modifiers)
     if first > 0:
-        raise Refused(f"modifiers come before {'its Subdivision Surface modifier' if subsurf else 'the Subdivision '
-                      'Surface modifier it would get'} ({_names(modifiers[:first])}): it would subdivide their "
+        which = "its Subdivision Surface modifier" if subsurf else "the Subdivision Surface modifier it would get"
+        raise Refused(f"modifiers come before {which} ({_names(modifiers[:first])}): it would subdivide their "
                       "result, not the mesh; apply or remove them, or move the Subdivision Surface modifier first")
     if not subsurf:
         return None, []
@@ -118,15 +118,21 @@ class Subject:
         self.rules = blender_rules(self.mesh, boundary_smooth, use_creases)
         self.faces = self.mesh.faces
 
+    def miss(self, cage: np.ndarray, faces=None, rules=None, targets=None) -> float:
+        """The largest distance from the mesh's vertices (`targets`: those of them, all by default) to the limit
+        positions of `cage` as Blender holds it (float32), over the bounding box's diagonal; sorpia's limit."""
+        faces, rules = (self.faces, self.rules) if faces is None else (faces, rules)
+        limit = sorpia.limit_points(np.asarray(cage, np.float32).astype(np.float64), faces, scheme=SCHEME, **rules)
+        limit = limit if targets is None else limit[targets]
+        return float(np.linalg.norm(limit - self.mesh.vertices, axis=1).max()) / _diagonal(self.mesh.vertices)
+
     def notes(self) -> list:
         """What the user should know about this object's result: where Blender draws the surface wrong, what
         the modifiers after the Subdivision Surface one do."""
         notes = []
-        two = two_face_vertices(self.mesh)
-        if len(two):
-            notes.append(f"{self.obj.name}: {len(two)} interior vertices of two faces (the first: {two[0]}): "
-                         "Blender 5.0 and older draw the surface around them wrong (OpenSubdiv 3.6.0's Bfr, "
-                         "fixed in 3.6.1); sorpia's fit is right there")
+        two = two_face_note(self.mesh)
+        if two is not None:
+            notes.append(f"{self.obj.name}: {two}")
         if self.after:
             notes.append(f"{self.obj.name}: the modifiers after its Subdivision Surface ({_names(self.after)}) "
                          "still change what is drawn")
@@ -234,13 +240,13 @@ class SORPIA_OT_fit(bpy.types.Operator):
                 res = sorpia.interpolate(s.mesh.vertices, s.faces, method=self.method, tol=self.tolerance,
                                          scheme=SCHEME, **s.rules,
                                          callback=lambda k, error, i=i: run.progress(i + min(k, 99) / 100))
-                if not res.converged:
+                # As sorpia fit: where B is singular the least-squares cage is the best there is (its
+                # SingularMatrixWarning names where the targets are missed); any other stop is no answer.
+                if not (res.converged or res.stop_reason == "singular"):
                     raise Refused(f"{s.obj.name}: the solve stopped short ({res.stop_reason}, {res.iterations} "
                                   f"iterations, E_k/E_0 {res.errors[-1]:.2g}); try another method")
                 cage = res.control_vertices.astype(np.float32)  # what Blender keeps
-                miss = np.linalg.norm(sorpia.limit_points(cage.astype(np.float64), s.faces, scheme=SCHEME,
-                                                          **s.rules) - s.mesh.vertices, axis=1).max()
-                fits.append((s, cage, miss / _diagonal(s.mesh.vertices), res))
+                fits.append((s, cage, s.miss(cage), res))
                 run.notes += s.notes()
             for s, cage, _, _ in fits:  # every fit solved: now the meshes change
                 _set_vertices(s.obj, cage)
@@ -300,13 +306,14 @@ class SORPIA_OT_fair_fit(bpy.types.Operator):
                 run.progress(i + 1)
                 # Far's refinement lists each face's children together, in the order of the faces.
                 parents = np.repeat(np.arange(len(s.mesh.face_sizes)), s.mesh.face_sizes)
-                fits.append((s, res, parents, res.max_error_relative))
-                run.notes += s.notes()
-            for s, res, parents, _ in fits:
-                _replace_geometry(s.obj.data, res.control_vertices, res.faces, parents, res.creases, res.corners)
                 tags = {k: v for k, v in (("creases", res.creases), ("corners", res.corners)) if v is not None}
+                miss = s.miss(res.control_vertices, res.faces, {"boundary": s.rules["boundary"], **tags}, res.targets)
+                fits.append((s, res, parents, tags, miss))
+                run.notes += s.notes()
+            for s, res, parents, tags, _ in fits:
+                _replace_geometry(s.obj.data, res.control_vertices, res.faces, parents, res.creases, res.corners)
                 s.set_modifier(res.faces, len(res.control_vertices), {"boundary": s.rules["boundary"], **tags})
-            worst = max(f[3] for f in fits)
+            worst = max(f[-1] for f in fits)
             run.finish(f"sorpia: fair fit of {len(fits)} mesh{'es' if len(fits) != 1 else ''} in "
                        f"{time.perf_counter() - t0:.2f} s, one level finer; largest miss {worst:.2g} of the "
                        "diagonal")

@@ -127,8 +127,8 @@ def blender_rules(mesh: BlenderMesh, boundary_smooth: str = "ALL", use_creases: 
     return rules
 
 
-def _count(n: int, what: str) -> str:
-    return f"{n} {what}" + ("" if n == 1 else "s")
+def _count(n: int, what: str, plural: str = "") -> str:
+    return f"{n} {what if n == 1 else plural or what + 's'}"
 
 
 def mesh_refusal(mesh: BlenderMesh) -> str | None:
@@ -146,9 +146,10 @@ def mesh_refusal(mesh: BlenderMesh) -> str | None:
     uses = np.bincount(corner_edges, minlength=len(edges))
     loose_edges = np.count_nonzero(uses == 0)
     if loose_vertices or loose_edges:
-        return (f"the mesh has {_count(loose_edges, 'loose edge')} and {_count(loose_vertices, 'loose vertex')} "
-                "(of no face): Blender's modifier makes the ends of loose edges sharp corners; delete them "
-                "(Select > Select All by Trait > Loose Geometry)")
+        loose = " and ".join(_count(k, *what) for k, what in ((loose_edges, ("loose edge",)),
+                                                              (loose_vertices, ("loose vertex", "loose vertices"))) if k)
+        return (f"the mesh has {loose} (of no face): Blender's modifier makes the "
+                "ends of loose edges sharp corners; delete them (Select > Select All by Trait > Loose Geometry)")
     many = np.count_nonzero(uses > 2)
     if many:
         return (f"the mesh has {_count(many, 'edge')} of three or more faces (non-manifold): "
@@ -176,6 +177,16 @@ def two_face_vertices(mesh: BlenderMesh) -> np.ndarray:
     boundary = np.zeros(n, dtype=bool)
     boundary[edges[np.bincount(mesh.corner_edges, minlength=len(edges)) == 1].ravel()] = True
     return np.flatnonzero((np.bincount(mesh.corner_verts, minlength=n) == 2) & ~boundary)
+
+
+def two_face_note(mesh: BlenderMesh) -> str | None:
+    """The warning for a mesh with `two_face_vertices`, None without."""
+    two = two_face_vertices(mesh)
+    if not len(two):
+        return None
+    return (f"{_count(len(two), 'interior vertex', 'interior vertices')} of two faces (the first: {two[0]}): Blender "
+            "5.0 and older draw the surface around them wrong (OpenSubdiv 3.6.0's Bfr, fixed in 3.6.1); sorpia's "
+            "fit is right there")
 
 
 def crease_weights_of(edges, n_vertices: int, creases=None, corners=None) -> tuple[np.ndarray, np.ndarray]:
@@ -267,4 +278,4 @@ def write_blender_script(path, vertices, faces, **options) -> None:
 
 __all__ = ["blender_script", "write_blender_script", "blender_refusal", "blender_quality", "crease_weight",
            "crease_sharpness", "modifier_settings", "BlenderMesh", "blender_rules", "mesh_refusal",
-           "two_face_vertices", "crease_weights_of"]
+           "two_face_vertices", "two_face_note", "crease_weights_of"]
