@@ -214,7 +214,34 @@ def _selected_meshes(context) -> list:
     return [o for o in context.selected_objects if o.type == "MESH"]
 
 
-class SORPIA_OT_fit(bpy.types.Operator):
+def _plural(n: int) -> str:
+    return f"{n} mesh{'es' if n != 1 else ''}"
+
+
+class _EachSelectedMesh:
+    """An operator on each selected mesh (each mesh once): `solve` for every one first, then `apply` to every
+    one, so that a refusal or a failed solve leaves them all as they were; then one report, `summary`."""
+
+    @classmethod
+    def poll(cls, context):
+        return context.mode == "OBJECT" and bool(_selected_meshes(context))
+
+    def execute(self, context):
+        t0 = time.perf_counter()
+        meshes = _selected_meshes(context)
+        with _Run(self, context, len(meshes)) as run:
+            fits = []
+            for i, s in enumerate(_subjects(meshes)):
+                fits.append(self.solve(s, run, i))
+                run.notes += s.notes()
+            for fit in fits:  # every fit solved: now the meshes change
+                self.apply(*fit)
+            run.finish(self.summary(fits, time.perf_counter() - t0))
+            return {"FINISHED"}
+        return {"CANCELLED"}
+
+
+class SORPIA_OT_fit(_EachSelectedMesh, bpy.types.Operator):
     """Move the vertices of each selected mesh so that the limit surface of its Subdivision Surface modifier passes
     through where they were"""
 
@@ -227,36 +254,25 @@ class SORPIA_OT_fit(bpy.types.Operator):
     tolerance: FloatProperty(name="Tolerance", description="stop when the largest miss has fallen below this "
                              "fraction of the first", default=1e-10, min=1e-15, max=0.1, precision=12)
 
-    @classmethod
-    def poll(cls, context):
-        return context.mode == "OBJECT" and bool(_selected_meshes(context))
+    def solve(self, s: Subject, run: _Run, i: int) -> tuple:
+        res = sorpia.interpolate(s.mesh.vertices, s.faces, method=self.method, tol=self.tolerance, scheme=SCHEME,
+                                 **s.rules, callback=lambda k, error: run.progress(i + min(k, 99) / 100))
+        # As sorpia fit: where B is singular the least-squares cage is the best there is (its
+        # SingularMatrixWarning names where the targets are missed); any other stop is no answer.
+        if not (res.converged or res.stop_reason == "singular"):
+            raise Refused(f"{s.obj.name}: the solve stopped short ({res.stop_reason}, {res.iterations} "
+                          f"iterations, E_k/E_0 {res.errors[-1]:.2g}); try another method")
+        cage = res.control_vertices.astype(np.float32)  # what Blender keeps
+        return s, cage, s.miss(cage), res
 
-    def execute(self, context):
-        t0 = time.perf_counter()
-        with _Run(self, context, len(_selected_meshes(context))) as run:
-            subjects = _subjects(_selected_meshes(context))
-            fits = []
-            for i, s in enumerate(subjects):
-                res = sorpia.interpolate(s.mesh.vertices, s.faces, method=self.method, tol=self.tolerance,
-                                         scheme=SCHEME, **s.rules,
-                                         callback=lambda k, error, i=i: run.progress(i + min(k, 99) / 100))
-                # As sorpia fit: where B is singular the least-squares cage is the best there is (its
-                # SingularMatrixWarning names where the targets are missed); any other stop is no answer.
-                if not (res.converged or res.stop_reason == "singular"):
-                    raise Refused(f"{s.obj.name}: the solve stopped short ({res.stop_reason}, {res.iterations} "
-                                  f"iterations, E_k/E_0 {res.errors[-1]:.2g}); try another method")
-                cage = res.control_vertices.astype(np.float32)  # what Blender keeps
-                fits.append((s, cage, s.miss(cage), res))
-                run.notes += s.notes()
-            for s, cage, _, _ in fits:  # every fit solved: now the meshes change
-                _set_vertices(s.obj, cage)
-                s.set_modifier()
-            worst = max(fits, key=lambda f: f[2])
-            run.finish(f"sorpia: fitted {len(fits)} mesh{'es' if len(fits) != 1 else ''} in "
-                       f"{time.perf_counter() - t0:.2f} s; largest miss {worst[2]:.2g} of the diagonal "
-                       f"({worst[0].obj.name}, {worst[3].iterations} iterations of {worst[3].variant})")
-            return {"FINISHED"}
-        return {"CANCELLED"}
+    def apply(self, s: Subject, cage, miss, res) -> None:
+        _set_vertices(s.obj, cage)
+        s.set_modifier()
+
+    def summary(self, fits, seconds: float) -> str:
+        s, _, miss, res = max(fits, key=lambda f: f[2])
+        return (f"sorpia: fitted {_plural(len(fits))} in {seconds:.2f} s; largest miss {miss:.2g} of the diagonal "
+                f"({s.obj.name}, {res.iterations} iterations of {res.variant})")
 
 
 def _replace_geometry(mesh, vertices: np.ndarray, faces: np.ndarray, parents: np.ndarray, creases, corners) -> None:
@@ -283,7 +299,7 @@ def _replace_geometry(mesh, vertices: np.ndarray, faces: np.ndarray, parents: np
     mesh.update()
 
 
-class SORPIA_OT_fair_fit(bpy.types.Operator):
+class SORPIA_OT_fair_fit(_EachSelectedMesh, bpy.types.Operator):
     """Replace each selected mesh with the one-level-finer cage whose limit surface passes through its vertices
     and bends least (creases carried; UV maps and vertex weights are not)"""
 
@@ -291,34 +307,23 @@ class SORPIA_OT_fair_fit(bpy.types.Operator):
     bl_label = "Fair Fit"
     bl_options = {"REGISTER", "UNDO"}
 
-    @classmethod
-    def poll(cls, context):
-        return context.mode == "OBJECT" and bool(_selected_meshes(context))
+    def solve(self, s: Subject, run: _Run, i: int) -> tuple:
+        res = sorpia.fair_interpolate(s.mesh.vertices, s.faces, scheme=SCHEME, tol=FAIR_TOL, max_iter=FAIR_MAX_ITER,
+                                      **s.rules)
+        run.progress(i + 1)
+        tags = {k: v for k, v in (("creases", res.creases), ("corners", res.corners)) if v is not None}
+        rules = {"boundary": s.rules["boundary"], **tags}
+        return s, res, rules, s.miss(res.control_vertices, res.faces, rules, res.targets)
 
-    def execute(self, context):
-        t0 = time.perf_counter()
-        with _Run(self, context, len(_selected_meshes(context))) as run:
-            subjects = _subjects(_selected_meshes(context))
-            fits = []
-            for i, s in enumerate(subjects):
-                res = sorpia.fair_interpolate(s.mesh.vertices, s.faces, scheme=SCHEME, tol=FAIR_TOL,
-                                              max_iter=FAIR_MAX_ITER, **s.rules)
-                run.progress(i + 1)
-                # Far's refinement lists each face's children together, in the order of the faces.
-                parents = np.repeat(np.arange(len(s.mesh.face_sizes)), s.mesh.face_sizes)
-                tags = {k: v for k, v in (("creases", res.creases), ("corners", res.corners)) if v is not None}
-                miss = s.miss(res.control_vertices, res.faces, {"boundary": s.rules["boundary"], **tags}, res.targets)
-                fits.append((s, res, parents, tags, miss))
-                run.notes += s.notes()
-            for s, res, parents, tags, _ in fits:
-                _replace_geometry(s.obj.data, res.control_vertices, res.faces, parents, res.creases, res.corners)
-                s.set_modifier(res.faces, len(res.control_vertices), {"boundary": s.rules["boundary"], **tags})
-            worst = max(f[-1] for f in fits)
-            run.finish(f"sorpia: fair fit of {len(fits)} mesh{'es' if len(fits) != 1 else ''} in "
-                       f"{time.perf_counter() - t0:.2f} s, one level finer; largest miss {worst:.2g} of the "
-                       "diagonal")
-            return {"FINISHED"}
-        return {"CANCELLED"}
+    def apply(self, s: Subject, res, rules, miss) -> None:
+        # Far's refinement lists each face's children together, in the order of the faces.
+        parents = np.repeat(np.arange(len(s.mesh.face_sizes)), s.mesh.face_sizes)
+        _replace_geometry(s.obj.data, res.control_vertices, res.faces, parents, res.creases, res.corners)
+        s.set_modifier(res.faces, len(res.control_vertices), rules)
+
+    def summary(self, fits, seconds: float) -> str:
+        return (f"sorpia: fair fit of {_plural(len(fits))} in {seconds:.2f} s, one level finer; largest miss "
+                f"{max(f[-1] for f in fits):.2g} of the diagonal")
 
 
 class SORPIA_OT_fit_cage(bpy.types.Operator):
