@@ -149,7 +149,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--vertices", type=int, default=100_000)
     parser.add_argument("--cage-vertices", type=int, default=2000)
-    parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument("--repeat", type=int, default=5)
     parser.add_argument("--zip", default=None, help="the extension zip (default dist/sorpia_blender-VERSION.zip)")
     parser.add_argument("--no-page", action="store_true")
     args = parser.parse_args()

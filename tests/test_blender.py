@@ -280,3 +280,18 @@ def test_script_and_extension_share_the_modifier_settings(tmp_path):
                         "boundary_smooth": "ALL", "use_creases": True}
     for key, value in settings.items():
         assert f"modifier.{key} = {value!r}\n" in text
+
+
+def test_interpolate_float32_measures_the_rounded_cage():
+    """The miss interpolate_float32 reports is that of the float32 cage, as sorpia.limit_points measures it."""
+    from sorpia.blender import interpolate_float32
+
+    V, F, tags = CASES["creases and a corner"]()
+    V = V + 0.05 * np.sin(3 * V[:, [1, 2, 0]])
+    res, cage, miss = interpolate_float32(V, F, {"boundary": "edge-only", **tags}, tol=1e-12)
+    assert res.converged and cage.dtype == np.float32
+    assert np.array_equal(cage, res.control_vertices.astype(np.float32))
+    limit = sorpia.limit_points(cage.astype(np.float64), F, scheme="catmull-clark", boundary="edge-only", **tags)
+    diagonal = np.linalg.norm(V.max(axis=0) - V.min(axis=0))
+    assert miss == pytest.approx(np.linalg.norm(limit - V, axis=1).max() / diagonal, rel=1e-9)
+    assert 1e-10 < miss < 1e-6  # float32's rounding, not the solve's 1e-12

@@ -25,7 +25,7 @@ from bpy.props import EnumProperty, FloatProperty
 
 import sorpia
 from sorpia.blender import (EDGE_CREASE, VERTEX_CREASE, BlenderMesh, blender_rules, crease_weights_of,
-                            mesh_refusal, modifier_settings, two_face_note)
+                            interpolate_float32, mesh_refusal, modifier_settings, two_face_note)
 from sorpia.solve import METHODS
 
 SCHEME = "catmull-clark"  # Blender's Subdivision Surface modifier: Catmull-Clark (its "Simple" is refused)
@@ -43,26 +43,35 @@ def _get(collection, attribute: str, count: int, dtype) -> np.ndarray:
     return out
 
 
-def _float_attribute(mesh, name: str, domain: str, count: int):
-    """A float attribute as Blender's modifier reads it (that name, domain and type), or None."""
+def _attribute(mesh, name: str, domain: str, data_type: str, value: str, count: int, dtype):
+    """An attribute's values by name, domain and type (or None): Blender's own arrays (position, .edge_verts,
+    .corner_vert, .corner_edge) are attributes too, and foreach_get copies them in one pass, where the same
+    values through MeshEdge.vertices or MeshLoop.vertex_index take a call per element (30-70 ms at 100k)."""
     layer = mesh.attributes.get(name)
-    if layer is None or layer.domain != domain or layer.data_type != "FLOAT":
+    if layer is None or layer.domain != domain or layer.data_type != data_type:
         return None
-    return _get(layer.data, "value", count, np.float32)
+    return _get(layer.data, value, count, dtype)
 
 
 def read_mesh(mesh) -> BlenderMesh:
     """The mesh's arrays by foreach_get (no Python loop over its elements). Blender keeps each face's corners
     consecutive and in face order, so the corner arrays are the faces' vertex lists concatenated."""
     n, e, m, k = len(mesh.vertices), len(mesh.edges), len(mesh.polygons), len(mesh.loops)
+
+    def arrays(name, domain, data_type, value, width, collection, attribute, count, dtype=np.int32):
+        out = _attribute(mesh, name, domain, data_type, value, width * count, dtype)
+        return _get(collection, attribute, width * count, dtype) if out is None else out  # (an empty mesh)
+
+    starts = np.append(_get(mesh.polygons, "loop_start", m, np.int32), k)
     return BlenderMesh(
-        vertices=_get(mesh.vertices, "co", 3 * n, np.float32).reshape(n, 3).astype(np.float64),
-        edges=_get(mesh.edges, "vertices", 2 * e, np.int32).reshape(e, 2),
-        face_sizes=_get(mesh.polygons, "loop_total", m, np.int32),
-        corner_verts=_get(mesh.loops, "vertex_index", k, np.int32),
-        corner_edges=_get(mesh.loops, "edge_index", k, np.int32),
-        edge_creases=_float_attribute(mesh, EDGE_CREASE, "EDGE", e),
-        vertex_creases=_float_attribute(mesh, VERTEX_CREASE, "POINT", n))
+        vertices=arrays("position", "POINT", "FLOAT_VECTOR", "vector", 3, mesh.vertices, "co", n,
+                        np.float32).reshape(n, 3).astype(np.float64),
+        edges=arrays(".edge_verts", "EDGE", "INT32_2D", "value", 2, mesh.edges, "vertices", e).reshape(e, 2),
+        face_sizes=np.diff(starts).astype(np.int32),
+        corner_verts=arrays(".corner_vert", "CORNER", "INT", "value", 1, mesh.loops, "vertex_index", k),
+        corner_edges=arrays(".corner_edge", "CORNER", "INT", "value", 1, mesh.loops, "edge_index", k),
+        edge_creases=_attribute(mesh, EDGE_CREASE, "EDGE", "FLOAT", "value", e, np.float32),
+        vertex_creases=_attribute(mesh, VERTEX_CREASE, "POINT", "FLOAT", "value", n, np.float32))
 
 
 def _names(modifiers) -> str:
@@ -118,13 +127,11 @@ class Subject:
         self.rules = blender_rules(self.mesh, boundary_smooth, use_creases)
         self.faces = self.mesh.faces
 
-    def miss(self, cage: np.ndarray, faces=None, rules=None, targets=None) -> float:
-        """The largest distance from the mesh's vertices (`targets`: those of them, all by default) to the limit
-        positions of `cage` as Blender holds it (float32), over the bounding box's diagonal; sorpia's limit."""
-        faces, rules = (self.faces, self.rules) if faces is None else (faces, rules)
+    def miss(self, cage: np.ndarray, faces, rules, targets) -> float:
+        """The largest distance from the mesh's vertices to the limit positions of `targets` (indices) of `cage`
+        (faces, rules) as Blender holds it (float32), over the bounding box's diagonal; sorpia's limit."""
         limit = sorpia.limit_points(np.asarray(cage, np.float32).astype(np.float64), faces, scheme=SCHEME, **rules)
-        limit = limit if targets is None else limit[targets]
-        return float(np.linalg.norm(limit - self.mesh.vertices, axis=1).max()) / _diagonal(self.mesh.vertices)
+        return float(np.linalg.norm(limit[targets] - self.mesh.vertices, axis=1).max()) / _diagonal(self.mesh.vertices)
 
     def notes(self) -> list:
         """What the user should know about this object's result: where Blender draws the surface wrong, what
@@ -171,7 +178,8 @@ def _subjects(objects) -> list:
 
 
 def _set_vertices(obj, vertices: np.ndarray) -> None:
-    obj.data.vertices.foreach_set("co", np.ascontiguousarray(vertices, dtype=np.float32).ravel())
+    """The mesh's positions set in one pass (the position attribute: MeshVertex.co takes a call per vertex)."""
+    obj.data.attributes["position"].data.foreach_set("vector", np.ascontiguousarray(vertices, np.float32).ravel())
     obj.data.update()
 
 
@@ -255,15 +263,15 @@ class SORPIA_OT_fit(_EachSelectedMesh, bpy.types.Operator):
                              "fraction of the first", default=1e-10, min=1e-15, max=0.1, precision=12)
 
     def solve(self, s: Subject, run: _Run, i: int) -> tuple:
-        res = sorpia.interpolate(s.mesh.vertices, s.faces, method=self.method, tol=self.tolerance, scheme=SCHEME,
-                                 **s.rules, callback=lambda k, error: run.progress(i + min(k, 99) / 100))
+        res, cage, miss = interpolate_float32(s.mesh.vertices, s.faces, s.rules, method=self.method,
+                                              tol=self.tolerance,
+                                              callback=lambda k, error: run.progress(i + min(k, 99) / 100))
         # As sorpia fit: where B is singular the least-squares cage is the best there is (its
         # SingularMatrixWarning names where the targets are missed); any other stop is no answer.
         if not (res.converged or res.stop_reason == "singular"):
             raise Refused(f"{s.obj.name}: the solve stopped short ({res.stop_reason}, {res.iterations} "
                           f"iterations, E_k/E_0 {res.errors[-1]:.2g}); try another method")
-        cage = res.control_vertices.astype(np.float32)  # what Blender keeps
-        return s, cage, s.miss(cage), res
+        return s, cage, miss, res
 
     def apply(self, s: Subject, cage, miss, res) -> None:
         _set_vertices(s.obj, cage)
