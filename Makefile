@@ -71,8 +71,14 @@ wheel: install
 	$(PY) -m pip wheel -q --no-deps --no-build-isolation $(PIP_BUILD) -w build/wheel-raw .
 	PATH="$(abspath $(VENV))/bin:$$PATH" $(VENV)/bin/auditwheel repair -w dist build/wheel-raw/sorpia-$(VERSION)-*.whl
 
+# Blender ships numpy but no scipy, which fair_interpolate and approximate use: the extension carries scipy's
+# wheel for Blender's Python (3.11) and platform. 1.13 is the newest whose wheels take numpy 1.22.4 to 2.2.
+EXTENSION_SCIPY := scipy==1.13.1
 blender-extension: wheel
-	$(PY) blender/build_extension.py "$$(ls -t dist/sorpia-$(VERSION)-*.whl | head -n 1)" dist
+	$(PY) -m pip download -q --no-deps --only-binary=:all: --python-version 3.11 --implementation cp \
+	  --platform manylinux_2_17_x86_64 -d build/extension-wheels "$(EXTENSION_SCIPY)"
+	$(PY) blender/build_extension.py "$$(ls -t dist/sorpia-$(VERSION)-*.whl | head -n 1)" dist \
+	  build/extension-wheels/$(subst ==,-,$(EXTENSION_SCIPY))-*.whl
 
 py-test: install blender-venv blender-extension
 	cd tests && ../$(PY) -m pytest

@@ -1,12 +1,14 @@
 """Write the Blender extension zip: blender/sorpia_blender with the sorpia wheel.
 
-    python blender/build_extension.py WHEEL OUTDIR
+    python blender/build_extension.py WHEEL OUTDIR [DEPENDENCY_WHEEL ...]
 
-writes OUTDIR/sorpia_blender-VERSION.zip, VERSION the wheel's: the add-on's
-files at the zip's root, the wheel under wheels/, and blender_manifest.toml
-with the wheel's version, its path under ``wheels`` and its platform under
-``platforms`` (Blender installs an extension only on the platforms listed and
-unpacks its wheels itself). Prints the zip's path.
+writes OUTDIR/sorpia_blender-VERSION.zip, VERSION the sorpia wheel's: the
+add-on's files at the zip's root, the wheels under wheels/ (sorpia's and the
+dependencies Blender lacks: scipy, which Fair Fit and Fit Cage to Target use;
+Blender ships numpy), and blender_manifest.toml with the version, the wheels'
+paths under ``wheels`` and the platforms every wheel has under ``platforms``
+(Blender installs an extension only on the platforms listed, and unpacks its
+wheels itself, without resolving dependencies). Prints the zip's path.
 """
 
 from __future__ import annotations
@@ -44,30 +46,37 @@ def wheel_tags(wheel: Path) -> tuple[str, list[str]]:
     return parts[1], platforms
 
 
-def manifest(version: str, wheel_name: str, platforms: list[str]) -> str:
+def manifest(version: str, wheel_names: list[str], platforms: list[str]) -> str:
     text = (SOURCE / "blender_manifest.toml").read_text()
     text, n = re.subn(r'(?m)^version = ".*"$', f'version = "{version}"', text)
     if n != 1:
         raise SystemExit("blender_manifest.toml: no version line to set")
-    return text + f'platforms = {platforms!r}\nwheels = ["./wheels/{wheel_name}"]\n'.replace("'", '"')
+    wheels = [f"./wheels/{name}" for name in wheel_names]
+    return text + f"platforms = {platforms!r}\nwheels = {wheels!r}\n".replace("'", '"')
 
 
-def build(wheel: Path, outdir: Path) -> Path:
+def build(wheel: Path, outdir: Path, dependencies: tuple = ()) -> Path:
     version, platforms = wheel_tags(wheel)
+    for dependency in dependencies:  # the platforms every wheel runs on
+        platforms = [p for p in platforms if p in wheel_tags(dependency)[1]]
+    if not platforms:
+        raise SystemExit(f"{wheel} and {', '.join(map(str, dependencies))} share no platform")
     outdir.mkdir(parents=True, exist_ok=True)
     out = outdir / f"sorpia_blender-{version}.zip"
     partial = out.with_suffix(".zip.partial")
+    wheels = [wheel, *dependencies]
     with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as z:
-        z.writestr("blender_manifest.toml", manifest(version, wheel.name, platforms))
+        z.writestr("blender_manifest.toml", manifest(version, [w.name for w in wheels], platforms))
         for path in sorted(SOURCE.rglob("*.py")):
             if "__pycache__" not in path.parts:
                 z.write(path, path.relative_to(SOURCE).as_posix())
-        z.write(wheel, f"wheels/{wheel.name}", compress_type=zipfile.ZIP_STORED)  # a wheel is a zip already
+        for w in wheels:
+            z.write(w, f"wheels/{w.name}", compress_type=zipfile.ZIP_STORED)  # a wheel is a zip already
     partial.replace(out)
     return out
 
 
 if __name__ == "__main__":
-    if len(sys.argv) != 3:
+    if len(sys.argv) < 3:
         raise SystemExit(__doc__)
-    print(build(Path(sys.argv[1]), Path(sys.argv[2])))
+    print(build(Path(sys.argv[1]), Path(sys.argv[2]), tuple(Path(p) for p in sys.argv[3:])))

@@ -32,7 +32,7 @@ bpy.ops.wm.read_homefile(use_empty=True)
 scene = bpy.context.scene
 
 def suzanne(x):
-    bpy.ops.mesh.primitive_monkey_add(location=(x, 0.0, 0.0), rotation=(0.0, 0.0, 0.35))
+    bpy.ops.mesh.primitive_monkey_add(location=(x, 0.0, 0.0), rotation=(0.0, 0.0, 0.3 if x < 0 else -0.3))
     obj = bpy.context.object
     modifier = obj.modifiers.new("Subdivision", "SUBSURF")
     modifier.levels = 3
@@ -54,20 +54,20 @@ def points(obj):
         o.color = (0.9, 0.1, 0.1, 1.0)
         scene.collection.objects.link(o)
 
-before, after = suzanne(-1.25), suzanne(1.25)
+before, after = suzanne(-1.45), suzanne(1.45)
 points(before)
 points(after)
 for o in scene.objects:
     o.select_set(o is after)
 bpy.context.view_layer.objects.active = after
 bpy.ops.object.sorpia_fit()
-bpy.ops.object.camera_add(location=(0.0, -6.2, 1.2), rotation=(1.42, 0.0, 0.0))
+bpy.ops.object.camera_add(location=(0.0, -8.0, 0.9), rotation=(1.46, 0.0, 0.0))
 scene.camera = bpy.context.object
-scene.camera.data.lens = 42
+scene.camera.data.lens = 48
 scene.render.engine = "BLENDER_WORKBENCH"
 scene.display.shading.color_type = "OBJECT"
 scene.display.shading.show_cavity = True
-scene.render.resolution_x, scene.render.resolution_y = 900, 420
+scene.render.resolution_x, scene.render.resolution_y = 840, 380
 scene.render.image_settings.color_mode = "RGB"
 scene.render.image_settings.compression = 100
 scene.render.filepath = {output!r}

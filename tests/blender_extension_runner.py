@@ -417,8 +417,10 @@ def scenario_undo():
 
 def main() -> None:
     OUT.mkdir(parents=True, exist_ok=True)
+    import scipy
+
     np.savez(OUT / "install.npz", sorpia_file=np.array(sorpia.__file__), version=np.array(sorpia.__version__),
-             blender=np.array(bpy.app.version_string))
+             scipy_file=np.array(scipy.__file__), blender=np.array(bpy.app.version_string))
     wanted = os.environ.get("SORPIA_SCENARIOS")
     for name, fn in list(globals().items()):
         if not name.startswith("scenario_") or (wanted and name[9:] not in wanted.split(",")):
