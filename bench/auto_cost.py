@@ -123,7 +123,7 @@ def main():
                 results[m], t = timed_solve(interp, v, m)
                 times[m].append(t)
         sor, auto = results["sor"], results["auto"]
-        same = np.array_equal(sor.control_vertices, auto.control_vertices) and np.array_equal(sor.errors, auto.errors)
+        same = np.array_equal(sor.control_vertices, auto.control_vertices) and np.array_equal(sor.history, auto.history)
         ts, ta = statistics.median(times["sor"]), statistics.median(times["auto"])
         lines.append(f"| {name} ({scheme}) | {len(v):,} | {sor.iterations} | {ts:.3f} | {ta:.3f} | {ta / ts:.3f} "
                      f"| {outcome(auto)} | {'yes' if same else 'NO'} |")
@@ -152,7 +152,7 @@ def main():
                 times[m].append(t)
         for m in methods:
             r = results[m]
-            lines.append(f"| {name} | {m} | {outcome(r)} | {r.errors[-1]:.2e} | {r.products} "
+            lines.append(f"| {name} | {m} | {outcome(r)} | {r.history[-1]:.2e} | {r.products} "
                          f"| {statistics.median(times[m]):.3f} |")
         del interp
     lines += ["", f"Load average {os.getloadavg()[0]:.1f} at the end."]

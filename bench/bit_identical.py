@@ -38,7 +38,7 @@ def _digest(arr) -> str:
 
 
 def _fingerprint(res) -> dict:
-    return {"control_vertices": _digest(res.control_vertices), "errors": _digest(res.errors),
+    return {"control_vertices": _digest(res.control_vertices), "errors": _digest(res.history),
             "iterations": int(res.iterations), "stop_reason": str(res.stop_reason)}
 
 

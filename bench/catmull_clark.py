@@ -103,7 +103,7 @@ def mesh_rows(name, v, f, dense_limit):
             table.append(dict(label=label, levels=[None] * 10, iterations=0, converged=False, variant="",
                               refused=str(e).split(":")[0] + ": " + str(e).split("(")[0].split(":", 1)[-1].strip()))
             continue
-        table.append(dict(label=label, levels=iterations_to_reach(r.errors, TABLE_TOLERANCES),
+        table.append(dict(label=label, levels=iterations_to_reach(r.history, TABLE_TOLERANCES),
                           iterations=r.iterations, converged=r.converged, variant=r.variant, refused=None))
     return dict(mesh=name, n=len(v), lambda_min=lo, lambda_max=hi, imag=imag, how=how,
                 closed=interp.closed, gs=converged.get(1.0), best_omega=best,

@@ -13,7 +13,11 @@ refinement at such vertices' corners); the largest miss |P - V| over the
 diagonal, at those vertices and elsewhere. Then the cost: B built with k darts
 against the same vertices made infinitely sharp corners (uniform rows), per
 dart; and B of a quad mesh with k quads split by a vertex of two faces against
-the same mesh unsplit, per such vertex.
+the same mesh unsplit, per such vertex. Last, quad meshes with many quads split
+(OpenSubdiv before 3.6.1 gets Bfr's patches wrong there through its topology
+cache, pull request 1353; sorpia builds those faces without it): the surface
+against Far's refinement (sorpia.limit_surface, level 2) at every corner of
+every refined quad, and what evaluation costs with and without such faces.
 Writes docs/benchmarks/darts.md (unless --no-page).
 
     python bench/darts.py [--shared ../shared/meshes] [--names a.obj,b.obj] [--no-page]
@@ -22,6 +26,7 @@ Writes docs/benchmarks/darts.md (unless --no-page).
 from __future__ import annotations
 
 import argparse
+import ctypes
 import os
 import sys
 import time
@@ -43,6 +48,7 @@ sys.path.insert(0, os.path.dirname(__file__))
 sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "tests"))
 from _report import write_page  # noqa: E402
 from conftest import level_dependent  # noqa: E402  (the tests' own: from the faces and tags alone)
+from test_catmull_clark import refined_corner_uv  # noqa: E402
 from test_robust_default import gregory_test8  # noqa: E402
 
 
@@ -135,7 +141,71 @@ def generated():
     v, f = sorpia.shapes.quad_irregular(1200, seed=2)
     v, f = split_quads(v, f, range(0, 1000, 50), 0.02)
     out.append(("quad_irregular(1200), 20 quads split", v, f, "catmull-clark", "edge-only", {}))
+    v, f = sorpia.shapes.quad_irregular(1200, seed=2)
+    v, f = split_quads(v, f, np.random.default_rng(2).choice(len(f), len(f) // 4, replace=False), 0.02)
+    out.append(("quad_irregular(1200), a quarter of its quads split", v, f, "catmull-clark", "edge-only", {}))
     return out
+
+
+def split_cases():
+    """Quad meshes with many quads split by a vertex of two faces, and one with none."""
+    out = []
+    v, f = sorpia.shapes.quad_irregular(12_000, seed=1)
+    out.append(("quad_irregular(12000), none split", np.asarray(v), np.asarray(f)))
+    for share in (0.01, 0.1):
+        which = np.random.default_rng(1).choice(len(f), int(share * len(f)), replace=False)
+        out.append((f"quad_irregular(12000), {share:.0%} of its quads split", *split_quads(v, f, which, 0.01)))
+    v, f = sorpia.shapes.quad_irregular(1200, seed=3)
+    out.append(("quad_irregular(1200), every quad split", *split_quads(v, f, range(len(f)), 0.02)))
+    return out
+
+
+class _Mallinfo2(ctypes.Structure):
+    _fields_ = [(name, ctypes.c_size_t) for name in ("arena", "ordblks", "smblks", "hblks", "hblkhd", "usmblks",
+                                                      "fsmblks", "uordblks", "fordblks", "keepcost")]
+
+
+def heap_mb():
+    """Bytes malloc has handed out and not had back (glibc's mallinfo2), in MB."""
+    libc = ctypes.CDLL("libc.so.6")
+    libc.mallinfo2.restype = _Mallinfo2
+    info = libc.mallinfo2()
+    return (info.uordblks + info.hblkhd) / 2**20
+
+
+def split_table():
+    """Per mesh: |LimitSurface.evaluate - Far| / diagonal at every corner of every quad of the level-2
+    refinement, the first evaluation (16 points a face: it builds the patches), the next ones (median of 5, with
+    derivatives) and the heap the surface holds after the first."""
+    lines = ["| mesh | faces | faces at a vertex of two faces | max miss against Far | first evaluation (s) | "
+             "next evaluations (s) | heap held after the first (MB) |", "|---|---:|---:|---:|---:|---:|---:|"]
+    rng = np.random.default_rng(5)
+    for name, v, f in split_cases():
+        diagonal = np.linalg.norm(np.ptp(v, axis=0))
+        vs, fs = sorpia.limit_surface(v, f, level=2, scheme="catmull-clark")
+        face, uv = refined_corner_uv(len(f), 2)
+        miss = np.linalg.norm(sorpia.LimitSurface(v, f, scheme="catmull-clark").evaluate(face, uv)
+                              - vs[fs.reshape(-1)], axis=1).max() / diagonal
+        counts = np.bincount(f.reshape(-1), minlength=len(v))
+        at_two = int(np.isin(f, np.flatnonzero(counts == 2)).any(axis=1).sum())
+        ids = np.repeat(np.arange(len(f), dtype=np.int32), 16)
+        uv = rng.random((len(ids), 2))
+        before = heap_mb()
+        s = sorpia.LimitSurface(v, f, scheme="catmull-clark")
+        t0 = time.perf_counter()
+        s.evaluate(ids, uv)
+        first = time.perf_counter() - t0
+        grown = heap_mb() - before
+        nexts = []
+        for _ in range(5):
+            t0 = time.perf_counter()
+            s.evaluate(ids, uv, derivatives=True)
+            nexts.append(time.perf_counter() - t0)
+        line = (f"| {name} | {len(f)} | {at_two} | {miss:.1e} | {first:.3f} | {np.median(nexts):.3f} | "
+                f"{grown:.1f} |")
+        print(line, flush=True)
+        lines.append(line)
+    return lines
 
 
 def shapes(shared: Path, names):
@@ -217,15 +287,22 @@ def main():
             f"{(times['split'] - times['plain']) / k * 1e6:.1f} |")
     print(line, flush=True)
     cost.append(line)
+    split = split_table()
     if not args.no_page:
         body = ("Misses are the largest |P - V| over the diagonal at the face corners (the limit surface of the "
                 "fitted cage, evaluated by sorpia.LimitSurface), at darts and Catmull-Clark's vertices of two faces, "
                 "and elsewhere; the jump is the distance from such a corner's point to the surface's point 1e-9 of "
                 "the way to the face's (or the corner's sub-face's) centre (Bfr's corner there is its own, Far's Limit() after its smooth level: "
-                "10 on a mesh with darts). On quad_irregular with split quads the miss elsewhere is OpenSubdiv "
-                "3.5.0's Bfr: at some corners of faces that hold a vertex of two faces, next to extraordinary "
-                "vertices, the corners of different faces at one vertex disagree (by 6e-2 with a random cage of "
-                "unit size), while B and Far's refinement agree; on grids and tori with split quads Bfr is exact.\n\n" + "\n".join(lines + cost))
+                "10 on a mesh with darts).\n\n" + "\n".join(lines + cost) +
+                "\n\nBfr before OpenSubdiv 3.6.1 (pull request 1353) builds the patch of a face with a corner at an "
+                "interior vertex of two faces from that face's vertex indices but shares it, through its topology "
+                "cache, with faces of the same topology whose indices repeat differently, where it is wrong (2e-2 "
+                "of the diagonal on quad_irregular(1200) with a quarter of its quads split). sorpia builds those "
+                "faces with a factory without the cache, each once, when first evaluated, and keeps them. Below, the "
+                "misses of sorpia.LimitSurface against Far's refinement (sorpia.limit_surface at level 2: Far's "
+                "Limit() on the last level, B V at the control vertices) at every corner of every refined quad, "
+                "and the cost, the control vertices as cage (16 random points a face; 'first' builds the patches, "
+                "'next' evaluates with derivatives).\n\n" + "\n".join(split))
         write_page("darts", "Fits through darts", body, settings=(ap, args))
 
 

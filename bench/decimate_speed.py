@@ -89,7 +89,7 @@ def quality(points, cage_path, scheme, diag, fit):
     q = {"cage_rms": float(np.sqrt(np.mean(d ** 2)) / diag), "cage_max": float(d.max() / diag)}
     if fit:
         res = sorpia.approximate(points, cage["v"], cage["f"], scheme=scheme)
-        q.update(fit_rms=res.rms / diag, fit_max=res.max_distance / diag)
+        q.update(fit_rms=res.rms / diag, fit_max=res.max_error / diag)
     return q
 
 

@@ -87,7 +87,7 @@ def run(name, v, f, repeat):
         runs = [timed(make_interpolator(v, f), v, 1, **kw) for _ in range(repeat)]
         res, times = runs[-1][0], [t for _, t in runs]
         rows.append(dict(mesh=name, n=len(v), label=label, parameter=parameter(res),
-                         levels=iterations_to_reach(res.errors, TABLE_TOLERANCES), iterations=res.iterations,
+                         levels=iterations_to_reach(res.history, TABLE_TOLERANCES), iterations=res.iterations,
                          converged=res.converged, products=res.products, seconds=statistics.median(times),
                          estimate_seconds=res.timings["estimate"]))
     return rows

@@ -111,7 +111,7 @@ def sorpia_method(V0, F, tol, method):
     t = r.timings
     return {"topology": t.get("topology", 0.0), "operator": t.get("operator", 0.0), "estimate": t.get("estimate", 0.0),
             "solve": t.get("solve", 0.0), "total": total, "iterations": r.iterations,
-            "final_error": float(r.errors[-1])}
+            "final_error": float(r.history[-1])}
 
 
 def sorpia_bench(spec, methods, tol, repeat):

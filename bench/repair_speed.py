@@ -117,7 +117,7 @@ def main():
         defects[f"core: sorpia::repair, {label}"] = lambda dv=dv, df=df: _core.repair(df, len(dv))
         result = sorpia.repair(dv, df)
         _core.Topology(result.faces, len(result.vertices))  # the repaired mesh passes validation
-        counts[label] = result.report["counts"]
+        counts[label] = result.changes["counts"]
     defects = alternate(defects, args.repeat)
 
     qv, qf = sorpia.shapes.quad_irregular(args.vertices, 1)
@@ -134,7 +134,7 @@ def main():
     assert sorpia.repair(qv, qf).faces is qf
     result = sorpia.repair(dqv, dqf)
     topology(result.faces, len(result.vertices), scheme="catmull-clark", warn=False)  # passes validation
-    counts["quads with 5 kinds"] = result.report["counts"]
+    counts["quads with 5 kinds"] = result.changes["counts"]
 
     machine = f"{platform.machine()}, {platform.processor() or platform.system()}"
     lines = [f"sorpia.repair at {len(v):,} vertices, {len(f):,} faces (sorpia.shapes.irregular); median of "

@@ -53,7 +53,7 @@ def main(argv=None) -> int:
         for t in counts:
             med = statistics.median(runs[t])
             rows.append({"mesh": spec, "vertices": len(v), "threads": t, "solve_median": med, "solve_min": min(runs[t]),
-                         "iterations": last[t].iterations, "final_error": float(last[t].errors[-1]),
+                         "iterations": last[t].iterations, "final_error": float(last[t].history[-1]),
                          "speedup": base / med})
     if a.json:
         print(json.dumps({"cpus": os.cpu_count(), "method": a.method, "tol": a.tol, "repeat": a.repeat, "rows": rows},

@@ -106,12 +106,12 @@ def main(argv=None) -> int:
             dt, res = timed(lambda: interp.update(res, [i], targets[i], tol=a.tol, in_place=kind == "in_place"))
             runs[kind].append(dt)
             rel[kind].append(res.relaxations)
-        acc["update"].append((res.errors[-1], max_residual(F, targets, res.control_vertices), res.initial_error))
+        acc["update"].append((res.history[-1], max_residual(F, targets, res.control_vertices), res.initial_error))
         full_solver = sorpia.Interpolator(F, n)  # a second one: a solve would reset `interp`'s kept targets
         dt, full = timed(lambda: full_solver.solve(targets, tol=a.tol))
         runs["full"].append(dt)
         rel["full"].append(full.relaxations)
-        acc["full"].append((full.errors[-1], max_residual(F, targets, full.control_vertices), full.initial_error))
+        acc["full"].append((full.history[-1], max_residual(F, targets, full.control_vertices), full.initial_error))
         # Same final accuracy: both within tol of the same solution.
         acc.setdefault("diff", []).append(float(np.abs(full.control_vertices - res.control_vertices).max()))
     med = {k: statistics.median(v) for k, v in runs.items()}
@@ -169,7 +169,7 @@ def main(argv=None) -> int:
             dt, r = timed(lambda: interp.solve(frame_v, tol=a.tol, initial=starts[kind]))
             runs[kind]["sweeps"].append(r.iterations)
             runs[kind]["seconds"].append(dt)
-            runs[kind]["start"].append(r.errors[0])
+            runs[kind]["start"].append(r.history[0])
             if kind == "moved":
                 frame_result = r
         previous, previous_v = frame_result.control_vertices, frame_v

@@ -99,7 +99,7 @@ def test_cg_falls_back_to_bicgstab_with_a_boundary():
 def test_loop_refuses_quads_and_points_to_catmull_clark():
     V, F = sorpia.shapes.quad_torus(6, 5)
     with pytest.raises(sorpia.MeshError, match=r'scheme="catmull-clark"'):
-        sorpia.interpolate(V, F)
+        sorpia.interpolate(V, F, scheme="loop")
 
 
 def test_an_unknown_scheme_is_named():
@@ -153,3 +153,58 @@ def test_boundary_is_keyword_only():
                  lambda: sorpia.Interpolator(F, len(V), "edge-only")):
         with pytest.raises(TypeError, match="positional"):
             call()
+
+
+def split_quads(v, f, which, lift=0.1):
+    """Quads `which` of (v, f) split along their diagonal from corner 0 to corner 2 through a new vertex (the
+    quad's centre raised along its normal by `lift` times the diagonal): an interior vertex of two faces each."""
+    v, f = [np.asarray(p, float) for p in v], [list(q) for q in f]
+    for k in which:
+        a, b, c, d = f[k]
+        n = np.cross(v[b] - v[a], v[d] - v[a])
+        v.append((v[a] + v[b] + v[c] + v[d]) / 4 + lift * np.linalg.norm(v[c] - v[a]) * n / np.linalg.norm(n))
+        f[k] = [a, b, c, len(v) - 1]
+        f.append([len(v) - 1, c, d, a])
+    return np.array(v), np.array(f, dtype=np.int32)
+
+
+def refined_corner_uv(n_faces, level):
+    """(face, (u, v)) of every corner of every quad of `sorpia.limit_surface` at `level` of an all-quad mesh, in its
+    order: the children of control face f come in one block, and child j of a quad lists the parent's corner j at
+    its place j, then the midpoint of edge j, the centre and the midpoint of edge j - 1 (Far's refinement)."""
+    square = np.array([[0, 0], [1, 0], [1, 1], [0, 1]], float)
+    corners = square[None]
+    for _ in range(level):
+        out = []
+        for c in corners:
+            for j in range(4):
+                image = [c[j], (c[j] + c[(j + 1) % 4]) / 2, c.mean(axis=0), (c[j] + c[(j + 3) % 4]) / 2]
+                out.append([image[(i - j) % 4] for i in range(4)])
+        corners = np.array(out)
+    face = np.repeat(np.arange(n_faces, dtype=np.int32), corners.size // 2)
+    return face, np.tile(corners.reshape(-1, 2), (n_faces, 1))
+
+
+@pytest.mark.parametrize("case", ["random quarter", "every quad"])
+def test_surface_at_vertices_of_two_faces_is_fars_refinement(case):
+    # OpenSubdiv's Bfr before 3.6.1 shares the patch of a face at an interior
+    # vertex of two faces, through its topology cache, with faces of the same
+    # topology where it is wrong (its pull request 1353: 2e-2 of the diagonal
+    # here with the cache); sorpia builds such faces without it. The
+    # reference: Far's refinement and Limit() (limit_surface, level 2) at every
+    # corner of every refined quad, to 1e-12 of the diagonal (measured 4e-16);
+    # and the fitted cage through its targets at every face corner.
+    if case == "random quarter":
+        v, f = sorpia.shapes.quad_irregular(1200, seed=4)
+        v, f = split_quads(v, f, np.random.default_rng(4).choice(len(f), len(f) // 4, replace=False))
+    else:
+        v, f = sorpia.shapes.quad_irregular(300, seed=5)
+        v, f = split_quads(v, f, range(len(f)), lift=-0.05)
+    scale = float(np.linalg.norm(v.max(axis=0) - v.min(axis=0)))
+    x = sorpia.interpolate(v, f, scheme=CC, tol=1e-14, max_iter=5000).control_vertices
+    vs, fs = sorpia.limit_surface(x, f, level=2, scheme=CC)
+    face, uv = refined_corner_uv(len(f), 2)
+    surface = sorpia.LimitSurface(x, f, scheme=CC)
+    assert np.abs(surface.evaluate(face, uv) - vs[fs.reshape(-1)]).max() / scale <= 1e-12
+    corner = np.repeat(np.arange(len(f), dtype=np.int32), 4), np.tile([[0, 0], [1, 0], [1, 1], [0, 1]], (len(f), 1))
+    assert np.abs(surface.evaluate(*corner) - v[f.reshape(-1)]).max() / scale <= 1e-12

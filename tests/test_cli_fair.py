@@ -107,7 +107,7 @@ def test_a_bad_targets_file_is_refused_with_its_line(torus_file, tmp_path, comma
 
 
 def test_render_fair_draws_plain_and_fair(torus_file, tmp_path, command):
-    pytest.importorskip("matplotlib")
+    pytest.importorskip("matplotlib", reason="matplotlib is not installed (pip install 'sorpia[plot]')")
     src, _, _ = torus_file
     png = tmp_path / "fair.png"
     code, stdout, err = command("render", src, "-o", png, "--fair", "--level", 1, "--size", "400x300")

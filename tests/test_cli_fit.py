@@ -41,10 +41,10 @@ def test_fit_writes_a_control_mesh_that_interpolates_the_file(mesh_file, tmp_pat
     # An ordinary mesh: auto's sor run makes the result, nothing else is tried.
     assert data["variant"] == "sor" and data["stop_reason"] == "converged"
     assert [a["method"] for a in data["attempts"]] == ["sor"]
-    assert data["iterations"] == ref.iterations == len(data["errors"]) - 1
-    np.testing.assert_allclose(data["errors"], ref.errors, rtol=1e-9, atol=1e-15)
+    assert data["iterations"] == ref.iterations == len(data["history"]) - 1
+    np.testing.assert_allclose(data["history"], ref.history, rtol=1e-9, atol=1e-15)
     assert data["omega"] == pytest.approx(ref.omega, rel=1e-12)
-    assert data["errors"][-1] < 1e-10 <= data["errors"][-2]  # the paper's stopping rule
+    assert data["history"][-1] < 1e-10 <= data["history"][-2]  # the paper's stopping rule
     assert data["mesh"]["vertices"] == len(V0) and data["mesh"]["faces"] == len(F)
     # The check is computed independently of the solver; against scipy's B V - V0 it agrees to rounding.
     assert data["max_residual"] == pytest.approx(np.linalg.norm(B @ Vc - V0, axis=1).max(), abs=1e-13)
@@ -69,7 +69,7 @@ def test_fit_not_converged_exits_1_and_writes_only_when_asked(torus_file, tmp_pa
     assert "NOT converged (max_iter)" in stdout and "Traceback" not in err
     assert "--keep-unconverged" in stdout and not out.exists()
     data = json.loads(report.read_text())
-    assert data["converged"] is False and data["iterations"] == 3 and len(data["errors"]) == 4
+    assert data["converged"] is False and data["iterations"] == 3 and len(data["history"]) == 4
     assert data["stop_reason"] == "max_iter" and data["recommended"] == "gmres" and data["not_written"] == [str(out)]
     code, stdout, err = command("fit", src, "-o", out, "--method", "pia", "--max-iter", 3, "--keep-unconverged")
     assert code == 1, err

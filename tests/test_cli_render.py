@@ -2,6 +2,10 @@
 
 from __future__ import annotations
 
+import pytest
+
+pytest.importorskip("matplotlib", reason="matplotlib is not installed (pip install 'sorpia[plot]')")
+
 
 def test_render_draws_figure_3(torus_file, tmp_path, command):
     from matplotlib.image import imread

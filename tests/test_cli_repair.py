@@ -103,7 +103,7 @@ def test_fit_repair_passes_through_every_input_vertex_at_each_copy(defect_file, 
     ctrl, faces = sorpia.read_mesh(str(src.parent / "ctrl.ply"))
     assert np.array_equal(faces, repaired.faces)
     assert data["repair"]["vertex_map"] == repaired.vertex_map.tolist()
-    assert data["repair"]["report"]["counts"] == repaired.report["counts"]
+    assert data["repair"]["report"]["counts"] == repaired.changes["counts"]
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", sorpia.UnreferencedVerticesWarning)
         limit = sorpia.limit_points(ctrl, faces)
@@ -122,7 +122,7 @@ def test_fit_without_repair_names_it(defect_file, command):
 
 def test_info_says_what_repair_would_change(defect_file, command):
     src, v, f = defect_file
-    counts = sorpia.repair(v, f).report["counts"]
+    counts = sorpia.repair(v, f).changes["counts"]
     code, out, err = command("info", src)
     assert code == 0, err
     assert "cannot run" in out and "--repair would fix" in out
@@ -158,7 +158,7 @@ def test_compare_repair_reports_the_vertex_map(defect_file, command):
 # pytest's own filter would raise it.
 @pytest.mark.filterwarnings("ignore::sorpia.UnreferencedVerticesWarning")
 def test_render_repair_draws_the_repaired_mesh(defect_file, command):
-    pytest.importorskip("matplotlib")
+    pytest.importorskip("matplotlib", reason="matplotlib is not installed (pip install 'sorpia[plot]')")
     src, _, _ = defect_file
     code, out, err = command("render", src, "--repair", "-o", "fig.png", "--size", "300x250", "--level", "1")
     assert code == 0, err

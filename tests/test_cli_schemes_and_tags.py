@@ -180,7 +180,7 @@ def test_fit_with_sharp_angle_writes_the_creases_it_found(tmp_path, monkeypatch,
 
 
 def test_render_draws_the_file_creases_in_orange(tmp_path, monkeypatch, command):
-    pytest.importorskip("matplotlib")
+    pytest.importorskip("matplotlib", reason="matplotlib is not installed (pip install 'sorpia[plot]')")
     from matplotlib.image import imread
 
     monkeypatch.chdir(tmp_path)

@@ -9,6 +9,7 @@ NOT_RUN with the reason, so that a new example cannot go untested unnoticed."""
 
 from __future__ import annotations
 
+import importlib
 import re
 import shlex
 import subprocess
@@ -54,6 +55,27 @@ def not_run(words: list[str]) -> bool:
     return any(line.startswith(prefix) for prefix in NOT_RUN)
 
 
+# The optional extras an example may need, found by what its text names: (pattern, module, reason).
+EXTRAS = [(re.compile(r"\.usd[ac]?\b|\bpxr\b"), "pxr", "usd-core is not installed (pip install 'sorpia[usd]')"),
+          (re.compile(r"\.png\b|--plot\b|\bsorpia render\b|\bmatplotlib\b"), "matplotlib",
+           "matplotlib is not installed (pip install 'sorpia[plot]')")]
+
+
+def installed(module: str) -> bool:
+    try:
+        importlib.import_module(module)
+    except ImportError:
+        return False
+    return True
+
+
+def skip_without_extras(text: str) -> None:
+    """Skip, saying which, when `text` (a page's examples) needs an optional extra that is not installed."""
+    for pattern, module, reason in EXTRAS:
+        if pattern.search(text) and not installed(module):
+            pytest.skip(reason)
+
+
 def page_id(page: Path) -> str:
     return str(page.relative_to(ROOT))
 
@@ -85,8 +107,9 @@ def make_files(folder: Path) -> None:
         sorpia.write_mesh(folder / name, qV, qF, creases=(qF[:6, :2], np.full(6, 3.0)))
     sorpia.write_mesh(folder / "cylinder.obj", *_quad_cylinder())
     # A USD stage: the tagged quad part as /World/Part, Catmull-Clark, with its texture coordinates (st).
-    sorpia.write_mesh(folder / "scene.usda", qV, qF, scheme="catmull-clark", creases=(qF[:6, :2], np.inf),
-                      corners=([20], [2.0]), uvs=sorpia.FaceVarying(qV[:, :2], corners), prim="/World/Part")
+    if installed("pxr"):  # the pages that read it skip without usd-core
+        sorpia.write_mesh(folder / "scene.usda", qV, qF, scheme="catmull-clark", creases=(qF[:6, :2], np.inf),
+                          corners=([20], [2.0]), uvs=sorpia.FaceVarying(qV[:, :2], corners), prim="/World/Part")
     # Files to repair: a quad grid with a duplicated face (bad.obj, polygons kept), an irregular triangle mesh
     # with a duplicated and a reversed face (scan.ply).
     gV, gF = sorpia.shapes.quad_grid(6, 5)
@@ -111,6 +134,7 @@ def test_pages_found():
 
 @pytest.mark.parametrize("page", [p for p in PAGES if blocks(p, "python")], ids=page_id)
 def test_python_examples_run(page, example_folder):
+    skip_without_extras("\n".join(blocks(page, "python")))
     namespace: dict = {"__name__": "__example__"}
     for i, code in enumerate(blocks(page, "python")):
         exec(compile(code, f"{page_id(page)} (python block {i + 1})", "exec"), namespace)  # noqa: S102
@@ -118,6 +142,7 @@ def test_python_examples_run(page, example_folder):
 
 @pytest.mark.parametrize("page", [p for p in PAGES if blocks(p, "bash")], ids=page_id)
 def test_shell_examples_run(page, example_folder, command):
+    skip_without_extras("\n".join(blocks(page, "bash")))
     ran = 0
     for block in blocks(page, "bash"):
         for words in shell_commands(block):

@@ -305,9 +305,9 @@ def test_the_energy_falls_from_the_plain_interpolation():
     w = res.refinement @ np.asarray(res.plain.control_vertices)
     assert res.plain_energy == pytest.approx(np.trace(w.T @ k @ w), rel=1e-10)
     assert res.energy == pytest.approx(np.trace(res.control_vertices.T @ k @ res.control_vertices), rel=1e-10)
-    assert np.all(np.diff(res.energies) <= 1e-12 * res.energies[0])
+    assert np.all(np.diff(res.history) <= 1e-12 * res.history[0])
     assert res.energy < res.plain_energy
-    assert res.energies[-1] == pytest.approx(res.energy, rel=1e-8)
+    assert res.history[-1] == pytest.approx(res.energy, rel=1e-8)
 
 
 def test_targets_on_a_plane_give_a_control_mesh_on_it():

@@ -88,7 +88,7 @@ def test_pillows_are_valid_and_fit_as_a_dense_solve(name):
     # B is well conditioned on these meshes: the Krylov or direct answer agrees with numpy to far below 1e-9
     assert np.abs(res.control_vertices - expected).max() <= 1e-9 * np.abs(v).max()
     r = sorpia.repair(v, f)  # a valid mesh comes out of repair unchanged
-    assert not any(r.report["counts"].values())
+    assert not any(r.changes["counts"].values())
     assert np.array_equal(r.face_map, np.arange(len(f))) and len(r.vertices) == len(v)
 
 
@@ -100,7 +100,7 @@ def test_repair_keeps_a_pillow_beside_what_it_fixes(scheme):
     n_faces = len(f)
     bad = f + [f[0], f[1][::-1]]  # a duplicate of face 0, and face 1 reversed (a third face on its edges)
     r = sorpia.repair(v, bad)
-    assert r.report["duplicate_faces"] == [n_faces] and r.report["reversed_duplicate_faces"] == [n_faces + 1]
+    assert r.changes["duplicate_faces"] == [n_faces] and r.changes["reversed_duplicate_faces"] == [n_faces + 1]
     assert r.face_map.tolist() == list(range(n_faces))
     assert mesh_problems(np.asarray(r.faces).tolist(), len(r.vertices)) == set()
 
@@ -121,7 +121,7 @@ def test_a_reversed_pair_beside_a_third_face_is_refused_and_repaired(faces):
             warnings.simplefilter("ignore", sorpia.UnreferencedVerticesWarning)
             sorpia.interpolate(v, faces, scheme="catmull-clark")
     r = sorpia.repair(v, faces)
-    assert r.report["reversed_duplicate_faces"] == [1] and r.face_map.tolist() == [0, 2]
+    assert r.changes["reversed_duplicate_faces"] == [1] and r.face_map.tolist() == [0, 2]
 
 
 # OpenSubdiv's regression shapes (regression/shapes/*.h), faces 0-based, vertices as there.

@@ -11,6 +11,8 @@ import pytest
 import sorpia
 from sorpia import _plotting as plotting
 
+pytest.importorskip("matplotlib", reason="matplotlib is not installed (pip install 'sorpia[plot]')")
+
 
 def orange_pixels(fig) -> int:
     from matplotlib.image import imread

@@ -69,7 +69,7 @@ def test_loop_names_the_first_non_triangle_and_the_way_out(form):
     faces = forms(F.tolist())[form]
     with pytest.raises(sorpia.MeshError, match=r"faces.*4 vertices.*Loop subdivision needs triangles.*"
                                                r'scheme="catmull-clark"'):
-        topology(faces, len(V))
+        topology(faces, len(V), scheme="loop")
 
 
 def test_repeated_vertex_in_a_polygon_is_named_by_the_core():

@@ -45,7 +45,7 @@ def check_repaired(v, f, result):
     # every output vertex is its input vertex, bit for bit
     assert np.array_equal(result.vertices.view(np.uint64), v[result.vertex_map].view(np.uint64))
     # every output face is its input face renumbered (reversed if flipped)
-    flipped = set(result.report["flipped_faces"])
+    flipped = set(result.changes["flipped_faces"])
     for j, src in enumerate(result.face_map):
         mapped = list(result.vertex_map[result.faces[j]])
         want = list(np.asarray(f)[src])
@@ -55,11 +55,11 @@ def check_repaired(v, f, result):
     # every vertex a kept face used is still used (by itself or a copy)
     kept_used = set(np.asarray(f)[result.face_map].ravel())
     assert kept_used <= set(result.vertex_map[np.unique(result.faces)])
-    json.dumps(result.report)  # JSON-able
+    json.dumps(result.changes)  # JSON-able
     # idempotent: the output is valid, and comes back as it is
     again = sorpia.repair(result.vertices, result.faces)
     assert again.vertices is result.vertices and again.faces is result.faces
-    assert not any(again.report["counts"].values())
+    assert not any(again.changes["counts"].values())
 
 
 def test_valid_mesh_comes_back_unchanged_without_a_copy():
@@ -68,13 +68,13 @@ def test_valid_mesh_comes_back_unchanged_without_a_copy():
     r = sorpia.repair(v, f)
     assert r.vertices is v and r.faces is f
     assert np.array_equal(r.vertex_map, np.arange(len(v))) and np.array_equal(r.face_map, np.arange(len(f)))
-    assert r.report["counts"] == {k: 0 for k in REPORT_KINDS}
+    assert r.changes["counts"] == {k: 0 for k in REPORT_KINDS}
 
 
 def test_open_bowtie():
     f = np.array([[0, 1, 2], [0, 3, 4]])
     r = sorpia.repair(points(5), f)
-    assert r.report["bowtie_vertices"] == [0] and r.report["bowtie_copies"] == [1]
+    assert r.changes["bowtie_vertices"] == [0] and r.changes["bowtie_copies"] == [1]
     assert r.faces.tolist() == [[0, 1, 2], [5, 3, 4]] and r.vertex_map.tolist() == [0, 1, 2, 3, 4, 0]
     check_repaired(points(5), f, r)
 
@@ -83,8 +83,8 @@ def test_closed_bowtie_of_two_cones():
     f = np.vstack([tetrahedron(), tetrahedron(4)])
     f[f == 7] = 0  # two closed tetrahedra, (0, 1, 2, 3) and (4, 5, 6, 0), touching at vertex 0
     r = sorpia.repair(points(7), f)
-    assert r.report["bowtie_vertices"] == [0] and r.report["counts"]["bowtie_copies"] == 1
-    assert r.report["counts"]["flipped_faces"] == 0
+    assert r.changes["bowtie_vertices"] == [0] and r.changes["counts"]["bowtie_copies"] == 1
+    assert r.changes["counts"]["flipped_faces"] == 0
     check_repaired(points(7), f, r)
 
 
@@ -94,9 +94,9 @@ def test_sheets_on_one_edge(n_sheets):
     # order, a third one left alone; each sheet after the first gets its own copies of 0 and 1
     f = [[0, 1, 2 + k] if k % 2 == 0 else [1, 0, 2 + k] for k in range(n_sheets)]
     r = sorpia.repair(points(2 + n_sheets), f)
-    assert r.report["nonmanifold_edges"] == [[0, 1]]
-    assert r.report["sheet_vertices"] == [0, 1]
-    assert r.report["sheet_copies"] == [(n_sheets - 1) // 2] * 2
+    assert r.changes["nonmanifold_edges"] == [[0, 1]]
+    assert r.changes["sheet_vertices"] == [0, 1]
+    assert r.changes["sheet_copies"] == [(n_sheets - 1) // 2] * 2
     check_repaired(points(2 + n_sheets), f, r)
 
 
@@ -105,8 +105,8 @@ def test_duplicate_reversed_duplicate_and_degenerate_faces():
     bad = np.vstack([f, f[[5]][:, [1, 2, 0]], f[[9]][:, ::-1], [[3, 3, 7]]])
     r = sorpia.repair(v, bad)
     n = len(f)
-    assert (r.report["duplicate_faces"], r.report["reversed_duplicate_faces"]) == ([n], [n + 1])
-    assert r.report["degenerate_faces"] == [n + 2]
+    assert (r.changes["duplicate_faces"], r.changes["reversed_duplicate_faces"]) == ([n], [n + 1])
+    assert r.changes["degenerate_faces"] == [n + 2]
     assert np.array_equal(r.faces, f) and np.array_equal(r.face_map, np.arange(n))
     check_repaired(v, bad, r)
 
@@ -116,7 +116,7 @@ def test_mixed_orientation_flips_the_fewer_faces():
     bad = np.array(f)
     bad[[4, 70, 71]] = bad[[4, 70, 71]][:, [0, 2, 1]]  # reversed as repair reverses: the second and third corners swapped
     r = sorpia.repair(v, bad)
-    assert r.report["flipped_faces"] == [4, 70, 71]
+    assert r.changes["flipped_faces"] == [4, 70, 71]
     assert np.array_equal(r.faces, f)
     check_repaired(v, bad, r)
 
@@ -126,9 +126,9 @@ def test_moebius_strip_is_cut_along_one_edge():
     # a strip that can be oriented
     v, f = points(16), moebius(8)
     r = sorpia.repair(v, f)
-    assert len(r.report["cut_edges"]) == 1
-    assert r.report["cut_vertices"] == r.report["cut_edges"][0] and r.report["cut_copies"] == [1, 1]
-    assert len(r.vertices) == 18 and r.report["counts"]["nonmanifold_edges"] == 0
+    assert len(r.changes["cut_edges"]) == 1
+    assert r.changes["cut_vertices"] == r.changes["cut_edges"][0] and r.changes["cut_copies"] == [1, 1]
+    assert len(r.vertices) == 18 and r.changes["counts"]["nonmanifold_edges"] == 0
     check_repaired(v, f, r)
     fit_passes_through_inputs(v, r)
 
@@ -168,7 +168,7 @@ def defect_mesh():
 def test_fit_of_repaired_defects_passes_through_the_inputs():
     v, bad = defect_mesh()
     r = sorpia.repair(v, bad)
-    assert sum(r.report["counts"].values()) > 0
+    assert sum(r.changes["counts"].values()) > 0
     check_repaired(v, bad, r)
     fit_passes_through_inputs(v, r)
 
@@ -197,7 +197,7 @@ def test_repair_of_corrupted_meshes(name, edits):
         return
     check_repaired(v, bad, r)
     if not mesh_problems(bad, len(v)):  # a valid mesh comes back as it is
-        assert not any(r.report["counts"].values()) and r.vertices is v
+        assert not any(r.changes["counts"].values()) and r.vertices is v
 
 
 @settings(FUZZ, max_examples=min(FUZZ.max_examples, 40))

@@ -126,7 +126,7 @@ def check_cuts(faces, result):
     """What the report says was cut is: each cut edge of two faces, and each pair left apart at a
     non-manifold edge, separates its faces at the output (no output edge joins two faces of one cut input
     edge unless both keep it as an edge of its own), and the vertex count adds up."""
-    r = result.report
+    r = result.changes
     n = int(np.max(faces)) + 1
     assert len(result.vertices) == n + r["counts"]["sheet_copies"] + r["counts"]["bowtie_copies"] + \
         r["counts"]["cut_copies"]
@@ -190,8 +190,8 @@ def test_sheets_that_no_orientation_fits_are_cut_and_fit(name, tri):
     if tri:
         f = triangles(f)
     r = repaired(v, f)
-    assert r.report["nonmanifold_edges"] and not r.report["cut_edges"]  # cut at non-manifold edges only
-    assert r.report["counts"]["degenerate_faces"] + r.report["counts"]["duplicate_faces"] == 0
+    assert r.changes["nonmanifold_edges"] and not r.changes["cut_edges"]  # cut at non-manifold edges only
+    assert r.changes["counts"]["degenerate_faces"] + r.changes["counts"]["duplicate_faces"] == 0
     assert len(r.face_map) == len(f)  # no face lost
     if name == "hex-grid" and not tri:
         # its first hex's faces pair into a closed hexahedron of its own: a cube of valence-3 vertices, whose
@@ -207,14 +207,14 @@ def test_the_grids_that_were_refused_are_cut_at_some_non_manifold_edges():
     # part no orientation fits; some pairs are left apart (each face bordering the edge alone), not all
     v, f = hex_grid_faces(2, "axis")
     r = repaired(v, f)
-    assert 0 < len(r.report["cut_nonmanifold_edges"]) < len(r.report["nonmanifold_edges"])
+    assert 0 < len(r.changes["cut_nonmanifold_edges"]) < len(r.changes["nonmanifold_edges"])
 
 
 def test_sheets_that_orient_are_not_cut():
     # outward boxes: every pair made at an edge of four faces runs it both ways; nothing to cut or flip
     v, f = boxes_on_edges()
     r = repaired(v, f)
-    assert not r.report["cut_nonmanifold_edges"] and not r.report["flipped_faces"]
+    assert not r.changes["cut_nonmanifold_edges"] and not r.changes["flipped_faces"]
 
 
 def test_mixed_orientation_that_is_orientable_is_flipped_not_cut():
@@ -225,7 +225,7 @@ def test_mixed_orientation_that_is_orientable_is_flipped_not_cut():
     bad = surface.copy()
     bad[[3, 10, 11, 40]] = bad[[3, 10, 11, 40]][:, ::-1]
     r = repaired(v, bad)
-    assert r.report["flipped_faces"] == [3, 10, 11, 40] and not r.report["cut_edges"]
+    assert r.changes["flipped_faces"] == [3, 10, 11, 40] and not r.changes["cut_edges"]
     assert [cycle(q) for q in face_lists(r.faces)] == [cycle(q) for q in surface.tolist()]  # as built
     check_fit(v, r)
 
@@ -238,18 +238,18 @@ def test_a_moebius_band_is_cut_across_along_a_short_path(width, tri):
         f = triangles(f)
     assert mesh_problems(f, len(v)) == {"inconsistent orientation"}
     r = repaired(v, f)
-    cut = r.report["cut_edges"]
+    cut = r.changes["cut_edges"]
     # across the band, from one side to the other: at least `width` edges (the narrowest cut), and a step or
     # two more where the search from the middle of the band meets itself
     assert width <= len(cut) <= width + 2
-    assert not r.report["nonmanifold_edges"]
+    assert not r.changes["nonmanifold_edges"]
     check_fit(v, r)
 
 
 def test_a_klein_bottle_is_cut_along_a_closed_path():
     v, f = klein_bottle(8, 6)
     r = repaired(v, f)
-    cut = r.report["cut_edges"]
+    cut = r.changes["cut_edges"]
     degree = np.bincount(np.ravel(cut), minlength=len(v))
     assert len(cut) <= 2 * 8 and set(degree[degree > 0].tolist()) == {2}  # a closed path: no end
     check_fit(v, r)
@@ -285,7 +285,7 @@ def test_hex_grid_file_fits_with_repair_and_with_nonmanifold_sharp(tmp_path, mon
     assert code == 0, err
     assert "no orientation fits" in out
     data = json.loads((tmp_path / "r.json").read_text())
-    assert data["repair"]["report"]["cut_nonmanifold_edges"] == sorpia.repair(v, f).report["cut_nonmanifold_edges"]
+    assert data["repair"]["report"]["cut_nonmanifold_edges"] == sorpia.repair(v, f).changes["cut_nonmanifold_edges"]
     ctrl, faces = sorpia.read_mesh("ctrl.obj")
     target = v[np.asarray(data["repair"]["vertex_map"])]
     assert np.abs(sorpia.limit_points(ctrl, faces, scheme="catmull-clark") - target).max() <= 1e-9 * np.abs(v).max()

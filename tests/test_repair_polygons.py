@@ -36,16 +36,16 @@ def check_repaired(v, faces, result):
     assert np.array_equal(result.vertex_map[:n], np.arange(n))
     assert np.array_equal(result.vertices.view(np.uint64), v[result.vertex_map].view(np.uint64))  # bit for bit
     given_faces = face_lists(faces)
-    flipped = set(result.report["flipped_faces"])
+    flipped = set(result.changes["flipped_faces"])
     for j, src in enumerate(result.face_map):
         mapped = [int(result.vertex_map[x]) for x in out[j]]
         assert cycle(mapped) == cycle(without_repeats(given_faces[src]), src in flipped), (j, src)
     kept_used = {x for src in result.face_map for x in given_faces[src]}
     assert kept_used <= set(result.vertex_map[[x for f in out for x in f]].tolist())
-    json.dumps(result.report)
+    json.dumps(result.changes)
     again = sorpia.repair(result.vertices, result.faces)  # idempotent: valid, and back as it is
     assert again.vertices is result.vertices and again.faces is result.faces
-    assert not any(again.report["counts"].values())
+    assert not any(again.changes["counts"].values())
 
 
 # ---- meshes built in code -------------------------------------------------
@@ -110,7 +110,7 @@ def test_valid_polygon_meshes_come_back_unchanged(form):
                  "lists": lambda: [list(x) for x in f]}[form]()
         v = np.ascontiguousarray(v, float)
         r = sorpia.repair(v, faces)
-        assert r.vertices is v and not any(r.report["counts"].values())
+        assert r.vertices is v and not any(r.changes["counts"].values())
         assert np.array_equal(r.face_map, np.arange(len(f)))
         if form == "lists":  # equal lengths are an (m, k) array, ragged lists Polygons
             assert isinstance(r.faces, sorpia.Polygons if isinstance(f, list) else np.ndarray)
@@ -122,7 +122,7 @@ def test_valid_polygon_meshes_come_back_unchanged(form):
 def test_open_bowtie_of_quads_keeps_the_array_form():
     f = np.array([[0, 1, 2, 3], [0, 4, 5, 6]])
     r = sorpia.repair(points(7), f)
-    assert r.report["bowtie_vertices"] == [0] and r.report["bowtie_copies"] == [1]
+    assert r.changes["bowtie_vertices"] == [0] and r.changes["bowtie_copies"] == [1]
     assert r.faces.dtype == np.int32 and r.faces.tolist() == [[0, 1, 2, 3], [7, 4, 5, 6]]
     check_repaired(points(7), f, r)
 
@@ -133,8 +133,8 @@ def test_closed_bowtie_of_two_cubes():
     f[f == 8] = 6  # the second cube's first corner welded onto the first's 6
     v = np.vstack([v0, v1])
     r = sorpia.repair(v, f)
-    assert r.report["bowtie_vertices"] == [6] and r.report["counts"]["bowtie_copies"] == 1
-    assert r.report["counts"]["flipped_faces"] == 0
+    assert r.changes["bowtie_vertices"] == [6] and r.changes["counts"]["bowtie_copies"] == 1
+    assert r.changes["counts"]["flipped_faces"] == 0
     check_repaired(v, f, r)
 
 
@@ -144,9 +144,9 @@ def test_quad_sheets_on_one_edge(n_sheets):
     f = [[0, 1, 2 + 2 * k, 3 + 2 * k] if k % 2 == 0 else [1, 0, 2 + 2 * k, 3 + 2 * k] for k in range(n_sheets)]
     v = points(2 + 2 * n_sheets)
     r = sorpia.repair(v, f)
-    assert r.report["nonmanifold_edges"] == [[0, 1]]
-    assert r.report["sheet_vertices"] == [0, 1]
-    assert r.report["sheet_copies"] == [(n_sheets - 1) // 2] * 2
+    assert r.changes["nonmanifold_edges"] == [[0, 1]]
+    assert r.changes["sheet_vertices"] == [0, 1]
+    assert r.changes["sheet_copies"] == [(n_sheets - 1) // 2] * 2
     assert r.faces.shape == (n_sheets, 4)
     check_repaired(v, f, r)
 
@@ -157,7 +157,7 @@ def test_four_quad_sheets_from_two_cubes_sharing_an_edge():
     f[f == 8], f[f == 9] = 2, 3  # the second cube's edge (8, 9) welded onto (2, 3)
     v = np.vstack([v0, v1])
     r = sorpia.repair(v, f)
-    assert r.report["sheet_vertices"] == [2, 3] and r.report["sheet_copies"] == [1, 1]
+    assert r.changes["sheet_vertices"] == [2, 3] and r.changes["sheet_copies"] == [1, 1]
     edges = {tuple(sorted((a, b))) for q in r.faces.tolist() for a, b in zip(q, q[1:] + q[:1])}
     assert len(edges) == 24  # two closed cubes again
     check_repaired(v, f, r)
@@ -167,7 +167,7 @@ def test_duplicate_and_reversed_duplicate_quads_keep_the_first():
     v, f = quad_grid(3, 3)
     bad = np.vstack([f, f[[1]][:, [2, 3, 0, 1]], f[[4]][:, ::-1], f[[7]][:, [1, 0, 3, 2]]])
     r = sorpia.repair(v, bad)
-    assert r.report["duplicate_faces"] == [9] and r.report["reversed_duplicate_faces"] == [10, 11]
+    assert r.changes["duplicate_faces"] == [9] and r.changes["reversed_duplicate_faces"] == [10, 11]
     assert np.array_equal(r.faces, f)
     check_repaired(v, bad, r)
 
@@ -178,7 +178,7 @@ def test_mixed_orientation_flips_the_fewer_faces():
     for i in (1, 6, 7):
         bad[i] = [bad[i][0]] + bad[i][:0:-1]  # reversed as repair reverses: the first corner kept
     r = sorpia.repair(v, bad)
-    assert r.report["flipped_faces"] == [1, 6, 7]
+    assert r.changes["flipped_faces"] == [1, 6, 7]
     assert isinstance(r.faces, sorpia.Polygons) and face_lists(r.faces) == face_lists(f)
     check_repaired(v, bad, r)
 
@@ -189,27 +189,27 @@ def test_repeated_corners_collapse_to_a_smaller_polygon_or_remove_the_face():
     v = np.vstack([v, points(3)])
     bad = np.vstack([f, [[2, 6, 5, 5], [6, 2, 7, 6], [7, 8, 7, 2]]])
     r = sorpia.repair(v, bad)
-    assert r.report["collapsed_faces"] == [2, 3] and r.report["degenerate_faces"] == [4]
+    assert r.changes["collapsed_faces"] == [2, 3] and r.changes["degenerate_faces"] == [4]
     assert isinstance(r.faces, sorpia.Polygons)
     assert r.faces.face_vertex_counts.tolist() == [4, 4, 3, 3]
     assert face_lists(r.faces)[2:] == [[2, 6, 5], [2, 7, 6]]
     check_repaired(v, bad, r)
-    assert any("repeated corner" in line for line in sorpia._repair.describe_changes(r.report))
+    assert any("repeated corner" in line for line in sorpia._repair.describe_changes(r.changes))
 
 
 def test_degenerate_quad_removed_keeps_the_array_form():
     v, f = quad_grid(2, 2)
     bad = np.vstack([f, [[0, 1, 0, 3]]])
     r = sorpia.repair(v, bad)
-    assert r.report["degenerate_faces"] == [4] and r.faces.shape == (4, 4)
+    assert r.changes["degenerate_faces"] == [4] and r.faces.shape == (4, 4)
     check_repaired(v, bad, r)
 
 
 def test_quad_moebius_strip_is_cut_along_one_edge():
     v, f = quad_moebius(7)
     r = sorpia.repair(v, f)
-    assert len(r.report["cut_edges"]) == 1 and r.report["cut_copies"] == [1, 1]
-    assert r.report["cut_vertices"] == r.report["cut_edges"][0]
+    assert len(r.changes["cut_edges"]) == 1 and r.changes["cut_copies"] == [1, 1]
+    assert r.changes["cut_vertices"] == r.changes["cut_edges"][0]
     check_repaired(v, f, r)
 
 
@@ -255,9 +255,9 @@ def test_repair_of_corrupted_polygon_meshes(name, edits, form):
     if isinstance(faces, sorpia.Polygons) or len({len(t) for t in bad}) > 1:
         assert isinstance(r.faces, sorpia.Polygons)
     else:  # an (m, k) array, or lists of k, stays an array unless a face got shorter
-        assert isinstance(r.faces, np.ndarray) != bool(r.report["collapsed_faces"])
+        assert isinstance(r.faces, np.ndarray) != bool(r.changes["collapsed_faces"])
     if not mesh_problems(bad, len(v)):  # a valid mesh comes back as it is
-        assert not any(r.report["counts"].values()) and r.vertices is v
+        assert not any(r.changes["counts"].values()) and r.vertices is v
 
 
 # ---- real polygon meshes ----------------------------------------------------
@@ -271,7 +271,7 @@ def test_real_polygon_meshes_repair_to_valid_meshes(path):
     v, f = sorpia.read_mesh(path)
     r = sorpia.repair(v, f)
     check_repaired(v, f, r)
-    assert set(r.report) == set(REPORT_KINDS) | {"counts"}
+    assert set(r.changes) == set(REPORT_KINDS) | {"counts"}
 
 
 # ---- sharpness tags ---------------------------------------------------------
@@ -297,7 +297,7 @@ def test_tags_follow_the_repair():
     assert len(edges) == 3  # (2, 3) twice (one copy per cube), (0, 1) once
     corners, corner_sharpness = r.tags["corners"]
     assert sorted(r.vertex_map[corners].tolist()) == [2, 2] and set(corner_sharpness) == {4.0}
-    assert r.report["duplicate_faces"] == [1]
+    assert r.changes["duplicate_faces"] == [1]
     assert r.tags["holes"].tolist() == [j for j, src in enumerate(r.face_map) if src == 5]
     assert sorpia.repair(v, f).tags == {}
 
@@ -312,7 +312,7 @@ def test_catmull_clark_fit_of_repaired_quads_passes_through_the_inputs():
                      [[f[20, 0], n + 3, n + 4, n + 5]]])
     bad[30:32] = bad[30:32][:, ::-1]
     r = sorpia.repair(v, bad)
-    assert sum(r.report["counts"].values()) > 0
+    assert sum(r.changes["counts"].values()) > 0
     check_repaired(v, bad, r)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", sorpia.UnreferencedVerticesWarning)

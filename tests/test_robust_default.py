@@ -102,7 +102,7 @@ def test_a_diverging_method_stops_at_the_first_sign_and_returns_its_best_iterate
     with pytest.warns(ConvergenceWarning, match="diverged.*method='gmres'"):
         res = sorpia.interpolate(v, f, method=method, **CC)
     assert res.stop_reason == "diverged" and not res.converged and res.recommended == "gmres"
-    errors = res.errors
+    errors = res.history
     best = int(np.argmin(errors))
     # The rule (sorpia::divergence_growth): stop at the first E_k above 10 (hss, whss: 100) times the lowest before.
     growth = 100.0 if method in ("hss", "whss") else 10.0
@@ -125,7 +125,7 @@ def test_auto_falls_back_to_gmres_and_matches_the_dense_solve():
     assert res.method == "auto" and res.converged and res.variant == "gmres"
     assert [a["method"] for a in res.attempts] == ["sor", "gmres"]
     assert res.attempts[0]["stop_reason"] in ("diverged", "slow")
-    assert res.attempts[1]["stop_reason"] == "converged" and res.attempts[1]["final_error"] == res.errors[-1]
+    assert res.attempts[1]["stop_reason"] == "converged" and res.attempts[1]["final_error"] == res.history[-1]
     # E/E_0 < 1e-10 with cond(B) = 25 bounds the relative error of V by about 1e-8.
     ref = np.linalg.solve(b, v)
     assert np.abs(res.control_vertices - ref).max() / np.abs(ref).max() < 1e-8
@@ -184,7 +184,7 @@ def test_a_singular_b_gets_the_least_squares_answer_of_least_norm(name, v, f, ta
     # What cannot be interpolated, and where: the least-squares residual, its largest rows first.
     r = np.linalg.norm(v - b @ ref, axis=1)
     e0 = np.linalg.norm(v - b @ v, axis=1).max()
-    assert res.errors[-1] == pytest.approx(r.max() / e0, rel=1e-6)
+    assert res.history[-1] == pytest.approx(r.max() / e0, rel=1e-6)
     np.testing.assert_allclose(res.worst_residuals, np.sort(r)[::-1][:len(res.worst_residuals)], rtol=1e-6)
     assert str(res.worst_vertices[0]) in str(caught[0].message)
 
@@ -211,7 +211,7 @@ def test_auto_on_an_ordinary_mesh_is_sor_alone():
     sor = sorpia.interpolate(v, f, method="sor")
     assert res.variant == "sor" and [a["method"] for a in res.attempts] == ["sor"]
     np.testing.assert_array_equal(res.control_vertices, sor.control_vertices)
-    np.testing.assert_array_equal(res.errors, sor.errors)
+    np.testing.assert_array_equal(res.history, sor.history)
 
 
 def test_a_slow_sor_is_stopped_before_max_iter():
@@ -224,7 +224,7 @@ def test_a_slow_sor_is_stopped_before_max_iter():
     assert res.converged and res.variant == "gmres"
     assert [(a["method"], a["stop_reason"], a["iterations"]) for a in res.attempts[:1]] == [("sor", "slow", 10)]
     # gmres starts from sor's iterate (below the start): its errors[0] is sor's E_10 / E_0.
-    assert res.errors[0] == pytest.approx(sor.errors[10], rel=1e-12) and res.iterations <= 12
+    assert res.history[0] == pytest.approx(sor.history[10], rel=1e-12) and res.iterations <= 12
 
 
 def test_the_new_fields_survive_pickle_and_show_in_repr():

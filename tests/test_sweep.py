@@ -76,7 +76,7 @@ def test_errors_are_the_papers_ek_with_threads(big_irregular):
         with pytest.warns(sorpia.ConvergenceWarning):
             res = sorpia.interpolate(v, f, threads=2, max_iter=k)
         ek = np.linalg.norm(v - b @ res.control_vertices, axis=1).max()
-        assert abs(ek / res.initial_error - res.errors[-1]) <= 1e-12
+        assert abs(ek / res.initial_error - res.history[-1]) <= 1e-12
 
 
 def test_control_vertices_in_callers_order():

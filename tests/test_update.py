@@ -107,10 +107,10 @@ def test_warm_start_same_guarantee(name, method):
     e0 = residual(B, moved, moved)
     assert warm.converged
     assert warm.initial_error == pytest.approx(e0, rel=1e-12)  # E_0 of the cold start
-    assert warm.errors[0] == pytest.approx(residual(B, moved, first.control_vertices) / e0, rel=1e-6)
-    assert warm.errors[0] < 1
+    assert warm.history[0] == pytest.approx(residual(B, moved, first.control_vertices) / e0, rel=1e-6)
+    assert warm.history[0] < 1
     assert residual(B, moved, warm.control_vertices) < 1.0001e-10 * e0
-    assert len(warm.errors) == warm.iterations + 1
+    assert len(warm.history) == warm.iterations + 1
 
 
 def test_warm_start_already_solved_does_nothing():
@@ -147,7 +147,7 @@ def test_update_meets_full_solve_guarantee_and_composes(name, in_place):
         assert res.converged and res.variant == "local" and res.method == "gs"
         assert res.initial_error == pytest.approx(e0, rel=1e-12)
         assert residual(B, targets, res.control_vertices) < 1.0001e-10 * e0
-        assert res.errors[-1] < 1e-10 < res.errors[0]
+        assert res.history[-1] < 1e-10 < res.history[0]
         assert res.iterations == 1 and 0 < res.relaxations
         full = interp.solve(targets, tol=1e-13)  # a solve resets the kept targets to these: the same
         np.testing.assert_allclose(res.control_vertices, full.control_vertices, atol=100 * 1e-10 * e0)
@@ -248,7 +248,7 @@ def test_update_nothing_to_do():
     interp = sorpia.Interpolator(F, len(V))
     res = interp.solve(V)
     same = interp.update(res, [3], V[3])
-    assert same.iterations == 0 and same.relaxations == 0 and list(same.errors) == [res.errors[-1]]
+    assert same.iterations == 0 and same.relaxations == 0 and list(same.history) == [res.history[-1]]
     np.testing.assert_array_equal(same.control_vertices, res.control_vertices)
 
 
@@ -313,7 +313,7 @@ def test_update_on_shared_meshes(name):
         warnings.simplefilter("ignore", sorpia.SingularMatrixWarning)  # the car's cubes (test_singular_cubes)
         res = interp.solve(V, max_iter=5000)
     if not res.converged:  # a full solve is the reference: without one there is nothing to match
-        pytest.skip(f"the full solve stops at E/E_0 = {res.errors[-1]:.3g} (docs: Creases, corners and holes)")
+        pytest.skip(f"the full solve stops at E/E_0 = {res.history[-1]:.3g} (docs: Creases, corners and holes)")
     targets = V.copy()
     i = len(V) // 2
     targets[i] += 0.01 * diagonal(V)
@@ -438,6 +438,6 @@ def test_far_warm_start_iterates():
     is measured against the larger of E_0 and the start's error."""
     V, F = meshes()["irregular"]
     res = sorpia.interpolate(V, F, initial=V * 1e100, max_iter=5000)
-    assert res.converged and res.iterations > 0 and res.errors[0] > 1e99
+    assert res.converged and res.iterations > 0 and res.history[0] > 1e99
     B = sorpia.limit_matrix(F, len(V))
     assert residual(B, V, res.control_vertices) < 1e-10 * residual(B, V, V)

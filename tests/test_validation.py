@@ -125,8 +125,9 @@ BAD_ARRAYS = [
 
 @pytest.mark.parametrize("vertices, faces, exc, match", [c[1:] for c in BAD_ARRAYS], ids=[c[0] for c in BAD_ARRAYS])
 def test_bad_arrays_are_refused_with_the_index(vertices, faces, exc, match):
+    # Loop named: "auto", the default, would take the quads of "faces-quads" as Catmull-Clark's
     with pytest.raises(exc, match=match):
-        sorpia.limit_points(vertices, faces)
+        sorpia.limit_points(vertices, faces, scheme="loop")
 
 
 # Two faces with the same vertices in the opposite order (issue 20, item 1) whose edges no other face uses are a
@@ -154,7 +155,7 @@ def test_reversed_duplicates_beside_a_third_face_are_refused(faces, match):
             warnings.simplefilter("ignore", sorpia.UnreferencedVerticesWarning)
             sorpia.interpolate(v, faces, scheme="catmull-clark")
     r = sorpia.repair(v, faces)
-    assert r.report["reversed_duplicate_faces"] == [1] and r.face_map.tolist() == [0, 2]
+    assert r.changes["reversed_duplicate_faces"] == [1] and r.face_map.tolist() == [0, 2]
 
 
 def test_every_refusal_is_a_value_or_type_error():
@@ -586,7 +587,7 @@ def test_a_run_cut_short_warns_and_stays_finite(method):
         res = sorpia.interpolate(v, f, method=method, max_iter=3, **options)
     assert not res.converged and res.stop_reason in ("max_iter", "diverged")
     assert res.iterations <= 3
-    assert np.isfinite(res.control_vertices).all() and np.isfinite(res.errors).all()
+    assert np.isfinite(res.control_vertices).all() and np.isfinite(res.history).all()
 
 
 @pytest.mark.parametrize("method", SOLVER_METHODS)
@@ -596,10 +597,10 @@ def test_an_unreachable_tol_ends_at_rounding_level(method, recwarn):
     v, f = sorpia.shapes.irregular(300, seed=2)
     res = sorpia.interpolate(v, f, method=method, tol=1e-300, max_iter=400)
     assert res.iterations <= 400
-    assert np.isfinite(res.control_vertices).all() and np.isfinite(res.errors).all()
+    assert np.isfinite(res.control_vertices).all() and np.isfinite(res.history).all()
     floor = 64 * np.finfo(float).eps * np.linalg.norm(v, axis=1).max()
     if res.converged:
-        assert res.errors[-1] * res.initial_error <= floor
+        assert res.history[-1] * res.initial_error <= floor
     else:
         assert any(issubclass(w.category, sorpia.ConvergenceWarning) for w in recwarn)
     residual = sorpia.limit_points(res.control_vertices, f) - v

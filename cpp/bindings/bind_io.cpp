@@ -102,6 +102,48 @@ void bind_io(py::module_& m) {
       "binary"_a, "tags"_a, "boundary"_a, "uv_values"_a.noconvert() = py::none(), "uv_indices"_a.noconvert() = py::none(),
       "normal_values"_a.noconvert() = py::none(), "normal_indices"_a.noconvert() = py::none());
   m.def(
+      "check_ply_per_vertex",
+      [](const Faces& faces, const std::optional<Faces>& face_vertex_counts, std::int32_t face_size,
+         std::size_t n_vertices, const Vertices& values, const Faces& indices, const std::string& what) {
+        if (values.ndim() != 2 || indices.size() != faces.size())
+          throw sorpia::ParameterError("check_ply_per_vertex: (values (k, width), one index per face corner)");
+        sorpia::MeshView view;
+        view.n_vertices = n_vertices;
+        view.face_vertex_indices = faces.data();
+        if (face_vertex_counts) {
+          view.face_vertex_counts = face_vertex_counts->data();
+          view.n_faces = static_cast<std::size_t>(face_vertex_counts->size());
+        } else {
+          view.face_size = face_size;
+          view.n_faces = static_cast<std::size_t>(faces.size()) / static_cast<std::size_t>(std::max(face_size, 1));
+        }
+        // per_vertex_values reads values[index] and the vertex of each corner unchecked: both checked here.
+        for (py::ssize_t i = 0; i < faces.size(); ++i) {
+          if (faces.data()[i] < 0 || static_cast<std::size_t>(faces.data()[i]) >= n_vertices)
+            throw sorpia::MeshError("check_ply_per_vertex: corner " + std::to_string(i) + " names vertex " +
+                                    std::to_string(faces.data()[i]) + ", out of range");
+          if (indices.data()[i] < 0 || indices.data()[i] >= values.shape(0))
+            throw sorpia::MeshError("check_ply_per_vertex: corner " + std::to_string(i) + " names value " +
+                                    std::to_string(indices.data()[i]) + ", out of range");
+        }
+        if (face_vertex_counts) {
+          std::size_t total = 0;
+          for (py::ssize_t f = 0; f < face_vertex_counts->size(); ++f)
+            total += static_cast<std::size_t>(std::max(0, face_vertex_counts->data()[f]));
+          if (total != static_cast<std::size_t>(faces.size()))
+            throw sorpia::ParameterError("check_ply_per_vertex: the face sizes do not add up to the corners");
+        }
+        sorpia::FaceVaryingView channel;
+        channel.values = values.data();
+        channel.n_values = static_cast<std::size_t>(values.shape(0));
+        channel.width = static_cast<int>(values.shape(1));
+        channel.indices = indices.data();
+        sorpia::check_ply_per_vertex(view, channel, what.c_str());
+      },
+      "face_vertex_indices"_a.noconvert(), "face_vertex_counts"_a.noconvert(), "face_size"_a, "n_vertices"_a,
+      "values"_a.noconvert(), "indices"_a.noconvert(), "what"_a,
+      "Raise ParameterError where PLY cannot hold the channel per vertex (write_mesh's check: the width, a seam).");
+  m.def(
       "write_file_atomic",
       [](const std::string& path, const py::bytes& data) {
         std::string bytes = data;

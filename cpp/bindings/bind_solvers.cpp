@@ -44,6 +44,10 @@ constexpr const char* kLocalVariant = "local";  // LocalSolver::update's variant
 
 const char* const kResultDoc = R"doc(What a solve returns (sorpia.interpolate, Interpolator.solve).
 
+``report()`` gives every attribute but control_vertices as a JSON-ready dict
+(arrays as lists), as every sorpia result's report() does. ``errors`` is the
+deprecated name of ``history`` (DeprecationWarning), for one release.
+
 Attributes
 ----------
 control_vertices : (n, k) float64
@@ -56,11 +60,11 @@ iterations : int
     counted from the start: 0 when a warm start already met tol. An update
     (Interpolator.update): 1 when it relaxed any vertex, else 0.
 converged : bool
-    errors[-1] < tol, or E_k at the rounding floor (E_k <= 64 eps max_i ||v_i^0||),
+    history[-1] < tol, or E_k at the rounding floor (E_k <= 64 eps max_i ||v_i^0||),
     below which no method can go: a tol of 1e-300 ends there, converged.
-errors : (iterations + 1,) float64
-    errors[k] = E_k / E_0, E_0 = max_i ||v_i^0 - (B V0)_i|| the error of the
-    cold start V = V0 whatever the start, so errors[0] = 1 from a cold start
+history : (iterations + 1,) float64
+    history[k] = E_k / E_0, E_0 = max_i ||v_i^0 - (B V0)_i|| the error of the
+    cold start V = V0 whatever the start, so history[0] = 1 from a cold start
     and E(start) / E_0 from a warm one (`initial`, an update); a single 0.0
     when E_0 = 0: V0 already interpolates and is the result. An update:
     [E(previous) / E_0, E(result) / E_0] with E_0 of the new targets, E over
@@ -69,7 +73,8 @@ method : str
 omega : float or None
     "sor"/"gs": the omega used (1.0 for "gs"); None for other methods.
 seconds : float
-    Wall time of the whole call, every phase in `timings` included.
+    Wall time of the whole call, every phase in `timings` included
+    (timings["total"]).
 stop_reason : {"converged", "max_iter", "diverged", "callback", "singular", "stalled", "slow"}
     "diverged": E_k rose above 10 times (the Krylov methods: 1e4 times) its
     lowest value before, or was not finite; control_vertices are then the
@@ -104,6 +109,9 @@ worst_vertices : (m,) int64
     largest, largest first; empty when converged.
 worst_residuals : (m,) float64
     Their residual norms ||v_i^0 - (B V)_i||, absolute.
+max_error : float
+    The largest miss of the returned control vertices, max_i ||v_i^0 -
+    (B V)_i||, absolute: history[returned_iteration] * initial_error.
 rho : float or None
     omega="young": the estimated spectral radius of I - D^-1 B.
 sigma : float or None
@@ -123,16 +131,17 @@ relaxations : int
 timings : dict
     Seconds per phase: "topology" (faces validated, one-ring), "operator"
     (B from OpenSubdiv's limit masks), "estimate" (spectral estimates for the
-    parameters: 0 when an Interpolator already holds them), "solve".
+    parameters: 0 when an Interpolator already holds them), "solve", and
+    "total", equal to `seconds`.
 )doc";
 
 // The public attributes, in the order of the docstring (and of _fields).
-const char* const kResultFields[] = {"control_vertices", "iterations",     "converged",          "errors",
-                                     "method",           "omega",          "seconds",            "stop_reason",
-                                     "initial_error",    "variant",        "attempts",           "returned_iteration",
-                                     "recommended",      "worst_vertices", "worst_residuals",    "rho",
-                                     "sigma",            "lambda_min",     "alpha",              "weight",
-                                     "products",         "relaxations",    "timings"};
+const char* const kResultFields[] = {"control_vertices", "iterations",     "converged",       "history",
+                                     "method",           "omega",          "seconds",         "stop_reason",
+                                     "initial_error",    "variant",        "attempts",        "returned_iteration",
+                                     "recommended",      "worst_vertices", "worst_residuals", "max_error",
+                                     "rho",              "sigma",          "lambda_min",      "alpha",
+                                     "weight",           "products",       "relaxations",     "timings"};
 
 py::dict attempt_dict(const sorpia::Attempt& a) {
   py::dict d;
@@ -172,7 +181,23 @@ void bind_result(py::module_& m) {
                               return view(r.control_vertices, static_cast<py::ssize_t>(r.columns), self,
                                           r.variant == kLocalVariant);
                             })
-      .def_property_readonly("errors", [](const py::object& self) { return view(self.cast<const R&>().errors, 0, self); })
+      .def_property_readonly("history",
+                             [](const py::object& self) { return view(self.cast<const R&>().errors, 0, self); })
+      .def_property_readonly("errors",
+                             [](const py::object& self) {
+                               if (PyErr_WarnEx(PyExc_DeprecationWarning,
+                                                "InterpolationResult.errors is deprecated: use history (the same "
+                                                "array; the name every sorpia result uses)",
+                                                1) != 0)
+                                 throw py::error_already_set();
+                               return view(self.cast<const R&>().errors, 0, self);
+                             })
+      .def_property_readonly("max_error",
+                             [](const R& r) {
+                               if (r.errors.empty()) return 0.0;
+                               const auto k = static_cast<std::size_t>(r.returned_iteration);
+                               return (k < r.errors.size() ? r.errors[k] : r.errors.back()) * r.initial_error;
+                             })
       .def_readonly("iterations", &R::iterations)
       .def_property_readonly("converged", &R::converged)
       .def_property_readonly("method", [](const R& r) { return std::string(sorpia::method_name(r.method)); })
@@ -209,6 +234,7 @@ void bind_result(py::module_& m) {
                                d["operator"] = r.operator_seconds;
                                d["estimate"] = r.estimate_seconds;
                                d["solve"] = r.solve_seconds;
+                               d["total"] = r.seconds;
                                return d;
                              })
       .def_readonly("omega_clamped", &R::omega_clamped, "omega='young' met rho >= YOUNG_RHO_CLAMP.")
@@ -267,6 +293,18 @@ void bind_result(py::module_& m) {
             r.worst_residuals = t[27].cast<std::vector<double>>();
             return r;
           }))
+      .def("report",
+           [](const py::object& self) {
+             // The result as JSON-ready values: arrays as lists, in the order of the docstring.
+             py::dict d;
+             for (const char* name : kResultFields) {
+               if (std::string(name) == "control_vertices") continue;
+               const py::object v = self.attr(name);
+               d[name] = py::isinstance<py::array>(v) ? v.attr("tolist")() : v;
+             }
+             return d;
+           },
+           "Every attribute but control_vertices, JSON-ready (arrays as lists), as every sorpia result's report().")
       .def("__repr__", [](const py::object& self) {
         std::string out = "InterpolationResult(";
         for (const char* name : kResultFields) {

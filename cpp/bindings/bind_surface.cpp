@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include "bindings.hpp"
+#include "sorpia/subface_grid.hpp"
 #include "sorpia/surface.hpp"
 
 namespace sorpia_py {
@@ -121,6 +122,7 @@ void bind_surface(py::module_& m) {
         },
         "n_vertices"_a, "n_faces"_a, "level"_a, "scheme"_a = sorpia::Scheme::Loop, "n_face_vertices"_a = 0);
   m.def("available_memory_bytes", &sorpia::available_memory_bytes);
+  m.def("subface_columns", &sorpia::subface_columns, "face_size"_a);
 }
 
 }  // namespace sorpia_py

@@ -7,12 +7,14 @@ given vertices: solves B V = V0 with SOR-PIA and the rest of the PIA family.
 """
 
 from ._core import __version__
-from .errors import (AttributeWarning, ConvergenceWarning, DecimationWarning, MeshError, MeshFileError,
+from .errors import (AttributeWarning, ConvergenceWarning, DecimationWarning, FormatWarning, MeshError, MeshFileError,
                      NonmanifoldWarning, OmegaWarning, ParameterError, SingularMatrixWarning, SorpiaWarning,
                      UnknownTagWarning, UnreferencedVerticesWarning, UsdWarning)
+from ._mesh import FaceVarying, SubdivisionMesh
+from ._validate import resolve_scheme
 from .limit import limit_matrix, limit_points
 from .solve import InterpolationResult, Interpolator, interpolate
-from .io import FaceVarying, read_mesh, write_mesh
+from .io import read, read_mesh, write_mesh
 from ._sharp import sharp_edges
 from ._validate import Polygons
 from ._repair import RepairResult, repair
@@ -26,10 +28,12 @@ from . import shapes
 
 __all__ = [
     "__version__",
+    "SubdivisionMesh", "read", "resolve_scheme",
     "MeshError",
     "MeshFileError",
     "ParameterError",
     "SorpiaWarning",
+    "FormatWarning",
     "UnreferencedVerticesWarning",
     "ConvergenceWarning", "InterpolationResult", "Interpolator", "OmegaWarning", "SingularMatrixWarning",
     "interpolate",

@@ -12,6 +12,8 @@ from __future__ import annotations
 import numpy as np
 
 from . import _core
+from ._mesh import SubdivisionMesh
+from ._validate import DEFAULT_SCHEME, Polygons, as_boundary, as_scheme, as_vertices
 from .errors import MeshError
 from .limit import topology as _topology
 
@@ -45,8 +47,6 @@ def topology_info(vertices, topology, list_extraordinary: bool | int = False, sc
         ``extraordinary`` (list of [index, valence, "interior"|"boundary"],
         if asked), ``bounding_box`` ([min xyz, max xyz]), ``diagonal``.
     """
-    from ._validate import as_scheme
-
     info = _layout(vertices, topology.n_faces, _core.mesh_statistics(topology, as_scheme(scheme)), list_extraordinary)
     return _with_regular(info, scheme)
 
@@ -54,8 +54,6 @@ def topology_info(vertices, topology, list_extraordinary: bool | int = False, sc
 def _with_regular(info: dict, scheme: str) -> dict:
     """info with "regular_valence": [inside, on the boundary], the valences the
     scheme calls regular (Loop 6 and 4, Catmull-Clark 4 and 3)."""
-    from ._validate import as_scheme
-
     info["regular_valence"] = list(_core.regular_valence(as_scheme(scheme)))
     return info
 
@@ -72,10 +70,6 @@ def mesh_info(vertices, faces, boundary: str = "edge-and-corner", list_extraordi
     list, with genus None. Faces that are not (m, 3) indices into `vertices`
     get vertex and face counts only.
     """
-    from ._validate import as_boundary, as_vertices
-
-    from ._validate import Polygons, as_scheme
-
     vertices = np.asarray(vertices, dtype=np.float64)
     n_faces = len(faces.face_vertex_counts) if isinstance(faces, Polygons) else None
     if n_faces is None:
@@ -103,18 +97,19 @@ def mesh_info(vertices, faces, boundary: str = "edge-and-corner", list_extraordi
     return info
 
 
-def mesh_statistics(vertices, faces, *, scheme: str = "auto", list_extraordinary: bool | int = False) -> dict:
+def mesh_statistics(vertices, faces=None, *, scheme: str = DEFAULT_SCHEME,
+                    list_extraordinary: bool | int = False) -> dict:
     """Statistics of a mesh, as ``sorpia info`` prints them (the paper's Table 2).
 
     Parameters
     ----------
-    vertices : array_like (n, 3) float
-        For the counts and the bounding box.
+    vertices : array_like (n, 3) float, or sorpia.SubdivisionMesh
+        For the counts and the bounding box; or a mesh (its faces and scheme).
     faces : array_like (m, k) int, list of polygons or sorpia.Polygons
     scheme : {"auto", "loop", "catmull-clark"}
         Whose regular valence the extraordinary vertices are counted against
         (Loop 6 inside and 4 on the boundary, Catmull-Clark 4 and 3); "auto":
-        Loop when every face is a triangle.
+        a mesh's own scheme, else Loop when every face is a triangle.
     list_extraordinary : bool or int
         Include the index, valence and side of every extraordinary vertex
         (True), of the first N (an int), or of none (False).
@@ -137,8 +132,12 @@ def mesh_statistics(vertices, faces, *, scheme: str = "auto", list_extraordinary
     >>> s["vertices"], s["edges"], s["faces"], s["genus"]
     (42, 120, 80, 0)
     """
-    from ._validate import as_scheme
-
+    if isinstance(vertices, SubdivisionMesh):
+        if faces is not None:
+            raise TypeError("mesh_statistics(mesh): the faces come from the SubdivisionMesh")
+        if scheme == DEFAULT_SCHEME:
+            scheme = vertices.scheme
+        vertices, faces = vertices.vertices, vertices.faces
     name = _core.scheme_name(as_scheme(scheme, faces))
     info = mesh_info(vertices, faces, list_extraordinary=list_extraordinary, scheme=name)
     verdict = info.pop("loop_pia")

@@ -35,7 +35,9 @@ from typing import NamedTuple
 import numpy as np
 
 from . import _core
-from ._validate import DEFAULT_BOUNDARY, as_boundary, as_tags, as_vertices
+from ._meshdata import merge_sharpness
+from ._remap import core_faces, faces_as_given, mapped_tags
+from ._validate import DEFAULT_BOUNDARY, as_boundary, as_tags
 from .errors import MeshError, NonmanifoldWarning
 
 
@@ -76,7 +78,7 @@ class Split(NamedTuple):
 
 
 def split(faces, n_vertices: int, boundary: str = DEFAULT_BOUNDARY, *, creases=None, corners=None,
-          holes=None) -> Split | None:
+          holes=None, stacklevel: int = 4) -> Split | None:
     """The manifold split of `faces` with OpenSubdiv's rules as tags, or None
     for a manifold mesh (nothing to split). Warns NonmanifoldWarning
     otherwise.
@@ -94,9 +96,7 @@ def split(faces, n_vertices: int, boundary: str = DEFAULT_BOUNDARY, *, creases=N
     non-manifold edges; a caller's crease at a crease vertex (OpenSubdiv
     counts it with the creases of every sheet).
     """
-    from ._repair import RepairResult, _core_faces, _faces_as_given, _mapped_tags
-
-    rows, triangles, polygons = _core_faces(faces, n_vertices)
+    rows, triangles, polygons = core_faces(faces, n_vertices)
     if triangles is not None:
         found = _core.split_nonmanifold(triangles, n_vertices)
         if found is None:
@@ -108,11 +108,11 @@ def split(faces, n_vertices: int, boundary: str = DEFAULT_BOUNDARY, *, creases=N
         if found is None:
             return None
         counts, split_indices, vertex_map, report = found
-        split_faces = _faces_as_given(rows, counts, split_indices)
+        split_faces = faces_as_given(rows, counts, split_indices)
     warnings.warn(f"nonmanifold=\"sharp\": {len(report['nonmanifold_edges'])} non-manifold edges and "
                   f"{len(report['nonmanifold_vertices'])} non-manifold vertices kept with OpenSubdiv's rules, "
                   "whose result OpenSubdiv's documentation calls undefined for now", NonmanifoldWarning,
-                  stacklevel=4)
+                  stacklevel=stacklevel)
     crease_vertices = sorted(set(report["nonmanifold_vertices"]) - set(report["corners"]))
     corner_vertices = report["corners"]
     if report["single_face_sheets"] and as_boundary(boundary) == _core.Boundary.edge_and_corner:
@@ -132,19 +132,13 @@ def split(faces, n_vertices: int, boundary: str = DEFAULT_BOUNDARY, *, creases=N
             raise MeshError(f"creases: edge ({a}, {b}) ends at a vertex on an interior non-manifold crease, whose "
                             "rule OpenSubdiv takes from the creases of all its sheets at once: nonmanifold=\"sharp\" "
                             "cannot reproduce it; repair the mesh or leave that crease out")
-        result = RepairResult(None, split_faces, vertex_map, np.arange(n_faces, dtype=np.int32), {})
-        tags = _mapped_tags(checked, result, n_vertices, given)
+        tags = mapped_tags(checked, split_faces, vertex_map, np.arange(n_faces, dtype=np.int32), n_vertices, given)
     copies = np.flatnonzero(np.isin(vertex_map, corner_vertices)).astype(np.int32)
-    user_corners, user_sharpness = tags.get("corners", (np.zeros(0, np.int32), np.zeros(0)))
-    # ours last: a corner given twice counts with its last sharpness, as in OpenSubdiv
-    tags["corners"] = (np.concatenate([user_corners, copies]),
-                       np.concatenate([user_sharpness, np.full(len(copies), _core.INFINITE_SHARPNESS)]))
+    # ours last: a corner or edge given twice counts with its last sharpness (OpenSubdiv's rule, merge_sharpness)
+    tags["corners"] = merge_sharpness(tags.get("corners"), (copies, _core.INFINITE_SHARPNESS), width=1)
     sharp = np.asarray(report["sharp_edges"], dtype=np.int32).reshape(-1, 2)
     if len(sharp):  # faces of a non-manifold edge joined again in the split (a pillow beside a third face)
-        user_edges, user_sharpness = tags.get("creases", (np.zeros((0, 2), np.int32), np.zeros(0)))
-        # ours last: an edge given twice counts with its last sharpness, as in OpenSubdiv
-        tags["creases"] = (np.concatenate([user_edges, sharp]),
-                           np.concatenate([user_sharpness, np.full(len(sharp), _core.INFINITE_SHARPNESS)]))
+        tags["creases"] = merge_sharpness(tags.get("creases"), (sharp, _core.INFINITE_SHARPNESS))
     return Split(split_faces, vertex_map, tags, report, boundary)
 
 
@@ -154,30 +148,6 @@ def _columns_to_input(vertex_map: np.ndarray, n: int):
 
     k = len(vertex_map)
     return scipy.sparse.csr_matrix((np.ones(k), (np.arange(k), vertex_map)), shape=(k, n))
-
-
-def limit_points(vertices, faces, boundary, scheme, tags: dict):
-    """`sorpia.limit_points` with nonmanifold="sharp"."""
-    from .limit import limit_points as manifold_limit_points
-
-    vertices = as_vertices(vertices, columns=None)
-    s = split(faces, len(vertices), boundary, **tags)
-    if s is None:
-        return manifold_limit_points(vertices, faces, boundary=boundary, scheme=scheme, **tags)
-    return manifold_limit_points(vertices[s.vertex_map], s.faces, boundary=s.boundary, scheme=scheme,
-                                 **s.tags)[: len(vertices)]
-
-
-def limit_matrix(faces, n_vertices: int, boundary, scheme, tags: dict):
-    """`sorpia.limit_matrix` with nonmanifold="sharp": the split's rows of the
-    input vertices, each copy's column added to its input vertex's."""
-    from .limit import limit_matrix as manifold_limit_matrix
-
-    s = split(faces, n_vertices, boundary, **tags)
-    if s is None:
-        return manifold_limit_matrix(faces, n_vertices, boundary=boundary, scheme=scheme, **tags)
-    return folded(manifold_limit_matrix(s.faces, len(s.vertex_map), boundary=s.boundary, scheme=scheme, **s.tags),
-                  s.vertex_map, n_vertices)
 
 
 def folded(b, vertex_map: np.ndarray, n: int):

@@ -25,6 +25,10 @@ import math
 
 import numpy as np
 
+from ._meshinfo import boundary_share
+from .errors import ParameterError
+from .surface import edge_uv
+
 # Faces drawn per panel at most: matplotlib sorts and paints each polygon in
 # Python, so the time to draw a figure grows with the faces drawn.
 FACE_BUDGET = 60_000
@@ -176,8 +180,6 @@ class _Faces:
         faces whose corners j, j + 1 are (a, b) or (b, a), two per edge (the
         same twice on a boundary). Raises ParameterError for a pair that is
         not an edge."""
-        from .errors import ParameterError
-
         edges = np.asarray(edges, dtype=np.int64).reshape(-1, 2)
         found: dict = {(min(a, b), max(a, b)): [] for a, b in edges.tolist()}
         for f, face in enumerate(self.rows()):
@@ -203,8 +205,6 @@ def crease_curves(surface, faces, edges, samples: int = 9, holes=None):
     hole faces, which have no surface: a side that is a hole takes the other
     side's values, and an edge both of whose faces are holes has no curve
     (NaN, which matplotlib leaves undrawn)."""
-    from .surface import edge_uv
-
     edges = np.asarray(edges, dtype=np.int64).reshape(-1, 2)
     F = _Faces(faces)
     rows = F.rows()
@@ -250,8 +250,6 @@ def _vertex_normals(face_normals: np.ndarray, faces: np.ndarray, n_vertices: int
 
 def _boundary_share(faces: np.ndarray, n_vertices: int) -> float:
     """Boundary edges / edges: 0 for a closed mesh."""
-    from ._meshinfo import boundary_share
-
     return boundary_share(faces, n_vertices)
 
 

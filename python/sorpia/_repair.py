@@ -4,13 +4,16 @@ orientation)."""
 
 from __future__ import annotations
 
+import warnings
 from types import MappingProxyType
 from typing import NamedTuple
 
 import numpy as np
 
 from . import _core
-from ._validate import Polygons, _face_rows, as_faces, as_polygons, as_tags, as_vertices
+from ._mesh import SubdivisionMesh, mesh_arguments
+from ._remap import core_faces, faces_as_given, mapped_tags
+from ._validate import Polygons, as_tags, as_vertices
 
 # The report's keys, in the order the repair applies its rules (see `repair`).
 REPORT_KINDS = ("degenerate_faces", "collapsed_faces", "duplicate_faces", "reversed_duplicate_faces", "nonmanifold_edges",
@@ -73,6 +76,36 @@ def describe_changes(report: dict, max_listed: int = 5) -> list[str]:
     return lines
 
 
+class _DeprecatedReport(dict):
+    """RepairResult.report for one release: the changes dict of old
+    (``r.report["counts"]``, with a DeprecationWarning: use ``r.changes``),
+    callable as every result's ``report()`` is."""
+
+    def __init__(self, changes: dict, report: dict) -> None:
+        super().__init__(changes)
+        self._report = report
+
+    def __call__(self) -> dict:
+        return self._report
+
+    def _warn(self) -> None:
+        warnings.warn("RepairResult.report as a dict is deprecated: use RepairResult.changes (the same dict); "
+                      "report() is the result's report, as on every sorpia result", DeprecationWarning, stacklevel=3)
+
+
+def _warning(name: str):
+    def method(self, *args, **kwargs):
+        self._warn()
+        return getattr(dict, name)(self, *args, **kwargs)
+    method.__name__ = name
+    return method
+
+
+# Every way of reading the old dict warns (json.dumps reads it without a warning, as it reads dicts in C).
+for _name in ("__getitem__", "__contains__", "__iter__", "__len__", "get", "keys", "values", "items"):
+    setattr(_DeprecatedReport, _name, _warning(_name))
+
+
 class RepairResult(NamedTuple):
     """What `repair` returns.
 
@@ -89,23 +122,47 @@ class RepairResult(NamedTuple):
         (``vertex_map[i] == i`` for i < n).
     face_map : numpy.ndarray, (m',) int32
         For every output face, the input face it comes from.
-    report : dict
-        Every change, JSON-able (lists of ints): see `repair`.
+    changes : dict
+        Every change, JSON-able (lists of ints): see `repair`. (Called
+        ``report`` until this release: ``result.report[...]`` still reads it, with a
+        DeprecationWarning, for one release.)
     tags : dict
         The sharpness tags given to `repair`, on the repaired mesh: the keys
         among ``creases``, ``corners`` and ``holes`` that were given, ready
         for ``interpolate(vertices, faces, **tags)`` (see `repair`).
+    rules : dict
+        The scheme, boundary rule and nonmanifold option of the mesh given
+        (a `sorpia.SubdivisionMesh`'s; the defaults for arrays), which
+        `mesh` carries over.
+
+    ``mesh`` is the repaired mesh as a `sorpia.SubdivisionMesh` with the
+    tags and rules; ``report()`` the result's report, as every sorpia
+    result gives it: a JSON-ready dict.
     """
 
     vertices: np.ndarray
     faces: np.ndarray | Polygons
     vertex_map: np.ndarray
     face_map: np.ndarray
-    report: dict
+    changes: dict
     tags: dict = MappingProxyType({})  # read-only: no tags given
+    rules: dict = MappingProxyType({})  # read-only: the defaults
+
+    @property
+    def mesh(self) -> SubdivisionMesh:
+        """The repaired mesh with its tags and the input's rules."""
+        return SubdivisionMesh(self.vertices, self.faces, **{**self.rules, **self.tags})
+
+    @property
+    def report(self) -> _DeprecatedReport:  # type: ignore[override]
+        """``report()``: the result's report (a JSON-ready dict: ``changes``
+        and the sizes of the input and output meshes). Read as a dict, the
+        deprecated name of `changes`."""
+        return _DeprecatedReport(self.changes, {"changes": self.changes, "n_vertices": int(len(self.vertices)),
+                                                "n_faces": int(len(self.face_map))})
 
 
-def repair(vertices, faces, *, creases=None, corners=None, holes=None) -> RepairResult:
+def repair(vertices, faces=None, *, creases=None, corners=None, holes=None) -> RepairResult:
     """Make a triangle or polygon mesh valid for subdivision without moving a vertex.
 
     The rules, applied in this order:
@@ -152,8 +209,9 @@ def repair(vertices, faces, *, creases=None, corners=None, holes=None) -> Repair
 
     Parameters
     ----------
-    vertices : array_like, (n, 3) float
-        Vertex positions (validated as everywhere in sorpia).
+    vertices : array_like, (n, 3) float, or sorpia.SubdivisionMesh
+        Vertex positions (validated as everywhere in sorpia); or a mesh,
+        whose tags are carried over and whose rules ``result.mesh`` keeps.
     faces : array_like, (m, k) int, list of lists, or sorpia.Polygons
         Triangles, quads or polygons of any sizes (at least 3 vertices each),
         indices into ``vertices``; they may fail sorpia's topology checks, which
@@ -190,42 +248,33 @@ def repair(vertices, faces, *, creases=None, corners=None, holes=None) -> Repair
         fewer than 3 vertices, no faces, a vertex of more edges than
         OpenSubdiv takes).
     """
+    rules = {}
+    if isinstance(vertices, SubdivisionMesh):
+        given = vertices.rules
+        rules = {k: given[k] for k in ("scheme", "boundary", "nonmanifold")}
+        vertices, faces, tags = mesh_arguments(vertices, faces, dict(creases=creases, corners=corners, holes=holes),
+                                               "repair")
+        creases, corners, holes = tags["creases"], tags["corners"], tags["holes"]
     vertices = as_vertices(vertices)
     result = _repair_faces(vertices, faces)
+    if rules:
+        result = result._replace(rules=rules)
     if creases is None and corners is None and holes is None:
         return result
-    r = result.report  # every input face is kept or removed by one rule
+    r = result.changes  # every input face is kept or removed by one rule
     n_faces = len(result.face_map) + sum(len(r[k]) for k in ("degenerate_faces", "duplicate_faces",
                                                               "reversed_duplicate_faces"))
     tags = as_tags(creases, corners, holes, n_vertices=len(vertices), n_faces=n_faces)
     given = {kind for kind, value in (("creases", creases), ("corners", corners), ("holes", holes))
              if value is not None}
-    return result._replace(tags=_mapped_tags(tags, result, len(vertices), given))
-
-
-def _core_faces(faces, n_vertices: int):
-    """`faces` validated for the core: ``(rows, triangles, polygons)`` where
-    rows is the (m, k) array the faces were given as (None for Polygons and
-    ragged lists), triangles the (m, 3) int32 array when k == 3 (else None)
-    and polygons otherwise the int32 (counts, indices)."""
-    rows = None if isinstance(faces, Polygons) else _face_rows(
-        faces, "faces", "(m, k)", "an (m, k) array of integer vertex indices, a list of polygons or sorpia.Polygons")
-    if rows is not None and rows.shape[1] == 3:  # triangles: the (m, 3) path, as sorpia's Loop functions take them
-        return rows, as_faces(rows, n_vertices, count_name="len(vertices)"), None
-    return rows, None, as_polygons(faces if rows is None else rows, n_vertices, count_name="len(vertices)")
-
-
-def _faces_as_given(rows, counts, indices):
-    """Output polygons in the form the input came in (see `repair`)."""
-    if rows is not None and (counts == rows.shape[1]).all():
-        return indices.reshape(-1, rows.shape[1])
-    return Polygons(counts, indices)
+    return result._replace(tags=mapped_tags(tags, result.faces, result.vertex_map, result.face_map, len(vertices),
+                                            given))
 
 
 def _repair_faces(vertices, faces) -> RepairResult:
     """`repair` without tags, of validated vertices."""
     n = vertices.shape[0]
-    rows, triangles, polygons = _core_faces(faces, n)
+    rows, triangles, polygons = core_faces(faces, n)
     if triangles is not None:
         changed = _core.repair(triangles, n)
         if changed is None:
@@ -244,38 +293,8 @@ def _repair_faces(vertices, faces) -> RepairResult:
         return _unchanged(vertices, faces if same else Polygons(counts, indices), len(counts))
     new_counts, new_indices, vertex_map, face_map, report = changed
     report["counts"] = _counts(report)
-    return RepairResult(vertices[vertex_map], _faces_as_given(rows, new_counts, new_indices), vertex_map, face_map,
+    return RepairResult(vertices[vertex_map], faces_as_given(rows, new_counts, new_indices), vertex_map, face_map,
                         report)
-
-
-def _mapped_tags(tags, result: RepairResult, n_vertices: int, kinds) -> dict:
-    """The tags (a checked _core.Tags of the input mesh, of `n_vertices`
-    vertices) on the repaired mesh of `result`: the `kinds` given."""
-    vertex_map, face_map, out = result.vertex_map, result.face_map, {}
-    if "creases" in kinds:
-        counts, indices = as_polygons(result.faces, len(vertex_map))
-        last = np.cumsum(counts) - 1
-        nxt = np.arange(1, len(indices) + 1)
-        nxt[last] = last - counts + 1  # a face's last corner is followed by its first
-        a, b = indices, indices[nxt]
-        edges = np.unique(np.column_stack([np.minimum(a, b), np.maximum(a, b)]), axis=0)  # the output edges
-        ends = np.sort(vertex_map[edges], axis=1).astype(np.int64)  # their input vertices
-        key = ends[:, 0] * n_vertices + ends[:, 1]
-        order = np.argsort(key, kind="stable")
-        wanted = np.sort(tags.crease_vertices, axis=1).astype(np.int64)
-        wanted_key = wanted[:, 0] * n_vertices + wanted[:, 1]
-        lo = np.searchsorted(key[order], wanted_key, side="left")
-        hi = np.searchsorted(key[order], wanted_key, side="right")
-        which = np.concatenate([order[i:j] for i, j in zip(lo, hi)] + [np.zeros(0, np.int64)])
-        out["creases"] = (edges[which].astype(np.int32), np.repeat(tags.crease_sharpness, hi - lo))
-    if "corners" in kinds:
-        sharpness = np.full(n_vertices, np.nan)
-        sharpness[tags.corner_vertices] = tags.corner_sharpness  # a corner given twice: the last, as OpenSubdiv
-        copies = np.flatnonzero(~np.isnan(sharpness[vertex_map]))
-        out["corners"] = (copies.astype(np.int32), sharpness[vertex_map[copies]])
-    if "holes" in kinds:
-        out["holes"] = np.flatnonzero(np.isin(face_map, tags.holes)).astype(np.int32)
-    return out
 
 
 def _unchanged(vertices, faces, n_faces) -> RepairResult:

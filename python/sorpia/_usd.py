@@ -20,13 +20,21 @@ from pathlib import Path
 
 import numpy as np
 
+from . import _core
+from ._mesh import FaceVarying
 from ._validate import Polygons
-from .errors import MeshFileError, ParameterError, UsdWarning
+from .errors import MeshError, MeshFileError, ParameterError, UsdWarning
 
 USD_SUFFIXES = (".usd", ".usda", ".usdc")
 # USD's tokens and sorpia's names, both ways.
 SCHEMES = {"catmullClark": "catmull-clark", "loop": "loop"}
 BOUNDARIES = {"edgeAndCorner": "edge-and-corner", "edgeOnly": "edge-only"}
+# The values USD's schema allows for each rule token sorpia reads (UsdGeomMesh).
+TOKENS = {
+    "subdivisionScheme": ("catmullClark", "loop", "bilinear", "none"),
+    "interpolateBoundary": ("none", "edgeAndCorner", "edgeOnly"),
+    "triangleSubdivisionRule": ("catmullClark", "smooth"),
+}
 # Why sorpia refuses the values it has no rule for.
 REFUSED = {
     ("subdivisionScheme", "bilinear"): "sorpia fits Loop and Catmull-Clark limit surfaces; a bilinear mesh is its "
@@ -97,24 +105,52 @@ def _mesh(stage, path, prim):
     return UsdGeom.Mesh(stage.GetPrimAtPath(found[0]))
 
 
+def _get(attr, where: str, time=None):
+    """attr.Get(time) (the default time when None); a value usd-core cannot
+    read (a corrupted .usdc: pxr's Tf.ErrorException from inside Get, a
+    decompression error) is a MeshFileError naming the file, prim and
+    attribute."""
+    from pxr import Usd
+
+    try:
+        return attr.Get(Usd.TimeCode.Default() if time is None else time)
+    except Exception as exc:  # pxr.Tf.ErrorException (a RuntimeError) and the like: the file's bytes are bad
+        raise MeshFileError(f"{where}: {attr.GetName()} cannot be read (a damaged file?): "
+                            f"{_last_line(exc)}") from None
+
+
+def _last_line(exc: BaseException) -> str:
+    text = str(exc).strip()
+    return text.splitlines()[-1].strip() if text else type(exc).__name__
+
+
 def _token(mesh, name: str, where: str) -> str:
-    """A uniform token attribute's value (its schema fallback when not authored), refused if sorpia has no rule."""
-    value = str(mesh.GetPrim().GetAttribute(name).Get())
+    """A uniform token attribute's value (its schema fallback when not
+    authored): refused by name where sorpia has no rule for it (REFUSED), or
+    where it is not one of the schema's values at all (TOKENS: a misspelt
+    or foreign token, e.g. "Loop")."""
+    value = str(_get(mesh.GetPrim().GetAttribute(name), where))
     if (name, value) in REFUSED:
         raise MeshFileError(f"{where}: {name} = {value} is refused: {REFUSED[name, value]}")
+    if value not in TOKENS[name]:
+        raise MeshFileError(f"{where}: {name} = {value} is not a value USD defines (it has "
+                            f"{', '.join(TOKENS[name])})")
     return value
 
 
 def _array(attr, dtype, where: str, warn_time: bool = False) -> np.ndarray:
     """An array attribute's value at the default time (empty when not authored).
     Time-sampled with no default value: the first sample, with a UsdWarning
-    saying so (and with one as well, only when `warn_time`)."""
-    from pxr import Usd
-
-    value = attr.Get(Usd.TimeCode.Default())
-    samples = attr.GetTimeSamples()
+    saying so (and with one as well, only when `warn_time`). A value that
+    cannot be read, or is not an array of numbers, is a MeshFileError naming
+    the attribute."""
+    value = _get(attr, where)
+    try:
+        samples = attr.GetTimeSamples()
+    except Exception as exc:  # pxr.Tf.ErrorException: a damaged file
+        raise MeshFileError(f"{where}: {attr.GetName()} cannot be read (a damaged file?): {_last_line(exc)}") from None
     if value is None and samples:
-        value = attr.Get(samples[0])
+        value = _get(attr, where, samples[0])
         warnings.warn(f"{where}: {attr.GetName()} has {len(samples)} time samples and no default value: read "
                       f"the sample at time {samples[0]:g}", UsdWarning, stacklevel=5)
     elif samples and warn_time:
@@ -122,13 +158,28 @@ def _array(attr, dtype, where: str, warn_time: bool = False) -> np.ndarray:
                       UsdWarning, stacklevel=5)
     if value is None:
         return np.zeros(0, dtype=dtype)
-    return np.array(value, dtype=dtype)
+    try:
+        return np.array(value, dtype=dtype)
+    except (TypeError, ValueError) as exc:
+        raise MeshFileError(f"{where}: {attr.GetName()} is not an array of numbers ({exc})") from None
 
 
 def read_usd(path, *, prim=None, tags: bool = False, attributes: bool = False):
     """read_mesh for a USD file: (vertices, faces, tags dict or None,
     attributes dict or None, scheme). The scheme (sorpia's name) is read
-    always; a value sorpia has no rule for is refused only with `tags`."""
+    always; a value sorpia has no rule for is refused only with `tags`.
+    What usd-core itself cannot read (pxr's Tf.ErrorException, a
+    RuntimeError, anywhere on the stage of a damaged file) is a
+    MeshFileError naming the file."""
+    _pxr(path)
+    try:
+        return _read_usd(path, prim, tags, attributes)
+    except RuntimeError as exc:
+        raise MeshFileError(f"{os.fsdecode(path)}: usd-core cannot read the stage (a damaged file?): "
+                            f"{_last_line(exc)}") from None
+
+
+def _read_usd(path, prim, tags: bool, attributes: bool):
     _, UsdGeom, _, Vt = _pxr(path)
 
     name = os.fsdecode(path)
@@ -152,7 +203,7 @@ def read_usd(path, *, prim=None, tags: bool = False, attributes: bool = False):
         raise MeshFileError(f"{where}: face {f} has {counts[f]} vertices (a face needs 3 or more)")
     counts, indices = counts.astype(np.int32), indices.astype(np.int32)
     faces = indices.reshape(len(counts), -1) if (counts == counts[0]).all() else Polygons(counts, indices)
-    scheme_token = str(mesh.GetSubdivisionSchemeAttr().Get())
+    scheme_token = str(_get(mesh.GetSubdivisionSchemeAttr(), where))
     tag_dict = _read_tags(mesh, where, len(counts)) if tags else None
     attribute_dict = _read_attributes(mesh, where, counts, indices, len(vertices)) if attributes else None
     return vertices, faces, tag_dict, attribute_dict, SCHEMES.get(scheme_token, scheme_token)
@@ -211,8 +262,6 @@ def _read_attributes(mesh, where: str, counts, indices, n_points: int) -> dict:
     primvar sorpia cannot carry (constant or uniform) is left out with a UsdWarning."""
     from pxr import UsdGeom
 
-    from .io import FaceVarying
-
     out = {}
     api = UsdGeom.PrimvarsAPI(mesh.GetPrim())
     # (key, values attribute, interpolation, indices attribute or None) of each channel the mesh has.
@@ -257,6 +306,7 @@ def write_usd(path, vertices, counts, indices, *, scheme=None, tags: dict, uvs=N
     whose stage is copied with this mesh written into its prim."""
     Usd, UsdGeom, Sdf, Vt = _pxr(path)
     name = os.fsdecode(path)
+    check_float32(vertices, "USD")
     if template is not None:
         stage = _open(template)
         mesh = _mesh(stage, template, prim)
@@ -343,19 +393,28 @@ def _refit_primvars(mesh, counts, indices, n_points: int, where: str, keep: set)
 
 
 def _export_atomically(stage, name: str) -> None:
-    """The stage's root layer exported to a temporary file beside `name` (the
-    same suffix: USD picks the format by it), then renamed over `name`."""
-    folder = os.path.dirname(os.path.abspath(name))
-    suffix = Path(name).suffix
-    fd, tmp = tempfile.mkstemp(prefix=f".{Path(name).stem}.", suffix=suffix, dir=folder)
-    os.close(fd)
-    try:
+    """The stage's root layer exported to a temporary folder (the same suffix:
+    USD picks the format by it), then its bytes written over `name` by the
+    core's atomic writer (sorpia::write_file_atomic: a temporary file beside
+    `name`, the mode a plain open() gives, or the replaced file's, fsync,
+    rename), as every other output is written; the temporary folder is
+    removed however the write ends."""
+    with tempfile.TemporaryDirectory(prefix="sorpia-usd-") as folder:
+        tmp = os.path.join(folder, "stage" + Path(name).suffix)
         if not stage.GetRootLayer().Export(tmp):
             raise MeshFileError(f"{name}: USD could not write the file")
-        with open(tmp, "rb+") as f:
-            os.fsync(f.fileno())
-        os.replace(tmp, name)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+        with open(tmp, "rb") as f:
+            data = f.read()
+    _core.write_file_atomic(os.fsencode(name), data)
+
+
+def check_float32(vertices, what: str = "USD") -> None:
+    """Refuse coordinates a float32 file cannot hold (beyond float32's
+    largest finite value, 3.4e38), as the STL writer refuses them: a
+    MeshError naming the first such vertex."""
+    v = np.asarray(vertices, dtype=np.float64)
+    beyond = np.abs(v) > float(np.finfo(np.float32).max)
+    if beyond.any():
+        i = int(np.flatnonzero(beyond.any(axis=1))[0])
+        x = float(v[i][np.flatnonzero(beyond[i])[0]])
+        raise MeshError(f"write_mesh: vertex {i} has coordinate {x!r}, beyond float32, which {what} stores")

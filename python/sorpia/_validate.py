@@ -30,6 +30,7 @@ mistake (vertices and faces swapped) than a convenience.
 
 from __future__ import annotations
 
+import numbers
 import operator
 from typing import NamedTuple, Optional
 
@@ -71,7 +72,7 @@ def as_vertices(vertices, name: str = "vertices", columns: Optional[int] = 3) ->
         raise TypeError(f"{name} must be an {shape} array of real numbers, got dtype {arr.dtype}")
     if arr.ndim != 2 or arr.shape[1] < 1 or (columns is not None and arr.shape[1] != columns):
         hint = " (a scalar per vertex: values[:, None])" if arr.ndim == 1 and columns is None else ""
-        raise ValueError(f"{name} must have shape {shape}{', k >= 1' if columns is None else ''}, "
+        raise MeshError(f"{name} must have shape {shape}{', k >= 1' if columns is None else ''}, "
                          f"got {arr.shape}{hint}")
     if arr.shape[0] == 0:
         raise MeshError(f"{name} is empty: a mesh needs at least one triangle")
@@ -95,6 +96,25 @@ def as_vertex_count(n_vertices, name: str = "n_vertices") -> int:
     if n < 0:
         raise ParameterError(f"{name} = {n} must be >= 0")
     return n
+
+
+_INT64_MAX = 2**63 - 1
+
+
+def as_real(value, name: str) -> float:
+    """An option that is a real number as a float: the one type check of scalar options (a bool, a string or None
+    where a number belongs is a ParameterError); its range is the core's to check, once."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
+        raise ParameterError(f"{name} must be a real number, got {value!r}")
+    return float(value)
+
+
+def as_integer(value, name: str, what: str) -> int:
+    """An option that is an integer as an int (`what` says which integers the option takes, for the message);
+    beyond int64 it is clamped there, where the core names it as too large."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Integral):
+        raise ParameterError(f"{name} = {value!r} must be {what}")
+    return min(int(value), _INT64_MAX)
 
 
 def _first_polygon(faces) -> tuple[int, int] | None:
@@ -155,7 +175,7 @@ def _face_rows(faces, name: str, shape: str, expected: str):
             raise TypeError(f"{name} must be {expected}: {error}") from None
     _index_dtype(arr, name, expected)
     if arr.ndim != 2:
-        raise ValueError(f"{name} must have shape {shape}, got {arr.shape}")
+        raise MeshError(f"{name} must have shape {shape}, got {arr.shape}")
     if arr.shape[0] == 0:
         raise MeshError(f"{name} is empty: a mesh needs at least one face")
     return arr
@@ -208,7 +228,7 @@ def as_polygons(faces, n_vertices: int, name: str = "faces",
         for arr, what in ((counts, "face_vertex_counts"), (indices, "face_vertex_indices")):
             _index_dtype(arr, f"{name}.{what}", "a 1-D array of integers")
             if arr.ndim != 1:
-                raise ValueError(f"{name}.{what} must be one-dimensional, got shape {arr.shape}")
+                raise MeshError(f"{name}.{what} must be one-dimensional, got shape {arr.shape}")
         if len(counts) == 0:
             raise MeshError(f"{name} is empty: a mesh needs at least one face")
         if counts.min() < 3:
@@ -250,9 +270,9 @@ def as_boundary(boundary: str) -> _core.Boundary:
 
 
 SCHEMES = tuple(_core.scheme_name(s) for s in _core.Scheme.__members__.values())
-DEFAULT_SCHEME = "loop"
-# scheme="auto": Loop when every face is a triangle, else Catmull-Clark (the command's default too).
+# The one default scheme of every entry point (library and command line): "auto", resolved by resolve_scheme.
 AUTO_SCHEME = "auto"
+DEFAULT_SCHEME = AUTO_SCHEME
 
 
 def all_triangles(faces) -> bool:
@@ -271,21 +291,35 @@ def all_triangles(faces) -> bool:
     return _first_polygon(faces) is None
 
 
-def as_scheme(scheme: str, faces=None) -> _core.Scheme:
-    """The core's Scheme for a scheme's name ("loop", "catmull-clark"), or for
-    "auto" the one `faces` call for: Loop when every face is a triangle
-    (`all_triangles`), else Catmull-Clark. The message of an unknown name
-    comes from the core (sorpia::parse_scheme)."""
+def resolve_scheme(scheme: str, faces: object = None, file_scheme: Optional[str] = None) -> str:
+    """The subdivision scheme's name ("loop" or "catmull-clark") for a
+    scheme option: the one place where "auto" is resolved, for the library
+    and the command line alike.
+
+    "auto" is the file's own scheme where it has one (`file_scheme`, a USD
+    mesh's subdivisionScheme as `sorpia.read` gives it), else Loop when every
+    face of `faces` is a triangle (`all_triangles`) and Catmull-Clark
+    otherwise. A scheme named explicitly is returned as it is, checked.
+    ParameterError for anything else (the names come from the core,
+    sorpia::parse_scheme), and for "auto" without faces or a file's scheme.
+    """
     if not isinstance(scheme, str):
         raise ParameterError(f"scheme must be a string, got {scheme!r}")
     if scheme == AUTO_SCHEME:
+        if file_scheme is not None:
+            return resolve_scheme(file_scheme)
         if faces is None:
             raise ParameterError('scheme="auto" needs the faces to choose from')
-        return _core.Scheme.loop if all_triangles(faces) else _core.Scheme.catmull_clark
+        return "loop" if all_triangles(faces) else "catmull-clark"
     try:
-        return _core.parse_scheme(scheme)
+        return _core.scheme_name(_core.parse_scheme(scheme))
     except ParameterError as exc:
         raise ParameterError(f"{exc}, or 'auto' (Loop for triangles, else Catmull-Clark)") from None
+
+
+def as_scheme(scheme: str, faces=None) -> _core.Scheme:
+    """The core's Scheme for a scheme option (`resolve_scheme`)."""
+    return _core.parse_scheme(resolve_scheme(scheme, faces))
 
 
 NONMANIFOLD_MODES = ("error", "sharp")
@@ -334,9 +368,9 @@ def _tag_indices(value, name: str, width: int) -> np.ndarray:
     if arr.dtype == bool or not np.issubdtype(arr.dtype, np.integer):
         raise TypeError(f"{name} must hold integer indices, got dtype {arr.dtype}")
     if width > 1 and (arr.ndim != 2 or arr.shape[1] != width):
-        raise ValueError(f"{name} must have shape (k, {width}), got {arr.shape}")
+        raise MeshError(f"{name} must have shape (k, {width}), got {arr.shape}")
     if width == 1 and arr.ndim != 1:
-        raise ValueError(f"{name} must have shape (k,), got {arr.shape}")
+        raise MeshError(f"{name} must have shape (k,), got {arr.shape}")
     if arr.min() < np.iinfo(np.int32).min or arr.max() > np.iinfo(np.int32).max:
         raise MeshError(f"{name} holds an index that does not fit in 32 bits")
     return np.ascontiguousarray(arr, dtype=np.int32)
@@ -349,7 +383,7 @@ def _tag_sharpness(value, name: str, k: int) -> np.ndarray:
     if arr.ndim == 0:
         arr = np.full(k, float(arr))
     if arr.shape != (k,):
-        raise ValueError(f"{name} must be a number or have shape ({k},), got {arr.shape}")
+        raise MeshError(f"{name} must be a number or have shape ({k},), got {arr.shape}")
     arr = np.ascontiguousarray(arr, dtype=np.float64)
     return np.where(np.isposinf(arr), _core.INFINITE_SHARPNESS, arr)
 

@@ -52,6 +52,7 @@ from __future__ import annotations
 import math
 import numbers
 import time
+import warnings
 from dataclasses import dataclass, field
 from typing import Callable, Optional
 
@@ -59,8 +60,10 @@ import numpy as np
 import scipy.sparse
 
 from . import _core
+from ._mesh import SubdivisionMesh, mesh_arguments
 from ._meshinfo import bounding_box_diagonal
-from ._validate import DEFAULT_BOUNDARY, as_vertices
+from ._validate import DEFAULT_BOUNDARY, DEFAULT_SCHEME, as_polygons, as_vertices, resolve_scheme
+from .energy import fairness_matrix
 from .errors import MeshError, ParameterError
 from .surface import LimitSurface
 
@@ -115,17 +118,18 @@ class ApproximationResult:
         Updates made (each followed by a re-projection of the footpoints).
     converged : bool
         True when the run stopped before ``iterations`` ran out
-        (``stop_reason`` other than "iterations").
+        (``stop_reason`` other than "max_iter").
     stop_reason : str
         Why the run stopped: "converged" (the lowest RMS distance fell by
         less than ``tol`` of itself per iteration over the last three, and
         a fresh search of every footpoint found none closer enough to go
         on), "exact" (the RMS distance is at rounding level, 1e-13 of the
-        diagonal), or "iterations" (``iterations`` ran out).
+        diagonal), or "max_iter" (``iterations`` ran out; "iterations"
+        until this release), the names every sorpia result uses.
     best_iteration : int
         The iteration whose control vertices and footpoints are returned:
         that of the lowest RMS distance (an update that raised it is not
-        returned); `rms`, `max_distance` and the report's ``final`` are its
+        returned); `rms`, `max_error` and the report's ``final`` are its
         record's.
     method : str
         The update that ran, "cg" or "lspia".
@@ -146,8 +150,16 @@ class ApproximationResult:
     timings : dict
         Seconds spent in each phase: ``footpoints``, ``rows``, ``normal``
         (forming A^T A and A^T P), ``solve``, ``report`` (surface to data),
-        ``total``; and ``cpu``: the process's CPU seconds of each (all
-        threads).
+        ``total`` (`seconds`); and ``cpu``: the process's CPU seconds of
+        each (all threads).
+    mesh : sorpia.SubdivisionMesh or None
+        The fitted cage: the control vertices on the cage's faces, with its
+        scheme, boundary rule and tags.
+
+    `rms` and `max_error` (the largest distance of a data point to the
+    returned surface; ``max_distance`` until this release, a deprecated
+    alias now), `seconds` (timings["total"]) and ``report()`` as every
+    sorpia result names them.
     """
 
     control_vertices: np.ndarray
@@ -165,11 +177,17 @@ class ApproximationResult:
     diagonal: float
     history: list = field(default_factory=list)
     timings: dict = field(default_factory=dict)
+    mesh: Optional[SubdivisionMesh] = None
 
     @property
     def converged(self) -> bool:
         """True when the run stopped before ``iterations`` ran out."""
-        return self.stop_reason != "iterations"
+        return self.stop_reason != "max_iter"
+
+    @property
+    def seconds(self) -> float:
+        """Wall time of the whole call, timings["total"]."""
+        return self.timings["total"]
 
     @property
     def rms(self) -> float:
@@ -177,9 +195,16 @@ class ApproximationResult:
         return self.history[self.best_iteration]["rms"]
 
     @property
-    def max_distance(self) -> float:
+    def max_error(self) -> float:
         """Largest distance of a data point to the returned limit surface."""
         return self.history[self.best_iteration]["max"]
+
+    @property
+    def max_distance(self) -> float:
+        """Deprecated name of ``max_error`` (DeprecationWarning), for one release."""
+        warnings.warn("ApproximationResult.max_distance is deprecated: use max_error (the same value; the name "
+                      "every sorpia result uses)", DeprecationWarning, stacklevel=2)
+        return self.max_error
 
     def report(self) -> dict:
         """The result as a JSON-ready dict (what ``sorpia approximate --report``
@@ -187,6 +212,7 @@ class ApproximationResult:
         per-point arrays."""
         last = self.history[self.best_iteration]
         return {"iterations": self.iterations, "converged": self.converged, "stop_reason": self.stop_reason,
+                "rms": self.rms, "max_error": self.max_error, "seconds": self.seconds,
                 "best_iteration": self.best_iteration, "method": self.method,
                 "fairness": self.fairness, "tangential": self.tangential, "diagonal": self.diagonal,
                 "n_points": int(self.distances.shape[0]),
@@ -272,8 +298,6 @@ def surface_samples(vertices, faces, sampling: str = "area") -> tuple[np.ndarray
     """
     if sampling not in SAMPLINGS:
         raise ParameterError(f"sampling = {sampling!r} must be one of {', '.join(SAMPLINGS)}")
-    from ._validate import as_polygons
-
     vertices = as_points(vertices)
     counts, indices = as_polygons(faces, len(vertices), "faces", "len(points)")
     starts = np.concatenate([[0], np.cumsum(counts[:-1], dtype=np.int64)])
@@ -294,14 +318,11 @@ def surface_samples(vertices, faces, sampling: str = "area") -> tuple[np.ndarray
 
 def as_points(points) -> np.ndarray:
     """`points` as a C-contiguous (k, 3) float64 array of finite values, k >= 1
-    (sorpia.ParameterError naming the first bad row otherwise)."""
+    (sorpia.MeshError naming the first bad row otherwise, as for vertices)."""
     arr = np.asarray(points) if not isinstance(points, np.ndarray) else points
     if arr.ndim == 2 and arr.shape[0] == 0:
-        raise ParameterError("points is empty: there is nothing to approximate")
-    try:
-        return as_vertices(arr, "points")
-    except MeshError as e:
-        raise ParameterError(str(e)) from None
+        raise MeshError("points is empty: there is nothing to approximate")
+    return as_vertices(arr, "points")
 
 
 class _Fit:
@@ -416,7 +437,8 @@ def _update(M, rhs, V, method: str, solver_tol: float, solver_max_iter: int):
     return x, used
 
 
-def approximate(points, cage_vertices, cage_faces, *, scheme: str = "auto", boundary: str = DEFAULT_BOUNDARY,
+def approximate(points, cage_vertices, cage_faces=None, *, scheme: str = DEFAULT_SCHEME,
+                boundary: str = DEFAULT_BOUNDARY,
                 creases=None, corners=None, holes=None, iterations: int = 10, tol: float = DEFAULT_TOL,
                 fairness: float = DEFAULT_FAIRNESS, tangential: Optional[float] = None,
                 method: str = DEFAULT_UPDATE, solver_tol: float = 1e-3,
@@ -430,8 +452,10 @@ def approximate(points, cage_vertices, cage_faces, *, scheme: str = "auto", boun
     ----------
     points : array_like, (k, 3) float
         The data: a point cloud or a dense mesh's vertices; finite, k >= 1.
-    cage_vertices : array_like, (n, 3) float
-        The cage's control vertices at the start (e.g. a decimated mesh).
+    cage_vertices : array_like, (n, 3) float, or sorpia.SubdivisionMesh
+        The cage's control vertices at the start (e.g. a decimated mesh);
+        or the cage as a mesh, with its rules (``approximate(points,
+        cage.mesh)``).
     cage_faces : array_like
         The cage's faces: triangles for Loop, any polygons for Catmull-Clark.
     scheme : {"auto", "loop", "catmull-clark"}
@@ -518,6 +542,9 @@ def approximate(points, cage_vertices, cage_faces, *, scheme: str = "auto", boun
         A cage with no faces, or one the scheme cannot take.
     """
     t0, c0 = time.perf_counter(), time.process_time()
+    cage_vertices, cage_faces, rules = mesh_arguments(cage_vertices, cage_faces, dict(
+        scheme=scheme, boundary=boundary, creases=creases, corners=corners, holes=holes), "approximate")
+    scheme, boundary, creases, corners, holes = rules.values()
     points = as_points(points)
     iterations = _count(iterations, "iterations", 1)
     tol = _nonnegative(tol, "tol")
@@ -558,10 +585,7 @@ def approximate(points, cage_vertices, cage_faces, *, scheme: str = "auto", boun
         points, weights = surface_samples(points, faces, sampling or "area")
     weights = _weights(weights, len(points))
     data = np.ldexp(points, e)
-    if scheme == "auto":
-        from ._validate import all_triangles
-
-        scheme = "loop" if all_triangles(cage_faces) else "catmull-clark"
+    scheme = resolve_scheme(scheme, cage_faces)
     surface = LimitSurface(cage_vertices, cage_faces, boundary=boundary, scheme=scheme, creases=creases,
                            corners=corners, holes=holes)
     fit = _Fit(points, surface, grid, newton_steps, report_level)
@@ -593,13 +617,11 @@ def approximate(points, cage_vertices, cage_faces, *, scheme: str = "auto", boun
     bests = [best[0]]  # the lowest RMS so far, after each iteration
     K = None
     if fairness > 0:
-        from .energy import fairness_matrix
-
         K = fairness_matrix(cage_faces, V.shape[0], scheme=scheme, boundary=boundary, creases=creases,
                             corners=corners, holes=holes, depth=_FAIRNESS_DEPTH)
         if method == "cg":  # the core's arrays, converted once for every update
             K = _core_csr(K)
-    stop_reason = "iterations"
+    stop_reason = "max_iter"
     searched = 0  # the iteration after which every footpoint was last searched for afresh
     done = 0
     for k in range(1, iterations + 1):
@@ -645,4 +667,6 @@ def approximate(points, cage_vertices, cage_faces, *, scheme: str = "auto", boun
                                stop_reason=stop_reason,
                                best_iteration=best_iteration, method=method,
                                fairness=fairness, tangential=tangential, diagonal=float(np.ldexp(diagonal, e)),
-                               history=history, timings=fit.timings)
+                               history=history, timings=fit.timings,
+                               mesh=SubdivisionMesh(np.ldexp(V, e), cage_faces, scheme=scheme, boundary=boundary,
+                                                    creases=creases, corners=corners, holes=holes))

@@ -22,11 +22,15 @@ Blender 5.0 and older draw the surface wrong.
 
 from __future__ import annotations
 
+import os
 from typing import NamedTuple, Optional
 
 import numpy as np
 
-from ._validate import Polygons, as_boundary, as_polygons, as_tags, as_vertices
+from . import _core
+from ._mesh import mesh_arguments
+from ._validate import DEFAULT_BOUNDARY, DEFAULT_SCHEME, Polygons, as_boundary, as_polygons, as_tags, as_vertices
+from .errors import ParameterError
 
 # Blender's default isolation; QUALITY_EXACT where features need the deepest isolation (darts, semi-sharp
 # creases and corners, one-face corners under edge-only): the limit positions there are then exact to float32.
@@ -109,8 +113,6 @@ def blender_rules(mesh: BlenderMesh, boundary_smooth: str = "ALL", use_creases: 
     ``boundary=``, and ``creases=``, ``corners=`` for the edges and vertices
     of weight whose sharpness is above 0."""
     if boundary_smooth not in BOUNDARY_RULE:
-        from .errors import ParameterError
-
         raise ParameterError(f"boundary_smooth must be one of {', '.join(map(repr, BOUNDARY_RULE))}, "
                              f"got {boundary_smooth!r}")
     rules: dict = {"boundary": BOUNDARY_RULE[boundary_smooth]}
@@ -229,7 +231,7 @@ def crease_weights_of(edges, n_vertices: int, creases=None, corners=None) -> tup
     return edge_w, vert_w
 
 
-def blender_script(vertices, faces, *, boundary: str = "edge-and-corner", creases=None, corners=None,
+def blender_script(vertices, faces=None, *, boundary: str = DEFAULT_BOUNDARY, creases=None, corners=None,
                    holes=None, name: str = "sorpia_cage", levels: int = 3) -> str:
     """A bpy script that adds the Catmull-Clark cage `vertices`, `faces` to the
     scene as object `name`: edge creases (``crease_edge``) and vertex creases
@@ -237,9 +239,15 @@ def blender_script(vertices, faces, *, boundary: str = "edge-and-corner", crease
     Subdivision Surface modifier with `modifier_settings` and `levels`
     subdivisions in the viewport and render. The coordinates are written as
     Python's shortest repr (Blender keeps float32). Holes are refused
-    (`blender_refusal`)."""
-    from .errors import ParameterError
-
+    (`blender_refusal`). ``blender_script(mesh)`` takes a Catmull-Clark
+    `sorpia.SubdivisionMesh` (another scheme is refused)."""
+    vertices, faces, rules = mesh_arguments(vertices, faces, dict(
+        scheme=DEFAULT_SCHEME, boundary=boundary, creases=creases, corners=corners, holes=holes), "blender_script")
+    boundary, creases, corners, holes = rules["boundary"], rules["creases"], rules["corners"], rules["holes"]
+    if rules["scheme"] != DEFAULT_SCHEME:  # a mesh's scheme: the script's modifier is Catmull-Clark's
+        reason = blender_refusal(rules["scheme"], {})
+        if reason is not None:
+            raise ParameterError(reason)
     vertices = as_vertices(vertices)
     counts, indices = as_polygons(faces, len(vertices))
     as_tags(creases, corners, holes, n_vertices=len(vertices), n_faces=len(counts))  # checked as a solve checks
@@ -287,12 +295,8 @@ modifier = obj.modifiers.new("Subdivision", "SUBSURF")
 '''
 
 
-def write_blender_script(path, vertices, faces, **options) -> None:
+def write_blender_script(path, vertices, faces=None, **options) -> None:
     """`blender_script` written to `path` atomically."""
-    import os
-
-    from . import _core
-
     _core.write_file_atomic(os.fsencode(path), blender_script(vertices, faces, **options).encode("utf-8"))
 
 

@@ -13,7 +13,8 @@ import numpy as np
 from . import _core
 from ._sharp import sharp_edges
 from .errors import DecimationWarning
-from ._validate import as_faces, as_scheme, as_vertex_count, as_vertices
+from ._mesh import SubdivisionMesh
+from ._validate import AUTO_SCHEME, DEFAULT_SCHEME, as_faces, as_scheme, as_vertex_count, as_vertices, resolve_scheme
 
 
 class Cage(NamedTuple):
@@ -27,17 +28,34 @@ class Cage(NamedTuple):
         The cage's edges sharper than `sharp_angle`, infinitely sharp: ready
         for ``creases=`` of `sorpia.interpolate`, `sorpia.limit_surface` and
         the rest. None without a `sharp_angle`.
+
+    ``mesh`` is the cage as a `sorpia.SubdivisionMesh` (its scheme from its
+    faces: triangles Loop, quads Catmull-Clark; its creases), ready for
+    ``sorpia.approximate(points, cage.mesh)``; ``report()`` its report, as
+    every sorpia result gives it: a JSON-ready dict.
     """
 
     vertices: np.ndarray
     faces: np.ndarray
     creases: Optional[tuple]
 
+    @property
+    def mesh(self) -> SubdivisionMesh:
+        """The cage with its scheme and creases."""
+        return SubdivisionMesh(self.vertices, self.faces, creases=self.creases)
 
-def decimate(vertices, faces, n_vertices: int, *, scheme: str = "loop", sharp_angle: Optional[float] = None,
+    def report(self) -> dict:
+        """The cage's sizes, scheme and creases as a JSON-ready dict."""
+        return {"n_vertices": int(len(self.vertices)), "n_faces": int(len(self.faces)),
+                "scheme": resolve_scheme(AUTO_SCHEME, self.faces),
+                "n_creases": 0 if self.creases is None else int(len(self.creases[0]))}
+
+
+def decimate(vertices, faces=None, n_vertices: Optional[int] = None, *, scheme: str = DEFAULT_SCHEME,
+             sharp_angle: Optional[float] = None,
              max_normal_deviation: float = 60.0, max_aspect_ratio: float = 10.0,
              max_boundary_angle: float = 30.0, strict: bool = True) -> Cage:
-    """A cage of `n_vertices` vertices for a dense triangle mesh.
+    """A cage of ``n_vertices`` vertices for a dense triangle mesh.
 
     OpenMesh's Decimater framework collapses edges in the order of Garland
     and Heckbert's quadric error (``ModQuadricT``; a collapse moves a vertex
@@ -53,19 +71,23 @@ def decimate(vertices, faces, n_vertices: int, *, scheme: str = "loop", sharp_an
     Under Catmull-Clark each decimated triangle is split into three quads at
     its centroid and edge midpoints (as `sorpia.shapes.quad_irregular` is
     made), the triangles decimated until the quad cage has at most
-    `n_vertices` vertices and at most 5 fewer.
+    ``n_vertices`` vertices and at most 5 fewer.
 
     Parameters
     ----------
-    vertices : (n, 3) float
+    vertices : (n, 3) float, or sorpia.SubdivisionMesh
+        The mesh's vertices; or a triangle mesh (``decimate(mesh, 500)``:
+        the vertex count then comes second).
     faces : (m, 3) int
         Triangles, manifold and consistently oriented (`sorpia.repair` makes
         a mesh so). Vertices no face uses are left out.
     n_vertices : int
         The cage's vertices: at least 4, at most the mesh's (under
         Catmull-Clark, its vertices, edges and faces together).
-    scheme : {"loop", "catmull-clark"}
-        Loop gives a triangle cage, Catmull-Clark a quad cage.
+    scheme : {"auto", "loop", "catmull-clark"}
+        The cage's: Loop gives a triangle cage, Catmull-Clark a quad cage;
+        "auto" (the default) is a mesh's own scheme, and Loop for arrays
+        (resolved on the input's triangles).
     sharp_angle : float, optional
         Degrees in [0, 180]: the cage's edges whose faces meet at more than
         this (`sorpia.sharp_edges` on the cage) become infinitely sharp
@@ -73,7 +95,7 @@ def decimate(vertices, faces, n_vertices: int, *, scheme: str = "loop", sharp_an
     max_normal_deviation, max_aspect_ratio, max_boundary_angle : float
         The decimation's guards, above.
     strict : bool
-        True: a decimation the guards stop before `n_vertices` raises
+        True: a decimation the guards stop before ``n_vertices`` raises
         `MeshError`. False: it returns the cage it reached (more vertices than
         asked) with a `DecimationWarning` saying how far it got.
 
@@ -86,16 +108,24 @@ def decimate(vertices, faces, n_vertices: int, *, scheme: str = "loop", sharp_an
     ------
     MeshError
         A face that is not a triangle, a mesh OpenMesh's half-edge mesh
-        cannot take (the face named), `n_vertices` above the mesh's, or
-        (`strict`) a decimation the guards stop before `n_vertices` (the
+        cannot take (the face named), ``n_vertices`` above the mesh's, or
+        (`strict`) a decimation the guards stop before ``n_vertices`` (the
         message says how far it got).
     ParameterError
-        `n_vertices` below 4, an unknown scheme, an angle or ratio out of range.
+        ``n_vertices`` below 4, an unknown scheme, an angle or ratio out of range.
     """
+    if isinstance(vertices, SubdivisionMesh):  # decimate(mesh, n_vertices)
+        if faces is not None:  # decimate(mesh, n)
+            if n_vertices is not None:
+                raise TypeError("decimate(mesh, n_vertices): the faces come from the SubdivisionMesh")
+            n_vertices = faces
+        if scheme == DEFAULT_SCHEME:  # the mesh's scheme (a triangle mesh marked Catmull-Clark: a quad cage)
+            scheme = vertices.scheme
+        vertices, faces = vertices.vertices, vertices.faces
     vertices = as_vertices(vertices)
     triangles = as_faces(faces, len(vertices), count_name="len(vertices)")
     n = as_vertex_count(n_vertices, "n_vertices")
-    scheme_value = as_scheme(scheme)
+    scheme_value = as_scheme(scheme, triangles)
     if sharp_angle is not None:  # the angle's one check (sorpia::sharp_edges), before the decimation's long work
         _core.sharp_edges(np.zeros((0, 3)), np.zeros(0, np.int32), np.zeros(0, np.int32), float(sharp_angle))
     mesh, stopped = _core.decimate(vertices, triangles, n, scheme_value, float(max_normal_deviation),

@@ -64,20 +64,23 @@ is; ``"as-tagged"`` integrates the surface as tagged, layers included.
 
 from __future__ import annotations
 
+from typing import Optional
+
 import numpy as np
 
 from . import _core
-from ._validate import DEFAULT_BOUNDARY, DEFAULT_SCHEME, as_rules, as_vertices
+from ._mesh import mesh_arguments, mesh_count
+from ._validate import DEFAULT_BOUNDARY, DEFAULT_SCHEME, as_integer, as_real, as_rules, as_vertices
 from .limit import built, warn_unreferenced
 from .errors import ParameterError
-from .solve import _integer, _real
 
 __all__ = ["fairness_matrix", "thin_plate_energy"]
 
 SEMI_SHARP = ("sharp", "as-tagged")
 
 
-def fairness_matrix(faces, n_vertices: int, *, scheme: str = DEFAULT_SCHEME, boundary: str = DEFAULT_BOUNDARY,
+def fairness_matrix(faces, n_vertices: Optional[int] = None, *, scheme: str = DEFAULT_SCHEME,
+                    boundary: str = DEFAULT_BOUNDARY,
                     creases=None, corners=None, holes=None, thin_plate: float = 1.0, membrane: float = 0.0,
                     gauss_points: int = 4, depth: int = 4, semi_sharp: str = "sharp", reference=None):
     """The fairness matrix K of a mesh's limit surface, (n, n) scipy CSR,
@@ -88,8 +91,9 @@ def fairness_matrix(faces, n_vertices: int, *, scheme: str = DEFAULT_SCHEME, bou
     Parameters
     ----------
     faces, n_vertices, scheme, boundary, creases, corners, holes
-        The mesh and its rules, as for `sorpia.limit_matrix`. K depends on
-        them alone, not on the vertices' positions.
+        The mesh and its rules, as for `sorpia.limit_matrix` (a
+        `sorpia.SubdivisionMesh` for all of them: ``fairness_matrix(mesh)``).
+        K depends on them alone, not on the vertices' positions.
     thin_plate, membrane : float
         Weights of the two terms, finite and >= 0, not both 0.
     gauss_points : int
@@ -103,7 +107,7 @@ def fairness_matrix(faces, n_vertices: int, *, scheme: str = DEFAULT_SCHEME, bou
         docstring): "sharp" measures the surface with them infinitely sharp,
         the bending on each side of a crease; "as-tagged" the surface as
         tagged, the thin layer where a crease turns included.
-    reference : (n_vertices, 3) array_like float, optional
+    reference : (n, 3) array_like float, optional (n the vertex count)
         None: the parametric measure (module docstring). Given: each face is
         measured in a fixed first fundamental form G, that of the limit
         surface of these control vertices at the face's centre (a reference
@@ -132,8 +136,9 @@ def fairness_matrix(faces, n_vertices: int, *, scheme: str = DEFAULT_SCHEME, bou
     import scipy.sparse  # here, not at import: sorpia's commands need no scipy
 
     semi_sharp = check_semi_sharp(semi_sharp)
-    arrays, n, rules = as_rules(faces, n_vertices, scheme=scheme, boundary=boundary, creases=creases,
-                                corners=corners, holes=holes)
+    faces, n_vertices, given = mesh_count(faces, n_vertices, dict(
+        scheme=scheme, boundary=boundary, creases=creases, corners=corners, holes=holes), "fairness_matrix")
+    arrays, n, rules = as_rules(faces, n_vertices, **given)
     topo = built(lambda: _core.Topology(*arrays, n))
     warn_unreferenced(topo, stacklevel=3)
     if reference is not None:
@@ -143,24 +148,28 @@ def fairness_matrix(faces, n_vertices: int, *, scheme: str = DEFAULT_SCHEME, bou
     return scipy.sparse.csr_matrix((data, indices, indptr), shape=(n, n))
 
 
-def thin_plate_energy(vertices, faces, *, scheme: str = DEFAULT_SCHEME, boundary: str = DEFAULT_BOUNDARY,
+def thin_plate_energy(vertices, faces=None, *, scheme: str = DEFAULT_SCHEME, boundary: str = DEFAULT_BOUNDARY,
                       creases=None, corners=None, holes=None, thin_plate: float = 1.0, membrane: float = 0.0,
                       gauss_points: int = 4, depth: int = 4, semi_sharp: str = "sharp") -> float:
     """The fairness energy of the limit surface of control vertices
     `vertices` (n, 3): ``sum(V * (K @ V))`` with K = `fairness_matrix` of the
-    same faces, rules and options (by default the thin-plate term alone)."""
+    same faces, rules and options (by default the thin-plate term alone).
+    ``thin_plate_energy(mesh)`` and ``thin_plate_energy(V, mesh)`` take a
+    `sorpia.SubdivisionMesh`."""
+    vertices, faces, rules = mesh_arguments(vertices, faces, dict(
+        scheme=scheme, boundary=boundary, creases=creases, corners=corners, holes=holes), "thin_plate_energy")
     vertices = as_vertices(vertices)
-    k = fairness_matrix(faces, vertices.shape[0], scheme=scheme, boundary=boundary, creases=creases, corners=corners,
-                        holes=holes, thin_plate=thin_plate, membrane=membrane, gauss_points=gauss_points,
+    k = fairness_matrix(faces, vertices.shape[0], **rules, thin_plate=thin_plate, membrane=membrane,
+                        gauss_points=gauss_points,
                         depth=depth, semi_sharp=semi_sharp)
     return float(np.sum(vertices * (k @ vertices)))
 
 
 def _options(thin_plate, membrane, gauss_points, depth) -> tuple:
     """The options as the core takes them; the core checks their ranges once."""
-    return (_real(thin_plate, "thin_plate"), _real(membrane, "membrane"),
-            min(_integer(gauss_points, "gauss_points", "an integer in 1..16"), 2**31 - 1),
-            min(_integer(depth, "depth", "an integer in 0..12"), 2**31 - 1))
+    return (as_real(thin_plate, "thin_plate"), as_real(membrane, "membrane"),
+            min(as_integer(gauss_points, "gauss_points", "an integer in 1..16"), 2**31 - 1),
+            min(as_integer(depth, "depth", "an integer in 0..12"), 2**31 - 1))
 
 
 def check_semi_sharp(semi_sharp) -> str:

@@ -70,6 +70,13 @@ class UsdWarning(SorpiaWarning):
     fit the faces written."""
 
 
+class FormatWarning(SorpiaWarning):
+    """A file format cannot hold a rule a mesh is written with (the scheme,
+    a boundary rule other than the default, sharpness tags): the file is
+    written without it, and the message names what is left out and the
+    formats that hold it (`sorpia.io.write_mesh_file`)."""
+
+
 class DecimationWarning(SorpiaWarning):
     """`sorpia.decimate` with ``strict=False``: the guards refused every
     further collapse before the count asked; the cage returned has the
@@ -83,4 +90,4 @@ class NonmanifoldWarning(SorpiaWarning):
 
 __all__ = ["MeshError", "MeshFileError", "ParameterError", "SorpiaWarning", "ConvergenceWarning",
            "SingularMatrixWarning", "OmegaWarning", "UnreferencedVerticesWarning", "UnknownTagWarning",
-           "AttributeWarning", "UsdWarning", "NonmanifoldWarning", "DecimationWarning"]
+           "AttributeWarning", "UsdWarning", "FormatWarning", "NonmanifoldWarning", "DecimationWarning"]

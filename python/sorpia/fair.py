@@ -48,12 +48,14 @@ from __future__ import annotations
 import math
 import numbers
 import time
+import warnings
 from dataclasses import dataclass, field
 from typing import Optional
 
 import numpy as np
 
 from . import _core
+from ._mesh import SubdivisionMesh, mesh_arguments
 from ._meshinfo import bounding_box_diagonal
 from ._nonmanifold import manifold_only
 from ._validate import DEFAULT_BOUNDARY, DEFAULT_SCHEME, as_rules, as_vertices
@@ -99,9 +101,10 @@ class FairResult:
         tr(V^T K V) of the plain interpolation's control mesh refined
         (R V_plain: the same surface as plain interpolation's, on the same
         fine mesh), which the iteration starts from.
-    energies : (iterations + 1,) float64
-        The energy after each iteration (energies[0]: the start's, after its
-        target vertices were recomputed from the others).
+    history : (iterations + 1,) float64
+        The energy after each iteration (history[0]: the start's, after its
+        target vertices were recomputed from the others). ``energies``: its
+        deprecated name (DeprecationWarning), for one release.
     max_error : float
         max over the targets of ||(B_fine V)_t - v_t||, absolute.
     max_error_relative : float
@@ -114,13 +117,13 @@ class FairResult:
     converged : bool
         stop_reason is "converged" or "exact".
     seconds : float
-        Wall time of the whole call.
+        Wall time of the whole call (timings["total"]).
     timings : dict
         Seconds per phase: "refine" (Far's refinement and the start R
         V_plain; R itself is built when `refinement` is read), "plain" (the
         plain interpolation, topology and B included), "energy" (K),
         "setup" (the fine mesh's B, the elimination, the preconditioner),
-        "solve" (the iteration).
+        "solve" (the iteration), and "total", equal to `seconds`.
     plain : InterpolationResult
         The plain interpolation of every input vertex on the input mesh
         (`sorpia.interpolate`), whose refined control mesh starts the
@@ -129,6 +132,10 @@ class FairResult:
         R: ``R @ plain.control_vertices`` is the plain surface's control
         mesh on the fine faces. Built by Far when first read (a property),
         then kept.
+
+    ``mesh`` is the fine control mesh as a `sorpia.SubdivisionMesh` (its
+    faces, scheme, boundary rule and tags); ``report()`` the result as a
+    JSON-ready dict, as every sorpia result gives it.
     """
 
     control_vertices: np.ndarray
@@ -142,7 +149,7 @@ class FairResult:
     targets: np.ndarray
     energy: float
     plain_energy: float
-    energies: np.ndarray
+    history: np.ndarray
     max_error: float
     max_error_relative: float
     iterations: int
@@ -167,6 +174,31 @@ class FairResult:
         """The fine mesh's tags as keyword arguments (creases=, corners=, holes=; absent kinds left out)."""
         return {k: v for k, v in (("creases", self.creases), ("corners", self.corners), ("holes", self.holes))
                 if v is not None}
+
+    @property
+    def mesh(self) -> SubdivisionMesh:
+        """The fine control mesh with its faces, scheme, boundary rule and tags."""
+        return SubdivisionMesh(self.control_vertices, self.faces, scheme=self.scheme, boundary=self.boundary,
+                               **self.tags)
+
+    @property
+    def energies(self) -> np.ndarray:
+        """Deprecated name of ``history`` (DeprecationWarning), for one release."""
+        warnings.warn("FairResult.energies is deprecated: use history (the same array; the name every sorpia "
+                      "result uses)", DeprecationWarning, stacklevel=2)
+        return self.history
+
+    def report(self) -> dict:
+        """The result as a JSON-ready dict: every scalar field, the history and
+        the timings (no per-vertex arrays), and the plain solve's figures."""
+        return {"scheme": self.scheme, "boundary": self.boundary, "levels": self.levels,
+                "n_control_vertices": int(len(self.control_vertices)), "n_targets": int(len(self.targets)),
+                "energy": self.energy, "plain_energy": self.plain_energy, "max_error": self.max_error,
+                "max_error_relative": self.max_error_relative, "iterations": self.iterations,
+                "converged": self.converged, "stop_reason": self.stop_reason, "seconds": self.seconds,
+                "history": np.asarray(self.history).tolist(), "timings": dict(self.timings),
+                "plain": {"variant": self.plain.variant, "iterations": int(self.plain.iterations),
+                          "stop_reason": self.plain.stop_reason}}
 
 
 def _weight(value, name: str) -> float:
@@ -244,7 +276,7 @@ def _fine_tags(tags: _core.Tags) -> tuple:
     return creases, corners, holes
 
 
-def fair_interpolate(vertices, faces, *, scheme: str = DEFAULT_SCHEME, levels: int = 1, thin_plate: float = 1.0,
+def fair_interpolate(vertices, faces=None, *, scheme: str = DEFAULT_SCHEME, levels: int = 1, thin_plate: float = 1.0,
                      membrane: float = 0.0, targets=None, boundary: str = DEFAULT_BOUNDARY, creases=None,
                      corners=None, holes=None, tol: float = 1e-6, max_iter: int = 2000,
                      threads: int = 1, semi_sharp: str = "sharp", depth: int = 0,
@@ -255,10 +287,11 @@ def fair_interpolate(vertices, faces, *, scheme: str = DEFAULT_SCHEME, levels: i
 
     Parameters
     ----------
-    vertices : (n, 3) array_like float
-        The points to interpolate (and the input control mesh's vertices).
+    vertices : (n, 3) array_like float, or sorpia.SubdivisionMesh
+        The points to interpolate (and the input control mesh's vertices);
+        or a mesh (``fair_interpolate(mesh)``: its vertices, faces and rules).
     faces : faces as `sorpia.interpolate` takes them
-    scheme : {"loop", "catmull-clark", "auto"}
+    scheme : {"auto", "loop", "catmull-clark"}
     levels : int
         Uniform refinement steps, 1..10 (each multiplies the faces by 4).
         Refused before any work when the fine mesh and its solve would not
@@ -308,6 +341,9 @@ def fair_interpolate(vertices, faces, *, scheme: str = DEFAULT_SCHEME, levels: i
     FairResult
     """
     t0 = time.perf_counter()
+    vertices, faces, rules = mesh_arguments(vertices, faces, dict(
+        scheme=scheme, boundary=boundary, creases=creases, corners=corners, holes=holes), "fair_interpolate")
+    scheme, boundary, creases, corners, holes = rules.values()
     levels, thin_plate, membrane, tol = check_fair_options(levels, thin_plate, membrane, tol)
     semi_sharp = check_semi_sharp(semi_sharp)
     depth = _integer(depth, "depth", "an integer in 0..12")
@@ -383,13 +419,14 @@ def fair_interpolate(vertices, faces, *, scheme: str = DEFAULT_SCHEME, levels: i
     diagonal = bounding_box_diagonal(v0)
     max_error = float(np.ldexp(sol["max_error"], e))
     fine_creases, fine_corners, fine_holes = _fine_tags(fine["tags"])
+    timings["total"] = time.perf_counter() - t0
     return FairResult(
         control_vertices=np.ldexp(sol["vertices"], e), faces=fine_faces, creases=fine_creases, corners=fine_corners,
         holes=fine_holes, scheme=_core.scheme_name(rules.scheme), boundary=_core.boundary_name(rules.boundary),
         levels=levels, targets=target_ids.astype(np.int64), energy=float(sol["energy"]),
-        plain_energy=float(sol["start_energy"]), energies=sol["energies"], max_error=max_error,
+        plain_energy=float(sol["start_energy"]), history=sol["energies"], max_error=max_error,
         max_error_relative=max_error / diagonal if diagonal > 0 else max_error,
-        iterations=int(sol["iterations"]), stop_reason=sol["stop_reason"], seconds=time.perf_counter() - t0,
+        iterations=int(sol["iterations"]), stop_reason=sol["stop_reason"], seconds=timings["total"],
         timings=timings, plain=plain, _refinement=refinement)
 
 

@@ -10,33 +10,28 @@ from __future__ import annotations
 
 import os
 import warnings
-from typing import NamedTuple
+from typing import NamedTuple, Optional
 
 import numpy as np
 
 from . import _core
-from ._validate import Polygons, as_boundary, as_polygons, as_tags, as_vertices
-from ._usd import is_usd
-from .errors import AttributeWarning, MeshFileError, ParameterError, UnknownTagWarning
-
-
-class FaceVarying(NamedTuple):
-    """Values given per face corner, as OpenSubdiv's face-varying channels
-    (Far::TopologyDescriptor::FVarChannel) hold them: texture coordinates or
-    normals.
-
-    ``values`` (k, width) float64; ``indices`` (c,) int32, one per face corner
-    in the faces' order (row by row of an (m, k) face array, or
-    ``Polygons.face_vertex_indices``' order): corner j's value is
-    ``values[indices[j]]``. A per-vertex attribute (PLY) has one value per
-    vertex and the faces' vertex indices as ``indices``."""
-
-    values: np.ndarray
-    indices: np.ndarray
+from ._mesh import FaceVarying, SubdivisionMesh, mesh_arguments, tags_dict
+from ._usd import _mesh as _usd_mesh
+from ._usd import _open as _usd_open
+from ._usd import is_usd, read_usd, write_usd
+from ._validate import (AUTO_SCHEME, DEFAULT_BOUNDARY, Polygons, all_triangles, as_boundary, as_polygons, as_tags,
+                        as_vertices, resolve_scheme)
+from .errors import AttributeWarning, FormatWarning, MeshFileError, ParameterError, UnknownTagWarning
 
 
 def read_mesh(path, triangulate: bool = False, tags: bool = False, attributes: bool = False, *, prim=None):
-    """Read a mesh from an .obj, .off, .ply, .stl, .usd, .usda or .usdc file.
+    """Read a mesh from an .obj, .off, .ply, .stl, .usd, .usda or .usdc file
+    as arrays: ``V, F = read_mesh(path)``, with ``tags`` and ``attributes``
+    a third and fourth value.
+
+    `sorpia.read` reads the same file into one `sorpia.SubdivisionMesh`
+    (tags, scheme and attributes included), the form every function takes;
+    this array form stays for the callers written for it.
 
     Parameters
     ----------
@@ -155,6 +150,32 @@ def read_mesh(path, triangulate: bool = False, tags: bool = False, attributes: b
     return out + ((contents.tags,) if tags else ()) + ((contents.attributes,) if attributes else ())
 
 
+def read(path: str | os.PathLike[str] | bytes, *, triangulate: bool = False,
+         prim: Optional[str] = None) -> SubdivisionMesh:
+    """Read a mesh file as one `SubdivisionMesh`: vertices, faces, the file's
+    scheme, boundary rule and sharpness tags, and its texture coordinates and
+    normals, whatever the file holds.
+
+    The one shape of a mesh read: ``read_mesh(path)`` returns the arrays
+    ``(vertices, faces)`` and, by its flags, the tags and attributes as a
+    third and fourth value; this function reads them all into the mesh
+    (``mesh.tags``, ``mesh.attributes``), which every function of sorpia
+    takes: ``sorpia.interpolate(sorpia.read("part.obj"))``.
+
+    The scheme is the file's own where it has one (a USD mesh's
+    ``subdivisionScheme``), else "auto" resolved on the faces: Loop for
+    triangles, Catmull-Clark otherwise (`resolve_scheme`). Formats, tags,
+    attributes, `triangulate`, `prim` and the errors are `read_mesh`'s.
+    """
+    contents = read_mesh_file(path, triangulate, True, True, prim)
+    tags = contents.tags or {}
+    attributes = contents.attributes or {}
+    return SubdivisionMesh(contents.vertices, contents.faces, scheme=tags.get("scheme") or AUTO_SCHEME,
+                           boundary=tags.get("boundary", DEFAULT_BOUNDARY), creases=tags.get("creases"),
+                           corners=tags.get("corners"), holes=tags.get("holes"), uvs=attributes.get("uvs"),
+                           normals=attributes.get("normals"))
+
+
 class MeshFileContents(NamedTuple):
     """What `read_mesh_file` returns: read_mesh's values and how many polygons were split."""
 
@@ -204,30 +225,15 @@ def read_mesh_file(path, triangulate: bool = False, tags: bool = False, attribut
 
 
 def _read_usd_file(path, triangulate: bool, tags: bool, attributes: bool, prim) -> MeshFileContents:
-    from ._usd import read_usd
-
     if triangulate:
         raise MeshFileError(f"{os.fsdecode(path)}: triangulate is not available for USD files (sorpia splits "
                             "polygons while reading OBJ, OFF and PLY): fit the polygons with Catmull-Clark")
-    vertices, faces, tag_dict, attribute_dict, scheme = read_usd(path, prim=prim, tags=tags, attributes=attributes)
+    vertices, faces, tag_dict, channels, scheme = read_usd(path, prim=prim, tags=tags, attributes=attributes)
+    attribute_dict = None if channels is None else {k: FaceVarying(*v) for k, v in channels.items()}
     return MeshFileContents(vertices, faces, tag_dict, 0, attribute_dict, scheme)
 
 
-def tags_dict(core_tags, boundary=None) -> dict:
-    """A _core.Tags (and Boundary or None) as read_mesh's keyword dict: only the kinds present."""
-    out: dict = {}
-    if len(core_tags.crease_sharpness):
-        out["creases"] = (core_tags.crease_vertices, core_tags.crease_sharpness)
-    if len(core_tags.corner_sharpness):
-        out["corners"] = (core_tags.corner_vertices, core_tags.corner_sharpness)
-    if len(core_tags.holes):
-        out["holes"] = core_tags.holes
-    if boundary is not None:
-        out["boundary"] = _core.boundary_name(boundary)
-    return out
-
-
-def write_mesh(path, vertices, faces, binary: bool = False, *, creases=None, corners=None, holes=None,
+def write_mesh(path, vertices, faces=None, binary: bool = False, *, creases=None, corners=None, holes=None,
                boundary=None, uvs=None, normals=None, scheme=None, prim=None, template=None) -> None:
     """Write a mesh to an .obj, .off, .ply, .stl, .usd, .usda or .usdc file, atomically.
 
@@ -240,8 +246,15 @@ def write_mesh(path, vertices, faces, binary: bool = False, *, creases=None, cor
     ----------
     path : str or os.PathLike
         The extension (any case) names the format.
-    vertices : array_like, (n, 3) float
-        Finite coordinates.
+    vertices : array_like, (n, 3) float, or sorpia.SubdivisionMesh
+        Finite coordinates; or a mesh, written with its rules and attributes
+        (``write_mesh(path, mesh)``, ``write_mesh(path, mesh, True)`` for
+        binary): its tags, a boundary rule other than the default and its
+        uvs and normals as the keywords below write them, its scheme in USD.
+        A format that cannot hold what the mesh carries is a ParameterError
+        (as for the keywords), as is OBJ, OFF, PLY or STL for a mesh whose
+        scheme is not the one its faces imply ("auto": Loop for triangles):
+        ``mesh.replace(...)`` drops what is not to be written.
     faces : (m, k) int array, list of index lists, or sorpia.Polygons
         Faces of 3 or more vertices (any mix in OBJ, OFF and PLY; STL stores
         triangles only: anything else is a ParameterError).
@@ -291,6 +304,26 @@ def write_mesh(path, vertices, faces, binary: bool = False, *, creases=None, cor
     type): coordinates are rounded to float32, and read back as written. Each
     crease edge is written as a crease of its own (``creaseLengths`` 2).
     """
+    if isinstance(vertices, SubdivisionMesh):
+        mesh = vertices
+        if faces is not None:  # write_mesh(path, mesh, binary)
+            if binary is not False or not isinstance(faces, bool):
+                raise TypeError("write_mesh(path, mesh, binary): the faces come from the SubdivisionMesh")
+            binary = faces
+        given = [k for k, v in (("creases", creases), ("corners", corners), ("holes", holes), ("boundary", boundary),
+                                ("uvs", uvs), ("normals", normals), ("scheme", scheme)) if v is not None]
+        if given:
+            raise ParameterError(f"write_mesh: {', '.join(given)} given beside a SubdivisionMesh, which carries its "
+                                 "own: use mesh.replace(...)")
+        vertices, faces = mesh.vertices, mesh.faces
+        creases, corners, holes, uvs, normals = mesh.creases, mesh.corners, mesh.holes, mesh.uvs, mesh.normals
+        boundary = None if mesh.boundary == DEFAULT_BOUNDARY else mesh.boundary
+        if is_usd(path):
+            scheme = mesh.scheme
+        elif mesh.scheme != resolve_scheme(AUTO_SCHEME, mesh.faces):
+            raise ParameterError(f"{os.fsdecode(path)}: the mesh's scheme {mesh.scheme!r} is not the one its faces "
+                                 "imply, and OBJ, OFF, PLY and STL do not hold a scheme: write USD, or "
+                                 "mesh.replace(scheme=\"auto\")")
     usd = is_usd(path)
     if not usd and (scheme is not None or prim is not None or template is not None):
         given = [k for k, v in (("scheme", scheme), ("prim", prim), ("template", template)) if v is not None]
@@ -315,8 +348,6 @@ def write_mesh(path, vertices, faces, binary: bool = False, *, creases=None, cor
     channels = [_as_face_varying(channel, name, len(indices), width)
                 for channel, name, width in ((uvs, "uvs", (1, 3)), (normals, "normals", (3, 3)))]
     if usd:
-        from ._usd import write_usd
-
         if scheme is not None and scheme not in ("loop", "catmull-clark"):
             raise ParameterError(f"scheme must be 'loop' or 'catmull-clark', got {scheme!r}")
         if counts is None:
@@ -332,10 +363,140 @@ def write_mesh(path, vertices, faces, binary: bool = False, *, creases=None, cor
                      *channels[0], *channels[1])
 
 
+# The rules each format holds: OBJ OpenSubdiv's 't' tags (boundary, creases, corners, holes), USD those and the
+# scheme (UsdGeomMesh's attributes); OFF, PLY and STL none.
+TAG_KINDS = ("creases", "corners", "holes")
+OBJ_RULES = ("boundary",) + TAG_KINDS
+USD_RULES = ("scheme",) + OBJ_RULES
+
+
+def rules_held(path) -> tuple:
+    """The rules (scheme, boundary, creases, corners, holes) a mesh file of `path`'s format holds."""
+    suffix = os.fsdecode(path).lower().rsplit(".", 1)[-1]
+    return USD_RULES if is_usd(path) else OBJ_RULES if suffix == "obj" else ()
+
+
+class WrittenMesh(NamedTuple):
+    """What `write_mesh_file` wrote."""
+
+    vertices: np.ndarray  # as the file holds them, read back (float32 in USD and STL)
+    written: tuple  # the rules written: among scheme, boundary, creases, corners, holes
+    dropped: tuple  # the rules the format could not hold and a reader would miss (each named in a FormatWarning)
+
+
+def write_mesh_file(path, vertices, faces=None, *, scheme=None, boundary=None, creases=None, corners=None,
+                    holes=None, uvs=None, normals=None, binary: bool = False, prim=None,
+                    template=None) -> WrittenMesh:
+    """Write a subdivision mesh with every rule the format holds, warn of those
+    it cannot hold, and read back what was written: the one path by which the
+    command line writes a control mesh.
+
+    `write_mesh` with all of a mesh's rules given, whatever the format: the
+    scheme, the boundary rule and the sharpness tags are written where the
+    format holds them (`rules_held`: USD all of them, OBJ all but the scheme,
+    OFF, PLY and STL none) and left out otherwise, with a `FormatWarning` for
+    each one a reader would miss: tags that are not empty, a boundary rule
+    other than the default ("edge-and-corner"), a scheme other than the one a
+    reader's "auto" picks for the faces (Loop for triangles, Catmull-Clark
+    otherwise). Empty tags are not written.
+
+    A `SubdivisionMesh` in the place of `vertices` is written with all of
+    its rules and attributes (``write_mesh_file(path, mesh)``; a rule given
+    beside it as well must agree, as everywhere).
+
+    Returns a `WrittenMesh`: the vertices as the file holds them, read back
+    from it (USD rounds them to float32; STL too, and since an STL file
+    merges its corners, its vertices are the float32 rounding of those given,
+    in their order), and the rules written and dropped. Raises what
+    `write_mesh` raises, before anything is written (coordinates beyond
+    float32 for USD and STL, a seam for PLY).
+    """
+    rules = {"scheme": scheme, "boundary": boundary, "creases": creases, "corners": corners, "holes": holes}
+    if isinstance(vertices, SubdivisionMesh):
+        mesh = vertices
+        vertices, faces, _ = mesh_arguments(mesh, faces, {k: v for k, v in rules.items() if v is not None},
+                                                     "write_mesh_file")
+        rules = {k: v for k, v in mesh.rules.items() if k in rules}
+        uvs = mesh.uvs if uvs is None else uvs
+        normals = mesh.normals if normals is None else normals
+    given = {k: v for k, v in rules.items() if v is not None and not (k in TAG_KINDS and _empty_tag(k, v))}
+    held = rules_held(path)
+    name, fmt = os.fsdecode(path), _format_label(path)
+    dropped = []
+    lost_tags = sorted(k for k in given if k in TAG_KINDS and k not in held)
+    if lost_tags:
+        dropped += lost_tags
+        warnings.warn(f"{name}: the sharpness tags ({', '.join(lost_tags)}) are not written: only .obj and USD "
+                      "files hold them; refitting this file would solve without them", FormatWarning, stacklevel=2)
+    if "boundary" in given and "boundary" not in held and as_boundary(given["boundary"]) != as_boundary(
+            DEFAULT_BOUNDARY):
+        dropped.append("boundary")
+        warnings.warn(f"{name}: the boundary rule {given['boundary']} is not written: {fmt} holds none, and a "
+                      f"reader takes {DEFAULT_BOUNDARY}; .obj and USD files hold it", FormatWarning, stacklevel=2)
+    if "scheme" in given and "scheme" not in held:
+        auto = "loop" if all_triangles(faces) else "catmull-clark"
+        if given["scheme"] != auto:
+            dropped.append("scheme")
+            warnings.warn(f"{name}: the scheme {given['scheme']} is not written: {fmt} holds no subdivision "
+                          f"scheme, and a reader's auto takes {auto} for these faces; USD files hold it",
+                          FormatWarning, stacklevel=2)
+    kept = {k: v for k, v in given.items() if k in held}
+    write_mesh(path, vertices, faces, binary=binary, uvs=uvs, normals=normals, prim=prim, template=template, **kept)
+    if fmt == "STL":
+        back = np.asarray(vertices, dtype=np.float64).astype(np.float32).astype(np.float64)
+    else:
+        back = read_mesh_file(path, prim=prim if template is None else _template_prim(template, prim)).vertices
+    return WrittenMesh(back, tuple(sorted(kept)), tuple(dropped))
+
+
+ATTRIBUTE_WORDS = {"uvs": "texture coordinates", "normals": "normals"}
+
+
+def attribute_refusal(path, name: str, channel, faces, n_vertices: int) -> str | None:
+    """Why a mesh file of `path`'s format cannot hold the face-varying
+    attribute `name` ("uvs" or "normals", a FaceVarying of `faces`), or None
+    where it can: OFF and STL hold none; PLY one value of 2 (uvs) or 3
+    (normals) numbers per vertex, so not a seam (a vertex with different
+    values in different faces). The check `write_mesh` makes, the core's
+    PLY writer's own (sorpia::check_ply_per_vertex, with its words), made
+    before the work."""
+    suffix = os.fsdecode(path).lower().rsplit(".", 1)[-1]
+    if suffix in ("off", "stl"):
+        return f"{suffix.upper()} has no per-vertex or per-corner values"
+    if suffix != "ply":
+        return None
+    values = np.ascontiguousarray(channel[0], dtype=np.float64)
+    indices = np.ascontiguousarray(channel[1], dtype=np.int32)
+    counts, corners = as_polygons(faces, n_vertices)
+    uniform = bool((counts == counts[0]).all()) if len(counts) else True
+    try:
+        _core.check_ply_per_vertex(corners, None if uniform else counts, int(counts[0]) if len(counts) else 3,
+                                   int(n_vertices), values, indices, ATTRIBUTE_WORDS[name])
+    except ParameterError as exc:
+        return str(exc)
+    return None
+
+
+def _empty_tag(kind: str, value) -> bool:
+    if kind == "holes":
+        return len(np.asarray(value).reshape(-1)) == 0
+    return len(np.asarray(value[0]).reshape(-1)) == 0
+
+
+def _format_label(path) -> str:
+    suffix = os.fsdecode(path).lower().rsplit(".", 1)[-1]
+    return "USD" if is_usd(path) else suffix.upper()
+
+
+def _template_prim(template, prim):
+    """The prim write_mesh wrote into with a template: `prim`, else the template's only mesh."""
+    if prim is not None:
+        return prim
+    return str(_usd_mesh(_usd_open(template), template, None).GetPath())
+
+
 def _as_face_varying(channel, name: str, n_corners: int, widths: tuple[int, int]):
     """write_mesh's `uvs` or `normals` as (values (k, width) float64, indices (c,) int32), or (None, None)."""
-    from .errors import ParameterError
-
     if channel is None:
         return None, None
     try:
@@ -352,4 +513,5 @@ def _as_face_varying(channel, name: str, n_corners: int, widths: tuple[int, int]
     return values, np.ascontiguousarray(indices, dtype=np.int32)
 
 
-__all__ = ["read_mesh", "write_mesh", "FaceVarying", "AttributeWarning", "UnknownTagWarning"]
+__all__ = ["read", "read_mesh", "write_mesh", "write_mesh_file", "attribute_refusal", "WrittenMesh", "FaceVarying",
+           "AttributeWarning", "UnknownTagWarning", "FormatWarning"]

@@ -3,14 +3,16 @@
 from __future__ import annotations
 
 import warnings
+from typing import Optional
 
 import numpy as np
 
 from . import _core
-from . import _nonmanifold as nonmanifold_sharp
-from ._validate import DEFAULT_BOUNDARY, DEFAULT_SCHEME, as_nonmanifold, as_rules, as_tags, as_vertices
+from ._mesh import mesh_arguments, mesh_count
+from ._nonmanifold import folded, refusal_hint, split
+from ._validate import (DEFAULT_BOUNDARY, DEFAULT_NONMANIFOLD, DEFAULT_SCHEME, as_nonmanifold, as_rules, as_tags,
+                        as_vertex_count, as_vertices)
 from .errors import MeshError, UnreferencedVerticesWarning
-from ._nonmanifold import refusal_hint
 
 
 def topology(faces, n_vertices: int, *, scheme: str = DEFAULT_SCHEME, warn: bool = True,
@@ -117,22 +119,24 @@ TAGS_DOC = """creases : (edges (k, 2) int, sharpness (k,) float or one float), o
         there."""
 
 
-def limit_points(vertices, faces, *, scheme: str = DEFAULT_SCHEME, boundary: str = DEFAULT_BOUNDARY, creases=None,
-                 corners=None, holes=None, nonmanifold: str = "error") -> np.ndarray:
+def limit_points(vertices, faces=None, *, scheme: str = DEFAULT_SCHEME, boundary: str = DEFAULT_BOUNDARY,
+                 creases=None, corners=None, holes=None, nonmanifold: str = DEFAULT_NONMANIFOLD) -> np.ndarray:
     """Limit positions of the vertices of a mesh (paper eq. 5-6), B V.
 
     Parameters
     ----------
-    vertices : array_like, (n, 3) or (n, k) float
+    vertices : array_like, (n, 3) or (n, k) float, or sorpia.SubdivisionMesh
         Control vertices, or any per-vertex data (k >= 1 columns, each
-        mapped by B alike).
-    faces : array_like (m, k) int, list of polygons or sorpia.Polygons
+        mapped by B alike); or a mesh (its vertices, faces and rules:
+        ``limit_points(mesh)``).
+    faces : array_like (m, k) int, list of polygons, sorpia.Polygons or sorpia.SubdivisionMesh
         Faces, indices into ``vertices``, consistently oriented; triangles for
-        Loop, any polygons for Catmull-Clark.
-    scheme : {"loop", "catmull-clark", "auto"}
+        Loop, any polygons for Catmull-Clark; or a mesh whose faces and rules
+        take `vertices` (``limit_points(control_vertices, mesh)``).
+    scheme : {"auto", "loop", "catmull-clark"}
         The subdivision scheme (OpenSubdiv's SCHEME_LOOP or SCHEME_CATMARK);
-        "auto" is Loop when every face is a triangle, else Catmull-Clark (the
-        command line's default).
+        "auto" (the default everywhere) is Loop when every face is a
+        triangle, else Catmull-Clark (`sorpia.resolve_scheme`).
     boundary : {"edge-and-corner", "edge-only"}
         Boundary rule (OpenSubdiv's VTX_BOUNDARY_EDGE_AND_CORNER or
         VTX_BOUNDARY_EDGE_ONLY). With "edge-and-corner" (the default) a
@@ -163,10 +167,17 @@ def limit_points(vertices, faces, *, scheme: str = DEFAULT_SCHEME, boundary: str
         refining until every sharpness has decayed, composed back to the
         control vertices (docs: "Creases, corners and holes").
     """
-    if as_nonmanifold(nonmanifold) == "sharp":
-        return nonmanifold_sharp.limit_points(vertices, faces, boundary, scheme,
-                                              dict(creases=creases, corners=corners, holes=holes))
+    vertices, faces, rules = mesh_arguments(vertices, faces, dict(
+        scheme=scheme, boundary=boundary, creases=creases, corners=corners, holes=holes, nonmanifold=nonmanifold),
+        "limit_points")
+    scheme, boundary, creases, corners, holes = (rules[k] for k in ("scheme", "boundary", "creases", "corners",
+                                                                    "holes"))
     vertices = as_vertices(vertices, columns=None)
+    if as_nonmanifold(rules["nonmanifold"]) == "sharp":
+        s = split(faces, len(vertices), boundary, creases=creases, corners=corners, holes=holes, stacklevel=3)
+        if s is not None:  # the split's rows of the input vertices
+            return limit_points(vertices[s.vertex_map], s.faces, boundary=s.boundary, scheme=scheme,
+                                **s.tags)[: len(vertices)]
     arrays, n, rules = as_rules(faces, vertices.shape[0], scheme=scheme, boundary=boundary, creases=creases,
                                 corners=corners, holes=holes, count_name="len(vertices)")
     topo = built(lambda: _core.Topology(*arrays, n))
@@ -187,20 +198,30 @@ NONMANIFOLD_DOC = """nonmanifold : {"error", "sharp"}
 limit_points.__doc__ = limit_points.__doc__.replace("{tags}", TAGS_DOC).replace("{nonmanifold}", NONMANIFOLD_DOC)
 
 
-def limit_matrix(faces, n_vertices: int, *, scheme: str = DEFAULT_SCHEME, boundary: str = DEFAULT_BOUNDARY,
-                 creases=None, corners=None, holes=None, nonmanifold: str = "error") -> scipy.sparse.csr_matrix:
+def limit_matrix(faces, n_vertices: Optional[int] = None, *, scheme: str = DEFAULT_SCHEME,
+                 boundary: str = DEFAULT_BOUNDARY, creases=None, corners=None, holes=None,
+                 nonmanifold: str = DEFAULT_NONMANIFOLD) -> scipy.sparse.csr_matrix:
     """The limit matrix B (paper eq. 7) as a scipy CSR matrix, (n, n) float64.
 
     Row i holds the limit mask of vertex i as OpenSubdiv evaluates it, so that
     ``limit_matrix(F, len(V)) @ V == limit_points(V, F)``. Unreferenced vertices
     get an identity row. See `limit_points` for `scheme`, `boundary`, the
-    tags (`creases`, `corners`, `holes`) and `nonmanifold`.
+    tags (`creases`, `corners`, `holes`) and `nonmanifold`. ``limit_matrix(mesh)``
+    takes a `sorpia.SubdivisionMesh`'s faces, vertex count and rules.
     """
     import scipy.sparse  # here, not at import: sorpia's commands need no scipy
 
-    if as_nonmanifold(nonmanifold) == "sharp":
-        return nonmanifold_sharp.limit_matrix(faces, n_vertices, boundary, scheme,
-                                              dict(creases=creases, corners=corners, holes=holes))
+    faces, n_vertices, rules = mesh_count(faces, n_vertices, dict(
+        scheme=scheme, boundary=boundary, creases=creases, corners=corners, holes=holes, nonmanifold=nonmanifold),
+        "limit_matrix")
+    scheme, boundary, creases, corners, holes = (rules[k] for k in ("scheme", "boundary", "creases", "corners",
+                                                                    "holes"))
+    if as_nonmanifold(rules["nonmanifold"]) == "sharp":
+        s = split(faces, as_vertex_count(n_vertices), boundary, creases=creases, corners=corners, holes=holes,
+                  stacklevel=3)
+        if s is not None:  # the split's rows of the input vertices, each copy's column added to its vertex's
+            return folded(limit_matrix(s.faces, len(s.vertex_map), boundary=s.boundary, scheme=scheme, **s.tags),
+                          s.vertex_map, as_vertex_count(n_vertices))
     arrays, n, rules = as_rules(faces, n_vertices, scheme=scheme, boundary=boundary, creases=creases,
                                 corners=corners, holes=holes)
     topo = built(lambda: _core.Topology(*arrays, n))

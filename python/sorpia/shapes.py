@@ -36,7 +36,7 @@ def pole(n: int = 48):
 
 
 def irregular(n_vertices: int = 2000, seed: int = 1):
-    """Closed genus-1 mesh of about `n_vertices` vertices with random edge flips:
+    """Closed genus-1 mesh of about ``n_vertices`` vertices with random edge flips:
     valences 3 to 12, most vertices extraordinary."""
     return _core.irregular(as_vertex_count(n_vertices), seed)
 
@@ -58,7 +58,7 @@ def quad_grid(nu: int = 10, nv: int = 10):
 
 
 def quad_irregular(n_vertices: int = 12000, seed: int = 1):
-    """A closed all-quad mesh of about `n_vertices` vertices with irregular
+    """A closed all-quad mesh of about ``n_vertices`` vertices with irregular
     vertices: `irregular` (n_vertices / 6) with each triangle split into three
     quads at its centroid and edge midpoints; valences 3 (the centroids), 4 (the
     midpoints) and 3..12 (the triangle mesh's vertices). Faces (m, 4)."""

@@ -98,7 +98,6 @@ more sweeps than Gauss-Seidel (figures on the omega study's page of the docs).
 from __future__ import annotations
 
 import math
-import numbers
 import time
 import warnings
 import weakref
@@ -107,9 +106,11 @@ from typing import Callable, Optional
 import numpy as np
 
 from . import _core
-from . import _nonmanifold as nonmanifold_sharp
-from ._validate import (DEFAULT_BOUNDARY, DEFAULT_SCHEME, as_boundary, as_nonmanifold, as_rules, as_vertex_count,
-                        as_vertices)
+from ._mesh import mesh_arguments, mesh_count
+from ._nonmanifold import folded, split
+from ._validate import (DEFAULT_BOUNDARY, DEFAULT_NONMANIFOLD, DEFAULT_SCHEME, as_boundary, as_integer,
+                        as_nonmanifold, as_real, as_rules, as_vertex_count, as_vertices)
+from ._validate import as_integer as _integer  # noqa: F401  (fair.py's name until it takes as_integer)
 from .errors import ConvergenceWarning, OmegaWarning, ParameterError, SingularMatrixWarning
 from .limit import NONMANIFOLD_DOC as _NONMANIFOLD_DOC
 from .limit import TAGS_DOC as _TAGS_DOC
@@ -121,23 +122,10 @@ OMEGA_RULES = ("auto", "young")
 THREADED_METHODS = ("sor", "gs", "auto")  # the methods that sweep on threads > 1 (auto: its sor run)
 YOUNG_RHO_CLAMP = float(_core.YOUNG_RHO_CLAMP)
 MAX_THREADS = int(_core.MAX_THREADS)
-_INT64_MAX = 2**63 - 1
 
 
 # The one result type, defined in the core's binding (its docstring lists the fields).
 InterpolationResult = _core.InterpolationResult
-
-
-def _real(value, name: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, numbers.Real):
-        raise ParameterError(f"{name} must be a real number, got {value!r}")
-    return float(value)
-
-
-def _integer(value, name: str, what: str) -> int:
-    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
-        raise ParameterError(f"{name} = {value!r} must be {what}")
-    return min(int(value), _INT64_MAX)  # beyond any limit: the core names it as too large
 
 
 def check_options(method: str = "auto", omega="auto", tol: float = 1e-10, max_iter: int = 1000,
@@ -157,16 +145,16 @@ def check_options(method: str = "auto", omega="auto", tol: float = 1e-10, max_it
     if isinstance(omega, str):
         rule, omega_value = _core.parse_omega(omega)
     else:
-        rule, omega_value = _core.OmegaRule.given, _real(omega, "omega")
+        rule, omega_value = _core.OmegaRule.given, as_real(omega, "omega")
     if callback is not None and not callable(callback):
         raise ParameterError(f"callback = {callback!r} must be callable (k, error) or None")
     return _core.SolveOptions(
         method=method_value, omega_rule=rule, omega=omega_value,
-        sigma=None if sigma is None else _real(sigma, "sigma"),
-        alpha=None if alpha is None else _real(alpha, "alpha"),
-        weight=None if weight is None else _real(weight, "weight"),
-        tol=_real(tol, "tol"), max_iter=_integer(max_iter, "max_iter", "an integer >= 1"),
-        threads=min(_integer(threads, "threads", "an integer >= 1"), 2**31 - 1))
+        sigma=None if sigma is None else as_real(sigma, "sigma"),
+        alpha=None if alpha is None else as_real(alpha, "alpha"),
+        weight=None if weight is None else as_real(weight, "weight"),
+        tol=as_real(tol, "tol"), max_iter=as_integer(max_iter, "max_iter", "an integer >= 1"),
+        threads=min(as_integer(threads, "threads", "an integer >= 1"), 2**31 - 1))
 
 
 class Interpolator:
@@ -175,18 +163,20 @@ class Interpolator:
 
     Parameters
     ----------
-    faces : array_like (m, k) int, list of polygons or sorpia.Polygons
+    faces : array_like (m, k) int, list of polygons, sorpia.Polygons or sorpia.SubdivisionMesh
         Faces, consistently oriented, manifold: triangles for Loop, any
-        polygons for Catmull-Clark.
+        polygons for Catmull-Clark; or a mesh (``Interpolator(mesh)``: its
+        faces, vertex count and rules).
     n_vertices : int
-        Number of vertices, an int or numpy integer >= 0 checked as
+        Number of vertices (not needed with a mesh), an int or numpy integer >= 0 checked as
         `sorpia.limit_matrix` checks it (a float, even 12.0, or a bool raises
         TypeError; a count below the largest face index + 1, MeshError).
         Vertices no face references pass through unchanged, with an
         UnreferencedVerticesWarning.
-    scheme : {"loop", "catmull-clark", "auto"}
+    scheme : {"auto", "loop", "catmull-clark"}
         The subdivision scheme whose limit surface interpolates, see
-        sorpia.limit_points ("auto": Loop when every face is a triangle).
+        sorpia.limit_points ("auto", the default: Loop when every face is a
+        triangle, else Catmull-Clark).
     boundary : {"edge-and-corner", "edge-only"}
         Boundary rule, see sorpia.limit_points.
     {tags}
@@ -202,10 +192,14 @@ class Interpolator:
     `update` moves: see `targets` and `update`.
     """
 
-    def __init__(self, faces, n_vertices: int, *, scheme: str = DEFAULT_SCHEME, boundary: str = DEFAULT_BOUNDARY,
-                 creases=None, corners=None, holes=None, nonmanifold: str = "error"):
-        self._build(faces, n_vertices, "n_vertices",
-                    dict(scheme=scheme, boundary=boundary, creases=creases, corners=corners, holes=holes), nonmanifold)
+    def __init__(self, faces, n_vertices: Optional[int] = None, *, scheme: str = DEFAULT_SCHEME,
+                 boundary: str = DEFAULT_BOUNDARY, creases=None, corners=None, holes=None,
+                 nonmanifold: str = DEFAULT_NONMANIFOLD):
+        faces, n_vertices, rules = mesh_count(faces, n_vertices, dict(
+            scheme=scheme, boundary=boundary, creases=creases, corners=corners, holes=holes, nonmanifold=nonmanifold),
+            "Interpolator")
+        nonmanifold = rules.pop("nonmanifold")
+        self._build(faces, n_vertices, "n_vertices", rules, nonmanifold)
 
     @classmethod
     def _for_vertices(cls, faces, n_vertices: int, rule_options: dict, nonmanifold: str) -> Interpolator:
@@ -223,7 +217,7 @@ class Interpolator:
         boundary = rule_options["boundary"]
         if as_nonmanifold(nonmanifold) == "sharp":
             tags = {kind: rule_options[kind] for kind in ("creases", "corners", "holes")}
-            self._split = nonmanifold_sharp.split(faces, as_vertex_count(n_vertices, count_name),
+            self._split = split(faces, as_vertex_count(n_vertices, count_name),
                                                   rule_options["boundary"], **tags)
         vertex_map = None
         if self._split is not None:
@@ -261,7 +255,7 @@ class Interpolator:
         data, indices, indptr = self._impl.limit_matrix()
         b = scipy.sparse.csr_matrix((data, indices, indptr), shape=(len(indptr) - 1, len(indptr) - 1))
         if self._split is not None:  # the split's rows of the caller's vertices, copies' columns added
-            return nonmanifold_sharp.folded(b, self._split.vertex_map, self.n_vertices)
+            return folded(b, self._split.vertex_map, self.n_vertices)
         return b
 
     def solve(self, vertices, method: str = "auto", omega="auto", tol: float = 1e-10, max_iter: int = 1000,
@@ -316,7 +310,7 @@ class Interpolator:
             beyond 2^+-200, which the solvers scale exactly), so that no
             squared norm overflows. The stopping rule is unchanged: E_0 is
             the error of the cold start V = V0, so the result meets the same
-            E_k / E_0 < tol; errors[0] = E(initial) / E_0 and iterations
+            E_k / E_0 < tol; history[0] = E(initial) / E_0 and iterations
             count from the warm start (0 when it already meets tol); a start
             far off iterates (divergence is measured against the larger of
             E_0 and the start's error).
@@ -383,7 +377,7 @@ class Interpolator:
         Returns
         -------
         InterpolationResult
-            method "gs", variant "local"; errors = [E(previous) / E_0,
+            method "gs", variant "local"; history = [E(previous) / E_0,
             E(result) / E_0] (only the first when nothing needed relaxing);
             iterations 1 when any vertex was relaxed, else 0; relaxations the
             single-vertex relaxations done; initial_error E_0 of the new targets.
@@ -440,7 +434,7 @@ class Interpolator:
             else:  # the local relaxation diverged, and the full solve that followed stopped short
                 what = (f"diverged, and method={self._solved_method!r} on the whole mesh stopped short "
                         f"({r.stop_reason})")
-            warnings.warn(f"update {what} with E/E_0 = {r.errors[-1]:.3g} > tol = {options.tol:g}: the targets "
+            warnings.warn(f"update {what} with E/E_0 = {r.history[-1]:.3g} > tol = {options.tol:g}: the targets "
                           "are left as they were, and the result holds previous's vertices", ConvergenceWarning,
                           stacklevel=2)
         r._record_build(time.perf_counter() - t0, 0.0, 0.0)
@@ -501,7 +495,7 @@ def stopped_short_message(r: InterpolationResult, method: str, tol: float, max_i
     reason = r.stop_reason
     if reason in ("converged", "callback"):
         return None
-    final = f"E_k/E_0 = {r.errors[-1]:.3g} > tol = {tol:g}"
+    final = f"E_k/E_0 = {r.history[-1]:.3g} > tol = {tol:g}"
     if reason == "singular":
         return (f"B is singular and the targets have a part outside its range: method={method!r} returns the "
                 f"least-squares control mesh of least norm ({r.variant}), {final}; the targets are missed most at "
@@ -509,9 +503,9 @@ def stopped_short_message(r: InterpolationResult, method: str, tol: float, max_i
     tried = "" if len(r.attempts) < 2 else " (tried: " + ", ".join(
         f"{a['method']} {a['stop_reason']} after {a['iterations']}" for a in r.attempts) + ")"
     if reason == "diverged":
-        final = (f"E_k/E_0 = {r.errors[r.returned_iteration]:.3g} > tol = {tol:g} at iteration "
+        final = (f"E_k/E_0 = {r.history[r.returned_iteration]:.3g} > tol = {tol:g} at iteration "
                  f"{r.returned_iteration}, the iterate returned (the lowest E_k; the run stopped at "
-                 f"{r.errors[-1]:.3g})")
+                 f"{r.history[-1]:.3g})")
     what = {"max_iter": f"reached max_iter = {max_iter}",
             "diverged": "diverged (E_k rose above a multiple of its lowest value, or was not finite)",
             "stalled": "stalled (no progress over a whole GMRES cycle: B is singular, or numerically so)"}[reason]
@@ -549,13 +543,18 @@ def _as_initial(initial, v0: np.ndarray) -> Optional[np.ndarray]:
     return arr
 
 
-def interpolate(vertices, faces, method: str = "auto", omega="auto", tol: float = 1e-10, max_iter: int = 1000,
+def interpolate(vertices, faces=None, method: str = "auto", omega="auto", tol: float = 1e-10, max_iter: int = 1000,
                 callback: Optional[Callable[[int, float], object]] = None, *, scheme: str = DEFAULT_SCHEME,
-                boundary: str = DEFAULT_BOUNDARY, creases=None, corners=None, holes=None, nonmanifold: str = "error",
+                boundary: str = DEFAULT_BOUNDARY, creases=None, corners=None, holes=None,
+                nonmanifold: str = DEFAULT_NONMANIFOLD,
                 sigma=None, alpha=None, weight=None, threads: int = 1, initial=None) -> InterpolationResult:
-    """Control vertices whose limit surface (Loop, or Catmull-Clark with
-    ``scheme="catmull-clark"``; ``scheme="auto"`` picks Loop when every face
-    is a triangle) interpolates ``vertices``.
+    """Control vertices whose limit surface (``scheme="auto"``, the default:
+    Loop when every face is a triangle, else Catmull-Clark) interpolates
+    ``vertices``.
+
+    ``interpolate(mesh)`` takes a `sorpia.SubdivisionMesh` (its vertices,
+    faces and rules), ``interpolate(data, mesh)`` other per-vertex data on
+    its faces; the other arguments then by keyword.
 
     ``vertices`` may be (n, k) data for any k >= 1 (every column interpolated);
     `initial` is a warm start, see `Interpolator.solve`. With
@@ -578,8 +577,10 @@ def interpolate(vertices, faces, method: str = "auto", omega="auto", tol: float 
     >>> np.allclose(sorpia.limit_points(res.control_vertices, F), V, atol=1e-9)
     True
     """
-    rule_options = dict(scheme=scheme, boundary=boundary, creases=creases, corners=corners, holes=holes)
-    as_nonmanifold(nonmanifold)
+    vertices, faces, rule_options = mesh_arguments(vertices, faces, dict(
+        scheme=scheme, boundary=boundary, creases=creases, corners=corners, holes=holes, nonmanifold=nonmanifold),
+        "interpolate")
+    nonmanifold = as_nonmanifold(rule_options.pop("nonmanifold"))
     t0 = time.perf_counter()
     # Options are checked before the (costly) operator is built.
     options = check_options(method, omega, tol, max_iter, callback, sigma=sigma, alpha=alpha, weight=weight,

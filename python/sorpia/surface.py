@@ -23,15 +23,15 @@ onto it, others refused):
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from . import _core
-from ._validate import (DEFAULT_BOUNDARY, DEFAULT_SCHEME, Polygons, as_boundary, as_nonmanifold, as_scheme, as_tags,
+from ._mesh import SubdivisionMesh, mesh_arguments
+from ._nonmanifold import split
+from ._validate import (DEFAULT_BOUNDARY, DEFAULT_NONMANIFOLD, DEFAULT_SCHEME, Polygons, as_nonmanifold, as_rules,
                         as_vertices)
 from .errors import ParameterError
-from .limit import topology
+from .limit import built, warn_unreferenced
 
 
 def _as_level(level) -> int:
@@ -45,11 +45,9 @@ def _as_level(level) -> int:
 
 def subface_columns(face_size: int) -> int:
     """Columns w of the grid of sub-faces of a k-gon under Catmull-Clark
-    (k != 4): corner j of the face is at ``(u, v) = (j % w, j // w)``."""
-    k = int(face_size)
-    if k < 3:
-        raise ParameterError(f"face_size must be at least 3, got {k}")
-    return (3 if k > 4 else 2) if k < 10 else 1 + math.isqrt(k - 1)
+    (k != 4): corner j of the face is at ``(u, v) = (j % w, j // w)``; the
+    core's one definition (``sorpia/subface_grid.hpp``)."""
+    return _core.subface_columns(int(face_size))
 
 
 def corner_uv(scheme: str, face_size: int, corner: int) -> tuple[float, float]:
@@ -96,15 +94,18 @@ class LimitSurface:
 
     Parameters
     ----------
-    vertices : array_like, (n, 3) float
-        Control vertices.
-    faces : array_like
+    vertices : array_like, (n, 3) float, or sorpia.SubdivisionMesh
+        Control vertices; or a mesh (``LimitSurface(mesh)``: its vertices,
+        faces and rules).
+    faces : array_like or sorpia.SubdivisionMesh
         Faces, consistently oriented, manifold: an (m, 3) array for Loop; for
-        Catmull-Clark any polygons.
+        Catmull-Clark any polygons; or a mesh whose faces and rules take
+        `vertices` (``LimitSurface(control_vertices, mesh)``).
     boundary : {"edge-and-corner", "edge-only"}
         Boundary rule, as in `sorpia.limit_points`.
-    scheme : {"loop", "catmull-clark"}
-        Subdivision scheme (OpenSubdiv's SCHEME_LOOP or SCHEME_CATMARK).
+    scheme : {"auto", "loop", "catmull-clark"}
+        Subdivision scheme (OpenSubdiv's SCHEME_LOOP or SCHEME_CATMARK);
+        "auto": Loop for triangles, else Catmull-Clark.
     creases : (edges, sharpness), optional
         Sharp edges: an (k, 2) int array of vertex pairs and a sharpness per
         edge (or one for all); ``inf`` (or 10 and more) is infinitely sharp,
@@ -128,23 +129,27 @@ class LimitSurface:
     docstring (`sorpia.surface`).
     """
 
-    def __init__(self, vertices, faces, *, boundary: str = DEFAULT_BOUNDARY, scheme: str = DEFAULT_SCHEME,
-                 creases=None, corners=None, holes=None, nonmanifold: str = "error"):
+    def __init__(self, vertices, faces=None, *, boundary: str = DEFAULT_BOUNDARY, scheme: str = DEFAULT_SCHEME,
+                 creases=None, corners=None, holes=None, nonmanifold: str = DEFAULT_NONMANIFOLD):
+        vertices, faces, rules = mesh_arguments(vertices, faces, dict(
+            scheme=scheme, boundary=boundary, creases=creases, corners=corners, holes=holes, nonmanifold=nonmanifold),
+            "LimitSurface")
+        scheme, boundary, creases, corners, holes, nonmanifold = rules.values()
         vertices = as_vertices(vertices)
         self._vertex_map, self._n_input = None, vertices.shape[0]
         if as_nonmanifold(nonmanifold) == "sharp":
-            from ._nonmanifold import split
-
-            s = split(faces, vertices.shape[0], boundary, creases=creases, corners=corners, holes=holes)
+            s = split(faces, vertices.shape[0], boundary, creases=creases, corners=corners, holes=holes, stacklevel=3)
             if s is not None:
                 self._vertex_map = s.vertex_map
                 vertices, faces, boundary = vertices[s.vertex_map], s.faces, s.boundary
                 creases, corners, holes = (s.tags.get(name) for name in ("creases", "corners", "holes"))
-        self._boundary = as_boundary(boundary)
-        self._scheme = as_scheme(scheme, faces)
-        self._topology = topology(faces, vertices.shape[0], scheme=scheme, count_name="len(vertices)")
-        tags = as_tags(creases, corners, holes, n_vertices=vertices.shape[0], n_faces=self._topology.n_faces)
-        self._surface = _core.LimitSurface(self._topology, vertices, self._scheme, self._boundary, tags)
+        # The faces and rules checked once (as_rules), as every entry point checks them.
+        arrays, n, checked = as_rules(faces, vertices.shape[0], scheme=scheme, boundary=boundary, creases=creases,
+                                      corners=corners, holes=holes, count_name="len(vertices)")
+        self._topology = built(lambda: _core.Topology(*arrays, n))
+        warn_unreferenced(self._topology, stacklevel=3)
+        self._scheme, self._boundary = checked.scheme, checked.boundary
+        self._surface = _core.LimitSurface(self._topology, vertices, checked.scheme, checked.boundary, checked.tags)
 
     @property
     def n_vertices(self) -> int:
@@ -317,8 +322,9 @@ class LimitSurface:
         return vertices, _faces_out(faces, counts)
 
 
-def limit_surface(vertices, faces, level: int = 3, *, boundary: str = DEFAULT_BOUNDARY,
-                  scheme: str = DEFAULT_SCHEME, creases=None, corners=None, holes=None, nonmanifold: str = "error"):
+def limit_surface(vertices, faces=None, level: int = 3, *, boundary: str = DEFAULT_BOUNDARY,
+                  scheme: str = DEFAULT_SCHEME, creases=None, corners=None, holes=None,
+                  nonmanifold: str = DEFAULT_NONMANIFOLD):
     """The limit surface as a mesh: uniform refinement to `level` with every
     output vertex at its exact limit position.
 
@@ -332,9 +338,10 @@ def limit_surface(vertices, faces, level: int = 3, *, boundary: str = DEFAULT_BO
 
     Parameters
     ----------
-    vertices : array_like, (n, 3) float
-        Control vertices.
-    faces : array_like
+    vertices : array_like, (n, 3) float, or sorpia.SubdivisionMesh
+        Control vertices, or a mesh (``limit_surface(mesh, level)``: the
+        level then comes second).
+    faces : array_like or sorpia.SubdivisionMesh
         Faces, consistently oriented, manifold; see `LimitSurface`.
     level : int, 0..15
         Refinement level. Loop: the output has m * 4**level triangles and
@@ -368,17 +375,22 @@ def limit_surface(vertices, faces, level: int = 3, *, boundary: str = DEFAULT_BO
         (``f * 4**level .. (f + 1) * 4**level - 1`` for Loop). Faces of holes
         are left out.
     """
+    if isinstance(vertices, SubdivisionMesh) and faces is not None:  # limit_surface(mesh, level)
+        faces, level = None, faces
     return LimitSurface(vertices, faces, boundary=boundary, scheme=scheme, creases=creases, corners=corners,
                         holes=holes, nonmanifold=nonmanifold).tessellate(level)
 
 
-def evaluate_limit(vertices, faces, face_ids, uv, derivatives: bool = False, *, boundary: str = DEFAULT_BOUNDARY,
-                   scheme: str = DEFAULT_SCHEME, creases=None, corners=None, holes=None, nonmanifold: str = "error"):
+def evaluate_limit(vertices, faces, face_ids=None, uv=None, derivatives: bool = False, *,
+                   boundary: str = DEFAULT_BOUNDARY, scheme: str = DEFAULT_SCHEME, creases=None, corners=None,
+                   holes=None, nonmanifold: str = DEFAULT_NONMANIFOLD):
     """Limit surface positions (and with ``derivatives=True`` the tangents and
     the unit normal) at points (face_ids[i], uv[i]); one-call form of
     ``LimitSurface(vertices, faces, boundary=..., scheme=..., ...).evaluate(face_ids,
     uv, derivatives)``; the rule options (boundary, scheme, creases, corners,
-    holes, nonmanifold) as in `LimitSurface`.
+    holes, nonmanifold) as in `LimitSurface`. With a `sorpia.SubdivisionMesh`:
+    ``evaluate_limit(mesh, face_ids, uv)`` or ``evaluate_limit(
+    control_vertices, mesh, face_ids, uv)``.
 
     The parameterisation of each kind of face is in `LimitSurface.evaluate`
     and the module docstring; for a Loop triangle ``(a, b, c)``, ``(0, 0)`` is
@@ -391,5 +403,11 @@ def evaluate_limit(vertices, faces, face_ids, uv, derivatives: bool = False, *, 
     positions : (k, 3) float64, or the tuple (positions, du, dv, normals) of
     (k, 3) float64 arrays with ``derivatives=True``; see `LimitSurface.evaluate`.
     """
+    if isinstance(vertices, SubdivisionMesh):  # evaluate_limit(mesh, face_ids, uv[, derivatives])
+        if uv is not None and not isinstance(uv, bool):
+            raise TypeError("evaluate_limit(mesh, face_ids, uv, derivatives): too many positional arguments")
+        faces, face_ids, uv, derivatives = None, faces, face_ids, derivatives if uv is None else uv
+    if face_ids is None or uv is None:
+        raise TypeError("evaluate_limit needs face_ids and uv")
     return LimitSurface(vertices, faces, boundary=boundary, scheme=scheme, creases=creases, corners=corners,
                         holes=holes, nonmanifold=nonmanifold).evaluate(face_ids, uv, derivatives)

@@ -1,5 +1,6 @@
 // LimitSurface: corners and tessellated control vertices are the limit points.
 #include <gtest/gtest.h>
+#include <opensubdiv/bfr/parameterization.h>
 
 #include <algorithm>
 #include <cmath>
@@ -8,11 +9,33 @@
 #include "sorpia/errors.hpp"
 #include "sorpia/limit.hpp"
 #include "sorpia/shapes.hpp"
+#include "sorpia/subface_grid.hpp"
 #include "sorpia/surface.hpp"
 
 namespace {
 
 using sorpia::Boundary;
+
+TEST(SubfaceGrid, IsBfrsQuadSubfaceParameterization) {
+  // Every corner j of a k-gon (k != 4) under Catmull-Clark where Bfr puts it,
+  // for k = 3..64 (columns 2, 3, then 1 + floor(sqrt(k - 1))).
+  namespace Bfr = OpenSubdiv::Bfr;
+  for (int k = 3; k <= 64; ++k) {
+    if (k == 4) continue;
+    const Bfr::Parameterization param(OpenSubdiv::Sdc::SCHEME_CATMARK, k);
+    ASSERT_EQ(param.GetType(), Bfr::Parameterization::QUAD_SUBFACES) << k;
+    const int w = sorpia::subface_columns(k);
+    for (int j = 0; j < k; ++j) {
+      double bfr[2], ours[2];
+      param.GetVertexCoord(j, bfr);
+      sorpia::subface_origin(w, j, ours);
+      EXPECT_EQ(ours[0], bfr[0]) << "k " << k << " corner " << j;
+      EXPECT_EQ(ours[1], bfr[1]) << "k " << k << " corner " << j;
+    }
+  }
+  EXPECT_EQ(sorpia::subface_columns(10), 4);  // 1 + sqrt(9): a perfect square, where a float root could round down
+  EXPECT_THROW(sorpia::subface_columns(2), sorpia::ParameterError);
+}
 
 TEST(LimitSurface, CornersEqualLimitPointsUnderBothBoundaryRules) {
   // (0,0), (1,0), (0,1) are the face's vertices 0, 1, 2. Bfr and Far's Limit

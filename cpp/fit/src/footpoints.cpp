@@ -7,7 +7,6 @@
 #include <limits>
 #include <memory>
 #include <string>
-#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -15,6 +14,7 @@
 #include "sorpia/detail/unit_normal.hpp"
 #include "sorpia/errors.hpp"
 #include "sorpia/interrupt.hpp"
+#include "sorpia/subface_grid.hpp"
 
 namespace sorpia {
 
@@ -236,31 +236,15 @@ struct Domains {
   std::vector<std::int32_t> half_edge_face;
   std::vector<std::uint8_t> hole;
 
-  Domains(const Topology& t, Scheme s, const std::vector<std::int32_t>& holes) : topology(t), scheme(s) {
+  Domains(const Topology& t, Scheme s, const std::vector<std::int32_t>& holes)
+      : topology(t), scheme(s), opposite(t.half_edge_twins()) {
     const std::size_t m = t.n_faces();
     hole.assign(m, 0);
     for (const std::int32_t f : holes) hole[static_cast<std::size_t>(f)] = 1;
-    const auto& fi = t.face_indices();
-    opposite.assign(fi.size(), -1);
-    half_edge_face.assign(fi.size(), 0);
-    std::unordered_map<std::uint64_t, std::int32_t> by_ends;
-    by_ends.reserve(fi.size());
-    const auto key = [](std::int32_t a, std::int32_t b) {
-      return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(a)) << 32) | static_cast<std::uint32_t>(b);
-    };
+    half_edge_face.assign(t.face_indices().size(), 0);
     for (std::size_t f = 0; f < m; ++f) {
       const std::int32_t o = t.face_offset(f), k = t.face_size(f);
-      for (std::int32_t e = 0; e < k; ++e) {
-        half_edge_face[static_cast<std::size_t>(o + e)] = static_cast<std::int32_t>(f);
-        by_ends.emplace(key(fi[o + e], fi[o + (e + 1) % k]), o + e);
-      }
-    }
-    for (std::size_t f = 0; f < m; ++f) {
-      const std::int32_t o = t.face_offset(f), k = t.face_size(f);
-      for (std::int32_t e = 0; e < k; ++e) {
-        const auto it = by_ends.find(key(fi[o + (e + 1) % k], fi[o + e]));
-        if (it != by_ends.end()) opposite[static_cast<std::size_t>(o + e)] = it->second;
-      }
+      std::fill_n(half_edge_face.begin() + o, k, static_cast<std::int32_t>(f));
     }
   }
 
@@ -268,10 +252,7 @@ struct Domains {
     if (scheme == Scheme::Loop) return Kind::Triangle;
     return topology.face_size(static_cast<std::size_t>(f)) == 4 ? Kind::Quad : Kind::Sub;
   }
-  int columns(std::int32_t f) const {
-    const int k = topology.face_size(static_cast<std::size_t>(f));
-    return k < 10 ? (k > 4 ? 3 : 2) : 1 + static_cast<int>(std::sqrt(static_cast<double>(k - 1)) + 1e-9);
-  }
+  int columns(std::int32_t f) const { return subface_columns(topology.face_size(static_cast<std::size_t>(f))); }
   int charts(std::int32_t f) const { return kind(f) == Kind::Sub ? topology.face_size(static_cast<std::size_t>(f)) : 1; }
 
   // (u, v) of local (a, b) in chart c of face f, and back.
@@ -280,9 +261,10 @@ struct Domains {
       uv[0] = a, uv[1] = b;
       return;
     }
-    const int w = columns(f);
-    uv[0] = (c % w) + 0.5 * a;
-    uv[1] = (c / w) + 0.5 * b;
+    double origin[2];
+    subface_origin(columns(f), c, origin);
+    uv[0] = origin[0] + 0.5 * a;
+    uv[1] = origin[1] + 0.5 * b;
   }
   // The chart of (u, v) in face f (a point on a sub-face's edge: the sub-face
   // Bfr's evaluation takes it in) and its local coordinates.

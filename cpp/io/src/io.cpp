@@ -549,4 +549,8 @@ void write_mesh(const std::string& path, const MeshView& mesh, bool binary, cons
   write_file_atomic(path, data);
 }
 
+void check_ply_per_vertex(const MeshView& mesh, const FaceVaryingView& channel, const char* what) {
+  detail::io::per_vertex_values(mesh, channel, what);
+}
+
 }  // namespace sorpia

@@ -610,6 +610,41 @@ std::vector<std::int32_t> Topology::face_offsets() const {
   return off;
 }
 
+std::vector<std::int32_t> Topology::half_edge_twins() const {
+  if (all_triangles_) return detail::EdgeGroups(detail::FaceArrays::triangles(n_faces_).over(face_indices_.data()),
+                                                n_vertices_).mates();
+  const std::vector<std::int32_t> corner_face = detail::corner_faces(face_offsets_);
+  const detail::FaceList fl{face_indices_.data(), face_offsets_.data(), corner_face.data(), n_faces_};
+  return detail::EdgeGroups(fl, n_vertices_).mates();
+}
+
+std::vector<std::int32_t> Topology::find_half_edges(const std::int32_t* pairs, std::size_t k) const {
+  // The queries sorted by (lower end, higher end), merged with EdgeGroups'
+  // edges, which come in that order.
+  std::vector<std::pair<std::uint64_t, std::size_t>> queries(k);
+  for (std::size_t i = 0; i < k; ++i) {
+    const auto a = static_cast<std::uint32_t>(std::min(pairs[2 * i], pairs[2 * i + 1]));
+    const auto b = static_cast<std::uint32_t>(std::max(pairs[2 * i], pairs[2 * i + 1]));
+    queries[i] = {static_cast<std::uint64_t>(a) << 32 | b, i};
+  }
+  std::sort(queries.begin(), queries.end());
+  std::vector<std::int32_t> out(k, -1);
+  std::size_t q = 0;
+  const auto visit = [&](std::int32_t a, std::int32_t b, const std::int32_t* hs, std::int32_t) {
+    const std::uint64_t key = static_cast<std::uint64_t>(static_cast<std::uint32_t>(a)) << 32 | static_cast<std::uint32_t>(b);
+    while (q < k && queries[q].first < key) ++q;
+    for (; q < k && queries[q].first == key; ++q) out[queries[q].second] = hs[0];
+  };
+  if (all_triangles_) {
+    detail::EdgeGroups(detail::FaceArrays::triangles(n_faces_).over(face_indices_.data()), n_vertices_).for_each(visit);
+  } else {
+    const std::vector<std::int32_t> corner_face = detail::corner_faces(face_offsets_);
+    const detail::FaceList fl{face_indices_.data(), face_offsets_.data(), corner_face.data(), n_faces_};
+    detail::EdgeGroups(fl, n_vertices_).for_each(visit);
+  }
+  return out;
+}
+
 const std::vector<std::int32_t>& Topology::faces() const {
   if (!all_triangles_)
     throw std::logic_error("sorpia::Topology::faces: the mesh has faces that are not triangles (use face_indices)");

@@ -29,6 +29,7 @@
 #include "sorpia/interrupt.hpp"
 #include "sorpia/limit.hpp"
 #include "sorpia/limit_operator.hpp"
+#include "sorpia/subface_grid.hpp"
 
 namespace sorpia {
 
@@ -43,6 +44,16 @@ namespace Sdc = OpenSubdiv::Sdc;
 using ThreadedCache = Bfr::SurfaceFactoryCacheThreaded<std::shared_mutex, std::shared_lock<std::shared_mutex>,
                                                        std::unique_lock<std::shared_mutex>>;
 using SurfaceFactory = Bfr::RefinerSurfaceFactory<ThreadedCache>;
+
+// OpenSubdiv before 3.6.1 (its pull request 1353): Bfr builds the irregular
+// patch of a face with a corner at an interior vertex of two faces (where the
+// control hull folds over itself) from the face's own mesh indices, which
+// vertices repeat around the face, but caches it under the face's topology
+// alone; a later face of the same topology whose indices repeat differently
+// gets that patch, wrong for it (measured: corners of such faces 1e-2 of the
+// diagonal off B V on quad_irregular(1200) with 20 of its quads split). Such
+// faces are built by a factory without a cache (BfrSurfaces).
+constexpr bool kBfrCachesFoldedPatchesWrongly = OPENSUBDIV_VERSION_NUMBER < 30601;
 
 using detail::Point3;
 
@@ -104,6 +115,60 @@ std::string face_words(Scheme scheme, double faces, int level) {
   return std::string(count) + " quads (k 4^(level-1) per k-sided face)";
 }
 
+// The Bfr surfaces of one limit surface's faces: from `cached` (one factory
+// whose cache shares irregular patches between faces of the same topology)
+// for every face but those Bfr must build on their own (see
+// kBfrCachesFoldedPatchesWrongly), which a factory without a cache builds,
+// each once, on first use (their patches depend only on the topology and
+// the rules, not on the vertices), kept here.
+class BfrSurfaces {
+ public:
+  BfrSurfaces(const Far::TopologyRefiner& refiner, const Topology& t, Bfr::SurfaceFactory::Options options)
+      : cached_(refiner, options) {
+    if (!kBfrCachesFoldedPatchesWrongly) return;
+    const auto& fi = t.face_indices();
+    std::int32_t n_alone = 0;
+    for (std::size_t f = 0; f < t.n_faces(); ++f) {
+      const std::int32_t o = t.face_offset(f);
+      bool alone = false;
+      for (std::int32_t i = 0; i < t.face_size(f); ++i) {
+        const auto v = static_cast<std::size_t>(fi[static_cast<std::size_t>(o + i)]);
+        alone = alone || (!t.is_boundary(v) && t.face_count(v) == 2);
+      }
+      if (!alone) continue;
+      if (slot_.empty()) slot_.assign(t.n_faces(), -1);
+      slot_[f] = n_alone++;
+    }
+    if (n_alone == 0) return;
+    options.EnableCaching(false);
+    uncached_ = std::make_unique<Bfr::RefinerSurfaceFactory<>>(refiner, options);
+    alone_.resize(static_cast<std::size_t>(n_alone));
+    built_ = std::make_unique<std::once_flag[]>(static_cast<std::size_t>(n_alone));
+    valid_.assign(static_cast<std::size_t>(n_alone), 0);
+  }
+
+  // Face `face`'s Bfr surface: `scratch` initialised by the shared factory,
+  // or the face's own, built on its first use (safe from several threads);
+  // null where Bfr cannot build it.
+  const Bfr::Surface<double>* get(int face, Bfr::Surface<double>& scratch) const {
+    const std::int32_t s = slot_.empty() ? -1 : slot_[static_cast<std::size_t>(face)];
+    if (s < 0) return cached_.InitVertexSurface(face, &scratch) ? &scratch : nullptr;
+    const auto k = static_cast<std::size_t>(s);
+    std::call_once(built_[k], [&] { valid_[k] = uncached_->InitVertexSurface(face, &alone_[k]) ? 1 : 0; });
+    return valid_[k] ? &alone_[k] : nullptr;
+  }
+  // A face's parameterisation (the same from either factory).
+  Bfr::Parameterization parameterization(int face) const { return cached_.GetFaceParameterization(face); }
+
+ private:
+  SurfaceFactory cached_;
+  std::vector<std::int32_t> slot_;  // per face: its place in alone_, or -1; empty when no face is alone
+  std::unique_ptr<Bfr::RefinerSurfaceFactory<>> uncached_;
+  mutable std::vector<Bfr::Surface<double>> alone_;
+  mutable std::unique_ptr<std::once_flag[]> built_;
+  mutable std::vector<std::uint8_t> valid_;  // written once, inside built_'s call_once
+};
+
 }  // namespace
 
 std::size_t tessellation_bytes(Scheme scheme, std::size_t n_vertices, std::size_t n_faces,
@@ -130,7 +195,7 @@ struct LimitSurface::Impl {
   Boundary boundary;
   Tags tags;
   detail::Refiner base;  // unrefined, with the tags: Bfr and the limit positions of control vertices
-  std::unique_ptr<SurfaceFactory> factory;
+  std::unique_ptr<BfrSurfaces> factory;
   std::vector<double> vertices;  // (n, 3), as given
   std::vector<Point3> points;    // referenced vertices in OpenSubdiv's order
   // Darts and Catmull-Clark's interior vertices of two faces
@@ -142,7 +207,7 @@ struct LimitSurface::Impl {
   std::vector<std::int32_t> exact_slot;
   std::vector<double> exact_points;  // (exact.vertices, 3)
   // Faces at a dart of two faces (an interior vertex of two faces with one
-  // infinitely sharp edge): OpenSubdiv's Bfr before 3.6.0 builds a wrong
+  // infinitely sharp edge): OpenSubdiv's Bfr before 3.6.1 builds a wrong
   // patch there and writes out of bounds (OpenSubdiv pull request 1336), so
   // evaluation refuses them (bfr_unsafe[f]: that vertex, or -1; empty when
   // there are none or OpenSubdiv is new enough).
@@ -174,7 +239,7 @@ struct LimitSurface::Impl {
       bool sharp = false;  // a dart: level-dependent with an infinitely sharp edge
       for (const int e : level0.GetVertexEdges(o)) sharp = sharp || level0.IsEdgeInfSharp(e);
       has_darts = has_darts || sharp;
-      if (!sharp || level0.GetVertexFaces(o).size() != 2 || OPENSUBDIV_VERSION_NUMBER >= 30600) continue;
+      if (!sharp || level0.GetVertexFaces(o).size() != 2 || OPENSUBDIV_VERSION_NUMBER >= 30601) continue;
       if (bfr_unsafe.empty()) bfr_unsafe.assign(t.n_faces(), -1);
       for (const int f : level0.GetVertexFaces(o)) bfr_unsafe[f] = v;
     }
@@ -182,18 +247,6 @@ struct LimitSurface::Impl {
 };
 
 namespace {
-
-// Columns w of the tiles of a face split into quad sub-faces: corner j lies
-// at (j mod w, j div w).
-int subface_columns(const Bfr::Parameterization& param) {
-  const int k = param.GetFaceSize();
-  double c[2];
-  for (int j = 1; j < k; ++j) {
-    param.GetVertexCoord(j, c);
-    if (c[1] > 0.0) return j;
-  }
-  return k;
-}
 
 std::string uv_str(double u, double v) { return "(" + std::to_string(u) + ", " + std::to_string(v) + ")"; }
 
@@ -224,7 +277,7 @@ void check_uv(const Bfr::Parameterization& param, std::size_t i, double& u, doub
       // w, j div w) (Bfr's GetVertexCoord(j)); the tile of (u, v) is the
       // corner at or below it, as Bfr's ConvertCoordToSubFace rounds.
       const int k = param.GetFaceSize();
-      const int w = subface_columns(param);
+      const int w = subface_columns(k);
       const double tile_u = std::floor(u + kUvSlack), tile_v = std::floor(v + kUvSlack);
       const double su = u - tile_u, sv = v - tile_v;
       const double j = tile_v * w + tile_u;
@@ -247,7 +300,7 @@ LimitSurface::LimitSurface(const Topology& topology, const double* vertices, Sch
   Bfr::SurfaceFactory::Options options;
   options.SetApproxLevelSmooth(impl_->has_darts ? kApproxLevelDarts : kApproxLevelSmooth);
   options.SetApproxLevelSharp(kApproxLevelSharp);
-  impl_->factory = std::make_unique<SurfaceFactory>(*impl_->base.refiner, options);
+  impl_->factory = std::make_unique<BfrSurfaces>(*impl_->base.refiner, impl_->topology, options);
   set_vertices(vertices);
 }
 
@@ -287,7 +340,7 @@ namespace {
 // thread count changes nothing in the results. The caller holds the
 // surface's lock.
 template <class Fn>
-void for_each_face_surface(const SurfaceFactory& factory, const std::int32_t* face_ids, std::size_t k, Fn fn) {
+void for_each_face_surface(const BfrSurfaces& factory, const std::int32_t* face_ids, std::size_t k, Fn fn) {
   // Group the points by face so that each face's surface is built once: a
   // counting sort by face (stable, linear; the ids are checked, >= 0).
   std::int32_t max_face = -1;
@@ -325,11 +378,12 @@ void for_each_face_surface(const SurfaceFactory& factory, const std::int32_t* fa
       if (first >= n_groups) break;
       for (std::ptrdiff_t g = first; g < std::min(n_groups, first + kFacesPerChunk); ++g) {
         const int face = face_ids[order[group_start[g]]];
-        if (!factory.InitVertexSurface(face, &surface)) {
+        const Bfr::Surface<double>* built = factory.get(face, surface);
+        if (!built) {
           failed_face = face;
           continue;
         }
-        fn(surface, face, order.data() + group_start[g], order.data() + group_start[g + 1]);
+        fn(*built, face, order.data() + group_start[g], order.data() + group_start[g + 1]);
       }
     }
   });
@@ -340,7 +394,7 @@ void for_each_face_surface(const SurfaceFactory& factory, const std::int32_t* fa
 // Bfr evaluation of k checked points (face_ids[i], params[2i..2i+1]) of the
 // surface whose control points (in OpenSubdiv's order) are `mesh_points`;
 // derivative outputs may be null. The caller holds the surface's lock.
-void evaluate_points(const SurfaceFactory& factory, const double* mesh_points, const std::int32_t* face_ids,
+void evaluate_points(const BfrSurfaces& factory, const double* mesh_points, const std::int32_t* face_ids,
                      const double* params, std::size_t k, double* positions, double* du, double* dv,
                      double* normals) {
   const bool want_derivs = du || dv || normals;
@@ -436,7 +490,7 @@ void LimitSurface::visit_faces(const std::int32_t* face_ids, std::size_t k,
 std::vector<double> LimitSurface::checked_params(const std::int32_t* face_ids, const double* uv,
                                                  std::size_t k) const {
   const std::size_t n_f = n_faces();
-  const SurfaceFactory& factory = *impl_->factory;
+  const BfrSurfaces& factory = *impl_->factory;
   const auto& level0 = impl_->base.refiner->GetLevel(0);
   std::vector<double> params(uv, uv + 2 * k);
   for (std::size_t i = 0; i < k; ++i) {
@@ -451,9 +505,9 @@ std::vector<double> LimitSurface::checked_params(const std::int32_t* face_ids, c
       throw MeshError("face_ids[" + std::to_string(i) + "] = " + std::to_string(f) + " is at vertex " +
                       std::to_string(impl_->bfr_unsafe[f]) +
                       ", an interior vertex of two faces with one infinitely sharp edge, where OpenSubdiv's Bfr "
-                      "before 3.6.0 (this build has " + std::to_string(OPENSUBDIV_VERSION_NUMBER) +
+                      "before 3.6.1 (this build has " + std::to_string(OPENSUBDIV_VERSION_NUMBER) +
                       ") evaluates no valid surface: remove that sharp edge, or split the vertex's faces");
-    check_uv(factory.GetFaceParameterization(f), i, params[2 * i], params[2 * i + 1]);
+    check_uv(factory.parameterization(f), i, params[2 * i], params[2 * i + 1]);
   }
   return params;
 }
@@ -464,7 +518,7 @@ std::vector<std::int32_t> LimitSurface::exact_corners(const std::int32_t* face_i
   if (impl_->exact.vertices.empty()) return slots;
   slots.assign(k, -1);
   const Topology& t = impl_->topology;
-  const SurfaceFactory& factory = *impl_->factory;
+  const BfrSurfaces& factory = *impl_->factory;
   for (std::size_t i = 0; i < k; ++i) {
     const std::int32_t f = face_ids[i];
     const std::int32_t* fv = t.face_indices().data() + t.face_offset(f);
@@ -472,7 +526,7 @@ std::vector<std::int32_t> LimitSurface::exact_corners(const std::int32_t* face_i
       const std::int32_t slot = impl_->exact_slot[fv[j]];
       if (slot < 0) continue;
       double corner[2];
-      factory.GetFaceParameterization(f).GetVertexCoord(j, corner);
+      factory.parameterization(f).GetVertexCoord(j, corner);
       if (corner[0] == params[2 * i] && corner[1] == params[2 * i + 1]) slots[i] = slot;
     }
   }
@@ -644,13 +698,13 @@ namespace {
 // covers the part of its parent at the parent's corner j (Far's
 // QuadRefinement and TriRefinement), an affine image of the child's own
 // domain; every coordinate is dyadic, so the result is exact.
-void refined_corner_uv(const Far::TopologyRefiner& refiner, const SurfaceFactory& factory, int level, int face,
+void refined_corner_uv(const Far::TopologyRefiner& refiner, const BfrSurfaces& factory, int level, int face,
                        int corner, int* control_face, double uv[2]) {
   const bool tri = refiner.GetSchemeType() == Sdc::SCHEME_LOOP;
   static constexpr double kSquare[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
   static constexpr double kTriangle[3][2] = {{0, 0}, {1, 0}, {0, 1}};
   if (level == 0) {
-    factory.GetFaceParameterization(face).GetVertexCoord(corner, uv);
+    factory.parameterization(face).GetVertexCoord(corner, uv);
     *control_face = face;
     return;
   }
@@ -694,7 +748,7 @@ void refined_corner_uv(const Far::TopologyRefiner& refiner, const SurfaceFactory
     } else {
       // Child j of a k-gon (k != 4) is sub-face j, corner j first.
       double x[2];
-      factory.GetFaceParameterization(parent).GetVertexCoord(j, x);
+      factory.parameterization(parent).GetVertexCoord(j, x);
       set(a, x[0], x[1]);
       set(b, x[0] + 0.5, x[1]);
       set(d, x[0], x[1] + 0.5);

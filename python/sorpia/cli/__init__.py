@@ -27,6 +27,7 @@ import sys
 import threading
 import warnings
 
+from ..errors import SorpiaWarning
 from . import progress as _progress
 from .common import EXIT_INTERRUPTED, EXIT_OK, EXIT_TERMINATED, EXIT_USAGE, UserError, warn_once
 from .parser import build_parser
@@ -123,7 +124,9 @@ def main(argv: list[str] | None = None) -> int:
     # Two levels: an interrupt can arrive while an error is being reported
     # (Ctrl-C during a read that then fails); the outer one catches it there too.
     try:
-        with _sigterm_raises(), _printable_names():
+        with _sigterm_raises(), _printable_names(), warnings.catch_warnings():
+            # sorpia's warnings are the command's to print (warn_once), whatever filter the caller set
+            warnings.simplefilter("always", SorpiaWarning)
             try:
                 return args.func(args)
             except UserError as exc:

@@ -8,11 +8,13 @@ import warnings
 
 import numpy as np
 
-from .. import __version__
-from .common import (EXIT_OK, SCHEME_LABELS, UserError, check_mesh_suffix, check_paths, fmt_seconds, is_triangles,
-                     read_input, report_warnings, solve_tags, tags_summary, warn_once)
-from .output import write_json
+from .. import DecimationWarning, MeshError, __version__, approximate, decimate, limit_surface
+from .._nonmanifold import NONMANIFOLD_HINT, REPAIR_HINT
+from .._validate import DEFAULT_BOUNDARY, resolve_scheme
 from ..approximate import DEFAULT_FAIRNESS, DEFAULT_TOL
+from .common import (EXIT_OK, SCHEME_LABELS, UserError, check_mesh_suffix, choose_scheme, fmt_seconds, is_triangles,
+                     read_input, report_warnings, solve_tags, tags_lines, tags_summary, warn_once)
+from .output import check_float32_outputs, check_outputs, write_control_mesh, write_json, write_surface
 from .progress import Progress
 
 # The data of an input mesh with faces when --sampling is not given (measured in docs/approximation.md).
@@ -20,68 +22,89 @@ DEFAULT_SAMPLING = "vertices"
 
 
 def _cage(input_mesh, vertices, cage, scheme, sharp_angle, source, progress):
-    """The cage to fit: (vertices, faces, tags, scheme, how it was made). --cage: read (its tags kept, with
-    --sharp-angle's creases added); --vertices N: the input mesh decimated (sorpia.decimate). Where the guards stop
-    decimation above N, the cage it reached is fitted: a warning says so, and how it was made records why
-    ("stopped")."""
+    """The cage to fit: (vertices, faces, tags, scheme, boundary rule of its file or None, how it was made).
+    --cage: read (its tags and scheme kept, with --sharp-angle's creases added); --vertices N: the input mesh
+    decimated (sorpia.decimate). Where the guards stop decimation above N, the cage it reached is fitted: a
+    warning says so, and how it was made records why ("stopped")."""
     if cage is not None:
         progress.status(f"reading {cage}")
         mesh = read_input(cage)
         if len(mesh.faces) == 0:
             raise UserError(f"--cage {cage} has no faces: a cage is a mesh of triangles, quads or polygons")
+        scheme = choose_scheme(scheme, mesh.faces, cage, mesh.tags.get("scheme"))
         tags = solve_tags(mesh, sharp_angle, cage)
-        if scheme == "auto":
-            scheme = "loop" if is_triangles(mesh.faces) else "catmull-clark"
-        return mesh.vertices, mesh.faces, tags, scheme, {"from": "file", "path": str(cage)}
-    from .. import DecimationWarning, decimate
-
+        return (mesh.vertices, mesh.faces, tags, scheme, mesh.tags.get("boundary"),
+                {"from": "file", "path": str(cage)})
     if len(input_mesh.faces) == 0:
         raise UserError(f"{source} is a point cloud (no faces): --vertices decimates a mesh's faces; give the "
                         "cage with --cage CAGE")
     if not is_triangles(input_mesh.faces):
-        raise UserError(f"{source}: --vertices decimates triangle meshes and this one has other faces; "
-                        "give the cage with --cage CAGE")
+        raise UserError(f"{source}: --vertices decimates triangle meshes and this one has other faces: pass "
+                        "--triangulate to split them (the data points stay the mesh's vertices), or give the cage "
+                        "with --cage CAGE")
     n_referenced = len(np.unique(np.asarray(input_mesh.faces).reshape(-1)))
-    scheme = "loop" if scheme == "auto" else scheme
+    scheme = resolve_scheme(scheme, input_mesh.faces)  # triangles: auto is Loop
     progress.status(f"decimating to {vertices} vertices")
     t0 = time.perf_counter()
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        made = decimate(input_mesh.vertices, input_mesh.faces, vertices, scheme=scheme, sharp_angle=sharp_angle,
-                        strict=False)
+        try:
+            made = decimate(input_mesh.vertices, input_mesh.faces, vertices, scheme=scheme,
+                            sharp_angle=sharp_angle, strict=False)
+        except MeshError as exc:
+            raise UserError(f"{source}: cannot decimate this mesh: {_without_hints(str(exc))}; repair it first "
+                            f"(sorpia repair {source} -o repaired.obj)") from None
     stopped = next((str(w.message) for w in caught if issubclass(w.category, DecimationWarning)), None)
     if stopped is not None:
         caught = [w for w in caught if not issubclass(w.category, DecimationWarning)]
         warn_once(f"{stopped}; fitting the cage of {len(made.vertices)} vertices it reached")
     report_warnings(caught)
     tags = {"creases": made.creases} if made.creases is not None and len(made.creases[0]) else {}
-    return made.vertices, made.faces, tags, scheme, {"from": "decimation", "vertices_asked": vertices,
-                                                     "mesh_vertices": n_referenced, "stopped": stopped,
-                                                     "seconds": time.perf_counter() - t0}
+    return made.vertices, made.faces, tags, scheme, None, {
+        "from": "decimation", "vertices_asked": vertices, "mesh_vertices": n_referenced, "stopped": stopped,
+        "seconds": time.perf_counter() - t0}
+
+
+def _without_hints(message: str) -> str:
+    """A library refusal without its ways out that name options of other commands (--repair, --nonmanifold)."""
+    for hint in (NONMANIFOLD_HINT, REPAIR_HINT):
+        message = message.replace("; " + hint, "").replace(": " + hint, "").replace(hint, "")
+    return message.rstrip(" ;:,")
+
+
+def _cage_refusal(exc: MeshError, origin: dict, source) -> UserError:
+    """A cage the library refuses, named as approximate's user knows it: the --cage file, or the cage decimated
+    from the input (whose indices are the cage's, not the input's), with approximate's own way out."""
+    text = _without_hints(str(exc))
+    if origin["from"] == "file":
+        path = origin["path"]
+        return UserError(f"--cage {path}: the cage cannot be fitted: {text}; sorpia repair {path} -o repaired.obj "
+                         "makes a cage valid without moving a vertex")
+    return UserError(f"the cage decimated from {source} ({origin.get('vertices_asked')} vertices asked; indices "
+                     f"are the cage's) cannot be fitted: {text}; give a cage with --cage CAGE, or another "
+                     "--vertices")
 
 
 def run_approximate(input_path, output, *, vertices=None, cage=None, scheme="auto", sharp_angle=None, report=None,
                     surface=None, level=3, iterations=10, tol=DEFAULT_TOL, fairness=DEFAULT_FAIRNESS, tangential=None,
-                    method="cg", boundary=None, sampling=None, quiet=False, force=False, out=None) -> tuple[int, dict]:
+                    method="cg", boundary=None, sampling=None, quiet=False, force=False, out=None, prim=None,
+                    triangulate=False) -> tuple[int, dict]:
     """`sorpia approximate`: returns (exit code, report dict). Every output
     is checked before the work and written atomically after it; an error
-    leaves none of them."""
-    from .. import approximate, limit_surface, write_mesh
-    from .._validate import DEFAULT_BOUNDARY
-
+    leaves none of them. The cage is written with its scheme, boundary rule
+    and tags where the format holds them (a warning where it does not).
+    `prim`: the USD input's mesh prim; `triangulate`: the input's polygons
+    split into triangles (for --vertices)."""
     out = out if out is not None else sys.stdout
     if (vertices is None) == (cage is None):
         raise UserError("give the cage: --vertices N (decimate the input) or --cage CAGE (a mesh file), one of them")
-    check_mesh_suffix("-o", output)
-    check_mesh_suffix("--surface", surface)
     check_mesh_suffix("--cage", cage)
-    check_paths([p for p in (input_path, cage) if p is not None],
-                {"-o": output, "--surface": surface, "--report": report}, force)
+    check_outputs([p for p in (input_path, cage) if p is not None], output, surface, report, force=force)
     timings = {}
     with Progress("approximate", enabled=not quiet) as progress:
         progress.status(f"reading {input_path}")
         t0 = time.perf_counter()
-        mesh = read_input(input_path, tags=False, points=True)
+        mesh = read_input(input_path, triangulate=triangulate, tags=False, points=True, prim=prim)
         timings["read"] = time.perf_counter() - t0
         points = mesh.vertices
         if sampling not in (None, "vertices") and len(mesh.faces) == 0:
@@ -89,23 +112,26 @@ def run_approximate(input_path, output, *, vertices=None, cage=None, scheme="aut
                             "its points are the data as they are")
         sampling = sampling or (DEFAULT_SAMPLING if len(mesh.faces) else "vertices")
         surface_data = {} if sampling == "vertices" else {"faces": mesh.faces, "sampling": sampling}
+        check_float32_outputs(points, {"-o": output, "--surface": surface})
         t0 = time.perf_counter()
-        cage_v, cage_f, tags, scheme, origin = _cage(mesh, vertices, cage, scheme, sharp_angle, input_path, progress)
+        cage_v, cage_f, tags, scheme, file_rule, origin = _cage(mesh, vertices, cage, scheme, sharp_angle,
+                                                                input_path, progress)
         timings["cage"] = time.perf_counter() - t0
-        rule = boundary if boundary is not None else DEFAULT_BOUNDARY
+        check_float32_outputs(cage_v, {"-o": output, "--surface": surface})
+        rule = boundary if boundary is not None else file_rule if file_rule is not None else DEFAULT_BOUNDARY
 
         def on_iteration(rec):
-            if quiet:
-                return
-            text = (f"approximate: iteration {rec['iteration']}, RMS {rec['rms']:.3g} ({rec['rms_relative']:.3g} of "
-                    f"the diagonal), max {rec['max']:.3g}, {rec['seconds']:.1f} s")
-            progress.status(text)
+            progress.note(f"approximate: iteration {rec['iteration']}, RMS {rec['rms_relative']:.3g} of the "
+                          f"diagonal, max {rec['max_relative']:.3g}, {rec['seconds']:.1f} s")
 
         progress.status("footpoints")
         t0 = time.perf_counter()
-        res = approximate(points, cage_v, cage_f, scheme=scheme, boundary=rule, iterations=iterations, tol=tol,
-                          fairness=fairness, tangential=tangential, method=method, callback=on_iteration,
-                          **surface_data, **tags)
+        try:
+            res = approximate(points, cage_v, cage_f, scheme=scheme, boundary=rule, iterations=iterations, tol=tol,
+                              fairness=fairness, tangential=tangential, method=method, callback=on_iteration,
+                              **surface_data, **tags)
+        except MeshError as exc:  # the data were read and checked: what is refused is the cage
+            raise _cage_refusal(exc, origin, input_path) from None
         timings["approximate"] = time.perf_counter() - t0
         t0 = time.perf_counter()
         surface_stats = None
@@ -114,17 +140,19 @@ def run_approximate(input_path, output, *, vertices=None, cage=None, scheme="aut
             Vs, Fs = limit_surface(res.control_vertices, cage_f, level=level, boundary=rule, scheme=scheme, **tags)
             surface_stats = {"path": str(surface), "level": level, "vertices": len(Vs), "faces": len(Fs)}
         progress.status(f"writing {output}")
-        # OBJ keeps the tags and the boundary rule the cage was fitted with, so that it can be refitted.
-        obj = str(output).lower().endswith(".obj")
-        write_mesh(output, res.control_vertices, cage_f, **(dict(tags, boundary=rule) if obj else {}))
+        # The cage keeps its scheme, boundary rule and tags where the format holds them, so that it can be refitted.
+        written = write_control_mesh(output, res.control_vertices, cage_f, scheme=scheme, boundary=rule, tags=tags)
         if surface is not None:
-            write_mesh(surface, Vs, Fs)
+            write_surface(surface, Vs, Fs)
         timings["write"] = time.perf_counter() - t0
     data = {"sorpia_version": __version__, "command": "approximate", "input": str(input_path),
             "input_points": int(len(points)), "sampling": sampling, "output": str(output),
             "cage": {**origin, "vertices": int(len(cage_v)), "faces": int(len(cage_f))},
-            "scheme": scheme, "boundary": rule, "tags": {"sharp_angle": sharp_angle, **tags_summary(tags)},
+            "scheme": scheme, "boundary": rule,
+            "tags": {"sharp_angle": sharp_angle, **tags_summary(tags), "written_to_output": list(written.written)},
             "surface": surface_stats, "report": None if report is None else str(report), **res.report(),
+            # the cage as read back from the file against the fitted one (USD stores float32): 0 for OBJ, OFF, PLY
+            "written_max_change": float(np.abs(written.vertices - res.control_vertices).max(initial=0.0)),
             "timings": {**timings, **{f"approximate.{k}": v for k, v in res.timings.items() if k != "cpu"}},
             "cpu_seconds": res.timings["cpu"]}
     if report is not None:
@@ -134,8 +162,17 @@ def run_approximate(input_path, output, *, vertices=None, cage=None, scheme="aut
     return EXIT_OK, data
 
 
+def _distances(rec: dict, prefix: str = "") -> str:
+    """'RMS a, max b of the diagonal (RMS c, max d model units)' for a history record's distances."""
+    r, m = rec[f"{prefix}rms"], rec[f"{prefix}max"]
+    return (f"RMS {rec[f'{prefix}rms_relative']:.3g}, max {rec[f'{prefix}max_relative']:.3g} of the diagonal "
+            f"(RMS {r:.4g}, max {m:.4g} model units)")
+
+
 def approximate_summary(d: dict) -> str:
-    """The summary `sorpia approximate` prints."""
+    """The summary `sorpia approximate` prints: every distance in model units and as a fraction of the data's
+    bounding-box diagonal; the cage as given beside it, or "unchanged" when no update lowered its RMS distance
+    (the cage written is the one given)."""
     f, first = d["final"], d["history"][0]
     made = (f"read from {d['cage']['path']}" if d["cage"]["from"] == "file" else
             f"decimated from {d['cage']['mesh_vertices']} vertices" +
@@ -147,20 +184,25 @@ def approximate_summary(d: dict) -> str:
                        for k, v in t.items() if "." not in k)
     written = [d["output"]] + ([d["surface"]["path"]] if d["surface"] else []) + ([d["report"]] if d["report"] else [])
     state = {"converged": "stopped: the RMS distance no longer fell by --tol", "exact": "stopped: the data lie on "
-             "the surface to rounding", "iterations": "stopped at --iterations"}[d["stop_reason"]]
+             "the surface to rounding", "max_iter": "stopped at --iterations"}[d["stop_reason"]]
+    given = ("unchanged: no update lowered the RMS distance of the cage as given (best iteration 0), which is "
+             "written" if d["best_iteration"] == 0 else
+             f"the cage as given: RMS {first['rms_relative']:.3g}, max {first['max_relative']:.3g} of the diagonal")
+    tag_lines = tags_lines(d["tags"])
     return "\n".join([
         f"sorpia approximate: {d['input']} -> {d['output']}",
-        f"  data        {d['input_points']} points, bounding-box diagonal {d['diagonal']:.4g}; " + (
+        f"  data        {d['input_points']} points, bounding-box diagonal {d['diagonal']:.4g} model units; " + (
             "the points, equally weighted" if d["sampling"] == "vertices" else
             f"the surface: {d['n_points']} samples ({d['sampling']}), RMS distances per area"),
         f"  cage        {d['cage']['vertices']} vertices, {d['cage']['faces']} faces, {made}",
         f"  scheme      {SCHEME_LABELS[d['scheme']]}, boundary {d['boundary']}",
+        *(f"  {'tags' if j == 0 else '':<12}{line}" for j, line in enumerate(tag_lines)),
         f"  update      {d['method']}, {d['iterations']} iterations ({state})",
-        f"  data->surf  RMS {f['rms']:.4g} ({f['rms_relative']:.3g} of the diagonal), max {f['max']:.4g} "
-        f"({f['max_relative']:.3g}); the cage as given: RMS {first['rms_relative']:.3g}, max "
-        f"{first['max_relative']:.3g}",
-        f"  surf->data  RMS {f['surface_rms']:.4g} ({f['surface_rms_relative']:.3g}), max {f['surface_max']:.4g} "
-        f"({f['surface_max_relative']:.3g})",
+        f"  data->surf  {_distances(f)}; {given}",
+        f"  surf->data  {_distances(f, 'surface_')}",
         f"  seconds     {phases}",
-        f"  wrote       {', '.join(written)}",
+        f"  wrote       {', '.join(written)}" + (
+            f" (the cage as written, read back, moved by at most {d['written_max_change']:.3g} model units, "
+            f"{d['written_max_change'] / (d['diagonal'] or 1.0):.3g} of the diagonal: USD stores float32)"
+            if d["written_max_change"] else ""),
     ])

@@ -3,6 +3,7 @@ files, solver options, the timed solve and the printed warnings."""
 
 from __future__ import annotations
 
+import inspect
 import os
 import sys
 import time
@@ -12,11 +13,31 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .._validate import AUTO_SCHEME, SCHEMES
+from .. import (Interpolator, MeshError, MeshFileError, ParameterError, _core, fair_interpolate, interpolate,
+                sharp_edges)
+from .. import repair as repair_mesh
+from .._meshdata import carry_attributes, merge_sharpness
+from .._nonmanifold import split
+from .._plotting import require_matplotlib
+from .._repair import describe_changes
+from .._usd import is_usd
+from .._validate import AUTO_SCHEME, DEFAULT_BOUNDARY, SCHEMES, resolve_scheme
+from ..io import read_mesh_file
 from ..solve import METHODS, THREADED_METHODS, ConvergenceWarning  # ConvergenceWarning: the summary says it
+from ..solve import check_options
 from . import progress as _progress
 
 EXIT_OK, EXIT_NOT_CONVERGED, EXIT_USAGE, EXIT_INTERRUPTED, EXIT_TERMINATED = 0, 1, 2, 130, 143
+
+
+def _defaults(function, names) -> dict:
+    return {name: p.default for name, p in inspect.signature(function).parameters.items() if name in names}
+
+
+# The library's own defaults, which the commands use where an option is not given (--tol and --max-iter of
+# fit, compare and render: sorpia.interpolate's; with --fair: sorpia.fair_interpolate's).
+FIT_DEFAULTS = _defaults(interpolate, ("tol", "max_iter"))
+FAIR_DEFAULTS = _defaults(fair_interpolate, ("tol", "max_iter", "levels", "membrane"))
 
 # The paper's names (Table 1) for the methods it compares, and ours for the
 # rest; compare's rows and the help list the methods in this order.
@@ -46,6 +67,7 @@ class PolygonError(UserError):
 
 # --------------------------------------------------------------------------- paths and files
 
+
 def _same_file(a, b) -> bool:
     a, b = Path(a), Path(b)
     if a.resolve() == b.resolve():
@@ -62,8 +84,6 @@ def check_paths(inputs, outputs: dict, force: bool = False) -> None:
     atomic writer could not start on (a folder not writable, a name too long
     for its folder: sorpia::check_writable); before any work is done, so a
     long fit never ends in 'cannot write'."""
-    from .. import MeshFileError, _core
-
     named = [(opt, p) for opt, p in outputs.items() if p is not None]
     for opt, p in named:
         folder = Path(p).parent
@@ -87,8 +107,6 @@ def usd_template(input_path, output, prim) -> dict:
     """write_mesh's keywords for a USD output of a USD input: the input's stage
     as the template, the mesh written into its prim (`prim`, --prim); {}
     otherwise."""
-    from .._usd import is_usd
-
     return {"template": input_path, "prim": prim} if is_usd(output) and is_usd(input_path) else {}
 
 
@@ -131,9 +149,6 @@ def read_input(path, triangulate: bool = False, repair: bool = False, tags: bool
     (carry_attributes); `prim`: a USD file's mesh prim (--prim); `points`: a
     file without faces (a point cloud) is read too. A USD mesh's
     subdivisionScheme is in `tags` as "scheme" (choose_scheme)."""
-    from .._usd import is_usd
-    from ..io import read_mesh_file
-
     if not Path(path).exists():
         raise UserError(f"{path}: no such file")
     if Path(path).is_dir():
@@ -157,31 +172,6 @@ def read_input(path, triangulate: bool = False, repair: bool = False, tags: bool
     return split_input(mesh, path, boundary_rule(boundary, mesh)) if nonmanifold == "sharp" else mesh
 
 
-def carry_attributes(attributes: dict, faces, n_vertices: int, new_faces, vertex_map, face_map) -> dict:
-    """Face-varying attributes (sorpia.FaceVarying per name) of `faces` onto
-    `new_faces`, whose face f is input face face_map[f] (None: the same face)
-    with vertex v a copy of input vertex vertex_map[v], its corners in any
-    order: each corner takes the value of its input face's corner at the same
-    input vertex."""
-    from .._validate import as_polygons
-    from ..io import FaceVarying
-
-    if not attributes:
-        return {}
-    vertex_map = np.asarray(vertex_map, dtype=np.int64)
-    counts, indices = as_polygons(faces, n_vertices)
-    new_counts, new_indices = as_polygons(new_faces, len(vertex_map))
-    face_map = np.arange(len(new_counts)) if face_map is None else np.asarray(face_map, dtype=np.int64)
-    keys = np.repeat(np.arange(len(counts), dtype=np.int64), counts) * n_vertices + indices
-    order = np.argsort(keys, kind="stable")
-    new_keys = np.repeat(face_map, new_counts) * n_vertices + vertex_map[new_indices]
-    corner = order[np.minimum(np.searchsorted(keys[order], new_keys), len(keys) - 1)]
-    if not np.array_equal(keys[corner], new_keys):  # a contract of repair and split, checked
-        raise AssertionError("carry_attributes: a new corner has no input corner at its vertex")
-    return {name: FaceVarying(channel.values, np.ascontiguousarray(channel.indices[corner]))
-            for name, channel in attributes.items()}
-
-
 def sharpness_tags(tags: dict) -> dict:
     """The creases, corners and holes of a file's tags (without its boundary rule)."""
     return {k: v for k, v in tags.items() if k in ("creases", "corners", "holes")}
@@ -192,9 +182,6 @@ def split_input(mesh: InputMesh, source, boundary: str) -> InputMesh:
     with OpenSubdiv's rules as corner and crease tags (sorpia._nonmanifold.split under the
     `boundary` rule; its NonmanifoldWarning is printed); what the split
     cannot reproduce is a UserError naming the file `source`."""
-    from .. import MeshError
-    from .._nonmanifold import split
-
     try:
         s = split(mesh.faces, len(mesh.vertices), boundary, **sharpness_tags(mesh.tags))
     except MeshError as exc:
@@ -254,14 +241,8 @@ def choose_scheme(scheme: str, faces, source, file_scheme=None) -> str:
     an all-triangle mesh and Catmull-Clark otherwise; Loop on polygons is a
     PolygonError naming the first face that is not a triangle and the two
     ways out."""
-    from .. import _core
-    from .._usd import is_usd
-    from .._validate import as_scheme
-
     scheme_asked = scheme
-    if scheme == AUTO_SCHEME and file_scheme is not None:
-        scheme = file_scheme
-
+    scheme = resolve_scheme(scheme, faces, file_scheme)  # the library's one rule
     if scheme == "loop" and not is_triangles(faces):
         counts = face_counts(faces)
         f = int(np.flatnonzero(counts != 3)[0])
@@ -271,16 +252,14 @@ def choose_scheme(scheme: str, faces, source, file_scheme=None) -> str:
                 "auto) to keep them")
         raise PolygonError(f"{source}: face {f} has {counts[f]} vertices and Loop subdivision needs triangles"
                            f"{' (' + given + ')' if given else ''}; {ways}")
-    return _core.scheme_name(as_scheme(scheme, faces))  # auto: the library's one rule
+    return scheme
 
 
 def solve_tags(mesh: InputMesh, sharp_angle, source) -> dict:
     """The creases, corners and holes a command solves with: the file's tags,
     and with --sharp-angle every edge sharper than it as an infinitely sharp
-    crease (sorpia.sharp_edges; an edge the file already tags takes the
-    larger sharpness)."""
-    from .. import MeshError, _core, sharp_edges
-
+    crease (sorpia.sharp_edges; an edge the file already tags is infinitely
+    sharp too: the last sharpness given counts, OpenSubdiv's rule)."""
     tags = {k: v for k, v in mesh.tags.items() if k in ("creases", "corners", "holes")}
     if sharp_angle is None:
         return tags
@@ -288,18 +267,9 @@ def solve_tags(mesh: InputMesh, sharp_angle, source) -> dict:
         edges = sharp_edges(mesh.vertices, mesh.faces, sharp_angle)
     except MeshError as exc:
         raise UserError(f"{source}: --sharp-angle: {exc}") from None
-    sharpness = np.full(len(edges), _core.INFINITE_SHARPNESS)
-    if "creases" in tags:
-        old_edges, old_sharpness = tags["creases"]
-        edges = np.vstack([np.sort(old_edges, axis=1), edges])
-        sharpness = np.concatenate([np.asarray(old_sharpness, dtype=float), sharpness])
-        # One row per edge, the largest sharpness of its tags (sorted by sharpness, the last of each edge kept).
-        order = np.lexsort((sharpness, edges[:, 1], edges[:, 0]))
-        edges, sharpness = edges[order], sharpness[order]
-        last = np.ones(len(edges), dtype=bool)
-        last[:-1] = (edges[1:] != edges[:-1]).any(axis=1)
-        edges, sharpness = edges[last], sharpness[last]
-    tags["creases"] = (np.ascontiguousarray(edges, dtype=np.int32), sharpness)
+    # After the file's creases: an edge both tag counts with the infinite sharpness (the library's one rule,
+    # sorpia._meshdata.merge_sharpness: the last one given).
+    tags["creases"] = merge_sharpness(tags.get("creases"), (edges, _core.INFINITE_SHARPNESS))
     return tags
 
 
@@ -318,8 +288,6 @@ def read_solve_input(path, *, triangulate: bool, repair: bool, ignore_tags: bool
 
 def boundary_rule(boundary, mesh: InputMesh) -> str:
     """--boundary when given, else the file's interpolateboundary tag, else the default rule."""
-    from .._validate import DEFAULT_BOUNDARY
-
     return boundary if boundary is not None else mesh.tags.get("boundary", DEFAULT_BOUNDARY)
 
 
@@ -327,8 +295,6 @@ def tags_summary(tags: dict) -> dict:
     """What a command reports of the tags it solved with: per kind the count,
     and for creases and corners how many are infinitely sharp, semi-sharp
     and smooth (0), with the histogram {sharpness: count}."""
-    from .. import _core
-
     out: dict = {}
     for kind in ("creases", "corners"):
         if kind not in tags:
@@ -364,10 +330,6 @@ def scheme_kwargs(scheme: str, tags: dict) -> dict:
     """The keyword arguments a solve takes for the scheme and tags: none for
     Loop (the library's default scheme), `scheme` otherwise, and the tags.
     A library without the argument asked for is a UserError saying so."""
-    import inspect
-
-    from .. import Interpolator
-
     kwargs = {**({} if scheme == "loop" else {"scheme": scheme}), **tags}
     missing = [k for k in ("scheme", "creases") if (k == "scheme" and "scheme" in kwargs or k == "creases" and tags)
                and k not in inspect.signature(Interpolator).parameters]
@@ -382,10 +344,8 @@ def repair_input(vertices, faces, source, tags=None):
     """sorpia.repair of a command's input, with its sharpness `tags` (a dict
     of creases, corners, holes); a mesh it refuses (no face left, an index
     out of range) is a UserError naming the file `source`."""
-    from .. import MeshError, repair
-
     try:
-        return repair(vertices, faces, **(tags or {}))
+        return repair_mesh(vertices, faces, **(tags or {}))
     except MeshError as exc:
         raise UserError(f"{source}: cannot repair this mesh: {exc}") from None
 
@@ -395,19 +355,15 @@ def repair_json(result) -> dict:
     change, with input indices), the vertex map (for every output vertex, the
     input vertex it copies) and the face map (for every output face, the input
     face it comes from; with --triangulate, a face of the triangulation)."""
-    return {"report": result.report, "vertex_map": result.vertex_map, "face_map": result.face_map}
+    return {"report": result.changes, "vertex_map": result.vertex_map, "face_map": result.face_map}
 
 
 def repair_lines(result) -> list[str]:
     """The repair's summary: one line per kind of change, or one saying there was none."""
-    from .._repair import describe_changes
-
-    return describe_changes(result.report) or ["nothing to repair: the mesh is valid"]
+    return describe_changes(result.changes) or ["nothing to repair: the mesh is valid"]
 
 
 def require_plotting() -> None:
-    from .._plotting import require_matplotlib
-
     try:
         require_matplotlib()
     except ImportError as exc:
@@ -416,13 +372,11 @@ def require_plotting() -> None:
 
 # --------------------------------------------------------------------------- solver options
 
+
 def check_solver_options(given: str, **options) -> None:
     """The library's own check of the solver options (sorpia.solve.check_options),
     before the file is read; its message follows the options as given
     on the command line (`given`, e.g. "--method pia --threads 2")."""
-    from .. import ParameterError
-    from ..solve import check_options
-
     try:
         check_options(**options)
     except ParameterError as exc:
@@ -435,6 +389,7 @@ def threads_for(method: str, threads: int) -> int:
 
 
 # --------------------------------------------------------------------------- timed solves
+
 
 def result_fields(res) -> dict:
     """Every field of an InterpolationResult except the control vertices
@@ -475,8 +430,6 @@ def timed(call, *, threads: int, source, scheme: str = "loop"):
     """call() with its wall and CPU seconds (Clock(threads)); the warnings it
     raised are printed (report_warnings). Returns (value, clock). A mesh the
     library refuses is a UserError naming the file `source` and the scheme."""
-    from .. import MeshError
-
     try:
         with warnings.catch_warnings(record=True) as caught, Clock(threads) as clock:
             warnings.simplefilter("always")
@@ -491,8 +444,6 @@ def build_interpolator(vertices, faces, *, boundary, progress, source, scheme="l
     """sorpia.Interpolator for the mesh, the scheme and the tags: the topology
     and limit operator B, built once for every solve, check and statistic of
     a command; prints its warnings; returns (interpolator, {"wall": s, "cpu": s})."""
-    from .. import Interpolator
-
     kwargs = scheme_kwargs(scheme, tags or {})
     progress.status("setting up (topology, limit operator)")
     interp, clock = timed(lambda: Interpolator(faces, len(vertices), boundary=boundary, **kwargs), threads=1,

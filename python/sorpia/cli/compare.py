@@ -11,7 +11,9 @@ from pathlib import Path
 import numpy as np
 
 from .. import __version__
-from .common import (DISPLAY_ORDER, EXIT_NOT_CONVERGED, EXIT_OK, OMEGA_METHODS, SCHEME_LABELS, UserError,
+from .._meshinfo import topology_info
+from .._plotting import convergence_figure
+from .common import (DISPLAY_ORDER, EXIT_NOT_CONVERGED, EXIT_OK, FIT_DEFAULTS, OMEGA_METHODS, SCHEME_LABELS, UserError,
                      build_interpolator, check_paths,
                      check_solver_options, cpu_clock, mesh_line, method_label, omega_text, read_solve_input,
                      repair_json, repair_lines, require_plotting, result_fields, run_solver, tags_lines, tags_summary,
@@ -39,7 +41,7 @@ def iterations_to_reach(errors, tolerances=TABLE_TOLERANCES) -> list:
     return out
 
 
-def run_compare(input_path, *, methods=DISPLAY_ORDER, omega="auto", tol=1e-10, max_iter=1000, boundary=None,
+def run_compare(input_path, *, methods=DISPLAY_ORDER, omega="auto", tol=None, max_iter=None, boundary=None,
                 table=None, csv_path=None, plot=None, json_path=None, quiet=False, force=False,
                 triangulate=False, threads=1, repair=False, scheme="auto", ignore_tags=False, sharp_angle=None,
                 nonmanifold="error", out=None, prim=None) -> tuple[int, dict]:
@@ -49,9 +51,9 @@ def run_compare(input_path, *, methods=DISPLAY_ORDER, omega="auto", tol=1e-10, m
     (and auto's sor run), `omega` to sor and auto. A method that refuses the
     mesh (wpia where B has an eigenvalue at or below 0) gets a row marked
     "refused" with its reason, and the others run."""
-    from .._meshinfo import topology_info
-
     out = out if out is not None else sys.stdout
+    tol = FIT_DEFAULTS["tol"] if tol is None else tol
+    max_iter = FIT_DEFAULTS["max_iter"] if max_iter is None else max_iter
     given = f"--methods {','.join(methods)}" + (f" --threads {threads}" if threads != 1 else "")
     for method in methods:
         check_solver_options(given, method=method, tol=tol, max_iter=max_iter, threads=threads_for(method, threads),
@@ -91,13 +93,13 @@ def run_compare(input_path, *, methods=DISPLAY_ORDER, omega="auto", tol=1e-10, m
                 "stop_reason": res.stop_reason,
                 "variant": res.variant,
                 "refused": None,
-                "reached": iterations_to_reach(res.errors),
+                "reached": iterations_to_reach(res.history),
                 "threads": n_threads,
                 "cpu_seconds": cpu,
                 "cpu_clock": cpu_clock(n_threads),
                 "wall_seconds": wall,
-                "errors": np.asarray(res.errors, dtype=float),
-                "result": {k: v for k, v in fields.items() if k != "errors"},
+                "history": np.asarray(res.history, dtype=float),
+                "result": {k: v for k, v in fields.items() if k != "history"},
             })
     data = {
         "sorpia_version": __version__,
@@ -126,9 +128,8 @@ def run_compare(input_path, *, methods=DISPLAY_ORDER, omega="auto", tol=1e-10, m
     if json_path is not None:
         write_json(json_path, data)
     if plot is not None:
-        from .._plotting import convergence_figure
 
-        curves = [(_curve_label(r), r["errors"]) for r in rows if r["refused"] is None]
+        curves = [(_curve_label(r), r["history"]) for r in rows if r["refused"] is None]
         save_figure(convergence_figure(curves, tol=tol, title=f"Convergence on {Path(input_path).name} "
                                        f"(paper Figure 7)"), plot)
     if not quiet:
@@ -157,7 +158,7 @@ def _refused_row(method: str, threads: int, reason: str) -> dict:
     return {"method": method, "label": method_label(method), "omega": None, "iterations": 0, "converged": False,
             "stop_reason": "refused", "variant": None, "refused": reason, "reached": [None] * len(TABLE_TOLERANCES),
             "threads": threads, "cpu_seconds": 0.0, "cpu_clock": cpu_clock(threads), "wall_seconds": 0.0,
-            "errors": np.zeros(0), "result": None}
+            "history": np.zeros(0), "result": None}
 
 
 def _curve_label(row) -> str:

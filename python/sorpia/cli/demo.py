@@ -1,4 +1,4 @@
-"""``sorpia demo``: fit, compare and render on a built-in sample mesh."""
+"""``sorpia demo``: every capability (interpolation, fair interpolation, approximation) on a built-in sample mesh."""
 
 from __future__ import annotations
 
@@ -8,11 +8,15 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import __version__
+from .. import __version__, decimate, read_mesh, shapes, write_mesh
+from .approximate import run_approximate
 from .common import UserError, require_plotting
 from .compare import run_compare
 from .fit import run_fit
 from .render import run_render
+
+# The demo's cage for approximation: the sample decimated to this many vertices.
+CAGE_VERTICES = 120
 
 
 def sample_mesh(scheme: str = "loop"):
@@ -22,8 +26,6 @@ def sample_mesh(scheme: str = "loop"):
     with its tube made wavy so that the limit surface visibly shrinks away
     from the vertices. Returns (vertices (n, 3) float64, faces (m, 3) or
     (m, 4) int32)."""
-    from .. import shapes
-
     if scheme == "catmull-clark":
         V, F = _quad_torus(24, 12)
     else:
@@ -63,10 +65,12 @@ def _new_demo_folder() -> Path:
 
 
 def run_demo(out_dir=None, *, quiet=False, scheme="auto", out=None) -> int:
-    """`sorpia demo`: fit, compare and render on the built-in sample mesh of
-    the scheme (auto: Loop's)."""
-    from .. import write_mesh
-
+    """`sorpia demo`: every capability on the built-in sample mesh of the
+    scheme (auto: Loop's): interpolation (fit, compare, render), fair
+    interpolation (fit --fair, render --fair) and approximation (a cage
+    decimated from the sample, fitted to the points of the fitted limit
+    surface: approximate, render --cage), each with its picture where
+    matplotlib is installed."""
     out = out if out is not None else sys.stdout
     t_start = time.perf_counter()
     if out_dir is None:
@@ -93,10 +97,17 @@ def run_demo(out_dir=None, *, quiet=False, scheme="auto", out=None) -> int:
         "Table 1 (Markdown)": folder / "table.md",
         "Table 1 (CSV)": folder / "table.csv",
         "comparison (JSON)": folder / "compare.json",
+        "fair control mesh (one level finer)": folder / "fair.obj",
+        "fair interpolation report": folder / "fair-report.json",
+        f"cage ({CAGE_VERTICES} vertices, decimated)": folder / "cage.obj",
+        "cage fitted to the surface's points": folder / "approximation.obj",
+        "approximation report": folder / "approximation-report.json",
     }
     if plots:
         paths["Figure 7 (convergence)"] = folder / "convergence.png"
         paths["Figure 3 (interpolation)"] = folder / "figure3.png"
+        paths["plain and fair interpolation"] = folder / "fair.png"
+        paths["approximation"] = folder / "approximation.png"
     scheme = "loop" if scheme == "auto" else scheme
     V, F = sample_mesh(scheme)
     write_mesh(paths["sample mesh"], V, F)
@@ -105,20 +116,37 @@ def run_demo(out_dir=None, *, quiet=False, scheme="auto", out=None) -> int:
     what = "a wavy torus of quads" if scheme == "catmull-clark" else "a wavy torus with random edge flips"
     say(f"sorpia {__version__} demo: sample mesh {sample} ({what})\n")
     codes = []
-    code, _ = run_fit(sample, paths["control mesh"], surface=paths["limit surface of the control mesh"],
-                      level=3, report=paths["fit report"], quiet=quiet, scheme=scheme, out=out)
-    codes.append(code)
-    say("")
-    code, _ = run_compare(sample, table=paths["Table 1 (Markdown)"], csv_path=paths["Table 1 (CSV)"],
-                          json_path=paths["comparison (JSON)"], plot=paths.get("Figure 7 (convergence)"),
-                          quiet=quiet, scheme=scheme, out=out)
-    codes.append(code)
-    if plots:
-        say("")
-        code, _ = run_render(sample, paths["Figure 3 (interpolation)"], quiet=quiet, scheme=scheme, out=out)
+
+    def step(run, *args, **kwargs):
+        code, _ = run(*args, quiet=quiet, out=out, **kwargs)
         codes.append(code)
+        say("")
+
+    # Interpolation: the control mesh, every method, Figure 3.
+    step(run_fit, sample, paths["control mesh"], surface=paths["limit surface of the control mesh"], level=3,
+         report=paths["fit report"], scheme=scheme)
+    step(run_compare, sample, table=paths["Table 1 (Markdown)"], csv_path=paths["Table 1 (CSV)"],
+         json_path=paths["comparison (JSON)"], plot=paths.get("Figure 7 (convergence)"), scheme=scheme)
+    if plots:
+        step(run_render, sample, paths["Figure 3 (interpolation)"], scheme=scheme)
+    # Fair interpolation: a control mesh one level finer through the same vertices, bending least.
+    step(run_fit, sample, paths["fair control mesh (one level finer)"], fair=True,
+         report=paths["fair interpolation report"], scheme=scheme)
+    if plots:
+        step(run_render, sample, paths["plain and fair interpolation"], fair=True, scheme=scheme)
+    # Approximation: a light cage (the sample decimated; its triangles split into quads for Catmull-Clark)
+    # fitted to the points of the limit surface written above.
+    Vt, Ft = read_mesh(sample, triangulate=True)
+    cage = decimate(Vt, Ft, CAGE_VERTICES, scheme=scheme, strict=False)
+    cage_path = paths[f"cage ({CAGE_VERTICES} vertices, decimated)"]
+    write_mesh(cage_path, cage.vertices, cage.faces)
+    data = paths["limit surface of the control mesh"]
+    step(run_approximate, data, paths["cage fitted to the surface's points"], cage=cage_path,
+         report=paths["approximation report"], scheme=scheme)
+    if plots:
+        step(run_render, data, paths["approximation"], cage=cage_path, scheme=scheme)
     width = max(len(k) for k in paths)
-    say(f"\nsorpia demo: done in {time.perf_counter() - t_start:.1f} s; files in {folder}:")
+    say(f"sorpia demo: done in {time.perf_counter() - t_start:.1f} s; files in {folder}:")
     for what, p in paths.items():
         say(f"  {what:<{width}}  {p}")
     say(f"next: sorpia info {sample}   |   sorpia fit --help")

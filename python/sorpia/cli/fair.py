@@ -4,19 +4,28 @@ those of ``--targets``) and bends least (sorpia.fair_interpolate)."""
 
 from __future__ import annotations
 
+import re
 import sys
 import time
 from pathlib import Path
 
 import numpy as np
 
-from .. import __version__
-from .common import (EXIT_NOT_CONVERGED, EXIT_OK, SCHEME_LABELS, UserError, face_counts, face_size_histogram,
-                     fmt_seconds, read_solve_input, repair_json, repair_lines, scheme_kwargs, tags_lines, tags_summary,
-                     usd_template, warn_once)
-from .fit import summary_text
-from .output import write_json
+from .. import __version__, fair_interpolate, limit_surface
+from .._checks import interpolation_miss, scale_exponent
+from .._meshinfo import topology_info
+from .._usd import is_usd
+from ..blender import write_blender_script
+from ..limit import topology as build_topology
+from .common import (EXIT_NOT_CONVERGED, EXIT_OK, FAIR_DEFAULTS, SCHEME_LABELS, UserError, face_counts,
+                     face_size_histogram, fmt_seconds, read_solve_input, repair_json, repair_lines, scheme_kwargs,
+                     tags_lines, tags_summary, usd_template, warn_once)
+from .output import (ATTRIBUTE_LABELS, check_blender, check_float32_outputs, check_outputs, check_surface_fits,
+                     summary_text, write_control_mesh, write_json, write_surface)
 from .progress import Progress
+
+# A vertex index in a --targets file: ASCII digits only (Python's int() also takes '1_0' and other scripts' digits).
+_INDEX = re.compile(r"[+-]?[0-9]+")
 
 
 def read_targets(path, n_vertices: int) -> np.ndarray:
@@ -25,47 +34,48 @@ def read_targets(path, n_vertices: int) -> np.ndarray:
     [0, n_vertices) and none twice (a UserError names the line)."""
     seen: dict[int, int] = {}
     out = []
-    with open(path, encoding="utf-8") as fh:
-        for line_no, line in enumerate(fh, 1):
-            for word in line.split("#", 1)[0].replace(",", " ").split():
-                try:
-                    index = int(word)
-                except ValueError:
-                    raise UserError(f"--targets {path}, line {line_no}: {word!r} is not a vertex index (a whole "
-                                    "number)") from None
-                if not 0 <= index < n_vertices:
-                    raise UserError(f"--targets {path}, line {line_no}: vertex {index} is out of range [0, "
-                                    f"{n_vertices}) (the input has {n_vertices} vertices)")
-                if index in seen:
-                    raise UserError(f"--targets {path}, line {line_no}: vertex {index} is repeated (first on line "
-                                    f"{seen[index]})")
-                seen[index] = line_no
-                out.append(index)
+    try:
+        with open(path, encoding="utf-8") as fh:
+            lines = fh.read().splitlines()
+    except UnicodeDecodeError as exc:
+        raise UserError(f"--targets {path}: the file is not UTF-8 text (byte {exc.start}: "
+                        f"{exc.object[exc.start:exc.start + 1]!r}); it holds vertex indices as ASCII digits") from None
+    for line_no, line in enumerate(lines, 1):
+        for word in line.split("#", 1)[0].replace(",", " ").split():
+            if not _INDEX.fullmatch(word):
+                raise UserError(f"--targets {path}, line {line_no}: {word!r} is not a vertex index (a whole "
+                                "number in ASCII digits)")
+            index = int(word)
+            if not 0 <= index < n_vertices:
+                raise UserError(f"--targets {path}, line {line_no}: vertex {index} is out of range [0, "
+                                f"{n_vertices}) (the input has {n_vertices} vertices)")
+            if index in seen:
+                raise UserError(f"--targets {path}, line {line_no}: vertex {index} is repeated (first on line "
+                                f"{seen[index]})")
+            seen[index] = line_no
+            out.append(index)
     if not out:
         raise UserError(f"--targets {path}: no vertex index in the file")
     return np.array(out, dtype=np.int64)
 
 
-def run_fair(input_path, output, *, levels=1, membrane=0.0, targets=None, tol=1e-10, max_iter=1000,
+def run_fair(input_path, output, *, levels=1, membrane=0.0, targets=None, tol=None, max_iter=None,
              boundary=None, surface=None, level=3, report=None, quiet=False, force=False, triangulate=False,
              binary=False, threads=1, repair=False, scheme="auto", ignore_tags=False, sharp_angle=None, out=None,
              prim=None, blender=None) -> tuple[int, dict]:
     """`sorpia fit --fair`: returns (exit code, report dict). The targets are
     met to rounding whatever the iteration stops at, so the control mesh is
     always written; exit code 1 when the iteration reached --max-iter before
-    the energy settled to --tol."""
-    from .. import fair_interpolate, limit_points, write_mesh
-    from .._meshinfo import topology_info
-    from ..limit import topology as build_topology
-    from .fit import (ATTRIBUTE_LABELS, _binary_for, _check_blender, _check_surface_fits, _tags_to_write,
-                  check_fit_paths)
-
+    the energy settled to --tol. `tol` and `max_iter` None: fair_interpolate's
+    defaults (FAIR_DEFAULTS)."""
     out = out if out is not None else sys.stdout
-    check_fit_paths([input_path] + ([targets] if targets is not None else []), output, surface, report, blender,
-                    binary, force)
+    tol = FAIR_DEFAULTS["tol"] if tol is None else tol
+    max_iter = FAIR_DEFAULTS["max_iter"] if max_iter is None else max_iter
+    check_outputs([input_path] + ([targets] if targets is not None else []), output, surface, report, blender,
+                  binary, force)
 
     timings: dict[str, float] = {}
-    with Progress(enabled=not quiet) as progress:
+    with Progress("fit --fair", enabled=not quiet) as progress:
         progress.status(f"reading {input_path}")
         mesh, scheme, boundary, tags = read_solve_input(
             input_path, triangulate=triangulate, repair=repair, ignore_tags=ignore_tags, nonmanifold="error",
@@ -83,51 +93,54 @@ def run_fair(input_path, output, *, levels=1, membrane=0.0, targets=None, tol=1e
         if surface is not None and Path(surface).suffix.lower() == ".stl" and scheme != "loop":
             raise UserError(f"--surface {surface}: STL holds triangles only, and the Catmull-Clark limit surface is "
                             "a quad mesh: write .obj, .off or .ply")
-        if blender is not None:
-            _check_blender(blender, scheme, tags)
+        check_float32_outputs(V0, {"-o": output, "--surface": surface})
+        check_blender(blender, scheme, tags)
         target_ids = None if targets is None else read_targets(targets, len(V0))
         if surface is not None:  # the fine mesh's faces, tessellated --level more times
             n_fine_faces = (len(F) * 4 if scheme == "loop" else int(np.sum(face_counts(F)))) * 4 ** (levels - 1)
-            _check_surface_fits(len(V0) * 4 ** levels, np.full(n_fine_faces, 3 if scheme == "loop" else 4), level,
+            check_surface_fits(len(V0) * 4 ** levels, np.full(n_fine_faces, 3 if scheme == "loop" else 4), level,
                                 scheme)
         progress.status(f"fair interpolation, {levels} level{'s' if levels > 1 else ''} finer")
         t0 = time.perf_counter()
-        res = fair_interpolate(V0, F, levels=levels, membrane=membrane, targets=target_ids, boundary=boundary,
-                               tol=tol, max_iter=max_iter, threads=threads, **scheme_kwargs(scheme, tags))
+        # Coordinates beyond 2^+-200 are fitted scaled by a power of two (exact: the same control mesh, scaled
+        # back): the energies, squares of the coordinates, would overflow. They are reported in the scaled units.
+        e = scale_exponent(V0) if membrane == 0 else 0  # the membrane term is not scale-free: never scaled
+        res = fair_interpolate(np.ldexp(V0, -e), F, levels=levels, membrane=membrane, targets=target_ids,
+                               boundary=boundary, tol=tol, max_iter=max_iter, threads=threads,
+                               **scheme_kwargs(scheme, tags))
         timings["fit"] = time.perf_counter() - t0
         stats = topology_info(V0, build_topology(F, len(V0), scheme=scheme, warn=False), scheme=scheme)
-        ctrl = np.asarray(res.control_vertices)
-        written_tags = _tags_to_write(output, res.tags, boundary, mesh, scheme)
+        ctrl = np.ldexp(np.asarray(res.control_vertices), e)
 
         progress.status(f"writing {output}")
         t0 = time.perf_counter()
-        write_mesh(output, ctrl, res.faces, binary=_binary_for(output, binary), **written_tags,
-                   **usd_template(input_path, output, prim))
+        # The fine cage with its scheme, boundary rule and refined tags where the format holds them; read back
+        # for the check below.
+        written = write_control_mesh(output, ctrl, res.faces, scheme=scheme, boundary=boundary, tags=res.tags,
+                                     binary=binary, template=usd_template(input_path, output, prim))
         if blender is not None:
-            from ..blender import write_blender_script
-
             write_blender_script(blender, ctrl, res.faces, boundary=boundary, **res.tags)
         timings["write"] = time.perf_counter() - t0
         surface_stats = None
         if surface is not None:
-            from .. import limit_surface
-
             progress.status(f"limit surface, level {level}")
             t0 = time.perf_counter()
             Vs, Fs = limit_surface(ctrl, res.faces, level=level, boundary=boundary, **scheme_kwargs(scheme, res.tags))
-            write_mesh(surface, Vs, Fs, binary=_binary_for(surface, binary))
+            write_surface(surface, Vs, Fs, binary)
             timings["surface"] = time.perf_counter() - t0
             surface_stats = {"path": str(surface), "level": level, "vertices": len(Vs), "faces": len(Fs)}
-        # A check of what was written, independent of the solver's elimination:
-        # the fine mesh's limit positions (sorpia.limit_points) at the targets.
+        # A check of what was written, independent of the solver's elimination: the limit positions of the fine
+        # cage as read back from the file (USD stores float32) at the targets.
         progress.status("checking the targets")
         t0 = time.perf_counter()
-        miss = limit_points(ctrl, res.faces, boundary=boundary, **scheme_kwargs(scheme, res.tags))[res.targets] - \
-            V0[res.targets]
-        max_residual = float(np.linalg.norm(miss, axis=1).max())
+        max_residual = interpolation_miss(written.vertices, V0[res.targets], res.faces, boundary=boundary,
+                                          scheme=scheme, tags=res.tags, rows=res.targets)
         timings["check"] = time.perf_counter() - t0
 
     diag = stats.get("diagonal") or 1.0
+    with np.errstate(over="ignore"):  # energies beyond double in model units: inf, and given scaled too
+        energies = (float(np.ldexp(res.plain_energy, 2 * e)), float(np.ldexp(res.energy, 2 * e)),
+                    np.ldexp(np.asarray(res.history), 2 * e))
     data = {
         "sorpia_version": __version__,
         "command": "fit",
@@ -137,12 +150,13 @@ def run_fair(input_path, output, *, levels=1, membrane=0.0, targets=None, tol=1e
         "scheme": scheme,
         "face_sizes": face_size_histogram(F),
         "tags": {"from_file": not ignore_tags, "sharp_angle": sharp_angle, **tags_summary(tags),
-                 "written_to_output": sorted(written_tags)},
+                 "written_to_output": list(written.written)},
         "fine_tags": tags_summary(res.tags),
         "repair": repair_json(mesh.repair) if repair else None,
         "output": str(output),
         "written": True,
         "surface": surface_stats,
+        "blender": None if blender is None else str(blender),
         "report": None if report is None else str(report),
         "mesh": stats,
         "boundary": boundary,
@@ -151,10 +165,14 @@ def run_fair(input_path, output, *, levels=1, membrane=0.0, targets=None, tol=1e
         "membrane": membrane,
         "targets": {"file": None if targets is None else str(targets), "count": int(len(res.targets))},
         "fine_mesh": {"vertices": int(len(ctrl)), "faces": int(len(res.faces)), "face_kind": fine_kind},
-        "plain_energy": res.plain_energy,
-        "energy": res.energy,
+        # energies in model units (inf where beyond double), and in units of 2^energy_scale_exponent
+        "energy_scale_exponent": 2 * e,
+        "energy_scaled": res.energy,
+        "plain_energy_scaled": res.plain_energy,
+        "plain_energy": energies[0],
+        "energy": energies[1],
         "energy_ratio": res.energy / res.plain_energy if res.plain_energy > 0 else None,
-        "energies": np.asarray(res.energies),
+        "history": energies[2],
         "tol": tol,
         "max_iter": max_iter,
         "threads": threads,
@@ -174,6 +192,14 @@ def run_fair(input_path, output, *, levels=1, membrane=0.0, targets=None, tol=1e
     return (EXIT_OK if res.converged else EXIT_NOT_CONVERGED), data
 
 
+def energy(d: dict, key: str) -> str:
+    """An energy of the report as printed: in model units squared, or where the data were scaled (beyond
+    2^+-200) as the scaled value times its power of two."""
+    if not d.get("energy_scale_exponent"):
+        return f"{d[key]:.6g}"
+    return f"{d[key + '_scaled']:.6g} x 2^{d['energy_scale_exponent']}"
+
+
 def fair_summary(d: dict, repaired=()) -> str:
     """The summary `sorpia fit --fair` prints."""
     ratio = d["energy_ratio"]
@@ -186,7 +212,7 @@ def fair_summary(d: dict, repaired=()) -> str:
     phases = ", ".join(f"{k} {fmt_seconds(v)}" + (f" ({inner})" if k == "fit" and inner else "")
                        for k, v in t.items() if not k.startswith("fit."))
     written = [d["output"]] + ([d["surface"]["path"]] if d["surface"] else []) + (
-        [d["report"]] if d["report"] else [])
+        [d["blender"]] if d.get("blender") else []) + ([d["report"]] if d["report"] else [])
     fine = d["fine_mesh"]
     lines = [
         f"sorpia fit --fair: {d['input']} -> {d['output']}",
@@ -197,11 +223,12 @@ def fair_summary(d: dict, repaired=()) -> str:
         f"  fine mesh   {d['levels']} level{'s' if d['levels'] > 1 else ''} finer: {fine['vertices']} vertices, "
         f"{fine['faces']} {fine['face_kind']}; {d['targets']['count']} targets",
         f"  energy      thin plate" + (f" + {d['membrane']:g} membrane" if d["membrane"] else "") +
-        f": {d['energy']:.6g}, plain interpolation {d['plain_energy']:.6g}" +
+        f": {energy(d, 'energy')}, plain interpolation {energy(d, 'plain_energy')}" +
         (f" (ratio {ratio:.3f})" if ratio is not None else ""),
         f"  result      {state}",
-        f"  check       max |B V - V0| over the targets = {d['max_residual']:.3g} "
-        f"({d['max_residual_relative']:.3g} of the bounding-box diagonal)",
+        f"  check       max |B V - V0| over the targets = {d['max_residual']:.3g} model units "
+        f"({d['max_residual_relative']:.3g} of the bounding-box diagonal), of the control mesh as written "
+        "(read back" + (": USD stores float32)" if is_usd(d["output"]) else ")"),
         f"  seconds     {phases}",
         f"  wrote       {', '.join(written)}",
     ]

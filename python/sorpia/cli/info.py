@@ -7,6 +7,13 @@ import json
 import sys
 import warnings
 
+import numpy as np
+
+from .. import Interpolator, MeshError, MeshFileError, ParameterError
+from .. import repair as repair_mesh
+from .._meshinfo import format_info, mesh_info
+from .._repair import describe_changes
+from .._usd import is_usd
 from .common import (EXIT_OK, SCHEME_LABELS, UserError, boundary_rule, choose_scheme, face_size_histogram,
                      is_triangles, read_input, repair_lines, scheme_kwargs, solve_tags, tags_lines, tags_summary)
 from .output import jsonable
@@ -29,21 +36,22 @@ def run_info(input_path, *, as_json=False, boundary=None, triangulate=False, rep
     repaired mesh and info["repair"] says what changed; without it, a mesh
     Loop PIA cannot run on is repaired in memory and info["repair"] says what
     --repair would change (or why it cannot)."""
-    from .. import MeshFileError
-    from .._meshinfo import format_info, mesh_info
-    from .._usd import is_usd
-
     out = out if out is not None else sys.stdout
     tags_refused = None
     try:
         mesh = read_input(input_path, triangulate=triangulate, repair=repair, tags=not ignore_tags,
                           nonmanifold=nonmanifold, prim=prim)
     except MeshFileError as exc:
-        if ignore_tags or ("tag" not in str(exc) and "subdivisionScheme" not in str(exc)):
+        if ignore_tags:
             raise
+        # A file that reads without its tags was refused for them (a rule sorpia has not, a malformed tag, a
+        # token USD does not define): described without them, the verdict fit's.
+        try:
+            mesh = read_input(input_path, triangulate=triangulate, repair=repair, tags=False,
+                              nonmanifold=nonmanifold, prim=prim)
+        except MeshFileError:
+            raise exc from None
         tags_refused = str(exc)
-        mesh = read_input(input_path, triangulate=triangulate, repair=repair, tags=False, nonmanifold=nonmanifold,
-                          prim=prim)
     polygons = not is_triangles(mesh.faces)
     try:
         chosen = choose_scheme(scheme, mesh.faces, input_path, mesh.tags.get("scheme"))
@@ -66,15 +74,19 @@ def run_info(input_path, *, as_json=False, boundary=None, triangulate=False, rep
                     **({"refused": tags_refused} if tags_refused else {})}
     if repair:
         info["repair"] = {"applied": True, "changes": repair_lines(mesh.repair),
-                          "counts": mesh.repair.report["counts"]}
+                          "counts": mesh.repair.changes["counts"]}
     elif not info["loop_pia"]["can_run"]:  # what --repair would do: to the faces as read (polygons kept)
         info["repair"] = _what_repair_would_do(mesh.vertices, mesh.faces)
-    if polygons and info["loop_pia"]["can_run"]:
-        info["loop_pia"] = {"can_run": False, "notes": [],
-                            "reason": "the file has faces of more than 3 vertices" + (
-                                " (the counts are of their triangulation); pass --triangulate to split them, or "
-                                "--scheme catmull-clark" if refusal else ": Loop needs triangles (--triangulate "
-                                "splits them)")}
+    if polygons and (info["loop_pia"]["can_run"] or is_usd(input_path)):
+        if is_usd(input_path):  # read as it is: sorpia triangulates while reading OBJ, OFF and PLY only
+            reason = ("the file has faces of more than 3 vertices: Loop needs triangles, and a USD file is fitted "
+                      "with its faces as they are (Catmull-Clark: --scheme auto or catmull-clark)")
+        elif refusal:
+            reason = ("the file has faces of more than 3 vertices (the counts are of their triangulation); pass "
+                      "--triangulate to split them, or --scheme catmull-clark")
+        else:
+            reason = "the file has faces of more than 3 vertices: Loop needs triangles (--triangulate splits them)"
+        info["loop_pia"] = {"can_run": False, "notes": [], "reason": reason}
     if tags_refused:  # fit refuses the file: so does the verdict
         reason = f"fit refuses the file's tags: {tags_refused} (--ignore-tags fits without them)"
         if info["loop_pia"]["can_run"]:
@@ -91,8 +103,6 @@ def run_info(input_path, *, as_json=False, boundary=None, triangulate=False, rep
 def _verdict(scheme: str, refusal, mesh, tags: dict, info: dict) -> dict:
     """Whether PIA can run with the scheme and the tags, and if not why: the
     Interpolator's own validation, or Loop's verdict for Loop without tags."""
-    from .. import Interpolator, MeshError, ParameterError
-
     if refusal is not None:
         return {"scheme": scheme, "can_run": False, "reason": refusal}
     if scheme == "loop" and not tags:
@@ -112,8 +122,6 @@ def _valence_two(topo) -> dict:
     faces of more than four sides: with exact rows, quads split by them keep
     B positive): the stationary methods (pia, wpia, gs, sor, hss, whss) may
     diverge there, and the default method auto then falls back to gmres."""
-    import numpy as np
-
     valence = np.diff(np.asarray(topo.ring_offsets))
     found = np.flatnonzero((valence == 2) & ~np.asarray(topo.is_boundary))
     if len(found) == 0:
@@ -151,12 +159,8 @@ def _what_repair_would_do(vertices, faces) -> dict:
     """sorpia.repair run in memory on a mesh PIA refuses (triangles or
     polygons, as --repair takes them): the changes it would make, one line
     per kind, or the reason it refuses the mesh too."""
-    from .. import MeshError
-    from .. import repair as repair_mesh
-    from .._repair import describe_changes
-
     try:
         result = repair_mesh(vertices, faces)
     except (MeshError, ValueError, TypeError) as exc:
         return {"applied": False, "refused": str(exc)}
-    return {"applied": False, "changes": describe_changes(result.report), "counts": result.report["counts"]}
+    return {"applied": False, "changes": describe_changes(result.changes), "counts": result.changes["counts"]}

@@ -7,7 +7,8 @@ import argparse
 from .. import __version__
 from .._validate import BOUNDARY_RULES, DEFAULT_BOUNDARY
 from .._plotting import FACE_BUDGET  # plotting imports matplotlib only when drawing
-from .common import CLI_SCHEMES, DISPLAY_ORDER
+from ..fair import MAX_LEVELS
+from .common import CLI_SCHEMES, DISPLAY_ORDER, FAIR_DEFAULTS, FIT_DEFAULTS
 from ..approximate import DEFAULT_FAIRNESS, DEFAULT_TANGENTIAL, DEFAULT_TOL, SAMPLINGS
 from .approximate import DEFAULT_SAMPLING, run_approximate
 from .compare import run_compare
@@ -56,6 +57,14 @@ def _positive_int(text: str) -> int:
     value = _int_arg(text)
     if value < 1:
         raise argparse.ArgumentTypeError(f"expected at least 1, got {text!r}")
+    return value
+
+
+def _levels_arg(text: str) -> int:
+    """--levels: subdivision steps of fair interpolation, 1 to MAX_LEVELS (the core's refinement limit)."""
+    value = _int_arg(text)
+    if not 1 <= value <= MAX_LEVELS:
+        raise argparse.ArgumentTypeError(f"expected 1 to {MAX_LEVELS} subdivision steps, got {text!r}")
     return value
 
 
@@ -180,10 +189,14 @@ def build_parser() -> argparse.ArgumentParser:
             p.add_argument("--omega", type=_omega_arg, default="auto",
                            help="relaxation of sor (and of auto's sor run): auto (sorpia's measured rule), young "
                            "(paper Remark 1, from the spectral radius of the Jacobi matrix) or a number in (0, 2)")
-        p.add_argument("--tol", type=_float_arg, default=1e-10,
-                       help="stop when E_k/E_0 < TOL, E_k = max_i |v_i^0 - (B V_k)_i| (paper section 5)")
-        p.add_argument("--max-iter", type=_int_arg, default=1000, metavar="N",
-                       help="stop after N iterations (exit code 1 if TOL was not reached)")
+        fair_text = (f"; with --fair {FAIR_DEFAULTS['tol']:g}, sorpia.fair_interpolate's" if with_method else "")
+        p.add_argument("--tol", type=_float_arg, default=None,
+                       help="stop when E_k/E_0 < TOL, E_k = max_i |v_i^0 - (B V_k)_i| (paper section 5); default: "
+                       f"{FIT_DEFAULTS['tol']:g}, sorpia.interpolate's{fair_text}")
+        fair_text = (f"; with --fair {FAIR_DEFAULTS['max_iter']}" if with_method else "")
+        p.add_argument("--max-iter", type=_int_arg, default=None, metavar="N",
+                       help="stop after N iterations (exit code 1 if TOL was not reached); default: "
+                       f"{FIT_DEFAULTS['max_iter']}{fair_text}")
         boundary_option(p, "boundary rule of the limit surface (OpenSubdiv VTX_BOUNDARY_EDGE_AND_CORNER keeps "
                         "one-face corners; EDGE_ONLY smooths them)")
 
@@ -234,8 +247,9 @@ def build_parser() -> argparse.ArgumentParser:
                      "surface passes through the given vertices (or --targets) and bends least (thin-plate energy, "
                      "plus --membrane); --tol then bounds the energy's relative change over the last iterations (2 to 10) and "
                      "--max-iter its iterations")
-    fit.add_argument("--levels", type=_positive_int, default=None, metavar="N",
-                     help="--fair: subdivision steps from the input to the fair control mesh (default 1)")
+    fit.add_argument("--levels", type=_levels_arg, default=None, metavar="N",
+                     help=f"--fair: subdivision steps from the input to the fair control mesh, 1 to {MAX_LEVELS} "
+                     f"(default {FAIR_DEFAULTS['levels']})")
     fit.add_argument("--membrane", type=_float_arg, default=None, metavar="W",
                      help="--fair: weight of the membrane term beside the thin plate's 1 (default 0)")
     fit.add_argument("--targets", metavar="FILE",
@@ -277,6 +291,9 @@ def build_parser() -> argparse.ArgumentParser:
     app.add_argument("--sharp-angle", type=_angle_arg, metavar="DEG",
                      help="make every edge of the cage whose faces' normals are more than DEG degrees apart an "
                      "infinitely sharp crease")
+    app.add_argument("--triangulate", action="store_true",
+                     help="split the input's faces of more than 3 vertices into triangles (a quad along its shorter "
+                     "diagonal) before --vertices decimates them; the data points stay the input's vertices")
     boundary_option(app, "boundary rule of the limit surface")
     app.add_argument("--iterations", type=_positive_int, default=10, metavar="K",
                      help="updates at most, each followed by re-projecting the footpoints")
@@ -307,7 +324,7 @@ def build_parser() -> argparse.ArgumentParser:
         a.input, a.output, vertices=a.vertices, cage=a.cage, scheme=a.scheme, sharp_angle=a.sharp_angle,
         report=a.report, surface=a.surface, level=a.level, iterations=a.iterations, tol=a.tol,
         fairness=a.fairness, tangential=a.tangential, method=a.method, boundary=a.boundary, sampling=a.sampling,
-        quiet=a.quiet, force=a.force)[0])
+        quiet=a.quiet, force=a.force, prim=a.prim, triangulate=a.triangulate)[0])
 
     comp = command("compare", "run several methods to one tolerance: the paper's Table 1 and Figure 7",
                    "Run each method on the mesh to the same tolerance and print the paper's Table 1 layout for "
@@ -367,8 +384,9 @@ def build_parser() -> argparse.ArgumentParser:
     ren.add_argument("--fair", action="store_true",
                      help="draw plain and fair interpolation side by side (as 'sorpia fit --fair'): the plain "
                      "control mesh and limit surface, then the fair control mesh --levels finer and its surface")
-    ren.add_argument("--levels", type=_positive_int, default=None, metavar="N",
-                     help="--fair: subdivision steps from the input to the fair control mesh (default 1)")
+    ren.add_argument("--levels", type=_levels_arg, default=None, metavar="N",
+                     help=f"--fair: subdivision steps from the input to the fair control mesh, 1 to {MAX_LEVELS} "
+                     f"(default {FAIR_DEFAULTS['levels']})")
     ren.add_argument("--membrane", type=_float_arg, default=None, metavar="W",
                      help="--fair: weight of the membrane term beside the thin plate's 1 (default 0)")
     scheme_options(ren)
@@ -425,11 +443,15 @@ def build_parser() -> argparse.ArgumentParser:
     rep.set_defaults(func=lambda a: run_repair(a.input, a.output, report=a.report, triangulate=a.triangulate,
                                                quiet=a.quiet, force=a.force, prim=a.prim)[0])
 
-    demo = command("demo", "fit, compare and render on a built-in sample mesh",
+    demo = command("demo", "every capability on a built-in sample mesh: interpolation, fair interpolation, "
+                   "approximation",
                    "Generate a small sample mesh (a wavy torus with random edge flips: valences 3 to 12, visible "
                    "shrinkage), then run fit (control mesh, limit surface, report), compare (Table 1 as Markdown "
-                   "and CSV, Figure 7) and render (Figure 3) on it, writing every file into one folder, and "
-                   "print where they are. Takes a few seconds.", input_arg=False)
+                   "and CSV, Figure 7) and render (Figure 3) on it; fair interpolation (a control mesh one level "
+                   "finer through the same vertices, bending least, drawn beside the plain one); and approximate (a "
+                   "cage decimated from the sample, fitted to the points of the limit surface that fit wrote, drawn "
+                   "with the points before and after); every file into one folder, and print where they are. "
+                   "Takes some seconds.", input_arg=False)
     demo.add_argument("--out", metavar="DIR", default=None,
                       help="folder for the files (created if needed; default: a new folder "
                       "sorpia-demo-YYYYMMDD-HHMMSS in the working directory)")

@@ -8,16 +8,20 @@ from pathlib import Path
 
 import numpy as np
 
-from .._plotting import FACE_BUDGET  # plotting imports matplotlib only when drawing
+from .. import LimitSurface, approximate, fair_interpolate, limit_surface
+# _plotting imports matplotlib only when drawing
+from .._plotting import FACE_BUDGET, crease_curves, interpolation_figure, level_for_budget
+from .._validate import DEFAULT_BOUNDARY
 from ..solve import stopped_short_message
-from .common import (EXIT_NOT_CONVERGED, EXIT_OK, OMEGA_METHODS, SCHEME_LABELS, UserError, check_paths,
-                     check_solver_options, face_counts, fit_once, fmt_seconds, is_triangles, method_label, omega_text,
-                     read_solve_input, repair_lines, require_plotting, scheme_kwargs)
+from .common import (EXIT_NOT_CONVERGED, EXIT_OK, FAIR_DEFAULTS, FIT_DEFAULTS, OMEGA_METHODS, SCHEME_LABELS,
+                     UserError, check_paths, check_solver_options, choose_scheme, face_counts, fit_once, fmt_seconds,
+                     method_label, omega_text, read_input, read_solve_input, repair_lines, require_plotting,
+                     scheme_kwargs, solve_tags)
 from .output import save_figure
 from .progress import Progress
 
 
-def run_render(input_path, output, *, level=3, method="auto", omega="auto", tol=1e-10, max_iter=1000, boundary=None,
+def run_render(input_path, output, *, level=3, method="auto", omega="auto", tol=None, max_iter=None, boundary=None,
                size=(1200, 1000), elev=30.0, azim=-60.0, face_budget=FACE_BUDGET, quiet=False, force=False,
                triangulate=False, up="z", threads=1, repair=False, scheme="auto", ignore_tags=False,
                sharp_angle=None, nonmanifold="error", out=None, prim=None, fair=False, levels=None,
@@ -26,10 +30,9 @@ def run_render(input_path, output, *, level=3, method="auto", omega="auto", tol=
     plain and fair interpolation (sorpia.fair_interpolate, `levels` finer,
     `membrane`) side by side; with `cage`, the same four panels for
     approximation (render_approximation)."""
-    from .. import LimitSurface
-    from .._plotting import crease_curves, interpolation_figure, level_for_budget
-
     out = out if out is not None else sys.stdout
+    tol = (FAIR_DEFAULTS if fair else FIT_DEFAULTS)["tol"] if tol is None else tol
+    max_iter = (FAIR_DEFAULTS if fair else FIT_DEFAULTS)["max_iter"] if max_iter is None else max_iter
     if Path(output).suffix.lower() != ".png":
         raise UserError(f"-o {output}: render writes a PNG image, give a file name ending in .png")
     check_paths([input_path] + ([cage] if cage is not None else []), {"-o": output}, force)
@@ -48,7 +51,7 @@ def run_render(input_path, output, *, level=3, method="auto", omega="auto", tol=
     if fair and (method != "auto" or omega != "auto" or nonmanifold != "error"):
         raise UserError("--method, --omega and --nonmanifold sharp cannot go with --fair: fair interpolation starts "
                         "from the default plain solve and takes manifold meshes only")
-    levels = 1 if levels is None else levels
+    levels = FAIR_DEFAULTS["levels"] if levels is None else levels
     require_plotting()
     budget = face_budget
     timings = {}
@@ -61,12 +64,12 @@ def run_render(input_path, output, *, level=3, method="auto", omega="auto", tol=
         timings.update(mesh.timings)
         fair_res = None
         if fair:
-            from .. import fair_interpolate
-
             progress.status(f"fair interpolation, {levels} level{'s' if levels > 1 else ''} finer")
             t0 = time.perf_counter()
-            fair_res = fair_interpolate(V0, F, levels=levels, membrane=0.0 if membrane is None else membrane,
-                                        boundary=boundary, threads=threads, **scheme_kwargs(scheme, tags))
+            fair_res = fair_interpolate(V0, F, levels=levels,
+                                        membrane=FAIR_DEFAULTS["membrane"] if membrane is None else membrane,
+                                        tol=tol, max_iter=max_iter, boundary=boundary, threads=threads,
+                                        **scheme_kwargs(scheme, tags))
             res = fair_res.plain
             timings["fit"] = time.perf_counter() - t0
         else:
@@ -137,11 +140,6 @@ def render_approximation(input_path, cage_path, output, *, level, boundary, size
     """`sorpia render IN --cage CAGE`: the input's vertices are data points; the cage is fitted to them
     (sorpia.approximate) and drawn as in Figure 3: (a) the cage as given, (b) its limit surface with the data,
     (c) the fitted cage, (d) its limit surface with the data."""
-    from .. import approximate, limit_surface
-    from .._plotting import interpolation_figure, level_for_budget
-    from .._validate import DEFAULT_BOUNDARY
-    from .common import read_input, solve_tags
-
     require_plotting()
     timings = {}
     with Progress(enabled=not quiet) as progress:
@@ -149,7 +147,7 @@ def render_approximation(input_path, cage_path, output, *, level, boundary, size
         points = read_input(input_path, tags=False, points=True).vertices
         mesh = read_input(cage_path)
         tags = solve_tags(mesh, sharp_angle, cage_path)
-        scheme = ("loop" if is_triangles(mesh.faces) else "catmull-clark") if scheme == "auto" else scheme
+        scheme = choose_scheme(scheme, mesh.faces, cage_path, mesh.tags.get("scheme"))
         rule = boundary if boundary is not None else mesh.tags.get("boundary", DEFAULT_BOUNDARY)
         progress.status("approximate")
         t0 = time.perf_counter()

@@ -171,6 +171,15 @@ inline void write_mesh(const std::string& path, const double* vertices, std::siz
   write_mesh(path, MeshView{vertices, n_vertices, faces, n_faces, nullptr, 3, {}, {}}, binary);
 }
 
+/// The check write_mesh makes of a face-varying channel for PLY, which
+/// stores one value per vertex: the channel's width is that of PLY's
+/// properties (2 numbers for texture coordinates, 3 for normals: `what` is
+/// "texture coordinates" or "normals") and every corner of a vertex has the
+/// same value (no seam). For a check before long work, with the writer's
+/// words.
+/// @throws ParameterError naming the first vertex with several values, or the width
+void check_ply_per_vertex(const MeshView& mesh, const FaceVaryingView& channel, const char* what);
+
 /// Write `data` to `path` atomically, as write_mesh writes its bytes: to a
 /// temporary file in the same folder (".sorpia-tmp-" and 6 random
 /// characters, whatever the length of `path`'s name; the mode of the file it

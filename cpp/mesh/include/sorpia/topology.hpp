@@ -116,6 +116,20 @@ class Topology {
   /// A vertex no face references: its limit is itself.
   bool is_unreferenced(std::size_t i) const { return ring_offsets_[i + 1] == ring_offsets_[i]; }
 
+  /// The half-edge across each half-edge. Half-edge h = face_offset(f) + i
+  /// runs from corner i of face f to corner i + 1 (face_indices()[h] to the
+  /// face's next corner); half_edge_twins()[h] is the half-edge of the other
+  /// face on that edge (which runs the other way), or -1 on the boundary.
+  /// Computed on each call by detail::EdgeGroups (half_edges.hpp), the matcher
+  /// the face checks' messages, repair and the statistics use: the build
+  /// matches edges per vertex and stores no half-edges.
+  std::vector<std::int32_t> half_edge_twins() const;
+  /// For each of k vertex pairs (pairs[2i], pairs[2i + 1]), either order, the
+  /// lower-numbered half-edge of the edge between them (numbered as in
+  /// half_edge_twins), or -1 where they share no edge. Computed on each call
+  /// (detail::EdgeGroups).
+  std::vector<std::int32_t> find_half_edges(const std::int32_t* pairs, std::size_t k) const;
+
   std::size_t n_edges() const { return n_edges_; }
   std::size_t n_boundary_edges() const { return n_boundary_edges_; }
   std::size_t n_unreferenced() const { return n_unreferenced_; }

@@ -119,8 +119,13 @@ class LimitSurface {
   /// the point is B V's (the limit of refinement; Bfr's own corner at a dart
   /// is Far's Limit() after its local refinements, 10 on a mesh with darts,
   /// which the points next to that corner start from: docs/surfaces.md).
-  /// With OpenSubdiv before 3.6.0 a face at a dart of two faces is refused
-  /// (MeshError): Bfr writes out of bounds building its surface.
+  /// With OpenSubdiv before 3.6.1 a face at a dart of two faces is refused
+  /// (MeshError): Bfr writes out of bounds building its surface (OpenSubdiv's
+  /// pull request 1336); and a face with a corner at an interior vertex of
+  /// two faces is built by a Bfr factory without a cache, alone, since Bfr
+  /// before 3.6.1 shares such a face's patch with faces of the same topology
+  /// whose vertices repeat differently, wrongly for them (its pull request
+  /// 1353). Every other face shares its patch through the cache.
   /// Within the corner region of side 1/16 at an extraordinary vertex Bfr
   /// uses a Gregory patch: positions approximate the limit surface there
   /// and OpenSubdiv's derivatives approximate the positions' derivatives
