@@ -188,8 +188,8 @@ def interpolate_float32(vertices, faces, rules: dict, **options):
     float32, and the largest distance from `vertices` to the limit positions
     of that rounded cage over the diagonal of their bounding box (what
     Blender's surface misses by, but for its own float32 evaluation). The
-    miss is B times the rounded cage by the solve's own operator B (2 ms at
-    100k vertices, where `sorpia.limit_points` builds the limit again)."""
+    miss is B times the rounded cage by the solve's own operator B, which
+    `sorpia.limit_points` would build again."""
     from .solve import Interpolator
 
     vertices = as_vertices(vertices)
