@@ -295,3 +295,40 @@ def test_interpolate_float32_measures_the_rounded_cage():
     diagonal = np.linalg.norm(V.max(axis=0) - V.min(axis=0))
     assert miss == pytest.approx(np.linalg.norm(limit - V, axis=1).max() / diagonal, rel=1e-9)
     assert 1e-10 < miss < 1e-6  # float32's rounding, not the solve's 1e-12
+
+
+def test_extension_zip_layout(tmp_path):
+    """blender/build_extension.py: the manifest Blender reads (schema 1.0.0, Blender 4.2 and later, no
+    permissions, the wheels' paths and the platforms they share) and every file it names inside the zip."""
+    import importlib.util
+    import tomllib
+    import zipfile
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parent.parent / "blender" / "build_extension.py"
+    spec = importlib.util.spec_from_file_location("build_extension", path)
+    build_extension = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(build_extension)
+    assert build_extension.wheel_tags(Path("sorpia-1.2.3-cp311-cp311-manylinux_2_35_x86_64.whl")) == (
+        "1.2.3", ["linux-x64"])
+    assert build_extension.wheel_tags(Path("x-1-cp311-cp311-macosx_11_0_arm64.whl"))[1] == ["macos-arm64"]
+    assert build_extension.wheel_tags(Path("x-1-cp311-cp311-win_amd64.whl"))[1] == ["windows-x64"]
+    with pytest.raises(SystemExit, match="none Blender installs on"):
+        build_extension.wheel_tags(Path("x-1-cp311-cp311-linux_riscv64.whl"))
+    wheels = []
+    for name in ("sorpia-0.9.1-cp311-cp311-manylinux_2_35_x86_64.whl",
+                 "scipy-1.13.1-cp311-cp311-manylinux_2_17_x86_64.manylinux2014_x86_64.whl"):
+        with zipfile.ZipFile(tmp_path / name, "w") as z:
+            z.writestr("x.txt", "a stand-in wheel")
+        wheels.append(tmp_path / name)
+    out = build_extension.build(wheels[0], tmp_path / "dist", (wheels[1],))
+    assert out.name == "sorpia_blender-0.9.1.zip"
+    with zipfile.ZipFile(out) as z:
+        manifest = tomllib.loads(z.read("blender_manifest.toml").decode())
+        names = set(z.namelist())
+    assert manifest["schema_version"] == "1.0.0" and manifest["id"] == "sorpia_blender"
+    assert manifest["version"] == "0.9.1" and manifest["blender_version_min"] == "4.2.0"
+    assert manifest["type"] == "add-on" and "permissions" not in manifest
+    assert manifest["platforms"] == ["linux-x64"]
+    assert {w.removeprefix("./") for w in manifest["wheels"]} == {f"wheels/{w.name}" for w in wheels} <= names
+    assert "__init__.py" in names
