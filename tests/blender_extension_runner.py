@@ -218,7 +218,7 @@ def scenario_fit_suzanne():
 
 
 def scenario_fit_shared():
-    """The shared meshes' quad models with their OBJ tags, where /work/shared is present."""
+    """The shared meshes' quad models with their OBJ tags, where the folder SHARED is present."""
     out = {}
     names = ["osd_catmark_car", "osd_catmark_helmet", "osd_catmark_bishop", "osd_catmark_cube_creases1"]
     for name in names:

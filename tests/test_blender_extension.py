@@ -27,7 +27,8 @@ from blender_support import BLENDER, EXTENSION, needs_bpy, needs_extension
 pytestmark = [needs_bpy, needs_extension]
 
 RUNNER = Path(__file__).with_name("blender_extension_runner.py")
-SHARED_MESHES = Path(os.environ.get("SORPIA_SHARED_MESHES", "/work/shared/meshes"))
+# the shared meshes beside the repository, as the other tests find them (SORPIA_SHARED_MESHES: elsewhere)
+SHARED_MESHES = Path(os.environ.get("SORPIA_SHARED_MESHES", Path(__file__).resolve().parents[2] / "shared" / "meshes"))
 # Blender evaluates in float32 (the cage rounded to float32, the patches summed in float32): a few ulps of the
 # coordinates, float32's epsilon being 6e-8 of the diagonal; the bound the issue set.
 BLENDER_TOL = 2e-6
