@@ -4,6 +4,7 @@
 #               with warnings as errors
 #   make blender-venv  Blender as a Python module (bpy, about 400 MB, its own numpy pin) in .venv-blender, for
 #               tests/test_blender.py; make test builds it where bpy installs and goes on without it otherwise
+#   make blender-extension  dist/sorpia_blender-VERSION.zip: the Blender extension (blender/), the wheel inside
 #   make docs   the documentation (Sphinx, from the installed package's docstrings) into build/docs
 #   make wheel  dist/sorpia-VERSION-cp311-cp311-manylinux_*.whl, OpenSubdiv and OpenMesh inside (auditwheel)
 #   make wheel-test  that wheel installed and tested in a clean Debian root (debootstrap + chroot, as root);
@@ -27,7 +28,7 @@ PIP_BUILD := -C build-dir=$(BUILD_DIR) -C cmake.define.SORPIA_BUILD_TESTS=ON
 SPHINX := $(PY) -m sphinx -b html -E -q docs build/docs
 
 .PHONY: demo test deps venv build-tools install cpp-test py-test docs docs-test clean blender-venv wheel \
-        wheel-test stubs
+        wheel-test stubs blender-extension
 
 demo: install
 	$(VENV)/bin/sorpia demo
@@ -68,9 +69,18 @@ blender-venv:
 	    || echo "bpy $(BPY_VERSION) could not be installed: tests/test_blender.py will skip"; \
 	fi
 
+# Blender ships numpy but no scipy, which fair_interpolate and approximate use: the extension carries scipy's
+# wheel for Blender's Python (3.11) and platform. 1.13 is the newest whose wheels take numpy 1.22.4 to 2.2.
+EXTENSION_SCIPY := scipy==1.13.1
+blender-extension: wheel
+	$(PY) -m pip download -q --no-deps --only-binary=:all: --python-version 3.11 --implementation cp \
+	  --platform manylinux_2_17_x86_64 -d build/extension-wheels "$(EXTENSION_SCIPY)"
+	$(PY) blender/build_extension.py "$$(ls -t dist/sorpia-$(VERSION)-*.whl | head -n 1)" dist \
+	  build/extension-wheels/$(subst ==,-,$(EXTENSION_SCIPY))-*.whl
+
 # SORPIA_REQUIRE_REFERENCE: PIP_BUILD builds sorpia._reference, so the reference tests (Far's Limit(), OpenMesh's
 # one-ring) must run here: a missing module fails them instead of skipping them.
-py-test: install blender-venv
+py-test: install blender-venv blender-extension
 	cd tests && SORPIA_REQUIRE_REFERENCE=1 ../$(PY) -m pytest
 
 docs: install

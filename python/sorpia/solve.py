@@ -442,14 +442,17 @@ class Interpolator:
         return r
 
     def _solve(self, v0: np.ndarray, method: str, options: _core.SolveOptions, callback, t0: float,
-               initial: Optional[np.ndarray] = None, keep_targets: bool = False) -> InterpolationResult:
+               initial: Optional[np.ndarray] = None, keep_targets: bool = False,
+               result: Optional[InterpolationResult] = None) -> InterpolationResult:
         """solve() on input already validated: `v0` from as_vertices, `options`
         from check_options, `initial` from _as_initial (interpolate validates
         them before building B and calls this). keep_targets: `update` moves
         these targets from now on. Warnings point at the caller of solve() or
-        interpolate()."""
+        interpolate(). `result`: the core already ran this solve (fair
+        interpolation's pipeline, sorpia::fair_interpolate): only what follows
+        it here (state, warnings, wall time)."""
+        r = self._impl.solve(v0, options, callback, initial, keep_targets) if result is None else result
         tol_value, max_iter = options.tol, options.max_iter
-        r = self._impl.solve(v0, options, callback, initial, keep_targets)
         if keep_targets:
             self._last_update = None
             self._solved_method = method
