@@ -317,3 +317,26 @@ def test_decimation_does_not_depend_on_where_the_mesh_lies(offset):
     assert np.array_equal(np.asarray(here.faces), np.asarray(there.faces))
     # The cage's vertices are the input's: exactly the moved ones.
     assert np.array_equal(there.vertices, (v + shift)[[np.flatnonzero((v == p).all(axis=1))[0] for p in here.vertices]])
+
+
+def test_a_cage_held_up_by_holes_says_so():
+    """Issue 33, item 11: a patch with 49 single-triangle holes asked for a 150-vertex Catmull-Clark cage stops
+    near 900 control vertices (each hole keeps its three corners: no collapse closes a hole, whatever
+    max_boundary_angle allows); the warning says how many of the cage's vertices lie on how many boundary loops,
+    and what to do."""
+    v, f = sorpia.shapes.grid(40, 40)
+    f = np.asarray(f)
+    centres = np.asarray(v)[f].mean(axis=1)[:, :2]
+    lo, hi = centres.min(axis=0), centres.max(axis=0)
+    holes = {int(np.argmin(np.linalg.norm(centres - (lo + (hi - lo) * (np.array([i, j]) + 1) / 8), axis=1)))
+             for i in range(7) for j in range(7)}
+    assert len(holes) == 49
+    f = np.delete(f, sorted(holes), axis=0)
+    for angle in (30, 180):
+        with pytest.warns(sorpia.DecimationWarning) as caught:
+            cage = sorpia.decimate(v, f, 150, scheme="catmull-clark", strict=False, max_boundary_angle=angle)
+        assert len(cage.vertices) > 600  # held up: 49 holes of at least 3 vertices each, as quads
+        message = str(caught[0].message)
+        assert f"decimate stopped at {len(cage.vertices)} vertices as quads" in message
+        assert "lie on its 50 boundary loops: each loop keeps at least 3 (no collapse closes a hole)" in message
+        assert f"max_boundary_angle ({angle} degrees)" in message and "fill small holes first" in message
