@@ -3,19 +3,13 @@ Blender (the bpy module), its Subdivision Surface modifier evaluated, and
 Blender's own limit positions (OpenSubdiv in Blender, float32) compared with
 the points the cage was fitted through.
 
-bpy is large (about 400 MB) and pins its own numpy, so it lives in a venv of
-its own, .venv-blender, which ``make blender-venv`` builds (``make test``
-builds it where bpy installs); SORPIA_BLENDER_PYTHON names another Python
-with bpy. Without one the tests skip, saying so."""
+Blender is found as tests/blender_support.py says (``make blender-venv``,
+or SORPIA_BLENDER_PYTHON); without it the tests skip, saying so."""
 
 from __future__ import annotations
 
-import importlib.util
-import os
 import subprocess
-import sys
 import textwrap
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -24,23 +18,7 @@ import sorpia
 from sorpia.blender import QUALITY_DEFAULT, QUALITY_EXACT, blender_quality, crease_weight, write_blender_script
 from sorpia.errors import ParameterError
 
-REPO = Path(__file__).resolve().parent.parent
-
-
-def blender_python() -> str | None:
-    """A Python that imports bpy: $SORPIA_BLENDER_PYTHON, the repository's .venv-blender, or this one."""
-    given = os.environ.get("SORPIA_BLENDER_PYTHON")
-    if given:
-        return given
-    venv = REPO / ".venv-blender" / "bin" / "python"
-    if venv.exists():
-        return str(venv)
-    return sys.executable if importlib.util.find_spec("bpy") is not None else None
-
-
-BLENDER = blender_python()
-needs_bpy = pytest.mark.skipif(BLENDER is None, reason="bpy is not installed: `make blender-venv` builds "
-                               ".venv-blender with bpy 5.0.1 (about 400 MB), or set SORPIA_BLENDER_PYTHON")
+from blender_support import BLENDER, needs_bpy
 
 # Runs in Blender's Python: the script sorpia wrote, or Blender's own USD import of the file sorpia wrote (its
 # Subdivision Surface modifier made from subdivisionScheme, quality raised as docs/blender.md says), then the
@@ -199,3 +177,158 @@ def test_blender_draws_the_approximated_cage(tmp_path):
     assert error.max() < 1e-5 * diagonal
     # Creases dropped, Blender's surface is another one: the comparison sees them.
     assert np.abs(blender_limit(tmp_path, res.control_vertices, cage.faces) - ours).max() > 1e-3 * diagonal
+
+
+def blender_arrays(V, faces, edge_sharpness=None, vertex_sharpness=None, extra_edges=()):
+    """A BlenderMesh built here, as Blender stores a mesh: each edge once (first seen first), each corner's
+    vertex and the edge to the next corner of its face; crease weights from sharpness by sqrt(s / 10)."""
+    from sorpia.blender import BlenderMesh
+
+    faces = [list(f) for f in faces]
+    index: dict = {}
+    corner_verts, corner_edges = [], []
+    for f in faces:
+        for a, b in zip(f, f[1:] + f[:1]):
+            corner_verts.append(a)
+            corner_edges.append(index.setdefault((min(a, b), max(a, b)), len(index)))
+    for a, b in extra_edges:
+        index.setdefault((min(a, b), max(a, b)), len(index))
+    edges = np.array(list(index), dtype=np.int32).reshape(-1, 2)
+    weights = None
+    if edge_sharpness is not None:
+        weights = np.array([np.sqrt(min(edge_sharpness.get(e, 0.0), 10) / 10) for e in index], np.float32)
+    vweights = None if vertex_sharpness is None else np.sqrt(np.asarray(vertex_sharpness) / 10).astype(np.float32)
+    return BlenderMesh(np.asarray(V, float), edges, np.array([len(f) for f in faces], np.int32),
+                       np.array(corner_verts, np.int32), np.array(corner_edges, np.int32), weights, vweights)
+
+
+def test_blender_rules_invert_the_script_mapping():
+    """What the script writes (sharpness as weights, the boundary rule as boundary_smooth) reads back as the
+    same rules: sharpness to float32 rounding, boundary exactly; creases off drops every tag."""
+    from sorpia.blender import BOUNDARY_RULE, BOUNDARY_SMOOTH, blender_rules, crease_sharpness
+
+    s = np.array([0.1, 0.5, 2.5, 9.99, 10.0])
+    assert np.allclose(crease_sharpness(crease_weight(s)), s, rtol=1e-6, atol=0)
+    assert crease_sharpness(1.0) == 10.0 and crease_sharpness(0.5) == 2.5
+    assert {BOUNDARY_SMOOTH[BOUNDARY_RULE[k]] for k in BOUNDARY_RULE} == set(BOUNDARY_RULE)
+    V, F = sorpia.shapes.quad_grid(5, 5)
+    mesh = blender_arrays(V, F, {(5, 6): 2.5, (6, 7): 10.0}, np.r_[0.0, 0.0, 0.0, 1.5, np.zeros(21)])
+    rules = blender_rules(mesh, "PRESERVE_CORNERS")
+    assert rules["boundary"] == "edge-and-corner"
+    edges, sharp = rules["creases"]
+    assert sorted(map(tuple, np.sort(edges, axis=1).tolist())) == [(5, 6), (6, 7)]
+    assert np.allclose(sorted(sharp), [2.5, 10.0], rtol=1e-6)
+    assert rules["corners"][0].tolist() == [3] and np.isclose(rules["corners"][1][0], 1.5, rtol=1e-6)
+    assert blender_rules(mesh, "ALL", use_creases=False) == {"boundary": "edge-only"}
+    with pytest.raises(ParameterError, match="boundary_smooth"):
+        blender_rules(mesh, "NONE")
+
+
+def test_crease_weights_of_the_fair_tags():
+    """Tags on a mesh's own edges as Blender's attributes, read back by blender_rules."""
+    from sorpia.blender import blender_rules, crease_weights_of
+
+    V, F = sorpia.shapes.quad_grid(5, 5)
+    mesh = blender_arrays(V, F)
+    edge_w, vert_w = crease_weights_of(mesh.edges, len(V), (np.array([[6, 5], [11, 12]]), [2.5, np.inf]),
+                                       (np.array([7]), 0.4))
+    assert edge_w.dtype == np.float32 and np.count_nonzero(edge_w) == 2 and np.count_nonzero(vert_w) == 1
+    rules = blender_rules(mesh._replace(edge_creases=edge_w, vertex_creases=vert_w))
+    got = dict(zip(map(tuple, np.sort(rules["creases"][0], axis=1).tolist()), rules["creases"][1]))
+    assert got.keys() == {(5, 6), (11, 12)} and np.isclose(got[(5, 6)], 2.5, rtol=1e-6) and got[(11, 12)] == 10.0
+    with pytest.raises(ValueError, match="not an edge"):
+        crease_weights_of(mesh.edges, len(V), (np.array([[0, 6]]), 1.0))
+
+
+def test_mesh_refusals():
+    """Each kind of mesh Blender's modifier draws otherwise than sorpia fits it is named; a good one passes."""
+    from sorpia.blender import mesh_refusal
+
+    V, F = sorpia.shapes.quad_grid(5, 5)
+    F = F.tolist()
+    up = np.vstack([V, [[0.5, 0.5, 1.0]]])
+    assert mesh_refusal(blender_arrays(V, F)) is None
+    assert "no faces" in mesh_refusal(blender_arrays(V, []))
+    assert "1 loose vertex" in mesh_refusal(blender_arrays(up, F))
+    assert "1 loose edge" in mesh_refusal(blender_arrays(up, F, extra_edges=[(0, 25)]))
+    assert "three or more faces" in mesh_refusal(blender_arrays(up, F + [[6, 7, 25]]))
+    assert "opposite orientation" in mesh_refusal(blender_arrays(V, F[:7] + [F[7][::-1]] + F[8:]))
+    assert "twice" in mesh_refusal(blender_arrays(V, F + [[0, 1, 1, 5]]))
+
+
+def test_two_face_vertices():
+    """Interior vertices of two faces are found; boundary vertices of two faces are not."""
+    from sorpia.blender import two_face_vertices
+
+    V, F = sorpia.shapes.quad_grid(5, 5)
+    F = F.tolist()
+    a, b, c, d = F[5]
+    V = np.vstack([V, 0.5 * (V[a] + V[c])])
+    F[5:6] = [[a, b, c, 25], [c, d, a, 25]]
+    assert two_face_vertices(blender_arrays(V, F)).tolist() == [25]
+    assert two_face_vertices(blender_arrays(*sorpia.shapes.quad_grid(5, 5))).size == 0
+
+
+def test_script_and_extension_share_the_modifier_settings(tmp_path):
+    """The script sets every setting modifier_settings gives, as the extension sets them on a new modifier."""
+    from sorpia.blender import blender_script, modifier_settings
+
+    V, F = sorpia.shapes.quad_grid(5, 5)
+    text = blender_script(V, F, boundary="edge-only", creases=(np.array([[5, 6]]), 2.5))
+    settings = modifier_settings(F, len(V), "edge-only", creases=(np.array([[5, 6]]), 2.5))
+    assert settings == {"subdivision_type": "CATMULL_CLARK", "use_limit_surface": True, "quality": QUALITY_EXACT,
+                        "boundary_smooth": "ALL", "use_creases": True}
+    for key, value in settings.items():
+        assert f"modifier.{key} = {value!r}\n" in text
+
+
+def test_interpolate_float32_measures_the_rounded_cage():
+    """The miss interpolate_float32 reports is that of the float32 cage, as sorpia.limit_points measures it."""
+    from sorpia.blender import interpolate_float32
+
+    V, F, tags = CASES["creases and a corner"]()
+    V = V + 0.05 * np.sin(3 * V[:, [1, 2, 0]])
+    res, cage, miss = interpolate_float32(V, F, {"boundary": "edge-only", **tags}, tol=1e-12)
+    assert res.converged and cage.dtype == np.float32
+    assert np.array_equal(cage, res.control_vertices.astype(np.float32))
+    limit = sorpia.limit_points(cage.astype(np.float64), F, scheme="catmull-clark", boundary="edge-only", **tags)
+    diagonal = np.linalg.norm(V.max(axis=0) - V.min(axis=0))
+    assert miss == pytest.approx(np.linalg.norm(limit - V, axis=1).max() / diagonal, rel=1e-9)
+    assert 1e-10 < miss < 1e-6  # float32's rounding, not the solve's 1e-12
+
+
+def test_extension_zip_layout(tmp_path):
+    """blender/build_extension.py: the manifest Blender reads (schema 1.0.0, Blender 4.2 and later, no
+    permissions, the wheels' paths and the platforms they share) and every file it names inside the zip."""
+    import importlib.util
+    import tomllib
+    import zipfile
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parent.parent / "blender" / "build_extension.py"
+    spec = importlib.util.spec_from_file_location("build_extension", path)
+    build_extension = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(build_extension)
+    assert build_extension.wheel_tags(Path("sorpia-1.2.3-cp311-cp311-manylinux_2_35_x86_64.whl")) == (
+        "1.2.3", ["linux-x64"])
+    assert build_extension.wheel_tags(Path("x-1-cp311-cp311-macosx_11_0_arm64.whl"))[1] == ["macos-arm64"]
+    assert build_extension.wheel_tags(Path("x-1-cp311-cp311-win_amd64.whl"))[1] == ["windows-x64"]
+    with pytest.raises(SystemExit, match="none Blender installs on"):
+        build_extension.wheel_tags(Path("x-1-cp311-cp311-linux_riscv64.whl"))
+    wheels = []
+    for name in ("sorpia-0.9.1-cp311-cp311-manylinux_2_35_x86_64.whl",
+                 "scipy-1.13.1-cp311-cp311-manylinux_2_17_x86_64.manylinux2014_x86_64.whl"):
+        with zipfile.ZipFile(tmp_path / name, "w") as z:
+            z.writestr("x.txt", "a stand-in wheel")
+        wheels.append(tmp_path / name)
+    out = build_extension.build(wheels[0], tmp_path / "dist", (wheels[1],))
+    assert out.name == "sorpia_blender-0.9.1.zip"
+    with zipfile.ZipFile(out) as z:
+        manifest = tomllib.loads(z.read("blender_manifest.toml").decode())
+        names = set(z.namelist())
+    assert manifest["schema_version"] == "1.0.0" and manifest["id"] == "sorpia_blender"
+    assert manifest["version"] == "0.9.1" and manifest["blender_version_min"] == "4.2.0"
+    assert manifest["type"] == "add-on" and "permissions" not in manifest
+    assert manifest["platforms"] == ["linux-x64"]
+    assert {w.removeprefix("./") for w in manifest["wheels"]} == {f"wheels/{w.name}" for w in wheels} <= names
+    assert "__init__.py" in names

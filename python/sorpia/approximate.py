@@ -64,6 +64,7 @@ import numpy as np
 
 from . import _core
 from ._mesh import SubdivisionMesh, mesh_arguments
+from ._scipy import CSRMatrix
 from ._validate import DEFAULT_BOUNDARY, DEFAULT_SCHEME, as_polygons, as_vertices, resolve_scheme
 from .errors import MeshError, ParameterError
 from .surface import LimitSurface
@@ -314,7 +315,7 @@ def as_points(points) -> np.ndarray:
     return as_vertices(arr, "points")
 
 
-def _core_csr(K: scipy.sparse.csr_matrix) -> tuple:
+def _core_csr(K: CSRMatrix) -> tuple:
     """(data, indices, indptr) of a CSR matrix as the core's NormalEquations
     takes it (float64, int32, int32, contiguous)."""
     return (np.ascontiguousarray(K.data, dtype=np.float64), np.ascontiguousarray(K.indices, dtype=np.int32),

@@ -55,7 +55,7 @@ from typing import Optional
 
 import numpy as np
 
-from . import _core
+from . import _core, _scipy
 from ._mesh import SubdivisionMesh, mesh_arguments
 from ._meshinfo import bounding_box_diagonal
 from ._nonmanifold import manifold_only
@@ -261,12 +261,12 @@ class _Refinement:
 
     def __call__(self):
         if self._matrix is None:
-            import scipy.sparse
+            sparse = _scipy.sparse("FairResult.refinement")
 
             topology, rules, levels = self._args
             fine = _core.refine_uniform(topology, rules, levels)
-            self._matrix = scipy.sparse.csr_matrix(fine["refinement"],
-                                                   shape=(int(fine["n_vertices"]), topology.n_vertices))
+            self._matrix = sparse.csr_matrix(fine["refinement"],
+                                             shape=(int(fine["n_vertices"]), topology.n_vertices))
             self._args = None
         return self._matrix
 

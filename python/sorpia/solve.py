@@ -105,9 +105,10 @@ from typing import Callable, Optional
 
 import numpy as np
 
-from . import _core
+from . import _core, _scipy
 from ._mesh import mesh_arguments, mesh_count
 from ._nonmanifold import folded, split
+from ._scipy import CSRMatrix
 from ._validate import (DEFAULT_BOUNDARY, DEFAULT_NONMANIFOLD, DEFAULT_SCHEME, as_boundary, as_integer,
                         as_nonmanifold, as_real, as_rules, as_vertex_count, as_vertices)
 from ._validate import as_integer as _integer  # noqa: F401  (fair.py's name until it takes as_integer)
@@ -248,12 +249,12 @@ class Interpolator:
         """True when B = Gamma Upsilon with Upsilon symmetric ("cg" runs CG, not BiCGSTAB)."""
         return bool(self._impl.symmetrisable)
 
-    def limit_matrix(self) -> scipy.sparse.csr_matrix:
+    def limit_matrix(self) -> CSRMatrix:
         """B as a scipy CSR matrix: the operator the solvers use, as `sorpia.limit_matrix` gives it."""
-        import scipy.sparse  # here, not at import: sorpia's commands need no scipy
+        sparse = _scipy.sparse("Interpolator.limit_matrix")
 
         data, indices, indptr = self._impl.limit_matrix()
-        b = scipy.sparse.csr_matrix((data, indices, indptr), shape=(len(indptr) - 1, len(indptr) - 1))
+        b = sparse.csr_matrix((data, indices, indptr), shape=(len(indptr) - 1, len(indptr) - 1))
         if self._split is not None:  # the split's rows of the caller's vertices, copies' columns added
             return folded(b, self._split.vertex_map, self.n_vertices)
         return b
