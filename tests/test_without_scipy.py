@@ -94,5 +94,7 @@ def test_what_needs_scipy_names_itself_and_the_package(no_scipy):
         sorpia.limit_matrix(F, len(V))
     with pytest.raises(ImportError, match=r"sorpia\.fairness_matrix needs scipy.*pip install scipy"):
         sorpia.fairness_matrix(F, len(V))
-    with pytest.raises(ImportError, match=r"sorpia\.approximate needs scipy.*pip install scipy"):
-        sorpia.approximate(V, V, F)
+    # approximate runs in the core (sorpia::approximate): no scipy, and the fit of a cage's own vertices
+    # from the cage itself stays where it is to the fairness term's small pull.
+    fit = sorpia.approximate(V, V, F, iterations=2)
+    assert fit.rms < 1e-2 * fit.diagonal
