@@ -644,7 +644,7 @@ def test_degenerate_data_is_refused_with_the_reason(points, what):
     # cage (the diagonal 0.248 -> 8.9e-8) while reporting a fit to rounding; refused, saying why. Points on a plane
     # are a surface (a cube cage fits the plane z = 1: test_a_fit_that_converges_stops_early_and_says_why).
     V, F = sorpia.shapes.icosphere(1)
-    with pytest.raises(sorpia.ParameterError, match=what):
+    with pytest.raises(sorpia.MeshError, match=what):
         approximate(points, V, F)
 
 

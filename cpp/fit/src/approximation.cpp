@@ -83,7 +83,7 @@ double bounding_box_diagonal(const double* p, std::size_t k) {
 // that closely, whatever its direction).
 void check_spread(const double* p, std::size_t k, double diagonal) {
   if (!(diagonal > 0))
-    throw ParameterError("the points all lie at one place (" + std::to_string(k) +
+    throw MeshError("the points all lie at one place (" + std::to_string(k) +
                          (k == 1 ? " point" : " points, all equal") +
                          "): there is no surface to fit; give points that span the surface");
   double mean[3] = {0.0, 0.0, 0.0};
@@ -116,7 +116,7 @@ void check_spread(const double* p, std::size_t k, double diagonal) {
     off = std::max(off, std::sqrt(r2));
   }
   if (off <= 1e-12)
-    throw ParameterError("the points all lie on one line (" + std::to_string(k) +
+    throw MeshError("the points all lie on one line (" + std::to_string(k) +
                          " points): no surface is determined by them; give points that span the surface");
 }
 
@@ -316,10 +316,9 @@ ApproximationResult approximate(LimitSurface& surface, const double* points, std
   const auto t0 = Clock::now();
   const double c0 = cpu_now();
   check_options(options);
-  if (k == 0) throw ParameterError("points is empty: there is nothing to approximate");
+  if (k == 0) throw MeshError("points is empty: there is nothing to approximate");
   for (std::size_t i = 0; i < 3 * k; ++i)
-    if (!std::isfinite(points[i]))
-      throw ParameterError("points[" + std::to_string(i / 3) + "] is not finite");
+    if (!std::isfinite(points[i])) throw MeshError("points[" + std::to_string(i / 3) + "] is not finite");
   if (weights) {
     bool any = false;
     for (std::size_t i = 0; i < k; ++i) {
