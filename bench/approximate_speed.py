@@ -10,9 +10,9 @@ random (face, u, v), moved by Gaussian noise of 1e-4 of the bounding-box diagona
 its vertices moved by noise of 2e-3 of the diagonal. Prints, as JSON:
 
 - ``update``: on the footpoints of the starting cage, the same normal equations (A^T A + mu I) V = A^T P + mu V0
-  solved by the core's conjugate gradients (Jacobi preconditioner) and by LSPIA (Deng and Lin 2014) to residuals of 1e-2 ...
-  1e-8 of the start: iterations and seconds of each, and the RMS distance at the footpoints
-  (|A V - P|) each reaches;
+  solved by the core's conjugate gradients (Jacobi preconditioner) and by LSPIA (Deng and Lin 2014) to residuals of
+  1e-2 ... 1e-8 of the start (one iteration of `sorpia.approximate` each): iterations and seconds of each, and the
+  RMS distance after the update (its footpoints re-projected);
 - ``phases``: `sorpia.approximate` with the default update for --iterations, its own timings (footpoints, rows,
   normal equations, solve, report) and history, with the process's CPU seconds and peak resident memory.
 
@@ -47,22 +47,19 @@ def data(n_points: int, n_cage: int):
 
 
 def compare_updates(P, V0, F) -> dict:
+    """One update of `sorpia.approximate` from the starting cage (point distance, no fairness term) by each method
+    to each residual: its iterations and seconds (the core's pipeline times its solve) and the RMS distance after
+    the update's re-projection of the footpoints."""
     import sorpia
-    from sorpia import _core
-    from sorpia.approximate import _normal_equations, _update
 
-    s = sorpia.LimitSurface(V0, F)
-    fid, uv, _, _, normals = _core.closest_points(s._surface, s._topology, P, 4, 10)
-    A = s.rows(fid, uv)[0]
     out = {}
     for name in ("cg", "lspia"):
-        M, rhs = _normal_equations(A, P, normals, V0, 1.0, 0.0, None, method=name)
         rows = []
         for rtol in (1e-2, 1e-4, 1e-6, 1e-8):
-            t0 = time.perf_counter()
-            V, used = _update(M, rhs, V0, name, rtol, 100000)
-            rows.append({"rtol": rtol, "iterations": used, "seconds": time.perf_counter() - t0,
-                         "rms": float(np.sqrt(np.mean(np.sum((A @ V - P) ** 2, axis=1))))})
+            r = sorpia.approximate(P, V0, F, iterations=1, tol=0, fairness=0.0, tangential=1.0, method=name,
+                                   solver_tol=rtol, solver_max_iter=100000)
+            rows.append({"rtol": rtol, "iterations": r.history[1]["solver_iterations"],
+                         "seconds": r.timings["solve"], "rms": r.history[1]["rms"]})
         out[name] = rows
     return out
 

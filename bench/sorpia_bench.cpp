@@ -1,9 +1,15 @@
-// sorpia-bench: times each phase of subdivision-surface interpolation (read, topology,
-// operator, solve, write) on mesh files and generated meshes, with the
-// streaming floor of a sweep and the peak memory. Links the C++ core only.
+// sorpia-bench: times each phase of sorpia's three capabilities on mesh files
+// and generated meshes: interpolation (read, topology, operator, solve, write,
+// with the streaming floor of a sweep and the peak memory), fair
+// interpolation (sorpia::fair_interpolate: plain solve, refinement, K, setup,
+// solve) and approximation (sorpia::approximate of the mesh's vertices by a
+// decimated cage: footpoints, rows, normal equations, solve, report). Links
+// the C++ core only.
 //
 //   sorpia-bench icosphere:8 torus:1000x1000 --method sor,gs,wpia --repeat 5
 //   sorpia-bench bunny.ply --write /tmp/out --json
+//   sorpia-bench --task fair irregular:3000 --levels 2
+//   sorpia-bench --task approximate bunny.obj --cage-vertices 400
 #include <malloc.h>
 
 #include <algorithm>
@@ -22,7 +28,10 @@
 #include <thread>
 #include <vector>
 
+#include "sorpia/approximation.hpp"
+#include "sorpia/cage.hpp"
 #include "sorpia/errors.hpp"
+#include "sorpia/fair_interpolation.hpp"
 #include "sorpia/interpolator.hpp"
 #include "sorpia/io.hpp"
 #include "sorpia/limit.hpp"
@@ -49,6 +58,7 @@ MESH is a mesh file (.obj .off .ply .stl) or a generated mesh:
   polygons:NUxNV[:SEED]  the quad torus with triangles, pentagons, hexagons
 
 options:
+  --task NAME        interpolate (default), fair or approximate
   --method LIST      comma-separated: auto sor gs pia wpia cg hss whss gmres
                      cgls, or none (time topology and operator only);
                      default sor
@@ -74,6 +84,18 @@ options:
   --json             print JSON instead of a table
   -h, --help         this text
 
+fair (every vertex a target; the plain solve with --method's first, --tol
+and --max-iter; --threads caps K and the products with it):
+  --levels N         refinement levels (default 1)
+  --membrane X       the membrane weight beside the thin plate's 1 (default 0)
+  --fair-tol X       the energy's stop rule (default 1e-6)
+approximate (the mesh's vertices fitted by the mesh decimated, the cage
+split into quads under catmull-clark):
+  --cage-vertices N  the cage's vertices (default: 2% of the mesh's, at least 50)
+  --iterations N     updates at most (default 10)
+  --fairness X       the fairness weight (default 3e-4)
+  --update NAME      cg (default) or lspia (point distance, tangential 1)
+
 Times are wall-clock seconds. "floor" is one plain streaming pass
 over the arrays a sweep reads and writes (the operator, V0 as 3 doubles
 and V as 4 doubles a vertex); sweep/floor = (solve seconds per
@@ -85,7 +107,10 @@ struct Usage : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+enum class Task { Interpolate, Fair, Approximate };
+
 struct Options {
+  Task task = Task::Interpolate;
   std::vector<std::string> meshes;
   std::vector<std::string> methods{"sor"};
   double tol = 1e-10;
@@ -102,6 +127,14 @@ struct Options {
   std::string write_dir, format = "ply";
   int repeat = 1;
   bool json = false;
+  // fair
+  int levels = 1;
+  double membrane = 0.0, fair_tol = 1e-6;
+  // approximate
+  int cage_vertices = 0;  // 0: 2% of the mesh's, at least 50
+  int iterations = 10;
+  double fairness = 3e-4;
+  sorpia::ApproximationUpdate update = sorpia::ApproximationUpdate::CG;
 };
 
 double to_double(const std::string& flag, const std::string& s) {
@@ -142,6 +175,28 @@ Options parse(int argc, char** argv) {
     if (a == "-h" || a == "--help") {
       std::cout << kUsage;
       std::exit(0);
+    } else if (a == "--task") {
+      const std::string t = value();
+      if (t == "interpolate") o.task = Task::Interpolate;
+      else if (t == "fair") o.task = Task::Fair;
+      else if (t == "approximate") o.task = Task::Approximate;
+      else throw Usage("--task: interpolate, fair or approximate, got '" + t + "'");
+    } else if (a == "--levels") {
+      o.levels = to_int(a, value(), 1);
+    } else if (a == "--membrane") {
+      o.membrane = to_double(a, value());
+    } else if (a == "--fair-tol") {
+      o.fair_tol = to_double(a, value());
+    } else if (a == "--cage-vertices") {
+      o.cage_vertices = to_int(a, value(), 4);
+    } else if (a == "--iterations") {
+      o.iterations = to_int(a, value(), 1);
+    } else if (a == "--fairness") {
+      o.fairness = to_double(a, value());
+    } else if (a == "--update") {
+      const std::string u = value();
+      if (u != "cg" && u != "lspia") throw Usage("--update: cg or lspia, got '" + u + "'");
+      o.update = u == "cg" ? sorpia::ApproximationUpdate::CG : sorpia::ApproximationUpdate::LSPIA;
     } else if (a == "--method") {
       o.methods = split(value(), ',');
       for (const auto& m : o.methods)
@@ -463,6 +518,129 @@ MeshRun run_mesh(const Options& o, const std::string& spec) {
   return run;
 }
 
+// ---- fair interpolation and approximation ------------------------------------------
+
+// One mesh's run of a pipeline: seconds per phase over the repeats (medians reported, in this order) and facts
+// of the last run (counts, iterations, stop reasons, figures), printed as they are.
+struct PipelineRun {
+  std::string label;
+  std::vector<std::pair<std::string, std::vector<double>>> phases;
+  std::vector<std::pair<std::string, std::string>> facts;
+  long peak_kb = 0;
+
+  void add(const std::string& phase, double seconds) {
+    for (auto& [name, times] : phases)
+      if (name == phase) {
+        times.push_back(seconds);
+        return;
+      }
+    phases.push_back({phase, {seconds}});
+  }
+  void fact(const std::string& name, const std::string& value) {
+    for (auto& [n, v] : facts)
+      if (n == name) {
+        v = value;
+        return;
+      }
+    facts.push_back({name, value});
+  }
+};
+
+std::string num(double x);
+
+// sorpia::fair_interpolate of every vertex: the Interpolator's build, then the pipeline's phases.
+PipelineRun run_fair(const Options& o, const std::string& spec) {
+  PipelineRun run;
+  run.label = label_of(spec);
+  for (int rep = 0; rep < o.repeat; ++rep) {
+    sorpia::Tags tags;
+    const BenchMesh mesh = load(spec, o.triangulate, o.file_tags, tags);
+    reset_peak();
+    const auto t0 = Clock::now();
+    sorpia::Topology topology(mesh.mesh);
+    add_random_creases(topology, o.crease_share, o.crease_sharpness, tags);
+    sorpia::Interpolator interp(std::move(topology), sorpia::Rules{o.scheme, o.boundary, std::move(tags)});
+    run.add("build", seconds_since(t0));
+    sorpia::FairInterpolationOptions fo;
+    fo.levels = o.levels;
+    fo.membrane = o.membrane;
+    fo.solve.tol = o.fair_tol;
+    fo.solve.threads = o.threads;
+    fo.plain.method = sorpia::parse_method(o.methods.front() == "none" ? "auto" : o.methods.front());
+    fo.plain.tol = o.tol;
+    fo.plain.max_iter = o.max_iter;
+    const auto t1 = Clock::now();
+    const sorpia::FairInterpolationResult r =
+        sorpia::fair_interpolate(interp, mesh.vertices().data(), nullptr, 0, fo);
+    const double total = seconds_since(t1);
+    run.add("plain", r.plain_seconds);
+    run.add("refine", r.refine_seconds);
+    run.add("energy", r.energy_seconds);
+    run.add("setup", r.solution.setup_seconds);
+    run.add("solve", r.solution.seconds);
+    run.add("total", seconds_since(t0));
+    run.add("pipeline", total);
+    run.fact("vertices", std::to_string(mesh.n_vertices()));
+    run.fact("fine_vertices", std::to_string(r.fine.n_vertices));
+    run.fact("plain_iterations", std::to_string(r.plain.iterations));
+    run.fact("iterations", std::to_string(r.solution.iterations));
+    run.fact("stop", r.solution.stop_reason);
+    run.fact("energy_over_plain", num(r.solution.energy / r.solution.start_energy));
+    run.fact("max_error", num(r.solution.max_error));
+    if (rep == 0) run.peak_kb = status_kb("VmHWM");
+  }
+  return run;
+}
+
+// sorpia::approximate of the mesh's vertices by the mesh decimated (OpenMesh's Decimater; quads under
+// Catmull-Clark): the cage's build, then the pipeline's phases.
+PipelineRun run_approximate(const Options& o, const std::string& spec) {
+  PipelineRun run;
+  run.label = label_of(spec);
+  for (int rep = 0; rep < o.repeat; ++rep) {
+    sorpia::Tags tags;
+    const BenchMesh mesh = load(spec, true, false, tags);
+    reset_peak();
+    const std::size_t n = mesh.n_vertices();
+    const std::size_t wanted =
+        o.cage_vertices > 0 ? static_cast<std::size_t>(o.cage_vertices) : std::max<std::size_t>(50, n / 50);
+    auto t0 = Clock::now();
+    sorpia::DecimateOptions d;
+    d.scheme = o.scheme;
+    std::string stopped;
+    sorpia::Mesh cage = sorpia::decimate(mesh.mesh, wanted, d, &stopped);
+    run.add("cage", seconds_since(t0));
+    t0 = Clock::now();
+    if (!cage.uniform() || cage.face_size != 3) cage.face_vertex_counts = cage.counts();
+    const std::vector<double> cage_vertices = cage.vertices;
+    const sorpia::Topology topology(cage);
+    sorpia::LimitSurface surface(topology, cage_vertices.data(), o.scheme, o.boundary);
+    run.add("surface", seconds_since(t0));
+    sorpia::ApproximationOptions ao;
+    ao.iterations = o.iterations;
+    ao.fairness = o.fairness;
+    ao.update = o.update;
+    if (o.update == sorpia::ApproximationUpdate::LSPIA) ao.tangential = 1.0;
+    const sorpia::ApproximationResult r = sorpia::approximate(surface, mesh.vertices().data(), n, nullptr, ao);
+    run.add("footpoints", r.seconds.footpoints);
+    run.add("rows", r.seconds.rows);
+    run.add("normal", r.seconds.normal);
+    run.add("solve", r.seconds.solve);
+    run.add("report", r.seconds.report);
+    run.add("pipeline", r.seconds.total);
+    run.fact("points", std::to_string(n));
+    run.fact("cage_vertices", std::to_string(cage_vertices.size() / 3));
+    run.fact("iterations", std::to_string(r.iterations));
+    run.fact("best_iteration", std::to_string(r.best_iteration));
+    run.fact("stop", r.stop_reason);
+    run.fact("rms_start", num(r.history.front().rms_relative));
+    run.fact("rms", num(r.history[static_cast<std::size_t>(r.best_iteration)].rms_relative));
+    run.fact("max", num(r.history[static_cast<std::size_t>(r.best_iteration)].max_relative));
+    if (rep == 0) run.peak_kb = status_kb("VmHWM");
+  }
+  return run;
+}
+
 // ---- output --------------------------------------------------------------------
 
 std::string json_str(const std::string& s) {
@@ -577,6 +755,41 @@ void print_table(const Options& o, const std::vector<MeshRun>& runs) {
   }
 }
 
+const char* task_name(Task t) {
+  return t == Task::Fair ? "fair" : t == Task::Approximate ? "approximate" : "interpolate";
+}
+
+void print_pipeline_json(const Options& o, const std::vector<PipelineRun>& runs) {
+  std::printf("{\n  \"machine\": {\"cpu\": %s, \"hardware_threads\": %u},\n", json_str(cpu_model()).c_str(),
+              std::thread::hardware_concurrency());
+  std::printf("  \"task\": %s,\n  \"options\": {\"scheme\": %s, \"boundary\": %s, \"threads\": %d, \"repeat\": %d},\n",
+              json_str(task_name(o.task)).c_str(), json_str(sorpia::scheme_name(o.scheme)).c_str(),
+              json_str(sorpia::boundary_name(o.boundary)).c_str(), o.threads, o.repeat);
+  std::printf("  \"meshes\": [");
+  for (std::size_t k = 0; k < runs.size(); ++k) {
+    const PipelineRun& r = runs[k];
+    std::printf("%s\n    {\"mesh\": %s, \"peak_rss_bytes\": %ld", k ? "," : "", json_str(r.label).c_str(),
+                1024 * r.peak_kb);
+    for (const auto& [name, times] : r.phases) std::printf(", %s: %s", json_str(name).c_str(), num(median(times)).c_str());
+    for (const auto& [name, value] : r.facts) std::printf(", %s: %s", json_str(name).c_str(), json_str(value).c_str());
+    std::printf("}");
+  }
+  std::printf("\n  ]\n}\n");
+}
+
+void print_pipeline_table(const Options& o, const std::vector<PipelineRun>& runs) {
+  std::printf("sorpia-bench --task %s: %s, %u hardware threads; %s; %s; seconds, medians of %d\n", task_name(o.task),
+              cpu_model().c_str(), std::thread::hardware_concurrency(), sorpia::scheme_name(o.scheme),
+              sorpia::boundary_name(o.boundary), o.repeat);
+  for (const PipelineRun& r : runs) {
+    std::printf("%s:", r.label.c_str());
+    for (const auto& [name, times] : r.phases) std::printf(" %s %.3f", name.c_str(), median(times));
+    std::printf("; peak %.1f MB\n ", r.peak_kb / 1024.0);
+    for (const auto& [name, value] : r.facts) std::printf(" %s %s", name.c_str(), value.c_str());
+    std::printf("\n");
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -588,8 +801,16 @@ int main(int argc, char** argv) {
     return 2;
   }
   std::vector<MeshRun> runs;
+  std::vector<PipelineRun> pipelines;
   try {
-    for (const auto& spec : o.meshes) runs.push_back(run_mesh(o, spec));
+    for (const auto& spec : o.meshes) {
+      if (o.task == Task::Fair)
+        pipelines.push_back(run_fair(o, spec));
+      else if (o.task == Task::Approximate)
+        pipelines.push_back(run_approximate(o, spec));
+      else
+        runs.push_back(run_mesh(o, spec));
+    }
   } catch (const Usage& e) {
     std::fprintf(stderr, "sorpia-bench: %s\n\n%s", e.what(), kUsage);
     return 2;
@@ -597,7 +818,9 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "sorpia-bench: %s\n", e.what());
     return 1;
   }
-  if (o.json)
+  if (o.task != Task::Interpolate)
+    (o.json ? print_pipeline_json : print_pipeline_table)(o, pipelines);
+  else if (o.json)
     print_json(o, runs);
   else
     print_table(o, runs);

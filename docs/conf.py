@@ -32,6 +32,8 @@ root_doc = "index"
 default_role = "py:obj"
 autodoc_member_order = "bysource"
 autodoc_typehints = "description"
+# sorpia._scipy.CSRMatrix is Any at run time (scipy is imported only where needed): show what it stands for.
+autodoc_type_aliases = {"CSRMatrix": "scipy.sparse.csr_matrix"}
 autodoc_default_options = {"members": True, "undoc-members": False, "show-inheritance": True}
 napoleon_google_docstring = False
 napoleon_numpy_docstring = True

@@ -53,3 +53,25 @@ def test_bench_writes_control_vertices_that_interpolate(sorpia_bench, tmp_path):
     # B V reproduces the grid's vertices: E_k/E_0 < 1e-10 with E_0 of order
     # 0.1 here, and OBJ keeps every digit.
     np.testing.assert_allclose(sorpia.limit_points(V, F), V0, atol=1e-10)
+
+
+def test_bench_times_fair_interpolation_and_approximation(sorpia_bench):
+    # --task fair and --task approximate run the core's pipelines (sorpia::fair_interpolate, sorpia::approximate)
+    # and report each phase; the figures are the pipelines' own: fair interpolation meets its targets to rounding
+    # and bends less than the plain surface, approximation lowers the RMS distance of the cage as decimated.
+    fair = json.loads(subprocess.run([sorpia_bench, "--task", "fair", "irregular:300", "--json"],
+                                     capture_output=True, text=True, check=True).stdout)
+    assert fair["task"] == "fair"
+    (m,) = fair["meshes"]
+    assert all(m[phase] >= 0 for phase in ("build", "plain", "refine", "energy", "setup", "solve", "total"))
+    assert int(m["fine_vertices"]) > int(m["vertices"]) and m["stop"] == "converged"
+    assert float(m["max_error"]) < 1e-12 and float(m["energy_over_plain"]) < 1
+    approx = json.loads(subprocess.run([sorpia_bench, "--task", "approximate", "icosphere:4", "--cage-vertices", "60",
+                                        "--iterations", "3", "--json"], capture_output=True, text=True,
+                                       check=True).stdout)
+    (a,) = approx["meshes"]
+    assert all(a[phase] >= 0 for phase in ("cage", "surface", "footpoints", "rows", "normal", "solve", "report"))
+    assert int(a["points"]) == 2562 and int(a["cage_vertices"]) == 60
+    assert float(a["rms"]) < float(a["rms_start"]) and 1 <= int(a["iterations"]) <= 3
+    out = subprocess.run([sorpia_bench, "--task", "nothing", "grid:6x5"], capture_output=True, text=True)
+    assert out.returncode == 2 and "--task: interpolate, fair or approximate" in out.stderr

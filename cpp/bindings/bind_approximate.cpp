@@ -1,8 +1,13 @@
 // Bindings of approximation (cpp/fit footpoints.hpp, normal_matrix.hpp): the
 // k-d tree, the footpoints of data points on a limit surface, and the normal
 // matrix of the fit and its normal equations (solved by the fitting layer's
-// PCG). Conversion and error translation only.
+// PCG), and approximation's pipeline (approximation.hpp). Conversion and error
+// translation only.
+#include <pybind11/stl.h>
+
 #include "bindings.hpp"
+#include "sorpia/approximation.hpp"
+#include "sorpia/detail/scaling.hpp"
 #include "sorpia/footpoints.hpp"
 #include "sorpia/normal_matrix.hpp"
 
@@ -58,6 +63,34 @@ struct NormalInput {
  private:
   Vertices weights_;
 };
+
+// A record as the Python layer's history holds it (keys in this order).
+py::dict record_dict(const sorpia::ApproximationRecord& r, double offset) {
+  py::dict d;
+  d["iteration"] = r.iteration;
+  d["rms"] = r.rms;
+  d["max"] = r.max;
+  d["surface_rms"] = r.surface_rms;
+  d["surface_max"] = r.surface_max;
+  d["rms_relative"] = r.rms_relative;
+  d["max_relative"] = r.max_relative;
+  d["surface_rms_relative"] = r.surface_rms_relative;
+  d["surface_max_relative"] = r.surface_max_relative;
+  d["solver_iterations"] = r.solver_iterations;
+  d["seconds"] = r.seconds + offset;
+  return d;
+}
+
+py::dict timings_dict(const sorpia::ApproximationTimings& t) {
+  py::dict d;
+  d["footpoints"] = t.footpoints;
+  d["rows"] = t.rows;
+  d["normal"] = t.normal;
+  d["solve"] = t.solve;
+  d["report"] = t.report;
+  d["total"] = t.total;
+  return d;
+}
 
 sorpia::FootpointOptions footpoint_options(int grid, int max_steps) {
   sorpia::FootpointOptions o;
@@ -232,6 +265,82 @@ void bind_approximate(py::module_& m) {
         },
         "surface"_a, "topology"_a, "points"_a.noconvert(), "face_ids"_a.noconvert(), "uv"_a.noconvert(),
         "max_steps"_a);
+
+  m.def(
+      "scale_exponent",
+      [](const py::args& arrays) {
+        double largest = 0.0;
+        for (const auto& a : arrays) {
+          const auto v = a.cast<py::array_t<double, py::array::c_style>>();
+          largest = sorpia::detail::largest_magnitude(v.data(), static_cast<std::size_t>(v.size()), largest);
+        }
+        return sorpia::detail::scale_exponent(largest);
+      },
+      "The exponent e of the core's exact scaling (sorpia/detail/scaling.hpp) for data whose largest magnitude\n"
+      "is that of the arrays given: 0 within 2^+-200.");
+
+  m.def("rms_levelled", &sorpia::rms_levelled, "bests"_a, "tol"_a, "window"_a,
+        "approximation's stop test on the lowest RMS after each iteration (sorpia::rms_levelled).");
+
+  m.def(
+      "approximate",
+      [](sorpia::LimitSurface& surface, const Vertices& points, const py::object& weights, int iterations, double tol,
+         double fairness, double tangential, const std::string& method, double solver_tol, long long solver_max_iter,
+         int grid, int newton_steps, int report_level, const py::object& callback, double seconds_before) {
+        check_shape(points, 3, "points");
+        const auto k = static_cast<std::size_t>(points.shape(0));
+        Vertices w;
+        if (!weights.is_none()) {
+          w = weights.cast<Vertices>();
+          if (w.ndim() != 1 || static_cast<std::size_t>(w.shape(0)) != k)
+            throw sorpia::ParameterError("weights must have one entry per point");
+        }
+        sorpia::ApproximationOptions o;
+        o.iterations = iterations;
+        o.tol = tol;
+        o.fairness = fairness;
+        o.tangential = tangential;
+        if (method != "cg" && method != "lspia")
+          throw sorpia::ParameterError("method = '" + method + "' must be one of cg, lspia");
+        o.update = method == "cg" ? sorpia::ApproximationUpdate::CG : sorpia::ApproximationUpdate::LSPIA;
+        o.solver_tol = solver_tol;
+        o.solver_max_iter = solver_max_iter;
+        o.footpoints = footpoint_options(grid, newton_steps);
+        o.report_level = report_level;
+        sorpia::ApproximationProgress progress;
+        if (!callback.is_none())
+          progress = [&callback, seconds_before](const sorpia::ApproximationRecord& r) {
+            py::gil_scoped_acquire gil;
+            callback(record_dict(r, seconds_before));
+          };
+        sorpia::ApproximationResult r;
+        {
+          LongCall call;
+          r = sorpia::approximate(surface, points.data(), k, weights.is_none() ? nullptr : w.data(), o, progress);
+        }
+        py::list history;
+        for (const auto& rec : r.history) history.append(record_dict(rec, seconds_before));
+        py::dict out;
+        out["control_vertices"] = to_numpy(std::move(r.control_vertices), 3);
+        out["face_ids"] = to_numpy(std::move(r.footpoints.face_ids), 0);
+        out["uv"] = to_numpy(std::move(r.footpoints.uv), 2);
+        out["distances"] = to_numpy(std::move(r.footpoints.distances), 0);
+        out["iterations"] = r.iterations;
+        out["stop_reason"] = r.stop_reason;
+        out["best_iteration"] = r.best_iteration;
+        out["diagonal"] = r.diagonal;
+        out["history"] = history;
+        py::dict timings = timings_dict(r.seconds);
+        timings["cpu"] = timings_dict(r.cpu_seconds);
+        out["timings"] = timings;
+        return out;
+      },
+      "surface"_a, "points"_a.noconvert(), "weights"_a, "iterations"_a, "tol"_a, "fairness"_a, "tangential"_a,
+      "method"_a, "solver_tol"_a, "solver_max_iter"_a, "grid"_a, "newton_steps"_a, "report_level"_a, "callback"_a,
+      "seconds_before"_a = 0.0,
+      "Approximation's pipeline (sorpia::approximate) from the surface's control vertices: a dict with\n"
+      "control_vertices, face_ids, uv, distances, iterations, stop_reason, best_iteration, diagonal, history\n"
+      "(records as dicts, seconds counted from seconds_before) and timings; callback(record) after each record.");
 }
 
 }  // namespace sorpia_py

@@ -1,15 +1,15 @@
 // Bindings of the fitting layer: the fairness matrix, uniform refinement
-// with its matrix R, and the fair solve. Conversion and error translation only.
+// with its matrix R, and fair interpolation's pipeline (sorpia::fair_interpolate). Conversion and error translation only.
 #include <optional>
 
 #include <pybind11/stl.h>
 
-#include <chrono>
+#include <string>
 #include <vector>
 
 #include "bindings.hpp"
-#include "sorpia/detail/parallel.hpp"
-#include "sorpia/fair.hpp"
+#include "sorpia/fair_interpolation.hpp"
+#include "sorpia/interpolator.hpp"
 #include "sorpia/fairness.hpp"
 #include "sorpia/refine.hpp"
 
@@ -87,46 +87,41 @@ void bind_fit(py::module_& m) {
   m.attr("MAX_REFINEMENT_LEVELS") = sorpia::kMaxRefinementLevels;
 
   m.def(
-      "fair_solve",
-      [](const sorpia::Topology& topology, const sorpia::Rules& rules, double thin_plate, double membrane,
-         const Indices& targets, const Vertices& positions, const Vertices& start, double tol, int window,
-         long long max_iter, int threads, std::optional<sorpia::Tags> energy_tags, int depth,
-         std::optional<Vertices> reference) {
-        const std::size_t n = topology.n_vertices();
-        if (reference) {
-          check_shape(*reference, 3, "reference");
-          check_rows(*reference, n, "reference", "the fine mesh");
-        }
+      "fair_interpolate",
+      [](sorpia::Interpolator& coarse, const Vertices& vertices, const Indices& targets,
+         const sorpia::SolveOptions& plain, int levels, double thin_plate, double membrane, double tol, int window,
+         long long max_iter, int threads, const std::string& semi_sharp, int depth, bool reference) {
+        check_shape(vertices, 3, "vertices");
+        check_rows(vertices, coarse.n_vertices(), "vertices", "the mesh");
         if (targets.ndim() != 1) throw sorpia::ParameterError("targets must be one-dimensional");
-        check_shape(positions, 3, "positions");
-        if (positions.shape(0) != targets.shape(0))
-          throw sorpia::ParameterError("positions must have one row per target");
-        check_shape(start, 3, "start");
-        check_rows(start, n, "start", "the fine mesh");
-        sorpia::FairOptions options;
-        options.tol = tol;
-        options.window = window;
-        options.max_iter = max_iter;
-        options.threads = threads;
-        sorpia::FairSolution s;
-        double energy_seconds = 0.0;
+        sorpia::FairInterpolationOptions options;
+        options.levels = levels;
+        options.thin_plate = thin_plate;
+        options.membrane = membrane;
+        options.solve.tol = tol;
+        options.solve.window = window;
+        options.solve.max_iter = max_iter;
+        options.solve.threads = threads;
+        if (semi_sharp != "sharp" && semi_sharp != "as-tagged")
+          throw sorpia::ParameterError("semi_sharp must be 'sharp' or 'as-tagged', got '" + semi_sharp + "'");
+        options.semi_sharp = semi_sharp == "sharp" ? sorpia::SemiSharp::Sharp : sorpia::SemiSharp::AsTagged;
+        options.depth = depth;
+        options.reference_metric = reference;
+        options.plain = plain;
+        sorpia::FairInterpolationResult r;
         {
           LongCall call;
-          // `threads` caps K's assembly and Bfr's evaluation in it too.
-          const sorpia::detail::ThreadCap cap(threads);
-          // K stays in the core: built here, used by fair_solve, never copied.
-          const auto t0 = std::chrono::steady_clock::now();
-          sorpia::FairnessQuadrature quadrature;
-          quadrature.depth = depth;
-          const sorpia::CsrMatrix k = sorpia::fairness_matrix(
-              topology, sorpia::Rules{rules.scheme, rules.boundary, energy_tags ? *energy_tags : rules.tags},
-              thin_plate, membrane, quadrature, reference ? reference->data() : nullptr,
-              /*sorted_columns=*/false);
-          energy_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-          s = sorpia::fair_solve(topology, rules, k, targets.data(), static_cast<std::size_t>(targets.shape(0)),
-                                 positions.data(), start.data(), options);
+          r = sorpia::fair_interpolate(coarse, vertices.data(), targets.data(),
+                                       static_cast<std::size_t>(targets.shape(0)), options);
         }
         py::dict out;
+        out["plain"] = py::cast(std::move(r.plain));
+        const auto face_size = r.fine.mesh.face_size;
+        out["faces"] = to_numpy(std::move(r.fine.mesh.face_vertex_indices), face_size);
+        out["n_vertices"] = r.fine.n_vertices;
+        out["tags"] = std::move(r.fine.tags);
+        if (!r.fine.refinement.indptr.empty()) out["refinement"] = csr_tuple(std::move(r.fine.refinement));
+        sorpia::FairSolution& s = r.solution;
         out["vertices"] = to_numpy(std::move(s.vertices), 3);
         out["energies"] = to_numpy(std::move(s.energies), 0);
         out["energy"] = s.energy;
@@ -134,19 +129,21 @@ void bind_fit(py::module_& m) {
         out["iterations"] = s.iterations;
         out["stop_reason"] = s.stop_reason;
         out["max_error"] = s.max_error;
-        out["free_vertices"] = s.free_vertices;
-        out["seconds"] = s.seconds;
-        out["setup_seconds"] = s.setup_seconds;
-        out["energy_seconds"] = energy_seconds;
+        py::dict seconds;
+        seconds["plain"] = r.plain_seconds;
+        seconds["refine"] = r.refine_seconds;
+        seconds["energy"] = r.energy_seconds;
+        seconds["setup"] = s.setup_seconds;
+        seconds["solve"] = s.seconds;
+        out["seconds"] = seconds;
         return out;
       },
-      "topology"_a, "rules"_a, "thin_plate"_a, "membrane"_a, "targets"_a.noconvert(), "positions"_a.noconvert(),
-      "start"_a.noconvert(), "tol"_a, "window"_a, "max_iter"_a, "threads"_a, "energy_tags"_a = py::none(),
-      "depth"_a = sorpia::FairnessQuadrature{}.depth, "reference"_a.noconvert() = py::none(),
-      "Least tr(V^T K V) with the limit positions of `targets` at `positions` (sorpia::fair_solve), K the\n"
-      "fairness matrix of the topology under `rules` with the given weights (sorpia::fairness_matrix; its tags\n"
-      "energy_tags when given, the quadrature's depth, the reference metric when given): a dict, with\n"
-      "energy_seconds (K) besides the solve's own.");
+      "interpolator"_a, "vertices"_a.noconvert(), "targets"_a.noconvert(), "plain"_a, "levels"_a, "thin_plate"_a,
+      "membrane"_a, "tol"_a, "window"_a, "max_iter"_a, "threads"_a, "semi_sharp"_a, "depth"_a, "reference"_a,
+      "Fair interpolation's pipeline (sorpia::fair_interpolate): the plain solve on the Interpolator's mesh, the\n"
+      "refinement, K and the fair solve. A dict: plain (InterpolationResult), faces, n_vertices, tags (the fine\n"
+      "mesh's), refinement (R as CSR arrays, only where the reference metric built it), vertices, energies,\n"
+      "energy, start_energy, iterations, stop_reason, max_error and seconds per phase.");
 }
 
 }  // namespace sorpia_py

@@ -34,7 +34,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from . import _core
+from . import _core, _scipy
 from ._meshdata import merge_sharpness
 from ._remap import core_faces, faces_as_given, mapped_tags
 from ._validate import DEFAULT_BOUNDARY, as_boundary, as_tags
@@ -144,10 +144,9 @@ def split(faces, n_vertices: int, boundary: str = DEFAULT_BOUNDARY, *, creases=N
 
 def _columns_to_input(vertex_map: np.ndarray, n: int):
     """The (len(vertex_map), n) 0/1 matrix that adds each copy's column to its input vertex's."""
-    import scipy.sparse
-
+    sparse = _scipy.sparse("the limit matrix of a non-manifold mesh")
     k = len(vertex_map)
-    return scipy.sparse.csr_matrix((np.ones(k), (np.arange(k), vertex_map)), shape=(k, n))
+    return sparse.csr_matrix((np.ones(k), (np.arange(k), vertex_map)), shape=(k, n))
 
 
 def folded(b, vertex_map: np.ndarray, n: int):

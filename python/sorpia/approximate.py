@@ -40,6 +40,10 @@ by the limit surface S(V) of a cage with control vertices V and fixed faces:
   samples of it weighted by area (`surface_samples`), so that the fit
   minimises a quadrature of the squared distance over the surface.
 
+The whole run (footpoints, updates, stopping rule, records) is the C++
+core's ``sorpia::approximate``; this module checks the arguments, samples a
+dense mesh's surface and builds the result.
+
 Distances are reported both ways at every iteration: data to surface (the
 footpoint distances) and surface to data (from the vertices of a uniform
 tessellation of the limit surface, exact limit points, to the nearest data
@@ -57,13 +61,11 @@ from dataclasses import dataclass, field
 from typing import Callable, Optional
 
 import numpy as np
-import scipy.sparse
 
 from . import _core
 from ._mesh import SubdivisionMesh, mesh_arguments
-from ._meshinfo import bounding_box_diagonal
+from ._scipy import CSRMatrix
 from ._validate import DEFAULT_BOUNDARY, DEFAULT_SCHEME, as_polygons, as_vertices, resolve_scheme
-from .energy import fairness_matrix
 from .errors import MeshError, ParameterError
 from .surface import LimitSurface
 
@@ -79,19 +81,8 @@ DEFAULT_FAIRNESS = 3e-4
 # The stopping rule's default: the blend goes on lowering the RMS distance by a few parts in a thousand per
 # iteration on noisy data long after the surface has settled (fitting the noise); the scans' fits fall faster.
 DEFAULT_TOL = 3e-3
-# The quadrature depth of approximation's K: a regulariser, whose exactness at extraordinary vertices matters
-# less than its cost (depth 4 on a 20k-vertex cage costs several times the rest of a 1M-point update).
-_FAIRNESS_DEPTH = 0
-# The proximal weight mu, relative to the mean diagonal of A^T W A.
-_PROXIMAL = 1e-6
-# The stopping rule's window: iterations over which the RMS distance must fall by less than tol each on average.
+# The stopping rule's window (the core's ApproximationOptions::window), for `_levelled`.
 _WINDOW = 3
-# An RMS distance below this fraction of the diagonal: the data lie on the surface, within the footpoints' and the
-# updates' rounding ("exact").
-_EXACT = 1e-13
-# A footpoint found afresh replaces the old one when it is closer by more than this fraction of the diagonal: another
-# local minimum of the distance, not the rounding of the same one.
-_CLOSER = 1e-10
 
 
 @dataclass
@@ -130,7 +121,8 @@ class ApproximationResult:
         The iteration whose control vertices and footpoints are returned:
         that of the lowest RMS distance (an update that raised it is not
         returned); `rms`, `max_error` and the report's ``final`` are its
-        record's.
+        record's, measured after a fresh search of every footpoint on its
+        surface (the closer kept: `distances`, `face_ids` and `uv` are those).
     method : str
         The update that ran, "cg" or "lspia".
     fairness : float
@@ -238,11 +230,9 @@ def _levelled(bests, tol: float) -> bool:
     """The stopping test on the lowest RMS distance after each iteration so
     far (non-increasing): True when over the last _WINDOW iterations it fell
     by at most tol of itself per iteration on average (with tol = 0: not at
-    all). One small step between large ones does not stop a run."""
-    if len(bests) <= _WINDOW:
-        return False
-    before = bests[-1 - _WINDOW]
-    return before - bests[-1] <= _WINDOW * tol * before
+    all). One small step between large ones does not stop a run. The core's
+    rule (sorpia::rms_levelled), which approximate runs."""
+    return _core.rms_levelled([float(b) for b in bests], float(tol), _WINDOW)
 
 
 def _weights(weights, k: int) -> Optional[np.ndarray]:
@@ -325,116 +315,11 @@ def as_points(points) -> np.ndarray:
     return as_vertices(arr, "points")
 
 
-class _Fit:
-    """One approximation run's state: the surface, the data and its k-d tree."""
-
-    def __init__(self, points, surface: LimitSurface, grid: int, steps: int, level: int):
-        self.points = points
-        self.surface = surface
-        self.grid, self.steps, self.level = grid, steps, level
-        self.data_index = None
-        self.timings = dict.fromkeys(("footpoints", "rows", "normal", "solve", "report"), 0.0)
-        self.cpu = dict.fromkeys(self.timings, 0.0)
-
-    def _timed(self, phase: str, fn, *args):
-        t, c = time.perf_counter(), time.process_time()
-        out = fn(*args)
-        self.timings[phase] += time.perf_counter() - t
-        self.cpu[phase] += time.process_time() - c
-        return out
-
-    def footpoints(self, previous=None):
-        core, topo = self.surface._surface, self.surface._topology
-        if previous is None:
-            return self._timed("footpoints", _core.closest_points, core, topo, self.points, self.grid, self.steps)
-        return self._timed("footpoints", _core.refine_footpoints, core, topo, self.points, previous[0],
-                           previous[1], self.steps)
-
-    def rows(self, face_ids, uv) -> scipy.sparse.csr_matrix:
-        return self._timed("rows", lambda: self.surface.rows(face_ids, uv)[0])
-
-    def surface_to_data(self) -> np.ndarray:
-        def run():
-            if self.data_index is None:
-                self.data_index = _core.PointIndex(self.points)
-            vertices, _ = self.surface.tessellate(self.level)
-            return self.data_index.nearest(np.ascontiguousarray(vertices))[1]
-
-        return self._timed("report", run)
-
-
-def _lspia(M: scipy.sparse.csr_matrix, rhs: np.ndarray, x: np.ndarray, rtol: float, max_iter: int):
-    """LSPIA (Deng and Lin 2014) on the normal equations: x += D^-1 (rhs - M x),
-    D the row sums of |M|. Without the fairness and proximal terms M = A^T A
-    with A >= 0 and rows summing to 1, so D_j is the sum of column j of A: each
-    control vertex moves by its points' residuals weighted by the basis,
-    divided by the sum of those weights. Stops when every column's residual
-    is below rtol times its initial one (or 1e-15 times its right-hand side)."""
-    scale = np.asarray(abs(M).sum(axis=1)).ravel()
-    inv = np.where(scale > 0, 1.0 / np.where(scale > 0, scale, 1.0), 0.0)[:, None]
-    r = rhs - M @ x
-    stop = np.maximum(rtol * np.linalg.norm(r, axis=0), 1e-15 * np.linalg.norm(rhs, axis=0))
-    for k in range(1, max_iter + 1):
-        if (np.linalg.norm(r, axis=0) <= stop).all():
-            return x, k - 1
-        x += inv * r
-        r = rhs - M @ x
-    return x, max_iter
-
-
-def _row_weights(points, normals, tangential: float, weights=None):
-    """Each point's weight W_i in the fit and W_i p_i: W_i = w_i I (tangential
-    = 1: point distance; returned as (k, 1) w_i, or None when all are 1) or
-    W_i = w_i (tangential I + (1 - tangential) n_i n_i^T) (returned as (k, 6):
-    xx, xy, xz, yy, yz, zz; a point whose normal is zero keeps W_i = w_i I);
-    w_i the points' weights (1 when None)."""
-    if tangential == 1.0:
-        w = None if weights is None else np.ascontiguousarray(weights[:, None])
-        return w, (points if weights is None else weights[:, None] * points)
-    return _core.blend_weights(np.ascontiguousarray(points), np.ascontiguousarray(normals), tangential,
-                               None if weights is None else np.ascontiguousarray(weights))
-
-
-def _normal_equations(A, points, normals, V, tangential: float, fairness: float, K, weights=None,
-                      method: str = DEFAULT_UPDATE):
-    """The normal equations of one update, (M, rhs): M = A^T W A + fairness m
-    K + mu I, rhs = A^T W P + mu V, m the mean diagonal of A^T W A and mu =
-    _PROXIMAL m, W_i as `_row_weights` gives them; K None or, for "cg", the
-    core's (data, indices, indptr) arrays of it (`_core_csr`), for "lspia" a
-    scipy CSR matrix. For "cg" M is the core's
-    `NormalEquations` (the normal matrix stays in the core: with tangential =
-    1 one (n, n) matrix for the three coordinates, below 1 one system of 3x3
-    blocks over the 3n unknowns); for "lspia" (tangential = 1 only) a scipy
-    CSR matrix."""
-    n = A.shape[1]
-    A = A.tocsr()
-    w, wp = _row_weights(points, normals, tangential, weights)
-    if method == "cg":
-        M = _core.NormalEquations(A.indptr, A.indices, A.data, n, w, K, fairness, _PROXIMAL)
-        return M, A.T @ wp + M.mu * V
-    ip, ix, val = _core.normal_matrix(A.indptr, A.indices, A.data, n, w)
-    AtA = scipy.sparse.csr_matrix((val[:, 0], ix, ip), shape=(n, n))
-    mean_diag = float(AtA.diagonal().mean()) or 1.0
-    mu = _PROXIMAL * mean_diag
-    M = AtA + scipy.sparse.identity(n, format="csr") * mu
-    if K is not None:
-        M = M + (fairness * mean_diag) * K
-    return M.tocsr(), A.T @ wp + mu * V
-
-
-def _core_csr(K: scipy.sparse.csr_matrix) -> tuple:
+def _core_csr(K: CSRMatrix) -> tuple:
     """(data, indices, indptr) of a CSR matrix as the core's NormalEquations
     takes it (float64, int32, int32, contiguous)."""
     return (np.ascontiguousarray(K.data, dtype=np.float64), np.ascontiguousarray(K.indices, dtype=np.int32),
             np.ascontiguousarray(K.indptr, dtype=np.int32))
-
-
-def _update(M, rhs, V, method: str, solver_tol: float, solver_max_iter: int):
-    """New control vertices from the normal equations: (V, solver iterations)."""
-    if method == "lspia":
-        return _lspia(M, rhs, V.copy(), solver_tol, solver_max_iter)
-    x, used, _ = M.solve(np.ascontiguousarray(rhs), V, solver_tol, solver_max_iter)
-    return x, used
 
 
 def approximate(points, cage_vertices, cage_faces=None, *, scheme: str = DEFAULT_SCHEME,
@@ -574,99 +459,28 @@ def approximate(points, cage_vertices, cage_faces=None, *, scheme: str = DEFAULT
     cage_vertices = as_vertices(cage_vertices, "cage_vertices")
     if len(cage_faces) == 0:
         raise MeshError("cage_faces is empty: the cage needs at least one face")
-    # Data beyond 2^+-200 in magnitude is fitted scaled by a power of two (exact, as `interpolate` scales its
-    # targets): squared distances, areas and the solver's norms would overflow or underflow. Records and the
-    # result are in the caller's units.
-    largest = max(float(np.abs(points).max(initial=0.0)), float(np.abs(cage_vertices).max(initial=0.0)))
-    e = int(np.frexp(largest)[1]) if largest > 0 else 0
-    e = e if abs(e) > 200 else 0
-    points, cage_vertices = np.ldexp(points, -e), np.ldexp(cage_vertices, -e)
+    # The pipeline runs in the core (sorpia::approximate: footpoints, updates, the stop rule, the records, the exact
+    # scaling of data beyond 2^+-200). A dense mesh's surface is sampled here, on the data as the core scales it
+    # (areas square the coordinates), and the samples handed over in the caller's units.
     if faces is not None:
-        points, weights = surface_samples(points, faces, sampling or "area")
+        e = _core.scale_exponent(points, cage_vertices)
+        samples, weights = surface_samples(np.ldexp(points, -e), faces, sampling or "area")
+        points = np.ldexp(samples, e)
     weights = _weights(weights, len(points))
-    data = np.ldexp(points, e)
     scheme = resolve_scheme(scheme, cage_faces)
     surface = LimitSurface(cage_vertices, cage_faces, boundary=boundary, scheme=scheme, creases=creases,
                            corners=corners, holes=holes)
-    fit = _Fit(points, surface, grid, newton_steps, report_level)
-    diagonal = bounding_box_diagonal(points)
-    unit = diagonal if diagonal > 0 else 1.0
-    history = []
-
-    def rms(d: np.ndarray) -> float:
-        return float(np.sqrt(np.mean(d ** 2) if weights is None else np.dot(weights, d ** 2) / len(d)))
-
-    def record(iteration: int, distances: np.ndarray, solver_iterations: int) -> dict:
-        s = fit.surface_to_data()
-        rec = {"iteration": iteration, "rms": rms(distances), "max": float(distances.max()),
-               "surface_rms": float(np.sqrt(np.mean(s ** 2))), "surface_max": float(s.max())}
-        for key in ("rms", "max", "surface_rms", "surface_max"):
-            rec[key + "_relative"] = rec[key] / unit
-            rec[key] = float(np.ldexp(rec[key], e))
-        rec["solver_iterations"] = solver_iterations
-        rec["seconds"] = time.perf_counter() - t0
-        history.append(rec)
-        if callback is not None:
-            callback(dict(rec))
-        return rec
-
-    face_ids, uv, _, distances, normals = fit.footpoints()
-    record(0, distances, 0)
-    V = cage_vertices.copy()
-    best = (rms(distances), V, face_ids, uv, distances, 0)
-    bests = [best[0]]  # the lowest RMS so far, after each iteration
-    K = None
-    if fairness > 0:
-        K = fairness_matrix(cage_faces, V.shape[0], scheme=scheme, boundary=boundary, creases=creases,
-                            corners=corners, holes=holes, depth=_FAIRNESS_DEPTH)
-        if method == "cg":  # the core's arrays, converted once for every update
-            K = _core_csr(K)
-    stop_reason = "max_iter"
-    searched = 0  # the iteration after which every footpoint was last searched for afresh
-    done = 0
-    for k in range(1, iterations + 1):
-        # The rows in face order: the points of a face share their columns, which the normal matrix reads once.
-        order = np.argsort(face_ids, kind="stable")
-        # The rows A (the largest array of a run) live only until the normal equations are formed from them.
-        M, rhs = fit._timed("normal", _normal_equations, fit.rows(face_ids[order], uv[order]), points[order],
-                            normals[order], V, tangential, fairness, K,
-                            None if weights is None else weights[order], method)
-        V, used = fit._timed("solve", _update, M, rhs, V, method, solver_tol, solver_max_iter)
-        del M, rhs
-        surface.set_vertices(V)
-        face_ids, uv, _, distances, normals = fit.footpoints((face_ids, uv))
-        done = k
-        rec = record(k, distances, used)
-        current = rms(distances)
-        if current <= best[0]:
-            best = (current, V, face_ids, uv, distances, k)
-        bests.append(best[0])
-        if rec["rms_relative"] <= _EXACT:
-            stop_reason = "exact"
-            break
-        if k == iterations or k - searched < _WINDOW or not _levelled(bests, tol):
-            continue
-        # The lowest RMS fell by less than tol per iteration over the last _WINDOW. Re-projection from the previous
-        # footpoints finds local minima of the distance: before stopping, every footpoint is searched for afresh
-        # (the grid's nearest sample, then Gauss-Newton) and the closer one kept; a gain of more than tol goes on.
-        searched = k
-        f2, uv2, _, d2, n2 = fit.footpoints()
-        closer = d2 < distances - _CLOSER * unit
-        if rms(np.where(closer, d2, distances)) < (1 - tol) * current:
-            face_ids, distances = np.where(closer, f2, face_ids), np.where(closer, d2, distances)
-            uv, normals = np.where(closer[:, None], uv2, uv), np.where(closer[:, None], n2, normals)
-            continue
-        stop_reason = "converged"
-        break
-    # The iterate of the lowest RMS distance (an update that raised it is not returned).
-    _, V, face_ids, uv, distances, best_iteration = best
-    fit.timings["total"] = time.perf_counter() - t0
-    fit.timings["cpu"] = dict(fit.cpu, total=time.process_time() - c0)
-    return ApproximationResult(control_vertices=np.ldexp(V, e), face_ids=face_ids, uv=uv,
-                               distances=np.ldexp(distances, e), points=data, weights=weights, iterations=done,
-                               stop_reason=stop_reason,
-                               best_iteration=best_iteration, method=method,
-                               fairness=fairness, tangential=tangential, diagonal=float(np.ldexp(diagonal, e)),
-                               history=history, timings=fit.timings,
-                               mesh=SubdivisionMesh(np.ldexp(V, e), cage_faces, scheme=scheme, boundary=boundary,
+    out = _core.approximate(surface._surface, points, weights, iterations, tol, fairness, tangential, method,
+                            solver_tol, solver_max_iter, grid, newton_steps, report_level, callback,
+                            time.perf_counter() - t0)
+    out["timings"]["total"] = time.perf_counter() - t0
+    out["timings"]["cpu"]["total"] = time.process_time() - c0
+    V = out["control_vertices"]
+    return ApproximationResult(control_vertices=V, face_ids=out["face_ids"], uv=out["uv"],
+                               distances=out["distances"], points=points, weights=weights,
+                               iterations=out["iterations"], stop_reason=out["stop_reason"],
+                               best_iteration=out["best_iteration"], method=method, fairness=fairness,
+                               tangential=tangential, diagonal=out["diagonal"], history=out["history"],
+                               timings=out["timings"],
+                               mesh=SubdivisionMesh(V, cage_faces, scheme=scheme, boundary=boundary,
                                                     creases=creases, corners=corners, holes=holes))

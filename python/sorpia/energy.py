@@ -68,7 +68,7 @@ from typing import Optional
 
 import numpy as np
 
-from . import _core
+from . import _core, _scipy
 from ._mesh import mesh_arguments, mesh_count
 from ._validate import DEFAULT_BOUNDARY, DEFAULT_SCHEME, as_integer, as_real, as_rules, as_vertices
 from .limit import built, warn_unreferenced
@@ -133,7 +133,7 @@ def fairness_matrix(faces, n_vertices: Optional[int] = None, *, scheme: str = DE
         A weight negative, not finite or both zero; gauss_points, depth or
         semi_sharp out of range (the message names the option).
     """
-    import scipy.sparse  # here, not at import: sorpia's commands need no scipy
+    sparse = _scipy.sparse("sorpia.fairness_matrix")
 
     semi_sharp = check_semi_sharp(semi_sharp)
     faces, n_vertices, given = mesh_count(faces, n_vertices, dict(
@@ -145,7 +145,7 @@ def fairness_matrix(faces, n_vertices: Optional[int] = None, *, scheme: str = DE
         reference = as_vertices(reference)
     data, indices, indptr = matrix_arrays(topo, rules, thin_plate, membrane, gauss_points, depth, semi_sharp,
                                           reference)
-    return scipy.sparse.csr_matrix((data, indices, indptr), shape=(n, n))
+    return sparse.csr_matrix((data, indices, indptr), shape=(n, n))
 
 
 def thin_plate_energy(vertices, faces=None, *, scheme: str = DEFAULT_SCHEME, boundary: str = DEFAULT_BOUNDARY,

@@ -22,7 +22,8 @@ with its semi-sharp creases and corners taken as infinitely sharp, so that
 the bending is measured on each side of a crease and the fairing does not
 flatten the creases: see `sorpia.energy`).
 
-The solve (sorpia::fair_solve in the C++ core): the constraint rows, the fine
+The pipeline (plain solve, refinement, K, solve) is the C++ core's
+sorpia::fair_interpolate; its solve (sorpia::fair_solve): the constraint rows, the fine
 mesh's limit matrix B at the targets' children, touch no other target's child
 (a vertex child's limit mask covers the faces around it, whose other corners
 are edge and face children), so each constraint gives its vertex from the
@@ -54,14 +55,14 @@ from typing import Optional
 
 import numpy as np
 
-from . import _core
+from . import _core, _scipy
 from ._mesh import SubdivisionMesh, mesh_arguments
 from ._meshinfo import bounding_box_diagonal
 from ._nonmanifold import manifold_only
 from ._validate import DEFAULT_BOUNDARY, DEFAULT_SCHEME, as_rules, as_vertices
 from .errors import MeshError, ParameterError
 from .limit import TAGS_DOC as _TAGS_DOC
-from .energy import check_semi_sharp, energy_tags
+from .energy import check_semi_sharp
 from .solve import InterpolationResult, Interpolator, _integer, check_options
 
 METRICS = ("parameter", "reference")
@@ -250,17 +251,22 @@ class _Refinement:
     interpolation needs only R V_plain (Far's PrimvarRefiner), so R is built
     when FairResult.refinement is read (or a reference metric needs it)."""
 
-    def __init__(self, topology, rules, levels: int):
+    def __init__(self, topology, rules, levels: int, built=None):
         self._args, self._matrix = (topology, rules, levels), None
+        if built is not None:  # the core built R for the reference metric: (data, indices, indptr)
+            import scipy.sparse
+
+            self._matrix = scipy.sparse.csr_matrix(built, shape=(len(built[2]) - 1, topology.n_vertices))
+            self._args = None
 
     def __call__(self):
         if self._matrix is None:
-            import scipy.sparse
+            sparse = _scipy.sparse("FairResult.refinement")
 
             topology, rules, levels = self._args
             fine = _core.refine_uniform(topology, rules, levels)
-            self._matrix = scipy.sparse.csr_matrix(fine["refinement"],
-                                                   shape=(int(fine["n_vertices"]), topology.n_vertices))
+            self._matrix = sparse.csr_matrix(fine["refinement"],
+                                             shape=(int(fine["n_vertices"]), topology.n_vertices))
             self._args = None
         return self._matrix
 
@@ -357,9 +363,9 @@ def fair_interpolate(vertices, faces=None, *, scheme: str = DEFAULT_SCHEME, leve
     arrays, n, rules = as_rules(faces, n, scheme=scheme, boundary=boundary, creases=creases, corners=corners,
                                 holes=holes, count_name="len(vertices)")
     target_ids = as_targets(targets, n)
-    timings = {}
 
-    # One topology for the plain solve and the refinement: the Interpolator's.
+    # The Interpolator's topology and B serve the plain solve and the refinement; the pipeline runs in the core
+    # (sorpia::fair_interpolate: plain solve, refinement, K, the fair solve, the exact scaling).
     t = time.perf_counter()
     rule_options = dict(scheme=scheme, boundary=boundary, creases=creases, corners=corners, holes=holes)
     try:
@@ -367,66 +373,27 @@ def fair_interpolate(vertices, faces=None, *, scheme: str = DEFAULT_SCHEME, leve
     except MeshError as exc:
         raise manifold_only(exc, "fair interpolation") from None
     build = time.perf_counter() - t
-    _core.check_refinement(interp.topology, rules, levels)  # refuses a fine mesh too big before any work
-
-    t = time.perf_counter()
-    plain = interp.solve(v0)
-    timings["plain"] = build + time.perf_counter() - t
-
-    # The fine mesh and the start R V_plain (Far's PrimvarRefiner); R itself only when FairResult.refinement is read.
-    t = time.perf_counter()
-    coarse = np.ascontiguousarray(plain.control_vertices, dtype=np.float64)
-    fine = _core.refine_uniform(interp.topology, rules, levels, vertices=coarse, refinement=False)
-    timings["refine"] = time.perf_counter() - t
-    refinement = _Refinement(interp.topology, rules, levels)
-
-    n_fine = int(fine["n_vertices"])
-    fine_faces = fine["faces"]
-    fine_rules = _core.Rules(scheme=rules.scheme, boundary=rules.boundary, tags=fine["tags"])
-    try:
-        fine_topology = _core.Topology(fine_faces, n_fine) if rules.scheme == _core.Scheme.loop else _core.Topology(
-            np.full(len(fine_faces), 4, np.int32), np.ascontiguousarray(fine_faces.reshape(-1)), n_fine)
-    except MeshError as exc:
-        # Far refines by topology, a face list names faces by their vertices: two faces back to back (a pillow)
-        # refine into faces whose middle triangles share all their vertices under Loop, along edges of four faces.
-        raise MeshError(f"the mesh refined {levels} time{'s' if levels > 1 else ''} is not a face list sorpia can "
-                        f"take ({exc}); under Loop this comes from two triangles with the same vertices in the "
-                        "opposite order (a pillow), whose refined faces meet along edges of four faces: fair "
-                        "interpolation cannot refine them (interpolate can fit such a mesh)") from None
-    start = fine["vertices"]
-    reference, e = None, 0
-    if metric == "reference":
-        # The thin plate in the reference's own metric does not change when the data and the reference are scaled
-        # together; beyond 2^+-200 the metric's squares leave double's range, so the solve then works scaled by a
-        # power of two (exact) and the vertices come back in the caller's units. The membrane term grows with the
-        # square of the scale (it is not scale-free), so a membrane with such data is refused.
-        largest = float(np.abs(v0).max(initial=0.0))
-        e = int(np.frexp(largest)[1]) if largest > 0 else 0
-        e = e if abs(e) > 200 else 0
-        if e and membrane > 0:
-            raise ParameterError(f"metric='reference' with a membrane term needs coordinates within 2^+-200 in "
-                                 f"magnitude (the largest is {largest:.3g}): the membrane energy scales with the "
-                                 "square of the units; scale the data, or use the thin plate alone")
-        reference = np.ascontiguousarray(np.ldexp(refinement() @ v0, -e))
-    sol = _core.fair_solve(fine_topology, fine_rules, thin_plate, membrane, target_ids,
-                           np.ascontiguousarray(np.ldexp(v0[target_ids], -e)),
-                           np.ascontiguousarray(np.ldexp(start, -e)), tol, ENERGY_WINDOW, int(max_iter),
-                           int(threads), energy_tags=energy_tags(fine_rules.tags, n_fine, len(fine_faces), semi_sharp),
-                           depth=depth, reference=reference)
-    timings["energy"], timings["setup"], timings["solve"] = (sol["energy_seconds"], sol["setup_seconds"],
-                                                             sol["seconds"])
-
+    t_plain = time.perf_counter()
+    plain_options = check_options()
+    out = _core.fair_interpolate(interp._impl, v0, target_ids, plain_options, levels, thin_plate, membrane, tol,
+                                 ENERGY_WINDOW, int(max_iter), int(threads), semi_sharp, depth, metric == "reference")
+    seconds = out["seconds"]
+    plain = interp._solve(v0, "auto", plain_options, None, t_plain, keep_targets=True, result=out["plain"])
+    timings = {"plain": build + seconds["plain"], "refine": seconds["refine"], "energy": seconds["energy"],
+               "setup": seconds["setup"], "solve": seconds["solve"]}
+    refinement = _Refinement(interp.topology, rules, levels, out.get("refinement"))
+    fine_faces = out["faces"]
     diagonal = bounding_box_diagonal(v0)
-    max_error = float(np.ldexp(sol["max_error"], e))
-    fine_creases, fine_corners, fine_holes = _fine_tags(fine["tags"])
+    max_error = float(out["max_error"])
+    fine_creases, fine_corners, fine_holes = _fine_tags(out["tags"])
     timings["total"] = time.perf_counter() - t0
     return FairResult(
-        control_vertices=np.ldexp(sol["vertices"], e), faces=fine_faces, creases=fine_creases, corners=fine_corners,
+        control_vertices=out["vertices"], faces=fine_faces, creases=fine_creases, corners=fine_corners,
         holes=fine_holes, scheme=_core.scheme_name(rules.scheme), boundary=_core.boundary_name(rules.boundary),
-        levels=levels, targets=target_ids.astype(np.int64), energy=float(sol["energy"]),
-        plain_energy=float(sol["start_energy"]), history=sol["energies"], max_error=max_error,
+        levels=levels, targets=target_ids.astype(np.int64), energy=float(out["energy"]),
+        plain_energy=float(out["start_energy"]), history=out["energies"], max_error=max_error,
         max_error_relative=max_error / diagonal if diagonal > 0 else max_error,
-        iterations=int(sol["iterations"]), stop_reason=sol["stop_reason"], seconds=timings["total"],
+        iterations=int(out["iterations"]), stop_reason=out["stop_reason"], seconds=timings["total"],
         timings=timings, plain=plain, _refinement=refinement)
 
 

@@ -19,7 +19,7 @@ from ._mesh import FaceVarying, SubdivisionMesh, mesh_arguments, tags_dict
 from ._usd import _mesh as _usd_mesh
 from ._usd import _open as _usd_open
 from ._usd import is_usd, read_usd, write_usd
-from ._validate import (AUTO_SCHEME, DEFAULT_BOUNDARY, Polygons, all_triangles, as_boundary, as_polygons, as_tags,
+from ._validate import (AUTO_SCHEME, DEFAULT_BOUNDARY, Polygons, as_boundary, as_polygons, as_tags,
                         as_vertices, resolve_scheme)
 from .errors import AttributeWarning, FormatWarning, MeshFileError, ParameterError, UnknownTagWarning
 
@@ -434,7 +434,7 @@ def write_mesh_file(path, vertices, faces=None, *, scheme=None, boundary=None, c
         warnings.warn(f"{name}: the boundary rule {given['boundary']} is not written: {fmt} holds none, and a "
                       f"reader takes {DEFAULT_BOUNDARY}; .obj and USD files hold it", FormatWarning, stacklevel=2)
     if "scheme" in given and "scheme" not in held:
-        auto = "loop" if all_triangles(faces) else "catmull-clark"
+        auto = resolve_scheme(AUTO_SCHEME, faces)  # what a reader of the file takes
         if given["scheme"] != auto:
             dropped.append("scheme")
             warnings.warn(f"{name}: the scheme {given['scheme']} is not written: {fmt} holds no subdivision "

@@ -7,9 +7,10 @@ from typing import Optional
 
 import numpy as np
 
-from . import _core
+from . import _core, _scipy
 from ._mesh import mesh_arguments, mesh_count
 from ._nonmanifold import folded, refusal_hint, split
+from ._scipy import CSRMatrix
 from ._validate import (DEFAULT_BOUNDARY, DEFAULT_NONMANIFOLD, DEFAULT_SCHEME, as_nonmanifold, as_rules, as_tags,
                         as_vertex_count, as_vertices)
 from .errors import MeshError, UnreferencedVerticesWarning
@@ -200,7 +201,7 @@ limit_points.__doc__ = limit_points.__doc__.replace("{tags}", TAGS_DOC).replace(
 
 def limit_matrix(faces, n_vertices: Optional[int] = None, *, scheme: str = DEFAULT_SCHEME,
                  boundary: str = DEFAULT_BOUNDARY, creases=None, corners=None, holes=None,
-                 nonmanifold: str = DEFAULT_NONMANIFOLD) -> scipy.sparse.csr_matrix:
+                 nonmanifold: str = DEFAULT_NONMANIFOLD) -> CSRMatrix:
     """The limit matrix B (paper eq. 7) as a scipy CSR matrix, (n, n) float64.
 
     Row i holds the limit mask of vertex i as OpenSubdiv evaluates it, so that
@@ -209,7 +210,7 @@ def limit_matrix(faces, n_vertices: Optional[int] = None, *, scheme: str = DEFAU
     tags (`creases`, `corners`, `holes`) and `nonmanifold`. ``limit_matrix(mesh)``
     takes a `sorpia.SubdivisionMesh`'s faces, vertex count and rules.
     """
-    import scipy.sparse  # here, not at import: sorpia's commands need no scipy
+    sparse = _scipy.sparse("sorpia.limit_matrix")
 
     faces, n_vertices, rules = mesh_count(faces, n_vertices, dict(
         scheme=scheme, boundary=boundary, creases=creases, corners=corners, holes=holes, nonmanifold=nonmanifold),
@@ -227,4 +228,4 @@ def limit_matrix(faces, n_vertices: Optional[int] = None, *, scheme: str = DEFAU
     topo = built(lambda: _core.Topology(*arrays, n))
     warn_unreferenced(topo, stacklevel=3)
     data, indices, indptr = _core.limit_matrix(topo, rules)
-    return scipy.sparse.csr_matrix((data, indices, indptr), shape=(n, n))
+    return sparse.csr_matrix((data, indices, indptr), shape=(n, n))

@@ -105,9 +105,10 @@ from typing import Callable, Optional
 
 import numpy as np
 
-from . import _core
+from . import _core, _scipy
 from ._mesh import mesh_arguments, mesh_count
 from ._nonmanifold import folded, split
+from ._scipy import CSRMatrix
 from ._validate import (DEFAULT_BOUNDARY, DEFAULT_NONMANIFOLD, DEFAULT_SCHEME, as_boundary, as_integer,
                         as_nonmanifold, as_real, as_rules, as_vertex_count, as_vertices)
 from ._validate import as_integer as _integer  # noqa: F401  (fair.py's name until it takes as_integer)
@@ -248,12 +249,12 @@ class Interpolator:
         """True when B = Gamma Upsilon with Upsilon symmetric ("cg" runs CG, not BiCGSTAB)."""
         return bool(self._impl.symmetrisable)
 
-    def limit_matrix(self) -> scipy.sparse.csr_matrix:
+    def limit_matrix(self) -> CSRMatrix:
         """B as a scipy CSR matrix: the operator the solvers use, as `sorpia.limit_matrix` gives it."""
-        import scipy.sparse  # here, not at import: sorpia's commands need no scipy
+        sparse = _scipy.sparse("Interpolator.limit_matrix")
 
         data, indices, indptr = self._impl.limit_matrix()
-        b = scipy.sparse.csr_matrix((data, indices, indptr), shape=(len(indptr) - 1, len(indptr) - 1))
+        b = sparse.csr_matrix((data, indices, indptr), shape=(len(indptr) - 1, len(indptr) - 1))
         if self._split is not None:  # the split's rows of the caller's vertices, copies' columns added
             return folded(b, self._split.vertex_map, self.n_vertices)
         return b
@@ -441,14 +442,17 @@ class Interpolator:
         return r
 
     def _solve(self, v0: np.ndarray, method: str, options: _core.SolveOptions, callback, t0: float,
-               initial: Optional[np.ndarray] = None, keep_targets: bool = False) -> InterpolationResult:
+               initial: Optional[np.ndarray] = None, keep_targets: bool = False,
+               result: Optional[InterpolationResult] = None) -> InterpolationResult:
         """solve() on input already validated: `v0` from as_vertices, `options`
         from check_options, `initial` from _as_initial (interpolate validates
         them before building B and calls this). keep_targets: `update` moves
         these targets from now on. Warnings point at the caller of solve() or
-        interpolate()."""
+        interpolate(). `result`: the core already ran this solve (fair
+        interpolation's pipeline, sorpia::fair_interpolate): only what follows
+        it here (state, warnings, wall time)."""
+        r = self._impl.solve(v0, options, callback, initial, keep_targets) if result is None else result
         tol_value, max_iter = options.tol, options.max_iter
-        r = self._impl.solve(v0, options, callback, initial, keep_targets)
         if keep_targets:
             self._last_update = None
             self._solved_method = method

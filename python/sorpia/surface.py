@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import _core
+from . import _core, _scipy
 from ._mesh import SubdivisionMesh, mesh_arguments
 from ._nonmanifold import split
 from ._validate import (DEFAULT_BOUNDARY, DEFAULT_NONMANIFOLD, DEFAULT_SCHEME, Polygons, as_nonmanifold, as_rules,
@@ -294,18 +294,18 @@ class LimitSurface:
             vertices the derivative rows are those of Bfr's Gregory patches
             (see `evaluate`'s notes).
         """
-        import scipy.sparse
+        sparse = _scipy.sparse("LimitSurface.rows")
 
         if isinstance(derivatives, bool) or derivatives not in (0, 1, 2):
             raise ParameterError(f"derivatives = {derivatives!r} must be 0, 1 or 2")
         face_ids, uv = self._points(face_ids, uv)
         n = self.n_vertices
-        mats = [scipy.sparse.csr_matrix(t, shape=(len(face_ids), n))
+        mats = [sparse.csr_matrix(t, shape=(len(face_ids), n))
                 for t in self._surface.rows(face_ids, uv, int(derivatives))]
         if self._vertex_map is not None:
             # V_split = V[vertex_map]: compose with the selection matrix.
-            select = scipy.sparse.csr_matrix((np.ones(n), (np.arange(n), self._vertex_map)),
-                                             shape=(n, self._n_input))
+            select = sparse.csr_matrix((np.ones(n), (np.arange(n), self._vertex_map)),
+                                       shape=(n, self._n_input))
             mats = [(m @ select).tocsr() for m in mats]
             for m in mats:
                 m.sort_indices()

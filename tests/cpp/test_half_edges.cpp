@@ -13,6 +13,7 @@
 
 #include "sorpia/detail/half_edges.hpp"
 #include "sorpia/shapes.hpp"
+#include "sorpia/topology.hpp"
 
 namespace {
 
@@ -69,6 +70,43 @@ TEST(EdgeGroups, PolygonsMatchAMap) {
   const Ints corner_face = sorpia::detail::corner_faces(off);
   const sorpia::detail::FaceList fl{m.face_vertex_indices.data(), off.data(), corner_face.data(), m.n_faces()};
   expect_same_groups(fl, m.n_vertices());
+}
+
+}  // namespace
+
+namespace {
+
+// Topology::half_edge_twins and find_half_edges against a std::map from the
+// directed edge (a, b) to its half-edge, on triangles, quads and mixed
+// polygons, closed and open: the twin of a -> b is b -> a, or -1 on the
+// boundary; every edge is found from either end, a pair that is no edge is not.
+TEST(Topology, HalfEdgeTwinsAndFoundEdgesMatchAMap) {
+  for (const sorpia::Mesh& m : {sorpia::irregular(300, 2), sorpia::grid(6, 5), sorpia::quad_irregular(300, 2),
+                                sorpia::polygon_torus(8, 6, 2), sorpia::quad_grid(5, 4)}) {
+    const sorpia::Topology t(m);
+    const auto& fi = t.face_indices();
+    std::map<std::pair<std::int32_t, std::int32_t>, std::int32_t> directed;
+    for (std::size_t f = 0; f < t.n_faces(); ++f)
+      for (std::int32_t i = 0; i < t.face_size(f); ++i) {
+        const std::int32_t h = t.face_offset(f) + i;
+        directed[{fi[h], fi[t.face_offset(f) + (i + 1) % t.face_size(f)]}] = h;
+      }
+    const Ints twin = t.half_edge_twins();
+    ASSERT_EQ(twin.size(), fi.size());
+    std::size_t boundary = 0;
+    Ints pairs, lowest;
+    for (const auto& [ab, h] : directed) {
+      const auto it = directed.find({ab.second, ab.first});
+      EXPECT_EQ(twin[static_cast<std::size_t>(h)], it == directed.end() ? -1 : it->second) << "half-edge " << h;
+      boundary += it == directed.end();
+      pairs.insert(pairs.end(), {ab.second, ab.first});  // from the other end
+      lowest.push_back(it == directed.end() ? h : std::min(h, it->second));
+    }
+    EXPECT_EQ(boundary, t.n_boundary_edges());
+    EXPECT_EQ(t.find_half_edges(pairs.data(), pairs.size() / 2), lowest);
+    const std::int32_t far[2] = {fi[0], fi[0]};  // a vertex and itself: no edge
+    EXPECT_EQ(t.find_half_edges(far, 1), Ints{-1});
+  }
 }
 
 }  // namespace

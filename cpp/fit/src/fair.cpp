@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "sorpia/detail/parallel.hpp"
+#include "sorpia/detail/scaling.hpp"
 #include "sorpia/errors.hpp"
 #include "sorpia/interrupt.hpp"
 #include "sorpia/limit_operator.hpp"
@@ -308,20 +309,16 @@ FairSolution fair_solve(const Topology& topology, const Rules& rules, const CsrM
   check_options(options);
   // The energy squares the coordinates and the iteration multiplies them
   // further: data beyond 2^+-200 in magnitude is solved scaled by a power of
-  // two (exact, as sorpia::solve scales its targets), the result scaled back.
-  double largest = 0.0;
-  for (std::size_t i = 0; i < 3 * n_targets; ++i) largest = std::max(largest, std::abs(positions[i]));
-  for (std::size_t i = 0; i < 3 * topology.n_vertices(); ++i) largest = std::max(largest, std::abs(start[i]));
-  int e = 0;
-  if (largest > 0.0 && std::isfinite(largest)) std::frexp(largest, &e);
-  if (std::abs(e) <= 200)
-    return solve_scaled(topology, rules, energy, targets, n_targets, positions, start, options);
+  // two (exact, as sorpia::solve scales its targets: detail/scaling.hpp), the result scaled back.
+  const int e = detail::scale_exponent(detail::largest_magnitude(
+      start, 3 * topology.n_vertices(), detail::largest_magnitude(positions, 3 * n_targets)));
+  if (e == 0) return solve_scaled(topology, rules, energy, targets, n_targets, positions, start, options);
   std::vector<double> p(positions, positions + 3 * n_targets), v(start, start + 3 * topology.n_vertices());
-  for (double& x : p) x = std::ldexp(x, -e);
-  for (double& x : v) x = std::ldexp(x, -e);
+  detail::scale_pow2(p.data(), p.size(), -e);
+  detail::scale_pow2(v.data(), v.size(), -e);
   FairSolution out = solve_scaled(topology, rules, energy, targets, n_targets, p.data(), v.data(), options);
-  for (double& x : out.vertices) x = std::ldexp(x, e);
-  for (double& x : out.energies) x = std::ldexp(x, 2 * e);
+  detail::scale_pow2(out.vertices.data(), out.vertices.size(), e);
+  detail::scale_pow2(out.energies.data(), out.energies.size(), 2 * e);
   out.energy = std::ldexp(out.energy, 2 * e);
   out.start_energy = std::ldexp(out.start_energy, 2 * e);
   out.max_error = std::ldexp(out.max_error, e);

@@ -1,10 +1,8 @@
 #include "sorpia/refine.hpp"
 
-#include <opensubdiv/far/primvarRefiner.h>
 #include <opensubdiv/far/stencilTable.h>
 #include <opensubdiv/far/stencilTableFactory.h>
 #include <opensubdiv/far/topologyRefiner.h>
-#include <opensubdiv/far/topologyRefinerFactory.h>
 
 #include <algorithm>
 #include <cmath>
@@ -80,21 +78,6 @@ void check_refinement(const Topology& topology, const Rules& rules, int levels) 
                          human_bytes(static_cast<double>(avail)) + " of memory is available: use fewer levels");
 }
 
-namespace {
-
-// A point of PrimvarRefinerReal's interpolation.
-struct Point {
-  double p[3];
-  void Clear(void* = nullptr) { p[0] = p[1] = p[2] = 0.0; }
-  void AddWithWeight(const Point& src, double w) {
-    p[0] += w * src.p[0];
-    p[1] += w * src.p[1];
-    p[2] += w * src.p[2];
-  }
-};
-
-}  // namespace
-
 RefinedMesh refine_uniform(const Topology& topology, const Rules& rules, int levels, const double* vertices,
                            bool with_refinement) {
   check_refinement(topology, rules, levels);
@@ -102,37 +85,20 @@ RefinedMesh refine_uniform(const Topology& topology, const Rules& rules, int lev
   const std::size_t n = topology.n_vertices();
 
   detail::Refiner osd = detail::make_refiner(topology, scheme, rules.boundary, rules.tags);
-  Far::TopologyRefiner& refiner = *osd.refiner;
-  Far::TopologyRefiner::UniformOptions options(levels);
   // The last level's edges (their sharpness) and vertex-face relations, read
   // only where creases or corners have sharpness to carry: without them the
   // fine mesh has no tags but holes (boundary edges and one-face corners are
   // sharp by the rules).
   const bool sharp_tags = !rules.tags.crease_sharpness.empty() || !rules.tags.corner_sharpness.empty();
-  options.fullTopologyInLastLevel = sharp_tags;
+  const detail::UniformRefinement uniform(osd, n, levels, sharp_tags);
   poll_interrupt();
-  refiner.RefineUniform(options);
-  poll_interrupt();
-
-  // Vertex v of every level is the child of vertex v of the level above
-  // (Far orders the children of vertices first): the fine index of Far's
-  // vertex j is the coarse index for j < n_osd, the rest after the n coarse
-  // vertices. Checked here, since everything below relies on it.
-  const std::size_t n_osd = osd.from_osd.size();
-  for (int l = 0; l < levels; ++l) {
-    const Far::TopologyLevel& lv = refiner.GetLevel(l);
-    for (std::size_t v = 0; v < n_osd; ++v)
-      if (lv.GetVertexChildVertex(static_cast<int>(v)) != static_cast<int>(v))
-        throw std::logic_error("OpenSubdiv's refinement does not order the children of vertices first");
-  }
-  const Far::TopologyLevel& last = refiner.GetLevel(levels);
+  const Far::TopologyRefiner& refiner = uniform.refiner();
+  const std::size_t n_osd = uniform.n_osd();
+  const Far::TopologyLevel& last = uniform.last();
   const auto n_last = static_cast<std::size_t>(last.GetNumVertices());
   RefinedMesh out;
-  out.n_vertices = n + (n_last - n_osd);
-  const auto fine_index = [&](int j) {
-    return static_cast<std::int32_t>(static_cast<std::size_t>(j) < n_osd ? static_cast<std::size_t>(osd.from_osd[j])
-                                                                          : n + static_cast<std::size_t>(j) - n_osd);
-  };
+  out.n_vertices = uniform.n_fine_vertices();
+  const auto fine_index = [&](int j) { return uniform.fine_index(j); };
 
   // Faces, and the coarse face of each (walking up the parents).
   const int n_fine_faces = last.GetNumFaces();
@@ -177,20 +143,17 @@ RefinedMesh refine_uniform(const Topology& topology, const Rules& rules, int lev
   if (vertices) {
     // R V level by level (Far's PrimvarRefiner): the same weights as R's rows
     // without building them; unreferenced vertices keep their place.
-    std::vector<Point> src(n_osd), dst;
-    for (std::size_t j = 0; j < n_osd; ++j)
-      std::copy_n(vertices + 3 * static_cast<std::size_t>(osd.from_osd[j]), 3, src[j].p);
-    const Far::PrimvarRefinerReal<double> primvar(refiner);
-    for (int l = 1; l <= levels; ++l) {
-      dst.resize(static_cast<std::size_t>(refiner.GetLevel(l).GetNumVertices()));
-      Point* out_points = dst.data();
-      primvar.Interpolate(l, src.data(), out_points);
-      src.swap(dst);
-    }
+    std::vector<detail::Point3> points;
+    detail::gather_points(osd, vertices, points);
+    uniform.interpolate(points);
     out.vertices.assign(vertices, vertices + 3 * std::min(n, out.n_vertices));
     out.vertices.resize(3 * out.n_vertices);
-    for (std::size_t j = 0; j < n_last; ++j)
-      std::copy_n(src[j].p, 3, out.vertices.data() + 3 * static_cast<std::size_t>(fine_index(static_cast<int>(j))));
+    for (std::size_t j = 0; j < n_last; ++j) {
+      double* q = out.vertices.data() + 3 * static_cast<std::size_t>(fine_index(static_cast<int>(j)));
+      q[0] = points[j].x;
+      q[1] = points[j].y;
+      q[2] = points[j].z;
+    }
   }
   if (!with_refinement) return out;
   poll_interrupt();

@@ -3,6 +3,7 @@
 #include <opensubdiv/far/error.h>
 #include <opensubdiv/far/primvarRefiner.h>
 #include <opensubdiv/far/topologyDescriptor.h>
+#include <opensubdiv/far/topologyRefinerFactory.h>
 
 #include <algorithm>
 #include <numeric>
@@ -11,6 +12,7 @@
 
 #include "sorpia/detail/osd_refiner.hpp"
 #include "sorpia/errors.hpp"
+#include "sorpia/interrupt.hpp"
 #include "sorpia/limit_operator.hpp"
 
 namespace sorpia {
@@ -112,6 +114,41 @@ void limit_positions(const Refiner& osd, const std::vector<Point3>& points, cons
     q[0] = limit[i].x;
     q[1] = limit[i].y;
     q[2] = limit[i].z;
+  }
+}
+
+UniformRefinement::UniformRefinement(const Refiner& base, std::size_t n_vertices, int levels, bool full_topology)
+    : refiner_(Far::TopologyRefinerFactory<Far::TopologyDescriptor>::Create(*base.refiner)),
+      from_osd_(base.from_osd.data()),
+      n_osd_(base.from_osd.size()),
+      n_vertices_(n_vertices),
+      levels_(levels) {
+  if (levels > 0) {
+    Far::TopologyRefiner::UniformOptions options(levels);
+    options.fullTopologyInLastLevel = full_topology;
+    poll_interrupt();
+    refiner_->RefineUniform(options);
+  }
+  for (int l = 0; l < levels; ++l) {
+    const Far::TopologyLevel& lv = refiner_->GetLevel(l);
+    for (std::size_t v = 0; v < n_osd(); ++v)
+      if (lv.GetVertexChildVertex(static_cast<int>(v)) != static_cast<int>(v))
+        throw std::logic_error("OpenSubdiv's refinement does not order the children of vertices first");
+  }
+}
+
+std::size_t UniformRefinement::n_fine_vertices() const {
+  return n_vertices_ + (static_cast<std::size_t>(last().GetNumVertices()) - n_osd());
+}
+
+void UniformRefinement::interpolate(std::vector<Point3>& points) const {
+  const Far::PrimvarRefinerReal<double> primvar(*refiner_);
+  std::vector<Point3> next;
+  for (int l = 1; l <= levels_; ++l) {
+    poll_interrupt();
+    next.resize(static_cast<std::size_t>(refiner_->GetLevel(l).GetNumVertices()));
+    primvar.Interpolate(l, points, next);
+    points.swap(next);
   }
 }
 

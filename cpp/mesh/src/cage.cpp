@@ -277,22 +277,41 @@ Mesh decimate(const Mesh& mesh, std::size_t n_vertices, const DecimateOptions& o
   check_options(options);
   if (stopped != nullptr) stopped->clear();
   if (n_vertices < 4) throw ParameterError("a cage needs at least 4 vertices, got " + std::to_string(n_vertices));
-  // OpenMesh's normals and quadrics square and multiply coordinates, and its
-  // degeneracy checks are absolute: coordinates beyond 2^+-20 in magnitude
-  // are decimated scaled by a power of two (exact; a half-edge collapse keeps
-  // the surviving vertices where they are) and scaled back.
-  double largest = 0.0;
-  for (const double x : mesh.vertices) largest = std::max(largest, std::abs(x));
-  int e = 0;
-  if (largest > 0.0 && std::isfinite(largest)) std::frexp(largest, &e);
-  if (std::abs(e) <= 20) e = 0;
-  Mesh scaled;
-  if (e != 0) {
-    scaled = mesh;
-    for (double& x : scaled.vertices) x = std::ldexp(x, -e);
-  }
   std::vector<std::int32_t> kept;
-  OMesh om = to_openmesh(e != 0 ? scaled : mesh, kept);
+  OMesh om = to_openmesh(mesh, kept);
+  // OpenMesh's quadric of a face holds its plane's offset d = -n.p and d^2,
+  // and a point's error is the sum of terms of the order of |p|^2 that
+  // cancel: far from the origin (1e6 on a scan of unit size: terms of 1e12,
+  // rounded by 1e-4, errors of 1e-6) rounding decides the collapses. Its
+  // normals and degeneracy checks are absolute too. So the mesh is
+  // decimated in coordinates centred on its bounding box and scaled by a
+  // power of two to a half-extent in [1/2, 1), and the cage takes its
+  // vertices from the input (a half-edge collapse moves no vertex): the same
+  // cage wherever the mesh lies and whatever its size, up to the rounding of
+  // the centred coordinates.
+  {
+    double lo[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
+    for (const auto vh : om.vertices())
+      for (int c = 0; c < 3; ++c) {
+        lo[c] = std::min(lo[c], om.point(vh)[c]);
+        hi[c] = std::max(hi[c], om.point(vh)[c]);
+      }
+    double centre[3], half = 0.0;
+    for (int c = 0; c < 3; ++c) {
+      centre[c] = lo[c] + 0.5 * (hi[c] - lo[c]);
+      half = std::max(half, 0.5 * (hi[c] - lo[c]));
+    }
+    int e = 0;
+    if (half > 0.0 && std::isfinite(half)) std::frexp(half, &e);
+    for (const auto vh : om.vertices()) {
+      auto& p = om.point(vh);
+      for (int c = 0; c < 3; ++c) p[c] = std::ldexp(p[c] - centre[c], -e);
+    }
+  }
+  // Each OpenMesh vertex's input vertex, kept through the garbage collection.
+  OpenMesh::VPropHandleT<std::int32_t> source;
+  om.add_property(source);
+  for (const auto vh : om.vertices()) om.property(source, vh) = kept[static_cast<std::size_t>(vh.idx())];
   const std::size_t start = om.n_vertices();
   const bool quads = options.scheme == Scheme::CatmullClark;
   const std::size_t have = quads ? quad_vertices(om) : start;
@@ -339,7 +358,9 @@ Mesh decimate(const Mesh& mesh, std::size_t n_vertices, const DecimateOptions& o
     *stopped = std::move(why);
   }
   Mesh triangles = from_openmesh(om);
-  for (double& x : triangles.vertices) x = std::ldexp(x, e);
+  for (const auto vh : om.vertices())
+    std::copy_n(&mesh.vertices[3 * static_cast<std::size_t>(om.property(source, vh))], 3,
+                &triangles.vertices[3 * static_cast<std::size_t>(vh.idx())]);
   return quads ? quads_from_triangles(triangles) : triangles;
 }
 

@@ -9,6 +9,7 @@
 
 #include "sorpia/interrupt.hpp"
 #include "sorpia/detail/apply.hpp"
+#include "sorpia/detail/scaling.hpp"
 #include "sorpia/solvers.hpp"
 
 namespace sorpia {
@@ -81,16 +82,8 @@ inline double max_row_norm(const double* r, std::size_t n, std::size_t k = 3) {
 // another thread's): solve() reports the part its parameters took.
 extern thread_local double estimate_seconds_on_this_thread;
 
-// x[k] *= 2^e for k < n (exactly, or rounded as ldexp rounds a subnormal).
-void scale_pow2(double* x, std::size_t n, int e);
-
-// The exponent e with 2^e ~ max |v0| when |e| > 200, else 0. The methods solve
-// for V0 / 2^e: multiplying by a power of two is exact and B is linear, so the
-// iterates are those of V0 scaled, and norms can neither overflow (|v| > 1e154
-// squares to inf) nor underflow. Within 2^+-200 no squared norm down to
-// rounding level (2^-53 max |v0|) can do either, and the scaling would change
-// no bit of any iterate: then V0 is used as it is, without a copy.
-int scale_exponent(const double* v0, std::size_t count);
+// scale_pow2 and scale_exponent: sorpia/detail/scaling.hpp, the core's one exact scaling by a power of two
+// (the methods solve for V0 / 2^e, the iterates those of V0 scaled).
 
 // Records E_k / E_0 and decides when to stop (paper section 5), the same for
 // every method. A run whose error grows past divergence_growth(method) times

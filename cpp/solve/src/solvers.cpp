@@ -168,17 +168,6 @@ double residual(const LimitOperator& op, const double* v0, const double* v, doub
   });
 }
 
-void scale_pow2(double* x, std::size_t n, int e) {
-  // Multiplying by a normal power of two is exact and rounds a subnormal
-  // result as ldexp does, at a fraction of its cost; 2^e outside the normal
-  // range needs ldexp itself.
-  if (e > -1000 && e < 1000) {
-    const double f = std::ldexp(1.0, e);
-    for (std::size_t k = 0; k < n; ++k) x[k] *= f;
-  } else {
-    for (std::size_t k = 0; k < n; ++k) x[k] = std::ldexp(x[k], e);
-  }
-}
 
 Transposed transpose(const LimitOperator& op) {
   Transposed t;
@@ -284,14 +273,6 @@ void resolve_parameters(const LimitOperator& op, const SolveOptions& opt, Spectr
 }
 
 }  // namespace
-
-int detail::scale_exponent(const double* v0, std::size_t count) {
-  double max_abs = 0.0;
-  for (std::size_t k = 0; k < count; ++k) max_abs = std::max(max_abs, std::abs(v0[k]));
-  int exponent = 0;
-  if (max_abs > 0.0 && std::isfinite(max_abs)) std::frexp(max_abs, &exponent);
-  return std::abs(exponent) <= 200 ? 0 : exponent;
-}
 
 namespace {
 

@@ -216,7 +216,7 @@ struct LimitSurface::Impl {
   // Uniformly refined to refined_level (built on demand); shares base's level
   // 0 (Far::TopologyRefinerFactory::Create), so it is declared after base and
   // destroyed before it.
-  std::unique_ptr<Far::TopologyRefiner> refined;
+  std::unique_ptr<detail::UniformRefinement> refined;
   int refined_level = -1;
   // The Python binding releases the GIL: evaluate() may run in several
   // threads at once, set_vertices() and tessellate() change state.
@@ -806,28 +806,18 @@ Mesh LimitSurface::tessellate(int level) {
   // Polls for an interrupt between the steps (OpenSubdiv's calls run whole).
   if (impl_->refined_level != level) {
     impl_->refined.reset();  // free the old one before building the new one
-    // The topology was converted and checked once, for base: share its level 0.
-    impl_->refined.reset(Far::TopologyRefinerFactory<Far::TopologyDescriptor>::Create(*impl_->base.refiner));
-    if (level > 0) {
-      Far::TopologyRefiner::UniformOptions options(level);
-      // Limit() on the last level needs its full topology: without it
-      // OpenSubdiv prints an error and leaves the output untouched.
-      options.fullTopologyInLastLevel = true;
-      poll_interrupt();
-      impl_->refined->RefineUniform(options);
-    }
+    // The topology was converted and checked once, for base: the refinement
+    // shares its level 0. Limit() on the last level needs its full topology:
+    // without it OpenSubdiv prints an error and leaves the output untouched.
+    impl_->refined = std::make_unique<detail::UniformRefinement>(impl_->base, n, level, true);
     impl_->refined_level = level;
   }
-  const Far::TopologyRefiner& refiner = *impl_->refined;
+  const detail::UniformRefinement& uniform = *impl_->refined;
+  const Far::TopologyRefiner& refiner = uniform.refiner();
   Far::PrimvarRefinerReal<double> primvar(refiner);
 
-  std::vector<Point3> src = impl_->points, dst;
-  for (int l = 1; l <= level; ++l) {
-    poll_interrupt();
-    dst.resize(static_cast<std::size_t>(refiner.GetLevel(l).GetNumVertices()));
-    primvar.Interpolate(l, src, dst);
-    std::swap(src, dst);
-  }
+  std::vector<Point3> src = impl_->points;
+  uniform.interpolate(src);
   poll_interrupt();
   std::vector<Point3> limit(src.size());
   primvar.Limit(src, limit);
@@ -836,7 +826,7 @@ Mesh LimitSurface::tessellate(int level) {
 
   // Where Limit() is not the limit, Bfr evaluates the control faces' surface
   // at the vertex's parameter (exact at the corners of its refined patches).
-  const auto& last = refiner.GetLevel(level);
+  const auto& last = uniform.last();
   // Only semi-sharp tags, or Catmull-Clark's level 0 of a mesh with other
   // faces than quads, make such vertices: the common case skips the search.
   if (impl_->tags.max_semi_sharpness() > 0.0 ||
@@ -866,14 +856,11 @@ Mesh LimitSurface::tessellate(int level) {
     for (std::size_t i = 0; i < fixed.size(); ++i) limit[fixed[i]] = Point3{p[3 * i], p[3 * i + 1], p[3 * i + 2]};
   }
 
-  // Refined vertices are ordered children of vertices first
-  // (orderVerticesFromFacesFirst = false), so the first vertices of every
-  // level descend from those of the level before, in order: the first n_osd
-  // descend from the control vertices.
-  const auto& from = impl_->base.from_osd;
-  const std::size_t n_osd = from.size();
+  // The first n_osd vertices of the level descend from the control vertices
+  // (UniformRefinement::fine_index): they are B V; the others follow.
+  const std::size_t n_osd = uniform.n_osd();
   const auto n_level = static_cast<std::size_t>(last.GetNumVertices());
-  const std::size_t n_out = n + (n_level - n_osd);
+  const std::size_t n_out = uniform.n_fine_vertices();
   Mesh out;
   out.vertices.resize(3 * n_out);
   // Control vertices: B V exactly as sorpia::limit_points computes it (one
@@ -884,17 +871,13 @@ Mesh LimitSurface::tessellate(int level) {
         out.vertices.data());
   for (std::size_t i = n_osd; i < n_level; ++i) {
     if (i % kRowsPerPoll == 0) poll_interrupt();
-    double* q = &out.vertices[3 * (n + i - n_osd)];
+    double* q = &out.vertices[3 * static_cast<std::size_t>(uniform.fine_index(static_cast<int>(i)))];
     q[0] = limit[i].x;
     q[1] = limit[i].y;
     q[2] = limit[i].z;
   }
   std::vector<Point3>().swap(limit);
 
-  const auto to_out = [&](int i) {
-    return static_cast<std::int32_t>(static_cast<std::size_t>(i) < n_osd ? static_cast<std::size_t>(from[i])
-                                                                         : n + static_cast<std::size_t>(i) - n_osd);
-  };
   const auto n_faces_level = static_cast<std::size_t>(last.GetNumFaces());
   out.face_vertex_counts.reserve(n_faces_level);
   out.face_vertex_indices.reserve(static_cast<std::size_t>(last.GetNumFaceVertices()));
@@ -903,7 +886,7 @@ Mesh LimitSurface::tessellate(int level) {
     if (last.IsFaceHole(static_cast<int>(f))) continue;
     const auto fv = last.GetFaceVertices(static_cast<int>(f));
     out.face_vertex_counts.push_back(fv.size());
-    for (int c = 0; c < fv.size(); ++c) out.face_vertex_indices.push_back(to_out(fv[c]));
+    for (int c = 0; c < fv.size(); ++c) out.face_vertex_indices.push_back(uniform.fine_index(fv[c]));
   }
   return out;
 }

@@ -74,4 +74,45 @@ void gather_points(const Refiner& osd, const double* vertices, std::vector<Point
 void limit_positions(const Refiner& osd, const std::vector<Point3>& points, const double* vertices,
                      std::size_t n, double* out);
 
+// A Refiner's mesh refined uniformly by Far: the one refinement that
+// LimitSurface::tessellate (the limit surface as a mesh) and refine_uniform
+// (the finer control mesh and its matrix R) share. The refiner made here
+// shares `base`'s level 0 (Far::TopologyRefinerFactory::Create of a
+// refiner), so `base` must outlive it. Far orders the children of vertices
+// first, so vertex j < n_osd() of every level descends from vertex j of
+// level 0 (checked by the constructor: the numbering below relies on it).
+class UniformRefinement {
+ public:
+  // `base` (of a mesh of n_vertices vertices) refined `levels` >= 0 times,
+  // the last level with its full topology (edges, vertex-face relations:
+  // Limit() and the sharpness of edges need them) when `full_topology`.
+  // Polls sorpia::poll_interrupt() before refining.
+  UniformRefinement(const Refiner& base, std::size_t n_vertices, int levels, bool full_topology);
+  const Far::TopologyRefiner& refiner() const { return *refiner_; }
+  int levels() const { return levels_; }
+  const Far::TopologyLevel& last() const { return refiner_->GetLevel(levels_); }
+  // The referenced vertices, the vertices of level 0.
+  std::size_t n_osd() const { return n_osd_; }
+  // Vertices of the last level in sorpia's numbering: the n_vertices of the
+  // mesh (an unreferenced one stays unreferenced), then the ones Far adds.
+  std::size_t n_fine_vertices() const;
+  // sorpia's index of vertex j of the last level: the mesh vertex it descends
+  // from for j < n_osd(), else n_vertices + j - n_osd().
+  std::int32_t fine_index(int j) const {
+    const auto u = static_cast<std::size_t>(j);
+    return u < n_osd_ ? from_osd_[u] : static_cast<std::int32_t>(n_vertices_ + u - n_osd_);
+  }
+  // `points`, level 0's (gather_points), carried to the last level by Far's
+  // PrimvarRefinerReal<double>::Interpolate, level by level (polling before
+  // each level).
+  void interpolate(std::vector<Point3>& points) const;
+
+ private:
+  std::unique_ptr<Far::TopologyRefiner> refiner_;
+  const std::int32_t* from_osd_;  // base's from_osd
+  std::size_t n_osd_;
+  std::size_t n_vertices_;
+  int levels_;
+};
+
 }  // namespace sorpia::detail

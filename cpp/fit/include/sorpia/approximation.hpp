@@ -1,0 +1,134 @@
+#pragma once
+/// @file approximation.hpp
+/// Approximation's pipeline, as sorpia::Interpolator is interpolation's:
+/// options in, a result out, every step in the core (docs/approximation.md).
+/// A cage's control vertices V (fixed faces and rules) are moved so that its
+/// limit surface lies closest to data points P in the least-squares sense:
+///
+///   1. footpoints: each point's closest point of the surface as (face, u, v)
+///      (closest_points: the nearest of a grid of limit points, then
+///      Gauss-Newton), record 0;
+///   2. per iteration: the rows A of the surface at the footpoints
+///      (LimitSurface::rows, the points in face order), the normal equations
+///      (A^T W A + c K + mu I) V = A^T W P + mu V_prev (W the points' weights,
+///      blended towards the normals by `tangential`: blend_weights; K the
+///      thin-plate energy of the cage at depth 0, c = fairness times the
+///      mean diagonal of A^T W A, mu = proximal times it), solved by PCG
+///      (NormalEquations) or by LSPIA (Deng and Lin 2014);
+///   3. the footpoints re-projected from where they were (refine_footpoints),
+///      a record (RMS and largest distance both ways: data to surface at the
+///      footpoints, surface to data from a uniform tessellation's vertices);
+///   4. the stop rule: the lowest RMS so far fell by at most `tol` of itself
+///      per iteration over the last `window` iterations, and a fresh search
+///      of every footpoint (closest_points again) finds none closer that
+///      lowers the RMS by more than `tol` (it goes on from the closer ones
+///      when it does), or the RMS is at rounding level (`exact` of the
+///      diagonal), or `iterations` ran out.
+///
+/// The control vertices of the lowest RMS are returned, with their
+/// footpoints searched for afresh (closest_points, any closer one kept) and
+/// their record measured again from them: re-projection keeps a point in a
+/// local minimum of its distance, a fresh search finds the closer surface. Data beyond 2^+-200
+/// in magnitude is fitted scaled by a power of two (sorpia/detail/scaling.hpp,
+/// exact); records and results are in the caller's units.
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "sorpia/footpoints.hpp"
+#include "sorpia/surface.hpp"
+
+namespace sorpia {
+
+/// How each iteration solves its normal equations.
+enum class ApproximationUpdate {
+  CG,     ///< the fitting layer's PCG (NormalEquations::solve)
+  LSPIA,  ///< x += D^-1 (rhs - M x), D the row sums of |M| (tangential 1 only)
+};
+
+/// The options of approximate (checked there, before any work).
+struct ApproximationOptions {
+  int iterations = 10;            ///< updates at most, >= 1
+  double tol = 3e-3;              ///< the stop rule's fall per iteration (step 4), finite, >= 0
+  double fairness = 3e-4;         ///< c over the mean diagonal of A^T W A, finite, >= 0; 0: no K
+  double tangential = 0.1;        ///< in [0, 1]: 1 point distance, 0 tangent distance, between a blend
+  ApproximationUpdate update = ApproximationUpdate::CG;
+  double solver_tol = 1e-3;       ///< each update's residual over its start's, finite, >= 0
+  long long solver_max_iter = 2000;  ///< iterations per update at most, >= 1
+  /// The footpoint search: grid 1..64 (samples per side of a face), max_steps
+  /// >= 1 (Gauss-Newton steps per projection).
+  FootpointOptions footpoints{4, 10};
+  int report_level = 2;           ///< the tessellation level of the surface-to-data distances, 0..15
+  int fairness_depth = 0;         ///< K's quadrature depth (a regulariser: its cost, not its exactness, counts)
+  double proximal = 1e-6;         ///< mu over the mean diagonal of A^T W A, > 0
+  int window = 3;                 ///< the stop rule's iterations, >= 1
+  double exact = 1e-13;           ///< an RMS below this fraction of the diagonal stops ("exact")
+  double closer = 1e-10;          ///< a fresh footpoint replaces one farther by more than this fraction of the diagonal
+};
+
+/// One iteration's figures (iteration 0: the cage as given).
+struct ApproximationRecord {
+  int iteration = 0;
+  /// Data to surface: the (weighted) RMS and the largest footpoint distance;
+  /// surface to data: from the tessellation's vertices to the nearest point.
+  /// In the caller's units, and over the data's bounding-box diagonal.
+  double rms = 0.0, max = 0.0, surface_rms = 0.0, surface_max = 0.0;
+  double rms_relative = 0.0, max_relative = 0.0, surface_rms_relative = 0.0, surface_max_relative = 0.0;
+  long long solver_iterations = 0;  ///< of the update before it (0 at iteration 0)
+  double seconds = 0.0;             ///< since approximate was called
+};
+
+/// Seconds per phase (wall clock, or the process's CPU time on all threads).
+struct ApproximationTimings {
+  double footpoints = 0.0, rows = 0.0, normal = 0.0, solve = 0.0, report = 0.0, total = 0.0;
+};
+
+/// What approximate returns, in the caller's units.
+struct ApproximationResult {
+  std::vector<double> control_vertices;  ///< (n, 3) row-major: V of the lowest RMS
+  /// The footpoints on that V's surface after the final fresh search:
+  /// face_ids, uv and distances (the other fields empty).
+  Footpoints footpoints;
+  int iterations = 0;      ///< updates made
+  /// "converged", "exact" or "max_iter" (`iterations` ran out; step 4).
+  std::string stop_reason;
+  int best_iteration = 0;  ///< the iteration whose V is returned
+  double diagonal = 0.0;   ///< of the data's bounding box: the unit of the relative figures
+  std::vector<ApproximationRecord> history;
+  ApproximationTimings seconds, cpu_seconds;
+};
+
+/// The stop rule's first test (step 4): on the lowest RMS after each
+/// iteration so far (non-increasing; bests[0] the cage's as given), true when
+/// over the last `window` iterations it fell by at most tol of itself per
+/// iteration on average (with tol 0: not at all). One small step between
+/// large ones does not stop a run; fewer than window + 1 entries never do.
+bool rms_levelled(const std::vector<double>& bests, double tol, int window);
+
+/// Called with each record as soon as it is known (an exception from it
+/// ends the run and propagates).
+using ApproximationProgress = std::function<void(const ApproximationRecord&)>;
+
+/// Fits the cage of `surface` to the points (steps above), from the
+/// surface's current control vertices.
+/// @param surface   the cage's limit surface; on return it holds the
+///                  returned control vertices
+/// @param points    row-major (k, 3), finite
+/// @param k         >= 1
+/// @param weights   k finite weights >= 0, not all 0, in the fit and in the
+///                  RMS (weighted: sum w d^2 / k, so scale them to mean 1),
+///                  or nullptr for equal ones
+/// @param progress  empty, or called with each record
+/// The surface-to-data distances leave out the control vertices no face
+/// uses (they are no point of the surface).
+/// @throws ParameterError for an option out of range, no point, a point or
+///         weight not finite, a negative weight, points all at one place
+///         (one point, or all duplicates) or all on one line (no surface is
+///         determined by them); MeshError as the surface's evaluation
+ApproximationResult approximate(LimitSurface& surface, const double* points, std::size_t k, const double* weights,
+                                const ApproximationOptions& options, const ApproximationProgress& progress = {});
+
+}  // namespace sorpia

@@ -1,0 +1,334 @@
+// The fit layer's pipelines: fair interpolation (sorpia::fair_interpolate)
+// against the same result assembled step by step from the layer's functions,
+// and approximation (sorpia::approximate) against a dense solve of one
+// update's normal equations on a tiny cage; both under the core's exact
+// scaling by a power of two.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include "expect_error.hpp"
+#include "sorpia/approximation.hpp"
+#include "sorpia/errors.hpp"
+#include "sorpia/fair.hpp"
+#include "sorpia/fair_interpolation.hpp"
+#include "sorpia/fairness.hpp"
+#include "sorpia/footpoints.hpp"
+#include "sorpia/interpolator.hpp"
+#include "sorpia/refine.hpp"
+#include "sorpia/shapes.hpp"
+#include "sorpia/surface.hpp"
+
+namespace {
+
+using sorpia::Boundary;
+using sorpia::Scheme;
+
+std::vector<double> noisy(const sorpia::Mesh& m, double amplitude, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> g(0.0, amplitude);
+  std::vector<double> v = m.vertices;
+  for (double& x : v) x += g(rng);
+  return v;
+}
+
+std::vector<double> scaled(std::vector<double> v, int e) {
+  for (double& x : v) x = std::ldexp(x, e);
+  return v;
+}
+
+sorpia::Rules tagged(const sorpia::Mesh& m) {
+  sorpia::Rules rules{Scheme::Loop, Boundary::EdgeAndCorner, {}};
+  const auto* f = m.face_vertex_indices.data();
+  rules.tags.crease_vertices = {f[0], f[1]};
+  rules.tags.crease_sharpness = {1.5};
+  return rules;
+}
+
+TEST(FairInterpolate, EqualsThePipelineAssembledStepByStep) {
+  // The driver runs the layer's own functions in order; assembled here by hand from them (plain solve,
+  // refine_uniform, the fine topology, K with the semi-sharp crease made sharp, fair_solve) the result is the
+  // same to the bit: the same operations on the same values.
+  const sorpia::Mesh m = sorpia::irregular(300, 3);
+  const std::vector<double> v0 = noisy(m, 0.01, 1);
+  const sorpia::Rules rules = tagged(m);
+  std::vector<std::int32_t> targets;
+  for (std::int32_t i = 0; i < static_cast<std::int32_t>(m.n_vertices()); i += 2) targets.push_back(i);
+  for (const int levels : {1, 2}) {
+    sorpia::FairInterpolationOptions o;
+    o.levels = levels;
+    o.membrane = 0.1;
+    sorpia::Interpolator interp(sorpia::Topology(m), rules);
+    const auto got = sorpia::fair_interpolate(interp, v0.data(), targets.data(), targets.size(), o);
+
+    sorpia::Interpolator again(sorpia::Topology(m), rules);
+    const sorpia::SolveResult plain = again.solve(v0.data(), 3, nullptr, o.plain, true);
+    const sorpia::RefinedMesh fine =
+        sorpia::refine_uniform(again.topology(), rules, levels, plain.control_vertices.data(), false);
+    const sorpia::Topology fine_topology(fine.mesh, fine.n_vertices);
+    sorpia::Tags sharp = fine.tags;
+    for (double& s : sharp.crease_sharpness)
+      if (s > 0) s = sorpia::kInfiniteSharpness;
+    sorpia::FairnessQuadrature q;
+    q.depth = 0;
+    const sorpia::CsrMatrix k = sorpia::fairness_matrix(fine_topology, sorpia::Rules{Scheme::Loop, rules.boundary, sharp},
+                                                        1.0, 0.1, q, nullptr, false);
+    std::vector<double> positions;
+    for (const std::int32_t t : targets)
+      for (int c = 0; c < 3; ++c) positions.push_back(v0[3 * static_cast<std::size_t>(t) + c]);
+    const sorpia::FairSolution want =
+        sorpia::fair_solve(fine_topology, sorpia::Rules{Scheme::Loop, rules.boundary, fine.tags}, k, targets.data(),
+                           targets.size(), positions.data(), fine.vertices.data(), o.solve);
+    EXPECT_EQ(got.plain.control_vertices, plain.control_vertices);
+    EXPECT_EQ(got.fine.mesh.face_vertex_indices, fine.mesh.face_vertex_indices);
+    EXPECT_EQ(got.fine.n_vertices, fine.n_vertices);
+    EXPECT_EQ(got.solution.vertices, want.vertices) << "levels " << levels;
+    EXPECT_EQ(got.solution.energies, want.energies);
+    EXPECT_EQ(got.solution.iterations, want.iterations);
+    EXPECT_EQ(got.solution.stop_reason, want.stop_reason);
+    EXPECT_LT(got.solution.energy, got.solution.start_energy);  // fairer than the plain surface
+    EXPECT_LT(got.solution.max_error, 1e-12);                    // the targets met to rounding
+  }
+}
+
+TEST(FairInterpolate, DataBeyondTwoToThe200IsSolvedScaledExactly) {
+  // The core's one scaling (detail/scaling.hpp): 2^300 V0 and 2^-300 V0 give 2^+-300 times V0's control
+  // vertices, bit for bit (a power of two is exact, and the pipeline is homogeneous in the data); with the
+  // reference metric too, whose thin-plate energy is scale-free.
+  const sorpia::Mesh m = sorpia::irregular(200, 5);
+  const std::vector<double> v0 = noisy(m, 0.01, 2);
+  for (const bool reference : {false, true}) {
+    sorpia::FairInterpolationOptions o;
+    o.reference_metric = reference;
+    sorpia::Interpolator a(sorpia::Topology(m), sorpia::Rules{});
+    const auto one = sorpia::fair_interpolate(a, v0.data(), nullptr, 0, o);
+    for (const int e : {300, -300}) {
+      sorpia::Interpolator b(sorpia::Topology(m), sorpia::Rules{});
+      const std::vector<double> big = scaled(v0, e);
+      const auto far = sorpia::fair_interpolate(b, big.data(), nullptr, 0, o);
+      EXPECT_EQ(far.solution.vertices, scaled(one.solution.vertices, e)) << "reference " << reference << " e " << e;
+      EXPECT_EQ(far.solution.iterations, one.solution.iterations);
+    }
+  }
+  sorpia::FairInterpolationOptions o;
+  o.reference_metric = true;
+  o.membrane = 1.0;
+  sorpia::Interpolator c(sorpia::Topology(m), sorpia::Rules{});
+  const std::vector<double> big = scaled(v0, 300);
+  sorpia_test::expect_error<sorpia::ParameterError>([&] { sorpia::fair_interpolate(c, big.data(), nullptr, 0, o); }, {"membrane term needs coordinates within 2^+-200"});
+}
+
+TEST(FairInterpolate, RefusesOptionsBeforeAnyWork) {
+  const sorpia::Mesh m = sorpia::icosphere(1);
+  sorpia::Interpolator interp(sorpia::Topology(m), sorpia::Rules{});
+  sorpia::FairInterpolationOptions o;
+  o.levels = 0;
+  sorpia_test::expect_error<sorpia::ParameterError>([&] { sorpia::fair_interpolate(interp, m.vertices.data(), nullptr, 0, o); }, {"levels must be an integer in 1..10, got 0"});
+  o.levels = 1;
+  o.thin_plate = 0.0;
+  sorpia_test::expect_error<sorpia::ParameterError>([&] { sorpia::fair_interpolate(interp, m.vertices.data(), nullptr, 0, o); }, {"thin_plate and membrane are both 0"});
+  o.thin_plate = 1.0;
+  const std::int32_t out_of_range[] = {0, 99};
+  sorpia_test::expect_error<sorpia::ParameterError>([&] { sorpia::fair_interpolate(interp, m.vertices.data(), out_of_range, 2, o); }, {"targets[1] = 99 is out of range [0, 42)"});
+}
+
+// ---- approximation -----------------------------------------------------------
+
+// x with a x = b for a dense symmetric positive definite (n, n) a: Cholesky, in long double.
+std::vector<double> dense_solve(const std::vector<long double>& a, const std::vector<long double>& b, std::size_t n) {
+  std::vector<long double> l(n * n, 0.0L);
+  for (std::size_t j = 0; j < n; ++j) {
+    long double d = a[j * n + j];
+    for (std::size_t k = 0; k < j; ++k) d -= l[j * n + k] * l[j * n + k];
+    l[j * n + j] = std::sqrt(d);
+    for (std::size_t i = j + 1; i < n; ++i) {
+      long double s = a[i * n + j];
+      for (std::size_t k = 0; k < j; ++k) s -= l[i * n + k] * l[j * n + k];
+      l[i * n + j] = s / l[j * n + j];
+    }
+  }
+  std::vector<long double> y(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    long double s = b[i];
+    for (std::size_t k = 0; k < i; ++k) s -= l[i * n + k] * y[k];
+    y[i] = s / l[i * n + i];
+  }
+  std::vector<double> x(n);
+  std::vector<long double> xl(n);
+  for (std::size_t i = n; i-- > 0;) {
+    long double s = y[i];
+    for (std::size_t k = i + 1; k < n; ++k) s -= l[k * n + i] * xl[k];
+    xl[i] = s / l[i * n + i];
+    x[i] = static_cast<double>(xl[i]);
+  }
+  return x;
+}
+
+struct TinyFit {
+  sorpia::Mesh cage = sorpia::icosphere(0);  // 12 vertices
+  std::vector<double> start, points;
+  TinyFit() {
+    // Points on the limit surface of the cage inflated by 10%, plus noise; the fit starts from the cage moved.
+    const sorpia::Topology topology(cage);
+    std::vector<double> big = cage.vertices;
+    for (double& x : big) x *= 1.1;
+    sorpia::LimitSurface truth(topology, big.data(), Scheme::Loop, Boundary::EdgeAndCorner);
+    const sorpia::Mesh tess = truth.tessellate(2);
+    points = noisy(tess, 1e-3, 7);
+    start = noisy(cage, 0.03, 8);
+  }
+};
+
+// One update of approximate from `fit.start`, by a dense solve of its normal equations with the footpoints of the
+// start: (A^T W A + c K + mu I) V = A^T W P + mu V_start over the 3n unknowns (x0, y0, z0, x1, ...), W_r = t I +
+// (1 - t) n_r n_r^T, c and mu the fairness and proximal weights times the mean diagonal of A^T W A (of its xx,
+// yy and zz entries).
+std::vector<double> dense_update(const TinyFit& fit, double fairness, double tangential) {
+  const sorpia::Topology topology(fit.cage);
+  sorpia::LimitSurface surface(topology, fit.start.data(), Scheme::Loop, Boundary::EdgeAndCorner);
+  const std::size_t k = fit.points.size() / 3, n = fit.cage.n_vertices(), m = 3 * n;
+  const sorpia::Footpoints feet = sorpia::closest_points(surface, topology, fit.points.data(), k, {4, 10});
+  const sorpia::CsrMatrix a = surface.rows(feet.face_ids.data(), feet.uv.data(), k, 0).position;
+  std::vector<long double> M(m * m, 0.0L), rhs(m, 0.0L);
+  for (std::size_t r = 0; r < k; ++r) {
+    const double* nr = &feet.normals[3 * r];
+    long double w[3][3];
+    for (int c = 0; c < 3; ++c)
+      for (int d = 0; d < 3; ++d) w[c][d] = (1 - tangential) * nr[c] * nr[d] + (c == d ? tangential : 0.0);
+    for (std::int32_t p = a.indptr[r]; p < a.indptr[r + 1]; ++p) {
+      const std::size_t i = static_cast<std::size_t>(a.indices[p]);
+      for (int c = 0; c < 3; ++c) {
+        for (int d = 0; d < 3; ++d) rhs[3 * i + c] += a.data[p] * w[c][d] * fit.points[3 * r + d];
+        for (std::int32_t q = a.indptr[r]; q < a.indptr[r + 1]; ++q)
+          for (int d = 0; d < 3; ++d)
+            M[(3 * i + c) * m + 3 * static_cast<std::size_t>(a.indices[q]) + d] += a.data[p] * a.data[q] * w[c][d];
+      }
+    }
+  }
+  long double mean = 0.0L;
+  for (std::size_t i = 0; i < m; ++i) mean += M[i * m + i];
+  mean /= static_cast<long double>(m);
+  sorpia::FairnessQuadrature q;
+  q.depth = 0;
+  const sorpia::CsrMatrix kk = sorpia::fairness_matrix(topology, sorpia::Rules{}, 1.0, 0.0, q);
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::int32_t p = kk.indptr[i]; p < kk.indptr[i + 1]; ++p)
+      for (int c = 0; c < 3; ++c)
+        M[(3 * i + c) * m + 3 * static_cast<std::size_t>(kk.indices[p]) + c] += fairness * mean * kk.data[p];
+  const long double mu = 1e-6L * mean;
+  for (std::size_t i = 0; i < m; ++i) {
+    M[i * m + i] += mu;
+    rhs[i] += mu * fit.start[i];
+  }
+  return dense_solve(M, rhs, m);
+}
+
+TEST(Approximate, OneUpdateEqualsADenseSolveOfItsNormalEquations) {
+  // One iteration, the update solved to 1e-14 of its residual: V is the dense solution (long double Cholesky of
+  // the 36 x 36 system, independent of the core's sparse normal matrix and PCG) to 1e-9 of the cage's size (the
+  // PCG's 1e-14 residual times the system's condition, a few thousand with the proximal term alone), for point
+  // distance, the tangent-distance blend, with and without the fairness term, by CG and by LSPIA.
+  const TinyFit fit;
+  struct Case {
+    sorpia::ApproximationUpdate update;
+    double tangential, fairness;
+  };
+  for (const Case c : {Case{sorpia::ApproximationUpdate::CG, 1.0, 0.0}, Case{sorpia::ApproximationUpdate::CG, 1.0, 1e-3},
+                       Case{sorpia::ApproximationUpdate::CG, 0.1, 1e-3},
+                       Case{sorpia::ApproximationUpdate::LSPIA, 1.0, 1e-3}}) {
+    const sorpia::Topology topology(fit.cage);
+    sorpia::LimitSurface surface(topology, fit.start.data(), Scheme::Loop, Boundary::EdgeAndCorner);
+    sorpia::ApproximationOptions o;
+    o.iterations = 1;
+    o.update = c.update;
+    o.tangential = c.tangential;
+    o.fairness = c.fairness;
+    o.solver_tol = 1e-14;
+    o.solver_max_iter = 1000000;
+    const auto r = sorpia::approximate(surface, fit.points.data(), fit.points.size() / 3, nullptr, o);
+    ASSERT_EQ(r.best_iteration, 1) << "the update lowers the RMS distance";
+    const std::vector<double> want = dense_update(fit, c.fairness, c.tangential);
+    ASSERT_EQ(r.control_vertices.size(), want.size());
+    for (std::size_t i = 0; i < want.size(); ++i)
+      EXPECT_NEAR(r.control_vertices[i], want[i], 1e-9) << "entry " << i << " tangential " << c.tangential
+                                                         << " fairness " << c.fairness;
+    EXPECT_LT(r.history[1].rms, r.history[0].rms);
+    EXPECT_EQ(r.iterations, 1);
+    EXPECT_EQ(r.stop_reason, "max_iter");
+  }
+}
+
+TEST(Approximate, StopsAndReportsAsItsHistorySays) {
+  // The run's figures: record 0 is the cage as given, each later one an update's; the returned iterate is that
+  // of the lowest RMS; the relative figures are the absolute ones over the diagonal of the points' box.
+  const TinyFit fit;
+  const sorpia::Topology topology(fit.cage);
+  sorpia::LimitSurface surface(topology, fit.start.data(), Scheme::Loop, Boundary::EdgeAndCorner);
+  std::vector<int> seen;
+  const auto r = sorpia::approximate(surface, fit.points.data(), fit.points.size() / 3, nullptr, {},
+                                     [&](const sorpia::ApproximationRecord& rec) { seen.push_back(rec.iteration); });
+  ASSERT_EQ(r.history.size(), static_cast<std::size_t>(r.iterations) + 1);
+  ASSERT_EQ(seen.size(), r.history.size());
+  double lowest = INFINITY;
+  int at = -1;
+  for (std::size_t i = 0; i < r.history.size(); ++i) {
+    EXPECT_EQ(seen[i], static_cast<int>(i));
+    EXPECT_DOUBLE_EQ(r.history[i].rms_relative, r.history[i].rms / r.diagonal);
+    if (r.history[i].rms < lowest) lowest = r.history[i].rms, at = static_cast<int>(i);
+  }
+  EXPECT_EQ(r.best_iteration, at);
+  double d2 = 0.0;
+  for (const double d : r.footpoints.distances) d2 += d * d;
+  EXPECT_NEAR(std::sqrt(d2 / static_cast<double>(r.footpoints.distances.size())), lowest, 1e-15);
+  EXPECT_TRUE(r.stop_reason == "converged" || r.stop_reason == "max_iter");
+}
+
+TEST(Approximate, DataBeyondTwoToThe200IsFittedScaledExactly) {
+  // 2^300 times the points and the cage: 2^300 times the control vertices and absolute figures, bit for bit;
+  // the relative figures the same (the core's one scaling, detail/scaling.hpp).
+  const TinyFit fit;
+  const sorpia::Topology topology(fit.cage);
+  sorpia::ApproximationOptions o;
+  o.iterations = 3;
+  sorpia::LimitSurface one_surface(topology, fit.start.data(), Scheme::Loop, Boundary::EdgeAndCorner);
+  const auto one = sorpia::approximate(one_surface, fit.points.data(), fit.points.size() / 3, nullptr, o);
+  const std::vector<double> big_start = scaled(fit.start, 300), big_points = scaled(fit.points, 300);
+  sorpia::LimitSurface big_surface(topology, big_start.data(), Scheme::Loop, Boundary::EdgeAndCorner);
+  const auto big = sorpia::approximate(big_surface, big_points.data(), big_points.size() / 3, nullptr, o);
+  EXPECT_EQ(big.control_vertices, scaled(one.control_vertices, 300));
+  EXPECT_EQ(big.footpoints.distances, scaled(one.footpoints.distances, 300));
+  ASSERT_EQ(big.history.size(), one.history.size());
+  for (std::size_t i = 0; i < one.history.size(); ++i) {
+    EXPECT_EQ(big.history[i].rms, std::ldexp(one.history[i].rms, 300));
+    EXPECT_EQ(big.history[i].rms_relative, one.history[i].rms_relative);
+  }
+}
+
+TEST(Approximate, RefusesBadOptionsAndData) {
+  const TinyFit fit;
+  const sorpia::Topology topology(fit.cage);
+  sorpia::LimitSurface surface(topology, fit.start.data(), Scheme::Loop, Boundary::EdgeAndCorner);
+  sorpia::ApproximationOptions o;
+  o.update = sorpia::ApproximationUpdate::LSPIA;
+  sorpia_test::expect_error<sorpia::ParameterError>([&] { sorpia::approximate(surface, fit.points.data(), 3, nullptr, o); }, {"it takes tangential = 1 only"});
+  sorpia_test::expect_error<sorpia::ParameterError>([&] { sorpia::approximate(surface, fit.points.data(), 0, nullptr, {}); }, {"points is empty"});
+  const double zero[3] = {0.0, 0.0, 0.0};
+  sorpia_test::expect_error<sorpia::ParameterError>([&] { sorpia::approximate(surface, fit.points.data(), 3, zero, {}); }, {"weights are all 0"});
+}
+
+TEST(Approximate, StopRuleLooksAtThreeIterations) {
+  // The rule on the lowest RMS after each iteration: one small step before large ones (a plateau) does not stop
+  // a run; three small ones in a row do; with tol = 0 only no decrease at all over three does.
+  EXPECT_FALSE(sorpia::rms_levelled({1.0, 0.9999, 0.5}, 1e-3, 3));
+  EXPECT_FALSE(sorpia::rms_levelled({1.0, 0.9999, 0.9998, 0.5}, 1e-3, 3));
+  EXPECT_FALSE(sorpia::rms_levelled({0.2, 0.1, 0.09995, 0.0999}, 1e-3, 3));
+  EXPECT_TRUE(sorpia::rms_levelled({1.0, 0.9999, 0.9998, 0.9997}, 1e-3, 3));
+  EXPECT_TRUE(sorpia::rms_levelled({0.5, 0.3, 0.2999, 0.2998, 0.2998}, 1e-3, 3));
+  EXPECT_FALSE(sorpia::rms_levelled({1.0, 1.0, 1.0, 0.9999}, 0.0, 3));
+  EXPECT_TRUE(sorpia::rms_levelled({1.0, 0.5, 0.5, 0.5, 0.5}, 0.0, 3));
+}
+
+}  // namespace
