@@ -2,10 +2,11 @@
 sorpia's compiled core (mesh topology, OpenSubdiv Loop and Catmull-Clark limits, PIA solvers)
 """
 from __future__ import annotations
+import collections.abc
 import numpy
 import numpy.typing
 import typing
-__all__: list[str] = ['Boundary', 'INFINITE_SHARPNESS', 'InterpolationResult', 'Interpolator', 'LimitSurface', 'MAX_REFINEMENT_LEVELS', 'MAX_THREADS', 'MeshError', 'MeshFileError', 'Method', 'NormalEquations', 'OmegaRule', 'ParameterError', 'PointIndex', 'Rules', 'Scheme', 'SolveOptions', 'Tags', 'Topology', 'YOUNG_RHO_CLAMP', 'available_memory_bytes', 'blend_weights', 'boundary_name', 'check_ply_per_vertex', 'check_refinement', 'check_writable', 'closest_points', 'decimate', 'face_list_statistics', 'fair_solve', 'fairness_matrix', 'grid', 'icosphere', 'irregular', 'limit_matrix', 'limit_points', 'limit_residual', 'mesh_statistics', 'method_names', 'normal_matrix', 'parse_boundary', 'parse_method', 'parse_omega', 'parse_scheme', 'pole', 'polygon_torus', 'quad_grid', 'quad_irregular', 'quad_torus', 'read_mesh', 'refine_footpoints', 'refine_uniform', 'refinement_bytes', 'regular_valence', 'repair', 'repair_polygons', 'scheme_name', 'sharp_edges', 'split_nonmanifold', 'split_nonmanifold_polygons', 'subface_columns', 'tessellation_bytes', 'torus', 'write_file_atomic', 'write_mesh']
+__all__: list[str] = ['Boundary', 'INFINITE_SHARPNESS', 'InterpolationResult', 'Interpolator', 'LimitSurface', 'MAX_REFINEMENT_LEVELS', 'MAX_THREADS', 'MeshError', 'MeshFileError', 'Method', 'NormalEquations', 'OmegaRule', 'ParameterError', 'PointIndex', 'Rules', 'Scheme', 'SolveOptions', 'Tags', 'Topology', 'YOUNG_RHO_CLAMP', 'approximate', 'available_memory_bytes', 'blend_weights', 'boundary_name', 'check_ply_per_vertex', 'check_refinement', 'check_writable', 'closest_points', 'decimate', 'face_list_statistics', 'fair_interpolate', 'fairness_matrix', 'grid', 'icosphere', 'irregular', 'limit_matrix', 'limit_points', 'limit_residual', 'mesh_statistics', 'method_names', 'normal_matrix', 'parse_boundary', 'parse_method', 'parse_omega', 'parse_scheme', 'pole', 'polygon_torus', 'quad_grid', 'quad_irregular', 'quad_torus', 'read_mesh', 'refine_footpoints', 'refine_uniform', 'refinement_bytes', 'regular_valence', 'repair', 'repair_polygons', 'rms_levelled', 'scale_exponent', 'scheme_name', 'sharp_edges', 'split_nonmanifold', 'split_nonmanifold_polygons', 'subface_columns', 'tessellation_bytes', 'torus', 'write_file_atomic', 'write_mesh']
 class MeshError(ValueError):
     """
     The faces or coordinates cannot be used: an index out of range, a repeated
@@ -680,6 +681,12 @@ class NormalEquations:
     @property
     def mu(self) -> float:
         ...
+def approximate(surface: LimitSurface, points: numpy.typing.NDArray[numpy.float64], weights: typing.Any, iterations: typing.SupportsInt | typing.SupportsIndex, tol: typing.SupportsFloat | typing.SupportsIndex, fairness: typing.SupportsFloat | typing.SupportsIndex, tangential: typing.SupportsFloat | typing.SupportsIndex, method: str, solver_tol: typing.SupportsFloat | typing.SupportsIndex, solver_max_iter: typing.SupportsInt | typing.SupportsIndex, grid: typing.SupportsInt | typing.SupportsIndex, newton_steps: typing.SupportsInt | typing.SupportsIndex, report_level: typing.SupportsInt | typing.SupportsIndex, callback: typing.Any, seconds_before: typing.SupportsFloat | typing.SupportsIndex = 0.0) -> dict:
+    """
+    Approximation's pipeline (sorpia::approximate) from the surface's control vertices: a dict with
+    control_vertices, face_ids, uv, distances, iterations, stop_reason, best_iteration, diagonal, history
+    (records as dicts, seconds counted from seconds_before) and timings; callback(record) after each record.
+    """
 def available_memory_bytes() -> int:
     ...
 def blend_weights(points: numpy.typing.NDArray[numpy.float64], normals: numpy.typing.NDArray[numpy.float64], tangential: typing.SupportsFloat | typing.SupportsIndex, weights: typing.Any = None) -> tuple[numpy.typing.NDArray[numpy.float64], numpy.typing.NDArray[numpy.float64]]:
@@ -710,12 +717,12 @@ def face_list_statistics(faces: numpy.typing.NDArray[numpy.int32], n_vertices: t
     """
     Statistics of a raw triangle list that may fail validation (genus None); None without faces or with an index out of range.
     """
-def fair_solve(topology: Topology, rules: Rules, thin_plate: typing.SupportsFloat | typing.SupportsIndex, membrane: typing.SupportsFloat | typing.SupportsIndex, targets: numpy.typing.NDArray[numpy.int32], positions: numpy.typing.NDArray[numpy.float64], start: numpy.typing.NDArray[numpy.float64], tol: typing.SupportsFloat | typing.SupportsIndex, window: typing.SupportsInt | typing.SupportsIndex, max_iter: typing.SupportsInt | typing.SupportsIndex, threads: typing.SupportsInt | typing.SupportsIndex, energy_tags: Tags | None = None, depth: typing.SupportsInt | typing.SupportsIndex = 4, reference: numpy.typing.NDArray[numpy.float64] | None = None) -> dict:
+def fair_interpolate(interpolator: Interpolator, vertices: numpy.typing.NDArray[numpy.float64], targets: numpy.typing.NDArray[numpy.int32], plain: SolveOptions, levels: typing.SupportsInt | typing.SupportsIndex, thin_plate: typing.SupportsFloat | typing.SupportsIndex, membrane: typing.SupportsFloat | typing.SupportsIndex, tol: typing.SupportsFloat | typing.SupportsIndex, window: typing.SupportsInt | typing.SupportsIndex, max_iter: typing.SupportsInt | typing.SupportsIndex, threads: typing.SupportsInt | typing.SupportsIndex, semi_sharp: str, depth: typing.SupportsInt | typing.SupportsIndex, reference: bool) -> dict:
     """
-    Least tr(V^T K V) with the limit positions of `targets` at `positions` (sorpia::fair_solve), K the
-    fairness matrix of the topology under `rules` with the given weights (sorpia::fairness_matrix; its tags
-    energy_tags when given, the quadrature's depth, the reference metric when given): a dict, with
-    energy_seconds (K) besides the solve's own.
+    Fair interpolation's pipeline (sorpia::fair_interpolate): the plain solve on the Interpolator's mesh, the
+    refinement, K and the fair solve. A dict: plain (InterpolationResult), faces, n_vertices, tags (the fine
+    mesh's), refinement (R as CSR arrays, only where the reference metric built it), vertices, energies,
+    energy, start_energy, iterations, stop_reason, max_error and seconds per phase.
     """
 def fairness_matrix(topology: Topology, rules: Rules, thin_plate: typing.SupportsFloat | typing.SupportsIndex, membrane: typing.SupportsFloat | typing.SupportsIndex, gauss_points: typing.SupportsInt | typing.SupportsIndex, depth: typing.SupportsInt | typing.SupportsIndex, reuse: bool = True, reference: numpy.typing.NDArray[numpy.float64] | None = None) -> tuple:
     """
@@ -790,6 +797,15 @@ def repair(faces: numpy.typing.NDArray[numpy.int32], n_vertices: typing.Supports
 def repair_polygons(face_vertex_counts: numpy.typing.NDArray[numpy.int32], face_vertex_indices: numpy.typing.NDArray[numpy.int32], n_vertices: typing.SupportsInt | typing.SupportsIndex) -> typing.Any:
     """
     sorpia::repair of polygons: None for a valid mesh, else (face_vertex_counts, face_vertex_indices, vertex_map, face_map, report dict).
+    """
+def rms_levelled(bests: collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex], tol: typing.SupportsFloat | typing.SupportsIndex, window: typing.SupportsInt | typing.SupportsIndex) -> bool:
+    """
+    approximation's stop test on the lowest RMS after each iteration (sorpia::rms_levelled).
+    """
+def scale_exponent(*args) -> int:
+    """
+    The exponent e of the core's exact scaling (sorpia/detail/scaling.hpp) for data whose largest magnitude
+    is that of the arrays given: 0 within 2^+-200.
     """
 def scheme_name(scheme: Scheme) -> str:
     ...
