@@ -28,12 +28,13 @@ from .progress import Progress
 _INDEX = re.compile(r"[+-]?[0-9]+")
 
 
-def read_targets(path) -> np.ndarray:
-    """The vertex indices of a --targets file: whole numbers separated by
-    spaces, commas or newlines, '#' to the end of a line a comment (a
-    UserError names the line of a word that is not one). Their values (at
-    least one, each a vertex, none twice) are the library's to check."""
-    out = []
+def read_targets(path) -> tuple[np.ndarray, list[int]]:
+    """The vertex indices of a --targets file, and the line of each: whole
+    numbers separated by spaces, commas or newlines, '#' to the end of a line
+    a comment (a UserError names the line of a word that is not one). Their
+    values (at least one, each a vertex, none twice) are the library's to
+    check; `on_line` puts the lines into its message."""
+    out, line_of = [], []
     try:
         with open(path, encoding="utf-8") as fh:
             lines = fh.read().splitlines()
@@ -46,7 +47,17 @@ def read_targets(path) -> np.ndarray:
                 raise UserError(f"--targets {path}, line {line_no}: {word!r} is not a vertex index (a whole "
                                 "number in ASCII digits)")
             out.append(min(max(int(word), _INT64_MIN), _INT64_MAX))  # beyond int64: out of range all the same
-    return np.array(out, dtype=np.int64)
+            line_of.append(line_no)
+    return np.array(out, dtype=np.int64), line_of
+
+
+def on_line(message: str, line_of: list[int]) -> str:
+    """The library's message about targets[i] with the file's line of each
+    entry it names ("targets[2] (line 3) = 5 repeats targets[0] (line 1)")."""
+    def named(m: re.Match) -> str:
+        i = int(m.group(1))
+        return f"{m.group(0)} (line {line_of[i]})" if i < len(line_of) else m.group(0)
+    return re.sub(r"targets\[(\d+)\]", named, message)
 
 
 _INT64_MIN, _INT64_MAX = int(np.iinfo(np.int64).min), int(np.iinfo(np.int64).max)
@@ -88,7 +99,7 @@ def run_fair(input_path, output, *, levels=1, membrane=0.0, targets=None, tol=No
                             "a quad mesh: write .obj, .off or .ply")
         check_float32_outputs(V0, {"-o": output, "--surface": surface})
         check_blender(blender, scheme, tags)
-        target_ids = None if targets is None else read_targets(targets)
+        target_ids, target_lines = (None, []) if targets is None else read_targets(targets)
         if surface is not None:  # the fine mesh's faces, tessellated --level more times
             n_fine_faces = (len(F) * 4 if scheme == "loop" else int(np.sum(face_counts(F)))) * 4 ** (levels - 1)
             check_surface_fits(len(V0) * 4 ** levels, np.full(n_fine_faces, 3 if scheme == "loop" else 4), level,
@@ -104,7 +115,7 @@ def run_fair(input_path, output, *, levels=1, membrane=0.0, targets=None, tol=No
                                    **scheme_kwargs(scheme, tags))
         except ParameterError as exc:  # the library's check of the targets, named with the file they came from
             if targets is not None and str(exc).startswith("targets"):
-                raise UserError(f"--targets {targets}: {exc}") from None
+                raise UserError(f"--targets {targets}: {on_line(str(exc), target_lines)}") from None
             raise
         timings["fit"] = time.perf_counter() - t0
         stats = topology_info(V0, build_topology(F, len(V0), scheme=scheme, warn=False), scheme=scheme)
