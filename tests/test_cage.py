@@ -373,3 +373,23 @@ def test_decimation_does_not_depend_on_where_the_mesh_lies(offset):
     assert np.array_equal(np.asarray(here.faces), np.asarray(there.faces))
     # The cage's vertices are the input's: exactly the moved ones.
     assert np.array_equal(there.vertices, (v + shift)[[np.flatnonzero((v == p).all(axis=1))[0] for p in here.vertices]])
+
+
+def test_catmull_clark_cage_of_an_open_mesh_keeps_its_boundary_and_orientation():
+    # A wavy 30 x 30 grid: the paired cage has the Loop cage's vertices and boundary, every directed edge once,
+    # and no vertex with fewer than two edges (a corner) on the boundary or three inside.
+    v, f = sorpia.shapes.grid(30, 30)
+    loop = sorpia.decimate(v, f, 150)
+    cage = sorpia.decimate(v, f, 150, scheme="catmull-clark")
+    np.testing.assert_array_equal(cage.vertices, loop.vertices)
+    faces = face_lists(cage.faces)
+    directed = [(a, b) for x in faces for a, b in zip(x.tolist(), np.roll(x, -1).tolist())]
+    assert len(set(directed)) == len(directed)
+    boundary = {(a, b) for a, b in directed if (b, a) not in set(directed)}
+    assert boundary == set(check_oriented_manifold(loop.vertices, loop.faces, closed=False))
+    edges = {tuple(sorted(e)) for e in directed}
+    valence = np.bincount(np.array(sorted(edges)).ravel(), minlength=len(cage.vertices))
+    on_boundary = np.zeros(len(cage.vertices), bool)
+    on_boundary[np.array(sorted(boundary)).ravel()] = True
+    assert valence[on_boundary].min() >= 2 and valence[~on_boundary].min() >= 3
+    assert 2 * sum(len(x) == 4 for x in faces) >= 0.8 * len(loop.faces)
