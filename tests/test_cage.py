@@ -147,9 +147,9 @@ def test_catmull_clark_cage_is_the_loop_cages_triangles_paired_into_quads():
         triangles += [tuple(x)] if len(x) == 3 else [(x[0], x[2], x[3]), (x[2], x[0], x[1])]
     canon = lambda t: min((t[i], t[(i + 1) % 3], t[(i + 2) % 3]) for i in range(3))  # noqa: E731
     assert sorted(map(canon, triangles)) == sorted(canon(tuple(t)) for t in loop.faces.tolist())
-    # Most are paired (measured: 91% of 596 triangles, 52 left; 80% stated), and a pairing never leaves a
+    # Most are paired (measured: 97% of 596 triangles, 20 left; 90% stated), and a pairing never leaves a
     # vertex with two edges (Catmull-Clark's rules want none inside).
-    assert 2 * (sizes == 4).sum() >= 0.8 * len(loop.faces)
+    assert 2 * (sizes == 4).sum() >= 0.9 * len(loop.faces)
     directed = {}
     for x in faces:
         for a, b in zip(x, np.roll(x, -1)):
@@ -190,7 +190,7 @@ def test_catmull_clark_cage_fits_as_well_as_loops_and_every_face_gets_points():
             owner += [i] * len(s)
         nearest = np.asarray(owner)[cKDTree(np.vstack(samples)).query(P)[1]]
         assert len(np.unique(nearest)) == len(face_lists(cage.faces))
-    # Measured: Loop 3.36e-3, Catmull-Clark 3.78e-3 (1.13x; the 3-quad split of before: 9.06e-3, 2.7x).
+    # Measured: Loop 3.36e-3, Catmull-Clark 3.74e-3 (1.12x; the 3-quad split of before: 9.06e-3, 2.7x).
     assert fits["catmull-clark"].rms <= 1.3 * fits["loop"].rms
 
 
@@ -392,4 +392,4 @@ def test_catmull_clark_cage_of_an_open_mesh_keeps_its_boundary_and_orientation()
     on_boundary = np.zeros(len(cage.vertices), bool)
     on_boundary[np.array(sorted(boundary)).ravel()] = True
     assert valence[on_boundary].min() >= 2 and valence[~on_boundary].min() >= 3
-    assert 2 * sum(len(x) == 4 for x in faces) >= 0.8 * len(loop.faces)
+    assert 2 * sum(len(x) == 4 for x in faces) >= 0.85 * len(loop.faces)  # measured: 93% of 269

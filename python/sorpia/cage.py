@@ -73,8 +73,8 @@ def decimate(vertices, faces=None, n_vertices: Optional[int] = None, *, scheme: 
     Under Catmull-Clark the same decimation's triangles (``n_vertices``
     vertices, as Loop's) are paired into quads across their edges, the
     best-shaped quads first (corners nearest right angles, the two triangles
-    nearest flat; no reflex corner, no vertex left with two edges), then by
-    exchanges that pair two left-over triangles more. Triangles that find no
+    nearest flat; no reflex corner, no vertex left with two edges), then
+    along augmenting paths that pair two left-over triangles more. Triangles that find no
     partner stay triangles (Catmull-Clark takes them as n-gons): the faces
     are then `sorpia.Polygons`, an (m, 4) array when every triangle paired.
 

@@ -291,10 +291,10 @@ double quad_quality(const OMesh& om, const OMesh::VertexHandle (&q)[4]) {
 }
 
 // The decimated triangles paired into quads across their edges, greedily by
-// quad_quality (best first), then improved by exchanges along alternating
-// paths of three edges (an unpaired triangle t takes a neighbour u from its
-// partner w when w can pair with another unpaired triangle instead: two
-// triangles fewer left over). Triangles that find no partner stay
+// quad_quality (best first), then improved along augmenting paths (an
+// unpaired triangle takes a neighbour from its partner, which takes another,
+// ... until one takes another unpaired triangle: two triangles fewer left
+// over). Triangles that find no partner stay
 // triangles. A pairing removes the shared edge, so it is refused where a
 // vertex of that edge would be left with fewer than three edges inside the
 // mesh (two on the boundary): Catmull-Clark's rules want no valence-2
@@ -342,42 +342,67 @@ Mesh paired_quads(const OMesh& om, const std::vector<double>& positions) {
   };
   for (const auto& [quality, e] : order)
     if (can_pair(OMesh::EdgeHandle(e))) set_pair(OMesh::EdgeHandle(e), true);
-  // Exchanges: t unpaired, u = t's neighbour across e1, paired with w across
-  // e2; x = w's other unpaired neighbour across e3. Pair t-u and w-x instead.
-  for (int sweep = 0; sweep < 4; ++sweep) {
+  // Augmenting paths: from an unpaired triangle t, a breadth-first search
+  // along alternating paths t -e1- u1 =paired= w1 -e2- u2 =paired= w2 ... -ek- x
+  // to another unpaired triangle x (at most kMaxSteps paired faces between;
+  // every edge taken a candidate quad), then each pair on the path moves one
+  // step: (t, u1), (w1, u2), ..., (w_{k-1}, x), one quad more. A path whose
+  // new pairs would break a valence is put back as it was.
+  constexpr int kMaxSteps = 6;
+  std::vector<int> parent_edge(n_faces, -1), seen(n_faces, -1);
+  std::vector<OMesh::FaceHandle> frontier, next;
+  for (int sweep = 0; sweep < 3; ++sweep) {
     bool changed = false;
     for (const auto t : om.faces()) {
       if (mate[t.idx()] >= 0) continue;
-      for (const auto h1 : om.fh_range(t)) {
-        const auto e1 = om.edge_handle(h1);
-        if (om.is_boundary(e1)) continue;
-        const auto u = om.opposite_face_handle(h1);
-        if (mate[u.idx()] < 0) continue;
-        const auto e2 = across[u.idx()];
-        const auto w = OMesh::FaceHandle(mate[u.idx()]);
-        bool done = false;
-        for (const auto h3 : om.fh_range(w)) {
-          const auto e3 = om.edge_handle(h3);
-          if (e3 == e2 || om.is_boundary(e3)) continue;
-          const auto x = om.opposite_face_handle(h3);
-          if (x == t || mate[x.idx()] >= 0) continue;
-          set_pair(e2, false);
-          if (can_pair(e1)) {
-            set_pair(e1, true);
-            if (can_pair(e3)) {
-              set_pair(e3, true);
-              done = true;
+      // seen[f] == t: reached in this search; parent_edge[u]: the edge u was entered by.
+      seen[t.idx()] = t.idx();
+      frontier.assign(1, t);
+      OMesh::FaceHandle found;
+      for (int step = 0; step <= kMaxSteps && !found.is_valid() && !frontier.empty(); ++step) {
+        next.clear();
+        for (const auto w : frontier) {
+          for (const auto h : om.fh_range(w)) {
+            const auto e = om.edge_handle(h);
+            if (om.is_boundary(e) || candidate[e.idx()].quality < 0.0 || e == across[w.idx()]) continue;
+            const auto u = om.opposite_face_handle(h);
+            if (seen[u.idx()] == t.idx()) continue;
+            seen[u.idx()] = t.idx();
+            parent_edge[u.idx()] = e.idx();
+            if (mate[u.idx()] < 0) {
+              found = u;
               break;
             }
-            set_pair(e1, false);
+            const auto w2 = OMesh::FaceHandle(mate[u.idx()]);
+            if (seen[w2.idx()] == t.idx() || step == kMaxSteps) continue;
+            seen[w2.idx()] = t.idx();
+            next.push_back(w2);
           }
-          set_pair(e2, true);
+          if (found.is_valid()) break;
         }
-        if (done) {
-          changed = true;
-          break;
-        }
+        frontier.swap(next);
       }
+      if (!found.is_valid()) continue;
+      // The path back from found: new edges (entered by) and old pairs (u's partner edge).
+      std::vector<OMesh::EdgeHandle> added, removed;
+      for (auto u = found;;) {
+        const OMesh::EdgeHandle e(parent_edge[u.idx()]);
+        added.push_back(e);
+        const auto [f, g] = faces_of(e);
+        const auto w = OMesh::FaceHandle(f == u.idx() ? g : f);
+        if (w == t) break;
+        removed.push_back(across[w.idx()]);
+        u = OMesh::FaceHandle(mate[w.idx()]);
+      }
+      for (const auto e : removed) set_pair(e, false);
+      std::size_t made = 0;
+      while (made < added.size() && can_pair(added[made])) set_pair(added[made++], true);
+      if (made == added.size()) {
+        changed = true;
+        continue;
+      }
+      while (made > 0) set_pair(added[--made], false);
+      for (const auto e : removed) set_pair(e, true);
     }
     if (!changed) break;
   }

@@ -46,8 +46,8 @@ struct DecimateOptions {
 /// same triangles (the same decimation, the same vertices) paired into quads
 /// across their edges, greedily by a quad's quality (its worst corner's
 /// departure from a right angle and the fold between its two triangles; no
-/// reflex corner, no vertex left with two edges), then by exchanges that
-/// pair two left-over triangles more; those that find no partner stay
+/// reflex corner, no vertex left with two edges), then along augmenting
+/// paths that pair two left-over triangles more; those that find no partner stay
 /// triangles (face_vertex_counts of 4 and 3; Catmull-Clark takes them as
 /// n-gons). Each quad (a, d, b, c) is the triangles (a, b, c) and (b, a, d).
 ///
