@@ -69,14 +69,10 @@ blender-venv:
 	    || echo "bpy $(BPY_VERSION) could not be installed: tests/test_blender.py will skip"; \
 	fi
 
-# Blender ships numpy but no scipy, which fair_interpolate and approximate use: the extension carries scipy's
-# wheel for Blender's Python (3.11) and platform. 1.13 is the newest whose wheels take numpy 1.22.4 to 2.2.
-EXTENSION_SCIPY := scipy==1.13.1
+# The extension carries sorpia's wheel alone: sorpia needs numpy, which Blender ships (no scipy: the operators'
+# functions never import it, tests/test_blender_extension.py checks).
 blender-extension: wheel
-	$(PY) -m pip download -q --no-deps --only-binary=:all: --python-version 3.11 --implementation cp \
-	  --platform manylinux_2_17_x86_64 -d build/extension-wheels "$(EXTENSION_SCIPY)"
-	$(PY) blender/build_extension.py "$$(ls -t dist/sorpia-$(VERSION)-*.whl | head -n 1)" dist \
-	  build/extension-wheels/$(subst ==,-,$(EXTENSION_SCIPY))-*.whl
+	$(PY) blender/build_extension.py "$$(ls -t dist/sorpia-$(VERSION)-*.whl | head -n 1)" dist
 
 # SORPIA_REQUIRE_REFERENCE: PIP_BUILD builds sorpia._reference, so the reference tests (Far's Limit(), OpenMesh's
 # one-ring) must run here: a missing module fails them instead of skipping them.

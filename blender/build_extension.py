@@ -3,9 +3,9 @@
     python blender/build_extension.py WHEEL OUTDIR [DEPENDENCY_WHEEL ...]
 
 writes OUTDIR/sorpia_blender-VERSION.zip, VERSION the sorpia wheel's: the
-add-on's files at the zip's root, the wheels under wheels/ (sorpia's and the
-dependencies Blender lacks: scipy, which Fair Fit and Fit Cage to Target use;
-Blender ships numpy), and blender_manifest.toml with the version, the wheels'
+add-on's files at the zip's root, the wheels under wheels/ (sorpia's, and
+any dependency Blender lacks: none today, sorpia needs numpy alone and
+Blender ships it), and blender_manifest.toml with the version, the wheels'
 paths under ``wheels`` and the platforms every wheel has under ``platforms``
 (Blender installs an extension only on the platforms listed, and unpacks its
 wheels itself, without resolving dependencies). Prints the zip's path.

@@ -417,10 +417,6 @@ def scenario_undo():
 
 def main() -> None:
     OUT.mkdir(parents=True, exist_ok=True)
-    import scipy
-
-    np.savez(OUT / "install.npz", sorpia_file=np.array(sorpia.__file__), version=np.array(sorpia.__version__),
-             scipy_file=np.array(scipy.__file__), blender=np.array(bpy.app.version_string))
     wanted = os.environ.get("SORPIA_SCENARIOS")
     for name, fn in list(globals().items()):
         if not name.startswith("scenario_") or (wanted and name[9:] not in wanted.split(",")):
@@ -430,6 +426,9 @@ def main() -> None:
             np.savez(OUT / f"{name[9:]}.npz", **{k: np.asarray(v) for k, v in result.items()})
         except Exception:
             (OUT / f"{name[9:]}.error").write_text(traceback.format_exc())
+    # after every operator ran: whether anything imported scipy, which Blender does not ship
+    np.savez(OUT / "install.npz", sorpia_file=np.array(sorpia.__file__), version=np.array(sorpia.__version__),
+             scipy_loaded=np.array("scipy" in sys.modules), blender=np.array(bpy.app.version_string))
 
 
 main()

@@ -373,9 +373,18 @@ def test_bad_cage_and_options_are_refused():
     P = V.copy()
     with pytest.raises(sorpia.MeshError, match="cage_faces is empty"):
         approximate(P, V, np.zeros((0, 3), np.int32))
-    for kwargs, message in [({"iterations": 0}, "iterations"), ({"tol": -1}, "tol"), ({"fairness": np.nan}, "fairness"),
-                            ({"method": "sor"}, "method"), ({"tangential": 2}, "tangential"),
-                            ({"method": "lspia", "tangential": 0.5}, "lspia"), ({"grid": 0}, "grid")]:
+    # The core's messages (its one check of each value): the parameter, the value as repr() writes it, the range.
+    for kwargs, message in [({"iterations": 0}, r"iterations = 0 must be an integer >= 1"),
+                            ({"tol": -1}, r"tol = -1\.0 must be a finite number >= 0"),
+                            ({"fairness": np.nan}, r"fairness = nan must be a finite number >= 0"),
+                            ({"solver_tol": -1e-10}, r"solver_tol = -1e-10 must be a finite number >= 0"),
+                            ({"method": "sor"}, r"method = 'sor' must be one of cg, lspia"),
+                            ({"tangential": 2}, r"tangential = 2\.0 must be in \[0, 1\]"),
+                            ({"method": "lspia", "tangential": 0.5}, "lspia"),
+                            ({"grid": 0}, r"grid = 0 must be in 1\.\.64"),
+                            ({"grid": 2**40}, r"grid = 2147483647 must be in 1\.\.64"),
+                            ({"iterations": 1.5}, r"iterations = 1\.5 must be an integer >= 1"),
+                            ({"tol": "x"}, r"tol must be a real number, got 'x'")]:
         with pytest.raises(sorpia.ParameterError, match=message):
             approximate(P, V, F, **kwargs)
 
@@ -644,7 +653,7 @@ def test_degenerate_data_is_refused_with_the_reason(points, what):
     # cage (the diagonal 0.248 -> 8.9e-8) while reporting a fit to rounding; refused, saying why. Points on a plane
     # are a surface (a cube cage fits the plane z = 1: test_a_fit_that_converges_stops_early_and_says_why).
     V, F = sorpia.shapes.icosphere(1)
-    with pytest.raises(sorpia.ParameterError, match=what):
+    with pytest.raises(sorpia.MeshError, match=what):
         approximate(points, V, F)
 
 

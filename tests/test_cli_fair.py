@@ -91,13 +91,16 @@ def test_fit_fair_refuses_options_that_do_not_apply(torus_file, tmp_path, comman
     assert not (tmp_path / "x.obj").exists()
 
 
+# The command line parses the file (a word that is no index: named with its line); the values are the library's
+# to check, named with the file they came from.
 @pytest.mark.parametrize("text, message", [
     ("1 2 x\n", "line 1: 'x' is not a vertex index"),
-    ("1\n\n5 1\n", "line 3: vertex 1 is repeated (first on line 1)"),
-    ("# nothing\n", "no vertex index in the file"),
-    ("0 100000\n", "line 1: vertex 100000 is out of range"),
+    ("1\n\n5 1\n", "t.txt: targets[2] = 1 repeats targets[0]"),
+    ("# nothing\n", "t.txt: targets is empty"),
+    ("0 100000\n", "t.txt: targets[1] = 100000 is out of range [0, "),
+    ("0 99999999999999999999999\n", "t.txt: targets[1] = 2147483647 is out of range [0, "),
 ])
-def test_a_bad_targets_file_is_refused_with_its_line(torus_file, tmp_path, command, text, message):
+def test_a_bad_targets_file_is_refused_with_its_name(torus_file, tmp_path, command, text, message):
     src, _, _ = torus_file
     targets = tmp_path / "t.txt"
     targets.write_text(text)

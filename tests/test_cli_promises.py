@@ -386,6 +386,29 @@ def test_approximate_errors_name_its_own_options(tmp_path, monkeypatch, command)
     assert "--nonmanifold" not in err and "--repair" not in err and "sorpia repair" in err
 
 
+def test_a_decimated_cage_the_library_refuses_is_named_as_the_decimated_cage(tmp_path, monkeypatch, command):
+    # Where decimation leaves a cage the fit refuses, the message says the indices are the decimated cage's
+    # (not the input's) and offers approximate's own ways out. The decimation is replaced by one that returns a
+    # cage with a bowtie vertex, as a decimation defect would.
+    import sorpia.cli.approximate as cli_approximate
+
+    monkeypatch.chdir(tmp_path)
+    scan_file(tmp_path)
+    V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [-1, 0, 0], [0, -1, 0.5]], float)
+    F = np.array([[0, 1, 2], [0, 3, 4]], np.int32)  # two fans meeting at vertex 0 only
+
+    def bowtie(*args, **kwargs):
+        return sorpia.Cage(V, F, None)
+
+    monkeypatch.setattr(cli_approximate, "decimate", bowtie)
+    code, _, err = command("approximate", "scan.ply", "--vertices", 5, "-o", "out.obj")
+    assert_user_error(code, err)
+    assert "the cage decimated from scan.ply" in err and "indices are the cage's" in err
+    assert "non-manifold vertex 0" in err and "--cage CAGE" in err
+    assert "--nonmanifold" not in err and "--repair" not in err
+    assert not (tmp_path / "out.obj").exists()
+
+
 # --------------------------------------------------------------------------- item 13: extreme scales
 
 def test_fit_check_at_1e200_is_finite_and_small(tmp_path, monkeypatch, command):

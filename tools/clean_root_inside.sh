@@ -3,8 +3,8 @@
 # OpenSubdiv, OpenMesh or compiler), as a new user would install and use the wheel:
 #   np1: Blender's numpy (1.26) and no scipy: `pip install --no-deps` of the wheel, then numpy; the compiled
 #        module's libraries (only sorpia.libs and what the manylinux policy allows), `import sorpia` without
-#        scipy and test_without_scipy.py; then scipy (a release that takes numpy 1.26), `sorpia demo` (which
-#        approximates a scan: scipy) and the pytest selection.
+#        scipy and test_without_scipy.py, `sorpia demo`; then scipy (a release that takes numpy 1.26) and the
+#        pytest selection.
 #   np2: `pip install` of the wheel with its dependencies (numpy 2.x, scipy), `sorpia demo`, the selection.
 #   clean_root_inside.sh WORK WHEEL_NAME   (WORK: the run's folder, holding wheel/, tests/, noscipy/)
 set -euo pipefail
@@ -80,8 +80,8 @@ step "np1: venv, the wheel without its dependencies (pip warns that scipy is mis
 step "np1: the compiled module's libraries" check_libraries np1
 step "np1: import sorpia and the functions that need no scipy, without scipy" \
   bash -c "cd noscipy && ../np1/bin/python -m pytest -q -p no:cacheprovider test_without_scipy.py"
+step "np1: sorpia demo (numpy 1.26.4, no scipy, no matplotlib)" demo np1
 step "np1: scipy for numpy 1.26.4" install np1 scipy numpy==1.26.4
-step "np1: sorpia demo (numpy 1.26.4, no matplotlib)" demo np1
 step "np1: pytest selection ($(versions np1))" selection np1
 step "np2: venv, pip install of the wheel with its dependencies (numpy 2.x, scipy)" \
   eval 'python3 -m venv np2 && install np2 "numpy>=2" scipy pytest &&

@@ -93,7 +93,11 @@ void bind_fit(py::module_& m) {
          long long max_iter, int threads, const std::string& semi_sharp, int depth, bool reference) {
         check_shape(vertices, 3, "vertices");
         check_rows(vertices, coarse.n_vertices(), "vertices", "the mesh");
-        if (targets.ndim() != 1) throw sorpia::ParameterError("targets must be one-dimensional");
+        if (targets.ndim() != 1) {
+          std::string shape;
+          for (py::ssize_t d = 0; d < targets.ndim(); ++d) shape += (d ? ", " : "") + std::to_string(targets.shape(d));
+          throw sorpia::ParameterError("targets must have shape (k,), got (" + shape + (targets.ndim() == 1 ? ",)" : ")"));
+        }
         sorpia::FairInterpolationOptions options;
         options.levels = levels;
         options.thin_plate = thin_plate;

@@ -1,9 +1,9 @@
 """scipy where a function needs it: imported on first use, not by ``import sorpia``.
 
 ``import sorpia`` needs numpy alone: Blender ships numpy but no scipy, and scipy.sparse is about half of
-sorpia's import time, which every command pays. Interpolation, fair interpolation, the limit points and
-surface, and mesh files need no scipy; what builds or takes a scipy sparse matrix (`sorpia.limit_matrix`,
-`sorpia.fairness_matrix`, `sorpia.approximate`, `LimitSurface.rows`, `Interpolator.limit_matrix`,
+sorpia's import time, which every command pays. Interpolation, fair interpolation, approximation, the limit
+points and surface, and mesh files need no scipy; what builds or takes a scipy sparse matrix
+(`sorpia.limit_matrix`, `sorpia.fairness_matrix`, `LimitSurface.rows`, `Interpolator.limit_matrix`,
 `FairResult.refinement`) gets it from `sparse`, which names the function and the package when scipy is missing.
 """
 
@@ -31,5 +31,6 @@ def sparse(needed_by: str) -> ModuleType:
         return importlib.import_module("scipy.sparse")
     except ImportError as exc:
         raise ImportError(f"{needed_by} needs scipy, which is not installed here: {INSTALL_HINT} "
-                          "(interpolation, fair interpolation, limit surfaces and mesh files work without it)",
+                          "(interpolation, fair interpolation, approximation, limit surfaces and mesh files "
+                          "work without it)",
                           name="scipy") from exc

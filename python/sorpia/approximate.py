@@ -53,8 +53,6 @@ the data's bounding box.
 
 from __future__ import annotations
 
-import math
-import numbers
 import time
 import warnings
 from dataclasses import dataclass, field
@@ -65,7 +63,7 @@ import numpy as np
 from . import _core
 from ._mesh import SubdivisionMesh, mesh_arguments
 from ._scipy import CSRMatrix
-from ._validate import DEFAULT_BOUNDARY, DEFAULT_SCHEME, as_polygons, as_vertices, resolve_scheme
+from ._validate import DEFAULT_BOUNDARY, DEFAULT_SCHEME, as_integer, as_polygons, as_real, as_vertices, resolve_scheme
 from .errors import MeshError, ParameterError
 from .surface import LimitSurface
 
@@ -213,17 +211,10 @@ class ApproximationResult:
                 "history": self.history, "timings": self.timings}
 
 
-def _count(value, name: str, low: int) -> int:
-    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Integral) or value < low:
-        raise ParameterError(f"{name} = {value!r} must be an integer >= {low}")
-    return int(value)
-
-
-def _nonnegative(value, name: str) -> float:
-    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real) or not (
-            math.isfinite(value) and value >= 0):
-        raise ParameterError(f"{name} = {value!r} must be a finite number >= 0")
-    return float(value)
+def _count(value, name: str, what: str) -> int:
+    """An integer option as the core takes it (int): the type converted, clamped to int32 (the core names a value
+    out of its range, once)."""
+    return min(max(as_integer(value, name, what), -2**31), 2**31 - 1)
 
 
 def _levelled(bests, tol: float) -> bool:
@@ -431,25 +422,20 @@ def approximate(points, cage_vertices, cage_faces=None, *, scheme: str = DEFAULT
         scheme=scheme, boundary=boundary, creases=creases, corners=corners, holes=holes), "approximate")
     scheme, boundary, creases, corners, holes = rules.values()
     points = as_points(points)
-    iterations = _count(iterations, "iterations", 1)
-    tol = _nonnegative(tol, "tol")
-    fairness = _nonnegative(fairness, "fairness")
+    # Types converted here; every range (and method, and lspia's tangential) is the core's to check, once.
+    iterations = _count(iterations, "iterations", "an integer >= 1")
+    tol = as_real(tol, "tol")
+    fairness = as_real(fairness, "fairness")
     if tangential is None:  # the blend for CG; LSPIA moves each coordinate on its own
         tangential = 1.0 if method == "lspia" else DEFAULT_TANGENTIAL
-    tangential = _nonnegative(tangential, "tangential")
-    if tangential > 1:
-        raise ParameterError(f"tangential = {tangential!r} must be in [0, 1]")
-    solver_tol = _nonnegative(solver_tol, "solver_tol")
-    solver_max_iter = _count(solver_max_iter, "solver_max_iter", 1)
-    grid = _count(grid, "grid", 1)
-    if grid > 64:
-        raise ParameterError(f"grid = {grid} must be in 1..64")
-    newton_steps = _count(newton_steps, "newton_steps", 1)
-    report_level = _count(report_level, "report_level", 0)
-    if method not in UPDATE_METHODS:
+    tangential = as_real(tangential, "tangential")
+    solver_tol = as_real(solver_tol, "solver_tol")
+    solver_max_iter = as_integer(solver_max_iter, "solver_max_iter", "an integer >= 1")
+    grid = _count(grid, "grid", "an integer in 1..64")
+    newton_steps = _count(newton_steps, "newton_steps", "an integer >= 1")
+    report_level = _count(report_level, "report_level", "an integer in 0..15")
+    if not isinstance(method, str):
         raise ParameterError(f"method = {method!r} must be one of {', '.join(UPDATE_METHODS)}")
-    if method == "lspia" and tangential != 1.0:
-        raise ParameterError("method = 'lspia' moves each coordinate on its own: it takes tangential = 1 only")
     if callback is not None and not callable(callback):
         raise ParameterError(f"callback = {callback!r} must be callable (record) or None")
     if faces is None and sampling is not None:

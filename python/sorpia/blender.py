@@ -31,6 +31,7 @@ from . import _core
 from ._mesh import mesh_arguments
 from ._validate import DEFAULT_BOUNDARY, DEFAULT_SCHEME, Polygons, as_boundary, as_polygons, as_tags, as_vertices
 from .errors import ParameterError
+from .solve import Interpolator
 
 # Blender's default isolation; QUALITY_EXACT where features need the deepest isolation (darts, semi-sharp
 # creases and corners, one-face corners under edge-only): the limit positions there are then exact to float32.
@@ -190,8 +191,6 @@ def interpolate_float32(vertices, faces, rules: dict, **options):
     Blender's surface misses by, but for its own float32 evaluation). The
     miss is B times the rounded cage by the solve's own operator B, which
     `sorpia.limit_points` would build again."""
-    from .solve import Interpolator
-
     vertices = as_vertices(vertices)
     interp = Interpolator(faces, len(vertices), scheme="catmull-clark", **rules)
     res = interp.solve(vertices, **options)

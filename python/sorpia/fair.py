@@ -46,8 +46,6 @@ result is a minimiser, the one nearest the plain interpolation in that sense.
 
 from __future__ import annotations
 
-import math
-import numbers
 import time
 import warnings
 from dataclasses import dataclass, field
@@ -59,11 +57,11 @@ from . import _core, _scipy
 from ._mesh import SubdivisionMesh, mesh_arguments
 from ._meshinfo import bounding_box_diagonal
 from ._nonmanifold import manifold_only
-from ._validate import DEFAULT_BOUNDARY, DEFAULT_SCHEME, as_rules, as_vertices
+from ._validate import DEFAULT_BOUNDARY, DEFAULT_SCHEME, as_integer, as_real, as_rules, as_vertices
 from .errors import MeshError, ParameterError
 from .limit import TAGS_DOC as _TAGS_DOC
 from .energy import check_semi_sharp
-from .solve import InterpolationResult, Interpolator, _integer, check_options
+from .solve import InterpolationResult, Interpolator, check_options
 
 METRICS = ("parameter", "reference")
 # The iteration's largest window: the energy change is measured over the iterations so far over 5, at least 2
@@ -202,48 +200,34 @@ class FairResult:
                           "stop_reason": self.plain.stop_reason}}
 
 
-def _weight(value, name: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not math.isfinite(float(value)):
-        raise ParameterError(f"{name} must be a finite real number, got {value!r}")
-    if value < 0:
-        raise ParameterError(f"{name} = {value!r} is negative: the energy's weights must be >= 0")
-    return float(value)
+def check_fair_options(levels, thin_plate, membrane, tol) -> tuple[int, int, float, float, float]:
+    """levels, thin_plate, membrane and tol converted to the core's types (ParameterError for a value of the wrong
+    type); their ranges are the core's (sorpia::fair_interpolate) to check, once, before any work."""
+    return (_as_int32(levels, "levels", f"an integer in 1..{MAX_LEVELS}"), as_real(thin_plate, "thin_plate"),
+            as_real(membrane, "membrane"), as_real(tol, "tol"))
 
 
-def check_fair_options(levels, thin_plate, membrane, tol) -> tuple[int, float, float, float]:
-    """levels, thin_plate, membrane and tol, checked (ParameterError) before any work."""
-    if isinstance(levels, bool) or not isinstance(levels, numbers.Integral) or not 1 <= levels <= MAX_LEVELS:
-        raise ParameterError(f"levels must be an integer in 1..{MAX_LEVELS}, got {levels!r}")
-    tp, mb = _weight(thin_plate, "thin_plate"), _weight(membrane, "membrane")
-    if tp == 0 and mb == 0:
-        raise ParameterError("thin_plate and membrane are both 0: the energy would be zero for every surface; "
-                             "give one of them a positive weight")
-    if isinstance(tol, bool) or not isinstance(tol, numbers.Real) or not (0 < tol < 1):
-        raise ParameterError(f"tol must be a real number in (0, 1), got {tol!r}")
-    return int(levels), tp, mb, float(tol)
+_INT32_MIN, _INT32_MAX = int(np.iinfo(np.int32).min), int(np.iinfo(np.int32).max)
+
+
+def _as_int32(value, name: str, what: str) -> int:
+    """An integer option the core takes as int: beyond int32 it is clamped there, where the core names it as out of
+    range."""
+    return min(max(as_integer(value, name, what), _INT32_MIN), _INT32_MAX)
 
 
 def as_targets(targets, n_vertices: int) -> np.ndarray:
-    """The target vertex indices, checked: None (every vertex), or distinct
-    integers in [0, n_vertices), at least one."""
+    """The target vertex indices as the core takes them (int32): None is every vertex; a non-integer array is a
+    TypeError. Their values (at least one, each in [0, n_vertices), none twice) are the core's to check; an index
+    beyond int32 is clamped there, where the core names it as out of range."""
     if targets is None:
         return np.arange(n_vertices, dtype=np.int32)
     arr = np.asarray(targets)
     if arr.size == 0:  # before the dtype: an empty list is float64 to numpy
-        raise ParameterError("targets is empty: give at least one vertex to interpolate (None: every vertex)")
+        return np.zeros(arr.shape, dtype=np.int32)
     if arr.dtype == bool or not np.issubdtype(arr.dtype, np.integer):
         raise TypeError(f"targets must be integer vertex indices, got dtype {arr.dtype}")
-    if arr.ndim != 1:
-        raise ParameterError(f"targets must have shape (k,), got {arr.shape}")
-    bad = np.flatnonzero((arr < 0) | (arr >= n_vertices))
-    if len(bad):
-        raise ParameterError(f"targets[{bad[0]}] = {arr[bad[0]]} is out of range [0, {n_vertices})")
-    order = np.argsort(arr, kind="stable")
-    repeated = np.flatnonzero(arr[order][1:] == arr[order][:-1])
-    if len(repeated):
-        first, second = sorted(order[repeated[0]:repeated[0] + 2])
-        raise ParameterError(f"targets[{second}] = {arr[second]} repeats targets[{first}]")
-    return np.ascontiguousarray(arr, dtype=np.int32)
+    return np.ascontiguousarray(np.clip(arr, _INT32_MIN, _INT32_MAX), dtype=np.int32)
 
 
 class _Refinement:
@@ -352,12 +336,11 @@ def fair_interpolate(vertices, faces=None, *, scheme: str = DEFAULT_SCHEME, leve
     scheme, boundary, creases, corners, holes = rules.values()
     levels, thin_plate, membrane, tol = check_fair_options(levels, thin_plate, membrane, tol)
     semi_sharp = check_semi_sharp(semi_sharp)
-    depth = _integer(depth, "depth", "an integer in 0..12")
-    if not 0 <= depth <= 12:
-        raise ParameterError(f"depth must be in 0..12, got {depth}")
+    depth = _as_int32(depth, "depth", "an integer in 0..12")
     if metric not in METRICS:
         raise ParameterError(f"metric must be one of {', '.join(map(repr, METRICS))}, got {metric!r}")
-    check_options("auto", tol=1e-10, max_iter=max_iter, threads=threads)  # max_iter and threads, as interpolate's
+    max_iter = as_integer(max_iter, "max_iter", "an integer >= 1")
+    threads = _as_int32(threads, "threads", "an integer >= 1")
     v0 = as_vertices(vertices)
     n = v0.shape[0]
     arrays, n, rules = as_rules(faces, n, scheme=scheme, boundary=boundary, creases=creases, corners=corners,
@@ -376,7 +359,7 @@ def fair_interpolate(vertices, faces=None, *, scheme: str = DEFAULT_SCHEME, leve
     t_plain = time.perf_counter()
     plain_options = check_options()
     out = _core.fair_interpolate(interp._impl, v0, target_ids, plain_options, levels, thin_plate, membrane, tol,
-                                 ENERGY_WINDOW, int(max_iter), int(threads), semi_sharp, depth, metric == "reference")
+                                 ENERGY_WINDOW, max_iter, threads, semi_sharp, depth, metric == "reference")
     seconds = out["seconds"]
     plain = interp._solve(v0, "auto", plain_options, None, t_plain, keep_targets=True, result=out["plain"])
     timings = {"plain": build + seconds["plain"], "refine": seconds["refine"], "energy": seconds["energy"],

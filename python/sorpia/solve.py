@@ -111,7 +111,6 @@ from ._nonmanifold import folded, split
 from ._scipy import CSRMatrix
 from ._validate import (DEFAULT_BOUNDARY, DEFAULT_NONMANIFOLD, DEFAULT_SCHEME, as_boundary, as_integer,
                         as_nonmanifold, as_real, as_rules, as_vertex_count, as_vertices)
-from ._validate import as_integer as _integer  # noqa: F401  (fair.py's name until it takes as_integer)
 from .errors import ConvergenceWarning, OmegaWarning, ParameterError, SingularMatrixWarning
 from .limit import NONMANIFOLD_DOC as _NONMANIFOLD_DOC
 from .limit import TAGS_DOC as _TAGS_DOC

@@ -314,7 +314,7 @@ TEST(Approximate, RefusesBadOptionsAndData) {
   sorpia::ApproximationOptions o;
   o.update = sorpia::ApproximationUpdate::LSPIA;
   sorpia_test::expect_error<sorpia::ParameterError>([&] { sorpia::approximate(surface, fit.points.data(), 3, nullptr, o); }, {"it takes tangential = 1 only"});
-  sorpia_test::expect_error<sorpia::ParameterError>([&] { sorpia::approximate(surface, fit.points.data(), 0, nullptr, {}); }, {"points is empty"});
+  sorpia_test::expect_error<sorpia::MeshError>([&] { sorpia::approximate(surface, fit.points.data(), 0, nullptr, {}); }, {"points is empty"});
   const double zero[3] = {0.0, 0.0, 0.0};
   sorpia_test::expect_error<sorpia::ParameterError>([&] { sorpia::approximate(surface, fit.points.data(), 3, zero, {}); }, {"weights are all 0"});
 }

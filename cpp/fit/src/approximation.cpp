@@ -12,6 +12,7 @@
 #include <utility>
 #include <vector>
 
+#include "sorpia/detail/repr.hpp"
 #include "sorpia/detail/scaling.hpp"
 #include "sorpia/errors.hpp"
 #include "sorpia/fair_interpolation.hpp"  // energy_tags
@@ -83,7 +84,7 @@ double bounding_box_diagonal(const double* p, std::size_t k) {
 // that closely, whatever its direction).
 void check_spread(const double* p, std::size_t k, double diagonal) {
   if (!(diagonal > 0))
-    throw ParameterError("the points all lie at one place (" + std::to_string(k) +
+    throw MeshError("the points all lie at one place (" + std::to_string(k) +
                          (k == 1 ? " point" : " points, all equal") +
                          "): there is no surface to fit; give points that span the surface");
   double mean[3] = {0.0, 0.0, 0.0};
@@ -116,20 +117,20 @@ void check_spread(const double* p, std::size_t k, double diagonal) {
     off = std::max(off, std::sqrt(r2));
   }
   if (off <= 1e-12)
-    throw ParameterError("the points all lie on one line (" + std::to_string(k) +
+    throw MeshError("the points all lie on one line (" + std::to_string(k) +
                          " points): no surface is determined by them; give points that span the surface");
 }
 
 void check_options(const ApproximationOptions& o) {
   const auto nonnegative = [](double v, const char* name) {
     if (!(std::isfinite(v) && v >= 0))
-      throw ParameterError(std::string(name) + " = " + std::to_string(v) + " must be a finite number >= 0");
+      throw ParameterError(std::string(name) + " = " + detail::repr(v) + " must be a finite number >= 0");
   };
   if (o.iterations < 1) throw ParameterError("iterations = " + std::to_string(o.iterations) + " must be an integer >= 1");
   nonnegative(o.tol, "tol");
   nonnegative(o.fairness, "fairness");
   nonnegative(o.tangential, "tangential");
-  if (o.tangential > 1) throw ParameterError("tangential = " + std::to_string(o.tangential) + " must be in [0, 1]");
+  if (o.tangential > 1) throw ParameterError("tangential = " + detail::repr(o.tangential) + " must be in [0, 1]");
   if (o.update == ApproximationUpdate::LSPIA && o.tangential != 1.0)
     throw ParameterError("method = 'lspia' moves each coordinate on its own: it takes tangential = 1 only");
   nonnegative(o.solver_tol, "solver_tol");
@@ -144,7 +145,7 @@ void check_options(const ApproximationOptions& o) {
   if (o.fairness_depth < 0 || o.fairness_depth > 12)
     throw ParameterError("fairness_depth = " + std::to_string(o.fairness_depth) + " must be in 0..12");
   if (!(std::isfinite(o.proximal) && o.proximal > 0))
-    throw ParameterError("proximal = " + std::to_string(o.proximal) + " must be a finite number > 0");
+    throw ParameterError("proximal = " + detail::repr(o.proximal) + " must be a finite number > 0");
   if (o.window < 1) throw ParameterError("window = " + std::to_string(o.window) + " must be >= 1");
   nonnegative(o.exact, "exact");
   nonnegative(o.closer, "closer");
@@ -316,15 +317,14 @@ ApproximationResult approximate(LimitSurface& surface, const double* points, std
   const auto t0 = Clock::now();
   const double c0 = cpu_now();
   check_options(options);
-  if (k == 0) throw ParameterError("points is empty: there is nothing to approximate");
+  if (k == 0) throw MeshError("points is empty: there is nothing to approximate");
   for (std::size_t i = 0; i < 3 * k; ++i)
-    if (!std::isfinite(points[i]))
-      throw ParameterError("points[" + std::to_string(i / 3) + "] is not finite");
+    if (!std::isfinite(points[i])) throw MeshError("points[" + std::to_string(i / 3) + "] is not finite");
   if (weights) {
     bool any = false;
     for (std::size_t i = 0; i < k; ++i) {
       if (!(std::isfinite(weights[i]) && weights[i] >= 0))
-        throw ParameterError("weights[" + std::to_string(i) + "] = " + std::to_string(weights[i]) +
+        throw ParameterError("weights[" + std::to_string(i) + "] = " + detail::repr(weights[i]) +
                              " must be a finite number >= 0");
       any = any || weights[i] > 0;
     }

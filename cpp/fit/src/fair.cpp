@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "sorpia/detail/parallel.hpp"
+#include "sorpia/detail/repr.hpp"
 #include "sorpia/detail/scaling.hpp"
 #include "sorpia/errors.hpp"
 #include "sorpia/interrupt.hpp"
@@ -173,12 +174,12 @@ std::size_t energy_window(long long k, int window) {
 
 void check_options(const FairOptions& o) {
   if (!(o.tol > 0.0 && std::isfinite(o.tol)))
-    throw ParameterError("tol must be positive and finite, got " + std::to_string(o.tol));
-  if (o.window < 1) throw ParameterError("window must be >= 1, got " + std::to_string(o.window));
-  if (o.max_iter < 1) throw ParameterError("max_iter must be >= 1, got " + std::to_string(o.max_iter));
+    throw ParameterError("tol must be a positive finite number, got " + detail::repr(o.tol));
+  if (o.window < 1) throw ParameterError("window = " + std::to_string(o.window) + " must be >= 1");
+  if (o.max_iter < 1) throw ParameterError("max_iter = " + std::to_string(o.max_iter) + " must be an integer >= 1");
   if (o.threads < 1 || o.threads > max_threads)
-    throw ParameterError("threads must be in 1.." + std::to_string(max_threads) + ", got " +
-                         std::to_string(o.threads));
+    throw ParameterError("threads = " + std::to_string(o.threads) + " must be an integer in 1.." +
+                         std::to_string(max_threads));
 }
 
 }  // namespace

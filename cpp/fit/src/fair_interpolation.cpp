@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "sorpia/detail/parallel.hpp"
+#include "sorpia/detail/repr.hpp"
 #include "sorpia/detail/scaling.hpp"
 #include "sorpia/errors.hpp"
 #include "sorpia/fairness.hpp"
@@ -21,9 +22,13 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
+// The options' messages name the parameter, the value as Python's repr() writes it and the range allowed: the
+// one check of each (the bindings and Python convert types only).
 void check_weight(double w, const char* name) {
-  if (!std::isfinite(w)) throw ParameterError(std::string(name) + " must be a finite real number, got " + std::to_string(w));
-  if (w < 0) throw ParameterError(std::string(name) + " = " + std::to_string(w) + " is negative: the energy's weights must be >= 0");
+  if (!std::isfinite(w))
+    throw ParameterError(std::string(name) + " must be a finite real number, got " + detail::repr(w));
+  if (w < 0)
+    throw ParameterError(std::string(name) + " = " + detail::repr(w) + " is negative: the energy's weights must be >= 0");
 }
 
 void check_options(const FairInterpolationOptions& o) {
@@ -36,15 +41,34 @@ void check_options(const FairInterpolationOptions& o) {
     throw ParameterError("thin_plate and membrane are both 0: the energy would be zero for every surface; "
                          "give one of them a positive weight");
   if (o.depth < 0 || o.depth > 12) throw ParameterError("depth must be in 0..12, got " + std::to_string(o.depth));
-  // tol, window, max_iter and threads: fair_solve's checks, made here before any work.
-  if (!(o.solve.tol > 0.0 && std::isfinite(o.solve.tol)))
-    throw ParameterError("tol must be positive and finite, got " + std::to_string(o.solve.tol));
-  if (o.solve.window < 1) throw ParameterError("window must be >= 1, got " + std::to_string(o.solve.window));
-  if (o.solve.max_iter < 1) throw ParameterError("max_iter must be >= 1, got " + std::to_string(o.solve.max_iter));
+  // tol, window, max_iter and threads: fair_solve's checks, made here before any work, with fair interpolation's
+  // range of tol (a relative fall of the energy: below 1).
+  if (!(o.solve.tol > 0.0 && o.solve.tol < 1.0))
+    throw ParameterError("tol must be a real number in (0, 1), got " + detail::repr(o.solve.tol));
+  if (o.solve.window < 1) throw ParameterError("window = " + std::to_string(o.solve.window) + " must be >= 1");
+  if (o.solve.max_iter < 1)
+    throw ParameterError("max_iter = " + std::to_string(o.solve.max_iter) + " must be an integer >= 1");
   if (o.solve.threads < 1 || o.solve.threads > max_threads)
-    throw ParameterError("threads must be in 1.." + std::to_string(max_threads) + ", got " +
-                         std::to_string(o.solve.threads));
+    throw ParameterError("threads = " + std::to_string(o.solve.threads) + " must be an integer in 1.." +
+                         std::to_string(max_threads));
   sorpia::check_options(o.plain);
+}
+
+// The targets: at least one, each in [0, n), none twice (the first repeat named with the index it repeats).
+void check_targets(const std::int32_t* targets, std::size_t n_targets, std::size_t n) {
+  if (n_targets == 0)
+    throw ParameterError("targets is empty: give at least one vertex to interpolate (None: every vertex)");
+  std::vector<std::int64_t> first(n, -1);
+  for (std::size_t i = 0; i < n_targets; ++i) {
+    const std::int32_t v = targets[i];
+    if (v < 0 || static_cast<std::size_t>(v) >= n)
+      throw ParameterError("targets[" + std::to_string(i) + "] = " + std::to_string(v) + " is out of range [0, " +
+                           std::to_string(n) + ")");
+    if (first[static_cast<std::size_t>(v)] >= 0)
+      throw ParameterError("targets[" + std::to_string(i) + "] = " + std::to_string(v) + " repeats targets[" +
+                           std::to_string(first[static_cast<std::size_t>(v)]) + "]");
+    first[static_cast<std::size_t>(v)] = static_cast<std::int64_t>(i);
+  }
 }
 
 // y = R x for x (n, 3): each row's products summed in R's column order from 0 (as scipy's csr_matvecs).
@@ -86,6 +110,7 @@ FairInterpolationResult fair_interpolate(Interpolator& coarse, const double* v0,
     targets = all.data();
     n_targets = n;
   }
+  check_targets(targets, n_targets, n);  // before any work
   check_refinement(topology, rules, options.levels);  // a fine mesh too big is refused before any work
   // The reference metric works on V0 / 2^e (detail/scaling.hpp): beyond 2^+-200 the metric's squares leave
   // double's range. Its thin plate does not change when the data and the reference are scaled together; the
@@ -143,10 +168,7 @@ FairInterpolationResult fair_interpolate(Interpolator& coarse, const double* v0,
 
   std::vector<double> positions(3 * n_targets);
   for (std::size_t i = 0; i < n_targets; ++i) {
-    const std::int32_t v = targets[i];
-    if (v < 0 || static_cast<std::size_t>(v) >= n)
-      throw ParameterError("targets[" + std::to_string(i) + "] = " + std::to_string(v) + " is out of range [0, " +
-                           std::to_string(n) + ")");
+    const std::int32_t v = targets[i];  // checked above
     for (int c = 0; c < 3; ++c) positions[3 * i + static_cast<std::size_t>(c)] = v0[3 * static_cast<std::size_t>(v) + static_cast<std::size_t>(c)];
   }
   detail::scale_pow2(positions.data(), positions.size(), -e);

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import __version__, fair_interpolate, limit_surface
+from .. import ParameterError, __version__, fair_interpolate, limit_surface
 from .._checks import interpolation_miss, scale_exponent
 from .._meshinfo import topology_info
 from .._usd import is_usd
@@ -28,11 +28,11 @@ from .progress import Progress
 _INDEX = re.compile(r"[+-]?[0-9]+")
 
 
-def read_targets(path, n_vertices: int) -> np.ndarray:
+def read_targets(path) -> np.ndarray:
     """The vertex indices of a --targets file: whole numbers separated by
-    spaces, commas or newlines, '#' to the end of a line a comment; each in
-    [0, n_vertices) and none twice (a UserError names the line)."""
-    seen: dict[int, int] = {}
+    spaces, commas or newlines, '#' to the end of a line a comment (a
+    UserError names the line of a word that is not one). Their values (at
+    least one, each a vertex, none twice) are the library's to check."""
     out = []
     try:
         with open(path, encoding="utf-8") as fh:
@@ -45,18 +45,11 @@ def read_targets(path, n_vertices: int) -> np.ndarray:
             if not _INDEX.fullmatch(word):
                 raise UserError(f"--targets {path}, line {line_no}: {word!r} is not a vertex index (a whole "
                                 "number in ASCII digits)")
-            index = int(word)
-            if not 0 <= index < n_vertices:
-                raise UserError(f"--targets {path}, line {line_no}: vertex {index} is out of range [0, "
-                                f"{n_vertices}) (the input has {n_vertices} vertices)")
-            if index in seen:
-                raise UserError(f"--targets {path}, line {line_no}: vertex {index} is repeated (first on line "
-                                f"{seen[index]})")
-            seen[index] = line_no
-            out.append(index)
-    if not out:
-        raise UserError(f"--targets {path}: no vertex index in the file")
+            out.append(min(max(int(word), _INT64_MIN), _INT64_MAX))  # beyond int64: out of range all the same
     return np.array(out, dtype=np.int64)
+
+
+_INT64_MIN, _INT64_MAX = int(np.iinfo(np.int64).min), int(np.iinfo(np.int64).max)
 
 
 def run_fair(input_path, output, *, levels=1, membrane=0.0, targets=None, tol=None, max_iter=None,
@@ -95,7 +88,7 @@ def run_fair(input_path, output, *, levels=1, membrane=0.0, targets=None, tol=No
                             "a quad mesh: write .obj, .off or .ply")
         check_float32_outputs(V0, {"-o": output, "--surface": surface})
         check_blender(blender, scheme, tags)
-        target_ids = None if targets is None else read_targets(targets, len(V0))
+        target_ids = None if targets is None else read_targets(targets)
         if surface is not None:  # the fine mesh's faces, tessellated --level more times
             n_fine_faces = (len(F) * 4 if scheme == "loop" else int(np.sum(face_counts(F)))) * 4 ** (levels - 1)
             check_surface_fits(len(V0) * 4 ** levels, np.full(n_fine_faces, 3 if scheme == "loop" else 4), level,
@@ -105,9 +98,14 @@ def run_fair(input_path, output, *, levels=1, membrane=0.0, targets=None, tol=No
         # Coordinates beyond 2^+-200 are fitted scaled by a power of two (exact: the same control mesh, scaled
         # back): the energies, squares of the coordinates, would overflow. They are reported in the scaled units.
         e = scale_exponent(V0) if membrane == 0 else 0  # the membrane term is not scale-free: never scaled
-        res = fair_interpolate(np.ldexp(V0, -e), F, levels=levels, membrane=membrane, targets=target_ids,
-                               boundary=boundary, tol=tol, max_iter=max_iter, threads=threads,
-                               **scheme_kwargs(scheme, tags))
+        try:
+            res = fair_interpolate(np.ldexp(V0, -e), F, levels=levels, membrane=membrane, targets=target_ids,
+                                   boundary=boundary, tol=tol, max_iter=max_iter, threads=threads,
+                                   **scheme_kwargs(scheme, tags))
+        except ParameterError as exc:  # the library's check of the targets, named with the file they came from
+            if targets is not None and str(exc).startswith("targets"):
+                raise UserError(f"--targets {targets}: {exc}") from None
+            raise
         timings["fit"] = time.perf_counter() - t0
         stats = topology_info(V0, build_topology(F, len(V0), scheme=scheme, warn=False), scheme=scheme)
         ctrl = np.ldexp(np.asarray(res.control_vertices), e)

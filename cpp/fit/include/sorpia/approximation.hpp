@@ -124,10 +124,11 @@ using ApproximationProgress = std::function<void(const ApproximationRecord&)>;
 /// @param progress  empty, or called with each record
 /// The surface-to-data distances leave out the control vertices no face
 /// uses (they are no point of the surface).
-/// @throws ParameterError for an option out of range, no point, a point or
-///         weight not finite, a negative weight, points all at one place
-///         (one point, or all duplicates) or all on one line (no surface is
-///         determined by them); MeshError as the surface's evaluation
+/// @throws ParameterError for an option out of range, a weight not finite
+///         or negative, or all 0; MeshError for no point, a point not
+///         finite, points all at one place (one point, or all duplicates) or
+///         all on one line (no surface is determined by them), and as the
+///         surface's evaluation
 ApproximationResult approximate(LimitSurface& surface, const double* points, std::size_t k, const double* weights,
                                 const ApproximationOptions& options, const ApproximationProgress& progress = {});
 
