@@ -1,5 +1,5 @@
 """Light cages for dense meshes: OpenMesh's quadric decimation down to a
-given number of vertices, split into quads for Catmull-Clark, with the sharp
+given number of vertices, its triangles paired into quads for Catmull-Clark, with the sharp
 edges found on the cage as creases. The control mesh that
 approximation (issue 23) fits to a scan's points."""
 
@@ -14,7 +14,7 @@ from . import _core
 from ._sharp import sharp_edges
 from .errors import DecimationWarning
 from ._mesh import SubdivisionMesh
-from ._validate import AUTO_SCHEME, DEFAULT_SCHEME, as_faces, as_scheme, as_vertex_count, as_vertices, resolve_scheme
+from ._validate import AUTO_SCHEME, DEFAULT_SCHEME, Polygons, as_faces, as_scheme, as_vertex_count, as_vertices, resolve_scheme
 
 
 class Cage(NamedTuple):
@@ -23,7 +23,9 @@ class Cage(NamedTuple):
     Attributes
     ----------
     vertices : (n, 3) float64
-    faces : (m, 3) int32 triangles (Loop) or (m, 4) int32 quads (Catmull-Clark)
+    faces : (m, 3) int32 triangles (Loop); under Catmull-Clark (m, 4) int32
+        quads, or `sorpia.Polygons` of quads and the triangles their pairing
+        left
     creases : ``(edges (k, 2) int32, sharpness (k,) float64)`` or None
         The cage's edges sharper than `sharp_angle`, infinitely sharp: ready
         for ``creases=`` of `sorpia.interpolate`, `sorpia.limit_surface` and
@@ -68,10 +70,13 @@ def decimate(vertices, faces=None, n_vertices: Optional[int] = None, *, scheme: 
     that the outline and corners of an open mesh stay; 0 removes them only
     where the boundary runs straight, 180 leaves them to the quadric).
 
-    Under Catmull-Clark each decimated triangle is split into three quads at
-    its centroid and edge midpoints (as `sorpia.shapes.quad_irregular` is
-    made), the triangles decimated until the quad cage has at most
-    ``n_vertices`` vertices and at most 5 fewer.
+    Under Catmull-Clark the same decimation's triangles (``n_vertices``
+    vertices, as Loop's) are paired into quads across their edges, the
+    best-shaped quads first (corners nearest right angles, the two triangles
+    nearest flat; no reflex corner, no vertex left with two edges), then
+    along augmenting paths that pair two left-over triangles more. Triangles that find no
+    partner stay triangles (Catmull-Clark takes them as n-gons): the faces
+    are then `sorpia.Polygons`, an (m, 4) array when every triangle paired.
 
     Parameters
     ----------
@@ -82,11 +87,11 @@ def decimate(vertices, faces=None, n_vertices: Optional[int] = None, *, scheme: 
         Triangles, manifold and consistently oriented (`sorpia.repair` makes
         a mesh so). Vertices no face uses are left out.
     n_vertices : int
-        The cage's vertices: at least 4, at most the mesh's (under
-        Catmull-Clark, its vertices, edges and faces together).
+        The cage's vertices: at least 4, at most the mesh's.
     scheme : {"auto", "loop", "catmull-clark"}
-        The cage's: Loop gives a triangle cage, Catmull-Clark a quad cage;
-        "auto" (the default) is a mesh's own scheme, and Loop for arrays
+        The cage's: Loop gives a triangle cage, Catmull-Clark a cage of
+        quads (and a few triangles; above); "auto" (the default) is a mesh's
+        own scheme, and Loop for arrays
         (resolved on the input's triangles).
     sharp_angle : float, optional
         Degrees in [0, 180]: the cage's edges whose faces meet at more than
@@ -136,7 +141,8 @@ def decimate(vertices, faces=None, n_vertices: Optional[int] = None, *, scheme: 
         cage_vertices, cage_faces = mesh
     else:
         cage_vertices, counts, indices = mesh
-        cage_faces = indices.reshape(len(counts), 4)
+        # All quads as an (m, 4) array; quads and the triangles the pairing left as Polygons.
+        cage_faces = indices.reshape(len(counts), 4) if (counts == 4).all() else Polygons(counts, indices)
     creases = None
     if sharp_angle is not None:
         edges = sharp_edges(cage_vertices, cage_faces, sharp_angle)

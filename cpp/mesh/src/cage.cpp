@@ -254,9 +254,173 @@ OMesh to_openmesh(const Mesh& mesh, std::vector<std::int32_t>& kept) {
   return om;
 }
 
-// The vertices of quads_from_triangles(om) once garbage-collected: one per
-// vertex, edge and face.
-std::size_t quad_vertices(const OMesh& om) { return om.n_vertices() + om.n_edges() + om.n_faces(); }
+// A quad made of the two triangles on either side of interior edge e, or
+// none: h = e's half-edge from a to b in triangle (a, b, c), its opposite in
+// (b, a, d); the quad is (a, d, b, c), oriented as the triangles.
+struct QuadCandidate {
+  double quality = -1.0;  // below 0: not a quad to make
+  OMesh::VertexHandle corners[4];
+};
+
+// A quad's quality in [0, 1] (1: a planar square-cornered quad), or -1 for
+// one not to make: 1 - (its worst corner's departure from a right angle)/90
+// degrees - (1 - cos of the angle between its two triangles' normals)/2;
+// a quad with a corner of 180 degrees or more (not convex: its two triangles
+// fold over their shared diagonal) is -1. Angles are invariant under the
+// decimation's centring and scaling, so the quality is the input's.
+double quad_quality(const OMesh& om, const OMesh::VertexHandle (&q)[4]) {
+  using V = OMesh::Point;
+  const V p[4] = {om.point(q[0]), om.point(q[1]), om.point(q[2]), om.point(q[3])};
+  // The triangles (a, b, c) = (q0, q2, q3) and (b, a, d) = (q2, q0, q1).
+  V n1 = OpenMesh::cross(p[2] - p[0], p[3] - p[0]), n2 = OpenMesh::cross(p[0] - p[2], p[1] - p[2]);
+  const double l1 = n1.norm(), l2 = n2.norm();
+  if (!(l1 > 0.0 && l2 > 0.0)) return -1.0;
+  n1 /= l1;
+  n2 /= l2;
+  const V normal = n1 + n2;
+  double worst = 0.0;
+  for (int i = 0; i < 4; ++i) {
+    const V next = p[(i + 1) % 4] - p[i], prev = p[(i + 3) % 4] - p[i];
+    const double ln = next.norm(), lp = prev.norm();
+    if (!(ln > 0.0 && lp > 0.0)) return -1.0;
+    if (OpenMesh::dot(OpenMesh::cross(next, prev), normal) <= 0.0) return -1.0;  // a reflex corner
+    const double angle = std::acos(std::clamp(OpenMesh::dot(next, prev) / (ln * lp), -1.0, 1.0));
+    worst = std::max(worst, std::abs(angle - M_PI / 2));
+  }
+  return 1.0 - worst / (M_PI / 2) - 0.5 * (1.0 - OpenMesh::dot(n1, n2));
+}
+
+// The decimated triangles paired into quads across their edges, greedily by
+// quad_quality (best first), then improved along augmenting paths (an
+// unpaired triangle takes a neighbour from its partner, which takes another,
+// ... until one takes another unpaired triangle: two triangles fewer left
+// over). Triangles that find no partner stay
+// triangles. A pairing removes the shared edge, so it is refused where a
+// vertex of that edge would be left with fewer than three edges inside the
+// mesh (two on the boundary): Catmull-Clark's rules want no valence-2
+// vertex inside. `positions` are the input's coordinates of om's vertices.
+Mesh paired_quads(const OMesh& om, const std::vector<double>& positions) {
+  const std::size_t n_faces = om.n_faces();
+  std::vector<std::int32_t> mate(n_faces, -1), valence(om.n_vertices(), 0);
+  std::vector<OMesh::EdgeHandle> across(n_faces);  // the edge a paired face shares with its mate
+  for (const auto v : om.vertices()) valence[v.idx()] = static_cast<std::int32_t>(om.valence(v));
+  const auto ends_keep_valence = [&](OMesh::EdgeHandle e) {
+    for (const auto v : {om.from_vertex_handle(om.halfedge_handle(e, 0)), om.to_vertex_handle(om.halfedge_handle(e, 0))})
+      if (valence[v.idx()] - 1 < (om.is_boundary(v) ? 2 : 3)) return false;
+    return true;
+  };
+  std::vector<QuadCandidate> candidate(om.n_edges());
+  std::vector<std::pair<double, int>> order;
+  for (const auto e : om.edges()) {
+    if (om.is_boundary(e)) continue;
+    const auto h = om.halfedge_handle(e, 0), o = om.halfedge_handle(e, 1);
+    QuadCandidate& c = candidate[e.idx()];
+    c.corners[0] = om.from_vertex_handle(h);
+    c.corners[1] = om.to_vertex_handle(om.next_halfedge_handle(o));
+    c.corners[2] = om.to_vertex_handle(h);
+    c.corners[3] = om.to_vertex_handle(om.next_halfedge_handle(h));
+    c.quality = quad_quality(om, c.corners);
+    if (c.quality >= 0.0) order.emplace_back(c.quality, e.idx());
+  }
+  std::stable_sort(order.begin(), order.end(), [](const auto& x, const auto& y) { return x.first > y.first; });
+  const auto faces_of = [&](OMesh::EdgeHandle e) {
+    return std::make_pair(om.face_handle(om.halfedge_handle(e, 0)).idx(), om.face_handle(om.halfedge_handle(e, 1)).idx());
+  };
+  const auto set_pair = [&](OMesh::EdgeHandle e, bool on) {
+    const auto [f, g] = faces_of(e);
+    mate[f] = on ? g : -1;
+    mate[g] = on ? f : -1;
+    across[f] = across[g] = on ? e : OMesh::EdgeHandle();
+    const int step = on ? -1 : 1;
+    valence[om.from_vertex_handle(om.halfedge_handle(e, 0)).idx()] += step;
+    valence[om.to_vertex_handle(om.halfedge_handle(e, 0)).idx()] += step;
+  };
+  const auto can_pair = [&](OMesh::EdgeHandle e) {
+    if (om.is_boundary(e) || candidate[e.idx()].quality < 0.0) return false;
+    const auto [f, g] = faces_of(e);
+    return mate[f] < 0 && mate[g] < 0 && ends_keep_valence(e);
+  };
+  for (const auto& [quality, e] : order)
+    if (can_pair(OMesh::EdgeHandle(e))) set_pair(OMesh::EdgeHandle(e), true);
+  // Augmenting paths: from an unpaired triangle t, a breadth-first search
+  // along alternating paths t -e1- u1 =paired= w1 -e2- u2 =paired= w2 ... -ek- x
+  // to another unpaired triangle x (at most kMaxSteps paired faces between;
+  // every edge taken a candidate quad), then each pair on the path moves one
+  // step: (t, u1), (w1, u2), ..., (w_{k-1}, x), one quad more. A path whose
+  // new pairs would break a valence is put back as it was.
+  constexpr int kMaxSteps = 6;
+  std::vector<int> parent_edge(n_faces, -1), seen(n_faces, -1);
+  std::vector<OMesh::FaceHandle> frontier, next;
+  for (int sweep = 0; sweep < 3; ++sweep) {
+    bool changed = false;
+    for (const auto t : om.faces()) {
+      if (mate[t.idx()] >= 0) continue;
+      // seen[f] == t: reached in this search; parent_edge[u]: the edge u was entered by.
+      seen[t.idx()] = t.idx();
+      frontier.assign(1, t);
+      OMesh::FaceHandle found;
+      for (int step = 0; step <= kMaxSteps && !found.is_valid() && !frontier.empty(); ++step) {
+        next.clear();
+        for (const auto w : frontier) {
+          for (const auto h : om.fh_range(w)) {
+            const auto e = om.edge_handle(h);
+            if (om.is_boundary(e) || candidate[e.idx()].quality < 0.0 || e == across[w.idx()]) continue;
+            const auto u = om.opposite_face_handle(h);
+            if (seen[u.idx()] == t.idx()) continue;
+            seen[u.idx()] = t.idx();
+            parent_edge[u.idx()] = e.idx();
+            if (mate[u.idx()] < 0) {
+              found = u;
+              break;
+            }
+            const auto w2 = OMesh::FaceHandle(mate[u.idx()]);
+            if (seen[w2.idx()] == t.idx() || step == kMaxSteps) continue;
+            seen[w2.idx()] = t.idx();
+            next.push_back(w2);
+          }
+          if (found.is_valid()) break;
+        }
+        frontier.swap(next);
+      }
+      if (!found.is_valid()) continue;
+      // The path back from found: new edges (entered by) and old pairs (u's partner edge).
+      std::vector<OMesh::EdgeHandle> added, removed;
+      for (auto u = found;;) {
+        const OMesh::EdgeHandle e(parent_edge[u.idx()]);
+        added.push_back(e);
+        const auto [f, g] = faces_of(e);
+        const auto w = OMesh::FaceHandle(f == u.idx() ? g : f);
+        if (w == t) break;
+        removed.push_back(across[w.idx()]);
+        u = OMesh::FaceHandle(mate[w.idx()]);
+      }
+      for (const auto e : removed) set_pair(e, false);
+      std::size_t made = 0;
+      while (made < added.size() && can_pair(added[made])) set_pair(added[made++], true);
+      if (made == added.size()) {
+        changed = true;
+        continue;
+      }
+      while (made > 0) set_pair(added[--made], false);
+      for (const auto e : removed) set_pair(e, true);
+    }
+    if (!changed) break;
+  }
+  Mesh out;
+  out.vertices = positions;
+  for (const auto f : om.faces()) {
+    const int g = mate[f.idx()];
+    if (g >= 0 && g < f.idx()) continue;  // the quad was written with its first face
+    if (g < 0) {
+      out.face_vertex_counts.push_back(3);
+      for (const auto v : om.fv_range(f)) out.face_vertex_indices.push_back(v.idx());
+    } else {
+      out.face_vertex_counts.push_back(4);
+      for (const auto v : candidate[across[f.idx()].idx()].corners) out.face_vertex_indices.push_back(v.idx());
+    }
+  }
+  return out;
+}
 
 Mesh from_openmesh(const OMesh& om) {
   Mesh out;
@@ -312,10 +476,9 @@ Mesh decimate(const Mesh& mesh, std::size_t n_vertices, const DecimateOptions& o
   OpenMesh::VPropHandleT<std::int32_t> source;
   om.add_property(source);
   for (const auto vh : om.vertices()) om.property(source, vh) = kept[static_cast<std::size_t>(vh.idx())];
-  const std::size_t start = om.n_vertices();
+  const std::size_t have = om.n_vertices();
   const bool quads = options.scheme == Scheme::CatmullClark;
-  const std::size_t have = quads ? quad_vertices(om) : start;
-  const char* what = quads ? " vertices as quads (vertices + edges + faces)" : " vertices";
+  const char* what = " vertices";
   if (n_vertices > have)
     throw MeshError("decimate: " + std::to_string(n_vertices) + " vertices asked but the mesh has " +
                     std::to_string(have) + what + (kept.size() < mesh.n_vertices() ? " in its faces" : ""));
@@ -337,18 +500,13 @@ Mesh decimate(const Mesh& mesh, std::size_t n_vertices, const DecimateOptions& o
   decimater.set_observer(&observer);
   if (!decimater.initialize()) throw MeshError("decimate: OpenMesh's decimater did not initialize");
 
-  // One pass to the count. Catmull-Clark counts the quad cage's vertices (the
-  // triangles' vertices, edges and faces): a collapse removes one vertex, two
-  // edges and a face on the boundary (4), three edges and two faces inside
-  // (6), so the first count at most n_vertices is at least n_vertices - 5.
+  // One pass to the count, for both schemes: Catmull-Clark's quads are the
+  // decimated triangles paired (paired_quads), which keeps the vertices.
   std::size_t count = have;
-  decimater.decimate_to(count, n_vertices, decimater.module(quadric), [&](const auto& ci) -> std::size_t {
-    if (!quads) return 1;
-    return om.is_boundary(ci.v0v1) || om.is_boundary(ci.v1v0) ? 4 : 6;
-  });
+  decimater.decimate_to(count, n_vertices, decimater.module(quadric), [](const auto&) -> std::size_t { return 1; });
   observer.rethrow();
   om.garbage_collection();
-  count = quads ? quad_vertices(om) : om.n_vertices();
+  count = om.n_vertices();
   if (count > n_vertices) {
     std::string why = "decimate stopped at " + std::to_string(count) + what + " of the " +
                       std::to_string(n_vertices) + " asked (from " + std::to_string(have) +
@@ -356,9 +514,10 @@ Mesh decimate(const Mesh& mesh, std::size_t n_vertices, const DecimateOptions& o
                       "(max_normal_deviation, max_aspect_ratio, max_boundary_angle)";
     // Where the boundary holds the cage up, say so, with the way out: a scan
     // with many holes keeps at least three vertices of each (OpenMesh's
-    // is_collapse_ok closes no hole), and a Catmull-Clark cage then has
-    // several times the control vertices asked (issue 33, item 11: 1517 for
-    // 150 on a scan with 47 boundary loops).
+    // is_collapse_ok closes no hole), so the cage has more vertices than
+    // asked (issue 33, item 11: 1517 for 150 on a scan with 47 boundary
+    // loops, when a Catmull-Clark cage split a coarser decimation's triangles
+    // into three quads; its vertices are now the triangles', as Loop's).
     std::size_t on_boundary = 0, loops = 0;
     {
       std::vector<char> seen(om.n_halfedges(), 0);
@@ -372,7 +531,7 @@ Mesh decimate(const Mesh& mesh, std::size_t n_vertices, const DecimateOptions& o
     }
     if (on_boundary > 0)
       why += "; " + std::to_string(on_boundary) + " of the cage's " + std::to_string(om.n_vertices()) +
-             " triangle vertices lie on its " + std::to_string(loops) + " boundary loop" + (loops == 1 ? "" : "s") +
+             " vertices lie on its " + std::to_string(loops) + " boundary loop" + (loops == 1 ? "" : "s") +
              ": each loop keeps at least 3 (no collapse closes a hole) and max_boundary_angle (" +
              std::to_string(static_cast<int>(options.max_boundary_angle)) +
              " degrees) those where it turns by more, so fill small holes first or raise max_boundary_angle (up to "
@@ -384,7 +543,7 @@ Mesh decimate(const Mesh& mesh, std::size_t n_vertices, const DecimateOptions& o
   for (const auto vh : om.vertices())
     std::copy_n(&mesh.vertices[3 * static_cast<std::size_t>(om.property(source, vh))], 3,
                 &triangles.vertices[3 * static_cast<std::size_t>(vh.idx())]);
-  return quads ? quads_from_triangles(triangles) : triangles;
+  return quads ? paired_quads(om, triangles.vertices) : triangles;
 }
 
 Mesh quads_from_triangles(const Mesh& tri) {

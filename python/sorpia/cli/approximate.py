@@ -10,7 +10,7 @@ import numpy as np
 
 from .. import DecimationWarning, MeshError, __version__, approximate, decimate, limit_surface
 from .._nonmanifold import NONMANIFOLD_HINT, REPAIR_HINT
-from .._validate import DEFAULT_BOUNDARY, resolve_scheme
+from .._validate import DEFAULT_BOUNDARY, Polygons, resolve_scheme
 from ..approximate import DEFAULT_FAIRNESS, DEFAULT_TOL
 from .common import (EXIT_OK, SCHEME_LABELS, UserError, check_mesh_suffix, choose_scheme, fmt_seconds, is_triangles,
                      read_input, report_warnings, solve_tags, tags_lines, tags_summary, warn_once)
@@ -85,6 +85,11 @@ def _cage_refusal(exc: MeshError, origin: dict, source) -> UserError:
                      "--vertices")
 
 
+def _n_faces(faces) -> int:
+    """The faces of an (m, k) array or of Polygons (whose len() is its two fields)."""
+    return int(len(faces.face_vertex_counts)) if isinstance(faces, Polygons) else int(len(faces))
+
+
 def run_approximate(input_path, output, *, vertices=None, cage=None, scheme="auto", sharp_angle=None, report=None,
                     surface=None, level=3, iterations=10, tol=DEFAULT_TOL, fairness=DEFAULT_FAIRNESS, tangential=None,
                     method="cg", boundary=None, sampling=None, quiet=False, force=False, out=None, prim=None,
@@ -147,7 +152,7 @@ def run_approximate(input_path, output, *, vertices=None, cage=None, scheme="aut
         timings["write"] = time.perf_counter() - t0
     data = {"sorpia_version": __version__, "command": "approximate", "input": str(input_path),
             "input_points": int(len(points)), "sampling": sampling, "output": str(output),
-            "cage": {**origin, "vertices": int(len(cage_v)), "faces": int(len(cage_f))},
+            "cage": {**origin, "vertices": int(len(cage_v)), "faces": _n_faces(cage_f)},
             "scheme": scheme, "boundary": rule,
             "tags": {"sharp_angle": sharp_angle, **tags_summary(tags), "written_to_output": list(written.written)},
             "surface": surface_stats, "report": None if report is None else str(report), **res.report(),

@@ -134,7 +134,7 @@ def run_demo(out_dir=None, *, quiet=False, scheme="auto", out=None) -> int:
          report=paths["fair interpolation report"], scheme=scheme)
     if plots:
         step(run_render, sample, paths["plain and fair interpolation"], fair=True, scheme=scheme)
-    # Approximation: a light cage (the sample decimated; its triangles split into quads for Catmull-Clark)
+    # Approximation: a light cage (the sample decimated; its triangles paired into quads for Catmull-Clark)
     # fitted to the points of the limit surface written above.
     Vt, Ft = read_mesh(sample, triangulate=True)
     cage = decimate(Vt, Ft, CAGE_VERTICES, scheme=scheme, strict=False)

@@ -271,8 +271,8 @@ def build_parser() -> argparse.ArgumentParser:
     app = command("approximate", "fit a light cage whose limit surface approximates a scan's points",
                   "Read a dense mesh or a point cloud (the data: a mesh's surface, sampled as --sampling says, "
                   "or the cloud's points), take a cage (--cage, a "
-                  "mesh file, or --vertices N: the input decimated to N vertices by OpenMesh's Decimater, quads "
-                  "for Catmull-Clark) and move the cage's control vertices so that its limit surface fits the "
+                  "mesh file, or --vertices N: the input decimated to N vertices by OpenMesh's Decimater, its triangles "
+                  "paired into quads for Catmull-Clark) and move the cage's control vertices so that its limit surface fits the "
                   "points in the least-squares sense (sorpia.approximate: footpoints on the limit surface, the "
                   "normal equations by conjugate gradients or LSPIA, footpoints re-projected after each update). "
                   "Writes the fitted cage (same faces; in .obj also its creases and boundary rule) and, if asked, "
@@ -287,7 +287,8 @@ def build_parser() -> argparse.ArgumentParser:
     cage_source.add_argument("--cage", metavar="CAGE", help="the cage as a mesh file (its tags are used); only read")
     app.add_argument("--scheme", choices=CLI_SCHEMES, default="auto",
                      help="subdivision scheme: auto = Loop for a triangle cage (and for --vertices), Catmull-Clark "
-                     "otherwise; catmull-clark with --vertices makes a quad cage")
+                     "otherwise; catmull-clark with --vertices makes a cage of quads (and the few triangles their pairing "
+                     "leaves)")
     app.add_argument("--sharp-angle", type=_angle_arg, metavar="DEG",
                      help="make every edge of the cage whose faces' normals are more than DEG degrees apart an "
                      "infinitely sharp crease")

@@ -2,7 +2,7 @@
 /// @file cage.hpp
 /// A light control mesh (a cage) made from a dense triangle mesh: OpenMesh's
 /// Decimater down to a given number of vertices, and for Catmull-Clark the
-/// decimated triangles split into quads.
+/// decimated triangles paired into quads.
 
 #include <cstddef>
 #include <string>
@@ -15,7 +15,7 @@ namespace sorpia {
 /// The guards of decimate(): a collapse that breaks one is never made.
 struct DecimateOptions {
   /// The cage's scheme: Loop gives the decimated triangles, Catmull-Clark
-  /// their split into quads (quads_from_triangles).
+  /// the same triangles paired into quads across their edges.
   Scheme scheme = Scheme::Loop;
   /// OpenMesh's ModNormalFlippingT: no face's normal may turn by more than
   /// this in one collapse (degrees, in (0, 180]).
@@ -43,9 +43,13 @@ struct DecimateOptions {
 /// every vertex whose one-ring changed as DecimaterT does.
 ///
 /// Loop: a triangle mesh of exactly `n_vertices` vertices. Catmull-Clark: the
-/// decimated triangles split into three quads each (quads_from_triangles),
-/// decimated until that quad mesh has at most `n_vertices` vertices (and at
-/// most 5 fewer: one collapse removes 4 to 6 of them).
+/// same triangles (the same decimation, the same vertices) paired into quads
+/// across their edges, greedily by a quad's quality (its worst corner's
+/// departure from a right angle and the fold between its two triangles; no
+/// reflex corner, no vertex left with two edges), then along augmenting
+/// paths that pair two left-over triangles more; those that find no partner stay
+/// triangles (face_vertex_counts of 4 and 3; Catmull-Clark takes them as
+/// n-gons). Each quad (a, d, b, c) is the triangles (a, b, c) and (b, a, d).
 ///
 /// Vertices no face references are left out (they count neither towards the
 /// mesh's vertices nor towards `n_vertices`). The result's vertices are input
