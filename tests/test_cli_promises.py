@@ -162,6 +162,26 @@ def test_write_mesh_file_returns_what_the_file_holds_and_warns_of_what_it_cannot
         write_mesh_file(tmp_path / "n.usda", mesh, scheme="loop")
 
 
+def test_approximate_carries_a_given_cages_texture_coordinates(tmp_path, monkeypatch, command):
+    """The fit moves only the cage's vertices: the texture coordinates on its faces stay valid and are written
+    (as fit writes the input's), read back from the file equal to the cage's; the summary says so."""
+    monkeypatch.chdir(tmp_path)
+    V, F = shapes.quad_grid(6, 6)
+    F = np.asarray(F)
+    uvs = (np.ascontiguousarray(V[:, :2]), F.ravel().copy())
+    sorpia.write_mesh(tmp_path / "cage.obj", sorpia.SubdivisionMesh(V, F, uvs=uvs))
+    sorpia.write_mesh(tmp_path / "dense.obj", *sorpia.limit_surface(V + 0.01 * np.sin(7 * V[:, [1, 2, 0]]), F,
+                                                                     level=3))
+    code, out, err = command("approximate", "dense.obj", "--cage", "cage.obj", "-o", "out.obj", "--iterations", 2)
+    assert code == 0, err
+    got, given = sorpia.read(tmp_path / "out.obj"), sorpia.read(tmp_path / "cage.obj")
+    assert got.uvs is not None
+    # the same corners get the same coordinates (OBJ's text round trip is the same for both files: exact)
+    np.testing.assert_array_equal(got.uvs.values[got.uvs.indices], given.uvs.values[given.uvs.indices])
+    assert re.search(r"attributes\s+texture coordinates written", out)
+    assert not np.array_equal(got.vertices, given.vertices)  # the cage was fitted, not copied
+
+
 # --------------------------------------------------------------------------- item 2: --prim
 
 def test_approximate_reads_the_prim_it_is_given(tmp_path, monkeypatch, command):

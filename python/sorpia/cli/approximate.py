@@ -14,7 +14,8 @@ from .._validate import DEFAULT_BOUNDARY, Polygons, resolve_scheme
 from ..approximate import DEFAULT_FAIRNESS, DEFAULT_TOL
 from .common import (EXIT_OK, SCHEME_LABELS, UserError, check_mesh_suffix, choose_scheme, fmt_seconds, is_triangles,
                      read_input, report_warnings, solve_tags, tags_lines, tags_summary, warn_once)
-from .output import check_float32_outputs, check_outputs, write_control_mesh, write_json, write_surface
+from .output import (attribute_lines, attributes_to_write, check_float32_outputs, check_outputs,
+                     write_control_mesh, write_json, write_surface)
 from .progress import Progress
 
 # The data of an input mesh with faces when --sampling is not given (measured in docs/approximation.md).
@@ -22,19 +23,20 @@ DEFAULT_SAMPLING = "vertices"
 
 
 def _cage(input_mesh, vertices, cage, scheme, sharp_angle, source, progress):
-    """The cage to fit: (vertices, faces, tags, scheme, boundary rule of its file or None, how it was made).
-    --cage: read (its tags and scheme kept, with --sharp-angle's creases added); --vertices N: the input mesh
+    """The cage to fit: (vertices, faces, tags, scheme, boundary rule of its file or None, how it was made, its
+    attributes). --cage: read (its tags, scheme, texture coordinates and normals kept, with --sharp-angle's creases
+    added: the fit moves only its vertices, so what hangs on its faces stays valid); --vertices N: the input mesh
     decimated (sorpia.decimate). Where the guards stop decimation above N, the cage it reached is fitted: a
     warning says so, and how it was made records why ("stopped")."""
     if cage is not None:
         progress.status(f"reading {cage}")
-        mesh = read_input(cage)
+        mesh = read_input(cage, attributes=True)
         if len(mesh.faces) == 0:
             raise UserError(f"--cage {cage} has no faces: a cage is a mesh of triangles, quads or polygons")
         scheme = choose_scheme(scheme, mesh.faces, cage, mesh.tags.get("scheme"))
         tags = solve_tags(mesh, sharp_angle, cage)
         return (mesh.vertices, mesh.faces, tags, scheme, mesh.tags.get("boundary"),
-                {"from": "file", "path": str(cage)})
+                {"from": "file", "path": str(cage)}, mesh.attributes)
     if len(input_mesh.faces) == 0:
         raise UserError(f"{source} is a point cloud (no faces): --vertices decimates a mesh's faces; give the "
                         "cage with --cage CAGE")
@@ -62,7 +64,7 @@ def _cage(input_mesh, vertices, cage, scheme, sharp_angle, source, progress):
     tags = {"creases": made.creases} if made.creases is not None and len(made.creases[0]) else {}
     return made.vertices, made.faces, tags, scheme, None, {
         "from": "decimation", "vertices_asked": vertices, "mesh_vertices": n_referenced, "stopped": stopped,
-        "seconds": time.perf_counter() - t0}
+        "seconds": time.perf_counter() - t0}, {}
 
 
 def _without_hints(message: str) -> str:
@@ -119,10 +121,11 @@ def run_approximate(input_path, output, *, vertices=None, cage=None, scheme="aut
         surface_data = {} if sampling == "vertices" else {"faces": mesh.faces, "sampling": sampling}
         check_float32_outputs(points, {"-o": output, "--surface": surface})
         t0 = time.perf_counter()
-        cage_v, cage_f, tags, scheme, file_rule, origin = _cage(mesh, vertices, cage, scheme, sharp_angle,
+        cage_v, cage_f, tags, scheme, file_rule, origin, cage_attributes = _cage(mesh, vertices, cage, scheme, sharp_angle,
                                                                 input_path, progress)
         timings["cage"] = time.perf_counter() - t0
         check_float32_outputs(cage_v, {"-o": output, "--surface": surface})
+        attributes, attribute_notes = attributes_to_write(output, cage_attributes, cage_f, len(cage_v))
         rule = boundary if boundary is not None else file_rule if file_rule is not None else DEFAULT_BOUNDARY
 
         def on_iteration(rec):
@@ -146,7 +149,8 @@ def run_approximate(input_path, output, *, vertices=None, cage=None, scheme="aut
             surface_stats = {"path": str(surface), "level": level, "vertices": len(Vs), "faces": len(Fs)}
         progress.status(f"writing {output}")
         # The cage keeps its scheme, boundary rule and tags where the format holds them, so that it can be refitted.
-        written = write_control_mesh(output, res.control_vertices, cage_f, scheme=scheme, boundary=rule, tags=tags)
+        written = write_control_mesh(output, res.control_vertices, cage_f, scheme=scheme, boundary=rule, tags=tags,
+                                     attributes=attributes)
         if surface is not None:
             write_surface(surface, Vs, Fs)
         timings["write"] = time.perf_counter() - t0
@@ -155,7 +159,7 @@ def run_approximate(input_path, output, *, vertices=None, cage=None, scheme="aut
             "cage": {**origin, "vertices": int(len(cage_v)), "faces": _n_faces(cage_f)},
             "scheme": scheme, "boundary": rule,
             "tags": {"sharp_angle": sharp_angle, **tags_summary(tags), "written_to_output": list(written.written)},
-            "surface": surface_stats, "report": None if report is None else str(report), **res.report(),
+            "attributes": attribute_notes, "surface": surface_stats, "report": None if report is None else str(report), **res.report(),
             # the cage as read back from the file against the fitted one (USD stores float32): 0 for OBJ, OFF, PLY
             "written_max_change": float(np.abs(written.vertices - res.control_vertices).max(initial=0.0)),
             "timings": {**timings, **{f"approximate.{k}": v for k, v in res.timings.items() if k != "cpu"}},
@@ -202,6 +206,7 @@ def approximate_summary(d: dict) -> str:
         f"  cage        {d['cage']['vertices']} vertices, {d['cage']['faces']} faces, {made}",
         f"  scheme      {SCHEME_LABELS[d['scheme']]}, boundary {d['boundary']}",
         *(f"  {'tags' if j == 0 else '':<12}{line}" for j, line in enumerate(tag_lines)),
+        *attribute_lines(d.get("attributes", {})),
         f"  update      {d['method']}, {d['iterations']} iterations ({state})",
         f"  data->surf  {_distances(f)}; {given}",
         f"  surf->data  {_distances(f, 'surface_')}",

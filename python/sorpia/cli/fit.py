@@ -18,7 +18,7 @@ from .common import (EXIT_NOT_CONVERGED, EXIT_OK, FAIR_DEFAULTS, FIT_DEFAULTS, O
                      fmt_seconds, mesh_line, method_label, read_solve_input, repair_json, repair_lines, result_fields,
                      scheme_kwargs, split_json, split_lines, tags_lines, tags_summary, usd_template)
 from .fair import run_fair
-from .output import (ATTRIBUTE_LABELS, attributes_to_write, check_blender, check_faces_fit, check_float32_outputs,
+from .output import (attribute_lines, attributes_to_write, check_blender, check_faces_fit, check_float32_outputs,
                      check_outputs, check_surface_fits, summary_text, write_control_mesh, write_json, write_surface)
 from .progress import Progress
 
@@ -210,8 +210,7 @@ def fit_summary(d: dict, repaired=(), kept=()) -> str:
         f"  mesh        {mesh_line(d['mesh'])}",
         f"  scheme      {SCHEME_LABELS[d['scheme']]}" + (f", boundary {d['boundary']}"),
         *(f"  {'tags' if j == 0 else '':<12}{line}" for j, line in enumerate(tags_lines(d["tags"]))),
-        *(f"  {'attributes' if j == 0 else '':<12}{ATTRIBUTE_LABELS[name]} {note}"
-          for j, (name, note) in enumerate(d.get("attributes", {}).items())),
+        *attribute_lines(d.get("attributes", {})),
         f"  method      {label}",
         f"  result      {state}",
         f"  check       max |B V - V0| = {d['max_residual']:.3g} model units "

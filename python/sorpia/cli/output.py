@@ -184,6 +184,12 @@ def attributes_to_write(output, attributes: dict, faces, n_vertices: int, keep_n
     return written, notes
 
 
+def attribute_lines(notes: dict) -> list[str]:
+    """A summary's lines for attributes_to_write's notes ({name: "written" or why not})."""
+    return [f"  {'attributes' if j == 0 else '':<12}{ATTRIBUTE_LABELS[name]} {note}"
+            for j, (name, note) in enumerate(notes.items())]
+
+
 def write_control_mesh(output, vertices, faces, *, scheme, boundary, tags: dict, binary: bool = False,
                        attributes=None, template=None):
     """A command's control mesh (cage), as one sorpia.SubdivisionMesh (its
