@@ -135,12 +135,13 @@ FairInterpolationResult fair_interpolate(Interpolator& coarse, const double* v0,
   out.plain = coarse.solve(v0, 3, nullptr, options.plain, true);
   out.plain_seconds = since(t);
 
-  // The fine mesh and the start R V_plain (Far's PrimvarRefiner); R itself only for the reference metric.
+  // The fine mesh and the start R V_plain (Far's PrimvarRefiner); R itself only for the reference metric, from
+  // the same refinement.
   t = Clock::now();
-  out.fine = refine_uniform(topology, rules, options.levels, out.plain.control_vertices.data(), false);
+  out.fine = refine_uniform(topology, rules, options.levels, out.plain.control_vertices.data(),
+                            /*with_refinement=*/options.reference_metric);
   std::vector<double> reference;
   if (options.reference_metric) {
-    out.fine.refinement = refine_uniform(topology, rules, options.levels, nullptr, true).refinement;
     reference = times(out.fine.refinement, v0);
     detail::scale_pow2(reference.data(), reference.size(), -e);
   }

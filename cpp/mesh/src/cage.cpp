@@ -96,11 +96,11 @@ class LazyDecimater : public OpenMesh::Decimater::BaseDecimaterT<OMesh> {
 
   explicit LazyDecimater(OMesh& mesh) : Base(mesh), mesh_(mesh) {}
 
-  // Collapses until `count` (reduced by removed(ci) before each collapse) is
-  // at most `target`, or no collapse is allowed; returns the collapses made.
-  // `priority` is the priority module; initialize() must have succeeded.
-  template <class Removed>
-  std::size_t decimate_to(std::size_t& count, std::size_t target, Module& priority, Removed removed) {
+  // Collapses until `count` (one less after each collapse: a half-edge
+  // collapse removes one vertex) is at most `target`, or no collapse is
+  // allowed; returns the collapses made. `priority` is the priority module;
+  // initialize() must have succeeded.
+  std::size_t decimate_to(std::size_t& count, std::size_t target, Module& priority) {
     priority_module_ = &priority;
     target_.assign(mesh_.n_vertices(), HalfedgeHandle());
     priority_.assign(mesh_.n_vertices(), -1.0f);
@@ -126,7 +126,7 @@ class LazyDecimater : public OpenMesh::Decimater::BaseDecimaterT<OMesh> {
       }
       support.clear();
       for (const auto w : mesh_.vv_range(ci.v0)) support.push_back(w);
-      count -= std::min(count, removed(ci));
+      --count;  // count > target >= 0
       this->preprocess_collapse(ci);
       mesh_.collapse(h);
       if (update_normals)
@@ -478,10 +478,9 @@ Mesh decimate(const Mesh& mesh, std::size_t n_vertices, const DecimateOptions& o
   for (const auto vh : om.vertices()) om.property(source, vh) = kept[static_cast<std::size_t>(vh.idx())];
   const std::size_t have = om.n_vertices();
   const bool quads = options.scheme == Scheme::CatmullClark;
-  const char* what = " vertices";
   if (n_vertices > have)
     throw MeshError("decimate: " + std::to_string(n_vertices) + " vertices asked but the mesh has " +
-                    std::to_string(have) + what + (kept.size() < mesh.n_vertices() ? " in its faces" : ""));
+                    std::to_string(have) + " vertices" + (kept.size() < mesh.n_vertices() ? " in its faces" : ""));
 
   LazyDecimater decimater(om);
   OpenMesh::Decimater::ModQuadricT<OMesh>::Handle quadric;
@@ -503,12 +502,12 @@ Mesh decimate(const Mesh& mesh, std::size_t n_vertices, const DecimateOptions& o
   // One pass to the count, for both schemes: Catmull-Clark's quads are the
   // decimated triangles paired (paired_quads), which keeps the vertices.
   std::size_t count = have;
-  decimater.decimate_to(count, n_vertices, decimater.module(quadric), [](const auto&) -> std::size_t { return 1; });
+  decimater.decimate_to(count, n_vertices, decimater.module(quadric));
   observer.rethrow();
   om.garbage_collection();
   count = om.n_vertices();
   if (count > n_vertices) {
-    std::string why = "decimate stopped at " + std::to_string(count) + what + " of the " +
+    std::string why = "decimate stopped at " + std::to_string(count) + " vertices of the " +
                       std::to_string(n_vertices) + " asked (from " + std::to_string(have) +
                       "): every further collapse would flip a normal, thin a face or cut a boundary corner "
                       "(max_normal_deviation, max_aspect_ratio, max_boundary_angle)";
