@@ -19,13 +19,14 @@
 #include "sorpia/fairness.hpp"
 #include "sorpia/interrupt.hpp"
 #include "sorpia/normal_matrix.hpp"
+#include "sorpia/detail/clock.hpp"
 
 namespace sorpia {
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
-double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+using detail::Clock;
+using detail::seconds_since;
 double cpu_now() {
   timespec ts{};
   clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
@@ -285,7 +286,7 @@ class Phases {
       Clock::time_point t;
       double c;
       ~Add() {
-        self->wall.*phase += since(t);
+        self->wall.*phase += seconds_since(t);
         self->cpu.*phase += cpu_now() - c;
       }
     } add{this, phase, t, c};
@@ -397,7 +398,7 @@ ApproximationResult approximate(LimitSurface& surface, const double* points, std
     rec.surface_rms = std::ldexp(rec.surface_rms, e);
     rec.surface_max = std::ldexp(rec.surface_max, e);
     rec.solver_iterations = solver_iterations;
-    rec.seconds = since(t0);
+    rec.seconds = seconds_since(t0);
     out.history.push_back(rec);
     if (progress) progress(rec);
     return rec;
@@ -611,7 +612,7 @@ ApproximationResult approximate(LimitSurface& surface, const double* points, std
   out.diagonal = std::ldexp(diagonal, e);
   out.seconds = phases.wall;
   out.cpu_seconds = phases.cpu;
-  out.seconds.total = since(t0);
+  out.seconds.total = seconds_since(t0);
   out.cpu_seconds.total = cpu_now() - c0;
   return out;
 }

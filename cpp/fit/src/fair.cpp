@@ -16,13 +16,14 @@
 #include "sorpia/limit_operator.hpp"
 #include "sorpia/pcg.hpp"
 #include "sorpia/solvers.hpp"
+#include "sorpia/detail/clock.hpp"
 
 namespace sorpia {
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
-double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+using detail::Clock;
+using detail::seconds_since;
 
 using Col3 = std::array<double, 3>;
 
@@ -261,7 +262,7 @@ FairSolution solve_scaled(const Topology& topology, const Rules& rules, const Cs
   BlockDiagonal jacobi;
   jacobi.scalars.resize(n);
   for (std::size_t i = 0; i < n; ++i) jacobi.scalars[i] = diag[i] > 0.0 ? 1.0 / diag[i] : 0.0;
-  out.setup_seconds = since(t_setup);
+  out.setup_seconds = seconds_since(t_setup);
 
   const auto t_solve = Clock::now();
   // The energy tracked by the iteration: E_k = E_{k-1} minus each column's step's decrease; the stop rule is the
@@ -282,7 +283,7 @@ FairSolution solve_scaled(const Topology& topology, const Rules& rules, const Cs
       stop, x, r, options.max_iter, options.threads);
   out.iterations = run.iterations;
   out.stop_reason = run.stop_reason;
-  out.seconds = since(t_solve);
+  out.seconds = seconds_since(t_solve);
 
   problem.expand(x, out.vertices, true);
   out.energy = energy_of(problem, out.vertices, kv);

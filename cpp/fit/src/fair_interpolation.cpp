@@ -14,13 +14,14 @@
 #include "sorpia/errors.hpp"
 #include "sorpia/fairness.hpp"
 #include "sorpia/solvers.hpp"
+#include "sorpia/detail/clock.hpp"
 
 namespace sorpia {
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
-double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+using detail::Clock;
+using detail::seconds_since;
 
 // The options' messages name the parameter, the value as Python's repr() writes it and the range allowed: the
 // one check of each (the bindings and Python convert types only).
@@ -133,7 +134,7 @@ FairInterpolationResult fair_interpolate(Interpolator& coarse, const double* v0,
 
   auto t = Clock::now();
   out.plain = coarse.solve(v0, 3, nullptr, options.plain, true);
-  out.plain_seconds = since(t);
+  out.plain_seconds = seconds_since(t);
 
   // The fine mesh and the start R V_plain (Far's PrimvarRefiner); R itself only for the reference metric, from
   // the same refinement.
@@ -145,7 +146,7 @@ FairInterpolationResult fair_interpolate(Interpolator& coarse, const double* v0,
     reference = times(out.fine.refinement, v0);
     detail::scale_pow2(reference.data(), reference.size(), -e);
   }
-  out.refine_seconds = since(t);
+  out.refine_seconds = seconds_since(t);
   std::vector<double> start = std::move(out.fine.vertices);
   out.fine.vertices.clear();
   const std::size_t n_fine = out.fine.n_vertices;
@@ -185,7 +186,7 @@ FairInterpolationResult fair_interpolate(Interpolator& coarse, const double* v0,
         fine_topology, Rules{rules.scheme, rules.boundary, energy_tags(fine_rules.tags, options.semi_sharp)},
         options.thin_plate, options.membrane, quadrature, reference.empty() ? nullptr : reference.data(),
         /*sorted_columns=*/false);
-    out.energy_seconds = since(t);
+    out.energy_seconds = seconds_since(t);
     out.solution = fair_solve(fine_topology, fine_rules, k, targets, n_targets, positions.data(), start.data(),
                               options.solve);
   }

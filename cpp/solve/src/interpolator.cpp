@@ -14,13 +14,14 @@
 
 #include "solver_detail.hpp"
 #include "sorpia/errors.hpp"
+#include "sorpia/detail/clock.hpp"
 
 namespace sorpia {
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+using detail::Clock;
+using detail::seconds_since;
 
 // A double as Python's repr writes it (the messages' convention).
 std::string repr(double x) {
