@@ -29,6 +29,7 @@ import numpy as np
 
 from . import _core
 from ._mesh import mesh_arguments
+from ._meshinfo import bounding_box_diagonal
 from ._validate import DEFAULT_BOUNDARY, DEFAULT_SCHEME, Polygons, as_boundary, as_polygons, as_tags, as_vertices
 from .errors import ParameterError
 from .solve import Interpolator
@@ -196,7 +197,7 @@ def interpolate_float32(vertices, faces, rules: dict, **options):
     res = interp.solve(vertices, **options)
     cage = res.control_vertices.astype(np.float32)
     limit = interp._impl.apply(cage.astype(np.float64))
-    diagonal = float(np.linalg.norm(vertices.max(axis=0) - vertices.min(axis=0))) or 1.0
+    diagonal = bounding_box_diagonal(vertices) or 1.0
     return res, cage, float(np.linalg.norm(limit - vertices, axis=1).max()) / diagonal
 
 
