@@ -10,17 +10,9 @@ from . import _core
 from ._validate import as_boundary
 from .limit import limit_points
 
-# Beyond 2^+-200 the squares inside a norm (or an energy) leave double's range: such data are worked on scaled by
-# a power of two (exact), as the solvers scale theirs.
-SCALE_LIMIT = 200
-
-
-def scale_exponent(*arrays) -> int:
-    """e such that the arrays times 2^-e lie within 2^+-SCALE_LIMIT (0 where they do already): the exact
-    scaling that keeps their squares inside double's range."""
-    largest = max((float(np.abs(np.asarray(a, dtype=np.float64)).max(initial=0.0)) for a in arrays), default=0.0)
-    e = int(np.frexp(largest)[1]) if largest > 0 else 0
-    return e if abs(e) > SCALE_LIMIT else 0
+# e such that arrays times 2^-e lie within 2^+-200 (0 where they do already): the core's exact scaling
+# (sorpia/detail/scaling.hpp), which keeps squares inside double's range; the solvers scale their data by it.
+scale_exponent = _core.scale_exponent
 
 
 def interpolation_miss(control_vertices, targets, faces, *, boundary, scheme: str = "loop", tags=None,

@@ -29,6 +29,7 @@ import numpy as np
 
 from . import _core
 from ._mesh import mesh_arguments
+from ._meshinfo import bounding_box_diagonal
 from ._validate import DEFAULT_BOUNDARY, DEFAULT_SCHEME, Polygons, as_boundary, as_polygons, as_tags, as_vertices
 from .errors import ParameterError
 from .solve import Interpolator
@@ -196,7 +197,7 @@ def interpolate_float32(vertices, faces, rules: dict, **options):
     res = interp.solve(vertices, **options)
     cage = res.control_vertices.astype(np.float32)
     limit = interp._impl.apply(cage.astype(np.float64))
-    diagonal = float(np.linalg.norm(vertices.max(axis=0) - vertices.min(axis=0))) or 1.0
+    diagonal = bounding_box_diagonal(vertices) or 1.0
     return res, cage, float(np.linalg.norm(limit - vertices, axis=1).max()) / diagonal
 
 
@@ -243,14 +244,12 @@ def blender_script(vertices, faces=None, *, boundary: str = DEFAULT_BOUNDARY, cr
     vertices, faces, rules = mesh_arguments(vertices, faces, dict(
         scheme=DEFAULT_SCHEME, boundary=boundary, creases=creases, corners=corners, holes=holes), "blender_script")
     boundary, creases, corners, holes = rules["boundary"], rules["creases"], rules["corners"], rules["holes"]
-    if rules["scheme"] != DEFAULT_SCHEME:  # a mesh's scheme: the script's modifier is Catmull-Clark's
-        reason = blender_refusal(rules["scheme"], {})
-        if reason is not None:
-            raise ParameterError(reason)
+    # a mesh's scheme, else the script's own: its modifier is Catmull-Clark's
+    scheme = "catmull-clark" if rules["scheme"] == DEFAULT_SCHEME else rules["scheme"]
     vertices = as_vertices(vertices)
     counts, indices = as_polygons(faces, len(vertices))
     as_tags(creases, corners, holes, n_vertices=len(vertices), n_faces=len(counts))  # checked as a solve checks
-    reason = blender_refusal("catmull-clark", {"holes": holes} if holes is not None else {})
+    reason = blender_refusal(scheme, {"holes": holes} if holes is not None else {})
     if reason is not None:
         raise ParameterError(reason)
     settings = modifier_settings(faces, len(vertices), boundary, creases, corners)
