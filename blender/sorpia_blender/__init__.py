@@ -29,8 +29,6 @@ from sorpia.blender import (EDGE_CREASE, VERTEX_CREASE, BlenderMesh, blender_rul
 from sorpia.solve import METHODS
 
 SCHEME = "catmull-clark"  # Blender's Subdivision Surface modifier: Catmull-Clark (its "Simple" is refused)
-# fit --fair's own defaults (sorpia fit's --tol and --max-iter), so that Fair Fit gives what the command gives.
-FAIR_TOL, FAIR_MAX_ITER = 1e-10, 1000
 
 
 class Refused(Exception):
@@ -270,7 +268,7 @@ class SORPIA_OT_fit(_EachSelectedMesh, bpy.types.Operator):
         # SingularMatrixWarning names where the targets are missed); any other stop is no answer.
         if not (res.converged or res.stop_reason == "singular"):
             raise Refused(f"{s.obj.name}: the solve stopped short ({res.stop_reason}, {res.iterations} "
-                          f"iterations, E_k/E_0 {res.errors[-1]:.2g}); try another method")
+                          f"iterations, E_k/E_0 {res.history[-1]:.2g}); try another method")
         return s, cage, miss, res
 
     def apply(self, s: Subject, cage, miss, res) -> None:
@@ -316,8 +314,8 @@ class SORPIA_OT_fair_fit(_EachSelectedMesh, bpy.types.Operator):
     bl_options = {"REGISTER", "UNDO"}
 
     def solve(self, s: Subject, run: _Run, i: int) -> tuple:
-        res = sorpia.fair_interpolate(s.mesh.vertices, s.faces, scheme=SCHEME, tol=FAIR_TOL, max_iter=FAIR_MAX_ITER,
-                                      **s.rules)
+        # The library's defaults, as `sorpia fit --fair` takes them, so that Fair Fit gives what the command gives.
+        res = sorpia.fair_interpolate(s.mesh.vertices, s.faces, scheme=SCHEME, **s.rules)
         run.progress(i + 1)
         tags = {k: v for k, v in (("creases", res.creases), ("corners", res.corners)) if v is not None}
         rules = {"boundary": s.rules["boundary"], **tags}
