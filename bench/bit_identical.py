@@ -78,12 +78,9 @@ def _read(path: str):
     return V, F, tags, isinstance(F, np.ndarray) and F.shape[1] == 3
 
 
-def mesh_cases(path: str, max_iter: int) -> dict:
+def mesh_cases(path: str, mesh, max_iter: int) -> dict:
     out: dict = {}
-    read = _read(path)
-    if isinstance(read, dict):
-        return read
-    V, F, tags, all_triangles = read
+    V, F, tags, all_triangles = mesh
     rules = dict(tags, scheme="loop" if all_triangles else "catmull-clark")
     nonmanifold = "sharp" if "nonman" in os.path.basename(path) else "error"
     for method in METHODS:
@@ -117,12 +114,9 @@ def _fair_fingerprint(res) -> dict:
             "plain": _fingerprint(res.plain)}
 
 
-def fair_cases(path: str) -> dict:
+def fair_cases(mesh) -> dict:
     out: dict = {}
-    read = _read(path)
-    if isinstance(read, dict):
-        return read
-    V, F, tags, all_triangles = read
+    V, F, tags, all_triangles = mesh
     rules = dict(tags, scheme="loop" if all_triangles else "catmull-clark")
     _case(out, "fair", lambda: _fair_fingerprint(sorpia.fair_interpolate(V, F, **rules)))
     _case(out, "fair-half-membrane-2", lambda: _fair_fingerprint(sorpia.fair_interpolate(
@@ -142,12 +136,9 @@ def _approximation_fingerprint(res) -> dict:
             "best_iteration": int(res.best_iteration), "diagonal": float(res.diagonal), "history": history}
 
 
-def approximate_cases(path: str) -> dict:
+def approximate_cases(mesh) -> dict:
     out: dict = {}
-    read = _read(path)
-    if isinstance(read, dict):
-        return read
-    V, F, tags, all_triangles = read
+    V, F, tags, all_triangles = mesh
     scheme = "loop" if all_triangles else "catmull-clark"
     weights = 1.0 + 0.5 * np.sin(np.arange(len(V)))  # deterministic, uneven
     if all_triangles:
@@ -200,13 +191,16 @@ def main(argv=None) -> int:
     result = {}
     for name in files:
         path = os.path.join(args.folder, name)
+        mesh = _read(path)  # once for every task; a refusal is recorded under each task's "read"
         result[name] = {}
         if "interpolate" in tasks:
-            result[name].update(mesh_cases(path, args.max_iter))
+            result[name].update(mesh if isinstance(mesh, dict) else mesh_cases(path, mesh, args.max_iter))
         if "fair" in tasks:
-            result[name].update({f"fair:{k}": v for k, v in fair_cases(path).items()})
+            cases = mesh if isinstance(mesh, dict) else fair_cases(mesh)
+            result[name].update({f"fair:{k}": v for k, v in cases.items()})
         if "approximate" in tasks:
-            result[name].update({f"approximate:{k}": v for k, v in approximate_cases(path).items()})
+            cases = mesh if isinstance(mesh, dict) else approximate_cases(mesh)
+            result[name].update({f"approximate:{k}": v for k, v in cases.items()})
         refused = [k for k, v in result[name].items() if "refused" in v]
         print(f"{name}: {len(result[name]) - len(refused)} cases, refused: {refused or 'none'}", flush=True)
     with open(args.out, "w") as f:

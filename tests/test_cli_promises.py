@@ -443,14 +443,16 @@ def test_fit_check_at_1e200_is_finite_and_small(tmp_path, monkeypatch, command):
     assert "check = inf" not in out and "inf" not in out.split("check", 1)[1].splitlines()[0]
 
 
-def test_fit_fair_energy_at_1e200_is_reported_scaled(tmp_path, monkeypatch, command):
+@pytest.mark.parametrize("membrane", [(), ("--membrane", "0.5")], ids=["thin-plate", "membrane"])
+def test_fit_fair_energy_at_1e200_is_reported_scaled(tmp_path, monkeypatch, command, membrane):
     monkeypatch.chdir(tmp_path)
     V, F = shapes.irregular(300, seed=5)
     write_obj(tmp_path / "unit.obj", np.asarray(V), F)
     write_obj(tmp_path / "big.obj", np.asarray(V) * 1e200, F)
     ratios = []
     for name in ("unit", "big"):
-        code, out, err = command("fit", f"{name}.obj", "--fair", "-o", f"{name}-fair.obj", "--report", f"{name}.json")
+        code, out, err = command("fit", f"{name}.obj", "--fair", "-o", f"{name}-fair.obj", "--report", f"{name}.json",
+                                 *membrane)
         assert code == 0, err
         assert "nan" not in out and "inf" not in out, out
         ratios.append(json.loads((tmp_path / f"{name}.json").read_text())["energy_ratio"])

@@ -108,7 +108,9 @@ def run_fair(input_path, output, *, levels=1, membrane=0.0, targets=None, tol=No
         t0 = time.perf_counter()
         # Coordinates beyond 2^+-200 are fitted scaled by a power of two (exact: the same control mesh, scaled
         # back): the energies, squares of the coordinates, would overflow. They are reported in the scaled units.
-        e = scale_exponent(V0) if membrane == 0 else 0  # the membrane term is not scale-free: never scaled
+        # The thin plate and the membrane are both quadratic in the coordinates (the CLI never uses the reference
+        # metric), so their energies scale by 2^2e together, as fair_solve's own scaling takes them.
+        e = scale_exponent(V0)
         try:
             res = fair_interpolate(np.ldexp(V0, -e), F, levels=levels, membrane=membrane, targets=target_ids,
                                    boundary=boundary, tol=tol, max_iter=max_iter, threads=threads,

@@ -24,10 +24,10 @@ from .. import SubdivisionMesh, _core
 from .._usd import is_usd
 from ..blender import blender_refusal
 from .._validate import as_scheme
-from ..io import attribute_refusal, write_mesh_file
+from ..io import ATTRIBUTE_WORDS, attribute_refusal, write_mesh_file
 from .common import UserError, check_mesh_suffix, check_paths, face_sizes_text, is_triangles, warn_once
 
-ATTRIBUTE_LABELS = {"uvs": "texture coordinates", "normals": "normals"}
+ATTRIBUTE_LABELS = ATTRIBUTE_WORDS  # the writer's words for the attributes (sorpia.io)
 FLOAT32_MAX = float(np.finfo(np.float32).max)  # a Python float: compared with float64s, never cast down
 FLOAT32_FORMATS = {".stl": "STL"}  # and USD: the formats that store float32 coordinates
 
