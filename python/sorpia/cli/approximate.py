@@ -54,7 +54,10 @@ def _cage(input_mesh, vertices, cage, scheme, sharp_angle, source, progress):
             made = decimate(input_mesh.vertices, input_mesh.faces, vertices, scheme=scheme,
                             sharp_angle=sharp_angle, strict=False)
         except MeshError as exc:
-            raise UserError(f"{source}: cannot decimate this mesh: {_without_hints(str(exc))}; repair it first "
+            text = _without_hints(str(exc))
+            if text.startswith("decimate stopped at"):  # a valid mesh the guards hold up: no repair helps
+                raise UserError(f"{source}: no light cage: {text} (--cage CAGE)") from None
+            raise UserError(f"{source}: cannot decimate this mesh: {text}; repair it first "
                             f"(sorpia repair {source} -o repaired.obj)") from None
     stopped = next((str(w.message) for w in caught if issubclass(w.category, DecimationWarning)), None)
     if stopped is not None:
