@@ -99,6 +99,27 @@ def time_reads(files: dict, runs: int) -> dict:
     return out
 
 
+def page_lines(path=DEFAULT_JSON) -> list[str]:
+    """The row of `path` (written by --json) as Markdown for bench/approximate_scaling.py's page; none when absent."""
+    if not os.path.exists(path):
+        return []
+    with open(path) as fh:
+        row = json.load(fh)
+    c, scan, t = row["command"], row["scan"], row["command"]["phases"]
+    inner = ", ".join(f"{k.split('.', 1)[1]} {v:.2f}" for k, v in t.items()
+                      if k.startswith("approximate.") and k != "approximate.total")
+    return ["", f"### The whole command at {scan['vertices']:,} points (bench/approximate_command.py)", "",
+            f"`sorpia approximate scan.ply -o cage.obj --vertices {row['cage_asked']}` on a real scan: "
+            f"{scan['mesh']} decimated to {scan['base']:,} vertices and refined by Loop's limit surface at level 3 "
+            f"({scan['vertices']:,} vertices, binary PLY of {scan['mb']['ply']} MB), default settings, in a fresh "
+            "process (start-up included).", "",
+            "| wall s (median) | read s | cage s | approximate s | write s | iterations | RMS / diagonal | peak MB |",
+            "|---:|---:|---:|---:|---:|---:|---:|---:|",
+            f"| {c['wall_s']:.2f} | {t['read']:.2f} | {t['cage']:.2f} | {t['approximate']:.2f} | {t['write']:.2f} "
+            f"| {c['iterations']} ({c['stop_reason']}) | {c['rms_relative']:.3g} | {c['peak_mb']:.0f} |", "",
+            f"approximate's phases (s): {inner}."]
+
+
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--mesh", default="stanford-bunny.obj", help="a triangle mesh of ../shared/meshes")

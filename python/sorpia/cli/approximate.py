@@ -44,7 +44,8 @@ def _cage(input_mesh, vertices, cage, scheme, sharp_angle, source, progress):
         raise UserError(f"{source}: --vertices decimates triangle meshes and this one has other faces: pass "
                         "--triangulate to split them (the data points stay the mesh's vertices), or give the cage "
                         "with --cage CAGE")
-    n_referenced = len(np.unique(np.asarray(input_mesh.faces).reshape(-1)))
+    # The vertices the faces use, counted in O(n) (np.unique would sort all 3m corners: seconds at 1M vertices).
+    n_referenced = int(np.bincount(np.asarray(input_mesh.faces).reshape(-1), minlength=1).astype(bool).sum())
     scheme = resolve_scheme(scheme, input_mesh.faces)  # triangles: auto is Loop
     progress.status(f"decimating to {vertices} vertices")
     t0 = time.perf_counter()
