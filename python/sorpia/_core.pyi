@@ -722,7 +722,8 @@ def fair_interpolate(interpolator: Interpolator, vertices: numpy.typing.NDArray[
     Fair interpolation's pipeline (sorpia::fair_interpolate): the plain solve on the Interpolator's mesh, the
     refinement, K and the fair solve. A dict: plain (InterpolationResult), faces, n_vertices, tags (the fine
     mesh's), refinement (R as CSR arrays, only where the reference metric built it), vertices, energies,
-    energy, start_energy, iterations, stop_reason, max_error and seconds per phase.
+    energy, start_energy, energy_exponent (the energies are in units of 2^energy_exponent), iterations,
+    stop_reason, max_error and seconds per phase.
     """
 def fairness_matrix(topology: Topology, rules: Rules, thin_plate: typing.SupportsFloat | typing.SupportsIndex, membrane: typing.SupportsFloat | typing.SupportsIndex, gauss_points: typing.SupportsInt | typing.SupportsIndex, depth: typing.SupportsInt | typing.SupportsIndex, reuse: bool = True, reference: numpy.typing.NDArray[numpy.float64] | None = None) -> tuple:
     """
