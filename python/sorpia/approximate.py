@@ -79,6 +79,8 @@ DEFAULT_FAIRNESS = 3e-4
 # The stopping rule's default: the blend goes on lowering the RMS distance by a few parts in a thousand per
 # iteration on noisy data long after the surface has settled (fitting the noise); the scans' fits fall faster.
 DEFAULT_TOL = 3e-3
+# Points per chunk (the core's ApproximationOptions::chunk_points): up to this many run as one array.
+DEFAULT_CHUNK_POINTS = 1 << 20
 # The stopping rule's window (the core's ApproximationOptions::window), for `_levelled`.
 _WINDOW = 3
 
@@ -320,7 +322,7 @@ def approximate(points, cage_vertices, cage_faces=None, *, scheme: str = DEFAULT
                 method: str = DEFAULT_UPDATE, solver_tol: float = 1e-3,
                 solver_max_iter: int = 2000, grid: int = 4, newton_steps: int = 10, report_level: int = 2,
                 callback: Optional[Callable[[dict], object]] = None, weights=None, faces=None,
-                sampling: Optional[str] = None) -> ApproximationResult:
+                sampling: Optional[str] = None, chunk_points: int = DEFAULT_CHUNK_POINTS) -> ApproximationResult:
     """Control vertices of a cage whose limit surface approximates `points`
     in the least-squares sense (the module docstring describes the method).
 
@@ -405,6 +407,12 @@ def approximate(points, cage_vertices, cage_faces=None, *, scheme: str = DEFAULT
         With `faces` (None means "area"): "area", the vertices weighted by
         their share of the area; "midpoints", the edges' midpoints likewise.
         Refused without `faces`.
+    chunk_points : int >= 1
+        Points per chunk, the unit of the footpoint search and of the
+        normal equations' sums (added in the chunks' order;
+        docs/approximation.md, "Large data"). The result does not depend on
+        it beyond rounding (1e-10 relative); at most this many points run
+        exactly as one array.
 
     Returns
     -------
@@ -456,7 +464,11 @@ def approximate(points, cage_vertices, cage_faces=None, *, scheme: str = DEFAULT
     scheme = resolve_scheme(scheme, cage_faces)
     surface = LimitSurface(cage_vertices, cage_faces, boundary=boundary, scheme=scheme, creases=creases,
                            corners=corners, holes=holes)
-    out = _core.approximate(surface._surface, points, weights, iterations, tol, fairness, tangential, method,
+    chunk_points = as_integer(chunk_points, "chunk_points", "an integer >= 1")
+    if chunk_points < 1:
+        raise ParameterError(f"chunk_points = {chunk_points} must be an integer >= 1")
+    chunks = _core.InMemoryChunks(surface._surface, points, weights, chunk_points)
+    out = _core.approximate(surface._surface, chunks, iterations, tol, fairness, tangential, method,
                             solver_tol, solver_max_iter, grid, newton_steps, report_level, callback,
                             time.perf_counter() - t0)
     out["timings"]["total"] = time.perf_counter() - t0
