@@ -229,3 +229,18 @@ def test_bad_files_are_named(tmp_path, text, message):
     with pytest.raises(ValueError, match=message) as info:
         _core.FileChunks(surface._surface, str(path), 100, str(tmp_path), 1000)
     assert "bad.ply" in str(info.value)
+
+
+def test_approximate_takes_a_path(tmp_path):
+    # sorpia.approximate(path) streams the file: the same fit as the array's (the same chunks), the footpoints not
+    # kept, n_points counted; weights and faces refused with a file.
+    P, V, F = noisy_samples()
+    np.save(tmp_path / "p.npy", P)
+    ref = approximate(P, V, F, chunk_points=1000, iterations=4)
+    out = approximate(tmp_path / "p.npy", V, F, chunk_points=1000, iterations=4, spill_directory=tmp_path)
+    np.testing.assert_array_equal(out.control_vertices, ref.control_vertices)
+    assert out.rms == ref.rms and out.n_points == len(P) and out.report()["n_points"] == len(P)
+    assert len(out.face_ids) == 0 and out.points == str(tmp_path / "p.npy")
+    with pytest.raises(sorpia.ParameterError, match="weights= and faces="):
+        approximate(str(tmp_path / "p.npy"), V, F, weights=np.ones(len(P)))
+    assert _core.point_file_points(str(tmp_path / "p.npy")) == len(P)

@@ -616,6 +616,10 @@ void bind_approximate(py::module_& m) {
            }),
            "surface"_a, "path"_a, "chunk_points"_a, "spill_directory"_a, "sample_points"_a, py::keep_alive<1, 2>());
 
+  m.def("point_file_points", [](const std::string& path) { return sorpia::point_file_layout(path).k; }, "path"_a,
+        "The number of points of a file FileChunks streams (a binary little-endian PLY's vertices, a .npy (k, 3)\n"
+        "array), from its header; FileError (sorpia.MeshFileError) for any other file.");
+
   m.def(
       "approximate",
       [](sorpia::LimitSurface& surface, sorpia::PointChunks& chunks, int iterations, double tol,

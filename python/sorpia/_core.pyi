@@ -6,7 +6,7 @@ import collections.abc
 import numpy
 import numpy.typing
 import typing
-__all__: list[str] = ['ApproximationChunk', 'Boundary', 'FileChunks', 'FootpointSearch', 'INFINITE_SHARPNESS', 'InMemoryChunks', 'InterpolationResult', 'Interpolator', 'LimitSurface', 'MAX_REFINEMENT_LEVELS', 'MAX_THREADS', 'MeshError', 'MeshFileError', 'Method', 'NormalEquations', 'OmegaRule', 'ParameterError', 'PointChunks', 'PointIndex', 'Rules', 'Scheme', 'SolveOptions', 'Tags', 'Topology', 'YOUNG_RHO_CLAMP', 'approximate', 'available_memory_bytes', 'blend_weights', 'boundary_name', 'check_ply_per_vertex', 'check_refinement', 'check_writable', 'closest_points', 'decimate', 'face_list_statistics', 'fair_interpolate', 'fairness_matrix', 'grid', 'icosphere', 'irregular', 'limit_matrix', 'limit_points', 'limit_residual', 'mesh_statistics', 'method_names', 'normal_matrix', 'parse_boundary', 'parse_method', 'parse_omega', 'parse_scheme', 'pole', 'polygon_torus', 'quad_grid', 'quad_irregular', 'quad_torus', 'read_mesh', 'refine_footpoints', 'refine_uniform', 'refinement_bytes', 'regular_valence', 'repair', 'repair_polygons', 'rms_levelled', 'scale_exponent', 'scheme_name', 'sharp_edges', 'split_nonmanifold', 'split_nonmanifold_polygons', 'subface_columns', 'tessellation_bytes', 'torus', 'write_file_atomic', 'write_mesh']
+__all__: list[str] = ['ApproximationChunk', 'Boundary', 'FileChunks', 'FootpointSearch', 'INFINITE_SHARPNESS', 'InMemoryChunks', 'InterpolationResult', 'Interpolator', 'LimitSurface', 'MAX_REFINEMENT_LEVELS', 'MAX_THREADS', 'MeshError', 'MeshFileError', 'Method', 'NormalEquations', 'OmegaRule', 'ParameterError', 'PointChunks', 'PointIndex', 'Rules', 'Scheme', 'SolveOptions', 'Tags', 'Topology', 'YOUNG_RHO_CLAMP', 'approximate', 'available_memory_bytes', 'blend_weights', 'boundary_name', 'check_ply_per_vertex', 'check_refinement', 'check_writable', 'closest_points', 'decimate', 'face_list_statistics', 'fair_interpolate', 'fairness_matrix', 'grid', 'icosphere', 'irregular', 'limit_matrix', 'limit_points', 'limit_residual', 'mesh_statistics', 'method_names', 'normal_matrix', 'parse_boundary', 'parse_method', 'parse_omega', 'parse_scheme', 'point_file_points', 'pole', 'polygon_torus', 'quad_grid', 'quad_irregular', 'quad_torus', 'read_mesh', 'refine_footpoints', 'refine_uniform', 'refinement_bytes', 'regular_valence', 'repair', 'repair_polygons', 'rms_levelled', 'scale_exponent', 'scheme_name', 'sharp_edges', 'split_nonmanifold', 'split_nonmanifold_polygons', 'subface_columns', 'tessellation_bytes', 'torus', 'write_file_atomic', 'write_mesh']
 class MeshError(ValueError):
     """
     The faces or coordinates cannot be used: an index out of range, a repeated
@@ -831,6 +831,11 @@ def parse_omega(text: str) -> tuple[OmegaRule, float]:
     """
 def parse_scheme(name: str) -> Scheme:
     ...
+def point_file_points(path: str) -> int:
+    """
+    The number of points of a file FileChunks streams (a binary little-endian PLY's vertices, a .npy (k, 3)
+    array), from its header; FileError (sorpia.MeshFileError) for any other file.
+    """
 def pole(n: typing.SupportsInt | typing.SupportsIndex) -> tuple:
     ...
 def polygon_torus(nu: typing.SupportsInt | typing.SupportsIndex, nv: typing.SupportsInt | typing.SupportsIndex, seed: typing.SupportsInt | typing.SupportsIndex = 1) -> tuple:

@@ -539,23 +539,25 @@ constexpr std::size_t kStateBytes[3] = {4 + 16 + 8 + 24, 4 + 16 + 8, 4 + 16 + 8 
 
 }  // namespace
 
-FileChunks::FileChunks(LimitSurface& surface, const std::string& path, std::size_t chunk_points,
-                       const std::string& spill_directory, std::size_t sample_points)
-    : LocalChunks(surface), path_(path), chunk_points_(chunk_points), sample_points_(sample_points) {
-  if (chunk_points == 0) throw ParameterError("chunk_points = 0 must be >= 1");
-  fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd_ < 0) file_error(path, std::strerror(errno));
-  const off_t end = ::lseek(fd_, 0, SEEK_END);
+PointFileLayout point_file_layout(const std::string& path) {
+  PointFileLayout out;
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) file_error(path, std::strerror(errno));
+  struct Closer {
+    int fd;
+    ~Closer() { ::close(fd); }
+  } closer{fd};
+  const off_t end = ::lseek(fd, 0, SEEK_END);
   if (end < 0) file_error(path, std::strerror(errno));
   const auto file_size = static_cast<std::size_t>(end);
   std::string head(std::min<std::size_t>(file_size, 65536), '\0');
-  read_all(fd_, head.data(), head.size(), 0, path);
+  read_all(fd, head.data(), head.size(), 0, path);
   if (head.rfind("ply", 0) == 0) {
     const auto stop = head.find("end_header");
     if (stop == std::string::npos) file_error(path, "its PLY header has no end_header within 64 KiB");
     const auto body = head.find('\n', stop);
     if (body == std::string::npos) file_error(path, "its PLY header is truncated");
-    offset_ = body + 1;
+    out.offset = body + 1;
     std::istringstream lines(head.substr(0, stop));
     std::string line;
     bool format = false, in_vertex = false, seen_vertex = false;
@@ -580,7 +582,7 @@ FileChunks::FileChunks(LimitSurface& surface, const std::string& path, std::size
         in_vertex = name == "vertex";
         if (in_vertex) {
           seen_vertex = true;
-          k_ = count;
+          out.k = count;
         }
       } else if (word == "property" && in_vertex) {
         std::string type, name;
@@ -593,12 +595,12 @@ FileChunks::FileChunks(LimitSurface& surface, const std::string& path, std::size
           const bool f64 = bytes == 8 && type != "int64";
           if (!(type == "float" || type == "float32" || type == "double" || type == "float64"))
             file_error(path, "its vertex property '" + name + "' is " + type + ": x, y, z must be float or double");
-          if (found > 0 && f64 != float64_) file_error(path, "its x, y, z are not all of one type");
-          float64_ = f64;
-          x_offset_[c] = stride_;
+          if (found > 0 && f64 != out.float64) file_error(path, "its x, y, z are not all of one type");
+          out.float64 = f64;
+          out.x_offset[c] = out.stride;
           found |= std::size_t{1} << c;
         }
-        stride_ += bytes;
+        out.stride += bytes;
       }
     }
     if (!format) file_error(path, "its PLY header has no format line");
@@ -615,7 +617,7 @@ FileChunks::FileChunks(LimitSurface& surface, const std::string& path, std::size
     }
     if (start + len > head.size()) file_error(path, "its .npy header is truncated");
     const std::string dict = head.substr(start, len);
-    offset_ = start + len;
+    out.offset = start + len;
     const auto value = [&](const std::string& key) {
       const auto p = dict.find("'" + key + "'");
       if (p == std::string::npos) file_error(path, "its .npy header has no '" + key + "'");
@@ -624,9 +626,9 @@ FileChunks::FileChunks(LimitSurface& surface, const std::string& path, std::size
     };
     const std::string descr = value("descr");
     if (descr.find("<f8") != std::string::npos)
-      float64_ = true;
+      out.float64 = true;
     else if (descr.find("<f4") != std::string::npos)
-      float64_ = false;
+      out.float64 = false;
     else
       file_error(path, "its .npy dtype is not little-endian float32 or float64");
     if (value("fortran_order").find("False") == std::string::npos) file_error(path, "its .npy array is not in C order");
@@ -636,17 +638,28 @@ FileChunks::FileChunks(LimitSurface& surface, const std::string& path, std::size
         std::sscanf(shape.c_str(), " (%zu, %zu)", &rows, &cols) != 2)
       file_error(path, "its .npy shape is not (k, 3)");
     if (cols != 3) file_error(path, "its .npy shape is (" + std::to_string(rows) + ", " + std::to_string(cols) + "), not (k, 3)");
-    k_ = rows;
-    stride_ = float64_ ? 24 : 12;
-    x_offset_[0] = 0;
-    x_offset_[1] = stride_ / 3;
-    x_offset_[2] = 2 * stride_ / 3;
+    out.k = rows;
+    out.stride = out.float64 ? 24 : 12;
+    out.x_offset[0] = 0;
+    out.x_offset[1] = out.stride / 3;
+    out.x_offset[2] = 2 * out.stride / 3;
   } else {
     file_error(path, "it is neither a PLY nor a .npy file");
   }
-  if (offset_ + k_ * stride_ > file_size)
-    file_error(path, "it holds " + std::to_string(file_size - offset_) + " bytes of points where " +
-                         std::to_string(k_) + " points need " + std::to_string(k_ * stride_));
+  if (out.offset + out.k * out.stride > file_size)
+    file_error(path, "it holds " + std::to_string(file_size - out.offset) + " bytes of points where " +
+                         std::to_string(out.k) + " points need " + std::to_string(out.k * out.stride));
+  return out;
+}
+
+FileChunks::FileChunks(LimitSurface& surface, const std::string& path, std::size_t chunk_points,
+                       const std::string& spill_directory, std::size_t sample_points)
+    : LocalChunks(surface), path_(path), chunk_points_(chunk_points), sample_points_(sample_points) {
+  if (chunk_points == 0) throw ParameterError("chunk_points = 0 must be >= 1");
+  layout_ = point_file_layout(path);
+  k_ = layout_.k;
+  fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd_ < 0) file_error(path, std::strerror(errno));
   std::string spill = (spill_directory.empty() ? std::string("/tmp") : spill_directory) + "/sorpia-chunks-XXXXXX";
   spill_fd_ = ::mkstemp(spill.data());
   if (spill_fd_ < 0) file_error(path, "no spill file in '" + spill_directory + "': " + std::strerror(errno));
@@ -660,13 +673,14 @@ FileChunks::~FileChunks() {
 }
 
 std::vector<double> FileChunks::read_points(std::size_t first, std::size_t count) const {
-  std::vector<char> raw(count * stride_);
-  read_all(fd_, raw.data(), raw.size(), offset_ + first * stride_, path_);
+  const PointFileLayout& l = layout_;
+  std::vector<char> raw(count * l.stride);
+  read_all(fd_, raw.data(), raw.size(), l.offset + first * l.stride, path_);
   std::vector<double> p(3 * count);
   for (std::size_t i = 0; i < count; ++i)
     for (std::size_t c = 0; c < 3; ++c) {
-      const char* at = raw.data() + i * stride_ + x_offset_[c];
-      if (float64_) {
+      const char* at = raw.data() + i * l.stride + l.x_offset[c];
+      if (l.float64) {
         std::memcpy(&p[3 * i + c], at, 8);
       } else {
         float f;

@@ -231,6 +231,17 @@ class InMemoryChunks : public LocalChunks {
   std::vector<ApproximationChunk> chunks_;
 };
 
+/// Where a file's points lie: k records of `stride` bytes from `offset`,
+/// coordinate c at x_offset[c] in each, float64 or float32 (little-endian).
+struct PointFileLayout {
+  std::size_t k = 0, offset = 0, stride = 0, x_offset[3] = {0, 0, 0};
+  bool float64 = false;
+};
+/// The layout of a binary little-endian PLY's vertices or of a .npy (k, 3)
+/// array of float32 or float64 in C order (FileChunks' files), from its header.
+/// @throws FileError naming the file and what it is not
+PointFileLayout point_file_layout(const std::string& path);
+
 /// Points read from a file a chunk at a time (every call reads its chunk
 /// again), their footpoint states spilled to a temporary file between calls:
 /// memory set by the chunk and the cage, not the points. Binary
@@ -263,8 +274,7 @@ class FileChunks : public LocalChunks {
   std::string path_, spill_path_;
   int fd_ = -1, spill_fd_ = -1;
   std::size_t k_ = 0, chunk_points_ = 0, sample_points_ = 0;
-  std::size_t offset_ = 0, stride_ = 0, x_offset_[3] = {0, 0, 0};
-  bool float64_ = false;
+  PointFileLayout layout_;
   ApproximationChunk chunk_;  // the loaded one
 };
 
