@@ -3,6 +3,8 @@ Python backend, and streamed from .npy and binary PLY files. The reference is th
 footpoints do not depend on the cutting (each point's search depends on that point alone), the sums only by
 rounding (1e-10 relative), and a backend that returns its chunks' sums in order gives the same bits."""
 
+import json
+
 import numpy as np
 import pytest
 
@@ -244,3 +246,27 @@ def test_approximate_takes_a_path(tmp_path):
     with pytest.raises(sorpia.ParameterError, match="weights= and faces="):
         approximate(str(tmp_path / "p.npy"), V, F, weights=np.ones(len(P)))
     assert _core.point_file_points(str(tmp_path / "p.npy")) == len(P)
+
+
+def test_command_streams_a_binary_ply(tmp_path, monkeypatch, command):
+    # `sorpia approximate scan.ply --cage cage.obj --stream yes`: the points read a chunk at a time, the fit the
+    # array's (the same chunks: the same bits, checked on the report's RMS and the cage read back to OBJ's 17
+    # digits); --vertices and --sampling, which need the mesh in memory, refused by name.
+    monkeypatch.chdir(tmp_path)
+    P, V, F = noisy_samples()
+    write_ply(tmp_path / "scan.ply", P, np.float64, extra=False)
+    sorpia.write_mesh(tmp_path / "cage.obj", V, F)
+    code, out, err = command("approximate", "scan.ply", "--cage", "cage.obj", "-o", "out.obj", "--stream", "yes",
+                             "--iterations", 3, "--report", "r.json", "--quiet")
+    assert code == 0, err
+    report = json.loads((tmp_path / "r.json").read_text())
+    cage_v, cage_f = sorpia.read_mesh(tmp_path / "cage.obj")[:2]
+    ref = approximate(P, cage_v, cage_f, iterations=3)
+    assert report["streamed"] and report["input_points"] == len(P) and report["rms"] == ref.rms
+    np.testing.assert_allclose(sorpia.read_mesh(tmp_path / "out.obj")[0], ref.control_vertices, rtol=1e-15,
+                               atol=1e-15)
+    code, out, err = command("approximate", "scan.ply", "--vertices", 50, "-o", "o2.obj", "--stream", "yes")
+    assert code != 0 and "--cage" in err
+    (tmp_path / "text.ply").write_text("ply\nformat ascii 1.0\nelement vertex 0\nend_header\n")
+    code, out, err = command("approximate", "text.ply", "--cage", "cage.obj", "-o", "o3.obj", "--stream", "yes")
+    assert code != 0 and "ascii" in err
