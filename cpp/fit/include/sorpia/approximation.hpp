@@ -39,6 +39,7 @@
 #include <vector>
 
 #include "sorpia/footpoints.hpp"
+#include "sorpia/point_chunks.hpp"
 #include "sorpia/surface.hpp"
 
 namespace sorpia {
@@ -67,6 +68,9 @@ struct ApproximationOptions {
   int window = 3;                 ///< the stop rule's iterations, >= 1
   double exact = 1e-13;           ///< an RMS below this fraction of the diagonal stops ("exact")
   double closer = 1e-10;          ///< a fresh footpoint replaces one farther by more than this fraction of the diagonal
+  /// Points per chunk of an in-memory array (point_chunks.hpp), >= 1: the
+  /// unit of the footpoints and of the normal sums, added in order.
+  std::size_t chunk_points = std::size_t{1} << 20;
 };
 
 /// One iteration's figures (iteration 0: the cage as given).
@@ -131,5 +135,14 @@ using ApproximationProgress = std::function<void(const ApproximationRecord&)>;
 ///         surface's evaluation
 ApproximationResult approximate(LimitSurface& surface, const double* points, std::size_t k, const double* weights,
                                 const ApproximationOptions& options, const ApproximationProgress& progress = {});
+
+/// The same fit (the one driver) over points held by a backend (PointChunks:
+/// in memory, streamed from a file, or elsewhere) whose chunks run on
+/// `surface` or on copies of it kept at the control vertices the driver
+/// sets. The backend's footpoint states move with the driver's calls; its
+/// sums are added in its chunks' order. With FileChunks the result's
+/// footpoints are empty, and the surface-to-data report uses its sample.
+ApproximationResult approximate(LimitSurface& surface, PointChunks& chunks, const ApproximationOptions& options,
+                                const ApproximationProgress& progress = {});
 
 }  // namespace sorpia
