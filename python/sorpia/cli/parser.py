@@ -320,12 +320,16 @@ def build_parser() -> argparse.ArgumentParser:
     app.add_argument("--level", type=_level_arg, default=3, metavar="L", help="refinement level of --surface")
     app.add_argument("--report", metavar="REPORT.json",
                      help="write a JSON report: the cage, the distances both ways per iteration, seconds per phase")
+    app.add_argument("--scheduler", metavar="ADDRESS",
+                     help="run the fit's chunks of points on the workers of the Dask cluster whose scheduler is at "
+                     "ADDRESS (tcp://host:8786; needs dask.distributed: pip install 'sorpia[dask]'); the result is "
+                     "the one of the same chunks in one process")
     output_flags(app)
     app.set_defaults(func=lambda a: run_approximate(
         a.input, a.output, vertices=a.vertices, cage=a.cage, scheme=a.scheme, sharp_angle=a.sharp_angle,
         report=a.report, surface=a.surface, level=a.level, iterations=a.iterations, tol=a.tol,
         fairness=a.fairness, tangential=a.tangential, method=a.method, boundary=a.boundary, sampling=a.sampling,
-        quiet=a.quiet, force=a.force, prim=a.prim, triangulate=a.triangulate)[0])
+        quiet=a.quiet, force=a.force, prim=a.prim, triangulate=a.triangulate, scheduler=a.scheduler)[0])
 
     comp = command("compare", "run several methods to one tolerance: the paper's Table 1 and Figure 7",
                    "Run each method on the mesh to the same tolerance and print the paper's Table 1 layout for "
