@@ -211,7 +211,9 @@ def dask_lines(rows) -> list:
              "core's threads) per million points for one round of footpoints (search or re-projection) and for "
              "one iteration's normal-equation sums, and the megabytes "
              "of arrays sent to the workers and back per iteration (besides the points, sent once). "
-             "docs/distributed.md projects a billion points from these.", "",
+             "Each worker's core runs on all the machine's cores: where two workers share the machine, the rows "
+             "show the same result from either, not a speed-up. docs/distributed.md projects a billion points "
+             "from these.", "",
              "| points | cage | chunks | workers | seconds | iterations | RMS / diagonal | relative difference "
              "| footpoints s (CPU) per 1M | sums s (CPU) per 1M | MB out per iteration | MB back per iteration |",
              "|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
