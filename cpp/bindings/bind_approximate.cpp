@@ -74,12 +74,14 @@ py::dict record_dict(const sorpia::ApproximationRecord& r, double offset) {
   d["iteration"] = r.iteration;
   d["rms"] = r.rms;
   d["max"] = r.max;
-  d["surface_rms"] = r.surface_rms;
-  d["surface_max"] = r.surface_max;
+  // The surface-to-data figures of a record where they were not measured (report_each off): None.
+  const auto measured = [](double v) -> py::object { return std::isnan(v) ? py::object(py::none()) : py::float_(v); };
+  d["surface_rms"] = measured(r.surface_rms);
+  d["surface_max"] = measured(r.surface_max);
   d["rms_relative"] = r.rms_relative;
   d["max_relative"] = r.max_relative;
-  d["surface_rms_relative"] = r.surface_rms_relative;
-  d["surface_max_relative"] = r.surface_max_relative;
+  d["surface_rms_relative"] = measured(r.surface_rms_relative);
+  d["surface_max_relative"] = measured(r.surface_max_relative);
   d["solver_iterations"] = r.solver_iterations;
   d["seconds"] = r.seconds + offset;
   return d;
@@ -624,7 +626,8 @@ void bind_approximate(py::module_& m) {
       "approximate",
       [](sorpia::LimitSurface& surface, sorpia::PointChunks& chunks, int iterations, double tol,
          double fairness, double tangential, const std::string& method, double solver_tol, long long solver_max_iter,
-         int grid, int newton_steps, int report_level, const py::object& callback, double seconds_before) {
+         int grid, int newton_steps, int report_level, const py::object& callback, double seconds_before,
+         bool report_each) {
         sorpia::ApproximationOptions o;
         o.iterations = iterations;
         o.tol = tol;
@@ -637,6 +640,7 @@ void bind_approximate(py::module_& m) {
         o.solver_max_iter = solver_max_iter;
         o.footpoints = footpoint_options(grid, newton_steps);
         o.report_level = report_level;
+        o.report_each = report_each;
         sorpia::ApproximationProgress progress;
         if (!callback.is_none())
           progress = [&callback, seconds_before](const sorpia::ApproximationRecord& r) {
@@ -667,11 +671,12 @@ void bind_approximate(py::module_& m) {
       },
       "surface"_a, "chunks"_a, "iterations"_a, "tol"_a, "fairness"_a, "tangential"_a,
       "method"_a, "solver_tol"_a, "solver_max_iter"_a, "grid"_a, "newton_steps"_a, "report_level"_a, "callback"_a,
-      "seconds_before"_a = 0.0,
+      "seconds_before"_a = 0.0, "report_each"_a = false,
       "Approximation's pipeline (sorpia::approximate) from the surface's control vertices, over the points of\n"
       "`chunks` (InMemoryChunks, FileChunks or a Python PointChunks): a dict with control_vertices, face_ids, uv,\n"
       "distances, iterations, stop_reason, best_iteration, diagonal, history (records as dicts, seconds counted\n"
-      "from seconds_before) and timings; callback(record) after each record.");
+      "from seconds_before) and timings; callback(record) after each record. The surface-to-data figures in every\n"
+      "record with report_each, else only in the returned iterate's (None in the others).");
 }
 
 }  // namespace sorpia_py

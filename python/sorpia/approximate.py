@@ -142,7 +142,9 @@ class ApproximationResult:
     history : list of dict
         One record per iteration, from 0 (the cage as given): ``iteration``,
         ``rms``, ``max`` (data to surface), ``surface_rms``, ``surface_max``
-        (surface to data), each also ``_relative`` (divided by ``diagonal``),
+        (surface to data: in the returned iterate's record, and in the
+        others only with ``report_each``, else None), each also
+        ``_relative`` (divided by ``diagonal``),
         ``solver_iterations`` (of the update before it; 0 at iteration 0) and
         ``seconds`` (since the start).
     timings : dict
@@ -334,6 +336,7 @@ def approximate(points, cage_vertices, cage_faces=None, *, scheme: str = DEFAULT
                 fairness: float = DEFAULT_FAIRNESS, tangential: Optional[float] = None,
                 method: str = DEFAULT_UPDATE, solver_tol: float = 1e-3,
                 solver_max_iter: int = 2000, grid: int = 4, newton_steps: int = 10, report_level: int = 2,
+                report_each: bool = False,
                 callback: Optional[Callable[[dict], object]] = None, weights=None, faces=None,
                 sampling: Optional[str] = None, chunk_points: int = DEFAULT_CHUNK_POINTS,
                 spill_directory=None, sample_points: int = DEFAULT_SAMPLE_POINTS,
@@ -412,6 +415,10 @@ def approximate(points, cage_vertices, cage_faces=None, *, scheme: str = DEFAULT
     report_level : int 0..15
         Tessellation level of the limit surface whose vertices measure the
         distance from the surface to the data.
+    report_each : bool
+        Measure the surface-to-data distances at every iteration (a
+        tessellation and a k-d tree query each time: about a tenth of a
+        run), not only for the returned iterate at the end (the default).
     callback : callable(record) or None
         Called with each iteration's record (see `ApproximationResult.history`)
         as soon as it is known.
@@ -521,7 +528,7 @@ def approximate(points, cage_vertices, cage_faces=None, *, scheme: str = DEFAULT
     try:
         out = _core.approximate(surface._surface, chunks, iterations, tol, fairness, tangential, method,
                                 solver_tol, solver_max_iter, grid, newton_steps, report_level, callback,
-                                time.perf_counter() - t0)
+                                time.perf_counter() - t0, bool(report_each))
     finally:
         if client is not None:
             chunks.close()

@@ -7,6 +7,7 @@
 #include <memory>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <numeric>
 #include <string>
 #include <utility>
@@ -301,7 +302,8 @@ ApproximationResult approximate(LimitSurface& surface, PointChunks& chunks, cons
   std::unique_ptr<PointIndex> data_index;
   std::vector<std::int64_t> nearest;
   std::vector<double> near_distance;
-  const auto record = [&](int iteration, const DistanceSums& distances, long long solver_iterations) {
+  // The surface-to-data distances of the surface's current state into rec (the data's k-d tree built once).
+  const auto measure_surface = [&](ApproximationRecord& rec) {
     phases.timed(&ApproximationTimings::report, [&] {
       if (!data_index) {
         const std::vector<double> sample = chunks.sample();
@@ -322,22 +324,27 @@ ApproximationResult approximate(LimitSurface& surface, PointChunks& chunks, cons
       }
       return 0;
     });
+    std::vector<double> s2(near_distance.size());
+    for (std::size_t i = 0; i < s2.size(); ++i) s2[i] = near_distance[i] * near_distance[i];
+    const double srms = std::sqrt(pairwise_sum(s2.data(), s2.size()) / static_cast<double>(s2.size()));
+    const double smax = near_distance.empty() ? 0.0 : *std::max_element(near_distance.begin(), near_distance.end());
+    rec.surface_rms_relative = srms / unit;
+    rec.surface_max_relative = smax / unit;
+    rec.surface_rms = std::ldexp(srms, e);
+    rec.surface_max = std::ldexp(smax, e);
+  };
+  const double not_measured = std::numeric_limits<double>::quiet_NaN();
+  const auto record = [&](int iteration, const DistanceSums& distances, long long solver_iterations) {
     ApproximationRecord rec;
     rec.iteration = iteration;
     rec.rms = rms(distances);
     rec.max = distances.max;
-    std::vector<double> s2(near_distance.size());
-    for (std::size_t i = 0; i < s2.size(); ++i) s2[i] = near_distance[i] * near_distance[i];
-    rec.surface_rms = std::sqrt(pairwise_sum(s2.data(), s2.size()) / static_cast<double>(s2.size()));
-    rec.surface_max = near_distance.empty() ? 0.0 : *std::max_element(near_distance.begin(), near_distance.end());
     rec.rms_relative = rec.rms / unit;
     rec.max_relative = rec.max / unit;
-    rec.surface_rms_relative = rec.surface_rms / unit;
-    rec.surface_max_relative = rec.surface_max / unit;
     rec.rms = std::ldexp(rec.rms, e);
     rec.max = std::ldexp(rec.max, e);
-    rec.surface_rms = std::ldexp(rec.surface_rms, e);
-    rec.surface_max = std::ldexp(rec.surface_max, e);
+    rec.surface_rms = rec.surface_max = rec.surface_rms_relative = rec.surface_max_relative = not_measured;
+    if (options.report_each) measure_surface(rec);
     rec.solver_iterations = solver_iterations;
     rec.seconds = seconds_since(t0);
     out.history.push_back(rec);
@@ -459,8 +466,9 @@ ApproximationResult approximate(LimitSurface& surface, PointChunks& chunks, cons
     footpoints([&] { return chunks.search_fresh(options.footpoints, options.closer * unit); });
   }
   const DistanceSums final_feet = chunks.keep_fresh_in_best();
+  ApproximationRecord& rec = out.history[static_cast<std::size_t>(best.iteration)];
+  if (!options.report_each) measure_surface(rec);  // the surface holds the returned iterate
   if (final_feet.changed > 0) {
-    ApproximationRecord& rec = out.history[static_cast<std::size_t>(best.iteration)];
     const double r = rms(final_feet), m = final_feet.max;
     rec.rms_relative = r / unit;
     rec.max_relative = m / unit;
