@@ -102,10 +102,13 @@ class ChunkHost:
         self.search_: Optional[Any] = None
         self.chunks: dict[int, Any] = {}
 
-    def add(self, index: int, points: np.ndarray, weights: Optional[np.ndarray], first: int) -> int:
-        """Chunk `index`: the points first .. first + len(points) of all."""
+    def add(self, index: int, points, weights: Optional[np.ndarray], first: int, count: int) -> int:
+        """Chunk `index`: the points first .. first + count of all, given as an
+        array, or read here from the file at the path `points`."""
+        if isinstance(points, str):
+            points = _core.read_point_file(points, first, count)
         self.chunks[index] = _core.ApproximationChunk(points, weights, first)
-        return len(points)
+        return count
 
     def set_control_vertices(self, vertices: np.ndarray) -> None:
         self.surface.set_vertices(vertices)
@@ -128,6 +131,8 @@ class ChunkHost:
             call = lambda c: c.refine(self.surface, *args)  # noqa: E731
         elif name == "normal_sums":
             call = lambda c: c.normal_sums(self.surface, *args)  # noqa: E731
+        elif name == "sample":  # FileChunks' fixed sample of the points: args (k, sample_points)
+            call = lambda c: c.points[_core.point_sample_mask(c.first, c.size, *args)]  # noqa: E731
         else:
             call = lambda c: getattr(c, name)(*args)  # noqa: E731
         out = []
@@ -142,13 +147,22 @@ class DaskChunks(_core.PointChunks):
     """The driver's backend (``_core.PointChunks``) whose chunks live on the
     workers of a Dask cluster: chunk c of ``chunk_points`` points on worker
     ``c * len(workers) // n_chunks`` (contiguous runs of chunks per worker).
-    Every sum goes back to the driver as a list in chunk index order."""
+    Every sum goes back to the driver as a list in chunk index order.
 
-    def __init__(self, client, workers: list[str], cage: dict, points: np.ndarray, weights: Optional[np.ndarray],
-                 chunk_points: int):
+    `points`: an array, whose chunks are sent from here (and which the
+    surface-to-data report measures from, as InMemoryChunks'), or the path of
+    a file FileChunks streams, whose chunks each worker reads itself (a
+    filesystem they all see at that path) and whose report comes from
+    FileChunks' fixed sample of `sample_points`; its footpoints are not
+    gathered (as FileChunks')."""
+
+    def __init__(self, client, workers: list[str], cage: dict, points, weights: Optional[np.ndarray],
+                 chunk_points: int, sample_points: int):
         super().__init__()
-        self.points = points
-        starts = list(range(0, len(points), chunk_points))
+        self.points, self.sample_points = points, sample_points
+        self.e = 0  # the driver's scaling of data beyond 2^+-200 (scale)
+        self.k = _core.point_file_points(points) if isinstance(points, str) else len(points)
+        starts = list(range(0, self.k, chunk_points))
         self.n_chunks = len(starts)
         workers = workers[:self.n_chunks]  # a worker without a chunk gets no actor
         self.futures = [client.submit(ChunkHost, cage, actor=True, workers=[w], allow_other_workers=False,
@@ -160,10 +174,11 @@ class DaskChunks(_core.PointChunks):
         # over chunks), the bytes of arrays sent to the workers (the points once, then the control vertices) and
         # back per call.
         self.stats = {"workers": len(self.hosts), "chunks": self.n_chunks, "chunk_points": chunk_points,
-                      "worker_seconds": {}, "worker_cpu_seconds": {}, "bytes_to_workers": int(points.nbytes) + (
-                          0 if weights is None else int(weights.nbytes)), "bytes_from_workers": {}}
-        _wait([self.hosts[owner[c]].add(c, points[s:s + chunk_points],
-                                        None if weights is None else weights[s:s + chunk_points], s)
+                      "worker_seconds": {}, "worker_cpu_seconds": {}, "bytes_to_workers": sum(
+                          _nbytes(a) for a in (points, weights) if isinstance(a, np.ndarray)), "bytes_from_workers": {}}
+        _wait([self.hosts[owner[c]].add(c, points if isinstance(points, str) else points[s:s + chunk_points],
+                                        None if weights is None else weights[s:s + chunk_points], s,
+                                        min(chunk_points, self.k - s))
                for c, s in enumerate(starts)])
 
     def close(self) -> None:
@@ -190,12 +205,13 @@ class DaskChunks(_core.PointChunks):
         self._all(name, *args)
 
     def size(self):
-        return len(self.points)
+        return self.k
 
     def extent(self):
         return self._all("extent")
 
     def scale(self, e):
+        self.e = e
         self._each("scale", e)
 
     def moments(self, center, diagonal):
@@ -231,9 +247,14 @@ class DaskChunks(_core.PointChunks):
         return self._all("normal_sums", tangential)
 
     def sample(self):
-        return self.points  # the client holds the array: the report measures from every point, as in one process
+        if isinstance(self.points, str):
+            return np.concatenate(self._all("sample", self.k, self.sample_points))
+        # the client holds the array: the report measures from every point (scaled as the chunks), as in one process
+        return np.ldexp(self.points, -self.e) if self.e else self.points
 
     def best_footpoints(self):
+        if isinstance(self.points, str):
+            return None  # a billion footpoints are not gathered on the client
         parts = self._all("best_footpoints")
         return tuple(np.concatenate([p[j] for p in parts]) for j in range(3))
 

@@ -446,7 +446,9 @@ def approximate(points, cage_vertices, cage_faces=None, *, scheme: str = DEFAULT
         ``pip install 'sorpia[dask]'``; docs/distributed.md): each worker
         holds its chunks between iterations, the client adds their sums in
         chunk order and solves, so the result is the one without `client`
-        and the same `chunk_points`. The client is left open.
+        and the same `chunk_points`. Points given as a path are read by
+        the workers themselves (a filesystem that the client and every
+        worker see at that path). The client is left open.
 
     Returns
     -------
@@ -489,9 +491,6 @@ def approximate(points, cage_vertices, cage_faces=None, *, scheme: str = DEFAULT
     if callback is not None and not callable(callback):
         raise ParameterError(f"callback = {callback!r} must be callable (record) or None")
     workers = None if client is None else _dask.check_client(client)
-    if client is not None and path is not None:
-        raise ParameterError(f"points = {path!r} is a file and client= a Dask cluster: the workers do not read "
-                             "files yet; give the points as an array (docs/distributed.md)")
     if faces is None and sampling is not None:
         raise ParameterError(f"sampling = {sampling!r} samples a dense mesh's faces: give faces= too")
     if faces is not None and weights is not None:
@@ -518,7 +517,7 @@ def approximate(points, cage_vertices, cage_faces=None, *, scheme: str = DEFAULT
     if client is not None:  # the workers build the same surface from the cage's arrays and rules
         chunks = _dask.DaskChunks(client, workers, dict(vertices=cage_vertices, faces=cage_faces, boundary=boundary,
                                                         scheme=scheme, creases=creases, corners=corners, holes=holes),
-                                  points, weights, chunk_points)
+                                  points if path is None else path, weights, chunk_points, sample_points)
     elif path is None:
         chunks = _core.InMemoryChunks(surface._surface, points, weights, chunk_points)
     else:
