@@ -202,7 +202,7 @@ def dask_rows(n: int, fraction: float, workers: tuple, chunk_points: int) -> lis
 
 def dask_lines(rows) -> list:
     """The Dask table of the page."""
-    lines = ["", "### On a Dask cluster", "",
+    lines = ["", "## On a Dask cluster", "",
              "The same data and cage at one size, cut into chunks (--dask-chunk points each), fitted in one process "
              "(workers 0: `sorpia.approximate` on the machine's threads) and on a `LocalCluster` of 1 and 2 worker "
              "processes of one thread each (`client=`; the same chunks, their sums added in chunk order): seconds "
