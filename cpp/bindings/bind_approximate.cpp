@@ -621,6 +621,29 @@ void bind_approximate(py::module_& m) {
   m.def("point_file_points", [](const std::string& path) { return sorpia::point_file_layout(path).k; }, "path"_a,
         "The number of points of a file FileChunks streams (a binary little-endian PLY's vertices, a .npy (k, 3)\n"
         "array), from its header; FileError (sorpia.MeshFileError) for any other file.");
+  m.def(
+      "read_point_file",
+      [](const std::string& path, std::size_t first, std::size_t count) {
+        std::vector<double> p;
+        {
+          LongCall call;
+          p = sorpia::read_point_file(path, first, count);
+        }
+        return to_numpy(std::move(p), 3);
+      },
+      "path"_a, "first"_a, "count"_a,
+      "Points first .. first + count of a file FileChunks streams, (count, 3) float64 (a chunk read where it is\n"
+      "used: a Dask worker).");
+  m.def(
+      "point_sample_mask",
+      [](std::size_t first, std::size_t count, std::size_t k, std::size_t sample_points) {
+        const std::vector<char> in = sorpia::point_sample_mask(first, count, k, sample_points);
+        py::array_t<bool> out(static_cast<py::ssize_t>(count));
+        std::copy(in.begin(), in.end(), out.mutable_data());
+        return out;
+      },
+      "first"_a, "count"_a, "k"_a, "sample_points"_a,
+      "Which of points first .. first + count of k are in FileChunks' fixed sample of about sample_points.");
 
   m.def(
       "approximate",

@@ -533,6 +533,37 @@ std::uint64_t mix(std::uint64_t x) {
   return x ^ (x >> 31);
 }
 
+// Points first .. first + count of a file of layout l open as fd, as float64 (row-major (count, 3)).
+std::vector<double> decode_points(int fd, const PointFileLayout& l, std::size_t first, std::size_t count,
+                                  const std::string& path) {
+  std::vector<char> raw(count * l.stride);
+  read_all(fd, raw.data(), raw.size(), l.offset + first * l.stride, path);
+  std::vector<double> p(3 * count);
+  for (std::size_t i = 0; i < count; ++i)
+    for (std::size_t c = 0; c < 3; ++c) {
+      const char* at = raw.data() + i * l.stride + l.x_offset[c];
+      if (l.float64) {
+        std::memcpy(&p[3 * i + c], at, 8);
+      } else {
+        float f;
+        std::memcpy(&f, at, 4);
+        p[3 * i + c] = static_cast<double>(f);
+      }
+    }
+  return p;
+}
+
+// A file open for reading, closed when it goes out of scope.
+struct ReadOnlyFile {
+  int fd;
+  explicit ReadOnlyFile(const std::string& path) : fd(::open(path.c_str(), O_RDONLY | O_CLOEXEC)) {
+    if (fd < 0) file_error(path, std::strerror(errno));
+  }
+  ~ReadOnlyFile() { ::close(fd); }
+  ReadOnlyFile(const ReadOnlyFile&) = delete;
+  ReadOnlyFile& operator=(const ReadOnlyFile&) = delete;
+};
+
 // The spill file's arrays, per point: current (face, uv, distance, normal), best (face, uv, distance), fresh (as
 // current). Each array holds all points, chunk c's at its first point.
 constexpr std::size_t kStateBytes[3] = {4 + 16 + 8 + 24, 4 + 16 + 8, 4 + 16 + 8 + 24};
@@ -541,12 +572,8 @@ constexpr std::size_t kStateBytes[3] = {4 + 16 + 8 + 24, 4 + 16 + 8, 4 + 16 + 8 
 
 PointFileLayout point_file_layout(const std::string& path) {
   PointFileLayout out;
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) file_error(path, std::strerror(errno));
-  struct Closer {
-    int fd;
-    ~Closer() { ::close(fd); }
-  } closer{fd};
+  const ReadOnlyFile file(path);
+  const int fd = file.fd;
   const off_t end = ::lseek(fd, 0, SEEK_END);
   if (end < 0) file_error(path, std::strerror(errno));
   const auto file_size = static_cast<std::size_t>(end);
@@ -673,21 +700,7 @@ FileChunks::~FileChunks() {
 }
 
 std::vector<double> FileChunks::read_points(std::size_t first, std::size_t count) const {
-  const PointFileLayout& l = layout_;
-  std::vector<char> raw(count * l.stride);
-  read_all(fd_, raw.data(), raw.size(), l.offset + first * l.stride, path_);
-  std::vector<double> p(3 * count);
-  for (std::size_t i = 0; i < count; ++i)
-    for (std::size_t c = 0; c < 3; ++c) {
-      const char* at = raw.data() + i * l.stride + l.x_offset[c];
-      if (l.float64) {
-        std::memcpy(&p[3 * i + c], at, 8);
-      } else {
-        float f;
-        std::memcpy(&f, at, 4);
-        p[3 * i + c] = static_cast<double>(f);
-      }
-    }
+  std::vector<double> p = decode_points(fd_, layout_, first, count, path_);
   if (scale_ != 0)
     for (double& v : p) v = std::ldexp(v, -scale_);
   return p;
@@ -748,19 +761,36 @@ void FileChunks::store(std::size_t c, unsigned changed) {
 
 std::vector<double> FileChunks::sample() {
   std::vector<double> out;
-  const bool all = k_ <= sample_points_;
-  // point i is in the sample when mix(i) falls below this share of 2^64
-  const long double share = all ? 1.0L : static_cast<long double>(sample_points_) / static_cast<long double>(k_);
-  const auto below = static_cast<std::uint64_t>(share * 18446744073709551615.0L);
   out.reserve(3 * std::min(k_, sample_points_ + sample_points_ / 16 + 64));
   for (std::size_t c = 0; c < n_chunks(); ++c) {
     poll_interrupt();
     const std::size_t first = c * chunk_points_, count = std::min(chunk_points_, k_ - first);
     const std::vector<double> p = read_points(first, count);
+    const std::vector<char> in = point_sample_mask(first, count, k_, sample_points_);
     for (std::size_t i = 0; i < count; ++i)
-      if (all || mix(first + i) < below) out.insert(out.end(), &p[3 * i], &p[3 * i + 3]);
+      if (in[i]) out.insert(out.end(), &p[3 * i], &p[3 * i + 3]);
   }
   return out;
+}
+
+std::vector<double> read_point_file(const std::string& path, std::size_t first, std::size_t count) {
+  const PointFileLayout layout = point_file_layout(path);
+  if (first > layout.k || count > layout.k - first)
+    throw ParameterError("points " + std::to_string(first) + " .. " + std::to_string(first + count) + " of '" +
+                         path + "': it holds " + std::to_string(layout.k));
+  const ReadOnlyFile file(path);
+  const int fd = file.fd;
+  return decode_points(fd, layout, first, count, path);
+}
+
+std::vector<char> point_sample_mask(std::size_t first, std::size_t count, std::size_t k, std::size_t sample_points) {
+  const bool all = k <= sample_points;
+  // point i is in the sample when mix(i) falls below this share of 2^64
+  const long double share = all ? 1.0L : static_cast<long double>(sample_points) / static_cast<long double>(k);
+  const auto below = static_cast<std::uint64_t>(share * 18446744073709551615.0L);
+  std::vector<char> in(count);
+  for (std::size_t i = 0; i < count; ++i) in[i] = all || mix(first + i) < below;
+  return in;
 }
 
 }  // namespace sorpia

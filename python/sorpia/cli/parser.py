@@ -324,12 +324,17 @@ def build_parser() -> argparse.ArgumentParser:
                      help="read the input's points a chunk at a time, never all in memory (out of core: a binary "
                      "little-endian PLY or a .npy (k, 3) array; needs --cage): auto = when the file holds more than "
                      f"{STREAM_POINTS:,} points")
+    app.add_argument("--scheduler", metavar="ADDRESS",
+                     help="run the fit's chunks of points on the workers of the Dask cluster whose scheduler is at "
+                     "ADDRESS (tcp://host:8786; needs dask.distributed: pip install 'sorpia[dask]'); the result is "
+                     "the one of the same chunks in one process")
     output_flags(app)
     app.set_defaults(func=lambda a: run_approximate(
         a.input, a.output, vertices=a.vertices, cage=a.cage, scheme=a.scheme, sharp_angle=a.sharp_angle,
         report=a.report, surface=a.surface, level=a.level, iterations=a.iterations, tol=a.tol,
         fairness=a.fairness, tangential=a.tangential, method=a.method, boundary=a.boundary, sampling=a.sampling,
-        quiet=a.quiet, force=a.force, prim=a.prim, triangulate=a.triangulate, stream=a.stream)[0])
+        quiet=a.quiet, force=a.force, prim=a.prim, triangulate=a.triangulate, stream=a.stream,
+        scheduler=a.scheduler)[0])
 
     comp = command("compare", "run several methods to one tolerance: the paper's Table 1 and Figure 7",
                    "Run each method on the mesh to the same tolerance and print the paper's Table 1 layout for "
