@@ -134,6 +134,19 @@ def test_closed_client_is_refused():
         sorpia.approximate(P, V, F, client=cl)
 
 
+def test_client_of_a_gone_scheduler_is_refused():
+    P, V, F, _ = noisy_samples(200)
+    c = distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False, dashboard_address=":0",
+                                 scheduler_port=0)
+    cl = distributed.Client(c, set_as_default=False)
+    c.close()  # the scheduler goes; the client is left as it is
+    try:
+        with pytest.raises(ParameterError, match="client = .* is (closed|connecting|closing)"):
+            sorpia.approximate(P, V, F, client=cl)
+    finally:
+        cl.close()
+
+
 def free_port() -> int:
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
