@@ -462,18 +462,24 @@ void bind_approximate(py::module_& m) {
            "(N + mu I + c K) X = rhs by the fitting layer's PCG from `start` (sorpia::NormalEquations::solve):\n"
            "(X, iterations, stop_reason).");
 
+  // Footpoints (face_ids, uv) given for points, checked.
+  const auto given_footpoints = [](const Vertices& points, const FaceIds& face_ids, const Vertices& uv) {
+    check_shape(points, 3, "points");
+    check_shape(uv, 2, "uv");
+    const auto n = static_cast<std::size_t>(points.shape(0));
+    if (face_ids.ndim() != 1 || static_cast<std::size_t>(face_ids.shape(0)) != n ||
+        static_cast<std::size_t>(uv.shape(0)) != n)
+      throw sorpia::ParameterError("face_ids and uv must have one row per point (" + std::to_string(n) + ")");
+    sorpia::Footpoints fp;
+    fp.face_ids = to_vector(face_ids);
+    fp.uv = to_vector(uv);
+    return fp;
+  };
   m.def("refine_footpoints",
-        [](const sorpia::LimitSurface& surface, const sorpia::Topology& topology, const Vertices& points,
-           const FaceIds& face_ids, const Vertices& uv, int max_steps) {
-          check_shape(points, 3, "points");
-          check_shape(uv, 2, "uv");
+        [given_footpoints](const sorpia::LimitSurface& surface, const sorpia::Topology& topology,
+                           const Vertices& points, const FaceIds& face_ids, const Vertices& uv, int max_steps) {
           const auto n = static_cast<std::size_t>(points.shape(0));
-          if (face_ids.ndim() != 1 || static_cast<std::size_t>(face_ids.shape(0)) != n ||
-              static_cast<std::size_t>(uv.shape(0)) != n)
-            throw sorpia::ParameterError("face_ids and uv must have one row per point (" + std::to_string(n) + ")");
-          sorpia::Footpoints fp;
-          fp.face_ids = to_vector(face_ids);
-          fp.uv = to_vector(uv);
+          sorpia::Footpoints fp = given_footpoints(points, face_ids, uv);
           const double* p = points.data();
           {
             LongCall call;
@@ -483,6 +489,38 @@ void bind_approximate(py::module_& m) {
         },
         "surface"_a, "topology"_a, "points"_a.noconvert(), "face_ids"_a.noconvert(), "uv"_a.noconvert(),
         "max_steps"_a);
+
+  m.def("closer_footpoints",
+        [given_footpoints](const sorpia::LimitSurface& surface, const sorpia::Topology& topology,
+                           const Vertices& points, const FaceIds& face_ids, const Vertices& uv, int grid,
+                           int max_steps, int starts) {
+          const auto n = static_cast<std::size_t>(points.shape(0));
+          sorpia::Footpoints fp = given_footpoints(points, face_ids, uv);
+          const double* p = points.data();
+          std::size_t moved = 0;
+          {
+            LongCall call;
+            sorpia::FootpointOptions o = footpoint_options(grid, max_steps);
+            o.starts = starts;
+            const sorpia::FootpointSearch search(surface, topology, o);
+            fp.positions.resize(3 * n);
+            fp.normals.resize(3 * n);
+            fp.distances.resize(n);
+            surface.evaluate(fp.face_ids.data(), fp.uv.data(), n, fp.positions.data(), nullptr, nullptr,
+                             fp.normals.data());
+            for (std::size_t i = 0; i < n; ++i) {
+              double d2 = 0.0;
+              for (std::size_t c = 0; c < 3; ++c) d2 += (p[3 * i + c] - fp.positions[3 * i + c]) * (p[3 * i + c] - fp.positions[3 * i + c]);
+              fp.distances[i] = std::sqrt(d2);
+            }
+            moved = search.closer(p, n, fp);
+          }
+          return py::make_tuple(footpoint_tuple(std::move(fp)), moved);
+        },
+        "surface"_a, "topology"_a, "points"_a.noconvert(), "face_ids"_a.noconvert(), "uv"_a.noconvert(), "grid"_a,
+        "max_steps"_a, "starts"_a,
+        "((face_ids, uv, positions, distances, normals), moved): the footpoints given, evaluated at their (face, uv),\n"
+        "re-searched from the grid samples within their distance (sorpia::FootpointSearch::closer).");
 
   m.def(
       "scale_exponent",
