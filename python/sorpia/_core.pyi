@@ -6,7 +6,7 @@ import collections.abc
 import numpy
 import numpy.typing
 import typing
-__all__: list[str] = ['Boundary', 'INFINITE_SHARPNESS', 'InterpolationResult', 'Interpolator', 'LimitSurface', 'MAX_REFINEMENT_LEVELS', 'MAX_THREADS', 'MeshError', 'MeshFileError', 'Method', 'NormalEquations', 'OmegaRule', 'ParameterError', 'PointIndex', 'Rules', 'Scheme', 'SolveOptions', 'Tags', 'Topology', 'YOUNG_RHO_CLAMP', 'approximate', 'available_memory_bytes', 'blend_weights', 'boundary_name', 'check_ply_per_vertex', 'check_refinement', 'check_writable', 'closer_footpoints', 'closest_points', 'decimate', 'face_list_statistics', 'fair_interpolate', 'fairness_matrix', 'grid', 'icosphere', 'irregular', 'limit_matrix', 'limit_points', 'limit_residual', 'mesh_statistics', 'method_names', 'normal_matrix', 'parse_boundary', 'parse_method', 'parse_omega', 'parse_scheme', 'pole', 'polygon_torus', 'quad_grid', 'quad_irregular', 'quad_torus', 'read_mesh', 'refine_footpoints', 'refine_uniform', 'refinement_bytes', 'regular_valence', 'repair', 'repair_polygons', 'rms_levelled', 'scale_exponent', 'scheme_name', 'sharp_edges', 'split_nonmanifold', 'split_nonmanifold_polygons', 'subface_columns', 'tessellation_bytes', 'torus', 'write_file_atomic', 'write_mesh']
+__all__: list[str] = ['ApproximationChunk', 'Boundary', 'FileChunks', 'FootpointSearch', 'INFINITE_SHARPNESS', 'InMemoryChunks', 'InterpolationResult', 'Interpolator', 'LimitSurface', 'MAX_REFINEMENT_LEVELS', 'MAX_THREADS', 'MeshError', 'MeshFileError', 'Method', 'NormalEquations', 'OmegaRule', 'ParameterError', 'PointChunks', 'PointIndex', 'Rules', 'Scheme', 'SolveOptions', 'Tags', 'Topology', 'YOUNG_RHO_CLAMP', 'approximate', 'available_memory_bytes', 'blend_weights', 'boundary_name', 'check_ply_per_vertex', 'check_refinement', 'check_writable', 'closest_points', 'decimate', 'face_list_statistics', 'fair_interpolate', 'fairness_matrix', 'grid', 'icosphere', 'irregular', 'limit_matrix', 'limit_points', 'limit_residual', 'mesh_statistics', 'method_names', 'normal_matrix', 'parse_boundary', 'parse_method', 'parse_omega', 'parse_scheme', 'point_file_points', 'point_sample_mask', 'pole', 'polygon_torus', 'quad_grid', 'quad_irregular', 'quad_torus', 'read_mesh', 'read_point_file', 'refine_footpoints', 'refine_uniform', 'refinement_bytes', 'regular_valence', 'repair', 'repair_polygons', 'rms_levelled', 'scale_exponent', 'scheme_name', 'sharp_edges', 'split_nonmanifold', 'split_nonmanifold_polygons', 'subface_columns', 'tessellation_bytes', 'torus', 'write_file_atomic', 'write_mesh']
 class MeshError(ValueError):
     """
     The faces or coordinates cannot be used: an index out of range, a repeated
@@ -681,11 +681,77 @@ class NormalEquations:
     @property
     def mu(self) -> float:
         ...
-def approximate(surface: LimitSurface, points: numpy.typing.NDArray[numpy.float64], weights: typing.Any, iterations: typing.SupportsInt | typing.SupportsIndex, tol: typing.SupportsFloat | typing.SupportsIndex, fairness: typing.SupportsFloat | typing.SupportsIndex, tangential: typing.SupportsFloat | typing.SupportsIndex, method: str, solver_tol: typing.SupportsFloat | typing.SupportsIndex, solver_max_iter: typing.SupportsInt | typing.SupportsIndex, grid: typing.SupportsInt | typing.SupportsIndex, newton_steps: typing.SupportsInt | typing.SupportsIndex, report_level: typing.SupportsInt | typing.SupportsIndex, callback: typing.Any, seconds_before: typing.SupportsFloat | typing.SupportsIndex = 0.0) -> dict:
+class FootpointSearch:
     """
-    Approximation's pipeline (sorpia::approximate) from the surface's control vertices: a dict with
-    control_vertices, face_ids, uv, distances, iterations, stop_reason, best_iteration, diagonal, history
-    (records as dicts, seconds counted from seconds_before) and timings; callback(record) after each record.
+    closest_points' search start on one state of a surface, built once and queried per chunk (sorpia::FootpointSearch); keep the surface unchanged while it is used.
+    """
+    def __init__(self, surface: LimitSurface, grid: typing.SupportsInt | typing.SupportsIndex, max_steps: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+class ApproximationChunk:
+    """
+    One chunk of approximation's points: its footpoints and its share of the normal equations (sorpia::ApproximationChunk; CHUNKS-API.md).
+    """
+    def __init__(self, points: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], weights: typing.Any = None, first: typing.SupportsInt | typing.SupportsIndex = 0) -> None:
+        ...
+    def best_footpoints(self) -> tuple[numpy.typing.NDArray[numpy.int32], numpy.typing.NDArray[numpy.float64], numpy.typing.NDArray[numpy.float64]]:
+        ...
+    def extent(self) -> tuple:
+        ...
+    def keep_best(self) -> None:
+        ...
+    def keep_fresh(self, closer: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    def keep_fresh_in_best(self) -> tuple:
+        ...
+    def line_offset(self, mean: typing.Any, axis: typing.Any, diagonal: typing.SupportsFloat | typing.SupportsIndex) -> float:
+        ...
+    def moments(self, center: typing.Any, diagonal: typing.SupportsFloat | typing.SupportsIndex) -> tuple:
+        ...
+    def normal_sums(self, surface: LimitSurface, tangential: typing.SupportsFloat | typing.SupportsIndex) -> tuple:
+        ...
+    def refine(self, surface: LimitSurface, grid: typing.SupportsInt | typing.SupportsIndex, max_steps: typing.SupportsInt | typing.SupportsIndex) -> tuple:
+        ...
+    def scale(self, e: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    def search(self, search: FootpointSearch) -> tuple:
+        ...
+    def search_fresh(self, search: FootpointSearch, closer: typing.SupportsFloat | typing.SupportsIndex) -> tuple:
+        ...
+    @property
+    def first(self) -> int:
+        ...
+    @property
+    def points(self) -> numpy.typing.NDArray[numpy.float64]:
+        ...
+    @property
+    def size(self) -> int:
+        ...
+class PointChunks:
+    """
+    approximation's points as chunks (sorpia::PointChunks), the backend its driver calls: subclass it in Python and implement every method (CHUNKS-API.md); sums may be returned per chunk, as a list, added in its order.
+    """
+    def __init__(self) -> None:
+        ...
+    def size(self) -> int:
+        """
+        the number of points
+        """
+class InMemoryChunks(PointChunks):
+    def __init__(self, surface: LimitSurface, points: numpy.typing.NDArray[numpy.float64], weights: typing.Any, chunk_points: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+class FileChunks(PointChunks):
+    """
+    Points streamed from a binary little-endian PLY or .npy file a chunk at a time, footpoint states spilled to a temporary file in spill_directory (sorpia::FileChunks).
+    """
+    def __init__(self, surface: LimitSurface, path: str, chunk_points: typing.SupportsInt | typing.SupportsIndex, spill_directory: str, sample_points: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+def approximate(surface: LimitSurface, chunks: PointChunks, iterations: typing.SupportsInt | typing.SupportsIndex, tol: typing.SupportsFloat | typing.SupportsIndex, fairness: typing.SupportsFloat | typing.SupportsIndex, tangential: typing.SupportsFloat | typing.SupportsIndex, method: str, solver_tol: typing.SupportsFloat | typing.SupportsIndex, solver_max_iter: typing.SupportsInt | typing.SupportsIndex, grid: typing.SupportsInt | typing.SupportsIndex, newton_steps: typing.SupportsInt | typing.SupportsIndex, report_level: typing.SupportsInt | typing.SupportsIndex, callback: typing.Any, seconds_before: typing.SupportsFloat | typing.SupportsIndex = 0.0, report_each: bool = False) -> dict:
+    """
+    Approximation's pipeline (sorpia::approximate) from the surface's control vertices, over the points of
+    `chunks` (InMemoryChunks, FileChunks or a Python PointChunks): a dict with control_vertices, face_ids, uv,
+    distances, iterations, stop_reason, best_iteration, diagonal, history (records as dicts, seconds counted
+    from seconds_before) and timings; callback(record) after each record. The surface-to-data figures in every
+    record with report_each, else only in the returned iterate's (None in the others).
     """
 def available_memory_bytes() -> int:
     ...
@@ -727,7 +793,8 @@ def fair_interpolate(interpolator: Interpolator, vertices: numpy.typing.NDArray[
     Fair interpolation's pipeline (sorpia::fair_interpolate): the plain solve on the Interpolator's mesh, the
     refinement, K and the fair solve. A dict: plain (InterpolationResult), faces, n_vertices, tags (the fine
     mesh's), refinement (R as CSR arrays, only where the reference metric built it), vertices, energies,
-    energy, start_energy, iterations, stop_reason, max_error and seconds per phase.
+    energy, start_energy, energy_exponent (the energies are in units of 2^energy_exponent), iterations,
+    stop_reason, max_error and seconds per phase.
     """
 def fairness_matrix(topology: Topology, rules: Rules, thin_plate: typing.SupportsFloat | typing.SupportsIndex, membrane: typing.SupportsFloat | typing.SupportsIndex, gauss_points: typing.SupportsInt | typing.SupportsIndex, depth: typing.SupportsInt | typing.SupportsIndex, reuse: bool = True, reference: numpy.typing.NDArray[numpy.float64] | None = None) -> tuple:
     """
@@ -771,6 +838,15 @@ def parse_omega(text: str) -> tuple[OmegaRule, float]:
     """
 def parse_scheme(name: str) -> Scheme:
     ...
+def point_file_points(path: str) -> int:
+    """
+    The number of points of a file FileChunks streams (a binary little-endian PLY's vertices, a .npy (k, 3)
+    array), from its header; FileError (sorpia.MeshFileError) for any other file.
+    """
+def point_sample_mask(first: typing.SupportsInt | typing.SupportsIndex, count: typing.SupportsInt | typing.SupportsIndex, k: typing.SupportsInt | typing.SupportsIndex, sample_points: typing.SupportsInt | typing.SupportsIndex) -> numpy.typing.NDArray[numpy.bool]:
+    """
+    Which of points first .. first + count of k are in FileChunks' fixed sample of about sample_points.
+    """
 def pole(n: typing.SupportsInt | typing.SupportsIndex) -> tuple:
     ...
 def polygon_torus(nu: typing.SupportsInt | typing.SupportsIndex, nv: typing.SupportsInt | typing.SupportsIndex, seed: typing.SupportsInt | typing.SupportsIndex = 1) -> tuple:
@@ -783,6 +859,11 @@ def quad_torus(nu: typing.SupportsInt | typing.SupportsIndex, nv: typing.Support
     ...
 def read_mesh(path: str, triangulate: bool, tags: bool, attributes: bool, points: bool = False) -> tuple[numpy.typing.NDArray[numpy.float64], numpy.typing.NDArray[numpy.int32], typing.Any, int, typing.Any, typing.Any]:
     ...
+def read_point_file(path: str, first: typing.SupportsInt | typing.SupportsIndex, count: typing.SupportsInt | typing.SupportsIndex) -> numpy.typing.NDArray[numpy.float64]:
+    """
+    Points first .. first + count of a file FileChunks streams, (count, 3) float64 (a chunk read where it is
+    used: a Dask worker).
+    """
 def refine_footpoints(surface: LimitSurface, topology: Topology, points: numpy.typing.NDArray[numpy.float64], face_ids: numpy.typing.NDArray[numpy.int32], uv: numpy.typing.NDArray[numpy.float64], max_steps: typing.SupportsInt | typing.SupportsIndex) -> tuple:
     ...
 def refine_uniform(topology: Topology, rules: Rules, levels: typing.SupportsInt | typing.SupportsIndex, vertices: numpy.typing.NDArray[numpy.float64] | None = None, refinement: bool = True) -> dict:

@@ -2,13 +2,15 @@
 
 from __future__ import annotations
 
+import contextlib
 import sys
 import time
 import warnings
 
 import numpy as np
 
-from .. import DecimationWarning, MeshError, __version__, approximate, decimate, limit_surface
+from .. import DecimationWarning, MeshError, MeshFileError, __version__, _core, approximate, decimate, limit_surface
+from .._dask import connect, worker_addresses  # imports dask.distributed only when called
 from .._nonmanifold import NONMANIFOLD_HINT, REPAIR_HINT
 from .._validate import DEFAULT_BOUNDARY, Polygons, resolve_scheme
 from ..approximate import DEFAULT_FAIRNESS, DEFAULT_TOL
@@ -20,6 +22,23 @@ from .progress import Progress
 
 # The data of an input mesh with faces when --sampling is not given (measured in docs/approximation.md).
 DEFAULT_SAMPLING = "vertices"
+# An input of more points than this is streamed (--stream auto): in memory a fit holds about 1 KB per point, so 2^24
+# points would take some 16 GB (docs/approximation.md, "Large data").
+STREAM_POINTS = 1 << 24
+
+
+def _streamed(input_path, stream) -> bool:
+    """Whether the input's points are streamed from the file (sorpia.approximate(path)): --stream yes, or auto and
+    a binary little-endian PLY or .npy of more than STREAM_POINTS points (its header says how many)."""
+    if stream == "no":
+        return False
+    try:
+        count = _core.point_file_points(str(input_path))
+    except MeshFileError as exc:
+        if stream == "yes":
+            raise UserError(f"--stream yes: {exc}") from None
+        return False
+    return stream == "yes" or count > STREAM_POINTS
 
 
 def _cage(input_mesh, vertices, cage, scheme, sharp_angle, source, progress):
@@ -95,31 +114,74 @@ def _n_faces(faces) -> int:
 def run_approximate(input_path, output, *, vertices=None, cage=None, scheme="auto", sharp_angle=None, report=None,
                     surface=None, level=3, iterations=10, tol=DEFAULT_TOL, fairness=DEFAULT_FAIRNESS, tangential=None,
                     method="cg", boundary=None, sampling=None, quiet=False, force=False, out=None, prim=None,
-                    triangulate=False) -> tuple[int, dict]:
+                    triangulate=False, stream="auto", scheduler=None) -> tuple[int, dict]:
     """`sorpia approximate`: returns (exit code, report dict). Every output
     is checked before the work and written atomically after it; an error
     leaves none of them. The cage is written with its scheme, boundary rule
     and tags where the format holds them (a warning where it does not).
     `prim`: the USD input's mesh prim; `triangulate`: the input's polygons
-    split into triangles (for --vertices)."""
+    split into triangles (for --vertices); `stream`: "auto", "yes" or "no"
+    (_streamed: the points read a chunk at a time, never all in memory);
+    `scheduler`: the address of a Dask scheduler whose workers run the fit's
+    chunks (dialled before the input is read; its client closed at the end;
+    a streamed file is read by the workers themselves)."""
     out = out if out is not None else sys.stdout
     if (vertices is None) == (cage is None):
         raise UserError("give the cage: --vertices N (decimate the input) or --cage CAGE (a mesh file), one of them")
     check_mesh_suffix("--cage", cage)
     check_outputs([p for p in (input_path, cage) if p is not None], output, surface, report, force=force)
     timings = {}
+    with _client(scheduler) if scheduler is not None else contextlib.nullcontext() as client:
+        return _run(input_path, output, client, scheduler, timings, vertices=vertices, cage=cage, scheme=scheme,
+                    sharp_angle=sharp_angle, report=report, surface=surface, level=level, iterations=iterations,
+                    tol=tol, fairness=fairness, tangential=tangential, method=method, boundary=boundary,
+                    sampling=sampling, quiet=quiet, out=out, prim=prim, triangulate=triangulate, stream=stream)
+
+
+@contextlib.contextmanager
+def _client(address):
+    """A Client of the Dask scheduler at `address`, closed on leaving; a UserError naming the address when
+    dask.distributed is not installed or no scheduler answers there."""
+    try:
+        client = connect(address)
+    except (ImportError, OSError) as exc:
+        raise UserError(str(exc)) from None
+    try:
+        yield client
+    finally:
+        client.close()
+
+
+def _run(input_path, output, client, scheduler, timings, *, vertices, cage, scheme, sharp_angle, report, surface,
+         level, iterations, tol, fairness, tangential, method, boundary, sampling, quiet, out, prim, triangulate,
+         stream):
+    """run_approximate's work, with its client (or None)."""
     with Progress("approximate", enabled=not quiet) as progress:
-        progress.status(f"reading {input_path}")
         t0 = time.perf_counter()
-        mesh = read_input(input_path, triangulate=triangulate, tags=False, points=True, prim=prim)
+        streamed = _streamed(input_path, stream)
+        if streamed:
+            if cage is None:
+                raise UserError(f"{input_path} is streamed (--stream): --vertices decimates a mesh, which must be in "
+                                "memory; give the cage with --cage CAGE (e.g. decimate a subsample of the points)")
+            if sampling not in (None, "vertices"):
+                raise UserError(f"--sampling {sampling} samples a mesh's faces and {input_path} is streamed: its "
+                                "points are the data as they are (--stream no reads the mesh)")
+            mesh = None
+            points = str(input_path)
+            n_input = _core.point_file_points(points)
+        else:
+            progress.status(f"reading {input_path}")
+            mesh = read_input(input_path, triangulate=triangulate, tags=False, points=True, prim=prim)
+            points = mesh.vertices
+            n_input = len(points)
         timings["read"] = time.perf_counter() - t0
-        points = mesh.vertices
-        if sampling not in (None, "vertices") and len(mesh.faces) == 0:
+        if not streamed and sampling not in (None, "vertices") and len(mesh.faces) == 0:
             raise UserError(f"--sampling {sampling} samples a mesh's faces and {input_path} is a point cloud: "
                             "its points are the data as they are")
-        sampling = sampling or (DEFAULT_SAMPLING if len(mesh.faces) else "vertices")
+        sampling = sampling or (DEFAULT_SAMPLING if not streamed and len(mesh.faces) else "vertices")
         surface_data = {} if sampling == "vertices" else {"faces": mesh.faces, "sampling": sampling}
-        check_float32_outputs(points, {"-o": output, "--surface": surface})
+        if not streamed:
+            check_float32_outputs(points, {"-o": output, "--surface": surface})
         t0 = time.perf_counter()
         cage_v, cage_f, tags, scheme, file_rule, origin, cage_attributes = _cage(mesh, vertices, cage, scheme, sharp_angle,
                                                                 input_path, progress)
@@ -137,7 +199,7 @@ def run_approximate(input_path, output, *, vertices=None, cage=None, scheme="aut
         try:
             res = approximate(points, cage_v, cage_f, scheme=scheme, boundary=rule, iterations=iterations, tol=tol,
                               fairness=fairness, tangential=tangential, method=method, callback=on_iteration,
-                              **surface_data, **tags)
+                              client=client, **surface_data, **tags)
         except MeshError as exc:  # the data were read and checked: what is refused is the cage
             raise _cage_refusal(exc, origin, input_path) from None
         timings["approximate"] = time.perf_counter() - t0
@@ -155,14 +217,16 @@ def run_approximate(input_path, output, *, vertices=None, cage=None, scheme="aut
             write_surface(surface, Vs, Fs)
         timings["write"] = time.perf_counter() - t0
     data = {"sorpia_version": __version__, "command": "approximate", "input": str(input_path),
-            "input_points": int(len(points)), "sampling": sampling, "output": str(output),
+            "input_points": int(n_input), "sampling": sampling, "streamed": streamed, "output": str(output),
             "cage": {**origin, "vertices": int(len(cage_v)), "faces": _n_faces(cage_f)},
             "scheme": scheme, "boundary": rule,
             "tags": {"sharp_angle": sharp_angle, **tags_summary(tags), "written_to_output": list(written.written)},
-            "attributes": attribute_notes, "surface": surface_stats, "report": None if report is None else str(report), **res.report(),
+            "attributes": attribute_notes, "surface": surface_stats,
+            "scheduler": None if client is None else {"address": scheduler, "workers": len(worker_addresses(client))},
+            "report": None if report is None else str(report), **res.report(),
             # the cage as read back from the file against the fitted one (USD stores float32): 0 for OBJ, OFF, PLY
             "written_max_change": float(np.abs(written.vertices - res.control_vertices).max(initial=0.0)),
-            "timings": {**timings, **{f"approximate.{k}": v for k, v in res.timings.items() if k != "cpu"}},
+            "timings": {**timings, **{f"approximate.{k}": v for k, v in res.timings.items() if k not in ("cpu", "cluster")}},
             "cpu_seconds": res.timings["cpu"]}
     if report is not None:
         write_json(report, data)
@@ -207,6 +271,8 @@ def approximate_summary(d: dict) -> str:
         f"  scheme      {SCHEME_LABELS[d['scheme']]}, boundary {d['boundary']}",
         *(f"  {'tags' if j == 0 else '':<12}{line}" for j, line in enumerate(tag_lines)),
         *attribute_lines(d.get("attributes", {})),
+        *([f"  cluster     Dask scheduler {d['scheduler']['address']}, {d['scheduler']['workers']} workers"]
+          if d.get("scheduler") else []),
         f"  update      {d['method']}, {d['iterations']} iterations ({state})",
         f"  data->surf  {_distances(f)}; {given}",
         f"  surf->data  {_distances(f, 'surface_')}",
