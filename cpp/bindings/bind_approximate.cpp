@@ -493,7 +493,7 @@ void bind_approximate(py::module_& m) {
   m.def("closer_footpoints",
         [given_footpoints](const sorpia::LimitSurface& surface, const sorpia::Topology& topology,
                            const Vertices& points, const FaceIds& face_ids, const Vertices& uv, int grid,
-                           int max_steps, int starts) {
+                           int max_steps, int starts, double near) {
           const auto n = static_cast<std::size_t>(points.shape(0));
           sorpia::Footpoints fp = given_footpoints(points, face_ids, uv);
           const double* p = points.data();
@@ -502,6 +502,7 @@ void bind_approximate(py::module_& m) {
             LongCall call;
             sorpia::FootpointOptions o = footpoint_options(grid, max_steps);
             o.starts = starts;
+            o.near = near;
             const sorpia::FootpointSearch search(surface, topology, o);
             fp.positions.resize(3 * n);
             fp.normals.resize(3 * n);
@@ -518,7 +519,7 @@ void bind_approximate(py::module_& m) {
           return py::make_tuple(footpoint_tuple(std::move(fp)), moved);
         },
         "surface"_a, "topology"_a, "points"_a.noconvert(), "face_ids"_a.noconvert(), "uv"_a.noconvert(), "grid"_a,
-        "max_steps"_a, "starts"_a,
+        "max_steps"_a, "starts"_a, "near"_a = 0.1,
         "((face_ids, uv, positions, distances, normals), moved): the footpoints given, evaluated at their (face, uv),\n"
         "re-searched from the grid samples within their distance (sorpia::FootpointSearch::closer).");
 

@@ -6,7 +6,7 @@ import collections.abc
 import numpy
 import numpy.typing
 import typing
-__all__: list[str] = ['ApproximationChunk', 'Boundary', 'FileChunks', 'FootpointSearch', 'INFINITE_SHARPNESS', 'InMemoryChunks', 'InterpolationResult', 'Interpolator', 'LimitSurface', 'MAX_REFINEMENT_LEVELS', 'MAX_THREADS', 'MeshError', 'MeshFileError', 'Method', 'NormalEquations', 'OmegaRule', 'ParameterError', 'PointChunks', 'PointIndex', 'Rules', 'Scheme', 'SolveOptions', 'Tags', 'Topology', 'YOUNG_RHO_CLAMP', 'approximate', 'available_memory_bytes', 'blend_weights', 'boundary_name', 'check_ply_per_vertex', 'check_refinement', 'check_writable', 'closer_footpoints', 'closest_points', 'decimate', 'face_list_statistics', 'fair_interpolate', 'fairness_matrix', 'grid', 'icosphere', 'irregular', 'limit_matrix', 'limit_points', 'limit_residual', 'mesh_statistics', 'method_names', 'normal_matrix', 'parse_boundary', 'parse_method', 'parse_omega', 'parse_scheme', 'point_file_points', 'point_sample_mask', 'pole', 'polygon_torus', 'quad_grid', 'quad_irregular', 'quad_torus', 'read_mesh', 'read_point_file', 'refine_footpoints', 'refine_uniform', 'refinement_bytes', 'regular_valence', 'repair', 'repair_polygons', 'rms_levelled', 'scale_exponent', 'scheme_name', 'sharp_edges', 'split_nonmanifold', 'split_nonmanifold_polygons', 'subface_columns', 'tessellation_bytes', 'torus', 'write_file_atomic', 'write_mesh']
+__all__: list[str] = ['ApproximationChunk', 'Boundary', 'FileChunks', 'FootpointSearch', 'INFINITE_SHARPNESS', 'InMemoryChunks', 'InterpolationResult', 'Interpolator', 'LimitSurface', 'MAX_REFINEMENT_LEVELS', 'MAX_THREADS', 'MeshError', 'MeshFileError', 'Method', 'NormalEquations', 'OmegaRule', 'ParameterError', 'PointChunks', 'PointIndex', 'Rules', 'Scheme', 'SolveOptions', 'Tags', 'Topology', 'YOUNG_RHO_CLAMP', 'approximate', 'available_memory_bytes', 'blend_weights', 'boundary_name', 'check_ply_per_vertex', 'check_refinement', 'check_writable', 'closest_points', 'decimate', 'face_list_statistics', 'fair_interpolate', 'fairness_matrix', 'grid', 'icosphere', 'irregular', 'limit_matrix', 'limit_points', 'limit_residual', 'mesh_statistics', 'method_names', 'normal_matrix', 'parse_boundary', 'parse_method', 'parse_omega', 'parse_scheme', 'point_file_points', 'point_sample_mask', 'pole', 'polygon_torus', 'quad_grid', 'quad_irregular', 'quad_torus', 'read_mesh', 'read_point_file', 'refine_footpoints', 'refine_uniform', 'refinement_bytes', 'regular_valence', 'repair', 'repair_polygons', 'rms_levelled', 'scale_exponent', 'scheme_name', 'sharp_edges', 'split_nonmanifold', 'split_nonmanifold_polygons', 'subface_columns', 'tessellation_bytes', 'torus', 'write_file_atomic', 'write_mesh']
 class MeshError(ValueError):
     """
     The faces or coordinates cannot be used: an index out of range, a repeated
@@ -773,7 +773,7 @@ def check_writable(path: str) -> None:
     """
     Raise MeshFileError naming path when write_file_atomic(path, ...) could not start.
     """
-def closer_footpoints(surface: LimitSurface, topology: Topology, points: numpy.typing.NDArray[numpy.float64], face_ids: numpy.typing.NDArray[numpy.int32], uv: numpy.typing.NDArray[numpy.float64], grid: typing.SupportsInt | typing.SupportsIndex, max_steps: typing.SupportsInt | typing.SupportsIndex, starts: typing.SupportsInt | typing.SupportsIndex) -> tuple[tuple, int]:
+def closer_footpoints(surface: LimitSurface, topology: Topology, points: numpy.typing.NDArray[numpy.float64], face_ids: numpy.typing.NDArray[numpy.int32], uv: numpy.typing.NDArray[numpy.float64], grid: typing.SupportsInt | typing.SupportsIndex, max_steps: typing.SupportsInt | typing.SupportsIndex, starts: typing.SupportsInt | typing.SupportsIndex, near: typing.SupportsFloat | typing.SupportsIndex = 0.1) -> tuple[tuple, int]:
     """
     ((face_ids, uv, positions, distances, normals), moved): the footpoints given, evaluated at their (face, uv),
     re-searched from the grid samples within their distance (sorpia::FootpointSearch::closer).
@@ -793,7 +793,8 @@ def fair_interpolate(interpolator: Interpolator, vertices: numpy.typing.NDArray[
     Fair interpolation's pipeline (sorpia::fair_interpolate): the plain solve on the Interpolator's mesh, the
     refinement, K and the fair solve. A dict: plain (InterpolationResult), faces, n_vertices, tags (the fine
     mesh's), refinement (R as CSR arrays, only where the reference metric built it), vertices, energies,
-    energy, start_energy, iterations, stop_reason, max_error and seconds per phase.
+    energy, start_energy, energy_exponent (the energies are in units of 2^energy_exponent), iterations,
+    stop_reason, max_error and seconds per phase.
     """
 def fairness_matrix(topology: Topology, rules: Rules, thin_plate: typing.SupportsFloat | typing.SupportsIndex, membrane: typing.SupportsFloat | typing.SupportsIndex, gauss_points: typing.SupportsInt | typing.SupportsIndex, depth: typing.SupportsInt | typing.SupportsIndex, reuse: bool = True, reference: numpy.typing.NDArray[numpy.float64] | None = None) -> tuple:
     """

@@ -119,7 +119,7 @@ TEST(FootpointSearch, CloserFindsTheClosestPointWhereTheGridsNearestSampleMisses
   const sorpia::Topology topology(bumpy.cage);
   const sorpia::LimitSurface surface(topology, bumpy.cage.vertices.data(), Scheme::Loop, Boundary::EdgeAndCorner);
   const std::size_t k = bumpy.points.size() / 3;
-  const sorpia::FootpointOptions options{4, 10, 32};
+  const sorpia::FootpointOptions options{4, 10, 8, 0.0};
   const sorpia::FootpointSearch search(surface, topology, options);
   sorpia::Footpoints fp = search.find(bumpy.points.data(), k);
   // find is closest_points, bit for bit.
@@ -155,7 +155,7 @@ TEST(FootpointSearch, CloserRefusesFootpointsThatDisagreeWithThePoints) {
   const sorpia::Mesh cage = sorpia::icosphere(1);
   const sorpia::Topology topology(cage);
   const sorpia::LimitSurface surface(topology, cage.vertices.data(), Scheme::Loop, Boundary::EdgeAndCorner);
-  const sorpia::FootpointSearch search(surface, topology, {4, 10, 8});
+  const sorpia::FootpointSearch search(surface, topology, {4, 10, 8, 0.0});
   const std::vector<double> points = {0.0, 0.0, 2.0, 0.0, 2.0, 0.0};
   sorpia::Footpoints fp = search.find(points.data(), 2);
   fp.distances.pop_back();

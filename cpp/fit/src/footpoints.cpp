@@ -229,15 +229,15 @@ std::size_t PointIndex::least_ranked(const double* q, double bound, double slack
   if (k == 0) return 0;
   // The points taken so far, a max-heap on their rank of at most k; the
   // bound is the k-th one's once k are held.
-  std::vector<std::pair<double, std::uint32_t>> heap;
-  heap.reserve(k + 1);
+  thread_local std::vector<std::pair<double, std::uint32_t>> heap;
+  heap.clear();
   // A box at distance b holds no rank below b - slack.
   const auto box_out = [&](const Node& nd) {
     const double reach = bound + slack;
     return !(reach > 0.0) || box_distance2(nd.lo, nd.hi, q) >= reach * reach;
   };
-  std::vector<std::uint32_t> stack;
-  stack.reserve(64);
+  thread_local std::vector<std::uint32_t> stack;
+  stack.clear();
   stack.push_back(0);
   while (!stack.empty()) {
     const Node& nd = nodes_[stack.back()];
@@ -841,23 +841,34 @@ std::size_t FootpointSearch::closer(const double* points, std::size_t n, Footpoi
   // In batches of points, so that the starts' states stay within a bounded
   // memory.
   constexpr std::size_t kBatch = 65536;
-  std::vector<std::int64_t> candidate(kBatch * starts);
+  std::vector<std::int64_t> candidate(kBatch * (starts + 1));
   std::vector<double> candidate_rank(kBatch * starts);
   std::vector<std::size_t> count(kBatch);
+  std::vector<std::int64_t> nearest_sample(kBatch);
+  std::vector<double> nearest_distance(kBatch);
   for (std::size_t first = 0; first < n; first += kBatch) {
     poll_interrupt();
     const std::size_t b = std::min(kBatch, n - first);
     const int tasks = task_count(b, 4096);
+    index_->nearest(points + 3 * first, b, nearest_sample.data(), nearest_distance.data());
     detail::for_each_index(tasks > 1, tasks, b, [&](std::size_t j) {
       const std::size_t i = first + j;
       const double* x = points + 3 * i;
       const double d = fp.distances[i];
-      // A sample s whose cell may hold a point closer than d: |x - s| -
-      // reach(s) < d, the least of that lower bound first.
-      const auto rank = [&](std::int64_t s, double dist) { return dist - reach_[static_cast<std::size_t>(s)]; };
-      count[j] = d > 0.0 ? index_->least_ranked(x, d, largest_reach_, starts, rank, &candidate[j * starts],
-                                                &candidate_rank[j * starts])
-                         : 0;
+      // The nearest sample, as find starts (its footpoint may be another
+      // than the one given), and for a point not within a fraction of that
+      // sample's reach of its footpoint, the samples whose cells may hold a
+      // point closer than d: |x - s| - reach(s) < d, the least of that lower
+      // bound first.
+      std::int64_t* c = &candidate[j * (starts + 1)];
+      c[0] = nearest_sample[j];
+      count[j] = d > 0.0 ? 1 : 0;
+      const auto u = static_cast<std::size_t>(c[0]);
+      if (!(d > options_.near * reach_[u])) return;  // (false for d = 0)
+      const auto rank = [&](std::int64_t s, double dist) {
+        return s == c[0] ? std::numeric_limits<double>::infinity() : dist - reach_[static_cast<std::size_t>(s)];
+      };
+      count[j] += index_->least_ranked(x, d, largest_reach_, starts, rank, c + 1, &candidate_rank[j * starts]);
     });
     // The starts, one row each: the point repeated, refined from its sample.
     std::vector<std::size_t> row(b + 1, 0);
@@ -872,7 +883,7 @@ std::size_t FootpointSearch::closer(const double* points, std::size_t n, Footpoi
     for (std::size_t j = 0; j < b; ++j)
       for (std::size_t c = 0; c < count[j]; ++c) {
         const std::size_t r = row[j] + c;
-        const auto s = static_cast<std::size_t>(candidate[j * starts + c]);
+        const auto s = static_cast<std::size_t>(candidate[j * (starts + 1) + c]);
         std::copy_n(points + 3 * (first + j), 3, &x[3 * r]);
         nearest[r] = static_cast<std::int64_t>(s);
         trial.face_ids[r] = sample_faces_[s];

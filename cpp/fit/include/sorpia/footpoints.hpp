@@ -79,9 +79,16 @@ struct FootpointOptions {
   int grid = 4;
   /// Gauss-Newton steps on (u, v) at most, per point.
   int max_steps = 20;
-  /// Starts per point at most of FootpointSearch::closer's re-search (0:
-  /// none).
+  /// Starts per point at most of FootpointSearch::closer's re-search from
+  /// the samples near a closer point (0: none).
   int starts = 8;
+  /// FootpointSearch::closer re-searches from those samples only the points
+  /// whose distance exceeds `near` times the reach of their nearest grid
+  /// sample (0: every point off the surface). A point nearer is refined from
+  /// that sample alone (as find); a closer point it misses lies on a fold of
+  /// the surface within about that distance, finer than the grid. 0 is the
+  /// exhaustive search (about 8 times find's cost), 0.1 about twice find's.
+  double near = 0.1;
 };
 
 /// The closest point of the limit surface to each of n points: start at the
@@ -119,13 +126,17 @@ class FootpointSearch {
   /// its face (the largest distance from s to its neighbours in the grid),
   /// so a surface point closer to x than its footpoint (distance d) lies
   /// within reach(s) of a sample s with |x - s| - reach(s) < d: those are
-  /// the candidate starts. Up to options.starts of them, least |x - s| -
-  /// reach(s) first, are refined (refine_footpoints from the sample, at
-  /// least 50 steps) and the closest result replaces the footpoint where it
-  /// is closer. Costs one bounded k-d tree query per point, and a
-  /// refinement per start (a point near the surface has a few, those of its
-  /// footpoint's grid cell and its neighbours). Each point's result depends
-  /// on that point alone; no distance increases.
+  /// the candidate starts. The point's nearest sample (find's start) and up
+  /// to options.starts candidates, least |x - s| - reach(s) first (for a
+  /// point farther than options.near times its nearest sample's reach),
+  /// are refined (refine_footpoints from the sample, at least 100 steps)
+  /// and the closest result replaces the footpoint where it is closer.
+  /// Cost: a k-d tree query per point and a refinement per start. With
+  /// near = 0 a point has about 5 to 8 starts (its footpoint's own grid
+  /// cell and its neighbours pass the bound too); with near = 0.1, on a
+  /// fit's footpoints, about 1.05.
+  /// Each point's result depends on that point alone; no distance
+  /// increases.
   /// @param points      row-major (n, 3), finite
   /// @param footpoints  face_ids, uv and distances of n points on this
   ///                    search's surface (as find or refine_footpoints give
