@@ -76,6 +76,7 @@ py::dict record_dict(const sorpia::ApproximationRecord& r, double offset) {
   d["max_relative"] = r.max_relative;
   d["surface_rms_relative"] = r.surface_rms_relative;
   d["surface_max_relative"] = r.surface_max_relative;
+  d["robust_scale"] = r.robust_scale;
   d["solver_iterations"] = r.solver_iterations;
   d["seconds"] = r.seconds + offset;
   return d;
@@ -286,7 +287,8 @@ void bind_approximate(py::module_& m) {
       "approximate",
       [](sorpia::LimitSurface& surface, const Vertices& points, const py::object& weights, int iterations, double tol,
          double fairness, double tangential, const std::string& method, double solver_tol, long long solver_max_iter,
-         int grid, int newton_steps, int report_level, const py::object& callback, double seconds_before) {
+         int grid, int newton_steps, int report_level, const py::object& callback, double seconds_before,
+         const std::string& robust, double robust_quantile, double robust_c) {
         check_shape(points, 3, "points");
         const auto k = static_cast<std::size_t>(points.shape(0));
         Vertices w;
@@ -307,6 +309,9 @@ void bind_approximate(py::module_& m) {
         o.solver_max_iter = solver_max_iter;
         o.footpoints = footpoint_options(grid, newton_steps);
         o.report_level = report_level;
+        o.robust.loss = sorpia::robust_loss(robust);
+        o.robust.quantile = robust_quantile;
+        o.robust.c = robust_c;
         sorpia::ApproximationProgress progress;
         if (!callback.is_none())
           progress = [&callback, seconds_before](const sorpia::ApproximationRecord& r) {
@@ -329,6 +334,8 @@ void bind_approximate(py::module_& m) {
         out["stop_reason"] = r.stop_reason;
         out["best_iteration"] = r.best_iteration;
         out["diagonal"] = r.diagonal;
+        out["robust_scale"] = r.robust_scale;
+        out["robust_outliers"] = r.robust_outliers;
         out["history"] = history;
         py::dict timings = timings_dict(r.seconds);
         timings["cpu"] = timings_dict(r.cpu_seconds);
@@ -337,9 +344,11 @@ void bind_approximate(py::module_& m) {
       },
       "surface"_a, "points"_a.noconvert(), "weights"_a, "iterations"_a, "tol"_a, "fairness"_a, "tangential"_a,
       "method"_a, "solver_tol"_a, "solver_max_iter"_a, "grid"_a, "newton_steps"_a, "report_level"_a, "callback"_a,
-      "seconds_before"_a = 0.0,
+      "seconds_before"_a = 0.0, "robust"_a = sorpia::robust_loss_name(sorpia::RobustOptions{}.loss),
+      "robust_quantile"_a = sorpia::RobustOptions{}.quantile, "robust_c"_a = sorpia::RobustOptions{}.c,
       "Approximation's pipeline (sorpia::approximate) from the surface's control vertices: a dict with\n"
-      "control_vertices, face_ids, uv, distances, iterations, stop_reason, best_iteration, diagonal, history\n"
+      "control_vertices, face_ids, uv, distances, iterations, stop_reason, best_iteration, diagonal, robust_scale,\n"
+      "robust_outliers, history\n"
       "(records as dicts, seconds counted from seconds_before) and timings; callback(record) after each record.");
 }
 

@@ -681,10 +681,11 @@ class NormalEquations:
     @property
     def mu(self) -> float:
         ...
-def approximate(surface: LimitSurface, points: numpy.typing.NDArray[numpy.float64], weights: typing.Any, iterations: typing.SupportsInt | typing.SupportsIndex, tol: typing.SupportsFloat | typing.SupportsIndex, fairness: typing.SupportsFloat | typing.SupportsIndex, tangential: typing.SupportsFloat | typing.SupportsIndex, method: str, solver_tol: typing.SupportsFloat | typing.SupportsIndex, solver_max_iter: typing.SupportsInt | typing.SupportsIndex, grid: typing.SupportsInt | typing.SupportsIndex, newton_steps: typing.SupportsInt | typing.SupportsIndex, report_level: typing.SupportsInt | typing.SupportsIndex, callback: typing.Any, seconds_before: typing.SupportsFloat | typing.SupportsIndex = 0.0) -> dict:
+def approximate(surface: LimitSurface, points: numpy.typing.NDArray[numpy.float64], weights: typing.Any, iterations: typing.SupportsInt | typing.SupportsIndex, tol: typing.SupportsFloat | typing.SupportsIndex, fairness: typing.SupportsFloat | typing.SupportsIndex, tangential: typing.SupportsFloat | typing.SupportsIndex, method: str, solver_tol: typing.SupportsFloat | typing.SupportsIndex, solver_max_iter: typing.SupportsInt | typing.SupportsIndex, grid: typing.SupportsInt | typing.SupportsIndex, newton_steps: typing.SupportsInt | typing.SupportsIndex, report_level: typing.SupportsInt | typing.SupportsIndex, callback: typing.Any, seconds_before: typing.SupportsFloat | typing.SupportsIndex = 0.0, robust: str = 'tukey', robust_quantile: typing.SupportsFloat | typing.SupportsIndex = 0.9, robust_c: typing.SupportsFloat | typing.SupportsIndex = 30.0) -> dict:
     """
     Approximation's pipeline (sorpia::approximate) from the surface's control vertices: a dict with
-    control_vertices, face_ids, uv, distances, iterations, stop_reason, best_iteration, diagonal, history
+    control_vertices, face_ids, uv, distances, iterations, stop_reason, best_iteration, diagonal, robust_scale,
+    robust_outliers, history
     (records as dicts, seconds counted from seconds_before) and timings; callback(record) after each record.
     """
 def available_memory_bytes() -> int:

@@ -79,6 +79,11 @@ DEFAULT_FAIRNESS = 3e-4
 # The stopping rule's default: the blend goes on lowering the RMS distance by a few parts in a thousand per
 # iteration on noisy data long after the surface has settled (fitting the noise); the scans' fits fall faster.
 DEFAULT_TOL = 3e-3
+# The robust fit (docs/approximation.md, "Robustness"): the loss, and per loss the scale's quantile of the
+# distances and the tuning constant c in units of that scale (the core's RobustOptions).
+ROBUST_LOSSES = ("none", "cauchy", "tukey")
+DEFAULT_ROBUST = "tukey"
+_ROBUST_SCALE = {"none": (0.9, 1.0), "cauchy": (0.9, 12.0), "tukey": (0.9, 30.0)}
 # The stopping rule's window (the core's ApproximationOptions::window), for `_levelled`.
 _WINDOW = 3
 
@@ -145,6 +150,14 @@ class ApproximationResult:
     mesh : sorpia.SubdivisionMesh or None
         The fitted cage: the control vertices on the cage's faces, with its
         scheme, boundary rule and tags.
+    robust : str
+        The robust loss that ran ("none": least squares).
+    robust_scale : float
+        The scale s of the returned iterate's distances (0 with "none"); the
+        records' ``robust_scale`` the scale of each iteration's.
+    robust_outliers : int
+        The points farther than c s from the returned surface (with "tukey":
+        the points that did not pull on it).
 
     `rms` and `max_error` (the largest distance of a data point to the
     returned surface; ``max_distance`` until this release, a deprecated
@@ -168,6 +181,9 @@ class ApproximationResult:
     history: list = field(default_factory=list)
     timings: dict = field(default_factory=dict)
     mesh: Optional[SubdivisionMesh] = None
+    robust: str = "none"
+    robust_scale: float = 0.0
+    robust_outliers: int = 0
 
     @property
     def converged(self) -> bool:
@@ -205,6 +221,7 @@ class ApproximationResult:
                 "rms": self.rms, "max_error": self.max_error, "seconds": self.seconds,
                 "best_iteration": self.best_iteration, "method": self.method,
                 "fairness": self.fairness, "tangential": self.tangential, "diagonal": self.diagonal,
+                "robust": self.robust, "robust_scale": self.robust_scale, "robust_outliers": self.robust_outliers,
                 "n_points": int(self.distances.shape[0]),
                 "n_control_vertices": int(self.control_vertices.shape[0]),
                 "final": {k: v for k, v in last.items() if k not in ("iteration", "seconds")},
@@ -320,7 +337,7 @@ def approximate(points, cage_vertices, cage_faces=None, *, scheme: str = DEFAULT
                 method: str = DEFAULT_UPDATE, solver_tol: float = 1e-3,
                 solver_max_iter: int = 2000, grid: int = 4, newton_steps: int = 10, report_level: int = 2,
                 callback: Optional[Callable[[dict], object]] = None, weights=None, faces=None,
-                sampling: Optional[str] = None) -> ApproximationResult:
+                sampling: Optional[str] = None, robust: str = DEFAULT_ROBUST) -> ApproximationResult:
     """Control vertices of a cage whose limit surface approximates `points`
     in the least-squares sense (the module docstring describes the method).
 
@@ -405,6 +422,18 @@ def approximate(points, cage_vertices, cage_faces=None, *, scheme: str = DEFAULT
         With `faces` (None means "area"): "area", the vertices weighted by
         their share of the area; "midpoints", the edges' midpoints likewise.
         Refused without `faces`.
+    robust : {"tukey", "cauchy", "none"}
+        Iteratively reweighted least squares against outliers: before each
+        update every point's weight is multiplied by a factor of its
+        distance d to the surface, w(d / (c s)), s the 90th percentile of
+        the distances (by weight) and c a constant: "tukey" (the default,
+        c = 30), Tukey's biweight (1 - r^2)^2, 0 for d beyond c s: such a
+        point does not pull at all; "cauchy" (c = 12), 1 / (1 + r^2): the
+        pull of a far point falls as 1 / d; "none": least squares. The
+        iterate returned and the stop rule then go by the loss's RMS
+        (``sqrt(sum_i w_i rho(d_i) / k)``), not the RMS distance of all the
+        points (the records still give that). On clean data the default
+        fits as least squares does (docs/approximation.md, "Robustness").
 
     Returns
     -------
@@ -434,6 +463,8 @@ def approximate(points, cage_vertices, cage_faces=None, *, scheme: str = DEFAULT
     grid = _count(grid, "grid", "an integer in 1..64")
     newton_steps = _count(newton_steps, "newton_steps", "an integer >= 1")
     report_level = _count(report_level, "report_level", "an integer in 0..15")
+    if not isinstance(robust, str):
+        raise ParameterError(f"robust = {robust!r} must be one of {', '.join(ROBUST_LOSSES)}")
     if not isinstance(method, str):
         raise ParameterError(f"method = {method!r} must be one of {', '.join(UPDATE_METHODS)}")
     if callback is not None and not callable(callback):
@@ -458,7 +489,7 @@ def approximate(points, cage_vertices, cage_faces=None, *, scheme: str = DEFAULT
                            corners=corners, holes=holes)
     out = _core.approximate(surface._surface, points, weights, iterations, tol, fairness, tangential, method,
                             solver_tol, solver_max_iter, grid, newton_steps, report_level, callback,
-                            time.perf_counter() - t0)
+                            time.perf_counter() - t0, robust, *_ROBUST_SCALE.get(robust, (0.5, 1.0)))
     out["timings"]["total"] = time.perf_counter() - t0
     out["timings"]["cpu"]["total"] = time.process_time() - c0
     V = out["control_vertices"]
@@ -467,6 +498,8 @@ def approximate(points, cage_vertices, cage_faces=None, *, scheme: str = DEFAULT
                                iterations=out["iterations"], stop_reason=out["stop_reason"],
                                best_iteration=out["best_iteration"], method=method, fairness=fairness,
                                tangential=tangential, diagonal=out["diagonal"], history=out["history"],
+                               robust=robust, robust_scale=out["robust_scale"],
+                               robust_outliers=out["robust_outliers"],
                                timings=out["timings"],
                                mesh=SubdivisionMesh(V, cage_faces, scheme=scheme, boundary=boundary,
                                                     creases=creases, corners=corners, holes=holes))

@@ -150,6 +150,10 @@ void check_options(const ApproximationOptions& o) {
   if (o.window < 1) throw ParameterError("window = " + std::to_string(o.window) + " must be >= 1");
   nonnegative(o.exact, "exact");
   nonnegative(o.closer, "closer");
+  if (!(o.robust.quantile > 0 && o.robust.quantile < 1))
+    throw ParameterError("robust_quantile = " + detail::repr(o.robust.quantile) + " must be in (0, 1)");
+  if (!(std::isfinite(o.robust.c) && o.robust.c > 0))
+    throw ParameterError("robust_c = " + detail::repr(o.robust.c) + " must be a finite number > 0");
 }
 
 // y (n, 3) = A^T x for A (k, n) and x (k, 3): row by row of A in order, each entry's product added to its
@@ -360,6 +364,22 @@ ApproximationResult approximate(LimitSurface& surface, const double* points, std
     for (std::size_t i = 0; i < k; ++i) squares[i] = weights ? weights[i] * (d[i] * d[i]) : d[i] * d[i];
     return std::sqrt(pairwise_sum(squares.data(), k) / static_cast<double>(k));
   };
+  // The robust fit (sorpia/robust.hpp): the scale of a state's distances, the factors of the points' weights in
+  // the next update (fit_w: the caller's weights times them), and the criterion that picks the iterate returned
+  // and stops the run (the RMS distance without a robust loss).
+  const bool robust = options.robust.loss != RobustLoss::None;
+  const double scale_floor = 1e-13 * unit;  // the data on the surface to rounding: no point is an outlier
+  const auto robust_scale_of = [&](const std::vector<double>& d) {
+    DistanceHistogram histogram(unit);
+    histogram.add(d.data(), weights, k);
+    return robust_scale(histogram, options.robust, scale_floor);
+  };
+  std::vector<double> fit_w;
+  const auto criterion = [&](const std::vector<double>& d) {
+    if (!robust) return rms(d);
+    return std::sqrt(robust_loss_sum(options.robust, robust_scale_of(d), d.data(), weights, k) /
+                     static_cast<double>(k));
+  };
   std::unique_ptr<PointIndex> data_index;
   std::vector<std::int64_t> nearest;
   std::vector<double> near_distance;
@@ -397,6 +417,7 @@ ApproximationResult approximate(LimitSurface& surface, const double* points, std
     rec.max = std::ldexp(rec.max, e);
     rec.surface_rms = std::ldexp(rec.surface_rms, e);
     rec.surface_max = std::ldexp(rec.surface_max, e);
+    if (robust) rec.robust_scale = std::ldexp(robust_scale_of(distances), e);
     rec.solver_iterations = solver_iterations;
     rec.seconds = seconds_since(t0);
     out.history.push_back(rec);
@@ -416,7 +437,7 @@ ApproximationResult approximate(LimitSurface& surface, const double* points, std
     std::vector<std::int32_t> face_ids;
     std::vector<double> uv, distances;
     int iteration;
-  } best{rms(feet.distances), V, feet.face_ids, feet.uv, feet.distances, 0};
+  } best{criterion(feet.distances), V, feet.face_ids, feet.uv, feet.distances, 0};
   std::vector<double> bests{best.rms};  // the lowest RMS so far, after each iteration
 
   CsrMatrix K;
@@ -437,10 +458,18 @@ ApproximationResult approximate(LimitSurface& surface, const double* points, std
   std::vector<std::size_t> order(k);
   std::vector<std::int32_t> face_o(k);
   std::vector<double> uv_o(2 * k), points_o(3 * k), normals_o(3 * k), w_o, wp(3 * k), w6;
-  if (weights) w_o.resize(k);
+  if (weights || robust) w_o.resize(k);
+  const double* fit_weights = weights;  // the points' weights in the updates
   if (blend) w6.resize(6 * k);
   for (int it = 1; it <= options.iterations; ++it) {
     poll_interrupt();
+    if (robust) {
+      fit_w.resize(k);
+      robust_factors(options.robust, robust_scale_of(feet.distances), feet.distances.data(), k, fit_w.data());
+      if (weights)
+        for (std::size_t i = 0; i < k; ++i) fit_w[i] *= weights[i];
+      fit_weights = fit_w.data();
+    }
     // The rows in face order: the points of a face share their columns, which the normal matrix reads once.
     std::iota(order.begin(), order.end(), std::size_t{0});
     std::stable_sort(order.begin(), order.end(),
@@ -464,18 +493,18 @@ ApproximationResult approximate(LimitSurface& surface, const double* points, std
             points_o[3 * i + c] = points[3 * o + c];
             normals_o[3 * i + c] = feet.normals[3 * o + c];
           }
-          if (weights) w_o[i] = weights[o];
+          if (fit_weights) w_o[i] = fit_weights[o];
         }
         const double* w = nullptr;
         int count = 0;
         if (blend) {
-          blend_weights(points_o.data(), normals_o.data(), weights ? w_o.data() : nullptr, k, options.tangential,
+          blend_weights(points_o.data(), normals_o.data(), fit_weights ? w_o.data() : nullptr, k, options.tangential,
                         w6.data(), wp.data());
           w = w6.data();
           count = 6;
         } else {
-          for (std::size_t i = 0; i < 3 * k; ++i) wp[i] = weights ? w_o[i / 3] * points_o[i] : points_o[i];
-          if (weights) {
+          for (std::size_t i = 0; i < 3 * k; ++i) wp[i] = fit_weights ? w_o[i / 3] * points_o[i] : points_o[i];
+          if (fit_weights) {
             w = w_o.data();
             count = 1;
           }
@@ -495,10 +524,10 @@ ApproximationResult approximate(LimitSurface& surface, const double* points, std
         for (std::size_t i = 0; i < k; ++i) {
           const std::size_t o = order[i];
           for (std::size_t c = 0; c < 3; ++c) points_o[3 * i + c] = points[3 * o + c];
-          if (weights) w_o[i] = weights[o];
+          if (fit_weights) w_o[i] = fit_weights[o];
         }
-        for (std::size_t i = 0; i < 3 * k; ++i) wp[i] = weights ? w_o[i / 3] * points_o[i] : points_o[i];
-        NormalMatrix N = normal_matrix(A, weights ? w_o.data() : nullptr, weights ? 1 : 0);
+        for (std::size_t i = 0; i < 3 * k; ++i) wp[i] = fit_weights ? w_o[i / 3] * points_o[i] : points_o[i];
+        NormalMatrix N = normal_matrix(A, fit_weights ? w_o.data() : nullptr, fit_weights ? 1 : 0);
         Sparse ata;
         ata.n = N.n;
         ata.indptr = std::move(N.indptr);
@@ -537,7 +566,7 @@ ApproximationResult approximate(LimitSurface& surface, const double* points, std
     }));
     done = it;
     const ApproximationRecord rec = record(it, feet.distances, used);
-    const double current = rms(feet.distances);
+    const double current = criterion(feet.distances);
     if (current <= best.rms) best = Best{current, V, feet.face_ids, feet.uv, feet.distances, it};
     bests.push_back(best.rms);
     if (rec.rms_relative <= options.exact) {
@@ -557,7 +586,7 @@ ApproximationResult approximate(LimitSurface& surface, const double* points, std
       closer[i] = fresh.distances[i] < feet.distances[i] - options.closer * unit;
       merged[i] = closer[i] ? fresh.distances[i] : feet.distances[i];
     }
-    if (rms(merged) < (1 - options.tol) * current) {
+    if (criterion(merged) < (1 - options.tol) * current) {
       for (std::size_t i = 0; i < k; ++i)
         if (closer[i]) {
           feet.face_ids[i] = fresh.face_ids[i];
@@ -598,6 +627,7 @@ ApproximationResult approximate(LimitSurface& surface, const double* points, std
     rec.max_relative = m / unit;
     rec.rms = std::ldexp(r, e);
     rec.max = std::ldexp(m, e);
+    if (robust) rec.robust_scale = std::ldexp(robust_scale_of(best.distances), e);
   }
   // The iterate of the lowest RMS distance (an update that raised it is not returned).
   out.iterations = done;
@@ -607,6 +637,11 @@ ApproximationResult approximate(LimitSurface& surface, const double* points, std
   surface.set_vertices(out.control_vertices.data());
   out.footpoints.face_ids = std::move(best.face_ids);
   out.footpoints.uv = std::move(best.uv);
+  if (robust) {
+    const double s = robust_scale_of(best.distances);
+    for (double d : best.distances) out.robust_outliers += d > options.robust.c * s;
+    out.robust_scale = std::ldexp(s, e);
+  }
   out.footpoints.distances = std::move(best.distances);
   detail::scale_pow2(out.footpoints.distances.data(), out.footpoints.distances.size(), e);
   out.diagonal = std::ldexp(diagonal, e);

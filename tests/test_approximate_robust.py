@@ -1,0 +1,138 @@
+"""The robust fit of sorpia.approximate (issue 33, item 15): outliers and
+duplicates do not move the cage far from where the rest of the data puts it,
+and on clean data the robust fit is the plain one. Every comparison is with
+the fit of the same cage to the clean points alone, measured on the limit
+surfaces themselves (their level-2 tessellations, vertex by vertex: the same
+cage's faces give the same tessellation), over the clean points' diagonal;
+the plain least-squares fit (robust="none") of the same data must fail the
+bound that the robust fit meets, so each test can fail."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+
+import sorpia
+from sorpia import shapes
+from sorpia.approximate import approximate
+
+
+def diagonal(p):
+    return float(np.linalg.norm(p.max(0) - p.min(0)))
+
+
+def noisy_torus(seed: int = 1):
+    """Points of a torus (radii 1, 0.4; 48 x 24 vertices) displaced along the normal by Gaussian noise of 1e-3
+    of the diagonal, and a torus cage of a quarter as many vertices (24 x 12) to fit them with, as decimation gives."""
+    v, _ = shapes.torus(48, 24)
+    ring = v.copy()
+    ring[:, 2] = 0
+    ring /= np.linalg.norm(ring, axis=1, keepdims=True)
+    n = (v - ring) / np.linalg.norm(v - ring, axis=1, keepdims=True)
+    rng = np.random.default_rng(seed)
+    p = v + n * rng.normal(scale=1e-3 * diagonal(v), size=(len(v), 1))
+    cv, cf = shapes.torus(24, 12)
+    return p, cv, np.asarray(cf)
+
+
+def gap(a, b, faces, diag):
+    """The largest distance between two fits' limit surfaces of the same cage faces, / diag."""
+    ta, _ = sorpia.limit_surface(a.control_vertices, faces, 2)
+    tb, _ = sorpia.limit_surface(b.control_vertices, faces, 2)
+    return float(np.linalg.norm(ta - tb, axis=1).max()) / diag
+
+
+def with_outliers(p, fraction, seed):
+    """`fraction` of the points moved 0.1 to 2 diagonals along random directions; (points, inlier mask)."""
+    rng = np.random.default_rng(seed)
+    k = max(1, round(fraction * len(p)))
+    idx = rng.choice(len(p), k, replace=False)
+    u = rng.normal(size=(k, 3))
+    u /= np.linalg.norm(u, axis=1, keepdims=True)
+    q = p.copy()
+    q[idx] += u * rng.uniform(0.1, 2.0, size=(k, 1)) * diagonal(p)
+    inlier = np.ones(len(p), bool)
+    inlier[idx] = False
+    return q, inlier
+
+
+def test_on_clean_data_the_robust_fit_is_the_plain_one():
+    # Tukey's factors of points within a few times the 90th percentile of the distances are 1 to within
+    # 2 (d / (c s))^2, c = 30: the robust fit of clean data moves its surface by less than 1e-4 of the diagonal
+    # from the plain fit's (the noise is 1e-3) and its RMS distance is the plain one's within 0.1%.
+    p, cv, cf = noisy_torus()
+    diag = diagonal(p)
+    plain = approximate(p, cv, cf, robust="none")
+    robust = approximate(p, cv, cf)
+    assert robust.robust == "tukey" and plain.robust == "none"
+    assert gap(robust, plain, cf, diag) < 1e-4
+    assert abs(robust.rms / plain.rms - 1) < 1e-3
+    assert robust.robust_outliers == 0  # no clean point lies beyond c s
+    assert plain.robust_scale == 0 and robust.robust_scale > 0
+
+
+@pytest.mark.parametrize("loss", ["cauchy", "tukey"])
+def test_far_outliers_do_not_move_the_surface(loss):
+    # 1% of the points moved 0.1 to 2 diagonals away: the plain fit's surface goes out to them (more than 0.1 of
+    # the diagonal from the fit of the other points alone), the robust fit's stays within 5e-3 of the diagonal of
+    # it (the noise is 1e-3; the outliers nearest the surface pull in the first updates, while the scale of the
+    # distances to the cage as given puts them within c s), its RMS distance of the inliers within 1% of that fit's, and it counts the outliers
+    # beyond c s.
+    p, cv, cf = noisy_torus()
+    diag = diagonal(p)
+    q, inlier = with_outliers(p, 0.01, 2)
+    clean = approximate(p[inlier], cv, cf, robust=loss)
+    plain = approximate(q, cv, cf, robust="none")
+    robust = approximate(q, cv, cf, robust=loss)
+    assert gap(plain, clean, cf, diag) > 0.1
+    assert gap(robust, clean, cf, diag) < 5e-3
+    inlier_rms = np.sqrt(np.mean(robust.distances[inlier] ** 2))
+    assert inlier_rms < 1.01 * clean.rms
+    assert robust.robust_outliers >= (~inlier).sum()
+
+
+def test_five_points_at_fifty_radii_among_642():
+    # The issue's case: a sphere's 642 points, 5 of them moved to 50 times the radius. The plain fit's cage
+    # reaches out (its extent grows tenfold and more); the robust fit's surface stays within 1e-3 of the
+    # diagonal of the fit without them.
+    v, _ = shapes.icosphere(3)
+    v = v / np.linalg.norm(v, axis=1, keepdims=True)
+    cv, cf = shapes.icosphere(1)
+    cf = np.asarray(cf)
+    q = v.copy()
+    far = np.random.default_rng(3).choice(len(v), 5, replace=False)
+    q[far] *= 50.0
+    keep = np.setdiff1d(np.arange(len(v)), far)
+    clean = approximate(v[keep], cv, cf)
+    plain = approximate(q, cv, cf, robust="none")
+    robust = approximate(q, cv, cf)
+    assert diagonal(plain.control_vertices) > 10 * diagonal(v)
+    assert gap(robust, clean, cf, 2.0) < 1e-3
+    assert robust.robust_outliers == 5
+
+
+def test_duplicates_of_one_point_do_not_pull_the_surface():
+    # 2% more points, all copies of one point 0.2 diagonals off the torus: least squares bulges the surface
+    # towards them (more than 0.15 of the diagonal); the robust fit's surface stays within 0.02 of the diagonal of
+    # the clean fit. Not closer: the first update weighs the points by the distances to the cage as given, whose
+    # scale (and so cut, c s) lets the copies pull until the surface has come closer to the other points.
+    p, cv, cf = noisy_torus()
+    diag = diagonal(p)
+    clean = approximate(p, cv, cf)
+    i = 100
+    off = p[i] + 0.2 * diag * (p[i] - p.mean(0)) / np.linalg.norm(p[i] - p.mean(0))
+    q = np.vstack([p, np.repeat(off[None], round(0.02 * len(p)), axis=0)])
+    plain = approximate(q, cv, cf, robust="none")
+    robust = approximate(q, cv, cf)
+    assert gap(plain, clean, cf, diag) > 0.15
+    assert gap(robust, clean, cf, diag) < 0.02
+
+
+def test_robust_is_checked():
+    p, cv, cf = noisy_torus()
+    with pytest.raises(sorpia.ParameterError, match=r"robust = 'huber' must be one of none, cauchy, tukey"):
+        approximate(p, cv, cf, robust="huber")
+    with pytest.raises(sorpia.ParameterError, match="robust = 1 must be one of"):
+        approximate(p, cv, cf, robust=1)
