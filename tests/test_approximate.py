@@ -5,6 +5,7 @@ and points sampled from a known cage's limit surface."""
 import json
 import subprocess
 import sys
+import warnings
 
 import numpy as np
 import pytest
@@ -533,7 +534,9 @@ def test_a_fit_that_converges_stops_early_and_says_why(scheme):
     g = np.linspace(-1, 1, 15)
     X, Y = np.meshgrid(g, g)
     P = np.c_[X.ravel(), Y.ravel(), np.ones(X.size)]
-    r = approximate(P, V, F, scheme=scheme, iterations=60, fairness=0.0)
+    with warnings.catch_warnings():  # the cube's other faces, which no point holds, fly off at fairness 0 (Loop)
+        warnings.filterwarnings("ignore", "the fitted surface strays", sorpia.SorpiaWarning)
+        r = approximate(P, V, F, scheme=scheme, iterations=60, fairness=0.0)
     assert r.converged and r.stop_reason in ("converged", "exact") and r.iterations < 20
     assert r.rms < 1e-9 * r.diagonal
     assert r.rms == r.history[r.best_iteration]["rms"] == min(h["rms"] for h in r.history)

@@ -136,3 +136,21 @@ def test_robust_is_checked():
         approximate(p, cv, cf, robust="huber")
     with pytest.raises(sorpia.ParameterError, match="robust = 1 must be one of"):
         approximate(p, cv, cf, robust=1)
+
+
+def test_a_surface_that_strays_from_the_data_is_warned_about():
+    # Points on a cap of a sphere (a fifth of it), a cage of the whole sphere, no fairness and the tangent
+    # distance alone: nothing holds the cage away from the cap, and its surface flies off more than the
+    # diagonal of the data, which a SorpiaWarning names; with the default fairness it stays, and no warning.
+    v, _ = shapes.icosphere(3)
+    v = v / np.linalg.norm(v, axis=1, keepdims=True)
+    p = v[v[:, 2] > 0.6]
+    cv, cf = shapes.icosphere(2)
+    with pytest.warns(sorpia.SorpiaWarning, match=r"strays from the data: its farthest point lies [\d.]+ of the "
+                                                  r"diagonal .* raise fairness \(now 0\)"):
+        r = approximate(p, cv, cf, fairness=0.0, tangential=0.0, robust="none")
+    assert r.history[r.best_iteration]["surface_max_relative"] > 1.0
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", sorpia.SorpiaWarning)
+        r = approximate(p, cv, cf)
+    assert r.history[r.best_iteration]["surface_max_relative"] <= 1.0

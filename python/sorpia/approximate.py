@@ -64,7 +64,7 @@ from . import _core
 from ._mesh import SubdivisionMesh, mesh_arguments
 from ._scipy import CSRMatrix
 from ._validate import DEFAULT_BOUNDARY, DEFAULT_SCHEME, as_integer, as_polygons, as_real, as_vertices, resolve_scheme
-from .errors import MeshError, ParameterError
+from .errors import MeshError, ParameterError, SorpiaWarning
 from .surface import LimitSurface
 
 UPDATE_METHODS = ("cg", "lspia")
@@ -84,6 +84,9 @@ DEFAULT_TOL = 3e-3
 ROBUST_LOSSES = ("none", "cauchy", "tukey")
 DEFAULT_ROBUST = "tukey"
 _ROBUST_SCALE = {"none": (0.9, 1.0), "cauchy": (0.9, 12.0), "tukey": (0.9, 30.0)}
+# A fitted surface whose farthest point lies farther than this (in diagonals) from the data is warned about: it
+# strays between points that do not hold the cage (e.g. fairness 0 with a cage as fine as the data).
+_STRAY = 1.0
 # The stopping rule's window (the core's ApproximationOptions::window), for `_levelled`.
 _WINDOW = 3
 
@@ -493,6 +496,13 @@ def approximate(points, cage_vertices, cage_faces=None, *, scheme: str = DEFAULT
     out["timings"]["total"] = time.perf_counter() - t0
     out["timings"]["cpu"]["total"] = time.process_time() - c0
     V = out["control_vertices"]
+    final = out["history"][out["best_iteration"]]
+    if final["surface_max_relative"] > _STRAY:
+        warnings.warn(f"the fitted surface strays from the data: its farthest point lies "
+                      f"{final['surface_max_relative']:.3g} of the diagonal from the nearest data point (the "
+                      f"data -> surface RMS is {final['rms_relative']:.3g} of the diagonal); where points do not hold "
+                      f"the cage, raise fairness (now {fairness:g}) or give a lighter cage", SorpiaWarning,
+                      stacklevel=2)
     return ApproximationResult(control_vertices=V, face_ids=out["face_ids"], uv=out["uv"],
                                distances=out["distances"], points=points, weights=weights,
                                iterations=out["iterations"], stop_reason=out["stop_reason"],

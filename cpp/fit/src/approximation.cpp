@@ -368,7 +368,9 @@ ApproximationResult approximate(LimitSurface& surface, const double* points, std
   // the next update (fit_w: the caller's weights times them), and the criterion that picks the iterate returned
   // and stops the run (the RMS distance without a robust loss).
   const bool robust = options.robust.loss != RobustLoss::None;
-  const double scale_floor = 1e-13 * unit;  // the data on the surface to rounding: no point is an outlier
+  // Distances below 1e-5 of the diagonal never make a point an outlier: on data the surface reaches to rounding
+  // the scale would fall with the fit and cut the points that converge last.
+  const double scale_floor = 1e-5 * unit;
   const auto robust_scale_of = [&](const std::vector<double>& d) {
     DistanceHistogram histogram(unit);
     histogram.add(d.data(), weights, k);
