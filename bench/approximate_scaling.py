@@ -11,6 +11,14 @@ diagonal, seed 1) whose vertices are the data points; its cage, `sorpia.decimate
 phase, the iterations, the final RMS and max distance over the diagonal, and the peak resident memory; the plot
 (log-log, with a dashed line of slope 1) the phases and the memory against N. Writes
 docs/benchmarks/approximate-scaling.md and its plot (unless --no-page). Nothing here runs under pytest.
+
+Out of core (--out-of-core N1,N2,..., rows of their own, --ooc-json): N points streamed from a binary PLY
+(float32 x, y, z) that is never in memory whole. The data: samples of a known limit surface (a torus cage of
+--ooc-cage vertices, moved along its normals by a smooth wave of 2% of its tube radius) at uniform random (face,
+u, v), plus Gaussian noise of 1e-3 of the diagonal, written a million points at a time into --ooc-dir (deleted
+after the run unless --keep); the fit starts from the torus cage without the wave, `sorpia.approximate(path,
+...)` with its defaults and --chunk-points points per chunk, in a process of its own (its peak resident memory is
+that of the fit alone, the file's writing done in another).
 """
 
 from __future__ import annotations
@@ -31,8 +39,9 @@ from _report import PAGES, print_json_plot, write_page  # noqa: E402
 PHASES = ("decimate", "footpoints", "rows", "normal", "solve", "report")
 
 
-def noisy_torus(n: int):
-    """A torus of about n vertices (nu = 2.5 nv), displaced along its normals by noise of 1e-3 of the diagonal."""
+def torus(n: int):
+    """A torus of about n vertices (nu = 2.5 nv; major radius 1), its faces, its vertices' unit normals (from the
+    ring through the tube's centre) and their distance from that ring."""
     import sorpia
 
     nv = max(3, round(np.sqrt(n / 2.5)))
@@ -41,7 +50,13 @@ def noisy_torus(n: int):
     ring[:, 2] = 0
     ring /= np.linalg.norm(ring, axis=1, keepdims=True)
     normal = v - ring
-    normal /= np.linalg.norm(normal, axis=1, keepdims=True)
+    tube = np.linalg.norm(normal, axis=1, keepdims=True)
+    return v, f, normal / tube, tube
+
+
+def noisy_torus(n: int):
+    """A torus of about n vertices, displaced along its normals by noise of 1e-3 of the diagonal."""
+    v, f, normal, _ = torus(n)
     diag = np.linalg.norm(v.max(0) - v.min(0))
     return v + normal * np.random.default_rng(1).normal(scale=1e-3 * diag, size=(len(v), 1)), f
 
@@ -64,6 +79,82 @@ def one(n: int, fraction: float) -> dict:
             **{k: float(timings.get(k, 0.0)) for k in PHASES[1:]}, "approximate": total,
             "iterations": result.iterations, "rms": last["rms_relative"], "max": last["max_relative"],
             "peak_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}
+
+
+def wave_torus(n_cage: int):
+    """The out-of-core benchmark's cages: a torus cage of about n_cage vertices (Loop), and the known one whose
+    limit surface the data samples, moved along the torus's normals by a smooth wave of 2% of the tube radius."""
+    v, f, normal, tube = torus(n_cage)
+    tube = tube.mean()
+    theta = np.arctan2(v[:, 1], v[:, 0])
+    phi = np.arctan2(v[:, 2], np.linalg.norm(v[:, :2], axis=1) - 1.0)  # the torus of major radius 1
+    known = v + normal * (0.02 * tube * np.sin(5 * theta) * np.cos(3 * phi))[:, None]
+    return v, known, f
+
+
+def write_samples(path: str, n: int, n_cage: int, block: int = 1 << 20) -> float:
+    """n noisy samples of wave_torus's known limit surface as a binary little-endian PLY of float32 x, y, z,
+    written a block at a time (never n points in memory). Returns the seconds taken."""
+    from sorpia.surface import LimitSurface
+
+    t0 = time.perf_counter()
+    _, known, f = wave_torus(n_cage)
+    surface = LimitSurface(known, f, scheme="loop")
+    diag = np.linalg.norm(known.max(0) - known.min(0))
+    rng = np.random.default_rng(7)
+    with open(path, "wb") as fh:
+        fh.write(("ply\nformat binary_little_endian 1.0\n"
+                  f"element vertex {n}\nproperty float x\nproperty float y\nproperty float z\nend_header\n").encode())
+        for start in range(0, n, block):
+            m = min(block, n - start)
+            fid = rng.integers(0, surface.n_faces, m).astype(np.int32)
+            uv = rng.random((m, 2))
+            flip = uv.sum(axis=1) > 1
+            uv[flip] = 1 - uv[flip]
+            p = surface.evaluate(fid, uv) + rng.normal(scale=1e-3 * diag / np.sqrt(3), size=(m, 3))
+            fh.write(p.astype("<f4").tobytes())
+    return time.perf_counter() - t0
+
+
+def one_out_of_core(path: str, n_cage: int, chunk_points: int, iterations: int) -> dict:
+    """The streamed fit of the points of `path`, in this process."""
+    import sorpia
+
+    v, _, f = wave_torus(n_cage)
+    t0 = time.perf_counter()
+    result = sorpia.approximate(path, v, f, chunk_points=chunk_points, iterations=iterations)
+    total = time.perf_counter() - t0
+    best = result.history[result.best_iteration]
+    return {"points": result.n_points, "cage": len(v), "chunk_points": chunk_points, "max_iterations": iterations,
+            **{k: float(result.timings.get(k, 0.0)) for k in PHASES[1:]}, "approximate": total,
+            "iterations": result.iterations, "stop_reason": result.stop_reason, "rms": best["rms_relative"],
+            "max": best["max_relative"], "surface_rms": best["surface_rms_relative"],
+            "peak_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+            "file_mb": os.path.getsize(path) / 2**20}
+
+
+def out_of_core_rows(sizes, n_cage: int, chunk_points: int, directory: str, keep: bool, iterations: int) -> list:
+    rows = []
+    for n in sizes:
+        path = os.path.join(directory, f"sorpia-ooc-{n}.ply")
+        if not os.path.exists(path):
+            print(f"writing {n:,} points to {path}", file=sys.stderr)
+            made = subprocess.run([sys.executable, __file__, "--write-samples", path, "--ooc-cage", str(n_cage),
+                                   "--points", str(n)], capture_output=True, text=True)
+            if made.returncode != 0:
+                print(f"{n} points: writing failed: {made.stderr.strip()[-2000:]}", file=sys.stderr)
+                break
+        out = subprocess.run([sys.executable, __file__, "--one-ooc", path, "--ooc-cage", str(n_cage),
+                              "--chunk-points", str(chunk_points), "--iterations", str(iterations)],
+                             capture_output=True, text=True)
+        if not keep:
+            os.remove(path)
+        if out.returncode != 0:
+            print(f"{n} points out of core: failed: {out.stderr.strip()[-2000:]}", file=sys.stderr)
+            break
+        rows.append(json.loads(out.stdout.strip().splitlines()[-1]))
+        print(rows[-1], file=sys.stderr)
+    return rows
 
 
 def draw(rows, path):
@@ -98,7 +189,35 @@ def main(argv=None):
     p.add_argument("--no-page", action="store_true", help="print only; do not write the page")
     p.add_argument("--from-json", metavar="PATH", help="rows measured earlier (a --json file), before the new ones")
     p.add_argument("--one", type=int, help=argparse.SUPPRESS)  # a child: one size, JSON on stdout
+    p.add_argument("--out-of-core", metavar="N1,N2", help="streamed rows instead: points per PLY (module docstring)")
+    p.add_argument("--ooc-cage", type=int, default=50000, help="cage vertices of the out-of-core rows")
+    p.add_argument("--chunk-points", type=int, default=1 << 20, help="points per chunk of the out-of-core rows")
+    p.add_argument("--ooc-dir", default="/tmp", help="where the out-of-core rows' PLY files are written")
+    p.add_argument("--ooc-json", metavar="PATH", help="append the out-of-core rows to this JSON list")
+    p.add_argument("--keep", action="store_true", help="keep the out-of-core PLY files")
+    p.add_argument("--iterations", type=int, default=10, help="iterations at most of the out-of-core rows' fits")
+    p.add_argument("--write-samples", metavar="PATH", help=argparse.SUPPRESS)  # a child: write one PLY
+    p.add_argument("--points", type=int, help=argparse.SUPPRESS)
+    p.add_argument("--one-ooc", metavar="PATH", help=argparse.SUPPRESS)  # a child: one streamed fit
     a = p.parse_args(argv)
+    if a.write_samples:
+        print(json.dumps({"seconds": write_samples(a.write_samples, a.points, a.ooc_cage)}))
+        return
+    if a.one_ooc:
+        print(json.dumps(one_out_of_core(a.one_ooc, a.ooc_cage, a.chunk_points, a.iterations)))
+        return
+    if a.out_of_core:
+        rows = out_of_core_rows([int(x) for x in a.out_of_core.split(",") if x], a.ooc_cage, a.chunk_points,
+                                a.ooc_dir, a.keep, a.iterations)
+        if a.ooc_json:
+            old = []
+            if os.path.exists(a.ooc_json):
+                with open(a.ooc_json) as fh:
+                    old = json.load(fh)
+            with open(a.ooc_json, "w") as fh:
+                json.dump(old + rows, fh, indent=1)
+        print(json.dumps(rows, indent=1))
+        return
     if a.one:
         print(json.dumps(one(a.one, a.fraction)))
         return

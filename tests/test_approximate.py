@@ -641,9 +641,9 @@ def test_unreferenced_cage_vertex_is_no_point_of_the_surface():
     # (before, a vertex 100 diagonals away put surface -> data at 34 diagonals).
     V, F = sorpia.shapes.icosphere(1)
     P, _ = sorpia.limit_surface(V * 1.05, F, level=2)
-    plain = approximate(P, V, F, iterations=2)
+    plain = approximate(P, V, F, iterations=2, report_each=True)
     with pytest.warns(sorpia.UnreferencedVerticesWarning):
-        extra = approximate(P, np.vstack([V, [[100.0, 0, 0]]]), F, iterations=2)
+        extra = approximate(P, np.vstack([V, [[100.0, 0, 0]]]), F, iterations=2, report_each=True)
     # The cage as given: the same surface, the same figures (to rounding). After an update the fits differ a
     # little (the extra vertex's empty row lowers the mean diagonal that scales the fairness and proximal terms),
     # the surface's distances stay those of a surface fitted to the points.

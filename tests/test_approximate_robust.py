@@ -154,3 +154,17 @@ def test_a_surface_that_strays_from_the_data_is_warned_about():
         warnings.simplefilter("error", sorpia.SorpiaWarning)
         r = approximate(p, cv, cf)
     assert r.history[r.best_iteration]["surface_max_relative"] <= 1.0
+
+
+def test_the_robust_fit_over_chunks_is_the_fit_of_one_array():
+    # The scale is a histogram of all the chunks' distances merged (the same counts however the points are cut)
+    # and the loss's sums are added in the chunks' order: cut into chunks of 100 points, the robust fit of data
+    # with outliers returns the same cage as the one-array fit to 1e-10 of the diagonal, and the same outliers.
+    p, cv, cf = noisy_torus()
+    q, _ = with_outliers(p, 0.01, 2)
+    one = approximate(q, cv, cf)
+    cut = approximate(q, cv, cf, chunk_points=100)
+    assert cut.iterations == one.iterations and cut.best_iteration == one.best_iteration
+    assert np.abs(cut.control_vertices - one.control_vertices).max() <= 1e-10 * diagonal(q)
+    assert cut.robust_outliers == one.robust_outliers > 0
+    assert abs(cut.robust_scale - one.robust_scale) <= 1e-10 * one.robust_scale

@@ -5,11 +5,15 @@
 // translation only.
 #include <pybind11/stl.h>
 
+#include <array>
+#include <memory>
+
 #include "bindings.hpp"
 #include "sorpia/approximation.hpp"
 #include "sorpia/detail/scaling.hpp"
 #include "sorpia/footpoints.hpp"
 #include "sorpia/normal_matrix.hpp"
+#include "sorpia/point_chunks.hpp"
 
 namespace sorpia_py {
 using namespace pybind11::literals;
@@ -70,12 +74,14 @@ py::dict record_dict(const sorpia::ApproximationRecord& r, double offset) {
   d["iteration"] = r.iteration;
   d["rms"] = r.rms;
   d["max"] = r.max;
-  d["surface_rms"] = r.surface_rms;
-  d["surface_max"] = r.surface_max;
+  // The surface-to-data figures of a record where they were not measured (report_each off): None.
+  const auto measured = [](double v) -> py::object { return std::isnan(v) ? py::object(py::none()) : py::float_(v); };
+  d["surface_rms"] = measured(r.surface_rms);
+  d["surface_max"] = measured(r.surface_max);
   d["rms_relative"] = r.rms_relative;
   d["max_relative"] = r.max_relative;
-  d["surface_rms_relative"] = r.surface_rms_relative;
-  d["surface_max_relative"] = r.surface_max_relative;
+  d["surface_rms_relative"] = measured(r.surface_rms_relative);
+  d["surface_max_relative"] = measured(r.surface_max_relative);
   d["robust_scale"] = r.robust_scale;
   d["solver_iterations"] = r.solver_iterations;
   d["seconds"] = r.seconds + offset;
@@ -99,6 +105,218 @@ sorpia::FootpointOptions footpoint_options(int grid, int max_steps) {
   o.max_steps = max_steps;
   return o;
 }
+
+// The Python forms of the chunks' sums (CHUNKS-API.md): DistanceSums as (squares, max, count, changed), NormalSums
+// as (indptr, indices, values, rhs), PointExtent as (count, weighted, lo, hi, largest), PointMoments as (count,
+// sum, sum2). A backend written in Python may return one of them or a list of them, one per chunk: the list is
+// added in its order (sorpia::add), as the core's backends add their chunks'.
+// k points' weights (None: null), converted into `holder`, which must outlive the pointer.
+const double* point_weights(const py::object& weights, std::size_t k, Vertices& holder) {
+  if (weights.is_none()) return nullptr;
+  holder = weights.cast<Vertices>();
+  if (holder.ndim() != 1 || static_cast<std::size_t>(holder.shape(0)) != k)
+    throw sorpia::ParameterError("weights must have one entry per point");
+  return holder.data();
+}
+
+py::tuple distance_tuple(const sorpia::DistanceSums& d) {
+  return py::make_tuple(d.squares, d.max, d.count, d.changed);
+}
+
+template <class T, class One>
+T fold(const py::handle& obj, One one) {
+  if (py::isinstance<py::list>(obj)) {
+    T total;
+    for (const auto& item : obj.cast<py::list>()) add(total, one(item));
+    return total;
+  }
+  return one(obj);
+}
+
+sorpia::DistanceSums to_distance_sums(const py::handle& obj) {
+  return fold<sorpia::DistanceSums>(obj, [](const py::handle& h) {
+    const auto t = h.cast<py::tuple>();
+    if (t.size() < 3 || t.size() > 4)
+      throw sorpia::ParameterError("distance sums must be (squares, max, count[, changed]), got " +
+                                   std::to_string(t.size()) + " items");
+    sorpia::DistanceSums d;
+    d.squares = t[0].cast<double>();
+    d.max = t[1].cast<double>();
+    d.count = t[2].cast<std::size_t>();
+    d.changed = t.size() > 3 ? t[3].cast<std::size_t>() : 0;
+    return d;
+  });
+}
+
+py::tuple normal_tuple(sorpia::NormalSums&& s) {
+  const int nb = s.matrix.blocks;
+  return py::make_tuple(to_numpy(std::move(s.matrix.indptr), 0), to_numpy(std::move(s.matrix.indices), 0),
+                        to_numpy(std::move(s.matrix.values), nb), to_numpy(std::move(s.rhs), 3));
+}
+
+sorpia::NormalSums to_normal_sums(const py::handle& obj) {
+  return fold<sorpia::NormalSums>(obj, [](const py::handle& h) {
+    const auto t = h.cast<py::tuple>();
+    if (t.size() != 4) throw sorpia::ParameterError("normal sums must be (indptr, indices, values, rhs)");
+    sorpia::NormalSums s;
+    const auto indptr = t[0].cast<py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>>();
+    const auto indices = t[1].cast<py::array_t<std::int32_t, py::array::c_style | py::array::forcecast>>();
+    const auto values = t[2].cast<py::array_t<double, py::array::c_style | py::array::forcecast>>();
+    const auto rhs = t[3].cast<py::array_t<double, py::array::c_style | py::array::forcecast>>();
+    if (indptr.ndim() != 1 || indptr.shape(0) < 1 || indices.ndim() != 1)
+      throw sorpia::ParameterError("normal sums: indptr and indices must be one-dimensional");
+    const auto n = static_cast<std::size_t>(indptr.shape(0)) - 1;
+    const auto nnz = static_cast<std::size_t>(indices.shape(0));
+    const auto nb = values.ndim() == 2 ? static_cast<std::size_t>(values.shape(1)) : 1;
+    if ((nb != 1 && nb != 6) || static_cast<std::size_t>(values.size()) != nnz * nb ||
+        static_cast<std::size_t>(rhs.size()) != 3 * n || indptr.data()[0] != 0 ||
+        static_cast<std::size_t>(indptr.data()[n]) != nnz)
+      throw sorpia::ParameterError("normal sums: indptr, indices, values ((nnz, 1 or 6)) and rhs ((n, 3)) disagree");
+    for (std::size_t r = 0; r < n; ++r) {
+      if (indptr.data()[r + 1] < indptr.data()[r])
+        throw sorpia::ParameterError("normal sums: indptr decreases");
+      for (auto p = indptr.data()[r]; p < indptr.data()[r + 1]; ++p) {
+        const auto q = static_cast<std::size_t>(p);
+        if (indices.data()[q] < 0 || static_cast<std::size_t>(indices.data()[q]) >= n ||
+            (p > indptr.data()[r] && indices.data()[q] <= indices.data()[q - 1]))
+          throw sorpia::ParameterError("normal sums: row " + std::to_string(r) +
+                                       " has a column out of range or out of order");
+      }
+    }
+    s.matrix.n = n;
+    s.matrix.blocks = static_cast<int>(nb);
+    s.matrix.indptr.assign(indptr.data(), indptr.data() + n + 1);
+    s.matrix.indices.assign(indices.data(), indices.data() + nnz);
+    s.matrix.values.assign(values.data(), values.data() + nnz * nb);
+    s.rhs.assign(rhs.data(), rhs.data() + 3 * n);
+    return s;
+  });
+}
+
+py::tuple extent_tuple(const sorpia::PointExtent& e) {
+  return py::make_tuple(e.count, e.weighted, py::make_tuple(e.lo[0], e.lo[1], e.lo[2]),
+                        py::make_tuple(e.hi[0], e.hi[1], e.hi[2]), e.largest);
+}
+
+sorpia::PointExtent to_extent(const py::handle& obj) {
+  return fold<sorpia::PointExtent>(obj, [](const py::handle& h) {
+    const auto t = h.cast<py::tuple>();
+    if (t.size() != 5) throw sorpia::ParameterError("an extent must be (count, weighted, lo, hi, largest)");
+    sorpia::PointExtent e;
+    e.count = t[0].cast<std::size_t>();
+    e.weighted = t[1].cast<std::size_t>();
+    const auto lo = t[2].cast<std::vector<double>>(), hi = t[3].cast<std::vector<double>>();
+    if (lo.size() != 3 || hi.size() != 3) throw sorpia::ParameterError("an extent's lo and hi must have 3 items");
+    for (int c = 0; c < 3; ++c) {
+      e.lo[c] = lo[static_cast<std::size_t>(c)];
+      e.hi[c] = hi[static_cast<std::size_t>(c)];
+    }
+    e.largest = t[4].cast<double>();
+    return e;
+  });
+}
+
+py::tuple moments_tuple(const sorpia::PointMoments& m) {
+  std::vector<double> s(m.sum, m.sum + 3), s2(m.sum2, m.sum2 + 9);
+  return py::make_tuple(m.count, to_numpy(std::move(s), 0), to_numpy(std::move(s2), 3));
+}
+
+sorpia::PointMoments to_moments(const py::handle& obj) {
+  return fold<sorpia::PointMoments>(obj, [](const py::handle& h) {
+    const auto t = h.cast<py::tuple>();
+    if (t.size() != 3) throw sorpia::ParameterError("moments must be (count, sum (3), sum2 (3, 3))");
+    sorpia::PointMoments m;
+    m.count = t[0].cast<std::size_t>();
+    const auto s = t[1].cast<py::array_t<double, py::array::c_style | py::array::forcecast>>();
+    const auto s2 = t[2].cast<py::array_t<double, py::array::c_style | py::array::forcecast>>();
+    if (s.size() != 3 || s2.size() != 9) throw sorpia::ParameterError("moments: sum (3) and sum2 (3, 3)");
+    std::copy_n(s.data(), 3, m.sum);
+    std::copy_n(s2.data(), 9, m.sum2);
+    return m;
+  });
+}
+
+std::array<double, 3> triple(const py::handle& h, const char* name) {
+  const auto v = h.cast<std::vector<double>>();
+  if (v.size() != 3) throw sorpia::ParameterError(std::string(name) + " must have 3 items");
+  return {v[0], v[1], v[2]};
+}
+
+// The trampoline of PointChunks: a Python subclass is a backend the C++ driver calls (the driver runs without the
+// GIL; each call takes it).
+class PyPointChunks : public sorpia::PointChunks {
+ public:
+  std::size_t size() override { PYBIND11_OVERRIDE_PURE(std::size_t, sorpia::PointChunks, size, ); }
+  void scale(int e) override { PYBIND11_OVERRIDE_PURE(void, sorpia::PointChunks, scale, e); }
+  void keep_best() override { PYBIND11_OVERRIDE_PURE(void, sorpia::PointChunks, keep_best, ); }
+  void keep_fresh(double closer) override { PYBIND11_OVERRIDE_PURE(void, sorpia::PointChunks, keep_fresh, closer); }
+  sorpia::PointExtent extent() override { py::gil_scoped_acquire gil;
+    return to_extent(call_locked("extent")); }
+  sorpia::PointMoments moments(const double center[3], double diagonal) override {
+    py::gil_scoped_acquire gil;
+    return to_moments(call_locked("moments", py::make_tuple(center[0], center[1], center[2]), diagonal));
+  }
+  double line_offset(const double mean[3], const double axis[3], double diagonal) override {
+    py::gil_scoped_acquire gil;
+    const py::object r = call_locked("line_offset", py::make_tuple(mean[0], mean[1], mean[2]),
+                              py::make_tuple(axis[0], axis[1], axis[2]), diagonal);
+    if (py::isinstance<py::list>(r)) {
+      double off = 0.0;
+      for (const auto& v : r.cast<py::list>()) off = std::max(off, v.cast<double>());
+      return off;
+    }
+    return r.cast<double>();
+  }
+  void set_control_vertices(const double* vertices, std::size_t n) override {
+    py::gil_scoped_acquire gil;
+    std::vector<double> v(vertices, vertices + 3 * n);
+    call_locked("set_control_vertices", to_numpy(std::move(v), 3));
+  }
+  sorpia::DistanceSums search(const sorpia::FootpointOptions& o) override {
+    py::gil_scoped_acquire gil;
+    return to_distance_sums(call_locked("search", o.grid, o.max_steps));
+  }
+  sorpia::DistanceSums refine(const sorpia::FootpointOptions& o) override {
+    py::gil_scoped_acquire gil;
+    return to_distance_sums(call_locked("refine", o.grid, o.max_steps));
+  }
+  sorpia::DistanceSums search_fresh(const sorpia::FootpointOptions& o, double closer) override {
+    py::gil_scoped_acquire gil;
+    return to_distance_sums(call_locked("search_fresh", o.grid, o.max_steps, closer));
+  }
+  sorpia::DistanceSums keep_fresh_in_best() override { py::gil_scoped_acquire gil;
+    return to_distance_sums(call_locked("keep_fresh_in_best")); }
+  sorpia::NormalSums normal_sums(double tangential) override { py::gil_scoped_acquire gil;
+    return to_normal_sums(call_locked("normal_sums", tangential)); }
+  std::vector<double> sample() override {
+    py::gil_scoped_acquire gil;
+    const auto a = call_locked("sample").cast<Vertices>();
+    check_shape(a, 3, "sample()");
+    return to_vector(a);
+  }
+  sorpia::Footpoints best_footpoints() override {
+    py::gil_scoped_acquire gil;
+    const py::object r = call_locked("best_footpoints");
+    sorpia::Footpoints f;
+    if (r.is_none()) return f;
+    const auto t = r.cast<py::tuple>();
+    if (t.size() != 3) throw sorpia::ParameterError("best_footpoints() must return (face_ids, uv, distances) or None");
+    f.face_ids = to_vector(t[0].cast<FaceIds>());
+    f.uv = to_vector(t[1].cast<Vertices>());
+    f.distances = to_vector(t[2].cast<Vertices>());
+    return f;
+  }
+
+ private:
+  // The Python override of `name` called with the GIL held (held by the caller).
+  template <class... Args>
+  py::object call_locked(const char* name, Args&&... args) {
+    const py::function f = py::get_override(static_cast<const sorpia::PointChunks*>(this), name);
+    if (!f) throw sorpia::ParameterError(std::string("PointChunks.") + name + " is not implemented");
+    return f(std::forward<Args>(args)...);
+  }
+};
+
 }  // namespace
 
 void bind_approximate(py::module_& m) {
@@ -283,20 +501,134 @@ void bind_approximate(py::module_& m) {
   m.def("rms_levelled", &sorpia::rms_levelled, "bests"_a, "tol"_a, "window"_a,
         "approximation's stop test on the lowest RMS after each iteration (sorpia::rms_levelled).");
 
+  py::class_<sorpia::FootpointSearch>(m, "FootpointSearch",
+                                      "closest_points' search start on one state of a surface, built once and "
+                                      "queried per chunk (sorpia::FootpointSearch); keep the surface unchanged "
+                                      "while it is used.")
+      .def(py::init([](const sorpia::LimitSurface& surface, int grid, int max_steps) {
+             LongCall call;
+             return std::make_unique<sorpia::FootpointSearch>(surface, surface.topology(),
+                                                              footpoint_options(grid, max_steps));
+           }),
+           "surface"_a, "grid"_a, "max_steps"_a, py::keep_alive<1, 2>());
+
+  py::class_<sorpia::ApproximationChunk>(m, "ApproximationChunk",
+                                         "One chunk of approximation's points: its footpoints and its share of "
+                                         "the normal equations (sorpia::ApproximationChunk; CHUNKS-API.md).")
+      .def(py::init([](const Vertices& points, const py::object& weights, std::size_t first) {
+             check_shape(points, 3, "points");
+             const auto k = static_cast<std::size_t>(points.shape(0));
+             Vertices w;
+             const double* wd = point_weights(weights, k, w);
+             return sorpia::ApproximationChunk(points.data(), k, wd, first);
+           }),
+           "points"_a, "weights"_a = py::none(), "first"_a = 0)
+      .def_property_readonly("size", &sorpia::ApproximationChunk::size)
+      .def_property_readonly("first", &sorpia::ApproximationChunk::first)
+      .def_property_readonly("points", [](const sorpia::ApproximationChunk& c) { return to_numpy(c.points(), 3); })
+      .def("extent", [](const sorpia::ApproximationChunk& c) { return extent_tuple(c.extent()); })
+      .def("scale", &sorpia::ApproximationChunk::scale, "e"_a)
+      .def("moments",
+           [](const sorpia::ApproximationChunk& c, const py::object& center, double diagonal) {
+             const auto x = triple(center, "center");
+             return moments_tuple(c.moments(x.data(), diagonal));
+           },
+           "center"_a, "diagonal"_a)
+      .def("line_offset",
+           [](const sorpia::ApproximationChunk& c, const py::object& mean, const py::object& axis, double diagonal) {
+             const auto x = triple(mean, "mean"), u = triple(axis, "axis");
+             return c.line_offset(x.data(), u.data(), diagonal);
+           },
+           "mean"_a, "axis"_a, "diagonal"_a)
+      .def("search",
+           [](sorpia::ApproximationChunk& c, const sorpia::FootpointSearch& s) {
+             sorpia::DistanceSums d;
+             {
+               LongCall call;
+               d = c.search(s);
+             }
+             return distance_tuple(d);
+           },
+           "search"_a)
+      .def("refine",
+           [](sorpia::ApproximationChunk& c, const sorpia::LimitSurface& surface, int grid, int max_steps) {
+             sorpia::DistanceSums d;
+             {
+               LongCall call;
+               d = c.refine(surface, footpoint_options(grid, max_steps));
+             }
+             return distance_tuple(d);
+           },
+           "surface"_a, "grid"_a, "max_steps"_a)
+      .def("keep_best", &sorpia::ApproximationChunk::keep_best)
+      .def("search_fresh",
+           [](sorpia::ApproximationChunk& c, const sorpia::FootpointSearch& s, double closer) {
+             sorpia::DistanceSums d;
+             {
+               LongCall call;
+               d = c.search_fresh(s, closer);
+             }
+             return distance_tuple(d);
+           },
+           "search"_a, "closer"_a)
+      .def("keep_fresh", &sorpia::ApproximationChunk::keep_fresh, "closer"_a)
+      .def("keep_fresh_in_best",
+           [](sorpia::ApproximationChunk& c) { return distance_tuple(c.keep_fresh_in_best()); })
+      .def("normal_sums",
+           [](const sorpia::ApproximationChunk& c, const sorpia::LimitSurface& surface, double tangential) {
+             sorpia::NormalSums s;
+             {
+               LongCall call;
+               s = c.normal_sums(surface, tangential);
+             }
+             return normal_tuple(std::move(s));
+           },
+           "surface"_a, "tangential"_a)
+      .def("best_footpoints", [](const sorpia::ApproximationChunk& c) {
+        sorpia::Footpoints f = c.best_footpoints();
+        return py::make_tuple(to_numpy(std::move(f.face_ids), 0), to_numpy(std::move(f.uv), 2),
+                              to_numpy(std::move(f.distances), 0));
+      });
+
+  py::class_<sorpia::PointChunks, PyPointChunks>(
+      m, "PointChunks",
+      "approximation's points as chunks (sorpia::PointChunks), the backend its driver calls: subclass it in "
+      "Python and implement every method (CHUNKS-API.md); sums may be returned per chunk, as a list, added in its "
+      "order.")
+      .def(py::init<>())
+      .def("size", &sorpia::PointChunks::size, "the number of points");
+
+  py::class_<sorpia::InMemoryChunks, sorpia::PointChunks>(m, "InMemoryChunks")
+      .def(py::init([](sorpia::LimitSurface& surface, const Vertices& points, const py::object& weights,
+                       std::size_t chunk_points) {
+             check_shape(points, 3, "points");
+             const auto k = static_cast<std::size_t>(points.shape(0));
+             Vertices w;
+             const double* wd = point_weights(weights, k, w);
+             return std::make_unique<sorpia::InMemoryChunks>(surface, points.data(), k, wd, chunk_points);
+           }),
+           "surface"_a, "points"_a.noconvert(), "weights"_a, "chunk_points"_a, py::keep_alive<1, 2>());
+
+  py::class_<sorpia::FileChunks, sorpia::PointChunks>(
+      m, "FileChunks",
+      "Points streamed from a binary little-endian PLY or .npy file a chunk at a time, footpoint states spilled to "
+      "a temporary file in spill_directory (sorpia::FileChunks).")
+      .def(py::init([](sorpia::LimitSurface& surface, const std::string& path, std::size_t chunk_points,
+                       const std::string& spill_directory, std::size_t sample_points) {
+             return std::make_unique<sorpia::FileChunks>(surface, path, chunk_points, spill_directory, sample_points);
+           }),
+           "surface"_a, "path"_a, "chunk_points"_a, "spill_directory"_a, "sample_points"_a, py::keep_alive<1, 2>());
+
+  m.def("point_file_points", [](const std::string& path) { return sorpia::point_file_layout(path).k; }, "path"_a,
+        "The number of points of a file FileChunks streams (a binary little-endian PLY's vertices, a .npy (k, 3)\n"
+        "array), from its header; FileError (sorpia.MeshFileError) for any other file.");
+
   m.def(
       "approximate",
-      [](sorpia::LimitSurface& surface, const Vertices& points, const py::object& weights, int iterations, double tol,
+      [](sorpia::LimitSurface& surface, sorpia::PointChunks& chunks, int iterations, double tol,
          double fairness, double tangential, const std::string& method, double solver_tol, long long solver_max_iter,
          int grid, int newton_steps, int report_level, const py::object& callback, double seconds_before,
-         const std::string& robust, double robust_quantile, double robust_c) {
-        check_shape(points, 3, "points");
-        const auto k = static_cast<std::size_t>(points.shape(0));
-        Vertices w;
-        if (!weights.is_none()) {
-          w = weights.cast<Vertices>();
-          if (w.ndim() != 1 || static_cast<std::size_t>(w.shape(0)) != k)
-            throw sorpia::ParameterError("weights must have one entry per point");
-        }
+         bool report_each, const std::string& robust, double robust_quantile, double robust_c) {
         sorpia::ApproximationOptions o;
         o.iterations = iterations;
         o.tol = tol;
@@ -309,6 +641,7 @@ void bind_approximate(py::module_& m) {
         o.solver_max_iter = solver_max_iter;
         o.footpoints = footpoint_options(grid, newton_steps);
         o.report_level = report_level;
+        o.report_each = report_each;
         o.robust.loss = sorpia::robust_loss(robust);
         o.robust.quantile = robust_quantile;
         o.robust.c = robust_c;
@@ -321,7 +654,7 @@ void bind_approximate(py::module_& m) {
         sorpia::ApproximationResult r;
         {
           LongCall call;
-          r = sorpia::approximate(surface, points.data(), k, weights.is_none() ? nullptr : w.data(), o, progress);
+          r = sorpia::approximate(surface, chunks, o, progress);
         }
         py::list history;
         for (const auto& rec : r.history) history.append(record_dict(rec, seconds_before));
@@ -342,14 +675,20 @@ void bind_approximate(py::module_& m) {
         out["timings"] = timings;
         return out;
       },
-      "surface"_a, "points"_a.noconvert(), "weights"_a, "iterations"_a, "tol"_a, "fairness"_a, "tangential"_a,
+      "surface"_a, "chunks"_a, "iterations"_a, "tol"_a, "fairness"_a, "tangential"_a,
       "method"_a, "solver_tol"_a, "solver_max_iter"_a, "grid"_a, "newton_steps"_a, "report_level"_a, "callback"_a,
-      "seconds_before"_a = 0.0, "robust"_a = sorpia::robust_loss_name(sorpia::RobustOptions{}.loss),
-      "robust_quantile"_a = sorpia::RobustOptions{}.quantile, "robust_c"_a = sorpia::RobustOptions{}.c,
-      "Approximation's pipeline (sorpia::approximate) from the surface's control vertices: a dict with\n"
-      "control_vertices, face_ids, uv, distances, iterations, stop_reason, best_iteration, diagonal, robust_scale,\n"
-      "robust_outliers, history\n"
-      "(records as dicts, seconds counted from seconds_before) and timings; callback(record) after each record.");
+      "seconds_before"_a = 0.0, "report_each"_a = false,
+      "robust"_a = "none", "robust_quantile"_a = sorpia::RobustOptions{}.quantile,
+      "robust_c"_a = sorpia::RobustOptions{}.c,
+      "Approximation's pipeline (sorpia::approximate) from the surface's control vertices, over the points of\n"
+      "`chunks` (InMemoryChunks, FileChunks or a Python PointChunks): a dict with control_vertices, face_ids, uv,\n"
+      "distances, iterations, stop_reason, best_iteration, diagonal, robust_scale, robust_outliers, history\n"
+      "(records as dicts, seconds counted from seconds_before) and timings; callback(record) after each record.\n"
+      "The surface-to-data figures in every record with report_each, else only in the returned iterate's (None\n"
+      "in the others). robust: the loss of the robust fit (none, cauchy, tukey) at the robust_quantile of the\n"
+      "distances times robust_c (sorpia/robust.hpp); none here unless given (sorpia.approximate passes its\n"
+      "default): a Python backend fits robustly only with distance_histogram, robust_loss_sum and\n"
+      "robust_normal_sums, which the trampoline does not reach yet.");
 }
 
 }  // namespace sorpia_py

@@ -6,7 +6,7 @@ import collections.abc
 import numpy
 import numpy.typing
 import typing
-__all__: list[str] = ['Boundary', 'INFINITE_SHARPNESS', 'InterpolationResult', 'Interpolator', 'LimitSurface', 'MAX_REFINEMENT_LEVELS', 'MAX_THREADS', 'MeshError', 'MeshFileError', 'Method', 'NormalEquations', 'OmegaRule', 'ParameterError', 'PointIndex', 'Rules', 'Scheme', 'SolveOptions', 'Tags', 'Topology', 'YOUNG_RHO_CLAMP', 'approximate', 'available_memory_bytes', 'blend_weights', 'boundary_name', 'check_ply_per_vertex', 'check_refinement', 'check_writable', 'closest_points', 'decimate', 'face_list_statistics', 'fair_interpolate', 'fairness_matrix', 'grid', 'icosphere', 'irregular', 'limit_matrix', 'limit_points', 'limit_residual', 'mesh_statistics', 'method_names', 'normal_matrix', 'parse_boundary', 'parse_method', 'parse_omega', 'parse_scheme', 'pole', 'polygon_torus', 'quad_grid', 'quad_irregular', 'quad_torus', 'read_mesh', 'refine_footpoints', 'refine_uniform', 'refinement_bytes', 'regular_valence', 'repair', 'repair_polygons', 'rms_levelled', 'scale_exponent', 'scheme_name', 'sharp_edges', 'split_nonmanifold', 'split_nonmanifold_polygons', 'subface_columns', 'tessellation_bytes', 'torus', 'write_file_atomic', 'write_mesh']
+__all__: list[str] = ['ApproximationChunk', 'Boundary', 'FileChunks', 'FootpointSearch', 'INFINITE_SHARPNESS', 'InMemoryChunks', 'InterpolationResult', 'Interpolator', 'LimitSurface', 'MAX_REFINEMENT_LEVELS', 'MAX_THREADS', 'MeshError', 'MeshFileError', 'Method', 'NormalEquations', 'OmegaRule', 'ParameterError', 'PointChunks', 'PointIndex', 'Rules', 'Scheme', 'SolveOptions', 'Tags', 'Topology', 'YOUNG_RHO_CLAMP', 'approximate', 'available_memory_bytes', 'blend_weights', 'boundary_name', 'check_ply_per_vertex', 'check_refinement', 'check_writable', 'closest_points', 'decimate', 'face_list_statistics', 'fair_interpolate', 'fairness_matrix', 'grid', 'icosphere', 'irregular', 'limit_matrix', 'limit_points', 'limit_residual', 'mesh_statistics', 'method_names', 'normal_matrix', 'parse_boundary', 'parse_method', 'parse_omega', 'parse_scheme', 'point_file_points', 'pole', 'polygon_torus', 'quad_grid', 'quad_irregular', 'quad_torus', 'read_mesh', 'refine_footpoints', 'refine_uniform', 'refinement_bytes', 'regular_valence', 'repair', 'repair_polygons', 'rms_levelled', 'scale_exponent', 'scheme_name', 'sharp_edges', 'split_nonmanifold', 'split_nonmanifold_polygons', 'subface_columns', 'tessellation_bytes', 'torus', 'write_file_atomic', 'write_mesh']
 class MeshError(ValueError):
     """
     The faces or coordinates cannot be used: an index out of range, a repeated
@@ -681,12 +681,81 @@ class NormalEquations:
     @property
     def mu(self) -> float:
         ...
-def approximate(surface: LimitSurface, points: numpy.typing.NDArray[numpy.float64], weights: typing.Any, iterations: typing.SupportsInt | typing.SupportsIndex, tol: typing.SupportsFloat | typing.SupportsIndex, fairness: typing.SupportsFloat | typing.SupportsIndex, tangential: typing.SupportsFloat | typing.SupportsIndex, method: str, solver_tol: typing.SupportsFloat | typing.SupportsIndex, solver_max_iter: typing.SupportsInt | typing.SupportsIndex, grid: typing.SupportsInt | typing.SupportsIndex, newton_steps: typing.SupportsInt | typing.SupportsIndex, report_level: typing.SupportsInt | typing.SupportsIndex, callback: typing.Any, seconds_before: typing.SupportsFloat | typing.SupportsIndex = 0.0, robust: str = 'tukey', robust_quantile: typing.SupportsFloat | typing.SupportsIndex = 0.9, robust_c: typing.SupportsFloat | typing.SupportsIndex = 30.0) -> dict:
+class FootpointSearch:
     """
-    Approximation's pipeline (sorpia::approximate) from the surface's control vertices: a dict with
-    control_vertices, face_ids, uv, distances, iterations, stop_reason, best_iteration, diagonal, robust_scale,
-    robust_outliers, history
+    closest_points' search start on one state of a surface, built once and queried per chunk (sorpia::FootpointSearch); keep the surface unchanged while it is used.
+    """
+    def __init__(self, surface: LimitSurface, grid: typing.SupportsInt | typing.SupportsIndex, max_steps: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+class ApproximationChunk:
+    """
+    One chunk of approximation's points: its footpoints and its share of the normal equations (sorpia::ApproximationChunk; CHUNKS-API.md).
+    """
+    def __init__(self, points: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], weights: typing.Any = None, first: typing.SupportsInt | typing.SupportsIndex = 0) -> None:
+        ...
+    def best_footpoints(self) -> tuple[numpy.typing.NDArray[numpy.int32], numpy.typing.NDArray[numpy.float64], numpy.typing.NDArray[numpy.float64]]:
+        ...
+    def extent(self) -> tuple:
+        ...
+    def keep_best(self) -> None:
+        ...
+    def keep_fresh(self, closer: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    def keep_fresh_in_best(self) -> tuple:
+        ...
+    def line_offset(self, mean: typing.Any, axis: typing.Any, diagonal: typing.SupportsFloat | typing.SupportsIndex) -> float:
+        ...
+    def moments(self, center: typing.Any, diagonal: typing.SupportsFloat | typing.SupportsIndex) -> tuple:
+        ...
+    def normal_sums(self, surface: LimitSurface, tangential: typing.SupportsFloat | typing.SupportsIndex) -> tuple:
+        ...
+    def refine(self, surface: LimitSurface, grid: typing.SupportsInt | typing.SupportsIndex, max_steps: typing.SupportsInt | typing.SupportsIndex) -> tuple:
+        ...
+    def scale(self, e: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    def search(self, search: FootpointSearch) -> tuple:
+        ...
+    def search_fresh(self, search: FootpointSearch, closer: typing.SupportsFloat | typing.SupportsIndex) -> tuple:
+        ...
+    @property
+    def first(self) -> int:
+        ...
+    @property
+    def points(self) -> numpy.typing.NDArray[numpy.float64]:
+        ...
+    @property
+    def size(self) -> int:
+        ...
+class PointChunks:
+    """
+    approximation's points as chunks (sorpia::PointChunks), the backend its driver calls: subclass it in Python and implement every method (CHUNKS-API.md); sums may be returned per chunk, as a list, added in its order.
+    """
+    def __init__(self) -> None:
+        ...
+    def size(self) -> int:
+        """
+        the number of points
+        """
+class InMemoryChunks(PointChunks):
+    def __init__(self, surface: LimitSurface, points: numpy.typing.NDArray[numpy.float64], weights: typing.Any, chunk_points: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+class FileChunks(PointChunks):
+    """
+    Points streamed from a binary little-endian PLY or .npy file a chunk at a time, footpoint states spilled to a temporary file in spill_directory (sorpia::FileChunks).
+    """
+    def __init__(self, surface: LimitSurface, path: str, chunk_points: typing.SupportsInt | typing.SupportsIndex, spill_directory: str, sample_points: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+def approximate(surface: LimitSurface, chunks: PointChunks, iterations: typing.SupportsInt | typing.SupportsIndex, tol: typing.SupportsFloat | typing.SupportsIndex, fairness: typing.SupportsFloat | typing.SupportsIndex, tangential: typing.SupportsFloat | typing.SupportsIndex, method: str, solver_tol: typing.SupportsFloat | typing.SupportsIndex, solver_max_iter: typing.SupportsInt | typing.SupportsIndex, grid: typing.SupportsInt | typing.SupportsIndex, newton_steps: typing.SupportsInt | typing.SupportsIndex, report_level: typing.SupportsInt | typing.SupportsIndex, callback: typing.Any, seconds_before: typing.SupportsFloat | typing.SupportsIndex = 0.0, report_each: bool = False, robust: str = 'none', robust_quantile: typing.SupportsFloat | typing.SupportsIndex = 0.9, robust_c: typing.SupportsFloat | typing.SupportsIndex = 30.0) -> dict:
+    """
+    Approximation's pipeline (sorpia::approximate) from the surface's control vertices, over the points of
+    `chunks` (InMemoryChunks, FileChunks or a Python PointChunks): a dict with control_vertices, face_ids, uv,
+    distances, iterations, stop_reason, best_iteration, diagonal, robust_scale, robust_outliers, history
     (records as dicts, seconds counted from seconds_before) and timings; callback(record) after each record.
+    The surface-to-data figures in every record with report_each, else only in the returned iterate's (None
+    in the others). robust: the loss of the robust fit (none, cauchy, tukey) at the robust_quantile of the
+    distances times robust_c (sorpia/robust.hpp); none here unless given (sorpia.approximate passes its
+    default): a Python backend fits robustly only with distance_histogram, robust_loss_sum and
+    robust_normal_sums, which the trampoline does not reach yet.
     """
 def available_memory_bytes() -> int:
     ...
@@ -767,6 +836,11 @@ def parse_omega(text: str) -> tuple[OmegaRule, float]:
     """
 def parse_scheme(name: str) -> Scheme:
     ...
+def point_file_points(path: str) -> int:
+    """
+    The number of points of a file FileChunks streams (a binary little-endian PLY's vertices, a .npy (k, 3)
+    array), from its header; FileError (sorpia.MeshFileError) for any other file.
+    """
 def pole(n: typing.SupportsInt | typing.SupportsIndex) -> tuple:
     ...
 def polygon_torus(nu: typing.SupportsInt | typing.SupportsIndex, nv: typing.SupportsInt | typing.SupportsIndex, seed: typing.SupportsInt | typing.SupportsIndex = 1) -> tuple:

@@ -53,6 +53,8 @@ the data's bounding box.
 
 from __future__ import annotations
 
+import os
+import tempfile
 import time
 import warnings
 from dataclasses import dataclass, field
@@ -87,6 +89,10 @@ _ROBUST_SCALE = {"none": (0.9, 1.0), "cauchy": (0.9, 12.0), "tukey": (0.9, 30.0)
 # A fitted surface whose farthest point lies farther than this (in diagonals) from the data is warned about: it
 # strays between points that do not hold the cage (e.g. fairness 0 with a cage as fine as the data).
 _STRAY = 1.0
+# Points per chunk (the core's ApproximationOptions::chunk_points): up to this many run as one array.
+DEFAULT_CHUNK_POINTS = 1 << 20
+# Points of a streamed file's fixed sample for the surface-to-data distances (a k-d tree of 4M points: ~200 MB).
+DEFAULT_SAMPLE_POINTS = 1 << 22
 # The stopping rule's window (the core's ApproximationOptions::window), for `_levelled`.
 _WINDOW = 3
 
@@ -105,9 +111,11 @@ class ApproximationResult:
         (face, u, v) in Bfr's parameterisation (`sorpia.surface`).
     distances : (k,) float64
         Distance of each data point to its footpoint.
-    points : (k, 3) float64
+    points : (k, 3) float64 or str
         The data points these belong to: `points` as given or, with
-        ``faces``, the samples of the dense surface (`surface_samples`).
+        ``faces``, the samples of the dense surface (`surface_samples`); for
+        points streamed from a file, its path (and `face_ids`, `uv`,
+        `distances` are empty: they are not kept).
     weights : (k,) float64 or None
         The points' weights in the fit and in the RMS distances, scaled to
         mean 1 (None: all equal).
@@ -142,7 +150,9 @@ class ApproximationResult:
     history : list of dict
         One record per iteration, from 0 (the cage as given): ``iteration``,
         ``rms``, ``max`` (data to surface), ``surface_rms``, ``surface_max``
-        (surface to data), each also ``_relative`` (divided by ``diagonal``),
+        (surface to data: in the returned iterate's record, and in the
+        others only with ``report_each``, else None), each also
+        ``_relative`` (divided by ``diagonal``),
         ``solver_iterations`` (of the update before it; 0 at iteration 0) and
         ``seconds`` (since the start).
     timings : dict
@@ -184,6 +194,7 @@ class ApproximationResult:
     history: list = field(default_factory=list)
     timings: dict = field(default_factory=dict)
     mesh: Optional[SubdivisionMesh] = None
+    n_points: int = 0
     robust: str = "none"
     robust_scale: float = 0.0
     robust_outliers: int = 0
@@ -225,7 +236,7 @@ class ApproximationResult:
                 "best_iteration": self.best_iteration, "method": self.method,
                 "fairness": self.fairness, "tangential": self.tangential, "diagonal": self.diagonal,
                 "robust": self.robust, "robust_scale": self.robust_scale, "robust_outliers": self.robust_outliers,
-                "n_points": int(self.distances.shape[0]),
+                "n_points": int(self.n_points),
                 "n_control_vertices": int(self.control_vertices.shape[0]),
                 "final": {k: v for k, v in last.items() if k not in ("iteration", "seconds")},
                 "history": self.history, "timings": self.timings}
@@ -339,15 +350,24 @@ def approximate(points, cage_vertices, cage_faces=None, *, scheme: str = DEFAULT
                 fairness: float = DEFAULT_FAIRNESS, tangential: Optional[float] = None,
                 method: str = DEFAULT_UPDATE, solver_tol: float = 1e-3,
                 solver_max_iter: int = 2000, grid: int = 4, newton_steps: int = 10, report_level: int = 2,
+                report_each: bool = False,
                 callback: Optional[Callable[[dict], object]] = None, weights=None, faces=None,
-                sampling: Optional[str] = None, robust: str = DEFAULT_ROBUST) -> ApproximationResult:
+                sampling: Optional[str] = None, chunk_points: int = DEFAULT_CHUNK_POINTS,
+                spill_directory=None, sample_points: int = DEFAULT_SAMPLE_POINTS,
+                robust: str = DEFAULT_ROBUST) -> ApproximationResult:
     """Control vertices of a cage whose limit surface approximates `points`
     in the least-squares sense (the module docstring describes the method).
 
     Parameters
     ----------
-    points : array_like, (k, 3) float
+    points : array_like, (k, 3) float, or str or os.PathLike
         The data: a point cloud or a dense mesh's vertices; finite, k >= 1.
+        Or the path of a file whose points are streamed a chunk at a time,
+        never all in memory (out of core; docs/approximation.md, "Large
+        data"): a binary little-endian PLY (the vertex element's x, y, z as
+        float or double, its other properties skipped, faces ignored) or a
+        .npy array (k, 3) of float32 or float64 in C order; equally
+        weighted (not with `weights` or `faces`).
     cage_vertices : array_like, (n, 3) float, or sorpia.SubdivisionMesh
         The cage's control vertices at the start (e.g. a decimated mesh);
         or the cage as a mesh, with its rules (``approximate(points,
@@ -409,6 +429,10 @@ def approximate(points, cage_vertices, cage_faces=None, *, scheme: str = DEFAULT
     report_level : int 0..15
         Tessellation level of the limit surface whose vertices measure the
         distance from the surface to the data.
+    report_each : bool
+        Measure the surface-to-data distances at every iteration (a
+        tessellation and a k-d tree query each time: about a tenth of a
+        run), not only for the returned iterate at the end (the default).
     callback : callable(record) or None
         Called with each iteration's record (see `ApproximationResult.history`)
         as soon as it is known.
@@ -425,6 +449,12 @@ def approximate(points, cage_vertices, cage_faces=None, *, scheme: str = DEFAULT
         With `faces` (None means "area"): "area", the vertices weighted by
         their share of the area; "midpoints", the edges' midpoints likewise.
         Refused without `faces`.
+    chunk_points : int >= 1
+        Points per chunk, the unit of the footpoint search and of the
+        normal equations' sums (added in the chunks' order;
+        docs/approximation.md, "Large data"). The result does not depend on
+        it beyond rounding (1e-10 relative); at most this many points run
+        exactly as one array.
     robust : {"tukey", "cauchy", "none"}
         Iteratively reweighted least squares against outliers: before each
         update every point's weight is multiplied by a factor of its
@@ -453,7 +483,13 @@ def approximate(points, cage_vertices, cage_faces=None, *, scheme: str = DEFAULT
     cage_vertices, cage_faces, rules = mesh_arguments(cage_vertices, cage_faces, dict(
         scheme=scheme, boundary=boundary, creases=creases, corners=corners, holes=holes), "approximate")
     scheme, boundary, creases, corners, holes = rules.values()
-    points = as_points(points)
+    path = os.fspath(points) if isinstance(points, (str, os.PathLike)) else None
+    if path is not None:
+        if weights is not None or faces is not None:
+            raise ParameterError(f"points = {path!r} is a file, streamed with equal weights: weights= and faces= "
+                                 "take the points as an array")
+    else:
+        points = as_points(points)
     # Types converted here; every range (and method, and lspia's tangential) is the core's to check, once.
     iterations = _count(iterations, "iterations", "an integer >= 1")
     tol = as_real(tol, "tol")
@@ -482,17 +518,29 @@ def approximate(points, cage_vertices, cage_faces=None, *, scheme: str = DEFAULT
     # The pipeline runs in the core (sorpia::approximate: footpoints, updates, the stop rule, the records, the exact
     # scaling of data beyond 2^+-200). A dense mesh's surface is sampled here, on the data as the core scales it
     # (areas square the coordinates), and the samples handed over in the caller's units.
+    chunk_points = as_integer(chunk_points, "chunk_points", "an integer >= 1")
+    sample_points = as_integer(sample_points, "sample_points", "an integer >= 1")
+    for value, name in ((chunk_points, "chunk_points"), (sample_points, "sample_points")):
+        if value < 1:
+            raise ParameterError(f"{name} = {value} must be an integer >= 1")
     if faces is not None:
         e = _core.scale_exponent(points, cage_vertices)
         samples, weights = surface_samples(np.ldexp(points, -e), faces, sampling or "area")
         points = np.ldexp(samples, e)
-    weights = _weights(weights, len(points))
+    weights = _weights(weights, len(points)) if path is None else None
     scheme = resolve_scheme(scheme, cage_faces)
     surface = LimitSurface(cage_vertices, cage_faces, boundary=boundary, scheme=scheme, creases=creases,
                            corners=corners, holes=holes)
-    out = _core.approximate(surface._surface, points, weights, iterations, tol, fairness, tangential, method,
+    if path is None:
+        chunks = _core.InMemoryChunks(surface._surface, points, weights, chunk_points)
+    else:
+        chunks = _core.FileChunks(surface._surface, path, chunk_points,
+                                  os.fspath(spill_directory if spill_directory is not None else tempfile.gettempdir()),
+                                  sample_points)
+    out = _core.approximate(surface._surface, chunks, iterations, tol, fairness, tangential, method,
                             solver_tol, solver_max_iter, grid, newton_steps, report_level, callback,
-                            time.perf_counter() - t0, robust, *_ROBUST_SCALE.get(robust, (0.5, 1.0)))
+                            time.perf_counter() - t0, bool(report_each), robust,
+                            *_ROBUST_SCALE.get(robust, (0.9, 1.0)))
     out["timings"]["total"] = time.perf_counter() - t0
     out["timings"]["cpu"]["total"] = time.process_time() - c0
     V = out["control_vertices"]
@@ -504,7 +552,8 @@ def approximate(points, cage_vertices, cage_faces=None, *, scheme: str = DEFAULT
                       f"the cage, raise fairness (now {fairness:g}) or give a lighter cage", SorpiaWarning,
                       stacklevel=2)
     return ApproximationResult(control_vertices=V, face_ids=out["face_ids"], uv=out["uv"],
-                               distances=out["distances"], points=points, weights=weights,
+                               distances=out["distances"], points=points if path is None else path,
+                               weights=weights,
                                iterations=out["iterations"], stop_reason=out["stop_reason"],
                                best_iteration=out["best_iteration"], method=method, fairness=fairness,
                                tangential=tangential, diagonal=out["diagonal"], history=out["history"],
@@ -512,4 +561,5 @@ def approximate(points, cage_vertices, cage_faces=None, *, scheme: str = DEFAULT
                                robust_outliers=out["robust_outliers"],
                                timings=out["timings"],
                                mesh=SubdivisionMesh(V, cage_faces, scheme=scheme, boundary=boundary,
-                                                    creases=creases, corners=corners, holes=holes))
+                                                    creases=creases, corners=corners, holes=holes),
+                               n_points=chunks.size())

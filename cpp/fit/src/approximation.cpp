@@ -7,11 +7,13 @@
 #include <memory>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <numeric>
 #include <string>
 #include <utility>
 #include <vector>
 
+#include "sorpia/detail/pairwise.hpp"
 #include "sorpia/detail/repr.hpp"
 #include "sorpia/detail/scaling.hpp"
 #include "sorpia/errors.hpp"
@@ -33,44 +35,15 @@ double cpu_now() {
   return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
 }
 
-// The sum of a[0..n) by numpy's pairwise summation (its add.reduce on a contiguous float64 array: blocks of at
-// most 128 summed with 8 accumulators, halves summed recursively). The RMS distances and the mean diagonal are
-// summed so because the fit's figures, which its stop rule compares, were numpy's before this driver: the same
-// bits (bench/bit_identical.py), and pairwise summation's error, O(log n) roundings rather than O(n).
-double pairwise_sum(const double* a, std::size_t n) {
-  if (n < 8) {
-    double res = 0.0;
-    for (std::size_t i = 0; i < n; ++i) res += a[i];
-    return res;
-  }
-  if (n <= 128) {
-    double r[8];
-    for (int j = 0; j < 8; ++j) r[j] = a[j];
-    std::size_t i = 8;
-    for (; i < n - n % 8; i += 8)
-      for (std::size_t j = 0; j < 8; ++j) r[j] += a[i + j];
-    double res = ((r[0] + r[1]) + (r[2] + r[3])) + ((r[4] + r[5]) + (r[6] + r[7]));
-    for (; i < n; ++i) res += a[i];
-    return res;
-  }
-  std::size_t n2 = n / 2;
-  n2 -= n2 % 8;
-  return pairwise_sum(a, n2) + pairwise_sum(a + n2, n - n2);
-}
+using detail::pairwise_sum;
 
 // The length of the diagonal of the points' bounding box, scaled before squaring (coordinates beyond 1e154
 // square to inf): |e| for the extent e divided by its largest component, times that component. The sum of the
 // three squares is formed with fused multiply-adds, ((x0 x0 + x1 x1) + x2 x2) each rounded once, as numpy's
 // norm of a 3-vector computes it through OpenBLAS's dot: the same bits as before this driver.
-double bounding_box_diagonal(const double* p, std::size_t k) {
-  if (k == 0) return 0.0;
-  double lo[3] = {p[0], p[1], p[2]}, hi[3] = {p[0], p[1], p[2]};
-  for (std::size_t i = 1; i < k; ++i)
-    for (int c = 0; c < 3; ++c) {
-      lo[c] = std::min(lo[c], p[3 * i + static_cast<std::size_t>(c)]);
-      hi[c] = std::max(hi[c], p[3 * i + static_cast<std::size_t>(c)]);
-    }
-  const double ext[3] = {hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]};
+double bounding_box_diagonal(const PointExtent& box) {
+  if (box.count == 0) return 0.0;
+  const double ext[3] = {box.hi[0] - box.lo[0], box.hi[1] - box.lo[1], box.hi[2] - box.lo[2]};
   const double scale = std::max({std::abs(ext[0]), std::abs(ext[1]), std::abs(ext[2])});
   if (!(scale > 0)) return 0.0;
   const double x[3] = {ext[0] / scale, ext[1] / scale, ext[2] / scale};
@@ -83,21 +56,25 @@ double bounding_box_diagonal(const double* p, std::size_t k) {
 // through the points' mean along their covariance's main axis (found by power iteration: for points on a line
 // the covariance is that axis's outer product, so one step finds it; for any other points no line holds them all
 // that closely, whatever its direction).
-void check_spread(const double* p, std::size_t k, double diagonal) {
+void check_spread(PointChunks& chunks, const PointExtent& box, double diagonal) {
+  const std::size_t k = box.count;
   if (!(diagonal > 0))
     throw MeshError("the points all lie at one place (" + std::to_string(k) +
                          (k == 1 ? " point" : " points, all equal") +
                          "): there is no surface to fit; give points that span the surface");
-  double mean[3] = {0.0, 0.0, 0.0};
-  for (std::size_t i = 0; i < k; ++i)
-    for (std::size_t c = 0; c < 3; ++c) mean[c] += p[3 * i + c] / static_cast<double>(k);
-  double a[3][3] = {};
-  for (std::size_t i = 0; i < k; ++i) {
-    double d[3];
-    for (std::size_t c = 0; c < 3; ++c) d[c] = (p[3 * i + c] - mean[c]) / diagonal;
-    for (int r = 0; r < 3; ++r)
-      for (int c = 0; c < 3; ++c) a[r][c] += d[r] * d[c];
+  // The moments about the box's centre (each coordinate within the diagonal's half of it), over the diagonal.
+  const double center[3] = {0.5 * (box.lo[0] + box.hi[0]), 0.5 * (box.lo[1] + box.hi[1]),
+                            0.5 * (box.lo[2] + box.hi[2])};
+  const PointMoments m = chunks.moments(center, diagonal);
+  const auto kd = static_cast<double>(m.count);
+  double mean_d[3], mean[3];
+  for (int c = 0; c < 3; ++c) {
+    mean_d[c] = m.sum[c] / kd;
+    mean[c] = center[c] + diagonal * mean_d[c];
   }
+  double a[3][3];
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) a[r][c] = m.sum2[3 * r + c] - kd * mean_d[r] * mean_d[c];
   double u[3] = {1.0, 0.7, 0.4};
   for (int it = 0; it < 100; ++it) {
     double w[3];
@@ -108,16 +85,8 @@ void check_spread(const double* p, std::size_t k, double diagonal) {
   }
   const double un = std::sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
   for (double& x : u) x /= un;
-  double off = 0.0;  // the largest distance from the line, over the diagonal
-  for (std::size_t i = 0; i < k; ++i) {
-    double d[3];
-    for (std::size_t c = 0; c < 3; ++c) d[c] = (p[3 * i + c] - mean[c]) / diagonal;
-    const double along = d[0] * u[0] + d[1] * u[1] + d[2] * u[2];
-    double r2 = 0.0;
-    for (int c = 0; c < 3; ++c) r2 += (d[c] - along * u[c]) * (d[c] - along * u[c]);
-    off = std::max(off, std::sqrt(r2));
-  }
-  if (off <= 1e-12)
+  // the largest distance from the line, over the diagonal
+  if (chunks.line_offset(mean, u, diagonal) <= 1e-12)
     throw MeshError("the points all lie on one line (" + std::to_string(k) +
                          " points): no surface is determined by them; give points that span the surface");
 }
@@ -154,19 +123,6 @@ void check_options(const ApproximationOptions& o) {
     throw ParameterError("robust_quantile = " + detail::repr(o.robust.quantile) + " must be in (0, 1)");
   if (!(std::isfinite(o.robust.c) && o.robust.c > 0))
     throw ParameterError("robust_c = " + detail::repr(o.robust.c) + " must be a finite number > 0");
-}
-
-// y (n, 3) = A^T x for A (k, n) and x (k, 3): row by row of A in order, each entry's product added to its
-// column's row of y (the order of scipy's A.T @ x, which this driver replaced).
-std::vector<double> transposed_times(const CsrMatrix& a, const double* x) {
-  std::vector<double> y(3 * a.n_cols, 0.0);
-  for (std::size_t r = 0; r < a.n_rows; ++r)
-    for (std::int32_t p = a.indptr[r]; p < a.indptr[r + 1]; ++p) {
-      const double w = a.data[static_cast<std::size_t>(p)];
-      double* yj = &y[3 * static_cast<std::size_t>(a.indices[static_cast<std::size_t>(p)])];
-      for (std::size_t c = 0; c < 3; ++c) yj[c] += w * x[3 * r + c];
-    }
-  return y;
 }
 
 // A sparse matrix with sorted, distinct columns per row (what the LSPIA update works on).
@@ -298,16 +254,6 @@ class Phases {
   }
 };
 
-// A footpoint state: what the loop keeps of Footpoints (positions are not used).
-struct Feet {
-  std::vector<std::int32_t> face_ids;
-  std::vector<double> uv, distances, normals;
-  explicit Feet(Footpoints&& f)
-      : face_ids(std::move(f.face_ids)), uv(std::move(f.uv)), distances(std::move(f.distances)),
-        normals(std::move(f.normals)) {}
-  Feet() = default;
-};
-
 }  // namespace
 
 bool rms_levelled(const std::vector<double>& bests, double tol, int window) {
@@ -317,24 +263,15 @@ bool rms_levelled(const std::vector<double>& bests, double tol, int window) {
   return before - bests.back() <= static_cast<double>(window) * tol * before;
 }
 
-ApproximationResult approximate(LimitSurface& surface, const double* points, std::size_t k, const double* weights,
-                                const ApproximationOptions& options, const ApproximationProgress& progress) {
+ApproximationResult approximate(LimitSurface& surface, PointChunks& chunks, const ApproximationOptions& options,
+                                const ApproximationProgress& progress) {
   const auto t0 = Clock::now();
   const double c0 = cpu_now();
   check_options(options);
+  const std::size_t k = chunks.size();
   if (k == 0) throw MeshError("points is empty: there is nothing to approximate");
-  for (std::size_t i = 0; i < 3 * k; ++i)
-    if (!std::isfinite(points[i])) throw MeshError("points[" + std::to_string(i / 3) + "] is not finite");
-  if (weights) {
-    bool any = false;
-    for (std::size_t i = 0; i < k; ++i) {
-      if (!(std::isfinite(weights[i]) && weights[i] >= 0))
-        throw ParameterError("weights[" + std::to_string(i) + "] = " + detail::repr(weights[i]) +
-                             " must be a finite number >= 0");
-      any = any || weights[i] > 0;
-    }
-    if (!any) throw ParameterError("weights are all 0: no point would count");
-  }
+  const PointExtent box0 = chunks.extent();
+  if (box0.weighted == 0) throw ParameterError("weights are all 0: no point would count");
   const Topology& topology = surface.topology();
   const std::size_t n = surface.n_vertices();
   std::vector<double> V(3 * n);
@@ -342,52 +279,40 @@ ApproximationResult approximate(LimitSurface& surface, const double* points, std
 
   // Squared distances, areas and the solver's norms of data beyond 2^+-200 would overflow or underflow: such data
   // is fitted scaled by a power of two (exact), and records and results come back in the caller's units.
-  const int e = detail::scale_exponent(detail::largest_magnitude(V.data(), V.size(),
-                                                                 detail::largest_magnitude(points, 3 * k)));
-  std::vector<double> scaled;
+  const int e = detail::scale_exponent(detail::largest_magnitude(V.data(), V.size(), box0.largest));
+  PointExtent box = box0;
   if (e != 0) {
-    scaled.assign(points, points + 3 * k);
-    detail::scale_pow2(scaled.data(), scaled.size(), -e);
-    points = scaled.data();
+    chunks.scale(e);
+    for (int c = 0; c < 3; ++c) {
+      box.lo[c] = std::ldexp(box.lo[c], -e);
+      box.hi[c] = std::ldexp(box.hi[c], -e);
+    }
     detail::scale_pow2(V.data(), V.size(), -e);
     surface.set_vertices(V.data());
   }
-  const double diagonal = bounding_box_diagonal(points, k);
-  check_spread(points, k, diagonal);
+  const double diagonal = bounding_box_diagonal(box);
+  check_spread(chunks, box, diagonal);
   const double unit = diagonal;
+  const auto set_vertices = [&](const std::vector<double>& x) {
+    surface.set_vertices(x.data());
+    chunks.set_control_vertices(x.data(), n);
+  };
+  chunks.set_control_vertices(V.data(), n);
 
   ApproximationResult out;
   Phases phases;
-  std::vector<double> squares(k);
   // The RMS distance of the points, weighted: sum w d^2 / k (the weights of mean 1).
-  const auto rms = [&](const std::vector<double>& d) {
-    for (std::size_t i = 0; i < k; ++i) squares[i] = weights ? weights[i] * (d[i] * d[i]) : d[i] * d[i];
-    return std::sqrt(pairwise_sum(squares.data(), k) / static_cast<double>(k));
-  };
-  // The robust fit (sorpia/robust.hpp): the scale of a state's distances, the factors of the points' weights in
-  // the next update (fit_w: the caller's weights times them), and the criterion that picks the iterate returned
-  // and stops the run (the RMS distance without a robust loss).
-  const bool robust = options.robust.loss != RobustLoss::None;
-  // Distances below 1e-5 of the diagonal never make a point an outlier: on data the surface reaches to rounding
-  // the scale would fall with the fit and cut the points that converge last.
-  const double scale_floor = 1e-5 * unit;
-  const auto robust_scale_of = [&](const std::vector<double>& d) {
-    DistanceHistogram histogram(unit);
-    histogram.add(d.data(), weights, k);
-    return robust_scale(histogram, options.robust, scale_floor);
-  };
-  std::vector<double> fit_w;
-  const auto criterion = [&](const std::vector<double>& d) {
-    if (!robust) return rms(d);
-    return std::sqrt(robust_loss_sum(options.robust, robust_scale_of(d), d.data(), weights, k) /
-                     static_cast<double>(k));
-  };
+  const auto rms = [&](const DistanceSums& d) { return std::sqrt(d.squares / static_cast<double>(k)); };
   std::unique_ptr<PointIndex> data_index;
   std::vector<std::int64_t> nearest;
   std::vector<double> near_distance;
-  const auto record = [&](int iteration, const std::vector<double>& distances, long long solver_iterations) {
+  // The surface-to-data distances of the surface's current state into rec (the data's k-d tree built once).
+  const auto measure_surface = [&](ApproximationRecord& rec) {
     phases.timed(&ApproximationTimings::report, [&] {
-      if (!data_index) data_index = std::make_unique<PointIndex>(points, k);
+      if (!data_index) {
+        const std::vector<double> sample = chunks.sample();
+        data_index = std::make_unique<PointIndex>(sample.data(), sample.size() / 3);
+      }
       const Mesh mesh = surface.tessellate(options.report_level);
       const std::size_t nv = mesh.n_vertices();
       nearest.resize(nv);
@@ -403,43 +328,60 @@ ApproximationResult approximate(LimitSurface& surface, const double* points, std
       }
       return 0;
     });
+    std::vector<double> s2(near_distance.size());
+    for (std::size_t i = 0; i < s2.size(); ++i) s2[i] = near_distance[i] * near_distance[i];
+    const double srms = std::sqrt(pairwise_sum(s2.data(), s2.size()) / static_cast<double>(s2.size()));
+    const double smax = near_distance.empty() ? 0.0 : *std::max_element(near_distance.begin(), near_distance.end());
+    rec.surface_rms_relative = srms / unit;
+    rec.surface_max_relative = smax / unit;
+    rec.surface_rms = std::ldexp(srms, e);
+    rec.surface_max = std::ldexp(smax, e);
+  };
+  // The robust fit (sorpia/robust.hpp): the scale of the chunks' current distances (a histogram merged over the
+  // chunks), which weighs the points in the next update, and the criterion that picks the iterate returned and
+  // stops the run (the RMS distance without a robust loss). Distances below 1e-5 of the diagonal never make a
+  // point an outlier: on data the surface reaches to rounding the scale would fall with the fit and cut the points
+  // that converge last.
+  const bool robust = options.robust.loss != RobustLoss::None;
+  const double scale_floor = 1e-5 * unit;
+  double current_scale = 0.0;
+  const auto measure_scale = [&] {
+    if (robust) current_scale = robust_scale(chunks.distance_histogram(unit), options.robust, scale_floor);
+  };
+  const auto criterion = [&](const DistanceSums& d) {
+    if (!robust) return rms(d);
+    return std::sqrt(chunks.robust_loss_sum(options.robust, current_scale) / static_cast<double>(k));
+  };
+  const double not_measured = std::numeric_limits<double>::quiet_NaN();
+  const auto record = [&](int iteration, const DistanceSums& distances, long long solver_iterations) {
     ApproximationRecord rec;
     rec.iteration = iteration;
     rec.rms = rms(distances);
-    rec.max = *std::max_element(distances.begin(), distances.end());
-    std::vector<double> s2(near_distance.size());
-    for (std::size_t i = 0; i < s2.size(); ++i) s2[i] = near_distance[i] * near_distance[i];
-    rec.surface_rms = std::sqrt(pairwise_sum(s2.data(), s2.size()) / static_cast<double>(s2.size()));
-    rec.surface_max = near_distance.empty() ? 0.0 : *std::max_element(near_distance.begin(), near_distance.end());
+    rec.max = distances.max;
     rec.rms_relative = rec.rms / unit;
     rec.max_relative = rec.max / unit;
-    rec.surface_rms_relative = rec.surface_rms / unit;
-    rec.surface_max_relative = rec.surface_max / unit;
     rec.rms = std::ldexp(rec.rms, e);
     rec.max = std::ldexp(rec.max, e);
-    rec.surface_rms = std::ldexp(rec.surface_rms, e);
-    rec.surface_max = std::ldexp(rec.surface_max, e);
-    if (robust) rec.robust_scale = std::ldexp(robust_scale_of(distances), e);
+    rec.surface_rms = rec.surface_max = rec.surface_rms_relative = rec.surface_max_relative = not_measured;
+    if (options.report_each) measure_surface(rec);
+    if (robust) rec.robust_scale = std::ldexp(current_scale, e);
     rec.solver_iterations = solver_iterations;
     rec.seconds = seconds_since(t0);
     out.history.push_back(rec);
     if (progress) progress(rec);
     return rec;
   };
-  const auto search = [&] {
-    return Feet(phases.timed(&ApproximationTimings::footpoints,
-                             [&] { return closest_points(surface, topology, points, k, options.footpoints); }));
-  };
+  const auto footpoints = [&](auto&& fn) { return phases.timed(&ApproximationTimings::footpoints, fn); };
 
-  Feet feet = search();
-  record(0, feet.distances, 0);
+  DistanceSums feet = footpoints([&] { return chunks.search(options.footpoints); });
+  measure_scale();
+  record(0, feet, 0);
+  chunks.keep_best();
   struct Best {
     double rms;
     std::vector<double> V;
-    std::vector<std::int32_t> face_ids;
-    std::vector<double> uv, distances;
     int iteration;
-  } best{criterion(feet.distances), V, feet.face_ids, feet.uv, feet.distances, 0};
+  } best{criterion(feet), V, 0};
   std::vector<double> bests{best.rms};  // the lowest RMS so far, after each iteration
 
   CsrMatrix K;
@@ -451,85 +393,40 @@ ApproximationResult approximate(LimitSurface& surface, const double* points, std
                         1.0, 0.0, quadrature);
   }
   const bool cg = options.update == ApproximationUpdate::CG;
-  const bool blend = options.tangential != 1.0;
   out.stop_reason = "max_iter";
   int searched = 0;  // the iteration after which every footpoint was last searched for afresh
-  Feet last_fresh;           // the last fresh search, made at iteration fresh_iteration
-  int fresh_iteration = -1;
+  int fresh_iteration = -1;  // the iteration of the chunks' last fresh search, kept for the final step
   int done = 0;
-  std::vector<std::size_t> order(k);
-  std::vector<std::int32_t> face_o(k);
-  std::vector<double> uv_o(2 * k), points_o(3 * k), normals_o(3 * k), w_o, wp(3 * k), w6;
-  if (weights || robust) w_o.resize(k);
-  const double* fit_weights = weights;  // the points' weights in the updates
-  if (blend) w6.resize(6 * k);
+  // Each chunk's rows and sums (summed in the chunks' order), timed as "normal" less the chunks' rows.
+  const auto sums = [&] {
+    NormalSums s = phases.timed(&ApproximationTimings::normal, [&] {
+      return robust ? chunks.robust_normal_sums(options.tangential, options.robust, current_scale)
+                    : chunks.normal_sums(options.tangential);
+    });
+    phases.wall.normal -= s.rows_seconds;
+    phases.cpu.normal -= s.rows_cpu;
+    phases.wall.rows += s.rows_seconds;
+    phases.cpu.rows += s.rows_cpu;
+    return s;
+  };
   for (int it = 1; it <= options.iterations; ++it) {
     poll_interrupt();
-    if (robust) {
-      fit_w.resize(k);
-      robust_factors(options.robust, robust_scale_of(feet.distances), feet.distances.data(), k, fit_w.data());
-      if (weights)
-        for (std::size_t i = 0; i < k; ++i) fit_w[i] *= weights[i];
-      fit_weights = fit_w.data();
-    }
-    // The rows in face order: the points of a face share their columns, which the normal matrix reads once.
-    std::iota(order.begin(), order.end(), std::size_t{0});
-    std::stable_sort(order.begin(), order.end(),
-                     [&](std::size_t a, std::size_t b) { return feet.face_ids[a] < feet.face_ids[b]; });
-    for (std::size_t i = 0; i < k; ++i) {
-      const std::size_t o = order[i];
-      face_o[i] = feet.face_ids[o];
-      uv_o[2 * i] = feet.uv[2 * o];
-      uv_o[2 * i + 1] = feet.uv[2 * o + 1];
-    }
-    // The rows A, the largest array of a run, live only until the normal equations are formed from them.
-    CsrMatrix A = phases.timed(&ApproximationTimings::rows,
-                               [&] { return surface.rows(face_o.data(), uv_o.data(), k, 0).position; });
+    NormalSums S = sums();
     long long used = 0;
-    std::vector<double> rhs;
+    std::vector<double> rhs = std::move(S.rhs);
     if (cg) {
       NormalEquations M = phases.timed(&ApproximationTimings::normal, [&] {
-        for (std::size_t i = 0; i < k; ++i) {
-          const std::size_t o = order[i];
-          for (std::size_t c = 0; c < 3; ++c) {
-            points_o[3 * i + c] = points[3 * o + c];
-            normals_o[3 * i + c] = feet.normals[3 * o + c];
-          }
-          if (fit_weights) w_o[i] = fit_weights[o];
-        }
-        const double* w = nullptr;
-        int count = 0;
-        if (blend) {
-          blend_weights(points_o.data(), normals_o.data(), fit_weights ? w_o.data() : nullptr, k, options.tangential,
-                        w6.data(), wp.data());
-          w = w6.data();
-          count = 6;
-        } else {
-          for (std::size_t i = 0; i < 3 * k; ++i) wp[i] = fit_weights ? w_o[i / 3] * points_o[i] : points_o[i];
-          if (fit_weights) {
-            w = w_o.data();
-            count = 1;
-          }
-        }
-        NormalEquations eq(normal_matrix(A, w, count), K, options.fairness, options.proximal);
-        rhs = transposed_times(A, wp.data());
+        NormalEquations eq(std::move(S.matrix), K, options.fairness, options.proximal);
         for (std::size_t i = 0; i < rhs.size(); ++i) rhs[i] += eq.mu() * V[i];
         return eq;
       });
-      A = CsrMatrix{};
       const PcgResult res = phases.timed(&ApproximationTimings::solve, [&] {
         return M.solve(rhs.data(), V.data(), options.solver_tol, options.solver_max_iter, 0);
       });
       used = res.iterations;
     } else {
       Sparse M = phases.timed(&ApproximationTimings::normal, [&] {
-        for (std::size_t i = 0; i < k; ++i) {
-          const std::size_t o = order[i];
-          for (std::size_t c = 0; c < 3; ++c) points_o[3 * i + c] = points[3 * o + c];
-          if (fit_weights) w_o[i] = fit_weights[o];
-        }
-        for (std::size_t i = 0; i < 3 * k; ++i) wp[i] = fit_weights ? w_o[i / 3] * points_o[i] : points_o[i];
-        NormalMatrix N = normal_matrix(A, fit_weights ? w_o.data() : nullptr, fit_weights ? 1 : 0);
+        NormalMatrix& N = S.matrix;
         Sparse ata;
         ata.n = N.n;
         ata.indptr = std::move(N.indptr);
@@ -544,11 +441,9 @@ ApproximationResult approximate(LimitSurface& surface, const double* points, std
         const double mu = options.proximal * mean_diagonal;
         Sparse m = plus(ata, nullptr, mu, true);
         if (!K.indptr.empty()) m = plus(m, &K, options.fairness * mean_diagonal, false);
-        rhs = transposed_times(A, wp.data());
         for (std::size_t i = 0; i < rhs.size(); ++i) rhs[i] += mu * V[i];
         return m;
       });
-      A = CsrMatrix{};
       used = phases.timed(&ApproximationTimings::solve,
                           [&] { return lspia(M, rhs, V, options.solver_tol, options.solver_max_iter); });
     }
@@ -556,20 +451,16 @@ ApproximationResult approximate(LimitSurface& surface, const double* points, std
       if (!std::isfinite(V[i]))
         throw ParameterError("approximation's update " + std::to_string(it) + " gave control vertex " +
                              std::to_string(i / 3) + " a value that is not finite");
-    surface.set_vertices(V.data());
-    feet = Feet(phases.timed(&ApproximationTimings::footpoints, [&] {
-      Footpoints from;
-      from.face_ids = feet.face_ids;
-      from.uv = feet.uv;
-      FootpointOptions refine = options.footpoints;
-      refine.grid = 0;
-      refine_footpoints(surface, topology, points, k, refine, from);
-      return from;
-    }));
+    set_vertices(V);
+    feet = footpoints([&] { return chunks.refine(options.footpoints); });
+    measure_scale();
     done = it;
-    const ApproximationRecord rec = record(it, feet.distances, used);
-    const double current = criterion(feet.distances);
-    if (current <= best.rms) best = Best{current, V, feet.face_ids, feet.uv, feet.distances, it};
+    const ApproximationRecord rec = record(it, feet, used);
+    const double current = criterion(feet);
+    if (current <= best.rms) {
+      best = Best{current, V, it};
+      chunks.keep_best();
+    }
     bests.push_back(best.rms);
     if (rec.rms_relative <= options.exact) {
       out.stop_reason = "exact";
@@ -581,28 +472,16 @@ ApproximationResult approximate(LimitSurface& surface, const double* points, std
     // footpoint is searched for afresh (the grid's nearest sample, then Gauss-Newton) and the closer one kept; a
     // gain of more than tol goes on.
     searched = it;
-    Feet fresh = search();
-    std::vector<char> closer(k);
-    std::vector<double> merged(k);
-    for (std::size_t i = 0; i < k; ++i) {
-      closer[i] = fresh.distances[i] < feet.distances[i] - options.closer * unit;
-      merged[i] = closer[i] ? fresh.distances[i] : feet.distances[i];
-    }
-    if (criterion(merged) < (1 - options.tol) * current) {
-      for (std::size_t i = 0; i < k; ++i)
-        if (closer[i]) {
-          feet.face_ids[i] = fresh.face_ids[i];
-          feet.distances[i] = fresh.distances[i];
-          for (std::size_t c = 0; c < 2; ++c) feet.uv[2 * i + c] = fresh.uv[2 * i + c];
-          for (std::size_t c = 0; c < 3; ++c) feet.normals[3 * i + c] = fresh.normals[3 * i + c];
-        }
+    const DistanceSums merged =
+        footpoints([&] { return chunks.search_fresh(options.footpoints, options.closer * unit); });
+    // (The footpoints' gain is a gain in distance: RMS against RMS, with a robust loss too.)
+    if (rms(merged) < (1 - options.tol) * rms(feet)) {
+      chunks.keep_fresh(options.closer * unit);
+      measure_scale();
       continue;
     }
     out.stop_reason = "converged";
-    if (best.iteration == it) {  // the fresh search was made on the iterate returned: the final step reuses it
-      last_fresh = std::move(fresh);
-      fresh_iteration = it;
-    }
+    if (best.iteration == it) fresh_iteration = it;  // the fresh search was made on the iterate returned: reused
     break;
   }
   // Reported distances are true distances (issue 33, 6): re-projection from the previous footpoints keeps a point
@@ -610,26 +489,18 @@ ApproximationResult approximate(LimitSurface& surface, const double* points, std
   // nearest sample, then Gauss-Newton: closest_points), any closer one kept, and its record measured again from
   // them before the result reports it.
   if (best.iteration != fresh_iteration) {
-    surface.set_vertices(best.V.data());
-    last_fresh = search();
+    set_vertices(best.V);
+    footpoints([&] { return chunks.search_fresh(options.footpoints, options.closer * unit); });
   }
-  bool closer_found = false;
-  for (std::size_t i = 0; i < k; ++i)
-    if (last_fresh.distances[i] < best.distances[i]) {
-      best.face_ids[i] = last_fresh.face_ids[i];
-      best.uv[2 * i] = last_fresh.uv[2 * i];
-      best.uv[2 * i + 1] = last_fresh.uv[2 * i + 1];
-      best.distances[i] = last_fresh.distances[i];
-      closer_found = true;
-    }
-  if (closer_found) {
-    ApproximationRecord& rec = out.history[static_cast<std::size_t>(best.iteration)];
-    const double r = rms(best.distances), m = *std::max_element(best.distances.begin(), best.distances.end());
+  const DistanceSums final_feet = chunks.keep_fresh_in_best();
+  ApproximationRecord& rec = out.history[static_cast<std::size_t>(best.iteration)];
+  if (!options.report_each) measure_surface(rec);  // the surface holds the returned iterate
+  if (final_feet.changed > 0) {
+    const double r = rms(final_feet), m = final_feet.max;
     rec.rms_relative = r / unit;
     rec.max_relative = m / unit;
     rec.rms = std::ldexp(r, e);
     rec.max = std::ldexp(m, e);
-    if (robust) rec.robust_scale = std::ldexp(robust_scale_of(best.distances), e);
   }
   // The iterate of the lowest RMS distance (an update that raised it is not returned).
   out.iterations = done;
@@ -637,14 +508,13 @@ ApproximationResult approximate(LimitSurface& surface, const double* points, std
   out.control_vertices = std::move(best.V);
   detail::scale_pow2(out.control_vertices.data(), out.control_vertices.size(), e);
   surface.set_vertices(out.control_vertices.data());
-  out.footpoints.face_ids = std::move(best.face_ids);
-  out.footpoints.uv = std::move(best.uv);
-  if (robust) {
-    const double s = robust_scale_of(best.distances);
-    for (double d : best.distances) out.robust_outliers += d > options.robust.c * s;
-    out.robust_scale = std::ldexp(s, e);
+  out.footpoints = chunks.best_footpoints();
+  if (robust) {  // the scale of the returned iterate's distances before the final search, in the fit's units
+    const double s = std::ldexp(rec.robust_scale, -e);
+    out.robust_scale = rec.robust_scale;
+    out.robust_outliers = out.footpoints.distances.empty() ? -1 : 0;
+    for (double d : out.footpoints.distances) out.robust_outliers += d > options.robust.c * s;
   }
-  out.footpoints.distances = std::move(best.distances);
   detail::scale_pow2(out.footpoints.distances.data(), out.footpoints.distances.size(), e);
   out.diagonal = std::ldexp(diagonal, e);
   out.seconds = phases.wall;
@@ -652,6 +522,12 @@ ApproximationResult approximate(LimitSurface& surface, const double* points, std
   out.seconds.total = seconds_since(t0);
   out.cpu_seconds.total = cpu_now() - c0;
   return out;
+}
+
+ApproximationResult approximate(LimitSurface& surface, const double* points, std::size_t k, const double* weights,
+                                const ApproximationOptions& options, const ApproximationProgress& progress) {
+  InMemoryChunks chunks(surface, points, k, weights, options.chunk_points);
+  return approximate(surface, chunks, options, progress);
 }
 
 }  // namespace sorpia

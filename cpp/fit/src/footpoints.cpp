@@ -454,11 +454,10 @@ constexpr double kRounding = 8.0;
 // Limit points known where the search starts (closest_points' grid samples,
 // evaluated with their derivatives): point i starts at sample nearest[i],
 // whose position and first derivatives are those of its (face, u, v), so
-// that its first evaluation is already made. refine releases them once
-// read.
+// that its first evaluation is already made (borrowed: a FootpointSearch's).
 struct KnownStart {
-  std::vector<std::int64_t> nearest;
-  std::vector<double> positions, du, dv;  // per sample, (3) each
+  const std::int64_t* nearest = nullptr;
+  const double *positions = nullptr, *du = nullptr, *dv = nullptr;  // per sample, (3) each
 };
 
 // One point's state in refine: the point, its current face, chart and
@@ -582,7 +581,6 @@ void refine(const LimitSurface& surface, const Topology& topology, const double*
     step(q);
   });
   // The inputs are in the slots now.
-  if (known != nullptr) *known = KnownStart{};
   std::vector<std::int32_t>().swap(fp.face_ids);
   std::vector<double>().swap(fp.uv);
   // Each round visits the faces the pending points are in, and runs each
@@ -682,41 +680,47 @@ void refine(const LimitSurface& surface, const Topology& topology, const double*
 
 }  // namespace
 
-Footpoints closest_points(const LimitSurface& surface, const Topology& topology, const double* points, std::size_t n,
-                          const FootpointOptions& options) {
+FootpointSearch::FootpointSearch(const LimitSurface& surface, const Topology& topology,
+                                 const FootpointOptions& options)
+    : surface_(&surface), topology_(&topology), options_(options) {
   if (options.grid < 1 || options.grid > 64)
     throw ParameterError("grid must be in 1..64, got " + std::to_string(options.grid));
   const Domains dom(topology, surface.scheme(), surface.tags().holes);
-  std::vector<std::int32_t> sample_faces;
-  std::vector<double> sample_uv;
-  grid_samples(dom, options.grid, sample_faces, sample_uv);
-  if (sample_faces.empty()) throw ParameterError("the surface has no face outside its holes");
-  const std::size_t k = sample_faces.size();
-  KnownStart known;
-  known.positions.resize(3 * k);
-  known.du.resize(3 * k);
-  known.dv.resize(3 * k);
-  surface.evaluate(sample_faces.data(), sample_uv.data(), k, known.positions.data(), known.du.data(),
-                   known.dv.data(), nullptr);
+  grid_samples(dom, options.grid, sample_faces_, sample_uv_);
+  if (sample_faces_.empty()) throw ParameterError("the surface has no face outside its holes");
+  const std::size_t k = sample_faces_.size();
+  positions_.resize(3 * k);
+  du_.resize(3 * k);
+  dv_.resize(3 * k);
+  surface.evaluate(sample_faces_.data(), sample_uv_.data(), k, positions_.data(), du_.data(), dv_.data(), nullptr);
+  index_ = std::make_unique<PointIndex>(positions_.data(), k);
+}
+
+FootpointSearch::~FootpointSearch() = default;
+
+Footpoints FootpointSearch::find(const double* points, std::size_t n) const {
   Footpoints fp;
   fp.face_ids.resize(n);
   fp.uv.resize(2 * n);
-  known.nearest.resize(n);
+  std::vector<std::int64_t> nearest(n);
   {
-    const PointIndex index(known.positions.data(), k);
     std::vector<double> dist(n);
-    index.nearest(points, n, known.nearest.data(), dist.data());
+    index_->nearest(points, n, nearest.data(), dist.data());
   }
   for (std::size_t i = 0; i < n; ++i) {
-    const auto s = static_cast<std::size_t>(known.nearest[i]);
-    fp.face_ids[i] = sample_faces[s];
-    fp.uv[2 * i] = sample_uv[2 * s];
-    fp.uv[2 * i + 1] = sample_uv[2 * s + 1];
+    const auto s = static_cast<std::size_t>(nearest[i]);
+    fp.face_ids[i] = sample_faces_[s];
+    fp.uv[2 * i] = sample_uv_[2 * s];
+    fp.uv[2 * i + 1] = sample_uv_[2 * s + 1];
   }
-  std::vector<std::int32_t>().swap(sample_faces);
-  std::vector<double>().swap(sample_uv);
-  refine(surface, topology, points, n, options, fp, &known);
+  KnownStart known{nearest.data(), positions_.data(), du_.data(), dv_.data()};
+  refine(*surface_, *topology_, points, n, options_, fp, &known);
   return fp;
+}
+
+Footpoints closest_points(const LimitSurface& surface, const Topology& topology, const double* points, std::size_t n,
+                          const FootpointOptions& options) {
+  return FootpointSearch(surface, topology, options).find(points, n);
 }
 
 void refine_footpoints(const LimitSurface& surface, const Topology& topology, const double* points, std::size_t n,

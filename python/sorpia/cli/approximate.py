@@ -8,7 +8,7 @@ import warnings
 
 import numpy as np
 
-from .. import DecimationWarning, MeshError, __version__, approximate, decimate, limit_surface
+from .. import DecimationWarning, MeshError, MeshFileError, __version__, _core, approximate, decimate, limit_surface
 from .._nonmanifold import NONMANIFOLD_HINT, REPAIR_HINT
 from .._validate import DEFAULT_BOUNDARY, Polygons, resolve_scheme
 from ..approximate import DEFAULT_FAIRNESS, DEFAULT_TOL
@@ -20,6 +20,23 @@ from .progress import Progress
 
 # The data of an input mesh with faces when --sampling is not given (measured in docs/approximation.md).
 DEFAULT_SAMPLING = "vertices"
+# An input of more points than this is streamed (--stream auto): in memory a fit holds about 1 KB per point, so 2^24
+# points would take some 16 GB (docs/approximation.md, "Large data").
+STREAM_POINTS = 1 << 24
+
+
+def _streamed(input_path, stream) -> bool:
+    """Whether the input's points are streamed from the file (sorpia.approximate(path)): --stream yes, or auto and
+    a binary little-endian PLY or .npy of more than STREAM_POINTS points (its header says how many)."""
+    if stream == "no":
+        return False
+    try:
+        count = _core.point_file_points(str(input_path))
+    except MeshFileError as exc:
+        if stream == "yes":
+            raise UserError(f"--stream yes: {exc}") from None
+        return False
+    return stream == "yes" or count > STREAM_POINTS
 
 
 def _cage(input_mesh, vertices, cage, scheme, sharp_angle, source, progress):
@@ -95,13 +112,14 @@ def _n_faces(faces) -> int:
 def run_approximate(input_path, output, *, vertices=None, cage=None, scheme="auto", sharp_angle=None, report=None,
                     surface=None, level=3, iterations=10, tol=DEFAULT_TOL, fairness=DEFAULT_FAIRNESS, tangential=None,
                     method="cg", boundary=None, sampling=None, quiet=False, force=False, out=None, prim=None,
-                    triangulate=False) -> tuple[int, dict]:
+                    triangulate=False, stream="auto") -> tuple[int, dict]:
     """`sorpia approximate`: returns (exit code, report dict). Every output
     is checked before the work and written atomically after it; an error
     leaves none of them. The cage is written with its scheme, boundary rule
     and tags where the format holds them (a warning where it does not).
     `prim`: the USD input's mesh prim; `triangulate`: the input's polygons
-    split into triangles (for --vertices)."""
+    split into triangles (for --vertices); `stream`: "auto", "yes" or "no"
+    (_streamed: the points read a chunk at a time, never all in memory)."""
     out = out if out is not None else sys.stdout
     if (vertices is None) == (cage is None):
         raise UserError("give the cage: --vertices N (decimate the input) or --cage CAGE (a mesh file), one of them")
@@ -109,17 +127,31 @@ def run_approximate(input_path, output, *, vertices=None, cage=None, scheme="aut
     check_outputs([p for p in (input_path, cage) if p is not None], output, surface, report, force=force)
     timings = {}
     with Progress("approximate", enabled=not quiet) as progress:
-        progress.status(f"reading {input_path}")
         t0 = time.perf_counter()
-        mesh = read_input(input_path, triangulate=triangulate, tags=False, points=True, prim=prim)
+        streamed = _streamed(input_path, stream)
+        if streamed:
+            if cage is None:
+                raise UserError(f"{input_path} is streamed (--stream): --vertices decimates a mesh, which must be in "
+                                "memory; give the cage with --cage CAGE (e.g. decimate a subsample of the points)")
+            if sampling not in (None, "vertices"):
+                raise UserError(f"--sampling {sampling} samples a mesh's faces and {input_path} is streamed: its "
+                                "points are the data as they are (--stream no reads the mesh)")
+            mesh = None
+            points = str(input_path)
+            n_input = _core.point_file_points(points)
+        else:
+            progress.status(f"reading {input_path}")
+            mesh = read_input(input_path, triangulate=triangulate, tags=False, points=True, prim=prim)
+            points = mesh.vertices
+            n_input = len(points)
         timings["read"] = time.perf_counter() - t0
-        points = mesh.vertices
-        if sampling not in (None, "vertices") and len(mesh.faces) == 0:
+        if not streamed and sampling not in (None, "vertices") and len(mesh.faces) == 0:
             raise UserError(f"--sampling {sampling} samples a mesh's faces and {input_path} is a point cloud: "
                             "its points are the data as they are")
-        sampling = sampling or (DEFAULT_SAMPLING if len(mesh.faces) else "vertices")
+        sampling = sampling or (DEFAULT_SAMPLING if not streamed and len(mesh.faces) else "vertices")
         surface_data = {} if sampling == "vertices" else {"faces": mesh.faces, "sampling": sampling}
-        check_float32_outputs(points, {"-o": output, "--surface": surface})
+        if not streamed:
+            check_float32_outputs(points, {"-o": output, "--surface": surface})
         t0 = time.perf_counter()
         cage_v, cage_f, tags, scheme, file_rule, origin, cage_attributes = _cage(mesh, vertices, cage, scheme, sharp_angle,
                                                                 input_path, progress)
@@ -155,7 +187,7 @@ def run_approximate(input_path, output, *, vertices=None, cage=None, scheme="aut
             write_surface(surface, Vs, Fs)
         timings["write"] = time.perf_counter() - t0
     data = {"sorpia_version": __version__, "command": "approximate", "input": str(input_path),
-            "input_points": int(len(points)), "sampling": sampling, "output": str(output),
+            "input_points": int(n_input), "sampling": sampling, "streamed": streamed, "output": str(output),
             "cage": {**origin, "vertices": int(len(cage_v)), "faces": _n_faces(cage_f)},
             "scheme": scheme, "boundary": rule,
             "tags": {"sharp_angle": sharp_angle, **tags_summary(tags), "written_to_output": list(written.written)},

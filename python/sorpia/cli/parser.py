@@ -10,7 +10,7 @@ from .._plotting import FACE_BUDGET  # plotting imports matplotlib only when dra
 from ..fair import MAX_LEVELS
 from .common import CLI_SCHEMES, DISPLAY_ORDER, FAIR_DEFAULTS, FIT_DEFAULTS
 from ..approximate import DEFAULT_FAIRNESS, DEFAULT_TANGENTIAL, DEFAULT_TOL, SAMPLINGS
-from .approximate import DEFAULT_SAMPLING, run_approximate
+from .approximate import DEFAULT_SAMPLING, STREAM_POINTS, run_approximate
 from .compare import run_compare
 from .demo import run_demo
 from .fit import run_fit
@@ -320,12 +320,16 @@ def build_parser() -> argparse.ArgumentParser:
     app.add_argument("--level", type=_level_arg, default=3, metavar="L", help="refinement level of --surface")
     app.add_argument("--report", metavar="REPORT.json",
                      help="write a JSON report: the cage, the distances both ways per iteration, seconds per phase")
+    app.add_argument("--stream", choices=("auto", "yes", "no"), default="auto",
+                     help="read the input's points a chunk at a time, never all in memory (out of core: a binary "
+                     "little-endian PLY or a .npy (k, 3) array; needs --cage): auto = when the file holds more than "
+                     f"{STREAM_POINTS:,} points")
     output_flags(app)
     app.set_defaults(func=lambda a: run_approximate(
         a.input, a.output, vertices=a.vertices, cage=a.cage, scheme=a.scheme, sharp_angle=a.sharp_angle,
         report=a.report, surface=a.surface, level=a.level, iterations=a.iterations, tol=a.tol,
         fairness=a.fairness, tangential=a.tangential, method=a.method, boundary=a.boundary, sampling=a.sampling,
-        quiet=a.quiet, force=a.force, prim=a.prim, triangulate=a.triangulate)[0])
+        quiet=a.quiet, force=a.force, prim=a.prim, triangulate=a.triangulate, stream=a.stream)[0])
 
     comp = command("compare", "run several methods to one tolerance: the paper's Table 1 and Figure 7",
                    "Run each method on the mesh to the same tolerance and print the paper's Table 1 layout for "

@@ -16,8 +16,9 @@
 ///      mean diagonal of A^T W A, mu = proximal times it), solved by PCG
 ///      (NormalEquations) or by LSPIA (Deng and Lin 2014);
 ///   3. the footpoints re-projected from where they were (refine_footpoints),
-///      a record (RMS and largest distance both ways: data to surface at the
-///      footpoints, surface to data from a uniform tessellation's vertices);
+///      a record (RMS and largest distance data to surface at the
+///      footpoints; surface to data, from a uniform tessellation's vertices,
+///      only with report_each, else for the returned iterate at the end);
 ///   4. the stop rule: the lowest RMS so far fell by at most `tol` of itself
 ///      per iteration over the last `window` iterations, and a fresh search
 ///      of every footpoint (closest_points again) finds none closer that
@@ -40,6 +41,7 @@
 
 #include "sorpia/footpoints.hpp"
 #include "sorpia/robust.hpp"
+#include "sorpia/point_chunks.hpp"
 #include "sorpia/surface.hpp"
 
 namespace sorpia {
@@ -63,6 +65,9 @@ struct ApproximationOptions {
   /// >= 1 (Gauss-Newton steps per projection).
   FootpointOptions footpoints{4, 10};
   int report_level = 2;           ///< the tessellation level of the surface-to-data distances, 0..15
+  /// The surface-to-data distances in every record (true), or only in the
+  /// returned iterate's, measured at the end (false: NaN in the others).
+  bool report_each = false;
   int fairness_depth = 0;         ///< K's quadrature depth (a regulariser: its cost, not its exactness, counts)
   double proximal = 1e-6;         ///< mu over the mean diagonal of A^T W A, > 0
   int window = 3;                 ///< the stop rule's iterations, >= 1
@@ -75,13 +80,17 @@ struct ApproximationOptions {
   /// stop rule and the choice of the iterate returned (the records keep
   /// the RMS distance of all the points).
   RobustOptions robust{};
+  /// Points per chunk of an in-memory array (point_chunks.hpp), >= 1: the
+  /// unit of the footpoints and of the normal sums, added in order.
+  std::size_t chunk_points = std::size_t{1} << 20;
 };
 
 /// One iteration's figures (iteration 0: the cage as given).
 struct ApproximationRecord {
   int iteration = 0;
   /// Data to surface: the (weighted) RMS and the largest footpoint distance;
-  /// surface to data: from the tessellation's vertices to the nearest point.
+  /// surface to data: from the tessellation's vertices to the nearest point
+  /// (NaN where not measured: ApproximationOptions::report_each).
   /// In the caller's units, and over the data's bounding-box diagonal.
   double rms = 0.0, max = 0.0, surface_rms = 0.0, surface_max = 0.0;
   double rms_relative = 0.0, max_relative = 0.0, surface_rms_relative = 0.0, surface_max_relative = 0.0;
@@ -110,7 +119,8 @@ struct ApproximationResult {
   double diagonal = 0.0;   ///< of the data's bounding box: the unit of the relative figures
   /// The robust scale s at the returned iterate's footpoints (0 without a
   /// robust loss), and how many points lie farther than c s from it (with
-  /// Tukey: the points that do not pull at all).
+  /// Tukey: the points that do not pull at all; -1 where the backend keeps
+  /// no footpoints, streamed data).
   double robust_scale = 0.0;
   long long robust_outliers = 0;
   std::vector<ApproximationRecord> history;
@@ -147,5 +157,14 @@ using ApproximationProgress = std::function<void(const ApproximationRecord&)>;
 ///         surface's evaluation
 ApproximationResult approximate(LimitSurface& surface, const double* points, std::size_t k, const double* weights,
                                 const ApproximationOptions& options, const ApproximationProgress& progress = {});
+
+/// The same fit (the one driver) over points held by a backend (PointChunks:
+/// in memory, streamed from a file, or elsewhere) whose chunks run on
+/// `surface` or on copies of it kept at the control vertices the driver
+/// sets. The backend's footpoint states move with the driver's calls; its
+/// sums are added in its chunks' order. With FileChunks the result's
+/// footpoints are empty, and the surface-to-data report uses its sample.
+ApproximationResult approximate(LimitSurface& surface, PointChunks& chunks, const ApproximationOptions& options,
+                                const ApproximationProgress& progress = {});
 
 }  // namespace sorpia

@@ -8,6 +8,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "sorpia/surface.hpp"
@@ -80,6 +81,31 @@ struct FootpointOptions {
 /// @throws ParameterError when the surface has no face outside holes
 Footpoints closest_points(const LimitSurface& surface, const Topology& topology, const double* points,
                           std::size_t n, const FootpointOptions& options);
+
+/// closest_points' search start on one state of a surface, built once and
+/// queried for any number of point sets (an approximation's chunks): the
+/// grid samples (face, u, v), their limit points and first derivatives, and
+/// a k-d tree over them. find(points) is closest_points(surface, topology,
+/// points, options), bit for bit. The surface and topology are borrowed:
+/// they must outlive it and the surface's control vertices must not change
+/// while it is used.
+class FootpointSearch {
+ public:
+  /// @throws ParameterError for a grid out of 1..64, or no face outside holes
+  FootpointSearch(const LimitSurface& surface, const Topology& topology, const FootpointOptions& options);
+  ~FootpointSearch();
+  FootpointSearch(const FootpointSearch&) = delete;
+  FootpointSearch& operator=(const FootpointSearch&) = delete;
+  Footpoints find(const double* points, std::size_t n) const;
+
+ private:
+  const LimitSurface* surface_;
+  const Topology* topology_;
+  FootpointOptions options_;
+  std::vector<std::int32_t> sample_faces_;
+  std::vector<double> sample_uv_, positions_, du_, dv_;
+  std::unique_ptr<PointIndex> index_;
+};
 
 /// Moves footpoints (face_ids, uv: the input state, e.g. those of the
 /// previous control vertices) to local minima of the distance to their

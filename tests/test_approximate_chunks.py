@@ -1,0 +1,287 @@
+"""Approximation over chunks of points (sorpia::PointChunks): the same fit however the points are cut, from a
+Python backend, and streamed from .npy and binary PLY files. The reference is the one-chunk in-memory run; the
+footpoints do not depend on the cutting (each point's search depends on that point alone), the sums only by
+rounding (1e-10 relative), and a backend that returns its chunks' sums in order gives the same bits."""
+
+import json
+
+import numpy as np
+import pytest
+
+import sorpia
+from sorpia import _core, shapes
+from sorpia.approximate import approximate
+from sorpia.surface import LimitSurface
+
+
+def noisy_samples(k=3000, seed=1):
+    """Points near the limit surface of a perturbed icosphere cage (noise 1e-3), and a start cage (the sphere)."""
+    V, F = shapes.icosphere(2)
+    rng = np.random.default_rng(seed)
+    target = LimitSurface(V * (1 + 0.1 * rng.standard_normal((len(V), 1))), F, scheme="loop")
+    fid = rng.integers(0, target.n_faces, k).astype(np.int32)
+    uv = rng.random((k, 2))
+    flip = uv.sum(axis=1) > 1
+    uv[flip] = 1 - uv[flip]
+    P = target.evaluate(fid, uv) + 1e-3 * rng.standard_normal((k, 3))
+    return np.ascontiguousarray(P), V, F
+
+
+def relative(a, b):
+    return float(np.max(np.abs(np.asarray(a) - np.asarray(b))) / np.max(np.abs(np.asarray(b))))
+
+
+@pytest.mark.parametrize("tangential", [0.1, 1.0])
+def test_many_chunks_equal_one(tangential):
+    # One update from the same footpoints: the sums differ by their order's rounding only, and the solve with them
+    # by 1e-13. Later iterations re-project the footpoints from different control vertices, and a footpoint is
+    # final at a step of 1e-11 in (u, v): control vertices 1e-14 apart give footpoints (and so updates) up to
+    # about that apart, whatever the sums (measured: 2e-10 to 5e-10 after 2 to 6 iterations, as a perturbation of
+    # the points by one rounding gives too).
+    P, V, F = noisy_samples()
+    w = np.random.default_rng(5).random(len(P)) + 0.5
+    first = [approximate(P, V, F, tangential=tangential, weights=w, iterations=1, chunk_points=c)
+             for c in (1 << 20, 701)]
+    assert relative(first[1].control_vertices, first[0].control_vertices) < 1e-12
+    assert abs(first[1].rms - first[0].rms) <= 1e-12 * first[0].rms
+    one = approximate(P, V, F, tangential=tangential, weights=w, iterations=6)
+    many = approximate(P, V, F, tangential=tangential, weights=w, iterations=6, chunk_points=701)
+    assert one.iterations == many.iterations and one.best_iteration == many.best_iteration
+    assert relative(many.control_vertices, one.control_vertices) < 5e-9
+    assert abs(many.rms - one.rms) <= 5e-9 * one.rms
+    np.testing.assert_array_equal(many.face_ids, one.face_ids)
+    np.testing.assert_allclose(many.distances, one.distances, rtol=0, atol=5e-9 * one.diagonal)
+
+
+class PythonChunks(_core.PointChunks):
+    """A backend in Python over _core.ApproximationChunk objects (what a Dask backend runs on its workers),
+    returning each chunk's sums in order."""
+
+    def __init__(self, P, V, F, chunk_points):
+        super().__init__()
+        self.chunks = [_core.ApproximationChunk(P[i:i + chunk_points], None, i) for i in range(0, len(P), chunk_points)]
+        self.surface = LimitSurface(V, F, scheme="loop")
+        self.search_ = None
+        self.calls = []
+
+    def size(self):
+        return sum(c.size for c in self.chunks)
+
+    def extent(self):
+        return [c.extent() for c in self.chunks]
+
+    def scale(self, e):
+        for c in self.chunks:
+            c.scale(e)
+
+    def moments(self, center, diagonal):
+        return [c.moments(center, diagonal) for c in self.chunks]
+
+    def line_offset(self, mean, axis, diagonal):
+        return [c.line_offset(mean, axis, diagonal) for c in self.chunks]
+
+    def set_control_vertices(self, V):
+        self.surface.set_vertices(V)
+        self.search_ = None
+
+    def _search(self, grid, max_steps):
+        if self.search_ is None:
+            self.search_ = _core.FootpointSearch(self.surface._surface, grid, max_steps)
+        return self.search_
+
+    def search(self, grid, max_steps):
+        self.calls.append("search")
+        s = self._search(grid, max_steps)
+        return [c.search(s) for c in self.chunks]
+
+    def refine(self, grid, max_steps):
+        self.calls.append("refine")
+        return [c.refine(self.surface._surface, grid, max_steps) for c in self.chunks]
+
+    def keep_best(self):
+        for c in self.chunks:
+            c.keep_best()
+
+    def search_fresh(self, grid, max_steps, closer):
+        self.calls.append("search_fresh")
+        s = self._search(grid, max_steps)
+        return [c.search_fresh(s, closer) for c in self.chunks]
+
+    def keep_fresh(self, closer):
+        for c in self.chunks:
+            c.keep_fresh(closer)
+
+    def keep_fresh_in_best(self):
+        return [c.keep_fresh_in_best() for c in self.chunks]
+
+    def normal_sums(self, tangential):
+        self.calls.append("normal_sums")
+        return [c.normal_sums(self.surface._surface, tangential) for c in self.chunks]
+
+    def sample(self):
+        return np.concatenate([c.points for c in self.chunks])
+
+    def best_footpoints(self):
+        parts = [c.best_footpoints() for c in self.chunks]
+        return tuple(np.concatenate([p[j] for p in parts]) for j in range(3))
+
+
+def core_run(surface, chunks, **kw):
+    o = dict(iterations=6, tol=3e-3, fairness=3e-4, tangential=0.1, method="cg", solver_tol=1e-3,
+             solver_max_iter=2000, grid=4, newton_steps=10, report_level=2, callback=None)
+    o.update(kw)
+    return _core.approximate(surface._surface, chunks, *o.values(), report_each=True)
+
+
+def test_python_backend_gives_the_same_bits():
+    P, V, F = noisy_samples()
+    ref_surface = LimitSurface(V, F, scheme="loop")
+    ref = core_run(ref_surface, _core.InMemoryChunks(ref_surface._surface, P, None, 500))
+    backend = PythonChunks(P, V, F, 500)
+    surface = LimitSurface(V, F, scheme="loop")
+    out = core_run(surface, backend)
+    np.testing.assert_array_equal(out["control_vertices"], ref["control_vertices"])
+    np.testing.assert_array_equal(out["face_ids"], ref["face_ids"])
+    np.testing.assert_array_equal(out["distances"], ref["distances"])
+    assert [h["rms"] for h in out["history"]] == [h["rms"] for h in ref["history"]]
+    assert backend.calls[0] == "search" and backend.calls[1] == "normal_sums" and "refine" in backend.calls
+
+
+def test_python_backend_errors_propagate():
+    P, V, F = noisy_samples(500)
+
+    class Broken(PythonChunks):
+        def normal_sums(self, tangential):
+            raise RuntimeError("worker lost")
+
+    surface = LimitSurface(V, F, scheme="loop")
+    with pytest.raises(RuntimeError, match="worker lost"):
+        core_run(surface, Broken(P, V, F, 100))
+
+
+def write_ply(path, P, dtype, extra=True):
+    """A binary little-endian PLY with the points as vertex x, y, z of `dtype` (and, with extra, an int property
+    and an rgb before and after them, which the reader must skip), and a face element after the vertices."""
+    t = "float" if dtype == np.float32 else "double"
+    fields = ([("id", "<i4")] if extra else []) + [("x", dtype), ("y", dtype), ("z", dtype)] + \
+        ([("r", "u1"), ("g", "u1"), ("b", "u1")] if extra else [])
+    rec = np.zeros(len(P), dtype=fields)
+    rec["x"], rec["y"], rec["z"] = P[:, 0], P[:, 1], P[:, 2]
+    props = (["property int id"] if extra else []) + [f"property {t} {c}" for c in "xyz"] + \
+        (["property uchar red", "property uchar green", "property uchar blue"] if extra else [])
+    header = "\n".join(["ply", "format binary_little_endian 1.0", f"element vertex {len(P)}", *props,
+                        "element face 1", "property list uchar int vertex_indices", "end_header"]) + "\n"
+    with open(path, "wb") as f:
+        f.write(header.encode())
+        f.write(rec.tobytes())
+        f.write(np.array([3], np.uint8).tobytes() + np.array([0, 1, 2], "<i4").tobytes())
+
+
+@pytest.mark.parametrize("kind", ["npy64", "npy32", "ply64", "ply32"])
+def test_streamed_file_equals_in_memory(tmp_path, kind):
+    P, V, F = noisy_samples()
+    dtype = np.float32 if kind.endswith("32") else np.float64
+    Pd = P.astype(dtype)
+    path = tmp_path / ("points.npy" if kind.startswith("npy") else "points.ply")
+    if kind.startswith("npy"):
+        np.save(path, Pd)
+    else:
+        write_ply(path, Pd, dtype)
+    ref_surface = LimitSurface(V, F, scheme="loop")
+    ref = core_run(ref_surface, _core.InMemoryChunks(ref_surface._surface, Pd.astype(np.float64), None, 700))
+    surface = LimitSurface(V, F, scheme="loop")
+    out = core_run(surface, _core.FileChunks(surface._surface, str(path), 700, str(tmp_path), 10**6))
+    np.testing.assert_array_equal(out["control_vertices"], ref["control_vertices"])
+    assert [h["rms"] for h in out["history"]] == [h["rms"] for h in ref["history"]]
+    assert [h["surface_rms"] for h in out["history"]] == [h["surface_rms"] for h in ref["history"]]
+    assert len(out["face_ids"]) == 0  # not kept for streamed data
+    assert not list(tmp_path.glob("sorpia-chunks-*"))  # the spill file is unlinked at once
+
+
+def test_streamed_sample_is_fixed_and_near(tmp_path):
+    # With more points than the sample, the report's surface-to-data distances come from a fixed sample: the same
+    # for any chunking, and no nearer than from all points (a subset's nearest point is no nearer).
+    P, V, F = noisy_samples(4000)
+    np.save(tmp_path / "p.npy", P)
+    runs = []
+    for chunk in (300, 1000):
+        surface = LimitSurface(V, F, scheme="loop")
+        runs.append(core_run(surface, _core.FileChunks(surface._surface, str(tmp_path / "p.npy"), chunk,
+                                                       str(tmp_path), 1000), iterations=2))
+    surface = LimitSurface(V, F, scheme="loop")
+    full = core_run(surface, _core.InMemoryChunks(surface._surface, P, None, 1000), iterations=2)
+    assert runs[0]["history"][0]["surface_rms"] == runs[1]["history"][0]["surface_rms"]
+    assert runs[0]["history"][0]["surface_rms"] >= full["history"][0]["surface_rms"]
+    np.testing.assert_array_equal(runs[1]["control_vertices"], full["control_vertices"])  # the report is no part of the fit
+
+
+@pytest.mark.parametrize("text,message", [
+    (b"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\nend_header\n"
+     b"0 0 0\n", "ascii PLY"),
+    (b"ply\nformat binary_little_endian 1.0\nelement vertex 5\nproperty float x\nproperty float y\n"
+     b"property float z\nend_header\n" + bytes(12), "need 60"),
+    (b"ply\nformat binary_little_endian 1.0\nelement vertex 1\nproperty float x\nproperty float y\nend_header\n",
+     "x, y and z"),
+    (b"hello", "neither a PLY nor a .npy"),
+])
+def test_bad_files_are_named(tmp_path, text, message):
+    path = tmp_path / "bad.ply"
+    path.write_bytes(text)
+    surface = LimitSurface(*shapes.icosphere(1), scheme="loop")
+    with pytest.raises(ValueError, match=message) as info:
+        _core.FileChunks(surface._surface, str(path), 100, str(tmp_path), 1000)
+    assert "bad.ply" in str(info.value)
+
+
+def test_approximate_takes_a_path(tmp_path):
+    # sorpia.approximate(path) streams the file: the same fit as the array's (the same chunks), the footpoints not
+    # kept, n_points counted; weights and faces refused with a file.
+    P, V, F = noisy_samples()
+    np.save(tmp_path / "p.npy", P)
+    ref = approximate(P, V, F, chunk_points=1000, iterations=4)
+    out = approximate(tmp_path / "p.npy", V, F, chunk_points=1000, iterations=4, spill_directory=tmp_path)
+    np.testing.assert_array_equal(out.control_vertices, ref.control_vertices)
+    assert out.rms == ref.rms and out.n_points == len(P) and out.report()["n_points"] == len(P)
+    assert len(out.face_ids) == 0 and out.points == str(tmp_path / "p.npy")
+    with pytest.raises(sorpia.ParameterError, match="weights= and faces="):
+        approximate(str(tmp_path / "p.npy"), V, F, weights=np.ones(len(P)))
+    assert _core.point_file_points(str(tmp_path / "p.npy")) == len(P)
+
+
+def test_command_streams_a_binary_ply(tmp_path, monkeypatch, command):
+    # `sorpia approximate scan.ply --cage cage.obj --stream yes`: the points read a chunk at a time, the fit the
+    # array's (the same chunks: the same bits, checked on the report's RMS and the cage read back to OBJ's 17
+    # digits); --vertices and --sampling, which need the mesh in memory, refused by name.
+    monkeypatch.chdir(tmp_path)
+    P, V, F = noisy_samples()
+    write_ply(tmp_path / "scan.ply", P, np.float64, extra=False)
+    sorpia.write_mesh(tmp_path / "cage.obj", V, F)
+    code, out, err = command("approximate", "scan.ply", "--cage", "cage.obj", "-o", "out.obj", "--stream", "yes",
+                             "--iterations", 3, "--report", "r.json", "--quiet")
+    assert code == 0, err
+    report = json.loads((tmp_path / "r.json").read_text())
+    cage_v, cage_f = sorpia.read_mesh(tmp_path / "cage.obj")[:2]
+    ref = approximate(P, cage_v, cage_f, iterations=3)
+    assert report["streamed"] and report["input_points"] == len(P) and report["rms"] == ref.rms
+    np.testing.assert_allclose(sorpia.read_mesh(tmp_path / "out.obj")[0], ref.control_vertices, rtol=1e-15,
+                               atol=1e-15)
+    code, out, err = command("approximate", "scan.ply", "--vertices", 50, "-o", "o2.obj", "--stream", "yes")
+    assert code != 0 and "--cage" in err
+    (tmp_path / "text.ply").write_text("ply\nformat ascii 1.0\nelement vertex 0\nend_header\n")
+    code, out, err = command("approximate", "text.ply", "--cage", "cage.obj", "-o", "o3.obj", "--stream", "yes")
+    assert code != 0 and "ascii" in err
+
+
+def test_surface_report_at_the_end_is_the_returned_iterates():
+    # Without report_each the surface-to-data distances are measured once, for the returned iterate: the same
+    # figures as measured at every iteration, None in the other records; the fit itself is unchanged.
+    P, V, F = noisy_samples()
+    each = approximate(P, V, F, iterations=4, report_each=True)
+    end = approximate(P, V, F, iterations=4)
+    np.testing.assert_array_equal(end.control_vertices, each.control_vertices)
+    b = end.best_iteration
+    for key in ("surface_rms", "surface_max", "surface_rms_relative", "surface_max_relative"):
+        assert end.history[b][key] == each.history[b][key]
+        assert all(h[key] is None for i, h in enumerate(end.history) if i != b)
+    assert [h["rms"] for h in end.history] == [h["rms"] for h in each.history]
+    json.dumps(end.report())
