@@ -9,6 +9,9 @@ bound that the robust fit meets, so each test can fail."""
 
 from __future__ import annotations
 
+import json
+import subprocess
+import sys
 import warnings
 
 import numpy as np
@@ -168,3 +171,27 @@ def test_the_robust_fit_over_chunks_is_the_fit_of_one_array():
     assert np.abs(cut.control_vertices - one.control_vertices).max() <= 1e-10 * diagonal(q)
     assert cut.robust_outliers == one.robust_outliers > 0
     assert abs(cut.robust_scale - one.robust_scale) <= 1e-10 * one.robust_scale
+
+
+def test_command_fits_robustly_by_default_and_says_how_many_points_it_cut(tmp_path):
+    # A point cloud with 1% far outliers and a cage given: `sorpia approximate` fits robustly unless --robust none,
+    # its summary counts the points beyond the cut, its report says the loss, and its cage's surface stays with
+    # the other points (the library's robust fit, the same cage to 1e-12 of the diagonal).
+    p, cv, cf = noisy_torus()
+    q, inlier = with_outliers(p, 0.01, 2)
+    (tmp_path / "cloud.obj").write_text("".join(f"v {x!r} {y!r} {z!r}\n" for x, y, z in q.tolist()))
+    sorpia.write_mesh(tmp_path / "start.obj", cv, cf)
+    runs = {}
+    for robust in ("tukey", "none"):
+        args = ["cloud.obj", "-o", f"{robust}.obj", "--cage", "start.obj", "--report", f"{robust}.json"]
+        args += [] if robust == "tukey" else ["--robust", robust]
+        r = subprocess.run([sys.executable, "-m", "sorpia", "approximate", *args], cwd=tmp_path, capture_output=True,
+                           text=True)
+        assert r.returncode == 0, r.stderr
+        runs[robust] = (r.stdout, json.loads((tmp_path / f"{robust}.json").read_text()))
+    out, report = runs["tukey"]
+    assert report["robust"] == "tukey" and report["robust_outliers"] >= (~inlier).sum()
+    assert f"robust tukey: {report['robust_outliers']} points beyond its cut" in out
+    assert runs["none"][1]["robust"] == "none" and "robust" not in runs["none"][0].split("update")[1].split("\n")[0]
+    fitted = sorpia.read_mesh(tmp_path / "tukey.obj")[0]
+    np.testing.assert_allclose(fitted, approximate(q, cv, cf).control_vertices, atol=1e-12 * diagonal(q))

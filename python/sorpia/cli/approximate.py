@@ -11,7 +11,7 @@ import numpy as np
 from .. import DecimationWarning, MeshError, MeshFileError, __version__, _core, approximate, decimate, limit_surface
 from .._nonmanifold import NONMANIFOLD_HINT, REPAIR_HINT
 from .._validate import DEFAULT_BOUNDARY, Polygons, resolve_scheme
-from ..approximate import DEFAULT_FAIRNESS, DEFAULT_TOL
+from ..approximate import DEFAULT_FAIRNESS, DEFAULT_ROBUST, DEFAULT_TOL
 from .common import (EXIT_OK, SCHEME_LABELS, UserError, check_mesh_suffix, choose_scheme, fmt_seconds, is_triangles,
                      read_input, report_warnings, solve_tags, tags_lines, tags_summary, warn_once)
 from .output import (attribute_lines, attributes_to_write, check_float32_outputs, check_outputs,
@@ -112,7 +112,7 @@ def _n_faces(faces) -> int:
 def run_approximate(input_path, output, *, vertices=None, cage=None, scheme="auto", sharp_angle=None, report=None,
                     surface=None, level=3, iterations=10, tol=DEFAULT_TOL, fairness=DEFAULT_FAIRNESS, tangential=None,
                     method="cg", boundary=None, sampling=None, quiet=False, force=False, out=None, prim=None,
-                    triangulate=False, stream="auto") -> tuple[int, dict]:
+                    triangulate=False, stream="auto", robust=DEFAULT_ROBUST) -> tuple[int, dict]:
     """`sorpia approximate`: returns (exit code, report dict). Every output
     is checked before the work and written atomically after it; an error
     leaves none of them. The cage is written with its scheme, boundary rule
@@ -167,11 +167,14 @@ def run_approximate(input_path, output, *, vertices=None, cage=None, scheme="aut
         progress.status("footpoints")
         t0 = time.perf_counter()
         try:
-            res = approximate(points, cage_v, cage_f, scheme=scheme, boundary=rule, iterations=iterations, tol=tol,
-                              fairness=fairness, tangential=tangential, method=method, callback=on_iteration,
-                              **surface_data, **tags)
+            with warnings.catch_warnings(record=True) as caught:  # a surface that strays: said once, as the others
+                warnings.simplefilter("always")
+                res = approximate(points, cage_v, cage_f, scheme=scheme, boundary=rule, iterations=iterations,
+                                  tol=tol, fairness=fairness, tangential=tangential, method=method,
+                                  callback=on_iteration, robust=robust, **surface_data, **tags)
         except MeshError as exc:  # the data were read and checked: what is refused is the cage
             raise _cage_refusal(exc, origin, input_path) from None
+        report_warnings(caught)
         timings["approximate"] = time.perf_counter() - t0
         t0 = time.perf_counter()
         surface_stats = None
@@ -239,7 +242,10 @@ def approximate_summary(d: dict) -> str:
         f"  scheme      {SCHEME_LABELS[d['scheme']]}, boundary {d['boundary']}",
         *(f"  {'tags' if j == 0 else '':<12}{line}" for j, line in enumerate(tag_lines)),
         *attribute_lines(d.get("attributes", {})),
-        f"  update      {d['method']}, {d['iterations']} iterations ({state})",
+        f"  update      {d['method']}, {d['iterations']} iterations ({state})" + (
+            "" if d.get("robust", "none") == "none" else
+            f"; robust {d['robust']}: {d['robust_outliers']} points beyond its cut" if d["robust_outliers"] >= 0 else
+            f"; robust {d['robust']}"),
         f"  data->surf  {_distances(f)}; {given}",
         f"  surf->data  {_distances(f, 'surface_')}",
         f"  seconds     {phases}",
