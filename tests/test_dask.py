@@ -20,7 +20,7 @@ distributed = pytest.importorskip("distributed", reason="dask.distributed is not
 
 import sorpia  # noqa: E402
 from sorpia import ParameterError, shapes  # noqa: E402
-from test_approximate_chunks import noisy_samples as chunk_samples, write_ply  # noqa: E402
+from test_approximate_chunks import noisy_samples as chunk_samples, with_outliers, write_ply  # noqa: E402
 
 
 @pytest.fixture(scope="module")
@@ -81,6 +81,17 @@ def test_two_workers_fit_as_one_process(client, tangential):
     assert local.history[-1]["rms"] < 0.5 * local.history[0]["rms"]  # a fit that moved: not a trivial equality
 
 
+@pytest.mark.parametrize("robust", ["tukey", "cauchy"])
+def test_robust_fit_with_outliers_on_two_workers_as_in_one_process(client, robust):
+    # the robust fit's histogram, loss sums and reweighted sums come from the workers' chunks in order
+    P, V, F, _ = noisy_samples(3000, seed=3)
+    P, far = with_outliers(P, 30)
+    kw = dict(robust=robust, iterations=5, chunk_points=700)
+    local = sorpia.approximate(P, V, F, **kw)
+    assert_same_fit(sorpia.approximate(P, V, F, client=client, **kw), local)
+    assert local.robust_outliers >= 1  # the outliers were cut or damped: the robust path ran
+
+
 def test_one_worker_fits_as_two(client, one_worker_client):
     P, V, F, _ = noisy_samples(3000, seed=2)
     kw = dict(iterations=5, chunk_points=500)
@@ -132,6 +143,19 @@ def test_closed_client_is_refused():
         cl.close()
     with pytest.raises(ParameterError, match="client = .* is closed"):
         sorpia.approximate(P, V, F, client=cl)
+
+
+def test_client_of_a_gone_scheduler_is_refused():
+    P, V, F, _ = noisy_samples(200)
+    c = distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False, dashboard_address=":0",
+                                 scheduler_port=0)
+    cl = distributed.Client(c, set_as_default=False)
+    c.close()  # the scheduler goes; the client is left as it is
+    try:
+        with pytest.raises(ParameterError, match="client = .* is (closed|connecting|closing)"):
+            sorpia.approximate(P, V, F, client=cl)
+    finally:
+        cl.close()
 
 
 def free_port() -> int:
@@ -213,3 +237,27 @@ def test_cli_streamed_file_read_by_the_workers(tmp_path, cluster, command):
     assert "2 workers" in out
     a, b = sorpia.read_mesh(tmp_path / "a.obj"), sorpia.read_mesh(tmp_path / "b.obj")
     assert relative(b[0], a[0]) < 1e-10
+
+
+def test_lost_worker_is_named():
+    # A worker killed between two calls of the driver: its actor and chunks are gone, and the next call says which
+    # worker and chunks, instead of Dask's bare comm error.
+    import os
+    import signal
+
+    from sorpia import _dask
+
+    P, V, F, _ = noisy_samples(1000, seed=8)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0",
+                                  scheduler_port=0, silence_logs=50) as c, \
+            distributed.Client(c, set_as_default=False) as cl:
+        workers = _dask.check_client(cl)
+        chunks = _dask.DaskChunks(cl, workers, dict(vertices=V, faces=F), P, None, 300, 1000)
+        assert sum(e[0] for e in chunks.extent()) == 1000
+        os.kill(cl.run(os.getpid)[workers[1]], signal.SIGKILL)
+        with pytest.raises(OSError, match=rf"a Dask worker holding this fit's chunks was lost: "
+                                          rf"{workers[1]} \(chunks 2..3\)"):
+            for _ in range(50):  # until the scheduler has noticed
+                chunks.extent()
+                time.sleep(0.1)
+        chunks.close()

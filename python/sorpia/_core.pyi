@@ -6,7 +6,7 @@ import collections.abc
 import numpy
 import numpy.typing
 import typing
-__all__: list[str] = ['ApproximationChunk', 'Boundary', 'FileChunks', 'FootpointSearch', 'INFINITE_SHARPNESS', 'InMemoryChunks', 'InterpolationResult', 'Interpolator', 'LimitSurface', 'MAX_REFINEMENT_LEVELS', 'MAX_THREADS', 'MeshError', 'MeshFileError', 'Method', 'NormalEquations', 'OmegaRule', 'ParameterError', 'PointChunks', 'PointIndex', 'Rules', 'Scheme', 'SolveOptions', 'Tags', 'Topology', 'YOUNG_RHO_CLAMP', 'approximate', 'available_memory_bytes', 'blend_weights', 'boundary_name', 'check_ply_per_vertex', 'check_refinement', 'check_writable', 'closest_points', 'decimate', 'face_list_statistics', 'fair_interpolate', 'fairness_matrix', 'grid', 'icosphere', 'irregular', 'limit_matrix', 'limit_points', 'limit_residual', 'mesh_statistics', 'method_names', 'normal_matrix', 'parse_boundary', 'parse_method', 'parse_omega', 'parse_scheme', 'point_file_points', 'point_sample_mask', 'pole', 'polygon_torus', 'quad_grid', 'quad_irregular', 'quad_torus', 'read_mesh', 'read_point_file', 'refine_footpoints', 'refine_uniform', 'refinement_bytes', 'regular_valence', 'repair', 'repair_polygons', 'rms_levelled', 'scale_exponent', 'scheme_name', 'sharp_edges', 'split_nonmanifold', 'split_nonmanifold_polygons', 'subface_columns', 'tessellation_bytes', 'torus', 'write_file_atomic', 'write_mesh']
+__all__: list[str] = ['ApproximationChunk', 'Boundary', 'FileChunks', 'FootpointSearch', 'INFINITE_SHARPNESS', 'InMemoryChunks', 'InterpolationResult', 'Interpolator', 'LimitSurface', 'MAX_REFINEMENT_LEVELS', 'MAX_THREADS', 'MeshError', 'MeshFileError', 'Method', 'NormalEquations', 'OmegaRule', 'ParameterError', 'PointChunks', 'PointIndex', 'Rules', 'Scheme', 'SolveOptions', 'Tags', 'Topology', 'YOUNG_RHO_CLAMP', 'approximate', 'available_memory_bytes', 'blend_weights', 'boundary_name', 'check_ply_per_vertex', 'check_refinement', 'check_writable', 'closer_footpoints', 'closest_points', 'decimate', 'face_list_statistics', 'fair_interpolate', 'fairness_matrix', 'grid', 'icosphere', 'irregular', 'limit_matrix', 'limit_points', 'limit_residual', 'mesh_statistics', 'method_names', 'normal_matrix', 'parse_boundary', 'parse_method', 'parse_omega', 'parse_scheme', 'point_file_points', 'point_sample_mask', 'pole', 'polygon_torus', 'quad_grid', 'quad_irregular', 'quad_torus', 'read_mesh', 'read_point_file', 'refine_footpoints', 'refine_uniform', 'refinement_bytes', 'regular_valence', 'repair', 'repair_polygons', 'rms_levelled', 'scale_exponent', 'scheme_name', 'sharp_edges', 'split_nonmanifold', 'split_nonmanifold_polygons', 'subface_columns', 'tessellation_bytes', 'torus', 'write_file_atomic', 'write_mesh']
 class MeshError(ValueError):
     """
     The faces or coordinates cannot be used: an index out of range, a repeated
@@ -689,12 +689,16 @@ class FootpointSearch:
         ...
 class ApproximationChunk:
     """
-    One chunk of approximation's points: its footpoints and its share of the normal equations (sorpia::ApproximationChunk; CHUNKS-API.md).
+    One chunk of approximation's points: its footpoints and its share of the normal equations (sorpia::ApproximationChunk, sorpia/point_chunks.hpp).
     """
     def __init__(self, points: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], weights: typing.Any = None, first: typing.SupportsInt | typing.SupportsIndex = 0) -> None:
         ...
     def best_footpoints(self) -> tuple[numpy.typing.NDArray[numpy.int32], numpy.typing.NDArray[numpy.float64], numpy.typing.NDArray[numpy.float64]]:
         ...
+    def distance_histogram(self, unit: typing.SupportsFloat | typing.SupportsIndex) -> tuple:
+        """
+        the current distances' weighted histogram (sorpia/robust.hpp) as (unit, total, mass)
+        """
     def extent(self) -> tuple:
         ...
     def keep_best(self) -> None:
@@ -711,6 +715,14 @@ class ApproximationChunk:
         ...
     def refine(self, surface: LimitSurface, grid: typing.SupportsInt | typing.SupportsIndex, max_steps: typing.SupportsInt | typing.SupportsIndex) -> tuple:
         ...
+    def robust_loss_sum(self, robust: tuple, scale: typing.SupportsFloat | typing.SupportsIndex) -> float:
+        """
+        sum w rho(d) of the current distances; robust = (loss, quantile, c)
+        """
+    def robust_normal_sums(self, surface: LimitSurface, tangential: typing.SupportsFloat | typing.SupportsIndex, robust: tuple, scale: typing.SupportsFloat | typing.SupportsIndex) -> tuple:
+        """
+        normal_sums with each weight times the robust factor of its distance at `scale`
+        """
     def scale(self, e: typing.SupportsInt | typing.SupportsIndex) -> None:
         ...
     def search(self, search: FootpointSearch) -> tuple:
@@ -728,7 +740,7 @@ class ApproximationChunk:
         ...
 class PointChunks:
     """
-    approximation's points as chunks (sorpia::PointChunks), the backend its driver calls: subclass it in Python and implement every method (CHUNKS-API.md); sums may be returned per chunk, as a list, added in its order.
+    approximation's points as chunks (sorpia::PointChunks), the backend its driver calls: subclass it in Python and implement every method (their calls and order: sorpia/point_chunks.hpp); sums may be returned per chunk, as a list, added in its order.
     """
     def __init__(self) -> None:
         ...
@@ -745,13 +757,17 @@ class FileChunks(PointChunks):
     """
     def __init__(self, surface: LimitSurface, path: str, chunk_points: typing.SupportsInt | typing.SupportsIndex, spill_directory: str, sample_points: typing.SupportsInt | typing.SupportsIndex) -> None:
         ...
-def approximate(surface: LimitSurface, chunks: PointChunks, iterations: typing.SupportsInt | typing.SupportsIndex, tol: typing.SupportsFloat | typing.SupportsIndex, fairness: typing.SupportsFloat | typing.SupportsIndex, tangential: typing.SupportsFloat | typing.SupportsIndex, method: str, solver_tol: typing.SupportsFloat | typing.SupportsIndex, solver_max_iter: typing.SupportsInt | typing.SupportsIndex, grid: typing.SupportsInt | typing.SupportsIndex, newton_steps: typing.SupportsInt | typing.SupportsIndex, report_level: typing.SupportsInt | typing.SupportsIndex, callback: typing.Any, seconds_before: typing.SupportsFloat | typing.SupportsIndex = 0.0, report_each: bool = False) -> dict:
+def approximate(surface: LimitSurface, chunks: PointChunks, iterations: typing.SupportsInt | typing.SupportsIndex, tol: typing.SupportsFloat | typing.SupportsIndex, fairness: typing.SupportsFloat | typing.SupportsIndex, tangential: typing.SupportsFloat | typing.SupportsIndex, method: str, solver_tol: typing.SupportsFloat | typing.SupportsIndex, solver_max_iter: typing.SupportsInt | typing.SupportsIndex, grid: typing.SupportsInt | typing.SupportsIndex, newton_steps: typing.SupportsInt | typing.SupportsIndex, report_level: typing.SupportsInt | typing.SupportsIndex, callback: typing.Any, seconds_before: typing.SupportsFloat | typing.SupportsIndex = 0.0, report_each: bool = False, robust: str = 'none', robust_quantile: typing.SupportsFloat | typing.SupportsIndex = 0.9, robust_c: typing.SupportsFloat | typing.SupportsIndex = 30.0) -> dict:
     """
     Approximation's pipeline (sorpia::approximate) from the surface's control vertices, over the points of
     `chunks` (InMemoryChunks, FileChunks or a Python PointChunks): a dict with control_vertices, face_ids, uv,
-    distances, iterations, stop_reason, best_iteration, diagonal, history (records as dicts, seconds counted
-    from seconds_before) and timings; callback(record) after each record. The surface-to-data figures in every
-    record with report_each, else only in the returned iterate's (None in the others).
+    distances, iterations, stop_reason, best_iteration, diagonal, robust_scale, robust_outliers, history
+    (records as dicts, seconds counted from seconds_before) and timings; callback(record) after each record.
+    The surface-to-data figures in every record with report_each, else only in the returned iterate's (None
+    in the others). robust: the loss of the robust fit (none, cauchy, tukey) at the robust_quantile of the
+    distances times robust_c (sorpia/robust.hpp); none here unless given (sorpia.approximate passes its
+    default): a Python backend fits robustly only where it defines distance_histogram, robust_loss_sum and
+    robust_normal_sums (sorpia/point_chunks.hpp).
     """
 def available_memory_bytes() -> int:
     ...
@@ -772,6 +788,11 @@ def check_refinement(topology: Topology, rules: Rules, levels: typing.SupportsIn
 def check_writable(path: str) -> None:
     """
     Raise MeshFileError naming path when write_file_atomic(path, ...) could not start.
+    """
+def closer_footpoints(surface: LimitSurface, topology: Topology, points: numpy.typing.NDArray[numpy.float64], face_ids: numpy.typing.NDArray[numpy.int32], uv: numpy.typing.NDArray[numpy.float64], grid: typing.SupportsInt | typing.SupportsIndex, max_steps: typing.SupportsInt | typing.SupportsIndex, starts: typing.SupportsInt | typing.SupportsIndex, near: typing.SupportsFloat | typing.SupportsIndex = 0.1) -> tuple[tuple, int]:
+    """
+    ((face_ids, uv, positions, distances, normals), moved): the footpoints given, evaluated at their (face, uv),
+    re-searched from the grid samples within their distance (sorpia::FootpointSearch::closer).
     """
 def closest_points(surface: LimitSurface, topology: Topology, points: numpy.typing.NDArray[numpy.float64], grid: typing.SupportsInt | typing.SupportsIndex, max_steps: typing.SupportsInt | typing.SupportsIndex) -> tuple:
     ...
