@@ -112,7 +112,8 @@ def page_lines(path=DEFAULT_JSON) -> list[str]:
             f"`sorpia approximate scan.ply -o cage.obj --vertices {row['cage_asked']}` on a real scan: "
             f"{scan['mesh']} decimated to {scan['base']:,} vertices and refined by Loop's limit surface at level 3 "
             f"({scan['vertices']:,} vertices, binary PLY of {scan['mb']['ply']} MB), default settings, in a fresh "
-            "process (start-up included).", "",
+            f"process (start-up included); 1-minute load average {row.get('load_start', float('nan')):.1f} before, "
+            f"{row.get('load_end', float('nan')):.1f} after, on 2 cores.", "",
             "| wall s (median) | read s | cage s | approximate s | write s | iterations | RMS / diagonal | peak MB |",
             "|---:|---:|---:|---:|---:|---:|---:|---:|",
             f"| {c['wall_s']:.2f} | {t['read']:.2f} | {t['cage']:.2f} | {t['approximate']:.2f} | {t['write']:.2f} "
@@ -133,12 +134,13 @@ def main(argv=None):
     a = p.parse_args(argv)
     scan = make_scan(a.mesh, a.base, pathlib.Path(a.dir))
     print(f"scan: {scan['vertices']:,} vertices, {scan['faces']:,} faces ({scan['mb']})", file=sys.stderr)
-    row = {"scan": scan, "cage_asked": a.vertices, "options": a.extra}
+    row = {"scan": scan, "cage_asked": a.vertices, "options": a.extra, "load_start": os.getloadavg()[0]}
     if not a.no_reads:
         row["read_s"] = time_reads(scan["files"], a.runs)
         print("read_mesh s: " + ", ".join(f"{k} {v:.3f}" for k, v in row["read_s"].items()), file=sys.stderr)
     row["command"] = time_command(scan["files"]["ply"], a.vertices, a.runs, a.extra)
     c = row["command"]
+    row["load_end"] = os.getloadavg()[0]
     print(f"command: {c['wall_s']:.2f} s median of {a.runs} (min {c['wall_min_s']:.2f}, max {c['wall_max_s']:.2f}), "
           f"peak {c['peak_mb']:.0f} MB, {c['iterations']} iterations ({c['stop_reason']}), cage {c['cage_vertices']}, "
           f"RMS {c['rms_relative']:.3g}, max {c['max_relative']:.3g} of the diagonal", file=sys.stderr)
