@@ -93,6 +93,32 @@ void add(NormalSums& total, NormalSums&& chunk) {
                            std::to_string(a.blocks));
     for (std::size_t i = 0; i < total.rhs.size(); ++i) total.rhs[i] += chunk.rhs[i];
     const auto nb = static_cast<std::size_t>(a.blocks);
+    // Where every entry of the chunk's pattern is in the total's (as soon as the chunks added cover the cage's
+    // faces), its values are added in place; else the patterns are merged.
+    bool within = true;
+    for (std::size_t i = 0; i < a.n && within; ++i) {
+      auto p = static_cast<std::size_t>(a.indptr[i]);
+      const auto pe = static_cast<std::size_t>(a.indptr[i + 1]);
+      for (auto q = static_cast<std::size_t>(b.indptr[i]); q < static_cast<std::size_t>(b.indptr[i + 1]); ++q) {
+        while (p < pe && a.indices[p] < b.indices[q]) ++p;
+        if (p == pe || a.indices[p] != b.indices[q]) {
+          within = false;
+          break;
+        }
+      }
+    }
+    if (within) {
+      for (std::size_t i = 0; i < a.n; ++i) {
+        auto p = static_cast<std::size_t>(a.indptr[i]);
+        for (auto q = static_cast<std::size_t>(b.indptr[i]); q < static_cast<std::size_t>(b.indptr[i + 1]); ++q) {
+          while (a.indices[p] < b.indices[q]) ++p;
+          for (std::size_t t = 0; t < nb; ++t) a.values[nb * p + t] += b.values[nb * q + t];
+        }
+      }
+      total.rows_seconds = rows_seconds;
+      total.rows_cpu = rows_cpu;
+      return;
+    }
     NormalMatrix m;
     m.n = a.n;
     m.blocks = a.blocks;
