@@ -15,7 +15,8 @@ divided by the bounding-box diagonal of the points. Rows:
 - Subdivfit -gfit 10 and -gfit 30: Hugues Hoppe's program (Hoppe et al.,
   "Piecewise smooth surface reconstruction", SIGGRAPH 1994), built from
   hhoppe/Mesh-processing-library at commit b79dd12 (`make CC=gcc -C libHh`,
-  `-C Subdivfit`); its output cage is read back and evaluated by sorpia's
+  `-C Subdivfit`: g++ 12, -std=c++14 -O3 -march=corei7 -ffast-math -fopenmp;
+  about 4 minutes on 2 cores); its output cage is read back and evaluated by sorpia's
   Loop limit surface. Time: the process, wall clock (its own reading of the
   text files included).
 - interpolation: `sorpia.interpolate` of the cage: the limit surface through
@@ -346,8 +347,45 @@ def run_mesh(spec, args, gfit, exe):
     return out
 
 
+def summary(results):
+    """The comparisons the docs quote, from this run's rows: per mesh, sorpia.approximate (defaults) against
+    Subdivfit -gfit 30 (RMS, max, surface -> dense) and its time against -gfit 10's, and the Catmull-Clark fit's
+    RMS over the Loop fit's; then every figure where sorpia's default is worse than -gfit 30."""
+    lines = ["## Summary\n", "sorpia.approximate with its defaults against Subdivfit on the same cage (Loop), and its "
+             "Catmull-Clark fit against its Loop fit, from the tables below:\n",
+             "| mesh | RMS: sorpia / -gfit 30 | max: sorpia / -gfit 30 | surface -> dense RMS, max: sorpia / -gfit 30 "
+             "| time: sorpia / -gfit 10 | RMS: Catmull-Clark / Loop |", "|---|---|---|---|---|---|"]
+    worse = []
+    for r in results:
+        rows = {(row["row"], row["scheme"]): row for row in r["rows"]}
+        ours, g30, g10 = (rows.get((label, "loop")) for label in
+                          ("sorpia.approximate", "Subdivfit -gfit 30", "Subdivfit -gfit 10"))
+        cc = rows.get(("sorpia.approximate", "catmull-clark"))
+        if ours is None:
+            continue
+        cells = ["-"] * 5
+        if g30 is not None:
+            cells[0] = f"{ours['rms'] / g30['rms']:.3f}"
+            cells[1] = f"{ours['max'] / g30['max']:.3f}"
+            cells[2] = f"{ours['surface'][0] / g30['surface'][0]:.3f}, {ours['surface'][1] / g30['surface'][1]:.3f}"
+            for what, a, b in (("RMS", ours["rms"], g30["rms"]), ("max", ours["max"], g30["max"]),
+                               ("surface -> dense RMS", ours["surface"][0], g30["surface"][0]),
+                               ("surface -> dense max", ours["surface"][1], g30["surface"][1])):
+                if a > b:
+                    worse.append(f"{r['mesh']}: {what} {a:.3g} against {b:.3g}")
+        if g10 is not None and g10["seconds"]:
+            cells[3] = f"{ours['seconds'] / g10['seconds']:.2f}"
+        if cc is not None:
+            cells[4] = f"{cc['rms'] / ours['rms']:.2f}"
+        lines.append(f"| {r['mesh']} | " + " | ".join(cells) + " |")
+    lines.append("")
+    if worse:
+        lines.append("Where sorpia's default is worse than Subdivfit -gfit 30: " + "; ".join(worse) + ".\n")
+    return "\n".join(lines)
+
+
 def table(results, have_subdivfit):
-    lines = []
+    lines = [summary(results)] if have_subdivfit else []
     for r in results:
         lines.append(f"## {r['mesh']}: {r['points']:,} points, cage of {r['cage_vertices']:,} vertices "
                      f"(decimated in {r['decimate_seconds']:.2f} s; the quad cage: "

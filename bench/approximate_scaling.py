@@ -335,6 +335,8 @@ def main(argv=None):
                      f"| {r['peak_mb']:.0f} |")
     lines += ["", "approximate s: the whole call of `sorpia.approximate` (its phases and the rest: validation, "
               "the limit surface's set-up); decimate s: `sorpia.decimate`, before it."]
+    from approximate_command import page_lines as command_lines  # the whole command at 1M, when measured
+    lines += command_lines()
     lines = print_json_plot(lines, rows, json_path=a.json, plot=a.plot, no_page=a.no_page,
                             default_plot=PAGES / "approximate-scaling.png", draw=draw,
                             caption="time and memory against the number of points")

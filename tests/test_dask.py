@@ -134,6 +134,19 @@ def test_closed_client_is_refused():
         sorpia.approximate(P, V, F, client=cl)
 
 
+def test_client_of_a_gone_scheduler_is_refused():
+    P, V, F, _ = noisy_samples(200)
+    c = distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False, dashboard_address=":0",
+                                 scheduler_port=0)
+    cl = distributed.Client(c, set_as_default=False)
+    c.close()  # the scheduler goes; the client is left as it is
+    try:
+        with pytest.raises(ParameterError, match="client = .* is (closed|connecting|closing)"):
+            sorpia.approximate(P, V, F, client=cl)
+    finally:
+        cl.close()
+
+
 def free_port() -> int:
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
@@ -213,3 +226,27 @@ def test_cli_streamed_file_read_by_the_workers(tmp_path, cluster, command):
     assert "2 workers" in out
     a, b = sorpia.read_mesh(tmp_path / "a.obj"), sorpia.read_mesh(tmp_path / "b.obj")
     assert relative(b[0], a[0]) < 1e-10
+
+
+def test_lost_worker_is_named():
+    # A worker killed between two calls of the driver: its actor and chunks are gone, and the next call says which
+    # worker and chunks, instead of Dask's bare comm error.
+    import os
+    import signal
+
+    from sorpia import _dask
+
+    P, V, F, _ = noisy_samples(1000, seed=8)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0",
+                                  scheduler_port=0, silence_logs=50) as c, \
+            distributed.Client(c, set_as_default=False) as cl:
+        workers = _dask.check_client(cl)
+        chunks = _dask.DaskChunks(cl, workers, dict(vertices=V, faces=F), P, None, 300, 1000)
+        assert sum(e[0] for e in chunks.extent()) == 1000
+        os.kill(cl.run(os.getpid)[workers[1]], signal.SIGKILL)
+        with pytest.raises(OSError, match=rf"a Dask worker holding this fit's chunks was lost: "
+                                          rf"{workers[1]} \(chunks 2..3\)"):
+            for _ in range(50):  # until the scheduler has noticed
+                chunks.extent()
+                time.sleep(0.1)
+        chunks.close()

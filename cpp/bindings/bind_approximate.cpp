@@ -82,6 +82,7 @@ py::dict record_dict(const sorpia::ApproximationRecord& r, double offset) {
   d["max_relative"] = r.max_relative;
   d["surface_rms_relative"] = measured(r.surface_rms_relative);
   d["surface_max_relative"] = measured(r.surface_max_relative);
+  d["robust_scale"] = r.robust_scale;
   d["solver_iterations"] = r.solver_iterations;
   d["seconds"] = r.seconds + offset;
   return d;
@@ -689,7 +690,7 @@ void bind_approximate(py::module_& m) {
       [](sorpia::LimitSurface& surface, sorpia::PointChunks& chunks, int iterations, double tol,
          double fairness, double tangential, const std::string& method, double solver_tol, long long solver_max_iter,
          int grid, int newton_steps, int report_level, const py::object& callback, double seconds_before,
-         bool report_each) {
+         bool report_each, const std::string& robust, double robust_quantile, double robust_c) {
         sorpia::ApproximationOptions o;
         o.iterations = iterations;
         o.tol = tol;
@@ -703,6 +704,9 @@ void bind_approximate(py::module_& m) {
         o.footpoints = footpoint_options(grid, newton_steps);
         o.report_level = report_level;
         o.report_each = report_each;
+        o.robust.loss = sorpia::robust_loss(robust);
+        o.robust.quantile = robust_quantile;
+        o.robust.c = robust_c;
         sorpia::ApproximationProgress progress;
         if (!callback.is_none())
           progress = [&callback, seconds_before](const sorpia::ApproximationRecord& r) {
@@ -725,6 +729,8 @@ void bind_approximate(py::module_& m) {
         out["stop_reason"] = r.stop_reason;
         out["best_iteration"] = r.best_iteration;
         out["diagonal"] = r.diagonal;
+        out["robust_scale"] = r.robust_scale;
+        out["robust_outliers"] = r.robust_outliers;
         out["history"] = history;
         py::dict timings = timings_dict(r.seconds);
         timings["cpu"] = timings_dict(r.cpu_seconds);
@@ -734,11 +740,17 @@ void bind_approximate(py::module_& m) {
       "surface"_a, "chunks"_a, "iterations"_a, "tol"_a, "fairness"_a, "tangential"_a,
       "method"_a, "solver_tol"_a, "solver_max_iter"_a, "grid"_a, "newton_steps"_a, "report_level"_a, "callback"_a,
       "seconds_before"_a = 0.0, "report_each"_a = false,
+      "robust"_a = "none", "robust_quantile"_a = sorpia::RobustOptions{}.quantile,
+      "robust_c"_a = sorpia::RobustOptions{}.c,
       "Approximation's pipeline (sorpia::approximate) from the surface's control vertices, over the points of\n"
       "`chunks` (InMemoryChunks, FileChunks or a Python PointChunks): a dict with control_vertices, face_ids, uv,\n"
-      "distances, iterations, stop_reason, best_iteration, diagonal, history (records as dicts, seconds counted\n"
-      "from seconds_before) and timings; callback(record) after each record. The surface-to-data figures in every\n"
-      "record with report_each, else only in the returned iterate's (None in the others).");
+      "distances, iterations, stop_reason, best_iteration, diagonal, robust_scale, robust_outliers, history\n"
+      "(records as dicts, seconds counted from seconds_before) and timings; callback(record) after each record.\n"
+      "The surface-to-data figures in every record with report_each, else only in the returned iterate's (None\n"
+      "in the others). robust: the loss of the robust fit (none, cauchy, tukey) at the robust_quantile of the\n"
+      "distances times robust_c (sorpia/robust.hpp); none here unless given (sorpia.approximate passes its\n"
+      "default): a Python backend fits robustly only with distance_histogram, robust_loss_sum and\n"
+      "robust_normal_sums, which the trampoline does not reach yet.");
 }
 
 }  // namespace sorpia_py

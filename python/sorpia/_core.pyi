@@ -745,13 +745,17 @@ class FileChunks(PointChunks):
     """
     def __init__(self, surface: LimitSurface, path: str, chunk_points: typing.SupportsInt | typing.SupportsIndex, spill_directory: str, sample_points: typing.SupportsInt | typing.SupportsIndex) -> None:
         ...
-def approximate(surface: LimitSurface, chunks: PointChunks, iterations: typing.SupportsInt | typing.SupportsIndex, tol: typing.SupportsFloat | typing.SupportsIndex, fairness: typing.SupportsFloat | typing.SupportsIndex, tangential: typing.SupportsFloat | typing.SupportsIndex, method: str, solver_tol: typing.SupportsFloat | typing.SupportsIndex, solver_max_iter: typing.SupportsInt | typing.SupportsIndex, grid: typing.SupportsInt | typing.SupportsIndex, newton_steps: typing.SupportsInt | typing.SupportsIndex, report_level: typing.SupportsInt | typing.SupportsIndex, callback: typing.Any, seconds_before: typing.SupportsFloat | typing.SupportsIndex = 0.0, report_each: bool = False) -> dict:
+def approximate(surface: LimitSurface, chunks: PointChunks, iterations: typing.SupportsInt | typing.SupportsIndex, tol: typing.SupportsFloat | typing.SupportsIndex, fairness: typing.SupportsFloat | typing.SupportsIndex, tangential: typing.SupportsFloat | typing.SupportsIndex, method: str, solver_tol: typing.SupportsFloat | typing.SupportsIndex, solver_max_iter: typing.SupportsInt | typing.SupportsIndex, grid: typing.SupportsInt | typing.SupportsIndex, newton_steps: typing.SupportsInt | typing.SupportsIndex, report_level: typing.SupportsInt | typing.SupportsIndex, callback: typing.Any, seconds_before: typing.SupportsFloat | typing.SupportsIndex = 0.0, report_each: bool = False, robust: str = 'none', robust_quantile: typing.SupportsFloat | typing.SupportsIndex = 0.9, robust_c: typing.SupportsFloat | typing.SupportsIndex = 30.0) -> dict:
     """
     Approximation's pipeline (sorpia::approximate) from the surface's control vertices, over the points of
     `chunks` (InMemoryChunks, FileChunks or a Python PointChunks): a dict with control_vertices, face_ids, uv,
-    distances, iterations, stop_reason, best_iteration, diagonal, history (records as dicts, seconds counted
-    from seconds_before) and timings; callback(record) after each record. The surface-to-data figures in every
-    record with report_each, else only in the returned iterate's (None in the others).
+    distances, iterations, stop_reason, best_iteration, diagonal, robust_scale, robust_outliers, history
+    (records as dicts, seconds counted from seconds_before) and timings; callback(record) after each record.
+    The surface-to-data figures in every record with report_each, else only in the returned iterate's (None
+    in the others). robust: the loss of the robust fit (none, cauchy, tukey) at the robust_quantile of the
+    distances times robust_c (sorpia/robust.hpp); none here unless given (sorpia.approximate passes its
+    default): a Python backend fits robustly only with distance_histogram, robust_loss_sum and
+    robust_normal_sums, which the trampoline does not reach yet.
     """
 def available_memory_bytes() -> int:
     ...

@@ -159,7 +159,7 @@ class DaskChunks(_core.PointChunks):
     def __init__(self, client, workers: list[str], cage: dict, points, weights: Optional[np.ndarray],
                  chunk_points: int, sample_points: int):
         super().__init__()
-        self.points, self.sample_points = points, sample_points
+        self.client, self.points, self.sample_points = client, points, sample_points
         self.e = 0  # the driver's scaling of data beyond 2^+-200 (scale)
         self.k = _core.point_file_points(points) if isinstance(points, str) else len(points)
         starts = list(range(0, self.k, chunk_points))
@@ -170,13 +170,15 @@ class DaskChunks(_core.PointChunks):
         with client.as_current():  # the actors' handles call through this client (it need not be the default)
             self.hosts = [f.result() for f in self.futures]
         owner = [c * len(self.hosts) // self.n_chunks for c in range(self.n_chunks)]
+        # what each actor holds, for a message when its worker is lost: (address, first chunk, last chunk)
+        self.holds = [(w, owner.index(h), len(owner) - 1 - owner[::-1].index(h)) for h, w in enumerate(workers)]
         # What the cluster did, for ApproximationResult.timings["cluster"]: the workers' seconds per call (summed
         # over chunks), the bytes of arrays sent to the workers (the points once, then the control vertices) and
         # back per call.
         self.stats = {"workers": len(self.hosts), "chunks": self.n_chunks, "chunk_points": chunk_points,
                       "worker_seconds": {}, "worker_cpu_seconds": {}, "bytes_to_workers": sum(
                           _nbytes(a) for a in (points, weights) if isinstance(a, np.ndarray)), "bytes_from_workers": {}}
-        _wait([self.hosts[owner[c]].add(c, points if isinstance(points, str) else points[s:s + chunk_points],
+        self._wait([self.hosts[owner[c]].add(c, points if isinstance(points, str) else points[s:s + chunk_points],
                                         None if weights is None else weights[s:s + chunk_points], s,
                                         min(chunk_points, self.k - s))
                for c, s in enumerate(starts)])
@@ -190,9 +192,26 @@ class DaskChunks(_core.PointChunks):
         # so the actor and its chunks, is released on the workers once the cycle collector frees the handle.
         gc.collect()
 
+    def _wait(self, futures: list) -> list:
+        """The results of calls of the actors (ActorFutures, one per actor or per chunk), in order; an OSError
+        naming the worker and its chunks where a worker that held chunks is lost."""
+        out = []
+        for f in futures:
+            try:
+                out.append(f.result())
+            except OSError as exc:  # the actor's worker cannot be reached: its chunks' states are gone
+                try:
+                    alive = set(worker_addresses(self.client))
+                except Exception:  # the scheduler too
+                    alive = set()
+                lost = ", ".join(f"{w} (chunks {a}..{b})" for w, a, b in self.holds if w not in alive)
+                raise OSError(f"a Dask worker holding this fit's chunks was lost: {lost or exc}; the chunks' "
+                              "footpoints lived in its memory, so the fit cannot go on: run it again") from exc
+        return out
+
     def _all(self, name: str, *args) -> list:
         """Each chunk's result of `name`, in chunk index order."""
-        parts = _wait([h.run(name, args) for h in self.hosts])
+        parts = self._wait([h.run(name, args) for h in self.hosts])
         out = sorted((triple for part in parts for triple in part), key=lambda triple: triple[0])
         for j, key in enumerate(("worker_seconds", "worker_cpu_seconds")):
             seconds = self.stats[key]
@@ -223,7 +242,7 @@ class DaskChunks(_core.PointChunks):
     def set_control_vertices(self, vertices):
         vertices = np.ascontiguousarray(vertices)
         self.stats["bytes_to_workers"] += len(self.hosts) * int(vertices.nbytes)
-        _wait([h.set_control_vertices(vertices) for h in self.hosts])
+        self._wait([h.set_control_vertices(vertices) for h in self.hosts])
 
     def search(self, grid, max_steps):
         return self._all("search", grid, max_steps)
@@ -266,8 +285,3 @@ def _nbytes(result) -> int:
     if isinstance(result, (tuple, list)):
         return sum(_nbytes(r) for r in result)
     return 8
-
-
-def _wait(futures: list) -> list:
-    """The results of actor calls (ActorFutures), in order."""
-    return [f.result() for f in futures]

@@ -66,7 +66,7 @@ from . import _core, _dask
 from ._mesh import SubdivisionMesh, mesh_arguments
 from ._scipy import CSRMatrix
 from ._validate import DEFAULT_BOUNDARY, DEFAULT_SCHEME, as_integer, as_polygons, as_real, as_vertices, resolve_scheme
-from .errors import MeshError, ParameterError
+from .errors import MeshError, ParameterError, SorpiaWarning
 from .surface import LimitSurface
 
 UPDATE_METHODS = ("cg", "lspia")
@@ -81,6 +81,14 @@ DEFAULT_FAIRNESS = 3e-4
 # The stopping rule's default: the blend goes on lowering the RMS distance by a few parts in a thousand per
 # iteration on noisy data long after the surface has settled (fitting the noise); the scans' fits fall faster.
 DEFAULT_TOL = 3e-3
+# The robust fit (docs/approximation.md, "Robustness"): the loss, and per loss the scale's quantile of the
+# distances and the tuning constant c in units of that scale (the core's RobustOptions).
+ROBUST_LOSSES = ("none", "cauchy", "tukey")
+DEFAULT_ROBUST = "tukey"
+_ROBUST_SCALE = {"none": (0.9, 1.0), "cauchy": (0.9, 12.0), "tukey": (0.9, 30.0)}
+# A fitted surface whose farthest point lies farther than this (in diagonals) from the data is warned about: it
+# strays between points that do not hold the cage (e.g. fairness 0 with a cage as fine as the data).
+_STRAY = 1.0
 # Points per chunk (the core's ApproximationOptions::chunk_points): up to this many run as one array.
 DEFAULT_CHUNK_POINTS = 1 << 20
 # Points of a streamed file's fixed sample for the surface-to-data distances (a k-d tree of 4M points: ~200 MB).
@@ -161,6 +169,14 @@ class ApproximationResult:
     mesh : sorpia.SubdivisionMesh or None
         The fitted cage: the control vertices on the cage's faces, with its
         scheme, boundary rule and tags.
+    robust : str
+        The robust loss that ran ("none": least squares).
+    robust_scale : float
+        The scale s of the returned iterate's distances (0 with "none"); the
+        records' ``robust_scale`` the scale of each iteration's.
+    robust_outliers : int
+        The points farther than c s from the returned surface (with "tukey":
+        the points that did not pull on it).
 
     `rms` and `max_error` (the largest distance of a data point to the
     returned surface; ``max_distance`` until this release, a deprecated
@@ -185,6 +201,9 @@ class ApproximationResult:
     timings: dict = field(default_factory=dict)
     mesh: Optional[SubdivisionMesh] = None
     n_points: int = 0
+    robust: str = "none"
+    robust_scale: float = 0.0
+    robust_outliers: int = 0
 
     @property
     def converged(self) -> bool:
@@ -222,6 +241,7 @@ class ApproximationResult:
                 "rms": self.rms, "max_error": self.max_error, "seconds": self.seconds,
                 "best_iteration": self.best_iteration, "method": self.method,
                 "fairness": self.fairness, "tangential": self.tangential, "diagonal": self.diagonal,
+                "robust": self.robust, "robust_scale": self.robust_scale, "robust_outliers": self.robust_outliers,
                 "n_points": int(self.n_points),
                 "n_control_vertices": int(self.control_vertices.shape[0]),
                 "final": {k: v for k, v in last.items() if k not in ("iteration", "seconds")},
@@ -340,7 +360,7 @@ def approximate(points, cage_vertices, cage_faces=None, *, scheme: str = DEFAULT
                 callback: Optional[Callable[[dict], object]] = None, weights=None, faces=None,
                 sampling: Optional[str] = None, chunk_points: int = DEFAULT_CHUNK_POINTS,
                 spill_directory=None, sample_points: int = DEFAULT_SAMPLE_POINTS,
-                client=None) -> ApproximationResult:
+                robust: str = DEFAULT_ROBUST, client=None) -> ApproximationResult:
     """Control vertices of a cage whose limit surface approximates `points`
     in the least-squares sense (the module docstring describes the method).
 
@@ -441,6 +461,18 @@ def approximate(points, cage_vertices, cage_faces=None, *, scheme: str = DEFAULT
         docs/approximation.md, "Large data"). The result does not depend on
         it beyond rounding (1e-10 relative); at most this many points run
         exactly as one array.
+    robust : {"tukey", "cauchy", "none"}
+        Iteratively reweighted least squares against outliers: before each
+        update every point's weight is multiplied by a factor of its
+        distance d to the surface, w(d / (c s)), s the 90th percentile of
+        the distances (by weight) and c a constant: "tukey" (the default,
+        c = 30), Tukey's biweight (1 - r^2)^2, 0 for d beyond c s: such a
+        point does not pull at all; "cauchy" (c = 12), 1 / (1 + r^2): the
+        pull of a far point falls as 1 / d; "none": least squares. The
+        iterate returned and the stop rule then go by the loss's RMS
+        (``sqrt(sum_i w_i rho(d_i) / k)``), not the RMS distance of all the
+        points (the records still give that). On clean data the default
+        fits as least squares does (docs/approximation.md, "Robustness").
     client : dask.distributed.Client or None
         Run the chunks on the workers of this Dask cluster (needs
         ``pip install 'sorpia[dask]'``; docs/distributed.md): each worker
@@ -486,6 +518,8 @@ def approximate(points, cage_vertices, cage_faces=None, *, scheme: str = DEFAULT
     grid = _count(grid, "grid", "an integer in 1..64")
     newton_steps = _count(newton_steps, "newton_steps", "an integer >= 1")
     report_level = _count(report_level, "report_level", "an integer in 0..15")
+    if not isinstance(robust, str):
+        raise ParameterError(f"robust = {robust!r} must be one of {', '.join(ROBUST_LOSSES)}")
     if not isinstance(method, str):
         raise ParameterError(f"method = {method!r} must be one of {', '.join(UPDATE_METHODS)}")
     if callback is not None and not callable(callback):
@@ -527,7 +561,8 @@ def approximate(points, cage_vertices, cage_faces=None, *, scheme: str = DEFAULT
     try:
         out = _core.approximate(surface._surface, chunks, iterations, tol, fairness, tangential, method,
                                 solver_tol, solver_max_iter, grid, newton_steps, report_level, callback,
-                                time.perf_counter() - t0, bool(report_each))
+                                time.perf_counter() - t0, bool(report_each), robust,
+                                *_ROBUST_SCALE.get(robust, (0.9, 1.0)))
     finally:
         if client is not None:
             chunks.close()
@@ -536,12 +571,21 @@ def approximate(points, cage_vertices, cage_faces=None, *, scheme: str = DEFAULT
     out["timings"]["total"] = time.perf_counter() - t0
     out["timings"]["cpu"]["total"] = time.process_time() - c0
     V = out["control_vertices"]
+    final = out["history"][out["best_iteration"]]
+    if final["surface_max_relative"] > _STRAY:
+        warnings.warn(f"the fitted surface strays from the data: its farthest point lies "
+                      f"{final['surface_max_relative']:.3g} of the diagonal from the nearest data point (the "
+                      f"data -> surface RMS is {final['rms_relative']:.3g} of the diagonal); where points do not hold "
+                      f"the cage, raise fairness (now {fairness:g}) or give a lighter cage", SorpiaWarning,
+                      stacklevel=2)
     return ApproximationResult(control_vertices=V, face_ids=out["face_ids"], uv=out["uv"],
                                distances=out["distances"], points=points if path is None else path,
                                weights=weights,
                                iterations=out["iterations"], stop_reason=out["stop_reason"],
                                best_iteration=out["best_iteration"], method=method, fairness=fairness,
                                tangential=tangential, diagonal=out["diagonal"], history=out["history"],
+                               robust=robust, robust_scale=out["robust_scale"],
+                               robust_outliers=out["robust_outliers"],
                                timings=out["timings"],
                                mesh=SubdivisionMesh(V, cage_faces, scheme=scheme, boundary=boundary,
                                                     creases=creases, corners=corners, holes=holes),

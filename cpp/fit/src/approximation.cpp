@@ -119,6 +119,10 @@ void check_options(const ApproximationOptions& o) {
   if (o.window < 1) throw ParameterError("window = " + std::to_string(o.window) + " must be >= 1");
   nonnegative(o.exact, "exact");
   nonnegative(o.closer, "closer");
+  if (!(o.robust.quantile > 0 && o.robust.quantile < 1))
+    throw ParameterError("robust_quantile = " + detail::repr(o.robust.quantile) + " must be in (0, 1)");
+  if (!(std::isfinite(o.robust.c) && o.robust.c > 0))
+    throw ParameterError("robust_c = " + detail::repr(o.robust.c) + " must be a finite number > 0");
 }
 
 // A sparse matrix with sorted, distinct columns per row (what the LSPIA update works on).
@@ -333,6 +337,21 @@ ApproximationResult approximate(LimitSurface& surface, PointChunks& chunks, cons
     rec.surface_rms = std::ldexp(srms, e);
     rec.surface_max = std::ldexp(smax, e);
   };
+  // The robust fit (sorpia/robust.hpp): the scale of the chunks' current distances (a histogram merged over the
+  // chunks), which weighs the points in the next update, and the criterion that picks the iterate returned and
+  // stops the run (the RMS distance without a robust loss). Distances below 1e-5 of the diagonal never make a
+  // point an outlier: on data the surface reaches to rounding the scale would fall with the fit and cut the points
+  // that converge last.
+  const bool robust = options.robust.loss != RobustLoss::None;
+  const double scale_floor = 1e-5 * unit;
+  double current_scale = 0.0;
+  const auto measure_scale = [&] {
+    if (robust) current_scale = robust_scale(chunks.distance_histogram(unit), options.robust, scale_floor);
+  };
+  const auto criterion = [&](const DistanceSums& d) {
+    if (!robust) return rms(d);
+    return std::sqrt(chunks.robust_loss_sum(options.robust, current_scale) / static_cast<double>(k));
+  };
   const double not_measured = std::numeric_limits<double>::quiet_NaN();
   const auto record = [&](int iteration, const DistanceSums& distances, long long solver_iterations) {
     ApproximationRecord rec;
@@ -345,6 +364,7 @@ ApproximationResult approximate(LimitSurface& surface, PointChunks& chunks, cons
     rec.max = std::ldexp(rec.max, e);
     rec.surface_rms = rec.surface_max = rec.surface_rms_relative = rec.surface_max_relative = not_measured;
     if (options.report_each) measure_surface(rec);
+    if (robust) rec.robust_scale = std::ldexp(current_scale, e);
     rec.solver_iterations = solver_iterations;
     rec.seconds = seconds_since(t0);
     out.history.push_back(rec);
@@ -354,13 +374,14 @@ ApproximationResult approximate(LimitSurface& surface, PointChunks& chunks, cons
   const auto footpoints = [&](auto&& fn) { return phases.timed(&ApproximationTimings::footpoints, fn); };
 
   DistanceSums feet = footpoints([&] { return chunks.search(options.footpoints); });
+  measure_scale();
   record(0, feet, 0);
   chunks.keep_best();
   struct Best {
     double rms;
     std::vector<double> V;
     int iteration;
-  } best{rms(feet), V, 0};
+  } best{criterion(feet), V, 0};
   std::vector<double> bests{best.rms};  // the lowest RMS so far, after each iteration
 
   CsrMatrix K;
@@ -378,7 +399,10 @@ ApproximationResult approximate(LimitSurface& surface, PointChunks& chunks, cons
   int done = 0;
   // Each chunk's rows and sums (summed in the chunks' order), timed as "normal" less the chunks' rows.
   const auto sums = [&] {
-    NormalSums s = phases.timed(&ApproximationTimings::normal, [&] { return chunks.normal_sums(options.tangential); });
+    NormalSums s = phases.timed(&ApproximationTimings::normal, [&] {
+      return robust ? chunks.robust_normal_sums(options.tangential, options.robust, current_scale)
+                    : chunks.normal_sums(options.tangential);
+    });
     phases.wall.normal -= s.rows_seconds;
     phases.cpu.normal -= s.rows_cpu;
     phases.wall.rows += s.rows_seconds;
@@ -429,9 +453,10 @@ ApproximationResult approximate(LimitSurface& surface, PointChunks& chunks, cons
                              std::to_string(i / 3) + " a value that is not finite");
     set_vertices(V);
     feet = footpoints([&] { return chunks.refine(options.footpoints); });
+    measure_scale();
     done = it;
     const ApproximationRecord rec = record(it, feet, used);
-    const double current = rms(feet);
+    const double current = criterion(feet);
     if (current <= best.rms) {
       best = Best{current, V, it};
       chunks.keep_best();
@@ -449,8 +474,10 @@ ApproximationResult approximate(LimitSurface& surface, PointChunks& chunks, cons
     searched = it;
     const DistanceSums merged =
         footpoints([&] { return chunks.search_fresh(options.footpoints, options.closer * unit); });
-    if (rms(merged) < (1 - options.tol) * current) {
+    // (The footpoints' gain is a gain in distance: RMS against RMS, with a robust loss too.)
+    if (rms(merged) < (1 - options.tol) * rms(feet)) {
       chunks.keep_fresh(options.closer * unit);
+      measure_scale();
       continue;
     }
     out.stop_reason = "converged";
@@ -482,6 +509,12 @@ ApproximationResult approximate(LimitSurface& surface, PointChunks& chunks, cons
   detail::scale_pow2(out.control_vertices.data(), out.control_vertices.size(), e);
   surface.set_vertices(out.control_vertices.data());
   out.footpoints = chunks.best_footpoints();
+  if (robust) {  // the scale of the returned iterate's distances before the final search, in the fit's units
+    const double s = std::ldexp(rec.robust_scale, -e);
+    out.robust_scale = rec.robust_scale;
+    out.robust_outliers = out.footpoints.distances.empty() ? -1 : 0;
+    for (double d : out.footpoints.distances) out.robust_outliers += d > options.robust.c * s;
+  }
   detail::scale_pow2(out.footpoints.distances.data(), out.footpoints.distances.size(), e);
   out.diagonal = std::ldexp(diagonal, e);
   out.seconds = phases.wall;

@@ -93,6 +93,32 @@ void add(NormalSums& total, NormalSums&& chunk) {
                            std::to_string(a.blocks));
     for (std::size_t i = 0; i < total.rhs.size(); ++i) total.rhs[i] += chunk.rhs[i];
     const auto nb = static_cast<std::size_t>(a.blocks);
+    // Where every entry of the chunk's pattern is in the total's (as soon as the chunks added cover the cage's
+    // faces), its values are added in place; else the patterns are merged.
+    bool within = true;
+    for (std::size_t i = 0; i < a.n && within; ++i) {
+      auto p = static_cast<std::size_t>(a.indptr[i]);
+      const auto pe = static_cast<std::size_t>(a.indptr[i + 1]);
+      for (auto q = static_cast<std::size_t>(b.indptr[i]); q < static_cast<std::size_t>(b.indptr[i + 1]); ++q) {
+        while (p < pe && a.indices[p] < b.indices[q]) ++p;
+        if (p == pe || a.indices[p] != b.indices[q]) {
+          within = false;
+          break;
+        }
+      }
+    }
+    if (within) {
+      for (std::size_t i = 0; i < a.n; ++i) {
+        auto p = static_cast<std::size_t>(a.indptr[i]);
+        for (auto q = static_cast<std::size_t>(b.indptr[i]); q < static_cast<std::size_t>(b.indptr[i + 1]); ++q) {
+          while (a.indices[p] < b.indices[q]) ++p;
+          for (std::size_t t = 0; t < nb; ++t) a.values[nb * p + t] += b.values[nb * q + t];
+        }
+      }
+      total.rows_seconds = rows_seconds;
+      total.rows_cpu = rows_cpu;
+      return;
+    }
     NormalMatrix m;
     m.n = a.n;
     m.blocks = a.blocks;
@@ -270,9 +296,15 @@ DistanceSums ApproximationChunk::keep_fresh_in_best() {
   return s;
 }
 
-NormalSums ApproximationChunk::normal_sums(const LimitSurface& surface, double tangential) const {
+NormalSums ApproximationChunk::normal_sums(const LimitSurface& surface, double tangential,
+                                           const RobustOptions* robust, double scale) const {
   const std::size_t k = k_;
-  const bool weighted = !weights_.empty();
+  const bool weighted = !weights_.empty() || robust != nullptr;
+  std::vector<double> factors;  // the robust factors of the points' weights, in point order
+  if (robust) {
+    factors.resize(k);
+    robust_factors(*robust, scale, current.distances.data(), k, factors.data());
+  }
   const bool blend = tangential != 1.0;
   NormalSums out;
   const auto t0 = detail::Clock::now();
@@ -300,7 +332,7 @@ NormalSums ApproximationChunk::normal_sums(const LimitSurface& surface, double t
   for (std::size_t i = 0; i < k; ++i) {
     const std::size_t o = order[i];
     for (std::size_t c = 0; c < 3; ++c) points_o[3 * i + c] = points_[3 * o + c];
-    if (weighted) w_o[i] = weights_[o];
+    if (weighted) w_o[i] = (weights_.empty() ? 1.0 : weights_[o]) * (robust ? factors[o] : 1.0);
   }
   const double* w = nullptr;
   int count = 0;
@@ -439,14 +471,60 @@ DistanceSums LocalChunks::keep_fresh_in_best() {
   return t;
 }
 
-NormalSums LocalChunks::normal_sums(double tangential) {
+NormalSums LocalChunks::normal_sums(double tangential) { return chunks_normal_sums(tangential, nullptr, 0.0); }
+
+NormalSums LocalChunks::chunks_normal_sums(double tangential, const RobustOptions* robust, double scale) {
   NormalSums t;
   for (std::size_t c = 0; c < n_chunks(); ++c) {
     poll_interrupt();
-    add(t, load(c, kPoints | kCurrent).normal_sums(surface_, tangential));
+    add(t, load(c, kPoints | kCurrent).normal_sums(surface_, tangential, robust, scale));
     store(c, 0);
   }
   return t;
+}
+
+DistanceHistogram ApproximationChunk::distance_histogram(double unit) const {
+  DistanceHistogram h(unit);
+  h.add(current.distances.data(), weights_.empty() ? nullptr : weights_.data(), k_);
+  return h;
+}
+
+double ApproximationChunk::robust_loss_sum(const RobustOptions& robust, double scale) const {
+  return sorpia::robust_loss_sum(robust, scale, current.distances.data(),
+                                 weights_.empty() ? nullptr : weights_.data(), k_);
+}
+
+namespace {
+[[noreturn]] void no_robust() {
+  throw ParameterError("this backend of chunks cannot fit robustly (it has no distance_histogram, "
+                       "robust_loss_sum, robust_normal_sums): pass robust = 'none'");
+}
+}  // namespace
+
+DistanceHistogram PointChunks::distance_histogram(double) { no_robust(); }
+double PointChunks::robust_loss_sum(const RobustOptions&, double) { no_robust(); }
+NormalSums PointChunks::robust_normal_sums(double, const RobustOptions&, double) { no_robust(); }
+
+DistanceHistogram LocalChunks::distance_histogram(double unit) {
+  DistanceHistogram t(unit);
+  for (std::size_t c = 0; c < n_chunks(); ++c) {
+    t.merge(load(c, kCurrent).distance_histogram(unit));
+    store(c, 0);
+  }
+  return t;
+}
+
+double LocalChunks::robust_loss_sum(const RobustOptions& robust, double scale) {
+  double t = 0.0;
+  for (std::size_t c = 0; c < n_chunks(); ++c) {
+    t += load(c, kCurrent).robust_loss_sum(robust, scale);
+    store(c, 0);
+  }
+  return t;
+}
+
+NormalSums LocalChunks::robust_normal_sums(double tangential, const RobustOptions& robust, double scale) {
+  return chunks_normal_sums(tangential, &robust, scale);
 }
 
 std::vector<double> LocalChunks::sample() {

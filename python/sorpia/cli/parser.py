@@ -9,7 +9,7 @@ from .._validate import BOUNDARY_RULES, DEFAULT_BOUNDARY
 from .._plotting import FACE_BUDGET  # plotting imports matplotlib only when drawing
 from ..fair import MAX_LEVELS
 from .common import CLI_SCHEMES, DISPLAY_ORDER, FAIR_DEFAULTS, FIT_DEFAULTS
-from ..approximate import DEFAULT_FAIRNESS, DEFAULT_TANGENTIAL, DEFAULT_TOL, SAMPLINGS
+from ..approximate import DEFAULT_FAIRNESS, DEFAULT_ROBUST, DEFAULT_TANGENTIAL, DEFAULT_TOL, ROBUST_LOSSES, SAMPLINGS
 from .approximate import DEFAULT_SAMPLING, STREAM_POINTS, run_approximate
 from .compare import run_compare
 from .demo import run_demo
@@ -314,6 +314,10 @@ def build_parser() -> argparse.ArgumentParser:
     app.add_argument("--fairness", type=_float_arg, default=DEFAULT_FAIRNESS,
                      help="weight of the thin-plate fairness term, relative to the data term: it holds the surface "
                      "where few points hold the cage; 0 for none (default: %(default)r)")
+    app.add_argument("--robust", choices=ROBUST_LOSSES, default=DEFAULT_ROBUST,
+                     help="the weight of points far from the surface: tukey = none beyond 30 times the 90th "
+                     "percentile of the distances (outliers do not pull), cauchy = falling as 1/distance, none = "
+                     "least squares (default: %(default)s)")
     app.add_argument("--surface", metavar="SURF",
                      help="also write the fitted limit surface, refined --level times, every vertex at its exact "
                      "limit position")
@@ -334,7 +338,7 @@ def build_parser() -> argparse.ArgumentParser:
         report=a.report, surface=a.surface, level=a.level, iterations=a.iterations, tol=a.tol,
         fairness=a.fairness, tangential=a.tangential, method=a.method, boundary=a.boundary, sampling=a.sampling,
         quiet=a.quiet, force=a.force, prim=a.prim, triangulate=a.triangulate, stream=a.stream,
-        scheduler=a.scheduler)[0])
+        robust=a.robust, scheduler=a.scheduler)[0])
 
     comp = command("compare", "run several methods to one tolerance: the paper's Table 1 and Figure 7",
                    "Run each method on the mesh to the same tolerance and print the paper's Table 1 layout for "

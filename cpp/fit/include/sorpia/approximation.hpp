@@ -40,6 +40,7 @@
 #include <vector>
 
 #include "sorpia/footpoints.hpp"
+#include "sorpia/robust.hpp"
 #include "sorpia/point_chunks.hpp"
 #include "sorpia/surface.hpp"
 
@@ -72,6 +73,13 @@ struct ApproximationOptions {
   int window = 3;                 ///< the stop rule's iterations, >= 1
   double exact = 1e-13;           ///< an RMS below this fraction of the diagonal stops ("exact")
   double closer = 1e-10;          ///< a fresh footpoint replaces one farther by more than this fraction of the diagonal
+  /// The robust weights (sorpia/robust.hpp): before each update every
+  /// point's weight times robust_factors of its footpoint distance at the
+  /// scale of that iteration's distances; with a loss other than None the
+  /// criterion sqrt(robust_loss_sum / k) replaces the RMS distance in the
+  /// stop rule and the choice of the iterate returned (the records keep
+  /// the RMS distance of all the points).
+  RobustOptions robust{};
   /// Points per chunk of an in-memory array (point_chunks.hpp), >= 1: the
   /// unit of the footpoints and of the normal sums, added in order.
   std::size_t chunk_points = std::size_t{1} << 20;
@@ -86,6 +94,9 @@ struct ApproximationRecord {
   /// In the caller's units, and over the data's bounding-box diagonal.
   double rms = 0.0, max = 0.0, surface_rms = 0.0, surface_max = 0.0;
   double rms_relative = 0.0, max_relative = 0.0, surface_rms_relative = 0.0, surface_max_relative = 0.0;
+  /// With a robust loss: the scale s of these distances, which weighs the
+  /// points in the next update (ApproximationOptions::robust); 0 without.
+  double robust_scale = 0.0;
   long long solver_iterations = 0;  ///< of the update before it (0 at iteration 0)
   double seconds = 0.0;             ///< since approximate was called
 };
@@ -106,6 +117,12 @@ struct ApproximationResult {
   std::string stop_reason;
   int best_iteration = 0;  ///< the iteration whose V is returned
   double diagonal = 0.0;   ///< of the data's bounding box: the unit of the relative figures
+  /// The robust scale s at the returned iterate's footpoints (0 without a
+  /// robust loss), and how many points lie farther than c s from it (with
+  /// Tukey: the points that do not pull at all; -1 where the backend keeps
+  /// no footpoints, streamed data).
+  double robust_scale = 0.0;
+  long long robust_outliers = 0;
   std::vector<ApproximationRecord> history;
   ApproximationTimings seconds, cpu_seconds;
 };

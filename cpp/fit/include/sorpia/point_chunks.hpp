@@ -24,6 +24,7 @@
 
 #include "sorpia/footpoints.hpp"
 #include "sorpia/normal_matrix.hpp"
+#include "sorpia/robust.hpp"
 #include "sorpia/surface.hpp"
 
 namespace sorpia {
@@ -112,7 +113,14 @@ class ApproximationChunk {
   /// A^T W A and A^T W P at the current footpoints: the rows in face order,
   /// W the weights (tangential 1) or the blend towards the normals
   /// (blend_weights).
-  NormalSums normal_sums(const LimitSurface& surface, double tangential) const;
+  /// With `robust` (not null): each point's weight times robust_factors of
+  /// its current distance at `scale` (the robust fit's update).
+  NormalSums normal_sums(const LimitSurface& surface, double tangential, const RobustOptions* robust = nullptr,
+                         double scale = 0.0) const;
+  /// The current distances' histogram (weighted), in bins of `unit`.
+  DistanceHistogram distance_histogram(double unit) const;
+  /// sum w_i rho(d_i) of the current distances (robust_loss_sum).
+  double robust_loss_sum(const RobustOptions& robust, double scale) const;
   /// The best iterate's footpoints: face_ids, uv, distances.
   Footpoints best_footpoints() const;
 
@@ -160,6 +168,14 @@ class PointChunks {
   virtual void keep_fresh(double closer) = 0;
   virtual DistanceSums keep_fresh_in_best() = 0;
   virtual NormalSums normal_sums(double tangential) = 0;
+  /// The robust fit's calls (sorpia/robust.hpp), on the current footpoints:
+  /// their distances' histogram (all chunks' merged), sum w rho(d) at a
+  /// scale, and normal_sums with each weight times the robust factor at a
+  /// scale. A backend without them cannot fit robustly: these defaults
+  /// throw ParameterError saying so (robust = "none" runs without them).
+  virtual DistanceHistogram distance_histogram(double unit);
+  virtual double robust_loss_sum(const RobustOptions& robust, double scale);
+  virtual NormalSums robust_normal_sums(double tangential, const RobustOptions& robust, double scale);
   /// Points for the surface-to-data distances (row-major (s, 3)): all of
   /// them when they fit, else a fixed sample.
   virtual std::vector<double> sample() = 0;
@@ -189,6 +205,9 @@ class LocalChunks : public PointChunks {
   void keep_fresh(double closer) override;
   DistanceSums keep_fresh_in_best() override;
   NormalSums normal_sums(double tangential) override;
+  DistanceHistogram distance_histogram(double unit) override;
+  double robust_loss_sum(const RobustOptions& robust, double scale) override;
+  NormalSums robust_normal_sums(double tangential, const RobustOptions& robust, double scale) override;
   std::vector<double> sample() override;
   Footpoints best_footpoints() override;
 
@@ -206,6 +225,8 @@ class LocalChunks : public PointChunks {
 
  private:
   const FootpointSearch& footpoint_search(const FootpointOptions& options);
+  // normal_sums of every chunk added in order; with `robust`, the robust fit's (robust_normal_sums).
+  NormalSums chunks_normal_sums(double tangential, const RobustOptions* robust, double scale);
   LimitSurface& surface_;
   std::unique_ptr<FootpointSearch> search_;
   FootpointOptions search_options_{};

@@ -1,0 +1,118 @@
+#include "sorpia/robust.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "sorpia/errors.hpp"
+
+namespace sorpia {
+
+RobustLoss robust_loss(const std::string& name, const char* what) {
+  if (name == "none") return RobustLoss::None;
+  if (name == "cauchy") return RobustLoss::Cauchy;
+  if (name == "tukey") return RobustLoss::Tukey;
+  throw ParameterError(std::string(what) + " = '" + name + "' must be one of none, cauchy, tukey");
+}
+
+const char* robust_loss_name(RobustLoss loss) {
+  switch (loss) {
+    case RobustLoss::Cauchy: return "cauchy";
+    case RobustLoss::Tukey: return "tukey";
+    case RobustLoss::None: break;
+  }
+  return "none";
+}
+
+namespace {
+constexpr int kBins = (DistanceHistogram::kHighestOctave - DistanceHistogram::kLowestOctave) *
+                      DistanceHistogram::kBinsPerOctave;
+}  // namespace
+
+DistanceHistogram::DistanceHistogram(double unit) : unit_(unit), mass_(1 + static_cast<std::size_t>(kBins), 0.0) {
+  if (!(std::isfinite(unit) && unit > 0))
+    throw std::invalid_argument("DistanceHistogram: the unit must be a finite number > 0");
+}
+
+void DistanceHistogram::add(const double* distances, const double* weights, std::size_t k) {
+  for (std::size_t i = 0; i < k; ++i) {
+    const double w = weights ? weights[i] : 1.0;
+    if (w == 0.0) continue;
+    const double x = distances[i] / unit_;
+    std::size_t slot = 0;  // the bin of zeros: below unit 2^kLowestOctave
+    if (x > 0) {
+      // bin b holds [2^(lo + b / B), 2^(lo + (b + 1) / B)); the largest distances stay in the last bin
+      const double b = std::floor((std::log2(x) - kLowestOctave) * kBinsPerOctave);
+      if (b >= 0) slot = 1 + static_cast<std::size_t>(std::min(b, static_cast<double>(kBins - 1)));
+    }
+    mass_[slot] += w;
+    total_ += w;
+  }
+}
+
+void DistanceHistogram::merge(const DistanceHistogram& other) {
+  if (other.unit_ != unit_) throw std::invalid_argument("DistanceHistogram::merge: the units differ");
+  for (std::size_t i = 0; i < mass_.size(); ++i) mass_[i] += other.mass_[i];
+  total_ += other.total_;
+}
+
+double DistanceHistogram::quantile(double q) const {
+  if (!(total_ > 0)) return 0.0;
+  const double target = std::clamp(q, 0.0, 1.0) * total_;
+  double below = mass_[0];
+  if (target <= below) return 0.0;
+  for (std::size_t b = 0; b < static_cast<std::size_t>(kBins); ++b) {
+    const double m = mass_[1 + b];
+    if (m > 0 && below + m >= target) {
+      const double t = std::clamp((target - below) / m, 0.0, 1.0);
+      return unit_ * std::exp2(kLowestOctave + (static_cast<double>(b) + t) / kBinsPerOctave);
+    }
+    below += m;
+  }
+  // rounding left the target above the last bin's cumulative mass: the upper edge of the last nonempty bin
+  for (std::size_t b = static_cast<std::size_t>(kBins); b-- > 0;)
+    if (mass_[1 + b] > 0) return unit_ * std::exp2(kLowestOctave + (static_cast<double>(b) + 1) / kBinsPerOctave);
+  return 0.0;
+}
+
+double robust_scale(const DistanceHistogram& histogram, const RobustOptions& options, double floor) {
+  return std::max(histogram.quantile(options.quantile), floor);
+}
+
+void robust_factors(const RobustOptions& options, double scale, const double* distances, std::size_t k,
+                    double* out) {
+  const double cs = options.c * scale;
+  for (std::size_t i = 0; i < k; ++i) {
+    const double r = distances[i] / cs;
+    switch (options.loss) {
+      case RobustLoss::None: out[i] = 1.0; break;
+      case RobustLoss::Cauchy: out[i] = 1.0 / (1.0 + r * r); break;
+      case RobustLoss::Tukey: {
+        const double u = 1.0 - r * r;
+        out[i] = r < 1.0 ? u * u : 0.0;
+        break;
+      }
+    }
+  }
+}
+
+double robust_loss_sum(const RobustOptions& options, double scale, const double* distances, const double* weights,
+                       std::size_t k) {
+  const double cs = options.c * scale, cs2 = cs * cs;
+  double sum = 0.0;
+  for (std::size_t i = 0; i < k; ++i) {
+    const double d = distances[i], r = d / cs;
+    double rho = d * d;
+    if (options.loss == RobustLoss::Cauchy) {
+      rho = cs2 * std::log1p(r * r);
+    } else if (options.loss == RobustLoss::Tukey) {
+      // (c s)^2 / 3 (1 - (1 - x)^3), x = r^2 <= 1, expanded: no cancellation for small r
+      const double x = std::min(r * r, 1.0);
+      rho = cs2 / 3.0 * (x * (3.0 - 3.0 * x + x * x));
+    }
+    sum += (weights ? weights[i] : 1.0) * rho;
+  }
+  return sum;
+}
+
+}  // namespace sorpia
