@@ -20,7 +20,7 @@ distributed = pytest.importorskip("distributed", reason="dask.distributed is not
 
 import sorpia  # noqa: E402
 from sorpia import ParameterError, shapes  # noqa: E402
-from test_approximate_chunks import noisy_samples as chunk_samples, write_ply  # noqa: E402
+from test_approximate_chunks import noisy_samples as chunk_samples, with_outliers, write_ply  # noqa: E402
 
 
 @pytest.fixture(scope="module")
@@ -79,6 +79,17 @@ def test_two_workers_fit_as_one_process(client, tangential):
     on_cluster = sorpia.approximate(P, V, F, client=client, **kw)
     assert_same_fit(on_cluster, local)
     assert local.history[-1]["rms"] < 0.5 * local.history[0]["rms"]  # a fit that moved: not a trivial equality
+
+
+@pytest.mark.parametrize("robust", ["tukey", "cauchy"])
+def test_robust_fit_with_outliers_on_two_workers_as_in_one_process(client, robust):
+    # the robust fit's histogram, loss sums and reweighted sums come from the workers' chunks in order
+    P, V, F, _ = noisy_samples(3000, seed=3)
+    P, far = with_outliers(P, 30)
+    kw = dict(robust=robust, iterations=5, chunk_points=700)
+    local = sorpia.approximate(P, V, F, **kw)
+    assert_same_fit(sorpia.approximate(P, V, F, client=client, **kw), local)
+    assert local.robust_outliers >= 1  # the outliers were cut or damped: the robust path ran
 
 
 def test_one_worker_fits_as_two(client, one_worker_client):
@@ -178,6 +189,15 @@ def test_cli_unreachable_scheduler_is_named(tmp_path, command):
     assert code == 2
     assert f"--scheduler {address}: no Dask scheduler answered there" in err
     assert not (tmp_path / "a.obj").exists()
+
+
+def test_cli_malformed_scheduler_address_is_named(tmp_path, command):
+    V, F = shapes.icosphere(2)
+    sorpia.write_mesh(tmp_path / "scan.ply", V, F)
+    code, _, err = command("approximate", str(tmp_path / "scan.ply"), "-o", str(tmp_path / "a.obj"),
+                           "--vertices", "20", "--scheduler", "scheduler-host")
+    assert code == 2
+    assert "--scheduler scheduler-host is not a Dask scheduler's address (tcp://HOST:PORT)" in err
 
 
 def test_without_dask_the_install_line_is_given(tmp_path, command, monkeypatch):

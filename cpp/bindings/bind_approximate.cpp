@@ -106,8 +106,8 @@ sorpia::FootpointOptions footpoint_options(int grid, int max_steps) {
   return o;
 }
 
-// The Python forms of the chunks' sums (CHUNKS-API.md): DistanceSums as (squares, max, count, changed), NormalSums
-// as (indptr, indices, values, rhs), PointExtent as (count, weighted, lo, hi, largest), PointMoments as (count,
+// The Python forms of the chunks' sums (the calls and their order: sorpia/point_chunks.hpp): DistanceSums as
+// (squares, max, count, changed), NormalSums as (indptr, indices, values, rhs), PointExtent as (count, weighted, lo, hi, largest), PointMoments as (count,
 // sum, sum2). A backend written in Python may return one of them or a list of them, one per chunk: the list is
 // added in its order (sorpia::add), as the core's backends add their chunks'.
 // k points' weights (None: null), converted into `holder`, which must outlive the pointer.
@@ -236,6 +236,39 @@ sorpia::PointMoments to_moments(const py::handle& obj) {
   });
 }
 
+// A distance histogram crosses to Python as (unit, total, mass): plain values a process can send.
+py::tuple histogram_tuple(const sorpia::DistanceHistogram& h) {
+  return py::make_tuple(h.unit(), h.total(), to_numpy(std::vector<double>(h.mass()), 0));
+}
+
+// (unit, total, mass), or a list of them merged in its order.
+sorpia::DistanceHistogram to_histogram(const py::handle& obj) {
+  const auto one = [](const py::handle& h) {
+    const auto t = h.cast<py::tuple>();
+    if (t.size() != 3) throw sorpia::ParameterError("a distance histogram must be (unit, total, mass)");
+    return sorpia::DistanceHistogram(t[0].cast<double>(), t[1].cast<double>(), t[2].cast<std::vector<double>>());
+  };
+  if (!py::isinstance<py::list>(obj)) return one(obj);
+  const auto items = obj.cast<py::list>();
+  if (items.empty()) throw sorpia::ParameterError("a list of distance histograms is empty");
+  sorpia::DistanceHistogram total = one(items[0]);
+  for (std::size_t i = 1; i < items.size(); ++i) total.merge(one(items[i]));
+  return total;
+}
+
+// A robust fit's settings cross to Python as (loss name, quantile, c).
+py::tuple robust_tuple(const sorpia::RobustOptions& o) {
+  return py::make_tuple(sorpia::robust_loss_name(o.loss), o.quantile, o.c);
+}
+
+sorpia::RobustOptions to_robust(const std::string& loss, double quantile, double c) {
+  sorpia::RobustOptions o;
+  o.loss = sorpia::robust_loss(loss, "loss");
+  o.quantile = quantile;
+  o.c = c;
+  return o;
+}
+
 std::array<double, 3> triple(const py::handle& h, const char* name) {
   const auto v = h.cast<std::vector<double>>();
   if (v.size() != 3) throw sorpia::ParameterError(std::string(name) + " must have 3 items");
@@ -288,6 +321,29 @@ class PyPointChunks : public sorpia::PointChunks {
     return to_distance_sums(call_locked("keep_fresh_in_best")); }
   sorpia::NormalSums normal_sums(double tangential) override { py::gil_scoped_acquire gil;
     return to_normal_sums(call_locked("normal_sums", tangential)); }
+  // The robust fit's calls are optional: a backend without them fits with robust = "none" only (the base's
+  // ParameterError says so). The robust settings go as (loss, quantile, c).
+  sorpia::DistanceHistogram distance_histogram(double unit) override {
+    py::gil_scoped_acquire gil;
+    if (!override_of("distance_histogram")) return sorpia::PointChunks::distance_histogram(unit);
+    return to_histogram(call_locked("distance_histogram", unit));
+  }
+  double robust_loss_sum(const sorpia::RobustOptions& robust, double scale) override {
+    py::gil_scoped_acquire gil;
+    if (!override_of("robust_loss_sum")) return sorpia::PointChunks::robust_loss_sum(robust, scale);
+    const py::object r = call_locked("robust_loss_sum", robust_tuple(robust), scale);
+    if (!py::isinstance<py::list>(r)) return r.cast<double>();
+    double total = 0.0;  // the chunks' sums added in the list's order
+    for (const auto& v : r.cast<py::list>()) total += v.cast<double>();
+    return total;
+  }
+  sorpia::NormalSums robust_normal_sums(double tangential, const sorpia::RobustOptions& robust,
+                                        double scale) override {
+    py::gil_scoped_acquire gil;
+    if (!override_of("robust_normal_sums"))
+      return sorpia::PointChunks::robust_normal_sums(tangential, robust, scale);
+    return to_normal_sums(call_locked("robust_normal_sums", tangential, robust_tuple(robust), scale));
+  }
   std::vector<double> sample() override {
     py::gil_scoped_acquire gil;
     const auto a = call_locked("sample").cast<Vertices>();
@@ -308,10 +364,14 @@ class PyPointChunks : public sorpia::PointChunks {
   }
 
  private:
+  // The Python override of `name`, or none (the GIL held by the caller).
+  py::function override_of(const char* name) const {
+    return py::get_override(static_cast<const sorpia::PointChunks*>(this), name);
+  }
   // The Python override of `name` called with the GIL held (held by the caller).
   template <class... Args>
   py::object call_locked(const char* name, Args&&... args) {
-    const py::function f = py::get_override(static_cast<const sorpia::PointChunks*>(this), name);
+    const py::function f = override_of(name);
     if (!f) throw sorpia::ParameterError(std::string("PointChunks.") + name + " is not implemented");
     return f(std::forward<Args>(args)...);
   }
@@ -553,7 +613,7 @@ void bind_approximate(py::module_& m) {
 
   py::class_<sorpia::ApproximationChunk>(m, "ApproximationChunk",
                                          "One chunk of approximation's points: its footpoints and its share of "
-                                         "the normal equations (sorpia::ApproximationChunk; CHUNKS-API.md).")
+                                         "the normal equations (sorpia::ApproximationChunk, sorpia/point_chunks.hpp).")
       .def(py::init([](const Vertices& points, const py::object& weights, std::size_t first) {
              check_shape(points, 3, "points");
              const auto k = static_cast<std::size_t>(points.shape(0));
@@ -623,6 +683,31 @@ void bind_approximate(py::module_& m) {
              return normal_tuple(std::move(s));
            },
            "surface"_a, "tangential"_a)
+      .def("distance_histogram",
+           [](const sorpia::ApproximationChunk& c, double unit) { return histogram_tuple(c.distance_histogram(unit)); },
+           "unit"_a, "the current distances' weighted histogram (sorpia/robust.hpp) as (unit, total, mass)")
+      .def("robust_loss_sum",
+           [](const sorpia::ApproximationChunk& c, const py::tuple& robust, double scale) {
+             if (robust.size() != 3) throw sorpia::ParameterError("robust must be (loss, quantile, c)");
+             return c.robust_loss_sum(
+                 to_robust(robust[0].cast<std::string>(), robust[1].cast<double>(), robust[2].cast<double>()), scale);
+           },
+           "robust"_a, "scale"_a, "sum w rho(d) of the current distances; robust = (loss, quantile, c)")
+      .def("robust_normal_sums",
+           [](const sorpia::ApproximationChunk& c, const sorpia::LimitSurface& surface, double tangential,
+              const py::tuple& robust, double scale) {
+             if (robust.size() != 3) throw sorpia::ParameterError("robust must be (loss, quantile, c)");
+             const sorpia::RobustOptions o =
+                 to_robust(robust[0].cast<std::string>(), robust[1].cast<double>(), robust[2].cast<double>());
+             sorpia::NormalSums s;
+             {
+               LongCall call;
+               s = c.normal_sums(surface, tangential, &o, scale);
+             }
+             return normal_tuple(std::move(s));
+           },
+           "surface"_a, "tangential"_a, "robust"_a, "scale"_a,
+           "normal_sums with each weight times the robust factor of its distance at `scale`")
       .def("best_footpoints", [](const sorpia::ApproximationChunk& c) {
         sorpia::Footpoints f = c.best_footpoints();
         return py::make_tuple(to_numpy(std::move(f.face_ids), 0), to_numpy(std::move(f.uv), 2),
@@ -632,8 +717,8 @@ void bind_approximate(py::module_& m) {
   py::class_<sorpia::PointChunks, PyPointChunks>(
       m, "PointChunks",
       "approximation's points as chunks (sorpia::PointChunks), the backend its driver calls: subclass it in "
-      "Python and implement every method (CHUNKS-API.md); sums may be returned per chunk, as a list, added in its "
-      "order.")
+      "Python and implement every method (their calls and order: sorpia/point_chunks.hpp); sums may be returned "
+      "per chunk, as a list, added in its order.")
       .def(py::init<>())
       .def("size", &sorpia::PointChunks::size, "the number of points");
 
@@ -749,8 +834,8 @@ void bind_approximate(py::module_& m) {
       "The surface-to-data figures in every record with report_each, else only in the returned iterate's (None\n"
       "in the others). robust: the loss of the robust fit (none, cauchy, tukey) at the robust_quantile of the\n"
       "distances times robust_c (sorpia/robust.hpp); none here unless given (sorpia.approximate passes its\n"
-      "default): a Python backend fits robustly only with distance_histogram, robust_loss_sum and\n"
-      "robust_normal_sums, which the trampoline does not reach yet.");
+      "default): a Python backend fits robustly only where it defines distance_histogram, robust_loss_sum and\n"
+      "robust_normal_sums (sorpia/point_chunks.hpp).");
 }
 
 }  // namespace sorpia_py

@@ -689,12 +689,16 @@ class FootpointSearch:
         ...
 class ApproximationChunk:
     """
-    One chunk of approximation's points: its footpoints and its share of the normal equations (sorpia::ApproximationChunk; CHUNKS-API.md).
+    One chunk of approximation's points: its footpoints and its share of the normal equations (sorpia::ApproximationChunk, sorpia/point_chunks.hpp).
     """
     def __init__(self, points: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], weights: typing.Any = None, first: typing.SupportsInt | typing.SupportsIndex = 0) -> None:
         ...
     def best_footpoints(self) -> tuple[numpy.typing.NDArray[numpy.int32], numpy.typing.NDArray[numpy.float64], numpy.typing.NDArray[numpy.float64]]:
         ...
+    def distance_histogram(self, unit: typing.SupportsFloat | typing.SupportsIndex) -> tuple:
+        """
+        the current distances' weighted histogram (sorpia/robust.hpp) as (unit, total, mass)
+        """
     def extent(self) -> tuple:
         ...
     def keep_best(self) -> None:
@@ -711,6 +715,14 @@ class ApproximationChunk:
         ...
     def refine(self, surface: LimitSurface, grid: typing.SupportsInt | typing.SupportsIndex, max_steps: typing.SupportsInt | typing.SupportsIndex) -> tuple:
         ...
+    def robust_loss_sum(self, robust: tuple, scale: typing.SupportsFloat | typing.SupportsIndex) -> float:
+        """
+        sum w rho(d) of the current distances; robust = (loss, quantile, c)
+        """
+    def robust_normal_sums(self, surface: LimitSurface, tangential: typing.SupportsFloat | typing.SupportsIndex, robust: tuple, scale: typing.SupportsFloat | typing.SupportsIndex) -> tuple:
+        """
+        normal_sums with each weight times the robust factor of its distance at `scale`
+        """
     def scale(self, e: typing.SupportsInt | typing.SupportsIndex) -> None:
         ...
     def search(self, search: FootpointSearch) -> tuple:
@@ -728,7 +740,7 @@ class ApproximationChunk:
         ...
 class PointChunks:
     """
-    approximation's points as chunks (sorpia::PointChunks), the backend its driver calls: subclass it in Python and implement every method (CHUNKS-API.md); sums may be returned per chunk, as a list, added in its order.
+    approximation's points as chunks (sorpia::PointChunks), the backend its driver calls: subclass it in Python and implement every method (their calls and order: sorpia/point_chunks.hpp); sums may be returned per chunk, as a list, added in its order.
     """
     def __init__(self) -> None:
         ...
@@ -754,8 +766,8 @@ def approximate(surface: LimitSurface, chunks: PointChunks, iterations: typing.S
     The surface-to-data figures in every record with report_each, else only in the returned iterate's (None
     in the others). robust: the loss of the robust fit (none, cauchy, tukey) at the robust_quantile of the
     distances times robust_c (sorpia/robust.hpp); none here unless given (sorpia.approximate passes its
-    default): a Python backend fits robustly only with distance_histogram, robust_loss_sum and
-    robust_normal_sums, which the trampoline does not reach yet.
+    default): a Python backend fits robustly only where it defines distance_histogram, robust_loss_sum and
+    robust_normal_sums (sorpia/point_chunks.hpp).
     """
 def available_memory_bytes() -> int:
     ...

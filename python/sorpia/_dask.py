@@ -83,9 +83,13 @@ def connect(address: str, timeout: float = 10.0):
     except ImportError:
         raise ImportError(f"--scheduler {address} runs the fit on a Dask cluster and needs dask.distributed, which "
                           f"is not installed: {INSTALL_HINT}") from None
+    try:  # checked before a Client is made: a Client of a malformed address hangs on closing
+        distributed.comm.get_address_host_port(address)
+    except ValueError as exc:
+        raise OSError(f"--scheduler {address} is not a Dask scheduler's address (tcp://HOST:PORT): {exc}") from None
     try:
         return distributed.Client(address, timeout=timeout, set_as_default=False)
-    except (OSError, TimeoutError, ValueError) as exc:
+    except (OSError, TimeoutError) as exc:
         raise OSError(f"--scheduler {address}: no Dask scheduler answered there within {timeout:g} s "
                       f"({type(exc).__name__}: {exc})") from None
 
@@ -129,8 +133,8 @@ class ChunkHost:
             call = (lambda c: c.search(search)) if name == "search" else (lambda c: c.search_fresh(search, args[2]))
         elif name == "refine":
             call = lambda c: c.refine(self.surface, *args)  # noqa: E731
-        elif name == "normal_sums":
-            call = lambda c: c.normal_sums(self.surface, *args)  # noqa: E731
+        elif name in ("normal_sums", "robust_normal_sums"):
+            call = lambda c: getattr(c, name)(self.surface, *args)  # noqa: E731
         elif name == "sample":  # FileChunks' fixed sample of the points: args (k, sample_points)
             call = lambda c: c.points[_core.point_sample_mask(c.first, c.size, *args)]  # noqa: E731
         else:
@@ -264,6 +268,15 @@ class DaskChunks(_core.PointChunks):
 
     def normal_sums(self, tangential):
         return self._all("normal_sums", tangential)
+
+    def distance_histogram(self, unit):
+        return self._all("distance_histogram", unit)
+
+    def robust_loss_sum(self, robust, scale):
+        return self._all("robust_loss_sum", tuple(robust), scale)
+
+    def robust_normal_sums(self, tangential, robust, scale):
+        return self._all("robust_normal_sums", tangential, tuple(robust), scale)
 
     def sample(self):
         if isinstance(self.points, str):

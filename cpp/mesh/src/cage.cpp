@@ -419,8 +419,9 @@ OMesh to_openmesh(const Mesh& mesh, std::vector<std::int32_t>& kept) {
   }
   om.reserve(kept.size(), 3 * n_faces / 2 + kept.size(), n_faces);
   for (const std::int32_t v : kept) om.add_vertex({mesh.vertices[3 * v], mesh.vertices[3 * v + 1], mesh.vertices[3 * v + 2]});
-  for (const std::int32_t face : face_order) {
-    const std::size_t f = static_cast<std::size_t>(face);
+  for (std::size_t k = 0; k < n_faces; ++k) {
+    if ((k & 0xffff) == 0) poll_interrupt();  // seconds at a few million faces
+    const std::size_t f = static_cast<std::size_t>(face_order[k]);
     const std::int32_t* t = &mesh.face_vertex_indices[3 * f];
     const OMesh::VertexHandle c[3] = {OMesh::VertexHandle(handle[t[0]]), OMesh::VertexHandle(handle[t[1]]),
                                       OMesh::VertexHandle(handle[t[2]])};
