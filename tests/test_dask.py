@@ -191,6 +191,15 @@ def test_cli_unreachable_scheduler_is_named(tmp_path, command):
     assert not (tmp_path / "a.obj").exists()
 
 
+def test_cli_malformed_scheduler_address_is_named(tmp_path, command):
+    V, F = shapes.icosphere(2)
+    sorpia.write_mesh(tmp_path / "scan.ply", V, F)
+    code, _, err = command("approximate", str(tmp_path / "scan.ply"), "-o", str(tmp_path / "a.obj"),
+                           "--vertices", "20", "--scheduler", "scheduler-host")
+    assert code == 2
+    assert "--scheduler scheduler-host is not a Dask scheduler's address (tcp://HOST:PORT)" in err
+
+
 def test_without_dask_the_install_line_is_given(tmp_path, command, monkeypatch):
     monkeypatch.setitem(sys.modules, "distributed", None)  # import distributed raises ImportError
     P, V, F, _ = noisy_samples(200)

@@ -83,9 +83,13 @@ def connect(address: str, timeout: float = 10.0):
     except ImportError:
         raise ImportError(f"--scheduler {address} runs the fit on a Dask cluster and needs dask.distributed, which "
                           f"is not installed: {INSTALL_HINT}") from None
+    try:  # checked before a Client is made: a Client of a malformed address hangs on closing
+        distributed.comm.get_address_host_port(address)
+    except ValueError as exc:
+        raise OSError(f"--scheduler {address} is not a Dask scheduler's address (tcp://HOST:PORT): {exc}") from None
     try:
         return distributed.Client(address, timeout=timeout, set_as_default=False)
-    except (OSError, TimeoutError, ValueError) as exc:
+    except (OSError, TimeoutError) as exc:
         raise OSError(f"--scheduler {address}: no Dask scheduler answered there within {timeout:g} s "
                       f"({type(exc).__name__}: {exc})") from None
 

@@ -44,11 +44,15 @@ The whole run (footpoints, updates, stopping rule, records) is the C++
 core's ``sorpia::approximate``; this module checks the arguments, samples a
 dense mesh's surface and builds the result.
 
-Distances are reported both ways at every iteration: data to surface (the
-footpoint distances) and surface to data (from the vertices of a uniform
-tessellation of the limit surface, exact limit points, to the nearest data
-point), as RMS and max, in model units and as fractions of the diagonal of
-the data's bounding box.
+Distances are reported at every iteration from the data to the surface (the
+footpoint distances), and for the returned iterate (at every iteration with
+``report_each``) from the surface to the data (from the vertices of a
+uniform tessellation of the limit surface, exact limit points, to the nearest
+data point), as RMS and max, in model units and as fractions of the diagonal
+of the data's bounding box.
+
+The points are worked on in chunks (``chunk_points``, docs/approximation.md,
+"Large data"), and may be streamed from a file given by its path.
 """
 
 from __future__ import annotations

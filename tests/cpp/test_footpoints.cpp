@@ -127,6 +127,8 @@ TEST(FootpointSearch, CloserFindsTheClosestPointWhereTheGridsNearestSampleMisses
   EXPECT_EQ(fp.distances, direct.distances);
   EXPECT_EQ(fp.face_ids, direct.face_ids);
   const std::vector<double> before = fp.distances;
+  sorpia::Footpoints from_find = fp;  // closer told the footpoints are find's: the nearest sample not again
+  search.closer(bumpy.points.data(), k, from_find, true);
   const std::size_t moved = search.closer(bumpy.points.data(), k, fp);
   const std::vector<double> least = brute_force(surface, topology, bumpy.points);
   const double diagonal = 2.0 * std::sqrt(3.0) * 1.35;  // at most: the cage within the sphere of radius 1.35
@@ -136,6 +138,8 @@ TEST(FootpointSearch, CloserFindsTheClosestPointWhereTheGridsNearestSampleMisses
     EXPECT_LE(fp.distances[i], before[i]) << "point " << i;
     EXPECT_LE(fp.distances[i], least[i] + 1e-8 * diagonal) << "point " << i << " before " << before[i] << " excess " << (fp.distances[i] - least[i]) / diagonal;
     EXPECT_GE(fp.distances[i], least[i] - 1e-8 * diagonal) << "point " << i;
+    EXPECT_LE(from_find.distances[i], before[i]);
+    EXPECT_NEAR(from_find.distances[i], least[i], 1e-8 * diagonal) << "point " << i;
     // The footpoint reported is that of its (face, u, v) on the surface.
     double p[3];
     surface.evaluate(&fp.face_ids[i], &fp.uv[2 * i], 1, p, nullptr, nullptr, nullptr);

@@ -822,7 +822,7 @@ Footpoints FootpointSearch::find(const double* points, std::size_t n) const {
   return fp;
 }
 
-std::size_t FootpointSearch::closer(const double* points, std::size_t n, Footpoints& fp) const {
+std::size_t FootpointSearch::closer(const double* points, std::size_t n, Footpoints& fp, bool found) const {
   if (fp.face_ids.size() != n || fp.uv.size() != 2 * n || fp.distances.size() != n)
     throw ParameterError("footpoints hold " + std::to_string(fp.face_ids.size()) + " faces, " +
                          std::to_string(fp.uv.size() / 2) + " parameters and " + std::to_string(fp.distances.size()) +
@@ -860,15 +860,18 @@ std::size_t FootpointSearch::closer(const double* points, std::size_t n, Footpoi
       // sample's reach of its footpoint, the samples whose cells may hold a
       // point closer than d: |x - s| - reach(s) < d, the least of that lower
       // bound first.
+      // (The nearest sample left out where the footpoints are find's.)
       std::int64_t* c = &candidate[j * (starts + 1)];
       c[0] = nearest_sample[j];
-      count[j] = d > 0.0 ? 1 : 0;
+      count[j] = d > 0.0 && !found ? 1 : 0;
       const auto u = static_cast<std::size_t>(c[0]);
       if (!(d > options_.near * reach_[u])) return;  // (false for d = 0)
       const auto rank = [&](std::int64_t s, double dist) {
         return s == c[0] ? std::numeric_limits<double>::infinity() : dist - reach_[static_cast<std::size_t>(s)];
       };
-      count[j] += index_->least_ranked(x, d, largest_reach_, starts, rank, c + 1, &candidate_rank[j * starts]);
+      const std::size_t m = index_->least_ranked(x, d, largest_reach_, starts, rank, c + 1, &candidate_rank[j * starts]);
+      if (found) std::copy_n(c + 1, m, c);
+      count[j] += m;
     });
     // The starts, one row each: the point repeated, refined from its sample.
     std::vector<std::size_t> row(b + 1, 0);

@@ -260,7 +260,10 @@ void ApproximationChunk::keep_best() {
 }
 
 DistanceSums ApproximationChunk::search_fresh(const FootpointSearch& search, double closer) {
-  fresh = from_footpoints(search.find(points_.data(), k_));
+  // The grid's nearest sample, then the samples that may lie near a closer point (FootpointSearch::closer).
+  Footpoints found = search.find(points_.data(), k_);
+  search.closer(points_.data(), k_, found, true);
+  fresh = from_footpoints(std::move(found));
   std::vector<double> merged(k_);
   for (std::size_t i = 0; i < k_; ++i)
     merged[i] = fresh.distances[i] < current.distances[i] - closer ? fresh.distances[i] : current.distances[i];

@@ -142,9 +142,11 @@ class FootpointSearch {
   ///                    search's surface (as find or refine_footpoints give
   ///                    them); positions and normals, where they hold 3n
   ///                    entries, are kept up to date
+  /// @param found       the footpoints are this search's find(points) (then
+  ///                    the nearest sample is not refined again)
   /// @throws ParameterError when the sizes disagree with n or a face is out
   ///                        of range
-  std::size_t closer(const double* points, std::size_t n, Footpoints& footpoints) const;
+  std::size_t closer(const double* points, std::size_t n, Footpoints& footpoints, bool found = false) const;
 
  private:
   const LimitSurface* surface_;

@@ -101,7 +101,7 @@ class ApproximationChunk {
   DistanceSums refine(const LimitSurface& surface, const FootpointOptions& options);
   /// The best iterate's footpoints := the current ones.
   void keep_best();
-  /// Fresh footpoints := search.find(points); returns the sums of the
+  /// Fresh footpoints := search.find(points), then search.closer; returns the sums of the
   /// current distances with each replaced by the fresh one where that is
   /// closer by more than `closer` (what keep_fresh would make them).
   DistanceSums search_fresh(const FootpointSearch& search, double closer);
