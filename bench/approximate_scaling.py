@@ -2,6 +2,7 @@
 
     python bench/approximate_scaling.py                              # 10k .. 4M points, cages of 2%
     python bench/approximate_scaling.py --sizes 10000,100000 --no-page --plot /tmp/a.png
+    python bench/approximate_scaling.py --sizes "" --from-json bench/approximate_scaling.json --dask 1000000
 
 For each size N, in a process of its own (so that each peak memory is its own): a noisy torus of about N
 vertices (`sorpia.shapes.torus`, each vertex moved along the normal by Gaussian noise of 1e-3 of the bounding-box
@@ -157,6 +158,75 @@ def out_of_core_rows(sizes, n_cage: int, chunk_points: int, directory: str, keep
     return rows
 
 
+def dask_rows(n: int, fraction: float, workers: tuple, chunk_points: int) -> list:
+    """The data and cage of one(n), fitted with chunks of `chunk_points` in this process (2 threads) and on a
+    LocalCluster of each of `workers` worker processes of one thread (the same chunks): each run's seconds and
+    the Dask runs' largest relative difference from the in-process one, the workers' seconds per million points
+    per call (footpoints: search and refine; sums: normal_sums) and the bytes of arrays sent each way per
+    iteration (the points' first sending apart)."""
+    import sorpia
+    from dask.distributed import Client, LocalCluster
+
+    points, faces = noisy_torus(n)
+    cage = sorpia.decimate(points, faces, max(4, int(round(fraction * len(points)))))
+    t0 = time.perf_counter()
+    local = sorpia.approximate(points, cage.vertices, cage.faces, chunk_points=chunk_points)
+    rows = [{"points": len(points), "cage": len(cage.vertices), "workers": 0, "chunk_points": chunk_points,
+             "seconds": time.perf_counter() - t0, "iterations": local.iterations, "rms": local.rms / local.diagonal,
+             "relative": 0.0}]
+    for w in workers:
+        with LocalCluster(n_workers=w, threads_per_worker=1, processes=True, dashboard_address=":0") as cluster, \
+                Client(cluster) as client:
+            t0 = time.perf_counter()
+            res = sorpia.approximate(points, cage.vertices, cage.faces, chunk_points=chunk_points, client=client)
+            seconds = time.perf_counter() - t0
+        c = res.timings["cluster"]
+        rounds = res.iterations + 1  # searches and re-projections: the first, one per iteration
+        per_m = 1e6 / len(points)
+        sent_points = len(points) * 24
+        rows.append({**rows[0], "workers": w, "seconds": seconds, "iterations": res.iterations,
+                     "rms": res.rms / res.diagonal,
+                     "relative": float(np.abs(res.control_vertices - local.control_vertices).max()
+                                       / np.abs(local.control_vertices).max()),
+                     **{f"{what}_per_m{suffix}": per_m * sum(c[key].get(call, 0.0) for call in calls) / n_calls
+                        for key, suffix in (("worker_seconds", ""), ("worker_cpu_seconds", "_cpu"))
+                        for what, calls, n_calls in (("footpoints", ("search", "refine"), rounds),
+                                                     ("sums", ("normal_sums",), max(res.iterations, 1)))},
+                     "mb_out_per_iteration": (c["bytes_to_workers"] - sent_points) / rounds / 1e6,
+                     "mb_in_per_iteration": c["bytes_from_workers"].get("normal_sums", 0) / max(res.iterations, 1) / 1e6
+                     + sum(c["bytes_from_workers"].get(call, 0) for call in ("search", "refine")) / rounds / 1e6,
+                     "chunks": c["chunks"]})
+        print(rows[-1], file=sys.stderr)
+    return rows
+
+
+def dask_lines(rows) -> list:
+    """The Dask table of the page."""
+    lines = ["", "## On a Dask cluster", "",
+             "The same data and cage at one size, cut into chunks (--dask-chunk points each), fitted in one process "
+             "(workers 0: `sorpia.approximate` on the machine's threads) and on a `LocalCluster` of 1 and 2 worker "
+             "processes of one thread each (`client=`; the same chunks, their sums added in chunk order): seconds "
+             "of the whole call, the largest difference of the control vertices from the in-process run's "
+             "(relative), and what the workers did: their wall seconds (and their processes' CPU seconds, the "
+             "core's threads) per million points for one round of footpoints (search or re-projection) and for "
+             "one iteration's normal-equation sums, and the megabytes "
+             "of arrays sent to the workers and back per iteration (besides the points, sent once). "
+             "Each worker's core runs on all the machine's cores: where two workers share the machine, the rows "
+             "show the same result from either, not a speed-up. docs/distributed.md projects a billion points "
+             "from these.", "",
+             "| points | cage | chunks | workers | seconds | iterations | RMS / diagonal | relative difference "
+             "| footpoints s (CPU) per 1M | sums s (CPU) per 1M | MB out per iteration | MB back per iteration |",
+             "|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
+    for r in rows:
+        dask = r["workers"] > 0
+        lines.append(f"| {r['points']:,} | {r['cage']:,} | {r.get('chunks', '')} | {r['workers']} "
+                     f"| {r['seconds']:.3g} | {r['iterations']} | {r['rms']:.3g} | {r['relative']:.2g} | "
+                     + (f"{r['footpoints_per_m']:.3g} ({r['footpoints_per_m_cpu']:.3g}) | {r['sums_per_m']:.3g} "
+                        f"({r['sums_per_m_cpu']:.3g}) | {r['mb_out_per_iteration']:.3g} "
+                        f"| {r['mb_in_per_iteration']:.3g} |" if dask else " | | | |"))
+    return lines
+
+
 def draw(rows, path):
     import matplotlib
 
@@ -188,6 +258,11 @@ def main(argv=None):
     p.add_argument("--json", metavar="PATH", help="also write the figures as JSON")
     p.add_argument("--no-page", action="store_true", help="print only; do not write the page")
     p.add_argument("--from-json", metavar="PATH", help="rows measured earlier (a --json file), before the new ones")
+    p.add_argument("--dask", type=int, metavar="N",
+                   help="also fit N points on a Dask LocalCluster of 1 and 2 workers (needs dask.distributed)")
+    p.add_argument("--dask-chunk", type=int, default=250_000, help="points per chunk of the --dask runs")
+    p.add_argument("--dask-json", metavar="PATH",
+                   help="the Dask rows' JSON: written when --dask measures them, read (rows measured earlier) when not")
     p.add_argument("--one", type=int, help=argparse.SUPPRESS)  # a child: one size, JSON on stdout
     p.add_argument("--out-of-core", metavar="N1,N2", help="streamed rows instead: points per PLY (module docstring)")
     p.add_argument("--ooc-cage", type=int, default=50000, help="cage vertices of the out-of-core rows")
@@ -199,6 +274,7 @@ def main(argv=None):
     p.add_argument("--write-samples", metavar="PATH", help=argparse.SUPPRESS)  # a child: write one PLY
     p.add_argument("--points", type=int, help=argparse.SUPPRESS)
     p.add_argument("--one-ooc", metavar="PATH", help=argparse.SUPPRESS)  # a child: one streamed fit
+    p.add_argument("--dask-one", type=int, help=argparse.SUPPRESS)  # a child: the Dask rows of one size
     a = p.parse_args(argv)
     if a.write_samples:
         print(json.dumps({"seconds": write_samples(a.write_samples, a.points, a.ooc_cage)}))
@@ -221,6 +297,9 @@ def main(argv=None):
     if a.one:
         print(json.dumps(one(a.one, a.fraction)))
         return
+    if a.dask_one:
+        print(json.dumps(dask_rows(a.dask_one, a.fraction, (1, 2), a.dask_chunk)))
+        return
     rows = []
     if a.from_json:
         with open(a.from_json) as fh:
@@ -233,6 +312,17 @@ def main(argv=None):
             break
         rows.append(json.loads(out.stdout.strip().splitlines()[-1]))
         print(rows[-1], file=sys.stderr)
+    dask = []
+    if a.dask_json and not a.dask:
+        with open(a.dask_json) as fh:
+            dask = json.load(fh)
+    if a.dask:
+        out = subprocess.run([sys.executable, __file__, "--dask-one", str(a.dask), "--fraction", str(a.fraction),
+                              "--dask-chunk", str(a.dask_chunk)], capture_output=True, text=True)
+        if out.returncode != 0:
+            print(f"Dask, {a.dask} points: failed: {out.stderr.strip()[-2000:]}", file=sys.stderr)
+        else:
+            dask = json.loads(out.stdout.strip().splitlines()[-1])
     lines = ["| points | cage | decimate s | footpoints s | rows s | normal s | solve s | report s | approximate s "
              "| iterations | RMS / diagonal | max / diagonal | peak MB |",
              "|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
@@ -242,13 +332,21 @@ def main(argv=None):
                      f"| {r['peak_mb']:.0f} |")
     lines += ["", "approximate s: the whole call of `sorpia.approximate` (its phases and the rest: validation, "
               "the limit surface's set-up); decimate s: `sorpia.decimate`, before it."]
+    from approximate_command import page_lines as command_lines  # the whole command at 1M, when measured
+    lines += command_lines()
     lines = print_json_plot(lines, rows, json_path=a.json, plot=a.plot, no_page=a.no_page,
                             default_plot=PAGES / "approximate-scaling.png", draw=draw,
                             caption="time and memory against the number of points")
+    if dask:
+        lines += dask_lines(dask)
+        print("\n".join(dask_lines(dask)))
     if not a.no_page:
         intro = __doc__.split("\n\n", 2)[2].split(" Writes\ndocs/")[0]
         write_page("approximate-scaling", "Approximation: cost of each phase against the number of points",
                    intro + "\n\n" + "\n".join(lines), settings=(p, a))
+    if a.dask and dask and a.dask_json:  # after the page, whose stamp would call the tree dirty for it
+        with open(a.dask_json, "w") as fh:
+            json.dump(dask, fh, indent=1)
 
 
 if __name__ == "__main__":

@@ -672,11 +672,11 @@ def test_reported_distances_are_true_distances():
     # Issue 33, item 6: re-projection keeps a footpoint in a local minimum of its distance, so the figures measured
     # at the fit's own footpoints overstated the distances (here, against a finer search of 16 x 16 grid samples
     # per face and 30 Gauss-Newton steps, 23 of 2562 points by more than 1e-3, the RMS by 0.7%). The returned
-    # iterate's footpoints are searched for afresh (closest_points with the fit's grid) before they are reported:
-    # no point is closer to the returned surface by that search than reported (to rounding: 1e-12), the finer
-    # search finds 5 points closer by more than 1e-3 (the starts of a grid of 4 miss them; a search from every
-    # grid sample within the current distance is left to the footpoint search itself), and the reported RMS is
-    # that of the reported distances.
+    # iterate's footpoints are searched for afresh before they are reported (closest_points with the fit's grid,
+    # then FootpointSearch::closer from the grid samples that may lie near a closer point): no point is closer to
+    # the returned surface than reported by that search (to rounding: 1e-12), by the finer search, or by the
+    # exhaustive re-search (near = 0) beyond 1e-9 of the diagonal (before closer, the finer search found 5 points
+    # closer by more than 1e-3), and the reported RMS is that of the reported distances.
     V, F = sorpia.shapes.icosphere(4)
     r = 1 + 0.25 * np.sin(6 * V[:, 0]) * np.sin(6 * V[:, 1]) * np.sin(6 * V[:, 2])
     P = np.ascontiguousarray(V * r[:, None])
@@ -685,7 +685,12 @@ def test_reported_distances_are_true_distances():
     s = sorpia.LimitSurface(res.control_vertices, cage.faces, scheme="catmull-clark")
     fresh = _core.closest_points(s._surface, s._topology, P, 4, 10)[3]
     assert np.all(res.distances <= fresh + 1e-12)
+    diagonal = np.linalg.norm(P.max(axis=0) - P.min(axis=0))
     finer = _core.closest_points(s._surface, s._topology, P, 16, 30)[3]
-    assert np.sum(res.distances > finer + 1e-3) <= 5
+    assert np.all(res.distances <= finer + 1e-9 * diagonal)
+    start = _core.closest_points(s._surface, s._topology, P, 4, 10)
+    (_, _, _, exhaustive, _), _ = _core.closer_footpoints(s._surface, s._topology, P, start[0], start[1], 4, 10, 8,
+                                                           near=0.0)
+    assert np.all(res.distances <= exhaustive + 1e-9 * diagonal)
     assert res.rms == pytest.approx(np.sqrt(np.mean(res.distances ** 2)), rel=1e-12)
     assert res.max_error == res.distances.max()

@@ -129,8 +129,9 @@ class PythonChunks(_core.PointChunks):
 def core_run(surface, chunks, **kw):
     o = dict(iterations=6, tol=3e-3, fairness=3e-4, tangential=0.1, method="cg", solver_tol=1e-3,
              solver_max_iter=2000, grid=4, newton_steps=10, report_level=2, callback=None)
+    robust = {key: kw.pop(key) for key in ("robust", "robust_quantile", "robust_c") if key in kw}
     o.update(kw)
-    return _core.approximate(surface._surface, chunks, *o.values(), report_each=True)
+    return _core.approximate(surface._surface, chunks, *o.values(), report_each=True, **robust)
 
 
 def test_python_backend_gives_the_same_bits():
@@ -157,6 +158,53 @@ def test_python_backend_errors_propagate():
     surface = LimitSurface(V, F, scheme="loop")
     with pytest.raises(RuntimeError, match="worker lost"):
         core_run(surface, Broken(P, V, F, 100))
+
+
+class PythonRobustChunks(PythonChunks):
+    """PythonChunks with the robust fit's three calls, each chunk's result in order."""
+
+    def distance_histogram(self, unit):
+        return [c.distance_histogram(unit) for c in self.chunks]
+
+    def robust_loss_sum(self, robust, scale):
+        return [c.robust_loss_sum(robust, scale) for c in self.chunks]
+
+    def robust_normal_sums(self, tangential, robust, scale):
+        self.calls.append("robust_normal_sums")
+        return [c.robust_normal_sums(self.surface._surface, tangential, robust, scale) for c in self.chunks]
+
+
+def with_outliers(P, count, seed=7):
+    """P with `count` points moved far off (five diagonals, at random), and their indices."""
+    rng = np.random.default_rng(seed)
+    far = rng.choice(len(P), count, replace=False)
+    P = P.copy()
+    P[far] += rng.normal(scale=5 * np.linalg.norm(np.ptp(P, axis=0)), size=(count, 3))
+    return P, far
+
+
+@pytest.mark.parametrize("robust", ["tukey", "cauchy"])
+def test_python_backend_fits_robustly_as_the_core(robust):
+    # With far outliers the robust factors change the fit (a test that a backend ignoring them would fail): a
+    # Python backend with the robust calls gives the core's bits, chunk by chunk.
+    P, V, F = noisy_samples()
+    P, far = with_outliers(P, 30)
+    kw = dict(robust=robust, robust_quantile=0.9, robust_c=30.0 if robust == "tukey" else 12.0)
+    ref_surface = LimitSurface(V, F, scheme="loop")
+    ref = core_run(ref_surface, _core.InMemoryChunks(ref_surface._surface, P, None, 500), **kw)
+    plain = core_run(LimitSurface(V, F, scheme="loop"), _core.InMemoryChunks(ref_surface._surface, P, None, 500))
+    assert relative(plain["control_vertices"], ref["control_vertices"]) > 1e-3  # the outliers moved the plain fit
+    backend = PythonRobustChunks(P, V, F, 500)
+    out = core_run(LimitSurface(V, F, scheme="loop"), backend, **kw)
+    np.testing.assert_array_equal(out["control_vertices"], ref["control_vertices"])
+    assert [h["rms"] for h in out["history"]] == [h["rms"] for h in ref["history"]]
+    assert out["robust_scale"] == ref["robust_scale"] and "robust_normal_sums" in backend.calls
+
+
+def test_python_backend_without_the_robust_calls_is_refused_when_robust():
+    P, V, F = noisy_samples(500)
+    with pytest.raises(sorpia.ParameterError, match="cannot fit robustly .* pass robust = 'none'"):
+        core_run(LimitSurface(V, F, scheme="loop"), PythonChunks(P, V, F, 100), robust="tukey")
 
 
 def write_ply(path, P, dtype, extra=True):

@@ -418,3 +418,85 @@ def test_a_cage_held_up_by_holes_says_so():
         assert f"of the cage's {len(cage.vertices)} vertices lie on its 50 boundary loops" in message
         assert "lie on its 50 boundary loops: each loop keeps at least 3 (no collapse closes a hole)" in message
         assert f"max_boundary_angle ({angle} degrees)" in message and "fill small holes first" in message
+
+
+def corner_plate(m=17):
+    """A plate of m x m unit cells (m odd) with a square hole at every cell (i, j) of odd i and j ((m//2)^2 holes), its
+    outline zigzagging (every other outline vertex pushed out by 2): every vertex is a corner of a hole or of the
+    outline, where the boundary turns by 90 degrees (holes) or at least 36.9 (acos 0.8, at a corner of the plate
+    between two pushed vertices)."""
+    xy = np.array([[i, j] for j in range(m + 1) for i in range(m + 1)], float)
+    on_side = (xy == 0) | (xy == m)
+    odd = (xy.sum(axis=1) % 2 == 1)
+    for axis in (0, 1):  # pushed out across the side it lies on
+        push = on_side[:, axis] & ~on_side[:, 1 - axis] & odd
+        xy[push, axis] += np.where(xy[push, axis] == 0, -2.0, 2.0)
+    idx = lambda i, j: j * (m + 1) + i  # noqa: E731
+    faces = []
+    for j in range(m):
+        for i in range(m):
+            if i % 2 == 1 and j % 2 == 1:
+                continue
+            faces += [[idx(i, j), idx(i + 1, j), idx(i + 1, j + 1)], [idx(i, j), idx(i + 1, j + 1), idx(i, j + 1)]]
+    v = np.column_stack([xy, np.zeros(len(xy))])
+    return v, np.array(faces, np.int32), (m // 2) ** 2
+
+
+@pytest.mark.parametrize("scheme", ["loop", "catmull-clark"])
+def test_a_cage_that_keeps_every_vertex_is_refused(scheme):
+    """Issue 33, item 11: where no collapse is allowed (every vertex a corner of one of 64 holes or of the outline)
+    the cage would have as many control vertices as the mesh has points: refused, strict or not, with the reason
+    and the way out; the counts in the message are the mesh's own (numpy)."""
+    v, f, n_holes = corner_plate()
+    assert n_holes == 64
+    turn = np.degrees(np.arccos(0.8))
+    assert turn > 30  # the outline's corners: above the default max_boundary_angle
+    for strict in (True, False):
+        with pytest.raises(sorpia.MeshError) as caught:
+            sorpia.decimate(v, f, 150, scheme=scheme, strict=strict)
+        message = str(caught.value)
+        n = len(np.unique(f))
+        assert f"decimate stopped at {n} vertices of the 150 asked (from {n})" in message
+        assert f"lie on its {n_holes + 1} boundary loops" in message
+        assert f"the cage would keep all {n} vertices, as many control vertices as the mesh has points" in message
+        assert "no fit is determined" in message and "give a cage of your own" in message
+    # One hole filled (its two triangles back): a few collapses become legal and the cage is returned, with the
+    # warning, lighter than the mesh.
+    idx = lambda i, j: j * 18 + i  # noqa: E731
+    filled = np.vstack([f, [[idx(7, 7), idx(8, 7), idx(8, 8)], [idx(7, 7), idx(8, 8), idx(7, 8)]]])
+    with pytest.warns(sorpia.DecimationWarning):
+        cage = sorpia.decimate(v, filled, 150, scheme=scheme, strict=False)
+    assert 150 < len(cage.vertices) < len(np.unique(filled))
+
+
+def test_the_command_refuses_a_cage_that_keeps_every_vertex(tmp_path, command):
+    v, f, _ = corner_plate()
+    sorpia.write_mesh(tmp_path / "plate.ply", v, f)
+    code, out, err = command("approximate", tmp_path / "plate.ply", "-o", tmp_path / "cage.obj", "--vertices", 150)
+    assert code == 2 and out == "", err
+    assert "no light cage" in err and "no fit is determined" in err and "--cage CAGE" in err
+    assert "repair" not in err  # the mesh is valid: no repair helps
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["plate.ply"]
+
+
+def test_a_large_mesh_decimated_in_rounds_fits_as_the_heap_alone():
+    """From 200,000 vertices decimate lays the mesh out in Morton order and collapses in rounds down to 4 times
+    the count before the heap takes the rest (docs/cages.md); below, the heap alone. Two tori of the same
+    shape on either side of that size, each to 2000 vertices: both cages closed, oriented, of genus 1, made of
+    input vertices, and their faces as close to the torus (distance from the torus's own equation, radii 1 and
+    0.4): the rounds' within 10% of the heap's, RMS and max."""
+    def torus_distance(p):
+        return np.abs(np.hypot(np.hypot(p[:, 0], p[:, 1]) - 1.0, p[:, 2]) - 0.4)
+
+    distances = {}
+    for nu, nv in ((700, 300), (680, 290)):  # 210,000 vertices (rounds) and 197,200 (the heap alone)
+        v, f = sorpia.shapes.torus(nu, nv)
+        cage = sorpia.decimate(v, f, 2000)
+        assert cage.vertices.shape == (2000, 3)
+        check_oriented_manifold(cage.vertices, cage.faces, closed=True)
+        assert euler_characteristic(cage.vertices, cage.faces) == 0
+        assert cKDTree(v).query(cage.vertices)[0].max() < 1e-15
+        d = torus_distance(surface_samples(cage.vertices, cage.faces))
+        distances[len(v) >= 200000] = (np.sqrt(np.mean(d ** 2)), d.max())
+    rounds, heap = distances[True], distances[False]
+    assert rounds[0] <= 1.1 * heap[0] and rounds[1] <= 1.1 * heap[1], distances

@@ -260,6 +260,66 @@ def test_sigterm_during_a_solve_exits_143_and_leaves_no_file(ico_file, tmp_path)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["ico.obj"]
 
 
+@pytest.fixture
+def big_scan(tmp_path):
+    """A scan of 300k points (binary PLY): its decimation lasts seconds, far longer than the signal's delay."""
+    v, f = sorpia.shapes.irregular(300000)
+    sorpia.write_mesh(tmp_path / "scan.ply", v, f, binary=True)
+    return tmp_path / "scan.ply"
+
+
+@pytest.mark.parametrize("sig, code, line", [(signal.SIGINT, 130, "interrupted"), (signal.SIGTERM, 143, "terminated")])
+def test_a_signal_during_approximate_decimation_stops_it_and_leaves_no_file(big_scan, tmp_path, sig, code, line):
+    # The signal comes from a thread 0.2 s into the decimation (sorpia.decimate, which polls for it between
+    # collapses): the decimation does not finish, the command ends with one line and its exit code, and none
+    # of its outputs (nor a temporary) exists.
+    run = child(f"""
+        import threading, time
+        import sorpia.cli.approximate as command
+        decimate, main = command.decimate, threading.get_ident()
+        def decimate_then_signal(*args, **kwargs):
+            threading.Timer(0.2, signal.pthread_kill, (main, {int(sig)})).start()
+            cage = decimate(*args, **kwargs)
+            print("decimation finished", flush=True)
+            return cage
+        command.decimate = decimate_then_signal
+        sys.exit(sorpia.cli.main(["approximate", "scan.ply", "-o", "c.obj", "--vertices", "500", "--quiet",
+                                  "--report", "r.json", "--surface", "s.obj"]))
+    """, cwd=tmp_path)
+    assert run.returncode == code, run.stderr
+    assert run.stderr == f"sorpia: {line}\n" and run.stdout == ""
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["scan.ply"]
+
+
+@pytest.mark.parametrize("sig, code, line", [(signal.SIGINT, 130, "interrupted"), (signal.SIGTERM, 143, "terminated")])
+def test_a_signal_during_approximate_fit_stops_it_and_leaves_no_file(tmp_path, sig, code, line):
+    # The signal comes from a thread 0.05 s after the fit's first iteration record, inside the next iteration
+    # (the core polls for it): the fit does not reach its 50th iteration, the command ends with one line and
+    # its exit code, no output.
+    v, f = sorpia.shapes.irregular(40000)
+    sorpia.write_mesh(tmp_path / "scan.ply", v, f, binary=True)
+    sorpia.write_mesh(tmp_path / "cage.obj", *sorpia.decimate(v, f, 800)[:2])
+    run = child(f"""
+        import threading
+        from sorpia.cli.progress import Progress
+        note, main, records = Progress.note, threading.get_ident(), []
+        def at_iteration(self, text):
+            records.append(text)
+            if len(records) == 1:
+                threading.Timer(0.05, signal.pthread_kill, (main, {int(sig)})).start()
+            return note(self, text)
+        Progress.note = at_iteration
+        code = sorpia.cli.main(["approximate", "scan.ply", "-o", "c.obj", "--cage", "cage.obj", "--quiet",
+                                "--iterations", "50", "--tol", "0", "--report", "r.json"])
+        print(len(records))
+        sys.exit(code)
+    """, cwd=tmp_path)
+    assert run.returncode == code, run.stderr
+    assert run.stderr == f"sorpia: {line}\n"
+    assert 1 <= int(run.stdout) < 50
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["cage.obj", "scan.ply"]
+
+
 def test_sigterm_during_a_write_lets_it_finish_then_exits_and_leaves_no_temporary(tmp_path):
     # A thread watches the folder and sends SIGTERM to the main thread as soon
     # as the writer's temporary file exists: the write finishes (the file is

@@ -58,7 +58,8 @@ def not_run(words: list[str]) -> bool:
 # The optional extras an example may need, found by what its text names: (pattern, module, reason).
 EXTRAS = [(re.compile(r"\.usd[ac]?\b|\bpxr\b"), "pxr", "usd-core is not installed (pip install 'sorpia[usd]')"),
           (re.compile(r"\.png\b|--plot\b|\bsorpia render\b|\bmatplotlib\b"), "matplotlib",
-           "matplotlib is not installed (pip install 'sorpia[plot]')")]
+           "matplotlib is not installed (pip install 'sorpia[plot]')"),
+          (re.compile(r"\bdask\b"), "distributed", "dask.distributed is not installed (pip install 'sorpia[dask]')")]
 
 
 def installed(module: str) -> bool:

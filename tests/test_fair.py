@@ -461,6 +461,16 @@ def test_coordinates_near_the_limits_of_double(scheme, scale, metric):
     assert np.isfinite(big.control_vertices).all()
     if metric == "reference":  # scale-free: the same energy
         assert big.energy == pytest.approx(one.energy, rel=1e-10)
+        assert big.energy_exponent == 0
+    else:  # the energies scale with the square of the coordinates: exact in units of 2^energy_exponent
+        e = sorpia._core.scale_exponent(v * scale)
+        assert e != 0 and big.energy_exponent == 2 * e
+        for scaled, plain in ((big.energy_scaled, one.energy), (big.plain_energy_scaled, one.plain_energy)):
+            assert scaled == pytest.approx(plain * (scale * 2.0 ** -e) ** 2, rel=1e-10)
+        # in model units they leave double's range: 1e310 overflows, 1e-310 is subnormal
+        assert big.energy == np.inf if scale > 1 else 0 <= big.energy < 1e-300
+    # the ratio, from the scaled energies, is the same at every scale (energy in model units: inf or 0 at 1e+-155)
+    assert big.energy_ratio == pytest.approx(one.energy_ratio, rel=1e-10) and big.energy_ratio <= 1 + 1e-12
     np.testing.assert_allclose(big.control_vertices / scale, one.control_vertices, rtol=0, atol=1e-12)
     limit = sorpia.limit_points(big.control_vertices / scale, big.faces, scheme=scheme, **big.tags)
     assert np.abs(limit[:len(v)] - v).max() <= 1e-12

@@ -106,8 +106,8 @@ sorpia::FootpointOptions footpoint_options(int grid, int max_steps) {
   return o;
 }
 
-// The Python forms of the chunks' sums (CHUNKS-API.md): DistanceSums as (squares, max, count, changed), NormalSums
-// as (indptr, indices, values, rhs), PointExtent as (count, weighted, lo, hi, largest), PointMoments as (count,
+// The Python forms of the chunks' sums (the calls and their order: sorpia/point_chunks.hpp): DistanceSums as
+// (squares, max, count, changed), NormalSums as (indptr, indices, values, rhs), PointExtent as (count, weighted, lo, hi, largest), PointMoments as (count,
 // sum, sum2). A backend written in Python may return one of them or a list of them, one per chunk: the list is
 // added in its order (sorpia::add), as the core's backends add their chunks'.
 // k points' weights (None: null), converted into `holder`, which must outlive the pointer.
@@ -236,6 +236,39 @@ sorpia::PointMoments to_moments(const py::handle& obj) {
   });
 }
 
+// A distance histogram crosses to Python as (unit, total, mass): plain values a process can send.
+py::tuple histogram_tuple(const sorpia::DistanceHistogram& h) {
+  return py::make_tuple(h.unit(), h.total(), to_numpy(std::vector<double>(h.mass()), 0));
+}
+
+// (unit, total, mass), or a list of them merged in its order.
+sorpia::DistanceHistogram to_histogram(const py::handle& obj) {
+  const auto one = [](const py::handle& h) {
+    const auto t = h.cast<py::tuple>();
+    if (t.size() != 3) throw sorpia::ParameterError("a distance histogram must be (unit, total, mass)");
+    return sorpia::DistanceHistogram(t[0].cast<double>(), t[1].cast<double>(), t[2].cast<std::vector<double>>());
+  };
+  if (!py::isinstance<py::list>(obj)) return one(obj);
+  const auto items = obj.cast<py::list>();
+  if (items.empty()) throw sorpia::ParameterError("a list of distance histograms is empty");
+  sorpia::DistanceHistogram total = one(items[0]);
+  for (std::size_t i = 1; i < items.size(); ++i) total.merge(one(items[i]));
+  return total;
+}
+
+// A robust fit's settings cross to Python as (loss name, quantile, c).
+py::tuple robust_tuple(const sorpia::RobustOptions& o) {
+  return py::make_tuple(sorpia::robust_loss_name(o.loss), o.quantile, o.c);
+}
+
+sorpia::RobustOptions to_robust(const std::string& loss, double quantile, double c) {
+  sorpia::RobustOptions o;
+  o.loss = sorpia::robust_loss(loss, "loss");
+  o.quantile = quantile;
+  o.c = c;
+  return o;
+}
+
 std::array<double, 3> triple(const py::handle& h, const char* name) {
   const auto v = h.cast<std::vector<double>>();
   if (v.size() != 3) throw sorpia::ParameterError(std::string(name) + " must have 3 items");
@@ -288,6 +321,29 @@ class PyPointChunks : public sorpia::PointChunks {
     return to_distance_sums(call_locked("keep_fresh_in_best")); }
   sorpia::NormalSums normal_sums(double tangential) override { py::gil_scoped_acquire gil;
     return to_normal_sums(call_locked("normal_sums", tangential)); }
+  // The robust fit's calls are optional: a backend without them fits with robust = "none" only (the base's
+  // ParameterError says so). The robust settings go as (loss, quantile, c).
+  sorpia::DistanceHistogram distance_histogram(double unit) override {
+    py::gil_scoped_acquire gil;
+    if (!override_of("distance_histogram")) return sorpia::PointChunks::distance_histogram(unit);
+    return to_histogram(call_locked("distance_histogram", unit));
+  }
+  double robust_loss_sum(const sorpia::RobustOptions& robust, double scale) override {
+    py::gil_scoped_acquire gil;
+    if (!override_of("robust_loss_sum")) return sorpia::PointChunks::robust_loss_sum(robust, scale);
+    const py::object r = call_locked("robust_loss_sum", robust_tuple(robust), scale);
+    if (!py::isinstance<py::list>(r)) return r.cast<double>();
+    double total = 0.0;  // the chunks' sums added in the list's order
+    for (const auto& v : r.cast<py::list>()) total += v.cast<double>();
+    return total;
+  }
+  sorpia::NormalSums robust_normal_sums(double tangential, const sorpia::RobustOptions& robust,
+                                        double scale) override {
+    py::gil_scoped_acquire gil;
+    if (!override_of("robust_normal_sums"))
+      return sorpia::PointChunks::robust_normal_sums(tangential, robust, scale);
+    return to_normal_sums(call_locked("robust_normal_sums", tangential, robust_tuple(robust), scale));
+  }
   std::vector<double> sample() override {
     py::gil_scoped_acquire gil;
     const auto a = call_locked("sample").cast<Vertices>();
@@ -308,10 +364,14 @@ class PyPointChunks : public sorpia::PointChunks {
   }
 
  private:
+  // The Python override of `name`, or none (the GIL held by the caller).
+  py::function override_of(const char* name) const {
+    return py::get_override(static_cast<const sorpia::PointChunks*>(this), name);
+  }
   // The Python override of `name` called with the GIL held (held by the caller).
   template <class... Args>
   py::object call_locked(const char* name, Args&&... args) {
-    const py::function f = py::get_override(static_cast<const sorpia::PointChunks*>(this), name);
+    const py::function f = override_of(name);
     if (!f) throw sorpia::ParameterError(std::string("PointChunks.") + name + " is not implemented");
     return f(std::forward<Args>(args)...);
   }
@@ -463,18 +523,24 @@ void bind_approximate(py::module_& m) {
            "(N + mu I + c K) X = rhs by the fitting layer's PCG from `start` (sorpia::NormalEquations::solve):\n"
            "(X, iterations, stop_reason).");
 
+  // Footpoints (face_ids, uv) given for points, checked.
+  const auto given_footpoints = [](const Vertices& points, const FaceIds& face_ids, const Vertices& uv) {
+    check_shape(points, 3, "points");
+    check_shape(uv, 2, "uv");
+    const auto n = static_cast<std::size_t>(points.shape(0));
+    if (face_ids.ndim() != 1 || static_cast<std::size_t>(face_ids.shape(0)) != n ||
+        static_cast<std::size_t>(uv.shape(0)) != n)
+      throw sorpia::ParameterError("face_ids and uv must have one row per point (" + std::to_string(n) + ")");
+    sorpia::Footpoints fp;
+    fp.face_ids = to_vector(face_ids);
+    fp.uv = to_vector(uv);
+    return fp;
+  };
   m.def("refine_footpoints",
-        [](const sorpia::LimitSurface& surface, const sorpia::Topology& topology, const Vertices& points,
-           const FaceIds& face_ids, const Vertices& uv, int max_steps) {
-          check_shape(points, 3, "points");
-          check_shape(uv, 2, "uv");
+        [given_footpoints](const sorpia::LimitSurface& surface, const sorpia::Topology& topology,
+                           const Vertices& points, const FaceIds& face_ids, const Vertices& uv, int max_steps) {
           const auto n = static_cast<std::size_t>(points.shape(0));
-          if (face_ids.ndim() != 1 || static_cast<std::size_t>(face_ids.shape(0)) != n ||
-              static_cast<std::size_t>(uv.shape(0)) != n)
-            throw sorpia::ParameterError("face_ids and uv must have one row per point (" + std::to_string(n) + ")");
-          sorpia::Footpoints fp;
-          fp.face_ids = to_vector(face_ids);
-          fp.uv = to_vector(uv);
+          sorpia::Footpoints fp = given_footpoints(points, face_ids, uv);
           const double* p = points.data();
           {
             LongCall call;
@@ -484,6 +550,39 @@ void bind_approximate(py::module_& m) {
         },
         "surface"_a, "topology"_a, "points"_a.noconvert(), "face_ids"_a.noconvert(), "uv"_a.noconvert(),
         "max_steps"_a);
+
+  m.def("closer_footpoints",
+        [given_footpoints](const sorpia::LimitSurface& surface, const sorpia::Topology& topology,
+                           const Vertices& points, const FaceIds& face_ids, const Vertices& uv, int grid,
+                           int max_steps, int starts, double near) {
+          const auto n = static_cast<std::size_t>(points.shape(0));
+          sorpia::Footpoints fp = given_footpoints(points, face_ids, uv);
+          const double* p = points.data();
+          std::size_t moved = 0;
+          {
+            LongCall call;
+            sorpia::FootpointOptions o = footpoint_options(grid, max_steps);
+            o.starts = starts;
+            o.near = near;
+            const sorpia::FootpointSearch search(surface, topology, o);
+            fp.positions.resize(3 * n);
+            fp.normals.resize(3 * n);
+            fp.distances.resize(n);
+            surface.evaluate(fp.face_ids.data(), fp.uv.data(), n, fp.positions.data(), nullptr, nullptr,
+                             fp.normals.data());
+            for (std::size_t i = 0; i < n; ++i) {
+              double d2 = 0.0;
+              for (std::size_t c = 0; c < 3; ++c) d2 += (p[3 * i + c] - fp.positions[3 * i + c]) * (p[3 * i + c] - fp.positions[3 * i + c]);
+              fp.distances[i] = std::sqrt(d2);
+            }
+            moved = search.closer(p, n, fp);
+          }
+          return py::make_tuple(footpoint_tuple(std::move(fp)), moved);
+        },
+        "surface"_a, "topology"_a, "points"_a.noconvert(), "face_ids"_a.noconvert(), "uv"_a.noconvert(), "grid"_a,
+        "max_steps"_a, "starts"_a, "near"_a = 0.1,
+        "((face_ids, uv, positions, distances, normals), moved): the footpoints given, evaluated at their (face, uv),\n"
+        "re-searched from the grid samples within their distance (sorpia::FootpointSearch::closer).");
 
   m.def(
       "scale_exponent",
@@ -514,7 +613,7 @@ void bind_approximate(py::module_& m) {
 
   py::class_<sorpia::ApproximationChunk>(m, "ApproximationChunk",
                                          "One chunk of approximation's points: its footpoints and its share of "
-                                         "the normal equations (sorpia::ApproximationChunk; CHUNKS-API.md).")
+                                         "the normal equations (sorpia::ApproximationChunk, sorpia/point_chunks.hpp).")
       .def(py::init([](const Vertices& points, const py::object& weights, std::size_t first) {
              check_shape(points, 3, "points");
              const auto k = static_cast<std::size_t>(points.shape(0));
@@ -584,6 +683,31 @@ void bind_approximate(py::module_& m) {
              return normal_tuple(std::move(s));
            },
            "surface"_a, "tangential"_a)
+      .def("distance_histogram",
+           [](const sorpia::ApproximationChunk& c, double unit) { return histogram_tuple(c.distance_histogram(unit)); },
+           "unit"_a, "the current distances' weighted histogram (sorpia/robust.hpp) as (unit, total, mass)")
+      .def("robust_loss_sum",
+           [](const sorpia::ApproximationChunk& c, const py::tuple& robust, double scale) {
+             if (robust.size() != 3) throw sorpia::ParameterError("robust must be (loss, quantile, c)");
+             return c.robust_loss_sum(
+                 to_robust(robust[0].cast<std::string>(), robust[1].cast<double>(), robust[2].cast<double>()), scale);
+           },
+           "robust"_a, "scale"_a, "sum w rho(d) of the current distances; robust = (loss, quantile, c)")
+      .def("robust_normal_sums",
+           [](const sorpia::ApproximationChunk& c, const sorpia::LimitSurface& surface, double tangential,
+              const py::tuple& robust, double scale) {
+             if (robust.size() != 3) throw sorpia::ParameterError("robust must be (loss, quantile, c)");
+             const sorpia::RobustOptions o =
+                 to_robust(robust[0].cast<std::string>(), robust[1].cast<double>(), robust[2].cast<double>());
+             sorpia::NormalSums s;
+             {
+               LongCall call;
+               s = c.normal_sums(surface, tangential, &o, scale);
+             }
+             return normal_tuple(std::move(s));
+           },
+           "surface"_a, "tangential"_a, "robust"_a, "scale"_a,
+           "normal_sums with each weight times the robust factor of its distance at `scale`")
       .def("best_footpoints", [](const sorpia::ApproximationChunk& c) {
         sorpia::Footpoints f = c.best_footpoints();
         return py::make_tuple(to_numpy(std::move(f.face_ids), 0), to_numpy(std::move(f.uv), 2),
@@ -593,8 +717,8 @@ void bind_approximate(py::module_& m) {
   py::class_<sorpia::PointChunks, PyPointChunks>(
       m, "PointChunks",
       "approximation's points as chunks (sorpia::PointChunks), the backend its driver calls: subclass it in "
-      "Python and implement every method (CHUNKS-API.md); sums may be returned per chunk, as a list, added in its "
-      "order.")
+      "Python and implement every method (their calls and order: sorpia/point_chunks.hpp); sums may be returned "
+      "per chunk, as a list, added in its order.")
       .def(py::init<>())
       .def("size", &sorpia::PointChunks::size, "the number of points");
 
@@ -622,6 +746,29 @@ void bind_approximate(py::module_& m) {
   m.def("point_file_points", [](const std::string& path) { return sorpia::point_file_layout(path).k; }, "path"_a,
         "The number of points of a file FileChunks streams (a binary little-endian PLY's vertices, a .npy (k, 3)\n"
         "array), from its header; FileError (sorpia.MeshFileError) for any other file.");
+  m.def(
+      "read_point_file",
+      [](const std::string& path, std::size_t first, std::size_t count) {
+        std::vector<double> p;
+        {
+          LongCall call;
+          p = sorpia::read_point_file(path, first, count);
+        }
+        return to_numpy(std::move(p), 3);
+      },
+      "path"_a, "first"_a, "count"_a,
+      "Points first .. first + count of a file FileChunks streams, (count, 3) float64 (a chunk read where it is\n"
+      "used: a Dask worker).");
+  m.def(
+      "point_sample_mask",
+      [](std::size_t first, std::size_t count, std::size_t k, std::size_t sample_points) {
+        const std::vector<char> in = sorpia::point_sample_mask(first, count, k, sample_points);
+        py::array_t<bool> out(static_cast<py::ssize_t>(count));
+        std::copy(in.begin(), in.end(), out.mutable_data());
+        return out;
+      },
+      "first"_a, "count"_a, "k"_a, "sample_points"_a,
+      "Which of points first .. first + count of k are in FileChunks' fixed sample of about sample_points.");
 
   m.def(
       "approximate",
@@ -687,8 +834,8 @@ void bind_approximate(py::module_& m) {
       "The surface-to-data figures in every record with report_each, else only in the returned iterate's (None\n"
       "in the others). robust: the loss of the robust fit (none, cauchy, tukey) at the robust_quantile of the\n"
       "distances times robust_c (sorpia/robust.hpp); none here unless given (sorpia.approximate passes its\n"
-      "default): a Python backend fits robustly only with distance_histogram, robust_loss_sum and\n"
-      "robust_normal_sums, which the trampoline does not reach yet.");
+      "default): a Python backend fits robustly only where it defines distance_histogram, robust_loss_sum and\n"
+      "robust_normal_sums (sorpia/point_chunks.hpp).");
 }
 
 }  // namespace sorpia_py

@@ -130,6 +130,7 @@ void bind_fit(py::module_& m) {
         out["energies"] = to_numpy(std::move(s.energies), 0);
         out["energy"] = s.energy;
         out["start_energy"] = s.start_energy;
+        out["energy_exponent"] = s.energy_exponent;
         out["iterations"] = s.iterations;
         out["stop_reason"] = s.stop_reason;
         out["max_error"] = s.max_error;
@@ -147,7 +148,8 @@ void bind_fit(py::module_& m) {
       "Fair interpolation's pipeline (sorpia::fair_interpolate): the plain solve on the Interpolator's mesh, the\n"
       "refinement, K and the fair solve. A dict: plain (InterpolationResult), faces, n_vertices, tags (the fine\n"
       "mesh's), refinement (R as CSR arrays, only where the reference metric built it), vertices, energies,\n"
-      "energy, start_energy, iterations, stop_reason, max_error and seconds per phase.");
+      "energy, start_energy, energy_exponent (the energies are in units of 2^energy_exponent), iterations,\n"
+      "stop_reason, max_error and seconds per phase.");
 }
 
 }  // namespace sorpia_py

@@ -6,7 +6,7 @@ import collections.abc
 import numpy
 import numpy.typing
 import typing
-__all__: list[str] = ['ApproximationChunk', 'Boundary', 'FileChunks', 'FootpointSearch', 'INFINITE_SHARPNESS', 'InMemoryChunks', 'InterpolationResult', 'Interpolator', 'LimitSurface', 'MAX_REFINEMENT_LEVELS', 'MAX_THREADS', 'MeshError', 'MeshFileError', 'Method', 'NormalEquations', 'OmegaRule', 'ParameterError', 'PointChunks', 'PointIndex', 'Rules', 'Scheme', 'SolveOptions', 'Tags', 'Topology', 'YOUNG_RHO_CLAMP', 'approximate', 'available_memory_bytes', 'blend_weights', 'boundary_name', 'check_ply_per_vertex', 'check_refinement', 'check_writable', 'closest_points', 'decimate', 'face_list_statistics', 'fair_interpolate', 'fairness_matrix', 'grid', 'icosphere', 'irregular', 'limit_matrix', 'limit_points', 'limit_residual', 'mesh_statistics', 'method_names', 'normal_matrix', 'parse_boundary', 'parse_method', 'parse_omega', 'parse_scheme', 'point_file_points', 'pole', 'polygon_torus', 'quad_grid', 'quad_irregular', 'quad_torus', 'read_mesh', 'refine_footpoints', 'refine_uniform', 'refinement_bytes', 'regular_valence', 'repair', 'repair_polygons', 'rms_levelled', 'scale_exponent', 'scheme_name', 'sharp_edges', 'split_nonmanifold', 'split_nonmanifold_polygons', 'subface_columns', 'tessellation_bytes', 'torus', 'write_file_atomic', 'write_mesh']
+__all__: list[str] = ['ApproximationChunk', 'Boundary', 'FileChunks', 'FootpointSearch', 'INFINITE_SHARPNESS', 'InMemoryChunks', 'InterpolationResult', 'Interpolator', 'LimitSurface', 'MAX_REFINEMENT_LEVELS', 'MAX_THREADS', 'MeshError', 'MeshFileError', 'Method', 'NormalEquations', 'OmegaRule', 'ParameterError', 'PointChunks', 'PointIndex', 'Rules', 'Scheme', 'SolveOptions', 'Tags', 'Topology', 'YOUNG_RHO_CLAMP', 'approximate', 'available_memory_bytes', 'blend_weights', 'boundary_name', 'check_ply_per_vertex', 'check_refinement', 'check_writable', 'closer_footpoints', 'closest_points', 'decimate', 'face_list_statistics', 'fair_interpolate', 'fairness_matrix', 'grid', 'icosphere', 'irregular', 'limit_matrix', 'limit_points', 'limit_residual', 'mesh_statistics', 'method_names', 'normal_matrix', 'parse_boundary', 'parse_method', 'parse_omega', 'parse_scheme', 'point_file_points', 'point_sample_mask', 'pole', 'polygon_torus', 'quad_grid', 'quad_irregular', 'quad_torus', 'read_mesh', 'read_point_file', 'refine_footpoints', 'refine_uniform', 'refinement_bytes', 'regular_valence', 'repair', 'repair_polygons', 'rms_levelled', 'scale_exponent', 'scheme_name', 'sharp_edges', 'split_nonmanifold', 'split_nonmanifold_polygons', 'subface_columns', 'tessellation_bytes', 'torus', 'write_file_atomic', 'write_mesh']
 class MeshError(ValueError):
     """
     The faces or coordinates cannot be used: an index out of range, a repeated
@@ -689,12 +689,16 @@ class FootpointSearch:
         ...
 class ApproximationChunk:
     """
-    One chunk of approximation's points: its footpoints and its share of the normal equations (sorpia::ApproximationChunk; CHUNKS-API.md).
+    One chunk of approximation's points: its footpoints and its share of the normal equations (sorpia::ApproximationChunk, sorpia/point_chunks.hpp).
     """
     def __init__(self, points: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], weights: typing.Any = None, first: typing.SupportsInt | typing.SupportsIndex = 0) -> None:
         ...
     def best_footpoints(self) -> tuple[numpy.typing.NDArray[numpy.int32], numpy.typing.NDArray[numpy.float64], numpy.typing.NDArray[numpy.float64]]:
         ...
+    def distance_histogram(self, unit: typing.SupportsFloat | typing.SupportsIndex) -> tuple:
+        """
+        the current distances' weighted histogram (sorpia/robust.hpp) as (unit, total, mass)
+        """
     def extent(self) -> tuple:
         ...
     def keep_best(self) -> None:
@@ -711,6 +715,14 @@ class ApproximationChunk:
         ...
     def refine(self, surface: LimitSurface, grid: typing.SupportsInt | typing.SupportsIndex, max_steps: typing.SupportsInt | typing.SupportsIndex) -> tuple:
         ...
+    def robust_loss_sum(self, robust: tuple, scale: typing.SupportsFloat | typing.SupportsIndex) -> float:
+        """
+        sum w rho(d) of the current distances; robust = (loss, quantile, c)
+        """
+    def robust_normal_sums(self, surface: LimitSurface, tangential: typing.SupportsFloat | typing.SupportsIndex, robust: tuple, scale: typing.SupportsFloat | typing.SupportsIndex) -> tuple:
+        """
+        normal_sums with each weight times the robust factor of its distance at `scale`
+        """
     def scale(self, e: typing.SupportsInt | typing.SupportsIndex) -> None:
         ...
     def search(self, search: FootpointSearch) -> tuple:
@@ -728,7 +740,7 @@ class ApproximationChunk:
         ...
 class PointChunks:
     """
-    approximation's points as chunks (sorpia::PointChunks), the backend its driver calls: subclass it in Python and implement every method (CHUNKS-API.md); sums may be returned per chunk, as a list, added in its order.
+    approximation's points as chunks (sorpia::PointChunks), the backend its driver calls: subclass it in Python and implement every method (their calls and order: sorpia/point_chunks.hpp); sums may be returned per chunk, as a list, added in its order.
     """
     def __init__(self) -> None:
         ...
@@ -754,8 +766,8 @@ def approximate(surface: LimitSurface, chunks: PointChunks, iterations: typing.S
     The surface-to-data figures in every record with report_each, else only in the returned iterate's (None
     in the others). robust: the loss of the robust fit (none, cauchy, tukey) at the robust_quantile of the
     distances times robust_c (sorpia/robust.hpp); none here unless given (sorpia.approximate passes its
-    default): a Python backend fits robustly only with distance_histogram, robust_loss_sum and
-    robust_normal_sums, which the trampoline does not reach yet.
+    default): a Python backend fits robustly only where it defines distance_histogram, robust_loss_sum and
+    robust_normal_sums (sorpia/point_chunks.hpp).
     """
 def available_memory_bytes() -> int:
     ...
@@ -777,6 +789,11 @@ def check_writable(path: str) -> None:
     """
     Raise MeshFileError naming path when write_file_atomic(path, ...) could not start.
     """
+def closer_footpoints(surface: LimitSurface, topology: Topology, points: numpy.typing.NDArray[numpy.float64], face_ids: numpy.typing.NDArray[numpy.int32], uv: numpy.typing.NDArray[numpy.float64], grid: typing.SupportsInt | typing.SupportsIndex, max_steps: typing.SupportsInt | typing.SupportsIndex, starts: typing.SupportsInt | typing.SupportsIndex, near: typing.SupportsFloat | typing.SupportsIndex = 0.1) -> tuple[tuple, int]:
+    """
+    ((face_ids, uv, positions, distances, normals), moved): the footpoints given, evaluated at their (face, uv),
+    re-searched from the grid samples within their distance (sorpia::FootpointSearch::closer).
+    """
 def closest_points(surface: LimitSurface, topology: Topology, points: numpy.typing.NDArray[numpy.float64], grid: typing.SupportsInt | typing.SupportsIndex, max_steps: typing.SupportsInt | typing.SupportsIndex) -> tuple:
     ...
 def decimate(vertices: numpy.typing.NDArray[numpy.float64], triangles: numpy.typing.NDArray[numpy.int32], n_vertices: typing.SupportsInt | typing.SupportsIndex, scheme: Scheme, max_normal_deviation: typing.SupportsFloat | typing.SupportsIndex, max_aspect_ratio: typing.SupportsFloat | typing.SupportsIndex, max_boundary_angle: typing.SupportsFloat | typing.SupportsIndex, strict: bool) -> tuple[tuple, typing.Any]:
@@ -792,7 +809,8 @@ def fair_interpolate(interpolator: Interpolator, vertices: numpy.typing.NDArray[
     Fair interpolation's pipeline (sorpia::fair_interpolate): the plain solve on the Interpolator's mesh, the
     refinement, K and the fair solve. A dict: plain (InterpolationResult), faces, n_vertices, tags (the fine
     mesh's), refinement (R as CSR arrays, only where the reference metric built it), vertices, energies,
-    energy, start_energy, iterations, stop_reason, max_error and seconds per phase.
+    energy, start_energy, energy_exponent (the energies are in units of 2^energy_exponent), iterations,
+    stop_reason, max_error and seconds per phase.
     """
 def fairness_matrix(topology: Topology, rules: Rules, thin_plate: typing.SupportsFloat | typing.SupportsIndex, membrane: typing.SupportsFloat | typing.SupportsIndex, gauss_points: typing.SupportsInt | typing.SupportsIndex, depth: typing.SupportsInt | typing.SupportsIndex, reuse: bool = True, reference: numpy.typing.NDArray[numpy.float64] | None = None) -> tuple:
     """
@@ -841,6 +859,10 @@ def point_file_points(path: str) -> int:
     The number of points of a file FileChunks streams (a binary little-endian PLY's vertices, a .npy (k, 3)
     array), from its header; FileError (sorpia.MeshFileError) for any other file.
     """
+def point_sample_mask(first: typing.SupportsInt | typing.SupportsIndex, count: typing.SupportsInt | typing.SupportsIndex, k: typing.SupportsInt | typing.SupportsIndex, sample_points: typing.SupportsInt | typing.SupportsIndex) -> numpy.typing.NDArray[numpy.bool]:
+    """
+    Which of points first .. first + count of k are in FileChunks' fixed sample of about sample_points.
+    """
 def pole(n: typing.SupportsInt | typing.SupportsIndex) -> tuple:
     ...
 def polygon_torus(nu: typing.SupportsInt | typing.SupportsIndex, nv: typing.SupportsInt | typing.SupportsIndex, seed: typing.SupportsInt | typing.SupportsIndex = 1) -> tuple:
@@ -853,6 +875,11 @@ def quad_torus(nu: typing.SupportsInt | typing.SupportsIndex, nv: typing.Support
     ...
 def read_mesh(path: str, triangulate: bool, tags: bool, attributes: bool, points: bool = False) -> tuple[numpy.typing.NDArray[numpy.float64], numpy.typing.NDArray[numpy.int32], typing.Any, int, typing.Any, typing.Any]:
     ...
+def read_point_file(path: str, first: typing.SupportsInt | typing.SupportsIndex, count: typing.SupportsInt | typing.SupportsIndex) -> numpy.typing.NDArray[numpy.float64]:
+    """
+    Points first .. first + count of a file FileChunks streams, (count, 3) float64 (a chunk read where it is
+    used: a Dask worker).
+    """
 def refine_footpoints(surface: LimitSurface, topology: Topology, points: numpy.typing.NDArray[numpy.float64], face_ids: numpy.typing.NDArray[numpy.int32], uv: numpy.typing.NDArray[numpy.float64], max_steps: typing.SupportsInt | typing.SupportsIndex) -> tuple:
     ...
 def refine_uniform(topology: Topology, rules: Rules, levels: typing.SupportsInt | typing.SupportsIndex, vertices: numpy.typing.NDArray[numpy.float64] | None = None, refinement: bool = True) -> dict:

@@ -44,11 +44,15 @@ The whole run (footpoints, updates, stopping rule, records) is the C++
 core's ``sorpia::approximate``; this module checks the arguments, samples a
 dense mesh's surface and builds the result.
 
-Distances are reported both ways at every iteration: data to surface (the
-footpoint distances) and surface to data (from the vertices of a uniform
-tessellation of the limit surface, exact limit points, to the nearest data
-point), as RMS and max, in model units and as fractions of the diagonal of
-the data's bounding box.
+Distances are reported at every iteration from the data to the surface (the
+footpoint distances), and for the returned iterate (at every iteration with
+``report_each``) from the surface to the data (from the vertices of a
+uniform tessellation of the limit surface, exact limit points, to the nearest
+data point), as RMS and max, in model units and as fractions of the diagonal
+of the data's bounding box.
+
+The points are worked on in chunks (``chunk_points``, docs/approximation.md,
+"Large data"), and may be streamed from a file given by its path.
 """
 
 from __future__ import annotations
@@ -62,7 +66,7 @@ from typing import Callable, Optional
 
 import numpy as np
 
-from . import _core
+from . import _core, _dask
 from ._mesh import SubdivisionMesh, mesh_arguments
 from ._scipy import CSRMatrix
 from ._validate import DEFAULT_BOUNDARY, DEFAULT_SCHEME, as_integer, as_polygons, as_real, as_vertices, resolve_scheme
@@ -159,7 +163,13 @@ class ApproximationResult:
         Seconds spent in each phase: ``footpoints``, ``rows``, ``normal``
         (forming A^T A and A^T P), ``solve``, ``report`` (surface to data),
         ``total`` (`seconds`); and ``cpu``: the process's CPU seconds of
-        each (all threads).
+        each (all threads). With ``client``, also ``cluster``: ``workers``,
+        ``chunks``, ``chunk_points``, ``worker_seconds`` and
+        ``worker_cpu_seconds`` (the workers' wall and CPU seconds per call
+        of the driver, summed over the chunks: ``search``, ``refine``,
+        ``normal_sums``, ...), ``bytes_to_workers`` (of the arrays sent: the
+        points once, the control vertices each iteration) and
+        ``bytes_from_workers`` (per call: the chunks' sums back).
     mesh : sorpia.SubdivisionMesh or None
         The fitted cage: the control vertices on the cage's faces, with its
         scheme, boundary rule and tags.
@@ -354,7 +364,7 @@ def approximate(points, cage_vertices, cage_faces=None, *, scheme: str = DEFAULT
                 callback: Optional[Callable[[dict], object]] = None, weights=None, faces=None,
                 sampling: Optional[str] = None, chunk_points: int = DEFAULT_CHUNK_POINTS,
                 spill_directory=None, sample_points: int = DEFAULT_SAMPLE_POINTS,
-                robust: str = DEFAULT_ROBUST) -> ApproximationResult:
+                robust: str = DEFAULT_ROBUST, client=None) -> ApproximationResult:
     """Control vertices of a cage whose limit surface approximates `points`
     in the least-squares sense (the module docstring describes the method).
 
@@ -467,6 +477,14 @@ def approximate(points, cage_vertices, cage_faces=None, *, scheme: str = DEFAULT
         (``sqrt(sum_i w_i rho(d_i) / k)``), not the RMS distance of all the
         points (the records still give that). On clean data the default
         fits as least squares does (docs/approximation.md, "Robustness").
+    client : dask.distributed.Client or None
+        Run the chunks on the workers of this Dask cluster (needs
+        ``pip install 'sorpia[dask]'``; docs/distributed.md): each worker
+        holds its chunks between iterations, the client adds their sums in
+        chunk order and solves, so the result is the one without `client`
+        and the same `chunk_points`. Points given as a path are read by
+        the workers themselves (a filesystem that the client and every
+        worker see at that path). The client is left open.
 
     Returns
     -------
@@ -475,7 +493,9 @@ def approximate(points, cage_vertices, cage_faces=None, *, scheme: str = DEFAULT
     Raises
     ------
     sorpia.ParameterError
-        Empty or non-finite points, an option out of range.
+        Empty or non-finite points, an option out of range; a `client`
+        that is not a running Client of a cluster with workers, or
+        dask.distributed not installed.
     sorpia.MeshError
         A cage with no faces, or one the scheme cannot take.
     """
@@ -508,6 +528,7 @@ def approximate(points, cage_vertices, cage_faces=None, *, scheme: str = DEFAULT
         raise ParameterError(f"method = {method!r} must be one of {', '.join(UPDATE_METHODS)}")
     if callback is not None and not callable(callback):
         raise ParameterError(f"callback = {callback!r} must be callable (record) or None")
+    workers = None if client is None else _dask.check_client(client)
     if faces is None and sampling is not None:
         raise ParameterError(f"sampling = {sampling!r} samples a dense mesh's faces: give faces= too")
     if faces is not None and weights is not None:
@@ -531,16 +552,26 @@ def approximate(points, cage_vertices, cage_faces=None, *, scheme: str = DEFAULT
     scheme = resolve_scheme(scheme, cage_faces)
     surface = LimitSurface(cage_vertices, cage_faces, boundary=boundary, scheme=scheme, creases=creases,
                            corners=corners, holes=holes)
-    if path is None:
+    if client is not None:  # the workers build the same surface from the cage's arrays and rules
+        chunks = _dask.DaskChunks(client, workers, dict(vertices=cage_vertices, faces=cage_faces, boundary=boundary,
+                                                        scheme=scheme, creases=creases, corners=corners, holes=holes),
+                                  points if path is None else path, weights, chunk_points, sample_points)
+    elif path is None:
         chunks = _core.InMemoryChunks(surface._surface, points, weights, chunk_points)
     else:
         chunks = _core.FileChunks(surface._surface, path, chunk_points,
                                   os.fspath(spill_directory if spill_directory is not None else tempfile.gettempdir()),
                                   sample_points)
-    out = _core.approximate(surface._surface, chunks, iterations, tol, fairness, tangential, method,
-                            solver_tol, solver_max_iter, grid, newton_steps, report_level, callback,
-                            time.perf_counter() - t0, bool(report_each), robust,
-                            *_ROBUST_SCALE.get(robust, (0.9, 1.0)))
+    try:
+        out = _core.approximate(surface._surface, chunks, iterations, tol, fairness, tangential, method,
+                                solver_tol, solver_max_iter, grid, newton_steps, report_level, callback,
+                                time.perf_counter() - t0, bool(report_each), robust,
+                                *_ROBUST_SCALE.get(robust, (0.9, 1.0)))
+    finally:
+        if client is not None:
+            chunks.close()
+    if client is not None:
+        out["timings"]["cluster"] = chunks.stats
     out["timings"]["total"] = time.perf_counter() - t0
     out["timings"]["cpu"]["total"] = time.process_time() - c0
     V = out["control_vertices"]

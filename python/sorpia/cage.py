@@ -102,7 +102,10 @@ def decimate(vertices, faces=None, n_vertices: Optional[int] = None, *, scheme: 
     strict : bool
         True: a decimation the guards stop before ``n_vertices`` raises
         `MeshError`. False: it returns the cage it reached (more vertices than
-        asked) with a `DecimationWarning` saying how far it got.
+        asked) with a `DecimationWarning` saying how far it got, unless no
+        collapse at all was allowed (every vertex a corner of a hole or of
+        the outline): that cage, every vertex of the mesh, is no lighter than
+        the data and raises `MeshError` either way.
 
     Returns
     -------
@@ -115,7 +118,7 @@ def decimate(vertices, faces=None, n_vertices: Optional[int] = None, *, scheme: 
         A face that is not a triangle, a mesh OpenMesh's half-edge mesh
         cannot take (the face named), ``n_vertices`` above the mesh's, or
         (`strict`) a decimation the guards stop before ``n_vertices`` (the
-        message says how far it got).
+        message says how far it got), or one that can remove no vertex.
     ParameterError
         ``n_vertices`` below 4, an unknown scheme, an angle or ratio out of range.
     """

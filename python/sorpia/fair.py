@@ -95,15 +95,24 @@ class FairResult:
         The interpolated vertices (input indices, which are also their
         children's indices in the fine mesh).
     energy : float
-        tr(V^T K V) of the result.
+        tr(V^T K V) of the result, in model units squared (inf or 0 where
+        that leaves double's range: ``energy_exponent``).
     plain_energy : float
         tr(V^T K V) of the plain interpolation's control mesh refined
         (R V_plain: the same surface as plain interpolation's, on the same
         fine mesh), which the iteration starts from.
     history : (iterations + 1,) float64
         The energy after each iteration (history[0]: the start's, after its
-        target vertices were recomputed from the others). ``energies``: its
-        deprecated name (DeprecationWarning), for one release.
+        target vertices were recomputed from the others), in the units of
+        ``energy``. ``energies``: its deprecated name (DeprecationWarning),
+        for one release.
+    energy_exponent : int
+        0, except for data beyond 2^+-200 in magnitude, which is solved
+        scaled by a power of two: there the energies (squares of the
+        coordinates) are exactly ``energy_scaled * 2**energy_exponent``,
+        which can overflow or underflow a double. ``energy_scaled`` and
+        ``plain_energy_scaled`` hold the scaled values; ``energy_ratio`` is
+        taken from them.
     max_error : float
         max over the targets of ||(B_fine V)_t - v_t||, absolute.
     max_error_relative : float
@@ -149,6 +158,9 @@ class FairResult:
     energy: float
     plain_energy: float
     history: np.ndarray
+    energy_exponent: int
+    energy_scaled: float
+    plain_energy_scaled: float
     max_error: float
     max_error_relative: float
     iterations: int
@@ -167,6 +179,13 @@ class FairResult:
     @property
     def converged(self) -> bool:
         return self.stop_reason in ("converged", "exact")
+
+    @property
+    def energy_ratio(self) -> Optional[float]:
+        """energy / plain_energy (at most 1: the fair surface bends no more than
+        the plain one), from the scaled energies, so finite where the energies
+        in model units are not; None where the plain energy is 0."""
+        return self.energy_scaled / self.plain_energy_scaled if self.plain_energy_scaled > 0 else None
 
     @property
     def tags(self) -> dict:
@@ -192,7 +211,9 @@ class FairResult:
         the timings (no per-vertex arrays), and the plain solve's figures."""
         return {"scheme": self.scheme, "boundary": self.boundary, "levels": self.levels,
                 "n_control_vertices": int(len(self.control_vertices)), "n_targets": int(len(self.targets)),
-                "energy": self.energy, "plain_energy": self.plain_energy, "max_error": self.max_error,
+                "energy": self.energy, "plain_energy": self.plain_energy, "energy_ratio": self.energy_ratio,
+                "energy_exponent": self.energy_exponent, "energy_scaled": self.energy_scaled,
+                "plain_energy_scaled": self.plain_energy_scaled, "max_error": self.max_error,
                 "max_error_relative": self.max_error_relative, "iterations": self.iterations,
                 "converged": self.converged, "stop_reason": self.stop_reason, "seconds": self.seconds,
                 "history": np.asarray(self.history).tolist(), "timings": dict(self.timings),
@@ -368,13 +389,17 @@ def fair_interpolate(vertices, faces=None, *, scheme: str = DEFAULT_SCHEME, leve
     fine_faces = out["faces"]
     diagonal = bounding_box_diagonal(v0)
     max_error = float(out["max_error"])
+    exponent = int(out["energy_exponent"])
+    with np.errstate(over="ignore", under="ignore"):  # beyond double in model units: inf or 0 (energy_exponent)
+        energy, plain_energy, history = (np.ldexp(out[key], exponent) for key in ("energy", "start_energy", "energies"))
     fine_creases, fine_corners, fine_holes = _fine_tags(out["tags"])
     timings["total"] = time.perf_counter() - t0
     return FairResult(
         control_vertices=out["vertices"], faces=fine_faces, creases=fine_creases, corners=fine_corners,
         holes=fine_holes, scheme=_core.scheme_name(rules.scheme), boundary=_core.boundary_name(rules.boundary),
-        levels=levels, targets=target_ids.astype(np.int64), energy=float(out["energy"]),
-        plain_energy=float(out["start_energy"]), history=out["energies"], max_error=max_error,
+        levels=levels, targets=target_ids.astype(np.int64), energy=float(energy),
+        plain_energy=float(plain_energy), history=history, energy_exponent=exponent,
+        energy_scaled=float(out["energy"]), plain_energy_scaled=float(out["start_energy"]), max_error=max_error,
         max_error_relative=max_error / diagonal if diagonal > 0 else max_error,
         iterations=int(out["iterations"]), stop_reason=out["stop_reason"], seconds=timings["total"],
         timings=timings, plain=plain, _refinement=refinement)

@@ -230,7 +230,9 @@ TEST(Approximate, OneUpdateEqualsADenseSolveOfItsNormalEquations) {
   // One iteration, the update solved to 1e-14 of its residual: V is the dense solution (long double Cholesky of
   // the 36 x 36 system, independent of the core's sparse normal matrix and PCG) to 1e-9 of the cage's size (the
   // PCG's 1e-14 residual times the system's condition, a few thousand with the proximal term alone), for point
-  // distance, the tangent-distance blend, with and without the fairness term, by CG and by LSPIA.
+  // distance, the tangent-distance blend, with and without the fairness term, by CG and by LSPIA; and with the
+  // points cut into chunks (of 7, of 1: the chunks' normal sums added in order, patterns merged or added in
+  // place), the same solution.
   const TinyFit fit;
   struct Case {
     sorpia::ApproximationUpdate update;
@@ -238,7 +240,8 @@ TEST(Approximate, OneUpdateEqualsADenseSolveOfItsNormalEquations) {
   };
   for (const Case c : {Case{sorpia::ApproximationUpdate::CG, 1.0, 0.0}, Case{sorpia::ApproximationUpdate::CG, 1.0, 1e-3},
                        Case{sorpia::ApproximationUpdate::CG, 0.1, 1e-3},
-                       Case{sorpia::ApproximationUpdate::LSPIA, 1.0, 1e-3}}) {
+                       Case{sorpia::ApproximationUpdate::LSPIA, 1.0, 1e-3}})
+  for (const std::size_t chunk : {std::size_t{1} << 20, std::size_t{7}, std::size_t{1}}) {
     const sorpia::Topology topology(fit.cage);
     sorpia::LimitSurface surface(topology, fit.start.data(), Scheme::Loop, Boundary::EdgeAndCorner);
     sorpia::ApproximationOptions o;
@@ -249,13 +252,14 @@ TEST(Approximate, OneUpdateEqualsADenseSolveOfItsNormalEquations) {
     o.solver_tol = 1e-14;
     o.solver_max_iter = 1000000;
     o.robust.loss = sorpia::RobustLoss::None;  // the least-squares update the dense solve makes
+    o.chunk_points = chunk;
     const auto r = sorpia::approximate(surface, fit.points.data(), fit.points.size() / 3, nullptr, o);
     ASSERT_EQ(r.best_iteration, 1) << "the update lowers the RMS distance";
     const std::vector<double> want = dense_update(fit, c.fairness, c.tangential);
     ASSERT_EQ(r.control_vertices.size(), want.size());
     for (std::size_t i = 0; i < want.size(); ++i)
       EXPECT_NEAR(r.control_vertices[i], want[i], 1e-9) << "entry " << i << " tangential " << c.tangential
-                                                         << " fairness " << c.fairness;
+                                                         << " fairness " << c.fairness << " chunks of " << chunk;
     EXPECT_LT(r.history[1].rms, r.history[0].rms);
     EXPECT_EQ(r.iterations, 1);
     EXPECT_EQ(r.stop_reason, "max_iter");

@@ -320,9 +320,7 @@ FairSolution fair_solve(const Topology& topology, const Rules& rules, const CsrM
   detail::scale_pow2(v.data(), v.size(), -e);
   FairSolution out = solve_scaled(topology, rules, energy, targets, n_targets, p.data(), v.data(), options);
   detail::scale_pow2(out.vertices.data(), out.vertices.size(), e);
-  detail::scale_pow2(out.energies.data(), out.energies.size(), 2 * e);
-  out.energy = std::ldexp(out.energy, 2 * e);
-  out.start_energy = std::ldexp(out.start_energy, 2 * e);
+  out.energy_exponent = 2 * e;  // the energies stay scaled: in the caller's units they may overflow
   out.max_error = std::ldexp(out.max_error, e);
   return out;
 }

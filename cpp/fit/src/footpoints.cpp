@@ -34,6 +34,17 @@ inline double box_distance2(const float* lo, const float* hi, const double* q) {
   return d2;
 }
 
+// Pushes inner node nd's children on a depth-first search's stack, the
+// nearer to q last, so that it is searched first.
+template <class Node>
+void push_children(const std::vector<Node>& nodes, const Node& nd, const double* q, std::vector<std::uint32_t>& stack) {
+  const Node& a = nodes[nd.left];
+  const Node& b = nodes[nd.left + 1];
+  const bool a_first = box_distance2(a.lo, a.hi, q) <= box_distance2(b.lo, b.hi, q);
+  stack.push_back(a_first ? nd.left + 1 : nd.left);
+  stack.push_back(a_first ? nd.left : nd.left + 1);
+}
+
 int task_count(std::size_t n, std::size_t per_task) {
   const std::size_t want = (n + per_task - 1) / per_task;
   return static_cast<int>(std::max<std::size_t>(
@@ -204,17 +215,60 @@ void PointIndex::nearest(const double* queries, std::size_t k, std::int64_t* ind
           }
           continue;
         }
-        // The nearer child last, so that it is searched first.
-        const Node& a = nodes_[nd.left];
-        const Node& b = nodes_[nd.left + 1];
-        const bool a_first = box_distance2(a.lo, a.hi, q) <= box_distance2(b.lo, b.hi, q);
-        stack.push_back(a_first ? nd.left + 1 : nd.left);
-        stack.push_back(a_first ? nd.left : nd.left + 1);
+        push_children(nodes_, nd, q, stack);
       }
       index[qi] = order_[best_i];
       distance[qi] = std::sqrt(best);
     }
   });
+}
+
+std::size_t PointIndex::least_ranked(const double* q, double bound, double slack, std::size_t k,
+                                     const std::function<double(std::int64_t, double)>& rank, std::int64_t* index,
+                                     double* value) const {
+  if (k == 0) return 0;
+  // The points taken so far, a max-heap on their rank of at most k; the
+  // bound is the k-th one's once k are held.
+  thread_local std::vector<std::pair<double, std::uint32_t>> heap;
+  heap.clear();
+  // A box at distance b holds no rank below b - slack.
+  const auto box_out = [&](const Node& nd) {
+    const double reach = bound + slack;
+    return !(reach > 0.0) || box_distance2(nd.lo, nd.hi, q) >= reach * reach;
+  };
+  thread_local std::vector<std::uint32_t> stack;
+  stack.clear();
+  stack.push_back(0);
+  while (!stack.empty()) {
+    const Node& nd = nodes_[stack.back()];
+    stack.pop_back();
+    if (box_out(nd)) continue;
+    if (nd.left == 0) {
+      for (std::uint32_t i = nd.begin; i < nd.end; ++i) {
+        const double* p = &points_[3 * static_cast<std::size_t>(i)];
+        const double dx = p[0] - q[0], dy = p[1] - q[1], dz = p[2] - q[2];
+        const double d = std::sqrt(dx * dx + dy * dy + dz * dz);
+        if (!(d - slack < bound)) continue;
+        const double r = rank(order_[i], d);
+        if (!(r < bound)) continue;
+        heap.emplace_back(r, i);
+        std::push_heap(heap.begin(), heap.end());
+        if (heap.size() > k) {
+          std::pop_heap(heap.begin(), heap.end());
+          heap.pop_back();
+        }
+        if (heap.size() == k) bound = heap.front().first;
+      }
+      continue;
+    }
+    push_children(nodes_, nd, q, stack);
+  }
+  std::sort_heap(heap.begin(), heap.end());
+  for (std::size_t j = 0; j < heap.size(); ++j) {
+    index[j] = order_[heap[j].second];
+    value[j] = heap[j].first;
+  }
+  return heap.size();
 }
 
 // ---- charts of a face's domain ---------------------------------------------------
@@ -321,7 +375,11 @@ struct Domains {
 // boundary. Returns true when the point moved.
 bool move(const Domains& dom, std::int32_t& f, int& c, double* ab, const double* d) {
   const Kind kind = dom.kind(f);
-  const double a0 = ab[0], b0 = ab[1];
+  // From the chart: a point put on an edge (a hop's, a + b = 1 computed)
+  // can lie a rounding outside it, where no side is crossed from and a step
+  // would leave the domain unseen.
+  const double a0 = std::clamp(ab[0], 0.0, 1.0);
+  const double b0 = std::clamp(ab[1], 0.0, kind == Kind::Triangle ? 1.0 - a0 : 1.0);
   const double a1 = a0 + d[0], b1 = b0 + d[1];
   // Fraction t of the step at which each side is crossed (sides: 0 b = 0,
   // 1 a + b = 1 or a = 1, 2 a = 0 for a triangle / b = 1 for a square, 3 a = 0).
@@ -440,6 +498,47 @@ void grid_samples(const Domains& dom, int r, std::vector<std::int32_t>& face_ids
   }
 }
 
+// For each sample of grid_samples(dom, r) (in its order), with limit points
+// `positions`: the largest distance to its neighbours in its chart's grid
+// (along a row, a column, and for a triangle the third direction). Every
+// point of the chart lies within about half a spacing of a sample in
+// (u, v), so within this of one in space.
+std::vector<double> grid_reach(const Domains& dom, int r, const std::vector<double>& positions) {
+  std::vector<double> reach(positions.size() / 3, 0.0);
+  const auto m = static_cast<std::int32_t>(dom.topology.n_faces());
+  std::size_t offset = 0;
+  for (std::int32_t f = 0; f < m; ++f) {
+    if (dom.hole[static_cast<std::size_t>(f)]) continue;
+    const bool tri = dom.kind(f) == Kind::Triangle;
+    for (int c = 0; c < dom.charts(f); ++c) {
+      // Sample (i, j) of this chart: row j holds r + 1 samples (r + 1 - j in a triangle).
+      const auto at = [&](int i, int j) {
+        std::size_t o = offset;
+        for (int jj = 0; jj < j; ++jj) o += static_cast<std::size_t>(tri ? r + 1 - jj : r + 1);
+        return o + static_cast<std::size_t>(i);
+      };
+      const auto link = [&](std::size_t a, std::size_t b) {
+        const double* p = &positions[3 * a];
+        const double* q = &positions[3 * b];
+        const double d = std::sqrt((p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) +
+                                   (p[2] - q[2]) * (p[2] - q[2]));
+        reach[a] = std::max(reach[a], d);
+        reach[b] = std::max(reach[b], d);
+      };
+      for (int j = 0; j <= r; ++j) {
+        const int row = tri ? r - j : r;  // the last i of row j
+        for (int i = 0; i <= row; ++i) {
+          if (i < row) link(at(i, j), at(i + 1, j));
+          if (j < r && (!tri || i <= row - 1)) link(at(i, j), at(i, j + 1));
+          if (tri && i > 0 && j < r) link(at(i, j), at(i - 1, j + 1));
+        }
+      }
+      offset = at(0, r) + static_cast<std::size_t>(tri ? 1 : r + 1);
+    }
+  }
+  return reach;
+}
+
 }  // namespace
 
 namespace {
@@ -447,6 +546,9 @@ namespace {
 // domain has side 1): its distance is then exact to about this times the
 // surface's size.
 constexpr double kUvTolerance = 1e-11;
+// Gauss-Newton steps at least of FootpointSearch::closer's refinements: its
+// starts may lie a few grid cells from their minimum.
+constexpr int kCloserSteps = 100;
 // The rounding of a computed distance, in units of epsilon times the size of
 // the surface point's coordinates (|p|_1 + distance).
 constexpr double kRounding = 8.0;
@@ -693,6 +795,8 @@ FootpointSearch::FootpointSearch(const LimitSurface& surface, const Topology& to
   du_.resize(3 * k);
   dv_.resize(3 * k);
   surface.evaluate(sample_faces_.data(), sample_uv_.data(), k, positions_.data(), du_.data(), dv_.data(), nullptr);
+  reach_ = grid_reach(dom, options.grid, positions_);
+  largest_reach_ = *std::max_element(reach_.begin(), reach_.end());
   index_ = std::make_unique<PointIndex>(positions_.data(), k);
 }
 
@@ -716,6 +820,97 @@ Footpoints FootpointSearch::find(const double* points, std::size_t n) const {
   KnownStart known{nearest.data(), positions_.data(), du_.data(), dv_.data()};
   refine(*surface_, *topology_, points, n, options_, fp, &known);
   return fp;
+}
+
+std::size_t FootpointSearch::closer(const double* points, std::size_t n, Footpoints& fp) const {
+  if (fp.face_ids.size() != n || fp.uv.size() != 2 * n || fp.distances.size() != n)
+    throw ParameterError("footpoints hold " + std::to_string(fp.face_ids.size()) + " faces, " +
+                         std::to_string(fp.uv.size() / 2) + " parameters and " + std::to_string(fp.distances.size()) +
+                         " distances for " + std::to_string(n) + " points");
+  const auto m = static_cast<std::int32_t>(topology_->n_faces());
+  for (std::size_t i = 0; i < n; ++i)
+    if (fp.face_ids[i] < 0 || fp.face_ids[i] >= m)
+      throw ParameterError("face_ids[" + std::to_string(i) + "] = " + std::to_string(fp.face_ids[i]) +
+                           " is out of range [0, " + std::to_string(m) + ")");
+  const auto starts = static_cast<std::size_t>(std::max(options_.starts, 0));
+  if (n == 0 || starts == 0) return 0;
+  const bool has_positions = fp.positions.size() == 3 * n, has_normals = fp.normals.size() == 3 * n;
+  FootpointOptions options = options_;
+  options.max_steps = std::max(options.max_steps, kCloserSteps);
+  std::size_t moved = 0;
+  // In batches of points, so that the starts' states stay within a bounded
+  // memory.
+  constexpr std::size_t kBatch = 65536;
+  std::vector<std::int64_t> candidate(kBatch * (starts + 1));
+  std::vector<double> candidate_rank(kBatch * starts);
+  std::vector<std::size_t> count(kBatch);
+  std::vector<std::int64_t> nearest_sample(kBatch);
+  std::vector<double> nearest_distance(kBatch);
+  for (std::size_t first = 0; first < n; first += kBatch) {
+    poll_interrupt();
+    const std::size_t b = std::min(kBatch, n - first);
+    const int tasks = task_count(b, 4096);
+    index_->nearest(points + 3 * first, b, nearest_sample.data(), nearest_distance.data());
+    detail::for_each_index(tasks > 1, tasks, b, [&](std::size_t j) {
+      const std::size_t i = first + j;
+      const double* x = points + 3 * i;
+      const double d = fp.distances[i];
+      // The nearest sample, as find starts (its footpoint may be another
+      // than the one given), and for a point not within a fraction of that
+      // sample's reach of its footpoint, the samples whose cells may hold a
+      // point closer than d: |x - s| - reach(s) < d, the least of that lower
+      // bound first.
+      std::int64_t* c = &candidate[j * (starts + 1)];
+      c[0] = nearest_sample[j];
+      count[j] = d > 0.0 ? 1 : 0;
+      const auto u = static_cast<std::size_t>(c[0]);
+      if (!(d > options_.near * reach_[u])) return;  // (false for d = 0)
+      const auto rank = [&](std::int64_t s, double dist) {
+        return s == c[0] ? std::numeric_limits<double>::infinity() : dist - reach_[static_cast<std::size_t>(s)];
+      };
+      count[j] += index_->least_ranked(x, d, largest_reach_, starts, rank, c + 1, &candidate_rank[j * starts]);
+    });
+    // The starts, one row each: the point repeated, refined from its sample.
+    std::vector<std::size_t> row(b + 1, 0);
+    for (std::size_t j = 0; j < b; ++j) row[j + 1] = row[j] + count[j];
+    const std::size_t rows = row[b];
+    if (rows == 0) continue;
+    std::vector<double> x(3 * rows);
+    std::vector<std::int64_t> nearest(rows);
+    Footpoints trial;
+    trial.face_ids.resize(rows);
+    trial.uv.resize(2 * rows);
+    for (std::size_t j = 0; j < b; ++j)
+      for (std::size_t c = 0; c < count[j]; ++c) {
+        const std::size_t r = row[j] + c;
+        const auto s = static_cast<std::size_t>(candidate[j * (starts + 1) + c]);
+        std::copy_n(points + 3 * (first + j), 3, &x[3 * r]);
+        nearest[r] = static_cast<std::int64_t>(s);
+        trial.face_ids[r] = sample_faces_[s];
+        trial.uv[2 * r] = sample_uv_[2 * s];
+        trial.uv[2 * r + 1] = sample_uv_[2 * s + 1];
+      }
+    KnownStart known{nearest.data(), positions_.data(), du_.data(), dv_.data()};
+    refine(*surface_, *topology_, x.data(), rows, options, trial, &known);
+    // The closest of each point's results, where closer than its footpoint
+    // (the first of equals).
+    for (std::size_t j = 0; j < b; ++j) {
+      if (count[j] == 0) continue;
+      std::size_t best = row[j];
+      for (std::size_t r = row[j] + 1; r < row[j + 1]; ++r)
+        if (trial.distances[r] < trial.distances[best]) best = r;
+      const std::size_t i = first + j;
+      if (!(trial.distances[best] < fp.distances[i])) continue;
+      ++moved;
+      fp.face_ids[i] = trial.face_ids[best];
+      fp.uv[2 * i] = trial.uv[2 * best];
+      fp.uv[2 * i + 1] = trial.uv[2 * best + 1];
+      fp.distances[i] = trial.distances[best];
+      if (has_positions) std::copy_n(&trial.positions[3 * best], 3, &fp.positions[3 * i]);
+      if (has_normals) std::copy_n(&trial.normals[3 * best], 3, &fp.normals[3 * i]);
+    }
+  }
+  return moved;
 }
 
 Footpoints closest_points(const LimitSurface& surface, const Topology& topology, const double* points, std::size_t n,

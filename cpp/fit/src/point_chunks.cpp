@@ -93,6 +93,32 @@ void add(NormalSums& total, NormalSums&& chunk) {
                            std::to_string(a.blocks));
     for (std::size_t i = 0; i < total.rhs.size(); ++i) total.rhs[i] += chunk.rhs[i];
     const auto nb = static_cast<std::size_t>(a.blocks);
+    // Where every entry of the chunk's pattern is in the total's (as soon as the chunks added cover the cage's
+    // faces), its values are added in place; else the patterns are merged.
+    bool within = true;
+    for (std::size_t i = 0; i < a.n && within; ++i) {
+      auto p = static_cast<std::size_t>(a.indptr[i]);
+      const auto pe = static_cast<std::size_t>(a.indptr[i + 1]);
+      for (auto q = static_cast<std::size_t>(b.indptr[i]); q < static_cast<std::size_t>(b.indptr[i + 1]); ++q) {
+        while (p < pe && a.indices[p] < b.indices[q]) ++p;
+        if (p == pe || a.indices[p] != b.indices[q]) {
+          within = false;
+          break;
+        }
+      }
+    }
+    if (within) {
+      for (std::size_t i = 0; i < a.n; ++i) {
+        auto p = static_cast<std::size_t>(a.indptr[i]);
+        for (auto q = static_cast<std::size_t>(b.indptr[i]); q < static_cast<std::size_t>(b.indptr[i + 1]); ++q) {
+          while (a.indices[p] < b.indices[q]) ++p;
+          for (std::size_t t = 0; t < nb; ++t) a.values[nb * p + t] += b.values[nb * q + t];
+        }
+      }
+      total.rows_seconds = rows_seconds;
+      total.rows_cpu = rows_cpu;
+      return;
+    }
     NormalMatrix m;
     m.n = a.n;
     m.blocks = a.blocks;
@@ -234,7 +260,10 @@ void ApproximationChunk::keep_best() {
 }
 
 DistanceSums ApproximationChunk::search_fresh(const FootpointSearch& search, double closer) {
-  fresh = from_footpoints(search.find(points_.data(), k_));
+  // The grid's nearest sample, then the samples that may lie near a closer point (FootpointSearch::closer).
+  Footpoints found = search.find(points_.data(), k_);
+  search.closer(points_.data(), k_, found);
+  fresh = from_footpoints(std::move(found));
   std::vector<double> merged(k_);
   for (std::size_t i = 0; i < k_; ++i)
     merged[i] = fresh.distances[i] < current.distances[i] - closer ? fresh.distances[i] : current.distances[i];
@@ -585,6 +614,37 @@ std::uint64_t mix(std::uint64_t x) {
   return x ^ (x >> 31);
 }
 
+// Points first .. first + count of a file of layout l open as fd, as float64 (row-major (count, 3)).
+std::vector<double> decode_points(int fd, const PointFileLayout& l, std::size_t first, std::size_t count,
+                                  const std::string& path) {
+  std::vector<char> raw(count * l.stride);
+  read_all(fd, raw.data(), raw.size(), l.offset + first * l.stride, path);
+  std::vector<double> p(3 * count);
+  for (std::size_t i = 0; i < count; ++i)
+    for (std::size_t c = 0; c < 3; ++c) {
+      const char* at = raw.data() + i * l.stride + l.x_offset[c];
+      if (l.float64) {
+        std::memcpy(&p[3 * i + c], at, 8);
+      } else {
+        float f;
+        std::memcpy(&f, at, 4);
+        p[3 * i + c] = static_cast<double>(f);
+      }
+    }
+  return p;
+}
+
+// A file open for reading, closed when it goes out of scope.
+struct ReadOnlyFile {
+  int fd;
+  explicit ReadOnlyFile(const std::string& path) : fd(::open(path.c_str(), O_RDONLY | O_CLOEXEC)) {
+    if (fd < 0) file_error(path, std::strerror(errno));
+  }
+  ~ReadOnlyFile() { ::close(fd); }
+  ReadOnlyFile(const ReadOnlyFile&) = delete;
+  ReadOnlyFile& operator=(const ReadOnlyFile&) = delete;
+};
+
 // The spill file's arrays, per point: current (face, uv, distance, normal), best (face, uv, distance), fresh (as
 // current). Each array holds all points, chunk c's at its first point.
 constexpr std::size_t kStateBytes[3] = {4 + 16 + 8 + 24, 4 + 16 + 8, 4 + 16 + 8 + 24};
@@ -593,12 +653,8 @@ constexpr std::size_t kStateBytes[3] = {4 + 16 + 8 + 24, 4 + 16 + 8, 4 + 16 + 8 
 
 PointFileLayout point_file_layout(const std::string& path) {
   PointFileLayout out;
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) file_error(path, std::strerror(errno));
-  struct Closer {
-    int fd;
-    ~Closer() { ::close(fd); }
-  } closer{fd};
+  const ReadOnlyFile file(path);
+  const int fd = file.fd;
   const off_t end = ::lseek(fd, 0, SEEK_END);
   if (end < 0) file_error(path, std::strerror(errno));
   const auto file_size = static_cast<std::size_t>(end);
@@ -725,21 +781,7 @@ FileChunks::~FileChunks() {
 }
 
 std::vector<double> FileChunks::read_points(std::size_t first, std::size_t count) const {
-  const PointFileLayout& l = layout_;
-  std::vector<char> raw(count * l.stride);
-  read_all(fd_, raw.data(), raw.size(), l.offset + first * l.stride, path_);
-  std::vector<double> p(3 * count);
-  for (std::size_t i = 0; i < count; ++i)
-    for (std::size_t c = 0; c < 3; ++c) {
-      const char* at = raw.data() + i * l.stride + l.x_offset[c];
-      if (l.float64) {
-        std::memcpy(&p[3 * i + c], at, 8);
-      } else {
-        float f;
-        std::memcpy(&f, at, 4);
-        p[3 * i + c] = static_cast<double>(f);
-      }
-    }
+  std::vector<double> p = decode_points(fd_, layout_, first, count, path_);
   if (scale_ != 0)
     for (double& v : p) v = std::ldexp(v, -scale_);
   return p;
@@ -800,19 +842,36 @@ void FileChunks::store(std::size_t c, unsigned changed) {
 
 std::vector<double> FileChunks::sample() {
   std::vector<double> out;
-  const bool all = k_ <= sample_points_;
-  // point i is in the sample when mix(i) falls below this share of 2^64
-  const long double share = all ? 1.0L : static_cast<long double>(sample_points_) / static_cast<long double>(k_);
-  const auto below = static_cast<std::uint64_t>(share * 18446744073709551615.0L);
   out.reserve(3 * std::min(k_, sample_points_ + sample_points_ / 16 + 64));
   for (std::size_t c = 0; c < n_chunks(); ++c) {
     poll_interrupt();
     const std::size_t first = c * chunk_points_, count = std::min(chunk_points_, k_ - first);
     const std::vector<double> p = read_points(first, count);
+    const std::vector<char> in = point_sample_mask(first, count, k_, sample_points_);
     for (std::size_t i = 0; i < count; ++i)
-      if (all || mix(first + i) < below) out.insert(out.end(), &p[3 * i], &p[3 * i + 3]);
+      if (in[i]) out.insert(out.end(), &p[3 * i], &p[3 * i + 3]);
   }
   return out;
+}
+
+std::vector<double> read_point_file(const std::string& path, std::size_t first, std::size_t count) {
+  const PointFileLayout layout = point_file_layout(path);
+  if (first > layout.k || count > layout.k - first)
+    throw ParameterError("points " + std::to_string(first) + " .. " + std::to_string(first + count) + " of '" +
+                         path + "': it holds " + std::to_string(layout.k));
+  const ReadOnlyFile file(path);
+  const int fd = file.fd;
+  return decode_points(fd, layout, first, count, path);
+}
+
+std::vector<char> point_sample_mask(std::size_t first, std::size_t count, std::size_t k, std::size_t sample_points) {
+  const bool all = k <= sample_points;
+  // point i is in the sample when mix(i) falls below this share of 2^64
+  const long double share = all ? 1.0L : static_cast<long double>(sample_points) / static_cast<long double>(k);
+  const auto below = static_cast<std::uint64_t>(share * 18446744073709551615.0L);
+  std::vector<char> in(count);
+  for (std::size_t i = 0; i < count; ++i) in[i] = all || mix(first + i) < below;
+  return in;
 }
 
 }  // namespace sorpia

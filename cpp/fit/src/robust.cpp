@@ -3,7 +3,10 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <string>
+#include <utility>
 
+#include "sorpia/detail/repr.hpp"
 #include "sorpia/errors.hpp"
 
 namespace sorpia {
@@ -32,6 +35,23 @@ constexpr int kBins = (DistanceHistogram::kHighestOctave - DistanceHistogram::kL
 DistanceHistogram::DistanceHistogram(double unit) : unit_(unit), mass_(1 + static_cast<std::size_t>(kBins), 0.0) {
   if (!(std::isfinite(unit) && unit > 0))
     throw std::invalid_argument("DistanceHistogram: the unit must be a finite number > 0");
+}
+
+DistanceHistogram::DistanceHistogram(double unit, double total, std::vector<double> mass)
+    : DistanceHistogram(unit) {
+  if (!(std::isfinite(total) && total >= 0))
+    throw ParameterError("a distance histogram's total weight is " + detail::repr(total) +
+                         ": it must be a finite number >= 0");
+  if (mass.size() != mass_.size())
+    throw ParameterError("a distance histogram has " + std::to_string(mass_.size()) + " bins, not " +
+                         std::to_string(mass.size()));
+  for (std::size_t b = 0; b < mass.size(); ++b) {
+    if (!(std::isfinite(mass[b]) && mass[b] >= 0))
+      throw ParameterError("a distance histogram's bin " + std::to_string(b) + " holds " + detail::repr(mass[b]) +
+                           ": a mass must be a finite number >= 0");
+  }
+  total_ = total;
+  mass_ = std::move(mass);
 }
 
 void DistanceHistogram::add(const double* distances, const double* weights, std::size_t k) {

@@ -1,9 +1,10 @@
 #include "sorpia/cage.hpp"
 
 #include <OpenMesh/Tools/Decimater/BaseDecimaterT.hh>
+#include <OpenMesh/Core/Utils/vector_cast.hh>
+#include <OpenMesh/Core/Geometry/QuadricT.hh>
 #include <OpenMesh/Tools/Decimater/ModAspectRatioT.hh>
 #include <OpenMesh/Tools/Decimater/ModNormalFlippingT.hh>
-#include <OpenMesh/Tools/Decimater/ModQuadricT.hh>
 #include <OpenMesh/Tools/Decimater/Observer.hh>
 #include <OpenMesh/Tools/Utils/HeapT.hh>
 
@@ -56,6 +57,60 @@ class ModBoundaryAngleT : public OpenMesh::Decimater::ModBaseT<MeshT> {
   double min_cos_ = 1.0;
 };
 
+// Garland and Heckbert's quadric error, as OpenMesh's ModQuadricT computes
+// it (its initialize, priority and postprocess; no maximum error), with
+// error(v0, v1) read in place: the decimation costs every outgoing collapse
+// of a vertex at each step, where ModQuadricT's priority takes a whole
+// CollapseInfo through a virtual call.
+template <class MeshT>
+class ModQuadricErrorT : public OpenMesh::Decimater::ModBaseT<MeshT> {
+ public:
+  DECIMATING_MODULE(ModQuadricErrorT, MeshT, QuadricError);
+  using Quadric = OpenMesh::Geometry::QuadricT<double>;
+  using VertexHandle = typename MeshT::VertexHandle;
+
+  explicit ModQuadricErrorT(MeshT& mesh) : Base(mesh, false) { mesh.add_property(quadrics_); }
+  ~ModQuadricErrorT() override { Base::mesh().remove_property(quadrics_); }
+
+  // Each vertex's quadric: the sum over its faces of the face plane's, weighted by the face's area.
+  void initialize() override {
+    MeshT& m = Base::mesh();
+    for (const auto v : m.vertices()) m.property(quadrics_, v).clear();
+    for (const auto f : m.faces()) {
+      auto fv = m.cfv_iter(f);
+      const VertexHandle a = *fv, b = *++fv, c = *++fv;
+      const OpenMesh::Vec3d p0 = m.point(a), p1 = m.point(b), p2 = m.point(c);
+      OpenMesh::Vec3d n = (p1 - p0) % (p2 - p0);
+      double area = n.norm();
+      if (area > FLT_MIN) {
+        n /= area;
+        area *= 0.5;
+      }
+      Quadric q(n[0], n[1], n[2], -(p0 | n));
+      q *= area;
+      m.property(quadrics_, a) += q;
+      m.property(quadrics_, b) += q;
+      m.property(quadrics_, c) += q;
+    }
+  }
+
+  // The error of collapsing v0 onto v1 (v0 removed, v1 kept where it is).
+  float error(VertexHandle v0, VertexHandle v1) {
+    const MeshT& m = Base::mesh();
+    Quadric q = m.property(quadrics_, v0);
+    q += m.property(quadrics_, v1);
+    return static_cast<float>(q(m.point(v1)));
+  }
+
+  float collapse_priority(const CollapseInfo& ci) override { return error(ci.v0, ci.v1); }
+  void postprocess_collapse(const CollapseInfo& ci) override {
+    Base::mesh().property(quadrics_, ci.v1) += Base::mesh().property(quadrics_, ci.v0);
+  }
+
+ private:
+  OpenMesh::VPropHandleT<Quadric> quadrics_;
+};
+
 // Polls for Ctrl-C between collapses; an Interrupted is kept and rethrown
 // after DecimaterT has returned (never thrown through OpenMesh).
 class InterruptObserver : public OpenMesh::Decimater::Observer {
@@ -94,13 +149,15 @@ class LazyDecimater : public OpenMesh::Decimater::BaseDecimaterT<OMesh> {
   using VertexHandle = OMesh::VertexHandle;
   using HalfedgeHandle = OMesh::HalfedgeHandle;
 
+  using Quadric = ModQuadricErrorT<OMesh>;
+
   explicit LazyDecimater(OMesh& mesh) : Base(mesh), mesh_(mesh) {}
 
   // Collapses until `count` (one less after each collapse: a half-edge
   // collapse removes one vertex) is at most `target`, or no collapse is
   // allowed; returns the collapses made. `priority` is the priority module;
   // initialize() must have succeeded.
-  std::size_t decimate_to(std::size_t& count, std::size_t target, Module& priority) {
+  std::size_t decimate_to(std::size_t& count, std::size_t target, Quadric& priority) {
     priority_module_ = &priority;
     target_.assign(mesh_.n_vertices(), HalfedgeHandle());
     priority_.assign(mesh_.n_vertices(), -1.0f);
@@ -111,7 +168,6 @@ class LazyDecimater : public OpenMesh::Decimater::BaseDecimaterT<OMesh> {
     heap.reserve(mesh_.n_vertices());
     for (const auto v : mesh_.vertices())
       if (!mesh_.status(v).deleted()) cost(v);
-    const bool update_normals = mesh_.has_face_normals();
     std::vector<VertexHandle> support;
     std::size_t made = 0;
     while (count > target && !heap.empty()) {
@@ -119,20 +175,13 @@ class LazyDecimater : public OpenMesh::Decimater::BaseDecimaterT<OMesh> {
       const HalfedgeHandle h = target_[v.idx()];
       heap.pop_front();
       CollapseInfo ci(mesh_, h);
-      if (!this->is_collapse_legal(ci) || Base::collapse_priority(ci) < 0.0f) {
+      if (!allowed(ci)) {
         refused_[h.idx()] = 1;
         cost(v);
         continue;
       }
-      support.clear();
-      for (const auto w : mesh_.vv_range(ci.v0)) support.push_back(w);
       --count;  // count > target >= 0
-      this->preprocess_collapse(ci);
-      mesh_.collapse(h);
-      if (update_normals)
-        for (const auto f : mesh_.vf_range(ci.v1))
-          if (!mesh_.status(f).deleted()) mesh_.set_normal(f, mesh_.calc_face_normal(f));
-      this->postprocess_collapse(ci);
+      collapse(ci, support);
       // The removed vertex's one-ring is costed again, as DecimaterT does. A
       // refusal stands while the one-rings its tests read stay as they were:
       // those of the collapse's two ends.
@@ -152,6 +201,72 @@ class LazyDecimater : public OpenMesh::Decimater::BaseDecimaterT<OMesh> {
     return made;
   }
 
+  // Collapses in rounds until `count` is at most `target` or a round makes
+  // none; returns the collapses made. Each round costs every vertex (its
+  // cheapest outgoing collapse not refused, under `priority`), takes as its
+  // threshold the cost of the cheapest kRoundShare of them, and sweeps the
+  // vertices in their order in memory, collapsing each at or under the
+  // threshold whose one-ring no collapse of the round has touched (its cost
+  // is then current); the legality test and the guards judge each, as in
+  // decimate_to. The sweep reads the mesh in its order in memory (vertices
+  // in Morton order: to_openmesh), where the heap's order jumps across all
+  // of it: the decimation of a large mesh is bound by that memory traffic.
+  std::size_t decimate_in_rounds(std::size_t& count, std::size_t target, Quadric& priority) {
+    constexpr double kRoundShare = 0.3;
+    priority_module_ = &priority;
+    const std::size_t n = mesh_.n_vertices();
+    target_.assign(n, HalfedgeHandle());
+    priority_.assign(n, -1.0f);
+    refused_.assign(mesh_.n_halfedges(), 0);
+    std::vector<int> touched(n, -1);  // the round whose collapse last touched the vertex
+    std::vector<float> costs;
+    std::vector<VertexHandle> ring;
+    std::size_t made = 0;
+    for (int round = 0; count > target; ++round) {
+      // Costed again: the vertices a collapse or a refusal of the round before touched (the rest stand).
+      costs.clear();
+      for (const auto v : mesh_.vertices()) {
+        if ((v.idx() & 0xffff) == 0) poll_interrupt();
+        if (mesh_.status(v).deleted()) continue;
+        if (round == 0 || touched[v.idx()] == round - 1) best_collapse(v);
+        if (target_[v.idx()].is_valid()) costs.push_back(priority_[v.idx()]);
+      }
+      if (costs.empty()) break;
+      const std::size_t want = std::min(count - target, std::max<std::size_t>(
+                                                            1, static_cast<std::size_t>(kRoundShare * costs.size())));
+      std::nth_element(costs.begin(), costs.begin() + static_cast<std::ptrdiff_t>(want - 1), costs.end());
+      const float threshold = costs[want - 1];
+      const std::size_t before = made;
+      for (const auto v : mesh_.vertices()) {
+        if (count <= target) break;
+        const int i = v.idx();
+        if (touched[i] == round || mesh_.status(v).deleted() || !target_[i].is_valid() || priority_[i] > threshold)
+          continue;
+        const HalfedgeHandle h = target_[i];
+        CollapseInfo ci(mesh_, h);
+        if (!allowed(ci)) {
+          refused_[h.idx()] = 1;
+          touched[i] = round;
+          continue;
+        }
+        // Touched: both ends' one-rings, whose costs and tests the collapse changes.
+        for (const auto w : mesh_.vv_range(ci.v1)) touched[w.idx()] = round;
+        --count;  // count > target >= 0
+        collapse(ci, ring);
+        // A refusal stands while the one-rings its tests read stay as they were (decimate_to).
+        for (const VertexHandle w : ring) {
+          touched[w.idx()] = round;
+          for (const auto out : mesh_.voh_range(w)) refused_[out.idx()] = 0;
+          for (const auto in : mesh_.vih_range(w)) refused_[in.idx()] = 0;
+        }
+        if (!this->notify_observer(++made)) return made;
+      }
+      // A round that makes few collapses leaves the rest to the heap.
+      if (made - before < count / 100) break;
+    }
+    return made;
+  }
+
  private:
   struct HeapInterface {
     LazyDecimater* d;
@@ -164,33 +279,61 @@ class LazyDecimater : public OpenMesh::Decimater::BaseDecimaterT<OMesh> {
 
   // v in the heap under its cheapest collapse not refused, or out of it.
   void cost(VertexHandle v) {
-    float best = FLT_MAX;
-    HalfedgeHandle target;
-    for (const auto h : mesh_.voh_range(v)) {
-      if (refused_[h.idx()]) continue;
-      const float p = priority_module_->collapse_priority(CollapseInfo(mesh_, h));
-      if (p >= 0.0f && p < best) {
-        best = p;
-        target = h;
-      }
-    }
+    best_collapse(v);
     const bool stored = heap_->is_stored(v);
-    target_[v.idx()] = target;
-    priority_[v.idx()] = target.is_valid() ? best : -1.0f;
-    if (target.is_valid())
+    if (target_[v.idx()].is_valid())
       stored ? heap_->update(v) : heap_->insert(v);
     else if (stored)
       heap_->remove(v);
   }
 
+  // The legality test and the guards (the binary modules) pass the collapse.
+  bool allowed(const CollapseInfo& ci) { return this->is_collapse_legal(ci) && Base::collapse_priority(ci) >= 0.0f; }
+
+  // Makes the collapse, with the modules' pre- and postprocessing and the
+  // face normals (the normal guard's) around it; `ring` is v0's one-ring
+  // before it.
+  void collapse(CollapseInfo& ci, std::vector<VertexHandle>& ring) {
+    ring.clear();
+    for (const auto w : mesh_.vv_range(ci.v0)) ring.push_back(w);
+    this->preprocess_collapse(ci);
+    mesh_.collapse(ci.v0v1);
+    if (mesh_.has_face_normals())
+      for (const auto f : mesh_.vf_range(ci.v1))
+        if (!mesh_.status(f).deleted()) mesh_.set_normal(f, mesh_.calc_face_normal(f));
+    this->postprocess_collapse(ci);
+  }
+
+  // target_[v] and priority_[v]: v's cheapest outgoing collapse not refused
+  // and its cost, or an invalid handle and -1.
+  void best_collapse(VertexHandle v) {
+    float best = FLT_MAX;
+    HalfedgeHandle target;
+    for (const auto h : mesh_.voh_range(v)) {
+      if (refused_[h.idx()]) continue;
+      const float p = priority_module_->error(v, mesh_.to_vertex_handle(h));
+      if (p >= 0.0f && p < best) {
+        best = p;
+        target = h;
+      }
+    }
+    target_[v.idx()] = target;
+    priority_[v.idx()] = target.is_valid() ? best : -1.0f;
+  }
+
   OMesh& mesh_;
-  Module* priority_module_ = nullptr;
+  Quadric* priority_module_ = nullptr;
   Heap* heap_ = nullptr;
   std::vector<HalfedgeHandle> target_;
   std::vector<float> priority_;
   std::vector<int> position_;
   std::vector<char> refused_;
 };
+
+// From this many vertices a mesh is decimated in its vertices' Morton order
+// and first in rounds (to_openmesh, decimate): it no longer fits in the
+// processor's caches, and the memory traffic bounds the decimation.
+constexpr std::size_t kLargeMesh = 200000;
 
 void check_options(const DecimateOptions& o) {
   if (!(o.max_normal_deviation > 0.0 && o.max_normal_deviation <= 180.0))
@@ -227,13 +370,58 @@ OMesh to_openmesh(const Mesh& mesh, std::vector<std::int32_t>& kept) {
   OMesh om;
   kept.clear();
   for (std::size_t v = 0; v < n; ++v)
-    if (handle[v] == 0) {
-      handle[v] = static_cast<std::int32_t>(kept.size());
-      kept.push_back(static_cast<std::int32_t>(v));
+    if (handle[v] == 0) kept.push_back(static_cast<std::int32_t>(v));
+  // A large mesh: the vertices in Morton order (the bounding box cut into
+  // 2^21 steps an axis, the bits interleaved) and each face after its first
+  // corner's (below), so that a one-ring lies together in memory, which the
+  // decimation's sweeps and collapses read at every step. A smaller one in
+  // the input's order.
+  if (kept.size() >= kLargeMesh) {
+    double lo[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
+    for (const std::int32_t v : kept)
+      for (int c = 0; c < 3; ++c) {
+        lo[c] = std::min(lo[c], mesh.vertices[3 * v + c]);
+        hi[c] = std::max(hi[c], mesh.vertices[3 * v + c]);
+      }
+    const auto spread = [](std::uint64_t x) {  // the 21 low bits of x to every third bit
+      x &= 0x1fffff;
+      x = (x | x << 32) & 0x1f00000000ffffULL;
+      x = (x | x << 16) & 0x1f0000ff0000ffULL;
+      x = (x | x << 8) & 0x100f00f00f00f00fULL;
+      x = (x | x << 4) & 0x10c30c30c30c30c3ULL;
+      return (x | x << 2) & 0x1249249249249249ULL;
+    };
+    std::vector<std::pair<std::uint64_t, std::int32_t>> order(kept.size());
+    for (std::size_t i = 0; i < kept.size(); ++i) {
+      const std::int32_t v = kept[i];
+      std::uint64_t code = 0;
+      for (int c = 0; c < 3; ++c) {
+        const double extent = hi[c] - lo[c];
+        const double t = extent > 0.0 && std::isfinite(extent) ? (mesh.vertices[3 * v + c] - lo[c]) / extent : 0.0;
+        code |= spread(static_cast<std::uint64_t>(std::clamp(t, 0.0, 1.0) * 2097151.0)) << c;
+      }
+      order[i] = {code, v};
     }
+    std::sort(order.begin(), order.end());
+    for (std::size_t i = 0; i < kept.size(); ++i) kept[i] = order[i].second;
+  }
+  for (std::size_t i = 0; i < kept.size(); ++i) handle[static_cast<std::size_t>(kept[i])] = static_cast<std::int32_t>(i);
+  std::vector<std::int32_t> face_order(n_faces);
+  if (kept.size() >= kLargeMesh) {  // each face after its first corner's (a counting sort)
+    std::vector<std::int32_t> first(kept.size() + 1, 0);
+    for (std::size_t f = 0; f < n_faces; ++f) ++first[static_cast<std::size_t>(handle[mesh.face_vertex_indices[3 * f]]) + 1];
+    for (std::size_t i = 0; i < kept.size(); ++i) first[i + 1] += first[i];
+    for (std::size_t f = 0; f < n_faces; ++f)
+      face_order[static_cast<std::size_t>(first[static_cast<std::size_t>(handle[mesh.face_vertex_indices[3 * f]])]++)] =
+          static_cast<std::int32_t>(f);
+  } else {
+    for (std::size_t f = 0; f < n_faces; ++f) face_order[f] = static_cast<std::int32_t>(f);
+  }
   om.reserve(kept.size(), 3 * n_faces / 2 + kept.size(), n_faces);
   for (const std::int32_t v : kept) om.add_vertex({mesh.vertices[3 * v], mesh.vertices[3 * v + 1], mesh.vertices[3 * v + 2]});
-  for (std::size_t f = 0; f < n_faces; ++f) {
+  for (std::size_t k = 0; k < n_faces; ++k) {
+    if ((k & 0xffff) == 0) poll_interrupt();  // seconds at a few million faces
+    const std::size_t f = static_cast<std::size_t>(face_order[k]);
     const std::int32_t* t = &mesh.face_vertex_indices[3 * f];
     const OMesh::VertexHandle c[3] = {OMesh::VertexHandle(handle[t[0]]), OMesh::VertexHandle(handle[t[1]]),
                                       OMesh::VertexHandle(handle[t[2]])};
@@ -483,7 +671,7 @@ Mesh decimate(const Mesh& mesh, std::size_t n_vertices, const DecimateOptions& o
                     std::to_string(have) + " vertices" + (kept.size() < mesh.n_vertices() ? " in its faces" : ""));
 
   LazyDecimater decimater(om);
-  OpenMesh::Decimater::ModQuadricT<OMesh>::Handle quadric;
+  ModQuadricErrorT<OMesh>::Handle quadric;
   OpenMesh::Decimater::ModNormalFlippingT<OMesh>::Handle normals;
   OpenMesh::Decimater::ModAspectRatioT<OMesh>::Handle aspect;
   ModBoundaryAngleT<OMesh>::Handle boundary;
@@ -501,7 +689,18 @@ Mesh decimate(const Mesh& mesh, std::size_t n_vertices, const DecimateOptions& o
 
   // One pass to the count, for both schemes: Catmull-Clark's quads are the
   // decimated triangles paired (paired_quads), which keeps the vertices.
+  // A large mesh (kLargeMesh vertices or more) is decimated first in rounds
+  // (decimate_in_rounds) down to kRoundsFactor times the count, then
+  // compacted, and the rest from the heap (decimate_to), which orders the
+  // last collapses, those that shape the cage, one by one; a smaller mesh
+  // from the heap alone.
+  constexpr std::size_t kRoundsFactor = 4;
   std::size_t count = have;
+  if (have >= kLargeMesh && have > kRoundsFactor * n_vertices) {
+    decimater.decimate_in_rounds(count, kRoundsFactor * n_vertices, decimater.module(quadric));
+    observer.rethrow();
+    om.garbage_collection();
+  }
   decimater.decimate_to(count, n_vertices, decimater.module(quadric));
   observer.rethrow();
   om.garbage_collection();
@@ -535,6 +734,14 @@ Mesh decimate(const Mesh& mesh, std::size_t n_vertices, const DecimateOptions& o
              std::to_string(static_cast<int>(options.max_boundary_angle)) +
              " degrees) those where it turns by more, so fill small holes first or raise max_boundary_angle (up to "
              "180)";
+    // A cage that keeps every vertex of the mesh has as many control
+    // vertices as the mesh (the data, when its vertices are the points)
+    // has points: no lighter than the data, and the fit of the points
+    // by it is not determined. Refused, whatever `stopped` asks.
+    if (count >= have)
+      throw MeshError(why + "; no collapse at all is allowed, so the cage would keep all " + std::to_string(have) +
+                      " vertices, as many control vertices as the mesh has points: no fit is determined by it. Ask "
+                      "for a cage on a mesh whose holes are filled or small parts removed, or give a cage of your own");
     if (stopped == nullptr) throw MeshError(why);
     *stopped = std::move(why);
   }

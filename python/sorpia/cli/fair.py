@@ -4,6 +4,7 @@ those of ``--targets``) and bends least (sorpia.fair_interpolate)."""
 
 from __future__ import annotations
 
+import math
 import re
 import sys
 import time
@@ -12,7 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import ParameterError, __version__, fair_interpolate, limit_surface
-from .._checks import interpolation_miss, scale_exponent
+from .._checks import interpolation_miss
 from .._meshinfo import topology_info
 from .._usd import is_usd
 from ..blender import write_blender_script
@@ -106,13 +107,8 @@ def run_fair(input_path, output, *, levels=1, membrane=0.0, targets=None, tol=No
                                 scheme)
         progress.status(f"fair interpolation, {levels} level{'s' if levels > 1 else ''} finer")
         t0 = time.perf_counter()
-        # Coordinates beyond 2^+-200 are fitted scaled by a power of two (exact: the same control mesh, scaled
-        # back): the energies, squares of the coordinates, would overflow. They are reported in the scaled units.
-        # The thin plate and the membrane are both quadratic in the coordinates (the CLI never uses the reference
-        # metric), so their energies scale by 2^2e together, as fair_solve's own scaling takes them.
-        e = scale_exponent(V0)
         try:
-            res = fair_interpolate(np.ldexp(V0, -e), F, levels=levels, membrane=membrane, targets=target_ids,
+            res = fair_interpolate(V0, F, levels=levels, membrane=membrane, targets=target_ids,
                                    boundary=boundary, tol=tol, max_iter=max_iter, threads=threads,
                                    **scheme_kwargs(scheme, tags))
         except ParameterError as exc:  # the library's check of the targets, named with the file they came from
@@ -121,7 +117,7 @@ def run_fair(input_path, output, *, levels=1, membrane=0.0, targets=None, tol=No
             raise
         timings["fit"] = time.perf_counter() - t0
         stats = topology_info(V0, build_topology(F, len(V0), scheme=scheme, warn=False), scheme=scheme)
-        ctrl = np.ldexp(np.asarray(res.control_vertices), e)
+        ctrl = np.asarray(res.control_vertices)
 
         progress.status(f"writing {output}")
         t0 = time.perf_counter()
@@ -149,9 +145,7 @@ def run_fair(input_path, output, *, levels=1, membrane=0.0, targets=None, tol=No
         timings["check"] = time.perf_counter() - t0
 
     diag = stats.get("diagonal") or 1.0
-    with np.errstate(over="ignore"):  # energies beyond double in model units: inf, and given scaled too
-        energies = (float(np.ldexp(res.plain_energy, 2 * e)), float(np.ldexp(res.energy, 2 * e)),
-                    np.ldexp(np.asarray(res.history), 2 * e))
+    fair_report = res.report()
     data = {
         "sorpia_version": __version__,
         "command": "fit",
@@ -176,14 +170,9 @@ def run_fair(input_path, output, *, levels=1, membrane=0.0, targets=None, tol=No
         "membrane": membrane,
         "targets": {"file": None if targets is None else str(targets), "count": int(len(res.targets))},
         "fine_mesh": {"vertices": int(len(ctrl)), "faces": int(len(res.faces)), "face_kind": fine_kind},
-        # energies in model units (inf where beyond double), and in units of 2^energy_scale_exponent
-        "energy_scale_exponent": 2 * e,
-        "energy_scaled": res.energy,
-        "plain_energy_scaled": res.plain_energy,
-        "plain_energy": energies[0],
-        "energy": energies[1],
-        "energy_ratio": res.energy / res.plain_energy if res.plain_energy > 0 else None,
-        "history": energies[2],
+        # energies in model units (inf where beyond double), and exactly in units of 2^energy_exponent
+        **{key: fair_report[key] for key in ("energy", "plain_energy", "energy_ratio", "energy_exponent",
+                                             "energy_scaled", "plain_energy_scaled", "history")},
         "tol": tol,
         "max_iter": max_iter,
         "threads": threads,
@@ -204,11 +193,12 @@ def run_fair(input_path, output, *, levels=1, membrane=0.0, targets=None, tol=No
 
 
 def energy(d: dict, key: str) -> str:
-    """An energy of the report as printed: in model units squared, or where the data were scaled (beyond
-    2^+-200) as the scaled value times its power of two."""
-    if not d.get("energy_scale_exponent"):
-        return f"{d[key]:.6g}"
-    return f"{d[key + '_scaled']:.6g} x 2^{d['energy_scale_exponent']}"
+    """An energy of the report as printed: in model units squared, or where that leaves double's range (data
+    beyond 2^+-200: inf, or below the normal range) as the scaled value times its power of two."""
+    value, scaled = d[key], d.get(key + "_scaled", d[key])
+    if not d.get("energy_exponent") or scaled == 0 or (math.isfinite(value) and abs(value) >= sys.float_info.min):
+        return f"{value:.6g}"
+    return f"{scaled:.6g} x 2^{d['energy_exponent']}"
 
 
 def fair_summary(d: dict, repaired=()) -> str:

@@ -276,7 +276,8 @@ def build_parser() -> argparse.ArgumentParser:
                   "points in the least-squares sense (sorpia.approximate: footpoints on the limit surface, the "
                   "normal equations by conjugate gradients or LSPIA, footpoints re-projected after each update). "
                   "Writes the fitted cage (same faces; in .obj also its creases and boundary rule) and, if asked, "
-                  "its limit surface and a JSON report with the RMS and max distances both ways per iteration. "
+                  "its limit surface and a JSON report with the RMS and max distances per iteration (surface to data: of the "
+                  "returned cage). "
                   "Every output is checked before the work. Prints a short summary; the progress line on stderr.",
                   solves=False)
     mesh_output(app, "fitted cage")
@@ -323,18 +324,23 @@ def build_parser() -> argparse.ArgumentParser:
                      "limit position")
     app.add_argument("--level", type=_level_arg, default=3, metavar="L", help="refinement level of --surface")
     app.add_argument("--report", metavar="REPORT.json",
-                     help="write a JSON report: the cage, the distances both ways per iteration, seconds per phase")
+                     help="write a JSON report: the cage, the distances per iteration (surface to data: of the returned "
+                     "cage), seconds per phase")
     app.add_argument("--stream", choices=("auto", "yes", "no"), default="auto",
                      help="read the input's points a chunk at a time, never all in memory (out of core: a binary "
                      "little-endian PLY or a .npy (k, 3) array; needs --cage): auto = when the file holds more than "
                      f"{STREAM_POINTS:,} points")
+    app.add_argument("--scheduler", metavar="ADDRESS",
+                     help="run the fit's chunks of points on the workers of the Dask cluster whose scheduler is at "
+                     "ADDRESS (tcp://host:8786; needs dask.distributed: pip install 'sorpia[dask]'); the result is "
+                     "the one of the same chunks in one process")
     output_flags(app)
     app.set_defaults(func=lambda a: run_approximate(
         a.input, a.output, vertices=a.vertices, cage=a.cage, scheme=a.scheme, sharp_angle=a.sharp_angle,
         report=a.report, surface=a.surface, level=a.level, iterations=a.iterations, tol=a.tol,
         fairness=a.fairness, tangential=a.tangential, method=a.method, boundary=a.boundary, sampling=a.sampling,
         quiet=a.quiet, force=a.force, prim=a.prim, triangulate=a.triangulate, stream=a.stream,
-        robust=a.robust)[0])
+        robust=a.robust, scheduler=a.scheduler)[0])
 
     comp = command("compare", "run several methods to one tolerance: the paper's Table 1 and Figure 7",
                    "Run each method on the mesh to the same tolerance and print the paper's Table 1 layout for "

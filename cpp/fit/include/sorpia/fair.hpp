@@ -58,6 +58,11 @@ struct FairSolution {
   std::vector<double> energies;
   double energy = 0.0;         ///< tr(V^T K V) of the result, computed
   double start_energy = 0.0;   ///< tr(V^T K V) of the start as given
+  /// energies, energy and start_energy are in units of 2^energy_exponent:
+  /// 0, except for data solved scaled (beyond 2^+-200 in magnitude), whose
+  /// energies (squares of coordinates) would leave double's range in the
+  /// caller's units; their ratios are the caller's.
+  int energy_exponent = 0;
   long long iterations = 0;
   /// "converged" (the tol rule), "max_iter", "exact" (the gradient vanished
   /// in every column: nothing left to minimise).

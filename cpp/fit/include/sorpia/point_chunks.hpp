@@ -101,7 +101,7 @@ class ApproximationChunk {
   DistanceSums refine(const LimitSurface& surface, const FootpointOptions& options);
   /// The best iterate's footpoints := the current ones.
   void keep_best();
-  /// Fresh footpoints := search.find(points); returns the sums of the
+  /// Fresh footpoints := search.find(points), then search.closer; returns the sums of the
   /// current distances with each replaced by the fresh one where that is
   /// closer by more than `closer` (what keep_fresh would make them).
   DistanceSums search_fresh(const FootpointSearch& search, double closer);
@@ -262,6 +262,14 @@ struct PointFileLayout {
 /// array of float32 or float64 in C order (FileChunks' files), from its header.
 /// @throws FileError naming the file and what it is not
 PointFileLayout point_file_layout(const std::string& path);
+/// Points first .. first + count of such a file as float64, row-major
+/// (count, 3): a chunk read where it is used (a Dask worker).
+/// @throws FileError; ParameterError for a range beyond the file's points
+std::vector<double> read_point_file(const std::string& path, std::size_t first, std::size_t count);
+/// Which of points first .. first + count of k are in FileChunks' fixed
+/// sample of about `sample_points` (all of them when k <= sample_points):
+/// each point's choice is its own, the same for any chunking.
+std::vector<char> point_sample_mask(std::size_t first, std::size_t count, std::size_t k, std::size_t sample_points);
 
 /// Points read from a file a chunk at a time (every call reads its chunk
 /// again), their footpoint states spilled to a temporary file between calls:

@@ -64,6 +64,13 @@ class DistanceHistogram {
 
   /// @param unit  the distances' unit (the data's diagonal), finite, > 0
   explicit DistanceHistogram(double unit);
+  /// A copy of a histogram of `unit` from its total() and mass(), as
+  /// another process sends them; ParameterError for another count of bins,
+  /// or a total or mass not finite or negative.
+  DistanceHistogram(double unit, double total, std::vector<double> mass);
+  double unit() const { return unit_; }
+  /// The weight in each bin: the bin of zeros, then the bins in order.
+  const std::vector<double>& mass() const { return mass_; }
   /// Adds k distances (finite, >= 0) with their weights (nullptr: 1 each).
   void add(const double* distances, const double* weights, std::size_t k);
   /// Adds another histogram of the same unit (std::invalid_argument otherwise).

@@ -1,0 +1,106 @@
+"""The footpoint search's re-search (sorpia::FootpointSearch::closer, `_core.closer_footpoints`) against a brute-force
+closest point: refinement from the 48 nearest of a fine grid of limit points (12 x 12 per face, evaluated by
+LimitSurface.evaluate, searched by scipy's k-d tree), 200 steps at most, the least distance kept. The cases are
+those where the grid's nearest sample starts some points in a local minimum of their distance (issue 33, item 6)."""
+
+import numpy as np
+import pytest
+from scipy.spatial import cKDTree
+
+import sorpia
+from sorpia import _core
+from sorpia.surface import LimitSurface, subface_columns
+
+
+def fine_grid(s: LimitSurface, faces, m: int = 12):
+    """(face_ids, uv, points): m x m cell-centred parameters in each face's domain (each chart of a Catmull-Clark
+    k-gon), and their limit points."""
+    t = (np.arange(m) + 0.5) / m
+    a, b = (x.ravel() for x in np.meshgrid(t, t))
+    sizes = np.asarray(faces.face_vertex_counts) if hasattr(faces, "face_vertex_counts") else \
+        np.full(s.n_faces, np.asarray(faces).shape[1])
+    fids, uvs = [], []
+    for f in range(s.n_faces):
+        if s.scheme == "loop":
+            keep = a + b < 1
+            charts = [np.c_[a[keep], b[keep]]]
+        elif sizes[f] == 4:
+            charts = [np.c_[a, b]]
+        else:
+            w = subface_columns(sizes[f])
+            charts = [np.c_[j % w + 0.5 * a, j // w + 0.5 * b] for j in range(sizes[f])]
+        for uv in charts:
+            fids.append(np.full(len(uv), f, np.int32))
+            uvs.append(uv)
+    fid, uv = np.concatenate(fids), np.concatenate(uvs)
+    return fid, uv, s.evaluate(fid, uv)
+
+
+def brute_force(s: LimitSurface, faces, P, starts: int = 48):
+    fid, uv, X = fine_grid(s, faces)
+    _, idx = cKDTree(X).query(P, k=starts)
+    out = _core.refine_footpoints(s._surface, s._topology, np.repeat(P, starts, axis=0), fid[idx.ravel()],
+                                  uv[idx.ravel()], 200)
+    return out[3].reshape(len(P), starts).min(axis=1)
+
+
+def bumpy_sphere():
+    V, F = sorpia.shapes.icosphere(4)
+    r = 1 + 0.25 * np.sin(6 * V[:, 0]) * np.sin(6 * V[:, 1]) * np.sin(6 * V[:, 2])
+    return np.ascontiguousarray(V * r[:, None]), F
+
+
+def fitted(case):
+    """A fitted surface and its data: the cases of issue 33 item 6 on a bumpy sphere (2562 points)."""
+    P, F = bumpy_sphere()
+    if case == "catmull-clark-100":  # test_approximate's test_reported_distances_are_true_distances
+        cage = sorpia.decimate(P, F, 100, scheme="catmull-clark", strict=False)
+        res = sorpia.approximate(P, cage.vertices, cage.faces, scheme="catmull-clark", iterations=3)
+        return LimitSurface(res.control_vertices, cage.faces, scheme="catmull-clark"), cage.faces, P
+    # A Loop cage of 300 vertices started collapsed to a point (1e-3 of its size) and fitted for 10 iterations.
+    cage = sorpia.decimate(P, F, 300, scheme="loop", strict=False)
+    centre = cage.vertices.mean(axis=0)
+    res = sorpia.approximate(P, centre + 1e-3 * (cage.vertices - centre), cage.faces, scheme="loop", iterations=10)
+    return LimitSurface(res.control_vertices, cage.faces, scheme="loop"), cage.faces, P
+
+
+@pytest.mark.parametrize("case, stuck", [("catmull-clark-100", 3), ("collapsed-loop-300", 100)])
+def test_closer_footpoints_are_the_brute_force_closest_points(case, stuck):
+    # The grid's nearest sample (closest_points, as approximate searches) leaves points in local minima, at least
+    # `stuck` of them by more than 1e-9 of the diagonal; after the re-search every point is within 1e-8 of the
+    # diagonal of the brute-force minimum (Gauss-Newton's slow convergence near focal points leaves that much), none
+    # farther than before, and the footpoints are their (face, u, v)'s limit points.
+    s, faces, P = fitted(case)
+    diagonal = np.linalg.norm(P.max(axis=0) - P.min(axis=0))
+    fid, uv, _, before, _ = _core.closest_points(s._surface, s._topology, P, 4, 10)
+    (fid2, uv2, pos, after, nrm), moved = _core.closer_footpoints(s._surface, s._topology, P, fid, uv, 4, 10, 8,
+                                                                   near=0.0)
+    least = brute_force(s, faces, P)
+    assert np.sum(before > least + 1e-9 * diagonal) >= stuck
+    assert np.all(after <= before)
+    assert np.all(np.abs(after - least) <= 1e-8 * diagonal)
+    assert moved >= np.sum(before > least + 1e-9 * diagonal)
+    np.testing.assert_allclose(s.evaluate(fid2, uv2), pos, atol=1e-14)
+    np.testing.assert_allclose(np.linalg.norm(P - pos, axis=1), after, atol=1e-15)
+    np.testing.assert_allclose(np.linalg.norm(nrm, axis=1), 1.0, atol=1e-12)
+    # The default near = 0.1 re-searches only the points farther than a tenth of their nearest sample's reach: never
+    # farther than before or than the exhaustive search's result by more than rounding, and at least as good as a
+    # fresh search from the nearest sample.
+    (_, _, _, cheap, _), _ = _core.closer_footpoints(s._surface, s._topology, P, fid, uv, 4, 10, 8)
+    assert np.all(cheap <= before) and np.all(cheap >= after - 1e-12 * diagonal)
+
+
+def test_closer_footpoints_keep_closest_points_and_refuse_bad_faces():
+    # Points on the surface are their own closest points: the re-search leaves them there (distance below 1e-9).
+    V, F = sorpia.shapes.icosphere(2)
+    s = LimitSurface(V * (1 + 0.2 * np.sin(5 * V[:, :1])), F)
+    rng = np.random.default_rng(3)
+    fid = rng.integers(0, s.n_faces, 500).astype(np.int32)
+    uv = rng.random((500, 2)) * 0.5
+    P = s.evaluate(fid, uv)
+    (_, _, _, d, _), _ = _core.closer_footpoints(s._surface, s._topology, P, fid, uv, 4, 10, 8)
+    assert d.max() < 1e-9
+    bad = fid.copy()
+    bad[7] = s.n_faces
+    with pytest.raises(sorpia.ParameterError, match=f"face_ids\\[7\\] = {s.n_faces} is out of range"):
+        _core.closer_footpoints(s._surface, s._topology, P, bad, uv, 4, 10, 8)
