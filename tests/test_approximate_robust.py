@@ -144,11 +144,13 @@ def test_robust_is_checked():
 def test_a_surface_that_strays_from_the_data_is_warned_about():
     # Points on a cap of a sphere (a fifth of it), a cage of the whole sphere, no fairness and the tangent
     # distance alone: nothing holds the cage away from the cap, and its surface flies off more than the
-    # diagonal of the data, which a SorpiaWarning names; with the default fairness it stays, and no warning.
+    # diagonal of the data, which a SorpiaWarning names; with the default fairness it stays, and no warning. (The
+    # cage of 42 vertices: with 162, the fresh searches' re-search finds the footpoints that strayed parts of the
+    # surface bring near the data, the RMS rises from there on, and the iterate returned is the start.)
     v, _ = shapes.icosphere(3)
     v = v / np.linalg.norm(v, axis=1, keepdims=True)
     p = v[v[:, 2] > 0.6]
-    cv, cf = shapes.icosphere(2)
+    cv, cf = shapes.icosphere(1)
     with pytest.warns(sorpia.SorpiaWarning, match=r"strays from the data: its farthest point lies [\d.]+ of the "
                                                   r"diagonal .* raise fairness \(now 0\)"):
         r = approximate(p, cv, cf, fairness=0.0, tangential=0.0, robust="none")
