@@ -197,3 +197,14 @@ def test_command_fits_robustly_by_default_and_says_how_many_points_it_cut(tmp_pa
     assert runs["none"][1]["robust"] == "none" and "robust" not in runs["none"][0].split("update")[1].split("\n")[0]
     fitted = sorpia.read_mesh(tmp_path / "tukey.obj")[0]
     np.testing.assert_allclose(fitted, approximate(q, cv, cf).control_vertices, atol=1e-12 * diagonal(q))
+
+
+def test_data_the_surface_reaches_is_fitted_as_least_squares_fits_it():
+    # A mesh's own vertices fitted with that mesh as the cage, no fairness: least squares drives the distances to
+    # rounding; the robust fit too (its scale, at least 1e-4 of the diagonal, cuts no point converging last).
+    v, f = shapes.torus(24, 12)
+    v = v + 0.01 * np.random.default_rng(4).standard_normal(v.shape)
+    plain = approximate(v, v, f, fairness=0.0, robust="none")
+    robust = approximate(v, v, f, fairness=0.0)
+    assert plain.rms < 1e-9 * plain.diagonal
+    assert robust.rms < 1e-9 * robust.diagonal and robust.robust_outliers == 0

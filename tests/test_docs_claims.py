@@ -87,3 +87,22 @@ def test_the_page_quotes_no_subdivfit_figure_of_another_run():
             if value in (0.13, 0.22) or "gfit" in text:
                 continue
             assert any(abs(value - c) <= 5e-3 * c for c in cells if c), (text, sentence)
+
+
+ROBUST_BENCH = ROOT / "docs" / "benchmarks" / "approximate_robust.md"
+
+
+@pytest.mark.skipif(not ROBUST_BENCH.exists(), reason="the robust benchmark page is not beside the tests")
+def test_the_robustness_table_is_the_robust_pages():
+    # Every figure in the table of approximation.md's "Robustness" section (past its first column, the data's
+    # label) is a cell of the one run on docs/benchmarks/approximate_robust.md, to the digits quoted.
+    cells = [v for line in ROBUST_BENCH.read_text().splitlines() if line.startswith("| ")
+             for cell in line.strip("|").split("|")[2:] for v in numbers(cell)]
+    text = PAGE.read_text()
+    table = text[text.index("| data | least squares"):]
+    table = table[:table.index("\n\n")]
+    quoted = [(v, line) for line in table.splitlines()[2:] for cell in line.strip("|").split("|")[1:]
+              for v in numbers(cell.replace("x", " "))]
+    assert len(quoted) > 30
+    for value, line in quoted:
+        assert any(abs(value - c) <= 5e-3 * abs(c) for c in cells if c) or value == 0, (value, line)

@@ -339,11 +339,11 @@ ApproximationResult approximate(LimitSurface& surface, PointChunks& chunks, cons
   };
   // The robust fit (sorpia/robust.hpp): the scale of the chunks' current distances (a histogram merged over the
   // chunks), which weighs the points in the next update, and the criterion that picks the iterate returned and
-  // stops the run (the RMS distance without a robust loss). Distances below 1e-5 of the diagonal never make a
-  // point an outlier: on data the surface reaches to rounding the scale would fall with the fit and cut the points
-  // that converge last.
+  // stops the run (the RMS distance without a robust loss). The scale is at least 1e-4 of the diagonal, so no
+  // point within 30 times that is an outlier: on data the surface reaches to rounding the scale would fall with the
+  // fit and cut the points that converge last (and a cut point drifts away).
   const bool robust = options.robust.loss != RobustLoss::None;
-  const double scale_floor = 1e-5 * unit;
+  const double scale_floor = 1e-4 * unit;
   double current_scale = 0.0;
   const auto measure_scale = [&] {
     if (robust) current_scale = robust_scale(chunks.distance_histogram(unit), options.robust, scale_floor);
