@@ -227,6 +227,31 @@ def dask_lines(rows) -> list:
     return lines
 
 
+OOC_JSON = os.path.join(os.path.dirname(os.path.abspath(__file__)), "approximate_scaling_ooc.json")
+
+
+def ooc_lines(rows) -> list:
+    """The out-of-core table of the page (the rows of --out-of-core runs, kept in --ooc-json)."""
+    lines = ["", "## Out of core", "",
+             "Points streamed from a binary PLY (float32) a chunk at a time, never in memory whole (module "
+             "docstring: samples of a known limit surface plus noise), onto a fixed cage; each row from its own "
+             "run of --out-of-core, in a process of its own. Peak MB is the fit's process alone. Seconds are "
+             "wall seconds of a loaded machine (see each row's note): compare the peak memory, which the chunk "
+             "and the cage set, not the points.", "",
+             "| points | cage | chunk | iterations | footpoints s | rows s | normal s | solve s | report s "
+             "| approximate s | RMS / diagonal | max / diagonal | peak MB | file MB |",
+             "|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
+    for r in rows:
+        lines.append(f"| {r['points']:,} | {r['cage']:,} | {r['chunk_points']:,} | {r['iterations']} | "
+                     + " | ".join(f"{r[k]:.3g}" for k in PHASES[1:])
+                     + f" | {r['approximate']:.3g} | {r['rms']:.3g} | {r['max']:.3g} | {r['peak_mb']:.0f} "
+                     f"| {r['file_mb']:.0f} |")
+    notes = sorted({r["note"] for r in rows if r.get("note")})
+    if notes:
+        lines += ["", "Measured: " + "; ".join(notes) + "."]
+    return lines
+
+
 def draw(rows, path):
     import matplotlib
 
@@ -340,6 +365,10 @@ def main(argv=None):
     if dask:
         lines += dask_lines(dask)
         print("\n".join(dask_lines(dask)))
+    ooc_path = a.ooc_json or OOC_JSON
+    if os.path.exists(ooc_path):
+        with open(ooc_path) as fh:
+            lines += ooc_lines(json.load(fh))
     if not a.no_page:
         intro = __doc__.split("\n\n", 2)[2].split(" Writes\ndocs/")[0]
         write_page("approximate-scaling", "Approximation: cost of each phase against the number of points",
