@@ -38,6 +38,8 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from _report import PAGES, print_json_plot, write_page  # noqa: E402
 
 PHASES = ("decimate", "footpoints", "rows", "normal", "solve", "report")
+# The backend's calls of an iteration's normal-equation sums: the plain fit's, and the robust fit's (the default).
+SUMS_CALLS = ("normal_sums", "robust_normal_sums")
 
 
 def torus(n: int):
@@ -162,7 +164,8 @@ def dask_rows(n: int, fraction: float, workers: tuple, chunk_points: int) -> lis
     """The data and cage of one(n), fitted with chunks of `chunk_points` in this process (2 threads) and on a
     LocalCluster of each of `workers` worker processes of one thread (the same chunks): each run's seconds and
     the Dask runs' largest relative difference from the in-process one, the workers' seconds per million points
-    per call (footpoints: search and refine; sums: normal_sums) and the bytes of arrays sent each way per
+    per call (footpoints: search and refine; sums: normal_sums, or robust_normal_sums under the default robust
+    fit) and the bytes of arrays sent each way per
     iteration (the points' first sending apart)."""
     import sorpia
     from dask.distributed import Client, LocalCluster
@@ -191,9 +194,10 @@ def dask_rows(n: int, fraction: float, workers: tuple, chunk_points: int) -> lis
                      **{f"{what}_per_m{suffix}": per_m * sum(c[key].get(call, 0.0) for call in calls) / n_calls
                         for key, suffix in (("worker_seconds", ""), ("worker_cpu_seconds", "_cpu"))
                         for what, calls, n_calls in (("footpoints", ("search", "refine"), rounds),
-                                                     ("sums", ("normal_sums",), max(res.iterations, 1)))},
+                                                     ("sums", SUMS_CALLS, max(res.iterations, 1)))},
                      "mb_out_per_iteration": (c["bytes_to_workers"] - sent_points) / rounds / 1e6,
-                     "mb_in_per_iteration": c["bytes_from_workers"].get("normal_sums", 0) / max(res.iterations, 1) / 1e6
+                     "mb_in_per_iteration": sum(c["bytes_from_workers"].get(call, 0) for call in SUMS_CALLS)
+                     / max(res.iterations, 1) / 1e6
                      + sum(c["bytes_from_workers"].get(call, 0) for call in ("search", "refine")) / rounds / 1e6,
                      "chunks": c["chunks"]})
         print(rows[-1], file=sys.stderr)
