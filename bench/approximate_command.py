@@ -108,7 +108,7 @@ def page_lines(path=DEFAULT_JSON) -> list[str]:
     c, scan, t = row["command"], row["scan"], row["command"]["phases"]
     inner = ", ".join(f"{k.split('.', 1)[1]} {v:.2f}" for k, v in t.items()
                       if k.startswith("approximate.") and k != "approximate.total")
-    return ["", f"### The whole command at {scan['vertices']:,} points (bench/approximate_command.py)", "",
+    return ["", f"## The whole command at {scan['vertices']:,} points (bench/approximate_command.py)", "",
             f"`sorpia approximate scan.ply -o cage.obj --vertices {row['cage_asked']}` on a real scan: "
             f"{scan['mesh']} decimated to {scan['base']:,} vertices and refined by Loop's limit surface at level 3 "
             f"({scan['vertices']:,} vertices, binary PLY of {scan['mb']['ply']} MB), default settings, in a fresh "
