@@ -261,11 +261,13 @@ py::tuple robust_tuple(const sorpia::RobustOptions& o) {
   return py::make_tuple(sorpia::robust_loss_name(o.loss), o.quantile, o.c);
 }
 
-sorpia::RobustOptions to_robust(const std::string& loss, double quantile, double c) {
+// robust_tuple's inverse.
+sorpia::RobustOptions to_robust(const py::tuple& robust) {
+  if (robust.size() != 3) throw sorpia::ParameterError("robust must be (loss, quantile, c)");
   sorpia::RobustOptions o;
-  o.loss = sorpia::robust_loss(loss, "loss");
-  o.quantile = quantile;
-  o.c = c;
+  o.loss = sorpia::robust_loss(robust[0].cast<std::string>(), "loss");
+  o.quantile = robust[1].cast<double>();
+  o.c = robust[2].cast<double>();
   return o;
 }
 
@@ -688,17 +690,13 @@ void bind_approximate(py::module_& m) {
            "unit"_a, "the current distances' weighted histogram (sorpia/robust.hpp) as (unit, total, mass)")
       .def("robust_loss_sum",
            [](const sorpia::ApproximationChunk& c, const py::tuple& robust, double scale) {
-             if (robust.size() != 3) throw sorpia::ParameterError("robust must be (loss, quantile, c)");
-             return c.robust_loss_sum(
-                 to_robust(robust[0].cast<std::string>(), robust[1].cast<double>(), robust[2].cast<double>()), scale);
+             return c.robust_loss_sum(to_robust(robust), scale);
            },
            "robust"_a, "scale"_a, "sum w rho(d) of the current distances; robust = (loss, quantile, c)")
       .def("robust_normal_sums",
            [](const sorpia::ApproximationChunk& c, const sorpia::LimitSurface& surface, double tangential,
               const py::tuple& robust, double scale) {
-             if (robust.size() != 3) throw sorpia::ParameterError("robust must be (loss, quantile, c)");
-             const sorpia::RobustOptions o =
-                 to_robust(robust[0].cast<std::string>(), robust[1].cast<double>(), robust[2].cast<double>());
+             const sorpia::RobustOptions o = to_robust(robust);
              sorpia::NormalSums s;
              {
                LongCall call;
