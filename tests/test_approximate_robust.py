@@ -193,7 +193,7 @@ def test_command_fits_robustly_by_default_and_says_how_many_points_it_cut(tmp_pa
         runs[robust] = (r.stdout, json.loads((tmp_path / f"{robust}.json").read_text()))
     out, report = runs["tukey"]
     assert report["robust"] == "tukey" and report["robust_outliers"] >= (~inlier).sum()
-    assert f"robust tukey: {report['robust_outliers']} points beyond its cut" in out
+    assert f"within the cut, {report['robust_outliers']} points beyond it" in out.split("kept")[1]
     assert runs["none"][1]["robust"] == "none" and "robust" not in runs["none"][0].split("update")[1].split("\n")[0]
     fitted = sorpia.read_mesh(tmp_path / "tukey.obj")[0]
     np.testing.assert_allclose(fitted, approximate(q, cv, cf).control_vertices, atol=1e-12 * diagonal(q))
@@ -208,3 +208,35 @@ def test_data_the_surface_reaches_is_fitted_as_least_squares_fits_it():
     robust = approximate(v, v, f, fairness=0.0)
     assert plain.rms < 1e-9 * plain.diagonal
     assert robust.rms < 1e-9 * robust.diagonal and robust.robust_outliers == 0
+
+
+def test_the_robust_defaults_seen_from_python_are_the_cores():
+    # One place for the defaults (sorpia::robust_options, ApproximationOptions::robust): sorpia.approximate, the
+    # binding and the command line default to the core's loss, and a loss named without its settings fits with
+    # the core's: the same bits as the binding given the core's (quantile, c) explicitly.
+    import inspect
+
+    from sorpia import _core
+    from sorpia.cli.parser import build_parser
+
+    assert inspect.signature(approximate).parameters["robust"].default == _core.DEFAULT_ROBUST == "tukey"
+    assert "robust: str = 'tukey'" in _core.approximate.__doc__
+    args = build_parser().parse_args(["approximate", "in.ply", "-o", "out.obj", "--vertices", "50"])
+    assert args.robust == _core.DEFAULT_ROBUST
+    assert _core.robust_options("tukey") == ("tukey", 0.9, 30.0)  # docs/approximation.md, "Robustness"
+    assert _core.robust_options("cauchy") == ("cauchy", 0.9, 12.0)
+    p, cv, cf = noisy_torus()
+    q, _ = with_outliers(p, 0.01, 2)
+    for loss in ("tukey", "cauchy"):
+        _, quantile, c = _core.robust_options(loss)
+        r = approximate(q, cv, cf, robust=loss, iterations=3)
+        surface = sorpia.LimitSurface(cv, cf)
+        o = dict(iterations=3, tol=3e-3, fairness=3e-4, tangential=0.1, method="cg", solver_tol=1e-3,
+                 solver_max_iter=2000, grid=4, newton_steps=10, report_level=2, callback=None)
+        out = _core.approximate(surface._surface, _core.InMemoryChunks(surface._surface, q, None, 1 << 20),
+                                *o.values(), robust=loss, robust_quantile=quantile, robust_c=c)
+        np.testing.assert_array_equal(r.control_vertices, out["control_vertices"])
+        other = _core.approximate(sorpia.LimitSurface(cv, cf)._surface,
+                                  _core.InMemoryChunks(sorpia.LimitSurface(cv, cf)._surface, q, None, 1 << 20),
+                                  *o.values(), robust=loss, robust_quantile=quantile, robust_c=2 * c)
+        assert not np.array_equal(other["control_vertices"], out["control_vertices"])  # c reaches the fit

@@ -7,6 +7,7 @@
 
 #include <array>
 #include <memory>
+#include <optional>
 
 #include "bindings.hpp"
 #include "sorpia/approximation.hpp"
@@ -82,6 +83,11 @@ py::dict record_dict(const sorpia::ApproximationRecord& r, double offset) {
   d["max_relative"] = r.max_relative;
   d["surface_rms_relative"] = measured(r.surface_rms_relative);
   d["surface_max_relative"] = measured(r.surface_max_relative);
+  d["robust_loss"] = r.robust_loss;
+  d["robust_loss_relative"] = r.robust_loss_relative;
+  d["inlier_rms"] = r.inlier_rms;
+  d["inlier_rms_relative"] = r.inlier_rms_relative;
+  d["robust_cut"] = r.robust_cut;
   d["robust_scale"] = r.robust_scale;
   d["solver_iterations"] = r.solver_iterations;
   d["seconds"] = r.seconds + offset;
@@ -261,6 +267,29 @@ py::tuple robust_tuple(const sorpia::RobustOptions& o) {
   return py::make_tuple(sorpia::robust_loss_name(o.loss), o.quantile, o.c);
 }
 
+// A robust fit's sums cross as (loss, inlier_squares, inlier_weight, cut).
+py::tuple robust_sums_tuple(const sorpia::RobustSums& s) {
+  return py::make_tuple(s.loss, s.inlier_squares, s.inlier_weight, s.cut);
+}
+
+// robust_sums_tuple's inverse, or a list of them added in the list's order.
+sorpia::RobustSums to_robust_sums(const py::object& obj) {
+  const auto one = [](const py::handle& h) {
+    const auto t = h.cast<py::tuple>();
+    if (t.size() != 4) throw sorpia::ParameterError("robust sums must be (loss, inlier_squares, inlier_weight, cut)");
+    sorpia::RobustSums s;
+    s.loss = t[0].cast<double>();
+    s.inlier_squares = t[1].cast<double>();
+    s.inlier_weight = t[2].cast<double>();
+    s.cut = t[3].cast<long long>();
+    return s;
+  };
+  if (!py::isinstance<py::list>(obj)) return one(obj);
+  sorpia::RobustSums total;
+  for (const auto& v : obj.cast<py::list>()) total.add(one(v));
+  return total;
+}
+
 // robust_tuple's inverse.
 sorpia::RobustOptions to_robust(const py::tuple& robust) {
   if (robust.size() != 3) throw sorpia::ParameterError("robust must be (loss, quantile, c)");
@@ -330,14 +359,10 @@ class PyPointChunks : public sorpia::PointChunks {
     if (!override_of("distance_histogram")) return sorpia::PointChunks::distance_histogram(unit);
     return to_histogram(call_locked("distance_histogram", unit));
   }
-  double robust_loss_sum(const sorpia::RobustOptions& robust, double scale) override {
+  sorpia::RobustSums robust_sums(const sorpia::RobustOptions& robust, double scale) override {
     py::gil_scoped_acquire gil;
-    if (!override_of("robust_loss_sum")) return sorpia::PointChunks::robust_loss_sum(robust, scale);
-    const py::object r = call_locked("robust_loss_sum", robust_tuple(robust), scale);
-    if (!py::isinstance<py::list>(r)) return r.cast<double>();
-    double total = 0.0;  // the chunks' sums added in the list's order
-    for (const auto& v : r.cast<py::list>()) total += v.cast<double>();
-    return total;
+    if (!override_of("robust_sums")) return sorpia::PointChunks::robust_sums(robust, scale);
+    return to_robust_sums(call_locked("robust_sums", robust_tuple(robust), scale));
   }
   sorpia::NormalSums robust_normal_sums(double tangential, const sorpia::RobustOptions& robust,
                                         double scale) override {
@@ -688,11 +713,13 @@ void bind_approximate(py::module_& m) {
       .def("distance_histogram",
            [](const sorpia::ApproximationChunk& c, double unit) { return histogram_tuple(c.distance_histogram(unit)); },
            "unit"_a, "the current distances' weighted histogram (sorpia/robust.hpp) as (unit, total, mass)")
-      .def("robust_loss_sum",
+      .def("robust_sums",
            [](const sorpia::ApproximationChunk& c, const py::tuple& robust, double scale) {
-             return c.robust_loss_sum(to_robust(robust), scale);
+             return robust_sums_tuple(c.robust_sums(to_robust(robust), scale));
            },
-           "robust"_a, "scale"_a, "sum w rho(d) of the current distances; robust = (loss, quantile, c)")
+           "robust"_a, "scale"_a,
+           "the current distances' robust sums (sorpia/robust.hpp) as (sum w rho(d), sum w d^2 and sum w within the "
+           "cut c s, the points beyond it); robust = (loss, quantile, c)")
       .def("robust_normal_sums",
            [](const sorpia::ApproximationChunk& c, const sorpia::LimitSurface& surface, double tangential,
               const py::tuple& robust, double scale) {
@@ -773,7 +800,8 @@ void bind_approximate(py::module_& m) {
       [](sorpia::LimitSurface& surface, sorpia::PointChunks& chunks, int iterations, double tol,
          double fairness, double tangential, const std::string& method, double solver_tol, long long solver_max_iter,
          int grid, int newton_steps, int report_level, const py::object& callback, double seconds_before,
-         bool report_each, const std::string& robust, double robust_quantile, double robust_c) {
+         bool report_each, const std::string& robust, std::optional<double> robust_quantile,
+         std::optional<double> robust_c) {
         sorpia::ApproximationOptions o;
         o.iterations = iterations;
         o.tol = tol;
@@ -787,9 +815,9 @@ void bind_approximate(py::module_& m) {
         o.footpoints = footpoint_options(grid, newton_steps);
         o.report_level = report_level;
         o.report_each = report_each;
-        o.robust.loss = sorpia::robust_loss(robust);
-        o.robust.quantile = robust_quantile;
-        o.robust.c = robust_c;
+        o.robust = sorpia::robust_options(sorpia::robust_loss(robust));
+        if (robust_quantile) o.robust.quantile = *robust_quantile;
+        if (robust_c) o.robust.c = *robust_c;
         sorpia::ApproximationProgress progress;
         if (!callback.is_none())
           progress = [&callback, seconds_before](const sorpia::ApproximationRecord& r) {
@@ -823,17 +851,24 @@ void bind_approximate(py::module_& m) {
       "surface"_a, "chunks"_a, "iterations"_a, "tol"_a, "fairness"_a, "tangential"_a,
       "method"_a, "solver_tol"_a, "solver_max_iter"_a, "grid"_a, "newton_steps"_a, "report_level"_a, "callback"_a,
       "seconds_before"_a = 0.0, "report_each"_a = false,
-      "robust"_a = "none", "robust_quantile"_a = sorpia::RobustOptions{}.quantile,
-      "robust_c"_a = sorpia::RobustOptions{}.c,
+      "robust"_a = sorpia::robust_loss_name(sorpia::ApproximationOptions{}.robust.loss),
+      "robust_quantile"_a = py::none(), "robust_c"_a = py::none(),
       "Approximation's pipeline (sorpia::approximate) from the surface's control vertices, over the points of\n"
       "`chunks` (InMemoryChunks, FileChunks or a Python PointChunks): a dict with control_vertices, face_ids, uv,\n"
       "distances, iterations, stop_reason, best_iteration, diagonal, robust_scale, robust_outliers, history\n"
       "(records as dicts, seconds counted from seconds_before) and timings; callback(record) after each record.\n"
       "The surface-to-data figures in every record with report_each, else only in the returned iterate's (None\n"
-      "in the others). robust: the loss of the robust fit (none, cauchy, tukey) at the robust_quantile of the\n"
-      "distances times robust_c (sorpia/robust.hpp); none here unless given (sorpia.approximate passes its\n"
-      "default): a Python backend fits robustly only where it defines distance_histogram, robust_loss_sum and\n"
-      "robust_normal_sums (sorpia/point_chunks.hpp).");
+      "in the others). robust: the loss of the robust fit (none, cauchy, tukey; the core's default unless\n"
+      "given) at the robust_quantile of the distances times robust_c (sorpia/robust.hpp; None: the loss's\n"
+      "defaults, robust_options): a Python backend fits robustly only where it defines distance_histogram,\n"
+      "robust_sums and robust_normal_sums (sorpia/point_chunks.hpp); robust = 'none' runs without them.");
+
+  // The robust fit's defaults cross from the core (sorpia::robust_options, ApproximationOptions::robust), so that
+  // the Python API and the command line take them from the one place they are set.
+  m.attr("DEFAULT_ROBUST") = sorpia::robust_loss_name(sorpia::ApproximationOptions{}.robust.loss);
+  m.def(
+      "robust_options", [](const std::string& loss) { return robust_tuple(sorpia::robust_options(sorpia::robust_loss(loss))); },
+      "loss"_a, "The default settings of a robust loss (sorpia::robust_options) as (loss, quantile, c).");
 }
 
 }  // namespace sorpia_py

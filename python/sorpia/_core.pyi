@@ -6,7 +6,7 @@ import collections.abc
 import numpy
 import numpy.typing
 import typing
-__all__: list[str] = ['ApproximationChunk', 'Boundary', 'FileChunks', 'FootpointSearch', 'INFINITE_SHARPNESS', 'InMemoryChunks', 'InterpolationResult', 'Interpolator', 'LimitSurface', 'MAX_REFINEMENT_LEVELS', 'MAX_THREADS', 'MeshError', 'MeshFileError', 'Method', 'NormalEquations', 'OmegaRule', 'ParameterError', 'PointChunks', 'PointIndex', 'Rules', 'Scheme', 'SolveOptions', 'Tags', 'Topology', 'YOUNG_RHO_CLAMP', 'approximate', 'available_memory_bytes', 'blend_weights', 'boundary_name', 'check_ply_per_vertex', 'check_refinement', 'check_writable', 'closer_footpoints', 'closest_points', 'decimate', 'face_list_statistics', 'fair_interpolate', 'fairness_matrix', 'grid', 'icosphere', 'irregular', 'limit_matrix', 'limit_points', 'limit_residual', 'mesh_statistics', 'method_names', 'normal_matrix', 'parse_boundary', 'parse_method', 'parse_omega', 'parse_scheme', 'point_file_points', 'point_sample_mask', 'pole', 'polygon_torus', 'quad_grid', 'quad_irregular', 'quad_torus', 'read_mesh', 'read_point_file', 'refine_footpoints', 'refine_uniform', 'refinement_bytes', 'regular_valence', 'repair', 'repair_polygons', 'rms_levelled', 'scale_exponent', 'scheme_name', 'sharp_edges', 'split_nonmanifold', 'split_nonmanifold_polygons', 'subface_columns', 'tessellation_bytes', 'torus', 'write_file_atomic', 'write_mesh']
+__all__: list[str] = ['ApproximationChunk', 'Boundary', 'DEFAULT_ROBUST', 'FileChunks', 'FootpointSearch', 'INFINITE_SHARPNESS', 'InMemoryChunks', 'InterpolationResult', 'Interpolator', 'LimitSurface', 'MAX_REFINEMENT_LEVELS', 'MAX_THREADS', 'MeshError', 'MeshFileError', 'Method', 'NormalEquations', 'OmegaRule', 'ParameterError', 'PointChunks', 'PointIndex', 'Rules', 'Scheme', 'SolveOptions', 'Tags', 'Topology', 'YOUNG_RHO_CLAMP', 'approximate', 'available_memory_bytes', 'blend_weights', 'boundary_name', 'check_ply_per_vertex', 'check_refinement', 'check_writable', 'closer_footpoints', 'closest_points', 'decimate', 'face_list_statistics', 'fair_interpolate', 'fairness_matrix', 'grid', 'icosphere', 'irregular', 'limit_matrix', 'limit_points', 'limit_residual', 'mesh_statistics', 'method_names', 'normal_matrix', 'parse_boundary', 'parse_method', 'parse_omega', 'parse_scheme', 'point_file_points', 'point_sample_mask', 'pole', 'polygon_torus', 'quad_grid', 'quad_irregular', 'quad_torus', 'read_mesh', 'read_point_file', 'refine_footpoints', 'refine_uniform', 'refinement_bytes', 'regular_valence', 'repair', 'repair_polygons', 'rms_levelled', 'robust_options', 'scale_exponent', 'scheme_name', 'sharp_edges', 'split_nonmanifold', 'split_nonmanifold_polygons', 'subface_columns', 'tessellation_bytes', 'torus', 'write_file_atomic', 'write_mesh']
 class MeshError(ValueError):
     """
     The faces or coordinates cannot be used: an index out of range, a repeated
@@ -715,13 +715,13 @@ class ApproximationChunk:
         ...
     def refine(self, surface: LimitSurface, grid: typing.SupportsInt | typing.SupportsIndex, max_steps: typing.SupportsInt | typing.SupportsIndex) -> tuple:
         ...
-    def robust_loss_sum(self, robust: tuple, scale: typing.SupportsFloat | typing.SupportsIndex) -> float:
-        """
-        sum w rho(d) of the current distances; robust = (loss, quantile, c)
-        """
     def robust_normal_sums(self, surface: LimitSurface, tangential: typing.SupportsFloat | typing.SupportsIndex, robust: tuple, scale: typing.SupportsFloat | typing.SupportsIndex) -> tuple:
         """
         normal_sums with each weight times the robust factor of its distance at `scale`
+        """
+    def robust_sums(self, robust: tuple, scale: typing.SupportsFloat | typing.SupportsIndex) -> tuple:
+        """
+        the current distances' robust sums (sorpia/robust.hpp) as (sum w rho(d), sum w d^2 and sum w within the cut c s, the points beyond it); robust = (loss, quantile, c)
         """
     def scale(self, e: typing.SupportsInt | typing.SupportsIndex) -> None:
         ...
@@ -757,17 +757,17 @@ class FileChunks(PointChunks):
     """
     def __init__(self, surface: LimitSurface, path: str, chunk_points: typing.SupportsInt | typing.SupportsIndex, spill_directory: str, sample_points: typing.SupportsInt | typing.SupportsIndex) -> None:
         ...
-def approximate(surface: LimitSurface, chunks: PointChunks, iterations: typing.SupportsInt | typing.SupportsIndex, tol: typing.SupportsFloat | typing.SupportsIndex, fairness: typing.SupportsFloat | typing.SupportsIndex, tangential: typing.SupportsFloat | typing.SupportsIndex, method: str, solver_tol: typing.SupportsFloat | typing.SupportsIndex, solver_max_iter: typing.SupportsInt | typing.SupportsIndex, grid: typing.SupportsInt | typing.SupportsIndex, newton_steps: typing.SupportsInt | typing.SupportsIndex, report_level: typing.SupportsInt | typing.SupportsIndex, callback: typing.Any, seconds_before: typing.SupportsFloat | typing.SupportsIndex = 0.0, report_each: bool = False, robust: str = 'none', robust_quantile: typing.SupportsFloat | typing.SupportsIndex = 0.9, robust_c: typing.SupportsFloat | typing.SupportsIndex = 30.0) -> dict:
+def approximate(surface: LimitSurface, chunks: PointChunks, iterations: typing.SupportsInt | typing.SupportsIndex, tol: typing.SupportsFloat | typing.SupportsIndex, fairness: typing.SupportsFloat | typing.SupportsIndex, tangential: typing.SupportsFloat | typing.SupportsIndex, method: str, solver_tol: typing.SupportsFloat | typing.SupportsIndex, solver_max_iter: typing.SupportsInt | typing.SupportsIndex, grid: typing.SupportsInt | typing.SupportsIndex, newton_steps: typing.SupportsInt | typing.SupportsIndex, report_level: typing.SupportsInt | typing.SupportsIndex, callback: typing.Any, seconds_before: typing.SupportsFloat | typing.SupportsIndex = 0.0, report_each: bool = False, robust: str = 'tukey', robust_quantile: typing.SupportsFloat | typing.SupportsIndex | None = None, robust_c: typing.SupportsFloat | typing.SupportsIndex | None = None) -> dict:
     """
     Approximation's pipeline (sorpia::approximate) from the surface's control vertices, over the points of
     `chunks` (InMemoryChunks, FileChunks or a Python PointChunks): a dict with control_vertices, face_ids, uv,
     distances, iterations, stop_reason, best_iteration, diagonal, robust_scale, robust_outliers, history
     (records as dicts, seconds counted from seconds_before) and timings; callback(record) after each record.
     The surface-to-data figures in every record with report_each, else only in the returned iterate's (None
-    in the others). robust: the loss of the robust fit (none, cauchy, tukey) at the robust_quantile of the
-    distances times robust_c (sorpia/robust.hpp); none here unless given (sorpia.approximate passes its
-    default): a Python backend fits robustly only where it defines distance_histogram, robust_loss_sum and
-    robust_normal_sums (sorpia/point_chunks.hpp).
+    in the others). robust: the loss of the robust fit (none, cauchy, tukey; the core's default unless
+    given) at the robust_quantile of the distances times robust_c (sorpia/robust.hpp; None: the loss's
+    defaults, robust_options): a Python backend fits robustly only where it defines distance_histogram,
+    robust_sums and robust_normal_sums (sorpia/point_chunks.hpp); robust = 'none' runs without them.
     """
 def available_memory_bytes() -> int:
     ...
@@ -904,6 +904,10 @@ def rms_levelled(bests: collections.abc.Sequence[typing.SupportsFloat | typing.S
     """
     approximation's stop test on the lowest RMS after each iteration (sorpia::rms_levelled).
     """
+def robust_options(loss: str) -> tuple:
+    """
+    The default settings of a robust loss (sorpia::robust_options) as (loss, quantile, c).
+    """
 def scale_exponent(*args) -> int:
     """
     The exponent e of the core's exact scaling (sorpia/detail/scaling.hpp) for data whose largest magnitude
@@ -935,6 +939,7 @@ def write_file_atomic(path: str, data: bytes) -> None:
     """
 def write_mesh(path: str, vertices: numpy.typing.NDArray[numpy.float64], face_vertex_indices: numpy.typing.NDArray[numpy.int32], face_vertex_counts: numpy.typing.NDArray[numpy.int32] | None, face_size: typing.SupportsInt | typing.SupportsIndex, binary: bool, tags: Tags | None, boundary: Boundary | None, uv_values: numpy.typing.NDArray[numpy.float64] | None = None, uv_indices: numpy.typing.NDArray[numpy.int32] | None = None, normal_values: numpy.typing.NDArray[numpy.float64] | None = None, normal_indices: numpy.typing.NDArray[numpy.int32] | None = None) -> None:
     ...
+DEFAULT_ROBUST: str = 'tukey'
 INFINITE_SHARPNESS: float = 10.0
 MAX_REFINEMENT_LEVELS: int = 10
 MAX_THREADS: int = 1024

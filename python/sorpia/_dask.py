@@ -272,8 +272,8 @@ class DaskChunks(_core.PointChunks):
     def distance_histogram(self, unit):
         return self._all("distance_histogram", unit)
 
-    def robust_loss_sum(self, robust, scale):
-        return self._all("robust_loss_sum", tuple(robust), scale)
+    def robust_sums(self, robust, scale):
+        return self._all("robust_sums", tuple(robust), scale)
 
     def robust_normal_sums(self, tangential, robust, scale):
         return self._all("robust_normal_sums", tangential, tuple(robust), scale)

@@ -85,11 +85,10 @@ DEFAULT_FAIRNESS = 3e-4
 # The stopping rule's default: the blend goes on lowering the RMS distance by a few parts in a thousand per
 # iteration on noisy data long after the surface has settled (fitting the noise); the scans' fits fall faster.
 DEFAULT_TOL = 3e-3
-# The robust fit (docs/approximation.md, "Robustness"): the loss, and per loss the scale's quantile of the
-# distances and the tuning constant c in units of that scale (the core's RobustOptions).
+# The robust fit (docs/approximation.md, "Robustness"): the losses, and the default one from the core, which also
+# holds each loss's scale quantile and tuning constant c (sorpia::robust_options; _core.robust_options(loss)).
 ROBUST_LOSSES = ("none", "cauchy", "tukey")
-DEFAULT_ROBUST = "tukey"
-_ROBUST_SCALE = {"none": (0.9, 1.0), "cauchy": (0.9, 12.0), "tukey": (0.9, 30.0)}
+DEFAULT_ROBUST = _core.DEFAULT_ROBUST
 # A fitted surface whose farthest point lies farther than this (in diagonals) from the data is warned about: it
 # strays between points that do not hold the cage (e.g. fairness 0 with a cage as fine as the data).
 _STRAY = 1.0
@@ -179,8 +178,11 @@ class ApproximationResult:
         The scale s of the returned iterate's distances (0 with "none"); the
         records' ``robust_scale`` the scale of each iteration's.
     robust_outliers : int
-        The points farther than c s from the returned surface (with "tukey":
-        the points that did not pull on it).
+        The points (of weight > 0) farther than c s from the returned
+        surface (with "tukey": the points that did not pull on it): its
+        record's ``robust_cut``. The records also give the loss's RMS
+        (``robust_loss``) and the RMS distance of the points within c s
+        (``inlier_rms``), in model units and ``_relative`` to the diagonal.
 
     `rms` and `max_error` (the largest distance of a data point to the
     returned surface; ``max_distance`` until this release, a deprecated
@@ -565,8 +567,7 @@ def approximate(points, cage_vertices, cage_faces=None, *, scheme: str = DEFAULT
     try:
         out = _core.approximate(surface._surface, chunks, iterations, tol, fairness, tangential, method,
                                 solver_tol, solver_max_iter, grid, newton_steps, report_level, callback,
-                                time.perf_counter() - t0, bool(report_each), robust,
-                                *_ROBUST_SCALE.get(robust, (0.9, 1.0)))
+                                time.perf_counter() - t0, bool(report_each), robust)
     finally:
         if client is not None:
             chunks.close()

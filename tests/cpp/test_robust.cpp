@@ -12,6 +12,7 @@
 
 #include "expect_error.hpp"
 #include "sorpia/errors.hpp"
+#include "sorpia/approximation.hpp"
 #include "sorpia/robust.hpp"
 
 namespace {
@@ -106,15 +107,15 @@ TEST(Robust, WeightsAreTheLossDerivative) {
       sorpia::robust_factors(o, s, &d, 1, &w);
       const double h = 1e-7 * d;
       const double up = d + h, down = d - h;
-      const double slope = (sorpia::robust_loss_sum(o, s, &up, nullptr, 1) -
-                            sorpia::robust_loss_sum(o, s, &down, nullptr, 1)) / (2 * h);
+      const double slope = (sorpia::robust_sums(o, s, &up, nullptr, 1).loss -
+                            sorpia::robust_sums(o, s, &down, nullptr, 1).loss) / (2 * h);
       EXPECT_NEAR(w, slope / (2 * d), 1e-6) << sorpia::robust_loss_name(loss) << " d " << d;
       EXPECT_GE(w, 0.0);
       EXPECT_LE(w, 1.0);
     }
     // Near 0 every loss is d^2: the criterion is the RMS distance where no point is far.
     const double d = 1e-5;
-    EXPECT_NEAR(sorpia::robust_loss_sum(o, s, &d, nullptr, 1), d * d, 1e-6 * d * d) << sorpia::robust_loss_name(loss);
+    EXPECT_NEAR(sorpia::robust_sums(o, s, &d, nullptr, 1).loss, d * d, 1e-6 * d * d) << sorpia::robust_loss_name(loss);
   }
   // Tukey: beyond c s no pull, and the loss is flat there; Cauchy: the pull c s / d falls as 1 / d.
   const double far = 1.0;
@@ -123,6 +124,56 @@ TEST(Robust, WeightsAreTheLossDerivative) {
   EXPECT_EQ(w, 0.0);
   sorpia::robust_factors(RobustOptions{RobustLoss::Cauchy, 0.5, 3.0}, 0.01, &far, 1, &w);
   EXPECT_NEAR(w * far, 0.03 * 0.03 / far, 1e-3 * 0.03 * 0.03 / far);
+}
+
+TEST(Robust, SumsSplitThePointsAtTheCut) {
+  // Against a direct count: the points within c s (weighted squares and weight) and the points of weight > 0
+  // beyond it; a weight 0 adds nothing; chunks' sums added equal the sums of all the points.
+  const std::vector<double> d = {0.0, 0.01, 0.029, 0.03, 0.031, 0.5, 2.0, 0.02};
+  const std::vector<double> w = {1.0, 2.0, 0.5, 1.0, 1.0, 3.0, 0.0, 0.0};
+  for (RobustLoss loss : {RobustLoss::None, RobustLoss::Cauchy, RobustLoss::Tukey}) {
+    const RobustOptions o{loss, 0.5, 3.0};  // c s = 0.03
+    const sorpia::RobustSums all = sorpia::robust_sums(o, 0.01, d.data(), w.data(), d.size());
+    double squares = 0.0, weight = 0.0;
+    long long cut = 0;
+    for (std::size_t i = 0; i < d.size(); ++i) {
+      if (w[i] == 0.0) continue;
+      if (d[i] <= 0.03 + 1e-15) {
+        squares += w[i] * d[i] * d[i];
+        weight += w[i];
+      } else {
+        ++cut;
+      }
+    }
+    EXPECT_NEAR(all.inlier_squares, squares, 1e-15);
+    EXPECT_EQ(all.inlier_weight, weight);
+    EXPECT_EQ(all.cut, cut);
+    EXPECT_EQ(cut, 2);
+    sorpia::RobustSums parts = sorpia::robust_sums(o, 0.01, d.data(), w.data(), 3);
+    parts.add(sorpia::robust_sums(o, 0.01, d.data() + 3, w.data() + 3, d.size() - 3));
+    EXPECT_NEAR(parts.loss, all.loss, 1e-15);
+    EXPECT_EQ(parts.cut, all.cut);
+    EXPECT_EQ(parts.inlier_weight, all.inlier_weight);
+  }
+}
+
+TEST(Robust, DefaultsPerLoss) {
+  // The one place of the defaults: approximation's default is Tukey's; each loss its own c; value-initialised
+  // settings are least squares.
+  const RobustOptions tukey = sorpia::robust_options(RobustLoss::Tukey);
+  const RobustOptions cauchy = sorpia::robust_options(RobustLoss::Cauchy);
+  EXPECT_EQ(tukey.loss, RobustLoss::Tukey);
+  EXPECT_EQ(tukey.quantile, 0.9);
+  EXPECT_EQ(tukey.c, 30.0);
+  EXPECT_EQ(cauchy.loss, RobustLoss::Cauchy);
+  EXPECT_EQ(cauchy.quantile, 0.9);
+  EXPECT_EQ(cauchy.c, 12.0);
+  EXPECT_EQ(sorpia::robust_options(RobustLoss::None).loss, RobustLoss::None);
+  EXPECT_EQ(RobustOptions{}.loss, RobustLoss::None);
+  const sorpia::ApproximationOptions defaults;
+  EXPECT_EQ(defaults.robust.loss, tukey.loss);
+  EXPECT_EQ(defaults.robust.quantile, tukey.quantile);
+  EXPECT_EQ(defaults.robust.c, tukey.c);
 }
 
 TEST(Robust, LossNames) {

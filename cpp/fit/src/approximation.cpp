@@ -348,10 +348,8 @@ ApproximationResult approximate(LimitSurface& surface, PointChunks& chunks, cons
   const auto measure_scale = [&] {
     if (robust) current_scale = robust_scale(chunks.distance_histogram(unit), options.robust, scale_floor);
   };
-  const auto criterion = [&](const DistanceSums& d) {
-    if (!robust) return rms(d);
-    return std::sqrt(chunks.robust_loss_sum(options.robust, current_scale) / static_cast<double>(k));
-  };
+  double current_loss = 0.0;  // the criterion at the last record's distances (robust), in the fit's units
+  const auto criterion = [&](const DistanceSums& d) { return robust ? current_loss : rms(d); };
   const double not_measured = std::numeric_limits<double>::quiet_NaN();
   const auto record = [&](int iteration, const DistanceSums& distances, long long solver_iterations) {
     ApproximationRecord rec;
@@ -364,7 +362,17 @@ ApproximationResult approximate(LimitSurface& surface, PointChunks& chunks, cons
     rec.max = std::ldexp(rec.max, e);
     rec.surface_rms = rec.surface_max = rec.surface_rms_relative = rec.surface_max_relative = not_measured;
     if (options.report_each) measure_surface(rec);
-    if (robust) rec.robust_scale = std::ldexp(current_scale, e);
+    if (robust) {
+      rec.robust_scale = std::ldexp(current_scale, e);
+      const RobustSums r = chunks.robust_sums(options.robust, current_scale);
+      current_loss = std::sqrt(r.loss / static_cast<double>(k));
+      const double inlier = r.inlier_weight > 0 ? std::sqrt(r.inlier_squares / r.inlier_weight) : 0.0;
+      rec.robust_loss_relative = current_loss / unit;
+      rec.robust_loss = std::ldexp(current_loss, e);
+      rec.inlier_rms_relative = inlier / unit;
+      rec.inlier_rms = std::ldexp(inlier, e);
+      rec.robust_cut = r.cut;
+    }
     rec.solver_iterations = solver_iterations;
     rec.seconds = seconds_since(t0);
     out.history.push_back(rec);
@@ -509,11 +517,9 @@ ApproximationResult approximate(LimitSurface& surface, PointChunks& chunks, cons
   detail::scale_pow2(out.control_vertices.data(), out.control_vertices.size(), e);
   surface.set_vertices(out.control_vertices.data());
   out.footpoints = chunks.best_footpoints();
-  if (robust) {  // the scale of the returned iterate's distances before the final search, in the fit's units
-    const double s = std::ldexp(rec.robust_scale, -e);
+  if (robust) {  // the returned iterate's record's: its scale and cut before the final search
     out.robust_scale = rec.robust_scale;
-    out.robust_outliers = out.footpoints.distances.empty() ? -1 : 0;
-    for (double d : out.footpoints.distances) out.robust_outliers += d > options.robust.c * s;
+    out.robust_outliers = rec.robust_cut;
   }
   detail::scale_pow2(out.footpoints.distances.data(), out.footpoints.distances.size(), e);
   out.diagonal = std::ldexp(diagonal, e);

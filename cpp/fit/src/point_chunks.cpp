@@ -489,20 +489,20 @@ DistanceHistogram ApproximationChunk::distance_histogram(double unit) const {
   return h;
 }
 
-double ApproximationChunk::robust_loss_sum(const RobustOptions& robust, double scale) const {
-  return sorpia::robust_loss_sum(robust, scale, current.distances.data(),
+RobustSums ApproximationChunk::robust_sums(const RobustOptions& robust, double scale) const {
+  return sorpia::robust_sums(robust, scale, current.distances.data(),
                                  weights_.empty() ? nullptr : weights_.data(), k_);
 }
 
 namespace {
 [[noreturn]] void no_robust() {
   throw ParameterError("this backend of chunks cannot fit robustly (it has no distance_histogram, "
-                       "robust_loss_sum, robust_normal_sums): pass robust = 'none'");
+                       "robust_sums, robust_normal_sums): pass robust = 'none'");
 }
 }  // namespace
 
 DistanceHistogram PointChunks::distance_histogram(double) { no_robust(); }
-double PointChunks::robust_loss_sum(const RobustOptions&, double) { no_robust(); }
+RobustSums PointChunks::robust_sums(const RobustOptions&, double) { no_robust(); }
 NormalSums PointChunks::robust_normal_sums(double, const RobustOptions&, double) { no_robust(); }
 
 DistanceHistogram LocalChunks::distance_histogram(double unit) {
@@ -514,10 +514,10 @@ DistanceHistogram LocalChunks::distance_histogram(double unit) {
   return t;
 }
 
-double LocalChunks::robust_loss_sum(const RobustOptions& robust, double scale) {
-  double t = 0.0;
+RobustSums LocalChunks::robust_sums(const RobustOptions& robust, double scale) {
+  RobustSums t;
   for (std::size_t c = 0; c < n_chunks(); ++c) {
-    t += load(c, kCurrent).robust_loss_sum(robust, scale);
+    t.add(load(c, kCurrent).robust_sums(robust, scale));
     store(c, 0);
   }
   return t;

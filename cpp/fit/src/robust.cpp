@@ -18,6 +18,15 @@ RobustLoss robust_loss(const std::string& name, const char* what) {
   throw ParameterError(std::string(what) + " = '" + name + "' must be one of none, cauchy, tukey");
 }
 
+RobustOptions robust_options(RobustLoss loss) {
+  switch (loss) {
+    case RobustLoss::Cauchy: return {loss, 0.9, 12.0};
+    case RobustLoss::Tukey: return {loss, 0.9, 30.0};
+    case RobustLoss::None: break;
+  }
+  return RobustOptions{};
+}
+
 const char* robust_loss_name(RobustLoss loss) {
   switch (loss) {
     case RobustLoss::Cauchy: return "cauchy";
@@ -116,11 +125,20 @@ void robust_factors(const RobustOptions& options, double scale, const double* di
   }
 }
 
-double robust_loss_sum(const RobustOptions& options, double scale, const double* distances, const double* weights,
+void RobustSums::add(const RobustSums& other) {
+  loss += other.loss;
+  inlier_squares += other.inlier_squares;
+  inlier_weight += other.inlier_weight;
+  cut += other.cut;
+}
+
+RobustSums robust_sums(const RobustOptions& options, double scale, const double* distances, const double* weights,
                        std::size_t k) {
   const double cs = options.c * scale, cs2 = cs * cs;
-  double sum = 0.0;
+  RobustSums sums;
   for (std::size_t i = 0; i < k; ++i) {
+    const double w = weights ? weights[i] : 1.0;
+    if (w == 0.0) continue;
     const double d = distances[i], r = d / cs;
     double rho = d * d;
     if (options.loss == RobustLoss::Cauchy) {
@@ -130,9 +148,15 @@ double robust_loss_sum(const RobustOptions& options, double scale, const double*
       const double x = std::min(r * r, 1.0);
       rho = cs2 / 3.0 * (x * (3.0 - 3.0 * x + x * x));
     }
-    sum += (weights ? weights[i] : 1.0) * rho;
+    sums.loss += w * rho;
+    if (d <= cs) {
+      sums.inlier_squares += w * d * d;
+      sums.inlier_weight += w;
+    } else {
+      ++sums.cut;
+    }
   }
-  return sum;
+  return sums;
 }
 
 }  // namespace sorpia

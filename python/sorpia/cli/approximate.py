@@ -251,11 +251,21 @@ def _distances(rec: dict, prefix: str = "") -> str:
             f"(RMS {r:.4g}, max {m:.4g} model units)")
 
 
+def _kept(rec: dict) -> str:
+    """'RMS a of the diagonal (RMS b model units) within the cut, n cut' for a robust fit's record: the points the
+    loss keeps (within c s) and the count of those it cuts."""
+    return (f"RMS {rec['inlier_rms_relative']:.3g} of the diagonal (RMS {rec['inlier_rms']:.4g} model units) within "
+            f"the cut, {rec['robust_cut']} points beyond it")
+
+
 def approximate_summary(d: dict) -> str:
     """The summary `sorpia approximate` prints: every distance in model units and as a fraction of the data's
-    bounding-box diagonal; the cage as given beside it, or "unchanged" when no update lowered its RMS distance
-    (the cage written is the one given)."""
+    bounding-box diagonal; the cage as given beside it, or "unchanged" when no update lowered its criterion (the
+    RMS distance, or the robust loss: the cage written is the one given). With a robust loss, a line for the
+    points within its cut (the data the fit keeps) beside the count of those beyond it, for both."""
     f, first = d["final"], d["history"][0]
+    robust = d.get("robust", "none") != "none"
+    criterion = f"the robust loss ({d['robust']})" if robust else "the RMS distance"
     made = (f"read from {d['cage']['path']}" if d["cage"]["from"] == "file" else
             f"decimated from {d['cage']['mesh_vertices']} vertices" +
             (f" ({d['cage']['vertices_asked']} asked: the guards stopped decimation)" if d["cage"]["stopped"] else ""))
@@ -265,10 +275,11 @@ def approximate_summary(d: dict) -> str:
     phases = ", ".join(f"{k} {fmt_seconds(v)}" + (f" ({inner})" if k == "approximate" else "")
                        for k, v in t.items() if "." not in k)
     written = [d["output"]] + ([d["surface"]["path"]] if d["surface"] else []) + ([d["report"]] if d["report"] else [])
-    state = {"converged": "stopped: the RMS distance no longer fell by --tol", "exact": "stopped: the data lie on "
+    state = {"converged": f"stopped: {criterion} no longer fell by --tol", "exact": "stopped: the data lie on "
              "the surface to rounding", "max_iter": "stopped at --iterations"}[d["stop_reason"]]
-    given = ("unchanged: no update lowered the RMS distance of the cage as given (best iteration 0), which is "
-             "written" if d["best_iteration"] == 0 else
+    unchanged = d["best_iteration"] == 0
+    given = (f"unchanged: no update lowered {criterion} of the cage as given (best iteration 0), which is "
+             "written" if unchanged else
              f"the cage as given: RMS {first['rms_relative']:.3g}, max {first['max_relative']:.3g} of the diagonal")
     tag_lines = tags_lines(d["tags"])
     return "\n".join([
@@ -283,10 +294,10 @@ def approximate_summary(d: dict) -> str:
         *([f"  cluster     Dask scheduler {d['scheduler']['address']}, {d['scheduler']['workers']} workers"]
           if d.get("scheduler") else []),
         f"  update      {d['method']}, {d['iterations']} iterations ({state})" + (
-            "" if d.get("robust", "none") == "none" else
-            f"; robust {d['robust']}: {d['robust_outliers']} points beyond its cut" if d["robust_outliers"] >= 0 else
-            f"; robust {d['robust']}"),
-        f"  data->surf  {_distances(f)}; {given}",
+            f"; robust {d['robust']}" if robust else ""),
+        f"  data->surf  {_distances(f)}" + (" over all the points" if robust else "") + f"; {given}",
+        *([f"  kept        {_kept(f)}" + ("" if unchanged else f"; the cage as given: {_kept(first)}")]
+          if robust else []),
         f"  surf->data  {_distances(f, 'surface_')}",
         f"  seconds     {phases}",
         f"  wrote       {', '.join(written)}" + (

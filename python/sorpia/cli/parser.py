@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from .. import __version__
+from .. import __version__, _core
 from .._validate import BOUNDARY_RULES, DEFAULT_BOUNDARY
 from .._plotting import FACE_BUDGET  # plotting imports matplotlib only when drawing
 from ..fair import MAX_LEVELS
@@ -316,9 +316,11 @@ def build_parser() -> argparse.ArgumentParser:
                      help="weight of the thin-plate fairness term, relative to the data term: it holds the surface "
                      "where few points hold the cage; 0 for none (default: %(default)r)")
     app.add_argument("--robust", choices=ROBUST_LOSSES, default=DEFAULT_ROBUST,
-                     help="the weight of points far from the surface: tukey = none beyond 30 times the 90th "
-                     "percentile of the distances (outliers do not pull), cauchy = falling as 1/distance, none = "
-                     "least squares (default: %(default)s)")
+                     help="the weight of points far from the surface: tukey = none beyond {1:g} times the {0:g}th "
+                     "percentile of the distances (outliers do not pull), cauchy = falling as 1/distance beyond {2:g} "
+                     "times it, none = least squares (default: %(default)s)".format(
+                         100 * _core.robust_options("tukey")[1], _core.robust_options("tukey")[2],
+                         _core.robust_options("cauchy")[2]))
     app.add_argument("--surface", metavar="SURF",
                      help="also write the fitted limit surface, refined --level times, every vertex at its exact "
                      "limit position")

@@ -76,10 +76,10 @@ struct ApproximationOptions {
   /// The robust weights (sorpia/robust.hpp): before each update every
   /// point's weight times robust_factors of its footpoint distance at the
   /// scale of that iteration's distances; with a loss other than None the
-  /// criterion sqrt(robust_loss_sum / k) replaces the RMS distance in the
+  /// criterion sqrt(RobustSums::loss / k) replaces the RMS distance in the
   /// stop rule and the choice of the iterate returned (the records keep
   /// the RMS distance of all the points).
-  RobustOptions robust{};
+  RobustOptions robust = robust_options(RobustLoss::Tukey);
   /// Points per chunk of an in-memory array (point_chunks.hpp), >= 1: the
   /// unit of the footpoints and of the normal sums, added in order.
   std::size_t chunk_points = std::size_t{1} << 20;
@@ -94,6 +94,12 @@ struct ApproximationRecord {
   /// In the caller's units, and over the data's bounding-box diagonal.
   double rms = 0.0, max = 0.0, surface_rms = 0.0, surface_max = 0.0;
   double rms_relative = 0.0, max_relative = 0.0, surface_rms_relative = 0.0, surface_max_relative = 0.0;
+  /// With a robust loss (0 without), at these distances and robust_scale:
+  /// the criterion sqrt(RobustSums::loss / k), the RMS distance of the
+  /// points within the cut c s (the data the fit keeps; 0 when none is), in
+  /// the caller's units and over the diagonal, and the points beyond it.
+  double robust_loss = 0.0, robust_loss_relative = 0.0, inlier_rms = 0.0, inlier_rms_relative = 0.0;
+  long long robust_cut = 0;
   /// With a robust loss: the scale s of these distances, which weighs the
   /// points in the next update (ApproximationOptions::robust); 0 without.
   double robust_scale = 0.0;
@@ -118,9 +124,9 @@ struct ApproximationResult {
   int best_iteration = 0;  ///< the iteration whose V is returned
   double diagonal = 0.0;   ///< of the data's bounding box: the unit of the relative figures
   /// The robust scale s at the returned iterate's footpoints (0 without a
-  /// robust loss), and how many points lie farther than c s from it (with
-  /// Tukey: the points that do not pull at all; -1 where the backend keeps
-  /// no footpoints, streamed data).
+  /// robust loss), and how many points (of weight > 0) lie farther than c s
+  /// from it (with Tukey: the points that do not pull at all): its record's
+  /// robust_scale and robust_cut, measured before the final search.
   double robust_scale = 0.0;
   long long robust_outliers = 0;
   std::vector<ApproximationRecord> history;

@@ -119,8 +119,8 @@ class ApproximationChunk {
                          double scale = 0.0) const;
   /// The current distances' histogram (weighted), in bins of `unit`.
   DistanceHistogram distance_histogram(double unit) const;
-  /// sum w_i rho(d_i) of the current distances (robust_loss_sum).
-  double robust_loss_sum(const RobustOptions& robust, double scale) const;
+  /// The robust sums of the current distances (sorpia::robust_sums).
+  RobustSums robust_sums(const RobustOptions& robust, double scale) const;
   /// The best iterate's footpoints: face_ids, uv, distances.
   Footpoints best_footpoints() const;
 
@@ -169,12 +169,13 @@ class PointChunks {
   virtual DistanceSums keep_fresh_in_best() = 0;
   virtual NormalSums normal_sums(double tangential) = 0;
   /// The robust fit's calls (sorpia/robust.hpp), on the current footpoints:
-  /// their distances' histogram (all chunks' merged), sum w rho(d) at a
+  /// their distances' histogram (all chunks' merged), robust_sums (the
+  /// criterion's sum w rho(d), the points within and beyond the cut) at a
   /// scale, and normal_sums with each weight times the robust factor at a
   /// scale. A backend without them cannot fit robustly: these defaults
   /// throw ParameterError saying so (robust = "none" runs without them).
   virtual DistanceHistogram distance_histogram(double unit);
-  virtual double robust_loss_sum(const RobustOptions& robust, double scale);
+  virtual RobustSums robust_sums(const RobustOptions& robust, double scale);
   virtual NormalSums robust_normal_sums(double tangential, const RobustOptions& robust, double scale);
   /// Points for the surface-to-data distances (row-major (s, 3)): all of
   /// them when they fit, else a fixed sample.
@@ -206,7 +207,7 @@ class LocalChunks : public PointChunks {
   DistanceSums keep_fresh_in_best() override;
   NormalSums normal_sums(double tangential) override;
   DistanceHistogram distance_histogram(double unit) override;
-  double robust_loss_sum(const RobustOptions& robust, double scale) override;
+  RobustSums robust_sums(const RobustOptions& robust, double scale) override;
   NormalSums robust_normal_sums(double tangential, const RobustOptions& robust, double scale) override;
   std::vector<double> sample() override;
   Footpoints best_footpoints() override;

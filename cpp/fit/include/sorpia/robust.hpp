@@ -38,19 +38,27 @@ RobustLoss robust_loss(const std::string& name, const char* what = "robust");
 /// The name of a loss (robust_loss's inverse).
 const char* robust_loss_name(RobustLoss loss);
 
-/// A robust fit's settings (ApproximationOptions::robust).
-/// The defaults (approximation's; docs/approximation.md, "Robustness", has
-/// the measurements): Tukey's biweight cutting at 30 times the 90th
-/// percentile of the distances, beyond the largest distance of every clean
-/// scan measured (so that clean data is fitted as by least squares) and
-/// short of points a tenth of the diagonal away.
+/// A robust fit's settings (ApproximationOptions::robust). Value-initialised:
+/// least squares (the quantile and c unused); robust_options gives each
+/// loss's defaults.
 struct RobustOptions {
-  RobustLoss loss = RobustLoss::Tukey;
+  RobustLoss loss = RobustLoss::None;
   /// s: this quantile of the distances (by weight), in (0, 1).
   double quantile = 0.9;
   /// c, the loss's tuning constant in units of s, finite, > 0.
-  double c = 30.0;
+  double c = 1.0;
 };
+
+/// A loss's default settings, the one place they are set (approximation's
+/// default is robust_options(RobustLoss::Tukey); the bindings, the Python
+/// API and the command line take them from here; docs/approximation.md,
+/// "Robustness", has the measurements): the scale s at the 90th percentile
+/// of the distances; Tukey's biweight cutting at c = 30 s, beyond the
+/// largest distance of every clean scan measured (so that clean data is
+/// fitted as by least squares) and short of points a tenth of the diagonal
+/// away; Cauchy's at c = 12 s, where its slower fall of the weight damps
+/// those points as much. None: RobustOptions{}.
+RobustOptions robust_options(RobustLoss loss);
 
 /// The distances' weighted histogram in bins of ratio 2^(1/kBinsPerOctave)
 /// from `unit` * 2^kLowestOctave up to `unit` * 2^kHighestOctave (the
@@ -100,10 +108,25 @@ double robust_scale(const DistanceHistogram& histogram, const RobustOptions& opt
 void robust_factors(const RobustOptions& options, double scale, const double* distances, std::size_t k,
                     double* out);
 
-/// sum_i weights[i] rho(distances[i]) (weights nullptr: 1 each) with rho
-/// scaled so that rho(d) = d^2 + O(d^4 / (c s)^2) for small d: with
-/// RobustLoss::None the sum of squares; the criterion's sum over one chunk.
-double robust_loss_sum(const RobustOptions& options, double scale, const double* distances, const double* weights,
+/// A robust fit's sums over points at a scale s (> 0), added over chunks
+/// (add): the criterion's sum w rho(d), and the split of the points at the
+/// cut c s (with Tukey the points beyond it do not pull at all; with Cauchy
+/// they pull little), so that a report can give the distances of the
+/// points the fit keeps beside the count of those it cuts.
+struct RobustSums {
+  /// sum_i w_i rho(d_i), rho scaled so that rho(d) = d^2 + O(d^4 / (c s)^2)
+  /// for small d: with RobustLoss::None the sum of squares.
+  double loss = 0.0;
+  /// sum w d^2 and sum w over the points within the cut (d <= c s).
+  double inlier_squares = 0.0, inlier_weight = 0.0;
+  /// The points of weight > 0 beyond the cut (d > c s).
+  long long cut = 0;
+  void add(const RobustSums& other);
+};
+
+/// The sums of k distances with their weights (nullptr: 1 each; a weight 0
+/// adds nothing) for the loss at scale s.
+RobustSums robust_sums(const RobustOptions& options, double scale, const double* distances, const double* weights,
                        std::size_t k);
 
 }  // namespace sorpia
