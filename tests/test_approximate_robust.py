@@ -240,3 +240,42 @@ def test_the_robust_defaults_seen_from_python_are_the_cores():
                                   _core.InMemoryChunks(sorpia.LimitSurface(cv, cf)._surface, q, None, 1 << 20),
                                   *o.values(), robust=loss, robust_quantile=quantile, robust_c=2 * c)
         assert not np.array_equal(other["control_vertices"], out["control_vertices"])  # c reaches the fit
+
+
+def sphere_with_far_points(count=20, factor=40.0, seed=3):
+    """The level-3 icosphere's 642 points with `count` of them moved `factor` times as far out; (points, far)."""
+    v, _ = shapes.icosphere(3)
+    p = np.asarray(v, float)
+    far = np.random.default_rng(seed).choice(len(p), count, replace=False)
+    p[far] *= factor
+    return p, far
+
+
+@pytest.mark.parametrize("robust", ["tukey", "cauchy", "none"])
+@pytest.mark.parametrize("case", ["zero on the far points", "nonzero only on the far points"])
+def test_points_of_weight_zero_are_no_data(robust, case):
+    # A point of weight 0 counts nowhere: the fit, and every figure of it (RMS, the largest distance, the
+    # diagonal, surface -> data, the points cut), are those of the points of weight > 0 given alone (the same
+    # cage to 1e-9 of the diagonal, the figures to 1e-9 relative; solved tightly, so that rounding in the sums'
+    # order does not change the iterates). With every nonzero weight on the far points, those are the data: the
+    # robust fit cuts none of them.
+    p, far = sphere_with_far_points()
+    cv, cf = shapes.icosphere(1)
+    w = np.ones(len(p))
+    if case == "zero on the far points":
+        w[far] = 0.0
+        w[np.random.default_rng(4).choice(len(p), 100, replace=False)] = 0.0
+    else:
+        w[:] = 0.0
+        w[far] = 1.0
+    kw = dict(robust=robust, solver_tol=1e-13, solver_max_iter=100000)
+    got = approximate(p, cv, cf, weights=w, **kw)
+    alone = approximate(p[w > 0], cv, cf, **kw)
+    assert got.diagonal == pytest.approx(alone.diagonal, rel=1e-12)
+    assert np.abs(got.control_vertices - alone.control_vertices).max() <= 1e-9 * alone.diagonal
+    a, b = got.history[got.best_iteration], alone.history[alone.best_iteration]
+    for key in ("rms", "max", "surface_rms", "surface_max", "inlier_rms"):
+        assert a[key] == pytest.approx(b[key], rel=1e-9, abs=1e-12 * alone.diagonal), key
+    assert got.robust_outliers == alone.robust_outliers
+    if robust != "none" and case != "zero on the far points":
+        assert got.robust_outliers == 0

@@ -164,6 +164,7 @@ class DaskChunks(_core.PointChunks):
                  chunk_points: int, sample_points: int):
         super().__init__()
         self.client, self.points, self.sample_points = client, points, sample_points
+        self.weights = weights  # the sample leaves out the points of weight 0, as the core's chunks do
         self.e = 0  # the driver's scaling of data beyond 2^+-200 (scale)
         self.k = _core.point_file_points(points) if isinstance(points, str) else len(points)
         starts = list(range(0, self.k, chunk_points))
@@ -281,8 +282,10 @@ class DaskChunks(_core.PointChunks):
     def sample(self):
         if isinstance(self.points, str):
             return np.concatenate(self._all("sample", self.k, self.sample_points))
-        # the client holds the array: the report measures from every point (scaled as the chunks), as in one process
-        return np.ldexp(self.points, -self.e) if self.e else self.points
+        # the client holds the array: the report measures from every point that counts (weight > 0; scaled as the
+        # chunks), as in one process
+        points = self.points if self.weights is None else self.points[np.asarray(self.weights) > 0]
+        return np.ldexp(points, -self.e) if self.e else points
 
     def best_footpoints(self):
         if isinstance(self.points, str):

@@ -57,7 +57,7 @@ double bounding_box_diagonal(const PointExtent& box) {
 // the covariance is that axis's outer product, so one step finds it; for any other points no line holds them all
 // that closely, whatever its direction).
 void check_spread(PointChunks& chunks, const PointExtent& box, double diagonal) {
-  const std::size_t k = box.count;
+  const std::size_t k = box.weighted;  // the points that count (weight > 0)
   if (!(diagonal > 0))
     throw MeshError("the points all lie at one place (" + std::to_string(k) +
                          (k == 1 ? " point" : " points, all equal") +

@@ -65,9 +65,9 @@ void add(DistanceSums& total, const DistanceSums& chunk) {
 
 void add(PointExtent& total, const PointExtent& chunk) {
   if (chunk.count == 0) return;
-  for (int c = 0; c < 3; ++c) {
-    total.lo[c] = total.count == 0 ? chunk.lo[c] : std::min(total.lo[c], chunk.lo[c]);
-    total.hi[c] = total.count == 0 ? chunk.hi[c] : std::max(total.hi[c], chunk.hi[c]);
+  for (int c = 0; chunk.weighted > 0 && c < 3; ++c) {  // the box of the points that count
+    total.lo[c] = total.weighted == 0 ? chunk.lo[c] : std::min(total.lo[c], chunk.lo[c]);
+    total.hi[c] = total.weighted == 0 ? chunk.hi[c] : std::max(total.hi[c], chunk.hi[c]);
   }
   total.largest = std::max(total.largest, chunk.largest);
   total.count += chunk.count;
@@ -184,14 +184,17 @@ PointExtent ApproximationChunk::extent() const {
   if (k_ == 0) return e;
   e.weighted = weights_.empty() ? k_ : static_cast<std::size_t>(std::count_if(
                                            weights_.begin(), weights_.end(), [](double w) { return w > 0; }));
-  for (int c = 0; c < 3; ++c) e.lo[c] = e.hi[c] = points_[static_cast<std::size_t>(c)];
-  for (std::size_t i = 0; i < k_; ++i)
+  bool first = true;
+  for (std::size_t i = 0; i < k_; ++i) {
+    for (std::size_t c = 0; c < 3; ++c) e.largest = std::max(e.largest, std::abs(points_[3 * i + c]));
+    if (!counts(i)) continue;  // a point of weight 0 is no data: outside the box (it is still scaled)
     for (std::size_t c = 0; c < 3; ++c) {
       const double v = points_[3 * i + c];
-      e.lo[c] = std::min(e.lo[c], v);
-      e.hi[c] = std::max(e.hi[c], v);
-      e.largest = std::max(e.largest, std::abs(v));
+      e.lo[c] = first ? v : std::min(e.lo[c], v);
+      e.hi[c] = first ? v : std::max(e.hi[c], v);
     }
+    first = false;
+  }
   return e;
 }
 
@@ -201,8 +204,9 @@ void ApproximationChunk::scale(int e) {
 
 PointMoments ApproximationChunk::moments(const double center[3], double diagonal) const {
   PointMoments m;
-  m.count = k_;
   for (std::size_t i = 0; i < k_; ++i) {
+    if (!counts(i)) continue;
+    ++m.count;
     double d[3];
     for (std::size_t c = 0; c < 3; ++c) d[c] = (points_[3 * i + c] - center[c]) / diagonal;
     for (int r = 0; r < 3; ++r) {
@@ -216,6 +220,7 @@ PointMoments ApproximationChunk::moments(const double center[3], double diagonal
 double ApproximationChunk::line_offset(const double mean[3], const double axis[3], double diagonal) const {
   double off = 0.0;
   for (std::size_t i = 0; i < k_; ++i) {
+    if (!counts(i)) continue;
     double d[3];
     for (std::size_t c = 0; c < 3; ++c) d[c] = (points_[3 * i + c] - mean[c]) / diagonal;
     const double along = d[0] * axis[0] + d[1] * axis[1] + d[2] * axis[2];
@@ -233,7 +238,8 @@ DistanceSums ApproximationChunk::sums(const std::vector<double>& d) const {
   std::vector<double> squares(k_);
   for (std::size_t i = 0; i < k_; ++i) squares[i] = weights_.empty() ? d[i] * d[i] : weights_[i] * (d[i] * d[i]);
   s.squares = detail::pairwise_sum(squares.data(), k_);
-  s.max = *std::max_element(d.begin(), d.end());
+  for (std::size_t i = 0; i < k_; ++i)
+    if (counts(i)) s.max = std::max(s.max, d[i]);
   return s;
 }
 
@@ -531,8 +537,11 @@ std::vector<double> LocalChunks::sample() {
   std::vector<double> out;
   out.reserve(3 * total_points());
   for (std::size_t c = 0; c < n_chunks(); ++c) {
-    const auto& p = load(c, kPoints).points();
-    out.insert(out.end(), p.begin(), p.end());
+    const ApproximationChunk& chunk = load(c, kPoints);
+    const auto& p = chunk.points();
+    for (std::size_t i = 0; i < chunk.size(); ++i)
+      if (chunk.counts(i)) out.insert(out.end(), p.begin() + static_cast<std::ptrdiff_t>(3 * i),
+                                      p.begin() + static_cast<std::ptrdiff_t>(3 * i + 3));
     store(c, 0);
   }
   return out;

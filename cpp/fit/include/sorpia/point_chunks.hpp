@@ -33,7 +33,7 @@ namespace sorpia {
 /// chunks' added in order by add()).
 struct DistanceSums {
   double squares = 0.0;      ///< sum w_i d_i^2 (a chunk's by pairwise summation; w_i 1 without weights)
-  double max = 0.0;          ///< the largest d_i
+  double max = 0.0;          ///< the largest d_i of a point of weight > 0
   std::size_t count = 0;     ///< points
   std::size_t changed = 0;   ///< footpoints replaced (keep_fresh_in_best), else 0
 };
@@ -58,8 +58,8 @@ void add(NormalSums& total, NormalSums&& chunk);
 struct PointExtent {
   std::size_t count = 0;     ///< points
   std::size_t weighted = 0;  ///< points of weight > 0 (all, without weights)
-  double lo[3] = {0.0, 0.0, 0.0}, hi[3] = {0.0, 0.0, 0.0};
-  double largest = 0.0;      ///< the largest |coordinate|
+  double lo[3] = {0.0, 0.0, 0.0}, hi[3] = {0.0, 0.0, 0.0};  ///< the box of the points of weight > 0
+  double largest = 0.0;      ///< the largest |coordinate| of any point
 };
 void add(PointExtent& total, const PointExtent& chunk);
 
@@ -85,6 +85,10 @@ class ApproximationChunk {
   std::size_t size() const { return k_; }
   std::size_t first() const { return first_; }
   const std::vector<double>& points() const { return points_; }
+  /// Whether point i counts (weight > 0): a point of weight 0 is no data; it
+  /// is left out of the box, the moments, the largest distance and the
+  /// sample, as it is out of every sum.
+  bool counts(std::size_t i) const { return weights_.empty() || weights_[i] > 0; }
 
   /// @throws MeshError naming a point not finite; ParameterError naming a
   ///         weight not finite or negative
