@@ -279,3 +279,26 @@ def test_points_of_weight_zero_are_no_data(robust, case):
     assert got.robust_outliers == alone.robust_outliers
     if robust != "none" and case != "zero on the far points":
         assert got.robust_outliers == 0
+
+
+@pytest.mark.parametrize("source", ["array", "streamed"])
+@pytest.mark.parametrize("exponent", [200, 201, -210])
+def test_outliers_near_2_to_the_200_are_cut_as_at_unit_scale(tmp_path, source, exponent):
+    # Data beyond 2^+-200 is fitted scaled by a power of two (exact): with 20 far points among them the robust fit
+    # is the unit-scale fit times 2^e, bit for bit, in memory and streamed from a file, and so are its robust
+    # figures (scale, cut count, the kept points' RMS).
+    p, _ = sphere_with_far_points()
+    cv, cf = shapes.icosphere(1)
+    cv = np.asarray(cv, float)
+    unit = approximate(p, cv, cf, iterations=4)
+    big = np.ldexp(p, exponent)
+    if source == "streamed":
+        np.save(tmp_path / "big.npy", big)
+        big = str(tmp_path / "big.npy")
+    got = approximate(big, np.ldexp(cv, exponent), cf, iterations=4)
+    np.testing.assert_array_equal(np.ldexp(got.control_vertices, -exponent), unit.control_vertices)
+    assert got.robust_outliers == unit.robust_outliers == 20
+    assert np.ldexp(got.robust_scale, -exponent) == unit.robust_scale
+    a, b = got.history[got.best_iteration], unit.history[unit.best_iteration]
+    assert np.ldexp(a["inlier_rms"], -exponent) == b["inlier_rms"] and a["inlier_rms_relative"] == b["inlier_rms_relative"]
+    assert np.isfinite([a["rms"], a["max"], a["surface_rms"], a["robust_loss"]]).all()

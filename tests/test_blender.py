@@ -332,3 +332,31 @@ def test_extension_zip_layout(tmp_path):
     assert manifest["platforms"] == ["linux-x64"]
     assert {w.removeprefix("./") for w in manifest["wheels"]} == {f"wheels/{w.name}" for w in wheels} <= names
     assert "__init__.py" in names
+
+
+@needs_bpy
+def test_blender_imports_a_streamed_fits_usd_cage_with_its_tags(command, tmp_path, monkeypatch):
+    # `sorpia approximate --stream yes` of a binary PLY with a creased, cornered Catmull-Clark cage, written to
+    # .usda: Blender's own USD import draws the limit surface sorpia evaluates for the cage as written, tags
+    # included (float32: 1e-6 of the cage's size), and not the surface without the tags.
+    monkeypatch.chdir(tmp_path)
+    sorpia.write_mesh(tmp_path / "scan.ply", *sorpia.shapes.icosphere(3), binary=True)
+    V = np.array([[x, y, z] for z in (-0.6, 0.6) for y in (-0.6, 0.6) for x in (-0.6, 0.6)])
+    F = np.array([[0, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [1, 3, 7, 5], [3, 2, 6, 7], [2, 0, 4, 6]], np.int32)
+    tags = {"creases": (np.array([[4, 5], [5, 7], [7, 6], [6, 4]], np.int32), np.full(4, 2.0)),
+            "corners": (np.array([0], np.int32), np.array([10.0]))}
+    sorpia.write_mesh(tmp_path / "cube.obj", V, F, **tags)
+    code, _, err = command("approximate", "scan.ply", "--cage", "cube.obj", "-o", "cage.usda", "--stream", "yes")
+    assert code == 0, err
+    cage = sorpia.read_mesh(tmp_path / "cage.usda", tags=True)
+    (tmp_path / "runner.py").write_text(RUNNER)
+    done = subprocess.run([BLENDER, str(tmp_path / "runner.py"), "usd", str(tmp_path / "cage.usda"),
+                           str(tmp_path / "limit.npy"), str(len(cage[0]))], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr[-3000:]
+    limit = np.load(tmp_path / "limit.npy")
+    want, _ = sorpia.limit_surface(cage[0], cage[1], level=0, scheme="catmull-clark", creases=cage[2]["creases"],
+                                   corners=cage[2]["corners"])
+    size = np.abs(cage[0]).max()
+    assert np.abs(limit - want[:len(cage[0])]).max() < 1e-6 * size
+    untagged, _ = sorpia.limit_surface(cage[0], cage[1], level=0, scheme="catmull-clark")
+    assert np.abs(limit - untagged[:len(cage[0])]).max() > 1e-2 * size

@@ -625,3 +625,39 @@ def test_robust_summary_gives_the_kept_points_rms_beside_the_cut_count(tmp_path,
     assert "over all the points" in data_line
     if report["stop_reason"] == "converged":
         assert "the robust loss (tukey) no longer fell" in out and "the RMS distance no longer fell" not in out
+
+
+def streamed_cube_fit(tmp_path, command, output):
+    """`sorpia approximate` of the sphere scan as a binary PLY streamed (--stream yes) with the creased cube cage,
+    written to `output`; returns (report, the cube's tags)."""
+    sorpia.write_mesh(tmp_path / "scan.ply", *shapes.icosphere(3), binary=True)
+    _, _, _, tags = creased_cube_file(tmp_path, "cube.obj")
+    code, out, err = command("approximate", "scan.ply", "--cage", "cube.obj", "-o", output, "--stream", "yes",
+                             "--report", "r.json", "--force")
+    assert code == 0, err
+    report = json.loads((tmp_path / "r.json").read_text())
+    assert report["streamed"]
+    return report, tags
+
+
+def test_streamed_fit_written_to_usd_reads_back_with_its_scheme_and_tags(tmp_path, monkeypatch, command):
+    # A streamed fit's cage written to .usda reads back through usd-core's API with the scheme, boundary rule and
+    # tags of the cage given, and its points are the streamed fit's (the same run to .obj) to float32 rounding
+    # (1e-7 relative); the streamed fit is the in-memory one.
+    pytest.importorskip("pxr", reason="usd-core is not installed (pip install 'sorpia[usd]')")
+    monkeypatch.chdir(tmp_path)
+    streamed_cube_fit(tmp_path, command, "cage.obj")
+    streamed_cube_fit(tmp_path, command, "cage.usda")
+    code, _, err = command("approximate", "scan.ply", "--cage", "cube.obj", "-o", "memory.obj", "--stream", "no")
+    assert code == 0, err
+    V = sorpia.read_mesh("cage.obj")[0]
+    np.testing.assert_array_equal(V, sorpia.read_mesh("memory.obj")[0])
+    _, _, _, tags = creased_cube_file(tmp_path, "cube.obj")
+    mesh = usd_mesh(tmp_path / "cage.usda")
+    assert mesh.GetSubdivisionSchemeAttr().Get() == "catmullClark"
+    assert mesh.GetInterpolateBoundaryAttr().Get() == "edgeAndCorner"
+    assert edge_set(np.asarray(mesh.GetCreaseIndicesAttr().Get())) == edge_set(tags["creases"][0])
+    assert list(mesh.GetCreaseSharpnessesAttr().Get()) == [2.0] * 4
+    assert list(mesh.GetCornerIndicesAttr().Get()) == [0] and list(mesh.GetCornerSharpnessesAttr().Get()) == [10.0]
+    points = np.asarray(mesh.GetPointsAttr().Get(), float)
+    assert np.abs(points - V).max() <= 1e-7 * np.abs(V).max()
