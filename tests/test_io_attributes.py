@@ -143,6 +143,32 @@ def test_ply_per_vertex_round_trip_and_seam_refused(tmp_path):
         sorpia.write_mesh(tmp_path / "m.off", V, F, uvs=per_vertex)
 
 
+def test_the_ply_per_vertex_check_before_the_work_refuses_what_the_writer_refuses():
+    # The check made before long work (sorpia::check_ply_per_vertex, through io.attribute_refusal's binding) is the
+    # writer's, indices included: a value index or a vertex index out of range is refused with write_mesh's words
+    # (MeshError), not read past the arrays; a seam as the writer says it.
+    from sorpia import MeshError, _core
+
+    V, F = sorpia.shapes.quad_grid(4, 3)
+    corners = np.ascontiguousarray(F.reshape(-1), dtype=np.int32)
+    values = np.random.default_rng(1).random((len(V), 2))
+
+    def check(corners, indices, n_vertices=len(V)):
+        _core.check_ply_per_vertex(corners, None, 4, n_vertices, values, indices, "texture coordinates")
+
+    check(corners, corners.copy())  # one value per vertex: held
+    bad = corners.copy()
+    bad[5] = len(V) + 7
+    with pytest.raises(MeshError, match=f"write_mesh: face 1 has texture coordinates index {len(V) + 7} out of range"):
+        check(corners, bad)
+    with pytest.raises(MeshError, match="write_mesh: face 0 has vertex index .* out of range"):
+        check(corners, corners.copy(), n_vertices=2)
+    seam = corners.copy()
+    seam[2] = (seam[2] + 1) % len(V)
+    with pytest.raises(ParameterError, match="has different ones in different faces"):
+        check(corners, seam)
+
+
 def test_ply_reads_the_common_property_names(tmp_path):
     # float s/t and texture_u/texture_v, written by hand; the values are exact in float32.
     for names in (("s", "t"), ("texture_u", "texture_v")):

@@ -117,15 +117,7 @@ void bind_io(py::module_& m) {
           view.face_size = face_size;
           view.n_faces = static_cast<std::size_t>(faces.size()) / static_cast<std::size_t>(std::max(face_size, 1));
         }
-        // per_vertex_values reads values[index] and the vertex of each corner unchecked: both checked here.
-        for (py::ssize_t i = 0; i < faces.size(); ++i) {
-          if (faces.data()[i] < 0 || static_cast<std::size_t>(faces.data()[i]) >= n_vertices)
-            throw sorpia::MeshError("check_ply_per_vertex: corner " + std::to_string(i) + " names vertex " +
-                                    std::to_string(faces.data()[i]) + ", out of range");
-          if (indices.data()[i] < 0 || indices.data()[i] >= values.shape(0))
-            throw sorpia::MeshError("check_ply_per_vertex: corner " + std::to_string(i) + " names value " +
-                                    std::to_string(indices.data()[i]) + ", out of range");
-        }
+        // The views read faces.size() corners: the arrays must hold them (the core checks the indices in them).
         if (face_vertex_counts) {
           std::size_t total = 0;
           for (py::ssize_t f = 0; f < face_vertex_counts->size(); ++f)

@@ -201,8 +201,9 @@ def matrix_arrays(topology: _core.Topology, rules: _core.Rules, thin_plate=1.0, 
     indices, indptr): what `fairness_matrix` returns. The surface's vertices
     are zero: K does not use them (the reference, when given, sets each
     face's metric). Fair interpolation builds its K in the core, next to the
-    solve that uses it, with the same tags (`energy_tags`)."""
-    tags = energy_tags(rules.tags, topology.n_vertices, topology.n_faces, check_semi_sharp(semi_sharp))
+    solve that uses it, with the same tags (`energy_tags`). `semi_sharp`
+    as check_semi_sharp returns it."""
+    tags = energy_tags(rules.tags, topology.n_vertices, topology.n_faces, semi_sharp)  # checked by the caller
     return _core.fairness_matrix(topology, _core.Rules(scheme=rules.scheme, boundary=rules.boundary, tags=tags),
                                  *_options(thin_plate, membrane, gauss_points, depth),
                                  reference=None if reference is None else np.ascontiguousarray(reference, np.float64))

@@ -57,7 +57,7 @@ from . import _core, _scipy
 from ._mesh import SubdivisionMesh, mesh_arguments
 from ._meshinfo import bounding_box_diagonal
 from ._nonmanifold import manifold_only
-from ._validate import DEFAULT_BOUNDARY, DEFAULT_SCHEME, as_integer, as_real, as_rules, as_vertices
+from ._validate import DEFAULT_BOUNDARY, DEFAULT_SCHEME, as_integer, as_real, as_vertices
 from .errors import MeshError, ParameterError
 from .limit import TAGS_DOC as _TAGS_DOC
 from .energy import check_semi_sharp
@@ -364,12 +364,10 @@ def fair_interpolate(vertices, faces=None, *, scheme: str = DEFAULT_SCHEME, leve
     threads = _as_int32(threads, "threads", "an integer >= 1")
     v0 = as_vertices(vertices)
     n = v0.shape[0]
-    arrays, n, rules = as_rules(faces, n, scheme=scheme, boundary=boundary, creases=creases, corners=corners,
-                                holes=holes, count_name="len(vertices)")
-    target_ids = as_targets(targets, n)
 
     # The Interpolator's topology and B serve the plain solve and the refinement; the pipeline runs in the core
-    # (sorpia::fair_interpolate: plain solve, refinement, K, the fair solve, the exact scaling).
+    # (sorpia::fair_interpolate: plain solve, refinement, K, the fair solve, the exact scaling). Building it is the
+    # one check of the faces and rules (as_rules).
     t = time.perf_counter()
     rule_options = dict(scheme=scheme, boundary=boundary, creases=creases, corners=corners, holes=holes)
     try:
@@ -377,6 +375,8 @@ def fair_interpolate(vertices, faces=None, *, scheme: str = DEFAULT_SCHEME, leve
     except MeshError as exc:
         raise manifold_only(exc, "fair interpolation") from None
     build = time.perf_counter() - t
+    rules = interp._rules
+    target_ids = as_targets(targets, n)
     t_plain = time.perf_counter()
     plain_options = check_options()
     out = _core.fair_interpolate(interp._impl, v0, target_ids, plain_options, levels, thin_plate, membrane, tol,

@@ -204,9 +204,10 @@ def read_mesh_file(path, triangulate: bool = False, tags: bool = False, attribut
     attribute_dict = None
     if attributes:
         attribute_dict = {}
-        for name, label, channel in zip(("uvs", "normals"), ("texture coordinates", "normals"), file_attributes):
+        for name, channel in zip(ATTRIBUTE_WORDS, file_attributes):  # the core's order: uvs, normals
             if channel is None:
                 continue
+            label = ATTRIBUTE_WORDS[name]
             missing = np.flatnonzero(channel[1] < 0)
             if len(missing):
                 warnings.warn(f"{os.fsdecode(path)}: {label} dropped: {len(missing)} of {len(channel[1])} face "

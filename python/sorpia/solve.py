@@ -233,6 +233,8 @@ class Interpolator:
         # the caller's rule (a split may be solved under another that gives the same rows: nonmanifold.split)
         self.boundary = _core.boundary_name(as_boundary(boundary))
         self.tags = rules.tags
+        # the rules the core solves under (a split's with nonmanifold="sharp")
+        self._rules = rules
         self.build_timings = self._impl.build_timings
         self._last_update = None  # weak reference to the result the last update returned
         self._solved_method = None  # the method of the last solve keeping its targets

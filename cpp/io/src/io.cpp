@@ -489,6 +489,43 @@ MeshFile read_mesh(const std::string& path, const ReadOptions& options) {
   return detail::io::parse_mesh(detail::io::load_file(path, format), format, options);
 }
 
+namespace {
+
+// The checks of a mesh view before its faces are read: every face of 3 or more corners, each naming a vertex in
+// range (write_mesh's words).
+void check_faces(const MeshView& mesh) {
+  std::size_t face = 0;
+  detail::io::for_each_face(mesh, [&](const std::int32_t* f, std::size_t k) {
+    if (k < 3 || k > static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max()))
+      throw MeshError("write_mesh: face " + std::to_string(face) + " has " +
+                      std::to_string(static_cast<std::int32_t>(k)) + " vertices; a face needs at least 3");
+    for (std::size_t c = 0; c < k; ++c)
+      if (f[c] < 0 || static_cast<std::size_t>(f[c]) >= mesh.n_vertices)
+        throw MeshError("write_mesh: face " + std::to_string(face) + " has vertex index " + std::to_string(f[c]) +
+                        " out of range [0, " + std::to_string(mesh.n_vertices) + ")");
+    ++face;
+  });
+}
+
+// A face-varying channel's values finite and its index of every corner in range.
+void check_channel(const MeshView& mesh, const FaceVaryingView& channel, const char* what) {
+  for (std::size_t i = 0; i < channel.n_values * static_cast<std::size_t>(channel.width); ++i)
+    if (!std::isfinite(channel.values[i]))
+      throw MeshError(std::string("write_mesh: ") + what + " value " +
+                      std::to_string(i / static_cast<std::size_t>(channel.width)) + " is not finite");
+  std::size_t corner = 0, face = 0;
+  detail::io::for_each_face(mesh, [&](const std::int32_t*, std::size_t k) {
+    for (std::size_t c = 0; c < k; ++c, ++corner)
+      if (channel.indices[corner] < 0 || static_cast<std::size_t>(channel.indices[corner]) >= channel.n_values)
+        throw MeshError(std::string("write_mesh: face ") + std::to_string(face) + " has " + what + " index " +
+                        std::to_string(channel.indices[corner]) + " out of range [0, " +
+                        std::to_string(channel.n_values) + ")");
+    ++face;
+  });
+}
+
+}  // namespace
+
 void write_mesh(const std::string& path, const MeshView& mesh, bool binary, const FileTags* tags) {
   const MeshFormat format = mesh_format(path);
   const std::string where = detail::io::printable_path(path) + ": ";
@@ -505,17 +542,7 @@ void write_mesh(const std::string& path, const MeshView& mesh, bool binary, cons
   for (std::size_t i = 0; i < 3 * mesh.n_vertices; ++i)
     if (!std::isfinite(mesh.vertices[i]))
       throw MeshError("write_mesh: vertex " + std::to_string(i / 3) + " has a non-finite coordinate");
-  std::size_t face = 0;
-  detail::io::for_each_face(mesh, [&](const std::int32_t* f, std::size_t k) {
-    if (k < 3 || k > static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max()))
-      throw MeshError("write_mesh: face " + std::to_string(face) + " has " +
-                      std::to_string(static_cast<std::int32_t>(k)) + " vertices; a face needs at least 3");
-    for (std::size_t c = 0; c < k; ++c)
-      if (f[c] < 0 || static_cast<std::size_t>(f[c]) >= mesh.n_vertices)
-        throw MeshError("write_mesh: face " + std::to_string(face) + " has vertex index " + std::to_string(f[c]) +
-                        " out of range [0, " + std::to_string(mesh.n_vertices) + ")");
-    ++face;
-  });
+  check_faces(mesh);
   if (tags) check_tags(tags->tags, mesh.n_vertices, mesh.n_faces);
   for (const auto* channel : {&mesh.uvs, &mesh.normals}) {
     if (!channel->width) continue;
@@ -524,20 +551,7 @@ void write_mesh(const std::string& path, const MeshView& mesh, bool binary, cons
       throw ParameterError(where + what + " are written to .obj and .ply files only");
     if (channel->width < 1 || channel->width > 3)
       throw ParameterError(where + what + " have 1 to 3 numbers each, not " + std::to_string(channel->width));
-    for (std::size_t i = 0; i < channel->n_values * static_cast<std::size_t>(channel->width); ++i)
-      if (!std::isfinite(channel->values[i]))
-        throw MeshError(std::string("write_mesh: ") + what + " value " + std::to_string(i / static_cast<std::size_t>(channel->width)) +
-                        " is not finite");
-    std::size_t corner = 0;
-    face = 0;
-    detail::io::for_each_face(mesh, [&](const std::int32_t*, std::size_t k) {
-      for (std::size_t c = 0; c < k; ++c, ++corner)
-        if (channel->indices[corner] < 0 || static_cast<std::size_t>(channel->indices[corner]) >= channel->n_values)
-          throw MeshError(std::string("write_mesh: face ") + std::to_string(face) + " has " + what + " index " +
-                          std::to_string(channel->indices[corner]) + " out of range [0, " +
-                          std::to_string(channel->n_values) + ")");
-      ++face;
-    });
+    check_channel(mesh, *channel, what);
   }
   std::string data;
   switch (format) {
@@ -550,6 +564,8 @@ void write_mesh(const std::string& path, const MeshView& mesh, bool binary, cons
 }
 
 void check_ply_per_vertex(const MeshView& mesh, const FaceVaryingView& channel, const char* what) {
+  check_faces(mesh);  // per_vertex_values reads each corner's vertex and value unchecked
+  if (channel.width) check_channel(mesh, channel, what);
   detail::io::per_vertex_values(mesh, channel, what);
 }
 

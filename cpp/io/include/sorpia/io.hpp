@@ -177,7 +177,8 @@ inline void write_mesh(const std::string& path, const double* vertices, std::siz
 /// "texture coordinates" or "normals") and every corner of a vertex has the
 /// same value (no seam). For a check before long work, with the writer's
 /// words.
-/// @throws ParameterError naming the first vertex with several values, or the width
+/// @throws ParameterError naming the first vertex with several values, or the width;
+///         MeshError for a face or a corner's value index out of range (write_mesh's checks)
 void check_ply_per_vertex(const MeshView& mesh, const FaceVaryingView& channel, const char* what);
 
 /// Write `data` to `path` atomically, as write_mesh writes its bytes: to a
