@@ -550,7 +550,7 @@ def table(results, have_subdivfit):
             seconds = f"{row['seconds']:.3g}" if row["seconds"] else "-"
             cpu = f"{row['cpu_seconds']:.3g}" if row.get("cpu_seconds") else "-"
             if row.get("iterations"):
-                why = {"iterations": ", the limit", None: ""}.get(row.get("stop_reason"), f", {row.get('stop_reason')}")
+                why = {"max_iter": ", the limit", None: ""}.get(row.get("stop_reason"), f", {row.get('stop_reason')}")
                 seconds += f" ({row['iterations']} iterations{why})"
             own = f"{row['own'][0]:.3g}, {row['own'][1]:.3g}" if "own" in row else ""
             back = f"{row['surface'][0]:.3g}, {row['surface'][1]:.3g}" if "surface" in row else ""
