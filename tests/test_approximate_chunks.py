@@ -239,7 +239,7 @@ def test_coarse_fit_reaches_the_full_fit():
     # noise of that fit's (the RMS distance of its tessellation's vertices to that surface, by a footpoint search).
     P, V, F = noisy_samples(6000)
     full = approximate(P, V, F, iterations=8, tol=0.0, coarse_iterations=0)
-    coarse = approximate(P, V, F, iterations=8, tol=0.0, coarse_iterations=4)
+    coarse = approximate(P, V, F, iterations=8, tol=0.0, coarse_iterations=4, coarse_points=8)
     assert coarse.coarse_iterations == 4
     assert coarse.rms <= 1.01 * full.rms
     S = LimitSurface(full.control_vertices, F, scheme="loop")
@@ -251,7 +251,7 @@ def test_coarse_fit_reaches_the_full_fit():
 
 def test_coarse_sample_does_not_depend_on_the_chunks():
     P, V, F = noisy_samples()
-    kw = dict(iterations=5, coarse_iterations=3)
+    kw = dict(iterations=5, coarse_iterations=3, coarse_points=8)
     one = approximate(P, V, F, **kw)
     many = approximate(P, V, F, chunk_points=701, **kw)
     assert [h["points"] for h in one.history] == [h["points"] for h in many.history]
@@ -266,7 +266,7 @@ def test_no_coarse_iterations_where_the_sample_holds_over_half_the_points():
     assert dense.coarse_iterations == 0 and all(h["points"] == len(P) for h in dense.history)
     np.testing.assert_array_equal(dense.control_vertices, plain.control_vertices)
     # and at least one update on all points: coarse_iterations beyond iterations - 1 is cut there
-    short = approximate(P, V, F, iterations=2, coarse_iterations=5)
+    short = approximate(P, V, F, iterations=2, coarse_iterations=5, coarse_points=8)
     assert short.coarse_iterations == 1 and short.history[-1]["points"] == len(P)
 
 
@@ -309,7 +309,7 @@ class PythonSampledChunks(PythonChunks):
 
 def test_python_backend_runs_coarse_iterations_as_the_core():
     P, V, F = noisy_samples()
-    kw = dict(coarse_iterations=3)
+    kw = dict(coarse_iterations=3, coarse_points=8.0)
     ref_surface = LimitSurface(V, F, scheme="loop")
     ref = core_run(ref_surface, _core.InMemoryChunks(ref_surface._surface, P, None, 500), **kw)
     out = core_run(LimitSurface(V, F, scheme="loop"), PythonSampledChunks(P, V, F, 500), **kw)

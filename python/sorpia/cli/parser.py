@@ -304,7 +304,7 @@ def build_parser() -> argparse.ArgumentParser:
                      help="stop when the RMS distance fell by less than this fraction per iteration over the last "
                      "three (and a fresh search of the footpoints finds none closer by more)")
     app.add_argument("--coarse-iterations", type=_int_arg, default=DEFAULT_COARSE_ITERATIONS, metavar="K",
-                     help="of the updates, the first K from the footpoints of a fixed sample of the points (8 per "
+                     help="of the updates, the first K from the footpoints of a fixed sample of the points (16 per "
                      "control vertex; none where that is over half the points), at a fraction of the cost "
                      "(default: %(default)s)")
     app.add_argument("--sampling", choices=("vertices",) + SAMPLINGS, default=None,

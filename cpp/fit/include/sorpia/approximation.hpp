@@ -66,7 +66,7 @@ struct ApproximationOptions {
   int coarse_iterations = 0;
   /// The sample's size in points per control vertex a face uses, finite,
   /// > 0; no coarse iterations when it would hold more than half the points.
-  double coarse_points = 8.0;
+  double coarse_points = 16.0;
   double tol = 3e-3;              ///< the stop rule's fall per iteration (step 4), finite, >= 0
   double fairness = 3e-4;         ///< c over the mean diagonal of A^T W A, finite, >= 0; 0: no K
   double tangential = 0.1;        ///< in [0, 1]: 1 point distance, 0 tangent distance, between a blend

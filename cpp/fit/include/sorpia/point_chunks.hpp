@@ -148,8 +148,10 @@ class ApproximationChunk {
 };
 
 /// The driver's view of all chunks (a backend). The driver calls, in order:
-/// size, extent, scale (only when e != 0), moments, line_offset; then per
-/// surface state set_control_vertices, and search (iteration 0), refine
+/// size, extent, scale (only when e != 0), moments, line_offset; set_sample
+/// around the coarse iterations (only with them); then per surface state
+/// set_control_vertices, and search (iteration 0, and after the coarse
+/// iterations), refine
 /// (after each update), normal_sums (before each update), keep_best (when
 /// the RMS is the lowest so far), search_fresh / keep_fresh (before
 /// stopping), keep_fresh_in_best and best_footpoints (at the end); sample
