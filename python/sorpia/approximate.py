@@ -405,7 +405,7 @@ def approximate(points, cage_vertices, cage_faces=None, *, scheme: str = DEFAULT
         The rules of the cage's limit surface, as in `sorpia.LimitSurface`.
     iterations : int >= 1
         Updates at most, each followed by a re-projection of the footpoints
-        (parameter correction).
+        (parameter correction); the coarse ones included.
     tol : float >= 0
         Stop when the lowest RMS distance so far fell by less than this
         fraction of it per iteration over the last three iterations, and a

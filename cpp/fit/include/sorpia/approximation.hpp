@@ -8,6 +8,12 @@
 ///   1. footpoints: each point's closest point of the surface as (face, u, v)
 ///      (closest_points: the nearest of a grid of limit points, then
 ///      Gauss-Newton), record 0;
+///   1b. coarse iterations first (coarse_iterations > 0, and a sample of at
+///      most half the points): steps 1-3 on a fixed sample of the points
+///      (PointChunks::set_sample: coarse_points per control vertex a face
+///      uses), without the stop rule, then the footpoints of all points
+///      searched afresh (step 1) for the iterate they reached; steps 2-4
+///      go on from there on all points;
 ///   2. per iteration: the rows A of the surface at the footpoints
 ///      (LimitSurface::rows, the points in face order), the normal equations
 ///      (A^T W A + c K + mu I) V = A^T W P + mu V_prev (W the points' weights,
@@ -19,12 +25,6 @@
 ///      a record (RMS and largest distance data to surface at the
 ///      footpoints; surface to data, from a uniform tessellation's vertices,
 ///      only with report_each, else for the returned iterate at the end);
-///   1b. coarse iterations first (coarse_iterations > 0, and a sample of at
-///      most half the points): steps 1-3 on a fixed sample of the points
-///      (PointChunks::set_sample: coarse_points per control vertex a face
-///      uses), without the stop rule, then the footpoints of all points
-///      searched afresh (step 1) for the iterate they reached; the steps
-///      below go on from there on all points;
 ///   4. the stop rule: the lowest RMS so far fell by at most `tol` of itself
 ///      per iteration over the last `window` iterations, and a fresh search
 ///      of every footpoint (closest_points again) finds none closer that
