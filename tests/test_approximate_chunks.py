@@ -129,8 +129,8 @@ class PythonChunks(_core.PointChunks):
 def core_run(surface, chunks, **kw):
     o = dict(iterations=6, tol=3e-3, fairness=3e-4, tangential=0.1, method="cg", solver_tol=1e-3,
              solver_max_iter=2000, grid=4, newton_steps=10, report_level=2, callback=None)
-    # least squares unless asked (the driver's default is the core's robust loss, which PythonChunks cannot run)
-    robust = {"robust": "none", **{key: kw.pop(key) for key in ("robust", "robust_quantile", "robust_c") if key in kw}}
+    robust = {"robust": "none", **{key: kw.pop(key) for key in ("robust", "robust_quantile", "robust_c", "coarse_iterations",
+                                                             "coarse_points") if key in kw}}
     o.update(kw)
     return _core.approximate(surface._surface, chunks, *o.values(), report_each=True, **robust)
 
@@ -206,6 +206,117 @@ def test_python_backend_without_the_robust_calls_is_refused_when_robust():
     P, V, F = noisy_samples(500)
     with pytest.raises(sorpia.ParameterError, match="cannot fit robustly .* pass robust = 'none'"):
         core_run(LimitSurface(V, F, scheme="loop"), PythonChunks(P, V, F, 100), robust="tukey")
+
+
+# ---- coarse iterations: updates on a fixed sample of the points first ----------------------------------------
+
+def sample_mask(k, sample_points):
+    """Which of k points are in the fixed sample of about sample_points (the core's point_sample_mask)."""
+    return np.asarray(_core.point_sample_mask(0, k, k, sample_points), dtype=bool)
+
+
+def test_coarse_iterations_are_the_samples_fit_then_all_points_fit():
+    # Independent of the driver's coarse phase: the fit of the sample alone for its 2 updates, then the fit of all
+    # points from the iterate it reached (a fresh search, 3 updates) give the same control vertices and records.
+    P, V, F = noisy_samples()
+    mask = sample_mask(len(P), 8 * len(V))
+    kw = dict(tol=0.0, robust="none")
+    both = approximate(P, V, F, iterations=5, coarse_iterations=2, coarse_points=8, **kw)
+    sample = approximate(P[mask], V, F, iterations=2, coarse_iterations=0, **kw)
+    assert sample.best_iteration == 2  # its last iterate is the one the coarse phase hands on
+    rest = approximate(P, sample.control_vertices, F, iterations=3, coarse_iterations=0, **kw)
+    assert both.coarse_iterations == 2 and both.iterations == 5 and 0 < mask.sum() < len(P) // 2
+    assert [h["points"] for h in both.history] == [mask.sum()] * 2 + [len(P)] * 4
+    for a, b in zip(both.history, sample.history[:2] + rest.history, strict=True):
+        assert abs(a["rms"] - b["rms"]) <= 1e-12 * b["rms"], a["iteration"]
+    assert relative(both.control_vertices, rest.control_vertices) < 1e-12
+    assert both.best_iteration == 2 + rest.best_iteration
+
+
+def test_coarse_fit_reaches_the_full_fit():
+    # On points near a known surface with noise 1e-3 the fit whose first 4 of 8 updates see 8 points per control
+    # vertex ends within 1% of the RMS of the fit whose 8 see all of them, and its surface within a tenth of the
+    # noise of that fit's (the RMS distance of its tessellation's vertices to that surface, by a footpoint search).
+    P, V, F = noisy_samples(6000)
+    full = approximate(P, V, F, iterations=8, tol=0.0, coarse_iterations=0)
+    coarse = approximate(P, V, F, iterations=8, tol=0.0, coarse_iterations=4, coarse_points=8)
+    assert coarse.coarse_iterations == 4
+    assert coarse.rms <= 1.01 * full.rms
+    S = LimitSurface(full.control_vertices, F, scheme="loop")
+    T = LimitSurface(coarse.control_vertices, F, scheme="loop")
+    on_t = _core.ApproximationChunk(np.ascontiguousarray(T.tessellate(3)[0]), None, 0)
+    squares, _, count = on_t.search(_core.FootpointSearch(S._surface, 8, 20))[:3]
+    assert np.sqrt(squares / count) < 1e-4
+
+
+def test_coarse_sample_does_not_depend_on_the_chunks():
+    P, V, F = noisy_samples()
+    kw = dict(iterations=5, coarse_iterations=3, coarse_points=8)
+    one = approximate(P, V, F, **kw)
+    many = approximate(P, V, F, chunk_points=701, **kw)
+    assert [h["points"] for h in one.history] == [h["points"] for h in many.history]
+    assert one.best_iteration == many.best_iteration
+    assert relative(many.control_vertices, one.control_vertices) < 5e-9
+
+
+def test_no_coarse_iterations_where_the_sample_holds_over_half_the_points():
+    P, V, F = noisy_samples()
+    plain = approximate(P, V, F, iterations=4, coarse_iterations=0)
+    dense = approximate(P, V, F, iterations=4, coarse_iterations=3, coarse_points=len(P) / len(V))
+    assert dense.coarse_iterations == 0 and all(h["points"] == len(P) for h in dense.history)
+    np.testing.assert_array_equal(dense.control_vertices, plain.control_vertices)
+    # and at least one update on all points: coarse_iterations beyond iterations - 1 is cut there
+    short = approximate(P, V, F, iterations=2, coarse_iterations=5, coarse_points=8)
+    assert short.coarse_iterations == 1 and short.history[-1]["points"] == len(P)
+
+
+@pytest.mark.parametrize("option,value,message", [
+    ("coarse_iterations", -1, "coarse_iterations = -1 must be an integer >= 0"),
+    ("coarse_points", 0.0, "coarse_points = 0.0 must be a finite number > 0"),
+    ("coarse_points", float("nan"), "coarse_points = nan must be a finite number > 0"),
+])
+def test_bad_coarse_options_are_named(option, value, message):
+    P, V, F = noisy_samples(500)
+    with pytest.raises(sorpia.ParameterError, match=message):
+        approximate(P, V, F, **{option: value})
+
+
+def test_coarse_streamed_file_equals_in_memory(tmp_path):
+    P, V, F = noisy_samples()
+    path = tmp_path / "points.npy"
+    np.save(path, P)
+    kw = dict(coarse_iterations=3, coarse_points=8.0)
+    ref_surface = LimitSurface(V, F, scheme="loop")
+    ref = core_run(ref_surface, _core.InMemoryChunks(ref_surface._surface, P, None, 700), **kw)
+    surface = LimitSurface(V, F, scheme="loop")
+    out = core_run(surface, _core.FileChunks(surface._surface, str(path), 700, str(tmp_path), 10**6), **kw)
+    assert out["coarse_iterations"] == 3
+    np.testing.assert_array_equal(out["control_vertices"], ref["control_vertices"])
+    assert [h["rms"] for h in out["history"]] == [h["rms"] for h in ref["history"]]
+
+
+class PythonSampledChunks(PythonChunks):
+    """PythonChunks with set_sample: the chunks' sampled ones for the calls that follow (as the Dask host)."""
+
+    def set_sample(self, sample_points):
+        if sample_points == 0:
+            self.chunks = self.all_chunks
+        else:
+            self.all_chunks = self.chunks
+            k = self.size()
+            self.chunks = [c.sampled(k, sample_points) for c in self.chunks]
+
+
+def test_python_backend_runs_coarse_iterations_as_the_core():
+    P, V, F = noisy_samples()
+    kw = dict(coarse_iterations=3, coarse_points=8.0)
+    ref_surface = LimitSurface(V, F, scheme="loop")
+    ref = core_run(ref_surface, _core.InMemoryChunks(ref_surface._surface, P, None, 500), **kw)
+    out = core_run(LimitSurface(V, F, scheme="loop"), PythonSampledChunks(P, V, F, 500), **kw)
+    np.testing.assert_array_equal(out["control_vertices"], ref["control_vertices"])
+    assert [h["rms"] for h in out["history"]] == [h["rms"] for h in ref["history"]]
+    with pytest.raises(sorpia.ParameterError, match="no set_sample.*pass coarse_iterations = 0"):
+        core_run(LimitSurface(V, F, scheme="loop"), PythonChunks(P, V, F, 500), **kw)
 
 
 def write_ply(path, P, dtype, extra=True):

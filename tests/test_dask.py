@@ -92,6 +92,15 @@ def test_robust_fit_with_outliers_on_two_workers_as_in_one_process(client, robus
     assert local.robust_outliers >= 1  # the outliers were cut or damped: the robust path ran
 
 
+def test_coarse_iterations_on_two_workers_as_in_one_process(client):
+    # the workers' chunks sample their points (set_sample) as the chunks in one process do
+    P, V, F, w = noisy_samples()
+    kw = dict(weights=w, iterations=5, coarse_iterations=3, coarse_points=8, chunk_points=700)
+    local = sorpia.approximate(P, V, F, **kw)
+    assert local.coarse_iterations == 3 and local.history[1]["points"] < len(P) // 2
+    assert_same_fit(sorpia.approximate(P, V, F, client=client, **kw), local)
+
+
 def test_one_worker_fits_as_two(client, one_worker_client):
     P, V, F, _ = noisy_samples(3000, seed=2)
     kw = dict(iterations=5, chunk_points=500)

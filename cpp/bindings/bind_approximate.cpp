@@ -73,6 +73,7 @@ struct NormalInput {
 py::dict record_dict(const sorpia::ApproximationRecord& r, double offset) {
   py::dict d;
   d["iteration"] = r.iteration;
+  d["points"] = r.points;
   d["rms"] = r.rms;
   d["max"] = r.max;
   // The surface-to-data figures of a record where they were not measured (report_each off): None.
@@ -89,6 +90,8 @@ py::dict record_dict(const sorpia::ApproximationRecord& r, double offset) {
   d["inlier_rms_relative"] = r.inlier_rms_relative;
   d["robust_cut"] = r.robust_cut;
   d["robust_scale"] = r.robust_scale;
+  d["move_max_relative"] = r.move_max_relative;
+  d["move_rms_relative"] = r.move_rms_relative;
   d["solver_iterations"] = r.solver_iterations;
   d["seconds"] = r.seconds + offset;
   return d;
@@ -370,6 +373,12 @@ class PyPointChunks : public sorpia::PointChunks {
     if (!override_of("robust_normal_sums"))
       return sorpia::PointChunks::robust_normal_sums(tangential, robust, scale);
     return to_normal_sums(call_locked("robust_normal_sums", tangential, robust_tuple(robust), scale));
+  }
+  // Optional as the robust calls: without it the base's ParameterError says to pass coarse_iterations = 0.
+  void set_sample(std::size_t sample_points) override {
+    py::gil_scoped_acquire gil;
+    if (!override_of("set_sample")) return sorpia::PointChunks::set_sample(sample_points);
+    call_locked("set_sample", sample_points);
   }
   std::vector<double> sample() override {
     py::gil_scoped_acquire gil;
@@ -733,6 +742,9 @@ void bind_approximate(py::module_& m) {
            },
            "surface"_a, "tangential"_a, "robust"_a, "scale"_a,
            "normal_sums with each weight times the robust factor of its distance at `scale`")
+      .def("sampled", &sorpia::ApproximationChunk::sampled, "k"_a, "sample_points"_a,
+           "a chunk of this one's points in the fixed sample of about sample_points of all k (the coarse "
+           "iterations' chunk)")
       .def("best_footpoints", [](const sorpia::ApproximationChunk& c) {
         sorpia::Footpoints f = c.best_footpoints();
         return py::make_tuple(to_numpy(std::move(f.face_ids), 0), to_numpy(std::move(f.uv), 2),
@@ -801,9 +813,12 @@ void bind_approximate(py::module_& m) {
          double fairness, double tangential, const std::string& method, double solver_tol, long long solver_max_iter,
          int grid, int newton_steps, int report_level, const py::object& callback, double seconds_before,
          bool report_each, const std::string& robust, std::optional<double> robust_quantile,
-         std::optional<double> robust_c) {
+         std::optional<double> robust_c,
+         int coarse_iterations, double coarse_points) {
         sorpia::ApproximationOptions o;
         o.iterations = iterations;
+        o.coarse_iterations = coarse_iterations;
+        o.coarse_points = coarse_points;
         o.tol = tol;
         o.fairness = fairness;
         o.tangential = tangential;
@@ -837,6 +852,7 @@ void bind_approximate(py::module_& m) {
         out["uv"] = to_numpy(std::move(r.footpoints.uv), 2);
         out["distances"] = to_numpy(std::move(r.footpoints.distances), 0);
         out["iterations"] = r.iterations;
+        out["coarse_iterations"] = r.coarse_iterations;
         out["stop_reason"] = r.stop_reason;
         out["best_iteration"] = r.best_iteration;
         out["diagonal"] = r.diagonal;
@@ -853,6 +869,7 @@ void bind_approximate(py::module_& m) {
       "seconds_before"_a = 0.0, "report_each"_a = false,
       "robust"_a = sorpia::robust_loss_name(sorpia::ApproximationOptions{}.robust.loss),
       "robust_quantile"_a = py::none(), "robust_c"_a = py::none(),
+      "coarse_iterations"_a = 0, "coarse_points"_a = sorpia::ApproximationOptions{}.coarse_points,
       "Approximation's pipeline (sorpia::approximate) from the surface's control vertices, over the points of\n"
       "`chunks` (InMemoryChunks, FileChunks or a Python PointChunks): a dict with control_vertices, face_ids, uv,\n"
       "distances, iterations, stop_reason, best_iteration, diagonal, robust_scale, robust_outliers, history\n"
@@ -861,7 +878,8 @@ void bind_approximate(py::module_& m) {
       "in the others). robust: the loss of the robust fit (none, cauchy, tukey; the core's default unless\n"
       "given) at the robust_quantile of the distances times robust_c (sorpia/robust.hpp; None: the loss's\n"
       "defaults, robust_options): a Python backend fits robustly only where it defines distance_histogram,\n"
-      "robust_sums and robust_normal_sums (sorpia/point_chunks.hpp); robust = 'none' runs without them.");
+      "robust_sums and robust_normal_sums (sorpia/point_chunks.hpp); robust = 'none' runs without them. coarse_iterations: updates on a fixed sample of\n"
+      "coarse_points per control vertex first (ApproximationOptions), where the backend defines set_sample.");
 
   // The robust fit's defaults cross from the core (sorpia::robust_options, ApproximationOptions::robust), so that
   // the Python API and the command line take them from the one place they are set.

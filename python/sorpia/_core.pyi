@@ -723,6 +723,10 @@ class ApproximationChunk:
         """
         the current distances' robust sums (sorpia/robust.hpp) as (sum w rho(d), sum w d^2 and sum w within the cut c s, the points beyond it); robust = (loss, quantile, c)
         """
+    def sampled(self, k: typing.SupportsInt | typing.SupportsIndex, sample_points: typing.SupportsInt | typing.SupportsIndex) -> ApproximationChunk:
+        """
+        a chunk of this one's points in the fixed sample of about sample_points of all k (the coarse iterations' chunk)
+        """
     def scale(self, e: typing.SupportsInt | typing.SupportsIndex) -> None:
         ...
     def search(self, search: FootpointSearch) -> tuple:
@@ -757,7 +761,7 @@ class FileChunks(PointChunks):
     """
     def __init__(self, surface: LimitSurface, path: str, chunk_points: typing.SupportsInt | typing.SupportsIndex, spill_directory: str, sample_points: typing.SupportsInt | typing.SupportsIndex) -> None:
         ...
-def approximate(surface: LimitSurface, chunks: PointChunks, iterations: typing.SupportsInt | typing.SupportsIndex, tol: typing.SupportsFloat | typing.SupportsIndex, fairness: typing.SupportsFloat | typing.SupportsIndex, tangential: typing.SupportsFloat | typing.SupportsIndex, method: str, solver_tol: typing.SupportsFloat | typing.SupportsIndex, solver_max_iter: typing.SupportsInt | typing.SupportsIndex, grid: typing.SupportsInt | typing.SupportsIndex, newton_steps: typing.SupportsInt | typing.SupportsIndex, report_level: typing.SupportsInt | typing.SupportsIndex, callback: typing.Any, seconds_before: typing.SupportsFloat | typing.SupportsIndex = 0.0, report_each: bool = False, robust: str = 'tukey', robust_quantile: typing.SupportsFloat | typing.SupportsIndex | None = None, robust_c: typing.SupportsFloat | typing.SupportsIndex | None = None) -> dict:
+def approximate(surface: LimitSurface, chunks: PointChunks, iterations: typing.SupportsInt | typing.SupportsIndex, tol: typing.SupportsFloat | typing.SupportsIndex, fairness: typing.SupportsFloat | typing.SupportsIndex, tangential: typing.SupportsFloat | typing.SupportsIndex, method: str, solver_tol: typing.SupportsFloat | typing.SupportsIndex, solver_max_iter: typing.SupportsInt | typing.SupportsIndex, grid: typing.SupportsInt | typing.SupportsIndex, newton_steps: typing.SupportsInt | typing.SupportsIndex, report_level: typing.SupportsInt | typing.SupportsIndex, callback: typing.Any, seconds_before: typing.SupportsFloat | typing.SupportsIndex = 0.0, report_each: bool = False, robust: str = 'tukey', robust_quantile: typing.SupportsFloat | typing.SupportsIndex | None = None, robust_c: typing.SupportsFloat | typing.SupportsIndex | None = None, coarse_iterations: typing.SupportsInt | typing.SupportsIndex = 0, coarse_points: typing.SupportsFloat | typing.SupportsIndex = 16.0) -> dict:
     """
     Approximation's pipeline (sorpia::approximate) from the surface's control vertices, over the points of
     `chunks` (InMemoryChunks, FileChunks or a Python PointChunks): a dict with control_vertices, face_ids, uv,
@@ -767,7 +771,8 @@ def approximate(surface: LimitSurface, chunks: PointChunks, iterations: typing.S
     in the others). robust: the loss of the robust fit (none, cauchy, tukey; the core's default unless
     given) at the robust_quantile of the distances times robust_c (sorpia/robust.hpp; None: the loss's
     defaults, robust_options): a Python backend fits robustly only where it defines distance_histogram,
-    robust_sums and robust_normal_sums (sorpia/point_chunks.hpp); robust = 'none' runs without them.
+    robust_sums and robust_normal_sums (sorpia/point_chunks.hpp); robust = 'none' runs without them. coarse_iterations: updates on a fixed sample of
+    coarse_points per control vertex first (ApproximationOptions), where the backend defines set_sample.
     """
 def available_memory_bytes() -> int:
     ...

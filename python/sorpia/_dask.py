@@ -105,6 +105,7 @@ class ChunkHost:
         self.surface = LimitSurface(**cage)._surface
         self.search_: Optional[Any] = None
         self.chunks: dict[int, Any] = {}
+        self.sampled: dict[int, Any] = {}  # the coarse iterations' chunks (set_sample), empty: all points
 
     def add(self, index: int, points, weights: Optional[np.ndarray], first: int, count: int) -> int:
         """Chunk `index`: the points first .. first + count of all, given as an
@@ -117,6 +118,12 @@ class ChunkHost:
     def set_control_vertices(self, vertices: np.ndarray) -> None:
         self.surface.set_vertices(vertices)
         self.search_ = None
+
+    def set_sample(self, k: int, sample_points: int) -> None:
+        """The chunks' points in the fixed sample of about sample_points of all k
+        for the calls that follow (ApproximationChunk.sampled), or all points
+        again with 0 (PointChunks.set_sample)."""
+        self.sampled = {} if sample_points == 0 else {i: c.sampled(k, sample_points) for i, c in self.chunks.items()}
 
     def _search(self, grid: int, max_steps: int):
         if self.search_ is None:
@@ -140,9 +147,10 @@ class ChunkHost:
         else:
             call = lambda c: getattr(c, name)(*args)  # noqa: E731
         out = []
-        for i in sorted(self.chunks):
+        chunks = self.sampled or self.chunks
+        for i in sorted(chunks):
             t0, c0 = time.perf_counter(), time.process_time()
-            result = call(self.chunks[i])
+            result = call(chunks[i])
             out.append((i, result, (time.perf_counter() - t0, time.process_time() - c0)))
         return out
 
@@ -278,6 +286,9 @@ class DaskChunks(_core.PointChunks):
 
     def robust_normal_sums(self, tangential, robust, scale):
         return self._all("robust_normal_sums", tangential, tuple(robust), scale)
+
+    def set_sample(self, sample_points):
+        self._wait([h.set_sample(self.k, sample_points) for h in self.hosts])
 
     def sample(self):
         if isinstance(self.points, str):

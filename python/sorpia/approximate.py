@@ -96,6 +96,10 @@ _STRAY = 1.0
 DEFAULT_CHUNK_POINTS = 1 << 20
 # Points of a streamed file's fixed sample for the surface-to-data distances (a k-d tree of 4M points: ~200 MB).
 DEFAULT_SAMPLE_POINTS = 1 << 22
+# The coarse iterations (the core's ApproximationOptions::coarse_iterations, coarse_points): updates on a fixed
+# sample of coarse_points per control vertex before those on all points.
+DEFAULT_COARSE_ITERATIONS = 0
+DEFAULT_COARSE_POINTS = 16.0
 # The stopping rule's window (the core's ApproximationOptions::window), for `_levelled`.
 _WINDOW = 3
 
@@ -123,7 +127,11 @@ class ApproximationResult:
         The points' weights in the fit and in the RMS distances, scaled to
         mean 1 (None: all equal).
     iterations : int
-        Updates made (each followed by a re-projection of the footpoints).
+        Updates made (each followed by a re-projection of the footpoints),
+        the coarse ones included.
+    coarse_iterations : int
+        Of them, the updates from the footpoints of the coarse sample only
+        (``coarse_iterations`` of `approximate`; 0 where none ran).
     converged : bool
         True when the run stopped before ``iterations`` ran out
         (``stop_reason`` other than "max_iter").
@@ -152,12 +160,16 @@ class ApproximationResult:
         relative distances.
     history : list of dict
         One record per iteration, from 0 (the cage as given): ``iteration``,
-        ``rms``, ``max`` (data to surface), ``surface_rms``, ``surface_max``
+        ``points`` (the points its distances are of: all, or the coarse
+        sample's before the last coarse update), ``rms``, ``max`` (data to
+        surface), ``surface_rms``, ``surface_max``
         (surface to data: in the returned iterate's record, and in the
         others only with ``report_each``, else None), each also
         ``_relative`` (divided by ``diagonal``),
-        ``solver_iterations`` (of the update before it; 0 at iteration 0) and
-        ``seconds`` (since the start).
+        ``move_max_relative`` and ``move_rms_relative`` (how far the update
+        before it moved the control vertices, largest and RMS, over the
+        diagonal; 0 at iteration 0), ``solver_iterations`` (of the update
+        before it; 0 at iteration 0) and ``seconds`` (since the start).
     timings : dict
         Seconds spent in each phase: ``footpoints``, ``rows``, ``normal``
         (forming A^T A and A^T P), ``solve``, ``report`` (surface to data),
@@ -210,6 +222,7 @@ class ApproximationResult:
     robust: str = "none"
     robust_scale: float = 0.0
     robust_outliers: int = 0
+    coarse_iterations: int = 0
 
     @property
     def converged(self) -> bool:
@@ -243,7 +256,8 @@ class ApproximationResult:
         writes): the history, the timings and the final figures, without the
         per-point arrays."""
         last = self.history[self.best_iteration]
-        return {"iterations": self.iterations, "converged": self.converged, "stop_reason": self.stop_reason,
+        return {"iterations": self.iterations, "coarse_iterations": self.coarse_iterations,
+                "converged": self.converged, "stop_reason": self.stop_reason,
                 "rms": self.rms, "max_error": self.max_error, "seconds": self.seconds,
                 "best_iteration": self.best_iteration, "method": self.method,
                 "fairness": self.fairness, "tangential": self.tangential, "diagonal": self.diagonal,
@@ -366,7 +380,8 @@ def approximate(points, cage_vertices, cage_faces=None, *, scheme: str = DEFAULT
                 callback: Optional[Callable[[dict], object]] = None, weights=None, faces=None,
                 sampling: Optional[str] = None, chunk_points: int = DEFAULT_CHUNK_POINTS,
                 spill_directory=None, sample_points: int = DEFAULT_SAMPLE_POINTS,
-                robust: str = DEFAULT_ROBUST, client=None) -> ApproximationResult:
+                robust: str = DEFAULT_ROBUST, coarse_iterations: int = DEFAULT_COARSE_ITERATIONS,
+                coarse_points: float = DEFAULT_COARSE_POINTS, client=None) -> ApproximationResult:
     """Control vertices of a cage whose limit surface approximates `points`
     in the least-squares sense (the module docstring describes the method).
 
@@ -392,7 +407,7 @@ def approximate(points, cage_vertices, cage_faces=None, *, scheme: str = DEFAULT
         The rules of the cage's limit surface, as in `sorpia.LimitSurface`.
     iterations : int >= 1
         Updates at most, each followed by a re-projection of the footpoints
-        (parameter correction).
+        (parameter correction); the coarse ones included.
     tol : float >= 0
         Stop when the lowest RMS distance so far fell by less than this
         fraction of it per iteration over the last three iterations, and a
@@ -479,6 +494,16 @@ def approximate(points, cage_vertices, cage_faces=None, *, scheme: str = DEFAULT
         (``sqrt(sum_i w_i rho(d_i) / k)``), not the RMS distance of all the
         points (the records still give that). On clean data the default
         fits as least squares does (docs/approximation.md, "Robustness").
+    coarse_iterations : int >= 0
+        Updates made first from the footpoints of a fixed sample of the
+        points only (each point's choice its own, the same however the
+        points are chunked or streamed), each a fraction of a full
+        iteration's cost; then the footpoints of all points are searched
+        afresh and the rest of ``iterations`` (one at least) run on all of
+        them, with the stop rule. None where the sample would hold more than
+        half the points. docs/approximation.md, "Coarse iterations".
+    coarse_points : float > 0
+        The sample's size: this many points per control vertex.
     client : dask.distributed.Client or None
         Run the chunks on the workers of this Dask cluster (needs
         ``pip install 'sorpia[dask]'``; docs/distributed.md): each worker
@@ -524,6 +549,8 @@ def approximate(points, cage_vertices, cage_faces=None, *, scheme: str = DEFAULT
     grid = _count(grid, "grid", "an integer in 1..64")
     newton_steps = _count(newton_steps, "newton_steps", "an integer >= 1")
     report_level = _count(report_level, "report_level", "an integer in 0..15")
+    coarse_iterations = _count(coarse_iterations, "coarse_iterations", "an integer >= 0")
+    coarse_points = as_real(coarse_points, "coarse_points")
     if not isinstance(robust, str):
         raise ParameterError(f"robust = {robust!r} must be one of {', '.join(ROBUST_LOSSES)}")
     if not isinstance(method, str):
@@ -567,7 +594,8 @@ def approximate(points, cage_vertices, cage_faces=None, *, scheme: str = DEFAULT
     try:
         out = _core.approximate(surface._surface, chunks, iterations, tol, fairness, tangential, method,
                                 solver_tol, solver_max_iter, grid, newton_steps, report_level, callback,
-                                time.perf_counter() - t0, bool(report_each), robust)
+                                time.perf_counter() - t0, bool(report_each), robust,
+                                coarse_iterations=coarse_iterations, coarse_points=coarse_points)
     finally:
         if client is not None:
             chunks.close()
@@ -591,6 +619,7 @@ def approximate(points, cage_vertices, cage_faces=None, *, scheme: str = DEFAULT
                                tangential=tangential, diagonal=out["diagonal"], history=out["history"],
                                robust=robust, robust_scale=out["robust_scale"],
                                robust_outliers=out["robust_outliers"],
+                               coarse_iterations=out["coarse_iterations"],
                                timings=out["timings"],
                                mesh=SubdivisionMesh(V, cage_faces, scheme=scheme, boundary=boundary,
                                                     creases=creases, corners=corners, holes=holes),

@@ -97,6 +97,10 @@ void check_options(const ApproximationOptions& o) {
       throw ParameterError(std::string(name) + " = " + detail::repr(v) + " must be a finite number >= 0");
   };
   if (o.iterations < 1) throw ParameterError("iterations = " + std::to_string(o.iterations) + " must be an integer >= 1");
+  if (o.coarse_iterations < 0)
+    throw ParameterError("coarse_iterations = " + std::to_string(o.coarse_iterations) + " must be an integer >= 0");
+  if (!(std::isfinite(o.coarse_points) && o.coarse_points > 0))
+    throw ParameterError("coarse_points = " + detail::repr(o.coarse_points) + " must be a finite number > 0");
   nonnegative(o.tol, "tol");
   nonnegative(o.fairness, "fairness");
   nonnegative(o.tangential, "tangential");
@@ -301,8 +305,11 @@ ApproximationResult approximate(LimitSurface& surface, PointChunks& chunks, cons
 
   ApproximationResult out;
   Phases phases;
-  // The RMS distance of the points, weighted: sum w d^2 / k (the weights of mean 1).
-  const auto rms = [&](const DistanceSums& d) { return std::sqrt(d.squares / static_cast<double>(k)); };
+  // The RMS distance of the points the sums are of (all k, or the coarse iterations' sample), weighted: sum w d^2
+  // over their count (the weights of mean 1).
+  const auto rms = [&](const DistanceSums& d) {
+    return std::sqrt(d.squares / static_cast<double>(d.count > 0 ? d.count : k));
+  };
   std::unique_ptr<PointIndex> data_index;
   std::vector<std::int64_t> nearest;
   std::vector<double> near_distance;
@@ -351,9 +358,13 @@ ApproximationResult approximate(LimitSurface& surface, PointChunks& chunks, cons
   double current_loss = 0.0;  // the criterion at the last record's distances (robust), in the fit's units
   const auto criterion = [&](const DistanceSums& d) { return robust ? current_loss : rms(d); };
   const double not_measured = std::numeric_limits<double>::quiet_NaN();
-  const auto record = [&](int iteration, const DistanceSums& distances, long long solver_iterations) {
+  const auto record = [&](int iteration, const DistanceSums& distances, long long solver_iterations,
+                          const std::array<double, 2>& move) {
     ApproximationRecord rec;
     rec.iteration = iteration;
+    rec.points = distances.count;
+    rec.move_max_relative = move[0];
+    rec.move_rms_relative = move[1];
     rec.rms = rms(distances);
     rec.max = distances.max;
     rec.rms_relative = rec.rms / unit;
@@ -381,17 +392,6 @@ ApproximationResult approximate(LimitSurface& surface, PointChunks& chunks, cons
   };
   const auto footpoints = [&](auto&& fn) { return phases.timed(&ApproximationTimings::footpoints, fn); };
 
-  DistanceSums feet = footpoints([&] { return chunks.search(options.footpoints); });
-  measure_scale();
-  record(0, feet, 0);
-  chunks.keep_best();
-  struct Best {
-    double rms;
-    std::vector<double> V;
-    int iteration;
-  } best{criterion(feet), V, 0};
-  std::vector<double> bests{best.rms};  // the lowest RMS so far, after each iteration
-
   CsrMatrix K;
   if (options.fairness > 0) {
     FairnessQuadrature quadrature;
@@ -417,8 +417,27 @@ ApproximationResult approximate(LimitSurface& surface, PointChunks& chunks, cons
     phases.cpu.rows += s.rows_cpu;
     return s;
   };
-  for (int it = 1; it <= options.iterations; ++it) {
+  // How far an update moved the control vertices that a face uses, over the diagonal: {largest, RMS}.
+  const auto moved = [&](const std::vector<double>& before) -> std::array<double, 2> {
+    double largest = 0.0;
+    std::vector<double> squares;
+    squares.reserve(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      if (topology.n_unreferenced() > 0 && topology.is_unreferenced(i)) continue;
+      const double d[3] = {V[3 * i] - before[3 * i], V[3 * i + 1] - before[3 * i + 1], V[3 * i + 2] - before[3 * i + 2]};
+      const double s2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+      largest = std::max(largest, s2);
+      squares.push_back(s2);
+    }
+    const double rms_move = squares.empty() ? 0.0 : std::sqrt(pairwise_sum(squares.data(), squares.size()) /
+                                                                  static_cast<double>(squares.size()));
+    return {std::sqrt(largest) / unit, rms_move / unit};
+  };
+  std::vector<double> V_before;
+  // One update of V from the current footpoints (step 2): the solver's iterations.
+  const auto update = [&](int it) -> long long {
     poll_interrupt();
+    V_before = V;
     NormalSums S = sums();
     long long used = 0;
     std::vector<double> rhs = std::move(S.rhs);
@@ -460,10 +479,45 @@ ApproximationResult approximate(LimitSurface& surface, PointChunks& chunks, cons
         throw ParameterError("approximation's update " + std::to_string(it) + " gave control vertex " +
                              std::to_string(i / 3) + " a value that is not finite");
     set_vertices(V);
+    return used;
+  };
+
+  // Coarse iterations (step 1b): updates on the fixed sample, the last one's footpoints of all points.
+  const std::size_t n_used = n - topology.n_unreferenced();
+  const double wanted = options.coarse_points * static_cast<double>(n_used);
+  const int coarse = wanted <= 0.5 * static_cast<double>(k) ? std::min(options.coarse_iterations, options.iterations - 1)
+                                                             : 0;
+  if (coarse > 0) chunks.set_sample(static_cast<std::size_t>(wanted));
+  DistanceSums feet = footpoints([&] { return chunks.search(options.footpoints); });
+  measure_scale();
+  record(0, feet, 0, {0.0, 0.0});
+  for (int it = 1; it <= coarse; ++it) {
+    const long long used = update(it);
+    if (it == coarse) {
+      chunks.set_sample(0);
+      feet = footpoints([&] { return chunks.search(options.footpoints); });
+    } else {
+      feet = footpoints([&] { return chunks.refine(options.footpoints); });
+    }
+    measure_scale();
+    record(it, feet, used, moved(V_before));
+  }
+  done = coarse;
+  chunks.keep_best();
+  struct Best {
+    double rms;
+    std::vector<double> V;
+    int iteration;
+  } best{criterion(feet), V, coarse};
+  std::vector<double> bests{best.rms};  // the lowest RMS so far, after each iteration on all points
+  searched = coarse;
+
+  for (int it = coarse + 1; it <= options.iterations; ++it) {
+    const long long used = update(it);
     feet = footpoints([&] { return chunks.refine(options.footpoints); });
     measure_scale();
     done = it;
-    const ApproximationRecord rec = record(it, feet, used);
+    const ApproximationRecord rec = record(it, feet, used, moved(V_before));
     const double current = criterion(feet);
     if (current <= best.rms) {
       best = Best{current, V, it};
@@ -512,6 +566,7 @@ ApproximationResult approximate(LimitSurface& surface, PointChunks& chunks, cons
   }
   // The iterate of the lowest RMS distance (an update that raised it is not returned).
   out.iterations = done;
+  out.coarse_iterations = coarse;
   out.best_iteration = best.iteration;
   out.control_vertices = std::move(best.V);
   detail::scale_pow2(out.control_vertices.data(), out.control_vertices.size(), e);

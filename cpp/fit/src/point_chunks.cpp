@@ -363,6 +363,17 @@ NormalSums ApproximationChunk::normal_sums(const LimitSurface& surface, double t
   return out;
 }
 
+ApproximationChunk ApproximationChunk::sampled(std::size_t k, std::size_t sample_points) const {
+  const std::vector<char> in = point_sample_mask(first_, k_, k, sample_points);
+  std::vector<double> points, weights;
+  for (std::size_t i = 0; i < k_; ++i)
+    if (in[i]) {
+      points.insert(points.end(), &points_[3 * i], &points_[3 * i + 3]);
+      if (!weights_.empty()) weights.push_back(weights_[i]);
+    }
+  return ApproximationChunk(points.data(), points.size() / 3, weights_.empty() ? nullptr : weights.data(), first_);
+}
+
 Footpoints ApproximationChunk::best_footpoints() const {
   Footpoints f;
   f.face_ids = best.face_ids;
@@ -427,8 +438,8 @@ DistanceSums LocalChunks::search(const FootpointOptions& options) {
   DistanceSums t;
   for (std::size_t c = 0; c < n_chunks(); ++c) {
     poll_interrupt();
-    add(t, load(c, kPoints).search(s));
-    store(c, kCurrent);
+    add(t, chunk(c, kPoints).search(s));
+    put(c, kCurrent);
   }
   return t;
 }
@@ -437,16 +448,16 @@ DistanceSums LocalChunks::refine(const FootpointOptions& options) {
   DistanceSums t;
   for (std::size_t c = 0; c < n_chunks(); ++c) {
     poll_interrupt();
-    add(t, load(c, kPoints | kCurrent).refine(surface_, options));
-    store(c, kCurrent);
+    add(t, chunk(c, kPoints | kCurrent).refine(surface_, options));
+    put(c, kCurrent);
   }
   return t;
 }
 
 void LocalChunks::keep_best() {
   for (std::size_t c = 0; c < n_chunks(); ++c) {
-    load(c, kCurrent).keep_best();
-    store(c, kBest);
+    chunk(c, kCurrent).keep_best();
+    put(c, kBest);
   }
 }
 
@@ -455,24 +466,24 @@ DistanceSums LocalChunks::search_fresh(const FootpointOptions& options, double c
   DistanceSums t;
   for (std::size_t c = 0; c < n_chunks(); ++c) {
     poll_interrupt();
-    add(t, load(c, kPoints | kCurrent).search_fresh(s, closer));
-    store(c, kFresh);
+    add(t, chunk(c, kPoints | kCurrent).search_fresh(s, closer));
+    put(c, kFresh);
   }
   return t;
 }
 
 void LocalChunks::keep_fresh(double closer) {
   for (std::size_t c = 0; c < n_chunks(); ++c) {
-    load(c, kCurrent | kFresh).keep_fresh(closer);
-    store(c, kCurrent);
+    chunk(c, kCurrent | kFresh).keep_fresh(closer);
+    put(c, kCurrent);
   }
 }
 
 DistanceSums LocalChunks::keep_fresh_in_best() {
   DistanceSums t;
   for (std::size_t c = 0; c < n_chunks(); ++c) {
-    add(t, load(c, kBest | kFresh).keep_fresh_in_best());
-    store(c, kBest);
+    add(t, chunk(c, kBest | kFresh).keep_fresh_in_best());
+    put(c, kBest);
   }
   return t;
 }
@@ -483,8 +494,8 @@ NormalSums LocalChunks::chunks_normal_sums(double tangential, const RobustOption
   NormalSums t;
   for (std::size_t c = 0; c < n_chunks(); ++c) {
     poll_interrupt();
-    add(t, load(c, kPoints | kCurrent).normal_sums(surface_, tangential, robust, scale));
-    store(c, 0);
+    add(t, chunk(c, kPoints | kCurrent).normal_sums(surface_, tangential, robust, scale));
+    put(c, 0);
   }
   return t;
 }
@@ -507,6 +518,11 @@ namespace {
 }
 }  // namespace
 
+void PointChunks::set_sample(std::size_t) {
+  throw ParameterError("this backend of chunks cannot run coarse iterations on a sample of the points (it has no "
+                       "set_sample): pass coarse_iterations = 0");
+}
+
 DistanceHistogram PointChunks::distance_histogram(double) { no_robust(); }
 RobustSums PointChunks::robust_sums(const RobustOptions&, double) { no_robust(); }
 NormalSums PointChunks::robust_normal_sums(double, const RobustOptions&, double) { no_robust(); }
@@ -514,8 +530,8 @@ NormalSums PointChunks::robust_normal_sums(double, const RobustOptions&, double)
 DistanceHistogram LocalChunks::distance_histogram(double unit) {
   DistanceHistogram t(unit);
   for (std::size_t c = 0; c < n_chunks(); ++c) {
-    t.merge(load(c, kCurrent).distance_histogram(unit));
-    store(c, 0);
+    t.merge(chunk(c, kCurrent).distance_histogram(unit));
+    put(c, 0);
   }
   return t;
 }
@@ -523,14 +539,24 @@ DistanceHistogram LocalChunks::distance_histogram(double unit) {
 RobustSums LocalChunks::robust_sums(const RobustOptions& robust, double scale) {
   RobustSums t;
   for (std::size_t c = 0; c < n_chunks(); ++c) {
-    t.add(load(c, kCurrent).robust_sums(robust, scale));
-    store(c, 0);
+    t.add(chunk(c, kCurrent).robust_sums(robust, scale));
+    put(c, 0);
   }
   return t;
 }
 
 NormalSums LocalChunks::robust_normal_sums(double tangential, const RobustOptions& robust, double scale) {
   return chunks_normal_sums(tangential, &robust, scale);
+}
+
+void LocalChunks::set_sample(std::size_t sample_points) {
+  sampled_.clear();
+  if (sample_points == 0) return;
+  sampled_.reserve(n_chunks());
+  for (std::size_t c = 0; c < n_chunks(); ++c) {
+    sampled_.push_back(load(c, kPoints).sampled(total_points(), sample_points));
+    store(c, 0);
+  }
 }
 
 std::vector<double> LocalChunks::sample() {

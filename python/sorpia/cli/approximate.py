@@ -13,7 +13,7 @@ from .. import DecimationWarning, MeshError, MeshFileError, __version__, _core, 
 from .._dask import connect, worker_addresses  # imports dask.distributed only when called
 from .._nonmanifold import NONMANIFOLD_HINT, REPAIR_HINT
 from .._validate import DEFAULT_BOUNDARY, Polygons, resolve_scheme
-from ..approximate import DEFAULT_FAIRNESS, DEFAULT_ROBUST, DEFAULT_TOL
+from ..approximate import DEFAULT_COARSE_ITERATIONS, DEFAULT_FAIRNESS, DEFAULT_ROBUST, DEFAULT_TOL
 from .common import (EXIT_OK, SCHEME_LABELS, UserError, check_mesh_suffix, choose_scheme, fmt_seconds, is_triangles,
                      read_input, report_warnings, solve_tags, tags_lines, tags_summary, warn_once)
 from .output import (attribute_lines, attributes_to_write, check_float32_outputs, check_outputs,
@@ -118,7 +118,8 @@ def _n_faces(faces) -> int:
 def run_approximate(input_path, output, *, vertices=None, cage=None, scheme="auto", sharp_angle=None, report=None,
                     surface=None, level=3, iterations=10, tol=DEFAULT_TOL, fairness=DEFAULT_FAIRNESS, tangential=None,
                     method="cg", boundary=None, sampling=None, quiet=False, force=False, out=None, prim=None,
-                    triangulate=False, stream="auto", robust=DEFAULT_ROBUST, scheduler=None) -> tuple[int, dict]:
+                    triangulate=False, stream="auto", robust=DEFAULT_ROBUST, scheduler=None,
+                    coarse_iterations=DEFAULT_COARSE_ITERATIONS) -> tuple[int, dict]:
     """`sorpia approximate`: returns (exit code, report dict). Every output
     is checked before the work and written atomically after it; an error
     leaves none of them. The cage is written with its scheme, boundary rule
@@ -140,7 +141,7 @@ def run_approximate(input_path, output, *, vertices=None, cage=None, scheme="aut
                     sharp_angle=sharp_angle, report=report, surface=surface, level=level, iterations=iterations,
                     tol=tol, fairness=fairness, tangential=tangential, method=method, boundary=boundary,
                     sampling=sampling, quiet=quiet, out=out, prim=prim, triangulate=triangulate, stream=stream,
-                    robust=robust)
+                    robust=robust, coarse_iterations=coarse_iterations)
 
 
 @contextlib.contextmanager
@@ -159,7 +160,7 @@ def _client(address):
 
 def _run(input_path, output, client, scheduler, timings, *, vertices, cage, scheme, sharp_angle, report, surface,
          level, iterations, tol, fairness, tangential, method, boundary, sampling, quiet, out, prim, triangulate,
-         stream, robust):
+         stream, robust, coarse_iterations):
     """run_approximate's work, with its client (or None)."""
     with Progress("approximate", enabled=not quiet) as progress:
         t0 = time.perf_counter()
@@ -206,7 +207,8 @@ def _run(input_path, output, client, scheduler, timings, *, vertices, cage, sche
                 warnings.simplefilter("always")
                 res = approximate(points, cage_v, cage_f, scheme=scheme, boundary=rule, iterations=iterations,
                                   tol=tol, fairness=fairness, tangential=tangential, method=method,
-                                  callback=on_iteration, robust=robust, client=client, **surface_data,
+                                  callback=on_iteration, robust=robust, client=client,
+                                  coarse_iterations=coarse_iterations, **surface_data,
                                   **tags)
         except MeshError as exc:  # the data were read and checked: what is refused is the cage
             raise _cage_refusal(exc, origin, input_path) from None

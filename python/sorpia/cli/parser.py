@@ -9,7 +9,8 @@ from .._validate import BOUNDARY_RULES, DEFAULT_BOUNDARY
 from .._plotting import FACE_BUDGET  # plotting imports matplotlib only when drawing
 from ..fair import MAX_LEVELS
 from .common import CLI_SCHEMES, DISPLAY_ORDER, FAIR_DEFAULTS, FIT_DEFAULTS
-from ..approximate import DEFAULT_FAIRNESS, DEFAULT_ROBUST, DEFAULT_TANGENTIAL, DEFAULT_TOL, ROBUST_LOSSES, SAMPLINGS
+from ..approximate import (DEFAULT_COARSE_ITERATIONS, DEFAULT_FAIRNESS, DEFAULT_ROBUST, DEFAULT_TANGENTIAL, DEFAULT_TOL,
+                           ROBUST_LOSSES, SAMPLINGS)
 from .approximate import DEFAULT_SAMPLING, STREAM_POINTS, run_approximate
 from .compare import run_compare
 from .demo import run_demo
@@ -302,6 +303,10 @@ def build_parser() -> argparse.ArgumentParser:
     app.add_argument("--tol", type=_float_arg, default=DEFAULT_TOL,
                      help="stop when the RMS distance fell by less than this fraction per iteration over the last "
                      "three (and a fresh search of the footpoints finds none closer by more)")
+    app.add_argument("--coarse-iterations", type=_int_arg, default=DEFAULT_COARSE_ITERATIONS, metavar="K",
+                     help="of the updates, the first K from the footpoints of a fixed sample of the points (16 per "
+                     "control vertex; none where that is over half the points), at a fraction of the cost "
+                     "(default: %(default)s)")
     app.add_argument("--sampling", choices=("vertices",) + SAMPLINGS, default=None,
                      help="the data of an input mesh with faces: vertices = its vertices, equally weighted; area = "
                      "its vertices weighted by their share of the surface's area; midpoints = its edges' midpoints "
@@ -342,7 +347,7 @@ def build_parser() -> argparse.ArgumentParser:
         report=a.report, surface=a.surface, level=a.level, iterations=a.iterations, tol=a.tol,
         fairness=a.fairness, tangential=a.tangential, method=a.method, boundary=a.boundary, sampling=a.sampling,
         quiet=a.quiet, force=a.force, prim=a.prim, triangulate=a.triangulate, stream=a.stream,
-        robust=a.robust, scheduler=a.scheduler)[0])
+        robust=a.robust, scheduler=a.scheduler, coarse_iterations=a.coarse_iterations)[0])
 
     comp = command("compare", "run several methods to one tolerance: the paper's Table 1 and Figure 7",
                    "Run each method on the mesh to the same tolerance and print the paper's Table 1 layout for "

@@ -8,6 +8,12 @@
 ///   1. footpoints: each point's closest point of the surface as (face, u, v)
 ///      (closest_points: the nearest of a grid of limit points, then
 ///      Gauss-Newton), record 0;
+///   1b. coarse iterations first (coarse_iterations > 0, and a sample of at
+///      most half the points): steps 1-3 on a fixed sample of the points
+///      (PointChunks::set_sample: coarse_points per control vertex a face
+///      uses), without the stop rule, then the footpoints of all points
+///      searched afresh (step 1) for the iterate they reached; steps 2-4
+///      go on from there on all points;
 ///   2. per iteration: the rows A of the surface at the footpoints
 ///      (LimitSurface::rows, the points in face order), the normal equations
 ///      (A^T W A + c K + mu I) V = A^T W P + mu V_prev (W the points' weights,
@@ -54,7 +60,13 @@ enum class ApproximationUpdate {
 
 /// The options of approximate (checked there, before any work).
 struct ApproximationOptions {
-  int iterations = 10;            ///< updates at most, >= 1
+  int iterations = 10;            ///< updates at most (the coarse ones included), >= 1
+  /// Updates on the sample first (step 1b), >= 0, at most iterations - 1
+  /// (one update at least on all points); 0: none.
+  int coarse_iterations = 0;
+  /// The sample's size in points per control vertex a face uses, finite,
+  /// > 0; no coarse iterations when it would hold more than half the points.
+  double coarse_points = 16.0;
   double tol = 3e-3;              ///< the stop rule's fall per iteration (step 4), finite, >= 0
   double fairness = 3e-4;         ///< c over the mean diagonal of A^T W A, finite, >= 0; 0: no K
   double tangential = 0.1;        ///< in [0, 1]: 1 point distance, 0 tangent distance, between a blend
@@ -88,6 +100,9 @@ struct ApproximationOptions {
 /// One iteration's figures (iteration 0: the cage as given).
 struct ApproximationRecord {
   int iteration = 0;
+  /// The points its figures are of: all, or the coarse iterations' sample's
+  /// (step 1b; their last update's figures are of all points).
+  std::size_t points = 0;
   /// Data to surface: the (weighted) RMS and the largest footpoint distance;
   /// surface to data: from the tessellation's vertices to the nearest point
   /// (NaN where not measured: ApproximationOptions::report_each).
@@ -103,6 +118,10 @@ struct ApproximationRecord {
   /// With a robust loss: the scale s of these distances, which weighs the
   /// points in the next update (ApproximationOptions::robust); 0 without.
   double robust_scale = 0.0;
+  /// How far the update before it moved the control vertices (those a face
+  /// uses), over the diagonal: the largest move and the RMS move (0 at
+  /// iteration 0).
+  double move_max_relative = 0.0, move_rms_relative = 0.0;
   long long solver_iterations = 0;  ///< of the update before it (0 at iteration 0)
   double seconds = 0.0;             ///< since approximate was called
 };
@@ -118,7 +137,8 @@ struct ApproximationResult {
   /// The footpoints on that V's surface after the final fresh search:
   /// face_ids, uv and distances (the other fields empty).
   Footpoints footpoints;
-  int iterations = 0;      ///< updates made
+  int iterations = 0;      ///< updates made (the coarse ones included)
+  int coarse_iterations = 0;  ///< of them on the sample (step 1b)
   /// "converged", "exact" or "max_iter" (`iterations` ran out; step 4).
   std::string stop_reason;
   int best_iteration = 0;  ///< the iteration whose V is returned

@@ -138,6 +138,11 @@ class ApproximationChunk {
   State current, best, fresh;
   /// Points (and weights) replaced, e.g. read again from a file: k unchanged.
   void set_points(std::vector<double> points, std::vector<double> weights);
+  /// A chunk of this one's points (and weights) that are in the fixed sample
+  /// of about sample_points of all k (point_sample_mask: each point's choice
+  /// its own, the same for any chunking), without footpoint states: the
+  /// coarse iterations' chunk (PointChunks::set_sample).
+  ApproximationChunk sampled(std::size_t k, std::size_t sample_points) const;
 
  private:
   friend class FileChunks;
@@ -147,8 +152,10 @@ class ApproximationChunk {
 };
 
 /// The driver's view of all chunks (a backend). The driver calls, in order:
-/// size, extent, scale (only when e != 0), moments, line_offset; then per
-/// surface state set_control_vertices, and search (iteration 0), refine
+/// size, extent, scale (only when e != 0), moments, line_offset; set_sample
+/// around the coarse iterations (only with them); then per surface state
+/// set_control_vertices, and search (iteration 0, and after the coarse
+/// iterations), refine
 /// (after each update), normal_sums (before each update), keep_best (when
 /// the RMS is the lowest so far), search_fresh / keep_fresh (before
 /// stopping), keep_fresh_in_best and best_footpoints (at the end); sample
@@ -181,6 +188,14 @@ class PointChunks {
   virtual DistanceHistogram distance_histogram(double unit);
   virtual RobustSums robust_sums(const RobustOptions& robust, double scale);
   virtual NormalSums robust_normal_sums(double tangential, const RobustOptions& robust, double scale);
+  /// The coarse iterations' points (ApproximationOptions::coarse_iterations):
+  /// with sample_points > 0, every call from search to robust_normal_sums
+  /// works, until the next set_sample, on the chunks' points in the fixed
+  /// sample of about sample_points of all (ApproximationChunk::sampled), with
+  /// footpoint states of their own; with 0, on all points again, with their
+  /// states as before. A backend without it cannot run coarse iterations:
+  /// this default throws ParameterError saying so.
+  virtual void set_sample(std::size_t sample_points);
   /// Points for the surface-to-data distances (row-major (s, 3)): all of
   /// them when they fit, else a fixed sample.
   virtual std::vector<double> sample() = 0;
@@ -213,6 +228,8 @@ class LocalChunks : public PointChunks {
   DistanceHistogram distance_histogram(double unit) override;
   RobustSums robust_sums(const RobustOptions& robust, double scale) override;
   NormalSums robust_normal_sums(double tangential, const RobustOptions& robust, double scale) override;
+  /// The sample's chunks are held in memory (about sample_points points).
+  void set_sample(std::size_t sample_points) override;
   std::vector<double> sample() override;
   Footpoints best_footpoints() override;
 
@@ -232,6 +249,12 @@ class LocalChunks : public PointChunks {
   const FootpointSearch& footpoint_search(const FootpointOptions& options);
   // normal_sums of every chunk added in order; with `robust`, the robust fit's (robust_normal_sums).
   NormalSums chunks_normal_sums(double tangential, const RobustOptions* robust, double scale);
+  // Chunk c for a footpoint call: the sample's (set_sample), else load(c, needs); put(c, changed) gives it back.
+  ApproximationChunk& chunk(std::size_t c, unsigned needs) { return sampled_.empty() ? load(c, needs) : sampled_[c]; }
+  void put(std::size_t c, unsigned changed) {
+    if (sampled_.empty()) store(c, changed);
+  }
+  std::vector<ApproximationChunk> sampled_;  // the coarse iterations' chunks, empty when working on all points
   LimitSurface& surface_;
   std::unique_ptr<FootpointSearch> search_;
   FootpointOptions search_options_{};
