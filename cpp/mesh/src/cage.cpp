@@ -250,9 +250,8 @@ class LazyDecimater : public OpenMesh::Decimater::BaseDecimaterT<OMesh> {
   // refusals and touched marks) is then the half's alone, so the halves
   // neither race nor depend on each other's progress, and the cage is the
   // same on one thread or two. Each half makes at most its share (by its
-  // vertices left) of the collapses the round wants. The cut moves by a
-  // quarter of the order every other round (half 0 is [0, n/2), then
-  // [n/4, 3n/4)), so that a collapse across one cut is made under the next.
+  // vertices left) of the collapses the round wants. The collapses across
+  // the cut wait for the heap (decimate_to).
   std::size_t decimate_in_rounds(std::size_t& count, std::size_t target, Quadric& priority) {
     constexpr double kRoundShare = 0.3;
     priority_module_ = &priority;
@@ -260,38 +259,29 @@ class LazyDecimater : public OpenMesh::Decimater::BaseDecimaterT<OMesh> {
     target_.assign(n, HalfedgeHandle());
     priority_.assign(n, -1.0f);
     refused_.assign(mesh_.n_halfedges(), 0);
-    // Half 0: [lo, hi), half 1 the rest; the cut moves by a quarter every other round, so that no band
-    // along it is left out of the rounds.
-    const int all = static_cast<int>(n);
-    int lo = 0, hi = all / 2;
-    const auto half = [&lo, &hi](VertexHandle v) { return v.idx() >= lo && v.idx() < hi ? 0 : 1; };
-    const auto ranges = [&lo, &hi, all](int t) {
-      return t == 0 ? std::vector<std::pair<int, int>>{{lo, hi}} : std::vector<std::pair<int, int>>{{0, lo}, {hi, all}};
-    };
+    const int cut = static_cast<int>(n / 2);
+    const int begin[2] = {0, cut}, end[2] = {cut, static_cast<int>(n)};
+    const auto half = [cut](VertexHandle v) { return v.idx() < cut ? 0 : 1; };
     const bool parallel = detail::available_processors() > 1;
     std::vector<int> touched(n, -1);  // the round whose collapse last touched the vertex
     std::vector<float> costs[2];
     std::vector<VertexHandle> rings[2], scratch[2];
-    std::vector<int> lift[2];  // half-edges whose refusal is lifted after the sweep
     std::size_t left[2], budget[2], made_in[2];
     bool stop = false;
     std::size_t made = 0;
     for (int round = 0; count > target; ++round) {
-      lo = round % 2 == 0 ? 0 : all / 4;
-      hi = lo + all / 2;
       // Costed again: the vertices a collapse or a refusal of the round before touched (the rest stand).
       detail::for_each_task(parallel, 2, [&](int t) {
         costs[t].clear();
         left[t] = 0;
-        for (const auto& [first, last] : ranges(t))
-          for (int i = first; i < last; ++i) {
-            if ((i & 0xffff) == 0) poll_interrupt();
-            const VertexHandle v(i);
-            if (mesh_.status(v).deleted()) continue;
-            ++left[t];
-            if (round == 0 || touched[i] == round - 1) best_collapse(v, true);
-            if (target_[i].is_valid()) costs[t].push_back(priority_[i]);
-          }
+        for (int i = begin[t]; i < end[t]; ++i) {
+          if ((i & 0xffff) == 0) poll_interrupt();
+          const VertexHandle v(i);
+          if (mesh_.status(v).deleted()) continue;
+          ++left[t];
+          if (round == 0 || touched[i] == round - 1) best_collapse(v, true);
+          if (target_[i].is_valid()) costs[t].push_back(priority_[i]);
+        }
       });
       costs[0].insert(costs[0].end(), costs[1].begin(), costs[1].end());
       if (costs[0].empty()) break;
@@ -309,48 +299,38 @@ class LazyDecimater : public OpenMesh::Decimater::BaseDecimaterT<OMesh> {
             if (half(w) != t) return false;
           return true;
         };
-        for (const auto& [first, last] : ranges(t))
-          for (int i = first; i < last && made_in[t] < budget[t]; ++i) {
-            const VertexHandle v(i);
-            if (touched[i] == round || mesh_.status(v).deleted() || !target_[i].is_valid() || priority_[i] > threshold)
-              continue;
-            const HalfedgeHandle h = target_[i];
-            if (!inside(v) || !inside(mesh_.to_vertex_handle(h))) continue;
-            CollapseInfo ci(mesh_, h);
-            if (!allowed(ci, scratch[t])) {
-              refused_[h.idx()] = 1;
-              touched[i] = round;
-              continue;
-            }
-            // Touched: both ends' one-rings, whose costs and tests the collapse changes.
-            for (const auto w : mesh_.vv_range(ci.v1)) touched[w.idx()] = round;
-            collapse(ci, rings[t]);
-            ++made_in[t];
-            // A refusal stands while the one-rings its tests read stay as they were (decimate_to). A half-edge
-            // to or from the other half (refused in an earlier round, under another cut) is lifted after the
-            // sweep: the other half may lift it too.
-            for (const VertexHandle w : rings[t]) {
-              touched[w.idx()] = round;
-              const auto lift_refusal = [&](HalfedgeHandle e, VertexHandle other) {
-                if (half(other) == t)
-                  refused_[e.idx()] = 0;
-                else
-                  lift[t].push_back(e.idx());
-              };
-              for (const auto out : mesh_.voh_range(w)) lift_refusal(out, mesh_.to_vertex_handle(out));
-              for (const auto in : mesh_.vih_range(w)) lift_refusal(in, mesh_.from_vertex_handle(in));
-            }
-            // Ctrl-C: the observer is polled on the calling thread (task 0) only.
-            if (t == 0 && !this->notify_observer(made + made_in[0])) {
-              stop = true;
-              break;
-            }
+        for (int i = begin[t]; i < end[t] && made_in[t] < budget[t]; ++i) {
+          const VertexHandle v(i);
+          if (touched[i] == round || mesh_.status(v).deleted() || !target_[i].is_valid() || priority_[i] > threshold)
+            continue;
+          const HalfedgeHandle h = target_[i];
+          if (!inside(v) || !inside(mesh_.to_vertex_handle(h))) continue;
+          CollapseInfo ci(mesh_, h);
+          if (!allowed(ci, scratch[t])) {
+            refused_[h.idx()] = 1;
+            touched[i] = round;
+            continue;
           }
+          // Touched: both ends' one-rings, whose costs and tests the collapse changes.
+          for (const auto w : mesh_.vv_range(ci.v1)) touched[w.idx()] = round;
+          collapse(ci, rings[t]);
+          ++made_in[t];
+          // A refusal stands while the one-rings its tests read stay as they were (decimate_to); a half-edge
+          // from the other half was never refused here (a collapse across the cut is not tried).
+          for (const VertexHandle w : rings[t]) {
+            touched[w.idx()] = round;
+            for (const auto out : mesh_.voh_range(w))
+              if (half(mesh_.to_vertex_handle(out)) == t) refused_[out.idx()] = 0;
+            for (const auto in : mesh_.vih_range(w))
+              if (half(mesh_.from_vertex_handle(in)) == t) refused_[in.idx()] = 0;
+          }
+          // Ctrl-C: the observer is polled on the calling thread (task 0) only.
+          if (t == 0 && !this->notify_observer(made + made_in[0])) {
+            stop = true;
+            break;
+          }
+        }
       });
-      for (auto& l : lift) {
-        for (const int h : l) refused_[static_cast<std::size_t>(h)] = 0;
-        l.clear();
-      }
       count -= made_in[0] + made_in[1];
       made += made_in[0] + made_in[1];
       if (stop) return made;
