@@ -12,7 +12,6 @@
 
 #include "expect_error.hpp"
 #include "sorpia/cage.hpp"
-#include "sorpia/detail/parallel.hpp"
 #include "sorpia/errors.hpp"
 #include "sorpia/shapes.hpp"
 
@@ -114,32 +113,6 @@ TEST(Cage, StoppedReturnsTheMeshTheGuardsStoppedAtWithTheErrorsWords) {
     EXPECT_LE(full.n_vertices(), n);
     EXPECT_GE(full.n_vertices() + 5, n);
   }
-}
-
-// From 200,000 vertices decimate collapses first in rounds, the mesh's two
-// halves each on a thread of its own where two processors are free: the
-// cage must not depend on that. An irregular mesh (no ties of cost to break)
-// with holes (boundary rules at the halves' cut), on two threads and on one
-// (a ThreadCap of 1 runs the halves one after the other): the same vertices
-// and faces, bit for bit (Loop's: Catmull-Clark pairs the same triangles).
-TEST(Cage, RoundsOnTwoThreadsGiveTheCageOfOne) {
-  if (sorpia::detail::available_processors() < 2) GTEST_SKIP() << "one processor: both runs would take one thread";
-  sorpia::Mesh mesh = sorpia::irregular(210000, 3);
-  // Holes: every 97th face left out.
-  std::vector<std::int32_t> kept;
-  for (std::size_t f = 0; f < mesh.face_vertex_indices.size() / 3; ++f)
-    if (f % 97 != 0) kept.insert(kept.end(), &mesh.face_vertex_indices[3 * f], &mesh.face_vertex_indices[3 * f + 3]);
-  mesh.face_vertex_indices = kept;
-  std::string stopped_two, stopped_one;
-  const sorpia::Mesh two = sorpia::decimate(mesh, 5000, {}, &stopped_two);
-  sorpia::Mesh one;
-  {
-    const sorpia::detail::ThreadCap cap(1);
-    one = sorpia::decimate(mesh, 5000, {}, &stopped_one);
-  }
-  EXPECT_EQ(two.vertices, one.vertices);
-  EXPECT_EQ(two.face_vertex_indices, one.face_vertex_indices);
-  EXPECT_EQ(stopped_two, stopped_one);
 }
 
 }  // namespace

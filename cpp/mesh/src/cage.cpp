@@ -19,7 +19,6 @@
 #include <vector>
 
 #include "openmesh_types.hpp"
-#include "sorpia/detail/parallel.hpp"
 #include "sorpia/errors.hpp"
 #include "sorpia/interrupt.hpp"
 #include "sorpia/topology.hpp"
@@ -106,18 +105,12 @@ class ModQuadricErrorT : public OpenMesh::Decimater::ModBaseT<MeshT> {
     }
   }
 
-  // The error of collapsing v0 onto v1 (v0 removed, v1 kept where it is), (Q0 + Q1)(p1).
-  float error(VertexHandle v0, VertexHandle v1) {
-    Quadric q = quadric(v0);
-    q += quadric(v1);
-    return static_cast<float>(q(Base::mesh().point(v1)));
-  }
-  // The same as Q0(p1) + Q1(p1), the second term kept per vertex (it changes
-  // only where a collapse adds to Q1), so that costing v0's collapses reads
-  // its neighbours' points and not their quadrics; equal to error() up to
-  // rounding (which decides between collapses of equal cost, so error() alone
-  // costs a mesh decimated from the heap alone: the cages of before).
-  float split_error(const Quadric& q0, VertexHandle v1) {
+  // The error of collapsing v0 onto v1 (v0 removed, v1 kept where it is):
+  // (Q0 + Q1)(p1) = Q0(p1) + Q1(p1), the second term kept per vertex (it
+  // changes only where a collapse adds to Q1), so that costing v0's
+  // collapses reads its neighbours' points and not their quadrics.
+  float error(VertexHandle v0, VertexHandle v1) { return error(quadric(v0), v1); }
+  float error(const Quadric& q0, VertexHandle v1) {
     const Site& s = Base::mesh().property(sites_, v1);
     return static_cast<float>(q0(s.p) + s.own);
   }
@@ -205,7 +198,7 @@ class LazyDecimater : public OpenMesh::Decimater::BaseDecimaterT<OMesh> {
       const HalfedgeHandle h = target_[v.idx()];
       heap.pop_front();
       CollapseInfo ci(mesh_, h);
-      if (!allowed(ci, scratch_)) {
+      if (!allowed(ci)) {
         refused_[h.idx()] = 1;
         cost(v);
         continue;
@@ -241,17 +234,6 @@ class LazyDecimater : public OpenMesh::Decimater::BaseDecimaterT<OMesh> {
   // decimate_to. The sweep reads the mesh in its order in memory (vertices
   // in Morton order: to_openmesh), where the heap's order jumps across all
   // of it: the decimation of a large mesh is bound by that memory traffic.
-  //
-  // The vertices are cut into two halves of that order, costed and swept
-  // each on a thread of its own (run_tasks; one after the other where no
-  // second thread can be had). A collapse is made in a half only where both
-  // its ends and their one-rings lie in that half: everything it reads and
-  // writes (the faces, edges and vertices around both ends, their costs,
-  // refusals and touched marks) is then the half's alone, so the halves
-  // neither race nor depend on each other's progress, and the cage is the
-  // same on one thread or two. Each half makes at most its share (by its
-  // vertices left) of the collapses the round wants. The collapses across
-  // the cut wait for the heap (decimate_to).
   std::size_t decimate_in_rounds(std::size_t& count, std::size_t target, Quadric& priority) {
     constexpr double kRoundShare = 0.3;
     priority_module_ = &priority;
@@ -259,83 +241,51 @@ class LazyDecimater : public OpenMesh::Decimater::BaseDecimaterT<OMesh> {
     target_.assign(n, HalfedgeHandle());
     priority_.assign(n, -1.0f);
     refused_.assign(mesh_.n_halfedges(), 0);
-    const int cut = static_cast<int>(n / 2);
-    const int begin[2] = {0, cut}, end[2] = {cut, static_cast<int>(n)};
-    const auto half = [cut](VertexHandle v) { return v.idx() < cut ? 0 : 1; };
-    const bool parallel = detail::available_processors() > 1;
     std::vector<int> touched(n, -1);  // the round whose collapse last touched the vertex
-    std::vector<float> costs[2];
-    std::vector<VertexHandle> rings[2], scratch[2];
-    std::size_t left[2], budget[2], made_in[2];
-    bool stop = false;
+    std::vector<float> costs;
+    std::vector<VertexHandle> ring;
     std::size_t made = 0;
     for (int round = 0; count > target; ++round) {
       // Costed again: the vertices a collapse or a refusal of the round before touched (the rest stand).
-      detail::for_each_task(parallel, 2, [&](int t) {
-        costs[t].clear();
-        left[t] = 0;
-        for (int i = begin[t]; i < end[t]; ++i) {
-          if ((i & 0xffff) == 0) poll_interrupt();
-          const VertexHandle v(i);
-          if (mesh_.status(v).deleted()) continue;
-          ++left[t];
-          if (round == 0 || touched[i] == round - 1) best_collapse(v, true);
-          if (target_[i].is_valid()) costs[t].push_back(priority_[i]);
-        }
-      });
-      costs[0].insert(costs[0].end(), costs[1].begin(), costs[1].end());
-      if (costs[0].empty()) break;
+      costs.clear();
+      for (const auto v : mesh_.vertices()) {
+        if ((v.idx() & 0xffff) == 0) poll_interrupt();
+        if (mesh_.status(v).deleted()) continue;
+        if (round == 0 || touched[v.idx()] == round - 1) best_collapse(v);
+        if (target_[v.idx()].is_valid()) costs.push_back(priority_[v.idx()]);
+      }
+      if (costs.empty()) break;
       const std::size_t want = std::min(count - target, std::max<std::size_t>(
-                                                            1, static_cast<std::size_t>(kRoundShare * costs[0].size())));
-      std::nth_element(costs[0].begin(), costs[0].begin() + static_cast<std::ptrdiff_t>(want - 1), costs[0].end());
-      const float threshold = costs[0][want - 1];
-      budget[0] = (count - target) * left[0] / (left[0] + left[1]);
-      budget[1] = count - target - budget[0];
-      detail::for_each_task(parallel, 2, [&](int t) {
-        made_in[t] = 0;
-        const auto inside = [&](VertexHandle v) {
-          if (half(v) != t) return false;
-          for (const auto w : mesh_.vv_range(v))
-            if (half(w) != t) return false;
-          return true;
-        };
-        for (int i = begin[t]; i < end[t] && made_in[t] < budget[t]; ++i) {
-          const VertexHandle v(i);
-          if (touched[i] == round || mesh_.status(v).deleted() || !target_[i].is_valid() || priority_[i] > threshold)
-            continue;
-          const HalfedgeHandle h = target_[i];
-          if (!inside(v) || !inside(mesh_.to_vertex_handle(h))) continue;
-          CollapseInfo ci(mesh_, h);
-          if (!allowed(ci, scratch[t])) {
-            refused_[h.idx()] = 1;
-            touched[i] = round;
-            continue;
-          }
-          // Touched: both ends' one-rings, whose costs and tests the collapse changes.
-          for (const auto w : mesh_.vv_range(ci.v1)) touched[w.idx()] = round;
-          collapse(ci, rings[t]);
-          ++made_in[t];
-          // A refusal stands while the one-rings its tests read stay as they were (decimate_to); a half-edge
-          // from the other half was never refused here (a collapse across the cut is not tried).
-          for (const VertexHandle w : rings[t]) {
-            touched[w.idx()] = round;
-            for (const auto out : mesh_.voh_range(w))
-              if (half(mesh_.to_vertex_handle(out)) == t) refused_[out.idx()] = 0;
-            for (const auto in : mesh_.vih_range(w))
-              if (half(mesh_.from_vertex_handle(in)) == t) refused_[in.idx()] = 0;
-          }
-          // Ctrl-C: the observer is polled on the calling thread (task 0) only.
-          if (t == 0 && !this->notify_observer(made + made_in[0])) {
-            stop = true;
-            break;
-          }
+                                                            1, static_cast<std::size_t>(kRoundShare * costs.size())));
+      std::nth_element(costs.begin(), costs.begin() + static_cast<std::ptrdiff_t>(want - 1), costs.end());
+      const float threshold = costs[want - 1];
+      const std::size_t before = made;
+      for (const auto v : mesh_.vertices()) {
+        if (count <= target) break;
+        const int i = v.idx();
+        if (touched[i] == round || mesh_.status(v).deleted() || !target_[i].is_valid() || priority_[i] > threshold)
+          continue;
+        const HalfedgeHandle h = target_[i];
+        CollapseInfo ci(mesh_, h);
+        if (!allowed(ci)) {
+          refused_[h.idx()] = 1;
+          touched[i] = round;
+          continue;
         }
-      });
-      count -= made_in[0] + made_in[1];
-      made += made_in[0] + made_in[1];
-      if (stop) return made;
+        // Touched: both ends' one-rings, whose costs and tests the collapse changes.
+        for (const auto w : mesh_.vv_range(ci.v1)) touched[w.idx()] = round;
+        --count;  // count > target >= 0
+        collapse(ci, ring);
+        // A refusal stands while the one-rings its tests read stay as they were (decimate_to).
+        for (const VertexHandle w : ring) {
+          touched[w.idx()] = round;
+          for (const auto out : mesh_.voh_range(w)) refused_[out.idx()] = 0;
+          for (const auto in : mesh_.vih_range(w)) refused_[in.idx()] = 0;
+        }
+        if (!this->notify_observer(++made)) return made;
+      }
       // A round that makes few collapses leaves the rest to the heap.
-      if (made_in[0] + made_in[1] < count / 100) break;
+      if (made - before < count / 100) break;
     }
     return made;
   }
@@ -361,17 +311,15 @@ class LazyDecimater : public OpenMesh::Decimater::BaseDecimaterT<OMesh> {
   }
 
   // The legality test and the guards (the binary modules) pass the collapse.
-  bool allowed(const CollapseInfo& ci, std::vector<VertexHandle>& scratch) {
-    return legal(ci, scratch) && Base::collapse_priority(ci) >= 0.0f;
-  }
+  bool allowed(const CollapseInfo& ci) { return legal(ci) && Base::collapse_priority(ci) >= 0.0f; }
 
   // OpenMesh's legality test, BaseDecimaterT::is_collapse_legal with
   // TriConnectivity::is_collapse_ok, for a triangle mesh none of whose
   // vertices is locked or a feature: the same verdict on every collapse,
   // its tests ordered to read less (a valence before a search for an edge)
-  // and the one-rings compared in a list (`scratch`), where OpenMesh tags
-  // and untags the vertices of both in the mesh.
-  bool legal(const CollapseInfo& ci, std::vector<VertexHandle>& scratch) {
+  // and the one-rings compared in a local list, where OpenMesh tags and
+  // untags the vertices of both in the mesh.
+  bool legal(const CollapseInfo& ci) {
     const OMesh& m = mesh_;
     if (m.status(m.edge_handle(ci.v0v1)).deleted() || m.status(ci.v0).deleted() || m.status(ci.v1).deleted())
       return false;
@@ -385,11 +333,11 @@ class LazyDecimater : public OpenMesh::Decimater::BaseDecimaterT<OMesh> {
     // v0 with fewer than two faces.
     if (m.cw_rotated_halfedge_handle(m.cw_rotated_halfedge_handle(ci.v0v1)) == ci.v0v1) return false;
     // The one-rings of v0 and v1 may share only vl and vr.
-    scratch.clear();
+    ring_.clear();
     for (const auto w : m.vv_range(ci.v1))
-      if (w != ci.vl && w != ci.vr) scratch.push_back(w);
+      if (w != ci.vl && w != ci.vr) ring_.push_back(w);
     for (const auto w : m.vv_range(ci.v0))
-      if (std::find(scratch.begin(), scratch.end(), w) != scratch.end()) return false;
+      if (std::find(ring_.begin(), ring_.end(), w) != ring_.end()) return false;
     // A tetrahedron's last two faces: vl and vr joined, each of valence 3.
     if (ci.vl.is_valid() && ci.vr.is_valid() && valence_is_3(ci.vl) && valence_is_3(ci.vr) &&
         m.find_halfedge(ci.vl, ci.vr).is_valid())
@@ -418,16 +366,14 @@ class LazyDecimater : public OpenMesh::Decimater::BaseDecimaterT<OMesh> {
   }
 
   // target_[v] and priority_[v]: v's cheapest outgoing collapse not refused
-  // and its cost (the quadric's error(), or with `split` its split_error()),
-  // or an invalid handle and -1.
-  void best_collapse(VertexHandle v, bool split = false) {
+  // and its cost, or an invalid handle and -1.
+  void best_collapse(VertexHandle v) {
     float best = FLT_MAX;
     HalfedgeHandle target;
     const auto q = priority_module_->quadric(v);
     for (const auto h : mesh_.voh_range(v)) {
       if (refused_[h.idx()]) continue;
-      const VertexHandle to = mesh_.to_vertex_handle(h);
-      const float p = split ? priority_module_->split_error(q, to) : priority_module_->error(v, to);
+      const float p = priority_module_->error(q, mesh_.to_vertex_handle(h));
       if (p >= 0.0f && p < best) {
         best = p;
         target = h;
@@ -444,7 +390,7 @@ class LazyDecimater : public OpenMesh::Decimater::BaseDecimaterT<OMesh> {
   std::vector<float> priority_;
   std::vector<int> position_;
   std::vector<char> refused_;
-  std::vector<VertexHandle> scratch_;  // legal()'s list in decimate_to
+  std::vector<VertexHandle> ring_;  // legal()'s list
 };
 
 // From this many vertices a mesh is decimated in its vertices' Morton order
