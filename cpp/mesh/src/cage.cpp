@@ -105,12 +105,18 @@ class ModQuadricErrorT : public OpenMesh::Decimater::ModBaseT<MeshT> {
     }
   }
 
-  // The error of collapsing v0 onto v1 (v0 removed, v1 kept where it is):
-  // (Q0 + Q1)(p1) = Q0(p1) + Q1(p1), the second term kept per vertex (it
-  // changes only where a collapse adds to Q1), so that costing v0's
-  // collapses reads its neighbours' points and not their quadrics.
-  float error(VertexHandle v0, VertexHandle v1) { return error(quadric(v0), v1); }
-  float error(const Quadric& q0, VertexHandle v1) {
+  // The error of collapsing v0 onto v1 (v0 removed, v1 kept where it is), (Q0 + Q1)(p1).
+  float error(VertexHandle v0, VertexHandle v1) {
+    Quadric q = quadric(v0);
+    q += quadric(v1);
+    return static_cast<float>(q(Base::mesh().point(v1)));
+  }
+  // The same as Q0(p1) + Q1(p1), the second term kept per vertex (it changes
+  // only where a collapse adds to Q1), so that costing v0's collapses reads
+  // its neighbours' points and not their quadrics; equal to error() up to
+  // rounding (which decides between collapses of equal cost, so error() alone
+  // costs a mesh decimated from the heap alone: the cages of before).
+  float split_error(const Quadric& q0, VertexHandle v1) {
     const Site& s = Base::mesh().property(sites_, v1);
     return static_cast<float>(q0(s.p) + s.own);
   }
@@ -251,7 +257,7 @@ class LazyDecimater : public OpenMesh::Decimater::BaseDecimaterT<OMesh> {
       for (const auto v : mesh_.vertices()) {
         if ((v.idx() & 0xffff) == 0) poll_interrupt();
         if (mesh_.status(v).deleted()) continue;
-        if (round == 0 || touched[v.idx()] == round - 1) best_collapse(v);
+        if (round == 0 || touched[v.idx()] == round - 1) best_collapse(v, true);
         if (target_[v.idx()].is_valid()) costs.push_back(priority_[v.idx()]);
       }
       if (costs.empty()) break;
@@ -366,14 +372,16 @@ class LazyDecimater : public OpenMesh::Decimater::BaseDecimaterT<OMesh> {
   }
 
   // target_[v] and priority_[v]: v's cheapest outgoing collapse not refused
-  // and its cost, or an invalid handle and -1.
-  void best_collapse(VertexHandle v) {
+  // and its cost (the quadric's error(), or with `split` its split_error()),
+  // or an invalid handle and -1.
+  void best_collapse(VertexHandle v, bool split = false) {
     float best = FLT_MAX;
     HalfedgeHandle target;
     const auto q = priority_module_->quadric(v);
     for (const auto h : mesh_.voh_range(v)) {
       if (refused_[h.idx()]) continue;
-      const float p = priority_module_->error(q, mesh_.to_vertex_handle(h));
+      const VertexHandle to = mesh_.to_vertex_handle(h);
+      const float p = split ? priority_module_->split_error(q, to) : priority_module_->error(v, to);
       if (p >= 0.0f && p < best) {
         best = p;
         target = h;
