@@ -12,6 +12,7 @@ baseline's error says the same count. Writes docs/benchmarks/decimate-speed.md u
 
     python bench/decimate_speed.py --baseline /tmp/sorpia-before --baseline-label "main 8a10afa"
     python bench/decimate_speed.py --sizes 10000 100000 --meshes ../shared/meshes --fit --repeats 3
+    python bench/decimate_speed.py --sizes --files /tmp/sorpia-scan-stanford-bunny-16000.ply --fit --fit-max 2000000
 """
 from __future__ import annotations
 
@@ -52,7 +53,11 @@ except sorpia.MeshError as e:
     print(json.dumps({"seconds": time.perf_counter() - t0, "error": str(e)}))
     sys.exit(0)
 seconds = time.perf_counter() - t0
-np.savez(sys.argv[4], v=cage.vertices, f=cage.faces)
+faces = cage.faces
+if hasattr(faces, "face_vertex_counts"):  # quads and triangles: counts and indices
+    np.savez(sys.argv[4], v=cage.vertices, fc=faces.face_vertex_counts, fi=faces.face_vertex_indices)
+else:
+    np.savez(sys.argv[4], v=cage.vertices, f=faces)
 print(json.dumps({"seconds": seconds, "vertices": len(cage.vertices)}))
 """
 
@@ -66,7 +71,19 @@ def noisy_torus(n, noise, seed=0):
     return v, np.asarray(mesh[1])
 
 
+def faces_of(cage):
+    """The faces of a cage written by _CHILD: an array, or sorpia.Polygons for quads and triangles mixed."""
+    return sorpia.Polygons(cage["fc"], cage["fi"]) if "fc" in cage else cage["f"]
+
+
 def triangles_of(faces):
+    """Triangles of faces (an array of triangles or quads, or sorpia.Polygons of both): each quad split into two."""
+    if isinstance(faces, sorpia.Polygons):
+        counts, indices = np.asarray(faces.face_vertex_counts), np.asarray(faces.face_vertex_indices)
+        start = np.concatenate([[0], np.cumsum(counts)[:-1]])
+        tri, quad = start[counts == 3], start[counts == 4]
+        return np.concatenate([indices[tri[:, None] + [0, 1, 2]], indices[quad[:, None] + [0, 1, 2]],
+                               indices[quad[:, None] + [0, 2, 3]]])
     faces = np.asarray(faces)
     if faces.shape[1] == 3:
         return faces
@@ -82,13 +99,32 @@ def decimate_in_child(mesh_path, n, scheme, cage_path, package_dir):
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
+def shape(vertices, triangles):
+    """The triangles' smallest angles (degrees: 5th percentile, median) and aspect ratios (longest edge over the
+    height onto it: 95th percentile, max)."""
+    p = np.asarray(vertices, float)[triangles]
+    e = np.stack([p[:, 2] - p[:, 1], p[:, 0] - p[:, 2], p[:, 1] - p[:, 0]], axis=1)  # edge k opposite corner k
+    length = np.linalg.norm(e, axis=2)
+    twice_area = np.linalg.norm(np.cross(e[:, 0], e[:, 1]), axis=1)
+    cos = np.stack([-(e[:, (k + 1) % 3] * e[:, (k + 2) % 3]).sum(1) / (length[:, (k + 1) % 3] * length[:, (k + 2) % 3])
+                    for k in range(3)], axis=1)
+    min_angle = np.degrees(np.arccos(np.clip(cos, -1, 1))).min(1)
+    longest = length.max(1)
+    aspect = np.where(twice_area > 0, longest ** 2 / np.maximum(twice_area, 1e-300), np.inf)
+    return {"min_angle_p5": float(np.percentile(min_angle, 5)), "min_angle_median": float(np.median(min_angle)),
+            "aspect_p95": float(np.percentile(aspect, 95)), "aspect_max": float(aspect.max())}
+
+
 def quality(points, cage_path, scheme, diag, fit):
-    """Distances of the points to the cage's triangles and (fit) to the limit surface approximate fits."""
+    """Distances of the points to the cage's triangles, the triangles' shape (shape(); a Catmull-Clark cage's quads
+    split into two), and (fit) the distances to the limit surface approximate fits."""
     cage = np.load(cage_path)
-    d = distances_to_mesh(points, cage["v"], triangles_of(cage["f"]))
+    faces = faces_of(cage)
+    d = distances_to_mesh(points, cage["v"], triangles_of(faces))
     q = {"cage_rms": float(np.sqrt(np.mean(d ** 2)) / diag), "cage_max": float(d.max() / diag)}
+    q.update(shape(cage["v"], triangles_of(faces)))
     if fit:
-        res = sorpia.approximate(points, cage["v"], cage["f"], scheme=scheme)
+        res = sorpia.approximate(points, cage["v"], faces, scheme=scheme)
         q.update(fit_rms=res.rms / diag, fit_max=res.max_error / diag)
     return q
 
@@ -105,6 +141,9 @@ def cases(args):
                 yield name, np.asarray(v, float), np.asarray(f)
     elif args.meshes:
         print(f"--meshes {args.meshes}: no such folder; its meshes are left out", file=sys.stderr)
+    for path in args.files:
+        v, f = sorpia.read_mesh(path)[:2]
+        yield pathlib.Path(path).name, np.asarray(v, float), np.asarray(f)
 
 
 def measure(args, folder):
@@ -156,7 +195,8 @@ def table(rows, args):
     who = ["baseline", "this"] if both else ["this"]
     pair = lambda r, k, spec: " / ".join(fmt(r.get(f"{w}_{k}"), spec) for w in who)  # noqa: E731
     head = "| mesh | vertices | scheme | asked | cage vertices | seconds" + (" | speed-up" if both else "") + \
-        " | cage RMS / diag | cage max / diag | fit RMS / diag | fit max / diag | load |"
+        " | cage RMS / diag | cage max / diag | fit RMS / diag | fit max / diag" \
+        " | min angle p5 / median (deg) | aspect p95 / max | load |"
     lines = [head, "|" + "---|" * 3 + "---:|" * (head.count("|") - 4)]
     for r in rows:
         counts = " / ".join(("stopped at " if (r.get(f"{w}_error") or r.get(f"{w}_vertices", 0) > r["asked"])
@@ -166,7 +206,9 @@ def table(rows, args):
             speed = f" | {r['baseline_s'] / r['this_s']:.1f}x" if r.get("baseline_s") else " | "
         lines.append(f"| {r['mesh']} | {r['points']:,} | {r['scheme']} | {r['asked']:,} | {counts} | "
                      f"{pair(r, 's', '.3g')}{speed} | {pair(r, 'cage_rms', '.3e')} | {pair(r, 'cage_max', '.3e')} | "
-                     f"{pair(r, 'fit_rms', '.3e')} | {pair(r, 'fit_max', '.3e')} | {r['load']:.1f} |")
+                     f"{pair(r, 'fit_rms', '.3e')} | {pair(r, 'fit_max', '.3e')} | "
+                     f"{pair(r, 'min_angle_p5', '.1f')}; {pair(r, 'min_angle_median', '.1f')} | "
+                     f"{pair(r, 'aspect_p95', '.2f')}; {pair(r, 'aspect_max', '.3g')} | {r['load']:.1f} |")
     return lines
 
 
@@ -176,6 +218,8 @@ def main(argv=None):
                     help="noisy tori of these many vertices")
     ap.add_argument("--meshes", default=None, metavar="DIR",
                     help=f"also the meshes {', '.join(MESHES)} found in DIR (OBJ)")
+    ap.add_argument("--files", nargs="*", default=[], metavar="PATH",
+                    help="also these triangle mesh files (e.g. bench/approximate_command.py's 1M scan)")
     ap.add_argument("--fraction", type=float, default=0.02, help="cage vertices per input vertex")
     ap.add_argument("--noise", type=float, default=1e-3, help="the tori's Gaussian noise (the tube radius is 0.25)")
     ap.add_argument("--repeats", type=int, default=3)

@@ -69,8 +69,14 @@ class ModQuadricErrorT : public OpenMesh::Decimater::ModBaseT<MeshT> {
   using Quadric = OpenMesh::Geometry::QuadricT<double>;
   using VertexHandle = typename MeshT::VertexHandle;
 
-  explicit ModQuadricErrorT(MeshT& mesh) : Base(mesh, false) { mesh.add_property(quadrics_); }
-  ~ModQuadricErrorT() override { Base::mesh().remove_property(quadrics_); }
+  explicit ModQuadricErrorT(MeshT& mesh) : Base(mesh, false) {
+    mesh.add_property(quadrics_);
+    mesh.add_property(sites_);
+  }
+  ~ModQuadricErrorT() override {
+    Base::mesh().remove_property(quadrics_);
+    Base::mesh().remove_property(sites_);
+  }
 
   // Each vertex's quadric: the sum over its faces of the face plane's, weighted by the face's area.
   void initialize() override {
@@ -92,23 +98,46 @@ class ModQuadricErrorT : public OpenMesh::Decimater::ModBaseT<MeshT> {
       m.property(quadrics_, b) += q;
       m.property(quadrics_, c) += q;
     }
+    for (const auto v : m.vertices()) {
+      Site& s = m.property(sites_, v);
+      s.p = m.point(v);
+      s.own = m.property(quadrics_, v)(s.p);
+    }
   }
 
-  // The error of collapsing v0 onto v1 (v0 removed, v1 kept where it is).
+  // The error of collapsing v0 onto v1 (v0 removed, v1 kept where it is), (Q0 + Q1)(p1).
   float error(VertexHandle v0, VertexHandle v1) {
-    const MeshT& m = Base::mesh();
-    Quadric q = m.property(quadrics_, v0);
-    q += m.property(quadrics_, v1);
-    return static_cast<float>(q(m.point(v1)));
+    Quadric q = quadric(v0);
+    q += quadric(v1);
+    return static_cast<float>(q(Base::mesh().point(v1)));
   }
+  // The same as Q0(p1) + Q1(p1), the second term kept per vertex (it changes
+  // only where a collapse adds to Q1), so that costing v0's collapses reads
+  // its neighbours' points and not their quadrics; equal to error() up to
+  // rounding (which decides between collapses of equal cost, so error() alone
+  // costs a mesh decimated from the heap alone: the cages of before).
+  float split_error(const Quadric& q0, VertexHandle v1) {
+    const Site& s = Base::mesh().property(sites_, v1);
+    return static_cast<float>(q0(s.p) + s.own);
+  }
+  const Quadric& quadric(VertexHandle v) { return Base::mesh().property(quadrics_, v); }
 
   float collapse_priority(const CollapseInfo& ci) override { return error(ci.v0, ci.v1); }
   void postprocess_collapse(const CollapseInfo& ci) override {
-    Base::mesh().property(quadrics_, ci.v1) += Base::mesh().property(quadrics_, ci.v0);
+    MeshT& m = Base::mesh();
+    m.property(quadrics_, ci.v1) += m.property(quadrics_, ci.v0);
+    Site& s = m.property(sites_, ci.v1);
+    s.own = m.property(quadrics_, ci.v1)(s.p);
   }
 
  private:
+  // A vertex's point (a half-edge collapse moves none) and its own quadric's error there, side by side.
+  struct Site {
+    OpenMesh::Vec3d p;
+    double own;
+  };
   OpenMesh::VPropHandleT<Quadric> quadrics_;
+  OpenMesh::VPropHandleT<Site> sites_;
 };
 
 // Polls for Ctrl-C between collapses; an Interrupted is kept and rethrown
@@ -228,7 +257,7 @@ class LazyDecimater : public OpenMesh::Decimater::BaseDecimaterT<OMesh> {
       for (const auto v : mesh_.vertices()) {
         if ((v.idx() & 0xffff) == 0) poll_interrupt();
         if (mesh_.status(v).deleted()) continue;
-        if (round == 0 || touched[v.idx()] == round - 1) best_collapse(v);
+        if (round == 0 || touched[v.idx()] == round - 1) best_collapse(v, true);
         if (target_[v.idx()].is_valid()) costs.push_back(priority_[v.idx()]);
       }
       if (costs.empty()) break;
@@ -288,7 +317,45 @@ class LazyDecimater : public OpenMesh::Decimater::BaseDecimaterT<OMesh> {
   }
 
   // The legality test and the guards (the binary modules) pass the collapse.
-  bool allowed(const CollapseInfo& ci) { return this->is_collapse_legal(ci) && Base::collapse_priority(ci) >= 0.0f; }
+  bool allowed(const CollapseInfo& ci) { return legal(ci) && Base::collapse_priority(ci) >= 0.0f; }
+
+  // OpenMesh's legality test, BaseDecimaterT::is_collapse_legal with
+  // TriConnectivity::is_collapse_ok, for a triangle mesh none of whose
+  // vertices is locked or a feature: the same verdict on every collapse,
+  // its tests ordered to read less (a valence before a search for an edge)
+  // and the one-rings compared in a local list, where OpenMesh tags and
+  // untags the vertices of both in the mesh.
+  bool legal(const CollapseInfo& ci) {
+    const OMesh& m = mesh_;
+    if (m.status(m.edge_handle(ci.v0v1)).deleted() || m.status(ci.v0).deleted() || m.status(ci.v1).deleted())
+      return false;
+    // A side triangle whose two other edges are both on the boundary would be left dangling.
+    if (ci.fl.is_valid() && m.is_boundary(ci.vlv1) && m.is_boundary(ci.v0vl)) return false;
+    if (ci.fr.is_valid() && m.is_boundary(ci.vrv0) && m.is_boundary(ci.v1vr)) return false;
+    if (ci.vl == ci.vr) return false;  // both invalid (an edge of no face) or the same vertex
+    // A boundary vertex goes only onto a boundary vertex, along a boundary
+    // edge (an inner edge between two boundary vertices has both vl and vr).
+    if (m.is_boundary(ci.v0) && (!m.is_boundary(ci.v1) || (ci.vl.is_valid() && ci.vr.is_valid()))) return false;
+    // v0 with fewer than two faces.
+    if (m.cw_rotated_halfedge_handle(m.cw_rotated_halfedge_handle(ci.v0v1)) == ci.v0v1) return false;
+    // The one-rings of v0 and v1 may share only vl and vr.
+    ring_.clear();
+    for (const auto w : m.vv_range(ci.v1))
+      if (w != ci.vl && w != ci.vr) ring_.push_back(w);
+    for (const auto w : m.vv_range(ci.v0))
+      if (std::find(ring_.begin(), ring_.end(), w) != ring_.end()) return false;
+    // A tetrahedron's last two faces: vl and vr joined, each of valence 3.
+    if (ci.vl.is_valid() && ci.vr.is_valid() && valence_is_3(ci.vl) && valence_is_3(ci.vr) &&
+        m.find_halfedge(ci.vl, ci.vr).is_valid())
+      return false;
+    return true;
+  }
+
+  bool valence_is_3(VertexHandle v) const {
+    int n = 0;
+    for (auto it = mesh_.cvv_iter(v); it.is_valid() && n < 4; ++it) ++n;
+    return n == 3;
+  }
 
   // Makes the collapse, with the modules' pre- and postprocessing and the
   // face normals (the normal guard's) around it; `ring` is v0's one-ring
@@ -305,13 +372,16 @@ class LazyDecimater : public OpenMesh::Decimater::BaseDecimaterT<OMesh> {
   }
 
   // target_[v] and priority_[v]: v's cheapest outgoing collapse not refused
-  // and its cost, or an invalid handle and -1.
-  void best_collapse(VertexHandle v) {
+  // and its cost (the quadric's error(), or with `split` its split_error()),
+  // or an invalid handle and -1.
+  void best_collapse(VertexHandle v, bool split = false) {
     float best = FLT_MAX;
     HalfedgeHandle target;
+    const auto q = priority_module_->quadric(v);
     for (const auto h : mesh_.voh_range(v)) {
       if (refused_[h.idx()]) continue;
-      const float p = priority_module_->error(v, mesh_.to_vertex_handle(h));
+      const VertexHandle to = mesh_.to_vertex_handle(h);
+      const float p = split ? priority_module_->split_error(q, to) : priority_module_->error(v, to);
       if (p >= 0.0f && p < best) {
         best = p;
         target = h;
@@ -328,6 +398,7 @@ class LazyDecimater : public OpenMesh::Decimater::BaseDecimaterT<OMesh> {
   std::vector<float> priority_;
   std::vector<int> position_;
   std::vector<char> refused_;
+  std::vector<VertexHandle> ring_;  // legal()'s list
 };
 
 // From this many vertices a mesh is decimated in its vertices' Morton order
