@@ -15,7 +15,8 @@ machine's load falls on both alike), medians over the rounds:
 - ``find``: `_core.closest_points` on the start cage (the grid, its k-d tree, the nearest sample, Gauss-Newton);
 - ``refine``: `_core.refine_footpoints` on the next cage from find's footpoints (the loop's warm start);
 - ``closer``: `_core.closer_footpoints` on the next cage from refine's footpoints (the re-search before stopping
-  and before reporting; FootpointOptions' defaults: 8 starts, near 0.1), where the build has it;
+  and before reporting; FootpointOptions' defaults: 8 starts, the build's near unless --near), where the build has
+  it;
 - ``rows``: `LimitSurface.rows` (positions only) at refine's footpoints, in face order (the normal equations' rows,
   as approximation builds them).
 
@@ -55,7 +56,7 @@ def resident_bytes() -> int:
         return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
 
 
-def worker(data: str, phase: str | None, out: str) -> None:
+def worker(data: str, phase: str | None, out: str, near: float | None) -> None:
     """Times the phases (or runs one, for callgrind) with the sorpia on sys.path; writes timings and distances."""
     from sorpia import _core
     from sorpia.surface import LimitSurface
@@ -92,8 +93,9 @@ def worker(data: str, phase: str | None, out: str) -> None:
         res["refine"] = refined[3]
     if phase in (None, "closer") and hasattr(_core, "closer_footpoints"):
         t = time.perf_counter()
+        kw = {} if near is None else {"near": near}
         (_, _, _, dist, _), moved = _core.closer_footpoints(s1._surface, s1._topology, P, refined[0], refined[1],
-                                                             4, 10, 8)
+                                                             4, 10, 8, **kw)
         times["closer"] = time.perf_counter() - t
         res["closer"] = dist
         times["closer_moved"] = moved
@@ -113,13 +115,14 @@ def worker(data: str, phase: str | None, out: str) -> None:
         json.dump(times, f)
 
 
-def run(build: str | None, data: str, tmp: str, phase: str | None = None, prefix: list[str] | None = None):
+def run(build: str | None, data: str, tmp: str, phase: str | None = None, prefix: list[str] | None = None,
+        near: float | None = None):
     env = dict(os.environ)
     if build:
         env["PYTHONPATH"] = build + os.pathsep + env.get("PYTHONPATH", "")
     out = os.path.join(tmp, "out")
     cmd = (prefix or []) + [sys.executable, __file__, "--worker", data, "--out", out] + \
-        (["--phase", phase] if phase else [])
+        (["--phase", phase] if phase else []) + (["--near", str(near)] if near is not None else [])
     subprocess.run(cmd, env=env, check=True, capture_output=prefix is not None)
     with open(out + ".json") as f:
         times = json.load(f)
@@ -133,12 +136,13 @@ def main() -> None:
     ap.add_argument("--rounds", type=int, default=5)
     ap.add_argument("--before", help="a directory holding the other build's sorpia package")
     ap.add_argument("--callgrind", choices=["find", "refine", "closer", "rows"])
+    ap.add_argument("--near", type=float, help="closer's FootpointOptions::near (default: the build's)")
     ap.add_argument("--worker", help=argparse.SUPPRESS)
     ap.add_argument("--out", help=argparse.SUPPRESS)
     ap.add_argument("--phase", help=argparse.SUPPRESS)
     a = ap.parse_args()
     if a.worker:
-        worker(a.worker, a.phase, a.out)
+        worker(a.worker, a.phase, a.out, a.near)
         return
     with tempfile.TemporaryDirectory() as tmp:
         data = os.path.join(tmp, "data.npz")
@@ -149,7 +153,9 @@ def main() -> None:
             entry = {"find": "sorpia::closest_points*", "refine": "sorpia::refine_footpoints*",
                      "closer": "sorpia::FootpointSearch::closer*", "rows": "sorpia::LimitSurface::rows*"}[a.callgrind]
             run(None, data, tmp, a.callgrind,
-                ["taskset", "-c", "0", "valgrind", "--tool=callgrind", f"--callgrind-out-file={log}", f"--toggle-collect={entry}"])
+                ["taskset", "-c", "0", "valgrind", "--tool=callgrind", f"--callgrind-out-file={log}",
+                 f"--toggle-collect={entry}"],
+                a.near)
             ann = subprocess.run(["callgrind_annotate", "--inclusive=no", log], capture_output=True, text=True).stdout
             print(json.dumps({"points": a.points, "cage": a.cage, "phase": a.callgrind,
                               "annotate": ann.splitlines()[:40]}, indent=1))
@@ -159,7 +165,7 @@ def main() -> None:
         results = {}
         for _ in range(a.rounds):
             for name, path in builds.items():
-                t, r = run(path, data, tmp)
+                t, r = run(path, data, tmp, near=a.near)
                 times[name].append(t)
                 results[name] = r
         report = {"points": a.points, "cage": a.cage, "rounds": a.rounds, "load": os.getloadavg()}

@@ -547,8 +547,10 @@ namespace {
 // surface's size.
 constexpr double kUvTolerance = 1e-11;
 // Gauss-Newton steps at least of FootpointSearch::closer's refinements: its
-// starts may lie a few grid cells from their minimum.
-constexpr int kCloserSteps = 100;
+// starts may lie a few grid cells from their minimum, and near a focal point
+// of the surface (a point as far from it as its radius of curvature)
+// Gauss-Newton converges slowly.
+constexpr int kCloserSteps = 400;
 // The rounding of a computed distance, in units of epsilon times the size of
 // the surface point's coordinates (|p|_1 + distance).
 constexpr double kRounding = 8.0;
@@ -584,12 +586,41 @@ struct Slot {
   float predicted;
 };
 
-// refine_footpoints, optionally from known start points. The points' states
+// Bfr's derivatives are approximate within the corner region of side 1/16 of
+// a face's domain at an extraordinary vertex (surface.hpp: a Gregory patch),
+// so that Gauss-Newton with them stops up to about 1e-5 of the face's size
+// off the minimum there (distances 1e-9 of the diagonal too far). A point
+// within this much of a chart's corner, in its local coordinates (twice the
+// region: a sub-face of a k-gon is half the face's side), takes its
+// derivatives from differences of Bfr's positions instead where refine is
+// asked to be exact (FootpointSearch::closer).
+constexpr double kCornerRegion = 1.0 / 8.0;
+// The step of those differences in (u, v): their error is about this (the
+// second derivative's term) plus epsilon over it (rounding) relative to the
+// derivative.
+constexpr double kDifferenceStep = 1e-7;
+
+bool near_corner(const Domains& dom, std::int32_t f, const double* ab) {
+  const Kind kind = dom.kind(f);
+  const double m = kind == Kind::Sub ? 2.0 * kCornerRegion : kCornerRegion;
+  const double a = ab[0], b = ab[1];
+  if (kind == Kind::Triangle) {
+    const double c = 1.0 - a - b;
+    return (a < m && b < m) || (c < m && b < m) || (a < m && c < m);
+  }
+  return (a < m || a > 1.0 - m) && (b < m || b > 1.0 - m);
+}
+
+// refine_footpoints, optionally from known start points; `exact`: with
+// `irregular` (per face, or null): Bfr's Surface::IsRegular() false, where
+// the derivatives come from differences of positions near corners
+// (kCornerRegion). The points' states
 // are held in one array in face order, so that the points of the face being
 // visited lie together in memory (and, one block, it goes back to the system
 // as a whole when freed).
 void refine(const LimitSurface& surface, const Topology& topology, const double* points, std::size_t n,
-            const FootpointOptions& options, Footpoints& fp, KnownStart* known) {
+            const FootpointOptions& options, Footpoints& fp, KnownStart* known,
+            const std::vector<std::uint8_t>* irregular = nullptr) {
   if (fp.face_ids.size() != n || fp.uv.size() != 2 * n)
     throw ParameterError("footpoints hold " + std::to_string(fp.face_ids.size()) + " faces and " +
                          std::to_string(fp.uv.size() / 2) + " parameters for " + std::to_string(n) + " points");
@@ -697,6 +728,20 @@ void refine(const LimitSurface& surface, const Topology& topology, const double*
         double uv[2], p[3], du[3], dv[3];
         dom.to_uv(f_visit, q.chart, q.ab[0], q.ab[1], uv);
         evaluate(uv, p, du, dv);
+        if (irregular && (*irregular)[static_cast<std::size_t>(f_visit)] && near_corner(dom, f_visit, q.ab)) {
+          // Forward differences, backward where the forward step would leave the chart.
+          const bool tri = dom.kind(f_visit) == Kind::Triangle;
+          const double h = dom.kind(f_visit) == Kind::Sub ? 0.5 * kDifferenceStep : kDifferenceStep;
+          const double room_a = tri ? 1.0 - q.ab[0] - q.ab[1] : 1.0 - q.ab[0];
+          const double room_b = tri ? room_a : 1.0 - q.ab[1];
+          const double local = dom.kind(f_visit) == Kind::Sub ? 2.0 * h : h;
+          const double hu = room_a > local ? h : -h, hv = room_b > local ? h : -h;
+          double at[2] = {uv[0] + hu, uv[1]}, pu[3], pv[3], unused[6];
+          evaluate(at, pu, unused, unused + 3);
+          at[0] = uv[0], at[1] = uv[1] + hv;
+          evaluate(at, pv, unused, unused + 3);
+          for (int c = 0; c < 3; ++c) du[c] = (pu[c] - p[c]) / hu, dv[c] = (pv[c] - p[c]) / hv;
+        }
         const double r[3] = {x[0] - p[0], x[1] - p[1], x[2] - p[2]};
         const double dist = std::sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
         // A point across an edge (a hop) starts at the surface point it left:
@@ -798,6 +843,13 @@ FootpointSearch::FootpointSearch(const LimitSurface& surface, const Topology& to
   reach_ = grid_reach(dom, options.grid, positions_);
   largest_reach_ = *std::max_element(reach_.begin(), reach_.end());
   index_ = std::make_unique<PointIndex>(positions_.data(), k);
+  // Bfr's regularity of each face (holes: regular, never searched).
+  std::vector<std::int32_t> faces;
+  for (std::int32_t f = 0; f < static_cast<std::int32_t>(topology.n_faces()); ++f)
+    if (!dom.hole[static_cast<std::size_t>(f)]) faces.push_back(f);
+  const std::vector<std::uint8_t> regular = surface.control_points(faces.data(), faces.size()).regular;
+  irregular_.assign(topology.n_faces(), 0);
+  for (std::size_t i = 0; i < faces.size(); ++i) irregular_[static_cast<std::size_t>(faces[i])] = !regular[i];
 }
 
 FootpointSearch::~FootpointSearch() = default;
@@ -846,38 +898,82 @@ std::size_t FootpointSearch::closer(const double* points, std::size_t n, Footpoi
   std::vector<std::size_t> count(kBatch);
   std::vector<std::int64_t> nearest_sample(kBatch);
   std::vector<double> nearest_distance(kBatch);
+  std::vector<double> own_position(3 * kBatch), own_normal(3 * kBatch);
+  std::vector<std::uint8_t> polish(kBatch);
+  const auto& fi = topology_->face_indices();
+  // Whether faces f and g share a vertex.
+  const auto adjacent = [&](std::int32_t f, std::int32_t g) {
+    if (f == g) return true;
+    const std::int32_t of = topology_->face_offset(static_cast<std::size_t>(f));
+    const std::int32_t og = topology_->face_offset(static_cast<std::size_t>(g));
+    const std::int32_t kf = topology_->face_size(static_cast<std::size_t>(f));
+    const std::int32_t kg = topology_->face_size(static_cast<std::size_t>(g));
+    for (std::int32_t a = 0; a < kf; ++a)
+      for (std::int32_t c = 0; c < kg; ++c)
+        if (fi[static_cast<std::size_t>(of + a)] == fi[static_cast<std::size_t>(og + c)]) return true;
+    return false;
+  };
   for (std::size_t first = 0; first < n; first += kBatch) {
     poll_interrupt();
     const std::size_t b = std::min(kBatch, n - first);
     const int tasks = task_count(b, 4096);
     index_->nearest(points + 3 * first, b, nearest_sample.data(), nearest_distance.data());
+    // The footpoints' normals: the orientation of the sheet each lies on.
+    surface_->evaluate(&fp.face_ids[first], &fp.uv[2 * first], b, own_position.data(), nullptr, nullptr,
+                       own_normal.data());
     detail::for_each_index(tasks > 1, tasks, b, [&](std::size_t j) {
       const std::size_t i = first + j;
       const double* x = points + 3 * i;
       const double d = fp.distances[i];
+      const std::int32_t f = fp.face_ids[i];
+      // The footpoint is refined again from itself (find and refine stop
+      // after max_steps, and near corners with Bfr's derivatives): a step
+      // or two where it is the minimum already.
+      polish[j] = d > 0.0;
       // The nearest sample, as find starts (its footpoint may be another
-      // than the one given), and for a point not within a fraction of that
-      // sample's reach of its footpoint, the samples whose cells may hold a
-      // point closer than d: |x - s| - reach(s) < d, the least of that lower
-      // bound first.
+      // than the one given), and for a point farther than a fraction of
+      // that sample's reach from its footpoint, the samples whose cells may
+      // hold a point closer than d: |x - s| - reach(s) < d, the least of
+      // that lower bound first, but, for a point nearer its footpoint than
+      // the sample's reach, those on the footpoint's own sheet (a sample of
+      // a face sharing a vertex with the footpoint's, whose normal agrees
+      // with the footpoint's): refined, those return to the footpoint, and
+      // a closer point on a fold lies on a sheet facing the other way or
+      // beyond the footpoint's ring of faces. (A point farther off can have
+      // another minimum on its own sheet: all are taken.)
       // (The nearest sample left out where the footpoints are find's.)
       std::int64_t* c = &candidate[j * (starts + 1)];
       c[0] = nearest_sample[j];
       count[j] = d > 0.0 && !found ? 1 : 0;
       const auto u = static_cast<std::size_t>(c[0]);
       if (!(d > options_.near * reach_[u])) return;  // (false for d = 0)
+      const double* n0 = &own_normal[3 * j];
       const auto rank = [&](std::int64_t s, double dist) {
-        return s == c[0] ? std::numeric_limits<double>::infinity() : dist - reach_[static_cast<std::size_t>(s)];
+        const auto k = static_cast<std::size_t>(s);
+        const double bound = dist - reach_[k];
+        if (s == c[0]) return std::numeric_limits<double>::infinity();
+        if (!(bound < d)) return bound;  // rejected by the bound alone, before the dearer test
+        const double* su = &du_[3 * k];
+        const double* sv = &dv_[3 * k];
+        const double facing = n0[0] * (su[1] * sv[2] - su[2] * sv[1]) + n0[1] * (su[2] * sv[0] - su[0] * sv[2]) +
+                              n0[2] * (su[0] * sv[1] - su[1] * sv[0]);
+        if (d < reach_[k] && facing > 0.0 && adjacent(f, sample_faces_[k]))
+          return std::numeric_limits<double>::infinity();
+        return bound;
       };
       const std::size_t m = index_->least_ranked(x, d, largest_reach_, starts, rank, c + 1, &candidate_rank[j * starts]);
       if (found) std::copy_n(c + 1, m, c);
       count[j] += m;
     });
-    // The starts, one row each: the point repeated, refined from its sample.
+    // The starts, one row each: the point repeated, refined from its sample;
+    // then the footpoints, refined from themselves.
     std::vector<std::size_t> row(b + 1, 0);
     for (std::size_t j = 0; j < b; ++j) row[j + 1] = row[j] + count[j];
     const std::size_t rows = row[b];
-    if (rows == 0) continue;
+    std::vector<std::size_t> polish_row(b + 1, 0);
+    for (std::size_t j = 0; j < b; ++j) polish_row[j + 1] = polish_row[j] + polish[j];
+    const std::size_t polish_rows = polish_row[b];
+    if (rows + polish_rows == 0) continue;
     std::vector<double> x(3 * rows);
     std::vector<std::int64_t> nearest(rows);
     Footpoints trial;
@@ -894,23 +990,38 @@ std::size_t FootpointSearch::closer(const double* points, std::size_t n, Footpoi
         trial.uv[2 * r + 1] = sample_uv_[2 * s + 1];
       }
     KnownStart known{nearest.data(), positions_.data(), du_.data(), dv_.data()};
-    refine(*surface_, *topology_, x.data(), rows, options, trial, &known);
+    if (rows > 0) refine(*surface_, *topology_, x.data(), rows, options, trial, &known, &irregular_);
+    std::vector<double> y(3 * polish_rows);
+    Footpoints again;
+    again.face_ids.resize(polish_rows);
+    again.uv.resize(2 * polish_rows);
+    for (std::size_t j = 0; j < b; ++j)
+      if (polish[j]) {
+        const std::size_t r = polish_row[j], i = first + j;
+        std::copy_n(points + 3 * i, 3, &y[3 * r]);
+        again.face_ids[r] = fp.face_ids[i];
+        std::copy_n(&fp.uv[2 * i], 2, &again.uv[2 * r]);
+      }
+    if (polish_rows > 0) refine(*surface_, *topology_, y.data(), polish_rows, options, again, nullptr, &irregular_);
     // The closest of each point's results, where closer than its footpoint
     // (the first of equals).
     for (std::size_t j = 0; j < b; ++j) {
-      if (count[j] == 0) continue;
+      if (count[j] == 0 && !polish[j]) continue;
+      const Footpoints* from = &trial;
       std::size_t best = row[j];
       for (std::size_t r = row[j] + 1; r < row[j + 1]; ++r)
         if (trial.distances[r] < trial.distances[best]) best = r;
+      if (polish[j] && (count[j] == 0 || again.distances[polish_row[j]] < trial.distances[best]))
+        from = &again, best = polish_row[j];
       const std::size_t i = first + j;
-      if (!(trial.distances[best] < fp.distances[i])) continue;
+      if (!(from->distances[best] < fp.distances[i])) continue;
       ++moved;
-      fp.face_ids[i] = trial.face_ids[best];
-      fp.uv[2 * i] = trial.uv[2 * best];
-      fp.uv[2 * i + 1] = trial.uv[2 * best + 1];
-      fp.distances[i] = trial.distances[best];
-      if (has_positions) std::copy_n(&trial.positions[3 * best], 3, &fp.positions[3 * i]);
-      if (has_normals) std::copy_n(&trial.normals[3 * best], 3, &fp.normals[3 * i]);
+      fp.face_ids[i] = from->face_ids[best];
+      fp.uv[2 * i] = from->uv[2 * best];
+      fp.uv[2 * i + 1] = from->uv[2 * best + 1];
+      fp.distances[i] = from->distances[best];
+      if (has_positions) std::copy_n(&from->positions[3 * best], 3, &fp.positions[3 * i]);
+      if (has_normals) std::copy_n(&from->normals[3 * best], 3, &fp.normals[3 * i]);
     }
   }
   return moved;
