@@ -547,10 +547,12 @@ namespace {
 // surface's size.
 constexpr double kUvTolerance = 1e-11;
 // Gauss-Newton steps at least of FootpointSearch::closer's refinements: its
-// starts may lie a few grid cells from their minimum, and near a focal point
-// of the surface (a point as far from it as its radius of curvature)
-// Gauss-Newton converges slowly.
-constexpr int kCloserSteps = 400;
+// starts may lie a few grid cells from their minimum.
+constexpr int kCloserSteps = 100;
+// Gauss-Newton steps at least of FootpointSearch::closer's last refinement of
+// each footpoint from itself: near a focal point of the surface (a point as
+// far from it as its radius of curvature) Gauss-Newton converges slowly.
+constexpr int kPolishSteps = 400;
 // The rounding of a computed distance, in units of epsilon times the size of
 // the surface point's coordinates (|p|_1 + distance).
 constexpr double kRounding = 8.0;
@@ -898,131 +900,104 @@ std::size_t FootpointSearch::closer(const double* points, std::size_t n, Footpoi
   std::vector<std::size_t> count(kBatch);
   std::vector<std::int64_t> nearest_sample(kBatch);
   std::vector<double> nearest_distance(kBatch);
-  std::vector<double> own_position(3 * kBatch), own_normal(3 * kBatch);
-  std::vector<std::uint8_t> polish(kBatch);
-  const auto& fi = topology_->face_indices();
-  // Whether faces f and g share a vertex.
-  const auto adjacent = [&](std::int32_t f, std::int32_t g) {
-    if (f == g) return true;
-    const std::int32_t of = topology_->face_offset(static_cast<std::size_t>(f));
-    const std::int32_t og = topology_->face_offset(static_cast<std::size_t>(g));
-    const std::int32_t kf = topology_->face_size(static_cast<std::size_t>(f));
-    const std::int32_t kg = topology_->face_size(static_cast<std::size_t>(g));
-    for (std::int32_t a = 0; a < kf; ++a)
-      for (std::int32_t c = 0; c < kg; ++c)
-        if (fi[static_cast<std::size_t>(of + a)] == fi[static_cast<std::size_t>(og + c)]) return true;
-    return false;
+  FootpointOptions polishing = options_;
+  polishing.max_steps = std::max(options_.max_steps, kPolishSteps);
+  // Replaces point i's footpoint by row r of `from` where that is closer.
+  const auto take = [&](std::size_t i, const Footpoints& from, std::size_t r) {
+    if (!(from.distances[r] < fp.distances[i])) return false;
+    fp.face_ids[i] = from.face_ids[r];
+    fp.uv[2 * i] = from.uv[2 * r];
+    fp.uv[2 * i + 1] = from.uv[2 * r + 1];
+    fp.distances[i] = from.distances[r];
+    if (has_positions) std::copy_n(&from.positions[3 * r], 3, &fp.positions[3 * i]);
+    if (has_normals) std::copy_n(&from.normals[3 * r], 3, &fp.normals[3 * i]);
+    return true;
   };
+  std::vector<std::uint8_t> changed(kBatch);
   for (std::size_t first = 0; first < n; first += kBatch) {
     poll_interrupt();
     const std::size_t b = std::min(kBatch, n - first);
     const int tasks = task_count(b, 4096);
     index_->nearest(points + 3 * first, b, nearest_sample.data(), nearest_distance.data());
-    // The footpoints' normals: the orientation of the sheet each lies on.
-    surface_->evaluate(&fp.face_ids[first], &fp.uv[2 * first], b, own_position.data(), nullptr, nullptr,
-                       own_normal.data());
     detail::for_each_index(tasks > 1, tasks, b, [&](std::size_t j) {
       const std::size_t i = first + j;
       const double* x = points + 3 * i;
       const double d = fp.distances[i];
-      const std::int32_t f = fp.face_ids[i];
-      // The footpoint is refined again from itself (find and refine stop
-      // after max_steps, and near corners with Bfr's derivatives): a step
-      // or two where it is the minimum already.
-      polish[j] = d > 0.0;
       // The nearest sample, as find starts (its footpoint may be another
-      // than the one given), and for a point farther than a fraction of
-      // that sample's reach from its footpoint, the samples whose cells may
-      // hold a point closer than d: |x - s| - reach(s) < d, the least of
-      // that lower bound first, but, for a point nearer its footpoint than
-      // the sample's reach, those on the footpoint's own sheet (a sample of
-      // a face sharing a vertex with the footpoint's, whose normal agrees
-      // with the footpoint's): refined, those return to the footpoint, and
-      // a closer point on a fold lies on a sheet facing the other way or
-      // beyond the footpoint's ring of faces. (A point farther off can have
-      // another minimum on its own sheet: all are taken.)
+      // than the one given), and for a point not within a fraction of that
+      // sample's reach of its footpoint, the samples whose cells may hold a
+      // point closer than d: |x - s| - reach(s) < d, the least of that lower
+      // bound first.
       // (The nearest sample left out where the footpoints are find's.)
       std::int64_t* c = &candidate[j * (starts + 1)];
       c[0] = nearest_sample[j];
       count[j] = d > 0.0 && !found ? 1 : 0;
       const auto u = static_cast<std::size_t>(c[0]);
       if (!(d > options_.near * reach_[u])) return;  // (false for d = 0)
-      const double* n0 = &own_normal[3 * j];
       const auto rank = [&](std::int64_t s, double dist) {
-        const auto k = static_cast<std::size_t>(s);
-        const double bound = dist - reach_[k];
-        if (s == c[0]) return std::numeric_limits<double>::infinity();
-        if (!(bound < d)) return bound;  // rejected by the bound alone, before the dearer test
-        const double* su = &du_[3 * k];
-        const double* sv = &dv_[3 * k];
-        const double facing = n0[0] * (su[1] * sv[2] - su[2] * sv[1]) + n0[1] * (su[2] * sv[0] - su[0] * sv[2]) +
-                              n0[2] * (su[0] * sv[1] - su[1] * sv[0]);
-        if (d < reach_[k] && facing > 0.0 && adjacent(f, sample_faces_[k]))
-          return std::numeric_limits<double>::infinity();
-        return bound;
+        return s == c[0] ? std::numeric_limits<double>::infinity() : dist - reach_[static_cast<std::size_t>(s)];
       };
       const std::size_t m = index_->least_ranked(x, d, largest_reach_, starts, rank, c + 1, &candidate_rank[j * starts]);
       if (found) std::copy_n(c + 1, m, c);
       count[j] += m;
     });
-    // The starts, one row each: the point repeated, refined from its sample;
-    // then the footpoints, refined from themselves.
+    // The starts, one row each: the point repeated, refined from its sample.
     std::vector<std::size_t> row(b + 1, 0);
     for (std::size_t j = 0; j < b; ++j) row[j + 1] = row[j] + count[j];
     const std::size_t rows = row[b];
-    std::vector<std::size_t> polish_row(b + 1, 0);
-    for (std::size_t j = 0; j < b; ++j) polish_row[j + 1] = polish_row[j] + polish[j];
-    const std::size_t polish_rows = polish_row[b];
-    if (rows + polish_rows == 0) continue;
-    std::vector<double> x(3 * rows);
-    std::vector<std::int64_t> nearest(rows);
-    Footpoints trial;
-    trial.face_ids.resize(rows);
-    trial.uv.resize(2 * rows);
-    for (std::size_t j = 0; j < b; ++j)
-      for (std::size_t c = 0; c < count[j]; ++c) {
-        const std::size_t r = row[j] + c;
-        const auto s = static_cast<std::size_t>(candidate[j * (starts + 1) + c]);
-        std::copy_n(points + 3 * (first + j), 3, &x[3 * r]);
-        nearest[r] = static_cast<std::int64_t>(s);
-        trial.face_ids[r] = sample_faces_[s];
-        trial.uv[2 * r] = sample_uv_[2 * s];
-        trial.uv[2 * r + 1] = sample_uv_[2 * s + 1];
+    std::fill_n(changed.begin(), b, std::uint8_t{0});
+    if (rows > 0) {
+      std::vector<double> x(3 * rows);
+      std::vector<std::int64_t> nearest(rows);
+      Footpoints trial;
+      trial.face_ids.resize(rows);
+      trial.uv.resize(2 * rows);
+      for (std::size_t j = 0; j < b; ++j)
+        for (std::size_t c = 0; c < count[j]; ++c) {
+          const std::size_t r = row[j] + c;
+          const auto s = static_cast<std::size_t>(candidate[j * (starts + 1) + c]);
+          std::copy_n(points + 3 * (first + j), 3, &x[3 * r]);
+          nearest[r] = static_cast<std::int64_t>(s);
+          trial.face_ids[r] = sample_faces_[s];
+          trial.uv[2 * r] = sample_uv_[2 * s];
+          trial.uv[2 * r + 1] = sample_uv_[2 * s + 1];
+        }
+      KnownStart known{nearest.data(), positions_.data(), du_.data(), dv_.data()};
+      refine(*surface_, *topology_, x.data(), rows, options, trial, &known, &irregular_);
+      // The closest of each point's results, where closer than its footpoint
+      // (the first of equals).
+      for (std::size_t j = 0; j < b; ++j) {
+        if (count[j] == 0) continue;
+        std::size_t best = row[j];
+        for (std::size_t r = row[j] + 1; r < row[j + 1]; ++r)
+          if (trial.distances[r] < trial.distances[best]) best = r;
+        changed[j] = take(first + j, trial, best);
       }
-    KnownStart known{nearest.data(), positions_.data(), du_.data(), dv_.data()};
-    if (rows > 0) refine(*surface_, *topology_, x.data(), rows, options, trial, &known, &irregular_);
-    std::vector<double> y(3 * polish_rows);
-    Footpoints again;
-    again.face_ids.resize(polish_rows);
-    again.uv.resize(2 * polish_rows);
+    }
+    // Then each footpoint refined again from itself, to the minimum
+    // (find and refine stop after max_steps, the starts after
+    // kCloserSteps, and near corners with Bfr's derivatives): a step or two
+    // where it is there already.
+    std::vector<std::size_t> again_row;
     for (std::size_t j = 0; j < b; ++j)
-      if (polish[j]) {
-        const std::size_t r = polish_row[j], i = first + j;
+      if (fp.distances[first + j] > 0.0) again_row.push_back(j);
+    if (!again_row.empty()) {
+      const std::size_t k = again_row.size();
+      std::vector<double> y(3 * k);
+      Footpoints again;
+      again.face_ids.resize(k);
+      again.uv.resize(2 * k);
+      for (std::size_t r = 0; r < k; ++r) {
+        const std::size_t i = first + again_row[r];
         std::copy_n(points + 3 * i, 3, &y[3 * r]);
         again.face_ids[r] = fp.face_ids[i];
         std::copy_n(&fp.uv[2 * i], 2, &again.uv[2 * r]);
       }
-    if (polish_rows > 0) refine(*surface_, *topology_, y.data(), polish_rows, options, again, nullptr, &irregular_);
-    // The closest of each point's results, where closer than its footpoint
-    // (the first of equals).
-    for (std::size_t j = 0; j < b; ++j) {
-      if (count[j] == 0 && !polish[j]) continue;
-      const Footpoints* from = &trial;
-      std::size_t best = row[j];
-      for (std::size_t r = row[j] + 1; r < row[j + 1]; ++r)
-        if (trial.distances[r] < trial.distances[best]) best = r;
-      if (polish[j] && (count[j] == 0 || again.distances[polish_row[j]] < trial.distances[best]))
-        from = &again, best = polish_row[j];
-      const std::size_t i = first + j;
-      if (!(from->distances[best] < fp.distances[i])) continue;
-      ++moved;
-      fp.face_ids[i] = from->face_ids[best];
-      fp.uv[2 * i] = from->uv[2 * best];
-      fp.uv[2 * i + 1] = from->uv[2 * best + 1];
-      fp.distances[i] = from->distances[best];
-      if (has_positions) std::copy_n(&from->positions[3 * best], 3, &fp.positions[3 * i]);
-      if (has_normals) std::copy_n(&from->normals[3 * best], 3, &fp.normals[3 * i]);
+      refine(*surface_, *topology_, y.data(), k, polishing, again, nullptr, &irregular_);
+      for (std::size_t r = 0; r < k; ++r)
+        if (take(first + again_row[r], again, r)) changed[again_row[r]] = 1;
     }
+    for (std::size_t j = 0; j < b; ++j) moved += changed[j];
   }
   return moved;
 }
