@@ -616,7 +616,7 @@ void bind_approximate(py::module_& m) {
           return py::make_tuple(footpoint_tuple(std::move(fp)), moved);
         },
         "surface"_a, "topology"_a, "points"_a.noconvert(), "face_ids"_a.noconvert(), "uv"_a.noconvert(), "grid"_a,
-        "max_steps"_a, "starts"_a, "near"_a = 0.1,
+        "max_steps"_a, "starts"_a, "near"_a = sorpia::FootpointOptions{}.near,
         "((face_ids, uv, positions, distances, normals), moved): the footpoints given, evaluated at their (face, uv),\n"
         "re-searched from the grid samples within their distance (sorpia::FootpointSearch::closer).");
 

@@ -2,9 +2,15 @@
 #include <gtest/gtest.h>
 #include <opensubdiv/bfr/parameterization.h>
 
+#include <opensubdiv/bfr/refinerSurfaceFactory.h>
+#include <opensubdiv/bfr/surface.h>
+
 #include <algorithm>
 #include <cmath>
+#include <thread>
 #include <vector>
+
+#include "sorpia/detail/osd_refiner.hpp"
 
 #include "sorpia/errors.hpp"
 #include "sorpia/limit.hpp"
@@ -131,6 +137,77 @@ TEST(LimitSurface, CatmullClarkPolygonsGiveQuadsAndExactCorners) {
     for (std::size_t i = 0; i < ids.size(); ++i)
       for (int c = 0; c < 3; ++c)
         EXPECT_NEAR(p[3 * i + c], t->vertices[3 * static_cast<std::size_t>(m.face_vertex_indices[i]) + c], 1e-12);
+}
+
+}  // namespace
+
+namespace {
+
+// Bfr's own evaluation of every face of a surface at `uv` (one parameter for
+// all faces, away from the corners), each face's Bfr::Surface built by a
+// factory without a cache and its patch points prepared at `vertices`:
+// positions, du and dv, (3 m) each.
+std::vector<double> bfr_evaluation(const sorpia::Topology& t, sorpia::Scheme scheme, const double* vertices,
+                                   const double* uv) {
+  namespace Bfr = OpenSubdiv::Bfr;
+  const sorpia::detail::Refiner r = sorpia::detail::make_refiner(t, scheme, Boundary::EdgeAndCorner);
+  Bfr::SurfaceFactory::Options options;
+  options.SetApproxLevelSmooth(4);  // surface.cpp's kApproxLevelSmooth (no darts here)
+  options.SetApproxLevelSharp(10);
+  options.EnableCaching(false);
+  const Bfr::RefinerSurfaceFactory<> factory(*r.refiner, options);
+  std::vector<double> points(3 * r.from_osd.size()), patch, out(9 * t.n_faces());
+  for (std::size_t k = 0; k < r.from_osd.size(); ++k) std::copy_n(&vertices[3 * r.from_osd[k]], 3, &points[3 * k]);
+  const std::size_t m = t.n_faces();
+  for (std::size_t f = 0; f < m; ++f) {
+    Bfr::Surface<double> s;
+    EXPECT_TRUE(factory.InitVertexSurface(static_cast<int>(f), &s));
+    patch.resize(3 * static_cast<std::size_t>(s.GetNumPatchPoints()));
+    s.PreparePatchPoints(points.data(), 3, patch.data(), 3);
+    s.Evaluate(uv, patch.data(), 3, &out[3 * f], &out[3 * (m + f)], &out[3 * (2 * m + f)]);
+  }
+  return out;
+}
+
+TEST(LimitSurface, PreparedPatchPointsFollowTheControlVertices) {
+  // LimitSurface keeps each face's Bfr surface and its patch points between
+  // evaluations until the control vertices change. After set_vertices, every
+  // face's evaluation (positions and first derivatives) equals Bfr's own,
+  // from a factory without a cache at the new vertices, bit for bit: also
+  // when two threads evaluate the faces at once, both preparing them, and
+  // after the faces' patch points had been prepared at the old vertices.
+  // Loop on an irregular torus (irregular patches at its extraordinary
+  // vertices), Catmull-Clark on polygons (quad sub-faces).
+  for (const auto scheme : {sorpia::Scheme::Loop, sorpia::Scheme::CatmullClark}) {
+    const sorpia::Mesh mesh = scheme == sorpia::Scheme::Loop ? sorpia::irregular(200) : sorpia::polygon_torus(8, 5, 2);
+    const sorpia::Topology t(mesh);
+    const std::size_t m = t.n_faces();
+    std::vector<double> moved = mesh.vertices;
+    for (std::size_t i = 0; i < moved.size(); ++i) moved[i] += 0.01 * std::sin(7.0 * static_cast<double>(i));
+    const double uv[2] = {0.3, 0.2};
+    std::vector<std::int32_t> ids(m);
+    std::vector<double> uvs(2 * m);
+    for (std::size_t f = 0; f < m; ++f) {
+      ids[f] = static_cast<std::int32_t>(f);
+      std::copy_n(uv, 2, &uvs[2 * f]);
+    }
+    sorpia::LimitSurface s(t, mesh.vertices.data(), scheme, Boundary::EdgeAndCorner);
+    const auto evaluate = [&](std::vector<double>& out) {
+      out.assign(9 * m, 0.0);
+      s.evaluate(ids.data(), uvs.data(), m, out.data(), out.data() + 3 * m, out.data() + 6 * m, nullptr);
+    };
+    std::vector<double> first, second, third;
+    evaluate(first);
+    EXPECT_EQ(first, bfr_evaluation(t, scheme, mesh.vertices.data(), uv));
+    s.set_vertices(moved.data());
+    std::thread other([&] { evaluate(second); });
+    evaluate(third);
+    other.join();
+    const std::vector<double> expected = bfr_evaluation(t, scheme, moved.data(), uv);
+    EXPECT_EQ(second, expected);
+    EXPECT_EQ(third, expected);
+    EXPECT_NE(first, expected);
+  }
 }
 
 }  // namespace

@@ -549,6 +549,10 @@ constexpr double kUvTolerance = 1e-11;
 // Gauss-Newton steps at least of FootpointSearch::closer's refinements: its
 // starts may lie a few grid cells from their minimum.
 constexpr int kCloserSteps = 100;
+// Gauss-Newton steps at least of FootpointSearch::closer's last refinement of
+// each footpoint from itself: near a focal point of the surface (a point as
+// far from it as its radius of curvature) Gauss-Newton converges slowly.
+constexpr int kPolishSteps = 400;
 // The rounding of a computed distance, in units of epsilon times the size of
 // the surface point's coordinates (|p|_1 + distance).
 constexpr double kRounding = 8.0;
@@ -584,12 +588,41 @@ struct Slot {
   float predicted;
 };
 
-// refine_footpoints, optionally from known start points. The points' states
+// Bfr's derivatives are approximate within the corner region of side 1/16 of
+// a face's domain at an extraordinary vertex (surface.hpp: a Gregory patch),
+// so that Gauss-Newton with them stops up to about 1e-5 of the face's size
+// off the minimum there (distances 1e-9 of the diagonal too far). A point
+// within this much of a chart's corner, in its local coordinates (twice the
+// region: a sub-face of a k-gon is half the face's side), takes its
+// derivatives from differences of Bfr's positions instead where refine is
+// asked to be exact (FootpointSearch::closer).
+constexpr double kCornerRegion = 1.0 / 8.0;
+// The step of those differences in (u, v): their error is about this (the
+// second derivative's term) plus epsilon over it (rounding) relative to the
+// derivative.
+constexpr double kDifferenceStep = 1e-7;
+
+bool near_corner(const Domains& dom, std::int32_t f, const double* ab) {
+  const Kind kind = dom.kind(f);
+  const double m = kind == Kind::Sub ? 2.0 * kCornerRegion : kCornerRegion;
+  const double a = ab[0], b = ab[1];
+  if (kind == Kind::Triangle) {
+    const double c = 1.0 - a - b;
+    return (a < m && b < m) || (c < m && b < m) || (a < m && c < m);
+  }
+  return (a < m || a > 1.0 - m) && (b < m || b > 1.0 - m);
+}
+
+// refine_footpoints, optionally from known start points; `exact`: with
+// `irregular` (per face, or null): Bfr's Surface::IsRegular() false, where
+// the derivatives come from differences of positions near corners
+// (kCornerRegion). The points' states
 // are held in one array in face order, so that the points of the face being
 // visited lie together in memory (and, one block, it goes back to the system
 // as a whole when freed).
 void refine(const LimitSurface& surface, const Topology& topology, const double* points, std::size_t n,
-            const FootpointOptions& options, Footpoints& fp, KnownStart* known) {
+            const FootpointOptions& options, Footpoints& fp, KnownStart* known,
+            const std::vector<std::uint8_t>* irregular = nullptr) {
   if (fp.face_ids.size() != n || fp.uv.size() != 2 * n)
     throw ParameterError("footpoints hold " + std::to_string(fp.face_ids.size()) + " faces and " +
                          std::to_string(fp.uv.size() / 2) + " parameters for " + std::to_string(n) + " points");
@@ -697,6 +730,20 @@ void refine(const LimitSurface& surface, const Topology& topology, const double*
         double uv[2], p[3], du[3], dv[3];
         dom.to_uv(f_visit, q.chart, q.ab[0], q.ab[1], uv);
         evaluate(uv, p, du, dv);
+        if (irregular && (*irregular)[static_cast<std::size_t>(f_visit)] && near_corner(dom, f_visit, q.ab)) {
+          // Forward differences, backward where the forward step would leave the chart.
+          const bool tri = dom.kind(f_visit) == Kind::Triangle;
+          const double h = dom.kind(f_visit) == Kind::Sub ? 0.5 * kDifferenceStep : kDifferenceStep;
+          const double room_a = tri ? 1.0 - q.ab[0] - q.ab[1] : 1.0 - q.ab[0];
+          const double room_b = tri ? room_a : 1.0 - q.ab[1];
+          const double local = dom.kind(f_visit) == Kind::Sub ? 2.0 * h : h;
+          const double hu = room_a > local ? h : -h, hv = room_b > local ? h : -h;
+          double at[2] = {uv[0] + hu, uv[1]}, pu[3], pv[3], unused[6];
+          evaluate(at, pu, unused, unused + 3);
+          at[0] = uv[0], at[1] = uv[1] + hv;
+          evaluate(at, pv, unused, unused + 3);
+          for (int c = 0; c < 3; ++c) du[c] = (pu[c] - p[c]) / hu, dv[c] = (pv[c] - p[c]) / hv;
+        }
         const double r[3] = {x[0] - p[0], x[1] - p[1], x[2] - p[2]};
         const double dist = std::sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
         // A point across an edge (a hop) starts at the surface point it left:
@@ -798,6 +845,13 @@ FootpointSearch::FootpointSearch(const LimitSurface& surface, const Topology& to
   reach_ = grid_reach(dom, options.grid, positions_);
   largest_reach_ = *std::max_element(reach_.begin(), reach_.end());
   index_ = std::make_unique<PointIndex>(positions_.data(), k);
+  // Bfr's regularity of each face (holes: regular, never searched).
+  std::vector<std::int32_t> faces;
+  for (std::int32_t f = 0; f < static_cast<std::int32_t>(topology.n_faces()); ++f)
+    if (!dom.hole[static_cast<std::size_t>(f)]) faces.push_back(f);
+  const std::vector<std::uint8_t> regular = surface.control_points(faces.data(), faces.size()).regular;
+  irregular_.assign(topology.n_faces(), 0);
+  for (std::size_t i = 0; i < faces.size(); ++i) irregular_[static_cast<std::size_t>(faces[i])] = !regular[i];
 }
 
 FootpointSearch::~FootpointSearch() = default;
@@ -846,6 +900,20 @@ std::size_t FootpointSearch::closer(const double* points, std::size_t n, Footpoi
   std::vector<std::size_t> count(kBatch);
   std::vector<std::int64_t> nearest_sample(kBatch);
   std::vector<double> nearest_distance(kBatch);
+  FootpointOptions polishing = options_;
+  polishing.max_steps = std::max(options_.max_steps, kPolishSteps);
+  // Replaces point i's footpoint by row r of `from` where that is closer.
+  const auto take = [&](std::size_t i, const Footpoints& from, std::size_t r) {
+    if (!(from.distances[r] < fp.distances[i])) return false;
+    fp.face_ids[i] = from.face_ids[r];
+    fp.uv[2 * i] = from.uv[2 * r];
+    fp.uv[2 * i + 1] = from.uv[2 * r + 1];
+    fp.distances[i] = from.distances[r];
+    if (has_positions) std::copy_n(&from.positions[3 * r], 3, &fp.positions[3 * i]);
+    if (has_normals) std::copy_n(&from.normals[3 * r], 3, &fp.normals[3 * i]);
+    return true;
+  };
+  std::vector<std::uint8_t> changed(kBatch);
   for (std::size_t first = 0; first < n; first += kBatch) {
     poll_interrupt();
     const std::size_t b = std::min(kBatch, n - first);
@@ -877,41 +945,59 @@ std::size_t FootpointSearch::closer(const double* points, std::size_t n, Footpoi
     std::vector<std::size_t> row(b + 1, 0);
     for (std::size_t j = 0; j < b; ++j) row[j + 1] = row[j] + count[j];
     const std::size_t rows = row[b];
-    if (rows == 0) continue;
-    std::vector<double> x(3 * rows);
-    std::vector<std::int64_t> nearest(rows);
-    Footpoints trial;
-    trial.face_ids.resize(rows);
-    trial.uv.resize(2 * rows);
-    for (std::size_t j = 0; j < b; ++j)
-      for (std::size_t c = 0; c < count[j]; ++c) {
-        const std::size_t r = row[j] + c;
-        const auto s = static_cast<std::size_t>(candidate[j * (starts + 1) + c]);
-        std::copy_n(points + 3 * (first + j), 3, &x[3 * r]);
-        nearest[r] = static_cast<std::int64_t>(s);
-        trial.face_ids[r] = sample_faces_[s];
-        trial.uv[2 * r] = sample_uv_[2 * s];
-        trial.uv[2 * r + 1] = sample_uv_[2 * s + 1];
+    std::fill_n(changed.begin(), b, std::uint8_t{0});
+    if (rows > 0) {
+      std::vector<double> x(3 * rows);
+      std::vector<std::int64_t> nearest(rows);
+      Footpoints trial;
+      trial.face_ids.resize(rows);
+      trial.uv.resize(2 * rows);
+      for (std::size_t j = 0; j < b; ++j)
+        for (std::size_t c = 0; c < count[j]; ++c) {
+          const std::size_t r = row[j] + c;
+          const auto s = static_cast<std::size_t>(candidate[j * (starts + 1) + c]);
+          std::copy_n(points + 3 * (first + j), 3, &x[3 * r]);
+          nearest[r] = static_cast<std::int64_t>(s);
+          trial.face_ids[r] = sample_faces_[s];
+          trial.uv[2 * r] = sample_uv_[2 * s];
+          trial.uv[2 * r + 1] = sample_uv_[2 * s + 1];
+        }
+      KnownStart known{nearest.data(), positions_.data(), du_.data(), dv_.data()};
+      refine(*surface_, *topology_, x.data(), rows, options, trial, &known, &irregular_);
+      // The closest of each point's results, where closer than its footpoint
+      // (the first of equals).
+      for (std::size_t j = 0; j < b; ++j) {
+        if (count[j] == 0) continue;
+        std::size_t best = row[j];
+        for (std::size_t r = row[j] + 1; r < row[j + 1]; ++r)
+          if (trial.distances[r] < trial.distances[best]) best = r;
+        changed[j] = take(first + j, trial, best);
       }
-    KnownStart known{nearest.data(), positions_.data(), du_.data(), dv_.data()};
-    refine(*surface_, *topology_, x.data(), rows, options, trial, &known);
-    // The closest of each point's results, where closer than its footpoint
-    // (the first of equals).
-    for (std::size_t j = 0; j < b; ++j) {
-      if (count[j] == 0) continue;
-      std::size_t best = row[j];
-      for (std::size_t r = row[j] + 1; r < row[j + 1]; ++r)
-        if (trial.distances[r] < trial.distances[best]) best = r;
-      const std::size_t i = first + j;
-      if (!(trial.distances[best] < fp.distances[i])) continue;
-      ++moved;
-      fp.face_ids[i] = trial.face_ids[best];
-      fp.uv[2 * i] = trial.uv[2 * best];
-      fp.uv[2 * i + 1] = trial.uv[2 * best + 1];
-      fp.distances[i] = trial.distances[best];
-      if (has_positions) std::copy_n(&trial.positions[3 * best], 3, &fp.positions[3 * i]);
-      if (has_normals) std::copy_n(&trial.normals[3 * best], 3, &fp.normals[3 * i]);
     }
+    // Then each footpoint refined again from itself, to the minimum
+    // (find and refine stop after max_steps, the starts after
+    // kCloserSteps, and near corners with Bfr's derivatives): a step or two
+    // where it is there already.
+    std::vector<std::size_t> again_row;
+    for (std::size_t j = 0; j < b; ++j)
+      if (fp.distances[first + j] > 0.0) again_row.push_back(j);
+    if (!again_row.empty()) {
+      const std::size_t k = again_row.size();
+      std::vector<double> y(3 * k);
+      Footpoints again;
+      again.face_ids.resize(k);
+      again.uv.resize(2 * k);
+      for (std::size_t r = 0; r < k; ++r) {
+        const std::size_t i = first + again_row[r];
+        std::copy_n(points + 3 * i, 3, &y[3 * r]);
+        again.face_ids[r] = fp.face_ids[i];
+        std::copy_n(&fp.uv[2 * i], 2, &again.uv[2 * r]);
+      }
+      refine(*surface_, *topology_, y.data(), k, polishing, again, nullptr, &irregular_);
+      for (std::size_t r = 0; r < k; ++r)
+        if (take(first + again_row[r], again, r)) changed[again_row[r]] = 1;
+    }
+    for (std::size_t j = 0; j < b; ++j) moved += changed[j];
   }
   return moved;
 }

@@ -115,19 +115,25 @@ std::string face_words(Scheme scheme, double faces, int level) {
   return std::string(count) + " quads (k 4^(level-1) per k-sided face)";
 }
 
-// The Bfr surfaces of one limit surface's faces: from `cached` (one factory
-// whose cache shares irregular patches between faces of the same topology)
-// for every face but those Bfr must build on their own (see
-// kBfrCachesFoldedPatchesWrongly), which a factory without a cache builds,
-// each once, on first use (their patches depend only on the topology and
-// the rules, not on the vertices), kept here.
+// The Bfr surfaces of one limit surface's faces and their patch points at the
+// current control vertices: each face's Bfr::Surface is built on its first
+// use and kept (it depends on the topology and the rules alone), from
+// `cached` (one factory whose cache shares irregular patches between faces of
+// the same topology) for every face but those Bfr must build on their own
+// (see kBfrCachesFoldedPatchesWrongly), which a factory without a cache
+// builds; its patch points (Bfr::Surface::PreparePatchPoints) are prepared on
+// the face's first evaluation after each change of the control vertices
+// (invalidate()) and kept until the next, so that every evaluation of the
+// face until then (Gauss-Newton steps, grid samples, rounds of a search)
+// uses them as they are. Both are built by whichever thread asks first,
+// under a lock per face (striped), and read without one after.
 class BfrSurfaces {
  public:
   BfrSurfaces(const Far::TopologyRefiner& refiner, const Topology& t, Bfr::SurfaceFactory::Options options)
-      : cached_(refiner, options) {
+      : cached_(refiner, options), faces_(std::make_unique<Face[]>(t.n_faces())), n_faces_(t.n_faces()) {
     if (!kBfrCachesFoldedPatchesWrongly) return;
     const auto& fi = t.face_indices();
-    std::int32_t n_alone = 0;
+    bool any = false;
     for (std::size_t f = 0; f < t.n_faces(); ++f) {
       const std::int32_t o = t.face_offset(f);
       bool alone = false;
@@ -135,38 +141,75 @@ class BfrSurfaces {
         const auto v = static_cast<std::size_t>(fi[static_cast<std::size_t>(o + i)]);
         alone = alone || (!t.is_boundary(v) && t.face_count(v) == 2);
       }
-      if (!alone) continue;
-      if (slot_.empty()) slot_.assign(t.n_faces(), -1);
-      slot_[f] = n_alone++;
+      faces_[f].alone = alone;
+      any = any || alone;
     }
-    if (n_alone == 0) return;
+    if (!any) return;
     options.EnableCaching(false);
     uncached_ = std::make_unique<Bfr::RefinerSurfaceFactory<>>(refiner, options);
-    alone_.resize(static_cast<std::size_t>(n_alone));
-    built_ = std::make_unique<std::once_flag[]>(static_cast<std::size_t>(n_alone));
-    valid_.assign(static_cast<std::size_t>(n_alone), 0);
   }
 
-  // Face `face`'s Bfr surface: `scratch` initialised by the shared factory,
-  // or the face's own, built on its first use (safe from several threads);
-  // null where Bfr cannot build it.
-  const Bfr::Surface<double>* get(int face, Bfr::Surface<double>& scratch) const {
-    const std::int32_t s = slot_.empty() ? -1 : slot_[static_cast<std::size_t>(face)];
-    if (s < 0) return cached_.InitVertexSurface(face, &scratch) ? &scratch : nullptr;
-    const auto k = static_cast<std::size_t>(s);
-    std::call_once(built_[k], [&] { valid_[k] = uncached_->InitVertexSurface(face, &alone_[k]) ? 1 : 0; });
-    return valid_[k] ? &alone_[k] : nullptr;
+  // Face `face`'s Bfr surface, built on its first use (safe from several
+  // threads); null where Bfr cannot build it.
+  const Bfr::Surface<double>* get(int face) const {
+    Face& f = faces_[static_cast<std::size_t>(face)];
+    std::uint8_t state = f.built.load(std::memory_order_acquire);
+    if (state == kNotBuilt) {
+      const std::lock_guard<std::mutex> lock(stripe(face));
+      state = f.built.load(std::memory_order_relaxed);
+      if (state == kNotBuilt) {
+        const bool ok = f.alone ? uncached_->InitVertexSurface(face, &f.surface)
+                                : cached_.InitVertexSurface(face, &f.surface);
+        state = ok ? kValid : kInvalid;
+        f.built.store(state, std::memory_order_release);
+      }
+    }
+    return state == kValid ? &f.surface : nullptr;
   }
+
+  // The patch points of face `face` (whose surface get() returned) at the
+  // control points `mesh_points` (in OpenSubdiv's order, the current ones:
+  // prepared once after each invalidate()), as Bfr::Surface::Evaluate takes
+  // them (3 doubles each).
+  const double* patch_points(int face, const double* mesh_points) const {
+    Face& f = faces_[static_cast<std::size_t>(face)];
+    if (f.prepared.load(std::memory_order_acquire) != generation_) {
+      const std::lock_guard<std::mutex> lock(stripe(face));
+      if (f.prepared.load(std::memory_order_relaxed) != generation_) {
+        const Bfr::Surface<double>::PointDescriptor desc(3);
+        f.patch.resize(3 * static_cast<std::size_t>(f.surface.GetNumPatchPoints()));
+        f.surface.PreparePatchPoints(mesh_points, desc, f.patch.data(), desc);
+        f.prepared.store(generation_, std::memory_order_release);
+      }
+    }
+    return f.patch.data();
+  }
+
+  // The control vertices changed: every face's patch points are prepared
+  // again on its next use. The caller holds the surface's lock exclusively.
+  void invalidate() { ++generation_; }
+
   // A face's parameterisation (the same from either factory).
   Bfr::Parameterization parameterization(int face) const { return cached_.GetFaceParameterization(face); }
 
  private:
+  static constexpr std::uint8_t kNotBuilt = 0, kValid = 1, kInvalid = 2;
+  struct Face {
+    Bfr::Surface<double> surface;
+    std::vector<double> patch;
+    std::atomic<std::uint64_t> prepared{0};  // the generation the patch points are of (0: none)
+    std::atomic<std::uint8_t> built{kNotBuilt};
+    bool alone = false;  // built by uncached_
+  };
+  std::mutex& stripe(int face) const { return stripes_[static_cast<std::size_t>(face) % kStripes]; }
+
   SurfaceFactory cached_;
-  std::vector<std::int32_t> slot_;  // per face: its place in alone_, or -1; empty when no face is alone
-  std::unique_ptr<Bfr::RefinerSurfaceFactory<>> uncached_;
-  mutable std::vector<Bfr::Surface<double>> alone_;
-  mutable std::unique_ptr<std::once_flag[]> built_;
-  mutable std::vector<std::uint8_t> valid_;  // written once, inside built_'s call_once
+  std::unique_ptr<Bfr::RefinerSurfaceFactory<>> uncached_;  // null when no face is alone
+  std::unique_ptr<Face[]> faces_;
+  std::size_t n_faces_;
+  std::uint64_t generation_ = 1;
+  static constexpr std::size_t kStripes = 64;
+  mutable std::mutex stripes_[kStripes];
 };
 
 }  // namespace
@@ -320,6 +363,7 @@ void LimitSurface::set_vertices(const double* vertices) {
   const std::size_t n = n_vertices();
   impl_->vertices.assign(vertices, vertices + 3 * n);
   detail::gather_points(impl_->base, vertices, impl_->points);
+  impl_->factory->invalidate();
   const CsrMatrix& rows = impl_->exact.rows;
   impl_->exact_points.assign(3 * rows.n_rows, 0.0);
   for (std::size_t k = 0; k < rows.n_rows; ++k)
@@ -363,7 +407,6 @@ void for_each_face_surface(const BfrSurfaces& factory, const std::int32_t* face_
   std::atomic<bool> stop{false};
   const int threads = evaluate_threads(n_groups);
   detail::for_each_task(threads > 1, threads, [&](int) {
-    Bfr::Surface<double> surface;
     for (;;) {
       // Only the calling thread's poll can throw (workers have no checker);
       // the others then stop at their next chunk.
@@ -378,7 +421,7 @@ void for_each_face_surface(const BfrSurfaces& factory, const std::int32_t* face_
       if (first >= n_groups) break;
       for (std::ptrdiff_t g = first; g < std::min(n_groups, first + kFacesPerChunk); ++g) {
         const int face = face_ids[order[group_start[g]]];
-        const Bfr::Surface<double>* built = factory.get(face, surface);
+        const Bfr::Surface<double>* built = factory.get(face);
         if (!built) {
           failed_face = face;
           continue;
@@ -400,18 +443,16 @@ void evaluate_points(const BfrSurfaces& factory, const double* mesh_points, cons
   const bool want_derivs = du || dv || normals;
   const Bfr::Surface<double>::PointDescriptor desc(3);
   for_each_face_surface(factory, face_ids, k,
-                        [&](const Bfr::Surface<double>& surface, int, const std::size_t* first,
+                        [&](const Bfr::Surface<double>& surface, int face, const std::size_t* first,
                             const std::size_t* last) {
-                          thread_local std::vector<double> patch;
-                          patch.resize(3 * static_cast<std::size_t>(surface.GetNumPatchPoints()));
-                          surface.PreparePatchPoints(mesh_points, desc, patch.data(), desc);
+                          const double* patch = factory.patch_points(face, mesh_points);
                           for (const std::size_t* it = first; it != last; ++it) {
                             const std::size_t i = *it;
                             double p[3], d1[3], d2[3];
                             if (want_derivs)
-                              surface.Evaluate(&params[2 * i], patch.data(), desc, p, d1, d2);
+                              surface.Evaluate(&params[2 * i], patch, desc, p, d1, d2);
                             else
-                              surface.Evaluate(&params[2 * i], patch.data(), desc, p);
+                              surface.Evaluate(&params[2 * i], patch, desc, p);
                             std::copy(p, p + 3, positions + 3 * i);
                             if (du) std::copy(d1, d1 + 3, du + 3 * i);
                             if (dv) std::copy(d2, d2 + 3, dv + 3 * i);
@@ -477,11 +518,9 @@ void LimitSurface::visit_faces(const std::int32_t* face_ids, std::size_t k,
   for_each_face_surface(*impl_->factory, face_ids, k,
                         [&](const Bfr::Surface<double>& surface, int face, const std::size_t* first,
                             const std::size_t* last) {
-                          thread_local std::vector<double> patch;
-                          patch.resize(3 * static_cast<std::size_t>(surface.GetNumPatchPoints()));
-                          surface.PreparePatchPoints(mesh_points, desc, patch.data(), desc);
+                          const double* patch = impl_->factory->patch_points(face, mesh_points);
                           const FaceEvaluation evaluate = [&](const double* uv, double* p, double* du, double* dv) {
-                            surface.Evaluate(uv, patch.data(), desc, p, du, dv);
+                            surface.Evaluate(uv, patch, desc, p, du, dv);
                           };
                           visit(face, first, last, evaluate);
                         });

@@ -86,9 +86,11 @@ struct FootpointOptions {
   /// whose distance exceeds `near` times the reach of their nearest grid
   /// sample (0: every point off the surface). A point nearer is refined from
   /// that sample alone (as find); a closer point it misses lies on a fold of
-  /// the surface within about that distance, finer than the grid. 0 is the
-  /// exhaustive search (about 8 times find's cost), 0.1 about twice find's.
-  double near = 0.1;
+  /// the surface within about that distance, finer than the grid. 0 (the
+  /// default) is the exhaustive search, which tests/test_footpoints.py holds
+  /// to the brute-force closest points within 1e-9 of the diagonal (about 6
+  /// times find's instructions; 0.1 far fewer, leaving points on folds).
+  double near = 0.0;
 };
 
 /// The closest point of the limit surface to each of n points: start at the
@@ -129,12 +131,19 @@ class FootpointSearch {
   /// the candidate starts. The point's nearest sample (find's start) and up
   /// to options.starts candidates, least |x - s| - reach(s) first (for a
   /// point farther than options.near times its nearest sample's reach),
-  /// are refined (refine_footpoints from the sample, at least 100 steps)
-  /// and the closest result replaces the footpoint where it is closer.
+  /// are refined (refine_footpoints from the sample, at least 100 steps),
+  /// the closest result replaces the footpoint where it is closer, and the
+  /// footpoint is then refined again from itself (at least 400 steps: near
+  /// a focal point Gauss-Newton converges slowly). These refinements take
+  /// their derivatives near the corners of irregular faces
+  /// (Bfr::Surface::IsRegular() false) from differences of positions (Bfr's
+  /// are approximate there, surface.hpp), so that they reach the minimum to
+  /// rounding.
   /// Cost: a k-d tree query per point and a refinement per start. With
   /// near = 0 a point has about 5 to 8 starts (its footpoint's own grid
-  /// cell and its neighbours pass the bound too); with near = 0.1, on a
-  /// fit's footpoints, about 1.05.
+  /// cell and its neighbours pass the bound too): about 6 times find's
+  /// instructions; with near = 0.1 about 1.05 starts on a fit's
+  /// footpoints.
   /// Each point's result depends on that point alone; no distance
   /// increases.
   /// @param points      row-major (n, 3), finite
@@ -154,6 +163,7 @@ class FootpointSearch {
   FootpointOptions options_;
   std::vector<std::int32_t> sample_faces_;
   std::vector<double> sample_uv_, positions_, du_, dv_;
+  std::vector<std::uint8_t> irregular_;  // per face: Bfr's Surface::IsRegular() false (closer)
   std::vector<double> reach_;  // per sample: the distance to its farthest neighbour in its chart's grid (closer)
   double largest_reach_ = 0.0;
   std::unique_ptr<PointIndex> index_;

@@ -60,11 +60,23 @@ struct FaceControlPoints {
 /// changes the control vertices without rebuilding them, as the PIA loop
 /// changes positions, never topology.
 ///
+/// Each face's Bfr::Surface is built on the face's first use and kept; its
+/// patch points (Bfr::Surface::PreparePatchPoints, the control vertices
+/// combined into the points Bfr evaluates the face from) are prepared on the
+/// face's first evaluation after each set_vertices() and kept until the
+/// next, so that evaluate(), visit_faces() and tessellate() prepare a face
+/// once per state of the control vertices however often they evaluate it;
+/// rows() and control_points() use the kept surfaces (their stencils need no
+/// patch points). Results are those of a fresh Bfr::Surface at the current
+/// vertices, bit for bit. Memory: a few hundred bytes per face, more at
+/// irregular faces (bench/footpoints_speed.py measures it).
+///
 /// Threads: evaluate() and get_vertices() may run concurrently (one shared
-/// Bfr factory with a thread-safe cache, the core's thread pool inside
-/// evaluate(): at most one thread per 64 distinct faces queried);
-/// set_vertices() and tessellate() take exclusive access. Long calls poll
-/// sorpia::poll_interrupt().
+/// Bfr factory with a thread-safe cache, a face's surface and patch points
+/// built by the first thread that needs them under a lock per face, the
+/// core's thread pool inside evaluate(): at most one thread per 64 distinct
+/// faces queried); set_vertices() and tessellate() take exclusive access.
+/// Long calls poll sorpia::poll_interrupt().
 ///
 /// Parameterisation of a face (Bfr::Parameterization, chosen by the scheme
 /// and the face's size k):
@@ -196,7 +208,8 @@ class LimitSurface {
   using FaceEvaluation = std::function<void(const double*, double*, double*, double*)>;
   /// Visits the distinct faces of k entries face_ids[0..k), each on one of
   /// the core's threads with its surface built and its patch points prepared
-  /// once: visit(face, first, last, evaluate), where [first, last) are the
+  /// (once per state of the control vertices, see the class comment):
+  /// visit(face, first, last, evaluate), where [first, last) are the
   /// indices i of the entries with face_ids[i] == face. For work that
   /// evaluates one face many times (Newton steps on footpoints) without
   /// rebuilding its patch at each step. The calls run concurrently on
