@@ -250,9 +250,9 @@ def ooc_lines(rows) -> list:
                      + " | ".join(f"{r[k]:.3g}" for k in PHASES[1:])
                      + f" | {r['approximate']:.3g} | {r['rms']:.3g} | {r['max']:.3g} | {r['peak_mb']:.0f} "
                      f"| {r['file_mb']:.0f} |")
-    notes = sorted({r["note"] for r in rows if r.get("note")})
+    notes = [f"{r['points']:,} points: {r['note']}" for r in rows if r.get("note")]
     if notes:
-        lines += ["", "Measured: " + "; ".join(notes) + "."]
+        lines += ["", "How each row was measured:", ""] + [f"- {n}." for n in notes]
     return lines
 
 
