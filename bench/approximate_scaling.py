@@ -240,8 +240,8 @@ def ooc_lines(rows) -> list:
              "Points streamed from a binary PLY (float32) a chunk at a time, never in memory whole (module "
              "docstring: samples of a known limit surface plus noise), onto a fixed cage; each row from its own "
              "run of --out-of-core, in a process of its own. Peak MB is the fit's process alone. Seconds are "
-             "wall seconds of a loaded machine (see each row's note): compare the peak memory, which the chunk "
-             "and the cage set, not the points.", "",
+             "wall seconds; each row's note says on what code and at what load it ran (a loaded machine inflates "
+             "them). The peak memory is set by the chunk and the cage, not the points.", "",
              "| points | cage | chunk | iterations | footpoints s | rows s | normal s | solve s | report s "
              "| approximate s | RMS / diagonal | max / diagonal | peak MB | file MB |",
              "|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
