@@ -233,6 +233,21 @@ def test_coarse_iterations_are_the_samples_fit_then_all_points_fit():
     assert both.best_iteration == 2 + rest.best_iteration
 
 
+def test_coarse_records_give_the_robust_loss_of_the_sample_as_its_own_fit_does():
+    # The robust criterion of a coarse record is over the sample's points, as its RMS: that of the sample fitted
+    # alone, not scaled down by the sqrt of the share of the points in the sample (below 0.5 here). Within 1e-3:
+    # the sample alone has its own diagonal, the unit of the scale's histogram bins and of its floor.
+    P, V, F = noisy_samples()
+    mask = sample_mask(len(P), 8 * len(V))
+    both = approximate(P, V, F, iterations=4, tol=0.0, coarse_iterations=2, coarse_points=8, robust="tukey")
+    sample = approximate(P[mask], V, F, iterations=2, tol=0.0, coarse_iterations=0, robust="tukey")
+    for a, b in zip(both.history[:2], sample.history[:2], strict=True):  # record 2 is of all points
+        for key in ("robust_loss", "inlier_rms"):  # the scale itself: to the histogram's bins (its unit differs)
+            assert abs(a[key] - b[key]) <= 1e-3 * b[key], (a["iteration"], key, a[key], b[key])
+        assert a["robust_cut"] == b["robust_cut"]
+    assert mask.sum() < 0.5 * len(P)
+
+
 def test_coarse_fit_reaches_the_full_fit():
     # On points near a known surface with noise 1e-3 the fit whose first 4 of 8 updates see 8 points per control
     # vertex ends within 1% of the RMS of the fit whose 8 see all of them, and its surface within a tenth of the

@@ -307,9 +307,8 @@ ApproximationResult approximate(LimitSurface& surface, PointChunks& chunks, cons
   Phases phases;
   // The RMS distance of the points the sums are of (all k, or the coarse iterations' sample), weighted: sum w d^2
   // over their count (the weights of mean 1).
-  const auto rms = [&](const DistanceSums& d) {
-    return std::sqrt(d.squares / static_cast<double>(d.count > 0 ? d.count : k));
-  };
+  const auto counted = [&](const DistanceSums& d) { return static_cast<double>(d.count > 0 ? d.count : k); };
+  const auto rms = [&](const DistanceSums& d) { return std::sqrt(d.squares / counted(d)); };
   std::unique_ptr<PointIndex> data_index;
   std::vector<std::int64_t> nearest;
   std::vector<double> near_distance;
@@ -376,7 +375,7 @@ ApproximationResult approximate(LimitSurface& surface, PointChunks& chunks, cons
     if (robust) {
       rec.robust_scale = std::ldexp(current_scale, e);
       const RobustSums r = chunks.robust_sums(options.robust, current_scale);
-      current_loss = std::sqrt(r.loss / static_cast<double>(k));
+      current_loss = std::sqrt(r.loss / counted(distances));  // over the points the sums are of, as rms
       const double inlier = r.inlier_weight > 0 ? std::sqrt(r.inlier_squares / r.inlier_weight) : 0.0;
       rec.robust_loss_relative = current_loss / unit;
       rec.robust_loss = std::ldexp(current_loss, e);
