@@ -869,7 +869,8 @@ void bind_approximate(py::module_& m) {
       "seconds_before"_a = 0.0, "report_each"_a = false,
       "robust"_a = sorpia::robust_loss_name(sorpia::ApproximationOptions{}.robust.loss),
       "robust_quantile"_a = py::none(), "robust_c"_a = py::none(),
-      "coarse_iterations"_a = 0, "coarse_points"_a = sorpia::ApproximationOptions{}.coarse_points,
+      "coarse_iterations"_a = sorpia::ApproximationOptions{}.coarse_iterations,
+      "coarse_points"_a = sorpia::ApproximationOptions{}.coarse_points,
       "Approximation's pipeline (sorpia::approximate) from the surface's control vertices, over the points of\n"
       "`chunks` (InMemoryChunks, FileChunks or a Python PointChunks): a dict with control_vertices, face_ids, uv,\n"
       "distances, iterations, stop_reason, best_iteration, diagonal, robust_scale, robust_outliers, history\n"
@@ -884,6 +885,8 @@ void bind_approximate(py::module_& m) {
   // The robust fit's defaults cross from the core (sorpia::robust_options, ApproximationOptions::robust), so that
   // the Python API and the command line take them from the one place they are set.
   m.attr("DEFAULT_ROBUST") = sorpia::robust_loss_name(sorpia::ApproximationOptions{}.robust.loss);
+  m.attr("DEFAULT_COARSE_ITERATIONS") = sorpia::ApproximationOptions{}.coarse_iterations;
+  m.attr("DEFAULT_COARSE_POINTS") = sorpia::ApproximationOptions{}.coarse_points;
   m.def(
       "robust_options", [](const std::string& loss) { return robust_tuple(sorpia::robust_options(sorpia::robust_loss(loss))); },
       "loss"_a, "The default settings of a robust loss (sorpia::robust_options) as (loss, quantile, c).");

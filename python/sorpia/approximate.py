@@ -98,8 +98,8 @@ DEFAULT_CHUNK_POINTS = 1 << 20
 DEFAULT_SAMPLE_POINTS = 1 << 22
 # The coarse iterations (the core's ApproximationOptions::coarse_iterations, coarse_points): updates on a fixed
 # sample of coarse_points per control vertex before those on all points.
-DEFAULT_COARSE_ITERATIONS = 0
-DEFAULT_COARSE_POINTS = 16.0
+DEFAULT_COARSE_ITERATIONS = _core.DEFAULT_COARSE_ITERATIONS
+DEFAULT_COARSE_POINTS = _core.DEFAULT_COARSE_POINTS
 # The stopping rule's window (the core's ApproximationOptions::window), for `_levelled`.
 _WINDOW = 3
 
