@@ -814,11 +814,12 @@ void bind_approximate(py::module_& m) {
          int grid, int newton_steps, int report_level, const py::object& callback, double seconds_before,
          bool report_each, const std::string& robust, std::optional<double> robust_quantile,
          std::optional<double> robust_c,
-         int coarse_iterations, double coarse_points) {
+         int coarse_iterations, double coarse_points, double coarse_tol) {
         sorpia::ApproximationOptions o;
         o.iterations = iterations;
         o.coarse_iterations = coarse_iterations;
         o.coarse_points = coarse_points;
+        o.coarse_tol = coarse_tol;
         o.tol = tol;
         o.fairness = fairness;
         o.tangential = tangential;
@@ -871,6 +872,7 @@ void bind_approximate(py::module_& m) {
       "robust_quantile"_a = py::none(), "robust_c"_a = py::none(),
       "coarse_iterations"_a = sorpia::ApproximationOptions{}.coarse_iterations,
       "coarse_points"_a = sorpia::ApproximationOptions{}.coarse_points,
+      "coarse_tol"_a = sorpia::ApproximationOptions{}.coarse_tol,
       "Approximation's pipeline (sorpia::approximate) from the surface's control vertices, over the points of\n"
       "`chunks` (InMemoryChunks, FileChunks or a Python PointChunks): a dict with control_vertices, face_ids, uv,\n"
       "distances, iterations, stop_reason, best_iteration, diagonal, robust_scale, robust_outliers, history\n"
@@ -880,13 +882,15 @@ void bind_approximate(py::module_& m) {
       "given) at the robust_quantile of the distances times robust_c (sorpia/robust.hpp; None: the loss's\n"
       "defaults, robust_options): a Python backend fits robustly only where it defines distance_histogram,\n"
       "robust_sums and robust_normal_sums (sorpia/point_chunks.hpp); robust = 'none' runs without them. coarse_iterations: updates on a fixed sample of\n"
-      "coarse_points per control vertex first (ApproximationOptions), where the backend defines set_sample.");
+      "coarse_points per control vertex first, at most that many, fewer where one lowers the sample's criterion by\n"
+      "at most coarse_tol of it (ApproximationOptions), where the backend defines set_sample.");
 
   // The robust fit's defaults cross from the core (sorpia::robust_options, ApproximationOptions::robust), so that
   // the Python API and the command line take them from the one place they are set.
   m.attr("DEFAULT_ROBUST") = sorpia::robust_loss_name(sorpia::ApproximationOptions{}.robust.loss);
   m.attr("DEFAULT_COARSE_ITERATIONS") = sorpia::ApproximationOptions{}.coarse_iterations;
   m.attr("DEFAULT_COARSE_POINTS") = sorpia::ApproximationOptions{}.coarse_points;
+  m.attr("DEFAULT_COARSE_TOL") = sorpia::ApproximationOptions{}.coarse_tol;
   m.def(
       "robust_options", [](const std::string& loss) { return robust_tuple(sorpia::robust_options(sorpia::robust_loss(loss))); },
       "loss"_a, "The default settings of a robust loss (sorpia::robust_options) as (loss, quantile, c).");

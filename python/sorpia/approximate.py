@@ -96,10 +96,12 @@ _STRAY = 1.0
 DEFAULT_CHUNK_POINTS = 1 << 20
 # Points of a streamed file's fixed sample for the surface-to-data distances (a k-d tree of 4M points: ~200 MB).
 DEFAULT_SAMPLE_POINTS = 1 << 22
-# The coarse iterations (the core's ApproximationOptions::coarse_iterations, coarse_points): updates on a fixed
-# sample of coarse_points per control vertex before those on all points.
+# The coarse iterations (the core's ApproximationOptions::coarse_iterations, coarse_points, coarse_tol): at most
+# coarse_iterations updates on a fixed sample of coarse_points per control vertex before those on all points, fewer
+# where one lowers the sample's criterion by at most coarse_tol of it.
 DEFAULT_COARSE_ITERATIONS = _core.DEFAULT_COARSE_ITERATIONS
 DEFAULT_COARSE_POINTS = _core.DEFAULT_COARSE_POINTS
+DEFAULT_COARSE_TOL = _core.DEFAULT_COARSE_TOL
 # The stopping rule's window (the core's ApproximationOptions::window), for `_levelled`.
 _WINDOW = 3
 
@@ -381,7 +383,8 @@ def approximate(points, cage_vertices, cage_faces=None, *, scheme: str = DEFAULT
                 sampling: Optional[str] = None, chunk_points: int = DEFAULT_CHUNK_POINTS,
                 spill_directory=None, sample_points: int = DEFAULT_SAMPLE_POINTS,
                 robust: str = DEFAULT_ROBUST, coarse_iterations: int = DEFAULT_COARSE_ITERATIONS,
-                coarse_points: float = DEFAULT_COARSE_POINTS, client=None) -> ApproximationResult:
+                coarse_points: float = DEFAULT_COARSE_POINTS, coarse_tol: float = DEFAULT_COARSE_TOL,
+                client=None) -> ApproximationResult:
     """Control vertices of a cage whose limit surface approximates `points`
     in the least-squares sense (the module docstring describes the method).
 
@@ -495,15 +498,22 @@ def approximate(points, cage_vertices, cage_faces=None, *, scheme: str = DEFAULT
         points (the records still give that). On clean data the default
         fits as least squares does (docs/approximation.md, "Robustness").
     coarse_iterations : int >= 0
-        Updates made first from the footpoints of a fixed sample of the
-        points only (each point's choice its own, the same however the
-        points are chunked or streamed), each a fraction of a full
-        iteration's cost; then the footpoints of all points are searched
-        afresh and the rest of ``iterations`` (one at least) run on all of
-        them, with the stop rule. None where the sample would hold more than
-        half the points. docs/approximation.md, "Coarse iterations".
+        At most this many updates made first from the footpoints of a fixed
+        sample of the points only (each point's choice its own, the same
+        however the points are chunked or streamed), each a fraction of a
+        full iteration's cost; fewer where one of them lowers the sample's
+        lowest RMS (with a robust loss: its criterion) by at most
+        `coarse_tol` of it, as on noisy data near its noise floor. Then the
+        footpoints of all points are searched afresh and the rest of
+        ``iterations`` (one at least) run on all of them, with the stop
+        rule. None where the sample would hold more than half the points;
+        0: none. docs/approximation.md, "Coarse iterations".
     coarse_points : float > 0
         The sample's size: this many points per control vertex.
+    coarse_tol : float >= 0
+        The coarse updates end after one that lowered the sample's lowest
+        RMS by at most this fraction of it (0: only after one that did not
+        lower it).
     client : dask.distributed.Client or None
         Run the chunks on the workers of this Dask cluster (needs
         ``pip install 'sorpia[dask]'``; docs/distributed.md): each worker
@@ -551,6 +561,7 @@ def approximate(points, cage_vertices, cage_faces=None, *, scheme: str = DEFAULT
     report_level = _count(report_level, "report_level", "an integer in 0..15")
     coarse_iterations = _count(coarse_iterations, "coarse_iterations", "an integer >= 0")
     coarse_points = as_real(coarse_points, "coarse_points")
+    coarse_tol = as_real(coarse_tol, "coarse_tol")
     if not isinstance(robust, str):
         raise ParameterError(f"robust = {robust!r} must be one of {', '.join(ROBUST_LOSSES)}")
     if not isinstance(method, str):
@@ -595,7 +606,8 @@ def approximate(points, cage_vertices, cage_faces=None, *, scheme: str = DEFAULT
         out = _core.approximate(surface._surface, chunks, iterations, tol, fairness, tangential, method,
                                 solver_tol, solver_max_iter, grid, newton_steps, report_level, callback,
                                 time.perf_counter() - t0, bool(report_each), robust,
-                                coarse_iterations=coarse_iterations, coarse_points=coarse_points)
+                                coarse_iterations=coarse_iterations, coarse_points=coarse_points,
+                                coarse_tol=coarse_tol)
     finally:
         if client is not None:
             chunks.close()

@@ -101,6 +101,7 @@ void check_options(const ApproximationOptions& o) {
     throw ParameterError("coarse_iterations = " + std::to_string(o.coarse_iterations) + " must be an integer >= 0");
   if (!(std::isfinite(o.coarse_points) && o.coarse_points > 0))
     throw ParameterError("coarse_points = " + detail::repr(o.coarse_points) + " must be a finite number > 0");
+  nonnegative(o.coarse_tol, "coarse_tol");
   nonnegative(o.tol, "tol");
   nonnegative(o.fairness, "fairness");
   nonnegative(o.tangential, "tangential");
@@ -354,7 +355,15 @@ ApproximationResult approximate(LimitSurface& surface, PointChunks& chunks, cons
   const auto measure_scale = [&] {
     if (robust) current_scale = robust_scale(chunks.distance_histogram(unit), options.robust, scale_floor);
   };
-  double current_loss = 0.0;  // the criterion at the last record's distances (robust), in the fit's units
+  double current_loss = 0.0;  // the criterion at the last measured distances (robust), in the fit's units
+  RobustSums current_robust;    // their robust sums at current_scale
+  // The criterion at the chunks' current distances d (their robust sums at current_scale with a robust loss).
+  const auto measure_criterion = [&](const DistanceSums& d) {
+    if (!robust) return rms(d);
+    current_robust = chunks.robust_sums(options.robust, current_scale);
+    current_loss = std::sqrt(current_robust.loss / counted(d));  // over the points the sums are of, as rms
+    return current_loss;
+  };
   const auto criterion = [&](const DistanceSums& d) { return robust ? current_loss : rms(d); };
   const double not_measured = std::numeric_limits<double>::quiet_NaN();
   const auto record = [&](int iteration, const DistanceSums& distances, long long solver_iterations,
@@ -374,8 +383,8 @@ ApproximationResult approximate(LimitSurface& surface, PointChunks& chunks, cons
     if (options.report_each) measure_surface(rec);
     if (robust) {
       rec.robust_scale = std::ldexp(current_scale, e);
-      const RobustSums r = chunks.robust_sums(options.robust, current_scale);
-      current_loss = std::sqrt(r.loss / counted(distances));  // over the points the sums are of, as rms
+      measure_criterion(distances);
+      const RobustSums& r = current_robust;
       const double inlier = r.inlier_weight > 0 ? std::sqrt(r.inlier_squares / r.inlier_weight) : 0.0;
       rec.robust_loss_relative = current_loss / unit;
       rec.robust_loss = std::ldexp(current_loss, e);
@@ -481,25 +490,39 @@ ApproximationResult approximate(LimitSurface& surface, PointChunks& chunks, cons
     return used;
   };
 
-  // Coarse iterations (step 1b): updates on the fixed sample, the last one's footpoints of all points.
+  // Coarse iterations (step 1b): updates on the fixed sample until coarse_iterations ran or one lowered the
+  // sample's lowest criterion by at most coarse_tol of it (near the noise floor the sample's fit follows its own
+  // noise, which the updates on all points then take back: no gain, and the stop rule waits for it); the last one's
+  // footpoints are all points'.
   const std::size_t n_used = n - topology.n_unreferenced();
   const double wanted = options.coarse_points * static_cast<double>(n_used);
-  const int coarse = wanted <= 0.5 * static_cast<double>(k) ? std::min(options.coarse_iterations, options.iterations - 1)
-                                                             : 0;
-  if (coarse > 0) chunks.set_sample(static_cast<std::size_t>(wanted));
+  const int coarse_most =
+      wanted <= 0.5 * static_cast<double>(k) ? std::min(options.coarse_iterations, options.iterations - 1) : 0;
+  if (coarse_most > 0) chunks.set_sample(static_cast<std::size_t>(wanted));
   DistanceSums feet = footpoints([&] { return chunks.search(options.footpoints); });
   measure_scale();
   record(0, feet, 0, {0.0, 0.0});
-  for (int it = 1; it <= coarse; ++it) {
+  std::vector<double> sample_bests{criterion(feet)};  // the sample's lowest criterion so far, after each update
+  int coarse = 0;
+  for (int it = 1; it <= coarse_most; ++it) {
     const long long used = update(it);
-    if (it == coarse) {
+    bool last = it == coarse_most;
+    if (!last) {
+      feet = footpoints([&] { return chunks.refine(options.footpoints); });
+      measure_scale();
+      sample_bests.push_back(std::min(sample_bests.back(), measure_criterion(feet)));
+      last = rms_levelled(sample_bests, options.coarse_tol, 1);
+    }
+    if (last) {
       chunks.set_sample(0);
       feet = footpoints([&] { return chunks.search(options.footpoints); });
-    } else {
-      feet = footpoints([&] { return chunks.refine(options.footpoints); });
+      measure_scale();
     }
-    measure_scale();
     record(it, feet, used, moved(V_before));
+    if (last) {
+      coarse = it;
+      break;
+    }
   }
   done = coarse;
   chunks.keep_best();

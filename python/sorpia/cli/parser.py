@@ -9,8 +9,8 @@ from .._validate import BOUNDARY_RULES, DEFAULT_BOUNDARY
 from .._plotting import FACE_BUDGET  # plotting imports matplotlib only when drawing
 from ..fair import MAX_LEVELS
 from .common import CLI_SCHEMES, DISPLAY_ORDER, FAIR_DEFAULTS, FIT_DEFAULTS
-from ..approximate import (DEFAULT_COARSE_ITERATIONS, DEFAULT_FAIRNESS, DEFAULT_ROBUST, DEFAULT_TANGENTIAL, DEFAULT_TOL,
-                           ROBUST_LOSSES, SAMPLINGS)
+from ..approximate import (DEFAULT_COARSE_ITERATIONS, DEFAULT_COARSE_POINTS, DEFAULT_COARSE_TOL, DEFAULT_FAIRNESS,
+                           DEFAULT_ROBUST, DEFAULT_TANGENTIAL, DEFAULT_TOL, ROBUST_LOSSES, SAMPLINGS)
 from .approximate import DEFAULT_SAMPLING, STREAM_POINTS, run_approximate
 from .compare import run_compare
 from .demo import run_demo
@@ -304,9 +304,10 @@ def build_parser() -> argparse.ArgumentParser:
                      help="stop when the RMS distance fell by less than this fraction per iteration over the last "
                      "three (and a fresh search of the footpoints finds none closer by more)")
     app.add_argument("--coarse-iterations", type=_int_arg, default=DEFAULT_COARSE_ITERATIONS, metavar="K",
-                     help="of the updates, the first K from the footpoints of a fixed sample of the points (16 per "
-                     "control vertex; none where that is over half the points), at a fraction of the cost "
-                     "(default: %(default)s)")
+                     help="of the updates, at most the first K from the footpoints of a fixed sample of the points "
+                     f"({DEFAULT_COARSE_POINTS:g} per control vertex; none where that is over half the points), at a "
+                     f"fraction of the cost; fewer where one lowers the sample's RMS by {DEFAULT_COARSE_TOL:.0%%} or "
+                     "less, as near the noise floor of noisy data; 0: none (default: %(default)s)")
     app.add_argument("--sampling", choices=("vertices",) + SAMPLINGS, default=None,
                      help="the data of an input mesh with faces: vertices = its vertices, equally weighted; area = "
                      "its vertices weighted by their share of the surface's area; midpoints = its edges' midpoints "

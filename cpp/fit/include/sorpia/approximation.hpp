@@ -11,9 +11,12 @@
 ///   1b. coarse iterations first (coarse_iterations > 0, and a sample of at
 ///      most half the points): steps 1-3 on a fixed sample of the points
 ///      (PointChunks::set_sample: coarse_points per control vertex a face
-///      uses), without the stop rule, then the footpoints of all points
-///      searched afresh (step 1) for the iterate they reached; steps 2-4
-///      go on from there on all points;
+///      uses), without the stop rule, until coarse_iterations of them ran
+///      or one lowered the sample's lowest criterion by at most coarse_tol
+///      of it (its record then not made of the sample); then the
+///      footpoints of all points searched afresh (step 1) for the iterate
+///      they reached, the last coarse iteration's record; steps 2-4 go on
+///      from there on all points;
 ///   2. per iteration: the rows A of the surface at the footpoints
 ///      (LimitSurface::rows, the points in face order), the normal equations
 ///      (A^T W A + c K + mu I) V = A^T W P + mu V_prev (W the points' weights,
@@ -61,12 +64,20 @@ enum class ApproximationUpdate {
 /// The options of approximate (checked there, before any work).
 struct ApproximationOptions {
   int iterations = 10;            ///< updates at most (the coarse ones included), >= 1
-  /// Updates on the sample first (step 1b), >= 0, at most iterations - 1
-  /// (one update at least on all points); 0: none.
-  int coarse_iterations = 0;
+  /// Updates on the sample first (step 1b), >= 0: at most this many, and at
+  /// most iterations - 1 (one update at least on all points); fewer where
+  /// coarse_tol ends them; 0: none.
+  int coarse_iterations = 6;
   /// The sample's size in points per control vertex a face uses, finite,
   /// > 0; no coarse iterations when it would hold more than half the points.
   double coarse_points = 16.0;
+  /// The coarse updates end after one that lowered the sample's lowest
+  /// criterion (the stop rule's: RMS, or the robust loss) by at most this
+  /// fraction of it (rms_levelled over one iteration), finite, >= 0; 0: only
+  /// after one that did not lower it. A fit that falls this little is near
+  /// the floor the data's noise sets, where the sample's fit follows the
+  /// sample's noise (step 1b).
+  double coarse_tol = 1e-2;
   double tol = 3e-3;              ///< the stop rule's fall per iteration (step 4), finite, >= 0
   double fairness = 3e-4;         ///< c over the mean diagonal of A^T W A, finite, >= 0; 0: no K
   double tangential = 0.1;        ///< in [0, 1]: 1 point distance, 0 tangent distance, between a blend
