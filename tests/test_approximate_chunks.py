@@ -14,8 +14,9 @@ from sorpia.approximate import approximate
 from sorpia.surface import LimitSurface
 
 
-def noisy_samples(k=3000, seed=1):
-    """Points near the limit surface of a perturbed icosphere cage (noise 1e-3), and a start cage (the sphere)."""
+def noisy_samples(k=3000, seed=1, noise=1e-3):
+    """Points near the limit surface of a perturbed icosphere cage (Gaussian noise of this deviation per
+    coordinate; the surface's radius about 1), and a start cage (the sphere)."""
     V, F = shapes.icosphere(2)
     rng = np.random.default_rng(seed)
     target = LimitSurface(V * (1 + 0.1 * rng.standard_normal((len(V), 1))), F, scheme="loop")
@@ -23,7 +24,7 @@ def noisy_samples(k=3000, seed=1):
     uv = rng.random((k, 2))
     flip = uv.sum(axis=1) > 1
     uv[flip] = 1 - uv[flip]
-    P = target.evaluate(fid, uv) + 1e-3 * rng.standard_normal((k, 3))
+    P = target.evaluate(fid, uv) + noise * rng.standard_normal((k, 3))
     return np.ascontiguousarray(P), V, F
 
 
@@ -233,6 +234,66 @@ def test_coarse_iterations_are_the_samples_fit_then_all_points_fit():
     assert both.best_iteration == 2 + rest.best_iteration
 
 
+def levelled_at(criteria, coarse_tol, most):
+    """The update after which the coarse phase ends, from the criterion of the sample fitted alone after each
+    update (criteria[0]: the start's): the first whose lowest so far fell by at most coarse_tol of the one before,
+    else `most`; and how far each fall up to it lay from coarse_tol (of the lowest before)."""
+    best = [criteria[0]]
+    margins = []
+    for j in range(1, most):
+        best.append(min(best[-1], criteria[j]))
+        fall = (best[-2] - best[-1]) / best[-2]
+        margins.append(abs(fall - coarse_tol))
+        if fall <= coarse_tol:
+            return j, margins
+    return most, margins
+
+
+def test_coarse_updates_end_where_the_samples_fit_levels():
+    # coarse_iterations is at most: the phase ends after the first update that lowered the sample's lowest RMS by
+    # at most coarse_tol of it, found here from the sample fitted alone; the run is then that fit for those updates
+    # followed by the fit of all points from its iterate (1e-12).
+    P, V, F = noisy_samples()
+    mask = sample_mask(len(P), 8 * len(V))
+    kw = dict(tol=0.0, robust="none")
+    sample = approximate(P[mask], V, F, iterations=6, coarse_iterations=0, **kw)
+    j, margins = levelled_at([h["rms"] for h in sample.history], 0.03, 6)
+    assert 1 < j < 6 and min(margins) > 1e-3  # the rule ends it early, and no fall lies at the threshold
+    both = approximate(P, V, F, iterations=9, coarse_iterations=6, coarse_points=8, coarse_tol=0.03, **kw)
+    assert both.coarse_iterations == j
+    assert [h["points"] for h in both.history] == [mask.sum()] * j + [len(P)] * (10 - j)
+    start = approximate(P[mask], V, F, iterations=j, coarse_iterations=0, **kw)
+    rest = approximate(P, start.control_vertices, F, iterations=9 - j, coarse_iterations=0, **kw)
+    for a, b in zip(both.history, start.history[:j] + rest.history, strict=True):
+        assert abs(a["rms"] - b["rms"]) <= 1e-12 * b["rms"], a["iteration"]
+    assert relative(both.control_vertices, rest.control_vertices) < 1e-12
+    # coarse_tol 0: the phase ends only after an update that did not lower the sample's RMS; here none
+    fixed = approximate(P, V, F, iterations=9, coarse_iterations=6, coarse_points=8, coarse_tol=0.0, **kw)
+    assert fixed.coarse_iterations == 6
+
+
+def test_noisy_data_ends_the_coarse_updates_early():
+    # With the defaults (16 points per control vertex, coarse_tol, the robust loss): on clean data the sample's
+    # fit falls by more than coarse_tol per update and all coarse_iterations run; with noise of 1e-2 (a hundred
+    # times the clean fit's RMS) it reaches the noise floor in a few updates and the phase ends there, at the
+    # update found from the sample fitted alone (its robust criterion within 1e-3 of the coarse records', as
+    # test_coarse_records_give_the_robust_loss_of_the_sample_as_its_own_fit_does checks), and the result within 1%
+    # of the RMS of the fit without coarse updates.
+    for noise, early in ((0.0, False), (1e-2, True)):
+        P, V, F = noisy_samples(12000, noise=noise)
+        mask = sample_mask(len(P), 16 * len(V))
+        most = _core.DEFAULT_COARSE_ITERATIONS
+        sample = approximate(P[mask], V, F, iterations=most, tol=0.0, coarse_iterations=0)
+        j, margins = levelled_at([h["robust_loss"] for h in sample.history], _core.DEFAULT_COARSE_TOL, most)
+        assert min(margins) > 2.5e-3  # each criterion within 1e-3 of the records': each fall within about 2e-3
+        run = approximate(P, V, F)
+        assert run.coarse_iterations == j, noise
+        assert (j <= 3 if early else j == most), (noise, j)
+        if early:
+            plain = approximate(P, V, F, coarse_iterations=0)
+            assert run.rms <= 1.01 * plain.rms
+
+
 def test_coarse_records_give_the_robust_loss_of_the_sample_as_its_own_fit_does():
     # The robust criterion of a coarse record is over the sample's points, as its RMS: that of the sample fitted
     # alone, not scaled down by the sqrt of the share of the points in the sample (below 0.5 here). Within 1e-3:
@@ -289,6 +350,8 @@ def test_no_coarse_iterations_where_the_sample_holds_over_half_the_points():
     ("coarse_iterations", -1, "coarse_iterations = -1 must be an integer >= 0"),
     ("coarse_points", 0.0, "coarse_points = 0.0 must be a finite number > 0"),
     ("coarse_points", float("nan"), "coarse_points = nan must be a finite number > 0"),
+    ("coarse_tol", -0.5, "coarse_tol = -0.5 must be a finite number >= 0"),
+    ("coarse_tol", float("inf"), "coarse_tol = inf must be a finite number >= 0"),
 ])
 def test_bad_coarse_options_are_named(option, value, message):
     P, V, F = noisy_samples(500)
