@@ -6,7 +6,7 @@ import collections.abc
 import numpy
 import numpy.typing
 import typing
-__all__: list[str] = ['ApproximationChunk', 'Boundary', 'DEFAULT_COARSE_ITERATIONS', 'DEFAULT_COARSE_POINTS', 'DEFAULT_ROBUST', 'FileChunks', 'FootpointSearch', 'INFINITE_SHARPNESS', 'InMemoryChunks', 'InterpolationResult', 'Interpolator', 'LimitSurface', 'MAX_REFINEMENT_LEVELS', 'MAX_THREADS', 'MeshError', 'MeshFileError', 'Method', 'NormalEquations', 'OmegaRule', 'ParameterError', 'PointChunks', 'PointIndex', 'Rules', 'Scheme', 'SolveOptions', 'Tags', 'Topology', 'YOUNG_RHO_CLAMP', 'approximate', 'available_memory_bytes', 'blend_weights', 'boundary_name', 'check_ply_per_vertex', 'check_refinement', 'check_writable', 'closer_footpoints', 'closest_points', 'decimate', 'face_list_statistics', 'fair_interpolate', 'fairness_matrix', 'grid', 'icosphere', 'irregular', 'limit_matrix', 'limit_points', 'limit_residual', 'mesh_statistics', 'method_names', 'normal_matrix', 'parse_boundary', 'parse_method', 'parse_omega', 'parse_scheme', 'point_file_points', 'point_sample_mask', 'pole', 'polygon_torus', 'quad_grid', 'quad_irregular', 'quad_torus', 'read_mesh', 'read_point_file', 'refine_footpoints', 'refine_uniform', 'refinement_bytes', 'regular_valence', 'repair', 'repair_polygons', 'rms_levelled', 'robust_options', 'scale_exponent', 'scheme_name', 'sharp_edges', 'split_nonmanifold', 'split_nonmanifold_polygons', 'subface_columns', 'tessellation_bytes', 'torus', 'write_file_atomic', 'write_mesh']
+__all__: list[str] = ['ApproximationChunk', 'Boundary', 'DEFAULT_COARSE_ITERATIONS', 'DEFAULT_COARSE_POINTS', 'DEFAULT_COARSE_TOL', 'DEFAULT_ROBUST', 'FileChunks', 'FootpointSearch', 'INFINITE_SHARPNESS', 'InMemoryChunks', 'InterpolationResult', 'Interpolator', 'LimitSurface', 'MAX_REFINEMENT_LEVELS', 'MAX_THREADS', 'MeshError', 'MeshFileError', 'Method', 'NormalEquations', 'OmegaRule', 'ParameterError', 'PointChunks', 'PointIndex', 'Rules', 'Scheme', 'SolveOptions', 'Tags', 'Topology', 'YOUNG_RHO_CLAMP', 'approximate', 'available_memory_bytes', 'blend_weights', 'boundary_name', 'check_ply_per_vertex', 'check_refinement', 'check_writable', 'closer_footpoints', 'closest_points', 'decimate', 'face_list_statistics', 'fair_interpolate', 'fairness_matrix', 'grid', 'icosphere', 'irregular', 'limit_matrix', 'limit_points', 'limit_residual', 'mesh_statistics', 'method_names', 'normal_matrix', 'parse_boundary', 'parse_method', 'parse_omega', 'parse_scheme', 'point_file_points', 'point_sample_mask', 'pole', 'polygon_torus', 'quad_grid', 'quad_irregular', 'quad_torus', 'read_mesh', 'read_point_file', 'refine_footpoints', 'refine_uniform', 'refinement_bytes', 'regular_valence', 'repair', 'repair_polygons', 'rms_levelled', 'robust_options', 'scale_exponent', 'scheme_name', 'sharp_edges', 'split_nonmanifold', 'split_nonmanifold_polygons', 'subface_columns', 'tessellation_bytes', 'torus', 'write_file_atomic', 'write_mesh']
 class MeshError(ValueError):
     """
     The faces or coordinates cannot be used: an index out of range, a repeated
@@ -761,7 +761,7 @@ class FileChunks(PointChunks):
     """
     def __init__(self, surface: LimitSurface, path: str, chunk_points: typing.SupportsInt | typing.SupportsIndex, spill_directory: str, sample_points: typing.SupportsInt | typing.SupportsIndex) -> None:
         ...
-def approximate(surface: LimitSurface, chunks: PointChunks, iterations: typing.SupportsInt | typing.SupportsIndex, tol: typing.SupportsFloat | typing.SupportsIndex, fairness: typing.SupportsFloat | typing.SupportsIndex, tangential: typing.SupportsFloat | typing.SupportsIndex, method: str, solver_tol: typing.SupportsFloat | typing.SupportsIndex, solver_max_iter: typing.SupportsInt | typing.SupportsIndex, grid: typing.SupportsInt | typing.SupportsIndex, newton_steps: typing.SupportsInt | typing.SupportsIndex, report_level: typing.SupportsInt | typing.SupportsIndex, callback: typing.Any, seconds_before: typing.SupportsFloat | typing.SupportsIndex = 0.0, report_each: bool = False, robust: str = 'tukey', robust_quantile: typing.SupportsFloat | typing.SupportsIndex | None = None, robust_c: typing.SupportsFloat | typing.SupportsIndex | None = None, coarse_iterations: typing.SupportsInt | typing.SupportsIndex = 0, coarse_points: typing.SupportsFloat | typing.SupportsIndex = 16.0) -> dict:
+def approximate(surface: LimitSurface, chunks: PointChunks, iterations: typing.SupportsInt | typing.SupportsIndex, tol: typing.SupportsFloat | typing.SupportsIndex, fairness: typing.SupportsFloat | typing.SupportsIndex, tangential: typing.SupportsFloat | typing.SupportsIndex, method: str, solver_tol: typing.SupportsFloat | typing.SupportsIndex, solver_max_iter: typing.SupportsInt | typing.SupportsIndex, grid: typing.SupportsInt | typing.SupportsIndex, newton_steps: typing.SupportsInt | typing.SupportsIndex, report_level: typing.SupportsInt | typing.SupportsIndex, callback: typing.Any, seconds_before: typing.SupportsFloat | typing.SupportsIndex = 0.0, report_each: bool = False, robust: str = 'tukey', robust_quantile: typing.SupportsFloat | typing.SupportsIndex | None = None, robust_c: typing.SupportsFloat | typing.SupportsIndex | None = None, coarse_iterations: typing.SupportsInt | typing.SupportsIndex = 6, coarse_points: typing.SupportsFloat | typing.SupportsIndex = 16.0, coarse_tol: typing.SupportsFloat | typing.SupportsIndex = 0.01) -> dict:
     """
     Approximation's pipeline (sorpia::approximate) from the surface's control vertices, over the points of
     `chunks` (InMemoryChunks, FileChunks or a Python PointChunks): a dict with control_vertices, face_ids, uv,
@@ -772,7 +772,8 @@ def approximate(surface: LimitSurface, chunks: PointChunks, iterations: typing.S
     given) at the robust_quantile of the distances times robust_c (sorpia/robust.hpp; None: the loss's
     defaults, robust_options): a Python backend fits robustly only where it defines distance_histogram,
     robust_sums and robust_normal_sums (sorpia/point_chunks.hpp); robust = 'none' runs without them. coarse_iterations: updates on a fixed sample of
-    coarse_points per control vertex first (ApproximationOptions), where the backend defines set_sample.
+    coarse_points per control vertex first, at most that many, fewer where one lowers the sample's criterion by
+    at most coarse_tol of it (ApproximationOptions), where the backend defines set_sample.
     """
 def available_memory_bytes() -> int:
     ...
@@ -944,8 +945,9 @@ def write_file_atomic(path: str, data: bytes) -> None:
     """
 def write_mesh(path: str, vertices: numpy.typing.NDArray[numpy.float64], face_vertex_indices: numpy.typing.NDArray[numpy.int32], face_vertex_counts: numpy.typing.NDArray[numpy.int32] | None, face_size: typing.SupportsInt | typing.SupportsIndex, binary: bool, tags: Tags | None, boundary: Boundary | None, uv_values: numpy.typing.NDArray[numpy.float64] | None = None, uv_indices: numpy.typing.NDArray[numpy.int32] | None = None, normal_values: numpy.typing.NDArray[numpy.float64] | None = None, normal_indices: numpy.typing.NDArray[numpy.int32] | None = None) -> None:
     ...
-DEFAULT_COARSE_ITERATIONS: int = 0
+DEFAULT_COARSE_ITERATIONS: int = 6
 DEFAULT_COARSE_POINTS: float = 16.0
+DEFAULT_COARSE_TOL: float = 0.01
 DEFAULT_ROBUST: str = 'tukey'
 INFINITE_SHARPNESS: float = 10.0
 MAX_REFINEMENT_LEVELS: int = 10

@@ -306,7 +306,7 @@ def build_parser() -> argparse.ArgumentParser:
     app.add_argument("--coarse-iterations", type=_int_arg, default=DEFAULT_COARSE_ITERATIONS, metavar="K",
                      help="of the updates, at most the first K from the footpoints of a fixed sample of the points "
                      f"({DEFAULT_COARSE_POINTS:g} per control vertex; none where that is over half the points), at a "
-                     f"fraction of the cost; fewer where one lowers the sample's RMS by {DEFAULT_COARSE_TOL:.0%%} or "
+                     f"fraction of the cost; fewer where one lowers the sample's RMS by {100 * DEFAULT_COARSE_TOL:g}%% or "
                      "less, as near the noise floor of noisy data; 0: none (default: %(default)s)")
     app.add_argument("--sampling", choices=("vertices",) + SAMPLINGS, default=None,
                      help="the data of an input mesh with faces: vertices = its vertices, equally weighted; area = "
