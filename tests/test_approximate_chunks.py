@@ -218,16 +218,16 @@ def sample_mask(k, sample_points):
 
 def test_coarse_iterations_are_the_samples_fit_then_all_points_fit():
     # Independent of the driver's coarse phase: the fit of the sample alone for its 2 updates, then the fit of all
-    # points from the iterate it reached (a fresh search, 3 updates) give the same control vertices and records.
+    # points from the iterate it reached (a fresh search, 4 updates) give the same control vertices and records.
     P, V, F = noisy_samples()
     mask = sample_mask(len(P), 8 * len(V))
     kw = dict(tol=0.0, robust="none")
-    both = approximate(P, V, F, iterations=5, coarse_iterations=2, coarse_points=8, **kw)
+    both = approximate(P, V, F, iterations=6, coarse_iterations=2, coarse_points=8, **kw)
     sample = approximate(P[mask], V, F, iterations=2, coarse_iterations=0, **kw)
     assert sample.best_iteration == 2  # its last iterate is the one the coarse phase hands on
-    rest = approximate(P, sample.control_vertices, F, iterations=3, coarse_iterations=0, **kw)
-    assert both.coarse_iterations == 2 and both.iterations == 5 and 0 < mask.sum() < len(P) // 2
-    assert [h["points"] for h in both.history] == [mask.sum()] * 2 + [len(P)] * 4
+    rest = approximate(P, sample.control_vertices, F, iterations=4, coarse_iterations=0, **kw)
+    assert both.coarse_iterations == 2 and both.iterations == 6 and 0 < mask.sum() < len(P) // 2
+    assert [h["points"] for h in both.history] == [mask.sum()] * 2 + [len(P)] * 5
     for a, b in zip(both.history, sample.history[:2] + rest.history, strict=True):
         assert abs(a["rms"] - b["rms"]) <= 1e-12 * b["rms"], a["iteration"]
     assert relative(both.control_vertices, rest.control_vertices) < 1e-12
@@ -259,16 +259,16 @@ def test_coarse_updates_end_where_the_samples_fit_levels():
     sample = approximate(P[mask], V, F, iterations=6, coarse_iterations=0, **kw)
     j, margins = levelled_at([h["rms"] for h in sample.history], 0.03, 6)
     assert 1 < j < 6 and min(margins) > 1e-3  # the rule ends it early, and no fall lies at the threshold
-    both = approximate(P, V, F, iterations=9, coarse_iterations=6, coarse_points=8, coarse_tol=0.03, **kw)
+    both = approximate(P, V, F, iterations=10, coarse_iterations=6, coarse_points=8, coarse_tol=0.03, **kw)
     assert both.coarse_iterations == j
-    assert [h["points"] for h in both.history] == [mask.sum()] * j + [len(P)] * (10 - j)
+    assert [h["points"] for h in both.history] == [mask.sum()] * j + [len(P)] * (11 - j)
     start = approximate(P[mask], V, F, iterations=j, coarse_iterations=0, **kw)
-    rest = approximate(P, start.control_vertices, F, iterations=9 - j, coarse_iterations=0, **kw)
+    rest = approximate(P, start.control_vertices, F, iterations=10 - j, coarse_iterations=0, **kw)
     for a, b in zip(both.history, start.history[:j] + rest.history, strict=True):
         assert abs(a["rms"] - b["rms"]) <= 1e-12 * b["rms"], a["iteration"]
     assert relative(both.control_vertices, rest.control_vertices) < 1e-12
     # coarse_tol 0: the phase ends only after an update that did not lower the sample's RMS; here none
-    fixed = approximate(P, V, F, iterations=9, coarse_iterations=6, coarse_points=8, coarse_tol=0.0, **kw)
+    fixed = approximate(P, V, F, iterations=10, coarse_iterations=6, coarse_points=8, coarse_tol=0.0, **kw)
     assert fixed.coarse_iterations == 6
 
 
@@ -300,7 +300,7 @@ def test_coarse_records_give_the_robust_loss_of_the_sample_as_its_own_fit_does()
     # the sample alone has its own diagonal, the unit of the scale's histogram bins and of its floor.
     P, V, F = noisy_samples()
     mask = sample_mask(len(P), 8 * len(V))
-    both = approximate(P, V, F, iterations=4, tol=0.0, coarse_iterations=2, coarse_points=8, robust="tukey")
+    both = approximate(P, V, F, iterations=6, tol=0.0, coarse_iterations=2, coarse_points=8, robust="tukey")
     sample = approximate(P[mask], V, F, iterations=2, tol=0.0, coarse_iterations=0, robust="tukey")
     for a, b in zip(both.history[:2], sample.history[:2], strict=True):  # record 2 is of all points
         for key in ("robust_loss", "inlier_rms"):  # the scale itself: to the histogram's bins (its unit differs)
@@ -327,7 +327,7 @@ def test_coarse_fit_reaches_the_full_fit():
 
 def test_coarse_sample_does_not_depend_on_the_chunks():
     P, V, F = noisy_samples()
-    kw = dict(iterations=5, coarse_iterations=3, coarse_points=8)
+    kw = dict(iterations=7, coarse_iterations=3, coarse_points=8)
     one = approximate(P, V, F, **kw)
     many = approximate(P, V, F, chunk_points=701, **kw)
     assert [h["points"] for h in one.history] == [h["points"] for h in many.history]
@@ -337,13 +337,18 @@ def test_coarse_sample_does_not_depend_on_the_chunks():
 
 def test_no_coarse_iterations_where_the_sample_holds_over_half_the_points():
     P, V, F = noisy_samples()
-    plain = approximate(P, V, F, iterations=4, coarse_iterations=0)
-    dense = approximate(P, V, F, iterations=4, coarse_iterations=3, coarse_points=len(P) / len(V))
+    plain = approximate(P, V, F, iterations=8, coarse_iterations=0)
+    dense = approximate(P, V, F, iterations=8, coarse_iterations=3, coarse_points=len(P) / len(V))
     assert dense.coarse_iterations == 0 and all(h["points"] == len(P) for h in dense.history)
     np.testing.assert_array_equal(dense.control_vertices, plain.control_vertices)
-    # and at least one update on all points: coarse_iterations beyond iterations - 1 is cut there
-    short = approximate(P, V, F, iterations=2, coarse_iterations=5, coarse_points=8)
-    assert short.coarse_iterations == 1 and short.history[-1]["points"] == len(P)
+    # and at least window + 1 = 4 updates on all points: coarse_iterations beyond iterations - 4 is cut there, to
+    # none below 5 iterations (then the run is the one without them)
+    short = approximate(P, V, F, iterations=6, coarse_iterations=5, coarse_points=8, coarse_tol=0.0)
+    assert short.coarse_iterations == 2 and [h["points"] == len(P) for h in short.history] == [False] * 2 + [True] * 5
+    four = approximate(P, V, F, iterations=4, coarse_iterations=5, coarse_points=8)
+    np.testing.assert_array_equal(four.control_vertices, approximate(P, V, F, iterations=4, coarse_iterations=0)
+                                  .control_vertices)
+    assert four.coarse_iterations == 0
 
 
 @pytest.mark.parametrize("option,value,message", [
@@ -363,7 +368,7 @@ def test_coarse_streamed_file_equals_in_memory(tmp_path):
     P, V, F = noisy_samples()
     path = tmp_path / "points.npy"
     np.save(path, P)
-    kw = dict(coarse_iterations=3, coarse_points=8.0)
+    kw = dict(iterations=7, coarse_iterations=3, coarse_points=8.0)
     ref_surface = LimitSurface(V, F, scheme="loop")
     ref = core_run(ref_surface, _core.InMemoryChunks(ref_surface._surface, P, None, 700), **kw)
     surface = LimitSurface(V, F, scheme="loop")
@@ -387,7 +392,7 @@ class PythonSampledChunks(PythonChunks):
 
 def test_python_backend_runs_coarse_iterations_as_the_core():
     P, V, F = noisy_samples()
-    kw = dict(coarse_iterations=3, coarse_points=8.0)
+    kw = dict(iterations=7, coarse_iterations=3, coarse_points=8.0)
     ref_surface = LimitSurface(V, F, scheme="loop")
     ref = core_run(ref_surface, _core.InMemoryChunks(ref_surface._surface, P, None, 500), **kw)
     out = core_run(LimitSurface(V, F, scheme="loop"), PythonSampledChunks(P, V, F, 500), **kw)

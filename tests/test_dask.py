@@ -95,7 +95,7 @@ def test_robust_fit_with_outliers_on_two_workers_as_in_one_process(client, robus
 def test_coarse_iterations_on_two_workers_as_in_one_process(client):
     # the workers' chunks sample their points (set_sample) as the chunks in one process do
     P, V, F, w = noisy_samples()
-    kw = dict(weights=w, iterations=5, coarse_iterations=3, coarse_points=8, chunk_points=700)
+    kw = dict(weights=w, iterations=7, coarse_iterations=3, coarse_points=8, chunk_points=700)
     local = sorpia.approximate(P, V, F, **kw)
     assert local.coarse_iterations == 3 and local.history[1]["points"] < len(P) // 2
     assert_same_fit(sorpia.approximate(P, V, F, client=client, **kw), local)

@@ -505,9 +505,11 @@ def approximate(points, cage_vertices, cage_faces=None, *, scheme: str = DEFAULT
         lowest RMS (with a robust loss: its criterion) by at most
         `coarse_tol` of it, as on noisy data near its noise floor. Then the
         footpoints of all points are searched afresh and the rest of
-        ``iterations`` (one at least) run on all of them, with the stop
-        rule. None where the sample would hold more than half the points;
-        0: none. docs/approximation.md, "Coarse iterations".
+        ``iterations`` (four at least: the first takes back what the
+        sample's fit made of its own points, the stop rule needs three
+        more) run on all of them, with the stop rule. None where the sample
+        would hold more than half the points; 0: none.
+        docs/approximation.md, "Coarse iterations".
     coarse_points : float > 0
         The sample's size: this many points per control vertex.
     coarse_tol : float >= 0

@@ -493,11 +493,13 @@ ApproximationResult approximate(LimitSurface& surface, PointChunks& chunks, cons
   // Coarse iterations (step 1b): updates on the fixed sample until coarse_iterations ran or one lowered the
   // sample's lowest criterion by at most coarse_tol of it (near the noise floor the sample's fit follows its own
   // noise, which the updates on all points then take back: no gain, and the stop rule waits for it); the last one's
-  // footpoints are all points'.
+  // footpoints are all points'. At least window + 1 updates stay for all points: the first takes back what the
+  // sample's fit made of the sample's own points, the stop rule's window follows it.
   const std::size_t n_used = n - topology.n_unreferenced();
   const double wanted = options.coarse_points * static_cast<double>(n_used);
-  const int coarse_most =
-      wanted <= 0.5 * static_cast<double>(k) ? std::min(options.coarse_iterations, options.iterations - 1) : 0;
+  const int coarse_most = wanted <= 0.5 * static_cast<double>(k)
+                              ? std::max(0, std::min(options.coarse_iterations, options.iterations - options.window - 1))
+                              : 0;
   if (coarse_most > 0) chunks.set_sample(static_cast<std::size_t>(wanted));
   DistanceSums feet = footpoints([&] { return chunks.search(options.footpoints); });
   measure_scale();

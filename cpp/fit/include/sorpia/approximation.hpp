@@ -8,8 +8,8 @@
 ///   1. footpoints: each point's closest point of the surface as (face, u, v)
 ///      (closest_points: the nearest of a grid of limit points, then
 ///      Gauss-Newton), record 0;
-///   1b. coarse iterations first (coarse_iterations > 0, and a sample of at
-///      most half the points): steps 1-3 on a fixed sample of the points
+///   1b. coarse iterations first (coarse_iterations > 0, iterations above
+///      window + 1, and a sample of at most half the points): steps 1-3 on a fixed sample of the points
 ///      (PointChunks::set_sample: coarse_points per control vertex a face
 ///      uses), without the stop rule, until coarse_iterations of them ran
 ///      or one lowered the sample's lowest criterion by at most coarse_tol
@@ -65,8 +65,10 @@ enum class ApproximationUpdate {
 struct ApproximationOptions {
   int iterations = 10;            ///< updates at most (the coarse ones included), >= 1
   /// Updates on the sample first (step 1b), >= 0: at most this many, and at
-  /// most iterations - 1 (one update at least on all points); fewer where
-  /// coarse_tol ends them; 0: none.
+  /// most iterations - window - 1 (window + 1 updates at least on all
+  /// points: the first takes back what the sample's fit made of the sample's
+  /// own points, the stop rule's window follows); fewer where coarse_tol
+  /// ends them; 0: none.
   int coarse_iterations = 6;
   /// The sample's size in points per control vertex a face uses, finite,
   /// > 0; no coarse iterations when it would hold more than half the points.
