@@ -418,10 +418,14 @@ class LazyDecimater : public OpenMesh::Decimater::BaseDecimaterT<OMesh> {
   std::vector<VertexHandle> ring_;  // legal()'s list
 };
 
-// From this many vertices a mesh is decimated in its vertices' Morton order
-// and first in rounds (to_openmesh, decimate): it no longer fits in the
-// processor's caches, and the memory traffic bounds the decimation.
+// From this many vertices a mesh is clustered first, or decimated in its
+// vertices' Morton order and first in rounds (to_openmesh, decimate): it no
+// longer fits in the processor's caches, and the memory traffic bounds the
+// decimation.
 constexpr std::size_t kLargeMesh = 200000;
+// A large mesh's collapses down to this many times the count are made in
+// bulk (by clustering or in rounds: decimate), the rest one by one.
+constexpr std::size_t kBulkFactor = 4;
 
 void check_options(const DecimateOptions& o) {
   if (!(o.max_normal_deviation > 0.0 && o.max_normal_deviation <= 180.0))
@@ -585,12 +589,13 @@ struct Clustering {
 // Clusters `mesh` (in the decimation's coordinates, `to_frame`) into about
 // `n_clusters` vertices. Vertices on the boundary stay as they are, so that
 // no hole closes and the boundary angle guard judges the boundary as before;
-// a cluster whose joining would leave the mesh not manifold (a cell's patch
-// that closes on itself, two patches that would share an edge twice) is
-// split back into its vertices, with those of its neighbouring clusters,
-// until the clustered mesh is manifold. False (nothing clustered) for a mesh
-// not manifold itself, whose refusal is the decimation's to name, and where
-// the grid cannot reach the count.
+// where the clusters leave a vertex whose link (link_of) is not a single
+// fan, the boundary's a path and an inner one a cycle, the mesh is mended
+// and judged again, until none is: a cluster between two others only joins
+// one of them, any other such cluster is split back into its vertices (a
+// single vertex: its neighbouring clusters are). False (nothing clustered)
+// for a mesh not manifold itself, whose refusal is the decimation's to name,
+// and where the grid or the mending does not settle.
 template <class ToFrame>
 bool cluster_vertices(const Mesh& mesh, std::size_t n_clusters, const ToFrame& to_frame, Clustering& out) {
   const std::size_t nv = mesh.n_vertices();
@@ -1009,13 +1014,14 @@ Mesh decimate(const Mesh& mesh, std::size_t n_vertices, const DecimateOptions& o
     return OpenMesh::Vec3d(std::ldexp(x[0] - centre[0], -e), std::ldexp(x[1] - centre[1], -e),
                            std::ldexp(x[2] - centre[2], -e));
   };
-  // A large mesh is clustered first (cluster_vertices) to kClusterFactor
-  // times the count, and decimated from there: clustering is a pass over
-  // flat arrays, each collapse of OpenMesh's half-edge mesh a jump in memory.
-  constexpr std::size_t kClusterFactor = 4;
+  // A large mesh of more than twice kBulkFactor times the count is
+  // clustered (cluster_vertices) to kBulkFactor times the count before
+  // OpenMesh sees it: clustering is a few passes over flat arrays, each
+  // collapse in OpenMesh's half-edge mesh jumps in memory. Nearer the count
+  // a grid's cells would hold too few vertices to cluster.
   Clustering clustered;
-  const bool clustering = have >= kLargeMesh && have > 2 * kClusterFactor * n_vertices &&
-                          cluster_vertices(mesh, kClusterFactor * n_vertices, to_frame, clustered);
+  const bool clustering = have >= kLargeMesh && have > 2 * kBulkFactor * n_vertices &&
+                          cluster_vertices(mesh, kBulkFactor * n_vertices, to_frame, clustered);
   std::vector<std::int32_t> kept;
   OMesh om = to_openmesh(clustering ? clustered.mesh : mesh, kept);
   for (const auto vh : om.vertices()) {
@@ -1059,15 +1065,15 @@ Mesh decimate(const Mesh& mesh, std::size_t n_vertices, const DecimateOptions& o
 
   // One pass to the count, for both schemes: Catmull-Clark's quads are the
   // decimated triangles paired (paired_quads), which keeps the vertices.
-  // A large mesh (kLargeMesh vertices or more) is decimated first in rounds
-  // (decimate_in_rounds) down to kRoundsFactor times the count, then
-  // compacted, and the rest from the heap (decimate_to), which orders the
-  // last collapses, those that shape the cage, one by one; a smaller mesh
-  // from the heap alone.
-  constexpr std::size_t kRoundsFactor = 4;
+  // A large mesh (kLargeMesh vertices or more) still above kBulkFactor
+  // times the count (not clustered, or clustered to as many) is decimated
+  // first in rounds (decimate_in_rounds) down to that, then compacted, and
+  // the rest from the heap (decimate_to), which orders the last collapses,
+  // those that shape the cage, one by one; a smaller mesh from the heap
+  // alone.
   std::size_t count = om.n_vertices();
-  if (count >= kLargeMesh && count > kRoundsFactor * n_vertices) {
-    decimater.decimate_in_rounds(count, kRoundsFactor * n_vertices, decimater.module(quadric));
+  if (count >= kLargeMesh && count > kBulkFactor * n_vertices) {
+    decimater.decimate_in_rounds(count, kBulkFactor * n_vertices, decimater.module(quadric));
     observer.rethrow();
     om.garbage_collection();
   }
