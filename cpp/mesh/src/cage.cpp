@@ -647,6 +647,13 @@ bool cluster_vertices(const Mesh& mesh, std::size_t n_clusters, const ToFrame& t
     manifold &= kind != Link::kNotManifold;
   });
   if (!manifold) return false;
+  // Kept out of clusters: the boundary's vertices and their neighbours, so
+  // that the faces along the boundary are the input's and the heap shapes
+  // that strip collapse by collapse (no cluster fans out to many boundary
+  // vertices in thin triangles).
+  std::vector<char> keep(boundary);
+  for (std::size_t c = 0; c < n_corners; ++c)
+    if (boundary[idx[c]]) keep[idx[next(c)]] = keep[idx[prev(c)]] = 1;
   double area = 0.0;
   for (std::size_t f = 0; f < nf; ++f)
     area += 0.5 * ((p[idx[3 * f + 1]] - p[idx[3 * f]]) % (p[idx[3 * f + 2]] - p[idx[3 * f]])).norm();
@@ -672,7 +679,7 @@ bool cluster_vertices(const Mesh& mesh, std::size_t n_clusters, const ToFrame& t
     for (std::size_t v = 0; v < nv; ++v) parent[v] = static_cast<std::int32_t>(v);
     for (std::size_t c = 0; c < n_corners; ++c) {
       const std::int32_t u = idx[c], w = idx[next(c)];
-      if (cell[u] == cell[w] && !boundary[u] && !boundary[w]) parent[find(u)] = find(w);
+      if (cell[u] == cell[w] && !keep[u] && !keep[w]) parent[find(u)] = find(w);
     }
     std::size_t n_made = 0;
     for (std::size_t v = 0; v < nv; ++v) n_made += used[v] && find(static_cast<std::int32_t>(v)) == static_cast<std::int32_t>(v);
