@@ -72,8 +72,8 @@ def decimate(vertices, faces=None, n_vertices: Optional[int] = None, *, scheme: 
     A mesh of 200,000 vertices or more and over 8 times ``n_vertices`` is
     first clustered on a grid to about 4 times ``n_vertices`` (Lindstrom's
     vertex clustering: each cluster becomes its vertex of least summed
-    quadric; boundary vertices are kept) and decimated from there, in a
-    fraction of the time (docs/cages.md).
+    quadric; boundary vertices and their neighbours are kept) and
+    decimated from there, in a fraction of the time (docs/cages.md).
 
     Under Catmull-Clark the same decimation's triangles (``n_vertices``
     vertices, as Loop's) are paired into quads across their edges, the
