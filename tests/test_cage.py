@@ -507,15 +507,16 @@ def test_a_large_mesh_clustered_or_decimated_in_rounds_fits_as_the_heap_alone(co
 
 def test_clustering_keeps_the_holes_and_their_boundary_vertices():
     """A large open mesh with holes (the wavy patch of 250,000 vertices, four round holes cut) clustered before
-    its decimation: its boundary vertices are never clustered, so the cage has the input's boundary loops and
-    Euler characteristic, its boundary vertices are input boundary vertices, and it is an oriented manifold."""
+    its decimation: its boundary vertices (and their neighbours) are never clustered, so the cage has the input's
+    boundary loops and Euler characteristic, its boundary vertices are input boundary vertices, and it is an
+    oriented manifold."""
     v, f = sorpia.shapes.grid(500, 500)
     centroid = v[f].mean(axis=1)
     holes = np.array([[0.3, 0.3], [0.7, 0.35], [0.5, 0.7], [0.25, 0.75]])
     f = f[np.all(np.linalg.norm(centroid[:, None, :2] - holes[None], axis=2) > 0.06, axis=1)]
     used = np.unique(f)
     v, f = v[used], np.searchsorted(used, f).astype(np.int32)
-    # The input's boundary: its directed edges whose opposite no face has (each edge in one face: grid's).
+    # The input's boundary: its directed edges whose opposite no face has (the patch is oriented consistently).
     a, b = f.ravel().astype(np.int64), np.roll(f, -1, axis=1).ravel().astype(np.int64)
     on_boundary = ~np.isin(a * len(v) + b, b * len(v) + a)
     boundary = list(zip(a[on_boundary].tolist(), b[on_boundary].tolist()))
