@@ -767,6 +767,13 @@ bool cluster_vertices(const Mesh& mesh, std::size_t n_clusters, const ToFrame& t
       seen[x] = 1;
     }
   }
+  // Far fewer clusters in faces than asked (a grid the correction did not
+  // settle): the heap would have too few collapses left to shape the cage.
+  {
+    std::vector<char> in_faces(static_cast<std::size_t>(n_numbered), 0);
+    for (const std::int32_t x : faces) in_faces[static_cast<std::size_t>(x)] = 1;
+    if (2 * static_cast<std::size_t>(std::count(in_faces.begin(), in_faces.end(), 1)) < n_clusters) return false;
+  }
 
   // The clusters' quadrics (every input face's, degenerate or not, to its
   // corners' clusters) and representatives.
