@@ -9,6 +9,7 @@
 #include <OpenMesh/Tools/Utils/HeapT.hh>
 
 #include <algorithm>
+#include <array>
 #include <cfloat>
 #include <cmath>
 #include <exception>
@@ -57,6 +58,21 @@ class ModBoundaryAngleT : public OpenMesh::Decimater::ModBaseT<MeshT> {
   double min_cos_ = 1.0;
 };
 
+using Quadric = OpenMesh::Geometry::QuadricT<double>;
+
+// A face's quadric as OpenMesh's ModQuadricT makes it: its plane's, weighted by its area.
+Quadric face_quadric(const OpenMesh::Vec3d& p0, const OpenMesh::Vec3d& p1, const OpenMesh::Vec3d& p2) {
+  OpenMesh::Vec3d n = (p1 - p0) % (p2 - p0);
+  double area = n.norm();
+  if (area > FLT_MIN) {
+    n /= area;
+    area *= 0.5;
+  }
+  Quadric q(n[0], n[1], n[2], -(p0 | n));
+  q *= area;
+  return q;
+}
+
 // Garland and Heckbert's quadric error, as OpenMesh's ModQuadricT computes
 // it (its initialize, priority and postprocess; no maximum error), with
 // error(v0, v1) read in place: the decimation costs every outgoing collapse
@@ -66,7 +82,6 @@ template <class MeshT>
 class ModQuadricErrorT : public OpenMesh::Decimater::ModBaseT<MeshT> {
  public:
   DECIMATING_MODULE(ModQuadricErrorT, MeshT, QuadricError);
-  using Quadric = OpenMesh::Geometry::QuadricT<double>;
   using VertexHandle = typename MeshT::VertexHandle;
 
   explicit ModQuadricErrorT(MeshT& mesh) : Base(mesh, false) {
@@ -78,25 +93,26 @@ class ModQuadricErrorT : public OpenMesh::Decimater::ModBaseT<MeshT> {
     Base::mesh().remove_property(sites_);
   }
 
-  // Each vertex's quadric: the sum over its faces of the face plane's, weighted by the face's area.
+  // The vertices' quadrics initialize() takes, in the order of the mesh's
+  // vertices, where the mesh's faces are not those to measure the error on
+  // (a clustered mesh: each vertex the sum of its cluster's).
+  void set_quadrics(std::vector<Quadric> quadrics) { given_ = std::move(quadrics); }
+
+  // Each vertex's quadric: the sum over its faces of the face plane's (face_quadric), or as set_quadrics gave it.
   void initialize() override {
     MeshT& m = Base::mesh();
-    for (const auto v : m.vertices()) m.property(quadrics_, v).clear();
-    for (const auto f : m.faces()) {
-      auto fv = m.cfv_iter(f);
-      const VertexHandle a = *fv, b = *++fv, c = *++fv;
-      const OpenMesh::Vec3d p0 = m.point(a), p1 = m.point(b), p2 = m.point(c);
-      OpenMesh::Vec3d n = (p1 - p0) % (p2 - p0);
-      double area = n.norm();
-      if (area > FLT_MIN) {
-        n /= area;
-        area *= 0.5;
+    if (!given_.empty()) {
+      for (const auto v : m.vertices()) m.property(quadrics_, v) = given_[static_cast<std::size_t>(v.idx())];
+    } else {
+      for (const auto v : m.vertices()) m.property(quadrics_, v).clear();
+      for (const auto f : m.faces()) {
+        auto fv = m.cfv_iter(f);
+        const VertexHandle a = *fv, b = *++fv, c = *++fv;
+        const Quadric q = face_quadric(m.point(a), m.point(b), m.point(c));
+        m.property(quadrics_, a) += q;
+        m.property(quadrics_, b) += q;
+        m.property(quadrics_, c) += q;
       }
-      Quadric q(n[0], n[1], n[2], -(p0 | n));
-      q *= area;
-      m.property(quadrics_, a) += q;
-      m.property(quadrics_, b) += q;
-      m.property(quadrics_, c) += q;
     }
     for (const auto v : m.vertices()) {
       Site& s = m.property(sites_, v);
@@ -138,6 +154,7 @@ class ModQuadricErrorT : public OpenMesh::Decimater::ModBaseT<MeshT> {
   };
   OpenMesh::VPropHandleT<Quadric> quadrics_;
   OpenMesh::VPropHandleT<Site> sites_;
+  std::vector<Quadric> given_;
 };
 
 // Polls for Ctrl-C between collapses; an Interrupted is kept and rethrown
@@ -401,10 +418,14 @@ class LazyDecimater : public OpenMesh::Decimater::BaseDecimaterT<OMesh> {
   std::vector<VertexHandle> ring_;  // legal()'s list
 };
 
-// From this many vertices a mesh is decimated in its vertices' Morton order
-// and first in rounds (to_openmesh, decimate): it no longer fits in the
-// processor's caches, and the memory traffic bounds the decimation.
+// From this many vertices a mesh is clustered first, or decimated in its
+// vertices' Morton order and first in rounds (to_openmesh, decimate): it no
+// longer fits in the processor's caches, and the memory traffic bounds the
+// decimation.
 constexpr std::size_t kLargeMesh = 200000;
+// A large mesh's collapses down to this many times the count are made in
+// bulk (by clustering or in rounds: decimate), the rest one by one.
+constexpr std::size_t kBulkFactor = 4;
 
 void check_options(const DecimateOptions& o) {
   if (!(o.max_normal_deviation > 0.0 && o.max_normal_deviation <= 180.0))
@@ -511,6 +532,276 @@ OMesh to_openmesh(const Mesh& mesh, std::vector<std::int32_t>& kept) {
     }
   }
   return om;
+}
+
+
+// The link of a vertex v of a triangle mesh, one edge a[i] -> b[i] for each
+// of its k faces (v, a[i], b[i]), as a manifold oriented mesh has it: a
+// single cycle of at least 3 edges (kInner) or a single path (kOnBoundary);
+// anything else (an edge of three faces or of two faces oriented alike, a
+// fan of several pieces, a repeated vertex) is kNotManifold.
+enum class Link { kNotManifold, kInner, kOnBoundary };
+
+Link link_of(std::int32_t v, const std::int32_t* a, const std::int32_t* b, std::size_t k) {
+  std::size_t starts = 0, start = 0;
+  for (std::size_t i = 0; i < k; ++i) {
+    if (a[i] == v || b[i] == v || a[i] == b[i]) return Link::kNotManifold;
+    bool entered = false;  // some edge ends where edge i starts
+    for (std::size_t j = 0; j < k; ++j) {
+      if (j != i && (a[j] == a[i] || b[j] == b[i])) return Link::kNotManifold;
+      entered |= b[j] == a[i];
+    }
+    if (!entered) {
+      ++starts;
+      start = i;
+    }
+  }
+  if (starts > 1) return Link::kNotManifold;
+  // Walk from the path's start (or around the cycle): every edge must be reached.
+  std::size_t walked = 1;
+  for (std::size_t i = start;;) {
+    std::size_t next = k;
+    for (std::size_t j = 0; j < k; ++j)
+      if (a[j] == b[i]) next = j;
+    if (next == k || next == start) break;
+    i = next;
+    ++walked;
+  }
+  if (walked != k) return Link::kNotManifold;
+  if (starts == 1) return Link::kOnBoundary;
+  return k >= 3 ? Link::kInner : Link::kNotManifold;
+}
+
+// A mesh's vertices clustered before its decimation, as Lindstrom's
+// out-of-core simplification does (Lindstrom 2000): a uniform grid's cells,
+// each cell's vertices joined by the mesh's edges a cluster, each cluster
+// one vertex (its representative) carrying the sum of its vertices'
+// quadrics, and the faces with three clusters kept. The representative is
+// the cluster's vertex where the cluster's quadric is least: an input
+// vertex, as a collapse keeps one. A cluster is what collapses inside it
+// would make, and the decimation goes on from it as if it had made them.
+struct Clustering {
+  Mesh mesh;                         // the representatives' input coordinates and the faces kept
+  std::vector<std::int32_t> source;  // each of mesh's vertices: its representative's input number
+  std::vector<Quadric> quadrics;     // each of mesh's vertices: the sum of its cluster's vertices' quadrics
+};
+
+// Clusters `mesh` (in the decimation's coordinates, `to_frame`) into about
+// `n_clusters` vertices. Vertices on the boundary stay as they are, so that
+// no hole closes and the boundary angle guard judges the boundary as before;
+// where the clusters leave a vertex whose link (link_of) is not a single
+// fan, the boundary's a path and an inner one a cycle, the mesh is mended
+// and judged again, until none is: a cluster between two others only joins
+// one of them, any other such cluster is split back into its vertices (a
+// single vertex: its neighbouring clusters are). False (nothing clustered)
+// for a mesh not manifold itself, whose refusal is the decimation's to name,
+// and where the grid or the mending does not settle.
+template <class ToFrame>
+bool cluster_vertices(const Mesh& mesh, std::size_t n_clusters, const ToFrame& to_frame, Clustering& out) {
+  const std::size_t nv = mesh.n_vertices();
+  const std::int32_t* idx = mesh.face_vertex_indices.data();
+  const std::size_t n_corners = mesh.face_vertex_indices.size(), nf = n_corners / 3;
+  if (mesh.uniform() ? mesh.face_size != 3
+                     : std::any_of(mesh.face_vertex_counts.begin(), mesh.face_vertex_counts.end(),
+                                   [](std::int32_t c) { return c != 3; }))
+    return false;
+  for (std::size_t c = 0; c < n_corners; ++c)
+    if (idx[c] < 0 || static_cast<std::size_t>(idx[c]) >= nv) return false;
+  std::vector<OpenMesh::Vec3d> p(nv);
+  for (std::size_t v = 0; v < nv; ++v) p[v] = to_frame(&mesh.vertices[3 * v]);
+  const auto next = [](std::size_t c) { return c - c % 3 + (c + 1) % 3; };
+  const auto prev = [](std::size_t c) { return c - c % 3 + (c + 2) % 3; };
+
+  // on_link(x, its Link) for each of the n labels x (a vertex's or a
+  // cluster's number) of the triangles' corners `label` (k of them), with
+  // its link's edges in la -> lb.
+  std::vector<std::size_t> first;
+  std::vector<std::uint32_t> corners;
+  std::vector<std::int32_t> la, lb;
+  const auto links = [&](const std::int32_t* label, std::size_t k, std::size_t n, auto&& on_link) {
+    first.assign(n + 1, 0);
+    for (std::size_t c = 0; c < k; ++c) ++first[static_cast<std::size_t>(label[c]) + 1];
+    for (std::size_t i = 0; i < n; ++i) first[i + 1] += first[i];
+    corners.resize(k);
+    {
+      std::vector<std::size_t> at(first.begin(), first.end() - 1);
+      for (std::size_t c = 0; c < k; ++c) corners[at[static_cast<std::size_t>(label[c])]++] = static_cast<std::uint32_t>(c);
+    }
+    for (std::size_t x = 0; x < n; ++x) {
+      if ((x & 0xffff) == 0) poll_interrupt();
+      if (first[x] == first[x + 1]) continue;
+      la.clear();
+      lb.clear();
+      for (std::size_t i = first[x]; i < first[x + 1]; ++i) {
+        la.push_back(label[next(corners[i])]);
+        lb.push_back(label[prev(corners[i])]);
+      }
+      on_link(x, link_of(static_cast<std::int32_t>(x), la.data(), lb.data(), la.size()));
+    }
+  };
+  std::vector<char> boundary(nv, 0), used(nv, 0);
+  bool manifold = true;
+  links(idx, n_corners, nv, [&](std::size_t v, Link kind) {
+    used[v] = 1;
+    boundary[v] = kind == Link::kOnBoundary;
+    manifold &= kind != Link::kNotManifold;
+  });
+  if (!manifold) return false;
+  // Kept out of clusters: the boundary's vertices and their neighbours, so
+  // that the faces along the boundary are the input's and the heap shapes
+  // that strip collapse by collapse (no cluster fans out to many boundary
+  // vertices in thin triangles).
+  std::vector<char> keep(boundary);
+  for (std::size_t c = 0; c < n_corners; ++c)
+    if (boundary[idx[c]]) keep[idx[next(c)]] = keep[idx[prev(c)]] = 1;
+  double area = 0.0;
+  for (std::size_t f = 0; f < nf; ++f)
+    area += 0.5 * ((p[idx[3 * f + 1]] - p[idx[3 * f]]) % (p[idx[3 * f + 2]] - p[idx[3 * f]])).norm();
+
+  // The grid: a cell of side h meets about 1.5 area / h^2 of a surface's
+  // cells (a plane's average over its orientations), and the cell's patch
+  // is one cluster; h is corrected from the clusters it gave.
+  std::vector<std::int32_t> cluster(nv), parent(nv);
+  const auto find = [&](std::int32_t x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  };
+  double h = std::sqrt(1.5 * area / static_cast<double>(n_clusters));
+  for (int attempt = 0; attempt < 3; ++attempt) {
+    if (!(h > 0.0 && std::isfinite(h))) return false;
+    std::vector<std::uint64_t> cell(nv);
+    for (std::size_t v = 0; v < nv; ++v) {
+      std::uint64_t key = 0;
+      for (int c = 0; c < 3; ++c)
+        key |= static_cast<std::uint64_t>(std::clamp(std::floor((p[v][c] + 1.0) / h), 0.0, 2097151.0)) << (21 * c);
+      cell[v] = key;
+    }
+    for (std::size_t v = 0; v < nv; ++v) parent[v] = static_cast<std::int32_t>(v);
+    for (std::size_t c = 0; c < n_corners; ++c) {
+      const std::int32_t u = idx[c], w = idx[next(c)];
+      if (cell[u] == cell[w] && !keep[u] && !keep[w]) parent[find(u)] = find(w);
+    }
+    std::size_t n_made = 0;
+    for (std::size_t v = 0; v < nv; ++v) n_made += used[v] && find(static_cast<std::int32_t>(v)) == static_cast<std::int32_t>(v);
+    const double ratio = static_cast<double>(n_made) / static_cast<double>(n_clusters);
+    if (ratio > 0.9 && ratio < 1.15) break;
+    h *= std::sqrt(ratio);
+  }
+  // Clusters numbered in the order of their first vertex.
+  std::vector<std::int32_t> number(nv, -1);
+  std::int32_t n_numbered = 0;
+  for (std::size_t v = 0; v < nv; ++v) {
+    const std::int32_t r = find(static_cast<std::int32_t>(v));
+    if (number[r] < 0) number[r] = n_numbered++;
+    cluster[v] = number[r];
+  }
+
+  // The clustered faces; a cluster whose link is not as its vertices' (an
+  // inner cluster's a cycle, a boundary vertex's a path) is split, with its
+  // neighbours, into its vertices, until none is.
+  std::vector<std::int32_t> faces;
+  std::vector<std::array<std::int32_t, 3>> keys;
+  std::vector<char> split;
+  for (int pass = 0;; ++pass) {
+    // Each face over three clusters once (several input faces can span the
+    // same three), keyed by its corners turned to put the least first.
+    keys.clear();
+    for (std::size_t f = 0; f < nf; ++f) {
+      std::int32_t t[3] = {cluster[idx[3 * f]], cluster[idx[3 * f + 1]], cluster[idx[3 * f + 2]]};
+      if (t[0] == t[1] || t[1] == t[2] || t[2] == t[0]) continue;
+      std::rotate(t, std::min_element(t, t + 3), t + 3);
+      keys.push_back({t[0], t[1], t[2]});
+    }
+    std::sort(keys.begin(), keys.end());
+    keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+    faces.clear();
+    for (const auto& t : keys) faces.insert(faces.end(), t.begin(), t.end());
+    const std::size_t n = static_cast<std::size_t>(n_numbered);
+    // A cluster's boundary: one of its vertices is on the input's (then it is that vertex alone).
+    std::vector<char> on_boundary(n, 0);
+    for (std::size_t v = 0; v < nv; ++v) on_boundary[cluster[v]] |= boundary[v];
+    split.assign(n, 0);
+    std::size_t n_split = 0;
+    // A cluster between two others only (two faces over the same three
+    // clusters, oriented against each other: a sliver a cell's corner cut
+    // off) joins one of them not on the boundary, which closes the fold.
+    std::vector<std::int32_t> joins;
+    links(faces.data(), faces.size(), n, [&](std::size_t x, Link kind) {
+      if (kind == (on_boundary[x] ? Link::kOnBoundary : Link::kInner)) return;
+      if (!on_boundary[x] && la.size() == 2 && la[0] == lb[1] && la[1] == lb[0] &&
+          !(on_boundary[la[0]] && on_boundary[la[1]])) {
+        joins.push_back(static_cast<std::int32_t>(x));
+        joins.push_back(on_boundary[la[0]] ? la[1] : la[0]);
+        return;
+      }
+      split[x] = 1;
+      ++n_split;
+    });
+    std::vector<std::int32_t> into(n, -1);
+    for (std::size_t i = 0; i < joins.size(); i += 2) into[joins[i]] = joins[i + 1];
+    std::size_t n_joined = 0;
+    for (std::size_t i = 0; i < joins.size(); i += 2)
+      if (into[joins[i + 1]] >= 0) {  // its neighbour joins another: split it instead
+        into[joins[i]] = -1;
+        split[joins[i]] = 1;
+        ++n_split;
+      } else {
+        ++n_joined;
+      }
+    for (std::size_t v = 0; v < nv; ++v)
+      if (into[cluster[v]] >= 0) cluster[v] = into[cluster[v]];
+    if (n_split == 0 && n_joined == 0) break;
+    if (pass == 16) return false;
+    if (n_joined > 0) continue;  // the splits were judged before the joins
+    std::vector<std::int32_t> members(n, 0);
+    for (std::size_t v = 0; v < nv; ++v) ++members[cluster[v]];
+    for (std::size_t c = 0; c < faces.size(); ++c)
+      if (split[faces[c]] == 1 && members[faces[c]] == 1)
+        for (const std::size_t d : {next(c), prev(c)})
+          if (!split[faces[d]]) split[faces[d]] = 2;
+    std::vector<char> seen(n, 0);  // each split cluster keeps its number for its first vertex
+    for (std::size_t v = 0; v < nv; ++v) {
+      const std::int32_t x = cluster[v];
+      if (!split[x]) continue;
+      if (seen[x]) cluster[v] = n_numbered++;
+      seen[x] = 1;
+    }
+  }
+  // Far fewer clusters in faces than asked (a grid the correction did not
+  // settle): the heap would have too few collapses left to shape the cage.
+  {
+    std::vector<char> in_faces(static_cast<std::size_t>(n_numbered), 0);
+    for (const std::int32_t x : faces) in_faces[static_cast<std::size_t>(x)] = 1;
+    if (2 * static_cast<std::size_t>(std::count(in_faces.begin(), in_faces.end(), 1)) < n_clusters) return false;
+  }
+
+  // The clusters' quadrics (every input face's, degenerate or not, to its
+  // corners' clusters) and representatives.
+  const std::size_t n = static_cast<std::size_t>(n_numbered);
+  out.quadrics.assign(n, Quadric());
+  for (auto& q : out.quadrics) q.clear();
+  for (std::size_t f = 0; f < nf; ++f) {
+    if ((f & 0xffff) == 0) poll_interrupt();
+    const Quadric q = face_quadric(p[idx[3 * f]], p[idx[3 * f + 1]], p[idx[3 * f + 2]]);
+    for (int k = 0; k < 3; ++k) out.quadrics[cluster[idx[3 * f + k]]] += q;
+  }
+  std::vector<double> least(n, HUGE_VAL);
+  out.source.assign(n, -1);
+  for (std::size_t v = 0; v < nv; ++v) {
+    if (!used[v]) continue;
+    const double e = out.quadrics[cluster[v]](p[v]);
+    if (e < least[cluster[v]]) {
+      least[cluster[v]] = e;
+      out.source[cluster[v]] = static_cast<std::int32_t>(v);
+    }
+  }
+  out.mesh = Mesh();
+  out.mesh.vertices.resize(3 * n, 0.0);
+  for (std::size_t x = 0; x < n; ++x)
+    if (out.source[x] >= 0) std::copy_n(&mesh.vertices[3 * static_cast<std::size_t>(out.source[x])], 3, &out.mesh.vertices[3 * x]);
+  out.mesh.face_vertex_indices = std::move(faces);
+  out.mesh.face_size = 3;
+  return true;
 }
 
 // A quad made of the two triangles on either side of interior edge e, or
@@ -700,46 +991,68 @@ Mesh decimate(const Mesh& mesh, std::size_t n_vertices, const DecimateOptions& o
   check_options(options);
   if (stopped != nullptr) stopped->clear();
   if (n_vertices < 4) throw ParameterError("a cage needs at least 4 vertices, got " + std::to_string(n_vertices));
-  std::vector<std::int32_t> kept;
-  OMesh om = to_openmesh(mesh, kept);
   // OpenMesh's quadric of a face holds its plane's offset d = -n.p and d^2,
   // and a point's error is the sum of terms of the order of |p|^2 that
   // cancel: far from the origin (1e6 on a scan of unit size: terms of 1e12,
   // rounded by 1e-4, errors of 1e-6) rounding decides the collapses. Its
   // normals and degeneracy checks are absolute too. So the mesh is
-  // decimated in coordinates centred on its bounding box and scaled by a
-  // power of two to a half-extent in [1/2, 1), and the cage takes its
-  // vertices from the input (a half-edge collapse moves no vertex): the same
-  // cage wherever the mesh lies and whatever its size, up to the rounding of
-  // the centred coordinates.
+  // decimated in coordinates centred on the bounding box of its vertices in
+  // faces and scaled by a power of two to a half-extent in [1/2, 1), and the
+  // cage takes its vertices from the input (a half-edge collapse moves no
+  // vertex): the same cage wherever the mesh lies and whatever its size, up
+  // to the rounding of the centred coordinates.
+  std::size_t have = 0;  // the vertices in faces (an index out of range is to_openmesh's to refuse)
+  double centre[3];
+  int e = 0;
   {
+    std::vector<char> used(mesh.n_vertices(), 0);
+    for (const std::int32_t v : mesh.face_vertex_indices)
+      if (v >= 0 && static_cast<std::size_t>(v) < used.size()) used[static_cast<std::size_t>(v)] = 1;
     double lo[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
-    for (const auto vh : om.vertices())
+    for (std::size_t v = 0; v < used.size(); ++v) {
+      if (!used[v]) continue;
+      ++have;
       for (int c = 0; c < 3; ++c) {
-        lo[c] = std::min(lo[c], om.point(vh)[c]);
-        hi[c] = std::max(hi[c], om.point(vh)[c]);
+        lo[c] = std::min(lo[c], mesh.vertices[3 * v + c]);
+        hi[c] = std::max(hi[c], mesh.vertices[3 * v + c]);
       }
-    double centre[3], half = 0.0;
+    }
+    double half = 0.0;
     for (int c = 0; c < 3; ++c) {
       centre[c] = lo[c] + 0.5 * (hi[c] - lo[c]);
       half = std::max(half, 0.5 * (hi[c] - lo[c]));
     }
-    int e = 0;
     if (half > 0.0 && std::isfinite(half)) std::frexp(half, &e);
-    for (const auto vh : om.vertices()) {
-      auto& p = om.point(vh);
-      for (int c = 0; c < 3; ++c) p[c] = std::ldexp(p[c] - centre[c], -e);
-    }
+  }
+  const auto to_frame = [&](const double* x) {
+    return OpenMesh::Vec3d(std::ldexp(x[0] - centre[0], -e), std::ldexp(x[1] - centre[1], -e),
+                           std::ldexp(x[2] - centre[2], -e));
+  };
+  // A large mesh of more than twice kBulkFactor times the count is
+  // clustered (cluster_vertices) to kBulkFactor times the count before
+  // OpenMesh sees it: clustering is a few passes over flat arrays, each
+  // collapse in OpenMesh's half-edge mesh jumps in memory. Nearer the count
+  // a grid's cells would hold too few vertices to cluster.
+  Clustering clustered;
+  const bool clustering = have >= kLargeMesh && have > 2 * kBulkFactor * n_vertices &&
+                          cluster_vertices(mesh, kBulkFactor * n_vertices, to_frame, clustered);
+  std::vector<std::int32_t> kept;
+  OMesh om = to_openmesh(clustering ? clustered.mesh : mesh, kept);
+  for (const auto vh : om.vertices()) {
+    auto& p = om.point(vh);
+    p = to_frame(p.data());
   }
   // Each OpenMesh vertex's input vertex, kept through the garbage collection.
   OpenMesh::VPropHandleT<std::int32_t> source;
   om.add_property(source);
-  for (const auto vh : om.vertices()) om.property(source, vh) = kept[static_cast<std::size_t>(vh.idx())];
-  const std::size_t have = om.n_vertices();
+  for (const auto vh : om.vertices()) {
+    const std::int32_t k = kept[static_cast<std::size_t>(vh.idx())];
+    om.property(source, vh) = clustering ? clustered.source[static_cast<std::size_t>(k)] : k;
+  }
   const bool quads = options.scheme == Scheme::CatmullClark;
   if (n_vertices > have)
     throw MeshError("decimate: " + std::to_string(n_vertices) + " vertices asked but the mesh has " +
-                    std::to_string(have) + " vertices" + (kept.size() < mesh.n_vertices() ? " in its faces" : ""));
+                    std::to_string(have) + " vertices" + (have < mesh.n_vertices() ? " in its faces" : ""));
 
   LazyDecimater decimater(om);
   ModQuadricErrorT<OMesh>::Handle quadric;
@@ -756,19 +1069,25 @@ Mesh decimate(const Mesh& mesh, std::size_t n_vertices, const DecimateOptions& o
   decimater.module(boundary).set_max_angle(options.max_boundary_angle);
   InterruptObserver observer;
   decimater.set_observer(&observer);
+  if (clustering) {  // the clusters' quadrics, of the input's faces
+    std::vector<Quadric> given(om.n_vertices());
+    for (const auto vh : om.vertices())
+      given[static_cast<std::size_t>(vh.idx())] = clustered.quadrics[static_cast<std::size_t>(kept[static_cast<std::size_t>(vh.idx())])];
+    decimater.module(quadric).set_quadrics(std::move(given));
+  }
   if (!decimater.initialize()) throw MeshError("decimate: OpenMesh's decimater did not initialize");
 
   // One pass to the count, for both schemes: Catmull-Clark's quads are the
   // decimated triangles paired (paired_quads), which keeps the vertices.
-  // A large mesh (kLargeMesh vertices or more) is decimated first in rounds
-  // (decimate_in_rounds) down to kRoundsFactor times the count, then
-  // compacted, and the rest from the heap (decimate_to), which orders the
-  // last collapses, those that shape the cage, one by one; a smaller mesh
-  // from the heap alone.
-  constexpr std::size_t kRoundsFactor = 4;
-  std::size_t count = have;
-  if (have >= kLargeMesh && have > kRoundsFactor * n_vertices) {
-    decimater.decimate_in_rounds(count, kRoundsFactor * n_vertices, decimater.module(quadric));
+  // A large mesh (kLargeMesh vertices or more) still above kBulkFactor
+  // times the count (not clustered, or clustered to as many) is decimated
+  // first in rounds (decimate_in_rounds) down to that, then compacted, and
+  // the rest from the heap (decimate_to), which orders the last collapses,
+  // those that shape the cage, one by one; a smaller mesh from the heap
+  // alone.
+  std::size_t count = om.n_vertices();
+  if (count >= kLargeMesh && count > kBulkFactor * n_vertices) {
+    decimater.decimate_in_rounds(count, kBulkFactor * n_vertices, decimater.module(quadric));
     observer.rethrow();
     om.garbage_collection();
   }
