@@ -18,6 +18,7 @@
 
 #include "sorpia/detail/clock.hpp"
 #include "sorpia/detail/pairwise.hpp"
+#include "sorpia/detail/parallel.hpp"
 #include "sorpia/detail/repr.hpp"
 #include "sorpia/errors.hpp"
 #include "sorpia/interrupt.hpp"
@@ -25,6 +26,9 @@
 namespace sorpia {
 
 namespace {
+
+// Points per task of normal_sums' gathers, at least.
+constexpr std::size_t kPointsPerTask = 65536;
 
 double cpu_seconds() {
   timespec ts{};
@@ -315,48 +319,74 @@ NormalSums ApproximationChunk::normal_sums(const LimitSurface& surface, double t
   NormalSums out;
   const auto t0 = detail::Clock::now();
   const double c0 = cpu_seconds();
-  // The rows in face order: the points of a face share their columns, which the normal matrix reads once.
+  // The rows in face order (a stable counting sort by face): the points of a face share their columns, which the
+  // normal matrix reads once.
+  const std::size_t n_faces = surface.n_faces();
   std::vector<std::size_t> order(k);
-  std::iota(order.begin(), order.end(), std::size_t{0});
-  std::stable_sort(order.begin(), order.end(),
-                   [&](std::size_t a, std::size_t b) { return current.face_ids[a] < current.face_ids[b]; });
+  {
+    std::vector<std::size_t> start(n_faces + 1, 0);
+    for (std::size_t i = 0; i < k; ++i) {
+      const std::int32_t f = current.face_ids[i];
+      if (f < 0 || static_cast<std::size_t>(f) >= n_faces)
+        throw ParameterError("face_ids[" + std::to_string(first_ + i) + "] = " + std::to_string(f) +
+                             " is out of range [0, " + std::to_string(n_faces) + ")");
+      ++start[static_cast<std::size_t>(f) + 1];
+    }
+    for (std::size_t f = 0; f < n_faces; ++f) start[f + 1] += start[f];
+    for (std::size_t i = 0; i < k; ++i) order[start[static_cast<std::size_t>(current.face_ids[i])]++] = i;
+  }
+  // The per-point gathers and weights below, in ranges of points per task (each point's values alone).
+  const int tasks = static_cast<int>(
+      std::clamp<std::size_t>(k / kPointsPerTask, 1, static_cast<std::size_t>(detail::available_processors())));
+  const auto in_ranges = [&](auto&& body) {
+    detail::for_each_task(tasks > 1, tasks, [&](int t) {
+      const auto u = static_cast<std::size_t>(t), nt = static_cast<std::size_t>(tasks);
+      body(k * u / nt, k * (u + 1) / nt);
+    });
+  };
   std::vector<std::int32_t> face_o(k);
   std::vector<double> uv_o(2 * k);
-  for (std::size_t i = 0; i < k; ++i) {
-    const std::size_t o = order[i];
-    face_o[i] = current.face_ids[o];
-    uv_o[2 * i] = current.uv[2 * o];
-    uv_o[2 * i + 1] = current.uv[2 * o + 1];
-  }
+  in_ranges([&](std::size_t i0, std::size_t i1) {
+    for (std::size_t i = i0; i < i1; ++i) {
+      const std::size_t o = order[i];
+      face_o[i] = current.face_ids[o];
+      uv_o[2 * i] = current.uv[2 * o];
+      uv_o[2 * i + 1] = current.uv[2 * o + 1];
+    }
+  });
   CsrMatrix A = surface.rows(face_o.data(), uv_o.data(), k, 0).position;
   out.rows_seconds = detail::seconds_since(t0);
   out.rows_cpu = cpu_seconds() - c0;
   std::vector<double>().swap(uv_o);
   std::vector<std::int32_t>().swap(face_o);
-  std::vector<double> points_o(3 * k), w_o, wp(3 * k), w6;
+  std::vector<double> points_o(3 * k), w_o, wp(3 * k), w6, normals_o;
   if (weighted) w_o.resize(k);
-  for (std::size_t i = 0; i < k; ++i) {
-    const std::size_t o = order[i];
-    for (std::size_t c = 0; c < 3; ++c) points_o[3 * i + c] = points_[3 * o + c];
-    if (weighted) w_o[i] = (weights_.empty() ? 1.0 : weights_[o]) * (robust ? factors[o] : 1.0);
+  if (blend) {
+    normals_o.resize(3 * k);
+    w6.resize(6 * k);
   }
+  in_ranges([&](std::size_t i0, std::size_t i1) {
+    for (std::size_t i = i0; i < i1; ++i) {
+      const std::size_t o = order[i];
+      for (std::size_t c = 0; c < 3; ++c) points_o[3 * i + c] = points_[3 * o + c];
+      if (weighted) w_o[i] = (weights_.empty() ? 1.0 : weights_[o]) * (robust ? factors[o] : 1.0);
+      if (blend)
+        for (std::size_t c = 0; c < 3; ++c) normals_o[3 * i + c] = current.normals[3 * o + c];
+    }
+    if (blend)
+      blend_weights(&points_o[3 * i0], &normals_o[3 * i0], weighted ? &w_o[i0] : nullptr, i1 - i0, tangential,
+                    &w6[6 * i0], &wp[3 * i0]);
+    else
+      for (std::size_t i = 3 * i0; i < 3 * i1; ++i) wp[i] = weighted ? w_o[i / 3] * points_o[i] : points_o[i];
+  });
   const double* w = nullptr;
   int count = 0;
   if (blend) {
-    std::vector<double> normals_o(3 * k);
-    for (std::size_t i = 0; i < k; ++i)
-      for (std::size_t c = 0; c < 3; ++c) normals_o[3 * i + c] = current.normals[3 * order[i] + c];
-    w6.resize(6 * k);
-    blend_weights(points_o.data(), normals_o.data(), weighted ? w_o.data() : nullptr, k, tangential, w6.data(),
-                  wp.data());
     w = w6.data();
     count = 6;
-  } else {
-    for (std::size_t i = 0; i < 3 * k; ++i) wp[i] = weighted ? w_o[i / 3] * points_o[i] : points_o[i];
-    if (weighted) {
-      w = w_o.data();
-      count = 1;
-    }
+  } else if (weighted) {
+    w = w_o.data();
+    count = 1;
   }
   out.matrix = normal_matrix(A, w, count);
   out.rhs = transposed_times(A, wp.data());

@@ -89,6 +89,9 @@ constexpr int kApproxLevelSharp = 10;
 // work per thread.
 constexpr std::ptrdiff_t kFacesPerChunk = 64;
 
+// Points per task of rows()' copy into the matrices, at least.
+constexpr std::size_t kRowsPerCopyTask = 65536;
+
 // Threads for `n_groups` faces: no more than there are chunks, so a small
 // query runs on the calling thread alone, and no more than the processors.
 int evaluate_threads(std::ptrdiff_t n_groups) {
@@ -594,22 +597,21 @@ SurfaceRows LimitSurface::rows(const std::int32_t* face_ids, const double* uv, s
   const int n_mats = derivatives == 0 ? 1 : derivatives == 1 ? 3 : 6;
   const std::vector<std::int32_t>& from_osd = impl_->base.from_osd;
 
-  // Stencils per face (faces in increasing order), and each point's face slot.
-  std::vector<std::int32_t> faces(face_ids, face_ids + k);
-  std::sort(faces.begin(), faces.end());
-  faces.erase(std::unique(faces.begin(), faces.end()), faces.end());
-  std::vector<FaceStencils> stencils(faces.size());
-  std::vector<std::size_t> face_slot(k);  // the point's face in `faces`, found once for every matrix
-  for (std::size_t i = 0; i < k; ++i)
-    face_slot[i] =
-        static_cast<std::size_t>(std::lower_bound(faces.begin(), faces.end(), face_ids[i]) - faces.begin());
+  // Stencils per face of the points (the faces in increasing order) and each face's slot among them (the ids
+  // are checked).
+  std::vector<std::int32_t> face_slot(n_faces(), -1);
+  for (std::size_t i = 0; i < k; ++i) face_slot[static_cast<std::size_t>(face_ids[i])] = 0;
+  std::size_t n_used = 0;
+  for (std::int32_t& slot : face_slot)
+    if (slot == 0) slot = static_cast<std::int32_t>(n_used++);
+  std::vector<FaceStencils> stencils(n_used);
   std::vector<std::size_t> rank(k);  // the point's index among its face's points
   {
     const std::shared_lock<std::shared_mutex> lock(impl_->mutex);
     for_each_face_surface(
         *impl_->factory, face_ids, k,
         [&](const Bfr::Surface<double>& surface, int face, const std::size_t* first, const std::size_t* last) {
-          FaceStencils& out = stencils[std::lower_bound(faces.begin(), faces.end(), face) - faces.begin()];
+          FaceStencils& out = stencils[static_cast<std::size_t>(face_slot[static_cast<std::size_t>(face)])];
           const int n_cv = surface.GetNumControlPoints();
           thread_local std::vector<int> cv;
           thread_local std::vector<double> w, w2;
@@ -661,12 +663,17 @@ SurfaceRows LimitSurface::rows(const std::int32_t* face_ids, const double* uv, s
   const CsrMatrix& exact = impl_->exact.rows;
   SurfaceRows out;
   CsrMatrix* mats[6] = {&out.position, &out.du, &out.dv, &out.duu, &out.duv, &out.dvv};
+  // The rows are copied out in ranges of points, one per task.
+  const int copy_tasks = static_cast<int>(
+      std::clamp<std::size_t>(k / kRowsPerCopyTask, 1, static_cast<std::size_t>(detail::available_processors())));
   for (int d = 0; d < n_mats; ++d) {
     CsrMatrix& m = *mats[d];
     m.n_rows = k;
     m.n_cols = n_vertices();
     m.indptr.assign(k + 1, 0);
-    const auto stencil_of = [&](std::size_t i) -> const FaceStencils& { return stencils[face_slot[i]]; };
+    const auto stencil_of = [&](std::size_t i) -> const FaceStencils& {
+      return stencils[static_cast<std::size_t>(face_slot[static_cast<std::size_t>(face_ids[i])])];
+    };
     const auto from_b = [&](std::size_t i) { return d == 0 && !slots.empty() && slots[i] >= 0; };
     for (std::size_t i = 0; i < k; ++i) {
       const std::size_t width = from_b(i) ? static_cast<std::size_t>(exact.indptr[slots[i] + 1] - exact.indptr[slots[i]])
@@ -677,19 +684,19 @@ SurfaceRows LimitSurface::rows(const std::int32_t* face_ids, const double* uv, s
     }
     m.indices.resize(m.indptr[k]);
     m.data.resize(m.indptr[k]);
-    for (std::size_t i = 0; i < k; ++i) {
+    detail::for_each_index(copy_tasks > 1, copy_tasks, k, [&](std::size_t i) {
       const std::size_t at = m.indptr[i];
       if (from_b(i)) {
         const std::int32_t b0 = exact.indptr[slots[i]], b1 = exact.indptr[slots[i] + 1];
         std::copy(exact.indices.begin() + b0, exact.indices.begin() + b1, m.indices.begin() + at);
         std::copy(exact.data.begin() + b0, exact.data.begin() + b1, m.data.begin() + at);
-        continue;
+        return;
       }
       const FaceStencils& f = stencil_of(i);
       const std::size_t width = f.columns.size();
       std::copy(f.columns.begin(), f.columns.end(), m.indices.begin() + at);
       std::copy_n(f.weights[d].begin() + rank[i] * width, width, m.data.begin() + at);
-    }
+    });
   }
   return out;
 }
