@@ -9,7 +9,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
-#include <numeric>
+#include <memory>
 #include <sstream>
 #include <string>
 #include <time.h>
@@ -29,6 +29,12 @@ namespace {
 
 // Points per task of normal_sums' gathers, at least.
 constexpr std::size_t kPointsPerTask = 65536;
+
+// An array of n values left uninitialised (for one that is written in full before it is read).
+template <class T>
+std::unique_ptr<T[]> uninitialised(std::size_t n) {
+  return std::unique_ptr<T[]>(new T[n]);
+}
 
 double cpu_seconds() {
   timespec ts{};
@@ -322,7 +328,7 @@ NormalSums ApproximationChunk::normal_sums(const LimitSurface& surface, double t
   // The rows in face order (a stable counting sort by face): the points of a face share their columns, which the
   // normal matrix reads once.
   const std::size_t n_faces = surface.n_faces();
-  std::vector<std::size_t> order(k);
+  const std::unique_ptr<std::size_t[]> order = uninitialised<std::size_t>(k);
   {
     std::vector<std::size_t> start(n_faces + 1, 0);
     for (std::size_t i = 0; i < k; ++i) {
@@ -344,8 +350,10 @@ NormalSums ApproximationChunk::normal_sums(const LimitSurface& surface, double t
       body(k * u / nt, k * (u + 1) / nt);
     });
   };
-  std::vector<std::int32_t> face_o(k);
-  std::vector<double> uv_o(2 * k);
+  // The per-point arrays are left uninitialised here and written by the tasks (a page of memory is then first
+  // touched by a task, in parallel).
+  std::unique_ptr<std::int32_t[]> face_o = uninitialised<std::int32_t>(k);
+  std::unique_ptr<double[]> uv_o = uninitialised<double>(2 * k);
   in_ranges([&](std::size_t i0, std::size_t i1) {
     for (std::size_t i = i0; i < i1; ++i) {
       const std::size_t o = order[i];
@@ -354,17 +362,15 @@ NormalSums ApproximationChunk::normal_sums(const LimitSurface& surface, double t
       uv_o[2 * i + 1] = current.uv[2 * o + 1];
     }
   });
-  CsrMatrix A = surface.rows(face_o.data(), uv_o.data(), k, 0).position;
+  CsrMatrix A = surface.rows(face_o.get(), uv_o.get(), k, 0).position;
   out.rows_seconds = detail::seconds_since(t0);
   out.rows_cpu = cpu_seconds() - c0;
-  std::vector<double>().swap(uv_o);
-  std::vector<std::int32_t>().swap(face_o);
-  std::vector<double> points_o(3 * k), w_o, wp(3 * k), w6, normals_o;
-  if (weighted) w_o.resize(k);
-  if (blend) {
-    normals_o.resize(3 * k);
-    w6.resize(6 * k);
-  }
+  uv_o.reset();
+  face_o.reset();
+  const std::unique_ptr<double[]> points_o = uninitialised<double>(3 * k), wp = uninitialised<double>(3 * k),
+                                  w_o = uninitialised<double>(weighted ? k : 0),
+                                  normals_o = uninitialised<double>(blend ? 3 * k : 0),
+                                  w6 = uninitialised<double>(blend ? 6 * k : 0);
   in_ranges([&](std::size_t i0, std::size_t i1) {
     for (std::size_t i = i0; i < i1; ++i) {
       const std::size_t o = order[i];
@@ -382,14 +388,14 @@ NormalSums ApproximationChunk::normal_sums(const LimitSurface& surface, double t
   const double* w = nullptr;
   int count = 0;
   if (blend) {
-    w = w6.data();
+    w = w6.get();
     count = 6;
   } else if (weighted) {
-    w = w_o.data();
+    w = w_o.get();
     count = 1;
   }
   out.matrix = normal_matrix(A, w, count);
-  out.rhs = transposed_times(A, wp.data());
+  out.rhs = transposed_times(A, wp.get());
   return out;
 }
 
