@@ -632,13 +632,16 @@ void refine(const LimitSurface& surface, const Topology& topology, const double*
     if (fp.face_ids[i] < 0 || fp.face_ids[i] >= m)
       throw ParameterError("face_ids[" + std::to_string(i) + "] = " + std::to_string(fp.face_ids[i]) +
                            " is out of range [0, " + std::to_string(m) + ")");
-  const std::unique_ptr<Slot[]> slots(new Slot[n]);  // each field set below
+  // Each field set below, in parallel, where the slots are first written (so that their memory is touched first by
+  // the tasks).
+  const std::unique_ptr<Slot[]> slots(new Slot[n]);
+  // The points in the order of their starting faces (a counting sort): slot s holds point point_of[s].
+  std::vector<std::size_t> point_of(n);
   {
-    // The points in the order of their starting faces (a counting sort).
     std::vector<std::size_t> start(static_cast<std::size_t>(m) + 1, 0);
     for (std::size_t i = 0; i < n; ++i) ++start[static_cast<std::size_t>(fp.face_ids[i]) + 1];
     for (std::size_t f = 1; f < start.size(); ++f) start[f] += start[f - 1];
-    for (std::size_t i = 0; i < n; ++i) slots[start[static_cast<std::size_t>(fp.face_ids[i])]++].point = i;
+    for (std::size_t i = 0; i < n; ++i) point_of[start[static_cast<std::size_t>(fp.face_ids[i])]++] = i;
   }
   // The Gauss-Newton step at q's best point, in (u, v), within the trust
   // region: false when the point is final, else q's current point has moved
@@ -683,7 +686,7 @@ void refine(const LimitSurface& surface, const Topology& topology, const double*
   const int tasks = task_count(n, 16384);
   detail::for_each_index(tasks > 1, tasks, n, [&](std::size_t s) {
     Slot& q = slots[s];
-    const std::size_t i = q.point;
+    const std::size_t i = q.point = point_of[s];
     std::copy_n(points + 3 * i, 3, q.x);
     q.face = q.best_face = fp.face_ids[i];
     q.chart = q.best_chart = dom.from_uv(q.face, &fp.uv[2 * i], q.ab);
@@ -715,9 +718,9 @@ void refine(const LimitSurface& surface, const Topology& topology, const double*
     // then taken in that face in the first round.
     step(q);
   });
-  // The inputs are in the slots now.
-  std::vector<std::int32_t>().swap(fp.face_ids);
-  std::vector<double>().swap(fp.uv);
+  // The inputs are in the slots now; their arrays are kept for the outputs (as are any of fp's other arrays of
+  // the right size: written in place).
+  std::vector<std::size_t>().swap(point_of);
   // Each round visits the faces the pending points are in, and runs each
   // point's steps there (the face's patch prepared once) until the point is
   // done or crosses into another face, where the next round takes it on.

@@ -262,6 +262,8 @@ DistanceSums ApproximationChunk::refine(const LimitSurface& surface, const Footp
   Footpoints from;
   from.face_ids = std::move(current.face_ids);
   from.uv = std::move(current.uv);
+  from.distances = std::move(current.distances);  // written in place
+  from.normals = std::move(current.normals);
   FootpointOptions refine = options;
   refine.grid = 0;
   refine_footpoints(surface, surface.topology(), points_.data(), k_, refine, from);

@@ -512,9 +512,7 @@ struct FaceStencils {
 void LimitSurface::visit_faces(const std::int32_t* face_ids, std::size_t k,
                                const std::function<void(std::int32_t, const std::size_t*, const std::size_t*,
                                                         const FaceEvaluation&)>& visit) const {
-  // The faces' checks: (0, 0) lies in every face's domain.
-  const std::vector<double> origin(2 * k, 0.0);
-  checked_params(face_ids, origin.data(), k);
+  check_faces(face_ids, k);
   const std::shared_lock<std::shared_mutex> lock(impl_->mutex);
   const double* mesh_points = &impl_->points.data()->x;
   const Bfr::Surface<double>::PointDescriptor desc(3);
@@ -529,12 +527,9 @@ void LimitSurface::visit_faces(const std::int32_t* face_ids, std::size_t k,
                         });
 }
 
-std::vector<double> LimitSurface::checked_params(const std::int32_t* face_ids, const double* uv,
-                                                 std::size_t k) const {
+void LimitSurface::check_faces(const std::int32_t* face_ids, std::size_t k) const {
   const std::size_t n_f = n_faces();
-  const BfrSurfaces& factory = *impl_->factory;
   const auto& level0 = impl_->base.refiner->GetLevel(0);
-  std::vector<double> params(uv, uv + 2 * k);
   for (std::size_t i = 0; i < k; ++i) {
     const std::int32_t f = face_ids[i];
     if (f < 0 || static_cast<std::size_t>(f) >= n_f)
@@ -549,8 +544,16 @@ std::vector<double> LimitSurface::checked_params(const std::int32_t* face_ids, c
                       ", an interior vertex of two faces with one infinitely sharp edge, where OpenSubdiv's Bfr "
                       "before 3.6.1 (this build has " + std::to_string(OPENSUBDIV_VERSION_NUMBER) +
                       ") evaluates no valid surface: remove that sharp edge, or split the vertex's faces");
-    check_uv(factory.parameterization(f), i, params[2 * i], params[2 * i + 1]);
   }
+}
+
+std::vector<double> LimitSurface::checked_params(const std::int32_t* face_ids, const double* uv,
+                                                 std::size_t k) const {
+  check_faces(face_ids, k);
+  const BfrSurfaces& factory = *impl_->factory;
+  std::vector<double> params(uv, uv + 2 * k);
+  for (std::size_t i = 0; i < k; ++i)
+    check_uv(factory.parameterization(face_ids[i]), i, params[2 * i], params[2 * i + 1]);
   return params;
 }
 

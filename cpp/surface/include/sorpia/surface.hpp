@@ -224,6 +224,8 @@ class LimitSurface {
   // The parameters of k points after evaluate()'s checks (pulled onto the
   // domain where a rounding error outside).
   std::vector<double> checked_params(const std::int32_t* face_ids, const double* uv, std::size_t k) const;
+  // evaluate()'s checks of the faces alone (checked_params makes them too).
+  void check_faces(const std::int32_t* face_ids, std::size_t k) const;
   // For each point at the corner of a vertex whose position comes from B
   // (Impl::exact), its row in the exact rows, else -1; empty when none.
   std::vector<std::int32_t> exact_corners(const std::int32_t* face_ids, const double* params, std::size_t k) const;
