@@ -44,7 +44,7 @@ double cpu_seconds() {
 
 // y (n, 3) = A^T x for A (k, n) and x (k, 3): row by row of A in order, each entry's product added to its
 // column's row of y (the order of scipy's A.T @ x, which the driver replaced).
-std::vector<double> transposed_times(const CsrMatrix& a, const double* x) {
+std::vector<double> transposed_times(const CsrRows& a, const double* x) {
   std::vector<double> y(3 * a.n_cols, 0.0);
   for (std::size_t r = 0; r < a.n_rows; ++r)
     for (std::int32_t p = a.indptr[r]; p < a.indptr[r + 1]; ++p) {
@@ -364,7 +364,8 @@ NormalSums ApproximationChunk::normal_sums(const LimitSurface& surface, double t
       uv_o[2 * i + 1] = current.uv[2 * o + 1];
     }
   });
-  CsrMatrix A = surface.rows(face_o.get(), uv_o.get(), k, 0).position;
+  const PositionRows rows = surface.position_rows(face_o.get(), uv_o.get(), k);
+  const CsrRows A{rows.n_rows, rows.n_cols, rows.indptr.data(), rows.indices.get(), rows.data.get()};
   out.rows_seconds = detail::seconds_since(t0);
   out.rows_cpu = cpu_seconds() - c0;
   uv_o.reset();

@@ -593,6 +593,36 @@ void LimitSurface::evaluate(const std::int32_t* face_ids, const double* uv, std:
 }
 
 SurfaceRows LimitSurface::rows(const std::int32_t* face_ids, const double* uv, std::size_t k, int derivatives) const {
+  SurfaceRows out;
+  CsrMatrix* mats[6] = {&out.position, &out.du, &out.dv, &out.duu, &out.duv, &out.dvv};
+  make_rows(face_ids, uv, k, derivatives, [&](int d, std::vector<std::int32_t>&& indptr) {
+    CsrMatrix& m = *mats[d];
+    m.n_rows = k;
+    m.n_cols = n_vertices();
+    m.indptr = std::move(indptr);
+    m.indices.resize(static_cast<std::size_t>(m.indptr[k]));
+    m.data.resize(static_cast<std::size_t>(m.indptr[k]));
+    return RowsTarget{m.indptr.data(), m.indices.data(), m.data.data()};
+  });
+  return out;
+}
+
+PositionRows LimitSurface::position_rows(const std::int32_t* face_ids, const double* uv, std::size_t k) const {
+  PositionRows out;
+  out.n_rows = k;
+  out.n_cols = n_vertices();
+  make_rows(face_ids, uv, k, 0, [&](int, std::vector<std::int32_t>&& indptr) {
+    out.indptr = std::move(indptr);
+    const auto nnz = static_cast<std::size_t>(out.indptr[k]);
+    out.indices.reset(new std::int32_t[nnz]);
+    out.data.reset(new double[nnz]);
+    return RowsTarget{out.indptr.data(), out.indices.get(), out.data.get()};
+  });
+  return out;
+}
+
+void LimitSurface::make_rows(const std::int32_t* face_ids, const double* uv, std::size_t k, int derivatives,
+                             const RowsStore& store) const {
   if (derivatives < 0 || derivatives > 2)
     throw ParameterError("derivatives = " + std::to_string(derivatives) +
                          " must be 0 (positions), 1 (and first derivatives) or 2 (and second derivatives)");
@@ -664,16 +694,11 @@ SurfaceRows LimitSurface::rows(const std::int32_t* face_ids, const double* uv, s
   // Points at the corner of a vertex whose position row is B's (see evaluate()).
   const std::vector<std::int32_t> slots = exact_corners(face_ids, params.data(), k);
   const CsrMatrix& exact = impl_->exact.rows;
-  SurfaceRows out;
-  CsrMatrix* mats[6] = {&out.position, &out.du, &out.dv, &out.duu, &out.duv, &out.dvv};
   // The rows are copied out in ranges of points, one per task.
   const int copy_tasks = static_cast<int>(
       std::clamp<std::size_t>(k / kRowsPerCopyTask, 1, static_cast<std::size_t>(detail::available_processors())));
   for (int d = 0; d < n_mats; ++d) {
-    CsrMatrix& m = *mats[d];
-    m.n_rows = k;
-    m.n_cols = n_vertices();
-    m.indptr.assign(k + 1, 0);
+    std::vector<std::int32_t> indptr(k + 1, 0);
     const auto stencil_of = [&](std::size_t i) -> const FaceStencils& {
       return stencils[static_cast<std::size_t>(face_slot[static_cast<std::size_t>(face_ids[i])])];
     };
@@ -681,27 +706,25 @@ SurfaceRows LimitSurface::rows(const std::int32_t* face_ids, const double* uv, s
     for (std::size_t i = 0; i < k; ++i) {
       const std::size_t width = from_b(i) ? static_cast<std::size_t>(exact.indptr[slots[i] + 1] - exact.indptr[slots[i]])
                                           : stencil_of(i).columns.size();
-      if (width > static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max() - m.indptr[i]))
+      if (width > static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max() - indptr[i]))
         throw ParameterError("rows: more than 2^31 - 1 weights in all; ask for fewer points at a time");
-      m.indptr[i + 1] = m.indptr[i] + static_cast<std::int32_t>(width);
+      indptr[i + 1] = indptr[i] + static_cast<std::int32_t>(width);
     }
-    m.indices.resize(m.indptr[k]);
-    m.data.resize(m.indptr[k]);
+    const RowsTarget to = store(d, std::move(indptr));
     detail::for_each_index(copy_tasks > 1, copy_tasks, k, [&](std::size_t i) {
-      const std::size_t at = m.indptr[i];
+      const auto at = static_cast<std::size_t>(to.indptr[i]);
       if (from_b(i)) {
         const std::int32_t b0 = exact.indptr[slots[i]], b1 = exact.indptr[slots[i] + 1];
-        std::copy(exact.indices.begin() + b0, exact.indices.begin() + b1, m.indices.begin() + at);
-        std::copy(exact.data.begin() + b0, exact.data.begin() + b1, m.data.begin() + at);
+        std::copy(exact.indices.begin() + b0, exact.indices.begin() + b1, to.indices + at);
+        std::copy(exact.data.begin() + b0, exact.data.begin() + b1, to.data + at);
         return;
       }
       const FaceStencils& f = stencil_of(i);
       const std::size_t width = f.columns.size();
-      std::copy(f.columns.begin(), f.columns.end(), m.indices.begin() + at);
-      std::copy_n(f.weights[d].begin() + rank[i] * width, width, m.data.begin() + at);
+      std::copy(f.columns.begin(), f.columns.end(), to.indices + at);
+      std::copy_n(f.weights[d].begin() + rank[i] * width, width, to.data + at);
     });
   }
-  return out;
 }
 
 FaceControlPoints LimitSurface::control_points(const std::int32_t* face_ids, std::size_t k) const {
