@@ -46,10 +46,12 @@ NormalMatrix normal_matrix(const CsrMatrix& rows, const double* weights, int wei
                        weights, weight_count);
 }
 
-NormalMatrix normal_matrix(const CsrRows& A, const double* weights, int weight_count) {
+NormalMatrix normal_matrix(const CsrRows& A, const double* weights, int weight_count, const double* x,
+                           double* rhs) {
   if (weight_count != 0 && weight_count != 1 && weight_count != 6)
     throw ParameterError("weight_count must be 0, 1 or 6, got " + std::to_string(weight_count));
   const std::size_t k = A.n_rows, n = A.n_cols;
+  const bool with_rhs = x != nullptr && rhs != nullptr;
   const int nb = weight_count == 6 ? 6 : 1;
   const auto unb = static_cast<std::size_t>(nb);
   // Runs of consecutive rows with the same columns (the points of one face,
@@ -104,6 +106,7 @@ NormalMatrix normal_matrix(const CsrRows& A, const double* weights, int weight_c
     for (std::size_t i = first; i < last; ++i) {
       if (t == 0 && (i - first) % 1024 == 0) poll_interrupt();
       touched.clear();
+      double y[3] = {0.0, 0.0, 0.0};  // row i of A^T x
       for (std::int64_t q = col_ptr[i]; q < col_ptr[i + 1]; ++q) {
         const auto run = static_cast<std::size_t>(col_runs[static_cast<std::size_t>(q)]);
         const std::int32_t li = col_pos[static_cast<std::size_t>(q)];
@@ -111,6 +114,11 @@ NormalMatrix normal_matrix(const CsrRows& A, const double* weights, int weight_c
         const std::int32_t m = A.indptr[r0 + 1] - A.indptr[r0];
         const std::int32_t* cols = A.indices + A.indptr[r0];
         const auto width = static_cast<std::size_t>(m - li);
+        if (with_rhs)
+          for (std::size_t r = r0; r < r1; ++r) {
+            const double a = A.data[A.indptr[r] + li];
+            for (std::size_t c = 0; c < 3; ++c) y[c] += a * x[3 * r + c];
+          }
         // Row li of the run's Gram matrix from column li on, sum_r w_r a_r[li] a_r[li:] ((width, nb) row-major),
         // added at its columns.
         row.assign(width * unb, 0.0);
@@ -129,6 +137,7 @@ NormalMatrix normal_matrix(const CsrRows& A, const double* weights, int weight_c
           for (std::size_t c = 0; c < unb; ++c) dst[c] += row[b * unb + c];
         }
       }
+      if (with_rhs) std::copy_n(y, 3, rhs + 3 * i);
       std::sort(touched.begin(), touched.end());
       up.row_len[i] = static_cast<std::int64_t>(touched.size());
       for (const std::int32_t j : touched) {

@@ -42,19 +42,6 @@ double cpu_seconds() {
   return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
 }
 
-// y (n, 3) = A^T x for A (k, n) and x (k, 3): row by row of A in order, each entry's product added to its
-// column's row of y (the order of scipy's A.T @ x, which the driver replaced).
-std::vector<double> transposed_times(const CsrRows& a, const double* x) {
-  std::vector<double> y(3 * a.n_cols, 0.0);
-  for (std::size_t r = 0; r < a.n_rows; ++r)
-    for (std::int32_t p = a.indptr[r]; p < a.indptr[r + 1]; ++p) {
-      const double w = a.data[static_cast<std::size_t>(p)];
-      double* yj = &y[3 * static_cast<std::size_t>(a.indices[static_cast<std::size_t>(p)])];
-      for (std::size_t c = 0; c < 3; ++c) yj[c] += w * x[3 * r + c];
-    }
-  return y;
-}
-
 ApproximationChunk::State from_footpoints(Footpoints&& f) {
   ApproximationChunk::State s;
   s.face_ids = std::move(f.face_ids);
@@ -397,8 +384,8 @@ NormalSums ApproximationChunk::normal_sums(const LimitSurface& surface, double t
     w = w_o.get();
     count = 1;
   }
-  out.matrix = normal_matrix(A, w, count);
-  out.rhs = transposed_times(A, wp.get());
+  out.rhs.resize(3 * A.n_cols);
+  out.matrix = normal_matrix(A, w, count, wp.get(), out.rhs.data());
   return out;
 }
 
