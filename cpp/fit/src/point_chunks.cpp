@@ -331,8 +331,7 @@ NormalSums ApproximationChunk::normal_sums(const LimitSurface& surface, double t
     for (std::size_t i = 0; i < k; ++i) order[start[static_cast<std::size_t>(current.face_ids[i])]++] = i;
   }
   // The per-point gathers and weights below, in ranges of points per task (each point's values alone).
-  const int tasks = static_cast<int>(
-      std::clamp<std::size_t>(k / kPointsPerTask, 1, static_cast<std::size_t>(detail::available_processors())));
+  const int tasks = detail::task_count(k, kPointsPerTask);
   const auto in_ranges = [&](auto&& body) {
     detail::for_each_task(tasks > 1, tasks, [&](int t) {
       const auto u = static_cast<std::size_t>(t), nt = static_cast<std::size_t>(tasks);

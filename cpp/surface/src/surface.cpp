@@ -695,8 +695,7 @@ void LimitSurface::make_rows(const std::int32_t* face_ids, const double* uv, std
   const std::vector<std::int32_t> slots = exact_corners(face_ids, params.data(), k);
   const CsrMatrix& exact = impl_->exact.rows;
   // The rows are copied out in ranges of points, one per task.
-  const int copy_tasks = static_cast<int>(
-      std::clamp<std::size_t>(k / kRowsPerCopyTask, 1, static_cast<std::size_t>(detail::available_processors())));
+  const int copy_tasks = detail::task_count(k, kRowsPerCopyTask);
   for (int d = 0; d < n_mats; ++d) {
     std::vector<std::int32_t> indptr(k + 1, 0);
     const auto stencil_of = [&](std::size_t i) -> const FaceStencils& {
