@@ -18,6 +18,7 @@
 #include "sorpia/fairness.hpp"
 #include "sorpia/footpoints.hpp"
 #include "sorpia/interpolator.hpp"
+#include "sorpia/normal_matrix.hpp"
 #include "sorpia/refine.hpp"
 #include "sorpia/shapes.hpp"
 #include "sorpia/surface.hpp"
@@ -224,6 +225,48 @@ std::vector<double> dense_update(const TinyFit& fit, double fairness, double tan
     rhs[i] += mu * fit.start[i];
   }
   return dense_solve(M, rhs, m);
+}
+
+TEST(NormalMatrix, RhsIsTheRowByRowProductBitForBit) {
+  // normal_matrix's A^T x alongside A^T W A equals the product summed row by row in order (the same additions:
+  // bit for bit), and the matrix is the one made without it: rows in runs of equal columns (a face's points) and
+  // alone, enough entries for several tasks.
+  std::mt19937 rng(5);
+  const std::size_t n = 400;
+  std::vector<std::int32_t> indptr{0}, indices;
+  std::vector<double> data;
+  while (indices.size() < 200000) {
+    std::vector<std::int32_t> cols(n);
+    for (std::size_t j = 0; j < n; ++j) cols[j] = static_cast<std::int32_t>(j);
+    std::shuffle(cols.begin(), cols.end(), rng);
+    cols.resize(6 + rng() % 14);
+    std::sort(cols.begin(), cols.end());
+    for (std::size_t r = 0, run = 1 + rng() % 40; r < run; ++r) {
+      for (const std::int32_t c : cols) {
+        indices.push_back(c);
+        data.push_back(std::uniform_real_distribution<double>(-1.0, 1.0)(rng));
+      }
+      indptr.push_back(static_cast<std::int32_t>(indices.size()));
+    }
+  }
+  const std::size_t k = indptr.size() - 1;
+  const sorpia::CsrRows a{k, n, indptr.data(), indices.data(), data.data()};
+  std::vector<double> x(3 * k), w(6 * k);
+  for (double& v : x) v = std::uniform_real_distribution<double>(-2.0, 2.0)(rng);
+  for (double& v : w) v = std::uniform_real_distribution<double>(0.0, 1.0)(rng);
+  std::vector<double> expected(3 * n, 0.0);
+  for (std::size_t r = 0; r < k; ++r)
+    for (std::int32_t p = indptr[r]; p < indptr[r + 1]; ++p)
+      for (std::size_t c = 0; c < 3; ++c) expected[3 * static_cast<std::size_t>(indices[p]) + c] += data[p] * x[3 * r + c];
+  for (const int count : {0, 6}) {
+    std::vector<double> rhs(3 * n, -1.0);
+    const sorpia::NormalMatrix with = sorpia::normal_matrix(a, count ? w.data() : nullptr, count, x.data(), rhs.data());
+    const sorpia::NormalMatrix without = sorpia::normal_matrix(a, count ? w.data() : nullptr, count);
+    EXPECT_EQ(rhs, expected) << count;
+    EXPECT_EQ(with.indptr, without.indptr);
+    EXPECT_EQ(with.indices, without.indices);
+    EXPECT_EQ(with.values, without.values);
+  }
 }
 
 TEST(Approximate, OneUpdateEqualsADenseSolveOfItsNormalEquations) {

@@ -210,4 +210,43 @@ TEST(LimitSurface, PreparedPatchPointsFollowTheControlVertices) {
   }
 }
 
+TEST(LimitSurface, PositionRowsAreRowsPositionMatrix) {
+  // position_rows holds rows()'s position matrix, entry for entry, also for
+  // more points than one task copies (several tasks) and at faces' corners;
+  // and that matrix times the control vertices is evaluate()'s positions.
+  for (const auto scheme : {sorpia::Scheme::Loop, sorpia::Scheme::CatmullClark}) {
+    const sorpia::Mesh mesh = scheme == sorpia::Scheme::Loop ? sorpia::irregular(200) : sorpia::polygon_torus(8, 5, 2);
+    const sorpia::Topology t(mesh);
+    const std::size_t m = t.n_faces(), k = 150000;
+    const double params[3][2] = {{0.3, 0.2}, {0.0, 0.0}, {0.1, 0.45}};
+    std::vector<std::int32_t> ids(k);
+    std::vector<double> uvs(2 * k);
+    for (std::size_t i = 0; i < k; ++i) {
+      ids[i] = static_cast<std::int32_t>((7 * i) % m);
+      std::copy_n(params[i % 3], 2, &uvs[2 * i]);
+    }
+    const sorpia::LimitSurface s(t, mesh.vertices.data(), scheme, Boundary::EdgeAndCorner);
+    const sorpia::CsrMatrix a = s.rows(ids.data(), uvs.data(), k, 1).position;
+    const sorpia::PositionRows b = s.position_rows(ids.data(), uvs.data(), k);
+    ASSERT_EQ(b.n_rows, a.n_rows);
+    ASSERT_EQ(b.n_cols, a.n_cols);
+    ASSERT_EQ(b.indptr, a.indptr);
+    const auto nnz = static_cast<std::size_t>(a.indptr[k]);
+    EXPECT_TRUE(std::equal(a.indices.begin(), a.indices.end(), b.indices.get()));
+    EXPECT_TRUE(std::equal(a.data.begin(), a.data.end(), b.data.get()));
+    ASSERT_EQ(a.indices.size(), nnz);
+    std::vector<double> positions(3 * k);
+    s.evaluate(ids.data(), uvs.data(), k, positions.data(), nullptr, nullptr, nullptr);
+    double worst = 0.0;
+    for (std::size_t i = 0; i < k; ++i)
+      for (int c = 0; c < 3; ++c) {
+        double p = 0.0;
+        for (auto q = static_cast<std::size_t>(b.indptr[i]); q < static_cast<std::size_t>(b.indptr[i + 1]); ++q)
+          p += b.data[q] * mesh.vertices[3 * static_cast<std::size_t>(b.indices[q]) + c];
+        worst = std::max(worst, std::abs(p - positions[3 * i + c]));
+      }
+    EXPECT_LT(worst, 1e-12) << "scheme " << static_cast<int>(scheme);
+  }
+}
+
 }  // namespace

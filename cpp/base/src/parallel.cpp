@@ -150,6 +150,12 @@ int available_processors() {
   return thread_cap > 0 ? std::min(n, thread_cap) : n;
 }
 
+int task_count(std::size_t n, std::size_t per_task) {
+  const std::size_t want = (n + per_task - 1) / per_task;
+  return static_cast<int>(
+      std::max<std::size_t>(1, std::min<std::size_t>(want, static_cast<std::size_t>(available_processors()))));
+}
+
 ThreadCap::ThreadCap(int n) : previous_(thread_cap) {
   if (n >= 1) thread_cap = previous_ > 0 ? std::min(previous_, n) : n;
 }

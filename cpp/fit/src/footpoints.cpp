@@ -45,12 +45,6 @@ void push_children(const std::vector<Node>& nodes, const Node& nd, const double*
   stack.push_back(a_first ? nd.left : nd.left + 1);
 }
 
-int task_count(std::size_t n, std::size_t per_task) {
-  const std::size_t want = (n + per_task - 1) / per_task;
-  return static_cast<int>(std::max<std::size_t>(
-      1, std::min<std::size_t>(want, static_cast<std::size_t>(detail::available_processors()))));
-}
-
 }  // namespace
 
 PointIndex::PointIndex(const double* points, std::size_t n) : n_(n) {
@@ -65,7 +59,7 @@ PointIndex::PointIndex(const double* points, std::size_t n) : n_(n) {
   // The top levels on this thread, down to one subtree per task; the
   // subtrees (disjoint ranges of order_) on the core's threads, each into
   // nodes of its own, appended after.
-  const int tasks = task_count(n, 65536);
+  const int tasks = detail::task_count(n, 65536);
   int depth = 0;
   while ((1 << depth) < tasks) ++depth;
   std::vector<std::array<std::uint32_t, 3>> subtrees;  // (node, begin, end)
@@ -159,7 +153,7 @@ std::vector<std::size_t> spatial_order(const double* p, std::size_t k) {
   std::vector<std::pair<std::uint64_t, std::size_t>> keyed(k);
   // Keys and sorted runs on the core's threads, the runs merged after (the
   // pairs are distinct: the same order as one sort).
-  const int tasks = task_count(k, 65536);
+  const int tasks = detail::task_count(k, 65536);
   std::vector<std::size_t> run_start(static_cast<std::size_t>(tasks) + 1);
   for (int t = 0; t <= tasks; ++t)
     run_start[static_cast<std::size_t>(t)] = k * static_cast<std::size_t>(t) / static_cast<std::size_t>(tasks);
@@ -188,7 +182,7 @@ std::vector<std::size_t> spatial_order(const double* p, std::size_t k) {
 
 void PointIndex::nearest(const double* queries, std::size_t k, std::int64_t* index, double* distance) const {
   const std::vector<std::size_t> order = spatial_order(queries, k);
-  const int tasks = task_count(k, 4096);
+  const int tasks = detail::task_count(k, 4096);
   detail::for_each_task(tasks > 1, tasks, [&](int t) {
     std::vector<std::uint32_t> stack;
     stack.reserve(64);
@@ -632,13 +626,16 @@ void refine(const LimitSurface& surface, const Topology& topology, const double*
     if (fp.face_ids[i] < 0 || fp.face_ids[i] >= m)
       throw ParameterError("face_ids[" + std::to_string(i) + "] = " + std::to_string(fp.face_ids[i]) +
                            " is out of range [0, " + std::to_string(m) + ")");
-  const std::unique_ptr<Slot[]> slots(new Slot[n]);  // each field set below
+  // Each field set below, in parallel, where the slots are first written (so that their memory is touched first by
+  // the tasks).
+  const std::unique_ptr<Slot[]> slots(new Slot[n]);
+  // The points in the order of their starting faces (a counting sort): slot s holds point point_of[s].
+  std::vector<std::size_t> point_of(n);
   {
-    // The points in the order of their starting faces (a counting sort).
     std::vector<std::size_t> start(static_cast<std::size_t>(m) + 1, 0);
     for (std::size_t i = 0; i < n; ++i) ++start[static_cast<std::size_t>(fp.face_ids[i]) + 1];
     for (std::size_t f = 1; f < start.size(); ++f) start[f] += start[f - 1];
-    for (std::size_t i = 0; i < n; ++i) slots[start[static_cast<std::size_t>(fp.face_ids[i])]++].point = i;
+    for (std::size_t i = 0; i < n; ++i) point_of[start[static_cast<std::size_t>(fp.face_ids[i])]++] = i;
   }
   // The Gauss-Newton step at q's best point, in (u, v), within the trust
   // region: false when the point is final, else q's current point has moved
@@ -680,10 +677,10 @@ void refine(const LimitSurface& surface, const Topology& topology, const double*
     return true;
   };
   const double radius0 = 1.0 / std::max(1, options.grid > 0 ? options.grid : 4);
-  const int tasks = task_count(n, 16384);
+  const int tasks = detail::task_count(n, 16384);
   detail::for_each_index(tasks > 1, tasks, n, [&](std::size_t s) {
     Slot& q = slots[s];
-    const std::size_t i = q.point;
+    const std::size_t i = q.point = point_of[s];
     std::copy_n(points + 3 * i, 3, q.x);
     q.face = q.best_face = fp.face_ids[i];
     q.chart = q.best_chart = dom.from_uv(q.face, &fp.uv[2 * i], q.ab);
@@ -715,9 +712,9 @@ void refine(const LimitSurface& surface, const Topology& topology, const double*
     // then taken in that face in the first round.
     step(q);
   });
-  // The inputs are in the slots now.
-  std::vector<std::int32_t>().swap(fp.face_ids);
-  std::vector<double>().swap(fp.uv);
+  // The inputs are in the slots now; their arrays are kept for the outputs (as are any of fp's other arrays of
+  // the right size: written in place).
+  std::vector<std::size_t>().swap(point_of);
   // Each round visits the faces the pending points are in, and runs each
   // point's steps there (the face's patch prepared once) until the point is
   // done or crosses into another face, where the next round takes it on.
@@ -917,7 +914,7 @@ std::size_t FootpointSearch::closer(const double* points, std::size_t n, Footpoi
   for (std::size_t first = 0; first < n; first += kBatch) {
     poll_interrupt();
     const std::size_t b = std::min(kBatch, n - first);
-    const int tasks = task_count(b, 4096);
+    const int tasks = detail::task_count(b, 4096);
     index_->nearest(points + 3 * first, b, nearest_sample.data(), nearest_distance.data());
     detail::for_each_index(tasks > 1, tasks, b, [&](std::size_t j) {
       const std::size_t i = first + j;

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <type_traits>
+#include <vector>
 
 #include "sorpia/detail/parallel.hpp"
 #include "sorpia/errors.hpp"
@@ -24,19 +26,40 @@ struct Upper {
   std::vector<std::vector<double>> part_val;
 };
 
+// Columns of a run's Gram row summed at once by gram_row, their sums held in registers.
+constexpr std::size_t kGramColumns = 4;
+
 // out[b * NB + c] += sum over the rows r0 .. r1 - 1 (a run with the same columns) of w_r[c] a_r[li] a_r[li + b],
-// b < width; w_r = weights[NB r ..] (1 when null). The weights' count a constant, so that each a_r[li + b] is
-// read once for all NB sums.
+// b < width, each sum added up over the rows in their order; w_r = weights[NB r ..] (1 when null). The weights'
+// count a constant, so that each a_r[li + b] is read once for all NB sums; `scaled` holds w_r[c] a_r[li] per row.
 template <int NB>
 void gram_row(const CsrRows& A, const double* weights, std::size_t r0, std::size_t r1, std::int32_t li,
-              std::size_t width, double* out) {
+              std::size_t width, double* out, std::vector<double>& scaled) {
+  scaled.resize((r1 - r0) * NB);
   for (std::size_t r = r0; r < r1; ++r) {
-    const double* a = A.data + A.indptr[r] + li;
-    double w[NB];
-    for (int c = 0; c < NB; ++c) w[c] = a[0] * (weights == nullptr ? 1.0 : weights[NB * r + static_cast<std::size_t>(c)]);
-    for (std::size_t b = 0; b < width; ++b)
-      for (int c = 0; c < NB; ++c) out[b * NB + static_cast<std::size_t>(c)] += w[c] * a[b];
+    const double a0 = A.data[A.indptr[r] + li];
+    for (int c = 0; c < NB; ++c)
+      scaled[(r - r0) * NB + static_cast<std::size_t>(c)] =
+          a0 * (weights == nullptr ? 1.0 : weights[NB * r + static_cast<std::size_t>(c)]);
   }
+  // kGramColumns columns at a time (then one at a time), each sum in a register over all the rows.
+  const auto columns = [&](std::size_t b, auto count) {
+    constexpr std::size_t kCount = decltype(count)::value;
+    double acc[kCount][NB];
+    for (std::size_t j = 0; j < kCount; ++j)
+      for (int c = 0; c < NB; ++c) acc[j][c] = out[(b + j) * NB + static_cast<std::size_t>(c)];
+    for (std::size_t r = r0; r < r1; ++r) {
+      const double* a = A.data + A.indptr[r] + li + b;
+      const double* w = &scaled[(r - r0) * NB];
+      for (std::size_t j = 0; j < kCount; ++j)
+        for (int c = 0; c < NB; ++c) acc[j][c] += w[c] * a[j];
+    }
+    for (std::size_t j = 0; j < kCount; ++j)
+      for (int c = 0; c < NB; ++c) out[(b + j) * NB + static_cast<std::size_t>(c)] = acc[j][c];
+  };
+  std::size_t b = 0;
+  for (; b + kGramColumns <= width; b += kGramColumns) columns(b, std::integral_constant<std::size_t, kGramColumns>{});
+  for (; b < width; ++b) columns(b, std::integral_constant<std::size_t, 1>{});
 }
 
 }  // namespace
@@ -46,10 +69,12 @@ NormalMatrix normal_matrix(const CsrMatrix& rows, const double* weights, int wei
                        weights, weight_count);
 }
 
-NormalMatrix normal_matrix(const CsrRows& A, const double* weights, int weight_count) {
+NormalMatrix normal_matrix(const CsrRows& A, const double* weights, int weight_count, const double* x,
+                           double* rhs) {
   if (weight_count != 0 && weight_count != 1 && weight_count != 6)
     throw ParameterError("weight_count must be 0, 1 or 6, got " + std::to_string(weight_count));
   const std::size_t k = A.n_rows, n = A.n_cols;
+  const bool with_rhs = x != nullptr && rhs != nullptr;
   const int nb = weight_count == 6 ? 6 : 1;
   const auto unb = static_cast<std::size_t>(nb);
   // Runs of consecutive rows with the same columns (the points of one face,
@@ -98,12 +123,13 @@ NormalMatrix normal_matrix(const CsrRows& A, const double* weights, int weight_c
     const std::size_t first = n * static_cast<std::size_t>(t) / static_cast<std::size_t>(tasks);
     const std::size_t last = n * static_cast<std::size_t>(t + 1) / static_cast<std::size_t>(tasks);
     std::vector<std::int32_t> marker(n, -1), touched;
-    std::vector<double> acc(n * unb, 0.0), row;
+    std::vector<double> acc(n * unb, 0.0), row, scaled;
     auto& out_idx = up.part_idx[static_cast<std::size_t>(t)];
     auto& out_val = up.part_val[static_cast<std::size_t>(t)];
     for (std::size_t i = first; i < last; ++i) {
       if (t == 0 && (i - first) % 1024 == 0) poll_interrupt();
       touched.clear();
+      double y[3] = {0.0, 0.0, 0.0};  // row i of A^T x
       for (std::int64_t q = col_ptr[i]; q < col_ptr[i + 1]; ++q) {
         const auto run = static_cast<std::size_t>(col_runs[static_cast<std::size_t>(q)]);
         const std::int32_t li = col_pos[static_cast<std::size_t>(q)];
@@ -111,13 +137,18 @@ NormalMatrix normal_matrix(const CsrRows& A, const double* weights, int weight_c
         const std::int32_t m = A.indptr[r0 + 1] - A.indptr[r0];
         const std::int32_t* cols = A.indices + A.indptr[r0];
         const auto width = static_cast<std::size_t>(m - li);
+        if (with_rhs)
+          for (std::size_t r = r0; r < r1; ++r) {
+            const double a = A.data[A.indptr[r] + li];
+            for (std::size_t c = 0; c < 3; ++c) y[c] += a * x[3 * r + c];
+          }
         // Row li of the run's Gram matrix from column li on, sum_r w_r a_r[li] a_r[li:] ((width, nb) row-major),
         // added at its columns.
         row.assign(width * unb, 0.0);
         if (nb == 6)
-          gram_row<6>(A, weights, r0, r1, li, width, row.data());
+          gram_row<6>(A, weights, r0, r1, li, width, row.data(), scaled);
         else
-          gram_row<1>(A, weight_count == 0 ? nullptr : weights, r0, r1, li, width, row.data());
+          gram_row<1>(A, weight_count == 0 ? nullptr : weights, r0, r1, li, width, row.data(), scaled);
         for (std::size_t b = 0; b < width; ++b) {
           const auto j = static_cast<std::size_t>(cols[static_cast<std::size_t>(li) + b]);
           double* dst = &acc[j * unb];
@@ -129,6 +160,7 @@ NormalMatrix normal_matrix(const CsrRows& A, const double* weights, int weight_c
           for (std::size_t c = 0; c < unb; ++c) dst[c] += row[b * unb + c];
         }
       }
+      if (with_rhs) std::copy_n(y, 3, rhs + 3 * i);
       std::sort(touched.begin(), touched.end());
       up.row_len[i] = static_cast<std::int64_t>(touched.size());
       for (const std::int32_t j : touched) {

@@ -9,7 +9,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
-#include <numeric>
+#include <memory>
 #include <sstream>
 #include <string>
 #include <time.h>
@@ -18,6 +18,7 @@
 
 #include "sorpia/detail/clock.hpp"
 #include "sorpia/detail/pairwise.hpp"
+#include "sorpia/detail/parallel.hpp"
 #include "sorpia/detail/repr.hpp"
 #include "sorpia/errors.hpp"
 #include "sorpia/interrupt.hpp"
@@ -26,23 +27,19 @@ namespace sorpia {
 
 namespace {
 
+// Points per task of normal_sums' gathers, at least.
+constexpr std::size_t kPointsPerTask = 65536;
+
+// An array of n values left uninitialised (for one that is written in full before it is read).
+template <class T>
+std::unique_ptr<T[]> uninitialised(std::size_t n) {
+  return std::unique_ptr<T[]>(new T[n]);
+}
+
 double cpu_seconds() {
   timespec ts{};
   clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
   return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
-}
-
-// y (n, 3) = A^T x for A (k, n) and x (k, 3): row by row of A in order, each entry's product added to its
-// column's row of y (the order of scipy's A.T @ x, which the driver replaced).
-std::vector<double> transposed_times(const CsrMatrix& a, const double* x) {
-  std::vector<double> y(3 * a.n_cols, 0.0);
-  for (std::size_t r = 0; r < a.n_rows; ++r)
-    for (std::int32_t p = a.indptr[r]; p < a.indptr[r + 1]; ++p) {
-      const double w = a.data[static_cast<std::size_t>(p)];
-      double* yj = &y[3 * static_cast<std::size_t>(a.indices[static_cast<std::size_t>(p)])];
-      for (std::size_t c = 0; c < 3; ++c) yj[c] += w * x[3 * r + c];
-    }
-  return y;
 }
 
 ApproximationChunk::State from_footpoints(Footpoints&& f) {
@@ -252,6 +249,8 @@ DistanceSums ApproximationChunk::refine(const LimitSurface& surface, const Footp
   Footpoints from;
   from.face_ids = std::move(current.face_ids);
   from.uv = std::move(current.uv);
+  from.distances = std::move(current.distances);  // written in place
+  from.normals = std::move(current.normals);
   FootpointOptions refine = options;
   refine.grid = 0;
   refine_footpoints(surface, surface.topology(), points_.data(), k_, refine, from);
@@ -315,51 +314,77 @@ NormalSums ApproximationChunk::normal_sums(const LimitSurface& surface, double t
   NormalSums out;
   const auto t0 = detail::Clock::now();
   const double c0 = cpu_seconds();
-  // The rows in face order: the points of a face share their columns, which the normal matrix reads once.
-  std::vector<std::size_t> order(k);
-  std::iota(order.begin(), order.end(), std::size_t{0});
-  std::stable_sort(order.begin(), order.end(),
-                   [&](std::size_t a, std::size_t b) { return current.face_ids[a] < current.face_ids[b]; });
-  std::vector<std::int32_t> face_o(k);
-  std::vector<double> uv_o(2 * k);
-  for (std::size_t i = 0; i < k; ++i) {
-    const std::size_t o = order[i];
-    face_o[i] = current.face_ids[o];
-    uv_o[2 * i] = current.uv[2 * o];
-    uv_o[2 * i + 1] = current.uv[2 * o + 1];
+  // The rows in face order (a stable counting sort by face): the points of a face share their columns, which the
+  // normal matrix reads once.
+  const std::size_t n_faces = surface.n_faces();
+  const std::unique_ptr<std::size_t[]> order = uninitialised<std::size_t>(k);
+  {
+    std::vector<std::size_t> start(n_faces + 1, 0);
+    for (std::size_t i = 0; i < k; ++i) {
+      const std::int32_t f = current.face_ids[i];
+      if (f < 0 || static_cast<std::size_t>(f) >= n_faces)
+        throw ParameterError("face_ids[" + std::to_string(first_ + i) + "] = " + std::to_string(f) +
+                             " is out of range [0, " + std::to_string(n_faces) + ")");
+      ++start[static_cast<std::size_t>(f) + 1];
+    }
+    for (std::size_t f = 0; f < n_faces; ++f) start[f + 1] += start[f];
+    for (std::size_t i = 0; i < k; ++i) order[start[static_cast<std::size_t>(current.face_ids[i])]++] = i;
   }
-  CsrMatrix A = surface.rows(face_o.data(), uv_o.data(), k, 0).position;
+  // The per-point gathers and weights below, in ranges of points per task (each point's values alone).
+  const int tasks = detail::task_count(k, kPointsPerTask);
+  const auto in_ranges = [&](auto&& body) {
+    detail::for_each_task(tasks > 1, tasks, [&](int t) {
+      const auto u = static_cast<std::size_t>(t), nt = static_cast<std::size_t>(tasks);
+      body(k * u / nt, k * (u + 1) / nt);
+    });
+  };
+  // The per-point arrays are left uninitialised here and written by the tasks (a page of memory is then first
+  // touched by a task, in parallel).
+  std::unique_ptr<std::int32_t[]> face_o = uninitialised<std::int32_t>(k);
+  std::unique_ptr<double[]> uv_o = uninitialised<double>(2 * k);
+  in_ranges([&](std::size_t i0, std::size_t i1) {
+    for (std::size_t i = i0; i < i1; ++i) {
+      const std::size_t o = order[i];
+      face_o[i] = current.face_ids[o];
+      uv_o[2 * i] = current.uv[2 * o];
+      uv_o[2 * i + 1] = current.uv[2 * o + 1];
+    }
+  });
+  const PositionRows rows = surface.position_rows(face_o.get(), uv_o.get(), k);
+  const CsrRows A{rows.n_rows, rows.n_cols, rows.indptr.data(), rows.indices.get(), rows.data.get()};
   out.rows_seconds = detail::seconds_since(t0);
   out.rows_cpu = cpu_seconds() - c0;
-  std::vector<double>().swap(uv_o);
-  std::vector<std::int32_t>().swap(face_o);
-  std::vector<double> points_o(3 * k), w_o, wp(3 * k), w6;
-  if (weighted) w_o.resize(k);
-  for (std::size_t i = 0; i < k; ++i) {
-    const std::size_t o = order[i];
-    for (std::size_t c = 0; c < 3; ++c) points_o[3 * i + c] = points_[3 * o + c];
-    if (weighted) w_o[i] = (weights_.empty() ? 1.0 : weights_[o]) * (robust ? factors[o] : 1.0);
-  }
+  uv_o.reset();
+  face_o.reset();
+  const std::unique_ptr<double[]> points_o = uninitialised<double>(3 * k), wp = uninitialised<double>(3 * k),
+                                  w_o = uninitialised<double>(weighted ? k : 0),
+                                  normals_o = uninitialised<double>(blend ? 3 * k : 0),
+                                  w6 = uninitialised<double>(blend ? 6 * k : 0);
+  in_ranges([&](std::size_t i0, std::size_t i1) {
+    for (std::size_t i = i0; i < i1; ++i) {
+      const std::size_t o = order[i];
+      for (std::size_t c = 0; c < 3; ++c) points_o[3 * i + c] = points_[3 * o + c];
+      if (weighted) w_o[i] = (weights_.empty() ? 1.0 : weights_[o]) * (robust ? factors[o] : 1.0);
+      if (blend)
+        for (std::size_t c = 0; c < 3; ++c) normals_o[3 * i + c] = current.normals[3 * o + c];
+    }
+    if (blend)
+      blend_weights(&points_o[3 * i0], &normals_o[3 * i0], weighted ? &w_o[i0] : nullptr, i1 - i0, tangential,
+                    &w6[6 * i0], &wp[3 * i0]);
+    else
+      for (std::size_t i = 3 * i0; i < 3 * i1; ++i) wp[i] = weighted ? w_o[i / 3] * points_o[i] : points_o[i];
+  });
   const double* w = nullptr;
   int count = 0;
   if (blend) {
-    std::vector<double> normals_o(3 * k);
-    for (std::size_t i = 0; i < k; ++i)
-      for (std::size_t c = 0; c < 3; ++c) normals_o[3 * i + c] = current.normals[3 * order[i] + c];
-    w6.resize(6 * k);
-    blend_weights(points_o.data(), normals_o.data(), weighted ? w_o.data() : nullptr, k, tangential, w6.data(),
-                  wp.data());
-    w = w6.data();
+    w = w6.get();
     count = 6;
-  } else {
-    for (std::size_t i = 0; i < 3 * k; ++i) wp[i] = weighted ? w_o[i / 3] * points_o[i] : points_o[i];
-    if (weighted) {
-      w = w_o.data();
-      count = 1;
-    }
+  } else if (weighted) {
+    w = w_o.get();
+    count = 1;
   }
-  out.matrix = normal_matrix(A, w, count);
-  out.rhs = transposed_times(A, wp.data());
+  out.rhs.resize(3 * A.n_cols);
+  out.matrix = normal_matrix(A, w, count, wp.get(), out.rhs.data());
   return out;
 }
 

@@ -2,10 +2,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <utility>
 
+#include "sorpia/detail/parallel.hpp"
 #include "sorpia/detail/repr.hpp"
 #include "sorpia/errors.hpp"
 
@@ -37,6 +40,9 @@ const char* robust_loss_name(RobustLoss loss) {
 }
 
 namespace {
+// Points per task of the per-point loops below, at least.
+constexpr std::size_t kPointsPerTask = 65536;
+
 constexpr int kBins = (DistanceHistogram::kHighestOctave - DistanceHistogram::kLowestOctave) *
                       DistanceHistogram::kBinsPerOctave;
 }  // namespace
@@ -64,17 +70,23 @@ DistanceHistogram::DistanceHistogram(double unit, double total, std::vector<doub
 }
 
 void DistanceHistogram::add(const double* distances, const double* weights, std::size_t k) {
-  for (std::size_t i = 0; i < k; ++i) {
-    const double w = weights ? weights[i] : 1.0;
-    if (w == 0.0) continue;
+  // Each distance's bin (in ranges of points per task), then the weights added up in the points' order.
+  const std::unique_ptr<std::uint32_t[]> bins(new std::uint32_t[k]);
+  const int tasks = detail::task_count(k, kPointsPerTask);
+  detail::for_each_index(tasks > 1, tasks, k, [&](std::size_t i) {
     const double x = distances[i] / unit_;
-    std::size_t slot = 0;  // the bin of zeros: below unit 2^kLowestOctave
+    std::uint32_t slot = 0;  // the bin of zeros: below unit 2^kLowestOctave
     if (x > 0) {
       // bin b holds [2^(lo + b / B), 2^(lo + (b + 1) / B)); the largest distances stay in the last bin
       const double b = std::floor((std::log2(x) - kLowestOctave) * kBinsPerOctave);
-      if (b >= 0) slot = 1 + static_cast<std::size_t>(std::min(b, static_cast<double>(kBins - 1)));
+      if (b >= 0) slot = 1 + static_cast<std::uint32_t>(std::min(b, static_cast<double>(kBins - 1)));
     }
-    mass_[slot] += w;
+    bins[i] = slot;
+  });
+  for (std::size_t i = 0; i < k; ++i) {
+    const double w = weights ? weights[i] : 1.0;
+    if (w == 0.0) continue;
+    mass_[bins[i]] += w;
     total_ += w;
   }
 }
@@ -111,7 +123,8 @@ double robust_scale(const DistanceHistogram& histogram, const RobustOptions& opt
 void robust_factors(const RobustOptions& options, double scale, const double* distances, std::size_t k,
                     double* out) {
   const double cs = options.c * scale;
-  for (std::size_t i = 0; i < k; ++i) {
+  const int tasks = detail::task_count(k, kPointsPerTask);
+  detail::for_each_index(tasks > 1, tasks, k, [&](std::size_t i) {
     const double r = distances[i] / cs;
     switch (options.loss) {
       case RobustLoss::None: out[i] = 1.0; break;
@@ -122,7 +135,7 @@ void robust_factors(const RobustOptions& options, double scale, const double* di
         break;
       }
     }
-  }
+  });
 }
 
 void RobustSums::add(const RobustSums& other) {

@@ -89,6 +89,9 @@ constexpr int kApproxLevelSharp = 10;
 // work per thread.
 constexpr std::ptrdiff_t kFacesPerChunk = 64;
 
+// Points per task of rows()' copy into the matrices, at least.
+constexpr std::size_t kRowsPerCopyTask = 65536;
+
 // Threads for `n_groups` faces: no more than there are chunks, so a small
 // query runs on the calling thread alone, and no more than the processors.
 int evaluate_threads(std::ptrdiff_t n_groups) {
@@ -509,9 +512,7 @@ struct FaceStencils {
 void LimitSurface::visit_faces(const std::int32_t* face_ids, std::size_t k,
                                const std::function<void(std::int32_t, const std::size_t*, const std::size_t*,
                                                         const FaceEvaluation&)>& visit) const {
-  // The faces' checks: (0, 0) lies in every face's domain.
-  const std::vector<double> origin(2 * k, 0.0);
-  checked_params(face_ids, origin.data(), k);
+  check_faces(face_ids, k);
   const std::shared_lock<std::shared_mutex> lock(impl_->mutex);
   const double* mesh_points = &impl_->points.data()->x;
   const Bfr::Surface<double>::PointDescriptor desc(3);
@@ -526,12 +527,9 @@ void LimitSurface::visit_faces(const std::int32_t* face_ids, std::size_t k,
                         });
 }
 
-std::vector<double> LimitSurface::checked_params(const std::int32_t* face_ids, const double* uv,
-                                                 std::size_t k) const {
+void LimitSurface::check_faces(const std::int32_t* face_ids, std::size_t k) const {
   const std::size_t n_f = n_faces();
-  const BfrSurfaces& factory = *impl_->factory;
   const auto& level0 = impl_->base.refiner->GetLevel(0);
-  std::vector<double> params(uv, uv + 2 * k);
   for (std::size_t i = 0; i < k; ++i) {
     const std::int32_t f = face_ids[i];
     if (f < 0 || static_cast<std::size_t>(f) >= n_f)
@@ -546,8 +544,16 @@ std::vector<double> LimitSurface::checked_params(const std::int32_t* face_ids, c
                       ", an interior vertex of two faces with one infinitely sharp edge, where OpenSubdiv's Bfr "
                       "before 3.6.1 (this build has " + std::to_string(OPENSUBDIV_VERSION_NUMBER) +
                       ") evaluates no valid surface: remove that sharp edge, or split the vertex's faces");
-    check_uv(factory.parameterization(f), i, params[2 * i], params[2 * i + 1]);
   }
+}
+
+std::vector<double> LimitSurface::checked_params(const std::int32_t* face_ids, const double* uv,
+                                                 std::size_t k) const {
+  check_faces(face_ids, k);
+  const BfrSurfaces& factory = *impl_->factory;
+  std::vector<double> params(uv, uv + 2 * k);
+  for (std::size_t i = 0; i < k; ++i)
+    check_uv(factory.parameterization(face_ids[i]), i, params[2 * i], params[2 * i + 1]);
   return params;
 }
 
@@ -587,6 +593,36 @@ void LimitSurface::evaluate(const std::int32_t* face_ids, const double* uv, std:
 }
 
 SurfaceRows LimitSurface::rows(const std::int32_t* face_ids, const double* uv, std::size_t k, int derivatives) const {
+  SurfaceRows out;
+  CsrMatrix* mats[6] = {&out.position, &out.du, &out.dv, &out.duu, &out.duv, &out.dvv};
+  make_rows(face_ids, uv, k, derivatives, [&](int d, std::vector<std::int32_t>&& indptr) {
+    CsrMatrix& m = *mats[d];
+    m.n_rows = k;
+    m.n_cols = n_vertices();
+    m.indptr = std::move(indptr);
+    m.indices.resize(static_cast<std::size_t>(m.indptr[k]));
+    m.data.resize(static_cast<std::size_t>(m.indptr[k]));
+    return RowsTarget{m.indptr.data(), m.indices.data(), m.data.data()};
+  });
+  return out;
+}
+
+PositionRows LimitSurface::position_rows(const std::int32_t* face_ids, const double* uv, std::size_t k) const {
+  PositionRows out;
+  out.n_rows = k;
+  out.n_cols = n_vertices();
+  make_rows(face_ids, uv, k, 0, [&](int, std::vector<std::int32_t>&& indptr) {
+    out.indptr = std::move(indptr);
+    const auto nnz = static_cast<std::size_t>(out.indptr[k]);
+    out.indices.reset(new std::int32_t[nnz]);
+    out.data.reset(new double[nnz]);
+    return RowsTarget{out.indptr.data(), out.indices.get(), out.data.get()};
+  });
+  return out;
+}
+
+void LimitSurface::make_rows(const std::int32_t* face_ids, const double* uv, std::size_t k, int derivatives,
+                             const RowsStore& store) const {
   if (derivatives < 0 || derivatives > 2)
     throw ParameterError("derivatives = " + std::to_string(derivatives) +
                          " must be 0 (positions), 1 (and first derivatives) or 2 (and second derivatives)");
@@ -594,22 +630,21 @@ SurfaceRows LimitSurface::rows(const std::int32_t* face_ids, const double* uv, s
   const int n_mats = derivatives == 0 ? 1 : derivatives == 1 ? 3 : 6;
   const std::vector<std::int32_t>& from_osd = impl_->base.from_osd;
 
-  // Stencils per face (faces in increasing order), and each point's face slot.
-  std::vector<std::int32_t> faces(face_ids, face_ids + k);
-  std::sort(faces.begin(), faces.end());
-  faces.erase(std::unique(faces.begin(), faces.end()), faces.end());
-  std::vector<FaceStencils> stencils(faces.size());
-  std::vector<std::size_t> face_slot(k);  // the point's face in `faces`, found once for every matrix
-  for (std::size_t i = 0; i < k; ++i)
-    face_slot[i] =
-        static_cast<std::size_t>(std::lower_bound(faces.begin(), faces.end(), face_ids[i]) - faces.begin());
+  // Stencils per face of the points (the faces in increasing order) and each face's slot among them (the ids
+  // are checked).
+  std::vector<std::int32_t> face_slot(n_faces(), -1);
+  for (std::size_t i = 0; i < k; ++i) face_slot[static_cast<std::size_t>(face_ids[i])] = 0;
+  std::size_t n_used = 0;
+  for (std::int32_t& slot : face_slot)
+    if (slot == 0) slot = static_cast<std::int32_t>(n_used++);
+  std::vector<FaceStencils> stencils(n_used);
   std::vector<std::size_t> rank(k);  // the point's index among its face's points
   {
     const std::shared_lock<std::shared_mutex> lock(impl_->mutex);
     for_each_face_surface(
         *impl_->factory, face_ids, k,
         [&](const Bfr::Surface<double>& surface, int face, const std::size_t* first, const std::size_t* last) {
-          FaceStencils& out = stencils[std::lower_bound(faces.begin(), faces.end(), face) - faces.begin()];
+          FaceStencils& out = stencils[static_cast<std::size_t>(face_slot[static_cast<std::size_t>(face)])];
           const int n_cv = surface.GetNumControlPoints();
           thread_local std::vector<int> cv;
           thread_local std::vector<double> w, w2;
@@ -659,39 +694,36 @@ SurfaceRows LimitSurface::rows(const std::int32_t* face_ids, const double* uv, s
   // Points at the corner of a vertex whose position row is B's (see evaluate()).
   const std::vector<std::int32_t> slots = exact_corners(face_ids, params.data(), k);
   const CsrMatrix& exact = impl_->exact.rows;
-  SurfaceRows out;
-  CsrMatrix* mats[6] = {&out.position, &out.du, &out.dv, &out.duu, &out.duv, &out.dvv};
+  // The rows are copied out in ranges of points, one per task.
+  const int copy_tasks = detail::task_count(k, kRowsPerCopyTask);
   for (int d = 0; d < n_mats; ++d) {
-    CsrMatrix& m = *mats[d];
-    m.n_rows = k;
-    m.n_cols = n_vertices();
-    m.indptr.assign(k + 1, 0);
-    const auto stencil_of = [&](std::size_t i) -> const FaceStencils& { return stencils[face_slot[i]]; };
+    std::vector<std::int32_t> indptr(k + 1, 0);
+    const auto stencil_of = [&](std::size_t i) -> const FaceStencils& {
+      return stencils[static_cast<std::size_t>(face_slot[static_cast<std::size_t>(face_ids[i])])];
+    };
     const auto from_b = [&](std::size_t i) { return d == 0 && !slots.empty() && slots[i] >= 0; };
     for (std::size_t i = 0; i < k; ++i) {
       const std::size_t width = from_b(i) ? static_cast<std::size_t>(exact.indptr[slots[i] + 1] - exact.indptr[slots[i]])
                                           : stencil_of(i).columns.size();
-      if (width > static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max() - m.indptr[i]))
+      if (width > static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max() - indptr[i]))
         throw ParameterError("rows: more than 2^31 - 1 weights in all; ask for fewer points at a time");
-      m.indptr[i + 1] = m.indptr[i] + static_cast<std::int32_t>(width);
+      indptr[i + 1] = indptr[i] + static_cast<std::int32_t>(width);
     }
-    m.indices.resize(m.indptr[k]);
-    m.data.resize(m.indptr[k]);
-    for (std::size_t i = 0; i < k; ++i) {
-      const std::size_t at = m.indptr[i];
+    const RowsTarget to = store(d, std::move(indptr));
+    detail::for_each_index(copy_tasks > 1, copy_tasks, k, [&](std::size_t i) {
+      const auto at = static_cast<std::size_t>(to.indptr[i]);
       if (from_b(i)) {
         const std::int32_t b0 = exact.indptr[slots[i]], b1 = exact.indptr[slots[i] + 1];
-        std::copy(exact.indices.begin() + b0, exact.indices.begin() + b1, m.indices.begin() + at);
-        std::copy(exact.data.begin() + b0, exact.data.begin() + b1, m.data.begin() + at);
-        continue;
+        std::copy(exact.indices.begin() + b0, exact.indices.begin() + b1, to.indices + at);
+        std::copy(exact.data.begin() + b0, exact.data.begin() + b1, to.data + at);
+        return;
       }
       const FaceStencils& f = stencil_of(i);
       const std::size_t width = f.columns.size();
-      std::copy(f.columns.begin(), f.columns.end(), m.indices.begin() + at);
-      std::copy_n(f.weights[d].begin() + rank[i] * width, width, m.data.begin() + at);
-    }
+      std::copy(f.columns.begin(), f.columns.end(), to.indices + at);
+      std::copy_n(f.weights[d].begin() + rank[i] * width, width, to.data + at);
+    });
   }
-  return out;
 }
 
 FaceControlPoints LimitSurface::control_points(const std::int32_t* face_ids, std::size_t k) const {

@@ -42,8 +42,13 @@ struct CsrRows {
 /// such run is read in order, once per column it holds, for the entries on
 /// and above the diagonal (the rest mirrored).
 /// @param weights  (k, weight_count) row-major, or null when weight_count is 0
+/// @param x, rhs   with both given, rhs (n, 3) := A^T x for x (k, 3) in the
+///                 same pass, each column's sum over the rows in their order
+///                 (as a row-by-row product would add it up); rhs is written
+///                 in full
 /// @throws ParameterError for a weight count other than 0, 1 or 6
-NormalMatrix normal_matrix(const CsrRows& rows, const double* weights, int weight_count);
+NormalMatrix normal_matrix(const CsrRows& rows, const double* weights, int weight_count, const double* x = nullptr,
+                           double* rhs = nullptr);
 NormalMatrix normal_matrix(const CsrMatrix& rows, const double* weights, int weight_count);
 
 /// The weights of the tangent-distance blend for normal_matrix: for each row

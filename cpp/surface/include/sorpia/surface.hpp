@@ -43,6 +43,18 @@ struct SurfaceRows {
   CsrMatrix position, du, dv, duu, duv, dvv;
 };
 
+/// The position rows of k points (LimitSurface::position_rows): rows()'
+/// position matrix in arrays of its own, (k, n_cols) with row i's columns
+/// indices[indptr[i] .. indptr[i + 1]) and weights data[...], where the
+/// indices and weights are not zeroed before rows() writes them (in parallel),
+/// for a caller that reads them in place.
+struct PositionRows {
+  std::size_t n_rows = 0, n_cols = 0;
+  std::vector<std::int32_t> indptr;
+  std::unique_ptr<std::int32_t[]> indices;
+  std::unique_ptr<double[]> data;
+};
+
 /// The control points of k faces (LimitSurface::control_points): face i's
 /// are indices[offsets[i] .. offsets[i + 1]).
 struct FaceControlPoints {
@@ -173,6 +185,8 @@ class LimitSurface {
   /// @param derivatives  0: position; 1: also du, dv; 2: also duu, duv, dvv
   /// @throws ParameterError as evaluate(), or for derivatives outside 0..2
   SurfaceRows rows(const std::int32_t* face_ids, const double* uv, std::size_t k, int derivatives = 0) const;
+  /// rows(face_ids, uv, k, 0).position, the same values, as PositionRows.
+  PositionRows position_rows(const std::int32_t* face_ids, const double* uv, std::size_t k) const;
 
   /// The control points of faces' surfaces in Bfr's order
   /// (Bfr::Surface::GetControlPointIndices, as mesh vertex indices; a vertex
@@ -224,6 +238,18 @@ class LimitSurface {
   // The parameters of k points after evaluate()'s checks (pulled onto the
   // domain where a rounding error outside).
   std::vector<double> checked_params(const std::int32_t* face_ids, const double* uv, std::size_t k) const;
+  // evaluate()'s checks of the faces alone (checked_params makes them too).
+  void check_faces(const std::int32_t* face_ids, std::size_t k) const;
+  // Where make_rows writes matrix d: the row offsets (handed to `store`) and room for their entries.
+  struct RowsTarget {
+    const std::int32_t* indptr;
+    std::int32_t* indices;
+    double* data;
+  };
+  using RowsStore = std::function<RowsTarget(int d, std::vector<std::int32_t>&& indptr)>;
+  // rows()' matrices, each stored where store(d, its row offsets) says (rows() and position_rows()).
+  void make_rows(const std::int32_t* face_ids, const double* uv, std::size_t k, int derivatives,
+                 const RowsStore& store) const;
   // For each point at the corner of a vertex whose position comes from B
   // (Impl::exact), its row in the exact rows, else -1; empty when none.
   std::vector<std::int32_t> exact_corners(const std::int32_t* face_ids, const double* params, std::size_t k) const;

@@ -41,6 +41,10 @@ class ThreadCap {
   int previous_;
 };
 
+/// Tasks for n items of at least `per_task` items each: ceil(n / per_task),
+/// at most available_processors(), at least 1.
+int task_count(std::size_t n, std::size_t per_task);
+
 /// task(t) for t in [0, n_tasks): through run_tasks when `parallel`, else one
 /// after another on the calling thread.
 inline void for_each_task(bool parallel, int n_tasks, const std::function<void(int)>& task) {
