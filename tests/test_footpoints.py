@@ -74,7 +74,8 @@ def test_closer_footpoints_are_the_brute_force_closest_points(case, stuck):
     s, faces, P = fitted(case)
     diagonal = np.linalg.norm(P.max(axis=0) - P.min(axis=0))
     fid, uv, _, before, _ = _core.closest_points(s._surface, s._topology, P, 4, 10)
-    (fid2, uv2, pos, after, nrm), moved = _core.closer_footpoints(s._surface, s._topology, P, fid, uv, 4, 10, 8)
+    (fid2, uv2, pos, after, nrm), moved, certified = _core.closer_footpoints(s._surface, s._topology, P, fid, uv, 4, 10, 8)
+    print("certified", certified, len(P))
     least = brute_force(s, faces, P)
     assert np.sum(before > least + 1e-9 * diagonal) >= stuck
     assert np.all(after <= before)
@@ -85,7 +86,7 @@ def test_closer_footpoints_are_the_brute_force_closest_points(case, stuck):
     np.testing.assert_allclose(np.linalg.norm(nrm, axis=1), 1.0, atol=1e-12)
     # near = 0.1 re-searches only the points farther than a tenth of their nearest sample's reach: never farther
     # than before or than the exhaustive search's result by more than rounding.
-    (_, _, _, cheap, _), _ = _core.closer_footpoints(s._surface, s._topology, P, fid, uv, 4, 10, 8, near=0.1)
+    (_, _, _, cheap, _), _, _ = _core.closer_footpoints(s._surface, s._topology, P, fid, uv, 4, 10, 8, near=0.1)
     assert np.all(cheap <= before) and np.all(cheap >= after - 1e-12 * diagonal)
 
 
@@ -97,7 +98,7 @@ def test_closer_footpoints_keep_closest_points_and_refuse_bad_faces():
     fid = rng.integers(0, s.n_faces, 500).astype(np.int32)
     uv = rng.random((500, 2)) * 0.5
     P = s.evaluate(fid, uv)
-    (_, _, _, d, _), _ = _core.closer_footpoints(s._surface, s._topology, P, fid, uv, 4, 10, 8)
+    (_, _, _, d, _), _, _ = _core.closer_footpoints(s._surface, s._topology, P, fid, uv, 4, 10, 8)
     assert d.max() < 1e-9
     bad = fid.copy()
     bad[7] = s.n_faces

@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <iterator>
 #include <limits>
 #include <memory>
 #include <string>
@@ -498,13 +499,11 @@ void grid_samples(const Domains& dom, int r, std::vector<std::int32_t>& face_ids
   }
 }
 
-// For each sample of grid_samples(dom, r) (in its order), with limit points
-// `positions`: the largest distance to its neighbours in its chart's grid
-// (along a row, a column, and for a triangle the third direction). Every
-// point of the chart lies within about half a spacing of a sample in
-// (u, v), so within this of one in space.
-std::vector<double> grid_reach(const Domains& dom, int r, const std::vector<double>& positions) {
-  std::vector<double> reach(positions.size() / 3, 0.0);
+// Calls link(f, a, b) for each pair of neighbouring samples a, b of
+// grid_samples(dom, r) (indices in its order) in one chart's grid of face f:
+// along a row, a column, and for a triangle the third direction.
+template <class Link>
+void for_each_grid_link(const Domains& dom, int r, Link&& link) {
   const auto m = static_cast<std::int32_t>(dom.topology.n_faces());
   std::size_t offset = 0;
   for (std::int32_t f = 0; f < m; ++f) {
@@ -517,25 +516,34 @@ std::vector<double> grid_reach(const Domains& dom, int r, const std::vector<doub
         for (int jj = 0; jj < j; ++jj) o += static_cast<std::size_t>(tri ? r + 1 - jj : r + 1);
         return o + static_cast<std::size_t>(i);
       };
-      const auto link = [&](std::size_t a, std::size_t b) {
-        const double* p = &positions[3 * a];
-        const double* q = &positions[3 * b];
-        const double d = std::sqrt((p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) +
-                                   (p[2] - q[2]) * (p[2] - q[2]));
-        reach[a] = std::max(reach[a], d);
-        reach[b] = std::max(reach[b], d);
-      };
       for (int j = 0; j <= r; ++j) {
         const int row = tri ? r - j : r;  // the last i of row j
         for (int i = 0; i <= row; ++i) {
-          if (i < row) link(at(i, j), at(i + 1, j));
-          if (j < r && (!tri || i <= row - 1)) link(at(i, j), at(i, j + 1));
-          if (tri && i > 0 && j < r) link(at(i, j), at(i - 1, j + 1));
+          if (i < row) link(f, at(i, j), at(i + 1, j));
+          if (j < r && (!tri || i <= row - 1)) link(f, at(i, j), at(i, j + 1));
+          if (tri && i > 0 && j < r) link(f, at(i, j), at(i - 1, j + 1));
         }
       }
       offset = at(0, r) + static_cast<std::size_t>(tri ? 1 : r + 1);
     }
   }
+}
+
+double distance3(const double* p, const double* q) {
+  return std::sqrt((p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) + (p[2] - q[2]) * (p[2] - q[2]));
+}
+
+// For each sample of grid_samples(dom, r) (in its order), with limit points
+// `positions`: the largest distance to its neighbours in its chart's grid
+// (for_each_grid_link). Every point of the chart lies within about half a
+// spacing of a sample in (u, v), so within this of one in space.
+std::vector<double> grid_reach(const Domains& dom, int r, const std::vector<double>& positions) {
+  std::vector<double> reach(positions.size() / 3, 0.0);
+  for_each_grid_link(dom, r, [&](std::int32_t, std::size_t a, std::size_t b) {
+    const double d = distance3(&positions[3 * a], &positions[3 * b]);
+    reach[a] = std::max(reach[a], d);
+    reach[b] = std::max(reach[b], d);
+  });
   return reach;
 }
 
@@ -856,6 +864,197 @@ FootpointSearch::FootpointSearch(const LimitSurface& surface, const Topology& to
 
 FootpointSearch::~FootpointSearch() = default;
 
+namespace {
+// closer's certificate (footpoints.hpp): the curvature bound per face is this
+// times the samples' largest angle between normals over distance (the chord
+// estimate misses curvature between samples).
+constexpr double kCertifySafety = 4.0;
+// The largest angle of the star's normals from the axis x - p: the graph's
+// slope is then at most 1.
+constexpr double kCertifyTilt = 0.7853981633974483;  // pi / 4
+// The largest distance times curvature bound (convexity needs below
+// 1 / (4 2^1.5) = 0.177).
+constexpr double kCertifyCurvature = 0.1;
+// The star's rim lies farther than this times the distance from the
+// footpoint (sqrt(2) times the distance, the lift of the disk, with room).
+constexpr double kCertifyRim = 4.0;
+}  // namespace
+
+struct FootpointSearch::Certificate {
+  // Per face: the faces sharing a vertex with it (its star, sorted) and the
+  // faces outside the star sharing a vertex with a face of the star (its
+  // rim); both empty where the face is never certified.
+  std::vector<std::int32_t> star_offsets, star, rim_offsets, rim;
+  std::vector<double> axis;       // per face (3): the unit axis of a cone holding its normals
+  std::vector<double> half;       // per face: the cone's half-angle
+  std::vector<double> curvature;  // per face: the bound of its normal curvature
+  std::vector<double> ball;       // per face (4): centre and radius of a ball holding its surface
+  std::vector<std::size_t> samples;  // per face + 1: its grid samples are [samples[f], samples[f + 1])
+
+  bool in_star(std::int32_t f, std::int32_t g) const {
+    const auto first = star.begin() + star_offsets[static_cast<std::size_t>(f)];
+    const auto last = star.begin() + star_offsets[static_cast<std::size_t>(f) + 1];
+    return std::binary_search(first, last, g);
+  }
+
+  // Whether point x, at distance d > 0 from its footpoint p in face f, is
+  // certified (footpoints.hpp, FootpointSearch::closer).
+  bool certifies(std::int32_t f, const double* x, const double* p, double d, const double* positions,
+                 const double* reach) const {
+    const auto fs = static_cast<std::size_t>(f);
+    if (!(d > 0.0) || star_offsets[fs] == star_offsets[fs + 1]) return false;
+    const double z[3] = {(x[0] - p[0]) / d, (x[1] - p[1]) / d, (x[2] - p[2]) / d};
+    const double* a = &axis[3 * fs];
+    const double sign = a[0] * z[0] + a[1] * z[1] + a[2] * z[2] < 0.0 ? -1.0 : 1.0;
+    double kappa = 0.0;
+    for (std::int32_t k = star_offsets[fs]; k < star_offsets[fs + 1]; ++k) {
+      const auto g = static_cast<std::size_t>(star[static_cast<std::size_t>(k)]);
+      const double* b = &axis[3 * g];
+      const double c = sign * (b[0] * z[0] + b[1] * z[1] + b[2] * z[2]);
+      if (!(std::acos(std::clamp(c, -1.0, 1.0)) + half[g] <= kCertifyTilt)) return false;
+      kappa = std::max(kappa, curvature[g]);
+    }
+    if (!(d * kappa <= kCertifyCurvature)) return false;
+    // The rim's surface lies within reach(s) of its samples s: its ball
+    // first, then where that is too near, the samples.
+    for (std::int32_t k = rim_offsets[fs]; k < rim_offsets[fs + 1]; ++k) {
+      const auto g = static_cast<std::size_t>(rim[static_cast<std::size_t>(k)]);
+      const double* o = &ball[4 * g];
+      if (distance3(p, o) - o[3] > kCertifyRim * d) continue;
+      for (std::size_t s = samples[g]; s < samples[g + 1]; ++s)
+        if (!(distance3(p, &positions[3 * s]) - reach[s] > kCertifyRim * d)) return false;
+    }
+    return true;
+  }
+};
+
+const FootpointSearch::Certificate& FootpointSearch::certificate() const {
+  std::call_once(certificate_once_, [&] {
+    auto cert = std::make_unique<Certificate>();
+    const Topology& t = *topology_;
+    const Tags& tags = surface_->tags();
+    const Domains dom(t, surface_->scheme(), tags.holes);
+    const std::size_t m = t.n_faces(), nv = t.n_vertices();
+    const std::vector<std::int32_t>& corners = t.face_indices();
+    // The samples of each face (grid_samples gives them face after face).
+    std::vector<std::size_t> first(m + 1, 0);
+    for (const std::int32_t f : sample_faces_) ++first[static_cast<std::size_t>(f) + 1];
+    for (std::size_t f = 0; f < m; ++f) first[f + 1] += first[f];
+    const std::size_t k = sample_faces_.size();
+    std::vector<double> normal(3 * k);
+    for (std::size_t s = 0; s < k; ++s) detail::unit_normal(&du_[3 * s], &dv_[3 * s], &normal[3 * s]);
+    // Curvature: the largest angle between neighbouring samples' normals over
+    // their distance; and the largest spacing.
+    std::vector<double> bend(m, 0.0), spacing(m, 0.0);
+    for_each_grid_link(dom, options_.grid, [&](std::int32_t f, std::size_t a, std::size_t b) {
+      const double* na = &normal[3 * a];
+      const double* nb = &normal[3 * b];
+      const double c = na[0] * nb[0] + na[1] * nb[1] + na[2] * nb[2];
+      const double len = distance3(&positions_[3 * a], &positions_[3 * b]);
+      const auto fs = static_cast<std::size_t>(f);
+      bend[fs] = std::max(bend[fs], len > 0.0 ? std::acos(std::clamp(c, -1.0, 1.0)) / len
+                                              : std::numeric_limits<double>::infinity());
+      spacing[fs] = std::max(spacing[fs], len);
+    });
+    cert->axis.assign(3 * m, 0.0);
+    cert->half.assign(m, std::numeric_limits<double>::infinity());
+    cert->curvature.assign(m, std::numeric_limits<double>::infinity());
+    cert->ball.assign(4 * m, 0.0);
+    for (std::size_t f = 0; f < m; ++f) {
+      if (first[f] == first[f + 1]) continue;  // a hole
+      double* a = &cert->axis[3 * f];
+      double* o = &cert->ball[4 * f];
+      bool zero = false;
+      for (std::size_t s = first[f]; s < first[f + 1]; ++s)
+        for (int c = 0; c < 3; ++c) {
+          a[c] += normal[3 * s + c];
+          o[c] += positions_[3 * s + c] / static_cast<double>(first[f + 1] - first[f]);
+          zero = zero || (normal[3 * s] == 0.0 && normal[3 * s + 1] == 0.0 && normal[3 * s + 2] == 0.0);
+        }
+      const double len = std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+      double half = 0.0;
+      for (std::size_t s = first[f]; s < first[f + 1]; ++s) {
+        const double* n = &normal[3 * s];
+        const double c = len > 0.0 ? (a[0] * n[0] + a[1] * n[1] + a[2] * n[2]) / len : -1.0;
+        half = std::max(half, std::acos(std::clamp(c, -1.0, 1.0)));
+        o[3] = std::max(o[3], distance3(&positions_[3 * s], o) + reach_[s]);
+      }
+      for (int c = 0; c < 3; ++c) a[c] = len > 0.0 ? a[c] / len : 0.0;
+      cert->curvature[f] = kCertifySafety * bend[f];
+      if (!zero && len > 0.0) cert->half[f] = half + cert->curvature[f] * spacing[f];
+    }
+    // Vertices where the surface is smooth all round: inside the mesh, not at
+    // a hole, on no crease and no corner of any sharpness.
+    std::vector<std::int32_t> vf_offsets(nv + 1, 0), vf;
+    for (const std::int32_t v : corners) ++vf_offsets[static_cast<std::size_t>(v) + 1];
+    for (std::size_t v = 0; v < nv; ++v) vf_offsets[v + 1] += vf_offsets[v];
+    vf.resize(corners.size());
+    {
+      std::vector<std::int32_t> fill(vf_offsets.begin(), vf_offsets.end() - 1);
+      for (std::size_t f = 0; f < m; ++f)
+        for (std::int32_t c = 0; c < t.face_size(f); ++c)
+          vf[static_cast<std::size_t>(fill[static_cast<std::size_t>(corners[static_cast<std::size_t>(t.face_offset(f) + c)])]++)] =
+              static_cast<std::int32_t>(f);
+    }
+    std::vector<std::uint8_t> smooth(nv, 1);
+    for (std::size_t v = 0; v < nv; ++v) smooth[v] = !t.is_unreferenced(v) && !t.is_boundary(v);
+    for (std::size_t c = 0; c < tags.n_creases(); ++c)
+      if (tags.crease_sharpness[c] > 0.0)
+        smooth[static_cast<std::size_t>(tags.crease_vertices[2 * c])] =
+            smooth[static_cast<std::size_t>(tags.crease_vertices[2 * c + 1])] = 0;
+    for (std::size_t c = 0; c < tags.n_corners(); ++c)
+      if (tags.corner_sharpness[c] > 0.0) smooth[static_cast<std::size_t>(tags.corner_vertices[c])] = 0;
+    for (const std::int32_t h : tags.holes)
+      for (std::int32_t c = 0; c < t.face_size(static_cast<std::size_t>(h)); ++c)
+        smooth[static_cast<std::size_t>(corners[static_cast<std::size_t>(t.face_offset(static_cast<std::size_t>(h)) + c)])] = 0;
+    // Each face's star and rim (left empty where the face is not certified).
+    std::vector<std::vector<std::int32_t>> stars(m), rims(m);
+    const int tasks = task_count(m, 4096);
+    detail::for_each_index(tasks > 1, tasks, m, [&](std::size_t f) {
+      const auto faces_at = [&](std::size_t g, std::vector<std::int32_t>& out) {
+        bool ok = true;
+        for (std::int32_t c = 0; c < t.face_size(g); ++c) {
+          const auto v = static_cast<std::size_t>(corners[static_cast<std::size_t>(t.face_offset(g) + c)]);
+          ok = ok && smooth[v];
+          out.insert(out.end(), vf.begin() + vf_offsets[v], vf.begin() + vf_offsets[v + 1]);
+        }
+        return ok;
+      };
+      if (first[f] == first[f + 1]) return;
+      std::vector<std::int32_t> star, around;
+      if (!faces_at(f, star)) return;
+      std::sort(star.begin(), star.end());
+      star.erase(std::unique(star.begin(), star.end()), star.end());
+      for (const std::int32_t g : star) {
+        if (!std::isfinite(cert->half[static_cast<std::size_t>(g)]) || !faces_at(static_cast<std::size_t>(g), around))
+          return;
+      }
+      std::sort(around.begin(), around.end());
+      around.erase(std::unique(around.begin(), around.end()), around.end());
+      std::vector<std::int32_t> rim;
+      std::set_difference(around.begin(), around.end(), star.begin(), star.end(), std::back_inserter(rim));
+      stars[f] = std::move(star);
+      rims[f] = std::move(rim);
+    });
+    const auto flatten = [&](std::vector<std::vector<std::int32_t>>& lists, std::vector<std::int32_t>& offsets,
+                             std::vector<std::int32_t>& flat) {
+      offsets.assign(m + 1, 0);
+      for (std::size_t f = 0; f < m; ++f)
+        offsets[f + 1] = offsets[f] + static_cast<std::int32_t>(lists[f].size());
+      flat.reserve(static_cast<std::size_t>(offsets[m]));
+      for (auto& list : lists) {
+        flat.insert(flat.end(), list.begin(), list.end());
+        std::vector<std::int32_t>().swap(list);
+      }
+    };
+    flatten(stars, cert->star_offsets, cert->star);
+    flatten(rims, cert->rim_offsets, cert->rim);
+    cert->samples = std::move(first);
+    certificate_ = std::move(cert);
+  });
+  return *certificate_;
+}
+
 Footpoints FootpointSearch::find(const double* points, std::size_t n) const {
   Footpoints fp;
   fp.face_ids.resize(n);
@@ -876,7 +1075,9 @@ Footpoints FootpointSearch::find(const double* points, std::size_t n) const {
   return fp;
 }
 
-std::size_t FootpointSearch::closer(const double* points, std::size_t n, Footpoints& fp, bool found) const {
+std::size_t FootpointSearch::closer(const double* points, std::size_t n, Footpoints& fp, bool found,
+                                    std::size_t* certified) const {
+  if (certified != nullptr) *certified = 0;
   if (fp.face_ids.size() != n || fp.uv.size() != 2 * n || fp.distances.size() != n)
     throw ParameterError("footpoints hold " + std::to_string(fp.face_ids.size()) + " faces, " +
                          std::to_string(fp.uv.size() / 2) + " parameters and " + std::to_string(fp.distances.size()) +
@@ -889,6 +1090,7 @@ std::size_t FootpointSearch::closer(const double* points, std::size_t n, Footpoi
   const auto starts = static_cast<std::size_t>(std::max(options_.starts, 0));
   if (n == 0 || starts == 0) return 0;
   const bool has_positions = fp.positions.size() == 3 * n, has_normals = fp.normals.size() == 3 * n;
+  const Certificate* cert = options_.certify ? &certificate() : nullptr;
   FootpointOptions options = options_;
   options.max_steps = std::max(options.max_steps, kCloserSteps);
   std::size_t moved = 0;
@@ -913,12 +1115,18 @@ std::size_t FootpointSearch::closer(const double* points, std::size_t n, Footpoi
     if (has_normals) std::copy_n(&from.normals[3 * r], 3, &fp.normals[3 * i]);
     return true;
   };
-  std::vector<std::uint8_t> changed(kBatch);
+  std::vector<std::uint8_t> changed(kBatch), skipped(kBatch);
+  std::vector<double> at;  // the footpoints' positions where fp holds none (the certificate's p)
   for (std::size_t first = 0; first < n; first += kBatch) {
     poll_interrupt();
     const std::size_t b = std::min(kBatch, n - first);
     const int tasks = task_count(b, 4096);
     index_->nearest(points + 3 * first, b, nearest_sample.data(), nearest_distance.data());
+    if (cert != nullptr && !has_positions) {
+      at.resize(3 * b);
+      surface_->evaluate(&fp.face_ids[first], &fp.uv[2 * first], b, at.data(), nullptr, nullptr, nullptr);
+    }
+    std::fill_n(skipped.begin(), b, std::uint8_t{0});
     detail::for_each_index(tasks > 1, tasks, b, [&](std::size_t j) {
       const std::size_t i = first + j;
       const double* x = points + 3 * i;
@@ -927,20 +1135,32 @@ std::size_t FootpointSearch::closer(const double* points, std::size_t n, Footpoi
       // than the one given), and for a point not within a fraction of that
       // sample's reach of its footpoint, the samples whose cells may hold a
       // point closer than d: |x - s| - reach(s) < d, the least of that lower
-      // bound first.
+      // bound first; none of the footpoint's face's star where the
+      // certificate holds.
       // (The nearest sample left out where the footpoints are find's.)
       std::int64_t* c = &candidate[j * (starts + 1)];
       c[0] = nearest_sample[j];
-      count[j] = d > 0.0 && !found ? 1 : 0;
+      const std::int32_t f = fp.face_ids[i];
       const auto u = static_cast<std::size_t>(c[0]);
-      if (!(d > options_.near * reach_[u])) return;  // (false for d = 0)
+      const bool off = d > 0.0 && d > options_.near * reach_[u];  // re-searched
+      const bool skip = off && cert != nullptr &&
+                        cert->certifies(f, x, has_positions ? &fp.positions[3 * i] : &at[3 * j], d,
+                                                        positions_.data(), reach_.data());
+      skipped[j] = skip;
+      const bool nearest_too = d > 0.0 && !found && !(skip && cert->in_star(f, sample_faces_[u]));
+      count[j] = nearest_too ? 1 : 0;
+      if (!off) return;
       const auto rank = [&](std::int64_t s, double dist) {
-        return s == c[0] ? std::numeric_limits<double>::infinity() : dist - reach_[static_cast<std::size_t>(s)];
+        return s == c[0] || (skip && cert->in_star(f, sample_faces_[static_cast<std::size_t>(s)]))
+                   ? std::numeric_limits<double>::infinity()
+                   : dist - reach_[static_cast<std::size_t>(s)];
       };
       const std::size_t m = index_->least_ranked(x, d, largest_reach_, starts, rank, c + 1, &candidate_rank[j * starts]);
-      if (found) std::copy_n(c + 1, m, c);
+      if (!nearest_too) std::copy_n(c + 1, m, c);
       count[j] += m;
     });
+    if (certified != nullptr)
+      for (std::size_t j = 0; j < b; ++j) *certified += skipped[j];
     // The starts, one row each: the point repeated, refined from its sample.
     std::vector<std::size_t> row(b + 1, 0);
     for (std::size_t j = 0; j < b; ++j) row[j + 1] = row[j] + count[j];

@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <mutex>
 #include <vector>
 
 #include "sorpia/surface.hpp"
@@ -91,6 +92,12 @@ struct FootpointOptions {
   /// to the brute-force closest points within 1e-9 of the diagonal (about 6
   /// times find's instructions; 0.1 far fewer, leaving points on folds).
   double near = 0.0;
+  /// FootpointSearch::closer leaves out the starts in the faces round a
+  /// footpoint where a bound on the surface's curvature there shows that
+  /// none of them can hold a closer point (the certificate described at
+  /// closer). false: every point takes every start (the exhaustive rule, the
+  /// reference the certificate is tested against).
+  bool certify = true;
 };
 
 /// The closest point of the limit surface to each of n points: start at the
@@ -141,9 +148,35 @@ class FootpointSearch {
   /// rounding.
   /// Cost: a k-d tree query per point and a refinement per start. With
   /// near = 0 a point has about 5 to 8 starts (its footpoint's own grid
-  /// cell and its neighbours pass the bound too): about 6 times find's
-  /// instructions; with near = 0.1 about 1.05 starts on a fit's
-  /// footpoints.
+  /// cell and its neighbours pass the bound too) unless certified; with
+  /// near = 0.1 about 1.05 starts on a fit's footpoints.
+  ///
+  /// Certificate (options.certify): the samples of the faces of the star
+  /// of the footpoint's face f (the faces sharing a vertex with f) are left
+  /// out of the starts where no point of the star can be closer to x than
+  /// the footpoint p, other than in p's own basin (which the refinement of p
+  /// from itself reaches). In the frame whose axis z is (x - p) / d, with
+  /// every normal of the star within 45 degrees of z, p's sheet of the star
+  /// is a graph z = h(y), |grad h| <= 1, h(0) = 0, over the disk |y| <= d
+  /// (a radial path of length r there lifts to one of length at most
+  /// sqrt(2) r on the surface, which stays inside the star when the star's
+  /// rim, the faces outside it sharing a vertex with it, lies farther than
+  /// 4 d from p). The squared distance to x on that graph,
+  /// |y|^2 + (h(y) - d)^2, has a Hessian of at least
+  /// 2 (1 - 2 d |Hess h|) >= 2 (1 - 2 d 2^1.5 kappa) for a normal
+  /// curvature bounded by kappa: with d kappa <= 0.1 it is convex on the
+  /// disk, which holds every point of the graph within d of x, so its only
+  /// minimum there is p's basin's. The bounds per face come from the grid
+  /// samples: kappa is 4 times the largest angle between neighbouring
+  /// samples' normals over their distance, the cone of normals is the
+  /// samples' widened by kappa times the largest spacing, the face lies in
+  /// the ball of its samples widened by their reach (as the candidates'
+  /// bound takes it). A face is never certified where a vertex of its star
+  /// lies on the boundary, at a hole, or on a crease or corner of any
+  /// sharpness (where the surface is not smooth, a crease's far side can be
+  /// closer). The star is taken to be one sheet over the plane (it does not
+  /// wind round z). The samples outside the star keep the candidates' bound,
+  /// and the points not certified take every start.
   /// Each point's result depends on that point alone; no distance
   /// increases.
   /// @param points      row-major (n, 3), finite
@@ -153,9 +186,12 @@ class FootpointSearch {
   ///                    entries, are kept up to date
   /// @param found       the footpoints are this search's find(points) (then
   ///                    the nearest sample is not refined again)
+  /// @param certified   where not null, set to how many points the
+  ///                    certificate let leave out their star's samples
   /// @throws ParameterError when the sizes disagree with n or a face is out
   ///                        of range
-  std::size_t closer(const double* points, std::size_t n, Footpoints& footpoints, bool found = false) const;
+  std::size_t closer(const double* points, std::size_t n, Footpoints& footpoints, bool found = false,
+                     std::size_t* certified = nullptr) const;
 
  private:
   const LimitSurface* surface_;
@@ -167,6 +203,12 @@ class FootpointSearch {
   std::vector<double> reach_;  // per sample: the distance to its farthest neighbour in its chart's grid (closer)
   double largest_reach_ = 0.0;
   std::unique_ptr<PointIndex> index_;
+  // closer's certificate: per face its star, rim, cone of normals,
+  // curvature bound and ball (footpoints.cpp), built on closer's first call.
+  struct Certificate;
+  const Certificate& certificate() const;
+  mutable std::once_flag certificate_once_;
+  mutable std::unique_ptr<const Certificate> certificate_;
 };
 
 /// Moves footpoints (face_ids, uv: the input state, e.g. those of the
