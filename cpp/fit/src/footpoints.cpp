@@ -232,23 +232,28 @@ std::size_t PointIndex::least_ranked(const double* q, double bound, double slack
   // bound is the k-th one's once k are held.
   thread_local std::vector<std::pair<double, std::uint32_t>> heap;
   heap.clear();
-  // A box at distance b holds no rank below b - slack.
-  const auto box_out = [&](const Node& nd) {
-    const double reach = bound + slack;
-    return !(reach > 0.0) || box_distance2(nd.lo, nd.hi, q) >= reach * reach;
+  // A box at distance b holds no rank below b minus its points' slack.
+  const auto box_out = [&](std::uint32_t node) {
+    const double reach =
+        bound + (node_slack_.empty() ? slack : std::min(slack, static_cast<double>(node_slack_[node])));
+    return !(reach > 0.0) || box_distance2(nodes_[node].lo, nodes_[node].hi, q) >= reach * reach;
   };
   thread_local std::vector<std::uint32_t> stack;
   stack.clear();
   stack.push_back(0);
   while (!stack.empty()) {
-    const Node& nd = nodes_[stack.back()];
+    const std::uint32_t node = stack.back();
+    const Node& nd = nodes_[node];
     stack.pop_back();
-    if (box_out(nd)) continue;
+    if (box_out(node)) continue;
     if (nd.left == 0) {
       for (std::uint32_t i = nd.begin; i < nd.end; ++i) {
         const double* p = &points_[3 * static_cast<std::size_t>(i)];
         const double dx = p[0] - q[0], dy = p[1] - q[1], dz = p[2] - q[2];
-        const double d = std::sqrt(dx * dx + dy * dy + dz * dz);
+        const double d2 = dx * dx + dy * dy + dz * dz;
+        const double within = bound + (point_slack_.empty() ? slack : std::min(slack, point_slack_[i]));
+        if (!(within > 0.0 && d2 < within * within)) continue;
+        const double d = std::sqrt(d2);
         if (!(d - slack < bound)) continue;
         const double r = rank(order_[i], d);
         if (!(r < bound)) continue;
@@ -270,6 +275,26 @@ std::size_t PointIndex::least_ranked(const double* q, double bound, double slack
     value[j] = heap[j].first;
   }
   return heap.size();
+}
+
+void PointIndex::set_slack(const double* slack) {
+  // A node's children follow it in nodes_: from the last node back, each
+  // node's children are done before it.
+  point_slack_.resize(n_);
+  for (std::size_t i = 0; i < n_; ++i) point_slack_[i] = slack[order_[i]];
+  node_slack_.assign(nodes_.size(), 0.0f);
+  for (std::size_t j = nodes_.size(); j-- > 0;) {
+    const Node& nd = nodes_[j];
+    if (nd.left != 0) {
+      node_slack_[j] = std::max(node_slack_[nd.left], node_slack_[nd.left + 1]);
+      continue;
+    }
+    double most = 0.0;
+    for (std::uint32_t i = nd.begin; i < nd.end; ++i) most = std::max(most, point_slack_[i]);
+    auto up = static_cast<float>(most);
+    if (static_cast<double>(up) < most) up = std::nextafter(up, std::numeric_limits<float>::infinity());
+    node_slack_[j] = up;
+  }
 }
 
 // ---- charts of a face's domain ---------------------------------------------------
@@ -853,6 +878,7 @@ FootpointSearch::FootpointSearch(const LimitSurface& surface, const Topology& to
   reach_ = grid_reach(dom, options.grid, positions_);
   largest_reach_ = *std::max_element(reach_.begin(), reach_.end());
   index_ = std::make_unique<PointIndex>(positions_.data(), k);
+  index_->set_slack(reach_.data());  // closer's candidates: |x - s| - reach(s) < d
   // Bfr's regularity of each face (holes: regular, never searched).
   std::vector<std::int32_t> faces;
   for (std::int32_t f = 0; f < static_cast<std::int32_t>(topology.n_faces()); ++f)
@@ -869,10 +895,13 @@ namespace {
 // times the samples' largest angle between normals over distance (the chord
 // estimate misses curvature between samples).
 constexpr double kCertifySafety = 4.0;
-// The largest angle of the star's normals from the axis x - p: the graph's
-// slope is then at most 1.
-constexpr double kCertifyTilt = 0.7853981633974483;  // pi / 4
-// The largest distance times curvature bound (convexity needs below
+// The largest angle of the star's normals from the axis x - p (below a right
+// angle: the star projects onto the plane across the axis without folding).
+constexpr double kCertifyStarTilt = 1.3962634015954636;  // 80 degrees
+// The largest angle of the normals near the footpoint (within sqrt(2) d of
+// it) from the axis: the graph's slope there is at most 1.
+constexpr double kCertifyTilt = 0.7853981633974483;  // 45 degrees
+// The largest distance times curvature bound (convexity needs it below
 // 1 / (4 2^1.5) = 0.177).
 constexpr double kCertifyCurvature = 0.1;
 // The star's rim lies farther than this times the distance from the
@@ -887,6 +916,7 @@ struct FootpointSearch::Certificate {
   std::vector<std::int32_t> star_offsets, star, rim_offsets, rim;
   std::vector<double> axis;       // per face (3): the unit axis of a cone holding its normals
   std::vector<double> half;       // per face: the cone's half-angle
+  std::vector<double> cone_cos;   // per face: cos(kCertifyStarTilt - half), above 1 where half exceeds it
   std::vector<double> curvature;  // per face: the bound of its normal curvature
   std::vector<double> ball;       // per face (4): centre and radius of a ball holding its surface
   std::vector<std::size_t> samples;  // per face + 1: its grid samples are [samples[f], samples[f + 1])
@@ -897,24 +927,30 @@ struct FootpointSearch::Certificate {
     return std::binary_search(first, last, g);
   }
 
-  // Whether point x, at distance d > 0 from its footpoint p in face f, is
-  // certified (footpoints.hpp, FootpointSearch::closer).
-  bool certifies(std::int32_t f, const double* x, const double* p, double d, const double* positions,
-                 const double* reach) const {
+  // Whether point x, at distance d > 0 from its footpoint p in face f (unit
+  // normal n there, or null), is certified (footpoints.hpp,
+  // FootpointSearch::closer).
+  bool certifies(std::int32_t f, const double* x, const double* p, const double* n, double d,
+                 const double* positions, const double* reach) const {
     const auto fs = static_cast<std::size_t>(f);
     if (!(d > 0.0) || star_offsets[fs] == star_offsets[fs + 1]) return false;
     const double z[3] = {(x[0] - p[0]) / d, (x[1] - p[1]) / d, (x[2] - p[2]) / d};
+    // The normals' side of the axis, and the angle of p's normal from it
+    // (without a normal: the cone of p's face bounds it).
     const double* a = &axis[3 * fs];
-    const double sign = a[0] * z[0] + a[1] * z[1] + a[2] * z[2] < 0.0 ? -1.0 : 1.0;
+    const double* along = n != nullptr ? n : a;
+    const double c_p = along[0] * z[0] + along[1] * z[1] + along[2] * z[2];
+    const double sign = c_p < 0.0 ? -1.0 : 1.0;
+    const double tilt = std::acos(std::min(std::abs(c_p), 1.0)) + (n != nullptr ? 0.0 : half[fs]);
     double kappa = 0.0;
     for (std::int32_t k = star_offsets[fs]; k < star_offsets[fs + 1]; ++k) {
       const auto g = static_cast<std::size_t>(star[static_cast<std::size_t>(k)]);
       const double* b = &axis[3 * g];
-      const double c = sign * (b[0] * z[0] + b[1] * z[1] + b[2] * z[2]);
-      if (!(std::acos(std::clamp(c, -1.0, 1.0)) + half[g] <= kCertifyTilt)) return false;
+      if (!(sign * (b[0] * z[0] + b[1] * z[1] + b[2] * z[2]) >= cone_cos[g])) return false;
       kappa = std::max(kappa, curvature[g]);
     }
     if (!(d * kappa <= kCertifyCurvature)) return false;
+    if (!(tilt + 1.4142135623730951 * d * kappa <= kCertifyTilt)) return false;
     // The rim's surface lies within reach(s) of its samples s: its ball
     // first, then where that is too near, the samples.
     for (std::int32_t k = rim_offsets[fs]; k < rim_offsets[fs + 1]; ++k) {
@@ -958,6 +994,7 @@ const FootpointSearch::Certificate& FootpointSearch::certificate() const {
     });
     cert->axis.assign(3 * m, 0.0);
     cert->half.assign(m, std::numeric_limits<double>::infinity());
+    cert->cone_cos.assign(m, 2.0);
     cert->curvature.assign(m, std::numeric_limits<double>::infinity());
     cert->ball.assign(4 * m, 0.0);
     for (std::size_t f = 0; f < m; ++f) {
@@ -981,7 +1018,10 @@ const FootpointSearch::Certificate& FootpointSearch::certificate() const {
       }
       for (int c = 0; c < 3; ++c) a[c] = len > 0.0 ? a[c] / len : 0.0;
       cert->curvature[f] = kCertifySafety * bend[f];
-      if (!zero && len > 0.0) cert->half[f] = half + cert->curvature[f] * spacing[f];
+      // A point of the face lies within about spacing / sqrt(3) of a sample,
+      // where its normal is within that distance times the curvature bound.
+      if (!zero && len > 0.0) cert->half[f] = half + 0.6 * cert->curvature[f] * spacing[f];
+      cert->cone_cos[f] = cert->half[f] <= kCertifyStarTilt ? std::cos(kCertifyStarTilt - cert->half[f]) : 2.0;
     }
     // Vertices where the surface is smooth all round: inside the mesh, not at
     // a hole, on no crease and no corner of any sharpness.
@@ -1121,35 +1161,64 @@ std::size_t FootpointSearch::closer(const double* points, std::size_t n, Footpoi
     poll_interrupt();
     const std::size_t b = std::min(kBatch, n - first);
     const int tasks = task_count(b, 4096);
-    index_->nearest(points + 3 * first, b, nearest_sample.data(), nearest_distance.data());
     if (cert != nullptr && !has_positions) {
       at.resize(3 * b);
       surface_->evaluate(&fp.face_ids[first], &fp.uv[2 * first], b, at.data(), nullptr, nullptr, nullptr);
     }
+    // In the points' spatial order, so that the queries find the tree's
+    // nodes and the faces' certificates in cache.
+    const std::vector<std::size_t> order = spatial_order(points + 3 * first, b);
+    // The nearest sample: find's start (left out where the footpoints are
+    // find's) and the reach that `near` scales; where the footpoints are
+    // find's and near is 0, only for the points the certificate leaves
+    // with every start.
+    const bool all_nearest = !found || options_.near > 0.0;
+    if (all_nearest) index_->nearest(points + 3 * first, b, nearest_sample.data(), nearest_distance.data());
+    // Re-searched: a point not within a fraction of its nearest sample's
+    // reach of its footpoint (every point off the surface for near = 0).
+    const auto off = [&](std::size_t j) {
+      const double d = fp.distances[first + j];
+      return d > 0.0 &&
+             (options_.near > 0.0 ? d > options_.near * reach_[static_cast<std::size_t>(nearest_sample[j])] : true);
+    };
     std::fill_n(skipped.begin(), b, std::uint8_t{0});
-    detail::for_each_index(tasks > 1, tasks, b, [&](std::size_t j) {
+    if (cert != nullptr)
+      detail::for_each_index(tasks > 1, tasks, b, [&](std::size_t o) {
+        const std::size_t j = order[o], i = first + j;
+        skipped[j] = off(j) && cert->certifies(fp.face_ids[i], points + 3 * i,
+                                               has_positions ? &fp.positions[3 * i] : &at[3 * j],
+                                               has_normals ? &fp.normals[3 * i] : nullptr, fp.distances[i],
+                                               positions_.data(), reach_.data());
+      });
+    if (!all_nearest) {
+      std::vector<std::size_t> rest;
+      for (const std::size_t j : order)
+        if (skipped[j]) nearest_sample[j] = -1;
+        else if (off(j)) rest.push_back(j);
+      std::vector<double> y(3 * rest.size()), unused(rest.size());
+      std::vector<std::int64_t> near(rest.size());
+      for (std::size_t r = 0; r < rest.size(); ++r) std::copy_n(points + 3 * (first + rest[r]), 3, &y[3 * r]);
+      if (!rest.empty()) index_->nearest(y.data(), rest.size(), near.data(), unused.data());
+      for (std::size_t r = 0; r < rest.size(); ++r) nearest_sample[rest[r]] = near[r];
+    }
+    detail::for_each_index(tasks > 1, tasks, b, [&](std::size_t o) {
+      const std::size_t j = order[o];
       const std::size_t i = first + j;
       const double* x = points + 3 * i;
       const double d = fp.distances[i];
       // The nearest sample, as find starts (its footpoint may be another
-      // than the one given), and for a point not within a fraction of that
-      // sample's reach of its footpoint, the samples whose cells may hold a
-      // point closer than d: |x - s| - reach(s) < d, the least of that lower
-      // bound first; none of the footpoint's face's star where the
-      // certificate holds.
-      // (The nearest sample left out where the footpoints are find's.)
+      // than the one given), and for a point re-searched, the samples whose
+      // cells may hold a point closer than d: |x - s| - reach(s) < d, the
+      // least of that lower bound first; none of the star of the
+      // footpoint's face where the certificate holds.
       std::int64_t* c = &candidate[j * (starts + 1)];
       c[0] = nearest_sample[j];
       const std::int32_t f = fp.face_ids[i];
-      const auto u = static_cast<std::size_t>(c[0]);
-      const bool off = d > 0.0 && d > options_.near * reach_[u];  // re-searched
-      const bool skip = off && cert != nullptr &&
-                        cert->certifies(f, x, has_positions ? &fp.positions[3 * i] : &at[3 * j], d,
-                                                        positions_.data(), reach_.data());
-      skipped[j] = skip;
-      const bool nearest_too = d > 0.0 && !found && !(skip && cert->in_star(f, sample_faces_[u]));
+      const bool skip = skipped[j] != 0;
+      const bool nearest_too =
+          d > 0.0 && !found && !(skip && cert->in_star(f, sample_faces_[static_cast<std::size_t>(c[0])]));
       count[j] = nearest_too ? 1 : 0;
-      if (!off) return;
+      if (!off(j)) return;
       const auto rank = [&](std::int64_t s, double dist) {
         return s == c[0] || (skip && cert->in_star(f, sample_faces_[static_cast<std::size_t>(s)]))
                    ? std::numeric_limits<double>::infinity()

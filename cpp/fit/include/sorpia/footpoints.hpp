@@ -36,12 +36,18 @@ class PointIndex {
   /// The at most `k` points of least rank(index, distance to q) below
   /// `bound`, for one query q (rank called on the calling thread), least
   /// first: their indices and ranks written to index and value (k entries
-  /// each). rank(i, d) must be at least d - slack (so that a part of the
-  /// tree farther than bound + slack is skipped); +inf rejects a point.
+  /// each). rank(i, d) must be at least d - slack, and at least d minus
+  /// point i's slack where set_slack gave them (so that a part of the tree
+  /// farther than bound plus its points' largest slack is skipped); +inf
+  /// rejects a point.
   /// @return how many were written
   std::size_t least_ranked(const double* q, double bound, double slack, std::size_t k,
                            const std::function<double(std::int64_t, double)>& rank, std::int64_t* index,
                            double* value) const;
+  /// Slack of each point (n entries, input order, finite and not negative):
+  /// least_ranked then skips a part of the tree by the largest slack of its
+  /// points rather than by its `slack` argument.
+  void set_slack(const double* slack);
 
  private:
   struct Node {
@@ -58,6 +64,8 @@ class PointIndex {
   std::vector<double> points_;       // (n, 3) in tree order
   std::vector<std::int64_t> order_;  // tree position -> input index
   std::vector<Node> nodes_;
+  std::vector<double> point_slack_;  // per point in tree order, set_slack's; empty without it
+  std::vector<float> node_slack_;    // per node, its points' largest slack (rounded up); empty without set_slack
 };
 
 /// Footpoints of data points on a limit surface: for point i the face
@@ -154,29 +162,34 @@ class FootpointSearch {
   /// Certificate (options.certify): the samples of the faces of the star
   /// of the footpoint's face f (the faces sharing a vertex with f) are left
   /// out of the starts where no point of the star can be closer to x than
-  /// the footpoint p, other than in p's own basin (which the refinement of p
-  /// from itself reaches). In the frame whose axis z is (x - p) / d, with
-  /// every normal of the star within 45 degrees of z, p's sheet of the star
-  /// is a graph z = h(y), |grad h| <= 1, h(0) = 0, over the disk |y| <= d
-  /// (a radial path of length r there lifts to one of length at most
-  /// sqrt(2) r on the surface, which stays inside the star when the star's
-  /// rim, the faces outside it sharing a vertex with it, lies farther than
-  /// 4 d from p). The squared distance to x on that graph,
-  /// |y|^2 + (h(y) - d)^2, has a Hessian of at least
-  /// 2 (1 - 2 d |Hess h|) >= 2 (1 - 2 d 2^1.5 kappa) for a normal
-  /// curvature bounded by kappa: with d kappa <= 0.1 it is convex on the
-  /// disk, which holds every point of the graph within d of x, so its only
-  /// minimum there is p's basin's. The bounds per face come from the grid
-  /// samples: kappa is 4 times the largest angle between neighbouring
-  /// samples' normals over their distance, the cone of normals is the
-  /// samples' widened by kappa times the largest spacing, the face lies in
-  /// the ball of its samples widened by their reach (as the candidates'
-  /// bound takes it). A face is never certified where a vertex of its star
-  /// lies on the boundary, at a hole, or on a crease or corner of any
-  /// sharpness (where the surface is not smooth, a crease's far side can be
-  /// closer). The star is taken to be one sheet over the plane (it does not
-  /// wind round z). The samples outside the star keep the candidates' bound,
-  /// and the points not certified take every start.
+  /// the footpoint p (distance d) other than in p's own basin, which the
+  /// refinement of p from itself reaches. In the frame whose axis z is
+  /// (x - p) / d:
+  /// - every normal of the star lies within 80 degrees of z, so that the
+  ///   star projects onto the plane across z without folding; it is taken
+  ///   to be one sheet over that plane (it does not wind round z);
+  /// - with kappa a bound of the star's normal curvature, p's normal lies
+  ///   within 45 degrees minus sqrt(2) d kappa of z, and the star's rim
+  ///   (the faces outside it sharing a vertex with it) farther than 4 d from
+  ///   p: the star over the disk |y| <= d round p is a graph z = h(y),
+  ///   h(0) = 0, of slope at most 1 (a radial path of length r lifts to one
+  ///   of length at most sqrt(2) r, along which the normal turns by at most
+  ///   sqrt(2) d kappa) and |Hess h| <= 2^1.5 kappa;
+  /// - d kappa <= 0.1: the squared distance to x over that disk,
+  ///   |y|^2 + (h(y) - d)^2, has a Hessian of at least
+  ///   2 (1 - 2 d 2^1.5 kappa) > 0, so it is convex there, and the disk
+  ///   holds every point of the star within d of x: the points of the star
+  ///   closer than d form one basin, p's.
+  /// The bounds come from the grid samples of each face: kappa is 4 times
+  /// the largest angle between neighbouring samples' normals over their
+  /// distance, the cone of normals is the samples' widened by kappa times
+  /// 0.6 of the largest spacing, and the face lies within reach(s) of its
+  /// samples s (as the candidates' bound takes it). A face is never
+  /// certified where a vertex of its star lies on the boundary, at a hole,
+  /// or on a crease or corner of any sharpness (where the surface is not
+  /// smooth: across a concave crease a closer point lies in the star). The
+  /// samples outside the star keep the candidates' bound; a point not
+  /// certified takes every start.
   /// Each point's result depends on that point alone; no distance
   /// increases.
   /// @param points      row-major (n, 3), finite
