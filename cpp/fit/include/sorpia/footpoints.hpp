@@ -98,7 +98,8 @@ struct FootpointOptions {
   /// the surface within about that distance, finer than the grid. 0 (the
   /// default) is the exhaustive search, which tests/test_footpoints.py holds
   /// to the brute-force closest points within 1e-9 of the diagonal (about 6
-  /// times find's instructions; 0.1 far fewer, leaving points on folds).
+  /// times find's instructions without the certificate below; 0.1 far fewer,
+  /// leaving points on folds).
   double near = 0.0;
   /// FootpointSearch::closer leaves out the starts in the faces round a
   /// footpoint where a bound on the surface's curvature there shows that
