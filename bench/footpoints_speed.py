@@ -94,13 +94,13 @@ def worker(data: str, phase: str | None, out: str, near: float | None) -> None:
     if phase in (None, "closer") and hasattr(_core, "closer_footpoints"):
         t = time.perf_counter()
         kw = {} if near is None else {"near": near}
-        out = _core.closer_footpoints(s1._surface, s1._topology, P, refined[0], refined[1], 4, 10, 8, **kw)
+        closer = _core.closer_footpoints(s1._surface, s1._topology, P, refined[0], refined[1], 4, 10, 8, **kw)
         times["closer"] = time.perf_counter() - t
-        dist = out[0][3]
-        if len(out) > 2:  # the points certified (builds from the closer certificate on)
-            times["closer_certified"] = out[2] / len(P)
+        dist = closer[0][3]
+        if len(closer) > 2:  # the points certified (builds from the closer certificate on)
+            times["closer_certified"] = closer[2] / len(P)
         res["closer"] = dist
-        times["closer_moved"] = out[1]
+        times["closer_moved"] = closer[1]
     if phase in (None, "rows"):
         if phase == "rows":
             refined = _core.refine_footpoints(s1._surface, s1._topology, P, found[0], found[1], 10)
