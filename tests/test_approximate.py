@@ -689,7 +689,7 @@ def test_reported_distances_are_true_distances():
     finer = _core.closest_points(s._surface, s._topology, P, 16, 30)[3]
     assert np.all(res.distances <= finer + 1e-9 * diagonal)
     start = _core.closest_points(s._surface, s._topology, P, 4, 10)
-    (_, _, _, exhaustive, _), _ = _core.closer_footpoints(s._surface, s._topology, P, start[0], start[1], 4, 10, 8,
+    (_, _, _, exhaustive, _), _, _ = _core.closer_footpoints(s._surface, s._topology, P, start[0], start[1], 4, 10, 8,
                                                            near=0.0)
     assert np.all(res.distances <= exhaustive + 1e-9 * diagonal)
     assert res.rms == pytest.approx(np.sqrt(np.mean(res.distances ** 2)), rel=1e-12)

@@ -590,16 +590,17 @@ void bind_approximate(py::module_& m) {
   m.def("closer_footpoints",
         [given_footpoints](const sorpia::LimitSurface& surface, const sorpia::Topology& topology,
                            const Vertices& points, const FaceIds& face_ids, const Vertices& uv, int grid,
-                           int max_steps, int starts, double near) {
+                           int max_steps, int starts, double near, bool certify) {
           const auto n = static_cast<std::size_t>(points.shape(0));
           sorpia::Footpoints fp = given_footpoints(points, face_ids, uv);
           const double* p = points.data();
-          std::size_t moved = 0;
+          std::size_t moved = 0, certified = 0;
           {
             LongCall call;
             sorpia::FootpointOptions o = footpoint_options(grid, max_steps);
             o.starts = starts;
             o.near = near;
+            o.certify = certify;
             const sorpia::FootpointSearch search(surface, topology, o);
             fp.positions.resize(3 * n);
             fp.normals.resize(3 * n);
@@ -611,14 +612,16 @@ void bind_approximate(py::module_& m) {
               for (std::size_t c = 0; c < 3; ++c) d2 += (p[3 * i + c] - fp.positions[3 * i + c]) * (p[3 * i + c] - fp.positions[3 * i + c]);
               fp.distances[i] = std::sqrt(d2);
             }
-            moved = search.closer(p, n, fp);
+            moved = search.closer(p, n, fp, false, &certified);
           }
-          return py::make_tuple(footpoint_tuple(std::move(fp)), moved);
+          return py::make_tuple(footpoint_tuple(std::move(fp)), moved, certified);
         },
         "surface"_a, "topology"_a, "points"_a.noconvert(), "face_ids"_a.noconvert(), "uv"_a.noconvert(), "grid"_a,
         "max_steps"_a, "starts"_a, "near"_a = sorpia::FootpointOptions{}.near,
-        "((face_ids, uv, positions, distances, normals), moved): the footpoints given, evaluated at their (face, uv),\n"
-        "re-searched from the grid samples within their distance (sorpia::FootpointSearch::closer).");
+        "certify"_a = sorpia::FootpointOptions{}.certify,
+        "((face_ids, uv, positions, distances, normals), moved, certified): the footpoints given, evaluated at their\n"
+        "(face, uv), re-searched from the grid samples within their distance (sorpia::FootpointSearch::closer);\n"
+        "certified: how many points its certificate let leave out their star's samples (certify=False: none).");
 
   m.def(
       "scale_exponent",

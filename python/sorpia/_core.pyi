@@ -795,10 +795,11 @@ def check_writable(path: str) -> None:
     """
     Raise MeshFileError naming path when write_file_atomic(path, ...) could not start.
     """
-def closer_footpoints(surface: LimitSurface, topology: Topology, points: numpy.typing.NDArray[numpy.float64], face_ids: numpy.typing.NDArray[numpy.int32], uv: numpy.typing.NDArray[numpy.float64], grid: typing.SupportsInt | typing.SupportsIndex, max_steps: typing.SupportsInt | typing.SupportsIndex, starts: typing.SupportsInt | typing.SupportsIndex, near: typing.SupportsFloat | typing.SupportsIndex = 0.0) -> tuple[tuple, int]:
+def closer_footpoints(surface: LimitSurface, topology: Topology, points: numpy.typing.NDArray[numpy.float64], face_ids: numpy.typing.NDArray[numpy.int32], uv: numpy.typing.NDArray[numpy.float64], grid: typing.SupportsInt | typing.SupportsIndex, max_steps: typing.SupportsInt | typing.SupportsIndex, starts: typing.SupportsInt | typing.SupportsIndex, near: typing.SupportsFloat | typing.SupportsIndex = 0.0, certify: bool = True) -> tuple[tuple, int, int]:
     """
-    ((face_ids, uv, positions, distances, normals), moved): the footpoints given, evaluated at their (face, uv),
-    re-searched from the grid samples within their distance (sorpia::FootpointSearch::closer).
+    ((face_ids, uv, positions, distances, normals), moved, certified): the footpoints given, evaluated at their
+    (face, uv), re-searched from the grid samples within their distance (sorpia::FootpointSearch::closer);
+    certified: how many points its certificate let leave out their star's samples (certify=False: none).
     """
 def closest_points(surface: LimitSurface, topology: Topology, points: numpy.typing.NDArray[numpy.float64], grid: typing.SupportsInt | typing.SupportsIndex, max_steps: typing.SupportsInt | typing.SupportsIndex) -> tuple:
     ...

@@ -29,17 +29,22 @@ using sorpia::Scheme;
 
 TEST(PointIndex, LeastRankedIsTheSortedScanOfTheRanksBelowTheBound) {
   // rank = distance - slack_i (slack_i in [0, 0.2], +inf for every third
-  // point): the k least below the bound, as a scan of every point finds them.
+  // point): the k least below the bound, as a scan of every point finds them,
+  // with the slack given per query (0.2) or per point (set_slack).
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   std::vector<double> points(3 * 2000), queries(3 * 50), slack(2000);
   for (double& x : points) x = u(rng);
   for (double& x : queries) x = 1.2 * u(rng);
   for (double& s : slack) s = 0.1 + 0.1 * u(rng);
-  const sorpia::PointIndex index(points.data(), 2000);
+  sorpia::PointIndex with_slack(points.data(), 2000);
+  with_slack.set_slack(slack.data());
+  const sorpia::PointIndex& per_point = with_slack;
+  const sorpia::PointIndex plain(points.data(), 2000);
   const auto rank = [&](std::int64_t i, double d) {
     return i % 3 == 0 ? std::numeric_limits<double>::infinity() : d - slack[static_cast<std::size_t>(i)];
   };
+  for (const sorpia::PointIndex* index : {&plain, &per_point})
   for (std::size_t q = 0; q < 50; ++q)
     for (const double bound : {0.05, 0.4, 10.0})
       for (const std::size_t k : {std::size_t{1}, std::size_t{7}, std::size_t{3000}}) {
@@ -55,8 +60,9 @@ TEST(PointIndex, LeastRankedIsTheSortedScanOfTheRanksBelowTheBound) {
         scan.resize(std::min(scan.size(), k));
         std::vector<std::int64_t> found(std::min<std::size_t>(k, 2000));
         std::vector<double> value(found.size());
-        const std::size_t got = index.least_ranked(&queries[3 * q], bound, 0.2, k, rank, found.data(), value.data());
-        ASSERT_EQ(got, scan.size()) << "query " << q << " bound " << bound << " k " << k;
+        const std::size_t got = index->least_ranked(&queries[3 * q], bound, 0.2, k, rank, found.data(), value.data());
+        ASSERT_EQ(got, scan.size()) << "query " << q << " bound " << bound << " k " << k << " per point "
+                                    << (index == &per_point);
         for (std::size_t j = 0; j < got; ++j) {
           EXPECT_EQ(found[j], scan[j].second);
           EXPECT_NEAR(value[j], scan[j].first, 1e-15);

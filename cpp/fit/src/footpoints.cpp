@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <iterator>
 #include <limits>
 #include <memory>
 #include <string>
@@ -225,23 +226,28 @@ std::size_t PointIndex::least_ranked(const double* q, double bound, double slack
   // bound is the k-th one's once k are held.
   thread_local std::vector<std::pair<double, std::uint32_t>> heap;
   heap.clear();
-  // A box at distance b holds no rank below b - slack.
-  const auto box_out = [&](const Node& nd) {
-    const double reach = bound + slack;
-    return !(reach > 0.0) || box_distance2(nd.lo, nd.hi, q) >= reach * reach;
+  // A box at distance b holds no rank below b minus its points' slack.
+  const auto box_out = [&](std::uint32_t node) {
+    const double reach =
+        bound + (node_slack_.empty() ? slack : std::min(slack, static_cast<double>(node_slack_[node])));
+    return !(reach > 0.0) || box_distance2(nodes_[node].lo, nodes_[node].hi, q) >= reach * reach;
   };
   thread_local std::vector<std::uint32_t> stack;
   stack.clear();
   stack.push_back(0);
   while (!stack.empty()) {
-    const Node& nd = nodes_[stack.back()];
+    const std::uint32_t node = stack.back();
+    const Node& nd = nodes_[node];
     stack.pop_back();
-    if (box_out(nd)) continue;
+    if (box_out(node)) continue;
     if (nd.left == 0) {
       for (std::uint32_t i = nd.begin; i < nd.end; ++i) {
         const double* p = &points_[3 * static_cast<std::size_t>(i)];
         const double dx = p[0] - q[0], dy = p[1] - q[1], dz = p[2] - q[2];
-        const double d = std::sqrt(dx * dx + dy * dy + dz * dz);
+        const double d2 = dx * dx + dy * dy + dz * dz;
+        const double within = bound + (point_slack_.empty() ? slack : std::min(slack, point_slack_[i]));
+        if (!(within > 0.0 && d2 < within * within)) continue;
+        const double d = std::sqrt(d2);
         if (!(d - slack < bound)) continue;
         const double r = rank(order_[i], d);
         if (!(r < bound)) continue;
@@ -263,6 +269,26 @@ std::size_t PointIndex::least_ranked(const double* q, double bound, double slack
     value[j] = heap[j].first;
   }
   return heap.size();
+}
+
+void PointIndex::set_slack(const double* slack) {
+  // A node's children follow it in nodes_: from the last node back, each
+  // node's children are done before it.
+  point_slack_.resize(n_);
+  for (std::size_t i = 0; i < n_; ++i) point_slack_[i] = slack[order_[i]];
+  node_slack_.assign(nodes_.size(), 0.0f);
+  for (std::size_t j = nodes_.size(); j-- > 0;) {
+    const Node& nd = nodes_[j];
+    if (nd.left != 0) {
+      node_slack_[j] = std::max(node_slack_[nd.left], node_slack_[nd.left + 1]);
+      continue;
+    }
+    double most = 0.0;
+    for (std::uint32_t i = nd.begin; i < nd.end; ++i) most = std::max(most, point_slack_[i]);
+    auto up = static_cast<float>(most);
+    if (static_cast<double>(up) < most) up = std::nextafter(up, std::numeric_limits<float>::infinity());
+    node_slack_[j] = up;
+  }
 }
 
 // ---- charts of a face's domain ---------------------------------------------------
@@ -492,13 +518,11 @@ void grid_samples(const Domains& dom, int r, std::vector<std::int32_t>& face_ids
   }
 }
 
-// For each sample of grid_samples(dom, r) (in its order), with limit points
-// `positions`: the largest distance to its neighbours in its chart's grid
-// (along a row, a column, and for a triangle the third direction). Every
-// point of the chart lies within about half a spacing of a sample in
-// (u, v), so within this of one in space.
-std::vector<double> grid_reach(const Domains& dom, int r, const std::vector<double>& positions) {
-  std::vector<double> reach(positions.size() / 3, 0.0);
+// Calls link(f, a, b) for each pair of neighbouring samples a, b of
+// grid_samples(dom, r) (indices in its order) in one chart's grid of face f:
+// along a row, a column, and for a triangle the third direction.
+template <class Link>
+void for_each_grid_link(const Domains& dom, int r, Link&& link) {
   const auto m = static_cast<std::int32_t>(dom.topology.n_faces());
   std::size_t offset = 0;
   for (std::int32_t f = 0; f < m; ++f) {
@@ -511,25 +535,34 @@ std::vector<double> grid_reach(const Domains& dom, int r, const std::vector<doub
         for (int jj = 0; jj < j; ++jj) o += static_cast<std::size_t>(tri ? r + 1 - jj : r + 1);
         return o + static_cast<std::size_t>(i);
       };
-      const auto link = [&](std::size_t a, std::size_t b) {
-        const double* p = &positions[3 * a];
-        const double* q = &positions[3 * b];
-        const double d = std::sqrt((p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) +
-                                   (p[2] - q[2]) * (p[2] - q[2]));
-        reach[a] = std::max(reach[a], d);
-        reach[b] = std::max(reach[b], d);
-      };
       for (int j = 0; j <= r; ++j) {
         const int row = tri ? r - j : r;  // the last i of row j
         for (int i = 0; i <= row; ++i) {
-          if (i < row) link(at(i, j), at(i + 1, j));
-          if (j < r && (!tri || i <= row - 1)) link(at(i, j), at(i, j + 1));
-          if (tri && i > 0 && j < r) link(at(i, j), at(i - 1, j + 1));
+          if (i < row) link(f, at(i, j), at(i + 1, j));
+          if (j < r && (!tri || i <= row - 1)) link(f, at(i, j), at(i, j + 1));
+          if (tri && i > 0 && j < r) link(f, at(i, j), at(i - 1, j + 1));
         }
       }
       offset = at(0, r) + static_cast<std::size_t>(tri ? 1 : r + 1);
     }
   }
+}
+
+double distance3(const double* p, const double* q) {
+  return std::sqrt((p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) + (p[2] - q[2]) * (p[2] - q[2]));
+}
+
+// For each sample of grid_samples(dom, r) (in its order), with limit points
+// `positions`: the largest distance to its neighbours in its chart's grid
+// (for_each_grid_link). Every point of the chart lies within about half a
+// spacing of a sample in (u, v), so within this of one in space.
+std::vector<double> grid_reach(const Domains& dom, int r, const std::vector<double>& positions) {
+  std::vector<double> reach(positions.size() / 3, 0.0);
+  for_each_grid_link(dom, r, [&](std::int32_t, std::size_t a, std::size_t b) {
+    const double d = distance3(&positions[3 * a], &positions[3 * b]);
+    reach[a] = std::max(reach[a], d);
+    reach[b] = std::max(reach[b], d);
+  });
   return reach;
 }
 
@@ -842,6 +875,7 @@ FootpointSearch::FootpointSearch(const LimitSurface& surface, const Topology& to
   reach_ = grid_reach(dom, options.grid, positions_);
   largest_reach_ = *std::max_element(reach_.begin(), reach_.end());
   index_ = std::make_unique<PointIndex>(positions_.data(), k);
+  index_->set_slack(reach_.data());  // closer's candidates: |x - s| - reach(s) < d
   // Bfr's regularity of each face (holes: regular, never searched).
   std::vector<std::int32_t> faces;
   for (std::int32_t f = 0; f < static_cast<std::int32_t>(topology.n_faces()); ++f)
@@ -852,6 +886,211 @@ FootpointSearch::FootpointSearch(const LimitSurface& surface, const Topology& to
 }
 
 FootpointSearch::~FootpointSearch() = default;
+
+namespace {
+// closer's certificate (footpoints.hpp): the curvature bound per face is this
+// times the samples' largest angle between normals over distance (the chord
+// estimate misses curvature between samples).
+constexpr double kCertifySafety = 4.0;
+// The largest angle of the star's normals from the axis x - p (below a right
+// angle: the star projects onto the plane across the axis without folding).
+constexpr double kCertifyStarTilt = 1.3962634015954636;  // 80 degrees
+// The largest angle of the normals near the footpoint (within sqrt(2) d of
+// it) from the axis: the graph's slope there is at most 1.
+constexpr double kCertifyTilt = 0.7853981633974483;  // 45 degrees
+// The largest distance times curvature bound (convexity needs it below
+// 1 / (4 2^1.5) = 0.177).
+constexpr double kCertifyCurvature = 0.1;
+// The star's rim lies farther than this times the distance from the
+// footpoint (sqrt(2) times the distance, the lift of the disk, with room).
+constexpr double kCertifyRim = 4.0;
+}  // namespace
+
+struct FootpointSearch::Certificate {
+  // Per face: the faces sharing a vertex with it (its star, sorted) and the
+  // faces outside the star sharing a vertex with a face of the star (its
+  // rim); both empty where the face is never certified.
+  std::vector<std::int32_t> star_offsets, star, rim_offsets, rim;
+  std::vector<double> axis;       // per face (3): the unit axis of a cone holding its normals
+  std::vector<double> half;       // per face: the cone's half-angle
+  std::vector<double> cone_cos;   // per face: cos(kCertifyStarTilt - half), above 1 where half exceeds it
+  std::vector<double> curvature;  // per face: the bound of its normal curvature
+  std::vector<double> ball;       // per face (4): centre and radius of a ball holding its surface
+  std::vector<std::size_t> samples;  // per face + 1: its grid samples are [samples[f], samples[f + 1])
+
+  bool in_star(std::int32_t f, std::int32_t g) const {
+    const auto first = star.begin() + star_offsets[static_cast<std::size_t>(f)];
+    const auto last = star.begin() + star_offsets[static_cast<std::size_t>(f) + 1];
+    return std::binary_search(first, last, g);
+  }
+
+  // Whether point x, at distance d > 0 from its footpoint p in face f (unit
+  // normal n there, or null), is certified (footpoints.hpp,
+  // FootpointSearch::closer).
+  bool certifies(std::int32_t f, const double* x, const double* p, const double* n, double d,
+                 const double* positions, const double* reach) const {
+    const auto fs = static_cast<std::size_t>(f);
+    if (!(d > 0.0) || star_offsets[fs] == star_offsets[fs + 1]) return false;
+    const double z[3] = {(x[0] - p[0]) / d, (x[1] - p[1]) / d, (x[2] - p[2]) / d};
+    // The normals' side of the axis, and the angle of p's normal from it
+    // (without a normal: the cone of p's face bounds it).
+    const double* a = &axis[3 * fs];
+    const double* along = n != nullptr ? n : a;
+    const double c_p = along[0] * z[0] + along[1] * z[1] + along[2] * z[2];
+    const double sign = c_p < 0.0 ? -1.0 : 1.0;
+    const double tilt = std::acos(std::min(std::abs(c_p), 1.0)) + (n != nullptr ? 0.0 : half[fs]);
+    double kappa = 0.0;
+    for (std::int32_t k = star_offsets[fs]; k < star_offsets[fs + 1]; ++k) {
+      const auto g = static_cast<std::size_t>(star[static_cast<std::size_t>(k)]);
+      const double* b = &axis[3 * g];
+      if (!(sign * (b[0] * z[0] + b[1] * z[1] + b[2] * z[2]) >= cone_cos[g])) return false;
+      kappa = std::max(kappa, curvature[g]);
+    }
+    if (!(d * kappa <= kCertifyCurvature)) return false;
+    if (!(tilt + 1.4142135623730951 * d * kappa <= kCertifyTilt)) return false;
+    // The rim's surface lies within reach(s) of its samples s: its ball
+    // first, then where that is too near, the samples.
+    for (std::int32_t k = rim_offsets[fs]; k < rim_offsets[fs + 1]; ++k) {
+      const auto g = static_cast<std::size_t>(rim[static_cast<std::size_t>(k)]);
+      const double* o = &ball[4 * g];
+      if (distance3(p, o) - o[3] > kCertifyRim * d) continue;
+      for (std::size_t s = samples[g]; s < samples[g + 1]; ++s)
+        if (!(distance3(p, &positions[3 * s]) - reach[s] > kCertifyRim * d)) return false;
+    }
+    return true;
+  }
+};
+
+const FootpointSearch::Certificate& FootpointSearch::certificate() const {
+  std::call_once(certificate_once_, [&] {
+    auto cert = std::make_unique<Certificate>();
+    const Topology& t = *topology_;
+    const Tags& tags = surface_->tags();
+    const Domains dom(t, surface_->scheme(), tags.holes);
+    const std::size_t m = t.n_faces(), nv = t.n_vertices();
+    const std::vector<std::int32_t>& corners = t.face_indices();
+    // The samples of each face (grid_samples gives them face after face).
+    std::vector<std::size_t> first(m + 1, 0);
+    for (const std::int32_t f : sample_faces_) ++first[static_cast<std::size_t>(f) + 1];
+    for (std::size_t f = 0; f < m; ++f) first[f + 1] += first[f];
+    const std::size_t k = sample_faces_.size();
+    std::vector<double> normal(3 * k);
+    for (std::size_t s = 0; s < k; ++s) detail::unit_normal(&du_[3 * s], &dv_[3 * s], &normal[3 * s]);
+    // Curvature: the largest angle between neighbouring samples' normals over
+    // their distance; and the largest spacing.
+    std::vector<double> bend(m, 0.0), spacing(m, 0.0);
+    for_each_grid_link(dom, options_.grid, [&](std::int32_t f, std::size_t a, std::size_t b) {
+      const double* na = &normal[3 * a];
+      const double* nb = &normal[3 * b];
+      const double c = na[0] * nb[0] + na[1] * nb[1] + na[2] * nb[2];
+      const double len = distance3(&positions_[3 * a], &positions_[3 * b]);
+      const auto fs = static_cast<std::size_t>(f);
+      bend[fs] = std::max(bend[fs], len > 0.0 ? std::acos(std::clamp(c, -1.0, 1.0)) / len
+                                              : std::numeric_limits<double>::infinity());
+      spacing[fs] = std::max(spacing[fs], len);
+    });
+    cert->axis.assign(3 * m, 0.0);
+    cert->half.assign(m, std::numeric_limits<double>::infinity());
+    cert->cone_cos.assign(m, 2.0);
+    cert->curvature.assign(m, std::numeric_limits<double>::infinity());
+    cert->ball.assign(4 * m, 0.0);
+    for (std::size_t f = 0; f < m; ++f) {
+      if (first[f] == first[f + 1]) continue;  // a hole
+      double* a = &cert->axis[3 * f];
+      double* o = &cert->ball[4 * f];
+      bool zero = false;
+      for (std::size_t s = first[f]; s < first[f + 1]; ++s)
+        for (int c = 0; c < 3; ++c) {
+          a[c] += normal[3 * s + c];
+          o[c] += positions_[3 * s + c] / static_cast<double>(first[f + 1] - first[f]);
+          zero = zero || (normal[3 * s] == 0.0 && normal[3 * s + 1] == 0.0 && normal[3 * s + 2] == 0.0);
+        }
+      const double len = std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+      double half = 0.0;
+      for (std::size_t s = first[f]; s < first[f + 1]; ++s) {
+        const double* n = &normal[3 * s];
+        const double c = len > 0.0 ? (a[0] * n[0] + a[1] * n[1] + a[2] * n[2]) / len : -1.0;
+        half = std::max(half, std::acos(std::clamp(c, -1.0, 1.0)));
+        o[3] = std::max(o[3], distance3(&positions_[3 * s], o) + reach_[s]);
+      }
+      for (int c = 0; c < 3; ++c) a[c] = len > 0.0 ? a[c] / len : 0.0;
+      cert->curvature[f] = kCertifySafety * bend[f];
+      // A point of the face lies within about spacing / sqrt(3) of a sample,
+      // where its normal is within that distance times the curvature bound.
+      if (!zero && len > 0.0) cert->half[f] = half + 0.6 * cert->curvature[f] * spacing[f];
+      cert->cone_cos[f] = cert->half[f] <= kCertifyStarTilt ? std::cos(kCertifyStarTilt - cert->half[f]) : 2.0;
+    }
+    // Vertices where the surface is smooth all round: inside the mesh, not at
+    // a hole, on no crease and no corner of any sharpness.
+    std::vector<std::int32_t> vf_offsets(nv + 1, 0), vf;
+    for (const std::int32_t v : corners) ++vf_offsets[static_cast<std::size_t>(v) + 1];
+    for (std::size_t v = 0; v < nv; ++v) vf_offsets[v + 1] += vf_offsets[v];
+    vf.resize(corners.size());
+    {
+      std::vector<std::int32_t> fill(vf_offsets.begin(), vf_offsets.end() - 1);
+      for (std::size_t f = 0; f < m; ++f)
+        for (std::int32_t c = 0; c < t.face_size(f); ++c)
+          vf[static_cast<std::size_t>(fill[static_cast<std::size_t>(corners[static_cast<std::size_t>(t.face_offset(f) + c)])]++)] =
+              static_cast<std::int32_t>(f);
+    }
+    std::vector<std::uint8_t> smooth(nv, 1);
+    for (std::size_t v = 0; v < nv; ++v) smooth[v] = !t.is_unreferenced(v) && !t.is_boundary(v);
+    for (std::size_t c = 0; c < tags.n_creases(); ++c)
+      if (tags.crease_sharpness[c] > 0.0)
+        smooth[static_cast<std::size_t>(tags.crease_vertices[2 * c])] =
+            smooth[static_cast<std::size_t>(tags.crease_vertices[2 * c + 1])] = 0;
+    for (std::size_t c = 0; c < tags.n_corners(); ++c)
+      if (tags.corner_sharpness[c] > 0.0) smooth[static_cast<std::size_t>(tags.corner_vertices[c])] = 0;
+    for (const std::int32_t h : tags.holes)
+      for (std::int32_t c = 0; c < t.face_size(static_cast<std::size_t>(h)); ++c)
+        smooth[static_cast<std::size_t>(corners[static_cast<std::size_t>(t.face_offset(static_cast<std::size_t>(h)) + c)])] = 0;
+    // Each face's star and rim (left empty where the face is not certified).
+    std::vector<std::vector<std::int32_t>> stars(m), rims(m);
+    const int tasks = detail::task_count(m, 4096);
+    detail::for_each_index(tasks > 1, tasks, m, [&](std::size_t f) {
+      const auto faces_at = [&](std::size_t g, std::vector<std::int32_t>& out) {
+        bool ok = true;
+        for (std::int32_t c = 0; c < t.face_size(g); ++c) {
+          const auto v = static_cast<std::size_t>(corners[static_cast<std::size_t>(t.face_offset(g) + c)]);
+          ok = ok && smooth[v];
+          out.insert(out.end(), vf.begin() + vf_offsets[v], vf.begin() + vf_offsets[v + 1]);
+        }
+        return ok;
+      };
+      if (first[f] == first[f + 1]) return;
+      std::vector<std::int32_t> star, around;
+      if (!faces_at(f, star)) return;
+      std::sort(star.begin(), star.end());
+      star.erase(std::unique(star.begin(), star.end()), star.end());
+      for (const std::int32_t g : star) {
+        if (!std::isfinite(cert->half[static_cast<std::size_t>(g)]) || !faces_at(static_cast<std::size_t>(g), around))
+          return;
+      }
+      std::sort(around.begin(), around.end());
+      around.erase(std::unique(around.begin(), around.end()), around.end());
+      std::vector<std::int32_t> rim;
+      std::set_difference(around.begin(), around.end(), star.begin(), star.end(), std::back_inserter(rim));
+      stars[f] = std::move(star);
+      rims[f] = std::move(rim);
+    });
+    const auto flatten = [&](std::vector<std::vector<std::int32_t>>& lists, std::vector<std::int32_t>& offsets,
+                             std::vector<std::int32_t>& flat) {
+      offsets.assign(m + 1, 0);
+      for (std::size_t f = 0; f < m; ++f)
+        offsets[f + 1] = offsets[f] + static_cast<std::int32_t>(lists[f].size());
+      flat.reserve(static_cast<std::size_t>(offsets[m]));
+      for (auto& list : lists) {
+        flat.insert(flat.end(), list.begin(), list.end());
+        std::vector<std::int32_t>().swap(list);
+      }
+    };
+    flatten(stars, cert->star_offsets, cert->star);
+    flatten(rims, cert->rim_offsets, cert->rim);
+    cert->samples = std::move(first);
+    certificate_ = std::move(cert);
+  });
+  return *certificate_;
+}
 
 Footpoints FootpointSearch::find(const double* points, std::size_t n) const {
   Footpoints fp;
@@ -873,7 +1112,9 @@ Footpoints FootpointSearch::find(const double* points, std::size_t n) const {
   return fp;
 }
 
-std::size_t FootpointSearch::closer(const double* points, std::size_t n, Footpoints& fp, bool found) const {
+std::size_t FootpointSearch::closer(const double* points, std::size_t n, Footpoints& fp, bool found,
+                                    std::size_t* certified) const {
+  if (certified != nullptr) *certified = 0;
   if (fp.face_ids.size() != n || fp.uv.size() != 2 * n || fp.distances.size() != n)
     throw ParameterError("footpoints hold " + std::to_string(fp.face_ids.size()) + " faces, " +
                          std::to_string(fp.uv.size() / 2) + " parameters and " + std::to_string(fp.distances.size()) +
@@ -886,6 +1127,7 @@ std::size_t FootpointSearch::closer(const double* points, std::size_t n, Footpoi
   const auto starts = static_cast<std::size_t>(std::max(options_.starts, 0));
   if (n == 0 || starts == 0) return 0;
   const bool has_positions = fp.positions.size() == 3 * n, has_normals = fp.normals.size() == 3 * n;
+  const Certificate* cert = options_.certify ? &certificate() : nullptr;
   FootpointOptions options = options_;
   options.max_steps = std::max(options.max_steps, kCloserSteps);
   std::size_t moved = 0;
@@ -910,34 +1152,81 @@ std::size_t FootpointSearch::closer(const double* points, std::size_t n, Footpoi
     if (has_normals) std::copy_n(&from.normals[3 * r], 3, &fp.normals[3 * i]);
     return true;
   };
-  std::vector<std::uint8_t> changed(kBatch);
+  std::vector<std::uint8_t> changed(kBatch), skipped(kBatch);
+  std::vector<double> at;  // the footpoints' positions where fp holds none (the certificate's p)
   for (std::size_t first = 0; first < n; first += kBatch) {
     poll_interrupt();
     const std::size_t b = std::min(kBatch, n - first);
     const int tasks = detail::task_count(b, 4096);
-    index_->nearest(points + 3 * first, b, nearest_sample.data(), nearest_distance.data());
-    detail::for_each_index(tasks > 1, tasks, b, [&](std::size_t j) {
+    if (cert != nullptr && !has_positions) {
+      at.resize(3 * b);
+      surface_->evaluate(&fp.face_ids[first], &fp.uv[2 * first], b, at.data(), nullptr, nullptr, nullptr);
+    }
+    // In the points' spatial order, so that the queries find the tree's
+    // nodes and the faces' certificates in cache.
+    const std::vector<std::size_t> order = spatial_order(points + 3 * first, b);
+    // The nearest sample: find's start (left out where the footpoints are
+    // find's) and the reach that `near` scales; where the footpoints are
+    // find's and near is 0, only for the points the certificate leaves
+    // with every start.
+    const bool all_nearest = !found || options_.near > 0.0;
+    if (all_nearest) index_->nearest(points + 3 * first, b, nearest_sample.data(), nearest_distance.data());
+    // Re-searched: a point not within a fraction of its nearest sample's
+    // reach of its footpoint (every point off the surface for near = 0).
+    const auto off = [&](std::size_t j) {
+      const double d = fp.distances[first + j];
+      return d > 0.0 &&
+             (options_.near > 0.0 ? d > options_.near * reach_[static_cast<std::size_t>(nearest_sample[j])] : true);
+    };
+    std::fill_n(skipped.begin(), b, std::uint8_t{0});
+    if (cert != nullptr)
+      detail::for_each_index(tasks > 1, tasks, b, [&](std::size_t o) {
+        const std::size_t j = order[o], i = first + j;
+        skipped[j] = off(j) && cert->certifies(fp.face_ids[i], points + 3 * i,
+                                               has_positions ? &fp.positions[3 * i] : &at[3 * j],
+                                               has_normals ? &fp.normals[3 * i] : nullptr, fp.distances[i],
+                                               positions_.data(), reach_.data());
+      });
+    if (!all_nearest) {
+      std::vector<std::size_t> rest;
+      for (const std::size_t j : order)
+        if (skipped[j]) nearest_sample[j] = -1;
+        else if (off(j)) rest.push_back(j);
+      std::vector<double> y(3 * rest.size()), unused(rest.size());
+      std::vector<std::int64_t> near(rest.size());
+      for (std::size_t r = 0; r < rest.size(); ++r) std::copy_n(points + 3 * (first + rest[r]), 3, &y[3 * r]);
+      if (!rest.empty()) index_->nearest(y.data(), rest.size(), near.data(), unused.data());
+      for (std::size_t r = 0; r < rest.size(); ++r) nearest_sample[rest[r]] = near[r];
+    }
+    detail::for_each_index(tasks > 1, tasks, b, [&](std::size_t o) {
+      const std::size_t j = order[o];
       const std::size_t i = first + j;
       const double* x = points + 3 * i;
       const double d = fp.distances[i];
       // The nearest sample, as find starts (its footpoint may be another
-      // than the one given), and for a point not within a fraction of that
-      // sample's reach of its footpoint, the samples whose cells may hold a
-      // point closer than d: |x - s| - reach(s) < d, the least of that lower
-      // bound first.
-      // (The nearest sample left out where the footpoints are find's.)
+      // than the one given), and for a point re-searched, the samples whose
+      // cells may hold a point closer than d: |x - s| - reach(s) < d, the
+      // least of that lower bound first; none of the star of the
+      // footpoint's face where the certificate holds.
       std::int64_t* c = &candidate[j * (starts + 1)];
       c[0] = nearest_sample[j];
-      count[j] = d > 0.0 && !found ? 1 : 0;
-      const auto u = static_cast<std::size_t>(c[0]);
-      if (!(d > options_.near * reach_[u])) return;  // (false for d = 0)
+      const std::int32_t f = fp.face_ids[i];
+      const bool skip = skipped[j] != 0;
+      const bool nearest_too =
+          d > 0.0 && !found && !(skip && cert->in_star(f, sample_faces_[static_cast<std::size_t>(c[0])]));
+      count[j] = nearest_too ? 1 : 0;
+      if (!off(j)) return;
       const auto rank = [&](std::int64_t s, double dist) {
-        return s == c[0] ? std::numeric_limits<double>::infinity() : dist - reach_[static_cast<std::size_t>(s)];
+        return s == c[0] || (skip && cert->in_star(f, sample_faces_[static_cast<std::size_t>(s)]))
+                   ? std::numeric_limits<double>::infinity()
+                   : dist - reach_[static_cast<std::size_t>(s)];
       };
       const std::size_t m = index_->least_ranked(x, d, largest_reach_, starts, rank, c + 1, &candidate_rank[j * starts]);
-      if (found) std::copy_n(c + 1, m, c);
+      if (!nearest_too) std::copy_n(c + 1, m, c);
       count[j] += m;
     });
+    if (certified != nullptr)
+      for (std::size_t j = 0; j < b; ++j) *certified += skipped[j];
     // The starts, one row each: the point repeated, refined from its sample.
     std::vector<std::size_t> row(b + 1, 0);
     for (std::size_t j = 0; j < b; ++j) row[j + 1] = row[j] + count[j];

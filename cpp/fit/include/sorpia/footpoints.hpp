@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <mutex>
 #include <vector>
 
 #include "sorpia/surface.hpp"
@@ -35,12 +36,18 @@ class PointIndex {
   /// The at most `k` points of least rank(index, distance to q) below
   /// `bound`, for one query q (rank called on the calling thread), least
   /// first: their indices and ranks written to index and value (k entries
-  /// each). rank(i, d) must be at least d - slack (so that a part of the
-  /// tree farther than bound + slack is skipped); +inf rejects a point.
+  /// each). rank(i, d) must be at least d - slack, and at least d minus
+  /// point i's slack where set_slack gave them (so that a part of the tree
+  /// farther than bound plus its points' largest slack is skipped); +inf
+  /// rejects a point.
   /// @return how many were written
   std::size_t least_ranked(const double* q, double bound, double slack, std::size_t k,
                            const std::function<double(std::int64_t, double)>& rank, std::int64_t* index,
                            double* value) const;
+  /// Slack of each point (n entries, input order, finite and not negative):
+  /// least_ranked then skips a part of the tree by the largest slack of its
+  /// points rather than by its `slack` argument.
+  void set_slack(const double* slack);
 
  private:
   struct Node {
@@ -57,6 +64,8 @@ class PointIndex {
   std::vector<double> points_;       // (n, 3) in tree order
   std::vector<std::int64_t> order_;  // tree position -> input index
   std::vector<Node> nodes_;
+  std::vector<double> point_slack_;  // per point in tree order, set_slack's; empty without it
+  std::vector<float> node_slack_;    // per node, its points' largest slack (rounded up); empty without set_slack
 };
 
 /// Footpoints of data points on a limit surface: for point i the face
@@ -89,8 +98,15 @@ struct FootpointOptions {
   /// the surface within about that distance, finer than the grid. 0 (the
   /// default) is the exhaustive search, which tests/test_footpoints.py holds
   /// to the brute-force closest points within 1e-9 of the diagonal (about 6
-  /// times find's instructions; 0.1 far fewer, leaving points on folds).
+  /// times find's instructions without the certificate below; 0.1 far fewer,
+  /// leaving points on folds).
   double near = 0.0;
+  /// FootpointSearch::closer leaves out the starts in the faces round a
+  /// footpoint where a bound on the surface's curvature there shows that
+  /// none of them can hold a closer point (the certificate described at
+  /// closer). false: every point takes every start (the exhaustive rule, the
+  /// reference the certificate is tested against).
+  bool certify = true;
 };
 
 /// The closest point of the limit surface to each of n points: start at the
@@ -141,9 +157,40 @@ class FootpointSearch {
   /// rounding.
   /// Cost: a k-d tree query per point and a refinement per start. With
   /// near = 0 a point has about 5 to 8 starts (its footpoint's own grid
-  /// cell and its neighbours pass the bound too): about 6 times find's
-  /// instructions; with near = 0.1 about 1.05 starts on a fit's
-  /// footpoints.
+  /// cell and its neighbours pass the bound too) unless certified; with
+  /// near = 0.1 about 1.05 starts on a fit's footpoints.
+  ///
+  /// Certificate (options.certify): the samples of the faces of the star
+  /// of the footpoint's face f (the faces sharing a vertex with f) are left
+  /// out of the starts where no point of the star can be closer to x than
+  /// the footpoint p (distance d) other than in p's own basin, which the
+  /// refinement of p from itself reaches. In the frame whose axis z is
+  /// (x - p) / d:
+  /// - every normal of the star lies within 80 degrees of z, so that the
+  ///   star projects onto the plane across z without folding; it is taken
+  ///   to be one sheet over that plane (it does not wind round z);
+  /// - with kappa a bound of the star's normal curvature, p's normal lies
+  ///   within 45 degrees minus sqrt(2) d kappa of z, and the star's rim
+  ///   (the faces outside it sharing a vertex with it) farther than 4 d from
+  ///   p: the star over the disk |y| <= d round p is a graph z = h(y),
+  ///   h(0) = 0, of slope at most 1 (a radial path of length r lifts to one
+  ///   of length at most sqrt(2) r, along which the normal turns by at most
+  ///   sqrt(2) d kappa) and |Hess h| <= 2^1.5 kappa;
+  /// - d kappa <= 0.1: the squared distance to x over that disk,
+  ///   |y|^2 + (h(y) - d)^2, has a Hessian of at least
+  ///   2 (1 - 2 d 2^1.5 kappa) > 0, so it is convex there, and the disk
+  ///   holds every point of the star within d of x: the points of the star
+  ///   closer than d form one basin, p's.
+  /// The bounds come from the grid samples of each face: kappa is 4 times
+  /// the largest angle between neighbouring samples' normals over their
+  /// distance, the cone of normals is the samples' widened by kappa times
+  /// 0.6 of the largest spacing, and the face lies within reach(s) of its
+  /// samples s (as the candidates' bound takes it). A face is never
+  /// certified where a vertex of its star lies on the boundary, at a hole,
+  /// or on a crease or corner of any sharpness (where the surface is not
+  /// smooth: across a concave crease a closer point lies in the star). The
+  /// samples outside the star keep the candidates' bound; a point not
+  /// certified takes every start.
   /// Each point's result depends on that point alone; no distance
   /// increases.
   /// @param points      row-major (n, 3), finite
@@ -153,9 +200,12 @@ class FootpointSearch {
   ///                    entries, are kept up to date
   /// @param found       the footpoints are this search's find(points) (then
   ///                    the nearest sample is not refined again)
+  /// @param certified   where not null, set to how many points the
+  ///                    certificate let leave out their star's samples
   /// @throws ParameterError when the sizes disagree with n or a face is out
   ///                        of range
-  std::size_t closer(const double* points, std::size_t n, Footpoints& footpoints, bool found = false) const;
+  std::size_t closer(const double* points, std::size_t n, Footpoints& footpoints, bool found = false,
+                     std::size_t* certified = nullptr) const;
 
  private:
   const LimitSurface* surface_;
@@ -167,6 +217,12 @@ class FootpointSearch {
   std::vector<double> reach_;  // per sample: the distance to its farthest neighbour in its chart's grid (closer)
   double largest_reach_ = 0.0;
   std::unique_ptr<PointIndex> index_;
+  // closer's certificate: per face its star, rim, cone of normals,
+  // curvature bound and ball (footpoints.cpp), built on closer's first call.
+  struct Certificate;
+  const Certificate& certificate() const;
+  mutable std::once_flag certificate_once_;
+  mutable std::unique_ptr<const Certificate> certificate_;
 };
 
 /// Moves footpoints (face_ids, uv: the input state, e.g. those of the
