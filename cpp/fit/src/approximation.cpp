@@ -555,8 +555,8 @@ ApproximationResult approximate(LimitSurface& surface, PointChunks& chunks, cons
     const bool levelled = rms_levelled(bests, options.tol, options.window);
     if (it == options.iterations || it - searched < options.window || !levelled) continue;
     // Re-projection from the previous footpoints finds local minima of the distance: before stopping, every
-    // footpoint is searched for afresh (the grid's nearest sample, then Gauss-Newton) and the closer one kept; a
-    // gain of more than tol goes on.
+    // footpoint is searched for afresh (every start that may lie near a closer point: FootpointSearch::closer)
+    // and the closer one kept; a gain of more than tol goes on.
     searched = it;
     const DistanceSums merged =
         footpoints([&] { return chunks.search_fresh(options.footpoints, options.closer * unit); });
@@ -571,11 +571,16 @@ ApproximationResult approximate(LimitSurface& surface, PointChunks& chunks, cons
     break;
   }
   // Reported distances are true distances (issue 33, 6): re-projection from the previous footpoints keeps a point
-  // in a local minimum of its distance, so the returned iterate's footpoints are searched for afresh (the grid's
-  // nearest sample, then Gauss-Newton: closest_points), any closer one kept, and its record measured again from
-  // them before the result reports it.
+  // in a local minimum of its distance, so the returned iterate's footpoints are searched for afresh (every start
+  // that may lie near a closer point: FootpointSearch::closer), any closer one kept, and its record measured again
+  // from them before the result reports it.
   if (best.iteration != fresh_iteration) {
-    set_vertices(best.V);
+    // The fresh search starts from the current footpoints, which must be the surface's: those of an earlier
+    // iterate returned are refined onto it first.
+    if (best.iteration != done) {
+      set_vertices(best.V);
+      footpoints([&] { return chunks.refine(options.footpoints); });
+    }
     footpoints([&] { return chunks.search_fresh(options.footpoints, options.closer * unit); });
   }
   const DistanceSums final_feet = chunks.keep_fresh_in_best();

@@ -916,6 +916,13 @@ struct FootpointSearch::Certificate {
   std::vector<double> cone_cos;   // per face: cos(kCertifyStarTilt - half), above 1 where half exceeds it
   std::vector<double> curvature;  // per face: the bound of its normal curvature
   std::vector<double> ball;       // per face (4): centre and radius of a ball holding its surface
+  // Per face: a lower bound of |p - s| - reach(s) over the points p of the
+  // face and the samples s outside its star (at most its ball's radius; 0
+  // where the face is never certified). Where it is at least 2 d, no sample
+  // outside the star passes the candidates' bound |x - s| - reach(s) < d
+  // for a point x at distance d from a footpoint p in the face, since
+  // |x - s| >= |p - s| - d: the point needs no query for candidates.
+  std::vector<double> clearance;
   std::vector<std::size_t> samples;  // per face + 1: its grid samples are [samples[f], samples[f + 1])
 
   bool in_star(std::int32_t f, std::int32_t g) const {
@@ -1087,6 +1094,25 @@ const FootpointSearch::Certificate& FootpointSearch::certificate() const {
     flatten(stars, cert->star_offsets, cert->star);
     flatten(rims, cert->rim_offsets, cert->rim);
     cert->samples = std::move(first);
+    // Each face's clearance: the least |o - s| - reach(s) - r over the
+    // samples s outside its star, for its ball (o, r) (p lies in the ball,
+    // so |p - s| >= |o - s| - r), looked for below 2 r.
+    cert->clearance.assign(m, 0.0);
+    detail::for_each_index(tasks > 1, tasks, m, [&](std::size_t f) {
+      if (cert->star_offsets[f] == cert->star_offsets[f + 1]) return;
+      const double* o = &cert->ball[4 * f];
+      const double r = o[3];
+      const auto g = static_cast<std::int32_t>(f);
+      const auto rank = [&](std::int64_t s, double dist) {
+        return cert->in_star(g, sample_faces_[static_cast<std::size_t>(s)])
+                   ? std::numeric_limits<double>::infinity()
+                   : dist - reach_[static_cast<std::size_t>(s)];
+      };
+      std::int64_t nearest = -1;
+      double least = 2.0 * r;
+      const std::size_t found = index_->least_ranked(o, 2.0 * r, largest_reach_, 1, rank, &nearest, &least);
+      cert->clearance[f] = found == 1 ? std::max(least - r, 0.0) : r;
+    });
     certificate_ = std::move(cert);
   });
   return *certificate_;
@@ -1215,7 +1241,7 @@ std::size_t FootpointSearch::closer(const double* points, std::size_t n, Footpoi
       const bool nearest_too =
           d > 0.0 && !found && !(skip && cert->in_star(f, sample_faces_[static_cast<std::size_t>(c[0])]));
       count[j] = nearest_too ? 1 : 0;
-      if (!off(j)) return;
+      if (!off(j) || (skip && cert->clearance[static_cast<std::size_t>(f)] >= 2.0 * d)) return;
       const auto rank = [&](std::int64_t s, double dist) {
         return s == c[0] || (skip && cert->in_star(f, sample_faces_[static_cast<std::size_t>(s)]))
                    ? std::numeric_limits<double>::infinity()

@@ -265,10 +265,16 @@ void ApproximationChunk::keep_best() {
 }
 
 DistanceSums ApproximationChunk::search_fresh(const FootpointSearch& search, double closer) {
-  // The grid's nearest sample, then the samples that may lie near a closer point (FootpointSearch::closer).
-  Footpoints found = search.find(points_.data(), k_);
-  search.closer(points_.data(), k_, found, true);
-  fresh = from_footpoints(std::move(found));
+  // From the current footpoints (of the search's surface), every start that may lie near a closer point: the
+  // grid's nearest sample and the samples of the candidates' bound, less those the certificate leaves out
+  // (FootpointSearch::closer).
+  Footpoints from;
+  from.face_ids = current.face_ids;
+  from.uv = current.uv;
+  from.distances = current.distances;
+  from.normals = current.normals;
+  search.closer(points_.data(), k_, from, false);
+  fresh = from_footpoints(std::move(from));
   std::vector<double> merged(k_);
   for (std::size_t i = 0; i < k_; ++i)
     merged[i] = fresh.distances[i] < current.distances[i] - closer ? fresh.distances[i] : current.distances[i];

@@ -105,9 +105,11 @@ class ApproximationChunk {
   DistanceSums refine(const LimitSurface& surface, const FootpointOptions& options);
   /// The best iterate's footpoints := the current ones.
   void keep_best();
-  /// Fresh footpoints := search.find(points), then search.closer; returns the sums of the
-  /// current distances with each replaced by the fresh one where that is
-  /// closer by more than `closer` (what keep_fresh would make them).
+  /// Fresh footpoints := the current ones (of the search's surface: searched
+  /// or refined on it) made closest by search.closer, every start that may
+  /// lie near a closer point tried; returns the sums of the current
+  /// distances with each replaced by the fresh one where that is closer by
+  /// more than `closer` (what keep_fresh would make them).
   DistanceSums search_fresh(const FootpointSearch& search, double closer);
   /// Current footpoints := the fresh ones where closer by more than `closer`.
   void keep_fresh(double closer);
