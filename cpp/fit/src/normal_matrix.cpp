@@ -22,7 +22,9 @@ constexpr std::size_t kRowEntriesPerTask = 32768;
 // The upper triangle (columns >= the row) of A^T W A, row by row: (row lengths, columns, values).
 struct Upper {
   std::vector<std::int64_t> row_len;
-  std::vector<std::vector<std::int32_t>> part_idx;  // per task, its rows in order
+  std::vector<std::int32_t> row_task;  // the task that made row i
+  std::vector<std::int64_t> row_at;    // where row i starts in its task's entries
+  std::vector<std::vector<std::int32_t>> part_idx;  // per task, its rows in the order it made them
   std::vector<std::vector<double>> part_val;
 };
 
@@ -109,16 +111,36 @@ NormalMatrix normal_matrix(const CsrRows& A, const double* weights, int weight_c
   }
   poll_interrupt();
   // Row i of A^T W A on and above the diagonal from the runs holding column i (Gustavson; a run's columns are
-  // sorted, so those >= i are its positions from i's on), a range of rows per task.
+  // sorted, so those >= i are its positions from i's on), a range of the rows' order `visit` per task.
   // Tasks by the work (the rows' stored entries) as well as by the rows, so that few rows with many points share
   // the work too.
   const auto nnz_rows = static_cast<std::size_t>(A.indptr[k]);
   const int tasks = static_cast<int>(std::clamp<std::size_t>(std::min(nnz_rows / kRowEntriesPerTask, n / 16), 1,
                                                              static_cast<std::size_t>(detail::available_processors())));
+  // The rows in the order the runs first hold them (then those no run holds): consecutive rows share runs, whose
+  // rows of A are then read again from the cache, for any numbering of the vertices. Each row's sums (over its runs
+  // in their order) are the same in any order of the rows.
+  std::vector<std::int32_t> visit;
+  visit.reserve(n);
+  {
+    std::vector<char> seen(n, 0);
+    for (std::size_t q = 0; q < n_runs; ++q)
+      for (std::int32_t p = A.indptr[run_start[q]]; p < A.indptr[run_start[q] + 1]; ++p) {
+        const auto j = static_cast<std::size_t>(A.indices[p]);
+        if (!seen[j]) {
+          seen[j] = 1;
+          visit.push_back(static_cast<std::int32_t>(j));
+        }
+      }
+    for (std::size_t j = 0; j < n; ++j)
+      if (!seen[j]) visit.push_back(static_cast<std::int32_t>(j));
+  }
   Upper up;
   up.part_idx.resize(static_cast<std::size_t>(tasks));
   up.part_val.resize(static_cast<std::size_t>(tasks));
   up.row_len.assign(n, 0);
+  up.row_task.assign(n, 0);
+  up.row_at.assign(n, 0);
   detail::for_each_task(tasks > 1, tasks, [&](int t) {
     const std::size_t first = n * static_cast<std::size_t>(t) / static_cast<std::size_t>(tasks);
     const std::size_t last = n * static_cast<std::size_t>(t + 1) / static_cast<std::size_t>(tasks);
@@ -126,8 +148,9 @@ NormalMatrix normal_matrix(const CsrRows& A, const double* weights, int weight_c
     std::vector<double> acc(n * unb, 0.0), row, scaled;
     auto& out_idx = up.part_idx[static_cast<std::size_t>(t)];
     auto& out_val = up.part_val[static_cast<std::size_t>(t)];
-    for (std::size_t i = first; i < last; ++i) {
-      if (t == 0 && (i - first) % 1024 == 0) poll_interrupt();
+    for (std::size_t s = first; s < last; ++s) {
+      const auto i = static_cast<std::size_t>(visit[s]);
+      if (t == 0 && (s - first) % 1024 == 0) poll_interrupt();
       touched.clear();
       double y[3] = {0.0, 0.0, 0.0};  // row i of A^T x
       for (std::int64_t q = col_ptr[i]; q < col_ptr[i + 1]; ++q) {
@@ -163,6 +186,8 @@ NormalMatrix normal_matrix(const CsrRows& A, const double* weights, int weight_c
       if (with_rhs) std::copy_n(y, 3, rhs + 3 * i);
       std::sort(touched.begin(), touched.end());
       up.row_len[i] = static_cast<std::int64_t>(touched.size());
+      up.row_task[i] = t;
+      up.row_at[i] = static_cast<std::int64_t>(out_idx.size());
       for (const std::int32_t j : touched) {
         out_idx.push_back(j);
         const double* src = &acc[static_cast<std::size_t>(j) * unb];
@@ -185,23 +210,20 @@ NormalMatrix normal_matrix(const CsrRows& A, const double* weights, int weight_c
   M.indices.resize(nnz);
   M.values.resize(nnz * unb);
   std::vector<std::int64_t> next_lower(M.indptr.begin(), M.indptr.end() - 1);
-  std::size_t i = 0;
-  for (std::size_t t = 0; t < up.part_idx.size(); ++t) {
-    const auto& idx = up.part_idx[t];
-    const auto& val = up.part_val[t];
-    std::size_t p = 0;
-    for (; p < idx.size(); ++i) {
-      while (up.row_len[i] == 0) ++i;  // a column no row reaches
-      auto own = static_cast<std::size_t>(M.indptr[i + 1] - up.row_len[i]);
-      for (std::int64_t e = 0; e < up.row_len[i]; ++e, ++p, ++own) {
-        const auto j = static_cast<std::size_t>(idx[p]);
-        M.indices[own] = idx[p];
-        std::copy(&val[p * unb], &val[p * unb] + nb, &M.values[own * unb]);
-        if (j == i) continue;
-        const auto slot = static_cast<std::size_t>(next_lower[j]++);
-        M.indices[slot] = static_cast<std::int32_t>(i);
-        std::copy(&val[p * unb], &val[p * unb] + nb, &M.values[slot * unb]);
-      }
+  for (std::size_t i = 0; i < n; ++i) {
+    if (up.row_len[i] == 0) continue;  // a column no row reaches
+    const auto& idx = up.part_idx[static_cast<std::size_t>(up.row_task[i])];
+    const auto& val = up.part_val[static_cast<std::size_t>(up.row_task[i])];
+    auto p = static_cast<std::size_t>(up.row_at[i]);
+    auto own = static_cast<std::size_t>(M.indptr[i + 1] - up.row_len[i]);
+    for (std::int64_t e = 0; e < up.row_len[i]; ++e, ++p, ++own) {
+      const auto j = static_cast<std::size_t>(idx[p]);
+      M.indices[own] = idx[p];
+      std::copy(&val[p * unb], &val[p * unb] + nb, &M.values[own * unb]);
+      if (j == i) continue;
+      const auto slot = static_cast<std::size_t>(next_lower[j]++);
+      M.indices[slot] = static_cast<std::int32_t>(i);
+      std::copy(&val[p * unb], &val[p * unb] + nb, &M.values[slot * unb]);
     }
   }
   return M;
