@@ -118,8 +118,8 @@ NormalMatrix normal_matrix(const CsrRows& A, const double* weights, int weight_c
   const int tasks = static_cast<int>(std::clamp<std::size_t>(std::min(nnz_rows / kRowEntriesPerTask, n / 16), 1,
                                                              static_cast<std::size_t>(detail::available_processors())));
   // The rows in the order the runs first hold them (then those no run holds): consecutive rows share runs, whose
-  // rows of A are then read again from the cache, for any numbering of the vertices. Each row's sums (over its runs
-  // in their order) are the same in any order of the rows.
+  // rows of A are then read again from the cache. Each row's sums (over its runs in their order) are the same in
+  // any order of the rows.
   std::vector<std::int32_t> visit;
   visit.reserve(n);
   {
@@ -135,6 +135,9 @@ NormalMatrix normal_matrix(const CsrRows& A, const double* weights, int weight_c
     for (std::size_t j = 0; j < n; ++j)
       if (!seen[j]) visit.push_back(static_cast<std::int32_t>(j));
   }
+  // Column j's place in `visit`: a row's sums are held at their columns' places, near one another as the rows are.
+  std::vector<std::int32_t> place(n);
+  for (std::size_t s = 0; s < n; ++s) place[static_cast<std::size_t>(visit[s])] = static_cast<std::int32_t>(s);
   Upper up;
   up.part_idx.resize(static_cast<std::size_t>(tasks));
   up.part_val.resize(static_cast<std::size_t>(tasks));
@@ -173,11 +176,12 @@ NormalMatrix normal_matrix(const CsrRows& A, const double* weights, int weight_c
         else
           gram_row<1>(A, weight_count == 0 ? nullptr : weights, r0, r1, li, width, row.data(), scaled);
         for (std::size_t b = 0; b < width; ++b) {
-          const auto j = static_cast<std::size_t>(cols[static_cast<std::size_t>(li) + b]);
-          double* dst = &acc[j * unb];
-          if (marker[j] != static_cast<std::int32_t>(i)) {
-            marker[j] = static_cast<std::int32_t>(i);
-            touched.push_back(static_cast<std::int32_t>(j));
+          const std::int32_t j = cols[static_cast<std::size_t>(li) + b];
+          const auto at = static_cast<std::size_t>(place[static_cast<std::size_t>(j)]);
+          double* dst = &acc[at * unb];
+          if (marker[at] != static_cast<std::int32_t>(i)) {
+            marker[at] = static_cast<std::int32_t>(i);
+            touched.push_back(j);
             std::fill(dst, dst + nb, 0.0);
           }
           for (std::size_t c = 0; c < unb; ++c) dst[c] += row[b * unb + c];
@@ -190,7 +194,7 @@ NormalMatrix normal_matrix(const CsrRows& A, const double* weights, int weight_c
       up.row_at[i] = static_cast<std::int64_t>(out_idx.size());
       for (const std::int32_t j : touched) {
         out_idx.push_back(j);
-        const double* src = &acc[static_cast<std::size_t>(j) * unb];
+        const double* src = &acc[static_cast<std::size_t>(place[static_cast<std::size_t>(j)]) * unb];
         out_val.insert(out_val.end(), src, src + nb);
       }
     }
