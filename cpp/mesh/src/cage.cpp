@@ -439,8 +439,11 @@ void check_options(const DecimateOptions& o) {
 }
 
 // The mesh's referenced vertices and its triangles in OpenMesh; `kept[i]` is
-// the input number of OpenMesh's vertex i.
-OMesh to_openmesh(const Mesh& mesh, std::vector<std::int32_t>& kept) {
+// the input number of OpenMesh's vertex i. `spatial`: in Morton order
+// whatever the size (a clustered mesh, whose vertices keep the input's
+// order: the cage's vertices and faces come out in OpenMesh's order, and the
+// fit reads the rows of a face's vertices together).
+OMesh to_openmesh(const Mesh& mesh, std::vector<std::int32_t>& kept, bool spatial = false) {
   if (!mesh.uniform())
     for (std::size_t f = 0; f < mesh.face_vertex_counts.size(); ++f)
       if (mesh.face_vertex_counts[f] != 3)
@@ -468,7 +471,8 @@ OMesh to_openmesh(const Mesh& mesh, std::vector<std::int32_t>& kept) {
   // corner's (below), so that a one-ring lies together in memory, which the
   // decimation's sweeps and collapses read at every step. A smaller one in
   // the input's order.
-  if (kept.size() >= kLargeMesh) {
+  const bool morton = spatial || kept.size() >= kLargeMesh;
+  if (morton) {
     double lo[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
     for (const std::int32_t v : kept)
       for (int c = 0; c < 3; ++c) {
@@ -499,7 +503,7 @@ OMesh to_openmesh(const Mesh& mesh, std::vector<std::int32_t>& kept) {
   }
   for (std::size_t i = 0; i < kept.size(); ++i) handle[static_cast<std::size_t>(kept[i])] = static_cast<std::int32_t>(i);
   std::vector<std::int32_t> face_order(n_faces);
-  if (kept.size() >= kLargeMesh) {  // each face after its first corner's (a counting sort)
+  if (morton) {  // each face after its first corner's (a counting sort)
     std::vector<std::int32_t> first(kept.size() + 1, 0);
     for (std::size_t f = 0; f < n_faces; ++f) ++first[static_cast<std::size_t>(handle[mesh.face_vertex_indices[3 * f]]) + 1];
     for (std::size_t i = 0; i < kept.size(); ++i) first[i + 1] += first[i];
@@ -1037,7 +1041,7 @@ Mesh decimate(const Mesh& mesh, std::size_t n_vertices, const DecimateOptions& o
   const bool clustering = have >= kLargeMesh && have > 2 * kBulkFactor * n_vertices &&
                           cluster_vertices(mesh, kBulkFactor * n_vertices, to_frame, clustered);
   std::vector<std::int32_t> kept;
-  OMesh om = to_openmesh(clustering ? clustered.mesh : mesh, kept);
+  OMesh om = clustering ? to_openmesh(clustered.mesh, kept, true) : to_openmesh(mesh, kept);
   for (const auto vh : om.vertices()) {
     auto& p = om.point(vh);
     p = to_frame(p.data());
