@@ -1187,8 +1187,9 @@ Footpoints FootpointSearch::find(const double* points, std::size_t n) const {
 }
 
 std::size_t FootpointSearch::closer(const double* points, std::size_t n, Footpoints& fp, bool found,
-                                    std::size_t* certified) const {
+                                    std::size_t* certified, std::size_t* listed) const {
   if (certified != nullptr) *certified = 0;
+  if (listed != nullptr) *listed = 0;
   if (fp.face_ids.size() != n || fp.uv.size() != 2 * n || fp.distances.size() != n)
     throw ParameterError("footpoints hold " + std::to_string(fp.face_ids.size()) + " faces, " +
                          std::to_string(fp.uv.size() / 2) + " parameters and " + std::to_string(fp.distances.size()) +
@@ -1266,13 +1267,13 @@ std::size_t FootpointSearch::closer(const double* points, std::size_t n, Footpoi
     // candidates are its face's near samples that pass the bound (its
     // nearest sample, in the star or outside it, holds no closer point
     // than those: see the contract).
-    const auto listed = [&](std::size_t j) {
+    const auto listed_by_clearance = [&](std::size_t j) {
       return skipped[j] && cert->clearance[static_cast<std::size_t>(fp.face_ids[first + j])] >= 2.0 * fp.distances[first + j];
     };
     if (!all_nearest) {
       std::vector<std::size_t> rest;
       for (const std::size_t j : order)
-        if (off(j) && !listed(j) && !(found && skipped[j])) rest.push_back(j);
+        if (off(j) && !listed_by_clearance(j) && !(found && skipped[j])) rest.push_back(j);
         else nearest_sample[j] = -1;
       std::vector<double> y(3 * rest.size()), unused(rest.size());
       std::vector<std::int64_t> near(rest.size());
@@ -1300,7 +1301,7 @@ std::size_t FootpointSearch::closer(const double* points, std::size_t n, Footpoi
       if (!off(j)) return;
       double* value = &candidate_rank[j * starts];
       std::size_t m = 0;
-      if (listed(j)) {
+      if (listed_by_clearance(j)) {
         // The near samples below the bound, least first (as the query
         // would take them).
         const auto fs = static_cast<std::size_t>(f);
@@ -1327,6 +1328,8 @@ std::size_t FootpointSearch::closer(const double* points, std::size_t n, Footpoi
     });
     if (certified != nullptr)
       for (std::size_t j = 0; j < b; ++j) *certified += skipped[j];
+    if (listed != nullptr)
+      for (std::size_t j = 0; j < b; ++j) *listed += off(j) && listed_by_clearance(j);
     // The starts, one row each: the point repeated, refined from its sample.
     std::vector<std::size_t> row(b + 1, 0);
     for (std::size_t j = 0; j < b; ++j) row[j + 1] = row[j] + count[j];

@@ -212,10 +212,13 @@ class FootpointSearch {
   ///                    the nearest sample is not refined again)
   /// @param certified   where not null, set to how many points the
   ///                    certificate let leave out their star's samples
+  /// @param listed      where not null, set to how many of those took their
+  ///                    candidates from their face's near samples (clearance
+  ///                    at least 2 d), without a query
   /// @throws ParameterError when the sizes disagree with n or a face is out
   ///                        of range
   std::size_t closer(const double* points, std::size_t n, Footpoints& footpoints, bool found = false,
-                     std::size_t* certified = nullptr) const;
+                     std::size_t* certified = nullptr, std::size_t* listed = nullptr) const;
 
  private:
   const LimitSurface* surface_;
