@@ -178,3 +178,53 @@ TEST(FootpointSearch, CloserRefusesFootpointsThatDisagreeWithThePoints) {
 }
 
 }  // namespace
+
+// On a smooth closed surface (icosphere(3)'s Loop surface) with points near
+// it, most points are certified, and nearly all of those have a clearance
+// of at least twice their distance, so that they take their candidates from
+// their face's near samples without a query; the results are those of every
+// start (certify false, the exhaustive rule) and of the brute force within
+// 1e-9 of the diagonal.
+TEST(FootpointSearch, CloserTakesTheNearSamplesOfCertifiedPointsWithClearance) {
+  const sorpia::Mesh cage = sorpia::icosphere(3);
+  const sorpia::Topology topology(cage);
+  const sorpia::LimitSurface surface(topology, cage.vertices.data(), Scheme::Loop, Boundary::EdgeAndCorner);
+  std::mt19937 rng(5);
+  std::normal_distribution<double> g(0.0, 1.0);
+  // About 0.003 off the surface (the limit surface is round to about 1e-3
+  // of its radius, that of the limit point at a face's centre).
+  const std::int32_t face = 0;
+  const double centre[2] = {1.0 / 3, 1.0 / 3};
+  double on[3];
+  surface.evaluate(&face, centre, 1, on, nullptr, nullptr, nullptr);
+  const double r0 = std::sqrt(on[0] * on[0] + on[1] * on[1] + on[2] * on[2]);
+  std::uniform_real_distribution<double> radius(0.997 * r0, 1.003 * r0);
+  std::vector<double> points;
+  for (int i = 0; i < 300; ++i) {
+    double x[3] = {g(rng), g(rng), g(rng)};
+    const double s = radius(rng) / std::sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2]);
+    for (double c : x) points.push_back(c * s);
+  }
+  const std::size_t k = points.size() / 3;
+  sorpia::FootpointOptions options{4, 10, 8, 0.0};
+  const sorpia::FootpointSearch search(surface, topology, options);
+  sorpia::Footpoints fp = search.find(points.data(), k);
+  sorpia::Footpoints every = fp;
+  std::size_t certified = 0, listed = 0;
+  search.closer(points.data(), k, fp, false, &certified, &listed);
+  EXPECT_GT(certified, 9 * k / 10);
+  EXPECT_GT(listed, 9 * certified / 10);
+  EXPECT_LE(listed, certified);
+  options.certify = false;
+  const sorpia::FootpointSearch exhaustive(surface, topology, options);
+  std::size_t none = 1, none_listed = 1;
+  exhaustive.closer(points.data(), k, every, false, &none, &none_listed);
+  EXPECT_EQ(none, 0u);
+  EXPECT_EQ(none_listed, 0u);
+  const std::vector<double> least = brute_force(surface, topology, std::vector<double>(points.begin(), points.begin() + 150));
+  const double diagonal = 2.0 * std::sqrt(3.0);  // at most: the limit surface lies within the unit sphere
+  for (std::size_t i = 0; i < k; ++i) {
+    EXPECT_LE(fp.distances[i], every.distances[i] + 1e-9 * diagonal) << "point " << i;
+    if (i < least.size()) EXPECT_LE(fp.distances[i], least[i] + 1e-9 * diagonal) << "point " << i;
+  }
+}

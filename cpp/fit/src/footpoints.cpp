@@ -916,12 +916,16 @@ struct FootpointSearch::Certificate {
   std::vector<double> cone_cos;   // per face: cos(kCertifyStarTilt - half), above 1 where half exceeds it
   std::vector<double> curvature;  // per face: the bound of its normal curvature
   std::vector<double> ball;       // per face (4): centre and radius of a ball holding its surface
-  // Per face: a lower bound of |p - s| - reach(s) over the points p of the
-  // face and the samples s outside its star (at most its ball's radius; 0
-  // where the face is never certified). Where it is at least 2 d, no sample
-  // outside the star passes the candidates' bound |x - s| - reach(s) < d
-  // for a point x at distance d from a footpoint p in the face, since
-  // |x - s| >= |p - s| - d: the point needs no query for candidates.
+  // Per face f: its near samples near[near_offsets[f] .. near_offsets[f + 1])
+  // and its clearance, a lower bound of |p - s| - reach(s) over the points p
+  // of the face and the samples s outside its star other than its near
+  // samples (0 where the face is never certified). Where the clearance is
+  // at least 2 d, no such sample passes the candidates' bound
+  // |x - s| - reach(s) < d for a point x at distance d from a footpoint p in
+  // the face, since |x - s| >= |p - s| - d: the near samples are the only
+  // candidates outside the star, and need no query.
+  std::vector<std::int32_t> near_offsets;
+  std::vector<std::int64_t> near;
   std::vector<double> clearance;
   std::vector<std::size_t> samples;  // per face + 1: its grid samples are [samples[f], samples[f + 1])
 
@@ -1094,25 +1098,69 @@ const FootpointSearch::Certificate& FootpointSearch::certificate() const {
     flatten(stars, cert->star_offsets, cert->star);
     flatten(rims, cert->rim_offsets, cert->rim);
     cert->samples = std::move(first);
-    // Each face's clearance: the least |o - s| - reach(s) - r over the
-    // samples s outside its star, for its ball (o, r) (p lies in the ball,
-    // so |p - s| >= |o - s| - r), looked for below 2 r.
+    // Each face's clearance and near samples: a point p of the face lies
+    // within reach(t) of one of its samples t, so that a sample s outside
+    // the star has |p - s| - reach(s) >= |t - s| - reach(t) - reach(s) for
+    // some t. The samples s whose least such bound over t is below
+    // kClearance r (r the face's ball's radius) are its near samples; the
+    // clearance bounds it below for the others. The balls (o, r) hold their
+    // face's samples widened by their reach (|o - t| + reach(t) <= r), so
+    // that the samples of a face g have the bound at least
+    // |o_f - o_g| - r_f - r_g: a query over the balls' centres finds the
+    // faces g outside the star below (1 + kClearance) r_f of it, and of
+    // their samples those with |o_f - s| - reach(s) - r_f below the
+    // clearance are compared with each sample t.
+    constexpr double kClearance = 0.1;
+    constexpr std::size_t kClearanceFaces = 64;
+    std::vector<std::int32_t> ball_face;
+    std::vector<double> centre, radius;
+    for (std::size_t f = 0; f < m; ++f)
+      if (cert->samples[f] != cert->samples[f + 1]) {
+        ball_face.push_back(static_cast<std::int32_t>(f));
+        centre.insert(centre.end(), &cert->ball[4 * f], &cert->ball[4 * f] + 3);
+        radius.push_back(cert->ball[4 * f + 3]);
+      }
+    PointIndex balls(centre.data(), ball_face.size());
+    balls.set_slack(radius.data());
+    const double largest_radius = *std::max_element(radius.begin(), radius.end());
     cert->clearance.assign(m, 0.0);
+    std::vector<std::vector<std::int64_t>> near_lists(m);
     detail::for_each_index(tasks > 1, tasks, m, [&](std::size_t f) {
       if (cert->star_offsets[f] == cert->star_offsets[f + 1]) return;
       const double* o = &cert->ball[4 * f];
       const double r = o[3];
       const auto g = static_cast<std::int32_t>(f);
-      const auto rank = [&](std::int64_t s, double dist) {
-        return cert->in_star(g, sample_faces_[static_cast<std::size_t>(s)])
-                   ? std::numeric_limits<double>::infinity()
-                   : dist - reach_[static_cast<std::size_t>(s)];
+      const auto rank = [&](std::int64_t b, double dist) {
+        const std::int32_t h = ball_face[static_cast<std::size_t>(b)];
+        return cert->in_star(g, h) ? std::numeric_limits<double>::infinity()
+                                   : dist - radius[static_cast<std::size_t>(b)];
       };
-      std::int64_t nearest = -1;
-      double least = 2.0 * r;
-      const std::size_t found = index_->least_ranked(o, 2.0 * r, largest_reach_, 1, rank, &nearest, &least);
-      cert->clearance[f] = found == 1 ? std::max(least - r, 0.0) : r;
+      std::int64_t near[kClearanceFaces];
+      double least[kClearanceFaces];
+      const std::size_t found =
+          balls.least_ranked(o, (1.0 + kClearance) * r, largest_radius, kClearanceFaces, rank, near, least);
+      const double clear = found == kClearanceFaces ? std::min(least[found - 1] - r, kClearance * r) : kClearance * r;
+      if (!(clear > 0.0)) return;
+      std::vector<std::int64_t>& list = near_lists[f];
+      const std::vector<std::size_t>& first = cert->samples;
+      for (std::size_t j = 0; j < found && least[j] - r < clear; ++j) {
+        const auto h = static_cast<std::size_t>(ball_face[static_cast<std::size_t>(near[j])]);
+        for (std::size_t s = first[h]; s < first[h + 1]; ++s) {
+          if (!(distance3(o, &positions_[3 * s]) - reach_[s] - r < clear)) continue;
+          for (std::size_t t = first[f]; t < first[f + 1]; ++t)
+            if (distance3(&positions_[3 * t], &positions_[3 * s]) - reach_[t] - reach_[s] < clear) {
+              list.push_back(static_cast<std::int64_t>(s));
+              break;
+            }
+        }
+      }
+      cert->clearance[f] = clear;
     });
+    cert->near_offsets.assign(m + 1, 0);
+    for (std::size_t f = 0; f < m; ++f)
+      cert->near_offsets[f + 1] = cert->near_offsets[f] + static_cast<std::int32_t>(near_lists[f].size());
+    cert->near.reserve(static_cast<std::size_t>(cert->near_offsets[m]));
+    for (const auto& list : near_lists) cert->near.insert(cert->near.end(), list.begin(), list.end());
     certificate_ = std::move(cert);
   });
   return *certificate_;
@@ -1139,8 +1187,9 @@ Footpoints FootpointSearch::find(const double* points, std::size_t n) const {
 }
 
 std::size_t FootpointSearch::closer(const double* points, std::size_t n, Footpoints& fp, bool found,
-                                    std::size_t* certified) const {
+                                    std::size_t* certified, std::size_t* listed) const {
   if (certified != nullptr) *certified = 0;
+  if (listed != nullptr) *listed = 0;
   if (fp.face_ids.size() != n || fp.uv.size() != 2 * n || fp.distances.size() != n)
     throw ParameterError("footpoints hold " + std::to_string(fp.face_ids.size()) + " faces, " +
                          std::to_string(fp.uv.size() / 2) + " parameters and " + std::to_string(fp.distances.size()) +
@@ -1192,10 +1241,11 @@ std::size_t FootpointSearch::closer(const double* points, std::size_t n, Footpoi
     // nodes and the faces' certificates in cache.
     const std::vector<std::size_t> order = spatial_order(points + 3 * first, b);
     // The nearest sample: find's start (left out where the footpoints are
-    // find's) and the reach that `near` scales; where the footpoints are
-    // find's and near is 0, only for the points the certificate leaves
-    // with every start.
-    const bool all_nearest = !found || options_.near > 0.0;
+    // find's) and the reach that `near` scales; for near = 0, only for the
+    // points that take candidates from a query (below), and where the
+    // footpoints are find's, only for those the certificate leaves with
+    // every start.
+    const bool all_nearest = options_.near > 0.0;
     if (all_nearest) index_->nearest(points + 3 * first, b, nearest_sample.data(), nearest_distance.data());
     // Re-searched: a point not within a fraction of its nearest sample's
     // reach of its footpoint (every point off the surface for near = 0).
@@ -1213,11 +1263,18 @@ std::size_t FootpointSearch::closer(const double* points, std::size_t n, Footpoi
                                                has_normals ? &fp.normals[3 * i] : nullptr, fp.distances[i],
                                                positions_.data(), reach_.data());
       });
+    // A certified point whose face's clearance is at least 2 d: its
+    // candidates are its face's near samples that pass the bound (its
+    // nearest sample, in the star or outside it, holds no closer point
+    // than those: see the contract).
+    const auto listed_by_clearance = [&](std::size_t j) {
+      return skipped[j] && cert->clearance[static_cast<std::size_t>(fp.face_ids[first + j])] >= 2.0 * fp.distances[first + j];
+    };
     if (!all_nearest) {
       std::vector<std::size_t> rest;
       for (const std::size_t j : order)
-        if (skipped[j]) nearest_sample[j] = -1;
-        else if (off(j)) rest.push_back(j);
+        if (off(j) && !listed_by_clearance(j) && !(found && skipped[j])) rest.push_back(j);
+        else nearest_sample[j] = -1;
       std::vector<double> y(3 * rest.size()), unused(rest.size());
       std::vector<std::int64_t> near(rest.size());
       for (std::size_t r = 0; r < rest.size(); ++r) std::copy_n(points + 3 * (first + rest[r]), 3, &y[3 * r]);
@@ -1239,20 +1296,40 @@ std::size_t FootpointSearch::closer(const double* points, std::size_t n, Footpoi
       const std::int32_t f = fp.face_ids[i];
       const bool skip = skipped[j] != 0;
       const bool nearest_too =
-          d > 0.0 && !found && !(skip && cert->in_star(f, sample_faces_[static_cast<std::size_t>(c[0])]));
+          c[0] >= 0 && d > 0.0 && !found && !(skip && cert->in_star(f, sample_faces_[static_cast<std::size_t>(c[0])]));
       count[j] = nearest_too ? 1 : 0;
-      if (!off(j) || (skip && cert->clearance[static_cast<std::size_t>(f)] >= 2.0 * d)) return;
-      const auto rank = [&](std::int64_t s, double dist) {
-        return s == c[0] || (skip && cert->in_star(f, sample_faces_[static_cast<std::size_t>(s)]))
-                   ? std::numeric_limits<double>::infinity()
-                   : dist - reach_[static_cast<std::size_t>(s)];
-      };
-      const std::size_t m = index_->least_ranked(x, d, largest_reach_, starts, rank, c + 1, &candidate_rank[j * starts]);
+      if (!off(j)) return;
+      double* value = &candidate_rank[j * starts];
+      std::size_t m = 0;
+      if (listed_by_clearance(j)) {
+        // The near samples below the bound, least first (as the query
+        // would take them).
+        const auto fs = static_cast<std::size_t>(f);
+        for (auto k = static_cast<std::size_t>(cert->near_offsets[fs]); k < static_cast<std::size_t>(cert->near_offsets[fs + 1]); ++k) {
+          const std::int64_t s = cert->near[k];
+          const double r = distance3(x, &positions_[3 * static_cast<std::size_t>(s)]) - reach_[static_cast<std::size_t>(s)];
+          if (!(r < d) || (m == starts && !(r < value[m - 1]))) continue;
+          std::int64_t* taken = c + 1;
+          std::size_t at = m < starts ? m++ : m - 1;
+          for (; at > 0 && r < value[at - 1]; --at) value[at] = value[at - 1], taken[at] = taken[at - 1];
+          value[at] = r;
+          taken[at] = s;
+        }
+      } else {
+        const auto rank = [&](std::int64_t s, double dist) {
+          return s == c[0] || (skip && cert->in_star(f, sample_faces_[static_cast<std::size_t>(s)]))
+                     ? std::numeric_limits<double>::infinity()
+                     : dist - reach_[static_cast<std::size_t>(s)];
+        };
+        m = index_->least_ranked(x, d, largest_reach_, starts, rank, c + 1, value);
+      }
       if (!nearest_too) std::copy_n(c + 1, m, c);
       count[j] += m;
     });
     if (certified != nullptr)
       for (std::size_t j = 0; j < b; ++j) *certified += skipped[j];
+    if (listed != nullptr)
+      for (std::size_t j = 0; j < b; ++j) *listed += off(j) && listed_by_clearance(j);
     // The starts, one row each: the point repeated, refined from its sample.
     std::vector<std::size_t> row(b + 1, 0);
     for (std::size_t j = 0; j < b; ++j) row[j + 1] = row[j] + count[j];

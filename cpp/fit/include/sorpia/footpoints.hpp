@@ -155,7 +155,8 @@ class FootpointSearch {
   /// (Bfr::Surface::IsRegular() false) from differences of positions (Bfr's
   /// are approximate there, surface.hpp), so that they reach the minimum to
   /// rounding.
-  /// Cost: a k-d tree query per point and a refinement per start. With
+  /// Cost: a k-d tree query per point not certified (or certified with a
+  /// clearance below 2 d) and a refinement per start. With
   /// near = 0 a point has about 5 to 8 starts (its footpoint's own grid
   /// cell and its neighbours pass the bound too) unless certified; with
   /// near = 0.1 about 1.05 starts on a fit's footpoints.
@@ -190,7 +191,16 @@ class FootpointSearch {
   /// or on a crease or corner of any sharpness (where the surface is not
   /// smooth: across a concave crease a closer point lies in the star). The
   /// samples outside the star keep the candidates' bound; a point not
-  /// certified takes every start.
+  /// certified takes every start. Per face f, with its ball (o, r) holding
+  /// its samples t widened by reach(t), the samples s outside the star
+  /// with min over t of |t - s| - reach(t) - reach(s) below 0.1 r are its
+  /// near samples, and the clearance bounds that below for the others
+  /// (every point of f lies within reach(t) of a sample t of f); a
+  /// certified point with clearance at least 2 d takes as starts only the
+  /// near samples that pass the candidates' bound (|x - s| >= |p - s| - d
+  /// keeps the others out), without a k-d tree query, and not its nearest
+  /// sample: outside the near samples that one's cells hold no point
+  /// closer than d, and a closer point anywhere lies in such a cell.
   /// Each point's result depends on that point alone; no distance
   /// increases.
   /// @param points      row-major (n, 3), finite
@@ -202,10 +212,13 @@ class FootpointSearch {
   ///                    the nearest sample is not refined again)
   /// @param certified   where not null, set to how many points the
   ///                    certificate let leave out their star's samples
+  /// @param listed      where not null, set to how many of those took their
+  ///                    candidates from their face's near samples (clearance
+  ///                    at least 2 d), without a query
   /// @throws ParameterError when the sizes disagree with n or a face is out
   ///                        of range
   std::size_t closer(const double* points, std::size_t n, Footpoints& footpoints, bool found = false,
-                     std::size_t* certified = nullptr) const;
+                     std::size_t* certified = nullptr, std::size_t* listed = nullptr) const;
 
  private:
   const LimitSurface* surface_;
