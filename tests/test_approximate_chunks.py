@@ -35,10 +35,10 @@ def relative(a, b):
 @pytest.mark.parametrize("tangential", [0.1, 1.0])
 def test_many_chunks_equal_one(tangential):
     # One update from the same footpoints: the sums differ by their order's rounding only, and the solve with them
-    # by 1e-13. Later iterations re-project the footpoints from different control vertices, and a footpoint is
-    # final at a step of 1e-11 in (u, v): control vertices 1e-14 apart give footpoints (and so updates) up to
-    # about that apart, whatever the sums (measured: 2e-10 to 5e-10 after 2 to 6 iterations, as a perturbation of
-    # the points by one rounding gives too).
+    # by 1e-13. Later iterations re-project the footpoints from different control vertices, each stopped at its
+    # step's tolerance (1e-5 in (u, v), a predicted decrease below 1e-6 of the distance): control vertices 1e-14
+    # apart give footpoints (and so updates) that far apart unless a point's step lies at the tolerance, where it
+    # may stop in one and not the other (measured: 2e-14 to 1.4e-13 after 2 to 6 iterations).
     P, V, F = noisy_samples()
     w = np.random.default_rng(5).random(len(P)) + 0.5
     first = [approximate(P, V, F, tangential=tangential, weights=w, iterations=1, chunk_points=c)

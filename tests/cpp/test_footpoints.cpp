@@ -177,6 +177,57 @@ TEST(FootpointSearch, CloserRefusesFootpointsThatDisagreeWithThePoints) {
                                                     {"face_ids[1] = 80 is out of range [0, 80)"});
 }
 
+TEST(RefineFootpoints, ALooseUvToleranceLeavesTheDistanceExactToItsRelativeTolerance) {
+  // Footpoints on one surface re-projected onto the surface of the cage
+  // grown by 2%, once with the default tolerance (to rounding) and once with
+  // uv_tolerance = 1e-5 from the same starts: the same minima, the loose
+  // distances exact to 1e-5 relatively (1e-6 predicted; Gauss-Newton's
+  // linear convergence leaves a few times that), and points on the surface
+  // still at distance zero to rounding.
+  const Bumpy bumpy(300);
+  const sorpia::Topology topology(bumpy.cage);
+  const sorpia::LimitSurface before(topology, bumpy.cage.vertices.data(), Scheme::Loop, Boundary::EdgeAndCorner);
+  std::vector<double> grown = bumpy.cage.vertices;
+  for (double& x : grown) x *= 1.02;
+  const sorpia::LimitSurface after(topology, grown.data(), Scheme::Loop, Boundary::EdgeAndCorner);
+  std::vector<double> points = bumpy.points;
+  std::vector<std::int32_t> on_faces;
+  std::vector<double> on_uv;
+  for (std::int32_t f = 0; f < static_cast<std::int32_t>(topology.n_faces()); f += 7) {
+    on_faces.push_back(f);
+    on_uv.push_back(0.2 + 0.001 * f);
+    on_uv.push_back(0.3);
+  }
+  std::vector<double> on(3 * on_faces.size());
+  after.evaluate(on_faces.data(), on_uv.data(), on_faces.size(), on.data(), nullptr, nullptr, nullptr);
+  points.insert(points.end(), on.begin(), on.end());
+  const std::size_t k = points.size() / 3, k_off = bumpy.points.size() / 3;
+  const sorpia::Footpoints start = sorpia::closest_points(before, topology, points.data(), k, {});
+  sorpia::Footpoints strict = start, loose = start;
+  sorpia::FootpointOptions options;
+  options.grid = 0;
+  sorpia::refine_footpoints(after, topology, points.data(), k, options, strict);
+  options.uv_tolerance = 1e-5;
+  sorpia::refine_footpoints(after, topology, points.data(), k, options, loose);
+  const double diagonal = 2.0 * std::sqrt(3.0) * 1.4;
+  for (std::size_t i = 0; i < k; ++i) {
+    if (i < k_off) {
+      EXPECT_GE(loose.distances[i], strict.distances[i] - 1e-12 * diagonal) << "point " << i;
+      EXPECT_LE(loose.distances[i], strict.distances[i] * (1.0 + 1e-5) + 1e-12 * diagonal) << "point " << i;
+    } else {
+      EXPECT_LE(strict.distances[i], 1e-12 * diagonal) << "point " << i;
+      EXPECT_LE(loose.distances[i], 1e-12 * diagonal) << "point " << i;
+    }
+  }
+  for (const double bad : {-1e-3, 1.0, std::numeric_limits<double>::quiet_NaN()}) {
+    options.uv_tolerance = bad;
+    sorpia::Footpoints fp = start;
+    sorpia_test::expect_error<sorpia::ParameterError>(
+        [&] { sorpia::refine_footpoints(after, topology, points.data(), k, options, fp); },
+        {"uv_tolerance = ", "must be in [0, 1)"});
+  }
+}
+
 }  // namespace
 
 // On a smooth closed surface (icosphere(3)'s Loop surface) with points near

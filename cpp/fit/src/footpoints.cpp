@@ -573,6 +573,10 @@ namespace {
 // domain has side 1): its distance is then exact to about this times the
 // surface's size.
 constexpr double kUvTolerance = 1e-11;
+// A step below FootpointOptions::uv_tolerance ends a point's refinement when
+// the decrease of the distance it predicts is below this fraction of the
+// distance: the distance is then exact to about this relatively.
+constexpr double kDistanceTolerance = 1e-6;
 // Gauss-Newton steps at least of FootpointSearch::closer's refinements: its
 // starts may lie a few grid cells from their minimum.
 constexpr int kCloserSteps = 100;
@@ -659,6 +663,8 @@ void refine(const LimitSurface& surface, const Topology& topology, const double*
     if (fp.face_ids[i] < 0 || fp.face_ids[i] >= m)
       throw ParameterError("face_ids[" + std::to_string(i) + "] = " + std::to_string(fp.face_ids[i]) +
                            " is out of range [0, " + std::to_string(m) + ")");
+  if (!(options.uv_tolerance >= 0.0 && options.uv_tolerance < 1.0))
+    throw ParameterError("uv_tolerance = " + std::to_string(options.uv_tolerance) + " must be in [0, 1)");
   // Each field set below, in parallel, where the slots are first written (so that their memory is touched first by
   // the tasks).
   const std::unique_ptr<Slot[]> slots(new Slot[n]);
@@ -689,11 +695,17 @@ void refine(const LimitSurface& surface, const Topology& topology, const double*
     const double det = m11 * m22 - a12 * a12;
     if (!(det > 0.0) || !std::isfinite(det)) return false;
     double d[2] = {(m22 * g1 - a12 * g2) / det, (m11 * g2 - a12 * g1) / det};
-    // Converged: a step below the tolerance in (u, v). (Near extraordinary
-    // vertices Bfr's derivatives are approximate, so the steps there need
-    // not vanish: the trust region shrinks to the tolerance instead.)
+    // Converged: a step below kUvTolerance in (u, v), or below the options'
+    // uv_tolerance with a predicted decrease of the distance below
+    // kDistanceTolerance of it (so that a point on the surface, whose
+    // distance is all error, still converges to rounding). (Near
+    // extraordinary vertices Bfr's derivatives are approximate, so the steps
+    // there need not vanish: the trust region shrinks to the tolerance
+    // instead.)
     const double len = std::max(std::abs(d[0]), std::abs(d[1]));
     if (!(len > kUvTolerance)) return false;
+    if (len <= options.uv_tolerance && 0.5 * (g1 * d[0] + g2 * d[1]) <= kDistanceTolerance * q.best_dist * q.best_dist)
+      return false;
     // The decrease of the distance that the Gauss-Newton model predicts
     // for the full step (g . d / 2 over the distance); -1 when the trust
     // region cuts the step.

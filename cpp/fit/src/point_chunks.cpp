@@ -27,6 +27,12 @@ namespace sorpia {
 
 namespace {
 
+// The iterations' re-projection (ApproximationChunk::refine) stops a point at a step below this in (u, v) where
+// its distance is exact to 1e-6 relatively (FootpointOptions::uv_tolerance): its footpoint only drives the next
+// update, whose rows move by first order in it (about 1e-5 of a face's size, far below a fit's distances), and the
+// distances reported come from FootpointSearch::closer's re-search, polished to rounding.
+constexpr double kIterationUvTolerance = 1e-5;
+
 // Points per task of normal_sums' gathers, at least.
 constexpr std::size_t kPointsPerTask = 65536;
 
@@ -253,6 +259,7 @@ DistanceSums ApproximationChunk::refine(const LimitSurface& surface, const Footp
   from.normals = std::move(current.normals);
   FootpointOptions refine = options;
   refine.grid = 0;
+  refine.uv_tolerance = kIterationUvTolerance;
   refine_footpoints(surface, surface.topology(), points_.data(), k_, refine, from);
   current = from_footpoints(std::move(from));
   return sums(current.distances);

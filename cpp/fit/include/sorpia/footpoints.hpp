@@ -107,6 +107,14 @@ struct FootpointOptions {
   /// closer). false: every point takes every start (the exhaustive rule, the
   /// reference the certificate is tested against).
   bool certify = true;
+  /// A point's refinement stops where its next Gauss-Newton step is below
+  /// this in (u, v) (a face's domain has side 1; in [0, 1)) and the decrease
+  /// of the distance it predicts is below 1e-6 of the distance (a point on
+  /// the surface goes on), and always below 1e-11. The default leaves a
+  /// footpoint at its minimum to about rounding; a looser one leaves it off
+  /// by up to about this (ApproximationChunk::refine's iterations), its
+  /// distance exact to about 1e-6 relatively.
+  double uv_tolerance = 1e-11;
 };
 
 /// The closest point of the limit surface to each of n points: start at the

@@ -101,7 +101,8 @@ class ApproximationChunk {
 
   /// Current footpoints := search.find(points) (closest_points).
   DistanceSums search(const FootpointSearch& search);
-  /// Current footpoints re-projected from where they are (refine_footpoints, grid unused).
+  /// Current footpoints re-projected from where they are (refine_footpoints, grid unused, to a uv_tolerance of
+  /// 1e-5: the iterations' footpoints, the distances exact to about 1e-6 relatively).
   DistanceSums refine(const LimitSurface& surface, const FootpointOptions& options);
   /// The best iterate's footpoints := the current ones.
   void keep_best();
