@@ -706,6 +706,10 @@ bool cluster_vertices(const Mesh& mesh, std::size_t n_clusters, const ToFrame& t
   std::vector<std::int32_t> faces;
   std::vector<std::array<std::int32_t, 3>> keys;
   std::vector<char> split;
+  // Joins can make new folds where slivers lie side by side; after these
+  // passes a sliver is split like any other cluster, which settles: a mesh
+  // of single vertices is the input, manifold.
+  constexpr int kJoinPasses = 8;
   for (int pass = 0;; ++pass) {
     // Each face over three clusters once (several input faces can span the
     // same three), keyed by its corners turned to put the least first.
@@ -732,7 +736,7 @@ bool cluster_vertices(const Mesh& mesh, std::size_t n_clusters, const ToFrame& t
     std::vector<std::int32_t> joins;
     links(faces.data(), faces.size(), n, [&](std::size_t x, Link kind) {
       if (kind == (on_boundary[x] ? Link::kOnBoundary : Link::kInner)) return;
-      if (!on_boundary[x] && la.size() == 2 && la[0] == lb[1] && la[1] == lb[0] &&
+      if (pass < kJoinPasses && !on_boundary[x] && la.size() == 2 && la[0] == lb[1] && la[1] == lb[0] &&
           !(on_boundary[la[0]] && on_boundary[la[1]])) {
         joins.push_back(static_cast<std::int32_t>(x));
         joins.push_back(on_boundary[la[0]] ? la[1] : la[0]);
@@ -755,7 +759,7 @@ bool cluster_vertices(const Mesh& mesh, std::size_t n_clusters, const ToFrame& t
     for (std::size_t v = 0; v < nv; ++v)
       if (into[cluster[v]] >= 0) cluster[v] = into[cluster[v]];
     if (n_split == 0 && n_joined == 0) break;
-    if (pass == 16) return false;
+    if (pass == kJoinPasses + 16) return false;
     if (n_joined > 0) continue;  // the splits were judged before the joins
     std::vector<std::int32_t> members(n, 0);
     for (std::size_t v = 0; v < nv; ++v) ++members[cluster[v]];
