@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "sorpia/detail/parallel.hpp"
+#include "sorpia/detail/spatial.hpp"
 #include "sorpia/detail/unit_normal.hpp"
 #include "sorpia/errors.hpp"
 #include "sorpia/interrupt.hpp"
@@ -130,59 +131,8 @@ void PointIndex::build(std::vector<Node>& nodes, std::uint32_t node, std::uint32
   build(nodes, left + 1, mid, end, depth - 1, subtrees);
 }
 
-namespace {
-
-// Spreads the low 21 bits of x to every third bit (a Morton code's one axis).
-std::uint64_t spread3(std::uint64_t x) {
-  x &= 0x1fffff;
-  x = (x | x << 32) & 0x1f00000000ffffULL;
-  x = (x | x << 16) & 0x1f0000ff0000ffULL;
-  x = (x | x << 8) & 0x100f00f00f00f00fULL;
-  x = (x | x << 4) & 0x10c30c30c30c30c3ULL;
-  x = (x | x << 2) & 0x1249249249249249ULL;
-  return x;
-}
-
-// The order of k points along a Morton (Z-order) curve over their bounding
-// box: neighbours in this order are near in space, so that queries taken in
-// it find the tree's nodes in cache.
-std::vector<std::size_t> spatial_order(const double* p, std::size_t k) {
-  if (k == 0) return {};
-  double lo[3] = {p[0], p[1], p[2]}, hi[3] = {p[0], p[1], p[2]};
-  for (std::size_t i = 0; i < k; ++i)
-    for (int c = 0; c < 3; ++c) lo[c] = std::min(lo[c], p[3 * i + c]), hi[c] = std::max(hi[c], p[3 * i + c]);
-  std::vector<std::pair<std::uint64_t, std::size_t>> keyed(k);
-  // Keys and sorted runs on the core's threads, the runs merged after (the
-  // pairs are distinct: the same order as one sort).
-  const int tasks = detail::task_count(k, 65536);
-  std::vector<std::size_t> run_start(static_cast<std::size_t>(tasks) + 1);
-  for (int t = 0; t <= tasks; ++t)
-    run_start[static_cast<std::size_t>(t)] = k * static_cast<std::size_t>(t) / static_cast<std::size_t>(tasks);
-  detail::for_each_task(tasks > 1, tasks, [&](int t) {
-    const std::size_t first = run_start[static_cast<std::size_t>(t)], last = run_start[static_cast<std::size_t>(t) + 1];
-    for (std::size_t i = first; i < last; ++i) {
-      std::uint64_t code = 0;
-      for (int c = 0; c < 3; ++c) {
-        const double span = hi[c] - lo[c];
-        const double u = span > 0 && std::isfinite(span) ? (p[3 * i + c] - lo[c]) / span : 0.0;
-        code |= spread3(static_cast<std::uint64_t>(std::clamp(u, 0.0, 1.0) * 2097151.0)) << c;
-      }
-      keyed[i] = {code, i};
-    }
-    std::sort(keyed.begin() + static_cast<std::ptrdiff_t>(first), keyed.begin() + static_cast<std::ptrdiff_t>(last));
-  });
-  for (std::size_t t = 1; t < static_cast<std::size_t>(tasks); ++t)
-    std::inplace_merge(keyed.begin(), keyed.begin() + static_cast<std::ptrdiff_t>(run_start[t]),
-                       keyed.begin() + static_cast<std::ptrdiff_t>(run_start[t + 1]));
-  std::vector<std::size_t> order(k);
-  for (std::size_t i = 0; i < k; ++i) order[i] = keyed[i].second;
-  return order;
-}
-
-}  // namespace
-
 void PointIndex::nearest(const double* queries, std::size_t k, std::int64_t* index, double* distance) const {
-  const std::vector<std::size_t> order = spatial_order(queries, k);
+  const std::vector<std::size_t> order = detail::spatial_order(queries, k);
   const int tasks = detail::task_count(k, 4096);
   detail::for_each_task(tasks > 1, tasks, [&](int t) {
     std::vector<std::uint32_t> stack;
@@ -1251,7 +1201,7 @@ std::size_t FootpointSearch::closer(const double* points, std::size_t n, Footpoi
     }
     // In the points' spatial order, so that the queries find the tree's
     // nodes and the faces' certificates in cache.
-    const std::vector<std::size_t> order = spatial_order(points + 3 * first, b);
+    const std::vector<std::size_t> order = detail::spatial_order(points + 3 * first, b);
     // The nearest sample: find's start (left out where the footpoints are
     // find's) and the reach that `near` scales; for near = 0, only for the
     // points that take candidates from a query (below), and where the

@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "openmesh_types.hpp"
+#include "sorpia/detail/spatial.hpp"
 #include "sorpia/errors.hpp"
 #include "sorpia/interrupt.hpp"
 #include "sorpia/topology.hpp"
@@ -473,33 +474,12 @@ OMesh to_openmesh(const Mesh& mesh, std::vector<std::int32_t>& kept, bool spatia
   // the input's order.
   const bool morton = spatial || kept.size() >= kLargeMesh;
   if (morton) {
-    double lo[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
-    for (const std::int32_t v : kept)
-      for (int c = 0; c < 3; ++c) {
-        lo[c] = std::min(lo[c], mesh.vertices[3 * v + c]);
-        hi[c] = std::max(hi[c], mesh.vertices[3 * v + c]);
-      }
-    const auto spread = [](std::uint64_t x) {  // the 21 low bits of x to every third bit
-      x &= 0x1fffff;
-      x = (x | x << 32) & 0x1f00000000ffffULL;
-      x = (x | x << 16) & 0x1f0000ff0000ffULL;
-      x = (x | x << 8) & 0x100f00f00f00f00fULL;
-      x = (x | x << 4) & 0x10c30c30c30c30c3ULL;
-      return (x | x << 2) & 0x1249249249249249ULL;
-    };
-    std::vector<std::pair<std::uint64_t, std::int32_t>> order(kept.size());
-    for (std::size_t i = 0; i < kept.size(); ++i) {
-      const std::int32_t v = kept[i];
-      std::uint64_t code = 0;
-      for (int c = 0; c < 3; ++c) {
-        const double extent = hi[c] - lo[c];
-        const double t = extent > 0.0 && std::isfinite(extent) ? (mesh.vertices[3 * v + c] - lo[c]) / extent : 0.0;
-        code |= spread(static_cast<std::uint64_t>(std::clamp(t, 0.0, 1.0) * 2097151.0)) << c;
-      }
-      order[i] = {code, v};
-    }
-    std::sort(order.begin(), order.end());
-    for (std::size_t i = 0; i < kept.size(); ++i) kept[i] = order[i].second;
+    std::vector<double> at(3 * kept.size());
+    for (std::size_t i = 0; i < kept.size(); ++i) std::copy_n(&mesh.vertices[3 * static_cast<std::size_t>(kept[i])], 3, &at[3 * i]);
+    const std::vector<std::size_t> order = detail::spatial_order(at.data(), kept.size());
+    std::vector<std::int32_t> sorted(kept.size());
+    for (std::size_t i = 0; i < kept.size(); ++i) sorted[i] = kept[order[i]];
+    kept = std::move(sorted);
   }
   for (std::size_t i = 0; i < kept.size(); ++i) handle[static_cast<std::size_t>(kept[i])] = static_cast<std::int32_t>(i);
   std::vector<std::int32_t> face_order(n_faces);
