@@ -39,7 +39,8 @@ void* Scratch::take_bytes(std::size_t n, std::size_t size) {
   // The current block, else the first unused one after it with room, else a new one.
   std::size_t j = current_;
   while (j < blocks_.size() && blocks_[j].size - blocks_[j].used < bytes) ++j;
-  if (j == blocks_.size()) blocks_.push_back(make_block(bytes));
+  // After a release, the first block is as large as the one given back (the same work taken up again fits in it).
+  if (j == blocks_.size()) blocks_.push_back(make_block(blocks_.empty() ? std::max(bytes, reserve_) : bytes));
   current_ = j;
   Block& b = blocks_[j];
   void* p = b.memory.get() + b.used;
@@ -64,6 +65,7 @@ void Scratch::close(std::size_t block, std::size_t used) {
   // (what the same work needs again), with a quarter more for work a little larger (reserved: untouched pages cost
   // no memory).
   const std::size_t size = (most_ + most_ / 4 + kAlign - 1) / kAlign * kAlign;
+  reserve_ = size;
   blocks_.clear();
   current_ = 0;
   try {

@@ -527,6 +527,9 @@ DistanceSums LocalChunks::keep_fresh_in_best() {
 NormalSums LocalChunks::normal_sums(double tangential) { return chunks_normal_sums(tangential, nullptr, 0.0); }
 
 NormalSums LocalChunks::chunks_normal_sums(double tangential, const RobustOptions* robust, double scale) {
+  // The normal sums end a surface state's calls (the update that follows sets new control vertices): its search
+  // is given back before the sums' arrays are taken.
+  search_.reset();
   NormalSums t;
   for (std::size_t c = 0; c < n_chunks(); ++c) {
     poll_interrupt();

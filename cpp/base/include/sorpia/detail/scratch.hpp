@@ -6,10 +6,10 @@
 // and unmaps it when freed).
 //
 // Arrays are taken within a Frame, which gives back every array taken in it when it ends (frames nest, innermost
-// first, on one thread). The memory held is that of the most arrays open at once since the Scratch was made or
-// released (in one block once the outermost frame has ended; pages beyond what was written are only reserved), and
-// it is held until release() or the Scratch's end: an owner that lends it to calls on data of bounded size (a
-// chunk) bounds it.
+// first, on one thread). The memory held is that of the most arrays open at once (in one block once the outermost
+// frame has ended, a quarter larger; pages beyond those written are only reserved, and cost no memory), and it is
+// held until release() or the Scratch's end: an owner that lends it to calls on data of bounded size (a chunk)
+// bounds it.
 #include <cstddef>
 #include <memory>
 #include <type_traits>
@@ -33,7 +33,8 @@ class Scratch {
                   "scratch holds arrays that need no construction");
     return static_cast<T*>(take_bytes(n, sizeof(T)));
   }
-  /// Gives the memory held back to the system. No frame may be open.
+  /// Gives the memory held back to the system. No frame may be open. The next array taken opens a block as large as
+  /// the one given back (pages not written cost no memory).
   void release();
   /// Bytes held (reserved, not necessarily touched).
   std::size_t held() const;
@@ -74,6 +75,7 @@ class Scratch {
   std::size_t current_ = 0;    // the block taken from last
   std::size_t in_use_ = 0;     // bytes taken and not given back (alignment included), over all blocks
   std::size_t most_ = 0;       // the most of in_use_ since the blocks were last merged
+  std::size_t reserve_ = 0;    // the size of the block the blocks were last merged into
   int depth_ = 0;              // frames open
 };
 
