@@ -36,12 +36,6 @@ constexpr double kIterationUvTolerance = 1e-5;
 // Points per task of normal_sums' gathers, at least.
 constexpr std::size_t kPointsPerTask = 65536;
 
-// An array of n values left uninitialised (for one that is written in full before it is read).
-template <class T>
-std::unique_ptr<T[]> uninitialised(std::size_t n) {
-  return std::unique_ptr<T[]>(new T[n]);
-}
-
 double cpu_seconds() {
   timespec ts{};
   clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
@@ -234,24 +228,26 @@ double ApproximationChunk::line_offset(const double mean[3], const double axis[3
   return off;
 }
 
-DistanceSums ApproximationChunk::sums(const std::vector<double>& d) const {
+DistanceSums ApproximationChunk::sums(const std::vector<double>& d, detail::Scratch* scratch) const {
   DistanceSums s;
   s.count = k_;
   if (k_ == 0) return s;
-  std::vector<double> squares(k_);
+  detail::Scratch::Frame frame(scratch);
+  double* const squares = frame.take<double>(k_);
   for (std::size_t i = 0; i < k_; ++i) squares[i] = weights_.empty() ? d[i] * d[i] : weights_[i] * (d[i] * d[i]);
-  s.squares = detail::pairwise_sum(squares.data(), k_);
+  s.squares = detail::pairwise_sum(squares, k_);
   for (std::size_t i = 0; i < k_; ++i)
     if (counts(i)) s.max = std::max(s.max, d[i]);
   return s;
 }
 
-DistanceSums ApproximationChunk::search(const FootpointSearch& search) {
-  current = from_footpoints(search.find(points_.data(), k_));
-  return sums(current.distances);
+DistanceSums ApproximationChunk::search(const FootpointSearch& search, detail::Scratch* scratch) {
+  current = from_footpoints(search.find(points_.data(), k_, scratch));
+  return sums(current.distances, scratch);
 }
 
-DistanceSums ApproximationChunk::refine(const LimitSurface& surface, const FootpointOptions& options) {
+DistanceSums ApproximationChunk::refine(const LimitSurface& surface, const FootpointOptions& options,
+                                        detail::Scratch* scratch) {
   Footpoints from;
   from.face_ids = std::move(current.face_ids);
   from.uv = std::move(current.uv);
@@ -260,9 +256,9 @@ DistanceSums ApproximationChunk::refine(const LimitSurface& surface, const Footp
   FootpointOptions refine = options;
   refine.grid = 0;
   refine.uv_tolerance = kIterationUvTolerance;
-  refine_footpoints(surface, surface.topology(), points_.data(), k_, refine, from);
+  refine_footpoints(surface, surface.topology(), points_.data(), k_, refine, from, scratch);
   current = from_footpoints(std::move(from));
-  return sums(current.distances);
+  return sums(current.distances, scratch);
 }
 
 void ApproximationChunk::keep_best() {
@@ -315,13 +311,15 @@ DistanceSums ApproximationChunk::keep_fresh_in_best() {
 }
 
 NormalSums ApproximationChunk::normal_sums(const LimitSurface& surface, double tangential,
-                                           const RobustOptions* robust, double scale) const {
+                                           const RobustOptions* robust, double scale,
+                                           detail::Scratch* scratch) const {
   const std::size_t k = k_;
   const bool weighted = !weights_.empty() || robust != nullptr;
-  std::vector<double> factors;  // the robust factors of the points' weights, in point order
+  detail::Scratch::Frame frame(scratch);
+  double* factors = nullptr;  // the robust factors of the points' weights, in point order
   if (robust) {
-    factors.resize(k);
-    robust_factors(*robust, scale, current.distances.data(), k, factors.data());
+    factors = frame.take<double>(k);
+    robust_factors(*robust, scale, current.distances.data(), k, factors);
   }
   const bool blend = tangential != 1.0;
   NormalSums out;
@@ -330,7 +328,7 @@ NormalSums ApproximationChunk::normal_sums(const LimitSurface& surface, double t
   // The rows in face order (a stable counting sort by face): the points of a face share their columns, which the
   // normal matrix reads once.
   const std::size_t n_faces = surface.n_faces();
-  const std::unique_ptr<std::size_t[]> order = uninitialised<std::size_t>(k);
+  std::size_t* const order = frame.take<std::size_t>(k);
   {
     std::vector<std::size_t> start(n_faces + 1, 0);
     for (std::size_t i = 0; i < k; ++i) {
@@ -351,10 +349,10 @@ NormalSums ApproximationChunk::normal_sums(const LimitSurface& surface, double t
       body(k * u / nt, k * (u + 1) / nt);
     });
   };
-  // The per-point arrays are left uninitialised here and written by the tasks (a page of memory is then first
+  // The per-point arrays are left uninitialised here and written by the tasks (a page of fresh memory is then first
   // touched by a task, in parallel).
-  std::unique_ptr<std::int32_t[]> face_o = uninitialised<std::int32_t>(k);
-  std::unique_ptr<double[]> uv_o = uninitialised<double>(2 * k);
+  std::int32_t* const face_o = frame.take<std::int32_t>(k);
+  double* const uv_o = frame.take<double>(2 * k);
   in_ranges([&](std::size_t i0, std::size_t i1) {
     for (std::size_t i = i0; i < i1; ++i) {
       const std::size_t o = order[i];
@@ -363,16 +361,15 @@ NormalSums ApproximationChunk::normal_sums(const LimitSurface& surface, double t
       uv_o[2 * i + 1] = current.uv[2 * o + 1];
     }
   });
-  const PositionRows rows = surface.position_rows(face_o.get(), uv_o.get(), k);
-  const CsrRows A{rows.n_rows, rows.n_cols, rows.indptr.data(), rows.indices.get(), rows.data.get()};
+  const PositionRows rows = surface.position_rows(face_o, uv_o, k, frame.scratch());
+  const CsrRows A{rows.n_rows, rows.n_cols, rows.indptr.data(), rows.indices, rows.data};
   out.rows_seconds = detail::seconds_since(t0);
   out.rows_cpu = cpu_seconds() - c0;
-  uv_o.reset();
-  face_o.reset();
-  const std::unique_ptr<double[]> points_o = uninitialised<double>(3 * k), wp = uninitialised<double>(3 * k),
-                                  w_o = uninitialised<double>(weighted ? k : 0),
-                                  normals_o = uninitialised<double>(blend ? 3 * k : 0),
-                                  w6 = uninitialised<double>(blend ? 6 * k : 0);
+  double* const points_o = frame.take<double>(3 * k);
+  double* const wp = frame.take<double>(3 * k);
+  double* const w_o = frame.take<double>(weighted ? k : 0);
+  double* const normals_o = frame.take<double>(blend ? 3 * k : 0);
+  double* const w6 = frame.take<double>(blend ? 6 * k : 0);
   in_ranges([&](std::size_t i0, std::size_t i1) {
     for (std::size_t i = i0; i < i1; ++i) {
       const std::size_t o = order[i];
@@ -390,14 +387,14 @@ NormalSums ApproximationChunk::normal_sums(const LimitSurface& surface, double t
   const double* w = nullptr;
   int count = 0;
   if (blend) {
-    w = w6.get();
+    w = w6;
     count = 6;
   } else if (weighted) {
-    w = w_o.get();
+    w = w_o;
     count = 1;
   }
   out.rhs.resize(3 * A.n_cols);
-  out.matrix = normal_matrix(A, w, count, wp.get(), out.rhs.data());
+  out.matrix = normal_matrix(A, w, count, wp, out.rhs.data());
   return out;
 }
 
@@ -476,7 +473,7 @@ DistanceSums LocalChunks::search(const FootpointOptions& options) {
   DistanceSums t;
   for (std::size_t c = 0; c < n_chunks(); ++c) {
     poll_interrupt();
-    add(t, chunk(c, kPoints).search(s));
+    add(t, chunk(c, kPoints).search(s, &scratch_));
     put(c, kCurrent);
   }
   return t;
@@ -486,7 +483,7 @@ DistanceSums LocalChunks::refine(const FootpointOptions& options) {
   DistanceSums t;
   for (std::size_t c = 0; c < n_chunks(); ++c) {
     poll_interrupt();
-    add(t, chunk(c, kPoints | kCurrent).refine(surface_, options));
+    add(t, chunk(c, kPoints | kCurrent).refine(surface_, options, &scratch_));
     put(c, kCurrent);
   }
   return t;
@@ -500,6 +497,7 @@ void LocalChunks::keep_best() {
 }
 
 DistanceSums LocalChunks::search_fresh(const FootpointOptions& options, double closer) {
+  scratch_.release();
   const FootpointSearch& s = footpoint_search(options);
   DistanceSums t;
   for (std::size_t c = 0; c < n_chunks(); ++c) {
@@ -529,10 +527,13 @@ DistanceSums LocalChunks::keep_fresh_in_best() {
 NormalSums LocalChunks::normal_sums(double tangential) { return chunks_normal_sums(tangential, nullptr, 0.0); }
 
 NormalSums LocalChunks::chunks_normal_sums(double tangential, const RobustOptions* robust, double scale) {
+  // The normal sums end a surface state's calls (the update that follows sets new control vertices): its search
+  // is given back before the sums' arrays are taken.
+  search_.reset();
   NormalSums t;
   for (std::size_t c = 0; c < n_chunks(); ++c) {
     poll_interrupt();
-    add(t, chunk(c, kPoints | kCurrent).normal_sums(surface_, tangential, robust, scale));
+    add(t, chunk(c, kPoints | kCurrent).normal_sums(surface_, tangential, robust, scale, &scratch_));
     put(c, 0);
   }
   return t;
@@ -612,6 +613,7 @@ std::vector<double> LocalChunks::sample() {
 }
 
 Footpoints LocalChunks::best_footpoints() {
+  scratch_.release();
   Footpoints out;
   for (std::size_t c = 0; c < n_chunks(); ++c) {
     const ApproximationChunk& ch = load(c, kBest);

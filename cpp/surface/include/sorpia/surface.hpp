@@ -11,6 +11,7 @@
 #include <memory>
 #include <vector>
 
+#include "sorpia/detail/scratch.hpp"
 #include "sorpia/limit.hpp"   // CsrMatrix
 #include "sorpia/memory.hpp"  // available_memory_bytes, which tessellate checks
 #include "sorpia/mesh.hpp"
@@ -47,12 +48,13 @@ struct SurfaceRows {
 /// position matrix in arrays of its own, (k, n_cols) with row i's columns
 /// indices[indptr[i] .. indptr[i + 1]) and weights data[...], where the
 /// indices and weights are not zeroed before rows() writes them (in parallel),
-/// for a caller that reads them in place.
+/// for a caller that reads them in place: they lie in the scratch given to
+/// position_rows, until the frame open on it ends.
 struct PositionRows {
   std::size_t n_rows = 0, n_cols = 0;
   std::vector<std::int32_t> indptr;
-  std::unique_ptr<std::int32_t[]> indices;
-  std::unique_ptr<double[]> data;
+  std::int32_t* indices = nullptr;
+  double* data = nullptr;
 };
 
 /// The control points of k faces (LimitSurface::control_points): face i's
@@ -185,8 +187,11 @@ class LimitSurface {
   /// @param derivatives  0: position; 1: also du, dv; 2: also duu, duv, dvv
   /// @throws ParameterError as evaluate(), or for derivatives outside 0..2
   SurfaceRows rows(const std::int32_t* face_ids, const double* uv, std::size_t k, int derivatives = 0) const;
-  /// rows(face_ids, uv, k, 0).position, the same values, as PositionRows.
-  PositionRows position_rows(const std::int32_t* face_ids, const double* uv, std::size_t k) const;
+  /// rows(face_ids, uv, k, 0).position, the same values, as PositionRows,
+  /// its entries and the call's transient arrays taken from `scratch` (in
+  /// the frame open on it).
+  PositionRows position_rows(const std::int32_t* face_ids, const double* uv, std::size_t k,
+                             detail::Scratch& scratch) const;
 
   /// The control points of faces' surfaces in Bfr's order
   /// (Bfr::Surface::GetControlPointIndices, as mesh vertex indices; a vertex
@@ -236,8 +241,8 @@ class LimitSurface {
 
  private:
   // The parameters of k points after evaluate()'s checks (pulled onto the
-  // domain where a rounding error outside).
-  std::vector<double> checked_params(const std::int32_t* face_ids, const double* uv, std::size_t k) const;
+  // domain where a rounding error outside), written to params (2k).
+  void checked_params(const std::int32_t* face_ids, const double* uv, std::size_t k, double* params) const;
   // evaluate()'s checks of the faces alone (checked_params makes them too).
   void check_faces(const std::int32_t* face_ids, std::size_t k) const;
   // Where make_rows writes matrix d: the row offsets (handed to `store`) and room for their entries.
@@ -247,9 +252,10 @@ class LimitSurface {
     double* data;
   };
   using RowsStore = std::function<RowsTarget(int d, std::vector<std::int32_t>&& indptr)>;
-  // rows()' matrices, each stored where store(d, its row offsets) says (rows() and position_rows()).
+  // rows()' matrices, each stored where store(d, its row offsets) says (rows() and position_rows()); the
+  // transient arrays taken from `scratch`, in the frame open on it (store may take from it too).
   void make_rows(const std::int32_t* face_ids, const double* uv, std::size_t k, int derivatives,
-                 const RowsStore& store) const;
+                 detail::Scratch& scratch, const RowsStore& store) const;
   // For each point at the corner of a vertex whose position comes from B
   // (Impl::exact), its row in the exact rows, else -1; empty when none.
   std::vector<std::int32_t> exact_corners(const std::int32_t* face_ids, const double* params, std::size_t k) const;
