@@ -516,6 +516,49 @@ std::vector<double> grid_reach(const Domains& dom, int r, const std::vector<doub
   return reach;
 }
 
+// The curves where the surface ends (the boundary, the edges of holes):
+// for each face f outside the holes (in offsets[f] .. offsets[f + 1]) and
+// each of its edges e with across[face_offset(f) + e] = -1, the limit
+// points at 2 r + 1 evenly spaced parameters along the edge (points, 3
+// each) and each one's largest distance to its neighbours along the edge
+// (reach): every point of the curve lies within that of one of them, as
+// every point of a face lies within grid_reach of one of its samples.
+void boundary_samples(const Domains& dom, const LimitSurface& surface, int r, const std::vector<std::int32_t>& across,
+                      std::vector<std::int32_t>& offsets, std::vector<double>& points, std::vector<double>& reach) {
+  const std::size_t m = dom.topology.n_faces();
+  const int count = 2 * r + 1;
+  std::vector<std::int32_t> face_ids;
+  std::vector<double> uv;
+  offsets.assign(m + 1, 0);
+  for (std::size_t f = 0; f < m; ++f) {
+    offsets[f + 1] = offsets[f];
+    if (dom.hole[f]) continue;
+    const auto g = static_cast<std::int32_t>(f);
+    for (std::int32_t e = 0; e < dom.topology.face_size(f); ++e) {
+      if (across[static_cast<std::size_t>(dom.topology.face_offset(f) + e)] >= 0) continue;
+      for (int i = 0; i < count; ++i) {
+        double ab[2], p[2];
+        const int c = dom.on_edge(g, e, static_cast<double>(i) / (count - 1), ab);
+        dom.to_uv(g, c, ab[0], ab[1], p);
+        face_ids.push_back(g);
+        uv.push_back(p[0]);
+        uv.push_back(p[1]);
+      }
+      offsets[f + 1] += count;
+    }
+  }
+  points.resize(3 * face_ids.size());
+  reach.assign(face_ids.size(), 0.0);
+  if (face_ids.empty()) return;
+  surface.evaluate(face_ids.data(), uv.data(), face_ids.size(), points.data(), nullptr, nullptr, nullptr);
+  for (std::size_t j = 0; j < face_ids.size(); j += static_cast<std::size_t>(count))
+    for (std::size_t i = j; i + 1 < j + static_cast<std::size_t>(count); ++i) {
+      const double d = distance3(&points[3 * i], &points[3 * (i + 1)]);
+      reach[i] = std::max(reach[i], d);
+      reach[i + 1] = std::max(reach[i + 1], d);
+    }
+}
+
 }  // namespace
 
 namespace {
@@ -890,6 +933,15 @@ struct FootpointSearch::Certificate {
   std::vector<std::int64_t> near;
   std::vector<double> clearance;
   std::vector<std::size_t> samples;  // per face + 1: its grid samples are [samples[f], samples[f + 1])
+  // Per half-edge (Topology::face_offset(f) + e): the face across it, -1
+  // where the surface ends there (the boundary, a hole).
+  std::vector<std::int32_t> across, face_offsets;  // face_offsets: per face + 1, Topology::face_offset
+  // Per face f: samples edge_points[3 j..] and edge_reach[j], j in
+  // [edge_offsets[f], edge_offsets[f + 1]), of the curves where the surface
+  // ends along f's edges (boundary_samples): each such curve lies within
+  // edge_reach[j] of one of its samples j.
+  std::vector<std::int32_t> edge_offsets;
+  std::vector<double> edge_points, edge_reach;
 
   bool in_star(std::int32_t f, std::int32_t g) const {
     const auto first = star.begin() + star_offsets[static_cast<std::size_t>(f)];
@@ -912,24 +964,66 @@ struct FootpointSearch::Certificate {
     const double c_p = along[0] * z[0] + along[1] * z[1] + along[2] * z[2];
     const double sign = c_p < 0.0 ? -1.0 : 1.0;
     const double tilt = std::acos(std::min(std::abs(c_p), 1.0)) + (n != nullptr ? 0.0 : half[fs]);
+    // Whether face g's surface (within reach(s) of its samples s) lies
+    // farther than kCertifyRim d from p: its ball first, then where that is
+    // too near, the samples.
+    const auto far = [&](std::size_t g) {
+      const double* o = &ball[4 * g];
+      if (distance3(p, o) - o[3] > kCertifyRim * d) return true;
+      for (std::size_t s = samples[g]; s < samples[g + 1]; ++s)
+        if (!(distance3(p, &positions[3 * s]) - reach[s] > kCertifyRim * d)) return false;
+      return true;
+    };
+    // The near part of the star: its faces not far from p (near[k] for
+    // star[k]); the cone, the curvature bound and the ends of the surface
+    // are those of these faces alone.
+    const std::int32_t first = star_offsets[fs], size = star_offsets[fs + 1] - first;
+    thread_local std::vector<std::uint8_t> near;
+    thread_local std::vector<std::int32_t> stack;
+    near.assign(static_cast<std::size_t>(size), 0);
     double kappa = 0.0;
-    for (std::int32_t k = star_offsets[fs]; k < star_offsets[fs + 1]; ++k) {
-      const auto g = static_cast<std::size_t>(star[static_cast<std::size_t>(k)]);
+    for (std::int32_t k = 0; k < size; ++k) {
+      const auto g = static_cast<std::size_t>(star[static_cast<std::size_t>(first + k)]);
+      if (g != fs && far(g)) continue;
       const double* b = &axis[3 * g];
       if (!(sign * (b[0] * z[0] + b[1] * z[1] + b[2] * z[2]) >= cone_cos[g])) return false;
       kappa = std::max(kappa, curvature[g]);
+      for (std::int32_t j = edge_offsets[g]; j < edge_offsets[g + 1]; ++j)
+        if (!(distance3(p, &edge_points[3 * static_cast<std::size_t>(j)]) - edge_reach[static_cast<std::size_t>(j)] >
+              kCertifyRim * d))
+          return false;
+      near[static_cast<std::size_t>(k)] = 1;
     }
     if (!(d * kappa <= kCertifyCurvature)) return false;
     if (!(tilt + 1.4142135623730951 * d * kappa <= kCertifyTilt)) return false;
-    // The rim's surface lies within reach(s) of its samples s: its ball
-    // first, then where that is too near, the samples.
-    for (std::int32_t k = rim_offsets[fs]; k < rim_offsets[fs + 1]; ++k) {
-      const auto g = static_cast<std::size_t>(rim[static_cast<std::size_t>(k)]);
-      const double* o = &ball[4 * g];
-      if (distance3(p, o) - o[3] > kCertifyRim * d) continue;
-      for (std::size_t s = samples[g]; s < samples[g + 1]; ++s)
-        if (!(distance3(p, &positions[3 * s]) - reach[s] > kCertifyRim * d)) return false;
+    // The near faces joined to f across their edges through near faces (2
+    // on those reached, f's first): one piece of surface.
+    const auto index_of = [&](std::int32_t g) {
+      const auto from = star.begin() + first, to = star.begin() + first + size;
+      const auto it = std::lower_bound(from, to, g);
+      return it != to && *it == g ? static_cast<std::int32_t>(it - from) : -1;
+    };
+    const std::int32_t own = index_of(f);
+    near[static_cast<std::size_t>(own)] = 2;
+    stack.assign(1, f);
+    std::int32_t joined = 1, listed = 0;
+    for (const std::uint8_t q : near) listed += q != 0;
+    while (!stack.empty() && joined < listed) {
+      const auto g = static_cast<std::size_t>(stack.back());
+      stack.pop_back();
+      for (std::int32_t h = face_offsets[g]; h < face_offsets[g + 1]; ++h) {
+        const std::int32_t next = across[static_cast<std::size_t>(h)];
+        const std::int32_t k = next < 0 ? -1 : index_of(next);
+        if (k < 0 || near[static_cast<std::size_t>(k)] != 1) continue;
+        near[static_cast<std::size_t>(k)] = 2;
+        ++joined;
+        stack.push_back(next);
+      }
     }
+    if (joined < listed) return false;
+    // The rim's surface lies farther than kCertifyRim d from p.
+    for (std::int32_t k = rim_offsets[fs]; k < rim_offsets[fs + 1]; ++k)
+      if (!far(static_cast<std::size_t>(rim[static_cast<std::size_t>(k)]))) return false;
     return true;
   }
 };
@@ -1007,16 +1101,27 @@ const FootpointSearch::Certificate& FootpointSearch::certificate() const {
               static_cast<std::int32_t>(f);
     }
     std::vector<std::uint8_t> smooth(nv, 1);
-    for (std::size_t v = 0; v < nv; ++v) smooth[v] = !t.is_unreferenced(v) && !t.is_boundary(v);
+    for (std::size_t v = 0; v < nv; ++v) smooth[v] = !t.is_unreferenced(v);
     for (std::size_t c = 0; c < tags.n_creases(); ++c)
       if (tags.crease_sharpness[c] > 0.0)
         smooth[static_cast<std::size_t>(tags.crease_vertices[2 * c])] =
             smooth[static_cast<std::size_t>(tags.crease_vertices[2 * c + 1])] = 0;
     for (std::size_t c = 0; c < tags.n_corners(); ++c)
       if (tags.corner_sharpness[c] > 0.0) smooth[static_cast<std::size_t>(tags.corner_vertices[c])] = 0;
-    for (const std::int32_t h : tags.holes)
-      for (std::int32_t c = 0; c < t.face_size(static_cast<std::size_t>(h)); ++c)
-        smooth[static_cast<std::size_t>(corners[static_cast<std::size_t>(t.face_offset(static_cast<std::size_t>(h)) + c)])] = 0;
+    // Across each half-edge the face there, -1 where the surface ends (the
+    // boundary, a hole); and the curves where it ends, sampled along each
+    // such edge of a face that is not a hole.
+    cert->face_offsets.resize(m + 1);
+    for (std::size_t f = 0; f <= m; ++f)
+      cert->face_offsets[f] = f < m ? t.face_offset(f) : static_cast<std::int32_t>(corners.size());
+    cert->across.assign(corners.size(), -1);
+    for (std::size_t h = 0; h < corners.size(); ++h) {
+      const std::int32_t o = dom.opposite[h];
+      const std::int32_t g = o < 0 ? -1 : dom.half_edge_face[static_cast<std::size_t>(o)];
+      if (g >= 0 && !dom.hole[static_cast<std::size_t>(g)]) cert->across[h] = g;
+    }
+    boundary_samples(dom, *surface_, options_.grid, cert->across, cert->edge_offsets, cert->edge_points,
+                     cert->edge_reach);
     // Each face's star and rim (left empty where the face is not certified).
     std::vector<std::vector<std::int32_t>> stars(m), rims(m);
     const int tasks = detail::task_count(m, 4096);
@@ -1026,7 +1131,8 @@ const FootpointSearch::Certificate& FootpointSearch::certificate() const {
         for (std::int32_t c = 0; c < t.face_size(g); ++c) {
           const auto v = static_cast<std::size_t>(corners[static_cast<std::size_t>(t.face_offset(g) + c)]);
           ok = ok && smooth[v];
-          out.insert(out.end(), vf.begin() + vf_offsets[v], vf.begin() + vf_offsets[v + 1]);
+          for (std::int32_t k = vf_offsets[v]; k < vf_offsets[v + 1]; ++k)
+            if (!dom.hole[static_cast<std::size_t>(vf[static_cast<std::size_t>(k)])]) out.push_back(vf[static_cast<std::size_t>(k)]);
         }
         return ok;
       };

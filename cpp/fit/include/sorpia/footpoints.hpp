@@ -170,34 +170,54 @@ class FootpointSearch {
   /// near = 0.1 about 1.05 starts on a fit's footpoints.
   ///
   /// Certificate (options.certify): the samples of the faces of the star
-  /// of the footpoint's face f (the faces sharing a vertex with f) are left
-  /// out of the starts where no point of the star can be closer to x than
-  /// the footpoint p (distance d) other than in p's own basin, which the
-  /// refinement of p from itself reaches. In the frame whose axis z is
+  /// of the footpoint's face f (the faces outside holes sharing a vertex
+  /// with f) are left out of the starts where no point of the star can be
+  /// closer to x than the footpoint p (distance d) other than in p's own
+  /// basin, which the refinement of p from itself reaches. A point of the
+  /// surface closer to x than d lies within 2 d of p; the star's near part
+  /// N is its faces whose surface comes within 4 d of p (f's always), and
+  /// the samples s of its other faces have |x - s| - reach(s) > 3 d, outside
+  /// the candidates' bound in any case. In the frame whose axis z is
   /// (x - p) / d:
-  /// - every normal of the star lies within 80 degrees of z, so that the
-  ///   star projects onto the plane across z without folding; it is taken
-  ///   to be one sheet over that plane (it does not wind round z);
-  /// - with kappa a bound of the star's normal curvature, p's normal lies
-  ///   within 45 degrees minus sqrt(2) d kappa of z, and the star's rim
-  ///   (the faces outside it sharing a vertex with it) farther than 4 d from
-  ///   p: the star over the disk |y| <= d round p is a graph z = h(y),
-  ///   h(0) = 0, of slope at most 1 (a radial path of length r lifts to one
-  ///   of length at most sqrt(2) r, along which the normal turns by at most
-  ///   sqrt(2) d kappa) and |Hess h| <= 2^1.5 kappa;
+  /// - every normal of N lies within 80 degrees of z, so that N projects
+  ///   onto the plane across z without folding, and each face of N is
+  ///   joined to f across edges between faces of N: N is one piece of
+  ///   surface without folds (a sheet that comes back near p through a fold
+  ///   outside N, out of the cone's sight, is joined to f only through faces
+  ///   outside N, unless N winds round z), taken to be one sheet over that
+  ///   plane (it does not wind round z);
+  /// - with kappa a bound of N's normal curvature, p's normal lies within
+  ///   45 degrees minus sqrt(2) d kappa of z, and N's edges lie farther than
+  ///   4 d from p: those it shares with the star's other faces (by N's
+  ///   definition), with the rim (the faces outside the star sharing a
+  ///   vertex with it, all farther than 4 d) and the curves where the
+  ///   surface ends (the boundary and the edges of holes, each within the
+  ///   reach of its samples at 2 grid + 1 points along the edge): N over the
+  ///   disk |y| <= d round p is a graph z = h(y), h(0) = 0, of slope at most 1
+  ///   (a radial path of length r lifts to one of length at most sqrt(2) r,
+  ///   which stays in N short of its edges, and along which the normal turns
+  ///   by at most sqrt(2) d kappa) and |Hess h| <= 2^1.5 kappa;
   /// - d kappa <= 0.1: the squared distance to x over that disk,
   ///   |y|^2 + (h(y) - d)^2, has a Hessian of at least
   ///   2 (1 - 2 d 2^1.5 kappa) > 0, so it is convex there, and the disk
-  ///   holds every point of the star within d of x: the points of the star
-  ///   closer than d form one basin, p's.
+  ///   holds every point of N within d of x: the points of the star closer
+  ///   than d form one basin, p's.
+  /// The argument uses the surface inside N alone, which is smooth up to
+  /// the curves where it ends: OpenSubdiv's boundary rules are a crease's
+  /// from one side, with no second sheet across it, the faces round a hole
+  /// are those of the surface without the hole, and a one-face corner
+  /// (valence 2, kept sharp by "edge-and-corner") is a corner of the curve,
+  /// which lies farther than 4 d from p like the rest of it; no point of
+  /// the curve is then within d of x, where a closest point need not be a
+  /// stationary point of the distance inside the surface.
   /// The bounds come from the grid samples of each face: kappa is 4 times
   /// the largest angle between neighbouring samples' normals over their
   /// distance, the cone of normals is the samples' widened by kappa times
   /// 0.6 of the largest spacing, and the face lies within reach(s) of its
   /// samples s (as the candidates' bound takes it). A face is never
-  /// certified where a vertex of its star lies on the boundary, at a hole,
-  /// or on a crease or corner of any sharpness (where the surface is not
-  /// smooth: across a concave crease a closer point lies in the star). The
+  /// certified where a vertex of its star lies on a crease or corner of any
+  /// sharpness (where the surface is not smooth: across a concave crease a
+  /// closer point lies in the star). The
   /// samples outside the star keep the candidates' bound; a point not
   /// certified takes every start. Per face f, with its ball (o, r) holding
   /// its samples t widened by reach(t), the samples s outside the star
