@@ -967,60 +967,81 @@ struct FootpointSearch::Certificate {
     // Whether face g's surface (within reach(s) of its samples s) lies
     // farther than kCertifyRim d from p: its ball first, then where that is
     // too near, the samples.
+    const double rim_d = kCertifyRim * d;
     const auto far = [&](std::size_t g) {
       const double* o = &ball[4 * g];
-      if (distance3(p, o) - o[3] > kCertifyRim * d) return true;
-      for (std::size_t s = samples[g]; s < samples[g + 1]; ++s)
-        if (!(distance3(p, &positions[3 * s]) - reach[s] > kCertifyRim * d)) return false;
+      if (distance3(p, o) - o[3] > rim_d) return true;
+      for (std::size_t s = samples[g]; s < samples[g + 1]; ++s) {
+        const double* q = &positions[3 * s];
+        const double e = reach[s] + rim_d;
+        if (!((p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) + (p[2] - q[2]) * (p[2] - q[2]) > e * e))
+          return false;
+      }
       return true;
     };
-    // The near part of the star: its faces not far from p (near[k] for
-    // star[k]); the cone, the curvature bound and the ends of the surface
-    // are those of these faces alone.
-    const std::int32_t first = star_offsets[fs], size = star_offsets[fs + 1] - first;
-    thread_local std::vector<std::uint8_t> near;
-    thread_local std::vector<std::int32_t> stack;
-    near.assign(static_cast<std::size_t>(size), 0);
-    double kappa = 0.0;
-    for (std::int32_t k = 0; k < size; ++k) {
-      const auto g = static_cast<std::size_t>(star[static_cast<std::size_t>(first + k)]);
-      if (g != fs && far(g)) continue;
+    // Face g's normals within the cone round z, and the curves where the
+    // surface ends along its edges farther than kCertifyRim d from p.
+    const auto holds = [&](std::size_t g) {
       const double* b = &axis[3 * g];
       if (!(sign * (b[0] * z[0] + b[1] * z[1] + b[2] * z[2]) >= cone_cos[g])) return false;
-      kappa = std::max(kappa, curvature[g]);
       for (std::int32_t j = edge_offsets[g]; j < edge_offsets[g + 1]; ++j)
         if (!(distance3(p, &edge_points[3 * static_cast<std::size_t>(j)]) - edge_reach[static_cast<std::size_t>(j)] >
-              kCertifyRim * d))
+              rim_d))
           return false;
-      near[static_cast<std::size_t>(k)] = 1;
-    }
-    if (!(d * kappa <= kCertifyCurvature)) return false;
-    if (!(tilt + 1.4142135623730951 * d * kappa <= kCertifyTilt)) return false;
-    // The near faces joined to f across their edges through near faces (2
-    // on those reached, f's first): one piece of surface.
-    const auto index_of = [&](std::int32_t g) {
-      const auto from = star.begin() + first, to = star.begin() + first + size;
-      const auto it = std::lower_bound(from, to, g);
-      return it != to && *it == g ? static_cast<std::int32_t>(it - from) : -1;
+      return true;
     };
-    const std::int32_t own = index_of(f);
-    near[static_cast<std::size_t>(own)] = 2;
-    stack.assign(1, f);
-    std::int32_t joined = 1, listed = 0;
-    for (const std::uint8_t q : near) listed += q != 0;
-    while (!stack.empty() && joined < listed) {
-      const auto g = static_cast<std::size_t>(stack.back());
-      stack.pop_back();
-      for (std::int32_t h = face_offsets[g]; h < face_offsets[g + 1]; ++h) {
-        const std::int32_t next = across[static_cast<std::size_t>(h)];
-        const std::int32_t k = next < 0 ? -1 : index_of(next);
-        if (k < 0 || near[static_cast<std::size_t>(k)] != 1) continue;
-        near[static_cast<std::size_t>(k)] = 2;
-        ++joined;
-        stack.push_back(next);
-      }
+    const auto bounded = [&](double kappa) {
+      return d * kappa <= kCertifyCurvature && tilt + 1.4142135623730951 * d * kappa <= kCertifyTilt;
+    };
+    // N: the whole star where each of its faces holds and none ends (a
+    // star without ends is joined to f round f's vertices), else its faces
+    // not far from p (near[k] for star[k]), joined to f across their edges.
+    const std::int32_t first = star_offsets[fs], size = star_offsets[fs + 1] - first;
+    double kappa = 0.0;
+    bool whole = true;
+    for (std::int32_t k = 0; k < size && whole; ++k) {
+      const auto g = static_cast<std::size_t>(star[static_cast<std::size_t>(first + k)]);
+      whole = edge_offsets[g] == edge_offsets[g + 1] && holds(g);
+      kappa = std::max(kappa, curvature[g]);
     }
-    if (joined < listed) return false;
+    if (!whole || !bounded(kappa)) {
+      thread_local std::vector<std::uint8_t> near;
+      thread_local std::vector<std::int32_t> stack;
+      near.assign(static_cast<std::size_t>(size), 0);
+      kappa = 0.0;
+      std::int32_t listed = 0;
+      for (std::int32_t k = 0; k < size; ++k) {
+        const auto g = static_cast<std::size_t>(star[static_cast<std::size_t>(first + k)]);
+        if (g != fs && far(g)) continue;
+        if (!holds(g)) return false;
+        kappa = std::max(kappa, curvature[g]);
+        near[static_cast<std::size_t>(k)] = 1;
+        ++listed;
+      }
+      if (!bounded(kappa)) return false;
+      // Joined to f (2 on those reached, f's first).
+      const auto index_of = [&](std::int32_t g) {
+        const auto from = star.begin() + first, to = star.begin() + first + size;
+        const auto it = std::lower_bound(from, to, g);
+        return it != to && *it == g ? static_cast<std::int32_t>(it - from) : -1;
+      };
+      near[static_cast<std::size_t>(index_of(f))] = 2;
+      stack.assign(1, f);
+      std::int32_t joined = 1;
+      while (!stack.empty() && joined < listed) {
+        const auto g = static_cast<std::size_t>(stack.back());
+        stack.pop_back();
+        for (std::int32_t h = face_offsets[g]; h < face_offsets[g + 1]; ++h) {
+          const std::int32_t next = across[static_cast<std::size_t>(h)];
+          const std::int32_t k = next < 0 ? -1 : index_of(next);
+          if (k < 0 || near[static_cast<std::size_t>(k)] != 1) continue;
+          near[static_cast<std::size_t>(k)] = 2;
+          ++joined;
+          stack.push_back(next);
+        }
+      }
+      if (joined < listed) return false;
+    }
     // The rim's surface lies farther than kCertifyRim d from p.
     for (std::int32_t k = rim_offsets[fs]; k < rim_offsets[fs + 1]; ++k)
       if (!far(static_cast<std::size_t>(rim[static_cast<std::size_t>(k)]))) return false;
@@ -1122,49 +1143,64 @@ const FootpointSearch::Certificate& FootpointSearch::certificate() const {
     }
     boundary_samples(dom, *surface_, options_.grid, cert->across, cert->edge_offsets, cert->edge_points,
                      cert->edge_reach);
-    // Each face's star and rim (left empty where the face is not certified).
-    std::vector<std::vector<std::int32_t>> stars(m), rims(m);
+    // Each face's star (sorted) and rim (left empty where the face is not
+    // certified): the faces at its vertices, then those at its star's
+    // vertices, each listed once (mark[g] = f + 1 once listed in f's star,
+    // -(f + 1) in its rim), for a range of faces per task.
     const int tasks = detail::task_count(m, 4096);
-    detail::for_each_index(tasks > 1, tasks, m, [&](std::size_t f) {
-      const auto faces_at = [&](std::size_t g, std::vector<std::int32_t>& out) {
+    struct Lists {
+      std::vector<std::int32_t> star_sizes, star, rim_sizes, rim;
+    };
+    std::vector<Lists> lists(static_cast<std::size_t>(tasks));
+    detail::for_each_task(tasks > 1, tasks, [&](int task) {
+      Lists& out = lists[static_cast<std::size_t>(task)];
+      std::vector<std::int64_t> mark(m, 0);
+      const std::size_t from = m * static_cast<std::size_t>(task) / static_cast<std::size_t>(tasks);
+      const std::size_t to = m * static_cast<std::size_t>(task + 1) / static_cast<std::size_t>(tasks);
+      // Appends the faces at g's vertices (not holes) not marked `in` or
+      // `out_mark`, marking them `in`; false where a vertex is not smooth.
+      const auto faces_at = [&](std::size_t g, std::int64_t in, std::int64_t out_mark, std::vector<std::int32_t>& list) {
         bool ok = true;
         for (std::int32_t c = 0; c < t.face_size(g); ++c) {
           const auto v = static_cast<std::size_t>(corners[static_cast<std::size_t>(t.face_offset(g) + c)]);
           ok = ok && smooth[v];
-          for (std::int32_t k = vf_offsets[v]; k < vf_offsets[v + 1]; ++k)
-            if (!dom.hole[static_cast<std::size_t>(vf[static_cast<std::size_t>(k)])]) out.push_back(vf[static_cast<std::size_t>(k)]);
+          for (std::int32_t k = vf_offsets[v]; k < vf_offsets[v + 1]; ++k) {
+            const auto h = static_cast<std::size_t>(vf[static_cast<std::size_t>(k)]);
+            if (dom.hole[h] || mark[h] == in || mark[h] == out_mark) continue;
+            mark[h] = in;
+            list.push_back(static_cast<std::int32_t>(h));
+          }
         }
         return ok;
       };
-      if (first[f] == first[f + 1]) return;
-      std::vector<std::int32_t> star, around;
-      if (!faces_at(f, star)) return;
-      std::sort(star.begin(), star.end());
-      star.erase(std::unique(star.begin(), star.end()), star.end());
-      for (const std::int32_t g : star) {
-        if (!std::isfinite(cert->half[static_cast<std::size_t>(g)]) || !faces_at(static_cast<std::size_t>(g), around))
-          return;
+      for (std::size_t f = from; f < to; ++f) {
+        const std::size_t star_at = out.star.size(), rim_at = out.rim.size();
+        const auto in = static_cast<std::int64_t>(f) + 1;
+        bool ok = first[f] != first[f + 1] && faces_at(f, in, in, out.star);
+        for (std::size_t k = star_at; ok && k < out.star.size(); ++k) {
+          const auto g = static_cast<std::size_t>(out.star[k]);
+          ok = std::isfinite(cert->half[g]) && faces_at(g, -in, in, out.rim);
+        }
+        if (!ok) {
+          out.star.resize(star_at);
+          out.rim.resize(rim_at);
+        }
+        std::sort(out.star.begin() + static_cast<std::ptrdiff_t>(star_at), out.star.end());
+        out.star_sizes.push_back(static_cast<std::int32_t>(out.star.size() - star_at));
+        out.rim_sizes.push_back(static_cast<std::int32_t>(out.rim.size() - rim_at));
       }
-      std::sort(around.begin(), around.end());
-      around.erase(std::unique(around.begin(), around.end()), around.end());
-      std::vector<std::int32_t> rim;
-      std::set_difference(around.begin(), around.end(), star.begin(), star.end(), std::back_inserter(rim));
-      stars[f] = std::move(star);
-      rims[f] = std::move(rim);
     });
-    const auto flatten = [&](std::vector<std::vector<std::int32_t>>& lists, std::vector<std::int32_t>& offsets,
-                             std::vector<std::int32_t>& flat) {
-      offsets.assign(m + 1, 0);
-      for (std::size_t f = 0; f < m; ++f)
-        offsets[f + 1] = offsets[f] + static_cast<std::int32_t>(lists[f].size());
-      flat.reserve(static_cast<std::size_t>(offsets[m]));
-      for (auto& list : lists) {
-        flat.insert(flat.end(), list.begin(), list.end());
-        std::vector<std::int32_t>().swap(list);
+    const auto flatten = [&](std::vector<std::int32_t> Lists::*sizes, std::vector<std::int32_t> Lists::*list,
+                             std::vector<std::int32_t>& offsets, std::vector<std::int32_t>& flat) {
+      offsets.assign(1, 0);
+      for (Lists& l : lists) {
+        for (const std::int32_t k : l.*sizes) offsets.push_back(offsets.back() + k);
+        flat.insert(flat.end(), (l.*list).begin(), (l.*list).end());
+        std::vector<std::int32_t>().swap(l.*list);
       }
     };
-    flatten(stars, cert->star_offsets, cert->star);
-    flatten(rims, cert->rim_offsets, cert->rim);
+    flatten(&Lists::star_sizes, &Lists::star, cert->star_offsets, cert->star);
+    flatten(&Lists::rim_sizes, &Lists::rim, cert->rim_offsets, cert->rim);
     cert->samples = std::move(first);
     // Each face's clearance and near samples: a point p of the face lies
     // within reach(t) of one of its samples t, so that a sample s outside
