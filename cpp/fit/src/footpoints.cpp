@@ -1331,15 +1331,51 @@ std::size_t FootpointSearch::closer(const double* points, std::size_t n, Footpoi
     if (has_normals) std::copy_n(&from.normals[3 * r], 3, &fp.normals[3 * i]);
     return true;
   };
-  std::vector<std::uint8_t> changed(kBatch), skipped(kBatch);
-  std::vector<double> at;  // the footpoints' positions where fp holds none (the certificate's p)
+  // Refines the footpoints of points first + rows[r] from themselves, to
+  // the minimum (find and refine stop after max_steps, the starts after
+  // kCloserSteps, and near corners with Bfr's derivatives: a step or two
+  // where one is there already), each taken where closer; `again` holds the
+  // results (row r: its point's footpoint, or where not taken, the point
+  // the refinement ended at).
+  const auto polish = [&](std::size_t first, const std::vector<std::size_t>& rows, Footpoints& again,
+                          std::vector<std::uint8_t>& changed) {
+    const std::size_t k = rows.size();
+    if (k == 0) return;
+    std::vector<double> y(3 * k);
+    again.face_ids.resize(k);
+    again.uv.resize(2 * k);
+    for (std::size_t r = 0; r < k; ++r) {
+      const std::size_t i = first + rows[r];
+      std::copy_n(points + 3 * i, 3, &y[3 * r]);
+      again.face_ids[r] = fp.face_ids[i];
+      std::copy_n(&fp.uv[2 * i], 2, &again.uv[2 * r]);
+    }
+    refine(*surface_, *topology_, y.data(), k, polishing, again, nullptr, &irregular_);
+    for (std::size_t r = 0; r < k; ++r)
+      if (take(first + rows[r], again, r)) changed[rows[r]] = 1;
+  };
+  std::vector<std::uint8_t> changed(kBatch), skipped(kBatch), started(kBatch);
   for (std::size_t first = 0; first < n; first += kBatch) {
     poll_interrupt();
     const std::size_t b = std::min(kBatch, n - first);
     const int tasks = detail::task_count(b, 4096);
-    if (cert != nullptr && !has_positions) {
-      at.resize(3 * b);
-      surface_->evaluate(&fp.face_ids[first], &fp.uv[2 * first], b, at.data(), nullptr, nullptr, nullptr);
+    // Each footpoint off its point refined from itself first: the
+    // certificate's p (and its normal) is then the polished footpoint, as
+    // that refinement evaluated it (-1 in polished_row where it ended
+    // elsewhere at no smaller distance, a hop across an edge: not
+    // certified).
+    std::fill_n(changed.begin(), b, std::uint8_t{0});
+    std::vector<std::size_t> again_row;
+    for (std::size_t j = 0; j < b; ++j)
+      if (fp.distances[first + j] > 0.0) again_row.push_back(j);
+    Footpoints polished;
+    polish(first, again_row, polished, changed);
+    std::vector<std::int64_t> polished_row(b, -1);
+    for (std::size_t r = 0; r < again_row.size(); ++r) {
+      const std::size_t i = first + again_row[r];
+      if (fp.face_ids[i] == polished.face_ids[r] && fp.uv[2 * i] == polished.uv[2 * r] &&
+          fp.uv[2 * i + 1] == polished.uv[2 * r + 1])
+        polished_row[again_row[r]] = static_cast<std::int64_t>(r);
     }
     // In the points' spatial order, so that the queries find the tree's
     // nodes and the faces' certificates in cache.
@@ -1362,10 +1398,10 @@ std::size_t FootpointSearch::closer(const double* points, std::size_t n, Footpoi
     if (cert != nullptr)
       detail::for_each_index(tasks > 1, tasks, b, [&](std::size_t o) {
         const std::size_t j = order[o], i = first + j;
-        skipped[j] = off(j) && cert->certifies(fp.face_ids[i], points + 3 * i,
-                                               has_positions ? &fp.positions[3 * i] : &at[3 * j],
-                                               has_normals ? &fp.normals[3 * i] : nullptr, fp.distances[i],
-                                               positions_.data(), reach_.data());
+        const auto r = static_cast<std::size_t>(polished_row[j]);
+        skipped[j] = off(j) && polished_row[j] >= 0 &&
+                     cert->certifies(fp.face_ids[i], points + 3 * i, &polished.positions[3 * r],
+                                     &polished.normals[3 * r], fp.distances[i], positions_.data(), reach_.data());
       });
     // A certified point whose face's clearance is at least 2 d: its
     // candidates are its face's near samples that pass the bound (its
@@ -1438,7 +1474,7 @@ std::size_t FootpointSearch::closer(const double* points, std::size_t n, Footpoi
     std::vector<std::size_t> row(b + 1, 0);
     for (std::size_t j = 0; j < b; ++j) row[j + 1] = row[j] + count[j];
     const std::size_t rows = row[b];
-    std::fill_n(changed.begin(), b, std::uint8_t{0});
+    std::fill_n(started.begin(), b, std::uint8_t{0});
     if (rows > 0) {
       std::vector<double> x(3 * rows);
       std::vector<std::int64_t> nearest(rows);
@@ -1464,32 +1500,15 @@ std::size_t FootpointSearch::closer(const double* points, std::size_t n, Footpoi
         std::size_t best = row[j];
         for (std::size_t r = row[j] + 1; r < row[j + 1]; ++r)
           if (trial.distances[r] < trial.distances[best]) best = r;
-        changed[j] = take(first + j, trial, best);
+        if (take(first + j, trial, best)) changed[j] = started[j] = 1;
       }
     }
-    // Then each footpoint refined again from itself, to the minimum
-    // (find and refine stop after max_steps, the starts after
-    // kCloserSteps, and near corners with Bfr's derivatives): a step or two
-    // where it is there already.
-    std::vector<std::size_t> again_row;
+    // The footpoints a start moved refined again from themselves.
+    again_row.clear();
     for (std::size_t j = 0; j < b; ++j)
-      if (fp.distances[first + j] > 0.0) again_row.push_back(j);
-    if (!again_row.empty()) {
-      const std::size_t k = again_row.size();
-      std::vector<double> y(3 * k);
-      Footpoints again;
-      again.face_ids.resize(k);
-      again.uv.resize(2 * k);
-      for (std::size_t r = 0; r < k; ++r) {
-        const std::size_t i = first + again_row[r];
-        std::copy_n(points + 3 * i, 3, &y[3 * r]);
-        again.face_ids[r] = fp.face_ids[i];
-        std::copy_n(&fp.uv[2 * i], 2, &again.uv[2 * r]);
-      }
-      refine(*surface_, *topology_, y.data(), k, polishing, again, nullptr, &irregular_);
-      for (std::size_t r = 0; r < k; ++r)
-        if (take(first + again_row[r], again, r)) changed[again_row[r]] = 1;
-    }
+      if (started[j]) again_row.push_back(j);
+    Footpoints again;
+    polish(first, again_row, again, changed);
     for (std::size_t j = 0; j < b; ++j) moved += changed[j];
   }
   return moved;

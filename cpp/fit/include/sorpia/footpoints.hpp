@@ -148,6 +148,9 @@ class FootpointSearch {
   /// (refine_footpoints' results, and find's: its start is the nearest
   /// sample, whose basin need not hold the closest point), so that each
   /// becomes the closest point of the surface; returns how many moved.
+  /// Each footpoint off its point is first refined from itself (at least
+  /// 400 steps: near a focal point Gauss-Newton converges slowly), and the
+  /// rest takes that footpoint and its distance d.
   /// Every point of the surface lies within reach(s) of a grid sample s of
   /// its face (the largest distance from s to its neighbours in the grid),
   /// so a surface point closer to x than its footpoint (distance d) lies
@@ -156,9 +159,8 @@ class FootpointSearch {
   /// to options.starts candidates, least |x - s| - reach(s) first (for a
   /// point farther than options.near times its nearest sample's reach),
   /// are refined (refine_footpoints from the sample, at least 100 steps),
-  /// the closest result replaces the footpoint where it is closer, and the
-  /// footpoint is then refined again from itself (at least 400 steps: near
-  /// a focal point Gauss-Newton converges slowly). These refinements take
+  /// the closest result replaces the footpoint where it is closer, and is
+  /// then refined from itself as the footpoints were. These refinements take
   /// their derivatives near the corners of irregular faces
   /// (Bfr::Surface::IsRegular() false) from differences of positions (Bfr's
   /// are approximate there, surface.hpp), so that they reach the minimum to
@@ -173,15 +175,19 @@ class FootpointSearch {
   /// of the footpoint's face f (the faces outside holes sharing a vertex
   /// with f) are left out of the starts where no point of the star can be
   /// closer to x than the footpoint p (distance d) other than in p's own
-  /// basin, which the refinement of p from itself reaches. A point of the
-  /// surface closer to x than d lies within 2 d of p; the star's near part
-  /// N is its faces whose surface comes within 4 d of p (f's always), and
-  /// the samples s of its other faces have |x - s| - reach(s) > 3 d, outside
-  /// the candidates' bound in any case. In the frame whose axis z is
-  /// (x - p) / d:
+  /// basin, which the refinement of p from itself reaches (p: the footpoint
+  /// that refinement returned; a point whose refinement hopped to another
+  /// point at no smaller distance is not certified). A point of the surface
+  /// closer to x than d lies within 2 d of p. N is the whole star
+  /// where the surface does not end in it and the tests below hold for all
+  /// of it, else its near part: its faces whose surface comes within 4 d of
+  /// p (f's always); the samples s of the other faces have
+  /// |x - s| - reach(s) > 3 d, outside the candidates' bound in any case. In
+  /// the frame whose axis z is (x - p) / d:
   /// - every normal of N lies within 80 degrees of z, so that N projects
   ///   onto the plane across z without folding, and each face of N is
-  ///   joined to f across edges between faces of N: N is one piece of
+  ///   joined to f across edges between faces of N (a whole star without
+  ///   ends is, round each vertex of f): N is one piece of
   ///   surface without folds (a sheet that comes back near p through a fold
   ///   outside N, out of the cone's sight, is joined to f only through faces
   ///   outside N, unless N winds round z), taken to be one sheet over that
