@@ -912,9 +912,9 @@ constexpr double kCertifyRim = 4.0;
 }  // namespace
 
 struct FootpointSearch::Certificate {
-  // Per face: the faces sharing a vertex with it (its star, sorted) and the
-  // faces outside the star sharing a vertex with a face of the star (its
-  // rim); both empty where the face is never certified.
+  // Per face: the faces outside holes sharing a vertex with it (its star,
+  // sorted) and those outside the star sharing a vertex with a face of the
+  // star (its rim); both empty where the face is never certified.
   std::vector<std::int32_t> star_offsets, star, rim_offsets, rim;
   std::vector<double> axis;       // per face (3): the unit axis of a cone holding its normals
   std::vector<double> half;       // per face: the cone's half-angle
@@ -1108,8 +1108,8 @@ const FootpointSearch::Certificate& FootpointSearch::certificate() const {
       if (!zero && len > 0.0) cert->half[f] = half + 0.6 * cert->curvature[f] * spacing[f];
       cert->cone_cos[f] = cert->half[f] <= kCertifyStarTilt ? std::cos(kCertifyStarTilt - cert->half[f]) : 2.0;
     }
-    // Vertices where the surface is smooth all round: inside the mesh, not at
-    // a hole, on no crease and no corner of any sharpness.
+    // Vertices where the surface is smooth (up to the boundary or a hole
+    // where it ends there): on no crease and no corner of any sharpness.
     std::vector<std::int32_t> vf_offsets(nv + 1, 0), vf;
     for (const std::int32_t v : corners) ++vf_offsets[static_cast<std::size_t>(v) + 1];
     for (std::size_t v = 0; v < nv; ++v) vf_offsets[v + 1] += vf_offsets[v];
