@@ -942,6 +942,18 @@ struct FootpointSearch::Certificate {
   // edge_reach[j] of one of its samples j.
   std::vector<std::int32_t> edge_offsets;
   std::vector<double> edge_points, edge_reach;
+  // Per face f, its star at once (shortcuts of the tests on each face of
+  // the star, below): star_axis (3) and star_cos, a cone holding the cones
+  // of the star's faces (angle(star_axis, axis[g]) + half[g] <= H for each
+  // g, star_cos = cos(kCertifyStarTilt - H), above 1 where H exceeds it,
+  // so that z within kCertifyStarTilt - H of star_axis passes every face's
+  // test); star_curvature, the largest curvature bound of the star;
+  // star_ends, whether the surface ends along an edge of the star; and
+  // rim_clear, a lower bound of |o - s| - reach(s) over the samples s of
+  // the rim (o: f's ball's centre), so that a point p has no point of the
+  // rim within rim_clear - |p - o| of it.
+  std::vector<double> star_axis, star_cos, star_curvature, rim_clear;
+  std::vector<std::uint8_t> star_ends;
 
   bool in_star(std::int32_t f, std::int32_t g) const {
     const auto first = star.begin() + star_offsets[static_cast<std::size_t>(f)];
@@ -997,13 +1009,12 @@ struct FootpointSearch::Certificate {
     // star without ends is joined to f round f's vertices), else its faces
     // not far from p (near[k] for star[k]), joined to f across their edges.
     const std::int32_t first = star_offsets[fs], size = star_offsets[fs + 1] - first;
-    double kappa = 0.0;
-    bool whole = true;
-    for (std::int32_t k = 0; k < size && whole; ++k) {
-      const auto g = static_cast<std::size_t>(star[static_cast<std::size_t>(first + k)]);
-      whole = edge_offsets[g] == edge_offsets[g + 1] && holds(g);
-      kappa = std::max(kappa, curvature[g]);
-    }
+    const double* sa = &star_axis[3 * fs];
+    bool whole = !star_ends[fs];
+    double kappa = star_curvature[fs];
+    if (whole && !(sign * (sa[0] * z[0] + sa[1] * z[1] + sa[2] * z[2]) >= star_cos[fs]))
+      for (std::int32_t k = 0; k < size && whole; ++k)
+        whole = holds(static_cast<std::size_t>(star[static_cast<std::size_t>(first + k)]));
     if (!whole || !bounded(kappa)) {
       thread_local std::vector<std::uint8_t> near;
       thread_local std::vector<std::int32_t> stack;
@@ -1043,6 +1054,7 @@ struct FootpointSearch::Certificate {
       if (joined < listed) return false;
     }
     // The rim's surface lies farther than kCertifyRim d from p.
+    if (rim_clear[fs] - distance3(p, &ball[4 * fs]) > rim_d) return true;
     for (std::int32_t k = rim_offsets[fs]; k < rim_offsets[fs + 1]; ++k)
       if (!far(static_cast<std::size_t>(rim[static_cast<std::size_t>(k)]))) return false;
     return true;
@@ -1202,6 +1214,48 @@ const FootpointSearch::Certificate& FootpointSearch::certificate() const {
     flatten(&Lists::star_sizes, &Lists::star, cert->star_offsets, cert->star);
     flatten(&Lists::rim_sizes, &Lists::rim, cert->rim_offsets, cert->rim);
     cert->samples = std::move(first);
+    // Each star at once (Certificate::star_axis ..., rim_clear).
+    cert->star_axis.assign(3 * m, 0.0);
+    cert->star_cos.assign(m, 2.0);
+    cert->star_curvature.assign(m, 0.0);
+    cert->star_ends.assign(m, 1);
+    cert->rim_clear.assign(m, -std::numeric_limits<double>::infinity());
+    detail::for_each_index(tasks > 1, tasks, m, [&](std::size_t f) {
+      const std::int32_t from = cert->star_offsets[f], to = cert->star_offsets[f + 1];
+      if (from == to) return;
+      double* a = &cert->star_axis[3 * f];
+      bool ends = false;
+      double kappa = 0.0;
+      for (std::int32_t k = from; k < to; ++k) {
+        const auto g = static_cast<std::size_t>(cert->star[static_cast<std::size_t>(k)]);
+        for (int c = 0; c < 3; ++c) a[c] += cert->axis[3 * g + c];
+        ends = ends || cert->edge_offsets[g] != cert->edge_offsets[g + 1];
+        kappa = std::max(kappa, cert->curvature[g]);
+      }
+      const double len = std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+      double wide = len > 0.0 ? 0.0 : std::numeric_limits<double>::infinity();
+      for (int c = 0; c < 3; ++c) a[c] = len > 0.0 ? a[c] / len : 0.0;
+      for (std::int32_t k = from; k < to && len > 0.0; ++k) {
+        const auto g = static_cast<std::size_t>(cert->star[static_cast<std::size_t>(k)]);
+        const double* b = &cert->axis[3 * g];
+        wide = std::max(wide, std::acos(std::clamp(a[0] * b[0] + a[1] * b[1] + a[2] * b[2], -1.0, 1.0)) + cert->half[g]);
+      }
+      // (A rounding's margin: the shortcut never passes where a face's own test would not.)
+      wide += 1e-12;
+      cert->star_cos[f] = wide <= kCertifyStarTilt ? std::cos(kCertifyStarTilt - wide) : 2.0;
+      cert->star_curvature[f] = kappa;
+      cert->star_ends[f] = ends;
+      const double* o = &cert->ball[4 * f];
+      double clear = std::numeric_limits<double>::infinity();
+      for (std::int32_t k = cert->rim_offsets[f]; k < cert->rim_offsets[f + 1]; ++k) {
+        const auto g = static_cast<std::size_t>(cert->rim[static_cast<std::size_t>(k)]);
+        const double* og = &cert->ball[4 * g];
+        if (!(distance3(o, og) - og[3] < clear)) continue;  // its samples s: |o - s| - reach(s) >= |o - og| - r_g
+        for (std::size_t t = cert->samples[g]; t < cert->samples[g + 1]; ++t)
+          clear = std::min(clear, distance3(o, &positions_[3 * t]) - reach_[t]);
+      }
+      cert->rim_clear[f] = clear;
+    });
     // Each face's clearance and near samples: a point p of the face lies
     // within reach(t) of one of its samples t, so that a sample s outside
     // the star has |p - s| - reach(s) >= |t - s| - reach(t) - reach(s) for
