@@ -516,6 +516,49 @@ std::vector<double> grid_reach(const Domains& dom, int r, const std::vector<doub
   return reach;
 }
 
+// The curves where the surface ends (the boundary, the edges of holes):
+// for each face f outside the holes (in offsets[f] .. offsets[f + 1]) and
+// each of its edges e with across[face_offset(f) + e] = -1, the limit
+// points at 2 r + 1 evenly spaced parameters along the edge (points, 3
+// each) and each one's largest distance to its neighbours along the edge
+// (reach): every point of the curve lies within that of one of them, as
+// every point of a face lies within grid_reach of one of its samples.
+void boundary_samples(const Domains& dom, const LimitSurface& surface, int r, const std::vector<std::int32_t>& across,
+                      std::vector<std::int32_t>& offsets, std::vector<double>& points, std::vector<double>& reach) {
+  const std::size_t m = dom.topology.n_faces();
+  const int count = 2 * r + 1;
+  std::vector<std::int32_t> face_ids;
+  std::vector<double> uv;
+  offsets.assign(m + 1, 0);
+  for (std::size_t f = 0; f < m; ++f) {
+    offsets[f + 1] = offsets[f];
+    if (dom.hole[f]) continue;
+    const auto g = static_cast<std::int32_t>(f);
+    for (std::int32_t e = 0; e < dom.topology.face_size(f); ++e) {
+      if (across[static_cast<std::size_t>(dom.topology.face_offset(f) + e)] >= 0) continue;
+      for (int i = 0; i < count; ++i) {
+        double ab[2], p[2];
+        const int c = dom.on_edge(g, e, static_cast<double>(i) / (count - 1), ab);
+        dom.to_uv(g, c, ab[0], ab[1], p);
+        face_ids.push_back(g);
+        uv.push_back(p[0]);
+        uv.push_back(p[1]);
+      }
+      offsets[f + 1] += count;
+    }
+  }
+  points.resize(3 * face_ids.size());
+  reach.assign(face_ids.size(), 0.0);
+  if (face_ids.empty()) return;
+  surface.evaluate(face_ids.data(), uv.data(), face_ids.size(), points.data(), nullptr, nullptr, nullptr);
+  for (std::size_t j = 0; j < face_ids.size(); j += static_cast<std::size_t>(count))
+    for (std::size_t i = j; i + 1 < j + static_cast<std::size_t>(count); ++i) {
+      const double d = distance3(&points[3 * i], &points[3 * (i + 1)]);
+      reach[i] = std::max(reach[i], d);
+      reach[i + 1] = std::max(reach[i + 1], d);
+    }
+}
+
 }  // namespace
 
 namespace {
@@ -867,9 +910,9 @@ constexpr double kCertifyRim = 4.0;
 }  // namespace
 
 struct FootpointSearch::Certificate {
-  // Per face: the faces sharing a vertex with it (its star, sorted) and the
-  // faces outside the star sharing a vertex with a face of the star (its
-  // rim); both empty where the face is never certified.
+  // Per face: the faces outside holes sharing a vertex with it (its star,
+  // sorted) and those outside the star sharing a vertex with a face of the
+  // star (its rim); both empty where the face is never certified.
   std::vector<std::int32_t> star_offsets, star, rim_offsets, rim;
   std::vector<double> axis;       // per face (3): the unit axis of a cone holding its normals
   std::vector<double> half;       // per face: the cone's half-angle
@@ -888,6 +931,27 @@ struct FootpointSearch::Certificate {
   std::vector<std::int64_t> near;
   std::vector<double> clearance;
   std::vector<std::size_t> samples;  // per face + 1: its grid samples are [samples[f], samples[f + 1])
+  // Per half-edge (Topology::face_offset(f) + e): the face across it, -1
+  // where the surface ends there (the boundary, a hole).
+  std::vector<std::int32_t> across, face_offsets;  // face_offsets: per face + 1, Topology::face_offset
+  // Per face f: samples edge_points[3 j..] and edge_reach[j], j in
+  // [edge_offsets[f], edge_offsets[f + 1]), of the curves where the surface
+  // ends along f's edges (boundary_samples): each such curve lies within
+  // edge_reach[j] of one of its samples j.
+  std::vector<std::int32_t> edge_offsets;
+  std::vector<double> edge_points, edge_reach;
+  // Per face f, its star at once (shortcuts of the tests on each face of
+  // the star, below): star_axis (3) and star_cos, a cone holding the cones
+  // of the star's faces (angle(star_axis, axis[g]) + half[g] <= H for each
+  // g, star_cos = cos(kCertifyStarTilt - H), above 1 where H exceeds it,
+  // so that z within kCertifyStarTilt - H of star_axis passes every face's
+  // test); star_curvature, the largest curvature bound of the star;
+  // star_ends, whether the surface ends along an edge of the star; and
+  // rim_clear, a lower bound of |o - s| - reach(s) over the samples s of
+  // the rim (o: f's ball's centre), so that a point p has no point of the
+  // rim within rim_clear - |p - o| of it.
+  std::vector<double> star_axis, star_cos, star_curvature, rim_clear;
+  std::vector<std::uint8_t> star_ends;
 
   bool in_star(std::int32_t f, std::int32_t g) const {
     const auto first = star.begin() + star_offsets[static_cast<std::size_t>(f)];
@@ -910,24 +974,87 @@ struct FootpointSearch::Certificate {
     const double c_p = along[0] * z[0] + along[1] * z[1] + along[2] * z[2];
     const double sign = c_p < 0.0 ? -1.0 : 1.0;
     const double tilt = std::acos(std::min(std::abs(c_p), 1.0)) + (n != nullptr ? 0.0 : half[fs]);
-    double kappa = 0.0;
-    for (std::int32_t k = star_offsets[fs]; k < star_offsets[fs + 1]; ++k) {
-      const auto g = static_cast<std::size_t>(star[static_cast<std::size_t>(k)]);
+    // Whether face g's surface (within reach(s) of its samples s) lies
+    // farther than kCertifyRim d from p: its ball first, then where that is
+    // too near, the samples.
+    const double rim_d = kCertifyRim * d;
+    const auto far = [&](std::size_t g) {
+      const double* o = &ball[4 * g];
+      if (distance3(p, o) - o[3] > rim_d) return true;
+      for (std::size_t s = samples[g]; s < samples[g + 1]; ++s) {
+        const double* q = &positions[3 * s];
+        const double e = reach[s] + rim_d;
+        if (!((p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) + (p[2] - q[2]) * (p[2] - q[2]) > e * e))
+          return false;
+      }
+      return true;
+    };
+    // Face g's normals within the cone round z, and the curves where the
+    // surface ends along its edges farther than kCertifyRim d from p.
+    const auto holds = [&](std::size_t g) {
       const double* b = &axis[3 * g];
       if (!(sign * (b[0] * z[0] + b[1] * z[1] + b[2] * z[2]) >= cone_cos[g])) return false;
-      kappa = std::max(kappa, curvature[g]);
+      for (std::int32_t j = edge_offsets[g]; j < edge_offsets[g + 1]; ++j)
+        if (!(distance3(p, &edge_points[3 * static_cast<std::size_t>(j)]) - edge_reach[static_cast<std::size_t>(j)] >
+              rim_d))
+          return false;
+      return true;
+    };
+    const auto bounded = [&](double kappa) {
+      return d * kappa <= kCertifyCurvature && tilt + 1.4142135623730951 * d * kappa <= kCertifyTilt;
+    };
+    // N: the whole star where each of its faces holds and none ends (a
+    // star without ends is joined to f round f's vertices), else its faces
+    // not far from p (near[k] for star[k]), joined to f across their edges.
+    const std::int32_t first = star_offsets[fs], size = star_offsets[fs + 1] - first;
+    const double* sa = &star_axis[3 * fs];
+    bool whole = !star_ends[fs];
+    double kappa = star_curvature[fs];
+    if (whole && !(sign * (sa[0] * z[0] + sa[1] * z[1] + sa[2] * z[2]) >= star_cos[fs]))
+      for (std::int32_t k = 0; k < size && whole; ++k)
+        whole = holds(static_cast<std::size_t>(star[static_cast<std::size_t>(first + k)]));
+    if (!whole || !bounded(kappa)) {
+      thread_local std::vector<std::uint8_t> near;
+      thread_local std::vector<std::int32_t> stack;
+      near.assign(static_cast<std::size_t>(size), 0);
+      kappa = 0.0;
+      std::int32_t listed = 0;
+      for (std::int32_t k = 0; k < size; ++k) {
+        const auto g = static_cast<std::size_t>(star[static_cast<std::size_t>(first + k)]);
+        if (g != fs && far(g)) continue;
+        if (!holds(g)) return false;
+        kappa = std::max(kappa, curvature[g]);
+        near[static_cast<std::size_t>(k)] = 1;
+        ++listed;
+      }
+      if (!bounded(kappa)) return false;
+      // Joined to f (2 on those reached, f's first).
+      const auto index_of = [&](std::int32_t g) {
+        const auto from = star.begin() + first, to = star.begin() + first + size;
+        const auto it = std::lower_bound(from, to, g);
+        return it != to && *it == g ? static_cast<std::int32_t>(it - from) : -1;
+      };
+      near[static_cast<std::size_t>(index_of(f))] = 2;
+      stack.assign(1, f);
+      std::int32_t joined = 1;
+      while (!stack.empty() && joined < listed) {
+        const auto g = static_cast<std::size_t>(stack.back());
+        stack.pop_back();
+        for (std::int32_t h = face_offsets[g]; h < face_offsets[g + 1]; ++h) {
+          const std::int32_t next = across[static_cast<std::size_t>(h)];
+          const std::int32_t k = next < 0 ? -1 : index_of(next);
+          if (k < 0 || near[static_cast<std::size_t>(k)] != 1) continue;
+          near[static_cast<std::size_t>(k)] = 2;
+          ++joined;
+          stack.push_back(next);
+        }
+      }
+      if (joined < listed) return false;
     }
-    if (!(d * kappa <= kCertifyCurvature)) return false;
-    if (!(tilt + 1.4142135623730951 * d * kappa <= kCertifyTilt)) return false;
-    // The rim's surface lies within reach(s) of its samples s: its ball
-    // first, then where that is too near, the samples.
-    for (std::int32_t k = rim_offsets[fs]; k < rim_offsets[fs + 1]; ++k) {
-      const auto g = static_cast<std::size_t>(rim[static_cast<std::size_t>(k)]);
-      const double* o = &ball[4 * g];
-      if (distance3(p, o) - o[3] > kCertifyRim * d) continue;
-      for (std::size_t s = samples[g]; s < samples[g + 1]; ++s)
-        if (!(distance3(p, &positions[3 * s]) - reach[s] > kCertifyRim * d)) return false;
-    }
+    // The rim's surface lies farther than kCertifyRim d from p.
+    if (rim_clear[fs] - distance3(p, &ball[4 * fs]) > rim_d) return true;
+    for (std::int32_t k = rim_offsets[fs]; k < rim_offsets[fs + 1]; ++k)
+      if (!far(static_cast<std::size_t>(rim[static_cast<std::size_t>(k)]))) return false;
     return true;
   }
 };
@@ -991,8 +1118,8 @@ const FootpointSearch::Certificate& FootpointSearch::certificate() const {
       if (!zero && len > 0.0) cert->half[f] = half + 0.6 * cert->curvature[f] * spacing[f];
       cert->cone_cos[f] = cert->half[f] <= kCertifyStarTilt ? std::cos(kCertifyStarTilt - cert->half[f]) : 2.0;
     }
-    // Vertices where the surface is smooth all round: inside the mesh, not at
-    // a hole, on no crease and no corner of any sharpness.
+    // Vertices where the surface is smooth (up to the boundary or a hole
+    // where it ends there): on no crease and no corner of any sharpness.
     std::vector<std::int32_t> vf_offsets(nv + 1, 0), vf;
     for (const std::int32_t v : corners) ++vf_offsets[static_cast<std::size_t>(v) + 1];
     for (std::size_t v = 0; v < nv; ++v) vf_offsets[v + 1] += vf_offsets[v];
@@ -1005,59 +1132,128 @@ const FootpointSearch::Certificate& FootpointSearch::certificate() const {
               static_cast<std::int32_t>(f);
     }
     std::vector<std::uint8_t> smooth(nv, 1);
-    for (std::size_t v = 0; v < nv; ++v) smooth[v] = !t.is_unreferenced(v) && !t.is_boundary(v);
+    for (std::size_t v = 0; v < nv; ++v) smooth[v] = !t.is_unreferenced(v);
     for (std::size_t c = 0; c < tags.n_creases(); ++c)
       if (tags.crease_sharpness[c] > 0.0)
         smooth[static_cast<std::size_t>(tags.crease_vertices[2 * c])] =
             smooth[static_cast<std::size_t>(tags.crease_vertices[2 * c + 1])] = 0;
     for (std::size_t c = 0; c < tags.n_corners(); ++c)
       if (tags.corner_sharpness[c] > 0.0) smooth[static_cast<std::size_t>(tags.corner_vertices[c])] = 0;
-    for (const std::int32_t h : tags.holes)
-      for (std::int32_t c = 0; c < t.face_size(static_cast<std::size_t>(h)); ++c)
-        smooth[static_cast<std::size_t>(corners[static_cast<std::size_t>(t.face_offset(static_cast<std::size_t>(h)) + c)])] = 0;
-    // Each face's star and rim (left empty where the face is not certified).
-    std::vector<std::vector<std::int32_t>> stars(m), rims(m);
+    // Across each half-edge the face there, -1 where the surface ends (the
+    // boundary, a hole); and the curves where it ends, sampled along each
+    // such edge of a face that is not a hole.
+    cert->face_offsets.resize(m + 1);
+    for (std::size_t f = 0; f <= m; ++f)
+      cert->face_offsets[f] = f < m ? t.face_offset(f) : static_cast<std::int32_t>(corners.size());
+    cert->across.assign(corners.size(), -1);
+    for (std::size_t h = 0; h < corners.size(); ++h) {
+      const std::int32_t o = dom.opposite[h];
+      const std::int32_t g = o < 0 ? -1 : dom.half_edge_face[static_cast<std::size_t>(o)];
+      if (g >= 0 && !dom.hole[static_cast<std::size_t>(g)]) cert->across[h] = g;
+    }
+    boundary_samples(dom, *surface_, options_.grid, cert->across, cert->edge_offsets, cert->edge_points,
+                     cert->edge_reach);
+    // Each face's star (sorted) and rim (left empty where the face is not
+    // certified): the faces at its vertices, then those at its star's
+    // vertices, each listed once (mark[g] = f + 1 once listed in f's star,
+    // -(f + 1) in its rim), for a range of faces per task.
     const int tasks = detail::task_count(m, 4096);
-    detail::for_each_index(tasks > 1, tasks, m, [&](std::size_t f) {
-      const auto faces_at = [&](std::size_t g, std::vector<std::int32_t>& out) {
+    struct Lists {
+      std::vector<std::int32_t> star_sizes, star, rim_sizes, rim;
+    };
+    std::vector<Lists> lists(static_cast<std::size_t>(tasks));
+    detail::for_each_task(tasks > 1, tasks, [&](int task) {
+      Lists& out = lists[static_cast<std::size_t>(task)];
+      std::vector<std::int64_t> mark(m, 0);
+      const std::size_t from = m * static_cast<std::size_t>(task) / static_cast<std::size_t>(tasks);
+      const std::size_t to = m * static_cast<std::size_t>(task + 1) / static_cast<std::size_t>(tasks);
+      // Appends the faces at g's vertices (not holes) not marked `in` or
+      // `out_mark`, marking them `in`; false where a vertex is not smooth.
+      const auto faces_at = [&](std::size_t g, std::int64_t in, std::int64_t out_mark, std::vector<std::int32_t>& list) {
         bool ok = true;
         for (std::int32_t c = 0; c < t.face_size(g); ++c) {
           const auto v = static_cast<std::size_t>(corners[static_cast<std::size_t>(t.face_offset(g) + c)]);
           ok = ok && smooth[v];
-          out.insert(out.end(), vf.begin() + vf_offsets[v], vf.begin() + vf_offsets[v + 1]);
+          for (std::int32_t k = vf_offsets[v]; k < vf_offsets[v + 1]; ++k) {
+            const auto h = static_cast<std::size_t>(vf[static_cast<std::size_t>(k)]);
+            if (dom.hole[h] || mark[h] == in || mark[h] == out_mark) continue;
+            mark[h] = in;
+            list.push_back(static_cast<std::int32_t>(h));
+          }
         }
         return ok;
       };
-      if (first[f] == first[f + 1]) return;
-      std::vector<std::int32_t> star, around;
-      if (!faces_at(f, star)) return;
-      std::sort(star.begin(), star.end());
-      star.erase(std::unique(star.begin(), star.end()), star.end());
-      for (const std::int32_t g : star) {
-        if (!std::isfinite(cert->half[static_cast<std::size_t>(g)]) || !faces_at(static_cast<std::size_t>(g), around))
-          return;
+      for (std::size_t f = from; f < to; ++f) {
+        const std::size_t star_at = out.star.size(), rim_at = out.rim.size();
+        const auto in = static_cast<std::int64_t>(f) + 1;
+        bool ok = first[f] != first[f + 1] && faces_at(f, in, in, out.star);
+        for (std::size_t k = star_at; ok && k < out.star.size(); ++k) {
+          const auto g = static_cast<std::size_t>(out.star[k]);
+          ok = std::isfinite(cert->half[g]) && faces_at(g, -in, in, out.rim);
+        }
+        if (!ok) {
+          out.star.resize(star_at);
+          out.rim.resize(rim_at);
+        }
+        std::sort(out.star.begin() + static_cast<std::ptrdiff_t>(star_at), out.star.end());
+        out.star_sizes.push_back(static_cast<std::int32_t>(out.star.size() - star_at));
+        out.rim_sizes.push_back(static_cast<std::int32_t>(out.rim.size() - rim_at));
       }
-      std::sort(around.begin(), around.end());
-      around.erase(std::unique(around.begin(), around.end()), around.end());
-      std::vector<std::int32_t> rim;
-      std::set_difference(around.begin(), around.end(), star.begin(), star.end(), std::back_inserter(rim));
-      stars[f] = std::move(star);
-      rims[f] = std::move(rim);
     });
-    const auto flatten = [&](std::vector<std::vector<std::int32_t>>& lists, std::vector<std::int32_t>& offsets,
-                             std::vector<std::int32_t>& flat) {
-      offsets.assign(m + 1, 0);
-      for (std::size_t f = 0; f < m; ++f)
-        offsets[f + 1] = offsets[f] + static_cast<std::int32_t>(lists[f].size());
-      flat.reserve(static_cast<std::size_t>(offsets[m]));
-      for (auto& list : lists) {
-        flat.insert(flat.end(), list.begin(), list.end());
-        std::vector<std::int32_t>().swap(list);
+    const auto flatten = [&](std::vector<std::int32_t> Lists::*sizes, std::vector<std::int32_t> Lists::*list,
+                             std::vector<std::int32_t>& offsets, std::vector<std::int32_t>& flat) {
+      offsets.assign(1, 0);
+      for (Lists& l : lists) {
+        for (const std::int32_t k : l.*sizes) offsets.push_back(offsets.back() + k);
+        flat.insert(flat.end(), (l.*list).begin(), (l.*list).end());
+        std::vector<std::int32_t>().swap(l.*list);
       }
     };
-    flatten(stars, cert->star_offsets, cert->star);
-    flatten(rims, cert->rim_offsets, cert->rim);
+    flatten(&Lists::star_sizes, &Lists::star, cert->star_offsets, cert->star);
+    flatten(&Lists::rim_sizes, &Lists::rim, cert->rim_offsets, cert->rim);
     cert->samples = std::move(first);
+    // Each star at once (Certificate::star_axis ..., rim_clear).
+    cert->star_axis.assign(3 * m, 0.0);
+    cert->star_cos.assign(m, 2.0);
+    cert->star_curvature.assign(m, 0.0);
+    cert->star_ends.assign(m, 1);
+    cert->rim_clear.assign(m, -std::numeric_limits<double>::infinity());
+    detail::for_each_index(tasks > 1, tasks, m, [&](std::size_t f) {
+      const std::int32_t from = cert->star_offsets[f], to = cert->star_offsets[f + 1];
+      if (from == to) return;
+      double* a = &cert->star_axis[3 * f];
+      bool ends = false;
+      double kappa = 0.0;
+      for (std::int32_t k = from; k < to; ++k) {
+        const auto g = static_cast<std::size_t>(cert->star[static_cast<std::size_t>(k)]);
+        for (int c = 0; c < 3; ++c) a[c] += cert->axis[3 * g + c];
+        ends = ends || cert->edge_offsets[g] != cert->edge_offsets[g + 1];
+        kappa = std::max(kappa, cert->curvature[g]);
+      }
+      const double len = std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+      double wide = len > 0.0 ? 0.0 : std::numeric_limits<double>::infinity();
+      for (int c = 0; c < 3; ++c) a[c] = len > 0.0 ? a[c] / len : 0.0;
+      for (std::int32_t k = from; k < to && len > 0.0; ++k) {
+        const auto g = static_cast<std::size_t>(cert->star[static_cast<std::size_t>(k)]);
+        const double* b = &cert->axis[3 * g];
+        wide = std::max(wide, std::acos(std::clamp(a[0] * b[0] + a[1] * b[1] + a[2] * b[2], -1.0, 1.0)) + cert->half[g]);
+      }
+      // (A rounding's margin: the shortcut never passes where a face's own test would not.)
+      wide += 1e-12;
+      cert->star_cos[f] = wide <= kCertifyStarTilt ? std::cos(kCertifyStarTilt - wide) : 2.0;
+      cert->star_curvature[f] = kappa;
+      cert->star_ends[f] = ends;
+      const double* o = &cert->ball[4 * f];
+      double clear = std::numeric_limits<double>::infinity();
+      for (std::int32_t k = cert->rim_offsets[f]; k < cert->rim_offsets[f + 1]; ++k) {
+        const auto g = static_cast<std::size_t>(cert->rim[static_cast<std::size_t>(k)]);
+        const double* og = &cert->ball[4 * g];
+        if (!(distance3(o, og) - og[3] < clear)) continue;  // its samples s: |o - s| - reach(s) >= |o - og| - r_g
+        for (std::size_t t = cert->samples[g]; t < cert->samples[g + 1]; ++t)
+          clear = std::min(clear, distance3(o, &positions_[3 * t]) - reach_[t]);
+      }
+      cert->rim_clear[f] = clear;
+    });
     // Each face's clearance and near samples: a point p of the face lies
     // within reach(t) of one of its samples t, so that a sample s outside
     // the star has |p - s| - reach(s) >= |t - s| - reach(t) - reach(s) for
@@ -1185,15 +1381,51 @@ std::size_t FootpointSearch::closer(const double* points, std::size_t n, Footpoi
     if (has_normals) std::copy_n(&from.normals[3 * r], 3, &fp.normals[3 * i]);
     return true;
   };
-  std::vector<std::uint8_t> changed(kBatch), skipped(kBatch);
-  std::vector<double> at;  // the footpoints' positions where fp holds none (the certificate's p)
+  // Refines the footpoints of points first + rows[r] from themselves, to
+  // the minimum (find and refine stop after max_steps, the starts after
+  // kCloserSteps, and near corners with Bfr's derivatives: a step or two
+  // where one is there already), each taken where closer; `again` holds the
+  // results (row r: its point's footpoint, or where not taken, the point
+  // the refinement ended at).
+  const auto polish = [&](std::size_t first, const std::vector<std::size_t>& rows, Footpoints& again,
+                          std::vector<std::uint8_t>& changed) {
+    const std::size_t k = rows.size();
+    if (k == 0) return;
+    std::vector<double> y(3 * k);
+    again.face_ids.resize(k);
+    again.uv.resize(2 * k);
+    for (std::size_t r = 0; r < k; ++r) {
+      const std::size_t i = first + rows[r];
+      std::copy_n(points + 3 * i, 3, &y[3 * r]);
+      again.face_ids[r] = fp.face_ids[i];
+      std::copy_n(&fp.uv[2 * i], 2, &again.uv[2 * r]);
+    }
+    refine(*surface_, *topology_, y.data(), k, polishing, again, nullptr, &irregular_);
+    for (std::size_t r = 0; r < k; ++r)
+      if (take(first + rows[r], again, r)) changed[rows[r]] = 1;
+  };
+  std::vector<std::uint8_t> changed(kBatch), skipped(kBatch), started(kBatch);
   for (std::size_t first = 0; first < n; first += kBatch) {
     poll_interrupt();
     const std::size_t b = std::min(kBatch, n - first);
     const int tasks = detail::task_count(b, 4096);
-    if (cert != nullptr && !has_positions) {
-      at.resize(3 * b);
-      surface_->evaluate(&fp.face_ids[first], &fp.uv[2 * first], b, at.data(), nullptr, nullptr, nullptr);
+    // Each footpoint off its point refined from itself first: the
+    // certificate's p (and its normal) is then the polished footpoint, as
+    // that refinement evaluated it (-1 in polished_row where it ended
+    // elsewhere at no smaller distance, a hop across an edge: not
+    // certified).
+    std::fill_n(changed.begin(), b, std::uint8_t{0});
+    std::vector<std::size_t> again_row;
+    for (std::size_t j = 0; j < b; ++j)
+      if (fp.distances[first + j] > 0.0) again_row.push_back(j);
+    Footpoints polished;
+    polish(first, again_row, polished, changed);
+    std::vector<std::int64_t> polished_row(b, -1);
+    for (std::size_t r = 0; r < again_row.size(); ++r) {
+      const std::size_t i = first + again_row[r];
+      if (fp.face_ids[i] == polished.face_ids[r] && fp.uv[2 * i] == polished.uv[2 * r] &&
+          fp.uv[2 * i + 1] == polished.uv[2 * r + 1])
+        polished_row[again_row[r]] = static_cast<std::int64_t>(r);
     }
     // In the points' spatial order, so that the queries find the tree's
     // nodes and the faces' certificates in cache.
@@ -1216,10 +1448,10 @@ std::size_t FootpointSearch::closer(const double* points, std::size_t n, Footpoi
     if (cert != nullptr)
       detail::for_each_index(tasks > 1, tasks, b, [&](std::size_t o) {
         const std::size_t j = order[o], i = first + j;
-        skipped[j] = off(j) && cert->certifies(fp.face_ids[i], points + 3 * i,
-                                               has_positions ? &fp.positions[3 * i] : &at[3 * j],
-                                               has_normals ? &fp.normals[3 * i] : nullptr, fp.distances[i],
-                                               positions_.data(), reach_.data());
+        const auto r = static_cast<std::size_t>(polished_row[j]);
+        skipped[j] = off(j) && polished_row[j] >= 0 &&
+                     cert->certifies(fp.face_ids[i], points + 3 * i, &polished.positions[3 * r],
+                                     &polished.normals[3 * r], fp.distances[i], positions_.data(), reach_.data());
       });
     // A certified point whose face's clearance is at least 2 d: its
     // candidates are its face's near samples that pass the bound (its
@@ -1292,7 +1524,7 @@ std::size_t FootpointSearch::closer(const double* points, std::size_t n, Footpoi
     std::vector<std::size_t> row(b + 1, 0);
     for (std::size_t j = 0; j < b; ++j) row[j + 1] = row[j] + count[j];
     const std::size_t rows = row[b];
-    std::fill_n(changed.begin(), b, std::uint8_t{0});
+    std::fill_n(started.begin(), b, std::uint8_t{0});
     if (rows > 0) {
       std::vector<double> x(3 * rows);
       std::vector<std::int64_t> nearest(rows);
@@ -1318,32 +1550,15 @@ std::size_t FootpointSearch::closer(const double* points, std::size_t n, Footpoi
         std::size_t best = row[j];
         for (std::size_t r = row[j] + 1; r < row[j + 1]; ++r)
           if (trial.distances[r] < trial.distances[best]) best = r;
-        changed[j] = take(first + j, trial, best);
+        if (take(first + j, trial, best)) changed[j] = started[j] = 1;
       }
     }
-    // Then each footpoint refined again from itself, to the minimum
-    // (find and refine stop after max_steps, the starts after
-    // kCloserSteps, and near corners with Bfr's derivatives): a step or two
-    // where it is there already.
-    std::vector<std::size_t> again_row;
+    // The footpoints a start moved refined again from themselves.
+    again_row.clear();
     for (std::size_t j = 0; j < b; ++j)
-      if (fp.distances[first + j] > 0.0) again_row.push_back(j);
-    if (!again_row.empty()) {
-      const std::size_t k = again_row.size();
-      std::vector<double> y(3 * k);
-      Footpoints again;
-      again.face_ids.resize(k);
-      again.uv.resize(2 * k);
-      for (std::size_t r = 0; r < k; ++r) {
-        const std::size_t i = first + again_row[r];
-        std::copy_n(points + 3 * i, 3, &y[3 * r]);
-        again.face_ids[r] = fp.face_ids[i];
-        std::copy_n(&fp.uv[2 * i], 2, &again.uv[2 * r]);
-      }
-      refine(*surface_, *topology_, y.data(), k, polishing, again, nullptr, &irregular_);
-      for (std::size_t r = 0; r < k; ++r)
-        if (take(first + again_row[r], again, r)) changed[again_row[r]] = 1;
-    }
+      if (started[j]) again_row.push_back(j);
+    Footpoints again;
+    polish(first, again_row, again, changed);
     for (std::size_t j = 0; j < b; ++j) moved += changed[j];
   }
   return moved;

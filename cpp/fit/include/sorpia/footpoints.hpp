@@ -151,6 +151,9 @@ class FootpointSearch {
   /// (refine_footpoints' results, and find's: its start is the nearest
   /// sample, whose basin need not hold the closest point), so that each
   /// becomes the closest point of the surface; returns how many moved.
+  /// Each footpoint off its point is first refined from itself (at least
+  /// 400 steps: near a focal point Gauss-Newton converges slowly), and the
+  /// rest takes that footpoint and its distance d.
   /// Every point of the surface lies within reach(s) of a grid sample s of
   /// its face (the largest distance from s to its neighbours in the grid),
   /// so a surface point closer to x than its footpoint (distance d) lies
@@ -159,9 +162,8 @@ class FootpointSearch {
   /// to options.starts candidates, least |x - s| - reach(s) first (for a
   /// point farther than options.near times its nearest sample's reach),
   /// are refined (refine_footpoints from the sample, at least 100 steps),
-  /// the closest result replaces the footpoint where it is closer, and the
-  /// footpoint is then refined again from itself (at least 400 steps: near
-  /// a focal point Gauss-Newton converges slowly). These refinements take
+  /// the closest result replaces the footpoint where it is closer, and is
+  /// then refined from itself as the footpoints were. These refinements take
   /// their derivatives near the corners of irregular faces
   /// (Bfr::Surface::IsRegular() false) from differences of positions (Bfr's
   /// are approximate there, surface.hpp), so that they reach the minimum to
@@ -173,34 +175,58 @@ class FootpointSearch {
   /// near = 0.1 about 1.05 starts on a fit's footpoints.
   ///
   /// Certificate (options.certify): the samples of the faces of the star
-  /// of the footpoint's face f (the faces sharing a vertex with f) are left
-  /// out of the starts where no point of the star can be closer to x than
-  /// the footpoint p (distance d) other than in p's own basin, which the
-  /// refinement of p from itself reaches. In the frame whose axis z is
-  /// (x - p) / d:
-  /// - every normal of the star lies within 80 degrees of z, so that the
-  ///   star projects onto the plane across z without folding; it is taken
-  ///   to be one sheet over that plane (it does not wind round z);
-  /// - with kappa a bound of the star's normal curvature, p's normal lies
-  ///   within 45 degrees minus sqrt(2) d kappa of z, and the star's rim
-  ///   (the faces outside it sharing a vertex with it) farther than 4 d from
-  ///   p: the star over the disk |y| <= d round p is a graph z = h(y),
-  ///   h(0) = 0, of slope at most 1 (a radial path of length r lifts to one
-  ///   of length at most sqrt(2) r, along which the normal turns by at most
-  ///   sqrt(2) d kappa) and |Hess h| <= 2^1.5 kappa;
+  /// of the footpoint's face f (the faces outside holes sharing a vertex
+  /// with f) are left out of the starts where no point of the star can be
+  /// closer to x than the footpoint p (distance d) other than in p's own
+  /// basin, which the refinement of p from itself reaches (p: the footpoint
+  /// that refinement returned; a point whose refinement hopped to another
+  /// point at no smaller distance is not certified). A point of the surface
+  /// closer to x than d lies within 2 d of p. N is the whole star
+  /// where the surface does not end in it and the tests below hold for all
+  /// of it, else its near part: its faces whose surface comes within 4 d of
+  /// p (f's always); the samples s of the other faces have
+  /// |x - s| - reach(s) > 3 d, outside the candidates' bound in any case. In
+  /// the frame whose axis z is (x - p) / d:
+  /// - every normal of N lies within 80 degrees of z, so that N projects
+  ///   onto the plane across z without folding, and each face of N is
+  ///   joined to f across edges between faces of N (a whole star without
+  ///   ends is, round each vertex of f): N is one piece of
+  ///   surface without folds (a sheet that comes back near p through a fold
+  ///   outside N, out of the cone's sight, is joined to f only through faces
+  ///   outside N, unless N winds round z), taken to be one sheet over that
+  ///   plane (it does not wind round z);
+  /// - with kappa a bound of N's normal curvature, p's normal lies within
+  ///   45 degrees minus sqrt(2) d kappa of z, and N's edges lie farther than
+  ///   4 d from p: those it shares with the star's other faces (by N's
+  ///   definition), with the rim (the faces outside the star sharing a
+  ///   vertex with it, all farther than 4 d) and the curves where the
+  ///   surface ends (the boundary and the edges of holes, each within the
+  ///   reach of its samples at 2 grid + 1 points along the edge): N over the
+  ///   disk |y| <= d round p is a graph z = h(y), h(0) = 0, of slope at most 1
+  ///   (a radial path of length r lifts to one of length at most sqrt(2) r,
+  ///   which stays in N short of its edges, and along which the normal turns
+  ///   by at most sqrt(2) d kappa) and |Hess h| <= 2^1.5 kappa;
   /// - d kappa <= 0.1: the squared distance to x over that disk,
   ///   |y|^2 + (h(y) - d)^2, has a Hessian of at least
   ///   2 (1 - 2 d 2^1.5 kappa) > 0, so it is convex there, and the disk
-  ///   holds every point of the star within d of x: the points of the star
-  ///   closer than d form one basin, p's.
+  ///   holds every point of N within d of x: the points of the star closer
+  ///   than d form one basin, p's.
+  /// The argument uses the surface inside N alone, which is smooth up to
+  /// the curves where it ends: OpenSubdiv's boundary rules are a crease's
+  /// from one side, with no second sheet across it, the faces round a hole
+  /// are those of the surface without the hole, and a one-face corner
+  /// (valence 2, kept sharp by "edge-and-corner") is a corner of the curve,
+  /// which lies farther than 4 d from p like the rest of it; no point of
+  /// the curve is then within d of x, where a closest point need not be a
+  /// stationary point of the distance inside the surface.
   /// The bounds come from the grid samples of each face: kappa is 4 times
   /// the largest angle between neighbouring samples' normals over their
   /// distance, the cone of normals is the samples' widened by kappa times
   /// 0.6 of the largest spacing, and the face lies within reach(s) of its
   /// samples s (as the candidates' bound takes it). A face is never
-  /// certified where a vertex of its star lies on the boundary, at a hole,
-  /// or on a crease or corner of any sharpness (where the surface is not
-  /// smooth: across a concave crease a closer point lies in the star). The
+  /// certified where a vertex of its star lies on a crease or corner of any
+  /// sharpness (where the surface is not smooth: across a concave crease a
+  /// closer point lies in the star). The
   /// samples outside the star keep the candidates' bound; a point not
   /// certified takes every start. Per face f, with its ball (o, r) holding
   /// its samples t widened by reach(t), the samples s outside the star
