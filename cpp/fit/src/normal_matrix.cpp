@@ -16,7 +16,9 @@ namespace {
 
 // Stored entries (of N and K together) per task of a product below which it runs on one thread.
 constexpr std::size_t kEntriesPerTask = 100000;
-// Stored entries of the rows A per task of the normal matrix's assembly, at least.
+// Values of the blocks' Gram matrices per task of the assembly, at least.
+constexpr std::size_t kGramValuesPerTask = 32768;
+// Stored entries of the rows per task of normal_matrix's blocks, at least.
 constexpr std::size_t kRowEntriesPerTask = 32768;
 
 // The upper triangle (columns >= the row) of A^T W A, row by row: (row lengths, columns, values).
@@ -28,31 +30,34 @@ struct Upper {
   std::vector<std::vector<double>> part_val;
 };
 
-// Columns of a run's Gram row summed at once by gram_row, their sums held in registers.
+// Columns of a block's Gram row summed at once by gram_row, their sums held in registers.
 constexpr std::size_t kGramColumns = 4;
 
-// out[b * NB + c] += sum over the rows r0 .. r1 - 1 (a run with the same columns) of w_r[c] a_r[li] a_r[li + b],
-// b < width, each sum added up over the rows in their order; w_r = weights[NB r ..] (1 when null). The weights'
-// count a constant, so that each a_r[li + b] is read once for all NB sums; `scaled` holds w_r[c] a_r[li] per row.
+// Where row li of a Gram matrix of `width` columns starts among its packed rows on and above the diagonal (in
+// entries).
+std::size_t packed_row(std::size_t li, std::size_t width) { return li * (2 * width + 1 - li) / 2; }
+
+// out[b * NB + c] = sum over the rows r < count of a block (count, stride) of w_r[c] a_r[li] a_r[li + b],
+// b < width, each sum added up over the rows in their order from 0; w_r = weights[NB r ..] (1 when null). The
+// weights' count a constant, so that each a_r[li + b] is read once for all NB sums; `scaled` holds w_r[c] a_r[li]
+// per row.
 template <int NB>
-void gram_row(const CsrRows& A, const double* weights, std::size_t r0, std::size_t r1, std::int32_t li,
+void gram_row(const double* rows, std::size_t stride, std::size_t count, const double* weights, std::size_t li,
               std::size_t width, double* out, std::vector<double>& scaled) {
-  scaled.resize((r1 - r0) * NB);
-  for (std::size_t r = r0; r < r1; ++r) {
-    const double a0 = A.data[A.indptr[r] + li];
+  scaled.resize(count * NB);
+  for (std::size_t r = 0; r < count; ++r) {
+    const double a0 = rows[r * stride + li];
     for (int c = 0; c < NB; ++c)
-      scaled[(r - r0) * NB + static_cast<std::size_t>(c)] =
+      scaled[r * NB + static_cast<std::size_t>(c)] =
           a0 * (weights == nullptr ? 1.0 : weights[NB * r + static_cast<std::size_t>(c)]);
   }
   // kGramColumns columns at a time (then one at a time), each sum in a register over all the rows.
-  const auto columns = [&](std::size_t b, auto count) {
-    constexpr std::size_t kCount = decltype(count)::value;
-    double acc[kCount][NB];
-    for (std::size_t j = 0; j < kCount; ++j)
-      for (int c = 0; c < NB; ++c) acc[j][c] = out[(b + j) * NB + static_cast<std::size_t>(c)];
-    for (std::size_t r = r0; r < r1; ++r) {
-      const double* a = A.data + A.indptr[r] + li + b;
-      const double* w = &scaled[(r - r0) * NB];
+  const auto columns = [&](std::size_t b, auto n_columns) {
+    constexpr std::size_t kCount = decltype(n_columns)::value;
+    double acc[kCount][NB] = {};
+    for (std::size_t r = 0; r < count; ++r) {
+      const double* a = rows + r * stride + li + b;
+      const double* w = &scaled[r * NB];
       for (std::size_t j = 0; j < kCount; ++j)
         for (int c = 0; c < NB; ++c) acc[j][c] += w[c] * a[j];
     }
@@ -66,72 +71,81 @@ void gram_row(const CsrRows& A, const double* weights, std::size_t r0, std::size
 
 }  // namespace
 
-NormalMatrix normal_matrix(const CsrMatrix& rows, const double* weights, int weight_count) {
-  return normal_matrix(CsrRows{rows.n_rows, rows.n_cols, rows.indptr.data(), rows.indices.data(), rows.data.data()},
-                       weights, weight_count);
-}
-
-NormalMatrix normal_matrix(const CsrRows& A, const double* weights, int weight_count, const double* x,
-                           double* rhs) {
+NormalBlocks::NormalBlocks(std::size_t n, std::size_t blocks, int weight_count)
+    : n_(n), weight_count_(weight_count), blocks_per_entry_(weight_count == 6 ? 6 : 1), blocks_(blocks) {
   if (weight_count != 0 && weight_count != 1 && weight_count != 6)
     throw ParameterError("weight_count must be 0, 1 or 6, got " + std::to_string(weight_count));
-  const std::size_t k = A.n_rows, n = A.n_cols;
-  const bool with_rhs = x != nullptr && rhs != nullptr;
-  const int nb = weight_count == 6 ? 6 : 1;
-  const auto unb = static_cast<std::size_t>(nb);
-  // Runs of consecutive rows with the same columns (the points of one face,
-  // when the caller orders the rows by face): each run is visited once per
-  // column it holds, its rows read in order.
-  std::vector<std::size_t> run_start;
-  for (std::size_t r = 0; r < k; ++r) {
-    const bool same = r > 0 && A.indptr[r + 1] - A.indptr[r] == A.indptr[r] - A.indptr[r - 1] &&
-                      std::equal(A.indices + A.indptr[r], A.indices + A.indptr[r + 1], A.indices + A.indptr[r - 1]);
-    if (!same) run_start.push_back(r);
+}
+
+void NormalBlocks::add(std::size_t b, const std::int32_t* columns, std::size_t width, const double* rows,
+                       std::size_t count, const double* weights, const double* x) {
+  Block& out = blocks_[b];
+  if (count == 0) return;  // no rows: no entries
+  out.columns.assign(columns, columns + width);
+  const auto nb = static_cast<std::size_t>(blocks_per_entry_);
+  out.gram.resize(packed_row(width, width) * nb);
+  thread_local std::vector<double> scaled;
+  for (std::size_t li = 0; li < width; ++li) {
+    double* row = &out.gram[packed_row(li, width) * nb];
+    if (nb == 6)
+      gram_row<6>(rows, width, count, weights, li, width - li, row, scaled);
+    else
+      gram_row<1>(rows, width, count, weight_count_ == 0 ? nullptr : weights, li, width - li, row, scaled);
   }
-  run_start.push_back(k);
-  const std::size_t n_runs = run_start.size() - 1;
-  // The runs' columns (A^T's rows over runs): for column j, (run, position of j in the run's columns).
+  out.rhs.clear();
+  if (x == nullptr) return;
+  out.rhs.assign(3 * width, 0.0);
+  for (std::size_t r = 0; r < count; ++r)
+    for (std::size_t li = 0; li < width; ++li) {
+      const double a = rows[r * width + li];
+      for (std::size_t c = 0; c < 3; ++c) out.rhs[3 * li + c] += a * x[3 * r + c];
+    }
+}
+
+NormalMatrix NormalBlocks::assemble(double* rhs) const {
+  const std::size_t n = n_, n_blocks = blocks_.size();
+  const int nb = blocks_per_entry_;
+  const auto unb = static_cast<std::size_t>(nb);
+  // The blocks' columns (A^T's rows over blocks): for column j, (block, position of j in the block's columns).
   std::vector<std::int64_t> col_ptr(n + 1, 0);
-  for (std::size_t q = 0; q < n_runs; ++q)
-    for (std::int32_t p = A.indptr[run_start[q]]; p < A.indptr[run_start[q] + 1]; ++p)
-      ++col_ptr[static_cast<std::size_t>(A.indices[p]) + 1];
+  std::size_t gram_values = 0;
+  for (const Block& q : blocks_) {
+    for (const std::int32_t j : q.columns) ++col_ptr[static_cast<std::size_t>(j) + 1];
+    gram_values += q.gram.size();
+  }
   for (std::size_t j = 0; j < n; ++j) col_ptr[j + 1] += col_ptr[j];
-  std::vector<std::int32_t> col_runs(static_cast<std::size_t>(col_ptr[n]));
-  std::vector<std::int32_t> col_pos(col_runs.size());
+  std::vector<std::int32_t> col_blocks(static_cast<std::size_t>(col_ptr[n]));
+  std::vector<std::int32_t> col_pos(col_blocks.size());
   {
     std::vector<std::int64_t> next(col_ptr.begin(), col_ptr.end() - 1);
-    for (std::size_t q = 0; q < n_runs; ++q) {
-      const std::int32_t p0 = A.indptr[run_start[q]];
-      for (std::int32_t p = p0; p < A.indptr[run_start[q] + 1]; ++p) {
-        const auto slot = static_cast<std::size_t>(next[static_cast<std::size_t>(A.indices[p])]++);
-        col_runs[slot] = static_cast<std::int32_t>(q);
-        col_pos[slot] = p - p0;
+    for (std::size_t q = 0; q < n_blocks; ++q) {
+      const std::vector<std::int32_t>& cols = blocks_[q].columns;
+      for (std::size_t p = 0; p < cols.size(); ++p) {
+        const auto slot = static_cast<std::size_t>(next[static_cast<std::size_t>(cols[p])]++);
+        col_blocks[slot] = static_cast<std::int32_t>(q);
+        col_pos[slot] = static_cast<std::int32_t>(p);
       }
     }
   }
   poll_interrupt();
-  // Row i of A^T W A on and above the diagonal from the runs holding column i (Gustavson; a run's columns are
-  // sorted, so those >= i are its positions from i's on), a range of the rows' order `visit` per task.
-  // Tasks by the work (the rows' stored entries) as well as by the rows, so that few rows with many points share
-  // the work too.
-  const auto nnz_rows = static_cast<std::size_t>(A.indptr[k]);
-  const int tasks = static_cast<int>(std::clamp<std::size_t>(std::min(nnz_rows / kRowEntriesPerTask, n / 16), 1,
+  // Row i of A^T W A on and above the diagonal from the blocks holding column i, in their order (Gustavson; a
+  // block's columns are sorted, so those >= i are its positions from i's on), a range of the rows' order `visit`
+  // per task.
+  const int tasks = static_cast<int>(std::clamp<std::size_t>(std::min(gram_values / kGramValuesPerTask, n / 16), 1,
                                                              static_cast<std::size_t>(detail::available_processors())));
-  // The rows in the order the runs first hold them (then those no run holds): consecutive rows share runs, whose
-  // rows of A are then read again from the cache. Each row's sums (over its runs in their order) are the same in
-  // any order of the rows.
+  // The rows in the order the blocks first hold them (then those no block holds): consecutive rows share blocks,
+  // whose Gram matrices are then read again from the cache. Each row's sums (over its blocks in their order) are the
+  // same in any order of the rows.
   std::vector<std::int32_t> visit;
   visit.reserve(n);
   {
     std::vector<char> seen(n, 0);
-    for (std::size_t q = 0; q < n_runs; ++q)
-      for (std::int32_t p = A.indptr[run_start[q]]; p < A.indptr[run_start[q] + 1]; ++p) {
-        const auto j = static_cast<std::size_t>(A.indices[p]);
-        if (!seen[j]) {
-          seen[j] = 1;
-          visit.push_back(static_cast<std::int32_t>(j));
+    for (const Block& q : blocks_)
+      for (const std::int32_t j : q.columns)
+        if (!seen[static_cast<std::size_t>(j)]) {
+          seen[static_cast<std::size_t>(j)] = 1;
+          visit.push_back(j);
         }
-      }
     for (std::size_t j = 0; j < n; ++j)
       if (!seen[j]) visit.push_back(static_cast<std::int32_t>(j));
   }
@@ -148,7 +162,7 @@ NormalMatrix normal_matrix(const CsrRows& A, const double* weights, int weight_c
     const std::size_t first = n * static_cast<std::size_t>(t) / static_cast<std::size_t>(tasks);
     const std::size_t last = n * static_cast<std::size_t>(t + 1) / static_cast<std::size_t>(tasks);
     std::vector<std::int32_t> marker(n, -1), touched;
-    std::vector<double> acc(n * unb, 0.0), row, scaled;
+    std::vector<double> acc(n * unb, 0.0);
     auto& out_idx = up.part_idx[static_cast<std::size_t>(t)];
     auto& out_val = up.part_val[static_cast<std::size_t>(t)];
     for (std::size_t s = first; s < last; ++s) {
@@ -156,27 +170,16 @@ NormalMatrix normal_matrix(const CsrRows& A, const double* weights, int weight_c
       if (t == 0 && (s - first) % 1024 == 0) poll_interrupt();
       touched.clear();
       double y[3] = {0.0, 0.0, 0.0};  // row i of A^T x
-      for (std::int64_t q = col_ptr[i]; q < col_ptr[i + 1]; ++q) {
-        const auto run = static_cast<std::size_t>(col_runs[static_cast<std::size_t>(q)]);
-        const std::int32_t li = col_pos[static_cast<std::size_t>(q)];
-        const std::size_t r0 = run_start[run], r1 = run_start[run + 1];
-        const std::int32_t m = A.indptr[r0 + 1] - A.indptr[r0];
-        const std::int32_t* cols = A.indices + A.indptr[r0];
-        const auto width = static_cast<std::size_t>(m - li);
-        if (with_rhs)
-          for (std::size_t r = r0; r < r1; ++r) {
-            const double a = A.data[A.indptr[r] + li];
-            for (std::size_t c = 0; c < 3; ++c) y[c] += a * x[3 * r + c];
-          }
-        // Row li of the run's Gram matrix from column li on, sum_r w_r a_r[li] a_r[li:] ((width, nb) row-major),
-        // added at its columns.
-        row.assign(width * unb, 0.0);
-        if (nb == 6)
-          gram_row<6>(A, weights, r0, r1, li, width, row.data(), scaled);
-        else
-          gram_row<1>(A, weight_count == 0 ? nullptr : weights, r0, r1, li, width, row.data(), scaled);
-        for (std::size_t b = 0; b < width; ++b) {
-          const std::int32_t j = cols[static_cast<std::size_t>(li) + b];
+      for (std::int64_t e = col_ptr[i]; e < col_ptr[i + 1]; ++e) {
+        const Block& q = blocks_[static_cast<std::size_t>(col_blocks[static_cast<std::size_t>(e)])];
+        const auto li = static_cast<std::size_t>(col_pos[static_cast<std::size_t>(e)]);
+        const std::size_t width = q.columns.size();
+        if (rhs != nullptr)
+          for (std::size_t c = 0; c < 3; ++c) y[c] += q.rhs[3 * li + c];
+        // Row li of the block's Gram matrix from column li on, added at its columns.
+        const double* row = &q.gram[packed_row(li, width) * unb];
+        for (std::size_t b = 0; b < width - li; ++b) {
+          const std::int32_t j = q.columns[li + b];
           const auto at = static_cast<std::size_t>(place[static_cast<std::size_t>(j)]);
           double* dst = &acc[at * unb];
           if (marker[at] != static_cast<std::int32_t>(i)) {
@@ -187,7 +190,7 @@ NormalMatrix normal_matrix(const CsrRows& A, const double* weights, int weight_c
           for (std::size_t c = 0; c < unb; ++c) dst[c] += row[b * unb + c];
         }
       }
-      if (with_rhs) std::copy_n(y, 3, rhs + 3 * i);
+      if (rhs != nullptr) std::copy_n(y, 3, rhs + 3 * i);
       std::sort(touched.begin(), touched.end());
       up.row_len[i] = static_cast<std::int64_t>(touched.size());
       up.row_task[i] = t;
@@ -231,6 +234,36 @@ NormalMatrix normal_matrix(const CsrRows& A, const double* weights, int weight_c
     }
   }
   return M;
+}
+
+NormalMatrix normal_matrix(const CsrMatrix& rows, const double* weights, int weight_count) {
+  return normal_matrix(CsrRows{rows.n_rows, rows.n_cols, rows.indptr.data(), rows.indices.data(), rows.data.data()},
+                       weights, weight_count);
+}
+
+NormalMatrix normal_matrix(const CsrRows& A, const double* weights, int weight_count, const double* x,
+                           double* rhs) {
+  const std::size_t k = A.n_rows;
+  // Runs of consecutive rows with the same columns: their entries are a dense block (rows, width) in place.
+  std::vector<std::size_t> run_start;
+  for (std::size_t r = 0; r < k; ++r) {
+    const bool same = r > 0 && A.indptr[r + 1] - A.indptr[r] == A.indptr[r] - A.indptr[r - 1] &&
+                      std::equal(A.indices + A.indptr[r], A.indices + A.indptr[r + 1], A.indices + A.indptr[r - 1]);
+    if (!same) run_start.push_back(r);
+  }
+  run_start.push_back(k);
+  const std::size_t n_runs = run_start.size() - 1;
+  NormalBlocks blocks(A.n_cols, n_runs, weight_count);
+  const bool with_rhs = x != nullptr && rhs != nullptr;
+  const auto nb = static_cast<std::size_t>(weight_count);
+  const int tasks = detail::task_count(static_cast<std::size_t>(A.indptr[k]), kRowEntriesPerTask);
+  detail::for_each_index(tasks > 1, tasks, n_runs, [&](std::size_t q) {
+    const std::size_t r0 = run_start[q], r1 = run_start[q + 1];
+    const auto width = static_cast<std::size_t>(A.indptr[r0 + 1] - A.indptr[r0]);
+    blocks.add(q, A.indices + A.indptr[r0], width, A.data + A.indptr[r0], r1 - r0,
+               weights == nullptr ? nullptr : weights + nb * r0, with_rhs ? x + 3 * r0 : nullptr);
+  });
+  return blocks.assemble(with_rhs ? rhs : nullptr);
 }
 
 void blend_weights(const double* points, const double* normals, const double* row_weights, std::size_t k,
