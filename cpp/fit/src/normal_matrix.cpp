@@ -21,15 +21,6 @@ constexpr std::size_t kGramValuesPerTask = 32768;
 // Stored entries of the rows per task of normal_matrix's blocks, at least.
 constexpr std::size_t kRowEntriesPerTask = 32768;
 
-// The upper triangle (columns >= the row) of A^T W A, row by row: (row lengths, columns, values).
-struct Upper {
-  std::vector<std::int64_t> row_len;
-  std::vector<std::int32_t> row_task;  // the task that made row i
-  std::vector<std::int64_t> row_at;    // where row i starts in its task's entries
-  std::vector<std::vector<std::int32_t>> part_idx;  // per task, its rows in the order it made them
-  std::vector<std::vector<double>> part_val;
-};
-
 // Columns of a block's Gram row summed at once by gram_row, their sums held in registers.
 constexpr std::size_t kGramColumns = 4;
 
@@ -152,23 +143,82 @@ NormalMatrix NormalBlocks::assemble(double* rhs) const {
   // Column j's place in `visit`: a row's sums are held at their columns' places, near one another as the rows are.
   std::vector<std::int32_t> place(n);
   for (std::size_t s = 0; s < n; ++s) place[static_cast<std::size_t>(visit[s])] = static_cast<std::int32_t>(s);
-  Upper up;
-  up.part_idx.resize(static_cast<std::size_t>(tasks));
-  up.part_val.resize(static_cast<std::size_t>(tasks));
-  up.row_len.assign(n, 0);
-  up.row_task.assign(n, 0);
-  up.row_at.assign(n, 0);
+  // Pass 1, the pattern: row i's columns on and above the diagonal (sorted) from the blocks holding column i, a
+  // range of the rows' order `visit` per task.
+  std::vector<std::vector<std::int32_t>> part_idx(static_cast<std::size_t>(tasks));  // per task, its rows' columns
+  std::vector<std::int64_t> row_len(n, 0), row_at(n, 0);  // row i's entries: part_idx[row_task[i]][row_at[i] ..]
+  std::vector<std::int32_t> row_task(n, 0);
+  const auto first_of = [&](int t) { return n * static_cast<std::size_t>(t) / static_cast<std::size_t>(tasks); };
   detail::for_each_task(tasks > 1, tasks, [&](int t) {
-    const std::size_t first = n * static_cast<std::size_t>(t) / static_cast<std::size_t>(tasks);
-    const std::size_t last = n * static_cast<std::size_t>(t + 1) / static_cast<std::size_t>(tasks);
     std::vector<std::int32_t> marker(n, -1), touched;
-    std::vector<double> acc(n * unb, 0.0);
-    auto& out_idx = up.part_idx[static_cast<std::size_t>(t)];
-    auto& out_val = up.part_val[static_cast<std::size_t>(t)];
-    for (std::size_t s = first; s < last; ++s) {
+    auto& out_idx = part_idx[static_cast<std::size_t>(t)];
+    for (std::size_t s = first_of(t); s < first_of(t + 1); ++s) {
       const auto i = static_cast<std::size_t>(visit[s]);
-      if (t == 0 && (s - first) % 1024 == 0) poll_interrupt();
+      if (t == 0 && (s - first_of(t)) % 1024 == 0) poll_interrupt();
       touched.clear();
+      for (std::int64_t e = col_ptr[i]; e < col_ptr[i + 1]; ++e) {
+        const std::vector<std::int32_t>& cols = blocks_[static_cast<std::size_t>(col_blocks[static_cast<std::size_t>(e)])].columns;
+        for (auto b = static_cast<std::size_t>(col_pos[static_cast<std::size_t>(e)]); b < cols.size(); ++b)
+          if (marker[static_cast<std::size_t>(cols[b])] != static_cast<std::int32_t>(i)) {
+            marker[static_cast<std::size_t>(cols[b])] = static_cast<std::int32_t>(i);
+            touched.push_back(cols[b]);
+          }
+      }
+      std::sort(touched.begin(), touched.end());
+      row_len[i] = static_cast<std::int64_t>(touched.size());
+      row_task[i] = t;
+      row_at[i] = static_cast<std::int64_t>(out_idx.size());
+      out_idx.insert(out_idx.end(), touched.begin(), touched.end());
+    }
+  });
+  // The whole matrix's pattern: row i is the mirrored entries (j, i) of the rows j < i, in order of j, then row
+  // i's own; and where each entry above the diagonal is mirrored (-1 on the diagonal).
+  NormalMatrix M;
+  M.n = n;
+  M.blocks = nb;
+  std::vector<std::int64_t> lower(n + 1, 0);
+  for (const auto& idx : part_idx)
+    for (const std::int32_t j : idx) ++lower[static_cast<std::size_t>(j) + 1];
+  // lower[j + 1] counts the upper entries in column j, the diagonal among them
+  M.indptr.assign(n + 1, 0);
+  for (std::size_t i = 0; i < n; ++i)
+    M.indptr[i + 1] = M.indptr[i] + (row_len[i] == 0 ? 0 : row_len[i] + lower[i + 1] - 1);
+  const auto nnz = static_cast<std::size_t>(M.indptr[n]);
+  M.indices.resize(nnz);
+  std::vector<std::vector<std::int64_t>> part_mirror(static_cast<std::size_t>(tasks));
+  for (std::size_t t = 0; t < part_idx.size(); ++t) part_mirror[t].resize(part_idx[t].size());
+  {
+    std::vector<std::int64_t> next_lower(M.indptr.begin(), M.indptr.end() - 1);
+    for (std::size_t i = 0; i < n; ++i) {
+      const auto& idx = part_idx[static_cast<std::size_t>(row_task[i])];
+      auto& mirror = part_mirror[static_cast<std::size_t>(row_task[i])];
+      auto p = static_cast<std::size_t>(row_at[i]);
+      auto own = static_cast<std::size_t>(M.indptr[i + 1] - row_len[i]);
+      for (std::int64_t e = 0; e < row_len[i]; ++e, ++p, ++own) {
+        const auto j = static_cast<std::size_t>(idx[p]);
+        M.indices[own] = idx[p];
+        mirror[p] = -1;
+        if (j == i) continue;
+        mirror[p] = next_lower[j]++;
+        M.indices[static_cast<std::size_t>(mirror[p])] = static_cast<std::int32_t>(i);
+      }
+    }
+  }
+  // Pass 2, the values: row i's entries summed over its blocks in their order (the sums held at their columns'
+  // places in `visit`, near one another as the rows are), each written to its place and its mirror's.
+  M.values.resize(nnz * unb);
+  detail::for_each_task(tasks > 1, tasks, [&](int t) {
+    std::vector<double> acc(n * unb, 0.0);
+    const auto& idx = part_idx[static_cast<std::size_t>(t)];
+    const auto& mirror = part_mirror[static_cast<std::size_t>(t)];
+    for (std::size_t s = first_of(t); s < first_of(t + 1); ++s) {
+      const auto i = static_cast<std::size_t>(visit[s]);
+      if (t == 0 && (s - first_of(t)) % 1024 == 0) poll_interrupt();
+      const auto p0 = static_cast<std::size_t>(row_at[i]), p1 = p0 + static_cast<std::size_t>(row_len[i]);
+      for (std::size_t p = p0; p < p1; ++p) {
+        double* dst = &acc[static_cast<std::size_t>(place[static_cast<std::size_t>(idx[p])]) * unb];
+        std::fill(dst, dst + nb, 0.0);
+      }
       double y[3] = {0.0, 0.0, 0.0};  // row i of A^T x
       for (std::int64_t e = col_ptr[i]; e < col_ptr[i + 1]; ++e) {
         const Block& q = blocks_[static_cast<std::size_t>(col_blocks[static_cast<std::size_t>(e)])];
@@ -179,60 +229,19 @@ NormalMatrix NormalBlocks::assemble(double* rhs) const {
         // Row li of the block's Gram matrix from column li on, added at its columns.
         const double* row = &q.gram[packed_row(li, width) * unb];
         for (std::size_t b = 0; b < width - li; ++b) {
-          const std::int32_t j = q.columns[li + b];
-          const auto at = static_cast<std::size_t>(place[static_cast<std::size_t>(j)]);
-          double* dst = &acc[at * unb];
-          if (marker[at] != static_cast<std::int32_t>(i)) {
-            marker[at] = static_cast<std::int32_t>(i);
-            touched.push_back(j);
-            std::fill(dst, dst + nb, 0.0);
-          }
+          double* dst = &acc[static_cast<std::size_t>(place[static_cast<std::size_t>(q.columns[li + b])]) * unb];
           for (std::size_t c = 0; c < unb; ++c) dst[c] += row[b * unb + c];
         }
       }
       if (rhs != nullptr) std::copy_n(y, 3, rhs + 3 * i);
-      std::sort(touched.begin(), touched.end());
-      up.row_len[i] = static_cast<std::int64_t>(touched.size());
-      up.row_task[i] = t;
-      up.row_at[i] = static_cast<std::int64_t>(out_idx.size());
-      for (const std::int32_t j : touched) {
-        out_idx.push_back(j);
-        const double* src = &acc[static_cast<std::size_t>(place[static_cast<std::size_t>(j)]) * unb];
-        out_val.insert(out_val.end(), src, src + nb);
+      auto own = static_cast<std::size_t>(M.indptr[i + 1] - row_len[i]);
+      for (std::size_t p = p0; p < p1; ++p, ++own) {
+        const double* src = &acc[static_cast<std::size_t>(place[static_cast<std::size_t>(idx[p])]) * unb];
+        std::copy(src, src + nb, &M.values[own * unb]);
+        if (mirror[p] >= 0) std::copy(src, src + nb, &M.values[static_cast<std::size_t>(mirror[p]) * unb]);
       }
     }
   });
-  // The whole matrix: row i is the mirrored entries (j, i) of the rows j < i, in order of j, then row i's own.
-  NormalMatrix M;
-  M.n = n;
-  M.blocks = nb;
-  std::vector<std::int64_t> lower(n + 1, 0);
-  for (const auto& idx : up.part_idx)
-    for (const std::int32_t j : idx) ++lower[static_cast<std::size_t>(j) + 1];
-  // lower[j + 1] counts the upper entries in column j, the diagonal among them
-  M.indptr.assign(n + 1, 0);
-  for (std::size_t i = 0; i < n; ++i)
-    M.indptr[i + 1] = M.indptr[i] + (up.row_len[i] == 0 ? 0 : up.row_len[i] + lower[i + 1] - 1);
-  const auto nnz = static_cast<std::size_t>(M.indptr[n]);
-  M.indices.resize(nnz);
-  M.values.resize(nnz * unb);
-  std::vector<std::int64_t> next_lower(M.indptr.begin(), M.indptr.end() - 1);
-  for (std::size_t i = 0; i < n; ++i) {
-    if (up.row_len[i] == 0) continue;  // a column no row reaches
-    const auto& idx = up.part_idx[static_cast<std::size_t>(up.row_task[i])];
-    const auto& val = up.part_val[static_cast<std::size_t>(up.row_task[i])];
-    auto p = static_cast<std::size_t>(up.row_at[i]);
-    auto own = static_cast<std::size_t>(M.indptr[i + 1] - up.row_len[i]);
-    for (std::int64_t e = 0; e < up.row_len[i]; ++e, ++p, ++own) {
-      const auto j = static_cast<std::size_t>(idx[p]);
-      M.indices[own] = idx[p];
-      std::copy(&val[p * unb], &val[p * unb] + nb, &M.values[own * unb]);
-      if (j == i) continue;
-      const auto slot = static_cast<std::size_t>(next_lower[j]++);
-      M.indices[slot] = static_cast<std::int32_t>(i);
-      std::copy(&val[p * unb], &val[p * unb] + nb, &M.values[slot * unb]);
-    }
-  }
   return M;
 }
 
