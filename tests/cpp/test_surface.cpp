@@ -258,9 +258,10 @@ TEST(LimitSurface, PositionBlocksAreRowsPositionMatrix) {
     std::size_t differ = 0;
     for (std::size_t i = 0; i < k; ++i) {
       const auto p0 = static_cast<std::size_t>(a.indptr[i]), p1 = static_cast<std::size_t>(a.indptr[i + 1]);
+      const auto at = static_cast<std::ptrdiff_t>(p0);
       const bool same = block_of[i] >= 0 && cols[i].size() == p1 - p0 &&
-                        std::equal(cols[i].begin(), cols[i].end(), a.indices.begin() + static_cast<std::ptrdiff_t>(p0)) &&
-                        std::equal(vals[i].begin(), vals[i].end(), a.data.begin() + static_cast<std::ptrdiff_t>(p0));
+                        std::equal(cols[i].begin(), cols[i].end(), a.indices.begin() + at) &&
+                        std::equal(vals[i].begin(), vals[i].end(), a.data.begin() + at);
       differ += same ? 0 : 1;
     }
     EXPECT_EQ(differ, 0u) << "scheme " << static_cast<int>(scheme);

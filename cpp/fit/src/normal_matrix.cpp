@@ -157,7 +157,8 @@ NormalMatrix NormalBlocks::assemble(double* rhs) const {
       if (t == 0 && (s - first_of(t)) % 1024 == 0) poll_interrupt();
       touched.clear();
       for (std::int64_t e = col_ptr[i]; e < col_ptr[i + 1]; ++e) {
-        const std::vector<std::int32_t>& cols = blocks_[static_cast<std::size_t>(col_blocks[static_cast<std::size_t>(e)])].columns;
+        const auto q = static_cast<std::size_t>(col_blocks[static_cast<std::size_t>(e)]);
+        const std::vector<std::int32_t>& cols = blocks_[q].columns;
         for (auto b = static_cast<std::size_t>(col_pos[static_cast<std::size_t>(e)]); b < cols.size(); ++b)
           if (marker[static_cast<std::size_t>(cols[b])] != static_cast<std::int32_t>(i)) {
             marker[static_cast<std::size_t>(cols[b])] = static_cast<std::int32_t>(i);
