@@ -231,20 +231,29 @@ TEST(LimitSurface, PositionBlocksAreRowsPositionMatrix) {
     const sorpia::CsrMatrix a = s.rows(ids.data(), uvs.data(), k, 1).position;
     std::size_t n_blocks = 0;
     std::vector<int> seen_block;
+    std::vector<std::int64_t> block_offsets;
+    std::vector<std::int32_t> block_columns;
     std::vector<std::vector<std::int32_t>> cols(k);
     std::vector<std::vector<double>> vals(k);
     std::vector<std::int64_t> block_of(k, -1);
     std::mutex mutex;
     s.position_blocks(
         ids.data(), uvs.data(), k,
-        [&](std::size_t blocks) {
-          n_blocks = blocks;
-          seen_block.assign(blocks, 0);
+        [&](std::vector<std::int64_t>&& offsets, std::vector<std::int32_t>&& columns) {
+          n_blocks = offsets.size() - 1;
+          seen_block.assign(n_blocks, 0);
+          block_offsets = std::move(offsets);
+          block_columns = std::move(columns);
         },
         [&](const sorpia::PositionBlock& b) {
           const std::lock_guard<std::mutex> lock(mutex);
           ASSERT_LT(b.index, n_blocks);
           ++seen_block[b.index];
+          // start's columns of the block are its own (none for a face whose points all have B's rows)
+          const auto c0 = static_cast<std::size_t>(block_offsets[b.index]);
+          const auto c1 = static_cast<std::size_t>(block_offsets[b.index + 1]);
+          if (b.count > 0)
+            EXPECT_TRUE(c1 - c0 == b.width && std::equal(b.columns, b.columns + b.width, &block_columns[c0]));
           for (std::size_t j = 0; j < b.count; ++j) {
             const std::size_t i = b.points[j];
             if (j > 0) EXPECT_LT(b.points[j - 1], i);

@@ -1,6 +1,9 @@
 #include "sorpia/normal_matrix.hpp"
 
 #include <algorithm>
+#include <atomic>
+#include <memory>
+#include <mutex>
 #include <cmath>
 #include <string>
 #include <type_traits>
@@ -16,8 +19,6 @@ namespace {
 
 // Stored entries (of N and K together) per task of a product below which it runs on one thread.
 constexpr std::size_t kEntriesPerTask = 100000;
-// Values of the blocks' Gram matrices per task of the assembly, at least.
-constexpr std::size_t kGramValuesPerTask = 32768;
 // Stored entries of the rows per task of normal_matrix's blocks, at least.
 constexpr std::size_t kRowEntriesPerTask = 32768;
 
@@ -60,189 +61,192 @@ void gram_row(const double* rows, std::size_t stride, std::size_t count, const d
   for (; b < width; ++b) columns(b, std::integral_constant<std::size_t, 1>{});
 }
 
+// Blocks per run that NormalBlocks adds into the pattern at once, in order.
+constexpr std::size_t kBlocksPerRun = 256;
+
 }  // namespace
 
-NormalBlocks::NormalBlocks(std::size_t n, std::size_t blocks, int weight_count)
-    : n_(n), weight_count_(weight_count), blocks_per_entry_(weight_count == 6 ? 6 : 1), blocks_(blocks) {
+struct NormalBlocks::State {
+  std::size_t n = 0;
+  int weight_count = 0;
+  std::size_t nb = 1;  // values per entry
+  std::vector<std::int64_t> offsets;
+  std::vector<std::int32_t> columns;
+  // The pattern on and above the diagonal: row i's columns up_idx[up_ptr[i] .. up_ptr[i + 1]), sorted; their sums.
+  std::vector<std::int64_t> up_ptr;
+  std::vector<std::int32_t> up_idx;
+  std::vector<double> up_val, rhs;  // (up_idx.size(), nb), (n, 3)
+  // A block's share until its run is added: its Gram matrix's rows on and above the diagonal (packed, nb values
+  // per entry) and A^T x ((width, 3)).
+  struct Share {
+    std::vector<double> gram, rhs;
+  };
+  std::vector<Share> shares;
+  std::unique_ptr<std::atomic<std::size_t>[]> run_left;  // per run, its blocks not yet added
+  std::mutex mutex;                                       // guards the three below
+  std::vector<char> run_complete;
+  std::size_t next_run = 0;  // the first run not yet added into the pattern
+  bool adding = false;       // a thread is adding runs
+  std::size_t n_runs() const { return run_complete.size(); }
+  std::size_t width(std::size_t b) const { return static_cast<std::size_t>(offsets[b + 1] - offsets[b]); }
+  // Run r's blocks' shares added at their entries, in the blocks' order, and released.
+  void add_run(std::size_t r) {
+    const std::size_t b1 = std::min(shares.size(), (r + 1) * kBlocksPerRun);
+    for (std::size_t b = r * kBlocksPerRun; b < b1; ++b) {
+      Share& q = shares[b];
+      if (q.gram.empty()) continue;
+      const std::size_t w = width(b);
+      const std::int32_t* cols = &columns[static_cast<std::size_t>(offsets[b])];
+      for (std::size_t li = 0; li < w; ++li) {
+        const auto i = static_cast<std::size_t>(cols[li]);
+        const double* row = &q.gram[packed_row(li, w) * nb];
+        auto p = static_cast<std::size_t>(up_ptr[i]);
+        for (std::size_t c = li; c < w; ++c, row += nb) {
+          while (up_idx[p] != cols[c]) ++p;  // cols sorted, a subset of row i's
+          double* dst = &up_val[p * nb];
+          for (std::size_t v = 0; v < nb; ++v) dst[v] += row[v];
+        }
+        if (!q.rhs.empty())
+          for (std::size_t v = 0; v < 3; ++v) rhs[3 * i + v] += q.rhs[3 * li + v];
+      }
+      q = Share{};
+    }
+  }
+};
+
+NormalBlocks::NormalBlocks(std::size_t n, int weight_count, std::vector<std::int64_t> offsets,
+                           std::vector<std::int32_t> columns)
+    : state_(std::make_unique<State>()) {
   if (weight_count != 0 && weight_count != 1 && weight_count != 6)
     throw ParameterError("weight_count must be 0, 1 or 6, got " + std::to_string(weight_count));
-}
-
-void NormalBlocks::add(std::size_t b, const std::int32_t* columns, std::size_t width, const double* rows,
-                       std::size_t count, const double* weights, const double* x) {
-  Block& out = blocks_[b];
-  if (count == 0) return;  // no rows: no entries
-  out.columns.assign(columns, columns + width);
-  const auto nb = static_cast<std::size_t>(blocks_per_entry_);
-  out.gram.resize(packed_row(width, width) * nb);
-  thread_local std::vector<double> scaled;
-  for (std::size_t li = 0; li < width; ++li) {
-    double* row = &out.gram[packed_row(li, width) * nb];
-    if (nb == 6)
-      gram_row<6>(rows, width, count, weights, li, width - li, row, scaled);
-    else
-      gram_row<1>(rows, width, count, weight_count_ == 0 ? nullptr : weights, li, width - li, row, scaled);
-  }
-  out.rhs.clear();
-  if (x == nullptr) return;
-  out.rhs.assign(3 * width, 0.0);
-  for (std::size_t r = 0; r < count; ++r)
-    for (std::size_t li = 0; li < width; ++li) {
-      const double a = rows[r * width + li];
-      for (std::size_t c = 0; c < 3; ++c) out.rhs[3 * li + c] += a * x[3 * r + c];
-    }
-}
-
-NormalMatrix NormalBlocks::assemble(double* rhs) const {
-  const std::size_t n = n_, n_blocks = blocks_.size();
-  const int nb = blocks_per_entry_;
-  const auto unb = static_cast<std::size_t>(nb);
-  // The blocks' columns (A^T's rows over blocks): for column j, (block, position of j in the block's columns).
+  State& s = *state_;
+  s.n = n;
+  s.weight_count = weight_count;
+  s.nb = weight_count == 6 ? 6 : 1;
+  s.offsets = std::move(offsets);
+  s.columns = std::move(columns);
+  const std::size_t n_blocks = s.offsets.empty() ? 0 : s.offsets.size() - 1;
+  // The blocks holding each column (A^T's rows over blocks): for column j, (block, position of j in its columns).
   std::vector<std::int64_t> col_ptr(n + 1, 0);
-  std::size_t gram_values = 0;
-  for (const Block& q : blocks_) {
-    for (const std::int32_t j : q.columns) ++col_ptr[static_cast<std::size_t>(j) + 1];
-    gram_values += q.gram.size();
-  }
+  for (const std::int32_t j : s.columns) ++col_ptr[static_cast<std::size_t>(j) + 1];
   for (std::size_t j = 0; j < n; ++j) col_ptr[j + 1] += col_ptr[j];
-  std::vector<std::int32_t> col_blocks(static_cast<std::size_t>(col_ptr[n]));
-  std::vector<std::int32_t> col_pos(col_blocks.size());
+  std::vector<std::int32_t> col_blocks(s.columns.size()), col_pos(s.columns.size());
   {
     std::vector<std::int64_t> next(col_ptr.begin(), col_ptr.end() - 1);
-    for (std::size_t q = 0; q < n_blocks; ++q) {
-      const std::vector<std::int32_t>& cols = blocks_[q].columns;
-      for (std::size_t p = 0; p < cols.size(); ++p) {
-        const auto slot = static_cast<std::size_t>(next[static_cast<std::size_t>(cols[p])]++);
-        col_blocks[slot] = static_cast<std::int32_t>(q);
+    for (std::size_t b = 0; b < n_blocks; ++b)
+      for (std::size_t p = 0; p < s.width(b); ++p) {
+        const auto slot = static_cast<std::size_t>(next[static_cast<std::size_t>(s.columns[s.offsets[b] + p])]++);
+        col_blocks[slot] = static_cast<std::int32_t>(b);
         col_pos[slot] = static_cast<std::int32_t>(p);
       }
-    }
   }
   poll_interrupt();
-  // Row i of A^T W A on and above the diagonal from the blocks holding column i, in their order (Gustavson; a
-  // block's columns are sorted, so those >= i are its positions from i's on), a range of the rows' order `visit`
-  // per task.
-  const int tasks = static_cast<int>(std::clamp<std::size_t>(std::min(gram_values / kGramValuesPerTask, n / 16), 1,
-                                                             static_cast<std::size_t>(detail::available_processors())));
-  // The rows in the order the blocks first hold them (then those no block holds): consecutive rows share blocks,
-  // whose Gram matrices are then read again from the cache. Each row's sums (over its blocks in their order) are the
-  // same in any order of the rows.
-  std::vector<std::int32_t> visit;
-  visit.reserve(n);
+  // Row i's columns on and above the diagonal: those from i's position on of every block holding i (Gustavson).
+  s.up_ptr.assign(n + 1, 0);
   {
-    std::vector<char> seen(n, 0);
-    for (const Block& q : blocks_)
-      for (const std::int32_t j : q.columns)
-        if (!seen[static_cast<std::size_t>(j)]) {
-          seen[static_cast<std::size_t>(j)] = 1;
-          visit.push_back(j);
-        }
-    for (std::size_t j = 0; j < n; ++j)
-      if (!seen[j]) visit.push_back(static_cast<std::int32_t>(j));
-  }
-  // Column j's place in `visit`: a row's sums are held at their columns' places, near one another as the rows are.
-  std::vector<std::int32_t> place(n);
-  for (std::size_t s = 0; s < n; ++s) place[static_cast<std::size_t>(visit[s])] = static_cast<std::int32_t>(s);
-  // Pass 1, the pattern: row i's columns on and above the diagonal (sorted) from the blocks holding column i, a
-  // range of the rows' order `visit` per task.
-  std::vector<std::vector<std::int32_t>> part_idx(static_cast<std::size_t>(tasks));  // per task, its rows' columns
-  std::vector<std::int64_t> row_len(n, 0), row_at(n, 0);  // row i's entries: part_idx[row_task[i]][row_at[i] ..]
-  std::vector<std::int32_t> row_task(n, 0);
-  const auto first_of = [&](int t) { return n * static_cast<std::size_t>(t) / static_cast<std::size_t>(tasks); };
-  detail::for_each_task(tasks > 1, tasks, [&](int t) {
     std::vector<std::int32_t> marker(n, -1), touched;
-    auto& out_idx = part_idx[static_cast<std::size_t>(t)];
-    for (std::size_t s = first_of(t); s < first_of(t + 1); ++s) {
-      const auto i = static_cast<std::size_t>(visit[s]);
-      if (t == 0 && (s - first_of(t)) % 1024 == 0) poll_interrupt();
+    for (std::size_t i = 0; i < n; ++i) {
       touched.clear();
       for (std::int64_t e = col_ptr[i]; e < col_ptr[i + 1]; ++e) {
-        const auto q = static_cast<std::size_t>(col_blocks[static_cast<std::size_t>(e)]);
-        const std::vector<std::int32_t>& cols = blocks_[q].columns;
-        for (auto b = static_cast<std::size_t>(col_pos[static_cast<std::size_t>(e)]); b < cols.size(); ++b)
-          if (marker[static_cast<std::size_t>(cols[b])] != static_cast<std::int32_t>(i)) {
-            marker[static_cast<std::size_t>(cols[b])] = static_cast<std::int32_t>(i);
-            touched.push_back(cols[b]);
+        const auto b = static_cast<std::size_t>(col_blocks[static_cast<std::size_t>(e)]);
+        const std::int32_t* cols = &s.columns[static_cast<std::size_t>(s.offsets[b])];
+        for (auto c = static_cast<std::size_t>(col_pos[static_cast<std::size_t>(e)]); c < s.width(b); ++c)
+          if (marker[static_cast<std::size_t>(cols[c])] != static_cast<std::int32_t>(i)) {
+            marker[static_cast<std::size_t>(cols[c])] = static_cast<std::int32_t>(i);
+            touched.push_back(cols[c]);
           }
       }
       std::sort(touched.begin(), touched.end());
-      row_len[i] = static_cast<std::int64_t>(touched.size());
-      row_task[i] = t;
-      row_at[i] = static_cast<std::int64_t>(out_idx.size());
-      out_idx.insert(out_idx.end(), touched.begin(), touched.end());
-    }
-  });
-  // The whole matrix's pattern: row i is the mirrored entries (j, i) of the rows j < i, in order of j, then row
-  // i's own; and where each entry above the diagonal is mirrored (-1 on the diagonal).
-  NormalMatrix M;
-  M.n = n;
-  M.blocks = nb;
-  std::vector<std::int64_t> lower(n + 1, 0);
-  for (const auto& idx : part_idx)
-    for (const std::int32_t j : idx) ++lower[static_cast<std::size_t>(j) + 1];
-  // lower[j + 1] counts the upper entries in column j, the diagonal among them
-  M.indptr.assign(n + 1, 0);
-  for (std::size_t i = 0; i < n; ++i)
-    M.indptr[i + 1] = M.indptr[i] + (row_len[i] == 0 ? 0 : row_len[i] + lower[i + 1] - 1);
-  const auto nnz = static_cast<std::size_t>(M.indptr[n]);
-  M.indices.resize(nnz);
-  std::vector<std::vector<std::int64_t>> part_mirror(static_cast<std::size_t>(tasks));
-  for (std::size_t t = 0; t < part_idx.size(); ++t) part_mirror[t].resize(part_idx[t].size());
-  {
-    std::vector<std::int64_t> next_lower(M.indptr.begin(), M.indptr.end() - 1);
-    for (std::size_t i = 0; i < n; ++i) {
-      const auto& idx = part_idx[static_cast<std::size_t>(row_task[i])];
-      auto& mirror = part_mirror[static_cast<std::size_t>(row_task[i])];
-      auto p = static_cast<std::size_t>(row_at[i]);
-      auto own = static_cast<std::size_t>(M.indptr[i + 1] - row_len[i]);
-      for (std::int64_t e = 0; e < row_len[i]; ++e, ++p, ++own) {
-        const auto j = static_cast<std::size_t>(idx[p]);
-        M.indices[own] = idx[p];
-        mirror[p] = -1;
-        if (j == i) continue;
-        mirror[p] = next_lower[j]++;
-        M.indices[static_cast<std::size_t>(mirror[p])] = static_cast<std::int32_t>(i);
-      }
+      s.up_idx.insert(s.up_idx.end(), touched.begin(), touched.end());
+      s.up_ptr[i + 1] = static_cast<std::int64_t>(s.up_idx.size());
     }
   }
-  // Pass 2, the values: row i's entries summed over its blocks in their order (the sums held at their columns'
-  // places in `visit`, near one another as the rows are), each written to its place and its mirror's.
-  M.values.resize(nnz * unb);
-  detail::for_each_task(tasks > 1, tasks, [&](int t) {
-    std::vector<double> acc(n * unb, 0.0);
-    const auto& idx = part_idx[static_cast<std::size_t>(t)];
-    const auto& mirror = part_mirror[static_cast<std::size_t>(t)];
-    for (std::size_t s = first_of(t); s < first_of(t + 1); ++s) {
-      const auto i = static_cast<std::size_t>(visit[s]);
-      if (t == 0 && (s - first_of(t)) % 1024 == 0) poll_interrupt();
-      const auto p0 = static_cast<std::size_t>(row_at[i]), p1 = p0 + static_cast<std::size_t>(row_len[i]);
-      for (std::size_t p = p0; p < p1; ++p) {
-        double* dst = &acc[static_cast<std::size_t>(place[static_cast<std::size_t>(idx[p])]) * unb];
-        std::fill(dst, dst + nb, 0.0);
-      }
-      double y[3] = {0.0, 0.0, 0.0};  // row i of A^T x
-      for (std::int64_t e = col_ptr[i]; e < col_ptr[i + 1]; ++e) {
-        const Block& q = blocks_[static_cast<std::size_t>(col_blocks[static_cast<std::size_t>(e)])];
-        const auto li = static_cast<std::size_t>(col_pos[static_cast<std::size_t>(e)]);
-        const std::size_t width = q.columns.size();
-        if (rhs != nullptr)
-          for (std::size_t c = 0; c < 3; ++c) y[c] += q.rhs[3 * li + c];
-        // Row li of the block's Gram matrix from column li on, added at its columns.
-        const double* row = &q.gram[packed_row(li, width) * unb];
-        for (std::size_t b = 0; b < width - li; ++b) {
-          double* dst = &acc[static_cast<std::size_t>(place[static_cast<std::size_t>(q.columns[li + b])]) * unb];
-          for (std::size_t c = 0; c < unb; ++c) dst[c] += row[b * unb + c];
-        }
-      }
-      if (rhs != nullptr) std::copy_n(y, 3, rhs + 3 * i);
-      auto own = static_cast<std::size_t>(M.indptr[i + 1] - row_len[i]);
-      for (std::size_t p = p0; p < p1; ++p, ++own) {
-        const double* src = &acc[static_cast<std::size_t>(place[static_cast<std::size_t>(idx[p])]) * unb];
-        std::copy(src, src + nb, &M.values[own * unb]);
-        if (mirror[p] >= 0) std::copy(src, src + nb, &M.values[static_cast<std::size_t>(mirror[p]) * unb]);
-      }
+  s.up_val.assign(s.up_idx.size() * s.nb, 0.0);
+  s.rhs.assign(3 * n, 0.0);
+  s.shares.resize(n_blocks);
+  const std::size_t n_runs = (n_blocks + kBlocksPerRun - 1) / kBlocksPerRun;
+  s.run_complete.assign(n_runs, 0);
+  s.run_left.reset(new std::atomic<std::size_t>[n_runs]);
+  for (std::size_t r = 0; r < n_runs; ++r) s.run_left[r] = std::min(n_blocks, (r + 1) * kBlocksPerRun) - r * kBlocksPerRun;
+}
+
+NormalBlocks::~NormalBlocks() = default;
+
+void NormalBlocks::add(std::size_t b, const double* rows, std::size_t count, const double* weights, const double* x) {
+  State& s = *state_;
+  const std::size_t width = s.width(b);
+  State::Share& out = s.shares[b];
+  if (count > 0 && width > 0) {
+    out.gram.resize(packed_row(width, width) * s.nb);
+    thread_local std::vector<double> scaled;
+    for (std::size_t li = 0; li < width; ++li) {
+      double* row = &out.gram[packed_row(li, width) * s.nb];
+      if (s.nb == 6)
+        gram_row<6>(rows, width, count, weights, li, width - li, row, scaled);
+      else
+        gram_row<1>(rows, width, count, s.weight_count == 0 ? nullptr : weights, li, width - li, row, scaled);
     }
-  });
+    if (x != nullptr) {
+      out.rhs.assign(3 * width, 0.0);
+      for (std::size_t r = 0; r < count; ++r)
+        for (std::size_t li = 0; li < width; ++li) {
+          const double a = rows[r * width + li];
+          for (std::size_t c = 0; c < 3; ++c) out.rhs[3 * li + c] += a * x[3 * r + c];
+        }
+    }
+  }
+  // The run complete: it and the complete runs after it added in order, unless a thread is adding already (which
+  // then finds them complete).
+  const std::size_t run = b / kBlocksPerRun;
+  if (--s.run_left[run] != 0) return;
+  std::unique_lock<std::mutex> lock(s.mutex);
+  s.run_complete[run] = 1;
+  if (s.adding) return;
+  s.adding = true;
+  while (s.next_run < s.n_runs() && s.run_complete[s.next_run]) {
+    const std::size_t r = s.next_run;
+    lock.unlock();
+    s.add_run(r);
+    lock.lock();
+    ++s.next_run;
+  }
+  s.adding = false;
+}
+
+NormalMatrix NormalBlocks::finish(double* rhs) {
+  State& s = *state_;
+  if (s.next_run != s.n_runs()) throw ParameterError("normal blocks: not every block was added");
+  const std::size_t n = s.n, nb = s.nb;
+  // The whole matrix: row i is the mirrored entries (j, i) of the rows j < i, in order of j, then row i's own.
+  NormalMatrix M;
+  M.n = n;
+  M.blocks = static_cast<int>(nb);
+  std::vector<std::int64_t> lower(n + 1, 0);
+  for (const std::int32_t j : s.up_idx) ++lower[static_cast<std::size_t>(j) + 1];
+  // lower[j + 1] counts the upper entries in column j, the diagonal among them
+  M.indptr.assign(n + 1, 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::int64_t own = s.up_ptr[i + 1] - s.up_ptr[i];
+    M.indptr[i + 1] = M.indptr[i] + (own == 0 ? 0 : own + lower[i + 1] - 1);
+  }
+  const auto nnz = static_cast<std::size_t>(M.indptr[n]);
+  M.indices.resize(nnz);
+  M.values.resize(nnz * nb);
+  std::vector<std::int64_t> next_lower(M.indptr.begin(), M.indptr.end() - 1);
+  for (std::size_t i = 0; i < n; ++i) {
+    auto own = static_cast<std::size_t>(M.indptr[i + 1] - (s.up_ptr[i + 1] - s.up_ptr[i]));
+    for (auto p = static_cast<std::size_t>(s.up_ptr[i]); p < static_cast<std::size_t>(s.up_ptr[i + 1]); ++p, ++own) {
+      const auto j = static_cast<std::size_t>(s.up_idx[p]);
+      const double* val = &s.up_val[p * nb];
+      M.indices[own] = s.up_idx[p];
+      std::copy(val, val + nb, &M.values[own * nb]);
+      if (j == i) continue;
+      const auto slot = static_cast<std::size_t>(next_lower[j]++);
+      M.indices[slot] = static_cast<std::int32_t>(i);
+      std::copy(val, val + nb, &M.values[slot * nb]);
+    }
+  }
+  if (rhs != nullptr) std::copy(s.rhs.begin(), s.rhs.end(), rhs);
   return M;
 }
 
@@ -263,17 +267,22 @@ NormalMatrix normal_matrix(const CsrRows& A, const double* weights, int weight_c
   }
   run_start.push_back(k);
   const std::size_t n_runs = run_start.size() - 1;
-  NormalBlocks blocks(A.n_cols, n_runs, weight_count);
+  std::vector<std::int64_t> offsets(n_runs + 1, 0);
+  std::vector<std::int32_t> columns;
+  for (std::size_t q = 0; q < n_runs; ++q) {
+    columns.insert(columns.end(), A.indices + A.indptr[run_start[q]], A.indices + A.indptr[run_start[q] + 1]);
+    offsets[q + 1] = static_cast<std::int64_t>(columns.size());
+  }
+  NormalBlocks blocks(A.n_cols, weight_count, std::move(offsets), std::move(columns));
   const bool with_rhs = x != nullptr && rhs != nullptr;
   const auto nb = static_cast<std::size_t>(weight_count);
   const int tasks = detail::task_count(static_cast<std::size_t>(A.indptr[k]), kRowEntriesPerTask);
   detail::for_each_index(tasks > 1, tasks, n_runs, [&](std::size_t q) {
     const std::size_t r0 = run_start[q], r1 = run_start[q + 1];
-    const auto width = static_cast<std::size_t>(A.indptr[r0 + 1] - A.indptr[r0]);
-    blocks.add(q, A.indices + A.indptr[r0], width, A.data + A.indptr[r0], r1 - r0,
-               weights == nullptr ? nullptr : weights + nb * r0, with_rhs ? x + 3 * r0 : nullptr);
+    blocks.add(q, A.data + A.indptr[r0], r1 - r0, weights == nullptr ? nullptr : weights + nb * r0,
+               with_rhs ? x + 3 * r0 : nullptr);
   });
-  return blocks.assemble(with_rhs ? rhs : nullptr);
+  return blocks.finish(with_rhs ? rhs : nullptr);
 }
 
 void blend_weights(const double* points, const double* normals, const double* row_weights, std::size_t k,

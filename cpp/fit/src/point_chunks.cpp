@@ -326,13 +326,14 @@ NormalSums ApproximationChunk::normal_sums(const LimitSurface& surface, double t
       throw ParameterError("face_ids[" + std::to_string(first_ + i) + "] = " + std::to_string(f) +
                            " is out of range [0, " + std::to_string(n_faces) + ")");
   }
-  // Each block of rows (a face's points) is weighted and multiplied out where it is made, in the cache
-  // (NormalBlocks::add); the blocks' shares are added up after, in their order.
+  // Each block of rows (a face's points) is weighted and multiplied out where it is made, in the cache, and added
+  // into the pattern of the blocks' columns in the blocks' order (NormalBlocks).
   std::unique_ptr<NormalBlocks> blocks;
   surface.position_blocks(
       current.face_ids.data(), current.uv.data(), k,
-      [&](std::size_t n_blocks) {
-        blocks = std::make_unique<NormalBlocks>(surface.n_vertices(), n_blocks, weight_count);
+      [&](std::vector<std::int64_t>&& offsets, std::vector<std::int32_t>&& columns) {
+        blocks = std::make_unique<NormalBlocks>(surface.n_vertices(), weight_count, std::move(offsets),
+                                                std::move(columns));
       },
       [&](const PositionBlock& b) {
         // The block's points, weights and weighted points (W p), in the block's order.
@@ -354,13 +355,12 @@ NormalSums ApproximationChunk::normal_sums(const LimitSurface& surface, double t
           blend_weights(p.data(), normals.data(), weighted ? w.data() : nullptr, m, tangential, w6.data(), wp.data());
         else
           for (std::size_t i = 0; i < 3 * m; ++i) wp[i] = weighted ? w[i / 3] * p[i] : p[i];
-        blocks->add(b.index, b.columns, b.width, b.rows, m, blend ? w6.data() : weighted ? w.data() : nullptr,
-                    wp.data());
+        blocks->add(b.index, b.rows, m, blend ? w6.data() : weighted ? w.data() : nullptr, wp.data());
       });
   out.rows_seconds = detail::seconds_since(t0);
   out.rows_cpu = cpu_seconds() - c0;
   out.rhs.resize(3 * surface.n_vertices());
-  out.matrix = blocks->assemble(out.rhs.data());
+  out.matrix = blocks->finish(out.rhs.data());
   return out;
 }
 

@@ -664,9 +664,10 @@ SurfaceRows LimitSurface::rows(const std::int32_t* face_ids, const double* uv, s
   return out;
 }
 
-void LimitSurface::position_blocks(const std::int32_t* face_ids, const double* uv, std::size_t k,
-                                   const std::function<void(std::size_t)>& start,
-                                   const std::function<void(const PositionBlock&)>& visit) const {
+void LimitSurface::position_blocks(
+    const std::int32_t* face_ids, const double* uv, std::size_t k,
+    const std::function<void(std::vector<std::int64_t>&& offsets, std::vector<std::int32_t>&& columns)>& start,
+    const std::function<void(const PositionBlock&)>& visit) const {
   const std::vector<double> params = checked_params(face_ids, uv, k);
   // The faces' blocks in increasing order of the face (the ids are checked), then the points with B's rows.
   std::vector<std::int32_t> face_block(n_faces(), -1);
@@ -676,12 +677,49 @@ void LimitSurface::position_blocks(const std::int32_t* face_ids, const double* u
     if (block == 0) block = static_cast<std::int32_t>(n_used++);
   const std::vector<std::int32_t> slots = exact_corners(face_ids, params.data(), k);
   const auto from_b = [&](std::size_t i) { return !slots.empty() && slots[i] >= 0; };
-  std::size_t n_exact = 0;
-  for (std::size_t i = 0; i < slots.size(); ++i) n_exact += from_b(i) ? 1 : 0;
-  start(n_used + n_exact);
+  const CsrMatrix& exact = impl_->exact.rows;
+  const std::vector<std::int32_t>& from_osd = impl_->base.from_osd;
+  {
+    // Every block's columns: a face's control points (sorted, distinct; none where all its points have B's rows),
+    // then B's rows'.
+    std::vector<char> any_face_row(n_used, 0);
+    for (std::size_t i = 0; i < k; ++i)
+      if (!from_b(i)) any_face_row[static_cast<std::size_t>(face_block[static_cast<std::size_t>(face_ids[i])])] = 1;
+    std::vector<std::vector<std::int32_t>> face_columns(n_used);
+    {
+      const std::shared_lock<std::shared_mutex> lock(impl_->mutex);
+      for_each_face_surface(*impl_->factory, face_ids, k,
+                            [&](const Bfr::Surface<double>& surface, int face, const std::size_t*, const std::size_t*) {
+                              const auto b = static_cast<std::size_t>(face_block[static_cast<std::size_t>(face)]);
+                              if (!any_face_row[b]) return;
+                              thread_local std::vector<int> cv;
+                              cv.resize(static_cast<std::size_t>(surface.GetNumControlPoints()));
+                              surface.GetControlPointIndices(cv.data());
+                              std::vector<std::int32_t>& cols = face_columns[b];
+                              cols.resize(cv.size());
+                              for (std::size_t c = 0; c < cv.size(); ++c)
+                                cols[c] = from_osd[static_cast<std::size_t>(cv[c])];
+                              std::sort(cols.begin(), cols.end());
+                              cols.erase(std::unique(cols.begin(), cols.end()), cols.end());
+                            });
+    }
+    std::vector<std::int64_t> offsets{0};
+    std::vector<std::int32_t> columns;
+    for (const std::vector<std::int32_t>& cols : face_columns) {
+      columns.insert(columns.end(), cols.begin(), cols.end());
+      offsets.push_back(static_cast<std::int64_t>(columns.size()));
+    }
+    for (std::size_t i = 0; i < slots.size(); ++i)
+      if (from_b(i)) {
+        columns.insert(columns.end(), exact.indices.begin() + exact.indptr[slots[i]],
+                       exact.indices.begin() + exact.indptr[slots[i] + 1]);
+        offsets.push_back(static_cast<std::int64_t>(columns.size()));
+      }
+    start(std::move(offsets), std::move(columns));
+  }
   {
     const std::shared_lock<std::shared_mutex> lock(impl_->mutex);
-    face_stencils(*impl_->factory, impl_->base.from_osd, face_ids, params.data(), k, 0,
+    face_stencils(*impl_->factory, from_osd, face_ids, params.data(), k, 0,
                   [&](int face, const std::size_t* first, const std::size_t* last, FaceStencils& s) {
                     PositionBlock b;
                     b.index = static_cast<std::size_t>(face_block[static_cast<std::size_t>(face)]);
@@ -705,7 +743,6 @@ void LimitSurface::position_blocks(const std::int32_t* face_ids, const double* u
                     visit(b);
                   });
   }
-  const CsrMatrix& exact = impl_->exact.rows;
   std::size_t next = n_used;
   for (std::size_t i = 0; i < slots.size(); ++i) {
     if (!from_b(i)) continue;

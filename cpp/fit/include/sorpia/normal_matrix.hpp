@@ -7,6 +7,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "sorpia/limit.hpp"  // CsrMatrix
@@ -33,38 +34,38 @@ struct CsrRows {
 };
 
 /// A^T W A and A^T x summed a block of rows at a time: a block is rows with
-/// the same columns (the points of one face), dense. Each block's share is
-/// formed on its own, in the cache, by whichever thread adds it (each entry a
-/// sum over the block's rows in their order); assemble() adds the blocks'
-/// shares in the order of their numbers, so that the sums do not depend on
-/// the threads. Weights as normal_matrix's.
+/// the same columns (the points of one face), dense. The blocks' columns are
+/// given first, which fixes the matrix's pattern; each block's share is then
+/// formed on its own, in the cache, by whichever thread adds it (each entry
+/// a sum over the block's rows in their order), and added into the pattern
+/// in the order of the blocks' numbers (a run of blocks once all of them and
+/// every run before it are in, by the thread that completes them), so that
+/// the sums do not depend on the threads. Weights as normal_matrix's.
 class NormalBlocks {
  public:
-  /// @param n       columns of A (the cage's vertices)
-  /// @param blocks  how many blocks add() will be given (numbers 0 .. blocks - 1)
+  /// @param n        columns of A (the cage's vertices)
+  /// @param offsets, columns  block b's columns (sorted, distinct, each < n)
+  ///                 are columns[offsets[b] .. offsets[b + 1])
   /// @throws ParameterError for a weight count other than 0, 1 or 6
-  NormalBlocks(std::size_t n, std::size_t blocks, int weight_count);
+  NormalBlocks(std::size_t n, int weight_count, std::vector<std::int64_t> offsets, std::vector<std::int32_t> columns);
+  ~NormalBlocks();
+  NormalBlocks(const NormalBlocks&) = delete;
+  NormalBlocks& operator=(const NormalBlocks&) = delete;
   /// Block b (each number once; different blocks may be added concurrently):
-  /// `count` rows (count, width) row-major over `columns` (sorted, distinct,
-  /// each < n), their weights (count, weight_count) row-major (null for
-  /// weight count 0) and x (count, 3), or null for no right-hand side.
-  void add(std::size_t b, const std::int32_t* columns, std::size_t width, const double* rows, std::size_t count,
-           const double* weights, const double* x);
-  /// The normal matrix of the blocks added (each entry their shares added in
-  /// the order of their numbers; entries no row makes structurally nonzero
-  /// are not stored) and, unless rhs is null, rhs (n, 3) := A^T x, written in
-  /// full.
-  NormalMatrix assemble(double* rhs) const;
+  /// `count` rows (count, width) row-major over its columns, their weights
+  /// (count, weight_count) row-major (null for weight count 0) and x
+  /// (count, 3), or null for no right-hand side. A block of 0 rows adds
+  /// nothing (its columns may be given as none).
+  void add(std::size_t b, const double* rows, std::size_t count, const double* weights, const double* x);
+  /// The normal matrix once every block is added (entries no row makes
+  /// structurally nonzero are not stored) and, unless rhs is null, rhs
+  /// (n, 3) := A^T x, written in full.
+  /// @throws ParameterError when a block was not added
+  NormalMatrix finish(double* rhs);
 
  private:
-  struct Block {
-    std::vector<std::int32_t> columns;
-    std::vector<double> gram;  // the Gram matrix's rows on and above the diagonal, packed, blocks values per entry
-    std::vector<double> rhs;   // (width, 3)
-  };
-  std::size_t n_ = 0;
-  int weight_count_ = 0, blocks_per_entry_ = 1;
-  std::vector<Block> blocks_;
+  struct State;
+  std::unique_ptr<State> state_;
 };
 
 /// A^T W A for rows A (k, n) and per-row weights: with `weight_count` 0 (W = I),

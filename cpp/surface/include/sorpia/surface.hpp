@@ -191,16 +191,19 @@ class LimitSurface {
   /// points of one face share its control points, so a face's points are
   /// one block, in the faces' increasing order; a point whose row is B's
   /// (at a dart's corner, see rows()) is a block of its own, after the
-  /// faces' in the points' order. start(blocks) is called first with their
-  /// count, then visit(block) once per block, on the core's threads
-  /// (concurrently for different blocks; the block's arrays are the
-  /// thread's until visit returns). A face whose points all have B's rows is
-  /// a block of 0 points. visit must not start tasks of the core's pool
+  /// faces' in the points' order. start(offsets, columns) is called first
+  /// with every block's columns (block b's are columns[offsets[b] ..
+  /// offsets[b + 1]), sorted and distinct; none for a face whose points all
+  /// have B's rows), then visit(block) once per block, on the core's
+  /// threads (concurrently for different blocks; the block's arrays are the
+  /// thread's until visit returns; a face whose points all have B's rows is
+  /// a block of 0 points). visit must not start tasks of the core's pool
   /// (detail::run_tasks is not reentrant).
   /// @throws ParameterError as evaluate()
-  void position_blocks(const std::int32_t* face_ids, const double* uv, std::size_t k,
-                       const std::function<void(std::size_t)>& start,
-                       const std::function<void(const PositionBlock&)>& visit) const;
+  void position_blocks(
+      const std::int32_t* face_ids, const double* uv, std::size_t k,
+      const std::function<void(std::vector<std::int64_t>&& offsets, std::vector<std::int32_t>&& columns)>& start,
+      const std::function<void(const PositionBlock&)>& visit) const;
 
   /// The control points of faces' surfaces in Bfr's order
   /// (Bfr::Surface::GetControlPointIndices, as mesh vertex indices; a vertex
