@@ -45,8 +45,8 @@ void add(DistanceSums& total, const DistanceSums& chunk);
 struct NormalSums {
   NormalMatrix matrix;        ///< A^T W A, 1 value per entry (W scalar) or 6 (the tangent blend); n 0: none yet
   std::vector<double> rhs;    ///< A^T W P, (n, 3) row-major
-  double rows_seconds = 0.0;  ///< wall seconds of forming the rows and each face's block of A^T W A and A^T W P
-                              ///< (timings' "rows"; "normal" is their sum over the blocks), of the chunks added
+  double rows_seconds = 0.0;  ///< wall seconds of forming the rows, each face's share of A^T W A and A^T W P
+                              ///< added in as it is made (timings' "rows"), of the chunks added
   double rows_cpu = 0.0;      ///< and the process's CPU seconds
 };
 /// total += chunk: the matrices' patterns merged row by row (sorted columns),
