@@ -237,8 +237,9 @@ TEST(LimitSurface, PositionBlocksAreRowsPositionMatrix) {
     std::vector<std::vector<double>> vals(k);
     std::vector<std::int64_t> block_of(k, -1);
     std::mutex mutex;
+    sorpia::detail::Scratch scratch;
     s.position_blocks(
-        ids.data(), uvs.data(), k,
+        ids.data(), uvs.data(), k, scratch,
         [&](std::vector<std::int64_t>&& offsets, std::vector<std::int32_t>&& columns) {
           n_blocks = offsets.size() - 1;
           seen_block.assign(n_blocks, 0);

@@ -599,11 +599,11 @@ bool near_corner(const Domains& dom, std::int32_t f, const double* ab) {
 // the derivatives come from differences of positions near corners
 // (kCornerRegion). The points' states
 // are held in one array in face order, so that the points of the face being
-// visited lie together in memory (and, one block, it goes back to the system
-// as a whole when freed).
+// visited lie together in memory; it and the other arrays of the call are
+// taken from `scratch` (null: arrays of the call's own).
 void refine(const LimitSurface& surface, const Topology& topology, const double* points, std::size_t n,
             const FootpointOptions& options, Footpoints& fp, KnownStart* known,
-            const std::vector<std::uint8_t>* irregular = nullptr) {
+            const std::vector<std::uint8_t>* irregular = nullptr, detail::Scratch* scratch = nullptr) {
   if (fp.face_ids.size() != n || fp.uv.size() != 2 * n)
     throw ParameterError("footpoints hold " + std::to_string(fp.face_ids.size()) + " faces and " +
                          std::to_string(fp.uv.size() / 2) + " parameters for " + std::to_string(n) + " points");
@@ -615,11 +615,13 @@ void refine(const LimitSurface& surface, const Topology& topology, const double*
                            " is out of range [0, " + std::to_string(m) + ")");
   if (!(options.uv_tolerance >= 0.0 && options.uv_tolerance < 1.0))
     throw ParameterError("uv_tolerance = " + std::to_string(options.uv_tolerance) + " must be in [0, 1)");
-  // Each field set below, in parallel, where the slots are first written (so that their memory is touched first by
-  // the tasks).
-  const std::unique_ptr<Slot[]> slots(new Slot[n]);
-  // The points in the order of their starting faces (a counting sort): slot s holds point point_of[s].
-  std::vector<std::size_t> point_of(n);
+  detail::Scratch::Frame frame(scratch);
+  // Each field set below, in parallel, where the slots are first written (so that their memory, where fresh, is
+  // touched first by the tasks).
+  Slot* const slots = frame.take<Slot>(n);
+  // The points in the order of their starting faces (a counting sort): slot s holds point point_of[s]. Then, its
+  // room reused, the slots pending (pending[0 .. n_pending)).
+  std::size_t* const point_of = frame.take<std::size_t>(n);
   {
     std::vector<std::size_t> start(static_cast<std::size_t>(m) + 1, 0);
     for (std::size_t i = 0; i < n; ++i) ++start[static_cast<std::size_t>(fp.face_ids[i]) + 1];
@@ -709,7 +711,6 @@ void refine(const LimitSurface& surface, const Topology& topology, const double*
   });
   // The inputs are in the slots now; their arrays are kept for the outputs (as are any of fp's other arrays of
   // the right size: written in place).
-  std::vector<std::size_t>().swap(point_of);
   // Each round visits the faces the pending points are in, and runs each
   // point's steps there (the face's patch prepared once) until the point is
   // done or crosses into another face, where the next round takes it on.
@@ -777,31 +778,28 @@ void refine(const LimitSurface& surface, const Topology& topology, const double*
       }
     }
   };
-  std::vector<std::size_t> pending;
-  pending.reserve(n);
+  std::size_t* const pending = point_of;
+  std::size_t n_pending = 0;
   for (std::size_t s = 0; s < n; ++s)
-    if (slots[s].fresh) pending.push_back(s);
-  std::vector<std::int32_t> pending_faces;
-  while (!pending.empty()) {
-    pending_faces.resize(pending.size());
-    for (std::size_t j = 0; j < pending.size(); ++j) pending_faces[j] = slots[pending[j]].face;
-    surface.visit_faces(pending_faces.data(), pending.size(),
+    if (slots[s].fresh) pending[n_pending++] = s;
+  std::int32_t* const pending_faces = frame.take<std::int32_t>(n);
+  while (n_pending > 0) {
+    for (std::size_t j = 0; j < n_pending; ++j) pending_faces[j] = slots[pending[j]].face;
+    surface.visit_faces(pending_faces, n_pending,
                         [&](std::int32_t f_visit, const std::size_t* first, const std::size_t* last,
                             const LimitSurface::FaceEvaluation& evaluate) {
                           for (const std::size_t* it = first; it != last; ++it)
                             run(slots[pending[*it]], f_visit, evaluate);
                         });
     std::size_t w = 0;
-    for (const std::size_t s : pending)
-      if (slots[s].again) {
-        slots[s].again = 0;
-        pending[w++] = s;
+    for (std::size_t j = 0; j < n_pending; ++j)
+      if (slots[pending[j]].again) {
+        slots[pending[j]].again = 0;
+        pending[w++] = pending[j];
       }
-    pending.resize(w);
+    n_pending = w;
     poll_interrupt();
   }
-  std::vector<std::size_t>().swap(pending);
-  std::vector<std::int32_t>().swap(pending_faces);
   // Back in input order, at the best points.
   fp.face_ids.resize(n);
   fp.uv.resize(2 * n);
@@ -1128,23 +1126,21 @@ const FootpointSearch::Certificate& FootpointSearch::certificate() const {
   return *certificate_;
 }
 
-Footpoints FootpointSearch::find(const double* points, std::size_t n) const {
+Footpoints FootpointSearch::find(const double* points, std::size_t n, detail::Scratch* scratch) const {
   Footpoints fp;
   fp.face_ids.resize(n);
   fp.uv.resize(2 * n);
-  std::vector<std::int64_t> nearest(n);
-  {
-    std::vector<double> dist(n);
-    index_->nearest(points, n, nearest.data(), dist.data());
-  }
+  detail::Scratch::Frame frame(scratch);
+  std::int64_t* const nearest = frame.take<std::int64_t>(n);
+  index_->nearest(points, n, nearest, frame.take<double>(n));
   for (std::size_t i = 0; i < n; ++i) {
     const auto s = static_cast<std::size_t>(nearest[i]);
     fp.face_ids[i] = sample_faces_[s];
     fp.uv[2 * i] = sample_uv_[2 * s];
     fp.uv[2 * i + 1] = sample_uv_[2 * s + 1];
   }
-  KnownStart known{nearest.data(), positions_.data(), du_.data(), dv_.data()};
-  refine(*surface_, *topology_, points, n, options_, fp, &known);
+  KnownStart known{nearest, positions_.data(), du_.data(), dv_.data()};
+  refine(*surface_, *topology_, points, n, options_, fp, &known, nullptr, &frame.scratch());
   return fp;
 }
 
@@ -1359,8 +1355,8 @@ Footpoints closest_points(const LimitSurface& surface, const Topology& topology,
 }
 
 void refine_footpoints(const LimitSurface& surface, const Topology& topology, const double* points, std::size_t n,
-                       const FootpointOptions& options, Footpoints& fp) {
-  refine(surface, topology, points, n, options, fp, nullptr);
+                       const FootpointOptions& options, Footpoints& fp, detail::Scratch* scratch) {
+  refine(surface, topology, points, n, options, fp, nullptr, nullptr, scratch);
 }
 
 }  // namespace sorpia

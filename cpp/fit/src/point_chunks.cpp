@@ -225,24 +225,26 @@ double ApproximationChunk::line_offset(const double mean[3], const double axis[3
   return off;
 }
 
-DistanceSums ApproximationChunk::sums(const std::vector<double>& d) const {
+DistanceSums ApproximationChunk::sums(const std::vector<double>& d, detail::Scratch* scratch) const {
   DistanceSums s;
   s.count = k_;
   if (k_ == 0) return s;
-  std::vector<double> squares(k_);
+  detail::Scratch::Frame frame(scratch);
+  double* const squares = frame.take<double>(k_);
   for (std::size_t i = 0; i < k_; ++i) squares[i] = weights_.empty() ? d[i] * d[i] : weights_[i] * (d[i] * d[i]);
-  s.squares = detail::pairwise_sum(squares.data(), k_);
+  s.squares = detail::pairwise_sum(squares, k_);
   for (std::size_t i = 0; i < k_; ++i)
     if (counts(i)) s.max = std::max(s.max, d[i]);
   return s;
 }
 
-DistanceSums ApproximationChunk::search(const FootpointSearch& search) {
-  current = from_footpoints(search.find(points_.data(), k_));
-  return sums(current.distances);
+DistanceSums ApproximationChunk::search(const FootpointSearch& search, detail::Scratch* scratch) {
+  current = from_footpoints(search.find(points_.data(), k_, scratch));
+  return sums(current.distances, scratch);
 }
 
-DistanceSums ApproximationChunk::refine(const LimitSurface& surface, const FootpointOptions& options) {
+DistanceSums ApproximationChunk::refine(const LimitSurface& surface, const FootpointOptions& options,
+                                        detail::Scratch* scratch) {
   Footpoints from;
   from.face_ids = std::move(current.face_ids);
   from.uv = std::move(current.uv);
@@ -251,9 +253,9 @@ DistanceSums ApproximationChunk::refine(const LimitSurface& surface, const Footp
   FootpointOptions refine = options;
   refine.grid = 0;
   refine.uv_tolerance = kIterationUvTolerance;
-  refine_footpoints(surface, surface.topology(), points_.data(), k_, refine, from);
+  refine_footpoints(surface, surface.topology(), points_.data(), k_, refine, from, scratch);
   current = from_footpoints(std::move(from));
-  return sums(current.distances);
+  return sums(current.distances, scratch);
 }
 
 void ApproximationChunk::keep_best() {
@@ -306,13 +308,15 @@ DistanceSums ApproximationChunk::keep_fresh_in_best() {
 }
 
 NormalSums ApproximationChunk::normal_sums(const LimitSurface& surface, double tangential,
-                                           const RobustOptions* robust, double scale) const {
+                                           const RobustOptions* robust, double scale,
+                                           detail::Scratch* scratch) const {
   const std::size_t k = k_;
   const bool weighted = !weights_.empty() || robust != nullptr;
-  std::vector<double> factors;  // the robust factors of the points' weights, in point order
+  detail::Scratch::Frame frame(scratch);
+  double* factors = nullptr;  // the robust factors of the points' weights, in point order
   if (robust) {
-    factors.resize(k);
-    robust_factors(*robust, scale, current.distances.data(), k, factors.data());
+    factors = frame.take<double>(k);
+    robust_factors(*robust, scale, current.distances.data(), k, factors);
   }
   const bool blend = tangential != 1.0;
   const int weight_count = blend ? 6 : weighted ? 1 : 0;
@@ -330,7 +334,7 @@ NormalSums ApproximationChunk::normal_sums(const LimitSurface& surface, double t
   // into the pattern of the blocks' columns in the blocks' order (NormalBlocks).
   std::unique_ptr<NormalBlocks> blocks;
   surface.position_blocks(
-      current.face_ids.data(), current.uv.data(), k,
+      current.face_ids.data(), current.uv.data(), k, frame.scratch(),
       [&](std::vector<std::int64_t>&& offsets, std::vector<std::int32_t>&& columns) {
         blocks = std::make_unique<NormalBlocks>(surface.n_vertices(), weight_count, std::move(offsets),
                                                 std::move(columns));
@@ -439,7 +443,7 @@ DistanceSums LocalChunks::search(const FootpointOptions& options) {
   DistanceSums t;
   for (std::size_t c = 0; c < n_chunks(); ++c) {
     poll_interrupt();
-    add(t, chunk(c, kPoints).search(s));
+    add(t, chunk(c, kPoints).search(s, &scratch_));
     put(c, kCurrent);
   }
   return t;
@@ -449,7 +453,7 @@ DistanceSums LocalChunks::refine(const FootpointOptions& options) {
   DistanceSums t;
   for (std::size_t c = 0; c < n_chunks(); ++c) {
     poll_interrupt();
-    add(t, chunk(c, kPoints | kCurrent).refine(surface_, options));
+    add(t, chunk(c, kPoints | kCurrent).refine(surface_, options, &scratch_));
     put(c, kCurrent);
   }
   return t;
@@ -463,6 +467,7 @@ void LocalChunks::keep_best() {
 }
 
 DistanceSums LocalChunks::search_fresh(const FootpointOptions& options, double closer) {
+  scratch_.release();
   const FootpointSearch& s = footpoint_search(options);
   DistanceSums t;
   for (std::size_t c = 0; c < n_chunks(); ++c) {
@@ -492,10 +497,13 @@ DistanceSums LocalChunks::keep_fresh_in_best() {
 NormalSums LocalChunks::normal_sums(double tangential) { return chunks_normal_sums(tangential, nullptr, 0.0); }
 
 NormalSums LocalChunks::chunks_normal_sums(double tangential, const RobustOptions* robust, double scale) {
+  // The normal sums end a surface state's calls (the update that follows sets new control vertices): its search
+  // is given back before the sums' arrays are taken.
+  search_.reset();
   NormalSums t;
   for (std::size_t c = 0; c < n_chunks(); ++c) {
     poll_interrupt();
-    add(t, chunk(c, kPoints | kCurrent).normal_sums(surface_, tangential, robust, scale));
+    add(t, chunk(c, kPoints | kCurrent).normal_sums(surface_, tangential, robust, scale, &scratch_));
     put(c, 0);
   }
   return t;
@@ -575,6 +583,7 @@ std::vector<double> LocalChunks::sample() {
 }
 
 Footpoints LocalChunks::best_footpoints() {
+  scratch_.release();
   Footpoints out;
   for (std::size_t c = 0; c < n_chunks(); ++c) {
     const ApproximationChunk& ch = load(c, kBest);

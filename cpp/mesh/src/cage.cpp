@@ -570,6 +570,36 @@ struct Clustering {
   std::vector<Quadric> quadrics;     // each of mesh's vertices: the sum of its cluster's vertices' quadrics
 };
 
+// Rounds of smoothing of the positions the clustering's grid cells are
+// taken from, on its second try (cluster_vertices): each moves a vertex
+// halfway to the mean of its neighbours (over its faces' corners), which
+// damps a noise at the vertices' own spacing by about half a round, so that
+// a cell cuts the surface in one disc where the noise folded it in and out
+// of the cell; it reaches about sqrt(rounds) spacings, below a cell's side
+// (several spacings: kBulkFactor clusters per vertex asked of a mesh of more
+// than twice as many).
+constexpr int kGridSmoothRounds = 4;
+
+// `p` smoothed by `rounds` rounds (kGridSmoothRounds) over the triangles
+// `idx` (n_corners corners), the vertices `fixed` where they are.
+std::vector<OpenMesh::Vec3d> smoothed(const std::vector<OpenMesh::Vec3d>& p, const std::int32_t* idx,
+                                      std::size_t n_corners, const std::vector<char>& fixed, int rounds) {
+  std::vector<OpenMesh::Vec3d> q(p), sum(p.size());
+  std::vector<std::int32_t> count(p.size());
+  for (int r = 0; r < rounds; ++r) {
+    std::fill(sum.begin(), sum.end(), OpenMesh::Vec3d(0.0, 0.0, 0.0));
+    std::fill(count.begin(), count.end(), 0);
+    for (std::size_t c = 0; c < n_corners; ++c) {
+      const std::size_t first = c - c % 3;
+      sum[idx[c]] += q[idx[first + (c + 1) % 3]] + q[idx[first + (c + 2) % 3]];
+      count[idx[c]] += 2;
+    }
+    for (std::size_t v = 0; v < p.size(); ++v)
+      if (count[v] > 0 && !fixed[v]) q[v] = 0.5 * q[v] + (0.5 / count[v]) * sum[v];
+  }
+  return q;
+}
+
 // Clusters `mesh` (in the decimation's coordinates, `to_frame`) into about
 // `n_clusters` vertices. Vertices on the boundary stay as they are, so that
 // no hole closes and the boundary angle guard judges the boundary as before;
@@ -577,7 +607,12 @@ struct Clustering {
 // fan, the boundary's a path and an inner one a cycle, the mesh is mended
 // and judged again, until none is: a cluster between two others only joins
 // one of them, any other such cluster is split back into its vertices (a
-// single vertex: its neighbouring clusters are). False (nothing clustered)
+// single vertex: its neighbouring clusters are). The grid's cells are taken
+// from the positions as they are first; where the mending does not settle
+// within kJoinPasses passes (a noise at the vertices' spacing folds the
+// surface in and out of the cells, so that the clusters split back towards
+// the input's vertices), from the positions smoothed (kGridSmoothRounds)
+// instead, the mesh and its quadrics as they are. False (nothing clustered)
 // for a mesh not manifold itself, whose refusal is the decimation's to name,
 // and where the grid or the mending does not settle.
 template <class ToFrame>
@@ -650,110 +685,122 @@ bool cluster_vertices(const Mesh& mesh, std::size_t n_clusters, const ToFrame& t
     while (parent[x] != x) x = parent[x] = parent[parent[x]];
     return x;
   };
-  double h = std::sqrt(1.5 * area / static_cast<double>(n_clusters));
-  for (int attempt = 0; attempt < 3; ++attempt) {
-    if (!(h > 0.0 && std::isfinite(h))) return false;
-    std::vector<std::uint64_t> cell(nv);
-    for (std::size_t v = 0; v < nv; ++v) {
-      std::uint64_t key = 0;
-      for (int c = 0; c < 3; ++c)
-        key |= static_cast<std::uint64_t>(std::clamp(std::floor((p[v][c] + 1.0) / h), 0.0, 2097151.0)) << (21 * c);
-      cell[v] = key;
-    }
-    for (std::size_t v = 0; v < nv; ++v) parent[v] = static_cast<std::int32_t>(v);
-    for (std::size_t c = 0; c < n_corners; ++c) {
-      const std::int32_t u = idx[c], w = idx[next(c)];
-      if (cell[u] == cell[w] && !keep[u] && !keep[w]) parent[find(u)] = find(w);
-    }
-    std::size_t n_made = 0;
-    for (std::size_t v = 0; v < nv; ++v) n_made += used[v] && find(static_cast<std::int32_t>(v)) == static_cast<std::int32_t>(v);
-    const double ratio = static_cast<double>(n_made) / static_cast<double>(n_clusters);
-    if (ratio > 0.9 && ratio < 1.15) break;
-    h *= std::sqrt(ratio);
-  }
-  // Clusters numbered in the order of their first vertex.
-  std::vector<std::int32_t> number(nv, -1);
-  std::int32_t n_numbered = 0;
-  for (std::size_t v = 0; v < nv; ++v) {
-    const std::int32_t r = find(static_cast<std::int32_t>(v));
-    if (number[r] < 0) number[r] = n_numbered++;
-    cluster[v] = number[r];
-  }
-
-  // The clustered faces; a cluster whose link is not as its vertices' (an
-  // inner cluster's a cycle, a boundary vertex's a path) is split, with its
-  // neighbours, into its vertices, until none is.
   std::vector<std::int32_t> faces;
   std::vector<std::array<std::int32_t, 3>> keys;
   std::vector<char> split;
-  // Joins can make new folds where slivers lie side by side; after these
-  // passes a sliver is split like any other cluster, which settles: a mesh
-  // of single vertices is the input, manifold.
-  constexpr int kJoinPasses = 8;
-  for (int pass = 0;; ++pass) {
-    // Each face over three clusters once (several input faces can span the
-    // same three), keyed by its corners turned to put the least first.
-    keys.clear();
-    for (std::size_t f = 0; f < nf; ++f) {
-      std::int32_t t[3] = {cluster[idx[3 * f]], cluster[idx[3 * f + 1]], cluster[idx[3 * f + 2]]};
-      if (t[0] == t[1] || t[1] == t[2] || t[2] == t[0]) continue;
-      std::rotate(t, std::min_element(t, t + 3), t + 3);
-      keys.push_back({t[0], t[1], t[2]});
+  std::int32_t n_numbered = 0;
+  for (const bool smooth : {false, true}) {
+    const std::vector<OpenMesh::Vec3d> p_smoothed =
+        smooth ? smoothed(p, idx, n_corners, boundary, kGridSmoothRounds) : std::vector<OpenMesh::Vec3d>();
+    const std::vector<OpenMesh::Vec3d>& q = smooth ? p_smoothed : p;  // the cells' positions
+    double h = std::sqrt(1.5 * area / static_cast<double>(n_clusters));
+    for (int attempt = 0; attempt < 3; ++attempt) {
+      if (!(h > 0.0 && std::isfinite(h))) return false;
+      std::vector<std::uint64_t> cell(nv);
+      for (std::size_t v = 0; v < nv; ++v) {
+        std::uint64_t key = 0;
+        for (int c = 0; c < 3; ++c)
+          key |= static_cast<std::uint64_t>(std::clamp(std::floor((q[v][c] + 1.0) / h), 0.0, 2097151.0)) << (21 * c);
+        cell[v] = key;
+      }
+      for (std::size_t v = 0; v < nv; ++v) parent[v] = static_cast<std::int32_t>(v);
+      for (std::size_t c = 0; c < n_corners; ++c) {
+        const std::int32_t u = idx[c], w = idx[next(c)];
+        if (cell[u] == cell[w] && !keep[u] && !keep[w]) parent[find(u)] = find(w);
+      }
+      std::size_t n_made = 0;
+      for (std::size_t v = 0; v < nv; ++v) n_made += used[v] && find(static_cast<std::int32_t>(v)) == static_cast<std::int32_t>(v);
+      const double ratio = static_cast<double>(n_made) / static_cast<double>(n_clusters);
+      if (ratio > 0.9 && ratio < 1.15) break;
+      h *= std::sqrt(ratio);
     }
-    std::sort(keys.begin(), keys.end());
-    keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
-    faces.clear();
-    for (const auto& t : keys) faces.insert(faces.end(), t.begin(), t.end());
-    const std::size_t n = static_cast<std::size_t>(n_numbered);
-    // A cluster's boundary: one of its vertices is on the input's (then it is that vertex alone).
-    std::vector<char> on_boundary(n, 0);
-    for (std::size_t v = 0; v < nv; ++v) on_boundary[cluster[v]] |= boundary[v];
-    split.assign(n, 0);
-    std::size_t n_split = 0;
-    // A cluster between two others only (two faces over the same three
-    // clusters, oriented against each other: a sliver a cell's corner cut
-    // off) joins one of them not on the boundary, which closes the fold.
-    std::vector<std::int32_t> joins;
-    links(faces.data(), faces.size(), n, [&](std::size_t x, Link kind) {
-      if (kind == (on_boundary[x] ? Link::kOnBoundary : Link::kInner)) return;
-      if (pass < kJoinPasses && !on_boundary[x] && la.size() == 2 && la[0] == lb[1] && la[1] == lb[0] &&
-          !(on_boundary[la[0]] && on_boundary[la[1]])) {
-        joins.push_back(static_cast<std::int32_t>(x));
-        joins.push_back(on_boundary[la[0]] ? la[1] : la[0]);
-        return;
-      }
-      split[x] = 1;
-      ++n_split;
-    });
-    std::vector<std::int32_t> into(n, -1);
-    for (std::size_t i = 0; i < joins.size(); i += 2) into[joins[i]] = joins[i + 1];
-    std::size_t n_joined = 0;
-    for (std::size_t i = 0; i < joins.size(); i += 2)
-      if (into[joins[i + 1]] >= 0) {  // its neighbour joins another: split it instead
-        into[joins[i]] = -1;
-        split[joins[i]] = 1;
-        ++n_split;
-      } else {
-        ++n_joined;
-      }
-    for (std::size_t v = 0; v < nv; ++v)
-      if (into[cluster[v]] >= 0) cluster[v] = into[cluster[v]];
-    if (n_split == 0 && n_joined == 0) break;
-    if (pass == kJoinPasses + 16) return false;
-    if (n_joined > 0) continue;  // the splits were judged before the joins
-    std::vector<std::int32_t> members(n, 0);
-    for (std::size_t v = 0; v < nv; ++v) ++members[cluster[v]];
-    for (std::size_t c = 0; c < faces.size(); ++c)
-      if (split[faces[c]] == 1 && members[faces[c]] == 1)
-        for (const std::size_t d : {next(c), prev(c)})
-          if (!split[faces[d]]) split[faces[d]] = 2;
-    std::vector<char> seen(n, 0);  // each split cluster keeps its number for its first vertex
+    // Clusters numbered in the order of their first vertex.
+    std::vector<std::int32_t> number(nv, -1);
+    n_numbered = 0;
     for (std::size_t v = 0; v < nv; ++v) {
-      const std::int32_t x = cluster[v];
-      if (!split[x]) continue;
-      if (seen[x]) cluster[v] = n_numbered++;
-      seen[x] = 1;
+      const std::int32_t r = find(static_cast<std::int32_t>(v));
+      if (number[r] < 0) number[r] = n_numbered++;
+      cluster[v] = number[r];
     }
+
+    // The clustered faces; a cluster whose link is not as its vertices' (an
+    // inner cluster's a cycle, a boundary vertex's a path) is split, with its
+    // neighbours, into its vertices, until none is.
+    // Joins can make new folds where slivers lie side by side; after these
+    // passes a sliver is split like any other cluster, which settles: a mesh
+    // of single vertices is the input, manifold.
+    constexpr int kJoinPasses = 8;
+    bool settled = false;
+    for (int pass = 0;; ++pass) {
+      // Each face over three clusters once (several input faces can span the
+      // same three), keyed by its corners turned to put the least first.
+      keys.clear();
+      for (std::size_t f = 0; f < nf; ++f) {
+        std::int32_t t[3] = {cluster[idx[3 * f]], cluster[idx[3 * f + 1]], cluster[idx[3 * f + 2]]};
+        if (t[0] == t[1] || t[1] == t[2] || t[2] == t[0]) continue;
+        std::rotate(t, std::min_element(t, t + 3), t + 3);
+        keys.push_back({t[0], t[1], t[2]});
+      }
+      std::sort(keys.begin(), keys.end());
+      keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+      faces.clear();
+      for (const auto& t : keys) faces.insert(faces.end(), t.begin(), t.end());
+      const std::size_t n = static_cast<std::size_t>(n_numbered);
+      // A cluster's boundary: one of its vertices is on the input's (then it is that vertex alone).
+      std::vector<char> on_boundary(n, 0);
+      for (std::size_t v = 0; v < nv; ++v) on_boundary[cluster[v]] |= boundary[v];
+      split.assign(n, 0);
+      std::size_t n_split = 0;
+      // A cluster between two others only (two faces over the same three
+      // clusters, oriented against each other: a sliver a cell's corner cut
+      // off) joins one of them not on the boundary, which closes the fold.
+      std::vector<std::int32_t> joins;
+      links(faces.data(), faces.size(), n, [&](std::size_t x, Link kind) {
+        if (kind == (on_boundary[x] ? Link::kOnBoundary : Link::kInner)) return;
+        if (pass < kJoinPasses && !on_boundary[x] && la.size() == 2 && la[0] == lb[1] && la[1] == lb[0] &&
+            !(on_boundary[la[0]] && on_boundary[la[1]])) {
+          joins.push_back(static_cast<std::int32_t>(x));
+          joins.push_back(on_boundary[la[0]] ? la[1] : la[0]);
+          return;
+        }
+        split[x] = 1;
+        ++n_split;
+      });
+      std::vector<std::int32_t> into(n, -1);
+      for (std::size_t i = 0; i < joins.size(); i += 2) into[joins[i]] = joins[i + 1];
+      std::size_t n_joined = 0;
+      for (std::size_t i = 0; i < joins.size(); i += 2)
+        if (into[joins[i + 1]] >= 0) {  // its neighbour joins another: split it instead
+          into[joins[i]] = -1;
+          split[joins[i]] = 1;
+          ++n_split;
+        } else {
+          ++n_joined;
+        }
+      for (std::size_t v = 0; v < nv; ++v)
+        if (into[cluster[v]] >= 0) cluster[v] = into[cluster[v]];
+      if (n_split == 0 && n_joined == 0) {
+        settled = true;
+        break;
+      }
+      if (pass == (smooth ? kJoinPasses + 16 : kJoinPasses - 1)) break;
+      if (n_joined > 0) continue;  // the splits were judged before the joins
+      std::vector<std::int32_t> members(n, 0);
+      for (std::size_t v = 0; v < nv; ++v) ++members[cluster[v]];
+      for (std::size_t c = 0; c < faces.size(); ++c)
+        if (split[faces[c]] == 1 && members[faces[c]] == 1)
+          for (const std::size_t d : {next(c), prev(c)})
+            if (!split[faces[d]]) split[faces[d]] = 2;
+      std::vector<char> seen(n, 0);  // each split cluster keeps its number for its first vertex
+      for (std::size_t v = 0; v < nv; ++v) {
+        const std::int32_t x = cluster[v];
+        if (!split[x]) continue;
+        if (seen[x]) cluster[v] = n_numbered++;
+        seen[x] = 1;
+      }
+    }
+    if (settled) break;
+    if (smooth) return false;
   }
   // Far fewer clusters in faces than asked (a grid the correction did not
   // settle): the heap would have too few collapses left to shape the cage.

@@ -16,6 +16,7 @@
 #include <limits>
 #include <mutex>
 #include <numeric>
+#include <optional>
 #include <shared_mutex>
 #include <string>
 #include <utility>
@@ -604,14 +605,13 @@ void LimitSurface::check_faces(const std::int32_t* face_ids, std::size_t k) cons
   }
 }
 
-std::vector<double> LimitSurface::checked_params(const std::int32_t* face_ids, const double* uv,
-                                                 std::size_t k) const {
+void LimitSurface::checked_params(const std::int32_t* face_ids, const double* uv, std::size_t k,
+                                  double* params) const {
   check_faces(face_ids, k);
   const BfrSurfaces& factory = *impl_->factory;
-  std::vector<double> params(uv, uv + 2 * k);
+  std::copy_n(uv, 2 * k, params);
   for (std::size_t i = 0; i < k; ++i)
     check_uv(factory.parameterization(face_ids[i]), i, params[2 * i], params[2 * i + 1]);
-  return params;
 }
 
 std::vector<std::int32_t> LimitSurface::exact_corners(const std::int32_t* face_ids, const double* params,
@@ -637,7 +637,8 @@ std::vector<std::int32_t> LimitSurface::exact_corners(const std::int32_t* face_i
 
 void LimitSurface::evaluate(const std::int32_t* face_ids, const double* uv, std::size_t k, double* positions,
                             double* du, double* dv, double* normals) const {
-  const std::vector<double> params = checked_params(face_ids, uv, k);
+  std::vector<double> params(2 * k);
+  checked_params(face_ids, uv, k, params.data());
   const std::shared_lock<std::shared_mutex> lock(impl_->mutex);
   evaluate_points(*impl_->factory, &impl_->points.data()->x, face_ids, params.data(), k, positions, du, dv,
                   normals);
@@ -652,7 +653,9 @@ void LimitSurface::evaluate(const std::int32_t* face_ids, const double* uv, std:
 SurfaceRows LimitSurface::rows(const std::int32_t* face_ids, const double* uv, std::size_t k, int derivatives) const {
   SurfaceRows out;
   CsrMatrix* mats[6] = {&out.position, &out.du, &out.dv, &out.duu, &out.duv, &out.dvv};
-  make_rows(face_ids, uv, k, derivatives, [&](int d, std::vector<std::int32_t>&& indptr) {
+  detail::Scratch scratch;
+  const detail::Scratch::Frame frame(&scratch);
+  make_rows(face_ids, uv, k, derivatives, scratch, [&](int d, std::vector<std::int32_t>&& indptr) {
     CsrMatrix& m = *mats[d];
     m.n_rows = k;
     m.n_cols = n_vertices();
@@ -665,17 +668,19 @@ SurfaceRows LimitSurface::rows(const std::int32_t* face_ids, const double* uv, s
 }
 
 void LimitSurface::position_blocks(
-    const std::int32_t* face_ids, const double* uv, std::size_t k,
+    const std::int32_t* face_ids, const double* uv, std::size_t k, detail::Scratch& scratch,
     const std::function<void(std::vector<std::int64_t>&& offsets, std::vector<std::int32_t>&& columns)>& start,
     const std::function<void(const PositionBlock&)>& visit) const {
-  const std::vector<double> params = checked_params(face_ids, uv, k);
+  const detail::Scratch::Frame frame(&scratch);
+  double* const params = frame.take<double>(2 * k);
+  checked_params(face_ids, uv, k, params);
   // The faces' blocks in increasing order of the face (the ids are checked), then the points with B's rows.
   std::vector<std::int32_t> face_block(n_faces(), -1);
   for (std::size_t i = 0; i < k; ++i) face_block[static_cast<std::size_t>(face_ids[i])] = 0;
   std::size_t n_used = 0;
   for (std::int32_t& block : face_block)
     if (block == 0) block = static_cast<std::int32_t>(n_used++);
-  const std::vector<std::int32_t> slots = exact_corners(face_ids, params.data(), k);
+  const std::vector<std::int32_t> slots = exact_corners(face_ids, params, k);
   const auto from_b = [&](std::size_t i) { return !slots.empty() && slots[i] >= 0; };
   const CsrMatrix& exact = impl_->exact.rows;
   const std::vector<std::int32_t>& from_osd = impl_->base.from_osd;
@@ -719,7 +724,7 @@ void LimitSurface::position_blocks(
   }
   {
     const std::shared_lock<std::shared_mutex> lock(impl_->mutex);
-    face_stencils(*impl_->factory, from_osd, face_ids, params.data(), k, 0,
+    face_stencils(*impl_->factory, from_osd, face_ids, params, k, 0,
                   [&](int face, const std::size_t* first, const std::size_t* last, FaceStencils& s) {
                     PositionBlock b;
                     b.index = static_cast<std::size_t>(face_block[static_cast<std::size_t>(face)]);
@@ -759,11 +764,16 @@ void LimitSurface::position_blocks(
 }
 
 void LimitSurface::make_rows(const std::int32_t* face_ids, const double* uv, std::size_t k, int derivatives,
-                             const RowsStore& store) const {
+                             detail::Scratch& scratch, const RowsStore& store) const {
   if (derivatives < 0 || derivatives > 2)
     throw ParameterError("derivatives = " + std::to_string(derivatives) +
                          " must be 0 (positions), 1 (and first derivatives) or 2 (and second derivatives)");
-  const std::vector<double> params = checked_params(face_ids, uv, k);
+  // The point's index among its face's points: in the caller's frame, as store's arrays, which the parameters'
+  // frame (ended before store) leaves room for.
+  std::size_t* const rank = scratch.take<std::size_t>(k);
+  std::optional<detail::Scratch::Frame> params_frame(std::in_place, &scratch);
+  double* const params = params_frame->take<double>(2 * k);
+  checked_params(face_ids, uv, k, params);
   const int n_mats = derivatives == 0 ? 1 : derivatives == 1 ? 3 : 6;
   const std::vector<std::int32_t>& from_osd = impl_->base.from_osd;
 
@@ -775,10 +785,9 @@ void LimitSurface::make_rows(const std::int32_t* face_ids, const double* uv, std
   for (std::int32_t& slot : face_slot)
     if (slot == 0) slot = static_cast<std::int32_t>(n_used++);
   std::vector<FaceStencils> stencils(n_used);
-  std::vector<std::size_t> rank(k);  // the point's index among its face's points
   {
     const std::shared_lock<std::shared_mutex> lock(impl_->mutex);
-    face_stencils(*impl_->factory, from_osd, face_ids, params.data(), k, derivatives,
+    face_stencils(*impl_->factory, from_osd, face_ids, params, k, derivatives,
                   [&](int face, const std::size_t* first, const std::size_t* last, FaceStencils& face_rows) {
                     for (const std::size_t* i = first; i != last; ++i) rank[*i] = static_cast<std::size_t>(i - first);
                     stencils[static_cast<std::size_t>(face_slot[static_cast<std::size_t>(face)])] =
@@ -787,7 +796,8 @@ void LimitSurface::make_rows(const std::int32_t* face_ids, const double* uv, std
   }
 
   // Points at the corner of a vertex whose position row is B's (see evaluate()).
-  const std::vector<std::int32_t> slots = exact_corners(face_ids, params.data(), k);
+  const std::vector<std::int32_t> slots = exact_corners(face_ids, params, k);
+  params_frame.reset();
   const CsrMatrix& exact = impl_->exact.rows;
   // The rows are copied out in ranges of points, one per task.
   const int copy_tasks = detail::task_count(k, kRowsPerCopyTask);
@@ -824,7 +834,8 @@ void LimitSurface::make_rows(const std::int32_t* face_ids, const double* uv, std
 FaceControlPoints LimitSurface::control_points(const std::int32_t* face_ids, std::size_t k) const {
   // The corner (0, 0) lies in every face's domain: the checks are evaluate()'s.
   const std::vector<double> corner(2 * k, 0.0);
-  (void)checked_params(face_ids, corner.data(), k);
+  std::vector<double> params(2 * k);
+  checked_params(face_ids, corner.data(), k, params.data());
   const std::vector<std::int32_t>& from_osd = impl_->base.from_osd;
   std::vector<std::vector<std::int32_t>> per_point(k);
   FaceControlPoints out;

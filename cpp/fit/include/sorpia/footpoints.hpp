@@ -13,6 +13,7 @@
 #include <mutex>
 #include <vector>
 
+#include "sorpia/detail/scratch.hpp"
 #include "sorpia/surface.hpp"
 #include "sorpia/topology.hpp"
 
@@ -142,7 +143,9 @@ class FootpointSearch {
   ~FootpointSearch();
   FootpointSearch(const FootpointSearch&) = delete;
   FootpointSearch& operator=(const FootpointSearch&) = delete;
-  Footpoints find(const double* points, std::size_t n) const;
+  /// Its transient arrays are taken from `scratch` where given (a caller
+  /// that repeats it lends one: detail/scratch.hpp).
+  Footpoints find(const double* points, std::size_t n, detail::Scratch* scratch = nullptr) const;
 
   /// Re-searches footpoints that may be local minima of the distance
   /// (refine_footpoints' results, and find's: its start is the nearest
@@ -259,8 +262,9 @@ class FootpointSearch {
 /// leaves the face's domain stops on its edge and, where a face lies across
 /// that edge (not a hole), continues in that face from the same surface point
 /// ("hops"); on a boundary edge it slides along the edge. Fills positions,
-/// distances and normals.
+/// distances and normals. Its transient arrays are taken from `scratch`
+/// where given (a caller that repeats it lends one: detail/scratch.hpp).
 void refine_footpoints(const LimitSurface& surface, const Topology& topology, const double* points, std::size_t n,
-                       const FootpointOptions& options, Footpoints& footpoints);
+                       const FootpointOptions& options, Footpoints& footpoints, detail::Scratch* scratch = nullptr);
 
 }  // namespace sorpia

@@ -101,10 +101,12 @@ class ApproximationChunk {
   double line_offset(const double mean[3], const double axis[3], double diagonal) const;
 
   /// Current footpoints := search.find(points) (closest_points).
-  DistanceSums search(const FootpointSearch& search);
+  /// search, refine and normal_sums take their transient arrays from `scratch` where given (LocalChunks lends
+  /// its one to each chunk's call: detail/scratch.hpp), else arrays of the call's own.
+  DistanceSums search(const FootpointSearch& search, detail::Scratch* scratch = nullptr);
   /// Current footpoints re-projected from where they are (refine_footpoints, grid unused, to a uv_tolerance of
   /// 1e-5: the iterations' footpoints, the distances exact to about 1e-6 relatively).
-  DistanceSums refine(const LimitSurface& surface, const FootpointOptions& options);
+  DistanceSums refine(const LimitSurface& surface, const FootpointOptions& options, detail::Scratch* scratch = nullptr);
   /// The best iterate's footpoints := the current ones.
   void keep_best();
   /// Fresh footpoints := the current ones (of the search's surface: searched
@@ -125,7 +127,7 @@ class ApproximationChunk {
   /// With `robust` (not null): each point's weight times robust_factors of
   /// its current distance at `scale` (the robust fit's update).
   NormalSums normal_sums(const LimitSurface& surface, double tangential, const RobustOptions* robust = nullptr,
-                         double scale = 0.0) const;
+                         double scale = 0.0, detail::Scratch* scratch = nullptr) const;
   /// The current distances' histogram (weighted), in bins of `unit`.
   DistanceHistogram distance_histogram(double unit) const;
   /// The robust sums of the current distances (sorpia::robust_sums).
@@ -151,7 +153,7 @@ class ApproximationChunk {
 
  private:
   friend class FileChunks;
-  DistanceSums sums(const std::vector<double>& distances) const;
+  DistanceSums sums(const std::vector<double>& distances, detail::Scratch* scratch = nullptr) const;
   std::size_t k_ = 0, first_ = 0;
   std::vector<double> points_, weights_;  // weights_ empty: all 1
 };
@@ -260,6 +262,10 @@ class LocalChunks : public PointChunks {
     if (sampled_.empty()) store(c, changed);
   }
   std::vector<ApproximationChunk> sampled_;  // the coarse iterations' chunks, empty when working on all points
+  // The chunks' calls' transient arrays (search, refine, normal_sums), one chunk's call at a time: the memory of a
+  // chunk's largest call, kept across the iterations; given back before the calls that take none (search_fresh,
+  // best_footpoints) so that it adds to no other peak.
+  detail::Scratch scratch_;
   LimitSurface& surface_;
   std::unique_ptr<FootpointSearch> search_;
   FootpointOptions search_options_{};

@@ -11,6 +11,7 @@
 #include <memory>
 #include <vector>
 
+#include "sorpia/detail/scratch.hpp"
 #include "sorpia/limit.hpp"   // CsrMatrix
 #include "sorpia/memory.hpp"  // available_memory_bytes, which tessellate checks
 #include "sorpia/mesh.hpp"
@@ -198,10 +199,11 @@ class LimitSurface {
   /// threads (concurrently for different blocks; the block's arrays are the
   /// thread's until visit returns; a face whose points all have B's rows is
   /// a block of 0 points). visit must not start tasks of the core's pool
-  /// (detail::run_tasks is not reentrant).
+  /// (detail::run_tasks is not reentrant). The call's transient arrays are
+  /// taken from `scratch` (in a frame of its own).
   /// @throws ParameterError as evaluate()
   void position_blocks(
-      const std::int32_t* face_ids, const double* uv, std::size_t k,
+      const std::int32_t* face_ids, const double* uv, std::size_t k, detail::Scratch& scratch,
       const std::function<void(std::vector<std::int64_t>&& offsets, std::vector<std::int32_t>&& columns)>& start,
       const std::function<void(const PositionBlock&)>& visit) const;
 
@@ -253,8 +255,8 @@ class LimitSurface {
 
  private:
   // The parameters of k points after evaluate()'s checks (pulled onto the
-  // domain where a rounding error outside).
-  std::vector<double> checked_params(const std::int32_t* face_ids, const double* uv, std::size_t k) const;
+  // domain where a rounding error outside), written to params (2k).
+  void checked_params(const std::int32_t* face_ids, const double* uv, std::size_t k, double* params) const;
   // evaluate()'s checks of the faces alone (checked_params makes them too).
   void check_faces(const std::int32_t* face_ids, std::size_t k) const;
   // Where make_rows writes matrix d: the row offsets (handed to `store`) and room for their entries.
@@ -264,9 +266,10 @@ class LimitSurface {
     double* data;
   };
   using RowsStore = std::function<RowsTarget(int d, std::vector<std::int32_t>&& indptr)>;
-  // rows()' matrices, each stored where store(d, its row offsets) says.
+  // rows()' matrices, each stored where store(d, its row offsets) says; the transient arrays taken from
+  // `scratch`, in the frame open on it (store may take from it too).
   void make_rows(const std::int32_t* face_ids, const double* uv, std::size_t k, int derivatives,
-                 const RowsStore& store) const;
+                 detail::Scratch& scratch, const RowsStore& store) const;
   // For each point at the corner of a vertex whose position comes from B
   // (Impl::exact), its row in the exact rows, else -1; empty when none.
   std::vector<std::int32_t> exact_corners(const std::int32_t* face_ids, const double* params, std::size_t k) const;
