@@ -671,7 +671,7 @@ void LimitSurface::position_blocks(
     const std::int32_t* face_ids, const double* uv, std::size_t k, detail::Scratch& scratch,
     const std::function<void(std::vector<std::int64_t>&& offsets, std::vector<std::int32_t>&& columns)>& start,
     const std::function<void(const PositionBlock&)>& visit) const {
-  const detail::Scratch::Frame frame(&scratch);
+  detail::Scratch::Frame frame(&scratch);
   double* const params = frame.take<double>(2 * k);
   checked_params(face_ids, uv, k, params);
   // The faces' blocks in increasing order of the face (the ids are checked), then the points with B's rows.
