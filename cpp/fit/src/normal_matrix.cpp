@@ -231,21 +231,31 @@ NormalMatrix NormalBlocks::finish(double* rhs) {
   }
   const auto nnz = static_cast<std::size_t>(M.indptr[n]);
   M.indices.resize(nnz);
-  M.values.resize(nnz * nb);
-  std::vector<std::int64_t> next_lower(M.indptr.begin(), M.indptr.end() - 1);
-  for (std::size_t i = 0; i < n; ++i) {
-    auto own = static_cast<std::size_t>(M.indptr[i + 1] - (s.up_ptr[i + 1] - s.up_ptr[i]));
-    for (auto p = static_cast<std::size_t>(s.up_ptr[i]); p < static_cast<std::size_t>(s.up_ptr[i + 1]); ++p, ++own) {
-      const auto j = static_cast<std::size_t>(s.up_idx[p]);
-      const double* val = &s.up_val[p * nb];
-      M.indices[own] = s.up_idx[p];
-      std::copy(val, val + nb, &M.values[own * nb]);
-      if (j == i) continue;
-      const auto slot = static_cast<std::size_t>(next_lower[j]++);
-      M.indices[slot] = static_cast<std::int32_t>(i);
-      std::copy(val, val + nb, &M.values[slot * nb]);
+  // Where each entry above the diagonal is mirrored (-1 on the diagonal), in order of the rows (the columns alone).
+  std::vector<std::int64_t> mirror(s.up_idx.size());
+  {
+    std::vector<std::int64_t> next_lower(M.indptr.begin(), M.indptr.end() - 1);
+    for (std::size_t i = 0; i < n; ++i) {
+      auto own = static_cast<std::size_t>(M.indptr[i + 1] - (s.up_ptr[i + 1] - s.up_ptr[i]));
+      for (auto p = static_cast<std::size_t>(s.up_ptr[i]); p < static_cast<std::size_t>(s.up_ptr[i + 1]); ++p, ++own) {
+        const auto j = static_cast<std::size_t>(s.up_idx[p]);
+        M.indices[own] = s.up_idx[p];
+        mirror[p] = j == i ? -1 : next_lower[j]++;
+        if (j != i) M.indices[static_cast<std::size_t>(mirror[p])] = static_cast<std::int32_t>(i);
+      }
     }
   }
+  // The values, at their places and their mirrors', in ranges of rows on the core's threads.
+  M.values.resize(nnz * nb);
+  const int tasks = detail::task_count(s.up_idx.size(), kEntriesPerTask);
+  detail::for_each_index(tasks > 1, tasks, n, [&](std::size_t i) {
+    auto own = static_cast<std::size_t>(M.indptr[i + 1] - (s.up_ptr[i + 1] - s.up_ptr[i]));
+    for (auto p = static_cast<std::size_t>(s.up_ptr[i]); p < static_cast<std::size_t>(s.up_ptr[i + 1]); ++p, ++own) {
+      const double* val = &s.up_val[p * nb];
+      std::copy(val, val + nb, &M.values[own * nb]);
+      if (mirror[p] >= 0) std::copy(val, val + nb, &M.values[static_cast<std::size_t>(mirror[p]) * nb]);
+    }
+  });
   if (rhs != nullptr) std::copy(s.rhs.begin(), s.rhs.end(), rhs);
   return M;
 }
