@@ -173,8 +173,12 @@ class ApproximationResult:
         diagonal; 0 at iteration 0), ``solver_iterations`` (of the update
         before it; 0 at iteration 0) and ``seconds`` (since the start).
     timings : dict
-        Seconds spent in each phase: ``footpoints``, ``rows``, ``normal``
-        (forming A^T A and A^T P), ``solve``, ``report`` (surface to data),
+        Seconds spent in each phase: ``footpoints``, ``rows`` (the rows of
+        the surface at the footpoints, a face's points at a time, each
+        face's share of A^T A and A^T P added in as it is made),
+        ``normal`` (the rest of forming A^T A and A^T P: the whole matrix
+        from its upper triangle, the chunks' sums added), ``solve``,
+        ``report`` (surface to data),
         ``total`` (`seconds`); and ``cpu``: the process's CPU seconds of
         each (all threads). With ``client``, also ``cluster``: ``workers``,
         ``chunks``, ``chunk_points``, ``worker_seconds`` and

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "expect_error.hpp"
+#include "sorpia/detail/parallel.hpp"
 #include "sorpia/approximation.hpp"
 #include "sorpia/errors.hpp"
 #include "sorpia/fair.hpp"
@@ -19,6 +20,7 @@
 #include "sorpia/footpoints.hpp"
 #include "sorpia/interpolator.hpp"
 #include "sorpia/normal_matrix.hpp"
+#include "sorpia/point_chunks.hpp"
 #include "sorpia/refine.hpp"
 #include "sorpia/shapes.hpp"
 #include "sorpia/surface.hpp"
@@ -227,10 +229,10 @@ std::vector<double> dense_update(const TinyFit& fit, double fairness, double tan
   return dense_solve(M, rhs, m);
 }
 
-TEST(NormalMatrix, RhsIsTheRowByRowProductBitForBit) {
-  // normal_matrix's A^T x alongside A^T W A equals the product summed row by row in order (the same additions:
-  // bit for bit), and the matrix is the one made without it: rows in runs of equal columns (a face's points) and
-  // alone, enough entries for several tasks.
+TEST(NormalMatrix, RhsIsTheRowByRowProduct) {
+  // normal_matrix's A^T x alongside A^T W A equals the product summed row by row in order (to rounding: each run's
+  // share is summed first, 1e-14 of the sum of the terms' magnitudes), and the matrix is the one made without it:
+  // rows in runs of equal columns (a face's points) and alone, enough entries for several tasks.
   std::mt19937 rng(5);
   const std::size_t n = 400;
   std::vector<std::int32_t> indptr{0}, indices;
@@ -254,18 +256,105 @@ TEST(NormalMatrix, RhsIsTheRowByRowProductBitForBit) {
   std::vector<double> x(3 * k), w(6 * k);
   for (double& v : x) v = std::uniform_real_distribution<double>(-2.0, 2.0)(rng);
   for (double& v : w) v = std::uniform_real_distribution<double>(0.0, 1.0)(rng);
-  std::vector<double> expected(3 * n, 0.0);
+  std::vector<double> expected(3 * n, 0.0), magnitude(3 * n, 0.0);
   for (std::size_t r = 0; r < k; ++r)
     for (std::int32_t p = indptr[r]; p < indptr[r + 1]; ++p)
-      for (std::size_t c = 0; c < 3; ++c) expected[3 * static_cast<std::size_t>(indices[p]) + c] += data[p] * x[3 * r + c];
+      for (std::size_t c = 0; c < 3; ++c) {
+        expected[3 * static_cast<std::size_t>(indices[p]) + c] += data[p] * x[3 * r + c];
+        magnitude[3 * static_cast<std::size_t>(indices[p]) + c] += std::abs(data[p] * x[3 * r + c]);
+      }
   for (const int count : {0, 6}) {
     std::vector<double> rhs(3 * n, -1.0);
     const sorpia::NormalMatrix with = sorpia::normal_matrix(a, count ? w.data() : nullptr, count, x.data(), rhs.data());
     const sorpia::NormalMatrix without = sorpia::normal_matrix(a, count ? w.data() : nullptr, count);
-    EXPECT_EQ(rhs, expected) << count;
+    for (std::size_t i = 0; i < 3 * n; ++i) EXPECT_NEAR(rhs[i], expected[i], 1e-14 * magnitude[i]) << count << " " << i;
     EXPECT_EQ(with.indptr, without.indptr);
     EXPECT_EQ(with.indices, without.indices);
     EXPECT_EQ(with.values, without.values);
+  }
+}
+
+TEST(NormalSums, SameOnOneThreadAsOnAllAndEqualToTheRowsProducts) {
+  // ApproximationChunk::normal_sums forms each face's block where it is made and adds the blocks in face order: the
+  // same sums bit for bit on one thread as on all (many faces: several tasks), with the tangent blend (6 values per
+  // entry) and with weights (1); and normal_matrix of LimitSurface::rows' position matrix in face order (the rows,
+  // weights and weighted points made apart; normal_matrix itself is held to scipy by test_normal_equations.py) to
+  // 1e-13 of the largest entry.
+  const sorpia::Mesh mesh = sorpia::irregular(3000);
+  const sorpia::Topology t(mesh);
+  const sorpia::LimitSurface surface(t, mesh.vertices.data(), Scheme::Loop, Boundary::EdgeAndCorner);
+  const std::size_t k = 60000, m = t.n_faces(), n = surface.n_vertices();
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::vector<double> points(3 * k), weights(k);
+  sorpia::ApproximationChunk::State state;
+  state.face_ids.resize(k);
+  state.uv.resize(2 * k);
+  state.distances.assign(k, 0.0);
+  state.normals.resize(3 * k);
+  for (std::size_t i = 0; i < k; ++i) {
+    state.face_ids[i] = static_cast<std::int32_t>(rng() % m);
+    const double u = unit(rng), v = unit(rng);
+    state.uv[2 * i] = u + v > 1.0 ? 1.0 - u : u;
+    state.uv[2 * i + 1] = u + v > 1.0 ? 1.0 - v : v;
+    weights[i] = 0.5 + unit(rng);
+  }
+  std::vector<double> at(3 * k);
+  surface.evaluate(state.face_ids.data(), state.uv.data(), k, at.data(), nullptr, nullptr, state.normals.data());
+  for (std::size_t i = 0; i < 3 * k; ++i) points[i] = at[i] + 1e-3 * (unit(rng) - 0.5);
+  sorpia::ApproximationChunk chunk(points.data(), k, weights.data(), 0);
+  chunk.current = state;
+  // The rows in face order (a stable sort), their weights and weighted points, for normal_matrix.
+  std::vector<std::size_t> order(k);
+  for (std::size_t i = 0; i < k; ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::size_t a, std::size_t b) { return state.face_ids[a] < state.face_ids[b]; });
+  std::vector<std::int32_t> face_o(k);
+  std::vector<double> uv_o(2 * k), p_o(3 * k), n_o(3 * k), w_o(k);
+  for (std::size_t i = 0; i < k; ++i) {
+    const std::size_t o = order[i];
+    face_o[i] = state.face_ids[o];
+    std::copy_n(&state.uv[2 * o], 2, &uv_o[2 * i]);
+    std::copy_n(&points[3 * o], 3, &p_o[3 * i]);
+    std::copy_n(&state.normals[3 * o], 3, &n_o[3 * i]);
+    w_o[i] = weights[o];
+  }
+  const sorpia::CsrMatrix a = surface.rows(face_o.data(), uv_o.data(), k, 0).position;
+  for (const double tangential : {0.1, 1.0}) {
+    const sorpia::NormalSums all = chunk.normal_sums(surface, tangential);
+    sorpia::NormalSums one;
+    {
+      const sorpia::detail::ThreadCap cap(1);
+      one = chunk.normal_sums(surface, tangential);
+    }
+    EXPECT_EQ(one.matrix.indptr, all.matrix.indptr);
+    EXPECT_EQ(one.matrix.indices, all.matrix.indices);
+    EXPECT_EQ(one.matrix.values, all.matrix.values) << tangential;
+    EXPECT_EQ(one.rhs, all.rhs) << tangential;
+    std::vector<double> w6(6 * k), wp(3 * k);
+    if (tangential != 1.0) {
+      sorpia::blend_weights(p_o.data(), n_o.data(), w_o.data(), k, tangential, w6.data(), wp.data());
+    } else {
+      for (std::size_t i = 0; i < 3 * k; ++i) wp[i] = w_o[i / 3] * p_o[i];
+    }
+    const int count = tangential != 1.0 ? 6 : 1;
+    std::vector<double> rhs(3 * n);
+    const sorpia::NormalMatrix ref = sorpia::normal_matrix(
+        sorpia::CsrRows{k, n, a.indptr.data(), a.indices.data(), a.data.data()},
+        count == 6 ? w6.data() : w_o.data(), count, wp.data(), rhs.data());
+    ASSERT_EQ(ref.indptr, all.matrix.indptr);
+    ASSERT_EQ(ref.indices, all.matrix.indices);
+    double largest = 0.0, worst = 0.0, largest_rhs = 0.0, worst_rhs = 0.0;
+    for (std::size_t e = 0; e < ref.values.size(); ++e) {
+      largest = std::max(largest, std::abs(ref.values[e]));
+      worst = std::max(worst, std::abs(ref.values[e] - all.matrix.values[e]));
+    }
+    for (std::size_t e = 0; e < rhs.size(); ++e) {
+      largest_rhs = std::max(largest_rhs, std::abs(rhs[e]));
+      worst_rhs = std::max(worst_rhs, std::abs(rhs[e] - all.rhs[e]));
+    }
+    EXPECT_LE(worst, 1e-13 * largest) << tangential;
+    EXPECT_LE(worst_rhs, 1e-13 * largest_rhs) << tangential;
   }
 }
 

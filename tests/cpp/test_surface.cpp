@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <mutex>
 #include <thread>
 #include <vector>
 
@@ -210,9 +211,10 @@ TEST(LimitSurface, PreparedPatchPointsFollowTheControlVertices) {
   }
 }
 
-TEST(LimitSurface, PositionRowsAreRowsPositionMatrix) {
-  // position_rows holds rows()'s position matrix, entry for entry, also for
-  // more points than one task copies (several tasks) and at faces' corners;
+TEST(LimitSurface, PositionBlocksAreRowsPositionMatrix) {
+  // position_blocks gives rows()'s position matrix, row for row, each point
+  // in one block (a face's points in increasing order, sharing its columns),
+  // also for many points (many threads) and at faces' corners (B's rows);
   // and that matrix times the control vertices is evaluate()'s positions.
   for (const auto scheme : {sorpia::Scheme::Loop, sorpia::Scheme::CatmullClark}) {
     const sorpia::Mesh mesh = scheme == sorpia::Scheme::Loop ? sorpia::irregular(200) : sorpia::polygon_torus(8, 5, 2);
@@ -227,27 +229,65 @@ TEST(LimitSurface, PositionRowsAreRowsPositionMatrix) {
     }
     const sorpia::LimitSurface s(t, mesh.vertices.data(), scheme, Boundary::EdgeAndCorner);
     const sorpia::CsrMatrix a = s.rows(ids.data(), uvs.data(), k, 1).position;
-    // twice on one scratch: the second call writes the memory the first one's frame gave back
+    std::size_t n_blocks = 0;
+    std::vector<int> seen_block;
+    std::vector<std::int64_t> block_offsets;
+    std::vector<std::int32_t> block_columns;
+    std::vector<std::vector<std::int32_t>> cols(k);
+    std::vector<std::vector<double>> vals(k);
+    std::vector<std::int64_t> block_of(k, -1);
+    std::mutex mutex;
     sorpia::detail::Scratch scratch;
-    for (int call = 0; call < 2; ++call) {
-      const sorpia::detail::Scratch::Frame frame(&scratch);
-      const sorpia::PositionRows b = s.position_rows(ids.data(), uvs.data(), k, scratch);
-      ASSERT_EQ(b.n_rows, a.n_rows);
-      ASSERT_EQ(b.n_cols, a.n_cols);
-      ASSERT_EQ(b.indptr, a.indptr);
-      EXPECT_TRUE(std::equal(a.indices.begin(), a.indices.end(), b.indices));
-      EXPECT_TRUE(std::equal(a.data.begin(), a.data.end(), b.data));
+    s.position_blocks(
+        ids.data(), uvs.data(), k, scratch,
+        [&](std::vector<std::int64_t>&& offsets, std::vector<std::int32_t>&& columns) {
+          n_blocks = offsets.size() - 1;
+          seen_block.assign(n_blocks, 0);
+          block_offsets = std::move(offsets);
+          block_columns = std::move(columns);
+        },
+        [&](const sorpia::PositionBlock& b) {
+          const std::lock_guard<std::mutex> lock(mutex);
+          ASSERT_LT(b.index, n_blocks);
+          ++seen_block[b.index];
+          // start's columns of the block are its own (none for a face whose points all have B's rows)
+          const auto c0 = static_cast<std::size_t>(block_offsets[b.index]);
+          const auto c1 = static_cast<std::size_t>(block_offsets[b.index + 1]);
+          if (b.count > 0)
+            EXPECT_TRUE(c1 - c0 == b.width && std::equal(b.columns, b.columns + b.width, &block_columns[c0]));
+          for (std::size_t j = 0; j < b.count; ++j) {
+            const std::size_t i = b.points[j];
+            if (j > 0) EXPECT_LT(b.points[j - 1], i);
+            EXPECT_EQ(block_of[i], -1) << "point " << i << " in two blocks";
+            block_of[i] = static_cast<std::int64_t>(b.index);
+            cols[i].assign(b.columns, b.columns + b.width);
+            vals[i].assign(b.rows + j * b.width, b.rows + (j + 1) * b.width);
+          }
+        });
+    EXPECT_TRUE(std::all_of(seen_block.begin(), seen_block.end(), [](int c) { return c == 1; }));
+    std::size_t differ = 0;
+    for (std::size_t i = 0; i < k; ++i) {
+      const auto p0 = static_cast<std::size_t>(a.indptr[i]), p1 = static_cast<std::size_t>(a.indptr[i + 1]);
+      const auto at = static_cast<std::ptrdiff_t>(p0);
+      const bool same = block_of[i] >= 0 && cols[i].size() == p1 - p0 &&
+                        std::equal(cols[i].begin(), cols[i].end(), a.indices.begin() + at) &&
+                        std::equal(vals[i].begin(), vals[i].end(), a.data.begin() + at);
+      differ += same ? 0 : 1;
     }
-    const auto nnz = static_cast<std::size_t>(a.indptr[k]);
-    ASSERT_EQ(a.indices.size(), nnz);
+    EXPECT_EQ(differ, 0u) << "scheme " << static_cast<int>(scheme);
+    // The faces' blocks in increasing order of the face (every face has points: face f's block is f), then one
+    // block per point with B's row.
+    ASSERT_GE(n_blocks, m);
+    for (std::size_t i = 0; i < k; ++i)
+      if (block_of[i] < static_cast<std::int64_t>(m)) EXPECT_EQ(block_of[i], ids[i]) << "point " << i;
     std::vector<double> positions(3 * k);
     s.evaluate(ids.data(), uvs.data(), k, positions.data(), nullptr, nullptr, nullptr);
     double worst = 0.0;
     for (std::size_t i = 0; i < k; ++i)
       for (int c = 0; c < 3; ++c) {
         double p = 0.0;
-        for (auto q = static_cast<std::size_t>(a.indptr[i]); q < static_cast<std::size_t>(a.indptr[i + 1]); ++q)
-          p += a.data[q] * mesh.vertices[3 * static_cast<std::size_t>(a.indices[q]) + c];
+        for (std::size_t q = 0; q < cols[i].size(); ++q)
+          p += vals[i][q] * mesh.vertices[3 * static_cast<std::size_t>(cols[i][q]) + c];
         worst = std::max(worst, std::abs(p - positions[3 * i + c]));
       }
     EXPECT_LT(worst, 1e-12) << "scheme " << static_cast<int>(scheme);

@@ -1,6 +1,9 @@
 #include "sorpia/normal_matrix.hpp"
 
 #include <algorithm>
+#include <atomic>
+#include <memory>
+#include <mutex>
 #include <cmath>
 #include <string>
 #include <type_traits>
@@ -16,43 +19,37 @@ namespace {
 
 // Stored entries (of N and K together) per task of a product below which it runs on one thread.
 constexpr std::size_t kEntriesPerTask = 100000;
-// Stored entries of the rows A per task of the normal matrix's assembly, at least.
+// Stored entries of the rows per task of normal_matrix's blocks, at least.
 constexpr std::size_t kRowEntriesPerTask = 32768;
 
-// The upper triangle (columns >= the row) of A^T W A, row by row: (row lengths, columns, values).
-struct Upper {
-  std::vector<std::int64_t> row_len;
-  std::vector<std::int32_t> row_task;  // the task that made row i
-  std::vector<std::int64_t> row_at;    // where row i starts in its task's entries
-  std::vector<std::vector<std::int32_t>> part_idx;  // per task, its rows in the order it made them
-  std::vector<std::vector<double>> part_val;
-};
-
-// Columns of a run's Gram row summed at once by gram_row, their sums held in registers.
+// Columns of a block's Gram row summed at once by gram_row, their sums held in registers.
 constexpr std::size_t kGramColumns = 4;
 
-// out[b * NB + c] += sum over the rows r0 .. r1 - 1 (a run with the same columns) of w_r[c] a_r[li] a_r[li + b],
-// b < width, each sum added up over the rows in their order; w_r = weights[NB r ..] (1 when null). The weights'
-// count a constant, so that each a_r[li + b] is read once for all NB sums; `scaled` holds w_r[c] a_r[li] per row.
+// Where row li of a Gram matrix of `width` columns starts among its packed rows on and above the diagonal (in
+// entries).
+std::size_t packed_row(std::size_t li, std::size_t width) { return li * (2 * width + 1 - li) / 2; }
+
+// out[b * NB + c] = sum over the rows r < count of a block (count, stride) of w_r[c] a_r[li] a_r[li + b],
+// b < width, each sum added up over the rows in their order from 0; w_r = weights[NB r ..] (1 when null). The
+// weights' count a constant, so that each a_r[li + b] is read once for all NB sums; `scaled` holds w_r[c] a_r[li]
+// per row.
 template <int NB>
-void gram_row(const CsrRows& A, const double* weights, std::size_t r0, std::size_t r1, std::int32_t li,
+void gram_row(const double* rows, std::size_t stride, std::size_t count, const double* weights, std::size_t li,
               std::size_t width, double* out, std::vector<double>& scaled) {
-  scaled.resize((r1 - r0) * NB);
-  for (std::size_t r = r0; r < r1; ++r) {
-    const double a0 = A.data[A.indptr[r] + li];
+  scaled.resize(count * NB);
+  for (std::size_t r = 0; r < count; ++r) {
+    const double a0 = rows[r * stride + li];
     for (int c = 0; c < NB; ++c)
-      scaled[(r - r0) * NB + static_cast<std::size_t>(c)] =
+      scaled[r * NB + static_cast<std::size_t>(c)] =
           a0 * (weights == nullptr ? 1.0 : weights[NB * r + static_cast<std::size_t>(c)]);
   }
   // kGramColumns columns at a time (then one at a time), each sum in a register over all the rows.
-  const auto columns = [&](std::size_t b, auto count) {
-    constexpr std::size_t kCount = decltype(count)::value;
-    double acc[kCount][NB];
-    for (std::size_t j = 0; j < kCount; ++j)
-      for (int c = 0; c < NB; ++c) acc[j][c] = out[(b + j) * NB + static_cast<std::size_t>(c)];
-    for (std::size_t r = r0; r < r1; ++r) {
-      const double* a = A.data + A.indptr[r] + li + b;
-      const double* w = &scaled[(r - r0) * NB];
+  const auto columns = [&](std::size_t b, auto n_columns) {
+    constexpr std::size_t kCount = decltype(n_columns)::value;
+    double acc[kCount][NB] = {};
+    for (std::size_t r = 0; r < count; ++r) {
+      const double* a = rows + r * stride + li + b;
+      const double* w = &scaled[r * NB];
       for (std::size_t j = 0; j < kCount; ++j)
         for (int c = 0; c < NB; ++c) acc[j][c] += w[c] * a[j];
     }
@@ -64,7 +61,204 @@ void gram_row(const CsrRows& A, const double* weights, std::size_t r0, std::size
   for (; b < width; ++b) columns(b, std::integral_constant<std::size_t, 1>{});
 }
 
+// Blocks per run that NormalBlocks adds into the pattern at once, in order.
+constexpr std::size_t kBlocksPerRun = 256;
+
 }  // namespace
+
+struct NormalBlocks::State {
+  std::size_t n = 0;
+  int weight_count = 0;
+  std::size_t nb = 1;  // values per entry
+  std::vector<std::int64_t> offsets;
+  std::vector<std::int32_t> columns;
+  // The pattern on and above the diagonal: row i's columns up_idx[up_ptr[i] .. up_ptr[i + 1]), sorted; their sums.
+  std::vector<std::int64_t> up_ptr;
+  std::vector<std::int32_t> up_idx;
+  std::vector<double> up_val, rhs;  // (up_idx.size(), nb), (n, 3)
+  // A block's share until its run is added: its Gram matrix's rows on and above the diagonal (packed, nb values
+  // per entry) and A^T x ((width, 3)).
+  struct Share {
+    std::vector<double> gram, rhs;
+  };
+  std::vector<Share> shares;
+  std::unique_ptr<std::atomic<std::size_t>[]> run_left;  // per run, its blocks not yet added
+  std::mutex mutex;                                       // guards the three below
+  std::vector<char> run_complete;
+  std::size_t next_run = 0;  // the first run not yet added into the pattern
+  bool adding = false;       // a thread is adding runs
+  std::size_t n_runs() const { return run_complete.size(); }
+  std::size_t width(std::size_t b) const { return static_cast<std::size_t>(offsets[b + 1] - offsets[b]); }
+  // Run r's blocks' shares added at their entries, in the blocks' order, and released.
+  void add_run(std::size_t r) {
+    const std::size_t b1 = std::min(shares.size(), (r + 1) * kBlocksPerRun);
+    for (std::size_t b = r * kBlocksPerRun; b < b1; ++b) {
+      Share& q = shares[b];
+      if (q.gram.empty()) continue;
+      const std::size_t w = width(b);
+      const std::int32_t* cols = &columns[static_cast<std::size_t>(offsets[b])];
+      for (std::size_t li = 0; li < w; ++li) {
+        const auto i = static_cast<std::size_t>(cols[li]);
+        const double* row = &q.gram[packed_row(li, w) * nb];
+        auto p = static_cast<std::size_t>(up_ptr[i]);
+        for (std::size_t c = li; c < w; ++c, row += nb) {
+          while (up_idx[p] != cols[c]) ++p;  // cols sorted, a subset of row i's
+          double* dst = &up_val[p * nb];
+          for (std::size_t v = 0; v < nb; ++v) dst[v] += row[v];
+        }
+        if (!q.rhs.empty())
+          for (std::size_t v = 0; v < 3; ++v) rhs[3 * i + v] += q.rhs[3 * li + v];
+      }
+      q = Share{};
+    }
+  }
+};
+
+NormalBlocks::NormalBlocks(std::size_t n, int weight_count, std::vector<std::int64_t> offsets,
+                           std::vector<std::int32_t> columns)
+    : state_(std::make_unique<State>()) {
+  if (weight_count != 0 && weight_count != 1 && weight_count != 6)
+    throw ParameterError("weight_count must be 0, 1 or 6, got " + std::to_string(weight_count));
+  State& s = *state_;
+  s.n = n;
+  s.weight_count = weight_count;
+  s.nb = weight_count == 6 ? 6 : 1;
+  s.offsets = std::move(offsets);
+  s.columns = std::move(columns);
+  const std::size_t n_blocks = s.offsets.empty() ? 0 : s.offsets.size() - 1;
+  // The blocks holding each column (A^T's rows over blocks): for column j, (block, position of j in its columns).
+  std::vector<std::int64_t> col_ptr(n + 1, 0);
+  for (const std::int32_t j : s.columns) ++col_ptr[static_cast<std::size_t>(j) + 1];
+  for (std::size_t j = 0; j < n; ++j) col_ptr[j + 1] += col_ptr[j];
+  std::vector<std::int32_t> col_blocks(s.columns.size()), col_pos(s.columns.size());
+  {
+    std::vector<std::int64_t> next(col_ptr.begin(), col_ptr.end() - 1);
+    for (std::size_t b = 0; b < n_blocks; ++b)
+      for (std::size_t p = 0; p < s.width(b); ++p) {
+        const auto slot = static_cast<std::size_t>(next[static_cast<std::size_t>(s.columns[s.offsets[b] + p])]++);
+        col_blocks[slot] = static_cast<std::int32_t>(b);
+        col_pos[slot] = static_cast<std::int32_t>(p);
+      }
+  }
+  poll_interrupt();
+  // Row i's columns on and above the diagonal: those from i's position on of every block holding i (Gustavson).
+  s.up_ptr.assign(n + 1, 0);
+  {
+    std::vector<std::int32_t> marker(n, -1), touched;
+    for (std::size_t i = 0; i < n; ++i) {
+      touched.clear();
+      for (std::int64_t e = col_ptr[i]; e < col_ptr[i + 1]; ++e) {
+        const auto b = static_cast<std::size_t>(col_blocks[static_cast<std::size_t>(e)]);
+        const std::int32_t* cols = &s.columns[static_cast<std::size_t>(s.offsets[b])];
+        for (auto c = static_cast<std::size_t>(col_pos[static_cast<std::size_t>(e)]); c < s.width(b); ++c)
+          if (marker[static_cast<std::size_t>(cols[c])] != static_cast<std::int32_t>(i)) {
+            marker[static_cast<std::size_t>(cols[c])] = static_cast<std::int32_t>(i);
+            touched.push_back(cols[c]);
+          }
+      }
+      std::sort(touched.begin(), touched.end());
+      s.up_idx.insert(s.up_idx.end(), touched.begin(), touched.end());
+      s.up_ptr[i + 1] = static_cast<std::int64_t>(s.up_idx.size());
+    }
+  }
+  s.up_val.assign(s.up_idx.size() * s.nb, 0.0);
+  s.rhs.assign(3 * n, 0.0);
+  s.shares.resize(n_blocks);
+  const std::size_t n_runs = (n_blocks + kBlocksPerRun - 1) / kBlocksPerRun;
+  s.run_complete.assign(n_runs, 0);
+  s.run_left.reset(new std::atomic<std::size_t>[n_runs]);
+  for (std::size_t r = 0; r < n_runs; ++r) s.run_left[r] = std::min(n_blocks, (r + 1) * kBlocksPerRun) - r * kBlocksPerRun;
+}
+
+NormalBlocks::~NormalBlocks() = default;
+
+void NormalBlocks::add(std::size_t b, const double* rows, std::size_t count, const double* weights, const double* x) {
+  State& s = *state_;
+  const std::size_t width = s.width(b);
+  State::Share& out = s.shares[b];
+  if (count > 0 && width > 0) {
+    out.gram.resize(packed_row(width, width) * s.nb);
+    thread_local std::vector<double> scaled;
+    for (std::size_t li = 0; li < width; ++li) {
+      double* row = &out.gram[packed_row(li, width) * s.nb];
+      if (s.nb == 6)
+        gram_row<6>(rows, width, count, weights, li, width - li, row, scaled);
+      else
+        gram_row<1>(rows, width, count, s.weight_count == 0 ? nullptr : weights, li, width - li, row, scaled);
+    }
+    if (x != nullptr) {
+      out.rhs.assign(3 * width, 0.0);
+      for (std::size_t r = 0; r < count; ++r)
+        for (std::size_t li = 0; li < width; ++li) {
+          const double a = rows[r * width + li];
+          for (std::size_t c = 0; c < 3; ++c) out.rhs[3 * li + c] += a * x[3 * r + c];
+        }
+    }
+  }
+  // The run complete: it and the complete runs after it added in order, unless a thread is adding already (which
+  // then finds them complete).
+  const std::size_t run = b / kBlocksPerRun;
+  if (--s.run_left[run] != 0) return;
+  std::unique_lock<std::mutex> lock(s.mutex);
+  s.run_complete[run] = 1;
+  if (s.adding) return;
+  s.adding = true;
+  while (s.next_run < s.n_runs() && s.run_complete[s.next_run]) {
+    const std::size_t r = s.next_run;
+    lock.unlock();
+    s.add_run(r);
+    lock.lock();
+    ++s.next_run;
+  }
+  s.adding = false;
+}
+
+NormalMatrix NormalBlocks::finish(double* rhs) {
+  State& s = *state_;
+  if (s.next_run != s.n_runs()) throw ParameterError("normal blocks: not every block was added");
+  const std::size_t n = s.n, nb = s.nb;
+  // The whole matrix: row i is the mirrored entries (j, i) of the rows j < i, in order of j, then row i's own.
+  NormalMatrix M;
+  M.n = n;
+  M.blocks = static_cast<int>(nb);
+  std::vector<std::int64_t> lower(n + 1, 0);
+  for (const std::int32_t j : s.up_idx) ++lower[static_cast<std::size_t>(j) + 1];
+  // lower[j + 1] counts the upper entries in column j, the diagonal among them
+  M.indptr.assign(n + 1, 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::int64_t own = s.up_ptr[i + 1] - s.up_ptr[i];
+    M.indptr[i + 1] = M.indptr[i] + (own == 0 ? 0 : own + lower[i + 1] - 1);
+  }
+  const auto nnz = static_cast<std::size_t>(M.indptr[n]);
+  M.indices.resize(nnz);
+  // Where each entry above the diagonal is mirrored (-1 on the diagonal), in order of the rows (the columns alone).
+  std::vector<std::int64_t> mirror(s.up_idx.size());
+  {
+    std::vector<std::int64_t> next_lower(M.indptr.begin(), M.indptr.end() - 1);
+    for (std::size_t i = 0; i < n; ++i) {
+      auto own = static_cast<std::size_t>(M.indptr[i + 1] - (s.up_ptr[i + 1] - s.up_ptr[i]));
+      for (auto p = static_cast<std::size_t>(s.up_ptr[i]); p < static_cast<std::size_t>(s.up_ptr[i + 1]); ++p, ++own) {
+        const auto j = static_cast<std::size_t>(s.up_idx[p]);
+        M.indices[own] = s.up_idx[p];
+        mirror[p] = j == i ? -1 : next_lower[j]++;
+        if (j != i) M.indices[static_cast<std::size_t>(mirror[p])] = static_cast<std::int32_t>(i);
+      }
+    }
+  }
+  // The values, at their places and their mirrors', in ranges of rows on the core's threads.
+  M.values.resize(nnz * nb);
+  const int tasks = detail::task_count(s.up_idx.size(), kEntriesPerTask);
+  detail::for_each_index(tasks > 1, tasks, n, [&](std::size_t i) {
+    auto own = static_cast<std::size_t>(M.indptr[i + 1] - (s.up_ptr[i + 1] - s.up_ptr[i]));
+    for (auto p = static_cast<std::size_t>(s.up_ptr[i]); p < static_cast<std::size_t>(s.up_ptr[i + 1]); ++p, ++own) {
+      const double* val = &s.up_val[p * nb];
+      std::copy(val, val + nb, &M.values[own * nb]);
+      if (mirror[p] >= 0) std::copy(val, val + nb, &M.values[static_cast<std::size_t>(mirror[p]) * nb]);
+    }
+  });
+  if (rhs != nullptr) std::copy(s.rhs.begin(), s.rhs.end(), rhs);
+  return M;
+}
 
 NormalMatrix normal_matrix(const CsrMatrix& rows, const double* weights, int weight_count) {
   return normal_matrix(CsrRows{rows.n_rows, rows.n_cols, rows.indptr.data(), rows.indices.data(), rows.data.data()},
@@ -73,15 +267,8 @@ NormalMatrix normal_matrix(const CsrMatrix& rows, const double* weights, int wei
 
 NormalMatrix normal_matrix(const CsrRows& A, const double* weights, int weight_count, const double* x,
                            double* rhs) {
-  if (weight_count != 0 && weight_count != 1 && weight_count != 6)
-    throw ParameterError("weight_count must be 0, 1 or 6, got " + std::to_string(weight_count));
-  const std::size_t k = A.n_rows, n = A.n_cols;
-  const bool with_rhs = x != nullptr && rhs != nullptr;
-  const int nb = weight_count == 6 ? 6 : 1;
-  const auto unb = static_cast<std::size_t>(nb);
-  // Runs of consecutive rows with the same columns (the points of one face,
-  // when the caller orders the rows by face): each run is visited once per
-  // column it holds, its rows read in order.
+  const std::size_t k = A.n_rows;
+  // Runs of consecutive rows with the same columns: their entries are a dense block (rows, width) in place.
   std::vector<std::size_t> run_start;
   for (std::size_t r = 0; r < k; ++r) {
     const bool same = r > 0 && A.indptr[r + 1] - A.indptr[r] == A.indptr[r] - A.indptr[r - 1] &&
@@ -90,147 +277,22 @@ NormalMatrix normal_matrix(const CsrRows& A, const double* weights, int weight_c
   }
   run_start.push_back(k);
   const std::size_t n_runs = run_start.size() - 1;
-  // The runs' columns (A^T's rows over runs): for column j, (run, position of j in the run's columns).
-  std::vector<std::int64_t> col_ptr(n + 1, 0);
-  for (std::size_t q = 0; q < n_runs; ++q)
-    for (std::int32_t p = A.indptr[run_start[q]]; p < A.indptr[run_start[q] + 1]; ++p)
-      ++col_ptr[static_cast<std::size_t>(A.indices[p]) + 1];
-  for (std::size_t j = 0; j < n; ++j) col_ptr[j + 1] += col_ptr[j];
-  std::vector<std::int32_t> col_runs(static_cast<std::size_t>(col_ptr[n]));
-  std::vector<std::int32_t> col_pos(col_runs.size());
-  {
-    std::vector<std::int64_t> next(col_ptr.begin(), col_ptr.end() - 1);
-    for (std::size_t q = 0; q < n_runs; ++q) {
-      const std::int32_t p0 = A.indptr[run_start[q]];
-      for (std::int32_t p = p0; p < A.indptr[run_start[q] + 1]; ++p) {
-        const auto slot = static_cast<std::size_t>(next[static_cast<std::size_t>(A.indices[p])]++);
-        col_runs[slot] = static_cast<std::int32_t>(q);
-        col_pos[slot] = p - p0;
-      }
-    }
+  std::vector<std::int64_t> offsets(n_runs + 1, 0);
+  std::vector<std::int32_t> columns;
+  for (std::size_t q = 0; q < n_runs; ++q) {
+    columns.insert(columns.end(), A.indices + A.indptr[run_start[q]], A.indices + A.indptr[run_start[q] + 1]);
+    offsets[q + 1] = static_cast<std::int64_t>(columns.size());
   }
-  poll_interrupt();
-  // Row i of A^T W A on and above the diagonal from the runs holding column i (Gustavson; a run's columns are
-  // sorted, so those >= i are its positions from i's on), a range of the rows' order `visit` per task.
-  // Tasks by the work (the rows' stored entries) as well as by the rows, so that few rows with many points share
-  // the work too.
-  const auto nnz_rows = static_cast<std::size_t>(A.indptr[k]);
-  const int tasks = static_cast<int>(std::clamp<std::size_t>(std::min(nnz_rows / kRowEntriesPerTask, n / 16), 1,
-                                                             static_cast<std::size_t>(detail::available_processors())));
-  // The rows in the order the runs first hold them (then those no run holds): consecutive rows share runs, whose
-  // rows of A are then read again from the cache. Each row's sums (over its runs in their order) are the same in
-  // any order of the rows.
-  std::vector<std::int32_t> visit;
-  visit.reserve(n);
-  {
-    std::vector<char> seen(n, 0);
-    for (std::size_t q = 0; q < n_runs; ++q)
-      for (std::int32_t p = A.indptr[run_start[q]]; p < A.indptr[run_start[q] + 1]; ++p) {
-        const auto j = static_cast<std::size_t>(A.indices[p]);
-        if (!seen[j]) {
-          seen[j] = 1;
-          visit.push_back(static_cast<std::int32_t>(j));
-        }
-      }
-    for (std::size_t j = 0; j < n; ++j)
-      if (!seen[j]) visit.push_back(static_cast<std::int32_t>(j));
-  }
-  // Column j's place in `visit`: a row's sums are held at their columns' places, near one another as the rows are.
-  std::vector<std::int32_t> place(n);
-  for (std::size_t s = 0; s < n; ++s) place[static_cast<std::size_t>(visit[s])] = static_cast<std::int32_t>(s);
-  Upper up;
-  up.part_idx.resize(static_cast<std::size_t>(tasks));
-  up.part_val.resize(static_cast<std::size_t>(tasks));
-  up.row_len.assign(n, 0);
-  up.row_task.assign(n, 0);
-  up.row_at.assign(n, 0);
-  detail::for_each_task(tasks > 1, tasks, [&](int t) {
-    const std::size_t first = n * static_cast<std::size_t>(t) / static_cast<std::size_t>(tasks);
-    const std::size_t last = n * static_cast<std::size_t>(t + 1) / static_cast<std::size_t>(tasks);
-    std::vector<std::int32_t> marker(n, -1), touched;
-    std::vector<double> acc(n * unb, 0.0), row, scaled;
-    auto& out_idx = up.part_idx[static_cast<std::size_t>(t)];
-    auto& out_val = up.part_val[static_cast<std::size_t>(t)];
-    for (std::size_t s = first; s < last; ++s) {
-      const auto i = static_cast<std::size_t>(visit[s]);
-      if (t == 0 && (s - first) % 1024 == 0) poll_interrupt();
-      touched.clear();
-      double y[3] = {0.0, 0.0, 0.0};  // row i of A^T x
-      for (std::int64_t q = col_ptr[i]; q < col_ptr[i + 1]; ++q) {
-        const auto run = static_cast<std::size_t>(col_runs[static_cast<std::size_t>(q)]);
-        const std::int32_t li = col_pos[static_cast<std::size_t>(q)];
-        const std::size_t r0 = run_start[run], r1 = run_start[run + 1];
-        const std::int32_t m = A.indptr[r0 + 1] - A.indptr[r0];
-        const std::int32_t* cols = A.indices + A.indptr[r0];
-        const auto width = static_cast<std::size_t>(m - li);
-        if (with_rhs)
-          for (std::size_t r = r0; r < r1; ++r) {
-            const double a = A.data[A.indptr[r] + li];
-            for (std::size_t c = 0; c < 3; ++c) y[c] += a * x[3 * r + c];
-          }
-        // Row li of the run's Gram matrix from column li on, sum_r w_r a_r[li] a_r[li:] ((width, nb) row-major),
-        // added at its columns.
-        row.assign(width * unb, 0.0);
-        if (nb == 6)
-          gram_row<6>(A, weights, r0, r1, li, width, row.data(), scaled);
-        else
-          gram_row<1>(A, weight_count == 0 ? nullptr : weights, r0, r1, li, width, row.data(), scaled);
-        for (std::size_t b = 0; b < width; ++b) {
-          const std::int32_t j = cols[static_cast<std::size_t>(li) + b];
-          const auto at = static_cast<std::size_t>(place[static_cast<std::size_t>(j)]);
-          double* dst = &acc[at * unb];
-          if (marker[at] != static_cast<std::int32_t>(i)) {
-            marker[at] = static_cast<std::int32_t>(i);
-            touched.push_back(j);
-            std::fill(dst, dst + nb, 0.0);
-          }
-          for (std::size_t c = 0; c < unb; ++c) dst[c] += row[b * unb + c];
-        }
-      }
-      if (with_rhs) std::copy_n(y, 3, rhs + 3 * i);
-      std::sort(touched.begin(), touched.end());
-      up.row_len[i] = static_cast<std::int64_t>(touched.size());
-      up.row_task[i] = t;
-      up.row_at[i] = static_cast<std::int64_t>(out_idx.size());
-      for (const std::int32_t j : touched) {
-        out_idx.push_back(j);
-        const double* src = &acc[static_cast<std::size_t>(place[static_cast<std::size_t>(j)]) * unb];
-        out_val.insert(out_val.end(), src, src + nb);
-      }
-    }
+  NormalBlocks blocks(A.n_cols, weight_count, std::move(offsets), std::move(columns));
+  const bool with_rhs = x != nullptr && rhs != nullptr;
+  const auto nb = static_cast<std::size_t>(weight_count);
+  const int tasks = detail::task_count(static_cast<std::size_t>(A.indptr[k]), kRowEntriesPerTask);
+  detail::for_each_index(tasks > 1, tasks, n_runs, [&](std::size_t q) {
+    const std::size_t r0 = run_start[q], r1 = run_start[q + 1];
+    blocks.add(q, A.data + A.indptr[r0], r1 - r0, weights == nullptr ? nullptr : weights + nb * r0,
+               with_rhs ? x + 3 * r0 : nullptr);
   });
-  // The whole matrix: row i is the mirrored entries (j, i) of the rows j < i, in order of j, then row i's own.
-  NormalMatrix M;
-  M.n = n;
-  M.blocks = nb;
-  std::vector<std::int64_t> lower(n + 1, 0);
-  for (const auto& idx : up.part_idx)
-    for (const std::int32_t j : idx) ++lower[static_cast<std::size_t>(j) + 1];
-  // lower[j + 1] counts the upper entries in column j, the diagonal among them
-  M.indptr.assign(n + 1, 0);
-  for (std::size_t i = 0; i < n; ++i)
-    M.indptr[i + 1] = M.indptr[i] + (up.row_len[i] == 0 ? 0 : up.row_len[i] + lower[i + 1] - 1);
-  const auto nnz = static_cast<std::size_t>(M.indptr[n]);
-  M.indices.resize(nnz);
-  M.values.resize(nnz * unb);
-  std::vector<std::int64_t> next_lower(M.indptr.begin(), M.indptr.end() - 1);
-  for (std::size_t i = 0; i < n; ++i) {
-    if (up.row_len[i] == 0) continue;  // a column no row reaches
-    const auto& idx = up.part_idx[static_cast<std::size_t>(up.row_task[i])];
-    const auto& val = up.part_val[static_cast<std::size_t>(up.row_task[i])];
-    auto p = static_cast<std::size_t>(up.row_at[i]);
-    auto own = static_cast<std::size_t>(M.indptr[i + 1] - up.row_len[i]);
-    for (std::int64_t e = 0; e < up.row_len[i]; ++e, ++p, ++own) {
-      const auto j = static_cast<std::size_t>(idx[p]);
-      M.indices[own] = idx[p];
-      std::copy(&val[p * unb], &val[p * unb] + nb, &M.values[own * unb]);
-      if (j == i) continue;
-      const auto slot = static_cast<std::size_t>(next_lower[j]++);
-      M.indices[slot] = static_cast<std::int32_t>(i);
-      std::copy(&val[p * unb], &val[p * unb] + nb, &M.values[slot * unb]);
-    }
-  }
-  return M;
+  return blocks.finish(with_rhs ? rhs : nullptr);
 }
 
 void blend_weights(const double* points, const double* normals, const double* row_weights, std::size_t k,

@@ -33,9 +33,6 @@ namespace {
 // distances reported come from FootpointSearch::closer's re-search, polished to rounding.
 constexpr double kIterationUvTolerance = 1e-5;
 
-// Points per task of normal_sums' gathers, at least.
-constexpr std::size_t kPointsPerTask = 65536;
-
 double cpu_seconds() {
   timespec ts{};
   clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
@@ -322,79 +319,52 @@ NormalSums ApproximationChunk::normal_sums(const LimitSurface& surface, double t
     robust_factors(*robust, scale, current.distances.data(), k, factors);
   }
   const bool blend = tangential != 1.0;
+  const int weight_count = blend ? 6 : weighted ? 1 : 0;
   NormalSums out;
   const auto t0 = detail::Clock::now();
   const double c0 = cpu_seconds();
-  // The rows in face order (a stable counting sort by face): the points of a face share their columns, which the
-  // normal matrix reads once.
   const std::size_t n_faces = surface.n_faces();
-  std::size_t* const order = frame.take<std::size_t>(k);
-  {
-    std::vector<std::size_t> start(n_faces + 1, 0);
-    for (std::size_t i = 0; i < k; ++i) {
-      const std::int32_t f = current.face_ids[i];
-      if (f < 0 || static_cast<std::size_t>(f) >= n_faces)
-        throw ParameterError("face_ids[" + std::to_string(first_ + i) + "] = " + std::to_string(f) +
-                             " is out of range [0, " + std::to_string(n_faces) + ")");
-      ++start[static_cast<std::size_t>(f) + 1];
-    }
-    for (std::size_t f = 0; f < n_faces; ++f) start[f + 1] += start[f];
-    for (std::size_t i = 0; i < k; ++i) order[start[static_cast<std::size_t>(current.face_ids[i])]++] = i;
+  for (std::size_t i = 0; i < k; ++i) {
+    const std::int32_t f = current.face_ids[i];
+    if (f < 0 || static_cast<std::size_t>(f) >= n_faces)
+      throw ParameterError("face_ids[" + std::to_string(first_ + i) + "] = " + std::to_string(f) +
+                           " is out of range [0, " + std::to_string(n_faces) + ")");
   }
-  // The per-point gathers and weights below, in ranges of points per task (each point's values alone).
-  const int tasks = detail::task_count(k, kPointsPerTask);
-  const auto in_ranges = [&](auto&& body) {
-    detail::for_each_task(tasks > 1, tasks, [&](int t) {
-      const auto u = static_cast<std::size_t>(t), nt = static_cast<std::size_t>(tasks);
-      body(k * u / nt, k * (u + 1) / nt);
-    });
-  };
-  // The per-point arrays are left uninitialised here and written by the tasks (a page of fresh memory is then first
-  // touched by a task, in parallel).
-  std::int32_t* const face_o = frame.take<std::int32_t>(k);
-  double* const uv_o = frame.take<double>(2 * k);
-  in_ranges([&](std::size_t i0, std::size_t i1) {
-    for (std::size_t i = i0; i < i1; ++i) {
-      const std::size_t o = order[i];
-      face_o[i] = current.face_ids[o];
-      uv_o[2 * i] = current.uv[2 * o];
-      uv_o[2 * i + 1] = current.uv[2 * o + 1];
-    }
-  });
-  const PositionRows rows = surface.position_rows(face_o, uv_o, k, frame.scratch());
-  const CsrRows A{rows.n_rows, rows.n_cols, rows.indptr.data(), rows.indices, rows.data};
+  // Each block of rows (a face's points) is weighted and multiplied out where it is made, in the cache, and added
+  // into the pattern of the blocks' columns in the blocks' order (NormalBlocks).
+  std::unique_ptr<NormalBlocks> blocks;
+  surface.position_blocks(
+      current.face_ids.data(), current.uv.data(), k, frame.scratch(),
+      [&](std::vector<std::int64_t>&& offsets, std::vector<std::int32_t>&& columns) {
+        blocks = std::make_unique<NormalBlocks>(surface.n_vertices(), weight_count, std::move(offsets),
+                                                std::move(columns));
+      },
+      [&](const PositionBlock& b) {
+        // The block's points, weights and weighted points (W p), in the block's order.
+        thread_local std::vector<double> p, w, normals, w6, wp;
+        const std::size_t m = b.count;
+        p.resize(3 * m);
+        w.resize(weighted ? m : 0);
+        normals.resize(blend ? 3 * m : 0);
+        w6.resize(blend ? 6 * m : 0);
+        wp.resize(3 * m);
+        for (std::size_t j = 0; j < m; ++j) {
+          const std::size_t o = b.points[j];
+          for (std::size_t c = 0; c < 3; ++c) p[3 * j + c] = points_[3 * o + c];
+          if (weighted) w[j] = (weights_.empty() ? 1.0 : weights_[o]) * (robust ? factors[o] : 1.0);
+          if (blend)
+            for (std::size_t c = 0; c < 3; ++c) normals[3 * j + c] = current.normals[3 * o + c];
+        }
+        if (blend)
+          blend_weights(p.data(), normals.data(), weighted ? w.data() : nullptr, m, tangential, w6.data(), wp.data());
+        else
+          for (std::size_t i = 0; i < 3 * m; ++i) wp[i] = weighted ? w[i / 3] * p[i] : p[i];
+        blocks->add(b.index, b.rows, m, blend ? w6.data() : weighted ? w.data() : nullptr, wp.data());
+      });
   out.rows_seconds = detail::seconds_since(t0);
   out.rows_cpu = cpu_seconds() - c0;
-  double* const points_o = frame.take<double>(3 * k);
-  double* const wp = frame.take<double>(3 * k);
-  double* const w_o = frame.take<double>(weighted ? k : 0);
-  double* const normals_o = frame.take<double>(blend ? 3 * k : 0);
-  double* const w6 = frame.take<double>(blend ? 6 * k : 0);
-  in_ranges([&](std::size_t i0, std::size_t i1) {
-    for (std::size_t i = i0; i < i1; ++i) {
-      const std::size_t o = order[i];
-      for (std::size_t c = 0; c < 3; ++c) points_o[3 * i + c] = points_[3 * o + c];
-      if (weighted) w_o[i] = (weights_.empty() ? 1.0 : weights_[o]) * (robust ? factors[o] : 1.0);
-      if (blend)
-        for (std::size_t c = 0; c < 3; ++c) normals_o[3 * i + c] = current.normals[3 * o + c];
-    }
-    if (blend)
-      blend_weights(&points_o[3 * i0], &normals_o[3 * i0], weighted ? &w_o[i0] : nullptr, i1 - i0, tangential,
-                    &w6[6 * i0], &wp[3 * i0]);
-    else
-      for (std::size_t i = 3 * i0; i < 3 * i1; ++i) wp[i] = weighted ? w_o[i / 3] * points_o[i] : points_o[i];
-  });
-  const double* w = nullptr;
-  int count = 0;
-  if (blend) {
-    w = w6;
-    count = 6;
-  } else if (weighted) {
-    w = w_o;
-    count = 1;
-  }
-  out.rhs.resize(3 * A.n_cols);
-  out.matrix = normal_matrix(A, w, count, wp, out.rhs.data());
+  out.rhs.resize(3 * surface.n_vertices());
+  out.matrix = blocks->finish(out.rhs.data());
   return out;
 }
 

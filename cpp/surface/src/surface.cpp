@@ -508,6 +508,63 @@ struct FaceStencils {
   std::vector<double> weights[6];
 };
 
+// The stencils of k checked points (face_ids[i], params[2i..2i+1]) a face at
+// a time, on the core's threads (for_each_face_surface): fn(face, first,
+// last, stencils) with [first, last) the indices of the face's points and
+// `stencils` their matrices 0 .. derivatives' (position; du, dv; duu, duv,
+// dvv), a thread's buffer that fn may take. OpenSubdiv's second derivatives
+// on the rotated middle sub-patches of irregular Loop faces are corrected
+// (see second_derivatives_reversed). The caller holds the surface's lock.
+template <class Fn>
+void face_stencils(const BfrSurfaces& factory, const std::vector<std::int32_t>& from_osd,
+                   const std::int32_t* face_ids, const double* params, std::size_t k, int derivatives, Fn fn) {
+  const int n_mats = derivatives == 0 ? 1 : derivatives == 1 ? 3 : 6;
+  for_each_face_surface(
+      factory, face_ids, k,
+      [&](const Bfr::Surface<double>& surface, int face, const std::size_t* first, const std::size_t* last) {
+        thread_local FaceStencils out;
+        const int n_cv = surface.GetNumControlPoints();
+        thread_local std::vector<int> cv;
+        thread_local std::vector<double> w, w2;
+        thread_local std::vector<std::int32_t> slot, mapped;
+        cv.resize(n_cv);
+        surface.GetControlPointIndices(cv.data());
+        // A mesh vertex may be more than one control point of the surface
+        // (a face meeting itself around a vertex): its weights add up.
+        mapped.resize(n_cv);
+        for (int c = 0; c < n_cv; ++c) mapped[c] = from_osd[cv[c]];
+        slot.resize(n_cv);
+        std::vector<std::int32_t>& cols = out.columns;
+        cols = mapped;
+        std::sort(cols.begin(), cols.end());
+        cols.erase(std::unique(cols.begin(), cols.end()), cols.end());
+        for (int c = 0; c < n_cv; ++c)
+          slot[c] = static_cast<std::int32_t>(std::lower_bound(cols.begin(), cols.end(), mapped[c]) - cols.begin());
+        const std::size_t width = cols.size(), count = static_cast<std::size_t>(last - first);
+        for (int d = 0; d < n_mats; ++d) out.weights[d].assign(count * width, 0.0);
+        w.resize(6 * static_cast<std::size_t>(n_cv));
+        double* s[6];
+        for (int d = 0; d < 6; ++d) s[d] = w.data() + d * n_cv;
+        for (std::size_t j = 0; j < count; ++j) {
+          const double* t = &params[2 * first[j]];
+          if (derivatives == 0)
+            surface.EvaluateStencil(t, s[0]);
+          else if (derivatives == 1)
+            surface.EvaluateStencil(t, s[0], s[1], s[2]);
+          else {
+            surface.EvaluateStencil(t, s[0], s[1], s[2], s[3], s[4], s[5]);
+            if (!surface.IsRegular() && surface.GetParameterization().GetType() == Bfr::Parameterization::TRI &&
+                second_derivatives_reversed(surface, t, s, w2))
+              for (int d = 3; d < 6; ++d)
+                for (int c = 0; c < n_cv; ++c) s[d][c] = -s[d][c];
+          }
+          for (int d = 0; d < n_mats; ++d)
+            for (int c = 0; c < n_cv; ++c) out.weights[d][j * width + slot[c]] += s[d][c];
+        }
+        fn(face, first, last, out);
+      });
+}
+
 }  // namespace
 
 void LimitSurface::visit_faces(const std::int32_t* face_ids, std::size_t k,
@@ -610,19 +667,100 @@ SurfaceRows LimitSurface::rows(const std::int32_t* face_ids, const double* uv, s
   return out;
 }
 
-PositionRows LimitSurface::position_rows(const std::int32_t* face_ids, const double* uv, std::size_t k,
-                                         detail::Scratch& scratch) const {
-  PositionRows out;
-  out.n_rows = k;
-  out.n_cols = n_vertices();
-  make_rows(face_ids, uv, k, 0, scratch, [&](int, std::vector<std::int32_t>&& indptr) {
-    out.indptr = std::move(indptr);
-    const auto nnz = static_cast<std::size_t>(out.indptr[k]);
-    out.indices = scratch.take<std::int32_t>(nnz);
-    out.data = scratch.take<double>(nnz);
-    return RowsTarget{out.indptr.data(), out.indices, out.data};
-  });
-  return out;
+void LimitSurface::position_blocks(
+    const std::int32_t* face_ids, const double* uv, std::size_t k, detail::Scratch& scratch,
+    const std::function<void(std::vector<std::int64_t>&& offsets, std::vector<std::int32_t>&& columns)>& start,
+    const std::function<void(const PositionBlock&)>& visit) const {
+  detail::Scratch::Frame frame(&scratch);
+  double* const params = frame.take<double>(2 * k);
+  checked_params(face_ids, uv, k, params);
+  // The faces' blocks in increasing order of the face (the ids are checked), then the points with B's rows.
+  std::vector<std::int32_t> face_block(n_faces(), -1);
+  for (std::size_t i = 0; i < k; ++i) face_block[static_cast<std::size_t>(face_ids[i])] = 0;
+  std::size_t n_used = 0;
+  for (std::int32_t& block : face_block)
+    if (block == 0) block = static_cast<std::int32_t>(n_used++);
+  const std::vector<std::int32_t> slots = exact_corners(face_ids, params, k);
+  const auto from_b = [&](std::size_t i) { return !slots.empty() && slots[i] >= 0; };
+  const CsrMatrix& exact = impl_->exact.rows;
+  const std::vector<std::int32_t>& from_osd = impl_->base.from_osd;
+  {
+    // Every block's columns: a face's control points (sorted, distinct; none where all its points have B's rows),
+    // then B's rows'.
+    std::vector<char> any_face_row(n_used, 0);
+    for (std::size_t i = 0; i < k; ++i)
+      if (!from_b(i)) any_face_row[static_cast<std::size_t>(face_block[static_cast<std::size_t>(face_ids[i])])] = 1;
+    std::vector<std::vector<std::int32_t>> face_columns(n_used);
+    {
+      const std::shared_lock<std::shared_mutex> lock(impl_->mutex);
+      for_each_face_surface(*impl_->factory, face_ids, k,
+                            [&](const Bfr::Surface<double>& surface, int face, const std::size_t*, const std::size_t*) {
+                              const auto b = static_cast<std::size_t>(face_block[static_cast<std::size_t>(face)]);
+                              if (!any_face_row[b]) return;
+                              thread_local std::vector<int> cv;
+                              cv.resize(static_cast<std::size_t>(surface.GetNumControlPoints()));
+                              surface.GetControlPointIndices(cv.data());
+                              std::vector<std::int32_t>& cols = face_columns[b];
+                              cols.resize(cv.size());
+                              for (std::size_t c = 0; c < cv.size(); ++c)
+                                cols[c] = from_osd[static_cast<std::size_t>(cv[c])];
+                              std::sort(cols.begin(), cols.end());
+                              cols.erase(std::unique(cols.begin(), cols.end()), cols.end());
+                            });
+    }
+    std::vector<std::int64_t> offsets{0};
+    std::vector<std::int32_t> columns;
+    for (const std::vector<std::int32_t>& cols : face_columns) {
+      columns.insert(columns.end(), cols.begin(), cols.end());
+      offsets.push_back(static_cast<std::int64_t>(columns.size()));
+    }
+    for (std::size_t i = 0; i < slots.size(); ++i)
+      if (from_b(i)) {
+        columns.insert(columns.end(), exact.indices.begin() + exact.indptr[slots[i]],
+                       exact.indices.begin() + exact.indptr[slots[i] + 1]);
+        offsets.push_back(static_cast<std::int64_t>(columns.size()));
+      }
+    start(std::move(offsets), std::move(columns));
+  }
+  {
+    const std::shared_lock<std::shared_mutex> lock(impl_->mutex);
+    face_stencils(*impl_->factory, from_osd, face_ids, params, k, 0,
+                  [&](int face, const std::size_t* first, const std::size_t* last, FaceStencils& s) {
+                    PositionBlock b;
+                    b.index = static_cast<std::size_t>(face_block[static_cast<std::size_t>(face)]);
+                    b.columns = s.columns.data();
+                    b.width = s.columns.size();
+                    b.points = first;
+                    b.count = static_cast<std::size_t>(last - first);
+                    b.rows = s.weights[0].data();
+                    thread_local std::vector<std::size_t> kept;
+                    if (std::any_of(first, last, from_b)) {  // the face's other points
+                      kept.clear();
+                      for (const std::size_t* i = first; i != last; ++i) {
+                        if (from_b(*i)) continue;
+                        std::copy_n(&s.weights[0][static_cast<std::size_t>(i - first) * b.width], b.width,
+                                    &s.weights[0][kept.size() * b.width]);
+                        kept.push_back(*i);
+                      }
+                      b.points = kept.data();
+                      b.count = kept.size();
+                    }
+                    visit(b);
+                  });
+  }
+  std::size_t next = n_used;
+  for (std::size_t i = 0; i < slots.size(); ++i) {
+    if (!from_b(i)) continue;
+    const std::int32_t b0 = exact.indptr[slots[i]], b1 = exact.indptr[slots[i] + 1];
+    PositionBlock b;
+    b.index = next++;
+    b.columns = exact.indices.data() + b0;
+    b.width = static_cast<std::size_t>(b1 - b0);
+    b.points = &i;
+    b.count = 1;
+    b.rows = exact.data.data() + b0;
+    visit(b);
+  }
 }
 
 void LimitSurface::make_rows(const std::int32_t* face_ids, const double* uv, std::size_t k, int derivatives,
@@ -649,54 +787,12 @@ void LimitSurface::make_rows(const std::int32_t* face_ids, const double* uv, std
   std::vector<FaceStencils> stencils(n_used);
   {
     const std::shared_lock<std::shared_mutex> lock(impl_->mutex);
-    for_each_face_surface(
-        *impl_->factory, face_ids, k,
-        [&](const Bfr::Surface<double>& surface, int face, const std::size_t* first, const std::size_t* last) {
-          FaceStencils& out = stencils[static_cast<std::size_t>(face_slot[static_cast<std::size_t>(face)])];
-          const int n_cv = surface.GetNumControlPoints();
-          thread_local std::vector<int> cv;
-          thread_local std::vector<double> w, w2;
-          cv.resize(n_cv);
-          surface.GetControlPointIndices(cv.data());
-          // A mesh vertex may be more than one control point of the surface
-          // (a face meeting itself around a vertex): its weights add up.
-          std::vector<std::int32_t>& cols = out.columns;
-          cols.resize(n_cv);
-          for (int c = 0; c < n_cv; ++c) cols[c] = from_osd[cv[c]];
-          std::vector<std::int32_t> slot(n_cv);
-          {
-            std::vector<std::int32_t> sorted = cols;
-            std::sort(sorted.begin(), sorted.end());
-            sorted.erase(std::unique(sorted.begin(), sorted.end()), sorted.end());
-            for (int c = 0; c < n_cv; ++c)
-              slot[c] = static_cast<std::int32_t>(std::lower_bound(sorted.begin(), sorted.end(), cols[c]) -
-                                                  sorted.begin());
-            cols = std::move(sorted);
-          }
-          const std::size_t width = cols.size(), count = static_cast<std::size_t>(last - first);
-          for (int d = 0; d < n_mats; ++d) out.weights[d].assign(count * width, 0.0);
-          w.resize(6 * static_cast<std::size_t>(n_cv));
-          double* s[6];
-          for (int d = 0; d < 6; ++d) s[d] = w.data() + d * n_cv;
-          for (std::size_t j = 0; j < count; ++j) {
-            const std::size_t i = first[j];
-            rank[i] = j;
-            const double* t = &params[2 * i];
-            if (derivatives == 0)
-              surface.EvaluateStencil(t, s[0]);
-            else if (derivatives == 1)
-              surface.EvaluateStencil(t, s[0], s[1], s[2]);
-            else {
-              surface.EvaluateStencil(t, s[0], s[1], s[2], s[3], s[4], s[5]);
-              if (!surface.IsRegular() && surface.GetParameterization().GetType() == Bfr::Parameterization::TRI &&
-                  second_derivatives_reversed(surface, t, s, w2))
-                for (int d = 3; d < 6; ++d)
-                  for (int c = 0; c < n_cv; ++c) s[d][c] = -s[d][c];
-            }
-            for (int d = 0; d < n_mats; ++d)
-              for (int c = 0; c < n_cv; ++c) out.weights[d][j * width + slot[c]] += s[d][c];
-          }
-        });
+    face_stencils(*impl_->factory, from_osd, face_ids, params, k, derivatives,
+                  [&](int face, const std::size_t* first, const std::size_t* last, FaceStencils& face_rows) {
+                    for (const std::size_t* i = first; i != last; ++i) rank[*i] = static_cast<std::size_t>(i - first);
+                    stencils[static_cast<std::size_t>(face_slot[static_cast<std::size_t>(face)])] =
+                        std::move(face_rows);
+                  });
   }
 
   // Points at the corner of a vertex whose position row is B's (see evaluate()).

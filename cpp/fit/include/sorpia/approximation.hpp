@@ -18,7 +18,8 @@
 ///      they reached, the last coarse iteration's record; steps 2-4 go on
 ///      from there on all points;
 ///   2. per iteration: the rows A of the surface at the footpoints
-///      (LimitSurface::rows, the points in face order), the normal equations
+///      (LimitSurface::position_blocks, a face's points at a time, each
+///      block multiplied out by NormalBlocks as it is made), the normal equations
 ///      (A^T W A + c K + mu I) V = A^T W P + mu V_prev (W the points' weights,
 ///      blended towards the normals by `tangential`: blend_weights; K the
 ///      thin-plate energy of the cage at depth 0, c = fairness times the

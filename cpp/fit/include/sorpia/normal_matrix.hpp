@@ -7,6 +7,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "sorpia/limit.hpp"  // CsrMatrix
@@ -32,20 +33,52 @@ struct CsrRows {
   const double* data = nullptr;
 };
 
+/// A^T W A and A^T x summed a block of rows at a time: a block is rows with
+/// the same columns (the points of one face), dense. The blocks' columns are
+/// given first, which fixes the matrix's pattern; each block's share is then
+/// formed on its own, in the cache, by whichever thread adds it (each entry
+/// a sum over the block's rows in their order), and added into the pattern
+/// in the order of the blocks' numbers (a run of blocks once all of them and
+/// every run before it are in, by the thread that completes them), so that
+/// the sums do not depend on the threads. Weights as normal_matrix's.
+class NormalBlocks {
+ public:
+  /// @param n        columns of A (the cage's vertices)
+  /// @param offsets, columns  block b's columns (sorted, distinct, each < n)
+  ///                 are columns[offsets[b] .. offsets[b + 1])
+  /// @throws ParameterError for a weight count other than 0, 1 or 6
+  NormalBlocks(std::size_t n, int weight_count, std::vector<std::int64_t> offsets, std::vector<std::int32_t> columns);
+  ~NormalBlocks();
+  NormalBlocks(const NormalBlocks&) = delete;
+  NormalBlocks& operator=(const NormalBlocks&) = delete;
+  /// Block b (each number once; different blocks may be added concurrently):
+  /// `count` rows (count, width) row-major over its columns, their weights
+  /// (count, weight_count) row-major (null for weight count 0) and x
+  /// (count, 3), or null for no right-hand side. A block of 0 rows adds
+  /// nothing (its columns may be given as none).
+  void add(std::size_t b, const double* rows, std::size_t count, const double* weights, const double* x);
+  /// The normal matrix once every block is added (entries no row makes
+  /// structurally nonzero are not stored) and, unless rhs is null, rhs
+  /// (n, 3) := A^T x, written in full.
+  /// @throws ParameterError when a block was not added
+  NormalMatrix finish(double* rhs);
+
+ private:
+  struct State;
+  std::unique_ptr<State> state_;
+};
+
 /// A^T W A for rows A (k, n) and per-row weights: with `weight_count` 0 (W = I),
 /// 1 (a scalar w_r per row: sum_r w_r a_r a_r^T) or 6 (a symmetric 3x3 W_r per
 /// row, stored xx, xy, xz, yy, yz, zz: the six (n, n) blocks sum_r W_r[c] a_r
 /// a_r^T, the normal matrix of sum_r (A_r V - p_r)^T W_r (A_r V - p_r) over
 /// the 3n unknowns V). Entries the rows make structurally nonzero are stored
-/// (a zero from cancellation stays). Fastest with the rows ordered so that
-/// rows with the same columns (the points of one face) are consecutive: each
-/// such run is read in order, once per column it holds, for the entries on
-/// and above the diagonal (the rest mirrored).
+/// (a zero from cancellation stays). Each run of consecutive rows with the
+/// same columns (the points of one face, when the caller orders the rows by
+/// face) is one block of NormalBlocks, the runs numbered in order.
 /// @param weights  (k, weight_count) row-major, or null when weight_count is 0
 /// @param x, rhs   with both given, rhs (n, 3) := A^T x for x (k, 3) in the
-///                 same pass, each column's sum over the rows in their order
-///                 (as a row-by-row product would add it up); rhs is written
-///                 in full
+///                 same pass; rhs is written in full
 /// @throws ParameterError for a weight count other than 0, 1 or 6
 NormalMatrix normal_matrix(const CsrRows& rows, const double* weights, int weight_count, const double* x = nullptr,
                            double* rhs = nullptr);

@@ -45,7 +45,8 @@ void add(DistanceSums& total, const DistanceSums& chunk);
 struct NormalSums {
   NormalMatrix matrix;        ///< A^T W A, 1 value per entry (W scalar) or 6 (the tangent blend); n 0: none yet
   std::vector<double> rhs;    ///< A^T W P, (n, 3) row-major
-  double rows_seconds = 0.0;  ///< wall seconds of forming the rows (timings' "rows"), of the chunks added
+  double rows_seconds = 0.0;  ///< wall seconds of forming the rows, each face's share of A^T W A and A^T W P
+                              ///< added in as it is made (timings' "rows"), of the chunks added
   double rows_cpu = 0.0;      ///< and the process's CPU seconds
 };
 /// total += chunk: the matrices' patterns merged row by row (sorted columns),
@@ -119,9 +120,10 @@ class ApproximationChunk {
   /// The best iterate's footpoints := the fresh ones where closer (at all);
   /// returns the best's sums, `changed` the footpoints replaced.
   DistanceSums keep_fresh_in_best();
-  /// A^T W A and A^T W P at the current footpoints: the rows in face order,
-  /// W the weights (tangential 1) or the blend towards the normals
-  /// (blend_weights).
+  /// A^T W A and A^T W P at the current footpoints: the rows a face's
+  /// points at a time (LimitSurface::position_blocks), each block's share
+  /// formed as it is made (NormalBlocks), W the weights (tangential 1) or
+  /// the blend towards the normals (blend_weights).
   /// With `robust` (not null): each point's weight times robust_factors of
   /// its current distance at `scale` (the robust fit's update).
   NormalSums normal_sums(const LimitSurface& surface, double tangential, const RobustOptions* robust = nullptr,

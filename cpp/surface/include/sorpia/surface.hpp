@@ -44,17 +44,16 @@ struct SurfaceRows {
   CsrMatrix position, du, dv, duu, duv, dvv;
 };
 
-/// The position rows of k points (LimitSurface::position_rows): rows()'
-/// position matrix in arrays of its own, (k, n_cols) with row i's columns
-/// indices[indptr[i] .. indptr[i + 1]) and weights data[...], where the
-/// indices and weights are not zeroed before rows() writes them (in parallel),
-/// for a caller that reads them in place: they lie in the scratch given to
-/// position_rows, until the frame open on it ends.
-struct PositionRows {
-  std::size_t n_rows = 0, n_cols = 0;
-  std::vector<std::int32_t> indptr;
-  std::int32_t* indices = nullptr;
-  double* data = nullptr;
+/// One block of the position rows of points (LimitSurface::position_blocks):
+/// `count` points sharing `width` columns (sorted, distinct), their rows
+/// dense, (count, width) row-major.
+struct PositionBlock {
+  std::size_t index = 0;                  ///< the block's number, 0 .. blocks - 1
+  const std::int32_t* columns = nullptr;  ///< width control vertices
+  std::size_t width = 0;
+  const std::size_t* points = nullptr;    ///< the points' indices among the k, increasing
+  std::size_t count = 0;
+  const double* rows = nullptr;           ///< (count, width): point points[j]'s weight of columns[c] at [j * width + c]
 };
 
 /// The control points of k faces (LimitSurface::control_points): face i's
@@ -187,11 +186,26 @@ class LimitSurface {
   /// @param derivatives  0: position; 1: also du, dv; 2: also duu, duv, dvv
   /// @throws ParameterError as evaluate(), or for derivatives outside 0..2
   SurfaceRows rows(const std::int32_t* face_ids, const double* uv, std::size_t k, int derivatives = 0) const;
-  /// rows(face_ids, uv, k, 0).position, the same values, as PositionRows,
-  /// its entries and the call's transient arrays taken from `scratch` (in
-  /// the frame open on it).
-  PositionRows position_rows(const std::int32_t* face_ids, const double* uv, std::size_t k,
-                             detail::Scratch& scratch) const;
+  /// rows(face_ids, uv, k, 0).position's rows, the same values, a block of
+  /// points at a time, for a caller that uses them where they are made (the
+  /// normal equations of approximation) instead of storing them all: the
+  /// points of one face share its control points, so a face's points are
+  /// one block, in the faces' increasing order; a point whose row is B's
+  /// (at a dart's corner, see rows()) is a block of its own, after the
+  /// faces' in the points' order. start(offsets, columns) is called first
+  /// with every block's columns (block b's are columns[offsets[b] ..
+  /// offsets[b + 1]), sorted and distinct; none for a face whose points all
+  /// have B's rows), then visit(block) once per block, on the core's
+  /// threads (concurrently for different blocks; the block's arrays are the
+  /// thread's until visit returns; a face whose points all have B's rows is
+  /// a block of 0 points). visit must not start tasks of the core's pool
+  /// (detail::run_tasks is not reentrant). The call's transient arrays are
+  /// taken from `scratch` (in a frame of its own).
+  /// @throws ParameterError as evaluate()
+  void position_blocks(
+      const std::int32_t* face_ids, const double* uv, std::size_t k, detail::Scratch& scratch,
+      const std::function<void(std::vector<std::int64_t>&& offsets, std::vector<std::int32_t>&& columns)>& start,
+      const std::function<void(const PositionBlock&)>& visit) const;
 
   /// The control points of faces' surfaces in Bfr's order
   /// (Bfr::Surface::GetControlPointIndices, as mesh vertex indices; a vertex
@@ -252,8 +266,8 @@ class LimitSurface {
     double* data;
   };
   using RowsStore = std::function<RowsTarget(int d, std::vector<std::int32_t>&& indptr)>;
-  // rows()' matrices, each stored where store(d, its row offsets) says (rows() and position_rows()); the
-  // transient arrays taken from `scratch`, in the frame open on it (store may take from it too).
+  // rows()' matrices, each stored where store(d, its row offsets) says; the transient arrays taken from
+  // `scratch`, in the frame open on it (store may take from it too).
   void make_rows(const std::int32_t* face_ids, const double* uv, std::size_t k, int derivatives,
                  detail::Scratch& scratch, const RowsStore& store) const;
   // For each point at the corner of a vertex whose position comes from B
