@@ -108,6 +108,11 @@ class PythonChunks(_core.PointChunks):
         s = self._search(grid, max_steps)
         return [c.search_fresh(s, closer) for c in self.chunks]
 
+    def refine_fresh(self, grid, max_steps):
+        self.calls.append("refine_fresh")
+        s = self._search(grid, max_steps)
+        return [c.refine_fresh(s) for c in self.chunks]
+
     def keep_fresh(self, closer):
         for c in self.chunks:
             c.keep_fresh(closer)

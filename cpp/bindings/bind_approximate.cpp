@@ -309,6 +309,17 @@ std::array<double, 3> triple(const py::handle& h, const char* name) {
   return {v[0], v[1], v[2]};
 }
 
+// A chunk's footpoint call without the GIL (LongCall), its sums as distance_tuple.
+template <class F>
+py::tuple long_sums(F&& call) {
+  sorpia::DistanceSums d;
+  {
+    LongCall long_call;
+    d = call();
+  }
+  return distance_tuple(d);
+}
+
 // The trampoline of PointChunks: a Python subclass is a backend the C++ driver calls (the driver runs without the
 // GIL; each call takes it).
 class PyPointChunks : public sorpia::PointChunks {
@@ -350,6 +361,12 @@ class PyPointChunks : public sorpia::PointChunks {
   sorpia::DistanceSums search_fresh(const sorpia::FootpointOptions& o, double closer) override {
     py::gil_scoped_acquire gil;
     return to_distance_sums(call_locked("search_fresh", o.grid, o.max_steps, closer));
+  }
+  // Optional: without it the base's refine then search_fresh.
+  sorpia::DistanceSums refine_fresh(const sorpia::FootpointOptions& o) override {
+    py::gil_scoped_acquire gil;
+    if (!override_of("refine_fresh")) return sorpia::PointChunks::refine_fresh(o);
+    return to_distance_sums(call_locked("refine_fresh", o.grid, o.max_steps));
   }
   sorpia::DistanceSums keep_fresh_in_best() override { py::gil_scoped_acquire gil;
     return to_distance_sums(call_locked("keep_fresh_in_best")); }
@@ -680,35 +697,25 @@ void bind_approximate(py::module_& m) {
            "mean"_a, "axis"_a, "diagonal"_a)
       .def("search",
            [](sorpia::ApproximationChunk& c, const sorpia::FootpointSearch& s) {
-             sorpia::DistanceSums d;
-             {
-               LongCall call;
-               d = c.search(s);
-             }
-             return distance_tuple(d);
+             return long_sums([&] { return c.search(s); });
            },
            "search"_a)
       .def("refine",
            [](sorpia::ApproximationChunk& c, const sorpia::LimitSurface& surface, int grid, int max_steps) {
-             sorpia::DistanceSums d;
-             {
-               LongCall call;
-               d = c.refine(surface, footpoint_options(grid, max_steps));
-             }
-             return distance_tuple(d);
+             return long_sums([&] { return c.refine(surface, footpoint_options(grid, max_steps)); });
            },
            "surface"_a, "grid"_a, "max_steps"_a)
       .def("keep_best", &sorpia::ApproximationChunk::keep_best)
       .def("search_fresh",
            [](sorpia::ApproximationChunk& c, const sorpia::FootpointSearch& s, double closer) {
-             sorpia::DistanceSums d;
-             {
-               LongCall call;
-               d = c.search_fresh(s, closer);
-             }
-             return distance_tuple(d);
+             return long_sums([&] { return c.search_fresh(s, closer); });
            },
            "search"_a, "closer"_a)
+      .def("refine_fresh",
+           [](sorpia::ApproximationChunk& c, const sorpia::FootpointSearch& s) {
+             return long_sums([&] { return c.refine_fresh(s); });
+           },
+           "search"_a)
       .def("keep_fresh", &sorpia::ApproximationChunk::keep_fresh, "closer"_a)
       .def("keep_fresh_in_best",
            [](sorpia::ApproximationChunk& c) { return distance_tuple(c.keep_fresh_in_best()); })

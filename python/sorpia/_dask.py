@@ -135,9 +135,9 @@ class ChunkHost:
         index order: the per-chunk work of the driver's call `name`
         (PointChunks), with its wall seconds and its process's CPU seconds
         (the core's threads) on the worker."""
-        if name in ("search", "search_fresh"):
+        if name in ("search", "search_fresh", "refine_fresh"):
             search = self._search(*args[:2])
-            call = (lambda c: c.search(search)) if name == "search" else (lambda c: c.search_fresh(search, args[2]))
+            call = (lambda c: getattr(c, name)(search, *args[2:]))  # noqa: E731
         elif name == "refine":
             call = lambda c: c.refine(self.surface, *args)  # noqa: E731
         elif name in ("normal_sums", "robust_normal_sums"):
@@ -268,6 +268,9 @@ class DaskChunks(_core.PointChunks):
 
     def search_fresh(self, grid, max_steps, closer):
         return self._all("search_fresh", grid, max_steps, closer)
+
+    def refine_fresh(self, grid, max_steps):
+        return self._all("refine_fresh", grid, max_steps)
 
     def keep_fresh(self, closer):
         self._each("keep_fresh", closer)

@@ -538,7 +538,11 @@ ApproximationResult approximate(LimitSurface& surface, PointChunks& chunks, cons
 
   for (int it = coarse + 1; it <= options.iterations; ++it) {
     const long long used = update(it);
-    feet = footpoints([&] { return chunks.refine(options.footpoints); });
+    // The last iteration's footpoints are the fresh search's (refine_fresh: re-projection and search in one, to
+    // full precision): its record holds true distances, and when it is the iterate returned, the final search is
+    // this one.
+    const bool last = it == options.iterations;
+    feet = footpoints([&] { return last ? chunks.refine_fresh(options.footpoints) : chunks.refine(options.footpoints); });
     measure_scale();
     done = it;
     const ApproximationRecord rec = record(it, feet, used, moved(V_before));
@@ -547,6 +551,7 @@ ApproximationResult approximate(LimitSurface& surface, PointChunks& chunks, cons
       best = Best{current, V, it};
       chunks.keep_best();
     }
+    if (last && best.iteration == it) fresh_iteration = it;
     bests.push_back(best.rms);
     if (rec.rms_relative <= options.exact) {
       out.stop_reason = "exact";

@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <limits>
 #include <memory>
 #include <sstream>
 #include <string>
@@ -281,6 +282,18 @@ DistanceSums ApproximationChunk::search_fresh(const FootpointSearch& search, dou
   return sums(merged);
 }
 
+DistanceSums ApproximationChunk::refine_fresh(const FootpointSearch& search) {
+  Footpoints from;
+  from.face_ids = std::move(current.face_ids);
+  from.uv = std::move(current.uv);
+  from.normals = std::move(current.normals);  // written in place
+  from.distances.assign(k_, std::numeric_limits<double>::infinity());  // (face, u, v) as starts only
+  search.closer(points_.data(), k_, from, false);
+  fresh = from_footpoints(std::move(from));
+  current = fresh;
+  return sums(current.distances);
+}
+
 void ApproximationChunk::keep_fresh(double closer) {
   for (std::size_t i = 0; i < k_; ++i)
     if (fresh.distances[i] < current.distances[i] - closer) {
@@ -478,6 +491,18 @@ DistanceSums LocalChunks::search_fresh(const FootpointOptions& options, double c
   return t;
 }
 
+DistanceSums LocalChunks::refine_fresh(const FootpointOptions& options) {
+  scratch_.release();
+  const FootpointSearch& s = footpoint_search(options);
+  DistanceSums t;
+  for (std::size_t c = 0; c < n_chunks(); ++c) {
+    poll_interrupt();
+    add(t, chunk(c, kPoints | kCurrent).refine_fresh(s));
+    put(c, kCurrent | kFresh);
+  }
+  return t;
+}
+
 void LocalChunks::keep_fresh(double closer) {
   for (std::size_t c = 0; c < n_chunks(); ++c) {
     chunk(c, kCurrent | kFresh).keep_fresh(closer);
@@ -526,6 +551,11 @@ namespace {
                        "robust_sums, robust_normal_sums): pass robust = 'none'");
 }
 }  // namespace
+
+DistanceSums PointChunks::refine_fresh(const FootpointOptions& options) {
+  refine(options);
+  return search_fresh(options, 0.0);
+}
 
 void PointChunks::set_sample(std::size_t) {
   throw ParameterError("this backend of chunks cannot run coarse iterations on a sample of the points (it has no "

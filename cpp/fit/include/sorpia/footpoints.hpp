@@ -243,8 +243,13 @@ class FootpointSearch {
   /// @param points      row-major (n, 3), finite
   /// @param footpoints  face_ids, uv and distances of n points on this
   ///                    search's surface (as find or refine_footpoints give
-  ///                    them); positions and normals, where they hold 3n
-  ///                    entries, are kept up to date
+  ///                    them), or with a distance of +inf, (face, u, v) that
+  ///                    are only a start (e.g. the footpoints of a previous
+  ///                    state of the surface): the refinement from itself
+  ///                    then takes it to its local minimum first, as
+  ///                    refine_footpoints would, to full precision;
+  ///                    positions and normals, where they hold 3n entries,
+  ///                    are kept up to date
   /// @param found       the footpoints are this search's find(points) (then
   ///                    the nearest sample is not refined again)
   /// @param certified   where not null, set to how many points the

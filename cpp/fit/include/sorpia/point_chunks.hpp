@@ -115,6 +115,13 @@ class ApproximationChunk {
   /// distances with each replaced by the fresh one where that is closer by
   /// more than `closer` (what keep_fresh would make them).
   DistanceSums search_fresh(const FootpointSearch& search, double closer);
+  /// Current and fresh footpoints := the current ones, of the previous
+  /// control vertices, re-projected onto the search's surface and made
+  /// closest in one call of search.closer (the distances given as +inf: its
+  /// refinement of each footpoint from itself is the re-projection, to
+  /// full precision); returns their sums. refine then search_fresh in one,
+  /// each footpoint refined once (the approximation's last iteration).
+  DistanceSums refine_fresh(const FootpointSearch& search);
   /// Current footpoints := the fresh ones where closer by more than `closer`.
   void keep_fresh(double closer);
   /// The best iterate's footpoints := the fresh ones where closer (at all);
@@ -163,11 +170,12 @@ class ApproximationChunk {
 /// around the coarse iterations (only with them); then per surface state
 /// set_control_vertices, and search (iteration 0, and after the coarse
 /// iterations), refine
-/// (after each update), normal_sums (before each update), keep_best (when
-/// the RMS is the lowest so far), search_fresh / keep_fresh (before
-/// stopping), keep_fresh_in_best and best_footpoints (at the end); sample
-/// once, for the surface-to-data report. Every sum is the chunks' added in
-/// their fixed order (add()).
+/// (after each update but the last), refine_fresh (after the last update),
+/// normal_sums (before each update), keep_best (when the RMS is the lowest
+/// so far), search_fresh / keep_fresh (before stopping),
+/// keep_fresh_in_best and best_footpoints (at the end); sample once, for
+/// the surface-to-data report. Every sum is the chunks' added in their
+/// fixed order (add()).
 class PointChunks {
  public:
   virtual ~PointChunks() = default;
@@ -186,6 +194,13 @@ class PointChunks {
   virtual void keep_fresh(double closer) = 0;
   virtual DistanceSums keep_fresh_in_best() = 0;
   virtual NormalSums normal_sums(double tangential) = 0;
+  /// The fresh footpoints of the current control vertices from the current
+  /// footpoints of the previous ones, and their sums (the closest points'
+  /// distances): ApproximationChunk::refine_fresh per chunk, which refines
+  /// each footpoint once. This default, for a backend without it, calls
+  /// refine then search_fresh (closer 0), each footpoint refined twice: the
+  /// same distances to rounding, its current footpoints the refined ones.
+  virtual DistanceSums refine_fresh(const FootpointOptions& options);
   /// The robust fit's calls (sorpia/robust.hpp), on the current footpoints:
   /// their distances' histogram (all chunks' merged), robust_sums (the
   /// criterion's sum w rho(d), the points within and beyond the cut) at a
@@ -229,6 +244,7 @@ class LocalChunks : public PointChunks {
   DistanceSums refine(const FootpointOptions& options) override;
   void keep_best() override;
   DistanceSums search_fresh(const FootpointOptions& options, double closer) override;
+  DistanceSums refine_fresh(const FootpointOptions& options) override;
   void keep_fresh(double closer) override;
   DistanceSums keep_fresh_in_best() override;
   NormalSums normal_sums(double tangential) override;
