@@ -161,6 +161,65 @@ TEST(FootpointSearch, CloserFindsTheClosestPointWhereTheGridsNearestSampleMisses
   for (std::size_t i = 0; i < k; ++i) EXPECT_GE(fp.distances[i], once[i] - 1e-12 * diagonal);
 }
 
+TEST(PointIndex, RefitToMovedPointsFindsTheNearestAsAScan) {
+  // The tree built on points, refitted to them moved (by up to 0.05 and, for
+  // every tenth point, across the cube): nearest is a scan of the moved points.
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::vector<double> points(3 * 3000), queries(3 * 200);
+  for (double& x : points) x = u(rng);
+  for (double& x : queries) x = 1.2 * u(rng);
+  sorpia::PointIndex index(points.data(), 3000);
+  for (std::size_t i = 0; i < points.size(); ++i) points[i] = (i / 3) % 10 == 0 ? u(rng) : points[i] + 0.05 * u(rng);
+  index.refit(points.data());
+  std::vector<std::int64_t> found(200);
+  std::vector<double> distance(200);
+  index.nearest(queries.data(), 200, found.data(), distance.data());
+  for (std::size_t q = 0; q < 200; ++q) {
+    double least = std::numeric_limits<double>::infinity();
+    std::int64_t at = -1;
+    for (std::size_t i = 0; i < 3000; ++i) {
+      const double* p = &points[3 * i];
+      const double* x = &queries[3 * q];
+      const double d = std::sqrt((p[0] - x[0]) * (p[0] - x[0]) + (p[1] - x[1]) * (p[1] - x[1]) + (p[2] - x[2]) * (p[2] - x[2]));
+      if (d < least) least = d, at = static_cast<std::int64_t>(i);
+    }
+    EXPECT_EQ(found[q], at) << "query " << q;
+    EXPECT_EQ(distance[q], least) << "query " << q;
+  }
+}
+
+TEST(FootpointSearch, APreviousStatesSearchTakenOverGivesAFreshSearchsResults) {
+  // A search on the bumpy surface taken over by one on the surface moved
+  // (find and closer as a search built afresh on it), and closer from the
+  // previous state's footpoints given as starts (distance +inf): the closest
+  // points, as brute force finds them.
+  const Bumpy bumpy(200);
+  const sorpia::Topology topology(bumpy.cage);
+  sorpia::LimitSurface surface(topology, bumpy.cage.vertices.data(), Scheme::Loop, Boundary::EdgeAndCorner);
+  const std::size_t k = bumpy.points.size() / 3;
+  const sorpia::FootpointOptions options{4, 10, 8, 0.0};
+  sorpia::FootpointSearch before(surface, topology, options);
+  sorpia::Footpoints fp = before.find(bumpy.points.data(), k);
+  std::vector<double> moved = bumpy.cage.vertices;
+  for (std::size_t i = 0; i < moved.size(); ++i) moved[i] *= 1.0 + 0.05 * std::sin(3.0 * static_cast<double>(i));
+  surface.set_vertices(moved.data());
+  const sorpia::FootpointSearch after(surface, topology, options, &before);
+  const sorpia::FootpointSearch fresh(surface, topology, options);
+  const sorpia::Footpoints a = after.find(bumpy.points.data(), k), b = fresh.find(bumpy.points.data(), k);
+  EXPECT_EQ(a.face_ids, b.face_ids);
+  EXPECT_EQ(a.distances, b.distances);
+  sorpia::Footpoints ca = a, cb = b;
+  after.closer(bumpy.points.data(), k, ca);
+  fresh.closer(bumpy.points.data(), k, cb);
+  EXPECT_EQ(ca.distances, cb.distances);
+  std::fill(fp.distances.begin(), fp.distances.end(), std::numeric_limits<double>::infinity());
+  after.closer(bumpy.points.data(), k, fp);
+  const std::vector<double> least = brute_force(surface, topology, bumpy.points);
+  const double diagonal = 2.0 * std::sqrt(3.0) * 1.45;  // at most: the cage within the sphere of radius 1.45
+  for (std::size_t i = 0; i < k; ++i) EXPECT_NEAR(fp.distances[i], least[i], 1e-8 * diagonal) << "point " << i;
+}
+
 TEST(FootpointSearch, CloserRefusesFootpointsThatDisagreeWithThePoints) {
   const sorpia::Mesh cage = sorpia::icosphere(1);
   const sorpia::Topology topology(cage);

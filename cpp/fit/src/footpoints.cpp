@@ -90,6 +90,50 @@ PointIndex::PointIndex(const double* points, std::size_t n) : n_(n) {
   points_.swap(sorted);
 }
 
+void PointIndex::set_box(Node& nd, const double* lo, const double* hi) {
+  for (int c = 0; c < 3; ++c) {
+    nd.lo[c] = std::nextafter(static_cast<float>(lo[c]), -std::numeric_limits<float>::infinity());
+    nd.hi[c] = std::nextafter(static_cast<float>(hi[c]), std::numeric_limits<float>::infinity());
+    if (static_cast<double>(nd.lo[c]) > lo[c]) nd.lo[c] = -std::numeric_limits<float>::infinity();
+    if (static_cast<double>(nd.hi[c]) < hi[c]) nd.hi[c] = std::numeric_limits<float>::infinity();
+  }
+}
+
+void PointIndex::refit(const double* points) {
+  points_.resize(3 * n_);
+  for (std::size_t i = 0; i < n_; ++i)
+    for (int c = 0; c < 3; ++c) points_[3 * i + c] = points[3 * order_[i] + c];
+  point_slack_.clear();
+  node_slack_.clear();
+  // A node's children follow it in nodes_ (as set_slack takes them): from the last node back.
+  for (std::size_t j = nodes_.size(); j-- > 0;) {
+    Node& nd = nodes_[j];
+    if (nd.left != 0) {
+      const Node &a = nodes_[nd.left], &b = nodes_[nd.left + 1];
+      for (int c = 0; c < 3; ++c) {
+        nd.lo[c] = std::min(a.lo[c], b.lo[c]);
+        nd.hi[c] = std::max(a.hi[c], b.hi[c]);
+      }
+      continue;
+    }
+    double lo[3] = {std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
+                    std::numeric_limits<double>::infinity()};
+    double hi[3] = {-lo[0], -lo[1], -lo[2]};
+    for (std::uint32_t i = nd.begin; i < nd.end; ++i)
+      for (int c = 0; c < 3; ++c) {
+        lo[c] = std::min(lo[c], points_[3 * i + c]);
+        hi[c] = std::max(hi[c], points_[3 * i + c]);
+      }
+    set_box(nd, lo, hi);
+  }
+}
+
+void PointIndex::release_points() {
+  std::vector<double>().swap(points_);
+  std::vector<double>().swap(point_slack_);
+  std::vector<float>().swap(node_slack_);
+}
+
 void PointIndex::build(std::vector<Node>& nodes, std::uint32_t node, std::uint32_t begin, std::uint32_t end, int depth,
                        std::vector<std::array<std::uint32_t, 3>>* subtrees) {
   // points_ is still in input order here; order_[begin..end) are the node's points.
@@ -107,12 +151,7 @@ void PointIndex::build(std::vector<Node>& nodes, std::uint32_t node, std::uint32
       hi[c] = std::max(hi[c], x);
     }
   Node& nd = nodes[node];
-  for (int c = 0; c < 3; ++c) {
-    nd.lo[c] = std::nextafter(static_cast<float>(lo[c]), -std::numeric_limits<float>::infinity());
-    nd.hi[c] = std::nextafter(static_cast<float>(hi[c]), std::numeric_limits<float>::infinity());
-    if (static_cast<double>(nd.lo[c]) > lo[c]) nd.lo[c] = -std::numeric_limits<float>::infinity();
-    if (static_cast<double>(nd.hi[c]) < hi[c]) nd.hi[c] = std::numeric_limits<float>::infinity();
-  }
+  set_box(nd, lo, hi);
   nd.begin = begin;
   nd.end = end;
   nd.left = 0;
@@ -863,12 +902,20 @@ void refine(const LimitSurface& surface, const Topology& topology, const double*
 }  // namespace
 
 FootpointSearch::FootpointSearch(const LimitSurface& surface, const Topology& topology,
-                                 const FootpointOptions& options)
+                                 const FootpointOptions& options, FootpointSearch* previous)
     : surface_(&surface), topology_(&topology), options_(options) {
   if (options.grid < 1 || options.grid > 64)
     throw ParameterError("grid must be in 1..64, got " + std::to_string(options.grid));
   const Domains dom(topology, surface.scheme(), surface.tags().holes);
-  grid_samples(dom, options.grid, sample_faces_, sample_uv_);
+  const bool reuse = previous != nullptr && previous->index_ && previous->topology_ == &topology &&
+                     previous->options_.grid == options.grid;
+  if (reuse) {
+    sample_faces_ = std::move(previous->sample_faces_);
+    sample_uv_ = std::move(previous->sample_uv_);
+    irregular_ = std::move(previous->irregular_);
+  } else {
+    grid_samples(dom, options.grid, sample_faces_, sample_uv_);
+  }
   if (sample_faces_.empty()) throw ParameterError("the surface has no face outside its holes");
   const std::size_t k = sample_faces_.size();
   positions_.resize(3 * k);
@@ -877,8 +924,15 @@ FootpointSearch::FootpointSearch(const LimitSurface& surface, const Topology& to
   surface.evaluate(sample_faces_.data(), sample_uv_.data(), k, positions_.data(), du_.data(), dv_.data(), nullptr);
   reach_ = grid_reach(dom, options.grid, positions_);
   largest_reach_ = *std::max_element(reach_.begin(), reach_.end());
-  index_ = std::make_unique<PointIndex>(positions_.data(), k);
+  if (reuse) {
+    index_ = std::move(previous->index_);
+    index_->refit(positions_.data());
+  } else {
+    index_ = std::make_unique<PointIndex>(positions_.data(), k);
+  }
   index_->set_slack(reach_.data());  // closer's candidates: |x - s| - reach(s) < d
+  if (previous != nullptr) previous->retire();
+  if (reuse) return;
   // Bfr's regularity of each face (holes: regular, never searched).
   std::vector<std::int32_t> faces;
   for (std::int32_t f = 0; f < static_cast<std::int32_t>(topology.n_faces()); ++f)
@@ -886,6 +940,15 @@ FootpointSearch::FootpointSearch(const LimitSurface& surface, const Topology& to
   const std::vector<std::uint8_t> regular = surface.control_points(faces.data(), faces.size()).regular;
   irregular_.assign(topology.n_faces(), 0);
   for (std::size_t i = 0; i < faces.size(); ++i) irregular_[static_cast<std::size_t>(faces[i])] = !regular[i];
+}
+
+void FootpointSearch::retire() {
+  std::vector<double>().swap(positions_);
+  std::vector<double>().swap(du_);
+  std::vector<double>().swap(dv_);
+  std::vector<double>().swap(reach_);
+  if (index_) index_->release_points();
+  certificate_.reset();
 }
 
 FootpointSearch::~FootpointSearch() = default;

@@ -440,12 +440,20 @@ double LocalChunks::line_offset(const double mean[3], const double axis[3], doub
   return off;
 }
 
-void LocalChunks::set_control_vertices(const double*, std::size_t) { search_.reset(); }
+void LocalChunks::set_control_vertices(const double*, std::size_t) { retire_search(); }
+
+void LocalChunks::retire_search() {
+  if (!search_) return;
+  search_->retire();
+  retired_ = std::move(search_);
+}
 
 const FootpointSearch& LocalChunks::footpoint_search(const FootpointOptions& options) {
   if (!search_ || search_options_.grid != options.grid || search_options_.max_steps != options.max_steps) {
-    search_.reset();
-    search_ = std::make_unique<FootpointSearch>(surface_, surface_.topology(), options);
+    retire_search();
+    // The retired search's grid and tree partition taken over (the surface's topology is the same).
+    search_ = std::make_unique<FootpointSearch>(surface_, surface_.topology(), options, retired_.get());
+    retired_.reset();
     search_options_ = options;
   }
   return *search_;
@@ -523,8 +531,8 @@ NormalSums LocalChunks::normal_sums(double tangential) { return chunks_normal_su
 
 NormalSums LocalChunks::chunks_normal_sums(double tangential, const RobustOptions* robust, double scale) {
   // The normal sums end a surface state's calls (the update that follows sets new control vertices): its search
-  // is given back before the sums' arrays are taken.
-  search_.reset();
+  // is given back before the sums' arrays are taken (all but what the next search takes over).
+  retire_search();
   NormalSums t;
   for (std::size_t c = 0; c < n_chunks(); ++c) {
     poll_interrupt();

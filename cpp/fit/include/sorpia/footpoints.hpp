@@ -49,6 +49,14 @@ class PointIndex {
   /// least_ranked then skips a part of the tree by the largest slack of its
   /// points rather than by its `slack` argument.
   void set_slack(const double* slack);
+  /// The same points moved (n, row-major, input order): the tree's
+  /// partition is kept and its boxes fitted to them (queries stay exact;
+  /// they visit more of the tree the farther the points moved across it).
+  /// Slack is cleared (set_slack again).
+  void refit(const double* points);
+  /// Frees the points and their slack, keeping the partition for refit
+  /// only: no query before refit.
+  void release_points();
 
  private:
   struct Node {
@@ -59,6 +67,8 @@ class PointIndex {
   /// Node `node` of `nodes` over order_[begin, end) and its subtree; at
   /// `depth` 0 (counting down; -1: never) an inner node is only listed in
   /// `subtrees` as (node, begin, end), to be built later.
+  /// nd's box: [lo, hi] rounded outward to float.
+  static void set_box(Node& nd, const double* lo, const double* hi);
   void build(std::vector<Node>& nodes, std::uint32_t node, std::uint32_t begin, std::uint32_t end, int depth,
              std::vector<std::array<std::uint32_t, 3>>* subtrees);
   std::size_t n_ = 0;
@@ -138,8 +148,21 @@ Footpoints closest_points(const LimitSurface& surface, const Topology& topology,
 /// while it is used.
 class FootpointSearch {
  public:
+  /// @param previous  a search on an earlier state of the same surface
+  ///                  (its topology, the same grid) or null: its samples'
+  ///                  (face, u, v), the faces' regularity and its k-d
+  ///                  tree's partition are taken over (its tree refitted:
+  ///                  PointIndex::refit), so that only the samples are
+  ///                  evaluated again; it is left empty, only to be
+  ///                  destroyed. The queries' results are those of a
+  ///                  search without it (but for which of equally near
+  ///                  samples a query finds).
   /// @throws ParameterError for a grid out of 1..64, or no face outside holes
-  FootpointSearch(const LimitSurface& surface, const Topology& topology, const FootpointOptions& options);
+  FootpointSearch(const LimitSurface& surface, const Topology& topology, const FootpointOptions& options,
+                  FootpointSearch* previous = nullptr);
+  /// Frees all but what a later search takes over as its `previous`: no
+  /// query after it.
+  void retire();
   ~FootpointSearch();
   FootpointSearch(const FootpointSearch&) = delete;
   FootpointSearch& operator=(const FootpointSearch&) = delete;

@@ -284,6 +284,10 @@ class LocalChunks : public PointChunks {
   detail::Scratch scratch_;
   LimitSurface& surface_;
   std::unique_ptr<FootpointSearch> search_;
+  // The last search, retired (FootpointSearch::retire) when the control vertices changed: the next search takes
+  // over its grid and tree partition.
+  std::unique_ptr<FootpointSearch> retired_;
+  void retire_search();
   FootpointOptions search_options_{};
 };
 
