@@ -186,26 +186,30 @@ struct TinyFit {
   }
 };
 
-// One update of approximate from `fit.start`, by a dense solve of its normal equations with the footpoints of the
-// start: (A^T W A + c K + mu I) V = A^T W P + mu V_start over the 3n unknowns (x0, y0, z0, x1, ...), W_r = t I +
-// (1 - t) n_r n_r^T, c and mu the fairness and proximal weights times the mean diagonal of A^T W A (of its xx,
-// yy and zz entries).
-std::vector<double> dense_update(const TinyFit& fit, double fairness, double tangential) {
-  const sorpia::Topology topology(fit.cage);
-  sorpia::LimitSurface surface(topology, fit.start.data(), Scheme::Loop, Boundary::EdgeAndCorner);
-  const std::size_t k = fit.points.size() / 3, n = fit.cage.n_vertices(), m = 3 * n;
-  const sorpia::Footpoints feet = sorpia::closest_points(surface, topology, fit.points.data(), k, {4, 10});
-  const sorpia::CsrMatrix a = surface.rows(feet.face_ids.data(), feet.uv.data(), k, 0).position;
+// One update of approximate from `start` (the control vertices of `surface`, whose rules are `rules`), by a dense
+// solve of its normal equations with the given footpoints of the points (face ids, uv and unit normals there):
+// (A^T W A + c K + mu I) V = A^T W P + mu V_start over the 3n unknowns (x0, y0, z0, x1, ...), A from rows() (a
+// point's row at a time), W_r = t I + (1 - t) n_r n_r^T (I where there is no normal), c and mu the fairness and proximal weights times the
+// mean diagonal of A^T W A (of its xx, yy and zz entries).
+std::vector<double> dense_update(const sorpia::LimitSurface& surface, const sorpia::Rules& rules,
+                                 const std::vector<double>& start, const std::vector<double>& points,
+                                 const std::int32_t* face_ids, const double* uv, const double* normals,
+                                 double fairness, double tangential) {
+  const std::size_t k = points.size() / 3, n = surface.n_vertices(), m = 3 * n;
+  const sorpia::CsrMatrix a = surface.rows(face_ids, uv, k, 0).position;
   std::vector<long double> M(m * m, 0.0L), rhs(m, 0.0L);
   for (std::size_t r = 0; r < k; ++r) {
-    const double* nr = &feet.normals[3 * r];
+    const double* nr = &normals[3 * r];
+    // No normal (zero or not finite: Bfr's at a Catmull-Clark vertex of two faces): W_r = I (blend_weights).
+    const bool normal = nr[0] * nr[0] + nr[1] * nr[1] + nr[2] * nr[2] > 0.0;
+    const double t = normal ? tangential : 1.0;
     long double w[3][3];
     for (int c = 0; c < 3; ++c)
-      for (int d = 0; d < 3; ++d) w[c][d] = (1 - tangential) * nr[c] * nr[d] + (c == d ? tangential : 0.0);
+      for (int d = 0; d < 3; ++d) w[c][d] = normal ? (1 - t) * nr[c] * nr[d] + (c == d ? t : 0.0) : (c == d ? 1.0 : 0.0);
     for (std::int32_t p = a.indptr[r]; p < a.indptr[r + 1]; ++p) {
       const std::size_t i = static_cast<std::size_t>(a.indices[p]);
       for (int c = 0; c < 3; ++c) {
-        for (int d = 0; d < 3; ++d) rhs[3 * i + c] += a.data[p] * w[c][d] * fit.points[3 * r + d];
+        for (int d = 0; d < 3; ++d) rhs[3 * i + c] += a.data[p] * w[c][d] * points[3 * r + d];
         for (std::int32_t q = a.indptr[r]; q < a.indptr[r + 1]; ++q)
           for (int d = 0; d < 3; ++d)
             M[(3 * i + c) * m + 3 * static_cast<std::size_t>(a.indices[q]) + d] += a.data[p] * a.data[q] * w[c][d];
@@ -217,7 +221,7 @@ std::vector<double> dense_update(const TinyFit& fit, double fairness, double tan
   mean /= static_cast<long double>(m);
   sorpia::FairnessQuadrature q;
   q.depth = 0;
-  const sorpia::CsrMatrix kk = sorpia::fairness_matrix(topology, sorpia::Rules{}, 1.0, 0.0, q);
+  const sorpia::CsrMatrix kk = sorpia::fairness_matrix(surface.topology(), rules, 1.0, 0.0, q);
   for (std::size_t i = 0; i < n; ++i)
     for (std::int32_t p = kk.indptr[i]; p < kk.indptr[i + 1]; ++p)
       for (int c = 0; c < 3; ++c)
@@ -225,9 +229,19 @@ std::vector<double> dense_update(const TinyFit& fit, double fairness, double tan
   const long double mu = 1e-6L * mean;
   for (std::size_t i = 0; i < m; ++i) {
     M[i * m + i] += mu;
-    rhs[i] += mu * fit.start[i];
+    rhs[i] += mu * start[i];
   }
   return dense_solve(M, rhs, m);
+}
+
+// The update of TinyFit from the footpoints of its start (closest_points).
+std::vector<double> dense_update(const TinyFit& fit, double fairness, double tangential) {
+  const sorpia::Topology topology(fit.cage);
+  sorpia::LimitSurface surface(topology, fit.start.data(), Scheme::Loop, Boundary::EdgeAndCorner);
+  const sorpia::Footpoints feet =
+      sorpia::closest_points(surface, topology, fit.points.data(), fit.points.size() / 3, {4, 10});
+  return dense_update(surface, sorpia::Rules{}, fit.start, fit.points, feet.face_ids.data(), feet.uv.data(),
+                      feet.normals.data(), fairness, tangential);
 }
 
 TEST(NormalMatrix, RhsIsTheRowByRowProduct) {
@@ -474,6 +488,82 @@ TEST(NormalSums, AtTheCornersOfDartsAndOfVerticesOfTwoFacesAreTheRowsProducts) {
       chunk.current = state;
       expect_normal_sums_are_the_rows_products(chunk, surface, points, weights);
     }
+  }
+}
+
+// Points in memory whose search gives the footpoints `feet` (every point's) instead of searching, so that the
+// driver's update is made from them.
+class GivenFootpoints : public sorpia::InMemoryChunks {
+ public:
+  GivenFootpoints(sorpia::LimitSurface& surface, const std::vector<double>& points, sorpia::ApproximationChunk::State feet)
+      : InMemoryChunks(surface, points.data(), points.size() / 3, nullptr, std::size_t{1} << 20), feet_(std::move(feet)) {}
+  sorpia::DistanceSums search(const sorpia::FootpointOptions&) override {
+    load(0, kPoints | kCurrent).current = feet_;
+    sorpia::DistanceSums d;
+    for (const double x : feet_.distances) {
+      d.squares += x * x;
+      d.max = std::max(d.max, x);
+    }
+    d.count = feet_.distances.size();
+    return d;
+  }
+
+ private:
+  sorpia::ApproximationChunk::State feet_;
+};
+
+TEST(Approximate, OneUpdateFromFootpointsAtDartsCornersEqualsADenseSolve) {
+  // Points near the limit surface of a CornerCage inflated by 10%, their footpoints on the cage's (closest_points),
+  // a third of them moved to the corners of its level-dependent vertices (the points there the inflated surface's
+  // corners, 1e-3 off): one update by the driver (normal_sums, a face's points at a time and B's rows' points in
+  // blocks of their own) equals the dense solve of the normal equations made a point's row at a time, to 1e-9.
+  for (const Scheme scheme : {Scheme::Loop, Scheme::CatmullClark})
+  for (const double tangential : {1.0, 0.1}) {
+    const CornerCage cage(scheme);
+    const sorpia::Topology topology(cage.mesh);
+    const sorpia::Rules rules{scheme, Boundary::EdgeAndCorner, cage.tags};
+    std::vector<double> big = cage.mesh.vertices;
+    for (double& x : big) x *= 1.1;
+    const sorpia::LimitSurface truth(topology, big.data(), scheme, Boundary::EdgeAndCorner, cage.tags);
+    const std::size_t k = 900;
+    sorpia::ApproximationChunk::State on_truth;
+    std::vector<double> points = random_footpoints(truth, k, 31, -1, on_truth);
+    sorpia::LimitSurface start(topology, cage.mesh.vertices.data(), scheme, Boundary::EdgeAndCorner, cage.tags);
+    const sorpia::Footpoints found = sorpia::closest_points(start, topology, points.data(), k, {4, 10});
+    sorpia::ApproximationChunk::State feet;
+    feet.face_ids = found.face_ids;
+    feet.uv = found.uv;
+    std::mt19937 rng(32);
+    for (std::size_t i = 0; i < k; i += 3) {
+      const auto& [f, uv] = cage.corners[rng() % cage.corners.size()];
+      feet.face_ids[i] = f;
+      feet.uv[2 * i] = uv[0];
+      feet.uv[2 * i + 1] = uv[1];
+      truth.evaluate(&f, uv.data(), 1, &points[3 * i], nullptr, nullptr, nullptr);
+      for (std::size_t c = 0; c < 3; ++c) points[3 * i + c] += 1e-3 * static_cast<double>(c + 1);
+    }
+    std::vector<double> at(3 * k);
+    feet.normals.resize(3 * k);
+    start.evaluate(feet.face_ids.data(), feet.uv.data(), k, at.data(), nullptr, nullptr, feet.normals.data());
+    for (std::size_t i = 0; i < k; ++i)
+      feet.distances.push_back(std::hypot(points[3 * i] - at[3 * i], points[3 * i + 1] - at[3 * i + 1],
+                                          points[3 * i + 2] - at[3 * i + 2]));
+    const std::vector<double> want = dense_update(start, rules, cage.mesh.vertices, points, feet.face_ids.data(),
+                                                  feet.uv.data(), feet.normals.data(), 0.0, tangential);
+    GivenFootpoints chunks(start, points, feet);
+    sorpia::ApproximationOptions o;
+    o.iterations = 1;
+    o.tangential = tangential;
+    o.fairness = 0.0;
+    o.solver_tol = 1e-14;
+    o.solver_max_iter = 1000000;
+    o.robust.loss = sorpia::RobustLoss::None;
+    const auto r = sorpia::approximate(start, chunks, o);
+    ASSERT_EQ(r.best_iteration, 1) << "the update lowers the RMS distance";
+    ASSERT_EQ(r.control_vertices.size(), want.size());
+    for (std::size_t i = 0; i < want.size(); ++i)
+      EXPECT_NEAR(r.control_vertices[i], want[i], 1e-9) << "entry " << i << " scheme " << static_cast<int>(scheme)
+                                                         << " tangential " << tangential;
   }
 }
 
