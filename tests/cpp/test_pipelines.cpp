@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <random>
 #include <vector>
@@ -185,26 +186,30 @@ struct TinyFit {
   }
 };
 
-// One update of approximate from `fit.start`, by a dense solve of its normal equations with the footpoints of the
-// start: (A^T W A + c K + mu I) V = A^T W P + mu V_start over the 3n unknowns (x0, y0, z0, x1, ...), W_r = t I +
-// (1 - t) n_r n_r^T, c and mu the fairness and proximal weights times the mean diagonal of A^T W A (of its xx,
-// yy and zz entries).
-std::vector<double> dense_update(const TinyFit& fit, double fairness, double tangential) {
-  const sorpia::Topology topology(fit.cage);
-  sorpia::LimitSurface surface(topology, fit.start.data(), Scheme::Loop, Boundary::EdgeAndCorner);
-  const std::size_t k = fit.points.size() / 3, n = fit.cage.n_vertices(), m = 3 * n;
-  const sorpia::Footpoints feet = sorpia::closest_points(surface, topology, fit.points.data(), k, {4, 10});
-  const sorpia::CsrMatrix a = surface.rows(feet.face_ids.data(), feet.uv.data(), k, 0).position;
+// One update of approximate from `start` (the control vertices of `surface`, whose rules are `rules`), by a dense
+// solve of its normal equations with the given footpoints of the points (face ids, uv and unit normals there):
+// (A^T W A + c K + mu I) V = A^T W P + mu V_start over the 3n unknowns (x0, y0, z0, x1, ...), A from rows() (a
+// point's row at a time), W_r = t I + (1 - t) n_r n_r^T (I where there is no normal), c and mu the fairness and proximal weights times the
+// mean diagonal of A^T W A (of its xx, yy and zz entries).
+std::vector<double> dense_update(const sorpia::LimitSurface& surface, const sorpia::Rules& rules,
+                                 const std::vector<double>& start, const std::vector<double>& points,
+                                 const std::int32_t* face_ids, const double* uv, const double* normals,
+                                 double fairness, double tangential) {
+  const std::size_t k = points.size() / 3, n = surface.n_vertices(), m = 3 * n;
+  const sorpia::CsrMatrix a = surface.rows(face_ids, uv, k, 0).position;
   std::vector<long double> M(m * m, 0.0L), rhs(m, 0.0L);
   for (std::size_t r = 0; r < k; ++r) {
-    const double* nr = &feet.normals[3 * r];
+    const double* nr = &normals[3 * r];
+    // No normal (zero or not finite: Bfr's at a Catmull-Clark vertex of two faces): W_r = I (blend_weights).
+    const bool normal = nr[0] * nr[0] + nr[1] * nr[1] + nr[2] * nr[2] > 0.0;
+    const double t = normal ? tangential : 1.0;
     long double w[3][3];
     for (int c = 0; c < 3; ++c)
-      for (int d = 0; d < 3; ++d) w[c][d] = (1 - tangential) * nr[c] * nr[d] + (c == d ? tangential : 0.0);
+      for (int d = 0; d < 3; ++d) w[c][d] = normal ? (1 - t) * nr[c] * nr[d] + (c == d ? t : 0.0) : (c == d ? 1.0 : 0.0);
     for (std::int32_t p = a.indptr[r]; p < a.indptr[r + 1]; ++p) {
       const std::size_t i = static_cast<std::size_t>(a.indices[p]);
       for (int c = 0; c < 3; ++c) {
-        for (int d = 0; d < 3; ++d) rhs[3 * i + c] += a.data[p] * w[c][d] * fit.points[3 * r + d];
+        for (int d = 0; d < 3; ++d) rhs[3 * i + c] += a.data[p] * w[c][d] * points[3 * r + d];
         for (std::int32_t q = a.indptr[r]; q < a.indptr[r + 1]; ++q)
           for (int d = 0; d < 3; ++d)
             M[(3 * i + c) * m + 3 * static_cast<std::size_t>(a.indices[q]) + d] += a.data[p] * a.data[q] * w[c][d];
@@ -216,7 +221,7 @@ std::vector<double> dense_update(const TinyFit& fit, double fairness, double tan
   mean /= static_cast<long double>(m);
   sorpia::FairnessQuadrature q;
   q.depth = 0;
-  const sorpia::CsrMatrix kk = sorpia::fairness_matrix(topology, sorpia::Rules{}, 1.0, 0.0, q);
+  const sorpia::CsrMatrix kk = sorpia::fairness_matrix(surface.topology(), rules, 1.0, 0.0, q);
   for (std::size_t i = 0; i < n; ++i)
     for (std::int32_t p = kk.indptr[i]; p < kk.indptr[i + 1]; ++p)
       for (int c = 0; c < 3; ++c)
@@ -224,9 +229,19 @@ std::vector<double> dense_update(const TinyFit& fit, double fairness, double tan
   const long double mu = 1e-6L * mean;
   for (std::size_t i = 0; i < m; ++i) {
     M[i * m + i] += mu;
-    rhs[i] += mu * fit.start[i];
+    rhs[i] += mu * start[i];
   }
   return dense_solve(M, rhs, m);
+}
+
+// The update of TinyFit from the footpoints of its start (closest_points).
+std::vector<double> dense_update(const TinyFit& fit, double fairness, double tangential) {
+  const sorpia::Topology topology(fit.cage);
+  sorpia::LimitSurface surface(topology, fit.start.data(), Scheme::Loop, Boundary::EdgeAndCorner);
+  const sorpia::Footpoints feet =
+      sorpia::closest_points(surface, topology, fit.points.data(), fit.points.size() / 3, {4, 10});
+  return dense_update(surface, sorpia::Rules{}, fit.start, fit.points, feet.face_ids.data(), feet.uv.data(),
+                      feet.normals.data(), fairness, tangential);
 }
 
 TEST(NormalMatrix, RhsIsTheRowByRowProduct) {
@@ -274,36 +289,17 @@ TEST(NormalMatrix, RhsIsTheRowByRowProduct) {
   }
 }
 
-TEST(NormalSums, SameOnOneThreadAsOnAllAndEqualToTheRowsProducts) {
-  // ApproximationChunk::normal_sums forms each face's block where it is made and adds the blocks in face order: the
-  // same sums bit for bit on one thread as on all (many faces: several tasks), with the tangent blend (6 values per
-  // entry) and with weights (1); and normal_matrix of LimitSurface::rows' position matrix in face order (the rows,
-  // weights and weighted points made apart; normal_matrix itself is held to scipy by test_normal_equations.py) to
-  // 1e-13 of the largest entry.
-  const sorpia::Mesh mesh = sorpia::irregular(3000);
-  const sorpia::Topology t(mesh);
-  const sorpia::LimitSurface surface(t, mesh.vertices.data(), Scheme::Loop, Boundary::EdgeAndCorner);
-  const std::size_t k = 60000, m = t.n_faces(), n = surface.n_vertices();
-  std::mt19937 rng(11);
-  std::uniform_real_distribution<double> unit(0.0, 1.0);
-  std::vector<double> points(3 * k), weights(k);
-  sorpia::ApproximationChunk::State state;
-  state.face_ids.resize(k);
-  state.uv.resize(2 * k);
-  state.distances.assign(k, 0.0);
-  state.normals.resize(3 * k);
-  for (std::size_t i = 0; i < k; ++i) {
-    state.face_ids[i] = static_cast<std::int32_t>(rng() % m);
-    const double u = unit(rng), v = unit(rng);
-    state.uv[2 * i] = u + v > 1.0 ? 1.0 - u : u;
-    state.uv[2 * i + 1] = u + v > 1.0 ? 1.0 - v : v;
-    weights[i] = 0.5 + unit(rng);
-  }
-  std::vector<double> at(3 * k);
-  surface.evaluate(state.face_ids.data(), state.uv.data(), k, at.data(), nullptr, nullptr, state.normals.data());
-  for (std::size_t i = 0; i < 3 * k; ++i) points[i] = at[i] + 1e-3 * (unit(rng) - 0.5);
-  sorpia::ApproximationChunk chunk(points.data(), k, weights.data(), 0);
-  chunk.current = state;
+// ApproximationChunk::normal_sums at the chunk's current footpoints (its points `points`, weights `weights`):
+// the same sums bit for bit on one thread as on all, on a pattern made and on the one kept from the call before;
+// and normal_matrix of LimitSurface::rows' position matrix in face order (the rows, weights and weighted points
+// made apart, the rows a point at a time: B's at a level-dependent vertex's corner; normal_matrix itself is held
+// to scipy by test_normal_equations.py) to 1e-13 of the largest entry, with the tangent blend (6 values per
+// entry) and with weights (1).
+void expect_normal_sums_are_the_rows_products(const sorpia::ApproximationChunk& chunk,
+                                              const sorpia::LimitSurface& surface, const std::vector<double>& points,
+                                              const std::vector<double>& weights) {
+  const sorpia::ApproximationChunk::State& state = chunk.current;
+  const std::size_t k = state.face_ids.size(), n = surface.n_vertices();
   // The rows in face order (a stable sort), their weights and weighted points, for normal_matrix.
   std::vector<std::size_t> order(k);
   for (std::size_t i = 0; i < k; ++i) order[i] = i;
@@ -355,6 +351,219 @@ TEST(NormalSums, SameOnOneThreadAsOnAllAndEqualToTheRowsProducts) {
     }
     EXPECT_LE(worst, 1e-13 * largest) << tangential;
     EXPECT_LE(worst_rhs, 1e-13 * largest_rhs) << tangential;
+  }
+}
+
+// k random footpoints on `surface` (every face but `avoid`; uv uniform in the face's domain), their normals, and
+// points 1e-3 off their positions.
+std::vector<double> random_footpoints(const sorpia::LimitSurface& surface, std::size_t k, unsigned seed,
+                                      std::int32_t avoid, sorpia::ApproximationChunk::State& state) {
+  const std::size_t m = surface.n_faces();
+  const bool quads = surface.scheme() == Scheme::CatmullClark;
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  state.face_ids.resize(k);
+  state.uv.resize(2 * k);
+  state.distances.assign(k, 0.0);
+  state.normals.resize(3 * k);
+  for (std::size_t i = 0; i < k; ++i) {
+    do state.face_ids[i] = static_cast<std::int32_t>(rng() % m);
+    while (state.face_ids[i] == avoid);
+    const double u = unit(rng), v = unit(rng);
+    const bool fold = !quads && u + v > 1.0;
+    state.uv[2 * i] = fold ? 1.0 - u : u;
+    state.uv[2 * i + 1] = fold ? 1.0 - v : v;
+  }
+  std::vector<double> at(3 * k), points(3 * k);
+  surface.evaluate(state.face_ids.data(), state.uv.data(), k, at.data(), nullptr, nullptr, state.normals.data());
+  for (std::size_t i = 0; i < 3 * k; ++i) points[i] = at[i] + 1e-3 * (unit(rng) - 0.5);
+  return points;
+}
+
+TEST(NormalSums, SameOnOneThreadAsOnAllAndEqualToTheRowsProducts) {
+  // Many faces (several tasks, many runs of blocks).
+  const sorpia::Mesh mesh = sorpia::irregular(3000);
+  const sorpia::Topology t(mesh);
+  const sorpia::LimitSurface surface(t, mesh.vertices.data(), Scheme::Loop, Boundary::EdgeAndCorner);
+  const std::size_t k = 60000;
+  sorpia::ApproximationChunk::State state;
+  const std::vector<double> points = random_footpoints(surface, k, 11, -1, state);
+  std::vector<double> weights(k);
+  std::mt19937 rng(12);
+  for (double& w : weights) w = 0.5 + std::uniform_real_distribution<double>(0.0, 1.0)(rng);
+  sorpia::ApproximationChunk chunk(points.data(), k, weights.data(), 0);
+  chunk.current = state;
+  expect_normal_sums_are_the_rows_products(chunk, surface, points, weights);
+}
+
+// A cage with level-dependent vertices (where a point at a face's corner has B's row, LimitSurface::rows, its
+// block one of its own in position_blocks): Loop's icosphere(1) with one infinitely sharp edge (its two ends
+// darts), or Catmull-Clark's quad torus with its quad 0 split along a diagonal through its centre (an interior
+// vertex of two faces).
+struct CornerCage {
+  sorpia::Mesh mesh;
+  Scheme scheme = Scheme::Loop;
+  sorpia::Tags tags;
+  std::vector<std::int32_t> level_dependent;
+  // Every corner of a face at a level-dependent vertex: (face, its corner's u, v).
+  std::vector<std::pair<std::int32_t, std::array<double, 2>>> corners;
+  explicit CornerCage(Scheme s) : scheme(s) {
+    if (s == Scheme::Loop) {
+      mesh = sorpia::icosphere(1);
+      const std::int32_t* f = mesh.face_vertex_indices.data();
+      tags.crease_vertices = {f[0], f[1]};
+      tags.crease_sharpness = {sorpia::kInfiniteSharpness};
+      level_dependent = {f[0], f[1]};
+    } else {
+      mesh = sorpia::quad_torus(6, 4);
+      std::vector<std::int32_t>& fi = mesh.face_vertex_indices;
+      const std::int32_t a = fi[0], c = fi[2], d = fi[3];
+      const auto middle = static_cast<std::int32_t>(mesh.n_vertices());
+      for (int x = 0; x < 3; ++x) {
+        double centre = 0.0;
+        for (int j = 0; j < 4; ++j) centre += 0.25 * mesh.vertices[3 * static_cast<std::size_t>(fi[j]) + x];
+        mesh.vertices.push_back(centre);
+      }
+      fi[3] = middle;  // (a, b, c, middle) and (middle, c, d, a)
+      fi.insert(fi.end(), {middle, c, d, a});
+      if (!mesh.uniform()) mesh.face_vertex_counts.push_back(4);
+      level_dependent = {middle};
+    }
+    const std::size_t size = s == Scheme::Loop ? 3 : 4;  // every face's corners
+    const double tri[3][2] = {{0, 0}, {1, 0}, {0, 1}}, quad[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+    for (std::size_t f = 0; f < mesh.n_faces(); ++f)
+      for (std::size_t j = 0; j < size; ++j)
+        if (std::count(level_dependent.begin(), level_dependent.end(), mesh.face_vertex_indices[size * f + j])) {
+          const double* uv = size == 3 ? tri[j] : quad[j];
+          corners.push_back({static_cast<std::int32_t>(f), {uv[0], uv[1]}});
+        }
+  }
+};
+
+TEST(NormalSums, AtTheCornersOfDartsAndOfVerticesOfTwoFacesAreTheRowsProducts) {
+  // As above with a third of the points at the corners of level-dependent vertices (B's rows), every point of
+  // one face there (its block of no points); then the footpoints moved to other faces on the same chunk (the
+  // kept pattern replaced).
+  for (const Scheme scheme : {Scheme::Loop, Scheme::CatmullClark}) {
+    const CornerCage cage(scheme);
+    const sorpia::Topology t(cage.mesh);
+    const sorpia::LimitSurface surface(t, cage.mesh.vertices.data(), scheme, Boundary::EdgeAndCorner, cage.tags);
+    // B's row at a corner has other columns than the face's points' rows.
+    const auto [f0, corner] = cage.corners[0];
+    const double both[4] = {corner[0], corner[1], scheme == Scheme::Loop ? 0.3 : 0.5, 0.3};
+    const std::int32_t faces[2] = {f0, f0};
+    const sorpia::CsrMatrix two = surface.rows(faces, both, 2, 0).position;
+    EXPECT_FALSE(std::equal(two.indices.begin(), two.indices.begin() + two.indptr[1], two.indices.begin() + two.indptr[1],
+                            two.indices.end()));
+    const std::size_t k = 6000;
+    sorpia::ApproximationChunk chunk;
+    for (const unsigned seed : {21u, 22u}) {
+      sorpia::ApproximationChunk::State state;
+      std::vector<double> points = random_footpoints(surface, k, seed, seed == 21u ? f0 : -1, state);
+      std::vector<double> weights(k, 1.0);
+      std::mt19937 rng(seed);
+      std::vector<std::size_t> at;  // the points moved to corners
+      for (std::size_t i = 0; i < k; i += 3) {
+        const auto& [f, uv] = cage.corners[rng() % cage.corners.size()];
+        state.face_ids[i] = f;
+        state.uv[2 * i] = uv[0];
+        state.uv[2 * i + 1] = uv[1];
+        weights[i] = 0.5 + 0.001 * static_cast<double>(rng() % 1000);
+        at.push_back(i);
+      }
+      std::vector<std::int32_t> at_faces;
+      std::vector<double> at_uv, at_p(3 * at.size()), at_n(3 * at.size());
+      for (const std::size_t i : at) {
+        at_faces.push_back(state.face_ids[i]);
+        at_uv.insert(at_uv.end(), {state.uv[2 * i], state.uv[2 * i + 1]});
+      }
+      surface.evaluate(at_faces.data(), at_uv.data(), at.size(), at_p.data(), nullptr, nullptr, at_n.data());
+      for (std::size_t j = 0; j < at.size(); ++j)
+        for (std::size_t c = 0; c < 3; ++c) {
+          points[3 * at[j] + c] = at_p[3 * j + c] + 1e-3 * static_cast<double>(c + 1);
+          state.normals[3 * at[j] + c] = at_n[3 * j + c];
+        }
+      if (seed == 21u) chunk = sorpia::ApproximationChunk(points.data(), k, weights.data(), 0);
+      else chunk.set_points(points, weights);
+      chunk.current = state;
+      expect_normal_sums_are_the_rows_products(chunk, surface, points, weights);
+    }
+  }
+}
+
+// Points in memory whose search gives the footpoints `feet` (every point's) instead of searching, so that the
+// driver's update is made from them.
+class GivenFootpoints : public sorpia::InMemoryChunks {
+ public:
+  GivenFootpoints(sorpia::LimitSurface& surface, const std::vector<double>& points, sorpia::ApproximationChunk::State feet)
+      : InMemoryChunks(surface, points.data(), points.size() / 3, nullptr, std::size_t{1} << 20), feet_(std::move(feet)) {}
+  sorpia::DistanceSums search(const sorpia::FootpointOptions&) override {
+    load(0, kPoints | kCurrent).current = feet_;
+    sorpia::DistanceSums d;
+    for (const double x : feet_.distances) {
+      d.squares += x * x;
+      d.max = std::max(d.max, x);
+    }
+    d.count = feet_.distances.size();
+    return d;
+  }
+
+ private:
+  sorpia::ApproximationChunk::State feet_;
+};
+
+TEST(Approximate, OneUpdateFromFootpointsAtDartsCornersEqualsADenseSolve) {
+  // Points near the limit surface of a CornerCage inflated by 10%, their footpoints on the cage's (closest_points),
+  // a third of them moved to the corners of its level-dependent vertices (the points there the inflated surface's
+  // corners, 1e-3 off): one update by the driver (normal_sums, a face's points at a time and B's rows' points in
+  // blocks of their own) equals the dense solve of the normal equations made a point's row at a time, to 1e-9.
+  for (const Scheme scheme : {Scheme::Loop, Scheme::CatmullClark})
+  for (const double tangential : {1.0, 0.1}) {
+    const CornerCage cage(scheme);
+    const sorpia::Topology topology(cage.mesh);
+    const sorpia::Rules rules{scheme, Boundary::EdgeAndCorner, cage.tags};
+    std::vector<double> big = cage.mesh.vertices;
+    for (double& x : big) x *= 1.1;
+    const sorpia::LimitSurface truth(topology, big.data(), scheme, Boundary::EdgeAndCorner, cage.tags);
+    const std::size_t k = 900;
+    sorpia::ApproximationChunk::State on_truth;
+    std::vector<double> points = random_footpoints(truth, k, 31, -1, on_truth);
+    sorpia::LimitSurface start(topology, cage.mesh.vertices.data(), scheme, Boundary::EdgeAndCorner, cage.tags);
+    const sorpia::Footpoints found = sorpia::closest_points(start, topology, points.data(), k, {4, 10});
+    sorpia::ApproximationChunk::State feet;
+    feet.face_ids = found.face_ids;
+    feet.uv = found.uv;
+    std::mt19937 rng(32);
+    for (std::size_t i = 0; i < k; i += 3) {
+      const auto& [f, uv] = cage.corners[rng() % cage.corners.size()];
+      feet.face_ids[i] = f;
+      feet.uv[2 * i] = uv[0];
+      feet.uv[2 * i + 1] = uv[1];
+      truth.evaluate(&f, uv.data(), 1, &points[3 * i], nullptr, nullptr, nullptr);
+      for (std::size_t c = 0; c < 3; ++c) points[3 * i + c] += 1e-3 * static_cast<double>(c + 1);
+    }
+    std::vector<double> at(3 * k);
+    feet.normals.resize(3 * k);
+    start.evaluate(feet.face_ids.data(), feet.uv.data(), k, at.data(), nullptr, nullptr, feet.normals.data());
+    for (std::size_t i = 0; i < k; ++i)
+      feet.distances.push_back(std::hypot(points[3 * i] - at[3 * i], points[3 * i + 1] - at[3 * i + 1],
+                                          points[3 * i + 2] - at[3 * i + 2]));
+    const std::vector<double> want = dense_update(start, rules, cage.mesh.vertices, points, feet.face_ids.data(),
+                                                  feet.uv.data(), feet.normals.data(), 0.0, tangential);
+    GivenFootpoints chunks(start, points, feet);
+    sorpia::ApproximationOptions o;
+    o.iterations = 1;
+    o.tangential = tangential;
+    o.fairness = 0.0;
+    o.solver_tol = 1e-14;
+    o.solver_max_iter = 1000000;
+    o.robust.loss = sorpia::RobustLoss::None;
+    const auto r = sorpia::approximate(start, chunks, o);
+    ASSERT_EQ(r.best_iteration, 1) << "the update lowers the RMS distance";
+    ASSERT_EQ(r.control_vertices.size(), want.size());
+    for (std::size_t i = 0; i < want.size(); ++i)
+      EXPECT_NEAR(r.control_vertices[i], want[i], 1e-9) << "entry " << i << " scheme " << static_cast<int>(scheme)
+                                                         << " tangential " << tangential;
   }
 }
 

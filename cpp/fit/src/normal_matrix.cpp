@@ -66,16 +66,106 @@ constexpr std::size_t kBlocksPerRun = 256;
 
 }  // namespace
 
-struct NormalBlocks::State {
+struct NormalPattern {
   std::size_t n = 0;
+  std::vector<std::int64_t> offsets;  // the blocks' columns it was made from
+  std::vector<std::int32_t> columns;
+  // The whole matrix's pattern (NormalMatrix's indptr and indices): row i's columns, sorted, are those of every
+  // block holding column i.
+  std::vector<std::int64_t> indptr;
+  std::vector<std::int32_t> indices;
+  // Where row i's diagonal entry is (its entries on and above the diagonal follow it); indptr[i] for an empty row.
+  std::vector<std::int64_t> diagonal;
+  // For an entry (j, i) below the diagonal, where its mirror (i, j) is (the entries on and above the diagonal
+  // hold the sums; those below copy them); unused above.
+  std::vector<std::int64_t> mirror;
+  std::size_t n_blocks() const { return offsets.empty() ? 0 : offsets.size() - 1; }
+  std::size_t width(std::size_t b) const { return static_cast<std::size_t>(offsets[b + 1] - offsets[b]); }
+};
+
+namespace {
+
+// The pattern of blocks' columns, in ranges of rows on the core's threads (each row's columns made on its own).
+std::shared_ptr<NormalPattern> make_pattern(std::size_t n, std::vector<std::int64_t> offsets,
+                                            std::vector<std::int32_t> columns) {
+  auto out = std::make_shared<NormalPattern>();
+  NormalPattern& s = *out;
+  s.n = n;
+  s.offsets = std::move(offsets);
+  s.columns = std::move(columns);
+  const std::size_t n_blocks = s.n_blocks();
+  // The blocks holding each column (A^T's rows over blocks): column j's are col_blocks[col_ptr[j] .. col_ptr[j + 1]).
+  std::vector<std::int64_t> col_ptr(n + 1, 0);
+  for (const std::int32_t j : s.columns) ++col_ptr[static_cast<std::size_t>(j) + 1];
+  for (std::size_t j = 0; j < n; ++j) col_ptr[j + 1] += col_ptr[j];
+  std::vector<std::int32_t> col_blocks(s.columns.size());
+  {
+    std::vector<std::int64_t> next(col_ptr.begin(), col_ptr.end() - 1);
+    for (std::size_t b = 0; b < n_blocks; ++b)
+      for (std::size_t p = 0; p < s.width(b); ++p)
+        col_blocks[static_cast<std::size_t>(next[static_cast<std::size_t>(s.columns[s.offsets[b] + p])]++)] =
+            static_cast<std::int32_t>(b);
+  }
+  poll_interrupt();
+  // Row i: the union of its blocks' columns (Gustavson), a range of rows per task, then the ranges put together.
+  const int tasks = detail::task_count(s.columns.size(), kRowEntriesPerTask);
+  const auto t_count = static_cast<std::size_t>(tasks);
+  std::vector<std::vector<std::int32_t>> part(t_count);
+  std::vector<std::int64_t> length(n + 1, 0);
+  detail::for_each_task(tasks > 1, tasks, [&](int t) {
+    const std::size_t i0 = n * static_cast<std::size_t>(t) / t_count, i1 = n * (static_cast<std::size_t>(t) + 1) / t_count;
+    std::vector<std::int32_t> marker(n, -1), touched;
+    std::vector<std::int32_t>& out_t = part[static_cast<std::size_t>(t)];
+    for (std::size_t i = i0; i < i1; ++i) {
+      touched.clear();
+      for (std::int64_t e = col_ptr[i]; e < col_ptr[i + 1]; ++e) {
+        const auto b = static_cast<std::size_t>(col_blocks[static_cast<std::size_t>(e)]);
+        for (auto c = static_cast<std::size_t>(s.offsets[b]); c < static_cast<std::size_t>(s.offsets[b + 1]); ++c) {
+          const auto j = static_cast<std::size_t>(s.columns[c]);
+          if (marker[j] != static_cast<std::int32_t>(i)) {
+            marker[j] = static_cast<std::int32_t>(i);
+            touched.push_back(s.columns[c]);
+          }
+        }
+      }
+      std::sort(touched.begin(), touched.end());
+      out_t.insert(out_t.end(), touched.begin(), touched.end());
+      length[i + 1] = static_cast<std::int64_t>(touched.size());
+    }
+  });
+  s.indptr = std::move(length);
+  for (std::size_t i = 0; i < n; ++i) s.indptr[i + 1] += s.indptr[i];
+  s.indices.resize(static_cast<std::size_t>(s.indptr[n]));
+  s.diagonal.resize(n);
+  s.mirror.resize(s.indices.size());
+  detail::for_each_task(tasks > 1, tasks, [&](int t) {
+    const std::size_t i0 = n * static_cast<std::size_t>(t) / t_count;
+    std::copy(part[static_cast<std::size_t>(t)].begin(), part[static_cast<std::size_t>(t)].end(),
+              s.indices.begin() + s.indptr[i0]);
+  });
+  detail::for_each_index(tasks > 1, tasks, n, [&](std::size_t i) {
+    const auto first = s.indices.begin() + s.indptr[i], last = s.indices.begin() + s.indptr[i + 1];
+    s.diagonal[i] = std::lower_bound(first, last, static_cast<std::int32_t>(i)) - s.indices.begin();
+  });
+  detail::for_each_index(tasks > 1, tasks, n, [&](std::size_t j) {
+    for (auto e = static_cast<std::size_t>(s.indptr[j]); e < static_cast<std::size_t>(s.diagonal[j]); ++e) {
+      const auto i = static_cast<std::size_t>(s.indices[e]);  // < j: (i, j) is in row i, after its diagonal
+      const auto first = s.indices.begin() + s.diagonal[i], last = s.indices.begin() + s.indptr[i + 1];
+      s.mirror[e] = std::lower_bound(first, last, static_cast<std::int32_t>(j)) - s.indices.begin();
+    }
+  });
+  return out;
+}
+
+}  // namespace
+
+struct NormalBlocks::State {
   int weight_count = 0;
   std::size_t nb = 1;  // values per entry
-  std::vector<std::int64_t> offsets;
-  std::vector<std::int32_t> columns;
-  // The pattern on and above the diagonal: row i's columns up_idx[up_ptr[i] .. up_ptr[i + 1]), sorted; their sums.
-  std::vector<std::int64_t> up_ptr;
-  std::vector<std::int32_t> up_idx;
-  std::vector<double> up_val, rhs;  // (up_idx.size(), nb), (n, 3)
+  std::shared_ptr<const NormalPattern> pattern;
+  // The sums on and above the diagonal, at the pattern's entries (nb values each; made on the first run's adding)
+  // and A^T x ((n, 3)).
+  std::vector<double> values, rhs;
   // A block's share until its run is added: its Gram matrix's rows on and above the diagonal (packed, nb values
   // per entry) and A^T x ((width, 3)).
   struct Share {
@@ -88,22 +178,26 @@ struct NormalBlocks::State {
   std::size_t next_run = 0;  // the first run not yet added into the pattern
   bool adding = false;       // a thread is adding runs
   std::size_t n_runs() const { return run_complete.size(); }
-  std::size_t width(std::size_t b) const { return static_cast<std::size_t>(offsets[b + 1] - offsets[b]); }
+  void make_values() {
+    if (values.empty()) values.assign(pattern->indices.size() * nb, 0.0);
+  }
   // Run r's blocks' shares added at their entries, in the blocks' order, and released.
   void add_run(std::size_t r) {
+    const NormalPattern& p = *pattern;
+    make_values();
     const std::size_t b1 = std::min(shares.size(), (r + 1) * kBlocksPerRun);
     for (std::size_t b = r * kBlocksPerRun; b < b1; ++b) {
       Share& q = shares[b];
       if (q.gram.empty()) continue;
-      const std::size_t w = width(b);
-      const std::int32_t* cols = &columns[static_cast<std::size_t>(offsets[b])];
+      const std::size_t w = p.width(b);
+      const std::int32_t* cols = &p.columns[static_cast<std::size_t>(p.offsets[b])];
       for (std::size_t li = 0; li < w; ++li) {
         const auto i = static_cast<std::size_t>(cols[li]);
         const double* row = &q.gram[packed_row(li, w) * nb];
-        auto p = static_cast<std::size_t>(up_ptr[i]);
+        auto e = static_cast<std::size_t>(p.diagonal[i]);
         for (std::size_t c = li; c < w; ++c, row += nb) {
-          while (up_idx[p] != cols[c]) ++p;  // cols sorted, a subset of row i's
-          double* dst = &up_val[p * nb];
+          while (p.indices[e] != cols[c]) ++e;  // cols sorted, a subset of row i's
+          double* dst = &values[e * nb];
           for (std::size_t v = 0; v < nb; ++v) dst[v] += row[v];
         }
         if (!q.rhs.empty())
@@ -115,54 +209,21 @@ struct NormalBlocks::State {
 };
 
 NormalBlocks::NormalBlocks(std::size_t n, int weight_count, std::vector<std::int64_t> offsets,
-                           std::vector<std::int32_t> columns)
+                           std::vector<std::int32_t> columns, std::shared_ptr<const NormalPattern>* kept)
     : state_(std::make_unique<State>()) {
   if (weight_count != 0 && weight_count != 1 && weight_count != 6)
     throw ParameterError("weight_count must be 0, 1 or 6, got " + std::to_string(weight_count));
   State& s = *state_;
-  s.n = n;
   s.weight_count = weight_count;
   s.nb = weight_count == 6 ? 6 : 1;
-  s.offsets = std::move(offsets);
-  s.columns = std::move(columns);
-  const std::size_t n_blocks = s.offsets.empty() ? 0 : s.offsets.size() - 1;
-  // The blocks holding each column (A^T's rows over blocks): for column j, (block, position of j in its columns).
-  std::vector<std::int64_t> col_ptr(n + 1, 0);
-  for (const std::int32_t j : s.columns) ++col_ptr[static_cast<std::size_t>(j) + 1];
-  for (std::size_t j = 0; j < n; ++j) col_ptr[j + 1] += col_ptr[j];
-  std::vector<std::int32_t> col_blocks(s.columns.size()), col_pos(s.columns.size());
-  {
-    std::vector<std::int64_t> next(col_ptr.begin(), col_ptr.end() - 1);
-    for (std::size_t b = 0; b < n_blocks; ++b)
-      for (std::size_t p = 0; p < s.width(b); ++p) {
-        const auto slot = static_cast<std::size_t>(next[static_cast<std::size_t>(s.columns[s.offsets[b] + p])]++);
-        col_blocks[slot] = static_cast<std::int32_t>(b);
-        col_pos[slot] = static_cast<std::int32_t>(p);
-      }
+  if (kept != nullptr && *kept && (*kept)->n == n && (*kept)->offsets == offsets && (*kept)->columns == columns) {
+    s.pattern = *kept;
+  } else {
+    s.pattern = make_pattern(n, std::move(offsets), std::move(columns));
+    if (kept != nullptr) *kept = s.pattern;
   }
-  poll_interrupt();
-  // Row i's columns on and above the diagonal: those from i's position on of every block holding i (Gustavson).
-  s.up_ptr.assign(n + 1, 0);
-  {
-    std::vector<std::int32_t> marker(n, -1), touched;
-    for (std::size_t i = 0; i < n; ++i) {
-      touched.clear();
-      for (std::int64_t e = col_ptr[i]; e < col_ptr[i + 1]; ++e) {
-        const auto b = static_cast<std::size_t>(col_blocks[static_cast<std::size_t>(e)]);
-        const std::int32_t* cols = &s.columns[static_cast<std::size_t>(s.offsets[b])];
-        for (auto c = static_cast<std::size_t>(col_pos[static_cast<std::size_t>(e)]); c < s.width(b); ++c)
-          if (marker[static_cast<std::size_t>(cols[c])] != static_cast<std::int32_t>(i)) {
-            marker[static_cast<std::size_t>(cols[c])] = static_cast<std::int32_t>(i);
-            touched.push_back(cols[c]);
-          }
-      }
-      std::sort(touched.begin(), touched.end());
-      s.up_idx.insert(s.up_idx.end(), touched.begin(), touched.end());
-      s.up_ptr[i + 1] = static_cast<std::int64_t>(s.up_idx.size());
-    }
-  }
-  s.up_val.assign(s.up_idx.size() * s.nb, 0.0);
   s.rhs.assign(3 * n, 0.0);
+  const std::size_t n_blocks = s.pattern->n_blocks();
   s.shares.resize(n_blocks);
   const std::size_t n_runs = (n_blocks + kBlocksPerRun - 1) / kBlocksPerRun;
   s.run_complete.assign(n_runs, 0);
@@ -174,7 +235,7 @@ NormalBlocks::~NormalBlocks() = default;
 
 void NormalBlocks::add(std::size_t b, const double* rows, std::size_t count, const double* weights, const double* x) {
   State& s = *state_;
-  const std::size_t width = s.width(b);
+  const std::size_t width = s.pattern->width(b);
   State::Share& out = s.shares[b];
   if (count > 0 && width > 0) {
     out.gram.resize(packed_row(width, width) * s.nb);
@@ -216,46 +277,21 @@ void NormalBlocks::add(std::size_t b, const double* rows, std::size_t count, con
 NormalMatrix NormalBlocks::finish(double* rhs) {
   State& s = *state_;
   if (s.next_run != s.n_runs()) throw ParameterError("normal blocks: not every block was added");
-  const std::size_t n = s.n, nb = s.nb;
-  // The whole matrix: row i is the mirrored entries (j, i) of the rows j < i, in order of j, then row i's own.
+  const NormalPattern& p = *s.pattern;
+  const std::size_t n = p.n, nb = s.nb;
+  s.make_values();
+  // The entries below the diagonal copied from their mirrors, in ranges of rows on the core's threads.
+  const int tasks = detail::task_count(p.indices.size(), kEntriesPerTask);
+  detail::for_each_index(tasks > 1, tasks, n, [&](std::size_t j) {
+    for (auto e = static_cast<std::size_t>(p.indptr[j]); e < static_cast<std::size_t>(p.diagonal[j]); ++e)
+      std::copy_n(&s.values[static_cast<std::size_t>(p.mirror[e]) * nb], nb, &s.values[e * nb]);
+  });
   NormalMatrix M;
   M.n = n;
   M.blocks = static_cast<int>(nb);
-  std::vector<std::int64_t> lower(n + 1, 0);
-  for (const std::int32_t j : s.up_idx) ++lower[static_cast<std::size_t>(j) + 1];
-  // lower[j + 1] counts the upper entries in column j, the diagonal among them
-  M.indptr.assign(n + 1, 0);
-  for (std::size_t i = 0; i < n; ++i) {
-    const std::int64_t own = s.up_ptr[i + 1] - s.up_ptr[i];
-    M.indptr[i + 1] = M.indptr[i] + (own == 0 ? 0 : own + lower[i + 1] - 1);
-  }
-  const auto nnz = static_cast<std::size_t>(M.indptr[n]);
-  M.indices.resize(nnz);
-  // Where each entry above the diagonal is mirrored (-1 on the diagonal), in order of the rows (the columns alone).
-  std::vector<std::int64_t> mirror(s.up_idx.size());
-  {
-    std::vector<std::int64_t> next_lower(M.indptr.begin(), M.indptr.end() - 1);
-    for (std::size_t i = 0; i < n; ++i) {
-      auto own = static_cast<std::size_t>(M.indptr[i + 1] - (s.up_ptr[i + 1] - s.up_ptr[i]));
-      for (auto p = static_cast<std::size_t>(s.up_ptr[i]); p < static_cast<std::size_t>(s.up_ptr[i + 1]); ++p, ++own) {
-        const auto j = static_cast<std::size_t>(s.up_idx[p]);
-        M.indices[own] = s.up_idx[p];
-        mirror[p] = j == i ? -1 : next_lower[j]++;
-        if (j != i) M.indices[static_cast<std::size_t>(mirror[p])] = static_cast<std::int32_t>(i);
-      }
-    }
-  }
-  // The values, at their places and their mirrors', in ranges of rows on the core's threads.
-  M.values.resize(nnz * nb);
-  const int tasks = detail::task_count(s.up_idx.size(), kEntriesPerTask);
-  detail::for_each_index(tasks > 1, tasks, n, [&](std::size_t i) {
-    auto own = static_cast<std::size_t>(M.indptr[i + 1] - (s.up_ptr[i + 1] - s.up_ptr[i]));
-    for (auto p = static_cast<std::size_t>(s.up_ptr[i]); p < static_cast<std::size_t>(s.up_ptr[i + 1]); ++p, ++own) {
-      const double* val = &s.up_val[p * nb];
-      std::copy(val, val + nb, &M.values[own * nb]);
-      if (mirror[p] >= 0) std::copy(val, val + nb, &M.values[static_cast<std::size_t>(mirror[p]) * nb]);
-    }
-  });
+  M.indptr = p.indptr;
+  M.indices = p.indices;
+  M.values = std::move(s.values);
   if (rhs != nullptr) std::copy(s.rhs.begin(), s.rhs.end(), rhs);
   return M;
 }

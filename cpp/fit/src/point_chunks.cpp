@@ -346,11 +346,13 @@ NormalSums ApproximationChunk::normal_sums(const LimitSurface& surface, double t
   // Each block of rows (a face's points) is weighted and multiplied out where it is made, in the cache, and added
   // into the pattern of the blocks' columns in the blocks' order (NormalBlocks).
   std::unique_ptr<NormalBlocks> blocks;
+  std::shared_ptr<const NormalPattern> pattern = std::atomic_load(&normal_pattern_);
   surface.position_blocks(
       current.face_ids.data(), current.uv.data(), k, frame.scratch(),
       [&](std::vector<std::int64_t>&& offsets, std::vector<std::int32_t>&& columns) {
         blocks = std::make_unique<NormalBlocks>(surface.n_vertices(), weight_count, std::move(offsets),
-                                                std::move(columns));
+                                                std::move(columns), &pattern);
+        std::atomic_store(&normal_pattern_, pattern);
       },
       [&](const PositionBlock& b) {
         // The block's points, weights and weighted points (W p), in the block's order.

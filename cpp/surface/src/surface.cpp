@@ -13,6 +13,7 @@
 #include <atomic>
 #include <cmath>
 #include <cstdio>
+#include <exception>
 #include <limits>
 #include <mutex>
 #include <numeric>
@@ -92,6 +93,10 @@ constexpr std::ptrdiff_t kFacesPerChunk = 64;
 
 // Points per task of rows()' copy into the matrices, at least.
 constexpr std::size_t kRowsPerCopyTask = 65536;
+// Points per task of the checks of faces and parameters, at least.
+constexpr std::size_t kPointsPerCheckTask = 65536;
+// Faces per task of position_blocks' columns, at least.
+constexpr std::size_t kFacesPerColumnsTask = 4096;
 
 // Threads for `n_groups` faces: no more than there are chunks, so a small
 // query runs on the calling thread alone, and no more than the processors.
@@ -129,8 +134,9 @@ std::string face_words(Scheme scheme, double faces, int level) {
 // the face's first evaluation after each change of the control vertices
 // (invalidate()) and kept until the next, so that every evaluation of the
 // face until then (Gauss-Newton steps, grid samples, rounds of a search)
-// uses them as they are. Both are built by whichever thread asks first,
-// under a lock per face (striped), and read without one after.
+// uses them as they are; its columns (its control points as mesh vertices)
+// are made on their first use and kept. Each is made by whichever thread
+// asks first, under a lock per face (striped), and read without one after.
 class BfrSurfaces {
  public:
   BfrSurfaces(const Far::TopologyRefiner& refiner, const Topology& t, Bfr::SurfaceFactory::Options options)
@@ -189,6 +195,27 @@ class BfrSurfaces {
     return f.patch.data();
   }
 
+  // Face `face`'s control points (of the surface get() returned) as mesh
+  // vertices (`from_osd`), sorted and distinct: the columns of its points'
+  // rows, made on the face's first use and kept (they depend on the topology
+  // alone).
+  const std::vector<std::int32_t>& columns(int face, const std::vector<std::int32_t>& from_osd) const {
+    Face& f = faces_[static_cast<std::size_t>(face)];
+    if (!f.has_columns.load(std::memory_order_acquire)) {
+      const std::lock_guard<std::mutex> lock(stripe(face));
+      if (!f.has_columns.load(std::memory_order_relaxed)) {
+        std::vector<int> cv(static_cast<std::size_t>(f.surface.GetNumControlPoints()));
+        f.surface.GetControlPointIndices(cv.data());
+        f.columns.resize(cv.size());
+        for (std::size_t c = 0; c < cv.size(); ++c) f.columns[c] = from_osd[static_cast<std::size_t>(cv[c])];
+        std::sort(f.columns.begin(), f.columns.end());
+        f.columns.erase(std::unique(f.columns.begin(), f.columns.end()), f.columns.end());
+        f.has_columns.store(true, std::memory_order_release);
+      }
+    }
+    return f.columns;
+  }
+
   // The control vertices changed: every face's patch points are prepared
   // again on its next use. The caller holds the surface's lock exclusively.
   void invalidate() { ++generation_; }
@@ -201,8 +228,10 @@ class BfrSurfaces {
   struct Face {
     Bfr::Surface<double> surface;
     std::vector<double> patch;
+    std::vector<std::int32_t> columns;       // columns()'s
     std::atomic<std::uint64_t> prepared{0};  // the generation the patch points are of (0: none)
     std::atomic<std::uint8_t> built{kNotBuilt};
+    std::atomic<bool> has_columns{false};
     bool alone = false;  // built by uncached_
   };
   std::mutex& stripe(int face) const { return stripes_[static_cast<std::size_t>(face) % kStripes]; }
@@ -296,6 +325,25 @@ struct LimitSurface::Impl {
 namespace {
 
 std::string uv_str(double u, double v) { return "(" + std::to_string(u) + ", " + std::to_string(v) + ")"; }
+
+// check(i) for i in [0, k), in ranges of points on the core's threads where there are many; what the first i to
+// throw throws is thrown (as by a loop in order).
+template <class Check>
+void check_points(std::size_t k, Check check) {
+  const int tasks = detail::task_count(k, kPointsPerCheckTask);
+  const auto t_count = static_cast<std::size_t>(tasks);
+  std::vector<std::exception_ptr> failed(t_count);
+  detail::for_each_task(tasks > 1, tasks, [&](int t) {
+    const auto r = static_cast<std::size_t>(t);
+    try {
+      for (std::size_t i = k * r / t_count; i < k * (r + 1) / t_count; ++i) check(i);
+    } catch (...) {
+      failed[r] = std::current_exception();
+    }
+  });
+  for (const std::exception_ptr& e : failed)
+    if (e) std::rethrow_exception(e);
+}
 
 // Checks (u, v) against the domain of a face with parameterisation `param`
 // (see surface.hpp) and pulls a point a rounding error outside onto it.
@@ -535,9 +583,7 @@ void face_stencils(const BfrSurfaces& factory, const std::vector<std::int32_t>& 
         for (int c = 0; c < n_cv; ++c) mapped[c] = from_osd[cv[c]];
         slot.resize(n_cv);
         std::vector<std::int32_t>& cols = out.columns;
-        cols = mapped;
-        std::sort(cols.begin(), cols.end());
-        cols.erase(std::unique(cols.begin(), cols.end()), cols.end());
+        cols = factory.columns(face, from_osd);
         for (int c = 0; c < n_cv; ++c)
           slot[c] = static_cast<std::int32_t>(std::lower_bound(cols.begin(), cols.end(), mapped[c]) - cols.begin());
         const std::size_t width = cols.size(), count = static_cast<std::size_t>(last - first);
@@ -588,7 +634,7 @@ void LimitSurface::visit_faces(const std::int32_t* face_ids, std::size_t k,
 void LimitSurface::check_faces(const std::int32_t* face_ids, std::size_t k) const {
   const std::size_t n_f = n_faces();
   const auto& level0 = impl_->base.refiner->GetLevel(0);
-  for (std::size_t i = 0; i < k; ++i) {
+  check_points(k, [&](std::size_t i) {
     const std::int32_t f = face_ids[i];
     if (f < 0 || static_cast<std::size_t>(f) >= n_f)
       throw ParameterError("face_ids[" + std::to_string(i) + "] = " + std::to_string(f) + " is out of range [0, " +
@@ -602,16 +648,18 @@ void LimitSurface::check_faces(const std::int32_t* face_ids, std::size_t k) cons
                       ", an interior vertex of two faces with one infinitely sharp edge, where OpenSubdiv's Bfr "
                       "before 3.6.1 (this build has " + std::to_string(OPENSUBDIV_VERSION_NUMBER) +
                       ") evaluates no valid surface: remove that sharp edge, or split the vertex's faces");
-  }
+  });
 }
 
 void LimitSurface::checked_params(const std::int32_t* face_ids, const double* uv, std::size_t k,
                                   double* params) const {
   check_faces(face_ids, k);
   const BfrSurfaces& factory = *impl_->factory;
-  std::copy_n(uv, 2 * k, params);
-  for (std::size_t i = 0; i < k; ++i)
+  check_points(k, [&](std::size_t i) {
+    params[2 * i] = uv[2 * i];
+    params[2 * i + 1] = uv[2 * i + 1];
     check_uv(factory.parameterization(face_ids[i]), i, params[2 * i], params[2 * i + 1]);
+  });
 }
 
 std::vector<std::int32_t> LimitSurface::exact_corners(const std::int32_t* face_ids, const double* params,
@@ -675,43 +723,38 @@ void LimitSurface::position_blocks(
   double* const params = frame.take<double>(2 * k);
   checked_params(face_ids, uv, k, params);
   // The faces' blocks in increasing order of the face (the ids are checked), then the points with B's rows.
-  std::vector<std::int32_t> face_block(n_faces(), -1);
+  std::vector<std::int32_t> face_block(n_faces(), -1), used;  // used: the faces' blocks' faces
   for (std::size_t i = 0; i < k; ++i) face_block[static_cast<std::size_t>(face_ids[i])] = 0;
-  std::size_t n_used = 0;
-  for (std::int32_t& block : face_block)
-    if (block == 0) block = static_cast<std::int32_t>(n_used++);
+  for (std::size_t f = 0; f < face_block.size(); ++f)
+    if (face_block[f] == 0) {
+      face_block[f] = static_cast<std::int32_t>(used.size());
+      used.push_back(static_cast<std::int32_t>(f));
+    }
+  const std::size_t n_used = used.size();
   const std::vector<std::int32_t> slots = exact_corners(face_ids, params, k);
   const auto from_b = [&](std::size_t i) { return !slots.empty() && slots[i] >= 0; };
   const CsrMatrix& exact = impl_->exact.rows;
   const std::vector<std::int32_t>& from_osd = impl_->base.from_osd;
   {
-    // Every block's columns: a face's control points (sorted, distinct; none where all its points have B's rows),
-    // then B's rows'.
-    std::vector<char> any_face_row(n_used, 0);
-    for (std::size_t i = 0; i < k; ++i)
+    // Every block's columns: a face's control points (BfrSurfaces::columns; none where all its points have B's
+    // rows, or where Bfr cannot build the face, for which face_stencils below throws), then B's rows'.
+    std::vector<char> any_face_row(slots.empty() ? 0 : n_used, 0);
+    for (std::size_t i = 0; i < slots.size(); ++i)
       if (!from_b(i)) any_face_row[static_cast<std::size_t>(face_block[static_cast<std::size_t>(face_ids[i])])] = 1;
-    std::vector<std::vector<std::int32_t>> face_columns(n_used);
+    std::vector<const std::vector<std::int32_t>*> face_columns(n_used, nullptr);
     {
       const std::shared_lock<std::shared_mutex> lock(impl_->mutex);
-      for_each_face_surface(*impl_->factory, face_ids, k,
-                            [&](const Bfr::Surface<double>& surface, int face, const std::size_t*, const std::size_t*) {
-                              const auto b = static_cast<std::size_t>(face_block[static_cast<std::size_t>(face)]);
-                              if (!any_face_row[b]) return;
-                              thread_local std::vector<int> cv;
-                              cv.resize(static_cast<std::size_t>(surface.GetNumControlPoints()));
-                              surface.GetControlPointIndices(cv.data());
-                              std::vector<std::int32_t>& cols = face_columns[b];
-                              cols.resize(cv.size());
-                              for (std::size_t c = 0; c < cv.size(); ++c)
-                                cols[c] = from_osd[static_cast<std::size_t>(cv[c])];
-                              std::sort(cols.begin(), cols.end());
-                              cols.erase(std::unique(cols.begin(), cols.end()), cols.end());
-                            });
+      const BfrSurfaces& factory = *impl_->factory;
+      const int tasks = detail::task_count(n_used, kFacesPerColumnsTask);
+      detail::for_each_index(tasks > 1, tasks, n_used, [&](std::size_t b) {
+        if ((any_face_row.empty() || any_face_row[b]) && factory.get(used[b]) != nullptr)
+          face_columns[b] = &factory.columns(used[b], from_osd);
+      });
     }
     std::vector<std::int64_t> offsets{0};
     std::vector<std::int32_t> columns;
-    for (const std::vector<std::int32_t>& cols : face_columns) {
-      columns.insert(columns.end(), cols.begin(), cols.end());
+    for (const std::vector<std::int32_t>* cols : face_columns) {
+      if (cols != nullptr) columns.insert(columns.end(), cols->begin(), cols->end());
       offsets.push_back(static_cast<std::int64_t>(columns.size()));
     }
     for (std::size_t i = 0; i < slots.size(); ++i)

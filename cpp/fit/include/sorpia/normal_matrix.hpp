@@ -33,6 +33,12 @@ struct CsrRows {
   const double* data = nullptr;
 };
 
+/// The pattern of NormalBlocks' matrix, which the blocks' columns alone fix:
+/// made by NormalBlocks and kept by a caller whose next blocks may have the
+/// same columns (approximation's next update, its points on the same faces),
+/// so that it is made once. Immutable once made: one may be shared.
+struct NormalPattern;
+
 /// A^T W A and A^T x summed a block of rows at a time: a block is rows with
 /// the same columns (the points of one face), dense. The blocks' columns are
 /// given first, which fixes the matrix's pattern; each block's share is then
@@ -46,8 +52,12 @@ class NormalBlocks {
   /// @param n        columns of A (the cage's vertices)
   /// @param offsets, columns  block b's columns (sorted, distinct, each < n)
   ///                 are columns[offsets[b] .. offsets[b + 1])
+  /// @param kept     where not null, the pattern is *kept where that was
+  ///                 made from the same n, offsets and columns, else it is
+  ///                 made (on the core's threads) and stored into *kept
   /// @throws ParameterError for a weight count other than 0, 1 or 6
-  NormalBlocks(std::size_t n, int weight_count, std::vector<std::int64_t> offsets, std::vector<std::int32_t> columns);
+  NormalBlocks(std::size_t n, int weight_count, std::vector<std::int64_t> offsets, std::vector<std::int32_t> columns,
+               std::shared_ptr<const NormalPattern>* kept = nullptr);
   ~NormalBlocks();
   NormalBlocks(const NormalBlocks&) = delete;
   NormalBlocks& operator=(const NormalBlocks&) = delete;

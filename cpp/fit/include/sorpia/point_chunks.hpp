@@ -163,6 +163,9 @@ class ApproximationChunk {
   DistanceSums sums(const std::vector<double>& distances, detail::Scratch* scratch = nullptr) const;
   std::size_t k_ = 0, first_ = 0;
   std::vector<double> points_, weights_;  // weights_ empty: all 1
+  // The normal matrix's pattern of the last normal_sums (NormalBlocks' `kept`: the same while the faces holding
+  // the points do), read and replaced atomically (std::atomic_load, std::atomic_store).
+  mutable std::shared_ptr<const NormalPattern> normal_pattern_;
 };
 
 /// The driver's view of all chunks (a backend). The driver calls, in order:
