@@ -11,6 +11,7 @@
 #include <utility>
 #include <vector>
 
+#include "sorpia/detail/order.hpp"
 #include "sorpia/detail/parallel.hpp"
 #include "sorpia/detail/spatial.hpp"
 #include "sorpia/detail/unit_normal.hpp"
@@ -704,12 +705,7 @@ void refine(const LimitSurface& surface, const Topology& topology, const double*
   // The points in the order of their starting faces (a counting sort): slot s holds point point_of[s]. Then, its
   // room reused, the slots pending (pending[0 .. n_pending)).
   std::size_t* const point_of = frame.take<std::size_t>(n);
-  {
-    std::vector<std::size_t> start(static_cast<std::size_t>(m) + 1, 0);
-    for (std::size_t i = 0; i < n; ++i) ++start[static_cast<std::size_t>(fp.face_ids[i]) + 1];
-    for (std::size_t f = 1; f < start.size(); ++f) start[f] += start[f - 1];
-    for (std::size_t i = 0; i < n; ++i) point_of[start[static_cast<std::size_t>(fp.face_ids[i])]++] = i;
-  }
+  detail::order_by_key(fp.face_ids.data(), n, static_cast<std::size_t>(m), point_of);
   // The Gauss-Newton step at q's best point, in (u, v), within the trust
   // region: false when the point is final, else q's current point has moved
   // (fresh, possibly into another face).

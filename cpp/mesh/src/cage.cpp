@@ -585,14 +585,13 @@ constexpr int kGridSmoothRounds = 4;
 std::vector<OpenMesh::Vec3d> smoothed(const std::vector<OpenMesh::Vec3d>& p, const std::int32_t* idx,
                                       std::size_t n_corners, const std::vector<char>& fixed, int rounds) {
   std::vector<OpenMesh::Vec3d> q(p), sum(p.size());
-  std::vector<std::int32_t> count(p.size());
+  std::vector<std::int32_t> count(p.size(), 0);  // the neighbours summed (each edge of a face once per face)
+  for (std::size_t c = 0; c < n_corners; ++c) count[idx[c]] += 2;
   for (int r = 0; r < rounds; ++r) {
     std::fill(sum.begin(), sum.end(), OpenMesh::Vec3d(0.0, 0.0, 0.0));
-    std::fill(count.begin(), count.end(), 0);
     for (std::size_t c = 0; c < n_corners; ++c) {
       const std::size_t first = c - c % 3;
       sum[idx[c]] += q[idx[first + (c + 1) % 3]] + q[idx[first + (c + 2) % 3]];
-      count[idx[c]] += 2;
     }
     for (std::size_t v = 0; v < p.size(); ++v)
       if (count[v] > 0 && !fixed[v]) q[v] = 0.5 * q[v] + (0.5 / count[v]) * sum[v];

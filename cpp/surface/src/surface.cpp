@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "sorpia/detail/level_dependent_rows.hpp"
+#include "sorpia/detail/order.hpp"
 #include "sorpia/detail/osd_refiner.hpp"
 #include "sorpia/detail/parallel.hpp"
 #include "sorpia/detail/unit_normal.hpp"
@@ -441,16 +442,13 @@ void for_each_face_surface(const BfrSurfaces& factory, const std::int32_t* face_
   // counting sort by face (stable, linear; the ids are checked, >= 0).
   std::int32_t max_face = -1;
   for (std::size_t i = 0; i < k; ++i) max_face = std::max(max_face, face_ids[i]);
-  std::vector<std::size_t> count(static_cast<std::size_t>(max_face) + 2, 0);
-  for (std::size_t i = 0; i < k; ++i) ++count[static_cast<std::size_t>(face_ids[i]) + 1];
-  std::vector<std::size_t> group_start;
-  for (std::size_t f = 1; f < count.size(); ++f) {
-    if (count[f] > 0) group_start.push_back(count[f - 1]);
-    count[f] += count[f - 1];
-  }
-  group_start.push_back(k);
   std::vector<std::size_t> order(k);
-  for (std::size_t i = 0; i < k; ++i) order[count[static_cast<std::size_t>(face_ids[i])]++] = i;
+  const std::vector<std::size_t> first =
+      detail::order_by_key(face_ids, k, static_cast<std::size_t>(max_face) + 1, order.data());
+  std::vector<std::size_t> group_start;  // the faces with points
+  for (std::size_t f = 0; f + 1 < first.size(); ++f)
+    if (first[f + 1] > first[f]) group_start.push_back(first[f]);
+  group_start.push_back(k);
   const auto n_groups = static_cast<std::ptrdiff_t>(group_start.size()) - 1;
 
   std::atomic<int> failed_face{-1};
