@@ -115,7 +115,7 @@ Irregular::Irregular(const Topology& t, Scheme scheme, const Tags& tags) : verte
     pairs.insert(pairs.end(), {a, b});
   }
   if (pairs.empty()) return;
-  const std::vector<std::int32_t> twin = t.half_edge_twins();
+  const std::vector<std::int32_t>& twin = t.half_edge_twins();
   half_edge.assign(twin.size(), 0);
   for (const std::int32_t h : t.find_half_edges(pairs.data(), pairs.size() / 2)) {
     if (h < 0) continue;  // not an edge (check_tags refuses it): nothing to refine towards

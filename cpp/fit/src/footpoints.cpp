@@ -296,7 +296,7 @@ enum class Kind : std::uint8_t { Triangle, Quad, Sub };
 struct Domains {
   const Topology& topology;
   Scheme scheme;
-  std::vector<std::int32_t> opposite;  // half-edge (face_offset(f) + e) -> half-edge across, or -1
+  const std::vector<std::int32_t>& opposite;  // half-edge (face_offset(f) + e) -> half-edge across, or -1 (the topology's)
   std::vector<std::int32_t> half_edge_face;
   std::vector<std::uint8_t> hole;
 
@@ -620,6 +620,8 @@ constexpr int kPolishSteps = 400;
 // The rounding of a computed distance, in units of epsilon times the size of
 // the surface point's coordinates (|p|_1 + distance).
 constexpr double kRounding = 8.0;
+// Points per task, at least, of refine's checks and lists of the points (a few loads and stores each).
+constexpr std::size_t kPointsPerTask = 65536;
 
 // Limit points known where the search starts (closest_points' grid samples,
 // evaluated with their derivatives): point i starts at sample nearest[i],
@@ -692,10 +694,11 @@ void refine(const LimitSurface& surface, const Topology& topology, const double*
                          std::to_string(fp.uv.size() / 2) + " parameters for " + std::to_string(n) + " points");
   const Domains dom(topology, surface.scheme(), surface.tags().holes);
   const auto m = static_cast<std::int32_t>(topology.n_faces());
-  for (std::size_t i = 0; i < n; ++i)
+  detail::check_each_index(n, kPointsPerTask, [&](std::size_t i) {
     if (fp.face_ids[i] < 0 || fp.face_ids[i] >= m)
       throw ParameterError("face_ids[" + std::to_string(i) + "] = " + std::to_string(fp.face_ids[i]) +
                            " is out of range [0, " + std::to_string(m) + ")");
+  });
   if (!(options.uv_tolerance >= 0.0 && options.uv_tolerance < 1.0))
     throw ParameterError("uv_tolerance = " + std::to_string(options.uv_tolerance) + " must be in [0, 1)");
   detail::Scratch::Frame frame(scratch);
@@ -857,25 +860,30 @@ void refine(const LimitSurface& surface, const Topology& topology, const double*
     }
   };
   std::size_t* const pending = point_of;
-  std::size_t n_pending = 0;
-  for (std::size_t s = 0; s < n; ++s)
-    if (slots[s].fresh) pending[n_pending++] = s;
+  std::size_t* const staging = frame.take<std::size_t>(n);  // keep_in_order's
+  std::size_t n_pending = detail::keep_in_order(
+      n, kPointsPerTask, [&](std::size_t s) { return slots[s].fresh != 0; }, [](std::size_t s) { return s; }, staging,
+      pending);
   std::int32_t* const pending_faces = frame.take<std::int32_t>(n);
   while (n_pending > 0) {
-    for (std::size_t j = 0; j < n_pending; ++j) pending_faces[j] = slots[pending[j]].face;
+    const int gather_tasks = detail::task_count(n_pending, kPointsPerTask);
+    detail::for_each_index(gather_tasks > 1, gather_tasks, n_pending,
+                           [&](std::size_t j) { pending_faces[j] = slots[pending[j]].face; });
     surface.visit_faces(pending_faces, n_pending,
                         [&](std::int32_t f_visit, const std::size_t* first, const std::size_t* last,
                             const LimitSurface::FaceEvaluation& evaluate) {
                           for (const std::size_t* it = first; it != last; ++it)
                             run(slots[pending[*it]], f_visit, evaluate);
                         });
-    std::size_t w = 0;
-    for (std::size_t j = 0; j < n_pending; ++j)
-      if (slots[pending[j]].again) {
-        slots[pending[j]].again = 0;
-        pending[w++] = pending[j];
-      }
-    n_pending = w;
+    n_pending = detail::keep_in_order(
+        n_pending, kPointsPerTask,
+        [&](std::size_t j) {
+          Slot& q = slots[pending[j]];
+          const bool again = q.again != 0;
+          q.again = 0;
+          return again;
+        },
+        [&](std::size_t j) { return pending[j]; }, staging, pending);
     poll_interrupt();
   }
   // Back in input order, at the best points.
@@ -1408,10 +1416,11 @@ std::size_t FootpointSearch::closer(const double* points, std::size_t n, Footpoi
                          std::to_string(fp.uv.size() / 2) + " parameters and " + std::to_string(fp.distances.size()) +
                          " distances for " + std::to_string(n) + " points");
   const auto m = static_cast<std::int32_t>(topology_->n_faces());
-  for (std::size_t i = 0; i < n; ++i)
+  detail::check_each_index(n, kPointsPerTask, [&](std::size_t i) {
     if (fp.face_ids[i] < 0 || fp.face_ids[i] >= m)
       throw ParameterError("face_ids[" + std::to_string(i) + "] = " + std::to_string(fp.face_ids[i]) +
                            " is out of range [0, " + std::to_string(m) + ")");
+  });
   const auto starts = static_cast<std::size_t>(std::max(options_.starts, 0));
   if (n == 0 || starts == 0) return 0;
   const bool has_positions = fp.positions.size() == 3 * n, has_normals = fp.normals.size() == 3 * n;

@@ -610,12 +610,19 @@ std::vector<std::int32_t> Topology::face_offsets() const {
   return off;
 }
 
-std::vector<std::int32_t> Topology::half_edge_twins() const {
-  if (all_triangles_) return detail::EdgeGroups(detail::FaceArrays::triangles(n_faces_).over(face_indices_.data()),
-                                                n_vertices_).mates();
-  const std::vector<std::int32_t> corner_face = detail::corner_faces(face_offsets_);
-  const detail::FaceList fl{face_indices_.data(), face_offsets_.data(), corner_face.data(), n_faces_};
-  return detail::EdgeGroups(fl, n_vertices_).mates();
+const std::vector<std::int32_t>& Topology::half_edge_twins() const {
+  if (!twins_) twins_ = std::make_shared<Twins>();  // a Topology moved from (not shared with another thread)
+  std::call_once(twins_->made, [&] {
+    if (all_triangles_) {
+      twins_->twins = detail::EdgeGroups(detail::FaceArrays::triangles(n_faces_).over(face_indices_.data()),
+                                         n_vertices_).mates();
+      return;
+    }
+    const std::vector<std::int32_t> corner_face = detail::corner_faces(face_offsets_);
+    const detail::FaceList fl{face_indices_.data(), face_offsets_.data(), corner_face.data(), n_faces_};
+    twins_->twins = detail::EdgeGroups(fl, n_vertices_).mates();
+  });
+  return twins_->twins;
 }
 
 std::vector<std::int32_t> Topology::find_half_edges(const std::int32_t* pairs, std::size_t k) const {

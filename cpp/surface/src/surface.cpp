@@ -94,7 +94,7 @@ constexpr std::ptrdiff_t kFacesPerChunk = 64;
 
 // Points per task of rows()' copy into the matrices, at least.
 constexpr std::size_t kRowsPerCopyTask = 65536;
-// Points per task of the checks of faces and parameters, at least.
+// Points per task of the checks of faces and parameters (and of the largest face id), at least.
 constexpr std::size_t kPointsPerCheckTask = 65536;
 // Faces per task of position_blocks' columns, at least.
 constexpr std::size_t kFacesPerColumnsTask = 4096;
@@ -327,25 +327,6 @@ namespace {
 
 std::string uv_str(double u, double v) { return "(" + std::to_string(u) + ", " + std::to_string(v) + ")"; }
 
-// check(i) for i in [0, k), in ranges of points on the core's threads where there are many; what the first i to
-// throw throws is thrown (as by a loop in order).
-template <class Check>
-void check_points(std::size_t k, Check check) {
-  const int tasks = detail::task_count(k, kPointsPerCheckTask);
-  const auto t_count = static_cast<std::size_t>(tasks);
-  std::vector<std::exception_ptr> failed(t_count);
-  detail::for_each_task(tasks > 1, tasks, [&](int t) {
-    const auto r = static_cast<std::size_t>(t);
-    try {
-      for (std::size_t i = k * r / t_count; i < k * (r + 1) / t_count; ++i) check(i);
-    } catch (...) {
-      failed[r] = std::current_exception();
-    }
-  });
-  for (const std::exception_ptr& e : failed)
-    if (e) std::rethrow_exception(e);
-}
-
 // Checks (u, v) against the domain of a face with parameterisation `param`
 // (see surface.hpp) and pulls a point a rounding error outside onto it.
 void check_uv(const Bfr::Parameterization& param, std::size_t i, double& u, double& v) {
@@ -440,8 +421,14 @@ template <class Fn>
 void for_each_face_surface(const BfrSurfaces& factory, const std::int32_t* face_ids, std::size_t k, Fn fn) {
   // Group the points by face so that each face's surface is built once: a
   // counting sort by face (stable, linear; the ids are checked, >= 0).
-  std::int32_t max_face = -1;
-  for (std::size_t i = 0; i < k; ++i) max_face = std::max(max_face, face_ids[i]);
+  const int tasks = detail::task_count(k, kPointsPerCheckTask);
+  const auto t_count = static_cast<std::size_t>(tasks);
+  const double max_face = detail::max_over_tasks(tasks > 1, tasks, [&](int t) {
+    const auto r = static_cast<std::size_t>(t);
+    std::int32_t m = 0;
+    for (std::size_t i = k * r / t_count; i < k * (r + 1) / t_count; ++i) m = std::max(m, face_ids[i]);
+    return static_cast<double>(m);
+  });
   std::vector<std::size_t> order(k);
   const std::vector<std::size_t> first =
       detail::order_by_key(face_ids, k, static_cast<std::size_t>(max_face) + 1, order.data());
@@ -632,7 +619,7 @@ void LimitSurface::visit_faces(const std::int32_t* face_ids, std::size_t k,
 void LimitSurface::check_faces(const std::int32_t* face_ids, std::size_t k) const {
   const std::size_t n_f = n_faces();
   const auto& level0 = impl_->base.refiner->GetLevel(0);
-  check_points(k, [&](std::size_t i) {
+  detail::check_each_index(k, kPointsPerCheckTask, [&](std::size_t i) {
     const std::int32_t f = face_ids[i];
     if (f < 0 || static_cast<std::size_t>(f) >= n_f)
       throw ParameterError("face_ids[" + std::to_string(i) + "] = " + std::to_string(f) + " is out of range [0, " +
@@ -653,7 +640,7 @@ void LimitSurface::checked_params(const std::int32_t* face_ids, const double* uv
                                   double* params) const {
   check_faces(face_ids, k);
   const BfrSurfaces& factory = *impl_->factory;
-  check_points(k, [&](std::size_t i) {
+  detail::check_each_index(k, kPointsPerCheckTask, [&](std::size_t i) {
     params[2 * i] = uv[2 * i];
     params[2 * i + 1] = uv[2 * i + 1];
     check_uv(factory.parameterization(face_ids[i]), i, params[2 * i], params[2 * i + 1]);

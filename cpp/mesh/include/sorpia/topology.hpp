@@ -5,6 +5,8 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -120,10 +122,12 @@ class Topology {
   /// runs from corner i of face f to corner i + 1 (face_indices()[h] to the
   /// face's next corner); half_edge_twins()[h] is the half-edge of the other
   /// face on that edge (which runs the other way), or -1 on the boundary.
-  /// Computed on each call by detail::EdgeGroups (half_edges.hpp), the matcher
-  /// the face checks' messages, repair and the statistics use: the build
-  /// matches edges per vertex and stores no half-edges.
-  std::vector<std::int32_t> half_edge_twins() const;
+  /// Computed by detail::EdgeGroups (half_edges.hpp), the matcher the face
+  /// checks' messages, repair and the statistics use, on the first call (the
+  /// build matches edges per vertex and stores no half-edges) and kept: later
+  /// calls, from any thread, return the same array (a copy of the Topology
+  /// shares it).
+  const std::vector<std::int32_t>& half_edge_twins() const;
   /// For each of k vertex pairs (pairs[2i], pairs[2i + 1]), either order, the
   /// lower-numbered half-edge of the edge between them (numbered as in
   /// half_edge_twins), or -1 where they share no edge. Computed on each call
@@ -157,6 +161,12 @@ class Topology {
   std::size_t n_edges_ = 0;
   std::size_t n_boundary_edges_ = 0;
   std::size_t n_unreferenced_ = 0;
+  // half_edge_twins(), made once on first use; shared by copies (their faces are the same).
+  struct Twins {
+    std::once_flag made;
+    std::vector<std::int32_t> twins;
+  };
+  mutable std::shared_ptr<Twins> twins_ = std::make_shared<Twins>();
 };
 
 }  // namespace sorpia

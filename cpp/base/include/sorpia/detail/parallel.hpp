@@ -4,7 +4,9 @@
 // that can solve in parallel too (libgomp's pool hangs in the child), and a
 // thread that cannot be started (a memory or process limit) makes the work run
 // on the calling thread instead of ending the process (libgomp exits).
+#include <algorithm>
 #include <cstddef>
+#include <exception>
 #include <functional>
 #include <vector>
 
@@ -64,6 +66,54 @@ void for_each_index(bool parallel, int n_tasks, std::size_t n, Body body) {
     const auto k = static_cast<std::size_t>(t);
     for (std::size_t i = n * k / t_count; i < n * (k + 1) / t_count; ++i) body(i);
   });
+}
+
+/// check(i) for i in [0, n), in ranges of at least `per_task` indices on the
+/// core's threads; what the first i to throw throws is thrown (as by a loop in
+/// order: each range stops at its first, the lowest range's is rethrown).
+template <class Check>
+void check_each_index(std::size_t n, std::size_t per_task, Check check) {
+  const int tasks = task_count(n, per_task);
+  const auto t_count = static_cast<std::size_t>(tasks);
+  std::vector<std::exception_ptr> failed(t_count);
+  for_each_task(tasks > 1, tasks, [&](int t) {
+    const auto r = static_cast<std::size_t>(t);
+    try {
+      for (std::size_t i = n * r / t_count; i < n * (r + 1) / t_count; ++i) check(i);
+    } catch (...) {
+      failed[r] = std::current_exception();
+    }
+  });
+  for (const std::exception_ptr& e : failed)
+    if (e) std::rethrow_exception(e);
+}
+
+/// The values value(j) of the j in [0, n) with keep(j), in the order of j,
+/// written to out[0 ..); returns how many. keep and value are called once per
+/// j (keep first), in ranges of at least `per_task` indices on the core's
+/// threads: each range's values are staged at its own start in `staging` (n
+/// entries, not overlapping out), then copied to their places once every
+/// range is done (so out may be the array keep and value read).
+template <class T, class Keep, class Value>
+std::size_t keep_in_order(std::size_t n, std::size_t per_task, Keep keep, Value value, T* staging, T* out) {
+  const int tasks = task_count(n, per_task);
+  const auto t_count = static_cast<std::size_t>(tasks);
+  std::vector<std::size_t> kept(t_count + 1, 0);  // per range its count, then where its values go
+  for_each_task(tasks > 1, tasks, [&](int t) {
+    const auto r = static_cast<std::size_t>(t);
+    const std::size_t first = n * r / t_count;
+    std::size_t w = first;
+    for (std::size_t j = first; j < n * (r + 1) / t_count; ++j)
+      if (keep(j)) staging[w++] = value(j);
+    kept[r + 1] = w - first;
+  });
+  for (std::size_t r = 0; r < t_count; ++r) kept[r + 1] += kept[r];
+  for_each_task(tasks > 1, tasks, [&](int t) {
+    const auto r = static_cast<std::size_t>(t);
+    const T* from = staging + n * r / t_count;
+    std::copy(from, from + (kept[r + 1] - kept[r]), out + kept[r]);
+  });
+  return kept[t_count];
 }
 
 /// The largest of f(t) for t in [0, n_tasks) (0 for none), the tasks run as by
