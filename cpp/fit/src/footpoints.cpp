@@ -26,6 +26,8 @@ namespace sorpia {
 namespace {
 
 constexpr std::uint32_t kLeafSize = 12;
+// Points per task, at least, of refit's and set_slack's copies and leaves.
+constexpr std::size_t kPointsPerFitTask = 65536;
 
 // Squared distance from q to a box (0 inside).
 inline double box_distance2(const float* lo, const float* hi, const double* q) {
@@ -102,21 +104,18 @@ void PointIndex::set_box(Node& nd, const double* lo, const double* hi) {
 
 void PointIndex::refit(const double* points) {
   points_.resize(3 * n_);
-  for (std::size_t i = 0; i < n_; ++i)
+  const int tasks = detail::task_count(n_, kPointsPerFitTask);
+  detail::for_each_index(tasks > 1, tasks, n_, [&](std::size_t i) {
     for (int c = 0; c < 3; ++c) points_[3 * i + c] = points[3 * order_[i] + c];
+  });
   point_slack_.clear();
   node_slack_.clear();
-  // A node's children follow it in nodes_ (as set_slack takes them): from the last node back.
-  for (std::size_t j = nodes_.size(); j-- > 0;) {
+  // The leaves' boxes on the core's threads; then, as a node's children follow it in nodes_ (as set_slack takes
+  // them), the inner nodes' from the last node back.
+  const int node_tasks = detail::task_count(nodes_.size(), kPointsPerFitTask / kLeafSize);
+  detail::for_each_index(node_tasks > 1, node_tasks, nodes_.size(), [&](std::size_t j) {
     Node& nd = nodes_[j];
-    if (nd.left != 0) {
-      const Node &a = nodes_[nd.left], &b = nodes_[nd.left + 1];
-      for (int c = 0; c < 3; ++c) {
-        nd.lo[c] = std::min(a.lo[c], b.lo[c]);
-        nd.hi[c] = std::max(a.hi[c], b.hi[c]);
-      }
-      continue;
-    }
+    if (nd.left != 0) return;
     double lo[3] = {std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
                     std::numeric_limits<double>::infinity()};
     double hi[3] = {-lo[0], -lo[1], -lo[2]};
@@ -126,6 +125,15 @@ void PointIndex::refit(const double* points) {
         hi[c] = std::max(hi[c], points_[3 * i + c]);
       }
     set_box(nd, lo, hi);
+  });
+  for (std::size_t j = nodes_.size(); j-- > 0;) {
+    Node& nd = nodes_[j];
+    if (nd.left == 0) continue;
+    const Node &a = nodes_[nd.left], &b = nodes_[nd.left + 1];
+    for (int c = 0; c < 3; ++c) {
+      nd.lo[c] = std::min(a.lo[c], b.lo[c]);
+      nd.hi[c] = std::max(a.hi[c], b.hi[c]);
+    }
   }
 }
 
@@ -265,19 +273,23 @@ void PointIndex::set_slack(const double* slack) {
   // A node's children follow it in nodes_: from the last node back, each
   // node's children are done before it.
   point_slack_.resize(n_);
-  for (std::size_t i = 0; i < n_; ++i) point_slack_[i] = slack[order_[i]];
-  node_slack_.assign(nodes_.size(), 0.0f);
-  for (std::size_t j = nodes_.size(); j-- > 0;) {
+  const int tasks = detail::task_count(n_, kPointsPerFitTask);
+  detail::for_each_index(tasks > 1, tasks, n_, [&](std::size_t i) { point_slack_[i] = slack[order_[i]]; });
+  // The leaves on the core's threads, then the inner nodes (as refit).
+  node_slack_.resize(nodes_.size());
+  const int node_tasks = detail::task_count(nodes_.size(), kPointsPerFitTask / kLeafSize);
+  detail::for_each_index(node_tasks > 1, node_tasks, nodes_.size(), [&](std::size_t j) {
     const Node& nd = nodes_[j];
-    if (nd.left != 0) {
-      node_slack_[j] = std::max(node_slack_[nd.left], node_slack_[nd.left + 1]);
-      continue;
-    }
+    if (nd.left != 0) return;
     double most = 0.0;
     for (std::uint32_t i = nd.begin; i < nd.end; ++i) most = std::max(most, point_slack_[i]);
     auto up = static_cast<float>(most);
     if (static_cast<double>(up) < most) up = std::nextafter(up, std::numeric_limits<float>::infinity());
     node_slack_[j] = up;
+  });
+  for (std::size_t j = nodes_.size(); j-- > 0;) {
+    const Node& nd = nodes_[j];
+    if (nd.left != 0) node_slack_[j] = std::max(node_slack_[nd.left], node_slack_[nd.left + 1]);
   }
 }
 
@@ -508,33 +520,49 @@ void grid_samples(const Domains& dom, int r, std::vector<std::int32_t>& face_ids
   }
 }
 
-// Calls link(f, a, b) for each pair of neighbouring samples a, b of
-// grid_samples(dom, r) (indices in its order) in one chart's grid of face f:
-// along a row, a column, and for a triangle the third direction.
+// The number of samples of face f in grid_samples(dom, r): none in a hole.
+std::size_t face_samples(const Domains& dom, int r, std::int32_t f) {
+  if (dom.hole[static_cast<std::size_t>(f)]) return 0;
+  const auto side = static_cast<std::size_t>(r + 1);
+  const std::size_t chart = dom.kind(f) == Kind::Triangle ? side * (side + 1) / 2 : side * side;
+  return static_cast<std::size_t>(dom.charts(f)) * chart;
+}
+
+// Calls link(f, a, b) for each pair of neighbouring samples a, b of face f of
+// grid_samples(dom, r) in one chart's grid (indices in its order, face f's
+// from `offset`): along a row, a column, and for a triangle the third
+// direction.
+template <class Link>
+void for_each_face_grid_link(const Domains& dom, int r, std::int32_t f, std::size_t offset, Link&& link) {
+  if (dom.hole[static_cast<std::size_t>(f)]) return;
+  const bool tri = dom.kind(f) == Kind::Triangle;
+  for (int c = 0; c < dom.charts(f); ++c) {
+    // Sample (i, j) of this chart: row j holds r + 1 samples (r + 1 - j in a triangle).
+    const auto at = [&](int i, int j) {
+      std::size_t o = offset;
+      for (int jj = 0; jj < j; ++jj) o += static_cast<std::size_t>(tri ? r + 1 - jj : r + 1);
+      return o + static_cast<std::size_t>(i);
+    };
+    for (int j = 0; j <= r; ++j) {
+      const int row = tri ? r - j : r;  // the last i of row j
+      for (int i = 0; i <= row; ++i) {
+        if (i < row) link(f, at(i, j), at(i + 1, j));
+        if (j < r && (!tri || i <= row - 1)) link(f, at(i, j), at(i, j + 1));
+        if (tri && i > 0 && j < r) link(f, at(i, j), at(i - 1, j + 1));
+      }
+    }
+    offset = at(0, r) + static_cast<std::size_t>(tri ? 1 : r + 1);
+  }
+}
+
+// for_each_face_grid_link for every face, in order.
 template <class Link>
 void for_each_grid_link(const Domains& dom, int r, Link&& link) {
   const auto m = static_cast<std::int32_t>(dom.topology.n_faces());
   std::size_t offset = 0;
   for (std::int32_t f = 0; f < m; ++f) {
-    if (dom.hole[static_cast<std::size_t>(f)]) continue;
-    const bool tri = dom.kind(f) == Kind::Triangle;
-    for (int c = 0; c < dom.charts(f); ++c) {
-      // Sample (i, j) of this chart: row j holds r + 1 samples (r + 1 - j in a triangle).
-      const auto at = [&](int i, int j) {
-        std::size_t o = offset;
-        for (int jj = 0; jj < j; ++jj) o += static_cast<std::size_t>(tri ? r + 1 - jj : r + 1);
-        return o + static_cast<std::size_t>(i);
-      };
-      for (int j = 0; j <= r; ++j) {
-        const int row = tri ? r - j : r;  // the last i of row j
-        for (int i = 0; i <= row; ++i) {
-          if (i < row) link(f, at(i, j), at(i + 1, j));
-          if (j < r && (!tri || i <= row - 1)) link(f, at(i, j), at(i, j + 1));
-          if (tri && i > 0 && j < r) link(f, at(i, j), at(i - 1, j + 1));
-        }
-      }
-      offset = at(0, r) + static_cast<std::size_t>(tri ? 1 : r + 1);
-    }
+    for_each_face_grid_link(dom, r, f, offset, link);
+    offset += face_samples(dom, r, f);
   }
 }
 
@@ -546,12 +574,19 @@ double distance3(const double* p, const double* q) {
 // `positions`: the largest distance to its neighbours in its chart's grid
 // (for_each_grid_link). Every point of the chart lies within about half a
 // spacing of a sample in (u, v), so within this of one in space.
+// A face's links join its own samples only: the faces on the core's threads.
 std::vector<double> grid_reach(const Domains& dom, int r, const std::vector<double>& positions) {
   std::vector<double> reach(positions.size() / 3, 0.0);
-  for_each_grid_link(dom, r, [&](std::int32_t, std::size_t a, std::size_t b) {
-    const double d = distance3(&positions[3 * a], &positions[3 * b]);
-    reach[a] = std::max(reach[a], d);
-    reach[b] = std::max(reach[b], d);
+  const std::size_t m = dom.topology.n_faces();
+  std::vector<std::size_t> first(m + 1, 0);  // face f's samples from first[f]
+  for (std::size_t f = 0; f < m; ++f) first[f + 1] = first[f] + face_samples(dom, r, static_cast<std::int32_t>(f));
+  const int tasks = detail::task_count(m, 2048);
+  detail::for_each_index(tasks > 1, tasks, m, [&](std::size_t f) {
+    for_each_face_grid_link(dom, r, static_cast<std::int32_t>(f), first[f], [&](std::int32_t, std::size_t a, std::size_t b) {
+      const double d = distance3(&positions[3 * a], &positions[3 * b]);
+      reach[a] = std::max(reach[a], d);
+      reach[b] = std::max(reach[b], d);
+    });
   });
   return reach;
 }
@@ -1396,12 +1431,13 @@ Footpoints FootpointSearch::find(const double* points, std::size_t n, detail::Sc
   detail::Scratch::Frame frame(scratch);
   std::int64_t* const nearest = frame.take<std::int64_t>(n);
   index_->nearest(points, n, nearest, frame.take<double>(n));
-  for (std::size_t i = 0; i < n; ++i) {
+  const int tasks = detail::task_count(n, kPointsPerTask);
+  detail::for_each_index(tasks > 1, tasks, n, [&](std::size_t i) {
     const auto s = static_cast<std::size_t>(nearest[i]);
     fp.face_ids[i] = sample_faces_[s];
     fp.uv[2 * i] = sample_uv_[2 * s];
     fp.uv[2 * i + 1] = sample_uv_[2 * s + 1];
-  }
+  });
   KnownStart known{nearest, positions_.data(), du_.data(), dv_.data()};
   refine(*surface_, *topology_, points, n, options_, fp, &known, nullptr, &frame.scratch());
   return fp;
