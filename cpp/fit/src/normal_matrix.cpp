@@ -363,13 +363,29 @@ NormalEquations::NormalEquations(NormalMatrix normal, CsrMatrix fairness_matrix,
     throw ParameterError("the fairness matrix is " + std::to_string(k_.n_rows) + " x " + std::to_string(k_.n_cols) +
                          " but the cage has " + std::to_string(n_.n) + " vertices");
   const auto nb = static_cast<std::size_t>(n_.blocks);
-  double sum = 0.0;
-  for (std::size_t i = 0; i < n_.n; ++i)
+  // Each row's diagonal entry (its trace for blocks) found on the core's threads, summed in row order after, as
+  // the sum over the entries in order; a row with two (a pattern with repeats) makes that sum run as it is.
+  const auto diagonal_term = [&](std::size_t p) {
+    const double* v = &n_.values[p * nb];
+    return nb == 1 ? v[0] : v[0] + v[3] + v[5];
+  };
+  std::vector<std::int64_t> diagonal_at(n_.n, -1);  // per row: its diagonal entry, -1 for none, -2 for several
+  const int tasks = detail::task_count(n_.indices.size(), kEntriesPerTask);
+  detail::for_each_index(tasks > 1, tasks, n_.n, [&](std::size_t i) {
     for (std::int64_t p = n_.indptr[i]; p < n_.indptr[i + 1]; ++p)
-      if (static_cast<std::size_t>(n_.indices[static_cast<std::size_t>(p)]) == i) {
-        const double* v = &n_.values[static_cast<std::size_t>(p) * nb];
-        sum += nb == 1 ? v[0] : v[0] + v[3] + v[5];
-      }
+      if (static_cast<std::size_t>(n_.indices[static_cast<std::size_t>(p)]) == i)
+        diagonal_at[i] = diagonal_at[i] == -1 ? p : -2;
+  });
+  double sum = 0.0;
+  if (std::find(diagonal_at.begin(), diagonal_at.end(), -2) == diagonal_at.end()) {
+    for (const std::int64_t p : diagonal_at)
+      if (p >= 0) sum += diagonal_term(static_cast<std::size_t>(p));
+  } else {
+    for (std::size_t i = 0; i < n_.n; ++i)
+      for (std::int64_t p = n_.indptr[i]; p < n_.indptr[i + 1]; ++p)
+        if (static_cast<std::size_t>(n_.indices[static_cast<std::size_t>(p)]) == i)
+          sum += diagonal_term(static_cast<std::size_t>(p));
+  }
   const double per = static_cast<double>(n_.n) * (nb == 1 ? 1.0 : 3.0);
   mean_diagonal_ = n_.n > 0 && sum != 0.0 ? sum / per : 1.0;
   mu_ = proximal * mean_diagonal_;
@@ -426,7 +442,11 @@ PcgResult NormalEquations::solve(const double* rhs, double* x, double rtol, long
   // The diagonal (blocks) of the whole matrix, inverted.
   BlockDiagonal precondition;
   (blocks ? precondition.blocks : precondition.scalars).assign(blocks ? 9 * n : n, 0.0);
-  for (std::size_t i = 0; i < n; ++i) {
+  // Each row's on its own: on the core's threads.
+  const std::size_t entries = n_.indices.size() + k_.indices.size();
+  const int tasks = static_cast<int>(std::clamp<std::size_t>(entries / kEntriesPerTask, 1,
+                                                             static_cast<std::size_t>(std::max(threads, 1))));
+  detail::for_each_index(tasks > 1, tasks, n, [&](std::size_t i) {
     double shift = mu_;
     if (k_.n_rows != 0) {
       const auto* first = k_.indices.data() + k_.indptr[i];
@@ -447,7 +467,7 @@ PcgResult NormalEquations::solve(const double* rhs, double* x, double rtol, long
       }
     if (!blocks) {
       precondition.scalars[i] = d[0] > 0.0 ? 1.0 / d[0] : 1.0;
-      continue;
+      return;
     }
     // The inverse of the symmetric block [[a, b, c], [b, e, f], [c, f, g]] by its adjugate.
     const double a = d[0], b = d[1], c = d[2], e = d[3], f = d[4], g = d[5];
@@ -464,7 +484,7 @@ PcgResult NormalEquations::solve(const double* rhs, double* x, double rtol, long
       inv[4] = e > 0.0 ? 1.0 / e : 1.0;
       inv[8] = g > 0.0 ? 1.0 / g : 1.0;
     }
-  }
+  });
   std::vector<double> xv(x, x + 3 * n), r(3 * n);
   apply(xv.data(), r.data(), threads);
   for (std::size_t i = 0; i < 3 * n; ++i) r[i] = rhs[i] - r[i];

@@ -33,6 +33,8 @@ namespace {
 // update, whose rows move by first order in it (about 1e-5 of a face's size, far below a fit's distances), and the
 // distances reported come from FootpointSearch::closer's re-search, polished to rounding.
 constexpr double kIterationUvTolerance = 1e-5;
+// Points (or values) per task, at least, of a chunk's loops over its points that are a few operations each.
+constexpr std::size_t kValuesPerTask = 65536;
 
 double cpu_seconds() {
   timespec ts{};
@@ -232,10 +234,18 @@ DistanceSums ApproximationChunk::sums(const std::vector<double>& d, detail::Scra
   if (k_ == 0) return s;
   detail::Scratch::Frame frame(scratch);
   double* const squares = frame.take<double>(k_);
-  for (std::size_t i = 0; i < k_; ++i) squares[i] = weights_.empty() ? d[i] * d[i] : weights_[i] * (d[i] * d[i]);
+  const int tasks = detail::task_count(k_, kValuesPerTask);
+  const auto t_count = static_cast<std::size_t>(tasks);
+  s.max = detail::max_over_tasks(tasks > 1, tasks, [&](int t) {
+    const auto r = static_cast<std::size_t>(t);
+    double most = 0.0;
+    for (std::size_t i = k_ * r / t_count; i < k_ * (r + 1) / t_count; ++i) {
+      squares[i] = weights_.empty() ? d[i] * d[i] : weights_[i] * (d[i] * d[i]);
+      if (counts(i)) most = std::max(most, d[i]);
+    }
+    return most;
+  });
   s.squares = detail::pairwise_sum(squares, k_);
-  for (std::size_t i = 0; i < k_; ++i)
-    if (counts(i)) s.max = std::max(s.max, d[i]);
   return s;
 }
 
@@ -260,9 +270,9 @@ DistanceSums ApproximationChunk::refine(const LimitSurface& surface, const Footp
 }
 
 void ApproximationChunk::keep_best() {
-  best.face_ids = current.face_ids;
-  best.uv = current.uv;
-  best.distances = current.distances;
+  detail::copy_in_ranges(current.face_ids, best.face_ids, kValuesPerTask);
+  detail::copy_in_ranges(current.uv, best.uv, kValuesPerTask);
+  detail::copy_in_ranges(current.distances, best.distances, kValuesPerTask);
 }
 
 DistanceSums ApproximationChunk::search_fresh(const FootpointSearch& search, double closer) {
@@ -337,12 +347,12 @@ NormalSums ApproximationChunk::normal_sums(const LimitSurface& surface, double t
   const auto t0 = detail::Clock::now();
   const double c0 = cpu_seconds();
   const std::size_t n_faces = surface.n_faces();
-  for (std::size_t i = 0; i < k; ++i) {
+  detail::check_each_index(k, kValuesPerTask, [&](std::size_t i) {
     const std::int32_t f = current.face_ids[i];
     if (f < 0 || static_cast<std::size_t>(f) >= n_faces)
       throw ParameterError("face_ids[" + std::to_string(first_ + i) + "] = " + std::to_string(f) +
                            " is out of range [0, " + std::to_string(n_faces) + ")");
-  }
+  });
   // Each block of rows (a face's points) is weighted and multiplied out where it is made, in the cache, and added
   // into the pattern of the blocks' columns in the blocks' order (NormalBlocks).
   std::unique_ptr<NormalBlocks> blocks;

@@ -148,10 +148,11 @@ void RobustSums::add(const RobustSums& other) {
 RobustSums robust_sums(const RobustOptions& options, double scale, const double* distances, const double* weights,
                        std::size_t k) {
   const double cs = options.c * scale, cs2 = cs * cs;
-  RobustSums sums;
-  for (std::size_t i = 0; i < k; ++i) {
+  // Each point's loss (in ranges of points per task), then the sums in the points' order.
+  const std::unique_ptr<double[]> loss(new double[k]);
+  const int tasks = detail::task_count(k, kPointsPerTask);
+  detail::for_each_index(tasks > 1, tasks, k, [&](std::size_t i) {
     const double w = weights ? weights[i] : 1.0;
-    if (w == 0.0) continue;
     const double d = distances[i], r = d / cs;
     double rho = d * d;
     if (options.loss == RobustLoss::Cauchy) {
@@ -161,7 +162,14 @@ RobustSums robust_sums(const RobustOptions& options, double scale, const double*
       const double x = std::min(r * r, 1.0);
       rho = cs2 / 3.0 * (x * (3.0 - 3.0 * x + x * x));
     }
-    sums.loss += w * rho;
+    loss[i] = w * rho;
+  });
+  RobustSums sums;
+  for (std::size_t i = 0; i < k; ++i) {
+    const double w = weights ? weights[i] : 1.0;
+    if (w == 0.0) continue;
+    const double d = distances[i];
+    sums.loss += loss[i];
     if (d <= cs) {
       sums.inlier_squares += w * d * d;
       sums.inlier_weight += w;

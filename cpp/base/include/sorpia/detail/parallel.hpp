@@ -116,6 +116,22 @@ std::size_t keep_in_order(std::size_t n, std::size_t per_task, Keep keep, Value 
   return kept[t_count];
 }
 
+/// to := from, resized to its size and copied in ranges of at least `per_task`
+/// values on the core's threads (a large array's first touch of fresh pages
+/// shared too).
+template <class T>
+void copy_in_ranges(const std::vector<T>& from, std::vector<T>& to, std::size_t per_task) {
+  to.resize(from.size());
+  const int tasks = task_count(from.size(), per_task);
+  const auto t_count = static_cast<std::size_t>(tasks);
+  for_each_task(tasks > 1, tasks, [&](int t) {
+    const auto r = static_cast<std::size_t>(t);
+    std::copy(from.begin() + static_cast<std::ptrdiff_t>(from.size() * r / t_count),
+              from.begin() + static_cast<std::ptrdiff_t>(from.size() * (r + 1) / t_count),
+              to.begin() + static_cast<std::ptrdiff_t>(from.size() * r / t_count));
+  });
+}
+
 /// The largest of f(t) for t in [0, n_tasks) (0 for none), the tasks run as by
 /// for_each_task.
 template <class F>
