@@ -657,6 +657,8 @@ constexpr int kPolishSteps = 400;
 constexpr double kRounding = 8.0;
 // Points per task, at least, of refine's checks and lists of the points (a few loads and stores each).
 constexpr std::size_t kPointsPerTask = 65536;
+// Rows per task, at least, of FootpointSearch::closer's gathers and lists of a batch's rows.
+constexpr std::size_t kRowsPerTask = 8192;
 
 // Limit points known where the search starts (closest_points' grid samples,
 // evaluated with their derivatives): point i starts at sample nearest[i],
@@ -1498,15 +1500,17 @@ std::size_t FootpointSearch::closer(const double* points, std::size_t n, Footpoi
     std::vector<double> y(3 * k);
     again.face_ids.resize(k);
     again.uv.resize(2 * k);
-    for (std::size_t r = 0; r < k; ++r) {
+    const int tasks = detail::task_count(k, kRowsPerTask);
+    detail::for_each_index(tasks > 1, tasks, k, [&](std::size_t r) {
       const std::size_t i = first + rows[r];
       std::copy_n(points + 3 * i, 3, &y[3 * r]);
       again.face_ids[r] = fp.face_ids[i];
       std::copy_n(&fp.uv[2 * i], 2, &again.uv[2 * r]);
-    }
+    });
     refine(*surface_, *topology_, y.data(), k, polishing, again, nullptr, &irregular_);
-    for (std::size_t r = 0; r < k; ++r)
+    detail::for_each_index(tasks > 1, tasks, k, [&](std::size_t r) {
       if (take(first + rows[r], again, r)) changed[rows[r]] = 1;
+    });
   };
   std::vector<std::uint8_t> changed(kBatch), skipped(kBatch), started(kBatch);
   for (std::size_t first = 0; first < n; first += kBatch) {
@@ -1519,18 +1523,25 @@ std::size_t FootpointSearch::closer(const double* points, std::size_t n, Footpoi
     // elsewhere at no smaller distance, a hop across an edge: not
     // certified).
     std::fill_n(changed.begin(), b, std::uint8_t{0});
-    std::vector<std::size_t> again_row;
-    for (std::size_t j = 0; j < b; ++j)
-      if (fp.distances[first + j] > 0.0) again_row.push_back(j);
+    // The rows j of the batch with keep(j), in order.
+    std::vector<std::size_t> staging(b);
+    const auto rows_where = [&](auto keep) {
+      std::vector<std::size_t> out(b);
+      out.resize(detail::keep_in_order(b, kRowsPerTask, keep, [](std::size_t j) { return j; }, staging.data(),
+                                       out.data()));
+      return out;
+    };
+    std::vector<std::size_t> again_row = rows_where([&](std::size_t j) { return fp.distances[first + j] > 0.0; });
     Footpoints polished;
     polish(first, again_row, polished, changed);
     std::vector<std::int64_t> polished_row(b, -1);
-    for (std::size_t r = 0; r < again_row.size(); ++r) {
+    const int again_tasks = detail::task_count(again_row.size(), kRowsPerTask);
+    detail::for_each_index(again_tasks > 1, again_tasks, again_row.size(), [&](std::size_t r) {
       const std::size_t i = first + again_row[r];
       if (fp.face_ids[i] == polished.face_ids[r] && fp.uv[2 * i] == polished.uv[2 * r] &&
           fp.uv[2 * i + 1] == polished.uv[2 * r + 1])
         polished_row[again_row[r]] = static_cast<std::int64_t>(r);
-    }
+    });
     // In the points' spatial order, so that the queries find the tree's
     // nodes and the faces' certificates in cache.
     const std::vector<std::size_t> order = detail::spatial_order(points + 3 * first, b);
@@ -1565,15 +1576,25 @@ std::size_t FootpointSearch::closer(const double* points, std::size_t n, Footpoi
       return skipped[j] && cert->clearance[static_cast<std::size_t>(fp.face_ids[first + j])] >= 2.0 * fp.distances[first + j];
     };
     if (!all_nearest) {
-      std::vector<std::size_t> rest;
-      for (const std::size_t j : order)
-        if (off(j) && !listed_by_clearance(j) && !(found && skipped[j])) rest.push_back(j);
-        else nearest_sample[j] = -1;
+      // The rows that take candidates from a query, in the points' spatial order.
+      std::vector<std::size_t> rest(b);
+      rest.resize(detail::keep_in_order(
+          b, kRowsPerTask,
+          [&](std::size_t o) {
+            const std::size_t j = order[o];
+            if (off(j) && !listed_by_clearance(j) && !(found && skipped[j])) return true;
+            nearest_sample[j] = -1;
+            return false;
+          },
+          [&](std::size_t o) { return order[o]; }, staging.data(), rest.data()));
       std::vector<double> y(3 * rest.size()), unused(rest.size());
       std::vector<std::int64_t> near(rest.size());
-      for (std::size_t r = 0; r < rest.size(); ++r) std::copy_n(points + 3 * (first + rest[r]), 3, &y[3 * r]);
+      const int rest_tasks = detail::task_count(rest.size(), kRowsPerTask);
+      detail::for_each_index(rest_tasks > 1, rest_tasks, rest.size(),
+                             [&](std::size_t r) { std::copy_n(points + 3 * (first + rest[r]), 3, &y[3 * r]); });
       if (!rest.empty()) index_->nearest(y.data(), rest.size(), near.data(), unused.data());
-      for (std::size_t r = 0; r < rest.size(); ++r) nearest_sample[rest[r]] = near[r];
+      detail::for_each_index(rest_tasks > 1, rest_tasks, rest.size(),
+                             [&](std::size_t r) { nearest_sample[rest[r]] = near[r]; });
     }
     detail::for_each_index(tasks > 1, tasks, b, [&](std::size_t o) {
       const std::size_t j = order[o];
@@ -1635,7 +1656,7 @@ std::size_t FootpointSearch::closer(const double* points, std::size_t n, Footpoi
       Footpoints trial;
       trial.face_ids.resize(rows);
       trial.uv.resize(2 * rows);
-      for (std::size_t j = 0; j < b; ++j)
+      detail::for_each_index(tasks > 1, tasks, b, [&](std::size_t j) {
         for (std::size_t c = 0; c < count[j]; ++c) {
           const std::size_t r = row[j] + c;
           const auto s = static_cast<std::size_t>(candidate[j * (starts + 1) + c]);
@@ -1645,22 +1666,21 @@ std::size_t FootpointSearch::closer(const double* points, std::size_t n, Footpoi
           trial.uv[2 * r] = sample_uv_[2 * s];
           trial.uv[2 * r + 1] = sample_uv_[2 * s + 1];
         }
+      });
       KnownStart known{nearest.data(), positions_.data(), du_.data(), dv_.data()};
       refine(*surface_, *topology_, x.data(), rows, options, trial, &known, &irregular_);
       // The closest of each point's results, where closer than its footpoint
       // (the first of equals).
-      for (std::size_t j = 0; j < b; ++j) {
-        if (count[j] == 0) continue;
+      detail::for_each_index(tasks > 1, tasks, b, [&](std::size_t j) {
+        if (count[j] == 0) return;
         std::size_t best = row[j];
         for (std::size_t r = row[j] + 1; r < row[j + 1]; ++r)
           if (trial.distances[r] < trial.distances[best]) best = r;
         if (take(first + j, trial, best)) changed[j] = started[j] = 1;
-      }
+      });
     }
     // The footpoints a start moved refined again from themselves.
-    again_row.clear();
-    for (std::size_t j = 0; j < b; ++j)
-      if (started[j]) again_row.push_back(j);
+    again_row = rows_where([&](std::size_t j) { return started[j] != 0; });
     Footpoints again;
     polish(first, again_row, again, changed);
     for (std::size_t j = 0; j < b; ++j) moved += changed[j];

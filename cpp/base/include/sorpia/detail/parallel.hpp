@@ -116,12 +116,15 @@ std::size_t keep_in_order(std::size_t n, std::size_t per_task, Keep keep, Value 
   return kept[t_count];
 }
 
-/// to := from, resized to its size and copied in ranges of at least `per_task`
-/// values on the core's threads (a large array's first touch of fresh pages
-/// shared too).
+/// to := from: where to has from's size, copied in ranges of at least
+/// `per_task` values on the core's threads (else copied whole: a resize would
+/// write every value twice).
 template <class T>
 void copy_in_ranges(const std::vector<T>& from, std::vector<T>& to, std::size_t per_task) {
-  to.resize(from.size());
+  if (to.size() != from.size()) {
+    to = from;
+    return;
+  }
   const int tasks = task_count(from.size(), per_task);
   const auto t_count = static_cast<std::size_t>(tasks);
   for_each_task(tasks > 1, tasks, [&](int t) {
