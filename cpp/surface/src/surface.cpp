@@ -736,12 +736,16 @@ void LimitSurface::position_blocks(
           face_columns[b] = &factory.columns(used[b], from_osd);
       });
     }
-    std::vector<std::int64_t> offsets{0};
-    std::vector<std::int32_t> columns;
-    for (const std::vector<std::int32_t>* cols : face_columns) {
-      if (cols != nullptr) columns.insert(columns.end(), cols->begin(), cols->end());
-      offsets.push_back(static_cast<std::int64_t>(columns.size()));
-    }
+    // The faces' columns placed by their offsets, copied on the core's threads.
+    std::vector<std::int64_t> offsets(n_used + 1, 0);
+    for (std::size_t b = 0; b < n_used; ++b)
+      offsets[b + 1] = offsets[b] + static_cast<std::int64_t>(face_columns[b] ? face_columns[b]->size() : 0);
+    std::vector<std::int32_t> columns(static_cast<std::size_t>(offsets[n_used]));
+    const int tasks = detail::task_count(n_used, kFacesPerColumnsTask);
+    detail::for_each_index(tasks > 1, tasks, n_used, [&](std::size_t b) {
+      if (face_columns[b] != nullptr)
+        std::copy(face_columns[b]->begin(), face_columns[b]->end(), columns.begin() + offsets[b]);
+    });
     for (std::size_t i = 0; i < slots.size(); ++i)
       if (from_b(i)) {
         columns.insert(columns.end(), exact.indices.begin() + exact.indptr[slots[i]],
