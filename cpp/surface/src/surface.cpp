@@ -430,11 +430,20 @@ void for_each_face_surface(const BfrSurfaces& factory, const std::int32_t* face_
     return static_cast<double>(m);
   });
   std::vector<std::size_t> order(k);
-  const std::vector<std::size_t> first =
-      detail::order_by_key(face_ids, k, static_cast<std::size_t>(max_face) + 1, order.data());
   std::vector<std::size_t> group_start;  // the faces with points
-  for (std::size_t f = 0; f + 1 < first.size(); ++f)
-    if (first[f + 1] > first[f]) group_start.push_back(first[f]);
+  const auto n_keys = static_cast<std::size_t>(max_face) + 1;
+  if (k < n_keys / 16) {
+    // Few points on many faces (a re-projection's later rounds): sorted (the same order, by face then index)
+    // without the counting sort's pass over every face.
+    for (std::size_t i = 0; i < k; ++i) order[i] = i;
+    std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return face_ids[a] < face_ids[b]; });
+    for (std::size_t j = 0; j < k; ++j)
+      if (j == 0 || face_ids[order[j]] != face_ids[order[j - 1]]) group_start.push_back(j);
+  } else {
+    const std::vector<std::size_t> first = detail::order_by_key(face_ids, k, n_keys, order.data());
+    for (std::size_t f = 0; f + 1 < first.size(); ++f)
+      if (first[f + 1] > first[f]) group_start.push_back(first[f]);
+  }
   group_start.push_back(k);
   const auto n_groups = static_cast<std::ptrdiff_t>(group_start.size()) - 1;
 
