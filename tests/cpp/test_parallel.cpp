@@ -5,12 +5,18 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <csignal>
+#include <cstdint>
+#include <numeric>
+#include <random>
 #include <stdexcept>
+#include <string>
 #include <thread>
 #include <vector>
 
+#include "sorpia/detail/order.hpp"
 #include "sorpia/detail/parallel.hpp"
 
 namespace {
@@ -69,6 +75,73 @@ TEST(Parallel, RangesCoverEachIndexOnce) {
     for (int h : hits) ASSERT_EQ(h, 1);
   }
   EXPECT_EQ(max_over_tasks(true, 5, [](int t) { return t == 3 ? 7.0 : 1.0; }), 7.0);
+}
+
+// The helpers that cut a loop into ranges give what the loop in order gives, with the pool's threads and with one
+// (ThreadCap(1)).
+TEST(Parallel, OrderByKeyIsTheStableSortByKey) {
+  std::mt19937 rng(5);
+  for (const std::size_t n_keys : {std::size_t{1}, std::size_t{7}, std::size_t{3000}}) {
+    std::vector<std::int32_t> keys(400000);
+    for (std::int32_t& k : keys) k = static_cast<std::int32_t>(rng() % n_keys);
+    std::vector<std::size_t> expect(keys.size());
+    std::iota(expect.begin(), expect.end(), std::size_t{0});
+    std::stable_sort(expect.begin(), expect.end(), [&](std::size_t a, std::size_t b) { return keys[a] < keys[b]; });
+    for (int cap : {0, 1}) {
+      const sorpia::detail::ThreadCap limit(cap);
+      std::vector<std::size_t> order(keys.size());
+      const std::vector<std::size_t> first = sorpia::detail::order_by_key(keys.data(), keys.size(), n_keys, order.data());
+      ASSERT_EQ(order, expect) << n_keys << " keys, cap " << cap;
+      ASSERT_EQ(first.size(), n_keys + 1);
+      for (std::size_t x = 0; x < n_keys; ++x)
+        ASSERT_EQ(first[x + 1] - first[x], static_cast<std::size_t>(std::count(keys.begin(), keys.end(), static_cast<std::int32_t>(x))));
+    }
+  }
+}
+
+TEST(Parallel, KeepInOrderIsTheFilterInOrder) {
+  const std::size_t n = 100000;
+  std::vector<std::size_t> in(n);
+  for (std::size_t j = 0; j < n; ++j) in[j] = (j * 7919) % 1000;
+  std::vector<std::size_t> expect;
+  for (std::size_t j = 0; j < n; ++j)
+    if (in[j] % 3 == 0) expect.push_back(in[j] + 1);
+  for (int cap : {0, 1}) {
+    const sorpia::detail::ThreadCap limit(cap);
+    std::vector<std::size_t> staging(n), out(in);  // out is also the array read: written after every range is read
+    std::vector<int> calls(n, 0);
+    const std::size_t kept = sorpia::detail::keep_in_order(
+        n, 1000, [&](std::size_t j) { return ++calls[j], out[j] % 3 == 0; }, [&](std::size_t j) { return out[j] + 1; },
+        staging.data(), out.data());
+    out.resize(kept);
+    EXPECT_EQ(out, expect) << "cap " << cap;
+    EXPECT_EQ(std::count(calls.begin(), calls.end(), 1), static_cast<std::ptrdiff_t>(n));  // keep once per index
+  }
+}
+
+TEST(Parallel, CheckEachIndexThrowsWhatTheFirstFailureThrows) {
+  for (int cap : {0, 1}) {
+    const sorpia::detail::ThreadCap limit(cap);
+    try {
+      sorpia::detail::check_each_index(100000, 1000, [](std::size_t i) {
+        if (i == 90000 || i == 30000 || i == 70000) throw std::runtime_error(std::to_string(i));
+      });
+      FAIL() << "no exception";
+    } catch (const std::runtime_error& e) {
+      EXPECT_STREQ(e.what(), "30000");
+    }
+  }
+  sorpia::detail::check_each_index(100000, 1000, [](std::size_t) {});
+}
+
+TEST(Parallel, CopyInRangesCopies) {
+  std::vector<double> from(300000);
+  for (std::size_t i = 0; i < from.size(); ++i) from[i] = 0.5 * static_cast<double>(i);
+  std::vector<double> same(from.size(), -1.0), other(3, -1.0);
+  sorpia::detail::copy_in_ranges(from, same, 1000);
+  sorpia::detail::copy_in_ranges(from, other, 1000);
+  EXPECT_EQ(same, from);
+  EXPECT_EQ(other, from);
 }
 
 TEST(Parallel, ATaskExceptionReachesTheCallerAfterAllTasks) {
