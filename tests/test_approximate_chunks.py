@@ -330,6 +330,32 @@ def test_coarse_fit_reaches_the_full_fit():
     assert np.sqrt(squares / count) < 1e-4
 
 
+def test_a_chunk_keeps_its_own_order_inside_and_the_given_order_outside():
+    # The chunk holds its points in spatial order; what leaves it is in the order as given: its points, its best
+    # footpoints (each point's search is its own: closest_points' on the same points, bit for bit), its sample's
+    # choice (point_sample_mask over the positions as given) and a message naming a point.
+    P, V, F = noisy_samples(2000)
+    first, k = 300, 5000  # the chunk's place among all points
+    chunk = _core.ApproximationChunk(P, None, first)
+    np.testing.assert_array_equal(chunk.points, P)
+    S = LimitSurface(V, F, scheme="loop")
+    chunk.search(_core.FootpointSearch(S._surface, 4, 10))
+    chunk.keep_best()
+    face_ids, uv, distances = chunk.best_footpoints()
+    ref = _core.closest_points(S._surface, S._topology, P, 4, 10)
+    np.testing.assert_array_equal(face_ids, ref[0])
+    np.testing.assert_array_equal(uv, ref[1])
+    np.testing.assert_array_equal(distances, ref[3])
+    sample = chunk.sampled(k, 700).points
+    chosen = P[_core.point_sample_mask(first, len(P), k, 700)]
+    assert 0 < len(sample) < len(P)
+    np.testing.assert_array_equal(np.unique(sample, axis=0), np.unique(chosen, axis=0))
+    w = np.ones(len(P))
+    w[[17, 1500]] = -1.0
+    with pytest.raises(ValueError, match=r"weights\[317\] = -1\.0"):
+        _core.ApproximationChunk(P, w, first).extent()
+
+
 def test_coarse_sample_does_not_depend_on_the_chunks():
     P, V, F = noisy_samples()
     kw = dict(iterations=7, coarse_iterations=3, coarse_points=8)

@@ -680,7 +680,14 @@ void bind_approximate(py::module_& m) {
            "points"_a, "weights"_a = py::none(), "first"_a = 0)
       .def_property_readonly("size", &sorpia::ApproximationChunk::size)
       .def_property_readonly("first", &sorpia::ApproximationChunk::first)
-      .def_property_readonly("points", [](const sorpia::ApproximationChunk& c) { return to_numpy(c.points(), 3); })
+      .def_property_readonly("points",
+                             [](const sorpia::ApproximationChunk& c) {
+                               // as given (the chunk holds them in its own order)
+                               std::vector<double> p(c.points().size());
+                               for (std::size_t i = 0; i < c.size(); ++i)
+                                 std::copy_n(&c.points()[3 * i], 3, &p[3 * c.given(i)]);
+                               return to_numpy(p, 3);
+                             })
       .def("extent", [](const sorpia::ApproximationChunk& c) { return extent_tuple(c.extent()); })
       .def("scale", &sorpia::ApproximationChunk::scale, "e"_a)
       .def("moments",

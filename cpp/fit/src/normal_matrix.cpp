@@ -167,11 +167,18 @@ struct NormalBlocks::State {
   // and A^T x ((n, 3)).
   std::vector<double> values, rhs;
   // A block's share until its run is added: its Gram matrix's rows on and above the diagonal (packed, nb values
-  // per entry) and A^T x ((width, 3)).
-  struct Share {
-    std::vector<double> gram, rhs;
-  };
-  std::vector<Share> shares;
+  // per entry) and then A^T x ((width, 3)), at share_at[b] in its run's slab (share_at[b + 1] - share_at[b]
+  // values; runs restart at 0); `filled` once made (a block of no rows or columns has none). A run's slab is
+  // taken from `spare` by the first of its blocks to be made and put back once the run is added, so that the
+  // shares of the few runs in flight reuse a few slabs rather than each block allocating (and another thread
+  // freeing) its own.
+  std::vector<std::size_t> share_at;
+  std::vector<char> filled;
+  std::unique_ptr<std::atomic<double*>[]> slab;  // per run, its slab (null before its first block)
+  std::vector<std::unique_ptr<double[]>> slabs;  // every slab made, each of slab_size values
+  std::vector<double*> spare;                    // the slabs no run holds
+  std::size_t slab_size = 0;
+  std::mutex slab_mutex;                         // guards slabs, spare and the making of a run's slab
   std::unique_ptr<std::atomic<std::size_t>[]> run_left;  // per run, its blocks not yet added
   std::mutex mutex;                                       // guards the three below
   std::vector<char> run_complete;
@@ -181,29 +188,51 @@ struct NormalBlocks::State {
   void make_values() {
     if (values.empty()) values.assign(pattern->indices.size() * nb, 0.0);
   }
-  // Run r's blocks' shares added at their entries, in the blocks' order, and released.
+  // Run r's slab, taken on its first call.
+  double* slab_of(std::size_t r) {
+    double* at = slab[r].load(std::memory_order_acquire);
+    if (at != nullptr) return at;
+    const std::lock_guard<std::mutex> lock(slab_mutex);
+    at = slab[r].load(std::memory_order_relaxed);
+    if (at != nullptr) return at;
+    if (spare.empty()) {
+      slabs.push_back(std::make_unique<double[]>(slab_size));
+      spare.push_back(slabs.back().get());
+    }
+    at = spare.back();
+    spare.pop_back();
+    slab[r].store(at, std::memory_order_release);
+    return at;
+  }
+  // Run r's blocks' shares added at their entries, in the blocks' order, and its slab put back.
   void add_run(std::size_t r) {
     const NormalPattern& p = *pattern;
     make_values();
-    const std::size_t b1 = std::min(shares.size(), (r + 1) * kBlocksPerRun);
+    const std::size_t b1 = std::min(filled.size(), (r + 1) * kBlocksPerRun);
+    double* const run_slab = slab[r].load(std::memory_order_acquire);
     for (std::size_t b = r * kBlocksPerRun; b < b1; ++b) {
-      Share& q = shares[b];
-      if (q.gram.empty()) continue;
+      if (!filled[b]) continue;
       const std::size_t w = p.width(b);
+      const double* const gram = run_slab + share_at[b];
+      const double* const share_rhs = gram + packed_row(w, w) * nb;
       const std::int32_t* cols = &p.columns[static_cast<std::size_t>(p.offsets[b])];
       for (std::size_t li = 0; li < w; ++li) {
         const auto i = static_cast<std::size_t>(cols[li]);
-        const double* row = &q.gram[packed_row(li, w) * nb];
+        const double* row = &gram[packed_row(li, w) * nb];
         auto e = static_cast<std::size_t>(p.diagonal[i]);
         for (std::size_t c = li; c < w; ++c, row += nb) {
           while (p.indices[e] != cols[c]) ++e;  // cols sorted, a subset of row i's
           double* dst = &values[e * nb];
           for (std::size_t v = 0; v < nb; ++v) dst[v] += row[v];
         }
-        if (!q.rhs.empty())
-          for (std::size_t v = 0; v < 3; ++v) rhs[3 * i + v] += q.rhs[3 * li + v];
+        if (filled[b] == 2)
+          for (std::size_t v = 0; v < 3; ++v) rhs[3 * i + v] += share_rhs[3 * li + v];
       }
-      q = Share{};
+    }
+    if (run_slab != nullptr) {
+      const std::lock_guard<std::mutex> lock(slab_mutex);
+      spare.push_back(run_slab);
+      slab[r].store(nullptr, std::memory_order_relaxed);
     }
   }
 };
@@ -224,8 +253,18 @@ NormalBlocks::NormalBlocks(std::size_t n, int weight_count, std::vector<std::int
   }
   s.rhs.assign(3 * n, 0.0);
   const std::size_t n_blocks = s.pattern->n_blocks();
-  s.shares.resize(n_blocks);
+  s.filled.assign(n_blocks, 0);
+  s.share_at.resize(n_blocks);
+  for (std::size_t b = 0, at = 0; b < n_blocks; ++b) {
+    if (b % kBlocksPerRun == 0) at = 0;
+    s.share_at[b] = at;
+    const std::size_t w = s.pattern->width(b);
+    at += packed_row(w, w) * s.nb + 3 * w;
+    s.slab_size = std::max(s.slab_size, at);
+  }
   const std::size_t n_runs = (n_blocks + kBlocksPerRun - 1) / kBlocksPerRun;
+  s.slab.reset(new std::atomic<double*>[n_runs]);
+  for (std::size_t r = 0; r < n_runs; ++r) s.slab[r].store(nullptr, std::memory_order_relaxed);
   s.run_complete.assign(n_runs, 0);
   s.run_left.reset(new std::atomic<std::size_t>[n_runs]);
   for (std::size_t r = 0; r < n_runs; ++r) s.run_left[r] = std::min(n_blocks, (r + 1) * kBlocksPerRun) - r * kBlocksPerRun;
@@ -236,29 +275,31 @@ NormalBlocks::~NormalBlocks() = default;
 void NormalBlocks::add(std::size_t b, const double* rows, std::size_t count, const double* weights, const double* x) {
   State& s = *state_;
   const std::size_t width = s.pattern->width(b);
-  State::Share& out = s.shares[b];
+  const std::size_t run = b / kBlocksPerRun;
   if (count > 0 && width > 0) {
-    out.gram.resize(packed_row(width, width) * s.nb);
+    double* const gram = s.slab_of(run) + s.share_at[b];
     thread_local std::vector<double> scaled;
     for (std::size_t li = 0; li < width; ++li) {
-      double* row = &out.gram[packed_row(li, width) * s.nb];
+      double* row = &gram[packed_row(li, width) * s.nb];
       if (s.nb == 6)
         gram_row<6>(rows, width, count, weights, li, width - li, row, scaled);
       else
         gram_row<1>(rows, width, count, s.weight_count == 0 ? nullptr : weights, li, width - li, row, scaled);
     }
+    s.filled[b] = 1;
     if (x != nullptr) {
-      out.rhs.assign(3 * width, 0.0);
+      double* const out_rhs = gram + packed_row(width, width) * s.nb;
+      std::fill_n(out_rhs, 3 * width, 0.0);
       for (std::size_t r = 0; r < count; ++r)
         for (std::size_t li = 0; li < width; ++li) {
           const double a = rows[r * width + li];
-          for (std::size_t c = 0; c < 3; ++c) out.rhs[3 * li + c] += a * x[3 * r + c];
+          for (std::size_t c = 0; c < 3; ++c) out_rhs[3 * li + c] += a * x[3 * r + c];
         }
+      s.filled[b] = 2;
     }
   }
   // The run complete: it and the complete runs after it added in order, unless a thread is adding already (which
   // then finds them complete).
-  const std::size_t run = b / kBlocksPerRun;
   if (--s.run_left[run] != 0) return;
   std::unique_lock<std::mutex> lock(s.mutex);
   s.run_complete[run] = 1;

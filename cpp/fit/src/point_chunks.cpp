@@ -21,6 +21,7 @@
 #include "sorpia/detail/pairwise.hpp"
 #include "sorpia/detail/parallel.hpp"
 #include "sorpia/detail/repr.hpp"
+#include "sorpia/detail/spatial.hpp"
 #include "sorpia/errors.hpp"
 #include "sorpia/interrupt.hpp"
 
@@ -159,6 +160,7 @@ void add(NormalSums& total, NormalSums&& chunk) {
 ApproximationChunk::ApproximationChunk(const double* points, std::size_t k, const double* weights, std::size_t first)
     : k_(k), first_(first), points_(points, points + 3 * k) {
   if (weights) weights_.assign(weights, weights + k);
+  arrange();
 }
 
 void ApproximationChunk::set_points(std::vector<double> points, std::vector<double> weights) {
@@ -167,16 +169,40 @@ void ApproximationChunk::set_points(std::vector<double> points, std::vector<doub
                          std::to_string(points.size() / 3) + " points");
   points_ = std::move(points);
   weights_ = std::move(weights);
+  arrange();
+}
+
+void ApproximationChunk::arrange() {
+  order_.clear();
+  if (k_ < 2 || k_ > std::numeric_limits<std::uint32_t>::max()) return;
+  for (const double v : points_)
+    if (!std::isfinite(v)) return;
+  const std::vector<std::size_t> order = detail::spatial_order(points_.data(), k_);
+  std::vector<double> points(3 * k_), weights(weights_.size());
+  order_.resize(k_);
+  const int tasks = detail::task_count(k_, 65536);
+  detail::for_each_index(tasks > 1, tasks, k_, [&](std::size_t i) {
+    const std::size_t j = order[i];
+    order_[i] = static_cast<std::uint32_t>(j);
+    std::copy_n(&points_[3 * j], 3, &points[3 * i]);
+    if (!weights.empty()) weights[i] = weights_[j];
+  });
+  points_ = std::move(points);
+  weights_ = std::move(weights);
 }
 
 PointExtent ApproximationChunk::extent() const {
   PointExtent e;
+  // (Points not all finite are as given: arrange() leaves them.)
   for (std::size_t i = 0; i < 3 * k_; ++i)
     if (!std::isfinite(points_[i])) throw MeshError("points[" + std::to_string(first_ + i / 3) + "] is not finite");
+  // The first weight as given that is wrong.
+  std::size_t bad = k_;
   for (std::size_t i = 0; i < weights_.size(); ++i)
-    if (!(std::isfinite(weights_[i]) && weights_[i] >= 0))
-      throw ParameterError("weights[" + std::to_string(first_ + i) + "] = " + detail::repr(weights_[i]) +
-                           " must be a finite number >= 0");
+    if (!(std::isfinite(weights_[i]) && weights_[i] >= 0) && (bad == k_ || given(i) < given(bad))) bad = i;
+  if (bad < k_)
+    throw ParameterError("weights[" + std::to_string(first_ + given(bad)) + "] = " + detail::repr(weights_[bad]) +
+                         " must be a finite number >= 0");
   e.count = k_;
   if (k_ == 0) return e;
   e.weighted = weights_.empty() ? k_ : static_cast<std::size_t>(std::count_if(
@@ -350,7 +376,7 @@ NormalSums ApproximationChunk::normal_sums(const LimitSurface& surface, double t
   detail::check_each_index(k, kValuesPerTask, [&](std::size_t i) {
     const std::int32_t f = current.face_ids[i];
     if (f < 0 || static_cast<std::size_t>(f) >= n_faces)
-      throw ParameterError("face_ids[" + std::to_string(first_ + i) + "] = " + std::to_string(f) +
+      throw ParameterError("face_ids[" + std::to_string(first_ + given(i)) + "] = " + std::to_string(f) +
                            " is out of range [0, " + std::to_string(n_faces) + ")");
   });
   // Each block of rows (a face's points) is weighted and multiplied out where it is made, in the cache, and added
@@ -394,10 +420,10 @@ NormalSums ApproximationChunk::normal_sums(const LimitSurface& surface, double t
 }
 
 ApproximationChunk ApproximationChunk::sampled(std::size_t k, std::size_t sample_points) const {
-  const std::vector<char> in = point_sample_mask(first_, k_, k, sample_points);
+  const std::vector<char> in = point_sample_mask(first_, k_, k, sample_points);  // by position as given
   std::vector<double> points, weights;
   for (std::size_t i = 0; i < k_; ++i)
-    if (in[i]) {
+    if (in[given(i)]) {
       points.insert(points.end(), &points_[3 * i], &points_[3 * i + 3]);
       if (!weights_.empty()) weights.push_back(weights_[i]);
     }
@@ -406,9 +432,22 @@ ApproximationChunk ApproximationChunk::sampled(std::size_t k, std::size_t sample
 
 Footpoints ApproximationChunk::best_footpoints() const {
   Footpoints f;
-  f.face_ids = best.face_ids;
-  f.uv = best.uv;
-  f.distances = best.distances;
+  if (order_.empty() || best.face_ids.size() != k_) {
+    f.face_ids = best.face_ids;
+    f.uv = best.uv;
+    f.distances = best.distances;
+    return f;
+  }
+  f.face_ids.resize(k_);
+  f.uv.resize(2 * k_);
+  f.distances.resize(k_);
+  for (std::size_t i = 0; i < k_; ++i) {
+    const std::size_t j = order_[i];
+    f.face_ids[j] = best.face_ids[i];
+    f.uv[2 * j] = best.uv[2 * i];
+    f.uv[2 * j + 1] = best.uv[2 * i + 1];
+    f.distances[j] = best.distances[i];
+  }
   return f;
 }
 
@@ -636,10 +675,10 @@ Footpoints LocalChunks::best_footpoints() {
   scratch_.release();
   Footpoints out;
   for (std::size_t c = 0; c < n_chunks(); ++c) {
-    const ApproximationChunk& ch = load(c, kBest);
-    out.face_ids.insert(out.face_ids.end(), ch.best.face_ids.begin(), ch.best.face_ids.end());
-    out.uv.insert(out.uv.end(), ch.best.uv.begin(), ch.best.uv.end());
-    out.distances.insert(out.distances.end(), ch.best.distances.begin(), ch.best.distances.end());
+    const Footpoints f = load(c, kBest).best_footpoints();
+    out.face_ids.insert(out.face_ids.end(), f.face_ids.begin(), f.face_ids.end());
+    out.uv.insert(out.uv.end(), f.uv.begin(), f.uv.end());
+    out.distances.insert(out.distances.end(), f.distances.begin(), f.distances.end());
     store(c, 0);
   }
   return out;
@@ -918,7 +957,10 @@ ApproximationChunk& FileChunks::load(std::size_t c, unsigned needs) {
   chunk_ = ApproximationChunk();
   chunk_.k_ = count;
   chunk_.first_ = first;
-  if (needs & kPoints) chunk_.points_ = read_points(first, count);
+  if (needs & kPoints) {
+    chunk_.points_ = read_points(first, count);
+    chunk_.arrange();  // the order its states were stored in
+  }
   ApproximationChunk::State* states[3] = {&chunk_.current, &chunk_.best, &chunk_.fresh};
   const unsigned bits[3] = {kCurrent, kBest, kFresh};
   for (int s = 0; s < 3; ++s)

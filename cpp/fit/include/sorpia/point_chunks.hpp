@@ -78,6 +78,17 @@ void add(PointMoments& total, const PointMoments& chunk);
 /// (PointChunks), given the surface (and search) of the current control
 /// vertices. `first` is the index of its first point among all (for
 /// messages naming a point).
+///
+/// The chunk holds its points in spatial order (detail::spatial_order, a
+/// Morton curve over their box), not as given: the points of a face then lie
+/// together in memory, which every pass over the points by face (the
+/// footpoints' rounds, the rows' blocks) reads in order instead of
+/// scattered. Its footpoint states are in that order too (a backend that
+/// stores them, FileChunks, gets the same order back from the same points);
+/// best_footpoints(), the sample's choice and the messages naming a point
+/// are in the order as given. Each point's footpoint is the same in either
+/// order (its search is its own); the sums over the points differ by
+/// rounding only.
 class ApproximationChunk {
  public:
   ApproximationChunk() = default;
@@ -85,7 +96,10 @@ class ApproximationChunk {
   ApproximationChunk(const double* points, std::size_t k, const double* weights, std::size_t first);
   std::size_t size() const { return k_; }
   std::size_t first() const { return first_; }
+  /// The points (k, 3) in the chunk's order (spatial, see the class comment).
   const std::vector<double>& points() const { return points_; }
+  /// Where point i of the chunk's order is among the points as given (0 .. k - 1).
+  std::size_t given(std::size_t i) const { return order_.empty() ? i : order_[i]; }
   /// Whether point i counts (weight > 0): a point of weight 0 is no data; it
   /// is left out of the box, the moments, the largest distance and the
   /// sample, as it is out of every sum.
@@ -161,8 +175,12 @@ class ApproximationChunk {
  private:
   friend class FileChunks;
   DistanceSums sums(const std::vector<double>& distances, detail::Scratch* scratch = nullptr) const;
+  // Puts the points (and weights) in spatial order, order_ the way back; none for points not all finite (extent()
+  // names the first, as given) or more than 2^32 - 1.
+  void arrange();
   std::size_t k_ = 0, first_ = 0;
   std::vector<double> points_, weights_;  // weights_ empty: all 1
+  std::vector<std::uint32_t> order_;      // point i's position as given; empty: as given
   // The normal matrix's pattern of the last normal_sums (NormalBlocks' `kept`: the same while the faces holding
   // the points do), read and replaced atomically (std::atomic_load, std::atomic_store).
   mutable std::shared_ptr<const NormalPattern> normal_pattern_;
