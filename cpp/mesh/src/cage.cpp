@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cfloat>
 #include <cmath>
 #include <exception>
@@ -587,13 +588,13 @@ struct Clustering {
 // than twice as many).
 constexpr int kGridSmoothRounds = 4;
 
-// The clustering's passes (cluster_vertices) run in tasks over contiguous
-// ranges (detail::for_each_range) of at least this many vertices, corners,
-// faces or clusters each; every result is the same whatever the number of
-// tasks.
-constexpr std::size_t kClusterTaskItems = 16384;
+// The decimation's passes over flat arrays (its bounds, cluster_vertices)
+// run in tasks over contiguous ranges (detail::for_each_range) of at least
+// this many vertices, corners, faces or clusters each; every result is the
+// same whatever the number of tasks.
+constexpr std::size_t kArrayTaskItems = 16384;
 
-int cluster_tasks(std::size_t n) { return detail::task_count(n, kClusterTaskItems); }
+int array_tasks(std::size_t n) { return detail::task_count(n, kArrayTaskItems); }
 
 // The sum over the tasks of count(t, first, last), the tasks over [0, n) as
 // by detail::for_each_range.
@@ -632,7 +633,7 @@ struct Links {
         [&](std::size_t c, std::size_t s) {
           edge[s] = {label[next_corner(c)], label[prev_corner(c)]};
         },
-        cluster_tasks(k));
+        array_tasks(k));
   }
   std::size_t size() const { return first.size() - 1; }
   const LinkEdge* begin(std::size_t x) const { return edge.get() + first[x]; }
@@ -642,7 +643,7 @@ struct Links {
   template <class OnLink>
   void judge(OnLink on_link) const {
     const std::size_t n = size();
-    const int tasks = cluster_tasks(n);
+    const int tasks = array_tasks(n);
     detail::for_each_range(tasks > 1, tasks, n, [&](int t, std::size_t first_x, std::size_t last_x) {
       for (std::size_t x = first_x; x < last_x; ++x) {
         if (t == 0 && ((x - first_x) & 0xffff) == 0) poll_interrupt();
@@ -660,7 +661,7 @@ struct Links {
 std::vector<OpenMesh::Vec3d> smoothed(const std::vector<OpenMesh::Vec3d>& p, const Links& links,
                                       const std::vector<char>& fixed, int rounds) {
   std::vector<OpenMesh::Vec3d> q(p), next(p.size());
-  const int tasks = cluster_tasks(p.size());
+  const int tasks = array_tasks(p.size());
   for (int r = 0; r < rounds; ++r) {
     detail::for_each_index(tasks > 1, tasks, p.size(), [&](std::size_t v) {
       if (links.begin(v) == links.end(v) || fixed[v]) {
@@ -701,7 +702,7 @@ bool cluster_vertices(const Mesh& mesh, std::size_t n_clusters, const ToFrame& t
                      : std::any_of(mesh.face_vertex_counts.begin(), mesh.face_vertex_counts.end(),
                                    [](std::int32_t c) { return c != 3; }))
     return false;
-  const int vertex_tasks = cluster_tasks(nv), corner_tasks = cluster_tasks(n_corners), face_tasks = cluster_tasks(nf);
+  const int vertex_tasks = array_tasks(nv), corner_tasks = array_tasks(n_corners), face_tasks = array_tasks(nf);
   const std::size_t out_of_range = sum_over_ranges(corner_tasks, n_corners, [&](int, std::size_t first, std::size_t last) {
     std::size_t bad = 0;
     for (std::size_t c = first; c < last; ++c) bad += idx[c] < 0 || static_cast<std::size_t>(idx[c]) >= nv;
@@ -938,8 +939,8 @@ bool cluster_vertices(const Mesh& mesh, std::size_t n_clusters, const ToFrame& t
   const std::size_t n = static_cast<std::size_t>(n_numbered);
   out.quadrics.assign(n, Quadric());
   for (auto& q : out.quadrics) q.clear();
-  const int cluster_tasks_n = cluster_tasks(n);
-  detail::for_each_range(cluster_tasks_n > 1, cluster_tasks_n, n, [&](int t, std::size_t first, std::size_t last) {
+  const int quadric_tasks = array_tasks(n);
+  detail::for_each_range(quadric_tasks > 1, quadric_tasks, n, [&](int t, std::size_t first, std::size_t last) {
     for (std::size_t f = 0; f < nf; ++f) {
       if (t == 0 && (f & 0xffff) == 0) poll_interrupt();
       const std::int32_t* c = &face_clusters[3 * f];
@@ -1191,16 +1192,37 @@ Mesh decimate(const Mesh& mesh, std::size_t n_vertices, const DecimateOptions& o
   double centre[3];
   int e = 0;
   {
-    std::vector<char> used(mesh.n_vertices(), 0);
-    for (const std::int32_t v : mesh.face_vertex_indices)
-      if (v >= 0 && static_cast<std::size_t>(v) < used.size()) used[static_cast<std::size_t>(v)] = 1;
+    // In tasks: the vertices in faces marked, then each task's count and
+    // bounds over its vertices, taken in the tasks' order.
+    const std::size_t nv = mesh.n_vertices(), k = mesh.face_vertex_indices.size();
+    const std::unique_ptr<std::atomic<char>[]> used(new std::atomic<char>[nv]());
+    const int corner_tasks = array_tasks(k), vertex_tasks = array_tasks(nv);
+    detail::for_each_index(corner_tasks > 1, corner_tasks, k, [&](std::size_t c) {
+      const std::int32_t v = mesh.face_vertex_indices[c];
+      if (v >= 0 && static_cast<std::size_t>(v) < nv) used[static_cast<std::size_t>(v)].store(1, std::memory_order_relaxed);
+    });
+    struct Bounds {
+      std::size_t have = 0;
+      double lo[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
+    };
+    std::vector<Bounds> part(static_cast<std::size_t>(vertex_tasks));
+    detail::for_each_range(vertex_tasks > 1, vertex_tasks, nv, [&](int t, std::size_t first, std::size_t last) {
+      Bounds& b = part[static_cast<std::size_t>(t)];
+      for (std::size_t v = first; v < last; ++v) {
+        if (!used[v].load(std::memory_order_relaxed)) continue;
+        ++b.have;
+        for (int c = 0; c < 3; ++c) {
+          b.lo[c] = std::min(b.lo[c], mesh.vertices[3 * v + c]);
+          b.hi[c] = std::max(b.hi[c], mesh.vertices[3 * v + c]);
+        }
+      }
+    });
     double lo[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
-    for (std::size_t v = 0; v < used.size(); ++v) {
-      if (!used[v]) continue;
-      ++have;
+    for (const Bounds& b : part) {
+      have += b.have;
       for (int c = 0; c < 3; ++c) {
-        lo[c] = std::min(lo[c], mesh.vertices[3 * v + c]);
-        hi[c] = std::max(hi[c], mesh.vertices[3 * v + c]);
+        lo[c] = std::min(lo[c], b.lo[c]);
+        hi[c] = std::max(hi[c], b.hi[c]);
       }
     }
     double half = 0.0;
@@ -1210,9 +1232,15 @@ Mesh decimate(const Mesh& mesh, std::size_t n_vertices, const DecimateOptions& o
     }
     if (half > 0.0 && std::isfinite(half)) std::frexp(half, &e);
   }
+  // x scaled by 2^-e: a product with 2^-e, rounded once as ldexp rounds,
+  // where 2^-e is a normal number.
+  const double scale = std::ldexp(1.0, -e);
+  const bool by_product = e > -1000 && e < 1000;
   const auto to_frame = [&](const double* x) {
-    return OpenMesh::Vec3d(std::ldexp(x[0] - centre[0], -e), std::ldexp(x[1] - centre[1], -e),
-                           std::ldexp(x[2] - centre[2], -e));
+    if (!by_product)
+      return OpenMesh::Vec3d(std::ldexp(x[0] - centre[0], -e), std::ldexp(x[1] - centre[1], -e),
+                             std::ldexp(x[2] - centre[2], -e));
+    return OpenMesh::Vec3d((x[0] - centre[0]) * scale, (x[1] - centre[1]) * scale, (x[2] - centre[2]) * scale);
   };
   // A large mesh of more than twice kBulkFactor times the count is
   // clustered (cluster_vertices) to kBulkFactor times the count before
