@@ -217,8 +217,16 @@ class LazyDecimater : public OpenMesh::Decimater::BaseDecimaterT<OMesh> {
     Heap heap{HeapInterface{this}};
     heap_ = &heap;
     heap.reserve(mesh_.n_vertices());
+    // The vertices costed in tasks (best_collapse reads the mesh and writes
+    // the vertex's own entries), then put in the heap in their order, as
+    // cost() puts them.
+    const int tasks = detail::task_count(mesh_.n_vertices(), 4096);
+    detail::for_each_index(tasks > 1, tasks, mesh_.n_vertices(), [&](std::size_t i) {
+      const VertexHandle v(static_cast<int>(i));
+      if (!mesh_.status(v).deleted()) best_collapse(v);
+    });
     for (const auto v : mesh_.vertices())
-      if (!mesh_.status(v).deleted()) cost(v);
+      if (!mesh_.status(v).deleted() && target_[v.idx()].is_valid()) heap.insert(v);
     std::vector<VertexHandle> support;
     std::size_t made = 0;
     while (count > target && !heap.empty()) {
@@ -613,7 +621,7 @@ std::size_t sum_over_ranges(int tasks, std::size_t n, Count count) {
 // cluster_vertices: a hash, so that the tasks share the cells about evenly
 // whatever the order of the vertices.
 int cell_task(std::uint64_t key, int n_tasks) {
-  return static_cast<int>(((key * 0x9E3779B97F4A7C15ull) >> 32) % static_cast<std::uint64_t>(n_tasks));
+  return static_cast<int>((((key * 0x9E3779B97F4A7C15ull) >> 32) * static_cast<std::uint64_t>(n_tasks)) >> 32);
 }
 
 std::size_t next_corner(std::size_t c) { return c - c % 3 + (c + 1) % 3; }
