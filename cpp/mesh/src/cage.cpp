@@ -24,6 +24,7 @@
 #include "openmesh_types.hpp"
 #include "sorpia/detail/order.hpp"
 #include "sorpia/detail/parallel.hpp"
+#include "sorpia/detail/scratch.hpp"
 #include "sorpia/detail/spatial.hpp"
 #include "sorpia/errors.hpp"
 #include "sorpia/interrupt.hpp"
@@ -721,6 +722,9 @@ bool cluster_vertices(const Mesh& mesh, std::size_t n_clusters, const ToFrame& t
   detail::for_each_index(vertex_tasks > 1, vertex_tasks, nv,
                          [&](std::size_t v) { p[v] = to_frame(&mesh.vertices[3 * v]); });
 
+  // The arrays that tasks fill first, taken unfilled (their pages first
+  // touched by the tasks).
+  detail::Scratch::Frame frame(nullptr);
   const Links vertex_links(idx, n_corners, nv);
   std::vector<char> boundary(nv, 0), used(nv, 0), bad(nv, 0);
   vertex_links.judge([&](std::size_t v, Link kind) {
@@ -733,7 +737,7 @@ bool cluster_vertices(const Mesh& mesh, std::size_t n_clusters, const ToFrame& t
   // that the faces along the boundary are the input's and the heap shapes
   // that strip collapse by collapse (no cluster fans out to many boundary
   // vertices in thin triangles).
-  std::vector<char> keep(nv, 0);
+  char* const keep = frame.take<char>(nv);
   detail::for_each_index(vertex_tasks > 1, vertex_tasks, nv, [&](std::size_t v) {
     char k = boundary[v];
     for (const LinkEdge* e = vertex_links.begin(v); !k && e != vertex_links.end(v); ++e)
@@ -746,18 +750,21 @@ bool cluster_vertices(const Mesh& mesh, std::size_t n_clusters, const ToFrame& t
   const std::size_t n_used = static_cast<std::size_t>(std::count(used.begin(), used.end(), 1));
   double area = 0.0;  // summed in the order of the faces
   {
-    std::vector<double> face_area(nf);
+    detail::Scratch::Frame areas(&frame.scratch());
+    double* const face_area = areas.take<double>(nf);
     detail::for_each_index(face_tasks > 1, face_tasks, nf, [&](std::size_t f) {
       face_area[f] = 0.5 * ((p[idx[3 * f + 1]] - p[idx[3 * f]]) % (p[idx[3 * f + 2]] - p[idx[3 * f]])).norm();
     });
-    for (const double a : face_area) area += a;
+    for (std::size_t f = 0; f < nf; ++f) area += face_area[f];
   }
 
   // The grid: a cell of side h meets about 1.5 area / h^2 of a surface's
   // cells (a plane's average over its orientations), and the cell's patch
   // is one cluster; h is corrected from the clusters it gave.
-  std::vector<std::int32_t> cluster(nv), parent(nv), number(nv);
-  std::vector<std::uint64_t> cell(nv);
+  std::int32_t* const cluster = frame.take<std::int32_t>(nv);
+  std::int32_t* const parent = frame.take<std::int32_t>(nv);
+  std::int32_t* const number = frame.take<std::int32_t>(nv);  // a root's cluster
+  std::uint64_t* const cell = frame.take<std::uint64_t>(nv);
   // Sets joined under their least vertex: parent[x] <= x throughout, and a
   // set's root is its least vertex.
   const auto find = [&](std::int32_t x) {
@@ -773,7 +780,8 @@ bool cluster_vertices(const Mesh& mesh, std::size_t n_clusters, const ToFrame& t
     return true;
   };
   std::vector<std::int32_t> faces;
-  std::vector<std::int32_t> face_clusters(n_corners);  // each input corner's cluster, as the faces were last keyed
+  // Each input corner's cluster, as the faces were last keyed.
+  std::int32_t* const face_clusters = frame.take<std::int32_t>(n_corners);
   std::vector<std::array<std::int32_t, 3>> keys;
   std::vector<std::vector<std::array<std::int32_t, 3>>> task_keys(static_cast<std::size_t>(face_tasks));
   std::vector<char> split;
