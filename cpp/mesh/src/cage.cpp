@@ -950,13 +950,31 @@ bool cluster_vertices(const Mesh& mesh, std::size_t n_clusters, const ToFrame& t
 
   // The clusters' quadrics: each the sum of the quadrics of the input's
   // faces (degenerate or not) over their corners in it, in the order of the
-  // faces. In tasks over ranges of the clusters, each over all faces (the
-  // clusters of their corners as last keyed: the clusters settled).
+  // faces. In tasks over ranges of the clusters of about as many vertices
+  // each (a cluster's faces about twice its vertices), each task over all
+  // faces (the clusters of their corners as last keyed: the clusters
+  // settled).
   const std::size_t n = static_cast<std::size_t>(n_numbered);
   out.quadrics.assign(n, Quadric());
   for (auto& q : out.quadrics) q.clear();
   const int quadric_tasks = array_tasks(n);
-  detail::for_each_range(quadric_tasks > 1, quadric_tasks, n, [&](int t, std::size_t first, std::size_t last) {
+  std::vector<std::size_t> cut(static_cast<std::size_t>(quadric_tasks) + 1, n);  // task t's clusters: cut[t] ..
+  cut[0] = 0;
+  if (quadric_tasks > 1) {
+    std::vector<std::vector<std::int32_t>> members(static_cast<std::size_t>(vertex_tasks));
+    detail::for_each_range(vertex_tasks > 1, vertex_tasks, nv, [&](int t, std::size_t first, std::size_t last) {
+      auto& m = members[static_cast<std::size_t>(t)];
+      m.assign(n, 0);
+      for (std::size_t v = first; v < last; ++v) ++m[static_cast<std::size_t>(cluster[v])];
+    });
+    std::size_t seen = 0, t = 1;
+    for (std::size_t x = 0; x < n && t < cut.size() - 1; ++x) {
+      for (const auto& m : members) seen += static_cast<std::size_t>(m[x]);
+      while (t < cut.size() - 1 && seen * static_cast<std::size_t>(quadric_tasks) >= nv * t) cut[t++] = x + 1;
+    }
+  }
+  detail::for_each_task(quadric_tasks > 1, quadric_tasks, [&](int t) {
+    const std::size_t first = cut[static_cast<std::size_t>(t)], last = cut[static_cast<std::size_t>(t) + 1];
     for (std::size_t f = 0; f < nf; ++f) {
       if (t == 0 && (f & 0xffff) == 0) poll_interrupt();
       const std::int32_t* c = &face_clusters[3 * f];
