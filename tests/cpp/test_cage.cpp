@@ -4,7 +4,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
+#include <numeric>
 #include <set>
 #include <string>
 #include <utility>
@@ -12,6 +14,7 @@
 
 #include "expect_error.hpp"
 #include "sorpia/cage.hpp"
+#include "sorpia/detail/parallel.hpp"
 #include "sorpia/errors.hpp"
 #include "sorpia/shapes.hpp"
 
@@ -113,6 +116,39 @@ TEST(Cage, StoppedReturnsTheMeshTheGuardsStoppedAtWithTheErrorsWords) {
     EXPECT_LE(full.n_vertices(), n);
     EXPECT_GE(full.n_vertices() + 5, n);
   }
+}
+
+TEST(Cage, ClusteringGivesTheSameCageOnOneThreadAsOnAll) {
+  // A torus of 210,000 vertices, clustered before its decimation (its passes
+  // in tasks over ranges of vertices, faces and clusters), with its vertices
+  // numbered in a scrambled order, so that every task's range borders every
+  // other's, and moved along the torus's normals by up to 1.7 vertex
+  // spacings, so that the grid is laid over the smoothed positions too.
+  const sorpia::Mesh torus = sorpia::torus(700, 300);
+  const std::size_t n = torus.n_vertices();
+  std::size_t step = 7919;
+  while (std::gcd(step, n) != 1) ++step;
+  const double spacing = 2 * M_PI * 0.4 / 300;
+  sorpia::Mesh mesh;
+  mesh.vertices.resize(3 * n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const double* p = &torus.vertices[3 * i];
+    const double ring = std::hypot(p[0], p[1]);
+    const double normal[3] = {(p[0] - p[0] / ring) / 0.4, (p[1] - p[1] / ring) / 0.4, p[2] / 0.4};
+    const double u = static_cast<double>(static_cast<std::uint32_t>(i * 2654435761u)) / 4294967296.0 * 2 - 1;
+    for (int c = 0; c < 3; ++c) mesh.vertices[3 * (i * step % n) + c] = p[c] + normal[c] * 1.7 * spacing * u;
+  }
+  for (const std::int32_t v : torus.face_vertex_indices)
+    mesh.face_vertex_indices.push_back(static_cast<std::int32_t>(static_cast<std::size_t>(v) * step % n));
+  const sorpia::Mesh all = sorpia::decimate(mesh, 2000);
+  sorpia::Mesh one;
+  {
+    const sorpia::detail::ThreadCap cap(1);
+    one = sorpia::decimate(mesh, 2000);
+  }
+  ASSERT_EQ(all.n_vertices(), 2000u);
+  EXPECT_EQ(one.vertices, all.vertices);
+  EXPECT_EQ(one.face_vertex_indices, all.face_vertex_indices);
 }
 
 }  // namespace

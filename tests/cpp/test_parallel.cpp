@@ -144,6 +144,28 @@ TEST(Parallel, CopyInRangesCopies) {
   EXPECT_EQ(other, from);
 }
 
+
+TEST(Parallel, GroupByKeyInTasksPlacesAsAStableSort) {
+  // 100,000 indices under 1,000 keys (a multiplicative hash, keys 0 and 999 unused), grouped in 1, 2 and 5 tasks:
+  // each slot holds the index std::stable_sort puts there, each key's slots start where its smaller keys' end.
+  const std::size_t k = 100000, n_keys = 1000;
+  std::vector<std::int32_t> keys(k);
+  for (std::size_t i = 0; i < k; ++i) keys[i] = 1 + static_cast<std::int32_t>(i * 2654435761u % 997u);
+  std::vector<std::size_t> expected(k);
+  std::iota(expected.begin(), expected.end(), std::size_t{0});
+  std::stable_sort(expected.begin(), expected.end(), [&](std::size_t a, std::size_t b) { return keys[a] < keys[b]; });
+  for (const int tasks : {1, 2, 5}) {
+    std::vector<std::size_t> order(k, k);
+    const std::vector<std::size_t> first = sorpia::detail::group_by_key(
+        keys.data(), k, n_keys, [&](std::size_t i, std::size_t s) { order[s] = i; }, tasks);
+    EXPECT_EQ(order, expected) << tasks;
+    ASSERT_EQ(first.size(), n_keys + 1);
+    for (std::size_t x = 0; x < n_keys; ++x)
+      EXPECT_EQ(first[x + 1] - first[x], static_cast<std::size_t>(std::count(keys.begin(), keys.end(), x))) << x;
+    EXPECT_EQ(first[0], 0u);
+  }
+}
+
 TEST(Parallel, ATaskExceptionReachesTheCallerAfterAllTasks) {
   std::atomic<int> ran{0};
   EXPECT_THROW(run_tasks(4,

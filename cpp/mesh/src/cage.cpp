@@ -10,16 +10,21 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cfloat>
 #include <cmath>
 #include <exception>
 #include <initializer_list>
 #include <map>
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "openmesh_types.hpp"
+#include "sorpia/detail/order.hpp"
+#include "sorpia/detail/parallel.hpp"
+#include "sorpia/detail/scratch.hpp"
 #include "sorpia/detail/spatial.hpp"
 #include "sorpia/errors.hpp"
 #include "sorpia/interrupt.hpp"
@@ -213,8 +218,16 @@ class LazyDecimater : public OpenMesh::Decimater::BaseDecimaterT<OMesh> {
     Heap heap{HeapInterface{this}};
     heap_ = &heap;
     heap.reserve(mesh_.n_vertices());
+    // The vertices costed in tasks (best_collapse reads the mesh and writes
+    // the vertex's own entries), then put in the heap in their order, as
+    // cost() puts them.
+    const int tasks = detail::task_count(mesh_.n_vertices(), 4096);
+    detail::for_each_index(tasks > 1, tasks, mesh_.n_vertices(), [&](std::size_t i) {
+      const VertexHandle v(static_cast<int>(i));
+      if (!mesh_.status(v).deleted()) best_collapse(v);
+    });
     for (const auto v : mesh_.vertices())
-      if (!mesh_.status(v).deleted()) cost(v);
+      if (!mesh_.status(v).deleted() && target_[v.idx()].is_valid()) heap.insert(v);
     std::vector<VertexHandle> support;
     std::size_t made = 0;
     while (count > target && !heap.empty()) {
@@ -519,21 +532,25 @@ OMesh to_openmesh(const Mesh& mesh, std::vector<std::int32_t>& kept, bool spatia
 }
 
 
-// The link of a vertex v of a triangle mesh, one edge a[i] -> b[i] for each
-// of its k faces (v, a[i], b[i]), as a manifold oriented mesh has it: a
+// The link of a vertex v of a triangle mesh, one edge e[i].a -> e[i].b for
+// each of its k faces (v, a, b), as a manifold oriented mesh has it: a
 // single cycle of at least 3 edges (kInner) or a single path (kOnBoundary);
 // anything else (an edge of three faces or of two faces oriented alike, a
 // fan of several pieces, a repeated vertex) is kNotManifold.
 enum class Link { kNotManifold, kInner, kOnBoundary };
 
-Link link_of(std::int32_t v, const std::int32_t* a, const std::int32_t* b, std::size_t k) {
+struct LinkEdge {
+  std::int32_t a, b;
+};
+
+Link link_of(std::int32_t v, const LinkEdge* e, std::size_t k) {
   std::size_t starts = 0, start = 0;
   for (std::size_t i = 0; i < k; ++i) {
-    if (a[i] == v || b[i] == v || a[i] == b[i]) return Link::kNotManifold;
+    if (e[i].a == v || e[i].b == v || e[i].a == e[i].b) return Link::kNotManifold;
     bool entered = false;  // some edge ends where edge i starts
     for (std::size_t j = 0; j < k; ++j) {
-      if (j != i && (a[j] == a[i] || b[j] == b[i])) return Link::kNotManifold;
-      entered |= b[j] == a[i];
+      if (j != i && (e[j].a == e[i].a || e[j].b == e[i].b)) return Link::kNotManifold;
+      entered |= e[j].b == e[i].a;
     }
     if (!entered) {
       ++starts;
@@ -546,7 +563,7 @@ Link link_of(std::int32_t v, const std::int32_t* a, const std::int32_t* b, std::
   for (std::size_t i = start;;) {
     std::size_t next = k;
     for (std::size_t j = 0; j < k; ++j)
-      if (a[j] == b[i]) next = j;
+      if (e[j].a == e[i].b) next = j;
     if (next == k || next == start) break;
     i = next;
     ++walked;
@@ -580,21 +597,92 @@ struct Clustering {
 // than twice as many).
 constexpr int kGridSmoothRounds = 4;
 
+// The decimation's passes over flat arrays (its bounds, cluster_vertices)
+// run in tasks over contiguous ranges (detail::for_each_range) of at least
+// this many vertices, corners, faces or clusters each; every result is the
+// same whatever the number of tasks.
+constexpr std::size_t kArrayTaskItems = 16384;
+
+int array_tasks(std::size_t n) { return detail::task_count(n, kArrayTaskItems); }
+
+// The sum over the tasks of count(t, first, last), the tasks over [0, n) as
+// by detail::for_each_range.
+template <class Count>
+std::size_t sum_over_ranges(int tasks, std::size_t n, Count count) {
+  std::vector<std::size_t> part(static_cast<std::size_t>(tasks), 0);
+  detail::for_each_range(tasks > 1, tasks, n, [&](int t, std::size_t first, std::size_t last) {
+    part[static_cast<std::size_t>(t)] = count(t, first, last);
+  });
+  std::size_t sum = 0;
+  for (const std::size_t s : part) sum += s;
+  return sum;
+}
+
+// The task (of n_tasks) that joins the vertices of a grid cell (its key) in
+// cluster_vertices: a hash, so that the tasks share the cells about evenly
+// whatever the order of the vertices.
+int cell_task(std::uint64_t key, int n_tasks) {
+  return static_cast<int>((((key * 0x9E3779B97F4A7C15ull) >> 32) * static_cast<std::uint64_t>(n_tasks)) >> 32);
+}
+
+std::size_t next_corner(std::size_t c) { return c - c % 3 + (c + 1) % 3; }
+std::size_t prev_corner(std::size_t c) { return c - c % 3 + (c + 2) % 3; }
+
+// The links of the labels of a triangle mesh's corners (a vertex's number,
+// or a cluster's, in [0, n)): label x's edges are edge[first[x] .. first[x +
+// 1]), one for each corner of x, from its next corner's label to its
+// previous one's, in the order of the corners (detail::group_by_key), laid
+// out together so that the passes over them read them in order.
+struct Links {
+  std::vector<std::size_t> first;
+  std::unique_ptr<LinkEdge[]> edge;
+  Links(const std::int32_t* label, std::size_t k, std::size_t n) : edge(new LinkEdge[k]) {
+    first = detail::group_by_key(
+        label, k, n,
+        [&](std::size_t c, std::size_t s) {
+          edge[s] = {label[next_corner(c)], label[prev_corner(c)]};
+        },
+        array_tasks(k));
+  }
+  std::size_t size() const { return first.size() - 1; }
+  const LinkEdge* begin(std::size_t x) const { return edge.get() + first[x]; }
+  const LinkEdge* end(std::size_t x) const { return edge.get() + first[x + 1]; }
+  // on_link(x, its Link) for each label x with corners, in tasks over the
+  // labels: on_link writes x's own entries only.
+  template <class OnLink>
+  void judge(OnLink on_link) const {
+    const std::size_t n = size();
+    const int tasks = array_tasks(n);
+    detail::for_each_range(tasks > 1, tasks, n, [&](int t, std::size_t first_x, std::size_t last_x) {
+      for (std::size_t x = first_x; x < last_x; ++x) {
+        if (t == 0 && ((x - first_x) & 0xffff) == 0) poll_interrupt();
+        if (begin(x) != end(x))
+          on_link(x, link_of(static_cast<std::int32_t>(x), begin(x), static_cast<std::size_t>(end(x) - begin(x))));
+      }
+    });
+  }
+};
+
 // `p` smoothed by `rounds` rounds (kGridSmoothRounds) over the triangles
-// `idx` (n_corners corners), the vertices `fixed` where they are.
-std::vector<OpenMesh::Vec3d> smoothed(const std::vector<OpenMesh::Vec3d>& p, const std::int32_t* idx,
-                                      std::size_t n_corners, const std::vector<char>& fixed, int rounds) {
-  std::vector<OpenMesh::Vec3d> q(p), sum(p.size());
-  std::vector<std::int32_t> count(p.size(), 0);  // the neighbours summed (each edge of a face once per face)
-  for (std::size_t c = 0; c < n_corners; ++c) count[idx[c]] += 2;
+// whose vertices' links are `links`, the vertices `fixed` where they are. A
+// vertex's sum of its neighbours is taken over its corners in their order,
+// the same whatever the tasks.
+std::vector<OpenMesh::Vec3d> smoothed(const std::vector<OpenMesh::Vec3d>& p, const Links& links,
+                                      const std::vector<char>& fixed, int rounds) {
+  std::vector<OpenMesh::Vec3d> q(p), next(p.size());
+  const int tasks = array_tasks(p.size());
   for (int r = 0; r < rounds; ++r) {
-    std::fill(sum.begin(), sum.end(), OpenMesh::Vec3d(0.0, 0.0, 0.0));
-    for (std::size_t c = 0; c < n_corners; ++c) {
-      const std::size_t first = c - c % 3;
-      sum[idx[c]] += q[idx[first + (c + 1) % 3]] + q[idx[first + (c + 2) % 3]];
-    }
-    for (std::size_t v = 0; v < p.size(); ++v)
-      if (count[v] > 0 && !fixed[v]) q[v] = 0.5 * q[v] + (0.5 / count[v]) * sum[v];
+    detail::for_each_index(tasks > 1, tasks, p.size(), [&](std::size_t v) {
+      if (links.begin(v) == links.end(v) || fixed[v]) {
+        next[v] = q[v];
+        return;
+      }
+      // The neighbours summed: each edge of a face once per face.
+      OpenMesh::Vec3d sum(0.0, 0.0, 0.0);
+      for (const LinkEdge* e = links.begin(v); e != links.end(v); ++e) sum += q[e->a] + q[e->b];
+      next[v] = 0.5 * q[v] + (0.5 / static_cast<std::int32_t>(2 * (links.end(v) - links.begin(v)))) * sum;
+    });
+    q.swap(next);
   }
   return q;
 }
@@ -623,103 +711,136 @@ bool cluster_vertices(const Mesh& mesh, std::size_t n_clusters, const ToFrame& t
                      : std::any_of(mesh.face_vertex_counts.begin(), mesh.face_vertex_counts.end(),
                                    [](std::int32_t c) { return c != 3; }))
     return false;
-  for (std::size_t c = 0; c < n_corners; ++c)
-    if (idx[c] < 0 || static_cast<std::size_t>(idx[c]) >= nv) return false;
+  const int vertex_tasks = array_tasks(nv), corner_tasks = array_tasks(n_corners), face_tasks = array_tasks(nf);
+  const std::size_t out_of_range = sum_over_ranges(corner_tasks, n_corners, [&](int, std::size_t first, std::size_t last) {
+    std::size_t bad = 0;
+    for (std::size_t c = first; c < last; ++c) bad += idx[c] < 0 || static_cast<std::size_t>(idx[c]) >= nv;
+    return bad;
+  });
+  if (out_of_range > 0) return false;
   std::vector<OpenMesh::Vec3d> p(nv);
-  for (std::size_t v = 0; v < nv; ++v) p[v] = to_frame(&mesh.vertices[3 * v]);
-  const auto next = [](std::size_t c) { return c - c % 3 + (c + 1) % 3; };
-  const auto prev = [](std::size_t c) { return c - c % 3 + (c + 2) % 3; };
+  detail::for_each_index(vertex_tasks > 1, vertex_tasks, nv,
+                         [&](std::size_t v) { p[v] = to_frame(&mesh.vertices[3 * v]); });
 
-  // on_link(x, its Link) for each of the n labels x (a vertex's or a
-  // cluster's number) of the triangles' corners `label` (k of them), with
-  // its link's edges in la -> lb.
-  std::vector<std::size_t> first;
-  std::vector<std::uint32_t> corners;
-  std::vector<std::int32_t> la, lb;
-  const auto links = [&](const std::int32_t* label, std::size_t k, std::size_t n, auto&& on_link) {
-    first.assign(n + 1, 0);
-    for (std::size_t c = 0; c < k; ++c) ++first[static_cast<std::size_t>(label[c]) + 1];
-    for (std::size_t i = 0; i < n; ++i) first[i + 1] += first[i];
-    corners.resize(k);
-    {
-      std::vector<std::size_t> at(first.begin(), first.end() - 1);
-      for (std::size_t c = 0; c < k; ++c) corners[at[static_cast<std::size_t>(label[c])]++] = static_cast<std::uint32_t>(c);
-    }
-    for (std::size_t x = 0; x < n; ++x) {
-      if ((x & 0xffff) == 0) poll_interrupt();
-      if (first[x] == first[x + 1]) continue;
-      la.clear();
-      lb.clear();
-      for (std::size_t i = first[x]; i < first[x + 1]; ++i) {
-        la.push_back(label[next(corners[i])]);
-        lb.push_back(label[prev(corners[i])]);
-      }
-      on_link(x, link_of(static_cast<std::int32_t>(x), la.data(), lb.data(), la.size()));
-    }
-  };
-  std::vector<char> boundary(nv, 0), used(nv, 0);
-  bool manifold = true;
-  links(idx, n_corners, nv, [&](std::size_t v, Link kind) {
+  // The arrays that tasks fill first, taken unfilled (their pages first
+  // touched by the tasks).
+  detail::Scratch::Frame frame(nullptr);
+  const Links vertex_links(idx, n_corners, nv);
+  std::vector<char> boundary(nv, 0), used(nv, 0), bad(nv, 0);
+  vertex_links.judge([&](std::size_t v, Link kind) {
     used[v] = 1;
     boundary[v] = kind == Link::kOnBoundary;
-    manifold &= kind != Link::kNotManifold;
+    bad[v] = kind == Link::kNotManifold;
   });
-  if (!manifold) return false;
+  if (std::find(bad.begin(), bad.end(), 1) != bad.end()) return false;
   // Kept out of clusters: the boundary's vertices and their neighbours, so
   // that the faces along the boundary are the input's and the heap shapes
   // that strip collapse by collapse (no cluster fans out to many boundary
   // vertices in thin triangles).
-  std::vector<char> keep(boundary);
-  for (std::size_t c = 0; c < n_corners; ++c)
-    if (boundary[idx[c]]) keep[idx[next(c)]] = keep[idx[prev(c)]] = 1;
-  double area = 0.0;
-  for (std::size_t f = 0; f < nf; ++f)
-    area += 0.5 * ((p[idx[3 * f + 1]] - p[idx[3 * f]]) % (p[idx[3 * f + 2]] - p[idx[3 * f]])).norm();
+  char* const keep = frame.take<char>(nv);
+  detail::for_each_index(vertex_tasks > 1, vertex_tasks, nv, [&](std::size_t v) {
+    char k = boundary[v];
+    for (const LinkEdge* e = vertex_links.begin(v); !k && e != vertex_links.end(v); ++e)
+      k = boundary[e->a] || boundary[e->b];
+    keep[v] = k;
+  });
+  std::vector<std::int32_t> boundary_vertices;
+  for (std::size_t v = 0; v < nv; ++v)
+    if (boundary[v]) boundary_vertices.push_back(static_cast<std::int32_t>(v));
+  const std::size_t n_used = static_cast<std::size_t>(std::count(used.begin(), used.end(), 1));
+  double area = 0.0;  // summed in the order of the faces
+  {
+    detail::Scratch::Frame areas(&frame.scratch());
+    double* const face_area = areas.take<double>(nf);
+    detail::for_each_index(face_tasks > 1, face_tasks, nf, [&](std::size_t f) {
+      face_area[f] = 0.5 * ((p[idx[3 * f + 1]] - p[idx[3 * f]]) % (p[idx[3 * f + 2]] - p[idx[3 * f]])).norm();
+    });
+    for (std::size_t f = 0; f < nf; ++f) area += face_area[f];
+  }
 
   // The grid: a cell of side h meets about 1.5 area / h^2 of a surface's
   // cells (a plane's average over its orientations), and the cell's patch
   // is one cluster; h is corrected from the clusters it gave.
-  std::vector<std::int32_t> cluster(nv), parent(nv);
+  std::int32_t* const cluster = frame.take<std::int32_t>(nv);
+  std::int32_t* const parent = frame.take<std::int32_t>(nv);
+  std::int32_t* const number = frame.take<std::int32_t>(nv);  // a root's cluster
+  std::uint64_t* const cell = frame.take<std::uint64_t>(nv);
+  // Sets joined under their least vertex: parent[x] <= x throughout, and a
+  // set's root is its least vertex.
   const auto find = [&](std::int32_t x) {
     while (parent[x] != x) x = parent[x] = parent[parent[x]];
     return x;
   };
+  const auto unite = [&](std::int32_t u, std::int32_t w) {
+    u = find(u);
+    w = find(w);
+    if (u == w) return false;
+    if (u < w) std::swap(u, w);
+    parent[u] = w;
+    return true;
+  };
   std::vector<std::int32_t> faces;
+  // Each input corner's cluster, as the faces were last keyed.
+  std::int32_t* const face_clusters = frame.take<std::int32_t>(n_corners);
   std::vector<std::array<std::int32_t, 3>> keys;
+  std::vector<std::vector<std::array<std::int32_t, 3>>> task_keys(static_cast<std::size_t>(face_tasks));
   std::vector<char> split;
   std::int32_t n_numbered = 0;
   for (const bool smooth : {false, true}) {
     const std::vector<OpenMesh::Vec3d> p_smoothed =
-        smooth ? smoothed(p, idx, n_corners, boundary, kGridSmoothRounds) : std::vector<OpenMesh::Vec3d>();
+        smooth ? smoothed(p, vertex_links, boundary, kGridSmoothRounds) : std::vector<OpenMesh::Vec3d>();
     const std::vector<OpenMesh::Vec3d>& q = smooth ? p_smoothed : p;  // the cells' positions
     double h = std::sqrt(1.5 * area / static_cast<double>(n_clusters));
     for (int attempt = 0; attempt < 3; ++attempt) {
       if (!(h > 0.0 && std::isfinite(h))) return false;
-      std::vector<std::uint64_t> cell(nv);
-      for (std::size_t v = 0; v < nv; ++v) {
+      detail::for_each_index(vertex_tasks > 1, vertex_tasks, nv, [&](std::size_t v) {
         std::uint64_t key = 0;
         for (int c = 0; c < 3; ++c)
           key |= static_cast<std::uint64_t>(std::clamp(std::floor((q[v][c] + 1.0) / h), 0.0, 2097151.0)) << (21 * c);
         cell[v] = key;
-      }
-      for (std::size_t v = 0; v < nv; ++v) parent[v] = static_cast<std::int32_t>(v);
-      for (std::size_t c = 0; c < n_corners; ++c) {
-        const std::int32_t u = idx[c], w = idx[next(c)];
-        if (cell[u] == cell[w] && !keep[u] && !keep[w]) parent[find(u)] = find(w);
-      }
-      std::size_t n_made = 0;
-      for (std::size_t v = 0; v < nv; ++v) n_made += used[v] && find(static_cast<std::int32_t>(v)) == static_cast<std::int32_t>(v);
+        parent[v] = static_cast<std::int32_t>(v);
+      });
+      // Each edge whose ends share a cell, neither kept, joins their sets,
+      // in tasks that each take the cells of one share of their hashes
+      // (cell_task): a set lies in one cell, so each task's finds and joins
+      // stay in its own sets. The sets are the same in any order of the
+      // joins. An edge inside the mesh is taken once, from its lesser end u
+      // in the face where it runs u -> w (a boundary edge's ends are kept).
+      const std::size_t joined = sum_over_ranges(vertex_tasks, nv, [&](int t, std::size_t, std::size_t) {
+        std::size_t made = 0;
+        for (std::size_t u = 0; u < nv; ++u) {
+          if (keep[u] || cell_task(cell[u], vertex_tasks) != t) continue;
+          for (const LinkEdge* e = vertex_links.begin(u); e != vertex_links.end(u); ++e)
+            if (static_cast<std::size_t>(e->a) > u && cell[u] == cell[e->a] && !keep[e->a])
+              made += unite(static_cast<std::int32_t>(u), e->a);
+        }
+        return made;
+      });
+      const std::size_t n_made = n_used - joined;  // each join makes one set of used vertices fewer
       const double ratio = static_cast<double>(n_made) / static_cast<double>(n_clusters);
       if (ratio > 0.9 && ratio < 1.15) break;
       h *= std::sqrt(ratio);
     }
-    // Clusters numbered in the order of their first vertex.
-    std::vector<std::int32_t> number(nv, -1);
-    n_numbered = 0;
-    for (std::size_t v = 0; v < nv; ++v) {
-      const std::int32_t r = find(static_cast<std::int32_t>(v));
-      if (number[r] < 0) number[r] = n_numbered++;
-      cluster[v] = number[r];
+    // Clusters numbered in the order of their first vertex (their root).
+    {
+      std::vector<std::int32_t> roots_before(static_cast<std::size_t>(vertex_tasks) + 1, 0);
+      detail::for_each_range(vertex_tasks > 1, vertex_tasks, nv, [&](int t, std::size_t first, std::size_t last) {
+        std::int32_t roots = 0;
+        for (std::size_t v = first; v < last; ++v) roots += parent[v] == static_cast<std::int32_t>(v);
+        roots_before[static_cast<std::size_t>(t) + 1] = roots;
+      });
+      for (std::size_t t = 0; t + 1 < roots_before.size(); ++t) roots_before[t + 1] += roots_before[t];
+      n_numbered = roots_before.back();
+      detail::for_each_range(vertex_tasks > 1, vertex_tasks, nv, [&](int t, std::size_t first, std::size_t last) {
+        std::int32_t x = roots_before[static_cast<std::size_t>(t)];
+        for (std::size_t v = first; v < last; ++v)
+          if (parent[v] == static_cast<std::int32_t>(v)) number[v] = x++;
+      });
+      detail::for_each_index(vertex_tasks > 1, vertex_tasks, nv, [&](std::size_t v) {
+        std::int32_t r = static_cast<std::int32_t>(v);
+        while (parent[r] != r) r = parent[r];
+        cluster[v] = number[r];
+      });
     }
 
     // The clustered faces; a cluster whose link is not as its vertices' (an
@@ -732,39 +853,55 @@ bool cluster_vertices(const Mesh& mesh, std::size_t n_clusters, const ToFrame& t
     bool settled = false;
     for (int pass = 0;; ++pass) {
       // Each face over three clusters once (several input faces can span the
-      // same three), keyed by its corners turned to put the least first.
-      keys.clear();
-      for (std::size_t f = 0; f < nf; ++f) {
-        std::int32_t t[3] = {cluster[idx[3 * f]], cluster[idx[3 * f + 1]], cluster[idx[3 * f + 2]]};
-        if (t[0] == t[1] || t[1] == t[2] || t[2] == t[0]) continue;
-        std::rotate(t, std::min_element(t, t + 3), t + 3);
-        keys.push_back({t[0], t[1], t[2]});
+      // same three), keyed by its corners turned to put the least first: in
+      // tasks over the faces, each task's keys sorted, then merged.
+      detail::for_each_range(face_tasks > 1, face_tasks, nf, [&](int t, std::size_t first, std::size_t last) {
+        auto& part = task_keys[static_cast<std::size_t>(t)];
+        part.clear();
+        for (std::size_t f = first; f < last; ++f) {
+          std::int32_t* c = &face_clusters[3 * f];
+          for (int k = 0; k < 3; ++k) c[k] = cluster[idx[3 * f + k]];
+          if (c[0] == c[1] || c[1] == c[2] || c[2] == c[0]) continue;
+          const int least = c[1] < c[0] ? (c[2] < c[1] ? 2 : 1) : (c[2] < c[0] ? 2 : 0);
+          part.push_back({c[least], c[(least + 1) % 3], c[(least + 2) % 3]});
+        }
+        std::sort(part.begin(), part.end());
+        part.erase(std::unique(part.begin(), part.end()), part.end());
+      });
+      keys.swap(task_keys[0]);
+      for (std::size_t t = 1; t < task_keys.size(); ++t) {
+        std::vector<std::array<std::int32_t, 3>> merged(keys.size() + task_keys[t].size());
+        std::merge(keys.begin(), keys.end(), task_keys[t].begin(), task_keys[t].end(), merged.begin());
+        merged.erase(std::unique(merged.begin(), merged.end()), merged.end());
+        keys.swap(merged);
       }
-      std::sort(keys.begin(), keys.end());
-      keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
       faces.clear();
       for (const auto& t : keys) faces.insert(faces.end(), t.begin(), t.end());
       const std::size_t n = static_cast<std::size_t>(n_numbered);
       // A cluster's boundary: one of its vertices is on the input's (then it is that vertex alone).
       std::vector<char> on_boundary(n, 0);
-      for (std::size_t v = 0; v < nv; ++v) on_boundary[cluster[v]] |= boundary[v];
+      for (const std::int32_t v : boundary_vertices) on_boundary[cluster[v]] = 1;
       split.assign(n, 0);
-      std::size_t n_split = 0;
       // A cluster between two others only (two faces over the same three
       // clusters, oriented against each other: a sliver a cell's corner cut
       // off) joins one of them not on the boundary, which closes the fold.
-      std::vector<std::int32_t> joins;
-      links(faces.data(), faces.size(), n, [&](std::size_t x, Link kind) {
+      // Judged in tasks; the joins then taken in the order of the clusters.
+      std::vector<std::int32_t> join_to(n, -1);
+      const Links cluster_links(faces.data(), faces.size(), n);
+      cluster_links.judge([&](std::size_t x, Link kind) {
         if (kind == (on_boundary[x] ? Link::kOnBoundary : Link::kInner)) return;
-        if (pass < kJoinPasses && !on_boundary[x] && la.size() == 2 && la[0] == lb[1] && la[1] == lb[0] &&
-            !(on_boundary[la[0]] && on_boundary[la[1]])) {
-          joins.push_back(static_cast<std::int32_t>(x));
-          joins.push_back(on_boundary[la[0]] ? la[1] : la[0]);
+        const LinkEdge* e = cluster_links.begin(x);
+        if (pass < kJoinPasses && !on_boundary[x] && cluster_links.end(x) - e == 2 && e[0].a == e[1].b &&
+            e[1].a == e[0].b && !(on_boundary[e[0].a] && on_boundary[e[1].a])) {
+          join_to[x] = on_boundary[e[0].a] ? e[1].a : e[0].a;
           return;
         }
         split[x] = 1;
-        ++n_split;
       });
+      std::size_t n_split = static_cast<std::size_t>(std::count(split.begin(), split.end(), 1));
+      std::vector<std::int32_t> joins;
+      for (std::size_t x = 0; x < n; ++x)
+        if (join_to[x] >= 0) joins.insert(joins.end(), {static_cast<std::int32_t>(x), join_to[x]});
       std::vector<std::int32_t> into(n, -1);
       for (std::size_t i = 0; i < joins.size(); i += 2) into[joins[i]] = joins[i + 1];
       std::size_t n_joined = 0;
@@ -776,8 +913,10 @@ bool cluster_vertices(const Mesh& mesh, std::size_t n_clusters, const ToFrame& t
         } else {
           ++n_joined;
         }
-      for (std::size_t v = 0; v < nv; ++v)
-        if (into[cluster[v]] >= 0) cluster[v] = into[cluster[v]];
+      if (n_joined > 0)
+        detail::for_each_index(vertex_tasks > 1, vertex_tasks, nv, [&](std::size_t v) {
+          if (into[cluster[v]] >= 0) cluster[v] = into[cluster[v]];
+        });
       if (n_split == 0 && n_joined == 0) {
         settled = true;
         break;
@@ -788,7 +927,7 @@ bool cluster_vertices(const Mesh& mesh, std::size_t n_clusters, const ToFrame& t
       for (std::size_t v = 0; v < nv; ++v) ++members[cluster[v]];
       for (std::size_t c = 0; c < faces.size(); ++c)
         if (split[faces[c]] == 1 && members[faces[c]] == 1)
-          for (const std::size_t d : {next(c), prev(c)})
+          for (const std::size_t d : {next_corner(c), prev_corner(c)})
             if (!split[faces[d]]) split[faces[d]] = 2;
       std::vector<char> seen(n, 0);  // each split cluster keeps its number for its first vertex
       for (std::size_t v = 0; v < nv; ++v) {
@@ -809,25 +948,73 @@ bool cluster_vertices(const Mesh& mesh, std::size_t n_clusters, const ToFrame& t
     if (2 * static_cast<std::size_t>(std::count(in_faces.begin(), in_faces.end(), 1)) < n_clusters) return false;
   }
 
-  // The clusters' quadrics (every input face's, degenerate or not, to its
-  // corners' clusters) and representatives.
+  // The clusters' quadrics: each the sum of the quadrics of the input's
+  // faces (degenerate or not) over their corners in it, in the order of the
+  // faces. In tasks over ranges of the clusters of about as many vertices
+  // each (a cluster's faces about twice its vertices), each task over all
+  // faces (the clusters of their corners as last keyed: the clusters
+  // settled).
   const std::size_t n = static_cast<std::size_t>(n_numbered);
   out.quadrics.assign(n, Quadric());
   for (auto& q : out.quadrics) q.clear();
-  for (std::size_t f = 0; f < nf; ++f) {
-    if ((f & 0xffff) == 0) poll_interrupt();
-    const Quadric q = face_quadric(p[idx[3 * f]], p[idx[3 * f + 1]], p[idx[3 * f + 2]]);
-    for (int k = 0; k < 3; ++k) out.quadrics[cluster[idx[3 * f + k]]] += q;
-  }
-  std::vector<double> least(n, HUGE_VAL);
-  out.source.assign(n, -1);
-  for (std::size_t v = 0; v < nv; ++v) {
-    if (!used[v]) continue;
-    const double e = out.quadrics[cluster[v]](p[v]);
-    if (e < least[cluster[v]]) {
-      least[cluster[v]] = e;
-      out.source[cluster[v]] = static_cast<std::int32_t>(v);
+  const int quadric_tasks = array_tasks(n);
+  std::vector<std::size_t> cut(static_cast<std::size_t>(quadric_tasks) + 1, n);  // task t's clusters: cut[t] ..
+  cut[0] = 0;
+  if (quadric_tasks > 1) {
+    std::vector<std::vector<std::int32_t>> members(static_cast<std::size_t>(vertex_tasks));
+    detail::for_each_range(vertex_tasks > 1, vertex_tasks, nv, [&](int t, std::size_t first, std::size_t last) {
+      auto& m = members[static_cast<std::size_t>(t)];
+      m.assign(n, 0);
+      for (std::size_t v = first; v < last; ++v) ++m[static_cast<std::size_t>(cluster[v])];
+    });
+    std::size_t seen = 0, t = 1;
+    for (std::size_t x = 0; x < n && t < cut.size() - 1; ++x) {
+      for (const auto& m : members) seen += static_cast<std::size_t>(m[x]);
+      while (t < cut.size() - 1 && seen * static_cast<std::size_t>(quadric_tasks) >= nv * t) cut[t++] = x + 1;
     }
+  }
+  detail::for_each_task(quadric_tasks > 1, quadric_tasks, [&](int t) {
+    const std::size_t first = cut[static_cast<std::size_t>(t)], last = cut[static_cast<std::size_t>(t) + 1];
+    for (std::size_t f = 0; f < nf; ++f) {
+      if (t == 0 && (f & 0xffff) == 0) poll_interrupt();
+      const std::int32_t* c = &face_clusters[3 * f];
+      const bool in[3] = {static_cast<std::size_t>(c[0]) - first < last - first,
+                          static_cast<std::size_t>(c[1]) - first < last - first,
+                          static_cast<std::size_t>(c[2]) - first < last - first};
+      if (!(in[0] || in[1] || in[2])) continue;
+      const Quadric q = face_quadric(p[idx[3 * f]], p[idx[3 * f + 1]], p[idx[3 * f + 2]]);
+      for (int k = 0; k < 3; ++k)
+        if (in[k]) out.quadrics[static_cast<std::size_t>(c[k])] += q;
+    }
+  });
+  // Each cluster's representative: its first vertex where its quadric is
+  // least. In tasks over the vertices, each task's then taken in their
+  // order where less.
+  {
+    std::vector<std::vector<double>> least(static_cast<std::size_t>(vertex_tasks));
+    std::vector<std::vector<std::int32_t>> source(static_cast<std::size_t>(vertex_tasks));
+    detail::for_each_range(vertex_tasks > 1, vertex_tasks, nv, [&](int t, std::size_t first, std::size_t last) {
+      auto& l = least[static_cast<std::size_t>(t)];
+      auto& s = source[static_cast<std::size_t>(t)];
+      l.assign(n, HUGE_VAL);
+      s.assign(n, -1);
+      for (std::size_t v = first; v < last; ++v) {
+        if (!used[v]) continue;
+        const std::size_t x = static_cast<std::size_t>(cluster[v]);
+        const double e = out.quadrics[x](p[v]);
+        if (e < l[x]) {
+          l[x] = e;
+          s[x] = static_cast<std::int32_t>(v);
+        }
+      }
+    });
+    for (std::size_t t = 1; t < least.size(); ++t)
+      for (std::size_t x = 0; x < n; ++x)
+        if (least[t][x] < least[0][x]) {
+          least[0][x] = least[t][x];
+          source[0][x] = source[t][x];
+        }
+    out.source = std::move(source[0]);
   }
   out.mesh = Mesh();
   out.mesh.vertices.resize(3 * n, 0.0);
@@ -1039,16 +1226,37 @@ Mesh decimate(const Mesh& mesh, std::size_t n_vertices, const DecimateOptions& o
   double centre[3];
   int e = 0;
   {
-    std::vector<char> used(mesh.n_vertices(), 0);
-    for (const std::int32_t v : mesh.face_vertex_indices)
-      if (v >= 0 && static_cast<std::size_t>(v) < used.size()) used[static_cast<std::size_t>(v)] = 1;
+    // In tasks: the vertices in faces marked, then each task's count and
+    // bounds over its vertices, taken in the tasks' order.
+    const std::size_t nv = mesh.n_vertices(), k = mesh.face_vertex_indices.size();
+    const std::unique_ptr<std::atomic<char>[]> used(new std::atomic<char>[nv]());
+    const int corner_tasks = array_tasks(k), vertex_tasks = array_tasks(nv);
+    detail::for_each_index(corner_tasks > 1, corner_tasks, k, [&](std::size_t c) {
+      const std::int32_t v = mesh.face_vertex_indices[c];
+      if (v >= 0 && static_cast<std::size_t>(v) < nv) used[static_cast<std::size_t>(v)].store(1, std::memory_order_relaxed);
+    });
+    struct Bounds {
+      std::size_t have = 0;
+      double lo[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
+    };
+    std::vector<Bounds> part(static_cast<std::size_t>(vertex_tasks));
+    detail::for_each_range(vertex_tasks > 1, vertex_tasks, nv, [&](int t, std::size_t first, std::size_t last) {
+      Bounds& b = part[static_cast<std::size_t>(t)];
+      for (std::size_t v = first; v < last; ++v) {
+        if (!used[v].load(std::memory_order_relaxed)) continue;
+        ++b.have;
+        for (int c = 0; c < 3; ++c) {
+          b.lo[c] = std::min(b.lo[c], mesh.vertices[3 * v + c]);
+          b.hi[c] = std::max(b.hi[c], mesh.vertices[3 * v + c]);
+        }
+      }
+    });
     double lo[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
-    for (std::size_t v = 0; v < used.size(); ++v) {
-      if (!used[v]) continue;
-      ++have;
+    for (const Bounds& b : part) {
+      have += b.have;
       for (int c = 0; c < 3; ++c) {
-        lo[c] = std::min(lo[c], mesh.vertices[3 * v + c]);
-        hi[c] = std::max(hi[c], mesh.vertices[3 * v + c]);
+        lo[c] = std::min(lo[c], b.lo[c]);
+        hi[c] = std::max(hi[c], b.hi[c]);
       }
     }
     double half = 0.0;
@@ -1058,9 +1266,15 @@ Mesh decimate(const Mesh& mesh, std::size_t n_vertices, const DecimateOptions& o
     }
     if (half > 0.0 && std::isfinite(half)) std::frexp(half, &e);
   }
+  // x scaled by 2^-e: a product with 2^-e, rounded once as ldexp rounds,
+  // where 2^-e is a normal number.
+  const double scale = std::ldexp(1.0, -e);
+  const bool by_product = e > -1000 && e < 1000;
   const auto to_frame = [&](const double* x) {
-    return OpenMesh::Vec3d(std::ldexp(x[0] - centre[0], -e), std::ldexp(x[1] - centre[1], -e),
-                           std::ldexp(x[2] - centre[2], -e));
+    if (!by_product)
+      return OpenMesh::Vec3d(std::ldexp(x[0] - centre[0], -e), std::ldexp(x[1] - centre[1], -e),
+                             std::ldexp(x[2] - centre[2], -e));
+    return OpenMesh::Vec3d((x[0] - centre[0]) * scale, (x[1] - centre[1]) * scale, (x[2] - centre[2]) * scale);
   };
   // A large mesh of more than twice kBulkFactor times the count is
   // clustered (cluster_vertices) to kBulkFactor times the count before

@@ -1,6 +1,6 @@
 #pragma once
 // Indices grouped by a small integer key: the one counting sort of points by their face (footpoints' re-projection,
-// the limit surface's per-face evaluations).
+// the limit surface's per-face evaluations) and of a mesh's corners by their vertex (the decimation's clustering).
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
@@ -11,38 +11,51 @@
 namespace sorpia {
 namespace detail {
 
-/// order[0 .. k) := 0 .. k - 1 ordered by keys[i] (stable: equal keys keep their order), keys in [0, n_keys), not
-/// checked. Returns first (n_keys + 1 entries): the indices of key x are order[first[x] .. first[x + 1]).
-/// On the core's threads where k is large against n_keys: each of t ranges of the indices counts its keys and places
-/// its indices after those of the ranges before it (the same order; t times n_keys counts held).
+/// Indices 0 .. k - 1 grouped by keys[i] (stable: equal keys keep their order), keys in [0, n_keys), not checked:
+/// place(i, s) is called once for each i, s its slot in the grouping (the slots of key x are first[x] .. first[x +
+/// 1), first returned, n_keys + 1 entries). With n_tasks > 1 the keys are counted and the indices placed in that many
+/// tasks (for_each_range over the indices; place is called from them, each slot once), each task's counts of every
+/// key held at once (n_tasks times n_keys counts): the same slots whatever n_tasks.
+template <class Place>
+std::vector<std::size_t> group_by_key(const std::int32_t* keys, std::size_t k, std::size_t n_keys, Place place,
+                                      int n_tasks = 1) {
+  std::vector<std::size_t> first(n_keys + 1, 0);
+  if (n_tasks <= 1) {
+    for (std::size_t i = 0; i < k; ++i) ++first[static_cast<std::size_t>(keys[i]) + 1];
+    for (std::size_t x = 0; x < n_keys; ++x) first[x + 1] += first[x];
+    std::vector<std::size_t> at(first.begin(), first.end() - 1);
+    for (std::size_t i = 0; i < k; ++i) place(i, at[static_cast<std::size_t>(keys[i])]++);
+    return first;
+  }
+  // at[t][x]: first task t's count of key x, then the slot of its next index of key x.
+  std::vector<std::vector<std::size_t>> at(static_cast<std::size_t>(n_tasks));
+  for_each_range(true, n_tasks, k, [&](int t, std::size_t begin, std::size_t end) {
+    std::vector<std::size_t>& a = at[static_cast<std::size_t>(t)];
+    a.assign(n_keys, 0);
+    for (std::size_t i = begin; i < end; ++i) ++a[static_cast<std::size_t>(keys[i])];
+  });
+  for (std::size_t x = 0; x < n_keys; ++x) {
+    std::size_t s = first[x];
+    for (std::vector<std::size_t>& a : at) {
+      const std::size_t count = a[x];
+      a[x] = s;
+      s += count;
+    }
+    first[x + 1] = s;
+  }
+  for_each_range(true, n_tasks, k, [&](int t, std::size_t begin, std::size_t end) {
+    std::vector<std::size_t>& a = at[static_cast<std::size_t>(t)];
+    for (std::size_t i = begin; i < end; ++i) place(i, a[static_cast<std::size_t>(keys[i])]++);
+  });
+  return first;
+}
+
+/// order[0 .. k) := 0 .. k - 1 ordered by keys[i] (group_by_key: order[s] is the index in slot s), on the core's
+/// threads where k is large against n_keys (the same order).
 inline std::vector<std::size_t> order_by_key(const std::int32_t* keys, std::size_t k, std::size_t n_keys,
                                              std::size_t* order) {
   const int tasks = task_count(k, std::max<std::size_t>(65536, 4 * n_keys));
-  const auto t_count = static_cast<std::size_t>(tasks);
-  std::vector<std::size_t> first(n_keys + 1, 0);
-  // Range r's count of key x (at[r * n_keys + x]), then where its next index of key x goes.
-  std::vector<std::size_t> at(t_count * n_keys, 0);
-  for_each_task(tasks > 1, tasks, [&](int t) {
-    const auto r = static_cast<std::size_t>(t);
-    std::size_t* count = at.data() + r * n_keys;
-    for (std::size_t i = k * r / t_count; i < k * (r + 1) / t_count; ++i) ++count[static_cast<std::size_t>(keys[i])];
-  });
-  std::size_t sum = 0;
-  for (std::size_t x = 0; x < n_keys; ++x) {
-    first[x] = sum;
-    for (std::size_t r = 0; r < t_count; ++r) {
-      const std::size_t c = at[r * n_keys + x];
-      at[r * n_keys + x] = sum;
-      sum += c;
-    }
-  }
-  first[n_keys] = sum;
-  for_each_task(tasks > 1, tasks, [&](int t) {
-    const auto r = static_cast<std::size_t>(t);
-    std::size_t* next = at.data() + r * n_keys;
-    for (std::size_t i = k * r / t_count; i < k * (r + 1) / t_count; ++i) order[next[static_cast<std::size_t>(keys[i])]++] = i;
-  });
-  return first;
+  return group_by_key(keys, k, n_keys, [order](std::size_t i, std::size_t s) { order[s] = i; }, tasks);
 }
 
 }  // namespace detail

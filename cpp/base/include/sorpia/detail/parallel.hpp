@@ -57,14 +57,23 @@ inline void for_each_task(bool parallel, int n_tasks, const std::function<void(i
   }
 }
 
-/// body(i) for i in [0, n), cut into n_tasks contiguous ranges of near-equal
-/// length, one task each (a static schedule).
+/// body(t, first, last) for each task t in [0, n_tasks), [first, last) the
+/// t-th of n_tasks contiguous ranges of near-equal length that cut [0, n) in
+/// order (a static schedule), the tasks run as by for_each_task.
 template <class Body>
-void for_each_index(bool parallel, int n_tasks, std::size_t n, Body body) {
+void for_each_range(bool parallel, int n_tasks, std::size_t n, Body body) {
   const auto t_count = static_cast<std::size_t>(n_tasks < 1 ? 1 : n_tasks);
   for_each_task(parallel, static_cast<int>(t_count), [&](int t) {
     const auto k = static_cast<std::size_t>(t);
-    for (std::size_t i = n * k / t_count; i < n * (k + 1) / t_count; ++i) body(i);
+    body(t, n * k / t_count, n * (k + 1) / t_count);
+  });
+}
+
+/// body(i) for i in [0, n), cut into n_tasks ranges as by for_each_range.
+template <class Body>
+void for_each_index(bool parallel, int n_tasks, std::size_t n, Body body) {
+  for_each_range(parallel, n_tasks, n, [&](int, std::size_t first, std::size_t last) {
+    for (std::size_t i = first; i < last; ++i) body(i);
   });
 }
 
