@@ -10,32 +10,10 @@
 #include <system_error>
 #include <thread>
 #include <algorithm>
-#include <atomic>
-#include <chrono>
 
 namespace sorpia {
 namespace detail {
 namespace {
-
-// How long a worker that finished its task, and a caller that finished its
-// own, spin for the next job or for the workers' end before sleeping on a
-// condition variable: the fit posts short jobs in quick succession (the
-// products of PCG, the rounds of a footpoint search), which a wake-up through
-// the kernel would otherwise delay by a good part of their length.
-constexpr std::chrono::microseconds kSpin{300};
-
-// Spins until ready() or kSpin has passed; ready()'s last value.
-template <class Ready>
-bool spin_until(Ready ready) {
-  const auto end = std::chrono::steady_clock::now() + kSpin;
-  for (unsigned i = 1;; ++i) {
-    if (ready()) return true;
-#if defined(__x86_64__) || defined(__i386__)
-    __builtin_ia32_pause();
-#endif
-    if ((i & 63) == 0 && std::chrono::steady_clock::now() >= end) return ready();
-  }
-}
 
 // Workers wait for a generation number to change, run their task of the
 // current job, and count down. One job at a time (a mutex serialises callers).
@@ -62,7 +40,6 @@ class Pool {
       pending_ = helpers;
       error_ = nullptr;
       ++generation_;
-      posted_.store(generation_, std::memory_order_release);
     }
     wake_.notify_all();
     // The caller takes task 0 and whatever no worker could take.
@@ -75,7 +52,6 @@ class Pool {
     };
     run_here(0);
     for (int t = helpers + 1; t < n_tasks; ++t) run_here(t);
-    spin_until([&] { return pending_.load(std::memory_order_acquire) == 0; });
     std::unique_lock<std::mutex> lock(mutex_);
     done_.wait(lock, [&] { return pending_ == 0; });
     task_ = nullptr;
@@ -119,11 +95,6 @@ class Pool {
   void work(int index, unsigned long long seen) {
     std::unique_lock<std::mutex> lock(mutex_);
     for (;;) {
-      if (generation_ == seen) {
-        lock.unlock();
-        spin_until([&] { return posted_.load(std::memory_order_acquire) != seen; });
-        lock.lock();
-      }
       wake_.wait(lock, [&] { return generation_ != seen; });
       seen = generation_;
       if (index > active_) continue;  // not needed for this job
@@ -146,9 +117,7 @@ class Pool {
   std::condition_variable wake_, done_;
   int workers_ = 0;  // detached threads, waiting in work()
   const std::function<void(int)>* task_ = nullptr;
-  int active_ = 0;
-  std::atomic<int> pending_{0};                // tasks of the job not yet ended (changed under mutex_)
-  std::atomic<unsigned long long> posted_{0};  // generation_, for the spin without mutex_
+  int active_ = 0, pending_ = 0;
   unsigned long long generation_ = 0;
   std::exception_ptr error_;
   static Pool* instance_;
