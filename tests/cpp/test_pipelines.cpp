@@ -295,6 +295,26 @@ TEST(NormalMatrix, RhsIsTheRowByRowProduct) {
 // made apart, the rows a point at a time: B's at a level-dependent vertex's corner; normal_matrix itself is held
 // to scipy by test_normal_equations.py) to 1e-13 of the largest entry, with the tangent blend (6 values per
 // entry) and with weights (1).
+// `state` (per point in the order the points were given) in the chunk's own order (ApproximationChunk holds its
+// points in spatial order: point i of its order is point given(i) as given), as its current footpoints.
+sorpia::ApproximationChunk::State in_chunk_order(const sorpia::ApproximationChunk& chunk,
+                                                 const sorpia::ApproximationChunk::State& state) {
+  sorpia::ApproximationChunk::State out;
+  const std::size_t k = chunk.size();
+  out.face_ids.resize(k);
+  out.uv.resize(2 * k);
+  out.distances.resize(state.distances.empty() ? 0 : k);
+  out.normals.resize(state.normals.empty() ? 0 : 3 * k);
+  for (std::size_t i = 0; i < k; ++i) {
+    const std::size_t j = chunk.given(i);
+    out.face_ids[i] = state.face_ids[j];
+    std::copy_n(&state.uv[2 * j], 2, &out.uv[2 * i]);
+    if (!out.distances.empty()) out.distances[i] = state.distances[j];
+    if (!out.normals.empty()) std::copy_n(&state.normals[3 * j], 3, &out.normals[3 * i]);
+  }
+  return out;
+}
+
 void expect_normal_sums_are_the_rows_products(const sorpia::ApproximationChunk& chunk,
                                               const sorpia::LimitSurface& surface, const std::vector<double>& points,
                                               const std::vector<double>& weights) {
@@ -311,9 +331,9 @@ void expect_normal_sums_are_the_rows_products(const sorpia::ApproximationChunk& 
     const std::size_t o = order[i];
     face_o[i] = state.face_ids[o];
     std::copy_n(&state.uv[2 * o], 2, &uv_o[2 * i]);
-    std::copy_n(&points[3 * o], 3, &p_o[3 * i]);
+    std::copy_n(&points[3 * chunk.given(o)], 3, &p_o[3 * i]);  // the state is in the chunk's order
     std::copy_n(&state.normals[3 * o], 3, &n_o[3 * i]);
-    w_o[i] = weights[o];
+    w_o[i] = weights[chunk.given(o)];
   }
   const sorpia::CsrMatrix a = surface.rows(face_o.data(), uv_o.data(), k, 0).position;
   for (const double tangential : {0.1, 1.0}) {
@@ -392,7 +412,7 @@ TEST(NormalSums, SameOnOneThreadAsOnAllAndEqualToTheRowsProducts) {
   std::mt19937 rng(12);
   for (double& w : weights) w = 0.5 + std::uniform_real_distribution<double>(0.0, 1.0)(rng);
   sorpia::ApproximationChunk chunk(points.data(), k, weights.data(), 0);
-  chunk.current = state;
+  chunk.current = in_chunk_order(chunk, state);
   expect_normal_sums_are_the_rows_products(chunk, surface, points, weights);
 }
 
@@ -485,7 +505,7 @@ TEST(NormalSums, AtTheCornersOfDartsAndOfVerticesOfTwoFacesAreTheRowsProducts) {
         }
       if (seed == 21u) chunk = sorpia::ApproximationChunk(points.data(), k, weights.data(), 0);
       else chunk.set_points(points, weights);
-      chunk.current = state;
+      chunk.current = in_chunk_order(chunk, state);
       expect_normal_sums_are_the_rows_products(chunk, surface, points, weights);
     }
   }
@@ -498,7 +518,8 @@ class GivenFootpoints : public sorpia::InMemoryChunks {
   GivenFootpoints(sorpia::LimitSurface& surface, const std::vector<double>& points, sorpia::ApproximationChunk::State feet)
       : InMemoryChunks(surface, points.data(), points.size() / 3, nullptr, std::size_t{1} << 20), feet_(std::move(feet)) {}
   sorpia::DistanceSums search(const sorpia::FootpointOptions&) override {
-    load(0, kPoints | kCurrent).current = feet_;
+    sorpia::ApproximationChunk& chunk = load(0, kPoints | kCurrent);
+    chunk.current = in_chunk_order(chunk, feet_);
     sorpia::DistanceSums d;
     for (const double x : feet_.distances) {
       d.squares += x * x;
