@@ -675,10 +675,16 @@ Footpoints LocalChunks::best_footpoints() {
   scratch_.release();
   Footpoints out;
   for (std::size_t c = 0; c < n_chunks(); ++c) {
-    const Footpoints f = load(c, kBest).best_footpoints();
-    out.face_ids.insert(out.face_ids.end(), f.face_ids.begin(), f.face_ids.end());
-    out.uv.insert(out.uv.end(), f.uv.begin(), f.uv.end());
-    out.distances.insert(out.distances.end(), f.distances.begin(), f.distances.end());
+    Footpoints f = load(c, kBest).best_footpoints();  // a copy in the order given: the first chunk's is kept whole
+    if (c == 0) {
+      out.face_ids = std::move(f.face_ids);
+      out.uv = std::move(f.uv);
+      out.distances = std::move(f.distances);
+    } else {
+      out.face_ids.insert(out.face_ids.end(), f.face_ids.begin(), f.face_ids.end());
+      out.uv.insert(out.uv.end(), f.uv.begin(), f.uv.end());
+      out.distances.insert(out.distances.end(), f.distances.begin(), f.distances.end());
+    }
     store(c, 0);
   }
   return out;
