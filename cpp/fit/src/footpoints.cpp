@@ -1109,7 +1109,7 @@ struct FootpointSearch::Certificate {
     };
     // N: the whole star where each of its faces holds and none ends (a
     // star without ends is joined to f round f's vertices), else its faces
-    // not far from p (near[k] for star[k]), joined to f across their edges.
+    // not far from p (linked[k] for star[k]), joined to f across their edges.
     const std::int32_t first = star_offsets[fs], size = star_offsets[fs + 1] - first;
     const double* sa = &star_axis[3 * fs];
     bool whole = !star_ends[fs];
@@ -1118,9 +1118,9 @@ struct FootpointSearch::Certificate {
       for (std::int32_t k = 0; k < size && whole; ++k)
         whole = holds(static_cast<std::size_t>(star[static_cast<std::size_t>(first + k)]));
     if (!whole || !bounded(kappa)) {
-      thread_local std::vector<std::uint8_t> near;
+      thread_local std::vector<std::uint8_t> linked;  // per star face: 1 near p, 2 joined to f
       thread_local std::vector<std::int32_t> stack;
-      near.assign(static_cast<std::size_t>(size), 0);
+      linked.assign(static_cast<std::size_t>(size), 0);
       kappa = 0.0;
       std::int32_t listed = 0;
       for (std::int32_t k = 0; k < size; ++k) {
@@ -1128,7 +1128,7 @@ struct FootpointSearch::Certificate {
         if (g != fs && far(g)) continue;
         if (!holds(g)) return false;
         kappa = std::max(kappa, curvature[g]);
-        near[static_cast<std::size_t>(k)] = 1;
+        linked[static_cast<std::size_t>(k)] = 1;
         ++listed;
       }
       if (!bounded(kappa)) return false;
@@ -1138,7 +1138,7 @@ struct FootpointSearch::Certificate {
         const auto it = std::lower_bound(from, to, g);
         return it != to && *it == g ? static_cast<std::int32_t>(it - from) : -1;
       };
-      near[static_cast<std::size_t>(index_of(f))] = 2;
+      linked[static_cast<std::size_t>(index_of(f))] = 2;
       stack.assign(1, f);
       std::int32_t joined = 1;
       while (!stack.empty() && joined < listed) {
@@ -1147,8 +1147,8 @@ struct FootpointSearch::Certificate {
         for (std::int32_t h = face_offsets[g]; h < face_offsets[g + 1]; ++h) {
           const std::int32_t next = across[static_cast<std::size_t>(h)];
           const std::int32_t k = next < 0 ? -1 : index_of(next);
-          if (k < 0 || near[static_cast<std::size_t>(k)] != 1) continue;
-          near[static_cast<std::size_t>(k)] = 2;
+          if (k < 0 || linked[static_cast<std::size_t>(k)] != 1) continue;
+          linked[static_cast<std::size_t>(k)] = 2;
           ++joined;
           stack.push_back(next);
         }
@@ -1246,9 +1246,7 @@ const FootpointSearch::Certificate& FootpointSearch::certificate() const {
     // Across each half-edge the face there, -1 where the surface ends (the
     // boundary, a hole); and the curves where it ends, sampled along each
     // such edge of a face that is not a hole.
-    cert->face_offsets.resize(m + 1);
-    for (std::size_t f = 0; f <= m; ++f)
-      cert->face_offsets[f] = f < m ? t.face_offset(f) : static_cast<std::int32_t>(corners.size());
+    cert->face_offsets = t.face_offsets();
     cert->across.assign(corners.size(), -1);
     for (std::size_t h = 0; h < corners.size(); ++h) {
       const std::int32_t o = dom.opposite[h];
@@ -1266,11 +1264,9 @@ const FootpointSearch::Certificate& FootpointSearch::certificate() const {
       std::vector<std::int32_t> star_sizes, star, rim_sizes, rim;
     };
     std::vector<Lists> lists(static_cast<std::size_t>(tasks));
-    detail::for_each_task(tasks > 1, tasks, [&](int task) {
+    detail::for_each_range(tasks > 1, tasks, m, [&](int task, std::size_t from, std::size_t to) {
       Lists& out = lists[static_cast<std::size_t>(task)];
       std::vector<std::int64_t> mark(m, 0);
-      const std::size_t from = m * static_cast<std::size_t>(task) / static_cast<std::size_t>(tasks);
-      const std::size_t to = m * static_cast<std::size_t>(task + 1) / static_cast<std::size_t>(tasks);
       // Appends the faces at g's vertices (not holes) not marked `in` or
       // `out_mark`, marking them `in`; false where a vertex is not smooth.
       const auto faces_at = [&](std::size_t g, std::int64_t in, std::int64_t out_mark, std::vector<std::int32_t>& list) {

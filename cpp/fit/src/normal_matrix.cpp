@@ -109,11 +109,9 @@ std::shared_ptr<NormalPattern> make_pattern(std::size_t n, std::vector<std::int6
   poll_interrupt();
   // Row i: the union of its blocks' columns (Gustavson), a range of rows per task, then the ranges put together.
   const int tasks = detail::task_count(s.columns.size(), kRowEntriesPerTask);
-  const auto t_count = static_cast<std::size_t>(tasks);
-  std::vector<std::vector<std::int32_t>> part(t_count);
+  std::vector<std::vector<std::int32_t>> part(static_cast<std::size_t>(tasks));
   std::vector<std::int64_t> length(n + 1, 0);
-  detail::for_each_task(tasks > 1, tasks, [&](int t) {
-    const std::size_t i0 = n * static_cast<std::size_t>(t) / t_count, i1 = n * (static_cast<std::size_t>(t) + 1) / t_count;
+  detail::for_each_range(tasks > 1, tasks, n, [&](int t, std::size_t i0, std::size_t i1) {
     std::vector<std::int32_t> marker(n, -1), touched;
     std::vector<std::int32_t>& out_t = part[static_cast<std::size_t>(t)];
     for (std::size_t i = i0; i < i1; ++i) {
@@ -138,8 +136,7 @@ std::shared_ptr<NormalPattern> make_pattern(std::size_t n, std::vector<std::int6
   s.indices.resize(static_cast<std::size_t>(s.indptr[n]));
   s.diagonal.resize(n);
   s.mirror.resize(s.indices.size());
-  detail::for_each_task(tasks > 1, tasks, [&](int t) {
-    const std::size_t i0 = n * static_cast<std::size_t>(t) / t_count;
+  detail::for_each_range(tasks > 1, tasks, n, [&](int t, std::size_t i0, std::size_t) {
     std::copy(part[static_cast<std::size_t>(t)].begin(), part[static_cast<std::size_t>(t)].end(),
               s.indices.begin() + s.indptr[i0]);
   });

@@ -642,7 +642,7 @@ struct Links {
         [&](std::size_t c, std::size_t s) {
           edge[s] = {label[next_corner(c)], label[prev_corner(c)]};
         },
-        array_tasks(k));
+        detail::grouping_tasks(k, n));
   }
   std::size_t size() const { return first.size() - 1; }
   const LinkEdge* begin(std::size_t x) const { return edge.get() + first[x]; }

@@ -237,6 +237,10 @@ class BfrSurfaces {
   };
   std::mutex& stripe(int face) const { return stripes_[static_cast<std::size_t>(face) % kStripes]; }
 
+ public:
+  std::size_t n_faces() const { return n_faces_; }
+
+ private:
   SurfaceFactory cached_;
   std::unique_ptr<Bfr::RefinerSurfaceFactory<>> uncached_;  // null when no face is alone
   std::unique_ptr<Face[]> faces_;
@@ -412,6 +416,24 @@ void LimitSurface::get_vertices(double* out) const {
 
 namespace {
 
+// The faces the k points lie in (ids checked), numbered in increasing order
+// of the face: slot[f] is face f's number (-1 for a face with no point),
+// face[b] the face numbered b.
+struct FaceSlots {
+  std::vector<std::int32_t> slot, face;
+};
+FaceSlots face_slots(const std::int32_t* face_ids, std::size_t k, std::size_t n_faces) {
+  FaceSlots out;
+  out.slot.assign(n_faces, -1);
+  for (std::size_t i = 0; i < k; ++i) out.slot[static_cast<std::size_t>(face_ids[i])] = 0;
+  for (std::size_t f = 0; f < n_faces; ++f)
+    if (out.slot[f] == 0) {
+      out.slot[f] = static_cast<std::int32_t>(out.face.size());
+      out.face.push_back(static_cast<std::int32_t>(f));
+    }
+  return out;
+}
+
 // Calls fn(surface, face, first, last) for each face of the k points, in
 // parallel over chunks of faces: [first, last) are the indices of that face's
 // points, `surface` its Bfr surface. Each point is computed alone, so the
@@ -419,19 +441,11 @@ namespace {
 // surface's lock.
 template <class Fn>
 void for_each_face_surface(const BfrSurfaces& factory, const std::int32_t* face_ids, std::size_t k, Fn fn) {
-  // Group the points by face so that each face's surface is built once: a
-  // counting sort by face (stable, linear; the ids are checked, >= 0).
-  const int tasks = detail::task_count(k, kPointsPerCheckTask);
-  const auto t_count = static_cast<std::size_t>(tasks);
-  const double max_face = detail::max_over_tasks(tasks > 1, tasks, [&](int t) {
-    const auto r = static_cast<std::size_t>(t);
-    std::int32_t m = 0;
-    for (std::size_t i = k * r / t_count; i < k * (r + 1) / t_count; ++i) m = std::max(m, face_ids[i]);
-    return static_cast<double>(m);
-  });
+  // Group the points by face (stable: by face, then index) so that each
+  // face's surface is built once; the ids are checked, in [0, n_faces).
   std::vector<std::size_t> order(k);
   std::vector<std::size_t> group_start;  // the faces with points
-  const auto n_keys = static_cast<std::size_t>(max_face) + 1;
+  const std::size_t n_keys = factory.n_faces();
   if (k < n_keys / 16) {
     // Few points on many faces (a re-projection's later rounds): sorted (the same order, by face then index)
     // without the counting sort's pass over every face.
@@ -717,13 +731,9 @@ void LimitSurface::position_blocks(
   double* const params = frame.take<double>(2 * k);
   checked_params(face_ids, uv, k, params);
   // The faces' blocks in increasing order of the face (the ids are checked), then the points with B's rows.
-  std::vector<std::int32_t> face_block(n_faces(), -1), used;  // used: the faces' blocks' faces
-  for (std::size_t i = 0; i < k; ++i) face_block[static_cast<std::size_t>(face_ids[i])] = 0;
-  for (std::size_t f = 0; f < face_block.size(); ++f)
-    if (face_block[f] == 0) {
-      face_block[f] = static_cast<std::int32_t>(used.size());
-      used.push_back(static_cast<std::int32_t>(f));
-    }
+  const FaceSlots blocks = face_slots(face_ids, k, n_faces());
+  const std::vector<std::int32_t>& face_block = blocks.slot;
+  const std::vector<std::int32_t>& used = blocks.face;  // the faces' blocks' faces
   const std::size_t n_used = used.size();
   const std::vector<std::int32_t> slots = exact_corners(face_ids, params, k);
   const auto from_b = [&](std::size_t i) { return !slots.empty() && slots[i] >= 0; };
@@ -775,7 +785,7 @@ void LimitSurface::position_blocks(
                     b.count = static_cast<std::size_t>(last - first);
                     b.rows = s.weights[0].data();
                     thread_local std::vector<std::size_t> kept;
-                    if (std::any_of(first, last, from_b)) {  // the face's other points
+                    if (std::any_of(first, last, from_b)) {  // the face's other points (none: no columns, as start gave)
                       kept.clear();
                       for (const std::size_t* i = first; i != last; ++i) {
                         if (from_b(*i)) continue;
@@ -785,6 +795,11 @@ void LimitSurface::position_blocks(
                       }
                       b.points = kept.data();
                       b.count = kept.size();
+                      if (kept.empty()) {
+                        b.columns = nullptr;
+                        b.width = 0;
+                        b.rows = nullptr;
+                      }
                     }
                     visit(b);
                   });
@@ -820,12 +835,9 @@ void LimitSurface::make_rows(const std::int32_t* face_ids, const double* uv, std
 
   // Stencils per face of the points (the faces in increasing order) and each face's slot among them (the ids
   // are checked).
-  std::vector<std::int32_t> face_slot(n_faces(), -1);
-  for (std::size_t i = 0; i < k; ++i) face_slot[static_cast<std::size_t>(face_ids[i])] = 0;
-  std::size_t n_used = 0;
-  for (std::int32_t& slot : face_slot)
-    if (slot == 0) slot = static_cast<std::int32_t>(n_used++);
-  std::vector<FaceStencils> stencils(n_used);
+  const FaceSlots faces_used = face_slots(face_ids, k, n_faces());
+  const std::vector<std::int32_t>& face_slot = faces_used.slot;
+  std::vector<FaceStencils> stencils(faces_used.face.size());
   {
     const std::shared_lock<std::shared_mutex> lock(impl_->mutex);
     face_stencils(*impl_->factory, from_osd, face_ids, params, k, derivatives,

@@ -126,7 +126,7 @@ class Topology {
   /// checks' messages, repair and the statistics use, on the first call (the
   /// build matches edges per vertex and stores no half-edges) and kept: later
   /// calls, from any thread, return the same array (a copy of the Topology
-  /// shares it).
+  /// shares it), valid while this Topology lives and is not assigned to.
   const std::vector<std::int32_t>& half_edge_twins() const;
   /// For each of k vertex pairs (pairs[2i], pairs[2i + 1]), either order, the
   /// lower-numbered half-edge of the edge between them (numbered as in

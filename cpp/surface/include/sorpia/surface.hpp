@@ -199,8 +199,8 @@ class LimitSurface {
   /// threads (concurrently for different blocks; the block's arrays are the
   /// thread's until visit returns; a face whose points all have B's rows is
   /// a block of 0 points). visit must not start tasks of the core's pool
-  /// (detail::run_tasks is not reentrant). The call's transient arrays are
-  /// taken from `scratch` (in a frame of its own).
+  /// (detail::run_tasks is not reentrant). The points' checked parameters
+  /// are taken from `scratch` (in a frame of its own).
   /// @throws ParameterError as evaluate()
   void position_blocks(
       const std::int32_t* face_ids, const double* uv, std::size_t k, detail::Scratch& scratch,

@@ -1,6 +1,6 @@
 #pragma once
-// Indices grouped by a small integer key: the one counting sort of points by their face (footpoints' re-projection,
-// the limit surface's per-face evaluations) and of a mesh's corners by their vertex (the decimation's clustering).
+// Indices grouped by a small integer key (a stable counting sort), for a pass over them a group at a time: points
+// by their face, a mesh's corners by their vertex.
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
@@ -50,12 +50,17 @@ std::vector<std::size_t> group_by_key(const std::int32_t* keys, std::size_t k, s
   return first;
 }
 
-/// order[0 .. k) := 0 .. k - 1 ordered by keys[i] (group_by_key: order[s] is the index in slot s), on the core's
-/// threads where k is large against n_keys (the same order).
+/// Tasks for group_by_key of k indices over n_keys keys: on the core's threads where k is large against n_keys
+/// (each task holds n_keys counts, and the counts are put together on one thread).
+inline int grouping_tasks(std::size_t k, std::size_t n_keys) {
+  return task_count(k, std::max<std::size_t>(65536, 4 * n_keys));
+}
+
+/// order[0 .. k) := 0 .. k - 1 ordered by keys[i] (group_by_key: order[s] is the index in slot s).
 inline std::vector<std::size_t> order_by_key(const std::int32_t* keys, std::size_t k, std::size_t n_keys,
                                              std::size_t* order) {
-  const int tasks = task_count(k, std::max<std::size_t>(65536, 4 * n_keys));
-  return group_by_key(keys, k, n_keys, [order](std::size_t i, std::size_t s) { order[s] = i; }, tasks);
+  return group_by_key(keys, k, n_keys, [order](std::size_t i, std::size_t s) { order[s] = i; },
+                      grouping_tasks(k, n_keys));
 }
 
 }  // namespace detail

@@ -83,14 +83,12 @@ void for_each_index(bool parallel, int n_tasks, std::size_t n, Body body) {
 template <class Check>
 void check_each_index(std::size_t n, std::size_t per_task, Check check) {
   const int tasks = task_count(n, per_task);
-  const auto t_count = static_cast<std::size_t>(tasks);
-  std::vector<std::exception_ptr> failed(t_count);
-  for_each_task(tasks > 1, tasks, [&](int t) {
-    const auto r = static_cast<std::size_t>(t);
+  std::vector<std::exception_ptr> failed(static_cast<std::size_t>(tasks));
+  for_each_range(tasks > 1, tasks, n, [&](int t, std::size_t first, std::size_t last) {
     try {
-      for (std::size_t i = n * r / t_count; i < n * (r + 1) / t_count; ++i) check(i);
+      for (std::size_t i = first; i < last; ++i) check(i);
     } catch (...) {
-      failed[r] = std::current_exception();
+      failed[static_cast<std::size_t>(t)] = std::current_exception();
     }
   });
   for (const std::exception_ptr& e : failed)
@@ -108,19 +106,16 @@ std::size_t keep_in_order(std::size_t n, std::size_t per_task, Keep keep, Value 
   const int tasks = task_count(n, per_task);
   const auto t_count = static_cast<std::size_t>(tasks);
   std::vector<std::size_t> kept(t_count + 1, 0);  // per range its count, then where its values go
-  for_each_task(tasks > 1, tasks, [&](int t) {
-    const auto r = static_cast<std::size_t>(t);
-    const std::size_t first = n * r / t_count;
+  for_each_range(tasks > 1, tasks, n, [&](int t, std::size_t first, std::size_t last) {
     std::size_t w = first;
-    for (std::size_t j = first; j < n * (r + 1) / t_count; ++j)
+    for (std::size_t j = first; j < last; ++j)
       if (keep(j)) staging[w++] = value(j);
-    kept[r + 1] = w - first;
+    kept[static_cast<std::size_t>(t) + 1] = w - first;
   });
   for (std::size_t r = 0; r < t_count; ++r) kept[r + 1] += kept[r];
-  for_each_task(tasks > 1, tasks, [&](int t) {
+  for_each_range(tasks > 1, tasks, n, [&](int t, std::size_t first, std::size_t) {
     const auto r = static_cast<std::size_t>(t);
-    const T* from = staging + n * r / t_count;
-    std::copy(from, from + (kept[r + 1] - kept[r]), out + kept[r]);
+    std::copy(staging + first, staging + first + (kept[r + 1] - kept[r]), out + kept[r]);
   });
   return kept[t_count];
 }
@@ -135,12 +130,9 @@ void copy_in_ranges(const std::vector<T>& from, std::vector<T>& to, std::size_t 
     return;
   }
   const int tasks = task_count(from.size(), per_task);
-  const auto t_count = static_cast<std::size_t>(tasks);
-  for_each_task(tasks > 1, tasks, [&](int t) {
-    const auto r = static_cast<std::size_t>(t);
-    std::copy(from.begin() + static_cast<std::ptrdiff_t>(from.size() * r / t_count),
-              from.begin() + static_cast<std::ptrdiff_t>(from.size() * (r + 1) / t_count),
-              to.begin() + static_cast<std::ptrdiff_t>(from.size() * r / t_count));
+  for_each_range(tasks > 1, tasks, from.size(), [&](int, std::size_t first, std::size_t last) {
+    std::copy(from.begin() + static_cast<std::ptrdiff_t>(first), from.begin() + static_cast<std::ptrdiff_t>(last),
+              to.begin() + static_cast<std::ptrdiff_t>(first));
   });
 }
 
